@@ -1,0 +1,19 @@
+"""hammerstein: multivariable Prandtl-Ishlinskii hysteresis of piezoelectric actuators.
+
+Model rate-independent hysteresis and cross-couplings with a multivariable
+classical Prandtl-Ishlinskii (PI) model, identify it, cancel it with the
+inverse multiplicative feedforward compensator, and simulate the result on a
+Hammerstein actuator (multivariable PI + python-control linear dynamics).
+"""
+
+from .compensators import (CompensatorDivergence, CompensatorError, ConvergenceReport,
+                           ConvergenceWarning, InverseMultiplicativeCompensator,
+                           convergence_report)
+from .dynamics import DynamicsError, bandwidths_hz, bending_modes, discretize
+from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
+from .plant import HammersteinPlant
+from .presets import (PresetError, bundled_presets, load_model, load_plant, model_from_table,
+                      model_to_table, save_model)
+from .simulation import ChainResult, simulate_chain, simulate_compensator, simulate_plant
+
+__version__ = "0.1.0"

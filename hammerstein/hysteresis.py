@@ -1,0 +1,537 @@
+"""Rate-independent hysteresis operators: play, classical and multivariable PI.
+
+Every operator here has memory. Following the contract of
+:func:`scipy.signal.max_len_seq`, each simulation function takes explicit
+initial play states and returns the final ones, so that a record simulated
+in chunks equals the same record simulated at once.
+
+References
+----------
+.. [1] M. Rakotondrabe, "Multivariable classical Prandtl-Ishlinskii hysteresis
+   modeling and compensation and sensorless control of a nonlinear 2-dof
+   piezoactuator", eq. (1)-(4) and Def. 3.2 (``shared/spec``).
+.. [2] M. A. Krasnosel'skii and A. V. Pokrovskii, *Systems with Hysteresis*,
+   Springer, 1989.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+__all__ = [
+    "play",
+    "PrandtlIshlinskii",
+    "MultivariablePI",
+    "HysteresisError",
+]
+
+
+class HysteresisError(ValueError):
+    """Invalid hysteresis model parameters or signals (names the field)."""
+
+
+def _as_finite_array(value, name, ndim=None):
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise HysteresisError(f"{name}: expected numbers, got {value!r}") from exc
+    if ndim is not None and arr.ndim != ndim:
+        raise HysteresisError(
+            f"{name}: expected a {ndim}-D array, found shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise HysteresisError(f"{name}: expected finite values, found NaN or inf")
+    return arr
+
+
+def validate_thresholds(thresholds, name="thresholds"):
+    """Check play-operator thresholds and return them as a float array.
+
+    Parameters
+    ----------
+    thresholds : array_like, shape (n_hysterons,)
+        Thresholds r_i [V]; finite, non-negative and strictly increasing.
+    name : str
+        Field name used in error messages.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_hysterons,)
+
+    Raises
+    ------
+    HysteresisError
+        If the thresholds are empty, not 1-D, non-finite, negative, unsorted
+        or duplicated.
+    """
+    r = _as_finite_array(thresholds, name, ndim=1)
+    if r.size == 0:
+        raise HysteresisError(f"{name}: expected at least one threshold, found none")
+    if np.any(r < 0):
+        raise HysteresisError(
+            f"{name}: expected non-negative thresholds, found {r[r < 0][0]:g}")
+    if np.any(np.diff(r) <= 0):
+        i = int(np.flatnonzero(np.diff(r) <= 0)[0])
+        raise HysteresisError(
+            f"{name}: expected strictly increasing thresholds, found "
+            f"r[{i}]={r[i]:g} followed by r[{i + 1}]={r[i + 1]:g}")
+    return r
+
+
+def play(u, thresholds, initial_state=None):
+    """Play (backlash) operators of several thresholds driven by one input.
+
+    ``y_i(t) = max(u(t) - r_i, min(u(t) + r_i, y_i(t - T)))``, eq. (1) of [1]_.
+
+    Parameters
+    ----------
+    u : array_like, shape (n_samples,)
+        Input signal [V].
+    thresholds : array_like, shape (n_hysterons,)
+        Thresholds r_i [V], non-negative and strictly increasing.
+    initial_state : array_like, shape (n_hysterons,), optional
+        Play outputs y_i(0 - T) before the first sample [V]; zeros by default.
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (n_hysterons, n_samples)
+        Play outputs [V].
+    final_state : numpy.ndarray, shape (n_hysterons,)
+        Play outputs at the last sample, to pass as ``initial_state`` of the
+        next chunk.
+
+    Raises
+    ------
+    HysteresisError
+        On non-finite input, invalid thresholds or a state of the wrong shape.
+    """
+    u = _as_finite_array(u, "u", ndim=1)
+    r = validate_thresholds(thresholds)
+    state = _initial_state(initial_state, r.size, "initial_state")
+    y = np.empty((r.size, u.size))
+    for t in range(u.size):
+        state = np.maximum(u[t] - r, np.minimum(u[t] + r, state))
+        y[:, t] = state
+    return y, state.copy()
+
+
+def _initial_state(initial_state, size, name):
+    if initial_state is None:
+        return np.zeros(size)
+    s = _as_finite_array(initial_state, name)
+    if s.shape != (size,):
+        raise HysteresisError(f"{name}: expected shape ({size},), found {s.shape}")
+    return s.astype(float, copy=True)
+
+
+@dataclass(frozen=True)
+class PrandtlIshlinskii:
+    """Classical Prandtl-Ishlinskii (PI) operator, eq. (2) of [1]_.
+
+    ``y(t) = sum_i w_i * play_{r_i}(u)(t)``.
+
+    Parameters
+    ----------
+    thresholds : array_like, shape (n_hysterons,)
+        Thresholds r_i [V] (input units), finite, non-negative, strictly
+        increasing.
+    weights : array_like, shape (n_hysterons,)
+        Weights w_i [µm/V] (output units per input unit); may be negative.
+
+    Raises
+    ------
+    HysteresisError
+        If thresholds are invalid or weights do not match them in length.
+    """
+
+    thresholds: np.ndarray
+    weights: np.ndarray
+
+    def __post_init__(self):
+        r = validate_thresholds(self.thresholds)
+        w = _as_finite_array(self.weights, "weights", ndim=1)
+        if w.shape != r.shape:
+            raise HysteresisError(
+                f"weights: expected {r.size} weights to match the thresholds, "
+                f"found {w.size}")
+        object.__setattr__(self, "thresholds", r)
+        object.__setattr__(self, "weights", w)
+
+    @property
+    def n_hysterons(self) -> int:
+        """Number of play operators (hysterons)."""
+        return self.thresholds.size
+
+    def simulate(self, u, initial_state=None):
+        """Output of the PI operator for an input record.
+
+        Parameters
+        ----------
+        u : array_like, shape (n_samples,)
+            Input [V].
+        initial_state : array_like, shape (n_hysterons,), optional
+            Initial play outputs [V]; zeros by default (demagnetised state).
+
+        Returns
+        -------
+        y : numpy.ndarray, shape (n_samples,)
+            Output [µm].
+        final_state : numpy.ndarray, shape (n_hysterons,)
+            Play outputs after the last sample [V].
+        """
+        plays, final = play(u, self.thresholds, initial_state)
+        return self.weights @ plays, final
+
+    def peak_output(self, amplitude):
+        """Output at the maximum of a symmetric periodic input, closed form.
+
+        For an input oscillating between -A and A (after the first half
+        period) the loop reaches ``sum_i w_i (A - r_i)`` over the hysterons
+        with r_i < A.
+
+        Parameters
+        ----------
+        amplitude : float
+            Input amplitude A [V].
+
+        Returns
+        -------
+        float
+            Peak output [µm].
+        """
+        active = self.thresholds < amplitude
+        return float(np.sum(self.weights[active] * (amplitude - self.thresholds[active])))
+
+    def secant_gain(self, amplitude):
+        """Secant gain of the major loop of amplitude A, ``peak_output(A)/A``.
+
+        Parameters
+        ----------
+        amplitude : float
+            Input amplitude A [V], > 0.
+
+        Returns
+        -------
+        float
+            Gain [µm/V] (NOTES §4, default compensator normalisation).
+        """
+        if not amplitude > 0:
+            raise HysteresisError(f"amplitude: expected > 0, found {amplitude!r}")
+        return self.peak_output(amplitude) / amplitude
+
+    def slopes(self):
+        """Reachable incremental slopes of the operator.
+
+        After an input reversal the play operators start moving in the order
+        of their thresholds, so the slope ``dy/du`` on any branch is one of
+        the cumulative sums ``S_j = sum_{i<=j} w_i`` (``S_0 = 0`` in the dead
+        band right after a reversal when r_1 > 0).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_hysterons + 1,)
+            ``[0, S_1, ..., S_n]`` [µm/V].
+        """
+        return np.concatenate([[0.0], np.cumsum(self.weights)])
+
+
+_Component = "PrandtlIshlinskii | float | None"
+
+
+@dataclass
+class MultivariablePI:
+    """Multivariable classical PI model, eq. (3)/(4) and Def. 3.2 of [1]_.
+
+    ``y_l(t) = sum_k Gamma_lk(u_k(t))`` for p outputs and m inputs; each
+    component ``Gamma_lk`` is a classical PI operator with its own thresholds
+    and weights, a pure linear gain, or absent. Diagonal components of a
+    square model are the direct transfers; the others are cross-couplings.
+
+    Parameters
+    ----------
+    components : sequence of sequences, shape (p, m)
+        ``components[l][k]`` is a :class:`PrandtlIshlinskii` (a hysteresis
+        from input k to output l), a float (a linear gain [µm/V]) or ``None``
+        (no transfer).
+    input_names : sequence of str, optional
+        Names of the m inputs (default ``u0, u1, ...``).
+    output_names : sequence of str, optional
+        Names of the p outputs (default ``y0, y1, ...``).
+    input_amplitude : array_like, shape (m,), optional
+        Amplitude of the input range each column was identified on [V]
+        (used for the secant gains of the compensator and range warnings).
+
+    Notes
+    -----
+    The play states of all hysterons are one flat vector of length
+    ``n_hysterons``, ordered by output l, then input k, then threshold, as
+    listed by :meth:`hysterons`.
+
+    Raises
+    ------
+    HysteresisError
+        If the component grid is not rectangular, a component has the wrong
+        type, names do not match the grid, or no component is a hysteresis.
+    """
+
+    components: Sequence[Sequence[object]]
+    input_names: Sequence[str] | None = None
+    output_names: Sequence[str] | None = None
+    input_amplitude: np.ndarray | None = None
+    _flat: dict = field(init=False, repr=False)
+
+    def __post_init__(self):
+        rows = [list(row) for row in self.components]
+        if not rows or not rows[0]:
+            raise HysteresisError("components: expected a non-empty p x m grid")
+        m = len(rows[0])
+        for l, row in enumerate(rows):
+            if len(row) != m:
+                raise HysteresisError(
+                    f"components: expected {m} entries in every row, "
+                    f"found {len(row)} in row {l}")
+            for k, comp in enumerate(row):
+                if comp is None or isinstance(comp, PrandtlIshlinskii):
+                    continue
+                if isinstance(comp, (int, float, np.floating, np.integer)) and np.isfinite(comp):
+                    row[k] = float(comp)
+                    continue
+                raise HysteresisError(
+                    f"components[{l}][{k}]: expected a PrandtlIshlinskii, a "
+                    f"finite gain or None, found {comp!r}")
+        self.components = rows
+        p = len(rows)
+        self.input_names = self._names(self.input_names, m, "u", "input_names")
+        self.output_names = self._names(self.output_names, p, "y", "output_names")
+        if self.input_amplitude is not None:
+            amp = _as_finite_array(self.input_amplitude, "input_amplitude", ndim=1)
+            if amp.shape != (m,) or np.any(amp <= 0):
+                raise HysteresisError(
+                    f"input_amplitude: expected {m} positive values, found {amp.tolist()}")
+            self.input_amplitude = amp
+        self._flat = self._flatten()
+
+    @staticmethod
+    def _names(names, count, prefix, field_name):
+        if names is None:
+            return [f"{prefix}{i}" for i in range(count)]
+        names = [str(n) for n in names]
+        if len(names) != count or len(set(names)) != count:
+            raise HysteresisError(
+                f"{field_name}: expected {count} distinct names, found {names}")
+        return names
+
+    def _flatten(self):
+        inp, out, r, w = [], [], [], []
+        gain = np.zeros((self.n_outputs, self.n_inputs))
+        for l, row in enumerate(self.components):
+            for k, comp in enumerate(row):
+                if isinstance(comp, PrandtlIshlinskii):
+                    inp += [k] * comp.n_hysterons
+                    out += [l] * comp.n_hysterons
+                    r.append(comp.thresholds)
+                    w.append(comp.weights)
+                elif comp is not None:
+                    gain[l, k] = comp
+        if not r:
+            raise HysteresisError(
+                "components: expected at least one hysteresis component (Def. 3.1)")
+        return {
+            "input_index": np.asarray(inp, dtype=np.int64),
+            "output_index": np.asarray(out, dtype=np.int64),
+            "thresholds": np.concatenate(r),
+            "weights": np.concatenate(w),
+            "gain": gain,
+        }
+
+    # -- shape ----------------------------------------------------------------
+    @property
+    def n_inputs(self) -> int:
+        """Number of inputs m."""
+        return len(self.components[0])
+
+    @property
+    def n_outputs(self) -> int:
+        """Number of outputs p."""
+        return len(self.components)
+
+    @property
+    def n_hysterons(self) -> int:
+        """Total number of play operators, the length of the state vector."""
+        return self._flat["thresholds"].size
+
+    def hysterons(self):
+        """Flat description of all hysterons, for kernels and interop.
+
+        Returns
+        -------
+        dict
+            ``input_index`` (n_hysterons,) int, ``output_index`` (n_hysterons,)
+            int, ``thresholds`` (n_hysterons,) [V], ``weights`` (n_hysterons,)
+            [µm/V], and ``gain`` (p, m) [µm/V], the pure linear components.
+        """
+        return {k: v.copy() for k, v in self._flat.items()}
+
+    def component(self, output, input):
+        """Component ``Gamma_lk`` by names or indices."""
+        l = output if isinstance(output, int) else self.output_names.index(output)
+        k = input if isinstance(input, int) else self.input_names.index(input)
+        return self.components[l][k]
+
+    # -- simulation ------------------------------------------------------------
+    def check_inputs(self, u, name="inputs"):
+        """Validate an input record and return it as an (m, n_samples) array.
+
+        Raises
+        ------
+        HysteresisError
+            If the array is not (m, n_samples) or holds non-finite values.
+        """
+        u = _as_finite_array(u, name)
+        if u.ndim == 1 and self.n_inputs == 1:
+            u = u[np.newaxis, :]
+        if u.ndim != 2 or u.shape[0] != self.n_inputs:
+            raise HysteresisError(
+                f"{name}: expected shape ({self.n_inputs}, n_samples), found {u.shape}")
+        return u
+
+    def initial_state(self, initial_state=None):
+        """Return a valid copy of a flat play-state vector (zeros by default)."""
+        return _initial_state(initial_state, self.n_hysterons, "initial_state")
+
+    def simulate(self, inputs, initial_state=None):
+        """Outputs of the multivariable PI model for an input record, eq. (4).
+
+        Plain numpy reference implementation (the test oracle of the
+        compiled kernels).
+
+        Parameters
+        ----------
+        inputs : array_like, shape (m, n_samples)
+            Input voltages [V].
+        initial_state : array_like, shape (n_hysterons,), optional
+            Initial play outputs [V]; zeros by default.
+
+        Returns
+        -------
+        outputs : numpy.ndarray, shape (p, n_samples)
+            Displacements [µm].
+        final_state : numpy.ndarray, shape (n_hysterons,)
+            Play outputs after the last sample [V].
+
+        Raises
+        ------
+        HysteresisError
+            On a wrongly shaped or non-finite input or state.
+        """
+        u = self.check_inputs(inputs)
+        s = self.initial_state(initial_state)
+        f = self._flat
+        n = u.shape[1]
+        y = np.empty((self.n_outputs, n))
+        for t in range(n):
+            ut = u[f["input_index"], t]
+            s = np.maximum(ut - f["thresholds"], np.minimum(ut + f["thresholds"], s))
+            y[:, t] = np.bincount(f["output_index"], weights=f["weights"] * s,
+                                  minlength=self.n_outputs) + f["gain"] @ u[:, t]
+        return y, s
+
+    def evaluate(self, inputs, state):
+        """Output for one input vector from a frozen play state, no commit.
+
+        ``Gamma(U; s) = sum w * max(U - r, min(U + r, s)) + G U``.
+
+        Parameters
+        ----------
+        inputs : numpy.ndarray, shape (m,)
+            Input voltages [V].
+        state : numpy.ndarray, shape (n_hysterons,)
+            Play outputs of the previous sample [V].
+
+        Returns
+        -------
+        outputs : numpy.ndarray, shape (p,)
+            Displacements [µm].
+        new_state : numpy.ndarray, shape (n_hysterons,)
+            Play outputs after this input [V].
+        """
+        f = self._flat
+        ut = inputs[f["input_index"]]
+        s = np.maximum(ut - f["thresholds"], np.minimum(ut + f["thresholds"], state))
+        y = np.bincount(f["output_index"], weights=f["weights"] * s,
+                        minlength=self.n_outputs) + f["gain"] @ inputs
+        return y, s
+
+    # -- static properties -----------------------------------------------------
+    def secant_gains(self, amplitude=None):
+        """Secant gain matrix of the major loops, ``Gamma_lk`` peak over A_k.
+
+        Parameters
+        ----------
+        amplitude : array_like, shape (m,), optional
+            Input amplitudes A_k [V]; defaults to ``input_amplitude``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, m)
+            ``K_lk = sum_i w_lki (A_k - r_lki) / A_k`` [µm/V] (NOTES §4);
+            linear components contribute their gain.
+
+        Raises
+        ------
+        HysteresisError
+            If no amplitude is given and the model has no ``input_amplitude``.
+        """
+        if amplitude is None:
+            if self.input_amplitude is None:
+                raise HysteresisError(
+                    "input_amplitude: the model has no identified input range; "
+                    "give the amplitude explicitly")
+            amplitude = self.input_amplitude
+        amp = _as_finite_array(amplitude, "amplitude", ndim=1)
+        if amp.shape != (self.n_inputs,) or np.any(amp <= 0):
+            raise HysteresisError(
+                f"amplitude: expected {self.n_inputs} positive values, found {amp.tolist()}")
+        K = np.zeros((self.n_outputs, self.n_inputs))
+        for l, row in enumerate(self.components):
+            for k, comp in enumerate(row):
+                if isinstance(comp, PrandtlIshlinskii):
+                    K[l, k] = comp.secant_gain(amp[k])
+                elif comp is not None:
+                    K[l, k] = comp
+        return K
+
+    def slope_levels(self, input_index):
+        """Reachable slope columns of one input, in order of input travel.
+
+        After a reversal of input k, the hysterons of every component of
+        column k start moving when the travel exceeds twice their threshold,
+        so the column ``J[:, k]`` of the incremental slope matrix steps
+        through cumulative weight sums (NOTES §4).
+
+        Parameters
+        ----------
+        input_index : int
+            Column k.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_levels, p)
+            Each row is a reachable column ``dY/du_k`` [µm/V], the first one
+            the dead band right after a reversal.
+        """
+        comps = [self.components[l][input_index] for l in range(self.n_outputs)]
+        levels = sorted({float(r) for c in comps if isinstance(c, PrandtlIshlinskii)
+                         for r in c.thresholds})
+        columns = []
+        for lvl in [-1.0] + levels:
+            col = np.zeros(self.n_outputs)
+            for l, c in enumerate(comps):
+                if isinstance(c, PrandtlIshlinskii):
+                    col[l] = c.weights[c.thresholds <= lvl].sum()
+                elif c is not None:
+                    col[l] = c
+            columns.append(col)
+        return np.array(columns)

@@ -1,0 +1,315 @@
+"""Model and preset files (TOML).
+
+A *model file* holds one ``[model]`` table: a multivariable PI model with its
+inputs, outputs, identified input range, shared or per-component thresholds
+and weights (or pure gains). A *preset* is a model file with a ``[preset]``
+table (name, sampling period) and a ``[dynamics]`` table: a complete
+simulated actuator. Identified models are saved in the same format, so the
+compensator and the scenarios accept both. The schema is in the README.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import tomli_w
+
+from .dynamics import DynamicsError, bending_modes, discretize
+from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from .plant import HammersteinPlant
+
+__all__ = [
+    "PresetError",
+    "bundled_presets",
+    "resolve_preset",
+    "read_toml",
+    "model_from_table",
+    "model_to_table",
+    "load_model",
+    "save_model",
+    "load_plant",
+]
+
+
+class PresetError(ValueError):
+    """A model or preset file is missing, malformed or inconsistent."""
+
+
+PRESET_DIR = resources.files("hammerstein") / "presets"
+
+
+def bundled_presets():
+    """Names and paths of the presets shipped with the package.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+    """
+    return {Path(p.name).stem: Path(str(p)) for p in PRESET_DIR.iterdir()
+            if p.name.endswith(".toml")}
+
+
+def resolve_preset(name_or_path, base_dir=None):
+    """Path of a preset given by bundled name or by file path.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path
+        A bundled preset name (see :func:`bundled_presets`) or a TOML path,
+        relative to ``base_dir`` when not absolute.
+    base_dir : pathlib.Path, optional
+        Directory of the file that names the preset.
+
+    Raises
+    ------
+    PresetError
+        If neither a bundled preset nor an existing file matches.
+    """
+    presets = bundled_presets()
+    if str(name_or_path) in presets:
+        return presets[str(name_or_path)]
+    path = Path(name_or_path)
+    if not path.is_absolute() and base_dir is not None:
+        path = Path(base_dir) / path
+    if path.is_file():
+        return path
+    raise PresetError(
+        f"{name_or_path}: not a bundled preset ({', '.join(sorted(presets))}) nor an existing file")
+
+
+def read_toml(path):
+    """Parse a TOML file, with errors that name the file.
+
+    Raises
+    ------
+    PresetError
+        If the file is missing, unreadable or not valid TOML.
+    """
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise PresetError(f"{path}: file not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise PresetError(f"{path}: invalid TOML: {exc}") from None
+    except OSError as exc:
+        raise PresetError(f"{path}: cannot read: {exc.strerror}") from None
+
+
+def model_from_table(table, source="model"):
+    """Build a :class:`MultivariablePI` from a parsed ``[model]`` table.
+
+    Parameters
+    ----------
+    table : dict
+        Keys ``inputs``, ``outputs`` (lists of names), optional
+        ``input_amplitude`` [V], optional shared ``thresholds`` [V], and
+        ``components.<output>.<input>`` tables with ``weights`` [µm/V] and
+        optional ``thresholds`` [V], or ``gain`` [µm/V]. Components not
+        listed are absent.
+    source : str
+        Prefix of error messages (file name).
+
+    Returns
+    -------
+    MultivariablePI
+
+    Raises
+    ------
+    PresetError
+        Naming the key that is missing or wrong.
+    """
+    if not isinstance(table, dict):
+        raise PresetError(f"{source}: model: expected a table")
+    problems = []
+    inputs, outputs = table.get("inputs"), table.get("outputs")
+    for key, val in (("inputs", inputs), ("outputs", outputs)):
+        if not (isinstance(val, list) and val and all(isinstance(v, str) for v in val)):
+            problems.append(f"model.{key}: expected a non-empty list of names")
+    if problems:
+        raise PresetError(f"{source}: " + "; ".join(problems))
+    comps_table = table.get("components", {})
+    if not isinstance(comps_table, dict):
+        raise PresetError(f"{source}: model.components: expected a table of tables")
+    shared_r = table.get("thresholds")
+    grid = [[None] * len(inputs) for _ in outputs]
+    for out_name, row in comps_table.items():
+        if out_name not in outputs:
+            problems.append(f"model.components.{out_name}: unknown output (outputs are {outputs})")
+            continue
+        for in_name, comp in row.items():
+            key = f"model.components.{out_name}.{in_name}"
+            if in_name not in inputs:
+                problems.append(f"{key}: unknown input (inputs are {inputs})")
+                continue
+            if not isinstance(comp, dict):
+                problems.append(f"{key}: expected a table with weights or gain")
+                continue
+            unknown = set(comp) - {"weights", "thresholds", "gain"}
+            if unknown:
+                problems.append(f"{key}: unknown keys {sorted(unknown)} (expected weights, thresholds or gain)")
+                continue
+            try:
+                if "gain" in comp:
+                    if "weights" in comp:
+                        raise HysteresisError("give either gain or weights, not both")
+                    g = comp["gain"]
+                    if not isinstance(g, (int, float)) or not np.isfinite(g):
+                        raise HysteresisError(f"gain: expected a finite number, found {g!r}")
+                    value = float(g)
+                else:
+                    r = comp.get("thresholds", shared_r)
+                    if r is None:
+                        raise HysteresisError("thresholds: none given here nor in model.thresholds")
+                    if "weights" not in comp:
+                        raise HysteresisError("weights: missing")
+                    value = PrandtlIshlinskii(r, comp["weights"])
+            except HysteresisError as exc:
+                problems.append(f"{key}: {exc}")
+                continue
+            grid[outputs.index(out_name)][inputs.index(in_name)] = value
+    if problems:
+        raise PresetError(f"{source}: " + "; ".join(problems))
+    try:
+        return MultivariablePI(grid, input_names=inputs, output_names=outputs,
+                               input_amplitude=table.get("input_amplitude"))
+    except HysteresisError as exc:
+        raise PresetError(f"{source}: model: {exc}") from None
+
+
+def model_to_table(model: MultivariablePI):
+    """Inverse of :func:`model_from_table`: a TOML-ready dict.
+
+    Thresholds are written per component (no shared vector is assumed).
+    """
+    table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
+             "input_unit": "V", "output_unit": "µm"}
+    if model.input_amplitude is not None:
+        table["input_amplitude"] = [float(a) for a in model.input_amplitude]
+    comps = {}
+    for l, out in enumerate(model.output_names):
+        for k, inp in enumerate(model.input_names):
+            c = model.components[l][k]
+            if c is None:
+                continue
+            if isinstance(c, PrandtlIshlinskii):
+                entry = {"thresholds": [float(v) for v in c.thresholds],
+                         "weights": [float(v) for v in c.weights]}
+            else:
+                entry = {"gain": float(c)}
+            comps.setdefault(out, {})[inp] = entry
+    table["components"] = comps
+    return table
+
+
+def load_model(path):
+    """Read the ``[model]`` table of a model or preset file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+
+    Returns
+    -------
+    MultivariablePI
+
+    Raises
+    ------
+    PresetError
+    """
+    data = read_toml(path)
+    if "model" not in data:
+        raise PresetError(f"{path}: missing [model] table")
+    return model_from_table(data["model"], str(path))
+
+
+def save_model(model, path, metadata=None):
+    """Write a model file that :func:`load_model` and scenarios accept.
+
+    Parameters
+    ----------
+    model : MultivariablePI
+    path : str or pathlib.Path
+        Destination ``.toml``; written atomically (temporary file, rename).
+    metadata : dict, optional
+        Stored as an ``[identification]`` table (method, frequency, fit
+        metrics...).
+    """
+    path = Path(path)
+    doc = {}
+    if metadata:
+        doc["identification"] = metadata
+    doc["model"] = model_to_table(model)
+    tmp = path.with_name(path.name + ".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(tmp, "wb") as fh:
+        tomli_w.dump(doc, fh)
+    tmp.replace(path)
+
+
+def dynamics_from_table(table, outputs, source="preset"):
+    """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
+
+    ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
+    ``damping_ratio`` per output; ``kind = "none"`` for a static plant.
+
+    Raises
+    ------
+    PresetError
+    """
+    kind = table.get("kind", "none")
+    if kind == "none":
+        return None
+    if kind != "bending_modes":
+        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes' or 'none', found {kind!r}")
+    for key in ("natural_frequency", "damping_ratio"):
+        if key not in table:
+            raise PresetError(f"{source}: dynamics.{key}: missing")
+        if len(np.atleast_1d(table[key])) != len(outputs):
+            raise PresetError(f"{source}: dynamics.{key}: expected {len(outputs)} values, one per output")
+    try:
+        return bending_modes(table["natural_frequency"], table["damping_ratio"], outputs)
+    except DynamicsError as exc:
+        raise PresetError(f"{source}: dynamics.{exc}") from None
+
+
+def load_plant(preset, dynamics=True, base_dir=None):
+    """Build the simulated actuator of a preset.
+
+    Parameters
+    ----------
+    preset : str or pathlib.Path
+        Bundled preset name or preset file.
+    dynamics : bool
+        ``True`` for the Hammerstein plant (PI + discretised linear
+        dynamics, ZOH with python-control); ``False`` for the static PI.
+    base_dir : pathlib.Path, optional
+        Directory that relative paths are resolved from.
+
+    Returns
+    -------
+    HammersteinPlant
+
+    Raises
+    ------
+    PresetError
+    """
+    path = resolve_preset(preset, base_dir)
+    data = read_toml(path)
+    meta = data.get("preset", {})
+    if "sampling_period" not in meta:
+        raise PresetError(f"{path}: preset.sampling_period: missing (seconds)")
+    T = meta["sampling_period"]
+    if not isinstance(T, (int, float)) or not T > 0:
+        raise PresetError(f"{path}: preset.sampling_period: expected a positive time [s], found {T!r}")
+    model = load_model(path)
+    lin = None
+    if dynamics:
+        cont = dynamics_from_table(data.get("dynamics", {}), model.output_names, str(path))
+        lin = discretize(cont, float(T)) if cont is not None else None
+    name = meta.get("name", path.stem)
+    return HammersteinPlant(model, float(T), lin, name=name)
