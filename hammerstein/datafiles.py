@@ -1,0 +1,213 @@
+"""Reading measured input/output records from delimited text files (pandas).
+
+Real files come with or without a header, with comma, semicolon, tab or
+space separators, sometimes with an empty leading index column (as the
+shipped ``data/piezo-stack-150V-1Hz.csv``). :func:`read_record` handles these
+and turns every problem into a one-line :class:`DataFileError` that names the
+file and what is wrong.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["DataFileError", "Record", "read_record", "bundled_data"]
+
+#: Fewest samples accepted in a record.
+MIN_SAMPLES = 10
+
+
+class DataFileError(ValueError):
+    """A data file cannot be read as a record (names the file and the problem)."""
+
+
+@dataclass(frozen=True)
+class Record:
+    """One measured single-input single-output record.
+
+    Attributes
+    ----------
+    timepts : numpy.ndarray, shape (n_samples,)
+        Time [s], uniform and increasing.
+    u : numpy.ndarray, shape (n_samples,)
+        Input [V].
+    y : numpy.ndarray, shape (n_samples,)
+        Output [µm].
+    input_name, output_name : str
+        Column names (``"column 2"`` style for files without a header).
+    sampling_period : float
+        Sampling period [s].
+    source : str
+        File the record was read from.
+    """
+
+    timepts: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    input_name: str
+    output_name: str
+    sampling_period: float
+    source: str = ""
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return self.u.size
+
+
+def bundled_data(name="piezo-stack-150V-1Hz.csv"):
+    """Path of a data file shipped in ``hammerstein/data``."""
+    return Path(__file__).with_name("data") / name
+
+
+def _is_number(text):
+    try:
+        float(text)
+    except (TypeError, ValueError):
+        return False
+    return True
+
+
+def _sniff_separator(sample):
+    first = next((ln for ln in sample.splitlines() if ln.strip()), "")
+    for sep in (",", ";", "\t"):
+        if sep in first:
+            return sep
+    return r"\s+"
+
+
+def _read_table(path):
+    try:
+        text = path.read_text(encoding="utf-8-sig", errors="replace")
+    except OSError as exc:
+        raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise DataFileError(f"{path}: the file is empty")
+    sep = _sniff_separator("\n".join(lines[:5]))
+    first = next(csv.reader([lines[0]], delimiter=sep)) if sep != r"\s+" else lines[0].split()
+    cells = [c.strip() for c in first if c.strip()]
+    header = any(not _is_number(c) for c in cells)
+    try:
+        frame = pd.read_csv(io.StringIO("\n".join(lines)), sep=sep, header=0 if header else None,
+                            engine="python", skipinitialspace=True)
+    except (pd.errors.ParserError, ValueError) as exc:
+        reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+        raise DataFileError(f"{path}: cannot parse the table ({reason})") from None
+    if header:
+        frame.columns = [str(c).strip() for c in frame.columns]
+    else:
+        frame.columns = list(range(frame.shape[1]))
+    # drop an empty leading index column (all cells empty)
+    if frame.shape[1] > 1 and frame.iloc[:, 0].isna().all():
+        frame = frame.iloc[:, 1:]
+        if not header:
+            frame.columns = list(range(frame.shape[1]))
+    return frame, header
+
+
+def _column(frame, header, key, role, path):
+    names = [str(c) for c in frame.columns]
+    available = ", ".join(f"{i}:{n}" if header else str(i) for i, n in enumerate(names))
+    if isinstance(key, str) and key.strip().lstrip("-").isdigit():
+        key = int(key)
+    if isinstance(key, (int, np.integer)):
+        if not 0 <= key < frame.shape[1]:
+            raise DataFileError(
+                f"{path}: {role} column {key} out of range; available columns: {available}")
+        col = frame.iloc[:, int(key)]
+        name = names[int(key)] if header else f"column {int(key)}"
+    else:
+        if key not in names:
+            raise DataFileError(
+                f"{path}: no {role} column named {key!r}; available columns: {available}")
+        col = frame[key]
+        name = str(key)
+    values = pd.to_numeric(col, errors="coerce")
+    bad = values.isna()
+    if bad.any():
+        row = int(np.flatnonzero(bad.to_numpy())[0])
+        raise DataFileError(
+            f"{path}: {role} column {name!r}: non-numeric or empty cell {col.iloc[row]!r} "
+            f"at data row {row + 1}")
+    arr = values.to_numpy(dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise DataFileError(f"{path}: {role} column {name!r}: infinite values")
+    return arr, name
+
+
+def read_record(path, input, output, time=None, sampling_period=None):
+    """Read a single-input single-output record from a delimited text file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        CSV / text file. A header is detected when a cell of the first
+        non-comment line is not a number; separators ``,`` ``;`` tab or
+        whitespace are detected; lines starting with ``#`` are ignored; an
+        empty leading index column is dropped.
+    input, output : str or int
+        Input [V] and output [µm] columns, by header name or 0-based index
+        (after dropping an empty index column).
+    time : str or int, optional
+        Time column [s]; must be increasing and uniform (within 1 % of the
+        median step).
+    sampling_period : float, optional
+        Sampling period [s] when there is no time column.
+
+    Returns
+    -------
+    Record
+
+    Raises
+    ------
+    DataFileError
+        Missing or empty file, unparsable table, missing or misnamed column
+        (the available ones are listed), non-numeric cells, non-increasing or
+        non-uniform time, fewer than 10 samples, neither ``time`` nor
+        ``sampling_period``, or both disagreeing.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise DataFileError(f"{path}: no such file")
+    if path.is_dir():
+        raise DataFileError(f"{path}: is a directory, expected a data file")
+    frame, header = _read_table(path)
+    if frame.shape[0] < MIN_SAMPLES:
+        raise DataFileError(
+            f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
+    u, uname = _column(frame, header, input, "input", path)
+    y, yname = _column(frame, header, output, "output", path)
+    if time is not None:
+        t, tname = _column(frame, header, time, "time", path)
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            i = int(np.flatnonzero(dt <= 0)[0])
+            raise DataFileError(
+                f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
+                f"({t[i]:g} s then {t[i + 1]:g} s)")
+        T = float(np.median(dt))
+        if np.max(np.abs(dt - T)) > 0.01 * T:
+            i = int(np.argmax(np.abs(dt - T)))
+            raise DataFileError(
+                f"{path}: time column {tname!r} is not uniformly sampled: step {dt[i]:g} s at "
+                f"data row {i + 2}, median step {T:g} s (resample the record first)")
+        if sampling_period is not None and not np.isclose(sampling_period, T, rtol=0.01):
+            raise DataFileError(
+                f"{path}: sampling period {sampling_period:g} s disagrees with the time "
+                f"column step {T:g} s")
+    else:
+        if sampling_period is None:
+            raise DataFileError(f"{path}: give a time column or a sampling period [s]")
+        if not (np.isfinite(sampling_period) and sampling_period > 0):
+            raise DataFileError(
+                f"{path}: sampling period: expected a positive time [s], found {sampling_period!r}")
+        T = float(sampling_period)
+        t = np.arange(u.size) * T
+    return Record(t, u, y, uname, yname, T, str(path))
