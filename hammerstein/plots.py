@@ -1,0 +1,177 @@
+"""Figures like the paper's (matplotlib, Agg backend).
+
+* :func:`loop_grid`: input-output maps in a p x m grid, panel (l, k) the map
+  of abscissa k against output l, lettered (a), (b), ... row by row as in the
+  paper's Fig. 5 and 8 ((a) direct x, (b) cross-coupling on x, (c)
+  cross-coupling on y, (d) direct y).
+* :func:`trajectory_figure`: XY plot with the reference, time plot and
+  tracking-error plot (Fig. 10-13).
+* :func:`xy_overlay`: several XY trajectories in one plot (Fig. 10-a).
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+__all__ = ["loop_grid", "trajectory_figure", "xy_overlay", "save"]
+
+_STYLES = ["-", "--", "-.", ":"]
+_MARKERS = [None, None, "o", "x", "s", "^"]
+
+
+def _style(i):
+    return dict(linestyle=_STYLES[i % len(_STYLES)], marker=_MARKERS[i % len(_MARKERS)],
+                markevery=0.08, markersize=4, linewidth=1.3)
+
+
+def loop_grid(curves, x_labels, y_labels, title, direct_label="direct",
+              cross_label="cross-coupling"):
+    """Input-output maps of direct transfers and cross-couplings.
+
+    Parameters
+    ----------
+    curves : list of dict
+        Each with ``label`` (str), ``column`` (int k), ``x`` (array, shape
+        (n,)) the abscissa [V or µm], and ``outputs`` (array, shape (p, n))
+        [µm].
+    x_labels : sequence of str, length m
+        Axis labels of the abscissae, e.g. ``'u_x [V]'``.
+    y_labels : sequence of str, length p
+        Axis labels of the outputs, e.g. ``'x [µm]'``.
+    title : str
+    direct_label, cross_label : str
+        Panel captions.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    p, m = len(y_labels), len(x_labels)
+    fig, axes = plt.subplots(p, m, figsize=(5.2 * m, 4.2 * p), squeeze=False)
+    counts = [0] * m
+    for c in curves:
+        k = c["column"]
+        for l in range(p):
+            axes[l][k].plot(c["x"], c["outputs"][l], label=c["label"], **_style(counts[k]))
+        counts[k] += 1
+    letters = "abcdefghijklmnopqrstuvwxyz"
+    for l in range(p):
+        for k in range(m):
+            ax = axes[l][k]
+            kind = direct_label if l == k else cross_label
+            ax.set_title(f"({letters[l * m + k]}) {kind}: {y_labels[l].split(' ')[0]} vs "
+                         f"{x_labels[k].split(' ')[0]}", fontsize=10)
+            ax.set_xlabel(x_labels[k])
+            ax.set_ylabel(y_labels[l])
+            ax.grid(True, alpha=0.3)
+            if counts[k]:
+                ax.legend(fontsize=8, loc="best")
+            else:
+                ax.text(0.5, 0.5, "no case drives this input", ha="center", va="center",
+                        transform=ax.transAxes, color="0.5")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def trajectory_figure(time, reference, outputs, names, title, diverged_at=None):
+    """XY plot, time plot and tracking-error plot of a 2-D trajectory.
+
+    Parameters
+    ----------
+    time : array_like, shape (n,)
+        [s].
+    reference, outputs : array_like, shape (2, n)
+        ``(x_r, y_r)`` and ``(x, y)`` [µm] (outputs may hold NaN after a
+        divergence).
+    names : sequence of 2 str
+        Output names.
+    title : str
+    diverged_at : float, optional
+        Divergence time [s], marked on the time plots.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    t = np.asarray(time) * 1e3
+    r = np.asarray(reference)
+    y = np.asarray(outputs)
+    e = r - y
+    fig = plt.figure(figsize=(13, 4.6))
+    gs = fig.add_gridspec(2, 3, width_ratios=[1.0, 1.4, 1.4])
+    ax = fig.add_subplot(gs[:, 0])
+    ax.plot(r[0], r[1], "--", color="0.35", label="reference", linewidth=1.2)
+    ax.plot(y[0], y[1], "-", color="C0", label="output", linewidth=1.0)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{names[0]} [µm]")
+    ax.set_ylabel(f"{names[1]} [µm]")
+    ax.set_title("(a) spatial domain", fontsize=10)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.grid(True, alpha=0.3)
+    axt = fig.add_subplot(gs[:, 1])
+    for i, n in enumerate(names):
+        axt.plot(t, r[i], "--", color=f"C{i}", linewidth=1.0, label=f"{n}_r")
+        axt.plot(t, y[i], "-", color=f"C{i}", linewidth=1.0, alpha=0.8, label=n)
+    axt.set_xlabel("time [ms]")
+    axt.set_ylabel("displacement [µm]")
+    axt.set_title("(b) time domain", fontsize=10)
+    axt.legend(fontsize=8, ncol=2, loc="upper right")
+    axt.grid(True, alpha=0.3)
+    axe = fig.add_subplot(gs[:, 2])
+    axe.plot(t, e[0], "-", color="C0", linewidth=1.0, label=f"{names[0]}_r - {names[0]}")
+    axe.plot(t, e[1], "-", color="C1", linewidth=1.0, label=f"{names[1]}_r - {names[1]}")
+    axe.plot(t, np.sqrt(e[0] ** 2 + e[1] ** 2), "-", color="k", linewidth=0.8,
+             label="Euclidean ||Y_r - Y||")
+    axe.set_xlabel("time [ms]")
+    axe.set_ylabel("tracking error [µm]")
+    axe.set_title("(c) tracking error", fontsize=10)
+    axe.legend(fontsize=8, loc="upper right")
+    axe.grid(True, alpha=0.3)
+    if diverged_at is not None:
+        for a in (axt, axe):
+            a.axvline(diverged_at * 1e3, color="r", linestyle=":", label="divergence")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def xy_overlay(curves, names, title):
+    """Several XY trajectories with their references (paper Fig. 10-a).
+
+    Parameters
+    ----------
+    curves : list of dict
+        Each with ``label``, ``reference`` and ``outputs`` (arrays, shape
+        (2, n)) [µm].
+    names : sequence of 2 str
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = plt.subplots(figsize=(6, 6))
+    for i, c in enumerate(curves):
+        ax.plot(c["reference"][0], c["reference"][1], "--", color="0.4", linewidth=1.0)
+        ax.plot(c["outputs"][0], c["outputs"][1], "-", color=f"C{i}", linewidth=1.1,
+                label=c["label"])
+    ax.plot([], [], "--", color="0.4", label="references")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{names[0]} [µm]")
+    ax.set_ylabel(f"{names[1]} [µm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title)
+    fig.tight_layout()
+    return fig
+
+
+def save(fig, path):
+    """Write a figure as PNG (120 dpi) and close it."""
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

@@ -1,0 +1,210 @@
+"""Report directory of a scenario: metrics.csv, time series, figures, report.md.
+
+Layout of ``DIR/<scenario name>/`` (written by
+:func:`hammerstein.runner.run_scenario` through :func:`write_report`):
+
+* ``metrics.csv``: long format, exactly the columns
+  ``case,channel,metric,value,unit``;
+* ``timeseries-<case>.csv``: ``time_s``, the references ``<output>_ref_um``
+  (compensated cases), the inputs ``<input>_V`` and the outputs
+  ``<output>_um``;
+* ``*.png``: input-output maps (open-loop and compensated sines, paper Fig. 5
+  and 8), trajectory figures (Fig. 10-13), divergence plots;
+* ``report.md``: the cases, the figures and the metrics table.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from . import plots
+
+__all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table"]
+
+COLUMNS = ["case", "channel", "metric", "value", "unit"]
+
+
+def metrics_frame(results):
+    """Long-format metrics of all cases.
+
+    Parameters
+    ----------
+    results : list of hammerstein.runner.CaseResult
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``case, channel, metric, value, unit``.
+    """
+    rows = [{"case": r.name, **row} for r in results for row in r.metrics]
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def timeseries_frame(result):
+    """Time series of one case: time, references, inputs, outputs.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``time_s``, ``<output>_ref_um`` (compensated cases only),
+        ``<input>_V``, ``<output>_um``.
+    """
+    model = result.spec.plant.hysteresis
+    cols = {"time_s": result.spec.time}
+    if result.reference is not None:
+        for l, o in enumerate(model.output_names):
+            cols[f"{o}_ref_um"] = result.reference[l]
+    for k, i in enumerate(model.input_names):
+        cols[f"{i}_V"] = result.inputs[k]
+    for l, o in enumerate(model.output_names):
+        cols[f"{o}_um"] = result.outputs[l]
+    return pd.DataFrame(cols)
+
+
+def markdown_table(frame, floatfmt="{:.4g}"):
+    """A pandas DataFrame as a GitHub markdown table (no extra dependency)."""
+    def fmt(v):
+        if isinstance(v, (float, np.floating)):
+            return "" if np.isnan(v) else floatfmt.format(v)
+        return str(v)
+    head = "| " + " | ".join(map(str, frame.columns)) + " |"
+    sep = "|" + "|".join("---" for _ in frame.columns) + "|"
+    body = ["| " + " | ".join(fmt(v) for v in row) + " |" for row in frame.itertuples(index=False)]
+    return "\n".join([head, sep, *body])
+
+
+def _plant_label(spec):
+    return "hammerstein" if spec.plant_spec.get("dynamics", True) else "static"
+
+
+def _signal_summary(spec):
+    s = spec.signal_spec
+    skip = {"kind"}
+    args = ", ".join(f"{k}={v}" for k, v in s.items() if k not in skip)
+    return f"{spec.mode} {s.get('kind')} ({args})"
+
+
+def _compensator_summary(spec):
+    if spec.mode == "drive":
+        return "none (open loop)"
+    c = spec.compensator_spec
+    return ", ".join(f"{k}={v}" for k, v in c.items())
+
+
+def _last_period(x, P):
+    # one full period plus the first sample again, so the loop closes
+    return np.concatenate([x[..., -P:], x[..., -P:-P + 1]], axis=-1)
+
+
+def _figures(scenario, results, directory):
+    """Write the figures; return [(caption, file name)]."""
+    figs = []
+    ok = [r for r in results if r.divergence is None]
+    first = results[0].spec.plant.hysteresis
+    in_names, out_names = list(first.input_names), list(first.output_names)
+    # open-loop maps, grouped by plant
+    groups = {}
+    for r in ok:
+        if r.spec.mode == "drive":
+            groups.setdefault(_plant_label(r.spec), []).append(r)
+    for label, rs in groups.items():
+        curves = [{"label": r.name, "column": r.spec.driven_input,
+                   "x": _last_period(r.inputs[r.spec.driven_input], r.spec.period_samples),
+                   "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
+        fig = plots.loop_grid(curves, [f"{n} [V]" for n in in_names],
+                              [f"{n} [µm]" for n in out_names],
+                              f"{scenario.title}: open-loop input-output maps ({label} plant, last period)")
+        fname = f"maps-open-loop-{label}.png"
+        plots.save(fig, directory / fname)
+        figs.append((f"Open-loop hysteresis and cross-couplings, {label} plant", fname))
+    # compensated single-axis sines, grouped by plant and compensator
+    groups = {}
+    for r in ok:
+        if r.spec.mode == "reference" and r.spec.loop_channel is not None:
+            key = (_plant_label(r.spec), repr(sorted(r.spec.compensator_spec.items())))
+            groups.setdefault(key, []).append(r)
+    for i, ((label, _), rs) in enumerate(groups.items()):
+        curves = [{"label": r.name, "column": r.spec.loop_channel,
+                   "x": _last_period(r.reference[r.spec.loop_channel], r.spec.period_samples),
+                   "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
+        fig = plots.loop_grid(curves, [f"{n}_r [µm]" for n in out_names],
+                              [f"{n} [µm]" for n in out_names],
+                              f"{scenario.title}: compensated maps ({label} plant, last period)",
+                              direct_label="compensated direct", cross_label="residual cross-coupling")
+        fname = f"maps-compensated-{label}{'' if i == 0 else f'-{i + 1}'}.png"
+        plots.save(fig, directory / fname)
+        comp = _compensator_summary(rs[0].spec)
+        figs.append((f"Compensated input-output maps, {label} plant, compensator {comp}", fname))
+    # trajectories (and diverged cases)
+    traj = [r for r in results if r.spec.mode == "reference"
+            and (r.spec.loop_channel is None or r.divergence is not None)]
+    for r in traj:
+        names = out_names[:2]
+        fig = plots.trajectory_figure(r.spec.time, r.reference[:2], r.outputs[:2], names,
+                                      f"{scenario.title}: {r.name} ({_plant_label(r.spec)} plant)",
+                                      diverged_at=r.diverged_at)
+        fname = f"trajectory-{r.name}.png"
+        plots.save(fig, directory / fname)
+        figs.append((f"Case {r.name}: spatial domain, time domain, tracking error", fname))
+    multi = [r for r in traj if r.divergence is None]
+    if len(multi) > 1:
+        curves = []
+        for r in multi:
+            start = int(round(r.spec.settle_periods * r.spec.period_samples))
+            curves.append({"label": r.name, "reference": r.reference[:2, start:],
+                           "outputs": r.outputs[:2, start:]})
+        fig = plots.xy_overlay(curves, out_names[:2], f"{scenario.title}: trajectories (after settling)")
+        plots.save(fig, directory / "xy-all.png")
+        figs.append(("All trajectories after settling (dashed: references)", "xy-all.png"))
+    return figs
+
+
+def write_report(scenario, results, directory):
+    """Write metrics.csv, the time series, the figures and report.md.
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenarios.Scenario
+    results : list of hammerstein.runner.CaseResult
+    directory : pathlib.Path
+        Existing (temporary) directory to fill.
+    """
+    directory = Path(directory)
+    frame = metrics_frame(results)
+    frame.to_csv(directory / "metrics.csv", index=False)
+    for r in results:
+        timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
+                                   float_format="%.6g")
+    figs = _figures(scenario, results, directory)
+    lines = [f"# {scenario.title}", ""]
+    if scenario.description:
+        lines += [scenario.description.strip(), ""]
+    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, seed {scenario.seed}).",
+              "Metrics are computed after `settle_periods` periods; loop metrics over the last "
+              "full period. The Euclidean error is ||Y_r - Y|| per sample (NOTES §6; the "
+              "paper's ε is not a distance and is not used).", "", "## Cases", ""]
+    table = pd.DataFrame([{
+        "case": r.name,
+        "signal": _signal_summary(r.spec),
+        "plant": f"{r.spec.plant_spec.get('preset')} ({_plant_label(r.spec)})",
+        "compensator": _compensator_summary(r.spec),
+        "samples": r.spec.time.size,
+        "status": ("ok" if r.divergence is None else
+                   f"DIVERGED at sample {r.divergence.sample} "
+                   f"(t = {r.diverged_at * 1e3:.3g} ms): {r.divergence.reason}"),
+    } for r in results])
+    lines += [markdown_table(table), ""]
+    notes = [(r.name, w) for r in results for w in dict.fromkeys(r.warnings)]
+    if notes:
+        lines += ["Warnings:", ""] + [f"- `{n}`: {w}" for n, w in notes] + [""]
+    lines += ["## Figures", ""]
+    for caption, fname in figs:
+        lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
+    lines += ["## Metrics", "", "Long format in `metrics.csv`; time series in "
+              "`timeseries-<case>.csv`.", ""]
+    if not frame.empty:
+        lines += [markdown_table(frame), ""]
+    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")

@@ -1,0 +1,337 @@
+"""Run scenarios: simulate every case, compute metrics, write the report.
+
+``run_scenario(path, out_dir)`` validates the file
+(:func:`hammerstein.scenarios.load_scenario`), simulates each case (an
+open-loop drive on the plant, or reference -> compensator -> plant with
+:func:`hammerstein.simulation.simulate_chain`), computes the metrics and
+writes ``out_dir/<scenario name>/`` atomically: the report is built in a
+temporary directory next to the target and renamed over it, so a failing
+scenario leaves nothing behind.
+
+Compensators are built by :func:`build_compensator` from the registry
+:data:`COMPENSATORS` (kind -> :class:`CompensatorKind`); add a kind by adding
+an entry. A compensator is any object with ``.name`` and
+``.simulate(reference (m, N), initial_state=None) -> (inputs (m, N), final_state)``.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import pandas as pd
+
+from . import metrics as met
+from .compensators import InverseMultiplicativeCompensator
+from .presets import load_model
+from .scenarios import Field, Invalid, ScenarioError, choice, integer, load_scenario, string
+from .simulation import simulate_chain
+
+__all__ = [
+    "CompensatorKind",
+    "COMPENSATORS",
+    "build_compensator",
+    "resolve_model",
+    "CaseResult",
+    "ScenarioOutcome",
+    "METRIC_COLUMNS",
+    "run_case",
+    "run_scenario",
+    "run_scenarios",
+]
+
+#: Columns of metrics.csv and of ScenarioOutcome.metrics.
+METRIC_COLUMNS = ["case", "channel", "metric", "value", "unit"]
+
+
+@dataclass
+class CompensatorKind:
+    """An entry of the compensator registry.
+
+    Attributes
+    ----------
+    build : callable
+        ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;
+        ``spec`` is the validated ``[compensator]`` table (defaults filled).
+    fields : dict of str to hammerstein.scenarios.Field
+        The keys this kind accepts besides ``kind`` (validated by
+        ``hammerstein validate``).
+    description : str
+        One line for ``hammerstein list`` and the README.
+    """
+
+    build: Callable[[dict, Any, Path], Any]
+    fields: dict = field(default_factory=dict)
+    description: str = ""
+
+
+def resolve_model(spec_model, plant, base_dir):
+    """The multivariable PI model a compensator is built from.
+
+    Parameters
+    ----------
+    spec_model : str
+        ``"plant"`` (the plant's own PI model) or a model/preset TOML path,
+        relative to ``base_dir`` when not absolute.
+    plant : HammersteinPlant
+    base_dir : pathlib.Path
+
+    Returns
+    -------
+    MultivariablePI
+
+    Raises
+    ------
+    PresetError
+        If the model file is missing or invalid.
+    """
+    if spec_model in (None, "plant"):
+        return plant.hysteresis
+    path = Path(spec_model)
+    if not path.is_absolute():
+        path = Path(base_dir) / path
+    return load_model(path)
+
+
+def _gain(v):
+    if v in ("secant", "identity"):
+        return v
+    if isinstance(v, list) and v and all(isinstance(r, list) and len(r) == len(v) and
+                                         all(isinstance(a, (int, float)) and not isinstance(a, bool)
+                                             for a in r) for r in v):
+        return v
+    raise Invalid(f"expected 'secant', 'identity' or a square matrix [[..],[..]] [µm/V], found {v!r}")
+
+
+def _build_none(spec, plant, base_dir):
+    return None
+
+
+def _build_multivariable(spec, plant, base_dir):
+    model = resolve_model(spec.get("model", "plant"), plant, base_dir)
+    return InverseMultiplicativeCompensator(
+        model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
+        check=spec.get("check", "error"))
+
+
+# -- registry of compensator kinds: add entries here ---------------------------------
+COMPENSATORS: dict[str, CompensatorKind] = {
+    "none": CompensatorKind(_build_none, {}, "no compensator (open-loop drives only)"),
+    "multivariable": CompensatorKind(
+        _build_multivariable,
+        {"model": Field(string(), default="plant"),
+         "gain": Field(_gain, default="secant"),
+         "iterations": Field(integer(1), default=1),
+         "check": Field(choice("error", "warn", "ignore"), default="error")},
+        "inverse multiplicative compensator of Theorem 4.1, normalised by K (NOTES §4)"),
+}
+
+
+def build_compensator(spec, plant, base_dir):
+    """Build the compensator of a ``[compensator]`` table.
+
+    Parameters
+    ----------
+    spec : dict
+        Validated table; ``kind`` selects the :data:`COMPENSATORS` entry
+        (default ``"none"``).
+    plant : HammersteinPlant
+        The simulated plant (its PI model is ``model = "plant"``).
+    base_dir : pathlib.Path
+        Directory of the scenario file (relative model paths).
+
+    Returns
+    -------
+    object or None
+        A compensator, or None for ``kind = "none"``.
+
+    Raises
+    ------
+    ValueError
+        Unknown kind; or the builder's own errors (CompensatorError,
+        PresetError), e.g. a law refused by the convergence check.
+    """
+    kind = spec.get("kind", "none")
+    if kind not in COMPENSATORS:
+        raise ValueError(f"kind: expected one of {', '.join(COMPENSATORS)}, found {kind!r}")
+    return COMPENSATORS[kind].build(spec, plant, Path(base_dir))
+
+
+@dataclass
+class CaseResult:
+    """Simulation and metrics of one case.
+
+    Attributes
+    ----------
+    spec : CaseSpec
+    inputs : numpy.ndarray, shape (m, n_samples)
+        Voltages [V] (NaN after a divergence).
+    outputs : numpy.ndarray, shape (p, n_samples)
+        Displacements [µm] (NaN after a divergence).
+    reference : numpy.ndarray or None, shape (p, n_samples)
+        [µm]; None for drives.
+    divergence : CompensatorDivergence or None
+    metrics : list of dict
+        Rows ``{channel, metric, value, unit}``.
+    warnings : list of str
+    """
+
+    spec: Any
+    inputs: np.ndarray
+    outputs: np.ndarray
+    reference: np.ndarray | None
+    divergence: Any
+    metrics: list
+    warnings: list
+
+    @property
+    def name(self):
+        return self.spec.name
+
+    @property
+    def diverged_at(self):
+        """Time of the divergence [s], or None."""
+        if self.divergence is None:
+            return None
+        return float(self.divergence.sample * self.spec.plant.sampling_period)
+
+
+def run_case(case):
+    """Simulate one resolved case and compute its metrics.
+
+    Parameters
+    ----------
+    case : hammerstein.scenarios.CaseSpec
+
+    Returns
+    -------
+    CaseResult
+        A compensator divergence is a result (metric ``diverged_at_time``
+        [s]), not an exception.
+    """
+    plant = case.plant
+    names = list(plant.hysteresis.output_names)
+    caught = list(case.warnings)
+    if case.mode == "drive":
+        y, _ = plant.simulate(case.signal)
+        rows = met.open_loop_metrics(case.signal, y, case.driven_input, names,
+                                     case.period_samples, case.settle_periods)
+        return CaseResult(case, case.signal, y, None, None, rows, caught)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        res = simulate_chain(case.compensator, plant, case.signal)
+    caught += [str(w.message) for w in rec]
+    if res.diverged:
+        t = float(res.divergence.sample * plant.sampling_period)
+        rows = [{"channel": "+".join(names), "metric": "diverged_at_time", "value": t,
+                 "unit": met.UNITS["diverged_at_time"]}]
+    else:
+        rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
+                                    case.settle_periods, scale=case.scale,
+                                    loop_channel=case.loop_channel)
+    return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
+
+
+@dataclass
+class ScenarioOutcome:
+    """What happened to one scenario file.
+
+    Attributes
+    ----------
+    name : str
+        Scenario name (the file stem when the file could not be read).
+    path : pathlib.Path
+    ok : bool
+    error : str or None
+        The problems, one per line, when not ok.
+    out_dir : pathlib.Path or None
+        ``DIR/<name>/`` when written.
+    metrics : pandas.DataFrame
+        Columns ``case, channel, metric, value, unit`` (empty when not ok).
+    """
+
+    name: str
+    path: Path
+    ok: bool
+    error: str | None
+    out_dir: Path | None
+    metrics: pd.DataFrame
+
+
+def _empty_metrics():
+    return pd.DataFrame({c: pd.Series(dtype=float if c == "value" else object)
+                         for c in METRIC_COLUMNS})
+
+
+def _atomic_write(out_dir, name, writer):
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out_dir))
+    target = out_dir / name
+    try:
+        writer(tmp)
+        if target.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".old", dir=out_dir))
+            target.rename(old / "previous")
+            tmp.rename(target)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(target)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return target
+
+
+def run_scenario(path, out_dir):
+    """Validate, simulate and write the report of one scenario.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Scenario TOML file.
+    out_dir : str or pathlib.Path
+        Reports directory; the report goes to ``out_dir/<scenario name>/``.
+
+    Returns
+    -------
+    ScenarioOutcome
+        Never raises for a bad scenario or a failed simulation: ``ok`` is
+        False and ``error`` says why; nothing is written then.
+    """
+    from .reports import metrics_frame, write_report
+    path = Path(path)
+    name = path.stem
+    try:
+        scenario = load_scenario(path)
+        name = scenario.name
+        results = [run_case(c) for c in scenario.cases]
+        frame = metrics_frame(results)
+        target = _atomic_write(out_dir, name, lambda d: write_report(scenario, results, d))
+    except ScenarioError as exc:
+        return ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics())
+    except Exception as exc:  # a failed scenario must not stop the others
+        return ScenarioOutcome(name, path, False, f"{path}: {type(exc).__name__}: {exc}",
+                               None, _empty_metrics())
+    return ScenarioOutcome(name, path, True, None, target, frame)
+
+
+def run_scenarios(paths, out_dir):
+    """Run several scenarios; a failure does not stop the others.
+
+    Parameters
+    ----------
+    paths : iterable of str or pathlib.Path
+    out_dir : str or pathlib.Path
+
+    Returns
+    -------
+    list of ScenarioOutcome
+        In the order of ``paths``.
+    """
+    return [run_scenario(p, out_dir) for p in paths]
