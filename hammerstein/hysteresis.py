@@ -110,11 +110,8 @@ def play(u, thresholds, initial_state=None):
     u = _as_finite_array(u, "u", ndim=1)
     r = validate_thresholds(thresholds)
     state = _initial_state(initial_state, r.size, "initial_state")
-    y = np.empty((r.size, u.size))
-    for t in range(u.size):
-        state = np.maximum(u[t] - r, np.minimum(u[t] + r, state))
-        y[:, t] = state
-    return y, state.copy()
+    from .simulation import simulate_plays  # all time stepping lives there
+    return simulate_plays(u, r, state)
 
 
 def _initial_state(initial_state, size, name):
@@ -404,8 +401,8 @@ class MultivariablePI:
     def simulate(self, inputs, initial_state=None):
         """Outputs of the multivariable PI model for an input record, eq. (4).
 
-        Plain numpy reference implementation (the test oracle of the
-        compiled kernels).
+        Stepped by :func:`hammerstein.simulation.simulate_hysteresis` (compiled
+        kernel; ``backend='numpy'`` there is the reference implementation).
 
         Parameters
         ----------
@@ -426,17 +423,8 @@ class MultivariablePI:
         HysteresisError
             On a wrongly shaped or non-finite input or state.
         """
-        u = self.check_inputs(inputs)
-        s = self.initial_state(initial_state)
-        f = self._flat
-        n = u.shape[1]
-        y = np.empty((self.n_outputs, n))
-        for t in range(n):
-            ut = u[f["input_index"], t]
-            s = np.maximum(ut - f["thresholds"], np.minimum(ut + f["thresholds"], s))
-            y[:, t] = np.bincount(f["output_index"], weights=f["weights"] * s,
-                                  minlength=self.n_outputs) + f["gain"] @ u[:, t]
-        return y, s
+        from .simulation import simulate_hysteresis  # all time stepping lives there
+        return simulate_hysteresis(self, inputs, initial_state)
 
     def evaluate(self, inputs, state):
         """Output for one input vector from a frozen play state, no commit.
