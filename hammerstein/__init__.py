@@ -9,6 +9,9 @@ Hammerstein actuator (multivariable PI + python-control linear dynamics).
 from .compensators import (CompensatorDivergence, CompensatorError, ConvergenceReport,
                            ConvergenceWarning, InverseMultiplicativeCompensator,
                            convergence_report)
+from .compensators import (PerAxisInverseCompensator, RangeWarning, StaticGainCompensator, check_reference_range, diagonal_compensator)
+from .inverse import InversePI, InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
+from .stability import literal_gain_equivalent_scale, stability_map
 from .dynamics import DynamicsError, bandwidths_hz, bending_modes, discretize
 from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
 from .plant import HammersteinPlant

@@ -9,6 +9,18 @@ matrices J of the model (NOTES §4). Normalised by a static gain matrix K,
 
 it converges when ``rho(I - K^-1 J) < 1`` for every reachable J; K = I is
 the paper's literal law.
+
+The family, each built from an identified model with one call:
+
+- :class:`InverseMultiplicativeCompensator` (multivariable, normalised; delay
+  or first-order low-pass feedback; iterations per sample);
+- :func:`diagonal_compensator`: the same law on the direct transfers only;
+- :class:`PerAxisInverseCompensator`: the per-axis analytic inverse PI of
+  Kuhnen & Janocha (paper ref. [20], NOTES §5, :mod:`hammerstein.inverse`);
+- :class:`StaticGainCompensator`: no hysteresis compensation, ``U = K^-1 Yr``.
+
+All have ``simulate(reference (m, N) [µm], initial_state=None) -> (inputs
+(m, N) [V], final_state)``, ``name``, ``n_states`` and ``initial_state()``.
 """
 
 from __future__ import annotations
@@ -19,7 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .hysteresis import HysteresisError, MultivariablePI
+from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from .inverse import kuhnen_inverse
 
 __all__ = [
     "CompensatorError",
@@ -28,6 +41,11 @@ __all__ = [
     "ConvergenceReport",
     "convergence_report",
     "InverseMultiplicativeCompensator",
+    "diagonal_compensator",
+    "PerAxisInverseCompensator",
+    "StaticGainCompensator",
+    "RangeWarning",
+    "check_reference_range",
 ]
 
 
@@ -37,6 +55,10 @@ class CompensatorError(ValueError):
 
 class ConvergenceWarning(UserWarning):
     """The compensator's fixed-point iteration may not converge."""
+
+
+class RangeWarning(UserWarning):
+    """A reference leaves the output range the model was identified on."""
 
 
 class CompensatorDivergence(RuntimeError):
@@ -193,6 +215,28 @@ class InverseMultiplicativeCompensator:
     divergence_bound : float, optional
         |U| [V] beyond which the simulation stops as diverged; default
         1000 times the largest identified input amplitude (or 1e4 V).
+    name : str
+        Label used in reports.
+    feedback : {'delay', 'lowpass'}
+        ``'delay'`` (default): the one-sample delay of Theorem 4.1.
+        ``'lowpass'``: a first-order low-pass filter in the feedback path
+        (paper Section 6), see Notes.
+    cutoff_hz : float, optional
+        Cut-off frequency of the low-pass feedback [Hz]; required for
+        ``'lowpass'``, > 0 and below the Nyquist frequency ``1/(2T)``.
+    sampling_period : float, optional
+        Sampling period T [s]; required for ``'lowpass'``.
+
+    Notes
+    -----
+    With ``v(t) = U(t) - K^-1 Gamma(U(t))`` the low-pass law is
+
+    ``v_f(t) = a v_f(t-T) + (1-a) v(t-T)``, ``a = exp(-2 pi cutoff_hz T)``,
+    ``U(t) = K^-1 Yr(t) + v_f(t)``;
+
+    ``a = 0`` gives back the delay law; the low-pass law takes one
+    iteration per sample. Flat state: ``U(t-T)`` (m) then, for
+    ``'lowpass'``, ``v_f(t-T)`` (m) [V], then the play states [V].
 
     Attributes
     ----------
@@ -202,12 +246,15 @@ class InverseMultiplicativeCompensator:
         Its inverse [V/µm].
     convergence : ConvergenceReport
         The check made at construction.
+    filter_coefficient : float
+        ``a`` of the low-pass feedback (0 for the delay).
 
     Raises
     ------
     CompensatorError
-        On a non-square model, an invalid gain or iteration count, or (with
-        ``check='error'``) a law that cannot converge.
+        On a non-square model, an invalid gain, iteration count, feedback,
+        cut-off or sampling period, or (with ``check='error'``) a law that
+        cannot converge.
     """
 
     model: MultivariablePI
@@ -216,10 +263,14 @@ class InverseMultiplicativeCompensator:
     check: str = "error"
     divergence_bound: float | None = None
     name: str = "multivariable"
+    feedback: str = "delay"
+    cutoff_hz: float | None = None
+    sampling_period: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.iterations, (int, np.integer)) or self.iterations < 1:
             raise CompensatorError(f"iterations: expected an integer >= 1, found {self.iterations!r}")
+        self._check_feedback()
         if self.check not in ("error", "warn", "ignore"):
             raise CompensatorError(f"check: expected 'error', 'warn' or 'ignore', found {self.check!r}")
         self.K, self.K_inv = _inverse_gain(self.model, self.gain)
@@ -234,10 +285,45 @@ class InverseMultiplicativeCompensator:
             amp = self.model.input_amplitude
             self.divergence_bound = 1e3 * float(np.max(amp)) if amp is not None else 1e4
 
+    def _check_feedback(self):
+        if self.feedback not in ("delay", "lowpass"):
+            raise CompensatorError(f"feedback: expected 'delay' or 'lowpass', found {self.feedback!r}")
+        T = self.sampling_period
+        if T is not None:
+            if isinstance(T, bool) or not isinstance(T, (int, float, np.integer, np.floating)) \
+                    or not (np.isfinite(T) and T > 0):
+                raise CompensatorError(f"sampling_period: expected a positive time [s], found {T!r}")
+            self.sampling_period = float(T)
+        fc = self.cutoff_hz
+        if self.feedback == "delay":
+            if fc is not None:
+                raise CompensatorError(
+                    f"cutoff_hz: only used with feedback='lowpass', found {fc!r} with feedback='delay'")
+            self.filter_coefficient = 0.0
+            return
+        if self.iterations != 1:
+            raise CompensatorError(
+                f"iterations: the low-pass feedback law takes 1 iteration per sample, found {self.iterations}")
+        if fc is None or self.sampling_period is None:
+            raise CompensatorError(
+                "cutoff_hz, sampling_period: feedback='lowpass' needs a cut-off frequency [Hz] "
+                "and the sampling period [s]")
+        if isinstance(fc, bool) or not isinstance(fc, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(fc):
+            raise CompensatorError(f"cutoff_hz: expected a frequency [Hz], found {fc!r}")
+        nyquist = 0.5 / self.sampling_period
+        if not 0 < fc < nyquist:
+            raise CompensatorError(
+                f"cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (Nyquist for "
+                f"T = {self.sampling_period:g} s), found {fc!r}")
+        self.cutoff_hz = float(fc)
+        self.filter_coefficient = float(np.exp(-2 * np.pi * self.cutoff_hz * self.sampling_period))
+
     @property
     def n_states(self) -> int:
-        """Length of the flat compensator state: U(t-T) then the play states."""
-        return self.model.n_inputs + self.model.n_hysterons
+        """Length of the flat state: U(t-T), [v_f(t-T) for 'lowpass'], play states."""
+        m = self.model.n_inputs
+        return m * (2 if self.feedback == "lowpass" else 1) + self.model.n_hysterons
 
     def initial_state(self, initial_state=None):
         """Validated copy of a flat compensator state (zeros by default)."""
@@ -269,6 +355,306 @@ class InverseMultiplicativeCompensator:
         ------
         CompensatorDivergence
             If U becomes non-finite or exceeds ``divergence_bound``.
+
+        Warns
+        -----
+        RangeWarning
+            If the reference leaves the identified output range
+            (:func:`check_reference_range`).
         """
         from .simulation import simulate_compensator
+        check_reference_range(self.model, reference)
         return simulate_compensator(self, reference, initial_state)
+
+
+def _square(model, what):
+    if not isinstance(model, MultivariablePI):
+        raise CompensatorError(f"model: expected a MultivariablePI, found {type(model).__name__}")
+    if model.n_outputs != model.n_inputs:
+        raise CompensatorError(
+            f"model: {what} needs a square model, found {model.n_outputs} outputs "
+            f"and {model.n_inputs} inputs")
+
+
+def _direct_name(model, l):
+    return f"Gamma_{model.output_names[l]}{model.input_names[l]}"
+
+
+def check_reference_range(model: MultivariablePI, reference, warn=True):
+    """Compare a reference with the output range the model was identified on.
+
+    The identified range of output l is the peak of its direct transfer at
+    the identification amplitude, ``|Gamma_ll|`` peak ``sum_i w_i (A_l -
+    r_i)`` (NOTES §2; a linear direct gain g gives ``|g| A_l``). Beyond it the
+    model (hence every compensator) extrapolates.
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        Square model with ``input_amplitude`` (otherwise nothing is checked).
+    reference : array_like, shape (m, n_samples)
+        Reference displacements [µm].
+    warn : bool
+        Emit a :class:`RangeWarning` when some ratio exceeds 1.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,) or None
+        ``max |Yr_l| / peak_l`` per output [-]; None when the model has no
+        ``input_amplitude``.
+
+    Raises
+    ------
+    CompensatorError
+        If the model is not square.
+    HysteresisError
+        If the reference is not a finite (m, n_samples) array.
+    """
+    _square(model, "the reference range check")
+    yr = model.check_inputs(reference, "reference")
+    if model.input_amplitude is None:
+        return None
+    peaks = np.zeros(model.n_outputs)
+    for l in range(model.n_outputs):
+        comp, A = model.components[l][l], model.input_amplitude[l]
+        if isinstance(comp, PrandtlIshlinskii):
+            peaks[l] = abs(comp.peak_output(A))
+        elif comp is not None:
+            peaks[l] = abs(comp) * A
+    reach = np.max(np.abs(yr), axis=1) if yr.shape[1] else np.zeros(model.n_outputs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(peaks > 0, reach / np.where(peaks > 0, peaks, 1.0), np.where(reach > 0, np.inf, 0.0))
+    if warn and np.any(ratio > 1 + 1e-9):
+        bad = [f"{model.output_names[l]}: {reach[l]:.4g} µm > {peaks[l]:.4g} µm"
+               for l in np.flatnonzero(ratio > 1 + 1e-9)]
+        warnings.warn("reference: beyond the range the model was identified on ("
+                      + "; ".join(bad) + "); the compensator extrapolates", RangeWarning, stacklevel=3)
+    return ratio
+
+
+def diagonal_compensator(model: MultivariablePI, **kwargs):
+    """The inverse multiplicative compensator restricted to the direct transfers.
+
+    Builds a copy of the model with every cross-coupling removed (off-diagonal
+    components ``None``) and the same ``input_amplitude``, then an
+    :class:`InverseMultiplicativeCompensator` on it: the direct transfers are
+    linearised exactly as by the multivariable law, the cross-couplings are
+    left, which isolates what cross-coupling compensation buys (issue 4).
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        Identified square model.
+    **kwargs
+        Passed to :class:`InverseMultiplicativeCompensator` (gain,
+        iterations, feedback, ...); ``name`` defaults to ``'diagonal'``.
+
+    Returns
+    -------
+    InverseMultiplicativeCompensator
+
+    Raises
+    ------
+    CompensatorError
+        If the model is not square or a direct transfer is absent.
+    """
+    _square(model, "the diagonal compensator")
+    comps = [[c if l == k else None for k, c in enumerate(row)] for l, row in enumerate(model.components)]
+    for l in range(model.n_inputs):
+        if not isinstance(comps[l][l], PrandtlIshlinskii):
+            raise CompensatorError(
+                f"model: {_direct_name(model, l)}: the diagonal compensator needs a hysteresis "
+                f"direct transfer, found {comps[l][l]!r}")
+    diag = MultivariablePI(comps, list(model.input_names), list(model.output_names),
+                           None if model.input_amplitude is None else model.input_amplitude.copy())
+    kwargs.setdefault("name", "diagonal")
+    return InverseMultiplicativeCompensator(diag, **kwargs)
+
+
+def _direct_secant(model):
+    if model.input_amplitude is None:
+        raise CompensatorError("model: input_amplitude: needed for the secant gains of the direct transfers")
+    K = np.diag(model.secant_gains())
+    for l, k in enumerate(K):
+        if not (np.isfinite(k) and k != 0):
+            raise CompensatorError(
+                f"model: {_direct_name(model, l)}: the secant gain is {k!r} µm/V; cannot invert it")
+    return K
+
+
+@dataclass
+class StaticGainCompensator:
+    """No hysteresis compensation: ``U = K^-1 Yr`` (the reference case).
+
+    K is the diagonal matrix of the secant gains of the direct transfers over
+    the identified range, ``K_ll = sum_i w_i (A_l - r_i) / A_l`` (NOTES §4).
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        Identified square model with ``input_amplitude``.
+    name : str
+        Label used in reports.
+
+    Attributes
+    ----------
+    K : numpy.ndarray, shape (m, m)
+        Diagonal gain matrix [µm/V].
+
+    Raises
+    ------
+    CompensatorError
+        If the model is not square, has no ``input_amplitude`` or a zero
+        secant gain.
+    """
+
+    model: MultivariablePI
+    name: str = "static gain"
+
+    def __post_init__(self):
+        _square(self.model, "the static-gain compensator")
+        self.K = np.diag(_direct_secant(self.model))
+        self.K_inv = np.diag(1.0 / np.diag(self.K))
+
+    n_states = 0
+
+    def initial_state(self, initial_state=None):
+        """The (empty) state; anything but None or an empty array is an error."""
+        s = np.zeros(0) if initial_state is None else np.asarray(initial_state, dtype=float)
+        if s.shape != (0,):
+            raise HysteresisError(f"initial_state: the static-gain compensator has no state, found shape {s.shape}")
+        return s
+
+    def simulate(self, reference, initial_state=None):
+        """Input voltages ``U = K^-1 Yr``.
+
+        Parameters
+        ----------
+        reference : array_like, shape (m, n_samples)
+            Reference displacements [µm].
+        initial_state : None or empty array
+
+        Returns
+        -------
+        inputs : numpy.ndarray, shape (m, n_samples)
+            Voltages [V].
+        final_state : numpy.ndarray, shape (0,)
+
+        Warns
+        -----
+        RangeWarning
+            If the reference leaves the identified range.
+        """
+        self.initial_state(initial_state)
+        yr = self.model.check_inputs(reference, "reference")
+        check_reference_range(self.model, yr)
+        return self.K_inv @ yr, np.zeros(0)
+
+
+@dataclass
+class PerAxisInverseCompensator:
+    """Per-axis inverse PI of Kuhnen & Janocha, the paper's "existing technique".
+
+    Input l is the analytic inverse of the direct transfer ``Gamma_ll``
+    applied to reference l (:func:`hammerstein.inverse.kuhnen_inverse`,
+    NOTES §5, paper ref. [20]); the cross-couplings are not compensated
+    (paper Fig. 9). A linear direct gain g is inverted as ``1/g``.
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        Identified square model.
+    name : str
+        Label used in reports.
+
+    Attributes
+    ----------
+    inverses : list
+        Per axis, an :class:`~hammerstein.inverse.InversePI` or the float
+        ``1/g`` [V/µm].
+
+    Notes
+    -----
+    The flat state concatenates the axes' inverse states (zeros: consistent
+    with zero play states of the model). No per-sample loop here: each axis
+    is a PI operator simulation then a vectorised inverse play.
+
+    Raises
+    ------
+    CompensatorError
+        If the model is not square, a direct transfer is absent or zero, or
+        not invertible (some cumulative weight sum ``S_i <= 0``; the message
+        names the component and i).
+    """
+
+    model: MultivariablePI
+    name: str = "per-axis inverse"
+
+    def __post_init__(self):
+        _square(self.model, "the per-axis inverse compensator")
+        self.inverses = []
+        for l in range(self.model.n_inputs):
+            comp, label = self.model.components[l][l], _direct_name(self.model, l)
+            if isinstance(comp, PrandtlIshlinskii):
+                try:
+                    self.inverses.append(kuhnen_inverse(comp, name=label))
+                except HysteresisError as exc:
+                    raise CompensatorError(f"model: {exc}") from None
+            elif comp is None or comp == 0:
+                raise CompensatorError(f"model: {label}: no direct transfer to invert, found {comp!r}")
+            else:
+                self.inverses.append(1.0 / comp)
+        sizes = [inv.n_states if not isinstance(inv, float) else 0 for inv in self.inverses]
+        self._offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+
+    @property
+    def n_states(self) -> int:
+        """Sum of the axes' inverse state lengths."""
+        return int(self._offsets[-1])
+
+    def initial_state(self, initial_state=None):
+        """Validated copy of the flat state (zeros by default)."""
+        if initial_state is None:
+            return np.zeros(self.n_states)
+        s = np.asarray(initial_state, dtype=float)
+        if s.shape != (self.n_states,) or not np.all(np.isfinite(s)):
+            raise HysteresisError(
+                f"initial_state: expected {self.n_states} finite values, found shape {s.shape}")
+        for l, inv in enumerate(self.inverses):
+            if not isinstance(inv, float):
+                inv.initial_state(s[self._offsets[l]:self._offsets[l + 1]])
+        return s.copy()
+
+    def simulate(self, reference, initial_state=None):
+        """Input voltages that invert each direct transfer.
+
+        Parameters
+        ----------
+        reference : array_like, shape (m, n_samples)
+            Reference displacements [µm].
+        initial_state : array_like, shape (n_states,), optional
+            Zeros by default.
+
+        Returns
+        -------
+        inputs : numpy.ndarray, shape (m, n_samples)
+            Voltages [V].
+        final_state : numpy.ndarray, shape (n_states,)
+
+        Warns
+        -----
+        RangeWarning
+            If the reference leaves the identified range.
+        """
+        yr = self.model.check_inputs(reference, "reference")
+        s = self.initial_state(initial_state)
+        check_reference_range(self.model, yr)
+        u = np.empty_like(yr)
+        final = s.copy()
+        for l, inv in enumerate(self.inverses):
+            if isinstance(inv, float):
+                u[l] = inv * yr[l]
+                continue
+            a, b = self._offsets[l], self._offsets[l + 1]
+            u[l], final[a:b] = inv.simulate(yr[l], s[a:b])
+        return u, final
