@@ -1,0 +1,211 @@
+"""The compensator family on the static plant, and the stability analysis (NOTES §4, §5)."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from hammerstein.compensators import (CompensatorError, InverseMultiplicativeCompensator,
+                                      PerAxisInverseCompensator, RangeWarning, StaticGainCompensator,
+                                      check_reference_range, diagonal_compensator)
+from hammerstein.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.presets import load_plant
+from hammerstein.simulation import simulate_chain
+from hammerstein.stability import literal_gain_equivalent_scale, stability_map
+
+T = 5e-5
+PERIOD = 400  # samples per period at 50 Hz, T = 50 µs
+
+
+@pytest.fixture(scope="module")
+def plant():
+    return load_plant("rakotondrabe-2dof", dynamics=False)
+
+
+@pytest.fixture(scope="module")
+def model(plant):
+    return plant.hysteresis
+
+
+def sine_on(axis, amplitude=50.0, freq=50.0, periods=3):
+    t = np.arange(periods * PERIOD) * T
+    ref = np.zeros((2, t.size))
+    ref[axis] = amplitude * np.sin(2 * np.pi * freq * t)
+    return ref
+
+
+def last_period(compensator, plant, ref):
+    res = simulate_chain(compensator, plant, ref)
+    assert not res.diverged
+    return res.outputs[:, -PERIOD:], ref[:, -PERIOD:]
+
+
+def rms(e):
+    return float(np.sqrt(np.mean(np.square(e))))
+
+
+FAMILY = {
+    "static": StaticGainCompensator,
+    "per-axis": PerAxisInverseCompensator,
+    "diagonal": diagonal_compensator,
+    "multivariable": InverseMultiplicativeCompensator,
+}
+
+
+# -- the common protocol ----------------------------------------------------------------------
+@pytest.mark.parametrize("kind", FAMILY)
+def test_protocol_and_chunked_runs(model, kind):
+    comp = FAMILY[kind](model)
+    assert isinstance(comp.name, str) and comp.name
+    assert comp.initial_state().shape == (comp.n_states,)
+    ref = sine_on(0) + 0.5 * sine_on(1, freq=70.0)
+    u, final = comp.simulate(ref)
+    assert u.shape == ref.shape and final.shape == (comp.n_states,)
+    u1, s1 = comp.simulate(ref[:, :517])
+    u2, s2 = comp.simulate(ref[:, 517:], s1)
+    np.testing.assert_allclose(np.hstack([u1, u2]), u, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(s2, final, rtol=0, atol=1e-12)
+
+
+# -- what each compensator does on the static plant -------------------------------------------
+def test_static_gain_is_secant_inverse(model):
+    """U = Yr / K_ll with K_ll = sum w (A - r) / A, from the preset's weights."""
+    comp = StaticGainCompensator(model)
+    A = 10.0
+    K = [np.sum(model.component(a, "u" + a).weights * (A - model.component(a, "u" + a).thresholds)) / A
+         for a in "xy"]
+    np.testing.assert_allclose(np.diag(comp.K), [58.39759 / 10, 50.5665722 / 10], rtol=1e-9)
+    ref = sine_on(0) + sine_on(1, 30.0)
+    u, _ = comp.simulate(ref)
+    np.testing.assert_allclose(u, ref / np.array(K)[:, None], rtol=1e-12)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_per_axis_inverse_linearises_direct_axis_exactly(plant, model, axis):
+    y, ref = last_period(PerAxisInverseCompensator(model), plant, sine_on(axis))
+    np.testing.assert_allclose(y[axis], ref[axis], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_cross_couplings_multivariable_vs_per_axis(plant, model, axis):
+    """Measured: x-reference cross p-p 3.25 (none) / 3.45 (per-axis) / 0.22 (multivariable);
+    y-reference 2.78 / 2.79 / 0.29 µm."""
+    other = 1 - axis
+    ref = sine_on(axis)
+    cross = {kind: np.ptp(last_period(FAMILY[kind](model), plant, ref)[0][other])
+             for kind in ("static", "per-axis", "multivariable")}
+    assert cross["per-axis"] == pytest.approx(cross["static"], rel=0.15)
+    assert cross["multivariable"] <= cross["per-axis"] / 5
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_diagonal_linearises_direct_axis_but_leaves_cross_coupling(plant, model, axis):
+    ref = sine_on(axis)
+    y_none, _ = last_period(StaticGainCompensator(model), plant, ref)
+    y_diag, r = last_period(diagonal_compensator(model), plant, ref)
+    comp = diagonal_compensator(model)
+    assert comp.model.components[0][1] is None and comp.model.components[1][0] is None
+    assert model.components[0][1] is not None  # the original model is untouched
+    assert rms(y_diag[axis] - r[axis]) < 0.2 < 0.05 * rms(y_none[axis] - r[axis])
+    assert np.ptp(y_diag[1 - axis]) == pytest.approx(np.ptp(y_none[1 - axis]), rel=0.15)
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_more_iterations_reduce_error(plant, model, axis):
+    """Measured RMS error (both outputs, last period) for 1, 2, 5 iterations:
+    x-reference 0.068, 0.018, 0.0042 µm; y-reference 0.066, 0.026, 0.0076 µm."""
+    ref = sine_on(axis)
+    errors = []
+    for n in (1, 2, 5):
+        y, r = last_period(InverseMultiplicativeCompensator(model, iterations=n), plant, ref)
+        errors.append(rms(y - r))
+    assert errors[0] < 0.1  # the normalised law, NOTES §4 (0.09 µm on the direct axis)
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[0] / errors[2] > 5
+
+
+def test_literal_law_diverges(plant, model):
+    comp = InverseMultiplicativeCompensator(model, gain="identity", check="ignore")
+    res = simulate_chain(comp, plant, sine_on(0))
+    assert res.diverged and res.divergence.sample < 20
+
+
+# -- stability map ---------------------------------------------------------------------------
+def test_stability_map_literal_and_normalised(model):
+    s_lit = literal_gain_equivalent_scale(model)
+    assert s_lit == pytest.approx(1 / np.sqrt(5.839759 * 5.05665722), rel=1e-6)
+    df = stability_map(model, [s_lit, 1.0])
+    assert list(df.columns[:4]) == ["scale", "max_radius", "min_radius", "converges"]
+    assert df.loc[0, "max_radius"] > 1 and not df.loc[0, "converges"]
+    assert df.loc[1, "max_radius"] < 1 and df.loc[1, "converges"]
+    assert df.attrs["literal_max_radius"] > 1 > df.attrs["normalised_max_radius"]
+    assert df.attrs["normalised_max_radius"] == pytest.approx(df.loc[1, "max_radius"], rel=1e-12)
+
+
+@pytest.mark.parametrize("scale, rho_max, rho_min", [
+    # one PI, r = (0, 1), w = (2, 1), A = 2: K = (2*2 + 1*1)/2 = 2.5, slopes S = (2, 3)
+    (1.0, 0.2, 0.2),      # |1 - 2/2.5| = |1 - 3/2.5| = 0.2
+    (0.5, 1.4, 0.6),      # |1 - 2/1.25| = 0.6, |1 - 3/1.25| = 1.4
+    (2.0, 0.6, 0.4),      # |1 - 2/5| = 0.6, |1 - 3/5| = 0.4
+])
+def test_stability_map_scalar_closed_form(scale, rho_max, rho_min):
+    m = MultivariablePI([[PrandtlIshlinskii([0.0, 1.0], [2.0, 1.0])]], input_amplitude=[2.0])
+    row = stability_map(m, [scale]).iloc[0]
+    assert row["max_radius"] == pytest.approx(rho_max, abs=1e-12)
+    assert row["min_radius"] == pytest.approx(rho_min, abs=1e-12)
+
+
+def test_stability_map_rejects_bad_scales(model):
+    with pytest.raises(CompensatorError, match="gain_scales"):
+        stability_map(model, [1.0, -0.5])
+
+
+# -- range guard -----------------------------------------------------------------------------
+def test_reference_range_warning(model):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ratio = check_reference_range(model, sine_on(0, 50.0))
+    np.testing.assert_allclose(ratio, [50.0 / 58.39759, 0.0], rtol=1e-6)
+    with pytest.warns(RangeWarning, match="x: 70 µm > 58.4 µm"):
+        check_reference_range(model, sine_on(0, 70.0))
+    with pytest.warns(RangeWarning):
+        PerAxisInverseCompensator(model).simulate(sine_on(1, 60.0))
+
+
+# -- validation ------------------------------------------------------------------------------
+@pytest.mark.parametrize("kwargs, match", [
+    ({"feedback": "filter"}, "feedback: expected 'delay' or 'lowpass'"),
+    ({"feedback": "lowpass", "sampling_period": T}, "cutoff_hz, sampling_period"),
+    ({"feedback": "lowpass", "cutoff_hz": 100.0}, "cutoff_hz, sampling_period"),
+    ({"feedback": "lowpass", "cutoff_hz": 0.0, "sampling_period": T}, "cutoff_hz: expected 0 <"),
+    ({"feedback": "lowpass", "cutoff_hz": 1e4, "sampling_period": T}, "Nyquist"),
+    ({"feedback": "lowpass", "cutoff_hz": 100.0, "sampling_period": -1.0}, "sampling_period"),
+    ({"feedback": "lowpass", "cutoff_hz": 100.0, "sampling_period": T, "iterations": 2}, "iterations"),
+    ({"cutoff_hz": 100.0}, "only used with feedback='lowpass'"),
+])
+def test_feedback_validation(model, kwargs, match):
+    with pytest.raises(CompensatorError, match=match):
+        InverseMultiplicativeCompensator(model, **kwargs)
+
+
+def test_lowpass_parameters(model):
+    comp = InverseMultiplicativeCompensator(model, feedback="lowpass", cutoff_hz=500.0, sampling_period=T)
+    assert comp.filter_coefficient == pytest.approx(np.exp(-2 * np.pi * 500.0 * T), rel=1e-12)
+    assert comp.n_states == 2 * 2 + model.n_hysterons
+    assert InverseMultiplicativeCompensator(model).filter_coefficient == 0.0
+
+
+def test_per_axis_rejects_non_invertible_direct_transfer():
+    bad = PrandtlIshlinskii([0.1, 0.5], [1.0, -2.0])
+    good = PrandtlIshlinskii([0.1, 0.5], [1.0, 0.5])
+    m = MultivariablePI([[bad, None], [None, good]], ["ux", "uy"], ["x", "y"], [1.0, 1.0])
+    with pytest.raises(CompensatorError, match="Gamma_xux: weights: .*S_2"):
+        PerAxisInverseCompensator(m)
+
+
+@pytest.mark.parametrize("kind", FAMILY)
+def test_non_square_model_rejected(kind):
+    pi = PrandtlIshlinskii([0.0, 1.0], [1.0, 1.0])
+    m = MultivariablePI([[pi, pi]], input_amplitude=[2.0, 2.0])
+    with pytest.raises(CompensatorError, match="square"):
+        FAMILY[kind](m)
