@@ -17,7 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ["loop_grid", "trajectory_figure", "xy_overlay", "save"]
+__all__ = ["loop_grid", "trajectory_figure", "divergence_figure", "xy_overlay", "save"]
 
 _STYLES = ["-", "--", "-.", ":"]
 _MARKERS = [None, None, "o", "x", "s", "^"]
@@ -78,7 +78,7 @@ def loop_grid(curves, x_labels, y_labels, title, direct_label="direct",
     return fig
 
 
-def trajectory_figure(time, reference, outputs, names, title, diverged_at=None):
+def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0):
     """XY plot, time plot and tracking-error plot of a 2-D trajectory.
 
     Parameters
@@ -91,8 +91,9 @@ def trajectory_figure(time, reference, outputs, names, title, diverged_at=None):
     names : sequence of 2 str
         Output names.
     title : str
-    diverged_at : float, optional
-        Divergence time [s], marked on the time plots.
+    settle_time : float
+        End of the settling transient [s]: the XY plot shows the record
+        after it, the time plots mark it.
 
     Returns
     -------
@@ -105,12 +106,13 @@ def trajectory_figure(time, reference, outputs, names, title, diverged_at=None):
     fig = plt.figure(figsize=(13, 4.6))
     gs = fig.add_gridspec(2, 3, width_ratios=[1.0, 1.4, 1.4])
     ax = fig.add_subplot(gs[:, 0])
-    ax.plot(r[0], r[1], "--", color="0.35", label="reference", linewidth=1.2)
-    ax.plot(y[0], y[1], "-", color="C0", label="output", linewidth=1.0)
+    steady = np.asarray(time) >= settle_time
+    ax.plot(r[0, steady], r[1, steady], "--", color="0.35", label="reference", linewidth=1.2)
+    ax.plot(y[0, steady], y[1, steady], "-", color="C0", label="output", linewidth=1.0)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(f"{names[0]} [µm]")
     ax.set_ylabel(f"{names[1]} [µm]")
-    ax.set_title("(a) spatial domain", fontsize=10)
+    ax.set_title("(a) spatial domain (after settling)", fontsize=10)
     ax.legend(fontsize=8, loc="upper right")
     ax.grid(True, alpha=0.3)
     axt = fig.add_subplot(gs[:, 1])
@@ -132,10 +134,47 @@ def trajectory_figure(time, reference, outputs, names, title, diverged_at=None):
     axe.set_title("(c) tracking error", fontsize=10)
     axe.legend(fontsize=8, loc="upper right")
     axe.grid(True, alpha=0.3)
-    if diverged_at is not None:
+    if settle_time > 0:
         for a in (axt, axe):
-            a.axvline(diverged_at * 1e3, color="r", linestyle=":", label="divergence")
+            a.axvline(settle_time * 1e3, color="0.5", linestyle=":", linewidth=1.0)
+            a.text(settle_time * 1e3, 1.0, " settled", transform=a.get_xaxis_transform(),
+                   va="top", ha="left", fontsize=8, color="0.4")
     fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def divergence_figure(inputs, names, sample, reason, title):
+    """Input voltages of a diverging compensator, |U| on a log scale.
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n)
+        Compensator output [V] (valid before ``sample``).
+    names : sequence of str
+        Input names.
+    sample : int
+        First sample where the divergence was detected.
+    reason : str
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    u = np.asarray(inputs)[:, :sample]
+    k = np.arange(u.shape[1])
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for i, n in enumerate(names):
+        mag = np.abs(u[i])
+        ax.semilogy(k, np.where(mag > 0, mag, np.nan), "o-", label=f"|{n}| [V]", markersize=4)
+    ax.axvline(sample, color="r", linestyle=":", label=f"divergence detected (sample {sample})")
+    ax.axhline(10.0, color="0.5", linestyle="--", linewidth=0.8, label="10 V drive range")
+    ax.set_xlabel("sample")
+    ax.set_ylabel("|compensator output| [V]")
+    ax.set_title(f"{title}\n{reason}", fontsize=9)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
     fig.tight_layout()
     return fig
 

@@ -138,18 +138,27 @@ def _figures(scenario, results, directory):
         plots.save(fig, directory / fname)
         comp = _compensator_summary(rs[0].spec)
         figs.append((f"Compensated input-output maps, {label} plant, compensator {comp}", fname))
-    # trajectories (and diverged cases)
-    traj = [r for r in results if r.spec.mode == "reference"
-            and (r.spec.loop_channel is None or r.divergence is not None)]
+    # diverged compensators
+    for r in results:
+        if r.divergence is not None:
+            fig = plots.divergence_figure(r.inputs, in_names, r.divergence.sample,
+                                          r.divergence.reason, f"{r.name}: compensator output until divergence")
+            fname = f"divergence-{r.name}.png"
+            plots.save(fig, directory / fname)
+            figs.append((f"Case {r.name}: the compensator diverged at sample "
+                         f"{r.divergence.sample} (t = {r.diverged_at * 1e3:.3g} ms)", fname))
+    # trajectories
+    traj = [r for r in ok if r.spec.mode == "reference" and r.spec.loop_channel is None]
     for r in traj:
         names = out_names[:2]
+        settle = r.spec.settle_periods * r.spec.period_samples * r.spec.plant.sampling_period
         fig = plots.trajectory_figure(r.spec.time, r.reference[:2], r.outputs[:2], names,
                                       f"{scenario.title}: {r.name} ({_plant_label(r.spec)} plant)",
-                                      diverged_at=r.diverged_at)
+                                      settle_time=settle)
         fname = f"trajectory-{r.name}.png"
         plots.save(fig, directory / fname)
         figs.append((f"Case {r.name}: spatial domain, time domain, tracking error", fname))
-    multi = [r for r in traj if r.divergence is None]
+    multi = traj
     if len(multi) > 1:
         curves = []
         for r in multi:
