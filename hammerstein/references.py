@@ -292,14 +292,16 @@ def lissajous_period(frequency_x, frequency_y, max_denominator=100):
     Raises
     ------
     SignalError
-        If the ratio is not close (1e-4 relative) to such a fraction.
+        If the ratio is not within 1e-6 (relative) of such a fraction; write
+        e.g. 100/3 Hz as 33.333333333333336, not 33.33.
     """
     fx = _positive(frequency_x, "frequencies[0]", "Hz")
     fy = _positive(frequency_y, "frequencies[1]", "Hz")
     ratio = Fraction(fx / fy).limit_denominator(max_denominator)
-    if abs(float(ratio) - fx / fy) > 1e-4 * fx / fy:
-        raise SignalError(f"frequencies: the ratio {fx:g}/{fy:g} is not a simple fraction "
-                          f"(denominator <= {max_denominator}); give duration instead of periods")
+    if abs(float(ratio) - fx / fy) > 1e-6 * fx / fy:
+        raise SignalError(f"frequencies: the ratio {fx!r}/{fy!r} is not a simple fraction "
+                          f"(denominator <= {max_denominator}) to 1e-6; give the frequencies in "
+                          f"full precision (100/3 Hz = 33.333333333333336) or a duration")
     return ratio.numerator / fx
 
 
