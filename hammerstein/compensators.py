@@ -625,6 +625,46 @@ class PerAxisInverseCompensator:
                 inv.initial_state(s[self._offsets[l]:self._offsets[l + 1]])
         return s.copy()
 
+    def consistent_state(self, model_state, last_inputs):
+        """Compensator state matching a state of the model (plant play states).
+
+        Parameters
+        ----------
+        model_state : array_like, shape (model.n_hysterons,)
+            Flat play states of the model [V] (ordered output, input,
+            threshold; :meth:`MultivariablePI.hysterons`).
+        last_inputs : array_like, shape (m,)
+            The inputs that led to it [V].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            So that the direct outputs follow the reference from the first
+            sample (:meth:`~hammerstein.inverse.InversePI.consistent_state`).
+
+        Raises
+        ------
+        HysteresisError
+            On wrong shapes or inputs inconsistent with the play states.
+        """
+        z = self.model.initial_state(model_state)
+        u_last = np.asarray(last_inputs, dtype=float)
+        if u_last.shape != (self.model.n_inputs,):
+            raise HysteresisError(
+                f"last_inputs: expected shape ({self.model.n_inputs},), found {u_last.shape}")
+        out = np.zeros(self.n_states)
+        start = 0
+        for l, row in enumerate(self.model.components):
+            for k, comp in enumerate(row):
+                if not isinstance(comp, PrandtlIshlinskii):
+                    continue
+                if l == k:
+                    a, b = self._offsets[l], self._offsets[l + 1]
+                    out[a:b] = self.inverses[l].consistent_state(
+                        z[start:start + comp.n_hysterons], u_last[l])
+                start += comp.n_hysterons
+        return out
+
     def simulate(self, reference, initial_state=None):
         """Input voltages that invert each direct transfer.
 

@@ -20,6 +20,8 @@ __all__ = ["stability_map", "literal_gain_equivalent_scale"]
 
 
 def _secant_diag(model):
+    if not isinstance(model, MultivariablePI) and isinstance(getattr(model, "model", None), MultivariablePI):
+        model = model.model  # a compensator: analyse the model it was built on
     if not isinstance(model, MultivariablePI):
         raise CompensatorError(f"model: expected a MultivariablePI, found {type(model).__name__}")
     if model.n_inputs != model.n_outputs:
@@ -72,8 +74,10 @@ def stability_map(model: MultivariablePI, gain_scales) -> pd.DataFrame:
 
     Parameters
     ----------
-    model : MultivariablePI
-        Identified square model with ``input_amplitude``.
+    model : MultivariablePI or compensator
+        Identified square model with ``input_amplitude``, or a compensator
+        built on one (e.g. :func:`~hammerstein.compensators.diagonal_compensator`:
+        its direct-transfer-only model is analysed).
     gain_scales : array_like, shape (n_scales,)
         Scales s > 0 [-]; s = 1 is the normalised law.
 
@@ -94,6 +98,7 @@ def stability_map(model: MultivariablePI, gain_scales) -> pd.DataFrame:
         is not a positive finite number.
     """
     K = _secant_diag(model)
+    model = getattr(model, "model", model)
     s = np.atleast_1d(np.asarray(gain_scales, dtype=float))
     if s.ndim != 1 or s.size == 0 or not np.all(np.isfinite(s)) or np.any(s <= 0):
         raise CompensatorError(f"gain_scales: expected positive finite numbers, found {np.asarray(gain_scales).tolist()}")
