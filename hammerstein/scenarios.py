@@ -475,17 +475,22 @@ def load_scenario(path):
         # compensator: merge and check
         cover = raw.get("compensator", {})
         cspec = _merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
+        scratch = []
+        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source)
         if "compensator" in raw:
             if isinstance(cover, dict):
-                _check_compensator(cspec, f"{where}.compensator", problems, source)
+                problems.extend(scratch)  # top-level problems are reported once, above
             else:
                 problems.append(f"{source}: {where}.compensator: expected a table")
+        elif scratch and not any("compensator" in q for q in problems[:n_before]):
+            problems.extend(scratch)
+        comp_ok = not scratch and cclean is not None
         sig = _signal(where, mode, raw[mode], plant, problems, source)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
                             f"(compensator.kind is 'none'); use drive for an open-loop run")
-        if sig is None or len(problems) > n_before:
+        if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
             continue
         t, signal, P, extras = sig
         settle = case.get("settle_periods", 1.0)
@@ -500,14 +505,15 @@ def load_scenario(path):
             with warnings.catch_warnings(record=True) as rec:
                 warnings.simplefilter("always")
                 try:
-                    comp = build_compensator(cspec, plant, base)
+                    comp = build_compensator(cclean, plant, base)
                 except (ValueError, PresetError) as exc:
                     problems.append(f"{source}: {where}.compensator: {exc}")
                     continue
             caught = [str(w.message) for w in rec]
         cases.append(CaseSpec(
             name=case["name"], description=case.get("description", ""), mode=mode,
-            signal_spec=dict(raw[mode]), plant_spec=pspec, compensator_spec=cspec,
+            signal_spec=dict(raw[mode]), plant_spec=pspec,
+            compensator_spec=cclean if cclean is not None else cspec,
             plant=plant, compensator=comp, time=t, signal=signal, period_samples=P,
             settle_periods=settle, warnings=caught, **extras))
     if problems:

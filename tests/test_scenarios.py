@@ -1,0 +1,184 @@
+"""Scenario validation: every problem at once, suggestions, merging, registry."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hammerstein import runner
+from hammerstein.scenarios import ScenarioError, load_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
+
+GOOD_CASE = """
+[[cases]]
+name = "x"
+reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, periods = 2 }
+"""
+HEAD = """
+[plant]
+preset = "rakotondrabe-2dof"
+dynamics = false
+[compensator]
+kind = "multivariable"
+"""
+
+
+def _write(tmp_path, text, name="s.toml"):
+    p = tmp_path / name
+    p.write_text(text, encoding="utf-8")
+    return p
+
+
+def test_bundled_scenarios_exist():
+    names = {p.name for p in BUNDLED}
+    for fig in ["fig05-characterization", "fig08-compensated-sine", "fig10-circles",
+                "fig11-spiral", "fig12-lissajous-3-2", "fig13-lissajous-4-3"]:
+        assert f"{fig}.toml" in names
+    assert "default.toml" in names
+
+
+@pytest.mark.parametrize("path", BUNDLED, ids=[p.stem for p in BUNDLED])
+def test_bundled_scenarios_validate(path):
+    sc = load_scenario(path)
+    assert sc.cases and sc.name == path.stem
+
+
+def test_every_problem_is_reported_at_once(tmp_path):
+    text = """
+titel = "typo"
+[plant]
+preset = "rakotondrabe-2dof"
+dynamics = "yes"
+[compensator]
+kind = "multivariable"
+gian = "secant"
+[[cases]]
+name = "a"
+reference = { kind = "sine", output = "x", amplitude = -5.0, frequncy = 50.0, periods = 2 }
+[[cases]]
+name = "b"
+reference = { kind = "circle", radius = 10.0, frequency = 20000.0, periods = 2 }
+settle_periods = -1
+"""
+    p = _write(tmp_path, text)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(p)
+    problems = err.value.problems
+    assert all(line.startswith(f"{p}: ") for line in problems)
+    joined = "\n".join(problems)
+    expected = [
+        "titel: unknown key (did you mean 'title'?)",
+        "plant.dynamics: expected true or false",
+        "compensator.gian: unknown key (did you mean 'gain'?)",
+        "cases[0].reference.amplitude: expected a number > 0 [µm]",
+        "cases[0].reference.frequncy: unknown key (did you mean 'frequency'?)",
+        "cases[0].reference.frequency: missing (required)",
+        "cases[1].settle_periods: expected a number >= 0",
+        "cases[1].reference.frequency: 20000 Hz is at or above the Nyquist frequency",
+    ]
+    for e in expected:
+        assert e in joined, e
+    assert len(problems) >= len(expected)
+
+
+@pytest.mark.parametrize("body, message", [
+    ("[plant]\npreset = 'rakotondrabe-2dof'\n[[cases]]\nname = 'a'\n"
+     "reference = { kind = 'sine', output = 'x', amplitude = 5.0, frequency = 50.0, periods = 2 }",
+     "cases[0].reference: a reference needs a compensator"),
+    (HEAD + "[[cases]]\nname = 'a'\n"
+     "reference = { kind = 'sine', output = 'z', amplitude = 5.0, frequency = 50.0, periods = 2 }",
+     "cases[0].reference.output: expected one of ['x', 'y'], found 'z'"),
+    (HEAD + "[[cases]]\nname = 'a'\n"
+     "drive = { kind = 'sine', input = 'ux', amplitude = 5.0, frequency = 50.0, periods = 2 }\n"
+     "reference = { kind = 'circle', radius = 5.0, frequency = 50.0, periods = 2 }",
+     "cases[0]: expected exactly one of reference"),
+    (HEAD + "[[cases]]\nname = 'a'\n"
+     "reference = { kind = 'circel', radius = 5.0, frequency = 50.0, periods = 2 }",
+     "cases[0].reference.kind: expected one of 'sine', 'circle', 'spiral', 'lissajous', found "
+     "'circel' (did you mean 'circle'?)"),
+    (HEAD.replace('"multivariable"', '"multivariabel"') + GOOD_CASE,
+     "compensator.kind: expected one of 'none', 'multivariable'"),
+    (HEAD + "gain = 'identity'\n" + GOOD_CASE,
+     "cases[0].compensator: gain: rho(I - K^-1 J) reaches"),
+    (HEAD.replace("rakotondrabe-2dof", "no-such-preset") + GOOD_CASE,
+     "cases[0].plant.preset: no-such-preset: not a bundled preset"),
+    (HEAD + GOOD_CASE + "settle_periods = 2",
+     "cases[0].settle_periods: 2 periods of settling leave less than one period"),
+    (HEAD + GOOD_CASE + GOOD_CASE, "cases[1].name: duplicate case name 'x'"),
+    ("name = 'bad name!'\n" + HEAD + GOOD_CASE, "name: expected a name of letters"),
+    (HEAD, "cases: missing (required)"),
+    ("this is not toml", "invalid TOML"),
+])
+def test_single_problems(tmp_path, body, message):
+    p = _write(tmp_path, body)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(p)
+    assert message in str(err.value)
+
+
+def test_case_overrides_merge_and_a_new_kind_does_not_inherit(tmp_path):
+    text = HEAD + "gain = 'identity'\ncheck = 'warn'\niterations = 2\n" + """
+[[cases]]
+name = "merged"
+reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, periods = 2 }
+compensator = { gain = "secant", check = "error" }
+plant = { dynamics = true }
+[[cases]]
+name = "open-loop"
+drive = { kind = "sine", input = "uy", amplitude = 10.0, frequency = 50.0, periods = 2 }
+compensator = { kind = "none" }
+"""
+    sc = load_scenario(_write(tmp_path, text))
+    merged, drive = sc.cases
+    assert merged.compensator_spec == {"kind": "multivariable", "gain": "secant", "check": "error",
+                                       "iterations": 2, "model": "plant"}
+    assert merged.compensator.iterations == 2 and not merged.plant.is_static
+    assert drive.compensator_spec == {"kind": "none"} and drive.compensator is None
+    assert drive.driven_input == 1 and drive.period_samples == 400
+
+
+def test_lissajous_period_and_default_name(tmp_path):
+    text = HEAD + """
+[[cases]]
+name = "l"
+reference = { kind = "lissajous", amplitude = [50.0, 40.0], frequencies = [40.0, 30.0], periods = 1.5 }
+settle_periods = 0.5
+"""
+    sc = load_scenario(_write(tmp_path, text, "my-liss.toml"))
+    assert sc.name == "my-liss"
+    case = sc.cases[0]
+    assert case.period_samples == 2000 and case.signal.shape == (2, 3000)
+    assert case.scale == 50.0
+
+
+class _StaticGain:
+    """A toy compensator: U = Yr / g (what a registry entry can add)."""
+
+    name = "static-gain"
+
+    def __init__(self, g):
+        self.g = g
+
+    def simulate(self, reference, initial_state=None):
+        return np.asarray(reference) / self.g, None
+
+
+def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch):
+    from hammerstein.scenarios import Field, number
+    monkeypatch.setitem(runner.COMPENSATORS, "static-gain", runner.CompensatorKind(
+        lambda spec, plant, base: _StaticGain(spec["gain"]),
+        {"gain": Field(number("µm/V", 0), required=True)}, "U = Yr / gain"))
+    text = HEAD.replace('"multivariable"', '"static-gain"') + "gain = 5.0\n" + GOOD_CASE
+    p = _write(tmp_path, text)
+    sc = load_scenario(p)
+    assert isinstance(sc.cases[0].compensator, _StaticGain)
+    out = runner.run_scenario(p, tmp_path / "out")
+    assert out.ok, out.error
+    rms = out.metrics.query("channel == 'x' and metric == 'rms_error'")["value"].item()
+    assert rms > 1.0  # a static gain cannot cancel the hysteresis
+    bad = _write(tmp_path, HEAD.replace('"multivariable"', '"static-gain"') + "gian = 5.0\n"
+                 + GOOD_CASE, "bad.toml")
+    with pytest.raises(ScenarioError, match="did you mean 'gain'"):
+        load_scenario(bad)
