@@ -101,14 +101,30 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
     ------
     IdentificationError
     """
-    from .identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
-                                 ascending_branches, fit_report)
+    from .identification import IdentificationError, fit_report
     if not 0 < train_fraction <= 1:
         raise IdentificationError(f"train_fraction: expected in (0, 1], found {train_fraction}")
     n_train = int(round(train_fraction * record.n_samples))
     u, y = record.u, record.y
     ut, yt = u[:n_train], y[:n_train]
     partition_arg = thresholds if thresholds is not None else partition
+    try:
+        ident, start = _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg,
+                            partition, bounds, skip_seconds)
+    except IdentificationError as exc:
+        raise IdentificationError(
+            f"{record.source}: training samples 0..{n_train - 1}: {exc}") from None
+    train = fit_report(ident.model_, ut, yt, ident.offset_, start=int(start))
+    validation = None
+    if n_train < record.n_samples - 1:
+        validation = fit_report(ident.model_, u, y, ident.offset_, start=n_train)
+    return ident, train, validation
+
+
+def _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg, partition, bounds,
+         skip_seconds):
+    from .identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
+                                 ascending_branches)
     if method == "closed-form":
         ident = ClosedFormPI(n_hysterons, partition_arg).fit(ut, yt)
         start = ident.branches_[0][0]
@@ -124,11 +140,7 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
     else:
         raise IdentificationError(
             f"method: expected 'closed-form' or 'least-squares', found {method!r}")
-    train = fit_report(ident.model_, ut, yt, ident.offset_, start=int(start))
-    validation = None
-    if n_train < record.n_samples - 1:
-        validation = fit_report(ident.model_, u, y, ident.offset_, start=n_train)
-    return ident, train, validation
+    return ident, start
 
 
 def _line(label, rep):

@@ -1,0 +1,123 @@
+"""Reading measured records: formats that real files have, and one-line errors for the rest."""
+
+import numpy as np
+import pytest
+
+from hammerstein.datafiles import DataFileError, Record, bundled_data, read_record
+
+N = 20
+T = 1e-3
+
+
+def _rows(sep=",", header=True, index=False):
+    t = np.arange(N) * T
+    u = 10 * np.sin(2 * np.pi * 5 * t)
+    y = 5 * u + 0.5
+    lines = []
+    if header:
+        lines.append(sep.join((["idx"] if index else []) + ["time", "volts", "microns"]))
+    for i in range(N):
+        cells = ([""] if index else []) + [f"{t[i]:.6f}", f"{u[i]:.9f}", f"{y[i]:.9f}"]
+        lines.append(sep.join(cells))
+    return "\n".join(lines) + "\n", t, u, y
+
+
+@pytest.mark.parametrize("sep", [",", ";", "\t", " "])
+@pytest.mark.parametrize("header", [True, False])
+def test_separators_and_header_detection(tmp_path, sep, header):
+    text, t, u, y = _rows(sep, header)
+    path = tmp_path / "rec.csv"
+    path.write_text(text)
+    cols = ("volts", "microns", "time") if header else (1, 2, 0)
+    rec = read_record(path, *cols)
+    assert isinstance(rec, Record)
+    np.testing.assert_allclose(rec.u, u, atol=1e-8)
+    np.testing.assert_allclose(rec.y, y, atol=1e-8)
+    assert rec.sampling_period == pytest.approx(T, rel=1e-6)
+    assert rec.input_name == ("volts" if header else "column 1")
+
+
+def test_empty_leading_index_column_is_dropped(tmp_path):
+    text, t, u, y = _rows(",", header=False, index=True)
+    path = tmp_path / "rec.csv"
+    path.write_text(text)
+    rec = read_record(path, input="1", output="2", time="0")       # indices given as text (CLI)
+    np.testing.assert_allclose(rec.u, u, atol=1e-8)
+
+
+def test_sampling_period_without_time_column(tmp_path):
+    text, t, u, y = _rows(",", header=True)
+    path = tmp_path / "rec.csv"
+    path.write_text(text)
+    rec = read_record(path, "volts", "microns", sampling_period=2e-3)
+    np.testing.assert_allclose(rec.timepts, np.arange(N) * 2e-3)
+
+
+def test_shipped_record():
+    rec = read_record(bundled_data(), input=2, output=1, time=0)
+    assert rec.n_samples == 50001
+    assert rec.sampling_period == pytest.approx(2e-4, rel=1e-3)
+    assert np.ptp(rec.u) == pytest.approx(300.0, abs=1e-6)
+    assert rec.y.min() == pytest.approx(-19.73, abs=0.01) and rec.y.max() == pytest.approx(19.72, abs=0.01)
+
+
+def _write(tmp_path, text, name="bad.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def _good(tmp_path):
+    return _write(tmp_path, _rows(",", header=True)[0], "good.csv")
+
+
+@pytest.mark.parametrize("case, kwargs, message", [
+    ("missing file", dict(path="nope.csv", input=0, output=1, time=None, sampling_period=1e-3),
+     "no such file"),
+    ("empty file", dict(text="", input=0, output=1, sampling_period=1e-3), "the file is empty"),
+    ("blank lines only", dict(text="\n\n  \n", input=0, output=1, sampling_period=1e-3),
+     "the file is empty"),
+    ("misnamed column", dict(input="volt", output="microns", time="time"),
+     "no input column named 'volt'; available columns: 0:time, 1:volts, 2:microns"),
+    ("index out of range", dict(input=0, output=7, time=None, sampling_period=1e-3),
+     "output column 7 out of range"),
+    ("no time information", dict(input="volts", output="microns"),
+     "give a time column or a sampling period"),
+    ("bad sampling period", dict(input="volts", output="microns", sampling_period=-1.0),
+     "expected a positive time"),
+    ("disagreeing period", dict(input="volts", output="microns", time="time", sampling_period=0.5),
+     "disagrees with the time column step"),
+])
+def test_errors_are_one_line_and_name_the_file(tmp_path, case, kwargs, message):
+    kwargs = dict(kwargs)
+    if "text" in kwargs:
+        path = _write(tmp_path, kwargs.pop("text"))
+    elif "path" in kwargs:
+        path = tmp_path / kwargs.pop("path")
+    else:
+        path = _good(tmp_path)
+    with pytest.raises(DataFileError) as err:
+        read_record(path, **kwargs)
+    text = str(err.value)
+    assert message in text and str(path) in text and "\n" not in text
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda rows: rows.__setitem__(5, "0.004,abc,1.0"), "input column 'volts': non-numeric or empty cell 'abc' at data row 5"),
+    (lambda rows: rows.__setitem__(6, "0.005,,1.0"), "non-numeric or empty cell"),
+    (lambda rows: rows.__setitem__(8, "0.001,1.0,1.0"), "time column 'time' is not increasing"),
+    (lambda rows: rows.__setitem__(8, "0.0075,1.0,1.0"), "not uniformly sampled"),
+    (lambda rows: rows.__delitem__(slice(5, None)), "too short, expected at least 10 samples, found 4"),
+])
+def test_bad_contents(tmp_path, mutate, message):
+    rows = _rows(",", header=True)[0].splitlines()
+    mutate(rows)
+    path = _write(tmp_path, "\n".join(rows) + "\n")
+    with pytest.raises(DataFileError, match=message.replace("(", r"\(").replace(")", r"\)")) as err:
+        read_record(path, "volts", "microns", time="time")
+    assert str(path) in str(err.value)
+
+
+def test_directory_is_rejected(tmp_path):
+    with pytest.raises(DataFileError, match="is a directory"):
+        read_record(tmp_path, 0, 1, sampling_period=1e-3)
