@@ -1,0 +1,133 @@
+"""The CLI end to end: every bundled scenario into a temporary directory,
+report contents, the paper's numbers, exit codes and atomic output."""
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from hammerstein.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
+
+
+@pytest.fixture(scope="module")
+def reports(tmp_path_factory):
+    out = tmp_path_factory.mktemp("reports")
+    status = main(["run", *map(str, BUNDLED), "--out", str(out)])
+    return out, status
+
+
+def _metric(out, scenario, case, channel, metric):
+    m = pd.read_csv(out / scenario / "metrics.csv")
+    sel = m[(m.case == case) & (m.channel == channel) & (m.metric == metric)]
+    assert len(sel) == 1, (scenario, case, channel, metric)
+    return float(sel.value.iloc[0])
+
+
+def test_every_bundled_scenario_runs(reports):
+    out, status = reports
+    assert status == 0
+    for path in BUNDLED:
+        d = out / path.stem
+        m = pd.read_csv(d / "metrics.csv")
+        assert list(m.columns) == ["case", "channel", "metric", "value", "unit"]
+        assert m.value.notna().all()
+        assert (d / "report.md").is_file() and list(d.glob("*.png"))
+        for case in m.case.unique():
+            ts = pd.read_csv(d / f"timeseries-{case}.csv")
+            assert {"time_s", "ux_V", "uy_V", "x_um", "y_um"} <= set(ts.columns)
+        text = (d / "report.md").read_text(encoding="utf-8")
+        for png in d.glob("*.png"):
+            assert f"]({png.name})" in text
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary dirs left
+
+
+@pytest.mark.parametrize("case, channel, metric, paper", [
+    ("ux-50Hz-static", "x", "peak_to_peak", 2 * 58.0),
+    ("uy-50Hz-static", "y", "peak_to_peak", 2 * 50.5),
+    ("ux-50Hz-static", "x", "hysteresis_ratio", 17.0),
+    ("uy-50Hz-static", "y", "hysteresis_ratio", 15.8),
+    ("uy-50Hz-static", "x", "cross_coupling_peak_to_peak", 3.0),
+    ("ux-50Hz-static", "y", "cross_coupling_peak_to_peak", 4.0),
+])
+def test_fig05_numbers_within_10_percent(reports, case, channel, metric, paper):
+    out, _ = reports
+    value = _metric(out, "fig05-characterization", case, channel, metric)
+    assert value == pytest.approx(paper, rel=0.10)
+
+
+def test_fig05_rate_dependency_loops_widen_with_frequency(reports):
+    out, _ = reports
+    widths = [_metric(out, "fig05-characterization", f"ux-{f}Hz", "x", "hysteresis_width")
+              for f in (50, 100, 150, 200)]
+    assert widths == sorted(widths) and widths[-1] > 2 * widths[0]
+
+
+@pytest.mark.parametrize("case, direct, cross, cross_limit", [
+    ("x-axis-static", "x", "y", 0.5),   # paper: (x_r, y) about ±0.25 µm
+    ("y-axis-static", "y", "x", 0.4),   # paper: (y_r, x) about ±0.2 µm
+])
+def test_fig08_static_plant_is_linearised_and_decoupled(reports, case, direct, cross, cross_limit):
+    out, _ = reports
+    rms = _metric(out, "fig08-compensated-sine", case, direct, "rms_error")
+    assert rms < 0.01 * 50.0
+    assert _metric(out, "fig08-compensated-sine", case, cross,
+                   "cross_coupling_peak_to_peak") < cross_limit
+
+
+def test_literal_law_reported_as_diverged(reports):
+    out, _ = reports
+    t = _metric(out, "literal-law-divergence", "literal-K-identity", "x+y", "diverged_at_time")
+    assert 0 < t < 20 * 5e-5  # within twenty samples
+    m = pd.read_csv(out / "literal-law-divergence" / "metrics.csv")
+    assert set(m[m.case == "literal-K-identity"].metric) == {"diverged_at_time"}
+    assert _metric(out, "literal-law-divergence", "normalised-K-secant", "x", "rms_error") < 0.5
+    text = (out / "literal-law-divergence" / "report.md").read_text(encoding="utf-8")
+    assert "DIVERGED at sample" in text
+
+
+def test_failing_scenario_leaves_nothing_and_others_run(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[plant]\npreset = 'rakotondrabe-2dof'\n[[cases]]\nname = 'a'\n"
+                   "drive = { kind = 'sine', input = 'ux', amplitude = -1.0, frequency = 50.0, "
+                   "periods = 2 }\n", encoding="utf-8")
+    out = tmp_path / "out"
+    status = main(["run", str(bad), str(ROOT / "scenarios" / "default.toml"), "--out", str(out)])
+    assert status == 1
+    captured = capsys.readouterr()
+    err_lines = captured.err.strip().splitlines()
+    assert len(err_lines) == 1 and "amplitude" in err_lines[0]
+    assert sorted(p.name for p in out.iterdir()) == ["default"]
+    assert "default" in captured.out
+
+
+def test_rerun_replaces_the_report_atomically(tmp_path):
+    out = tmp_path / "out"
+    default = str(ROOT / "scenarios" / "default.toml")
+    assert main(["run", default, "--out", str(out)]) == 0
+    (out / "default" / "stale.txt").write_text("old")
+    assert main(["run", default, "--out", str(out)]) == 0
+    assert not (out / "default" / "stale.txt").exists()
+    assert sorted(p.name for p in out.iterdir()) == ["default"]
+
+
+def test_validate_and_exit_codes(tmp_path, capsys):
+    assert main(["validate", str(ROOT / "scenarios" / "default.toml")]) == 0
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[plant]\npresett = 'x'\n", encoding="utf-8")
+    assert main(["validate", str(bad)]) == 1
+    err = capsys.readouterr().err
+    assert "presett: unknown key (did you mean 'preset'?)" in err
+    assert "cases: missing (required)" in err
+    assert main(["run"]) == 2          # usage error
+    assert main(["no-such-command"]) == 2
+
+
+def test_list_shows_presets_and_scenarios(capsys, monkeypatch):
+    monkeypatch.chdir(ROOT)
+    assert main(["list"]) == 0
+    text = capsys.readouterr().out
+    assert "rakotondrabe-2dof" in text and "multivariable" in text
+    assert "fig08-compensated-sine.toml" in text
