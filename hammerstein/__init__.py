@@ -21,5 +21,7 @@ from .simulation import ChainResult, simulate_chain, simulate_compensator, simul
 from .identification import ClosedFormPI, IdentificationError, LeastSquaresPI, MultivariableIdentifier, fit_report
 from .sensors import Sensor, characterize, identify_plant
 from .datafiles import DataFileError, Record, read_record
+from .scenarios import ScenarioError, load_scenario
+from .runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
 
 __version__ = "0.1.0"
