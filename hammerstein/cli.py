@@ -108,7 +108,7 @@ COMMANDS = [
     "hammerstein.cli:add_validate_parser",
     "hammerstein.cli:add_list_parser",
     "hammerstein.identify_cli:add_parser",
-    # "hammerstein.check_cli:add_parser",
+    "hammerstein.check_cli:add_parser",
 ]
 
 

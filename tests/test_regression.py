@@ -209,3 +209,100 @@ def test_bad_baseline_files_give_one_line_errors(tmp_path, content, message):
     with pytest.raises(BaselineError, match=message) as err:
         read_baseline(path)
     assert str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+# -- hammerstein check, end to end ----------------------------------------------
+
+DEFAULT = ROOT / "scenarios" / "default.toml"
+
+
+def _check(*args):
+    from hammerstein.cli import main
+    return main(["check", *map(str, args)])
+
+
+def _variant(tmp_path, name, **compensator):
+    """default.toml copied to tmp_path with a changed [compensator] table."""
+    with DEFAULT.open("rb") as fh:
+        sc = tomllib.load(fh)
+    sc["compensator"].update(compensator)
+    path = tmp_path / name
+    path.write_bytes(tomli_w.dumps(sc).encode())
+    return path
+
+
+@pytest.fixture(scope="module")
+def default_baseline(tmp_path_factory):
+    path = tmp_path_factory.mktemp("baseline") / "baseline.csv"
+    assert _check(DEFAULT, "--baseline", path, "--update") == 0
+    return path
+
+
+def test_check_passes_on_the_unchanged_scenario(default_baseline, capsys, tmp_path):
+    assert _check(DEFAULT, "--baseline", default_baseline, "--out", tmp_path) == 0
+    out = capsys.readouterr().out
+    assert "no metric moved" in out and out.strip().endswith("PASS")
+    assert (tmp_path / "default" / "metrics.csv").is_file()
+    baseline = read_baseline(default_baseline)
+    assert set(baseline["scenario"]) == {"default"}
+    assert set(baseline["case"]) == {"open-loop-ux-50Hz", "sine-x-50um-static", "circle-30um"}
+
+
+def test_check_fails_on_a_degraded_compensator(default_baseline, capsys, tmp_path):
+    """K twice the secant gains: the same scenario name and cases, errors grow about 3-7x."""
+    degraded = _variant(tmp_path, "default.toml", gain=[[12.0, 0.0], [0.0, 12.0]])
+    assert _check(degraded, "--baseline", default_baseline) == 1
+    out = capsys.readouterr().out
+    assert "regressed" in out and out.strip().endswith("FAIL")
+    # a generous tolerance on every metric lets it pass again
+    assert _check(degraded, "--baseline", default_baseline, "--rtol", "10") == 0
+
+
+def test_check_fails_when_a_scenario_fails(default_baseline, capsys, tmp_path):
+    """The literal law (K = I) is refused at construction (rho >= 1): a failed scenario."""
+    literal = _variant(tmp_path, "default.toml", gain="identity")
+    assert _check(literal, "--baseline", default_baseline) == 1
+    assert "scenario failed" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("setup, message", [
+    ("missing", "baseline file not found"),
+    ("malformed", "missing column scenario"),
+    ("tolerances", "rms_error.rtol"),
+    ("no-scenario", "scenario file not found"),
+])
+def test_check_usage_errors_exit_2(tmp_path, capsys, setup, message):
+    baseline = tmp_path / "baseline.csv"
+    scenario = DEFAULT
+    extra = []
+    if setup == "malformed":
+        baseline.write_text("case,channel,metric,value,unit\n", encoding="utf-8")
+    elif setup == "tolerances":
+        baseline.write_text("scenario,case,channel,metric,value,unit\n", encoding="utf-8")
+        tol = tmp_path / "tol.toml"
+        tol.write_text("[rms_error]\nrtol = -0.1\n", encoding="utf-8")
+        extra = ["--tolerances", tol]
+    elif setup == "no-scenario":
+        baseline.write_text("scenario,case,channel,metric,value,unit\n", encoding="utf-8")
+        scenario = tmp_path / "nope.toml"
+    assert _check(scenario, "--baseline", baseline, *extra) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    if setup == "missing":
+        assert not baseline.exists()
+
+
+def test_update_replaces_only_the_scenarios_run(default_baseline, tmp_path):
+    other = pd.DataFrame([{"scenario": "other", "case": "c", "channel": "x",
+                           "metric": "rms_error", "value": 1.0, "unit": "µm"}])
+    path = tmp_path / "b.csv"
+    stale = read_baseline(default_baseline)
+    stale.loc[stale["metric"] == "rms_error", "value"] = 123.0
+    write_baseline(pd.concat([stale, other]), path)
+    assert _check(DEFAULT, "--baseline", path, "--update") == 0
+    updated = read_baseline(path)
+    pd.testing.assert_frame_equal(
+        updated[updated["scenario"] == "default"].reset_index(drop=True),
+        read_baseline(default_baseline))
+    assert updated[updated["scenario"] == "other"]["value"].tolist() == [1.0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b.csv"]

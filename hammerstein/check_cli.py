@@ -1,0 +1,132 @@
+"""``hammerstein check``: the regression gate on the command line (issue 6, item 5).
+
+``hammerstein check SCENARIO... --baseline FILE`` runs the scenarios with
+:func:`hammerstein.runner.run_scenarios`, compares their metrics with the
+baseline file (:func:`hammerstein.regression.compare_metrics`), prints the
+metrics that moved and one summary line.
+
+Exit status: 0 when nothing regressed; 1 on a regression (a metric beyond
+tolerance in the bad direction, a missing metric, a new divergence) or a
+failed scenario; 2 on usage errors (missing or malformed baseline without
+``--update``, bad tolerances, two scenarios with the same name).
+
+``--update`` rewrites the baseline on purpose: the rows of the scenarios
+run are replaced, the other scenarios kept; the file is written to a
+temporary file and renamed. It writes nothing if a scenario failed.
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+
+__all__ = ["add_parser", "run_check"]
+
+
+def add_parser(subparsers):
+    """Register the ``check`` subcommand on an argparse subparsers object."""
+    p = subparsers.add_parser(
+        "check", help="run scenarios and compare their metrics with a baseline",
+        description="Run scenarios and compare their metrics.csv with a stored baseline "
+                    "(per-metric relative and absolute tolerances). Exit 0 when nothing "
+                    "regressed, 1 on a regression or a failed scenario, 2 on usage errors.")
+    p.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario TOML files")
+    p.add_argument("--baseline", required=True, metavar="FILE",
+                   help="baseline CSV (columns scenario,case,channel,metric,value,unit)")
+    p.add_argument("--update", action="store_true",
+                   help="rewrite the baseline rows of these scenarios with the current metrics")
+    p.add_argument("--out", metavar="DIR",
+                   help="keep the reports in DIR (default: a temporary directory)")
+    p.add_argument("--rtol", type=float, metavar="R",
+                   help="relative tolerance for every metric (e.g. 0.05 = 5 %%)")
+    p.add_argument("--atol", type=float, metavar="A",
+                   help="absolute tolerance for every metric, in its unit")
+    p.add_argument("--tolerances", metavar="TOML",
+                   help="per-metric overrides: tables [metric] with rtol, atol, direction")
+    p.add_argument("--all", action="store_true", dest="show_all",
+                   help="print every compared metric, not only those that moved")
+    p.set_defaults(handler=run_check)
+    return p
+
+
+def _err(msg):
+    print(f"error: {msg}", file=sys.stderr)
+
+
+def run_check(args):
+    """Handler of ``hammerstein check``; returns the exit status."""
+    from .regression import (BaselineError, compare_metrics, is_regression, load_tolerances,
+                             merge_baseline, read_baseline, resolve_tolerances, summary_line,
+                             write_baseline)
+    baseline_path = Path(args.baseline)
+    try:
+        overrides = load_tolerances(args.tolerances) if args.tolerances else None
+        tolerance = resolve_tolerances(overrides, rtol=args.rtol, atol=args.atol)
+        baseline = None
+        if not args.update or baseline_path.exists():
+            baseline = read_baseline(baseline_path)
+    except BaselineError as exc:
+        _err(" ".join(str(exc).split()))
+        return 2
+    missing = [s for s in args.scenarios if not Path(s).is_file()]
+    if missing:
+        _err(f"{missing[0]}: scenario file not found")
+        return 2
+
+    outcomes = _run(args.scenarios, args.out)
+    names = [o.name for o in outcomes]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        _err(f"scenario name {dup[0]!r} is used by several files; names must be unique in a baseline")
+        return 2
+    failed = [o for o in outcomes if not o.ok]
+    for o in failed:
+        _err(f"{o.path}: scenario failed: {'; '.join(str(o.error).splitlines())}")
+    ok = [o for o in outcomes if o.ok]
+    current = (pd.concat([o.metrics.assign(scenario=o.name) for o in ok], ignore_index=True)
+               if ok else None)
+
+    if args.update:
+        if failed:
+            _err(f"{baseline_path}: not updated because {len(failed)} scenario(s) failed")
+            return 1
+        merged = merge_baseline(baseline, current)
+        write_baseline(merged, baseline_path)
+        print(f"{baseline_path}: updated {len(current)} metrics of {len(ok)} scenario(s) "
+              f"({len(merged)} metrics in the file)")
+        return 0
+
+    if current is None:
+        print(f"check: no scenario ran -> FAIL ({len(failed)} failed)")
+        return 1
+    run_names = set(current["scenario"])
+    unknown = sorted(run_names - set(baseline["scenario"]))
+    base = baseline[baseline["scenario"].isin(run_names)]
+    result = compare_metrics(current, base, tolerance)
+    shown = result if args.show_all else result[
+        (result["status"] != "ok") | (result["delta"].fillna(0) != 0)]
+    if len(shown):
+        with pd.option_context("display.width", 200, "display.max_rows", None,
+                               "display.max_columns", None):
+            print(shown.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+    else:
+        print("no metric moved")
+    if unknown:
+        print(f"note: scenario(s) not in {baseline_path}: {', '.join(unknown)} "
+              f"(their metrics are 'new'; add them with --update)")
+    line = summary_line(result, n_scenarios=len(ok))
+    if failed:
+        line = f"{line.rsplit(' -> ', 1)[0]}; {len(failed)} scenario(s) failed -> FAIL"
+    print(line)
+    return 1 if failed or is_regression(result).any() else 0
+
+
+def _run(paths, out):
+    from .runner import run_scenarios
+    if out is not None:
+        return run_scenarios(paths, out)
+    with tempfile.TemporaryDirectory(prefix="hammerstein-check-") as tmp:
+        return run_scenarios(paths, tmp)
