@@ -7,7 +7,7 @@ Hammerstein actuator (multivariable PI + python-control linear dynamics).
 """
 
 from .compensators import (CompensatorDivergence, CompensatorError, ConvergenceReport,
-                           ConvergenceWarning, InverseMultiplicativeCompensator,
+                           ConvergenceWarning, InverseMultiplicativeCompensator, midpoint_gains,
                            convergence_report)
 from .compensators import (PerAxisInverseCompensator, RangeWarning, StaticGainCompensator, check_reference_range, diagonal_compensator)
 from .inverse import InversePI, InversePlay, kuhnen_inverse, kuhnen_inverse_parameters

@@ -325,6 +325,15 @@ class LeastSquaresPI:
     (unconstrained) or :func:`scipy.optimize.lsq_linear` (bounded /
     non-negative weights; the offset is never bounded).
 
+    ``bounds="monotone"`` constrains the model instead of the weights: the
+    unknowns become the cumulative sums ``S_j = sum_{i<=j} w_i`` (the slopes
+    reachable on a branch, NOTES §4), bounded by ``S_j >= min_slope`` (or
+    ``<= -min_slope`` for a decreasing transfer). The fitted operator is then
+    strictly monotone, hence invertible (Kuhnen: ``S_i > 0``) and compensable
+    with ``rho(I - K^-1 J) < 1`` for a suitable K. Use it for direct
+    transfers identified where phase lag makes the loops overshoot after a
+    reversal (negative slopes that no compensator can invert).
+
     Parameters
     ----------
     thresholds : array_like, shape (n,), optional
@@ -334,10 +343,14 @@ class LeastSquaresPI:
         Number of hysterons when thresholds are not given.
     partition : {"time", "input"}
         Partition when thresholds are not given.
-    bounds : None, "nonnegative" or (float, float)
-        Weight bounds [µm/V]: unconstrained, ``w >= 0``, or ``lo <= w <= hi``.
+    bounds : None, "nonnegative", "monotone" or (float, float)
+        Weight bounds [µm/V]: unconstrained, ``w >= 0``, cumulative sums
+        ``|S_j| >= min_slope`` (monotone model), or ``lo <= w <= hi``.
     offset : bool
         Fit a constant output offset [µm] too.
+    min_slope : float, optional
+        Smallest slope [µm/V] of a monotone fit; default 10 % of the
+        record's secant slope ``(y(u_max) - y(u_min)) / (u_max - u_min)``.
 
     Attributes
     ----------
@@ -353,12 +366,13 @@ class LeastSquaresPI:
     """
 
     def __init__(self, thresholds=None, n_hysterons=15, partition="time",
-                 bounds=None, offset=True):
+                 bounds=None, offset=True, min_slope=None):
         self.thresholds = thresholds
         self.n_hysterons = n_hysterons
         self.partition = partition
         self.bounds = bounds
         self.offset = offset
+        self.min_slope = min_slope
 
     def _bounds(self, n):
         b = self.bounds
@@ -366,12 +380,15 @@ class LeastSquaresPI:
             return None
         if isinstance(b, str) and b == "nonnegative":
             lo, hi = 0.0, np.inf
+        elif isinstance(b, str) and b == "monotone":
+            return "monotone"
         else:
             try:
                 lo, hi = (float(v) for v in b)
             except (TypeError, ValueError):
                 raise IdentificationError(
-                    f"bounds: expected None, 'nonnegative' or (lo, hi), found {b!r}") from None
+                    f"bounds: expected None, 'nonnegative', 'monotone' or (lo, hi), "
+                    f"found {b!r}") from None
             if not lo < hi:
                 raise IdentificationError(f"bounds: expected lo < hi, found {b!r}")
         lower = np.full(n + bool(self.offset), lo)
@@ -440,6 +457,8 @@ class LeastSquaresPI:
         bounds = self._bounds(r.size)
         if bounds is None:
             coef, *_ = scipy.linalg.lstsq(X, target)
+        elif isinstance(bounds, str):  # monotone: solve for the cumulative sums S
+            coef = self._solve_monotone(X, target, u[skip:], y[skip:], r.size)
         else:
             coef = scipy.optimize.lsq_linear(X, target, bounds=bounds, method="bvls").x
         w = coef[:r.size]
@@ -451,6 +470,29 @@ class LeastSquaresPI:
         self.amplitude_ = float(np.ptp(u[skip:]) / 2.0)
         self.residual_rms_ = float(np.sqrt(np.mean((target - X @ coef) ** 2)))
         return self
+
+
+    def _solve_monotone(self, X, target, u, y, n):
+        """Least squares over S = cumsum(w) with |S_j| >= min_slope."""
+        i_max, i_min = int(np.argmax(u)), int(np.argmin(u))
+        secant = (y[i_max] - y[i_min]) / max(u[i_max] - u[i_min], 1e-300)
+        s_min = self.min_slope if self.min_slope is not None else 0.1 * abs(secant)
+        if not (np.isfinite(s_min) and s_min >= 0):
+            raise IdentificationError(f"min_slope: expected a slope >= 0 [µm/V], found {s_min!r}")
+        sign = 1.0 if secant >= 0 else -1.0
+        # w = M S with M the first-difference matrix; flip the sign so the
+        # bound is always S' >= s_min
+        M = np.eye(n) - np.eye(n, k=-1)
+        Xs = X.copy()
+        Xs[:, :n] = sign * (X[:, :n] @ M)
+        lower = np.full(X.shape[1], s_min)
+        upper = np.full(X.shape[1], np.inf)
+        if self.offset:
+            lower[-1] = -np.inf
+        sol = scipy.optimize.lsq_linear(Xs, target, bounds=(lower, upper), method="bvls").x
+        coef = sol.copy()
+        coef[:n] = sign * (M @ sol[:n])
+        return coef
 
 
 _METHODS = {"closed-form": ClosedFormPI, "least-squares": LeastSquaresPI}
@@ -494,7 +536,9 @@ class MultivariableIdentifier:
         Hysterons per component, shared or per component n_lk.
     **options
         Other options of the monovariable identifier (``partition``,
-        ``bounds``, ``offset``...).
+        ``bounds``, ``offset``...). ``bounds="monotone"`` is applied to the
+        direct transfers (l == k) only; cross-couplings, which need not be
+        monotone, are fitted unconstrained.
 
     Attributes
     ----------
@@ -578,7 +622,10 @@ class MultivariableIdentifier:
         amplitude = np.zeros(m)
         for k, (U, Y) in enumerate(arrays):
             for l in range(p):
-                ident = make_identifier(self.method, n_hysterons=int(n[l, k]), **self.options)
+                opts = dict(self.options)
+                if opts.get("bounds") == "monotone" and l != k:
+                    opts["bounds"] = None
+                ident = make_identifier(self.method, n_hysterons=int(n[l, k]), **opts)
                 try:
                     ident.fit(U[k], Y[l], **(fit_options or {}))
                 except IdentificationError as exc:
