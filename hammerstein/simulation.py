@@ -46,6 +46,10 @@ def _check_backend(backend):
 
 
 # -- packing ---------------------------------------------------------------------
+#: plays of each input are padded to a multiple of this (AVX: 4 doubles)
+LANES = 4
+
+
 @dataclass
 class PackedModel:
     """Multivariable PI model as kernel arrays (see :mod:`hammerstein.kernels`).
@@ -63,7 +67,8 @@ class PackedModel:
     index : numpy.ndarray, shape (n_hysterons,), int64
         Play operator of each hysteron (flat state order of the model).
     rep : numpy.ndarray, shape (n_plays,), int64
-        One hysteron of each play operator.
+        One hysteron of each play operator (-1 for the padding plays that
+        round each input's plays up to a multiple of ``LANES``).
     """
 
     start: np.ndarray
@@ -75,7 +80,10 @@ class PackedModel:
 
     def plays(self, hysteron_state):
         """Play states (n_plays,) from the flat hysteron state (n_hysterons,)."""
-        return np.ascontiguousarray(hysteron_state[self.rep], dtype=float)
+        s = np.zeros(self.rep.size)
+        used = self.rep >= 0
+        s[used] = np.asarray(hysteron_state, dtype=float)[self.rep[used]]
+        return s
 
     def hysteron_state(self, play_state):
         """Flat hysteron state (n_hysterons,) from the play states."""
@@ -101,15 +109,22 @@ def pack_model(model, state=None):
     keys = np.column_stack([f["input_index"].astype(float), f["thresholds"], s0])
     _, rep, index = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     index = np.asarray(index, dtype=np.int64).ravel()
-    n_plays = rep.size
     p, m = f["gain"].shape
-    W = np.zeros((p, n_plays))
-    np.add.at(W, (f["output_index"], index), f["weights"])
+    # pad every input's plays to a multiple of LANES (zero threshold and
+    # weight: they follow u and add nothing) so the vector loops have no tail
     play_input = f["input_index"][rep]
-    start = np.searchsorted(play_input, np.arange(m + 1)).astype(np.int64)
-    return PackedModel(start=start, r=f["thresholds"][rep].copy(), W=W,
-                       G=np.ascontiguousarray(f["gain"], dtype=float),
-                       index=index, rep=np.asarray(rep, dtype=np.int64))
+    counts = np.bincount(play_input, minlength=m)
+    padded = -(-counts // LANES) * LANES
+    start = np.concatenate([[0], np.cumsum(padded)]).astype(np.int64)
+    slot = start[play_input] + (np.arange(rep.size) - np.searchsorted(play_input, play_input))
+    r = np.zeros(start[-1])
+    r[slot] = f["thresholds"][rep]
+    W = np.zeros((p, start[-1]))
+    np.add.at(W, (f["output_index"], slot[index]), f["weights"])
+    rep_padded = np.full(start[-1], -1, dtype=np.int64)
+    rep_padded[slot] = rep
+    return PackedModel(start=start, r=r, W=W, G=np.ascontiguousarray(f["gain"], dtype=float),
+                       index=slot[index].astype(np.int64), rep=rep_padded)
 
 
 # -- play operators / multivariable PI ---------------------------------------------
@@ -495,6 +510,9 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     reference = np.asarray(reference, dtype=float)
     if backend == "numba" and _fusable(compensator):
         yr = compensator.model.check_inputs(reference, "reference")
+        from . import compensators
+        if hasattr(compensators, "check_reference_range"):   # as compensator.simulate does
+            compensators.check_reference_range(compensator.model, yr)
         cstate = _compensator_state(compensator, compensator_state)
         pstate = plant.initial_state(plant_state)
         if plant.hysteresis.n_inputs != compensator.model.n_inputs:

@@ -1,0 +1,270 @@
+"""Compiled kernels (backend='numba') against the plain numpy oracle (backend='numpy').
+
+Random models: random p x m grids of PI operators with random numbers of
+thresholds, negative weights, pure gains and absent components; random
+inputs and initial states. Agreement is required to 1e-9 (the kernels only
+change the order of the weighted sums).
+"""
+
+import numpy as np
+import pytest
+
+from hammerstein import (CompensatorDivergence, HammersteinPlant,
+                         InverseMultiplicativeCompensator, MultivariablePI, PrandtlIshlinskii,
+                         bending_modes, discretize, load_plant)
+from hammerstein import simulation as sim
+from hammerstein.hysteresis import play
+
+ATOL = 1e-9
+T = 5e-5
+
+
+def random_pi(rng, n_max=6, shared=None):
+    n = int(rng.integers(1, n_max + 1)) if shared is None else shared.size
+    r = np.sort(rng.choice(np.linspace(0, 8, 81), n, replace=False)) if shared is None else shared
+    w = rng.normal(0.5, 0.8, n)          # includes negative weights
+    return PrandtlIshlinskii(r, w)
+
+
+def random_model(rng, p=None, m=None, square=False, shared=False):
+    p = int(rng.integers(1, 4)) if p is None else p
+    m = (p if square else int(rng.integers(1, 4))) if m is None else m
+    r_shared = np.sort(rng.choice(np.linspace(0, 8, 81), 5, replace=False)) if shared else None
+    comps = []
+    for l in range(p):
+        row = []
+        for k in range(m):
+            kind = rng.choice(["pi", "pi", "gain", "none"])
+            row.append(random_pi(rng, shared=r_shared) if kind == "pi"
+                       else float(rng.normal()) if kind == "gain" else None)
+        comps.append(row)
+    comps[0][0] = random_pi(rng, shared=r_shared)      # at least one hysteresis
+    return MultivariablePI(comps)
+
+
+def random_inputs(rng, m, n):
+    t = np.arange(n)
+    u = rng.normal(0, 3, (m, n)).cumsum(axis=1) * 0.3
+    return u + 6 * np.sin(2 * np.pi * t / rng.integers(20, 200))
+
+
+def square_model(rng, m):
+    """A square model whose normalised compensator converges (checked at construction).
+
+    Positive direct weights with a first threshold of 0 (no dead band) and
+    thresholds below 3 V for a 10 V range keep the slopes within (0, 1.5) times the secant gain: rho(I - K^-1 J) < 1.
+    """
+    comps = []
+    for l in range(m):
+        row = []
+        for k in range(m):
+            r = np.r_[0.0, np.sort(rng.choice(np.linspace(0.1, 3, 30), int(rng.integers(1, 6)),
+                                               replace=False))]
+            w = (rng.uniform(0.2, 1.5, r.size) if l == k else rng.normal(0, 0.02, r.size))
+            row.append(PrandtlIshlinskii(r, w))
+        comps.append(row)
+    return MultivariablePI(comps, input_amplitude=np.full(m, 10.0))
+
+
+@pytest.mark.parametrize("seed", range(8))
+@pytest.mark.parametrize("shared", [False, True])
+def test_forward_model_matches_oracle(seed, shared):
+    rng = np.random.default_rng(seed)
+    model = random_model(rng, shared=shared)
+    u = random_inputs(rng, model.n_inputs, 300)
+    s0 = None if seed % 2 else rng.normal(0, 2, model.n_hysterons)
+    y_ref, s_ref = sim.simulate_hysteresis(model, u, s0, backend="numpy")
+    y, s = sim.simulate_hysteresis(model, u, s0)
+    np.testing.assert_allclose(y, y_ref, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(s, s_ref, rtol=0, atol=ATOL)
+    # model.simulate (used by every caller) is the kernel
+    np.testing.assert_allclose(model.simulate(u, s0)[0], y_ref, rtol=0, atol=ATOL)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_forward_model_chunked_equals_whole(seed):
+    rng = np.random.default_rng(100 + seed)
+    model = random_model(rng, shared=bool(seed % 2))
+    u = random_inputs(rng, model.n_inputs, 400)
+    y_whole, s_whole = model.simulate(u)
+    cuts = np.sort(rng.choice(np.arange(1, 400), 3, replace=False))
+    s, parts = None, []
+    for a, b in zip(np.r_[0, cuts], np.r_[cuts, 400]):
+        y, s = model.simulate(u[:, a:b], s)
+        parts.append(y)
+    np.testing.assert_allclose(np.hstack(parts), y_whole, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(s, s_whole, rtol=0, atol=ATOL)
+
+
+def test_shared_plays_are_merged_only_with_equal_states():
+    rng = np.random.default_rng(7)
+    model = random_model(rng, p=3, m=2, shared=True)
+    model = MultivariablePI([[random_pi(rng, shared=np.array([0.0, 1.0, 2.0]))
+                              for _ in range(2)] for _ in range(3)])
+    packed = sim.pack_model(model)
+    assert packed.r.size == 2 * 4            # 2 inputs x 3 thresholds, padded to 4 lanes
+    state = rng.normal(0, 1, model.n_hysterons)
+    assert np.count_nonzero(sim.pack_model(model, state).rep >= 0) == model.n_hysterons
+    u = random_inputs(rng, 2, 200)
+    np.testing.assert_allclose(model.simulate(u, state)[0],
+                               sim.simulate_hysteresis(model, u, state, backend="numpy")[0],
+                               rtol=0, atol=ATOL)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_play_kernel_matches_closed_form_recursion(seed):
+    rng = np.random.default_rng(seed)
+    u = random_inputs(rng, 1, 250)[0]
+    r = np.array([0.0, 0.5, 1.7, 4.0])
+    s0 = rng.normal(0, 2, r.size)
+    y, s = play(u, r, s0)
+    expected = np.empty_like(y)
+    prev = s0.copy()
+    for t in range(u.size):            # eq. (1), written out
+        prev = np.maximum(u[t] - r, np.minimum(u[t] + r, prev))
+        expected[:, t] = prev
+    np.testing.assert_allclose(y, expected, rtol=0, atol=0)
+    np.testing.assert_allclose(s, expected[:, -1], rtol=0, atol=0)
+
+
+def random_plant(rng, model, dynamics):
+    dyn = None
+    if dynamics:
+        p = model.n_outputs
+        dyn = discretize(bending_modes(rng.uniform(200, 600, p), rng.uniform(0.05, 0.5, p)), T)
+    return HammersteinPlant(model, T, dyn)
+
+
+@pytest.mark.parametrize("dynamics", [False, True])
+@pytest.mark.parametrize("seed", range(4))
+def test_plant_matches_oracle_and_chunks(seed, dynamics):
+    rng = np.random.default_rng(200 + seed)
+    plant = random_plant(rng, random_model(rng), dynamics)
+    u = random_inputs(rng, plant.hysteresis.n_inputs, 300)
+    x0 = rng.normal(0, 1, plant.n_states)
+    y_ref, s_ref = sim.simulate_plant(plant, u, x0, backend="numpy")
+    y, s = plant.simulate(u, x0)
+    np.testing.assert_allclose(y, y_ref, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(s, s_ref, rtol=0, atol=ATOL)
+    y1, s1 = plant.simulate(u[:, :117], x0)
+    y2, s2 = plant.simulate(u[:, 117:], s1)
+    np.testing.assert_allclose(np.hstack([y1, y2]), y_ref, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(s2, s_ref, rtol=0, atol=ATOL)
+
+
+def _compare_chain(comp, plant, yr, **kw):
+    ref = sim.simulate_chain(comp, plant, yr, backend="numpy", **kw)
+    got = sim.simulate_chain(comp, plant, yr, **kw)
+    assert got.diverged == ref.diverged
+    if ref.diverged:
+        assert got.divergence.sample == ref.divergence.sample
+        n = ref.divergence.sample
+        np.testing.assert_allclose(got.inputs[:, :n], ref.inputs[:, :n], rtol=0, atol=ATOL)
+        np.testing.assert_allclose(got.outputs[:, :n], ref.outputs[:, :n], rtol=0, atol=ATOL)
+        assert np.all(np.isnan(got.inputs[:, n:]))
+    else:
+        for a in ("inputs", "outputs", "compensator_state", "plant_state"):
+            np.testing.assert_allclose(getattr(got, a), getattr(ref, a), rtol=0, atol=ATOL)
+    return got
+
+
+@pytest.mark.parametrize("iterations", [1, 3])
+@pytest.mark.parametrize("dynamics", [False, True])
+@pytest.mark.parametrize("seed", range(3))
+def test_compensator_chain_matches_oracle(seed, dynamics, iterations):
+    rng = np.random.default_rng(300 + seed)
+    m = int(rng.integers(1, 4))
+    model = square_model(rng, m)
+    comp = InverseMultiplicativeCompensator(model, iterations=iterations, check="error")
+    plant = random_plant(rng, square_model(rng, m), dynamics)
+    yr = random_inputs(rng, m, 300) * 2
+    got = _compare_chain(comp, plant, yr)
+    assert not got.diverged
+    u_ref, c_ref = sim.simulate_compensator(comp, yr, backend="numpy")
+    u, c = comp.simulate(yr)
+    np.testing.assert_allclose(u, u_ref, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(c, c_ref, rtol=0, atol=ATOL)
+    # chunked == whole, states carried over
+    a = sim.simulate_chain(comp, plant, yr[:, :140])
+    b = sim.simulate_chain(comp, plant, yr[:, 140:], a.compensator_state, a.plant_state)
+    np.testing.assert_allclose(np.hstack([a.outputs, b.outputs]), got.outputs, rtol=0, atol=ATOL)
+
+
+def test_literal_law_diverges_at_the_same_sample_as_the_oracle():
+    plant = load_plant("rakotondrabe-2dof")
+    comp = InverseMultiplicativeCompensator(plant.hysteresis, gain="identity", check="ignore")
+    t = np.arange(400) * T
+    yr = np.vstack([50 * np.sin(2 * np.pi * 50 * t), np.zeros_like(t)])
+    got = _compare_chain(comp, plant, yr)
+    assert got.divergence.sample == 8            # the core's documented number
+    with pytest.raises(CompensatorDivergence) as exc:
+        comp.simulate(yr)
+    assert exc.value.sample == 8
+
+
+def _lowpass(model, cutoff_hz):
+    return InverseMultiplicativeCompensator(model, check="ignore", feedback="lowpass",
+                                            cutoff_hz=cutoff_hz, sampling_period=T)
+
+
+@pytest.mark.parametrize("cutoff_hz", [50.0, 2000.0])
+def test_lowpass_feedback_matches_oracle(cutoff_hz):
+    rng = np.random.default_rng(400)
+    model = square_model(rng, 2)
+    plant = random_plant(rng, model, True)
+    yr = random_inputs(rng, 2, 300)
+    comp = _lowpass(model, cutoff_hz)
+    _compare_chain(comp, plant, yr)
+    x0 = np.concatenate([rng.normal(0, 1, 4), np.zeros(model.n_hysterons)])
+    u_ref, s_ref = sim.simulate_compensator(comp, yr, x0, backend="numpy")
+    u, s = comp.simulate(yr, x0)
+    np.testing.assert_allclose(u, u_ref, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(s, s_ref, rtol=0, atol=ATOL)
+
+
+def test_lowpass_with_a_zero_pole_is_the_delay_law():
+    # a = exp(-2 pi fc T) -> 0: v_f(t) = v(t-T) and U(t) = U(t-T) + K^-1 (Yr - Gamma(U(t-T)))
+    rng = np.random.default_rng(401)
+    model = square_model(rng, 2)
+    yr = random_inputs(rng, 2, 200)
+    comp = _lowpass(model, 9_000.0)
+    comp.cutoff_hz = 1e9                     # below Nyquist is enforced at construction only
+    assert sim.compensator_law(comp)[1] == 0.0
+    delay = InverseMultiplicativeCompensator(model, check="ignore")
+    np.testing.assert_allclose(comp.simulate(yr)[0], delay.simulate(yr)[0], rtol=0, atol=ATOL)
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_batch_equals_individual_runs(parallel):
+    rng = np.random.default_rng(500)
+    base = square_model(rng, 2)
+    scaled = MultivariablePI([[PrandtlIshlinskii(c.thresholds, c.weights * 0.95)
+                               for c in row] for row in base.components],
+                             input_amplitude=base.input_amplitude)
+    models = [base, scaled]
+    comps = [InverseMultiplicativeCompensator(models[0], check="ignore"),
+             InverseMultiplicativeCompensator(models[1], iterations=3, check="ignore"),
+             _lowpass(models[1], 300.0),
+             InverseMultiplicativeCompensator(models[0], gain=0.1, check="ignore")]
+    plants = [random_plant(rng, base, True), random_plant(rng, base, False),
+              random_plant(rng, base, True), random_plant(rng, base, True)]
+    refs = [random_inputs(rng, 2, n) * 3 for n in (250, 90, 300, 200)]
+    results = sim.simulate_chain_batch(comps, plants, refs, parallel=parallel)
+    for comp, plant, yr, got in zip(comps, plants, refs, results):
+        one = sim.simulate_chain(comp, plant, yr)
+        assert got.diverged == one.diverged
+        np.testing.assert_allclose(got.inputs, one.inputs, rtol=0, atol=ATOL)
+        np.testing.assert_allclose(got.outputs, one.outputs, rtol=0, atol=ATOL)
+        if not one.diverged:
+            np.testing.assert_allclose(got.plant_state, one.plant_state, rtol=0, atol=ATOL)
+            np.testing.assert_allclose(got.compensator_state, one.compensator_state,
+                                       rtol=0, atol=ATOL)
+        else:
+            assert got.divergence.sample == one.divergence.sample
+    assert results[3].diverged                 # K = 0.1 I: rho(I - K^-1 J) > 1
+
+
+def test_bad_backend_is_named():
+    model = random_model(np.random.default_rng(0))
+    with pytest.raises(ValueError, match="backend"):
+        sim.simulate_hysteresis(model, np.zeros((model.n_inputs, 3)), backend="fortran")
