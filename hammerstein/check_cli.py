@@ -3,7 +3,8 @@
 ``hammerstein check SCENARIO... --baseline FILE`` runs the scenarios with
 :func:`hammerstein.runner.run_scenarios`, compares their metrics with the
 baseline file (:func:`hammerstein.regression.compare_metrics`), prints the
-metrics that moved and one summary line.
+metrics that moved (beyond round-off, ``|delta| > 1e-9 (1 + |baseline|)``,
+or not ``ok``; ``--all`` prints every metric) and one summary line.
 
 Exit status: 0 when nothing regressed; 1 on a regression (a metric beyond
 tolerance in the bad direction, a missing metric, a new divergence) or a
@@ -24,6 +25,10 @@ from pathlib import Path
 import pandas as pd
 
 __all__ = ["add_parser", "run_check"]
+
+#: Relative move below which a metric is not listed as moved (round-off of a
+#: recompiled kernel); it still counts in the comparison.
+_ROUNDOFF = 1e-9
 
 
 def add_parser(subparsers):
@@ -106,8 +111,8 @@ def run_check(args):
     unknown = sorted(run_names - set(baseline["scenario"]))
     base = baseline[baseline["scenario"].isin(run_names)]
     result = compare_metrics(current, base, tolerance)
-    shown = result if args.show_all else result[
-        (result["status"] != "ok") | (result["delta"].fillna(0) != 0)]
+    moved = result["delta"].abs() > _ROUNDOFF * (1.0 + result["baseline"].abs())
+    shown = result if args.show_all else result[(result["status"] != "ok") | moved]
     if len(shown):
         with pd.option_context("display.width", 200, "display.max_rows", None,
                                "display.max_columns", None):
