@@ -23,5 +23,6 @@ from .sensors import Sensor, characterize, identify_plant
 from .datafiles import DataFileError, Record, read_record
 from .scenarios import ScenarioError, load_scenario
 from .runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
+from .regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline
 
 __version__ = "0.1.0"
