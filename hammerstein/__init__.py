@@ -18,6 +18,8 @@ from .plant import HammersteinPlant
 from .presets import (PresetError, bundled_presets, load_model, load_plant, model_from_table,
                       model_to_table, save_model)
 from .simulation import ChainResult, simulate_chain, simulate_compensator, simulate_plant
+from .simulation import simulate_chain_batch, simulate_hysteresis
+from .progress import progress
 from .identification import ClosedFormPI, IdentificationError, LeastSquaresPI, MultivariableIdentifier, fit_report
 from .sensors import Sensor, characterize, identify_plant
 from .datafiles import DataFileError, Record, read_record

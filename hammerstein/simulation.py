@@ -331,35 +331,60 @@ def _divergence(u, bound, status, sample):
         sample, f"|U| = {np.max(np.abs(u)):.3g} V exceeds the bound {bound:.3g} V")
 
 
-def _simulate_compensator_numpy(compensator, yr, state):
+def compensator_step(compensator, state, reference):
+    """One sample of the compensator law (numpy), without divergence checks.
+
+    The body of the numpy oracle loop, also the update of the python-control
+    compensator system (:func:`hammerstein.interop.compensator_system`).
+
+    Parameters
+    ----------
+    compensator : InverseMultiplicativeCompensator
+    state : numpy.ndarray, shape (n_states,)
+        ``U(t-T)`` [V], (``v_f(t-T)`` [V] for the low-pass law), play states [V].
+    reference : numpy.ndarray, shape (m,)
+        ``Yr(t)`` [µm].
+
+    Returns
+    -------
+    inputs : numpy.ndarray, shape (m,)
+        ``U(t)`` [V].
+    new_state : numpy.ndarray, shape (n_states,)
+        State committed with ``U(t)``.
+    """
     model = compensator.model
     m = model.n_inputs
     lowpass, a = compensator_law(compensator)
-    u_prev = state[:m].copy()
-    vf = state[m:2 * m].copy() if lowpass else None
-    s = state[2 * m:].copy() if lowpass else state[m:].copy()
+    u_prev = state[:m]
+    s = state[2 * m:] if lowpass else state[m:]
     Kinv = compensator.K_inv
+    if lowpass:
+        y_prev, _ = model.evaluate(u_prev, s)
+        vf = a * state[m:2 * m] + (1.0 - a) * (u_prev - Kinv @ y_prev)
+        u = Kinv @ reference + vf
+    else:
+        u = u_prev
+        for _ in range(compensator.iterations):
+            y_hat, _ = model.evaluate(u, s)
+            u = u + Kinv @ (reference - y_hat)
+    if not np.all(np.isfinite(u)):
+        return u, state.copy()
+    _, s = model.evaluate(u, s)
+    return u, np.concatenate([u, vf, s] if lowpass else [u, s])
+
+
+def _simulate_compensator_numpy(compensator, yr, state):
     bound = compensator.divergence_bound
     u_out = np.empty_like(yr)
     for t in range(yr.shape[1]):
-        if lowpass:
-            y_prev, _ = model.evaluate(u_prev, s)
-            vf = a * vf + (1.0 - a) * (u_prev - Kinv @ y_prev)
-            u = Kinv @ yr[:, t] + vf
-        else:
-            u = u_prev
-            for _ in range(compensator.iterations):
-                y_hat, _ = model.evaluate(u, s)
-                u = u + Kinv @ (yr[:, t] - y_hat)
+        u, new_state = compensator_step(compensator, state, yr[:, t])
         if not np.all(np.isfinite(u)):
             raise CompensatorDivergence(t, "the input voltage became non-finite")
         if np.max(np.abs(u)) > bound:
             raise _divergence(u, bound, kernels.STATUS_BOUND, t)
-        _, s = model.evaluate(u, s)
         u_out[:, t] = u
-        u_prev = u
-    parts = [u_prev, vf, s] if lowpass else [u_prev, s]
-    return u_out, np.concatenate(parts)
+        state = new_state
+    return u_out, state
 
 
 def _run_chain_kernel(compensator, yr, cstate, plant=None, pstate=None):
