@@ -126,7 +126,9 @@ def _figures(scenario, results, directory):
         if r.spec.mode == "reference" and r.spec.loop_channel is not None:
             key = (_plant_label(r.spec), repr(sorted(r.spec.compensator_spec.items())))
             groups.setdefault(key, []).append(r)
-    for i, ((label, _), rs) in enumerate(groups.items()):
+    seen = {}
+    for (label, _), rs in groups.items():
+        seen[label] = seen.get(label, 0) + 1
         curves = [{"label": r.name, "column": r.spec.loop_channel,
                    "x": _last_period(r.reference[r.spec.loop_channel], r.spec.period_samples),
                    "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
@@ -134,7 +136,7 @@ def _figures(scenario, results, directory):
                               [f"{n} [µm]" for n in out_names],
                               f"{scenario.title}: compensated maps ({label} plant, last period)",
                               direct_label="compensated direct", cross_label="residual cross-coupling")
-        fname = f"maps-compensated-{label}{'' if i == 0 else f'-{i + 1}'}.png"
+        fname = f"maps-compensated-{label}{'' if seen[label] == 1 else f'-{seen[label]}'}.png"
         plots.save(fig, directory / fname)
         comp = _compensator_summary(rs[0].spec)
         figs.append((f"Compensated input-output maps, {label} plant, compensator {comp}", fname))
