@@ -28,6 +28,8 @@ import pandas as pd
 
 from . import metrics as met
 from .compensators import InverseMultiplicativeCompensator
+from .identification import IdentificationError
+from .identified import identified_model, identify_table, report_identified
 from .presets import load_model
 from .scenarios import Field, Invalid, ScenarioError, choice, integer, load_scenario, string
 from .simulation import simulate_chain
@@ -70,16 +72,19 @@ class CompensatorKind:
     description: str = ""
 
 
-def resolve_model(spec_model, plant, base_dir):
+def resolve_model(spec_model, plant, base_dir, identify=None):
     """The multivariable PI model a compensator is built from.
 
     Parameters
     ----------
     spec_model : str
-        ``"plant"`` (the plant's own PI model) or a model/preset TOML path,
-        relative to ``base_dir`` when not absolute.
+        ``"plant"`` (the plant's own PI model), ``"identified"`` (identified
+        on ``plant`` by the ``identify`` table, :mod:`hammerstein.identified`)
+        or a model/preset TOML path, relative to ``base_dir`` when not absolute.
     plant : HammersteinPlant
     base_dir : pathlib.Path
+    identify : dict, optional
+        The ``identify`` table (required with ``"identified"``).
 
     Returns
     -------
@@ -89,9 +94,16 @@ def resolve_model(spec_model, plant, base_dir):
     ------
     PresetError
         If the model file is missing or invalid.
+    IdentificationError
+        If ``identify`` is missing or the identification fails.
     """
     if spec_model in (None, "plant"):
         return plant.hysteresis
+    if spec_model == "identified":
+        if identify is None:
+            raise IdentificationError("identify: missing (required with model = 'identified'), "
+                                      "e.g. identify = { frequency = 50.0 }")
+        return identified_model(plant, identify)[0]
     path = Path(spec_model)
     if not path.is_absolute():
         path = Path(base_dir) / path
@@ -99,13 +111,13 @@ def resolve_model(spec_model, plant, base_dir):
 
 
 def _gain(v):
-    if v in ("secant", "identity"):
+    if v in ("secant", "midpoint", "identity"):
         return v
     if isinstance(v, list) and v and all(isinstance(r, list) and len(r) == len(v) and
                                          all(isinstance(a, (int, float)) and not isinstance(a, bool)
                                              for a in r) for r in v):
         return v
-    raise Invalid(f"expected 'secant', 'identity' or a square matrix [[..],[..]] [µm/V], found {v!r}")
+    raise Invalid(f"expected 'secant', 'midpoint', 'identity' or a square matrix [[..],[..]] [µm/V], found {v!r}")
 
 
 def _build_none(spec, plant, base_dir):
@@ -113,7 +125,7 @@ def _build_none(spec, plant, base_dir):
 
 
 def _build_multivariable(spec, plant, base_dir):
-    model = resolve_model(spec.get("model", "plant"), plant, base_dir)
+    model = resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
         check=spec.get("check", "error"))
@@ -125,6 +137,7 @@ COMPENSATORS: dict[str, CompensatorKind] = {
     "multivariable": CompensatorKind(
         _build_multivariable,
         {"model": Field(string(), default="plant"),
+         "identify": Field(identify_table),
          "gain": Field(_gain, default="secant"),
          "iterations": Field(integer(1), default=1),
          "check": Field(choice("error", "warn", "ignore"), default="error")},
@@ -312,7 +325,8 @@ def run_scenario(path, out_dir):
         name = scenario.name
         results = [run_case(c) for c in scenario.cases]
         frame = metrics_frame(results)
-        target = _atomic_write(out_dir, name, lambda d: write_report(scenario, results, d))
+        target = _atomic_write(out_dir, name, lambda d: (write_report(scenario, results, d),
+                                                          report_identified(scenario, results, d)))
     except ScenarioError as exc:
         return ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics())
     except Exception as exc:  # a failed scenario must not stop the others

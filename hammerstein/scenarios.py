@@ -244,8 +244,9 @@ def check_table(table, schema, where, problems, source):
             continue
         try:
             out[key] = schema[key].check(value)
-        except Invalid as exc:
-            problems.append(f"{source}: {pre}{key}: {exc}")
+        except Invalid as exc:  # a nested table may report several (subkey, message)
+            for sub, msg in getattr(exc, "problems", None) or [(None, str(exc))]:
+                problems.append(f"{source}: {pre}{key}{'.' + sub if sub else ''}: {msg}")
     for key, fld in schema.items():
         if key not in table:
             if fld.required:

@@ -1,0 +1,321 @@
+"""Identified models in scenarios: ``model = "identified"`` with an ``identify`` table.
+
+A compensator table (or an open-loop drive case that compares a model with
+the plant) may name the model "identified at f Hz on this plant"::
+
+    model = "identified"
+    identify = { frequency = 50.0, amplitude = 10.0, periods = 3, n_hysterons = 15,
+                 method = "least-squares", partition = "time", bounds = "monotone",
+                 sensor = false, seed = 0 }
+
+Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults).
+The model is identified on the case's own plant (same preset and dynamics
+setting) by the characterisation experiment of Section 3.3, Steps 1-4: a
+sine on each input in turn, all outputs recorded
+(:func:`hammerstein.sensors.characterize`), then
+:class:`hammerstein.identification.MultivariableIdentifier`. Identified
+models are cached in-process on (plant content, identify table), so a
+scenario with many cases identifies each model once, and are saved into
+the report directory as ``models/identified-<f>Hz-<method>.toml``
+(:func:`hammerstein.presets.save_model`; loadable by ``model = "path"``).
+
+``sensor = true`` measures the outputs through the inductive sensor model of
+NOTES §1 (IBS ECL202): 40 nm quantisation, first-order 2 kHz bandwidth, and
+white noise of :data:`SENSOR_NOISE_RMS` = 0.02 µm RMS (half a quantisation
+step; the paper does not state the noise) drawn with ``seed``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from .identification import IdentificationError, MultivariableIdentifier
+from .presets import model_to_table, save_model
+from .scenarios import Field, Invalid, boolean, check_table, choice, integer, number
+from .sensors import Sensor, characterize, identification_metadata
+
+__all__ = [
+    "IDENTIFY_FIELDS",
+    "SENSOR_NOISE_RMS",
+    "NestedInvalid",
+    "identify_table",
+    "identified_model",
+    "model_file_name",
+    "clear_cache",
+    "save_identified_models",
+]
+
+#: White-noise RMS [µm] of the ECL202 sensor model used by ``sensor = true``.
+SENSOR_NOISE_RMS = 0.02
+
+
+class NestedInvalid(Invalid):
+    """A nested table has problems; ``problems`` lists ``(key, message)``."""
+
+    def __init__(self, problems):
+        self.problems = list(problems)
+        super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
+
+
+def _bounds(v):
+    if v in ("none", "nonnegative", "monotone"):
+        return v
+    if (isinstance(v, list) and len(v) == 2
+            and all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in v)
+            and v[0] < v[1]):
+        return [float(a) for a in v]
+    hint = choice("none", "nonnegative", "monotone")
+    try:
+        hint(v)
+    except Invalid as exc:
+        raise Invalid(f"{exc}, or [lo, hi] weight bounds [µm/V]") from None
+    return v
+
+
+def _n_hysterons(v):
+    if isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+        return v
+    if (isinstance(v, list) and v and all(isinstance(r, list) and r for r in v)
+            and all(isinstance(a, int) and not isinstance(a, bool) and a >= 1 for r in v for a in r)):
+        return v
+    raise Invalid(f"expected an integer >= 1 or a p x m table of them, found {v!r}")
+
+
+def _amplitude(v):
+    if isinstance(v, list):
+        return [number("V", 0)(a) for a in v]
+    return number("V", 0)(v)
+
+
+#: Schema of the ``identify`` table: key -> Field (checker, default).
+IDENTIFY_FIELDS = {
+    "frequency": Field(number("Hz", 0), required=True),
+    "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
+    "periods": Field(integer(2), default=3),
+    "n_hysterons": Field(_n_hysterons, default=15),
+    "method": Field(choice("closed-form", "least-squares"), default="closed-form"),
+    "partition": Field(choice("time", "input"), default="time"),
+    "bounds": Field(_bounds, default="none"),
+    "sensor": Field(boolean(), default=False),
+    "seed": Field(integer(0), default=0),
+}
+
+
+def identify_table(value):
+    """Field checker of an ``identify`` table (all problems at once).
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled (``amplitude`` stays absent when not
+        given: the plant model's ``input_amplitude`` is used).
+
+    Raises
+    ------
+    NestedInvalid
+        Listing ``(key, message)`` for every problem (unknown keys with the
+        closest valid key, missing ``frequency``, bad values).
+    """
+    problems = []
+    clean = check_table(value, IDENTIFY_FIELDS, "", problems, "")
+    if clean is None:
+        raise Invalid(f"expected a table such as {{ frequency = 50.0 }}, found {value!r}")
+    if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares":
+        problems.append(": bounds: only used by method = 'least-squares'")
+    if problems:  # check_table lines read ": key: message" with an empty source
+        raise NestedInvalid([tuple(p[2:].split(": ", 1)) for p in problems])
+    return clean
+
+
+# -- identification with an in-process cache ------------------------------------------
+_CACHE: dict = {}
+
+
+def clear_cache():
+    """Forget every identified model (tests)."""
+    _CACHE.clear()
+
+
+def _plant_fingerprint(plant):
+    """Content hash of a plant: PI model table, sampling period, dynamics matrices."""
+    h = hashlib.sha1(repr(model_to_table(plant.hysteresis)).encode())
+    h.update(repr(float(plant.sampling_period)).encode())
+    if plant.dynamics is not None:
+        for mat in (plant.dynamics.A, plant.dynamics.B, plant.dynamics.C, plant.dynamics.D):
+            h.update(np.ascontiguousarray(mat, dtype=float).tobytes())
+    else:
+        h.update(b"static")
+    return h.hexdigest()
+
+
+def _freeze(v):
+    return tuple(_freeze(a) for a in v) if isinstance(v, list) else v
+
+
+def _spec_key(spec):
+    return tuple(sorted((k, _freeze(v)) for k, v in spec.items()))
+
+
+def identified_model(plant, spec):
+    """The model identified on ``plant`` by the ``identify`` table ``spec`` (cached).
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        The case's plant (its preset and dynamics setting).
+    spec : dict
+        ``identify`` table (validated by :func:`identify_table` or raw; it is
+        validated again here).
+
+    Returns
+    -------
+    model : MultivariablePI
+        Inputs/outputs named as the plant's, ``input_amplitude`` the
+        excitation amplitudes [V].
+    metadata : dict
+        The ``[identification]`` table saved with the model (method,
+        frequency_hz, amplitude_V, fit_rms_um, plant...).
+
+    Raises
+    ------
+    IdentificationError
+        If the table is invalid or the identification fails (e.g. a
+        frequency beyond Nyquist, a closed form on too short a record).
+    """
+    try:
+        spec = identify_table(spec)
+    except Invalid as exc:
+        raise IdentificationError(f"identify: {exc}") from None
+    key = (_plant_fingerprint(plant), _spec_key(spec))
+    if key in _CACHE:
+        return _CACHE[key]
+    model = plant.hysteresis
+    f = spec["frequency"]
+    if f >= 0.5 / plant.sampling_period:
+        raise IdentificationError(f"identify.frequency: {f:g} Hz is beyond the Nyquist "
+                                  f"frequency {0.5 / plant.sampling_period:g} Hz of the plant")
+    amp = spec.get("amplitude")
+    if amp is None:
+        if model.input_amplitude is None:
+            raise IdentificationError("identify.amplitude: missing, and the plant model has no "
+                                      "input_amplitude to default to")
+        amp = np.asarray(model.input_amplitude, dtype=float)
+    amp = np.broadcast_to(np.asarray(amp, dtype=float), (model.n_inputs,)).copy() \
+        if np.ndim(amp) == 0 else np.asarray(amp, dtype=float)
+    if amp.shape != (model.n_inputs,):
+        raise IdentificationError(f"identify.amplitude: expected one value or {model.n_inputs} "
+                                  f"[V], found {spec.get('amplitude')!r}")
+    sensor = Sensor(resolution=0.04, bandwidth_hz=2000.0, noise_rms=SENSOR_NOISE_RMS,
+                    seed=spec["seed"]) if spec["sensor"] else None
+    records = characterize(plant, amp, f, spec["periods"], sensor)
+    options = {"partition": spec["partition"]}
+    if spec["method"] == "least-squares":
+        options["bounds"] = None if spec["bounds"] == "none" else spec["bounds"]
+    fit_options = {"skip": "auto"} if spec["method"] == "least-squares" else None
+    ident = MultivariableIdentifier(spec["method"], spec["n_hysterons"], **options)
+    try:
+        ident.fit(records, model.input_names, model.output_names,
+                  fit_options=fit_options)
+    except IdentificationError as exc:
+        raise IdentificationError(f"identify (at {f:g} Hz): {exc}") from None
+    meta = identification_metadata(
+        ident, frequency_hz=float(f), amplitude_V=amp.tolist(), periods=spec["periods"],
+        partition=spec["partition"], bounds=str(spec["bounds"]),
+        sampling_period_s=float(plant.sampling_period),
+        plant=f"{plant.name} ({'hammerstein' if plant.dynamics is not None else 'static'})",
+        sensor=None if sensor is None else {
+            "resolution_um": sensor.resolution, "bandwidth_hz": sensor.bandwidth_hz,
+            "noise_rms_um": sensor.noise_rms, "seed": spec["seed"]})
+    _CACHE[key] = (ident.model_, meta)
+    return _CACHE[key]
+
+
+def model_file_name(spec):
+    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table."""
+    return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
+
+
+def _used_specs(scenario):
+    """[(case name, role, plant, identify spec)] of the identified models of a scenario."""
+    used = []
+    for case in scenario.cases:
+        comp = case.compensator_spec or {}
+        if case.mode == "reference" and comp.get("model") == "identified" and "identify" in comp:
+            used.append((case.name, "compensator", case.plant, comp["identify"]))
+        mspec = getattr(case, "model_spec", None) or {}
+        if mspec.get("model") == "identified" and "identify" in mspec:
+            used.append((case.name, "comparison", case.plant, mspec["identify"]))
+    return used
+
+
+def save_identified_models(scenario, directory):
+    """Save every identified model a scenario used into ``directory/models/``.
+
+    File names are :func:`model_file_name`; a second, different model with
+    the same name (another plant or options) gets ``-2``, ``-3``... before
+    ``.toml``. Models come from the cache (identified while loading).
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenarios.Scenario
+    directory : pathlib.Path
+        The report directory being written.
+
+    Returns
+    -------
+    list of dict
+        One row per case and role: ``case``, ``role`` ('compensator' or
+        'comparison'), ``file`` (relative to ``directory``), ``plant``.
+    """
+    directory = Path(directory)
+    files, names, rows = {}, set(), []
+    for case_name, role, plant, spec in _used_specs(scenario):
+        model, meta = identified_model(plant, spec)
+        key = (_plant_fingerprint(plant), _spec_key(identify_table(spec)))
+        if key not in files:
+            base = model_file_name(spec)[:-len(".toml")]
+            name, i = f"{base}.toml", 1
+            while name in names:
+                i += 1
+                name = f"{base}-{i}.toml"
+            names.add(name)
+            files[key] = f"models/{name}"
+            save_model(model, directory / files[key], meta)
+        rows.append({"case": case_name, "role": role, "file": files[key], "plant": meta["plant"]})
+    return rows
+
+
+def report_identified(scenario, results, directory):
+    """Report hook: save the identified models and list them in ``report.md``.
+
+    Called by :func:`hammerstein.runner.run_scenario` after
+    :func:`hammerstein.reports.write_report`; does nothing for a scenario
+    without identified models.
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenarios.Scenario
+    results : list of hammerstein.runner.CaseResult
+    directory : pathlib.Path
+        The report directory being written (contains ``report.md``).
+    """
+    directory = Path(directory)
+    rows = save_identified_models(scenario, directory)
+    if not rows:
+        return
+    lines = ["", "## Identified models", "",
+             "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
+             "Steps 1-4); loadable with `model = \"<file>\"`.", "",
+             "| case | role | model file | plant |", "|---|---|---|---|"]
+    lines += [f"| {r['case']} | {r['role']} | [`{r['file']}`]({r['file']}) | {r['plant']} |"
+              for r in rows]
+    with open(directory / "report.md", "a", encoding="utf-8") as fh:
+        fh.write("\n".join(lines) + "\n")
