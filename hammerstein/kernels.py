@@ -146,7 +146,7 @@ def pi_kernel(u, start, r, W, G, s, y):
             y[l, t] = a + g
 
 
-@njit(cache=True, fastmath={"reassoc"})
+@njit(cache=True)
 def _linear(h, A, B, C, D, x, xn, y):
     """``y = C x + D h``; ``x <- A x + B h`` (discrete state update)."""
     p = D.shape[0]
@@ -301,11 +301,16 @@ def chain_batch_serial(yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound,
 
 
 @njit(cache=True, parallel=True)
-def chain_batch_parallel(yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
-                         cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
+def chain_batch_parallel(order, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound,
+                         lowpass, a, cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
                          u_out, y_out, status, sample):
-    """Independent chain cases spread over the cores (numba ``prange``)."""
-    for b in prange(yr.shape[0]):
+    """Independent chain cases spread over the cores (numba ``prange``).
+
+    ``order`` (n_cases,) lists the cases so that the equal contiguous chunks
+    the threads receive hold equal work (see ``simulation._balanced_order``).
+    """
+    for i in prange(order.size):
+        b = order[i]
         _batch_case(b, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
                     cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
                     u_out, y_out, status, sample)

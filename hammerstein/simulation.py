@@ -585,6 +585,16 @@ def _stack(arrays, shape, dtype=float):
     return out
 
 
+def _balanced_order(lengths, n_threads):
+    """Case order whose ``n_threads`` contiguous equal chunks hold similar work.
+
+    Cases sorted by length are dealt round-robin to the chunks (numba splits
+    a ``prange`` into equal contiguous chunks, one per thread).
+    """
+    by_length = np.argsort(-np.asarray(lengths), kind="stable")
+    return np.concatenate([by_length[i::n_threads] for i in range(n_threads)]).astype(np.int64)
+
+
 def simulate_chain_batch(compensators, plants, references, parallel=None):
     """Many independent compensator -> plant cases in one compiled call.
 
@@ -676,7 +686,10 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     )
     if parallel is None:
         parallel = B > 1 and int(lengths.sum()) >= PARALLEL_MIN_SAMPLES and kernels.threads() > 1
-    (kernels.chain_batch_parallel if parallel else kernels.chain_batch_serial)(*args)
+    if parallel:
+        kernels.chain_batch_parallel(_balanced_order(lengths, kernels.threads()), *args)
+    else:
+        kernels.chain_batch_serial(*args)
     cu, cvf, cs, ps, xs, u_out, y_out, status, sample = args[11:14] + args[22:]
     results = []
     for b in range(B):
