@@ -27,11 +27,12 @@ import numpy as np
 import pandas as pd
 
 from . import metrics as met
-from .compensators import InverseMultiplicativeCompensator
+from .compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+                           StaticGainCompensator, diagonal_compensator)
 from .identification import IdentificationError
 from .identified import identified_model, identify_table, report_identified
 from .presets import load_model
-from .scenarios import Field, Invalid, ScenarioError, choice, integer, load_scenario, string
+from .scenarios import Field, Invalid, ScenarioError, choice, integer, load_scenario, number, string
 from .simulation import simulate_chain
 
 __all__ = [
@@ -128,7 +129,35 @@ def _build_multivariable(spec, plant, base_dir):
     model = resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
-        check=spec.get("check", "error"))
+        check=spec.get("check", "error"), **_feedback_options(spec, plant))
+
+
+def _spec_model(spec, plant, base_dir):
+    """The model of a compensator table (every kind resolves it like "multivariable")."""
+    return resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+
+
+def _feedback_options(spec, plant):
+    """feedback = "lowpass" needs the cut-off [Hz] and the plant's sampling period [s]."""
+    if spec.get("feedback", "delay") == "delay":
+        return {}
+    return {"feedback": spec["feedback"], "cutoff_hz": spec.get("cutoff_hz"),
+            "sampling_period": plant.sampling_period}
+
+
+def _build_diagonal(spec, plant, base_dir):
+    return diagonal_compensator(
+        _spec_model(spec, plant, base_dir), gain=spec.get("gain", "secant"),
+        iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
+        **_feedback_options(spec, plant))
+
+
+def _build_per_axis(spec, plant, base_dir):
+    return PerAxisInverseCompensator(_spec_model(spec, plant, base_dir))
+
+
+def _build_static_gain(spec, plant, base_dir):
+    return StaticGainCompensator(_spec_model(spec, plant, base_dir))
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------
@@ -140,9 +169,21 @@ COMPENSATORS: dict[str, CompensatorKind] = {
          "identify": Field(identify_table),
          "gain": Field(_gain, default="secant"),
          "iterations": Field(integer(1), default=1),
-         "check": Field(choice("error", "warn", "ignore"), default="error")},
+         "check": Field(choice("error", "warn", "ignore"), default="error"),
+         "feedback": Field(choice("delay", "lowpass"), default="delay"),
+         "cutoff_hz": Field(number("Hz", 0))},
         "inverse multiplicative compensator of Theorem 4.1, normalised by K (NOTES §4)"),
 }
+_MODEL_KEYS = ("model", "identify")  # the model fields every kind shares with "multivariable"
+COMPENSATORS["diagonal"] = CompensatorKind(
+    _build_diagonal, dict(COMPENSATORS["multivariable"].fields),
+    "the multivariable law on the direct transfers only (cross-couplings left)")
+COMPENSATORS["per-axis"] = CompensatorKind(
+    _build_per_axis, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
+    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (NOTES §5)")
+COMPENSATORS["static-gain"] = CompensatorKind(
+    _build_static_gain, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
+    "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")
 
 
 def build_compensator(spec, plant, base_dir):
