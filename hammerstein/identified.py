@@ -309,9 +309,24 @@ def report_identified(scenario, results, directory):
     """
     directory = Path(directory)
     rows = save_identified_models(scenario, directory)
-    if not rows:
+    figs = _comparison_figures(scenario, results, directory)
+    if not rows and not figs:
         return
-    lines = ["", "## Identified models", "",
+    lines = []
+    if figs:
+        lines += ["", "## Model vs plant", "",
+                  "Open-loop drives compared with a model (rate-independent PI, no dynamics) "
+                  "driven by the same voltages: metrics `model_rms_error` and "
+                  "`model_max_abs_error` [µm] per output (plant minus model, after settling; the "
+                  "paper's RMS_error_model, Section 5.3); model outputs in "
+                  "`model-outputs-<case>.csv`.", ""]
+        for caption, fname in figs:
+            lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
+    if not rows:
+        with open(directory / "report.md", "a", encoding="utf-8") as fh:
+            fh.write("\n".join(lines) + "\n")
+        return
+    lines += ["", "## Identified models", "",
              "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
              "Steps 1-4); loadable with `model = \"<file>\"`.", "",
              "| case | role | model file | plant |", "|---|---|---|---|"]
@@ -319,3 +334,152 @@ def report_identified(scenario, results, directory):
               for r in rows]
     with open(directory / "report.md", "a", encoding="utf-8") as fh:
         fh.write("\n".join(lines) + "\n")
+
+
+# -- model-vs-plant comparison of open-loop drives (paper Fig. 6, 7) -------------------
+def comparison_model(case, mode, plant, base_dir):
+    """The model an open-loop drive case compares with its plant.
+
+    Parameters
+    ----------
+    case : dict
+        The raw ``[[cases]]`` table: ``model`` ("identified", "plant" or a
+        model file path relative to ``base_dir``) and, with "identified",
+        ``identify`` (:data:`IDENTIFY_FIELDS`).
+    mode : {'drive', 'reference'}
+        Only drives may name a comparison model.
+    plant : HammersteinPlant
+        The case's plant (the model is identified on it).
+    base_dir : pathlib.Path
+
+    Returns
+    -------
+    model : MultivariablePI
+        With the plant's numbers of inputs and outputs.
+    spec : dict
+        ``{"model": ..., "identify": validated table}`` (``identify`` only
+        with "identified").
+
+    Raises
+    ------
+    ValueError
+        One ``key: message`` per line (unknown ``identify`` keys with hints,
+        a reference case, a missing table, a failed identification, a model
+        of the wrong size); PresetError for an unreadable model file.
+    """
+    from .runner import resolve_model
+    name = case.get("model")
+    lines = []
+    if mode != "drive":
+        lines.append("model: a model is compared with the plant in open-loop drive cases only; "
+                     "the compensator's model is compensator.model")
+    if not isinstance(name, str):
+        lines.append(f"model: expected 'identified', 'plant' or a model file path, found {name!r}"
+                     if "model" in case else
+                     "identify: only used with model = 'identified' (add model = \"identified\")")
+    spec = {"model": name}
+    if name == "identified":
+        if "identify" not in case:
+            lines.append("identify: missing (required with model = 'identified'), "
+                         "e.g. identify = { frequency = 50.0 }")
+        else:
+            try:
+                spec["identify"] = identify_table(case["identify"])
+            except Invalid as exc:
+                lines += [f"identify.{k}: {m}" for k, m in getattr(exc, "problems", [])] \
+                    or [f"identify: {exc}"]
+    elif "identify" in case and isinstance(name, str):
+        lines.append(f"identify: only used with model = 'identified', found model = {name!r}")
+    if lines or plant is None:
+        raise ValueError("\n".join(lines))
+    try:
+        model = resolve_model(name, plant, base_dir, spec.get("identify"))
+    except IdentificationError as exc:
+        raise ValueError(f"model: {exc}") from None
+    ref = plant.hysteresis
+    if (model.n_inputs, model.n_outputs) != (ref.n_inputs, ref.n_outputs):
+        raise ValueError(f"model: expected a {ref.n_outputs}x{ref.n_inputs} model like the plant's, "
+                         f"found {model.n_outputs}x{model.n_inputs}")
+    return model, spec
+
+
+def model_comparison(case, plant_outputs):
+    """Simulate a drive case's comparison model and compare it with the plant.
+
+    The model (rate-independent PI, no dynamics) is driven by the case's
+    voltages from zero play states, like the plant.
+
+    Parameters
+    ----------
+    case : hammerstein.scenarios.CaseSpec
+        A drive case with ``case.model``.
+    plant_outputs : numpy.ndarray, shape (p, n_samples)
+        The plant's displacements [µm].
+
+    Returns
+    -------
+    model_outputs : numpy.ndarray, shape (p, n_samples)
+        [µm].
+    rows : list of dict
+        Per output channel, over the steady window after ``settle_periods``:
+        ``model_rms_error`` (the paper's RMS_error_model, Section 5.3) and
+        ``model_max_abs_error`` of plant minus model [µm].
+    """
+    from .metrics import steady_window
+    ym, _ = case.model.simulate(case.signal)
+    y = np.asarray(plant_outputs, dtype=float)
+    win = steady_window(y.shape[1], case.period_samples, case.settle_periods)
+    e = y[:, win] - ym[:, win]
+    rows = []
+    for l, name in enumerate(case.plant.hysteresis.output_names):
+        rows.append({"channel": name, "metric": "model_rms_error",
+                     "value": float(np.sqrt(np.mean(e[l] ** 2))), "unit": "µm"})
+        rows.append({"channel": name, "metric": "model_max_abs_error",
+                     "value": float(np.max(np.abs(e[l]))), "unit": "µm"})
+    return ym, rows
+
+
+def _last_period(x, P):
+    return np.concatenate([x[..., -P:], x[..., -P:-P + 1]], axis=-1)
+
+
+def _model_label(spec):
+    if spec.get("model") == "identified":
+        i = spec["identify"]
+        return f"model identified at {i['frequency']:g} Hz ({i.get('method', 'closed-form')})"
+    return f"model {spec.get('model')}"
+
+
+def _comparison_figures(scenario, results, directory):
+    """Plant-vs-model loop grids (Fig. 6) and model output CSVs; [(caption, file)]."""
+    import pandas as pd
+
+    from .plots import save
+    from .plots_model import model_loop_grid
+    groups = {}
+    for r in results:
+        if getattr(r, "model_outputs", None) is None:
+            continue
+        model = r.spec.plant.hysteresis
+        cols = {"time_s": r.spec.time}
+        cols.update({f"{o}_model_um": r.model_outputs[l] for l, o in enumerate(model.output_names)})
+        pd.DataFrame(cols).to_csv(directory / f"model-outputs-{r.name}.csv", index=False,
+                                  float_format="%.6g")
+        label = "hammerstein" if r.spec.plant.dynamics is not None else "static"
+        groups.setdefault((label, _model_label(r.spec.model_spec)), []).append(r)
+    figs = []
+    for i, ((label, mlabel), rs) in enumerate(groups.items()):
+        model = rs[0].spec.plant.hysteresis
+        P = lambda r: r.spec.period_samples  # noqa: E731
+        curves = [{"label": r.name, "column": r.spec.driven_input,
+                   "x": _last_period(r.inputs[r.spec.driven_input], P(r)),
+                   "plant": _last_period(r.outputs, P(r)),
+                   "model": _last_period(r.model_outputs, P(r))} for r in rs]
+        fig = model_loop_grid(curves, [f"{n} [V]" for n in model.input_names],
+                              [f"{n} [µm]" for n in model.output_names],
+                              f"{scenario.title}: {label} plant (solid) vs {mlabel} (dashed), "
+                              f"last period")
+        fname = f"model-vs-plant-{label}{'' if i == 0 else f'-{i + 1}'}.png"
+        save(fig, directory / fname)
+        figs.append((f"Model vs plant: {label} plant, {mlabel}", fname))
+    return figs

@@ -30,7 +30,7 @@ from . import metrics as met
 from .compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                            StaticGainCompensator, diagonal_compensator)
 from .identification import IdentificationError
-from .identified import identified_model, identify_table, report_identified
+from .identified import identified_model, identify_table, model_comparison, report_identified
 from .presets import load_model
 from .scenarios import Field, Invalid, ScenarioError, choice, integer, load_scenario, number, string
 from .simulation import simulate_chain
@@ -41,6 +41,8 @@ __all__ = [
     "build_compensator",
     "resolve_model",
     "CaseResult",
+    "ScenarioKind",
+    "SCENARIO_KINDS",
     "ScenarioOutcome",
     "METRIC_COLUMNS",
     "run_case",
@@ -233,6 +235,8 @@ class CaseResult:
     metrics : list of dict
         Rows ``{channel, metric, value, unit}``.
     warnings : list of str
+    model_outputs : numpy.ndarray or None, shape (p, n_samples)
+        Drives with a comparison model: the model's displacements [µm].
     """
 
     spec: Any
@@ -242,6 +246,7 @@ class CaseResult:
     divergence: Any
     metrics: list
     warnings: list
+    model_outputs: np.ndarray | None = None
 
     @property
     def name(self):
@@ -275,7 +280,11 @@ def run_case(case):
         y, _ = plant.simulate(case.signal)
         rows = met.open_loop_metrics(case.signal, y, case.driven_input, names,
                                      case.period_samples, case.settle_periods)
-        return CaseResult(case, case.signal, y, None, None, rows, caught)
+        ym = None
+        if case.model is not None:  # model vs plant (Fig. 6, 7)
+            ym, more = model_comparison(case, y)
+            rows += more
+        return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         res = simulate_chain(case.compensator, plant, case.signal)
@@ -289,6 +298,52 @@ def run_case(case):
                                     case.settle_periods, scale=case.scale,
                                     loop_channel=case.loop_channel)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
+
+
+@dataclass
+class ScenarioKind:
+    """An entry of the scenario-kind registry (top-level ``kind`` of a file).
+
+    Attributes
+    ----------
+    load : callable
+        ``load(path, data) -> scenario`` (``data`` the parsed TOML); raises
+        ScenarioError listing every problem. The scenario has ``name`` and
+        ``cases``.
+    simulate : callable
+        ``simulate(scenario) -> results``, each with ``name`` and
+        ``metrics`` (rows ``{channel, metric, value, unit}``).
+    write : callable
+        ``write(scenario, results, directory)`` fills the report directory.
+    """
+
+    load: Callable
+    simulate: Callable
+    write: Callable
+
+
+def _write_cases(scenario, results, directory):
+    from .reports import write_report
+    write_report(scenario, results, directory)
+    report_identified(scenario, results, directory)
+
+
+def _lazy(entry):
+    def call(*args):
+        import importlib
+        module, func = entry.split(":")
+        return getattr(importlib.import_module(module), func)(*args)
+    return call
+
+
+# -- registry of scenario kinds: add entries here ("cases" is load_scenario's own) ----
+SCENARIO_KINDS: dict[str, ScenarioKind] = {
+    "cases": ScenarioKind(load_scenario, lambda sc: [run_case(c) for c in sc.cases], _write_cases),
+    "identification": ScenarioKind(
+        _lazy("hammerstein.record_scenarios:load_identification_scenario"),
+        _lazy("hammerstein.record_scenarios:run_identification_scenario"),
+        _lazy("hammerstein.record_scenarios:write_identification_report")),
+}
 
 
 @dataclass
@@ -358,16 +413,16 @@ def run_scenario(path, out_dir):
         Never raises for a bad scenario or a failed simulation: ``ok`` is
         False and ``error`` says why; nothing is written then.
     """
-    from .reports import metrics_frame, write_report
+    from .reports import metrics_frame
     path = Path(path)
     name = path.stem
     try:
-        scenario = load_scenario(path)
+        scenario = load_scenario(path)  # dispatches on the top-level kind
         name = scenario.name
-        results = [run_case(c) for c in scenario.cases]
+        kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
+        results = kind.simulate(scenario)
         frame = metrics_frame(results)
-        target = _atomic_write(out_dir, name, lambda d: (write_report(scenario, results, d),
-                                                          report_identified(scenario, results, d)))
+        target = _atomic_write(out_dir, name, lambda d: kind.write(scenario, results, d))
     except ScenarioError as exc:
         return ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics())
     except Exception as exc:  # a failed scenario must not stop the others

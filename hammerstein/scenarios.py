@@ -163,6 +163,7 @@ TOP = {
     "title": Field(string()),
     "description": Field(string()),
     "seed": Field(integer(0), default=0),
+    "kind": Field(choice("cases")),  # other kinds: runner.SCENARIO_KINDS, dispatched below
     "plant": Field(lambda v: v, required=True),
     "compensator": Field(lambda v: v),
     "cases": Field(lambda v: v, required=True),
@@ -179,6 +180,8 @@ CASE = {
     "plant": Field(lambda v: v),
     "compensator": Field(lambda v: v),
     "settle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
+    "model": Field(string()),     # drives: a model compared with the plant (hammerstein.identified)
+    "identify": Field(lambda v: v),
 }
 _PHASE = Field(number("deg"), default=0.0)
 _LENGTH = {"periods": Field(number("periods", 0)), "duration": Field(number("s", 0))}
@@ -287,6 +290,11 @@ class CaseSpec:
         Amplitude or radius [µm] for percent metrics.
     warnings : list of str
         Warnings raised while building (e.g. a convergence warning).
+    model : MultivariablePI or None
+        Drives: the model compared with the plant (case keys ``model``,
+        ``identify``; :func:`hammerstein.identified.comparison_model`).
+    model_spec : dict or None
+        The case's ``model`` and validated ``identify`` entries.
     """
 
     name: str
@@ -305,6 +313,8 @@ class CaseSpec:
     loop_channel: int | None = None
     scale: float | None = None
     warnings: list = field(default_factory=list)
+    model: Any = None
+    model_spec: dict | None = None
 
 
 @dataclass
@@ -399,6 +409,14 @@ def _signal(case_where, mode, spec, plant, problems, source):
     return t, sig, max(int(round(period / T)), 1), extras
 
 
+def _kind_problem(kind, kinds):
+    try:
+        choice(*kinds)(kind)
+    except Invalid as exc:
+        return [str(exc)]
+    return []
+
+
 def load_scenario(path):
     """Validate and resolve a scenario file.
 
@@ -424,6 +442,12 @@ def load_scenario(path):
         data = read_toml(path)
     except PresetError as exc:
         raise ScenarioError([str(exc)]) from None
+    kind = data.get("kind", "cases")
+    if kind != "cases":
+        from .runner import SCENARIO_KINDS  # e.g. "identification" (measured records)
+        if kind not in SCENARIO_KINDS:
+            raise ScenarioError([f"{source}: kind: {exc}" for exc in _kind_problem(kind, SCENARIO_KINDS)])
+        return SCENARIO_KINDS[kind].load(path, data)
     problems = []
     top = check_table(data, TOP, "", problems, source) or {}
     base = path.parent
@@ -501,6 +525,14 @@ def load_scenario(path):
                             f"leave less than {'one period' if need - settle * P > 1 else 'one sample'} "
                             f"of the {t.size}-sample record; lengthen it or settle less")
             continue
+        cmp_model, cmp_spec = None, None
+        if "model" in raw or "identify" in raw:
+            from .identified import comparison_model
+            try:
+                cmp_model, cmp_spec = comparison_model(raw, mode, plant, base)
+            except (ValueError, PresetError) as exc:  # one "key: message" per line
+                problems.extend(f"{source}: {where}.{line}" for line in str(exc).splitlines())
+                continue
         comp, caught = None, []
         if mode == "reference":
             with warnings.catch_warnings(record=True) as rec:
@@ -516,7 +548,8 @@ def load_scenario(path):
             signal_spec=dict(raw[mode]), plant_spec=pspec,
             compensator_spec=cclean if cclean is not None else cspec,
             plant=plant, compensator=comp, time=t, signal=signal, period_samples=P,
-            settle_periods=settle, warnings=caught, **extras))
+            settle_periods=settle, warnings=caught, model=cmp_model, model_spec=cmp_spec,
+            **extras))
     if problems:
         raise ScenarioError(problems)
     return Scenario(name=top.get("name", path.stem), title=top.get("title", path.stem),
