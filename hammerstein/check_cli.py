@@ -89,7 +89,7 @@ def run_check(args):
         return 2
     failed = [o for o in outcomes if not o.ok]
     for o in failed:
-        _err(f"{o.path}: scenario failed: {'; '.join(str(o.error).splitlines())}")
+        _err(f"scenario failed: {'; '.join(str(o.error).splitlines())}")
     ok = [o for o in outcomes if o.ok]
     current = (pd.concat([o.metrics.assign(scenario=o.name) for o in ok], ignore_index=True)
                if ok else None)

@@ -382,6 +382,8 @@ def read_baseline(path):
         a non-numeric value or a duplicated metric.
     """
     path = Path(path)
+    if path.is_dir():
+        raise BaselineError(f"{path}: is a directory, expected a baseline CSV file")
     if not path.is_file():
         raise BaselineError(f"{path}: baseline file not found (create it with --update)")
     try:

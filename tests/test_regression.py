@@ -195,6 +195,7 @@ def test_merge_baseline_replaces_only_the_scenarios_run():
 
 @pytest.mark.parametrize("content, message", [
     (None, "not found"),
+    ("<dir>", "is a directory"),
     ("", "empty baseline"),
     ("case,channel,metric,value,unit\na,x,rms_error,1,µm\n", "missing column scenario"),
     ("scenario,case,channel,metric,value\ns,a,x,rms_error,1\n", "missing column.*unit"),
@@ -204,7 +205,9 @@ def test_merge_baseline_replaces_only_the_scenarios_run():
 ])
 def test_bad_baseline_files_give_one_line_errors(tmp_path, content, message):
     path = tmp_path / "b.csv"
-    if content is not None:
+    if content == "<dir>":
+        path.mkdir()
+    elif content is not None:
         path.write_text(content, encoding="utf-8")
     with pytest.raises(BaselineError, match=message) as err:
         read_baseline(path)
