@@ -322,6 +322,9 @@ def report_identified(scenario, results, directory):
                   "`model-outputs-<case>.csv`.", ""]
         for caption, fname in figs:
             lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
+        for caption, fname, table in _frequency_tables(scenario, results, directory):
+            lines += [f"### {caption}", "", f"![{caption}]({fname[0]})", "",
+                      f"Table: [`{fname[1]}`]({fname[1]}).", "", _markdown(table), ""]
     if not rows:
         with open(directory / "report.md", "a", encoding="utf-8") as fh:
             fh.write("\n".join(lines) + "\n")
@@ -483,3 +486,78 @@ def _comparison_figures(scenario, results, directory):
         save(fig, directory / fname)
         figs.append((f"Model vs plant: {label} plant, {mlabel}", fname))
     return figs
+
+
+def model_rms_table(results):
+    """Model error against drive frequency of the model-vs-plant drive cases.
+
+    Parameters
+    ----------
+    results : list of hammerstein.runner.CaseResult
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per case and output: ``plant`` ('hammerstein' or
+        'static'), ``model`` (label), ``input`` (driven input), ``output``,
+        ``amplitude_V``, ``frequency_hz``, ``model_rms_error`` and
+        ``model_max_abs_error`` [µm]; sorted by plant, model, input, output,
+        frequency.
+    """
+    import pandas as pd
+    rows = []
+    for r in results:
+        if getattr(r, "model_outputs", None) is None or r.spec.mode != "drive":
+            continue
+        spec = r.spec
+        vals = {(m["channel"], m["metric"]): m["value"] for m in r.metrics}
+        for o in spec.plant.hysteresis.output_names:
+            rows.append({"plant": "hammerstein" if spec.plant.dynamics is not None else "static",
+                         "model": _model_label(spec.model_spec),
+                         "input": spec.plant.hysteresis.input_names[spec.driven_input],
+                         "output": o, "amplitude_V": float(spec.signal_spec["amplitude"]),
+                         "frequency_hz": float(spec.signal_spec["frequency"]),
+                         "model_rms_error": vals[(o, "model_rms_error")],
+                         "model_max_abs_error": vals[(o, "model_max_abs_error")]})
+    cols = ["plant", "model", "input", "output", "amplitude_V", "frequency_hz",
+            "model_rms_error", "model_max_abs_error"]
+    frame = pd.DataFrame(rows, columns=cols)
+    return frame.sort_values(cols[:6], kind="stable").reset_index(drop=True)
+
+
+def _markdown(table):
+    from .reports import markdown_table
+    return markdown_table(table)
+
+
+def _frequency_tables(scenario, results, directory):
+    """Fig. 7: model RMS error vs drive frequency for every (plant, model, amplitude)
+    group with 3 or more drive frequencies; writes CSV and figure."""
+    from .plots import save
+    from .plots_model import rms_vs_frequency_figure
+    table = model_rms_table(results)
+    out = []
+    groups = [(key, g) for key, g in table.groupby(["plant", "model", "amplitude_V"], sort=False)
+              if g["frequency_hz"].nunique() >= 3]
+    for i, ((plant, mlabel, amp), g) in enumerate(groups):
+        first = next(r for r in results if getattr(r, "model_outputs", None) is not None)
+        model = first.spec.plant.hysteresis
+        suffix = "" if i == 0 else f"-{i + 1}"
+        fig_name, csv_name = f"model-rms-vs-frequency{suffix}.png", f"model-rms-vs-frequency{suffix}.csv"
+        g.to_csv(directory / csv_name, index=False, float_format="%.6g")
+        f_id = None
+        for r in results:
+            ms = getattr(r.spec, "model_spec", None) or {}
+            if ms.get("model") == "identified" and _model_label(ms) == mlabel:
+                f_id = ms["identify"]["frequency"]
+                break
+        fig = rms_vs_frequency_figure(g, list(model.input_names), list(model.output_names),
+                                      f"{scenario.title}\nRMS error of the {mlabel} against the "
+                                      f"{plant} plant, {amp:g} V drives", identification_hz=f_id)
+        save(fig, directory / fig_name)
+        wide = g.pivot_table(index="frequency_hz", columns=["output", "input"],
+                             values="model_rms_error")
+        wide.columns = [f"{o}<-{k} [µm]" for o, k in wide.columns]
+        out.append((f"Model RMS error vs drive frequency ({plant} plant, {mlabel}, {amp:g} V)",
+                    (fig_name, csv_name), wide.reset_index()))
+    return out
