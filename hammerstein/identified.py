@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from .identification import IdentificationError, MultivariableIdentifier
-from .presets import model_to_table, save_model
+from .presets import PresetError, model_to_table, save_model
 from .scenarios import Field, Invalid, boolean, check_table, choice, integer, number
 from .sensors import Sensor, characterize, identification_metadata
 
@@ -397,7 +397,7 @@ def comparison_model(case, mode, plant, base_dir):
         raise ValueError("\n".join(lines))
     try:
         model = resolve_model(name, plant, base_dir, spec.get("identify"))
-    except IdentificationError as exc:
+    except (IdentificationError, PresetError) as exc:
         raise ValueError(f"model: {exc}") from None
     ref = plant.hysteresis
     if (model.n_inputs, model.n_outputs) != (ref.n_inputs, ref.n_outputs):
