@@ -298,7 +298,10 @@ def report_identified(scenario, results, directory):
 
     Called by :func:`hammerstein.runner.run_scenario` after
     :func:`hammerstein.reports.write_report`; does nothing for a scenario
-    without identified models.
+    without identified models or model-vs-plant drives. Writes the model
+    files, ``model-outputs-<case>.csv``, the plant-vs-model loop grids
+    (Fig. 6) and, for 3 or more drive frequencies, ``model-rms-vs-frequency.csv``
+    and ``.png`` (Fig. 7); sweep cases are left to their sweep's report.
 
     Parameters
     ----------
@@ -309,6 +312,8 @@ def report_identified(scenario, results, directory):
     """
     directory = Path(directory)
     rows = save_identified_models(scenario, directory)
+    # sweep cases ([[sweeps]], hammerstein.sweeps) are reported by their sweep's table and figure
+    results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     figs = _comparison_figures(scenario, results, directory)
     if not rows and not figs:
         return
