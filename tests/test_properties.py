@@ -218,6 +218,18 @@ def test_play_is_1_lipschitz_in_sup_norm(u1, r, data):
     assert np.all(gap <= bound + 1e-12), (gap, bound)
 
 
+@PROPS
+@given(op=pi_operators(), u1=signal(1, 40), data=st.data())
+def test_pi_is_lipschitz_with_the_sum_of_absolute_weights(op, u1, data):
+    """Corollary: |Gamma(u1) - Gamma(u2)| <= sum |w_i| ||u1 - u2||_inf (same initial state)."""
+    u2 = u1 + data.draw(arrays(np.float64, u1.size, elements=st.floats(-2.0, 2.0)))
+    s0 = data.draw(arrays(np.float64, op.n_hysterons, elements=VOLT))
+    y1, _ = op.simulate(u1, s0)
+    y2, _ = op.simulate(u2, s0)
+    bound = np.sum(np.abs(op.weights)) * np.max(np.abs(u1 - u2))
+    assert np.max(np.abs(y1 - y2)) <= bound + 1e-10
+
+
 # -- wiping-out ----------------------------------------------------------------
 
 @PROPS
