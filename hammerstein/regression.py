@@ -39,6 +39,7 @@ __all__ = [
     "STATUSES",
     "KEY_COLUMNS",
     "BASELINE_COLUMNS",
+    "default_tolerance",
     "resolve_tolerances",
     "load_tolerances",
     "compare_metrics",
@@ -110,6 +111,29 @@ DEFAULT_TOLERANCES = {
 }
 
 
+def default_tolerance(metric):
+    """Default tolerance of a metric name.
+
+    A name of :data:`DEFAULT_TOLERANCES`; otherwise a name containing
+    ``error`` or starting with ``cross_coupling`` is an error (lower is
+    better; ``*_percent``: the ratio tolerance, else the µm one); anything
+    else gets the ``"*"`` entry (neutral).
+
+    Parameters
+    ----------
+    metric : str
+
+    Returns
+    -------
+    Tolerance
+    """
+    if metric in DEFAULT_TOLERANCES:
+        return DEFAULT_TOLERANCES[metric]
+    if "error" in metric or metric.startswith("cross_coupling"):
+        return _RATIO if metric.endswith("_percent") else _ERROR
+    return DEFAULT_TOLERANCES["*"]
+
+
 def _number(value, where):
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise BaselineError(f"{where}: expected a number, found {value!r}")
@@ -170,7 +194,7 @@ def resolve_tolerances(overrides=None, rtol=None, atol=None):
         glob["atol"] = _number(atol, "--atol")
 
     def tolerance(metric):
-        tol = DEFAULT_TOLERANCES.get(metric, DEFAULT_TOLERANCES["*"])
+        tol = default_tolerance(metric)
         tol = replace(tol, **parsed.get("*", {}))
         tol = replace(tol, **parsed.get(metric, {}))
         return replace(tol, **glob)

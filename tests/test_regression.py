@@ -142,6 +142,19 @@ def test_tolerance_overrides(overrides, rtol, status):
     assert _status(result, "rms_error") == status
 
 
+@pytest.mark.parametrize("metric, rtol, atol, direction", [
+    ("rms_error", 0.05, 0.01, "lower"),
+    ("peak_to_peak", 0.01, 0.01, "neutral"),
+    ("mean_abs_error", 0.05, 0.01, "lower"),              # unknown, named as an error
+    ("max_abs_error_percent", 0.05, 0.2, "lower"),
+    ("cross_coupling_rms", 0.05, 0.01, "lower"),
+    ("spectral_radius", 0.05, 1e-9, "neutral"),           # unknown: neutral
+])
+def test_default_tolerances_by_metric_name(metric, rtol, atol, direction):
+    tol = resolve_tolerances()(metric)
+    assert (tol.rtol, tol.atol, tol.direction) == (rtol, atol, direction)
+
+
 def test_dict_overrides_are_accepted_directly():
     result = compare_metrics(table(_with(BASE, "rms_error", 1.15)), table(BASE),
                              {"rms_error": {"atol": 0.2}})
