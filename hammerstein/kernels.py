@@ -32,6 +32,13 @@ __all__ = ["play_kernel", "pi_kernel", "plant_kernel", "chain_kernel",
            "chain_batch_serial", "chain_batch_parallel",
            "STATUS_OK", "STATUS_NONFINITE", "STATUS_BOUND"]
 
+# fastmath={'reassoc'} only: lets LLVM vectorise the weighted sums (summation
+# order changes, ~1e-15 relative; tests check 1e-9 against the numpy oracle).
+# No 'nnan'/'ninf': the divergence checks need exact non-finite semantics.
+# The helpers are inlined by numba (inline='always') and take these flags
+# from the kernel that calls them.
+FASTMATH = {"reassoc"}
+
 STATUS_OK = 0
 STATUS_NONFINITE = 1
 STATUS_BOUND = 2
@@ -56,7 +63,7 @@ def play_kernel(u, r, s, y):
 
 # Indices are cast to uint64 in the hot loops: numba then drops its negative
 # index wrap-around, and LLVM vectorises the play updates (vminpd/vmaxpd).
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _commit(u, start, r, s):
     """Move the play operators to the input vector ``u`` (m,) (eq. (1))."""
     for k in range(start.size - 1):
@@ -71,27 +78,37 @@ def _commit(u, start, r, s):
             s[j] = v
 
 
-# fastmath={'reassoc'} only: lets LLVM vectorise the weighted sums (summation
-# order changes, ~1e-15 relative; tests check 1e-9 against the numpy oracle).
-# No 'nnan'/'ninf': the divergence checks need exact non-finite semantics.
-@njit(cache=True, fastmath={"reassoc"})
+@njit(cache=True, inline="always")
 def _output(u, W, G, s, y):
-    """``y = W s + G u`` (eq. (4))."""
+    """``y = W s + G u`` (eq. (4)); outputs in pairs share the loads of s."""
     p, n = W.shape
     m = G.shape[1]
-    for l in range(p):
-        ll = uint64(l)
-        a = 0.0
+    for l in range(0, p - 1, 2):
+        W0 = W[l]
+        W1 = W[l + 1]
+        a0 = 0.0
+        a1 = 0.0
         for j in range(uint64(n)):
             j = uint64(j)
-            a += W[ll, j] * s[j]
-        g = 0.0
+            a0 += W0[j] * s[j]
+            a1 += W1[j] * s[j]
         for k in range(m):
-            g += G[l, k] * u[k]
-        y[l] = a + g
+            a0 += G[l, k] * u[k]
+            a1 += G[l + 1, k] * u[k]
+        y[l] = a0
+        y[l + 1] = a1
+    if p % 2:
+        W0 = W[p - 1]
+        a0 = 0.0
+        for j in range(uint64(n)):
+            j = uint64(j)
+            a0 += W0[j] * s[j]
+        for k in range(m):
+            a0 += G[p - 1, k] * u[k]
+        y[p - 1] = a0
 
 
-@njit(cache=True, fastmath={"reassoc"})
+@njit(cache=True, inline="always")
 def _evaluate(u, start, r, W, G, s, y):
     """``y = Gamma(u; s)`` without moving the plays (frozen states)."""
     p, n = W.shape
@@ -114,7 +131,7 @@ def _evaluate(u, start, r, W, G, s, y):
                 y[l] += W[l, j] * v
 
 
-@njit(cache=True, fastmath={"reassoc"})
+@njit(cache=True, fastmath=FASTMATH)
 def pi_kernel(u, start, r, W, G, s, y):
     """Multivariable PI forward model: ``u`` (m, N) -> ``y`` (p, N); ``s`` in/out.
 
@@ -134,19 +151,32 @@ def pi_kernel(u, start, r, W, G, s, y):
                 v = hi if hi < v else v
                 v = lo if lo > v else v
                 s[j] = v
-        for l in range(p):
-            ll = uint64(l)
-            a = 0.0
+        for l in range(0, p - 1, 2):          # outputs in pairs share the loads of s
+            W0 = W[l]
+            W1 = W[l + 1]
+            a0 = 0.0
+            a1 = 0.0
             for j in range(uint64(n)):
                 j = uint64(j)
-                a += W[ll, j] * s[j]
-            g = 0.0
+                a0 += W0[j] * s[j]
+                a1 += W1[j] * s[j]
             for k in range(m):
-                g += G[l, k] * u[k, t]
-            y[l, t] = a + g
+                a0 += G[l, k] * u[k, t]
+                a1 += G[l + 1, k] * u[k, t]
+            y[l, t] = a0
+            y[l + 1, t] = a1
+        if p % 2:
+            W0 = W[p - 1]
+            a0 = 0.0
+            for j in range(uint64(n)):
+                j = uint64(j)
+                a0 += W0[j] * s[j]
+            for k in range(m):
+                a0 += G[p - 1, k] * u[k, t]
+            y[p - 1, t] = a0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _linear(h, A, B, C, D, x, xn, y):
     """``y = C x + D h``; ``x <- A x + B h`` (discrete state update)."""
     p = D.shape[0]
@@ -169,7 +199,7 @@ def _linear(h, A, B, C, D, x, xn, y):
         x[i] = xn[i]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FASTMATH)
 def plant_kernel(u, start, r, W, G, s, A, B, C, D, x, y):
     """Hammerstein plant: PI then linear part; ``s`` and ``x`` in/out, ``y`` (p, N) out."""
     m, N = u.shape
@@ -188,7 +218,7 @@ def plant_kernel(u, start, r, W, G, s, A, B, C, D, x, y):
             y[l, t] = yt[l]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FASTMATH)
 def chain_kernel(yr, n_samples,
                  cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
                  cu, cvf, cs,
@@ -277,7 +307,7 @@ def chain_kernel(yr, n_samples,
     return STATUS_OK, n_samples
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FASTMATH)
 def _batch_case(b, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
                 cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
                 u_out, y_out, status, sample):
@@ -289,7 +319,7 @@ def _batch_case(b, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, low
     sample[b] = sm
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=FASTMATH)
 def chain_batch_serial(yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
                        cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
                        u_out, y_out, status, sample):
@@ -300,7 +330,7 @@ def chain_batch_serial(yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound,
                     u_out, y_out, status, sample)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
 def chain_batch_parallel(order, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound,
                          lowpass, a, cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
                          u_out, y_out, status, sample):
