@@ -186,10 +186,14 @@ def write_report(scenario, results, directory):
     directory = Path(directory)
     frame = metrics_frame(results)
     frame.to_csv(directory / "metrics.csv", index=False)
+    from .sweeps import sweep_report_lines  # sweep cases: tables and figures per sweep only
+    sweep_lines = sweep_report_lines(scenario, results, directory, frame)
+    results = [r for r in results if getattr(r.spec, "sweep", None) is None]
+    frame = frame[frame["case"].isin([r.name for r in results])]
     for r in results:
         timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
                                    float_format="%.6g")
-    figs = _figures(scenario, results, directory)
+    figs = _figures(scenario, results, directory) if results else []
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]
@@ -207,13 +211,14 @@ def write_report(scenario, results, directory):
                    f"DIVERGED at sample {r.divergence.sample} "
                    f"(t = {r.diverged_at * 1e3:.3g} ms): {r.divergence.reason}"),
     } for r in results])
-    lines += [markdown_table(table), ""]
+    lines += [markdown_table(table), ""] if results else ["(sweep cases only; see below)", ""]
     notes = [(r.name, w) for r in results for w in dict.fromkeys(r.warnings)]
     if notes:
         lines += ["Warnings:", ""] + [f"- `{n}`: {w}" for n, w in notes] + [""]
     lines += ["## Figures", ""]
     for caption, fname in figs:
         lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
+    lines += sweep_lines
     lines += ["## Metrics", "", "Long format in `metrics.csv`; time series in "
               "`timeseries-<case>.csv`.", ""]
     if not frame.empty:

@@ -172,7 +172,7 @@ COMPENSATORS: dict[str, CompensatorKind] = {
          "gain": Field(_gain, default="secant"),
          "iterations": Field(integer(1), default=1),
          "check": Field(choice("error", "warn", "ignore"), default="error"),
-         "feedback": Field(choice("delay", "lowpass"), default="delay"),
+         "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
          "cutoff_hz": Field(number("Hz", 0))},
         "inverse multiplicative compensator of Theorem 4.1, normalised by K (NOTES §4)"),
 }
@@ -289,6 +289,13 @@ def run_case(case):
         warnings.simplefilter("always")
         res = simulate_chain(case.compensator, plant, case.signal)
     caught += [str(w.message) for w in rec]
+    return chain_result(case, res, caught)
+
+
+def chain_result(case, res, caught):
+    """CaseResult of a compensated case from its simulated chain (ChainResult)."""
+    plant = case.plant
+    names = list(plant.hysteresis.output_names)
     if res.diverged:
         t = float(res.divergence.sample * plant.sampling_period)
         rows = [{"channel": "+".join(names), "metric": "diverged_at_time", "value": t,
@@ -338,7 +345,7 @@ def _lazy(entry):
 
 # -- registry of scenario kinds: add entries here ("cases" is load_scenario's own) ----
 SCENARIO_KINDS: dict[str, ScenarioKind] = {
-    "cases": ScenarioKind(load_scenario, lambda sc: [run_case(c) for c in sc.cases], _write_cases),
+    "cases": ScenarioKind(load_scenario, _lazy("hammerstein.sweeps:run_scenario_cases"), _write_cases),
     "identification": ScenarioKind(
         _lazy("hammerstein.record_scenarios:load_identification_scenario"),
         _lazy("hammerstein.record_scenarios:run_identification_scenario"),

@@ -166,7 +166,9 @@ TOP = {
     "kind": Field(choice("cases")),  # other kinds: runner.SCENARIO_KINDS, dispatched below
     "plant": Field(lambda v: v, required=True),
     "compensator": Field(lambda v: v),
-    "cases": Field(lambda v: v, required=True),
+    "cases": Field(lambda v: v),          # required unless [[sweeps]] are given
+    "sweeps": Field(lambda v: v),         # hammerstein.sweeps: expanded into cases
+    "stability_map": Field(lambda v: v),  # hammerstein.sweeps.check_stability_map
 }
 PLANT = {
     "preset": Field(string(), required=True),
@@ -315,6 +317,7 @@ class CaseSpec:
     warnings: list = field(default_factory=list)
     model: Any = None
     model_spec: dict | None = None
+    sweep: dict | None = None  # {sweep, compensator, axis, frequency_hz} of a sweep case
 
 
 @dataclass
@@ -327,6 +330,8 @@ class Scenario:
     seed: int
     path: Path
     cases: list
+    sweeps: list = field(default_factory=list)  # hammerstein.sweeps.SweepSpec
+    stability_map: Any = None                   # pandas.DataFrame (hammerstein.sweeps)
 
 
 def _merge_compensator(top, case):
@@ -464,9 +469,15 @@ def load_scenario(path):
     if "cases" in data and (not isinstance(cases_raw, list) or not cases_raw):
         problems.append(f"{source}: cases: expected one or more [[cases]] tables")
         cases_raw = []
+    if "cases" not in data and "sweeps" not in data:
+        problems.append(f"{source}: cases: missing (required)")
+    entries, sweep_specs = [(f"cases[{i}]", raw) for i, raw in enumerate(cases_raw)], []
+    if "sweeps" in data:
+        from .sweeps import expand_sweeps
+        more, sweep_specs = expand_sweeps(data["sweeps"], source, problems)
+        entries += more
     plants, cases, names = {}, [], set()
-    for i, raw in enumerate(cases_raw):
-        where = f"cases[{i}]"
+    for where, raw in entries:
         n_before = len(problems)
         case = check_table(raw, CASE, where, problems, source)
         if case is None:
@@ -550,8 +561,20 @@ def load_scenario(path):
             plant=plant, compensator=comp, time=t, signal=signal, period_samples=P,
             settle_periods=settle, warnings=caught, model=cmp_model, model_spec=cmp_spec,
             **extras))
+    smap = None
+    if "stability_map" in data and isinstance(plant_top.get("preset"), str):
+        from .sweeps import check_stability_map
+        try:
+            smap_plant = load_plant(plant_top["preset"], dynamics=bool(plant_top.get("dynamics", True)),
+                                    base_dir=base)
+        except PresetError:
+            smap_plant = None  # reported with the plant table
+        smap = check_stability_map(data["stability_map"], smap_plant, comp_top, base, problems, source)
     if problems:
         raise ScenarioError(problems)
+    info = {c["case"]: {"sweep": sp.name, **c} for sp in sweep_specs for c in sp.cases}
+    for c in cases:
+        c.sweep = info.get(c.name)
     return Scenario(name=top.get("name", path.stem), title=top.get("title", path.stem),
                     description=top.get("description", ""), seed=top.get("seed", 0),
-                    path=path, cases=cases)
+                    path=path, cases=cases, sweeps=sweep_specs, stability_map=smap)
