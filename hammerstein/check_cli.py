@@ -63,9 +63,7 @@ def _err(msg):
 
 def run_check(args):
     """Handler of ``hammerstein check``; returns the exit status."""
-    from .regression import (BaselineError, compare_metrics, is_regression, load_tolerances,
-                             merge_baseline, read_baseline, resolve_tolerances, summary_line,
-                             write_baseline)
+    from .regression import BaselineError, load_tolerances, read_baseline, resolve_tolerances
     baseline_path = Path(args.baseline)
     try:
         overrides = load_tolerances(args.tolerances) if args.tolerances else None
@@ -80,6 +78,22 @@ def run_check(args):
     if missing:
         _err(f"{missing[0]}: scenario file not found")
         return 2
+    if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
+        _err(f"--out: {args.out} exists and is not a directory")
+        return 2
+    try:
+        return _check(args, baseline_path, baseline, tolerance)
+    except BaselineError as exc:  # inconsistent metrics from the runner
+        _err(" ".join(str(exc).split()))
+        return 1
+    except OSError as exc:        # baseline not writable
+        _err(f"{baseline_path}: cannot write the baseline ({exc.strerror or exc})")
+        return 2
+
+
+def _check(args, baseline_path, baseline, tolerance):
+    from .regression import (compare_metrics, is_regression, merge_baseline, summary_line,
+                             write_baseline)
 
     outcomes = _run(args.scenarios, args.out)
     names = [o.name for o in outcomes]

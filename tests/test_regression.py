@@ -286,6 +286,7 @@ def test_check_fails_when_a_scenario_fails(default_baseline, capsys, tmp_path):
     ("malformed", "missing column scenario"),
     ("tolerances", "rms_error.rtol"),
     ("no-scenario", "scenario file not found"),
+    ("out-is-file", "not a directory"),
 ])
 def test_check_usage_errors_exit_2(tmp_path, capsys, setup, message):
     baseline = tmp_path / "baseline.csv"
@@ -301,6 +302,10 @@ def test_check_usage_errors_exit_2(tmp_path, capsys, setup, message):
     elif setup == "no-scenario":
         baseline.write_text("scenario,case,channel,metric,value,unit\n", encoding="utf-8")
         scenario = tmp_path / "nope.toml"
+    elif setup == "out-is-file":
+        baseline.write_text("scenario,case,channel,metric,value,unit\n", encoding="utf-8")
+        (tmp_path / "out").write_text("", encoding="utf-8")
+        extra = ["--out", tmp_path / "out"]
     assert _check(scenario, "--baseline", baseline, *extra) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
