@@ -374,11 +374,26 @@ def test_plant_with_dynamics_chunked_equals_whole(preset_plant, data):
     np.testing.assert_allclose(s, fin, rtol=1e-12, atol=1e-9)
 
 
+def _compensator(kind, plant):
+    model = plant.hysteresis
+    if kind == "secant":
+        return InverseMultiplicativeCompensator(model)
+    if kind == "two-iterations":
+        return InverseMultiplicativeCompensator(model, iterations=2)
+    if kind == "lowpass":
+        return InverseMultiplicativeCompensator(model, feedback="lowpass", cutoff_hz=2000.0,
+                                                sampling_period=plant.sampling_period,
+                                                check="ignore")
+    from hammerstein import PerAxisInverseCompensator
+    return PerAxisInverseCompensator(model)
+
+
+@pytest.mark.parametrize("kind", ["secant", "two-iterations", "lowpass", "per-axis"])
 @FEW
 @given(amp=st.floats(1.0, 50.0), freq=st.floats(5.0, 200.0), phase=st.floats(0.0, 6.3),
        n=st.integers(0, 300), data=st.data())
-def test_compensator_chunked_equals_whole(preset_plant, amp, freq, phase, n, data):
-    comp = InverseMultiplicativeCompensator(preset_plant.hysteresis)
+def test_compensator_chunked_equals_whole(preset_plant, kind, amp, freq, phase, n, data):
+    comp = _compensator(kind, preset_plant)
     t = np.arange(n) * preset_plant.sampling_period
     ref = np.vstack([amp * np.sin(2 * np.pi * freq * t),
                      0.6 * amp * np.sin(2 * np.pi * freq * t + phase)])
