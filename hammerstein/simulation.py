@@ -533,11 +533,12 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     """
     _check_backend(backend)
     reference = np.asarray(reference, dtype=float)
-    if backend == "numba" and _fusable(compensator):
-        yr = compensator.model.check_inputs(reference, "reference")
+    if _fusable(compensator):
         from . import compensators
         if hasattr(compensators, "check_reference_range"):   # as compensator.simulate does
-            compensators.check_reference_range(compensator.model, yr)
+            compensators.check_reference_range(compensator.model, reference)
+    if backend == "numba" and _fusable(compensator):
+        yr = compensator.model.check_inputs(reference, "reference")
         cstate = _compensator_state(compensator, compensator_state)
         pstate = plant.initial_state(plant_state)
         if plant.hysteresis.n_inputs != compensator.model.n_inputs:
