@@ -126,7 +126,8 @@ def _check(args, baseline_path, baseline, tolerance):
     base = baseline[baseline["scenario"].isin(run_names)]
     result = compare_metrics(current, base, tolerance)
     moved = result["delta"].abs() > _ROUNDOFF * (1.0 + result["baseline"].abs())
-    shown = result if args.show_all else result[(result["status"] != "ok") | moved]
+    listed = ((result["status"] != "ok") | moved) & ~result["scenario"].isin(unknown)
+    shown = result if args.show_all else result[listed]
     if len(shown):
         with pd.option_context("display.width", 200, "display.max_rows", None,
                                "display.max_columns", None):

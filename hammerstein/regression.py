@@ -288,12 +288,13 @@ def compare_metrics(current, baseline, tolerances=None):
         - ``ok``: within tolerance (or both NaN);
         - ``regressed``: moved beyond tolerance in the bad direction (any
           direction for a neutral metric), became or stopped being NaN, or
-          changed unit; also a new ``diverged_at_time`` (the case diverged
-          where it did not);
+          changed unit; also a new ``diverged_at_time`` of a case that is in
+          the baseline (the case diverged where it did not);
         - ``improved``: moved beyond tolerance in the good direction;
         - ``missing``: in the baseline, not in the current table (counts as
           a regression: see :func:`is_regression`);
-        - ``new``: only in the current table (not a regression).
+        - ``new``: only in the current table (not a regression), e.g. every
+          metric of a case or scenario absent from the baseline.
 
     Raises
     ------
@@ -312,6 +313,7 @@ def compare_metrics(current, baseline, tolerances=None):
                         enumerate(map(tuple, merged[KEY_COLUMNS].to_numpy()))]
     merged = merged.sort_values("_order", kind="stable").reset_index(drop=True)
 
+    base_cases = set(map(tuple, base[["scenario", "case"]].to_numpy()))
     rows = []
     for rec in merged.to_dict("records"):
         tol = tol_of(rec["metric"])
@@ -323,7 +325,9 @@ def compare_metrics(current, baseline, tolerances=None):
         if rec["_merge"] == "left_only":
             status = "missing"
         elif rec["_merge"] == "right_only":
-            status = "regressed" if rec["metric"] == DIVERGENCE_METRIC else "new"
+            diverged = (rec["metric"] == DIVERGENCE_METRIC
+                        and (rec["scenario"], rec["case"]) in base_cases)
+            status = "regressed" if diverged else "new"
         else:
             status = _status(b, c, allowed, tol.direction, rec["unit_b"] != rec["unit_c"])
         rows.append({"scenario": rec["scenario"], "case": rec["case"],

@@ -104,6 +104,11 @@ def test_new_divergence_is_a_regression():
     assert set(result.loc[result["case"] == "sine", "status"]) == {"missing", "regressed"}
 
 
+def test_divergence_of_a_case_new_to_the_baseline_is_new():
+    current = table(BASE + [("literal", "x+y", "diverged_at_time", 4e-4, "s")])
+    assert _status(compare_metrics(current, table(BASE)), "diverged_at_time") == "new"
+
+
 def test_divergence_time_moving_is_a_regression():
     base = table([("literal", "x+y", "diverged_at_time", 4e-4, "s")])
     same = compare_metrics(base, base)
@@ -327,3 +332,11 @@ def test_update_replaces_only_the_scenarios_run(default_baseline, tmp_path):
         read_baseline(default_baseline))
     assert updated[updated["scenario"] == "other"]["value"].tolist() == [1.0]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["b.csv"]
+
+
+def test_scenario_absent_from_the_baseline_is_new_not_a_failure(tmp_path, capsys):
+    baseline = tmp_path / "b.csv"
+    baseline.write_text("scenario,case,channel,metric,value,unit\n", encoding="utf-8")
+    assert _check(DEFAULT, "--baseline", baseline) == 0
+    out = capsys.readouterr().out
+    assert "not in" in out and "default" in out and " 0 ok," in out and out.strip().endswith("PASS")
