@@ -337,9 +337,13 @@ def report_identified(scenario, results, directory):
     lines += ["", "## Identified models", "",
              "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
              "Steps 1-4); loadable with `model = \"<file>\"`.", "",
-             "| case | role | model file | plant |", "|---|---|---|---|"]
-    lines += [f"| {r['case']} | {r['role']} | [`{r['file']}`]({r['file']}) | {r['plant']} |"
-              for r in rows]
+             "| model file | plant | used as | cases |", "|---|---|---|---|"]
+    by_file = {}
+    for r in rows:
+        by_file.setdefault((r["file"], r["plant"], r["role"]), []).append(r["case"])
+    for (fname, plant, role), cases in by_file.items():
+        shown = ", ".join(cases) if len(cases) <= 4 else f"{', '.join(cases[:3])}, ... ({len(cases)} cases)"
+        lines.append(f"| [`{fname}`]({fname}) | {plant} | {role} | {shown} |")
     with open(directory / "report.md", "a", encoding="utf-8") as fh:
         fh.write("\n".join(lines) + "\n")
 

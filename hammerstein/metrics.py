@@ -38,6 +38,8 @@ UNITS = {
     "max_euclidean_error_percent": "%",
     "rms_error_percent": "%",
     "diverged_at_time": "s",
+    "model_rms_error": "µm",       # plant vs model, hammerstein.identified (paper Section 5.3)
+    "model_max_abs_error": "µm",
 }
 
 
