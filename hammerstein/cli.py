@@ -109,6 +109,7 @@ COMMANDS = [
     "hammerstein.cli:add_list_parser",
     "hammerstein.identify_cli:add_parser",
     "hammerstein.check_cli:add_parser",
+    "hammerstein.replication:add_parser",
 ]
 
 
