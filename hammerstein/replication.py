@@ -407,7 +407,7 @@ def write_readme(root, outcomes=None):
           "`ratio` = ours / paper. ± values are half the peak-to-peak range. The paper's trajectory "
           "errors are its ε = sgn(θ)√|θ|, which is not a distance (NOTES §6); ours are the Euclidean "
           "error ‖Y_r − Y‖ (max over the settled window).", "",
-          _table(comp), ""]
+          _table(comp.assign(paper=comp["paper"].str.replace("|", "\\|", regex=False))), ""]
     # trends
     L += ["## 2. Trends (Fig. 7 and Fig. 9)", ""]
     if not t7.empty:
