@@ -32,7 +32,19 @@ _ROUNDOFF = 1e-9
 
 
 def add_parser(subparsers):
-    """Register the ``check`` subcommand on an argparse subparsers object."""
+    """Register the ``check`` subcommand.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        From :meth:`argparse.ArgumentParser.add_subparsers`
+        (:data:`hammerstein.cli.COMMANDS` lists this function).
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The ``check`` parser; its ``handler`` default is :func:`run_check`.
+    """
     p = subparsers.add_parser(
         "check", help="run scenarios and compare their metrics with a baseline",
         description="Run scenarios and compare their metrics.csv with a stored baseline "
@@ -62,7 +74,23 @@ def _err(msg):
 
 
 def run_check(args):
-    """Handler of ``hammerstein check``; returns the exit status."""
+    """Handler of ``hammerstein check``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        ``scenarios`` (list of paths), ``baseline``, ``update``, ``out``,
+        ``rtol``, ``atol``, ``tolerances``, ``show_all``.
+
+    Returns
+    -------
+    int
+        0 nothing regressed (or the baseline was updated); 1 a regression, a
+        missing metric, a new divergence or a failed scenario; 2 a usage error
+        (baseline missing without ``--update``, malformed or a directory; bad
+        tolerances; a scenario file not found; ``--out`` not a directory; two
+        scenarios with the same name). Errors go to stderr, one line each.
+    """
     from .regression import BaselineError, load_tolerances, read_baseline, resolve_tolerances
     baseline_path = Path(args.baseline)
     try:
