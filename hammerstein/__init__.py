@@ -23,6 +23,7 @@ from .progress import progress
 from .identification import ClosedFormPI, IdentificationError, LeastSquaresPI, MultivariableIdentifier, fit_report
 from .sensors import Sensor, characterize, identify_plant
 from .datafiles import DataFileError, Record, read_record
+from .identified import comparison_model, identified_model, identify_table, save_identified_models
 from .scenarios import ScenarioError, load_scenario
 from .runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
 from .regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline

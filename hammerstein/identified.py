@@ -260,8 +260,9 @@ def save_identified_models(scenario, directory):
     """Save every identified model a scenario used into ``directory/models/``.
 
     File names are :func:`model_file_name`; a second, different model with
-    the same name (another plant or options) gets ``-2``, ``-3``... before
-    ``.toml``. Models come from the cache (identified while loading).
+    the same name gets the plant label (``-static`` / ``-hammerstein``), then
+    ``-2``, ``-3``... before ``.toml``. Models come from the cache
+    (identified while loading).
 
     Parameters
     ----------
@@ -282,10 +283,13 @@ def save_identified_models(scenario, directory):
         key = (_plant_fingerprint(plant), _spec_key(identify_table(spec)))
         if key not in files:
             base = model_file_name(spec)[:-len(".toml")]
+            label = "hammerstein" if plant.dynamics is not None else "static"
             name, i = f"{base}.toml", 1
+            if name in names:
+                name = f"{base}-{label}.toml"
             while name in names:
                 i += 1
-                name = f"{base}-{i}.toml"
+                name = f"{base}-{label}-{i}.toml"
             names.add(name)
             files[key] = f"models/{name}"
             save_model(model, directory / files[key], meta)
