@@ -20,11 +20,16 @@ implementation:
   following excursion) leave every later output unchanged; and the state after
   a history equals the state after its reduced sequence of dominant
   (alternating, wiping-out) extrema, computed by an independent algorithm;
-* Lipschitz continuity with constant 1 in the sup norm, per hysteron;
+* Lipschitz continuity with constant 1 in the sup norm, per hysteron
+  (``|play(u1) - play(u2)| <= max(||u1 - u2||, |s1 - s2|)``), hence with
+  constant ``sum |w_i|`` for a PI operator;
 * monotone output for monotone input when the weights are positive;
 * additivity of the multivariable model, eq. (3), from zero initial states;
-* chunked simulation equals one whole simulation for every stateful object;
-* the Kuhnen-Janocha inverse composed with the model is the identity.
+* chunked simulation equals one whole simulation for every stateful object
+  (play, PI, multivariable PI, Hammerstein plant with dynamics, the
+  compensator family), empty chunks included;
+* the Kuhnen-Janocha inverse composed with the model is the identity, from
+  zero states and from the state matching any input history.
 """
 
 from __future__ import annotations
