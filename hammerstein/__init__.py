@@ -27,5 +27,7 @@ from .identified import comparison_model, identified_model, identify_table, save
 from .scenarios import ScenarioError, load_scenario
 from .runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
 from .regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline
+from .sweeps import SweepSpec, expand_sweeps, run_cases, sweep_table
+from .replication import paper_comparison, replicate, write_readme
 
 __version__ = "0.1.0"
