@@ -320,3 +320,16 @@ def test_bundled_data_path_form(tmp_path):
     p = resolve_data_path("bundled:piezo-stack-150V-1Hz.csv", tmp_path)
     assert p.is_file() and p.parent.name == "data" and p.parent.parent.name == "hammerstein"
     assert resolve_data_path("rec.csv", tmp_path) == tmp_path / "rec.csv"
+
+
+def test_fig06_bundled_scenario_report(tmp_path):
+    outcome = run_scenario(ROOT / "scenarios" / "paper" / "fig06-model-validation.toml", tmp_path)
+    assert outcome.ok, outcome.error
+    m = outcome.metrics
+    for case, direct in [("ux-10V", "x"), ("uy-10V", "y"), ("ux-5V", "x"), ("uy-5V", "y")]:
+        rng = _metric(m, case, direct, "peak_to_peak")
+        # inside the identification range: within 5 % of the loop's range (10 V: < 0.5 %)
+        assert _metric(m, case, direct, "model_rms_error") < (0.005 if "10V" in case else 0.05) * rng
+    text = (outcome.out_dir / "report.md").read_text(encoding="utf-8")
+    assert "](model-vs-plant-hammerstein.png)" in text
+    assert (outcome.out_dir / "models" / "identified-50Hz-least-squares.toml").is_file()
