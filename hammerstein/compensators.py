@@ -216,19 +216,16 @@ def convergence_report(model: MultivariablePI, gain=None, max_matrices=100_000):
     levels = [model.slope_levels(k)[1:] for k in range(m)]  # skip dead band
     total = int(np.prod([len(lv) for lv in levels]))
     if total <= max_matrices:
-        combos = itertools.product(*[range(len(lv)) for lv in levels])
+        combos = np.array(list(itertools.product(*[range(len(lv)) for lv in levels])),
+                          dtype=np.int64).reshape(-1, m)
     else:
         rng = np.random.default_rng(0)
-        combos = (tuple(rng.integers(len(lv)) for lv in levels) for _ in range(max_matrices))
-    radii, worst, worst_r = [], None, -1.0
-    eye = np.eye(m)
-    for combo in combos:
-        J = np.column_stack([levels[k][i] for k, i in enumerate(combo)])
-        r = float(np.max(np.abs(np.linalg.eigvals(eye - Kinv @ J))))
-        radii.append(r)
-        if r > worst_r:
-            worst_r, worst = r, J
-    radii = np.asarray(radii)
+        combos = np.column_stack([rng.integers(len(lv), size=max_matrices) for lv in levels])
+    # J[c, :, k] = levels[k][combos[c, k]]: every slope matrix at once, one
+    # batched eigenvalue call instead of one per matrix
+    J = np.stack([levels[k][combos[:, k]] for k in range(m)], axis=2)
+    radii = np.max(np.abs(np.linalg.eigvals(np.eye(m) - Kinv @ J)), axis=1)
+    worst = J[int(np.argmax(radii))]
     return ConvergenceReport(max_radius=float(radii.max()), min_radius=float(radii.min()),
                              worst_slopes=worst, radii=radii, n_matrices=radii.size)
 
