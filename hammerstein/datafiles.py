@@ -84,9 +84,16 @@ def _sniff_separator(sample):
 
 def _read_table(path):
     try:
-        text = path.read_text(encoding="utf-8-sig", errors="replace")
+        raw = path.read_bytes()
     except OSError as exc:
         raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
+        text = raw.decode("utf-16", errors="replace")
+    else:
+        text = raw.decode("utf-8-sig", errors="replace")
+    if "\x00" in text or text.count("\ufffd") > 0.01 * len(text) + 1:
+        raise DataFileError(f"{path}: not a text table (binary content); expected delimited "
+                            f"text such as CSV")
     lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise DataFileError(f"{path}: the file is empty")
@@ -133,9 +140,11 @@ def _column(frame, header, key, role, path):
     bad = values.isna()
     if bad.any():
         row = int(np.flatnonzero(bad.to_numpy())[0])
-        raise DataFileError(
-            f"{path}: {role} column {name!r}: non-numeric or empty cell {col.iloc[row]!r} "
-            f"at data row {row + 1}")
+        cell = col.iloc[row]
+        what = (f"non-numeric or empty cell {str(cell).strip()!r}" if isinstance(cell, str) and cell.strip()
+                and cell.strip().lower() not in ("nan", "na", "n/a", "null", "none")
+                else "non-numeric or empty cell (empty or NaN)")
+        raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}")
     arr = values.to_numpy(dtype=float)
     if not np.all(np.isfinite(arr)):
         raise DataFileError(f"{path}: {role} column {name!r}: infinite values")
@@ -169,8 +178,8 @@ def read_record(path, input, output, time=None, sampling_period=None):
     ------
     DataFileError
         Missing or empty file, unparsable table, missing or misnamed column
-        (the available ones are listed), non-numeric cells, non-increasing or
-        non-uniform time, fewer than 10 samples, neither ``time`` nor
+        (the available ones are listed), non-numeric, empty, NaN or infinite
+        cells, binary content, non-increasing or non-uniform time, fewer than 10 samples, neither ``time`` nor
         ``sampling_period``, or both disagreeing.
     """
     path = Path(path)
