@@ -6,7 +6,11 @@ open-loop drive on the plant, or reference -> compensator -> plant with
 :func:`hammerstein.simulation.simulate_chain`), computes the metrics and
 writes ``out_dir/<scenario name>/`` atomically: the report is built in a
 temporary directory next to the target and renamed over it, so a failing
-scenario leaves nothing behind.
+scenario leaves nothing behind. Warnings of the cases (a reference beyond
+the identified range, a convergence check set to ``"warn"``, ...) are listed
+in ``report.md``, in ``warnings.csv`` (``case, message``; written only when
+there are warnings) and in :attr:`ScenarioOutcome.warnings` (``hammerstein
+run`` prints one ``warning:`` line each).
 
 Compensators are built by :func:`build_compensator` from the registry
 :data:`COMPENSATORS` (kind -> :class:`CompensatorKind`); add a kind by adding
@@ -118,9 +122,10 @@ def _gain(v):
         return v
     if isinstance(v, list) and v and all(isinstance(r, list) and len(r) == len(v) and
                                          all(isinstance(a, (int, float)) and not isinstance(a, bool)
-                                             for a in r) for r in v):
+                                             and np.isfinite(a) for a in r) for r in v):
         return v
-    raise Invalid(f"expected 'secant', 'midpoint', 'identity' or a square matrix [[..],[..]] [µm/V], found {v!r}")
+    raise Invalid(f"expected 'secant', 'midpoint', 'identity' or a square matrix [[..],[..]] of "
+                  f"finite numbers [µm/V], found {v!r}")
 
 
 def _build_none(spec, plant, base_dir):
@@ -369,6 +374,9 @@ class ScenarioOutcome:
         ``DIR/<name>/`` when written.
     metrics : pandas.DataFrame
         Columns ``case, channel, metric, value, unit`` (empty when not ok).
+    warnings : list of (str, str)
+        ``(case, message)`` of every distinct warning of the cases (range,
+        convergence, ...), also in ``report.md`` and ``warnings.csv``.
     """
 
     name: str
@@ -377,6 +385,7 @@ class ScenarioOutcome:
     error: str | None
     out_dir: Path | None
     metrics: pd.DataFrame
+    warnings: list = field(default_factory=list)
 
 
 def _empty_metrics():
@@ -404,6 +413,20 @@ def _atomic_write(out_dir, name, writer):
     return target
 
 
+def _case_warnings(results):
+    """Distinct ``(case, message)`` pairs of the results' warnings, in order."""
+    pairs = [(str(getattr(r, "name", "")), " ".join(str(w).split()))
+             for r in results for w in getattr(r, "warnings", None) or []]
+    return list(dict.fromkeys(pairs))
+
+
+def _write_warnings(pairs, directory):
+    """``warnings.csv`` (columns ``case, message``) when there are warnings."""
+    if pairs:
+        pd.DataFrame(pairs, columns=["case", "message"]).to_csv(
+            Path(directory) / "warnings.csv", index=False)
+
+
 def run_scenario(path, out_dir):
     """Validate, simulate and write the report of one scenario.
 
@@ -429,13 +452,18 @@ def run_scenario(path, out_dir):
         kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
         results = kind.simulate(scenario)
         frame = metrics_frame(results)
-        target = _atomic_write(out_dir, name, lambda d: kind.write(scenario, results, d))
+        caught = _case_warnings(results)
+
+        def write(d):
+            kind.write(scenario, results, d)
+            _write_warnings(caught, d)
+        target = _atomic_write(out_dir, name, write)
     except ScenarioError as exc:
         return ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics())
     except Exception as exc:  # a failed scenario must not stop the others
         return ScenarioOutcome(name, path, False, f"{path}: {type(exc).__name__}: {exc}",
                                None, _empty_metrics())
-    return ScenarioOutcome(name, path, True, None, target, frame)
+    return ScenarioOutcome(name, path, True, None, target, frame, caught)
 
 
 def run_scenarios(paths, out_dir):
