@@ -246,9 +246,13 @@ def save_model(model, path, metadata=None):
     doc["model"] = model_to_table(model)
     tmp = path.with_name(path.name + ".tmp")
     path.parent.mkdir(parents=True, exist_ok=True)
-    with open(tmp, "wb") as fh:
-        tomli_w.dump(doc, fh)
-    tmp.replace(path)
+    try:
+        with open(tmp, "wb") as fh:
+            tomli_w.dump(doc, fh)
+        tmp.replace(path)
+    except BaseException:  # no half-written model file left behind
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def dynamics_from_table(table, outputs, source="preset"):
