@@ -14,6 +14,7 @@ usage error; the model file is written only on success (atomically).
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -161,8 +162,16 @@ def _handler(args):
             raise ValueError(f"--train-fraction: expected in (0, 1], found {args.train_fraction}")
         if args.time is None and args.sampling_period is None:
             raise ValueError("give --time COL or --sampling-period S")
+        if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
+                                                     and args.sampling_period > 0):
+            raise ValueError(f"--sampling-period: expected a positive time [s], "
+                             f"found {args.sampling_period}")
+        if args.skip is not None and not (np.isfinite(args.skip) and args.skip >= 0):
+            raise ValueError(f"--skip: expected a time >= 0 [s], found {args.skip}")
+        if Path(args.out).is_dir():
+            raise ValueError(f"--out: {args.out} is a directory; expected a model file name")
     except ValueError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"hammerstein identify: error: {exc}", file=sys.stderr)
         return 2
     try:
         rec = read_record(args.data, args.input, args.output, args.time, args.sampling_period)
