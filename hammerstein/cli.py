@@ -7,6 +7,13 @@ imported lazily: add a subcommand with one line there.
 
 Exit status: 0 on success, 1 when a scenario failed (the others still
 run), 2 on usage errors.
+
+stderr carries one line per problem and nothing else: ``error: <file>:
+<message>`` for a failed scenario (its problems joined by ``; ``),
+``error: <file>: <key>: <message>`` per problem for ``validate``,
+``warning: <file>: <case>: <message>`` per warning of a scenario that ran,
+``hammerstein <command>: error: <message>`` for a usage error, and any other
+Python warning as one ``warning: <Category>: <message>`` line (no traceback).
 """
 
 from __future__ import annotations
@@ -14,13 +21,51 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 from pathlib import Path
 
-__all__ = ["main", "build_parser", "COMMANDS"]
+__all__ = ["main", "build_parser", "one_line", "COMMANDS"]
 
 
 def _print_err(msg):
     print(msg, file=sys.stderr)
+
+
+def one_line(text, path=None):
+    """Fold a multi-line message into one line, without a repeated ``path: `` prefix.
+
+    Parameters
+    ----------
+    text : str
+        Message, one problem per line (e.g. ``ScenarioOutcome.error``).
+    path : str, optional
+        File name that prefixes each problem; kept once, at the front.
+
+    Returns
+    -------
+    str
+        ``path: problem 1; problem 2; ...`` on one line.
+    """
+    lines = [" ".join(ln.split()) for ln in str(text).splitlines() if ln.strip()]
+    if path is None:
+        return "; ".join(lines)
+    pre = f"{path}: "
+    lines = [ln[len(pre):] if ln.startswith(pre) else ln for ln in lines]
+    return pre + "; ".join(lines)
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse parser whose usage errors are one line on stderr (exit status 2)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} "
+                     f"(see '{self.prog} --help')\n")
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    """warnings.showwarning replacement: one ``warning: Category: message`` line."""
+    print(f"warning: {category.__name__}: {' '.join(str(message).split())}",
+          file=sys.stderr if file is None else file)
 
 
 # -- run ---------------------------------------------------------------------------
@@ -37,16 +82,33 @@ def add_run_parser(subparsers):
 
 def _run(args):
     from .runner import run_scenario
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        _print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
+        return 2
     status = 0
     for path in args.scenarios:
         outcome = run_scenario(path, args.out)
         if outcome.ok:
             n_cases = outcome.metrics["case"].nunique()
             print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases)")
+            for case, msg in outcome.warnings:
+                _print_err(f"warning: {path}: {case}: {' '.join(msg.split())}")
+            _print_divergences(path, outcome.metrics)
         else:
-            _print_err(f"error: {'; '.join(outcome.error.splitlines())}")
+            _print_err(f"error: {one_line(outcome.error, str(path))}")
             status = 1
     return status
+
+
+def _print_divergences(path, metrics):
+    """One ``warning:`` line naming the cases whose compensator diverged (report.md has the reason)."""
+    div = metrics[metrics["metric"] == "diverged_at_time"] if len(metrics) else metrics
+    if len(div):
+        cases = [f"{c} (t = {v:.4g} s)" for c, v in zip(div["case"], div["value"])]
+        more = f", ... ({len(cases) - 5} more)" if len(cases) > 5 else ""
+        _print_err(f"warning: {path}: the compensator diverged in {len(cases)} case(s): "
+                   f"{', '.join(cases[:5])}{more}; the cases stopped there (see report.md)")
 
 
 # -- validate ----------------------------------------------------------------------
@@ -65,8 +127,8 @@ def _validate(args):
         try:
             sc = load_scenario(path)
         except ScenarioError as exc:
-            for line in exc.problems:
-                _print_err(f"error: {line}")
+            for line in exc.problems:  # one line per problem: file: key: message
+                _print_err(f"error: {' '.join(line.split())}")
             status = 1
             continue
         print(f"{path}: ok ({len(sc.cases)} cases)")
@@ -115,11 +177,12 @@ COMMANDS = [
 
 def build_parser():
     """The argparse parser with every registered subcommand."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="hammerstein",
         description="Multivariable Prandtl-Ishlinskii hysteresis of piezoelectric actuators: "
                     "simulate scenarios, compensate, report.")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
+                                parser_class=_Parser)
     for entry in COMMANDS:
         module, func = entry.split(":")
         getattr(importlib.import_module(module), func)(sub)
@@ -144,7 +207,9 @@ def main(argv=None):
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: usage error (2) or --help (0)
         return int(exc.code or 0)
-    return int(args.handler(args))
+    with warnings.catch_warnings():  # stray warnings: one line each, no source line
+        warnings.showwarning = _one_line_warning
+        return int(args.handler(args))
 
 
 if __name__ == "__main__":
