@@ -28,6 +28,9 @@ __all__ = [
 #: Fewest samples per period accepted for any periodic signal.
 MIN_SAMPLES_PER_PERIOD = 8
 
+#: Most samples in one record (80 MB per signal row; 500 s at T = 50 µs).
+MAX_SAMPLES = 10_000_000
+
 
 class SignalError(ValueError):
     """Invalid reference or drive parameters (the message names the field)."""
@@ -48,6 +51,7 @@ def _finite(value, name, unit):
 
 
 def _check_frequency(frequency, sampling_period, name="frequency"):
+    sampling_period = _positive(sampling_period, "sampling_period", "s")
     f = _positive(frequency, name, "Hz")
     nyquist = 1.0 / (2.0 * sampling_period)
     if f >= nyquist:
@@ -82,8 +86,8 @@ def time_vector(sampling_period, period=None, periods=None, duration=None):
     Raises
     ------
     SignalError
-        If both or neither of ``periods`` and ``duration`` are given, or a
-        value is not positive.
+        If both or neither of ``periods`` and ``duration`` are given, a
+        value is not positive, or the record exceeds :data:`MAX_SAMPLES`.
     """
     T = _positive(sampling_period, "sampling_period", "s")
     if (periods is None) == (duration is None):
@@ -92,6 +96,10 @@ def time_vector(sampling_period, period=None, periods=None, duration=None):
         length = _positive(periods, "periods", "-") * period
     else:
         length = _positive(duration, "duration", "s")
+    if not length / T <= MAX_SAMPLES:
+        raise SignalError(f"{'periods' if periods is not None else 'duration'}: the record would "
+                          f"have {length / T:.3g} samples; expected at most {MAX_SAMPLES:.0e} "
+                          f"({MAX_SAMPLES * T:g} s at T = {T:g} s)")
     n = max(int(round(length / T)), 1)
     return np.arange(n) * T
 
