@@ -86,7 +86,7 @@ def read_toml(path):
     Raises
     ------
     PresetError
-        If the file is missing, unreadable or not valid TOML.
+        If the file is missing, unreadable, not UTF-8 or not valid TOML.
     """
     path = Path(path)
     try:
@@ -96,6 +96,9 @@ def read_toml(path):
         raise PresetError(f"{path}: file not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{path}: invalid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:  # TOML is UTF-8 text
+        raise PresetError(f"{path}: invalid TOML: not UTF-8 text (byte {exc.start}: "
+                          f"{exc.object[exc.start:exc.start + 1]!r})") from None
     except OSError as exc:
         raise PresetError(f"{path}: cannot read: {exc.strerror}") from None
 
