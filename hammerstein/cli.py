@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -131,6 +132,10 @@ def _validate(args):
                 _print_err(f"error: {' '.join(line.split())}")
             status = 1
             continue
+        except Exception as exc:  # as run does: one line, the other files still checked
+            _print_err(f"error: {path}: {type(exc).__name__}: {one_line(exc)}")
+            status = 1
+            continue
         print(f"{path}: ok ({len(sc.cases)} cases)")
     return status
 
@@ -209,7 +214,14 @@ def main(argv=None):
         return int(exc.code or 0)
     with warnings.catch_warnings():  # stray warnings: one line each, no source line
         warnings.showwarning = _one_line_warning
-        return int(args.handler(args))
+        try:
+            return int(args.handler(args))
+        except Exception as exc:  # a bug, not bad input: still one line, no traceback
+            if os.environ.get("HAMMERSTEIN_DEBUG"):
+                raise
+            _print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "
+                       f"{one_line(exc)} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
+            return 1
 
 
 if __name__ == "__main__":
