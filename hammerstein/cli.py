@@ -87,10 +87,11 @@ def _run(args):
     if out.exists() and not out.is_dir():
         _print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
         return 2
-    status = 0
+    status, taken = 0, {}
     for path in args.scenarios:
-        outcome = run_scenario(path, args.out)
+        outcome = run_scenario(path, args.out, taken)
         if outcome.ok:
+            taken[outcome.name] = outcome.path
             n_cases = outcome.metrics["case"].nunique()
             print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases)")
             for case, msg in outcome.warnings:

@@ -193,6 +193,9 @@ def read_record(path, input, output, time=None, sampling_period=None):
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
     u, uname = _column(frame, header, input, "input", path)
     y, yname = _column(frame, header, output, "output", path)
+    if uname == yname:
+        raise DataFileError(
+            f"{path}: input and output are the same column {uname!r}; name two different columns")
     if time is not None:
         t, tname = _column(frame, header, time, "time", path)
         dt = np.diff(t)

@@ -427,7 +427,7 @@ def _write_warnings(pairs, directory):
             Path(directory) / "warnings.csv", index=False)
 
 
-def run_scenario(path, out_dir):
+def run_scenario(path, out_dir, taken=None):
     """Validate, simulate and write the report of one scenario.
 
     Parameters
@@ -436,6 +436,10 @@ def run_scenario(path, out_dir):
         Scenario TOML file.
     out_dir : str or pathlib.Path
         Reports directory; the report goes to ``out_dir/<scenario name>/``.
+    taken : dict of str to pathlib.Path, optional
+        Report names already written in this run (by :func:`run_scenarios`):
+        a scenario whose name is taken fails instead of overwriting the
+        other scenario's report.
 
     Returns
     -------
@@ -449,6 +453,10 @@ def run_scenario(path, out_dir):
     try:
         scenario = load_scenario(path)  # dispatches on the top-level kind
         name = scenario.name
+        if taken is not None and name in taken:
+            raise ScenarioError([
+                f"{path}: name: {name!r} is also the name of {taken[name]} in this run; "
+                f"give each scenario its own name (its report directory)"])
         kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
         results = kind.simulate(scenario)
         frame = metrics_frame(results)
@@ -479,4 +487,10 @@ def run_scenarios(paths, out_dir):
     list of ScenarioOutcome
         In the order of ``paths``.
     """
-    return [run_scenario(p, out_dir) for p in paths]
+    taken, outcomes = {}, []
+    for p in paths:
+        outcome = run_scenario(p, out_dir, taken)
+        if outcome.ok:
+            taken[outcome.name] = outcome.path
+        outcomes.append(outcome)
+    return outcomes

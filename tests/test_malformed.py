@@ -412,3 +412,30 @@ def test_range_warning_ratio(plant):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_reference_range(plant.hysteresis, 0.99 * np.diag(peaks))  # inside: no warning
+
+
+def test_two_scenarios_with_one_name_do_not_overwrite_each_other(tmp_path, capsys):
+    """The second scenario of a run that reuses a name fails (exit 1) instead of
+    silently replacing the first one's report directory."""
+    text = (CORPUS / "good" / "good-static.toml").read_text(encoding="utf-8")
+    first, second = tmp_path / "a.toml", tmp_path / "b.toml"
+    first.write_text(text, encoding="utf-8")
+    second.write_text(text, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["run", str(first), str(second), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is also the name of" in err[0] and str(second) in err[0]
+    assert len([p for p in out.iterdir() if not p.name.startswith(".")]) == 1
+
+
+def test_identify_refuses_one_column_as_input_and_output(tmp_path, capsys):
+    data = tmp_path / "rec.csv"
+    t = np.arange(400) * 1e-3
+    u = 5 * np.sin(2 * np.pi * 5 * t)
+    np.savetxt(data, np.column_stack([t, u, 2 * u]), delimiter=",", header="t,u,y", comments="")
+    status = main(["identify", str(data), "--input", "u", "--output", "u", "--time", "t",
+                   "--out", str(tmp_path / "m.toml")])
+    assert status == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "same column" in err[0]
+    assert not (tmp_path / "m.toml").exists()
