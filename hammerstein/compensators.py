@@ -321,7 +321,8 @@ class InverseMultiplicativeCompensator:
         self.convergence = convergence_report(self.model, self.K)
         if not self.convergence.converges and self.check != "ignore":
             msg = (f"gain: rho(I - K^-1 J) reaches {self.convergence.max_radius:.3g} >= 1 "
-                   f"over the model's slopes; the fixed-point iteration diverges (NOTES §4); "
+                   f"over the model's slopes; the fixed-point iteration is not guaranteed to "
+                   f"converge and diverges where those slopes persist (NOTES §4); "
                    f"gain='midpoint' minimises the radius")
             if self.check == "error":
                 raise CompensatorError(msg)
