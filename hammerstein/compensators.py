@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, state_vector
 from .inverse import kuhnen_inverse
 
 __all__ = [
@@ -373,13 +373,7 @@ class InverseMultiplicativeCompensator:
 
     def initial_state(self, initial_state=None):
         """Validated copy of a flat compensator state (zeros by default)."""
-        if initial_state is None:
-            return np.zeros(self.n_states)
-        s = np.asarray(initial_state, dtype=float)
-        if s.shape != (self.n_states,) or not np.all(np.isfinite(s)):
-            raise HysteresisError(
-                f"initial_state: expected {self.n_states} finite values, found shape {s.shape}")
-        return s.copy()
+        return state_vector(initial_state, self.n_states)
 
     def simulate(self, reference, initial_state=None):
         """Input voltages that make the model follow a reference.
@@ -660,12 +654,7 @@ class PerAxisInverseCompensator:
 
     def initial_state(self, initial_state=None):
         """Validated copy of the flat state (zeros by default)."""
-        if initial_state is None:
-            return np.zeros(self.n_states)
-        s = np.asarray(initial_state, dtype=float)
-        if s.shape != (self.n_states,) or not np.all(np.isfinite(s)):
-            raise HysteresisError(
-                f"initial_state: expected {self.n_states} finite values, found shape {s.shape}")
+        s = state_vector(initial_state, self.n_states)
         for l, inv in enumerate(self.inverses):
             if not isinstance(inv, float):
                 inv.initial_state(s[self._offsets[l]:self._offsets[l + 1]])

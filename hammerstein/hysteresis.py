@@ -109,12 +109,35 @@ def play(u, thresholds, initial_state=None):
     """
     u = _as_finite_array(u, "u", ndim=1)
     r = validate_thresholds(thresholds)
-    state = _initial_state(initial_state, r.size, "initial_state")
+    state = state_vector(initial_state, r.size, "initial_state")
     from .simulation import simulate_plays  # all time stepping lives there
     return simulate_plays(u, r, state)
 
 
-def _initial_state(initial_state, size, name):
+def state_vector(initial_state, size, name="initial_state"):
+    """Validated copy of a flat state vector, zeros when None.
+
+    Every stateful object (play operators, plants, compensators) stores its
+    memory as one flat float vector; this is the one check of it.
+
+    Parameters
+    ----------
+    initial_state : array_like, shape (size,), or None
+        State [units of the object: V for play states, µm for linear states].
+    size : int
+        Expected length.
+    name : str
+        Field name for error messages.
+
+    Returns
+    -------
+    numpy.ndarray, shape (size,)
+
+    Raises
+    ------
+    HysteresisError
+        If the state is not finite or not of shape (size,).
+    """
     if initial_state is None:
         return np.zeros(size)
     s = _as_finite_array(initial_state, name)
@@ -396,7 +419,7 @@ class MultivariablePI:
 
     def initial_state(self, initial_state=None):
         """Return a valid copy of a flat play-state vector (zeros by default)."""
-        return _initial_state(initial_state, self.n_hysterons, "initial_state")
+        return state_vector(initial_state, self.n_hysterons, "initial_state")
 
     def simulate(self, inputs, initial_state=None):
         """Outputs of the multivariable PI model for an input record, eq. (4).

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from .hysteresis import HysteresisError, MultivariablePI
+from .hysteresis import HysteresisError, MultivariablePI, state_vector
 
 __all__ = ["HammersteinPlant"]
 
@@ -99,13 +99,7 @@ class HammersteinPlant:
         HysteresisError
             If the state does not have length ``n_states``.
         """
-        if initial_state is None:
-            return np.zeros(self.n_states)
-        s = np.asarray(initial_state, dtype=float)
-        if s.shape != (self.n_states,) or not np.all(np.isfinite(s)):
-            raise HysteresisError(
-                f"initial_state: expected {self.n_states} finite values, found shape {s.shape}")
-        return s.copy()
+        return state_vector(initial_state, self.n_states)
 
     def simulate(self, inputs, initial_state=None):
         """Displacements for a record of input voltages (open loop).

@@ -24,7 +24,7 @@ import numpy as np
 
 from . import kernels
 from .compensators import CompensatorDivergence, CompensatorError
-from .hysteresis import HysteresisError
+from .hysteresis import HysteresisError, state_vector
 
 __all__ = [
     "simulate_plays",
@@ -312,13 +312,7 @@ def compensator_state(compensator, initial_state=None):
     lowpass, _ = compensator_law(compensator)
     model = compensator.model
     n = model.n_inputs * (2 if lowpass else 1) + model.n_hysterons
-    if initial_state is None:
-        return np.zeros(n)
-    s = np.asarray(initial_state, dtype=float)
-    if s.shape != (n,) or not np.all(np.isfinite(s)):
-        raise HysteresisError(
-            f"initial_state: expected {n} finite values, found shape {s.shape}")
-    return s.copy()
+    return state_vector(initial_state, n)
 
 
 _compensator_state = compensator_state
