@@ -11,6 +11,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import matplotlib
 
 matplotlib.use("Agg")
@@ -58,22 +60,52 @@ def loop_grid(curves, x_labels, y_labels, title, direct_label="direct",
         for l in range(p):
             axes[l][k].plot(c["x"], c["outputs"][l], label=c["label"], **_style(counts[k]))
         counts[k] += 1
+    return decorate_grid(fig, axes, counts, x_labels, y_labels, title,
+                         direct_label, cross_label, legend_size=8)
+
+
+def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="direct",
+                  cross_label="cross-coupling", legend_size=8):
+    """Titles, labels and legends of a p x m grid of input-output maps.
+
+    Panel (l, k) is output l against abscissa k, lettered row by row as in the
+    paper's Fig. 5/6/8: (a) (u_x, x) direct, (b) (u_y, x) cross-coupling, ...
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    axes : array of Axes, shape (p, m)
+    counts : sequence of int, length m
+        Curves drawn in each column (a column without curves says so).
+    x_labels, y_labels : sequence of str
+        Abscissa labels (m) and output labels (p), e.g. ``'u_x [V]'``, ``'x [µm]'``.
+    title : str
+    direct_label, cross_label : str
+        Captions of diagonal and off-diagonal panels.
+    legend_size : float
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        ``fig``, laid out.
+    """
+    p, m = len(y_labels), len(x_labels)
     letters = "abcdefghijklmnopqrstuvwxyz"
     for l in range(p):
         for k in range(m):
             ax = axes[l][k]
             kind = direct_label if l == k else cross_label
-            ax.set_title(f"({letters[l * m + k]}) {kind}: {y_labels[l].split(' ')[0]} vs "
+            ax.set_title(f"({letters[(l * m + k) % 26]}) {kind}: {y_labels[l].split(' ')[0]} vs "
                          f"{x_labels[k].split(' ')[0]}", fontsize=10)
             ax.set_xlabel(x_labels[k])
             ax.set_ylabel(y_labels[l])
             ax.grid(True, alpha=0.3)
             if counts[k]:
-                ax.legend(fontsize=8, loc="best")
+                ax.legend(fontsize=legend_size, loc="best")
             else:
                 ax.text(0.5, 0.5, "no case drives this input", ha="center", va="center",
                         transform=ax.transAxes, color="0.5")
-    fig.suptitle(title)
+    fig.suptitle(textwrap.fill(title, width=int(48 * m)))
     fig.tight_layout()
     return fig
 

@@ -15,6 +15,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from .plots import decorate_grid  # noqa: E402
 
 __all__ = ["model_loop_grid", "rms_vs_frequency_figure", "record_fit_figure"]
 
@@ -60,21 +61,7 @@ def model_loop_grid(curves, x_labels, y_labels, title):
             ax.plot(c["x"], c["model"][l], "--", color=color, linewidth=1.1,
                     label=f"{c['label']}: model")
         counts[k] += 1
-    for l in range(p):
-        for k in range(m):
-            ax = axes[l][k]
-            ax.set_title(_panel_title(l, k, m, y_labels, x_labels), fontsize=10)
-            ax.set_xlabel(x_labels[k])
-            ax.set_ylabel(y_labels[l])
-            ax.grid(True, alpha=0.3)
-            if counts[k]:
-                ax.legend(fontsize=7, loc="best")
-            else:
-                ax.text(0.5, 0.5, "no case drives this input", ha="center", va="center",
-                        transform=ax.transAxes, color="0.5")
-    fig.suptitle(title)
-    fig.tight_layout()
-    return fig
+    return decorate_grid(fig, axes, counts, x_labels, y_labels, title, legend_size=7)
 
 
 def rms_vs_frequency_figure(table, input_names, output_names, title, identification_hz=None):
