@@ -44,6 +44,15 @@ STATUS_NONFINITE = 1
 STATUS_BOUND = 2
 
 
+@njit(cache=True, inline="always")
+def _play(v, uk, rj):
+    """One play-operator step, ``max(u - r, min(u + r, v))`` (eq. (1))."""
+    hi = uk + rj
+    lo = uk - rj
+    v = hi if hi < v else v
+    return lo if lo > v else v
+
+
 @njit(cache=True)
 def play_kernel(u, r, s, y):
     """Play operators of one input, eq. (1): ``y`` (n, N) out, ``s`` (n,) in/out."""
@@ -53,10 +62,7 @@ def play_kernel(u, r, s, y):
         ri = r[i]
         for t in range(uint64(u.size)):
             t = uint64(t)
-            hi = u[t] + ri
-            lo = u[t] - ri
-            v = hi if hi < v else v
-            v = lo if lo > v else v
+            v = _play(v, u[t], ri)
             y[i, t] = v
         s[i] = v
 
@@ -70,12 +76,7 @@ def _commit(u, start, r, s):
         uk = u[k]
         for j in range(uint64(start[k]), uint64(start[k + 1])):
             j = uint64(j)
-            v = s[j]
-            hi = uk + r[j]
-            lo = uk - r[j]
-            v = hi if hi < v else v
-            v = lo if lo > v else v
-            s[j] = v
+            s[j] = _play(s[j], uk, r[j])
 
 
 @njit(cache=True, inline="always")
@@ -122,11 +123,7 @@ def _evaluate(u, start, r, W, G, s, y):
         uk = u[k]
         for j in range(uint64(start[k]), uint64(start[k + 1])):
             j = uint64(j)
-            v = s[j]
-            hi = uk + r[j]
-            lo = uk - r[j]
-            v = hi if hi < v else v
-            v = lo if lo > v else v
+            v = _play(s[j], uk, r[j])
             for l in range(p):
                 y[l] += W[l, j] * v
 
@@ -145,12 +142,7 @@ def pi_kernel(u, start, r, W, G, s, y):
             uk = u[k, t]
             for j in range(uint64(start[k]), uint64(start[k + 1])):
                 j = uint64(j)
-                v = s[j]
-                hi = uk + r[j]
-                lo = uk - r[j]
-                v = hi if hi < v else v
-                v = lo if lo > v else v
-                s[j] = v
+                s[j] = _play(s[j], uk, r[j])
         for l in range(0, p - 1, 2):          # outputs in pairs share the loads of s
             W0 = W[l]
             W1 = W[l + 1]
