@@ -59,6 +59,7 @@ class _Parser(argparse.ArgumentParser):
     """argparse parser whose usage errors are one line on stderr (exit status 2)."""
 
     def error(self, message):
+        """Print the usage error as one line on stderr and exit with status 2."""
         self.exit(2, f"{self.prog}: error: {' '.join(message.split())} "
                      f"(see '{self.prog} --help')\n")
 
@@ -71,6 +72,13 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 # -- run ---------------------------------------------------------------------------
 def add_run_parser(subparsers):
+    """Register `hammerstein run SCENARIO... [--out DIR]`: simulate scenarios, write one report directory each.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``hammerstein`` sub-command registry.
+    """
     p = subparsers.add_parser(
         "run", help="simulate scenarios and write reports",
         description="Simulate each scenario and write DIR/<scenario name>/ (metrics.csv, "
@@ -115,6 +123,13 @@ def _print_divergences(path, metrics):
 
 # -- validate ----------------------------------------------------------------------
 def add_validate_parser(subparsers):
+    """Register `hammerstein validate SCENARIO...`: the scenario checks of `run`, without simulating.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``hammerstein`` sub-command registry.
+    """
     p = subparsers.add_parser(
         "validate", help="check scenario files without simulating",
         description="Check scenario files and list every problem as 'file: key: message'.")
@@ -143,6 +158,13 @@ def _validate(args):
 
 # -- list --------------------------------------------------------------------------
 def add_list_parser(subparsers):
+    """Register `hammerstein list [--scenarios DIR]`: presets, compensator kinds and scenario files.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``hammerstein`` sub-command registry.
+    """
     p = subparsers.add_parser(
         "list", help="list bundled presets, compensator kinds and scenarios",
         description="List the bundled actuator presets, the compensator kinds and the "

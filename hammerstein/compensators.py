@@ -108,6 +108,7 @@ class ConvergenceReport:
 
     @property
     def converges(self) -> bool:
+        """True when ``max_radius < 1``: the iteration contracts on every branch."""
         return bool(self.max_radius < 1.0)
 
 

@@ -488,6 +488,7 @@ class ChainResult:
 
     @property
     def diverged(self) -> bool:
+        """True when the compensator diverged (see ``divergence``)."""
         return self.divergence is not None
 
 
