@@ -134,6 +134,10 @@ def pi_kernel(u, start, r, W, G, s, y):
 
     The play updates of each input are one contiguous, vectorised loop; each
     play is updated once however many outputs it feeds (``W`` columns).
+    The bodies of :func:`_commit` and :func:`_output` are written out here on
+    purpose: calling them with the column views ``u[:, t]`` and ``y[:, t]``
+    measured 0.62-0.99 ns per hysteron update against 0.42-0.51 ns inline
+    (the 0.6 ns target of the benchmark).
     """
     m, N = u.shape
     p, n = W.shape
