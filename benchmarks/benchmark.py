@@ -111,7 +111,7 @@ def main(argv=None):
     import numba
     import hammerstein as hs
     from hammerstein import simulation as sim
-    from hammerstein.interop import chain_system
+    from hammerstein.core.interop import chain_system
 
     plant = hs.load_plant("rakotondrabe-2dof")
     model = plant.hysteresis

@@ -6,28 +6,28 @@ inverse multiplicative feedforward compensator, and simulate the result on a
 Hammerstein actuator (multivariable PI + python-control linear dynamics).
 """
 
-from .compensators import (CompensatorDivergence, CompensatorError, ConvergenceReport,
+from hammerstein.core.compensators import (CompensatorDivergence, CompensatorError, ConvergenceReport,
                            ConvergenceWarning, InverseMultiplicativeCompensator, midpoint_gains,
                            convergence_report)
-from .compensators import (PerAxisInverseCompensator, RangeWarning, StaticGainCompensator, check_reference_range, diagonal_compensator)
-from .inverse import InversePI, InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
-from .stability import literal_gain_equivalent_scale, stability_map
-from .dynamics import DynamicsError, bandwidths_hz, bending_modes, discretize
-from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
-from .plant import HammersteinPlant
-from .presets import (PresetError, bundled_presets, load_model, load_plant, model_from_table,
+from hammerstein.core.compensators import (PerAxisInverseCompensator, RangeWarning, StaticGainCompensator, check_reference_range, diagonal_compensator)
+from hammerstein.core.inverse import InversePI, InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
+from hammerstein.core.stability import literal_gain_equivalent_scale, stability_map
+from hammerstein.core.dynamics import DynamicsError, bandwidths_hz, bending_modes, discretize
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
+from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.presets import (PresetError, bundled_presets, load_model, load_plant, model_from_table,
                       model_to_table, save_model)
-from .simulation import ChainResult, simulate_chain, simulate_compensator, simulate_plant
-from .simulation import simulate_chain_batch, simulate_hysteresis
-from .progress import progress
-from .identification import ClosedFormPI, IdentificationError, LeastSquaresPI, MultivariableIdentifier, fit_report
-from .sensors import Sensor, characterize, identify_plant
-from .datafiles import DataFileError, Record, read_record
-from .identified import comparison_model, identified_model, identify_table, save_identified_models
-from .scenarios import ScenarioError, load_scenario
-from .runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
-from .regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline
-from .sweeps import SweepSpec, expand_sweeps, run_cases, sweep_table
-from .replication import paper_comparison, replicate, write_readme
+from hammerstein.simulation import ChainResult, simulate_chain, simulate_compensator, simulate_plant
+from hammerstein.simulation import simulate_chain_batch, simulate_hysteresis
+from hammerstein.scenario.progress import progress
+from hammerstein.core.identification import ClosedFormPI, IdentificationError, LeastSquaresPI, MultivariableIdentifier, fit_report
+from hammerstein.core.sensors import Sensor, characterize, identify_plant
+from hammerstein.core.datafiles import DataFileError, Record, read_record
+from hammerstein.scenario.identified import comparison_model, identified_model, identify_table, save_identified_models
+from hammerstein.scenario.schema import ScenarioError, load_scenario
+from hammerstein.runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
+from hammerstein.scenario.regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline
+from hammerstein.scenario.sweeps import SweepSpec, expand_sweeps, run_cases, sweep_table
+from hammerstein.report.replication import paper_comparison, replicate, write_readme
 
 __version__ = "0.1.0"

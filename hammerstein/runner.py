@@ -30,14 +30,14 @@ from typing import Any, Callable
 import numpy as np
 import pandas as pd
 
-from . import metrics as met
-from .compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+from hammerstein.core import metrics as met
+from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                            StaticGainCompensator, diagonal_compensator)
-from .identification import IdentificationError
-from .identified import identified_model, identify_table, model_comparison, report_identified
-from .presets import load_model
-from .scenarios import Field, Invalid, ScenarioError, choice, integer, load_scenario, number, string
-from .simulation import simulate_chain
+from hammerstein.core.identification import IdentificationError
+from hammerstein.scenario.identified import identified_model, identify_table, model_comparison, report_identified
+from hammerstein.core.presets import load_model
+from hammerstein.scenario.schema import Field, Invalid, ScenarioError, choice, integer, load_scenario, number, string
+from hammerstein.simulation import simulate_chain
 
 __all__ = [
     "CompensatorKind",
@@ -335,7 +335,7 @@ class ScenarioKind:
 
 
 def _write_cases(scenario, results, directory):
-    from .reports import write_report
+    from hammerstein.report.scenario import write_report
     write_report(scenario, results, directory)
     report_identified(scenario, results, directory)
 
@@ -350,11 +350,11 @@ def _lazy(entry):
 
 # -- registry of scenario kinds: add entries here ("cases" is load_scenario's own) ----
 SCENARIO_KINDS: dict[str, ScenarioKind] = {
-    "cases": ScenarioKind(load_scenario, _lazy("hammerstein.sweeps:run_scenario_cases"), _write_cases),
+    "cases": ScenarioKind(load_scenario, _lazy("hammerstein.scenario.sweeps:run_scenario_cases"), _write_cases),
     "identification": ScenarioKind(
-        _lazy("hammerstein.record_scenarios:load_identification_scenario"),
-        _lazy("hammerstein.record_scenarios:run_identification_scenario"),
-        _lazy("hammerstein.record_scenarios:write_identification_report")),
+        _lazy("hammerstein.scenario.records:load_identification_scenario"),
+        _lazy("hammerstein.scenario.records:run_identification_scenario"),
+        _lazy("hammerstein.scenario.records:write_identification_report")),
 }
 
 
@@ -447,7 +447,7 @@ def run_scenario(path, out_dir, taken=None):
         Never raises for a bad scenario or a failed simulation: ``ok`` is
         False and ``error`` says why; nothing is written then.
     """
-    from .reports import metrics_frame
+    from hammerstein.report.scenario import metrics_frame
     path = Path(path)
     name = path.stem
     try:

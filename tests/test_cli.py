@@ -6,8 +6,8 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from hammerstein.cli import main
-from hammerstein.presets import read_toml
+from hammerstein.cli.main import main
+from hammerstein.core.presets import read_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hammerstein.datafiles import DataFileError, Record, bundled_data, read_record
+from hammerstein.core.datafiles import DataFileError, Record, bundled_data, read_record
 
 N = 20
 T = 1e-3

@@ -9,12 +9,12 @@ import pandas as pd
 import pytest
 
 from hammerstein import PrandtlIshlinskii, load_model, load_plant
-from hammerstein.cli import main
-from hammerstein.compensators import convergence_report
-from hammerstein.identified import identified_model
-from hammerstein.record_scenarios import resolve_data_path
+from hammerstein.cli.main import main
+from hammerstein.core.compensators import convergence_report
+from hammerstein.scenario.identified import identified_model
+from hammerstein.scenario.records import resolve_data_path
 from hammerstein.runner import run_scenario
-from hammerstein.scenarios import ScenarioError, load_scenario
+from hammerstein.scenario.schema import ScenarioError, load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANT = '[plant]\npreset = "rakotondrabe-2dof"\ndynamics = {dyn}\n'

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from hammerstein.hysteresis import HysteresisError, PrandtlIshlinskii, play
-from hammerstein.inverse import InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
-from hammerstein.presets import load_plant
+from hammerstein.core.hysteresis import HysteresisError, PrandtlIshlinskii, play
+from hammerstein.core.inverse import InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
+from hammerstein.core.presets import load_plant
 
 T = 5e-5
 

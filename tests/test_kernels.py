@@ -13,7 +13,7 @@ from hammerstein import (CompensatorDivergence, HammersteinPlant,
                          InverseMultiplicativeCompensator, MultivariablePI, PrandtlIshlinskii,
                          bending_modes, discretize, load_plant)
 from hammerstein import simulation as sim
-from hammerstein.hysteresis import play
+from hammerstein.core.hysteresis import play
 
 ATOL = 1e-9
 T = 5e-5

@@ -23,14 +23,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein import cli
-from hammerstein import references as refs
-from hammerstein.cli import main
-from hammerstein.compensators import (CompensatorError, InverseMultiplicativeCompensator,
+from hammerstein.cli import main as cli
+from hammerstein.core import references as refs
+from hammerstein.cli.main import main
+from hammerstein.core.compensators import (CompensatorError, InverseMultiplicativeCompensator,
                                       PerAxisInverseCompensator, RangeWarning,
                                       check_reference_range)
-from hammerstein.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
-from hammerstein.presets import load_plant
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.presets import load_plant
 
 CORPUS = Path(__file__).resolve().parent / "corpus"
 GOOD = CORPUS / "good"

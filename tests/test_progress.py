@@ -2,7 +2,7 @@
 
 import io
 
-from hammerstein.progress import progress
+from hammerstein.scenario.progress import progress
 
 
 def test_progress_is_quiet_when_stderr_is_not_a_terminal():

@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 import tomli_w
 
-from hammerstein.regression import (BaselineError, compare_metrics, is_regression, merge_baseline,
+from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression, merge_baseline,
                                     read_baseline, resolve_tolerances, summary_line,
                                     write_baseline)
 
@@ -238,7 +238,7 @@ DEFAULT = ROOT / "scenarios" / "default.toml"
 
 
 def _check(*args):
-    from hammerstein.cli import main
+    from hammerstein.cli.main import main
     return main(["check", *map(str, args)])
 
 

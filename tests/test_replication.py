@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.replication import (FIG09, FIG10, PAPER_NUMBERS, family_comparison, fig09_trends,
+from hammerstein.report.replication import (FIG09, FIG10, PAPER_NUMBERS, family_comparison, fig09_trends,
                                      paper_comparison, read_metrics, write_readme)
 
 SCALE = 1.5  # synthetic "ours" = SCALE x paper (paper 0: 0.7)

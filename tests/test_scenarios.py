@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hammerstein import runner
-from hammerstein.scenarios import ScenarioError, load_scenario
+from hammerstein.scenario.schema import ScenarioError, load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
@@ -166,7 +166,7 @@ class _StaticGain:
 
 
 def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch):
-    from hammerstein.scenarios import Field, number
+    from hammerstein.scenario.schema import Field, number
     monkeypatch.setitem(runner.COMPENSATORS, "static-gain", runner.CompensatorKind(
         lambda spec, plant, base: _StaticGain(spec["gain"]),
         {"gain": Field(number("µm/V", 0), required=True)}, "U = Yr / gain"))

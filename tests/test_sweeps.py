@@ -5,8 +5,8 @@ import pandas as pd
 import pytest
 
 from hammerstein.runner import run_scenario
-from hammerstein.scenarios import ScenarioError, load_scenario
-from hammerstein.sweeps import expand_sweeps
+from hammerstein.scenario.schema import ScenarioError, load_scenario
+from hammerstein.scenario.sweeps import expand_sweeps
 
 HEAD = """
 name = "sw"

@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, state_vector
-from .inverse import kuhnen_inverse
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, state_vector
+from hammerstein.core.inverse import kuhnen_inverse
 
 __all__ = [
     "CompensatorError",
@@ -403,7 +403,7 @@ class InverseMultiplicativeCompensator:
             If the reference leaves the identified output range
             (:func:`check_reference_range`).
         """
-        from .simulation import simulate_compensator
+        from hammerstein.simulation import simulate_compensator
         check_reference_range(self.model, reference)
         return simulate_compensator(self, reference, initial_state)
 

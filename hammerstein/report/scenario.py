@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import plots
+from hammerstein.report import figures as plots
 
 __all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table"]
 
@@ -186,7 +186,7 @@ def write_report(scenario, results, directory):
     directory = Path(directory)
     frame = metrics_frame(results)
     frame.to_csv(directory / "metrics.csv", index=False)
-    from .sweeps import sweep_report_lines  # sweep cases: tables and figures per sweep only
+    from hammerstein.scenario.sweeps import sweep_report_lines  # sweep cases: tables and figures per sweep only
     sweep_lines = sweep_report_lines(scenario, results, directory, frame)
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     frame = frame[frame["case"].isin([r.name for r in results])]

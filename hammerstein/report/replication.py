@@ -310,7 +310,7 @@ def fig08_identified_figure(report_dir, path):
     bool
         False when no time series was found (nothing written).
     """
-    from . import plots
+    from hammerstein.report import figures as plots
     report_dir = Path(report_dir)
     curves = []
     for f in (50, 100, 150, 200):
@@ -342,7 +342,7 @@ def _fmt(v, digits=3):
 
 
 def _table(df, digits=3):
-    from .reports import markdown_table
+    from hammerstein.report.scenario import markdown_table
     return markdown_table(df, floatfmt="{:.%dg}" % digits)
 
 
@@ -555,7 +555,7 @@ def replicate(scenarios="scenarios/paper", out="reports/paper"):
     FileNotFoundError
         If ``scenarios`` holds no ``*.toml`` file.
     """
-    from .runner import run_scenario
+    from hammerstein.runner import run_scenario
     files = sorted(Path(scenarios).glob("*.toml"))
     if not files:
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")

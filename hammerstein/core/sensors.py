@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
-from .hysteresis import MultivariablePI
-from .identification import IdentificationError, MultivariableIdentifier
-from .presets import save_model
+from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
+from hammerstein.core.presets import save_model
 
 __all__ = ["Sensor", "characterize", "identify_plant", "identification_metadata"]
 

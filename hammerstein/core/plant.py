@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
-from .hysteresis import HysteresisError, MultivariablePI, state_vector
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, state_vector
 
 __all__ = ["HammersteinPlant"]
 
@@ -118,5 +118,5 @@ class HammersteinPlant:
         final_state : numpy.ndarray, shape (n_states,)
             State after the last sample, for a chunked continuation.
         """
-        from .simulation import simulate_plant
+        from hammerstein.simulation import simulate_plant
         return simulate_plant(self, inputs, initial_state)

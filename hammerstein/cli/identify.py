@@ -102,7 +102,7 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
     ------
     IdentificationError
     """
-    from .identification import IdentificationError, fit_report
+    from hammerstein.core.identification import IdentificationError, fit_report
     if not 0 < train_fraction <= 1:
         raise IdentificationError(f"train_fraction: expected in (0, 1], found {train_fraction}")
     n_train = int(round(train_fraction * record.n_samples))
@@ -124,7 +124,7 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
 
 def _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg, partition, bounds,
          skip_seconds):
-    from .identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
+    from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
                                  ascending_branches)
     if method == "closed-form":
         ident = ClosedFormPI(n_hysterons, partition_arg).fit(ut, yt)
@@ -151,10 +151,10 @@ def _line(label, rep):
 
 
 def _handler(args):
-    from .datafiles import DataFileError, read_record
-    from .hysteresis import HysteresisError, MultivariablePI
-    from .identification import IdentificationError
-    from .presets import save_model
+    from hammerstein.core.datafiles import DataFileError, read_record
+    from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
+    from hammerstein.core.identification import IdentificationError
+    from hammerstein.core.presets import save_model
 
     try:
         n, thresholds = _parse_thresholds(args.thresholds)

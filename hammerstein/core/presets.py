@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from .dynamics import DynamicsError, bending_modes, discretize
-from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
-from .plant import HammersteinPlant
+from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.plant import HammersteinPlant
 
 __all__ = [
     "PresetError",

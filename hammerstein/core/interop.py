@@ -13,7 +13,7 @@ Example
 -------
 >>> import control, numpy as np
 >>> from hammerstein import load_plant
->>> from hammerstein.interop import hammerstein_system
+>>> from hammerstein.core.interop import hammerstein_system
 >>> plant = load_plant("rakotondrabe-2dof")
 >>> sys = hammerstein_system(plant)            # inputs ux, uy; outputs x, y
 >>> t = np.arange(200) * plant.sampling_period
@@ -28,8 +28,8 @@ from __future__ import annotations
 import control
 import numpy as np
 
-from .hysteresis import HysteresisError
-from .simulation import compensator_law, compensator_step
+from hammerstein.core.hysteresis import HysteresisError
+from hammerstein.simulation import compensator_law, compensator_step
 
 __all__ = ["pi_system", "linear_system", "hammerstein_system", "compensator_system",
            "chain_system", "reference_names"]

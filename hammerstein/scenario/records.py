@@ -36,13 +36,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from . import plots
-from .datafiles import DataFileError, Record, bundled_data, read_record
-from .hysteresis import MultivariablePI
-from .identification import IdentificationError
-from .identify_cli import identify_record
-from .presets import save_model
-from .scenarios import (NAME, Field, Invalid, ScenarioError, check_table, choice, integer,
+from hammerstein.report import figures as plots
+from hammerstein.core.datafiles import DataFileError, Record, bundled_data, read_record
+from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.core.identification import IdentificationError
+from hammerstein.cli.identify import identify_record
+from hammerstein.core.presets import save_model
+from hammerstein.scenario.schema import (NAME, Field, Invalid, ScenarioError, check_table, choice, integer,
                         number, string)
 
 __all__ = [
@@ -296,8 +296,8 @@ def write_identification_report(scenario, results, directory):
     directory : pathlib.Path
         Existing (temporary) report directory.
     """
-    from .plots_model import record_fit_figure
-    from .reports import markdown_table, metrics_frame
+    from hammerstein.report.model_figures import record_fit_figure
+    from hammerstein.report.scenario import markdown_table, metrics_frame
     directory = Path(directory)
     rec, spec = scenario.record, scenario.identification
     uname, yname = _names(scenario)

@@ -15,7 +15,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-from .plots import decorate_grid  # noqa: E402
+from hammerstein.report.figures import decorate_grid  # noqa: E402
 
 __all__ = ["model_loop_grid", "rms_vs_frequency_figure", "record_fit_figure"]
 

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import kernels
-from .compensators import CompensatorDivergence, CompensatorError
-from .hysteresis import HysteresisError, state_vector
+from hammerstein.simulation import _kernels as kernels
+from hammerstein.core.compensators import CompensatorDivergence, CompensatorError
+from hammerstein.core.hysteresis import HysteresisError, state_vector
 
 __all__ = [
     "simulate_plays",
@@ -494,7 +494,7 @@ class ChainResult:
 
 def _fusable(compensator):
     """True when the fused chain kernel implements this compensator exactly."""
-    from .compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
     return (isinstance(compensator, InverseMultiplicativeCompensator)
             and type(compensator).simulate is InverseMultiplicativeCompensator.simulate
             and all(hasattr(compensator, a) for a in ("model", "K_inv", "iterations",
@@ -529,7 +529,7 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     _check_backend(backend)
     reference = np.asarray(reference, dtype=float)
     if _fusable(compensator):
-        from . import compensators
+        from hammerstein.core import compensators
         if hasattr(compensators, "check_reference_range"):   # as compensator.simulate does
             compensators.check_reference_range(compensator.model, reference)
     if backend == "numba" and _fusable(compensator):

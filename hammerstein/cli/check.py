@@ -91,7 +91,7 @@ def run_check(args):
         tolerances; a scenario file not found; ``--out`` not a directory; two
         scenarios with the same name). Errors go to stderr, one line each.
     """
-    from .regression import BaselineError, load_tolerances, read_baseline, resolve_tolerances
+    from hammerstein.scenario.regression import BaselineError, load_tolerances, read_baseline, resolve_tolerances
     baseline_path = Path(args.baseline)
     try:
         overrides = load_tolerances(args.tolerances) if args.tolerances else None
@@ -120,7 +120,7 @@ def run_check(args):
 
 
 def _check(args, baseline_path, baseline, tolerance):
-    from .regression import (compare_metrics, is_regression, merge_baseline, summary_line,
+    from hammerstein.scenario.regression import (compare_metrics, is_regression, merge_baseline, summary_line,
                              write_baseline)
 
     outcomes = _run(args.scenarios, args.out)
@@ -173,7 +173,7 @@ def _check(args, baseline_path, baseline, tolerance):
 
 
 def _run(paths, out):
-    from .runner import run_scenarios
+    from hammerstein.runner import run_scenarios
     if out is not None:
         return run_scenarios(paths, out)
     with tempfile.TemporaryDirectory(prefix="hammerstein-check-") as tmp:

@@ -63,7 +63,7 @@ class Record:
 
 def bundled_data(name="piezo-stack-150V-1Hz.csv"):
     """Path of a data file shipped in ``hammerstein/data``."""
-    return Path(__file__).with_name("data") / name
+    return Path(__file__).resolve().parents[1] / "data" / name
 
 
 def _is_number(text):

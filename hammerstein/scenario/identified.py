@@ -32,10 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .identification import IdentificationError, MultivariableIdentifier
-from .presets import PresetError, model_to_table, save_model
-from .scenarios import Field, Invalid, boolean, check_table, choice, integer, number
-from .sensors import Sensor, characterize, identification_metadata
+from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
+from hammerstein.core.presets import PresetError, model_to_table, save_model
+from hammerstein.scenario.schema import Field, Invalid, boolean, check_table, choice, integer, number
+from hammerstein.core.sensors import Sensor, characterize, identification_metadata
 
 __all__ = [
     "IDENTIFY_FIELDS",
@@ -383,7 +383,7 @@ def comparison_model(case, mode, plant, base_dir):
         a reference case, a missing table, a failed identification, a model
         of the wrong size); PresetError for an unreadable model file.
     """
-    from .runner import resolve_model
+    from hammerstein.runner import resolve_model
     name = case.get("model")
     lines = []
     if mode != "drive":
@@ -441,7 +441,7 @@ def model_comparison(case, plant_outputs):
         ``model_rms_error`` (the paper's RMS_error_model, Section 5.3) and
         ``model_max_abs_error`` of plant minus model [µm].
     """
-    from .metrics import steady_window
+    from hammerstein.core.metrics import steady_window
     ym, _ = case.model.simulate(case.signal)
     y = np.asarray(plant_outputs, dtype=float)
     win = steady_window(y.shape[1], case.period_samples, case.settle_periods)
@@ -470,8 +470,8 @@ def _comparison_figures(scenario, results, directory):
     """Plant-vs-model loop grids (Fig. 6) and model output CSVs; [(caption, file)]."""
     import pandas as pd
 
-    from .plots import save
-    from .plots_model import model_loop_grid
+    from hammerstein.report.figures import save
+    from hammerstein.report.model_figures import model_loop_grid
     groups = {}
     for r in results:
         if getattr(r, "model_outputs", None) is None:
@@ -539,15 +539,15 @@ def model_rms_table(results):
 
 
 def _markdown(table):
-    from .reports import markdown_table
+    from hammerstein.report.scenario import markdown_table
     return markdown_table(table)
 
 
 def _frequency_tables(scenario, results, directory):
     """Fig. 7: model RMS error vs drive frequency for every (plant, model, amplitude)
     group with 3 or more drive frequencies; writes CSV and figure."""
-    from .plots import save
-    from .plots_model import rms_vs_frequency_figure
+    from hammerstein.report.figures import save
+    from hammerstein.report.model_figures import rms_vs_frequency_figure
     table = model_rms_table(results)
     out = []
     groups = [(key, g) for key, g in table.groupby(["plant", "model", "amplitude_V"], sort=False)

@@ -110,7 +110,7 @@ def play(u, thresholds, initial_state=None):
     u = _as_finite_array(u, "u", ndim=1)
     r = validate_thresholds(thresholds)
     state = state_vector(initial_state, r.size, "initial_state")
-    from .simulation import simulate_plays  # all time stepping lives there
+    from hammerstein.simulation import simulate_plays  # all time stepping lives there
     return simulate_plays(u, r, state)
 
 
@@ -446,7 +446,7 @@ class MultivariablePI:
         HysteresisError
             On a wrongly shaped or non-finite input or state.
         """
-        from .simulation import simulate_hysteresis  # all time stepping lives there
+        from hammerstein.simulation import simulate_hysteresis  # all time stepping lives there
         return simulate_hysteresis(self, inputs, initial_state)
 
     def evaluate(self, inputs, state):

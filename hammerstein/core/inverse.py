@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .hysteresis import HysteresisError, PrandtlIshlinskii, _as_finite_array
+from hammerstein.core.hysteresis import HysteresisError, PrandtlIshlinskii, _as_finite_array
 
 __all__ = ["InversePlay", "InversePI", "kuhnen_inverse", "kuhnen_inverse_parameters"]
 

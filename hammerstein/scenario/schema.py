@@ -24,8 +24,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import references as refs
-from .presets import PresetError, load_plant, read_toml
+from hammerstein.core import references as refs
+from hammerstein.core.presets import PresetError, load_plant, read_toml
 
 __all__ = [
     "ScenarioError",
@@ -343,7 +343,7 @@ def _merge_compensator(top, case):
 
 
 def _check_compensator(spec, where, problems, source):
-    from .runner import COMPENSATORS  # the registry lives with the factory
+    from hammerstein.runner import COMPENSATORS  # the registry lives with the factory
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
         hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
@@ -440,7 +440,7 @@ def load_scenario(path):
     ScenarioError
         Listing every problem found, one ``file: key: message`` per line.
     """
-    from .runner import build_compensator
+    from hammerstein.runner import build_compensator
     path = Path(path)
     source = str(path)
     try:
@@ -449,7 +449,7 @@ def load_scenario(path):
         raise ScenarioError([str(exc)]) from None
     kind = data.get("kind", "cases")
     if kind != "cases":
-        from .runner import SCENARIO_KINDS  # e.g. "identification" (measured records)
+        from hammerstein.runner import SCENARIO_KINDS  # e.g. "identification" (measured records)
         if kind not in SCENARIO_KINDS:
             raise ScenarioError([f"{source}: kind: {exc}" for exc in _kind_problem(kind, SCENARIO_KINDS)])
         return SCENARIO_KINDS[kind].load(path, data)
@@ -473,7 +473,7 @@ def load_scenario(path):
         problems.append(f"{source}: cases: missing (required)")
     entries, sweep_specs = [(f"cases[{i}]", raw) for i, raw in enumerate(cases_raw)], []
     if "sweeps" in data:
-        from .sweeps import expand_sweeps
+        from hammerstein.scenario.sweeps import expand_sweeps
         more, sweep_specs = expand_sweeps(data["sweeps"], source, problems)
         entries += more
     plants, cases, names = {}, [], set()
@@ -538,7 +538,7 @@ def load_scenario(path):
             continue
         cmp_model, cmp_spec = None, None
         if "model" in raw or "identify" in raw:
-            from .identified import comparison_model
+            from hammerstein.scenario.identified import comparison_model
             try:
                 cmp_model, cmp_spec = comparison_model(raw, mode, plant, base)
             except (ValueError, PresetError) as exc:  # one "key: message" per line
@@ -563,7 +563,7 @@ def load_scenario(path):
             **extras))
     smap = None
     if "stability_map" in data and isinstance(plant_top.get("preset"), str):
-        from .sweeps import check_stability_map
+        from hammerstein.scenario.sweeps import check_stability_map
         try:
             smap_plant = load_plant(plant_top["preset"], dynamics=bool(plant_top.get("dynamics", True)),
                                     base_dir=base)

@@ -90,7 +90,7 @@ def add_run_parser(subparsers):
 
 
 def _run(args):
-    from .runner import run_scenario
+    from hammerstein.runner import run_scenario
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         _print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
@@ -138,7 +138,7 @@ def add_validate_parser(subparsers):
 
 
 def _validate(args):
-    from .scenarios import ScenarioError, load_scenario
+    from hammerstein.scenario.schema import ScenarioError, load_scenario
     status = 0
     for path in args.scenarios:
         try:
@@ -175,8 +175,8 @@ def add_list_parser(subparsers):
 
 
 def _list(args):
-    from .presets import bundled_presets
-    from .runner import COMPENSATORS
+    from hammerstein.core.presets import bundled_presets
+    from hammerstein.runner import COMPENSATORS
     print("presets:")
     for name, path in sorted(bundled_presets().items()):
         print(f"  {name}  ({path})")
@@ -194,12 +194,12 @@ def _list(args):
 
 # -- command registrations: one line per subcommand ("module:add_parser") ------------
 COMMANDS = [
-    "hammerstein.cli:add_run_parser",
-    "hammerstein.cli:add_validate_parser",
-    "hammerstein.cli:add_list_parser",
-    "hammerstein.identify_cli:add_parser",
-    "hammerstein.check_cli:add_parser",
-    "hammerstein.replication:add_parser",
+    "hammerstein.cli.main:add_run_parser",
+    "hammerstein.cli.main:add_validate_parser",
+    "hammerstein.cli.main:add_list_parser",
+    "hammerstein.cli.identify:add_parser",
+    "hammerstein.cli.check:add_parser",
+    "hammerstein.report.replication:add_parser",
 ]
 
 

@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from .scenarios import NAME, Field, Invalid, check_table, number, string
+from hammerstein.scenario.schema import NAME, Field, Invalid, check_table, number, string
 
 __all__ = [
     "SweepSpec",
@@ -147,7 +147,7 @@ def expand_sweeps(sweeps, source, problems):
         ``sweeps[i](<case name>)``.
     specs : list of SweepSpec
     """
-    from .scenarios import CASE
+    from hammerstein.scenario.schema import CASE
     if not isinstance(sweeps, list) or not all(isinstance(s, dict) for s in sweeps):
         problems.append(f"{source}: sweeps: expected one or more [[sweeps]] tables")
         return [], []
@@ -226,10 +226,10 @@ def run_cases(cases, desc="cases"):
     list of hammerstein.runner.CaseResult
         In the order of ``cases``; divergences are results.
     """
-    from .compensators import check_reference_range
-    from .progress import progress
-    from .runner import chain_result, run_case
-    from .simulation import _fusable, simulate_chain_batch
+    from hammerstein.core.compensators import check_reference_range
+    from hammerstein.scenario.progress import progress
+    from hammerstein.runner import chain_result, run_case
+    from hammerstein.simulation import _fusable, simulate_chain_batch
     results = [None] * len(cases)
     batchable = [i for i, c in enumerate(cases)
                  if getattr(c, "sweep", None) is not None and c.mode == "reference"
@@ -324,8 +324,8 @@ def sweep_figure(table, spec, output_names, title, metric=None):
         Log-scaled metric axis when all values are positive; cases that
         diverged have no point.
     """
-    from . import plots
-    from .metrics import UNITS
+    from hammerstein.report import figures as plots
+    from hammerstein.core.metrics import UNITS
     plt = plots.plt
     metric = metric or spec.metric
     axes_names = [a if a is not None else "-" for a in spec.axes]
@@ -406,8 +406,8 @@ def check_stability_map(table, plant, compensator_top, base_dir, problems, sourc
         and ``K_<output>``; ``attrs['laws']`` maps each label to its
         ``literal_scale``, ``literal_max_radius``, ``normalised_max_radius``.
     """
-    from .runner import build_compensator
-    from .stability import stability_map
+    from hammerstein.runner import build_compensator
+    from hammerstein.core.stability import stability_map
     clean = check_table(table, STABILITY, "stability_map", problems, source)
     if clean is None or "scales" not in clean or plant is None:
         return None
@@ -446,7 +446,7 @@ def stability_figure(frame, title):
     -------
     matplotlib.figure.Figure
     """
-    from . import plots
+    from hammerstein.report import figures as plots
     plt = plots.plt
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     laws = frame.attrs.get("laws", {})
@@ -490,8 +490,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
         Markdown lines for ``report.md`` (sections with the figures and the
         files written); empty when the scenario has no sweep and no map.
     """
-    from . import plots
-    from .reports import markdown_table, metrics_frame
+    from hammerstein.report import figures as plots
+    from hammerstein.report.scenario import markdown_table, metrics_frame
     directory = Path(directory)
     specs = getattr(scenario, "sweeps", None) or []
     smap = getattr(scenario, "stability_map", None)

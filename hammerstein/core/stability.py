@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .compensators import CompensatorError, convergence_report
-from .hysteresis import MultivariablePI
+from hammerstein.core.compensators import CompensatorError, convergence_report
+from hammerstein.core.hysteresis import MultivariablePI
 
 __all__ = ["stability_map", "literal_gain_equivalent_scale"]
 

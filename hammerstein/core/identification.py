@@ -27,7 +27,7 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from .hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
 
 __all__ = [
     "IdentificationError",
@@ -174,7 +174,7 @@ def partition_thresholds(u, n_hysterons, partition="time", branch=None):
     """
     if not isinstance(partition, str):
         try:
-            from .hysteresis import validate_thresholds
+            from hammerstein.core.hysteresis import validate_thresholds
             return validate_thresholds(partition, "thresholds")
         except HysteresisError as exc:
             raise IdentificationError(str(exc)) from None
