@@ -554,7 +554,9 @@ class DynamicsIdentifier:
     percentage points of the best; the singular values of the subspace step
     (``singular_values_``, whose gap shows the order as well) and Akaike's
     criterion on the validation residuals (``aic_``) are reported for
-    inspection. The chosen order is then refitted on the full records.
+    inspection. The chosen order is then refitted on the full records (if
+    that refit of A is unstable, A and C of the estimation parts are kept and
+    only B, D and the initial states are refitted).
 
     Parameters
     ----------
@@ -697,10 +699,14 @@ class DynamicsIdentifier:
             chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
         else:
             chosen = int(candidates[0])
-        sid = self._subspace(ins, outs, block_rows)
-        A, C = sid.system_ac(chosen)
+        sid_all = self._subspace(ins, outs, block_rows)
+        A, C = sid_all.system_ac(chosen)
         if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
-            raise DynamicsError(f"order: the model of order {chosen} is unstable")
+            if candidates.size == 1:
+                raise DynamicsError(f"order: the model of order {chosen} is unstable")
+            A, C = sid.system_ac(chosen)      # stable on the estimation parts (checked above)
+        else:
+            sid = sid_all
         B, D, x0, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough)
         fit_all = _fit_percent(np.concatenate(outs, axis=1), np.concatenate(yhat, axis=1))
         self.system_ = control.ss(A, B, C, D, dt=T, name="identified_dynamics")
