@@ -1,0 +1,131 @@
+"""hammerstein.core.lti: validation, identification of G, sensor handling, figure."""
+
+import control
+import numpy as np
+import pytest
+
+from hammerstein.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.core.lti import (DynamicsIdentifier, compare_frequency_responses,
+                                  continuous_system, dc_gain, excitation, modal_parameters,
+                                  sensor_filter, state_space_dynamics)
+from hammerstein.sensors import Sensor
+
+T = 5e-5
+FN, ZETA = np.array([310.0, 290.0]), np.array([0.15, 0.20])
+
+
+def mode_matrices(fn=300.0, zeta=0.2):
+    wn = 2 * np.pi * fn
+    return [[0.0, wn], [-wn, -2 * zeta * wn]], [[0.0], [wn]], [[1.0, 0.0]]
+
+
+# -- state_space_dynamics ------------------------------------------------------------
+def test_state_space_dynamics_dc_gain_reported_not_forced():
+    A, B, C = mode_matrices()
+    G = state_space_dynamics(A, B, 0.8 * np.array(C), names=["x"])
+    assert isinstance(G, control.StateSpace) and G.isctime()
+    assert dc_gain(G)[0, 0] == pytest.approx(0.8, rel=1e-12)   # -C A^-1 B = 0.8
+    assert G.output_labels == ["x"] and G.input_labels == ["x_h"]
+
+
+@pytest.mark.parametrize("A, B, C, D, key", [
+    ([[1.0, 0.0]], [[1.0]], [[1.0]], None, "dynamics.A"),                    # not square
+    ([[-1.0]], [[1.0, 0.0], [0.0, 1.0]], [[1.0]], None, "dynamics.B"),       # rows != n
+    ([[-1.0]], [[1.0]], [[1.0], [1.0]], None, "dynamics.C"),                 # p rows != p cols
+    ([[-1.0]], [[1.0]], [[1.0]], [[0.0, 1.0]], "dynamics.D"),
+    ([[-1.0]], [[np.nan]], [[1.0]], None, "dynamics.B"),
+    ([[0.1]], [[1.0]], [[1.0]], None, "dynamics.A"),                         # unstable
+    ([[0.0, 1.0], [-1.0, 0.0]], [[0.0], [1.0]], [[1.0, 0.0]], None, "dynamics.A"),  # marginal
+    ("abc", [[1.0]], [[1.0]], None, "dynamics.A"),
+    ([-1.0], [[1.0]], [[1.0]], None, "dynamics.A"),                          # 1-D
+])
+def test_state_space_dynamics_bad_matrices_name_the_key(A, B, C, D, key):
+    with pytest.raises(DynamicsError, match=key.replace(".", r"\.")):
+        state_space_dynamics(A, B, C, D)
+
+
+def test_modal_parameters_and_continuous_round_trip():
+    Gc = bending_modes(FN, ZETA)
+    Gd = discretize(Gc, T)
+    f, z = modal_parameters(Gd)
+    np.testing.assert_allclose(f, np.sort(FN), rtol=1e-9)
+    np.testing.assert_allclose(z, ZETA[np.argsort(FN)], rtol=1e-9)
+    back = continuous_system(Gd)
+    np.testing.assert_allclose(dc_gain(back), np.eye(2), atol=1e-9)
+    np.testing.assert_allclose(np.sort(np.abs(back.poles())), np.sort(np.abs(Gc.poles())), rtol=1e-9)
+
+
+# -- identification ------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def records():
+    G = discretize(bending_modes(FN, ZETA), T)
+    _, u = excitation(T, 2, 5.0, f_max=2000.0, period=0.02, periods=3, seed=3)
+    y = [control.forced_response(G, U=ui).outputs for ui in u]
+    return G, u, y
+
+
+def check_model(ident, G, tol_resp):
+    f, z = modal_parameters(ident.system_)
+    assert ident.order_ == 4
+    np.testing.assert_allclose(f, np.sort(FN), rtol=0.01)          # natural frequency within 1 %
+    np.testing.assert_allclose(z, ZETA[np.argsort(FN)], rtol=0.05)
+    c = compare_frequency_responses(ident.system_, G, np.linspace(5, 1000, 60))
+    assert np.max(c["relative_error"]) < tol_resp                    # all 2x2 entries up to 1 kHz
+
+
+def test_identifies_noise_free_system_from_two_records(records):
+    G, u, y = records
+    ident = DynamicsIdentifier(max_order=6).fit(u, y, T)
+    check_model(ident, G, 1e-6)
+    assert np.all(ident.fit_percent_ > 99.99)
+    assert ident.singular_values_[3] > 1e6 * ident.singular_values_[4]   # order gap at 4
+    assert ident.system_.dt == T
+
+
+def test_sensor_pole_is_kept_out_of_the_model(records):
+    G, u, y = records
+    sensor = Sensor(resolution=0.04, bandwidth_hz=2000.0, noise_rms=0.01, seed=7)
+    ym = [sensor.measure(yi, T) for yi in y]
+    ident = DynamicsIdentifier(max_order=6, sensor=sensor).fit(u, ym, T)
+    check_model(ident, G, 0.01)
+    b, a = sensor_filter(sensor, T)
+    z_sensor = -a[1] / a[0]                                           # 0.52 at 2 kHz, 20 kHz
+    assert np.min(np.abs(ident.system_.poles() - z_sensor)) > 0.3
+    # ignoring the sensor: the fit has to model its pole (more states or a worse response)
+    naive = DynamicsIdentifier(max_order=6).fit(u, ym, T)
+    c = compare_frequency_responses(naive.system_, G, np.linspace(5, 1000, 60))
+    assert naive.order_ > 4 or np.max(c["relative_error"]) > 0.02
+
+
+def test_single_array_record_and_fixed_order(records):
+    G, u, y = records
+    one = u[0] + u[1]
+    out = y[0] + y[1]
+    ident = DynamicsIdentifier(order=4).fit(one, out, T)
+    assert ident.order_ == 4 and ident.orders_.tolist() == [4]
+
+
+def test_malformed_records_raise(records):
+    _, u, y = records
+    with pytest.raises(DynamicsError, match="records"):
+        DynamicsIdentifier().fit(u[0], y[0][:, :-1], T)
+    with pytest.raises(DynamicsError, match="sampling_period"):
+        DynamicsIdentifier().fit(u, y, 0.0)
+
+
+def test_excitation_peak_and_band():
+    t, recs = excitation(T, 2, [1.0, 2.0], f_max=1000.0, period=0.01, periods=2, offset=0.5)
+    assert len(recs) == 2 and recs[1].shape == (2, t.size)
+    assert np.max(np.abs(recs[1][1] - 0.5)) == pytest.approx(2.0)
+    np.testing.assert_allclose(recs[1][0], 0.5)
+    spec = np.abs(np.fft.rfft(recs[0][0, :200] - 0.5))
+    freqs = np.fft.rfftfreq(200, T)
+    assert np.all(spec[freqs > 1000.0] < 1e-9) and np.all(spec[(freqs > 0) & (freqs <= 1000)] > 1e-3)
+
+
+def test_bode_figure(records, tmp_path):
+    from hammerstein.report_dynamics_figure import dynamics_bode_figure
+    G, _, _ = records
+    fig = dynamics_bode_figure(G, G, frequencies_hz=np.logspace(0, 3.5, 50))
+    assert len(fig.axes) >= 8                       # 2 x 2 entries x (magnitude, phase)
+    fig.savefig(tmp_path / "bode.png")
