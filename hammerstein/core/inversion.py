@@ -58,7 +58,7 @@ import control
 import numpy as np
 import scipy.linalg
 
-from ..dynamics import DynamicsError
+from hammerstein.core.dynamics import DynamicsError
 
 __all__ = ["InverseSystem", "inverse_system", "ZPETCInverse", "preview_inverse"]
 

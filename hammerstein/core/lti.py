@@ -34,7 +34,8 @@ import numpy as np
 import scipy.linalg
 import scipy.signal
 
-from ..dynamics import DynamicsError
+from hammerstein.core.dynamics import DynamicsError
+from hammerstein.simulation import simulate_hysteresis, simulate_plant
 
 __all__ = [
     "state_space_dynamics",
@@ -354,7 +355,6 @@ def hammerstein_records(plant, model, voltages, sensor=None):
     outputs : list of numpy.ndarray, each shape (p, n_samples)
         Measured displacements [µm].
     """
-    from ..simulation import simulate_hysteresis, simulate_plant
     inputs, outputs = [], []
     for u in voltages:
         y, _ = simulate_plant(plant, u)

@@ -7,7 +7,7 @@ import pytest
 
 from hammerstein.core.inversion import ZPETCInverse, inverse_system, preview_inverse
 from hammerstein.core.lti import state_space_dynamics
-from hammerstein.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 
 T = 5e-5
 

@@ -4,11 +4,11 @@ import control
 import numpy as np
 import pytest
 
-from hammerstein.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.lti import (DynamicsIdentifier, compare_frequency_responses,
                                   continuous_system, dc_gain, excitation, modal_parameters,
                                   sensor_filter, state_space_dynamics)
-from hammerstein.sensors import Sensor
+from hammerstein.core.sensors import Sensor
 
 T = 5e-5
 FN, ZETA = np.array([310.0, 290.0]), np.array([0.15, 0.20])
@@ -124,7 +124,7 @@ def test_excitation_peak_and_band():
 
 
 def test_bode_figure(records, tmp_path):
-    from hammerstein.report_dynamics_figure import dynamics_bode_figure
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
     G, _, _ = records
     fig = dynamics_bode_figure(G, G, frequencies_hz=np.logspace(0, 3.5, 50))
     assert len(fig.axes) >= 8                       # 2 x 2 entries x (magnitude, phase)
