@@ -20,7 +20,7 @@ the report directory as ``models/identified-<f>Hz-<method>.toml``
 (:func:`hammerstein.presets.save_model`; loadable by ``model = "path"``).
 
 ``sensor = true`` measures the outputs through the inductive sensor model of
-NOTES §1 (IBS ECL202): 40 nm quantisation, first-order 2 kHz bandwidth, and
+docs/identification.md (IBS ECL202): 40 nm quantisation, first-order 2 kHz bandwidth, and
 white noise of :data:`SENSOR_NOISE_RMS` = 0.02 µm RMS (half a quantisation
 step; the paper does not state the noise) drawn with ``seed``.
 """

@@ -109,7 +109,7 @@ COMPENSATORS: dict[str, CompensatorKind] = {
          "check": Field(choice("error", "warn", "ignore"), default="error"),
          "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
          "cutoff_hz": Field(number("Hz", 0))},
-        "inverse multiplicative compensator of Theorem 4.1, normalised by K (NOTES §4)"),
+        "inverse multiplicative compensator of Theorem 4.1, normalised by K (docs/compensator.md)"),
 }
 _MODEL_KEYS = ("model", "identify")  # the model fields every kind shares with "multivariable"
 COMPENSATORS["diagonal"] = CompensatorKind(
@@ -117,7 +117,7 @@ COMPENSATORS["diagonal"] = CompensatorKind(
     "the multivariable law on the direct transfers only (cross-couplings left)")
 COMPENSATORS["per-axis"] = CompensatorKind(
     _build_per_axis, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
-    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (NOTES §5)")
+    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (docs/per-axis-inverse.md)")
 COMPENSATORS["static-gain"] = CompensatorKind(
     _build_static_gain, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
     "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")

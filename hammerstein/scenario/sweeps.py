@@ -31,7 +31,7 @@ A top-level ``[stability_map]`` table (``scales`` = list of gain scalings s,
 or ``{ start, stop, num }`` log-spaced; optional ``compensators`` as above,
 default the scenario's ``[compensator]``) writes ``stability-map.csv`` and
 ``stability-map.png``: the largest ``rho(I - (s K)^-1 J)`` against s
-(:func:`hammerstein.stability.stability_map`, NOTES §4), with the
+(:func:`hammerstein.core.stability.stability_map`, docs/compensator.md), with the
 normalised law (s = 1) and the paper's literal law (K = I) marked.
 """
 
