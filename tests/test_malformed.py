@@ -135,7 +135,6 @@ SCENARIOS = {
 #: resolved (a compensator refused by its own checks) or run (an identification on a
 #: record); stem -> number of cases ``validate`` reports.
 RUN_ONLY = {"identification-constant-input": 2, "literal-law-check-error": 1,
-            "lowpass-above-nyquist": 1, "lowpass-without-cutoff": 1,
             "per-axis-non-invertible": 1, "singular-gain-matrix": 1}
 #: Files with several problems: validate lists each on its own line.
 SEVERAL = {"empty": 2, "identification-bad-keys": 5, "identify-bad-values": 4,

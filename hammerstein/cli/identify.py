@@ -14,14 +14,14 @@ usage error; the model file is written only on success (atomically).
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, read_record
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
 from hammerstein.core.identification import IdentificationError
-from hammerstein.core.presets import save_model
+from hammerstein.cli._common import out_file_problem
+from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.record_identification import identify_record
 
 __all__ = ["add_parser", "identify_record"]
@@ -67,8 +67,11 @@ def _parse_thresholds(text):
         if n < 1:
             raise ValueError(f"--thresholds: expected N >= 1, found {n}")
         return n, None
+    if any(not v.strip() for v in text.split(",")):
+        raise ValueError(f"--thresholds: expected numbers [V] separated by commas, found an empty "
+                         f"entry in {text!r}")
     try:
-        r = np.array([float(v) for v in text.split(",") if v.strip()])
+        r = np.array([float(v) for v in text.split(",")])
     except ValueError:
         raise ValueError(f"--thresholds: expected numbers [V] separated by commas, found {text!r}") from None
     return r.size, r
@@ -93,8 +96,9 @@ def _handler(args):
                              f"found {args.sampling_period}")
         if args.skip is not None and not (np.isfinite(args.skip) and args.skip >= 0):
             raise ValueError(f"--skip: expected a time >= 0 [s], found {args.skip}")
-        if Path(args.out).is_dir():
-            raise ValueError(f"--out: {args.out} is a directory; expected a model file name")
+        problem = out_file_problem(args.out, "model file")
+        if problem:
+            raise ValueError(problem)
     except ValueError as exc:
         print(f"hammerstein identify: error: {exc}", file=sys.stderr)
         return 2
@@ -122,7 +126,7 @@ def _handler(args):
                         validation_rms_percent_of_range=val["rms_percent_of_range"],
                         validation_max_abs_um=val["max_abs_um"])
         save_model(model, args.out, meta)
-    except (DataFileError, IdentificationError, HysteresisError) as exc:
+    except (DataFileError, IdentificationError, HysteresisError, PresetError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except OSError as exc:

@@ -22,7 +22,9 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
+import threading
 import warnings
 
 from hammerstein.cli._common import one_line, print_err
@@ -91,6 +93,29 @@ def build_parser(command=None):
     return parser
 
 
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived (``signum``): unwinds like Ctrl-C, removing temporaries."""
+
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _on_signal(signum, frame):
+    # later signals are ignored so that the clean-up in progress (removing a
+    # temporary directory) is not interrupted in turn
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+def _install_signal_handlers():
+    """SIGINT/SIGTERM -> :class:`Interrupted`; returns the previous handlers (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    return {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+
+
 def _command(argv):
     """The subcommand named in ``argv`` (its first argument not starting with '-'), or None."""
     for a in argv:
@@ -110,9 +135,30 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0 success, 1 a scenario failed, 2 usage error.
+        Exit status: 0 success, 1 a scenario failed, 2 usage error, 130
+        interrupted by SIGINT (Ctrl-C), 143 by SIGTERM; an interruption
+        prints the one line ``interrupted`` and removes the temporary
+        directory of the report in progress.
     """
     argv = sys.argv[1:] if argv is None else list(argv)
+    previous = _install_signal_handlers()
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as exc:  # SIGINT or SIGTERM: one line, no traceback
+        signum = getattr(exc, "signum", signal.SIGINT)
+        try:
+            sys.stdout.flush()
+        except (OSError, ValueError):
+            pass
+        print_err("interrupted")
+        return 128 + int(signum)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _main(argv):
+    """:func:`main` without the signal handling."""
     command = _command(argv)
     parser = build_parser(command) if command is not None else build_parser("")
     try:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hammerstein.cli._common import print_err
+from hammerstein.cli._common import out_dir_problem, print_err
 from hammerstein.runner import replicate
 
 __all__ = ["add_parser", "handler"]
@@ -37,10 +37,14 @@ def add_parser(subparsers):
 
 def handler(args):
     """Run the paper's scenarios and write the README; exit status 0, 1 (a scenario failed) or 2."""
+    problem = out_dir_problem(args.out)
+    if problem:
+        print_err(f"hammerstein replicate: error: {problem}")
+        return 2
     try:
         outcomes = replicate(args.scenarios, args.out)
     except FileNotFoundError as exc:
-        print_err(f"error: {exc}")
+        print_err(f"hammerstein replicate: error: {exc}")
         return 2
     for o in outcomes:
         if o.ok:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hammerstein.cli._common import one_line, print_err
-from hammerstein.runner import run_scenario
+from hammerstein.cli._common import one_line, out_dir_problem, print_err
+from hammerstein.runner import MARKER, remove_stale_temporaries, run_scenario
 
 __all__ = ["add_parser", "handler"]
 
@@ -32,18 +32,24 @@ def add_parser(subparsers):
     p.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario TOML files")
     p.add_argument("--out", default="reports", metavar="DIR",
                    help="reports directory (default: reports/)")
+    p.add_argument("--force", action="store_true",
+                   help=f"replace DIR/<scenario name> even when hammerstein did not write it "
+                        f"(by default only a report directory with a {MARKER} file, or an empty "
+                        f"directory, is replaced)")
     p.set_defaults(handler=handler)
 
 
 def handler(args):
     """Run the scenarios of ``args.scenarios`` into ``args.out``; exit status 0, 1 or 2."""
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
+    problem = out_dir_problem(args.out)
+    if problem:
+        print_err(f"hammerstein run: error: {problem}")
         return 2
+    out = Path(args.out)
+    remove_stale_temporaries(out)
     status, taken = 0, {}
     for path in args.scenarios:
-        outcome = run_scenario(path, args.out, taken)
+        outcome = run_scenario(path, out, taken, force=args.force)
         if outcome.ok:
             taken[outcome.name] = outcome.path
             n_cases = outcome.metrics["case"].nunique()

@@ -10,6 +10,7 @@ compensator and the scenarios accept both. The schema is in the README.
 
 from __future__ import annotations
 
+import difflib
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -17,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.plant import HammersteinPlant
@@ -39,6 +41,24 @@ class PresetError(ValueError):
 
 
 PRESET_DIR = resources.files("hammerstein") / "presets"
+
+#: Keys of a model or preset file, per table (anything else is reported with the closest key).
+FILE_KEYS = ("model", "preset", "dynamics", "identification")
+MODEL_KEYS = ("inputs", "outputs", "input_unit", "output_unit", "input_amplitude", "thresholds",
+              "components", "description")
+PRESET_KEYS = ("name", "description", "sampling_period")
+DYNAMICS_KEYS = ("kind", "natural_frequency", "damping_ratio")
+
+
+def unknown_keys(table, allowed, where):
+    """``where.key: unknown key (did you mean ...?)`` for every key of ``table`` not in ``allowed``."""
+    out = []
+    for key in table if isinstance(table, dict) else ():
+        if key not in allowed:
+            hint = difflib.get_close_matches(str(key), list(allowed), n=1)
+            extra = f" (did you mean {hint[0]!r}?)" if hint else f" (valid keys: {', '.join(allowed)})"
+            out.append(f"{where}{key}: unknown key{extra}")
+    return out
 
 
 def bundled_presets():
@@ -80,18 +100,24 @@ def resolve_preset(name_or_path, base_dir=None):
         f"{name_or_path}: not a bundled preset ({', '.join(sorted(presets))}) nor an existing file")
 
 
-def read_toml(path):
+def read_toml(path, what="TOML file"):
     """Parse a TOML file, with errors that name the file.
+
+    The file must be a regular file of at most
+    :func:`hammerstein.core.files.limit` ``("toml")`` bytes (4 MiB, environment
+    variable ``HAMMERSTEIN_MAX_TOML_BYTES``), checked before reading.
 
     Raises
     ------
     PresetError
-        If the file is missing, unreadable, not UTF-8 or not valid TOML.
+        If the file is missing, not a regular file, too large, unreadable,
+        not UTF-8 or not valid TOML.
     """
     path = Path(path)
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        return tomllib.loads(bounded_read_text(path, "toml", what))
+    except FileLimitError as exc:
+        raise PresetError(str(exc)) from None
     except FileNotFoundError:
         raise PresetError(f"{path}: file not found") from None
     except tomllib.TOMLDecodeError as exc:
@@ -128,7 +154,7 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
-    problems = []
+    problems = unknown_keys(table, MODEL_KEYS, "model.")
     inputs, outputs = table.get("inputs"), table.get("outputs")
     for key, val in (("inputs", inputs), ("outputs", outputs)):
         if not (isinstance(val, list) and val and all(isinstance(v, str) for v in val)):
@@ -224,9 +250,12 @@ def load_model(path):
     ------
     PresetError
     """
-    data = read_toml(path)
+    data = read_toml(path, "model file")
     if "model" not in data:
         raise PresetError(f"{path}: missing [model] table")
+    problems = unknown_keys(data, FILE_KEYS, "")
+    if problems:
+        raise PresetError(f"{path}: " + "; ".join(problems))
     return model_from_table(data["model"], str(path))
 
 
@@ -237,25 +266,28 @@ def save_model(model, path, metadata=None):
     ----------
     model : MultivariablePI
     path : str or pathlib.Path
-        Destination ``.toml``; written atomically (temporary file, rename).
+        Destination ``.toml``; written atomically through an exclusive
+        temporary file and a rename (:func:`hammerstein.core.files.safe_write`:
+        a symlink's target is written, a replaced file keeps its permissions).
     metadata : dict, optional
         Stored as an ``[identification]`` table (method, frequency, fit
         metrics...).
+
+    Raises
+    ------
+    PresetError
+        The target exists and is not a regular file (a directory, device...).
+    OSError
+        The directory cannot be created or written.
     """
-    path = Path(path)
     doc = {}
     if metadata:
         doc["identification"] = metadata
     doc["model"] = model_to_table(model)
-    tmp = path.with_name(path.name + ".tmp")
-    path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        with open(tmp, "wb") as fh:
-            tomli_w.dump(doc, fh)
-        tmp.replace(path)
-    except BaseException:  # no half-written model file left behind
-        tmp.unlink(missing_ok=True)
-        raise
+        safe_write(path, tomli_w.dumps(doc), "model file")
+    except FileLimitError as exc:
+        raise PresetError(str(exc)) from None
 
 
 def dynamics_from_table(table, outputs, source="preset"):
@@ -306,17 +338,24 @@ def load_plant(preset, dynamics=True, base_dir=None):
     PresetError
     """
     path = resolve_preset(preset, base_dir)
-    data = read_toml(path)
+    data = read_toml(path, "preset file")
     meta = data.get("preset", {})
+    dyn = data.get("dynamics", {})
+    if not isinstance(meta, dict) or not isinstance(dyn, dict):
+        raise PresetError(f"{path}: {'preset' if not isinstance(meta, dict) else 'dynamics'}: "
+                          f"expected a table")
+    problems = unknown_keys(meta, PRESET_KEYS, "preset.") + unknown_keys(dyn, DYNAMICS_KEYS, "dynamics.")
+    if problems:
+        raise PresetError(f"{path}: " + "; ".join(problems))
     if "sampling_period" not in meta:
         raise PresetError(f"{path}: preset.sampling_period: missing (seconds)")
     T = meta["sampling_period"]
-    if not isinstance(T, (int, float)) or not T > 0:
+    if not isinstance(T, (int, float)) or isinstance(T, bool) or not (np.isfinite(T) and T > 0):
         raise PresetError(f"{path}: preset.sampling_period: expected a positive time [s], found {T!r}")
     model = load_model(path)
     lin = None
     if dynamics:
-        cont = dynamics_from_table(data.get("dynamics", {}), model.output_names, str(path))
+        cont = dynamics_from_table(dyn, model.output_names, str(path))
         lin = discretize(cont, float(T)) if cont is not None else None
     name = meta.get("name", path.stem)
     return HammersteinPlant(model, float(T), lin, name=name)

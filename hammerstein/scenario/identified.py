@@ -35,7 +35,7 @@ import numpy as np
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.presets import PresetError, load_model, model_to_table, save_model
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
-from hammerstein.scenario.schema import (Field, Invalid, NestedInvalid, boolean, check_table, choice,
+from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, _short, Field, Invalid, NestedInvalid, boolean, check_table, choice,
                                          integer, number)
 
 __all__ = [
@@ -74,12 +74,14 @@ def _bounds(v):
 
 
 def _n_hysterons(v):
-    if isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+    if isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= MAX_HYSTERONS:
         return v
     if (isinstance(v, list) and v and all(isinstance(r, list) and r for r in v)
-            and all(isinstance(a, int) and not isinstance(a, bool) and a >= 1 for r in v for a in r)):
+            and all(isinstance(a, int) and not isinstance(a, bool) and 1 <= a <= MAX_HYSTERONS
+                    for r in v for a in r)):
         return v
-    raise Invalid(f"expected an integer >= 1 or a p x m table of them, found {v!r}")
+    raise Invalid(f"expected an integer 1..{MAX_HYSTERONS} or a p x m table of them, "
+                  f"found {_short(v)}")
 
 
 def _amplitude(v):
@@ -92,7 +94,7 @@ def _amplitude(v):
 IDENTIFY_FIELDS = {
     "frequency": Field(number("Hz", 0), required=True),
     "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
-    "periods": Field(integer(2), default=3),
+    "periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=3),
     "n_hysterons": Field(_n_hysterons, default=15),
     "method": Field(choice("closed-form", "least-squares"), default="closed-form"),
     "partition": Field(choice("time", "input"), default="time"),

@@ -21,7 +21,7 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.scenario.identified import identify_table, resolve_model
-from hammerstein.scenario.schema import Field, Invalid, choice, integer, number, string
+from hammerstein.scenario.schema import MAX_ITERATIONS, Field, Invalid, choice, integer, number, string
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "resolve_model"]
 
@@ -105,7 +105,7 @@ COMPENSATORS: dict[str, CompensatorKind] = {
         {"model": Field(string(), default="plant"),
          "identify": Field(identify_table),
          "gain": Field(_gain, default="secant"),
-         "iterations": Field(integer(1), default=1),
+         "iterations": Field(integer(1, MAX_ITERATIONS), default=1),
          "check": Field(choice("error", "warn", "ignore"), default="error"),
          "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
          "cutoff_hz": Field(number("Hz", 0))},

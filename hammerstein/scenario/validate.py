@@ -21,6 +21,7 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 from __future__ import annotations
 
 import difflib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -32,8 +33,9 @@ from hammerstein.core.presets import PresetError, load_model, load_plant, read_t
 from hammerstein.scenario.identified import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
-from hammerstein.scenario.schema import (CASE, DRIVES, PLANT, REFERENCES, TOP, Field, ScenarioError,
-                                         check_table, kind_problem)
+from hammerstein.scenario.schema import (CASE, DRIVES, MAX_CASES, MAX_NAME, NAME, PLANT, REFERENCES,
+                                         TOP, Field, ScenarioError, check_table, kind_problem,
+                                         total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
 
 __all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_scenario"]
@@ -146,7 +148,7 @@ def read_scenario(path):
     """Parse a scenario file: ``(path, data)``; raises ScenarioError for unreadable TOML."""
     path = Path(path)
     try:
-        return path, read_toml(path)
+        return path, read_toml(path, "scenario file")
     except PresetError as exc:
         raise ScenarioError([str(exc)]) from None
 
@@ -168,7 +170,25 @@ def _check_compensator(spec, where, problems, source):
                         f"{', '.join(map(repr, COMPENSATORS))}, found {kind!r}{extra}")
         return None
     schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
-    return check_table(spec, schema, where, problems, source)
+    clean = check_table(spec, schema, where, problems, source)
+    if clean is not None:
+        problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean))
+    return clean
+
+
+def _option_problems(spec):
+    """Keys given for an option that is not selected (``key: message`` strings)."""
+    out = []
+    feedback = spec.get("feedback", "delay")
+    if "cutoff_hz" in spec and feedback != "lowpass":
+        out.append(f"cutoff_hz: only used with feedback = 'lowpass' (feedback is {feedback!r}); "
+                   f"remove it or set feedback = 'lowpass'")
+    if feedback == "lowpass" and "cutoff_hz" not in spec:
+        out.append("cutoff_hz: missing (feedback='lowpass' needs a cut-off frequency [Hz])")
+    if "identify" in spec and spec.get("model", "plant") != "identified":
+        out.append(f"identify: only used with model = 'identified' (model is "
+                   f"{spec.get('model', 'plant')!r})")
+    return out
 
 
 def _signal(case_where, mode, spec, plant, problems, source):
@@ -206,6 +226,9 @@ def _signal(case_where, mode, spec, plant, problems, source):
         else:
             outs = c.pop("outputs", None) or list(model.output_names[:2])
             missing = [o for o in outs if o not in model.output_names]
+            if not missing and len(set(outs)) < len(outs):
+                raise refs.SignalError(f"outputs: expected two different outputs of the plant "
+                                       f"{model.output_names}, found {outs}")
             if missing or model.n_outputs < 2:
                 raise refs.SignalError(f"outputs: expected two of the plant's outputs "
                                        f"{model.output_names}, found {outs}")
@@ -244,21 +267,37 @@ def _model_problems(name, identify, plant, base, files):
             return ["identify: missing (required with model = 'identified'), "
                     "e.g. identify = { frequency = 50.0 }"]
         problem = nyquist_problem(identify, plant)
+        if problem is None and plant is not None:
+            n = identify.get("periods", 3) / identify["frequency"] / plant.sampling_period
+            if n > refs.MAX_SAMPLES:
+                problem = (f"identify.frequency: {identify['frequency']:g} Hz for "
+                           f"{identify.get('periods', 3)} periods would record {n:.3g} samples "
+                           f"per input; expected at most {refs.MAX_SAMPLES:.0e}")
         return [problem] if problem else []
     path = Path(name) if Path(name).is_absolute() else base / name
     if path not in files:
         try:
-            load_model(path)
-            files[path] = None
+            files[path] = load_model(path)
         except PresetError as exc:
             files[path] = str(exc)
-    return [files[path]] if files[path] else []
+    if isinstance(files[path], str):
+        return [files[path]]
+    model, pm = files[path], getattr(plant, "hysteresis", None)
+    if pm is not None and (model.n_inputs, model.n_outputs) != (pm.n_inputs, pm.n_outputs):
+        return [f"{name}: the model has {model.n_inputs} input(s) {list(model.input_names)} and "
+                f"{model.n_outputs} output(s) {list(model.output_names)}; the plant has "
+                f"{pm.n_inputs} {list(pm.input_names)} and {pm.n_outputs} {list(pm.output_names)}"]
+    return []
 
 
 def _validate_cases(path, data):
     """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError."""
     source, base, problems = str(path), path.parent, []
     top = check_table(data, TOP, "", problems, source) or {}
+    if "name" not in data and not (re.fullmatch(NAME, path.stem) and len(path.stem) <= MAX_NAME):
+        problems.append(f"{source}: name: missing, and the file name {path.stem[:MAX_NAME]!r} is not "
+                        f"usable as the report directory name (at most {MAX_NAME} letters, digits, "
+                        f"'.', '_' or '-', starting with a letter or digit); give name = \"...\"")
     plant_top = data.get("plant", {}) if isinstance(data.get("plant", {}), dict) else {}
     comp_top = data.get("compensator", {}) if isinstance(data.get("compensator", {}), dict) else {}
     if "plant" in data:
@@ -279,6 +318,15 @@ def _validate_cases(path, data):
         more, sweep_specs = expand_sweeps(data["sweeps"], source, problems)
         entries += more
     plants, cases, names, model_files = {}, [], set(), {}
+    if len(entries) > MAX_CASES:
+        problems.append(f"{source}: cases: {len(entries)} cases (sweeps expanded); expected at "
+                        f"most {MAX_CASES}")
+        entries = []
+    budget, total = total_samples_budget(), 0
+
+    def once(line):  # a problem of a top-level table, found per case, is listed once
+        if line not in problems:
+            problems.append(line)
 
     def plant_of(preset, dynamics):
         key = (preset, bool(dynamics))
@@ -313,6 +361,10 @@ def _validate_cases(path, data):
             except PresetError as exc:
                 plants[(pspec["preset"], bool(pspec.get("dynamics", True)))] = None
                 problems.append(f"{source}: {where}.plant.preset: {exc}")
+            if plant is not None and pspec.get("dynamics") is True and plant.dynamics is None:
+                key = f"{where}.plant" if "dynamics" in plant_clean else "plant"
+                once(f"{source}: {key}.dynamics: true, but the preset {pspec['preset']!r} has no "
+                     f"[dynamics] (or kind = 'none'); set dynamics = false for its static plant")
         # compensator: merge and check
         cover = raw.get("compensator", {})
         cspec = _merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
@@ -326,6 +378,13 @@ def _validate_cases(path, data):
         elif scratch and not any("compensator" in q for q in problems[:n_before]):
             problems.extend(scratch)
         comp_ok = not scratch and cclean is not None
+        if comp_ok and plant is not None and cclean.get("feedback") == "lowpass":
+            nyquist = 0.5 / plant.sampling_period
+            if cclean["cutoff_hz"] >= nyquist:
+                key = f"{where}.compensator" if "cutoff_hz" in cover else "compensator"
+                once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
+                     f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
+                comp_ok = False
         sig = _signal(where, mode, raw[mode], plant, problems, source)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
@@ -334,6 +393,12 @@ def _validate_cases(path, data):
         if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
             continue
         t, signal, P, extras = sig
+        total += t.size
+        if total > budget:
+            problems.append(f"{source}: {where}: the cases up to this one have {total:.3g} samples "
+                            f"in all; expected at most {budget:.3g} per scenario (shorten the "
+                            f"records, or raise HAMMERSTEIN_MAX_SAMPLES)")
+            break
         settle = case.get("settle_periods", 1.0)
         need = settle * P + (P if (mode == "drive" or "loop_channel" in extras) else 1)
         if t.size < need:
