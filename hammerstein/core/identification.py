@@ -440,6 +440,10 @@ class LeastSquaresPI:
         if isinstance(skip, str) and skip == "auto":
             skip = int(ascending_branches(u)[0][0])
         if not isinstance(skip, (int, np.integer)) or not 0 <= skip <= u.size - 2:
+            if skip_seconds is not None:  # in the unit the user gave
+                raise IdentificationError(
+                    f"skip: expected a burn-in in [0, {(u.size - 2) * sampling_period:g}] s, "
+                    f"found {skip_seconds:g} s")
             raise IdentificationError(
                 f"skip: expected a sample count in [0, {u.size - 2}], found {skip!r}")
         if self.thresholds is not None:

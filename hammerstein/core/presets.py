@@ -94,7 +94,7 @@ def resolve_preset(name_or_path, base_dir=None):
     path = Path(name_or_path)
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
-    if path.is_file():
+    if path.exists():  # read_toml refuses a directory or special file, naming it
         return path
     raise PresetError(
         f"{name_or_path}: not a bundled preset ({', '.join(sorted(presets))}) nor an existing file")

@@ -11,6 +11,8 @@ by ``hammerstein identify`` and by identification scenarios
 
 from __future__ import annotations
 
+import numpy as np
+
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
                                              ascending_branches, fit_report)
 
@@ -56,6 +58,10 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
     n_train = int(round(train_fraction * record.n_samples))
     u, y = record.u, record.y
     ut, yt = u[:n_train], y[:n_train]
+    if not np.ptp(yt) > 0:  # a fit to it is meaningless and its error in % of the range infinite
+        raise IdentificationError(
+            f"{record.source}: output column {record.output_name!r}: the output is constant over "
+            f"the training samples 0..{n_train - 1}; expected the response to the excitation")
     partition_arg = thresholds if thresholds is not None else partition
     try:
         ident, start = _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg,

@@ -93,11 +93,11 @@ MAX_HYSTERONS = 100
 MAX_IDENTIFY_PERIODS = 1000
 #: Most frequencies of one sweep.
 MAX_SWEEP_FREQUENCIES = 200
-#: Most samples of one case (the same bound as the signal generators).
-MAX_CASE_SAMPLES = 10_000_000
+#: Most samples of one case or identification experiment (100 s at 20 kHz).
+MAX_CASE_SAMPLES = 2_000_000
 #: Default total-samples budget of one scenario (all cases and identification
 #: experiments); the environment variable ``HAMMERSTEIN_MAX_SAMPLES`` changes it.
-MAX_TOTAL_SAMPLES = 20_000_000
+MAX_TOTAL_SAMPLES = 5_000_000
 
 
 def total_samples_budget():

@@ -33,7 +33,7 @@ from hammerstein.core.presets import PresetError, load_model, load_plant, read_t
 from hammerstein.scenario.identified import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
-from hammerstein.scenario.schema import (CASE, DRIVES, MAX_CASES, MAX_NAME, NAME, PLANT, REFERENCES,
+from hammerstein.scenario.schema import (CASE, DRIVES, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT, REFERENCES,
                                          TOP, Field, ScenarioError, check_table, kind_problem,
                                          total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
@@ -161,7 +161,7 @@ def _merge_compensator(top, case):
     return {**top, **case}
 
 
-def _check_compensator(spec, where, problems, source):
+def _check_compensator(spec, where, problems, source, own=None):
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
         hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
@@ -172,27 +172,52 @@ def _check_compensator(spec, where, problems, source):
     schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
     clean = check_table(spec, schema, where, problems, source)
     if clean is not None:
-        problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean))
+        problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean, own))
     return clean
 
 
-def _option_problems(spec):
-    """Keys given for an option that is not selected (``key: message`` strings)."""
+def _option_problems(spec, own=None):
+    """Keys given for an option that is not selected (``key: message`` strings).
+
+    ``spec`` is the merged table; ``own`` the keys written in the table being
+    checked (a case that overrides ``model`` may inherit an ``identify``).
+    """
+    own = spec if own is None else own
     out = []
     feedback = spec.get("feedback", "delay")
-    if "cutoff_hz" in spec and feedback != "lowpass":
+    if "cutoff_hz" in own and feedback != "lowpass":
         out.append(f"cutoff_hz: only used with feedback = 'lowpass' (feedback is {feedback!r}); "
                    f"remove it or set feedback = 'lowpass'")
     if feedback == "lowpass" and "cutoff_hz" not in spec:
         out.append("cutoff_hz: missing (feedback='lowpass' needs a cut-off frequency [Hz])")
-    if "identify" in spec and spec.get("model", "plant") != "identified":
+    if "identify" in own and spec.get("model", "plant") != "identified":
         out.append(f"identify: only used with model = 'identified' (model is "
                    f"{spec.get('model', 'plant')!r})")
     return out
 
 
-def _signal(case_where, mode, spec, plant, problems, source):
-    """Generate the drive/reference; returns (time, signal, period_samples, extras)."""
+def _predicted_samples(kind, c, T):
+    """Samples the signal of a checked table ``c`` will have (before generating it)."""
+    if "duration" in c:
+        return c["duration"] / T
+    if c.get("periods") is None:
+        return 0.0
+    if kind == "lissajous":
+        try:
+            period = refs.lissajous_period(*c["frequencies"])
+        except refs.SignalError:
+            period = 1.0 / min(c["frequencies"])
+    else:
+        period = 1.0 / c["frequency"]
+    return c["periods"] * period / T
+
+
+def _signal(case_where, mode, spec, plant, problems, source, budget=None):
+    """Generate the drive/reference; returns (time, signal, period_samples, extras).
+
+    ``budget``: ``{"limit", "used", "over"}`` samples per scenario; a signal
+    beyond it is reported once (later ones are then not generated).
+    """
     kinds = DRIVES if mode == "drive" else REFERENCES
     where = f"{case_where}.{mode}"
     if not isinstance(spec, dict):
@@ -213,6 +238,22 @@ def _signal(case_where, mode, spec, plant, problems, source):
     model = plant.hysteresis
     c = {k: v for k, v in clean.items() if k != "kind"}
     extras = {}
+    n = _predicted_samples(kind, c, T)
+    if MAX_CASE_SAMPLES < n <= refs.MAX_SAMPLES:  # beyond: the generator's own message
+        problems.append(f"{source}: {where}: the record would have {n:.3g} samples; expected at "
+                        f"most {MAX_CASE_SAMPLES:.3g} per case ({MAX_CASE_SAMPLES * T:g} s at "
+                        f"T = {T:g} s)")
+        return None
+    if budget is not None and n <= refs.MAX_SAMPLES:
+        if budget["over"]:
+            return None
+        if budget["used"] + n > budget["limit"]:
+            budget["over"] = True
+            problems.append(f"{source}: {where}: its {n:.3g} samples bring the scenario to "
+                            f"{budget['used'] + n:.3g}; expected at most {budget['limit']:.3g} "
+                            f"samples per scenario (shorten the records, or raise "
+                            f"HAMMERSTEIN_MAX_SAMPLES)")
+            return None
     try:
         if mode == "drive":
             t, sig = refs.sine_drive(T, model.input_names, **c)
@@ -269,10 +310,10 @@ def _model_problems(name, identify, plant, base, files):
         problem = nyquist_problem(identify, plant)
         if problem is None and plant is not None:
             n = identify.get("periods", 3) / identify["frequency"] / plant.sampling_period
-            if n > refs.MAX_SAMPLES:
+            if n > MAX_CASE_SAMPLES:
                 problem = (f"identify.frequency: {identify['frequency']:g} Hz for "
                            f"{identify.get('periods', 3)} periods would record {n:.3g} samples "
-                           f"per input; expected at most {refs.MAX_SAMPLES:.0e}")
+                           f"per input; expected at most {MAX_CASE_SAMPLES:.3g}")
         return [problem] if problem else []
     path = Path(name) if Path(name).is_absolute() else base / name
     if path not in files:
@@ -322,7 +363,7 @@ def _validate_cases(path, data):
         problems.append(f"{source}: cases: {len(entries)} cases (sweeps expanded); expected at "
                         f"most {MAX_CASES}")
         entries = []
-    budget, total = total_samples_budget(), 0
+    budget = {"limit": total_samples_budget(), "used": 0, "over": False}
 
     def once(line):  # a problem of a top-level table, found per case, is listed once
         if line not in problems:
@@ -369,7 +410,8 @@ def _validate_cases(path, data):
         cover = raw.get("compensator", {})
         cspec = _merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
         scratch = []
-        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source)
+        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source,
+                                    own=cover if isinstance(cover, dict) else {})
         if "compensator" in raw:
             if isinstance(cover, dict):
                 problems.extend(scratch)  # top-level problems are reported once, above
@@ -385,7 +427,7 @@ def _validate_cases(path, data):
                 once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
                      f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
                 comp_ok = False
-        sig = _signal(where, mode, raw[mode], plant, problems, source)
+        sig = _signal(where, mode, raw[mode], plant, problems, source, budget)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
@@ -393,12 +435,7 @@ def _validate_cases(path, data):
         if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
             continue
         t, signal, P, extras = sig
-        total += t.size
-        if total > budget:
-            problems.append(f"{source}: {where}: the cases up to this one have {total:.3g} samples "
-                            f"in all; expected at most {budget:.3g} per scenario (shorten the "
-                            f"records, or raise HAMMERSTEIN_MAX_SAMPLES)")
-            break
+        budget["used"] += t.size
         settle = case.get("settle_periods", 1.0)
         need = settle * P + (P if (mode == "drive" or "loop_channel" in extras) else 1)
         if t.size < need:
