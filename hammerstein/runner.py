@@ -45,7 +45,7 @@ from typing import Callable
 
 import pandas as pd
 
-from hammerstein.core.files import umask
+from hammerstein.core.files import deferred_signals, umask
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.replication import write_readme
@@ -182,8 +182,9 @@ def remove_stale_temporaries(out_dir, before=None):
     """Remove temporary directories of killed runs in ``out_dir``.
 
     Only directories named ``.hammerstein-tmp.<pid>.*`` that hold the
-    :data:`MARKER` file, whose marker is older than ``before`` (default now)
-    and whose process ``<pid>`` is gone (or is this process) are removed.
+    :data:`MARKER` file (or are empty: killed before writing it), whose
+    marker is older than ``before`` (default now) and whose process
+    ``<pid>`` is gone (or is this process) are removed.
 
     Returns
     -------
@@ -202,8 +203,10 @@ def remove_stale_temporaries(out_dir, before=None):
             continue
         marker = p / MARKER
         try:
-            if p.is_symlink() or not p.is_dir() or marker.is_symlink() or \
-                    marker.stat().st_mtime >= before:
+            if p.is_symlink() or not p.is_dir() or marker.is_symlink():
+                continue
+            when = marker.stat().st_mtime if marker.exists() else p.stat().st_mtime
+            if when >= before:
                 continue
         except OSError:
             continue
@@ -216,7 +219,13 @@ def remove_stale_temporaries(out_dir, before=None):
                 pass
             except (PermissionError, OverflowError, OSError):
                 continue
-        shutil.rmtree(p, ignore_errors=True)
+        if marker.exists():
+            shutil.rmtree(p, ignore_errors=True)
+        else:  # killed before its marker was written: removed only when empty
+            try:
+                os.rmdir(p)
+            except OSError:
+                continue
         removed.append(p)
     return removed
 
@@ -225,22 +234,26 @@ def _atomic_write(out_dir, name, writer, force=False):
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     target = out_dir / name
-    tmp = _make_temporary(out_dir)
+    tmp = old = None
     try:
+        with deferred_signals():  # the name of what is created is always known
+            tmp = _make_temporary(out_dir)
         writer(tmp)
         problem = _ownership_problem(target, force)  # again: it may have appeared meanwhile
         if problem:
             raise ScenarioError([problem])
-        if os.path.lexists(target):
-            old = _make_temporary(out_dir)
-            os.rename(target, old / "previous")
-            os.rename(tmp, target)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
+        with deferred_signals():  # the swap is never left half done
+            if os.path.lexists(target):
+                old = _make_temporary(out_dir)
+                os.rename(target, old / "previous")
             os.rename(tmp, target)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
     return target
 
 

@@ -31,11 +31,14 @@ from __future__ import annotations
 
 import os
 import secrets
+import signal
 import stat
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
-           "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX"]
+           "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
@@ -148,6 +151,25 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     return bounded_read_bytes(path, kind, what).decode(encoding)
 
 
+@contextmanager
+def deferred_signals():
+    """Hold SIGINT and SIGTERM back while creating or renaming a temporary.
+
+    A signal that arrives meanwhile is delivered when the block ends, so the
+    caller always knows the name of what it created (and removes it) and a
+    rename of a report over an old one is never left half done.
+    """
+    if threading.current_thread() is not threading.main_thread() or \
+            not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def umask():
     """The process umask (read without changing it for longer than one call)."""
     mask = os.umask(0o022)
@@ -200,14 +222,16 @@ def safe_write(path, data, what="file"):
     parent.mkdir(parents=True, exist_ok=True)
     if mode is None:
         mode = 0o666 & ~umask()
-    while True:
-        tmp = parent / f".{target.name[:100]}.{secrets.token_hex(6)}{TMP_SUFFIX}"
-        try:
-            fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-            break
-        except FileExistsError:
-            continue
+    tmp = None
     try:
+        with deferred_signals():
+            while tmp is None:
+                name = parent / f".{target.name[:100]}.{secrets.token_hex(6)}{TMP_SUFFIX}"
+                try:
+                    fd = os.open(name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+                    tmp = name
+                except FileExistsError:
+                    continue
         with os.fdopen(fd, "wb") as fh:
             if callable(data):
                 data(fh)
@@ -218,9 +242,10 @@ def safe_write(path, data, what="file"):
         os.chmod(tmp, mode)
         os.replace(tmp, target)
     except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
         raise
     return target
