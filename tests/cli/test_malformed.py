@@ -32,7 +32,7 @@ from hammerstein.core.compensators import (CompensatorError, InverseMultiplicati
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.presets import load_plant
 
-CORPUS = Path(__file__).resolve().parent / "corpus"
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good"
 
 #: Malformed scenario file -> fragment its error must contain.
