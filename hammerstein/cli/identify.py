@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["add_parser", "identify_record"]
+__all__ = ["add_parser"]
 
 
 def add_parser(subparsers):
@@ -68,82 +68,6 @@ def _parse_thresholds(text):
     return r.size, r
 
 
-def identify_record(record, method="least-squares", n_hysterons=15, thresholds=None,
-                    partition="time", bounds=None, train_fraction=0.7, skip_seconds=None):
-    """Identify a classical PI model on the start of a record, validate on the rest.
-
-    Parameters
-    ----------
-    record : hammerstein.datafiles.Record
-    method : {"closed-form", "least-squares"}
-    n_hysterons : int
-    thresholds : array_like, shape (n,), optional
-        Explicit thresholds [V] (override ``n_hysterons`` and ``partition``).
-    partition : {"time", "input"}
-    bounds : None or "nonnegative"
-        Least-squares weight bounds.
-    train_fraction : float
-        Fraction (0, 1] of the samples used for training.
-    skip_seconds : float, optional
-        Least-squares burn-in [s]; default: up to the first complete ascending
-        branch of the training samples.
-
-    Returns
-    -------
-    identifier : ClosedFormPI or LeastSquaresPI
-        Fitted.
-    train : dict
-        :func:`~hammerstein.identification.fit_report` on the training
-        samples after the virgin curve / burn-in.
-    validation : dict or None
-        The same on the held-out samples (``None`` if ``train_fraction`` = 1).
-
-    Raises
-    ------
-    IdentificationError
-    """
-    from hammerstein.core.identification import IdentificationError, fit_report
-    if not 0 < train_fraction <= 1:
-        raise IdentificationError(f"train_fraction: expected in (0, 1], found {train_fraction}")
-    n_train = int(round(train_fraction * record.n_samples))
-    u, y = record.u, record.y
-    ut, yt = u[:n_train], y[:n_train]
-    partition_arg = thresholds if thresholds is not None else partition
-    try:
-        ident, start = _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg,
-                            partition, bounds, skip_seconds)
-    except IdentificationError as exc:
-        raise IdentificationError(
-            f"{record.source}: training samples 0..{n_train - 1}: {exc}") from None
-    train = fit_report(ident.model_, ut, yt, ident.offset_, start=int(start))
-    validation = None
-    if n_train < record.n_samples - 1:
-        validation = fit_report(ident.model_, u, y, ident.offset_, start=n_train)
-    return ident, train, validation
-
-
-def _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg, partition, bounds,
-         skip_seconds):
-    from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
-                                 ascending_branches)
-    if method == "closed-form":
-        ident = ClosedFormPI(n_hysterons, partition_arg).fit(ut, yt)
-        start = ident.branches_[0][0]
-    elif method == "least-squares":
-        ident = LeastSquaresPI(thresholds=thresholds, n_hysterons=n_hysterons,
-                               partition=partition, bounds=bounds)
-        if skip_seconds is not None:
-            ident.fit(ut, yt, skip_seconds=skip_seconds, sampling_period=record.sampling_period)
-            start = int(round(skip_seconds / record.sampling_period))
-        else:
-            ident.fit(ut, yt, skip="auto")
-            start = ascending_branches(ut)[0][0]
-    else:
-        raise IdentificationError(
-            f"method: expected 'closed-form' or 'least-squares', found {method!r}")
-    return ident, start
-
-
 def _line(label, rep):
     return (f"{label}: RMS {rep['rms_um']:.4g} µm = {rep['rms_percent_of_range']:.3g} % of the "
             f"{rep['output_range_um']:.4g} µm range, max |error| {rep['max_abs_um']:.4g} µm "
@@ -155,6 +79,7 @@ def _handler(args):
     from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
     from hammerstein.core.identification import IdentificationError
     from hammerstein.core.presets import save_model
+    from hammerstein.core.record_identification import identify_record
 
     try:
         n, thresholds = _parse_thresholds(args.thresholds)

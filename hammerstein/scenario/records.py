@@ -3,7 +3,7 @@
 A scenario file of this kind has no plant: it identifies a classical PI
 model from a measured single-input single-output record, trains on the
 first part of the record (the start-up / virgin curve only warms up the play
-states, :func:`hammerstein.identify_cli.identify_record`), validates on the
+states, :func:`hammerstein.core.record_identification.identify_record`), validates on the
 held-out rest and writes a report directory like the simulated scenarios::
 
     kind = "identification"
@@ -40,7 +40,7 @@ from hammerstein.report import figures as plots
 from hammerstein.core.datafiles import DataFileError, Record, bundled_data, read_record
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.identification import IdentificationError
-from hammerstein.cli.identify import identify_record
+from hammerstein.core.record_identification import identify_record
 from hammerstein.core.presets import save_model
 from hammerstein.scenario.schema import (NAME, Field, Invalid, ScenarioError, check_table, choice, integer,
                         number, string)
