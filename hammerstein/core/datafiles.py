@@ -321,6 +321,10 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
     u, unames = zip(*[_column(frame, header, c, "input", path) for c in ins])
     y, ynames = zip(*[_column(frame, header, c, "output", path) for c in outs])
+    both = [n for n in unames if n in ynames]
+    if both:
+        raise DataFileError(
+            f"{path}: input and output are the same column {both[0]!r}; name two different columns")
     names = list(unames) + list(ynames)
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:

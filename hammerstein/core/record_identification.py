@@ -239,7 +239,8 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
     u = record.u[k]
     name = f"{record.source}: " if record.source else ""
     if not np.ptp(u) > 0:
-        raise IdentificationError(f"{name}the inputs are constant; expected an excitation")
+        what = "the input is" if record.u.shape[0] == 1 else "all inputs are"
+        raise IdentificationError(f"{name}{what} constant; expected an excitation")
     branches = _branches(u)
     complete = [i for i, br in enumerate(branches) if br[2]]
     roll, periodic = 0, False
