@@ -266,3 +266,41 @@ def test_out_refuses_a_file_the_project_did_not_write(tmp_path, capsys):
     assert "model" in read_toml(notes)
     assert _cli(capsys, *argv, "--out", notes)[0] == 0      # ours now: may be rewritten
     assert sorted(p.name for p in tmp_path.iterdir()) == ["loop.csv", "notes.toml"]
+
+
+# -- Hammerstein presets (PI + state_space dynamics) -----------------------------------------
+def test_state_space_preset_is_accepted_with_its_offset(tmp_path):
+    import control
+    from hammerstein.core.presets import load_plant, save_model
+    model = MultivariablePI([[PrandtlIshlinskii([0, 1], [1.0, 0.5])]], ["u"], ["y"], [2.0],
+                            output_offset=[1.0])
+    wn = 2 * np.pi * 200
+    G = control.ss([[0, wn], [-wn, -0.6 * wn]], [[0], [wn]], [[1, 0]], [[0]])   # unit DC gain
+    tables = {"preset": {"name": "p", "sampling_period": 1e-4},
+              "dynamics": {"kind": "state_space", "A": G.A.tolist(), "B": G.B.tolist(),
+                           "C": G.C.tolist(), "D": G.D.tolist()}}
+    save_model(model, tmp_path / "p.toml", None, extra=tables)
+    plant = load_plant(tmp_path / "p.toml")
+    y, _ = plant.simulate(np.full((1, 3000), 1.5))
+    # steady state: the PI output at 1.5 V from rest, 1.5 + 0.5 * 0.5 = 1.75, plus the offset
+    assert y[0, -1] == pytest.approx(2.75, abs=1e-6)
+    tables["dynamics"]["B"] = [[0.0, 1.0]]
+    save_model(model, tmp_path / "bad.toml", None, extra=tables)
+    with pytest.raises(PresetError, match=r"dynamics.B: expected shape \(2, 1\)"):
+        load_plant(tmp_path / "bad.toml")
+
+
+def test_dynamics_option_writes_a_preset_or_says_why_not(tmp_path, capsys):
+    u, y = _steady_loop("piezo", 0.5)
+    data = tmp_path / "loop.csv"
+    write_csv(data, {"u": np.tile(u, 3), "y": np.tile(y, 3)})
+    status, _, err = _cli(capsys, "identify", data, "--input", "u", "--output", "y",
+                          "--sampling-period", "1e-4", "--out", tmp_path / "p.toml", "--dynamics")
+    assert status == 2 and "--dynamics-records" in err
+    try:
+        import hammerstein.core.lti  # noqa: F401
+    except ImportError:
+        status, _, err = _cli(capsys, "identify", data, "--input", "u", "--output", "y",
+                              "--sampling-period", "1e-4", "--out", tmp_path / "p.toml",
+                              "--dynamics", "--dynamics-records", data)
+        assert status == 1 and "hammerstein.core.lti" in err and not (tmp_path / "p.toml").exists()

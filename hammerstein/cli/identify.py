@@ -388,13 +388,14 @@ def _report(args, fit, records):
 
 def _dynamics_tables(args, fit):
     """``[preset]`` and ``[dynamics]`` tables of a preset with identified linear dynamics."""
-    from hammerstein.core.identification import IdentificationError
-    try:
-        from hammerstein.core.record_identification import dynamics_tables
-    except ImportError:
-        raise IdentificationError(
-            "--dynamics: the linear-dynamics identifier is not available in this version") from None
     from hammerstein.core.datafiles import read_records
+    from hammerstein.core.identification import IdentificationError
+    from hammerstein.core.record_identification import dynamics_tables
     dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
            for d in args.dynamics_records]
-    return dynamics_tables(fit, dyn, name=Path(args.out).stem)
+    try:
+        return dynamics_tables(fit, dyn, name=Path(args.out).stem)
+    except ImportError:
+        raise IdentificationError(
+            "--dynamics: the linear-dynamics identifier (hammerstein.core.lti) is not part of "
+            "this installation") from None

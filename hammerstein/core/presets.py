@@ -316,7 +316,11 @@ def dynamics_from_table(table, outputs, source="preset"):
     """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
 
     ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
-    ``damping_ratio`` per output; ``kind = "none"`` for a static plant.
+    ``damping_ratio`` per output; ``kind = "state_space"`` with continuous
+    matrices ``A`` (n, n) [1/s], ``B`` (n, p), ``C`` (p, n), ``D`` (p, p)
+    (p inputs: the PI outputs, p outputs: the displacements; e.g. identified
+    by ``hammerstein identify --dynamics``); ``kind = "none"`` for a static
+    plant.
 
     Raises
     ------
@@ -325,8 +329,11 @@ def dynamics_from_table(table, outputs, source="preset"):
     kind = table.get("kind", "none")
     if kind == "none":
         return None
+    if kind == "state_space":
+        return _state_space(table, outputs, source)
     if kind != "bending_modes":
-        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes' or 'none', found {kind!r}")
+        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
+                          f"'none', found {kind!r}")
     for key in ("natural_frequency", "damping_ratio"):
         if key not in table:
             raise PresetError(f"{source}: dynamics.{key}: missing")
@@ -336,6 +343,38 @@ def dynamics_from_table(table, outputs, source="preset"):
         return bending_modes(table["natural_frequency"], table["damping_ratio"], outputs)
     except DynamicsError as exc:
         raise PresetError(f"{source}: dynamics.{exc}") from None
+
+
+def _state_space(table, outputs, source):
+    import control
+    unknown = sorted(set(table) - {"kind", "A", "B", "C", "D"})
+    if unknown:
+        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key"
+                          f"{_hint(unknown[0], ('A', 'B', 'C', 'D'))}")
+    p = len(outputs)
+    mats = {}
+    for key in ("A", "B", "C", "D"):
+        if key not in table:
+            if key == "D":
+                mats[key] = np.zeros((p, p))
+                continue
+            raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space')")
+        try:
+            arr = np.array(table[key], dtype=float)
+        except (TypeError, ValueError):
+            raise PresetError(f"{source}: dynamics.{key}: expected a matrix (list of rows)") from None
+        if arr.ndim != 2 or not np.all(np.isfinite(arr)):
+            raise PresetError(f"{source}: dynamics.{key}: expected a finite matrix (list of rows)")
+        mats[key] = arr
+    n = mats["A"].shape[0]
+    expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+    for key, shape in expected.items():
+        if mats[key].shape != shape:
+            raise PresetError(f"{source}: dynamics.{key}: expected shape {shape} for {p} outputs "
+                              f"and {n} states, found {mats[key].shape}")
+    return control.ss(mats["A"], mats["B"], mats["C"], mats["D"],
+                      inputs=[f"{o}_h" for o in outputs], outputs=list(outputs),
+                      name="state_space")
 
 
 def load_plant(preset, dynamics=True, base_dir=None):

@@ -70,6 +70,7 @@ __all__ = [
     "parse_components",
     "identify_records",
     "identify_record",
+    "dynamics_tables",
 ]
 
 #: A reversal is recognised once the input has come back by this fraction of its span.
@@ -811,3 +812,65 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
     """Single-record form of :func:`identify_records` (same options and result)."""
     return identify_records([record], method, n_hysterons, thresholds, partition, bounds,
                             components, hold_out, train_fraction, skip_seconds)
+
+
+def dynamics_tables(fit, records, name="identified", **options):
+    """Identify the linear dynamics behind a fitted PI and return preset tables.
+
+    The Hammerstein structure ``y = G(Gamma(u)) + c`` is identified in two
+    steps: ``Gamma`` and ``c`` from the (slow) hysteresis records
+    (:func:`identify_records`), then G from broadband records: the PI outputs
+    ``H = Gamma(u)`` are the inputs of G and ``y - c`` its outputs
+    (:class:`hammerstein.core.lti.DynamicsIdentifier`, subspace method with
+    order selection on held-out samples). G is returned in continuous time
+    (inverse of the ZOH map), as a preset's ``[dynamics]`` table.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        Square p x p model.
+    records : sequence of MultiRecord
+        Broadband records with the same columns, one sampling period.
+    name : str
+        Preset name.
+    **options
+        Options of :class:`~hammerstein.core.lti.DynamicsIdentifier`.
+
+    Returns
+    -------
+    dict
+        ``{"preset": {...}, "dynamics": {"kind": "state_space", "A", "B",
+        "C", "D"}}`` for :func:`hammerstein.core.presets.save_model`.
+
+    Raises
+    ------
+    IdentificationError
+        On a non-square model, no records, differing sampling periods, or a
+        failed identification.
+    ImportError
+        If :mod:`hammerstein.core.lti` is not available.
+    """
+    from hammerstein.core import lti            # optional: the linear-dynamics identifier
+    model = fit.model
+    if model.n_inputs != model.n_outputs:
+        raise IdentificationError(
+            f"dynamics: expected a square model (one displacement per PI output), found "
+            f"{model.n_outputs} outputs x {model.n_inputs} inputs")
+    records = _as_records(records)
+    T = records[0].sampling_period
+    if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
+        raise IdentificationError("dynamics records: expected one sampling period for all")
+    off = np.zeros((model.n_outputs, 1)) if model.output_offset is None \
+        else model.output_offset[:, None]
+    ins = [model.simulate(r.u)[0] - off for r in records]
+    outs = [r.y - off for r in records]
+    try:
+        ident = lti.DynamicsIdentifier(**options).fit(ins, outs, T)
+        cont = lti.continuous_system(ident.system_)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        raise IdentificationError(f"dynamics: {exc}") from None
+    mat = lambda M: [[float(v) for v in row] for row in np.atleast_2d(np.asarray(M))]
+    return {"preset": {"name": name, "sampling_period": float(T),
+                       "description": "PI identified from records + identified linear dynamics"},
+            "dynamics": {"kind": "state_space", "A": mat(cont.A), "B": mat(cont.B),
+                         "C": mat(cont.C), "D": mat(cont.D)}}
