@@ -250,16 +250,17 @@ def load_identification_scenario(path, data):
     if ident.get("bounds", "none") != "none" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.bounds: only used by method = 'least-squares'")
     records = []
-    if dat is not None and not problems:
+    if dat is not None:
         files = dat.get("files", [dat["file"]] if "file" in dat else [])
         ins = dat.get("inputs", dat.get("input"))
         outs = dat.get("outputs", dat.get("output"))
         for key, alias, val in (("file", "files", files), ("input", "inputs", ins),
                                 ("output", "outputs", outs)):
-            if not val:
-                problems.append(f"{source}: data.{key}: missing (required; or data.{alias})")
-            elif key in dat and alias in dat:
+            if key in dat and alias in dat:
                 problems.append(f"{source}: data.{alias}: give {key} or {alias}, not both")
+            elif not val and alias not in data.get("data", {}) and key not in data.get("data", {}):
+                problems.append(f"{source}: data.{key}: missing (required); or data.{alias} "
+                                f"as a list")
         if "time" not in dat and "sampling_period" not in dat:
             problems.append(f"{source}: data: give time (a column) or sampling_period [s]")
         if not problems:
@@ -363,13 +364,14 @@ def write_identification_report(scenario, results, directory):
     frame = metrics_frame(results)
     frame.to_csv(directory / "metrics.csv", index=False)
     rec, split, pred = fit.records[0], fit.splits[0], fit.predictions[0]
+    iu_tag, ou_tag = iu.replace("µ", "u"), ou.replace("µ", "u")   # ASCII column names
     for r, mask in (("train", split.train), ("validation", split.held_out)):
         cols = {"time_s": rec.timepts[mask]}
         for k, name in enumerate(model.input_names):
-            cols[f"{name}_{iu}"] = rec.u[k][mask]
+            cols[f"{name}_{iu_tag}"] = rec.u[k][mask]
         for l, name in enumerate(model.output_names):
-            cols[f"{name}_{ou}"] = rec.y[l][mask]
-            cols[f"{name}_model_{ou}"] = pred[l][mask]
+            cols[f"{name}_{ou_tag}"] = rec.y[l][mask]
+            cols[f"{name}_model_{ou_tag}"] = pred[l][mask]
         pd.DataFrame(cols).to_csv(directory / f"timeseries-{r}.csv", index=False,
                                   float_format="%.7g")
     model_file = f"models/identified-{spec['method']}.toml"
