@@ -234,7 +234,7 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", CORPUS / "data"],
      "hammerstein identify: error: --out:"),
     (["identify", CORPUS / "data" / "good.csv", "--time", "0", "--input", "1"],
-     "hammerstein identify: error: the following arguments are required: --output, --out"),
+     "hammerstein identify: error: the following arguments are required: --output/--outputs, --out"),
     (["check", GOOD / "good-static.toml"],
      "hammerstein check: error: the following arguments are required: --baseline"),
     (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein: error: unrecognized arguments: --bogus"),
