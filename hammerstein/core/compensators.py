@@ -31,8 +31,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, state_vector
+from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii, state_vector
 from hammerstein.core.inverse import kuhnen_inverse
+from hammerstein.exceptions import (CompensatorDivergence, CompensatorError, ConvergenceWarning,
+                                    HysteresisError, RangeWarning)
 
 __all__ = [
     "CompensatorError",
@@ -48,35 +50,6 @@ __all__ = [
     "RangeWarning",
     "check_reference_range",
 ]
-
-
-class CompensatorError(ValueError):
-    """Invalid compensator parameters, or a law that cannot converge."""
-
-
-class ConvergenceWarning(UserWarning):
-    """The compensator's fixed-point iteration may not converge."""
-
-
-class RangeWarning(UserWarning):
-    """A reference leaves the output range the model was identified on."""
-
-
-class CompensatorDivergence(RuntimeError):
-    """The compensator output left every bound during a simulation.
-
-    Attributes
-    ----------
-    sample : int
-        Index of the first sample where the divergence was detected.
-    reason : str
-        What was detected (non-finite or out-of-bound input).
-    """
-
-    def __init__(self, sample, reason):
-        self.sample = int(sample)
-        self.reason = str(reason)
-        super().__init__(f"compensator diverged at sample {self.sample}: {self.reason}")
 
 
 @dataclass

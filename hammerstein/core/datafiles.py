@@ -17,14 +17,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.exceptions import DataFileError
+
 __all__ = ["DataFileError", "Record", "read_record", "bundled_data"]
 
 #: Fewest samples accepted in a record.
 MIN_SAMPLES = 10
-
-
-class DataFileError(ValueError):
-    """A data file cannot be read as a record (names the file and the problem)."""
 
 
 @dataclass(frozen=True)

@@ -21,16 +21,14 @@ from typing import Sequence
 
 import numpy as np
 
+from hammerstein.exceptions import HysteresisError
+
 __all__ = [
     "play",
     "PrandtlIshlinskii",
     "MultivariablePI",
     "HysteresisError",
 ]
-
-
-class HysteresisError(ValueError):
-    """Invalid hysteresis model parameters or signals (names the field)."""
 
 
 def _as_finite_array(value, name, ndim=None):

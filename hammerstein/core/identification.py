@@ -27,7 +27,9 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
+from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, PrandtlIshlinskii, play,
+                                        validate_thresholds)
+from hammerstein.exceptions import IdentificationError
 
 __all__ = [
     "IdentificationError",
@@ -41,10 +43,6 @@ __all__ = [
 
 #: Fraction of the input span within which a sample counts as "at" an extremum.
 _EXTREMUM_BAND = 0.02
-
-
-class IdentificationError(ValueError):
-    """The record or the options do not allow an identification (says why)."""
 
 
 # -- record helpers -------------------------------------------------------------
@@ -174,7 +172,6 @@ def partition_thresholds(u, n_hysterons, partition="time", branch=None):
     """
     if not isinstance(partition, str):
         try:
-            from hammerstein.core.hysteresis import validate_thresholds
             return validate_thresholds(partition, "thresholds")
         except HysteresisError as exc:
             raise IdentificationError(str(exc)) from None

@@ -20,6 +20,7 @@ import tomli_w
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.plant import HammersteinPlant
+from hammerstein.exceptions import PresetError
 
 __all__ = [
     "PresetError",
@@ -32,10 +33,6 @@ __all__ = [
     "save_model",
     "load_plant",
 ]
-
-
-class PresetError(ValueError):
-    """A model or preset file is missing, malformed or inconsistent."""
 
 
 PRESET_DIR = resources.files("hammerstein") / "presets"

@@ -13,6 +13,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from hammerstein.exceptions import SignalError
+
 __all__ = [
     "SignalError",
     "MIN_SAMPLES_PER_PERIOD",
@@ -30,10 +32,6 @@ MIN_SAMPLES_PER_PERIOD = 8
 
 #: Most samples in one record (80 MB per signal row; 500 s at T = 50 µs).
 MAX_SAMPLES = 10_000_000
-
-
-class SignalError(ValueError):
-    """Invalid reference or drive parameters (the message names the field)."""
 
 
 def _positive(value, name, unit):

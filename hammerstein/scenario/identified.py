@@ -36,6 +36,7 @@ from hammerstein.core.identification import IdentificationError, MultivariableId
 from hammerstein.core.presets import PresetError, model_to_table, save_model
 from hammerstein.scenario.schema import Field, Invalid, boolean, check_table, choice, integer, number
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
+from hammerstein.exceptions import NestedInvalid
 
 __all__ = [
     "IDENTIFY_FIELDS",
@@ -50,14 +51,6 @@ __all__ = [
 
 #: White-noise RMS [µm] of the ECL202 sensor model used by ``sensor = true``.
 SENSOR_NOISE_RMS = 0.02
-
-
-class NestedInvalid(Invalid):
-    """A nested table has problems; ``problems`` lists ``(key, message)``."""
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
 
 
 def _bounds(v):

@@ -26,6 +26,7 @@ import numpy as np
 
 from hammerstein.core import references as refs
 from hammerstein.core.presets import PresetError, load_plant, read_toml
+from hammerstein.exceptions import Invalid, ScenarioError
 
 __all__ = [
     "ScenarioError",
@@ -41,24 +42,6 @@ __all__ = [
     "choice",
     "name_list",
 ]
-
-
-class ScenarioError(ValueError):
-    """A scenario file has one or more problems.
-
-    Attributes
-    ----------
-    problems : list of str
-        One ``file: key: message`` line per problem.
-    """
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("\n".join(self.problems))
-
-
-class Invalid(ValueError):
-    """Raised by a field checker; the message says what was expected."""
 
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammerstein.simulation import _kernels as kernels
-from hammerstein.core.compensators import CompensatorDivergence, CompensatorError
+from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.core.hysteresis import HysteresisError, state_vector
 
 __all__ = [
