@@ -25,16 +25,19 @@ All have ``simulate(reference (m, N) [µm], initial_state=None) -> (inputs
 
 from __future__ import annotations
 
+import functools
 import itertools
+import math
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii, state_vector
+from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.inverse import kuhnen_inverse
 from hammerstein.exceptions import (CompensatorDivergence, CompensatorError, ConvergenceWarning,
                                     HysteresisError, RangeWarning)
+from hammerstein.simulation import CompensatorLaw, simulate_compensator, state_vector
 
 __all__ = [
     "CompensatorError",
@@ -376,9 +379,43 @@ class InverseMultiplicativeCompensator:
             If the reference leaves the identified output range
             (:func:`check_reference_range`).
         """
-        from hammerstein.simulation import simulate_compensator
         check_reference_range(self.model, reference)
         return simulate_compensator(self, reference, initial_state)
+
+    def packed_law(self):
+        """The law this compensator computes, for the fused chain kernels.
+
+        Read from the current attributes (``feedback``, ``cutoff_hz``,
+        ``sampling_period``, ``K_inv``, ``iterations``, ``divergence_bound``)
+        at every call.
+
+        Returns
+        -------
+        hammerstein.simulation.CompensatorLaw
+            No reference pre-filter; the reference check is
+            :func:`check_reference_range` on the model.
+
+        Raises
+        ------
+        CompensatorError
+            On an unknown ``feedback`` or a low-pass law without a positive
+            ``cutoff_hz`` [Hz] and ``sampling_period`` [s].
+        """
+        if self.feedback == "delay":
+            lowpass, pole = False, 0.0
+        elif self.feedback != "lowpass":
+            raise CompensatorError(f"feedback: expected 'delay' or 'lowpass', found {self.feedback!r}")
+        else:
+            fc, T = self.cutoff_hz, self.sampling_period
+            if fc is None or T is None or not (fc > 0 and T > 0):
+                raise CompensatorError(
+                    "feedback: the low-pass law needs cutoff_hz [Hz] > 0 and sampling_period [s] > 0, "
+                    f"found cutoff_hz={fc!r}, sampling_period={T!r}")
+            lowpass, pole = True, math.exp(-2.0 * math.pi * float(fc) * float(T))
+        return CompensatorLaw(model=self.model, K_inv=self.K_inv, iterations=int(self.iterations),
+                              divergence_bound=float(self.divergence_bound), lowpass=lowpass,
+                              pole=pole, prefilter=None,
+                              check_reference=functools.partial(check_reference_range, self.model))
 
 
 def _square(model, what):
@@ -564,6 +601,17 @@ class StaticGainCompensator:
         check_reference_range(self.model, yr)
         return self.K_inv @ yr, np.zeros(0)
 
+    def packed_law(self):
+        """None: the fused chain kernels do not run this compensator (see
+        :mod:`hammerstein.simulation`); :func:`~hammerstein.simulation.simulate_chain`
+        calls :meth:`simulate`.
+
+        Returns
+        -------
+        None
+        """
+        return None
+
 
 @dataclass
 class PerAxisInverseCompensator:
@@ -707,3 +755,14 @@ class PerAxisInverseCompensator:
             a, b = self._offsets[l], self._offsets[l + 1]
             u[l], final[a:b] = inv.simulate(yr[l], s[a:b])
         return u, final
+
+    def packed_law(self):
+        """None: the fused chain kernels do not run this compensator (see
+        :mod:`hammerstein.simulation`); :func:`~hammerstein.simulation.simulate_chain`
+        calls :meth:`simulate`.
+
+        Returns
+        -------
+        None
+        """
+        return None

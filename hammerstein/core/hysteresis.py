@@ -22,6 +22,7 @@ from typing import Sequence
 import numpy as np
 
 from hammerstein.exceptions import HysteresisError
+from hammerstein.simulation import finite_array, simulate_hysteresis, simulate_plays, state_vector
 
 __all__ = [
     "play",
@@ -31,17 +32,7 @@ __all__ = [
 ]
 
 
-def _as_finite_array(value, name, ndim=None):
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise HysteresisError(f"{name}: expected numbers, got {value!r}") from exc
-    if ndim is not None and arr.ndim != ndim:
-        raise HysteresisError(
-            f"{name}: expected a {ndim}-D array, found shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise HysteresisError(f"{name}: expected finite values, found NaN or inf")
-    return arr
+_as_finite_array = finite_array   # former private name, used across core
 
 
 def validate_thresholds(thresholds, name="thresholds"):
@@ -108,40 +99,7 @@ def play(u, thresholds, initial_state=None):
     u = _as_finite_array(u, "u", ndim=1)
     r = validate_thresholds(thresholds)
     state = state_vector(initial_state, r.size, "initial_state")
-    from hammerstein.simulation import simulate_plays  # all time stepping lives there
     return simulate_plays(u, r, state)
-
-
-def state_vector(initial_state, size, name="initial_state"):
-    """Validated copy of a flat state vector, zeros when None.
-
-    Every stateful object (play operators, plants, compensators) stores its
-    memory as one flat float vector; this is the one check of it.
-
-    Parameters
-    ----------
-    initial_state : array_like, shape (size,), or None
-        State [units of the object: V for play states, µm for linear states].
-    size : int
-        Expected length.
-    name : str
-        Field name for error messages.
-
-    Returns
-    -------
-    numpy.ndarray, shape (size,)
-
-    Raises
-    ------
-    HysteresisError
-        If the state is not finite or not of shape (size,).
-    """
-    if initial_state is None:
-        return np.zeros(size)
-    s = _as_finite_array(initial_state, name)
-    if s.shape != (size,):
-        raise HysteresisError(f"{name}: expected shape ({size},), found {s.shape}")
-    return s.astype(float, copy=True)
 
 
 @dataclass(frozen=True)
@@ -444,7 +402,6 @@ class MultivariablePI:
         HysteresisError
             On a wrongly shaped or non-finite input or state.
         """
-        from hammerstein.simulation import simulate_hysteresis  # all time stepping lives there
         return simulate_hysteresis(self, inputs, initial_state)
 
     def evaluate(self, inputs, state):
