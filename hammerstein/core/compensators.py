@@ -276,6 +276,32 @@ class InverseMultiplicativeCompensator:
         On a non-square model, an invalid gain, iteration count, feedback,
         cut-off or sampling period, or (with ``check='error'``) a law that
         cannot converge.
+
+    Examples
+    --------
+    The compensator inverts the model it is built from; fed to that model
+    (a static plant), its output follows the reference within the one-sample
+    lag of the fixed-point step:
+
+    >>> import numpy as np
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> model = MultivariablePI(
+    ...     [[PrandtlIshlinskii([0.0, 1.0, 2.0], [1.0, 0.5, 0.25]), 0.1],
+    ...      [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.0, 1.0], [0.8, 0.4])]],
+    ...     input_amplitude=[10.0, 10.0])
+    >>> t = np.arange(400)
+    >>> reference = np.vstack([8 * np.sin(2 * np.pi * t / 200), 4 * np.sin(2 * np.pi * t / 100)])
+    >>> from hammerstein import InverseMultiplicativeCompensator
+    >>> comp = InverseMultiplicativeCompensator(model)
+    >>> np.round(comp.K, 3)                      # diagonal secant gains [µm/V]
+    array([[1.65, 0.  ],
+           [0.  , 1.16]])
+    >>> print(f"rho(I - K^-1 J) <= {comp.convergence.max_radius:.3f}")
+    rho(I - K^-1 J) <= 0.418
+    >>> inputs, final_state = comp.simulate(reference)
+    >>> y, _ = model.simulate(inputs)
+    >>> print(f"{np.max(np.abs(y - reference)):.3f} um")
+    0.115 um
     """
 
     model: MultivariablePI
@@ -508,6 +534,27 @@ def diagonal_compensator(model: MultivariablePI, **kwargs):
     ------
     CompensatorError
         If the model is not square or a direct transfer is absent.
+
+    Examples
+    --------
+    The cross-couplings of the model stay in the output (about 0.05 µm/V of
+    ``ux`` on y):
+
+    >>> import numpy as np
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> model = MultivariablePI(
+    ...     [[PrandtlIshlinskii([0.0, 1.0, 2.0], [1.0, 0.5, 0.25]), 0.1],
+    ...      [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.0, 1.0], [0.8, 0.4])]],
+    ...     input_amplitude=[10.0, 10.0])
+    >>> t = np.arange(400)
+    >>> reference = np.vstack([8 * np.sin(2 * np.pi * t / 200), 4 * np.sin(2 * np.pi * t / 100)])
+    >>> from hammerstein import diagonal_compensator
+    >>> comp = diagonal_compensator(model)
+    >>> comp.name, comp.model.component(1, 0) is None
+    ('diagonal', True)
+    >>> y, _ = model.simulate(comp.simulate(reference)[0])
+    >>> np.round(np.max(np.abs(y - reference), axis=1), 3)
+    array([0.468, 0.402])
     """
     _square(model, "the diagonal compensator")
     comps = [[c if l == k else None for k, c in enumerate(row)] for l, row in enumerate(model.components)]
@@ -557,6 +604,24 @@ class StaticGainCompensator:
     CompensatorError
         If the model is not square, has no ``input_amplitude`` or a zero
         secant gain.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> model = MultivariablePI(
+    ...     [[PrandtlIshlinskii([0.0, 1.0, 2.0], [1.0, 0.5, 0.25]), 0.1],
+    ...      [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.0, 1.0], [0.8, 0.4])]],
+    ...     input_amplitude=[10.0, 10.0])
+    >>> t = np.arange(400)
+    >>> reference = np.vstack([8 * np.sin(2 * np.pi * t / 200), 4 * np.sin(2 * np.pi * t / 100)])
+    >>> from hammerstein import StaticGainCompensator
+    >>> comp = StaticGainCompensator(model)
+    >>> np.round(np.diag(comp.K), 3)             # secant gains over +-10 V [µm/V]
+    array([1.65, 1.16])
+    >>> y, _ = model.simulate(comp.simulate(reference)[0])
+    >>> np.round(np.max(np.abs(y - reference), axis=1), 3)   # the hysteresis remains
+    array([1.203, 0.754])
     """
 
     model: MultivariablePI
@@ -647,6 +712,25 @@ class PerAxisInverseCompensator:
         If the model is not square, a direct transfer is absent or zero, or
         not invertible (some cumulative weight sum ``S_i <= 0``; the message
         names the component and i).
+
+    Examples
+    --------
+    Each direct transfer is inverted exactly; what remains is the
+    uncompensated cross-coupling:
+
+    >>> import numpy as np
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> model = MultivariablePI(
+    ...     [[PrandtlIshlinskii([0.0, 1.0, 2.0], [1.0, 0.5, 0.25]), 0.1],
+    ...      [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.0, 1.0], [0.8, 0.4])]],
+    ...     input_amplitude=[10.0, 10.0])
+    >>> t = np.arange(400)
+    >>> reference = np.vstack([8 * np.sin(2 * np.pi * t / 200), 4 * np.sin(2 * np.pi * t / 100)])
+    >>> from hammerstein import PerAxisInverseCompensator
+    >>> comp = PerAxisInverseCompensator(model)
+    >>> y, _ = model.simulate(comp.simulate(reference)[0])
+    >>> np.round(np.max(np.abs(y - reference), axis=1), 3)
+    array([0.367, 0.33 ])
     """
 
     model: MultivariablePI

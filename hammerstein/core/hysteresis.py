@@ -250,6 +250,26 @@ class MultivariablePI:
     HysteresisError
         If the component grid is not rectangular, a component has the wrong
         type, names do not match the grid, or no component is a hysteresis.
+
+    Examples
+    --------
+    Two inputs, two outputs: a hysteresis and a linear cross-coupling on
+    output x, a small hysteretic cross-coupling and a direct hysteresis on
+    output y. On the first rise of ``ux`` the plays of threshold r move by
+    ``u - r``: ``x = 1 * 2 + 0.5 * (2 - 1) = 2.5`` at 2 V.
+
+    >>> import numpy as np
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> model = MultivariablePI(
+    ...     [[PrandtlIshlinskii([0.0, 1.0, 2.0], [1.0, 0.5, 0.25]), 0.1],
+    ...      [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.0, 1.0], [0.8, 0.4])]],
+    ...     input_names=["ux", "uy"], output_names=["x", "y"], input_amplitude=[10.0, 10.0])
+    >>> model.n_hysterons
+    7
+    >>> y, final_state = model.simulate([[0.0, 2.0, 4.0, 2.0, 0.0], [0.0] * 5])
+    >>> np.round(y, 3)
+    array([[0.  , 2.5 , 6.  , 4.  , 1.  ],
+           [0.  , 0.11, 0.25, 0.15, 0.03]])
     """
 
     components: Sequence[Sequence[object]]
