@@ -375,7 +375,23 @@ class InverseMultiplicativeCompensator:
         return m * (2 if self.feedback == "lowpass" else 1) + self.model.n_hysterons
 
     def initial_state(self, initial_state=None):
-        """Validated copy of a flat compensator state (zeros by default)."""
+        """Validated copy of a flat compensator state (zeros by default).
+
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+            ``U(t-T)`` [V], (``v_f(t-T)`` [V] for ``'lowpass'``), play states [V].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            A new array.
+
+        Raises
+        ------
+        HysteresisError
+            On a wrong shape or non-finite values.
+        """
         return state_vector(initial_state, self.n_states)
 
     def simulate(self, reference, initial_state=None):
@@ -393,6 +409,7 @@ class InverseMultiplicativeCompensator:
         inputs : numpy.ndarray, shape (m, n_samples)
             Compensator output U [V].
         final_state : numpy.ndarray, shape (n_states,)
+            State after the last sample, for a chunked continuation.
 
         Raises
         ------
@@ -529,6 +546,7 @@ def diagonal_compensator(model: MultivariablePI, **kwargs):
     Returns
     -------
     InverseMultiplicativeCompensator
+        On the model without its cross-couplings.
 
     Raises
     ------
@@ -635,7 +653,23 @@ class StaticGainCompensator:
     n_states = 0
 
     def initial_state(self, initial_state=None):
-        """The (empty) state; anything but None or an empty array is an error."""
+        """The (empty) state; anything but None or an empty array is an error.
+
+        Parameters
+        ----------
+        initial_state : None or array_like, shape (0,)
+            No state.
+
+        Returns
+        -------
+        numpy.ndarray, shape (0,)
+            An empty array.
+
+        Raises
+        ------
+        HysteresisError
+            If a non-empty state is given.
+        """
         s = np.zeros(0) if initial_state is None else np.asarray(initial_state, dtype=float)
         if s.shape != (0,):
             raise HysteresisError(f"initial_state: the static-gain compensator has no state, found shape {s.shape}")
@@ -649,6 +683,7 @@ class StaticGainCompensator:
         reference : array_like, shape (m, n_samples)
             Reference displacements [µm].
         initial_state : None or empty array
+            The compensator has no state.
 
         Returns
         -------
@@ -759,7 +794,25 @@ class PerAxisInverseCompensator:
         return int(self._offsets[-1])
 
     def initial_state(self, initial_state=None):
-        """Validated copy of the flat state (zeros by default)."""
+        """Validated copy of the flat state (zeros by default).
+
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+            The axes' inverse states, concatenated (see
+            :meth:`~hammerstein.core.inverse.InversePI.initial_state`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            A new array.
+
+        Raises
+        ------
+        HysteresisError
+            On a wrong shape, non-finite values or an inconsistent
+            inverse-play state.
+        """
         s = state_vector(initial_state, self.n_states)
         for l, inv in enumerate(self.inverses):
             if not isinstance(inv, float):

@@ -60,7 +60,18 @@ class Record:
 
 
 def bundled_data(name="piezo-stack-150V-1Hz.csv"):
-    """Path of a data file shipped in ``hammerstein/data``."""
+    """Path of a data file shipped in ``hammerstein/data``.
+
+    Parameters
+    ----------
+    name : str
+        File name.
+
+    Returns
+    -------
+    pathlib.Path
+        Its path (not checked for existence).
+    """
     return Path(__file__).resolve().parents[1] / "data" / name
 
 

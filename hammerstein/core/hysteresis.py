@@ -371,7 +371,25 @@ class MultivariablePI:
         return {k: v.copy() for k, v in self._flat.items()}
 
     def component(self, output, input):
-        """Component ``Gamma_lk`` by names or indices."""
+        """Component ``Gamma_lk`` by names or indices.
+
+        Parameters
+        ----------
+        output : str or int
+            Output l, by name or index.
+        input : str or int
+            Input k, by name or index.
+
+        Returns
+        -------
+        PrandtlIshlinskii, float or None
+            The hysteresis, the linear gain [µm/V] or None (no transfer).
+
+        Raises
+        ------
+        ValueError
+            On an unknown name.
+        """
         l = output if isinstance(output, int) else self.output_names.index(output)
         k = input if isinstance(input, int) else self.input_names.index(input)
         return self.components[l][k]
@@ -379,6 +397,18 @@ class MultivariablePI:
     # -- simulation ------------------------------------------------------------
     def check_inputs(self, u, name="inputs"):
         """Validate an input record and return it as an (m, n_samples) array.
+
+        Parameters
+        ----------
+        u : array_like, shape (m, n_samples), or (n_samples,) when m = 1
+            Input voltages [V].
+        name : str
+            Field name for error messages.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m, n_samples)
+            Float array (not copied when already one).
 
         Raises
         ------
@@ -394,7 +424,23 @@ class MultivariablePI:
         return u
 
     def initial_state(self, initial_state=None):
-        """Return a valid copy of a flat play-state vector (zeros by default)."""
+        """Return a valid copy of a flat play-state vector (zeros by default).
+
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_hysterons,), optional
+            Play outputs [V], ordered as :meth:`hysterons`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_hysterons,)
+            A new array.
+
+        Raises
+        ------
+        HysteresisError
+            On a wrong shape or non-finite values.
+        """
         return state_vector(initial_state, self.n_hysterons, "initial_state")
 
     def simulate(self, inputs, initial_state=None):

@@ -103,6 +103,8 @@ def linear_system(plant, name="dynamics"):
     ----------
     plant : HammersteinPlant
         With dynamics (``plant.is_static`` False).
+    name : str
+        System name.
 
     Returns
     -------
@@ -129,6 +131,9 @@ def hammerstein_system(plant, name="plant"):
     Parameters
     ----------
     plant : HammersteinPlant
+        The actuator model.
+    name : str
+        System name.
 
     Returns
     -------
@@ -148,7 +153,18 @@ def hammerstein_system(plant, name="plant"):
 
 
 def reference_names(model):
-    """Names of the reference inputs of the compensator system: ``<out>_r``."""
+    """Names of the reference inputs of the compensator system: ``<out>_r``.
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        The compensator's model.
+
+    Returns
+    -------
+    list of str
+        One name per model output.
+    """
     return [f"{n}_r" for n in model.output_names]
 
 
@@ -221,6 +237,9 @@ def chain_system(compensator, plant, name="chain"):
     compensator : InverseMultiplicativeCompensator
         Its model's input names must be the plant's input names.
     plant : HammersteinPlant
+        The actuator model.
+    name : str
+        System name.
 
     Returns
     -------

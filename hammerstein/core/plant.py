@@ -98,6 +98,16 @@ class HammersteinPlant:
     def initial_state(self, initial_state=None):
         """Validated copy of a flat plant state (zeros by default).
 
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+            Play states [V] then linear states [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            A new array.
+
         Raises
         ------
         HysteresisError

@@ -60,6 +60,11 @@ def resolve_preset(name_or_path, base_dir=None):
     base_dir : pathlib.Path, optional
         Directory of the file that names the preset.
 
+    Returns
+    -------
+    pathlib.Path
+        Path of the preset file.
+
     Raises
     ------
     PresetError
@@ -79,6 +84,16 @@ def resolve_preset(name_or_path, base_dir=None):
 
 def read_toml(path):
     """Parse a TOML file, with errors that name the file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file.
+
+    Returns
+    -------
+    dict
+        The parsed document.
 
     Raises
     ------
@@ -185,6 +200,16 @@ def model_to_table(model: MultivariablePI):
     """Inverse of :func:`model_from_table`: a TOML-ready dict.
 
     Thresholds are written per component (no shared vector is assumed).
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        The model to write.
+
+    Returns
+    -------
+    dict
+        ``[model]`` table of the preset format (see :func:`model_from_table`).
     """
     table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
              "input_unit": "V", "output_unit": "µm"}

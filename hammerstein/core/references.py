@@ -295,6 +295,20 @@ def lissajous_period(frequency_x, frequency_y, max_denominator=100):
     The ratio ``f_x / f_y`` is approximated by a fraction p/q with q <=
     ``max_denominator``; the common period is ``p / f_x = q / f_y``.
 
+    Parameters
+    ----------
+    frequency_x : float
+        Frequency of the x signal [Hz], > 0.
+    frequency_y : float
+        Frequency of the y signal [Hz], > 0.
+    max_denominator : int
+        Largest q tried.
+
+    Returns
+    -------
+    float
+        The common period [s].
+
     Raises
     ------
     SignalError

@@ -120,12 +120,20 @@ def state_vector(initial_state, size, name="initial_state"):
 
 # -- kernel argument structures (numba accepts these named tuples) --------------------
 class PIArrays(NamedTuple):
-    """Packed multivariable PI model (see :func:`pack_model`).
+    """Packed multivariable PI model, a kernel argument (see :func:`pack_model`).
 
-    ``start`` (m + 1,) int64: the play operators of input k are
-    ``start[k]:start[k+1]``; ``r`` (n_plays,) thresholds [V]; ``W`` (p,
-    n_plays) weights [µm/V]; ``G`` (p, m) pure linear gains [µm/V]. Stacked
-    on a leading case axis for the batch kernels.
+    Each field gets a leading case axis for the batch kernels.
+
+    Parameters
+    ----------
+    start : numpy.ndarray, shape (m + 1,), int64
+        The play operators of input k are ``start[k]:start[k+1]``.
+    r : numpy.ndarray, shape (n_plays,)
+        Thresholds [V].
+    W : numpy.ndarray, shape (p, n_plays)
+        Weight of each play in each output [µm/V].
+    G : numpy.ndarray, shape (p, m)
+        Pure linear gains [µm/V].
     """
 
     start: np.ndarray
@@ -135,12 +143,22 @@ class PIArrays(NamedTuple):
 
 
 class LinearArrays(NamedTuple):
-    """Discrete state space ``y = C x + D u``; ``x <- A x + B u``.
+    """Discrete state space ``y = C x + D u``; ``x <- A x + B u``, a kernel argument.
 
-    ``A`` (n, n), ``B`` (n, k), ``C`` (q, n), ``D`` (q, k), float, in the
-    units of the signals they map (µm for the bending modes and the
-    reference pre-filter). Stacked on a leading case axis for the batch
+    Units are those of the signals mapped (µm for the bending modes and the
+    reference pre-filter). Each field gets a leading case axis for the batch
     kernels.
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (n, n)
+        State matrix.
+    B : numpy.ndarray, shape (n, k)
+        Input matrix.
+    C : numpy.ndarray, shape (q, n)
+        Output matrix.
+    D : numpy.ndarray, shape (q, k)
+        Feedthrough matrix.
     """
 
     A: np.ndarray
@@ -150,11 +168,24 @@ class LinearArrays(NamedTuple):
 
 
 class LawArrays(NamedTuple):
-    """Compensator law as kernel arguments (see :class:`CompensatorLaw`).
+    """Compensator law as a kernel argument (see :class:`CompensatorLaw`).
 
-    ``K_inv`` (m, p) [V/µm]; ``iterations`` int; ``bound`` [V];
-    ``lowpass`` bool; ``pole`` [-]; ``prefiltered`` bool (run the reference
-    pre-filter). Each field gets a leading case axis for the batch kernels.
+    Each field gets a leading case axis for the batch kernels.
+
+    Parameters
+    ----------
+    K_inv : numpy.ndarray, shape (m, p)
+        Inverse gain [V/µm].
+    iterations : int
+        Fixed-point iterations per sample (delay law).
+    bound : float
+        Divergence bound on |U| [V].
+    lowpass : bool
+        Low-pass feedback law instead of the delay.
+    pole : float
+        Pole ``a`` of the low-pass law [-].
+    prefiltered : bool
+        Run the reference pre-filter.
     """
 
     K_inv: np.ndarray
@@ -168,10 +199,22 @@ class LawArrays(NamedTuple):
 class ChainState(NamedTuple):
     """States of a chain run, updated in place by the kernels.
 
-    ``cu`` (m,) ``U(t-T)`` [V]; ``cvf`` (m,) low-pass correction [V];
-    ``cs`` (n_plays,) compensator play states [V]; ``xf`` (n_f,)
-    pre-filter state [µm]; ``ps`` (n_plays,) plant play states [V]; ``x``
-    (n_x,) linear plant state [µm].
+    Each field gets a leading case axis for the batch kernels.
+
+    Parameters
+    ----------
+    cu : numpy.ndarray, shape (m,)
+        ``U(t-T)`` [V].
+    cvf : numpy.ndarray, shape (m,)
+        Low-pass correction ``v_f`` [V] (unused by the delay law).
+    cs : numpy.ndarray, shape (n_plays,)
+        Packed compensator play states [V].
+    xf : numpy.ndarray, shape (n_f,)
+        Pre-filter state [µm].
+    ps : numpy.ndarray, shape (n_plays_plant,)
+        Packed plant play states [V].
+    x : numpy.ndarray, shape (n_x,)
+        Linear plant state [µm].
     """
 
     cu: np.ndarray
@@ -202,7 +245,7 @@ class CompensatorLaw(NamedTuple):
     (low-pass law only), the model's play states (n_hysterons,) [V], the
     pre-filter state (n_f,) [µm].
 
-    Attributes
+    Parameters
     ----------
     model : object
         The hysteresis model Gamma, duck-typed like
@@ -254,11 +297,13 @@ class CompensatorLaw(NamedTuple):
         Parameters
         ----------
         state : numpy.ndarray, shape (n_states,)
+            Flat compensator state.
 
         Returns
         -------
         tuple of numpy.ndarray
-            ``(m,)``, ``(m,)`` or None, ``(n_hysterons,)``, ``(n_f,)``.
+            ``U(t-T)`` (m,) [V], ``v_f`` (m,) [V] or None for the delay
+            law, play states (n_hysterons,) [V], pre-filter state (n_f,) [µm].
         """
         m, nh = self.model.n_inputs, self.model.n_hysterons
         off = 2 * m if self.lowpass else m
@@ -278,6 +323,7 @@ def compensator_law_of(compensator):
     Returns
     -------
     CompensatorLaw or None
+        None when the compensator declares no law.
 
     Raises
     ------
@@ -370,13 +416,13 @@ LANES = 4
 
 @dataclass
 class PackedModel:
-    """Multivariable PI model as kernel arrays.
+    """Multivariable PI model as kernel arrays (built by :func:`pack_model`).
 
     Hysterons with the same input, threshold and initial play state are one
     play operator (they evolve identically, Def. 3.2 of the paper), so the
     kernels update each play once and weight it into every output.
 
-    Attributes
+    Parameters
     ----------
     start : numpy.ndarray, shape (m + 1,), int64
         The play operators of input k are ``start[k]:start[k+1]``.
@@ -460,6 +506,7 @@ def pack_model(model, state=None):
     Returns
     -------
     PackedModel
+        Plays merged and padded; ``arrays`` is the kernel argument.
     """
     f = model.hysterons()
     nh = f["thresholds"].size

@@ -215,6 +215,7 @@ def compensator_state(compensator, initial_state=None):
     Parameters
     ----------
     compensator : object with ``packed_law()``
+        A fusable compensator.
     initial_state : array_like, shape (n_states,), optional
         ``U(t-T)`` (m,) [V]; for the low-pass law the filtered correction
         ``v_f`` (m,) [V]; the play states (n_hysterons,) [V]; the pre-filter
@@ -223,6 +224,7 @@ def compensator_state(compensator, initial_state=None):
     Returns
     -------
     numpy.ndarray, shape (n_states,)
+        A validated copy.
 
     Raises
     ------
@@ -357,14 +359,16 @@ def simulate_compensator(compensator, reference, initial_state=None, backend="nu
 class ChainResult:
     """Result of a compensator -> plant simulation.
 
-    Attributes
+    Parameters
     ----------
     inputs : numpy.ndarray, shape (m, n_samples)
         Compensator output [V] (NaN after a divergence).
     outputs : numpy.ndarray, shape (p, n_samples)
         Plant displacements [µm] (NaN after a divergence).
-    compensator_state, plant_state : numpy.ndarray or None
-        Final states (None after a divergence).
+    compensator_state : numpy.ndarray or None
+        Final compensator state (None after a divergence).
+    plant_state : numpy.ndarray or None
+        Final plant state (None after a divergence).
     divergence : CompensatorDivergence or None
         Set when the compensator diverged; the arrays are valid before
         ``divergence.sample``.
