@@ -73,7 +73,18 @@ def steady_window(n_samples, period_samples, settle_periods):
 
 
 def peak_to_peak(y):
-    """``max(y) - min(y)`` of a record, shape (n_samples,) [µm]."""
+    """``max(y) - min(y)`` of a record.
+
+    Parameters
+    ----------
+    y : array_like, shape (n_samples,)
+        Record [µm].
+
+    Returns
+    -------
+    float
+        Peak-to-peak value [µm].
+    """
     return float(np.ptp(np.asarray(y, dtype=float)))
 
 

@@ -13,6 +13,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from hammerstein.exceptions import SignalError
+
 __all__ = [
     "SignalError",
     "MIN_SAMPLES_PER_PERIOD",
@@ -30,10 +32,6 @@ MIN_SAMPLES_PER_PERIOD = 8
 
 #: Most samples in one record (80 MB per signal row; 500 s at T = 50 µs).
 MAX_SAMPLES = 10_000_000
-
-
-class SignalError(ValueError):
-    """Invalid reference or drive parameters (the message names the field)."""
 
 
 def _positive(value, name, unit):
@@ -296,6 +294,20 @@ def lissajous_period(frequency_x, frequency_y, max_denominator=100):
 
     The ratio ``f_x / f_y`` is approximated by a fraction p/q with q <=
     ``max_denominator``; the common period is ``p / f_x = q / f_y``.
+
+    Parameters
+    ----------
+    frequency_x : float
+        Frequency of the x signal [Hz], > 0.
+    frequency_y : float
+        Frequency of the y signal [Hz], > 0.
+    max_denominator : int
+        Largest q tried.
+
+    Returns
+    -------
+    float
+        The common period [s].
 
     Raises
     ------

@@ -25,6 +25,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from hammerstein.exceptions import Invalid, NestedInvalid, ScenarioError
+
 __all__ = [
     "ScenarioError",
     "Field",
@@ -38,32 +40,6 @@ __all__ = [
     "choice",
     "name_list",
 ]
-
-
-class ScenarioError(ValueError):
-    """A scenario file has one or more problems.
-
-    Attributes
-    ----------
-    problems : list of str
-        One ``file: key: message`` line per problem.
-    """
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("\n".join(self.problems))
-
-
-class Invalid(ValueError):
-    """Raised by a field checker; the message says what was expected."""
-
-
-class NestedInvalid(Invalid):
-    """A nested table has problems; ``problems`` lists ``(key, message)``."""
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
 
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------
