@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.references import raster_line_index
 from hammerstein.report import figures as plots
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
@@ -252,6 +253,30 @@ def _figures(scenario, results, directory):
     return figs
 
 
+def _raster_figures(scenario, results, directory):
+    """Error maps of the raster references (one per case); return [(caption, file name)]."""
+    figs = []
+    for r in results:
+        s = r.spec.signal_spec
+        if r.spec.mode != "reference" or s.get("kind") != "raster" or r.divergence is not None:
+            continue
+        names = list(r.spec.plant.hysteresis.output_names)
+        fast, slow = (names.index(o) for o in s["outputs"])
+        cycles = r.spec.time * float(s["frequency"])
+        e = r.reference - r.outputs
+        fig = plots.raster_error_map(
+            r.reference[fast], e[[fast, slow]],
+            [f"{names[fast]}_r - {names[fast]} (fast)", f"{names[slow]}_r - {names[slow]} (slow)"],
+            raster_line_index(r.spec.time, s["frequency"]), np.mod(cycles, 1.0) < 0.5,
+            float(s["size"][0]), names[fast],
+            f"{scenario.title}: {r.name}, tracking error per scan line")
+        fname = f"raster-error-{r.name}.png"
+        plots.save(fig, directory / fname)
+        figs.append((f"Case {r.name}: tracking error per scan line against the fast-axis "
+                     f"position (trace and retrace)", fname))
+    return figs
+
+
 def write_report(scenario, results, directory):
     """Write metrics.csv, the time series, the figures and report.md.
 
@@ -272,6 +297,7 @@ def write_report(scenario, results, directory):
         timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
                                    float_format="%.6g")
     figs = _figures(scenario, results, directory) if results else []
+    figs += _raster_figures(scenario, results, directory)
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]
