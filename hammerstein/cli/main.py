@@ -57,7 +57,7 @@ COMMANDS = {
     "run": ("hammerstein.cli.run", "simulate scenarios and write reports"),
     "validate": ("hammerstein.cli.validate", "check scenario files without simulating"),
     "list": ("hammerstein.cli.listing", "list bundled presets, compensator kinds and scenarios"),
-    "identify": ("hammerstein.cli.identify", "identify a classical PI model from a measured record"),
+    "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
 }

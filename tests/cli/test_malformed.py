@@ -32,7 +32,7 @@ from hammerstein.core.compensators import (CompensatorError, InverseMultiplicati
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.presets import load_plant
 
-CORPUS = Path(__file__).resolve().parent / "corpus"
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good"
 
 #: Malformed scenario file -> fragment its error must contain.
@@ -234,7 +234,7 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", CORPUS / "data"],
      "hammerstein identify: error: --out:"),
     (["identify", CORPUS / "data" / "good.csv", "--time", "0", "--input", "1"],
-     "hammerstein identify: error: the following arguments are required: --output, --out"),
+     "hammerstein identify: error: the following arguments are required: --output/--outputs, --out"),
     (["check", GOOD / "good-static.toml"],
      "hammerstein check: error: the following arguments are required: --baseline"),
     (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein: error: unrecognized arguments: --bogus"),

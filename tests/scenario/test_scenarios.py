@@ -10,7 +10,7 @@ from hammerstein.scenario import registry
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
 
 GOOD_CASE = """
