@@ -11,7 +11,7 @@ from hammerstein.cli.main import main
 from hammerstein.report.messages import group_warnings, message_template
 from hammerstein.report.scenario import compensator_summary, signal_summary
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 _SCENARIO = """
 name = "w"
