@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+from importlib import metadata
 import os
 import sys
 import warnings
@@ -68,7 +69,6 @@ def _version():
     version = getattr(sys.modules.get("hammerstein"), "__version__", None)
     if version:
         return version
-    from importlib import metadata
     try:
         return metadata.version("hammerstein")
     except metadata.PackageNotFoundError:

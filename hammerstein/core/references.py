@@ -17,6 +17,7 @@ from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 __all__ = [
     "SignalError",
@@ -689,8 +690,6 @@ def from_file(sampling_period, outputs, file, columns, time="time", duration=Non
         (unknown output, missing column, non-numeric values), ``duration``
         (beyond the file's last time).
     """
-    import pandas as pd  # only this reference kind needs pandas
-
     T = _positive(sampling_period, "sampling_period", "s")
     path = Path(file)
     if base_dir is not None and not path.is_absolute():

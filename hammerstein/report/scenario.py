@@ -156,8 +156,13 @@ def compensator_summary(c):
              else f"{model} model"]
     if "gain" in c:
         g = c["gain"]
-        parts.append(f"{g} gain" if isinstance(g, str) else
-                     "gain K = [" + "; ".join(" ".join(_num(a) for a in row) for row in g) + "] µm/V")
+        if isinstance(g, str):
+            parts.append(f"{g} gain")
+        elif isinstance(g, list):
+            parts.append("gain K = [" + "; ".join(" ".join(_num(a) for a in row) for row in g)
+                         + "] µm/V")
+        else:
+            parts.append(f"gain {g:g}" if isinstance(g, (int, float)) else f"gain {g}")
     if "iterations" in c:
         parts.append(f"{c['iterations']} iteration{'' if c['iterations'] == 1 else 's'}")
     if c.get("feedback") == "lowpass":
@@ -165,6 +170,9 @@ def compensator_summary(c):
                      if c.get("cutoff_hz") is not None else "low-pass feedback")
     if c.get("check") not in (None, "error"):
         parts.append(f"convergence check: {c['check']}")
+    known = {"kind", "model", "identify", "gain", "iterations", "feedback", "cutoff_hz", "check"}
+    parts += [f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+              for k, v in c.items() if k not in known and isinstance(v, (str, int, float))]
     return f"{kind}: {', '.join(parts)}"
 
 

@@ -2,7 +2,6 @@
 
 import textwrap
 import xml.etree.ElementTree as ET
-from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -10,8 +9,6 @@ import pytest
 from hammerstein.cli.main import main
 from hammerstein.report.messages import group_warnings, message_template
 from hammerstein.report.scenario import compensator_summary, signal_summary
-
-ROOT = Path(__file__).resolve().parents[2]
 
 _SCENARIO = """
 name = "w"
