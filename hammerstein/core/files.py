@@ -37,6 +37,8 @@ import threading
 from contextlib import contextmanager
 from pathlib import Path
 
+from hammerstein.exceptions import HammersteinError
+
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals"]
 
@@ -51,7 +53,7 @@ LIMITS = {
 TMP_SUFFIX = ".hammerstein-tmp"
 
 
-class FileLimitError(ValueError):
+class FileLimitError(HammersteinError, ValueError):
     """A file cannot be read or written safely (message names the file and why)."""
 
 

@@ -200,8 +200,8 @@ def _predicted_samples(kind, c, T):
     """Samples the signal of a checked table ``c`` will have (before generating it)."""
     if "duration" in c:
         return c["duration"] / T
-    if c.get("periods") is None:
-        return 0.0
+    if c.get("periods") is None or not ("frequency" in c or "frequencies" in c):
+        return 0.0  # e.g. a file reference: as long as its file (bounded in bytes)
     if kind == "lissajous":
         try:
             period = refs.lissajous_period(*c["frequencies"])
@@ -212,7 +212,7 @@ def _predicted_samples(kind, c, T):
     return c["periods"] * period / T
 
 
-def _signal(case_where, mode, spec, plant, problems, source, budget=None):
+def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=None):
     """Generate the drive/reference; returns (time, signal, period_samples, extras).
 
     ``budget``: ``{"limit", "used", "over"}`` samples per scenario; a signal
@@ -256,14 +256,30 @@ def _signal(case_where, mode, spec, plant, problems, source, budget=None):
             return None
     try:
         if mode == "drive":
-            t, sig = refs.sine_drive(T, model.input_names, **c)
+            fn = refs.triangle_drive if kind == "triangle" else refs.sine_drive
+            t, sig = fn(T, model.input_names, **c)
             extras["driven_input"] = model.input_names.index(c["input"])
             period = 1.0 / c["frequency"]
-        elif kind == "sine":
-            t, sig = refs.sine(T, model.output_names, **c)
+        elif kind in ("sine", "triangle"):
+            fn = refs.triangle if kind == "triangle" else refs.sine
+            t, sig = fn(T, model.output_names, **c)
             extras["loop_channel"] = model.output_names.index(c["output"])
             extras["scale"] = c["amplitude"]
             period = 1.0 / c["frequency"]
+        elif kind == "file":
+            period = c.pop("period", None) or T
+            t, sig = refs.from_file(T, model.output_names, base_dir=base, **c)
+        elif kind == "raster":
+            outs = c.pop("outputs")
+            if len(set(outs)) != 2 or any(o not in model.output_names for o in outs):
+                raise refs.SignalError(f"outputs: expected two different outputs [fast, slow] "
+                                       f"of the plant {model.output_names}, found {outs}")
+            t, xy = refs.raster(T, **c)
+            sig = np.zeros((model.n_outputs, t.size))
+            for row, o in zip(xy, outs):
+                sig[model.output_names.index(o)] = row
+            period = 1.0 / c["frequency"]
+            extras["scale"] = float(max(c["size"]))
         else:
             outs = c.pop("outputs", None) or list(model.output_names[:2])
             missing = [o for o in outs if o not in model.output_names]
@@ -427,7 +443,7 @@ def _validate_cases(path, data):
                 once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
                      f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
                 comp_ok = False
-        sig = _signal(where, mode, raw[mode], plant, problems, source, budget)
+        sig = _signal(where, mode, raw[mode], plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "

@@ -24,9 +24,9 @@ from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.presets import PresetError, load_model, save_model
 from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries
 
-CORPUS = Path(__file__).resolve().parent / "corpus"
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good" / "good-static.toml"
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 IDENTIFY = [str(CORPUS / "data" / "good.csv"), "--time", "time_s", "--input", "u_V",
             "--output", "y_um", "--thresholds", "5"]
 
@@ -174,12 +174,12 @@ def test_save_model_round_trip_through_a_symlink(tmp_path):
 
 def test_identify_writes_a_symlinks_target_and_keeps_its_mode(capsys, tmp_path):
     real = tmp_path / "real.toml"
-    real.write_text("")
+    save_model(_model(), real)  # a model file: identify may replace it
     os.chmod(real, 0o600)
     (tmp_path / "m.toml").symlink_to(real)
     status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", tmp_path / "m.toml")
     assert (status, err) == (0, [])
-    assert (tmp_path / "m.toml").is_symlink() and "[model]" in real.read_text()
+    assert (tmp_path / "m.toml").is_symlink() and "u_V" in real.read_text()
     assert stat.S_IMODE(os.stat(real).st_mode) == 0o600
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "real.toml"]
 
