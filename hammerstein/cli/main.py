@@ -30,6 +30,7 @@ import threading
 import warnings
 
 from hammerstein.cli._common import one_line, print_err
+from hammerstein.core.files import interrupt
 
 __all__ = ["main", "build_parser", "one_line", "COMMANDS"]
 
@@ -107,20 +108,13 @@ def build_parser(command=None):
     return parser
 
 
-class Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived (``signum``): unwinds like Ctrl-C, removing temporaries."""
-
-    def __init__(self, signum):
-        super().__init__(signum)
-        self.signum = signum
-
-
 def _on_signal(signum, frame):
     # later signals are ignored so that the clean-up in progress (removing a
-    # temporary directory) is not interrupted in turn
+    # temporary directory) is not interrupted in turn; inside the creation or
+    # rename of a temporary the interruption waits for its end
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, signal.SIG_IGN)
-    raise Interrupted(signum)
+    interrupt(signum)
 
 
 def _install_signal_handlers():

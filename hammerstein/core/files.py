@@ -31,16 +31,15 @@ from __future__ import annotations
 
 import os
 import secrets
-import signal
 import stat
-import threading
 from contextlib import contextmanager
 from pathlib import Path
 
 from hammerstein.exceptions import HammersteinError
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
-           "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals"]
+           "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals",
+           "Interrupted", "interrupt"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
@@ -153,23 +152,46 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     return bounded_read_bytes(path, kind, what).decode(encoding)
 
 
+class Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived (``signum``): unwinds like Ctrl-C, removing temporaries."""
+
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
+_CRITICAL = {"depth": 0, "pending": None}
+
+
+def interrupt(signum):
+    """Raise :class:`Interrupted` now, or when the current :func:`deferred_signals` block ends.
+
+    The signal handler of the command line (:mod:`hammerstein.cli.main`) calls it.
+    """
+    if _CRITICAL["depth"] > 0:
+        _CRITICAL["pending"] = signum
+        return
+    raise Interrupted(signum)
+
+
 @contextmanager
 def deferred_signals():
-    """Hold SIGINT and SIGTERM back while creating or renaming a temporary.
+    """Hold an interruption (:func:`interrupt`) back while creating or renaming a temporary.
 
-    A signal that arrives meanwhile is delivered when the block ends, so the
-    caller always knows the name of what it created (and removes it) and a
-    rename of a report over an old one is never left half done.
+    A signal that arrives meanwhile raises :class:`Interrupted` when the
+    block ends, so the caller always knows the name of what it created (and
+    removes it) and a rename of a report over an old one is never left half
+    done. (A signal mask would not do: CPython may take a process signal on
+    another thread and still run the handler in the main thread at once.)
     """
-    if threading.current_thread() is not threading.main_thread() or \
-            not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    _CRITICAL["depth"] += 1
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        _CRITICAL["depth"] -= 1
+        if _CRITICAL["depth"] == 0 and _CRITICAL["pending"] is not None:
+            signum, _CRITICAL["pending"] = _CRITICAL["pending"], None
+            raise Interrupted(signum)
 
 
 def umask():
