@@ -118,7 +118,7 @@ def _on_signal(signum, frame):
 
 
 def _install_signal_handlers():
-    """SIGINT/SIGTERM -> :class:`Interrupted`; returns the previous handlers (main thread only)."""
+    """SIGINT/SIGTERM -> a KeyboardInterrupt (:func:`hammerstein.core.files.interrupt`); returns the previous handlers (main thread only)."""
     if threading.current_thread() is not threading.main_thread():
         return {}
     return {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}

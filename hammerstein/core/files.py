@@ -35,11 +35,11 @@ import stat
 from contextlib import contextmanager
 from pathlib import Path
 
-from hammerstein.exceptions import HammersteinError
+from hammerstein.exceptions import FileLimitError
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals",
-           "Interrupted", "interrupt"]
+           "interrupt"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
@@ -50,10 +50,6 @@ LIMITS = {
 
 #: Suffix of the temporary files of :func:`safe_write`.
 TMP_SUFFIX = ".hammerstein-tmp"
-
-
-class FileLimitError(HammersteinError, ValueError):
-    """A file cannot be read or written safely (message names the file and why)."""
 
 
 def _size(n):
@@ -152,8 +148,12 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     return bounded_read_bytes(path, kind, what).decode(encoding)
 
 
-class Interrupted(KeyboardInterrupt):
-    """SIGINT or SIGTERM arrived (``signum``): unwinds like Ctrl-C, removing temporaries."""
+class _Interrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM arrived (``signum``): unwinds like Ctrl-C, removing temporaries.
+
+    A KeyboardInterrupt (not an Exception), so that no ``except Exception``
+    of a scenario run swallows it.
+    """
 
     def __init__(self, signum):
         super().__init__(signum)
@@ -164,21 +164,21 @@ _CRITICAL = {"depth": 0, "pending": None}
 
 
 def interrupt(signum):
-    """Raise :class:`Interrupted` now, or when the current :func:`deferred_signals` block ends.
+    """Raise a KeyboardInterrupt carrying ``signum`` now, or when the current :func:`deferred_signals` block ends.
 
     The signal handler of the command line (:mod:`hammerstein.cli.main`) calls it.
     """
     if _CRITICAL["depth"] > 0:
         _CRITICAL["pending"] = signum
         return
-    raise Interrupted(signum)
+    raise _Interrupted(signum)
 
 
 @contextmanager
 def deferred_signals():
     """Hold an interruption (:func:`interrupt`) back while creating or renaming a temporary.
 
-    A signal that arrives meanwhile raises :class:`Interrupted` when the
+    A signal that arrives meanwhile raises the interruption when the
     block ends, so the caller always knows the name of what it created (and
     removes it) and a rename of a report over an old one is never left half
     done. (A signal mask would not do: CPython may take a process signal on
@@ -191,7 +191,7 @@ def deferred_signals():
         _CRITICAL["depth"] -= 1
         if _CRITICAL["depth"] == 0 and _CRITICAL["pending"] is not None:
             signum, _CRITICAL["pending"] = _CRITICAL["pending"], None
-            raise Interrupted(signum)
+            raise _Interrupted(signum)
 
 
 def umask():
