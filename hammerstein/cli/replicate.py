@@ -36,7 +36,21 @@ def add_parser(subparsers):
 
 
 def handler(args):
-    """Run the paper's scenarios and write the README; exit status 0, 1 (a scenario failed) or 2."""
+    """Run the paper's scenarios and write the README; exit status 0, 1 (a scenario failed) or 2.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments: ``args.scenarios`` (directory of the paper's
+        scenario files) and ``args.out`` (output directory).
+
+    Returns
+    -------
+    int
+        0 when every scenario ran, 1 when one failed (one line per failure
+        on stderr), 2 when ``args.scenarios`` holds no ``*.toml`` scenario or ``args.out``
+        cannot be a directory (usage error).
+    """
     problem = out_dir_problem(args.out)
     if problem:
         print_err(f"hammerstein replicate: error: {problem}")

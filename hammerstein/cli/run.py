@@ -50,7 +50,21 @@ def add_parser(subparsers):
 
 
 def handler(args):
-    """Run the scenarios of ``args.scenarios`` into ``args.out``; exit status 0, 1 or 2."""
+    """Run the scenarios of ``args.scenarios`` into ``args.out``; exit status 0, 1 or 2.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments: ``args.scenarios`` (list of scenario file paths) and
+        ``args.out`` (directory receiving one report directory per scenario).
+
+    Returns
+    -------
+    int
+        0 when every scenario ran, 1 when one failed (one line per failure
+        on stderr, the others still run), 2 when ``args.out`` cannot be a
+        reports directory (empty, a file, under a file, not writable).
+    """
     problem = out_dir_problem(args.out)
     if problem:
         print_err(f"hammerstein run: error: {problem}")

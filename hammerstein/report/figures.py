@@ -319,6 +319,14 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
 
 
 def save(fig, path):
-    """Write a figure as PNG (120 dpi) and close it."""
+    """Write a figure as PNG (120 dpi) and close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure; closed afterwards (pyplot releases it).
+    path : str or pathlib.Path
+        File to write (overwritten).
+    """
     fig.savefig(path, dpi=120)
     plt.close(fig)
