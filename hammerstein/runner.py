@@ -186,6 +186,13 @@ def remove_stale_temporaries(out_dir, before=None):
     marker is older than ``before`` (default now) and whose process
     ``<pid>`` is gone (or is this process) are removed.
 
+    Parameters
+    ----------
+    out_dir : str or pathlib.Path
+        Reports directory (nothing happens when it does not exist).
+    before : float, optional
+        Start of the run [s since the epoch]; default now.
+
     Returns
     -------
     list of pathlib.Path

@@ -60,10 +60,20 @@ def _size(n):
 
 
 def limit(kind):
-    """The size limit [bytes] of a kind of file (``"toml"``, ``"data"``, ``"baseline"``).
+    """The size limit [bytes] of a kind of file.
 
     The environment variable of :data:`LIMITS` overrides the default; a
     value that is not a positive integer is ignored.
+
+    Parameters
+    ----------
+    kind : {'toml', 'data', 'baseline'}
+        Key of :data:`LIMITS`.
+
+    Returns
+    -------
+    int
+        Largest accepted size [bytes].
     """
     var, default = LIMITS[kind]
     text = os.environ.get(var, "").strip()
@@ -73,7 +83,17 @@ def limit(kind):
 
 
 def check_regular(path, what="file"):
-    """``os.stat`` of ``path`` if it is a regular file; else FileLimitError.
+    """``os.stat`` of ``path`` if it is a regular file (a symlink is followed).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    what : str
+        What the file should be, for messages.
+
+    Returns
+    -------
+    os.stat_result
 
     Raises
     ------
@@ -144,7 +164,29 @@ def bounded_read_bytes(path, kind="toml", what="file"):
 
 
 def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
-    """:func:`bounded_read_bytes` decoded (UnicodeDecodeError passes through)."""
+    """:func:`bounded_read_bytes`, decoded.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    kind : {'toml', 'data', 'baseline'}
+        Selects the size limit.
+    what : str
+        What the file should be, for messages.
+    encoding : str
+        Text encoding.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    FileNotFoundError, FileLimitError, OSError
+        As :func:`bounded_read_bytes`.
+    UnicodeDecodeError
+        The bytes are not text in ``encoding``.
+    """
     return bounded_read_bytes(path, kind, what).decode(encoding)
 
 
@@ -167,6 +209,16 @@ def interrupt(signum):
     """Raise a KeyboardInterrupt carrying ``signum`` now, or when the current :func:`deferred_signals` block ends.
 
     The signal handler of the command line (:mod:`hammerstein.cli.main`) calls it.
+
+    Parameters
+    ----------
+    signum : int
+        The signal (SIGINT or SIGTERM); the exit status is ``128 + signum``.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Carrying ``signum``, unless a :func:`deferred_signals` block is open.
     """
     if _CRITICAL["depth"] > 0:
         _CRITICAL["pending"] = signum
@@ -195,7 +247,13 @@ def deferred_signals():
 
 
 def umask():
-    """The process umask (read without changing it for longer than one call)."""
+    """The process umask (read without changing it for longer than one call).
+
+    Returns
+    -------
+    int
+        Permission bits removed from newly created files and directories.
+    """
     mask = os.umask(0o022)
     os.umask(mask)
     return mask

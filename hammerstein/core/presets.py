@@ -47,7 +47,22 @@ DYNAMICS_KEYS = ("kind", "natural_frequency", "damping_ratio")
 
 
 def unknown_keys(table, allowed, where):
-    """``where.key: unknown key (did you mean ...?)`` for every key of ``table`` not in ``allowed``."""
+    """The unknown keys of a table, each with the closest valid key.
+
+    Parameters
+    ----------
+    table : dict
+        Parsed TOML table (anything else has no keys).
+    allowed : sequence of str
+        Valid keys.
+    where : str
+        Key path prefix (``"preset."``).
+
+    Returns
+    -------
+    list of str
+        ``where.key: unknown key (did you mean ...?)`` per unknown key.
+    """
     out = []
     for key in table if isinstance(table, dict) else ():
         if key not in allowed:

@@ -474,7 +474,7 @@ def write_baseline(frame, path):
 
     An exclusive temporary file next to ``path`` is renamed over it: a
     replaced file keeps its permissions, a symlink's target is written, a
-    target that is not a regular file is refused (BaselineError).
+    target that is not a regular file is refused.
 
     Parameters
     ----------
@@ -486,6 +486,13 @@ def write_baseline(frame, path):
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    BaselineError
+        Malformed metrics, or a target that is not a regular file.
+    OSError
+        The directory cannot be created or written.
     """
     frame = _normalise(frame, "baseline")
     path = Path(path)

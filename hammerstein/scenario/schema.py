@@ -77,7 +77,14 @@ MAX_TOTAL_SAMPLES = 5_000_000
 
 
 def total_samples_budget():
-    """The total-samples budget of one scenario (``HAMMERSTEIN_MAX_SAMPLES`` or the default)."""
+    """The total-samples budget of one scenario.
+
+    Returns
+    -------
+    int
+        ``HAMMERSTEIN_MAX_SAMPLES`` when it is a positive integer, else
+        :data:`MAX_TOTAL_SAMPLES`.
+    """
     text = os.environ.get("HAMMERSTEIN_MAX_SAMPLES", "").strip()
     return int(text) if text.isdigit() and int(text) > 0 else MAX_TOTAL_SAMPLES
 
@@ -320,7 +327,13 @@ _NAME_WHAT = "a name of letters, digits, '.', '_' or '-'"
 
 
 def name_field():
-    """Checker of a name usable as a file name (:data:`NAME`, at most :data:`MAX_NAME` characters)."""
+    """Checker of a name usable as a file name (:data:`NAME`, at most :data:`MAX_NAME` characters).
+
+    Returns
+    -------
+    callable
+        ``check(value) -> str``, raising :class:`Invalid`.
+    """
     return string(NAME, _NAME_WHAT, MAX_NAME)
 
 TOP = {
