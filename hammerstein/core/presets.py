@@ -19,6 +19,7 @@ import tomli_w
 
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
 
 __all__ = [
@@ -31,6 +32,10 @@ __all__ = [
     "load_model",
     "save_model",
     "load_plant",
+    "dynamics_from_table",
+    "dynamics_to_table",
+    "load_dynamics",
+    "save_dynamics",
 ]
 
 
@@ -258,21 +263,70 @@ def save_model(model, path, metadata=None):
         raise
 
 
+_DYNAMICS_KEYS = {"none": set(), "bending_modes": {"natural_frequency", "damping_ratio"},
+                  "state_space": {"A", "B", "C", "D"}}
+
+
 def dynamics_from_table(table, outputs, source="preset"):
     """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
 
     ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
-    ``damping_ratio`` per output; ``kind = "none"`` for a static plant.
+    ``damping_ratio`` per output (decoupled, unit DC gain);
+    ``kind = "state_space"`` with continuous-time matrices ``A`` (n x n)
+    [1/s], ``B`` (n x p), ``C`` (p x n) and optional ``D`` (p x p) as arrays
+    of arrays: inputs are the p PI outputs [µm], outputs the p displacements
+    [µm]; off-diagonal (dynamic cross-coupling) terms are allowed, the DC
+    gain is whatever the matrices give (see
+    :func:`hammerstein.core.lti.dc_gain`); ``kind = "none"`` for a static
+    plant.
+
+    Parameters
+    ----------
+    table : dict
+        The parsed ``[dynamics]`` table.
+    outputs : list of str
+        Output names of the preset's PI model (p of them).
+    source : str
+        Prefix of error messages (file name).
+
+    Returns
+    -------
+    control.StateSpace or None
+        Continuous-time p x p system (None for ``kind = "none"``).
 
     Raises
     ------
     PresetError
+        Naming the key: ``dynamics.A: expected ...`` (shape, finiteness,
+        stability of A, p = number of outputs).
     """
+    if not isinstance(table, dict):
+        raise PresetError(f"{source}: dynamics: expected a table")
     kind = table.get("kind", "none")
+    if kind not in _DYNAMICS_KEYS:
+        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
+                          f"'none', found {kind!r}")
+    unknown = sorted(set(table) - _DYNAMICS_KEYS[kind] - {"kind", "description"})
+    if unknown:
+        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key for kind = {kind!r} "
+                          f"(expected {', '.join(sorted(_DYNAMICS_KEYS[kind])) or 'none'})")
     if kind == "none":
         return None
-    if kind != "bending_modes":
-        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes' or 'none', found {kind!r}")
+    if kind == "state_space":
+        for key in ("A", "B", "C"):
+            if key not in table:
+                raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space' "
+                                  f"needs A, B, C and optionally D)")
+        try:
+            system = state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
+                                          names=None)
+        except DynamicsError as exc:
+            raise PresetError(f"{source}: {exc}") from None
+        if system.ninputs != len(outputs):
+            raise PresetError(f"{source}: dynamics.B: expected {len(outputs)} columns, one per "
+                              f"PI output {list(outputs)}, found {system.ninputs}")
+        return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
+                                    names=outputs)
     for key in ("natural_frequency", "damping_ratio"):
         if key not in table:
             raise PresetError(f"{source}: dynamics.{key}: missing")
@@ -282,6 +336,87 @@ def dynamics_from_table(table, outputs, source="preset"):
         return bending_modes(table["natural_frequency"], table["damping_ratio"], outputs)
     except DynamicsError as exc:
         raise PresetError(f"{source}: dynamics.{exc}") from None
+
+
+def dynamics_to_table(system):
+    """A ``[dynamics]`` table (``kind = "state_space"``) of a continuous or discrete system.
+
+    A discrete system is written as its continuous ZOH equivalent
+    (:func:`hammerstein.core.lti.continuous_system`), so that
+    :func:`load_dynamics` at the same sampling period gives it back.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p system.
+
+    Returns
+    -------
+    dict
+        TOML-ready ``{"kind": "state_space", "A": [[..]], "B", "C", "D"}``.
+    """
+    if system.isdtime(strict=True):
+        system = continuous_system(system)
+    return {"kind": "state_space",
+            **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
+
+
+def load_dynamics(path, outputs, sampling_period):
+    """The discrete linear dynamics G of a dynamics or preset file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file with a ``[dynamics]`` table (a preset, or a file written
+        by :func:`save_dynamics`).
+    outputs : list of str
+        Output names of the plant (p).
+    sampling_period : float
+        T [s] of the plant; the continuous dynamics are discretised (ZOH) at it.
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete p x p system.
+
+    Raises
+    ------
+    PresetError
+        Missing file, no ``[dynamics]`` table, ``kind = "none"``, wrong size.
+    """
+    data = read_toml(path)
+    if "dynamics" not in data:
+        raise PresetError(f"{path}: missing [dynamics] table")
+    cont = dynamics_from_table(data["dynamics"], list(outputs), str(path))
+    if cont is None:
+        raise PresetError(f"{path}: dynamics.kind: 'none' has no dynamics to invert")
+    return discretize(cont, float(sampling_period))
+
+
+def save_dynamics(system, path, metadata=None):
+    """Write a dynamics file (``[dynamics] kind = "state_space"``) that :func:`load_dynamics` reads.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p system (a discrete one is saved as its continuous ZOH equivalent).
+    path : str or pathlib.Path
+        Destination, written atomically.
+    metadata : dict, optional
+        Stored as an ``[identification]`` table.
+    """
+    path = Path(path)
+    doc = {"identification": metadata} if metadata else {}
+    doc["dynamics"] = dynamics_to_table(system)
+    tmp = path.with_name(path.name + ".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with open(tmp, "wb") as fh:
+            tomli_w.dump(doc, fh)
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def load_plant(preset, dynamics=True, base_dir=None):
