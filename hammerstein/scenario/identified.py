@@ -63,6 +63,8 @@ __all__ = [
     "identify_dynamics_table",
     "identified_hammerstein",
     "resolve_dynamics",
+    "save_identified_dynamics",
+    "flat_frequency",
 ]
 
 #: White-noise RMS [µm] of the ECL202 sensor model used by ``sensor = true``.
@@ -278,7 +280,8 @@ def _used_specs(scenario):
     used = []
     for case in scenario.cases:
         comp = case.compensator_spec or {}
-        if case.mode == "reference" and comp.get("model") == "identified" and "identify" in comp:
+        if (case.mode == "reference" and comp.get("model") == "identified" and "identify" in comp
+                and comp.get("kind") != "hammerstein"):     # see save_identified_dynamics
             used.append((case.name, "compensator", case.plant, comp["identify"]))
         mspec = getattr(case, "model_spec", None) or {}
         if mspec.get("model") == "identified" and "identify" in mspec:
@@ -740,3 +743,57 @@ def resolve_dynamics(spec, plant, base_dir, model=None):
     if not path.is_absolute():
         path = Path(base_dir) / path
     return pi, load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+
+
+def _dynamics_specs(scenario):
+    """[(case name, plant, compensator spec)] of the cases whose G is identified."""
+    used = []
+    for case in scenario.cases:
+        comp = case.compensator_spec or {}
+        dyn = comp.get("dynamics") or ("identified" if comp.get("model") == "identified" else "plant")
+        if case.mode == "reference" and comp.get("kind") == "hammerstein" and dyn == "identified":
+            used.append((case.name, case.plant, comp))
+    return used
+
+
+def save_identified_dynamics(scenario, directory):
+    """Save the PI models and dynamics that ``kind = "hammerstein"`` cases identified.
+
+    Files ``models/hammerstein-<i>-pi.toml`` (model file) and
+    ``models/hammerstein-<i>-dynamics.toml`` (``[dynamics] kind =
+    "state_space"``, continuous ZOH equivalent: loadable by ``dynamics =
+    "<file>"``), one pair per distinct identification (from the cache).
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenario.resolve.Scenario
+    directory : pathlib.Path
+
+    Returns
+    -------
+    list of dict
+        One per distinct identification: ``cases``, ``pi_file``,
+        ``dynamics_file``, ``identifier`` (DynamicsIdentifier), ``plant``
+        (HammersteinPlant), ``metadata`` (of the dynamics).
+    """
+    directory = Path(directory)
+    out, index = [], {}
+    for name, plant, comp in _dynamics_specs(scenario):
+        ident_pi = comp.get("model") == "identified"
+        model = None if ident_pi else resolve_model(comp.get("model", "plant"), plant,
+                                                     scenario.path.parent, comp.get("identify"))
+        pi, pmeta, ident, dmeta = identified_hammerstein(
+            plant, comp.get("identify") if ident_pi else None, comp.get("identify_dynamics"), model)
+        key = id(ident)
+        if key not in index:
+            i = len(out) + 1
+            row = {"cases": [], "pi_file": None, "dynamics_file": f"models/hammerstein-{i}-dynamics.toml",
+                   "identifier": ident, "plant": plant, "metadata": dmeta}
+            if ident_pi:
+                row["pi_file"] = f"models/hammerstein-{i}-pi.toml"
+                save_model(pi, directory / row["pi_file"], pmeta)
+            save_dynamics(ident.system_, directory / row["dynamics_file"], dmeta)
+            index[key] = row
+            out.append(row)
+        index[key]["cases"].append(name)
+    return out
