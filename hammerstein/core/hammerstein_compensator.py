@@ -95,8 +95,9 @@ def continuation(reference, samples, period_samples=None):
         How many.
     period_samples : int, optional
         Period of a periodic reference: the continuation is the record one
-        period earlier; otherwise a quadratic extrapolation of the last three
-        samples (exact for polynomials of degree 2).
+        period earlier when the last 8 samples repeat those one period
+        earlier (a spiral does not); otherwise a quadratic extrapolation of
+        the last three samples (exact for polynomials of degree 2).
 
     Returns
     -------
@@ -106,8 +107,10 @@ def continuation(reference, samples, period_samples=None):
     N = r.shape[1]
     if samples <= 0:
         return np.zeros((r.shape[0], 0))
-    if period_samples and N >= period_samples >= samples:
-        return r[:, N - period_samples:N - period_samples + samples].copy()
+    if period_samples and N >= period_samples + 8 and period_samples >= samples:
+        last, before = r[:, N - 8:], r[:, N - period_samples - 8:N - period_samples]
+        if np.allclose(last, before, rtol=0, atol=1e-9 * max(np.max(np.abs(r)), 1.0)):
+            return r[:, N - period_samples:N - period_samples + samples].copy()
     if N < 3:
         return np.repeat(r[:, -1:], samples, axis=1)
     k = np.arange(1, samples + 1)

@@ -14,6 +14,7 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
+import control
 import numpy as np
 import tomli_w
 
@@ -355,10 +356,15 @@ def dynamics_to_table(system):
     dict
         TOML-ready ``{"kind": "state_space", "A": [[..]], "B", "C", "D"}``.
     """
+    mats = system
     if system.isdtime(strict=True):
-        system = continuous_system(system)
+        try:
+            mats = continuous_system(system)
+        except DynamicsError:              # e.g. a real pole at z <= 0: keep it discrete
+            return {"kind": "discrete_state_space", "sampling_period": float(system.dt),
+                    **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
     return {"kind": "state_space",
-            **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
+            **{k: np.asarray(getattr(mats, k), dtype=float).tolist() for k in "ABCD"}}
 
 
 def load_dynamics(path, outputs, sampling_period):
@@ -387,6 +393,21 @@ def load_dynamics(path, outputs, sampling_period):
     data = read_toml(path)
     if "dynamics" not in data:
         raise PresetError(f"{path}: missing [dynamics] table")
+    table = data["dynamics"]
+    if isinstance(table, dict) and table.get("kind") == "discrete_state_space":
+        dt = table.get("sampling_period")
+        if not isinstance(dt, (int, float)) or not np.isclose(dt, sampling_period):
+            raise PresetError(f"{path}: dynamics.sampling_period: expected the plant's "
+                              f"{sampling_period:g} s for discrete dynamics, found {dt!r}")
+        try:
+            sysc = state_space_dynamics(-np.eye(len(table["A"])), table["B"], table["C"],
+                                        table.get("D"), names=outputs)   # shapes and finiteness
+        except (DynamicsError, KeyError, TypeError) as exc:
+            raise PresetError(f"{path}: {exc}") from None
+        A = np.asarray(table["A"], dtype=float)
+        if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
+            raise PresetError(f"{path}: dynamics.A: expected a stable discrete system (|z| < 1)")
+        return control.ss(A, sysc.B, sysc.C, sysc.D, dt=float(dt))
     cont = dynamics_from_table(data["dynamics"], list(outputs), str(path))
     if cont is None:
         raise PresetError(f"{path}: dynamics.kind: 'none' has no dynamics to invert")
