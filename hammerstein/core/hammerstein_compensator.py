@@ -181,7 +181,7 @@ class HammersteinCompensator:
     True
     """
 
-    def __init__(self, model, dynamics, inversion="zpetc", gain="secant", iterations=3,
+    def __init__(self, model, dynamics, inversion="zpetc", gain="midpoint", iterations=3,
                  check="error", feedback="delay", cutoff_hz=None, sampling_period=None,
                  name="hammerstein"):
         if inversion not in INVERSIONS:

@@ -732,17 +732,24 @@ def resolve_dynamics(spec, plant, base_dir, model=None):
                                                  spec.get("identify_dynamics"),
                                                  None if ident_pi else model)
         return pi, ident.system_
-    pi = model if model is not None else resolve_model(spec.get("model", "plant"), plant, base_dir,
-                                                       spec.get("identify"))
     if dyn == "plant":
         if plant.dynamics is None:
             raise IdentificationError("dynamics: the plant is static (no dynamics); "
                                       "a Hammerstein compensator needs dynamics")
-        return pi, plant.dynamics
-    path = Path(dyn)
-    if not path.is_absolute():
-        path = Path(base_dir) / path
-    return pi, load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+        G = plant.dynamics
+    else:
+        path = Path(dyn)
+        if not path.is_absolute():
+            path = Path(base_dir) / path
+        G = load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+    if model is None and spec.get("model") == "identified":
+        # as with identified dynamics: the PI is characterised where this G is flat
+        ispec = identify_table(spec.get("identify"))
+        f_pi = min(ispec["frequency"], max(flat_frequency(G), 0.01))
+        return identified_model(plant, {**ispec, "frequency": f_pi})[0], G
+    pi = model if model is not None else resolve_model(spec.get("model", "plant"), plant, base_dir,
+                                                       spec.get("identify"))
+    return pi, G
 
 
 def _dynamics_specs(scenario):

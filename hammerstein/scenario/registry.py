@@ -132,7 +132,7 @@ def _build_hammerstein(spec, plant, base_dir):
         model = _spec_model(spec, plant, base_dir)
     pi, G = resolve_dynamics(spec, plant, base_dir, model)
     comp = HammersteinCompensator(
-        pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "secant"),
+        pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
         iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
         feedback=spec.get("feedback", "delay"), cutoff_hz=spec.get("cutoff_hz"),
         sampling_period=plant.sampling_period)
@@ -144,6 +144,7 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     _build_hammerstein,
     {**{k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k != "identify"},
      "identify": Field(hammerstein_identify_table),
+     "gain": Field(_gain, default="midpoint"),     # smallest rho(I - K^-1 J) for identified PIs
      "iterations": Field(integer(1), default=3),
      "dynamics": Field(string()),          # default: "identified" with model = "identified", else "plant"
      "identify_dynamics": Field(identify_dynamics_table),
