@@ -10,6 +10,9 @@ compensator and the scenarios accept both. The schema is in the README.
 
 from __future__ import annotations
 
+import difflib
+import os
+import tempfile
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -22,6 +25,7 @@ from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
+from hammerstein.exceptions import PresetError
 
 __all__ = [
     "PresetError",
@@ -38,10 +42,6 @@ __all__ = [
     "load_dynamics",
     "save_dynamics",
 ]
-
-
-class PresetError(ValueError):
-    """A model or preset file is missing, malformed or inconsistent."""
 
 
 PRESET_DIR = resources.files("hammerstein") / "presets"
@@ -69,6 +69,11 @@ def resolve_preset(name_or_path, base_dir=None):
     base_dir : pathlib.Path, optional
         Directory of the file that names the preset.
 
+    Returns
+    -------
+    pathlib.Path
+        Path of the preset file.
+
     Raises
     ------
     PresetError
@@ -88,6 +93,16 @@ def resolve_preset(name_or_path, base_dir=None):
 
 def read_toml(path):
     """Parse a TOML file, with errors that name the file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file.
+
+    Returns
+    -------
+    dict
+        The parsed document.
 
     Raises
     ------
@@ -134,7 +149,12 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
-    problems = []
+    problems = [f"model.{key}: unknown key{_hint(key, MODEL_KEYS)}"
+                for key in table if key not in MODEL_KEYS]
+    for key in ("input_unit", "output_unit"):
+        if key in table and not (isinstance(table[key], str) and table[key].strip()):
+            problems.append(f"model.{key}: expected a unit name such as 'V' or 'µm', "
+                            f"found {table[key]!r}")
     inputs, outputs = table.get("inputs"), table.get("outputs")
     for key, val in (("inputs", inputs), ("outputs", outputs)):
         if not (isinstance(val, list) and val and all(isinstance(v, str) for v in val)):
@@ -158,9 +178,10 @@ def model_from_table(table, source="model"):
             if not isinstance(comp, dict):
                 problems.append(f"{key}: expected a table with weights or gain")
                 continue
-            unknown = set(comp) - {"weights", "thresholds", "gain"}
+            unknown = sorted(set(comp) - set(COMPONENT_KEYS))
             if unknown:
-                problems.append(f"{key}: unknown keys {sorted(unknown)} (expected weights, thresholds or gain)")
+                problems += [f"{key}.{u}: unknown key{_hint(u, COMPONENT_KEYS)} (expected "
+                             f"weights with optional thresholds, or gain)" for u in unknown]
                 continue
             try:
                 if "gain" in comp:
@@ -181,24 +202,66 @@ def model_from_table(table, source="model"):
                 problems.append(f"{key}: {exc}")
                 continue
             grid[outputs.index(out_name)][inputs.index(in_name)] = value
+    offset = table.get("output_offset")
+    if offset is not None and not (isinstance(offset, list) and len(offset) == len(outputs)
+                                   and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                           and np.isfinite(v) for v in offset)):
+        problems.append(f"model.output_offset: expected {len(outputs)} finite numbers, one per "
+                        f"output, found {offset!r}")
     if problems:
         raise PresetError(f"{source}: " + "; ".join(problems))
     try:
         return MultivariablePI(grid, input_names=inputs, output_names=outputs,
-                               input_amplitude=table.get("input_amplitude"))
+                               input_amplitude=table.get("input_amplitude"),
+                               output_offset=offset)
     except HysteresisError as exc:
         raise PresetError(f"{source}: model: {exc}") from None
 
 
-def model_to_table(model: MultivariablePI):
+#: Keys of a ``[model]`` table.
+MODEL_KEYS = ("inputs", "outputs", "input_unit", "output_unit", "input_amplitude",
+              "thresholds", "output_offset", "components")
+#: Keys of one ``[model.components.<output>.<input>]`` table.
+COMPONENT_KEYS = ("weights", "thresholds", "gain")
+
+
+def _hint(key, known):
+    close = difflib.get_close_matches(str(key), known, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     """Inverse of :func:`model_from_table`: a TOML-ready dict.
 
-    Thresholds are written per component (no shared vector is assumed).
+    Thresholds shared by every hysteresis component are written once as
+    ``thresholds``; otherwise each component carries its own. Pure gains are
+    written as ``gain``, absent components are left out, a non-zero
+    ``output_offset`` is written as a list (one value per output).
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        The model to write.
+    input_unit, output_unit : str
+        Unit names stored with the model (informative; the weights are in
+        output unit per input unit).
+
+    Returns
+    -------
+    dict
+        ``[model]`` table of the preset format (see :func:`model_from_table`).
     """
     table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
-             "input_unit": "V", "output_unit": "µm"}
+             "input_unit": str(input_unit), "output_unit": str(output_unit)}
     if model.input_amplitude is not None:
         table["input_amplitude"] = [float(a) for a in model.input_amplitude]
+    if model.output_offset is not None:
+        table["output_offset"] = [float(c) for c in model.output_offset]
+    pis = [c for row in model.components for c in row if isinstance(c, PrandtlIshlinskii)]
+    shared = all(c.thresholds.shape == pis[0].thresholds.shape
+                 and np.array_equal(c.thresholds, pis[0].thresholds) for c in pis)
+    if shared:
+        table["thresholds"] = [float(v) for v in pis[0].thresholds]
     comps = {}
     for l, out in enumerate(model.output_names):
         for k, inp in enumerate(model.input_names):
@@ -206,8 +269,8 @@ def model_to_table(model: MultivariablePI):
             if c is None:
                 continue
             if isinstance(c, PrandtlIshlinskii):
-                entry = {"thresholds": [float(v) for v in c.thresholds],
-                         "weights": [float(v) for v in c.weights]}
+                entry = {} if shared else {"thresholds": [float(v) for v in c.thresholds]}
+                entry["weights"] = [float(v) for v in c.weights]
             else:
                 entry = {"gain": float(c)}
             comps.setdefault(out, {})[inp] = entry
@@ -236,28 +299,37 @@ def load_model(path):
     return model_from_table(data["model"], str(path))
 
 
-def save_model(model, path, metadata=None):
+def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", extra=None):
     """Write a model file that :func:`load_model` and scenarios accept.
 
     Parameters
     ----------
     model : MultivariablePI
     path : str or pathlib.Path
-        Destination ``.toml``; written atomically (temporary file, rename).
+        Destination ``.toml``; written atomically (a unique temporary file
+        next to it, then a rename).
     metadata : dict, optional
         Stored as an ``[identification]`` table (method, frequency, fit
         metrics...).
+    input_unit, output_unit : str
+        Units stored in the ``[model]`` table.
+    extra : dict, optional
+        Further top-level tables (e.g. ``preset`` and ``dynamics`` of a
+        preset file).
     """
     path = Path(path)
     doc = {}
     if metadata:
         doc["identification"] = metadata
-    doc["model"] = model_to_table(model)
-    tmp = path.with_name(path.name + ".tmp")
+    doc.update(extra or {})
+    doc["model"] = model_to_table(model, input_unit, output_unit)
     path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    tmp = Path(name)
     try:
-        with open(tmp, "wb") as fh:
+        with os.fdopen(fd, "wb") as fh:
             tomli_w.dump(doc, fh)
+        os.chmod(tmp, 0o644)   # mkstemp makes it private; a model file is shared
         tmp.replace(path)
     except BaseException:  # no half-written model file left behind
         tmp.unlink(missing_ok=True)
@@ -276,8 +348,9 @@ def dynamics_from_table(table, outputs, source="preset"):
     ``kind = "state_space"`` with continuous-time matrices ``A`` (n x n)
     [1/s], ``B`` (n x p), ``C`` (p x n) and optional ``D`` (p x p) as arrays
     of arrays: inputs are the p PI outputs [µm], outputs the p displacements
-    [µm]; off-diagonal (dynamic cross-coupling) terms are allowed, the DC
-    gain is whatever the matrices give (see
+    [µm] (e.g. identified by ``hammerstein identify --dynamics``);
+    off-diagonal (dynamic cross-coupling) terms are allowed, the DC gain is
+    whatever the matrices give (see
     :func:`hammerstein.core.lti.dc_gain`); ``kind = "none"`` for a static
     plant.
 

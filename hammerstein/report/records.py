@@ -11,14 +11,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
-from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import save_model
 from hammerstein.report import figures as plots
 from hammerstein.report.model_figures import record_fit_figure
 from hammerstein.report.tables import markdown_table, metrics_frame
-from hammerstein.scenario.records import _names as channel_names
 
 __all__ = ["write_identification_report"]
 
@@ -28,55 +27,65 @@ def write_identification_report(scenario, results, directory):
 
     Parameters
     ----------
-    scenario : hammerstein.scenario.records.RecordScenario
+    scenario : RecordScenario
     results : list of RecordResult
-        From :func:`hammerstein.scenario.records.run_identification_scenario`.
+        From :func:`run_identification_scenario`.
     directory : pathlib.Path
         Existing (temporary) report directory.
     """
     directory = Path(directory)
-    rec, spec = scenario.record, scenario.identification
-    uname, yname = channel_names(scenario)
-    ident = results[0].identifier
+    spec, dat = scenario.identification, scenario.data
+    fit = results[0].fit
+    iu, ou = dat["input_unit"], dat["output_unit"]
+    model = fit.model
     frame = metrics_frame(results)
     frame.to_csv(directory / "metrics.csv", index=False)
-    for r in results:
-        w = r.window
-        pd.DataFrame({"time_s": rec.timepts[w], f"{uname}_V": rec.u[w], f"{yname}_um": rec.y[w],
-                      f"{yname}_model_um": r.model_output[w]}).to_csv(
-            directory / f"timeseries-{r.name}.csv", index=False, float_format="%.7g")
-    model = MultivariablePI([[ident.model_]], [uname], [yname], [ident.amplitude_])
+    rec, split, pred = fit.records[0], fit.splits[0], fit.predictions[0]
+    iu_tag, ou_tag = iu.replace("µ", "u"), ou.replace("µ", "u")   # ASCII column names
+    for r, mask in (("train", split.train), ("validation", split.held_out)):
+        cols = {"time_s": rec.timepts[mask]}
+        for k, name in enumerate(model.input_names):
+            cols[f"{name}_{iu_tag}"] = rec.u[k][mask]
+        for l, name in enumerate(model.output_names):
+            cols[f"{name}_{ou_tag}"] = rec.y[l][mask]
+            cols[f"{name}_model_{ou_tag}"] = pred[l][mask]
+        pd.DataFrame(cols).to_csv(directory / f"timeseries-{r}.csv", index=False,
+                                  float_format="%.7g")
     model_file = f"models/identified-{spec['method']}.toml"
-    val = {row["metric"]: row["value"] for row in results[1].metrics}
+    val = fit.validation
     save_model(model, directory / model_file, {
-        "method": spec["method"], "source": str(scenario.data["file"]),
-        "n_hysterons": int(ident.thresholds_.size),
-        "partition": "explicit" if "thresholds" in spec else spec["partition"],
-        "bounds": spec["bounds"], "train_fraction": spec["train_fraction"],
-        "sampling_period_s": rec.sampling_period, "amplitude_V": ident.amplitude_,
-        "offset_um": ident.offset_, "validation_rms_um": val["rms_error"],
-        "validation_rms_percent_of_range": val["rms_error_percent"]})
-    split = rec.timepts[results[1].window.start]
-    fig = record_fit_figure(rec.timepts, rec.u, rec.y, results[0].model_output,
-                            results[0].window.start, results[1].window.start,
-                            f"{uname} [V]", f"{yname} [µm]",
+        "method": spec["method"],
+        "sources": [str(f) for f in dat.get("files", [dat.get("file")])],
+        "partition": fit.partition, "bounds": spec["bounds"],
+        "components": [" ".join(row) for row in fit.structure],
+        "held_out": [s.description for s in fit.splits], "notes": list(fit.notes),
+        "sampling_period_s": rec.sampling_period,
+        "validation_rms": [v["rms"] for v in val],
+        "validation_rms_percent_of_range": max(v["rms_percent"] for v in val)}, iu, ou)
+    train_idx, held_idx = np.flatnonzero(split.train), np.flatnonzero(split.held_out)
+    fig = record_fit_figure(rec.timepts, rec.u[split.excitation], rec.y[0], pred[0],
+                            int(train_idx[0]), int(held_idx[0]) if held_idx.size else rec.n_samples,
+                            f"{model.input_names[split.excitation]} [{iu}]",
+                            f"{model.output_names[0]} [{ou}]",
                             f"{scenario.title}: measured vs identified PI model")
     plots.save(fig, directory / "record-fit.png")
+    structure = "; ".join(f"{out} <- {inp}: {fit.structure[l][k]}"
+                          for l, out in enumerate(model.output_names)
+                          for k, inp in enumerate(model.input_names))
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]
-    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, kind identification).", "",
-              f"Record `{rec.source}`: {rec.n_samples} samples, T = {rec.sampling_period:.6g} s, "
-              f"input `{rec.input_name}` [V] -> output `{rec.output_name}` [µm].", "",
-              f"Identification: {spec['method']}, {ident.thresholds_.size} hysterons (thresholds "
-              f"{ident.thresholds_[0]:.4g} to {ident.thresholds_[-1]:.4g} V), partition "
-              f"{'explicit' if 'thresholds' in spec else spec['partition']}, bounds {spec['bounds']}, "
-              f"output offset {ident.offset_:.4g} µm. Trained on samples "
-              f"{results[0].window.start}..{results[0].window.stop - 1} (the start-up / virgin "
-              f"curve before them only warms up the play states); validated on the held-out "
-              f"samples from t = {split:.4g} s on. Model file: [`{model_file}`]({model_file}).", "",
+    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, kind identification).", ""]
+    for r, s in zip(fit.records, fit.splits):
+        lines += [f"- Record `{r.source}`: {r.n_samples} samples, T = {r.sampling_period:.6g} s; "
+                  f"{s.description}."]
+    lines += ["", f"Identification: {spec['method']}, partition {fit.partition}, bounds "
+              f"{spec['bounds']}; components {structure}; output offset "
+              f"{[round(float(c), 6) for c in (model.output_offset if model.output_offset is not None else np.zeros(model.n_outputs))]} {ou}."]
+    lines += [f"- {note}" for note in fit.notes]
+    lines += ["", f"Model file: [`{model_file}`]({model_file}).", "",
               "## Figures", "", "### Measured vs model", "",
               "![Measured vs model](record-fit.png)", "",
-              "## Metrics", "", "RMS error in µm and in % of the measured output range "
+              "## Metrics", "", f"RMS error in {ou} and in % of the measured output range "
               "(peak to peak) of each window.", "", markdown_table(frame), ""]
     (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from hammerstein.core import metrics as met
+from hammerstein.core.references import raster_line_index
 from hammerstein.simulation import simulate_chain
 
 __all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples"]
@@ -27,7 +28,7 @@ __all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_s
 class CaseResult:
     """Simulation and metrics of one case.
 
-    Attributes
+    Parameters
     ----------
     spec : hammerstein.scenario.validate.CaseSpec
     inputs : numpy.ndarray, shape (m, n_samples)
@@ -117,7 +118,26 @@ def fade_samples(case):
 
 
 def chain_result(case, res, caught):
-    """CaseResult of a compensated case from its simulated chain (ChainResult)."""
+    """CaseResult of a compensated case from its simulated chain (ChainResult).
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        The compensated case; ``case.signal`` is its reference [µm], shape
+        (p, n_samples).
+    res : hammerstein.simulation.ChainResult
+        The compensator -> plant simulation of the case: inputs [V], shape
+        (m, n_samples), and outputs [µm], shape (p, n_samples).
+    caught : list of str
+        Warning messages of the case (kept in the result).
+
+    Returns
+    -------
+    CaseResult
+        With the tracking metrics
+        (:func:`hammerstein.core.metrics.tracking_metrics`), or the single
+        ``diverged_at_time`` [s] row when the compensator diverged.
+    """
     plant = case.plant
     names = list(plant.hysteresis.output_names)
     if res.diverged:
@@ -128,6 +148,9 @@ def chain_result(case, res, caught):
         rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
                                     case.settle_periods, scale=case.scale,
                                     loop_channel=case.loop_channel)
+        if case.signal_spec.get("kind") == "raster":  # per scan line
+            line = raster_line_index(case.time, case.signal_spec["frequency"])
+            rows += met.raster_line_metrics(case.signal, res.outputs, line)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
 
 

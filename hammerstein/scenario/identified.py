@@ -40,7 +40,8 @@ from hammerstein.core.lti import (DynamicsIdentifier, excitation, hammerstein_re
 from hammerstein.core.presets import (PresetError, load_dynamics, load_model, model_to_table,
                                       save_dynamics, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
-from hammerstein.scenario.schema import (Field, Invalid, NestedInvalid, boolean, check_table, choice,
+from hammerstein.exceptions import NestedInvalid
+from hammerstein.scenario.schema import (Field, Invalid, boolean, check_table, choice,
                                          integer, number)
 
 __all__ = [
@@ -271,7 +272,19 @@ def identified_model(plant, spec):
 
 
 def model_file_name(spec):
-    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table."""
+    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table.
+
+    Parameters
+    ----------
+    spec : dict
+        The ``identify`` table: ``frequency`` [Hz] and, optionally,
+        ``method`` (default ``"closed-form"``).
+
+    Returns
+    -------
+    str
+        The file name, frequency formatted with ``:g``.
+    """
     return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
 
 

@@ -33,7 +33,7 @@ __all__ = ["CompensatorKind", "COMPENSATORS", "RATE_INDEPENDENT", "build_compens
 class CompensatorKind:
     """An entry of the compensator registry.
 
-    Attributes
+    Parameters
     ----------
     build : callable
         ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;

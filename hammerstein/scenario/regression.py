@@ -32,6 +32,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.exceptions import BaselineError
+
 __all__ = [
     "BaselineError",
     "Tolerance",
@@ -61,15 +63,11 @@ DIVERGENCE_METRIC = "diverged_at_time"
 _DIRECTIONS = ("lower", "higher", "neutral")
 
 
-class BaselineError(ValueError):
-    """A baseline, metrics table or tolerance specification is unusable."""
-
-
 @dataclass(frozen=True)
 class Tolerance:
     """Allowed move of one metric.
 
-    Attributes
+    Parameters
     ----------
     rtol : float
         Relative tolerance [-] (0.05 = 5 %), of ``|baseline|``.
@@ -86,7 +84,18 @@ class Tolerance:
     direction: str = "neutral"
 
     def allowed(self, baseline):
-        """Largest accepted ``|current - baseline|`` for a baseline value."""
+        """Largest accepted ``|current - baseline|`` for a baseline value.
+
+        Parameters
+        ----------
+        baseline : float
+            The baseline value of the metric, in its unit (µm, %, s).
+
+        Returns
+        -------
+        float
+            ``atol + rtol * |baseline|``, in the metric's unit.
+        """
         return self.atol + self.rtol * abs(baseline)
 
 

@@ -40,7 +40,7 @@ GAIN_DEVIATION = 0.02
 class Scenario:
     """A resolved scenario of kind ``"cases"``: metadata and ready-to-run cases.
 
-    Attributes
+    Parameters
     ----------
     name, title, description : str
     seed : int

@@ -25,6 +25,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from hammerstein.exceptions import Invalid, NestedInvalid, ScenarioError
+
 __all__ = [
     "ScenarioError",
     "Field",
@@ -40,39 +42,34 @@ __all__ = [
 ]
 
 
-class ScenarioError(ValueError):
-    """A scenario file has one or more problems.
-
-    Attributes
-    ----------
-    problems : list of str
-        One ``file: key: message`` line per problem.
-    """
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("\n".join(self.problems))
-
-
-class Invalid(ValueError):
-    """Raised by a field checker; the message says what was expected."""
-
-
-class NestedInvalid(Invalid):
-    """A nested table has problems; ``problems`` lists ``(key, message)``."""
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
-
-
 # -- field checkers: value -> normalised value, or raise Invalid -------------------
 def _is_number(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
 
 
 def number(unit, minimum=None, exclusive=True):
-    """Checker of a finite number [unit], optionally ``> minimum`` (or ``>=``)."""
+    """Checker of a finite number [unit], optionally ``> minimum`` (or ``>=``).
+
+    Parameters
+    ----------
+    unit : str
+        Unit named in the error message (``"µm"``, ``"Hz"``, ``"s"``, ``"V"``).
+    minimum : float, optional
+        Lower bound in the same unit; None for no bound.
+    exclusive : bool
+        Whether the bound is strict (``> minimum``) or not (``>= minimum``).
+
+    Returns
+    -------
+    callable
+        ``check(value) -> float``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a finite number (a
+        bool is not one) or violates the bound.
+    """
     def check(v):
         bound = "" if minimum is None else f" {'>' if exclusive else '>='} {minimum:g}"
         if not _is_number(v) or (minimum is not None and (v <= minimum if exclusive else v < minimum)):
@@ -82,7 +79,24 @@ def number(unit, minimum=None, exclusive=True):
 
 
 def integer(minimum=0):
-    """Checker of an integer ``>= minimum``."""
+    """Checker of an integer ``>= minimum``.
+
+    Parameters
+    ----------
+    minimum : int
+        Smallest accepted value.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> int``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not an int (a bool is
+        not one) or is below ``minimum``.
+    """
     def check(v):
         if not isinstance(v, int) or isinstance(v, bool) or v < minimum:
             raise Invalid(f"expected an integer >= {minimum}, found {v!r}")
@@ -91,7 +105,27 @@ def integer(minimum=0):
 
 
 def string(pattern=None, what="a string"):
-    """Checker of a string, optionally matching a regular expression."""
+    """Checker of a string, optionally matching a regular expression.
+
+    Parameters
+    ----------
+    pattern : str, optional
+        Regular expression the whole string must match (``re.fullmatch``);
+        None accepts any string.
+    what : str
+        Description of the expected value, used in the error message.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> str``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a string or does not
+        match ``pattern``.
+    """
     def check(v):
         if not isinstance(v, str) or (pattern is not None and not re.fullmatch(pattern, v)):
             raise Invalid(f"expected {what}, found {v!r}")
@@ -100,7 +134,18 @@ def string(pattern=None, what="a string"):
 
 
 def boolean():
-    """Checker of ``true`` / ``false``."""
+    """Checker of ``true`` / ``false``.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> bool``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a bool.
+    """
     def check(v):
         if not isinstance(v, bool):
             raise Invalid(f"expected true or false, found {v!r}")
@@ -109,7 +154,24 @@ def boolean():
 
 
 def choice(*options):
-    """Checker of one string among ``options``."""
+    """Checker of one string among ``options``.
+
+    Parameters
+    ----------
+    *options : str
+        The accepted values.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> value``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not one of ``options``;
+        the message suggests the closest option (difflib).
+    """
     def check(v):
         if v not in options:
             hint = difflib.get_close_matches(str(v), options, n=1)
@@ -120,7 +182,24 @@ def choice(*options):
 
 
 def name_list(count):
-    """Checker of a list of ``count`` strings."""
+    """Checker of a list of ``count`` strings.
+
+    Parameters
+    ----------
+    count : int
+        Required length of the list.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> list of str``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a list of exactly
+        ``count`` strings.
+    """
     def check(v):
         if not (isinstance(v, list) and len(v) == count and all(isinstance(s, str) for s in v)):
             raise Invalid(f"expected a list of {count} names, found {v!r}")
@@ -140,6 +219,26 @@ def _frequency_pair(v):
     if isinstance(v, list) and len(v) == 2 and all(_is_number(a) and a > 0 for a in v):
         return [float(a) for a in v]
     raise Invalid(f"expected two positive frequencies [f_x, f_y] [Hz], found {v!r}")
+
+
+def _extent_pair(v):
+    if isinstance(v, list) and len(v) == 2 and all(_is_number(a) and a > 0 for a in v):
+        return [float(a) for a in v]
+    raise Invalid(f"expected two positive extents [fast, slow] [µm], found {v!r}")
+
+
+def _fraction(upper):
+    def check(v):
+        if not _is_number(v) or not 0 <= v <= upper:
+            raise Invalid(f"expected a fraction of the period in [0, {upper:g}], found {v!r}")
+        return float(v)
+    return check
+
+
+def _column_map(v):
+    if isinstance(v, dict) and v and all(isinstance(c, str) and c for c in v.values()):
+        return dict(v)
+    raise Invalid(f"expected a table {{ <output> = \"<column>\" }} of column names, found {v!r}")
 
 
 @dataclass
@@ -192,11 +291,13 @@ CASE = {
 }
 _PHASE = Field(number("deg"), default=0.0)
 _LENGTH = {"periods": Field(number("periods", 0)), "duration": Field(number("s", 0))}
+_SINE_REFERENCE = {"output": Field(string(), required=True),
+                   "amplitude": Field(number("µm", 0), required=True),
+                   "frequency": Field(number("Hz", 0), required=True),
+                   "phase": _PHASE, "offset": Field(number("µm"), default=0.0), **_LENGTH}
 REFERENCES = {
-    "sine": {"output": Field(string(), required=True),
-             "amplitude": Field(number("µm", 0), required=True),
-             "frequency": Field(number("Hz", 0), required=True),
-             "phase": _PHASE, "offset": Field(number("µm"), default=0.0), **_LENGTH},
+    "sine": _SINE_REFERENCE,
+    "triangle": dict(_SINE_REFERENCE),  # hammerstein.core.references.triangle
     "circle": {"radius": Field(number("µm", 0), required=True),
                "frequency": Field(number("Hz", 0), required=True),
                "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
@@ -209,12 +310,25 @@ REFERENCES = {
     "lissajous": {"amplitude": Field(_amplitudes, required=True),
                   "frequencies": Field(_frequency_pair, required=True),
                   "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
+    "raster": {"outputs": Field(name_list(2), required=True),     # [fast, slow]
+               "size": Field(_extent_pair, required=True),
+               "lines": Field(integer(2), required=True),
+               "frequency": Field(number("Hz", 0), required=True),  # fast axis (line rate)
+               "slow": Field(choice("step", "ramp"), default="step"),
+               "smoothing": Field(_fraction(0.5), default=0.0)},
+    "file": {"file": Field(string(), required=True),
+             "time": Field(string(), default="time"),
+             "columns": Field(_column_map, required=True),
+             "duration": Field(number("s", 0)),
+             "period": Field(number("s", 0))},   # what settle_periods counts (default: T)
 }
+_SINE_DRIVE = {"input": Field(string(), required=True),
+               "amplitude": Field(number("V", 0), required=True),
+               "frequency": Field(number("Hz", 0), required=True),
+               "phase": _PHASE, "offset": Field(number("V"), default=0.0), **_LENGTH}
 DRIVES = {
-    "sine": {"input": Field(string(), required=True),
-             "amplitude": Field(number("V", 0), required=True),
-             "frequency": Field(number("Hz", 0), required=True),
-             "phase": _PHASE, "offset": Field(number("V"), default=0.0), **_LENGTH},
+    "sine": _SINE_DRIVE,
+    "triangle": dict(_SINE_DRIVE),  # hammerstein.core.references.triangle_drive
 }
 
 
@@ -267,7 +381,20 @@ def check_table(table, schema, where, problems, source):
 
 
 def kind_problem(kind, kinds):
-    """The message of an unknown ``kind`` among ``kinds`` (with the closest one), or []."""
+    """The message of an unknown ``kind`` among ``kinds`` (with the closest one), or [].
+
+    Parameters
+    ----------
+    kind : object
+        The ``kind`` value read from the file.
+    kinds : iterable of str
+        The known kinds.
+
+    Returns
+    -------
+    list of str
+        One message when ``kind`` is unknown, else empty.
+    """
     try:
         choice(*kinds)(kind)
     except Invalid as exc:

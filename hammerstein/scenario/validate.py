@@ -43,7 +43,7 @@ __all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_
 class CaseSpec:
     """A validated case of a scenario (resolved: with its compensator and model).
 
-    Attributes
+    Parameters
     ----------
     name : str
     description : str
@@ -111,7 +111,7 @@ class CaseSpec:
 class ScenarioSpec:
     """A validated scenario of kind ``"cases"`` (nothing built or identified yet).
 
-    Attributes
+    Parameters
     ----------
     name, title, description : str
     seed : int
@@ -143,7 +143,24 @@ class ScenarioSpec:
 
 
 def read_scenario(path):
-    """Parse a scenario file: ``(path, data)``; raises ScenarioError for unreadable TOML."""
+    """Parse a scenario file: ``(path, data)``; raises ScenarioError for unreadable TOML.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Scenario TOML file.
+
+    Returns
+    -------
+    (pathlib.Path, dict)
+        The path and the parsed TOML document.
+
+    Raises
+    ------
+    ScenarioError
+        If the file is missing, unreadable, not UTF-8 or not valid TOML
+        (one problem line, from :func:`hammerstein.core.presets.read_toml`).
+    """
     path = Path(path)
     try:
         return path, read_toml(path)
@@ -171,7 +188,7 @@ def _check_compensator(spec, where, problems, source):
     return check_table(spec, schema, where, problems, source)
 
 
-def _signal(case_where, mode, spec, plant, problems, source):
+def _signal(case_where, mode, spec, plant, problems, source, base=None):
     """Generate the drive/reference; returns (time, signal, period_samples, extras)."""
     kinds = DRIVES if mode == "drive" else REFERENCES
     where = f"{case_where}.{mode}"
@@ -195,14 +212,30 @@ def _signal(case_where, mode, spec, plant, problems, source):
     extras = {}
     try:
         if mode == "drive":
-            t, sig = refs.sine_drive(T, model.input_names, **c)
+            fn = refs.triangle_drive if kind == "triangle" else refs.sine_drive
+            t, sig = fn(T, model.input_names, **c)
             extras["driven_input"] = model.input_names.index(c["input"])
             period = 1.0 / c["frequency"]
-        elif kind == "sine":
-            t, sig = refs.sine(T, model.output_names, **c)
+        elif kind in ("sine", "triangle"):
+            fn = refs.triangle if kind == "triangle" else refs.sine
+            t, sig = fn(T, model.output_names, **c)
             extras["loop_channel"] = model.output_names.index(c["output"])
             extras["scale"] = c["amplitude"]
             period = 1.0 / c["frequency"]
+        elif kind == "file":
+            period = c.pop("period", None) or T
+            t, sig = refs.from_file(T, model.output_names, base_dir=base, **c)
+        elif kind == "raster":
+            outs = c.pop("outputs")
+            if len(set(outs)) != 2 or any(o not in model.output_names for o in outs):
+                raise refs.SignalError(f"outputs: expected two different outputs [fast, slow] "
+                                       f"of the plant {model.output_names}, found {outs}")
+            t, xy = refs.raster(T, **c)
+            sig = np.zeros((model.n_outputs, t.size))
+            for row, o in zip(xy, outs):
+                sig[model.output_names.index(o)] = row
+            period = 1.0 / c["frequency"]
+            extras["scale"] = float(max(c["size"]))
         else:
             outs = c.pop("outputs", None) or list(model.output_names[:2])
             missing = [o for o in outs if o not in model.output_names]
@@ -359,7 +392,7 @@ def _validate_cases(path, data):
         elif scratch and not any("compensator" in q for q in problems[:n_before]):
             problems.extend(scratch)
         comp_ok = not scratch and cclean is not None
-        sig = _signal(where, mode, raw[mode], plant, problems, source)
+        sig = _signal(where, mode, raw[mode], plant, problems, source, base)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "

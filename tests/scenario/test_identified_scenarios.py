@@ -17,7 +17,7 @@ from hammerstein.runner import run_scenario
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PLANT = '[plant]\npreset = "rakotondrabe-2dof"\ndynamics = {dyn}\n'
 
 

@@ -9,7 +9,7 @@ import pytest
 from hammerstein.cli.main import main
 from hammerstein.core.presets import read_toml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
 
 

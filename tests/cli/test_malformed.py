@@ -32,7 +32,7 @@ from hammerstein.core.compensators import (CompensatorError, InverseMultiplicati
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.presets import load_plant
 
-CORPUS = Path(__file__).resolve().parent / "corpus"
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good"
 
 #: Malformed scenario file -> fragment its error must contain.
@@ -124,8 +124,9 @@ SCENARIOS = {
     "unknown-plant-key": "plant.dynamic: unknown key (did you mean 'dynamics'?)",
     "unknown-preset": "rakotondrabe-2dfo: not a bundled preset",
     "unknown-reference-key": "cases[0].reference.amplitud: unknown key (did you mean 'amplitude'?)",
-    "unknown-reference-kind": "cases[0].reference.kind: expected one of 'sine', 'circle', 'spiral', "
-                              "'lissajous', found 'sinus' (did you mean 'sine'?)",
+    "unknown-reference-kind": "cases[0].reference.kind: expected one of 'sine', 'triangle', "
+                              "'circle', 'spiral', 'lissajous', 'raster', 'file', found 'sinus' "
+                              "(did you mean 'sine'?)",
     "unknown-top-key": "nmae: unknown key (did you mean 'name'?)",
     "zero-frequency": "cases[0].drive.frequency: expected a number > 0 [Hz], found 0.0",
     "zero-iterations": "compensator.iterations: expected an integer >= 1, found 0",
@@ -234,7 +235,7 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", CORPUS / "data"],
      "hammerstein identify: error: --out:"),
     (["identify", CORPUS / "data" / "good.csv", "--time", "0", "--input", "1"],
-     "hammerstein identify: error: the following arguments are required: --output, --out"),
+     "hammerstein identify: error: the following arguments are required: --output/--outputs, --out"),
     (["check", GOOD / "good-static.toml"],
      "hammerstein check: error: the following arguments are required: --baseline"),
     (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein: error: unrecognized arguments: --bogus"),
