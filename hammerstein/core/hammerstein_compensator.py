@@ -44,7 +44,8 @@ from hammerstein.core.compensators import CompensatorError, InverseMultiplicativ
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.hysteresis import state_vector
 from hammerstein.core.inversion import ZPETCInverse, preview_inverse
-from hammerstein.simulation import ChainResult, simulate_chain
+from hammerstein.simulation import (ChainResult, LinearArrays, simulate_chain,
+                                    simulate_compensator)
 
 __all__ = ["HammersteinCompensator", "INVERSIONS", "fade_in", "continuation"]
 
@@ -324,18 +325,38 @@ class HammersteinCompensator:
         CompensatorDivergence
             When the hysteresis compensator diverges.
         """
+        if self.inverse is not None:           # the declared law, pre-filter included
+            return simulate_compensator(self, reference, self.initial_state(initial_state))
         r = self.model.check_inputs(reference, "reference")
         cstate, fstate = self._split(self.initial_state(initial_state))
         v, fstate = self.inverse_dynamics(r, fstate)
         u, cstate = self.hysteresis_compensator.simulate(v, cstate)
         return u, np.concatenate([cstate, fstate])
 
-    def chain(self, plant, reference, compensator_state=None, plant_state=None):
-        """Reference (lead) -> G^-1 -> compiled fused PI-compensator + plant chain.
+    def packed_law(self):
+        """The fused law: the ZPETC inverse as the kernel's linear reference pre-filter.
 
-        ``V`` is computed by the inverse, then
-        :func:`hammerstein.simulation.simulate_chain` runs the hysteresis
-        compensator fused with the plant in one compiled loop.
+        Returns
+        -------
+        hammerstein.simulation.CompensatorLaw or None
+            The hysteresis compensator's law with ``prefilter`` = the ZPETC
+            state space (:meth:`ZPETCInverse.state_space`); None for
+            ``'stable'`` (whole-record inverse, run by :meth:`chain`).
+        """
+        if self.inverse is None:
+            return None
+        law = self.hysteresis_compensator.packed_law()
+        return law._replace(prefilter=LinearArrays(*(np.ascontiguousarray(M, dtype=float)
+                                                     for M in self.inverse.state_space())))
+
+    def chain(self, plant, reference, compensator_state=None, plant_state=None):
+        """Reference (lead) -> G^-1 -> PI compensator -> plant, compiled.
+
+        ``'zpetc'``: :func:`hammerstein.simulation.simulate_chain` runs the
+        ZPETC inverse (the law's reference pre-filter, :meth:`packed_law`),
+        the hysteresis compensator and the plant fused in one compiled loop.
+        ``'stable'``: V is computed over the whole record first, then the
+        hysteresis compensator and the plant run fused.
 
         Parameters
         ----------
@@ -350,6 +371,9 @@ class HammersteinCompensator:
         ChainResult
             Divergence reported, not raised; chunked runs equal one run.
         """
+        if self.inverse is not None:           # one compiled loop: pre-filter, law, plant
+            return simulate_chain(self, plant, reference, self.initial_state(compensator_state),
+                                  plant_state)
         r = self.model.check_inputs(reference, "reference")
         cstate, fstate = self._split(self.initial_state(compensator_state))
         v, fstate = self.inverse_dynamics(r, fstate)

@@ -391,16 +391,26 @@ def dynamics_from_table(table, outputs, source="preset"):
             if key not in table:
                 raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space' "
                                   f"needs A, B, C and optionally D)")
+        p = len(outputs)
+        shapes = {}
+        for key in ("A", "B", "C", "D"):
+            if key in table:
+                try:
+                    shapes[key] = np.shape(np.array(table[key], dtype=float))
+                except (TypeError, ValueError):
+                    raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix "
+                                      f"(list of rows)") from None
+        n = shapes["A"][0] if len(shapes["A"]) == 2 else -1
+        expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+        for key, shape in shapes.items():
+            if n >= 1 and shape != expected[key]:
+                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key]} for "
+                                  f"{p} outputs and {n} states, found {shape}")
         try:
-            system = state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
-                                          names=None)
+            return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
+                                        names=outputs)
         except DynamicsError as exc:
             raise PresetError(f"{source}: {exc}") from None
-        if system.ninputs != len(outputs):
-            raise PresetError(f"{source}: dynamics.B: expected {len(outputs)} columns, one per "
-                              f"PI output {list(outputs)}, found {system.ninputs}")
-        return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
-                                    names=outputs)
     for key in ("natural_frequency", "damping_ratio"):
         if key not in table:
             raise PresetError(f"{source}: dynamics.{key}: missing")

@@ -123,7 +123,9 @@ def test_without_inverse_the_dynamics_remain(plant):
 def test_fade_and_continuation():
     r = np.vstack([np.arange(10.0) ** 2, np.ones(10)])
     np.testing.assert_allclose(continuation(r, 3), [[100, 121, 144], [1, 1, 1]])
-    np.testing.assert_allclose(continuation(r, 2, period_samples=4), r[:, 6:8])
+    np.testing.assert_allclose(continuation(r, 2, period_samples=4), [[100, 121], [1, 1]])  # not periodic
+    per = np.tile([[0.0, 1.0, 3.0, 2.0, -1.0]], (1, 4))
+    np.testing.assert_allclose(continuation(per, 3, period_samples=5), [[0.0, 1.0, 3.0]])
     f = fade_in(np.ones((1, 8)), 4)
     np.testing.assert_allclose(f[0], [0, 0.5 - 0.5 * np.cos(np.pi / 4), 0.5,
                                       0.5 + 0.5 * np.cos(np.pi / 4), 1, 1, 1, 1])
@@ -138,7 +140,7 @@ def test_state_space_preset(coupled, tmp_path):
     with pytest.raises(PresetError, match=r"dynamics\.C: expected shape"):
         dynamics_from_table({"kind": "state_space", "A": [[-1.0]], "B": [[1.0, 0.0]],
                              "C": [[1.0]]}, ["x", "y"])
-    with pytest.raises(PresetError, match=r"dynamics\.B: expected 2 columns"):
+    with pytest.raises(PresetError, match=r"dynamics\.B: expected shape \(1, 2\)"):
         dynamics_from_table({"kind": "state_space", "A": [[-1.0]], "B": [[1.0]], "C": [[1.0]]},
                             ["x", "y"])
     with pytest.raises(PresetError, match=r"dynamics\.A: missing"):
