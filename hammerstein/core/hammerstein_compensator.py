@@ -227,6 +227,15 @@ class HammersteinCompensator:
     def initial_state(self, initial_state=None):
         """Validated copy of a flat state (zeros by default).
 
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+            The hysteresis compensator's state then the filter state.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+
         Raises
         ------
         HysteresisError

@@ -108,6 +108,16 @@ def fade_samples(case):
 
     ``compensator.fade_in`` [s] when given, else one period of the reference,
     at most the ``settle_periods`` the metrics skip.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        A resolved reference case.
+
+    Returns
+    -------
+    int
+        Fade-in length [samples].
     """
     T = case.plant.sampling_period
     given = getattr(case.compensator, "fade_in", None)

@@ -518,6 +518,16 @@ def hammerstein_identify_table(value):
     As :func:`identify_table`, with :data:`HAMMERSTEIN_IDENTIFY_DEFAULTS`
     for the keys not given.
 
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled.
+
     Raises
     ------
     NestedInvalid
@@ -553,6 +563,17 @@ IDENTIFY_DYNAMICS_FIELDS = {
 
 def identify_dynamics_table(value):
     """Field checker of an ``identify_dynamics`` table (every key optional).
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled (``order`` and ``sensor`` stay absent
+        when not given: chosen from the data, and as ``identify.sensor``).
 
     Raises
     ------
