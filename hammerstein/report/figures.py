@@ -341,7 +341,7 @@ def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="di
             ax = axes[l][j]
             kind = direct_label if l == k else cross_label
             ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {kind}: {y_labels[l].split(' ')[0]} vs "
-                         f"{x_labels[k].split(' ')[0]}", fontsize=10)
+                         f"{x_labels[k].split(' ')[0]}", fontsize=10, y=1.0)
             ax.set_xlabel(x_labels[k])
             ax.set_ylabel(y_labels[l])
             ax.grid(True, alpha=0.3)
@@ -416,7 +416,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     ax.set_xlabel(f"{names[0]} [µm]")
     ax.set_ylabel(f"{names[1]} [µm]")
     ax.set_title("(a) spatial domain after settling\n(dashed: reference, solid: output)",
-                 fontsize=10)
+                 fontsize=10, y=1.0)
     ax.grid(True, alpha=0.3)
 
     axt = fig.add_subplot(gs[0, 1])
@@ -424,18 +424,18 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         axt.plot(*decimate(t, r[i]), "--", color=f"C{i}", linewidth=1.0, label=f"{n}_r")
         axt.plot(*decimate(t, y[i]), "-", color=f"C{i}", linewidth=1.0, alpha=0.8, label=n)
     axt.set_ylabel("displacement [µm]")
-    axt.set_title("(b) time domain", fontsize=10)
+    axt.set_title("(b) time domain", fontsize=10, y=1.0)
     axu = fig.add_subplot(gs[1, 1], sharex=axt)
     if inputs is not None:
         u = np.asarray(inputs, dtype=float)
         un = list(input_names) if input_names is not None else [f"u{k}" for k in range(len(u))]
         for k, n in enumerate(un):
             axu.plot(*decimate(t, u[k]), "-", color=f"C{k + 2}", linewidth=1.0, label=f"{n}")
-        axu.set_title("(d) input voltages (compensator output)", fontsize=10)
+        axu.set_title("(d) input voltages (compensator output)", fontsize=10, y=1.0)
     else:
         axu.text(0.5, 0.5, "no input voltages given", ha="center", va="center",
                  transform=axu.transAxes, color="0.5")
-        axu.set_title("(d) input voltages", fontsize=10)
+        axu.set_title("(d) input voltages", fontsize=10, y=1.0)
     axu.set_ylabel("voltage [V]")
     axu.set_xlabel("time [ms]")
 
@@ -444,13 +444,13 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         axe.plot(*decimate(t, e[i]), "-", color=f"C{i}", linewidth=1.0, label=f"{n}_r - {n}")
     axe.set_ylabel("tracking error [µm]")
     axe.set_title("(c) tracking error per axis" + (" (scaled after settling)" if transient else ""),
-                  fontsize=10)
+                  fontsize=10, y=1.0)
     axn = fig.add_subplot(gs[1, 2], sharex=axt)
     axn.plot(*decimate(t, eu), "-", color="k", linewidth=0.9)
     axn.set_ylabel("||Y_r - Y|| [µm]")
     axn.set_xlabel("time [ms]")
     axn.set_title("(e) Euclidean error" + (" (scaled after settling)" if transient else ""),
-                  fontsize=10)
+                  fontsize=10, y=1.0)
     for a in (axt, axu, axe, axn):
         a.grid(True, alpha=0.3)
         a.set_xlim(t[0], t[-1])
@@ -551,6 +551,10 @@ def xy_overlay(curves, names, title):
 
 
 def save(fig, path):
-    """Write a figure as PNG (:data:`DPI`) and close it (one draw: no tight bbox)."""
-    fig.savefig(path, dpi=DPI)
+    """Write a figure as PNG (:data:`DPI`) and close it.
+
+    One draw (no tight bounding box); zlib level 3 (default 6) encodes the
+    PNG about twice as fast for files a few percent larger.
+    """
+    fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 3})
     plt.close(fig)
