@@ -24,10 +24,14 @@ from hammerstein.core.identification import ClosedFormPI, IdentificationError, L
 from hammerstein.core.sensors import Sensor, characterize, identify_plant
 from hammerstein.core.datafiles import DataFileError, Record, read_record
 from hammerstein.scenario.identified import comparison_model, identified_model, identify_table, save_identified_models
-from hammerstein.scenario.schema import ScenarioError, load_scenario
-from hammerstein.runner import COMPENSATORS, ScenarioOutcome, build_compensator, run_scenario, run_scenarios
+from hammerstein.scenario.schema import ScenarioError
+from hammerstein.scenario.validate import validate_scenario
+from hammerstein.scenario.resolve import load_scenario, resolve_scenario
+from hammerstein.scenario.registry import COMPENSATORS, build_compensator
+from hammerstein.runner import ScenarioOutcome, replicate, run_scenario, run_scenarios
 from hammerstein.scenario.regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline
-from hammerstein.scenario.sweeps import SweepSpec, expand_sweeps, run_cases, sweep_table
-from hammerstein.report.replication import paper_comparison, replicate, write_readme
+from hammerstein.scenario.sweeps import SweepSpec, expand_sweeps, run_cases
+from hammerstein.report.sweeps import sweep_table
+from hammerstein.report.replication import paper_comparison, write_readme
 
 __version__ = "0.1.0"

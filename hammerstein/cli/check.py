@@ -1,8 +1,8 @@
-"""``hammerstein check``: the regression gate on the command line (issue 6, item 5).
+"""``hammerstein check``: the regression gate on the command line.
 
 ``hammerstein check SCENARIO... --baseline FILE`` runs the scenarios with
 :func:`hammerstein.runner.run_scenarios`, compares their metrics with the
-baseline file (:func:`hammerstein.regression.compare_metrics`), prints the
+baseline file (:func:`hammerstein.scenario.regression.compare_metrics`), prints the
 metrics that moved (beyond round-off, ``|delta| > 1e-9 (1 + |baseline|)``,
 or not ``ok``; ``--all`` prints every metric) and one summary line.
 
@@ -24,11 +24,19 @@ from pathlib import Path
 
 import pandas as pd
 
+from hammerstein.runner import run_scenarios
+from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
+                                             load_tolerances, merge_baseline, read_baseline,
+                                             resolve_tolerances, summary_line, write_baseline)
+
 __all__ = ["add_parser", "run_check"]
 
 #: Relative move below which a metric is not listed as moved (round-off of a
 #: recompiled kernel); it still counts in the comparison.
 _ROUNDOFF = 1e-9
+
+
+HELP = "run scenarios and compare their metrics with a baseline"
 
 
 def add_parser(subparsers):
@@ -38,7 +46,7 @@ def add_parser(subparsers):
     ----------
     subparsers : argparse._SubParsersAction
         From :meth:`argparse.ArgumentParser.add_subparsers`
-        (:data:`hammerstein.cli.COMMANDS` lists this function).
+        (:data:`hammerstein.cli.main.COMMANDS` lists this module).
 
     Returns
     -------
@@ -46,7 +54,7 @@ def add_parser(subparsers):
         The ``check`` parser; its ``handler`` default is :func:`run_check`.
     """
     p = subparsers.add_parser(
-        "check", help="run scenarios and compare their metrics with a baseline",
+        "check", help=HELP,
         description="Run scenarios and compare their metrics.csv with a stored baseline "
                     "(per-metric relative and absolute tolerances). Exit 0 when nothing "
                     "regressed, 1 on a regression or a failed scenario, 2 on usage errors.")
@@ -91,7 +99,6 @@ def run_check(args):
         tolerances; a scenario file not found; ``--out`` not a directory; two
         scenarios with the same name). Errors go to stderr, one line each.
     """
-    from hammerstein.scenario.regression import BaselineError, load_tolerances, read_baseline, resolve_tolerances
     baseline_path = Path(args.baseline)
     try:
         overrides = load_tolerances(args.tolerances) if args.tolerances else None
@@ -120,9 +127,6 @@ def run_check(args):
 
 
 def _check(args, baseline_path, baseline, tolerance):
-    from hammerstein.scenario.regression import (compare_metrics, is_regression, merge_baseline, summary_line,
-                             write_baseline)
-
     outcomes = _run(args.scenarios, args.out)
     names = [o.name for o in outcomes]
     dup = sorted({n for n in names if names.count(n) > 1})
@@ -173,7 +177,6 @@ def _check(args, baseline_path, baseline, tolerance):
 
 
 def _run(paths, out):
-    from hammerstein.runner import run_scenarios
     if out is not None:
         return run_scenarios(paths, out)
     with tempfile.TemporaryDirectory(prefix="hammerstein-check-") as tmp:

@@ -1,54 +1,96 @@
-"""``hammerstein identify``: identify a classical PI model from a measured record.
+"""``hammerstein identify``: identify a p x m PI model from measured records.
 
-Reads a delimited text file (:func:`hammerstein.datafiles.read_record`),
-identifies a classical PI model on the first ``--train-fraction`` of the
-record (closed form or least squares, :mod:`hammerstein.identification`),
-reports the fit on the training loops and on the held-out rest (RMS in µm and
-in % of the output range), and saves a 1x1 model file with
-:func:`hammerstein.presets.save_model` and an ``[identification]`` table.
+Reads one or more delimited text files (:func:`hammerstein.core.datafiles.read_records`),
+each holding the time (or given the sampling period), every input column and
+every output column; identifies a multivariable classical PI model
+(:func:`hammerstein.core.record_identification.identify_records`: split at
+reversal points, held-out complete branches or periods, partition and
+component structure chosen automatically unless given), reports the fit on
+the training and held-out samples, and writes a model file
+(:func:`hammerstein.core.presets.save_model`) that ``model = "path"`` in a
+scenario and the compensators accept. Optional: ``--metrics`` (long CSV),
+``--plot`` (loops and errors), ``--dynamics`` (a preset with linear dynamics).
 
-Exit status: 0 on success, 1 on a data or identification error, 2 on a
-usage error; the model file is written only on success (atomically).
+Exit status: 0 on success, 1 on a data or identification error (one line on
+stderr), 2 on a usage error; nothing is written unless everything succeeded,
+every file is written through a temporary file and a rename, and a file the
+project did not write is never overwritten without ``--force``.
 """
 
 from __future__ import annotations
 
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["add_parser", "identify_record"]
+__all__ = ["add_parser"]
+
+#: Header of a metrics file (the project's long format).
+METRICS_HEADER = "case,channel,metric,value,unit"
 
 
 def add_parser(subparsers):
     """Register the ``identify`` subcommand (sets ``handler``)."""
     p = subparsers.add_parser(
-        "identify", help="identify a classical PI model from a measured record",
-        description="Identify a classical Prandtl-Ishlinskii model (input [V] -> output [µm]) "
-                    "from a CSV/text record, report the fit on training and held-out samples, "
-                    "and save a model file.")
-    p.add_argument("data", metavar="DATA.csv", help="delimited text file (header optional)")
-    p.add_argument("--input", required=True, metavar="COL", help="input column [V], name or 0-based index")
-    p.add_argument("--output", required=True, metavar="COL", help="output column [µm], name or 0-based index")
+        "identify", help="identify a (multivariable) PI model from measured records",
+        description="Identify a multivariable classical Prandtl-Ishlinskii model from CSV/text "
+                    "records (one or more files, each with every input and output column), "
+                    "report the fit on training and held-out periods, and save a model file.")
+    p.add_argument("data", nargs="+", metavar="DATA.csv",
+                   help="delimited text files (header optional); typically one per excited input")
+    p.add_argument("--input", "--inputs", dest="inputs", required=True, metavar="COLS",
+                   help="input column(s), names or 0-based indices separated by commas")
+    p.add_argument("--output", "--outputs", dest="outputs", required=True, metavar="COLS",
+                   help="output column(s), names or 0-based indices separated by commas")
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
     p.add_argument("--sampling-period", type=float, metavar="S",
                    help="sampling period [s] when there is no time column")
+    p.add_argument("--input-unit", default="V", metavar="UNIT", help="input unit (default V)")
+    p.add_argument("--output-unit", default="µm", metavar="UNIT", help="output unit (default µm)")
     p.add_argument("--method", choices=["closed-form", "least-squares"], default="least-squares",
-                   help="Appendix closed form or least squares over the record (default)")
+                   help="least squares over the training samples (default) or the Appendix "
+                        "closed form on the ascending branches (one excited input per file)")
     p.add_argument("--thresholds", default="15", metavar="N|r1,r2,...",
-                   help="number of hysterons, or explicit thresholds [V] (default 15)")
-    p.add_argument("--partition", choices=["time", "input"], default="time",
-                   help="threshold partition of the ascending half period (default time)")
-    p.add_argument("--bounds", choices=["none", "nonnegative"], default="none",
-                   help="least-squares weight bounds (default none)")
-    p.add_argument("--train-fraction", type=float, default=0.7, metavar="F",
-                   help="fraction of the record used for training; the rest is held out (default 0.7)")
+                   help="hysterons per component, or explicit thresholds in the input unit "
+                        "(default 15)")
+    p.add_argument("--partition", choices=["auto", "time", "input"], default="auto",
+                   help="threshold partition; auto (default) keeps the one with the smaller "
+                        "held-out error")
+    p.add_argument("--bounds", choices=["none", "nonnegative", "monotone"], default="none",
+                   help="least squares: constrain the direct transfers (default none)")
+    p.add_argument("--components", default="auto", metavar="auto|all|OUT:IN=KIND,...",
+                   help="auto (default): components whose contribution is below the noise "
+                        "become pure gains or absent; all: every component a PI; or explicit "
+                        "kinds pi, gain, none per OUT:IN")
+    p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
+                   help="auto (default): hold out the last complete branches or periods of "
+                        "each record; none: train on everything, no validation")
+    p.add_argument("--train-fraction", type=float, metavar="F",
+                   help="split instead at the reversal point nearest to this fraction of "
+                        "each record")
     p.add_argument("--skip", type=float, metavar="SECONDS",
-                   help="least squares: burn-in [s] that only warms up the play states "
-                        "(default: up to the first complete ascending branch)")
+                   help="burn-in [s] that only warms up the play states (default: up to the "
+                        "first complete branch)")
     p.add_argument("--out", required=True, metavar="MODEL.toml", help="model file to write")
+    p.add_argument("--metrics", metavar="FILE.csv",
+                   help="write the fit metrics (case,channel,metric,value,unit)")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="write measured vs model loops per component and the error")
+    p.add_argument("--dynamics", action="store_true",
+                   help="also identify linear dynamics from --dynamics-records and write a "
+                        "preset (PI + state_space dynamics) instead of a model file")
+    p.add_argument("--dynamics-records", nargs="+", metavar="FILE.csv", default=[],
+                   help="broadband records (same columns) for --dynamics")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite --out, --metrics or --plot even if the project did not write it")
     p.set_defaults(handler=_handler)
+
+
+class _Usage(ValueError):
+    """A usage error (exit 2)."""
 
 
 def _parse_thresholds(text):
@@ -57,159 +99,303 @@ def _parse_thresholds(text):
         try:
             n = int(text)
         except ValueError:
-            raise ValueError(f"--thresholds: expected a count N or a list r1,r2,..., found {text!r}") from None
+            raise _Usage(f"--thresholds: expected a count N or a list r1,r2,..., found {text!r}") from None
         if n < 1:
-            raise ValueError(f"--thresholds: expected N >= 1, found {n}")
+            raise _Usage(f"--thresholds: expected N >= 1, found {n}")
         return n, None
     try:
         r = np.array([float(v) for v in text.split(",") if v.strip()])
     except ValueError:
-        raise ValueError(f"--thresholds: expected numbers [V] separated by commas, found {text!r}") from None
+        raise _Usage(f"--thresholds: expected numbers separated by commas, found {text!r}") from None
+    if r.size == 0 or not np.all(np.isfinite(r)) or r[0] < 0 or np.any(np.diff(r) <= 0):
+        raise _Usage(f"--thresholds: expected increasing thresholds >= 0, found {text!r}")
     return r.size, r
 
 
-def identify_record(record, method="least-squares", n_hysterons=15, thresholds=None,
-                    partition="time", bounds=None, train_fraction=0.7, skip_seconds=None):
-    """Identify a classical PI model on the start of a record, validate on the rest.
-
-    Parameters
-    ----------
-    record : hammerstein.datafiles.Record
-    method : {"closed-form", "least-squares"}
-    n_hysterons : int
-    thresholds : array_like, shape (n,), optional
-        Explicit thresholds [V] (override ``n_hysterons`` and ``partition``).
-    partition : {"time", "input"}
-    bounds : None or "nonnegative"
-        Least-squares weight bounds.
-    train_fraction : float
-        Fraction (0, 1] of the samples used for training.
-    skip_seconds : float, optional
-        Least-squares burn-in [s]; default: up to the first complete ascending
-        branch of the training samples.
-
-    Returns
-    -------
-    identifier : ClosedFormPI or LeastSquaresPI
-        Fitted.
-    train : dict
-        :func:`~hammerstein.identification.fit_report` on the training
-        samples after the virgin curve / burn-in.
-    validation : dict or None
-        The same on the held-out samples (``None`` if ``train_fraction`` = 1).
-
-    Raises
-    ------
-    IdentificationError
-    """
-    from hammerstein.core.identification import IdentificationError, fit_report
-    if not 0 < train_fraction <= 1:
-        raise IdentificationError(f"train_fraction: expected in (0, 1], found {train_fraction}")
-    n_train = int(round(train_fraction * record.n_samples))
-    u, y = record.u, record.y
-    ut, yt = u[:n_train], y[:n_train]
-    partition_arg = thresholds if thresholds is not None else partition
+def _written_by_us(path, kind):
+    """True when an existing file looks like one this command writes."""
     try:
-        ident, start = _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg,
-                            partition, bounds, skip_seconds)
-    except IdentificationError as exc:
-        raise IdentificationError(
-            f"{record.source}: training samples 0..{n_train - 1}: {exc}") from None
-    train = fit_report(ident.model_, ut, yt, ident.offset_, start=int(start))
-    validation = None
-    if n_train < record.n_samples - 1:
-        validation = fit_report(ident.model_, u, y, ident.offset_, start=n_train)
-    return ident, train, validation
+        with open(path, "rb") as fh:
+            head = fh.read(4096)
+    except OSError:
+        return False
+    if kind == "model":
+        import tomllib
+        try:
+            with open(path, "rb") as fh:
+                return "model" in tomllib.load(fh)
+        except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+            return False
+    if kind == "metrics":
+        return head.decode("utf-8", "replace").splitlines()[:1] == [METRICS_HEADER]
+    return head.startswith(b"\x89PNG") and b"Matplotlib" in head
 
 
-def _fit(record, ut, yt, method, n_hysterons, thresholds, partition_arg, partition, bounds,
-         skip_seconds):
-    from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
-                                 ascending_branches)
-    if method == "closed-form":
-        ident = ClosedFormPI(n_hysterons, partition_arg).fit(ut, yt)
-        start = ident.branches_[0][0]
-    elif method == "least-squares":
-        ident = LeastSquaresPI(thresholds=thresholds, n_hysterons=n_hysterons,
-                               partition=partition, bounds=bounds)
-        if skip_seconds is not None:
-            ident.fit(ut, yt, skip_seconds=skip_seconds, sampling_period=record.sampling_period)
-            start = int(round(skip_seconds / record.sampling_period))
-        else:
-            ident.fit(ut, yt, skip="auto")
-            start = ascending_branches(ut)[0][0]
-    else:
-        raise IdentificationError(
-            f"method: expected 'closed-form' or 'least-squares', found {method!r}")
-    return ident, start
+def _check_target(path, option, kind, force, inputs):
+    path = Path(path)
+    if path.is_dir():
+        raise _Usage(f"{option}: {path} is a directory; expected a file name")
+    if any(path.resolve() == Path(d).resolve() for d in inputs):
+        raise _Usage(f"{option}: {path} is one of the data files")
+    if path.exists() and not force and not _written_by_us(path, kind):
+        raise _Usage(f"{option}: {path} exists and was not written by hammerstein identify; "
+                     f"choose another name or add --force to overwrite it")
 
 
-def _line(label, rep):
-    return (f"{label}: RMS {rep['rms_um']:.4g} µm = {rep['rms_percent_of_range']:.3g} % of the "
-            f"{rep['output_range_um']:.4g} µm range, max |error| {rep['max_abs_um']:.4g} µm "
+def _atomic_write(path, write):
+    """Write through a unique temporary file next to ``path``, then rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    tmp = Path(name)
+    try:
+        write(tmp)
+        os.chmod(tmp, 0o644)
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _check_usage(args):
+    n, thresholds = _parse_thresholds(args.thresholds)
+    if args.train_fraction is not None and not 0 < args.train_fraction <= 1:
+        raise _Usage(f"--train-fraction: expected in (0, 1], found {args.train_fraction}")
+    if args.train_fraction is not None and args.hold_out == "none":
+        raise _Usage("--train-fraction and --hold-out none: give one of them")
+    if args.time is None and args.sampling_period is None:
+        raise _Usage("give --time COL or --sampling-period S")
+    if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
+                                                 and args.sampling_period > 0):
+        raise _Usage(f"--sampling-period: expected a positive time [s], found {args.sampling_period}")
+    if args.skip is not None and not (np.isfinite(args.skip) and args.skip >= 0):
+        raise _Usage(f"--skip: expected a time >= 0 [s], found {args.skip}")
+    if args.bounds != "none" and args.method == "closed-form":
+        raise _Usage("--bounds: only used by --method least-squares")
+    if args.dynamics_records and not args.dynamics:
+        raise _Usage("--dynamics-records: only used with --dynamics")
+    if args.dynamics and not args.dynamics_records:
+        raise _Usage("--dynamics: give the broadband records with --dynamics-records FILE ...")
+    for unit, opt in ((args.input_unit, "--input-unit"), (args.output_unit, "--output-unit")):
+        if not unit.strip():
+            raise _Usage(f"{opt}: expected a unit name")
+    inputs = list(args.data) + list(args.dynamics_records)
+    _check_target(args.out, "--out", "model", args.force, inputs)
+    targets = [Path(args.out).resolve()]
+    for path, opt, kind in ((args.metrics, "--metrics", "metrics"), (args.plot, "--plot", "plot")):
+        if path is not None:
+            _check_target(path, opt, kind, args.force, inputs)
+            if Path(path).resolve() in targets:
+                raise _Usage(f"{opt}: {path} is already another output of this command")
+            targets.append(Path(path).resolve())
+    return n, thresholds
+
+
+def _line(label, name, rep, unit):
+    return (f"{label}{name}: RMS {rep['rms']:.4g} {unit} = {rep['rms_percent']:.3g} % of the "
+            f"{rep['range']:.4g} {unit} range, max |error| {rep['max_abs']:.4g} {unit} "
             f"({rep['n_samples']} samples)")
 
 
+def metrics_rows(fit, output_unit):
+    """Rows ``(case, channel, metric, value, unit)`` of a fit (train, validation)."""
+    rows = []
+    for case, reps in (("train", fit.train), ("validation", fit.validation)):
+        for name, rep in zip(fit.model.output_names, reps or []):
+            rows += [(case, name, "rms_error", rep["rms"], output_unit),
+                     (case, name, "rms_error_percent", rep["rms_percent"], "%"),
+                     (case, name, "max_abs_error", rep["max_abs"], output_unit)]
+    return rows
+
+
+def _write_metrics(path, rows):
+    import pandas as pd
+    frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
+    _atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.7g"))
+
+
+def fit_figure(fit, input_unit, output_unit):
+    """Measured vs model loops per component (rows outputs, columns inputs) and the error.
+
+    Each loop panel (l, k) shows output l against input k over the records
+    whose excitation is input k, training samples in blue, held-out samples
+    in orange, the model dashed; the last column shows the error of output l
+    over all records (held-out part shaded).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    model = fit.model
+    p, m = model.n_outputs, model.n_inputs
+    fig, axes = plt.subplots(p, m + 1, figsize=(3.2 * (m + 1), 2.6 * p), squeeze=False,
+                             layout="constrained")
+    for l in range(p):
+        for k in range(m):
+            ax = axes[l][k]
+            kind = fit.structure[l][k]
+            for rec, s, pred in zip(fit.records, fit.splits, fit.predictions):
+                if s.excitation != k:
+                    continue
+                used = s.train | s.held_out
+                ax.plot(rec.u[k][s.train], rec.y[l][s.train], ".", ms=1.5, color="tab:blue")
+                ax.plot(rec.u[k][s.held_out], rec.y[l][s.held_out], ".", ms=1.5,
+                        color="tab:orange")
+                ax.plot(rec.u[k][used], pred[l][used], "--", lw=0.8, color="k")
+            ax.set_title(f"{model.output_names[l]} <- {model.input_names[k]} ({kind})", fontsize=9)
+            ax.set_xlabel(f"{model.input_names[k]} [{input_unit}]", fontsize=8)
+            ax.set_ylabel(f"{model.output_names[l]} [{output_unit}]", fontsize=8)
+            ax.tick_params(labelsize=7)
+        ax = axes[l][m]
+        start = 0
+        for rec, s, pred in zip(fit.records, fit.splits, fit.predictions):
+            idx = np.arange(rec.n_samples) + start
+            used = s.train | s.held_out
+            ax.plot(idx[used], (rec.y[l] - pred[l])[used], lw=0.6, color="tab:red")
+            if s.held_out.any():
+                h = idx[s.held_out]
+                ax.axvspan(h[0], h[-1], color="tab:orange", alpha=0.15, lw=0)
+            start += rec.n_samples
+        ax.set_title(f"error of {model.output_names[l]} (held out shaded)", fontsize=9)
+        ax.set_xlabel("sample (records in order)", fontsize=8)
+        ax.set_ylabel(f"[{output_unit}]", fontsize=8)
+        ax.tick_params(labelsize=7)
+    fig.suptitle("measured (training blue, held out orange) vs model (dashed)", fontsize=10)
+    return fig
+
+
+def _write_plot(path, fit, input_unit, output_unit):
+    import matplotlib.pyplot as plt
+    fig = fit_figure(fit, input_unit, output_unit)
+    try:
+        _atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110))
+    finally:
+        plt.close(fig)
+
+
+def _metadata(args, fit, records):
+    val = fit.validation
+    meta = {"method": fit.method, "sources": [str(d) for d in args.data],
+            "input_columns": str(args.inputs), "output_columns": str(args.outputs),
+            "partition": fit.partition,
+            "partition_scores_percent": {k: float(v) for k, v in fit.partition_scores.items()},
+            "components": {out: {inp: fit.structure[l][k]
+                                 for k, inp in enumerate(fit.model.input_names)}
+                           for l, out in enumerate(fit.model.output_names)},
+            "bounds": args.bounds, "sampling_period_s": [r.sampling_period for r in records],
+            "input_unit": args.input_unit, "output_unit": args.output_unit,
+            "held_out": [s.description for s in fit.splits],
+            "notes": list(fit.notes),
+            "train_rms": [r["rms"] for r in fit.train],
+            "train_rms_percent_of_range": max(r["rms_percent"] for r in fit.train)}
+    if val is not None:
+        meta.update(validation_rms=[r["rms"] for r in val],
+                    validation_rms_percent_by_output=[r["rms_percent"] for r in val],
+                    validation_rms_percent_of_range=max(r["rms_percent"] for r in val),
+                    validation_max_abs=[r["max_abs"] for r in val])
+    return meta
+
+
 def _handler(args):
-    from hammerstein.core.datafiles import DataFileError, read_record
-    from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
+    from hammerstein.core.datafiles import DataFileError, column_list, read_records
+    from hammerstein.core.hysteresis import HysteresisError
     from hammerstein.core.identification import IdentificationError
-    from hammerstein.core.presets import save_model
+    from hammerstein.core.presets import PresetError, save_model
+    from hammerstein.core.record_identification import identify_records
 
     try:
-        n, thresholds = _parse_thresholds(args.thresholds)
-        if not 0 < args.train_fraction <= 1:
-            raise ValueError(f"--train-fraction: expected in (0, 1], found {args.train_fraction}")
-        if args.time is None and args.sampling_period is None:
-            raise ValueError("give --time COL or --sampling-period S")
-        if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
-                                                     and args.sampling_period > 0):
-            raise ValueError(f"--sampling-period: expected a positive time [s], "
-                             f"found {args.sampling_period}")
-        if args.skip is not None and not (np.isfinite(args.skip) and args.skip >= 0):
-            raise ValueError(f"--skip: expected a time >= 0 [s], found {args.skip}")
-        if Path(args.out).is_dir():
-            raise ValueError(f"--out: {args.out} is a directory; expected a model file name")
-    except ValueError as exc:
+        n, thresholds = _check_usage(args)
+    except _Usage as exc:
         print(f"hammerstein identify: error: {exc}", file=sys.stderr)
         return 2
     try:
-        rec = read_record(args.data, args.input, args.output, args.time, args.sampling_period)
-        ident, train, val = identify_record(
-            rec, args.method, n, thresholds, args.partition,
-            None if args.bounds == "none" else args.bounds, args.train_fraction, args.skip)
-        in_name = "u" if rec.input_name.startswith("column ") else rec.input_name
-        out_name = "y" if rec.output_name.startswith("column ") else rec.output_name
-        if in_name == out_name:
-            out_name = out_name + "_out"
-        model = MultivariablePI([[ident.model_]], [in_name], [out_name], [ident.amplitude_])
-        meta = {"method": args.method, "source": str(args.data),
-                "input_column": str(args.input), "output_column": str(args.output),
-                "n_hysterons": int(ident.thresholds_.size),
-                "partition": "explicit" if thresholds is not None else args.partition,
-                "bounds": args.bounds, "train_fraction": args.train_fraction,
-                "sampling_period_s": rec.sampling_period, "amplitude_V": ident.amplitude_,
-                "offset_um": ident.offset_,
-                "train_rms_um": train["rms_um"],
-                "train_rms_percent_of_range": train["rms_percent_of_range"]}
-        if val is not None:
-            meta.update(validation_rms_um=val["rms_um"],
-                        validation_rms_percent_of_range=val["rms_percent_of_range"],
-                        validation_max_abs_um=val["max_abs_um"])
-        save_model(model, args.out, meta)
-    except (DataFileError, IdentificationError, HysteresisError) as exc:
+        records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
+                   for d in args.data]
+        names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
+        fit = identify_records(
+            records, args.method, n, thresholds, "time" if thresholds is not None and
+            args.partition == "auto" else args.partition, args.bounds, args.components,
+            args.hold_out, args.train_fraction, args.skip, *names)
+        extra = None
+        if args.dynamics:
+            extra = _dynamics_tables(args, fit)
+        rows = metrics_rows(fit, args.output_unit)
+        if args.plot:
+            _write_plot(args.plot, fit, args.input_unit, args.output_unit)
+        if args.metrics:
+            _write_metrics(args.metrics, rows)
+        save_model(fit.model, args.out, _metadata(args, fit, records), args.input_unit,
+                   args.output_unit, extra)
+    except (DataFileError, IdentificationError, HysteresisError, PresetError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except OSError as exc:
-        print(f"error: {args.out}: cannot write the model ({exc.strerror or exc})", file=sys.stderr)
+        print(f"error: {exc.filename or args.out}: cannot write ({exc.strerror or exc})",
+              file=sys.stderr)
         return 1
-    print(f"{rec.source}: {rec.n_samples} samples, T = {rec.sampling_period:.6g} s, "
-          f"input {rec.input_name!r} [V] -> output {rec.output_name!r} [µm]")
-    print(f"{args.method}: {ident.thresholds_.size} hysterons, thresholds "
-          f"{ident.thresholds_[0]:.4g}..{ident.thresholds_[-1]:.4g} V, input amplitude "
-          f"{ident.amplitude_:.4g} V, output offset {ident.offset_:.4g} µm")
-    print(_line("training", train))
-    if val is not None:
-        print(_line("held-out", val))
-    print(f"wrote {args.out}")
+    _report(args, fit, records)
     return 0
+
+
+def _names(record, in_keys, out_keys):
+    """Model names: the column names, or u0.. / y0.. for headerless files."""
+    ins = [n if not n.startswith("column ") else f"u{i}" for i, n in enumerate(record.input_names)]
+    outs = [n if not n.startswith("column ") else f"y{i}" for i, n in enumerate(record.output_names)]
+    if len(ins) == 1 and ins[0] == "u0":
+        ins = ["u"]
+    if len(outs) == 1 and outs[0] == "y0":
+        outs = ["y"]
+    return ins, outs
+
+
+def _report(args, fit, records):
+    iu, ou = args.input_unit, args.output_unit
+    model = fit.model
+    for rec, s in zip(fit.records, fit.splits):
+        print(f"{rec.source}: {rec.n_samples} samples, T = {rec.sampling_period:.6g} s, "
+              f"excitation {model.input_names[s.excitation]}; {s.description}")
+    print(f"{fit.method}: {model.n_outputs} output(s) x {model.n_inputs} input(s), partition "
+          f"{fit.partition}, inputs [{iu}] -> outputs [{ou}]")
+    for note in fit.notes:
+        print(f"  {note}")
+    for l, out in enumerate(model.output_names):
+        parts = []
+        for k, inp in enumerate(model.input_names):
+            c = model.components[l][k]
+            if fit.structure[l][k] == "pi":
+                parts.append(f"{inp}: PI {c.n_hysterons} hysterons, thresholds "
+                             f"{c.thresholds[0]:.4g}..{c.thresholds[-1]:.4g} {iu}")
+            elif fit.structure[l][k] == "gain":
+                parts.append(f"{inp}: gain {c:.4g} {ou}/{iu}")
+            else:
+                parts.append(f"{inp}: absent")
+        off = 0.0 if model.output_offset is None else model.output_offset[l]
+        print(f"  {out} <- " + "; ".join(parts) + f"; output offset {off:.4g} {ou}")
+    single = model.n_outputs == 1
+    for label, reps in (("training", fit.train), ("held-out", fit.validation)):
+        for name, rep in zip(model.output_names, reps or []):
+            print(_line(label, "" if single else f" {name}", rep, ou))
+    if args.metrics:
+        print(f"wrote {args.metrics}")
+    if args.plot:
+        print(f"wrote {args.plot}")
+    print(f"wrote {args.out}")
+
+
+def _dynamics_tables(args, fit):
+    """``[preset]`` and ``[dynamics]`` tables of a preset with identified linear dynamics."""
+    from hammerstein.core.datafiles import read_records
+    from hammerstein.core.identification import IdentificationError
+    from hammerstein.core.record_identification import dynamics_tables
+    dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
+           for d in args.dynamics_records]
+    try:
+        return dynamics_tables(fit, dyn, name=Path(args.out).stem)
+    except ImportError:
+        raise IdentificationError(
+            "--dynamics: the linear-dynamics identifier (hammerstein.core.lti) is not part of "
+            "this installation") from None

@@ -1,9 +1,10 @@
 """Command-line interface: ``hammerstein run | validate | list | ...``.
 
-Each subcommand is a function ``add_parser(subparsers)`` that adds its
-parser and sets ``handler=<function(args) -> exit status>``. Subcommands
-are registered in :data:`COMMANDS` as ``"module:function"`` strings,
-imported lazily: add a subcommand with one line there.
+One module per subcommand (``hammerstein/cli/<command>.py``), each with a
+function ``add_parser(subparsers)`` that adds its parser and sets
+``handler=<function(args) -> exit status>``. Subcommands are registered in
+:data:`COMMANDS` (name -> module, one-line help); only the module of the
+command being run is imported, so ``hammerstein --help`` stays light.
 
 Exit status: 0 on success, 1 when a scenario failed (the others still
 run), 2 on usage errors.
@@ -23,36 +24,10 @@ import importlib
 import os
 import sys
 import warnings
-from pathlib import Path
+
+from hammerstein.cli._common import one_line, print_err
 
 __all__ = ["main", "build_parser", "one_line", "COMMANDS"]
-
-
-def _print_err(msg):
-    print(msg, file=sys.stderr)
-
-
-def one_line(text, path=None):
-    """Fold a multi-line message into one line, without a repeated ``path: `` prefix.
-
-    Parameters
-    ----------
-    text : str
-        Message, one problem per line (e.g. ``ScenarioOutcome.error``).
-    path : str, optional
-        File name that prefixes each problem; kept once, at the front.
-
-    Returns
-    -------
-    str
-        ``path: problem 1; problem 2; ...`` on one line.
-    """
-    lines = [" ".join(ln.split()) for ln in str(text).splitlines() if ln.strip()]
-    if path is None:
-        return "; ".join(lines)
-    pre = f"{path}: "
-    lines = [ln[len(pre):] if ln.startswith(pre) else ln for ln in lines]
-    return pre + "; ".join(lines)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -70,151 +45,58 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
           file=sys.stderr if file is None else file)
 
 
-# -- run ---------------------------------------------------------------------------
-def add_run_parser(subparsers):
-    """Register `hammerstein run SCENARIO... [--out DIR]`: simulate scenarios, write one report directory each.
+# -- the commands: name -> (module with add_parser(subparsers), one-line help) ------------
+#: Every subcommand. Its module defines ``add_parser(subparsers)`` (which sets
+#: ``handler=<function(args) -> exit status>``) and imports what the command
+#: needs at module level; it is imported only when its command is run (or by
+#: :func:`build_parser` without a command), so ``hammerstein --help`` imports
+#: none of the numerical stack. Add a command with one line here and a
+#: module ``hammerstein/cli/<command>.py``.
+COMMANDS = {
+    "run": ("hammerstein.cli.run", "simulate scenarios and write reports"),
+    "validate": ("hammerstein.cli.validate", "check scenario files without simulating"),
+    "list": ("hammerstein.cli.listing", "list bundled presets, compensator kinds and scenarios"),
+    "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
+    "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
+    "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
+}
+
+
+def build_parser(command=None):
+    """The argparse parser of ``hammerstein``.
 
     Parameters
     ----------
-    subparsers : argparse._SubParsersAction
-        The ``hammerstein`` sub-command registry.
+    command : str, optional
+        Only this subcommand's module is imported and its full parser built;
+        the others get a placeholder with their one-line help (enough for
+        ``hammerstein --help`` and for rejecting an unknown command). Default:
+        every subcommand in full.
+
+    Returns
+    -------
+    argparse.ArgumentParser
     """
-    p = subparsers.add_parser(
-        "run", help="simulate scenarios and write reports",
-        description="Simulate each scenario and write DIR/<scenario name>/ (metrics.csv, "
-                    "time series, figures, report.md).")
-    p.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario TOML files")
-    p.add_argument("--out", default="reports", metavar="DIR",
-                   help="reports directory (default: reports/)")
-    p.set_defaults(handler=_run)
-
-
-def _run(args):
-    from hammerstein.runner import run_scenario
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        _print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
-        return 2
-    status, taken = 0, {}
-    for path in args.scenarios:
-        outcome = run_scenario(path, args.out, taken)
-        if outcome.ok:
-            taken[outcome.name] = outcome.path
-            n_cases = outcome.metrics["case"].nunique()
-            print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases)")
-            for case, msg in outcome.warnings:
-                _print_err(f"warning: {path}: {case}: {' '.join(msg.split())}")
-            _print_divergences(path, outcome.metrics)
-        else:
-            _print_err(f"error: {one_line(outcome.error, str(path))}")
-            status = 1
-    return status
-
-
-def _print_divergences(path, metrics):
-    """One ``warning:`` line naming the cases whose compensator diverged (report.md has the reason)."""
-    div = metrics[metrics["metric"] == "diverged_at_time"] if len(metrics) else metrics
-    if len(div):
-        cases = [f"{c} (t = {v:.4g} s)" for c, v in zip(div["case"], div["value"])]
-        more = f", ... ({len(cases) - 5} more)" if len(cases) > 5 else ""
-        _print_err(f"warning: {path}: the compensator diverged in {len(cases)} case(s): "
-                   f"{', '.join(cases[:5])}{more}; the cases stopped there (see report.md)")
-
-
-# -- validate ----------------------------------------------------------------------
-def add_validate_parser(subparsers):
-    """Register `hammerstein validate SCENARIO...`: the scenario checks of `run`, without simulating.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        The ``hammerstein`` sub-command registry.
-    """
-    p = subparsers.add_parser(
-        "validate", help="check scenario files without simulating",
-        description="Check scenario files and list every problem as 'file: key: message'.")
-    p.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario TOML files")
-    p.set_defaults(handler=_validate)
-
-
-def _validate(args):
-    from hammerstein.scenario.schema import ScenarioError, load_scenario
-    status = 0
-    for path in args.scenarios:
-        try:
-            sc = load_scenario(path)
-        except ScenarioError as exc:
-            for line in exc.problems:  # one line per problem: file: key: message
-                _print_err(f"error: {' '.join(line.split())}")
-            status = 1
-            continue
-        except Exception as exc:  # as run does: one line, the other files still checked
-            _print_err(f"error: {path}: {type(exc).__name__}: {one_line(exc)}")
-            status = 1
-            continue
-        print(f"{path}: ok ({len(sc.cases)} cases)")
-    return status
-
-
-# -- list --------------------------------------------------------------------------
-def add_list_parser(subparsers):
-    """Register `hammerstein list [--scenarios DIR]`: presets, compensator kinds and scenario files.
-
-    Parameters
-    ----------
-    subparsers : argparse._SubParsersAction
-        The ``hammerstein`` sub-command registry.
-    """
-    p = subparsers.add_parser(
-        "list", help="list bundled presets, compensator kinds and scenarios",
-        description="List the bundled actuator presets, the compensator kinds and the "
-                    "scenario files under DIR (default ./scenarios).")
-    p.add_argument("--scenarios", default="scenarios", metavar="DIR",
-                   help="directory searched for *.toml scenarios (default: ./scenarios)")
-    p.set_defaults(handler=_list)
-
-
-def _list(args):
-    from hammerstein.core.presets import bundled_presets
-    from hammerstein.runner import COMPENSATORS
-    print("presets:")
-    for name, path in sorted(bundled_presets().items()):
-        print(f"  {name}  ({path})")
-    print("compensator kinds:")
-    for name, kind in COMPENSATORS.items():
-        print(f"  {name}: {kind.description}")
-    root = Path(args.scenarios)
-    files = sorted(root.rglob("*.toml")) if root.is_dir() else []
-    print(f"scenarios under {root}/:" if files else
-          f"scenarios: none found under {root}/ (run from the repository root)")
-    for f in files:
-        print(f"  {f}")
-    return 0
-
-
-# -- command registrations: one line per subcommand ("module:add_parser") ------------
-COMMANDS = [
-    "hammerstein.cli.main:add_run_parser",
-    "hammerstein.cli.main:add_validate_parser",
-    "hammerstein.cli.main:add_list_parser",
-    "hammerstein.cli.identify:add_parser",
-    "hammerstein.cli.check:add_parser",
-    "hammerstein.report.replication:add_parser",
-]
-
-
-def build_parser():
-    """The argparse parser with every registered subcommand."""
     parser = _Parser(
         prog="hammerstein",
         description="Multivariable Prandtl-Ishlinskii hysteresis of piezoelectric actuators: "
                     "simulate scenarios, compensate, report.")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
                                 parser_class=_Parser)
-    for entry in COMMANDS:
-        module, func = entry.split(":")
-        getattr(importlib.import_module(module), func)(sub)
+    for name, (module, help_text) in COMMANDS.items():
+        if command is None or name == command:
+            importlib.import_module(module).add_parser(sub)
+        else:
+            sub.add_parser(name, help=help_text)
     return parser
+
+
+def _command(argv):
+    """The subcommand named in ``argv`` (its first argument not starting with '-'), or None."""
+    for a in argv:
+        if not a.startswith("-"):
+            return a if a in COMMANDS else None
+    return None
 
 
 def main(argv=None):
@@ -230,7 +112,9 @@ def main(argv=None):
     int
         Exit status: 0 success, 1 a scenario failed, 2 usage error.
     """
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = _command(argv)
+    parser = build_parser(command) if command is not None else build_parser("")
     try:
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: usage error (2) or --help (0)
@@ -242,8 +126,8 @@ def main(argv=None):
         except Exception as exc:  # a bug, not bad input: still one line, no traceback
             if os.environ.get("HAMMERSTEIN_DEBUG"):
                 raise
-            _print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "
-                       f"{one_line(exc)} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
+            print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "
+                      f"{one_line(exc)} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
             return 1
 
 

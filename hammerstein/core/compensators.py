@@ -462,6 +462,8 @@ def check_reference_range(model: MultivariablePI, reference, warn=True):
             peaks[l] = abs(comp.peak_output(A))
         elif comp is not None:
             peaks[l] = abs(comp) * A
+    if model.output_offset is not None:   # the range is that of Gamma, around the offset
+        yr = yr - model.output_offset[:, None]
     reach = np.max(np.abs(yr), axis=1) if yr.shape[1] else np.zeros(model.n_outputs)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(peaks > 0, reach / np.where(peaks > 0, peaks, 1.0), np.where(reach > 0, np.inf, 0.0))
@@ -589,6 +591,8 @@ class StaticGainCompensator:
         self.initial_state(initial_state)
         yr = self.model.check_inputs(reference, "reference")
         check_reference_range(self.model, yr)
+        if self.model.output_offset is not None:   # Gamma(U) = Yr - c
+            yr = yr - self.model.output_offset[:, None]
         return self.K_inv @ yr, np.zeros(0)
 
 
@@ -725,6 +729,8 @@ class PerAxisInverseCompensator:
         yr = self.model.check_inputs(reference, "reference")
         s = self.initial_state(initial_state)
         check_reference_range(self.model, yr)
+        if self.model.output_offset is not None:   # Gamma(U) = Yr - c
+            yr = yr - self.model.output_offset[:, None]
         u = np.empty_like(yr)
         final = s.copy()
         for l, inv in enumerate(self.inverses):

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["DataFileError", "Record", "read_record", "bundled_data"]
+__all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
 
 #: Fewest samples accepted in a record.
 MIN_SAMPLES = 10
@@ -59,6 +59,61 @@ class Record:
     def n_samples(self) -> int:
         """Number of samples."""
         return self.u.size
+
+
+@dataclass(frozen=True)
+class MultiRecord:
+    """One measured multi-input multi-output record.
+
+    Attributes
+    ----------
+    timepts : numpy.ndarray, shape (n_samples,)
+        Time [s], uniform and increasing.
+    u : numpy.ndarray, shape (m, n_samples)
+        Inputs (in the input unit, e.g. V).
+    y : numpy.ndarray, shape (p, n_samples)
+        Outputs (in the output unit, e.g. µm).
+    input_names, output_names : tuple of str
+        Column names (``"column 2"`` style for files without a header).
+    sampling_period : float
+        Sampling period [s].
+    source : str
+        File the record was read from.
+    """
+
+    timepts: np.ndarray
+    u: np.ndarray
+    y: np.ndarray
+    input_names: tuple
+    output_names: tuple
+    sampling_period: float
+    source: str = ""
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return self.u.shape[1]
+
+    @classmethod
+    def from_record(cls, record):
+        """The (1, n_samples) form of a single-input single-output :class:`Record`."""
+        return cls(record.timepts, record.u[None, :], record.y[None, :], (record.input_name,),
+                   (record.output_name,), record.sampling_period, record.source)
+
+
+def column_list(text):
+    """Column keys from ``"u1,u2"`` / ``"0,2"`` / a list: names or 0-based indices.
+
+    Returns
+    -------
+    list of str or int
+    """
+    if isinstance(text, (list, tuple)):
+        return list(text)
+    if isinstance(text, (int, np.integer)):
+        return [int(text)]
+    parts = [c.strip() for c in str(text).split(",")]
+    return [int(c) if c.lstrip("-").isdigit() else c for c in parts]
 
 
 def bundled_data(name="piezo-stack-150V-1Hz.csv"):
@@ -223,3 +278,67 @@ def read_record(path, input, output, time=None, sampling_period=None):
         T = float(sampling_period)
         t = np.arange(u.size) * T
     return Record(t, u, y, uname, yname, T, str(path))
+
+
+def read_records(path, inputs, outputs, time=None, sampling_period=None):
+    """Read a multi-input multi-output record from a delimited text file.
+
+    The file format rules are those of :func:`read_record`.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    inputs, outputs : str, int or list
+        Input and output columns: names or 0-based indices, as a list or as
+        one comma-separated string (``"u1,u2"``).
+    time : str or int, optional
+        Time column [s]; increasing and uniform.
+    sampling_period : float, optional
+        Sampling period [s] when there is no time column.
+
+    Returns
+    -------
+    MultiRecord
+
+    Raises
+    ------
+    DataFileError
+        As :func:`read_record`; also for a column named twice or used both as
+        input and output, or an empty column list.
+    """
+    ins, outs = column_list(inputs), column_list(outputs)
+    if not ins or not outs or any(c == "" for c in ins + outs):
+        raise DataFileError(f"{path}: expected at least one input and one output column, "
+                            f"found inputs {inputs!r}, outputs {outputs!r}")
+    path = Path(path)
+    if not path.exists():
+        raise DataFileError(f"{path}: no such file")
+    if path.is_dir():
+        raise DataFileError(f"{path}: is a directory, expected a data file")
+    frame, header = _read_table(path)
+    if frame.shape[0] < MIN_SAMPLES:
+        raise DataFileError(
+            f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
+    u, unames = zip(*[_column(frame, header, c, "input", path) for c in ins])
+    y, ynames = zip(*[_column(frame, header, c, "output", path) for c in outs])
+    both = [n for n in unames if n in ynames]
+    if both:
+        raise DataFileError(
+            f"{path}: input and output are the same column {both[0]!r}; name two different columns")
+    names = list(unames) + list(ynames)
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise DataFileError(f"{path}: column {dup[0]!r} named twice among the inputs and outputs; "
+                            f"name each column once")
+    if time is not None:
+        first = read_record(path, ins[0], outs[0], time, sampling_period)
+        t, T = first.timepts, first.sampling_period
+    else:
+        if sampling_period is None:
+            raise DataFileError(f"{path}: give a time column or a sampling period [s]")
+        if not (np.isfinite(sampling_period) and sampling_period > 0):
+            raise DataFileError(
+                f"{path}: sampling period: expected a positive time [s], found {sampling_period!r}")
+        T = float(sampling_period)
+        t = np.arange(frame.shape[0]) * T
+    return MultiRecord(t, np.array(u), np.array(y), tuple(unames), tuple(ynames), T, str(path))

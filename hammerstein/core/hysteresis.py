@@ -282,6 +282,12 @@ class MultivariablePI:
     input_amplitude : array_like, shape (m,), optional
         Amplitude of the input range each column was identified on [V]
         (used for the secant gains of the compensator and range warnings).
+    output_offset : array_like, shape (p,), optional
+        Constant added to every output [µm], ``y_l = sum_k Gamma_lk(u_k) +
+        c_l`` (the sensor zero of an identified record). Included by
+        :meth:`simulate` and by the plant; the compensators subtract it from
+        the reference. Not included by :meth:`evaluate` (the operator
+        ``Gamma`` alone). ``None`` means zeros.
 
     Notes
     -----
@@ -300,6 +306,7 @@ class MultivariablePI:
     input_names: Sequence[str] | None = None
     output_names: Sequence[str] | None = None
     input_amplitude: np.ndarray | None = None
+    output_offset: np.ndarray | None = None
     _flat: dict = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -331,6 +338,12 @@ class MultivariablePI:
                 raise HysteresisError(
                     f"input_amplitude: expected {m} positive values, found {amp.tolist()}")
             self.input_amplitude = amp
+        if self.output_offset is not None:
+            off = _as_finite_array(self.output_offset, "output_offset", ndim=1)
+            if off.shape != (p,):
+                raise HysteresisError(
+                    f"output_offset: expected {p} values (one per output), found {off.tolist()}")
+            self.output_offset = None if not np.any(off) else off
         self._flat = self._flatten()
 
     @staticmethod
@@ -437,7 +450,7 @@ class MultivariablePI:
         Returns
         -------
         outputs : numpy.ndarray, shape (p, n_samples)
-            Displacements [µm].
+            Displacements [µm], ``output_offset`` included.
         final_state : numpy.ndarray, shape (n_hysterons,)
             Play outputs after the last sample [V].
 

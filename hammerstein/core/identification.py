@@ -258,7 +258,7 @@ class ClosedFormPI:
         self.n_hysterons = n_hysterons
         self.partition = partition
 
-    def fit(self, u, y):
+    def fit(self, u, y, branches=None):
         """Identify the weights from an input/output record.
 
         Parameters
@@ -268,6 +268,11 @@ class ClosedFormPI:
             ascending branch after any start-up.
         y : array_like, shape (n_samples,)
             Measured output [µm].
+        branches : list of (int, int), optional
+            Complete ascending branches to use, ``(start, stop)`` sample
+            indices of a minimum and the following maximum (inclusive);
+            found by :func:`ascending_branches` by default. Only their
+            samples enter the fit (the rest of the record may be held out).
 
         Returns
         -------
@@ -280,7 +285,14 @@ class ClosedFormPI:
             not fit in ``[0, A)``, or the system is singular.
         """
         u, y = _pair(u, y)
-        branches = ascending_branches(u)
+        if branches is None:
+            branches = ascending_branches(u)
+        else:
+            branches = [(int(a), int(b)) for a, b in branches]
+            if not branches or any(not 0 <= a < b < u.size or u[b] <= u[a] for a, b in branches):
+                raise IdentificationError(
+                    f"branches: expected (start, stop) of ascending branches inside the record, "
+                    f"found {branches}")
         r = partition_thresholds(u, self.n_hysterons, self.partition, branches[0])
         spans = np.array([u[b] - u[a] for a, b in branches])
         amplitude = float(spans.mean() / 2.0)

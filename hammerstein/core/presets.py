@@ -10,6 +10,9 @@ compensator and the scenarios accept both. The schema is in the README.
 
 from __future__ import annotations
 
+import difflib
+import os
+import tempfile
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -128,7 +131,12 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
-    problems = []
+    problems = [f"model.{key}: unknown key{_hint(key, MODEL_KEYS)}"
+                for key in table if key not in MODEL_KEYS]
+    for key in ("input_unit", "output_unit"):
+        if key in table and not (isinstance(table[key], str) and table[key].strip()):
+            problems.append(f"model.{key}: expected a unit name such as 'V' or 'µm', "
+                            f"found {table[key]!r}")
     inputs, outputs = table.get("inputs"), table.get("outputs")
     for key, val in (("inputs", inputs), ("outputs", outputs)):
         if not (isinstance(val, list) and val and all(isinstance(v, str) for v in val)):
@@ -152,9 +160,10 @@ def model_from_table(table, source="model"):
             if not isinstance(comp, dict):
                 problems.append(f"{key}: expected a table with weights or gain")
                 continue
-            unknown = set(comp) - {"weights", "thresholds", "gain"}
+            unknown = sorted(set(comp) - set(COMPONENT_KEYS))
             if unknown:
-                problems.append(f"{key}: unknown keys {sorted(unknown)} (expected weights, thresholds or gain)")
+                problems += [f"{key}.{u}: unknown key{_hint(u, COMPONENT_KEYS)} (expected "
+                             f"weights with optional thresholds, or gain)" for u in unknown]
                 continue
             try:
                 if "gain" in comp:
@@ -175,24 +184,60 @@ def model_from_table(table, source="model"):
                 problems.append(f"{key}: {exc}")
                 continue
             grid[outputs.index(out_name)][inputs.index(in_name)] = value
+    offset = table.get("output_offset")
+    if offset is not None and not (isinstance(offset, list) and len(offset) == len(outputs)
+                                   and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                           and np.isfinite(v) for v in offset)):
+        problems.append(f"model.output_offset: expected {len(outputs)} finite numbers, one per "
+                        f"output, found {offset!r}")
     if problems:
         raise PresetError(f"{source}: " + "; ".join(problems))
     try:
         return MultivariablePI(grid, input_names=inputs, output_names=outputs,
-                               input_amplitude=table.get("input_amplitude"))
+                               input_amplitude=table.get("input_amplitude"),
+                               output_offset=offset)
     except HysteresisError as exc:
         raise PresetError(f"{source}: model: {exc}") from None
 
 
-def model_to_table(model: MultivariablePI):
+#: Keys of a ``[model]`` table.
+MODEL_KEYS = ("inputs", "outputs", "input_unit", "output_unit", "input_amplitude",
+              "thresholds", "output_offset", "components")
+#: Keys of one ``[model.components.<output>.<input>]`` table.
+COMPONENT_KEYS = ("weights", "thresholds", "gain")
+
+
+def _hint(key, known):
+    close = difflib.get_close_matches(str(key), known, n=1)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     """Inverse of :func:`model_from_table`: a TOML-ready dict.
 
-    Thresholds are written per component (no shared vector is assumed).
+    Thresholds shared by every hysteresis component are written once as
+    ``thresholds``; otherwise each component carries its own. Pure gains are
+    written as ``gain``, absent components are left out, a non-zero
+    ``output_offset`` is written as a list (one value per output).
+
+    Parameters
+    ----------
+    model : MultivariablePI
+    input_unit, output_unit : str
+        Unit names stored with the model (informative; the weights are in
+        output unit per input unit).
     """
     table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
-             "input_unit": "V", "output_unit": "µm"}
+             "input_unit": str(input_unit), "output_unit": str(output_unit)}
     if model.input_amplitude is not None:
         table["input_amplitude"] = [float(a) for a in model.input_amplitude]
+    if model.output_offset is not None:
+        table["output_offset"] = [float(c) for c in model.output_offset]
+    pis = [c for row in model.components for c in row if isinstance(c, PrandtlIshlinskii)]
+    shared = all(c.thresholds.shape == pis[0].thresholds.shape
+                 and np.array_equal(c.thresholds, pis[0].thresholds) for c in pis)
+    if shared:
+        table["thresholds"] = [float(v) for v in pis[0].thresholds]
     comps = {}
     for l, out in enumerate(model.output_names):
         for k, inp in enumerate(model.input_names):
@@ -200,8 +245,8 @@ def model_to_table(model: MultivariablePI):
             if c is None:
                 continue
             if isinstance(c, PrandtlIshlinskii):
-                entry = {"thresholds": [float(v) for v in c.thresholds],
-                         "weights": [float(v) for v in c.weights]}
+                entry = {} if shared else {"thresholds": [float(v) for v in c.thresholds]}
+                entry["weights"] = [float(v) for v in c.weights]
             else:
                 entry = {"gain": float(c)}
             comps.setdefault(out, {})[inp] = entry
@@ -230,28 +275,37 @@ def load_model(path):
     return model_from_table(data["model"], str(path))
 
 
-def save_model(model, path, metadata=None):
+def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", extra=None):
     """Write a model file that :func:`load_model` and scenarios accept.
 
     Parameters
     ----------
     model : MultivariablePI
     path : str or pathlib.Path
-        Destination ``.toml``; written atomically (temporary file, rename).
+        Destination ``.toml``; written atomically (a unique temporary file
+        next to it, then a rename).
     metadata : dict, optional
         Stored as an ``[identification]`` table (method, frequency, fit
         metrics...).
+    input_unit, output_unit : str
+        Units stored in the ``[model]`` table.
+    extra : dict, optional
+        Further top-level tables (e.g. ``preset`` and ``dynamics`` of a
+        preset file).
     """
     path = Path(path)
     doc = {}
     if metadata:
         doc["identification"] = metadata
-    doc["model"] = model_to_table(model)
-    tmp = path.with_name(path.name + ".tmp")
+    doc.update(extra or {})
+    doc["model"] = model_to_table(model, input_unit, output_unit)
     path.parent.mkdir(parents=True, exist_ok=True)
+    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    tmp = Path(name)
     try:
-        with open(tmp, "wb") as fh:
+        with os.fdopen(fd, "wb") as fh:
             tomli_w.dump(doc, fh)
+        os.chmod(tmp, 0o644)   # mkstemp makes it private; a model file is shared
         tmp.replace(path)
     except BaseException:  # no half-written model file left behind
         tmp.unlink(missing_ok=True)
@@ -262,7 +316,11 @@ def dynamics_from_table(table, outputs, source="preset"):
     """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
 
     ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
-    ``damping_ratio`` per output; ``kind = "none"`` for a static plant.
+    ``damping_ratio`` per output; ``kind = "state_space"`` with continuous
+    matrices ``A`` (n, n) [1/s], ``B`` (n, p), ``C`` (p, n), ``D`` (p, p)
+    (p inputs: the PI outputs, p outputs: the displacements; e.g. identified
+    by ``hammerstein identify --dynamics``); ``kind = "none"`` for a static
+    plant.
 
     Raises
     ------
@@ -271,8 +329,11 @@ def dynamics_from_table(table, outputs, source="preset"):
     kind = table.get("kind", "none")
     if kind == "none":
         return None
+    if kind == "state_space":
+        return _state_space(table, outputs, source)
     if kind != "bending_modes":
-        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes' or 'none', found {kind!r}")
+        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
+                          f"'none', found {kind!r}")
     for key in ("natural_frequency", "damping_ratio"):
         if key not in table:
             raise PresetError(f"{source}: dynamics.{key}: missing")
@@ -282,6 +343,38 @@ def dynamics_from_table(table, outputs, source="preset"):
         return bending_modes(table["natural_frequency"], table["damping_ratio"], outputs)
     except DynamicsError as exc:
         raise PresetError(f"{source}: dynamics.{exc}") from None
+
+
+def _state_space(table, outputs, source):
+    import control
+    unknown = sorted(set(table) - {"kind", "A", "B", "C", "D"})
+    if unknown:
+        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key"
+                          f"{_hint(unknown[0], ('A', 'B', 'C', 'D'))}")
+    p = len(outputs)
+    mats = {}
+    for key in ("A", "B", "C", "D"):
+        if key not in table:
+            if key == "D":
+                mats[key] = np.zeros((p, p))
+                continue
+            raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space')")
+        try:
+            arr = np.array(table[key], dtype=float)
+        except (TypeError, ValueError):
+            raise PresetError(f"{source}: dynamics.{key}: expected a matrix (list of rows)") from None
+        if arr.ndim != 2 or not np.all(np.isfinite(arr)):
+            raise PresetError(f"{source}: dynamics.{key}: expected a finite matrix (list of rows)")
+        mats[key] = arr
+    n = mats["A"].shape[0]
+    expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+    for key, shape in expected.items():
+        if mats[key].shape != shape:
+            raise PresetError(f"{source}: dynamics.{key}: expected shape {shape} for {p} outputs "
+                              f"and {n} states, found {mats[key].shape}")
+    return control.ss(mats["A"], mats["B"], mats["C"], mats["D"],
+                      inputs=[f"{o}_h" for o in outputs], outputs=list(outputs),
+                      name="state_space")
 
 
 def load_plant(preset, dynamics=True, base_dir=None):

@@ -1,23 +1,31 @@
 """Replication report of the paper: ``hammerstein replicate``.
 
-:func:`replicate` runs every scenario of ``scenarios/paper/`` into
-``reports/paper/<scenario>/`` and writes ``reports/paper/README.md``
-(:func:`write_readme`): every number the paper publishes next to ours with
-their ratio (:data:`PAPER_NUMBERS`, :func:`paper_comparison`), the Fig. 7 and
-Fig. 9 trends (:func:`fig09_trends`, :func:`fig07_trends`), the compensator
-family on the trajectories of Fig. 10-13 (:func:`family_comparison`), the
-figures in the paper's numbering, and a discussion of where we differ and
-why (NOTES §4, §6, §7). Our numbers are always read from the reports'
-``metrics.csv`` files (pandas), never written into this module.
+:func:`hammerstein.runner.replicate` runs every scenario of
+``scenarios/paper/`` into ``reports/paper/<scenario>/``, then
+:func:`write_readme` writes ``reports/paper/README.md``: every number the
+paper publishes next to ours with their ratio (:data:`PAPER_NUMBERS`, read
+from ``paper_numbers.toml`` beside this module; :func:`paper_comparison`),
+the Fig. 7 and Fig. 9 trends (:func:`fig09_trends`, :func:`fig07_trends`),
+the compensator family on the trajectories of Fig. 10-13
+(:func:`family_comparison`), the figures in the paper's numbering, and a
+discussion of where we differ and why (docs/compensator.md,
+docs/metrics.md, docs/hammerstein-plant.md). Our numbers are always read
+from the reports' ``metrics.csv`` files (pandas), never written into this
+module.
 """
 
 from __future__ import annotations
 
 import re
+import tomllib
+from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from hammerstein.report import figures as plots
+from hammerstein.report.tables import markdown_table
 
 __all__ = [
     "PAPER_NUMBERS",
@@ -29,8 +37,6 @@ __all__ = [
     "fig07_trends",
     "fig08_identified_figure",
     "write_readme",
-    "replicate",
-    "add_parser",
 ]
 
 # scenario names (report directories)
@@ -40,86 +46,14 @@ FIG10, FIG11, FIG12, FIG13 = ("fig10-circles", "fig11-spiral", "fig12-lissajous-
                               "fig13-lissajous-4-3")
 LITERAL, STABILITY = "literal-law-divergence", "stability-map"
 
-#: Every number the paper publishes, where we read ours. ``factor`` turns our
-#: metric into the paper's quantity (0.5: a peak-to-peak into a ± half range).
-#: ``setting`` says which of our experiments stands for it.
-PAPER_NUMBERS = [
-    dict(figure="Fig. 5", quantity="direct x loop, ± half range", paper=58.0, unit="µm", text="±58 µm",
-         scenario=FIG05, case="ux-50Hz-static", channel="x", metric="peak_to_peak", factor=0.5,
-         setting="static plant (paper's model)"),
-    dict(figure="Fig. 5", quantity="direct x loop, ± half range", paper=58.0, unit="µm", text="±58 µm",
-         scenario=FIG05, case="ux-50Hz", channel="x", metric="peak_to_peak", factor=0.5,
-         setting="Hammerstein actuator"),
-    dict(figure="Fig. 5", quantity="direct y loop, ± half range", paper=50.5, unit="µm", text="±50.5 µm",
-         scenario=FIG05, case="uy-50Hz-static", channel="y", metric="peak_to_peak", factor=0.5,
-         setting="static plant (paper's model)"),
-    dict(figure="Fig. 5", quantity="direct y loop, ± half range", paper=50.5, unit="µm", text="±50.5 µm",
-         scenario=FIG05, case="uy-50Hz", channel="y", metric="peak_to_peak", factor=0.5,
-         setting="Hammerstein actuator"),
-    dict(figure="Fig. 5", quantity="h/H direct x", paper=17.0, unit="%", text="17 %",
-         scenario=FIG05, case="ux-50Hz-static", channel="x", metric="hysteresis_ratio", factor=1.0,
-         setting="static plant (paper's model)"),
-    dict(figure="Fig. 5", quantity="h/H direct x", paper=17.0, unit="%", text="17 %",
-         scenario=FIG05, case="ux-50Hz", channel="x", metric="hysteresis_ratio", factor=1.0,
-         setting="Hammerstein actuator"),
-    dict(figure="Fig. 5", quantity="h/H direct y", paper=15.8, unit="%", text="15.8 %",
-         scenario=FIG05, case="uy-50Hz-static", channel="y", metric="hysteresis_ratio", factor=1.0,
-         setting="static plant (paper's model)"),
-    dict(figure="Fig. 5", quantity="h/H direct y", paper=15.8, unit="%", text="15.8 %",
-         scenario=FIG05, case="uy-50Hz", channel="y", metric="hysteresis_ratio", factor=1.0,
-         setting="Hammerstein actuator"),
-    dict(figure="Fig. 5 / Sec. 5", quantity="cross-coupling (u_y -> x) before compensation, ±", paper=1.5,
-         unit="µm", text="±1.5 µm", scenario=FIG05, case="uy-50Hz-static", channel="x",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="static plant (paper's model)"),
-    dict(figure="Fig. 5 / Sec. 5", quantity="cross-coupling (u_y -> x) before compensation, ±", paper=1.5,
-         unit="µm", text="±1.5 µm", scenario=FIG05, case="uy-50Hz", channel="x",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="Hammerstein actuator"),
-    dict(figure="Fig. 5 / Sec. 5", quantity="cross-coupling (u_x -> y) before compensation, ±", paper=2.0,
-         unit="µm", text="±2 µm", scenario=FIG05, case="ux-50Hz-static", channel="y",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="static plant (paper's model)"),
-    dict(figure="Fig. 5 / Sec. 5", quantity="cross-coupling (u_x -> y) before compensation, ±", paper=2.0,
-         unit="µm", text="±2 µm", scenario=FIG05, case="ux-50Hz", channel="y",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="Hammerstein actuator"),
-    dict(figure="Fig. 8", quantity="residual cross-coupling (y_r -> x) after compensation, ±", paper=0.2,
-         unit="µm", text="±0.2 µm", scenario=FIG08, case="y-axis-static", channel="x",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="static plant, paper's model"),
-    dict(figure="Fig. 8", quantity="residual cross-coupling (y_r -> x) after compensation, ±", paper=0.2,
-         unit="µm", text="±0.2 µm", scenario=FIG08, case="y-axis", channel="x",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 8", quantity="residual cross-coupling (x_r -> y) after compensation, ±", paper=0.25,
-         unit="µm", text="±0.25 µm", scenario=FIG08, case="x-axis-static", channel="y",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="static plant, paper's model"),
-    dict(figure="Fig. 8", quantity="residual cross-coupling (x_r -> y) after compensation, ±", paper=0.25,
-         unit="µm", text="±0.25 µm", scenario=FIG08, case="x-axis", channel="y",
-         metric="cross_coupling_peak_to_peak", factor=0.5, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 8", quantity="compensated direct x: h/H (\"completely linearised\")", paper=0.0,
-         unit="%", text="≈ 0 %", scenario=FIG08, case="x-axis", channel="x",
-         metric="hysteresis_ratio", factor=1.0, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 8", quantity="compensated direct y: h/H (\"completely linearised\")", paper=0.0,
-         unit="%", text="≈ 0 %", scenario=FIG08, case="y-axis", channel="y",
-         metric="hysteresis_ratio", factor=1.0, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 10", quantity="circle 50 µm: max error, % of radius", paper=2.0, unit="%",
-         text="2 % (|ε| < 1 µm)", scenario=FIG10, case="circle-50um", channel="x+y",
-         metric="max_euclidean_error_percent", factor=1.0, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 10", quantity="circle 50 µm: max error, % of radius", paper=2.0, unit="%",
-         text="2 % (|ε| < 1 µm)", scenario=FIG10, case="circle-50um-static", channel="x+y",
-         metric="max_euclidean_error_percent", factor=1.0, setting="static plant, paper's model"),
-    dict(figure="Fig. 10", quantity="circle 30 µm: max error, % of radius", paper=2.0, unit="%",
-         text="2 %", scenario=FIG10, case="circle-30um", channel="x+y",
-         metric="max_euclidean_error_percent", factor=1.0, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 10", quantity="circle 15 µm: max error, % of radius", paper=2.0, unit="%",
-         text="2 %", scenario=FIG10, case="circle-15um", channel="x+y",
-         metric="max_euclidean_error_percent", factor=1.0, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 11", quantity="spiral 50 µm: max error, % of radius", paper=2.0, unit="%",
-         text="2 %", scenario=FIG11, case="spiral-50um", channel="x+y",
-         metric="max_euclidean_error_percent", factor=1.0, setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 12", quantity="Lissajous 3/2: max error", paper=2.0, unit="µm", text="|ε| ≈ 2 µm",
-         scenario=FIG12, case="lissajous-3-2", channel="x+y", metric="max_euclidean_error", factor=1.0,
-         setting="Hammerstein, identified at 50 Hz"),
-    dict(figure="Fig. 13", quantity="Lissajous 4/3: max error", paper=2.0, unit="µm", text="|ε| ≈ 2 µm",
-         scenario=FIG13, case="lissajous-4-3", channel="x+y", metric="max_euclidean_error", factor=1.0,
-         setting="Hammerstein, identified at 50 Hz"),
-]
+#: Every number the paper publishes, where we read ours (``paper_numbers.toml``
+#: beside this module): ``figure, quantity, paper, unit, text, scenario, case,
+#: channel, metric, factor, setting``. ``factor`` turns our metric into the
+#: paper's quantity (0.5: a peak-to-peak into a ± half range). ``setting`` says
+#: which of our experiments stands for it.
+PAPER_NUMBERS = tomllib.loads(
+    resources.files("hammerstein.report").joinpath("paper_numbers.toml").read_text(encoding="utf-8")
+)["numbers"]
 
 
 def read_metrics(root):
@@ -312,7 +246,6 @@ def fig08_identified_figure(report_dir, path):
     bool
         False when no time series was found (nothing written).
     """
-    from hammerstein.report import figures as plots
     report_dir = Path(report_dir)
     curves = []
     for f in (50, 100, 150, 200):
@@ -345,7 +278,6 @@ def _fmt(v, digits=3):
 
 
 def _table(df, digits=3):
-    from hammerstein.report.scenario import markdown_table
     return markdown_table(df, floatfmt="{:.%dg}" % digits)
 
 
@@ -537,60 +469,3 @@ def _discussion(metrics, comp, fam):
          "removes cross-couplings that the per-axis inverse [20] leaves at their uncompensated level.",
          ""]
     return L
-
-
-def replicate(scenarios="scenarios/paper", out="reports/paper"):
-    """Run every paper scenario and write the replication README.
-
-    Parameters
-    ----------
-    scenarios : str or pathlib.Path
-        Directory of scenario ``*.toml`` files.
-    out : str or pathlib.Path
-        Output directory: ``<out>/<scenario>/`` reports and ``<out>/README.md``.
-
-    Returns
-    -------
-    list of ScenarioOutcome
-
-    Raises
-    ------
-    FileNotFoundError
-        If ``scenarios`` holds no ``*.toml`` file.
-    """
-    from hammerstein.runner import run_scenario
-    files = sorted(Path(scenarios).glob("*.toml"))
-    if not files:
-        raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
-    out = Path(out)
-    outcomes = [run_scenario(f, out) for f in files]
-    write_readme(out, outcomes)
-    return outcomes
-
-
-def add_parser(subparsers):
-    """Register ``hammerstein replicate``."""
-    p = subparsers.add_parser(
-        "replicate", help="regenerate the replication report of the paper",
-        description="Run every scenario of DIR (default scenarios/paper) into OUT/<scenario>/ and "
-                    "write OUT/README.md: the paper's numbers next to ours with their ratios, the "
-                    "trends of Fig. 7 and 9, the compensator family, the figures.")
-    p.add_argument("--scenarios", default="scenarios/paper", metavar="DIR")
-    p.add_argument("--out", default="reports/paper", metavar="OUT")
-    p.set_defaults(handler=_replicate)
-
-
-def _replicate(args):
-    import sys
-    try:
-        outcomes = replicate(args.scenarios, args.out)
-    except FileNotFoundError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    for o in outcomes:
-        if o.ok:
-            print(f"{o.path}: wrote {o.out_dir}/")
-        else:
-            print(f"error: {'; '.join(o.error.splitlines())}", file=sys.stderr)
-    print(f"wrote {Path(args.out) / 'README.md'}")
-    return 0 if all(o.ok for o in outcomes) else 1

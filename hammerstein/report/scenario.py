@@ -21,26 +21,10 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.report import figures as plots
+from hammerstein.report.sweeps import sweep_report_lines
+from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
 
-__all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table"]
-
-COLUMNS = ["case", "channel", "metric", "value", "unit"]
-
-
-def metrics_frame(results):
-    """Long-format metrics of all cases.
-
-    Parameters
-    ----------
-    results : list of hammerstein.runner.CaseResult
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns ``case, channel, metric, value, unit``.
-    """
-    rows = [{"case": r.name, **row} for r in results for row in r.metrics]
-    return pd.DataFrame(rows, columns=COLUMNS)
+__all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table", "COLUMNS"]
 
 
 def timeseries_frame(result):
@@ -62,18 +46,6 @@ def timeseries_frame(result):
     for l, o in enumerate(model.output_names):
         cols[f"{o}_um"] = result.outputs[l]
     return pd.DataFrame(cols)
-
-
-def markdown_table(frame, floatfmt="{:.4g}"):
-    """A pandas DataFrame as a GitHub markdown table (no extra dependency)."""
-    def fmt(v):
-        if isinstance(v, (float, np.floating)):
-            return "" if np.isnan(v) else floatfmt.format(v)
-        return str(v)
-    head = "| " + " | ".join(map(str, frame.columns)) + " |"
-    sep = "|" + "|".join("---" for _ in frame.columns) + "|"
-    body = ["| " + " | ".join(fmt(v) for v in row) + " |" for row in frame.itertuples(index=False)]
-    return "\n".join([head, sep, *body])
 
 
 def _plant_label(spec):
@@ -274,15 +246,14 @@ def write_report(scenario, results, directory):
 
     Parameters
     ----------
-    scenario : hammerstein.scenarios.Scenario
-    results : list of hammerstein.runner.CaseResult
+    scenario : hammerstein.scenario.resolve.Scenario
+    results : list of hammerstein.scenario.execute.CaseResult
     directory : pathlib.Path
         Existing (temporary) directory to fill.
     """
     directory = Path(directory)
     frame = metrics_frame(results)
     frame.to_csv(directory / "metrics.csv", index=False)
-    from hammerstein.scenario.sweeps import sweep_report_lines  # sweep cases: tables and figures per sweep only
     sweep_lines = sweep_report_lines(scenario, results, directory, frame)
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     frame = frame[frame["case"].isin([r.name for r in results])]

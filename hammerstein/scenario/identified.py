@@ -20,7 +20,7 @@ the report directory as ``models/identified-<f>Hz-<method>.toml``
 (:func:`hammerstein.presets.save_model`; loadable by ``model = "path"``).
 
 ``sensor = true`` measures the outputs through the inductive sensor model of
-NOTES §1 (IBS ECL202): 40 nm quantisation, first-order 2 kHz bandwidth, and
+docs/identification.md (IBS ECL202): 40 nm quantisation, first-order 2 kHz bandwidth, and
 white noise of :data:`SENSOR_NOISE_RMS` = 0.02 µm RMS (half a quantisation
 step; the paper does not state the noise) drawn with ``seed``.
 """
@@ -33,9 +33,10 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
-from hammerstein.core.presets import PresetError, model_to_table, save_model
-from hammerstein.scenario.schema import Field, Invalid, boolean, check_table, choice, integer, number
+from hammerstein.core.presets import PresetError, load_model, model_to_table, save_model
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
+from hammerstein.scenario.schema import (Field, Invalid, NestedInvalid, boolean, check_table, choice,
+                                         integer, number)
 
 __all__ = [
     "IDENTIFY_FIELDS",
@@ -43,21 +44,18 @@ __all__ = [
     "NestedInvalid",
     "identify_table",
     "identified_model",
+    "nyquist_problem",
     "model_file_name",
     "clear_cache",
     "save_identified_models",
+    "resolve_model",
+    "comparison_spec",
+    "resolve_comparison_model",
+    "comparison_model",
 ]
 
 #: White-noise RMS [µm] of the ECL202 sensor model used by ``sensor = true``.
 SENSOR_NOISE_RMS = 0.02
-
-
-class NestedInvalid(Invalid):
-    """A nested table has problems; ``problems`` lists ``(key, message)``."""
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
 
 
 def _bounds(v):
@@ -164,6 +162,26 @@ def _spec_key(spec):
     return tuple(sorted((k, _freeze(v)) for k, v in spec.items()))
 
 
+def nyquist_problem(spec, plant):
+    """``identify.frequency: ...`` when the excitation of ``spec`` is not below the plant's Nyquist frequency.
+
+    Parameters
+    ----------
+    spec : dict
+        Validated ``identify`` table (:func:`identify_table`).
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    str or None
+        The problem, or None when ``frequency < 1 / (2 T)``.
+    """
+    f, nyquist = spec["frequency"], 0.5 / plant.sampling_period
+    if f >= nyquist:
+        return f"identify.frequency: {f:g} Hz is beyond the Nyquist frequency {nyquist:g} Hz of the plant"
+    return None
+
+
 def identified_model(plant, spec):
     """The model identified on ``plant`` by the ``identify`` table ``spec`` (cached).
 
@@ -199,9 +217,9 @@ def identified_model(plant, spec):
         return _CACHE[key]
     model = plant.hysteresis
     f = spec["frequency"]
-    if f >= 0.5 / plant.sampling_period:
-        raise IdentificationError(f"identify.frequency: {f:g} Hz is beyond the Nyquist "
-                                  f"frequency {0.5 / plant.sampling_period:g} Hz of the plant")
+    problem = nyquist_problem(spec, plant)
+    if problem:
+        raise IdentificationError(problem)
     amp = spec.get("amplitude")
     if amp is None:
         if model.input_amplitude is None:
@@ -297,62 +315,130 @@ def save_identified_models(scenario, directory):
     return rows
 
 
-def report_identified(scenario, results, directory):
-    """Report hook: save the identified models and list them in ``report.md``.
-
-    Called by :func:`hammerstein.runner.run_scenario` after
-    :func:`hammerstein.reports.write_report`; does nothing for a scenario
-    without identified models or model-vs-plant drives. Writes the model
-    files, ``model-outputs-<case>.csv``, the plant-vs-model loop grids
-    (Fig. 6) and, for 3 or more drive frequencies, ``model-rms-vs-frequency.csv``
-    and ``.png`` (Fig. 7); sweep cases are left to their sweep's report.
+# -- models of compensators and model-vs-plant comparisons (paper Fig. 6, 7) ---------
+def resolve_model(spec_model, plant, base_dir, identify=None):
+    """The multivariable PI model a compensator (or a comparison) is built from.
 
     Parameters
     ----------
-    scenario : hammerstein.scenarios.Scenario
-    results : list of hammerstein.runner.CaseResult
-    directory : pathlib.Path
-        The report directory being written (contains ``report.md``).
+    spec_model : str
+        ``"plant"`` (the plant's own PI model), ``"identified"`` (identified
+        on ``plant`` by the ``identify`` table, :func:`identified_model`) or a
+        model/preset TOML path, relative to ``base_dir`` when not absolute.
+    plant : HammersteinPlant
+    base_dir : pathlib.Path
+    identify : dict, optional
+        The ``identify`` table (required with ``"identified"``).
+
+    Returns
+    -------
+    MultivariablePI
+
+    Raises
+    ------
+    PresetError
+        If the model file is missing or invalid.
+    IdentificationError
+        If ``identify`` is missing or the identification fails.
     """
-    directory = Path(directory)
-    rows = save_identified_models(scenario, directory)
-    # sweep cases ([[sweeps]], hammerstein.sweeps) are reported by their sweep's table and figure
-    results = [r for r in results if getattr(r.spec, "sweep", None) is None]
-    figs = _comparison_figures(scenario, results, directory)
-    if not rows and not figs:
-        return
+    if spec_model in (None, "plant"):
+        return plant.hysteresis
+    if spec_model == "identified":
+        if identify is None:
+            raise IdentificationError("identify: missing (required with model = 'identified'), "
+                                      "e.g. identify = { frequency = 50.0 }")
+        return identified_model(plant, identify)[0]
+    path = Path(spec_model)
+    if not path.is_absolute():
+        path = Path(base_dir) / path
+    return load_model(path)
+
+
+def comparison_spec(case, mode):
+    """Check the ``model`` / ``identify`` keys of a case (no model is loaded or identified).
+
+    Parameters
+    ----------
+    case : dict
+        The raw ``[[cases]]`` table: ``model`` ("identified", "plant" or a
+        model file path) and, with "identified", ``identify``
+        (:data:`IDENTIFY_FIELDS`).
+    mode : {'drive', 'reference'}
+        Only drives may name a comparison model.
+
+    Returns
+    -------
+    dict
+        ``{"model": ..., "identify": validated table}`` (``identify`` only
+        with "identified").
+
+    Raises
+    ------
+    ValueError
+        One ``key: message`` per line (unknown ``identify`` keys with hints,
+        a reference case, a missing table).
+    """
+    name = case.get("model")
     lines = []
-    if figs:
-        lines += ["", "## Model vs plant", "",
-                  "Open-loop drives compared with a model (rate-independent PI, no dynamics) "
-                  "driven by the same voltages: metrics `model_rms_error` and "
-                  "`model_max_abs_error` [µm] per output (plant minus model, after settling; the "
-                  "paper's RMS_error_model, Section 5.3); model outputs in "
-                  "`model-outputs-<case>.csv`.", ""]
-        for caption, fname in figs:
-            lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
-        for caption, fname, table in _frequency_tables(scenario, results, directory):
-            lines += [f"### {caption}", "", f"![{caption}]({fname[0]})", "",
-                      f"Table: [`{fname[1]}`]({fname[1]}).", "", _markdown(table), ""]
-    if not rows:
-        with open(directory / "report.md", "a", encoding="utf-8") as fh:
-            fh.write("\n".join(lines) + "\n")
-        return
-    lines += ["", "## Identified models", "",
-             "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
-             "Steps 1-4); loadable with `model = \"<file>\"`.", "",
-             "| model file | plant | used as | cases |", "|---|---|---|---|"]
-    by_file = {}
-    for r in rows:
-        by_file.setdefault((r["file"], r["plant"], r["role"]), []).append(r["case"])
-    for (fname, plant, role), cases in by_file.items():
-        shown = ", ".join(cases) if len(cases) <= 4 else f"{', '.join(cases[:3])}, ... ({len(cases)} cases)"
-        lines.append(f"| [`{fname}`]({fname}) | {plant} | {role} | {shown} |")
-    with open(directory / "report.md", "a", encoding="utf-8") as fh:
-        fh.write("\n".join(lines) + "\n")
+    if mode != "drive":
+        lines.append("model: a model is compared with the plant in open-loop drive cases only; "
+                     "the compensator's model is compensator.model")
+    if not isinstance(name, str):
+        lines.append(f"model: expected 'identified', 'plant' or a model file path, found {name!r}"
+                     if "model" in case else
+                     "identify: only used with model = 'identified' (add model = \"identified\")")
+    spec = {"model": name}
+    if name == "identified":
+        if "identify" not in case:
+            lines.append("identify: missing (required with model = 'identified'), "
+                         "e.g. identify = { frequency = 50.0 }")
+        else:
+            try:
+                spec["identify"] = identify_table(case["identify"])
+            except Invalid as exc:
+                lines += [f"identify.{k}: {m}" for k, m in getattr(exc, "problems", [])] \
+                    or [f"identify: {exc}"]
+    elif "identify" in case and isinstance(name, str):
+        lines.append(f"identify: only used with model = 'identified', found model = {name!r}")
+    if lines:
+        raise ValueError("\n".join(lines))
+    return spec
 
 
-# -- model-vs-plant comparison of open-loop drives (paper Fig. 6, 7) -------------------
+def resolve_comparison_model(spec, plant, base_dir):
+    """The comparison model of a checked ``spec`` (:func:`comparison_spec`), on ``plant``.
+
+    Parameters
+    ----------
+    spec : dict
+        ``{"model": ..., "identify": ...}``.
+    plant : HammersteinPlant
+        The case's plant (an "identified" model is identified on it).
+    base_dir : pathlib.Path
+        Directory of the scenario file (relative model paths).
+
+    Returns
+    -------
+    MultivariablePI
+        With the plant's numbers of inputs and outputs.
+
+    Raises
+    ------
+    ValueError
+        ``model: message`` for a failed identification, an unreadable model
+        file or a model of the wrong size.
+    """
+    try:
+        model = resolve_model(spec["model"], plant, base_dir, spec.get("identify"))
+    except (IdentificationError, PresetError) as exc:
+        raise ValueError(f"model: {exc}") from None
+    ref = plant.hysteresis
+    if (model.n_inputs, model.n_outputs) != (ref.n_inputs, ref.n_outputs):
+        raise ValueError(f"model: expected a {ref.n_outputs}x{ref.n_inputs} model like the plant's, "
+                         f"found {model.n_outputs}x{model.n_inputs}")
+    return model
+
+
 def comparison_model(case, mode, plant, base_dir):
     """The model an open-loop drive case compares with its plant.
 
@@ -383,194 +469,7 @@ def comparison_model(case, mode, plant, base_dir):
         a reference case, a missing table, a failed identification, a model
         of the wrong size); PresetError for an unreadable model file.
     """
-    from hammerstein.runner import resolve_model
-    name = case.get("model")
-    lines = []
-    if mode != "drive":
-        lines.append("model: a model is compared with the plant in open-loop drive cases only; "
-                     "the compensator's model is compensator.model")
-    if not isinstance(name, str):
-        lines.append(f"model: expected 'identified', 'plant' or a model file path, found {name!r}"
-                     if "model" in case else
-                     "identify: only used with model = 'identified' (add model = \"identified\")")
-    spec = {"model": name}
-    if name == "identified":
-        if "identify" not in case:
-            lines.append("identify: missing (required with model = 'identified'), "
-                         "e.g. identify = { frequency = 50.0 }")
-        else:
-            try:
-                spec["identify"] = identify_table(case["identify"])
-            except Invalid as exc:
-                lines += [f"identify.{k}: {m}" for k, m in getattr(exc, "problems", [])] \
-                    or [f"identify: {exc}"]
-    elif "identify" in case and isinstance(name, str):
-        lines.append(f"identify: only used with model = 'identified', found model = {name!r}")
-    if lines or plant is None:
-        raise ValueError("\n".join(lines))
-    try:
-        model = resolve_model(name, plant, base_dir, spec.get("identify"))
-    except (IdentificationError, PresetError) as exc:
-        raise ValueError(f"model: {exc}") from None
-    ref = plant.hysteresis
-    if (model.n_inputs, model.n_outputs) != (ref.n_inputs, ref.n_outputs):
-        raise ValueError(f"model: expected a {ref.n_outputs}x{ref.n_inputs} model like the plant's, "
-                         f"found {model.n_outputs}x{model.n_inputs}")
-    return model, spec
-
-
-def model_comparison(case, plant_outputs):
-    """Simulate a drive case's comparison model and compare it with the plant.
-
-    The model (rate-independent PI, no dynamics) is driven by the case's
-    voltages from zero play states, like the plant.
-
-    Parameters
-    ----------
-    case : hammerstein.scenarios.CaseSpec
-        A drive case with ``case.model``.
-    plant_outputs : numpy.ndarray, shape (p, n_samples)
-        The plant's displacements [µm].
-
-    Returns
-    -------
-    model_outputs : numpy.ndarray, shape (p, n_samples)
-        [µm].
-    rows : list of dict
-        Per output channel, over the steady window after ``settle_periods``:
-        ``model_rms_error`` (the paper's RMS_error_model, Section 5.3) and
-        ``model_max_abs_error`` of plant minus model [µm].
-    """
-    from hammerstein.core.metrics import steady_window
-    ym, _ = case.model.simulate(case.signal)
-    y = np.asarray(plant_outputs, dtype=float)
-    win = steady_window(y.shape[1], case.period_samples, case.settle_periods)
-    e = y[:, win] - ym[:, win]
-    rows = []
-    for l, name in enumerate(case.plant.hysteresis.output_names):
-        rows.append({"channel": name, "metric": "model_rms_error",
-                     "value": float(np.sqrt(np.mean(e[l] ** 2))), "unit": "µm"})
-        rows.append({"channel": name, "metric": "model_max_abs_error",
-                     "value": float(np.max(np.abs(e[l]))), "unit": "µm"})
-    return ym, rows
-
-
-def _last_period(x, P):
-    return np.concatenate([x[..., -P:], x[..., -P:-P + 1]], axis=-1)
-
-
-def _model_label(spec):
-    if spec.get("model") == "identified":
-        i = spec["identify"]
-        return f"model identified at {i['frequency']:g} Hz ({i.get('method', 'closed-form')})"
-    return f"model {spec.get('model')}"
-
-
-def _comparison_figures(scenario, results, directory):
-    """Plant-vs-model loop grids (Fig. 6) and model output CSVs; [(caption, file)]."""
-    import pandas as pd
-
-    from hammerstein.report.figures import save
-    from hammerstein.report.model_figures import model_loop_grid
-    groups = {}
-    for r in results:
-        if getattr(r, "model_outputs", None) is None:
-            continue
-        model = r.spec.plant.hysteresis
-        cols = {"time_s": r.spec.time}
-        cols.update({f"{o}_model_um": r.model_outputs[l] for l, o in enumerate(model.output_names)})
-        pd.DataFrame(cols).to_csv(directory / f"model-outputs-{r.name}.csv", index=False,
-                                  float_format="%.6g")
-        label = "hammerstein" if r.spec.plant.dynamics is not None else "static"
-        groups.setdefault((label, _model_label(r.spec.model_spec)), []).append(r)
-    figs = []
-    for i, ((label, mlabel), rs) in enumerate(groups.items()):
-        model = rs[0].spec.plant.hysteresis
-        P = lambda r: r.spec.period_samples  # noqa: E731
-        curves = [{"label": r.name, "column": r.spec.driven_input,
-                   "x": _last_period(r.inputs[r.spec.driven_input], P(r)),
-                   "plant": _last_period(r.outputs, P(r)),
-                   "model": _last_period(r.model_outputs, P(r))} for r in rs]
-        fig = model_loop_grid(curves, [f"{n} [V]" for n in model.input_names],
-                              [f"{n} [µm]" for n in model.output_names],
-                              f"{scenario.title}: {label} plant (solid) vs {mlabel} (dashed), "
-                              f"last period")
-        fname = f"model-vs-plant-{label}{'' if i == 0 else f'-{i + 1}'}.png"
-        save(fig, directory / fname)
-        figs.append((f"Model vs plant: {label} plant, {mlabel}", fname))
-    return figs
-
-
-def model_rms_table(results):
-    """Model error against drive frequency of the model-vs-plant drive cases.
-
-    Parameters
-    ----------
-    results : list of hammerstein.runner.CaseResult
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per case and output: ``plant`` ('hammerstein' or
-        'static'), ``model`` (label), ``input`` (driven input), ``output``,
-        ``amplitude_V``, ``frequency_hz``, ``model_rms_error`` and
-        ``model_max_abs_error`` [µm]; sorted by plant, model, input, output,
-        frequency.
-    """
-    import pandas as pd
-    rows = []
-    for r in results:
-        if getattr(r, "model_outputs", None) is None or r.spec.mode != "drive":
-            continue
-        spec = r.spec
-        vals = {(m["channel"], m["metric"]): m["value"] for m in r.metrics}
-        for o in spec.plant.hysteresis.output_names:
-            rows.append({"plant": "hammerstein" if spec.plant.dynamics is not None else "static",
-                         "model": _model_label(spec.model_spec),
-                         "input": spec.plant.hysteresis.input_names[spec.driven_input],
-                         "output": o, "amplitude_V": float(spec.signal_spec["amplitude"]),
-                         "frequency_hz": float(spec.signal_spec["frequency"]),
-                         "model_rms_error": vals[(o, "model_rms_error")],
-                         "model_max_abs_error": vals[(o, "model_max_abs_error")]})
-    cols = ["plant", "model", "input", "output", "amplitude_V", "frequency_hz",
-            "model_rms_error", "model_max_abs_error"]
-    frame = pd.DataFrame(rows, columns=cols)
-    return frame.sort_values(cols[:6], kind="stable").reset_index(drop=True)
-
-
-def _markdown(table):
-    from hammerstein.report.scenario import markdown_table
-    return markdown_table(table)
-
-
-def _frequency_tables(scenario, results, directory):
-    """Fig. 7: model RMS error vs drive frequency for every (plant, model, amplitude)
-    group with 3 or more drive frequencies; writes CSV and figure."""
-    from hammerstein.report.figures import save
-    from hammerstein.report.model_figures import rms_vs_frequency_figure
-    table = model_rms_table(results)
-    out = []
-    groups = [(key, g) for key, g in table.groupby(["plant", "model", "amplitude_V"], sort=False)
-              if g["frequency_hz"].nunique() >= 3]
-    for i, ((plant, mlabel, amp), g) in enumerate(groups):
-        first = next(r for r in results if getattr(r, "model_outputs", None) is not None)
-        model = first.spec.plant.hysteresis
-        suffix = "" if i == 0 else f"-{i + 1}"
-        fig_name, csv_name = f"model-rms-vs-frequency{suffix}.png", f"model-rms-vs-frequency{suffix}.csv"
-        g.to_csv(directory / csv_name, index=False, float_format="%.6g")
-        f_id = None
-        for r in results:
-            ms = getattr(r.spec, "model_spec", None) or {}
-            if ms.get("model") == "identified" and _model_label(ms) == mlabel:
-                f_id = ms["identify"]["frequency"]
-                break
-        fig = rms_vs_frequency_figure(g, list(model.input_names), list(model.output_names),
-                                      f"{scenario.title}\nRMS error of the {mlabel} against the "
-                                      f"{plant} plant, {amp:g} V drives", identification_hz=f_id)
-        save(fig, directory / fig_name)
-        wide = g.pivot_table(index="frequency_hz", columns=["output", "input"],
-                             values="model_rms_error")
-        wide.columns = [f"{o}<-{k} [µm]" for o, k in wide.columns]
-        out.append((f"Model RMS error vs drive frequency ({plant} plant, {mlabel}, {amp:g} V)",
-                    (fig_name, csv_name), wide.reset_index()))
-    return out
+    spec = comparison_spec(case, mode)
+    if plant is None:
+        raise ValueError("")
+    return resolve_comparison_model(spec, plant, base_dir), spec

@@ -1,49 +1,50 @@
 """Identification scenarios on measured records (``kind = "identification"``).
 
-A scenario file of this kind has no plant: it identifies a classical PI
-model from a measured single-input single-output record, trains on the
-first part of the record (the start-up / virgin curve only warms up the play
-states, :func:`hammerstein.identify_cli.identify_record`), validates on the
-held-out rest and writes a report directory like the simulated scenarios::
+A scenario file of this kind has no plant: it identifies a (multivariable)
+classical PI model from measured records with the options of
+``hammerstein identify`` (:func:`hammerstein.core.record_identification.identify_records`:
+split at reversal points, the last complete branches or periods held out,
+partition and component structure chosen automatically unless given) and
+writes a report directory like the simulated scenarios::
 
     kind = "identification"
     name = "real-data-piezo-stack"
     [data]
-    file = "bundled:piezo-stack-150V-1Hz.csv"   # or a path relative to the scenario file
-    input = 2        # column [V]: 0-based index or header name
-    output = 1       # column [µm]
+    file = "bundled:piezo-stack-150V-1Hz.csv"   # or files = [...]; paths relative to the scenario
+    input = 2        # column(s): 0-based index, header name, or a list (inputs = [...])
+    output = 1       # column(s) (outputs = [...])
     time = 0         # column [s]; or sampling_period = 2e-4
+    input_unit = "V"
+    output_unit = "µm"
     [identification]
     method = "least-squares"   # or "closed-form"
-    n_hysterons = 15           # or thresholds = [r_1, ..., r_n] [V]
-    partition = "time"         # or "input"
+    n_hysterons = 15           # or thresholds = [r_1, ..., r_n]
+    partition = "auto"         # "time" or "input"; auto keeps the smaller held-out error
     bounds = "none"            # least squares: "nonnegative" or "monotone"
-    train_fraction = 0.6       # first 60 % of the samples train, the rest validates
+    components = "auto"        # "all", or "OUT:IN=pi|gain|none,..."
+    hold_out = "auto"          # or "none"; train_fraction = 0.6 splits at the nearest reversal
 
 The report holds ``metrics.csv`` (cases ``train`` and ``validation``;
-metrics ``rms_error`` [µm], ``rms_error_percent`` [% of the measured output
-range of the window], ``max_abs_error`` [µm], ``output_range`` [µm]),
-``timeseries-<case>.csv``, the model file ``models/identified-<method>.toml``,
-an overlay figure and ``report.md``. The runner dispatches here through
-:data:`hammerstein.runner.SCENARIO_KINDS`.
+per output channel ``rms_error``, ``rms_error_percent`` [% of the measured
+output range of the window], ``max_abs_error``, ``output_range``),
+``timeseries-<case>.csv`` (first record), the model file
+``models/identified-<method>.toml``, an overlay figure and ``report.md``. The
+runner dispatches here through :data:`hammerstein.runner.SCENARIO_KINDS`.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
-from hammerstein.report import figures as plots
-from hammerstein.core.datafiles import DataFileError, Record, bundled_data, read_record
-from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.core.datafiles import DataFileError, bundled_data, read_records
 from hammerstein.core.identification import IdentificationError
-from hammerstein.cli.identify import identify_record
-from hammerstein.core.presets import save_model
+from hammerstein.core.record_identification import identify_records
 from hammerstein.scenario.schema import (NAME, Field, Invalid, ScenarioError, check_table, choice, integer,
-                        number, string)
+                                         number, string)
 
 __all__ = [
     "DATA_FIELDS",
@@ -53,7 +54,6 @@ __all__ = [
     "resolve_data_path",
     "load_identification_scenario",
     "run_identification_scenario",
-    "write_identification_report",
 ]
 
 
@@ -77,6 +77,32 @@ def _fraction(v):
     raise Invalid(f"expected a fraction in (0, 1) (the rest is held out), found {v!r}")
 
 
+def _columns(v):
+    if isinstance(v, list) and v:
+        return [_column(c) for c in v]
+    return [_column(v)]
+
+
+def _files(v):
+    if isinstance(v, list) and v and all(isinstance(f, str) and f for f in v):
+        return list(v)
+    raise Invalid(f"expected a non-empty list of file names, found {v!r}")
+
+
+def _names_list(v):
+    if isinstance(v, str):
+        v = [v]
+    if isinstance(v, list) and v and all(isinstance(n, str) and re.fullmatch(NAME, n) for n in v):
+        return list(v)
+    raise Invalid(f"expected a name or a list of names (letters, digits, '.', '_', '-'), found {v!r}")
+
+
+def _components(v):
+    if isinstance(v, str) and v.strip():
+        return v
+    raise Invalid(f"expected 'auto', 'all' or 'OUT:IN=pi|gain|none,...', found {v!r}")
+
+
 TOP = {
     "kind": Field(choice("identification"), required=True),
     "name": Field(string(NAME, "a name of letters, digits, '.', '_' or '-'")),
@@ -88,22 +114,31 @@ TOP = {
 }
 #: Schema of the ``[data]`` table.
 DATA_FIELDS = {
-    "file": Field(string(), required=True),
-    "input": Field(_column, required=True),
-    "output": Field(_column, required=True),
+    "file": Field(string()),
+    "files": Field(_files),
+    "input": Field(_columns),
+    "inputs": Field(_columns),
+    "output": Field(_columns),
+    "outputs": Field(_columns),
     "time": Field(_column),
     "sampling_period": Field(number("s", 0)),
-    "input_name": Field(string(NAME, "a name")),
-    "output_name": Field(string(NAME, "a name")),
+    "input_name": Field(_names_list),
+    "output_name": Field(_names_list),
+    "input_names": Field(_names_list),
+    "output_names": Field(_names_list),
+    "input_unit": Field(string(), default="V"),
+    "output_unit": Field(string(), default="µm"),
 }
 #: Schema of the ``[identification]`` table.
 IDENTIFICATION_FIELDS = {
     "method": Field(choice("closed-form", "least-squares"), default="least-squares"),
     "n_hysterons": Field(integer(1), default=15),
     "thresholds": Field(_thresholds),
-    "partition": Field(choice("time", "input"), default="time"),
+    "partition": Field(choice("auto", "time", "input"), default="auto"),
     "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),
-    "train_fraction": Field(_fraction, default=0.6),
+    "components": Field(_components, default="auto"),
+    "hold_out": Field(choice("auto", "none"), default="auto"),
+    "train_fraction": Field(_fraction),
     "skip": Field(number("s", 0, exclusive=False)),
 }
 
@@ -121,7 +156,7 @@ class RecordScenario:
         Validated ``[data]`` table.
     identification : dict
         Validated ``[identification]`` table (defaults filled).
-    record : hammerstein.datafiles.Record
+    records : list of hammerstein.core.datafiles.MultiRecord
     cases : list of str
         ``["train", "validation"]``.
     kind : str
@@ -135,7 +170,7 @@ class RecordScenario:
     path: Path
     data: dict
     identification: dict
-    record: Record
+    records: list
     cases: list = field(default_factory=lambda: ["train", "validation"])
     kind: str = "identification"
 
@@ -148,21 +183,16 @@ class RecordResult:
     ----------
     name : str
         ``"train"`` or ``"validation"``.
-    window : slice
-        Samples of the evaluation window.
     metrics : list of dict
-        Rows ``{channel, metric, value, unit}``.
-    model_output : numpy.ndarray, shape (n_samples,)
-        Model output + offset over the whole record [µm].
-    identifier : ClosedFormPI or LeastSquaresPI
-        Fitted (the same object in both results).
+        Rows ``{channel, metric, value, unit}``, one set per output.
+    fit : hammerstein.core.record_identification.RecordFit
+        The identification (the same object in both results): model,
+        splits (training and held-out samples of each record), predictions.
     """
 
     name: str
-    window: slice
     metrics: list
-    model_output: np.ndarray
-    identifier: object
+    fit: object
 
 
 def resolve_data_path(text, base_dir):
@@ -215,43 +245,59 @@ def load_identification_scenario(path, data):
                         problems, source) or {}
     if ident.get("bounds", "none") != "none" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.bounds: only used by method = 'least-squares'")
-    record = None
-    if dat is not None and not problems:
+    records = []
+    if dat is not None:
+        files = dat.get("files", [dat["file"]] if "file" in dat else [])
+        ins = dat.get("inputs", dat.get("input"))
+        outs = dat.get("outputs", dat.get("output"))
+        for key, alias, val in (("file", "files", files), ("input", "inputs", ins),
+                                ("output", "outputs", outs)):
+            if key in dat and alias in dat:
+                problems.append(f"{source}: data.{alias}: give {key} or {alias}, not both")
+            elif not val and alias not in data.get("data", {}) and key not in data.get("data", {}):
+                problems.append(f"{source}: data.{key}: missing (required); or data.{alias} "
+                                f"as a list")
         if "time" not in dat and "sampling_period" not in dat:
             problems.append(f"{source}: data: give time (a column) or sampling_period [s]")
-        else:
-            try:
-                record = read_record(resolve_data_path(dat["file"], path.parent), dat["input"],
-                                     dat["output"], dat.get("time"), dat.get("sampling_period"))
-            except DataFileError as exc:
-                problems.append(f"{source}: data.file: {exc}")
+        if not problems:
+            for f in files:
+                try:
+                    records.append(read_records(resolve_data_path(f, path.parent), ins, outs,
+                                                dat.get("time"), dat.get("sampling_period")))
+                except DataFileError as exc:
+                    problems.append(f"{source}: data.file: {exc}")
     if problems:
         raise ScenarioError(problems)
     return RecordScenario(name=top.get("name", path.stem), title=top.get("title", path.stem),
                           description=top.get("description", ""), seed=top.get("seed", 0),
-                          path=path, data=dat, identification=ident, record=record)
+                          path=path, data=dat, identification=ident, records=records)
 
 
-def _rows(channel, rep):
-    return [{"channel": channel, "metric": "rms_error", "value": rep["rms_um"], "unit": "µm"},
-            {"channel": channel, "metric": "rms_error_percent",
-             "value": rep["rms_percent_of_range"], "unit": "%"},
-            {"channel": channel, "metric": "max_abs_error", "value": rep["max_abs_um"], "unit": "µm"},
-            {"channel": channel, "metric": "output_range", "value": rep["output_range_um"],
-             "unit": "µm"}]
+def _rows(channel, rep, unit):
+    return [{"channel": channel, "metric": "rms_error", "value": rep["rms"], "unit": unit},
+            {"channel": channel, "metric": "rms_error_percent", "value": rep["rms_percent"],
+             "unit": "%"},
+            {"channel": channel, "metric": "max_abs_error", "value": rep["max_abs"], "unit": unit},
+            {"channel": channel, "metric": "output_range", "value": rep["range"], "unit": unit}]
 
 
 def _names(scenario):
-    rec = scenario.record
-    u = scenario.data.get("input_name") or ("u" if rec.input_name.startswith("column ")
-                                             else rec.input_name)
-    y = scenario.data.get("output_name") or ("y" if rec.output_name.startswith("column ")
-                                              else rec.output_name)
-    return u, (y if y != u else y + "_out")
+    """Model input and output names: given, or the column names (u/y for headerless files)."""
+    rec = scenario.records[0]
+    dat = scenario.data
+    ins = dat.get("input_names", dat.get("input_name"))
+    outs = dat.get("output_names", dat.get("output_name"))
+    if ins is None:
+        ins = [n if not n.startswith("column ") else f"u{i}" for i, n in enumerate(rec.input_names)]
+        ins = ["u"] if ins == ["u0"] else ins
+    if outs is None:
+        outs = [n if not n.startswith("column ") else f"y{i}" for i, n in enumerate(rec.output_names)]
+        outs = ["y"] if outs == ["y0"] else outs
+    return list(ins), list(outs)
 
 
 def run_identification_scenario(scenario):
-    """Identify on the training samples and validate on the held-out rest.
+    """Identify on the training periods and validate on the held-out ones.
 
     Parameters
     ----------
@@ -260,87 +306,34 @@ def run_identification_scenario(scenario):
     Returns
     -------
     list of RecordResult
-        ``train`` (after the virgin curve / burn-in) and ``validation``.
+        ``train`` and ``validation``.
 
     Raises
     ------
     IdentificationError
-        If the training samples cannot be identified (reported by the runner
-        as a failed scenario).
+        If the records cannot be identified or nothing is held out (reported
+        by the runner as a failed scenario).
     """
-    spec, rec = scenario.identification, scenario.record
+    spec = scenario.identification
+    ins, outs = _names(scenario)
+    rec = scenario.records[0]
+    if len(ins) != rec.u.shape[0] or len(outs) != rec.y.shape[0]:
+        raise IdentificationError(
+            f"data.input_names/output_names: expected {rec.u.shape[0]} input and "
+            f"{rec.y.shape[0]} output names, found {ins} and {outs}")
     thresholds = spec.get("thresholds")
-    ident, train, val = identify_record(
-        rec, spec["method"], spec["n_hysterons"], None if thresholds is None else np.asarray(thresholds),
-        spec["partition"], None if spec["bounds"] == "none" else spec["bounds"],
-        spec["train_fraction"], spec.get("skip"))
-    if val is None:
-        raise IdentificationError("identification.train_fraction: no held-out samples left")
-    pred, _ = ident.model_.simulate(rec.u)
-    pred = pred + ident.offset_
-    n_train = int(round(spec["train_fraction"] * rec.n_samples))
-    start = n_train - train["n_samples"]
-    _, yname = _names(scenario)
-    return [RecordResult("train", slice(start, n_train), _rows(yname, train), pred, ident),
-            RecordResult("validation", slice(n_train, rec.n_samples), _rows(yname, val), pred, ident)]
-
-
-def write_identification_report(scenario, results, directory):
-    """Write metrics.csv, the time series, the model file, the figure and report.md.
-
-    Parameters
-    ----------
-    scenario : RecordScenario
-    results : list of RecordResult
-        From :func:`run_identification_scenario`.
-    directory : pathlib.Path
-        Existing (temporary) report directory.
-    """
-    from hammerstein.report.model_figures import record_fit_figure
-    from hammerstein.report.scenario import markdown_table, metrics_frame
-    directory = Path(directory)
-    rec, spec = scenario.record, scenario.identification
-    uname, yname = _names(scenario)
-    ident = results[0].identifier
-    frame = metrics_frame(results)
-    frame.to_csv(directory / "metrics.csv", index=False)
-    for r in results:
-        w = r.window
-        pd.DataFrame({"time_s": rec.timepts[w], f"{uname}_V": rec.u[w], f"{yname}_um": rec.y[w],
-                      f"{yname}_model_um": r.model_output[w]}).to_csv(
-            directory / f"timeseries-{r.name}.csv", index=False, float_format="%.7g")
-    model = MultivariablePI([[ident.model_]], [uname], [yname], [ident.amplitude_])
-    model_file = f"models/identified-{spec['method']}.toml"
-    val = {row["metric"]: row["value"] for row in results[1].metrics}
-    save_model(model, directory / model_file, {
-        "method": spec["method"], "source": str(scenario.data["file"]),
-        "n_hysterons": int(ident.thresholds_.size),
-        "partition": "explicit" if "thresholds" in spec else spec["partition"],
-        "bounds": spec["bounds"], "train_fraction": spec["train_fraction"],
-        "sampling_period_s": rec.sampling_period, "amplitude_V": ident.amplitude_,
-        "offset_um": ident.offset_, "validation_rms_um": val["rms_error"],
-        "validation_rms_percent_of_range": val["rms_error_percent"]})
-    split = rec.timepts[results[1].window.start]
-    fig = record_fit_figure(rec.timepts, rec.u, rec.y, results[0].model_output,
-                            results[0].window.start, results[1].window.start,
-                            f"{uname} [V]", f"{yname} [µm]",
-                            f"{scenario.title}: measured vs identified PI model")
-    plots.save(fig, directory / "record-fit.png")
-    lines = [f"# {scenario.title}", ""]
-    if scenario.description:
-        lines += [scenario.description.strip(), ""]
-    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, kind identification).", "",
-              f"Record `{rec.source}`: {rec.n_samples} samples, T = {rec.sampling_period:.6g} s, "
-              f"input `{rec.input_name}` [V] -> output `{rec.output_name}` [µm].", "",
-              f"Identification: {spec['method']}, {ident.thresholds_.size} hysterons (thresholds "
-              f"{ident.thresholds_[0]:.4g} to {ident.thresholds_[-1]:.4g} V), partition "
-              f"{'explicit' if 'thresholds' in spec else spec['partition']}, bounds {spec['bounds']}, "
-              f"output offset {ident.offset_:.4g} µm. Trained on samples "
-              f"{results[0].window.start}..{results[0].window.stop - 1} (the start-up / virgin "
-              f"curve before them only warms up the play states); validated on the held-out "
-              f"samples from t = {split:.4g} s on. Model file: [`{model_file}`]({model_file}).", "",
-              "## Figures", "", "### Measured vs model", "",
-              "![Measured vs model](record-fit.png)", "",
-              "## Metrics", "", "RMS error in µm and in % of the measured output range "
-              "(peak to peak) of each window.", "", markdown_table(frame), ""]
-    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")
+    partition = spec["partition"]
+    if thresholds is not None and partition == "auto":
+        partition = "time"
+    fit = identify_records(
+        scenario.records, spec["method"], spec["n_hysterons"],
+        None if thresholds is None else np.asarray(thresholds), partition, spec["bounds"],
+        spec["components"], spec["hold_out"], spec.get("train_fraction"), spec.get("skip"),
+        ins, outs)
+    if fit.validation is None:
+        raise IdentificationError("identification.hold_out: nothing held out; the report "
+                                  "needs a validation part (hold_out = 'auto')")
+    unit = scenario.data["output_unit"]
+    return [RecordResult(case, [row for name, rep in zip(fit.model.output_names, reps)
+                                for row in _rows(name, rep, unit)], fit)
+            for case, reps in (("train", fit.train), ("validation", fit.validation))]

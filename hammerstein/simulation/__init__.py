@@ -40,6 +40,12 @@ __all__ = [
 BACKENDS = ("numba", "numpy")
 
 
+def _offset(model):
+    """Output offset of a model as a (p, 1) column, or None."""
+    off = getattr(model, "output_offset", None)
+    return None if off is None else np.asarray(off, dtype=float)[:, None]
+
+
 def _check_backend(backend):
     if backend not in BACKENDS:
         raise ValueError(f"backend: expected one of {BACKENDS}, found {backend!r}")
@@ -198,12 +204,15 @@ def simulate_hysteresis(model, inputs, initial_state=None, backend="numba"):
             s = np.maximum(ut - f["thresholds"], np.minimum(ut + f["thresholds"], s))
             y[:, t] = np.bincount(f["output_index"], weights=f["weights"] * s,
                                   minlength=model.n_outputs) + f["gain"] @ u[:, t]
-        return y, s
-    pk = pack_model(model, s)
-    sp = pk.plays(s)
-    y = np.empty((model.n_outputs, u.shape[1]))
-    kernels.pi_kernel(np.ascontiguousarray(u), pk.start, pk.r, pk.W, pk.G, sp, y)
-    return y, pk.hysteron_state(sp)
+    else:
+        pk = pack_model(model, s)
+        sp = pk.plays(s)
+        y = np.empty((model.n_outputs, u.shape[1]))
+        kernels.pi_kernel(np.ascontiguousarray(u), pk.start, pk.r, pk.W, pk.G, sp, y)
+        s = pk.hysteron_state(sp)
+    if _offset(model) is not None:
+        y += _offset(model)
+    return y, s
 
 
 # -- plant -----------------------------------------------------------------------
@@ -249,9 +258,14 @@ def simulate_plant(plant, inputs, initial_state=None, backend="numba"):
         A, B, C, D = plant.matrices
         x = state[nh:]
         y = np.empty_like(h)
+        off = _offset(model)
+        if off is not None:   # the offset is a sensor zero, after the dynamics
+            h = h - off
         for t in range(h.shape[1]):
             y[:, t] = C @ x + D @ h[:, t]
             x = A @ x + B @ h[:, t]
+        if off is not None:
+            y += off
         return y, np.concatenate([play_final, x])
     if plant.is_static:
         return simulate_hysteresis(model, u, state[:nh])
@@ -262,6 +276,8 @@ def simulate_plant(plant, inputs, initial_state=None, backend="numba"):
     y = np.empty((model.n_outputs, u.shape[1]))
     kernels.plant_kernel(np.ascontiguousarray(u), pk.start, pk.r, pk.W, pk.G, sp,
                          A, B, C, D, x, y)
+    if _offset(model) is not None:   # a sensor zero, after the dynamics
+        y += _offset(model)
     return y, np.concatenate([pk.hysteron_state(sp), x])
 
 
@@ -349,6 +365,8 @@ def compensator_step(compensator, state, reference):
     model = compensator.model
     m = model.n_inputs
     lowpass, a = compensator_law(compensator)
+    if _offset(model) is not None:   # Gamma(U) = Yr - c
+        reference = reference - _offset(model)[:, 0]
     u_prev = state[:m]
     s = state[2 * m:] if lowpass else state[m:]
     Kinv = compensator.K_inv
@@ -386,6 +404,8 @@ def _run_chain_kernel(compensator, yr, cstate, plant=None, pstate=None):
     model = compensator.model
     m = model.n_inputs
     lowpass, a = compensator_law(compensator)
+    if _offset(model) is not None:   # Gamma(U) = Yr - c
+        yr = yr - _offset(model)
     off = 2 * m if lowpass else m
     cpk = pack_model(model, cstate[off:])
     cu = cstate[:m].copy()
@@ -411,6 +431,8 @@ def _run_chain_kernel(compensator, yr, cstate, plant=None, pstate=None):
         np.ascontiguousarray(compensator.K_inv, dtype=float), int(compensator.iterations),
         float(compensator.divergence_bound), lowpass, a, cu, cvf, cs,
         plant is not None, ppk.start, ppk.r, ppk.W, ppk.G, A, B, C, D, ps, x, u, y)
+    if plant is not None and _offset(plant.hysteresis) is not None:
+        y += _offset(plant.hysteresis)
     cs_h = cpk.hysteron_state(cs)
     c_final = np.concatenate([cu, cvf, cs_h] if lowpass else [cu, cs_h])
     p_final = None if plant is None else np.concatenate([ppk.hysteron_state(ps), x])
@@ -643,7 +665,8 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
         if c.model.n_inputs != m or pl.hysteresis.n_inputs != m or pl.hysteresis.n_outputs != p:
             raise HysteresisError(f"references[{b}]: case sizes differ from case 0 "
                                   f"(inputs {m}, outputs {p})")
-        yrs.append(c.model.check_inputs(r, f"references[{b}]"))
+        yr_b = c.model.check_inputs(r, f"references[{b}]")
+        yrs.append(yr_b if _offset(c.model) is None else yr_b - _offset(c.model))
     lengths = np.array([r.shape[1] for r in yrs], dtype=np.int64)
     N = int(lengths.max())
     # pack each distinct model / plant once
@@ -691,6 +714,8 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     for b in range(B):
         n = lengths[b]
         u, y = u_out[b, :, :n], y_out[b, :, :n]
+        if _offset(plts[b].hysteresis) is not None:
+            y += _offset(plts[b].hysteresis)
         if status[b] != kernels.STATUS_OK:
             t = int(sample[b])
             div = _divergence(u[:, t], comps[b].divergence_bound, status[b], t)

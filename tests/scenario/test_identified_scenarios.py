@@ -14,9 +14,10 @@ from hammerstein.core.compensators import convergence_report
 from hammerstein.scenario.identified import identified_model
 from hammerstein.scenario.records import resolve_data_path
 from hammerstein.runner import run_scenario
-from hammerstein.scenario.schema import ScenarioError, load_scenario
+from hammerstein.scenario.resolve import load_scenario
+from hammerstein.scenario.schema import ScenarioError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PLANT = '[plant]\npreset = "rakotondrabe-2dof"\ndynamics = {dyn}\n'
 
 
@@ -333,3 +334,25 @@ def test_fig06_bundled_scenario_report(tmp_path):
     text = (outcome.out_dir / "report.md").read_text(encoding="utf-8")
     assert "](model-vs-plant-hammerstein.png)" in text
     assert (outcome.out_dir / "models" / "identified-50Hz-least-squares.toml").is_file()
+
+
+def test_identification_failure_passes_validate_and_fails_run_in_one_line(tmp_path, capsys):
+    # 200 hysterons on the ~3-sample ascending branch of a 3 kHz sine (T = 50 µs): the
+    # identification itself fails, which only the resolution of `run` can find
+    p = tmp_path / "id-fails.toml"
+    p.write_text("[plant]\npreset = 'rakotondrabe-2dof'\ndynamics = false\n"
+                 "[compensator]\nkind = 'multivariable'\nmodel = 'identified'\n"
+                 "identify = { frequency = 3000.0, n_hysterons = 200 }\n"
+                 "[[cases]]\nname = 'a'\n"
+                 "reference = { kind = 'sine', output = 'x', amplitude = 10.0, frequency = 50.0, "
+                 "periods = 2 }\n", encoding="utf-8")
+    assert main(["validate", str(p)]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == "" and "ok (1 cases)" in captured.out
+    out = tmp_path / "out"
+    assert main(["run", str(p), "--out", str(out)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: {p}: cases[0].compensator: identify (at 3000 Hz)")
+    assert "repeated thresholds" in err[0]
+    assert not out.exists() or not list(out.iterdir())
+

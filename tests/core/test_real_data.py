@@ -63,6 +63,7 @@ def test_cli_identify_shipped_record(tmp_path, capsys, method):
     text = capsys.readouterr().out
     assert status == 0
     assert "held-out: RMS" in text and "µm" in text and "% of the" in text
+    assert "held out samples" in text and "2 periods" in text      # says what was held out
     meta = read_toml(out)["identification"]
     assert meta["validation_rms_percent_of_range"] < 0.5
     model = load_model(out)
@@ -74,10 +75,12 @@ def test_cli_identify_shipped_record(tmp_path, capsys, method):
     (["--input", "2", "--output", "9", "--time", "0"], 1, "output column 9 out of range"),
     (["--input", "2", "--output", "1", "--time", "0", "--thresholds", "x,y"], 2, "--thresholds"),
     (["--input", "2", "--output", "1"], 2, "give --time COL or --sampling-period S"),
-    (["--input", "2", "--output", "1", "--time", "0", "--train-fraction", "0.4"], 1,
-     "training samples 0..19999: u: no complete ascending branch"),
     (["--input", "2", "--output", "1", "--time", "0", "--train-fraction", "0.1"], 1,
-     "u: the input is constant"),
+     "no training samples left after the burn-in; shorten the held-out part (--train-fraction)"),
+    (["--input", "2", "--output", "1", "--time", "0", "--train-fraction", "0.5", "--hold-out",
+      "none"], 2, "--train-fraction and --hold-out none"),
+    (["--input", "2", "--output", "1", "--time", "0", "--method", "closed-form", "--bounds",
+      "monotone"], 2, "--bounds: only used by --method least-squares"),
 ])
 def test_cli_errors_exit_status_and_no_partial_file(tmp_path, capsys, argv, status, message):
     out = tmp_path / "model.toml"

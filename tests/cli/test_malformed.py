@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.cli import main as cli
+from hammerstein.cli import listing
 from hammerstein.core import references as refs
 from hammerstein.cli.main import main
 from hammerstein.core.compensators import (CompensatorError, InverseMultiplicativeCompensator,
@@ -32,7 +32,7 @@ from hammerstein.core.compensators import (CompensatorError, InverseMultiplicati
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.presets import load_plant
 
-CORPUS = Path(__file__).resolve().parent / "corpus"
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good"
 
 #: Malformed scenario file -> fragment its error must contain.
@@ -131,8 +131,12 @@ SCENARIOS = {
     "zero-iterations": "compensator.iterations: expected an integer >= 1, found 0",
     "zero-radius": "cases[0].reference.radius: expected a number > 0 [µm], found 0",
 }
-#: Files whose problems ``validate`` cannot see (found when the case runs).
-RUN_ONLY = {"identification-constant-input"}
+#: Files whose problems ``validate`` cannot see: they are found when the scenario is
+#: resolved (a compensator refused by its own checks) or run (an identification on a
+#: record); stem -> number of cases ``validate`` reports.
+RUN_ONLY = {"identification-constant-input": 2, "literal-law-check-error": 1,
+            "lowpass-above-nyquist": 1, "lowpass-without-cutoff": 1,
+            "per-axis-non-invertible": 1, "singular-gain-matrix": 1}
 #: Files with several problems: validate lists each on its own line.
 SEVERAL = {"empty": 2, "identification-bad-keys": 5, "identify-bad-values": 4,
            "many-wrong-types": 5, "spiral-missing-duration": 2, "unknown-reference-key": 2,
@@ -179,7 +183,7 @@ def test_validate_lists_every_problem(capsys, stem):
     path = CORPUS / "scenarios" / f"{stem}.toml"
     status, out, err = _call(capsys, "validate", path)
     if stem in RUN_ONLY:
-        assert (status, err) == (0, []) and "ok (2 cases)" in out
+        assert (status, err) == (0, []) and f"ok ({RUN_ONLY[stem]} cases)" in out
         return
     assert status == 1 and out == ""
     assert len(err) == SEVERAL.get(stem, 1), err
@@ -230,7 +234,7 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", CORPUS / "data"],
      "hammerstein identify: error: --out:"),
     (["identify", CORPUS / "data" / "good.csv", "--time", "0", "--input", "1"],
-     "hammerstein identify: error: the following arguments are required: --output, --out"),
+     "hammerstein identify: error: the following arguments are required: --output/--outputs, --out"),
     (["check", GOOD / "good-static.toml"],
      "hammerstein check: error: the following arguments are required: --baseline"),
     (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein: error: unrecognized arguments: --bogus"),
@@ -313,13 +317,13 @@ def test_stray_python_warning_and_unexpected_error_are_one_line(capsys, monkeypa
     def noisy(args):
         warnings.warn("first line\n  second line", RuntimeWarning)
         return 0
-    monkeypatch.setattr(cli, "_list", noisy)
+    monkeypatch.setattr(listing, "handler", noisy)
     status, out, err = _call(capsys, "list")
     assert status == 0 and err == ["warning: RuntimeWarning: first line second line"]
 
     def broken(args):
         raise TypeError("bug\nwith two lines")
-    monkeypatch.setattr(cli, "_list", broken)
+    monkeypatch.setattr(listing, "handler", broken)
     monkeypatch.delenv("HAMMERSTEIN_DEBUG", raising=False)
     status, out, err = _call(capsys, "list")
     assert status == 1 and len(err) == 1

@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 
 from hammerstein.runner import run_scenario
-from hammerstein.scenario.schema import ScenarioError, load_scenario
+from hammerstein.scenario.resolve import load_scenario
+from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import expand_sweeps
 
 HEAD = """

@@ -121,3 +121,18 @@ def test_bad_contents(tmp_path, mutate, message):
 def test_directory_is_rejected(tmp_path):
     with pytest.raises(DataFileError, match="is a directory"):
         read_record(tmp_path, 0, 1, sampling_period=1e-3)
+
+
+def test_read_records_several_columns_by_name_and_index(tmp_path):
+    from hammerstein.core.datafiles import read_records
+    path = tmp_path / "mimo.csv"
+    rows = ["t;ux;uy;x;y"] + [f"{i * 0.5};{i};{-i};{2 * i};{3 * i}" for i in range(12)]
+    path.write_text("\n".join(rows) + "\n")
+    rec = read_records(path, "ux,2", ["x", 4], time="t")
+    assert rec.input_names == ("ux", "uy") and rec.output_names == ("x", "y")
+    assert rec.u.shape == (2, 12) and rec.y.shape == (2, 12)
+    assert np.array_equal(rec.y[1], 3 * np.arange(12)) and rec.sampling_period == 0.5
+    with pytest.raises(DataFileError, match="same column 'ux'"):
+        read_records(path, "ux", "ux,x", time="t")
+    with pytest.raises(DataFileError, match="no input column named 'uz'"):
+        read_records(path, "ux,uz", "x", sampling_period=1.0)

@@ -16,7 +16,7 @@ from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_
                                     read_baseline, resolve_tolerances, summary_line,
                                     write_baseline)
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def table(rows, scenario="s"):

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from hammerstein import runner
-from hammerstein.scenario.schema import ScenarioError, load_scenario
+from hammerstein.scenario import registry
+from hammerstein.scenario.resolve import load_scenario
+from hammerstein.scenario.schema import ScenarioError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
 
 GOOD_CASE = """
@@ -167,7 +169,7 @@ class _StaticGain:
 
 def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch):
     from hammerstein.scenario.schema import Field, number
-    monkeypatch.setitem(runner.COMPENSATORS, "static-gain", runner.CompensatorKind(
+    monkeypatch.setitem(registry.COMPENSATORS, "static-gain", registry.CompensatorKind(
         lambda spec, plant, base: _StaticGain(spec["gain"]),
         {"gain": Field(number("µm/V", 0), required=True)}, "U = Yr / gain"))
     text = HEAD.replace('"multivariable"', '"static-gain"') + "gain = 5.0\n" + GOOD_CASE

@@ -1,0 +1,46 @@
+"""``hammerstein list [--scenarios DIR]``: bundled presets, compensator kinds, scenario files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from hammerstein.core.presets import bundled_presets
+from hammerstein.scenario.registry import COMPENSATORS
+
+__all__ = ["add_parser", "handler"]
+
+HELP = "list bundled presets, compensator kinds and scenarios"
+
+
+def add_parser(subparsers):
+    """Register `hammerstein list [--scenarios DIR]`: presets, compensator kinds and scenario files.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``hammerstein`` sub-command registry.
+    """
+    p = subparsers.add_parser(
+        "list", help=HELP,
+        description="List the bundled actuator presets, the compensator kinds and the "
+                    "scenario files under DIR (default ./scenarios).")
+    p.add_argument("--scenarios", default="scenarios", metavar="DIR",
+                   help="directory searched for *.toml scenarios (default: ./scenarios)")
+    p.set_defaults(handler=handler)
+
+
+def handler(args):
+    """Print the presets, the compensator kinds and the scenario files; exit status 0."""
+    print("presets:")
+    for name, path in sorted(bundled_presets().items()):
+        print(f"  {name}  ({path})")
+    print("compensator kinds:")
+    for name, kind in COMPENSATORS.items():
+        print(f"  {name}: {kind.description}")
+    root = Path(args.scenarios)
+    files = sorted(root.rglob("*.toml")) if root.is_dir() else []
+    print(f"scenarios under {root}/:" if files else
+          f"scenarios: none found under {root}/ (run from the repository root)")
+    for f in files:
+        print(f"  {f}")
+    return 0

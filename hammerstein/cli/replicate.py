@@ -1,0 +1,51 @@
+"""``hammerstein replicate [--scenarios DIR] [--out OUT]``: the replication report of the paper.
+
+Runs every scenario of DIR into ``OUT/<scenario>/`` and writes
+``OUT/README.md`` (:func:`hammerstein.runner.replicate`,
+:mod:`hammerstein.report.replication`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from hammerstein.cli._common import print_err
+from hammerstein.runner import replicate
+
+__all__ = ["add_parser", "handler"]
+
+HELP = "regenerate the replication report of the paper"
+
+
+def add_parser(subparsers):
+    """Register ``hammerstein replicate``.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``hammerstein`` sub-command registry.
+    """
+    p = subparsers.add_parser(
+        "replicate", help=HELP,
+        description="Run every scenario of DIR (default scenarios/paper) into OUT/<scenario>/ and "
+                    "write OUT/README.md: the paper's numbers next to ours with their ratios, the "
+                    "trends of Fig. 7 and 9, the compensator family, the figures.")
+    p.add_argument("--scenarios", default="scenarios/paper", metavar="DIR")
+    p.add_argument("--out", default="reports/paper", metavar="OUT")
+    p.set_defaults(handler=handler)
+
+
+def handler(args):
+    """Run the paper's scenarios and write the README; exit status 0, 1 (a scenario failed) or 2."""
+    try:
+        outcomes = replicate(args.scenarios, args.out)
+    except FileNotFoundError as exc:
+        print_err(f"error: {exc}")
+        return 2
+    for o in outcomes:
+        if o.ok:
+            print(f"{o.path}: wrote {o.out_dir}/")
+        else:
+            print_err(f"error: {'; '.join(o.error.splitlines())}")
+    print(f"wrote {Path(args.out) / 'README.md'}")
+    return 0 if all(o.ok for o in outcomes) else 1

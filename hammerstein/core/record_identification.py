@@ -1,0 +1,876 @@
+"""Identification of p x m PI models from measured records, split by periods.
+
+:func:`identify_records` identifies a multivariable classical PI model
+(:class:`~hammerstein.core.hysteresis.MultivariablePI`) from one or more
+measured records (:class:`~hammerstein.core.datafiles.MultiRecord`), each
+holding every input and every output column. Typically there is one record per
+excited input (Steps 1-4 of Section 3.3 of the paper), but least squares
+accepts any excitation: all components of an output are fitted together.
+
+What it does, in order:
+
+1. **Split by periods.** The excitation of each record (its input of largest
+   relative span) is cut at its reversal points into branches; a branch is
+   *complete* when it travels at least 90 % of the input span. The held-out
+   part is a run of trailing complete branches (about a third of the
+   periods, at least one branch); the rest trains. A record holding a single
+   closed loop (one ascending and one descending branch, ending where it
+   started) is rotated to start at its minimum and its play states start on
+   the steady loop, so its ascending branch trains and its descending branch
+   is held out. Before the first complete branch the play states depend on
+   an unknown history: those samples only warm up the play states (burn-in).
+2. **Thresholds** per input: ``time`` (Remark 5.1 of the paper, the instants
+   that split the first complete branch into n + 1 equal parts), ``input``
+   (uniform in input, ``r_1 = 0`` a linear term) or ``auto``: both are
+   fitted and the one with the smaller held-out error is kept.
+3. **Fit**: least squares of every output on the play outputs of every input
+   plus one output offset (:func:`scipy.linalg.lstsq`, or
+   :func:`scipy.optimize.lsq_linear` with bounds on the direct transfers),
+   or the closed form of the paper's Appendix per component.
+4. **Structure**: each component is a PI, a pure gain or absent. With
+   ``components="auto"`` a component is simplified (PI -> absent, else PI ->
+   gain) when the simplified fit's training RMS error of its output grows by
+   at most 5 %, i.e. when its contribution is below the noise and mismatch
+   of that output.
+5. **Fit report** on the training and held-out samples per output (RMS,
+   RMS in % of the measured output range, largest absolute error), the model
+   simulated with its output offset.
+
+References
+----------
+.. [1] M. Rakotondrabe, "Multivariable classical Prandtl-Ishlinskii hysteresis
+   modeling and compensation and sensorless control of a nonlinear 2-dof
+   piezoactuator", Section 3.3, Remark 5.1 and Appendix.
+.. [2] K. Kuhnen, "Modeling, identification and compensation of complex
+   hysteretic nonlinearities", Eur. J. Control 9 (2003) (least squares on
+   play outputs, monotone PI via cumulative weights).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from hammerstein.core.datafiles import MultiRecord, Record
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
+from hammerstein.core.identification import (ClosedFormPI, IdentificationError,
+                                             partition_thresholds)
+
+__all__ = [
+    "REVERSAL_BAND",
+    "COMPLETE_TRAVEL",
+    "PRUNE_TOLERANCE",
+    "Split",
+    "RecordFit",
+    "reversal_points",
+    "split_record",
+    "parse_components",
+    "identify_records",
+    "identify_record",
+    "dynamics_tables",
+]
+
+#: A reversal is recognised once the input has come back by this fraction of its span.
+REVERSAL_BAND = 0.05
+#: A complete branch travels at least this fraction of the input span.
+COMPLETE_TRAVEL = 0.9
+#: Relative growth of an output's training RMS error accepted when a component is simplified.
+PRUNE_TOLERANCE = 0.05
+#: Component kinds.
+KINDS = ("pi", "gain", "none")
+
+
+# -- splitting -----------------------------------------------------------------------
+def reversal_points(u, band=REVERSAL_BAND):
+    """Sample indices where the input reverses (local extrema beyond a dead band).
+
+    Parameters
+    ----------
+    u : array_like, shape (n_samples,)
+        Input record.
+    band : float
+        The input must come back from an extremum by ``band`` times its span
+        (peak to peak) for the extremum to count (rejects noise wiggles).
+
+    Returns
+    -------
+    list of int
+        Indices of the extrema, increasing; the first and last samples are
+        not included.
+    """
+    u = np.asarray(u, dtype=float)
+    span = float(np.ptp(u)) if u.size else 0.0
+    if not span > 0:
+        return []
+    tol = band * span
+    rev = []
+    hi = lo = 0
+    direction = 0
+    ext = 0
+    for i in range(1, u.size):
+        v = u[i]
+        if direction == 0:
+            if v > u[hi]:
+                hi = i
+            if v < u[lo]:
+                lo = i
+            if v - u[lo] > tol:
+                direction, ext = 1, i
+                if lo > 0 and u[0] - u[lo] > tol:
+                    rev.append(lo)
+            elif u[hi] - v > tol:
+                direction, ext = -1, i
+                if hi > 0 and u[hi] - u[0] > tol:
+                    rev.append(hi)
+        elif direction > 0:
+            if v >= u[ext]:
+                ext = i
+            elif u[ext] - v > tol:
+                rev.append(ext)
+                direction, ext = -1, i
+        else:
+            if v <= u[ext]:
+                ext = i
+            elif v - u[ext] > tol:
+                rev.append(ext)
+                direction, ext = 1, i
+    return rev
+
+
+@dataclass
+class Split:
+    """How one record is used: training, held-out and burn-in samples.
+
+    Attributes
+    ----------
+    train : numpy.ndarray of bool, shape (n_samples,)
+        Samples fitted (after the burn-in, outside the held-out part).
+    held_out : numpy.ndarray of bool, shape (n_samples,)
+        Samples held out for validation (all False without validation).
+    burn_in : int
+        Samples before this index only warm up the play states.
+    periodic : bool
+        The play states start on the steady loop (a closed loop record) rather
+        than at zero.
+    roll : int
+        The record was rotated to start at its original sample ``roll`` (a
+        closed loop starting elsewhere than at a reversal); 0 otherwise.
+    branches : list of (int, int, bool)
+        ``(start, stop, complete)`` of every branch between reversals.
+    excitation : int
+        Index of the input the record is split on.
+    description : str
+        One sentence saying what was held out.
+    """
+
+    train: np.ndarray
+    held_out: np.ndarray
+    burn_in: int
+    periodic: bool
+    roll: int
+    branches: list
+    excitation: int
+    description: str
+
+    def ascending(self, u):
+        """Complete ascending branches of the training samples, (start, stop).
+
+        The reversal sample ``stop`` may be the first held-out sample (two
+        branches share their reversal).
+        """
+        return [(a, b) for a, b, ok in self.branches
+                if ok and u[b] > u[a] and self.train[a:b].all()]
+
+
+def _branches(u):
+    span = float(np.ptp(u))
+    bounds = [0] + reversal_points(u) + [u.size - 1]
+    return [(a, b, bool(abs(u[b] - u[a]) >= COMPLETE_TRAVEL * span))
+            for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+
+def _closed_loop(u, y):
+    """True when the record is one closed loop (ends where it started)."""
+    su, sy = np.ptp(u), np.ptp(y, axis=-1)
+    return bool(abs(u[-1] - u[0]) <= 0.05 * su
+                and np.all(np.abs(y[..., -1] - y[..., 0]) <= 0.1 * np.where(sy > 0, sy, 1.0)))
+
+
+def _excitation(record):
+    spans = np.ptp(record.u, axis=1)
+    return int(np.argmax(spans))
+
+
+def split_record(record, method="least-squares", hold_out="auto", train_fraction=None,
+                 burn_in_seconds=None):
+    """Split a record into burn-in, training and held-out samples by periods.
+
+    Parameters
+    ----------
+    record : MultiRecord
+    method : {"least-squares", "closed-form"}
+        The closed form needs a complete ascending branch in the training part.
+    hold_out : {"auto", "none"}
+        ``"auto"``: hold out trailing complete branches (see the module
+        notes); ``"none"``: train on the whole record, no validation.
+    train_fraction : float, optional
+        Split instead at the reversal point nearest to this fraction of the
+        samples (the held-out part still starts at a reversal).
+    burn_in_seconds : float, optional
+        Burn-in [s] instead of "up to the first complete branch".
+
+    Returns
+    -------
+    (MultiRecord, Split)
+        The record (rotated when it is a closed loop that did not start at a
+        reversal) and its split.
+
+    Raises
+    ------
+    IdentificationError
+        If the excitation is constant, the record holds no complete branch,
+        or too few branches to hold one out; the message names the option
+        that helps (``--hold-out none``, ``--train-fraction``, a longer
+        record).
+    """
+    k = _excitation(record)
+    u = record.u[k]
+    name = f"{record.source}: " if record.source else ""
+    if not np.ptp(u) > 0:
+        what = "the input is" if record.u.shape[0] == 1 else "all inputs are"
+        raise IdentificationError(f"{name}{what} constant; expected an excitation")
+    branches = _branches(u)
+    complete = [i for i, br in enumerate(branches) if br[2]]
+    roll, periodic = 0, False
+    if len(complete) <= 2 and _closed_loop(u, record.y):
+        roll = int(np.argmin(u))
+        if roll:
+            record = replace(record, u=np.roll(record.u, -roll, axis=1),
+                             y=np.roll(record.y, -roll, axis=1))
+            u = record.u[k]
+            branches = _branches(u)
+            complete = [i for i, br in enumerate(branches) if br[2]]
+        periodic = True
+    n = u.size
+    if not complete:
+        raise IdentificationError(
+            f"{name}no complete branch (the input never travels from one extremum to the "
+            f"other); record at least one full period of the excitation")
+    held = np.zeros(n, dtype=bool)
+    if train_fraction is not None:
+        if not 0 < train_fraction <= 1:
+            raise IdentificationError(f"train_fraction: expected in (0, 1], found {train_fraction}")
+        cuts = [a for a, _, _ in branches[1:]]
+        if train_fraction < 1:
+            if not cuts:
+                raise IdentificationError(f"{name}no reversal point to split at; use --hold-out none")
+            s = min(cuts, key=lambda c: abs(c - train_fraction * n))
+            held[s:] = True
+    elif hold_out == "auto":
+        c = len(complete)
+        if c >= 3:
+            h = 2 * max(1, int(round(c / 6)))
+            while c - h < 2 and h > 1:
+                h -= 1
+            held[branches[complete[-h]][0]:] = True
+        elif c == 2:
+            held[branches[complete[-1]][0]:] = True
+        elif len(branches) >= 6:           # broadband: no full-span branch, split at a reversal
+            cuts = [a for a, _, _ in branches[1:]]
+            held[min(cuts, key=lambda c: abs(c - 0.7 * n)):] = True
+        else:
+            raise IdentificationError(
+                f"{name}only one complete branch, nothing to hold out for validation; record "
+                f"at least one full period (or a closed loop), or train on all of it with "
+                f"--hold-out none")
+    elif hold_out != "none":
+        raise IdentificationError(f"hold_out: expected 'auto' or 'none', found {hold_out!r}")
+    if method == "closed-form" and hold_out == "auto" and train_fraction is None:
+        split = _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds)
+        if not split.ascending(u):        # hold out the first complete branch instead
+            a, b, _ = branches[complete[0]]
+            held[:] = False
+            held[a:b + 1] = True
+            if not held.any() or len(complete) < 2:
+                raise IdentificationError(
+                    f"{name}no complete ascending branch left for the closed form; use "
+                    f"--method least-squares")
+    split = _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds)
+    if not split.train.any():
+        raise IdentificationError(
+            f"{name}no training samples left after the burn-in; shorten the held-out part "
+            f"(--train-fraction) or the burn-in (--skip)")
+    if method == "closed-form" and not split.ascending(u):
+        raise IdentificationError(
+            f"{name}no complete ascending branch (minimum followed by the maximum) in the "
+            f"training part; record at least one full period, or use --method least-squares")
+    return record, split
+
+
+def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
+    u = record.u[k]
+    n = u.size
+    if burn_in_seconds is not None:
+        burn = int(round(burn_in_seconds / record.sampling_period))
+        if not 0 <= burn < n - 1:
+            raise IdentificationError(
+                f"skip: expected a burn-in shorter than the record ({n * record.sampling_period:g} s), "
+                f"found {burn_in_seconds:g} s")
+    else:
+        burn = 0 if periodic else branches[complete[0]][0]
+    train = ~held
+    train[:burn] = False
+    T = record.sampling_period
+    if held.any():
+        idx = np.flatnonzero(held)
+        n_br = sum(1 for a, b, ok in branches if ok and held[a:b + 1].all())
+        what = (f"{n_br} complete branch{'es' if n_br != 1 else ''}"
+                + (f" ({n_br // 2} period{'s' if n_br // 2 != 1 else ''})" if n_br >= 2 else ""))
+        desc = (f"held out samples {idx[0]}..{idx[-1]} (t = {idx[0] * T:.4g} to {idx[-1] * T:.4g} s,"
+                f" {what})")
+    else:
+        desc = "nothing held out (trained on the whole record)"
+    if burn:
+        desc += f"; samples 0..{burn - 1} only warm up the play states"
+    if periodic:
+        desc += "; one closed loop: play states start on the steady loop"
+    return Split(train, held, burn, periodic, 0, branches, k, desc)
+
+
+# -- structure -------------------------------------------------------------------------
+def parse_components(spec, input_names, output_names):
+    """Component kinds from ``"auto"``, ``"all"`` or ``"OUT:IN=pi|gain|none,..."``.
+
+    Returns
+    -------
+    (kinds, auto) : (list of list of str, numpy.ndarray of bool)
+        Kinds per (output, input) and which ones the automatic pruning may
+        simplify (those not given explicitly, unless ``"all"``).
+
+    Raises
+    ------
+    IdentificationError
+        On an unknown output, input or kind (the known ones are listed).
+    """
+    p, m = len(output_names), len(input_names)
+    kinds = [["pi"] * m for _ in range(p)]
+    auto = np.ones((p, m), dtype=bool)
+    if spec is None or spec == "auto":
+        return kinds, auto
+    if spec == "all":
+        return kinds, np.zeros((p, m), dtype=bool)
+    items = spec.items() if isinstance(spec, dict) else [
+        tuple(part.split("=", 1)) if "=" in part else (part, None)
+        for part in str(spec).split(",") if part.strip()]
+    for key, kind in items:
+        key = key if isinstance(key, tuple) else tuple(str(key).strip().split(":", 1))
+        if len(key) != 2 or kind is None:
+            raise IdentificationError(
+                f"components: expected OUTPUT:INPUT=pi|gain|none entries, found {key!r}")
+        out, inp = (str(v).strip() for v in key)
+        kind = str(kind).strip()
+        if out not in output_names:
+            raise IdentificationError(f"components: unknown output {out!r} (outputs: "
+                                      f"{', '.join(output_names)})")
+        if inp not in input_names:
+            raise IdentificationError(f"components: unknown input {inp!r} (inputs: "
+                                      f"{', '.join(input_names)})")
+        if kind not in KINDS:
+            raise IdentificationError(f"components: {out}:{inp}: expected pi, gain or none, "
+                                      f"found {kind!r}")
+        l, k = output_names.index(out), input_names.index(inp)
+        kinds[l][k] = kind
+        auto[l, k] = False
+    return kinds, auto
+
+
+# -- least squares engine ----------------------------------------------------------------
+def _thresholds(records, splits, k, n, partition, explicit):
+    """Thresholds of input k from the record where it travels most."""
+    if explicit is not None:
+        return np.asarray(explicit, dtype=float), "explicit"
+    spans = [np.ptp(r.u[k][s.train]) if s.train.any() else 0.0 for r, s in zip(records, splits)]
+    j = int(np.argmax(spans))
+    if not spans[j] > 0:
+        raise IdentificationError(f"input {records[0].input_names[k]!r}: never excited in the "
+                                  f"training samples; cannot identify its components")
+    uk = records[j].u[k][splits[j].train]
+    if partition == "time":
+        for a, b, ok in _branches(uk):
+            if ok:
+                sign = 1.0 if uk[b] > uk[a] else -1.0
+                try:
+                    return partition_thresholds(sign * uk, n, "time", (a, b)), "time"
+                except IdentificationError:
+                    break
+        # no complete branch of this input (broadband): uniform in input
+    amplitude = np.ptp(uk) / 2.0
+    return amplitude * np.arange(n) / n, "input"
+
+
+def _plays(u, r, periodic):
+    phi, final = play(u, r)
+    if periodic:
+        phi, _ = play(u, r, final)
+    return phi
+
+
+class _LeastSquares:
+    """Joint least squares of every output on the play outputs of every input."""
+
+    def __init__(self, records, splits, thresholds, bounds, offset=True):
+        self.records, self.splits, self.r = records, splits, thresholds
+        self.bounds = bounds
+        self.offset = offset
+        m = records[0].u.shape[0]
+        self.m = m
+        # regressors over the training samples, concatenated over the records
+        self.phi = [np.concatenate([_plays(rec.u[k], thresholds[k], s.periodic)[:, s.train]
+                                    for rec, s in zip(records, splits)], axis=1).T
+                    for k in range(m)]
+        self.lin = [np.concatenate([rec.u[k][s.train] for rec, s in zip(records, splits)])
+                    for k in range(m)]
+        self.y = np.concatenate([rec.y[:, s.train] for rec, s in zip(records, splits)], axis=1)
+
+    def fit_output(self, l, kinds):
+        """Components and offset of output l for kinds[k]; returns (comps, offset, rms)."""
+        cols, layout = [], []
+        lower, upper = [], []
+        for k, kind in enumerate(kinds):
+            if kind == "pi":
+                X = self.phi[k]
+                n = X.shape[1]
+                lo, hi = np.full(n, -np.inf), np.full(n, np.inf)
+                transform = None
+                if l == k and self.bounds == "nonnegative":
+                    lo[:] = 0.0
+                elif l == k and self.bounds == "monotone":
+                    sec = np.polyfit(self.lin[k], self.y[l], 1)[0] if np.ptp(self.lin[k]) > 0 else 1.0
+                    sign = 1.0 if sec >= 0 else -1.0
+                    M = np.eye(n) - np.eye(n, k=-1)
+                    transform = sign * M
+                    X = X @ transform
+                    lo[:] = 0.1 * abs(sec)
+                cols.append(X)
+                layout.append((k, "pi", n, transform))
+                lower.append(lo)
+                upper.append(hi)
+            elif kind == "gain":
+                cols.append(self.lin[k][:, None])
+                layout.append((k, "gain", 1, None))
+                lower.append([-np.inf])
+                upper.append([np.inf])
+        target = self.y[l]
+        if self.offset:
+            cols.append(np.ones((target.size, 1)))
+            lower.append([-np.inf])
+            upper.append([np.inf])
+        if not cols:
+            return [None] * self.m, float(np.mean(target)), float(np.std(target))
+        X = np.column_stack(cols)
+        lo, hi = np.concatenate(lower), np.concatenate(upper)
+        if np.all(np.isinf(lo)) and np.all(np.isinf(hi)):
+            coef, *_ = scipy.linalg.lstsq(X, target)
+        else:
+            coef = scipy.optimize.lsq_linear(X, target, bounds=(lo, hi), method="bvls").x
+        rms = float(np.sqrt(np.mean((target - X @ coef) ** 2)))
+        comps = [None] * self.m
+        i = 0
+        for k, kind, n, transform in layout:
+            c = coef[i:i + n]
+            i += n
+            if kind == "pi":
+                w = transform @ c if transform is not None else c
+                comps[k] = PrandtlIshlinskii(self.r[k], w)
+            else:
+                comps[k] = float(c[0])
+        offset = float(coef[-1]) if self.offset else 0.0
+        return comps, offset, rms
+
+
+class _ClosedForm:
+    """Closed form of the Appendix per component (records exciting one input each)."""
+
+    def __init__(self, records, splits, n_hysterons, partition):
+        self.records, self.splits = records, splits
+        self.m = records[0].u.shape[0]
+        self.by_input = {}
+        for j, rec in enumerate(records):
+            spans = np.ptp(rec.u, axis=1)
+            excited = np.flatnonzero(spans > 1e-9 * max(spans.max(), 1e-300))
+            if excited.size != 1:
+                raise IdentificationError(
+                    f"{rec.source}: the closed form needs records that excite one input each, "
+                    f"found {excited.size} excited inputs; use --method least-squares")
+            self.by_input.setdefault(int(excited[0]), []).append(j)
+        missing = [rec_name for k, rec_name in enumerate(records[0].input_names)
+                   if k not in self.by_input]
+        if missing:
+            raise IdentificationError(f"inputs {missing}: no record excites them; the closed form "
+                                      f"needs one record per input (Steps 1-4)")
+        self.fits = {}
+        p = records[0].y.shape[0]
+        for k, js in self.by_input.items():
+            j = js[0]
+            rec, s = records[j], splits[j]
+            for l in range(p):
+                ident = ClosedFormPI(n_hysterons, partition)
+                try:
+                    ident.fit(rec.u[k], rec.y[l], branches=s.ascending(rec.u[k]))
+                except IdentificationError as exc:
+                    raise IdentificationError(f"{rec.source}: component ({records[0].output_names[l]}, "
+                                              f"{rec.input_names[k]}): {exc}") from None
+                self.fits[l, k] = ident
+        self.thresholds = {k: self.fits[0, k].thresholds_ for k in self.by_input}
+
+    def fit_output(self, l, kinds):
+        comps = [None] * self.m
+        offsets = []
+        parts = []
+        for k, kind in enumerate(kinds):
+            for j in self.by_input[k]:
+                rec, s = self.records[j], self.splits[j]
+                if kind == "pi":
+                    comps[k] = self.fits[l, k].model_
+                elif kind == "gain":
+                    uk, yk = rec.u[k][s.train], rec.y[l][s.train]
+                    comps[k] = float(np.polyfit(uk, yk, 1)[0])
+                break
+        for j, (rec, s) in enumerate(zip(self.records, self.splits)):
+            pred = np.zeros(rec.n_samples)
+            for k, c in enumerate(comps):
+                if isinstance(c, PrandtlIshlinskii):
+                    pred += c.simulate(rec.u[k], _steady(c, rec.u[k]) if s.periodic else None)[0]
+                elif c is not None:
+                    pred += c * rec.u[k]
+            parts.append(rec.y[l][s.train] - pred[s.train])
+            offsets.append(parts[-1])
+        res = np.concatenate(parts)
+        offset = float(np.mean(res))
+        return comps, offset, float(np.sqrt(np.mean((res - offset) ** 2)))
+
+
+def _steady(pi, u):
+    return pi.simulate(u)[1]
+
+
+# -- driver ------------------------------------------------------------------------------
+@dataclass
+class RecordFit:
+    """Result of :func:`identify_records`.
+
+    Attributes
+    ----------
+    model : MultivariablePI
+        Identified model, ``output_offset`` included, ``input_amplitude`` the
+        half span of each input over the training samples.
+    method : str
+    partition : str
+        Threshold partition used (``"time"``, ``"input"`` or ``"explicit"``).
+    partition_scores : dict of str to float
+        Mean held-out (or training, without held-out samples) RMS error in %
+        of the output range for each partition tried.
+    structure : list of list of str
+        ``"pi"``, ``"gain"`` or ``"none"`` per (output, input).
+    notes : list of str
+        What was decided automatically (partition, pruned components).
+    records : list of MultiRecord
+        The records as used (closed loops rotated to start at their minimum).
+    splits : list of Split
+    train, validation : list of dict
+        Per output: ``rms``, ``rms_percent`` (of the measured range of the
+        window), ``max_abs``, ``range``, ``n_samples``; ``validation`` is
+        ``None`` when nothing is held out.
+    predictions : list of numpy.ndarray, shape (p, n_samples)
+        Model outputs over each record (offset included).
+    """
+
+    model: MultivariablePI
+    method: str
+    partition: str
+    partition_scores: dict
+    structure: list
+    notes: list
+    records: list
+    splits: list
+    train: list
+    validation: list | None
+    predictions: list = field(repr=False)
+
+
+def _as_records(records):
+    out = []
+    for rec in ([records] if isinstance(records, (Record, MultiRecord)) else list(records)):
+        out.append(MultiRecord.from_record(rec) if isinstance(rec, Record) else rec)
+    if not out:
+        raise IdentificationError("records: expected at least one record, found none")
+    m, p = out[0].u.shape[0], out[0].y.shape[0]
+    for rec in out[1:]:
+        if rec.u.shape[0] != m or rec.y.shape[0] != p:
+            raise IdentificationError(
+                f"{rec.source}: expected {m} inputs and {p} outputs as in {out[0].source}, "
+                f"found {rec.u.shape[0]} and {rec.y.shape[0]}")
+    return out
+
+
+def simulate_on_record(model, record, split):
+    """Model outputs over a record, play states as the split assumes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, n_samples)
+        Offset included.
+    """
+    state = model.simulate(record.u)[1] if split.periodic else None
+    return model.simulate(record.u, state)[0]
+
+
+def _window_metrics(records, splits, predictions, which):
+    p = records[0].y.shape[0]
+    out = []
+    for l in range(p):
+        err, meas = [], []
+        for rec, s, pred in zip(records, splits, predictions):
+            mask = getattr(s, which)
+            err.append(rec.y[l][mask] - pred[l][mask])
+            meas.append(rec.y[l][mask])
+        err, meas = np.concatenate(err), np.concatenate(meas)
+        if not err.size:
+            return None
+        rng = float(np.ptp(meas))
+        rms = float(np.sqrt(np.mean(err ** 2)))
+        out.append({"rms": rms, "rms_percent": 100 * rms / rng if rng > 0 else float("inf"),
+                    "max_abs": float(np.max(np.abs(err))), "range": rng,
+                    "n_samples": int(err.size)})
+    return out
+
+
+def _fit_structure(engine, kinds, auto, names_out, names_in, prune):
+    """Fit every output; simplify components where allowed. Returns (grid, offsets, notes)."""
+    p = len(kinds)
+    grid, offsets, notes = [], [], []
+    for l in range(p):
+        row = list(kinds[l])
+        comps, off, rms = engine.fit_output(l, row)
+        if prune:
+            base = rms
+            order = sorted((k for k in range(len(row)) if auto[l, k] and row[k] != "none"),
+                           key=lambda k: _contribution(comps[k], engine, k))
+            for k in order:
+                for simpler in ("none", "gain"):
+                    if KINDS.index(simpler) <= KINDS.index(row[k]):
+                        continue
+                    trial = list(row)
+                    trial[k] = simpler
+                    if not any(t == "pi" for r_ in ([trial] + [g for g in kinds[l + 1:]]) for t in r_) \
+                            and not any(isinstance(c, PrandtlIshlinskii) for g in grid for c in g):
+                        continue          # keep at least one hysteresis component in the model
+                    c2, o2, rms2 = engine.fit_output(l, trial)
+                    if rms2 <= (1 + PRUNE_TOLERANCE) * base + 1e-12 * max(abs(o2), 1.0):
+                        notes.append(f"{names_out[l]} <- {names_in[k]}: "
+                                     f"{'absent' if simpler == 'none' else 'a pure gain'} "
+                                     f"(training RMS {rms2:.3g} vs {base:.3g} as a PI)")
+                        row, comps, off, rms = trial, c2, o2, rms2
+                        break
+        kinds[l] = row
+        grid.append(comps)
+        offsets.append(off)
+    return grid, offsets, notes
+
+
+def _contribution(comp, engine, k):
+    if comp is None:
+        return 0.0
+    if isinstance(comp, PrandtlIshlinskii):
+        c = engine.phi[k] @ comp.weights if hasattr(engine, "phi") else comp.weights
+        return float(np.std(c))
+    return float(np.std(comp * engine.lin[k])) if hasattr(engine, "lin") else abs(comp)
+
+
+def identify_records(records, method="least-squares", n_hysterons=15, thresholds=None,
+                     partition="auto", bounds=None, components="auto", hold_out="auto",
+                     train_fraction=None, skip_seconds=None, input_names=None, output_names=None):
+    """Identify a p x m PI model from records, validated on held-out periods.
+
+    Parameters
+    ----------
+    records : MultiRecord, Record or sequence of them
+        Each with all m inputs (shape (m, n_samples), input unit) and all p
+        outputs (shape (p, n_samples), output unit).
+    method : {"least-squares", "closed-form"}
+    n_hysterons : int
+        Hysterons per component.
+    thresholds : array_like, shape (n,), optional
+        Explicit thresholds (input unit) for every component.
+    partition : {"auto", "time", "input"}
+        Threshold partition; ``"auto"`` keeps the one with the smaller
+        held-out error.
+    bounds : None, "nonnegative" or "monotone"
+        Least-squares constraints on the direct transfers (output l from
+        input l): ``w >= 0``, or cumulative weights ``|S_j| >= 10 %`` of the
+        secant slope (a strictly monotone, invertible PI). Cross-couplings are
+        unconstrained.
+    components : "auto", "all", str or dict
+        ``"auto"``: every component starts as a PI and is simplified to absent
+        or a pure gain where that costs at most 5 % of the output's training
+        RMS error; ``"all"``: every component a PI; or explicit kinds
+        ``"OUT:IN=pi|gain|none,..."`` (the others automatic).
+    hold_out, train_fraction, skip_seconds
+        See :func:`split_record` (``skip_seconds`` is the burn-in [s]).
+    input_names, output_names : sequence of str, optional
+        Names in the model (default: the column names of the first record).
+
+    Returns
+    -------
+    RecordFit
+
+    Raises
+    ------
+    IdentificationError
+        On records that cannot be split or identified (the message names
+        the record and the option that helps).
+    """
+    records = _as_records(records)
+    if method not in ("least-squares", "closed-form"):
+        raise IdentificationError(
+            f"method: expected 'least-squares' or 'closed-form', found {method!r}")
+    if partition not in ("auto", "time", "input"):
+        raise IdentificationError(f"partition: expected 'auto', 'time' or 'input', found {partition!r}")
+    if bounds not in (None, "none", "nonnegative", "monotone"):
+        raise IdentificationError(
+            f"bounds: expected 'none', 'nonnegative' or 'monotone', found {bounds!r}")
+    if bounds is not None and bounds != "none" and method == "closed-form":
+        raise IdentificationError("bounds: only used by the least-squares method")
+    bounds = None if bounds == "none" else bounds
+    in_names = list(input_names or records[0].input_names)
+    out_names = list(output_names or records[0].output_names)
+    kinds0, auto = parse_components(components, in_names, out_names)
+    pairs = [split_record(rec, method, hold_out, train_fraction, skip_seconds) for rec in records]
+    records = [r for r, _ in pairs]
+    splits = [s for _, s in pairs]
+    m = records[0].u.shape[0]
+    tried = ["time", "input"] if partition == "auto" and thresholds is None else [partition]
+    results, errors = {}, {}
+    for part in tried:
+        try:
+            results[part] = _one_partition(records, splits, method, n_hysterons, thresholds, part,
+                                           bounds, [list(r) for r in kinds0], auto,
+                                           in_names, out_names, m)
+        except (IdentificationError, HysteresisError) as exc:
+            errors[part] = str(exc)
+    if not results:
+        raise IdentificationError(next(iter(errors.values())))
+    scores = {part: res[1] for part, res in results.items()}
+    best = min(scores, key=scores.get)
+    fit, _ = results[best]
+    if len(tried) > 1:
+        basis = "held-out" if fit.validation is not None else "training"
+        fit.notes.insert(0, "partition auto: chose " + best + " (" + ", ".join(
+            f"{p} {scores[p]:.3g} %" if p in scores else f"{p} failed: {errors[p]}"
+            for p in tried) + f" mean {basis} RMS of the output range)")
+    fit.partition_scores = scores
+    return fit
+
+
+def _one_partition(records, splits, method, n, thresholds, partition, bounds, kinds, auto,
+                   in_names, out_names, m):
+    if partition == "auto":
+        partition = "time"
+    notes = []
+    if method == "least-squares":
+        r, used = zip(*[_thresholds(records, splits, k, n, partition, thresholds) for k in range(m)])
+        if thresholds is None and any(u != partition for u in used):
+            notes.append("inputs " + ", ".join(in_names[k] for k in range(m) if used[k] != partition)
+                         + ": no complete branch, thresholds uniform in input")
+        engine = _LeastSquares(records, splits, list(r), bounds)
+    else:
+        engine = _ClosedForm(records, splits, n, thresholds if thresholds is not None else partition)
+    grid, offsets, prune_notes = _fit_structure(engine, kinds, auto, out_names, in_names,
+                                                prune=bool(auto.any()))
+    notes += prune_notes
+    amplitude = np.zeros(m)
+    for rec, s in zip(records, splits):
+        amplitude = np.maximum(amplitude, np.ptp(rec.u[:, s.train], axis=1) / 2.0)
+    amplitude = np.where(amplitude > 0, amplitude, 1.0)
+    model = MultivariablePI(grid, in_names, out_names, amplitude, output_offset=offsets)
+    predictions = [simulate_on_record(model, rec, s) for rec, s in zip(records, splits)]
+    train = _window_metrics(records, splits, predictions, "train")
+    val = _window_metrics(records, splits, predictions, "held_out")
+    score = float(np.mean([v["rms_percent"] for v in (val or train)]))
+    structure = [["pi" if isinstance(c, PrandtlIshlinskii) else "none" if c is None else "gain"
+                  for c in row] for row in grid]
+    return RecordFit(model, method, "explicit" if thresholds is not None else partition, {},
+                     structure, notes, records, splits, train, val, predictions), score
+
+
+def identify_record(record, method="least-squares", n_hysterons=15, thresholds=None,
+                    partition="auto", bounds=None, train_fraction=None, skip_seconds=None,
+                    hold_out="auto", components="auto"):
+    """Single-record form of :func:`identify_records` (same options and result)."""
+    return identify_records([record], method, n_hysterons, thresholds, partition, bounds,
+                            components, hold_out, train_fraction, skip_seconds)
+
+
+def dynamics_tables(fit, records, name="identified", **options):
+    """Identify the linear dynamics behind a fitted PI and return preset tables.
+
+    The Hammerstein structure ``y = G(Gamma(u)) + c`` is identified in two
+    steps: ``Gamma`` and ``c`` from the (slow) hysteresis records
+    (:func:`identify_records`), then G from broadband records: the PI outputs
+    ``H = Gamma(u)`` are the inputs of G and ``y - c`` its outputs
+    (:class:`hammerstein.core.lti.DynamicsIdentifier`, subspace method with
+    order selection on held-out samples). G is returned in continuous time
+    (inverse of the ZOH map), as a preset's ``[dynamics]`` table.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        Square p x p model.
+    records : sequence of MultiRecord
+        Broadband records with the same columns, one sampling period.
+    name : str
+        Preset name.
+    **options
+        Options of :class:`~hammerstein.core.lti.DynamicsIdentifier`.
+
+    Returns
+    -------
+    dict
+        ``{"preset": {...}, "dynamics": {"kind": "state_space", "A", "B",
+        "C", "D"}}`` for :func:`hammerstein.core.presets.save_model`.
+
+    Raises
+    ------
+    IdentificationError
+        On a non-square model, no records, differing sampling periods, or a
+        failed identification.
+    ImportError
+        If :mod:`hammerstein.core.lti` is not available.
+    """
+    from hammerstein.core import lti            # optional: the linear-dynamics identifier
+    model = fit.model
+    if model.n_inputs != model.n_outputs:
+        raise IdentificationError(
+            f"dynamics: expected a square model (one displacement per PI output), found "
+            f"{model.n_outputs} outputs x {model.n_inputs} inputs")
+    records = _as_records(records)
+    T = records[0].sampling_period
+    if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
+        raise IdentificationError("dynamics records: expected one sampling period for all")
+    off = np.zeros((model.n_outputs, 1)) if model.output_offset is None \
+        else model.output_offset[:, None]
+    ins = [model.simulate(r.u)[0] - off for r in records]
+    outs = [r.y - off for r in records]
+    try:
+        ident = lti.DynamicsIdentifier(**options).fit(ins, outs, T)
+        cont = lti.continuous_system(ident.system_)
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        raise IdentificationError(f"dynamics: {exc}") from None
+    mat = lambda M: [[float(v) for v in row] for row in np.atleast_2d(np.asarray(M))]
+    return {"preset": {"name": name, "sampling_period": float(T),
+                       "description": "PI identified from records + identified linear dynamics"},
+            "dynamics": {"kind": "state_space", "A": mat(cont.A), "B": mat(cont.B),
+                         "C": mat(cont.C), "D": mat(cont.D)}}

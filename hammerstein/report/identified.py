@@ -1,0 +1,187 @@
+"""Reports of identified models and model-vs-plant drives (paper Fig. 6, 7).
+
+:func:`report_identified` saves the identified models a scenario used
+(:func:`hammerstein.scenario.identified.save_identified_models`) and appends
+their sections to ``report.md``: the plant-vs-model loop grids of open-loop
+drives with a comparison model (Fig. 6), ``model-outputs-<case>.csv`` and,
+for 3 or more drive frequencies, the model RMS error against frequency
+(:func:`model_rms_table`, ``model-rms-vs-frequency.csv`` and ``.png``, Fig. 7).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hammerstein.report.figures import save
+from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
+from hammerstein.report.tables import markdown_table
+from hammerstein.scenario.identified import save_identified_models
+
+__all__ = ["report_identified", "model_rms_table"]
+
+
+def report_identified(scenario, results, directory):
+    """Report hook: save the identified models and list them in ``report.md``.
+
+    Called by :func:`hammerstein.runner.run_scenario` after
+    :func:`hammerstein.report.scenario.write_report`; does nothing for a scenario
+    without identified models or model-vs-plant drives. Writes the model
+    files, ``model-outputs-<case>.csv``, the plant-vs-model loop grids
+    (Fig. 6) and, for 3 or more drive frequencies, ``model-rms-vs-frequency.csv``
+    and ``.png`` (Fig. 7); sweep cases are left to their sweep's report.
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenario.resolve.Scenario
+    results : list of hammerstein.scenario.execute.CaseResult
+    directory : pathlib.Path
+        The report directory being written (contains ``report.md``).
+    """
+    directory = Path(directory)
+    rows = save_identified_models(scenario, directory)
+    # sweep cases ([[sweeps]], hammerstein.scenario.sweeps) are reported by their sweep's table and figure
+    results = [r for r in results if getattr(r.spec, "sweep", None) is None]
+    figs = _comparison_figures(scenario, results, directory)
+    if not rows and not figs:
+        return
+    lines = []
+    if figs:
+        lines += ["", "## Model vs plant", "",
+                  "Open-loop drives compared with a model (rate-independent PI, no dynamics) "
+                  "driven by the same voltages: metrics `model_rms_error` and "
+                  "`model_max_abs_error` [µm] per output (plant minus model, after settling; the "
+                  "paper's RMS_error_model, Section 5.3); model outputs in "
+                  "`model-outputs-<case>.csv`.", ""]
+        for caption, fname in figs:
+            lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
+        for caption, fname, table in _frequency_tables(scenario, results, directory):
+            lines += [f"### {caption}", "", f"![{caption}]({fname[0]})", "",
+                      f"Table: [`{fname[1]}`]({fname[1]}).", "", markdown_table(table), ""]
+    if not rows:
+        with open(directory / "report.md", "a", encoding="utf-8") as fh:
+            fh.write("\n".join(lines) + "\n")
+        return
+    lines += ["", "## Identified models", "",
+             "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
+             "Steps 1-4); loadable with `model = \"<file>\"`.", "",
+             "| model file | plant | used as | cases |", "|---|---|---|---|"]
+    by_file = {}
+    for r in rows:
+        by_file.setdefault((r["file"], r["plant"], r["role"]), []).append(r["case"])
+    for (fname, plant, role), cases in by_file.items():
+        shown = ", ".join(cases) if len(cases) <= 4 else f"{', '.join(cases[:3])}, ... ({len(cases)} cases)"
+        lines.append(f"| [`{fname}`]({fname}) | {plant} | {role} | {shown} |")
+    with open(directory / "report.md", "a", encoding="utf-8") as fh:
+        fh.write("\n".join(lines) + "\n")
+
+
+def _last_period(x, P):
+    return np.concatenate([x[..., -P:], x[..., -P:-P + 1]], axis=-1)
+
+
+def _model_label(spec):
+    if spec.get("model") == "identified":
+        i = spec["identify"]
+        return f"model identified at {i['frequency']:g} Hz ({i.get('method', 'closed-form')})"
+    return f"model {spec.get('model')}"
+
+
+def _comparison_figures(scenario, results, directory):
+    """Plant-vs-model loop grids (Fig. 6) and model output CSVs; [(caption, file)]."""
+    groups = {}
+    for r in results:
+        if getattr(r, "model_outputs", None) is None:
+            continue
+        model = r.spec.plant.hysteresis
+        cols = {"time_s": r.spec.time}
+        cols.update({f"{o}_model_um": r.model_outputs[l] for l, o in enumerate(model.output_names)})
+        pd.DataFrame(cols).to_csv(directory / f"model-outputs-{r.name}.csv", index=False,
+                                  float_format="%.6g")
+        label = "hammerstein" if r.spec.plant.dynamics is not None else "static"
+        groups.setdefault((label, _model_label(r.spec.model_spec)), []).append(r)
+    figs = []
+    for i, ((label, mlabel), rs) in enumerate(groups.items()):
+        model = rs[0].spec.plant.hysteresis
+        P = lambda r: r.spec.period_samples  # noqa: E731
+        curves = [{"label": r.name, "column": r.spec.driven_input,
+                   "x": _last_period(r.inputs[r.spec.driven_input], P(r)),
+                   "plant": _last_period(r.outputs, P(r)),
+                   "model": _last_period(r.model_outputs, P(r))} for r in rs]
+        fig = model_loop_grid(curves, [f"{n} [V]" for n in model.input_names],
+                              [f"{n} [µm]" for n in model.output_names],
+                              f"{scenario.title}: {label} plant (solid) vs {mlabel} (dashed), "
+                              f"last period")
+        fname = f"model-vs-plant-{label}{'' if i == 0 else f'-{i + 1}'}.png"
+        save(fig, directory / fname)
+        figs.append((f"Model vs plant: {label} plant, {mlabel}", fname))
+    return figs
+
+
+def model_rms_table(results):
+    """Model error against drive frequency of the model-vs-plant drive cases.
+
+    Parameters
+    ----------
+    results : list of hammerstein.scenario.execute.CaseResult
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per case and output: ``plant`` ('hammerstein' or
+        'static'), ``model`` (label), ``input`` (driven input), ``output``,
+        ``amplitude_V``, ``frequency_hz``, ``model_rms_error`` and
+        ``model_max_abs_error`` [µm]; sorted by plant, model, input, output,
+        frequency.
+    """
+    rows = []
+    for r in results:
+        if getattr(r, "model_outputs", None) is None or r.spec.mode != "drive":
+            continue
+        spec = r.spec
+        vals = {(m["channel"], m["metric"]): m["value"] for m in r.metrics}
+        for o in spec.plant.hysteresis.output_names:
+            rows.append({"plant": "hammerstein" if spec.plant.dynamics is not None else "static",
+                         "model": _model_label(spec.model_spec),
+                         "input": spec.plant.hysteresis.input_names[spec.driven_input],
+                         "output": o, "amplitude_V": float(spec.signal_spec["amplitude"]),
+                         "frequency_hz": float(spec.signal_spec["frequency"]),
+                         "model_rms_error": vals[(o, "model_rms_error")],
+                         "model_max_abs_error": vals[(o, "model_max_abs_error")]})
+    cols = ["plant", "model", "input", "output", "amplitude_V", "frequency_hz",
+            "model_rms_error", "model_max_abs_error"]
+    frame = pd.DataFrame(rows, columns=cols)
+    return frame.sort_values(cols[:6], kind="stable").reset_index(drop=True)
+
+
+def _frequency_tables(scenario, results, directory):
+    """Fig. 7: model RMS error vs drive frequency for every (plant, model, amplitude)
+    group with 3 or more drive frequencies; writes CSV and figure."""
+    table = model_rms_table(results)
+    out = []
+    groups = [(key, g) for key, g in table.groupby(["plant", "model", "amplitude_V"], sort=False)
+              if g["frequency_hz"].nunique() >= 3]
+    for i, ((plant, mlabel, amp), g) in enumerate(groups):
+        first = next(r for r in results if getattr(r, "model_outputs", None) is not None)
+        model = first.spec.plant.hysteresis
+        suffix = "" if i == 0 else f"-{i + 1}"
+        fig_name, csv_name = f"model-rms-vs-frequency{suffix}.png", f"model-rms-vs-frequency{suffix}.csv"
+        g.to_csv(directory / csv_name, index=False, float_format="%.6g")
+        f_id = None
+        for r in results:
+            ms = getattr(r.spec, "model_spec", None) or {}
+            if ms.get("model") == "identified" and _model_label(ms) == mlabel:
+                f_id = ms["identify"]["frequency"]
+                break
+        fig = rms_vs_frequency_figure(g, list(model.input_names), list(model.output_names),
+                                      f"{scenario.title}\nRMS error of the {mlabel} against the "
+                                      f"{plant} plant, {amp:g} V drives", identification_hz=f_id)
+        save(fig, directory / fig_name)
+        wide = g.pivot_table(index="frequency_hz", columns=["output", "input"],
+                             values="model_rms_error")
+        wide.columns = [f"{o}<-{k} [µm]" for o, k in wide.columns]
+        out.append((f"Model RMS error vs drive frequency ({plant} plant, {mlabel}, {amp:g} V)",
+                    (fig_name, csv_name), wide.reset_index()))
+    return out

@@ -1,0 +1,91 @@
+"""Report directory of an identification scenario on a measured record.
+
+:func:`write_identification_report` writes ``metrics.csv`` (cases ``train``
+and ``validation``), ``timeseries-<case>.csv``, the model file
+``models/identified-<method>.toml``, the overlay figure ``record-fit.png``
+and ``report.md`` of a scenario of kind ``"identification"``
+(:mod:`hammerstein.scenario.records`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hammerstein.core.presets import save_model
+from hammerstein.report import figures as plots
+from hammerstein.report.model_figures import record_fit_figure
+from hammerstein.report.tables import markdown_table, metrics_frame
+
+__all__ = ["write_identification_report"]
+
+
+def write_identification_report(scenario, results, directory):
+    """Write metrics.csv, the time series, the model file, the figure and report.md.
+
+    Parameters
+    ----------
+    scenario : RecordScenario
+    results : list of RecordResult
+        From :func:`run_identification_scenario`.
+    directory : pathlib.Path
+        Existing (temporary) report directory.
+    """
+    directory = Path(directory)
+    spec, dat = scenario.identification, scenario.data
+    fit = results[0].fit
+    iu, ou = dat["input_unit"], dat["output_unit"]
+    model = fit.model
+    frame = metrics_frame(results)
+    frame.to_csv(directory / "metrics.csv", index=False)
+    rec, split, pred = fit.records[0], fit.splits[0], fit.predictions[0]
+    iu_tag, ou_tag = iu.replace("µ", "u"), ou.replace("µ", "u")   # ASCII column names
+    for r, mask in (("train", split.train), ("validation", split.held_out)):
+        cols = {"time_s": rec.timepts[mask]}
+        for k, name in enumerate(model.input_names):
+            cols[f"{name}_{iu_tag}"] = rec.u[k][mask]
+        for l, name in enumerate(model.output_names):
+            cols[f"{name}_{ou_tag}"] = rec.y[l][mask]
+            cols[f"{name}_model_{ou_tag}"] = pred[l][mask]
+        pd.DataFrame(cols).to_csv(directory / f"timeseries-{r}.csv", index=False,
+                                  float_format="%.7g")
+    model_file = f"models/identified-{spec['method']}.toml"
+    val = fit.validation
+    save_model(model, directory / model_file, {
+        "method": spec["method"],
+        "sources": [str(f) for f in dat.get("files", [dat.get("file")])],
+        "partition": fit.partition, "bounds": spec["bounds"],
+        "components": [" ".join(row) for row in fit.structure],
+        "held_out": [s.description for s in fit.splits], "notes": list(fit.notes),
+        "sampling_period_s": rec.sampling_period,
+        "validation_rms": [v["rms"] for v in val],
+        "validation_rms_percent_of_range": max(v["rms_percent"] for v in val)}, iu, ou)
+    train_idx, held_idx = np.flatnonzero(split.train), np.flatnonzero(split.held_out)
+    fig = record_fit_figure(rec.timepts, rec.u[split.excitation], rec.y[0], pred[0],
+                            int(train_idx[0]), int(held_idx[0]) if held_idx.size else rec.n_samples,
+                            f"{model.input_names[split.excitation]} [{iu}]",
+                            f"{model.output_names[0]} [{ou}]",
+                            f"{scenario.title}: measured vs identified PI model")
+    plots.save(fig, directory / "record-fit.png")
+    structure = "; ".join(f"{out} <- {inp}: {fit.structure[l][k]}"
+                          for l, out in enumerate(model.output_names)
+                          for k, inp in enumerate(model.input_names))
+    lines = [f"# {scenario.title}", ""]
+    if scenario.description:
+        lines += [scenario.description.strip(), ""]
+    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, kind identification).", ""]
+    for r, s in zip(fit.records, fit.splits):
+        lines += [f"- Record `{r.source}`: {r.n_samples} samples, T = {r.sampling_period:.6g} s; "
+                  f"{s.description}."]
+    lines += ["", f"Identification: {spec['method']}, partition {fit.partition}, bounds "
+              f"{spec['bounds']}; components {structure}; output offset "
+              f"{[round(float(c), 6) for c in (model.output_offset if model.output_offset is not None else np.zeros(model.n_outputs))]} {ou}."]
+    lines += [f"- {note}" for note in fit.notes]
+    lines += ["", f"Model file: [`{model_file}`]({model_file}).", "",
+              "## Figures", "", "### Measured vs model", "",
+              "![Measured vs model](record-fit.png)", "",
+              "## Metrics", "", f"RMS error in {ou} and in % of the measured output range "
+              "(peak to peak) of each window.", "", markdown_table(frame), ""]
+    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")

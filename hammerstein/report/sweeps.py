@@ -1,0 +1,228 @@
+"""Sweep and stability-map reports: wide tables, figures, ``report.md`` sections.
+
+Each ``[[sweeps]]`` table of a scenario (:class:`hammerstein.scenario.sweeps.SweepSpec`)
+writes ``sweep-<name>.csv`` (:func:`sweep_table`: ``frequency_hz,
+compensator, axis, channel`` then one column per metric) and
+``sweep-<name>.png`` (:func:`sweep_figure`: the metric against frequency in
+the p x m layout of the paper's Fig. 9); a ``[stability_map]`` writes
+``stability-map.csv`` and ``stability-map.png`` (:func:`stability_figure`).
+:func:`sweep_report_lines` writes them all and returns the ``report.md``
+sections.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from hammerstein.core.metrics import UNITS
+from hammerstein.report import figures as plots
+from hammerstein.report.tables import markdown_table, metrics_frame
+
+__all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines"]
+
+
+def _fmt(f):
+    return f"{f:g}"
+
+
+def sweep_table(spec, metrics):
+    """Wide table of one sweep.
+
+    Parameters
+    ----------
+    spec : hammerstein.scenario.sweeps.SweepSpec
+    metrics : pandas.DataFrame
+        Long metrics (``case, channel, metric, value, unit``) of the scenario.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (case, channel): ``frequency_hz, compensator, axis,
+        channel``, then one column per metric (units in
+        :data:`hammerstein.metrics.UNITS`); ordered by compensator, axis,
+        channel, frequency. Diverged cases carry ``diverged_at_time`` [s].
+    """
+    index = pd.DataFrame(spec.cases)
+    sub = metrics[metrics["case"].isin(index["case"])]
+    if sub.empty:
+        return index.assign(channel=pd.Series(dtype=object))[
+            ["frequency_hz", "compensator", "axis", "channel"]]
+    wide = sub.pivot_table(index=["case", "channel"], columns="metric", values="value",
+                           aggfunc="first").reset_index()
+    wide.columns.name = None
+    out = index.merge(wide, on="case", how="left").drop(columns="case")
+    metric_cols = [c for c in out.columns if c not in ("frequency_hz", "compensator", "axis", "channel")]
+    order = {lab: k for k, lab in enumerate(dict.fromkeys(index["compensator"]))}
+    out = out.assign(_o=out["compensator"].map(order)).sort_values(
+        ["_o", "axis", "channel", "frequency_hz"], kind="stable").drop(columns="_o")
+    return out[["frequency_hz", "compensator", "axis", "channel"] + metric_cols].reset_index(drop=True)
+
+
+def sweep_figure(table, spec, output_names, title, metric=None):
+    """Metric against frequency, panel (l, k) = output l for the excitation on axis k.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`sweep_table` output.
+    spec : hammerstein.scenario.sweeps.SweepSpec
+    output_names : sequence of str
+        The plant's outputs (panel rows).
+    title : str
+    metric : str, optional
+        Column to plot (default ``spec.metric``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Log-scaled metric axis when all values are positive; cases that
+        diverged have no point.
+    """
+    plt = plots.plt
+    metric = metric or spec.metric
+    axes_names = [a if a is not None else "-" for a in spec.axes]
+    p, m = len(output_names), len(axes_names)
+    fig, axs = plt.subplots(p, m, figsize=(4.8 * m, 3.6 * p), squeeze=False)
+    letters = "abcdefghijklmnopqrstuvwxyz"
+    unit = UNITS.get(metric, "")
+    for l, out in enumerate(output_names):
+        for k, axis in enumerate(axes_names):
+            ax = axs[l][k]
+            rows = table[(table["channel"] == out) & (table["axis"] == axis)]
+            for j, lab in enumerate(dict.fromkeys(table["compensator"])):
+                r = rows[rows["compensator"] == lab].sort_values("frequency_hz")
+                if metric in r and r[metric].notna().any():
+                    ax.plot(r["frequency_hz"], r[metric], label=lab, **plots._style(j))
+            vals = rows[metric] if metric in rows else pd.Series(dtype=float)
+            if vals.notna().any() and (vals.dropna() > 0).all():
+                ax.set_yscale("log")
+            direct = (spec.mode == "reference" and axis == out) or \
+                     (spec.mode == "drive" and k == l)
+            src = f"{axis}_r" if spec.mode == "reference" else axis
+            kind = "direct" if direct else "cross-coupling"
+            ax.set_title(f"({letters[l * m + k]}) {kind}: {out} vs {src}", fontsize=10)
+            ax.set_xlabel("frequency [Hz]")
+            ax.set_ylabel(f"{metric} of {out} [{unit}]" if unit else f"{metric} of {out}")
+            ax.grid(True, which="both", alpha=0.3)
+            if ax.lines:
+                ax.legend(fontsize=7, loc="best")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def stability_figure(frame, title):
+    """Largest ``rho(I - (s K)^-1 J)`` against the gain scaling s (log-log).
+
+    Marks rho = 1 (convergence limit), s = 1 (normalised law, K the direct
+    secant gains) and, per compensator, the paper's literal law K = I at its
+    equivalent scale with its exact radius.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    plt = plots.plt
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    laws = frame.attrs.get("laws", {})
+    for j, (label, g) in enumerate(frame.groupby("compensator", sort=False)):
+        line, = ax.plot(g["scale"], g["max_radius"], label=f"{label}: max rho", **plots._style(j))
+        law = laws.get(label, {})
+        if "literal_scale" in law:
+            ax.plot([law["literal_scale"]], [law["literal_max_radius"]], "v", color=line.get_color(),
+                    markersize=9, label=f"{label}: literal law K = I (rho {law['literal_max_radius']:.3g})")
+        if "normalised_max_radius" in law:
+            ax.plot([1.0], [law["normalised_max_radius"]], "o", color=line.get_color(), markersize=8,
+                    label=f"{label}: normalised law s = 1 (rho {law['normalised_max_radius']:.3g})")
+    ax.axhline(1.0, color="k", linewidth=1, linestyle=":")
+    ax.text(frame["scale"].min(), 1.05, "rho = 1: convergence limit", fontsize=8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("gain scaling s (K = s x direct secant gains)")
+    ax.set_ylabel("max rho(I - (sK)^-1 J) over reachable slopes")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def sweep_report_lines(scenario, results, directory, metrics=None):
+    """Write the sweep CSVs/figures and the stability map of a scenario.
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenarios.Scenario
+    results : list of hammerstein.runner.CaseResult
+    directory : pathlib.Path
+    metrics : pandas.DataFrame, optional
+        Long metrics of ``results`` (computed when omitted).
+
+    Returns
+    -------
+    list of str
+        Markdown lines for ``report.md`` (sections with the figures and the
+        files written); empty when the scenario has no sweep and no map.
+    """
+    directory = Path(directory)
+    specs = getattr(scenario, "sweeps", None) or []
+    smap = getattr(scenario, "stability_map", None)
+    if not specs and smap is None:
+        return []
+    if metrics is None:
+        metrics = metrics_frame(results)
+    lines = []
+    outputs = list(results[0].spec.plant.hysteresis.output_names) if results else []
+    for spec in specs:
+        table = sweep_table(spec, metrics)
+        csv = f"sweep-{spec.name}.csv"
+        table.to_csv(directory / csv, index=False, float_format="%.6g")
+        png = None
+        if len(spec.frequencies) > 1:
+            png = f"sweep-{spec.name}.png"
+            fig = sweep_figure(table, spec, outputs,
+                               f"{scenario.title}: {spec.metric} vs frequency ({spec.name})")
+            plots.save(fig, directory / png)
+        n_div = int(table["diverged_at_time"].notna().groupby(
+            [table["compensator"], table["axis"], table["frequency_hz"]]).any().sum()) \
+            if "diverged_at_time" in table else 0
+        lines += [f"## Sweep `{spec.name}`", ""]
+        if spec.description:
+            lines += [spec.description.strip(), ""]
+        what = [f"compensators {', '.join(l or '-' for l in spec.labels)}"]
+        if spec.axes != [None]:
+            what.append(f"axes {', '.join(str(a) for a in spec.axes)}")
+        if spec.frequencies:
+            what.append(f"frequencies {', '.join(_fmt(f) for f in spec.frequencies)} Hz")
+        lines += [f"{len(spec.cases)} cases: {'; '.join(what)}. Table: `{csv}` "
+                  f"(long rows also in `metrics.csv`). Diverged cases: {n_div}.", ""]
+        if png:
+            lines += [f"![{spec.metric} vs frequency]({png})", ""]
+        else:  # a comparison of compensators: the table itself
+            keep = [c for c in ("frequency_hz", "compensator", "axis", "channel", "rms_error",
+                                "max_abs_error", "cross_coupling_peak_to_peak", "rms_euclidean_error",
+                                "max_euclidean_error", "max_euclidean_error_percent",
+                                "diverged_at_time") if c in table]
+            lines += [markdown_table(table[keep]), ""]
+        names = [c["case"] for c in spec.cases]
+        warned = {}
+        for r in results:
+            if r.name in names:
+                for w in dict.fromkeys(r.warnings):
+                    warned[w] = warned.get(w, 0) + 1
+        if warned:
+            lines += ["Warnings:", ""] + [f"- {n} case(s): {w}" for w, n in warned.items()] + [""]
+    if smap is not None:
+        smap.to_csv(directory / "stability-map.csv", index=False, float_format="%.6g")
+        plots.save(stability_figure(smap, f"{scenario.title}"), directory / "stability-map.png")
+        laws = pd.DataFrame([{"compensator": k, **v} for k, v in smap.attrs.get("laws", {}).items()])
+        lines += ["## Stability map", "",
+                  "Largest spectral radius of the fixed-point iteration over the model's reachable "
+                  "slope matrices against the gain scaling s (K = s x direct secant gains; "
+                  "NOTES §4). Table: `stability-map.csv`.", "",
+                  "![stability map](stability-map.png)", ""]
+        if not laws.empty:
+            lines += [markdown_table(laws), ""]
+    return lines

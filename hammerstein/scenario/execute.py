@@ -1,0 +1,148 @@
+"""Execution of resolved cases: simulation and metrics of one case.
+
+:func:`run_case` simulates a resolved case (an open-loop drive on the plant,
+optionally against a comparison model, or reference -> compensator -> plant
+with :func:`hammerstein.simulation.simulate_chain`) and computes its metrics
+(:mod:`hammerstein.core.metrics`); :func:`chain_result` turns an already
+simulated chain (e.g. from the batch kernel,
+:func:`hammerstein.scenario.sweeps.run_cases`) into the same
+:class:`CaseResult`. A compensator divergence is a result, not an exception.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from hammerstein.core import metrics as met
+from hammerstein.simulation import simulate_chain
+
+__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison"]
+
+
+@dataclass
+class CaseResult:
+    """Simulation and metrics of one case.
+
+    Attributes
+    ----------
+    spec : hammerstein.scenario.validate.CaseSpec
+    inputs : numpy.ndarray, shape (m, n_samples)
+        Voltages [V] (NaN after a divergence).
+    outputs : numpy.ndarray, shape (p, n_samples)
+        Displacements [µm] (NaN after a divergence).
+    reference : numpy.ndarray or None, shape (p, n_samples)
+        [µm]; None for drives.
+    divergence : CompensatorDivergence or None
+    metrics : list of dict
+        Rows ``{channel, metric, value, unit}``.
+    warnings : list of str
+    model_outputs : numpy.ndarray or None, shape (p, n_samples)
+        Drives with a comparison model: the model's displacements [µm].
+    """
+
+    spec: Any
+    inputs: np.ndarray
+    outputs: np.ndarray
+    reference: np.ndarray | None
+    divergence: Any
+    metrics: list
+    warnings: list
+    model_outputs: np.ndarray | None = None
+
+    @property
+    def name(self):
+        return self.spec.name
+
+    @property
+    def diverged_at(self):
+        """Time of the divergence [s], or None."""
+        if self.divergence is None:
+            return None
+        return float(self.divergence.sample * self.spec.plant.sampling_period)
+
+
+def run_case(case):
+    """Simulate one resolved case and compute its metrics.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        Resolved (:func:`hammerstein.scenario.resolve.resolve_scenario`).
+
+    Returns
+    -------
+    CaseResult
+        A compensator divergence is a result (metric ``diverged_at_time``
+        [s]), not an exception.
+    """
+    plant = case.plant
+    names = list(plant.hysteresis.output_names)
+    caught = list(case.warnings)
+    if case.mode == "drive":
+        y, _ = plant.simulate(case.signal)
+        rows = met.open_loop_metrics(case.signal, y, case.driven_input, names,
+                                     case.period_samples, case.settle_periods)
+        ym = None
+        if case.model is not None:  # model vs plant (Fig. 6, 7)
+            ym, more = model_comparison(case, y)
+            rows += more
+        return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        res = simulate_chain(case.compensator, plant, case.signal)
+    caught += [str(w.message) for w in rec]
+    return chain_result(case, res, caught)
+
+
+def chain_result(case, res, caught):
+    """CaseResult of a compensated case from its simulated chain (ChainResult)."""
+    plant = case.plant
+    names = list(plant.hysteresis.output_names)
+    if res.diverged:
+        t = float(res.divergence.sample * plant.sampling_period)
+        rows = [{"channel": "+".join(names), "metric": "diverged_at_time", "value": t,
+                 "unit": met.UNITS["diverged_at_time"]}]
+    else:
+        rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
+                                    case.settle_periods, scale=case.scale,
+                                    loop_channel=case.loop_channel)
+    return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
+
+
+def model_comparison(case, plant_outputs):
+    """Simulate a drive case's comparison model and compare it with the plant.
+
+    The model (rate-independent PI, no dynamics) is driven by the case's
+    voltages from zero play states, like the plant.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        A drive case with ``case.model``.
+    plant_outputs : numpy.ndarray, shape (p, n_samples)
+        The plant's displacements [µm].
+
+    Returns
+    -------
+    model_outputs : numpy.ndarray, shape (p, n_samples)
+        [µm].
+    rows : list of dict
+        Per output channel, over the steady window after ``settle_periods``:
+        ``model_rms_error`` (the paper's RMS_error_model, Section 5.3) and
+        ``model_max_abs_error`` of plant minus model [µm].
+    """
+    ym, _ = case.model.simulate(case.signal)
+    y = np.asarray(plant_outputs, dtype=float)
+    win = met.steady_window(y.shape[1], case.period_samples, case.settle_periods)
+    e = y[:, win] - ym[:, win]
+    rows = []
+    for l, name in enumerate(case.plant.hysteresis.output_names):
+        rows.append({"channel": name, "metric": "model_rms_error",
+                     "value": float(np.sqrt(np.mean(e[l] ** 2))), "unit": "µm"})
+        rows.append({"channel": name, "metric": "model_max_abs_error",
+                     "value": float(np.max(np.abs(e[l]))), "unit": "µm"})
+    return ym, rows

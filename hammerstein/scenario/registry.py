@@ -1,0 +1,153 @@
+"""The registry of compensator kinds: ``[compensator] kind = ...`` -> builder.
+
+Compensators are built by :func:`build_compensator` from the registry
+:data:`COMPENSATORS` (kind -> :class:`CompensatorKind`); add a kind by adding
+an entry (its ``fields`` are checked by ``hammerstein validate``, its
+``build`` runs when the scenario is resolved). A compensator is any object
+with ``.name`` and ``.simulate(reference (m, N), initial_state=None) ->
+(inputs (m, N), final_state)``. The model a kind is built from
+(``model = "plant" | "identified" | <file>``) is resolved by
+:func:`hammerstein.scenario.identified.resolve_model`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+                                           StaticGainCompensator, diagonal_compensator)
+from hammerstein.scenario.identified import identify_table, resolve_model
+from hammerstein.scenario.schema import Field, Invalid, choice, integer, number, string
+
+__all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "resolve_model"]
+
+
+@dataclass
+class CompensatorKind:
+    """An entry of the compensator registry.
+
+    Attributes
+    ----------
+    build : callable
+        ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;
+        ``spec`` is the validated ``[compensator]`` table (defaults filled).
+    fields : dict of str to hammerstein.scenario.schema.Field
+        The keys this kind accepts besides ``kind`` (validated by
+        ``hammerstein validate``).
+    description : str
+        One line for ``hammerstein list`` and the README.
+    """
+
+    build: Callable[[dict, Any, Path], Any]
+    fields: dict = field(default_factory=dict)
+    description: str = ""
+
+
+def _gain(v):
+    if v in ("secant", "midpoint", "identity"):
+        return v
+    if isinstance(v, list) and v and all(isinstance(r, list) and len(r) == len(v) and
+                                         all(isinstance(a, (int, float)) and not isinstance(a, bool)
+                                             and np.isfinite(a) for a in r) for r in v):
+        return v
+    raise Invalid(f"expected 'secant', 'midpoint', 'identity' or a square matrix [[..],[..]] of "
+                  f"finite numbers [µm/V], found {v!r}")
+
+
+def _build_none(spec, plant, base_dir):
+    return None
+
+
+def _build_multivariable(spec, plant, base_dir):
+    model = resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+    return InverseMultiplicativeCompensator(
+        model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
+        check=spec.get("check", "error"), **_feedback_options(spec, plant))
+
+
+def _spec_model(spec, plant, base_dir):
+    """The model of a compensator table (every kind resolves it like "multivariable")."""
+    return resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+
+
+def _feedback_options(spec, plant):
+    """feedback = "lowpass" needs the cut-off [Hz] and the plant's sampling period [s]."""
+    if spec.get("feedback", "delay") == "delay":
+        return {}
+    return {"feedback": spec["feedback"], "cutoff_hz": spec.get("cutoff_hz"),
+            "sampling_period": plant.sampling_period}
+
+
+def _build_diagonal(spec, plant, base_dir):
+    return diagonal_compensator(
+        _spec_model(spec, plant, base_dir), gain=spec.get("gain", "secant"),
+        iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
+        **_feedback_options(spec, plant))
+
+
+def _build_per_axis(spec, plant, base_dir):
+    return PerAxisInverseCompensator(_spec_model(spec, plant, base_dir))
+
+
+def _build_static_gain(spec, plant, base_dir):
+    return StaticGainCompensator(_spec_model(spec, plant, base_dir))
+
+
+# -- registry of compensator kinds: add entries here ---------------------------------
+COMPENSATORS: dict[str, CompensatorKind] = {
+    "none": CompensatorKind(_build_none, {}, "no compensator (open-loop drives only)"),
+    "multivariable": CompensatorKind(
+        _build_multivariable,
+        {"model": Field(string(), default="plant"),
+         "identify": Field(identify_table),
+         "gain": Field(_gain, default="secant"),
+         "iterations": Field(integer(1), default=1),
+         "check": Field(choice("error", "warn", "ignore"), default="error"),
+         "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
+         "cutoff_hz": Field(number("Hz", 0))},
+        "inverse multiplicative compensator of Theorem 4.1, normalised by K (docs/compensator.md)"),
+}
+_MODEL_KEYS = ("model", "identify")  # the model fields every kind shares with "multivariable"
+COMPENSATORS["diagonal"] = CompensatorKind(
+    _build_diagonal, dict(COMPENSATORS["multivariable"].fields),
+    "the multivariable law on the direct transfers only (cross-couplings left)")
+COMPENSATORS["per-axis"] = CompensatorKind(
+    _build_per_axis, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
+    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (docs/per-axis-inverse.md)")
+COMPENSATORS["static-gain"] = CompensatorKind(
+    _build_static_gain, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
+    "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")
+
+
+def build_compensator(spec, plant, base_dir):
+    """Build the compensator of a ``[compensator]`` table.
+
+    Parameters
+    ----------
+    spec : dict
+        Validated table; ``kind`` selects the :data:`COMPENSATORS` entry
+        (default ``"none"``).
+    plant : HammersteinPlant
+        The simulated plant (its PI model is ``model = "plant"``).
+    base_dir : pathlib.Path
+        Directory of the scenario file (relative model paths).
+
+    Returns
+    -------
+    object or None
+        A compensator, or None for ``kind = "none"``.
+
+    Raises
+    ------
+    ValueError
+        Unknown kind; or the builder's own errors (CompensatorError,
+        PresetError), e.g. a law refused by the convergence check.
+    """
+    kind = spec.get("kind", "none")
+    if kind not in COMPENSATORS:
+        raise ValueError(f"kind: expected one of {', '.join(COMPENSATORS)}, found {kind!r}")
+    return COMPENSATORS[kind].build(spec, plant, Path(base_dir))

@@ -1,0 +1,142 @@
+"""Scenario files, step 2 of 2: resolution (what ``hammerstein run`` adds to validation).
+
+:func:`resolve_scenario` turns a validated scenario
+(:func:`hammerstein.scenario.validate.validate_scenario`) into what execution
+needs: it identifies the ``model = "identified"`` models on their plants
+(cached, :mod:`hammerstein.scenario.identified`), reads the model files,
+builds every compensator (:func:`hammerstein.scenario.registry.build_compensator`,
+whose convergence check may refuse a law) and computes the
+``[stability_map]``. Problems found only here are collected and raised as
+one :class:`ScenarioError` with the same ``file: key: message`` lines as the
+validation. :func:`load_scenario` runs both steps.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from hammerstein.core.presets import PresetError
+from hammerstein.scenario.identified import resolve_comparison_model
+from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.schema import ScenarioError
+from hammerstein.scenario.sweeps import stability_map_frame
+from hammerstein.scenario.validate import ScenarioSpec, validate_scenario
+
+__all__ = ["Scenario", "resolve_scenario", "load_scenario"]
+
+
+@dataclass
+class Scenario:
+    """A resolved scenario of kind ``"cases"``: metadata and ready-to-run cases.
+
+    Attributes
+    ----------
+    name, title, description : str
+    seed : int
+    path : pathlib.Path
+    cases : list of hammerstein.scenario.validate.CaseSpec
+        With their compensators and comparison models.
+    sweeps : list of hammerstein.scenario.sweeps.SweepSpec
+    stability_map : pandas.DataFrame or None
+        :func:`hammerstein.scenario.sweeps.stability_map_frame`.
+    kind : str
+        ``"cases"``.
+    """
+
+    name: str
+    title: str
+    description: str
+    seed: int
+    path: Path
+    cases: list
+    sweeps: list = field(default_factory=list)
+    stability_map: Any = None
+    kind: str = "cases"
+
+
+def resolve_scenario(spec):
+    """Identify, load and build what a validated scenario needs (step 2 of 2).
+
+    Parameters
+    ----------
+    spec : ScenarioSpec or hammerstein.scenario.records.RecordScenario
+        From :func:`hammerstein.scenario.validate.validate_scenario`. Other
+        kinds than ``"cases"`` (identification scenarios) need no resolution
+        and are returned as they are.
+
+    Returns
+    -------
+    Scenario
+        Cases with their compensators (and the warnings raised while
+        building them) and comparison models; the stability map.
+
+    Raises
+    ------
+    ScenarioError
+        Every problem of the resolution, one ``file: key: message`` per line:
+        a failed identification, an unreadable or wrongly sized model file, a
+        compensator refused by its convergence check, a stability-map
+        compensator that cannot be built.
+    """
+    if not isinstance(spec, ScenarioSpec):
+        return spec
+    source, base, problems, cases = str(spec.path), spec.path.parent, [], []
+    for case in spec.cases:
+        model = None
+        if case.model_spec is not None:
+            try:
+                model = resolve_comparison_model(case.model_spec, case.plant, base)
+            except (ValueError, PresetError) as exc:  # one "key: message" per line
+                problems.extend(f"{source}: {case.where}.{line}" for line in str(exc).splitlines())
+                continue
+        comp, caught = None, []
+        if case.mode == "reference":
+            with warnings.catch_warnings(record=True) as rec:
+                warnings.simplefilter("always")
+                try:
+                    comp = build_compensator(case.compensator_spec, case.plant, base)
+                except (ValueError, PresetError) as exc:
+                    problems.append(f"{source}: {case.where}.compensator: {exc}")
+                    continue
+            caught = [str(w.message) for w in rec]
+        cases.append(replace(case, compensator=comp, model=model, warnings=caught))
+    smap = None
+    if spec.stability_map is not None and spec.stability_plant is not None:
+        smap = stability_map_frame(spec.stability_map, spec.stability_plant, spec.compensator_top,
+                                   base, problems, source)
+    if problems:
+        raise ScenarioError(problems)
+    return Scenario(name=spec.name, title=spec.title, description=spec.description,
+                    seed=spec.seed, path=spec.path, cases=cases, sweeps=spec.sweeps,
+                    stability_map=smap)
+
+
+def load_scenario(path):
+    """Validate and resolve a scenario file (both steps).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Scenario TOML file.
+
+    Returns
+    -------
+    Scenario or hammerstein.scenario.records.RecordScenario
+        Cases with their plants, built compensators and signals.
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem found, one ``file: key: message`` per line
+        (the validation's; when there are none, the resolution's).
+
+    Examples
+    --------
+    >>> from hammerstein.scenario.resolve import load_scenario
+    >>> sc = load_scenario("scenarios/default.toml")  # doctest: +SKIP
+    >>> [c.name for c in sc.cases]                     # doctest: +SKIP
+    """
+    return resolve_scenario(validate_scenario(path))

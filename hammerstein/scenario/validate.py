@@ -1,0 +1,425 @@
+"""Scenario files, step 1 of 2: validation (what ``hammerstein validate`` runs).
+
+:func:`validate_scenario` reads a scenario file and checks all of it,
+collecting EVERY problem before raising one :class:`ScenarioError` whose
+lines read ``file: key: message``: unknown keys (with the closest valid
+key), types, units and ranges, the plant preset and the names of its inputs
+and outputs, the drive and reference signals (generated here, so a signal
+at or beyond the Nyquist frequency or too short for ``settle_periods`` is
+reported), duplicate case names, the ``identify`` and ``model`` keys of a
+case (an ``identify`` table present, its frequency below Nyquist), the
+model files named by ``model`` (read and checked), ``[[sweeps]]`` (expanded
+into cases) and the ``[stability_map]`` table. It builds no compensator,
+identifies no model and simulates nothing: that is step 2,
+:func:`hammerstein.scenario.resolve.resolve_scenario`.
+
+A file whose top-level ``kind`` is not ``"cases"`` is validated by the entry
+of :data:`VALIDATORS` (``"identification"``: measured records,
+:func:`hammerstein.scenario.records.load_identification_scenario`).
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from hammerstein.core import references as refs
+from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.scenario.identified import comparison_spec, nyquist_problem
+from hammerstein.scenario.records import load_identification_scenario
+from hammerstein.scenario.registry import COMPENSATORS
+from hammerstein.scenario.schema import (CASE, DRIVES, PLANT, REFERENCES, TOP, Field, ScenarioError,
+                                         check_table, kind_problem)
+from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
+
+__all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_scenario"]
+
+
+@dataclass
+class CaseSpec:
+    """A validated case of a scenario (resolved: with its compensator and model).
+
+    Attributes
+    ----------
+    name : str
+    description : str
+    mode : {'drive', 'reference'}
+    signal_spec : dict
+        The validated ``drive`` or ``reference`` table.
+    plant_spec, compensator_spec : dict
+        Merged plant and (validated, defaults filled) compensator tables.
+    plant : HammersteinPlant
+    compensator : object or None
+        Built compensator (None for drives and ``kind = "none"``); None
+        until :func:`hammerstein.scenario.resolve.resolve_scenario`.
+    time : numpy.ndarray, shape (n_samples,)
+        [s].
+    signal : numpy.ndarray, shape (m or p, n_samples)
+        Drive voltages [V] or reference displacements [µm].
+    period_samples : int
+        Samples per period of the excitation (common period for Lissajous).
+    settle_periods : float
+    driven_input : int or None
+        Index of the driven input (drives).
+    loop_channel : int or None
+        Output carrying a single-axis sine reference.
+    scale : float or None
+        Amplitude or radius [µm] for percent metrics.
+    warnings : list of str
+        Warnings raised while building the compensator (e.g. a convergence
+        warning); filled by the resolution.
+    model : MultivariablePI or None
+        Drives: the model compared with the plant (case keys ``model``,
+        ``identify``); None until resolved.
+    model_spec : dict or None
+        The case's ``model`` and validated ``identify`` entries
+        (:func:`hammerstein.scenario.identified.comparison_spec`).
+    sweep : dict or None
+        ``{sweep, case, compensator, axis, frequency_hz}`` of a sweep case.
+    where : str
+        Key path of the case in the file (``cases[0]``,
+        ``sweeps[1](<case name>)``), for the problems of the resolution.
+    """
+
+    name: str
+    description: str
+    mode: str
+    signal_spec: dict
+    plant_spec: dict
+    compensator_spec: dict
+    plant: Any
+    compensator: Any
+    time: np.ndarray
+    signal: np.ndarray
+    period_samples: int
+    settle_periods: float
+    driven_input: int | None = None
+    loop_channel: int | None = None
+    scale: float | None = None
+    warnings: list = field(default_factory=list)
+    model: Any = None
+    model_spec: dict | None = None
+    sweep: dict | None = None
+    where: str = ""
+
+
+@dataclass
+class ScenarioSpec:
+    """A validated scenario of kind ``"cases"`` (nothing built or identified yet).
+
+    Attributes
+    ----------
+    name, title, description : str
+    seed : int
+    path : pathlib.Path
+    cases : list of CaseSpec
+    sweeps : list of hammerstein.scenario.sweeps.SweepSpec
+    stability_map : dict or None
+        Checked ``[stability_map]`` table
+        (:func:`hammerstein.scenario.sweeps.check_stability_table`).
+    stability_plant : HammersteinPlant or None
+        The top-level plant the stability map is computed on.
+    compensator_top : dict
+        The top-level ``[compensator]`` table (the stability map's default).
+    kind : str
+        ``"cases"``.
+    """
+
+    name: str
+    title: str
+    description: str
+    seed: int
+    path: Path
+    cases: list
+    sweeps: list = field(default_factory=list)
+    stability_map: dict | None = None
+    stability_plant: Any = None
+    compensator_top: dict = field(default_factory=dict)
+    kind: str = "cases"
+
+
+def read_scenario(path):
+    """Parse a scenario file: ``(path, data)``; raises ScenarioError for unreadable TOML."""
+    path = Path(path)
+    try:
+        return path, read_toml(path)
+    except PresetError as exc:
+        raise ScenarioError([str(exc)]) from None
+
+
+def _merge_compensator(top, case):
+    top = dict(top or {})
+    case = dict(case or {})
+    if "kind" in case and case["kind"] != top.get("kind", "none"):
+        return case
+    return {**top, **case}
+
+
+def _check_compensator(spec, where, problems, source):
+    kind = spec.get("kind", "none")
+    if kind not in COMPENSATORS:
+        hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
+        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
+        problems.append(f"{source}: {where}.kind: expected one of "
+                        f"{', '.join(map(repr, COMPENSATORS))}, found {kind!r}{extra}")
+        return None
+    schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
+    return check_table(spec, schema, where, problems, source)
+
+
+def _signal(case_where, mode, spec, plant, problems, source):
+    """Generate the drive/reference; returns (time, signal, period_samples, extras)."""
+    kinds = DRIVES if mode == "drive" else REFERENCES
+    where = f"{case_where}.{mode}"
+    if not isinstance(spec, dict):
+        problems.append(f"{source}: {where}: expected a table, found {spec!r}")
+        return None
+    kind = spec.get("kind")
+    if kind not in kinds:
+        hint = difflib.get_close_matches(str(kind), list(kinds), n=1)
+        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
+        problems.append(f"{source}: {where}.kind: expected one of "
+                        f"{', '.join(map(repr, kinds))}, found {kind!r}{extra}")
+        return None
+    n_before = len(problems)
+    clean = check_table(spec, {"kind": Field(lambda v: v), **kinds[kind]}, where, problems, source)
+    if clean is None or len(problems) > n_before or plant is None:
+        return None
+    T = plant.sampling_period
+    model = plant.hysteresis
+    c = {k: v for k, v in clean.items() if k != "kind"}
+    extras = {}
+    try:
+        if mode == "drive":
+            t, sig = refs.sine_drive(T, model.input_names, **c)
+            extras["driven_input"] = model.input_names.index(c["input"])
+            period = 1.0 / c["frequency"]
+        elif kind == "sine":
+            t, sig = refs.sine(T, model.output_names, **c)
+            extras["loop_channel"] = model.output_names.index(c["output"])
+            extras["scale"] = c["amplitude"]
+            period = 1.0 / c["frequency"]
+        else:
+            outs = c.pop("outputs", None) or list(model.output_names[:2])
+            missing = [o for o in outs if o not in model.output_names]
+            if missing or model.n_outputs < 2:
+                raise refs.SignalError(f"outputs: expected two of the plant's outputs "
+                                       f"{model.output_names}, found {outs}")
+            fn = {"circle": refs.circle, "spiral": refs.spiral, "lissajous": refs.lissajous}[kind]
+            t, xy = fn(T, **c)
+            sig = np.zeros((model.n_outputs, t.size))
+            for row, o in zip(xy, outs):
+                sig[model.output_names.index(o)] = row
+            if kind == "lissajous":
+                try:
+                    period = refs.lissajous_period(*c["frequencies"])
+                except refs.SignalError:
+                    period = 1.0 / min(c["frequencies"])
+                amp = c["amplitude"]
+                extras["scale"] = float(np.max(amp))
+            else:
+                period = 1.0 / c["frequency"]
+                extras["scale"] = c["radius"]
+    except refs.SignalError as exc:
+        problems.append(f"{source}: {where}.{exc}")
+        return None
+    return t, sig, max(int(round(period / T)), 1), extras
+
+
+def _model_problems(name, identify, plant, base, files):
+    """Problems of a ``model`` key that need no identification and no compensator.
+
+    ``"identified"``: the ``identify`` table is present and its frequency below
+    Nyquist; a file name: the model file reads (``files`` caches path ->
+    message or None). Returns ``key: message`` strings.
+    """
+    if name in (None, "plant"):
+        return []
+    if name == "identified":
+        if identify is None:
+            return ["identify: missing (required with model = 'identified'), "
+                    "e.g. identify = { frequency = 50.0 }"]
+        problem = nyquist_problem(identify, plant)
+        return [problem] if problem else []
+    path = Path(name) if Path(name).is_absolute() else base / name
+    if path not in files:
+        try:
+            load_model(path)
+            files[path] = None
+        except PresetError as exc:
+            files[path] = str(exc)
+    return [files[path]] if files[path] else []
+
+
+def _validate_cases(path, data):
+    """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError."""
+    source, base, problems = str(path), path.parent, []
+    top = check_table(data, TOP, "", problems, source) or {}
+    plant_top = data.get("plant", {}) if isinstance(data.get("plant", {}), dict) else {}
+    comp_top = data.get("compensator", {}) if isinstance(data.get("compensator", {}), dict) else {}
+    if "plant" in data:
+        check_table(data["plant"], PLANT, "plant", problems, source)
+    if "compensator" in data:
+        if isinstance(comp_top, dict):
+            _check_compensator(comp_top, "compensator", problems, source)
+        else:
+            problems.append(f"{source}: compensator: expected a table")
+    cases_raw = data.get("cases", [])
+    if "cases" in data and (not isinstance(cases_raw, list) or not cases_raw):
+        problems.append(f"{source}: cases: expected one or more [[cases]] tables")
+        cases_raw = []
+    if "cases" not in data and "sweeps" not in data:
+        problems.append(f"{source}: cases: missing (required)")
+    entries, sweep_specs = [(f"cases[{i}]", raw) for i, raw in enumerate(cases_raw)], []
+    if "sweeps" in data:
+        more, sweep_specs = expand_sweeps(data["sweeps"], source, problems)
+        entries += more
+    plants, cases, names, model_files = {}, [], set(), {}
+
+    def plant_of(preset, dynamics):
+        key = (preset, bool(dynamics))
+        if key not in plants:
+            plants[key] = load_plant(preset, dynamics=bool(dynamics), base_dir=base)
+        return plants[key]
+
+    for where, raw in entries:
+        n_before = len(problems)
+        case = check_table(raw, CASE, where, problems, source)
+        if case is None:
+            continue
+        if "name" in case:
+            if case["name"] in names:
+                problems.append(f"{source}: {where}.name: duplicate case name {case['name']!r}")
+            names.add(case["name"])
+        has_ref, has_drive = "reference" in raw, "drive" in raw
+        if has_ref == has_drive:
+            problems.append(f"{source}: {where}: expected exactly one of reference "
+                            f"(compensated) or drive (open loop)")
+            continue
+        mode = "reference" if has_ref else "drive"
+        # plant: merge and load
+        pover = raw.get("plant", {})
+        pspec = {**plant_top, **(pover if isinstance(pover, dict) else {})}
+        plant_clean = check_table(pover, {k: Field(f.check) for k, f in PLANT.items()},
+                                  f"{where}.plant", problems, source) if "plant" in raw else {}
+        plant = None
+        if plant_clean is not None and "preset" in pspec and isinstance(pspec["preset"], str):
+            try:
+                plant = plant_of(pspec["preset"], pspec.get("dynamics", True))
+            except PresetError as exc:
+                plants[(pspec["preset"], bool(pspec.get("dynamics", True)))] = None
+                problems.append(f"{source}: {where}.plant.preset: {exc}")
+        # compensator: merge and check
+        cover = raw.get("compensator", {})
+        cspec = _merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
+        scratch = []
+        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source)
+        if "compensator" in raw:
+            if isinstance(cover, dict):
+                problems.extend(scratch)  # top-level problems are reported once, above
+            else:
+                problems.append(f"{source}: {where}.compensator: expected a table")
+        elif scratch and not any("compensator" in q for q in problems[:n_before]):
+            problems.extend(scratch)
+        comp_ok = not scratch and cclean is not None
+        sig = _signal(where, mode, raw[mode], plant, problems, source)
+        kind = cspec.get("kind", "none")
+        if mode == "reference" and kind == "none":
+            problems.append(f"{source}: {where}.reference: a reference needs a compensator "
+                            f"(compensator.kind is 'none'); use drive for an open-loop run")
+        if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
+            continue
+        t, signal, P, extras = sig
+        settle = case.get("settle_periods", 1.0)
+        need = settle * P + (P if (mode == "drive" or "loop_channel" in extras) else 1)
+        if t.size < need:
+            problems.append(f"{source}: {where}.settle_periods: {settle:g} periods of settling "
+                            f"leave less than {'one period' if need - settle * P > 1 else 'one sample'} "
+                            f"of the {t.size}-sample record; lengthen it or settle less")
+            continue
+        cmp_spec = None
+        if "model" in raw or "identify" in raw:
+            try:
+                cmp_spec = comparison_spec(raw, mode)
+            except ValueError as exc:  # one "key: message" per line
+                problems.extend(f"{source}: {where}.{line}" for line in str(exc).splitlines())
+                continue
+        if mode == "reference" and "model" in COMPENSATORS[kind].fields:
+            more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
+                                   model_files)
+            problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
+        if cmp_spec is not None:
+            more = _model_problems(cmp_spec["model"], cmp_spec.get("identify"), plant, base,
+                                   model_files)
+            problems.extend(f"{source}: {where}.model: {msg}" for msg in more)
+        if len(problems) > n_before:
+            continue
+        cases.append(CaseSpec(
+            name=case["name"], description=case.get("description", ""), mode=mode,
+            signal_spec=dict(raw[mode]), plant_spec=pspec,
+            compensator_spec=cclean if cclean is not None else cspec,
+            plant=plant, compensator=None, time=t, signal=signal, period_samples=P,
+            settle_periods=settle, model_spec=cmp_spec, where=where, **extras))
+    smap, smap_plant = None, None
+    if "stability_map" in data and isinstance(plant_top.get("preset"), str):
+        try:
+            smap_plant = plant_of(plant_top["preset"], plant_top.get("dynamics", True))
+        except PresetError:
+            smap_plant = None  # reported with the plant table
+        smap = check_stability_table(data["stability_map"], problems, source)
+    if problems:
+        raise ScenarioError(problems)
+    info = {c["case"]: {"sweep": sp.name, **c} for sp in sweep_specs for c in sp.cases}
+    for c in cases:
+        c.sweep = info.get(c.name)
+    return ScenarioSpec(name=top.get("name", path.stem), title=top.get("title", path.stem),
+                        description=top.get("description", ""), seed=top.get("seed", 0),
+                        path=path, cases=cases, sweeps=sweep_specs, stability_map=smap,
+                        stability_plant=smap_plant, compensator_top=comp_top)
+
+
+#: Validators of the top-level ``kind`` of a scenario file: ``(path, data) -> spec``
+#: (``data`` the parsed TOML), raising ScenarioError with every problem. A new
+#: kind also needs an entry in :data:`hammerstein.runner.SCENARIO_KINDS`.
+VALIDATORS: dict[str, Callable] = {
+    "cases": _validate_cases,
+    "identification": load_identification_scenario,
+}
+
+
+def validate_scenario(path):
+    """Validate a scenario file (step 1 of 2; nothing is built or simulated).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Scenario TOML file.
+
+    Returns
+    -------
+    ScenarioSpec or hammerstein.scenario.records.RecordScenario
+        The validated scenario: cases with their plants and signals, but no
+        compensator and no identified or loaded model yet
+        (:func:`hammerstein.scenario.resolve.resolve_scenario` builds them).
+
+    Raises
+    ------
+    ScenarioError
+        Listing every problem found, one ``file: key: message`` per line.
+
+    Examples
+    --------
+    >>> from hammerstein.scenario.validate import validate_scenario
+    >>> spec = validate_scenario("scenarios/default.toml")  # doctest: +SKIP
+    >>> spec.cases[0].compensator is None                    # doctest: +SKIP
+    True
+    """
+    path, data = read_scenario(path)
+    kind = data.get("kind", "cases")
+    if kind not in VALIDATORS:
+        raise ScenarioError([f"{path}: kind: {msg}" for msg in kind_problem(kind, VALIDATORS)])
+    return VALIDATORS[kind](path, data)
