@@ -30,7 +30,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 __all__ = ["loop_grid", "decorate_grid", "trajectory_figure", "divergence_figure", "xy_overlay",
-           "save", "decimate", "decimate_path", "fixed_layout", "legend_on_top", "headroom", "suptitle",
+           "save", "scenario_prefix", "grid_figure", "decimate", "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
            "MAX_POINTS", "DPI"]
 
 #: Largest number of points drawn per line: a 15-inch figure at :data:`DPI` is
@@ -218,6 +218,14 @@ def legend_on_top(ax, n_entries, ncol=None, fontsize=8, loc="upper center", **kw
                      borderaxespad=0.3, handlelength=2.2, columnspacing=1.2, **kwargs)
 
 
+def log_ticks(ax):
+    """Plain labels 1, 2, 5 x 10^k on a log y-axis (no crowded minor labels)."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+    ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+
+
 def _settled_ylim(ax, values, pad=0.08):
     """Scale ``ax`` on ``values`` (the settled part of its curves)."""
     v = np.concatenate([np.ravel(a) for a in values])
@@ -229,8 +237,18 @@ def _settled_ylim(ax, values, pad=0.08):
     ax.set_ylim(lo - pad * span, hi + pad * span)
 
 
-def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6):
+def scenario_prefix(scenario):
+    """Short name of a scenario for figure titles: the part of its title
+    before ':' when short (``"Fig. 8"``), else its name."""
+    title = str(getattr(scenario, "title", "") or "")
+    head = title.split(":", 1)[0].strip()
+    return head if ":" in title and 0 < len(head) <= 24 else scenario.name
+
+
+def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6, extra_top=0.0):
     """A p x m grid of panels with a fixed layout and room for ``title``.
+
+    ``extra_top`` [in] reserves a band under the title (a figure legend).
 
     Returns
     -------
@@ -238,7 +256,7 @@ def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6):
     axes : numpy.ndarray of Axes, shape (p, m)
     """
     W = 0.85 + 0.25 + m * panel_w + (m - 1) * 0.85
-    top = _title_height(title, W) + 0.3
+    top = _title_height(title, W) + 0.3 + extra_top
     H = top + 0.6 + p * panel_h + (p - 1) * 0.8
     fig, axes = plt.subplots(p, m, figsize=(W, H), squeeze=False)
     fixed_layout(fig, p, m, left=0.85, right=0.25, bottom=0.6, top=top, wspace=0.85, hspace=0.8)

@@ -72,10 +72,7 @@ def _last_period(x, P):
 
 
 def _figure_prefix(scenario):
-    """Short name of the scenario for figure titles: the part of its title
-    before ':' when short ("Fig. 8"), else the scenario name."""
-    head = scenario.title.split(":", 1)[0].strip()
-    return head if ":" in scenario.title and len(head) <= 24 else scenario.name
+    return plots.scenario_prefix(scenario)
 
 
 def _join_numbers(values, unit):
