@@ -373,14 +373,17 @@ def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="di
     return fig
 
 
-def _mark_transient(ax, t_end, hidden=None):
-    """Shade the start-up transient [0, t_end] (time axis in ms); ``hidden``:
-    peak of the curves there when the axis is scaled on the settled part."""
+def _mark_transient(ax, t_end):
+    """Shade the start-up transient [0, t_end] (time axis in ms)."""
     ax.axvspan(ax.get_xlim()[0], t_end, color="0.85", alpha=0.6, zorder=0, linewidth=0)
-    note = "start-up" if hidden is None else f"start-up: peak {hidden:.3g} µm, off scale"
-    # in the legend band at the top (the legend sits on the right): no curve there
-    ax.text(0.01, 0.985, note, transform=ax.transAxes, ha="left", va="top", fontsize=7,
-            color="0.3")
+
+
+def _peak_off_scale(ax, values):
+    """Largest |value| of ``values`` when some of them lie outside the y-limits."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    lo, hi = ax.get_ylim()
+    return float(np.max(np.abs(v))) if v.size and (v.min() < lo or v.max() > hi) else None
 
 
 def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
@@ -422,11 +425,11 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     steady = t >= settle_time * 1e3
     transient = settle_time > 0 and steady.any() and not steady.all()
     W = 15.0
-    top = _title_height(title, W) + 0.3
-    H = top + 2 * 2.7 + 0.75 + 0.55
+    top = _title_height(title, W) + 0.45
+    H = top + 2 * 2.7 + 0.9 + 0.55
     fig = plt.figure(figsize=(W, H))
     gs = fig.add_gridspec(2, 3, width_ratios=[1.15, 1.4, 1.4])
-    fixed_layout(fig, 2, 3, left=0.7, right=0.2, bottom=0.55, top=top, wspace=0.8, hspace=0.75)
+    fixed_layout(fig, 2, 3, left=0.7, right=0.2, bottom=0.55, top=top, wspace=0.8, hspace=0.9)
     ax = fig.add_subplot(gs[:, 0])
     ax.plot(*decimate_path(r[0, steady], r[1, steady]), "--", color="0.35", linewidth=1.2)
     ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0)
@@ -461,37 +464,31 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     for i, n in enumerate(names):
         axe.plot(*decimate(t, e[i]), "-", color=f"C{i}", linewidth=1.0, label=f"{n}_r - {n}")
     axe.set_ylabel("tracking error [µm]")
-    axe.set_title("(c) tracking error per axis" + (" (scaled after settling)" if transient else ""),
-                  fontsize=10, y=1.0)
     axn = fig.add_subplot(gs[1, 2], sharex=axt)
     axn.plot(*decimate(t, eu), "-", color="k", linewidth=0.9)
     axn.set_ylabel("||Y_r - Y|| [µm]")
     axn.set_xlabel("time [ms]")
-    axn.set_title("(e) Euclidean error" + (" (scaled after settling)" if transient else ""),
-                  fontsize=10, y=1.0)
     for a in (axt, axu, axe, axn):
         a.grid(True, alpha=0.3)
         a.set_xlim(t[0], t[-1])
     plt.setp(axt.get_xticklabels(), visible=False)
     plt.setp(axe.get_xticklabels(), visible=False)
+    notes = {axe: "", axn: ""}
     if transient:
         _settled_ylim(axe, [e[:, steady]])
         _settled_ylim(axn, [np.r_[0.0, eu[steady]]])
-        for a, vals in ((axt, None), (axu, None), (axe, e), (axn, eu)):
-            hidden = None
-            if vals is not None:
-                lo, hi = a.get_ylim()
-                early = np.asarray(vals)[..., ~steady]
-                early = early[np.isfinite(early)]
-                if early.size and (early.min() < lo or early.max() > hi):
-                    hidden = float(np.max(np.abs(early)))
-            _mark_transient(a, settle_time * 1e3, hidden)
+        for a, vals in ((axe, e[:, ~steady]), (axn, eu[~steady])):
+            peak = _peak_off_scale(a, vals)
+            notes[a] = "\nscaled after settling" + (
+                "" if peak is None else f"; start-up (shaded) peaks at {peak:.3g} µm")
+        for a in (axt, axu, axe, axn):
+            _mark_transient(a, settle_time * 1e3)
+    axe.set_title("(c) tracking error per axis" + notes[axe], fontsize=10, y=1.0)
+    axn.set_title("(e) Euclidean error" + notes[axn], fontsize=10, y=1.0)
     legend_on_top(axt, 2 * len(names), loc="upper right")
     if inputs is not None:
         legend_on_top(axu, len(un), loc="upper right")
     legend_on_top(axe, len(names), loc="upper right")
-    if transient:
-        headroom(axn, 1)  # room for the start-up note
     suptitle(fig, title)
     return fig
 
