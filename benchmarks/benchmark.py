@@ -9,7 +9,7 @@ For the bundled preset (paper's 2x2 model, 15 hysterons per component, T =
    update (p * m * n = 60 hysterons per sample) and samples per second;
 2. the wall time of 1 s of the full compensator -> multivariable PI ->
    linear dynamics chain through the fused kernel, through python-control
-   (``input_output_response`` of :func:`hammerstein.interop.chain_system`,
+   (``input_output_response`` of :func:`hammerstein.core.interop.chain_system`,
    run on a shorter record and scaled) and through the per-sample numpy
    loop (``backend='numpy'``), with the ratios;
 3. the kernels' compile time, cold (empty temporary ``NUMBA_CACHE_DIR``) and

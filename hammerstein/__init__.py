@@ -4,34 +4,121 @@ Model rate-independent hysteresis and cross-couplings with a multivariable
 classical Prandtl-Ishlinskii (PI) model, identify it, cancel it with the
 inverse multiplicative feedforward compensator, and simulate the result on a
 Hammerstein actuator (multivariable PI + python-control linear dynamics).
+
+``import hammerstein`` is light: it loads the exception classes only. Every
+other name below is imported from its module on first access (PEP 562), so
+numba, python-control, pandas and matplotlib load only when a name that
+needs them is used.
+
+Layers (each imports only the ones before it): :mod:`hammerstein.exceptions`,
+:mod:`hammerstein.simulation` (stepping on arrays), :mod:`hammerstein.core`
+(models, compensators, identification), :mod:`hammerstein.scenario`,
+:mod:`hammerstein.report`, :mod:`hammerstein.runner`, :mod:`hammerstein.cli`.
 """
 
-from hammerstein.core.compensators import (CompensatorDivergence, CompensatorError, ConvergenceReport,
-                           ConvergenceWarning, InverseMultiplicativeCompensator, midpoint_gains,
-                           convergence_report)
-from hammerstein.core.compensators import (PerAxisInverseCompensator, RangeWarning, StaticGainCompensator, check_reference_range, diagonal_compensator)
-from hammerstein.core.inverse import InversePI, InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
-from hammerstein.core.stability import literal_gain_equivalent_scale, stability_map
-from hammerstein.core.dynamics import DynamicsError, bandwidths_hz, bending_modes, discretize
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import (PresetError, bundled_presets, load_model, load_plant, model_from_table,
-                      model_to_table, save_model)
-from hammerstein.simulation import ChainResult, simulate_chain, simulate_compensator, simulate_plant
-from hammerstein.simulation import simulate_chain_batch, simulate_hysteresis
-from hammerstein.scenario.progress import progress
-from hammerstein.core.identification import ClosedFormPI, IdentificationError, LeastSquaresPI, MultivariableIdentifier, fit_report
-from hammerstein.core.sensors import Sensor, characterize, identify_plant
-from hammerstein.core.datafiles import DataFileError, Record, read_record
-from hammerstein.scenario.identified import comparison_model, identified_model, identify_table, save_identified_models
-from hammerstein.scenario.schema import ScenarioError
-from hammerstein.scenario.validate import validate_scenario
-from hammerstein.scenario.resolve import load_scenario, resolve_scenario
-from hammerstein.scenario.registry import COMPENSATORS, build_compensator
-from hammerstein.runner import ScenarioOutcome, replicate, run_scenario, run_scenarios
-from hammerstein.scenario.regression import BaselineError, compare_metrics, read_baseline, resolve_tolerances, write_baseline
-from hammerstein.scenario.sweeps import SweepSpec, expand_sweeps, run_cases
-from hammerstein.report.sweeps import sweep_table
-from hammerstein.report.replication import paper_comparison, write_readme
+from __future__ import annotations
+
+import importlib
+
+from hammerstein.exceptions import (BaselineError, CompensatorDivergence, CompensatorError,
+                                    ConvergenceWarning, DataFileError, DynamicsError,
+                                    HammersteinError, HammersteinWarning, HysteresisError,
+                                    IdentificationError, Invalid, NestedInvalid, PresetError,
+                                    RangeWarning, ScenarioError, SignalError)
 
 __version__ = "0.1.0"
+
+#: public name -> module that defines it (imported on first access)
+_LAZY = {
+    # core: models, compensators, stability, dynamics
+    "ConvergenceReport": "hammerstein.core.compensators",
+    "InverseMultiplicativeCompensator": "hammerstein.core.compensators",
+    "PerAxisInverseCompensator": "hammerstein.core.compensators",
+    "StaticGainCompensator": "hammerstein.core.compensators",
+    "check_reference_range": "hammerstein.core.compensators",
+    "convergence_report": "hammerstein.core.compensators",
+    "diagonal_compensator": "hammerstein.core.compensators",
+    "midpoint_gains": "hammerstein.core.compensators",
+    "InversePI": "hammerstein.core.inverse",
+    "InversePlay": "hammerstein.core.inverse",
+    "kuhnen_inverse": "hammerstein.core.inverse",
+    "kuhnen_inverse_parameters": "hammerstein.core.inverse",
+    "literal_gain_equivalent_scale": "hammerstein.core.stability",
+    "stability_map": "hammerstein.core.stability",
+    "bandwidths_hz": "hammerstein.core.dynamics",
+    "bending_modes": "hammerstein.core.dynamics",
+    "discretize": "hammerstein.core.dynamics",
+    "MultivariablePI": "hammerstein.core.hysteresis",
+    "PrandtlIshlinskii": "hammerstein.core.hysteresis",
+    "play": "hammerstein.core.hysteresis",
+    "HammersteinPlant": "hammerstein.core.plant",
+    "bundled_presets": "hammerstein.core.presets",
+    "load_model": "hammerstein.core.presets",
+    "load_plant": "hammerstein.core.presets",
+    "model_from_table": "hammerstein.core.presets",
+    "model_to_table": "hammerstein.core.presets",
+    "save_model": "hammerstein.core.presets",
+    "ClosedFormPI": "hammerstein.core.identification",
+    "LeastSquaresPI": "hammerstein.core.identification",
+    "MultivariableIdentifier": "hammerstein.core.identification",
+    "fit_report": "hammerstein.core.identification",
+    "Sensor": "hammerstein.core.sensors",
+    "characterize": "hammerstein.core.sensors",
+    "identify_plant": "hammerstein.core.sensors",
+    "Record": "hammerstein.core.datafiles",
+    "read_record": "hammerstein.core.datafiles",
+    # simulation
+    "ChainResult": "hammerstein.simulation",
+    "simulate_chain": "hammerstein.simulation",
+    "simulate_chain_batch": "hammerstein.simulation",
+    "simulate_compensator": "hammerstein.simulation",
+    "simulate_hysteresis": "hammerstein.simulation",
+    "simulate_plant": "hammerstein.simulation",
+    # scenarios, runner, reports
+    "progress": "hammerstein.scenario.progress",
+    "comparison_model": "hammerstein.scenario.identified",
+    "identified_model": "hammerstein.scenario.identified",
+    "identify_table": "hammerstein.scenario.identified",
+    "save_identified_models": "hammerstein.scenario.identified",
+    "load_scenario": "hammerstein.scenario.resolve",
+    "resolve_scenario": "hammerstein.scenario.resolve",
+    "validate_scenario": "hammerstein.scenario.validate",
+    "COMPENSATORS": "hammerstein.scenario.registry",
+    "ScenarioOutcome": "hammerstein.runner",
+    "build_compensator": "hammerstein.scenario.registry",
+    "run_scenario": "hammerstein.runner",
+    "run_scenarios": "hammerstein.runner",
+    "compare_metrics": "hammerstein.scenario.regression",
+    "read_baseline": "hammerstein.scenario.regression",
+    "resolve_tolerances": "hammerstein.scenario.regression",
+    "write_baseline": "hammerstein.scenario.regression",
+    "SweepSpec": "hammerstein.scenario.sweeps",
+    "expand_sweeps": "hammerstein.scenario.sweeps",
+    "run_cases": "hammerstein.scenario.sweeps",
+    "sweep_table": "hammerstein.report.sweeps",
+    "paper_comparison": "hammerstein.report.replication",
+    "replicate": "hammerstein.runner",
+    "write_readme": "hammerstein.report.replication",
+}
+
+_EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "SignalError",
+               "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
+               "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
+               "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid"]
+
+__all__ = sorted(_EXCEPTIONS + list(_LAZY)) + ["__version__"]
+
+
+def __getattr__(name):
+    """Import a public name from its module on first access (PEP 562)."""
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'hammerstein' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value            # later accesses skip __getattr__
+    return value
+
+
+def __dir__():
+    """Public names, loaded or not, for ``dir(hammerstein)`` and completion."""
+    return sorted(set(globals()) | set(__all__))

@@ -11,6 +11,15 @@ tolerance in the bad direction, a missing metric, a new divergence) or a
 failed scenario; 2 on usage errors (missing or malformed baseline without
 ``--update``, bad tolerances, two scenarios with the same name).
 
+``--junit-xml FILE`` also writes the gate as a JUnit XML report, one test
+case per scenario (:func:`junit_xml`): a regression is a ``failure`` naming
+the metrics that regressed with their baseline and current values, a failed
+scenario an ``error``; CI systems show it as tests.
+
+``-q`` prints nothing when the gate passes (errors and, on a failure, the
+metrics that failed and the summary line); ``-v`` also prints each
+scenario's warnings, one line per distinct warning.
+
 ``--update`` rewrites the baseline on purpose: the rows of the scenarios
 run are replaced, the other scenarios kept; the file is written to a
 temporary file and renamed. It writes nothing if a scenario failed.
@@ -18,18 +27,21 @@ temporary file and renamed. It writes nothing if a scenario failed.
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pandas as pd
 
+from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.runner import run_scenarios
 from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
                                              load_tolerances, merge_baseline, read_baseline,
                                              resolve_tolerances, summary_line, write_baseline)
 
-__all__ = ["add_parser", "run_check"]
+__all__ = ["add_parser", "run_check", "junit_xml"]
 
 #: Relative move below which a metric is not listed as moved (round-off of a
 #: recompiled kernel); it still counts in the comparison.
@@ -73,6 +85,10 @@ def add_parser(subparsers):
                    help="per-metric overrides: tables [metric] with rtol, atol, direction")
     p.add_argument("--all", action="store_true", dest="show_all",
                    help="print every compared metric, not only those that moved")
+    p.add_argument("--junit-xml", metavar="FILE", dest="junit_xml",
+                   help="also write a JUnit XML report: one test case per scenario, failures "
+                        "naming the metrics that regressed")
+    add_verbosity(p)
     p.set_defaults(handler=run_check)
     return p
 
@@ -116,6 +132,10 @@ def run_check(args):
     if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
         _err(f"--out: {args.out} exists and is not a directory")
         return 2
+    junit = getattr(args, "junit_xml", None)
+    if junit is not None and (Path(junit).is_dir() or not Path(junit).resolve().parent.is_dir()):
+        _err(f"--junit-xml: {junit} is a directory or its directory does not exist")
+        return 2
     try:
         return _check(args, baseline_path, baseline, tolerance)
     except BaselineError as exc:  # inconsistent metrics from the runner
@@ -137,6 +157,11 @@ def _check(args, baseline_path, baseline, tolerance):
     for o in failed:
         _err(f"scenario failed: {'; '.join(str(o.error).splitlines())}")
     ok = [o for o in outcomes if o.ok]
+    verbosity = getattr(args, "verbosity", 0)
+    if verbosity > 0:
+        for o in ok:
+            print_warnings(o.path, o.warnings, 0)
+    junit = getattr(args, "junit_xml", None)
     current = (pd.concat([o.metrics.assign(scenario=o.name) for o in ok], ignore_index=True)
                if ok else None)
 
@@ -146,11 +171,16 @@ def _check(args, baseline_path, baseline, tolerance):
             return 1
         merged = merge_baseline(baseline, current)
         write_baseline(merged, baseline_path)
-        print(f"{baseline_path}: updated {len(current)} metrics of {len(ok)} scenario(s) "
-              f"({len(merged)} metrics in the file)")
+        if junit is not None:
+            _write_junit(junit, outcomes, None)
+        if verbosity >= 0:
+            print(f"{baseline_path}: updated {len(current)} metrics of {len(ok)} scenario(s) "
+                  f"({len(merged)} metrics in the file)")
         return 0
 
     if current is None:
+        if junit is not None:
+            _write_junit(junit, outcomes, None)
         print(f"check: no scenario ran -> FAIL ({len(failed)} failed)")
         return 1
     run_names = set(current["scenario"])
@@ -160,6 +190,21 @@ def _check(args, baseline_path, baseline, tolerance):
     moved = result["delta"].abs() > _ROUNDOFF * (1.0 + result["baseline"].abs())
     listed = ((result["status"] != "ok") | moved) & ~result["scenario"].isin(unknown)
     shown = result if args.show_all else result[listed]
+    if junit is not None:
+        _write_junit(junit, outcomes, result)
+    regressed = bool(failed) or bool(is_regression(result).any())
+    if verbosity < 0:  # quiet: nothing on success; what failed and the verdict otherwise
+        if regressed:
+            bad = result[is_regression(result)]
+            if len(bad):
+                with pd.option_context("display.width", 200, "display.max_rows", None,
+                                       "display.max_columns", None):
+                    print(bad.to_string(index=False, float_format=lambda v: f"{v:.6g}"))
+            line = summary_line(result, n_scenarios=len(ok))
+            if failed:
+                line = f"{line.rsplit(' -> ', 1)[0]}; {len(failed)} scenario(s) failed -> FAIL"
+            print(line)
+        return 1 if regressed else 0
     if len(shown):
         with pd.option_context("display.width", 200, "display.max_rows", None,
                                "display.max_columns", None):
@@ -174,6 +219,88 @@ def _check(args, baseline_path, baseline, tolerance):
         line = f"{line.rsplit(' -> ', 1)[0]}; {len(failed)} scenario(s) failed -> FAIL"
     print(line)
     return 1 if failed or is_regression(result).any() else 0
+
+
+def _fmt(v):
+    return "nan" if pd.isna(v) else f"{v:.6g}"
+
+
+def junit_xml(outcomes, comparison=None):
+    """The gate as a JUnit XML tree: one ``testcase`` per scenario.
+
+    Parameters
+    ----------
+    outcomes : list of hammerstein.runner.ScenarioOutcome
+        The scenarios run, in order.
+    comparison : pandas.DataFrame, optional
+        :func:`hammerstein.scenario.regression.compare_metrics` of the
+        scenarios that ran (None: no comparison, e.g. ``--update``).
+
+    Returns
+    -------
+    xml.etree.ElementTree.ElementTree
+        ``<testsuites><testsuite name="hammerstein check">`` with one
+        ``<testcase classname="hammerstein.check" name="<scenario>">`` per
+        scenario (``file`` its path): a ``<failure>`` lists every metric
+        that regressed or is missing (``case/channel/metric: baseline ->
+        current unit (tolerance ...)``); a scenario that failed to run has
+        an ``<error>``; a scenario not in the baseline passes and says so in
+        ``<system-out>``.
+    """
+    suite = ET.Element("testsuite", name="hammerstein check")
+    n_fail = n_err = 0
+    for o in outcomes:
+        case = ET.SubElement(suite, "testcase", classname="hammerstein.check", name=str(o.name),
+                             file=str(o.path))
+        if not o.ok:
+            n_err += 1
+            err = ET.SubElement(case, "error", message=" ".join(str(o.error).split())[:500],
+                                type="ScenarioFailed")
+            err.text = str(o.error)
+            continue
+        if comparison is None:
+            continue
+        rows = comparison[comparison["scenario"] == o.name]
+        if rows.empty or (rows["status"] == "new").all():
+            ET.SubElement(case, "system-out").text = (
+                f"{o.name}: not in the baseline ({len(rows)} new metrics)")
+            continue
+        bad = rows[is_regression(rows)]
+        if len(bad):
+            n_fail += 1
+            lines = [f"{r.case}/{r.channel}/{r.metric}: {r.status}, baseline {_fmt(r.baseline)} "
+                     f"-> current {_fmt(r.current)} {r.unit} (allowed ±{_fmt(r.tolerance)})"
+                     for r in bad.itertuples()]
+            names = sorted(dict.fromkeys(f"{r.metric} of {r.case}/{r.channel}"
+                                         for r in bad.itertuples()))
+            more = f" and {len(names) - 3} more" if len(names) > 3 else ""
+            fail = ET.SubElement(case, "failure", type="MetricRegressed",
+                                 message=f"{len(bad)} metric(s) regressed: "
+                                         f"{', '.join(names[:3])}{more}")
+            fail.text = "\n".join(lines)
+    suite.set("tests", str(len(outcomes)))
+    suite.set("failures", str(n_fail))
+    suite.set("errors", str(n_err))
+    suite.set("skipped", "0")
+    root = ET.Element("testsuites", name="hammerstein check", tests=str(len(outcomes)),
+                      failures=str(n_fail), errors=str(n_err))
+    root.append(suite)
+    return ET.ElementTree(root)
+
+
+def _write_junit(path, outcomes, comparison):
+    """Write :func:`junit_xml` to ``path`` atomically (temporary file, then rename)."""
+    tree = junit_xml(outcomes, comparison)
+    ET.indent(tree)
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.resolve().parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            tree.write(fh, encoding="utf-8", xml_declaration=True)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _run(paths, out):

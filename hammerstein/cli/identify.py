@@ -26,6 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from hammerstein.core.datafiles import DataFileError, column_list, read_records
+from hammerstein.core.presets import PresetError, save_model
+from hammerstein.core.record_identification import dynamics_tables, identify_records
+from hammerstein.exceptions import HysteresisError, IdentificationError
+
 __all__ = ["add_parser"]
 
 #: Header of a metrics file (the project's long format).
@@ -301,11 +306,6 @@ def _metadata(args, fit, records):
 
 
 def _handler(args):
-    from hammerstein.core.datafiles import DataFileError, column_list, read_records
-    from hammerstein.core.hysteresis import HysteresisError
-    from hammerstein.core.identification import IdentificationError
-    from hammerstein.core.presets import PresetError, save_model
-    from hammerstein.core.record_identification import identify_records
 
     try:
         n, thresholds = _check_usage(args)
@@ -388,9 +388,6 @@ def _report(args, fit, records):
 
 def _dynamics_tables(args, fit):
     """``[preset]`` and ``[dynamics]`` tables of a preset with identified linear dynamics."""
-    from hammerstein.core.datafiles import read_records
-    from hammerstein.core.identification import IdentificationError
-    from hammerstein.core.record_identification import dynamics_tables
     dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
            for d in args.dynamics_records]
     try:

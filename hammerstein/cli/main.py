@@ -12,7 +12,8 @@ run), 2 on usage errors.
 stderr carries one line per problem and nothing else: ``error: <file>:
 <message>`` for a failed scenario (its problems joined by ``; ``),
 ``error: <file>: <key>: <message>`` per problem for ``validate``,
-``warning: <file>: <case>: <message>`` per warning of a scenario that ran,
+``warning: <file>: <case or N cases>: <message>`` per distinct warning of a
+scenario that ran (``-v``: per case; ``-q``: none),
 ``hammerstein <command>: error: <message>`` for a usage error, and any other
 Python warning as one ``warning: <Category>: <message>`` line (no traceback).
 """
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+from importlib import metadata
 import os
 import sys
 import warnings
@@ -62,6 +64,17 @@ COMMANDS = {
 }
 
 
+def _version():
+    """The package's ``__version__`` (already imported), else the installed distribution's."""
+    version = getattr(sys.modules.get("hammerstein"), "__version__", None)
+    if version:
+        return version
+    try:
+        return metadata.version("hammerstein")
+    except metadata.PackageNotFoundError:
+        return "unknown"
+
+
 def build_parser(command=None):
     """The argparse parser of ``hammerstein``.
 
@@ -81,6 +94,7 @@ def build_parser(command=None):
         prog="hammerstein",
         description="Multivariable Prandtl-Ishlinskii hysteresis of piezoelectric actuators: "
                     "simulate scenarios, compensate, report.")
+    parser.add_argument("--version", action="version", version=f"hammerstein {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
                                 parser_class=_Parser)
     for name, (module, help_text) in COMMANDS.items():

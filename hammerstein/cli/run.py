@@ -3,13 +3,22 @@
 Validates and resolves each file, simulates its cases and writes
 ``DIR/<scenario name>/`` (:func:`hammerstein.runner.run_scenario`). A failed
 scenario prints one ``error:`` line and the others still run (exit 1).
+
+stderr carries one ``warning:`` line per distinct warning of a scenario,
+with the number of cases that raised it (``warning: <file>: 85 cases:
+<message>``; numbers that differ between the cases shown as a range);
+``report.md`` and ``warnings.csv`` keep every case's own message. ``-v``
+prints one line per case and warning instead, and what is being run; ``-q``
+prints errors only.
 """
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 from hammerstein.cli._common import one_line, print_err
+from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.runner import run_scenario
 
 __all__ = ["add_parser", "handler"]
@@ -32,6 +41,7 @@ def add_parser(subparsers):
     p.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario TOML files")
     p.add_argument("--out", default="reports", metavar="DIR",
                    help="reports directory (default: reports/)")
+    add_verbosity(p)
     p.set_defaults(handler=handler)
 
 
@@ -42,15 +52,20 @@ def handler(args):
         print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
         return 2
     status, taken = 0, {}
+    verbosity = getattr(args, "verbosity", 0)
     for path in args.scenarios:
+        if verbosity > 0:
+            print_err(f"{path}: running ...")
+        start = time.perf_counter()
         outcome = run_scenario(path, args.out, taken)
         if outcome.ok:
             taken[outcome.name] = outcome.path
             n_cases = outcome.metrics["case"].nunique()
-            print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases)")
-            for case, msg in outcome.warnings:
-                print_err(f"warning: {path}: {case}: {' '.join(msg.split())}")
-            _print_divergences(path, outcome.metrics)
+            if verbosity >= 0:
+                took = f" in {time.perf_counter() - start:.1f} s" if verbosity > 0 else ""
+                print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases){took}")
+                print_warnings(path, outcome.warnings, verbosity)
+                _print_divergences(path, outcome.metrics)
         else:
             print_err(f"error: {one_line(outcome.error, str(path))}")
             status = 1

@@ -17,14 +17,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.exceptions import DataFileError
+
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
 
 #: Fewest samples accepted in a record.
 MIN_SAMPLES = 10
-
-
-class DataFileError(ValueError):
-    """A data file cannot be read as a record (names the file and the problem)."""
 
 
 @dataclass(frozen=True)
@@ -117,7 +115,18 @@ def column_list(text):
 
 
 def bundled_data(name="piezo-stack-150V-1Hz.csv"):
-    """Path of a data file shipped in ``hammerstein/data``."""
+    """Path of a data file shipped in ``hammerstein/data``.
+
+    Parameters
+    ----------
+    name : str
+        File name.
+
+    Returns
+    -------
+    pathlib.Path
+        Its path (not checked for existence).
+    """
     return Path(__file__).resolve().parents[1] / "data" / name
 
 

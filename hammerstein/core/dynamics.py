@@ -19,11 +19,9 @@ from typing import Sequence
 import control
 import numpy as np
 
+from hammerstein.exceptions import DynamicsError
+
 __all__ = ["DynamicsError", "bending_modes", "discretize", "bandwidths_hz"]
-
-
-class DynamicsError(ValueError):
-    """Invalid linear-dynamics parameters (names the field)."""
 
 
 def bending_modes(natural_frequency, damping_ratio, names: Sequence[str] | None = None):

@@ -21,6 +21,9 @@ from typing import Sequence
 
 import numpy as np
 
+from hammerstein.exceptions import HysteresisError
+from hammerstein.simulation import finite_array, simulate_hysteresis, simulate_plays, state_vector
+
 __all__ = [
     "play",
     "PrandtlIshlinskii",
@@ -29,21 +32,7 @@ __all__ = [
 ]
 
 
-class HysteresisError(ValueError):
-    """Invalid hysteresis model parameters or signals (names the field)."""
-
-
-def _as_finite_array(value, name, ndim=None):
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise HysteresisError(f"{name}: expected numbers, got {value!r}") from exc
-    if ndim is not None and arr.ndim != ndim:
-        raise HysteresisError(
-            f"{name}: expected a {ndim}-D array, found shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise HysteresisError(f"{name}: expected finite values, found NaN or inf")
-    return arr
+_as_finite_array = finite_array   # former private name, used across core
 
 
 def validate_thresholds(thresholds, name="thresholds"):
@@ -110,40 +99,7 @@ def play(u, thresholds, initial_state=None):
     u = _as_finite_array(u, "u", ndim=1)
     r = validate_thresholds(thresholds)
     state = state_vector(initial_state, r.size, "initial_state")
-    from hammerstein.simulation import simulate_plays  # all time stepping lives there
     return simulate_plays(u, r, state)
-
-
-def state_vector(initial_state, size, name="initial_state"):
-    """Validated copy of a flat state vector, zeros when None.
-
-    Every stateful object (play operators, plants, compensators) stores its
-    memory as one flat float vector; this is the one check of it.
-
-    Parameters
-    ----------
-    initial_state : array_like, shape (size,), or None
-        State [units of the object: V for play states, µm for linear states].
-    size : int
-        Expected length.
-    name : str
-        Field name for error messages.
-
-    Returns
-    -------
-    numpy.ndarray, shape (size,)
-
-    Raises
-    ------
-    HysteresisError
-        If the state is not finite or not of shape (size,).
-    """
-    if initial_state is None:
-        return np.zeros(size)
-    s = _as_finite_array(initial_state, name)
-    if s.shape != (size,):
-        raise HysteresisError(f"{name}: expected shape ({size},), found {s.shape}")
-    return s.astype(float, copy=True)
 
 
 @dataclass(frozen=True)
@@ -300,6 +256,26 @@ class MultivariablePI:
     HysteresisError
         If the component grid is not rectangular, a component has the wrong
         type, names do not match the grid, or no component is a hysteresis.
+
+    Examples
+    --------
+    Two inputs, two outputs: a hysteresis and a linear cross-coupling on
+    output x, a small hysteretic cross-coupling and a direct hysteresis on
+    output y. On the first rise of ``ux`` the plays of threshold r move by
+    ``u - r``: ``x = 1 * 2 + 0.5 * (2 - 1) = 2.5`` at 2 V.
+
+    >>> import numpy as np
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> model = MultivariablePI(
+    ...     [[PrandtlIshlinskii([0.0, 1.0, 2.0], [1.0, 0.5, 0.25]), 0.1],
+    ...      [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.0, 1.0], [0.8, 0.4])]],
+    ...     input_names=["ux", "uy"], output_names=["x", "y"], input_amplitude=[10.0, 10.0])
+    >>> model.n_hysterons
+    7
+    >>> y, final_state = model.simulate([[0.0, 2.0, 4.0, 2.0, 0.0], [0.0] * 5])
+    >>> np.round(y, 3)
+    array([[0.  , 2.5 , 6.  , 4.  , 1.  ],
+           [0.  , 0.11, 0.25, 0.15, 0.03]])
     """
 
     components: Sequence[Sequence[object]]
@@ -408,7 +384,25 @@ class MultivariablePI:
         return {k: v.copy() for k, v in self._flat.items()}
 
     def component(self, output, input):
-        """Component ``Gamma_lk`` by names or indices."""
+        """Component ``Gamma_lk`` by names or indices.
+
+        Parameters
+        ----------
+        output : str or int
+            Output l, by name or index.
+        input : str or int
+            Input k, by name or index.
+
+        Returns
+        -------
+        PrandtlIshlinskii, float or None
+            The hysteresis, the linear gain [µm/V] or None (no transfer).
+
+        Raises
+        ------
+        ValueError
+            On an unknown name.
+        """
         l = output if isinstance(output, int) else self.output_names.index(output)
         k = input if isinstance(input, int) else self.input_names.index(input)
         return self.components[l][k]
@@ -416,6 +410,18 @@ class MultivariablePI:
     # -- simulation ------------------------------------------------------------
     def check_inputs(self, u, name="inputs"):
         """Validate an input record and return it as an (m, n_samples) array.
+
+        Parameters
+        ----------
+        u : array_like, shape (m, n_samples), or (n_samples,) when m = 1
+            Input voltages [V].
+        name : str
+            Field name for error messages.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m, n_samples)
+            Float array (not copied when already one).
 
         Raises
         ------
@@ -431,7 +437,23 @@ class MultivariablePI:
         return u
 
     def initial_state(self, initial_state=None):
-        """Return a valid copy of a flat play-state vector (zeros by default)."""
+        """Return a valid copy of a flat play-state vector (zeros by default).
+
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_hysterons,), optional
+            Play outputs [V], ordered as :meth:`hysterons`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_hysterons,)
+            A new array.
+
+        Raises
+        ------
+        HysteresisError
+            On a wrong shape or non-finite values.
+        """
         return state_vector(initial_state, self.n_hysterons, "initial_state")
 
     def simulate(self, inputs, initial_state=None):
@@ -459,7 +481,6 @@ class MultivariablePI:
         HysteresisError
             On a wrongly shaped or non-finite input or state.
         """
-        from hammerstein.simulation import simulate_hysteresis  # all time stepping lives there
         return simulate_hysteresis(self, inputs, initial_state)
 
     def evaluate(self, inputs, state):

@@ -28,8 +28,8 @@ from __future__ import annotations
 import control
 import numpy as np
 
-from hammerstein.core.hysteresis import HysteresisError
-from hammerstein.simulation import compensator_law, compensator_step
+from hammerstein.exceptions import CompensatorError, HysteresisError
+from hammerstein.simulation import compensator_law_of, compensator_step
 
 __all__ = ["pi_system", "linear_system", "hammerstein_system", "compensator_system",
            "chain_system", "reference_names"]
@@ -103,6 +103,8 @@ def linear_system(plant, name="dynamics"):
     ----------
     plant : HammersteinPlant
         With dynamics (``plant.is_static`` False).
+    name : str
+        System name.
 
     Returns
     -------
@@ -129,6 +131,9 @@ def hammerstein_system(plant, name="plant"):
     Parameters
     ----------
     plant : HammersteinPlant
+        The actuator model.
+    name : str
+        System name.
 
     Returns
     -------
@@ -148,55 +153,77 @@ def hammerstein_system(plant, name="plant"):
 
 
 def reference_names(model):
-    """Names of the reference inputs of the compensator system: ``<out>_r``."""
+    """Names of the reference inputs of the compensator system: ``<out>_r``.
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        The compensator's model.
+
+    Returns
+    -------
+    list of str
+        One name per model output.
+    """
     return [f"{n}_r" for n in model.output_names]
 
 
 def compensator_system(compensator, sampling_period=None, name="compensator"):
-    """Inverse multiplicative compensator as a discrete-time python-control system.
+    """A fusable compensator as a discrete-time python-control system.
 
-    Output ``U(t)`` from the reference ``Yr(t)`` and the state by the law of
-    :func:`hammerstein.simulation.simulate_compensator` (delay with
-    ``iterations`` fixed-point steps, or the low-pass of Section 6); update:
-    the state committed with ``U(t)``. No divergence detection.
+    Output ``U(t)`` from the reference ``Yr(t)`` and the state by the
+    compensator's law (:class:`hammerstein.simulation.CompensatorLaw`, as
+    :func:`hammerstein.simulation.simulate_compensator` runs it: delay with
+    ``iterations`` fixed-point steps, or the low-pass of Section 6, after the
+    optional reference pre-filter); update: the state committed with
+    ``U(t)``. No divergence detection.
 
     Parameters
     ----------
     compensator : InverseMultiplicativeCompensator
+        Or any compensator whose ``packed_law()`` returns a law (read once,
+        when the system is built).
     sampling_period : float, optional
         T [s]; default ``compensator.sampling_period``.
     name : str
+        System name.
 
     Returns
     -------
     control.NonlinearIOSystem
         Inputs ``<out>_r`` [µm], outputs ``model.input_names`` [V]; states
-        ``U_prev`` [V], (``v_f`` [V]), ``c_<out>_<in>[i]`` play states [V].
+        ``U_prev`` [V], (``v_f`` [V]), ``c_<out>_<in>[i]`` play states [V],
+        (``xf[i]`` pre-filter states [µm]).
 
     Raises
     ------
     HysteresisError
         Without a sampling period.
+    CompensatorError
+        If the compensator declares no law (``packed_law()``).
     """
     if sampling_period is None:
         sampling_period = getattr(compensator, "sampling_period", None)
     if sampling_period is None:
         raise HysteresisError("sampling_period: expected a positive time [s], found None")
     T = _check_period(sampling_period)
-    model = compensator.model
-    lowpass, _ = compensator_law(compensator)
+    law = compensator_law_of(compensator)
+    if law is None:
+        raise CompensatorError(
+            f"compensator: {type(compensator).__name__} declares no packed_law(), so it has "
+            f"no per-sample law to wrap")
+    model = law.model
     states = [f"U_prev_{n}" for n in model.input_names]
-    if lowpass:
+    if law.lowpass:
         states += [f"v_f_{n}" for n in model.input_names]
     states += _play_state_names(model, "c_")
+    states += [f"xf[{i}]" for i in range(law.n_filter_states)]
 
     def update(t, x, yr, params):
-        return compensator_step(compensator, np.asarray(x, dtype=float),
-                                np.asarray(yr, dtype=float))[1]
+        return compensator_step(law, np.asarray(x, dtype=float), np.asarray(yr, dtype=float))[1]
 
     def output(t, x, yr, params):
-        return compensator_step(compensator, np.asarray(x, dtype=float),
-                                np.asarray(yr, dtype=float))[0]
+        return compensator_step(law, np.asarray(x, dtype=float), np.asarray(yr, dtype=float))[0]
 
     return control.nlsys(update, output, inputs=reference_names(model),
                          outputs=list(model.input_names), states=states, dt=T, name=name)
@@ -210,6 +237,9 @@ def chain_system(compensator, plant, name="chain"):
     compensator : InverseMultiplicativeCompensator
         Its model's input names must be the plant's input names.
     plant : HammersteinPlant
+        The actuator model.
+    name : str
+        System name.
 
     Returns
     -------

@@ -85,6 +85,16 @@ class InversePlay:
     def initial_state(self, initial_state=None):
         """Validated state ``[y(-T), u(-T)]`` [V] (zeros by default).
 
+        Parameters
+        ----------
+        initial_state : array_like, shape (2,), optional
+            Play output and input before the first sample [V].
+
+        Returns
+        -------
+        numpy.ndarray, shape (2,)
+            A new array.
+
         Raises
         ------
         HysteresisError
@@ -221,6 +231,22 @@ class InversePI:
         convention: both start on their virgin (initial loading) curves, which
         are inverse to each other, so the composition is the identity from the
         first sample.
+
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+            Play states of ``Gamma~^-1`` [µm] then ``[v(-T), u(-T)]`` [V].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            A new array.
+
+        Raises
+        ------
+        HysteresisError
+            On a wrong shape, non-finite values or an inconsistent
+            inverse-play state.
         """
         if initial_state is None:
             return np.zeros(self.n_states)

@@ -320,7 +320,7 @@ class ZPETCInverse:
     Examples
     --------
     >>> import numpy as np, control
-    >>> from hammerstein.dynamics import bending_modes, discretize
+    >>> from hammerstein.core.dynamics import bending_modes, discretize
     >>> G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), 5e-5)
     >>> inv = ZPETCInverse(G)
     >>> inv.preview_samples
@@ -588,7 +588,7 @@ def preview_inverse(system, reference, method="stable", initial_state=None, regu
     Examples
     --------
     >>> import numpy as np, control
-    >>> from hammerstein.dynamics import bending_modes, discretize
+    >>> from hammerstein.core.dynamics import bending_modes, discretize
     >>> G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), 5e-5)
     >>> t = np.arange(1000) * 5e-5
     >>> yr = np.vstack([np.sin(2 * np.pi * 200 * t), np.zeros_like(t)])

@@ -605,7 +605,7 @@ class DynamicsIdentifier:
     Examples
     --------
     >>> import numpy as np, control
-    >>> from hammerstein.dynamics import bending_modes, discretize
+    >>> from hammerstein.core.dynamics import bending_modes, discretize
     >>> G = discretize(bending_modes([300.0], [0.2]), 5e-5)
     >>> t, (u,) = excitation(5e-5, 1, 1.0, period=0.02, periods=2)
     >>> y = control.forced_response(G, U=u).outputs.reshape(1, -1)

@@ -24,6 +24,7 @@ __all__ = [
     "euclidean_error",
     "open_loop_metrics",
     "tracking_metrics",
+    "raster_line_metrics",
 ]
 
 UNITS = {
@@ -40,6 +41,8 @@ UNITS = {
     "diverged_at_time": "s",
     "model_rms_error": "µm",       # plant vs model, hammerstein.identified (paper Section 5.3)
     "model_max_abs_error": "µm",
+    "line_rms_error": "µm",        # raster references: per scan line (channel "line-<j>")
+    "line_max_error": "µm",
 }
 
 
@@ -73,7 +76,18 @@ def steady_window(n_samples, period_samples, settle_periods):
 
 
 def peak_to_peak(y):
-    """``max(y) - min(y)`` of a record, shape (n_samples,) [µm]."""
+    """``max(y) - min(y)`` of a record.
+
+    Parameters
+    ----------
+    y : array_like, shape (n_samples,)
+        Record [µm].
+
+    Returns
+    -------
+    float
+        Peak-to-peak value [µm].
+    """
     return float(np.ptp(np.asarray(y, dtype=float)))
 
 
@@ -272,4 +286,36 @@ def tracking_metrics(reference, outputs, output_names, period_samples, settle_pe
     rows.append(_row(allch, "rms_euclidean_error", np.sqrt(np.mean(ee ** 2))))
     if scale:
         rows.append(_row(allch, "max_euclidean_error_percent", 100.0 * ee.max() / scale))
+    return rows
+
+
+def raster_line_metrics(reference, outputs, line_index):
+    """Euclidean tracking error per scan line of a raster reference.
+
+    Parameters
+    ----------
+    reference, outputs : array_like, shape (p, n_samples)
+        [µm].
+    line_index : array_like of int, shape (n_samples,)
+        Scan line (0-based) of each sample
+        (:func:`hammerstein.core.references.raster_line_index`); every
+        line is measured whole (trace and retrace, the first one with the
+        start-up transient: no settling window).
+
+    Returns
+    -------
+    list of dict
+        Per line, channel ``line-<j>`` (1-based, zero-padded):
+        ``line_rms_error`` and ``line_max_error`` of ``||Y_r - Y||`` [µm].
+    """
+    ee = euclidean_error(reference, outputs)
+    line = np.asarray(line_index, dtype=int)
+    lines = np.unique(line)
+    width = len(str(int(lines.max()) + 1)) if lines.size else 1
+    rows = []
+    for j in lines:
+        e = ee[line == j]
+        ch = f"line-{int(j) + 1:0{width}d}"
+        rows.append(_row(ch, "line_rms_error", np.sqrt(np.mean(e ** 2))))
+        rows.append(_row(ch, "line_max_error", np.max(e)))
     return rows

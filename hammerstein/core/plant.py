@@ -9,11 +9,15 @@ NOTES §7). Without dynamics the plant is the static (rate-independent) model.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, state_vector
+from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
+from hammerstein.simulation import simulate_plant, state_vector
+
+if TYPE_CHECKING:                      # the plant only reads A, B, C, D: no python-control needed
+    import control
 
 __all__ = ["HammersteinPlant"]
 
@@ -94,6 +98,16 @@ class HammersteinPlant:
     def initial_state(self, initial_state=None):
         """Validated copy of a flat plant state (zeros by default).
 
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+            Play states [V] then linear states [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            A new array.
+
         Raises
         ------
         HysteresisError
@@ -118,5 +132,4 @@ class HammersteinPlant:
         final_state : numpy.ndarray, shape (n_states,)
             State after the last sample, for a chunked continuation.
         """
-        from hammerstein.simulation import simulate_plant
         return simulate_plant(self, inputs, initial_state)

@@ -23,6 +23,7 @@ import tomli_w
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.plant import HammersteinPlant
+from hammerstein.exceptions import PresetError
 
 __all__ = [
     "PresetError",
@@ -35,10 +36,6 @@ __all__ = [
     "save_model",
     "load_plant",
 ]
-
-
-class PresetError(ValueError):
-    """A model or preset file is missing, malformed or inconsistent."""
 
 
 PRESET_DIR = resources.files("hammerstein") / "presets"
@@ -66,6 +63,11 @@ def resolve_preset(name_or_path, base_dir=None):
     base_dir : pathlib.Path, optional
         Directory of the file that names the preset.
 
+    Returns
+    -------
+    pathlib.Path
+        Path of the preset file.
+
     Raises
     ------
     PresetError
@@ -85,6 +87,16 @@ def resolve_preset(name_or_path, base_dir=None):
 
 def read_toml(path):
     """Parse a TOML file, with errors that name the file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file.
+
+    Returns
+    -------
+    dict
+        The parsed document.
 
     Raises
     ------
@@ -223,9 +235,15 @@ def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     Parameters
     ----------
     model : MultivariablePI
+        The model to write.
     input_unit, output_unit : str
         Unit names stored with the model (informative; the weights are in
         output unit per input unit).
+
+    Returns
+    -------
+    dict
+        ``[model]`` table of the preset format (see :func:`model_from_table`).
     """
     table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
              "input_unit": str(input_unit), "output_unit": str(output_unit)}

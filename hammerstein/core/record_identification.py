@@ -56,6 +56,7 @@ import scipy.optimize
 
 from hammerstein.core.datafiles import MultiRecord, Record
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii, play
+from hammerstein.core import lti
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError,
                                              partition_thresholds)
 
@@ -847,10 +848,7 @@ def dynamics_tables(fit, records, name="identified", **options):
     IdentificationError
         On a non-square model, no records, differing sampling periods, or a
         failed identification.
-    ImportError
-        If :mod:`hammerstein.core.lti` is not available.
     """
-    from hammerstein.core import lti            # optional: the linear-dynamics identifier
     model = fit.model
     if model.n_inputs != model.n_outputs:
         raise IdentificationError(

@@ -38,7 +38,7 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
 
     Examples
     --------
-    >>> from hammerstein.dynamics import bending_modes, discretize
+    >>> from hammerstein.core.dynamics import bending_modes, discretize
     >>> G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), 5e-5)
     >>> fig = dynamics_bode_figure(G, G)
     >>> len(fig.axes) >= 8

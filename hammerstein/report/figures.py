@@ -30,7 +30,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 __all__ = ["loop_grid", "decorate_grid", "trajectory_figure", "divergence_figure", "xy_overlay",
-           "save", "scenario_prefix", "grid_figure", "decimate", "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
+           "raster_error_map", "save", "scenario_prefix", "grid_figure", "decimate",
+           "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
            "MAX_POINTS", "DPI"]
 
 #: Largest number of points drawn per line: a 15-inch figure at :data:`DPI` is
@@ -562,6 +563,81 @@ def xy_overlay(curves, names, title):
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.03, 1.0), borderaxespad=0.0)
     suptitle(fig, title)
+    return fig
+
+
+def _line_image(x, e, line, mask, n_lines, grid):
+    """Rows of ``e`` against ``x`` on ``grid``, one row per line, samples where ``mask``."""
+    img = np.full((n_lines, grid.size), np.nan)
+    for j in range(n_lines):
+        sel = (line == j) & mask
+        if np.count_nonzero(sel) < 2:
+            continue
+        order = np.argsort(x[sel], kind="stable")
+        img[j] = np.interp(grid, x[sel][order], e[sel][order], left=np.nan, right=np.nan)
+    return img
+
+
+def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, fast_name, title,
+                     n_bins=200):
+    """Image-style error map of a raster scan: error against fast-axis position, one row per line.
+
+    One row of panels per error signal (e.g. the fast- and the slow-axis
+    tracking error), the trace (fast axis rising) on the left and the
+    retrace on the right; each image row is a scan line, its colour the
+    error at each fast-axis reference position (linear interpolation onto
+    ``n_bins`` positions). Colours are symmetric about 0 (red: output below
+    the reference), shared by the trace and retrace of a signal.
+
+    Parameters
+    ----------
+    fast_reference : array_like, shape (n,)
+        Fast-axis reference [µm].
+    errors : array_like, shape (k, n)
+        Errors ``y_r - y`` [µm] (NaN after a divergence).
+    labels : sequence of k str
+        Name of each error signal, e.g. ``'x_r - x'``.
+    line_index : array_like of int, shape (n,)
+        Scan line of each sample, 0-based.
+    trace : array_like of bool, shape (n,)
+        True on the trace half of each line.
+    extent : float
+        Fast-axis scan size W [µm] (the abscissa spans [0, W]).
+    fast_name : str
+        Fast-axis output name.
+    title : str
+    n_bins : int
+        Positions per image row.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    x = np.asarray(fast_reference, dtype=float)
+    e = np.atleast_2d(np.asarray(errors, dtype=float))
+    line = np.asarray(line_index, dtype=int)
+    trace = np.asarray(trace, dtype=bool)
+    n_lines = int(line.max()) + 1
+    grid = np.linspace(0.0, float(extent), int(n_bins))
+    k = e.shape[0]
+    fig, axes = plt.subplots(k, 2, figsize=(11, 2.0 + 2.6 * k), squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.1, top=0.86, wspace=0.12, hspace=0.45)
+    for i in range(k):
+        imgs = [_line_image(x, e[i], line, trace, n_lines, grid),
+                _line_image(x, e[i], line, ~trace, n_lines, grid)]
+        finite = np.concatenate([m[np.isfinite(m)] for m in imgs])
+        lim = float(np.max(np.abs(finite))) if finite.size else 1.0
+        lim = lim if lim > 0 else 1.0
+        for d, (img, name) in enumerate(zip(imgs, ("trace", "retrace"))):
+            ax = axes[i][d]
+            im = ax.imshow(img, aspect="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
+                           extent=(0.0, float(extent), n_lines + 0.5, 0.5), interpolation="nearest")
+            ax.set_title(f"({chr(97 + 2 * i + d)}) {labels[i]}, {name}", fontsize=10, y=1.0)
+            ax.set_xlabel(f"{fast_name}_r (fast axis) [µm]")
+            if d == 0:
+                ax.set_ylabel("scan line")
+        fig.colorbar(im, ax=list(axes[i]), fraction=0.03, pad=0.02, label="error [µm]")
+    fig.suptitle(title)
     return fig
 
 

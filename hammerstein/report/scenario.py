@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.references import raster_line_index
 from hammerstein.report import figures as plots
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
@@ -52,18 +53,133 @@ def _plant_label(spec):
     return "hammerstein" if spec.plant_spec.get("dynamics", True) else "static"
 
 
+def _num(v, unit=""):
+    """A number for people: ``50 µm``, ``0.25 s``, ``33.3333 Hz``."""
+    return f"{float(v):.6g}{' ' + unit if unit else ''}"
+
+
+def _length(s):
+    if "periods" in s:
+        return f"{_num(s['periods'])} period{'' if s['periods'] == 1 else 's'}"
+    return _num(s["duration"], "s") if "duration" in s else ""
+
+
+def signal_summary(mode, s):
+    """A drive or reference table in words: ``sine on x, 50 µm, 50 Hz, 5 periods``.
+
+    Parameters
+    ----------
+    mode : {'drive', 'reference'}
+    s : dict
+        The case's ``drive`` or ``reference`` table.
+
+    Returns
+    -------
+    str
+        Only the settings that apply; phase and offset only when not zero.
+    """
+    kind = s.get("kind")
+    unit = "V" if mode == "drive" else "µm"
+    parts = []
+    if kind in ("sine", "triangle"):
+        on = s.get("input" if mode == "drive" else "output")
+        parts = [f"{kind} on {on}", _num(s["amplitude"], unit), _num(s["frequency"], "Hz")]
+    elif kind == "circle":
+        parts = ["circle", f"radius {_num(s['radius'], 'µm')}", _num(s["frequency"], "Hz")]
+    elif kind == "spiral":
+        parts = ["spiral", f"radius {_num(s['radius'], 'µm')}", _num(s["frequency"], "Hz"),
+                 f"decay τ {_num(s['tau'], 's')} after {_num(s.get('circle_periods', 1.0))} "
+                 f"circle(s)"]
+    elif kind == "lissajous":
+        a = s["amplitude"]
+        amp = (" × ".join(_num(x) for x in a) + " µm") if isinstance(a, list) else _num(a, "µm")
+        parts = ["Lissajous", amp, " / ".join(_num(f) for f in s["frequencies"]) + " Hz"]
+    elif kind == "raster":
+        fast, slow = s["outputs"]
+        size = s["size"]
+        parts = [f"raster, fast {fast}, slow {slow}",
+                 f"{_num(size[0])} × {_num(size[1])} µm", f"{s['lines']} lines",
+                 f"{_num(s['frequency'], 'Hz')} line rate", f"slow axis {s.get('slow', 'step')}"]
+        if s.get("smoothing"):
+            parts.append(f"turns rounded over {_num(100 * s['smoothing'])} % of a period")
+    elif kind == "file":
+        cols = ", ".join(f"{o} = {c!r}" for o, c in s.get("columns", {}).items())
+        parts = [f"file {s.get('file')}", f"time {s.get('time', 'time')!r}", cols]
+    else:
+        parts = [str(kind)]
+    if s.get("phase"):
+        parts.append(f"phase {_num(s['phase'], '°')}")
+    if s.get("offset"):
+        parts.append(f"offset {_num(s['offset'], unit)}")
+    if kind not in ("file",):
+        parts.append(_length(s))
+    return ", ".join(p for p in parts if p)
+
+
 def _signal_summary(spec):
-    s = spec.signal_spec
-    skip = {"kind"}
-    args = ", ".join(f"{k}={v}" for k, v in s.items() if k not in skip)
-    return f"{spec.mode} {s.get('kind')} ({args})"
+    what = "open-loop drive" if spec.mode == "drive" else "reference"
+    return f"{what}: {signal_summary(spec.mode, spec.signal_spec)}"
+
+
+def _identify_summary(ident):
+    if not ident:
+        return "model identified on the plant"
+    at = _num(ident["frequency"], "Hz")
+    if "amplitude" in ident:
+        at += f", {_num(ident['amplitude'], 'V')}"
+    bits = [f"{ident['n_hysterons']} hysterons"] if "n_hysterons" in ident else []
+    bits += [ident["method"]] if "method" in ident else []
+    return f"model identified at {at}" + (f" ({', '.join(bits)})" if bits else "")
+
+
+def compensator_summary(c):
+    """A validated ``[compensator]`` table in words, only the settings that apply.
+
+    ``identify`` is shown only with ``model = "identified"``; ``cutoff_hz``
+    only with the low-pass feedback law.
+
+    Parameters
+    ----------
+    c : dict
+        The case's compensator table (defaults filled).
+
+    Returns
+    -------
+    str
+        E.g. ``multivariable: plant model, secant gain, 1 iteration``.
+    """
+    kind = c.get("kind", "none")
+    if kind == "none":
+        return "none"
+    model = c.get("model", "plant")
+    parts = [_identify_summary(c.get("identify")) if model == "identified"
+             else f"{model} model"]
+    if "gain" in c:
+        g = c["gain"]
+        if isinstance(g, str):
+            parts.append(f"{g} gain")
+        elif isinstance(g, list):
+            parts.append("gain K = [" + "; ".join(" ".join(_num(a) for a in row) for row in g)
+                         + "] µm/V")
+        else:
+            parts.append(f"gain {g:g}" if isinstance(g, (int, float)) else f"gain {g}")
+    if "iterations" in c:
+        parts.append(f"{c['iterations']} iteration{'' if c['iterations'] == 1 else 's'}")
+    if c.get("feedback") == "lowpass":
+        parts.append(f"low-pass feedback at {_num(c['cutoff_hz'], 'Hz')}"
+                     if c.get("cutoff_hz") is not None else "low-pass feedback")
+    if c.get("check") not in (None, "error"):
+        parts.append(f"convergence check: {c['check']}")
+    known = {"kind", "model", "identify", "gain", "iterations", "feedback", "cutoff_hz", "check"}
+    parts += [f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+              for k, v in c.items() if k not in known and isinstance(v, (str, int, float))]
+    return f"{kind}: {', '.join(parts)}"
 
 
 def _compensator_summary(spec):
     if spec.mode == "drive":
         return "none (open loop)"
-    c = spec.compensator_spec
-    return ", ".join(f"{k}={v}" for k, v in c.items())
+    return compensator_summary(spec.compensator_spec)
 
 
 def _last_period(x, P):
@@ -80,20 +196,23 @@ def _join_numbers(values, unit):
     return f"{', '.join(f'{v:g}' for v in vals)} {unit}"
 
 
-def _drive_summary(rs):
+def _signal_words(rs, unit, fallback):
+    """'10 V sines at 50, 100 Hz' for the cases of one figure (one signal kind)."""
+    kinds = {str(r.spec.signal_spec.get("kind")) for r in rs}
     amps = [r.spec.signal_spec.get("amplitude") for r in rs]
     freqs = [r.spec.signal_spec.get("frequency") for r in rs]
-    if None in amps or None in freqs:
-        return "open-loop drives"
-    return f"{_join_numbers(amps, 'V')} sines at {_join_numbers(freqs, 'Hz')}"
+    if len(kinds) != 1 or any(not isinstance(v, (int, float)) or isinstance(v, bool)
+                              for v in amps + freqs):
+        return fallback
+    return f"{_join_numbers(amps, unit)} {kinds.pop()}s at {_join_numbers(freqs, 'Hz')}"
+
+
+def _drive_summary(rs):
+    return _signal_words(rs, "V", "open-loop drives")
 
 
 def _reference_summary(rs):
-    amps = [r.spec.signal_spec.get("amplitude") for r in rs]
-    freqs = [r.spec.signal_spec.get("frequency") for r in rs]
-    if any(not isinstance(v, (int, float)) for v in amps + freqs):
-        return "compensated references"
-    return f"{_join_numbers(amps, 'µm')} sines at {_join_numbers(freqs, 'Hz')}"
+    return _signal_words(rs, "µm", "compensated references")
 
 
 def _model_summary(c):
@@ -238,6 +357,30 @@ def _figures(scenario, results, directory):
     return figs
 
 
+def _raster_figures(scenario, results, directory):
+    """Error maps of the raster references (one per case); return [(caption, file name)]."""
+    figs = []
+    for r in results:
+        s = r.spec.signal_spec
+        if r.spec.mode != "reference" or s.get("kind") != "raster" or r.divergence is not None:
+            continue
+        names = list(r.spec.plant.hysteresis.output_names)
+        fast, slow = (names.index(o) for o in s["outputs"])
+        cycles = r.spec.time * float(s["frequency"])
+        e = r.reference - r.outputs
+        fig = plots.raster_error_map(
+            r.reference[fast], e[[fast, slow]],
+            [f"{names[fast]}_r - {names[fast]} (fast)", f"{names[slow]}_r - {names[slow]} (slow)"],
+            raster_line_index(r.spec.time, s["frequency"]), np.mod(cycles, 1.0) < 0.5,
+            float(s["size"][0]), names[fast],
+            f"{scenario.title}: {r.name}, tracking error per scan line")
+        fname = f"raster-error-{r.name}.png"
+        plots.save(fig, directory / fname)
+        figs.append((f"Case {r.name}: tracking error per scan line against the fast-axis "
+                     f"position (trace and retrace)", fname))
+    return figs
+
+
 def write_report(scenario, results, directory):
     """Write metrics.csv, the time series, the figures and report.md.
 
@@ -258,6 +401,7 @@ def write_report(scenario, results, directory):
         timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
                                    float_format="%.6g")
     figs = _figures(scenario, results, directory) if results else []
+    figs += _raster_figures(scenario, results, directory)
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]

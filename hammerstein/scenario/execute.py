@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from hammerstein.core import metrics as met
+from hammerstein.core.references import raster_line_index
 from hammerstein.simulation import simulate_chain
 
 __all__ = ["CaseResult", "run_case", "chain_result", "model_comparison"]
@@ -110,6 +111,9 @@ def chain_result(case, res, caught):
         rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
                                     case.settle_periods, scale=case.scale,
                                     loop_channel=case.loop_channel)
+        if case.signal_spec.get("kind") == "raster":  # per scan line
+            line = raster_line_index(case.time, case.signal_spec["frequency"])
+            rows += met.raster_line_metrics(case.signal, res.outputs, line)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
 
 

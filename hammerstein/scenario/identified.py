@@ -35,7 +35,8 @@ import numpy as np
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.presets import PresetError, load_model, model_to_table, save_model
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
-from hammerstein.scenario.schema import (Field, Invalid, NestedInvalid, boolean, check_table, choice,
+from hammerstein.exceptions import NestedInvalid
+from hammerstein.scenario.schema import (Field, Invalid, boolean, check_table, choice,
                                          integer, number)
 
 __all__ = [

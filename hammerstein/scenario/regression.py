@@ -32,6 +32,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.exceptions import BaselineError
+
 __all__ = [
     "BaselineError",
     "Tolerance",
@@ -59,10 +61,6 @@ BASELINE_COLUMNS = ["scenario", "case", "channel", "metric", "value", "unit"]
 #: Metric whose appearance means a case diverged (the runner's convention).
 DIVERGENCE_METRIC = "diverged_at_time"
 _DIRECTIONS = ("lower", "higher", "neutral")
-
-
-class BaselineError(ValueError):
-    """A baseline, metrics table or tolerance specification is unusable."""
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from hammerstein.exceptions import Invalid, NestedInvalid, ScenarioError
+
 __all__ = [
     "ScenarioError",
     "Field",
@@ -38,32 +40,6 @@ __all__ = [
     "choice",
     "name_list",
 ]
-
-
-class ScenarioError(ValueError):
-    """A scenario file has one or more problems.
-
-    Attributes
-    ----------
-    problems : list of str
-        One ``file: key: message`` line per problem.
-    """
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("\n".join(self.problems))
-
-
-class Invalid(ValueError):
-    """Raised by a field checker; the message says what was expected."""
-
-
-class NestedInvalid(Invalid):
-    """A nested table has problems; ``problems`` lists ``(key, message)``."""
-
-    def __init__(self, problems):
-        self.problems = list(problems)
-        super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
 
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------
@@ -142,6 +118,26 @@ def _frequency_pair(v):
     raise Invalid(f"expected two positive frequencies [f_x, f_y] [Hz], found {v!r}")
 
 
+def _extent_pair(v):
+    if isinstance(v, list) and len(v) == 2 and all(_is_number(a) and a > 0 for a in v):
+        return [float(a) for a in v]
+    raise Invalid(f"expected two positive extents [fast, slow] [µm], found {v!r}")
+
+
+def _fraction(upper):
+    def check(v):
+        if not _is_number(v) or not 0 <= v <= upper:
+            raise Invalid(f"expected a fraction of the period in [0, {upper:g}], found {v!r}")
+        return float(v)
+    return check
+
+
+def _column_map(v):
+    if isinstance(v, dict) and v and all(isinstance(c, str) and c for c in v.values()):
+        return dict(v)
+    raise Invalid(f"expected a table {{ <output> = \"<column>\" }} of column names, found {v!r}")
+
+
 @dataclass
 class Field:
     """One key of a scenario table.
@@ -192,11 +188,13 @@ CASE = {
 }
 _PHASE = Field(number("deg"), default=0.0)
 _LENGTH = {"periods": Field(number("periods", 0)), "duration": Field(number("s", 0))}
+_SINE_REFERENCE = {"output": Field(string(), required=True),
+                   "amplitude": Field(number("µm", 0), required=True),
+                   "frequency": Field(number("Hz", 0), required=True),
+                   "phase": _PHASE, "offset": Field(number("µm"), default=0.0), **_LENGTH}
 REFERENCES = {
-    "sine": {"output": Field(string(), required=True),
-             "amplitude": Field(number("µm", 0), required=True),
-             "frequency": Field(number("Hz", 0), required=True),
-             "phase": _PHASE, "offset": Field(number("µm"), default=0.0), **_LENGTH},
+    "sine": _SINE_REFERENCE,
+    "triangle": dict(_SINE_REFERENCE),  # hammerstein.core.references.triangle
     "circle": {"radius": Field(number("µm", 0), required=True),
                "frequency": Field(number("Hz", 0), required=True),
                "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
@@ -209,12 +207,25 @@ REFERENCES = {
     "lissajous": {"amplitude": Field(_amplitudes, required=True),
                   "frequencies": Field(_frequency_pair, required=True),
                   "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
+    "raster": {"outputs": Field(name_list(2), required=True),     # [fast, slow]
+               "size": Field(_extent_pair, required=True),
+               "lines": Field(integer(2), required=True),
+               "frequency": Field(number("Hz", 0), required=True),  # fast axis (line rate)
+               "slow": Field(choice("step", "ramp"), default="step"),
+               "smoothing": Field(_fraction(0.5), default=0.0)},
+    "file": {"file": Field(string(), required=True),
+             "time": Field(string(), default="time"),
+             "columns": Field(_column_map, required=True),
+             "duration": Field(number("s", 0)),
+             "period": Field(number("s", 0))},   # what settle_periods counts (default: T)
 }
+_SINE_DRIVE = {"input": Field(string(), required=True),
+               "amplitude": Field(number("V", 0), required=True),
+               "frequency": Field(number("Hz", 0), required=True),
+               "phase": _PHASE, "offset": Field(number("V"), default=0.0), **_LENGTH}
 DRIVES = {
-    "sine": {"input": Field(string(), required=True),
-             "amplitude": Field(number("V", 0), required=True),
-             "frequency": Field(number("Hz", 0), required=True),
-             "phase": _PHASE, "offset": Field(number("V"), default=0.0), **_LENGTH},
+    "sine": _SINE_DRIVE,
+    "triangle": dict(_SINE_DRIVE),  # hammerstein.core.references.triangle_drive
 }
 
 

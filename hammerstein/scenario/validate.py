@@ -171,7 +171,7 @@ def _check_compensator(spec, where, problems, source):
     return check_table(spec, schema, where, problems, source)
 
 
-def _signal(case_where, mode, spec, plant, problems, source):
+def _signal(case_where, mode, spec, plant, problems, source, base=None):
     """Generate the drive/reference; returns (time, signal, period_samples, extras)."""
     kinds = DRIVES if mode == "drive" else REFERENCES
     where = f"{case_where}.{mode}"
@@ -195,14 +195,30 @@ def _signal(case_where, mode, spec, plant, problems, source):
     extras = {}
     try:
         if mode == "drive":
-            t, sig = refs.sine_drive(T, model.input_names, **c)
+            fn = refs.triangle_drive if kind == "triangle" else refs.sine_drive
+            t, sig = fn(T, model.input_names, **c)
             extras["driven_input"] = model.input_names.index(c["input"])
             period = 1.0 / c["frequency"]
-        elif kind == "sine":
-            t, sig = refs.sine(T, model.output_names, **c)
+        elif kind in ("sine", "triangle"):
+            fn = refs.triangle if kind == "triangle" else refs.sine
+            t, sig = fn(T, model.output_names, **c)
             extras["loop_channel"] = model.output_names.index(c["output"])
             extras["scale"] = c["amplitude"]
             period = 1.0 / c["frequency"]
+        elif kind == "file":
+            period = c.pop("period", None) or T
+            t, sig = refs.from_file(T, model.output_names, base_dir=base, **c)
+        elif kind == "raster":
+            outs = c.pop("outputs")
+            if len(set(outs)) != 2 or any(o not in model.output_names for o in outs):
+                raise refs.SignalError(f"outputs: expected two different outputs [fast, slow] "
+                                       f"of the plant {model.output_names}, found {outs}")
+            t, xy = refs.raster(T, **c)
+            sig = np.zeros((model.n_outputs, t.size))
+            for row, o in zip(xy, outs):
+                sig[model.output_names.index(o)] = row
+            period = 1.0 / c["frequency"]
+            extras["scale"] = float(max(c["size"]))
         else:
             outs = c.pop("outputs", None) or list(model.output_names[:2])
             missing = [o for o in outs if o not in model.output_names]
@@ -326,7 +342,7 @@ def _validate_cases(path, data):
         elif scratch and not any("compensator" in q for q in problems[:n_before]):
             problems.extend(scratch)
         comp_ok = not scratch and cclean is not None
-        sig = _signal(where, mode, raw[mode], plant, problems, source)
+        sig = _signal(where, mode, raw[mode], plant, problems, source, base)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "

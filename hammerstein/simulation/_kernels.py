@@ -3,20 +3,28 @@
 Low-level loops only: they take packed float/int arrays, update the states
 in place and never allocate per sample. :mod:`hammerstein.simulation` packs
 the models, validates the arguments, and keeps the plain numpy loops that
-serve as the test oracle of these kernels.
+serve as the test oracle of these kernels (``_oracle``).
 
-Packed multivariable PI model (see ``simulation.pack_model``)
--------------------------------------------------------------
-``start`` (m + 1,) int64
-    The *unique* play operators driven by input k are ``start[k]:start[k+1]``
-    (hysterons of several outputs sharing input, threshold and initial state
-    are one play operator, Def. 3.2 of the paper: they evolve identically).
-``r`` (n_plays,) [V]
-    Thresholds of the unique play operators.
-``W`` (p, n_plays) [µm/V]
-    Weight of each play operator in each output (0 where absent).
-``G`` (p, m) [µm/V]
-    Pure linear components.
+Arguments are a few named tuples of arrays (:mod:`._packing`), which numba
+passes as structs:
+
+``PIArrays(start, r, W, G)``, a packed multivariable PI model
+    ``start`` (m + 1,) int64: the *unique* play operators driven by input k
+    are ``start[k]:start[k+1]`` (hysterons of several outputs sharing input,
+    threshold and initial state are one play operator, Def. 3.2 of the
+    paper: they evolve identically); ``r`` (n_plays,) thresholds [V]; ``W``
+    (p, n_plays) weight of each play in each output [µm/V]; ``G`` (p, m)
+    pure linear components [µm/V].
+``LinearArrays(A, B, C, D)``
+    Discrete state space (bending modes; reference pre-filter).
+``LawArrays(K_inv, iterations, bound, lowpass, pole, prefiltered)``
+    The compensator law.
+``ChainState(cu, cvf, cs, xf, ps, x)``
+    States of a chain run, updated in place.
+
+The batch kernels take the same structures with a leading case axis on every
+field. Numba compiles each kernel on its first call (``cache=True``: once per
+machine), so a run compiles only the kernels it uses.
 
 Status codes returned by the chain kernels: 0 ok, 1 non-finite input voltage,
 2 input voltage beyond the divergence bound.
@@ -28,21 +36,20 @@ import numba
 import numpy as np
 from numba import njit, prange, uint64
 
+from hammerstein.simulation._packing import (STATUS_BOUND, STATUS_NONFINITE, STATUS_OK, ChainState,
+                                             LawArrays, LinearArrays, PIArrays)
+
 __all__ = ["play_kernel", "pi_kernel", "plant_kernel", "chain_kernel",
            "chain_batch_serial", "chain_batch_parallel",
            "STATUS_OK", "STATUS_NONFINITE", "STATUS_BOUND"]
 
 # fastmath={'reassoc'} only: lets LLVM vectorise the weighted sums (summation
 # order changes, ~1e-15 relative; tests check 1e-9 against the numpy oracle).
-# No 'nnan'/'ninf': the divergence checks need exact non-finite semantics.
+# No 'nnan'/'ninf': the divergence checks need exact non-finite semantics;
+# no 'contract' (FMA): an identity pre-filter stays exact.
 # The helpers are inlined by numba (inline='always') and take these flags
 # from the kernel that calls them.
 FASTMATH = {"reassoc"}
-
-STATUS_OK = 0
-STATUS_NONFINITE = 1
-STATUS_BOUND = 2
-
 
 @njit(cache=True, inline="always")
 def _play(v, uk, rj):
@@ -129,8 +136,10 @@ def _evaluate(u, start, r, W, G, s, y):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def pi_kernel(u, start, r, W, G, s, y):
+def pi_kernel(u, pi, s, y):
     """Multivariable PI forward model: ``u`` (m, N) -> ``y`` (p, N); ``s`` in/out.
+
+    ``pi`` is a :class:`PIArrays`.
 
     The play updates of each input are one contiguous, vectorised loop; each
     play is updated once however many outputs it feeds (``W`` columns).
@@ -139,6 +148,7 @@ def pi_kernel(u, start, r, W, G, s, y):
     measured 0.62-0.99 ns per hysteron update against 0.42-0.51 ns inline
     (the 0.6 ns target of the benchmark).
     """
+    start, r, W, G = pi
     m, N = u.shape
     p, n = W.shape
     for t in range(N):
@@ -173,22 +183,23 @@ def pi_kernel(u, start, r, W, G, s, y):
 
 
 @njit(cache=True, inline="always")
-def _linear(h, A, B, C, D, x, xn, y):
+def _linear(h, lin, x, xn, y):
     """``y = C x + D h``; ``x <- A x + B h`` (discrete state update)."""
-    p = D.shape[0]
+    A, B, C, D = lin
+    q, k = D.shape
     nx = x.size
-    for l in range(p):
+    for l in range(q):
         a = 0.0
         for i in range(nx):
             a += C[l, i] * x[i]
-        for i in range(p):
+        for i in range(k):
             a += D[l, i] * h[i]
         y[l] = a
     for i in range(nx):
         a = 0.0
         for j in range(nx):
             a += A[i, j] * x[j]
-        for j in range(p):
+        for j in range(k):
             a += B[i, j] * h[j]
         xn[i] = a
     for i in range(nx):
@@ -196,8 +207,12 @@ def _linear(h, A, B, C, D, x, xn, y):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def plant_kernel(u, start, r, W, G, s, A, B, C, D, x, y):
-    """Hammerstein plant: PI then linear part; ``s`` and ``x`` in/out, ``y`` (p, N) out."""
+def plant_kernel(u, pi, s, lin, x, y):
+    """Hammerstein plant: PI (``PIArrays``) then linear part (``LinearArrays``).
+
+    ``s`` (plays) and ``x`` (linear state) in/out, ``y`` (p, N) out.
+    """
+    start, r, W, G = pi
     m, N = u.shape
     p = W.shape[0]
     ut = np.empty(m)
@@ -209,25 +224,27 @@ def plant_kernel(u, start, r, W, G, s, A, B, C, D, x, y):
             ut[k] = u[k, t]
         _commit(ut, start, r, s)
         _output(ut, W, G, s, h)
-        _linear(h, A, B, C, D, x, xn, yt)
+        _linear(h, lin, x, xn, yt)
         for l in range(p):
             y[l, t] = yt[l]
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def chain_kernel(yr, n_samples,
-                 cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
-                 cu, cvf, cs,
-                 run_plant, pstart, pr, pW, pG, A, B, C, D, ps, x,
+def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, state,
                  u_out, y_out):
-    """Compensator -> multivariable PI -> linear dynamics, one loop.
+    """Reference pre-filter -> compensator -> multivariable PI -> linear dynamics, one loop.
 
+    Pre-filter (``law.prefiltered``): ``v = Cf xf + Df Yr(t)``,
+    ``xf <- Af xf + Bf Yr(t)`` (``prefilter`` a ``LinearArrays``); else
+    ``v = Yr(t)``.
     Compensator (delay): from ``U = U(t-T)``, ``iterations`` times
-    ``U <- U + K^-1 (Yr(t) - Gamma(U; s(t-T)))``, then commit the plays.
-    Compensator (low-pass): ``v = U(t-T) - K^-1 Gamma(U(t-T))``,
-    ``v_f <- a v_f + (1 - a) v``, ``U = K^-1 Yr(t) + v_f``, then commit.
-    States ``cu`` (m,), ``cvf`` (m,), ``cs`` (plays), ``ps`` and ``x`` are
-    updated in place up to the last valid sample.
+    ``U <- U + K^-1 (v - Gamma(U; s(t-T)))``, then commit the plays.
+    Compensator (low-pass): ``w = U(t-T) - K^-1 Gamma(U(t-T))``,
+    ``v_f <- a v_f + (1 - a) w``, ``U = K^-1 v + v_f``, then commit.
+    ``comp`` and ``plant`` are ``PIArrays``, ``linear`` the plant's
+    ``LinearArrays`` (used when ``run_plant``), ``law`` a ``LawArrays``.
+    The ``state`` fields (``ChainState``) are updated in place up to the
+    last valid sample.
 
     Returns
     -------
@@ -235,6 +252,15 @@ def chain_kernel(yr, n_samples,
         ``status`` 0, or 1/2 with the diverging sample (``u_out[:, sample]``
         then holds the offending U, outputs stop before it).
     """
+    Kinv = law.K_inv
+    iterations = law.iterations
+    bound = law.bound
+    lowpass = law.lowpass
+    a = law.pole
+    prefiltered = law.prefiltered
+    cstart, cr, cW, cG = comp
+    pstart, pr, pW, pG = plant
+    cu, cvf, cs, xf, ps, x = state
     m = cG.shape[1]
     p = cW.shape[0]
     pp = pW.shape[0]
@@ -243,6 +269,9 @@ def chain_kernel(yr, n_samples,
     yh = np.empty(p)
     yhat = np.empty(p)
     v = np.empty(m)
+    ref = np.empty(p)
+    yrt = np.empty(p)
+    xfn = np.empty(xf.size)
     h = np.empty(pp)
     yt = np.empty(pp)
     xn = np.empty(x.size)
@@ -250,6 +279,13 @@ def chain_kernel(yr, n_samples,
     # get it from the commit (a play moved to U is idempotent at U)
     _evaluate(cu, cstart, cr, cW, cG, cs, yhat)
     for t in range(n_samples):
+        if prefiltered:
+            for l in range(p):
+                yrt[l] = yr[l, t]
+            _linear(yrt, prefilter, xf, xfn, ref)
+        else:
+            for l in range(p):
+                ref[l] = yr[l, t]
         if lowpass:
             for k in range(m):
                 acc = 0.0
@@ -261,7 +297,7 @@ def chain_kernel(yr, n_samples,
             for k in range(m):
                 acc = 0.0
                 for l in range(p):
-                    acc += Kinv[k, l] * yr[l, t]
+                    acc += Kinv[k, l] * ref[l]
                 u[k] = acc + cvf[k]
         else:
             for k in range(m):
@@ -269,11 +305,11 @@ def chain_kernel(yr, n_samples,
             for it in range(iterations):
                 if it == 0:
                     for l in range(p):
-                        e[l] = yr[l, t] - yhat[l]
+                        e[l] = ref[l] - yhat[l]
                 else:
                     _evaluate(u, cstart, cr, cW, cG, cs, yh)
                     for l in range(p):
-                        e[l] = yr[l, t] - yh[l]
+                        e[l] = ref[l] - yh[l]
                 for k in range(m):
                     acc = 0.0
                     for l in range(p):
@@ -297,51 +333,73 @@ def chain_kernel(yr, n_samples,
         if run_plant:
             _commit(u, pstart, pr, ps)
             _output(u, pW, pG, ps, h)
-            _linear(h, A, B, C, D, x, xn, yt)
+            _linear(h, linear, x, xn, yt)
             for l in range(pp):
                 y_out[l, t] = yt[l]
     return STATUS_OK, n_samples
 
 
+# -- batches: every structure carries a leading case axis ------------------------------
+@njit(cache=True, inline="always")
+def _case_pi(pi, b):
+    return PIArrays(pi.start[b], pi.r[b], pi.W[b], pi.G[b])
+
+
+@njit(cache=True, inline="always")
+def _case_linear(lin, b):
+    return LinearArrays(lin.A[b], lin.B[b], lin.C[b], lin.D[b])
+
+
+@njit(cache=True, inline="always")
+def _case_law(law, b):
+    return LawArrays(law.K_inv[b], law.iterations[b], law.bound[b], law.lowpass[b],
+                     law.pole[b], law.prefiltered[b])
+
+
+@njit(cache=True, inline="always")
+def _case_state(st, b):
+    return ChainState(st.cu[b], st.cvf[b], st.cs[b], st.xf[b], st.ps[b], st.x[b])
+
+
 @njit(cache=True, fastmath=FASTMATH)
-def _batch_case(b, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
-                cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
+def _batch_case(b, yr, lengths, law, comp, prefilter, plant, linear, state,
                 u_out, y_out, status, sample):
-    st, sm = chain_kernel(yr[b], lengths[b], cstart[b], cr[b], cW[b], cG[b], Kinv[b],
-                          iterations[b], bound[b], lowpass[b], a[b], cu[b], cvf[b], cs[b],
-                          True, pstart[b], pr[b], pW[b], pG[b], A[b], B[b], C[b], D[b],
-                          ps[b], x[b], u_out[b], y_out[b])
+    st, sm = chain_kernel(yr[b], lengths[b], _case_law(law, b), _case_pi(comp, b),
+                          _case_linear(prefilter, b), _case_pi(plant, b),
+                          _case_linear(linear, b), True, _case_state(state, b),
+                          u_out[b], y_out[b])
     status[b] = st
     sample[b] = sm
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def chain_batch_serial(yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
-                       cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
+def chain_batch_serial(yr, lengths, law, comp, prefilter, plant, linear, state,
                        u_out, y_out, status, sample):
-    """Independent chain cases one after the other (arrays stacked on axis 0)."""
+    """Independent chain cases one after the other (fields stacked on axis 0)."""
     for b in range(yr.shape[0]):
-        _batch_case(b, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
-                    cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
+        _batch_case(b, yr, lengths, law, comp, prefilter, plant, linear, state,
                     u_out, y_out, status, sample)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def chain_batch_parallel(order, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound,
-                         lowpass, a, cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
+def chain_batch_parallel(order, yr, lengths, law, comp, prefilter, plant, linear, state,
                          u_out, y_out, status, sample):
     """Independent chain cases spread over the cores (numba ``prange``).
 
     ``order`` (n_cases,) lists the cases so that the equal contiguous chunks
-    the threads receive hold equal work (see ``simulation._balanced_order``).
+    the threads receive hold equal work (see ``_stepping._balanced_order``).
     """
     for i in prange(order.size):
         b = order[i]
-        _batch_case(b, yr, lengths, cstart, cr, cW, cG, Kinv, iterations, bound, lowpass, a,
-                    cu, cvf, cs, pstart, pr, pW, pG, A, B, C, D, ps, x,
+        _batch_case(b, yr, lengths, law, comp, prefilter, plant, linear, state,
                     u_out, y_out, status, sample)
 
 
 def threads() -> int:
-    """Number of threads numba uses for the parallel batch kernel."""
+    """Number of threads numba uses for the parallel batch kernel.
+
+    Returns
+    -------
+    int
+    """
     return numba.get_num_threads()

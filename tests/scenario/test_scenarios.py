@@ -98,7 +98,8 @@ settle_periods = -1
      "cases[0]: expected exactly one of reference"),
     (HEAD + "[[cases]]\nname = 'a'\n"
      "reference = { kind = 'circel', radius = 5.0, frequency = 50.0, periods = 2 }",
-     "cases[0].reference.kind: expected one of 'sine', 'circle', 'spiral', 'lissajous', found "
+     "cases[0].reference.kind: expected one of 'sine', 'triangle', 'circle', 'spiral', "
+     "'lissajous', 'raster', 'file', found "
      "'circel' (did you mean 'circle'?)"),
     (HEAD.replace('"multivariable"', '"multivariabel"') + GOOD_CASE,
      "compensator.kind: expected one of 'none', 'multivariable'"),

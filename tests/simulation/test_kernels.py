@@ -9,9 +9,10 @@ change the order of the weighted sums).
 import numpy as np
 import pytest
 
-from hammerstein import (CompensatorDivergence, HammersteinPlant,
-                         InverseMultiplicativeCompensator, MultivariablePI, PrandtlIshlinskii,
-                         bending_modes, discretize, load_plant)
+from hammerstein import (CompensatorDivergence, CompensatorError, HammersteinPlant,
+                         HysteresisError, InverseMultiplicativeCompensator, MultivariablePI,
+                         PrandtlIshlinskii, StaticGainCompensator, bending_modes, discretize,
+                         load_plant)
 from hammerstein import simulation as sim
 from hammerstein.core.hysteresis import play
 
@@ -268,3 +269,119 @@ def test_bad_backend_is_named():
     model = random_model(np.random.default_rng(0))
     with pytest.raises(ValueError, match="backend"):
         sim.simulate_hysteresis(model, np.zeros((model.n_inputs, 3)), backend="fortran")
+
+
+# -- linear reference pre-filter ----------------------------------------------------------
+class Prefiltered:
+    """The law of ``inner`` behind a linear reference pre-filter (the compensator protocol)."""
+
+    def __init__(self, inner, prefilter):
+        self.inner, self.prefilter = inner, prefilter
+
+    def packed_law(self):
+        return self.inner.packed_law()._replace(prefilter=self.prefilter)
+
+    def simulate(self, reference, initial_state=None):
+        return sim.simulate_compensator(self, reference, initial_state)
+
+
+def stable_filter(rng, n, p):
+    """A random discrete state space of n states, p inputs/outputs, spectral radius 0.8."""
+    A = rng.normal(size=(n, n))
+    A *= 0.8 / max(np.max(np.abs(np.linalg.eigvals(A))), 1e-12)
+    return sim.LinearArrays(A, rng.normal(size=(n, p)), rng.normal(size=(p, n)),
+                            np.eye(p) + 0.1 * rng.normal(size=(p, p)))
+
+
+def filter_loop(f, yr, x0):
+    """v(t) = C x + D Yr(t); x <- A x + B Yr(t), written out."""
+    x, v = x0.copy(), np.empty_like(yr)
+    for t in range(yr.shape[1]):
+        v[:, t] = f.C @ x + f.D @ yr[:, t]
+        x = f.A @ x + f.B @ yr[:, t]
+    return v, x
+
+
+@pytest.mark.parametrize("law", ["delay", "iterations", "lowpass"])
+@pytest.mark.parametrize("seed", range(2))
+def test_prefilter_equals_the_compensator_on_the_filtered_reference(seed, law):
+    rng = np.random.default_rng(600 + seed)
+    model = square_model(rng, 2)
+    inner = (_lowpass(model, 400.0) if law == "lowpass" else
+             InverseMultiplicativeCompensator(model, iterations=3 if law == "iterations" else 1,
+                                              check="ignore"))
+    f = stable_filter(rng, 3, 2)
+    comp = Prefiltered(inner, f)
+    plant = random_plant(rng, square_model(rng, 2), True)
+    yr = random_inputs(rng, 2, 250)
+    v, xf_final = filter_loop(f, yr, np.zeros(3))
+    expected = sim.simulate_chain(inner, plant, v)
+    got = _compare_chain(comp, plant, yr)               # numba against the numpy oracle
+    assert not got.diverged and not expected.diverged
+    np.testing.assert_allclose(got.inputs, expected.inputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(got.outputs, expected.outputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(got.compensator_state,
+                               np.concatenate([expected.compensator_state, xf_final]),
+                               rtol=0, atol=ATOL)
+    # chunked == whole: the final states (pre-filter state included) are fed back
+    a = sim.simulate_chain(comp, plant, yr[:, :101])
+    b = sim.simulate_chain(comp, plant, yr[:, 101:], a.compensator_state, a.plant_state)
+    np.testing.assert_allclose(np.hstack([a.outputs, b.outputs]), got.outputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(b.compensator_state, got.compensator_state, rtol=0, atol=ATOL)
+    u1, s1 = comp.simulate(yr[:, :60])
+    u2, s2 = comp.simulate(yr[:, 60:], s1)
+    np.testing.assert_allclose(np.hstack([u1, u2]), got.inputs, rtol=0, atol=ATOL)
+
+
+@pytest.mark.parametrize("feedback", ["delay", "lowpass"])
+def test_empty_prefilter_is_the_exact_identity(feedback):
+    rng = np.random.default_rng(610)
+    model = square_model(rng, 2)
+    inner = (_lowpass(model, 300.0) if feedback == "lowpass"
+             else InverseMultiplicativeCompensator(model, iterations=2, check="ignore"))
+    plant = random_plant(rng, model, True)
+    yr = random_inputs(rng, 2, 200)
+    plain = sim.simulate_chain(inner, plant, yr)
+    empty = sim.simulate_chain(Prefiltered(inner, sim.identity_filter(2)), plant, yr)
+    np.testing.assert_array_equal(empty.inputs, plain.inputs)
+    np.testing.assert_array_equal(empty.outputs, plain.outputs)
+    np.testing.assert_array_equal(empty.compensator_state, plain.compensator_state)
+
+
+def test_batch_runs_prefiltered_and_plain_cases():
+    rng = np.random.default_rng(620)
+    model = square_model(rng, 2)
+    inner = InverseMultiplicativeCompensator(model, check="ignore")
+    comps = [Prefiltered(inner, stable_filter(rng, 2, 2)), inner,
+             Prefiltered(_lowpass(model, 200.0), stable_filter(rng, 1, 2))]
+    plant = random_plant(rng, model, True)
+    refs = [random_inputs(rng, 2, n) for n in (180, 120, 150)]
+    for parallel in (False, True):
+        for comp, yr, got in zip(comps, refs,
+                                 sim.simulate_chain_batch(comps, plant, refs, parallel=parallel)):
+            one = sim.simulate_chain(comp, plant, yr)
+            np.testing.assert_allclose(got.outputs, one.outputs, rtol=0, atol=ATOL)
+            np.testing.assert_allclose(got.compensator_state, one.compensator_state,
+                                       rtol=0, atol=ATOL)
+
+
+def test_prefilter_of_the_wrong_shape_is_named():
+    rng = np.random.default_rng(630)
+    model = square_model(rng, 2)
+    f = stable_filter(rng, 2, 2)
+    bad = Prefiltered(InverseMultiplicativeCompensator(model, check="ignore"),
+                      f._replace(B=np.zeros((2, 3))))
+    with pytest.raises(HysteresisError, match=r"prefilter\.B: expected shape \(2, 2\)"):
+        sim.simulate_chain(bad, random_plant(rng, model, False), random_inputs(rng, 2, 10))
+
+
+def test_compensators_without_a_law_run_their_own_simulate():
+    plant = load_plant("rakotondrabe-2dof")
+    static = StaticGainCompensator(plant.hysteresis)
+    assert static.packed_law() is None and not sim.is_fusable(static)
+    t = np.arange(200) * T
+    yr = np.vstack([5 * np.sin(2 * np.pi * 50 * t), np.zeros_like(t)])
+    res = sim.simulate_chain(static, plant, yr)
+    np.testing.assert_allclose(res.inputs, np.linalg.solve(static.K, yr), rtol=1e-12, atol=1e-12)
+    with pytest.raises(CompensatorError, match="packed_law"):
+        sim.simulate_chain_batch(static, plant, [yr])

@@ -1,0 +1,35 @@
+"""How much the commands print: ``-q/--quiet``, ``-v/--verbose`` and grouped warnings."""
+
+from __future__ import annotations
+
+from hammerstein.cli._common import print_err
+from hammerstein.report.messages import group_warnings
+
+__all__ = ["add_verbosity", "print_warnings"]
+
+
+def add_verbosity(p):
+    """``-q/--quiet`` (errors only) and ``-v/--verbose`` (per-case warnings, progress) on ``p``."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("-q", "--quiet", action="store_const", const=-1, dest="verbosity", default=0,
+                   help="print errors only")
+    g.add_argument("-v", "--verbose", action="store_const", const=1, dest="verbosity",
+                   help="print every case's warnings (not one line per distinct warning) "
+                        "and what is being run")
+
+
+def print_warnings(path, pairs, verbosity=0):
+    """Print a scenario's ``(case, message)`` warnings on stderr.
+
+    ``verbosity`` 0: one line per distinct warning with its cases
+    (:func:`hammerstein.report.messages.group_warnings`); 1: one line per
+    case and warning; -1: nothing.
+    """
+    if verbosity < 0:
+        return
+    if verbosity > 0:
+        for case, msg in pairs:
+            print_err(f"warning: {path}: {case}: {' '.join(msg.split())}")
+        return
+    for group in group_warnings(pairs):
+        print_err(f"warning: {group.line(path)}")

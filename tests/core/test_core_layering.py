@@ -1,0 +1,112 @@
+"""Layering and weight of the core: what each layer imports, and when.
+
+Expectations come from the architecture (exceptions < simulation < core):
+the modules' import statements are read with ``ast`` and fresh interpreters
+show which third-party packages a given use loads.
+"""
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[2] / "hammerstein"
+HEAVY = ("numpy", "numba", "control", "pandas", "scipy", "matplotlib", "tqdm")
+
+
+def _imports(path):
+    """(module imported, inside a function?) for every import statement of a file."""
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    out = []
+
+    def visit(node, in_function):
+        for child in ast.iter_child_nodes(node):
+            inner = in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef))
+            if isinstance(child, ast.Import):
+                out.extend((a.name, inner) for a in child.names)
+            elif isinstance(child, ast.ImportFrom) and child.level == 0:
+                out.append((child.module, inner))
+            visit(child, inner)
+
+    visit(tree, False)
+    return out
+
+
+def _files(layer):
+    return sorted((PACKAGE / layer).glob("*.py"))
+
+
+def test_simulation_never_imports_core_or_higher_layers():
+    for path in _files("simulation"):
+        for module, _ in _imports(path):
+            if module.startswith("hammerstein"):
+                assert (module == "hammerstein.exceptions"
+                        or module.startswith("hammerstein.simulation")), (path.name, module)
+
+
+def test_core_imports_only_downward():
+    allowed = ("hammerstein.exceptions", "hammerstein.simulation", "hammerstein.core")
+    for path in _files("core"):
+        for module, _ in _imports(path):
+            if module.startswith("hammerstein"):
+                assert module.startswith(allowed), (path.name, module)
+
+
+@pytest.mark.parametrize("layer", ["core", "simulation"])
+def test_no_function_level_imports_of_the_package(layer):
+    for path in _files(layer):
+        inner = [m for m, in_function in _imports(path) if in_function and m.startswith("hammerstein")]
+        assert inner == [], (path.name, inner)
+
+
+def _fresh(code):
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=PACKAGE.parent, timeout=300)
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def _loaded_snippet():
+    return ("import json, sys; print(json.dumps(sorted({k.split('.')[0] for k in sys.modules} "
+            f"& set({HEAVY!r}))))")
+
+
+def test_import_hammerstein_loads_no_third_party_package():
+    assert _fresh("import hammerstein; " + _loaded_snippet()) == []
+
+
+def test_lazy_face_loads_what_a_name_needs():
+    loaded = _fresh("from hammerstein import MultivariablePI; " + _loaded_snippet())
+    assert "numpy" in loaded
+    assert not {"control", "pandas", "matplotlib", "tqdm"} & set(loaded)
+
+
+def test_every_public_name_resolves_and_dir_lists_it():
+    import hammerstein
+    for name in hammerstein.__all__:
+        assert getattr(hammerstein, name) is not None, name
+    assert set(hammerstein.__all__) <= set(dir(hammerstein))
+    with pytest.raises(AttributeError, match="no_such_name"):
+        hammerstein.no_such_name
+
+
+def test_core_runs_without_matplotlib_and_tqdm():
+    code = """
+import json, sys
+sys.modules["matplotlib"] = None          # importing them now raises ImportError
+sys.modules["tqdm"] = None
+import numpy as np
+from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
+                         PrandtlIshlinskii, simulate_chain)
+model = MultivariablePI([[PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5]), 0.05],
+                         [None, PrandtlIshlinskii([0.0, 2.0], [1.0, 0.3])]],
+                        input_amplitude=[10.0, 10.0])
+reference = np.vstack([np.linspace(0, 4, 50), np.linspace(0, -3, 50)])
+result = simulate_chain(InverseMultiplicativeCompensator(model), HammersteinPlant(model, 1e-4),
+                        reference)
+print(json.dumps(float(np.max(np.abs(result.outputs - reference)))))
+"""
+    # the compensator inverts its own model: the static plant tracks the ramp
+    assert _fresh(code) < 0.5

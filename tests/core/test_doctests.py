@@ -1,0 +1,34 @@
+"""The Examples sections of the core and simulation run and print what they say."""
+
+import doctest
+import importlib
+import pkgutil
+import warnings
+
+import pytest
+
+import hammerstein.core
+import hammerstein.simulation
+
+MODULES = ["hammerstein.exceptions", "hammerstein.simulation"] + sorted(
+    info.name for pkg in (hammerstein.core, hammerstein.simulation)
+    for info in pkgutil.iter_modules(pkg.__path__, pkg.__name__ + "."))
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_examples_run(name):
+    module = importlib.import_module(name)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS)
+    assert result.failed == 0, f"{name}: {result.failed} of {result.attempted} examples failed"
+
+
+@pytest.mark.parametrize("name", [
+    "MultivariablePI", "simulate_chain", "InverseMultiplicativeCompensator",
+    "PerAxisInverseCompensator", "StaticGainCompensator", "diagonal_compensator",
+    "MultivariableIdentifier"])
+def test_main_objects_have_examples(name):
+    import hammerstein
+    examples = doctest.DocTestFinder(recurse=False).find(getattr(hammerstein, name))
+    assert examples and examples[0].examples, name
