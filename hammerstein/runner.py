@@ -59,7 +59,7 @@ METRIC_COLUMNS = ["case", "channel", "metric", "value", "unit"]
 class ScenarioKind:
     """An entry of the scenario-kind registry (top-level ``kind`` of a file).
 
-    Attributes
+    Parameters
     ----------
     simulate : callable
         ``simulate(scenario) -> results`` (``scenario`` validated and
@@ -89,7 +89,7 @@ SCENARIO_KINDS: dict[str, ScenarioKind] = {
 class ScenarioOutcome:
     """What happened to one scenario file.
 
-    Attributes
+    Parameters
     ----------
     name : str
         Scenario name (the file stem when the file could not be read).
@@ -173,6 +173,13 @@ def run_scenario(path, out_dir, taken=None):
     ScenarioOutcome
         Never raises for a bad scenario or a failed simulation: ``ok`` is
         False and ``error`` says why; nothing is written then.
+
+    Raises
+    ------
+    ScenarioError
+        Never propagates: raised internally when the scenario's name is in
+        ``taken``, then caught like every other exception and reported in
+        the outcome's ``error``.
     """
     path = Path(path)
     name = path.stem

@@ -38,7 +38,13 @@ METRICS_HEADER = "case,channel,metric,value,unit"
 
 
 def add_parser(subparsers):
-    """Register the ``identify`` subcommand (sets ``handler``)."""
+    """Register the ``identify`` subcommand (sets ``handler``).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``add_subparsers()`` object of the ``hammerstein`` parser.
+    """
     p = subparsers.add_parser(
         "identify", help="identify a (multivariable) PI model from measured records",
         description="Identify a multivariable classical Prandtl-Ishlinskii model from CSV/text "
@@ -204,7 +210,24 @@ def _line(label, name, rep, unit):
 
 
 def metrics_rows(fit, output_unit):
-    """Rows ``(case, channel, metric, value, unit)`` of a fit (train, validation)."""
+    """Rows ``(case, channel, metric, value, unit)`` of a fit (train, validation).
+
+    Parameters
+    ----------
+    fit : RecordFit
+        Result of :func:`hammerstein.core.record_identification.identify_records`.
+    output_unit : str
+        Unit of the outputs (e.g. ``"µm"``), written in the unit column of the
+        absolute errors.
+
+    Returns
+    -------
+    list of tuple
+        Per window (``"train"``, then ``"validation"`` when something was
+        held out) and output: ``rms_error`` [output unit],
+        ``rms_error_percent`` [%] of the measured range and ``max_abs_error``
+        [output unit].
+    """
     rows = []
     for case, reps in (("train", fit.train), ("validation", fit.validation)):
         for name, rep in zip(fit.model.output_names, reps or []):
@@ -228,9 +251,20 @@ def fit_figure(fit, input_unit, output_unit):
     in orange, the model dashed; the last column shows the error of output l
     over all records (held-out part shaded).
 
+    Parameters
+    ----------
+    fit : RecordFit
+        Result of :func:`hammerstein.core.record_identification.identify_records`
+        for a p x m model.
+    input_unit : str
+        Unit of the inputs for the axis labels (e.g. ``"V"``).
+    output_unit : str
+        Unit of the outputs and of the error (e.g. ``"µm"``).
+
     Returns
     -------
     matplotlib.figure.Figure
+        p rows by m + 1 columns of axes; the caller saves and closes it.
     """
     import matplotlib
     matplotlib.use("Agg")

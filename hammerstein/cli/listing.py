@@ -30,7 +30,20 @@ def add_parser(subparsers):
 
 
 def handler(args):
-    """Print the presets, the compensator kinds and the scenario files; exit status 0."""
+    """Print the presets, the compensator kinds and the scenario files; exit status 0.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments; ``args.scenarios`` is the directory searched
+        recursively for ``*.toml`` scenario files (none listed when it is
+        not a directory).
+
+    Returns
+    -------
+    int
+        Exit status, always 0.
+    """
     print("presets:")
     for name, path in sorted(bundled_presets().items()):
         print(f"  {name}  ({path})")

@@ -36,7 +36,20 @@ def add_parser(subparsers):
 
 
 def handler(args):
-    """Run the paper's scenarios and write the README; exit status 0, 1 (a scenario failed) or 2."""
+    """Run the paper's scenarios and write the README; exit status 0, 1 (a scenario failed) or 2.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments: ``args.scenarios`` (directory of the paper's
+        scenario files) and ``args.out`` (output directory).
+
+    Returns
+    -------
+    int
+        0 when every scenario ran, 1 when one failed (one line per failure
+        on stderr), 2 when ``args.scenarios`` holds no ``*.toml`` scenario.
+    """
     try:
         outcomes = replicate(args.scenarios, args.out)
     except FileNotFoundError as exc:

@@ -46,7 +46,21 @@ def add_parser(subparsers):
 
 
 def handler(args):
-    """Run the scenarios of ``args.scenarios`` into ``args.out``; exit status 0, 1 or 2."""
+    """Run the scenarios of ``args.scenarios`` into ``args.out``; exit status 0, 1 or 2.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments: ``args.scenarios`` (list of scenario file paths) and
+        ``args.out`` (directory receiving one report directory per scenario).
+
+    Returns
+    -------
+    int
+        0 when every scenario ran, 1 when one failed (one line per failure
+        on stderr, the others still run), 2 when ``args.out`` exists and is
+        not a directory.
+    """
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")

@@ -35,7 +35,20 @@ def add_parser(subparsers):
 
 
 def handler(args):
-    """Validate each file of ``args.scenarios``; exit status 0 (all valid) or 1."""
+    """Validate each file of ``args.scenarios``; exit status 0 (all valid) or 1.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments; ``args.scenarios`` is the list of scenario file
+        paths.
+
+    Returns
+    -------
+    int
+        0 when every file is valid, 1 otherwise (one line per problem on
+        stderr; every file is still checked).
+    """
     status = 0
     for path in args.scenarios:
         try:

@@ -59,7 +59,7 @@ __all__ = [
 class ConvergenceReport:
     """Spectral radii of ``I - K^-1 J`` over the reachable slope matrices.
 
-    Attributes
+    Parameters
     ----------
     max_radius : float
         Largest ``rho(I - K^-1 J)`` over the slope matrices outside the dead
@@ -72,6 +72,9 @@ class ConvergenceReport:
         All radii, in the order of the enumerated slope matrices.
     n_matrices : int
         Number of slope matrices examined.
+
+    Attributes
+    ----------
     converges : bool
         ``max_radius < 1``.
     """

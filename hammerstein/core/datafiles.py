@@ -29,7 +29,7 @@ MIN_SAMPLES = 10
 class Record:
     """One measured single-input single-output record.
 
-    Attributes
+    Parameters
     ----------
     timepts : numpy.ndarray, shape (n_samples,)
         Time [s], uniform and increasing.
@@ -63,7 +63,7 @@ class Record:
 class MultiRecord:
     """One measured multi-input multi-output record.
 
-    Attributes
+    Parameters
     ----------
     timepts : numpy.ndarray, shape (n_samples,)
         Time [s], uniform and increasing.
@@ -101,6 +101,13 @@ class MultiRecord:
 
 def column_list(text):
     """Column keys from ``"u1,u2"`` / ``"0,2"`` / a list: names or 0-based indices.
+
+    Parameters
+    ----------
+    text : str or int or list or tuple
+        Comma-separated names or indices (a name that is an integer, possibly
+        negative, becomes an index), a single index, or a list/tuple of keys
+        (returned as a list unchanged).
 
     Returns
     -------

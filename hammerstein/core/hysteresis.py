@@ -192,6 +192,11 @@ class PrandtlIshlinskii:
         -------
         float
             Gain [µm/V] (NOTES §4, default compensator normalisation).
+
+        Raises
+        ------
+        HysteresisError
+            When ``amplitude`` is not > 0 (or is NaN).
         """
         if not amplitude > 0:
             raise HysteresisError(f"amplitude: expected > 0, found {amplitude!r}")

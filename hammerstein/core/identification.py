@@ -516,6 +516,11 @@ def make_identifier(method="closed-form", **options):
     **options
         Constructor options of :class:`ClosedFormPI` / :class:`LeastSquaresPI`.
 
+    Returns
+    -------
+    ClosedFormPI or LeastSquaresPI
+        A new identifier built with ``options``.
+
     Raises
     ------
     IdentificationError

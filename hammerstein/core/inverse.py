@@ -205,7 +205,7 @@ class InversePI:
     states of ``Gamma~^-1`` (n values [µm]) then the :class:`InversePlay`
     state ``[v(-T), u(-T)]`` [V].
 
-    Attributes
+    Parameters
     ----------
     shifted_inverse : PrandtlIshlinskii
         ``Gamma~^-1``, thresholds r'_i [µm], weights w'_i [V/µm].

@@ -66,13 +66,16 @@ __all__ = ["InverseSystem", "inverse_system", "ZPETCInverse", "preview_inverse"]
 class InverseSystem:
     """Exact state-space inverse of a square discrete system (see module docstring).
 
-    Attributes
+    Parameters
     ----------
     relative_degree : numpy.ndarray, shape (p,), int
         ``r_i`` per output.
     A, B, C, D : numpy.ndarray
         ``A_z`` (n, n), ``B Delta^-1`` (n, p), ``-Delta^-1 Phi`` (p, n),
         ``Delta^-1`` (p, p): from the advanced reference ``yt`` to v.
+
+    Attributes
+    ----------
     zeros : numpy.ndarray, shape (n,), complex
         Eigenvalues of ``A_z``: the invariant zeros of G and ``sum r_i`` zeros.
     """
@@ -510,6 +513,12 @@ class ZPETCInverse:
         numpy.ndarray, shape (p, n_samples)
             ``v`` [µm] with ``G v ~ reference`` (the plant starting at rest at
             ``reference[:, 0]``, see :meth:`plant_state`).
+
+        Raises
+        ------
+        DynamicsError
+            When ``reference`` or ``tail`` is not a finite array with p rows,
+            or ``tail`` has fewer than ``preview_samples`` samples.
         """
         r = _check_reference(reference, self.p)
         P = self.preview_samples

@@ -340,9 +340,28 @@ def dynamics_from_table(table, outputs, source="preset"):
     by ``hammerstein identify --dynamics``); ``kind = "none"`` for a static
     plant.
 
+    Parameters
+    ----------
+    table : dict
+        The parsed ``[dynamics]`` TOML table.
+    outputs : sequence of str
+        Output names, p of them: one mode per output, and the names given to
+        the system's inputs and outputs.
+    source : str
+        File name used as the prefix of error messages.
+
+    Returns
+    -------
+    control.StateSpace or None
+        Continuous-time system with p inputs [µm] and p outputs [µm]
+        (2p states for bending modes), or None for ``kind = "none"``.
+
     Raises
     ------
     PresetError
+        On an unknown ``kind``, a missing or unknown key, a value count that
+        is not one per output, a matrix of the wrong shape or with non-finite
+        entries, or invalid modal parameters.
     """
     kind = table.get("kind", "none")
     if kind == "none":

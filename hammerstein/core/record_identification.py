@@ -145,7 +145,7 @@ def reversal_points(u, band=REVERSAL_BAND):
 class Split:
     """How one record is used: training, held-out and burn-in samples.
 
-    Attributes
+    Parameters
     ----------
     train : numpy.ndarray of bool, shape (n_samples,)
         Samples fitted (after the burn-in, outside the held-out part).
@@ -181,6 +181,19 @@ class Split:
 
         The reversal sample ``stop`` may be the first held-out sample (two
         branches share their reversal).
+
+        Parameters
+        ----------
+        u : array_like, shape (n_samples,)
+            The excitation input of the record (row ``excitation`` of its
+            inputs, input unit, e.g. [V]).
+
+        Returns
+        -------
+        list of (int, int)
+            ``(start, stop)`` sample indices of every complete branch along
+            which ``u`` rises and whose samples ``start:stop`` are all
+            training samples.
         """
         return [(a, b) for a, b, ok in self.branches
                 if ok and u[b] > u[a] and self.train[a:b].all()]
@@ -344,6 +357,18 @@ def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
 # -- structure -------------------------------------------------------------------------
 def parse_components(spec, input_names, output_names):
     """Component kinds from ``"auto"``, ``"all"`` or ``"OUT:IN=pi|gain|none,..."``.
+
+    Parameters
+    ----------
+    spec : None, str or dict
+        ``None`` or ``"auto"`` (every component a PI, all prunable),
+        ``"all"`` (every component a PI, none prunable), a comma-separated
+        string ``"OUT:IN=kind,..."`` or a dict ``{"OUT:IN" or (OUT, IN):
+        kind}``; the components not named stay automatic.
+    input_names : sequence of str
+        The m input names of the model.
+    output_names : sequence of str
+        The p output names of the model.
 
     Returns
     -------
@@ -563,7 +588,7 @@ def _steady(pi, u):
 class RecordFit:
     """Result of :func:`identify_records`.
 
-    Attributes
+    Parameters
     ----------
     model : MultivariablePI
         Identified model, ``output_offset`` included, ``input_amplitude`` the
@@ -619,6 +644,16 @@ def _as_records(records):
 
 def simulate_on_record(model, record, split):
     """Model outputs over a record, play states as the split assumes.
+
+    Parameters
+    ----------
+    model : MultivariablePI
+        The identified p x m model.
+    record : MultiRecord
+        Record whose inputs ``u`` (shape (m, n_samples)) drive the model.
+    split : Split
+        When ``split.periodic``, the play states start on the steady loop
+        (the state after one pass over the record); otherwise at zero.
 
     Returns
     -------
@@ -810,7 +845,41 @@ def _one_partition(records, splits, method, n, thresholds, partition, bounds, ki
 def identify_record(record, method="least-squares", n_hysterons=15, thresholds=None,
                     partition="auto", bounds=None, train_fraction=None, skip_seconds=None,
                     hold_out="auto", components="auto"):
-    """Single-record form of :func:`identify_records` (same options and result)."""
+    """Single-record form of :func:`identify_records` (same options and result).
+
+    Parameters
+    ----------
+    record : MultiRecord or Record
+        The record, all m inputs and p outputs.
+    method : {"least-squares", "closed-form"}
+        Identification method.
+    n_hysterons : int
+        Hysterons per component.
+    thresholds : array_like, shape (n,), optional
+        Explicit thresholds (input unit, e.g. [V]) for every component.
+    partition : {"auto", "time", "input"}
+        Threshold partition.
+    bounds : None, "nonnegative" or "monotone"
+        Least-squares constraints on the direct transfers.
+    train_fraction : float, optional
+        Split at the reversal nearest to this fraction of the samples.
+    skip_seconds : float, optional
+        Burn-in [s].
+    hold_out : {"auto", "none"}
+        Whether trailing complete branches are held out for validation.
+    components : "auto", "all", str or dict
+        Component kinds, see :func:`parse_components`.
+
+    Returns
+    -------
+    RecordFit
+        As :func:`identify_records`.
+
+    Raises
+    ------
+    IdentificationError
+        As :func:`identify_records`.
+    """
     return identify_records([record], method, n_hysterons, thresholds, partition, bounds,
                             components, hold_out, train_fraction, skip_seconds)
 

@@ -646,6 +646,13 @@ def save(fig, path):
 
     One draw (no tight bounding box); zlib level 3 (default 6) encodes the
     PNG about twice as fast for files a few percent larger.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure; closed afterwards (pyplot releases it).
+    path : str or pathlib.Path
+        File to write (overwritten).
     """
     fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 3})
     plt.close(fig)

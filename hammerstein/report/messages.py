@@ -25,7 +25,7 @@ _NUMBER = re.compile(r"\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
 class WarningGroup:
     """One distinct warning of a scenario and the cases that raised it.
 
-    Attributes
+    Parameters
     ----------
     message : str
         The message; numbers that differ between the cases read ``lo-hi``
@@ -64,6 +64,16 @@ class WarningGroup:
 
 def message_template(message):
     """The message with runs of whitespace folded and every number replaced by ``#``.
+
+    Parameters
+    ----------
+    message : object
+        A warning message (converted with ``str``).
+
+    Returns
+    -------
+    str
+        The template: warnings that differ only in their numbers share it.
 
     Examples
     --------

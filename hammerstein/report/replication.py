@@ -128,6 +128,11 @@ def family_comparison(metrics):
     Reads the cases ``family-<trajectory>-<label>`` (compensator sweeps of
     the trajectory scenarios).
 
+    Parameters
+    ----------
+    metrics : dict of str to pandas.DataFrame
+        :func:`read_metrics` output (scenario name -> long metrics).
+
     Returns
     -------
     pandas.DataFrame
@@ -172,6 +177,11 @@ def _fig09_long(metrics):
 def fig09_trends(metrics):
     """Fig. 9 trends: RMS error at chosen frequencies per compensator and transfer.
 
+    Parameters
+    ----------
+    metrics : dict of str to pandas.DataFrame
+        :func:`read_metrics` output (scenario name -> long metrics).
+
     Returns
     -------
     pandas.DataFrame
@@ -200,6 +210,11 @@ _FIG07 = re.compile(r"(?:^|-)u(?P<input>[a-z]+)-(?P<f>[0-9.]+)Hz$")  # ux-10Hz, 
 
 def fig07_trends(metrics):
     """Fig. 7 trend: model RMS error (model identified at 50 Hz vs plant) per transfer.
+
+    Parameters
+    ----------
+    metrics : dict of str to pandas.DataFrame
+        :func:`read_metrics` output (scenario name -> long metrics).
 
     Returns
     -------

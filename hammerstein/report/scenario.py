@@ -31,6 +31,14 @@ __all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table"
 def timeseries_frame(result):
     """Time series of one case: time, references, inputs, outputs.
 
+    Parameters
+    ----------
+    result : CaseResult
+        A simulated case (:class:`hammerstein.scenario.execute.CaseResult`):
+        time [s] of shape (n_samples,), reference [µm] of shape
+        (p, n_samples) or None, inputs [V] of shape (m, n_samples) and
+        outputs [µm] of shape (p, n_samples).
+
     Returns
     -------
     pandas.DataFrame

@@ -151,9 +151,20 @@ def stability_figure(frame, title):
     secant gains) and, per compensator, the paper's literal law K = I at its
     equivalent scale with its exact radius.
 
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Stability map (:func:`hammerstein.scenario.sweeps.stability_map_frame`):
+        columns ``compensator, scale, max_radius``; ``attrs['laws']`` maps a
+        compensator label to its ``literal_scale``, ``literal_max_radius``
+        and ``normalised_max_radius`` (each optional).
+    title : str
+        Axes title.
+
     Returns
     -------
     matplotlib.figure.Figure
+        The caller saves and closes it.
     """
     plt = plots.plt
     W, legend_w = 11.0, 3.6

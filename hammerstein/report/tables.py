@@ -30,7 +30,21 @@ def metrics_frame(results):
 
 
 def markdown_table(frame, floatfmt="{:.4g}"):
-    """A pandas DataFrame as a GitHub markdown table (no extra dependency)."""
+    """A pandas DataFrame as a GitHub markdown table (no extra dependency).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table; its index is not written.
+    floatfmt : str
+        ``str.format`` pattern of the float cells; NaN cells are left empty.
+
+    Returns
+    -------
+    str
+        Header, separator and one line per row, joined by newlines (no
+        trailing newline).
+    """
     def fmt(v):
         if isinstance(v, (float, np.floating)):
             return "" if np.isnan(v) else floatfmt.format(v)

@@ -28,7 +28,7 @@ __all__ = ["CaseResult", "run_case", "chain_result", "model_comparison"]
 class CaseResult:
     """Simulation and metrics of one case.
 
-    Attributes
+    Parameters
     ----------
     spec : hammerstein.scenario.validate.CaseSpec
     inputs : numpy.ndarray, shape (m, n_samples)
@@ -100,7 +100,26 @@ def run_case(case):
 
 
 def chain_result(case, res, caught):
-    """CaseResult of a compensated case from its simulated chain (ChainResult)."""
+    """CaseResult of a compensated case from its simulated chain (ChainResult).
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        The compensated case; ``case.signal`` is its reference [µm], shape
+        (p, n_samples).
+    res : hammerstein.simulation.ChainResult
+        The compensator -> plant simulation of the case: inputs [V], shape
+        (m, n_samples), and outputs [µm], shape (p, n_samples).
+    caught : list of str
+        Warning messages of the case (kept in the result).
+
+    Returns
+    -------
+    CaseResult
+        With the tracking metrics
+        (:func:`hammerstein.core.metrics.tracking_metrics`), or the single
+        ``diverged_at_time`` [s] row when the compensator diverged.
+    """
     plant = case.plant
     names = list(plant.hysteresis.output_names)
     if res.diverged:

@@ -258,7 +258,19 @@ def identified_model(plant, spec):
 
 
 def model_file_name(spec):
-    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table."""
+    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table.
+
+    Parameters
+    ----------
+    spec : dict
+        The ``identify`` table: ``frequency`` [Hz] and, optionally,
+        ``method`` (default ``"closed-form"``).
+
+    Returns
+    -------
+    str
+        The file name, frequency formatted with ``:g``.
+    """
     return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
 
 

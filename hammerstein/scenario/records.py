@@ -147,7 +147,7 @@ IDENTIFICATION_FIELDS = {
 class RecordScenario:
     """A validated identification scenario.
 
-    Attributes
+    Parameters
     ----------
     name, title, description : str
     seed : int
@@ -179,7 +179,7 @@ class RecordScenario:
 class RecordResult:
     """One window (train or validation) of an identification scenario.
 
-    Attributes
+    Parameters
     ----------
     name : str
         ``"train"`` or ``"validation"``.

@@ -30,7 +30,7 @@ __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "resolve_mode
 class CompensatorKind:
     """An entry of the compensator registry.
 
-    Attributes
+    Parameters
     ----------
     build : callable
         ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;

@@ -67,7 +67,7 @@ _DIRECTIONS = ("lower", "higher", "neutral")
 class Tolerance:
     """Allowed move of one metric.
 
-    Attributes
+    Parameters
     ----------
     rtol : float
         Relative tolerance [-] (0.05 = 5 %), of ``|baseline|``.
@@ -84,7 +84,18 @@ class Tolerance:
     direction: str = "neutral"
 
     def allowed(self, baseline):
-        """Largest accepted ``|current - baseline|`` for a baseline value."""
+        """Largest accepted ``|current - baseline|`` for a baseline value.
+
+        Parameters
+        ----------
+        baseline : float
+            The baseline value of the metric, in its unit (µm, %, s).
+
+        Returns
+        -------
+        float
+            ``atol + rtol * |baseline|``, in the metric's unit.
+        """
         return self.atol + self.rtol * abs(baseline)
 
 

@@ -32,7 +32,7 @@ __all__ = ["Scenario", "resolve_scenario", "load_scenario"]
 class Scenario:
     """A resolved scenario of kind ``"cases"``: metadata and ready-to-run cases.
 
-    Attributes
+    Parameters
     ----------
     name, title, description : str
     seed : int

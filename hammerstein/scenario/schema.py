@@ -48,7 +48,28 @@ def _is_number(v):
 
 
 def number(unit, minimum=None, exclusive=True):
-    """Checker of a finite number [unit], optionally ``> minimum`` (or ``>=``)."""
+    """Checker of a finite number [unit], optionally ``> minimum`` (or ``>=``).
+
+    Parameters
+    ----------
+    unit : str
+        Unit named in the error message (``"µm"``, ``"Hz"``, ``"s"``, ``"V"``).
+    minimum : float, optional
+        Lower bound in the same unit; None for no bound.
+    exclusive : bool
+        Whether the bound is strict (``> minimum``) or not (``>= minimum``).
+
+    Returns
+    -------
+    callable
+        ``check(value) -> float``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a finite number (a
+        bool is not one) or violates the bound.
+    """
     def check(v):
         bound = "" if minimum is None else f" {'>' if exclusive else '>='} {minimum:g}"
         if not _is_number(v) or (minimum is not None and (v <= minimum if exclusive else v < minimum)):
@@ -58,7 +79,24 @@ def number(unit, minimum=None, exclusive=True):
 
 
 def integer(minimum=0):
-    """Checker of an integer ``>= minimum``."""
+    """Checker of an integer ``>= minimum``.
+
+    Parameters
+    ----------
+    minimum : int
+        Smallest accepted value.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> int``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not an int (a bool is
+        not one) or is below ``minimum``.
+    """
     def check(v):
         if not isinstance(v, int) or isinstance(v, bool) or v < minimum:
             raise Invalid(f"expected an integer >= {minimum}, found {v!r}")
@@ -67,7 +105,27 @@ def integer(minimum=0):
 
 
 def string(pattern=None, what="a string"):
-    """Checker of a string, optionally matching a regular expression."""
+    """Checker of a string, optionally matching a regular expression.
+
+    Parameters
+    ----------
+    pattern : str, optional
+        Regular expression the whole string must match (``re.fullmatch``);
+        None accepts any string.
+    what : str
+        Description of the expected value, used in the error message.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> str``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a string or does not
+        match ``pattern``.
+    """
     def check(v):
         if not isinstance(v, str) or (pattern is not None and not re.fullmatch(pattern, v)):
             raise Invalid(f"expected {what}, found {v!r}")
@@ -76,7 +134,18 @@ def string(pattern=None, what="a string"):
 
 
 def boolean():
-    """Checker of ``true`` / ``false``."""
+    """Checker of ``true`` / ``false``.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> bool``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a bool.
+    """
     def check(v):
         if not isinstance(v, bool):
             raise Invalid(f"expected true or false, found {v!r}")
@@ -85,7 +154,24 @@ def boolean():
 
 
 def choice(*options):
-    """Checker of one string among ``options``."""
+    """Checker of one string among ``options``.
+
+    Parameters
+    ----------
+    *options : str
+        The accepted values.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> value``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not one of ``options``;
+        the message suggests the closest option (difflib).
+    """
     def check(v):
         if v not in options:
             hint = difflib.get_close_matches(str(v), options, n=1)
@@ -96,7 +182,24 @@ def choice(*options):
 
 
 def name_list(count):
-    """Checker of a list of ``count`` strings."""
+    """Checker of a list of ``count`` strings.
+
+    Parameters
+    ----------
+    count : int
+        Required length of the list.
+
+    Returns
+    -------
+    callable
+        ``check(value) -> list of str``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a list of exactly
+        ``count`` strings.
+    """
     def check(v):
         if not (isinstance(v, list) and len(v) == count and all(isinstance(s, str) for s in v)):
             raise Invalid(f"expected a list of {count} names, found {v!r}")
@@ -278,7 +381,20 @@ def check_table(table, schema, where, problems, source):
 
 
 def kind_problem(kind, kinds):
-    """The message of an unknown ``kind`` among ``kinds`` (with the closest one), or []."""
+    """The message of an unknown ``kind`` among ``kinds`` (with the closest one), or [].
+
+    Parameters
+    ----------
+    kind : object
+        The ``kind`` value read from the file.
+    kinds : iterable of str
+        The known kinds.
+
+    Returns
+    -------
+    list of str
+        One message when ``kind`` is unknown, else empty.
+    """
     try:
         choice(*kinds)(kind)
     except Invalid as exc:

@@ -71,7 +71,7 @@ BATCH_SIZE = 16
 class SweepSpec:
     """A validated ``[[sweeps]]`` table.
 
-    Attributes
+    Parameters
     ----------
     name : str
     mode : {'reference', 'drive'}
@@ -84,6 +84,8 @@ class SweepSpec:
         template leaves it to the signal kind (circles, Lissajous...).
     metric : str
         Metric plotted against frequency.
+    description : str
+        The sweep's ``description`` key (empty when absent).
     cases : list of dict
         ``{case, compensator, axis, frequency_hz}`` per expanded case.
     """
@@ -264,7 +266,18 @@ def run_cases(cases, desc="cases"):
 
 
 def run_scenario_cases(scenario):
-    """:func:`run_cases` on a scenario's cases (the runner's "cases" kind)."""
+    """:func:`run_cases` on a scenario's cases (the runner's "cases" kind).
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenario.resolve.Scenario
+        A resolved scenario; its name labels the progress display.
+
+    Returns
+    -------
+    list of hammerstein.scenario.execute.CaseResult
+        In the order of ``scenario.cases``; divergences are results.
+    """
     return run_cases(scenario.cases, desc=scenario.name)
 
 

@@ -43,7 +43,7 @@ __all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_
 class CaseSpec:
     """A validated case of a scenario (resolved: with its compensator and model).
 
-    Attributes
+    Parameters
     ----------
     name : str
     description : str
@@ -111,7 +111,7 @@ class CaseSpec:
 class ScenarioSpec:
     """A validated scenario of kind ``"cases"`` (nothing built or identified yet).
 
-    Attributes
+    Parameters
     ----------
     name, title, description : str
     seed : int
@@ -143,7 +143,24 @@ class ScenarioSpec:
 
 
 def read_scenario(path):
-    """Parse a scenario file: ``(path, data)``; raises ScenarioError for unreadable TOML."""
+    """Parse a scenario file: ``(path, data)``; raises ScenarioError for unreadable TOML.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Scenario TOML file.
+
+    Returns
+    -------
+    (pathlib.Path, dict)
+        The path and the parsed TOML document.
+
+    Raises
+    ------
+    ScenarioError
+        If the file is missing, unreadable, not UTF-8 or not valid TOML
+        (one problem line, from :func:`hammerstein.core.presets.read_toml`).
+    """
     path = Path(path)
     try:
         return path, read_toml(path)
