@@ -163,7 +163,20 @@ def _title_lines(title, width_in, fontsize=12):
 
 
 def suptitle(fig, title, fontsize=12):
-    """Figure title wrapped to the figure width; returns the number of lines."""
+    """Figure title wrapped to the figure width, at the top of the figure.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    title : str
+    fontsize : float
+        [pt].
+
+    Returns
+    -------
+    int
+        Number of lines of the wrapped title.
+    """
     lines = _title_lines(title, fig.get_size_inches()[0] - 0.3, fontsize)
     fig.suptitle("\n".join(lines), fontsize=fontsize, y=1 - 0.12 / fig.get_size_inches()[1],
                  va="top")
@@ -176,8 +189,18 @@ def _title_height(title, width_in, fontsize=12):
 
 
 def headroom(ax, rows, fontsize=8):
-    """Extend the y-limits of ``ax`` upwards (linear or log) so that a band of
-    ``rows`` text lines at the top stays free of data."""
+    """Extend the y-limits of ``ax`` upwards so that a band at the top stays free of data.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        With its final position (layout fixed) and its curves drawn; linear
+        or log y-scale.
+    rows : int
+        Text lines the band must hold.
+    fontsize : float
+        Font size of those lines [pt].
+    """
     fig_h = ax.figure.get_size_inches()[1]
     ax_h = ax.get_position().height * fig_h
     frac = min(0.6, (rows * fontsize * 1.45 / 72 + 0.12) / ax_h)
@@ -220,7 +243,13 @@ def legend_on_top(ax, n_entries, ncol=None, fontsize=8, loc="upper center", **kw
 
 
 def log_ticks(ax):
-    """Plain labels 1, 2, 5 x 10^k on a log y-axis (no crowded minor labels)."""
+    """Plain labels 1, 2, 5 x 10^k on a log y-axis (no crowded minor labels).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        With a log y-scale.
+    """
     from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
     ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
@@ -239,8 +268,19 @@ def _settled_ylim(ax, values, pad=0.08):
 
 
 def scenario_prefix(scenario):
-    """Short name of a scenario for figure titles: the part of its title
-    before ':' when short (``"Fig. 8"``), else its name."""
+    """Short name of a scenario for figure titles.
+
+    Parameters
+    ----------
+    scenario : object
+        With ``title`` and ``name`` (a loaded scenario).
+
+    Returns
+    -------
+    str
+        The part of the title before ':' when it is short (``"Fig. 8"``),
+        else the scenario name.
+    """
     title = str(getattr(scenario, "title", "") or "")
     head = title.split(":", 1)[0].strip()
     return head if ":" in title and 0 < len(head) <= 24 else scenario.name
@@ -249,7 +289,16 @@ def scenario_prefix(scenario):
 def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6, extra_top=0.0):
     """A p x m grid of panels with a fixed layout and room for ``title``.
 
-    ``extra_top`` [in] reserves a band under the title (a figure legend).
+    Parameters
+    ----------
+    p, m : int
+        Rows and columns of panels.
+    title : str
+        Figure title (wrapped; the top margin grows with its lines).
+    panel_w, panel_h : float
+        Size of one panel [in].
+    extra_top : float
+        Height [in] of a band reserved under the title (a figure legend).
 
     Returns
     -------

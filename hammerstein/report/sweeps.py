@@ -36,7 +36,18 @@ _METRIC_LABELS = {
 
 
 def metric_label(metric):
-    """A metric name in words for axis labels, e.g. ``'model RMS error'``."""
+    """A metric name in words for axis labels.
+
+    Parameters
+    ----------
+    metric : str
+        Column name of ``metrics.csv``, e.g. ``'model_rms_error'``.
+
+    Returns
+    -------
+    str
+        E.g. ``'model RMS error'``; unknown names with spaces for underscores.
+    """
     return _METRIC_LABELS.get(metric, str(metric).replace("_", " "))
 
 
