@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.report.figures import save
+from hammerstein.report.figures import save, scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
 from hammerstein.report.tables import markdown_table
 from hammerstein.core.lti import compare_frequency_responses
@@ -92,6 +92,17 @@ def _model_label(spec):
     return f"model {spec.get('model')}"
 
 
+def _drive_words(rs):
+    """'10, 5 V sines at 50 Hz' for the drive cases of a figure."""
+    def join(vals, unit):
+        return f"{', '.join(f'{v:g}' for v in dict.fromkeys(float(x) for x in vals))} {unit}"
+    try:
+        return (f"{join([r.spec.signal_spec['amplitude'] for r in rs], 'V')} sines at "
+                f"{join([r.spec.signal_spec['frequency'] for r in rs], 'Hz')}")
+    except (KeyError, TypeError, ValueError):
+        return "open-loop drives"
+
+
 def _comparison_figures(scenario, results, directory):
     """Plant-vs-model loop grids (Fig. 6) and model output CSVs; [(caption, file)]."""
     groups = {}
@@ -115,8 +126,8 @@ def _comparison_figures(scenario, results, directory):
                    "model": _last_period(r.model_outputs, P(r))} for r in rs]
         fig = model_loop_grid(curves, [f"{n} [V]" for n in model.input_names],
                               [f"{n} [µm]" for n in model.output_names],
-                              f"{scenario.title}: {label} plant (solid) vs {mlabel} (dashed), "
-                              f"last period")
+                              f"{scenario_prefix(scenario)}: {label} plant (solid) vs {mlabel} "
+                              f"(dashed), {_drive_words(rs)} (last period)")
         fname = f"model-vs-plant-{label}{'' if i == 0 else f'-{i + 1}'}.png"
         save(fig, directory / fname)
         figs.append((f"Model vs plant: {label} plant, {mlabel}", fname))
@@ -179,7 +190,7 @@ def _frequency_tables(scenario, results, directory):
                 f_id = ms["identify"]["frequency"]
                 break
         fig = rms_vs_frequency_figure(g, list(model.input_names), list(model.output_names),
-                                      f"{scenario.title}\nRMS error of the {mlabel} against the "
+                                      f"{scenario_prefix(scenario)}: RMS error of the {mlabel} against the "
                                       f"{plant} plant, {amp:g} V drives", identification_hz=f_id)
         save(fig, directory / fig_name)
         wide = g.pivot_table(index="frequency_hz", columns=["output", "input"],
