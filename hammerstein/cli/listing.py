@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hammerstein.core.presets import bundled_presets
+import numpy as np
+
+from hammerstein.core.lti import dc_gain
+from hammerstein.core.presets import PresetError, bundled_presets, load_plant
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -29,6 +32,18 @@ def add_parser(subparsers):
     p.set_defaults(handler=handler)
 
 
+def _dynamics_summary(path):
+    """``; dynamics: n states, DC gain [[..]]`` of a preset (reported, not forced to I)."""
+    try:
+        plant = load_plant(path)
+    except PresetError as exc:
+        return f"; invalid: {exc}"
+    if plant.dynamics is None:
+        return "; static (no dynamics)"
+    gain = np.round(dc_gain(plant.dynamics), 4).tolist()
+    return f"; dynamics: {plant.dynamics.nstates} states, DC gain {gain}"
+
+
 def handler(args):
     """Print the presets, the compensator kinds and the scenario files; exit status 0.
 
@@ -46,7 +61,7 @@ def handler(args):
     """
     print("presets:")
     for name, path in sorted(bundled_presets().items()):
-        print(f"  {name}  ({path})")
+        print(f"  {name}  ({path}){_dynamics_summary(path)}")
     print("compensator kinds:")
     for name, kind in COMPENSATORS.items():
         print(f"  {name}: {kind.description}")

@@ -15,12 +15,14 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
+import control
 import numpy as np
 import tomli_w
 
 from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
 
@@ -34,6 +36,10 @@ __all__ = [
     "load_model",
     "save_model",
     "load_plant",
+    "dynamics_from_table",
+    "dynamics_to_table",
+    "load_dynamics",
+    "save_dynamics",
 ]
 
 
@@ -373,47 +379,81 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
         raise PresetError(str(exc)) from None
 
 
+_DYNAMICS_KEYS = {"none": set(), "bending_modes": {"natural_frequency", "damping_ratio"},
+                  "state_space": {"A", "B", "C", "D"}}
+
+
 def dynamics_from_table(table, outputs, source="preset"):
     """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
 
     ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
-    ``damping_ratio`` per output; ``kind = "state_space"`` with continuous
-    matrices ``A`` (n, n) [1/s], ``B`` (n, p), ``C`` (p, n), ``D`` (p, p)
-    (p inputs: the PI outputs, p outputs: the displacements; e.g. identified
-    by ``hammerstein identify --dynamics``); ``kind = "none"`` for a static
+    ``damping_ratio`` per output (decoupled, unit DC gain);
+    ``kind = "state_space"`` with continuous-time matrices ``A`` (n x n)
+    [1/s], ``B`` (n x p), ``C`` (p x n) and optional ``D`` (p x p) as arrays
+    of arrays: inputs are the p PI outputs [µm], outputs the p displacements
+    [µm] (e.g. identified by ``hammerstein identify --dynamics``);
+    off-diagonal (dynamic cross-coupling) terms are allowed, the DC gain is
+    whatever the matrices give (see
+    :func:`hammerstein.core.lti.dc_gain`); ``kind = "none"`` for a static
     plant.
 
     Parameters
     ----------
     table : dict
-        The parsed ``[dynamics]`` TOML table.
-    outputs : sequence of str
-        Output names, p of them: one mode per output, and the names given to
-        the system's inputs and outputs.
+        The parsed ``[dynamics]`` table.
+    outputs : list of str
+        Output names of the preset's PI model (p of them).
     source : str
-        File name used as the prefix of error messages.
+        Prefix of error messages (file name).
 
     Returns
     -------
     control.StateSpace or None
-        Continuous-time system with p inputs [µm] and p outputs [µm]
-        (2p states for bending modes), or None for ``kind = "none"``.
+        Continuous-time p x p system (None for ``kind = "none"``).
 
     Raises
     ------
     PresetError
-        On an unknown ``kind``, a missing or unknown key, a value count that
-        is not one per output, a matrix of the wrong shape or with non-finite
-        entries, or invalid modal parameters.
+        Naming the key: ``dynamics.A: expected ...`` (shape, finiteness,
+        stability of A, p = number of outputs).
     """
+    if not isinstance(table, dict):
+        raise PresetError(f"{source}: dynamics: expected a table")
     kind = table.get("kind", "none")
+    if kind not in _DYNAMICS_KEYS:
+        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
+                          f"'none', found {kind!r}")
+    unknown = sorted(set(table) - _DYNAMICS_KEYS[kind] - {"kind", "description"})
+    if unknown:
+        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key for kind = {kind!r} "
+                          f"(expected {', '.join(sorted(_DYNAMICS_KEYS[kind])) or 'none'})")
     if kind == "none":
         return None
     if kind == "state_space":
-        return _state_space(table, outputs, source)
-    if kind != "bending_modes":
-        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
-                          f"'none', found {kind!r}")
+        for key in ("A", "B", "C"):
+            if key not in table:
+                raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space' "
+                                  f"needs A, B, C and optionally D)")
+        p = len(outputs)
+        shapes = {}
+        for key in ("A", "B", "C", "D"):
+            if key in table:
+                try:
+                    shapes[key] = np.shape(np.array(table[key], dtype=float))
+                except (TypeError, ValueError):
+                    raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix "
+                                      f"(list of rows)") from None
+        n = shapes["A"][0] if len(shapes["A"]) == 2 else -1
+        expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+        for key, shape in shapes.items():
+            if n >= 1 and shape != expected[key]:
+                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key]} for "
+                                  f"{p} outputs and {n} states, found {shape}")
+        try:
+            return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
+                                        names=outputs)
+        except DynamicsError as exc:
+            raise PresetError(f"{source}: {exc}") from None
     for key in ("natural_frequency", "damping_ratio"):
         if key not in table:
             raise PresetError(f"{source}: dynamics.{key}: missing")
@@ -425,36 +465,105 @@ def dynamics_from_table(table, outputs, source="preset"):
         raise PresetError(f"{source}: dynamics.{exc}") from None
 
 
-def _state_space(table, outputs, source):
-    import control
-    unknown = sorted(set(table) - {"kind", "A", "B", "C", "D"})
-    if unknown:
-        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key"
-                          f"{_hint(unknown[0], ('A', 'B', 'C', 'D'))}")
-    p = len(outputs)
-    mats = {}
-    for key in ("A", "B", "C", "D"):
-        if key not in table:
-            if key == "D":
-                mats[key] = np.zeros((p, p))
-                continue
-            raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space')")
+def dynamics_to_table(system):
+    """A ``[dynamics]`` table (``kind = "state_space"``) of a continuous or discrete system.
+
+    A discrete system is written as its continuous ZOH equivalent
+    (:func:`hammerstein.core.lti.continuous_system`), so that
+    :func:`load_dynamics` at the same sampling period gives it back.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p system.
+
+    Returns
+    -------
+    dict
+        TOML-ready ``{"kind": "state_space", "A": [[..]], "B", "C", "D"}``.
+    """
+    mats = system
+    if system.isdtime(strict=True):
         try:
-            arr = np.array(table[key], dtype=float)
-        except (TypeError, ValueError):
-            raise PresetError(f"{source}: dynamics.{key}: expected a matrix (list of rows)") from None
-        if arr.ndim != 2 or not np.all(np.isfinite(arr)):
-            raise PresetError(f"{source}: dynamics.{key}: expected a finite matrix (list of rows)")
-        mats[key] = arr
-    n = mats["A"].shape[0]
-    expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
-    for key, shape in expected.items():
-        if mats[key].shape != shape:
-            raise PresetError(f"{source}: dynamics.{key}: expected shape {shape} for {p} outputs "
-                              f"and {n} states, found {mats[key].shape}")
-    return control.ss(mats["A"], mats["B"], mats["C"], mats["D"],
-                      inputs=[f"{o}_h" for o in outputs], outputs=list(outputs),
-                      name="state_space")
+            mats = continuous_system(system)
+        except DynamicsError:              # e.g. a real pole at z <= 0: keep it discrete
+            return {"kind": "discrete_state_space", "sampling_period": float(system.dt),
+                    **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
+    return {"kind": "state_space",
+            **{k: np.asarray(getattr(mats, k), dtype=float).tolist() for k in "ABCD"}}
+
+
+def load_dynamics(path, outputs, sampling_period):
+    """The discrete linear dynamics G of a dynamics or preset file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file with a ``[dynamics]`` table (a preset, or a file written
+        by :func:`save_dynamics`).
+    outputs : list of str
+        Output names of the plant (p).
+    sampling_period : float
+        T [s] of the plant; the continuous dynamics are discretised (ZOH) at it.
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete p x p system.
+
+    Raises
+    ------
+    PresetError
+        Missing file, no ``[dynamics]`` table, ``kind = "none"``, wrong size.
+    """
+    data = read_toml(path)
+    if "dynamics" not in data:
+        raise PresetError(f"{path}: missing [dynamics] table")
+    table = data["dynamics"]
+    if isinstance(table, dict) and table.get("kind") == "discrete_state_space":
+        dt = table.get("sampling_period")
+        if not isinstance(dt, (int, float)) or not np.isclose(dt, sampling_period):
+            raise PresetError(f"{path}: dynamics.sampling_period: expected the plant's "
+                              f"{sampling_period:g} s for discrete dynamics, found {dt!r}")
+        try:
+            sysc = state_space_dynamics(-np.eye(len(table["A"])), table["B"], table["C"],
+                                        table.get("D"), names=outputs)   # shapes and finiteness
+        except (DynamicsError, KeyError, TypeError) as exc:
+            raise PresetError(f"{path}: {exc}") from None
+        A = np.asarray(table["A"], dtype=float)
+        if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
+            raise PresetError(f"{path}: dynamics.A: expected a stable discrete system (|z| < 1)")
+        return control.ss(A, sysc.B, sysc.C, sysc.D, dt=float(dt))
+    cont = dynamics_from_table(data["dynamics"], list(outputs), str(path))
+    if cont is None:
+        raise PresetError(f"{path}: dynamics.kind: 'none' has no dynamics to invert")
+    return discretize(cont, float(sampling_period))
+
+
+def save_dynamics(system, path, metadata=None):
+    """Write a dynamics file (``[dynamics] kind = "state_space"``) that :func:`load_dynamics` reads.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p system (a discrete one is saved as its continuous ZOH equivalent).
+    path : str or pathlib.Path
+        Destination, written atomically.
+    metadata : dict, optional
+        Stored as an ``[identification]`` table.
+    """
+    path = Path(path)
+    doc = {"identification": metadata} if metadata else {}
+    doc["dynamics"] = dynamics_to_table(system)
+    tmp = path.with_name(path.name + ".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with open(tmp, "wb") as fh:
+            tomli_w.dump(doc, fh)
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def load_plant(preset, dynamics=True, base_dir=None):

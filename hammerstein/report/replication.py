@@ -245,7 +245,9 @@ def fig08_identified_figure(report_dir, path):
 
     Reads ``timeseries-<case>.csv`` of the Fig. 8 report (cases ``x-axis``,
     ``y-axis`` for 50 Hz and ``id<f>Hz-<axis>-axis``) and draws the last
-    period of each in the 2 x 2 compensated-map layout.
+    period of each in the 2 x 2 compensated-map layout: the figure that
+    ``hammerstein run`` writes as ``maps-compensated-hammerstein-by-identification.png``
+    in that report, redrawn from the saved time series.
 
     Parameters
     ----------
@@ -277,7 +279,8 @@ def fig08_identified_figure(report_dir, path):
     if not curves:
         return False
     fig = plots.loop_grid(curves, ["x_r [µm]", "y_r [µm]"], ["x [µm]", "y [µm]"],
-                          "Fig. 8: compensated maps, Hammerstein actuator, last period",
+                          "Fig. 8: compensated maps, hammerstein plant, one compensator per "
+                          "identification frequency (last period)",
                           direct_label="compensated direct", cross_label="residual cross-coupling")
     plots.save(fig, path)
     return True

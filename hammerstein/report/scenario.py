@@ -195,16 +195,81 @@ def _last_period(x, P):
     return np.concatenate([x[..., -P:], x[..., -P:-P + 1]], axis=-1)
 
 
+def _figure_prefix(scenario):
+    return plots.scenario_prefix(scenario)
+
+
+def _join_numbers(values, unit):
+    vals = sorted(dict.fromkeys(float(v) for v in values))
+    return f"{', '.join(f'{v:g}' for v in vals)} {unit}"
+
+
+def _signal_words(rs, unit, fallback):
+    """'10 V sines at 50, 100 Hz' for the cases of one figure (one signal kind)."""
+    kinds = {str(r.spec.signal_spec.get("kind")) for r in rs}
+    amps = [r.spec.signal_spec.get("amplitude") for r in rs]
+    freqs = [r.spec.signal_spec.get("frequency") for r in rs]
+    if len(kinds) != 1 or any(not isinstance(v, (int, float)) or isinstance(v, bool)
+                              for v in amps + freqs):
+        return fallback
+    return f"{_join_numbers(amps, unit)} {kinds.pop()}s at {_join_numbers(freqs, 'Hz')}"
+
+
+def _drive_summary(rs):
+    return _signal_words(rs, "V", "open-loop drives")
+
+
+def _reference_summary(rs):
+    return _signal_words(rs, "µm", "compensated references")
+
+
+def _model_summary(c):
+    model = c.get("model", "plant")
+    if model == "identified":
+        i = c.get("identify", {})
+        extra = ", ".join(str(i[k]) for k in ("method", "bounds") if k in i)
+        return f"model identified at {i.get('frequency', 0):g} Hz" + (f" ({extra})" if extra else "")
+    if model == "plant":
+        return "the plant's own model"
+    return f"model {model}"
+
+
+def _compensator_title(spec):
+    """A compensator in words, e.g. 'multivariable compensator, model identified
+    at 100 Hz (least-squares, monotone), midpoint gain'."""
+    c = spec.compensator_spec
+    words = f"{c.get('kind', 'multivariable')} compensator, {_model_summary(c)}"
+    gain = c.get("gain")
+    if gain is not None:
+        words += f", {gain if isinstance(gain, str) else 'matrix'} gain"
+    if c.get("iterations", 1) != 1:
+        words += f", {c['iterations']} iterations"
+    return words
+
+
+def _identified_frequency(spec):
+    c = spec.compensator_spec
+    if c.get("model") == "identified":
+        return float(c.get("identify", {}).get("frequency", float("nan")))
+    return None
+
+
 def _figures(scenario, results, directory):
-    """Write the figures; return [(caption, file name)]."""
+    """Write the figures; return [(caption, file name)].
+
+    Figure titles say what each file shows (plant, drives or compensator),
+    not the scenario's title. Open-loop drives compared with a model are
+    drawn in the model-vs-plant maps only (``hammerstein.report.identified``).
+    """
     figs = []
     ok = [r for r in results if r.divergence is None]
     first = results[0].spec.plant.hysteresis
     in_names, out_names = list(first.input_names), list(first.output_names)
-    # open-loop maps, grouped by plant
+    prefix = _figure_prefix(scenario)
+    # open-loop maps, grouped by plant (drives with a model comparison have their own maps)
     groups = {}
     for r in ok:
-        if r.spec.mode == "drive":
+        if r.spec.mode == "drive" and getattr(r, "model_outputs", None) is None:
             groups.setdefault(_plant_label(r.spec), []).append(r)
     for label, rs in groups.items():
         curves = [{"label": r.name, "column": r.spec.driven_input,
@@ -212,7 +277,8 @@ def _figures(scenario, results, directory):
                    "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
         fig = plots.loop_grid(curves, [f"{n} [V]" for n in in_names],
                               [f"{n} [µm]" for n in out_names],
-                              f"{scenario.title}: open-loop input-output maps ({label} plant, last period)")
+                              f"{prefix}: open-loop input-output maps, {label} plant, "
+                              f"{_drive_summary(rs)} (last period)")
         fname = f"maps-open-loop-{label}.png"
         plots.save(fig, directory / fname)
         figs.append((f"Open-loop hysteresis and cross-couplings, {label} plant", fname))
@@ -223,24 +289,53 @@ def _figures(scenario, results, directory):
             key = (_plant_label(r.spec), repr(sorted(r.spec.compensator_spec.items())))
             groups.setdefault(key, []).append(r)
     seen = {}
+    identified = {}
     for (label, _), rs in groups.items():
         seen[label] = seen.get(label, 0) + 1
         curves = [{"label": r.name, "column": r.spec.loop_channel,
                    "x": _last_period(r.reference[r.spec.loop_channel], r.spec.period_samples),
                    "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
+        comp = _compensator_title(rs[0].spec)
         fig = plots.loop_grid(curves, [f"{n}_r [µm]" for n in out_names],
                               [f"{n} [µm]" for n in out_names],
-                              f"{scenario.title}: compensated maps ({label} plant, last period)",
+                              f"{prefix}: compensated maps, {label} plant, {comp}; "
+                              f"{_reference_summary(rs)} (last period)",
                               direct_label="compensated direct", cross_label="residual cross-coupling")
         fname = f"maps-compensated-{label}{'' if seen[label] == 1 else f'-{seen[label]}'}.png"
         plots.save(fig, directory / fname)
-        comp = _compensator_summary(rs[0].spec)
-        figs.append((f"Compensated input-output maps, {label} plant, compensator {comp}", fname))
+        figs.append((f"Compensated input-output maps, {label} plant, {comp}", fname))
+        f_id = _identified_frequency(rs[0].spec)
+        if f_id is not None:
+            identified.setdefault(label, []).append((f_id, rs))
+    # several identified models on one plant: one overlay as the paper's Fig. 8
+    for label, groups_f in identified.items():
+        if len({f for f, _ in groups_f}) < 2:
+            continue
+        curves = []
+        for f_id, rs in sorted(groups_f, key=lambda g: g[0]):
+            for r in rs:
+                f_ref = r.spec.signal_spec.get("frequency")
+                tested = f", tested at {f_ref:g} Hz" if isinstance(f_ref, (int, float)) else ""
+                curves.append({"label": f"identified at {f_id:g} Hz{tested}",
+                               "column": r.spec.loop_channel,
+                               "x": _last_period(r.reference[r.spec.loop_channel], r.spec.period_samples),
+                               "outputs": _last_period(r.outputs, r.spec.period_samples)})
+        fname = f"maps-compensated-{label}-by-identification.png"
+        fig = plots.loop_grid(curves, [f"{n}_r [µm]" for n in out_names],
+                              [f"{n} [µm]" for n in out_names],
+                              f"{prefix}: compensated maps, {label} plant, one compensator per "
+                              f"identification frequency (last period)",
+                              direct_label="compensated direct", cross_label="residual cross-coupling")
+        plots.save(fig, directory / fname)
+        figs.append((f"Compensated input-output maps, {label} plant, compensators identified at "
+                     f"{_join_numbers([f for f, _ in groups_f], 'Hz')} (as the paper's Fig. 8)", fname))
     # diverged compensators
     for r in results:
         if r.divergence is not None:
             fig = plots.divergence_figure(r.inputs, in_names, r.divergence.sample,
-                                          r.divergence.reason, f"{r.name}: compensator output until divergence")
+                                          r.divergence.reason,
+                                          f"{prefix}: {r.name}, {_compensator_title(r.spec)}: "
+                                          f"compensator output until divergence")
             fname = f"divergence-{r.name}.png"
             plots.save(fig, directory / fname)
             figs.append((f"Case {r.name}: the compensator diverged at sample "
@@ -251,19 +346,20 @@ def _figures(scenario, results, directory):
         names = out_names[:2]
         settle = r.spec.settle_periods * r.spec.period_samples * r.spec.plant.sampling_period
         fig = plots.trajectory_figure(r.spec.time, r.reference[:2], r.outputs[:2], names,
-                                      f"{scenario.title}: {r.name} ({_plant_label(r.spec)} plant)",
-                                      settle_time=settle)
+                                      f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, "
+                                      f"{_compensator_title(r.spec)}",
+                                      settle_time=settle, inputs=r.inputs, input_names=in_names)
         fname = f"trajectory-{r.name}.png"
         plots.save(fig, directory / fname)
-        figs.append((f"Case {r.name}: spatial domain, time domain, tracking error", fname))
-    multi = traj
-    if len(multi) > 1:
+        figs.append((f"Case {r.name}: spatial domain, time domain (displacements, input "
+                     f"voltages), tracking error", fname))
+    if len(traj) > 1:
         curves = []
-        for r in multi:
+        for r in traj:
             start = int(round(r.spec.settle_periods * r.spec.period_samples))
             curves.append({"label": r.name, "reference": r.reference[:2, start:],
                            "outputs": r.outputs[:2, start:]})
-        fig = plots.xy_overlay(curves, out_names[:2], f"{scenario.title}: trajectories (after settling)")
+        fig = plots.xy_overlay(curves, out_names[:2], f"{prefix}: all trajectories after settling")
         plots.save(fig, directory / "xy-all.png")
         figs.append(("All trajectories after settling (dashed: references)", "xy-all.png"))
     return figs

@@ -20,7 +20,35 @@ from hammerstein.core.metrics import UNITS
 from hammerstein.report import figures as plots
 from hammerstein.report.tables import markdown_table, metrics_frame
 
-__all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines"]
+__all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines", "metric_label"]
+
+
+_LETTERS = "abcdefghijklmnopqrstuvwxyz"
+_METRIC_LABELS = {
+    "rms_error": "RMS error", "max_abs_error": "max |error|",
+    "rms_error_percent": "RMS error", "model_rms_error": "model RMS error",
+    "model_max_abs_error": "model max |error|", "peak_to_peak": "peak to peak",
+    "hysteresis_width": "hysteresis width", "hysteresis_ratio": "hysteresis ratio h/H",
+    "cross_coupling_peak_to_peak": "cross-coupling peak to peak",
+    "max_euclidean_error": "max Euclidean error", "rms_euclidean_error": "RMS Euclidean error",
+    "max_euclidean_error_percent": "max Euclidean error", "diverged_at_time": "divergence time",
+}
+
+
+def metric_label(metric):
+    """A metric name in words for axis labels.
+
+    Parameters
+    ----------
+    metric : str
+        Column name of ``metrics.csv``, e.g. ``'model_rms_error'``.
+
+    Returns
+    -------
+    str
+        E.g. ``'model RMS error'``; unknown names with spaces for underscores.
+    """
+    return _METRIC_LABELS.get(metric, str(metric).replace("_", " "))
 
 
 def _fmt(f):
@@ -80,36 +108,50 @@ def sweep_figure(table, spec, output_names, title, metric=None):
         Log-scaled metric axis when all values are positive; cases that
         diverged have no point.
     """
-    plt = plots.plt
     metric = metric or spec.metric
     axes_names = [a if a is not None else "-" for a in spec.axes]
     p, m = len(output_names), len(axes_names)
-    fig, axs = plt.subplots(p, m, figsize=(4.8 * m, 3.6 * p), squeeze=False)
-    letters = "abcdefghijklmnopqrstuvwxyz"
+    labels = list(dict.fromkeys(table["compensator"]))
+    # one legend for the whole figure, under the title; none for a single unnamed series
+    named = not (len(labels) == 1 and labels[0] in ("-", "", None))
+    ncol = min(len(labels), 3)
+    band = (-(-len(labels) // ncol) * 0.2 + 0.15) if named else 0.0
+    fig, axs = plots.grid_figure(p, m, title, panel_w=4.8, panel_h=3.3, extra_top=band)
     unit = UNITS.get(metric, "")
+    what = metric_label(metric)
+    handles = {}
     for l, out in enumerate(output_names):
         for k, axis in enumerate(axes_names):
             ax = axs[l][k]
             rows = table[(table["channel"] == out) & (table["axis"] == axis)]
-            for j, lab in enumerate(dict.fromkeys(table["compensator"])):
+            for j, lab in enumerate(labels):
                 r = rows[rows["compensator"] == lab].sort_values("frequency_hz")
                 if metric in r and r[metric].notna().any():
-                    ax.plot(r["frequency_hz"], r[metric], label=lab, **plots._style(j))
+                    line, = ax.plot(r["frequency_hz"], r[metric], label=lab, **plots._style(j))
+                    handles.setdefault(lab, line)
             vals = rows[metric] if metric in rows else pd.Series(dtype=float)
             if vals.notna().any() and (vals.dropna() > 0).all():
                 ax.set_yscale("log")
+                plots.log_ticks(ax)
             direct = (spec.mode == "reference" and axis == out) or \
                      (spec.mode == "drive" and k == l)
-            src = f"{axis}_r" if spec.mode == "reference" else axis
+            if spec.mode == "reference":
+                src = f"{axis}_r" if axis != "-" else "reference"
+            else:
+                src = axis if axis != "-" else "drive"
             kind = "direct" if direct else "cross-coupling"
-            ax.set_title(f"({letters[l * m + k]}) {kind}: {out} vs {src}", fontsize=10)
+            ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {kind}: {out} vs {src}", fontsize=10,
+                         y=1.0)
             ax.set_xlabel("frequency [Hz]")
-            ax.set_ylabel(f"{metric} of {out} [{unit}]" if unit else f"{metric} of {out}")
-            ax.grid(True, which="both", alpha=0.3)
-            if ax.lines:
-                ax.legend(fontsize=7, loc="best")
-    fig.suptitle(title)
-    fig.tight_layout()
+            ax.set_ylabel(f"{what}, {out} [{unit}]" if unit else f"{what}, {out}")
+            ax.grid(True, which="major", alpha=0.3)
+            ax.grid(True, which="minor", alpha=0.12)
+    if named and handles:
+        W, H = fig.get_size_inches()
+        top = fig.subplotpars.top * H
+        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=ncol,
+                   fontsize=8, frameon=False, bbox_to_anchor=(0.5, (top + 0.3) / H))
+    plots.suptitle(fig, title)
     return fig
 
 
@@ -136,7 +178,10 @@ def stability_figure(frame, title):
         The caller saves and closes it.
     """
     plt = plots.plt
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    W, legend_w = 11.0, 3.6
+    top = plots._title_height(title, W) + 0.05
+    fig, ax = plt.subplots(figsize=(W, top + 4.6 + 0.6))
+    plots.fixed_layout(fig, left=0.8, right=legend_w, bottom=0.6, top=top)
     laws = frame.attrs.get("laws", {})
     for j, (label, g) in enumerate(frame.groupby("compensator", sort=False)):
         line, = ax.plot(g["scale"], g["max_radius"], label=f"{label}: max rho", **plots._style(j))
@@ -153,10 +198,11 @@ def stability_figure(frame, title):
     ax.set_yscale("log")
     ax.set_xlabel("gain scaling s (K = s x direct secant gains)")
     ax.set_ylabel("max rho(I - (sK)^-1 J) over reachable slopes")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, loc="best")
-    ax.set_title(title, fontsize=10)
-    fig.tight_layout()
+    ax.grid(True, which="major", alpha=0.3)
+    ax.grid(True, which="minor", alpha=0.12)
+    # outside the axes, on the right: the curves fill the whole plot
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    plots.suptitle(fig, title)
     return fig
 
 
@@ -194,7 +240,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
         if len(spec.frequencies) > 1:
             png = f"sweep-{spec.name}.png"
             fig = sweep_figure(table, spec, outputs,
-                               f"{scenario.title}: {spec.metric} vs frequency ({spec.name})")
+                               f"{plots.scenario_prefix(scenario)}: {metric_label(spec.metric)} "
+                               f"vs frequency, sweep {spec.name}")
             plots.save(fig, directory / png)
         n_div = int(table["diverged_at_time"].notna().groupby(
             [table["compensator"], table["axis"], table["frequency_hz"]]).any().sum()) \

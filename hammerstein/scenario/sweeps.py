@@ -243,7 +243,8 @@ def run_cases(cases, desc="cases"):
     results = [None] * len(cases)
     batchable = [i for i, c in enumerate(cases)
                  if getattr(c, "sweep", None) is not None and c.mode == "reference"
-                 and _fusable(c.compensator)]
+                 and _fusable(c.compensator)
+                 and not hasattr(c.compensator, "run_reference")]   # own start-up: run_case
     rest = [i for i in range(len(cases)) if i not in set(batchable)]
     n_sweep = sum(1 for c in cases if getattr(c, "sweep", None) is not None)
     bar = progress(total=len(cases), desc=desc, unit="case") if n_sweep else None

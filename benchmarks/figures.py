@@ -1,0 +1,167 @@
+"""Time every figure function of the reports on representative data.
+
+Run: ``python benchmarks/figures.py [--repeat N]`` (from the repository root).
+
+Not a test: it prints one row per figure function with the time to build the
+figure (the function call: plotting and layout), to write it (``savefig`` as
+the reports do, PNG at :data:`hammerstein.report.figures.DPI`) and the total,
+best of ``--repeat`` runs, in milliseconds of wall time, and the CPU time of
+the process (steadier than the wall time on a shared machine). The data imitate the bundled
+scenarios (T = 50 µs): loop grids of one 50 Hz period (401 samples) with 8
+curves, trajectory figures of 80 ms (circle, 1600 samples) and 1 s (20 000
+samples, decimated to :data:`hammerstein.report.figures.MAX_POINTS` per
+line), the XY overlay of four circles, the Fig. 6 model grid, the Fig. 7
+model-error and Fig. 9 sweep grids (6 compensators x 15 frequencies), the
+stability map and the record-fit figure of a 20 000-sample record.
+
+The paper run (``hammerstein run scenarios/paper/*.toml``) writes about 25
+figures; the sum of the totals below for its mix is the plotting part of its
+wall time. Other processes on the machine inflate the numbers (the load
+average is printed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pandas as pd
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hammerstein.report import figures as plots  # noqa: E402
+from hammerstein.report import model_figures  # noqa: E402
+
+try:  # the sweep figures moved from scenario/ to report/
+    from hammerstein.report import sweeps as sweep_figs  # noqa: E402
+except ImportError:  # pragma: no cover
+    from hammerstein.scenario import sweeps as sweep_figs  # noqa: E402
+
+T = 50e-6
+
+
+def _loop(n=401, amp=10.0, gain=5.8, width=0.17, phase=0.0):
+    th = np.linspace(0, 2 * np.pi, n)
+    u = amp * np.sin(th)
+    return u, gain * u + width * gain * amp * np.cos(th + phase)
+
+
+def _loop_curves(n_per_column=4, outputs=2):
+    curves = []
+    for k in range(2):
+        for i in range(n_per_column):
+            u, y = _loop(phase=0.1 * i)
+            outs = np.vstack([y if l == k else 0.03 * y for l in range(outputs)])
+            curves.append({"label": f"case-{k}-{i}", "column": k, "x": u, "outputs": outs})
+    return curves
+
+
+def _trajectory(n, radius=30.0, f=50.0):
+    t = np.arange(n) * T
+    r = np.vstack([radius * np.cos(2 * np.pi * f * t), radius * np.sin(2 * np.pi * f * t)])
+    y = 1.05 * r + 0.5 * np.sin(2 * np.pi * 150 * t) + 5 * np.exp(-t / 0.004)
+    u = r / 5.8
+    return t, r, y, u
+
+
+def cases():
+    """[(name, builder)]: each builder returns a new Figure."""
+    names_in, names_out = ["ux [V]", "uy [V]"], ["x [µm]", "y [µm]"]
+    out = [("loop_grid (2x2, 8 curves of 401 samples)",
+            lambda: plots.loop_grid(_loop_curves(), names_in, names_out, "open-loop maps")),
+           ("loop_grid (one driven input: 2x1)",
+            lambda: plots.loop_grid([c for c in _loop_curves() if c["column"] == 0], names_in,
+                                    names_out, "compensated maps"))]
+    for n, what in ((1600, "circle, 80 ms"), (20000, "1 s record, decimated")):
+        t, r, y, u = _trajectory(n)
+        out.append((f"trajectory_figure ({what}: {n} samples)",
+                    lambda t=t, r=r, y=y, u=u: plots.trajectory_figure(
+                        t, r, y, ["x", "y"], "trajectory", settle_time=0.04, inputs=u,
+                        input_names=["ux", "uy"])))
+    circles = []
+    for i, R in enumerate((15.0, 30.0, 50.0, 50.0)):
+        _, r, y, _ = _trajectory(800, radius=R)
+        circles.append({"label": f"circle-{i}", "reference": r, "outputs": y})
+    out.append(("xy_overlay (4 circles of 800 samples)",
+                lambda: plots.xy_overlay(circles, ["x", "y"], "all trajectories")))
+    u = np.zeros((2, 9))
+    u[0] = 0.8 * 8.0 ** np.arange(9)
+    u[1] = 0.1 * 8.0 ** np.arange(9)
+    out.append(("divergence_figure (8 samples)",
+                lambda: plots.divergence_figure(u, ["ux", "uy"], 8, "|U| exceeds the bound",
+                                                "diverged")))
+    mcurves = [{"label": c["label"], "column": c["column"], "x": c["x"], "plant": c["outputs"],
+                "model": 0.98 * c["outputs"]} for c in _loop_curves(2)]
+    out.append(("model_loop_grid (2x2, 4 cases plant + model)",
+                lambda: model_figures.model_loop_grid(mcurves, names_in, names_out,
+                                                      "model vs plant")))
+    f = np.array([10, 20, 30, 40, 50, 60, 75, 100, 125, 150, 175, 200, 250, 300, 350, 420.0])
+    rows = [{"input": i, "output": o, "frequency_hz": fr,
+             "model_rms_error": 0.1 + abs(fr - 50) / 10} for i in ("ux", "uy") for o in ("x", "y")
+            for fr in f]
+    table = pd.DataFrame(rows)
+    out.append(("rms_vs_frequency_figure (2x2, 16 frequencies)",
+                lambda: model_figures.rms_vs_frequency_figure(table, ["ux", "uy"], ["x", "y"],
+                                                              "model error", 50.0)))
+    comps = [f"mv-{k}Hz" for k in (50, 100, 150, 200)] + ["per-axis-50Hz", "static-gain-50Hz"]
+    srows = [{"frequency_hz": fr, "compensator": c, "axis": a, "channel": ch,
+              "rms_error": 0.1 * (j + 1) + fr / 100.0}
+             for j, c in enumerate(comps) for a in ("x", "y") for ch in ("x", "y") for fr in f[:15]]
+    stable = pd.DataFrame(srows)
+    spec = SimpleNamespace(metric="rms_error", axes=["x", "y"], mode="reference", name="rms")
+    out.append(("sweep_figure (2x2, 6 compensators x 15 frequencies)",
+                lambda: sweep_figs.sweep_figure(stable, spec, ["x", "y"], "sweep")))
+    s = np.geomspace(0.05, 20, 81)
+    smap = pd.DataFrame([{"compensator": c, "scale": v, "max_radius": abs(1 - 1 / v) + 0.1 * j}
+                         for j, c in enumerate(("paper", "id50", "id200", "diag")) for v in s])
+    smap.attrs["laws"] = {c: {"literal_scale": 0.2, "literal_max_radius": 9.0,
+                              "normalised_max_radius": 0.7} for c in ("paper", "id50", "id200", "diag")}
+    out.append(("stability_figure (4 compensators x 81 scales)",
+                lambda: sweep_figs.stability_figure(smap, "stability map")))
+    n = 20000
+    tt = np.arange(n) * 1e-3
+    uu = 75 + 75 * np.sin(2 * np.pi * tt)
+    yy = 0.26 * uu + 2 * np.cos(2 * np.pi * tt)
+    out.append((f"record_fit_figure ({n} samples)",
+                lambda: model_figures.record_fit_figure(tt, uu, yy, yy + 0.05, 100, 12000,
+                                                        "u [V]", "y [µm]", "record fit")))
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3, help="runs per figure (best is shown)")
+    args = ap.parse_args(argv)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"figure functions, best of {args.repeat} (ms); load average {load:.2f}; "
+          f"PNG at {plots.DPI} dpi, at most {plots.MAX_POINTS} points per line")
+    print(f"{'figure':<58} {'build':>8} {'save':>8} {'total':>8} {'cpu':>8}")
+    total = cpu_total = 0.0
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "figure.png"
+        for name, build in cases():
+            best, cpu = None, None
+            for _ in range(args.repeat):
+                c0, t0 = time.process_time(), time.perf_counter()
+                fig = build()
+                t1 = time.perf_counter()
+                plots.save(fig, path)
+                t2, c2 = time.perf_counter(), time.process_time()
+                if best is None or t2 - t0 < best[0] + best[1]:
+                    best = (t1 - t0, t2 - t1)
+                cpu = c2 - c0 if cpu is None else min(cpu, c2 - c0)
+            total += sum(best)
+            cpu_total += cpu
+            print(f"{name:<58} {best[0] * 1e3:8.1f} {best[1] * 1e3:8.1f} {sum(best) * 1e3:8.1f} "
+                  f"{cpu * 1e3:8.1f}")
+    print(f"{'sum':<58} {'':>8} {'':>8} {total * 1e3:8.1f} {cpu_total * 1e3:8.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,73 @@
+"""Figure helpers: decimation keeps what a figure shows, grids drop undriven inputs."""
+
+import numpy as np
+import pytest
+
+from hammerstein.report import figures as plots
+
+
+def test_decimate_keeps_extremes_and_bounds_points():
+    rng = np.random.default_rng(0)
+    t = np.arange(100_000) * 1e-5
+    y = np.sin(2 * np.pi * 37 * t) + 0.1 * rng.standard_normal(t.size)
+    td, yd = plots.decimate(t, y, max_points=2000)
+    assert td.size <= 2002
+    assert yd.max() == y.max() and yd.min() == y.min()       # global extremes kept exactly
+    assert np.all(np.diff(td) > 0)                            # time order kept
+    # every kept point is a sample of the original line
+    idx = np.searchsorted(t, td)
+    np.testing.assert_array_equal(y[idx], yd)
+    # per bin of 100 samples the min and max survive: the envelope is exact
+    for k in (0, 317, 999):
+        sl = slice(k * 100, (k + 1) * 100)
+        inside = (td >= t[sl][0]) & (td <= t[sl][-1])
+        assert yd[inside].max() == y[sl].max() and yd[inside].min() == y[sl].min()
+
+
+def test_decimate_short_line_unchanged_and_nan_breaks_kept():
+    t = np.arange(500.0)
+    y = np.cos(t)
+    td, yd = plots.decimate(t, y)
+    np.testing.assert_array_equal(yd, y)
+    y = np.r_[np.sin(np.arange(5000.0)), np.full(5000, np.nan)]
+    _, yd = plots.decimate(np.arange(10_000.0), y, max_points=200)
+    assert np.isnan(yd).any() and np.nanmax(yd) == np.nanmax(y)
+
+
+def test_decimate_path_keeps_loop_extremes():
+    th = np.linspace(0, 40 * np.pi, 50_001)
+    x, y = 10 * np.sin(th), 58 * np.sin(th + 0.3)
+    xd, yd = plots.decimate_path(x, y, max_points=2000)
+    assert xd.size <= 2002
+    assert xd.max() == x.max() and yd.min() == y.min()
+
+
+@pytest.mark.parametrize("columns, n_axes", [([0], 2), ([1], 2), ([0, 1], 4)])
+def test_loop_grid_drops_undriven_columns(columns, n_axes):
+    u = 10 * np.sin(np.linspace(0, 2 * np.pi, 401))
+    curves = [{"label": f"c{k}", "column": k, "x": u, "outputs": np.vstack([u, 0.1 * u])}
+              for k in columns]
+    fig = plots.loop_grid(curves, ["ux [V]", "uy [V]"], ["x [µm]", "y [µm]"], "maps")
+    titles = [ax.get_title() for ax in fig.axes]
+    assert len(fig.axes) == n_axes
+    # panel letters follow the paper's 2x2 numbering even when a column is left out
+    expected = {0: ["(a)", "(c)"], 1: ["(b)", "(d)"]}
+    for k in columns:
+        for letter in expected[k]:
+            assert any(t.startswith(letter) for t in titles)
+    plots.plt.close(fig)
+
+
+def test_legend_on_top_leaves_the_data_below_the_legend(tmp_path):
+    fig, ax = plots.plt.subplots(figsize=(5, 4))
+    plots.fixed_layout(fig)
+    y = np.linspace(-1, 1, 50)
+    for i in range(6):
+        ax.plot(y, y + 0.01 * i, label=f"curve {i}")
+    leg = plots.legend_on_top(ax, 6, ncol=2)
+    fig.canvas.draw()
+    box = leg.get_window_extent()
+    top_of_data = ax.transData.transform((0.0, 1.05))[1]
+    assert box.y0 >= top_of_data - 1.0                        # pixels: legend above every curve
+    plots.save(fig, tmp_path / "f.png")
+    assert (tmp_path / "f.png").stat().st_size > 0
