@@ -556,9 +556,9 @@ IDENTIFY_DYNAMICS_FIELDS = {
     "amplitude": Field(number("V", 0), default=8.0),
     "band": Field(_band, default=[20.0, 1000.0]),
     "period": Field(number("s", 0), default=0.05),
-    "periods": Field(integer(2), default=8),
-    "order": Field(integer(1)),                        # default: chosen by held-out fit
-    "max_order": Field(integer(1), default=8),
+    "periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=8),
+    "order": Field(integer(1, 50)),                    # default: chosen by held-out fit
+    "max_order": Field(integer(1, 50), default=8),
     "sensor": Field(boolean()),                        # default: as identify.sensor
     "seed": Field(integer(0), default=1),
 }

@@ -145,7 +145,7 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     {**{k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k != "identify"},
      "identify": Field(hammerstein_identify_table),
      "gain": Field(_gain, default="midpoint"),     # smallest rho(I - K^-1 J) for identified PIs
-     "iterations": Field(integer(1), default=3),
+     "iterations": Field(integer(1, MAX_ITERATIONS), default=3),
      "dynamics": Field(string()),          # default: "identified" with model = "identified", else "plant"
      "identify_dynamics": Field(identify_dynamics_table),
      "inversion": Field(choice(*INVERSIONS), default="zpetc"),
