@@ -139,18 +139,21 @@ def _dominant_extrema(u):
     first excursion from the anchor is wiped by a value of opposite sign and
     at least the same magnitude (the zero state is symmetric about 0).
     """
+    def agree(a, b):       # sign(a) * sign(b) > 0, without products that underflow
+        return (a > 0 and b > 0) or (a < 0 and b < 0)
+
     stack = [0.0]
     for x in map(float, u):
         while True:
             if x == stack[-1]:
                 break
-            if len(stack) >= 2 and (x - stack[-1]) * (stack[-1] - stack[-2]) > 0:
+            if len(stack) >= 2 and agree(x - stack[-1], stack[-1] - stack[-2]):
                 stack.pop()            # same direction: not a reversal point
                 continue
-            if len(stack) >= 3 and (x - stack[-2]) * (stack[-1] - stack[-2]) <= 0:
+            if len(stack) >= 3 and not agree(x - stack[-2], stack[-1] - stack[-2]):
                 del stack[-2:]         # minor loop stack[-2] -> stack[-1] closed
                 continue
-            if len(stack) == 2 and x * stack[-1] < 0 and abs(x) >= abs(stack[-1]):
+            if len(stack) == 2 and agree(x, -stack[-1]) and abs(x) >= abs(stack[-1]):
                 stack.pop()            # first excursion wiped by the opposite one
                 continue
             stack.append(x)
@@ -273,6 +276,7 @@ def test_play_state_depends_only_on_dominant_extrema(u, r):
     ([5.0, -6.0], [0.0, -6.0]),
     ([1.0, 4.0, 2.0, 3.0, 1.0, 5.0], [0.0, 5.0]),
     ([4.0, -3.0, 2.0, -1.0, 3.0], [0.0, 4.0, -3.0, 3.0]),
+    ([0.5, 5e-324, 0.0], [0.0, 0.5, 0.0]),   # subnormal steps: products would underflow
 ])
 def test_dominant_extrema_reduction_examples(history, reduced):
     np.testing.assert_array_equal(_dominant_extrema(history), reduced)
