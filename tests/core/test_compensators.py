@@ -1,4 +1,4 @@
-"""The compensator family on the static plant, and the stability analysis (NOTES §4, §5)."""
+"""The compensator family on the static plant, and the stability analysis (docs/compensator.md, docs/per-axis-inverse.md)."""
 
 import warnings
 
@@ -119,7 +119,7 @@ def test_more_iterations_reduce_error(plant, model, axis):
     for n in (1, 2, 5):
         y, r = last_period(InverseMultiplicativeCompensator(model, iterations=n), plant, ref)
         errors.append(rms(y - r))
-    assert errors[0] < 0.1  # the normalised law, NOTES §4 (0.09 µm on the direct axis)
+    assert errors[0] < 0.1  # the normalised law, docs/compensator.md (0.09 µm on the direct axis)
     assert errors[0] > errors[1] > errors[2]
     assert errors[0] / errors[2] > 5
 

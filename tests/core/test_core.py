@@ -143,7 +143,7 @@ def test_fig05_numbers_from_the_preset(static):
 def test_literal_law_is_detected_as_divergent(static):
     model = static.hysteresis
     rep = convergence_report(model, "identity")
-    assert not rep.converges and rep.max_radius > 2.0        # NOTES §4: about 3-9
+    assert not rep.converges and rep.max_radius > 2.0        # docs/compensator.md: about 3-9
     assert convergence_report(model, "secant").converges
     with pytest.raises(CompensatorError, match="rho"):
         InverseMultiplicativeCompensator(model, gain="identity")

@@ -1,7 +1,7 @@
 """Identification round trips: closed form (Appendix eq. 14-17), least squares, Steps 1-4.
 
 A known model is simulated, re-identified, and the weights compared
-(NOTES §3: exact when the breakpoints fall on samples, about 1-2 % at 50 µs
+(docs/identification.md: exact when the breakpoints fall on samples, about 1-2 % at 50 µs
 sampling on a 50 Hz sine).
 """
 
@@ -94,7 +94,7 @@ def test_closed_form_offsets_and_off_centre_input():
 
 @pytest.mark.parametrize("component", [(0, 0), (0, 1), (1, 0), (1, 1)])
 def test_closed_form_sine_50hz_within_2_percent(static_plant, component):
-    """50 Hz sine sampled at 50 µs: breakpoints between samples (NOTES §3)."""
+    """50 Hz sine sampled at 50 µs: breakpoints between samples (docs/identification.md)."""
     pi = static_plant.hysteresis.components[component[0]][component[1]]
     u = sine(periods=4)
     y, _ = pi.simulate(u)

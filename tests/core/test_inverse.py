@@ -1,4 +1,4 @@
-"""Analytic inverse PI (Kuhnen & Janocha, NOTES §5) and the inverse play operator."""
+"""Analytic inverse PI (Kuhnen & Janocha, docs/per-axis-inverse.md) and the inverse play operator."""
 
 import numpy as np
 import pytest

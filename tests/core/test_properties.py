@@ -430,7 +430,7 @@ def _kuhnen_inverse():
 
 @st.composite
 def invertible_pi(draw):
-    """PI operator with every cumulative weight sum S_i > 0 (NOTES §5).
+    """PI operator with every cumulative weight sum S_i > 0 (docs/per-axis-inverse.md).
 
     Thresholds at least 1 mV apart: the inverse thresholds
     ``r'_i+1 - r'_i = S_i (r_i+1 - r_i)`` must stay distinct in floating point
