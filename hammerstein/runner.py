@@ -212,7 +212,8 @@ def remove_stale_temporaries(out_dir, before=None):
         try:
             if p.is_symlink() or not p.is_dir() or marker.is_symlink():
                 continue
-            when = marker.stat().st_mtime if marker.exists() else p.stat().st_mtime
+            owned = marker.is_file()  # a directory named like the marker is not one
+            when = marker.stat().st_mtime if owned else p.stat().st_mtime
             if when >= before:
                 continue
         except OSError:
@@ -226,7 +227,7 @@ def remove_stale_temporaries(out_dir, before=None):
                 pass
             except (PermissionError, OverflowError, OSError):
                 continue
-        if marker.exists():
+        if owned:
             shutil.rmtree(p, ignore_errors=True)
         else:  # killed before its marker was written: removed only when empty
             try:
