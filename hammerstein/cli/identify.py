@@ -26,7 +26,7 @@ import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import out_file_problem
-from hammerstein.core.files import bounded_read_text, safe_write
+from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.record_identification import dynamics_tables, identify_records
 from hammerstein.exceptions import HysteresisError, IdentificationError
@@ -357,7 +357,7 @@ def _handler(args):
             _write_metrics(args.metrics, rows)
         save_model(fit.model, args.out, _metadata(args, fit, records), args.input_unit,
                    args.output_unit, extra)
-    except (DataFileError, IdentificationError, HysteresisError, PresetError) as exc:
+    except (DataFileError, IdentificationError, HysteresisError, PresetError, FileLimitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except OSError as exc:

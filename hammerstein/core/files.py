@@ -12,8 +12,9 @@ exclusively (``O_EXCL``, unique name ``.<name>.<random>.hammerstein-tmp``)
 next to the target, then renamed over it, so a reader never sees a
 half-written file and an interrupted write leaves the target untouched. A
 target that exists but is not a regular file is refused; a symlink's target
-is written (the link stays); a replaced file keeps its permission bits and a
-new one gets the user's umask.
+is written (the link stays); a read-only target is refused (a rename would
+bypass its protection); a replaced file keeps its permission bits and a new
+one gets the user's umask.
 
 Limits (bytes), overridable with environment variables:
 
@@ -281,8 +282,8 @@ def safe_write(path, data, what="file"):
     Raises
     ------
     FileLimitError
-        The target exists and is not a regular file, or its directory is
-        not a directory.
+        The target exists and is not a regular file or is read-only, or its
+        directory is not a directory.
     OSError
         The directory cannot be created or written.
     """
@@ -298,6 +299,9 @@ def safe_write(path, data, what="file"):
             kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file"
             raise FileLimitError(f"{path}: exists and is {kind}; expected a {what} to replace")
         mode = stat.S_IMODE(st.st_mode)
+        if not mode & 0o222 or not os.access(target, os.W_OK):  # a rename would bypass it
+            raise FileLimitError(f"{path}: is read-only; make it writable (chmod u+w) to have "
+                                 f"it replaced, or choose another path")
     parent = target.parent
     if parent.exists() and not parent.is_dir():
         raise FileLimitError(f"{path}: {parent} is not a directory")
