@@ -48,7 +48,7 @@ import pandas as pd
 from hammerstein.core.files import deferred_signals, umask
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
-from hammerstein.report.replication import write_readme
+from hammerstein.report.replication import foreign_outputs, write_readme
 from hammerstein.report.scenario import metrics_frame, write_report
 from hammerstein.scenario.records import run_identification_scenario
 from hammerstein.scenario.resolve import resolve_scenario
@@ -377,7 +377,7 @@ def run_scenarios(paths, out_dir, force=False):
     return outcomes
 
 
-def replicate(scenarios="scenarios/paper", out="reports/paper"):
+def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
     """Run every paper scenario and write the replication README.
 
     Parameters
@@ -387,6 +387,10 @@ def replicate(scenarios="scenarios/paper", out="reports/paper"):
     out : str or pathlib.Path
         Output directory: ``<out>/<scenario>/`` reports and ``<out>/README.md``
         (:func:`hammerstein.report.replication.write_readme`).
+    force : bool
+        Replace ``<out>/README.md`` and the other files of the README (and
+        report directories) even when hammerstein did not write them; by
+        default they are checked before anything runs.
 
     Returns
     -------
@@ -396,12 +400,20 @@ def replicate(scenarios="scenarios/paper", out="reports/paper"):
     ------
     FileNotFoundError
         If ``scenarios`` holds no ``*.toml`` file.
+    FileExistsError
+        A file the README step would replace was not written by ``hammerstein
+        replicate`` (:func:`hammerstein.report.replication.foreign_outputs`)
+        and ``force`` is False; nothing has run.
     """
     files = sorted(Path(scenarios).glob("*.toml"))
     if not files:
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
     out = Path(out)
+    problems = [] if force else foreign_outputs(out)
+    if problems:
+        raise FileExistsError(f"{problems[0]}{f' (and {len(problems) - 1} more)' if len(problems) > 1 else ''}; "
+                              f"move it away, choose another --out, or use --force to replace it")
     remove_stale_temporaries(out)
-    outcomes = [run_scenario(f, out) for f in files]
+    outcomes = [run_scenario(f, out, force=force) for f in files]
     write_readme(out, outcomes)
     return outcomes
