@@ -60,6 +60,15 @@ def _size(n):
     return f"{n} bytes"
 
 
+def _hint(kind):
+    """``raise it with VAR=BYTES``, noting an override that is not a positive integer."""
+    var = LIMITS[kind][0]
+    text = os.environ.get(var)
+    bad = "" if text is None or (text.strip().isdigit() and int(text) > 0) else \
+        f"; its value {text!r} is not a positive integer, the default applies"
+    return f"raise it with {var}=BYTES{bad}"
+
+
 def limit(kind):
     """The size limit [bytes] of a kind of file.
 
@@ -148,7 +157,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
                                  f"expected a {what}")
         if st.st_size > cap:
             raise FileLimitError(f"{path}: {_size(st.st_size)} is larger than the limit of "
-                                 f"{_size(cap)} for a {what} (raise it with {LIMITS[kind][0]}=BYTES)")
+                                 f"{_size(cap)} for a {what} ({_hint(kind)})")
         chunks, total = [], 0
         while True:  # the file may grow while read: never more than cap + 1 bytes
             chunk = os.read(fd, min(1 << 20, cap + 1 - total))
@@ -158,7 +167,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
             total += len(chunk)
             if total > cap:
                 raise FileLimitError(f"{path}: larger than the limit of {_size(cap)} for a "
-                                     f"{what} (raise it with {LIMITS[kind][0]}=BYTES)")
+                                     f"{what} ({_hint(kind)})")
         return b"".join(chunks)
     finally:
         os.close(fd)

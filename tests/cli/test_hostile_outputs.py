@@ -169,3 +169,22 @@ def test_replicate_replaces_its_own_readme_and_force_replaces_a_users(capsys, tm
     status, _, err = _call(capsys, "replicate", "--scenarios", scenarios, "--out", out)
     assert status == 0, err  # its own README: replaced without --force
     assert not [p for p in out.iterdir() if p.name.startswith(".") and p.name != "good-static"]
+
+
+# -- limits overridden by the environment -----------------------------------------------------
+def test_a_limit_override_that_is_not_a_number_is_named(capsys, tmp_path, monkeypatch):
+    # HAMMERSTEIN_MAX_SAMPLES=abc was ignored silently: the message said "raise
+    # HAMMERSTEIN_MAX_SAMPLES" to a user who believed they had
+    monkeypatch.setenv("HAMMERSTEIN_MAX_SAMPLES", "abc")
+    scenario = tmp_path / "s.toml"
+    text = GOOD.read_text().replace("periods = 2", "periods = 4000")  # 1.6e6 samples a case
+    scenario.write_text(text + text[text.index("[[cases]]"):].replace('name = "', 'name = "more-'))
+    status, _, err = _call(capsys, "validate", scenario)
+    assert status == 1 and any("HAMMERSTEIN_MAX_SAMPLES" in e and "'abc' is not a positive integer"
+                               in e for e in err), err
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOML_BYTES", "4k")
+    big = tmp_path / "big.toml"
+    big.write_text(GOOD.read_text() + "#" * (5 * 2**20))
+    status, _, err = _call(capsys, "validate", big)
+    assert status == 1 and len(err) == 1
+    assert "HAMMERSTEIN_MAX_TOML_BYTES=BYTES" in err[0] and "'4k' is not a positive integer" in err[0]
