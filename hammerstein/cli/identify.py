@@ -30,6 +30,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.record_identification import dynamics_tables, identify_records
 from hammerstein.exceptions import HysteresisError, IdentificationError
+from hammerstein.scenario.schema import MAX_HYSTERONS
 
 __all__ = ["add_parser"]
 
@@ -111,8 +112,8 @@ def _parse_thresholds(text):
             n = int(text)
         except ValueError:
             raise _Usage(f"--thresholds: expected a count N or a list r1,r2,..., found {text!r}") from None
-        if n < 1:
-            raise _Usage(f"--thresholds: expected N >= 1, found {n}")
+        if not 1 <= n <= MAX_HYSTERONS:
+            raise _Usage(f"--thresholds: expected 1 <= N <= {MAX_HYSTERONS} hysterons, found {n}")
         return n, None
     if any(not v.strip() for v in text.split(",")):
         raise _Usage(f"--thresholds: expected numbers separated by commas, found an empty entry "
@@ -121,6 +122,8 @@ def _parse_thresholds(text):
         r = np.array([float(v) for v in text.split(",")])
     except ValueError:
         raise _Usage(f"--thresholds: expected numbers separated by commas, found {text!r}") from None
+    if r.size > MAX_HYSTERONS:
+        raise _Usage(f"--thresholds: expected at most {MAX_HYSTERONS} thresholds, found {r.size}")
     if r.size == 0 or not np.all(np.isfinite(r)) or r[0] < 0 or np.any(np.diff(r) <= 0):
         raise _Usage(f"--thresholds: expected increasing thresholds >= 0, found {text!r}")
     return r.size, r

@@ -328,7 +328,8 @@ def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
     u = record.u[k]
     n = u.size
     if burn_in_seconds is not None:
-        burn = int(round(burn_in_seconds / record.sampling_period))
+        ratio = burn_in_seconds / record.sampling_period  # inf for a huge --skip
+        burn = int(round(ratio)) if np.isfinite(ratio) and abs(ratio) < n else n
         if not 0 <= burn < n - 1:
             raise IdentificationError(
                 f"skip: expected a burn-in shorter than the record ({n * record.sampling_period:g} s), "

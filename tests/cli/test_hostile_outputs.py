@@ -188,3 +188,24 @@ def test_a_limit_override_that_is_not_a_number_is_named(capsys, tmp_path, monkey
     status, _, err = _call(capsys, "validate", big)
     assert status == 1 and len(err) == 1
     assert "HAMMERSTEIN_MAX_TOML_BYTES=BYTES" in err[0] and "'4k' is not a positive integer" in err[0]
+
+
+# -- huge numbers on the identify command line ------------------------------------------------
+@pytest.mark.parametrize("extra, expected", [
+    (["--thresholds", "99999999999999999999"], "--thresholds: expected 1 <= N <= 100"),
+    (["--thresholds", ",".join(str(i) for i in range(101))], "--thresholds: expected at most 100"),
+])
+def test_identify_huge_threshold_counts_are_usage_errors(capsys, tmp_path, extra, expected):
+    # was "unexpected ValueError: Maximum allowed size exceeded" (exit 1)
+    args = [a for a in IDENTIFY if a not in ("--thresholds", "5")]
+    status, _, err = _call(capsys, "identify", *args, *extra, "--out", tmp_path / "m.toml")
+    assert status == 2 and len(err) == 1 and expected in err[0], err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_identify_huge_skip_is_a_one_line_error(capsys, tmp_path):
+    # --skip 1e308 s over a 1 ms sampling period was "unexpected OverflowError" (exit 1)
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--skip", "1e308", "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1 and "burn-in shorter than the record" in err[0], err
+    assert "1e+308 s" in err[0] and "Error" not in err[0]
+    assert list(tmp_path.iterdir()) == []
