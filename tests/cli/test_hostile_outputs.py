@@ -209,3 +209,15 @@ def test_identify_huge_skip_is_a_one_line_error(capsys, tmp_path):
     assert status == 1 and len(err) == 1 and "burn-in shorter than the record" in err[0], err
     assert "1e+308 s" in err[0] and "Error" not in err[0]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_deeply_nested_tolerance_and_model_files_are_one_line_errors(tmp_path):
+    # the TOML parser recursed into RecursionError ("unexpected RecursionError" in the CLI)
+    from hammerstein.core.presets import PresetError, read_toml
+    from hammerstein.scenario.regression import BaselineError, load_tolerances
+    nested = tmp_path / "nested.toml"
+    nested.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(BaselineError, match="nested too deeply"):
+        load_tolerances(nested)
+    with pytest.raises(PresetError, match="nested too deeply"):
+        read_toml(nested)
