@@ -87,6 +87,8 @@ def test_dynamics_preset_has_the_true_bending_modes(identified, capsys):
     zeta_true = np.asarray(true["damping_ratio"], dtype=float)[order]
 
     plant = load_plant(identified)
+    # the time column's step (5e-5 s printed to 9 digits), not its rounding noise
+    assert read_toml(identified)["preset"]["sampling_period"] == 5e-5
     f_id, zeta_id = modal_parameters(plant.dynamics)
     assert f_id.shape == (2,)
     assert f_id == pytest.approx(f_true, rel=0.01)
