@@ -793,7 +793,8 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
         if not any(np.ptp(r.y[l][s.train]) > 0 for r, s in zip(records, splits) if s.train.any()):
             raise IdentificationError(
                 f"{records[0].source}: output column {name!r}: the output is constant over the "
-                f"training samples; expected the response to the excitation")
+                f"training samples; expected the response to the excitation: add a record that "
+                f"excites an input it depends on, or leave it out of --outputs")
     m = records[0].u.shape[0]
     tried = ["time", "input"] if partition == "auto" and thresholds is None else [partition]
     results, errors = {}, {}

@@ -65,3 +65,17 @@ def test_an_asymmetric_loop_is_named_and_its_held_out_error_is_of_that_order(
         assert len(notes) == 1 and "--hold-out none" in notes[0]
         stated = float(notes[0].split("(")[1].split("%")[0])
         assert stated > ASYMMETRY_NOTE_PERCENT and 0.5 * stated <= held <= 2 * stated
+
+
+def test_an_output_no_record_excites_names_the_fix(tmp_path, capsys):
+    # 2 inputs, output y depends on b only, and only input a is driven
+    n = 2000
+    a = 40 + 40 * np.sin(2 * np.pi * np.arange(n) / 1000)
+    lines = ["a,b,x,y"] + [f"{v:.6g},0,{0.5 * v:.6g},-2" for v in a]
+    data = tmp_path / "a_only.csv"
+    data.write_text("\n".join(lines) + "\n")
+    status = main(["identify", str(data), "--inputs", "a,b", "--outputs", "x,y",
+                   "--sampling-period", "1e-3", "--out", str(tmp_path / "m.toml")])
+    err = capsys.readouterr().err
+    assert status == 1 and "'y'" in err and "--outputs" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "m.toml").exists()
