@@ -144,6 +144,10 @@ def test_list_shows_presets_and_scenarios(capsys, monkeypatch):
     text = capsys.readouterr().out
     assert "rakotondrabe-2dof" in text and "multivariable" in text
     assert "fig08-compensated-sine.toml" in text
+    scenarios, _, others = text.partition("preset and dynamics files")
+    assert "coupled-2dof.toml" in others and "coupled-2dof.toml" not in scenarios
+    assert "fn+5.toml; dynamics only" in others
+
 
 
 def test_help_imports_no_heavy_module():
