@@ -85,6 +85,8 @@ OUTPUT_MAPS = ("auto", "none", "deadzone")
 MAP_KNOTS = 8
 #: Alternations of the output-map fit (PI weights, then map slopes).
 MAP_ITERATIONS = 8
+#: Weight of the slope-change penalty of the output map (relative to the data rows).
+MAP_SMOOTHING = 0.05
 #: Relative drop of the score that makes ``output_map="auto"`` keep the map on a symmetric loop.
 MAP_GAIN = 0.1
 
@@ -999,7 +1001,7 @@ def _one_partition(records, splits, method, n, thresholds, partition, bounds, ki
 
 def identify_record(record, method="least-squares", n_hysterons=15, thresholds=None,
                     partition="auto", bounds=None, train_fraction=None, skip_seconds=None,
-                    hold_out="auto", components="auto"):
+                    hold_out="auto", components="auto", output_map="auto"):
     """Single-record form of :func:`identify_records` (same options and result).
 
     Parameters
@@ -1024,6 +1026,8 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
         Whether trailing complete branches are held out for validation.
     components : "auto", "all", str or dict
         Component kinds, see :func:`parse_components`.
+    output_map : {"auto", "none", "deadzone"}
+        Static output map after the PI (modified PI), see :func:`identify_records`.
 
     Returns
     -------
@@ -1036,7 +1040,8 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
         As :func:`identify_records`.
     """
     return identify_records([record], method, n_hysterons, thresholds, partition, bounds,
-                            components, hold_out, train_fraction, skip_seconds)
+                            components, hold_out, train_fraction, skip_seconds,
+                            output_map=output_map)
 
 
 def dynamics_tables(fit, records, name="identified", **options):
@@ -1167,7 +1172,12 @@ def _fit_output_maps(fit, bounds, n_knots=MAP_KNOTS, iterations=MAP_ITERATIONS):
             X = np.column_stack([_segment_basis(h, z), np.ones(h.size)])
             sec = max(float(np.polyfit(h, y, 1)[0]), 1e-12)
             lo = np.r_[np.full(z.size + 1, 1e-3 * sec), -np.inf]
-            coef = scipy.optimize.lsq_linear(X, y, bounds=(lo, np.full(lo.size, np.inf)),
+            # smoothness prior: slope changes cost, so that S bends only where the PI cannot
+            D = np.diff(np.eye(z.size + 1), axis=0)
+            mu = MAP_SMOOTHING * np.sqrt(h.size) * np.ptp(h) / (z.size + 1)
+            Xa = np.vstack([X, np.column_stack([mu * D, np.zeros(z.size)])])
+            ya = np.concatenate([y, np.zeros(z.size)])
+            coef = scipy.optimize.lsq_linear(Xa, ya, bounds=(lo, np.full(lo.size, np.inf)),
                                              method="bvls").x
             err = float(np.sqrt(np.mean((y - X @ coef) ** 2)))
             smap = OutputMap(z, coef[:-1])
