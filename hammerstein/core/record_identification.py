@@ -888,6 +888,11 @@ def _with_output_map(fit, output_map, bounds, classical, asymmetric):
                          f"(modified PI; {why}{numbers})")
     else:
         fit.notes.append(f"output map: deadzone ({numbers})")
+    if val is not None and any(s.periodic for s in fit.splits):
+        fit.notes.append("output map: one closed loop trains on its ascending branch only, on "
+                         "which the PI and the map can be traded against each other; the "
+                         "held-out branch is extrapolated: record two periods or more, or train "
+                         "on both branches with --hold-out none")
     fit.model, fit.predictions, fit.train, fit.validation = model, predictions, train, val
     fit.output_map = "deadzone"
     return fit
@@ -1126,7 +1131,9 @@ def _component_thresholds(model, k, default):
     return default
 
 
-def _fit_output_maps(fit, bounds, n_knots=MAP_KNOTS, iterations=MAP_ITERATIONS):
+def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
+    n_knots = MAP_KNOTS if n_knots is None else n_knots
+    iterations = MAP_ITERATIONS if iterations is None else iterations
     """Modified PI: the structure of ``fit`` plus a monotone output map per output.
 
     Alternating linear least squares (Kuhnen's modified PI, the operators
