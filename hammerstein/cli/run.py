@@ -20,6 +20,7 @@ from pathlib import Path
 from hammerstein.cli._common import one_line, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.runner import run_scenario
+from hammerstein.simulation import announce_compiles
 
 __all__ = ["add_parser", "handler"]
 
@@ -67,6 +68,7 @@ def handler(args):
         return 2
     status, taken = 0, {}
     verbosity = getattr(args, "verbosity", 0)
+    announce_compiles(print_err if verbosity >= 0 else None)   # first run: before compiling
     for path in args.scenarios:
         if verbosity > 0:
             print_err(f"{path}: running ...")

@@ -372,21 +372,6 @@ def _record(flat, offsets, b, rows):
     return flat[rows * a:rows * (a + n)].reshape((rows, n))
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
-                u_out, y_out, status, sample):
-    p = comp.W.shape[1]
-    m = comp.G.shape[2]
-    pp = plant.W.shape[1]
-    n = offsets[b + 1] - offsets[b]
-    st, sm = chain_kernel(_record(yr, offsets, b, p), n, _case_law(law, b),
-                          _case_pi(comp, b), _case_linear(prefilter, b), _case_pi(plant, b),
-                          _case_linear(linear, b), run_plant, _case_state(state, b),
-                          _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
-    status[b] = st
-    sample[b] = sm
-
-
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
                 u_out, y_out, status, sample, worker):
@@ -408,11 +393,19 @@ def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_pla
     ``_stepping._balanced_order``); with one thread it runs them in turn.
     ``worker`` (n_cases,) int64 receives the thread that ran each case.
     """
+    p = comp.W.shape[1]
+    m = comp.G.shape[2]
+    pp = plant.W.shape[1]
     for i in prange(order.size):
         b = order[i]
         worker[b] = numba.get_thread_id()
-        _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
-                    u_out, y_out, status, sample)
+        st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
+                              _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
+                              _case_pi(plant, b), _case_linear(linear, b), run_plant,
+                              _case_state(state, b), _record(u_out, offsets, b, m),
+                              _record(y_out, offsets, b, pp))
+        status[b] = st
+        sample[b] = sm
 
 
 def threads() -> int:
