@@ -84,7 +84,7 @@ class _Notices(event.Listener):
         self.depth = 0
         self.started = None
         self.told = False
-        self.scale = 1.0                 # measured / estimated, from this process's compilations
+        self.scale = 1.0                 # measured / estimated (>= 1), from earlier compilations
         self.lock = threading.Lock()
 
     def on_start(self, ev):
@@ -110,8 +110,11 @@ class _Notices(event.Listener):
         with self.lock:
             self.depth -= 1
             if self.depth == 0 and self.started is not None:
-                taken = time.perf_counter() - self.started
-                self.scale = min(4.0, max(0.5, taken / self.estimate))
+                # a slower machine (or a busy one) scales the later estimates up; the
+                # short compilations are too noisy (fixed costs) to scale anything
+                if self.estimate >= 1.0:
+                    taken = time.perf_counter() - self.started
+                    self.scale = min(3.0, max(1.0, taken / self.estimate))
                 self.started = None
 
 
@@ -122,8 +125,9 @@ def compile_notices(notify=None):
     A compilation is announced when numba is about to compile one of the
     simulation kernels because its on-disk cache does not hold it, and the
     compilation is estimated at :data:`MIN_NOTICE_SECONDS` or more; loads
-    from the cache are silent. The estimate scales :data:`COMPILE_SECONDS`
-    by how long this process's earlier compilations took against theirs.
+    from the cache are silent. The estimate is :func:`compile_estimate`,
+    scaled up (at most 3x) when this process's earlier compilations took
+    longer than theirs (a slower or busy machine).
 
     Parameters
     ----------
