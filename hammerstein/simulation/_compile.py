@@ -19,6 +19,8 @@ from contextlib import contextmanager
 
 from numba.core import event
 
+from hammerstein.simulation import _kernels
+
 __all__ = ["COMPILE_SECONDS", "MIN_NOTICE_SECONDS", "compile_notices", "announce_compiles",
            "compile_estimate"]
 
@@ -35,8 +37,7 @@ COMPILE_SECONDS = {"play_kernel": 0.4, "pi_kernel": 0.5, "plant_kernel": 1.0,
 MIN_NOTICE_SECONDS = 1.5
 
 
-def _kernels():
-    from hammerstein.simulation import _kernels
+def _dispatchers():
     return {name: getattr(_kernels, name) for name in COMPILE_SECONDS}
 
 
@@ -69,7 +70,7 @@ def compile_estimate(name):
     """
     seconds = COMPILE_SECONDS[name]
     if name == "chain_batch":
-        chain = _kernels()["chain_kernel"]
+        chain = _kernels.chain_kernel
         if not chain.signatures and not _on_disk(chain):
             seconds += COMPILE_SECONDS["chain_kernel"]
     return seconds
@@ -80,7 +81,7 @@ class _Notices(event.Listener):
 
     def __init__(self, notify):
         self.tell = notify
-        self.names = {id(d): name for name, d in _kernels().items()}
+        self.names = {id(d): name for name, d in _dispatchers().items()}
         self.depth = 0
         self.started = None
         self.told = False
