@@ -361,7 +361,30 @@ def _case_law(law, b):
 
 @njit(cache=True, inline="always")
 def _case_state(st, b):
-    return ChainState(st.cu[b], st.cvf[b], st.cs[b], st.xf[b], st.ps[b], st.x[b])
+    """Copies of case b's states, private to the thread that runs it.
+
+    The state rows of neighbouring cases share cache lines (``cu`` is 16
+    bytes a case); updated in place at every sample by two threads, they
+    would bounce between the cores (false sharing).
+    """
+    return ChainState(st.cu[b].copy(), st.cvf[b].copy(), st.cs[b].copy(), st.xf[b].copy(),
+                      st.ps[b].copy(), st.x[b].copy())
+
+
+@njit(cache=True, inline="always")
+def _store_state(st, b, local):
+    """Case b's states back from the thread's copies."""
+    for k in range(local.cu.size):
+        st.cu[b, k] = local.cu[k]
+        st.cvf[b, k] = local.cvf[k]
+    for k in range(local.cs.size):
+        st.cs[b, k] = local.cs[k]
+    for k in range(local.xf.size):
+        st.xf[b, k] = local.xf[k]
+    for k in range(local.ps.size):
+        st.ps[b, k] = local.ps[k]
+    for k in range(local.x.size):
+        st.x[b, k] = local.x[k]
 
 
 @njit(cache=True, inline="always")
@@ -370,6 +393,24 @@ def _record(flat, offsets, b, rows):
     a = offsets[b]
     n = offsets[b + 1] - a
     return flat[rows * a:rows * (a + n)].reshape((rows, n))
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+                u_out, y_out, status, sample):
+    """Case b of :func:`chain_batch` (a function of its own: numba's parfor passes lose
+    the updates of arrays copied inside a ``prange`` body)."""
+    p = comp.W.shape[1]
+    m = comp.G.shape[2]
+    pp = plant.W.shape[1]
+    local = _case_state(state, b)
+    st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
+                          _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
+                          _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                          _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
+    _store_state(state, b, local)
+    status[b] = st
+    sample[b] = sm
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -384,7 +425,8 @@ def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_pla
     sample counts. The other structures (``LawArrays``, ``PIArrays``,
     ``LinearArrays``, ``ChainState``) carry a leading case axis, zero padded
     to the largest model (zero thresholds, weights and states add exact
-    zeros). Each case is :func:`chain_kernel` with the very signature of a
+    zeros); each case steps a private copy of its states, stored back at
+    the end. Each case is :func:`chain_kernel` with the very signature of a
     single run (one compiled loop serves both, so batches equal single runs
     bit for bit).
 
@@ -393,19 +435,11 @@ def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_pla
     ``_stepping._balanced_order``); with one thread it runs them in turn.
     ``worker`` (n_cases,) int64 receives the thread that ran each case.
     """
-    p = comp.W.shape[1]
-    m = comp.G.shape[2]
-    pp = plant.W.shape[1]
     for i in prange(order.size):
         b = order[i]
         worker[b] = numba.get_thread_id()
-        st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
-                              _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
-                              _case_pi(plant, b), _case_linear(linear, b), run_plant,
-                              _case_state(state, b), _record(u_out, offsets, b, m),
-                              _record(y_out, offsets, b, pp))
-        status[b] = st
-        sample[b] = sm
+        _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+                    u_out, y_out, status, sample)
 
 
 def threads() -> int:
