@@ -21,7 +21,7 @@ from __future__ import annotations
 import importlib
 
 from hammerstein.exceptions import (BaselineError, CompensatorDivergence, CompensatorError,
-                                    ConvergenceWarning, DataFileError, DynamicsError,
+                                    ConvergenceWarning, DataFileError, DynamicsError, FileLimitError,
                                     HammersteinError, HammersteinWarning, HysteresisError,
                                     IdentificationError, Invalid, NestedInvalid, PresetError,
                                     RangeWarning, ScenarioError, SignalError)
@@ -104,7 +104,8 @@ _LAZY = {
 _EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "SignalError",
                "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
                "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
-               "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid"]
+               "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid",
+               "FileLimitError"]
 
 __all__ = sorted(_EXCEPTIONS + list(_LAZY)) + ["__version__"]
 

@@ -37,6 +37,7 @@ __all__ = [
     "BaselineError",
     "Invalid",
     "NestedInvalid",
+    "FileLimitError",
 ]
 
 
@@ -158,3 +159,8 @@ class NestedInvalid(Invalid):
     def __init__(self, problems):
         self.problems = list(problems)
         super().__init__("; ".join(f"{k}: {m}" for k, m in self.problems))
+
+
+class FileLimitError(HammersteinError, ValueError):
+    """A file cannot be read or written safely: not a regular file, or larger than its size
+    limit (:mod:`hammerstein.core.files`; the message names the file and why)."""

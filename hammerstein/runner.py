@@ -8,7 +8,18 @@ compensators), simulates each case (:mod:`hammerstein.scenario.execute`,
 sweep cases batched by :func:`hammerstein.scenario.sweeps.run_cases`),
 computes the metrics and writes ``out_dir/<scenario name>/`` atomically: the report is built in a
 temporary directory next to the target and renamed over it, so a failing
-scenario leaves nothing behind. Warnings of the cases (a reference beyond
+scenario leaves nothing behind.
+
+Ownership: every report directory carries a :data:`MARKER` file
+(``.hammerstein-report``, the version that wrote it). An existing
+``out_dir/<name>`` is replaced only when it holds that marker or is an empty
+directory; anything else (a user's directory, a file, a symlink) makes the
+scenario fail with one line naming the path and ``--force`` (``force=True``
+replaces it). Temporary directories are named ``.hammerstein-tmp.<pid>.*``
+and hold the marker from their creation, so :func:`remove_stale_temporaries`
+can remove those left by a killed run (older than the current run, their
+process gone) and nothing else. Report directories get the user's umask
+permissions. Warnings of the cases (a reference beyond
 the identified range, a convergence check set to ``"warn"``, ...) are listed
 in ``report.md``, in ``warnings.csv`` (``case, message``; written only when
 there are warnings) and in :attr:`ScenarioOutcome.warnings` (``hammerstein
@@ -23,14 +34,18 @@ the paper's scenarios and writes the replication README
 
 from __future__ import annotations
 
+import os
 import shutil
 import tempfile
+import time
 from dataclasses import dataclass, field
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Callable
 
 import pandas as pd
 
+from hammerstein.core.files import deferred_signals, umask
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.replication import write_readme
@@ -49,7 +64,15 @@ __all__ = [
     "run_scenario",
     "run_scenarios",
     "replicate",
+    "MARKER",
+    "TMP_PREFIX",
+    "remove_stale_temporaries",
 ]
+
+#: File in every report directory: the project wrote it (``run`` may replace it).
+MARKER = ".hammerstein-report"
+#: Prefix of the temporary directories of a run (``.hammerstein-tmp.<pid>.<random>``).
+TMP_PREFIX = ".hammerstein-tmp."
 
 #: Columns of metrics.csv and of ScenarioOutcome.metrics.
 METRIC_COLUMNS = ["case", "channel", "metric", "value", "unit"]
@@ -120,23 +143,124 @@ def _empty_metrics():
                          for c in METRIC_COLUMNS})
 
 
-def _atomic_write(out_dir, name, writer):
+def _version():
+    try:
+        return version("hammerstein")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def _is_ours(target):
+    """Whether ``target`` is a report directory the project wrote (marker) or an empty directory."""
+    if target.is_symlink() or not target.is_dir():
+        return False
+    if (target / MARKER).is_file() and not (target / MARKER).is_symlink():
+        return True
+    return not any(target.iterdir())
+
+
+def _ownership_problem(target, force):
+    """Why ``target`` may not be replaced (one line), or None."""
+    if force or not os.path.lexists(target) or _is_ours(target):
+        return None
+    what = ("a symbolic link" if target.is_symlink() else
+            "a directory hammerstein did not write" if target.is_dir() else
+            "a file" if target.is_file() else "not a directory")
+    return (f"{target}: exists and is {what} (no {MARKER} file); move it away, choose another "
+            f"--out, or use --force to replace it")
+
+
+def _make_temporary(out_dir):
+    """A new ``.hammerstein-tmp.<pid>.*`` directory holding the marker, umask permissions."""
+    tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}{os.getpid()}.", dir=out_dir))
+    os.chmod(tmp, 0o777 & ~umask())
+    (tmp / MARKER).write_text(f"hammerstein {_version()}\n", encoding="utf-8")
+    return tmp
+
+
+def remove_stale_temporaries(out_dir, before=None):
+    """Remove temporary directories of killed runs in ``out_dir``.
+
+    Only directories named ``.hammerstein-tmp.<pid>.*`` that hold the
+    :data:`MARKER` file (or are empty: killed before writing it), whose
+    marker is older than ``before`` (default now) and whose process
+    ``<pid>`` is gone (or is this process) are removed.
+
+    Parameters
+    ----------
+    out_dir : str or pathlib.Path
+        Reports directory (nothing happens when it does not exist).
+    before : float, optional
+        Start of the run [s since the epoch]; default now.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The directories removed.
+    """
+    out_dir, before = Path(out_dir), time.time() if before is None else before
+    removed = []
+    try:
+        entries = list(out_dir.iterdir()) if out_dir.is_dir() else []
+    except OSError:
+        return removed
+    for p in entries:
+        parts = p.name[len(TMP_PREFIX):].split(".", 1)
+        if not p.name.startswith(TMP_PREFIX) or not parts[0].isdigit():
+            continue
+        marker = p / MARKER
+        try:
+            if p.is_symlink() or not p.is_dir() or marker.is_symlink():
+                continue
+            when = marker.stat().st_mtime if marker.exists() else p.stat().st_mtime
+            if when >= before:
+                continue
+        except OSError:
+            continue
+        pid = int(parts[0])
+        if pid != os.getpid():
+            try:
+                os.kill(pid, 0)
+                continue  # another run still working
+            except ProcessLookupError:
+                pass
+            except (PermissionError, OverflowError, OSError):
+                continue
+        if marker.exists():
+            shutil.rmtree(p, ignore_errors=True)
+        else:  # killed before its marker was written: removed only when empty
+            try:
+                os.rmdir(p)
+            except OSError:
+                continue
+        removed.append(p)
+    return removed
+
+
+def _atomic_write(out_dir, name, writer, force=False):
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".tmp", dir=out_dir))
     target = out_dir / name
+    tmp = old = None
     try:
+        with deferred_signals():  # the name of what is created is always known
+            tmp = _make_temporary(out_dir)
         writer(tmp)
-        if target.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=".old", dir=out_dir))
-            target.rename(old / "previous")
-            tmp.rename(target)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            tmp.rename(target)
+        problem = _ownership_problem(target, force)  # again: it may have appeared meanwhile
+        if problem:
+            raise ScenarioError([problem])
+        with deferred_signals():  # the swap is never left half done
+            if os.path.lexists(target):
+                old = _make_temporary(out_dir)
+                os.rename(target, old / "previous")
+            os.rename(tmp, target)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
     return target
 
 
@@ -154,7 +278,17 @@ def _write_warnings(pairs, directory):
             Path(directory) / "warnings.csv", index=False)
 
 
-def run_scenario(path, out_dir, taken=None):
+def _message(path, exc):
+    """One failure message without exception class names (kept only for an unexpected bug)."""
+    if isinstance(exc, OSError):
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        return f"{path}: cannot write the report: {exc.strerror or exc}{where}"
+    if isinstance(exc, (ValueError, ArithmeticError)) or type(exc).__module__.startswith("hammerstein"):
+        return f"{path}: {exc}"
+    return f"{path}: unexpected {type(exc).__name__}: {exc}"
+
+
+def run_scenario(path, out_dir, taken=None, force=False):
     """Validate, simulate and write the report of one scenario.
 
     Parameters
@@ -167,6 +301,10 @@ def run_scenario(path, out_dir, taken=None):
         Report names already written in this run (by :func:`run_scenarios`):
         a scenario whose name is taken fails instead of overwriting the
         other scenario's report.
+    force : bool
+        Replace ``out_dir/<name>`` even when the project did not write it
+        (default: only a directory with the :data:`MARKER` file, or an
+        empty one, is replaced).
 
     Returns
     -------
@@ -190,6 +328,9 @@ def run_scenario(path, out_dir, taken=None):
             raise ScenarioError([
                 f"{path}: name: {name!r} is also the name of {taken[name]} in this run; "
                 f"give each scenario its own name (its report directory)"])
+        problem = _ownership_problem(Path(out_dir) / name, force)
+        if problem:  # before simulating: nothing of the user's is replaced
+            raise ScenarioError([f"{path}: {problem}"])
         scenario = resolve_scenario(spec)
         kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
         results = kind.simulate(scenario)
@@ -199,31 +340,36 @@ def run_scenario(path, out_dir, taken=None):
         def write(d):
             kind.write(scenario, results, d)
             _write_warnings(caught, d)
-        target = _atomic_write(out_dir, name, write)
+        target = _atomic_write(out_dir, name, write, force)
     except ScenarioError as exc:
         return ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics())
     except Exception as exc:  # a failed scenario must not stop the others
-        return ScenarioOutcome(name, path, False, f"{path}: {type(exc).__name__}: {exc}",
-                               None, _empty_metrics())
+        return ScenarioOutcome(name, path, False, _message(path, exc), None, _empty_metrics())
     return ScenarioOutcome(name, path, True, None, target, frame, caught)
 
 
-def run_scenarios(paths, out_dir):
+def run_scenarios(paths, out_dir, force=False):
     """Run several scenarios; a failure does not stop the others.
+
+    Stale temporary directories of killed runs in ``out_dir`` are removed
+    first (:func:`remove_stale_temporaries`).
 
     Parameters
     ----------
     paths : iterable of str or pathlib.Path
     out_dir : str or pathlib.Path
+    force : bool
+        See :func:`run_scenario`.
 
     Returns
     -------
     list of ScenarioOutcome
         In the order of ``paths``.
     """
+    remove_stale_temporaries(out_dir)
     taken, outcomes = {}, []
     for p in paths:
-        outcome = run_scenario(p, out_dir, taken)
+        outcome = run_scenario(p, out_dir, taken, force)
         if outcome.ok:
             taken[outcome.name] = outcome.path
         outcomes.append(outcome)
@@ -254,6 +400,7 @@ def replicate(scenarios="scenarios/paper", out="reports/paper"):
     if not files:
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
     out = Path(out)
+    remove_stale_temporaries(out)
     outcomes = [run_scenario(f, out) for f in files]
     write_readme(out, outcomes)
     return outcomes

@@ -2,9 +2,49 @@
 
 from __future__ import annotations
 
+import os
 import sys
+from pathlib import Path
 
-__all__ = ["print_err", "one_line"]
+__all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem"]
+
+
+def out_dir_problem(out):
+    """Why ``out`` cannot be a reports directory (one line, for a usage error), or None.
+
+    An empty path, a path under an existing file (``f/sub`` with ``f`` a
+    file), an existing non-directory, or a directory that cannot be written.
+    Nothing is created.
+    """
+    if not str(out).strip():
+        return "--out: empty path; expected a directory"
+    p = Path(out)
+    while not os.path.lexists(p) and p != p.parent:
+        p = p.parent
+    if not p.is_dir():
+        what = "exists and is not a directory" if p == Path(out) else "is not a directory"
+        return f"--out: {p} {what}"
+    if not os.access(p, os.W_OK | os.X_OK):
+        return f"--out: {p}: permission denied (cannot write there)"
+    return None
+
+
+def out_file_problem(out, what="file"):
+    """Why ``out`` cannot be written as a single file (one line), or None.
+
+    An empty path, a directory, an existing special file (device, FIFO,
+    socket), a path under an existing file, or a directory that cannot be
+    written. A symlink is judged by its target.
+    """
+    if not str(out).strip():
+        return f"--out: empty path; expected a {what} name"
+    p = Path(out)
+    if p.is_dir():
+        return f"--out: {out} is a directory; expected a {what} name"
+    if os.path.lexists(p) and p.exists() and not p.is_file():
+        return f"--out: {out} is not a regular file (a device, FIFO or socket); expected a {what} name"
+    problem = out_dir_problem(p.resolve().parent if p.is_symlink() else p.parent)
+    return problem.replace("--out: ", f"--out: {out}: ", 1) if problem else None
 
 
 def print_err(msg):

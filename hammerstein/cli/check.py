@@ -27,7 +27,6 @@ temporary file and renamed. It writes nothing if a scenario failed.
 
 from __future__ import annotations
 
-import os
 import sys
 import tempfile
 import xml.etree.ElementTree as ET
@@ -35,7 +34,9 @@ from pathlib import Path
 
 import pandas as pd
 
+from hammerstein.cli._common import out_dir_problem, out_file_problem
 from hammerstein.cli._output import add_verbosity, print_warnings
+from hammerstein.core.files import safe_write
 from hammerstein.runner import run_scenarios
 from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
                                              load_tolerances, merge_baseline, read_baseline,
@@ -98,6 +99,10 @@ def _err(msg):
     print(f"error: {msg}", file=sys.stderr)
 
 
+def _usage(msg):
+    print(f"hammerstein check: error: {msg}", file=sys.stderr)
+
+
 def run_check(args):
     """Handler of ``hammerstein check``.
 
@@ -124,18 +129,23 @@ def run_check(args):
         if not args.update or baseline_path.exists():
             baseline = read_baseline(baseline_path)
     except BaselineError as exc:
-        _err(" ".join(str(exc).split()))
+        _usage(" ".join(str(exc).split()))
         return 2
-    missing = [s for s in args.scenarios if not Path(s).is_file()]
+    missing = [s for s in args.scenarios if not Path(s).exists()]
     if missing:
-        _err(f"{missing[0]}: scenario file not found")
+        _usage(f"{missing[0]}: scenario file not found")
         return 2
-    if args.out is not None and Path(args.out).exists() and not Path(args.out).is_dir():
-        _err(f"--out: {args.out} exists and is not a directory")
+    problem = out_dir_problem(args.out) if args.out is not None else None
+    if problem is None and args.update:
+        problem = out_file_problem(baseline_path, "baseline CSV file")
+        problem = problem.replace("--out", "--baseline", 1) if problem else None
+    if problem:
+        _usage(problem)
         return 2
     junit = getattr(args, "junit_xml", None)
-    if junit is not None and (Path(junit).is_dir() or not Path(junit).resolve().parent.is_dir()):
-        _err(f"--junit-xml: {junit} is a directory or its directory does not exist")
+    problem = out_file_problem(junit, "JUnit XML file") if junit is not None else None
+    if problem:
+        _usage(problem.replace("--out", "--junit-xml", 1))
         return 2
     try:
         return _check(args, baseline_path, baseline, tolerance)
@@ -143,7 +153,7 @@ def run_check(args):
         _err(" ".join(str(exc).split()))
         return 1
     except OSError as exc:        # baseline not writable
-        _err(f"{baseline_path}: cannot write the baseline ({exc.strerror or exc})")
+        _usage(f"{baseline_path}: cannot write the baseline ({exc.strerror or exc})")
         return 2
 
 
@@ -154,7 +164,7 @@ def _check(args, baseline_path, baseline, tolerance):
     names = [o.name for o in outcomes]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        _err(f"scenario name {dup[0]!r} is used by several files; names must be unique in a baseline")
+        _usage(f"scenario name {dup[0]!r} is used by several files; names must be unique in a baseline")
         return 2
     failed = [o for o in outcomes if not o.ok]
     for o in failed:
@@ -295,15 +305,8 @@ def _write_junit(path, outcomes, comparison):
     """Write :func:`junit_xml` to ``path`` atomically (temporary file, then rename)."""
     tree = junit_xml(outcomes, comparison)
     ET.indent(tree)
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.resolve().parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            tree.write(fh, encoding="utf-8", xml_declaration=True)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    safe_write(path, lambda fh: tree.write(fh, encoding="utf-8", xml_declaration=True),
+               "JUnit XML file")
 
 
 def _run(paths, out):

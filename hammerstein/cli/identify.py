@@ -19,14 +19,14 @@ project did not write is never overwritten without ``--force``.
 
 from __future__ import annotations
 
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
+from hammerstein.cli._common import out_file_problem
+from hammerstein.core.files import bounded_read_text, safe_write
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.record_identification import dynamics_tables, identify_records
 from hammerstein.exceptions import HysteresisError, IdentificationError
@@ -114,8 +114,11 @@ def _parse_thresholds(text):
         if n < 1:
             raise _Usage(f"--thresholds: expected N >= 1, found {n}")
         return n, None
+    if any(not v.strip() for v in text.split(",")):
+        raise _Usage(f"--thresholds: expected numbers separated by commas, found an empty entry "
+                     f"in {text!r}")
     try:
-        r = np.array([float(v) for v in text.split(",") if v.strip()])
+        r = np.array([float(v) for v in text.split(",")])
     except ValueError:
         raise _Usage(f"--thresholds: expected numbers separated by commas, found {text!r}") from None
     if r.size == 0 or not np.all(np.isfinite(r)) or r[0] < 0 or np.any(np.diff(r) <= 0):
@@ -133,9 +136,8 @@ def _written_by_us(path, kind):
     if kind == "model":
         import tomllib
         try:
-            with open(path, "rb") as fh:
-                return "model" in tomllib.load(fh)
-        except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+            return "model" in tomllib.loads(bounded_read_text(path, "toml", "model file"))
+        except (OSError, ValueError, tomllib.TOMLDecodeError, UnicodeDecodeError):
             return False
     if kind == "metrics":
         return head.decode("utf-8", "replace").splitlines()[:1] == [METRICS_HEADER]
@@ -143,9 +145,10 @@ def _written_by_us(path, kind):
 
 
 def _check_target(path, option, kind, force, inputs):
+    problem = out_file_problem(path, f"{kind} file")  # empty, directory, special, under a file
+    if problem:
+        raise _Usage(problem.replace("--out", option, 1))
     path = Path(path)
-    if path.is_dir():
-        raise _Usage(f"{option}: {path} is a directory; expected a file name")
     if any(path.resolve() == Path(d).resolve() for d in inputs):
         raise _Usage(f"{option}: {path} is one of the data files")
     if path.exists() and not force and not _written_by_us(path, kind):
@@ -154,19 +157,9 @@ def _check_target(path, option, kind, force, inputs):
 
 
 def _atomic_write(path, write):
-    """Write through a unique temporary file next to ``path``, then rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        write(tmp)
-        os.chmod(tmp, 0o644)
-        tmp.replace(path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    """``write(binary file)`` through an exclusive temporary file next to ``path``, then rename
+    (:func:`hammerstein.core.files.safe_write`: symlink target written, permissions kept)."""
+    safe_write(path, write, "file")
 
 
 def _check_usage(args):
@@ -240,7 +233,7 @@ def metrics_rows(fit, output_unit):
 def _write_metrics(path, rows):
     import pandas as pd
     frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
-    _atomic_write(path, lambda tmp: frame.to_csv(tmp, index=False, float_format="%.7g"))
+    _atomic_write(path, lambda fh: fh.write(frame.to_csv(index=False, float_format="%.7g").encode()))
 
 
 def fit_figure(fit, input_unit, output_unit):
@@ -311,7 +304,7 @@ def _write_plot(path, fit, input_unit, output_unit):
     import matplotlib.pyplot as plt
     fig = fit_figure(fit, input_unit, output_unit)
     try:
-        _atomic_write(path, lambda tmp: fig.savefig(tmp, format="png", dpi=110))
+        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
     finally:
         plt.close(fig)
 

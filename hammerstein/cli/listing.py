@@ -4,7 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hammerstein.core.presets import bundled_presets
+import numpy as np
+
+from hammerstein.core.lti import dc_gain
+from hammerstein.core.presets import PresetError, bundled_presets, load_plant, read_toml
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -29,6 +32,18 @@ def add_parser(subparsers):
     p.set_defaults(handler=handler)
 
 
+def _dynamics_summary(path):
+    """``; dynamics: n states, DC gain [[..]]`` of a preset (reported, not forced to I)."""
+    try:
+        plant = load_plant(path)
+    except PresetError as exc:
+        return f"; invalid: {exc}"
+    if plant.dynamics is None:
+        return "; static (no dynamics)"
+    gain = np.round(dc_gain(plant.dynamics), 4).tolist()
+    return f"; dynamics: {plant.dynamics.nstates} states, DC gain {gain}"
+
+
 def handler(args):
     """Print the presets, the compensator kinds and the scenario files; exit status 0.
 
@@ -46,14 +61,35 @@ def handler(args):
     """
     print("presets:")
     for name, path in sorted(bundled_presets().items()):
-        print(f"  {name}  ({path})")
+        print(f"  {name}  ({path}){_dynamics_summary(path)}")
     print("compensator kinds:")
     for name, kind in COMPENSATORS.items():
         print(f"  {name}: {kind.description}")
     root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
-    print(f"scenarios under {root}/:" if files else
+    presets = [f for f in files if _is_preset(f)]
+    scenarios = [f for f in files if f not in presets]
+    print(f"scenarios under {root}/:" if scenarios else
           f"scenarios: none found under {root}/ (run from the repository root)")
-    for f in files:
+    for f in scenarios:
         print(f"  {f}")
+    if presets:
+        print(f"preset and dynamics files under {root}/ (preset = \"<path>\", "
+              f"dynamics = \"<path>\"):")
+        for f in presets:
+            print(f"  {f}{_dynamics_summary(f) if _is_full_preset(f) else '; dynamics only'}")
     return 0
+
+
+def _is_full_preset(path):
+    """True when the file has a ``[preset]`` table (a plant, not only dynamics)."""
+    return "preset" in read_toml(path)
+
+
+def _is_preset(path):
+    """True for a preset (``[preset]``) or dynamics-only file, not a scenario."""
+    try:
+        doc = read_toml(path)
+        return "preset" in doc or set(doc) == {"dynamics"}
+    except PresetError:
+        return False       # listed as a scenario: validate reports its problem

@@ -24,10 +24,13 @@ import argparse
 import importlib
 from importlib import metadata
 import os
+import signal
 import sys
+import threading
 import warnings
 
 from hammerstein.cli._common import one_line, print_err
+from hammerstein.core.files import interrupt
 
 __all__ = ["main", "build_parser", "one_line", "COMMANDS"]
 
@@ -105,6 +108,22 @@ def build_parser(command=None):
     return parser
 
 
+def _on_signal(signum, frame):
+    # later signals are ignored so that the clean-up in progress (removing a
+    # temporary directory) is not interrupted in turn; inside the creation or
+    # rename of a temporary the interruption waits for its end
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    interrupt(signum)
+
+
+def _install_signal_handlers():
+    """SIGINT/SIGTERM -> a KeyboardInterrupt (:func:`hammerstein.core.files.interrupt`); returns the previous handlers (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    return {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+
+
 def _command(argv):
     """The subcommand named in ``argv`` (its first argument not starting with '-'), or None."""
     for a in argv:
@@ -124,9 +143,30 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0 success, 1 a scenario failed, 2 usage error.
+        Exit status: 0 success, 1 a scenario failed, 2 usage error, 130
+        interrupted by SIGINT (Ctrl-C), 143 by SIGTERM; an interruption
+        prints the one line ``interrupted`` and removes the temporary
+        directory of the report in progress.
     """
     argv = sys.argv[1:] if argv is None else list(argv)
+    previous = _install_signal_handlers()
+    try:
+        return _main(argv)
+    except KeyboardInterrupt as exc:  # SIGINT or SIGTERM: one line, no traceback
+        signum = getattr(exc, "signum", signal.SIGINT)
+        try:
+            sys.stdout.flush()
+        except (OSError, ValueError):
+            pass
+        print_err("interrupted")
+        return 128 + int(signum)
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def _main(argv):
+    """:func:`main` without the signal handling."""
     command = _command(argv)
     parser = build_parser(command) if command is not None else build_parser("")
     try:

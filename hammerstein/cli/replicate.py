@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hammerstein.cli._common import print_err
+from hammerstein.cli._common import out_dir_problem, print_err
 from hammerstein.runner import replicate
 
 __all__ = ["add_parser", "handler"]
@@ -48,12 +48,17 @@ def handler(args):
     -------
     int
         0 when every scenario ran, 1 when one failed (one line per failure
-        on stderr), 2 when ``args.scenarios`` holds no ``*.toml`` scenario.
+        on stderr), 2 when ``args.scenarios`` holds no ``*.toml`` scenario or ``args.out``
+        cannot be a directory (usage error).
     """
+    problem = out_dir_problem(args.out)
+    if problem:
+        print_err(f"hammerstein replicate: error: {problem}")
+        return 2
     try:
         outcomes = replicate(args.scenarios, args.out)
     except FileNotFoundError as exc:
-        print_err(f"error: {exc}")
+        print_err(f"hammerstein replicate: error: {exc}")
         return 2
     for o in outcomes:
         if o.ok:

@@ -17,9 +17,9 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from hammerstein.cli._common import one_line, print_err
+from hammerstein.cli._common import one_line, out_dir_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
-from hammerstein.runner import run_scenario
+from hammerstein.runner import MARKER, remove_stale_temporaries, run_scenario
 from hammerstein.simulation import announce_compiles
 
 __all__ = ["add_parser", "handler"]
@@ -42,6 +42,10 @@ def add_parser(subparsers):
     p.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario TOML files")
     p.add_argument("--out", default="reports", metavar="DIR",
                    help="reports directory (default: reports/)")
+    p.add_argument("--force", action="store_true",
+                   help=f"replace DIR/<scenario name> even when hammerstein did not write it "
+                        f"(by default only a report directory with a {MARKER} file, or an empty "
+                        f"directory, is replaced)")
     add_verbosity(p)
     p.set_defaults(handler=handler)
 
@@ -59,13 +63,15 @@ def handler(args):
     -------
     int
         0 when every scenario ran, 1 when one failed (one line per failure
-        on stderr, the others still run), 2 when ``args.out`` exists and is
-        not a directory.
+        on stderr, the others still run), 2 when ``args.out`` cannot be a
+        reports directory (empty, a file, under a file, not writable).
     """
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        print_err(f"hammerstein run: error: --out: {out} exists and is not a directory")
+    problem = out_dir_problem(args.out)
+    if problem:
+        print_err(f"hammerstein run: error: {problem}")
         return 2
+    out = Path(args.out)
+    remove_stale_temporaries(out)
     status, taken = 0, {}
     verbosity = getattr(args, "verbosity", 0)
     announce_compiles(print_err if verbosity >= 0 else None)   # first run: before compiling
@@ -73,7 +79,7 @@ def handler(args):
         if verbosity > 0:
             print_err(f"{path}: running ...")
         start = time.perf_counter()
-        outcome = run_scenario(path, args.out, taken)
+        outcome = run_scenario(path, out, taken, force=args.force)
         if outcome.ok:
             taken[outcome.name] = outcome.path
             n_cases = outcome.metrics["case"].nunique()

@@ -59,7 +59,7 @@ def handler(args):
             status = 1
             continue
         except Exception as exc:  # as run does: one line, the other files still checked
-            print_err(f"error: {path}: {type(exc).__name__}: {one_line(exc)}")
+            print_err(f"error: {path}: unexpected {type(exc).__name__}: {one_line(exc)}")
             status = 1
             continue
         print(f"{path}: ok ({len(sc.cases)} cases)")

@@ -3,7 +3,7 @@
 The inverse multiplicative compensator of Theorem 4.1 of the paper,
 ``U(t) = Yr(t) + U(t-T) - Gamma(U(t-T))``, is a fixed-point iteration, one
 step per sample, that converges only when ``rho(I - J) < 1`` for the slope
-matrices J of the model (NOTES §4). Normalised by a static gain matrix K,
+matrices J of the model (docs/compensator.md). Normalised by a static gain matrix K,
 
 ``U(t) = U(t-T) + K^-1 (Yr(t) - Gamma(U(t-T)))``,
 
@@ -16,7 +16,7 @@ The family, each built from an identified model with one call:
   or first-order low-pass feedback; iterations per sample);
 - :func:`diagonal_compensator`: the same law on the direct transfers only;
 - :class:`PerAxisInverseCompensator`: the per-axis analytic inverse PI of
-  Kuhnen & Janocha (paper ref. [20], NOTES §5, :mod:`hammerstein.inverse`);
+  Kuhnen & Janocha (paper ref. [20], docs/per-axis-inverse.md, :mod:`hammerstein.inverse`);
 - :class:`StaticGainCompensator`: no hysteresis compensation, ``U = K^-1 Yr``.
 
 All have ``simulate(reference (m, N) [µm], initial_state=None) -> (inputs
@@ -99,7 +99,7 @@ def midpoint_gains(model: MultivariablePI):
     contraction factor ``max |1 - J/K|`` is smallest, and equal to
     ``(S_max - S_min) / (S_max + S_min) < 1``, at ``K = (S_min + S_max) / 2``
     (the classical optimal relaxation of a fixed-point iteration). The slopes
-    are the cumulative weight sums of each direct transfer (NOTES §4),
+    are the cumulative weight sums of each direct transfer (docs/compensator.md),
     outside the dead band.
 
     Parameters
@@ -177,7 +177,7 @@ def convergence_report(model: MultivariablePI, gain=None, max_matrices=100_000):
         Square model (m inputs, m outputs).
     gain : {'secant', 'midpoint', 'identity'} or array_like, shape (m, m), optional
         Normalisation K [µm/V]; default the diagonal secant gains of the
-        direct transfers over the identified range (NOTES §4).
+        direct transfers over the identified range (docs/compensator.md).
     max_matrices : int
         Upper bound on the number of combinations examined; beyond it a
         random subset (fixed seed) is used.
@@ -214,7 +214,7 @@ def convergence_report(model: MultivariablePI, gain=None, max_matrices=100_000):
 class InverseMultiplicativeCompensator:
     """Multivariable inverse multiplicative compensator, Theorem 4.1.
 
-    ``U(t) = U(t-T) + K^-1 (Yr(t) - Gamma(U(t-T)))`` (NOTES §4); with
+    ``U(t) = U(t-T) + K^-1 (Yr(t) - Gamma(U(t-T)))`` (docs/compensator.md); with
     ``gain='identity'`` it is the paper's literal law. The compensator is
     built from the model alone: no parameter is computed beyond K.
 
@@ -328,7 +328,7 @@ class InverseMultiplicativeCompensator:
         if not self.convergence.converges and self.check != "ignore":
             msg = (f"gain: rho(I - K^-1 J) reaches {self.convergence.max_radius:.3g} >= 1 "
                    f"over the model's slopes; the fixed-point iteration is not guaranteed to "
-                   f"converge and diverges where those slopes persist (NOTES §4); "
+                   f"converge and diverges where those slopes persist (docs/compensator.md); "
                    f"gain='midpoint' minimises the radius")
             if self.check == "error":
                 raise CompensatorError(msg)
@@ -482,7 +482,7 @@ def check_reference_range(model: MultivariablePI, reference, warn=True):
 
     The identified range of output l is the peak of its direct transfer at
     the identification amplitude, ``|Gamma_ll|`` peak ``sum_i w_i (A_l -
-    r_i)`` (NOTES §2; a linear direct gain g gives ``|g| A_l``). Beyond it the
+    r_i)`` (docs/multivariable-model.md; a linear direct gain g gives ``|g| A_l``). Beyond it the
     model (hence every compensator) extrapolates.
 
     Parameters
@@ -608,7 +608,7 @@ class StaticGainCompensator:
     """No hysteresis compensation: ``U = K^-1 Yr`` (the reference case).
 
     K is the diagonal matrix of the secant gains of the direct transfers over
-    the identified range, ``K_ll = sum_i w_i (A_l - r_i) / A_l`` (NOTES §4).
+    the identified range, ``K_ll = sum_i w_i (A_l - r_i) / A_l`` (docs/compensator.md).
 
     Parameters
     ----------
@@ -726,7 +726,7 @@ class PerAxisInverseCompensator:
 
     Input l is the analytic inverse of the direct transfer ``Gamma_ll``
     applied to reference l (:func:`hammerstein.inverse.kuhnen_inverse`,
-    NOTES §5, paper ref. [20]); the cross-couplings are not compensated
+    docs/per-axis-inverse.md, paper ref. [20]); the cross-couplings are not compensated
     (paper Fig. 9). A linear direct gain g is inverted as ``1/g``.
 
     Parameters

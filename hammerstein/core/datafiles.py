@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import FileLimitError, bounded_read_bytes
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
@@ -155,7 +156,9 @@ def _sniff_separator(sample):
 
 def _read_table(path):
     try:
-        raw = path.read_bytes()
+        raw = bounded_read_bytes(path, "data", "data file")
+    except FileLimitError as exc:
+        raise DataFileError(str(exc)) from None
     except OSError as exc:
         raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
@@ -228,7 +231,9 @@ def read_record(path, input, output, time=None, sampling_period=None):
     Parameters
     ----------
     path : str or pathlib.Path
-        CSV / text file. A header is detected when a cell of the first
+        CSV / text file: a regular file of at most 256 MiB
+        (``HAMMERSTEIN_MAX_DATA_BYTES`` raises the limit), checked before
+        reading. A header is detected when a cell of the first
         non-comment line is not a number; separators ``,`` ``;`` tab or
         whitespace are detected; lines starting with ``#`` are ignored; an
         empty leading index column is dropped.

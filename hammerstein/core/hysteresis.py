@@ -9,7 +9,7 @@ References
 ----------
 .. [1] M. Rakotondrabe, "Multivariable classical Prandtl-Ishlinskii hysteresis
    modeling and compensation and sensorless control of a nonlinear 2-dof
-   piezoactuator", eq. (1)-(4) and Def. 3.2 (``shared/spec``).
+   piezoactuator", eq. (1)-(4) and Def. 3.2.
 .. [2] M. A. Krasnosel'skii and A. V. Pokrovskii, *Systems with Hysteresis*,
    Springer, 1989.
 """
@@ -191,7 +191,7 @@ class PrandtlIshlinskii:
         Returns
         -------
         float
-            Gain [µm/V] (NOTES §4, default compensator normalisation).
+            Gain [µm/V] (docs/compensator.md, default compensator normalisation).
 
         Raises
         ------
@@ -526,7 +526,7 @@ class MultivariablePI:
         Returns
         -------
         numpy.ndarray, shape (p, m)
-            ``K_lk = sum_i w_lki (A_k - r_lki) / A_k`` [µm/V] (NOTES §4);
+            ``K_lk = sum_i w_lki (A_k - r_lki) / A_k`` [µm/V] (docs/compensator.md);
             linear components contribute their gain.
 
         Raises
@@ -559,7 +559,7 @@ class MultivariablePI:
         After a reversal of input k, the hysterons of every component of
         column k start moving when the travel exceeds twice their threshold,
         so the column ``J[:, k]`` of the incremental slope matrix steps
-        through cumulative weight sums (NOTES §4).
+        through cumulative weight sums (docs/compensator.md).
 
         Parameters
         ----------

@@ -4,9 +4,9 @@ Two monovariable methods, as estimator objects in the style of pysindy /
 scikit-learn (``fit`` returns ``self``; fitted attributes end in ``_``):
 
 * :class:`ClosedFormPI`, the closed form of the paper's Appendix (eq. 14-17,
-  NOTES §3): a triangular solve on the shifted ascending branch;
+  docs/identification.md): a triangular solve on the shifted ascending branch;
 * :class:`LeastSquaresPI`, least squares over the whole record (the paper's
-  ref. [18], NOTES §3): the play outputs for fixed thresholds form a linear
+  ref. [18], docs/identification.md): the play outputs for fixed thresholds form a linear
   regressor matrix.
 
 :class:`MultivariableIdentifier` applies either method to every component
@@ -18,7 +18,7 @@ References
 ----------
 .. [1] M. Rakotondrabe, "Multivariable classical Prandtl-Ishlinskii hysteresis
    modeling and compensation and sensorless control of a nonlinear 2-dof
-   piezoactuator", Section 3.3, Remark 5.1 and Appendix (``shared/spec``).
+   piezoactuator", Section 3.3, Remark 5.1 and Appendix.
 """
 
 from __future__ import annotations
@@ -207,7 +207,7 @@ class ClosedFormPI:
 
     The ascending branch from the input minimum to the next maximum is shifted
     to the origin, ``u' = u - u_min``, ``y' = y - y(u_min)``; with bandwidths
-    ``bw_i = 2 r_i`` and ``bw_{n+1} = 2A`` (A = half input span; NOTES §3),
+    ``bw_i = 2 r_i`` and ``bw_{n+1} = 2A`` (A = half input span; docs/identification.md),
     ``y_j = y'(u' = bw_{j+1}) = sum_{i<=j} (bw_{j+1} - bw_i) w_i`` (eq. 14),
     a lower-triangular system (eq. 15-16) solved for w (eq. 17) with
     :func:`scipy.linalg.solve_triangular`.
@@ -336,7 +336,7 @@ class LeastSquaresPI:
 
     ``bounds="monotone"`` constrains the model instead of the weights: the
     unknowns become the cumulative sums ``S_j = sum_{i<=j} w_i`` (the slopes
-    reachable on a branch, NOTES §4), bounded by ``S_j >= min_slope`` (or
+    reachable on a branch, docs/compensator.md), bounded by ``S_j >= min_slope`` (or
     ``<= -min_slope`` for a decreasing transfer). The fitted operator is then
     strictly monotone, hence invertible (Kuhnen: ``S_i > 0``) and compensable
     with ``rho(I - K^-1 J) < 1`` for a suitable K. Use it for direct
@@ -449,6 +449,10 @@ class LeastSquaresPI:
         if isinstance(skip, str) and skip == "auto":
             skip = int(ascending_branches(u)[0][0])
         if not isinstance(skip, (int, np.integer)) or not 0 <= skip <= u.size - 2:
+            if skip_seconds is not None:  # in the unit the user gave
+                raise IdentificationError(
+                    f"skip: expected a burn-in in [0, {(u.size - 2) * sampling_period:g}] s, "
+                    f"found {skip_seconds:g} s")
             raise IdentificationError(
                 f"skip: expected a sample count in [0, {u.size - 2}], found {skip!r}")
         if self.thresholds is not None:

@@ -1,6 +1,6 @@
 """Analytic inverse of a classical Prandtl-Ishlinskii operator (Kuhnen & Janocha).
 
-The paper's "existing technique" (its ref. [20]; NOTES §5) inverts each direct
+The paper's "existing technique" (its ref. [20]; docs/per-axis-inverse.md) inverts each direct
 transfer of the actuator separately. For a PI operator with ``r_1 = 0`` and
 cumulative weight sums ``S_i = sum_{j<=i} w_j > 0`` the inverse is again a PI
 operator with
@@ -151,7 +151,7 @@ def kuhnen_inverse_parameters(thresholds, weights, name="component"):
     """Thresholds and weights of the inverse of a PI operator with r_1 = 0.
 
     ``r'_i = sum_{j<=i} w_j (r_i - r_j)``, ``w'_1 = 1/w_1``,
-    ``w'_i = -w_i / (S_i S_{i-1})``, ``S_i = sum_{j<=i} w_j`` (NOTES §5,
+    ``w'_i = -w_i / (S_i S_{i-1})``, ``S_i = sum_{j<=i} w_j`` (docs/per-axis-inverse.md,
     paper ref. [20]).
 
     Parameters
@@ -189,7 +189,7 @@ def kuhnen_inverse_parameters(thresholds, weights, name="component"):
         i = int(bad[0])
         raise HysteresisError(
             f"{name}: weights: the cumulative weight sum S_{i + 1} = {S[i]:.6g} µm/V is <= 0; "
-            f"the Kuhnen-Janocha inverse needs S_i > 0 for every i (NOTES §5)")
+            f"the Kuhnen-Janocha inverse needs S_i > 0 for every i (docs/per-axis-inverse.md)")
     r_inv = np.array([np.sum(w[:i + 1] * (r[i] - r[:i + 1])) for i in range(r.size)])
     w_inv = np.empty_like(w)
     w_inv[0] = 1.0 / w[0]

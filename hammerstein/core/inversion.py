@@ -471,6 +471,41 @@ class ZPETCInverse:
         final = np.concatenate([ext[:, -(L - 1):].T.reshape(-1) if L > 1 else np.zeros(0), xg])
         return v, final
 
+    def state_space(self):
+        """The filter as one discrete state space on the flat filter state.
+
+        ``v(k) = Cf s(k) + Df r(k)``, ``s(k+1) = Af s(k) + Bf r(k)`` with
+        ``s`` the state of :meth:`filter` (past ``window - 1`` reference
+        samples, oldest first, then the acceptable-mode state): the same
+        outputs and final states as :meth:`filter`, in the form of a linear
+        reference pre-filter of the compiled chain.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``Af`` (n_states, n_states), ``Bf`` (n_states, p), ``Cf``
+            (p, n_states), ``Df`` (p, p) [µm -> µm].
+        """
+        p, L = self.p, self.window
+        nw, ng = p * (L - 1), self._Ag.shape[0]
+        n = nw + ng
+        Af, Bf = np.zeros((n, n)), np.zeros((n, p))
+        Cf, Df = np.zeros((p, n)), self._taps_v[0].copy()
+        for j in range(L - 1):                     # slot j holds r(k - (L - 1 - j))
+            lag = L - 1 - j
+            Cf[:, j * p:(j + 1) * p] = self._taps_v[lag]
+            if ng:
+                Af[nw:, j * p:(j + 1) * p] = self._Bg @ self._taps_w[lag]
+            if j < L - 2:                          # shift the window by one sample
+                Af[j * p:(j + 1) * p, (j + 1) * p:(j + 2) * p] = np.eye(p)
+        if L > 1:
+            Bf[(L - 2) * p:(L - 1) * p] = np.eye(p)
+        if ng:
+            Af[nw:, nw:] = self._Ag
+            Bf[nw:] = self._Bg @ self._taps_w[0]
+            Cf[:, nw:] = self._Cg
+        return Af, Bf, Cf, Df
+
     def step(self, reference_sample, state):
         """One sample of :meth:`filter`.
 

@@ -5,7 +5,7 @@ width h (largest vertical gap between the ascending and the descending
 branch of the input-output map) and h/H. Compensated tracking (Fig. 8,
 10-13): RMS and maximum absolute error per axis, residual cross-coupling
 peak to peak, and the Euclidean tracking error ``||Y_r - Y||`` per sample
-(NOTES §6: the paper's ε = sgn(θ)√|θ| is not a distance and is not used).
+(docs/metrics.md: the paper's ε = sgn(θ)√|θ| is not a distance and is not used).
 
 Metrics are computed over the steady-state window that follows
 ``settle_periods`` periods; loop metrics over the last full period.
@@ -164,7 +164,7 @@ def hysteresis_width(u, y, period_samples, n_grid=1000):
 
 
 def euclidean_error(reference, outputs):
-    """Euclidean tracking error ``||Y_r(t) - Y(t)||`` per sample (NOTES §6).
+    """Euclidean tracking error ``||Y_r(t) - Y(t)||`` per sample (docs/metrics.md).
 
     Parameters
     ----------

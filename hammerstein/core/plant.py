@@ -3,7 +3,7 @@
 ``U (m, N) [V] -> Gamma (multivariable PI) -> H (p, N) [µm] -> G(z) -> Y (p, N) [µm]``
 
 The linear part makes the hysteresis rate dependent (paper, Sections 1 and 6;
-NOTES §7). Without dynamics the plant is the static (rate-independent) model.
+docs/hammerstein-plant.md). Without dynamics the plant is the static (rate-independent) model.
 """
 
 from __future__ import annotations

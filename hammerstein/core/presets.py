@@ -11,17 +11,18 @@ compensator and the scenarios accept both. The schema is in the README.
 from __future__ import annotations
 
 import difflib
-import os
-import tempfile
 import tomllib
 from importlib import resources
 from pathlib import Path
 
+import control
 import numpy as np
 import tomli_w
 
+from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
 
@@ -35,10 +36,46 @@ __all__ = [
     "load_model",
     "save_model",
     "load_plant",
+    "dynamics_from_table",
+    "dynamics_to_table",
+    "load_dynamics",
+    "save_dynamics",
 ]
 
 
 PRESET_DIR = resources.files("hammerstein") / "presets"
+
+#: Keys of a model or preset file, per table (anything else is reported with the closest key;
+#: the ``[model]`` keys are :data:`MODEL_KEYS`, ``kind = "state_space"`` dynamics A, B, C, D).
+FILE_KEYS = ("model", "preset", "dynamics", "identification")
+PRESET_KEYS = ("name", "description", "sampling_period")
+DYNAMICS_KEYS = ("kind", "natural_frequency", "damping_ratio")
+
+
+def unknown_keys(table, allowed, where):
+    """The unknown keys of a table, each with the closest valid key.
+
+    Parameters
+    ----------
+    table : dict
+        Parsed TOML table (anything else has no keys).
+    allowed : sequence of str
+        Valid keys.
+    where : str
+        Key path prefix (``"preset."``).
+
+    Returns
+    -------
+    list of str
+        ``where.key: unknown key (did you mean ...?)`` per unknown key.
+    """
+    out = []
+    for key in table if isinstance(table, dict) else ():
+        if key not in allowed:
+            hint = difflib.get_close_matches(str(key), list(allowed), n=1)
+            extra = f" (did you mean {hint[0]!r}?)" if hint else f" (valid keys: {', '.join(allowed)})"
+            out.append(f"{where}{key}: unknown key{extra}")
+    return out
 
 
 def bundled_presets():
@@ -79,19 +116,25 @@ def resolve_preset(name_or_path, base_dir=None):
     path = Path(name_or_path)
     if not path.is_absolute() and base_dir is not None:
         path = Path(base_dir) / path
-    if path.is_file():
+    if path.exists():  # read_toml refuses a directory or special file, naming it
         return path
     raise PresetError(
         f"{name_or_path}: not a bundled preset ({', '.join(sorted(presets))}) nor an existing file")
 
 
-def read_toml(path):
+def read_toml(path, what="TOML file"):
     """Parse a TOML file, with errors that name the file.
+
+    The file must be a regular file of at most
+    :func:`hammerstein.core.files.limit` ``("toml")`` bytes (4 MiB, environment
+    variable ``HAMMERSTEIN_MAX_TOML_BYTES``), checked before reading.
 
     Parameters
     ----------
     path : str or pathlib.Path
         TOML file.
+    what : str
+        What the file should be ("scenario file", ...), for messages.
 
     Returns
     -------
@@ -101,12 +144,14 @@ def read_toml(path):
     Raises
     ------
     PresetError
-        If the file is missing, unreadable, not UTF-8 or not valid TOML.
+        If the file is missing, not a regular file, too large, unreadable,
+        not UTF-8 or not valid TOML.
     """
     path = Path(path)
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        return tomllib.loads(bounded_read_text(path, "toml", what))
+    except FileLimitError as exc:
+        raise PresetError(str(exc)) from None
     except FileNotFoundError:
         raise PresetError(f"{path}: file not found") from None
     except tomllib.TOMLDecodeError as exc:
@@ -287,9 +332,12 @@ def load_model(path):
     ------
     PresetError
     """
-    data = read_toml(path)
+    data = read_toml(path, "model file")
     if "model" not in data:
         raise PresetError(f"{path}: missing [model] table")
+    problems = unknown_keys(data, FILE_KEYS, "")
+    if problems:
+        raise PresetError(f"{path}: " + "; ".join(problems))
     return model_from_table(data["model"], str(path))
 
 
@@ -300,8 +348,10 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
     ----------
     model : MultivariablePI
     path : str or pathlib.Path
-        Destination ``.toml``; written atomically (a unique temporary file
-        next to it, then a rename).
+        Destination ``.toml``; written atomically through an exclusive
+        temporary file and a rename (:func:`hammerstein.core.files.safe_write`:
+        a symlink's target is written, a replaced file keeps its permissions,
+        a new one gets the umask's).
     metadata : dict, optional
         Stored as an ``[identification]`` table (method, frequency, fit
         metrics...).
@@ -310,67 +360,100 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
     extra : dict, optional
         Further top-level tables (e.g. ``preset`` and ``dynamics`` of a
         preset file).
+
+    Raises
+    ------
+    PresetError
+        The target exists and is not a regular file (a directory, device...).
+    OSError
+        The directory cannot be created or written.
     """
-    path = Path(path)
     doc = {}
     if metadata:
         doc["identification"] = metadata
     doc.update(extra or {})
     doc["model"] = model_to_table(model, input_unit, output_unit)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    tmp = Path(name)
     try:
-        with os.fdopen(fd, "wb") as fh:
-            tomli_w.dump(doc, fh)
-        os.chmod(tmp, 0o644)   # mkstemp makes it private; a model file is shared
-        tmp.replace(path)
-    except BaseException:  # no half-written model file left behind
-        tmp.unlink(missing_ok=True)
-        raise
+        safe_write(path, tomli_w.dumps(doc), "model file")
+    except FileLimitError as exc:
+        raise PresetError(str(exc)) from None
+
+
+_DYNAMICS_KEYS = {"none": set(), "bending_modes": {"natural_frequency", "damping_ratio"},
+                  "state_space": {"A", "B", "C", "D"}}
 
 
 def dynamics_from_table(table, outputs, source="preset"):
     """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
 
     ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
-    ``damping_ratio`` per output; ``kind = "state_space"`` with continuous
-    matrices ``A`` (n, n) [1/s], ``B`` (n, p), ``C`` (p, n), ``D`` (p, p)
-    (p inputs: the PI outputs, p outputs: the displacements; e.g. identified
-    by ``hammerstein identify --dynamics``); ``kind = "none"`` for a static
+    ``damping_ratio`` per output (decoupled, unit DC gain);
+    ``kind = "state_space"`` with continuous-time matrices ``A`` (n x n)
+    [1/s], ``B`` (n x p), ``C`` (p x n) and optional ``D`` (p x p) as arrays
+    of arrays: inputs are the p PI outputs [µm], outputs the p displacements
+    [µm] (e.g. identified by ``hammerstein identify --dynamics``);
+    off-diagonal (dynamic cross-coupling) terms are allowed, the DC gain is
+    whatever the matrices give (see
+    :func:`hammerstein.core.lti.dc_gain`); ``kind = "none"`` for a static
     plant.
 
     Parameters
     ----------
     table : dict
-        The parsed ``[dynamics]`` TOML table.
-    outputs : sequence of str
-        Output names, p of them: one mode per output, and the names given to
-        the system's inputs and outputs.
+        The parsed ``[dynamics]`` table.
+    outputs : list of str
+        Output names of the preset's PI model (p of them).
     source : str
-        File name used as the prefix of error messages.
+        Prefix of error messages (file name).
 
     Returns
     -------
     control.StateSpace or None
-        Continuous-time system with p inputs [µm] and p outputs [µm]
-        (2p states for bending modes), or None for ``kind = "none"``.
+        Continuous-time p x p system (None for ``kind = "none"``).
 
     Raises
     ------
     PresetError
-        On an unknown ``kind``, a missing or unknown key, a value count that
-        is not one per output, a matrix of the wrong shape or with non-finite
-        entries, or invalid modal parameters.
+        Naming the key: ``dynamics.A: expected ...`` (shape, finiteness,
+        stability of A, p = number of outputs).
     """
+    if not isinstance(table, dict):
+        raise PresetError(f"{source}: dynamics: expected a table")
     kind = table.get("kind", "none")
+    if kind not in _DYNAMICS_KEYS:
+        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
+                          f"'none', found {kind!r}")
+    unknown = sorted(set(table) - _DYNAMICS_KEYS[kind] - {"kind", "description"})
+    if unknown:
+        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key for kind = {kind!r} "
+                          f"(expected {', '.join(sorted(_DYNAMICS_KEYS[kind])) or 'none'})")
     if kind == "none":
         return None
     if kind == "state_space":
-        return _state_space(table, outputs, source)
-    if kind != "bending_modes":
-        raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
-                          f"'none', found {kind!r}")
+        for key in ("A", "B", "C"):
+            if key not in table:
+                raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space' "
+                                  f"needs A, B, C and optionally D)")
+        p = len(outputs)
+        shapes = {}
+        for key in ("A", "B", "C", "D"):
+            if key in table:
+                try:
+                    shapes[key] = np.shape(np.array(table[key], dtype=float))
+                except (TypeError, ValueError):
+                    raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix "
+                                      f"(list of rows)") from None
+        n = shapes["A"][0] if len(shapes["A"]) == 2 else -1
+        expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+        for key, shape in shapes.items():
+            if n >= 1 and shape != expected[key]:
+                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key]} for "
+                                  f"{p} outputs and {n} states, found {shape}")
+        try:
+            return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
+                                        names=outputs)
+        except DynamicsError as exc:
+            raise PresetError(f"{source}: {exc}") from None
     for key in ("natural_frequency", "damping_ratio"):
         if key not in table:
             raise PresetError(f"{source}: dynamics.{key}: missing")
@@ -382,36 +465,105 @@ def dynamics_from_table(table, outputs, source="preset"):
         raise PresetError(f"{source}: dynamics.{exc}") from None
 
 
-def _state_space(table, outputs, source):
-    import control
-    unknown = sorted(set(table) - {"kind", "A", "B", "C", "D"})
-    if unknown:
-        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key"
-                          f"{_hint(unknown[0], ('A', 'B', 'C', 'D'))}")
-    p = len(outputs)
-    mats = {}
-    for key in ("A", "B", "C", "D"):
-        if key not in table:
-            if key == "D":
-                mats[key] = np.zeros((p, p))
-                continue
-            raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space')")
+def dynamics_to_table(system):
+    """A ``[dynamics]`` table (``kind = "state_space"``) of a continuous or discrete system.
+
+    A discrete system is written as its continuous ZOH equivalent
+    (:func:`hammerstein.core.lti.continuous_system`), so that
+    :func:`load_dynamics` at the same sampling period gives it back.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p system.
+
+    Returns
+    -------
+    dict
+        TOML-ready ``{"kind": "state_space", "A": [[..]], "B", "C", "D"}``.
+    """
+    mats = system
+    if system.isdtime(strict=True):
         try:
-            arr = np.array(table[key], dtype=float)
-        except (TypeError, ValueError):
-            raise PresetError(f"{source}: dynamics.{key}: expected a matrix (list of rows)") from None
-        if arr.ndim != 2 or not np.all(np.isfinite(arr)):
-            raise PresetError(f"{source}: dynamics.{key}: expected a finite matrix (list of rows)")
-        mats[key] = arr
-    n = mats["A"].shape[0]
-    expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
-    for key, shape in expected.items():
-        if mats[key].shape != shape:
-            raise PresetError(f"{source}: dynamics.{key}: expected shape {shape} for {p} outputs "
-                              f"and {n} states, found {mats[key].shape}")
-    return control.ss(mats["A"], mats["B"], mats["C"], mats["D"],
-                      inputs=[f"{o}_h" for o in outputs], outputs=list(outputs),
-                      name="state_space")
+            mats = continuous_system(system)
+        except DynamicsError:              # e.g. a real pole at z <= 0: keep it discrete
+            return {"kind": "discrete_state_space", "sampling_period": float(system.dt),
+                    **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
+    return {"kind": "state_space",
+            **{k: np.asarray(getattr(mats, k), dtype=float).tolist() for k in "ABCD"}}
+
+
+def load_dynamics(path, outputs, sampling_period):
+    """The discrete linear dynamics G of a dynamics or preset file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file with a ``[dynamics]`` table (a preset, or a file written
+        by :func:`save_dynamics`).
+    outputs : list of str
+        Output names of the plant (p).
+    sampling_period : float
+        T [s] of the plant; the continuous dynamics are discretised (ZOH) at it.
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete p x p system.
+
+    Raises
+    ------
+    PresetError
+        Missing file, no ``[dynamics]`` table, ``kind = "none"``, wrong size.
+    """
+    data = read_toml(path)
+    if "dynamics" not in data:
+        raise PresetError(f"{path}: missing [dynamics] table")
+    table = data["dynamics"]
+    if isinstance(table, dict) and table.get("kind") == "discrete_state_space":
+        dt = table.get("sampling_period")
+        if not isinstance(dt, (int, float)) or not np.isclose(dt, sampling_period):
+            raise PresetError(f"{path}: dynamics.sampling_period: expected the plant's "
+                              f"{sampling_period:g} s for discrete dynamics, found {dt!r}")
+        try:
+            sysc = state_space_dynamics(-np.eye(len(table["A"])), table["B"], table["C"],
+                                        table.get("D"), names=outputs)   # shapes and finiteness
+        except (DynamicsError, KeyError, TypeError) as exc:
+            raise PresetError(f"{path}: {exc}") from None
+        A = np.asarray(table["A"], dtype=float)
+        if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
+            raise PresetError(f"{path}: dynamics.A: expected a stable discrete system (|z| < 1)")
+        return control.ss(A, sysc.B, sysc.C, sysc.D, dt=float(dt))
+    cont = dynamics_from_table(data["dynamics"], list(outputs), str(path))
+    if cont is None:
+        raise PresetError(f"{path}: dynamics.kind: 'none' has no dynamics to invert")
+    return discretize(cont, float(sampling_period))
+
+
+def save_dynamics(system, path, metadata=None):
+    """Write a dynamics file (``[dynamics] kind = "state_space"``) that :func:`load_dynamics` reads.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p system (a discrete one is saved as its continuous ZOH equivalent).
+    path : str or pathlib.Path
+        Destination, written atomically.
+    metadata : dict, optional
+        Stored as an ``[identification]`` table.
+    """
+    path = Path(path)
+    doc = {"identification": metadata} if metadata else {}
+    doc["dynamics"] = dynamics_to_table(system)
+    tmp = path.with_name(path.name + ".tmp")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        with open(tmp, "wb") as fh:
+            tomli_w.dump(doc, fh)
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def load_plant(preset, dynamics=True, base_dir=None):
@@ -436,17 +588,26 @@ def load_plant(preset, dynamics=True, base_dir=None):
     PresetError
     """
     path = resolve_preset(preset, base_dir)
-    data = read_toml(path)
+    data = read_toml(path, "preset file")
     meta = data.get("preset", {})
+    dyn = data.get("dynamics", {})
+    if not isinstance(meta, dict) or not isinstance(dyn, dict):
+        raise PresetError(f"{path}: {'preset' if not isinstance(meta, dict) else 'dynamics'}: "
+                          f"expected a table")
+    problems = unknown_keys(meta, PRESET_KEYS, "preset.")
+    if dyn.get("kind") != "state_space":  # its A, B, C, D are checked with the matrices
+        problems += unknown_keys(dyn, DYNAMICS_KEYS, "dynamics.")
+    if problems:
+        raise PresetError(f"{path}: " + "; ".join(problems))
     if "sampling_period" not in meta:
         raise PresetError(f"{path}: preset.sampling_period: missing (seconds)")
     T = meta["sampling_period"]
-    if not isinstance(T, (int, float)) or not T > 0:
+    if not isinstance(T, (int, float)) or isinstance(T, bool) or not (np.isfinite(T) and T > 0):
         raise PresetError(f"{path}: preset.sampling_period: expected a positive time [s], found {T!r}")
     model = load_model(path)
     lin = None
     if dynamics:
-        cont = dynamics_from_table(data.get("dynamics", {}), model.output_names, str(path))
+        cont = dynamics_from_table(dyn, model.output_names, str(path))
         lin = discretize(cont, float(T)) if cont is not None else None
     name = meta.get("name", path.stem)
     return HammersteinPlant(model, float(T), lin, name=name)

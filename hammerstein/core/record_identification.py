@@ -787,6 +787,11 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
     pairs = [split_record(rec, method, hold_out, train_fraction, skip_seconds) for rec in records]
     records = [r for r, _ in pairs]
     splits = [s for _, s in pairs]
+    for l, name in enumerate(out_names):  # a fit to it is meaningless, its % error infinite
+        if not any(np.ptp(r.y[l][s.train]) > 0 for r, s in zip(records, splits) if s.train.any()):
+            raise IdentificationError(
+                f"{records[0].source}: output column {name!r}: the output is constant over the "
+                f"training samples; expected the response to the excitation")
     m = records[0].u.shape[0]
     tried = ["time", "input"] if partition == "auto" and thresholds is None else [partition]
     results, errors = {}, {}

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import FileLimitError, check_regular
 from hammerstein.exceptions import SignalError
 
 __all__ = [
@@ -643,12 +644,15 @@ def raster_line_index(time, frequency):
 
 def _read_bounded(path, limit):
     try:
+        check_regular(path, "CSV file")  # a FIFO or device is refused before it is opened
         with open(path, "rb") as fh:
             data = fh.read(limit + 1)
     except FileNotFoundError:
         raise SignalError(f"file: {path} not found") from None
     except IsADirectoryError:
         raise SignalError(f"file: {path} is a directory, expected a CSV file") from None
+    except FileLimitError as exc:
+        raise SignalError(f"file: {exc}") from None
     except OSError as exc:
         raise SignalError(f"file: {path} cannot be read ({exc.strerror or exc})") from None
     if len(data) > limit:

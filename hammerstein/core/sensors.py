@@ -1,7 +1,7 @@
 """Simulated characterisation experiments: displacement sensor and sine tests.
 
 :class:`Sensor` models the inductive sensors of the paper (IBS ECL202: 40 nm
-resolution, 2 kHz bandwidth; NOTES §1). :func:`characterize` drives each input
+resolution, 2 kHz bandwidth; docs/identification.md). :func:`characterize` drives each input
 of a simulated actuator in turn with a sine and records all outputs (Steps 1-4
 of Section 3.3); :func:`identify_plant` identifies a multivariable PI model
 from those records and can save it as a model file.
@@ -36,7 +36,7 @@ class Sensor:
     ----------
     resolution : float
         Quantisation step [µm]; 0 disables it. Default 0.04 µm (40 nm,
-        IBS ECL202, NOTES §1).
+        IBS ECL202, docs/identification.md).
     bandwidth_hz : float or None
         -3 dB bandwidth [Hz]; ``None`` disables the filter. Default 2000 Hz.
     noise_rms : float

@@ -2,7 +2,7 @@
 
 The normalised law ``U(t) = U(t-T) + (s K)^-1 (Yr(t) - Gamma(U(t-T)))``
 converges when ``rho(I - (s K)^-1 J) < 1`` for every reachable slope matrix
-J of the model (NOTES §4). With K the diagonal secant gains of the direct
+J of the model (docs/compensator.md). With K the diagonal secant gains of the direct
 transfers, ``s = 1`` is the normalised law; the paper's literal law (K = I)
 sits at ``s_l = 1/K_ll`` on each axis, summarised by
 :func:`literal_gain_equivalent_scale`.
@@ -68,7 +68,7 @@ def stability_map(model: MultivariablePI, gain_scales) -> pd.DataFrame:
 
     For each scale s, :func:`~hammerstein.compensators.convergence_report`
     with the gain ``s K`` (K the diagonal secant gains of the direct
-    transfers over ``model.input_amplitude``, NOTES §4) gives the largest
+    transfers over ``model.input_amplitude``, docs/compensator.md) gives the largest
     and smallest ``rho(I - (s K)^-1 J)`` over the reachable slope matrices
     (dead band excluded).
 

@@ -307,7 +307,7 @@ FIGURES = [
     ("Fig. 12", "Lissajous 3/2", FIG12, "*.png"),
     ("Fig. 13", "Lissajous 4/3", FIG13, "*.png"),
     ("Theorem 4.1", "the literal law diverges", LITERAL, "*.png"),
-    ("NOTES §4", "stability map: rho vs gain scaling", STABILITY, "*.png"),
+    ("docs/compensator.md", "stability map: rho vs gain scaling", STABILITY, "*.png"),
 ]
 
 
@@ -355,7 +355,7 @@ def write_readme(root, outcomes=None):
             L += ["**Scenarios that failed:**", ""] + [f"- `{o.path}`: {o.error}" for o in failed] + [""]
     L += ["## 1. The paper's numbers and ours", "",
           "`ratio` = ours / paper. ± values are half the peak-to-peak range. The paper's trajectory "
-          "errors are its ε = sgn(θ)√|θ|, which is not a distance (NOTES §6); ours are the Euclidean "
+          "errors are its ε = sgn(θ)√|θ|, which is not a distance (docs/metrics.md); ours are the Euclidean "
           "error ‖Y_r − Y‖ (max over the settled window).", "",
           _table(comp.assign(paper=comp["paper"].str.replace("|", "\\|", regex=False))), ""]
     # trends
@@ -452,18 +452,18 @@ def _discussion(metrics, comp, fam):
     hx = ours(FIG05, "ux-50Hz", "x", "hysteresis_ratio")
     sx = ours(FIG05, "ux-50Hz-static", "x", "hysteresis_ratio")
     L = ["## 5. Where we differ, and why", "",
-         f"- **The compensator law (NOTES §4).** Theorem 4.1 as printed, U(t) = Y_r(t) + U(t−T) − "
+         f"- **The compensator law (docs/compensator.md).** Theorem 4.1 as printed, U(t) = Y_r(t) + U(t−T) − "
          f"Γ(U(t−T)), is a fixed-point iteration that converges only if ρ(I − J) < 1; the model's "
          f"direct slopes are 3.6-9.9 µm/V, so ρ reaches 3-9 and the literal law diverges (here at "
          f"t = {_fmt(lit * 1e3 if np.isfinite(lit) else np.nan)} ms, `{LITERAL}`). Everything above "
          f"uses the normalised law U(t) = U(t−T) + K⁻¹(Y_r(t) − Γ(U(t−T))) (K = direct secant gains "
          f"for the paper's model, the midpoint gains for identified models); the stability map "
          f"(`{STABILITY}`) shows where both sit.",
-         "- **The error measure (NOTES §6).** The paper's ε = sgn(θ)√|θ|, θ = (x_r + y_r)² − (x + y)², "
+         "- **The error measure (docs/metrics.md).** The paper's ε = sgn(θ)√|θ|, θ = (x_r + y_r)² − (x + y)², "
          "is not a distance (it reports several µm for a 0.3 µm error and can vanish for a large one). "
          "We report the Euclidean error ‖Y_r − Y‖ and per-axis errors, so our trajectory percentages "
          "and the paper's 2 % are not the same measure; the ratios above compare them anyway.",
-         f"- **Phase lag of the simulated actuator (NOTES §7).** The paper gives only a 400-500 Hz "
+         f"- **Phase lag of the simulated actuator (docs/hammerstein-plant.md).** The paper gives only a 400-500 Hz "
          f"bandwidth; our bending modes add 3-4° of lag at 50 Hz, which widens the 50 Hz loops "
          f"(h/H x {_fmt(hx)} % on the Hammerstein actuator against {_fmt(sx)} % for the paper's model "
          f"alone). A model identified on the actuator at 50 Hz absorbs that lag at 50 Hz and at the "

@@ -415,7 +415,7 @@ def write_report(scenario, results, directory):
         lines += [scenario.description.strip(), ""]
     lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, seed {scenario.seed}).",
               "Metrics are computed after `settle_periods` periods; loop metrics over the last "
-              "full period. The Euclidean error is ||Y_r - Y|| per sample (NOTES §6; the "
+              "full period. The Euclidean error is ||Y_r - Y|| per sample (docs/metrics.md; the "
               "paper's ε is not a distance and is not used).", "", "## Cases", ""]
     table = pd.DataFrame([{
         "case": r.name,

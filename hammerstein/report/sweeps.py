@@ -279,7 +279,7 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
         lines += ["## Stability map", "",
                   "Largest spectral radius of the fixed-point iteration over the model's reachable "
                   "slope matrices against the gain scaling s (K = s x direct secant gains; "
-                  "NOTES §4). Table: `stability-map.csv`.", "",
+                  "docs/compensator.md). Table: `stability-map.csv`.", "",
                   "![stability map](stability-map.png)", ""]
         if not laws.empty:
             lines += [markdown_table(laws), ""]

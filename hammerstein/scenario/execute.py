@@ -21,7 +21,7 @@ from hammerstein.core import metrics as met
 from hammerstein.core.references import raster_line_index
 from hammerstein.simulation import simulate_chain
 
-__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison"]
+__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples"]
 
 
 @dataclass
@@ -94,9 +94,37 @@ def run_case(case):
         return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
-        res = simulate_chain(case.compensator, plant, case.signal)
+        if hasattr(case.compensator, "run_reference"):   # inverse of G: preview and fade-in
+            res = case.compensator.run_reference(plant, case.signal, case.period_samples,
+                                                 fade_samples(case))
+        else:
+            res = simulate_chain(case.compensator, plant, case.signal)
     caught += [str(w.message) for w in rec]
     return chain_result(case, res, caught)
+
+
+def fade_samples(case):
+    """Fade-in of a compensator that inverts the dynamics [samples].
+
+    ``compensator.fade_in`` [s] when given, else one period of the reference,
+    at most the ``settle_periods`` the metrics skip.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        A resolved reference case.
+
+    Returns
+    -------
+    int
+        Fade-in length [samples].
+    """
+    T = case.plant.sampling_period
+    given = getattr(case.compensator, "fade_in", None)
+    settle = int(case.settle_periods * case.period_samples)
+    if given is not None:
+        return int(round(given / T))
+    return int(min(case.period_samples, settle))
 
 
 def chain_result(case, res, caught):

@@ -30,13 +30,19 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+import control
 import numpy as np
 
+from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
-from hammerstein.core.presets import PresetError, load_model, model_to_table, save_model
+from hammerstein.core.lti import (DynamicsIdentifier, excitation, hammerstein_records,
+                                  modal_parameters)
+from hammerstein.core.presets import (PresetError, load_dynamics, load_model, model_to_table,
+                                      save_dynamics, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
 from hammerstein.exceptions import NestedInvalid
-from hammerstein.scenario.schema import (Field, Invalid, boolean, check_table, choice,
+from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, _short,
+                                         boolean, check_table, choice,
                                          integer, number)
 
 __all__ = [
@@ -53,6 +59,14 @@ __all__ = [
     "comparison_spec",
     "resolve_comparison_model",
     "comparison_model",
+    "HAMMERSTEIN_IDENTIFY_DEFAULTS",
+    "hammerstein_identify_table",
+    "IDENTIFY_DYNAMICS_FIELDS",
+    "identify_dynamics_table",
+    "identified_hammerstein",
+    "resolve_dynamics",
+    "save_identified_dynamics",
+    "flat_frequency",
 ]
 
 #: White-noise RMS [µm] of the ECL202 sensor model used by ``sensor = true``.
@@ -75,12 +89,14 @@ def _bounds(v):
 
 
 def _n_hysterons(v):
-    if isinstance(v, int) and not isinstance(v, bool) and v >= 1:
+    if isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= MAX_HYSTERONS:
         return v
     if (isinstance(v, list) and v and all(isinstance(r, list) and r for r in v)
-            and all(isinstance(a, int) and not isinstance(a, bool) and a >= 1 for r in v for a in r)):
+            and all(isinstance(a, int) and not isinstance(a, bool) and 1 <= a <= MAX_HYSTERONS
+                    for r in v for a in r)):
         return v
-    raise Invalid(f"expected an integer >= 1 or a p x m table of them, found {v!r}")
+    raise Invalid(f"expected an integer 1..{MAX_HYSTERONS} or a p x m table of them, "
+                  f"found {_short(v)}")
 
 
 def _amplitude(v):
@@ -93,7 +109,7 @@ def _amplitude(v):
 IDENTIFY_FIELDS = {
     "frequency": Field(number("Hz", 0), required=True),
     "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
-    "periods": Field(integer(2), default=3),
+    "periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=3),
     "n_hysterons": Field(_n_hysterons, default=15),
     "method": Field(choice("closed-form", "least-squares"), default="closed-form"),
     "partition": Field(choice("time", "input"), default="time"),
@@ -139,8 +155,9 @@ _CACHE: dict = {}
 
 
 def clear_cache():
-    """Forget every identified model (tests)."""
+    """Forget every identified model and dynamics (tests)."""
     _CACHE.clear()
+    _HCACHE.clear()
 
 
 def _plant_fingerprint(plant):
@@ -279,7 +296,8 @@ def _used_specs(scenario):
     used = []
     for case in scenario.cases:
         comp = case.compensator_spec or {}
-        if case.mode == "reference" and comp.get("model") == "identified" and "identify" in comp:
+        if (case.mode == "reference" and comp.get("model") == "identified" and "identify" in comp
+                and comp.get("kind") != "hammerstein"):     # see save_identified_dynamics
             used.append((case.name, "compensator", case.plant, comp["identify"]))
         mspec = getattr(case, "model_spec", None) or {}
         if mspec.get("model") == "identified" and "identify" in mspec:
@@ -486,3 +504,340 @@ def comparison_model(case, mode, plant, base_dir):
     if plant is None:
         raise ValueError("")
     return resolve_comparison_model(spec, plant, base_dir), spec
+
+
+# -- the Hammerstein compensator: PI and linear dynamics identified in two stages -------
+#: ``identify`` defaults of ``kind = "hammerstein"``: least squares with monotone direct
+#: transfers on 40 hysterons (time partition: dense near the reversals) and 5 periods (the
+#: sensor noise averages out; the static error at small radii is the lever once G is
+#: inverted). Any key given in the scenario overrides these.
+HAMMERSTEIN_IDENTIFY_DEFAULTS = {"method": "least-squares", "bounds": "monotone",
+                                 "partition": "time", "n_hysterons": 40, "periods": 5}
+
+
+def hammerstein_identify_table(value):
+    """Field checker of the ``identify`` table of ``kind = "hammerstein"``.
+
+    As :func:`identify_table`, with :data:`HAMMERSTEIN_IDENTIFY_DEFAULTS`
+    for the keys not given.
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled.
+
+    Raises
+    ------
+    NestedInvalid
+        As :func:`identify_table`.
+    """
+    if isinstance(value, dict):
+        value = {**HAMMERSTEIN_IDENTIFY_DEFAULTS, **value}
+    return identify_table(value)
+
+
+def _band(v):
+    if (isinstance(v, list) and len(v) == 2 and all(isinstance(a, (int, float))
+                                                    and not isinstance(a, bool) for a in v)
+            and 0 < v[0] < v[1]):
+        return [float(a) for a in v]
+    raise Invalid(f"expected [f_min, f_max] in Hz with 0 < f_min < f_max, found {v!r}")
+
+
+#: Schema of the ``identify_dynamics`` table (defaults: 8 V random-phase multisines on
+#: each input in turn, 20 Hz-1 kHz, 8 periods of 50 ms, order chosen from the data).
+IDENTIFY_DYNAMICS_FIELDS = {
+    "excitation": Field(choice("multisine"), default="multisine"),
+    "amplitude": Field(number("V", 0), default=8.0),
+    "band": Field(_band, default=[20.0, 1000.0]),
+    "period": Field(number("s", 0), default=0.05),
+    "periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=8),
+    "order": Field(integer(1, 50)),                    # default: chosen by held-out fit
+    "max_order": Field(integer(1, 50), default=8),
+    "sensor": Field(boolean()),                        # default: as identify.sensor
+    "seed": Field(integer(0), default=1),
+}
+
+
+def identify_dynamics_table(value):
+    """Field checker of an ``identify_dynamics`` table (every key optional).
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled (``order`` and ``sensor`` stay absent
+        when not given: chosen from the data, and as ``identify.sensor``).
+
+    Raises
+    ------
+    NestedInvalid
+        Listing ``(key, message)`` for every problem.
+    """
+    problems = []
+    clean = check_table(value, IDENTIFY_DYNAMICS_FIELDS, "", problems, "")
+    if clean is None:
+        raise Invalid(f"expected a table such as {{ amplitude = 8.0, band = [20.0, 1000.0] }}, "
+                      f"found {value!r}")
+    if "order" in clean and clean["order"] > clean["max_order"]:
+        problems.append(": order: expected <= max_order")
+    if problems:
+        raise NestedInvalid([tuple(p[2:].split(": ", 1)) for p in problems])
+    return clean
+
+
+def _sensor(flag, seed):
+    return Sensor(resolution=0.04, bandwidth_hz=2000.0, noise_rms=SENSOR_NOISE_RMS,
+                  seed=seed) if flag else None
+
+
+def _fit_dynamics(plant, model, dspec, sensor_flag):
+    """DynamicsIdentifier fitted on broadband records of ``plant`` with inputs Gamma_model(U)."""
+    sensor = _sensor(sensor_flag, dspec["seed"] + 1000)
+    lo, hi = dspec["band"]
+    _, volts = excitation(plant.sampling_period, plant.hysteresis.n_inputs, dspec["amplitude"],
+                          f_max=hi, f_min=lo, period=dspec["period"], periods=dspec["periods"],
+                          seed=dspec["seed"])
+    ins, outs = hammerstein_records(plant, model, volts, sensor)
+    try:
+        return DynamicsIdentifier(order=dspec.get("order"), max_order=dspec["max_order"],
+                                  sensor=sensor).fit(ins, outs, plant.sampling_period)
+    except DynamicsError as exc:
+        raise IdentificationError(f"identify_dynamics: {exc}") from None
+
+
+#: Largest deviation ``max |G(f) G(0)^-1 - I|`` of the identified dynamics at which the PI
+#: may be characterised (the dynamics then add < 0.2 % of gain or phase to the loops).
+FLAT_TOLERANCE = 0.002
+#: Frequency of the first-stage PI characterisation [Hz] (quasi-static for modes >= 100 Hz).
+FIRST_STAGE_HZ = 2.0
+
+
+def flat_frequency(system, tolerance=FLAT_TOLERANCE, f_max=None):
+    """Highest frequency below which the dynamics are flat: ``|G(f) G(0)^-1 - I|_2 <= tolerance``.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        Discrete p x p G.
+    tolerance : float
+        [-].
+    f_max : float, optional
+        Upper end of the search [Hz]; default 0.45 / T.
+
+    Returns
+    -------
+    float
+        [Hz] (on a log grid of 400 points from 0.01 Hz).
+    """
+    f = np.logspace(-2, np.log10(f_max or 0.45 / system.dt), 400)
+    Gw = np.asarray(control.frequency_response(system, 2 * np.pi * f).complex).reshape(
+        system.noutputs, system.ninputs, f.size)
+    G0inv = np.linalg.inv(np.real(Gw[:, :, 0]))
+    dev = np.array([np.linalg.norm(Gw[:, :, k] @ G0inv - np.eye(system.noutputs), 2)
+                    for k in range(f.size)])
+    bad = np.nonzero(dev > tolerance)[0]
+    return float(f[-1] if bad.size == 0 else f[max(bad[0] - 1, 0)])
+
+
+_HCACHE: dict = {}
+
+
+def identified_hammerstein(plant, identify, identify_dynamics=None, model=None):
+    """PI and linear dynamics of a Hammerstein actuator, identified in two stages (cached).
+
+    1. the PI is identified as for ``kind = "multivariable"``
+       (:func:`identified_model`) at ``min(F, 2 Hz)``, F = ``identify.frequency``;
+    2. G is identified from broadband multisine records, inputs
+       ``Gamma_PI(U)`` (:class:`hammerstein.core.lti.DynamicsIdentifier`:
+       order by held-out fit, the sensor low-pass kept out);
+    3. the PI characterisation frequency is ``min(F, f_flat)``, ``f_flat``
+       the highest frequency where the identified G is flat
+       (:func:`flat_frequency`: ``|G(f) G(0)^-1 - I| <= 0.2 %``); at a
+       higher F the loops would carry the dynamics' lag and gain (which G^-1
+       already compensates). When that frequency differs from the first
+       stage's, the PI is identified there and G again with it.
+
+    The first stage characterises the PI at ``min(F, 2 Hz)``: quasi-static
+    for bending modes of 100 Hz and more, with the noise averaged over the
+    ``periods`` periods.
+
+    With ``model`` given (``model = "plant"`` or a file), only G is identified.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+    identify : dict or None
+        The compensator's ``identify`` table (validated).
+    identify_dynamics : dict, optional
+        ``identify_dynamics`` table (:data:`IDENTIFY_DYNAMICS_FIELDS`).
+    model : MultivariablePI, optional
+        A PI model not to identify.
+
+    Returns
+    -------
+    pi : MultivariablePI
+    pi_metadata : dict or None
+    dynamics : DynamicsIdentifier
+        Fitted (``system_``, ``order_``, ``validation_fit_``...).
+    dynamics_metadata : dict
+        ``[identification]`` table of the dynamics file.
+
+    Raises
+    ------
+    IdentificationError
+    """
+    try:
+        dspec = identify_dynamics_table(identify_dynamics or {})
+    except Invalid as exc:
+        raise IdentificationError(f"identify_dynamics: {exc}") from None
+    if plant.dynamics is None:
+        raise IdentificationError("dynamics: the plant is static (plant.dynamics = false): "
+                                  "there are no dynamics to identify; use dynamics = \"plant\"")
+    sensor_flag = dspec.get("sensor", bool((identify or {}).get("sensor", False)))
+    key = (_plant_fingerprint(plant), _spec_key(identify or {}), _spec_key(dspec),
+           None if model is None else repr(model_to_table(model)), sensor_flag)
+    if key in _HCACHE:
+        return _HCACHE[key]
+    meta = None
+    if model is None:                       # stage 1: quasi-static PI, then G
+        spec = identify_table(identify)
+        F = spec["frequency"]
+        model, meta = identified_model(plant, {**spec, "frequency": min(F, FIRST_STAGE_HZ)})
+        ident = _fit_dynamics(plant, model, dspec, sensor_flag)
+        f_flat = flat_frequency(ident.system_)
+        f_pi = min(F, max(f_flat, 0.01))
+        if f_pi != min(F, FIRST_STAGE_HZ):   # stage 2: PI where G is flat (at F if it is), G again
+            model, meta = identified_model(plant, {**spec, "frequency": f_pi})
+            ident = _fit_dynamics(plant, model, dspec, sensor_flag)
+        meta = {**meta, "requested_frequency_hz": float(F), "flat_frequency_hz": f_flat,
+                "note": "PI characterised at min(F, flat frequency of the identified G)"}
+    else:
+        ident = _fit_dynamics(plant, model, dspec, sensor_flag)
+    fn, zeta = modal_parameters(ident.system_)
+    dmeta = {"method": "subspace (PO-MOESP, nfoursid), order by held-out fit",
+             "order": int(ident.order_),
+             "validation_fit_percent": [float(v) for v in np.nan_to_num(ident.validation_fit_)],
+             "fit_percent": [float(v) for v in ident.fit_percent_],
+             "natural_frequency_hz": [float(v) for v in fn],
+             "damping_ratio": [float(v) for v in zeta],
+             "excitation": {k: v for k, v in dspec.items()},
+             "sensor": bool(sensor_flag),
+             "sampling_period_s": float(plant.sampling_period),
+             "plant": plant.name}
+    _HCACHE[key] = (model, meta, ident, dmeta)
+    return _HCACHE[key]
+
+
+def resolve_dynamics(spec, plant, base_dir, model=None):
+    """The discrete G a ``kind = "hammerstein"`` compensator inverts, and its PI model.
+
+    Parameters
+    ----------
+    spec : dict
+        Validated compensator table: ``model``, ``identify``, ``dynamics``
+        (``"plant"``, ``"identified"`` or a dynamics/preset file path),
+        ``identify_dynamics``.
+    plant : HammersteinPlant
+    base_dir : pathlib.Path
+    model : MultivariablePI, optional
+        Already resolved PI model (``model`` other than "identified").
+
+    Returns
+    -------
+    pi : MultivariablePI
+    G : control.StateSpace
+        Discrete, ``dt`` = the plant's sampling period.
+
+    Raises
+    ------
+    IdentificationError, PresetError
+    """
+    dyn = spec.get("dynamics") or ("identified" if spec.get("model") == "identified" else "plant")
+    if dyn == "identified":
+        ident_pi = spec.get("model") == "identified"
+        pi, _, ident, _ = identified_hammerstein(plant, spec.get("identify") if ident_pi else None,
+                                                 spec.get("identify_dynamics"),
+                                                 None if ident_pi else model)
+        return pi, ident.system_
+    if dyn == "plant":
+        if plant.dynamics is None:
+            raise IdentificationError("dynamics: the plant is static (no dynamics); "
+                                      "a Hammerstein compensator needs dynamics")
+        G = plant.dynamics
+    else:
+        path = Path(dyn)
+        if not path.is_absolute():
+            path = Path(base_dir) / path
+        G = load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+    if model is None and spec.get("model") == "identified":
+        # as with identified dynamics: the PI is characterised where this G is flat
+        ispec = identify_table(spec.get("identify"))
+        f_pi = min(ispec["frequency"], max(flat_frequency(G), 0.01))
+        return identified_model(plant, {**ispec, "frequency": f_pi})[0], G
+    pi = model if model is not None else resolve_model(spec.get("model", "plant"), plant, base_dir,
+                                                       spec.get("identify"))
+    return pi, G
+
+
+def _dynamics_specs(scenario):
+    """[(case name, plant, compensator spec)] of the cases whose G is identified."""
+    used = []
+    for case in scenario.cases:
+        comp = case.compensator_spec or {}
+        dyn = comp.get("dynamics") or ("identified" if comp.get("model") == "identified" else "plant")
+        if case.mode == "reference" and comp.get("kind") == "hammerstein" and dyn == "identified":
+            used.append((case.name, case.plant, comp))
+    return used
+
+
+def save_identified_dynamics(scenario, directory):
+    """Save the PI models and dynamics that ``kind = "hammerstein"`` cases identified.
+
+    Files ``models/hammerstein-<i>-pi.toml`` (model file) and
+    ``models/hammerstein-<i>-dynamics.toml`` (``[dynamics] kind =
+    "state_space"``, continuous ZOH equivalent: loadable by ``dynamics =
+    "<file>"``), one pair per distinct identification (from the cache).
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenario.resolve.Scenario
+    directory : pathlib.Path
+
+    Returns
+    -------
+    list of dict
+        One per distinct identification: ``cases``, ``pi_file``,
+        ``dynamics_file``, ``identifier`` (DynamicsIdentifier), ``plant``
+        (HammersteinPlant), ``metadata`` (of the dynamics).
+    """
+    directory = Path(directory)
+    out, index = [], {}
+    for name, plant, comp in _dynamics_specs(scenario):
+        ident_pi = comp.get("model") == "identified"
+        model = None if ident_pi else resolve_model(comp.get("model", "plant"), plant,
+                                                     scenario.path.parent, comp.get("identify"))
+        pi, pmeta, ident, dmeta = identified_hammerstein(
+            plant, comp.get("identify") if ident_pi else None, comp.get("identify_dynamics"), model)
+        key = id(ident)
+        if key not in index:
+            i = len(out) + 1
+            row = {"cases": [], "pi_file": None, "dynamics_file": f"models/hammerstein-{i}-dynamics.toml",
+                   "identifier": ident, "plant": plant, "metadata": dmeta}
+            if ident_pi:
+                row["pi_file"] = f"models/hammerstein-{i}-pi.toml"
+                save_model(pi, directory / row["pi_file"], pmeta)
+            save_dynamics(ident.system_, directory / row["dynamics_file"], dmeta)
+            index[key] = row
+            out.append(row)
+        index[key]["cases"].append(name)
+    return out

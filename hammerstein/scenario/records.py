@@ -43,7 +43,8 @@ import numpy as np
 from hammerstein.core.datafiles import DataFileError, bundled_data, read_records
 from hammerstein.core.identification import IdentificationError
 from hammerstein.core.record_identification import identify_records
-from hammerstein.scenario.schema import (NAME, Field, Invalid, ScenarioError, check_table, choice, integer,
+from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
+                                         choice, integer, name_field,
                                          number, string)
 
 __all__ = [
@@ -105,8 +106,8 @@ def _components(v):
 
 TOP = {
     "kind": Field(choice("identification"), required=True),
-    "name": Field(string(NAME, "a name of letters, digits, '.', '_' or '-'")),
-    "title": Field(string()),
+    "name": Field(name_field()),
+    "title": Field(string(max_length=200)),
     "description": Field(string()),
     "seed": Field(integer(0), default=0),
     "data": Field(lambda v: v, required=True),
@@ -132,7 +133,7 @@ DATA_FIELDS = {
 #: Schema of the ``[identification]`` table.
 IDENTIFICATION_FIELDS = {
     "method": Field(choice("closed-form", "least-squares"), default="least-squares"),
-    "n_hysterons": Field(integer(1), default=15),
+    "n_hysterons": Field(integer(1, MAX_HYSTERONS), default=15),
     "thresholds": Field(_thresholds),
     "partition": Field(choice("auto", "time", "input"), default="auto"),
     "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),

@@ -20,10 +20,13 @@ import numpy as np
 
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
-from hammerstein.scenario.identified import identify_table, resolve_model
-from hammerstein.scenario.schema import Field, Invalid, choice, integer, number, string
+from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.scenario.identified import (hammerstein_identify_table, identify_dynamics_table,
+                                             identify_table, resolve_dynamics, resolve_model)
+from hammerstein.scenario.schema import MAX_ITERATIONS, Field, Invalid, choice, integer, number, string
 
-__all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "resolve_model"]
+__all__ = ["CompensatorKind", "COMPENSATORS", "RATE_INDEPENDENT", "build_compensator",
+           "resolve_model"]
 
 
 @dataclass
@@ -105,7 +108,7 @@ COMPENSATORS: dict[str, CompensatorKind] = {
         {"model": Field(string(), default="plant"),
          "identify": Field(identify_table),
          "gain": Field(_gain, default="secant"),
-         "iterations": Field(integer(1), default=1),
+         "iterations": Field(integer(1, MAX_ITERATIONS), default=1),
          "check": Field(choice("error", "warn", "ignore"), default="error"),
          "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
          "cutoff_hz": Field(number("Hz", 0))},
@@ -121,6 +124,37 @@ COMPENSATORS["per-axis"] = CompensatorKind(
 COMPENSATORS["static-gain"] = CompensatorKind(
     _build_static_gain, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
     "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")
+
+
+def _build_hammerstein(spec, plant, base_dir):
+    model = None
+    if spec.get("model", "plant") != "identified":
+        model = _spec_model(spec, plant, base_dir)
+    pi, G = resolve_dynamics(spec, plant, base_dir, model)
+    comp = HammersteinCompensator(
+        pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
+        iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
+        feedback=spec.get("feedback", "delay"), cutoff_hz=spec.get("cutoff_hz"),
+        sampling_period=plant.sampling_period)
+    comp.fade_in = spec.get("fade_in")
+    return comp
+
+
+COMPENSATORS["hammerstein"] = CompensatorKind(
+    _build_hammerstein,
+    {**{k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k != "identify"},
+     "identify": Field(hammerstein_identify_table),
+     "gain": Field(_gain, default="midpoint"),     # smallest rho(I - K^-1 J) for identified PIs
+     "iterations": Field(integer(1, MAX_ITERATIONS), default=3),
+     "dynamics": Field(string()),          # default: "identified" with model = "identified", else "plant"
+     "identify_dynamics": Field(identify_dynamics_table),
+     "inversion": Field(choice(*INVERSIONS), default="zpetc"),
+     "fade_in": Field(number("s", 0, exclusive=False))},   # default: one period (<= settling)
+    "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
+    "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
+    "(docs/hammerstein-plant.md)")
+#: kinds that compensate the hysteresis only (rate independent): warned about dynamics
+RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
 
 
 def build_compensator(spec, plant, base_dir):

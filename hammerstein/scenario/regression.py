@@ -22,9 +22,8 @@ unknown metrics) any move beyond tolerance is a regression.
 
 from __future__ import annotations
 
+import io
 import math
-import os
-import tempfile
 import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -32,6 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, bounded_read_text, safe_write
 from hammerstein.exceptions import BaselineError
 
 __all__ = [
@@ -233,10 +233,13 @@ def load_tolerances(path):
     """
     path = Path(path)
     try:
-        with path.open("rb") as fh:
-            table = tomllib.load(fh)
+        table = tomllib.loads(bounded_read_text(path, "toml", "tolerance file"))
     except FileNotFoundError:
         raise BaselineError(f"{path}: tolerance file not found") from None
+    except FileLimitError as exc:
+        raise BaselineError(str(exc)) from None
+    except UnicodeDecodeError:
+        raise BaselineError(f"{path}: not a readable TOML file (not UTF-8 text)") from None
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise BaselineError(f"{path}: not a readable TOML file ({exc})") from None
     resolve_tolerances(table)  # validate now, with the file's name in the error
@@ -421,11 +424,14 @@ def read_baseline(path):
     path = Path(path)
     if path.is_dir():
         raise BaselineError(f"{path}: is a directory, expected a baseline CSV file")
-    if not path.is_file():
+    if not path.exists():
         raise BaselineError(f"{path}: baseline file not found (create it with --update)")
     try:
-        frame = pd.read_csv(path, dtype={c: str for c in KEY_COLUMNS + ["unit"]},
+        raw = bounded_read_bytes(path, "baseline", "baseline CSV file")
+        frame = pd.read_csv(io.BytesIO(raw), dtype={c: str for c in KEY_COLUMNS + ["unit"]},
                             keep_default_na=False, na_values={"value": ["nan", "NaN"]})
+    except FileLimitError as exc:
+        raise BaselineError(str(exc)) from None
     except pd.errors.EmptyDataError:
         raise BaselineError(f"{path}: empty baseline file (expected columns "
                             f"{', '.join(BASELINE_COLUMNS)})") from None
@@ -464,7 +470,11 @@ def merge_baseline(old, new):
 
 
 def write_baseline(frame, path):
-    """Write a baseline CSV atomically (temporary file, then rename).
+    """Write a baseline CSV atomically (:func:`hammerstein.core.files.safe_write`).
+
+    An exclusive temporary file next to ``path`` is renamed over it: a
+    replaced file keeps its permissions, a symlink's target is written, a
+    target that is not a regular file is refused.
 
     Parameters
     ----------
@@ -476,16 +486,18 @@ def write_baseline(frame, path):
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    BaselineError
+        Malformed metrics, or a target that is not a regular file.
+    OSError
+        The directory cannot be created or written.
     """
     frame = _normalise(frame, "baseline")
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            frame.to_csv(fh, index=False, lineterminator="\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+        safe_write(path, frame.to_csv(index=False, lineterminator="\n"), "baseline CSV file")
+    except FileLimitError as exc:
+        raise BaselineError(str(exc)) from None
     return path

@@ -18,14 +18,22 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from hammerstein.core.lti import compare_frequency_responses, modal_parameters
 from hammerstein.core.presets import PresetError
 from hammerstein.scenario.identified import resolve_comparison_model
-from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.registry import RATE_INDEPENDENT, build_compensator
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import stability_map_frame
 from hammerstein.scenario.validate import ScenarioSpec, validate_scenario
 
-__all__ = ["Scenario", "resolve_scenario", "load_scenario"]
+__all__ = ["Scenario", "resolve_scenario", "load_scenario", "dynamics_warning"]
+
+#: a reference reaches the dynamics above this fraction of the first resonance ...
+RESONANCE_FRACTION = 0.1
+#: ... or where |G(f) G(0)^-1 - I| exceeds this
+GAIN_DEVIATION = 0.02
 
 
 @dataclass
@@ -55,6 +63,52 @@ class Scenario:
     sweeps: list = field(default_factory=list)
     stability_map: Any = None
     kind: str = "cases"
+
+
+def dynamics_warning(case):
+    """One warning when a rate-independent treatment meets frequencies the dynamics shape.
+
+    A case warns when its plant has dynamics and its highest reference (or
+    drive) frequency f is above ``RESONANCE_FRACTION`` of the first
+    resonance, or where ``|G(f) G(0)^-1 - I|_2 > GAIN_DEVIATION``, and it is
+    a reference tracked by a rate-independent compensator
+    (:data:`hammerstein.scenario.registry.RATE_INDEPENDENT`) or an open-loop
+    drive compared with a static (PI-only) model.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+
+    Returns
+    -------
+    str or None
+        The warning, pointing to ``kind = "hammerstein"``.
+    """
+    plant = case.plant
+    if plant is None or plant.dynamics is None:
+        return None
+    kind = (case.compensator_spec or {}).get("kind", "none")
+    static_model = case.mode == "drive" and case.model_spec is not None
+    if not (static_model or (case.mode == "reference" and kind in RATE_INDEPENDENT)):
+        return None
+    sig = case.signal_spec or {}
+    f = max(np.atleast_1d(sig.get("frequencies", sig.get("frequency", 0.0))), default=0.0)
+    if not f > 0:
+        return None
+    fn, zeta = modal_parameters(plant.dynamics)
+    resonant = fn[zeta < 1.0 / np.sqrt(2.0)]
+    f_res = float(resonant.min()) if resonant.size else float(fn.min())
+    c = compare_frequency_responses(plant.dynamics, plant.dynamics, [1e-3, float(f)])["true"]
+    dev = float(np.linalg.norm(c[:, :, 1] @ np.linalg.inv(np.real(c[:, :, 0]))
+                               - np.eye(c.shape[0]), 2))
+    if f <= RESONANCE_FRACTION * f_res and dev <= GAIN_DEVIATION:
+        return None
+    what = (f"compensator kind = {kind!r} is rate independent" if not static_model else
+            "the comparison model is static (PI only)")
+    return (f"{what}, but the {case.mode} reaches {f:g} Hz, where the plant's linear dynamics "
+            f"(first resonance {f_res:.0f} Hz) change the response by {100 * dev:.1f} %: the "
+            f"dynamics are not compensated; use [compensator] kind = \"hammerstein\" "
+            f"(inverse of the identified dynamics, docs/hammerstein-plant.md)")
 
 
 def resolve_scenario(spec):
@@ -102,6 +156,9 @@ def resolve_scenario(spec):
                     problems.append(f"{source}: {case.where}.compensator: {exc}")
                     continue
             caught = [str(w.message) for w in rec]
+        extra = dynamics_warning(case)
+        if extra:
+            caught.append(extra)
         cases.append(replace(case, compensator=comp, model=model, warnings=caught))
     smap = None
     if spec.stability_map is not None and spec.stability_plant is not None:

@@ -19,6 +19,7 @@ This module holds what both use: the key tables, the field checkers and
 from __future__ import annotations
 
 import difflib
+import os
 import re
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -39,7 +40,53 @@ __all__ = [
     "boolean",
     "choice",
     "name_list",
+    "name_field",
+    "MAX_NAME",
+    "MAX_TEXT",
+    "MAX_ITERATIONS",
+    "MAX_CASES",
+    "MAX_SWEEP_FREQUENCIES",
+    "MAX_CASE_SAMPLES",
+    "MAX_TOTAL_SAMPLES",
+    "MAX_HYSTERONS",
+    "MAX_IDENTIFY_PERIODS",
+    "total_samples_budget",
 ]
+
+
+# -- upper bounds (documented in the README, checked by validate) -------------------
+#: Longest name (scenario, case, sweep, label): it becomes a file or directory name.
+MAX_NAME = 100
+#: Longest free text (title, description, preset or model path).
+MAX_TEXT = 1000
+#: Most fixed-point iterations per sample of a compensator.
+MAX_ITERATIONS = 100
+#: Most cases of a scenario (after expanding the sweeps).
+MAX_CASES = 2000
+#: Most hysterons per component of an identified model.
+MAX_HYSTERONS = 100
+#: Most periods of an identification experiment.
+MAX_IDENTIFY_PERIODS = 1000
+#: Most frequencies of one sweep.
+MAX_SWEEP_FREQUENCIES = 200
+#: Most samples of one case or identification experiment (100 s at 20 kHz).
+MAX_CASE_SAMPLES = 2_000_000
+#: Default total-samples budget of one scenario (all cases and identification
+#: experiments); the environment variable ``HAMMERSTEIN_MAX_SAMPLES`` changes it.
+MAX_TOTAL_SAMPLES = 5_000_000
+
+
+def total_samples_budget():
+    """The total-samples budget of one scenario.
+
+    Returns
+    -------
+    int
+        ``HAMMERSTEIN_MAX_SAMPLES`` when it is a positive integer, else
+        :data:`MAX_TOTAL_SAMPLES`.
+    """
+    text = os.environ.get("HAMMERSTEIN_MAX_SAMPLES", "").strip()
+    return int(text) if text.isdigit() and int(text) > 0 else MAX_TOTAL_SAMPLES
 
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------
@@ -73,18 +120,21 @@ def number(unit, minimum=None, exclusive=True):
     def check(v):
         bound = "" if minimum is None else f" {'>' if exclusive else '>='} {minimum:g}"
         if not _is_number(v) or (minimum is not None and (v <= minimum if exclusive else v < minimum)):
-            raise Invalid(f"expected a number{bound} [{unit}], found {v!r}")
+            raise Invalid(f"expected a number{bound} [{unit}], found {_short(v)}")
         return float(v)
     return check
 
 
-def integer(minimum=0):
-    """Checker of an integer ``>= minimum``.
+def integer(minimum=0, maximum=None):
+    """Checker of an integer ``>= minimum`` (and ``<= maximum`` when given).
 
     Parameters
     ----------
     minimum : int
         Smallest accepted value.
+    maximum : int, optional
+        Largest accepted value (an upper bound of validate, e.g.
+        :data:`MAX_ITERATIONS`).
 
     Returns
     -------
@@ -95,17 +145,25 @@ def integer(minimum=0):
     ------
     Invalid
         From the returned checker, when the value is not an int (a bool is
-        not one) or is below ``minimum``.
+        not one) or is outside ``minimum..maximum``.
     """
     def check(v):
         if not isinstance(v, int) or isinstance(v, bool) or v < minimum:
-            raise Invalid(f"expected an integer >= {minimum}, found {v!r}")
+            raise Invalid(f"expected an integer >= {minimum}, found {_short(v)}")
+        if maximum is not None and v > maximum:
+            raise Invalid(f"expected an integer {minimum}..{maximum}, found {_short(v)}")
         return v
     return check
 
 
-def string(pattern=None, what="a string"):
-    """Checker of a string, optionally matching a regular expression.
+def _short(v, n=60):
+    """``repr(v)`` cut to about ``n`` characters (a 2 MB string is not echoed back)."""
+    text = repr(v)
+    return text if len(text) <= n else f"{text[:n]}... ({len(text)} characters)"
+
+
+def string(pattern=None, what="a string", max_length=MAX_TEXT):
+    """Checker of a string of at most ``max_length`` characters, optionally matching a pattern.
 
     Parameters
     ----------
@@ -114,6 +172,8 @@ def string(pattern=None, what="a string"):
         None accepts any string.
     what : str
         Description of the expected value, used in the error message.
+    max_length : int
+        Most characters accepted (:data:`MAX_TEXT` by default).
 
     Returns
     -------
@@ -123,12 +183,14 @@ def string(pattern=None, what="a string"):
     Raises
     ------
     Invalid
-        From the returned checker, when the value is not a string or does not
-        match ``pattern``.
+        From the returned checker, when the value is not a string is longer than
+        ``max_length`` or does not match ``pattern``.
     """
     def check(v):
+        if isinstance(v, str) and len(v) > max_length:
+            raise Invalid(f"expected at most {max_length} characters, found {len(v)}")
         if not isinstance(v, str) or (pattern is not None and not re.fullmatch(pattern, v)):
-            raise Invalid(f"expected {what}, found {v!r}")
+            raise Invalid(f"expected {what}, found {_short(v)}")
         return v
     return check
 
@@ -261,10 +323,22 @@ class Field:
 
 
 NAME = r"[A-Za-z0-9][A-Za-z0-9._-]*"
+_NAME_WHAT = "a name of letters, digits, '.', '_' or '-'"
+
+
+def name_field():
+    """Checker of a name usable as a file name (:data:`NAME`, at most :data:`MAX_NAME` characters).
+
+    Returns
+    -------
+    callable
+        ``check(value) -> str``, raising :class:`Invalid`.
+    """
+    return string(NAME, _NAME_WHAT, MAX_NAME)
 
 TOP = {
-    "name": Field(string(NAME, "a name of letters, digits, '.', '_' or '-'")),
-    "title": Field(string()),
+    "name": Field(name_field()),
+    "title": Field(string(max_length=200)),
     "description": Field(string()),
     "seed": Field(integer(0), default=0),
     "kind": Field(choice("cases")),  # other kinds: hammerstein.scenario.validate.VALIDATORS
@@ -279,7 +353,7 @@ PLANT = {
     "dynamics": Field(boolean(), default=True),
 }
 CASE = {
-    "name": Field(string(NAME, "a name of letters, digits, '.', '_' or '-'"), required=True),
+    "name": Field(name_field(), required=True),
     "description": Field(string()),
     "reference": Field(lambda v: v),
     "drive": Field(lambda v: v),

@@ -50,7 +50,9 @@ from hammerstein.core.stability import stability_map
 from hammerstein.scenario.execute import chain_result, run_case
 from hammerstein.scenario.progress import progress
 from hammerstein.scenario.registry import build_compensator
-from hammerstein.scenario.schema import CASE, NAME, Field, Invalid, check_table, number, string
+from hammerstein.core.metrics import UNITS
+from hammerstein.scenario.schema import (CASE, MAX_NAME, MAX_SWEEP_FREQUENCIES, NAME, Field, Invalid,
+                                         _short, check_table, choice, name_field, number, string)
 from hammerstein.simulation import _fusable, simulate_chain_batch
 
 __all__ = [
@@ -103,29 +105,32 @@ class SweepSpec:
 def _frequencies(v):
     if (isinstance(v, list) and v and all(isinstance(f, (int, float)) and not isinstance(f, bool)
                                           and np.isfinite(f) and f > 0 for f in v)):
+        if len(v) > MAX_SWEEP_FREQUENCIES:
+            raise Invalid(f"expected at most {MAX_SWEEP_FREQUENCIES} frequencies, found {len(v)}")
         if len(set(v)) != len(v):
             raise Invalid(f"expected distinct frequencies [Hz], found duplicates in {v!r}")
         return [float(f) for f in v]
-    raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {v!r}")
+    raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {_short(v)}")
 
 
 def _labelled_tables(v):
     if not isinstance(v, dict) or not v:
         raise Invalid(f"expected a table of label = {{ kind = ... }} compensator tables, found {v!r}")
     for label, table in v.items():
-        if not re.fullmatch(NAME, label):
-            raise Invalid(f"label {label!r}: expected letters, digits, '.', '_' or '-'")
+        if not re.fullmatch(NAME, label) or len(label) > MAX_NAME:
+            raise Invalid(f"label {_short(label)}: expected at most {MAX_NAME} letters, digits, "
+                          f"'.', '_' or '-'")
         if not isinstance(table, dict):
             raise Invalid(f"{label}: expected a compensator table, found {table!r}")
     return v
 
 
 _OWN = {
-    "name": Field(string(NAME, "a name of letters, digits, '.', '_' or '-'"), required=True),
+    "name": Field(name_field(), required=True),
     "description": Field(string()),
     "frequencies": Field(_frequencies),
     "compensators": Field(_labelled_tables),
-    "metric": Field(string(), default="rms_error"),
+    "metric": Field(choice(*UNITS), default="rms_error"),  # a metric the cases compute
 }
 
 
@@ -157,11 +162,16 @@ def expand_sweeps(sweeps, source, problems):
         return [], []
     case_keys = {k: f for k, f in CASE.items() if k != "name"}
     schema = {**case_keys, **_OWN}
-    entries, specs = [], []
+    entries, specs, seen = [], [], {}
     for i, raw in enumerate(sweeps):
         where = f"sweeps[{i}]"
         n0 = len(problems)
         clean = check_table(raw, schema, where, problems, source)
+        if clean is not None and "name" in clean:
+            if clean["name"] in seen:  # each sweep writes sweep-<name>.csv and .png
+                problems.append(f"{source}: {where}.name: duplicate sweep name {clean['name']!r} "
+                                f"(also sweeps[{seen[clean['name']]}]); give each sweep its own name")
+            seen.setdefault(clean["name"], i)
         if clean is None or len(problems) > n0:
             continue
         has_ref, has_drive = "reference" in raw, "drive" in raw
@@ -233,7 +243,8 @@ def run_cases(cases, desc="cases"):
     results = [None] * len(cases)
     batchable = [i for i, c in enumerate(cases)
                  if getattr(c, "sweep", None) is not None and c.mode == "reference"
-                 and _fusable(c.compensator)]
+                 and _fusable(c.compensator)
+                 and not hasattr(c.compensator, "run_reference")]   # own start-up: run_case
     rest = [i for i in range(len(cases)) if i not in set(batchable)]
     n_sweep = sum(1 for c in cases if getattr(c, "sweep", None) is not None)
     bar = progress(total=len(cases), desc=desc, unit="case") if n_sweep else None

@@ -21,6 +21,7 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 from __future__ import annotations
 
 import difflib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
@@ -28,12 +29,13 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.core import references as refs
-from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.core.presets import PresetError, load_dynamics, load_model, load_plant, read_toml
 from hammerstein.scenario.identified import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
-from hammerstein.scenario.schema import (CASE, DRIVES, PLANT, REFERENCES, TOP, Field, ScenarioError,
-                                         check_table, kind_problem)
+from hammerstein.scenario.schema import (CASE, DRIVES, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT, REFERENCES,
+                                         TOP, Field, ScenarioError, check_table, kind_problem,
+                                         total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
 
 __all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_scenario"]
@@ -163,7 +165,7 @@ def read_scenario(path):
     """
     path = Path(path)
     try:
-        return path, read_toml(path)
+        return path, read_toml(path, "scenario file")
     except PresetError as exc:
         raise ScenarioError([str(exc)]) from None
 
@@ -176,7 +178,7 @@ def _merge_compensator(top, case):
     return {**top, **case}
 
 
-def _check_compensator(spec, where, problems, source):
+def _check_compensator(spec, where, problems, source, own=None):
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
         hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
@@ -185,11 +187,54 @@ def _check_compensator(spec, where, problems, source):
                         f"{', '.join(map(repr, COMPENSATORS))}, found {kind!r}{extra}")
         return None
     schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
-    return check_table(spec, schema, where, problems, source)
+    clean = check_table(spec, schema, where, problems, source)
+    if clean is not None:
+        problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean, own))
+    return clean
 
 
-def _signal(case_where, mode, spec, plant, problems, source, base=None):
-    """Generate the drive/reference; returns (time, signal, period_samples, extras)."""
+def _option_problems(spec, own=None):
+    """Keys given for an option that is not selected (``key: message`` strings).
+
+    ``spec`` is the merged table; ``own`` the keys written in the table being
+    checked (a case that overrides ``model`` may inherit an ``identify``).
+    """
+    own = spec if own is None else own
+    out = []
+    feedback = spec.get("feedback", "delay")
+    if "cutoff_hz" in own and feedback != "lowpass":
+        out.append(f"cutoff_hz: only used with feedback = 'lowpass' (feedback is {feedback!r}); "
+                   f"remove it or set feedback = 'lowpass'")
+    if feedback == "lowpass" and "cutoff_hz" not in spec:
+        out.append("cutoff_hz: missing (feedback='lowpass' needs a cut-off frequency [Hz])")
+    if "identify" in own and spec.get("model", "plant") != "identified":
+        out.append(f"identify: only used with model = 'identified' (model is "
+                   f"{spec.get('model', 'plant')!r})")
+    return out
+
+
+def _predicted_samples(kind, c, T):
+    """Samples the signal of a checked table ``c`` will have (before generating it)."""
+    if "duration" in c:
+        return c["duration"] / T
+    if c.get("periods") is None or not ("frequency" in c or "frequencies" in c):
+        return 0.0  # e.g. a file reference: as long as its file (bounded in bytes)
+    if kind == "lissajous":
+        try:
+            period = refs.lissajous_period(*c["frequencies"])
+        except refs.SignalError:
+            period = 1.0 / min(c["frequencies"])
+    else:
+        period = 1.0 / c["frequency"]
+    return c["periods"] * period / T
+
+
+def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=None):
+    """Generate the drive/reference; returns (time, signal, period_samples, extras).
+
+    ``budget``: ``{"limit", "used", "over"}`` samples per scenario; a signal
+    beyond it is reported once (later ones are then not generated).
+    """
     kinds = DRIVES if mode == "drive" else REFERENCES
     where = f"{case_where}.{mode}"
     if not isinstance(spec, dict):
@@ -210,6 +255,22 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None):
     model = plant.hysteresis
     c = {k: v for k, v in clean.items() if k != "kind"}
     extras = {}
+    n = _predicted_samples(kind, c, T)
+    if MAX_CASE_SAMPLES < n <= refs.MAX_SAMPLES:  # beyond: the generator's own message
+        problems.append(f"{source}: {where}: the record would have {n:.3g} samples; expected at "
+                        f"most {MAX_CASE_SAMPLES:.3g} per case ({MAX_CASE_SAMPLES * T:g} s at "
+                        f"T = {T:g} s)")
+        return None
+    if budget is not None and n <= refs.MAX_SAMPLES:
+        if budget["over"]:
+            return None
+        if budget["used"] + n > budget["limit"]:
+            budget["over"] = True
+            problems.append(f"{source}: {where}: its {n:.3g} samples bring the scenario to "
+                            f"{budget['used'] + n:.3g}; expected at most {budget['limit']:.3g} "
+                            f"samples per scenario (shorten the records, or raise "
+                            f"HAMMERSTEIN_MAX_SAMPLES)")
+            return None
     try:
         if mode == "drive":
             fn = refs.triangle_drive if kind == "triangle" else refs.sine_drive
@@ -239,6 +300,9 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None):
         else:
             outs = c.pop("outputs", None) or list(model.output_names[:2])
             missing = [o for o in outs if o not in model.output_names]
+            if not missing and len(set(outs)) < len(outs):
+                raise refs.SignalError(f"outputs: expected two different outputs of the plant "
+                                       f"{model.output_names}, found {outs}")
             if missing or model.n_outputs < 2:
                 raise refs.SignalError(f"outputs: expected two of the plant's outputs "
                                        f"{model.output_names}, found {outs}")
@@ -277,21 +341,70 @@ def _model_problems(name, identify, plant, base, files):
             return ["identify: missing (required with model = 'identified'), "
                     "e.g. identify = { frequency = 50.0 }"]
         problem = nyquist_problem(identify, plant)
+        if problem is None and plant is not None:
+            n = identify.get("periods", 3) / identify["frequency"] / plant.sampling_period
+            if n > MAX_CASE_SAMPLES:
+                problem = (f"identify.frequency: {identify['frequency']:g} Hz for "
+                           f"{identify.get('periods', 3)} periods would record {n:.3g} samples "
+                           f"per input; expected at most {MAX_CASE_SAMPLES:.3g}")
         return [problem] if problem else []
     path = Path(name) if Path(name).is_absolute() else base / name
     if path not in files:
         try:
-            load_model(path)
-            files[path] = None
+            files[path] = load_model(path)
         except PresetError as exc:
             files[path] = str(exc)
-    return [files[path]] if files[path] else []
+    if isinstance(files[path], str):
+        return [files[path]]
+    model, pm = files[path], getattr(plant, "hysteresis", None)
+    if pm is not None and (model.n_inputs, model.n_outputs) != (pm.n_inputs, pm.n_outputs):
+        return [f"{name}: the model has {model.n_inputs} input(s) {list(model.input_names)} and "
+                f"{model.n_outputs} output(s) {list(model.output_names)}; the plant has "
+                f"{pm.n_inputs} {list(pm.input_names)} and {pm.n_outputs} {list(pm.output_names)}"]
+    return []
+
+
+def _dynamics_problems(spec, plant, base, files, settle, period_samples):
+    """Problems of the ``dynamics`` keys of ``kind = "hammerstein"`` (nothing identified).
+
+    ``dynamics`` is "plant", "identified" or a readable dynamics/preset file of
+    the plant's size; "plant" and "identified" need a plant with dynamics;
+    ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
+    within the settling the metrics skip. Returns ``key: message`` strings.
+    """
+    dyn = spec.get("dynamics") or ("identified" if spec.get("model") == "identified" else "plant")
+    out = []
+    if "identify_dynamics" in spec and dyn != "identified":
+        out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
+    if dyn in ("plant", "identified"):
+        if plant.dynamics is None:
+            out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
+    else:
+        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
+        if ("dynamics", path) not in files:
+            try:
+                load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+                files[("dynamics", path)] = None
+            except PresetError as exc:
+                files[("dynamics", path)] = f"dynamics: expected 'plant', 'identified' or a " \
+                                            f"dynamics file: {exc}"
+        if files[("dynamics", path)]:
+            out.append(files[("dynamics", path)])
+    fade = spec.get("fade_in")
+    if fade is not None and fade > settle * period_samples * plant.sampling_period + 1e-12:
+        out.append(f"fade_in: {fade:g} s is longer than the {settle:g} settling periods "
+                   f"({settle * period_samples * plant.sampling_period:g} s) the metrics skip")
+    return out
 
 
 def _validate_cases(path, data):
     """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError."""
     source, base, problems = str(path), path.parent, []
     top = check_table(data, TOP, "", problems, source) or {}
+    if "name" not in data and not (re.fullmatch(NAME, path.stem) and len(path.stem) <= MAX_NAME):
+        problems.append(f"{source}: name: missing, and the file name {path.stem[:MAX_NAME]!r} is not "
+                        f"usable as the report directory name (at most {MAX_NAME} letters, digits, "
+                        f"'.', '_' or '-', starting with a letter or digit); give name = \"...\"")
     plant_top = data.get("plant", {}) if isinstance(data.get("plant", {}), dict) else {}
     comp_top = data.get("compensator", {}) if isinstance(data.get("compensator", {}), dict) else {}
     if "plant" in data:
@@ -312,6 +425,15 @@ def _validate_cases(path, data):
         more, sweep_specs = expand_sweeps(data["sweeps"], source, problems)
         entries += more
     plants, cases, names, model_files = {}, [], set(), {}
+    if len(entries) > MAX_CASES:
+        problems.append(f"{source}: cases: {len(entries)} cases (sweeps expanded); expected at "
+                        f"most {MAX_CASES}")
+        entries = []
+    budget = {"limit": total_samples_budget(), "used": 0, "over": False}
+
+    def once(line):  # a problem of a top-level table, found per case, is listed once
+        if line not in problems:
+            problems.append(line)
 
     def plant_of(preset, dynamics):
         key = (preset, bool(dynamics))
@@ -346,11 +468,16 @@ def _validate_cases(path, data):
             except PresetError as exc:
                 plants[(pspec["preset"], bool(pspec.get("dynamics", True)))] = None
                 problems.append(f"{source}: {where}.plant.preset: {exc}")
+            if plant is not None and pspec.get("dynamics") is True and plant.dynamics is None:
+                key = f"{where}.plant" if "dynamics" in plant_clean else "plant"
+                once(f"{source}: {key}.dynamics: true, but the preset {pspec['preset']!r} has no "
+                     f"[dynamics] (or kind = 'none'); set dynamics = false for its static plant")
         # compensator: merge and check
         cover = raw.get("compensator", {})
         cspec = _merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
         scratch = []
-        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source)
+        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source,
+                                    own=cover if isinstance(cover, dict) else {})
         if "compensator" in raw:
             if isinstance(cover, dict):
                 problems.extend(scratch)  # top-level problems are reported once, above
@@ -359,7 +486,14 @@ def _validate_cases(path, data):
         elif scratch and not any("compensator" in q for q in problems[:n_before]):
             problems.extend(scratch)
         comp_ok = not scratch and cclean is not None
-        sig = _signal(where, mode, raw[mode], plant, problems, source, base)
+        if comp_ok and plant is not None and cclean.get("feedback") == "lowpass":
+            nyquist = 0.5 / plant.sampling_period
+            if cclean["cutoff_hz"] >= nyquist:
+                key = f"{where}.compensator" if "cutoff_hz" in cover else "compensator"
+                once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
+                     f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
+                comp_ok = False
+        sig = _signal(where, mode, raw[mode], plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
         if mode == "reference" and kind == "none":
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
@@ -367,6 +501,7 @@ def _validate_cases(path, data):
         if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
             continue
         t, signal, P, extras = sig
+        budget["used"] += t.size
         settle = case.get("settle_periods", 1.0)
         need = settle * P + (P if (mode == "drive" or "loop_channel" in extras) else 1)
         if t.size < need:
@@ -385,6 +520,9 @@ def _validate_cases(path, data):
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
             problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
+        if mode == "reference" and "dynamics" in COMPENSATORS[kind].fields:
+            more = _dynamics_problems(cclean, plant, base, model_files, settle, P)
+            problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
         if cmp_spec is not None:
             more = _model_problems(cmp_spec["model"], cmp_spec.get("identify"), plant, base,
                                    model_files)

@@ -71,8 +71,8 @@ SCENARIOS = {
     "lissajous-bad-ratio": "cases[0].reference.frequencies: the ratio 50.0/50.0001 is not a simple fraction",
     "list-for-table": "cases[0].drive: expected a table, found ['sine'",
     "literal-law-check-error": "cases[0].compensator: gain: rho(I - K^-1 J) reaches 8.96 >= 1",
-    "lowpass-above-nyquist": "cutoff_hz: expected 0 < cutoff_hz < 10000 Hz",
-    "lowpass-without-cutoff": "feedback='lowpass' needs a cut-off frequency",
+    "lowpass-above-nyquist": "compensator.cutoff_hz: expected 0 < cutoff_hz < 10000 Hz",
+    "lowpass-without-cutoff": "compensator.cutoff_hz: missing (feedback='lowpass' needs a cut-off frequency",
     "many-wrong-types": "cases[0].drive.amplitude: expected a number > 0 [V], found datetime.date(1979, 5, 27)",
     "missing-case-name": "cases[0].name: missing (required)",
     "missing-cases": "cases: missing (required)",
@@ -131,12 +131,39 @@ SCENARIOS = {
     "zero-frequency": "cases[0].drive.frequency: expected a number > 0 [Hz], found 0.0",
     "zero-iterations": "compensator.iterations: expected an integer >= 1, found 0",
     "zero-radius": "cases[0].reference.radius: expected a number > 0 [µm], found 0",
+    # issue 13: bounds, names, what validate can know
+    "..": "name: missing, and the file name '..' is not usable as the report directory name",
+    "huge-iterations": "compensator.iterations: expected an integer 1..100, found 9223372036854775807",
+    "long-title": "title: expected at most 200 characters, found 300",
+    "long-name": "name: expected at most 100 characters, found 300",
+    "long-case-name": "cases[0].name: expected at most 100 characters, found 101",
+    "long-record": "cases[0].drive: the record would have 4e+06 samples; expected at most 2e+06 per case",
+    "samples-budget": "cases[2].drive: its 1.8e+06 samples bring the scenario to 5.4e+06; expected at "
+                      "most 5e+06 samples per scenario",
+    "too-many-cases": "cases: 2200 cases (sweeps expanded); expected at most 2000",
+    "sweep-too-many-frequencies": "sweeps[0].frequencies: expected at most 200 frequencies, found 201",
+    "sweep-duplicate-names": "sweeps[1].name: duplicate sweep name 's' (also sweeps[0])",
+    "sweep-unknown-metric": "sweeps[0].metric: expected one of 'peak_to_peak'",
+    "model-shape-mismatch": "cases[0].compensator: ../models/one-by-one.toml: the model has 1 input(s) "
+                            "['u'] and 1 output(s) ['y']; the plant has 2 ['ux', 'uy'] and 2 ['x', 'y']",
+    "drive-model-shape-mismatch": "cases[0].model: ../models/one-by-one.toml: the model has 1 input(s)",
+    "dynamics-without-dynamics": "plant.dynamics: true, but the preset '../models/preset-static.toml' "
+                                 "has no [dynamics]",
+    "circle-same-outputs": "cases[0].reference.outputs: expected two different outputs of the plant",
+    "cutoff-with-delay": "compensator.cutoff_hz: only used with feedback = 'lowpass' (feedback is 'delay')",
+    "identify-without-identified": "compensator.identify: only used with model = 'identified'",
+    "identify-huge-periods": "compensator.identify.periods: expected an integer 2..1000, found 100000",
+    "identify-too-slow": "identify.frequency: 1e-06 Hz for 3 periods would record 6e+10 samples",
+    "plant-preset-unknown-key": "preset.sampling_perod: unknown key (did you mean 'sampling_period'?); "
+                                "dynamics.damping: unknown key (did you mean 'damping_ratio'?)",
+    "model-unknown-key": "model.input_amplitud: unknown key (did you mean 'input_amplitude'?)",
+    "device-model": "/dev/zero: not a regular file (a device, FIFO or socket), expected a model file",
+    "device-preset": "/dev/zero: not a regular file (a device, FIFO or socket), expected a preset file",
 }
 #: Files whose problems ``validate`` cannot see: they are found when the scenario is
 #: resolved (a compensator refused by its own checks) or run (an identification on a
 #: record); stem -> number of cases ``validate`` reports.
 RUN_ONLY = {"identification-constant-input": 2, "literal-law-check-error": 1,
-            "lowpass-above-nyquist": 1, "lowpass-without-cutoff": 1,
             "per-axis-non-invertible": 1, "singular-gain-matrix": 1}
 #: Files with several problems: validate lists each on its own line.
 SEVERAL = {"empty": 2, "identification-bad-keys": 5, "identify-bad-values": 4,
@@ -150,6 +177,7 @@ DATA = {
     "decreasing-time.csv": "time column 'time_s' is not increasing at data row 12",
     "empty-cell.csv": "input column 'u_V': non-numeric or empty cell (empty or NaN) at data row 16",
     "empty.csv": "the file is empty",
+    "constant-output.csv": "output column 'y_um': the output is constant over the training samples",
     "garbage.bin": "not a text table (binary content)",
     "header-only.csv": "too short, expected at least 10 samples, found 0",
     "inf-cell.csv": "output column 'y_um': infinite values",
@@ -239,6 +267,27 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
     (["check", GOOD / "good-static.toml"],
      "hammerstein check: error: the following arguments are required: --baseline"),
     (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein: error: unrecognized arguments: --bogus"),
+    # issue 13: every path or option problem is a usage error of its command
+    (["run", GOOD / "good-static.toml", "--out", ""], "hammerstein run: error: --out: empty path"),
+    (["run", GOOD / "good-static.toml", "--out", GOOD / "good-static.toml" / "sub"],
+     f"hammerstein run: error: --out: {GOOD / 'good-static.toml'} is not a directory"),
+    (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS[:-1], "1,,2", "--out", "m.toml"],
+     "hammerstein identify: error: --thresholds: expected numbers separated by commas, found an "
+     "empty entry in '1,,2'"),
+    (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", "/dev/null"],
+     "hammerstein identify: error: --out: /dev/null is not a regular file"),
+    (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", ""],
+     "hammerstein identify: error: --out: empty path"),
+    (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out",
+      GOOD / "good-static.toml" / "m.toml"], "hammerstein identify: error: --out: "),
+    (["check", GOOD / "good-static.toml", "--baseline", CORPUS / "nowhere.csv"],
+     "hammerstein check: error: "),
+    (["check", GOOD / "good-static.toml", "--baseline", "/dev/zero"],
+     "hammerstein check: error: /dev/zero: not a regular file"),
+    (["check", GOOD / "good-static.toml", "--baseline", "b.csv", "--update", "--out",
+      GOOD / "good-static.toml" / "x"], "hammerstein check: error: --out: "),
+    (["replicate", "--scenarios", CORPUS / "nowhere"], "hammerstein replicate: error: "),
+    (["replicate", "--out", ""], "hammerstein replicate: error: --out: empty path"),
 ])
 def test_usage_errors_are_one_line_exit_2(capsys, argv, message):
     status, out, err = _call(capsys, *argv)
@@ -364,9 +413,9 @@ def test_model_parameter_guards(thresholds, weights, message):
     assert message in str(err.value)
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def plant(static_plant):
+    return static_plant
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])

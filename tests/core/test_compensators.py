@@ -1,4 +1,4 @@
-"""The compensator family on the static plant, and the stability analysis (NOTES §4, §5)."""
+"""The compensator family on the static plant, and the stability analysis (docs/compensator.md, docs/per-axis-inverse.md)."""
 
 import warnings
 
@@ -9,7 +9,6 @@ from hammerstein.core.compensators import (CompensatorError, InverseMultiplicati
                                       PerAxisInverseCompensator, RangeWarning, StaticGainCompensator,
                                       check_reference_range, diagonal_compensator)
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.presets import load_plant
 from hammerstein.simulation import simulate_chain
 from hammerstein.core.stability import literal_gain_equivalent_scale, stability_map
 
@@ -17,12 +16,12 @@ T = 5e-5
 PERIOD = 400  # samples per period at 50 Hz, T = 50 µs
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def plant(static_plant):
+    return static_plant
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def model(plant):
     return plant.hysteresis
 
@@ -119,7 +118,7 @@ def test_more_iterations_reduce_error(plant, model, axis):
     for n in (1, 2, 5):
         y, r = last_period(InverseMultiplicativeCompensator(model, iterations=n), plant, ref)
         errors.append(rms(y - r))
-    assert errors[0] < 0.1  # the normalised law, NOTES §4 (0.09 µm on the direct axis)
+    assert errors[0] < 0.1  # the normalised law, docs/compensator.md (0.09 µm on the direct axis)
     assert errors[0] > errors[1] > errors[2]
     assert errors[0] / errors[2] > 5
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hammerstein import (CompensatorError, InverseMultiplicativeCompensator,
-                         bandwidths_hz, convergence_report, load_plant, play,
+                         bandwidths_hz, convergence_report, play,
                          simulate_chain)
 from hammerstein.core.presets import bundled_presets, dynamics_from_table, read_toml
 
@@ -48,14 +48,14 @@ def test_play_threshold_above_amplitude_stays_at_initial_state():
     np.testing.assert_allclose(y, 0.5)
 
 
-@pytest.fixture(scope="module")
-def preset():
-    return load_plant("rakotondrabe-2dof", dynamics=True)
+@pytest.fixture
+def preset(preset_plant):
+    return preset_plant
 
 
-@pytest.fixture(scope="module")
-def static():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def static(static_plant):
+    return static_plant
 
 
 def _record(n=900, seed=1):
@@ -143,7 +143,7 @@ def test_fig05_numbers_from_the_preset(static):
 def test_literal_law_is_detected_as_divergent(static):
     model = static.hysteresis
     rep = convergence_report(model, "identity")
-    assert not rep.converges and rep.max_radius > 2.0        # NOTES §4: about 3-9
+    assert not rep.converges and rep.max_radius > 2.0        # docs/compensator.md: about 3-9
     assert convergence_report(model, "secant").converges
     with pytest.raises(CompensatorError, match="rho"):
         InverseMultiplicativeCompensator(model, gain="identity")

@@ -1,7 +1,7 @@
 """Identification round trips: closed form (Appendix eq. 14-17), least squares, Steps 1-4.
 
 A known model is simulated, re-identified, and the weights compared
-(NOTES §3: exact when the breakpoints fall on samples, about 1-2 % at 50 µs
+(docs/identification.md: exact when the breakpoints fall on samples, about 1-2 % at 50 µs
 sampling on a 50 Hz sine).
 """
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
-                         PrandtlIshlinskii, load_model, load_plant)
+                         PrandtlIshlinskii, load_model)
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
                                         MultivariableIdentifier, ascending_branches, fit_report,
                                         partition_thresholds)
@@ -18,11 +18,6 @@ from hammerstein.core.sensors import Sensor, characterize, identify_plant
 
 EQ12 = np.array([0.07, 0.32, 0.74, 1.3, 2.0, 2.8, 3.67, 4.61, 5.54, 6.5, 7.34, 8.1, 8.8, 9.3, 9.7])
 T = 5e-5
-
-
-@pytest.fixture(scope="module")
-def static_plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
 
 
 def sine(amplitude=10.0, frequency=50.0, periods=3, offset=0.0):
@@ -94,7 +89,7 @@ def test_closed_form_offsets_and_off_centre_input():
 
 @pytest.mark.parametrize("component", [(0, 0), (0, 1), (1, 0), (1, 1)])
 def test_closed_form_sine_50hz_within_2_percent(static_plant, component):
-    """50 Hz sine sampled at 50 µs: breakpoints between samples (NOTES §3)."""
+    """50 Hz sine sampled at 50 µs: breakpoints between samples (docs/identification.md)."""
     pi = static_plant.hysteresis.components[component[0]][component[1]]
     u = sine(periods=4)
     y, _ = pi.simulate(u)

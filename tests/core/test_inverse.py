@@ -1,18 +1,17 @@
-"""Analytic inverse PI (Kuhnen & Janocha, NOTES §5) and the inverse play operator."""
+"""Analytic inverse PI (Kuhnen & Janocha, docs/per-axis-inverse.md) and the inverse play operator."""
 
 import numpy as np
 import pytest
 
 from hammerstein.core.hysteresis import HysteresisError, PrandtlIshlinskii, play
 from hammerstein.core.inverse import InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
-from hammerstein.core.presets import load_plant
 
 T = 5e-5
 
 
-@pytest.fixture(scope="module")
-def model():
-    return load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+@pytest.fixture
+def model(static_plant):
+    return static_plant.hysteresis
 
 
 def piecewise_monotone(rng, peak, n_extrema=12, samples=(20, 300)):

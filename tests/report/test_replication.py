@@ -57,7 +57,8 @@ def test_readme_lists_every_paper_number_with_its_ratio(tmp_path):
             assert float(cells[6]) == pytest.approx(SCALE, rel=1e-3)
     for paper in ("17 %", "15.8 %", "±1.5 µm", "±2 µm", "±0.2 µm", "±0.25 µm", "\\|ε\\| ≈ 2 µm", "2 %"):
         assert paper in text
-    assert "NOTES §4" in text and "NOTES §6" in text and "NOTES §7" in text
+    assert "docs/compensator.md" in text and "docs/metrics.md" in text and "docs/hammerstein-plant.md" in text
+    assert "NOTES" not in text
     assert (tmp_path / "paper-numbers.csv").is_file()
 
 

@@ -337,12 +337,12 @@ def test_fig06_bundled_scenario_report(tmp_path):
 
 
 def test_identification_failure_passes_validate_and_fails_run_in_one_line(tmp_path, capsys):
-    # 200 hysterons on the ~3-sample ascending branch of a 3 kHz sine (T = 50 µs): the
+    # 100 hysterons (the most validate accepts) on the ~3-sample ascending branch of a 3 kHz sine (T = 50 µs): the
     # identification itself fails, which only the resolution of `run` can find
     p = tmp_path / "id-fails.toml"
     p.write_text("[plant]\npreset = 'rakotondrabe-2dof'\ndynamics = false\n"
                  "[compensator]\nkind = 'multivariable'\nmodel = 'identified'\n"
-                 "identify = { frequency = 3000.0, n_hysterons = 200 }\n"
+                 "identify = { frequency = 3000.0, n_hysterons = 100 }\n"
                  "[[cases]]\nname = 'a'\n"
                  "reference = { kind = 'sine', output = 'x', amplitude = 10.0, frequency = 50.0, "
                  "periods = 2 }\n", encoding="utf-8")

@@ -11,7 +11,8 @@ from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError
 
 ROOT = Path(__file__).resolve().parents[2]
-BUNDLED = sorted((ROOT / "scenarios").rglob("*.toml"))
+BUNDLED = sorted(p for p in (ROOT / "scenarios").rglob("*.toml")
+                 if "presets" not in p.relative_to(ROOT / "scenarios").parts)   # preset files
 
 GOOD_CASE = """
 [[cases]]

@@ -164,4 +164,4 @@ reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, p
     assert list(t["scale"]) == [0.1, 1.0, 5.0]
     row = t.set_index("scale")
     assert row.loc[1.0, "max_radius"] < 1 and bool(row.loc[1.0, "converges"])
-    assert row.loc[0.1, "max_radius"] > 1  # far under-normalised, like K = I (NOTES §4)
+    assert row.loc[0.1, "max_radius"] > 1  # far under-normalised, like K = I (docs/compensator.md)

@@ -1,0 +1,307 @@
+"""Issue 13: never destroy what the project did not write, stop cleanly, bound every input.
+
+Ownership of report directories (marker, ``--force``), safe single-file
+writes (:func:`hammerstein.core.files.safe_write`: exclusive temporary file,
+rename, symlink target written, special files refused, permissions kept),
+bounded reads, stale temporaries, and SIGINT/SIGTERM through a real
+subprocess.
+"""
+
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.main import main
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, limit, safe_write, umask
+from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.presets import PresetError, load_model, save_model
+from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries
+
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
+GOOD = CORPUS / "good" / "good-static.toml"
+REPO = Path(__file__).resolve().parents[2]
+IDENTIFY = [str(CORPUS / "data" / "good.csv"), "--time", "time_s", "--input", "u_V",
+            "--output", "y_um", "--thresholds", "5"]
+
+
+def _call(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err.splitlines()
+
+
+def _snapshot(root):
+    """path -> (kind, bytes or link target, mode) of everything under ``root``."""
+    snap = {}
+    for dirpath, dirnames, filenames in os.walk(root):
+        for name in dirnames + filenames:
+            p = Path(dirpath) / name
+            st = os.lstat(p)
+            if stat.S_ISLNK(st.st_mode):
+                snap[p] = ("link", os.readlink(p), None)
+            elif stat.S_ISREG(st.st_mode):
+                snap[p] = ("file", p.read_bytes(), stat.S_IMODE(st.st_mode))
+            else:
+                snap[p] = ("dir" if stat.S_ISDIR(st.st_mode) else "other", None,
+                           stat.S_IMODE(st.st_mode))
+    return snap
+
+
+def _model():
+    return MultivariablePI([[PrandtlIshlinskii([0.0, 2.0], [1.0, 0.5])]], ["u"], ["y"], [5.0])
+
+
+# -- ownership of report directories -----------------------------------------------------
+@pytest.mark.parametrize("kind", ["user-dir", "file", "symlink-dir", "symlink-dangling"])
+def test_run_never_replaces_what_it_did_not_write(capsys, tmp_path, kind):
+    out = tmp_path / "out"
+    out.mkdir()
+    target = out / "good-static"
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "keep.txt").write_text("mine")
+    if kind == "user-dir":
+        target.mkdir()
+        (target / "thesis.tex").write_text("precious")
+    elif kind == "file":
+        target.write_text("precious")
+    elif kind == "symlink-dir":
+        target.symlink_to(elsewhere)
+    else:
+        target.symlink_to(tmp_path / "nowhere")
+    before = _snapshot(tmp_path)
+    status, out_text, err = _call(capsys, "run", GOOD, "--out", out)
+    assert status == 1 and out_text == "" and len(err) == 1
+    assert str(target) in err[0] and "--force" in err[0]
+    assert _snapshot(tmp_path) == before  # byte for byte, no temporary left
+
+
+def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
+    out = tmp_path / "out"
+    (out / "good-static").mkdir(parents=True)  # empty: replaced
+    assert _call(capsys, "run", GOOD, "--out", out)[0] == 0
+    marker = out / "good-static" / MARKER
+    assert marker.read_text().startswith("hammerstein ")
+    (out / "good-static" / "metrics.csv").write_text("stale")
+    assert _call(capsys, "run", GOOD, "--out", out)[0] == 0  # marked: replaced
+    assert (out / "good-static" / "metrics.csv").read_text() != "stale"
+    marker.unlink()
+    assert _call(capsys, "run", GOOD, "--out", out)[0] == 1  # no longer ours
+    assert _call(capsys, "run", GOOD, "--out", out, "--force")[0] == 0
+    assert marker.is_file()
+    assert sorted(p.name for p in out.iterdir()) == ["good-static"]
+
+
+def test_report_directories_get_umask_permissions(capsys, tmp_path):
+    assert _call(capsys, "run", GOOD, "--out", tmp_path)[0] == 0
+    mode = stat.S_IMODE(os.stat(tmp_path / "good-static").st_mode)
+    assert mode == 0o777 & ~umask()
+
+
+def test_out_dir_problems_are_usage_errors(capsys, tmp_path):
+    f = tmp_path / "f"
+    f.write_text("x")
+    for out in ("", f, f / "sub"):
+        status, _, err = _call(capsys, "run", GOOD, "--out", out)
+        assert status == 2 and len(err) == 1 and err[0].startswith("hammerstein run: error: --out:")
+    assert f.read_text() == "x" and sorted(p.name for p in tmp_path.iterdir()) == ["f"]
+
+
+# -- single files: safe_write ---------------------------------------------------------------
+def test_safe_write_writes_a_symlinks_target_and_keeps_permissions(tmp_path):
+    real = tmp_path / "real.toml"
+    real.write_text("old")
+    os.chmod(real, 0o640)
+    link = tmp_path / "link.toml"
+    link.symlink_to(real)
+    user_tmp = tmp_path / "link.toml.tmp"
+    user_tmp.write_text("the user's own")
+    assert safe_write(link, b"new") == real
+    assert link.is_symlink() and real.read_text() == "new"
+    assert stat.S_IMODE(os.stat(real).st_mode) == 0o640
+    assert user_tmp.read_text() == "the user's own"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.toml", "link.toml.tmp", "real.toml"]
+    fresh = safe_write(tmp_path / "sub" / "new.toml", "x")
+    assert stat.S_IMODE(os.stat(fresh).st_mode) == 0o666 & ~umask()
+
+
+@pytest.mark.parametrize("special", ["/dev/null", "fifo", "dir"])
+def test_safe_write_refuses_special_targets(tmp_path, special):
+    if special == "fifo":
+        target = tmp_path / "fifo"
+        os.mkfifo(target)
+    elif special == "dir":
+        target = tmp_path / "d"
+        target.mkdir()
+    else:
+        target = Path(special)
+    with pytest.raises(FileLimitError, match="expected a file to replace"):
+        safe_write(target, b"x")
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+    if special == "/dev/null":
+        assert stat.S_ISCHR(os.stat(target).st_mode)
+
+
+def test_safe_write_leaves_the_target_when_the_writer_fails(tmp_path):
+    target = tmp_path / "b.csv"
+    target.write_text("old")
+
+    def writer(fh):
+        fh.write(b"half")
+        raise RuntimeError("disk full")
+    with pytest.raises(RuntimeError):
+        safe_write(target, writer)
+    assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["b.csv"]
+
+
+def test_save_model_round_trip_through_a_symlink(tmp_path):
+    real = tmp_path / "m.toml"
+    real.write_text("")
+    (tmp_path / "l.toml").symlink_to(real)
+    save_model(_model(), tmp_path / "l.toml")
+    assert load_model(real).input_names == ["u"] and (tmp_path / "l.toml").is_symlink()
+    with pytest.raises(PresetError, match="is a directory"):
+        save_model(_model(), tmp_path)
+
+
+def test_identify_writes_a_symlinks_target_and_keeps_its_mode(capsys, tmp_path):
+    real = tmp_path / "real.toml"
+    save_model(_model(), real)  # a model file: identify may replace it
+    os.chmod(real, 0o600)
+    (tmp_path / "m.toml").symlink_to(real)
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", tmp_path / "m.toml")
+    assert (status, err) == (0, [])
+    assert (tmp_path / "m.toml").is_symlink() and "u_V" in real.read_text()
+    assert stat.S_IMODE(os.stat(real).st_mode) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "real.toml"]
+
+
+def test_check_update_keeps_the_baselines_permissions(capsys, tmp_path):
+    baseline = tmp_path / "b.csv"
+    assert _call(capsys, "check", CORPUS / "good" / "good-static-2.toml", "--baseline", baseline,
+                 "--update")[0] == 0
+    os.chmod(baseline, 0o604)
+    assert _call(capsys, "check", CORPUS / "good" / "good-static-2.toml", "--baseline", baseline,
+                 "--update")[0] == 0
+    assert stat.S_IMODE(os.stat(baseline).st_mode) == 0o604
+    assert [p.name for p in tmp_path.iterdir()] == ["b.csv"]
+
+
+# -- bounded reads ----------------------------------------------------------------------------
+def test_reads_are_bounded(tmp_path, monkeypatch):
+    big = tmp_path / "big.toml"
+    big.write_bytes(b"# " + b"x" * 2000 + b"\n")
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOML_BYTES", "1000")
+    assert limit("toml") == 1000
+    with pytest.raises(FileLimitError, match="larger than the limit of 1000 bytes.*"
+                                             "HAMMERSTEIN_MAX_TOML_BYTES"):
+        bounded_read_bytes(big)
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOML_BYTES", "junk")
+    assert limit("toml") == 4 * 2**20 and bounded_read_bytes(big) == big.read_bytes()
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    with pytest.raises(FileLimitError, match="not a regular file"):
+        bounded_read_bytes(fifo)  # and it does not block waiting for a writer
+
+
+@pytest.mark.parametrize("command", ["run", "validate"])
+def test_special_scenario_files_fail_at_once(capsys, tmp_path, command):
+    fifo = tmp_path / "s.toml"
+    os.mkfifo(fifo)
+    extra = ["--out", tmp_path / "out"] if command == "run" else []
+    for path in ("/dev/zero", fifo, tmp_path):
+        status, _, err = _call(capsys, command, path, *extra)
+        assert status == 1 and len(err) == 1 and f"{path}: " in err[0]
+        assert "not a regular file" in err[0] or "is a directory" in err[0]
+    assert not (tmp_path / "out").exists() or not list((tmp_path / "out").iterdir())
+
+
+def test_data_file_limit_is_overridable(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", "100")
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", tmp_path / "m.toml")
+    assert status == 1 and "HAMMERSTEIN_MAX_DATA_BYTES" in err[0]
+    assert not (tmp_path / "m.toml").exists()
+
+
+# -- stale temporaries ----------------------------------------------------------------------------
+def _dead_pid():
+    p = subprocess.Popen([sys.executable, "-c", "pass"])
+    p.wait()
+    return p.pid
+
+
+def test_stale_temporaries_of_killed_runs_are_removed_and_nothing_else(tmp_path):
+    old = time.time() - 3600
+    stale = tmp_path / f"{TMP_PREFIX}{_dead_pid()}.abc"
+    stale.mkdir()
+    (stale / MARKER).write_text("hammerstein")
+    (stale / "metrics.csv").write_text("x")
+    os.utime(stale / MARKER, (old, old))
+    unmarked = tmp_path / f"{TMP_PREFIX}{_dead_pid()}.def"  # not ours: no marker, not empty
+    unmarked.mkdir()
+    (unmarked / "notes.txt").write_text("mine")
+    empty = tmp_path / f"{TMP_PREFIX}{_dead_pid()}.xyz"  # killed before the marker: empty
+    empty.mkdir()
+    os.utime(empty, (old, old))
+    alive = tmp_path / f"{TMP_PREFIX}{os.getppid()}.ghi"   # a live process: still working
+    alive.mkdir()
+    (alive / MARKER).write_text("hammerstein")
+    os.utime(alive / MARKER, (old, old))
+    fresh = tmp_path / f"{TMP_PREFIX}{_dead_pid()}.jkl"     # newer than the run
+    fresh.mkdir()
+    (fresh / MARKER).write_text("hammerstein")
+    user = tmp_path / ".hammerstein-tmp.notes"
+    user.write_text("mine")
+    removed = remove_stale_temporaries(tmp_path, before=time.time() - 60)
+    assert sorted(removed) == sorted([stale, empty])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        p.name for p in (unmarked, alive, fresh, user))
+
+
+# -- interruption through a real process ------------------------------------------------------------
+def _interrupt(tmp_path, sig, argv):
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "hammerstein", *map(str, argv), "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:  # wait for the report in progress
+        if out.is_dir() and any(p.name.startswith(TMP_PREFIX) for p in out.iterdir()):
+            break
+        time.sleep(0.005)
+    proc.send_signal(sig)
+    stdout, stderr = proc.communicate(timeout=120)
+    return proc.returncode, stdout, stderr, out
+
+
+@pytest.mark.parametrize("sig, code", [
+    (signal.SIGTERM, 143),
+    pytest.param(signal.SIGINT, 130, marks=pytest.mark.slow),
+])
+def test_signal_ends_the_run_in_one_line(tmp_path, sig, code):
+    status, stdout, stderr, out = _interrupt(tmp_path, sig, ["run", GOOD])
+    if status == 0:
+        pytest.skip("the run finished before the signal arrived")
+    assert status == code and stderr == "interrupted\n", stderr
+    assert not [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
+
+
+@pytest.mark.slow
+def test_sigkill_leaves_a_temporary_that_the_next_run_removes(tmp_path):
+    status, _, _, out = _interrupt(tmp_path, signal.SIGKILL, ["run", GOOD])
+    assert status == -signal.SIGKILL
+    left = [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
+    assert left  # killed while writing: nothing could clean up
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    run = subprocess.run([sys.executable, "-m", "hammerstein", "run", str(GOOD), "--out", str(out)],
+                         capture_output=True, text=True, env=env, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert sorted(p.name for p in out.iterdir()) == ["good-static"]
