@@ -15,13 +15,16 @@ It prints, not asserting anything (speed targets are read, not tested):
    and state arrays: ``nbytes``) against the bytes of the data itself
    (references, inputs and outputs of every case at its own length), and
    the tracemalloc peak of the whole ``simulate_chain_batch`` call;
-2. the kernel's wall time (the compiled call only, not the packing), serial
-   then with 2 threads, best of ``--repeat``, with the process CPU time of
-   the same calls (steadier on a shared machine: two busy threads show as
-   CPU time about twice the wall time);
-3. the work each thread receives (samples x cost of the case's model), a
-   fact of the case order that no other process on the machine changes:
-   the 2-thread speed-up cannot exceed ``total / max(thread work)``.
+2. the kernel's wall time (the compiled calls only, not the packing),
+   serial then with 2 threads, best of ``--repeat``, with the process CPU
+   time and the CPU time of each thread (``time.thread_time``: what each
+   thread computed, which other processes do not change; two busy threads
+   show as a process CPU time about twice the wall time). On free cores the
+   wall time of the 2-thread run is its busiest thread's CPU time, so
+   ``serial CPU / busiest thread's CPU`` is the speed-up the kernel gets
+   when the cores are its own;
+3. the samples each thread ran: the 2-thread speed-up cannot exceed
+   ``total / max(samples per thread)``.
 
 The load average is printed: other engineers' processes on the 2 cores
 inflate the wall times, and a 2-thread run then cannot reach 2x.
@@ -33,6 +36,7 @@ import argparse
 import json
 import os
 import sys
+import threading
 import time
 import tracemalloc
 import warnings
@@ -69,7 +73,16 @@ def sweep(n_cases=1000, periods=5, seed=0):
 
 
 class KernelSpy:
-    """Wraps the batch kernels of ``hammerstein.simulation._kernels``: times and sizes each call."""
+    """Wraps the batch kernel of ``hammerstein.simulation._kernels``: times and sizes each call.
+
+    A threaded batch calls the kernel once per piece, from several threads;
+    :meth:`summary` folds the calls of one batch: wall time from the first
+    call's start to the last call's end, process CPU time, the CPU time of
+    each thread (``time.thread_time``: what it computed, whatever else ran
+    on the machine), the samples each thread ran, and the bytes of the
+    kernel's arguments. (The kernels before the ragged batch, serial and
+    parallel, are wrapped too, for a before/after run.)
+    """
 
     NAMES = ("chain_batch_serial", "chain_batch_parallel", "chain_batch")
 
@@ -78,49 +91,45 @@ class KernelSpy:
         self.module = _kernels
         self.saved = {n: getattr(_kernels, n) for n in self.NAMES if hasattr(_kernels, n)}
         self.calls = []
+        self.lock = threading.Lock()
 
     def __enter__(self):
         for name, fn in self.saved.items():
             setattr(self.module, name, self._wrap(name, fn))
+        self.c0 = time.process_time()
         return self
 
     def __exit__(self, *exc):
+        self.cpu = time.process_time() - self.c0
         for name, fn in self.saved.items():
             setattr(self.module, name, fn)
 
     def _wrap(self, name, fn):
         def call(*args):
-            s0 = thread_schedstat()
-            c0, t0 = time.process_time(), time.perf_counter()
+            c0, t0 = time.thread_time(), time.perf_counter()
             out = fn(*args)
-            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-            s1 = thread_schedstat()
-            busy = {tid: (s1[tid][0] - s0.get(tid, (0, 0))[0]) * 1e-9 for tid in s1}
-            wait = {tid: (s1[tid][1] - s0.get(tid, (0, 0))[1]) * 1e-9 for tid in s1}
-            ran = sorted((t for t in busy if busy[t] > 1e-4), key=lambda t: -busy[t])
-            self.calls.append({"kernel": name, "wall": wall, "cpu": cpu,
-                               "thread_cpu": [busy[t] for t in ran],
-                               "thread_wait": [wait[t] for t in ran],
-                               "arg_bytes": _nbytes(args), "args": args})
+            t1, c1 = time.perf_counter(), time.thread_time()
+            cases = np.array(args[0]) if name == "chain_batch" else None
+            with self.lock:
+                self.calls.append({"kernel": name, "start": t0, "end": t1, "cpu": c1 - c0,
+                                   "thread": threading.get_ident(), "cases": cases,
+                                   "arg_bytes": _nbytes(args if cases is None else args[1:])})
             return out
         return call
 
-
-def thread_schedstat():
-    """``{thread id: (ns on a CPU, ns waiting for one)}`` of this process (Linux schedstat)."""
-    out = {}
-    try:
-        tids = os.listdir("/proc/self/task")
-    except OSError:
-        return out
-    for tid in tids:
-        try:
-            with open(f"/proc/self/task/{tid}/schedstat") as f:
-                fields = f.read().split()
-            out[tid] = (int(fields[0]), int(fields[1]))
-        except (OSError, IndexError, ValueError):
-            continue
-    return out
+    def summary(self, lengths):
+        threads = {}
+        for c in self.calls:
+            t = threads.setdefault(c["thread"], {"cpu": 0.0, "samples": 0})
+            t["cpu"] += c["cpu"]
+            t["samples"] += int(lengths.sum() if c["cases"] is None
+                                else lengths[c["cases"]].sum())
+        per = sorted(threads.values(), key=lambda t: -t["cpu"])
+        return {"kernel": self.calls[0]["kernel"], "calls": len(self.calls),
+                "wall": max(c["end"] for c in self.calls) - min(c["start"] for c in self.calls),
+                "cpu": self.cpu, "thread_cpu": [t["cpu"] for t in per],
+                "thread_samples": [t["samples"] for t in per],
+                "arg_bytes": self.calls[0]["arg_bytes"]}
 
 
 def _nbytes(obj):
@@ -132,7 +141,7 @@ def _nbytes(obj):
 
 
 def balance(order, work, n_threads):
-    """Work of each thread when a ``prange`` over ``order`` is cut into equal contiguous chunks."""
+    """Work of each thread when ``order`` is cut into equal contiguous chunks."""
     chunks = np.array_split(np.asarray(order), n_threads)
     return [float(np.sum(work[c])) for c in chunks]
 
@@ -146,7 +155,6 @@ def main(argv=None):
 
     import numba
     from hammerstein import simulation as sim
-    from hammerstein.simulation import _stepping
 
     comps, plant, refs = sweep(args.cases)
     lengths = np.array([r.shape[1] for r in refs])
@@ -168,7 +176,7 @@ def main(argv=None):
         results = sim.simulate_chain_batch(comps, plant, refs, parallel=False)
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
-    arg_bytes = spy.calls[-1]["arg_bytes"]
+    arg_bytes = spy.summary(lengths)["arg_bytes"]
     del results, spy
     print("\n1. memory")
     print(f"   data (references, inputs, outputs at their own lengths) {data_bytes / 1e6:8.1f} MB")
@@ -178,43 +186,37 @@ def main(argv=None):
     # 2. kernel time serial vs 2 threads -------------------------------------------------
     def kernel_times(parallel, threads):
         numba.set_num_threads(threads)
-        calls = []
+        runs = []
         for _ in range(args.repeat):
             with KernelSpy() as spy:
                 sim.simulate_chain_batch(comps, plant, refs, parallel=parallel)
-            calls.append(spy.calls[-1])
-        best = min(calls, key=lambda c: c["wall"])
-        # per-thread CPU time: what each thread computed, whatever else ran on the machine
-        busiest = min(max(c["thread_cpu"], default=np.nan) for c in calls)
-        return best, busiest, calls
+            runs.append(spy.summary(lengths))
+        numba.set_num_threads(n_threads)
+        best = min(runs, key=lambda r: r["wall"])
+        # the busiest thread's CPU time: the wall time on free cores
+        busiest = min(max(r["thread_cpu"]) for r in runs)
+        return best, busiest
 
     threads2 = min(2, n_threads)
-    ser, ser_busy, _ = kernel_times(False, 1)
-    par, par_busy, par_calls = kernel_times(True, threads2)
-    numba.set_num_threads(n_threads)
-    wait = np.median([sum(c["thread_wait"]) for c in par_calls])
+    ser, ser_busy = kernel_times(False, 1)
+    par, par_busy = kernel_times(True, threads2)
     print(f"\n2. kernel time, best of {args.repeat} (wall; process CPU; CPU of each thread)")
-    print(f"   serial      {ser['wall'] * 1e3:8.1f} ms; CPU {ser['cpu'] * 1e3:8.1f} ms; "
-          f"threads {', '.join(f'{t * 1e3:.1f}' for t in ser['thread_cpu'])} ms")
-    print(f"   {threads2} threads   {par['wall'] * 1e3:8.1f} ms; CPU {par['cpu'] * 1e3:8.1f} ms; "
-          f"threads {', '.join(f'{t * 1e3:.1f}' for t in par['thread_cpu'])} ms "
-          f"(CPU / wall {par['cpu'] / par['wall']:.2f}; the kernel's threads waited "
-          f"{wait * 1e3:.1f} ms per call, median, for a core taken by other processes)")
-    print(f"   speed-up    wall {ser['wall'] / par['wall']:.2f}x; "
-          f"serial CPU / busiest thread's CPU {ser_busy / par_busy:.2f}x "
-          f"(the wall speed-up on two free cores)")
+    for label, r in (("serial   ", ser), (f"{threads2} threads", par)):
+        print(f"   {label}  {r['wall'] * 1e3:8.1f} ms; CPU {r['cpu'] * 1e3:8.1f} ms "
+              f"(CPU / wall {r['cpu'] / r['wall']:.2f}); threads "
+              f"{', '.join(f'{t * 1e3:.1f}' for t in r['thread_cpu'])} ms "
+              f"({r['calls']} kernel calls)")
+    print(f"   speed-up     wall {ser['wall'] / par['wall']:.2f}x; serial CPU / busiest "
+          f"thread's CPU {ser_busy / par_busy:.2f}x (the wall speed-up on {threads2} free cores)")
+    print(f"   (CPU / wall below the number of threads: other processes had the cores; "
+          f"load average now {os.getloadavg()[0]:.2f})")
+
     # 3. work per thread ----------------------------------------------------------------
-    order = _stepping._balanced_order(lengths, threads2)
-    per_thread = balance(order, lengths.astype(float), threads2)
-    bound = sum(per_thread) / max(per_thread)
-    print(f"\n3. samples per thread ({threads2} threads; every case has the same model size)")
-    print(f"   planned (equal contiguous chunks of the case order): "
-          f"{', '.join(f'{w:.0f}' for w in per_thread)}; the speed-up cannot exceed "
+    samples = par["thread_samples"]
+    bound = sum(samples) / max(samples)
+    print(f"\n3. samples run by each thread ({threads2} threads; every case has the same "
+          f"model size): {', '.join(map(str, samples))}; the speed-up cannot exceed "
           f"{bound:.3f}x")
-    if par["kernel"] == "chain_batch":            # the kernel records who ran each case
-        worker = par["args"][-1]
-        ran = [int(lengths[worker == k].sum()) for k in range(threads2)]
-        print(f"   run (thread of each case, from the kernel): {', '.join(map(str, ran))}")
 
     print("\nsummary: " + json.dumps({
         "cases": len(refs), "samples": int(lengths.sum()),
