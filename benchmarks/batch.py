@@ -17,7 +17,7 @@ It prints, not asserting anything (speed targets are read, not tested):
    the tracemalloc peak of the whole ``simulate_chain_batch`` call;
 2. the kernel's wall time (the compiled calls only, not the packing),
    serial then with 2 threads, best of ``--repeat``, with the process CPU
-   time and the CPU time of each thread (``time.thread_time``: what each
+   time and the CPU time of each thread (Linux schedstat: what each
    thread computed, which other processes do not change; two busy threads
    show as a process CPU time about twice the wall time). On free cores the
    wall time of the 2-thread run is its busiest thread's CPU time, so
@@ -75,13 +75,13 @@ def sweep(n_cases=1000, periods=5, seed=0):
 class KernelSpy:
     """Wraps the batch kernel of ``hammerstein.simulation._kernels``: times and sizes each call.
 
-    A threaded batch calls the kernel once per piece, from several threads;
-    :meth:`summary` folds the calls of one batch: wall time from the first
-    call's start to the last call's end, process CPU time, the CPU time of
-    each thread (``time.thread_time``: what it computed, whatever else ran
-    on the machine), the samples each thread ran, and the bytes of the
-    kernel's arguments. (The kernels before the ragged batch, serial and
-    parallel, are wrapped too, for a before/after run.)
+    :meth:`summary` gives the last call's wall time, the process CPU time,
+    the CPU time of each thread that ran (Linux ``/proc/self/task/*/schedstat``:
+    what each thread computed, whatever else ran on the machine) and how
+    long it waited for a core, the samples each thread ran (from the
+    kernel's ``worker`` output), and the bytes of the kernel's arguments.
+    (The kernels before the ragged batch, serial and parallel, are wrapped
+    too, for a before/after run.)
     """
 
     NAMES = ("chain_batch_serial", "chain_batch_parallel", "chain_batch")
@@ -106,30 +106,50 @@ class KernelSpy:
 
     def _wrap(self, name, fn):
         def call(*args):
-            c0, t0 = time.thread_time(), time.perf_counter()
+            s0 = thread_schedstat()
+            t0 = time.perf_counter()
             out = fn(*args)
-            t1, c1 = time.perf_counter(), time.thread_time()
-            cases = np.array(args[0]) if name == "chain_batch" else None
+            t1 = time.perf_counter()
+            s1 = thread_schedstat()
+            busy = {tid: (s1[tid][0] - s0.get(tid, (0, 0))[0]) * 1e-9 for tid in s1}
+            wait = {tid: (s1[tid][1] - s0.get(tid, (0, 0))[1]) * 1e-9 for tid in s1}
+            ran = sorted((t for t in busy if busy[t] > 1e-3), key=lambda t: -busy[t])
             with self.lock:
-                self.calls.append({"kernel": name, "start": t0, "end": t1, "cpu": c1 - c0,
-                                   "thread": threading.get_ident(), "cases": cases,
-                                   "arg_bytes": _nbytes(args if cases is None else args[1:])})
+                self.calls.append({"kernel": name, "start": t0, "end": t1,
+                                   "thread_cpu": [busy[t] for t in ran],
+                                   "thread_wait": [wait[t] for t in ran],
+                                   "worker": args[-1] if name == "chain_batch" else None,
+                                   "arg_bytes": _nbytes(args)})
             return out
         return call
 
     def summary(self, lengths):
-        threads = {}
-        for c in self.calls:
-            t = threads.setdefault(c["thread"], {"cpu": 0.0, "samples": 0})
-            t["cpu"] += c["cpu"]
-            t["samples"] += int(lengths.sum() if c["cases"] is None
-                                else lengths[c["cases"]].sum())
-        per = sorted(threads.values(), key=lambda t: -t["cpu"])
-        return {"kernel": self.calls[0]["kernel"], "calls": len(self.calls),
-                "wall": max(c["end"] for c in self.calls) - min(c["start"] for c in self.calls),
-                "cpu": self.cpu, "thread_cpu": [t["cpu"] for t in per],
-                "thread_samples": [t["samples"] for t in per],
-                "arg_bytes": self.calls[0]["arg_bytes"]}
+        c = self.calls[-1]
+        if c["worker"] is not None:
+            w = np.asarray(c["worker"])
+            samples = [int(lengths[w == k].sum()) for k in np.unique(w)]
+        else:
+            samples = [int(lengths.sum())]
+        return {"kernel": c["kernel"], "wall": c["end"] - c["start"], "cpu": self.cpu,
+                "thread_cpu": c["thread_cpu"], "thread_wait": c["thread_wait"],
+                "thread_samples": sorted(samples, reverse=True), "arg_bytes": c["arg_bytes"]}
+
+
+def thread_schedstat():
+    """``{thread id: (ns on a CPU, ns waiting for one)}`` of this process (Linux schedstat)."""
+    out = {}
+    try:
+        tids = os.listdir("/proc/self/task")
+    except OSError:
+        return out
+    for tid in tids:
+        try:
+            with open(f"/proc/self/task/{tid}/schedstat") as f:
+                fields = f.read().split()
+            out[tid] = (int(fields[0]), int(fields[1]))
+        except (OSError, IndexError, ValueError):
+            continue
+    return out
 
 
 def _nbytes(obj):
@@ -204,8 +224,8 @@ def main(argv=None):
     for label, r in (("serial   ", ser), (f"{threads2} threads", par)):
         print(f"   {label}  {r['wall'] * 1e3:8.1f} ms; CPU {r['cpu'] * 1e3:8.1f} ms "
               f"(CPU / wall {r['cpu'] / r['wall']:.2f}); threads "
-              f"{', '.join(f'{t * 1e3:.1f}' for t in r['thread_cpu'])} ms "
-              f"({r['calls']} kernel calls)")
+              f"{', '.join(f'{t * 1e3:.1f}' for t in r['thread_cpu'])} ms, waited for a "
+              f"core {sum(r['thread_wait']) * 1e3:.1f} ms")
     print(f"   speed-up     wall {ser['wall'] / par['wall']:.2f}x; serial CPU / busiest "
           f"thread's CPU {ser_busy / par_busy:.2f}x (the wall speed-up on {threads2} free cores)")
     print(f"   (CPU / wall below the number of threads: other processes had the cores; "

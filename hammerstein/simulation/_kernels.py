@@ -24,12 +24,11 @@ passes as structs:
 
 The batch kernel (:func:`chain_batch`) takes the same structures with a
 leading case axis on every field, and the records ragged: one flat buffer
-with per-case offsets, no padding to the longest case. It releases the GIL,
-so Python threads run pieces of one batch at once on the cores. Numba
-compiles each kernel on its first call (``cache=True``: once per machine,
-then loaded from the on-disk cache), so a run compiles only the kernels it
-uses; the batch kernel calls :func:`chain_kernel` with the signature of a
-single run, so the two share one compiled chain loop.
+with per-case offsets, no padding to the longest case. Numba compiles each
+kernel on its first call (``cache=True``: once per machine, then loaded from
+the on-disk cache), so a run compiles only the kernels it uses; the batch
+kernel calls :func:`chain_kernel` with the signature of a single run, so
+the two share one compiled chain loop.
 
 Status codes returned by the chain kernels: 0 ok, 1 non-finite input voltage,
 2 input voltage beyond the divergence bound.
@@ -39,7 +38,7 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-from numba import njit, uint64
+from numba import njit, prange, uint64
 
 from hammerstein.simulation._packing import (STATUS_BOUND, STATUS_NONFINITE, STATUS_OK, ChainState,
                                              LawArrays, LinearArrays, PIArrays)
@@ -396,10 +395,28 @@ def _record(flat, offsets, b, rows):
     return flat[rows * a:rows * (a + n)].reshape((rows, n))
 
 
-@njit(cache=True, nogil=True, fastmath=FASTMATH)
-def chain_batch(cases, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+@njit(cache=True, fastmath=FASTMATH)
+def _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
                 u_out, y_out, status, sample):
-    """The independent chain cases listed in ``cases``, one after the other.
+    """Case b of :func:`chain_batch` (a function of its own: numba's parfor passes lose
+    the updates of arrays copied inside a ``prange`` body)."""
+    p = comp.W.shape[1]
+    m = comp.G.shape[2]
+    pp = plant.W.shape[1]
+    local = _case_state(state, b)
+    st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
+                          _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
+                          _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                          _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
+    _store_state(state, b, local)
+    status[b] = st
+    sample[b] = sm
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+                u_out, y_out, status, sample, worker):
+    """Independent chain cases, spread over ``numba.get_num_threads()`` threads.
 
     Records are ragged, not padded: case b's reference is the C-contiguous
     block ``yr[p * offsets[b] : p * offsets[b+1]]`` viewed as (p, n_b), and
@@ -413,28 +430,20 @@ def chain_batch(cases, offsets, yr, law, comp, prefilter, plant, linear, run_pla
     single run (one compiled loop serves both, so batches equal single runs
     bit for bit).
 
-    ``cases`` (k,) int64 selects the cases to run. The kernel releases the
-    GIL (``nogil``): several Python threads run disjoint ``cases`` of the
-    same batch at once (``_stepping.simulate_chain_batch``), each case's
-    states private to its thread.
+    ``order`` (n_cases,) int64 lists the cases so that the equal contiguous
+    chunks numba's ``prange`` gives the threads hold equal work (see
+    ``_stepping._balanced_order``); with one thread it runs them in turn.
+    ``worker`` (n_cases,) int64 receives the thread that ran each case.
     """
-    p = comp.W.shape[1]
-    m = comp.G.shape[2]
-    pp = plant.W.shape[1]
-    for i in range(cases.size):
-        b = cases[i]
-        local = _case_state(state, b)
-        st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
-                              _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
-                              _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
-                              _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
-        _store_state(state, b, local)
-        status[b] = st
-        sample[b] = sm
+    for i in prange(order.size):
+        b = order[i]
+        worker[b] = numba.get_thread_id()
+        _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+                    u_out, y_out, status, sample)
 
 
 def threads() -> int:
-    """Number of threads for a batch (numba's setting, ``NUMBA_NUM_THREADS``).
+    """Number of threads numba uses for the parallel batch kernel.
 
     Returns
     -------
@@ -443,3 +452,12 @@ def threads() -> int:
     return numba.get_num_threads()
 
 
+def set_threads(n: int) -> None:
+    """Set the number of threads of the parallel batch kernel (this Python thread only).
+
+    Parameters
+    ----------
+    n : int
+        1 ... ``numba.config.NUMBA_NUM_THREADS``.
+    """
+    numba.set_num_threads(n)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -545,12 +544,12 @@ def _unpacked(flat, offsets, b, rows):
 def _balanced_order(lengths, n_threads):
     """Case order whose ``n_threads`` contiguous equal chunks hold similar work.
 
-    ``n_threads`` contiguous chunks of ``n // n_threads`` or one more cases
-    (as :func:`numpy.array_split` cuts them). Cases sorted by length,
-    longest first, go greedily to the chunk with the least work that still
-    has room (longest processing time first, with the chunk sizes fixed), so
-    each chunk holds about the same number of samples however unequal the
-    cases; every case appears once.
+    numba cuts a ``prange`` of n iterations into ``n_threads`` contiguous
+    chunks of ``n // n_threads`` or one more iterations, one per thread.
+    Cases sorted by length, longest first, go greedily to the chunk with the
+    least work that still has room (longest processing time first, with
+    the chunk sizes fixed), so each thread receives about the same number of
+    samples however unequal the cases; every case appears once.
     """
     lengths = np.asarray(lengths, dtype=np.int64)
     n_threads = max(1, min(int(n_threads), lengths.size))
@@ -567,68 +566,6 @@ def _balanced_order(lengths, n_threads):
     return np.concatenate([np.asarray(c, dtype=np.int64) for c in chunks])
 
 
-#: a threaded batch is cut into about this many pieces per thread
-PIECES_PER_THREAD = 16
-
-
-def _pieces(lengths, n_threads):
-    """Pieces of the batch for the threads to take in turn, longest cases first.
-
-    Case indices sorted by length, longest first, cut into consecutive
-    pieces of about ``total / (PIECES_PER_THREAD * n_threads)`` samples (one
-    case at least): the first pieces are single long cases, the last ones
-    many short cases. Threads that take the next piece whenever they finish
-    one end within about one short piece of each other (dynamic longest
-    processing time first), even when another process slows one of them.
-    """
-    lengths = np.asarray(lengths, dtype=np.int64)
-    order = np.argsort(-lengths, kind="stable").astype(np.int64)
-    target = max(1, int(lengths.sum()) // (PIECES_PER_THREAD * max(1, n_threads)))
-    pieces, start, acc = [], 0, 0
-    for i, b in enumerate(order):
-        acc += int(lengths[b])
-        if acc >= target:
-            pieces.append(order[start:i + 1])
-            start, acc = i + 1, 0
-    if start < order.size:
-        pieces.append(order[start:])
-    return pieces
-
-
-def _run_threads(run, pieces, n_threads, worker):
-    """``run(cases)`` on every piece, pieces taken in turn by ``n_threads`` threads.
-
-    The kernel releases the GIL, so the threads compute at once; the calling
-    thread is thread 0. ``worker[cases]`` receives the thread of each piece.
-    """
-    lock = threading.Lock()
-    next_piece = [0]
-    errors = []
-
-    def loop(k):
-        try:
-            while True:
-                with lock:
-                    i = next_piece[0]
-                    next_piece[0] += 1
-                if i >= len(pieces):
-                    return
-                worker[pieces[i]] = k
-                run(pieces[i])
-        except BaseException as exc:   # noqa: BLE001 - re-raised in the calling thread
-            errors.append(exc)
-
-    helpers = [threading.Thread(target=loop, args=(k,), daemon=True)
-               for k in range(1, n_threads)]
-    for t in helpers:
-        t.start()
-    loop(0)
-    for t in helpers:
-        t.join()
-    if errors:
-        raise errors[0]
-
-
 def _stack_linear(systems, n, k):
     """Stack ``LinearArrays`` of up to n states, k inputs and outputs (zero padded)."""
     return LinearArrays(_stack([s.A for s in systems], (n, n)),
@@ -638,7 +575,7 @@ def _stack_linear(systems, n, k):
 
 
 def simulate_chain_batch(compensators, plants, references, parallel=None):
-    """Many independent compensator -> plant cases on the compiled batch kernel.
+    """Many independent compensator -> plant cases in one compiled call.
 
     Cases may differ by reference (frequency, amplitude, axis, length), by
     compensator model, gain and law, and by plant, as long as the numbers of
@@ -656,11 +593,11 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     references : sequence of array_like, each shape (m, n_samples_b)
         Reference displacements [µm] of each case (lengths may differ).
     parallel : bool, optional
-        Spread the cases over ``numba.get_num_threads()`` threads (the
-        compiled kernel releases the GIL; the threads take pieces of the
-        batch, longest cases first, as they finish); by default when there
-        are several cases and at least ``PARALLEL_MIN_SAMPLES`` samples.
-        Results do not depend on it (each case is computed alone).
+        Spread the cases over ``numba.get_num_threads()`` threads (numba
+        ``prange``, cases in an order that gives each thread equal work); by
+        default when there are several cases and at least
+        ``PARALLEL_MIN_SAMPLES`` samples. Results do not depend on it (each
+        case is computed alone).
 
     Returns
     -------
@@ -738,15 +675,17 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     worker = np.zeros(B, dtype=np.int64)
     if parallel is None:
         parallel = B > 1 and total >= PARALLEL_MIN_SAMPLES
-    n_threads = min(kernels.threads(), B) if parallel else 1
-    args = (offsets, _ragged(yrs, offsets), law_arrays, stack_pi(cpk, nc, m),
-            _stack_linear(filters, nf, pc), stack_pi(ppk, npl, p), _stack_linear(lin, nx, p),
-            True, state, u_out, y_out, status, sample)
-    if n_threads == 1:
-        kernels.chain_batch(np.arange(B, dtype=np.int64), *args)
-    else:
-        _run_threads(lambda cases: kernels.chain_batch(cases, *args),
-                     _pieces(lengths, n_threads), n_threads, worker)
+    n_threads = kernels.threads() if parallel else 1
+    order = _balanced_order(lengths, n_threads)
+    previous = kernels.threads()
+    kernels.set_threads(n_threads)
+    try:
+        kernels.chain_batch(order, offsets, _ragged(yrs, offsets), law_arrays,
+                            stack_pi(cpk, nc, m), _stack_linear(filters, nf, pc),
+                            stack_pi(ppk, npl, p), _stack_linear(lin, nx, p), True, state,
+                            u_out, y_out, status, sample, worker)
+    finally:
+        kernels.set_threads(previous)
     results = []
     for b in range(B):
         u, y = _unpacked(u_out, offsets, b, m), _unpacked(y_out, offsets, b, p)

@@ -446,33 +446,6 @@ def test_balanced_order_gives_each_thread_equal_work(seed, n_threads):
     assert max(work) <= lengths.sum() / n_threads + lengths.max()
 
 
-@pytest.mark.parametrize("n_threads", [1, 2, 5])
-def test_pieces_cover_every_case_once_longest_first(n_threads):
-    from hammerstein.simulation._stepping import PIECES_PER_THREAD, _pieces
-    rng = np.random.default_rng(n_threads)
-    lengths = rng.integers(1, 5000, 400)
-    pieces = _pieces(lengths, n_threads)
-    flat = np.concatenate(pieces)
-    assert sorted(flat.tolist()) == list(range(lengths.size))
-    assert np.all(np.diff(lengths[flat]) <= 0)                     # longest first
-    target = lengths.sum() / (PIECES_PER_THREAD * n_threads)
-    # every piece but the last reaches the target, by less than its last case
-    for piece in pieces[:-1]:
-        assert target - 1 <= lengths[piece].sum() < target + lengths[piece].max()
-
-
-def test_an_error_in_a_batch_thread_reaches_the_caller():
-    from hammerstein.simulation._stepping import _run_threads
-
-    def run(cases):
-        if 3 in cases:
-            raise ValueError("piece with case 3")
-
-    worker = np.zeros(6, dtype=np.int64)
-    with pytest.raises(ValueError, match="case 3"):
-        _run_threads(run, [np.array([k]) for k in range(6)], 2, worker)
-
-
 # -- compile notices ---------------------------------------------------------------------
 def test_compile_notice_is_one_line_per_top_level_kernel_compilation():
     from numba.core import event
