@@ -145,7 +145,7 @@ def read_toml(path, what="TOML file"):
     ------
     PresetError
         If the file is missing, not a regular file, too large, unreadable,
-        not UTF-8 or not valid TOML.
+        not UTF-8 or not valid TOML (including nesting too deep to parse).
     """
     path = Path(path)
     try:
@@ -156,6 +156,8 @@ def read_toml(path, what="TOML file"):
         raise PresetError(f"{path}: file not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{path}: invalid TOML: {exc}") from None
+    except RecursionError:  # the parser recurses once per level of [ or {
+        raise PresetError(f"{path}: invalid TOML: arrays or inline tables nested too deeply") from None
     except UnicodeDecodeError as exc:  # TOML is UTF-8 text
         raise PresetError(f"{path}: invalid TOML: not UTF-8 text (byte {exc.start}: "
                           f"{exc.object[exc.start:exc.start + 1]!r})") from None
