@@ -18,7 +18,9 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
 
     Uses python-control's frequency-response plotting
     (``control.frequency_response(...).plot()``): one magnitude and one
-    phase row per output, one column per input.
+    phase row per output, one column per input, named by ``true``'s signal
+    names; ``identified`` solid, ``true`` dashed on top (both stay visible
+    where they coincide).
 
     Parameters
     ----------
@@ -52,12 +54,16 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     responses = [control.frequency_response(identified, w), control.frequency_response(true, w)]
     for resp, label in zip(responses, labels):
         resp.sysname = label
+        # the panels are titled by the first system's names: use the true system's
+        # (x_h -> x), not an identified system's default u[0] -> y[0]
+        resp.input_labels, resp.output_labels = true.input_labels, true.output_labels
     with np.errstate(divide="ignore"):            # exact zeros (decoupled entries): -inf dB
         cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, title=title,
                                  wrap_phase=True)
     fig = cplt.figure
     for ax in np.ravel(cplt.axes):
-        for line, style in zip(ax.get_lines()[:2], ("-", "--")):
-            line.set_linestyle(style)
+        for line in ax.get_lines():       # the second system dashed on top (by label: the
+            if line.get_label() == labels[1]:   # Nyquist markers are lines too)
+                line.set_linestyle("--")
     fig.set_size_inches(4.0 * true.ninputs + 1.5, 3.0 * true.noutputs + 1.5)
     return fig
