@@ -211,3 +211,15 @@ def test_identified_hammerstein_meets_targets(tmp_path):
         '{ kind = "circle", radius = 20.0, frequency = 170.0, periods = 8 }'))
     val = {m["metric"]: m["value"] for m in run_case(sc.cases[0]).metrics}
     assert val["max_euclidean_error_percent"] < 2.0
+
+
+@pytest.mark.parametrize("A, match", [
+    ([[0.0, 1.0, 0.0], [-1.0, -0.5, 0.0]], r"dynamics\.A: expected a non-empty square matrix .* \(2, 3\)"),
+    ([1.0, 2.0], r"dynamics\.A: expected a non-empty square matrix .* \(2,\)"),
+    ([], r"dynamics\.A: expected a non-empty square matrix")])
+def test_non_square_state_matrix_is_named_as_such(A, match):
+    """Regression: a 2 x 3 A read 'expected shape (2, 2) for 2 outputs and 2 states'."""
+    table = {"kind": "state_space", "A": A, "B": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+             "C": [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]}
+    with pytest.raises(PresetError, match=match):
+        dynamics_from_table(table, ["x", "y"])
