@@ -70,7 +70,10 @@ def oracle_chain(comp, plant, lead):
     return Y
 
 
-def test_compiled_chain_equals_numpy_oracle(plant):
+@pytest.mark.parametrize("preset", ["rakotondrabe-2dof", COUPLED])
+def test_compiled_chain_equals_numpy_oracle(preset):
+    """Also on the coupled preset: a non-diagonal inverse (full MIMO pre-filter, P = 3)."""
+    plant = load_plant(preset)
     comp = HammersteinCompensator(plant.hysteresis, plant.dynamics, iterations=3)
     lead = fade_in(circle(plant.sampling_period, 600, 200.0, 20.0), 100)
     res = comp.chain(plant, lead)
@@ -78,8 +81,10 @@ def test_compiled_chain_equals_numpy_oracle(plant):
     np.testing.assert_allclose(res.outputs, oracle_chain(comp, plant, lead), atol=1e-9)
 
 
+@pytest.mark.parametrize("preset", ["rakotondrabe-2dof", COUPLED])
 @pytest.mark.parametrize("inversion", ["zpetc"])
-def test_chunked_equals_whole(plant, inversion):
+def test_chunked_equals_whole(preset, inversion):
+    plant = load_plant(preset)
     comp = HammersteinCompensator(plant.hysteresis, plant.dynamics, inversion=inversion)
     lead, s0, _ = comp.start(circle(plant.sampling_period, 900, 150.0, 25.0), 133, 133)
     whole = comp.chain(plant, lead, s0)
