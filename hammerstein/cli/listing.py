@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.lti import dc_gain
-from hammerstein.core.presets import PresetError, bundled_presets, load_plant
+from hammerstein.core.presets import PresetError, bundled_presets, load_plant, read_toml
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -52,7 +52,9 @@ def handler(args):
     args : argparse.Namespace
         Parsed arguments; ``args.scenarios`` is the directory searched
         recursively for ``*.toml`` scenario files (none listed when it is
-        not a directory).
+        not a directory); files with a ``[preset]`` table there are listed
+        as preset files (dynamics and DC gain), files with only a
+        ``[dynamics]`` table as dynamics files.
 
     Returns
     -------
@@ -67,8 +69,30 @@ def handler(args):
         print(f"  {name}: {kind.description}")
     root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
+    kinds = {f: _model_file_kind(f) for f in files}   # preset/dynamics files are not scenarios
+    others = [f for f in files if kinds[f]]
+    files = [f for f in files if not kinds[f]]
+    if others:
+        print(f"preset and dynamics files under {root}/:")
+        for f in others:
+            print(f"  {f}{_dynamics_summary(f) if kinds[f] == 'preset' else kinds[f]}")
     print(f"scenarios under {root}/:" if files else
           f"scenarios: none found under {root}/ (run from the repository root)")
     for f in files:
         print(f"  {f}")
     return 0
+
+
+def _model_file_kind(path):
+    """``"preset"`` ([preset] table), ``"; dynamics file ..."`` (a [dynamics] table and no
+    scenario keys), or ``""`` (a scenario, or unreadable: left to ``validate``)."""
+    try:
+        doc = read_toml(path)
+    except PresetError:
+        return ""
+    if isinstance(doc.get("preset"), dict):
+        return "preset"
+    if isinstance(doc.get("dynamics"), dict) and not {"cases", "sweeps", "stability_map",
+                                                       "data", "plant"} & set(doc):
+        return '; dynamics file ([compensator] dynamics = "<path>")'
+    return ""

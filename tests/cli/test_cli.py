@@ -146,6 +146,19 @@ def test_list_shows_presets_and_scenarios(capsys, monkeypatch):
     assert "fig08-compensated-sine.toml" in text
 
 
+def test_list_separates_preset_and_dynamics_files_from_scenarios(capsys, monkeypatch):
+    """Regression: scenarios/presets/*.toml were listed as scenarios, without the DC gain
+    that coupled-2dof.toml says `hammerstein list` reports."""
+    monkeypatch.chdir(ROOT)
+    assert main(["list"]) == 0
+    text = capsys.readouterr().out
+    head, scenarios = text.split("scenarios under scenarios/:")
+    assert "presets/" not in scenarios and "default.toml" in scenarios
+    line = next(ln for ln in head.splitlines() if "coupled-2dof.toml" in ln)
+    assert "DC gain [[1.08, -0.06], [0.08, 0.94]]" in line      # the file's own comment
+    assert "mismatch/fn+5.toml; dynamics file" in head
+
+
 def test_help_imports_no_heavy_module():
     """`hammerstein --help` builds its parser without the numerical stack.
 
