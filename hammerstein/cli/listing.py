@@ -52,9 +52,7 @@ def handler(args):
     args : argparse.Namespace
         Parsed arguments; ``args.scenarios`` is the directory searched
         recursively for ``*.toml`` scenario files (none listed when it is
-        not a directory); files with a ``[preset]`` table there are listed
-        as preset files (dynamics and DC gain), files with only a
-        ``[dynamics]`` table as dynamics files.
+        not a directory).
 
     Returns
     -------
@@ -69,30 +67,29 @@ def handler(args):
         print(f"  {name}: {kind.description}")
     root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
-    kinds = {f: _model_file_kind(f) for f in files}   # preset/dynamics files are not scenarios
-    others = [f for f in files if kinds[f]]
-    files = [f for f in files if not kinds[f]]
-    if others:
-        print(f"preset and dynamics files under {root}/:")
-        for f in others:
-            print(f"  {f}{_dynamics_summary(f) if kinds[f] == 'preset' else kinds[f]}")
-    print(f"scenarios under {root}/:" if files else
+    presets = [f for f in files if _is_preset(f)]
+    scenarios = [f for f in files if f not in presets]
+    print(f"scenarios under {root}/:" if scenarios else
           f"scenarios: none found under {root}/ (run from the repository root)")
-    for f in files:
+    for f in scenarios:
         print(f"  {f}")
+    if presets:
+        print(f"preset and dynamics files under {root}/ (preset = \"<path>\", "
+              f"dynamics = \"<path>\"):")
+        for f in presets:
+            print(f"  {f}{_dynamics_summary(f) if _is_full_preset(f) else '; dynamics only'}")
     return 0
 
 
-def _model_file_kind(path):
-    """``"preset"`` ([preset] table), ``"; dynamics file ..."`` (a [dynamics] table and no
-    scenario keys), or ``""`` (a scenario, or unreadable: left to ``validate``)."""
+def _is_full_preset(path):
+    """True when the file has a ``[preset]`` table (a plant, not only dynamics)."""
+    return "preset" in read_toml(path)
+
+
+def _is_preset(path):
+    """True for a preset (``[preset]``) or dynamics-only file, not a scenario."""
     try:
         doc = read_toml(path)
+        return "preset" in doc or set(doc) == {"dynamics"}
     except PresetError:
-        return ""
-    if isinstance(doc.get("preset"), dict):
-        return "preset"
-    if isinstance(doc.get("dynamics"), dict) and not {"cases", "sweeps", "stability_map",
-                                                       "data", "plant"} & set(doc):
-        return '; dynamics file ([compensator] dynamics = "<path>")'
-    return ""
+        return False       # listed as a scenario: validate reports its problem

@@ -18,9 +18,7 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
 
     Uses python-control's frequency-response plotting
     (``control.frequency_response(...).plot()``): one magnitude and one
-    phase row per output, one column per input, named by ``true``'s signal
-    names; ``identified`` solid, ``true`` dashed on top (both stay visible
-    where they coincide).
+    phase row per output, one column per input.
 
     Parameters
     ----------
@@ -51,19 +49,31 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
         f_hi = 0.45 / min(dts) if dts else 5000.0
         frequencies_hz = np.logspace(0, np.log10(f_hi), 300)
     w = 2 * np.pi * np.asarray(frequencies_hz, dtype=float)
+    if (identified.ninputs, identified.noutputs) == (true.ninputs, true.noutputs):
+        # the identified model knows no signal names: give it the true system's
+        identified = control.ss(identified.A, identified.B, identified.C, identified.D,
+                                identified.dt, inputs=true.input_labels,
+                                outputs=true.output_labels)
     responses = [control.frequency_response(identified, w), control.frequency_response(true, w)]
     for resp, label in zip(responses, labels):
         resp.sysname = label
-        # the panels are titled by the first system's names: use the true system's
-        # (x_h -> x), not an identified system's default u[0] -> y[0]
-        resp.input_labels, resp.output_labels = true.input_labels, true.output_labels
     with np.errstate(divide="ignore"):            # exact zeros (decoupled entries): -inf dB
         cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, title=title,
                                  wrap_phase=True)
     fig = cplt.figure
-    for ax in np.ravel(cplt.axes):
-        for line in ax.get_lines():       # the second system dashed on top (by label: the
-            if line.get_label() == labels[1]:   # Nyquist markers are lines too)
+    for ax in np.ravel(cplt.axes):       # the true system dashed over the identified one
+        for line in ax.get_lines():
+            if line.get_label() == labels[1]:
                 line.set_linestyle("--")
+    axes = np.asarray(cplt.axes).reshape(2 * true.noutputs, true.ninputs)
+    zero = np.all(np.abs(responses[1].magnitude) == 0, axis=-1)      # (p, m)
+    for i, j in zip(*np.nonzero(zero)):
+        # an exactly-zero true entry (no dynamic coupling) has no magnitude in dB and
+        # no phase: draw nothing for it rather than a meaningless 0 deg line
+        for ax in axes[2 * i:2 * i + 2, j]:
+            for line in [ln for ln in ax.get_lines() if ln.get_label() == labels[1]]:
+                line.remove()
+        axes[2 * i, j].text(0.02, 0.04, f"{labels[1]}: 0 (no coupling)",
+                            transform=axes[2 * i, j].transAxes, fontsize=8)
     fig.set_size_inches(4.0 * true.ninputs + 1.5, 3.0 * true.noutputs + 1.5)
     return fig

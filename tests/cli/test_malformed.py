@@ -413,9 +413,9 @@ def test_model_parameter_guards(thresholds, weights, message):
     assert message in str(err.value)
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def plant(static_plant):
+    return static_plant
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])

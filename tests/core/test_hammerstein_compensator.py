@@ -16,9 +16,9 @@ from hammerstein.core.lti import dc_gain
 COUPLED = "scenarios/presets/coupled-2dof.toml"
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof")
+@pytest.fixture
+def plant(preset_plant):
+    return preset_plant
 
 
 @pytest.fixture(scope="module")

@@ -138,11 +138,13 @@ def test_bode_figure_shows_both_systems_and_the_signal_names():
     G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
     anonymous = control.ss(G.A, G.B, G.C, G.D, G.dt)            # identified: default names
     fig = dynamics_bode_figure(anonymous, G, frequencies_hz=np.logspace(0, 3.5, 50))
+    both = 0
     for ax in fig.axes:
         styles = {ln.get_label(): ln.get_linestyle() for ln in ax.get_lines()
                   if len(ln.get_xdata()) == 50}
-        if styles:
-            assert styles == {"identified": "-", "true": "--"}
+        assert styles.get("identified", "-") == "-" and styles.get("true", "--") == "--"
+        both += styles == {"identified": "-", "true": "--"}
+    assert both == 4              # the direct entries: magnitude and phase of x and y
     titles = " ".join(ax.get_title() for ax in fig.axes) + " ".join(
         t.get_text() for t in fig.texts)
     assert "x_h" in titles and "y_h" in titles and "u[0]" not in titles
