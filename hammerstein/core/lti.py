@@ -163,14 +163,16 @@ def align_dc_gain(system, reference):
     a PI characterised quasi-statically absorbs the DC gain G(0) of the true
     dynamics (cross-coupling included), and the identified G comes out with
     ``G_id(0) ~ I``. Compare an identified G with ``align_dc_gain(G_true,
-    G_id)``, not with ``G_true``.
+    numpy.eye(p))``, not with ``G_true``.
 
     Parameters
     ----------
     system : control.StateSpace
         p x p stable system (continuous or discrete), invertible DC gain.
-    reference : control.StateSpace
-        p x p system whose DC gain is taken.
+    reference : control.StateSpace or array_like, shape (p, p)
+        p x p system whose DC gain is taken, or that DC gain itself
+        (``numpy.eye(p)``: unit DC gain; exact zeros of a decoupled G stay
+        exact zeros when its G(0) is diagonal).
 
     Returns
     -------
@@ -193,7 +195,8 @@ def align_dc_gain(system, reference):
     """
     G0 = dc_gain(system)
     try:
-        N = np.linalg.solve(G0, dc_gain(reference))
+        R0 = dc_gain(reference) if hasattr(reference, "ninputs") else np.asarray(reference, float)
+        N = np.linalg.solve(G0, R0)
     except np.linalg.LinAlgError:
         raise DynamicsError("dynamics: the DC gain G(0) is singular: cannot align it") from None
     return control.ss(system.A, system.B @ N, system.C, system.D @ N, system.dt,

@@ -212,14 +212,14 @@ def _report_dynamics(scenario, directory):
              "the fit on held-out data (the last 30 % of each record); the sensor's low-pass is "
              "kept out of G. The PI, characterised quasi-statically, holds the static gain "
              "G(0) of the actuator (cross-coupling included), so the identified G has "
-             "G_id(0) ~ I: it is compared with the true G brought to the same DC gain, "
-             "G_true G_true(0)^-1 G_id(0) (the product G Gamma is what is identified). "
+             "G_id(0) ~ I: it is compared with the true G brought to unit DC gain, "
+             "G_true G_true(0)^-1 (the product G Gamma is what is identified). "
              "Relative error: |G_id - that| / largest true gain of the row.", ""]
     for i, r in enumerate(rows, start=1):
         ident, plant, meta = r["identifier"], r["plant"], r["metadata"]
         fname = f"dynamics-bode-{i}.png"
-        true = align_dc_gain(plant.dynamics, ident.system_)
-        fig = dynamics_bode_figure(ident.system_, true, labels=("identified", "true (DC as identified)"),
+        true = align_dc_gain(plant.dynamics, np.eye(plant.dynamics.noutputs))
+        fig = dynamics_bode_figure(ident.system_, true, labels=("identified", "true G G(0)^-1"),
                                    title=f"Identified vs true G ({plant.name}), order {ident.order_}")
         save(fig, directory / fname)
         cmp_ = compare_frequency_responses(ident.system_, true, [10.0, 100.0, 200.0, 300.0])
