@@ -169,3 +169,34 @@ def test_align_dc_gain_keeps_the_dynamics_and_takes_the_other_dc_gain():
     singular = state_space_dynamics([[-1.0]], [[1.0, 1.0]], [[1.0], [1.0]])
     with pytest.raises(DynamicsError, match="singular"):
         align_dc_gain(singular, singular)
+
+
+def test_align_dc_gain_to_identity_keeps_a_decoupled_system_exactly_decoupled():
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    H = align_dc_gain(G, np.eye(2))
+    z = np.exp(2j * np.pi * 200.0 * T)
+    assert H(z)[0, 1] == 0 and H(z)[1, 0] == 0           # the Bode figure's 'no coupling'
+    np.testing.assert_allclose(np.diag(H(z)), np.diag(G(z)), rtol=1e-9)   # G(0) = I already
+
+
+def test_bode_figure_marks_round_off_entries_as_no_coupling():
+    """Regression: G G(0)^-1 of a coupled preset whose coupling is static leaves 1e-17
+    off-diagonal entries; drawn at -340 dB they squeezed every panel's scale."""
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    B = G.B.copy()
+    B[0, 1] = B[2, 0] = 1e-17
+    noisy = control.ss(G.A, B, G.C, G.D, T, inputs=G.input_labels, outputs=G.output_labels)
+    fig = dynamics_bode_figure(G, noisy, frequencies_hz=np.logspace(0, 3.5, 50))
+    assert sum("no coupling" in t.get_text() for ax in fig.axes for t in ax.texts) == 2
+    assert min(ax.get_ylim()[0] for ax in fig.axes if "dB" in ax.get_ylabel()) > -200
+
+
+def test_bode_figure_is_a_new_figure_each_call():
+    """Regression: python-control drew the second call onto the first, unclosed figure."""
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    f = np.logspace(0, 3.5, 50)
+    first, second = dynamics_bode_figure(G, G, frequencies_hz=f), dynamics_bode_figure(G, G, frequencies_hz=f)
+    assert first is not second
+    assert [len(ax.get_lines()) for ax in second.axes] == [len(ax.get_lines()) for ax in first.axes]
