@@ -20,6 +20,7 @@ from pathlib import Path
 from hammerstein.cli._common import one_line, out_dir_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_scenario
+from hammerstein.simulation import announce_compiles
 
 __all__ = ["add_parser", "handler"]
 
@@ -73,6 +74,7 @@ def handler(args):
     remove_stale_temporaries(out)
     status, taken = 0, {}
     verbosity = getattr(args, "verbosity", 0)
+    announce_compiles(print_err if verbosity >= 0 else None)   # first run: before compiling
     for path in args.scenarios:
         if verbosity > 0:
             print_err(f"{path}: running ...")

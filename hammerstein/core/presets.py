@@ -489,12 +489,17 @@ def dynamics_from_table(table, outputs, source="preset"):
                 except (TypeError, ValueError):
                     raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix "
                                       f"(list of rows)") from None
-        n = shapes["A"][0] if len(shapes["A"]) == 2 else -1
-        expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+        if len(shapes["A"]) != 2 or shapes["A"][0] != shapes["A"][1] or shapes["A"][0] == 0:
+            raise PresetError(f"{source}: dynamics.A: expected a non-empty square matrix (one row "
+                              f"and one column per state), found shape {shapes['A']}")
+        n = shapes["A"][0]
+        expected = {"B": ((n, p), "one row per state of A, one column per PI output"),
+                    "C": ((p, n), "one row per displacement, one column per state of A"),
+                    "D": ((p, p), "one row per displacement, one column per PI output")}
         for key, shape in shapes.items():
-            if n >= 1 and shape != expected[key]:
-                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key]} for "
-                                  f"{p} outputs and {n} states, found {shape}")
+            if key != "A" and shape != expected[key][0]:
+                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key][0]} "
+                                  f"({expected[key][1]}; {p} outputs, {n} states), found {shape}")
         try:
             return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
                                         names=outputs)

@@ -7,6 +7,7 @@ import matplotlib
 matplotlib.use("Agg")
 
 import control  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 __all__ = ["dynamics_bode_figure"]
@@ -57,6 +58,7 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     responses = [control.frequency_response(identified, w), control.frequency_response(true, w)]
     for resp, label in zip(responses, labels):
         resp.sysname = label
+    plt.figure()              # a figure of its own: bode_plot draws on pyplot's current one
     with np.errstate(divide="ignore"):            # exact zeros (decoupled entries): -inf dB
         cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, title=title,
                                  wrap_phase=True)
@@ -66,7 +68,8 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
             if line.get_label() == labels[1]:
                 line.set_linestyle("--")
     axes = np.asarray(cplt.axes).reshape(2 * true.noutputs, true.ninputs)
-    zero = np.all(np.abs(responses[1].magnitude) == 0, axis=-1)      # (p, m)
+    mag = np.abs(responses[1].magnitude)                             # (p, m, n_freq)
+    zero = np.max(mag, axis=-1) <= 1e-12 * np.max(mag)               # (p, m): 0 up to round-off
     for i, j in zip(*np.nonzero(zero)):
         # an exactly-zero true entry (no dynamic coupling) has no magnitude in dB and
         # no phase: draw nothing for it rather than a meaningless 0 deg line
@@ -75,5 +78,9 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
                 line.remove()
         axes[2 * i, j].text(0.02, 0.04, f"{labels[1]}: 0 (no coupling)",
                             transform=axes[2 * i, j].transAxes, fontsize=8)
+    if zero.any():                          # scales without the removed curves
+        for ax in axes.ravel():
+            ax.relim()
+            ax.autoscale_view(scalex=False)
     fig.set_size_inches(4.0 * true.ninputs + 1.5, 3.0 * true.noutputs + 1.5)
     return fig
