@@ -82,7 +82,7 @@ __all__ = [
 #: Output-map options of :func:`identify_records`.
 OUTPUT_MAPS = ("auto", "none", "deadzone")
 #: Knots of a fitted output map (at quantiles of the PI output).
-MAP_KNOTS = 8
+MAP_KNOTS = 16
 #: Alternations of the output-map fit (PI weights, then map slopes).
 MAP_ITERATIONS = 8
 #: Weight of the slope-change penalty of the output map (relative to the data rows).
