@@ -349,7 +349,13 @@ class OutputMap:
         return self.slopes[np.searchsorted(self.knots, np.asarray(h, dtype=float), side="right")]
 
     def to_table(self):
-        """``{"knots": [...], "slopes": [...]}`` for a model file."""
+        """The map as a model-file table.
+
+        Returns
+        -------
+        dict
+            ``{"knots": [...], "slopes": [...]}`` (lists of floats).
+        """
         return {"knots": [float(v) for v in self.knots], "slopes": [float(v) for v in self.slopes]}
 
 
