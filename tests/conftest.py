@@ -9,9 +9,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from hammerstein import load_plant
+from hammerstein import InverseMultiplicativeCompensator, load_plant
+from hammerstein import simulation as sim
 
 #: the repository root (scenarios/, baselines/, tests/corpus/ live below it)
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,3 +35,28 @@ def static_plant():
 def preset_plant():
     """The bundled preset with its bending modes: the Hammerstein actuator."""
     return load_plant("rakotondrabe-2dof", dynamics=True)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def compiled_kernels():
+    """Compile (or load from numba's cache) every simulation kernel once, up front.
+
+    On a fresh clone numba's cache is empty and the CLI announces each compilation
+    with one stderr line ("compiling the simulation kernels once, ..."). Tests that
+    count stderr lines would otherwise see that line in whichever test happens to
+    compile first; compiling here, outside any CLI run, keeps them deterministic.
+    """
+    plant = load_plant("rakotondrabe-2dof", dynamics=True)
+    static = load_plant("rakotondrabe-2dof", dynamics=False)
+    model = plant.hysteresis
+    u = np.zeros((model.n_inputs, 8))
+    sim.simulate_plays(np.zeros(8), np.array([0.0, 0.5]), np.zeros(2))
+    sim.simulate_hysteresis(model, u)
+    sim.simulate_plant(plant, u)
+    comp = InverseMultiplicativeCompensator(model)
+    yr = np.zeros((model.n_outputs, 8))
+    sim.simulate_compensator(comp, yr)
+    sim.simulate_chain(comp, plant, yr)
+    sim.simulate_chain(comp, static, yr)
+    for parallel in (False, True):
+        sim.simulate_chain_batch([comp, comp], [plant, static], [yr, yr], parallel=parallel)
