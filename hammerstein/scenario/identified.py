@@ -30,7 +30,6 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-import control
 import numpy as np
 
 from hammerstein.core.dynamics import DynamicsError
@@ -41,9 +40,12 @@ from hammerstein.core.presets import (PresetError, load_dynamics, load_model, mo
                                       save_dynamics, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
 from hammerstein.exceptions import NestedInvalid
+from hammerstein.core.lazy import lazy_module
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, _short,
                                          boolean, check_table, choice,
                                          integer, number)
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
     "IDENTIFY_FIELDS",
