@@ -166,8 +166,8 @@ def _plant_fingerprint(plant):
     """Content hash of a plant: PI model table, sampling period, dynamics matrices."""
     h = hashlib.sha1(repr(model_to_table(plant.hysteresis)).encode())
     h.update(repr(float(plant.sampling_period)).encode())
-    if plant.dynamics is not None:
-        for mat in (plant.dynamics.A, plant.dynamics.B, plant.dynamics.C, plant.dynamics.D):
+    if not plant.is_static:  # the matrices: no python-control needed
+        for mat in plant.matrices:
             h.update(np.ascontiguousarray(mat, dtype=float).tobytes())
     else:
         h.update(b"static")
