@@ -49,7 +49,7 @@ from hammerstein.core.files import deferred_signals, umask
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.render import FigureJobs, FigureRenderer
-from hammerstein.report.replication import write_readme
+from hammerstein.report.replication import foreign_outputs, write_readme
 from hammerstein.report.scenario import metrics_frame, write_report
 from hammerstein.scenario.records import run_identification_scenario
 from hammerstein.scenario.resolve import resolve_scenario
@@ -220,7 +220,8 @@ def remove_stale_temporaries(out_dir, before=None):
         try:
             if p.is_symlink() or not p.is_dir() or marker.is_symlink():
                 continue
-            when = marker.stat().st_mtime if marker.exists() else p.stat().st_mtime
+            owned = marker.is_file()  # a directory named like the marker is not one
+            when = marker.stat().st_mtime if owned else p.stat().st_mtime
             if when >= before:
                 continue
         except OSError:
@@ -234,7 +235,7 @@ def remove_stale_temporaries(out_dir, before=None):
                 pass
             except (PermissionError, OverflowError, OSError):
                 continue
-        if marker.exists():
+        if owned:
             shutil.rmtree(p, ignore_errors=True)
         else:  # killed before its marker was written: removed only when empty
             try:
@@ -573,7 +574,7 @@ def run_scenarios(paths, out_dir, force=False):
     return run_pipelined(paths, out_dir, force)
 
 
-def replicate(scenarios="scenarios/paper", out="reports/paper"):
+def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
     """Run every paper scenario and write the replication README.
 
     Parameters
@@ -583,6 +584,10 @@ def replicate(scenarios="scenarios/paper", out="reports/paper"):
     out : str or pathlib.Path
         Output directory: ``<out>/<scenario>/`` reports and ``<out>/README.md``
         (:func:`hammerstein.report.replication.write_readme`).
+    force : bool
+        Replace ``<out>/README.md`` and the other files of the README (and
+        report directories) even when hammerstein did not write them; by
+        default they are checked before anything runs.
 
     Returns
     -------
@@ -592,12 +597,20 @@ def replicate(scenarios="scenarios/paper", out="reports/paper"):
     ------
     FileNotFoundError
         If ``scenarios`` holds no ``*.toml`` file.
+    FileExistsError
+        A file the README step would replace was not written by ``hammerstein
+        replicate`` (:func:`hammerstein.report.replication.foreign_outputs`)
+        and ``force`` is False; nothing has run.
     """
     files = sorted(Path(scenarios).glob("*.toml"))
     if not files:
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
     out = Path(out)
+    problems = [] if force else foreign_outputs(out)
+    if problems:
+        raise FileExistsError(f"{problems[0]}{f' (and {len(problems) - 1} more)' if len(problems) > 1 else ''}; "
+                              f"move it away, choose another --out, or use --force to replace it")
     remove_stale_temporaries(out)
-    outcomes = run_pipelined(files, out)
+    outcomes = run_pipelined(files, out, force)
     write_readme(out, outcomes)
     return outcomes

@@ -33,16 +33,26 @@ def out_file_problem(out, what="file"):
     """Why ``out`` cannot be written as a single file (one line), or None.
 
     An empty path, a directory, an existing special file (device, FIFO,
-    socket), a path under an existing file, or a directory that cannot be
+    socket) or read-only file, a path under an existing file, a symbolic
+    link that cannot be followed (loop), or a directory that cannot be
     written. A symlink is judged by its target.
     """
     if not str(out).strip():
         return f"--out: empty path; expected a {what} name"
     p = Path(out)
+    if p.is_symlink():
+        try:
+            os.stat(p)
+        except FileNotFoundError:
+            pass  # a dangling link: its target is created
+        except OSError as exc:  # a loop of links, a link through a file...
+            return f"--out: {out}: cannot follow the symbolic link ({exc.strerror})"
     if p.is_dir():
         return f"--out: {out} is a directory; expected a {what} name"
     if os.path.lexists(p) and p.exists() and not p.is_file():
         return f"--out: {out} is not a regular file (a device, FIFO or socket); expected a {what} name"
+    if p.is_file() and (not p.stat().st_mode & 0o222 or not os.access(p, os.W_OK)):
+        return f"--out: {out} is read-only; make it writable (chmod u+w) or choose another name"
     problem = out_dir_problem(p.resolve().parent if p.is_symlink() else p.parent)
     return problem.replace("--out: ", f"--out: {out}: ", 1) if problem else None
 

@@ -36,7 +36,7 @@ import pandas as pd
 
 from hammerstein.cli._common import out_dir_problem, out_file_problem
 from hammerstein.cli._output import add_verbosity, print_warnings
-from hammerstein.core.files import safe_write
+from hammerstein.core.files import FileLimitError, safe_write
 from hammerstein.runner import run_scenarios
 from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
                                              load_tolerances, merge_baseline, read_baseline,
@@ -302,8 +302,11 @@ def _write_junit(path, outcomes, comparison):
     """Write :func:`junit_xml` to ``path`` atomically (temporary file, then rename)."""
     tree = junit_xml(outcomes, comparison)
     ET.indent(tree)
-    safe_write(path, lambda fh: tree.write(fh, encoding="utf-8", xml_declaration=True),
-               "JUnit XML file")
+    try:
+        safe_write(path, lambda fh: tree.write(fh, encoding="utf-8", xml_declaration=True),
+                   "JUnit XML file")
+    except FileLimitError as exc:  # became a special or read-only file meanwhile
+        raise BaselineError(str(exc)) from None
 
 
 def _run(paths, out):

@@ -26,10 +26,11 @@ import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import out_file_problem
-from hammerstein.core.files import bounded_read_text, safe_write
+from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.record_identification import dynamics_tables, identify_records
 from hammerstein.exceptions import HysteresisError, IdentificationError
+from hammerstein.scenario.schema import MAX_HYSTERONS
 
 __all__ = ["add_parser"]
 
@@ -111,8 +112,8 @@ def _parse_thresholds(text):
             n = int(text)
         except ValueError:
             raise _Usage(f"--thresholds: expected a count N or a list r1,r2,..., found {text!r}") from None
-        if n < 1:
-            raise _Usage(f"--thresholds: expected N >= 1, found {n}")
+        if not 1 <= n <= MAX_HYSTERONS:
+            raise _Usage(f"--thresholds: expected 1 <= N <= {MAX_HYSTERONS} hysterons, found {n}")
         return n, None
     if any(not v.strip() for v in text.split(",")):
         raise _Usage(f"--thresholds: expected numbers separated by commas, found an empty entry "
@@ -121,6 +122,8 @@ def _parse_thresholds(text):
         r = np.array([float(v) for v in text.split(",")])
     except ValueError:
         raise _Usage(f"--thresholds: expected numbers separated by commas, found {text!r}") from None
+    if r.size > MAX_HYSTERONS:
+        raise _Usage(f"--thresholds: expected at most {MAX_HYSTERONS} thresholds, found {r.size}")
     if r.size == 0 or not np.all(np.isfinite(r)) or r[0] < 0 or np.any(np.diff(r) <= 0):
         raise _Usage(f"--thresholds: expected increasing thresholds >= 0, found {text!r}")
     return r.size, r
@@ -357,7 +360,7 @@ def _handler(args):
             _write_metrics(args.metrics, rows)
         save_model(fit.model, args.out, _metadata(args, fit, records), args.input_unit,
                    args.output_unit, extra)
-    except (DataFileError, IdentificationError, HysteresisError, PresetError) as exc:
+    except (DataFileError, IdentificationError, HysteresisError, PresetError, FileLimitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     except OSError as exc:

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.lti import dc_gain
-from hammerstein.core.presets import PresetError, bundled_presets, load_plant
+from hammerstein.core.presets import PresetError, bundled_presets, load_plant, read_toml
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -67,8 +67,29 @@ def handler(args):
         print(f"  {name}: {kind.description}")
     root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
-    print(f"scenarios under {root}/:" if files else
+    presets = [f for f in files if _is_preset(f)]
+    scenarios = [f for f in files if f not in presets]
+    print(f"scenarios under {root}/:" if scenarios else
           f"scenarios: none found under {root}/ (run from the repository root)")
-    for f in files:
+    for f in scenarios:
         print(f"  {f}")
+    if presets:
+        print(f"preset and dynamics files under {root}/ (preset = \"<path>\", "
+              f"dynamics = \"<path>\"):")
+        for f in presets:
+            print(f"  {f}{_dynamics_summary(f) if _is_full_preset(f) else '; dynamics only'}")
     return 0
+
+
+def _is_full_preset(path):
+    """True when the file has a ``[preset]`` table (a plant, not only dynamics)."""
+    return "preset" in read_toml(path)
+
+
+def _is_preset(path):
+    """True for a preset (``[preset]``) or dynamics-only file, not a scenario."""
+    try:
+        doc = read_toml(path)
+        return "preset" in doc or set(doc) == {"dynamics"}
+    except PresetError:
+        return False       # listed as a scenario: validate reports its problem

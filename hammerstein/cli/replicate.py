@@ -32,6 +32,9 @@ def add_parser(subparsers):
                     "trends of Fig. 7 and 9, the compensator family, the figures.")
     p.add_argument("--scenarios", default="scenarios/paper", metavar="DIR")
     p.add_argument("--out", default="reports/paper", metavar="OUT")
+    p.add_argument("--force", action="store_true",
+                   help="replace OUT/README.md, its tables and report directories even when "
+                        "hammerstein did not write them")
     p.set_defaults(handler=handler)
 
 
@@ -49,17 +52,24 @@ def handler(args):
     int
         0 when every scenario ran, 1 when one failed (one line per failure
         on stderr), 2 when ``args.scenarios`` holds no ``*.toml`` scenario or ``args.out``
-        cannot be a directory (usage error).
+        cannot be a directory, or a file of the README was not written by
+        hammerstein replicate and ``args.force`` is not set (usage error).
     """
     problem = out_dir_problem(args.out)
     if problem:
         print_err(f"hammerstein replicate: error: {problem}")
         return 2
     try:
-        outcomes = replicate(args.scenarios, args.out)
-    except FileNotFoundError as exc:
+        outcomes = replicate(args.scenarios, args.out, force=args.force)
+    except (FileNotFoundError, FileExistsError) as exc:
         print_err(f"hammerstein replicate: error: {exc}")
         return 2
+    except OSError as exc:  # README step: cannot write
+        print_err(f"error: {exc.filename or args.out}: cannot write ({exc.strerror or exc})")
+        return 1
+    except ValueError as exc:  # README step: a special file appeared meanwhile
+        print_err(f"error: {' '.join(str(exc).split())}")
+        return 1
     for o in outcomes:
         if o.ok:
             print(f"{o.path}: wrote {o.out_dir}/")

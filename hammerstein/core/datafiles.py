@@ -280,7 +280,8 @@ def read_record(path, input, output, time=None, sampling_period=None):
             raise DataFileError(
                 f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
                 f"({t[i]:g} s then {t[i + 1]:g} s)")
-        T = float(np.median(dt))
+        # 12 significant digits: the step of a printed time column, not its rounding noise
+        T = float(f"{np.median(dt):.12g}")
         if np.max(np.abs(dt - T)) > 0.01 * T:
             i = int(np.argmax(np.abs(dt - T)))
             raise DataFileError(

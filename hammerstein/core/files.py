@@ -12,8 +12,9 @@ exclusively (``O_EXCL``, unique name ``.<name>.<random>.hammerstein-tmp``)
 next to the target, then renamed over it, so a reader never sees a
 half-written file and an interrupted write leaves the target untouched. A
 target that exists but is not a regular file is refused; a symlink's target
-is written (the link stays); a replaced file keeps its permission bits and a
-new one gets the user's umask.
+is written (the link stays); a read-only target is refused (a rename would
+bypass its protection); a replaced file keeps its permission bits and a new
+one gets the user's umask.
 
 Limits (bytes), overridable with environment variables:
 
@@ -57,6 +58,15 @@ def _size(n):
         if n >= scale:
             return f"{n / scale:.4g} {unit}"
     return f"{n} bytes"
+
+
+def _hint(kind):
+    """``raise it with VAR=BYTES``, noting an override that is not a positive integer."""
+    var = LIMITS[kind][0]
+    text = os.environ.get(var)
+    bad = "" if text is None or (text.strip().isdigit() and int(text) > 0) else \
+        f"; its value {text!r} is not a positive integer, the default applies"
+    return f"raise it with {var}=BYTES{bad}"
 
 
 def limit(kind):
@@ -147,7 +157,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
                                  f"expected a {what}")
         if st.st_size > cap:
             raise FileLimitError(f"{path}: {_size(st.st_size)} is larger than the limit of "
-                                 f"{_size(cap)} for a {what} (raise it with {LIMITS[kind][0]}=BYTES)")
+                                 f"{_size(cap)} for a {what} ({_hint(kind)})")
         chunks, total = [], 0
         while True:  # the file may grow while read: never more than cap + 1 bytes
             chunk = os.read(fd, min(1 << 20, cap + 1 - total))
@@ -157,7 +167,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
             total += len(chunk)
             if total > cap:
                 raise FileLimitError(f"{path}: larger than the limit of {_size(cap)} for a "
-                                     f"{what} (raise it with {LIMITS[kind][0]}=BYTES)")
+                                     f"{what} ({_hint(kind)})")
         return b"".join(chunks)
     finally:
         os.close(fd)
@@ -281,8 +291,8 @@ def safe_write(path, data, what="file"):
     Raises
     ------
     FileLimitError
-        The target exists and is not a regular file, or its directory is
-        not a directory.
+        The target exists and is not a regular file or is read-only, or its
+        directory is not a directory.
     OSError
         The directory cannot be created or written.
     """
@@ -298,6 +308,9 @@ def safe_write(path, data, what="file"):
             kind = "a directory" if stat.S_ISDIR(st.st_mode) else "not a regular file"
             raise FileLimitError(f"{path}: exists and is {kind}; expected a {what} to replace")
         mode = stat.S_IMODE(st.st_mode)
+        if not mode & 0o222 or not os.access(target, os.W_OK):  # a rename would bypass it
+            raise FileLimitError(f"{path}: is read-only; make it writable (chmod u+w) to have "
+                                 f"it replaced, or choose another path")
     parent = target.parent
     if parent.exists() and not parent.is_dir():
         raise FileLimitError(f"{path}: {parent} is not a directory")

@@ -41,6 +41,7 @@ control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) o
 __all__ = [
     "state_space_dynamics",
     "dc_gain",
+    "align_dc_gain",
     "modal_parameters",
     "continuous_system",
     "sensor_filter",
@@ -153,6 +154,54 @@ def dc_gain(system):
     """
     return np.atleast_2d(np.asarray(control.dcgain(system), dtype=float)).reshape(
         system.noutputs, system.ninputs)
+
+
+def align_dc_gain(system, reference):
+    """The same dynamics with the DC gain of another system: ``G G(0)^-1 R(0)``.
+
+    A Hammerstein model ``G(Gamma(U))`` is identifiable only up to a static
+    invertible matrix N (``G N^-1`` and ``N Gamma`` give the same actuator):
+    a PI characterised quasi-statically absorbs the DC gain G(0) of the true
+    dynamics (cross-coupling included), and the identified G comes out with
+    ``G_id(0) ~ I``. Compare an identified G with ``align_dc_gain(G_true,
+    numpy.eye(p))``, not with ``G_true``.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        p x p stable system (continuous or discrete), invertible DC gain.
+    reference : control.StateSpace or array_like, shape (p, p)
+        p x p system whose DC gain is taken, or that DC gain itself
+        (``numpy.eye(p)``: unit DC gain; exact zeros of a decoupled G stay
+        exact zeros when its G(0) is diagonal).
+
+    Returns
+    -------
+    control.StateSpace
+        ``system`` followed (on its inputs) by the static matrix
+        ``G(0)^-1 R(0)``; same states, poles, ``dt`` and signal names.
+
+    Raises
+    ------
+    DynamicsError
+        When the DC gain of ``system`` is singular.
+
+    Examples
+    --------
+    >>> wn = 2 * 3.141592653589793 * 300.0
+    >>> G = state_space_dynamics([[0.0, wn], [-wn, -0.3 * wn]], [[0.0], [2 * wn]], [[1.0, 0.0]])
+    >>> R = state_space_dynamics([[-wn]], [[wn]], [[1.0]])
+    >>> round(float(dc_gain(align_dc_gain(G, R))[0, 0]), 9)
+    1.0
+    """
+    G0 = dc_gain(system)
+    try:
+        R0 = dc_gain(reference) if hasattr(reference, "ninputs") else np.asarray(reference, float)
+        N = np.linalg.solve(G0, R0)
+    except np.linalg.LinAlgError:
+        raise DynamicsError("dynamics: the DC gain G(0) is singular: cannot align it") from None
+    return control.ss(system.A, system.B @ N, system.C, system.D @ N, system.dt,
+                      inputs=system.input_labels, outputs=system.output_labels)
 
 
 def modal_parameters(system):

@@ -147,7 +147,7 @@ def read_toml(path, what="TOML file"):
     ------
     PresetError
         If the file is missing, not a regular file, too large, unreadable,
-        not UTF-8 or not valid TOML.
+        not UTF-8 or not valid TOML (including nesting too deep to parse).
     """
     path = Path(path)
     try:
@@ -158,6 +158,8 @@ def read_toml(path, what="TOML file"):
         raise PresetError(f"{path}: file not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{path}: invalid TOML: {exc}") from None
+    except RecursionError:  # the parser recurses once per level of [ or {
+        raise PresetError(f"{path}: invalid TOML: arrays or inline tables nested too deeply") from None
     except UnicodeDecodeError as exc:  # TOML is UTF-8 text
         raise PresetError(f"{path}: invalid TOML: not UTF-8 text (byte {exc.start}: "
                           f"{exc.object[exc.start:exc.start + 1]!r})") from None
@@ -451,12 +453,17 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
                 except (TypeError, ValueError):
                     raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix "
                                       f"(list of rows)") from None
-        n = shapes["A"][0] if len(shapes["A"]) == 2 else -1
-        expected = {"A": (n, n), "B": (n, p), "C": (p, n), "D": (p, p)}
+        if len(shapes["A"]) != 2 or shapes["A"][0] != shapes["A"][1] or shapes["A"][0] == 0:
+            raise PresetError(f"{source}: dynamics.A: expected a non-empty square matrix (one row "
+                              f"and one column per state), found shape {shapes['A']}")
+        n = shapes["A"][0]
+        expected = {"B": ((n, p), "one row per state of A, one column per PI output"),
+                    "C": ((p, n), "one row per displacement, one column per state of A"),
+                    "D": ((p, p), "one row per displacement, one column per PI output")}
         for key, shape in shapes.items():
-            if n >= 1 and shape != expected[key]:
-                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key]} for "
-                                  f"{p} outputs and {n} states, found {shape}")
+            if key != "A" and shape != expected[key][0]:
+                raise PresetError(f"{source}: dynamics.{key}: expected shape {expected[key][0]} "
+                                  f"({expected[key][1]}; {p} outputs, {n} states), found {shape}")
         try:
             return state_space_dynamics(table["A"], table["B"], table["C"], table.get("D"),
                                         names=outputs)

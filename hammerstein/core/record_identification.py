@@ -71,6 +71,8 @@ __all__ = [
     "identify_records",
     "identify_record",
     "dynamics_tables",
+    "loop_asymmetry",
+    "ASYMMETRY_NOTE_PERCENT",
 ]
 
 #: A reversal is recognised once the input has come back by this fraction of its span.
@@ -327,7 +329,8 @@ def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
     u = record.u[k]
     n = u.size
     if burn_in_seconds is not None:
-        burn = int(round(burn_in_seconds / record.sampling_period))
+        ratio = burn_in_seconds / record.sampling_period  # inf for a huge --skip
+        burn = int(round(ratio)) if np.isfinite(ratio) and abs(ratio) < n else n
         if not 0 <= burn < n - 1:
             raise IdentificationError(
                 f"skip: expected a burn-in shorter than the record ({n * record.sampling_period:g} s), "
@@ -792,7 +795,8 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
         if not any(np.ptp(r.y[l][s.train]) > 0 for r, s in zip(records, splits) if s.train.any()):
             raise IdentificationError(
                 f"{records[0].source}: output column {name!r}: the output is constant over the "
-                f"training samples; expected the response to the excitation")
+                f"training samples; expected the response to the excitation: add a record that "
+                f"excites an input it depends on, or leave it out of --outputs")
     m = records[0].u.shape[0]
     tried = ["time", "input"] if partition == "auto" and thresholds is None else [partition]
     results, errors = {}, {}
@@ -814,7 +818,83 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
             f"{p} {scores[p]:.3g} %" if p in scores else f"{p} failed: {errors[p]}"
             for p in tried) + f" mean {basis} RMS of the output range)")
     fit.partition_scores = scores
+    fit.notes += _asymmetry_notes(records, splits, out_names)
     return fit
+
+
+#: A measured loop whose point-symmetry defect exceeds this % of its output range gets a note.
+ASYMMETRY_NOTE_PERCENT = 2.0
+
+
+def loop_asymmetry(u, y, branches):
+    """How far a measured loop is from point symmetry, in % of its output range.
+
+    A classical PI's steady loops are point-symmetric about their centre
+    (the descending branch is the ascending one rotated by 180 degrees,
+    Brokate & Sprekels [3], Section 2.3), whatever its weights: an
+    asymmetric loop (saturation on one side, a Preisach or Bouc-Wen loop
+    with asymmetric parameters) is beyond the model. The last complete
+    descending branch ``y_d`` is compared with the last complete ascending
+    one ``y_a`` rotated about ``(u_c, y_c)``: ``u_c`` the mid-range of the
+    input over both branches, ``y_c`` fitted by least squares; the RMS of
+    ``y_d(u) + y_a(2 u_c - u) - 2 y_c`` is returned.
+
+    Parameters
+    ----------
+    u : array_like, shape (n_samples,)
+        The excitation (input unit, e.g. [V]).
+    y : array_like, shape (n_samples,)
+        One output (output unit, e.g. [µm]).
+    branches : list of (int, int, bool)
+        ``(start, stop, complete)`` as in :attr:`Split.branches`.
+
+    Returns
+    -------
+    float or None
+        RMS defect [%] of the output range over the two branches, or None
+        without a complete ascending and a complete descending branch.
+
+    References
+    ----------
+    .. [3] M. Brokate, J. Sprekels, "Hysteresis and phase transitions",
+       Springer (1996).
+    """
+    u, y = np.asarray(u, dtype=float), np.asarray(y, dtype=float)
+    up = [(a, b) for a, b, ok in branches if ok and u[b] > u[a]]
+    down = [(a, b) for a, b, ok in branches if ok and u[b] < u[a]]
+    if not up or not down:
+        return None
+    (a1, b1), (a2, b2) = up[-1], down[-1]
+    ua, ya, ud, yd = u[a1:b1 + 1], y[a1:b1 + 1], u[a2:b2 + 1], y[a2:b2 + 1]
+    order = np.argsort(ua, kind="stable")
+    uc = 0.5 * (min(ua.min(), ud.min()) + max(ua.max(), ud.max()))
+    mirrored = 2 * uc - ud
+    inside = (mirrored >= ua.min()) & (mirrored <= ua.max())
+    span = np.ptp(np.concatenate([ya, yd]))
+    if inside.sum() < 3 or not span > 0:
+        return None
+    total = yd[inside] + np.interp(mirrored[inside], ua[order], ya[order])
+    defect = total - total.mean()                  # the mean is 2 y_c
+    return float(100 * np.sqrt(np.mean(defect ** 2)) / span)
+
+
+def _asymmetry_notes(records, splits, out_names):
+    notes = []
+    for l, name in enumerate(out_names):
+        for rec, s in zip(records, splits):
+            others = np.delete(np.ptp(rec.u, axis=1), s.excitation)
+            if np.any(others > 0.02 * np.ptp(rec.u[s.excitation])):
+                continue                           # several inputs driven: no single loop
+            d = loop_asymmetry(rec.u[s.excitation], rec.y[l], s.branches)
+            if d is not None and d > ASYMMETRY_NOTE_PERCENT:
+                notes.append(
+                    f"{name}: the measured loop of {rec.source or 'the record'} is not "
+                    f"point-symmetric ({d:.3g} % of the range between its descending branch "
+                    f"and its ascending branch rotated by 180 degrees); a classical PI's loops "
+                    f"are, so expect an error of that order on the held-out branch (training "
+                    f"on both branches with --hold-out none reduces but cannot remove it)")
+                break
+    return notes
 
 
 def _one_partition(records, splits, method, n, thresholds, partition, bounds, kinds, auto,

@@ -12,6 +12,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 __all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "state_space_data"]
@@ -97,15 +98,37 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
         f_hi = 0.45 / min(dts) if dts else 5000.0
         frequencies_hz = np.logspace(0, np.log10(f_hi), 300)
     w = 2 * np.pi * np.asarray(frequencies_hz, dtype=float)
+    if (identified.ninputs, identified.noutputs) == (true.ninputs, true.noutputs):
+        # the identified model knows no signal names: give it the true system's
+        identified = control.ss(identified.A, identified.B, identified.C, identified.D,
+                                identified.dt, inputs=true.input_labels,
+                                outputs=true.output_labels)
     responses = [control.frequency_response(identified, w), control.frequency_response(true, w)]
     for resp, label in zip(responses, labels):
         resp.sysname = label
+    plt.figure()              # a figure of its own: bode_plot draws on pyplot's current one
     with np.errstate(divide="ignore"):            # exact zeros (decoupled entries): -inf dB
         cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, title=title,
                                  wrap_phase=True)
     fig = cplt.figure
-    for ax in np.ravel(cplt.axes):
-        for line, style in zip(ax.get_lines()[:2], ("-", "--")):
-            line.set_linestyle(style)
+    for ax in np.ravel(cplt.axes):       # the true system dashed over the identified one
+        for line in ax.get_lines():
+            if line.get_label() == labels[1]:
+                line.set_linestyle("--")
+    axes = np.asarray(cplt.axes).reshape(2 * true.noutputs, true.ninputs)
+    mag = np.abs(responses[1].magnitude)                             # (p, m, n_freq)
+    zero = np.max(mag, axis=-1) <= 1e-12 * np.max(mag)               # (p, m): 0 up to round-off
+    for i, j in zip(*np.nonzero(zero)):
+        # an exactly-zero true entry (no dynamic coupling) has no magnitude in dB and
+        # no phase: draw nothing for it rather than a meaningless 0 deg line
+        for ax in axes[2 * i:2 * i + 2, j]:
+            for line in [ln for ln in ax.get_lines() if ln.get_label() == labels[1]]:
+                line.remove()
+        axes[2 * i, j].text(0.02, 0.04, f"{labels[1]}: 0 (no coupling)",
+                            transform=axes[2 * i, j].transAxes, fontsize=8)
+    if zero.any():                          # scales without the removed curves
+        for ax in axes.ravel():
+            ax.relim()
+            ax.autoscale_view(scalex=False)
     fig.set_size_inches(4.0 * true.ninputs + 1.5, 3.0 * true.noutputs + 1.5)
     return fig

@@ -18,7 +18,7 @@ import pandas as pd
 from hammerstein.report.figures import scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
 from hammerstein.report.tables import markdown_table
-from hammerstein.core.lti import compare_frequency_responses
+from hammerstein.core.lti import align_dc_gain, compare_frequency_responses
 from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
 from hammerstein.report.render import FigureJobs
 from hammerstein.scenario.identified import save_identified_dynamics, save_identified_models
@@ -213,15 +213,19 @@ def _report_dynamics(scenario, directory, jobs):
              "G identified by subspace identification (PO-MOESP) from random-phase multisines on "
              "each input in turn, with the identified PI's outputs as its inputs; order chosen by "
              "the fit on held-out data (the last 30 % of each record); the sensor's low-pass is "
-             "kept out of G. Relative error: |G_id - G_true| / largest true gain of the row.", ""]
+             "kept out of G. The PI, characterised quasi-statically, holds the static gain "
+             "G(0) of the actuator (cross-coupling included), so the identified G has "
+             "G_id(0) ~ I: it is compared with the true G brought to unit DC gain, "
+             "G_true G_true(0)^-1 (the product G Gamma is what is identified). "
+             "Relative error: |G_id - that| / largest true gain of the row.", ""]
     for i, r in enumerate(rows, start=1):
         ident, plant, meta = r["identifier"], r["plant"], r["metadata"]
         fname = f"dynamics-bode-{i}.png"
+        true = align_dc_gain(plant.dynamics, np.eye(plant.dynamics.noutputs))
         jobs.add(directory / fname, dynamics_bode_figure_from_data, state_space_data(ident.system_),
-                 state_space_data(plant.dynamics),
-                 labels=("identified", "true"),
+                 state_space_data(true), labels=("identified", "true G G(0)^-1"),
                  title=f"Identified vs true G ({plant.name}), order {ident.order_}")
-        cmp_ = compare_frequency_responses(ident.system_, plant.dynamics, [10.0, 100.0, 200.0, 300.0])
+        cmp_ = compare_frequency_responses(ident.system_, true, [10.0, 100.0, 200.0, 300.0])
         val = ", ".join(f"{n}: {v:.2f} %" for n, v in zip(ident.orders_, ident.validation_fit_)
                         if np.isfinite(v))
         lines += [f"### Dynamics {i}: cases {', '.join(r['cases'][:4])}"

@@ -240,6 +240,8 @@ def load_tolerances(path):
         raise BaselineError(str(exc)) from None
     except UnicodeDecodeError:
         raise BaselineError(f"{path}: not a readable TOML file (not UTF-8 text)") from None
+    except RecursionError:
+        raise BaselineError(f"{path}: not a readable TOML file (nested too deeply)") from None
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise BaselineError(f"{path}: not a readable TOML file ({exc})") from None
     resolve_tolerances(table)  # validate now, with the file's name in the error

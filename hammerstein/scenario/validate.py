@@ -21,6 +21,7 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 from __future__ import annotations
 
 import difflib
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -213,6 +214,14 @@ def _option_problems(spec, own=None):
     return out
 
 
+def _ignored_env(var):
+    """``"; its value 'abc' is not a positive integer, the default applies"`` for a bad override, else ``""``."""
+    text = os.environ.get(var)
+    if text is None or (text.strip().isdigit() and int(text) > 0):
+        return ""
+    return f"; its value {text!r} is not a positive integer, the default applies"
+
+
 def _predicted_samples(kind, c, T):
     """Samples the signal of a checked table ``c`` will have (before generating it)."""
     if "duration" in c:
@@ -269,7 +278,7 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
             problems.append(f"{source}: {where}: its {n:.3g} samples bring the scenario to "
                             f"{budget['used'] + n:.3g}; expected at most {budget['limit']:.3g} "
                             f"samples per scenario (shorten the records, or raise "
-                            f"HAMMERSTEIN_MAX_SAMPLES)")
+                            f"HAMMERSTEIN_MAX_SAMPLES{_ignored_env('HAMMERSTEIN_MAX_SAMPLES')})")
             return None
     try:
         if mode == "drive":

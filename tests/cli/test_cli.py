@@ -144,6 +144,18 @@ def test_list_shows_presets_and_scenarios(capsys, monkeypatch):
     text = capsys.readouterr().out
     assert "rakotondrabe-2dof" in text and "multivariable" in text
     assert "fig08-compensated-sine.toml" in text
+    scenarios, _, others = text.partition("preset and dynamics files")
+    assert "coupled-2dof.toml" in others and "coupled-2dof.toml" not in scenarios
+    assert "fn+5.toml; dynamics only" in others
+
+
+def test_list_reports_the_dc_gain_of_a_preset_file(capsys, monkeypatch):
+    """coupled-2dof.toml says its G(0) is reported by `hammerstein list`: it is."""
+    monkeypatch.chdir(ROOT)
+    assert main(["list"]) == 0
+    _, _, others = capsys.readouterr().out.partition("preset and dynamics files")
+    line = next(ln for ln in others.splitlines() if "coupled-2dof.toml" in ln)
+    assert "DC gain [[1.08, -0.06], [0.08, 0.94]]" in line      # B and C of the file
 
 
 def test_help_imports_no_heavy_module():

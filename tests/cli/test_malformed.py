@@ -40,6 +40,8 @@ SCENARIOS = {
     "above-nyquist": "cases[0].reference.frequency: 10000 Hz is at or above the Nyquist frequency",
     "bad-case-name": "cases[0].name: expected a name of letters",
     "bad-seed": "seed: expected an integer >= 0, found -1",
+    "deeply-nested-array": "invalid TOML: arrays or inline tables nested too deeply",
+    "deeply-nested-inline-table": "invalid TOML: arrays or inline tables nested too deeply",
     "binary-garbage": "invalid TOML: not UTF-8 text",
     "both-drive-and-reference": "cases[0]: expected exactly one of reference",
     "cases-not-list": "cases: expected one or more [[cases]] tables",
@@ -413,9 +415,9 @@ def test_model_parameter_guards(thresholds, weights, message):
     assert message in str(err.value)
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def plant(static_plant):
+    return static_plant
 
 
 @pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])

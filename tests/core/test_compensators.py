@@ -9,7 +9,6 @@ from hammerstein.core.compensators import (CompensatorError, InverseMultiplicati
                                       PerAxisInverseCompensator, RangeWarning, StaticGainCompensator,
                                       check_reference_range, diagonal_compensator)
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.presets import load_plant
 from hammerstein.simulation import simulate_chain
 from hammerstein.core.stability import literal_gain_equivalent_scale, stability_map
 
@@ -17,12 +16,12 @@ T = 5e-5
 PERIOD = 400  # samples per period at 50 Hz, T = 50 µs
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def plant(static_plant):
+    return static_plant
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def model(plant):
     return plant.hysteresis
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hammerstein import (CompensatorError, InverseMultiplicativeCompensator,
-                         bandwidths_hz, convergence_report, load_plant, play,
+                         bandwidths_hz, convergence_report, play,
                          simulate_chain)
 from hammerstein.core.presets import bundled_presets, dynamics_from_table, read_toml
 
@@ -48,14 +48,14 @@ def test_play_threshold_above_amplitude_stays_at_initial_state():
     np.testing.assert_allclose(y, 0.5)
 
 
-@pytest.fixture(scope="module")
-def preset():
-    return load_plant("rakotondrabe-2dof", dynamics=True)
+@pytest.fixture
+def preset(preset_plant):
+    return preset_plant
 
 
-@pytest.fixture(scope="module")
-def static():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
+@pytest.fixture
+def static(static_plant):
+    return static_plant
 
 
 def _record(n=900, seed=1):

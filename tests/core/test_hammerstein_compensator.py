@@ -16,9 +16,9 @@ from hammerstein.core.lti import dc_gain
 COUPLED = "scenarios/presets/coupled-2dof.toml"
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof")
+@pytest.fixture
+def plant(preset_plant):
+    return preset_plant
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +70,10 @@ def oracle_chain(comp, plant, lead):
     return Y
 
 
-def test_compiled_chain_equals_numpy_oracle(plant):
+@pytest.mark.parametrize("preset", ["rakotondrabe-2dof", COUPLED])
+def test_compiled_chain_equals_numpy_oracle(preset):
+    """Also on the coupled preset: a non-diagonal inverse (full MIMO pre-filter, P = 3)."""
+    plant = load_plant(preset)
     comp = HammersteinCompensator(plant.hysteresis, plant.dynamics, iterations=3)
     lead = fade_in(circle(plant.sampling_period, 600, 200.0, 20.0), 100)
     res = comp.chain(plant, lead)
@@ -78,8 +81,10 @@ def test_compiled_chain_equals_numpy_oracle(plant):
     np.testing.assert_allclose(res.outputs, oracle_chain(comp, plant, lead), atol=1e-9)
 
 
+@pytest.mark.parametrize("preset", ["rakotondrabe-2dof", COUPLED])
 @pytest.mark.parametrize("inversion", ["zpetc"])
-def test_chunked_equals_whole(plant, inversion):
+def test_chunked_equals_whole(preset, inversion):
+    plant = load_plant(preset)
     comp = HammersteinCompensator(plant.hysteresis, plant.dynamics, inversion=inversion)
     lead, s0, _ = comp.start(circle(plant.sampling_period, 900, 150.0, 25.0), 133, 133)
     whole = comp.chain(plant, lead, s0)
@@ -211,3 +216,15 @@ def test_identified_hammerstein_meets_targets(tmp_path):
         '{ kind = "circle", radius = 20.0, frequency = 170.0, periods = 8 }'))
     val = {m["metric"]: m["value"] for m in run_case(sc.cases[0]).metrics}
     assert val["max_euclidean_error_percent"] < 2.0
+
+
+@pytest.mark.parametrize("A, match", [
+    ([[0.0, 1.0, 0.0], [-1.0, -0.5, 0.0]], r"dynamics\.A: expected a non-empty square matrix .* \(2, 3\)"),
+    ([1.0, 2.0], r"dynamics\.A: expected a non-empty square matrix .* \(2,\)"),
+    ([], r"dynamics\.A: expected a non-empty square matrix")])
+def test_non_square_state_matrix_is_named_as_such(A, match):
+    """Regression: a 2 x 3 A read 'expected shape (2, 2) for 2 outputs and 2 states'."""
+    table = {"kind": "state_space", "A": A, "B": [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
+             "C": [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]}
+    with pytest.raises(PresetError, match=match):
+        dynamics_from_table(table, ["x", "y"])

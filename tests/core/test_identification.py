@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
-                         PrandtlIshlinskii, load_model, load_plant)
+                         PrandtlIshlinskii, load_model)
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
                                         MultivariableIdentifier, ascending_branches, fit_report,
                                         partition_thresholds)
@@ -18,11 +18,6 @@ from hammerstein.core.sensors import Sensor, characterize, identify_plant
 
 EQ12 = np.array([0.07, 0.32, 0.74, 1.3, 2.0, 2.8, 3.67, 4.61, 5.54, 6.5, 7.34, 8.1, 8.8, 9.3, 9.7])
 T = 5e-5
-
-
-@pytest.fixture(scope="module")
-def static_plant():
-    return load_plant("rakotondrabe-2dof", dynamics=False)
 
 
 def sine(amplitude=10.0, frequency=50.0, periods=3, offset=0.0):

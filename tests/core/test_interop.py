@@ -13,9 +13,9 @@ ATOL = 1e-9
 N = 120
 
 
-@pytest.fixture(scope="module")
-def plant():
-    return load_plant("rakotondrabe-2dof")
+@pytest.fixture
+def plant(preset_plant):
+    return preset_plant
 
 
 def _record(plant, n=N):

@@ -5,14 +5,13 @@ import pytest
 
 from hammerstein.core.hysteresis import HysteresisError, PrandtlIshlinskii, play
 from hammerstein.core.inverse import InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
-from hammerstein.core.presets import load_plant
 
 T = 5e-5
 
 
-@pytest.fixture(scope="module")
-def model():
-    return load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+@pytest.fixture
+def model(static_plant):
+    return static_plant.hysteresis
 
 
 def piecewise_monotone(rng, peak, n_extrema=12, samples=(20, 300)):

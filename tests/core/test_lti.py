@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
-from hammerstein.core.lti import (DynamicsIdentifier, compare_frequency_responses,
+from hammerstein.core.lti import (DynamicsIdentifier, align_dc_gain, compare_frequency_responses,
                                   continuous_system, dc_gain, excitation, modal_parameters,
                                   sensor_filter, state_space_dynamics)
 from hammerstein.core.sensors import Sensor
@@ -129,3 +129,74 @@ def test_bode_figure(records, tmp_path):
     fig = dynamics_bode_figure(G, G, frequencies_hz=np.logspace(0, 3.5, 50))
     assert len(fig.axes) >= 8                       # 2 x 2 entries x (magnitude, phase)
     fig.savefig(tmp_path / "bode.png")
+
+
+def test_bode_figure_shows_both_systems_and_the_signal_names():
+    """Regression: the 'true' curve was drawn solid over an identical 'identified' curve
+    (the dashed style went to a Nyquist marker), and the panels read u[0] -> y[0]."""
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    anonymous = control.ss(G.A, G.B, G.C, G.D, G.dt)            # identified: default names
+    fig = dynamics_bode_figure(anonymous, G, frequencies_hz=np.logspace(0, 3.5, 50))
+    both = 0
+    for ax in fig.axes:
+        styles = {ln.get_label(): ln.get_linestyle() for ln in ax.get_lines()
+                  if len(ln.get_xdata()) == 50}
+        assert styles.get("identified", "-") == "-" and styles.get("true", "--") == "--"
+        both += styles == {"identified": "-", "true": "--"}
+    assert both == 4              # the direct entries: magnitude and phase of x and y
+    titles = " ".join(ax.get_title() for ax in fig.axes) + " ".join(
+        t.get_text() for t in fig.texts)
+    assert "x_h" in titles and "y_h" in titles and "u[0]" not in titles
+
+
+def test_align_dc_gain_keeps_the_dynamics_and_takes_the_other_dc_gain():
+    """G N with N = G(0)^-1 R(0): closed form at any frequency, poles unchanged."""
+    wn = 2 * np.pi * np.array([350.0, 330.0])
+    A = [[0, wn[0], 0, 0], [-wn[0], -0.24 * wn[0], 0, 0], [0, 0, 0, wn[1]],
+         [0, 0, -wn[1], -0.36 * wn[1]]]
+    B = [[0, 0], [wn[0], 0.05 * wn[0]], [0, 0], [-0.04 * wn[1], wn[1]]]
+    G = discretize(state_space_dynamics(A, B, [[1, 0, 0, 0], [0, 0, 1, 0]], names=["x", "y"]), T)
+    R = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)         # DC gain I
+    H = align_dc_gain(G, R)
+    np.testing.assert_allclose(dc_gain(H), np.eye(2), atol=1e-9)
+    N = np.linalg.inv([[1.0, 0.05], [-0.04, 1.0]])                 # G(0) written out from B
+    z = np.exp(2j * np.pi * 300.0 * T)
+    np.testing.assert_allclose(H(z), G(z) @ N, rtol=1e-9, atol=1e-12)
+    assert abs(H(z)[0, 1]) < 1e-12   # the coupling through B shares the modes: all static
+    np.testing.assert_allclose(np.sort_complex(H.poles()), np.sort_complex(G.poles()))
+    assert H.output_labels == ["x", "y"] and H.dt == T
+    singular = state_space_dynamics([[-1.0]], [[1.0, 1.0]], [[1.0], [1.0]])
+    with pytest.raises(DynamicsError, match="singular"):
+        align_dc_gain(singular, singular)
+
+
+def test_align_dc_gain_to_identity_keeps_a_decoupled_system_exactly_decoupled():
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    H = align_dc_gain(G, np.eye(2))
+    z = np.exp(2j * np.pi * 200.0 * T)
+    assert H(z)[0, 1] == 0 and H(z)[1, 0] == 0           # the Bode figure's 'no coupling'
+    np.testing.assert_allclose(np.diag(H(z)), np.diag(G(z)), rtol=1e-9)   # G(0) = I already
+
+
+def test_bode_figure_marks_round_off_entries_as_no_coupling():
+    """Regression: G G(0)^-1 of a coupled preset whose coupling is static leaves 1e-17
+    off-diagonal entries; drawn at -340 dB they squeezed every panel's scale."""
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    B = G.B.copy()
+    B[0, 1] = B[2, 0] = 1e-17
+    noisy = control.ss(G.A, B, G.C, G.D, T, inputs=G.input_labels, outputs=G.output_labels)
+    fig = dynamics_bode_figure(G, noisy, frequencies_hz=np.logspace(0, 3.5, 50))
+    assert sum("no coupling" in t.get_text() for ax in fig.axes for t in ax.texts) == 2
+    assert min(ax.get_ylim()[0] for ax in fig.axes if "dB" in ax.get_ylabel()) > -200
+
+
+def test_bode_figure_is_a_new_figure_each_call():
+    """Regression: python-control drew the second call onto the first, unclosed figure."""
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    G = discretize(bending_modes(FN, ZETA, ["x", "y"]), T)
+    f = np.logspace(0, 3.5, 50)
+    first, second = dynamics_bode_figure(G, G, frequencies_hz=f), dynamics_bode_figure(G, G, frequencies_hz=f)
+    assert first is not second
+    assert [len(ax.get_lines()) for ax in second.axes] == [len(ax.get_lines()) for ax in first.axes]

@@ -43,7 +43,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI, PrandtlIshlinskii,
-                         load_plant, play)
+                         play)
 
 PROPS = settings(max_examples=40, deadline=None,
                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -361,11 +361,6 @@ def test_multivariable_pi_chunked_equals_whole(model, data):
         parts.append(yc)
     np.testing.assert_allclose(np.concatenate(parts, axis=1), y, rtol=1e-13, atol=1e-12)
     np.testing.assert_array_equal(s, fin)
-
-
-@pytest.fixture(scope="module")
-def preset_plant():
-    return load_plant("rakotondrabe-2dof", dynamics=True)
 
 
 @FEW
