@@ -382,13 +382,20 @@ class PendingScenario:
             self.outcome = ScenarioOutcome(o.name, o.path, True, None, target, o.metrics, o.warnings)
         return self.outcome
 
-    def abandon(self):
-        """Cancel the figures and remove the temporary directory (on an interruption)."""
+    def abandon(self, wait=True):
+        """Cancel the figures and remove the temporary directory (on an interruption).
+
+        Parameters
+        ----------
+        wait : bool
+            Wait for the figures being drawn first; False once the
+            renderer is closed (its workers have exited).
+        """
         if self._tmp is not None:
             tmp, self._tmp = self._tmp, None
             try:
                 if self._jobs is not None:
-                    self._jobs.cancel()
+                    self._jobs.cancel(wait)
             finally:
                 shutil.rmtree(tmp, ignore_errors=True)
 
@@ -534,21 +541,23 @@ def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None):
             if on_outcome is not None:
                 on_outcome(p, outcome)
 
+    renderer = FigureRenderer()
     try:
-        with FigureRenderer() as renderer:
-            for p in paths:
-                if on_start is not None:
-                    on_start(p)
-                job = start_scenario(p, out_dir, taken, force, renderer)
-                if job.outcome.ok:  # the name is reserved while its figures are drawn
-                    taken[job.name] = job.outcome.path
-                pending.append((p, job))
-                finish_ready(block=False)
-            finish_ready(block=True)
+        for p in paths:
+            if on_start is not None:
+                on_start(p)
+            job = start_scenario(p, out_dir, taken, force, renderer)
+            if job.outcome.ok:  # the name is reserved while its figures are drawn
+                taken[job.name] = job.outcome.path
+            pending.append((p, job))
+            finish_ready(block=False)
+        finish_ready(block=True)
     except BaseException:
+        renderer.close(cancel=True)  # its workers have exited: nothing writes any more
         for _, job in pending:
-            job.abandon()
+            job.abandon(wait=False)
         raise
+    renderer.close()
     return outcomes
 
 

@@ -163,12 +163,21 @@ class FigureJobs:
             if f.exception() is not None:
                 raise f.exception()
 
-    def cancel(self):
-        """Cancel the jobs not started and wait for the running ones (before removing the directory)."""
+    def cancel(self, wait=True):
+        """Cancel the jobs not started; wait for the running ones (before removing the directory).
+
+        Parameters
+        ----------
+        wait : bool
+            False once the renderer's pool is shut down (its workers have
+            exited, so nothing writes any more; the futures of jobs it had
+            started may never finish then).
+        """
         self._queued = []
         for f in self._futures:
             f.cancel()
-        wait_futures(self._futures)
+        if wait:
+            wait_futures(self._futures)
 
 
 def _worker_init():
