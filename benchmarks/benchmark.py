@@ -13,11 +13,13 @@ For the bundled preset (paper's 2x2 model, 15 hysterons per component, T =
    run on a shorter record and scaled) and through the per-sample numpy
    loop (``backend='numpy'``), with the ratios;
 3. the kernels' compile time, cold (empty temporary ``NUMBA_CACHE_DIR``) and
-   cached (second process, same directory);
+   cached (second process, same directory), and each kernel's cold compile
+   time (the table behind the first run's "compiling ... about N s" line);
 4. the wall time of a Fig. 9-like sweep: 4 models (the preset's weights
    perturbed by +-5 %, standing in for models identified at 50/100/150/200
    Hz) x 20 frequencies 10..420 Hz x 2 axes x 5 periods, compensator ->
-   Hammerstein plant, in one batched kernel call (serial and parallel).
+   Hammerstein plant, in one batched kernel call (serial and parallel;
+   ``benchmarks/batch.py`` measures the batch kernel alone on 1000 cases).
 
 Targets (issue 5): forward <= 0.6 ns per hysteron update; chain >= 200x
 faster than python-control and >= 50x faster than the numpy loop; sweep
@@ -51,16 +53,18 @@ t1 = time.perf_counter()
 plant = hs.load_plant("rakotondrabe-2dof")
 comp = hs.InverseMultiplicativeCompensator(plant.hysteresis)
 u = np.zeros((2, 8))
-t2 = time.perf_counter()
-hs.play(u[0], [0.0, 1.0])
-plant.hysteresis.simulate(u)
-plant.simulate(u)
-comp.simulate(u)
-sim.simulate_chain(comp, plant, u)
+steps = {"play_kernel": lambda: hs.play(u[0], [0.0, 1.0]),
+         "pi_kernel": lambda: plant.hysteresis.simulate(u),
+         "plant_kernel": lambda: plant.simulate(u),
+         "chain_kernel": lambda: sim.simulate_chain(comp, plant, u),
+         "chain_batch": lambda: sim.simulate_chain_batch(comp, plant, [u, u], parallel=True)}
+each = {}
+for name, first_call in steps.items():
+    t = time.perf_counter()
+    first_call()
+    each[name] = time.perf_counter() - t
 sim.simulate_chain_batch(comp, plant, [u, u], parallel=False)
-sim.simulate_chain_batch(comp, plant, [u, u], parallel=True)
-t3 = time.perf_counter()
-print(json.dumps({"import_s": t1 - t0, "kernels_s": t3 - t2}))
+print(json.dumps({"import_s": t1 - t0, "kernels_s": sum(each.values()), "each": each}))
 """
 
 
@@ -173,6 +177,9 @@ def main(argv=None):
     print(f"   cold (empty NUMBA_CACHE_DIR) {ct['cold']['kernels_s']:6.2f} s;  "
           f"cached {ct['cached']['kernels_s']:6.2f} s;  (import hammerstein "
           f"{ct['cached']['import_s']:.2f} s)")
+    print("   each kernel, cold (the first call; a run compiles only those it calls; "
+          "hammerstein.simulation._compile.COMPILE_SECONDS):")
+    print("   " + ", ".join(f"{k} {v:.2f} s" for k, v in ct["cold"]["each"].items()))
 
     # 4. Fig. 9-like sweep ----------------------------------------------------------
     models = perturbed_models(model)

@@ -41,6 +41,7 @@ from hammerstein.runner import run_scenarios
 from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
                                              load_tolerances, merge_baseline, read_baseline,
                                              resolve_tolerances, summary_line, write_baseline)
+from hammerstein.simulation import announce_compiles
 
 __all__ = ["add_parser", "run_check", "junit_xml"]
 
@@ -157,6 +158,8 @@ def run_check(args):
 
 
 def _check(args, baseline_path, baseline, tolerance):
+    announce_compiles((lambda message: print(message, file=sys.stderr))   # first run: one
+                      if getattr(args, "verbosity", 0) >= 0 else None)      # line before compiling
     outcomes = _run(args.scenarios, args.out)
     names = [o.name for o in outcomes]
     dup = sorted({n for n in names if names.count(n) > 1})

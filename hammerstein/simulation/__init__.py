@@ -9,7 +9,8 @@ nothing of :mod:`hammerstein.core` (which imports it).
 Two backends compute the same thing:
 
 * ``"numba"`` (default): compiled kernels (private ``_kernels``), one loop
-  per record with no Python per sample, compiled on first use and cached;
+  per record with no Python per sample, compiled on first use and cached
+  (:func:`compile_notices` announces a compilation before it starts);
 * ``"numpy"``: plain numpy loops (private ``_oracle``), the reference
   implementation and the test oracle of the kernels.
 
@@ -63,6 +64,7 @@ from hammerstein.simulation._packing import (LANES, ChainState, CompensatorLaw, 
                                              compensator_law_of, finite_array, identity_filter,
                                              pack_model, state_vector)
 from hammerstein.simulation._oracle import compensator_step
+from hammerstein.simulation._compile import announce_compiles, compile_notices
 from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, ChainResult, _fusable,
                                               compensator_law, compensator_state, is_fusable,
                                               simulate_chain, simulate_chain_batch,
@@ -95,4 +97,6 @@ __all__ = [
     "ChainState",
     "LANES",
     "PARALLEL_MIN_SAMPLES",
+    "compile_notices",
+    "announce_compiles",
 ]

@@ -22,9 +22,13 @@ passes as structs:
 ``ChainState(cu, cvf, cs, xf, ps, x)``
     States of a chain run, updated in place.
 
-The batch kernels take the same structures with a leading case axis on every
-field. Numba compiles each kernel on its first call (``cache=True``: once per
-machine), so a run compiles only the kernels it uses.
+The batch kernel (:func:`chain_batch`) takes the same structures with a
+leading case axis on every field, and the records ragged: one flat buffer
+with per-case offsets, no padding to the longest case. Numba compiles each
+kernel on its first call (``cache=True``: once per machine, then loaded from
+the on-disk cache), so a run compiles only the kernels it uses; the batch
+kernel calls :func:`chain_kernel` with the signature of a single run, so
+the two share one compiled chain loop.
 
 Status codes returned by the chain kernels: 0 ok, 1 non-finite input voltage,
 2 input voltage beyond the divergence bound.
@@ -39,8 +43,7 @@ from numba import njit, prange, uint64
 from hammerstein.simulation._packing import (STATUS_BOUND, STATUS_NONFINITE, STATUS_OK, ChainState,
                                              LawArrays, LinearArrays, PIArrays)
 
-__all__ = ["play_kernel", "pi_kernel", "plant_kernel", "chain_kernel",
-           "chain_batch_serial", "chain_batch_parallel",
+__all__ = ["play_kernel", "pi_kernel", "plant_kernel", "chain_kernel", "chain_batch",
            "STATUS_OK", "STATUS_NONFINITE", "STATUS_BOUND"]
 
 # fastmath={'reassoc'} only: lets LLVM vectorise the weighted sums (summation
@@ -339,7 +342,7 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     return STATUS_OK, n_samples
 
 
-# -- batches: every structure carries a leading case axis ------------------------------
+# -- batches: ragged records, every other structure with a leading case axis ----------
 @njit(cache=True, inline="always")
 def _case_pi(pi, b):
     return PIArrays(pi.start[b], pi.r[b], pi.W[b], pi.G[b])
@@ -358,40 +361,84 @@ def _case_law(law, b):
 
 @njit(cache=True, inline="always")
 def _case_state(st, b):
-    return ChainState(st.cu[b], st.cvf[b], st.cs[b], st.xf[b], st.ps[b], st.x[b])
+    """Copies of case b's states, private to the thread that runs it.
+
+    The state rows of neighbouring cases share cache lines (``cu`` is 16
+    bytes a case); updated in place at every sample by two threads, they
+    would bounce between the cores (false sharing).
+    """
+    return ChainState(st.cu[b].copy(), st.cvf[b].copy(), st.cs[b].copy(), st.xf[b].copy(),
+                      st.ps[b].copy(), st.x[b].copy())
+
+
+@njit(cache=True, inline="always")
+def _store_state(st, b, local):
+    """Case b's states back from the thread's copies."""
+    for k in range(local.cu.size):
+        st.cu[b, k] = local.cu[k]
+        st.cvf[b, k] = local.cvf[k]
+    for k in range(local.cs.size):
+        st.cs[b, k] = local.cs[k]
+    for k in range(local.xf.size):
+        st.xf[b, k] = local.xf[k]
+    for k in range(local.ps.size):
+        st.ps[b, k] = local.ps[k]
+    for k in range(local.x.size):
+        st.x[b, k] = local.x[k]
+
+
+@njit(cache=True, inline="always")
+def _record(flat, offsets, b, rows):
+    """Case b's (rows, n_b) record: a C-contiguous view of the ragged ``flat`` buffer."""
+    a = offsets[b]
+    n = offsets[b + 1] - a
+    return flat[rows * a:rows * (a + n)].reshape((rows, n))
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _batch_case(b, yr, lengths, law, comp, prefilter, plant, linear, state,
+def _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
                 u_out, y_out, status, sample):
-    st, sm = chain_kernel(yr[b], lengths[b], _case_law(law, b), _case_pi(comp, b),
-                          _case_linear(prefilter, b), _case_pi(plant, b),
-                          _case_linear(linear, b), True, _case_state(state, b),
-                          u_out[b], y_out[b])
+    """Case b of :func:`chain_batch` (a function of its own: numba's parfor passes lose
+    the updates of arrays copied inside a ``prange`` body)."""
+    p = comp.W.shape[1]
+    m = comp.G.shape[2]
+    pp = plant.W.shape[1]
+    local = _case_state(state, b)
+    st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
+                          _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
+                          _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                          _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
+    _store_state(state, b, local)
     status[b] = st
     sample[b] = sm
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def chain_batch_serial(yr, lengths, law, comp, prefilter, plant, linear, state,
-                       u_out, y_out, status, sample):
-    """Independent chain cases one after the other (fields stacked on axis 0)."""
-    for b in range(yr.shape[0]):
-        _batch_case(b, yr, lengths, law, comp, prefilter, plant, linear, state,
-                    u_out, y_out, status, sample)
-
-
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def chain_batch_parallel(order, yr, lengths, law, comp, prefilter, plant, linear, state,
-                         u_out, y_out, status, sample):
-    """Independent chain cases spread over the cores (numba ``prange``).
+def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+                u_out, y_out, status, sample, worker):
+    """Independent chain cases, spread over ``numba.get_num_threads()`` threads.
 
-    ``order`` (n_cases,) lists the cases so that the equal contiguous chunks
-    the threads receive hold equal work (see ``_stepping._balanced_order``).
+    Records are ragged, not padded: case b's reference is the C-contiguous
+    block ``yr[p * offsets[b] : p * offsets[b+1]]`` viewed as (p, n_b), and
+    likewise its inputs in ``u_out`` (m rows) and outputs in ``y_out``
+    (plant outputs rows); ``offsets`` (n_cases + 1,) int64 are cumulative
+    sample counts. The other structures (``LawArrays``, ``PIArrays``,
+    ``LinearArrays``, ``ChainState``) carry a leading case axis, zero padded
+    to the largest model (zero thresholds, weights and states add exact
+    zeros); each case steps a private copy of its states, stored back at
+    the end. Each case is :func:`chain_kernel` with the very signature of a
+    single run (one compiled loop serves both, so batches equal single runs
+    bit for bit).
+
+    ``order`` (n_cases,) int64 lists the cases so that the equal contiguous
+    chunks numba's ``prange`` gives the threads hold equal work (see
+    ``_stepping._balanced_order``); with one thread it runs them in turn.
+    ``worker`` (n_cases,) int64 receives the thread that ran each case.
     """
     for i in prange(order.size):
         b = order[i]
-        _batch_case(b, yr, lengths, law, comp, prefilter, plant, linear, state,
+        worker[b] = numba.get_thread_id()
+        _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
                     u_out, y_out, status, sample)
 
 
@@ -403,3 +450,14 @@ def threads() -> int:
     int
     """
     return numba.get_num_threads()
+
+
+def set_threads(n: int) -> None:
+    """Set the number of threads of the parallel batch kernel (this Python thread only).
+
+    Parameters
+    ----------
+    n : int
+        1 ... ``numba.config.NUMBA_NUM_THREADS``.
+    """
+    numba.set_num_threads(n)

@@ -527,14 +527,43 @@ def _stack(arrays, shape, dtype=float):
     return out
 
 
+def _ragged(arrays, offsets):
+    """Records (rows, n_b) packed end to end: case b is ``flat[rows*off[b]:rows*off[b+1]]``."""
+    rows = arrays[0].shape[0] if arrays else 0
+    flat = np.empty(rows * int(offsets[-1]))
+    for b, a in enumerate(arrays):
+        flat[rows * offsets[b]:rows * offsets[b + 1]] = a.ravel()
+    return flat
+
+
+def _unpacked(flat, offsets, b, rows):
+    """Case b's (rows, n_b) view of a ragged buffer (see :func:`_ragged`)."""
+    return flat[rows * offsets[b]:rows * offsets[b + 1]].reshape(rows, -1)
+
+
 def _balanced_order(lengths, n_threads):
     """Case order whose ``n_threads`` contiguous equal chunks hold similar work.
 
-    Cases sorted by length are dealt round-robin to the chunks (numba splits
-    a ``prange`` into equal contiguous chunks, one per thread).
+    numba cuts a ``prange`` of n iterations into ``n_threads`` contiguous
+    chunks of ``n // n_threads`` or one more iterations, one per thread.
+    Cases sorted by length, longest first, go greedily to the chunk with the
+    least work that still has room (longest processing time first, with
+    the chunk sizes fixed), so each thread receives about the same number of
+    samples however unequal the cases; every case appears once.
     """
-    by_length = np.argsort(-np.asarray(lengths), kind="stable")
-    return np.concatenate([by_length[i::n_threads] for i in range(n_threads)]).astype(np.int64)
+    lengths = np.asarray(lengths, dtype=np.int64)
+    n_threads = max(1, min(int(n_threads), lengths.size))
+    if n_threads == 1:
+        return np.arange(lengths.size, dtype=np.int64)
+    sizes = [len(c) for c in np.array_split(np.arange(lengths.size), n_threads)]
+    chunks = [[] for _ in range(n_threads)]
+    work = np.zeros(n_threads)
+    for b in np.argsort(-lengths, kind="stable"):
+        room = [k for k in range(n_threads) if len(chunks[k]) < sizes[k]]
+        k = min(room, key=lambda j: work[j])
+        chunks[k].append(b)
+        work[k] += lengths[b]
+    return np.concatenate([np.asarray(c, dtype=np.int64) for c in chunks])
 
 
 def _stack_linear(systems, n, k):
@@ -550,7 +579,10 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
 
     Cases may differ by reference (frequency, amplitude, axis, length), by
     compensator model, gain and law, and by plant, as long as the numbers of
-    inputs and outputs agree. Each case starts from zero states.
+    inputs and outputs agree. Each case starts from zero states. The
+    records are packed end to end (memory in proportion to the samples, not
+    to the number of cases times the longest case), and each case's result
+    equals :func:`simulate_chain` on it bit for bit.
 
     Parameters
     ----------
@@ -561,8 +593,11 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     references : sequence of array_like, each shape (m, n_samples_b)
         Reference displacements [µm] of each case (lengths may differ).
     parallel : bool, optional
-        Spread the cases over the cores (numba ``prange``); by default when
-        there are several cases and at least ``PARALLEL_MIN_SAMPLES`` samples.
+        Spread the cases over ``numba.get_num_threads()`` threads (numba
+        ``prange``, cases in an order that gives each thread equal work); by
+        default when there are several cases and at least
+        ``PARALLEL_MIN_SAMPLES`` samples. Results do not depend on it (each
+        case is computed alone).
 
     Returns
     -------
@@ -600,7 +635,7 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
                                   f"(inputs {m}, outputs {p})")
         yrs.append(_without_offset(law.model, law.model.check_inputs(r, f"references[{b}]")))
     lengths = np.array([r.shape[1] for r in yrs], dtype=np.int64)
-    N = int(lengths.max())
+    offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
     # pack each distinct model / plant once
     cache = {}
 
@@ -634,21 +669,26 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
         np.array([law.prefilter is not None for law in laws], dtype=np.bool_))
     state = ChainState(np.zeros((B, m)), np.zeros((B, m)), np.zeros((B, nc)), np.zeros((B, nf)),
                        np.zeros((B, npl)), np.zeros((B, nx)))
-    u_out, y_out = np.full((B, m, N), np.nan), np.full((B, p, N), np.nan)
+    total = int(offsets[-1])
+    u_out, y_out = np.full(m * total, np.nan), np.full(p * total, np.nan)
     status, sample = np.zeros(B, dtype=np.int64), np.zeros(B, dtype=np.int64)
-    args = (_stack(yrs, (m, N)), lengths, law_arrays, stack_pi(cpk, nc, m),
-            _stack_linear(filters, nf, pc), stack_pi(ppk, npl, p), _stack_linear(lin, nx, p),
-            state, u_out, y_out, status, sample)
+    worker = np.zeros(B, dtype=np.int64)
     if parallel is None:
-        parallel = B > 1 and int(lengths.sum()) >= PARALLEL_MIN_SAMPLES and kernels.threads() > 1
-    if parallel:
-        kernels.chain_batch_parallel(_balanced_order(lengths, kernels.threads()), *args)
-    else:
-        kernels.chain_batch_serial(*args)
+        parallel = B > 1 and total >= PARALLEL_MIN_SAMPLES
+    n_threads = kernels.threads() if parallel else 1
+    order = _balanced_order(lengths, n_threads)
+    previous = kernels.threads()
+    kernels.set_threads(n_threads)
+    try:
+        kernels.chain_batch(order, offsets, _ragged(yrs, offsets), law_arrays,
+                            stack_pi(cpk, nc, m), _stack_linear(filters, nf, pc),
+                            stack_pi(ppk, npl, p), _stack_linear(lin, nx, p), True, state,
+                            u_out, y_out, status, sample, worker)
+    finally:
+        kernels.set_threads(previous)
     results = []
     for b in range(B):
-        n = lengths[b]
-        u, y = u_out[b, :, :n], y_out[b, :, :n]
+        u, y = _unpacked(u_out, offsets, b, m), _unpacked(y_out, offsets, b, p)
         _with_offset(plts[b].hysteresis, y)
         if status[b] != STATUS_OK:
             t = int(sample[b])

@@ -251,15 +251,15 @@ def test_batch_equals_individual_runs(parallel):
               random_plant(rng, base, True), random_plant(rng, base, True)]
     refs = [random_inputs(rng, 2, n) * 3 for n in (250, 90, 300, 200)]
     results = sim.simulate_chain_batch(comps, plants, refs, parallel=parallel)
+    # the batch runs chain_kernel itself on each case: equal bit for bit, not within a tolerance
     for comp, plant, yr, got in zip(comps, plants, refs, results):
         one = sim.simulate_chain(comp, plant, yr)
         assert got.diverged == one.diverged
-        np.testing.assert_allclose(got.inputs, one.inputs, rtol=0, atol=ATOL)
-        np.testing.assert_allclose(got.outputs, one.outputs, rtol=0, atol=ATOL)
+        np.testing.assert_array_equal(got.inputs, one.inputs)
+        np.testing.assert_array_equal(got.outputs, one.outputs)
         if not one.diverged:
-            np.testing.assert_allclose(got.plant_state, one.plant_state, rtol=0, atol=ATOL)
-            np.testing.assert_allclose(got.compensator_state, one.compensator_state,
-                                       rtol=0, atol=ATOL)
+            np.testing.assert_array_equal(got.plant_state, one.plant_state)
+            np.testing.assert_array_equal(got.compensator_state, one.compensator_state)
         else:
             assert got.divergence.sample == one.divergence.sample
     assert results[3].diverged                 # K = 0.1 I: rho(I - K^-1 J) > 1
@@ -360,9 +360,8 @@ def test_batch_runs_prefiltered_and_plain_cases():
         for comp, yr, got in zip(comps, refs,
                                  sim.simulate_chain_batch(comps, plant, refs, parallel=parallel)):
             one = sim.simulate_chain(comp, plant, yr)
-            np.testing.assert_allclose(got.outputs, one.outputs, rtol=0, atol=ATOL)
-            np.testing.assert_allclose(got.compensator_state, one.compensator_state,
-                                       rtol=0, atol=ATOL)
+            np.testing.assert_array_equal(got.outputs, one.outputs)
+            np.testing.assert_array_equal(got.compensator_state, one.compensator_state)
 
 
 def test_prefilter_of_the_wrong_shape_is_named():
@@ -385,3 +384,111 @@ def test_compensators_without_a_law_run_their_own_simulate():
     np.testing.assert_allclose(res.inputs, np.linalg.solve(static.K, yr), rtol=1e-12, atol=1e-12)
     with pytest.raises(CompensatorError, match="packed_law"):
         sim.simulate_chain_batch(static, plant, [yr])
+
+
+# -- the batch kernel: ragged records, thread balance ------------------------------------
+def _sweep_like(rng, n_cases):
+    model = square_model(rng, 2)
+    comps = [InverseMultiplicativeCompensator(model, check="ignore"),
+             InverseMultiplicativeCompensator(model, iterations=2, check="ignore")]
+    plant = random_plant(rng, model, True)
+    lengths = rng.integers(5, 400, n_cases)
+    refs = [random_inputs(rng, 2, int(n)) for n in lengths]
+    return [comps[b % 2] for b in range(n_cases)], plant, refs
+
+
+def test_batch_records_are_ragged_not_padded():
+    rng = np.random.default_rng(700)
+    comps, plant, refs = _sweep_like(rng, 12)
+    refs[3] = random_inputs(rng, 2, 3000)          # one long case
+    results = sim.simulate_chain_batch(comps, plant, refs, parallel=False)
+    total = sum(r.shape[1] for r in refs)
+    for yr, got in zip(refs, results):
+        assert got.inputs.shape == yr.shape and got.outputs.shape == yr.shape
+        assert got.inputs.flags.c_contiguous and got.outputs.flags.c_contiguous
+        # the inputs of every case are views of one buffer of exactly sum(m n_b) values
+        assert got.inputs.base is results[0].inputs.base
+        assert got.inputs.base.size == 2 * total
+
+
+@pytest.mark.parametrize("n_threads", [1, 2])
+def test_batch_is_the_same_on_one_or_two_threads(n_threads):
+    import numba
+    if numba.config.NUMBA_NUM_THREADS < n_threads:
+        pytest.skip("numba has fewer threads")
+    rng = np.random.default_rng(710)
+    comps, plant, refs = _sweep_like(rng, 9)
+    serial = sim.simulate_chain_batch(comps, plant, refs, parallel=False)
+    previous = numba.get_num_threads()
+    numba.set_num_threads(n_threads)
+    try:
+        threaded = sim.simulate_chain_batch(comps, plant, refs, parallel=True)
+    finally:
+        numba.set_num_threads(previous)
+    assert numba.get_num_threads() == previous          # the batch restores the setting
+    for a, b in zip(serial, threaded):
+        np.testing.assert_array_equal(a.outputs, b.outputs)
+        np.testing.assert_array_equal(a.compensator_state, b.compensator_state)
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("n_threads", [2, 3, 4])
+def test_balanced_order_gives_each_thread_equal_work(seed, n_threads):
+    from hammerstein.simulation._stepping import _balanced_order
+    rng = np.random.default_rng(seed)
+    lengths = rng.integers(1, 10_000, int(rng.integers(n_threads, 300)))
+    order = _balanced_order(lengths, n_threads)
+    assert sorted(order.tolist()) == list(range(lengths.size))     # a permutation
+    # numba's prange: n_threads contiguous chunks of n // n_threads or one more
+    work = [lengths[c].sum() for c in np.array_split(order, n_threads)]
+    # greedy longest-first: no thread exceeds another by more than the longest case
+    assert max(work) - min(work) <= lengths.max()
+    assert max(work) <= lengths.sum() / n_threads + lengths.max()
+
+
+# -- compile notices ---------------------------------------------------------------------
+def test_compile_notice_is_one_line_per_top_level_kernel_compilation():
+    from numba.core import event
+
+    from hammerstein.simulation import _compile
+    from hammerstein.simulation import _kernels as kernels
+    messages = []
+
+    def compile_event(dispatcher):
+        return event.trigger_event("numba:compile", data={"dispatcher": dispatcher})
+
+    with sim.compile_notices(messages.append):
+        with compile_event(kernels.chain_kernel):
+            with compile_event(kernels.plant_kernel):        # nested: part of the same wait
+                pass
+        with compile_event(kernels.play_kernel):             # estimated < MIN_NOTICE_SECONDS
+            pass
+        with compile_event(kernels.chain_batch):
+            pass
+    with compile_event(kernels.chain_kernel):                # outside the block: silent
+        pass
+    assert len(messages) == 2
+    assert messages[0].startswith("compiling the simulation kernels once, about ")
+    assert messages[1].startswith("compiling one more simulation kernel once, about ")
+    assert all("\n" not in m for m in messages)
+    assert _compile.COMPILE_SECONDS["play_kernel"] < _compile.MIN_NOTICE_SECONDS
+
+
+def test_loading_a_compiled_kernel_announces_nothing():
+    messages = []
+    model = random_model(np.random.default_rng(0))
+    sim.simulate_hysteresis(model, np.zeros((model.n_inputs, 5)))       # compiled or loaded
+    with sim.compile_notices(messages.append):
+        sim.simulate_hysteresis(model, np.zeros((model.n_inputs, 5)))
+    assert messages == []
+
+
+def test_announce_compiles_keeps_one_listener():
+    from numba.core import event
+    sim.announce_compiles(None)                 # e.g. left on by an in-process CLI run
+    before = len(event._registered["numba:compile"])
+    sim.announce_compiles(print)
+    sim.announce_compiles(print)
+    assert len(event._registered["numba:compile"]) == before + 1
+    sim.announce_compiles(None)
+    assert len(event._registered["numba:compile"]) == before

@@ -1,0 +1,181 @@
+"""Notice of the kernels' one-time compilation (numba), for the CLI and other front ends.
+
+Numba compiles a kernel on its first call and keeps it in its on-disk cache
+(``cache=True``), so only the first run on a machine (or after an upgrade
+of the kernels) waits. :func:`compile_notices` tells a front end *before*
+such a wait, with an estimate: it listens to numba's ``numba:compile``
+event, which numba raises only when the on-disk cache does not hold the
+kernel (a cache hit loads it without the event). Nothing is printed by the
+library itself: without :func:`compile_notices` the notice goes to the
+``hammerstein.simulation`` logger at INFO level (silent by default).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from contextlib import contextmanager
+
+from numba.core import event
+
+from hammerstein.simulation import _kernels
+
+__all__ = ["COMPILE_SECONDS", "MIN_NOTICE_SECONDS", "compile_notices", "announce_compiles",
+           "compile_estimate"]
+
+_LOG = logging.getLogger("hammerstein.simulation")
+
+#: Typical compile time of each kernel [s], cold cache, on the 2-core
+#: development machine (``python benchmarks/benchmark.py``, section 3).
+#: ``chain_batch`` links ``chain_kernel``, compiled first when it is not
+#: cached either.
+COMPILE_SECONDS = {"play_kernel": 0.4, "pi_kernel": 0.5, "plant_kernel": 1.0,
+                   "chain_kernel": 3.0, "chain_batch": 5.0}
+
+#: Compilations estimated below this [s] pass without a notice.
+MIN_NOTICE_SECONDS = 1.5
+
+
+def _dispatchers():
+    return {name: getattr(_kernels, name) for name in COMPILE_SECONDS}
+
+
+def _on_disk(dispatcher):
+    """True when numba's on-disk cache holds a compiled version of ``dispatcher``.
+
+    Reads the cache index (stamped with the source file, so an edited kernel
+    reads as absent); any failure reads as absent.
+    """
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:      # noqa: BLE001 - a private numba API; absent means "estimate it"
+        return False
+
+
+def compile_estimate(name):
+    """Seconds the compilation of kernel ``name`` will take here, from :data:`COMPILE_SECONDS`.
+
+    Includes the kernels it links that are neither loaded nor cached.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`COMPILE_SECONDS`.
+
+    Returns
+    -------
+    float
+        Estimated compile time [s] at the development machine's speed.
+    """
+    seconds = COMPILE_SECONDS[name]
+    if name == "chain_batch":
+        chain = _kernels.chain_kernel
+        if not chain.signatures and not _on_disk(chain):
+            seconds += COMPILE_SECONDS["chain_kernel"]
+    return seconds
+
+
+class _Notices(event.Listener):
+    """Calls ``notify(message)`` before each top-level compilation of a kernel."""
+
+    def __init__(self, notify):
+        self.tell = notify
+        self.names = {id(d): name for name, d in _dispatchers().items()}
+        self.depth = 0
+        self.started = None
+        self.told = False
+        self.scale = 1.0                 # measured / estimated (>= 1), from earlier compilations
+        self.lock = threading.Lock()
+
+    def on_start(self, ev):
+        with self.lock:
+            self.depth += 1
+            name = self.names.get(id(ev.data["dispatcher"]))
+            if self.depth > 1 or name is None:
+                return
+            self.estimate = compile_estimate(name)
+            self.started = time.perf_counter()
+            seconds = self.estimate * self.scale
+            if seconds < MIN_NOTICE_SECONDS:
+                return
+            about = f"about {seconds:.0f} s" if seconds >= 2 else "about 1 s"
+            if self.told:
+                self.tell(f"compiling one more simulation kernel once, {about}")
+            else:
+                self.tell(f"compiling the simulation kernels once, {about} "
+                            f"(numba caches them for later runs)")
+                self.told = True
+
+    def on_end(self, ev):
+        with self.lock:
+            self.depth -= 1
+            if self.depth == 0 and self.started is not None:
+                # a slower machine (or a busy one) scales the later estimates up; the
+                # short compilations are too noisy (fixed costs) to scale anything
+                if self.estimate >= 1.0:
+                    taken = time.perf_counter() - self.started
+                    self.scale = min(3.0, max(1.0, taken / self.estimate))
+                self.started = None
+
+
+@contextmanager
+def compile_notices(notify=None):
+    """Within the block, announce each kernel compilation before it starts.
+
+    A compilation is announced when numba is about to compile one of the
+    simulation kernels because its on-disk cache does not hold it, and the
+    compilation is estimated at :data:`MIN_NOTICE_SECONDS` or more; loads
+    from the cache are silent. The estimate is :func:`compile_estimate`,
+    scaled up (at most 3x) when this process's earlier compilations took
+    longer than theirs (a slower or busy machine).
+
+    Parameters
+    ----------
+    notify : callable, optional
+        Called with a one-line message, e.g. ``"compiling the simulation
+        kernels once, about 3 s (numba caches them for later runs)"``;
+        by default the ``hammerstein.simulation`` logger at INFO level.
+
+    Yields
+    ------
+    None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.simulation import compile_notices, simulate_plays
+    >>> messages = []
+    >>> with compile_notices(messages.append):
+    ...     y, _ = simulate_plays(np.zeros(3), np.zeros(1), np.zeros(1))
+    >>> all(m.startswith("compiling the simulation kernels") for m in messages)
+    True
+    """
+    listener = _Notices(notify if notify is not None else _LOG.info)
+    with event.install_listener("numba:compile", listener):
+        yield
+
+
+_PROCESS = {"listener": None}
+
+
+def announce_compiles(notify):
+    """Announce kernel compilations from now on, process-wide (a command-line front end).
+
+    The same notices as :func:`compile_notices`, without a block: calling it
+    again replaces ``notify`` (one listener per process, so repeated calls
+    never repeat a message); ``None`` stops the notices.
+
+    Parameters
+    ----------
+    notify : callable or None
+        Called with each one-line message (e.g. a print to stderr).
+    """
+    listener = _PROCESS["listener"]
+    if listener is not None:
+        event.unregister("numba:compile", listener)
+        _PROCESS["listener"] = None
+    if notify is not None:
+        listener = _Notices(notify)
+        event.register("numba:compile", listener)
+        _PROCESS["listener"] = listener
