@@ -49,6 +49,7 @@ _LAZY = {
     "bending_modes": "hammerstein.core.dynamics",
     "discretize": "hammerstein.core.dynamics",
     "MultivariablePI": "hammerstein.core.hysteresis",
+    "OutputMap": "hammerstein.core.hysteresis",
     "PrandtlIshlinskii": "hammerstein.core.hysteresis",
     "play": "hammerstein.core.hysteresis",
     "HammersteinPlant": "hammerstein.core.plant",

@@ -80,6 +80,12 @@ def add_parser(subparsers):
     p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
                    help="auto (default): hold out the last complete branches or periods of "
                         "each record; none: train on everything, no validation")
+    p.add_argument("--output-map", choices=["auto", "none", "deadzone"], default="auto",
+                   help="static monotone map after the PI, the modified PI of Kuhnen (one-sided "
+                        "dead zones; models asymmetric and saturating loops, exactly "
+                        "invertible). auto (default): kept when the loop is not "
+                        "point-symmetric and the map lowers the held-out error, or when it "
+                        "lowers it by more than 10 %%; deadzone: always; none: classical PI")
     p.add_argument("--train-fraction", type=float, metavar="F",
                    help="split instead at the reversal point nearest to this fraction of "
                         "each record")
@@ -180,6 +186,8 @@ def _check_usage(args):
         raise _Usage(f"--skip: expected a time >= 0 [s], found {args.skip}")
     if args.bounds != "none" and args.method == "closed-form":
         raise _Usage("--bounds: only used by --method least-squares")
+    if args.output_map == "deadzone" and args.method == "closed-form":
+        raise _Usage("--output-map deadzone: only used by --method least-squares")
     if args.dynamics_records and not args.dynamics:
         raise _Usage("--dynamics-records: only used with --dynamics")
     if args.dynamics and not args.dynamics_records:
@@ -321,7 +329,7 @@ def _metadata(args, fit, records):
             "components": {out: {inp: fit.structure[l][k]
                                  for k, inp in enumerate(fit.model.input_names)}
                            for l, out in enumerate(fit.model.output_names)},
-            "bounds": args.bounds, "sampling_period_s": [r.sampling_period for r in records],
+            "bounds": args.bounds, "output_map": fit.output_map, "sampling_period_s": [r.sampling_period for r in records],
             "input_unit": args.input_unit, "output_unit": args.output_unit,
             "held_out": [s.description for s in fit.splits],
             "notes": list(fit.notes),
@@ -349,7 +357,7 @@ def _handler(args):
         fit = identify_records(
             records, args.method, n, thresholds, "time" if thresholds is not None and
             args.partition == "auto" else args.partition, args.bounds, args.components,
-            args.hold_out, args.train_fraction, args.skip, *names)
+            args.hold_out, args.train_fraction, args.skip, *names, output_map=args.output_map)
         extra = None
         if args.dynamics:
             extra = _dynamics_tables(args, fit)
@@ -405,6 +413,10 @@ def _report(args, fit, records):
                 parts.append(f"{inp}: absent")
         off = 0.0 if model.output_offset is None else model.output_offset[l]
         print(f"  {out} <- " + "; ".join(parts) + f"; output offset {off:.4g} {ou}")
+        mp = None if model.output_map is None else model.output_map[l]
+        if mp is not None:
+            print(f"  {out}: output map, {mp.knots.size} knots, slopes "
+                  f"{mp.slopes.min():.4g}..{mp.slopes.max():.4g}")
     single = model.n_outputs == 1
     for label, reps in (("training", fit.train), ("held-out", fit.validation)):
         for name, rep in zip(model.output_names, reps or []):

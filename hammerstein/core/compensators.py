@@ -518,8 +518,7 @@ def check_reference_range(model: MultivariablePI, reference, warn=True):
             peaks[l] = abs(comp.peak_output(A))
         elif comp is not None:
             peaks[l] = abs(comp) * A
-    if model.output_offset is not None:   # the range is that of Gamma, around the offset
-        yr = yr - model.output_offset[:, None]
+    yr = model.gamma_reference(yr)        # the range is that of Gamma: S^-1(Yr - c)
     reach = np.max(np.abs(yr), axis=1) if yr.shape[1] else np.zeros(model.n_outputs)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(peaks > 0, reach / np.where(peaks > 0, peaks, 1.0), np.where(reach > 0, np.inf, 0.0))
@@ -704,8 +703,7 @@ class StaticGainCompensator:
         self.initial_state(initial_state)
         yr = self.model.check_inputs(reference, "reference")
         check_reference_range(self.model, yr)
-        if self.model.output_offset is not None:   # Gamma(U) = Yr - c
-            yr = yr - self.model.output_offset[:, None]
+        yr = self.model.gamma_reference(yr)        # Gamma(U) = S^-1(Yr - c)
         return self.K_inv @ yr, np.zeros(0)
 
     def packed_law(self):
@@ -890,8 +888,7 @@ class PerAxisInverseCompensator:
         yr = self.model.check_inputs(reference, "reference")
         s = self.initial_state(initial_state)
         check_reference_range(self.model, yr)
-        if self.model.output_offset is not None:   # Gamma(U) = Yr - c
-            yr = yr - self.model.output_offset[:, None]
+        yr = self.model.gamma_reference(yr)        # Gamma(U) = S^-1(Yr - c)
         u = np.empty_like(yr)
         final = s.copy()
         for l, inv in enumerate(self.inverses):

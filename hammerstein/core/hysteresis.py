@@ -28,6 +28,7 @@ __all__ = [
     "play",
     "PrandtlIshlinskii",
     "MultivariablePI",
+    "OutputMap",
     "HysteresisError",
 ]
 
@@ -221,6 +222,143 @@ class PrandtlIshlinskii:
 _Component = "PrandtlIshlinskii | float | None"
 
 
+class OutputMap:
+    """Monotone static output map of the modified PI: one-sided dead zones.
+
+    ``S(h) = a_0 h + sum_j (a_j - a_{j-1}) (max(h - z_j, 0) - max(-z_j, 0))``,
+    a continuous piecewise-linear, strictly increasing map with knots
+    ``z_1 < ... < z_K`` and segment slopes ``a_0, ..., a_K > 0``, through
+    the origin (``S(0) = 0``). It is the superposition of one-sided dead-zone
+    operators of the modified Prandtl-Ishlinskii model of Kuhnen [3]_ written
+    with the slope of each segment: ``y = S(Gamma(u))`` draws asymmetric and
+    saturating loops that a classical PI cannot, and stays exactly
+    invertible, ``S^-1`` being again piecewise linear with knots ``S(z_j)``
+    and slopes ``1 / a_j``.
+
+    Parameters
+    ----------
+    knots : array_like, shape (K,)
+        Strictly increasing knots ``z_j`` in the unit of ``h`` (the PI
+        output, e.g. [µm]); may be empty (a pure gain).
+    slopes : array_like, shape (K + 1,)
+        Positive slope of each segment [-]: left of ``z_1``, between the
+        knots, right of ``z_K``.
+
+    Raises
+    ------
+    HysteresisError
+        If the knots are not finite and strictly increasing, or the slopes
+        are not ``K + 1`` finite positive numbers.
+
+    References
+    ----------
+    .. [3] K. Kuhnen, "Modeling, identification and compensation of complex
+       hysteretic nonlinearities: a modified Prandtl-Ishlinskii approach",
+       European Journal of Control 9(4) (2003), the superposition operator S.
+
+    Examples
+    --------
+    A one-sided saturation: slope 1 below 5 µm, 0.7 above; the inverse
+    undoes it exactly.
+
+    >>> import numpy as np
+    >>> from hammerstein.core.hysteresis import OutputMap
+    >>> s = OutputMap([5.0], [1.0, 0.7])
+    >>> s.apply(np.array([-2.0, 5.0, 10.0]))
+    array([-2. ,  5. ,  8.5])
+    >>> s.inverse(s.apply(np.array([-2.0, 5.0, 10.0])))
+    array([-2.,  5., 10.])
+    """
+
+    def __init__(self, knots, slopes):
+        z = np.atleast_1d(_as_finite_array(knots, "knots")).astype(float).ravel() \
+            if np.size(knots) else np.zeros(0)
+        a = np.atleast_1d(_as_finite_array(slopes, "slopes")).astype(float).ravel()
+        if z.size > 1 and np.any(np.diff(z) <= 0):
+            raise HysteresisError(f"knots: expected strictly increasing values, found {z.tolist()}")
+        if a.size != z.size + 1:
+            raise HysteresisError(f"slopes: expected {z.size + 1} values (one per segment around "
+                                  f"{z.size} knots), found {a.size}")
+        if np.any(a <= 0):
+            raise HysteresisError(f"slopes: expected positive values (a strictly increasing, "
+                                  f"invertible map), found {a.tolist()}")
+        self.knots, self.slopes = z, a
+        self.values = self._forward(z)          # S(z_j), the knots of the inverse
+
+    def __repr__(self):
+        return f"OutputMap(knots={self.knots.tolist()}, slopes={self.slopes.tolist()})"
+
+    def __eq__(self, other):
+        return (isinstance(other, OutputMap) and np.array_equal(self.knots, other.knots)
+                and np.array_equal(self.slopes, other.slopes))
+
+    def _forward(self, h):
+        h = np.asarray(h, dtype=float)
+        y = self.slopes[0] * h
+        for z, da in zip(self.knots, np.diff(self.slopes)):
+            y = y + da * (np.maximum(h - z, 0.0) - max(-z, 0.0))
+        return y
+
+    def apply(self, h):
+        """``S(h)``, element-wise.
+
+        Parameters
+        ----------
+        h : array_like, any shape
+            PI outputs (e.g. [µm]).
+
+        Returns
+        -------
+        numpy.ndarray, same shape
+            Mapped outputs (same unit).
+        """
+        return self._forward(h)
+
+    def inverse(self, y):
+        """``S^-1(y)``, element-wise and exact (piecewise linear).
+
+        Parameters
+        ----------
+        y : array_like, any shape
+            Mapped outputs (e.g. [µm]).
+
+        Returns
+        -------
+        numpy.ndarray, same shape
+            ``h`` with ``S(h) = y``.
+        """
+        y = np.asarray(y, dtype=float)
+        if not self.knots.size:
+            return y / self.slopes[0]
+        seg = np.searchsorted(self.values, y, side="right")   # 0 .. K
+        anchor = np.maximum(seg - 1, 0)
+        return self.knots[anchor] + (y - self.values[anchor]) / self.slopes[seg]
+
+    def derivative(self, h):
+        """Slope ``S'(h)`` [-] (the right derivative at a knot).
+
+        Parameters
+        ----------
+        h : array_like, any shape
+            PI outputs.
+
+        Returns
+        -------
+        numpy.ndarray, same shape
+        """
+        return self.slopes[np.searchsorted(self.knots, np.asarray(h, dtype=float), side="right")]
+
+    def to_table(self):
+        """The map as a model-file table.
+
+        Returns
+        -------
+        dict
+            ``{"knots": [...], "slopes": [...]}`` (lists of floats).
+        """
+        return {"knots": [float(v) for v in self.knots], "slopes": [float(v) for v in self.slopes]}
+
+
 @dataclass
 class MultivariablePI:
     """Multivariable classical PI model, eq. (3)/(4) and Def. 3.2 of [1]_.
@@ -249,6 +387,13 @@ class MultivariablePI:
         :meth:`simulate` and by the plant; the compensators subtract it from
         the reference. Not included by :meth:`evaluate` (the operator
         ``Gamma`` alone). ``None`` means zeros.
+    output_map : sequence of (OutputMap, dict or None), length p, optional
+        Static output map per output, the modified PI of Kuhnen [3]_:
+        ``y_l = S_l(sum_k Gamma_lk(u_k)) + c_l`` (a dict holds ``knots`` and
+        ``slopes``). Applied by :meth:`simulate` and the plant (between the
+        PI and the linear dynamics); the compensators track
+        ``Gamma(U) = S^-1(Yr - c)`` (:meth:`gamma_reference`). ``None`` (or
+        all entries None): the classical PI.
 
     Notes
     -----
@@ -288,6 +433,7 @@ class MultivariablePI:
     output_names: Sequence[str] | None = None
     input_amplitude: np.ndarray | None = None
     output_offset: np.ndarray | None = None
+    output_map: Sequence[object] | None = None
     _flat: dict = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -325,7 +471,89 @@ class MultivariablePI:
                 raise HysteresisError(
                     f"output_offset: expected {p} values (one per output), found {off.tolist()}")
             self.output_offset = None if not np.any(off) else off
+        if self.output_map is not None:
+            maps = list(self.output_map)
+            if len(maps) != p:
+                raise HysteresisError(f"output_map: expected {p} entries (one per output, None "
+                                      f"for none), found {len(maps)}")
+            for l, mp in enumerate(maps):
+                if isinstance(mp, dict):
+                    extra = set(mp) - {"knots", "slopes"}
+                    if extra or "slopes" not in mp:
+                        raise HysteresisError(
+                            f"output_map[{l}]: expected keys knots and slopes, found {sorted(mp)}")
+                    try:
+                        maps[l] = OutputMap(mp.get("knots", []), mp["slopes"])
+                    except HysteresisError as exc:
+                        raise HysteresisError(f"output_map[{l}]: {exc}") from None
+                elif mp is not None and not isinstance(mp, OutputMap):
+                    raise HysteresisError(f"output_map[{l}]: expected an OutputMap, a dict or "
+                                          f"None, found {mp!r}")
+            self.output_map = maps if any(mp is not None for mp in maps) else None
         self._flat = self._flatten()
+
+    # -- static output map (modified PI) -----------------------------------------
+    @property
+    def has_output_map(self) -> bool:
+        """True when some output has a static output map (a modified PI)."""
+        return self.output_map is not None
+
+    def _map_rows(self, y, inverse):
+        y = np.asarray(y, dtype=float)
+        if self.output_map is None:
+            return y
+        out = np.array(y, dtype=float)
+        for l, mp in enumerate(self.output_map):
+            if mp is not None:
+                out[l] = mp.inverse(y[l]) if inverse else mp.apply(y[l])
+        return out
+
+    def output_map_apply(self, h):
+        """``S_l(h_l)`` per output (identity without a map).
+
+        Parameters
+        ----------
+        h : array_like, shape (p, n_samples) or (p,)
+            PI outputs ``Gamma(U)`` [µm].
+
+        Returns
+        -------
+        numpy.ndarray, same shape
+            A new array when the model has a map, ``h`` itself otherwise.
+        """
+        return self._map_rows(h, False)
+
+    def output_map_inverse(self, y):
+        """``S_l^-1(y_l)`` per output, exact (identity without a map).
+
+        Parameters
+        ----------
+        y : array_like, shape (p, n_samples) or (p,)
+            Outputs without offset [µm].
+
+        Returns
+        -------
+        numpy.ndarray, same shape
+        """
+        return self._map_rows(y, True)
+
+    def gamma_reference(self, reference):
+        """``S^-1(Yr - c)``: what ``Gamma(U)`` must follow for the outputs to track ``Yr``.
+
+        Parameters
+        ----------
+        reference : numpy.ndarray, shape (p, n_samples)
+            Reference displacements [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, n_samples)
+            ``reference`` itself for a classical PI without offset.
+        """
+        yr = reference
+        if self.output_offset is not None:
+            yr = yr - self.output_offset[:, None]
+        return self.output_map_inverse(yr) if self.output_map is not None else yr
 
     @staticmethod
     def _names(names, count, prefix, field_name):

@@ -20,7 +20,8 @@ import tomli_w
 
 from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize, sampled_bending_modes
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
+                                         PrandtlIshlinskii)
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.lazy import lazy_module
@@ -177,7 +178,11 @@ def model_from_table(table, source="model"):
         ``input_amplitude`` [V], optional shared ``thresholds`` [V], and
         ``components.<output>.<input>`` tables with ``weights`` [µm/V] and
         optional ``thresholds`` [V], or ``gain`` [µm/V]. Components not
-        listed are absent.
+        listed are absent. Optional ``output_offset`` (one value per output)
+        and ``output_map.<output>`` tables with ``knots`` (strictly
+        increasing, output unit) and ``slopes`` (one more, positive): the
+        static output map of the modified PI
+        (:class:`~hammerstein.core.hysteresis.OutputMap`).
     source : str
         Prefix of error messages (file name).
 
@@ -251,19 +256,53 @@ def model_from_table(table, source="model"):
                                            and np.isfinite(v) for v in offset)):
         problems.append(f"model.output_offset: expected {len(outputs)} finite numbers, one per "
                         f"output, found {offset!r}")
+    maps = None
+    map_table = table.get("output_map")
+    if map_table is not None:
+        if not isinstance(map_table, dict):
+            problems.append("model.output_map: expected a table of [model.output_map.<output>] "
+                            "tables")
+        else:
+            maps = [None] * len(outputs)
+            for out_name, entry in map_table.items():
+                key = f"model.output_map.{out_name}"
+                if out_name not in outputs:
+                    problems.append(f"{key}: unknown output (outputs are {outputs})")
+                    continue
+                if not isinstance(entry, dict):
+                    problems.append(f"{key}: expected a table with knots and slopes")
+                    continue
+                unknown = sorted(set(entry) - set(OUTPUT_MAP_KEYS))
+                if unknown:
+                    problems += [f"{key}.{u}: unknown key{_hint(u, OUTPUT_MAP_KEYS)} (expected "
+                                 f"knots and slopes)" for u in unknown]
+                    continue
+                try:
+                    if "slopes" not in entry:
+                        raise HysteresisError("slopes: missing")
+                    vals = [entry.get("knots", []), entry["slopes"]]
+                    if not all(isinstance(v, list) and all(
+                            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+                            for v in vals):
+                        raise HysteresisError("knots and slopes: expected lists of numbers")
+                    maps[outputs.index(out_name)] = OutputMap(*vals)
+                except HysteresisError as exc:
+                    problems.append(f"{key}: {exc}")
     if problems:
         raise PresetError(f"{source}: " + "; ".join(problems))
     try:
         return MultivariablePI(grid, input_names=inputs, output_names=outputs,
                                input_amplitude=table.get("input_amplitude"),
-                               output_offset=offset)
+                               output_offset=offset, output_map=maps)
     except HysteresisError as exc:
         raise PresetError(f"{source}: model: {exc}") from None
 
 
 #: Keys of a ``[model]`` table.
 MODEL_KEYS = ("inputs", "outputs", "input_unit", "output_unit", "input_amplitude",
-              "thresholds", "output_offset", "components")
+              "thresholds", "output_offset", "components", "output_map")
+#: Keys of one ``[model.output_map.<output>]`` table.
+OUTPUT_MAP_KEYS = ("knots", "slopes")
 #: Keys of one ``[model.components.<output>.<input>]`` table.
 COMPONENT_KEYS = ("weights", "thresholds", "gain")
 
@@ -279,7 +318,8 @@ def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     Thresholds shared by every hysteresis component are written once as
     ``thresholds``; otherwise each component carries its own. Pure gains are
     written as ``gain``, absent components are left out, a non-zero
-    ``output_offset`` is written as a list (one value per output).
+    ``output_offset`` is written as a list (one value per output), output
+    maps as ``output_map.<output>`` tables (``knots``, ``slopes``).
 
     Parameters
     ----------
@@ -318,6 +358,10 @@ def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
                 entry = {"gain": float(c)}
             comps.setdefault(out, {})[inp] = entry
     table["components"] = comps
+    if model.output_map is not None:
+        table["output_map"] = {out: mp.to_table() for out, mp in zip(model.output_names,
+                                                                     model.output_map)
+                               if mp is not None}
     return table
 
 

@@ -23,6 +23,7 @@ writes a report directory like the simulated scenarios::
     bounds = "none"            # least squares: "nonnegative" or "monotone"
     components = "auto"        # "all", or "OUT:IN=pi|gain|none,..."
     hold_out = "auto"          # or "none"; train_fraction = 0.6 splits at the nearest reversal
+    output_map = "auto"        # "none" (classical PI) or "deadzone" (modified PI, always)
 
 The report holds ``metrics.csv`` (cases ``train`` and ``validation``;
 per output channel ``rms_error``, ``rms_error_percent`` [% of the measured
@@ -139,6 +140,7 @@ IDENTIFICATION_FIELDS = {
     "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),
     "components": Field(_components, default="auto"),
     "hold_out": Field(choice("auto", "none"), default="auto"),
+    "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
     "train_fraction": Field(_fraction),
     "skip": Field(number("s", 0, exclusive=False)),
 }
@@ -246,6 +248,9 @@ def load_identification_scenario(path, data):
                         problems, source) or {}
     if ident.get("bounds", "none") != "none" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.bounds: only used by method = 'least-squares'")
+    if ident.get("output_map") == "deadzone" and ident.get("method") == "closed-form":
+        problems.append(f"{source}: identification.output_map: deadzone only with method = "
+                        f"'least-squares'")
     records = []
     if dat is not None:
         files = dat.get("files", [dat["file"]] if "file" in dat else [])
@@ -330,7 +335,7 @@ def run_identification_scenario(scenario):
         scenario.records, spec["method"], spec["n_hysterons"],
         None if thresholds is None else np.asarray(thresholds), partition, spec["bounds"],
         spec["components"], spec["hold_out"], spec.get("train_fraction"), spec.get("skip"),
-        ins, outs)
+        ins, outs, output_map=spec.get("output_map", "auto"))
     if fit.validation is None:
         raise IdentificationError("identification.hold_out: nothing held out; the report "
                                   "needs a validation part (hold_out = 'auto')")

@@ -38,8 +38,15 @@ def _offset(model):
     return None if off is None else np.asarray(off, dtype=float)[:, None]
 
 
+def _has_map(model):
+    """True when a model has a static output map ``S`` (duck-typed ``has_output_map``)."""
+    return bool(getattr(model, "has_output_map", False))
+
+
 def _with_offset(model, y):
-    """``y + c``: the model's output offset (a sensor zero) added to its outputs."""
+    """``S(y) + c``, in place: the output map (if any), then the offset (a sensor zero)."""
+    if _has_map(model):
+        y[...] = model.output_map_apply(y)
     off = _offset(model)
     if off is not None:
         y += off
@@ -47,9 +54,33 @@ def _with_offset(model, y):
 
 
 def _without_offset(model, yr):
-    """``Yr - c``: the reference of ``Gamma`` when the model has an output offset."""
+    """``S^-1(Yr - c)``: the reference of ``Gamma`` (offset and output map undone)."""
     off = _offset(model)
-    return yr if off is None else yr - off
+    yr = yr if off is None else yr - off
+    return model.output_map_inverse(yr) if _has_map(model) else yr
+
+
+def _mapped_plant(plant, u, state, backend):
+    """Plant whose PI has an output map: ``H = S(Gamma(U))`` then the linear part (numpy)."""
+    model = plant.hysteresis
+    nh = model.n_hysterons
+    h, plays = simulate_hysteresis(model, u, state[:nh], backend)
+    off = _offset(model)
+    h = h - off if off is not None else h          # S(Gamma(U)), offset after the dynamics
+    A, B, C, D = plant.matrices
+    x = state[nh:].copy()
+    y = np.empty_like(h)
+    for t in range(h.shape[1]):
+        y[:, t] = C @ x + D @ h[:, t]
+        x = A @ x + B @ h[:, t]
+    return _with_offset_only(model, y), np.concatenate([plays, x])
+
+
+def _with_offset_only(model, y):
+    off = _offset(model)
+    if off is not None:
+        y += off
+    return y
 
 
 def _check_backend(backend):
@@ -177,9 +208,11 @@ def simulate_plant(plant, inputs, initial_state=None, backend="numba"):
     u = model.check_inputs(inputs)
     state = plant.initial_state(initial_state)
     nh = model.n_hysterons
+    if _has_map(model) and not plant.is_static:
+        return _mapped_plant(plant, u, state, backend)
     if backend == "numpy":      # the offset is a sensor zero, after the dynamics
         y, final = oracle.plant(plant, u, state)
-        return _with_offset(model, y), final
+        return _with_offset(model, y), final     # static here when the model has a map
     if plant.is_static:
         return simulate_hysteresis(model, u, state[:nh])
     pk = pack_model(model, state[:nh])
@@ -476,7 +509,7 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     law = _validated(compensator_law_of(compensator))
     if law is not None and law.check_reference is not None:
         law.check_reference(reference)          # as the compensator's simulate does
-    if backend == "numba" and law is not None:
+    if backend == "numba" and law is not None and not _has_map(plant.hysteresis):
         yr = _without_offset(law.model, law.model.check_inputs(reference, "reference"))
         cstate = state_vector(compensator_state, law.n_states)
         pstate = plant.initial_state(plant_state)
@@ -626,6 +659,8 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
             raise CompensatorError(
                 f"compensators: the batch kernel runs compensators with a packed_law() "
                 f"(e.g. InverseMultiplicativeCompensator) only, found {type(c).__name__}")
+    if any(_has_map(pl.hysteresis) for pl in plts):   # S between PI and dynamics: unfused
+        return [simulate_chain(c, pl, r) for c, pl, r in zip(comps, plts, references)]
     m = laws[0].model.n_inputs
     p = plts[0].hysteresis.n_outputs
     yrs = []
