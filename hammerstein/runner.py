@@ -48,6 +48,7 @@ import pandas as pd
 from hammerstein.core.files import deferred_signals, umask
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
+from hammerstein.report.render import FigureJobs, FigureRenderer
 from hammerstein.report.replication import foreign_outputs, write_readme
 from hammerstein.report.scenario import metrics_frame, write_report
 from hammerstein.scenario.records import run_identification_scenario
@@ -62,7 +63,11 @@ __all__ = [
     "ScenarioOutcome",
     "METRIC_COLUMNS",
     "run_scenario",
+    "start_scenario",
+    "PendingScenario",
+    "FigureRenderer",
     "run_scenarios",
+    "run_pipelined",
     "replicate",
     "MARKER",
     "TMP_PREFIX",
@@ -89,16 +94,19 @@ class ScenarioKind:
         resolved), each result with ``name``, ``metrics`` (rows ``{channel,
         metric, value, unit}``) and ``warnings``.
     write : callable
-        ``write(scenario, results, directory)`` fills the report directory.
+        ``write(scenario, results, directory, jobs)`` fills the report
+        directory; its figures go to ``jobs``
+        (:class:`hammerstein.report.render.FigureJobs`), drawn by the
+        runner's renderer before the directory is renamed into place.
     """
 
     simulate: Callable
     write: Callable
 
 
-def _write_cases(scenario, results, directory):
-    write_report(scenario, results, directory)
-    report_identified(scenario, results, directory)
+def _write_cases(scenario, results, directory, jobs):
+    write_report(scenario, results, directory, jobs)
+    report_identified(scenario, results, directory, jobs)
 
 
 # -- registry of scenario kinds: add entries here (and a validator in scenario.validate) ----
@@ -238,15 +246,36 @@ def remove_stale_temporaries(out_dir, before=None):
     return removed
 
 
-def _atomic_write(out_dir, name, writer, force=False):
+def _start_write(out_dir, writer):
+    """A new temporary directory in ``out_dir`` filled by ``writer(tmp)`` (removed on error)."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    target = out_dir / name
-    tmp = old = None
+    tmp = None
     try:
         with deferred_signals():  # the name of what is created is always known
             tmp = _make_temporary(out_dir)
         writer(tmp)
+    except BaseException:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return tmp
+
+
+def _finish_write(out_dir, name, tmp, force=False, jobs=None):
+    """Wait for the figure ``jobs`` writing into ``tmp``, then rename ``tmp`` to ``out_dir/name``.
+
+    ``tmp`` is removed on any error (after the jobs stopped writing into it).
+    """
+    target = Path(out_dir) / name
+    old = None
+    try:
+        try:
+            if jobs is not None:
+                jobs.wait()
+        except BaseException:
+            jobs.cancel()
+            raise
         problem = _ownership_problem(target, force)  # again: it may have appeared meanwhile
         if problem:
             raise ScenarioError([problem])
@@ -263,6 +292,10 @@ def _atomic_write(out_dir, name, writer, force=False):
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
     return target
+
+
+def _atomic_write(out_dir, name, writer, force=False):
+    return _finish_write(out_dir, name, _start_write(out_dir, writer), force)
 
 
 def _case_warnings(results):
@@ -289,36 +322,114 @@ def _message(path, exc):
     return f"{path}: unexpected {type(exc).__name__}: {exc}"
 
 
-def run_scenario(path, out_dir, taken=None, force=False):
-    """Validate, simulate and write the report of one scenario.
+class PendingScenario:
+    """A scenario simulated and written to its temporary directory, its figures still drawing.
+
+    Made by :func:`start_scenario`; :meth:`finish` waits for the figures and
+    renames the report into place (or returns the failure).
+
+    Parameters
+    ----------
+    outcome : ScenarioOutcome
+        The outcome when the report is in place (or the failure).
+    tmp : pathlib.Path or None
+        The temporary directory (None when the scenario already failed).
+    jobs : hammerstein.report.render.FigureJobs or None
+    force : bool
+    out_dir : pathlib.Path or None
+        The reports directory.
+    """
+
+    def __init__(self, outcome, tmp=None, jobs=None, force=False, out_dir=None):
+        self.outcome, self._tmp, self._jobs, self._force = outcome, tmp, jobs, force
+        self._out_dir = out_dir
+
+    @property
+    def name(self):
+        """The scenario's name (its report directory)."""
+        return self.outcome.name
+
+    def done(self):
+        """Whether :meth:`finish` would not wait.
+
+        Returns
+        -------
+        bool
+            True when the figures are drawn or there is nothing to wait for.
+        """
+        return self._tmp is None or self._jobs is None or self._jobs.done()
+
+    def finish(self):
+        """Wait for the figures and rename the report into place.
+
+        Returns
+        -------
+        ScenarioOutcome
+            Not ok (nothing written) when a figure failed or the target
+            cannot be replaced.
+        """
+        if self._tmp is None:
+            return self.outcome
+        o, tmp, self._tmp = self.outcome, self._tmp, None
+        try:
+            target = _finish_write(self._out_dir, o.name, tmp, self._force, self._jobs)
+        except ScenarioError as exc:
+            self.outcome = ScenarioOutcome(o.name, o.path, False, str(exc), None, _empty_metrics())
+        except Exception as exc:  # a failed figure (in a worker too) is the scenario's error
+            self.outcome = ScenarioOutcome(o.name, o.path, False, _message(o.path, exc), None,
+                                           _empty_metrics())
+        else:
+            self.outcome = ScenarioOutcome(o.name, o.path, True, None, target, o.metrics, o.warnings)
+        return self.outcome
+
+    def abandon(self, wait=True):
+        """Cancel the figures and remove the temporary directory (on an interruption).
+
+        Parameters
+        ----------
+        wait : bool
+            Wait for the figures being drawn first; False once the
+            renderer is closed (its workers have exited).
+        """
+        if self._tmp is not None:
+            tmp, self._tmp = self._tmp, None
+            try:
+                if self._jobs is not None:
+                    self._jobs.cancel(wait)
+            finally:
+                shutil.rmtree(tmp, ignore_errors=True)
+
+
+def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
+    """Validate and simulate one scenario, write its report to a temporary directory.
+
+    The figures are handed to ``renderer`` (drawn while the caller goes on);
+    :meth:`PendingScenario.finish` waits for them and renames the report
+    into place.
 
     Parameters
     ----------
     path : str or pathlib.Path
         Scenario TOML file.
     out_dir : str or pathlib.Path
-        Reports directory; the report goes to ``out_dir/<scenario name>/``.
+        Reports directory.
     taken : dict of str to pathlib.Path, optional
-        Report names already written in this run (by :func:`run_scenarios`):
-        a scenario whose name is taken fails instead of overwriting the
-        other scenario's report.
+        Report names already used in this run (see :func:`run_scenario`).
     force : bool
-        Replace ``out_dir/<name>`` even when the project did not write it
-        (default: only a directory with the :data:`MARKER` file, or an
-        empty one, is replaced).
+        See :func:`run_scenario`.
+    renderer : hammerstein.report.render.FigureRenderer, optional
+        Draws the figures; default: drawn here, before returning.
 
     Returns
     -------
-    ScenarioOutcome
-        Never raises for a bad scenario or a failed simulation: ``ok`` is
-        False and ``error`` says why; nothing is written then.
+    PendingScenario
+        Never raises for a bad scenario or a failed simulation.
 
     Raises
     ------
     ScenarioError
-        Never propagates: raised internally when the scenario's name is in
-        ``taken``, then caught like every other exception and reported in
-        the outcome's ``error``.
+        Never propagates: raised internally when the name is in ``taken``
+        and caught like every other exception (the outcome's ``error``).
     """
     path = Path(path)
     name = path.stem
@@ -337,16 +448,117 @@ def run_scenario(path, out_dir, taken=None, force=False):
         results = kind.simulate(scenario)
         frame = metrics_frame(results)
         caught = _case_warnings(results)
+        jobs = FigureJobs(renderer)
 
         def write(d):
-            kind.write(scenario, results, d)
+            kind.write(scenario, results, d, jobs)
             _write_warnings(caught, d)
-        target = _atomic_write(out_dir, name, write, force)
+            jobs.submit()
+        tmp = _start_write(out_dir, write)
     except ScenarioError as exc:
-        return ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics())
+        return PendingScenario(ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics()))
     except Exception as exc:  # a failed scenario must not stop the others
-        return ScenarioOutcome(name, path, False, _message(path, exc), None, _empty_metrics())
-    return ScenarioOutcome(name, path, True, None, target, frame, caught)
+        return PendingScenario(ScenarioOutcome(name, path, False, _message(path, exc), None,
+                                               _empty_metrics()))
+    return PendingScenario(ScenarioOutcome(name, path, True, None, Path(out_dir) / name, frame,
+                                           caught), tmp, jobs, force, Path(out_dir))
+
+
+def run_scenario(path, out_dir, taken=None, force=False, renderer=None):
+    """Validate, simulate and write the report of one scenario.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Scenario TOML file.
+    out_dir : str or pathlib.Path
+        Reports directory; the report goes to ``out_dir/<scenario name>/``.
+    taken : dict of str to pathlib.Path, optional
+        Report names already written in this run (by :func:`run_scenarios`):
+        a scenario whose name is taken fails instead of overwriting the
+        other scenario's report.
+    force : bool
+        Replace ``out_dir/<name>`` even when the project did not write it
+        (default: only a directory with the :data:`MARKER` file, or an
+        empty one, is replaced).
+    renderer : hammerstein.report.render.FigureRenderer, optional
+        Draws the figures (default: in this process).
+
+    Returns
+    -------
+    ScenarioOutcome
+        Never raises for a bad scenario or a failed simulation: ``ok`` is
+        False and ``error`` says why; nothing is written then.
+
+    Raises
+    ------
+    ScenarioError
+        Never propagates: raised internally when the scenario's name is in
+        ``taken``, then caught like every other exception and reported in
+        the outcome's ``error``.
+    """
+    pending = start_scenario(path, out_dir, taken, force, renderer)
+    try:
+        return pending.finish()
+    except BaseException:
+        pending.abandon()
+        raise
+
+
+def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None):
+    """Run scenarios in order, drawing the figures of one while the next simulates.
+
+    Figures go to a :class:`hammerstein.report.render.FigureRenderer` (2
+    worker processes); each report is renamed into place once its figures
+    are drawn, in the order of ``paths``. An interruption cancels the
+    figures and removes every temporary directory of the run.
+
+    Parameters
+    ----------
+    paths : iterable of str or pathlib.Path
+    out_dir : str or pathlib.Path
+    force : bool
+        See :func:`run_scenario`.
+    on_outcome : callable, optional
+        ``on_outcome(path, outcome)`` as each scenario finishes (in order).
+    on_start : callable, optional
+        ``on_start(path)`` before each scenario starts.
+
+    Returns
+    -------
+    list of ScenarioOutcome
+        In the order of ``paths``.
+    """
+    taken, pending, outcomes = {}, [], []
+
+    def finish_ready(block):
+        while pending and (block or pending[0][1].done()):
+            p, job = pending.pop(0)
+            outcome = job.finish()
+            if not outcome.ok and taken.get(outcome.name) == outcome.path:
+                del taken[outcome.name]  # its figures failed: the name is free again
+            outcomes.append(outcome)
+            if on_outcome is not None:
+                on_outcome(p, outcome)
+
+    renderer = FigureRenderer()
+    try:
+        for p in paths:
+            if on_start is not None:
+                on_start(p)
+            job = start_scenario(p, out_dir, taken, force, renderer)
+            if job.outcome.ok:  # the name is reserved while its figures are drawn
+                taken[job.name] = job.outcome.path
+            pending.append((p, job))
+            finish_ready(block=False)
+        finish_ready(block=True)
+    except BaseException:
+        renderer.close(cancel=True)  # its workers have exited: nothing writes any more
+        for _, job in pending:
+            job.abandon(wait=False)
+        raise
+    renderer.close()
+    return outcomes
 
 
 def run_scenarios(paths, out_dir, force=False):
@@ -368,13 +580,7 @@ def run_scenarios(paths, out_dir, force=False):
         In the order of ``paths``.
     """
     remove_stale_temporaries(out_dir)
-    taken, outcomes = {}, []
-    for p in paths:
-        outcome = run_scenario(p, out_dir, taken, force)
-        if outcome.ok:
-            taken[outcome.name] = outcome.path
-        outcomes.append(outcome)
-    return outcomes
+    return run_pipelined(paths, out_dir, force)
 
 
 def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
@@ -414,6 +620,6 @@ def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
         raise FileExistsError(f"{problems[0]}{f' (and {len(problems) - 1} more)' if len(problems) > 1 else ''}; "
                               f"move it away, choose another --out, or use --force to replace it")
     remove_stale_temporaries(out)
-    outcomes = [run_scenario(f, out, force=force) for f in files]
+    outcomes = run_pipelined(files, out, force)
     write_readme(out, outcomes)
     return outcomes

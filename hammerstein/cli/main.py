@@ -32,6 +32,12 @@ import warnings
 from hammerstein.cli._common import one_line, print_err
 from hammerstein.core.files import interrupt
 
+# One BLAS thread unless the user set one: the run's matrices are small and its
+# processes (simulation, figure workers) already use the cores; OpenBLAS threads
+# spinning on a loaded machine cost 2-3x the CPU time of the identification
+# (benchmarks/cli.py). Set before numpy is first imported (nothing above imports it).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 __all__ = ["main", "build_parser", "one_line", "COMMANDS"]
 
 

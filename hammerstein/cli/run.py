@@ -19,7 +19,7 @@ from pathlib import Path
 
 from hammerstein.cli._common import one_line, out_dir_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
-from hammerstein.runner import MARKER, remove_stale_temporaries, run_scenario
+from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
 from hammerstein.simulation import announce_compiles
 
 __all__ = ["add_parser", "handler"]
@@ -72,26 +72,30 @@ def handler(args):
         return 2
     out = Path(args.out)
     remove_stale_temporaries(out)
-    status, taken = 0, {}
     verbosity = getattr(args, "verbosity", 0)
     announce_compiles(print_err if verbosity >= 0 else None)   # first run: before compiling
-    for path in args.scenarios:
+    started, failed = {}, []
+
+    def on_start(path):
         if verbosity > 0:
             print_err(f"{path}: running ...")
-        start = time.perf_counter()
-        outcome = run_scenario(path, out, taken, force=args.force)
+        started[path] = time.perf_counter()
+
+    def on_outcome(path, outcome):
         if outcome.ok:
-            taken[outcome.name] = outcome.path
             n_cases = outcome.metrics["case"].nunique()
             if verbosity >= 0:
-                took = f" in {time.perf_counter() - start:.1f} s" if verbosity > 0 else ""
+                took = f" in {time.perf_counter() - started[path]:.1f} s" if verbosity > 0 else ""
                 print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases){took}")
                 print_warnings(path, outcome.warnings, verbosity)
                 _print_divergences(path, outcome.metrics)
         else:
             print_err(f"error: {one_line(outcome.error, str(path))}")
-            status = 1
-    return status
+            failed.append(path)
+
+    # figures of one scenario are drawn (2 worker processes) while the next one simulates
+    run_pipelined(args.scenarios, out, args.force, on_outcome=on_outcome, on_start=on_start)
+    return 1 if failed else 0
 
 
 def _print_divergences(path, metrics):

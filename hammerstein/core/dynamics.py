@@ -16,12 +16,15 @@ from __future__ import annotations
 
 from typing import Sequence
 
-import control
 import numpy as np
 
+from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import DynamicsError
 
-__all__ = ["DynamicsError", "bending_modes", "discretize", "bandwidths_hz"]
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
+
+__all__ = ["DynamicsError", "bending_modes", "discretize", "bandwidths_hz", "zoh",
+           "SampledSystem", "sampled_bending_modes"]
 
 
 def bending_modes(natural_frequency, damping_ratio, names: Sequence[str] | None = None):
@@ -50,6 +53,12 @@ def bending_modes(natural_frequency, damping_ratio, names: Sequence[str] | None 
         If frequencies or damping ratios are non-positive, non-finite or of
         mismatched length.
     """
+    A, B, C, D, labels = _bending_matrices(natural_frequency, damping_ratio, names)
+    return control.ss(A, B, C, D, name="bending_modes", **labels)
+
+
+def _bending_matrices(natural_frequency, damping_ratio, names):
+    """Continuous (A, B, C, D) and signal names of :func:`bending_modes` (checked)."""
     fn = np.atleast_1d(np.asarray(natural_frequency, dtype=float))
     zeta = np.atleast_1d(np.asarray(damping_ratio, dtype=float))
     if fn.ndim != 1 or fn.shape != zeta.shape:
@@ -73,10 +82,190 @@ def bending_modes(natural_frequency, damping_ratio, names: Sequence[str] | None 
         A[2 * l:2 * l + 2, 2 * l:2 * l + 2] = [[0.0, wn], [-wn, -2 * z * wn]]
         B[2 * l + 1, l] = wn
         C[l, 2 * l] = 1.0
-    return control.ss(A, B, C, np.zeros((p, p)),
-                      inputs=[f"{n}_h" for n in names], outputs=list(names),
-                      states=[f"{n}_{s}" for n in names for s in ("pos", "vel")],
-                      name="bending_modes")
+    return A, B, C, np.zeros((p, p)), {
+        "inputs": [f"{n}_h" for n in names], "outputs": list(names),
+        "states": [f"{n}_{s}" for n in names for s in ("pos", "vel")]}
+
+
+def zoh(A, B, sampling_period):
+    """Zero-order-hold discretisation of ``dx/dt = A x + B u``.
+
+    ``expm(T [[A, B], [0, 0]]) = [[A_d, B_d], [0, I]]`` (the ZOH definition,
+    e.g. Franklin, Powell & Workman, *Digital Control of Dynamic Systems*,
+    Sec. 4.3.3), computed as :func:`scipy.signal.cont2discrete` does for
+    ``method="zoh"``, so the matrices equal those of
+    ``control.sample_system(..., method="zoh")`` without importing
+    python-control.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        Continuous state matrix [1/s].
+    B : array_like, shape (n, m)
+        Continuous input matrix.
+    sampling_period : float
+        T [s], > 0.
+
+    Returns
+    -------
+    A_d : numpy.ndarray, shape (n, n)
+    B_d : numpy.ndarray, shape (n, m)
+
+    Raises
+    ------
+    DynamicsError
+        If the sampling period is not positive.
+
+    Examples
+    --------
+    >>> A_d, B_d = zoh([[-1.0]], [[1.0]], 0.5)
+    >>> bool(np.isclose(A_d[0, 0], np.exp(-0.5)) and np.isclose(B_d[0, 0], 1 - np.exp(-0.5)))
+    True
+    """
+    import scipy.linalg  # lazy: only when a plant with dynamics is built
+
+    if not (np.isfinite(sampling_period) and sampling_period > 0):
+        raise DynamicsError(f"sampling_period: expected a positive time [s], found {sampling_period!r}")
+    A, B = np.atleast_2d(np.asarray(A, dtype=float)), np.atleast_2d(np.asarray(B, dtype=float))
+    n, m = B.shape
+    em = np.vstack((np.hstack((A, B)), np.zeros((m, n + m))))
+    ms = scipy.linalg.expm(sampling_period * em)[:n, :]
+    return ms[:, :n], ms[:, n:]
+
+
+class SampledSystem:
+    """Discrete-time state-space matrices with signal names, python-control on demand.
+
+    What a simulation needs of sampled dynamics (``A, B, C, D, dt`` and the
+    sizes) without importing python-control; :meth:`to_control` gives the
+    ``control.StateSpace`` (as ``control.sample_system`` would) for analysis
+    (Bode, interop, identification).
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (n, n)
+    B : numpy.ndarray, shape (n, m)
+    C : numpy.ndarray, shape (p, n)
+    D : numpy.ndarray, shape (p, m)
+    dt : float
+        Sampling period T [s].
+    inputs, outputs, states : list of str
+        Signal names.
+    name : str
+        System name.
+    """
+
+    def __init__(self, A, B, C, D, dt, inputs, outputs, states, name):
+        self.A, self.B, self.C, self.D = A, B, C, D
+        self.dt, self.name = float(dt), name
+        self.inputs, self.outputs, self.states = list(inputs), list(outputs), list(states)
+
+    ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")
+    noutputs = property(lambda self: self.C.shape[0], doc="Number of outputs p.")
+    nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
+
+    def isdtime(self, strict=False):
+        """Always True: a discrete-time system (python-control's signature).
+
+        Parameters
+        ----------
+        strict : bool
+            Ignored.
+
+        Returns
+        -------
+        bool
+        """
+        return True
+
+    def poles(self):
+        """Eigenvalues of ``A`` (discrete poles z), as ``control.StateSpace.poles``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n,)
+            Complex.
+        """
+        return np.linalg.eigvals(self.A).astype(complex)
+
+    def frequency_response_hz(self, frequencies_hz):
+        """``G(z) = C (z I - A)^-1 B + D`` at ``z = exp(j 2 pi f T)``.
+
+        Parameters
+        ----------
+        frequencies_hz : array_like, shape (n_freq,)
+            [Hz].
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, m, n_freq)
+            Complex gains (as ``control.frequency_response(...).complex``).
+        """
+        f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
+        eye = np.eye(self.nstates)
+        return np.stack([self.C @ np.linalg.solve(np.exp(2j * np.pi * fk * self.dt) * eye - self.A,
+                                                  self.B) + self.D for fk in f], axis=-1)
+
+    @classmethod
+    def from_system(cls, system):
+        """The matrices and names of a discrete ``control.StateSpace``.
+
+        Parameters
+        ----------
+        system : control.StateSpace
+            Discrete-time.
+
+        Returns
+        -------
+        SampledSystem
+        """
+        return cls(np.asarray(system.A), np.asarray(system.B), np.asarray(system.C),
+                   np.asarray(system.D), system.dt, system.input_labels, system.output_labels,
+                   system.state_labels, system.name)
+
+    def to_control(self):
+        """The same system as a ``control.StateSpace``.
+
+        Returns
+        -------
+        control.StateSpace
+            Discrete-time, ``dt`` = the sampling period, same signal names.
+        """
+        return control.ss(self.A, self.B, self.C, self.D, self.dt, inputs=self.inputs,
+                          outputs=self.outputs, states=self.states, name=self.name)
+
+
+def sampled_bending_modes(natural_frequency, damping_ratio, names, sampling_period):
+    """:func:`bending_modes` discretised by zero-order hold, without python-control.
+
+    Equals ``discretize(bending_modes(...), sampling_period)`` (matrices,
+    sampling period and signal names; the system name is
+    ``bending_modes$sampled`` as python-control names a sampled system).
+
+    Parameters
+    ----------
+    natural_frequency : array_like, shape (p,)
+        [Hz], > 0.
+    damping_ratio : array_like, shape (p,)
+        In (0, 1].
+    names : sequence of str or None
+        Names of the p axes.
+    sampling_period : float
+        T [s], > 0.
+
+    Returns
+    -------
+    SampledSystem
+        p inputs [µm], p outputs [µm], 2p states.
+
+    Raises
+    ------
+    DynamicsError
+        As :func:`bending_modes`, or for a non-positive sampling period.
+    """
+    A, B, C, D, labels = _bending_matrices(natural_frequency, damping_ratio, names)
+    Ad, Bd = zoh(A, B, sampling_period)
+    return SampledSystem(Ad, Bd, C, D, sampling_period, name="bending_modes$sampled", **labels)
 
 
 def discretize(system, sampling_period):

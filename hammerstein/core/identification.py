@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, PrandtlIshlinskii, play,
                                         validate_thresholds)
@@ -473,7 +472,9 @@ class LeastSquaresPI:
         elif isinstance(bounds, str):  # monotone: solve for the cumulative sums S
             coef = self._solve_monotone(X, target, u[skip:], y[skip:], r.size)
         else:
-            coef = scipy.optimize.lsq_linear(X, target, bounds=bounds, method="bvls").x
+            from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
+
+            coef = lsq_linear(X, target, bounds=bounds, method="bvls").x
         w = coef[:r.size]
         c = float(coef[-1]) if self.offset else 0.0
         self.thresholds_ = r
@@ -502,7 +503,9 @@ class LeastSquaresPI:
         upper = np.full(X.shape[1], np.inf)
         if self.offset:
             lower[-1] = -np.inf
-        sol = scipy.optimize.lsq_linear(Xs, target, bounds=(lower, upper), method="bvls").x
+        from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
+
+        sol = lsq_linear(Xs, target, bounds=(lower, upper), method="bvls").x
         coef = sol.copy()
         coef[:n] = sign * (M @ sol[:n])
         return coef

@@ -25,11 +25,13 @@ Example
 
 from __future__ import annotations
 
-import control
 import numpy as np
 
 from hammerstein.exceptions import CompensatorError, HysteresisError
+from hammerstein.core.lazy import lazy_module
 from hammerstein.simulation import compensator_law_of, compensator_step
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = ["pi_system", "linear_system", "hammerstein_system", "compensator_system",
            "chain_system", "reference_names"]

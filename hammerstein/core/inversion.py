@@ -54,11 +54,13 @@ References
 
 from __future__ import annotations
 
-import control
 import numpy as np
 import scipy.linalg
 
+from hammerstein.core.lazy import lazy_module
 from hammerstein.core.dynamics import DynamicsError
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = ["InverseSystem", "inverse_system", "ZPETCInverse", "preview_inverse"]
 

@@ -29,13 +29,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import control
 import numpy as np
 import scipy.linalg
-import scipy.signal
 
 from hammerstein.core.dynamics import DynamicsError
+from hammerstein.core.lazy import lazy_module
 from hammerstein.simulation import simulate_hysteresis, simulate_plant
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
     "state_space_dynamics",
@@ -288,12 +289,16 @@ def sensor_filter(sensor, sampling_period):
     bw = None if sensor is None else getattr(sensor, "bandwidth_hz", None)
     if bw is None:
         return None
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
     wc = 2 * np.pi * float(bw)
     b, a, _ = scipy.signal.cont2discrete(([wc], [1.0, wc]), sampling_period, method="bilinear")
     return np.ravel(b), np.ravel(a)
 
 
 def _apply_filter(ba, signal):
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
     b, a = ba
     zi = scipy.signal.lfilter_zi(b, a)
     return np.vstack([scipy.signal.lfilter(b, a, row, zi=zi * row[0])[0] for row in signal])
@@ -447,6 +452,8 @@ def _state_regressors(A, C, u):
     and input, run by :func:`scipy.signal.lfilter`); a loop is used when A is
     defective.
     """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
     n, (m, N) = A.shape[0], u.shape
     p = C.shape[0]
     lam, V = np.linalg.eig(A)

@@ -8,11 +8,11 @@ docs/hammerstein-plant.md). Without dynamics the plant is the static (rate-indep
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hammerstein.core.dynamics import SampledSystem
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
 from hammerstein.simulation import simulate_plant, state_vector
 
@@ -22,7 +22,6 @@ if TYPE_CHECKING:                      # the plant only reads A, B, C, D: no pyt
 __all__ = ["HammersteinPlant"]
 
 
-@dataclass
 class HammersteinPlant:
     """Multivariable PI hysteresis followed by discrete-time linear dynamics.
 
@@ -32,9 +31,12 @@ class HammersteinPlant:
         Rate-independent part, m inputs [V] -> p outputs [µm].
     sampling_period : float
         Sampling period T [s].
-    dynamics : control.StateSpace or None
+    dynamics : control.StateSpace, hammerstein.core.dynamics.SampledSystem or None
         Discrete-time linear part with ``dt == sampling_period``, p inputs and
-        p outputs [µm]; ``None`` for the static plant.
+        p outputs [µm]; ``None`` for the static plant. A ``SampledSystem``
+        (the presets' bending modes) is simulated from its matrices and
+        turned into a ``control.StateSpace`` on the first access of
+        :attr:`dynamics` (python-control is imported only then).
     name : str
         Label used in reports.
 
@@ -50,17 +52,15 @@ class HammersteinPlant:
         period.
     """
 
-    hysteresis: MultivariablePI
-    sampling_period: float
-    dynamics: control.StateSpace | None = None
-    name: str = "plant"
-
-    def __post_init__(self):
+    def __init__(self, hysteresis: MultivariablePI, sampling_period: float,
+                 dynamics: control.StateSpace | None = None, name: str = "plant"):
+        self.hysteresis, self.sampling_period, self.name = hysteresis, sampling_period, name
+        self._dynamics = dynamics
         if not (np.isfinite(self.sampling_period) and self.sampling_period > 0):
             raise HysteresisError(
                 f"sampling_period: expected a positive time [s], found {self.sampling_period!r}")
-        if self.dynamics is not None:
-            d = self.dynamics
+        if dynamics is not None:
+            d = dynamics
             p = self.hysteresis.n_outputs
             if d.ninputs != p or d.noutputs != p:
                 raise HysteresisError(
@@ -71,15 +71,35 @@ class HammersteinPlant:
                     f"dynamics: expected a discrete system with dt={self.sampling_period}, "
                     f"found dt={d.dt}")
 
+    def __repr__(self):
+        return (f"HammersteinPlant(hysteresis={self.hysteresis!r}, sampling_period="
+                f"{self.sampling_period!r}, dynamics={self._dynamics!r}, name={self.name!r})")
+
+    @property
+    def dynamics(self):
+        """The linear part as a ``control.StateSpace`` (None for the static plant)."""
+        if self._dynamics is not None and hasattr(self._dynamics, "to_control"):
+            self._dynamics = self._dynamics.to_control()  # python-control loaded here, once
+        return self._dynamics
+
+    @property
+    def sampled_dynamics(self):
+        """The linear part as a :class:`hammerstein.core.dynamics.SampledSystem` (no python-control).
+
+        None for the static plant.
+        """
+        d = self._dynamics
+        return d if d is None or hasattr(d, "to_control") else SampledSystem.from_system(d)
+
     @property
     def is_static(self) -> bool:
         """True when the plant has no linear dynamics."""
-        return self.dynamics is None
+        return self._dynamics is None
 
     @property
     def n_linear_states(self) -> int:
         """Number of states of the linear part (0 for the static plant)."""
-        return 0 if self.dynamics is None else self.dynamics.nstates
+        return 0 if self._dynamics is None else self._dynamics.nstates
 
     @property
     def n_states(self) -> int:
@@ -89,10 +109,10 @@ class HammersteinPlant:
     @property
     def matrices(self):
         """Discrete ``(A, B, C, D)`` of the linear part, identity-like if static."""
-        if self.dynamics is None:
+        if self._dynamics is None:
             p = self.hysteresis.n_outputs
             return (np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p))
-        d = self.dynamics
+        d = self._dynamics
         return (np.asarray(d.A), np.asarray(d.B), np.asarray(d.C), np.asarray(d.D))
 
     def initial_state(self, initial_state=None):

@@ -15,17 +15,19 @@ import tomllib
 from importlib import resources
 from pathlib import Path
 
-import control
 import numpy as np
 import tomli_w
 
 from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
-from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize, sampled_bending_modes
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii)
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import PresetError
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
     "PresetError",
@@ -429,7 +431,7 @@ _DYNAMICS_KEYS = {"none": set(), "bending_modes": {"natural_frequency", "damping
                   "state_space": {"A", "B", "C", "D"}}
 
 
-def dynamics_from_table(table, outputs, source="preset"):
+def dynamics_from_table(table, outputs, source="preset", build=True):
     """Continuous-time linear dynamics from a ``[dynamics]`` table, or None.
 
     ``kind = "bending_modes"`` with ``natural_frequency`` [Hz] and
@@ -451,11 +453,17 @@ def dynamics_from_table(table, outputs, source="preset"):
         Output names of the preset's PI model (p of them).
     source : str
         Prefix of error messages (file name).
+    build : bool
+        False: bending modes are returned as ``("bending_modes",
+        natural_frequency, damping_ratio)`` (their keys checked) for
+        :func:`hammerstein.core.dynamics.sampled_bending_modes` (no
+        python-control; it checks the values).
 
     Returns
     -------
-    control.StateSpace or None
-        Continuous-time p x p system (None for ``kind = "none"``).
+    control.StateSpace, tuple or None
+        Continuous-time p x p system (None for ``kind = "none"``; a tuple
+        for bending modes with ``build=False``).
 
     Raises
     ------
@@ -510,6 +518,8 @@ def dynamics_from_table(table, outputs, source="preset"):
             raise PresetError(f"{source}: dynamics.{key}: missing")
         if len(np.atleast_1d(table[key])) != len(outputs):
             raise PresetError(f"{source}: dynamics.{key}: expected {len(outputs)} values, one per output")
+    if not build:
+        return ("bending_modes", table["natural_frequency"], table["damping_ratio"])
     try:
         return bending_modes(table["natural_frequency"], table["damping_ratio"], outputs)
     except DynamicsError as exc:
@@ -658,7 +668,13 @@ def load_plant(preset, dynamics=True, base_dir=None):
     model = load_model(path)
     lin = None
     if dynamics:
-        cont = dynamics_from_table(dyn, model.output_names, str(path))
-        lin = discretize(cont, float(T)) if cont is not None else None
+        cont = dynamics_from_table(dyn, model.output_names, str(path), build=False)
+        if isinstance(cont, tuple):  # bending modes: sampled without python-control
+            try:
+                lin = sampled_bending_modes(*cont[1:], model.output_names, float(T))
+            except DynamicsError as exc:
+                raise PresetError(f"{path}: dynamics.{exc}") from None
+        elif cont is not None:
+            lin = discretize(cont, float(T))
     name = meta.get("name", path.stem)
     return HammersteinPlant(model, float(T), lin, name=name)

@@ -52,7 +52,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 
 from hammerstein.core.datafiles import MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
@@ -518,7 +517,9 @@ class _LeastSquares:
         if np.all(np.isinf(lo)) and np.all(np.isinf(hi)):
             coef, *_ = scipy.linalg.lstsq(X, target)
         else:
-            coef = scipy.optimize.lsq_linear(X, target, bounds=(lo, hi), method="bvls").x
+            from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
+
+            coef = lsq_linear(X, target, bounds=(lo, hi), method="bvls").x
         rms = float(np.sqrt(np.mean((target - X @ coef) ** 2)))
         comps = [None] * self.m
         i = 0

@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
@@ -90,6 +89,8 @@ class Sensor:
         if not (np.isfinite(sampling_period) and sampling_period > 0):
             raise ValueError(f"sampling_period: expected > 0 s, found {sampling_period!r}")
         if self.bandwidth_hz is not None:
+            import scipy.signal  # lazy: ~0.5 s to import; only a sensor with a low-pass needs it
+
             wc = 2 * np.pi * self.bandwidth_hz
             b, a, _ = scipy.signal.cont2discrete(([wc], [1.0, wc]), sampling_period,
                                                  method="bilinear")

@@ -1,4 +1,10 @@
-"""Bode comparison of identified and true linear dynamics G (all p x p entries)."""
+"""Bode comparison of identified and true linear dynamics G (all p x p entries).
+
+python-control draws it, imported on first use (a run without identified
+dynamics does not load it). :func:`state_space_data` and
+:func:`dynamics_bode_figure_from_data` carry the systems to a figure worker
+process as arrays (``control.StateSpace`` objects do not pickle).
+"""
 
 from __future__ import annotations
 
@@ -6,11 +12,51 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import control  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-__all__ = ["dynamics_bode_figure"]
+__all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "state_space_data"]
+
+
+def state_space_data(system):
+    """A ``control.StateSpace`` as a picklable dict (matrices, sampling period, signal names).
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        n states, m inputs, p outputs.
+
+    Returns
+    -------
+    dict
+        ``A`` (n, n), ``B`` (n, m), ``C`` (p, n), ``D`` (p, m) arrays,
+        ``dt`` (None, 0 or the sampling period [s]), ``inputs``, ``outputs``
+        (names) and ``name``.
+    """
+    return {"A": np.asarray(system.A), "B": np.asarray(system.B), "C": np.asarray(system.C),
+            "D": np.asarray(system.D), "dt": system.dt, "inputs": list(system.input_labels),
+            "outputs": list(system.output_labels), "name": system.name}
+
+
+def dynamics_bode_figure_from_data(identified, true, **kwargs):
+    """:func:`dynamics_bode_figure` of two systems given by :func:`state_space_data`.
+
+    Parameters
+    ----------
+    identified, true : dict
+        From :func:`state_space_data`.
+    **kwargs
+        Passed to :func:`dynamics_bode_figure`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import control  # lazy: python-control only for runs with identified dynamics
+
+    systems = [control.ss(d["A"], d["B"], d["C"], d["D"], d["dt"], inputs=d["inputs"],
+                          outputs=d["outputs"], name=d["name"]) for d in (identified, true)]
+    return dynamics_bode_figure(*systems, **kwargs)
 
 
 def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identified", "true"),
@@ -45,6 +91,8 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     >>> len(fig.axes) >= 8
     True
     """
+    import control  # lazy: python-control only for runs with identified dynamics
+
     dts = [s.dt for s in (identified, true) if s.isdtime(strict=True)]
     if frequencies_hz is None:
         f_hi = 0.45 / min(dts) if dts else 5000.0

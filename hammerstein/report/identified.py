@@ -15,17 +15,18 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.report.figures import save, scenario_prefix
+from hammerstein.report.figures import scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
 from hammerstein.report.tables import markdown_table
 from hammerstein.core.lti import align_dc_gain, compare_frequency_responses
-from hammerstein.report.dynamics_figure import dynamics_bode_figure
+from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
+from hammerstein.report.render import FigureJobs
 from hammerstein.scenario.identified import save_identified_dynamics, save_identified_models
 
 __all__ = ["report_identified", "model_rms_table"]
 
 
-def report_identified(scenario, results, directory):
+def report_identified(scenario, results, directory, jobs=None):
     """Report hook: save the identified models and list them in ``report.md``.
 
     Called by :func:`hammerstein.runner.run_scenario` after
@@ -41,13 +42,16 @@ def report_identified(scenario, results, directory):
     results : list of hammerstein.scenario.execute.CaseResult
     directory : pathlib.Path
         The report directory being written (contains ``report.md``).
+    jobs : hammerstein.report.render.FigureJobs, optional
+        Collects the figures (the caller waits for them); default: drawn here.
     """
     directory = Path(directory)
+    jobs = FigureJobs() if jobs is None else jobs
     rows = save_identified_models(scenario, directory)
-    _report_dynamics(scenario, directory)
+    _report_dynamics(scenario, directory, jobs)
     # sweep cases ([[sweeps]], hammerstein.scenario.sweeps) are reported by their sweep's table and figure
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
-    figs = _comparison_figures(scenario, results, directory)
+    figs = _comparison_figures(scenario, results, directory, jobs)
     if not rows and not figs:
         return
     lines = []
@@ -60,7 +64,7 @@ def report_identified(scenario, results, directory):
                   "`model-outputs-<case>.csv`.", ""]
         for caption, fname in figs:
             lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
-        for caption, fname, table in _frequency_tables(scenario, results, directory):
+        for caption, fname, table in _frequency_tables(scenario, results, directory, jobs):
             lines += [f"### {caption}", "", f"![{caption}]({fname[0]})", "",
                       f"Table: [`{fname[1]}`]({fname[1]}).", "", markdown_table(table), ""]
     if not rows:
@@ -103,7 +107,7 @@ def _drive_words(rs):
         return "open-loop drives"
 
 
-def _comparison_figures(scenario, results, directory):
+def _comparison_figures(scenario, results, directory, jobs):
     """Plant-vs-model loop grids (Fig. 6) and model output CSVs; [(caption, file)]."""
     groups = {}
     for r in results:
@@ -124,12 +128,11 @@ def _comparison_figures(scenario, results, directory):
                    "x": _last_period(r.inputs[r.spec.driven_input], P(r)),
                    "plant": _last_period(r.outputs, P(r)),
                    "model": _last_period(r.model_outputs, P(r))} for r in rs]
-        fig = model_loop_grid(curves, [f"{n} [V]" for n in model.input_names],
-                              [f"{n} [µm]" for n in model.output_names],
-                              f"{scenario_prefix(scenario)}: {label} plant (solid) vs {mlabel} "
-                              f"(dashed), {_drive_words(rs)} (last period)")
         fname = f"model-vs-plant-{label}{'' if i == 0 else f'-{i + 1}'}.png"
-        save(fig, directory / fname)
+        jobs.add(directory / fname, model_loop_grid, curves,
+                 [f"{n} [V]" for n in model.input_names], [f"{n} [µm]" for n in model.output_names],
+                 f"{scenario_prefix(scenario)}: {label} plant (solid) vs {mlabel} "
+                 f"(dashed), {_drive_words(rs)} (last period)")
         figs.append((f"Model vs plant: {label} plant, {mlabel}", fname))
     return figs
 
@@ -170,7 +173,7 @@ def model_rms_table(results):
     return frame.sort_values(cols[:6], kind="stable").reset_index(drop=True)
 
 
-def _frequency_tables(scenario, results, directory):
+def _frequency_tables(scenario, results, directory, jobs):
     """Fig. 7: model RMS error vs drive frequency for every (plant, model, amplitude)
     group with 3 or more drive frequencies; writes CSV and figure."""
     table = model_rms_table(results)
@@ -189,10 +192,10 @@ def _frequency_tables(scenario, results, directory):
             if ms.get("model") == "identified" and _model_label(ms) == mlabel:
                 f_id = ms["identify"]["frequency"]
                 break
-        fig = rms_vs_frequency_figure(g, list(model.input_names), list(model.output_names),
-                                      f"{scenario_prefix(scenario)}: RMS error of the {mlabel} against the "
-                                      f"{plant} plant, {amp:g} V drives", identification_hz=f_id)
-        save(fig, directory / fig_name)
+        jobs.add(directory / fig_name, rms_vs_frequency_figure, g, list(model.input_names),
+                 list(model.output_names),
+                 f"{scenario_prefix(scenario)}: RMS error of the {mlabel} against the "
+                 f"{plant} plant, {amp:g} V drives", identification_hz=f_id)
         wide = g.pivot_table(index="frequency_hz", columns=["output", "input"],
                              values="model_rms_error")
         wide.columns = [f"{o}<-{k} [µm]" for o, k in wide.columns]
@@ -201,7 +204,7 @@ def _frequency_tables(scenario, results, directory):
     return out
 
 
-def _report_dynamics(scenario, directory):
+def _report_dynamics(scenario, directory, jobs):
     """Section "Identified dynamics": Bode figure identified vs true G (all entries), fits."""
     rows = save_identified_dynamics(scenario, directory)
     if not rows:
@@ -219,9 +222,9 @@ def _report_dynamics(scenario, directory):
         ident, plant, meta = r["identifier"], r["plant"], r["metadata"]
         fname = f"dynamics-bode-{i}.png"
         true = align_dc_gain(plant.dynamics, np.eye(plant.dynamics.noutputs))
-        fig = dynamics_bode_figure(ident.system_, true, labels=("identified", "true G G(0)^-1"),
-                                   title=f"Identified vs true G ({plant.name}), order {ident.order_}")
-        save(fig, directory / fname)
+        jobs.add(directory / fname, dynamics_bode_figure_from_data, state_space_data(ident.system_),
+                 state_space_data(true), labels=("identified", "true G G(0)^-1"),
+                 title=f"Identified vs true G ({plant.name}), order {ident.order_}")
         cmp_ = compare_frequency_responses(ident.system_, true, [10.0, 100.0, 200.0, 300.0])
         val = ", ".join(f"{n}: {v:.2f} %" for n, v in zip(ident.orders_, ident.validation_fit_)
                         if np.isfinite(v))

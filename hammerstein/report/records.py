@@ -15,14 +15,14 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.presets import save_model
-from hammerstein.report import figures as plots
 from hammerstein.report.model_figures import record_fit_figure
+from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
 
 __all__ = ["write_identification_report"]
 
 
-def write_identification_report(scenario, results, directory):
+def write_identification_report(scenario, results, directory, jobs=None):
     """Write metrics.csv, the time series, the model file, the figure and report.md.
 
     Parameters
@@ -32,8 +32,11 @@ def write_identification_report(scenario, results, directory):
         From :func:`run_identification_scenario`.
     directory : pathlib.Path
         Existing (temporary) report directory.
+    jobs : hammerstein.report.render.FigureJobs, optional
+        Collects the figure (the caller waits for it); default: drawn here.
     """
     directory = Path(directory)
+    jobs = FigureJobs() if jobs is None else jobs
     spec, dat = scenario.identification, scenario.data
     fit = results[0].fit
     iu, ou = dat["input_unit"], dat["output_unit"]
@@ -63,12 +66,11 @@ def write_identification_report(scenario, results, directory):
         "validation_rms": [v["rms"] for v in val],
         "validation_rms_percent_of_range": max(v["rms_percent"] for v in val)}, iu, ou)
     train_idx, held_idx = np.flatnonzero(split.train), np.flatnonzero(split.held_out)
-    fig = record_fit_figure(rec.timepts, rec.u[split.excitation], rec.y[0], pred[0],
-                            int(train_idx[0]), int(held_idx[0]) if held_idx.size else rec.n_samples,
-                            f"{model.input_names[split.excitation]} [{iu}]",
-                            f"{model.output_names[0]} [{ou}]",
-                            f"{scenario.title}: measured vs identified PI model")
-    plots.save(fig, directory / "record-fit.png")
+    jobs.add(directory / "record-fit.png", record_fit_figure, rec.timepts,
+             rec.u[split.excitation], rec.y[0], pred[0],
+             int(train_idx[0]), int(held_idx[0]) if held_idx.size else rec.n_samples,
+             f"{model.input_names[split.excitation]} [{iu}]", f"{model.output_names[0]} [{ou}]",
+             f"{scenario.title}: measured vs identified PI model")
     structure = "; ".join(f"{out} <- {inp}: {fit.structure[l][k]}"
                           for l, out in enumerate(model.output_names)
                           for k, inp in enumerate(model.input_names))

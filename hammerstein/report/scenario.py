@@ -22,6 +22,7 @@ import pandas as pd
 
 from hammerstein.core.references import raster_line_index
 from hammerstein.report import figures as plots
+from hammerstein.report.render import FigureJobs
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
 
@@ -254,8 +255,8 @@ def _identified_frequency(spec):
     return None
 
 
-def _figures(scenario, results, directory):
-    """Write the figures; return [(caption, file name)].
+def _figures(scenario, results, directory, jobs):
+    """Add the figure jobs to ``jobs``; return [(caption, file name)].
 
     Figure titles say what each file shows (plant, drives or compensator),
     not the scenario's title. Open-loop drives compared with a model are
@@ -275,12 +276,11 @@ def _figures(scenario, results, directory):
         curves = [{"label": r.name, "column": r.spec.driven_input,
                    "x": _last_period(r.inputs[r.spec.driven_input], r.spec.period_samples),
                    "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
-        fig = plots.loop_grid(curves, [f"{n} [V]" for n in in_names],
-                              [f"{n} [µm]" for n in out_names],
-                              f"{prefix}: open-loop input-output maps, {label} plant, "
-                              f"{_drive_summary(rs)} (last period)")
         fname = f"maps-open-loop-{label}.png"
-        plots.save(fig, directory / fname)
+        jobs.add(directory / fname, plots.loop_grid, curves, [f"{n} [V]" for n in in_names],
+                 [f"{n} [µm]" for n in out_names],
+                 f"{prefix}: open-loop input-output maps, {label} plant, "
+                 f"{_drive_summary(rs)} (last period)")
         figs.append((f"Open-loop hysteresis and cross-couplings, {label} plant", fname))
     # compensated single-axis sines, grouped by plant and compensator
     groups = {}
@@ -296,13 +296,12 @@ def _figures(scenario, results, directory):
                    "x": _last_period(r.reference[r.spec.loop_channel], r.spec.period_samples),
                    "outputs": _last_period(r.outputs, r.spec.period_samples)} for r in rs]
         comp = _compensator_title(rs[0].spec)
-        fig = plots.loop_grid(curves, [f"{n}_r [µm]" for n in out_names],
-                              [f"{n} [µm]" for n in out_names],
-                              f"{prefix}: compensated maps, {label} plant, {comp}; "
-                              f"{_reference_summary(rs)} (last period)",
-                              direct_label="compensated direct", cross_label="residual cross-coupling")
         fname = f"maps-compensated-{label}{'' if seen[label] == 1 else f'-{seen[label]}'}.png"
-        plots.save(fig, directory / fname)
+        jobs.add(directory / fname, plots.loop_grid, curves, [f"{n}_r [µm]" for n in out_names],
+                 [f"{n} [µm]" for n in out_names],
+                 f"{prefix}: compensated maps, {label} plant, {comp}; "
+                 f"{_reference_summary(rs)} (last period)",
+                 direct_label="compensated direct", cross_label="residual cross-coupling")
         figs.append((f"Compensated input-output maps, {label} plant, {comp}", fname))
         f_id = _identified_frequency(rs[0].spec)
         if f_id is not None:
@@ -321,23 +320,21 @@ def _figures(scenario, results, directory):
                                "x": _last_period(r.reference[r.spec.loop_channel], r.spec.period_samples),
                                "outputs": _last_period(r.outputs, r.spec.period_samples)})
         fname = f"maps-compensated-{label}-by-identification.png"
-        fig = plots.loop_grid(curves, [f"{n}_r [µm]" for n in out_names],
-                              [f"{n} [µm]" for n in out_names],
-                              f"{prefix}: compensated maps, {label} plant, one compensator per "
-                              f"identification frequency (last period)",
-                              direct_label="compensated direct", cross_label="residual cross-coupling")
-        plots.save(fig, directory / fname)
+        jobs.add(directory / fname, plots.loop_grid, curves, [f"{n}_r [µm]" for n in out_names],
+                 [f"{n} [µm]" for n in out_names],
+                 f"{prefix}: compensated maps, {label} plant, one compensator per "
+                 f"identification frequency (last period)",
+                 direct_label="compensated direct", cross_label="residual cross-coupling")
         figs.append((f"Compensated input-output maps, {label} plant, compensators identified at "
                      f"{_join_numbers([f for f, _ in groups_f], 'Hz')} (as the paper's Fig. 8)", fname))
     # diverged compensators
     for r in results:
         if r.divergence is not None:
-            fig = plots.divergence_figure(r.inputs, in_names, r.divergence.sample,
-                                          r.divergence.reason,
-                                          f"{prefix}: {r.name}, {_compensator_title(r.spec)}: "
-                                          f"compensator output until divergence")
             fname = f"divergence-{r.name}.png"
-            plots.save(fig, directory / fname)
+            jobs.add(directory / fname, plots.divergence_figure, r.inputs, in_names,
+                     r.divergence.sample, r.divergence.reason,
+                     f"{prefix}: {r.name}, {_compensator_title(r.spec)}: "
+                     f"compensator output until divergence")
             figs.append((f"Case {r.name}: the compensator diverged at sample "
                          f"{r.divergence.sample} (t = {r.diverged_at * 1e3:.3g} ms)", fname))
     # trajectories
@@ -345,12 +342,11 @@ def _figures(scenario, results, directory):
     for r in traj:
         names = out_names[:2]
         settle = r.spec.settle_periods * r.spec.period_samples * r.spec.plant.sampling_period
-        fig = plots.trajectory_figure(r.spec.time, r.reference[:2], r.outputs[:2], names,
-                                      f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, "
-                                      f"{_compensator_title(r.spec)}",
-                                      settle_time=settle, inputs=r.inputs, input_names=in_names)
         fname = f"trajectory-{r.name}.png"
-        plots.save(fig, directory / fname)
+        jobs.add(directory / fname, plots.trajectory_figure, r.spec.time, r.reference[:2],
+                 r.outputs[:2], names,
+                 f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, {_compensator_title(r.spec)}",
+                 settle_time=settle, inputs=r.inputs, input_names=in_names)
         figs.append((f"Case {r.name}: spatial domain, time domain (displacements, input "
                      f"voltages), tracking error", fname))
     if len(traj) > 1:
@@ -359,14 +355,14 @@ def _figures(scenario, results, directory):
             start = int(round(r.spec.settle_periods * r.spec.period_samples))
             curves.append({"label": r.name, "reference": r.reference[:2, start:],
                            "outputs": r.outputs[:2, start:]})
-        fig = plots.xy_overlay(curves, out_names[:2], f"{prefix}: all trajectories after settling")
-        plots.save(fig, directory / "xy-all.png")
+        jobs.add(directory / "xy-all.png", plots.xy_overlay, curves, out_names[:2],
+                 f"{prefix}: all trajectories after settling")
         figs.append(("All trajectories after settling (dashed: references)", "xy-all.png"))
     return figs
 
 
-def _raster_figures(scenario, results, directory):
-    """Error maps of the raster references (one per case); return [(caption, file name)]."""
+def _raster_figures(scenario, results, directory, jobs):
+    """Error maps of the raster references (jobs, one per case); return [(caption, file name)]."""
     figs = []
     for r in results:
         s = r.spec.signal_spec
@@ -376,20 +372,20 @@ def _raster_figures(scenario, results, directory):
         fast, slow = (names.index(o) for o in s["outputs"])
         cycles = r.spec.time * float(s["frequency"])
         e = r.reference - r.outputs
-        fig = plots.raster_error_map(
+        fname = f"raster-error-{r.name}.png"
+        jobs.add(
+            directory / fname, plots.raster_error_map,
             r.reference[fast], e[[fast, slow]],
             [f"{names[fast]}_r - {names[fast]} (fast)", f"{names[slow]}_r - {names[slow]} (slow)"],
             raster_line_index(r.spec.time, s["frequency"]), np.mod(cycles, 1.0) < 0.5,
             float(s["size"][0]), names[fast],
             f"{scenario.title}: {r.name}, tracking error per scan line")
-        fname = f"raster-error-{r.name}.png"
-        plots.save(fig, directory / fname)
         figs.append((f"Case {r.name}: tracking error per scan line against the fast-axis "
                      f"position (trace and retrace)", fname))
     return figs
 
 
-def write_report(scenario, results, directory):
+def write_report(scenario, results, directory, jobs=None):
     """Write metrics.csv, the time series, the figures and report.md.
 
     Parameters
@@ -398,18 +394,21 @@ def write_report(scenario, results, directory):
     results : list of hammerstein.scenario.execute.CaseResult
     directory : pathlib.Path
         Existing (temporary) directory to fill.
+    jobs : hammerstein.report.render.FigureJobs, optional
+        Collects the figures (the caller waits for them); default: drawn here.
     """
     directory = Path(directory)
+    jobs = FigureJobs() if jobs is None else jobs
     frame = metrics_frame(results)
     frame.to_csv(directory / "metrics.csv", index=False)
-    sweep_lines = sweep_report_lines(scenario, results, directory, frame)
+    sweep_lines = sweep_report_lines(scenario, results, directory, frame, jobs)
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     frame = frame[frame["case"].isin([r.name for r in results])]
     for r in results:
         timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
                                    float_format="%.6g")
-    figs = _figures(scenario, results, directory) if results else []
-    figs += _raster_figures(scenario, results, directory)
+    figs = _figures(scenario, results, directory, jobs) if results else []
+    figs += _raster_figures(scenario, results, directory, jobs)
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]

@@ -18,6 +18,7 @@ import pandas as pd
 
 from hammerstein.core.metrics import UNITS
 from hammerstein.report import figures as plots
+from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
 
 __all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines", "metric_label"]
@@ -206,7 +207,7 @@ def stability_figure(frame, title):
     return fig
 
 
-def sweep_report_lines(scenario, results, directory, metrics=None):
+def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
     """Write the sweep CSVs/figures and the stability map of a scenario.
 
     Parameters
@@ -216,6 +217,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
     directory : pathlib.Path
     metrics : pandas.DataFrame, optional
         Long metrics of ``results`` (computed when omitted).
+    jobs : hammerstein.report.render.FigureJobs, optional
+        Collects the figures (the caller waits for them); default: drawn here.
 
     Returns
     -------
@@ -230,6 +233,7 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
         return []
     if metrics is None:
         metrics = metrics_frame(results)
+    jobs = FigureJobs() if jobs is None else jobs
     lines = []
     outputs = list(results[0].spec.plant.hysteresis.output_names) if results else []
     for spec in specs:
@@ -239,10 +243,9 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
         png = None
         if len(spec.frequencies) > 1:
             png = f"sweep-{spec.name}.png"
-            fig = sweep_figure(table, spec, outputs,
-                               f"{plots.scenario_prefix(scenario)}: {metric_label(spec.metric)} "
-                               f"vs frequency, sweep {spec.name}")
-            plots.save(fig, directory / png)
+            jobs.add(directory / png, sweep_figure, table, spec, outputs,
+                     f"{plots.scenario_prefix(scenario)}: {metric_label(spec.metric)} "
+                     f"vs frequency, sweep {spec.name}")
         n_div = int(table["diverged_at_time"].notna().groupby(
             [table["compensator"], table["axis"], table["frequency_hz"]]).any().sum()) \
             if "diverged_at_time" in table else 0
@@ -274,7 +277,7 @@ def sweep_report_lines(scenario, results, directory, metrics=None):
             lines += ["Warnings:", ""] + [f"- {n} case(s): {w}" for w, n in warned.items()] + [""]
     if smap is not None:
         smap.to_csv(directory / "stability-map.csv", index=False, float_format="%.6g")
-        plots.save(stability_figure(smap, f"{scenario.title}"), directory / "stability-map.png")
+        jobs.add(directory / "stability-map.png", stability_figure, smap, f"{scenario.title}")
         laws = pd.DataFrame([{"compensator": k, **v} for k, v in smap.attrs.get("laws", {}).items()])
         lines += ["## Stability map", "",
                   "Largest spectral radius of the fixed-point iteration over the model's reachable "

@@ -30,7 +30,6 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
-import control
 import numpy as np
 
 from hammerstein.core.dynamics import DynamicsError
@@ -41,9 +40,12 @@ from hammerstein.core.presets import (PresetError, load_dynamics, load_model, mo
                                       save_dynamics, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
 from hammerstein.exceptions import NestedInvalid
+from hammerstein.core.lazy import lazy_module
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, _short,
                                          boolean, check_table, choice,
                                          integer, number)
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
     "IDENTIFY_FIELDS",
@@ -164,8 +166,8 @@ def _plant_fingerprint(plant):
     """Content hash of a plant: PI model table, sampling period, dynamics matrices."""
     h = hashlib.sha1(repr(model_to_table(plant.hysteresis)).encode())
     h.update(repr(float(plant.sampling_period)).encode())
-    if plant.dynamics is not None:
-        for mat in (plant.dynamics.A, plant.dynamics.B, plant.dynamics.C, plant.dynamics.D):
+    if not plant.is_static:  # the matrices: no python-control needed
+        for mat in plant.matrices:
             h.update(np.ascontiguousarray(mat, dtype=float).tobytes())
     else:
         h.update(b"static")

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from hammerstein.core.lti import compare_frequency_responses, modal_parameters
+from hammerstein.core.lti import modal_parameters
 from hammerstein.core.presets import PresetError
 from hammerstein.scenario.identified import resolve_comparison_model
 from hammerstein.scenario.registry import RATE_INDEPENDENT, build_compensator
@@ -85,7 +85,7 @@ def dynamics_warning(case):
         The warning, pointing to ``kind = "hammerstein"``.
     """
     plant = case.plant
-    if plant is None or plant.dynamics is None:
+    if plant is None or plant.is_static:
         return None
     kind = (case.compensator_spec or {}).get("kind", "none")
     static_model = case.mode == "drive" and case.model_spec is not None
@@ -95,10 +95,11 @@ def dynamics_warning(case):
     f = max(np.atleast_1d(sig.get("frequencies", sig.get("frequency", 0.0))), default=0.0)
     if not f > 0:
         return None
-    fn, zeta = modal_parameters(plant.dynamics)
+    lin = plant.sampled_dynamics  # numpy only: python-control is not loaded for a warning
+    fn, zeta = modal_parameters(lin)
     resonant = fn[zeta < 1.0 / np.sqrt(2.0)]
     f_res = float(resonant.min()) if resonant.size else float(fn.min())
-    c = compare_frequency_responses(plant.dynamics, plant.dynamics, [1e-3, float(f)])["true"]
+    c = lin.frequency_response_hz([1e-3, float(f)])
     dev = float(np.linalg.norm(c[:, :, 1] @ np.linalg.inv(np.real(c[:, :, 0]))
                                - np.eye(c.shape[0]), 2))
     if f <= RESONANCE_FRACTION * f_res and dev <= GAIN_DEVIATION:

@@ -386,7 +386,7 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
     if "identify_dynamics" in spec and dyn != "identified":
         out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
     if dyn in ("plant", "identified"):
-        if plant.dynamics is None:
+        if plant.is_static:
             out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
     else:
         path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
@@ -477,7 +477,7 @@ def _validate_cases(path, data):
             except PresetError as exc:
                 plants[(pspec["preset"], bool(pspec.get("dynamics", True)))] = None
                 problems.append(f"{source}: {where}.plant.preset: {exc}")
-            if plant is not None and pspec.get("dynamics") is True and plant.dynamics is None:
+            if plant is not None and pspec.get("dynamics") is True and plant.is_static:
                 key = f"{where}.plant" if "dynamics" in plant_clean else "plant"
                 once(f"{source}: {key}.dynamics: true, but the preset {pspec['preset']!r} has no "
                      f"[dynamics] (or kind = 'none'); set dynamics = false for its static plant")

@@ -1,0 +1,253 @@
+"""Figure jobs of the reports and the renderer that runs them (inline or in a process pool).
+
+The report code does not draw: it collects one :class:`FigureJob` per PNG
+(a module-level figure function, its picklable arguments, the file) into a
+:class:`FigureJobs` list, and a :class:`FigureRenderer` runs them. Without a
+renderer (``FigureJobs()``) every job is drawn at once in the calling
+process, as a plain function call would. The runner of ``hammerstein
+run``/``check``/``replicate`` uses a renderer with a pool of 2 worker
+processes (``multiprocessing`` fork context: the workers inherit the
+imported matplotlib and draw while the next scenario simulates); it waits
+for a report's figures (:meth:`FigureJobs.wait`) before the report
+directory is renamed into place, and an error raised in a worker is raised
+again there, so it becomes the scenario's one-line error. Where fork is not
+available, or for a batch of one figure while no pool runs, figures are
+drawn inline.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import signal
+from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import wait as wait_futures
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from hammerstein.report.figures import save
+
+__all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "WORKERS"]
+
+#: Worker processes of the pool of :class:`FigureRenderer` (the machine the
+#: targets are set on has 2 cores; the main process simulates meanwhile).
+WORKERS = 2
+
+
+@dataclass(frozen=True)
+class FigureJob:
+    """One PNG of a report: ``save(function(*args, **kwargs), path)``.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The PNG file to write.
+    function : callable
+        A module-level function returning a ``matplotlib.figure.Figure``
+        (pickled by reference for the pool).
+    args : tuple
+        Positional arguments (arrays, strings, frames: picklable).
+    kwargs : dict
+        Keyword arguments.
+    """
+
+    path: Path
+    function: Callable
+    args: tuple = ()
+    kwargs: dict = field(default_factory=dict)
+
+
+def render_job(job):
+    """Draw and write one figure job (the function the pool workers run).
+
+    Parameters
+    ----------
+    job : FigureJob
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+    """
+    save(job.function(*job.args, **job.kwargs), job.path)
+    return job.path
+
+
+def _done(value=None, error=None):
+    f = Future()
+    if error is None:
+        f.set_result(value)
+    else:
+        f.set_exception(error)
+    return f
+
+
+class FigureJobs:
+    """The figure jobs of one report directory.
+
+    Parameters
+    ----------
+    renderer : FigureRenderer, optional
+        Runs the jobs; without one each job is drawn when added.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> from hammerstein.report.figures import divergence_figure
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> jobs = FigureJobs()
+    >>> jobs.add(d / "div.png", divergence_figure, np.zeros((2, 10)), ["u1", "u2"], 5, "test", "t")
+    >>> jobs.wait(); (d / "div.png").exists()
+    True
+    """
+
+    def __init__(self, renderer=None):
+        self.renderer = renderer
+        self._queued = []
+        self._futures = []
+
+    def add(self, path, function, *args, **kwargs):
+        """Add the job ``save(function(*args, **kwargs), path)``.
+
+        Drawn at once without a renderer (errors raised here); queued
+        otherwise until :meth:`submit` or :meth:`wait`.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The PNG file.
+        function : callable
+            Module-level function returning a ``matplotlib.figure.Figure``.
+        *args, **kwargs
+            Its arguments (picklable: arrays, strings, frames, dicts).
+
+        Raises
+        ------
+        Exception
+            Whatever ``function`` or the PNG writer raises, when drawn at once.
+        """
+        job = FigureJob(Path(path), function, args, kwargs)
+        if self.renderer is None:
+            render_job(job)
+        else:
+            self._queued.append(job)
+
+    def submit(self):
+        """Hand the queued jobs to the renderer (they run while the caller goes on)."""
+        if self._queued:
+            self._futures += self.renderer.submit(self._queued)
+            self._queued = []
+
+    def done(self):
+        """Whether every job has finished (successfully or not).
+
+        Returns
+        -------
+        bool
+        """
+        return not self._queued and all(f.done() for f in self._futures)
+
+    def wait(self):
+        """Run or wait for every job; then raise the first job's error, if any.
+
+        Raises
+        ------
+        Exception
+            The first error of a job (after all of them have finished, so
+            no worker still writes into the directory).
+        """
+        self.submit()
+        wait_futures(self._futures)
+        for f in self._futures:
+            if f.exception() is not None:
+                raise f.exception()
+
+    def cancel(self, wait=True):
+        """Cancel the jobs not started; wait for the running ones (before removing the directory).
+
+        Parameters
+        ----------
+        wait : bool
+            False once the renderer's pool is shut down (its workers have
+            exited, so nothing writes any more; the futures of jobs it had
+            started may never finish then).
+        """
+        self._queued = []
+        for f in self._futures:
+            f.cancel()
+        if wait:
+            wait_futures(self._futures)
+
+
+def _worker_init():
+    # the parent handles Ctrl-C/SIGTERM (and cancels); a worker finishes its figure
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+class FigureRenderer:
+    """Runs figure jobs in a pool of forked worker processes (or inline).
+
+    A context manager; the pool starts with the first batch of two or more
+    jobs and stops on exit (pending jobs are cancelled when leaving on an
+    error). Inline where the fork start method is unavailable, with
+    ``workers < 2``, or after the pool broke (a worker killed).
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (default :data:`WORKERS`).
+    """
+
+    def __init__(self, workers=WORKERS):
+        self.workers = int(workers) if "fork" in multiprocessing.get_all_start_methods() else 0
+        self._pool = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        self.close(cancel=exc_type is not None)
+        return False
+
+    def close(self, cancel=False):
+        """Stop the pool; wait for the running jobs.
+
+        Parameters
+        ----------
+        cancel : bool
+            Drop the jobs not started yet.
+        """
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=cancel)
+            self._pool = None
+
+    def submit(self, jobs):
+        """Start the jobs; return one ``concurrent.futures.Future`` per job.
+
+        Parameters
+        ----------
+        jobs : list of FigureJob
+
+        Returns
+        -------
+        list of concurrent.futures.Future
+            Already finished for jobs drawn inline (their error is set on
+            the future, not raised).
+        """
+        if self._pool is None and self.workers >= 2 and len(jobs) >= 2:
+            self._pool = ProcessPoolExecutor(self.workers, multiprocessing.get_context("fork"),
+                                             initializer=_worker_init)
+        if self._pool is not None:
+            try:
+                return [self._pool.submit(render_job, j) for j in jobs]
+            except BrokenProcessPool:  # a worker died: draw the rest here
+                self._pool, self.workers = None, 0
+        out = []
+        for j in jobs:
+            try:
+                out.append(_done(render_job(j)))
+            except Exception as exc:
+                out.append(_done(error=exc))
+        return out
