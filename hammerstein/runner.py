@@ -496,6 +496,31 @@ def run_scenario(path, out_dir, taken=None, force=False, renderer=None):
         Never propagates: raised internally when the scenario's name is in
         ``taken``, then caught like every other exception and reported in
         the outcome's ``error``.
+
+    Examples
+    --------
+    A 10 V, 50 Hz sine on u_x of the static plant: its x loop spans
+    ``2 sum_i w_i (A - r_i)`` = 116.8 µm peak to peak (the closed form of the
+    PI's peak output, docs/operators.md).
+
+    >>> import pathlib, tempfile
+    >>> from hammerstein import run_scenario
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (folder / "tiny.toml").write_text('''
+    ... [plant]
+    ... preset = "rakotondrabe-2dof"
+    ... dynamics = false
+    ... [[cases]]
+    ... name = "open-loop"
+    ... drive = { kind = "sine", input = "ux", amplitude = 10.0, frequency = 50.0, periods = 2 }
+    ... ''')
+    >>> outcome = run_scenario(folder / "tiny.toml", folder / "reports")
+    >>> outcome.ok, outcome.out_dir.name
+    (True, 'tiny')
+    >>> m = outcome.metrics
+    >>> row = (m.case == "open-loop") & (m.channel == "x") & (m.metric == "peak_to_peak")
+    >>> print(f"{m[row].value.item():.1f} µm")
+    116.8 µm
     """
     pending = start_scenario(path, out_dir, taken, force, renderer)
     try:

@@ -10,7 +10,7 @@ import pytest
 import hammerstein.core
 import hammerstein.simulation
 
-MODULES = ["hammerstein.exceptions", "hammerstein.simulation"] + sorted(
+MODULES = ["hammerstein.exceptions", "hammerstein.simulation", "hammerstein.runner"] + sorted(
     info.name for pkg in (hammerstein.core, hammerstein.simulation)
     for info in pkgutil.iter_modules(pkg.__path__, pkg.__name__ + "."))
 
@@ -27,7 +27,7 @@ def test_examples_run(name):
 @pytest.mark.parametrize("name", [
     "MultivariablePI", "simulate_chain", "InverseMultiplicativeCompensator",
     "PerAxisInverseCompensator", "StaticGainCompensator", "diagonal_compensator",
-    "MultivariableIdentifier"])
+    "MultivariableIdentifier", "run_scenario"])
 def test_main_objects_have_examples(name):
     import hammerstein
     examples = doctest.DocTestFinder(recurse=False).find(getattr(hammerstein, name))
