@@ -143,7 +143,7 @@ def _written_by_us(path, kind):
     except OSError:
         return False
     if kind == "model":
-        import tomllib
+        import tomllib  # lazy: only to read an existing model file
         try:
             return "model" in tomllib.loads(bounded_read_text(path, "toml", "model file"))
         except (OSError, ValueError, tomllib.TOMLDecodeError, UnicodeDecodeError):
@@ -242,7 +242,7 @@ def metrics_rows(fit, output_unit):
 
 
 def _write_metrics(path, rows):
-    import pandas as pd
+    import pandas as pd  # lazy: only for --metrics
     frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
     _atomic_write(path, lambda fh: fh.write(frame.to_csv(index=False, float_format="%.7g").encode()))
 
@@ -270,7 +270,7 @@ def fit_figure(fit, input_unit, output_unit):
     matplotlib.figure.Figure
         p rows by m + 1 columns of axes; the caller saves and closes it.
     """
-    import matplotlib
+    import matplotlib  # lazy: only for --plot
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     model = fit.model
@@ -312,7 +312,7 @@ def fit_figure(fit, input_unit, output_unit):
 
 
 def _write_plot(path, fit, input_unit, output_unit):
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: only for --plot
     fig = fit_figure(fit, input_unit, output_unit)
     try:
         _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))

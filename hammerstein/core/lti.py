@@ -530,8 +530,8 @@ class _MultiRecordMOESP:
     """
 
     def __init__(self, ins, outs, block_rows):
-        import pandas as pd
-        from nfoursid.nfoursid import NFourSID
+        import pandas as pd  # lazy: nfoursid's interface takes DataFrames
+        from nfoursid.nfoursid import NFourSID  # lazy: only when dynamics are identified
         from nfoursid.utils import Utils
         m, p = ins[0].shape[0], outs[0].shape[0]
         cols_u = [f"u{i}" for i in range(m)]
