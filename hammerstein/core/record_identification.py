@@ -16,8 +16,10 @@ What it does, in order:
    periods, at least one branch); the rest trains. A record holding a single
    closed loop (one ascending and one descending branch, ending where it
    started) is rotated to start at its minimum and its play states start on
-   the steady loop, so its ascending branch trains and its descending branch
-   is held out. Before the first complete branch the play states depend on
+   the steady loop; least squares trains on both branches and holds out
+   every third of 30 blocks of each (a loop that is not point-symmetric
+   cannot be told from one branch), the closed form trains on the ascending branch and holds
+   out the descending one. Before the first complete branch the play states depend on
    an unknown history: those samples only warm up the play states (burn-in).
 2. **Thresholds** per input: ``time`` (Remark 5.1 of the paper, the instants
    that split the first complete branch into n + 1 equal parts), ``input``
@@ -60,7 +62,11 @@ from hammerstein.core import lti
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError,
                                              partition_thresholds)
 
+#: a single closed loop fitted by least squares: blocks per branch, every third held out
+HOLD_OUT_BLOCKS = 30
+
 __all__ = [
+    "HOLD_OUT_BLOCKS",
     "REVERSAL_BAND",
     "COMPLETE_TRAVEL",
     "PRUNE_TOLERANCE",
@@ -305,6 +311,17 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
             while c - h < 2 and h > 1:
                 h -= 1
             held[branches[complete[-h]][0]:] = True
+        elif c == 2 and periodic and method != "closed-form":
+            # one closed loop, least squares: both branches train (their turning points
+            # set the play memory, and a loop that is not point-symmetric cannot be told
+            # from one branch); every third of HOLD_OUT_BLOCKS blocks of each branch is
+            # held out and predicted, so every threshold's breakpoint has training
+            # samples next to it
+            for i in complete:
+                a, b, _ = branches[i]
+                edges = np.linspace(a, b + 1, HOLD_OUT_BLOCKS + 1).astype(int)
+                for j in range(1, HOLD_OUT_BLOCKS, 3):
+                    held[edges[j]:edges[j + 1]] = True
         elif c == 2:
             held[branches[complete[-1]][0]:] = True
         elif len(branches) >= 6:           # broadband: no full-span branch, split at a reversal
@@ -339,6 +356,16 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
     return record, split
 
 
+def _one_branch_held_mask(held):
+    """True when a held-out mask is one contiguous block (a whole branch of a closed loop)."""
+    return np.count_nonzero(np.diff(held.astype(np.int8))) <= 2
+
+
+def _one_branch_held(split):
+    """True when a closed loop's held-out part is one contiguous block (a whole branch)."""
+    return _one_branch_held_mask(split.held_out)
+
+
 def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
     u = record.u[k]
     n = u.size
@@ -354,7 +381,13 @@ def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
     train = ~held
     train[:burn] = False
     T = record.sampling_period
-    if held.any():
+    if held.any() and periodic and not _one_branch_held_mask(held):
+        idx = np.flatnonzero(held)
+        parts = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+        desc = (f"held out {idx.size} samples in {len(parts)} blocks, every third block of "
+                f"each branch of the closed loop ({parts[0][0]}..{parts[0][-1]}, ...); both "
+                f"branches and their turning points train")
+    elif held.any():
         idx = np.flatnonzero(held)
         n_br = sum(1 for a, b, ok in branches if ok and held[a:b + 1].all())
         what = (f"{n_br} complete branch{'es' if n_br != 1 else ''}"
@@ -889,7 +922,7 @@ def _with_output_map(fit, output_map, bounds, classical, asymmetric):
                          f"(modified PI; {why}{numbers})")
     else:
         fit.notes.append(f"output map: deadzone ({numbers})")
-    if val is not None and any(s.periodic for s in fit.splits):
+    if val is not None and any(s.periodic and _one_branch_held(s) for s in fit.splits):
         fit.notes.append("output map: one closed loop trains on its ascending branch only, on "
                          "which the PI and the map can be traded against each other; the "
                          "held-out branch is extrapolated: record two periods or more, or train "

@@ -198,10 +198,16 @@ def test_single_closed_loop_trained_on_both_branches(tmp_path, capsys, kind):
     assert _stated(out, "training") <= 1.0
 
 
-def test_single_closed_loop_says_the_falling_branch_is_extrapolated(tmp_path, capsys):
-    u, y = _loop("one-sided", periods=1)
-    out, _ = _identify(tmp_path, capsys, u, y, "--output-map", "deadzone")
-    assert "held-out branch is extrapolated" in out
+@pytest.mark.parametrize("kind", ["tanh", "one-sided"])
+def test_single_lopsided_loop_is_predicted_on_held_out_blocks_of_both_branches(
+        tmp_path, capsys, kind):
+    u, y = _loop(kind, periods=1)
+    out, _ = _identify(tmp_path, capsys, u, y)
+    assert "every third block of each branch" in out
+    assert "held-out branch is extrapolated" not in out
+    assert _stated(out, "held-out") <= 1.0
+    out_pi, _ = _identify(tmp_path, capsys, u, y, "--output-map", "none")
+    assert _stated(out, "held-out") < _stated(out_pi, "held-out")
 
 
 def test_symmetric_loop_keeps_the_classical_pi(tmp_path, capsys):
