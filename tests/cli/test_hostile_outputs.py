@@ -17,6 +17,7 @@ from hammerstein.cli.main import main
 from hammerstein.core.files import FileLimitError, safe_write
 from hammerstein.report.replication import README_MARK, foreign_outputs
 from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries
+from snapshots import tree_snapshot
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good" / "good-static.toml"
@@ -29,22 +30,6 @@ def _call(capsys, *argv):
     out, err = capsys.readouterr()
     assert "Traceback" not in err
     return status, out, err.splitlines()
-
-
-def _tree(root):
-    """relative path -> (kind, bytes or link target, mode) of everything under ``root``."""
-    snap = {}
-    for dirpath, dirnames, filenames in os.walk(root):
-        for name in dirnames + filenames:
-            p = Path(dirpath) / name
-            st = os.lstat(p)
-            if stat.S_ISLNK(st.st_mode):
-                snap[p.relative_to(root)] = ("link", os.readlink(p))
-            elif stat.S_ISREG(st.st_mode):
-                snap[p.relative_to(root)] = ("file", p.read_bytes(), stat.S_IMODE(st.st_mode))
-            else:
-                snap[p.relative_to(root)] = ("other", stat.S_IFMT(st.st_mode), stat.S_IMODE(st.st_mode))
-    return snap
 
 
 def _dead_pid():
@@ -68,9 +53,9 @@ def test_stale_cleanup_keeps_a_directory_whose_marker_is_a_directory(tmp_path):
     old = time.time() - 3600
     os.utime(user / MARKER, (old, old))
     os.utime(user, (old, old))
-    before = _tree(tmp_path)
+    before = tree_snapshot(tmp_path)
     assert remove_stale_temporaries(tmp_path) == []
-    assert _tree(tmp_path) == before
+    assert tree_snapshot(tmp_path) == before
 
 
 def test_safe_write_refuses_a_read_only_target(tmp_path):
@@ -91,11 +76,11 @@ def test_identify_refuses_a_read_only_target_even_with_force(capsys, tmp_path, o
     outputs = {"--out": tmp_path / "m.toml", "--metrics": tmp_path / "m.csv", "--plot": tmp_path / "p.png"}
     outputs[option] = target
     args = [a for o, p in outputs.items() for a in (o, p)]
-    before = _tree(tmp_path)
+    before = tree_snapshot(tmp_path)
     status, _, err = _call(capsys, "identify", *IDENTIFY, *args, "--force")
     assert status == 2 and len(err) == 1
     assert err[0].startswith(f"hammerstein identify: error: {option}:") and "read-only" in err[0]
-    assert _tree(tmp_path) == before
+    assert tree_snapshot(tmp_path) == before
 
 
 def test_identify_symlink_loop_is_a_usage_error(capsys, tmp_path):
@@ -112,11 +97,11 @@ def test_check_update_refuses_a_read_only_baseline(capsys, tmp_path):
     baseline = tmp_path / "b.csv"
     baseline.write_text("scenario,case,channel,metric,value,unit\n")
     baseline.chmod(0o444)
-    before = _tree(tmp_path)
+    before = tree_snapshot(tmp_path)
     status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--update")
     assert status == 2 and len(err) == 1 and "read-only" in err[0]
     assert err[0].startswith("hammerstein check: error:")
-    assert _tree(tmp_path) == before
+    assert tree_snapshot(tmp_path) == before
 
 
 # -- replicate: OUT/README.md and its tables -------------------------------------------------
@@ -147,11 +132,11 @@ def test_replicate_never_replaces_a_readme_it_did_not_write(capsys, tmp_path, ki
         os.mkfifo(out / "paper-numbers.csv")
     else:
         (out / "README.md").symlink_to(os.devnull)
-    before = _tree(tmp_path)
+    before = tree_snapshot(tmp_path)
     status, stdout, err = _call(capsys, "replicate", "--scenarios", scenarios, "--out", out)
     assert status == 2 and stdout == "" and len(err) == 1, err
     assert err[0].startswith("hammerstein replicate: error:") and "--force" in err[0]
-    assert _tree(tmp_path) == before  # nothing ran, nothing written
+    assert tree_snapshot(tmp_path) == before  # nothing ran, nothing written
 
 
 @pytest.mark.slow

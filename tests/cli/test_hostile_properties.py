@@ -16,8 +16,6 @@ marked slow.
 import contextlib
 import io
 import math
-import os
-import stat
 import tempfile
 from pathlib import Path
 
@@ -28,6 +26,7 @@ from hypothesis import strategies as st
 
 from hammerstein.cli.main import main
 from hammerstein.runner import MARKER, TMP_PREFIX
+from snapshots import tree_snapshot
 
 # -- values: mostly valid (so that some files run), sometimes hostile ------------------------
 def mostly(valid, *hostile):
@@ -121,17 +120,6 @@ def scenario(draw, dynamics=False):
     return doc
 
 
-def _snapshot(root):
-    snap = {}
-    for dirpath, dirnames, filenames in os.walk(root):
-        for name in dirnames + filenames:
-            p = Path(dirpath) / name
-            st_ = os.lstat(p)
-            data = p.read_bytes() if stat.S_ISREG(st_.st_mode) else None
-            snap[p] = (stat.S_IFMT(st_.st_mode), stat.S_IMODE(st_.st_mode), data)
-    return snap
-
-
 def _check(doc, occupant, command):
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
@@ -153,7 +141,7 @@ def _check(doc, occupant, command):
                 target.mkdir(exist_ok=True)
                 (target / MARKER).write_text("hammerstein 0.1.0\n")
                 (target / "metrics.csv").write_text("old")
-        before = _snapshot(root)
+        before = tree_snapshot(root)
         err = io.StringIO()
         argv = [command, str(path)] + (["--out", str(out)] if command == "run" else [])
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
@@ -168,7 +156,7 @@ def _check(doc, occupant, command):
             assert len(errors) == len(set(errors)) and (status == 0) == (not errors), lines
         else:
             assert len(errors) == (status == 1), lines
-        after = _snapshot(root)
+        after = tree_snapshot(root)
         written = out / name if isinstance(name, str) and name else None
         for p, info in before.items():  # nothing pre-existing changed (a marked report may be replaced)
             if status == 0 and occupant == "report" and written is not None and \

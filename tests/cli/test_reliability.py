@@ -15,7 +15,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
@@ -23,6 +22,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, limit, sa
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.presets import PresetError, load_model, save_model
 from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries
+from snapshots import tree_snapshot
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good" / "good-static.toml"
@@ -36,23 +36,6 @@ def _call(capsys, *argv):
     out, err = capsys.readouterr()
     assert "Traceback" not in err
     return status, out, err.splitlines()
-
-
-def _snapshot(root):
-    """path -> (kind, bytes or link target, mode) of everything under ``root``."""
-    snap = {}
-    for dirpath, dirnames, filenames in os.walk(root):
-        for name in dirnames + filenames:
-            p = Path(dirpath) / name
-            st = os.lstat(p)
-            if stat.S_ISLNK(st.st_mode):
-                snap[p] = ("link", os.readlink(p), None)
-            elif stat.S_ISREG(st.st_mode):
-                snap[p] = ("file", p.read_bytes(), stat.S_IMODE(st.st_mode))
-            else:
-                snap[p] = ("dir" if stat.S_ISDIR(st.st_mode) else "other", None,
-                           stat.S_IMODE(st.st_mode))
-    return snap
 
 
 def _model():
@@ -77,11 +60,11 @@ def test_run_never_replaces_what_it_did_not_write(capsys, tmp_path, kind):
         target.symlink_to(elsewhere)
     else:
         target.symlink_to(tmp_path / "nowhere")
-    before = _snapshot(tmp_path)
+    before = tree_snapshot(tmp_path)
     status, out_text, err = _call(capsys, "run", GOOD, "--out", out)
     assert status == 1 and out_text == "" and len(err) == 1
     assert str(target) in err[0] and "--force" in err[0]
-    assert _snapshot(tmp_path) == before  # byte for byte, no temporary left
+    assert tree_snapshot(tmp_path) == before  # byte for byte, no temporary left
 
 
 def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
