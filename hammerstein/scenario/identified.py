@@ -141,12 +141,24 @@ def identify_table(value):
         Listing ``(key, message)`` for every problem (unknown keys with the
         closest valid key, missing ``frequency``, bad values).
     """
+    def cross(clean):
+        if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares":
+            yield "bounds: only used by method = 'least-squares'"
+
+    return _nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
+
+
+def _nested_table(value, fields, example, cross):
+    """Check a nested table against ``fields``, then ``cross(clean)``'s "key: message" lines.
+
+    Raises ``Invalid`` when ``value`` is no table (naming ``example``) and
+    ``NestedInvalid`` with every ``(key, message)`` problem at once.
+    """
     problems = []
-    clean = check_table(value, IDENTIFY_FIELDS, "", problems, "")
+    clean = check_table(value, fields, "", problems, "")
     if clean is None:
-        raise Invalid(f"expected a table such as {{ frequency = 50.0 }}, found {value!r}")
-    if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares":
-        problems.append(": bounds: only used by method = 'least-squares'")
+        raise Invalid(f"expected a table such as {example}, found {value!r}")
+    problems += [f": {line}" for line in cross(clean)]
     if problems:  # check_table lines read ": key: message" with an empty source
         raise NestedInvalid([tuple(p[2:].split(": ", 1)) for p in problems])
     return clean
@@ -585,16 +597,12 @@ def identify_dynamics_table(value):
     NestedInvalid
         Listing ``(key, message)`` for every problem.
     """
-    problems = []
-    clean = check_table(value, IDENTIFY_DYNAMICS_FIELDS, "", problems, "")
-    if clean is None:
-        raise Invalid(f"expected a table such as {{ amplitude = 8.0, band = [20.0, 1000.0] }}, "
-                      f"found {value!r}")
-    if "order" in clean and clean["order"] > clean["max_order"]:
-        problems.append(": order: expected <= max_order")
-    if problems:
-        raise NestedInvalid([tuple(p[2:].split(": ", 1)) for p in problems])
-    return clean
+    def cross(clean):
+        if "order" in clean and clean["order"] > clean["max_order"]:
+            yield "order: expected <= max_order"
+
+    return _nested_table(value, IDENTIFY_DYNAMICS_FIELDS,
+                         "{ amplitude = 8.0, band = [20.0, 1000.0] }", cross)
 
 
 def _sensor(flag, seed):
