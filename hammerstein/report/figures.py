@@ -700,8 +700,8 @@ def save(fig, path):
     ----------
     fig : matplotlib.figure.Figure
         The figure; closed afterwards (pyplot releases it).
-    path : str or pathlib.Path
-        File to write (overwritten).
+    path : str, pathlib.Path or binary file object
+        Where to write (a file is overwritten).
     """
-    fig.savefig(path, dpi=DPI, pil_kwargs={"compress_level": 3})
+    fig.savefig(path, dpi=DPI, format="png", pil_kwargs={"compress_level": 3})
     plt.close(fig)

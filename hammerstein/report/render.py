@@ -1,8 +1,9 @@
 """Figure jobs of the reports and the renderer that runs them (inline or in a process pool).
 
-The report code does not draw: it collects one :class:`FigureJob` per PNG
-(a module-level figure function, its picklable arguments, the file) into a
-:class:`FigureJobs` list, and a :class:`FigureRenderer` runs them. Without a
+The report code does not draw: it adds one :class:`FigureJob` per PNG
+(a module-level figure function, its picklable arguments, the file) to a
+:class:`FigureJobs` list, which hands it at once to a
+:class:`FigureRenderer`. Without a
 renderer (``FigureJobs()``) every job is drawn at once in the calling
 process, as a plain function call would. The runner of ``hammerstein
 run``/``check``/``replicate`` uses a renderer with a pool of 2 worker
@@ -11,13 +12,21 @@ imported matplotlib and draw while the next scenario simulates); it waits
 for a report's figures (:meth:`FigureJobs.wait`) before the report
 directory is renamed into place, and an error raised in a worker is raised
 again there, so it becomes the scenario's one-line error. Where fork is not
-available, or for a batch of one figure while no pool runs, figures are
-drawn inline.
+available, figures are drawn inline.
+
+A renderer draws a figure once per run: a job whose function and arguments
+equal (by the hash of their pickle) those of a job it has already drawn gets
+a copy of that PNG instead of a second drawing (the paper run's five
+scenarios with the same identified dynamics share one Bode plot).
 """
 
 from __future__ import annotations
 
+import gc
+import hashlib
+import io
 import multiprocessing
+import pickle
 import signal
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import wait as wait_futures
@@ -28,7 +37,8 @@ from typing import Callable
 
 from hammerstein.report.figures import save
 
-__all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "WORKERS"]
+__all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "job_key", "WORKERS",
+           "REMEMBERED"]
 
 #: Worker processes of the pool of :class:`FigureRenderer` (the machine the
 #: targets are set on has 2 cores; the main process simulates meanwhile).
@@ -67,11 +77,58 @@ def render_job(job):
 
     Returns
     -------
-    pathlib.Path
-        The file written.
+    bytes
+        The PNG written to ``job.path`` (the renderer copies it for an
+        identical job).
     """
-    save(job.function(*job.args, **job.kwargs), job.path)
-    return job.path
+    buffer = io.BytesIO()
+    save(job.function(*job.args, **job.kwargs), buffer)
+    png = buffer.getvalue()
+    job.path.write_bytes(png)
+    return png
+
+
+#: Drawn figures a :class:`FigureRenderer` remembers for copies (oldest dropped first).
+REMEMBERED = 64
+
+
+def job_key(job):
+    """Hash of a job's function and arguments: equal keys draw equal PNGs.
+
+    Parameters
+    ----------
+    job : FigureJob
+
+    Returns
+    -------
+    bytes or None
+        16-byte BLAKE2 digest of the pickled ``(module, name, args,
+        kwargs)``; None when they do not pickle.
+    """
+    try:
+        blob = pickle.dumps((job.function.__module__, job.function.__qualname__, job.args,
+                             sorted(job.kwargs.items())), protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # an argument that does not pickle: no copy, draw it
+        return None
+    return hashlib.blake2b(blob, digest_size=16).digest()
+
+
+def _copy_when_drawn(first, path):
+    """A future for ``path`` that gets the PNG of ``first`` once ``first`` is drawn."""
+    copy = Future()
+
+    def write(done):
+        if not copy.set_running_or_notify_cancel():     # the report was abandoned
+            return
+        try:
+            path.write_bytes(done.result())
+        except BaseException as exc:     # the first drawing's error, or this write's
+            copy.set_exception(exc)
+        else:
+            copy.set_result(done.result())
+
+    first.add_done_callback(write)
+    return copy
 
 
 def _done(value=None, error=None):
@@ -110,8 +167,9 @@ class FigureJobs:
     def add(self, path, function, *args, **kwargs):
         """Add the job ``save(function(*args, **kwargs), path)``.
 
-        Drawn at once without a renderer (errors raised here); queued
-        otherwise until :meth:`submit` or :meth:`wait`.
+        Drawn at once without a renderer (errors raised here); otherwise
+        handed to the renderer at once, so that it draws while the caller
+        writes the rest of the report.
 
         Parameters
         ----------
@@ -132,6 +190,7 @@ class FigureJobs:
             render_job(job)
         else:
             self._queued.append(job)
+            self.submit()
 
     def submit(self):
         """Hand the queued jobs to the renderer (they run while the caller goes on)."""
@@ -184,13 +243,16 @@ def _worker_init():
     # the parent handles Ctrl-C/SIGTERM (and cancels); a worker finishes its figure
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    # the objects inherited from the parent live as long as the worker: the collector
+    # need not walk them again every time a figure's many small objects trigger it
+    gc.freeze()
 
 
 class FigureRenderer:
     """Runs figure jobs in a pool of forked worker processes (or inline).
 
-    A context manager; the pool starts with the first batch of two or more
-    jobs and stops on exit (pending jobs are cancelled when leaving on an
+    A context manager; the pool starts with the first job and stops on
+    exit (pending jobs are cancelled when leaving on an
     error). Inline where the fork start method is unavailable, with
     ``workers < 2``, or after the pool broke (a worker killed).
 
@@ -203,6 +265,7 @@ class FigureRenderer:
     def __init__(self, workers=WORKERS):
         self.workers = int(workers) if "fork" in multiprocessing.get_all_start_methods() else 0
         self._pool = None
+        self._drawn = {}                        # job_key -> future of its PNG bytes
 
     def __enter__(self):
         return self
@@ -233,10 +296,29 @@ class FigureRenderer:
         Returns
         -------
         list of concurrent.futures.Future
-            Already finished for jobs drawn inline (their error is set on
-            the future, not raised).
+            Each resolves to the job's PNG bytes. Already finished for jobs
+            drawn inline (their error is set on the future, not raised); a
+            job equal to one drawn before (:func:`job_key`) gets a copy of
+            its PNG when that one is done.
         """
-        if self._pool is None and self.workers >= 2 and len(jobs) >= 2:
+        keys = [job_key(j) for j in jobs]
+        first = {}                          # index of each new key's first job in this batch
+        for i, key in enumerate(keys):
+            if key is None or (key not in self._drawn and key not in first):
+                first[key if key is not None else ("undrawn", i)] = i
+        new = sorted(first.values())
+        started = dict(zip(new, self._start([jobs[i] for i in new])))
+        for i in new:
+            if keys[i] is not None:
+                self._drawn[keys[i]] = started[i]
+        out = [started[i] if i in started else _copy_when_drawn(self._drawn[keys[i]], j.path)
+               for i, j in enumerate(jobs)]
+        while len(self._drawn) > REMEMBERED:
+            del self._drawn[next(iter(self._drawn))]
+        return out
+
+    def _start(self, jobs):
+        if self._pool is None and self.workers >= 2 and jobs:
             self._pool = ProcessPoolExecutor(self.workers, multiprocessing.get_context("fork"),
                                              initializer=_worker_init)
         if self._pool is not None:

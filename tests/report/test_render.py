@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from hammerstein.report import figures as plots
-from hammerstein.report.render import FigureJobs, FigureRenderer
+from hammerstein.report.render import FigureJob, FigureJobs, FigureRenderer, job_key
 from hammerstein.runner import TMP_PREFIX, run_pipelined
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,7 +33,6 @@ def test_pool_writes_the_same_pngs_as_inline(tmp_path):
     with FigureRenderer(workers=2) as renderer:
         jobs = FigureJobs(renderer)
         _loop_jobs(tmp_path / "pool", jobs)
-        assert not any((tmp_path / "pool").iterdir())   # queued, not drawn yet
         jobs.wait()
     for k in range(3):
         a = (tmp_path / "inline" / f"loop-{k}.png").read_bytes()
@@ -71,3 +70,59 @@ def test_pipelined_run_writes_every_figure_in_place(tmp_path):
     text = (o.out_dir / "report.md").read_text(encoding="utf-8")
     assert all(f"({n})" in text for n in pngs)           # every figure the report names exists
     assert not any(p.name.startswith(TMP_PREFIX) for p in tmp_path.iterdir())
+
+
+CALLS = []
+
+
+def _counted_loop(*args, **kwargs):  # module level: picklable by reference
+    CALLS.append(args[-1])
+    return plots.loop_grid(*args, **kwargs)
+
+
+def _curves(k=0):
+    th = np.linspace(0, 2 * np.pi, 101)
+    return [{"label": "c", "column": 0, "x": 10 * np.sin(th),
+             "outputs": np.vstack([5 * np.sin(th + 0.2 * k), 0.1 * np.cos(th)])}]
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_equal_jobs_are_drawn_once_and_copied(tmp_path, workers):
+    CALLS.clear()
+    names = (["u1 [V]", "u2 [V]"], ["x [µm]", "y [µm]"])
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    with FigureRenderer(workers=workers) as renderer:
+        first, second = FigureJobs(renderer), FigureJobs(renderer)   # two report directories
+        first.add(tmp_path / "a" / "loop.png", _counted_loop, _curves(), *names, "same")
+        second.add(tmp_path / "b" / "loop.png", _counted_loop, _curves(), *names, "same")
+        second.add(tmp_path / "b" / "other.png", _counted_loop, _curves(1), *names, "other")
+        first.wait()
+        second.wait()
+    a = (tmp_path / "a" / "loop.png").read_bytes()
+    assert a[:8] == b"\x89PNG\r\n\x1a\n" and a == (tmp_path / "b" / "loop.png").read_bytes()
+    assert a != (tmp_path / "b" / "other.png").read_bytes()
+    if workers == 0:                 # drawn in this process: the calls are seen here
+        assert CALLS == ["same", "other"]
+
+
+def test_job_key_tells_arguments_apart():
+    names = (["u1 [V]", "u2 [V]"], ["x [µm]", "y [µm]"])
+    key = job_key(FigureJob(Path("a.png"), plots.loop_grid, (_curves(), *names, "t")))
+    assert key == job_key(FigureJob(Path("b.png"), plots.loop_grid, (_curves(), *names, "t")))
+    assert key != job_key(FigureJob(Path("a.png"), plots.loop_grid, (_curves(1), *names, "t")))
+    assert key != job_key(FigureJob(Path("a.png"), plots.loop_grid, (_curves(), *names, "u")))
+    assert key != job_key(FigureJob(Path("a.png"), _counted_loop, (_curves(), *names, "t")))
+    assert job_key(FigureJob(Path("a.png"), plots.loop_grid, (lambda: 0,))) is None
+
+
+@pytest.mark.parametrize("workers", [0, 2])
+def test_a_copy_fails_with_the_drawing_it_copies(tmp_path, workers):
+    with FigureRenderer(workers=workers) as renderer:
+        first, second = FigureJobs(renderer), FigureJobs(renderer)
+        first.add(tmp_path / "bad-1.png", _failing_figure, 1)
+        second.add(tmp_path / "bad-2.png", _failing_figure, 1)
+        for jobs in (first, second):
+            with pytest.raises(ValueError, match="legend does not fit"):
+                jobs.wait()
+    assert not any(tmp_path.iterdir())
