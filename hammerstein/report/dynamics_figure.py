@@ -15,6 +15,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from hammerstein.report.figures import _title_height, fixed_layout, suptitle  # noqa: E402
+
 __all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "state_space_data"]
 
 
@@ -30,12 +32,15 @@ def state_space_data(system):
     -------
     dict
         ``A`` (n, n), ``B`` (n, m), ``C`` (p, n), ``D`` (p, m) arrays,
-        ``dt`` (None, 0 or the sampling period [s]), ``inputs``, ``outputs``
-        (names) and ``name``.
+        ``dt`` (None, 0 or the sampling period [s]), ``inputs`` and
+        ``outputs`` (names). Not the system's name: python-control numbers
+        unnamed systems as they are made, and the figure labels the curves
+        itself, so equal systems give equal data (and the renderer draws
+        their figure once).
     """
     return {"A": np.asarray(system.A), "B": np.asarray(system.B), "C": np.asarray(system.C),
             "D": np.asarray(system.D), "dt": system.dt, "inputs": list(system.input_labels),
-            "outputs": list(system.output_labels), "name": system.name}
+            "outputs": list(system.output_labels)}
 
 
 def dynamics_bode_figure_from_data(identified, true, **kwargs):
@@ -55,7 +60,7 @@ def dynamics_bode_figure_from_data(identified, true, **kwargs):
     import control  # lazy: python-control only for runs with identified dynamics
 
     systems = [control.ss(d["A"], d["B"], d["C"], d["D"], d["dt"], inputs=d["inputs"],
-                          outputs=d["outputs"], name=d["name"]) for d in (identified, true)]
+                          outputs=d["outputs"]) for d in (identified, true)]
     return dynamics_bode_figure(*systems, **kwargs)
 
 
@@ -106,10 +111,22 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     responses = [control.frequency_response(identified, w), control.frequency_response(true, w)]
     for resp, label in zip(responses, labels):
         resp.sysname = label
-    plt.figure()              # a figure of its own: bode_plot draws on pyplot's current one
-    with np.errstate(divide="ignore"):            # exact zeros (decoupled entries): -inf dB
-        cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, title=title,
-                                 wrap_phase=True)
+    p, m = true.noutputs, true.ninputs
+    title_h = _title_height(title, 4.0 * m + 1.5)
+    # python-control's fonts (it sets them when it makes the axes itself)
+    with plt.rc_context(control.config.defaults["ctrlplot.rcParams"]):
+        fig, ax = plt.subplots(2 * p, m, figsize=(4.0 * m + 1.5, 3.0 * p + 1.0 + title_h),
+                               squeeze=False)
+        # margins in inches, set before python-control draws: it places the "To <output>"
+        # labels from the axes' positions, and with its own axes it would run tight_layout
+        # (two extra draws of the whole figure)
+        fixed_layout(fig, 2 * p, m, left=1.35, right=0.25, bottom=0.6, top=title_h + 0.35,
+                     wspace=0.45, hspace=0.35)
+        with np.errstate(divide="ignore"):        # exact zeros (decoupled entries): -inf dB
+            cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, ax=ax,
+                                     wrap_phase=True, share_magnitude="row",
+                                     share_phase="row", share_frequency="col")
+    suptitle(fig, title)
     fig = cplt.figure
     for ax in np.ravel(cplt.axes):       # the true system dashed over the identified one
         for line in ax.get_lines():
@@ -130,5 +147,4 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
         for ax in axes.ravel():
             ax.relim()
             ax.autoscale_view(scalex=False)
-    fig.set_size_inches(4.0 * true.ninputs + 1.5, 3.0 * true.noutputs + 1.5)
     return fig
