@@ -505,7 +505,13 @@ class LeastSquaresPI:
             lower[-1] = -np.inf
         from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
 
-        sol = lsq_linear(Xs, target, bounds=(lower, upper), method="bvls").x
+        # the same problem on the triangular factor of Xs = Q R (||Xs c - t||^2 =
+        # ||R c - Q^T t||^2 + const, same gradient Xs^T (Xs c - t)): every BVLS step then
+        # solves a k x k system instead of an n_samples x k one. R and Q^T t are the
+        # factor of [Xs t] (Q itself is never formed).
+        k = Xs.shape[1]
+        Rt = np.linalg.qr(np.column_stack([Xs, target]), mode="r")
+        sol = lsq_linear(Rt[:k, :k], Rt[:k, k], bounds=(lower, upper), method="bvls").x
         coef = sol.copy()
         coef[:n] = sign * (M @ sol[:n])
         return coef
