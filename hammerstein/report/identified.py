@@ -118,7 +118,7 @@ def _comparison_figures(scenario, results, directory, jobs):
         cols.update({f"{o}_model_um": r.model_outputs[l] for l, o in enumerate(model.output_names)})
         pd.DataFrame(cols).to_csv(directory / f"model-outputs-{r.name}.csv", index=False,
                                   float_format="%.6g")
-        label = "hammerstein" if r.spec.plant.dynamics is not None else "static"
+        label = "hammerstein" if not r.spec.plant.is_static else "static"
         groups.setdefault((label, _model_label(r.spec.model_spec)), []).append(r)
     figs = []
     for i, ((label, mlabel), rs) in enumerate(groups.items()):
@@ -160,7 +160,7 @@ def model_rms_table(results):
         spec = r.spec
         vals = {(m["channel"], m["metric"]): m["value"] for m in r.metrics}
         for o in spec.plant.hysteresis.output_names:
-            rows.append({"plant": "hammerstein" if spec.plant.dynamics is not None else "static",
+            rows.append({"plant": "hammerstein" if not spec.plant.is_static else "static",
                          "model": _model_label(spec.model_spec),
                          "input": spec.plant.hysteresis.input_names[spec.driven_input],
                          "output": o, "amplitude_V": float(spec.signal_spec["amplitude"]),

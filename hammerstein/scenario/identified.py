@@ -280,7 +280,7 @@ def identified_model(plant, spec):
         ident, frequency_hz=float(f), amplitude_V=amp.tolist(), periods=spec["periods"],
         partition=spec["partition"], bounds=str(spec["bounds"]),
         sampling_period_s=float(plant.sampling_period),
-        plant=f"{plant.name} ({'hammerstein' if plant.dynamics is not None else 'static'})",
+        plant=f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})",
         sensor=None if sensor is None else {
             "resolution_um": sensor.resolution, "bandwidth_hz": sensor.bandwidth_hz,
             "noise_rms_um": sensor.noise_rms, "seed": spec["seed"]})
@@ -346,7 +346,7 @@ def save_identified_models(scenario, directory):
         key = (_plant_fingerprint(plant), _spec_key(identify_table(spec)))
         if key not in files:
             base = model_file_name(spec)[:-len(".toml")]
-            label = "hammerstein" if plant.dynamics is not None else "static"
+            label = "hammerstein" if not plant.is_static else "static"
             name, i = f"{base}.toml", 1
             if name in names:
                 name = f"{base}-{label}.toml"
@@ -710,7 +710,7 @@ def identified_hammerstein(plant, identify, identify_dynamics=None, model=None):
         dspec = identify_dynamics_table(identify_dynamics or {})
     except Invalid as exc:
         raise IdentificationError(f"identify_dynamics: {exc}") from None
-    if plant.dynamics is None:
+    if plant.is_static:
         raise IdentificationError("dynamics: the plant is static (plant.dynamics = false): "
                                   "there are no dynamics to identify; use dynamics = \"plant\"")
     sensor_flag = dspec.get("sensor", bool((identify or {}).get("sensor", False)))
