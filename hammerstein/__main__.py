@@ -1,8 +1,6 @@
 """``python -m hammerstein``: the same as the ``hammerstein`` console script."""
 
-import sys
-
-from hammerstein.cli.main import main
+from hammerstein.cli.main import run
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

@@ -189,3 +189,33 @@ def test_command_table_help_matches_each_command_parser():
     sub = next(a for a in parser._actions if a.dest == "command")
     helps = {a.dest: a.help for a in sub._choices_actions}
     assert helps == {name: text for name, (_, text) in COMMANDS.items()}
+
+
+@pytest.mark.parametrize("args, status, out, err", [
+    (["validate", "scenarios/default.toml"], 0, "default.toml", ""),
+    (["validate", "no-such-file.toml"], 1, "", "no-such-file.toml"),
+    (["run"], 2, "", "SCENARIO"),
+])
+def test_console_script_keeps_status_and_output(args, status, out, err):
+    """`python -m hammerstein` (the console script's :func:`run`): same status and
+    complete output although the process ends with os._exit."""
+    import subprocess
+    import sys
+    res = subprocess.run([sys.executable, "-m", "hammerstein", *args], capture_output=True,
+                         text=True, timeout=120, cwd=ROOT)
+    assert res.returncode == status, res.stderr
+    assert out in res.stdout and res.stdout.endswith("\n") == bool(res.stdout)
+    assert err in res.stderr and len(res.stderr.splitlines()) == bool(err)
+
+
+def test_closed_pipe_is_not_an_error_message():
+    """`hammerstein list | head -1`: the reader leaves early; no error line."""
+    import subprocess
+    import sys
+    proc = subprocess.Popen([sys.executable, "-m", "hammerstein", "list"], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.read(10)
+    proc.stdout.close()                     # before `list` has written everything
+    err = proc.stderr.read().decode()
+    proc.wait(timeout=120)
+    assert "Error" not in err and "error" not in err, err
