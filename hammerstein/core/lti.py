@@ -510,9 +510,24 @@ def _fit_bdx0(A, C, ins, outs, feedthrough):
 
 
 def _simulate(A, B, C, D, u, x0):
-    """Response of (A, B, C, D) to u (m, N) from x0 [µm]."""
-    RB, R0 = _state_regressors(A, C, u)
-    return (RB @ B.ravel() + R0 @ x0).T + D @ u
+    """Response of (A, B, C, D) to u (m, N) from x0 [µm].
+
+    In modal coordinates (``A = V diag(lam) V^-1``): one first-order
+    recursion per mode on ``V^-1 B u`` (:func:`scipy.signal.lfilter`), the
+    same sums as :func:`_state_regressors` without forming its (N, p, n m)
+    regressors; through them when A is defective.
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) >= 1e8:
+        RB, R0 = _state_regressors(A, C, u)
+        return (RB @ B.ravel() + R0 @ x0).T + D @ u
+    Vinv = np.linalg.inv(V)
+    z = Vinv @ (B @ u).astype(complex)                      # (n, N) modal inputs
+    W = np.stack([scipy.signal.lfilter([0.0, 1.0], [1.0, -lam_i], z_i) for lam_i, z_i in zip(lam, z)])
+    W += (lam[:, None] ** np.arange(u.shape[1])[None, :]) * (Vinv @ x0)[:, None]
+    return (C @ V @ W).real + D @ u
 
 
 class _MultiRecordMOESP:

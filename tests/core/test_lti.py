@@ -200,3 +200,36 @@ def test_bode_figure_is_a_new_figure_each_call():
     first, second = dynamics_bode_figure(G, G, frequencies_hz=f), dynamics_bode_figure(G, G, frequencies_hz=f)
     assert first is not second
     assert [len(ax.get_lines()) for ax in second.axes] == [len(ax.get_lines()) for ax in first.axes]
+
+
+def _loop_response(A, B, C, D, u, x0):
+    """Naive reference: x_{k+1} = A x_k + B u_k, y_k = C x_k + D u_k, one step at a time."""
+    x = np.array(x0, dtype=float)
+    y = np.empty((C.shape[0], u.shape[1]))
+    for k in range(u.shape[1]):
+        y[:, k] = C @ x + D @ u[:, k]
+        x = A @ x + B @ u[:, k]
+    return y
+
+
+@pytest.mark.parametrize("kind", ["lightly-damped modes", "real poles", "defective"])
+def test_simulate_equals_the_state_recursion(kind):
+    """_simulate (modal first-order filters; the regressors when A is defective) against
+    the plain state recursion, from a non-zero initial state."""
+    from hammerstein.core.lti import _simulate
+    rng = np.random.default_rng(7)
+    if kind == "lightly-damped modes":
+        G = discretize(bending_modes(FN, [0.02, 0.05], ["x", "y"]), T)
+        A, B, C = G.A, G.B + 0.1 * rng.standard_normal(G.B.shape), G.C
+    elif kind == "real poles":
+        Q = rng.standard_normal((3, 3))
+        A, B, C = Q @ np.diag([0.9, -0.5, 0.2]) @ np.linalg.inv(Q), rng.standard_normal((3, 2)), \
+            rng.standard_normal((2, 3))
+    else:                                                   # a Jordan block: no eigenbasis
+        A, B, C = np.array([[0.9, 1.0], [0.0, 0.9]]), rng.standard_normal((2, 2)), np.eye(2)
+    D = rng.standard_normal((C.shape[0], B.shape[1]))
+    u = rng.standard_normal((B.shape[1], 3000))
+    x0 = rng.standard_normal(A.shape[0])
+    expected = _loop_response(A, B, C, D, u, x0)
+    np.testing.assert_allclose(_simulate(A, B, C, D, u, x0), expected, rtol=0,
+                               atol=1e-10 * np.max(np.abs(expected)))
