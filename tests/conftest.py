@@ -7,6 +7,7 @@ multivariable PI of eq. (13) with (``preset_plant``) or without
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,11 @@ from hammerstein import simulation as sim
 
 #: the repository root (scenarios/, baselines/, tests/corpus/ live below it)
 ROOT = Path(__file__).resolve().parents[1]
+
+# Hermetic runs: no identification comes from (or goes to) the user's on-disk cache,
+# in this process and in the CLI subprocesses the tests start. The cache's own tests
+# point it at a temporary directory.
+os.environ["HAMMERSTEIN_CACHE_DIR"] = "off"
 
 
 @pytest.fixture(scope="session")

@@ -47,6 +47,7 @@ LIMITS = {
     "toml": ("HAMMERSTEIN_MAX_TOML_BYTES", 4 * 2**20),
     "data": ("HAMMERSTEIN_MAX_DATA_BYTES", 256 * 2**20),
     "baseline": ("HAMMERSTEIN_MAX_BASELINE_BYTES", 64 * 2**20),
+    "cache": ("HAMMERSTEIN_MAX_CACHE_BYTES", 64 * 2**20),
 }
 
 #: Suffix of the temporary files of :func:`safe_write`.
@@ -77,7 +78,7 @@ def limit(kind):
 
     Parameters
     ----------
-    kind : {'toml', 'data', 'baseline'}
+    kind : {'toml', 'data', 'baseline', 'cache'}
         Key of :data:`LIMITS`.
 
     Returns
@@ -127,7 +128,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
     Parameters
     ----------
     path : str or pathlib.Path
-    kind : {'toml', 'data', 'baseline'}
+    kind : {'toml', 'data', 'baseline', 'cache'}
         Selects the size limit.
     what : str
         What the file should be, for messages ("scenario file", ...).
@@ -179,7 +180,7 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     Parameters
     ----------
     path : str or pathlib.Path
-    kind : {'toml', 'data', 'baseline'}
+    kind : {'toml', 'data', 'baseline', 'cache'}
         Selects the size limit.
     what : str
         What the file should be, for messages.

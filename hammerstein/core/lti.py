@@ -697,6 +697,74 @@ class DynamicsIdentifier:
     def _subspace(ins, outs, block_rows):
         return _MultiRecordMOESP(ins, outs, block_rows)
 
+    _FITTED_ARRAYS = ("singular_values_", "orders_", "validation_fit_", "aic_", "fit_percent_",
+                      "initial_states_")
+
+    def to_dict(self):
+        """The parameters (but the sensor) and fitted attributes as plain data (for JSON).
+
+        Returns
+        -------
+        dict
+            ``params`` (order, max_order, block_rows, feedthrough,
+            validation_fraction, order_tolerance) and ``fitted``:
+            ``A``, ``B``, ``C``, ``D`` (nested lists), ``dt`` [s] and
+            ``name`` of ``system_``, ``order_``, ``sampling_period_`` and
+            the arrays (nested lists; NaN where the array has NaN).
+
+        Raises
+        ------
+        DynamicsError
+            If the identifier is not fitted.
+        """
+        if not hasattr(self, "system_"):
+            raise DynamicsError("to_dict: the identifier is not fitted (call fit first)")
+        params = {"order": None if self.order is None else int(self.order),
+                  "max_order": int(self.max_order),
+                  "block_rows": None if self.block_rows is None else int(self.block_rows),
+                  "feedthrough": bool(self.feedthrough),
+                  "validation_fraction": float(self.validation_fraction),
+                  "order_tolerance": float(self.order_tolerance)}
+        G = self.system_
+        fitted = {k: np.asarray(getattr(G, k), dtype=float).tolist() for k in "ABCD"}
+        fitted.update({"dt": float(G.dt), "name": str(G.name), "order_": int(self.order_),
+                       "sampling_period_": float(self.sampling_period_)})
+        fitted.update({k: np.asarray(getattr(self, k)).tolist() for k in self._FITTED_ARRAYS})
+        return {"params": params, "fitted": fitted}
+
+    @classmethod
+    def from_dict(cls, data, sensor=None):
+        """A fitted identifier from :meth:`to_dict` (round trip: equal arrays, same system).
+
+        Parameters
+        ----------
+        data : dict
+            From :meth:`to_dict`.
+        sensor : Sensor, optional
+            The sensor parameter (not part of the data).
+
+        Returns
+        -------
+        DynamicsIdentifier
+
+        Raises
+        ------
+        DynamicsError
+            If ``data`` lacks a key or holds matrices of inconsistent shapes.
+        """
+        try:
+            ident = cls(**data["params"], sensor=sensor)
+            f = data["fitted"]
+            mats = [np.array(f[k], dtype=float, ndmin=2) for k in "ABCD"]
+            ident.system_ = control.ss(*mats, dt=f["dt"], name=f["name"])
+            ident.order_ = int(f["order_"])
+            ident.sampling_period_ = float(f["sampling_period_"])
+            for k in cls._FITTED_ARRAYS:
+                setattr(ident, k, np.array(f[k], dtype=int if k == "orders_" else float))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DynamicsError(f"from_dict: not a fitted identifier ({exc})") from None
+        return ident
+
     def fit(self, inputs, outputs, sampling_period):
         """Identify G from one or several records.
 

@@ -36,9 +36,10 @@ from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lti import (DynamicsIdentifier, excitation, hammerstein_records,
                                   modal_parameters)
-from hammerstein.core.presets import (PresetError, load_dynamics, load_model, model_to_table,
-                                      save_dynamics, save_model)
+from hammerstein.core.presets import (PresetError, load_dynamics, load_model, model_from_table,
+                                      model_to_table, save_dynamics, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
+from hammerstein.scenario import diskcache
 from hammerstein.exceptions import NestedInvalid
 from hammerstein.core.lazy import lazy_module
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, _short,
@@ -169,9 +170,39 @@ _CACHE: dict = {}
 
 
 def clear_cache():
-    """Forget every identified model and dynamics (tests)."""
+    """Forget every identified model and dynamics of this process (tests).
+
+    The on-disk cache (:mod:`hammerstein.scenario.diskcache`) is kept.
+    """
     _CACHE.clear()
     _HCACHE.clear()
+
+
+def _model_table(model):
+    """``model_to_table(model)`` when it gives the same model back, else None (not cached)."""
+    table = model_to_table(model)
+    try:
+        same = model_to_table(model_from_table(table)) == table
+    except PresetError:
+        same = False
+    return table if same else None
+
+
+def _from_disk(kind, key, build):
+    """``build(value)`` of the on-disk entry of ``(kind, key)``; None if absent or unusable."""
+    value = diskcache.load(kind, key)
+    if value is None:
+        return None
+    try:
+        return build(value)
+    except (KeyError, TypeError, ValueError, PresetError, DynamicsError):
+        return None     # an entry of an older shape: identify again
+
+
+def _to_disk(kind, key, value):
+    """Store ``value`` unless its model table did not round-trip (``value["model"]`` None)."""
+    if value["model"] is not None:
+        diskcache.store(kind, key, value)
 
 
 def _plant_fingerprint(plant):
@@ -247,6 +278,10 @@ def identified_model(plant, spec):
     key = (_plant_fingerprint(plant), _spec_key(spec))
     if key in _CACHE:
         return _CACHE[key]
+    stored = _from_disk("pi", key, lambda v: (model_from_table(v["model"]), v["meta"]))
+    if stored is not None:
+        _CACHE[key] = stored
+        return stored
     model = plant.hysteresis
     f = spec["frequency"]
     problem = nyquist_problem(spec, plant)
@@ -285,6 +320,7 @@ def identified_model(plant, spec):
             "resolution_um": sensor.resolution, "bandwidth_hz": sensor.bandwidth_hz,
             "noise_rms_um": sensor.noise_rms, "seed": spec["seed"]})
     _CACHE[key] = (ident.model_, meta)
+    _to_disk("pi", key, {"model": _model_table(ident.model_), "meta": meta})
     return _CACHE[key]
 
 
@@ -718,6 +754,18 @@ def identified_hammerstein(plant, identify, identify_dynamics=None, model=None):
            None if model is None else repr(model_to_table(model)), sensor_flag)
     if key in _HCACHE:
         return _HCACHE[key]
+    given = model
+
+    def build(v):
+        ident = DynamicsIdentifier.from_dict(v["ident"], sensor=_sensor(sensor_flag,
+                                                                        dspec["seed"] + 1000))
+        return (given if given is not None else model_from_table(v["model"]), v["meta"], ident,
+                v["dmeta"])
+
+    stored = _from_disk("hammerstein", key, build)
+    if stored is not None:
+        _HCACHE[key] = stored
+        return stored
     meta = None
     if model is None:                       # stage 1: quasi-static PI, then G
         spec = identify_table(identify)
@@ -745,6 +793,8 @@ def identified_hammerstein(plant, identify, identify_dynamics=None, model=None):
              "sampling_period_s": float(plant.sampling_period),
              "plant": plant.name}
     _HCACHE[key] = (model, meta, ident, dmeta)
+    _to_disk("hammerstein", key, {"model": _model_table(model) if given is None else {},
+                                  "meta": meta, "ident": ident.to_dict(), "dmeta": dmeta})
     return _HCACHE[key]
 
 

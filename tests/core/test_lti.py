@@ -233,3 +233,24 @@ def test_simulate_equals_the_state_recursion(kind):
     expected = _loop_response(A, B, C, D, u, x0)
     np.testing.assert_allclose(_simulate(A, B, C, D, u, x0), expected, rtol=0,
                                atol=1e-10 * np.max(np.abs(expected)))
+
+
+def test_fitted_identifier_round_trips_through_json(records):
+    import json
+    _, u, y = records
+    sensor = Sensor(bandwidth_hz=2000.0)
+    ident = DynamicsIdentifier(max_order=6, sensor=sensor).fit(u, y, T)
+    back = DynamicsIdentifier.from_dict(json.loads(json.dumps(ident.to_dict())), sensor=sensor)
+    for k in ("singular_values_", "orders_", "validation_fit_", "aic_", "fit_percent_",
+              "initial_states_"):
+        a, b = getattr(ident, k), getattr(back, k)
+        assert a.dtype == b.dtype and a.shape == b.shape
+        np.testing.assert_array_equal(a, b)
+    for k in "ABCD":
+        np.testing.assert_array_equal(getattr(back.system_, k), getattr(ident.system_, k))
+    assert (back.system_.dt, back.order_, back.sampling_period_) == (T, ident.order_, T)
+    assert back.to_dict() == ident.to_dict() and back.sensor is sensor
+    with pytest.raises(DynamicsError, match="not fitted"):
+        DynamicsIdentifier().to_dict()
+    with pytest.raises(DynamicsError, match="not a fitted identifier"):
+        DynamicsIdentifier.from_dict({"params": {}, "fitted": {"A": [[1.0]]}})

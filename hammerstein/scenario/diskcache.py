@@ -1,0 +1,197 @@
+"""On-disk cache of identifications, so that running a scenario again does not identify again.
+
+Identifying a model (characterisation records simulated on the plant, least
+squares; for ``kind = "hammerstein"`` two PI stages and two subspace fits of
+G) takes seconds and gives the same result every time: the records are
+simulated, and the sensor noise is drawn with the table's ``seed``. The
+results are therefore kept on disk, one JSON file per identification,
+under a name that is a hash of
+
+* what is identified: the plant's content (PI model, sampling period,
+  dynamics matrices) and the ``identify`` / ``identify_dynamics`` tables;
+* the code that identifies: the hammerstein version, a digest of every
+  ``.py`` file of the package, and the numpy, scipy, numba and nfoursid
+  versions, so that an entry is never used by other code than the code that
+  wrote it.
+
+Where: ``$HAMMERSTEIN_CACHE_DIR``, else ``$XDG_CACHE_HOME/hammerstein``,
+else ``~/.cache/hammerstein``, in a subdirectory ``identified/``.
+``HAMMERSTEIN_CACHE_DIR=off`` (or empty) turns the cache off. Removing the
+directory is always safe (the next run identifies again).
+
+Safety: an entry is written once, through a temporary file and a rename
+(:func:`hammerstein.core.files.safe_write`), and never over an existing
+file; a read is bounded (``HAMMERSTEIN_MAX_CACHE_BYTES``, default 64 MiB).
+An entry that cannot be read or parsed, or whose content does not match
+its key, is ignored and the identification runs as if there were no cache.
+Nothing is deleted. A cache that cannot be written (read-only home,
+full disk) only costs the time of identifying again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from importlib import metadata
+from pathlib import Path
+
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, safe_write
+
+__all__ = ["cache_dir", "code_digest", "entry_path", "load", "store", "ENV"]
+
+#: Environment variable naming the cache directory (``off`` or empty: no cache).
+ENV = "HAMMERSTEIN_CACHE_DIR"
+#: Format of the entries (part of every key).
+FORMAT = 1
+
+_DIGEST = {}
+
+
+def cache_dir():
+    """The directory of the identification cache, or None when it is turned off.
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``<root>/identified`` with root ``$HAMMERSTEIN_CACHE_DIR``, else
+        ``$XDG_CACHE_HOME/hammerstein``, else ``~/.cache/hammerstein``.
+    """
+    root = os.environ.get(ENV)
+    if root is not None:
+        if root.strip() in ("", "off", "0", "false", "no"):
+            return None
+        return Path(root).expanduser() / "identified"
+    xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
+    base = Path(xdg) if xdg else Path.home() / ".cache"
+    return base / "hammerstein" / "identified"
+
+
+def _version(dist):
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return "-"
+
+
+def code_digest():
+    """Digest of the code an entry depends on (computed once per process).
+
+    Returns
+    -------
+    str
+        SHA-256 (hex) of the package's ``.py`` files (paths and contents)
+        and of the hammerstein, numpy, scipy, numba and nfoursid versions.
+    """
+    if "value" not in _DIGEST:
+        package = Path(__file__).resolve().parents[1]
+        h = hashlib.sha256()
+        for dist in ("hammerstein", "numpy", "scipy", "numba", "nfoursid"):
+            h.update(f"{dist}={_version(dist)};".encode())
+        for path in sorted(package.rglob("*.py")):
+            h.update(path.relative_to(package).as_posix().encode() + b"\0")
+            h.update(path.read_bytes() + b"\0")
+        _DIGEST["value"] = h.hexdigest()
+    return _DIGEST["value"]
+
+
+def _key_text(kind, key):
+    return repr((FORMAT, kind, code_digest(), key))
+
+
+def entry_path(kind, key):
+    """The file of one entry (whether it exists or not).
+
+    Parameters
+    ----------
+    kind : str
+        What is cached (``"pi"``, ``"hammerstein"``).
+    key : tuple
+        Content key of the identification (strings, numbers, tuples: its
+        ``repr`` is hashed).
+
+    Returns
+    -------
+    pathlib.Path or None
+        ``<cache_dir>/<kind>-<sha256>.json``; None when the cache is off.
+    """
+    d = cache_dir()
+    if d is None:
+        return None
+    return d / f"{kind}-{hashlib.sha256(_key_text(kind, key).encode()).hexdigest()}.json"
+
+
+def load(kind, key):
+    """The value stored for ``(kind, key)``, or None.
+
+    Parameters
+    ----------
+    kind : str
+    key : tuple
+        See :func:`entry_path`.
+
+    Returns
+    -------
+    dict or None
+        The stored value; None when the cache is off, the entry is missing,
+        too large, unreadable, not JSON, or written for another key.
+    """
+    path = entry_path(kind, key)
+    if path is None or not path.is_file():
+        return None
+    try:
+        entry = json.loads(bounded_read_bytes(path, "cache", "identification cache entry"))
+    except (OSError, FileLimitError, ValueError):
+        return None
+    if not isinstance(entry, dict) or entry.get("key") != _key_text(kind, key):
+        return None
+    value = entry.get("value")
+    return value if isinstance(value, dict) else None
+
+
+def _same(a, b):
+    """Equal JSON data, NaN equal to NaN, and of the same types (no tuple for a list)."""
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float):
+        return a == b or (a != a and b != b)
+    return a == b
+
+
+def store(kind, key, value):
+    """Store ``value`` for ``(kind, key)`` unless an entry file exists already.
+
+    Parameters
+    ----------
+    kind : str
+    key : tuple
+        See :func:`entry_path`.
+    value : dict
+        JSON data (dicts, lists, str, int, float, bool, None). Floats are
+        written with all their digits (``repr``), so they read back equal.
+
+    Returns
+    -------
+    bool
+        True when the entry was written; False when the cache is off, an
+        entry exists, the value is not JSON data that reads back equal, or
+        the file cannot be written.
+    """
+    path = entry_path(kind, key)
+    if path is None or os.path.lexists(path):
+        return False
+    try:
+        text = json.dumps({"key": _key_text(kind, key), "value": value}, allow_nan=True)
+    except (TypeError, ValueError):
+        return False
+    if not _same(json.loads(text)["value"], value):   # tuples or numpy scalars do not round-trip
+        return False
+    try:
+        safe_write(path, text, "identification cache entry")
+    except (OSError, FileLimitError):
+        return False
+    return True
