@@ -1,7 +1,7 @@
 """Wall and CPU time of the warm CLI runs a user feels.
 
-Run: ``python benchmarks/cli.py [--repeat N] [--only default|paper]`` (from the
-repository root).
+Run: ``python benchmarks/cli.py [--repeat N] [--only default|paper] [--no-cache]``
+(from the repository root).
 
 Not a test. For each command it runs the CLI once to warm the caches (numba's
 kernels, the file system), then ``--repeat`` times in fresh processes
@@ -11,6 +11,12 @@ that run (the process and its figure workers, from ``getrusage`` of the
 children) and the load average before and after. On a machine shared with
 other work the wall time follows the load; the CPU time is the steadier
 number (it does not count time spent waiting for a core).
+
+Warm means: numba's kernels compiled and cached, and the identifications of
+the scenarios in hammerstein's on-disk cache (``HAMMERSTEIN_CACHE_DIR``;
+the warm-up run fills it). ``--no-cache`` turns that cache off for the
+warm-up and the timed runs (``HAMMERSTEIN_CACHE_DIR=off``): every run
+identifies again, as the first run of a new scenario does.
 
 Targets (2-core machine, warm): ``run scenarios/paper/*.toml`` <= 8 s wall;
 ``run scenarios/default.toml`` <= 2 s wall.
@@ -40,7 +46,7 @@ def _children_cpu():
     return r.ru_utime, r.ru_stime
 
 
-def time_run(scenarios, out):
+def time_run(scenarios, out, cache=True):
     """One ``hammerstein run`` in a fresh process: (wall, user, system) [s].
 
     Parameters
@@ -49,6 +55,8 @@ def time_run(scenarios, out):
         Scenario files.
     out : str
         Reports directory.
+    cache : bool
+        Use hammerstein's identification cache (else ``HAMMERSTEIN_CACHE_DIR=off``).
 
     Returns
     -------
@@ -61,6 +69,8 @@ def time_run(scenarios, out):
         If the run fails (its stderr in the message).
     """
     env = dict(os.environ, PYTHONPATH=str(ROOT))
+    if not cache:
+        env["HAMMERSTEIN_CACHE_DIR"] = "off"
     u0, s0 = _children_cpu()
     t0 = time.perf_counter()
     p = subprocess.run([sys.executable, "-m", "hammerstein", "run", *scenarios, "--out", out, "-q"],
@@ -78,7 +88,7 @@ def main(argv=None):
     Parameters
     ----------
     argv : list of str, optional
-        ``--repeat N`` (default 3), ``--only default|paper``.
+        ``--repeat N`` (default 3), ``--only default|paper``, ``--no-cache``.
 
     Returns
     -------
@@ -88,6 +98,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--only", choices=sorted(RUNS))
+    ap.add_argument("--no-cache", action="store_true",
+                    help="identify in every run (HAMMERSTEIN_CACHE_DIR=off)")
     args = ap.parse_args(argv)
     names = [args.only] if args.only else list(RUNS)
     print(f"{'run':<8} {'best wall [s]':>13} {'user [s]':>9} {'sys [s]':>8} {'target [s]':>10}  "
@@ -95,9 +107,10 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix="hammerstein-bench-") as tmp:
         for name in names:
             scenarios, target = RUNS[name]
-            time_run(scenarios, tmp)  # warm: numba cache, files
+            time_run(scenarios, tmp, not args.no_cache)  # warm: numba, identifications, files
             load0 = os.getloadavg()[0]
-            best = min((time_run(scenarios, tmp) for _ in range(max(1, args.repeat))),
+            best = min((time_run(scenarios, tmp, not args.no_cache)
+                        for _ in range(max(1, args.repeat))),
                        key=lambda t: t[0])
             load1 = os.getloadavg()[0]
             print(f"{name:<8} {best[0]:>13.2f} {best[1]:>9.2f} {best[2]:>8.2f} {target:>10.1f}  "
