@@ -132,6 +132,12 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
         for line in ax.get_lines():
             if line.get_label() == labels[1]:
                 line.set_linestyle("--")
+        legend = ax.get_legend()
+        if legend is not None:           # python-control drew it with the solid style
+            handles = {ln.get_label(): ln for ln in ax.get_lines()}
+            ax.legend([handles[t.get_text()] for t in legend.get_texts()],
+                      [t.get_text() for t in legend.get_texts()], loc=legend._loc,
+                      fontsize=legend.get_texts()[0].get_fontsize())
     axes = np.asarray(cplt.axes).reshape(2 * true.noutputs, true.ninputs)
     mag = np.abs(responses[1].magnitude)                             # (p, m, n_freq)
     zero = np.max(mag, axis=-1) <= 1e-12 * np.max(mag)               # (p, m): 0 up to round-off
