@@ -327,9 +327,8 @@ class InverseMultiplicativeCompensator:
         self.convergence = convergence_report(self.model, self.K)
         if not self.convergence.converges and self.check != "ignore":
             msg = (f"gain: rho(I - K^-1 J) reaches {self.convergence.max_radius:.3g} >= 1 "
-                   f"over the model's slopes; the fixed-point iteration is not guaranteed to "
-                   f"converge and diverges where those slopes persist (docs/compensator.md); "
-                   f"gain='midpoint' minimises the radius")
+                   f"over the model's slopes: the iteration may diverge where they persist; "
+                   f"gain='midpoint' minimises the radius (docs/compensator.md)")
             if self.check == "error":
                 raise CompensatorError(msg)
             warnings.warn(msg, ConvergenceWarning, stacklevel=2)

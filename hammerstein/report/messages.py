@@ -2,10 +2,13 @@
 
 A sweep of 85 cases raises the same convergence warning 85 times, each with
 its own numbers (``rho(I - K^-1 J) reaches 1.02`` in one case, ``1.03`` in
-another). :func:`group_warnings` groups the ``(case, message)`` pairs of a
-scenario by their *template*, the message with every number replaced by a
-placeholder (:func:`message_template`), and renders each group once, with the
-numbers that differ between its cases shown as a range (``1.02-1.03``). The
+another), and the same dynamics warning for each compensator kind it
+compares (``kind = 'per-axis'``, ``kind = 'static-gain'``).
+:func:`group_warnings` groups the ``(case, message)`` pairs of a scenario by
+their *template*, the message with every number and every single-quoted name
+replaced by a placeholder (:func:`message_template`), and renders each group
+once, with the numbers that differ between its cases shown as a range
+(``1.02-1.03``) and the names as a list (``'per-axis'/'static-gain'``). The
 command line prints the groups; ``report.md`` and ``warnings.csv`` keep every
 case's own message.
 """
@@ -18,7 +21,12 @@ from dataclasses import dataclass
 __all__ = ["WarningGroup", "message_template", "group_warnings"]
 
 #: An unsigned decimal number (a sign is part of the text: ``K^-1`` keeps its ``-``).
-_NUMBER = re.compile(r"\d+(?:\.\d+)?(?:[eE][-+]?\d+)?")
+_NUMBER = r"\d+(?:\.\d+)?(?:[eE][-+]?\d+)?"
+#: A single-quoted name (a kind, a gain), as ``repr`` writes a string.
+_NAME = r"'[^'\s]*'"
+#: The variable parts of a message: names first, so that the digits of ``'mv-50Hz'``
+#: stay in the name.
+_SLOT = re.compile(f"{_NAME}|{_NUMBER}")
 
 
 @dataclass
@@ -63,7 +71,7 @@ class WarningGroup:
 
 
 def message_template(message):
-    """The message with runs of whitespace folded and every number replaced by ``#``.
+    """The message with runs of whitespace folded, every number replaced by ``#`` and every quoted name by ``'?'``.
 
     Parameters
     ----------
@@ -73,25 +81,32 @@ def message_template(message):
     Returns
     -------
     str
-        The template: warnings that differ only in their numbers share it.
+        The template: warnings that differ only in their numbers and
+        quoted names share it.
 
     Examples
     --------
     >>> message_template("rho reaches 1.02 >= 1 at  50 Hz")
     'rho reaches # >= # at # Hz'
+    >>> message_template("kind = 'mv-50Hz' is rate independent at 200 Hz")
+    "kind = '?' is rate independent at # Hz"
     """
-    return _NUMBER.sub("#", " ".join(str(message).split()))
+    return _SLOT.sub(lambda m: "'?'" if m.group().startswith("'") else "#",
+                     " ".join(str(message).split()))
 
 
 def _merge(messages):
-    """One message from messages of the same template; differing numbers as ranges."""
-    texts = _NUMBER.split(messages[0])
-    slots = [_NUMBER.findall(m) for m in messages]
+    """One message from messages of the same template: differing numbers as ranges,
+    differing names as a list in order of appearance."""
+    texts = _SLOT.split(messages[0])
+    slots = [_SLOT.findall(m) for m in messages]
     out = [texts[0]]
     for k in range(len(slots[0])):
         values = list(dict.fromkeys(s[k] for s in slots))
         if len(values) == 1:
             out.append(values[0])
+        elif values[0].startswith("'"):
+            out.append("/".join(values))
         else:
             lo = min(values, key=float)
             hi = max(values, key=float)
@@ -117,9 +132,10 @@ def group_warnings(pairs):
 
     Examples
     --------
-    >>> g = group_warnings([("a", "rho 1.02 >= 1"), ("b", "rho 1.03 >= 1"), ("c", "range")])
+    >>> g = group_warnings([("a", "rho 1.02 >= 1"), ("b", "rho 1.03 >= 1"), ("c", "range"),
+    ...                     ("d", "kind = 'diagonal' at 50 Hz"), ("e", "kind = 'per-axis' at 50 Hz")])
     >>> [(x.count, x.message) for x in g]
-    [(2, 'rho 1.02–1.03 >= 1'), (1, 'range')]
+    [(2, 'rho 1.02–1.03 >= 1'), (1, 'range'), (2, "kind = 'diagonal'/'per-axis' at 50 Hz")]
     """
     groups = {}
     for case, msg in pairs:

@@ -104,12 +104,13 @@ def dynamics_warning(case):
                                - np.eye(c.shape[0]), 2))
     if f <= RESONANCE_FRACTION * f_res and dev <= GAIN_DEVIATION:
         return None
-    what = (f"compensator kind = {kind!r} is rate independent" if not static_model else
-            "the comparison model is static (PI only)")
-    return (f"{what}, but the {case.mode} reaches {f:g} Hz, where the plant's linear dynamics "
-            f"(first resonance {f_res:.0f} Hz) change the response by {100 * dev:.1f} %: the "
-            f"dynamics are not compensated; use [compensator] kind = \"hammerstein\" "
-            f"(inverse of the identified dynamics, docs/hammerstein-plant.md)")
+    effect = (f"at {f:g} Hz the plant's linear dynamics (first resonance {f_res:.0f} Hz) "
+              f"change the response by {100 * dev:.1f} %")
+    if static_model:
+        return (f"the comparison model is static (PI only): {effect}, which it does not "
+                f"model (docs/hammerstein-plant.md)")
+    return (f"compensator kind = {kind!r} is rate independent: {effect}, which it does not "
+            f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")
 
 
 def resolve_scenario(spec):

@@ -154,3 +154,19 @@ def test_check_junit_xml_pass_and_failure(scenario, tmp_path, capsys):
     assert f"baseline {old[0] / 10:.6g} -> current {old[0]:.6g}" in fail.text \
         or f"baseline {old[1] / 10:.6g} -> current {old[1]:.6g}" in fail.text
     assert b.find("error") is not None and "triangel" in b.find("error").text
+
+
+def test_group_warnings_folds_quoted_names_into_a_list():
+    """The dynamics warning of each rate-independent kind in a sweep: one line, every kind."""
+    msg = ("compensator kind = {!r} is rate independent: at {} Hz the plant's linear dynamics "
+           "(first resonance 290 Hz) change the response by {} %, which it does not compensate")
+    pairs = [("a", msg.format("multivariable", 50, 8.5)), ("b", msg.format("per-axis", 50, 8.5)),
+             ("c", msg.format("static-gain", 420, 334.5)), ("d", msg.format("per-axis", 50, 8.5))]
+    (group,) = group_warnings(pairs)
+    assert group.cases == ["a", "b", "c", "d"]
+    assert group.message == msg.format("multivariable", 50, 8.5).replace(
+        "'multivariable'", "'multivariable'/'per-axis'/'static-gain'").replace(
+        "50 Hz", "50\u2013420 Hz").replace("8.5 %", "8.5\u2013334.5 %")
+    # the digits of a quoted name stay in the name; names and numbers never mix
+    assert message_template("kind = 'mv-50Hz' at 50 Hz") == "kind = '?' at # Hz"
+    assert len(group_warnings([("a", "x 'one' 2"), ("b", "x 3 'two'")])) == 2

@@ -9,6 +9,7 @@ from hammerstein import runner
 from hammerstein.scenario import registry
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError
+from hammerstein.scenario.validate import validate_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted(p for p in (ROOT / "scenarios").rglob("*.toml")
@@ -44,7 +45,8 @@ def test_bundled_scenarios_exist():
 
 @pytest.mark.parametrize("path", BUNDLED, ids=[p.stem for p in BUNDLED])
 def test_bundled_scenarios_validate(path):
-    sc = load_scenario(path)
+    """Validation only (nothing identified or simulated); the slow end-to-end tests run them."""
+    sc = validate_scenario(path)
     assert sc.cases and sc.name == path.stem
 
 
@@ -186,3 +188,49 @@ def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch):
                  + GOOD_CASE, "bad.toml")
     with pytest.raises(ScenarioError, match="did you mean 'gain'"):
         load_scenario(bad)
+
+
+DYNAMICS_HEAD = """
+[plant]
+preset = "rakotondrabe-2dof"
+dynamics = {dynamics}
+[compensator]
+kind = "{kind}"
+model = "plant"
+"""
+
+
+@pytest.mark.parametrize("dynamics, kind, case, expected", [
+    ("true", "multivariable",
+     'reference = { kind = "sine", output = "y", amplitude = 30.0, frequency = 300.0, periods = 3 }',
+     "compensator kind = 'multivariable' is rate independent: at 300 Hz"),
+    ("true", "per-axis",
+     'reference = { kind = "circle", radius = 20.0, frequency = 40.0, periods = 2 }',
+     "compensator kind = 'per-axis' is rate independent: at 40 Hz"),
+    ("true", "multivariable",   # 5 Hz: 2 % of the first resonance, gain within 0.1 %
+     'reference = { kind = "sine", output = "y", amplitude = 30.0, frequency = 5.0, periods = 2 }',
+     None),
+    ("false", "multivariable",  # no dynamics to warn about
+     'reference = { kind = "sine", output = "y", amplitude = 30.0, frequency = 300.0, periods = 3 }',
+     None),
+    ("true", "multivariable",   # open loop, compared with the static PI
+     'drive = { kind = "sine", input = "ux", amplitude = 5.0, frequency = 100.0, periods = 3 }\n'
+     'model = "plant"',
+     "the comparison model is static (PI only): at 100 Hz"),
+])
+def test_dynamics_warning(tmp_path, dynamics, kind, case, expected):
+    """One warning when a rate-independent treatment meets the plant's dynamics
+    (above 10 % of the first resonance, 290 Hz, or a gain change over 2 %)."""
+    text = DYNAMICS_HEAD.format(dynamics=dynamics, kind=kind) + f'''
+[[cases]]
+name = "c"
+{case}
+'''
+    sc = load_scenario(_write(tmp_path, text))
+    from hammerstein.scenario.resolve import dynamics_warning
+    message = dynamics_warning(sc.cases[0])
+    if expected is None:
+        assert message is None
+    else:
+        assert message.startswith(expected) and "first resonance 290 Hz" in message
+        assert "docs/hammerstein-plant.md" in message and len(message) < 240
