@@ -79,7 +79,7 @@ def one_line(text, path=None):
 
     Examples
     --------
-    >>> one_line("a.toml: x: bad\na.toml: y: worse", "a.toml")
+    >>> one_line("a.toml: x: bad\\na.toml: y: worse", "a.toml")
     'a.toml: x: bad; y: worse'
     """
     lines = [" ".join(ln.split()) for ln in str(text).splitlines() if ln.strip()]

@@ -1,4 +1,4 @@
-"""The Examples sections of the core and simulation run and print what they say."""
+"""The Examples sections of every module run and print what they say."""
 
 import doctest
 import importlib
@@ -7,12 +7,16 @@ import warnings
 
 import pytest
 
+import hammerstein.cli
 import hammerstein.core
+import hammerstein.report
+import hammerstein.scenario
 import hammerstein.simulation
 
+PACKAGES = (hammerstein.core, hammerstein.simulation, hammerstein.scenario, hammerstein.report,
+            hammerstein.cli)
 MODULES = ["hammerstein.exceptions", "hammerstein.simulation", "hammerstein.runner"] + sorted(
-    info.name for pkg in (hammerstein.core, hammerstein.simulation)
-    for info in pkgutil.iter_modules(pkg.__path__, pkg.__name__ + "."))
+    info.name for pkg in PACKAGES for info in pkgutil.iter_modules(pkg.__path__, pkg.__name__ + "."))
 
 
 @pytest.mark.parametrize("name", MODULES)
