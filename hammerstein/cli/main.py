@@ -140,7 +140,7 @@ def _command(argv):
 
 
 def main(argv=None):
-    """Entry point of the ``hammerstein`` console script.
+    """The ``hammerstein`` command as a function; the console script is :func:`run`.
 
     Parameters
     ----------
