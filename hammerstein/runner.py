@@ -453,7 +453,6 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
         def write(d):
             kind.write(scenario, results, d, jobs)
             _write_warnings(caught, d)
-            jobs.submit()
         tmp = _start_write(out_dir, write)
     except ScenarioError as exc:
         return PendingScenario(ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics()))

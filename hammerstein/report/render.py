@@ -113,22 +113,16 @@ def job_key(job):
     return hashlib.blake2b(blob, digest_size=16).digest()
 
 
-def _copy_when_drawn(first, path):
-    """A future for ``path`` that gets the PNG of ``first`` once ``first`` is drawn."""
-    copy = Future()
-
-    def write(done):
-        if not copy.set_running_or_notify_cancel():     # the report was abandoned
-            return
-        try:
-            path.write_bytes(done.result())
-        except BaseException as exc:     # the first drawing's error, or this write's
-            copy.set_exception(exc)
-        else:
-            copy.set_result(done.result())
-
-    first.add_done_callback(write)
-    return copy
+def _settle(future, done, path=None):
+    """Give ``future`` the outcome of ``done`` (writing its PNG to ``path`` first, if given)."""
+    try:
+        png = done.result()
+        if path is not None:
+            path.write_bytes(png)
+    except BaseException as exc:     # the drawing's error, or this write's
+        future.set_exception(exc)
+    else:
+        future.set_result(png)
 
 
 def _done(value=None, error=None):
@@ -161,7 +155,6 @@ class FigureJobs:
 
     def __init__(self, renderer=None):
         self.renderer = renderer
-        self._queued = []
         self._futures = []
 
     def add(self, path, function, *args, **kwargs):
@@ -189,14 +182,7 @@ class FigureJobs:
         if self.renderer is None:
             render_job(job)
         else:
-            self._queued.append(job)
-            self.submit()
-
-    def submit(self):
-        """Hand the queued jobs to the renderer (they run while the caller goes on)."""
-        if self._queued:
-            self._futures += self.renderer.submit(self._queued)
-            self._queued = []
+            self._futures += self.renderer.submit([job])
 
     def done(self):
         """Whether every job has finished (successfully or not).
@@ -205,7 +191,7 @@ class FigureJobs:
         -------
         bool
         """
-        return not self._queued and all(f.done() for f in self._futures)
+        return all(f.done() for f in self._futures)
 
     def wait(self):
         """Run or wait for every job; then raise the first job's error, if any.
@@ -216,7 +202,6 @@ class FigureJobs:
             The first error of a job (after all of them have finished, so
             no worker still writes into the directory).
         """
-        self.submit()
         wait_futures(self._futures)
         for f in self._futures:
             if f.exception() is not None:
@@ -232,7 +217,6 @@ class FigureJobs:
             exited, so nothing writes any more; the futures of jobs it had
             started may never finish then).
         """
-        self._queued = []
         for f in self._futures:
             f.cancel()
         if wait:
@@ -311,11 +295,35 @@ class FigureRenderer:
         for i in new:
             if keys[i] is not None:
                 self._drawn[keys[i]] = started[i]
-        out = [started[i] if i in started else _copy_when_drawn(self._drawn[keys[i]], j.path)
+        out = [started[i] if i in started else self._copy_when_drawn(self._drawn[keys[i]], j)
                for i, j in enumerate(jobs)]
         while len(self._drawn) > REMEMBERED:
             del self._drawn[next(iter(self._drawn))]
         return out
+
+    def _copy_when_drawn(self, first, job):
+        """A future for ``job`` that gets the PNG of ``first`` once ``first`` is drawn.
+
+        If ``first`` was cancelled (the report that drew it was abandoned),
+        ``job`` is drawn after all.
+        """
+        copy = Future()
+
+        def chain(done):
+            if not copy.set_running_or_notify_cancel():     # this report was abandoned
+                return
+            if not done.cancelled():
+                _settle(copy, done, job.path)
+                return
+            try:
+                again = self._start([job])[0]
+            except BaseException as exc:                    # the pool is shut down
+                copy.set_exception(exc)
+            else:
+                again.add_done_callback(lambda d: _settle(copy, d))
+
+        first.add_done_callback(chain)
+        return copy
 
     def _start(self, jobs):
         if self._pool is None and self.workers >= 2 and jobs:

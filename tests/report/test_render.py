@@ -126,3 +126,28 @@ def test_a_copy_fails_with_the_drawing_it_copies(tmp_path, workers):
             with pytest.raises(ValueError, match="legend does not fit"):
                 jobs.wait()
     assert not any(tmp_path.iterdir())
+
+
+def _slow_loop(*args, **kwargs):  # keeps a worker busy, then draws
+    import time
+    time.sleep(1.0)
+    return plots.loop_grid(*args, **kwargs)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="the pool needs fork")
+def test_a_copy_is_drawn_when_the_report_it_copies_is_abandoned(tmp_path):
+    names = (["u1 [V]", "u2 [V]"], ["x [µm]", "y [µm]"])
+    for d in ("busy", "a", "b"):
+        (tmp_path / d).mkdir()
+    with FigureRenderer(workers=2) as renderer:
+        busy = FigureJobs(renderer)
+        for k in range(2):                        # both workers busy for a second
+            busy.add(tmp_path / "busy" / f"{k}.png", _slow_loop, _curves(k), *names, f"busy {k}")
+        a, b = FigureJobs(renderer), FigureJobs(renderer)
+        a.add(tmp_path / "a" / "loop.png", plots.loop_grid, _curves(), *names, "same")
+        b.add(tmp_path / "b" / "loop.png", plots.loop_grid, _curves(), *names, "same")
+        a.cancel()                                # report a abandoned before its figure started
+        b.wait()
+        busy.wait()
+    assert not (tmp_path / "a" / "loop.png").exists()
+    assert (tmp_path / "b" / "loop.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
