@@ -12,7 +12,9 @@ curves, trajectory figures of 80 ms (circle, 1600 samples) and 1 s (20 000
 samples, decimated to :data:`hammerstein.report.figures.MAX_POINTS` per
 line), the XY overlay of four circles, the Fig. 6 model grid, the Fig. 7
 model-error and Fig. 9 sweep grids (6 compensators x 15 frequencies), the
-stability map and the record-fit figure of a 20 000-sample record.
+stability map, the record-fit figure of a 20 000-sample record, the error map
+of a 64-line raster scan and the Bode plot of identified against true 2x2
+dynamics (python-control, 300 frequencies).
 
 The paper run (``hammerstein run scenarios/paper/*.toml``) writes about 25
 figures; the sum of the totals below for its mix is the plotting part of its
@@ -35,8 +37,11 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from hammerstein.core.dynamics import bending_modes, discretize  # noqa: E402
+from hammerstein.core.references import raster_line_index  # noqa: E402
 from hammerstein.report import figures as plots  # noqa: E402
 from hammerstein.report import model_figures  # noqa: E402
+from hammerstein.report.dynamics_figure import dynamics_bode_figure  # noqa: E402
 
 try:  # the sweep figures moved from scenario/ to report/
     from hammerstein.report import sweeps as sweep_figs  # noqa: E402
@@ -131,6 +136,18 @@ def cases():
     out.append((f"record_fit_figure ({n} samples)",
                 lambda: model_figures.record_fit_figure(tt, uu, yy, yy + 0.05, 100, 12000,
                                                         "u [V]", "y [µm]", "record fit")))
+    lines, f_fast = 64, 50.0                      # 64 lines of a 50 Hz fast axis: 25 600 samples
+    tr = np.arange(int(round(lines / f_fast / T))) * T
+    cycles = tr * f_fast
+    fast = 40.0 * (1 - np.abs(2 * np.mod(cycles, 1.0) - 1))          # triangle, 0..40 µm
+    err = np.vstack([0.3 * np.sin(2 * np.pi * 3 * cycles), 0.1 * np.cos(2 * np.pi * cycles)])
+    out.append((f"raster_error_map ({lines} lines, {tr.size} samples)",
+                lambda: plots.raster_error_map(fast, err, ["x_r - x (fast)", "y_r - y (slow)"],
+                                               raster_line_index(tr, f_fast),
+                                               np.mod(cycles, 1.0) < 0.5, 40.0, "x", "raster")))
+    G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2], ["x", "y"]), T)
+    out.append(("dynamics_bode_figure (2x2, 300 frequencies)",
+                lambda: dynamics_bode_figure(G, G, title="identified vs true")))
     return out
 
 
