@@ -19,7 +19,7 @@ else ``~/.cache/hammerstein``, in a subdirectory ``identified/``.
 ``HAMMERSTEIN_CACHE_DIR=off`` (or empty) turns the cache off. Removing the
 directory is always safe (the next run identifies again); entries written by
 older versions are never read again and not removed either (an entry is a
-few kB: the paper's 8 identifications take 70 kB).
+few kB: the paper's 8 identifications take 32 kB).
 
 Safety: an entry is written once, through a temporary file and a rename
 (:func:`hammerstein.core.files.safe_write`), and never over an existing
