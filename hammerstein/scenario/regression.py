@@ -459,16 +459,19 @@ def merge_baseline(old, new):
     Returns
     -------
     pandas.DataFrame
-        Sorted by scenario (stable within a scenario).
+        The baseline's scenarios in their order, each replaced where it
+        stood, then the scenarios it did not have, in the order of
+        ``new``: a baseline kept in version control changes by the rows
+        whose values changed, not by a reordering.
     """
     new = _normalise(new, "current metrics")
     if old is None or old.empty:
-        merged = new
-    else:
-        old = _normalise(old, "baseline")
-        merged = pd.concat([old[~old["scenario"].isin(set(new["scenario"]))], new],
-                           ignore_index=True)
-    return merged.sort_values("scenario", kind="stable").reset_index(drop=True)
+        return new.reset_index(drop=True)
+    old = _normalise(old, "baseline")
+    fresh = set(new["scenario"])
+    order = list(dict.fromkeys([*old["scenario"], *new["scenario"]]))
+    parts = [(new if name in fresh else old).query("scenario == @name") for name in order]
+    return pd.concat(parts, ignore_index=True)
 
 
 def write_baseline(frame, path):

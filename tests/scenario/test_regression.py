@@ -211,6 +211,20 @@ def test_merge_baseline_replaces_only_the_scenarios_run():
             [r[3] for r in BASE]).all()
 
 
+def test_merge_baseline_keeps_the_baseline_order():
+    """--update rewrites a scenario where it stood and appends new ones: a baseline in
+    version control changes by its changed rows only."""
+    old = pd.concat([table(BASE, "z"), table(BASE, "a"), table(BASE, "m")])
+    new = pd.concat([table(_with(BASE, "rms_error", 9.0), "a"), table(BASE, "new")])
+    merged = merge_baseline(old, new)
+    assert list(dict.fromkeys(merged["scenario"])) == ["z", "a", "m", "new"]
+    unchanged = merged[merged["scenario"] != "a"].drop(columns="value")
+    assert len(unchanged) == 3 * len(BASE)
+    assert list(merged.loc[merged["scenario"] == "a", "metric"]) == [r[2] for r in BASE]
+    same = merge_baseline(old, table(BASE, "m"))
+    pd.testing.assert_frame_equal(same, old.reset_index(drop=True), check_dtype=False)
+
+
 @pytest.mark.parametrize("content, message", [
     (None, "not found"),
     ("<dir>", "is a directory"),
