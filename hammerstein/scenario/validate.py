@@ -476,7 +476,8 @@ def _validate_cases(path, data):
                 plant = plant_of(pspec["preset"], pspec.get("dynamics", True))
             except PresetError as exc:
                 plants[(pspec["preset"], bool(pspec.get("dynamics", True)))] = None
-                problems.append(f"{source}: {where}.plant.preset: {exc}")
+                key = f"{where}.plant" if isinstance(pover, dict) and "preset" in pover else "plant"
+                problems.append(f"{source}: {key}.preset: {exc}")
             if plant is not None and pspec.get("dynamics") is True and plant.is_static:
                 key = f"{where}.plant" if "dynamics" in plant_clean else "plant"
                 once(f"{source}: {key}.dynamics: true, but the preset {pspec['preset']!r} has no "

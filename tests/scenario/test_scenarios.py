@@ -109,7 +109,9 @@ settle_periods = -1
     (HEAD + "gain = 'identity'\n" + GOOD_CASE,
      "cases[0].compensator: gain: rho(I - K^-1 J) reaches"),
     (HEAD.replace("rakotondrabe-2dof", "no-such-preset") + GOOD_CASE,
-     "cases[0].plant.preset: no-such-preset: not a bundled preset"),
+     ": plant.preset: no-such-preset: not a bundled preset"),   # the key the file has
+    (HEAD + GOOD_CASE.replace('name = "x"', 'name = "x"\nplant = { preset = "no-such" }'),
+     "cases[0].plant.preset: no-such: not a bundled preset"),
     (HEAD + GOOD_CASE + "settle_periods = 2",
      "cases[0].settle_periods: 2 periods of settling leave less than one period"),
     (HEAD + GOOD_CASE + GOOD_CASE, "cases[1].name: duplicate case name 'x'"),
