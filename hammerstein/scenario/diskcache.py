@@ -57,7 +57,8 @@ def cache_dir():
     -------
     pathlib.Path or None
         ``<root>/identified`` with root ``$HAMMERSTEIN_CACHE_DIR``, else
-        ``$XDG_CACHE_HOME/hammerstein``, else ``~/.cache/hammerstein``.
+        ``$XDG_CACHE_HOME/hammerstein``, else ``~/.cache/hammerstein``;
+        None when turned off or when there is no home directory.
     """
     root = os.environ.get(ENV)
     if root is not None:
@@ -65,8 +66,13 @@ def cache_dir():
             return None
         return Path(root).expanduser() / "identified"
     xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
-    base = Path(xdg) if xdg else Path.home() / ".cache"
-    return base / "hammerstein" / "identified"
+    if xdg:
+        return Path(xdg) / "hammerstein" / "identified"
+    try:
+        home = Path.home()
+    except (RuntimeError, KeyError):      # no HOME and no passwd entry: no cache
+        return None
+    return home / ".cache" / "hammerstein" / "identified"
 
 
 def _version(dist):

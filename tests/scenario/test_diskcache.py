@@ -105,6 +105,20 @@ def test_default_location_follows_xdg(monkeypatch, tmp_path):
     monkeypatch.delenv(diskcache.ENV, raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     assert diskcache.cache_dir() == tmp_path / "hammerstein" / "identified"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert diskcache.cache_dir() == tmp_path / "home" / ".cache" / "hammerstein" / "identified"
+
+
+def test_no_home_directory_means_no_cache(monkeypatch):
+    from pathlib import Path
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+    monkeypatch.delenv(diskcache.ENV, raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setattr(Path, "home", staticmethod(no_home))
+    assert diskcache.cache_dir() is None and diskcache.load("pi", (1,)) is None
 
 
 def test_unwritable_cache_costs_only_time(tmp_path, static_plant, monkeypatch):
