@@ -15,7 +15,9 @@ sine on each input in turn, all outputs recorded
 (:func:`hammerstein.sensors.characterize`), then
 :class:`hammerstein.identification.MultivariableIdentifier`. Identified
 models are cached in-process on (plant content, identify table), so a
-scenario with many cases identifies each model once, and are saved into
+scenario with many cases identifies each model once, and on disk
+(:mod:`hammerstein.scenario.diskcache`), so a later run does not identify them
+again; they are saved into
 the report directory as ``models/identified-<f>Hz-<method>.toml``
 (:func:`hammerstein.presets.save_model`; loadable by ``model = "path"``).
 
@@ -39,9 +41,9 @@ from hammerstein.core.lti import (DynamicsIdentifier, excitation, hammerstein_re
 from hammerstein.core.presets import (PresetError, load_dynamics, load_model, model_from_table,
                                       model_to_table, save_dynamics, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
-from hammerstein.scenario import diskcache
 from hammerstein.exceptions import NestedInvalid
 from hammerstein.core.lazy import lazy_module
+from hammerstein.scenario import diskcache
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, _short,
                                          boolean, check_table, choice,
                                          integer, number)
