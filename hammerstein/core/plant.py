@@ -72,8 +72,15 @@ class HammersteinPlant:
                     f"found dt={d.dt}")
 
     def __repr__(self):
-        return (f"HammersteinPlant(hysteresis={self.hysteresis!r}, sampling_period="
-                f"{self.sampling_period!r}, dynamics={self._dynamics!r}, name={self.name!r})")
+        """Class, name, hysteresis model and the dynamics' order (no arrays)."""
+        d = self._dynamics
+        if d is None:
+            dyn = "static (no dynamics)"
+        else:
+            n = d.nstates if hasattr(d, "nstates") else d.A.shape[0]
+            dyn = f"dynamics order {n}"
+        return (f"HammersteinPlant(name={self.name!r}, {self.hysteresis!r}, {dyn}, "
+                f"sampling_period={self.sampling_period:g} s)")
 
     @property
     def dynamics(self):
