@@ -340,11 +340,11 @@ def _figures(scenario, results, directory, jobs):
     # trajectories
     traj = [r for r in ok if r.spec.mode == "reference" and r.spec.loop_channel is None]
     for r in traj:
-        names = out_names[:2]
+        names = out_names                      # every output (z too); the XY plot: the first two
         settle = r.spec.settle_periods * r.spec.period_samples * r.spec.plant.sampling_period
         fname = f"trajectory-{r.name}.png"
-        jobs.add(directory / fname, plots.trajectory_figure, r.spec.time, r.reference[:2],
-                 r.outputs[:2], names,
+        jobs.add(directory / fname, plots.trajectory_figure, r.spec.time, r.reference,
+                 r.outputs, names,
                  f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, {_compensator_title(r.spec)}",
                  settle_time=settle, inputs=r.inputs, input_names=in_names)
         figs.append((f"Case {r.name}: spatial domain, time domain (displacements, input "

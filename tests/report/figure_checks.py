@@ -93,6 +93,10 @@ def figure_problems(fig, name="figure"):
         for artist in ax.get_children():
             n = _visible_points(artist, ax)
             if n is None:
+                if isinstance(artist, (Line2D, Patch)) and artist is not ax.patch \
+                        and artist.get_visible():
+                    drawn_labels.add(artist.get_label())    # a reference line or span (axhline,
+                    #                                          axvspan) may be in a legend
                 continue
             counts.append(n)
             label = artist.get_label()

@@ -132,3 +132,64 @@ def test_every_figure_of_every_bundled_report_shows_its_data(path, tmp_path):
     assert renderer.problems == []
     for name in pngs:
         assert png_problems(outcome.out_dir / name) == []
+
+
+# -- single figures: what they draw is what they say ---------------------------------------
+def test_trajectory_figure_keeps_every_output_in_time_and_error_panels():
+    from hammerstein.report.figures import trajectory_figure
+    t = np.arange(2000) * 5e-5
+    th = 2 * np.pi * 50 * t
+    ref = np.vstack([10 * np.cos(th), 10 * np.sin(th), 2 * np.sin(2 * th)])
+    out = ref + np.vstack([0.1 * np.sin(th), 0.2 * np.cos(th), 0.3 * np.ones_like(t)])
+    fig = trajectory_figure(t, ref, out, ["x", "y", "z"], "three outputs", settle_time=0.01,
+                            inputs=ref / 5, input_names=["ux", "uy", "uz"])
+    fig.canvas.draw()
+    assert figure_problems(fig) == []
+    by_title = {ax.get_title().split("\n")[0]: ax for ax in fig.axes}
+    assert [ln.get_label() for ln in by_title["(b) time domain"].lines] == \
+        ["x_r", "x", "y_r", "y", "z_r", "z"]
+    errors = by_title["(c) tracking error per axis"].lines
+    assert [ln.get_label() for ln in errors] == ["x_r - x", "y_r - y", "z_r - z"]
+    np.testing.assert_allclose(errors[2].get_ydata(), -0.3)          # z's error, drawn
+    (eu,) = [a for a in fig.axes if a.get_title().startswith("(e)")][0].lines
+    # |e|^2 = 0.01 sin^2 + 0.04 cos^2 + 0.09: largest at cos^2 = 1, over x, y and z
+    np.testing.assert_allclose(eu.get_ydata().max(), np.sqrt(0.2 ** 2 + 0.3 ** 2), rtol=1e-3)
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("recorded", [True, False])
+def test_divergence_title_cites_only_what_is_drawn(recorded):
+    from hammerstein.report.figures import divergence_figure
+    u = np.vstack([10.0 ** np.arange(10), 0.5 * 10.0 ** np.arange(10)])
+    if not recorded:
+        u[:, 8:] = np.nan                        # the runner records nothing from the sample on
+    fig = divergence_figure(u, ["ux", "uy"], 8, "|U| = 1e+08 V exceeds the bound 1e+04 V", "t")
+    fig.canvas.draw()
+    assert figure_problems(fig) == []
+    title = fig.texts[0].get_text() if fig.texts else fig._suptitle.get_text()
+    assert ("(not recorded)" in title) is not recorded
+    last = max(np.nanmax(np.where(np.isfinite(ln.get_ydata()), ln.get_xdata(), np.nan))
+               for ln in fig.axes[0].lines if ln.get_label().startswith("|"))
+    assert last == (8 if recorded else 7)
+    plt.close(fig)
+
+
+def test_bode_figure_nyquist_line_is_a_grey_reference_and_the_legend_is_off_the_axes():
+    from hammerstein.core.dynamics import bending_modes, discretize
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    T = 5e-5
+    G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), T)
+    fig = dynamics_bode_figure(discretize(bending_modes([300.0, 295.0], [0.15, 0.2]), T), G,
+                               labels=("identified", "true G"))
+    fig.canvas.draw()
+    assert figure_problems(fig) == []
+    nyq = [ln for ax in fig.axes for ln in ax.lines if ln.get_label().startswith("Nyquist")]
+    assert nyq and all(ln.get_color() == "0.55" and ln.get_linestyle() == ":" for ln in nyq)
+    assert all(np.allclose(ln.get_xdata(), 0.5 / T) for ln in nyq)
+    assert all(ax.get_legend() is None for ax in fig.axes)
+    (legend,) = fig.legends
+    assert [t.get_text() for t in legend.get_texts()] == \
+        ["identified", "true G", f"Nyquist frequency ({0.5 / T:g} Hz)"]
+    box = legend.get_window_extent()                 # above every panel: on no curve
+    assert all(box.y0 >= ax.get_window_extent().y1 for ax in fig.axes)
+    plt.close(fig)
