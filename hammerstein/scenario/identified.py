@@ -44,7 +44,8 @@ from hammerstein.core.sensors import Sensor, characterize, identification_metada
 from hammerstein.exceptions import NestedInvalid
 from hammerstein.core.lazy import lazy_module
 from hammerstein.scenario import diskcache
-from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, _short,
+from hammerstein.core.schema import nested_table
+from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, short_repr,
                                          boolean, check_table, choice,
                                          integer, number)
 
@@ -101,7 +102,7 @@ def _n_hysterons(v):
                     for r in v for a in r)):
         return v
     raise Invalid(f"expected an integer 1..{MAX_HYSTERONS} or a p x m table of them, "
-                  f"found {_short(v)}")
+                  f"found {short_repr(v)}")
 
 
 def _amplitude(v):
@@ -148,23 +149,7 @@ def identify_table(value):
         if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares":
             yield "bounds: only used by method = 'least-squares'"
 
-    return _nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
-
-
-def _nested_table(value, fields, example, cross):
-    """Check a nested table against ``fields``, then ``cross(clean)``'s "key: message" lines.
-
-    Raises ``Invalid`` when ``value`` is no table (naming ``example``) and
-    ``NestedInvalid`` with every ``(key, message)`` problem at once.
-    """
-    problems = []
-    clean = check_table(value, fields, "", problems, "")
-    if clean is None:
-        raise Invalid(f"expected a table such as {example}, found {value!r}")
-    problems += [f": {line}" for line in cross(clean)]
-    if problems:  # check_table lines read ": key: message" with an empty source
-        raise NestedInvalid([tuple(p[2:].split(": ", 1)) for p in problems])
-    return clean
+    return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
 
 
 # -- identification with an in-process cache ------------------------------------------
@@ -639,7 +624,7 @@ def identify_dynamics_table(value):
         if "order" in clean and clean["order"] > clean["max_order"]:
             yield "order: expected <= max_order"
 
-    return _nested_table(value, IDENTIFY_DYNAMICS_FIELDS,
+    return nested_table(value, IDENTIFY_DYNAMICS_FIELDS,
                          "{ amplitude = 8.0, band = [20.0, 1000.0] }", cross)
 
 

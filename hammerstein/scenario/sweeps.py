@@ -52,7 +52,7 @@ from hammerstein.scenario.progress import progress
 from hammerstein.scenario.registry import build_compensator
 from hammerstein.core.metrics import UNITS
 from hammerstein.scenario.schema import (CASE, MAX_NAME, MAX_SWEEP_FREQUENCIES, NAME, Field, Invalid,
-                                         _short, check_table, choice, name_field, number, string)
+                                         short_repr, check_table, choice, name_field, number, string)
 from hammerstein.simulation import _fusable, simulate_chain_batch
 
 __all__ = [
@@ -110,7 +110,7 @@ def _frequencies(v):
         if len(set(v)) != len(v):
             raise Invalid(f"expected distinct frequencies [Hz], found duplicates in {v!r}")
         return [float(f) for f in v]
-    raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {_short(v)}")
+    raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {short_repr(v)}")
 
 
 def _labelled_tables(v):
@@ -118,7 +118,7 @@ def _labelled_tables(v):
         raise Invalid(f"expected a table of label = {{ kind = ... }} compensator tables, found {v!r}")
     for label, table in v.items():
         if not re.fullmatch(NAME, label) or len(label) > MAX_NAME:
-            raise Invalid(f"label {_short(label)}: expected at most {MAX_NAME} letters, digits, "
+            raise Invalid(f"label {short_repr(label)}: expected at most {MAX_NAME} letters, digits, "
                           f"'.', '_' or '-'")
         if not isinstance(table, dict):
             raise Invalid(f"{label}: expected a compensator table, found {table!r}")

@@ -20,7 +20,6 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 
 from __future__ import annotations
 
-import difflib
 import os
 import re
 from dataclasses import dataclass, field
@@ -182,10 +181,7 @@ def _merge_compensator(top, case):
 def _check_compensator(spec, where, problems, source, own=None):
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
-        hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
-        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
-        problems.append(f"{source}: {where}.kind: expected one of "
-                        f"{', '.join(map(repr, COMPENSATORS))}, found {kind!r}{extra}")
+        problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, COMPENSATORS)]
         return None
     schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
     clean = check_table(spec, schema, where, problems, source)
@@ -251,10 +247,7 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
         return None
     kind = spec.get("kind")
     if kind not in kinds:
-        hint = difflib.get_close_matches(str(kind), list(kinds), n=1)
-        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
-        problems.append(f"{source}: {where}.kind: expected one of "
-                        f"{', '.join(map(repr, kinds))}, found {kind!r}{extra}")
+        problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, kinds)]
         return None
     n_before = len(problems)
     clean = check_table(spec, {"kind": Field(lambda v: v), **kinds[kind]}, where, problems, source)
