@@ -7,7 +7,7 @@ an entry (its ``fields`` are checked by ``hammerstein validate``, its
 with ``.name`` and ``.simulate(reference (m, N), initial_state=None) ->
 (inputs (m, N), final_state)``. The model a kind is built from
 (``model = "plant" | "identified" | <file>``) is resolved by
-:func:`hammerstein.scenario.identified.resolve_model`.
+:func:`hammerstein.scenario.identification.resolve_model`.
 """
 
 from __future__ import annotations
@@ -21,8 +21,9 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
-from hammerstein.scenario.identified import (hammerstein_identify_table, identify_dynamics_table,
-                                             identify_table, resolve_dynamics, resolve_model)
+from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
+from hammerstein.scenario.identify_tables import (hammerstein_identify_table, identify_dynamics_table,
+                                                  identify_table)
 from hammerstein.scenario.schema import MAX_ITERATIONS, Field, Invalid, choice, integer, number, string
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "RATE_INDEPENDENT", "build_compensator",
@@ -36,7 +37,7 @@ class CompensatorKind:
     Parameters
     ----------
     build : callable
-        ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;
+        ``build(spec: dict, plant, context: ResolveContext) -> compensator or None``;
         ``spec`` is the validated ``[compensator]`` table (defaults filled).
     fields : dict of str to hammerstein.scenario.schema.Field
         The keys this kind accepts besides ``kind`` (validated by
@@ -61,20 +62,20 @@ def _gain(v):
                   f"finite numbers [µm/V], found {v!r}")
 
 
-def _build_none(spec, plant, base_dir):
+def _build_none(spec, plant, context):
     return None
 
 
-def _build_multivariable(spec, plant, base_dir):
-    model = resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+def _build_multivariable(spec, plant, context):
+    model = resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
         check=spec.get("check", "error"), **_feedback_options(spec, plant))
 
 
-def _spec_model(spec, plant, base_dir):
+def _spec_model(spec, plant, context):
     """The model of a compensator table (every kind resolves it like "multivariable")."""
-    return resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+    return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
 
 
 def _feedback_options(spec, plant):
@@ -85,19 +86,19 @@ def _feedback_options(spec, plant):
             "sampling_period": plant.sampling_period}
 
 
-def _build_diagonal(spec, plant, base_dir):
+def _build_diagonal(spec, plant, context):
     return diagonal_compensator(
-        _spec_model(spec, plant, base_dir), gain=spec.get("gain", "secant"),
+        _spec_model(spec, plant, context), gain=spec.get("gain", "secant"),
         iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
         **_feedback_options(spec, plant))
 
 
-def _build_per_axis(spec, plant, base_dir):
-    return PerAxisInverseCompensator(_spec_model(spec, plant, base_dir))
+def _build_per_axis(spec, plant, context):
+    return PerAxisInverseCompensator(_spec_model(spec, plant, context))
 
 
-def _build_static_gain(spec, plant, base_dir):
-    return StaticGainCompensator(_spec_model(spec, plant, base_dir))
+def _build_static_gain(spec, plant, context):
+    return StaticGainCompensator(_spec_model(spec, plant, context))
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------
@@ -126,11 +127,11 @@ COMPENSATORS["static-gain"] = CompensatorKind(
     "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")
 
 
-def _build_hammerstein(spec, plant, base_dir):
+def _build_hammerstein(spec, plant, context):
     model = None
     if spec.get("model", "plant") != "identified":
-        model = _spec_model(spec, plant, base_dir)
-    pi, G = resolve_dynamics(spec, plant, base_dir, model)
+        model = _spec_model(spec, plant, context)
+    pi, G = resolve_dynamics(spec, plant, context, model)
     comp = HammersteinCompensator(
         pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
         iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
@@ -157,7 +158,7 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
 RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
 
 
-def build_compensator(spec, plant, base_dir):
+def build_compensator(spec, plant, context):
     """Build the compensator of a ``[compensator]`` table.
 
     Parameters
@@ -167,8 +168,10 @@ def build_compensator(spec, plant, base_dir):
         (default ``"none"``).
     plant : HammersteinPlant
         The simulated plant (its PI model is ``model = "plant"``).
-    base_dir : pathlib.Path
-        Directory of the scenario file (relative model paths).
+    context : hammerstein.scenario.identification.ResolveContext or pathlib.Path
+        The case's context: the scenario's directory (relative model paths),
+        the run's identification cache and the record of what the case
+        identified; a directory gives a context of its own.
 
     Returns
     -------
@@ -184,4 +187,6 @@ def build_compensator(spec, plant, base_dir):
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
         raise ValueError(f"kind: expected one of {', '.join(COMPENSATORS)}, found {kind!r}")
-    return COMPENSATORS[kind].build(spec, plant, Path(base_dir))
+    if not isinstance(context, ResolveContext):
+        context = ResolveContext(Path(context))
+    return COMPENSATORS[kind].build(spec, plant, context)

@@ -144,7 +144,7 @@ CASE = {
     "plant": Field(lambda v: v),
     "compensator": Field(lambda v: v),
     "settle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
-    "model": Field(string()),     # drives: a model compared with the plant (scenario.identified)
+    "model": Field(string()),     # drives: a model compared with the plant (scenario.identification)
     "identify": Field(lambda v: v),
 }
 _PHASE = Field(number("deg"), default=0.0)

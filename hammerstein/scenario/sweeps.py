@@ -341,7 +341,7 @@ def check_stability_table(table, problems, source):
     return clean
 
 
-def stability_map_frame(clean, plant, compensator_top, base_dir, problems, source):
+def stability_map_frame(clean, plant, compensator_top, context, problems, source):
     """Build the compensators of a checked ``[stability_map]`` table and compute the maps.
 
     Parameters
@@ -352,7 +352,8 @@ def stability_map_frame(clean, plant, compensator_top, base_dir, problems, sourc
         The scenario's top-level plant (identified models are identified on it).
     compensator_top : dict
         The scenario's ``[compensator]`` table (default compensator).
-    base_dir : pathlib.Path
+    context : hammerstein.scenario.identification.ResolveContext or pathlib.Path
+        The scenario's directory and identification cache.
     problems : list of str
         Receives ``source: stability_map.compensators.<label>: message``
         for a compensator that cannot be built or mapped.
@@ -374,7 +375,7 @@ def stability_map_frame(clean, plant, compensator_top, base_dir, problems, sourc
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                comp = build_compensator(spec, plant, base_dir)
+                comp = build_compensator(spec, plant, context)
             df = stability_map(comp, clean["scales"])
         except Exception as exc:  # report as a problem of this label
             problems.append(f"{source}: stability_map.compensators.{label}: {exc}")

@@ -30,7 +30,7 @@ import numpy as np
 
 from hammerstein.core import references as refs
 from hammerstein.core.presets import PresetError, load_dynamics, load_model, load_plant, read_toml
-from hammerstein.scenario.identified import comparison_spec, nyquist_problem
+from hammerstein.scenario.identify_tables import comparison_spec, dynamics_source, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
 from hammerstein.scenario.schema import (CASE, DRIVES, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT, REFERENCES,
@@ -79,12 +79,17 @@ class CaseSpec:
         ``identify``); None until resolved.
     model_spec : dict or None
         The case's ``model`` and validated ``identify`` entries
-        (:func:`hammerstein.scenario.identified.comparison_spec`).
+        (:func:`hammerstein.scenario.identify_tables.comparison_spec`).
     sweep : dict or None
         ``{sweep, case, compensator, axis, frequency_hz}`` of a sweep case.
     where : str
         Key path of the case in the file (``cases[0]``,
         ``sweeps[1](<case name>)``), for the problems of the resolution.
+    identified : list
+        What the case identified
+        (:class:`hammerstein.scenario.identification.IdentifiedModel`,
+        :class:`hammerstein.scenario.identification.IdentifiedDynamics`);
+        filled by the resolution.
     """
 
     name: str
@@ -107,6 +112,7 @@ class CaseSpec:
     model_spec: dict | None = None
     sweep: dict | None = None
     where: str = ""
+    identified: list = field(default_factory=list)
 
 
 @dataclass
@@ -374,7 +380,7 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
     ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
     within the settling the metrics skip. Returns ``key: message`` strings.
     """
-    dyn = spec.get("dynamics") or ("identified" if spec.get("model") == "identified" else "plant")
+    dyn = dynamics_source(spec)
     out = []
     if "identify_dynamics" in spec and dyn != "identified":
         out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
