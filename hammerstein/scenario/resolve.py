@@ -24,7 +24,7 @@ from hammerstein.core.lti import modal_parameters
 from hammerstein.core.presets import PresetError
 from hammerstein.scenario.identification import ResolveContext, resolve_comparison_model
 from hammerstein.scenario.identification_cache import IdentificationCache
-from hammerstein.scenario.registry import RATE_INDEPENDENT, build_compensator
+from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import stability_map_frame
 from hammerstein.scenario.validate import ScenarioSpec, validate_scenario
@@ -72,8 +72,8 @@ def dynamics_warning(case):
     A case warns when its plant has dynamics and its highest reference (or
     drive) frequency f is above ``RESONANCE_FRACTION`` of the first
     resonance, or where ``|G(f) G(0)^-1 - I|_2 > GAIN_DEVIATION``, and it is
-    a reference tracked by a rate-independent compensator
-    (:data:`hammerstein.scenario.registry.RATE_INDEPENDENT`) or an open-loop
+    a reference tracked by a rate-independent compensator kind (capability
+    ``rate_independent`` of :class:`hammerstein.scenario.registry.CompensatorKind`) or an open-loop
     drive compared with a static (PI-only) model.
 
     Parameters
@@ -90,7 +90,8 @@ def dynamics_warning(case):
         return None
     kind = (case.compensator_spec or {}).get("kind", "none")
     static_model = case.mode == "drive" and case.model_spec is not None
-    if not (static_model or (case.mode == "reference" and kind in RATE_INDEPENDENT)):
+    rate_independent = compensator_kind(case.compensator_spec).rate_independent
+    if not (static_model or (case.mode == "reference" and rate_independent)):
         return None
     sig = case.signal_spec or {}
     f = max(np.atleast_1d(sig.get("frequencies", sig.get("frequency", 0.0))), default=0.0)

@@ -1,4 +1,4 @@
-"""Scenario files (TOML): the schema (key tables, field checkers, :func:`check_table`).
+"""Scenario files (TOML): the key tables and the bounds of a scenario.
 
 A scenario names a simulated actuator (``[plant]``), an optional feedforward
 compensator (``[compensator]``) and one or more ``[[cases]]``, each an
@@ -12,8 +12,13 @@ raising one :class:`ScenarioError` whose lines read ``file: key: message``:
 ranges, names, signals against Nyquist; what ``hammerstein validate`` runs)
 and :func:`hammerstein.scenario.resolve.resolve_scenario` (identified models,
 model files, compensators, stability maps; ``hammerstein run`` runs both).
-This module holds what both use: the key tables, the field checkers and
-:func:`check_table`.
+This module holds the key tables of a scenario file and its bounds; the
+generic machinery (:class:`~hammerstein.core.schema.Field`, the checkers,
+:func:`~hammerstein.core.schema.check_table`) is :mod:`hammerstein.core.schema`,
+the keys of each reference and drive kind are their registry entries
+(:data:`hammerstein.core.references.REFERENCE_KINDS`,
+:data:`hammerstein.core.references.DRIVE_KINDS`), those of each compensator
+kind :data:`hammerstein.scenario.registry.COMPENSATORS`.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ from __future__ import annotations
 import os
 
 from hammerstein.core.schema import (MAX_NAME, MAX_TEXT, NAME, Field, Invalid, NestedInvalid, boolean,
-                                     check_table, choice, integer, is_number, kind_problem, name_field,
+                                     check_table, choice, integer, kind_problem, name_field,
                                      name_list, number, short_repr, string)
 from hammerstein.exceptions import ScenarioError
 
@@ -85,41 +90,6 @@ def total_samples_budget():
     return int(text) if text.isdigit() and int(text) > 0 else MAX_TOTAL_SAMPLES
 
 
-# -- scenario-specific checkers (the generic ones: hammerstein.core.schema) ---------
-def _amplitudes(v):
-    if is_number(v) and v > 0:
-        return float(v)
-    if isinstance(v, list) and len(v) == 2 and all(is_number(a) and a > 0 for a in v):
-        return [float(a) for a in v]
-    raise Invalid(f"expected a positive number or two [µm], found {v!r}")
-
-
-def _frequency_pair(v):
-    if isinstance(v, list) and len(v) == 2 and all(is_number(a) and a > 0 for a in v):
-        return [float(a) for a in v]
-    raise Invalid(f"expected two positive frequencies [f_x, f_y] [Hz], found {v!r}")
-
-
-def _extent_pair(v):
-    if isinstance(v, list) and len(v) == 2 and all(is_number(a) and a > 0 for a in v):
-        return [float(a) for a in v]
-    raise Invalid(f"expected two positive extents [fast, slow] [µm], found {v!r}")
-
-
-def _fraction(upper):
-    def check(v):
-        if not is_number(v) or not 0 <= v <= upper:
-            raise Invalid(f"expected a fraction of the period in [0, {upper:g}], found {v!r}")
-        return float(v)
-    return check
-
-
-def _column_map(v):
-    if isinstance(v, dict) and v and all(isinstance(c, str) and c for c in v.values()):
-        return dict(v)
-    raise Invalid(f"expected a table {{ <output> = \"<column>\" }} of column names, found {v!r}")
-
-
 TOP = {
     "name": Field(name_field()),
     "title": Field(string(max_length=200)),
@@ -146,45 +116,4 @@ CASE = {
     "settle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
     "model": Field(string()),     # drives: a model compared with the plant (scenario.identification)
     "identify": Field(lambda v: v),
-}
-_PHASE = Field(number("deg"), default=0.0)
-_LENGTH = {"periods": Field(number("periods", 0)), "duration": Field(number("s", 0))}
-_SINE_REFERENCE = {"output": Field(string(), required=True),
-                   "amplitude": Field(number("µm", 0), required=True),
-                   "frequency": Field(number("Hz", 0), required=True),
-                   "phase": _PHASE, "offset": Field(number("µm"), default=0.0), **_LENGTH}
-REFERENCES = {
-    "sine": _SINE_REFERENCE,
-    "triangle": dict(_SINE_REFERENCE),  # hammerstein.core.references.triangle
-    "circle": {"radius": Field(number("µm", 0), required=True),
-               "frequency": Field(number("Hz", 0), required=True),
-               "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
-    "spiral": {"radius": Field(number("µm", 0), required=True),
-               "frequency": Field(number("Hz", 0), required=True),
-               "tau": Field(number("s", 0), required=True),
-               "duration": Field(number("s", 0), required=True),
-               "circle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
-               "phase": _PHASE, "outputs": Field(name_list(2))},
-    "lissajous": {"amplitude": Field(_amplitudes, required=True),
-                  "frequencies": Field(_frequency_pair, required=True),
-                  "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
-    "raster": {"outputs": Field(name_list(2), required=True),     # [fast, slow]
-               "size": Field(_extent_pair, required=True),
-               "lines": Field(integer(2), required=True),
-               "frequency": Field(number("Hz", 0), required=True),  # fast axis (line rate)
-               "slow": Field(choice("step", "ramp"), default="step"),
-               "smoothing": Field(_fraction(0.5), default=0.0)},
-    "file": {"file": Field(string(), required=True),
-             "time": Field(string(), default="time"),
-             "columns": Field(_column_map, required=True),
-             "duration": Field(number("s", 0)),
-             "period": Field(number("s", 0))},   # what settle_periods counts (default: T)
-}
-_SINE_DRIVE = {"input": Field(string(), required=True),
-               "amplitude": Field(number("V", 0), required=True),
-               "frequency": Field(number("Hz", 0), required=True),
-               "phase": _PHASE, "offset": Field(number("V"), default=0.0), **_LENGTH}
-DRIVES = {
-    "sine": _SINE_DRIVE,
-    "triangle": dict(_SINE_DRIVE),  # hammerstein.core.references.triangle_drive
 }

@@ -49,11 +49,11 @@ from hammerstein.core.compensators import check_reference_range
 from hammerstein.core.stability import stability_map
 from hammerstein.scenario.execute import chain_result, run_case
 from hammerstein.scenario.progress import progress
-from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.registry import COMPENSATORS, build_compensator, compensator_kind
 from hammerstein.core.metrics import UNITS
 from hammerstein.scenario.schema import (CASE, MAX_NAME, MAX_SWEEP_FREQUENCIES, NAME, Field, Invalid,
                                          short_repr, check_table, choice, name_field, number, string)
-from hammerstein.simulation import _fusable, simulate_chain_batch
+from hammerstein.simulation import is_fusable, simulate_chain_batch
 
 __all__ = [
     "SweepSpec",
@@ -243,8 +243,7 @@ def run_cases(cases, desc="cases"):
     results = [None] * len(cases)
     batchable = [i for i, c in enumerate(cases)
                  if getattr(c, "sweep", None) is not None and c.mode == "reference"
-                 and _fusable(c.compensator)
-                 and not hasattr(c.compensator, "run_reference")]   # own start-up: run_case
+                 and compensator_kind(c.compensator_spec).batchable and is_fusable(c.compensator)]
     rest = [i for i in range(len(cases)) if i not in set(batchable)]
     n_sweep = sum(1 for c in cases if getattr(c, "sweep", None) is not None)
     bar = progress(total=len(cases), desc=desc, unit="case") if n_sweep else None
@@ -370,8 +369,9 @@ def stability_map_frame(clean, plant, compensator_top, context, problems, source
     comps = clean.get("compensators") or {"compensator": compensator_top}
     frames, laws = [], {}
     for label, spec in comps.items():
-        spec = {**spec, "check": "ignore"} if spec.get("kind", "none") in ("multivariable", "diagonal") \
-            else spec
+        entry = COMPENSATORS.get(spec.get("kind", "none"))
+        if entry is not None and entry.rate_independent and "check" in entry.fields:
+            spec = {**spec, "check": "ignore"}   # the map shows where the law converges
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
