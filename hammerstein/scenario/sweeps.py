@@ -25,7 +25,7 @@ cross-coupling x_r -> y, (d) direct y).
 compensators of sweep cases in batches on the compiled batch kernel
 (:func:`hammerstein.simulation.simulate_chain_batch`, both cores), the
 others case by case, with a progress bar on a terminal
-(:func:`hammerstein.progress.progress`, quiet off-terminal).
+(:func:`hammerstein.scenario.progress.progress`, quiet off-terminal).
 
 A top-level ``[stability_map]`` table (``scales`` = list of gain scalings s,
 or ``{ start, stop, num }`` log-spaced; optional ``compensators`` as above,
@@ -231,13 +231,13 @@ def run_cases(cases, desc="cases"):
 
     Parameters
     ----------
-    cases : list of hammerstein.scenarios.CaseSpec
+    cases : list of hammerstein.scenario.validate.CaseSpec
     desc : str
         Label of the progress bar (shown only on a terminal).
 
     Returns
     -------
-    list of hammerstein.runner.CaseResult
+    list of hammerstein.scenario.execute.CaseResult
         In the order of ``cases``; divergences are results.
     """
     results = [None] * len(cases)
