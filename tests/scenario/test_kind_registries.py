@@ -139,3 +139,33 @@ def test_every_compensator_kind_declares_consistent_capabilities(name, entry):
     # an inverse of the dynamics is not rate independent, and runs with its own start-up
     assert not (entry.look_ahead and (entry.rate_independent or entry.batchable))
     assert entry.fades_in <= entry.look_ahead
+
+
+@pytest.mark.parametrize("extra, oracle", [
+    ("", True),                                   # default: the plant's true G
+    ('dynamics = "plant"', True),
+    ('dynamics = "dyn.toml"', False),             # a dynamics file: what the user measured
+])
+def test_report_says_when_the_hammerstein_kind_inverts_the_true_dynamics(tmp_path, extra, oracle):
+    from hammerstein.core.presets import load_plant, save_dynamics
+    from hammerstein.runner import run_scenario
+
+    plant = load_plant("rakotondrabe-2dof")
+    save_dynamics(plant.dynamics, tmp_path / "dyn.toml")
+    path = tmp_path / "h.toml"
+    path.write_text(f"""
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "hammerstein"
+model = "plant"
+{extra}
+[[cases]]
+name = "x"
+settle_periods = 1
+reference = {{ kind = "sine", output = "x", amplitude = 20.0, frequency = 100.0, periods = 2 }}
+""", encoding="utf-8")
+    outcome = run_scenario(path, tmp_path / "out")
+    assert outcome.ok, outcome.error
+    report = (outcome.out_dir / "report.md").read_text(encoding="utf-8")
+    assert ("inverts the plant's true dynamics G (an oracle" in report) == oracle
