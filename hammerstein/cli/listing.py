@@ -8,6 +8,7 @@ import numpy as np
 
 from hammerstein.core.lti import dc_gain
 from hammerstein.core.presets import PresetError, bundled_presets, load_plant, read_toml
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -65,6 +66,10 @@ def handler(args):
     print("compensator kinds:")
     for name, kind in COMPENSATORS.items():
         print(f"  {name}: {kind.description}")
+    for title, kinds in (("reference kinds", REFERENCE_KINDS), ("drive kinds", DRIVE_KINDS)):
+        print(f"{title}:")
+        for name, kind in kinds.items():
+            print(f"  {name}: {kind.description}")
     root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
     presets = [f for f in files if _is_preset(f)]

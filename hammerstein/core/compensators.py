@@ -16,7 +16,7 @@ The family, each built from an identified model with one call:
   or first-order low-pass feedback; iterations per sample);
 - :func:`diagonal_compensator`: the same law on the direct transfers only;
 - :class:`PerAxisInverseCompensator`: the per-axis analytic inverse PI of
-  Kuhnen & Janocha (paper ref. [20], docs/per-axis-inverse.md, :mod:`hammerstein.inverse`);
+  Kuhnen & Janocha (paper ref. [20], docs/per-axis-inverse.md, :mod:`hammerstein.core.inverse`);
 - :class:`StaticGainCompensator`: no hysteresis compensation, ``U = K^-1 Yr``.
 
 All have ``simulate(reference (m, N) [µm], initial_state=None) -> (inputs
@@ -744,7 +744,7 @@ class PerAxisInverseCompensator:
     """Per-axis inverse PI of Kuhnen & Janocha, the paper's "existing technique".
 
     Input l is the analytic inverse of the direct transfer ``Gamma_ll``
-    applied to reference l (:func:`hammerstein.inverse.kuhnen_inverse`,
+    applied to reference l (:func:`hammerstein.core.inverse.kuhnen_inverse`,
     docs/per-axis-inverse.md, paper ref. [20]); the cross-couplings are not compensated
     (paper Fig. 9). A linear direct gain g is inverted as ``1/g``.
 
@@ -758,7 +758,7 @@ class PerAxisInverseCompensator:
     Attributes
     ----------
     inverses : list
-        Per axis, an :class:`~hammerstein.inverse.InversePI` or the float
+        Per axis, an :class:`~hammerstein.core.inverse.InversePI` or the float
         ``1/g`` [V/µm].
 
     Notes
@@ -868,7 +868,7 @@ class PerAxisInverseCompensator:
         -------
         numpy.ndarray, shape (n_states,)
             So that the direct outputs follow the reference from the first
-            sample (:meth:`~hammerstein.inverse.InversePI.consistent_state`).
+            sample (:meth:`~hammerstein.core.inverse.InversePI.consistent_state`).
 
         Raises
         ------

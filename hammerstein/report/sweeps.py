@@ -72,7 +72,7 @@ def sweep_table(spec, metrics):
     pandas.DataFrame
         One row per (case, channel): ``frequency_hz, compensator, axis,
         channel``, then one column per metric (units in
-        :data:`hammerstein.metrics.UNITS`); ordered by compensator, axis,
+        :data:`hammerstein.core.metrics.UNITS`); ordered by compensator, axis,
         channel, frequency. Diverged cases carry ``diverged_at_time`` [s].
     """
     index = pd.DataFrame(spec.cases)
@@ -251,8 +251,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
 
     Parameters
     ----------
-    scenario : hammerstein.scenarios.Scenario
-    results : list of hammerstein.runner.CaseResult
+    scenario : hammerstein.scenario.resolve.Scenario
+    results : list of hammerstein.scenario.execute.CaseResult
     directory : pathlib.Path
     metrics : pandas.DataFrame, optional
         Long metrics of ``results`` (computed when omitted).

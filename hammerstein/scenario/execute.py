@@ -18,10 +18,11 @@ from typing import Any
 import numpy as np
 
 from hammerstein.core import metrics as met
-from hammerstein.core.references import raster_line_index
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.scenario.registry import compensator_kind
 from hammerstein.simulation import simulate_chain
 
-__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples"]
+__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples", "signal_kind"]
 
 
 @dataclass
@@ -94,7 +95,7 @@ def run_case(case):
         return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
-        if hasattr(case.compensator, "run_reference"):   # inverse of G: preview and fade-in
+        if compensator_kind(case.compensator_spec).look_ahead:   # e.g. an inverse of G
             res = case.compensator.run_reference(plant, case.signal, case.period_samples,
                                                  fade_samples(case))
         else:
@@ -103,11 +104,30 @@ def run_case(case):
     return chain_result(case, res, caught)
 
 
-def fade_samples(case):
-    """Fade-in of a compensator that inverts the dynamics [samples].
+def signal_kind(case):
+    """The registry entry of a case's drive or reference.
 
-    ``compensator.fade_in`` [s] when given, else one period of the reference,
-    at most the ``settle_periods`` the metrics skip.
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+
+    Returns
+    -------
+    hammerstein.core.references.ReferenceKind
+        From :data:`hammerstein.core.references.DRIVE_KINDS` (drives) or
+        :data:`hammerstein.core.references.REFERENCE_KINDS`.
+    """
+    kinds = DRIVE_KINDS if case.mode == "drive" else REFERENCE_KINDS
+    return kinds[case.signal_spec["kind"]]
+
+
+def fade_samples(case):
+    """Fade-in of the reference of a compensator kind that fades in [samples].
+
+    The compensator table's ``fade_in`` [s] when given, else one period of
+    the reference, at most the ``settle_periods`` the metrics skip; 0 for a
+    kind without the ``fades_in`` capability
+    (:class:`hammerstein.scenario.registry.CompensatorKind`).
 
     Parameters
     ----------
@@ -119,8 +139,10 @@ def fade_samples(case):
     int
         Fade-in length [samples].
     """
+    if not compensator_kind(case.compensator_spec).fades_in:
+        return 0
     T = case.plant.sampling_period
-    given = getattr(case.compensator, "fade_in", None)
+    given = case.compensator_spec.get("fade_in")
     settle = int(case.settle_periods * case.period_samples)
     if given is not None:
         return int(round(given / T))
@@ -158,9 +180,9 @@ def chain_result(case, res, caught):
         rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
                                     case.settle_periods, scale=case.scale,
                                     loop_channel=case.loop_channel)
-        if case.signal_spec.get("kind") == "raster":  # per scan line
-            line = raster_line_index(case.time, case.signal_spec["frequency"])
-            rows += met.raster_line_metrics(case.signal, res.outputs, line)
+        entry = signal_kind(case)
+        if entry.metrics is not None:  # e.g. per scan line
+            rows += entry.metrics(case.time, case.signal_spec, case.signal, res.outputs)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
 
 

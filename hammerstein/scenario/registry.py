@@ -3,11 +3,14 @@
 Compensators are built by :func:`build_compensator` from the registry
 :data:`COMPENSATORS` (kind -> :class:`CompensatorKind`); add a kind by adding
 an entry (its ``fields`` are checked by ``hammerstein validate``, its
-``build`` runs when the scenario is resolved). A compensator is any object
-with ``.name`` and ``.simulate(reference (m, N), initial_state=None) ->
-(inputs (m, N), final_state)``. The model a kind is built from
+``build`` runs when the scenario is resolved, its capabilities say how the
+cases run and what the report says; nothing else switches on the kind's
+name). A compensator is any object with ``.name`` and
+``.simulate(reference (m, N), initial_state=None) -> (inputs (m, N),
+final_state)``; one that needs look-ahead also has ``.run_reference(plant,
+reference, period_samples, fade_samples) -> ChainResult``. The model a kind is built from
 (``model = "plant" | "identified" | <file>``) is resolved by
-:func:`hammerstein.scenario.identified.resolve_model`.
+:func:`hammerstein.scenario.identification.resolve_model`.
 """
 
 from __future__ import annotations
@@ -21,12 +24,13 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
-from hammerstein.scenario.identified import (hammerstein_identify_table, identify_dynamics_table,
-                                             identify_table, resolve_dynamics, resolve_model)
-from hammerstein.scenario.schema import MAX_ITERATIONS, Field, Invalid, choice, integer, number, string
+from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
+from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
+                                                  identify_dynamics_table, identify_table)
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, choice, integer, kind_problem, number,
+                                         string)
 
-__all__ = ["CompensatorKind", "COMPENSATORS", "RATE_INDEPENDENT", "build_compensator",
-           "resolve_model"]
+__all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
 
 
 @dataclass
@@ -36,18 +40,66 @@ class CompensatorKind:
     Parameters
     ----------
     build : callable
-        ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;
+        ``build(spec: dict, plant, context: ResolveContext) -> compensator or None``;
         ``spec`` is the validated ``[compensator]`` table (defaults filled).
     fields : dict of str to hammerstein.scenario.schema.Field
         The keys this kind accepts besides ``kind`` (validated by
         ``hammerstein validate``).
     description : str
         One line for ``hammerstein list`` and the README.
+    rate_independent : bool
+        It compensates the hysteresis only: a case whose frequency reaches
+        the plant's dynamics is warned about them.
+    batchable : bool
+        Sweep cases of this kind may run in the batch kernel
+        (:func:`hammerstein.simulation.simulate_chain_batch`) when the built
+        compensator is fusable.
+    look_ahead : bool
+        It needs the whole reference ahead (an inverse of the dynamics): the
+        case runs through the compensator's ``run_reference``.
+    fades_in : bool
+        The reference is faded in from rest over ``fade_in`` [s] of the
+        table (default one period, at most the settling the metrics skip).
+    compensates : bool
+        It tracks references (False: open-loop drives only).
+    summary : callable, optional
+        ``summary(spec) -> list of str``: notes the report adds to the
+        compensator's description (e.g. that it uses the plant's true
+        dynamics).
     """
 
-    build: Callable[[dict, Any, Path], Any]
+    build: Callable[[dict, Any, Any], Any]
     fields: dict = field(default_factory=dict)
     description: str = ""
+    rate_independent: bool = False
+    batchable: bool = False
+    look_ahead: bool = False
+    fades_in: bool = False
+    compensates: bool = True
+    summary: Callable | None = None
+
+
+def compensator_kind(spec):
+    """The registry entry of a compensator table (``kind``, default ``"none"``).
+
+    Parameters
+    ----------
+    spec : dict or None
+        A validated ``[compensator]`` table.
+
+    Returns
+    -------
+    CompensatorKind
+
+    Raises
+    ------
+    ValueError
+        Unknown kind (``kind: expected one of ...``, with the closest one).
+    """
+    kind = (spec or {}).get("kind", "none")
+    if kind not in COMPENSATORS:
+        raise ValueError(f"kind: {kind_problem(kind, COMPENSATORS)[0]}")
+    return COMPENSATORS[kind]
 
 
 def _gain(v):
@@ -61,20 +113,20 @@ def _gain(v):
                   f"finite numbers [µm/V], found {v!r}")
 
 
-def _build_none(spec, plant, base_dir):
+def _build_none(spec, plant, context):
     return None
 
 
-def _build_multivariable(spec, plant, base_dir):
-    model = resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+def _build_multivariable(spec, plant, context):
+    model = resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
         check=spec.get("check", "error"), **_feedback_options(spec, plant))
 
 
-def _spec_model(spec, plant, base_dir):
+def _spec_model(spec, plant, context):
     """The model of a compensator table (every kind resolves it like "multivariable")."""
-    return resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+    return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
 
 
 def _feedback_options(spec, plant):
@@ -85,24 +137,25 @@ def _feedback_options(spec, plant):
             "sampling_period": plant.sampling_period}
 
 
-def _build_diagonal(spec, plant, base_dir):
+def _build_diagonal(spec, plant, context):
     return diagonal_compensator(
-        _spec_model(spec, plant, base_dir), gain=spec.get("gain", "secant"),
+        _spec_model(spec, plant, context), gain=spec.get("gain", "secant"),
         iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
         **_feedback_options(spec, plant))
 
 
-def _build_per_axis(spec, plant, base_dir):
-    return PerAxisInverseCompensator(_spec_model(spec, plant, base_dir))
+def _build_per_axis(spec, plant, context):
+    return PerAxisInverseCompensator(_spec_model(spec, plant, context))
 
 
-def _build_static_gain(spec, plant, base_dir):
-    return StaticGainCompensator(_spec_model(spec, plant, base_dir))
+def _build_static_gain(spec, plant, context):
+    return StaticGainCompensator(_spec_model(spec, plant, context))
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------
 COMPENSATORS: dict[str, CompensatorKind] = {
-    "none": CompensatorKind(_build_none, {}, "no compensator (open-loop drives only)"),
+    "none": CompensatorKind(_build_none, {}, "no compensator (open-loop drives only)",
+                            compensates=False),
     "multivariable": CompensatorKind(
         _build_multivariable,
         {"model": Field(string(), default="plant"),
@@ -112,32 +165,42 @@ COMPENSATORS: dict[str, CompensatorKind] = {
          "check": Field(choice("error", "warn", "ignore"), default="error"),
          "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
          "cutoff_hz": Field(number("Hz", 0))},
-        "inverse multiplicative compensator of Theorem 4.1, normalised by K (docs/compensator.md)"),
+        "inverse multiplicative compensator of Theorem 4.1, normalised by K (docs/compensator.md)",
+        rate_independent=True, batchable=True),
 }
 _MODEL_KEYS = ("model", "identify")  # the model fields every kind shares with "multivariable"
 COMPENSATORS["diagonal"] = CompensatorKind(
     _build_diagonal, dict(COMPENSATORS["multivariable"].fields),
-    "the multivariable law on the direct transfers only (cross-couplings left)")
+    "the multivariable law on the direct transfers only (cross-couplings left)",
+    rate_independent=True, batchable=True)
 COMPENSATORS["per-axis"] = CompensatorKind(
     _build_per_axis, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
-    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (docs/per-axis-inverse.md)")
+    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (docs/per-axis-inverse.md)",
+    rate_independent=True, batchable=True)
 COMPENSATORS["static-gain"] = CompensatorKind(
     _build_static_gain, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
-    "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")
+    "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)",
+    rate_independent=True, batchable=True)
 
 
-def _build_hammerstein(spec, plant, base_dir):
+def _build_hammerstein(spec, plant, context):
     model = None
     if spec.get("model", "plant") != "identified":
-        model = _spec_model(spec, plant, base_dir)
-    pi, G = resolve_dynamics(spec, plant, base_dir, model)
+        model = _spec_model(spec, plant, context)
+    pi, G = resolve_dynamics(spec, plant, context, model)
     comp = HammersteinCompensator(
         pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
         iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
         feedback=spec.get("feedback", "delay"), cutoff_hz=spec.get("cutoff_hz"),
         sampling_period=plant.sampling_period)
-    comp.fade_in = spec.get("fade_in")
     return comp
+
+
+def _hammerstein_notes(spec):
+    if dynamics_source(spec) == "plant":
+        return ["inverts the plant's true dynamics G (an oracle: nothing identified; "
+                "dynamics = \"identified\" identifies G)"]
+    return []
 
 
 COMPENSATORS["hammerstein"] = CompensatorKind(
@@ -152,12 +215,11 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
      "fade_in": Field(number("s", 0, exclusive=False))},   # default: one period (<= settling)
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
-    "(docs/hammerstein-plant.md)")
-#: kinds that compensate the hysteresis only (rate independent): warned about dynamics
-RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
+    "(docs/hammerstein-plant.md)",
+    look_ahead=True, fades_in=True, summary=_hammerstein_notes)
 
 
-def build_compensator(spec, plant, base_dir):
+def build_compensator(spec, plant, context):
     """Build the compensator of a ``[compensator]`` table.
 
     Parameters
@@ -167,8 +229,10 @@ def build_compensator(spec, plant, base_dir):
         (default ``"none"``).
     plant : HammersteinPlant
         The simulated plant (its PI model is ``model = "plant"``).
-    base_dir : pathlib.Path
-        Directory of the scenario file (relative model paths).
+    context : hammerstein.scenario.identification.ResolveContext or pathlib.Path
+        The case's context: the scenario's directory (relative model paths),
+        the run's identification cache and the record of what the case
+        identified; a directory gives a context of its own.
 
     Returns
     -------
@@ -181,7 +245,7 @@ def build_compensator(spec, plant, base_dir):
         Unknown kind; or the builder's own errors (CompensatorError,
         PresetError), e.g. a law refused by the convergence check.
     """
-    kind = spec.get("kind", "none")
-    if kind not in COMPENSATORS:
-        raise ValueError(f"kind: expected one of {', '.join(COMPENSATORS)}, found {kind!r}")
-    return COMPENSATORS[kind].build(spec, plant, Path(base_dir))
+    entry = compensator_kind(spec)
+    if not isinstance(context, ResolveContext):
+        context = ResolveContext(Path(context))
+    return entry.build(spec, plant, context)

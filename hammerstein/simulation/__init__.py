@@ -65,7 +65,7 @@ from hammerstein.simulation._packing import (LANES, ChainState, CompensatorLaw, 
                                              pack_model, state_vector)
 from hammerstein.simulation._oracle import compensator_step
 from hammerstein.simulation._compile import announce_compiles, compile_notices
-from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, ChainResult, _fusable,
+from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, ChainResult,
                                               compensator_law, compensator_state, is_fusable,
                                               simulate_chain, simulate_chain_batch,
                                               simulate_compensator, simulate_hysteresis,

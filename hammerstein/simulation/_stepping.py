@@ -307,7 +307,6 @@ def is_fusable(compensator):
     return compensator_law_of(compensator) is not None
 
 
-_fusable = is_fusable          # former name, used by hammerstein.scenario.sweeps
 
 
 def _law_arrays(law):
