@@ -24,6 +24,7 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.core.presets import PresetError, load_dynamics
 from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
@@ -66,6 +67,11 @@ class CompensatorKind:
         ``summary(spec) -> list of str``: notes the report adds to the
         compensator's description (e.g. that it uses the plant's true
         dynamics).
+    check : callable, optional
+        ``check(spec, plant, base_dir, files, settle_periods, period_samples)
+        -> list of "key: message"``: the kind's own checks of ``hammerstein
+        validate`` that need the plant and the case (nothing identified or
+        built); ``files`` caches the files read.
     """
 
     build: Callable[[dict, Any, Any], Any]
@@ -77,6 +83,7 @@ class CompensatorKind:
     fades_in: bool = False
     compensates: bool = True
     summary: Callable | None = None
+    check: Callable | None = None
 
 
 def compensator_kind(spec):
@@ -203,6 +210,39 @@ def _hammerstein_notes(spec):
     return []
 
 
+def _dynamics_problems(spec, plant, base, files, settle, period_samples):
+    """Problems of the ``dynamics`` keys of ``kind = "hammerstein"`` (nothing identified).
+
+    ``dynamics`` is "plant", "identified" or a readable dynamics/preset file of
+    the plant's size; "plant" and "identified" need a plant with dynamics;
+    ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
+    within the settling the metrics skip. Returns ``key: message`` strings.
+    """
+    dyn = dynamics_source(spec)
+    out = []
+    if "identify_dynamics" in spec and dyn != "identified":
+        out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
+    if dyn in ("plant", "identified"):
+        if plant.is_static:
+            out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
+    else:
+        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
+        if ("dynamics", path) not in files:
+            try:
+                load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+                files[("dynamics", path)] = None
+            except PresetError as exc:
+                files[("dynamics", path)] = f"dynamics: expected 'plant', 'identified' or a " \
+                                            f"dynamics file: {exc}"
+        if files[("dynamics", path)]:
+            out.append(files[("dynamics", path)])
+    fade = spec.get("fade_in")
+    if fade is not None and fade > settle * period_samples * plant.sampling_period + 1e-12:
+        out.append(f"fade_in: {fade:g} s is longer than the {settle:g} settling periods "
+                   f"({settle * period_samples * plant.sampling_period:g} s) the metrics skip")
+    return out
+
+
 COMPENSATORS["hammerstein"] = CompensatorKind(
     _build_hammerstein,
     {**{k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k != "identify"},
@@ -216,7 +256,7 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
     "(docs/hammerstein-plant.md)",
-    look_ahead=True, fades_in=True, summary=_hammerstein_notes)
+    look_ahead=True, fades_in=True, summary=_hammerstein_notes, check=_dynamics_problems)
 
 
 def build_compensator(spec, plant, context):

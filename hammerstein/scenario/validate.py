@@ -29,8 +29,8 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.core import references as refs
-from hammerstein.core.presets import PresetError, load_dynamics, load_model, load_plant, read_toml
-from hammerstein.scenario.identify_tables import comparison_spec, dynamics_source, nyquist_problem
+from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
 from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
@@ -319,39 +319,6 @@ def _model_problems(name, identify, plant, base, files):
     return []
 
 
-def _dynamics_problems(spec, plant, base, files, settle, period_samples):
-    """Problems of the ``dynamics`` keys of ``kind = "hammerstein"`` (nothing identified).
-
-    ``dynamics`` is "plant", "identified" or a readable dynamics/preset file of
-    the plant's size; "plant" and "identified" need a plant with dynamics;
-    ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
-    within the settling the metrics skip. Returns ``key: message`` strings.
-    """
-    dyn = dynamics_source(spec)
-    out = []
-    if "identify_dynamics" in spec and dyn != "identified":
-        out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
-    if dyn in ("plant", "identified"):
-        if plant.is_static:
-            out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
-    else:
-        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
-        if ("dynamics", path) not in files:
-            try:
-                load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
-                files[("dynamics", path)] = None
-            except PresetError as exc:
-                files[("dynamics", path)] = f"dynamics: expected 'plant', 'identified' or a " \
-                                            f"dynamics file: {exc}"
-        if files[("dynamics", path)]:
-            out.append(files[("dynamics", path)])
-    fade = spec.get("fade_in")
-    if fade is not None and fade > settle * period_samples * plant.sampling_period + 1e-12:
-        out.append(f"fade_in: {fade:g} s is longer than the {settle:g} settling periods "
-                   f"({settle * period_samples * plant.sampling_period:g} s) the metrics skip")
-    return out
-
-
 def _validate_cases(path, data):
     """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError."""
     source, base, problems = str(path), path.parent, []
@@ -476,8 +443,8 @@ def _validate_cases(path, data):
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
             problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
-        if mode == "reference" and "dynamics" in COMPENSATORS[kind].fields:
-            more = _dynamics_problems(cclean, plant, base, model_files, settle, P)
+        if mode == "reference" and COMPENSATORS[kind].check is not None:   # the kind's own checks
+            more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
             problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
         if cmp_spec is not None:
             more = _model_problems(cmp_spec["model"], cmp_spec.get("identify"), plant, base,
