@@ -644,8 +644,9 @@ def load_plant(preset, dynamics=True, base_dir=None):
     preset : str or pathlib.Path
         Bundled preset name or preset file.
     dynamics : bool
-        ``True`` for the Hammerstein plant (PI + discretised linear
-        dynamics, ZOH with python-control); ``False`` for the static PI.
+        ``True`` for the Hammerstein plant (hysteresis, creep when the preset
+        has a ``[creep]`` table, discretised linear dynamics); ``False`` for
+        the static (rate-independent) hysteresis alone, without creep.
     base_dir : pathlib.Path, optional
         Directory that relative paths are resolved from.
 
@@ -686,8 +687,8 @@ def load_plant(preset, dynamics=True, base_dir=None):
         elif cont is not None:
             lin = discretize(cont, float(T))
     name = meta.get("name", path.stem)
-    return HammersteinPlant(model, float(T), lin, name=name,
-                            creep=_creep(data.get("creep"), model.output_names, path))
+    creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
+    return HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
 
 
 def _creep(table, outputs, path):
