@@ -28,7 +28,8 @@ import numpy as np
 from numba import njit
 
 __all__ = ["ramp_preisach_kernel", "generalized_play_kernel", "linear_kernel", "ramps",
-           "preisach_steps", "linear_steps", "generalized_play_steps"]
+           "preisach_steps", "linear_steps", "generalized_play_steps",
+           "preisach_inverse_kernel"]
 
 
 @njit(cache=True, inline="always")
@@ -202,3 +203,125 @@ def generalized_play_steps(u, thresholds, weights, gamma_l, gamma_r, state):
     generalized_play_kernel(np.ascontiguousarray(u, dtype=float), thresholds, weights,
                             gamma_l, gamma_r, s, y)
     return y, s
+
+
+# -- exact inverse of a multivariable Preisach model -------------------------------
+@njit(cache=True)
+def _component(c, u, E, e_off, row, col, mu, q_off, rev, off, s, commit):
+    """Output of component c at input u from states s (committed when ``commit``)."""
+    e0 = e_off[c]
+    acc = 0.0
+    for q in range(q_off[c], q_off[c + 1]):
+        i = e0 + row[q]
+        j = e0 + col[q]
+        up = _ramp(u, E[i], E[i + 1])
+        down = _ramp(u, E[j], E[j + 1])
+        v = s[q]
+        if v > down:
+            v = down
+        if v < up:
+            v = up
+        if commit:
+            s[q] = v
+        acc += mu[q] * v
+    poly = 0.0
+    for n in range(rev.shape[1] - 1, -1, -1):
+        poly = (poly + rev[c, n]) * u
+    return acc + poly + off[c]
+
+
+@njit(cache=True)
+def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, rev, off, s, tol):
+    """u in [lo, hi] with component c = target (Illinois false position; clipped)."""
+    flo = _component(c, lo, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+    if flo >= 0.0:
+        return lo
+    fhi = _component(c, hi, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+    if fhi <= 0.0:
+        return hi
+    a, b, fa, fb = lo, hi, flo, fhi
+    side = 0
+    x = 0.5 * (a + b)
+    for _ in range(200):
+        x = (a * fb - b * fa) / (fb - fa)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+        fx = _component(c, x, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+        if abs(fx) <= tol or b - a <= 1e-13 * (1.0 + abs(x)):
+            return x
+        if fx < 0.0:
+            a, fa = x, fx
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b, fb = x, fx
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return x
+
+
+@njit(cache=True)
+def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, rev, off, present, s, lo, hi,
+                            exact, K_inv, u_prev, u, tol, max_sweeps):
+    """Inputs u (m, N) that make the model follow yr (p = m, N); states s, u_prev in/out.
+
+    ``exact``: per sample, Gauss-Seidel over the outputs, each a monotone
+    scalar root of its direct path (cross-couplings at the current estimate),
+    then every state committed at the solution. Otherwise the inverse
+    multiplicative law ``u_t = u_{t-1} + K^-1 (yr_t - Gamma(u_{t-1}))``.
+    Returns the number of samples whose sweeps did not converge.
+    """
+    p, N = yr.shape
+    m = p
+    ut = np.empty(m)
+    g = np.empty(p)
+    unconverged = 0
+    for k in range(m):
+        ut[k] = u_prev[k]
+    for t in range(N):
+        if exact:
+            converged = False
+            for _ in range(max_sweeps):
+                delta = 0.0
+                for l in range(p):
+                    target = yr[l, t]
+                    for k in range(m):
+                        c = l * m + k
+                        if k != l and present[c]:
+                            target -= _component(c, ut[k], E, e_off, row, col, mu, q_off, rev,
+                                                 off, s, False)
+                    new = _root(l * m + l, target, lo[l], hi[l], E, e_off, row, col, mu, q_off,
+                                rev, off, s, tol)
+                    if abs(new - ut[l]) > delta:
+                        delta = abs(new - ut[l])
+                    ut[l] = new
+                if delta <= 1e-11:
+                    converged = True
+                    break
+            if not converged:
+                unconverged += 1
+        else:
+            for l in range(p):
+                g[l] = 0.0
+                for k in range(m):
+                    c = l * m + k
+                    if present[c]:
+                        g[l] += _component(c, ut[k], E, e_off, row, col, mu, q_off, rev, off, s,
+                                           False)
+            for k in range(m):
+                a = ut[k]
+                for l in range(p):
+                    a += K_inv[k, l] * (yr[l, t] - g[l])
+                ut[k] = min(max(a, lo[k]), hi[k])
+        for l in range(p):
+            for k in range(m):
+                c = l * m + k
+                if present[c]:
+                    _component(c, ut[k], E, e_off, row, col, mu, q_off, rev, off, s, True)
+        for k in range(m):
+            u[k, t] = ut[k]
+    for k in range(m):
+        u_prev[k] = ut[k]
+    return unconverged
