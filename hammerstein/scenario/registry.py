@@ -30,6 +30,7 @@ from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_i
                                                   identify_dynamics_table, identify_table)
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, choice, integer, kind_problem, number,
                                          string)
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
 
@@ -257,6 +258,20 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
     "(docs/hammerstein-plant.md)",
     look_ahead=True, fades_in=True, summary=_hammerstein_notes, check=_dynamics_problems)
+
+
+def _build_preisach_inverse(spec, plant, context):
+    return PreisachInverseCompensator(_spec_model(spec, plant, context),
+                                      method=spec.get("method", "root"))
+
+
+COMPENSATORS["preisach-inverse"] = CompensatorKind(
+    _build_preisach_inverse,
+    {"model": Field(string(), default="plant"),
+     "method": Field(choice("root", "multiplicative"), default="root")},
+    "exact per-sample inverse of a Preisach model (monotone root per direct path), or its "
+    "inverse multiplicative law; rate independent (docs/plants.md)",
+    rate_independent=True)
 
 
 def build_compensator(spec, plant, context):
