@@ -113,6 +113,37 @@ def dynamics_warning(case):
             f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")
 
 
+def canonical_key(value):
+    """A hashable key equal for equal tables (dicts in any key order, arrays by content).
+
+    Parameters
+    ----------
+    value : object
+        A validated table: dicts, lists, tuples, numbers, strings, paths,
+        numpy arrays, None; anything else by identity (distinct objects
+        never compare equal, which only costs a second build).
+
+    Returns
+    -------
+    tuple or object
+        Hashable.
+
+    Examples
+    --------
+    >>> canonical_key({"b": [1.0, 2], "a": "x"}) == canonical_key({"a": "x", "b": (1.0, 2)})
+    True
+    """
+    if isinstance(value, dict):
+        return ("dict", tuple(sorted((str(k), canonical_key(v)) for k, v in value.items())))
+    if isinstance(value, (list, tuple)):
+        return ("seq", tuple(canonical_key(v) for v in value))
+    if isinstance(value, np.ndarray):
+        return ("array", value.dtype.str, value.shape, value.tobytes())
+    if isinstance(value, (str, int, float, bool, type(None), Path, np.generic)):
+        return (type(value).__name__, value)
+    return ("object", type(value).__qualname__, id(value))
+
+
 def resolve_scenario(spec):
     """Identify, load and build what a validated scenario needs (step 2 of 2).
 
@@ -140,6 +171,7 @@ def resolve_scenario(spec):
     if not isinstance(spec, ScenarioSpec):
         return spec
     source, base, problems, cases = str(spec.path), spec.path.parent, [], []
+    built, warned = {}, {}         # canonical table and plant -> (compensator, error), warnings
     for case in spec.cases:
         model = None
         if case.model_spec is not None:
@@ -150,14 +182,22 @@ def resolve_scenario(spec):
                 continue
         comp, caught = None, []
         if case.mode == "reference":
-            with warnings.catch_warnings(record=True) as rec:
-                warnings.simplefilter("always")
-                try:
-                    comp = build_compensator(case.compensator_spec, case.plant, base)
-                except (ValueError, PresetError) as exc:
-                    problems.append(f"{source}: {case.where}.compensator: {exc}")
-                    continue
-            caught = [str(w.message) for w in rec]
+            # one build (identification, convergence report) per distinct table and plant
+            key = (canonical_key(case.compensator_spec), id(case.plant))
+            if key not in built:
+                with warnings.catch_warnings(record=True) as rec:
+                    warnings.simplefilter("always")
+                    try:
+                        built[key] = (build_compensator(case.compensator_spec, case.plant, base),
+                                      None)
+                    except (ValueError, PresetError) as exc:
+                        built[key] = (None, exc)
+                warned[key] = [str(w.message) for w in rec]
+            comp, error = built[key]
+            if error is not None:
+                problems.append(f"{source}: {case.where}.compensator: {error}")
+                continue
+            caught = list(warned[key])
         extra = dynamics_warning(case)
         if extra:
             caught.append(extra)
