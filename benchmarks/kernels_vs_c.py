@@ -362,7 +362,7 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
         uo, yo = np.empty(m * N), np.empty(p * N)
         status, sample, worker = (np.zeros(B, dtype=np.int64) for _ in range(3))
         kernels.chain_batch(order, offsets, flat, blaw, bcomp, bfilter, bpi, blin, True, st,
-                            uo, yo, status, sample, worker)
+                            uo, yo, status, sample, worker, 0)
         assert not status.any()
         return yo
 
@@ -379,12 +379,7 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
         assert not status.any()
         return yo
 
-    previous = kernels.threads()
-    kernels.set_threads(1)
-    try:
-        out["batch"] = _compare(nb_batch, c_batch, N, repeats)
-    finally:
-        kernels.set_threads(previous)
+    out["batch"] = _compare(nb_batch, c_batch, N, repeats)
     return out
 
 
