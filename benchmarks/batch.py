@@ -118,7 +118,7 @@ class KernelSpy:
                 self.calls.append({"kernel": name, "start": t0, "end": t1,
                                    "thread_cpu": [busy[t] for t in ran],
                                    "thread_wait": [wait[t] for t in ran],
-                                   "worker": args[-1] if name == "chain_batch" else None,
+                                   "worker": args[-2] if name == "chain_batch" else None,
                                    "arg_bytes": _nbytes(args)})
             return out
         return call

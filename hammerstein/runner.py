@@ -529,7 +529,7 @@ def run_scenario(path, out_dir, taken=None, force=False, renderer=None):
         raise
 
 
-def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None):
+def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None, figures=None):
     """Run scenarios in order, drawing the figures of one while the next simulates.
 
     Figures go to a :class:`hammerstein.report.render.FigureRenderer` (2
@@ -547,6 +547,9 @@ def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None):
         ``on_outcome(path, outcome)`` as each scenario finishes (in order).
     on_start : callable, optional
         ``on_start(path)`` before each scenario starts.
+    figures : callable, optional
+        ``figures(png_path) -> bool``: draw only these figures (see
+        :func:`hammerstein.report.render.figure_selection`); all by default.
 
     Returns
     -------
@@ -565,7 +568,7 @@ def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None):
             if on_outcome is not None:
                 on_outcome(p, outcome)
 
-    renderer = FigureRenderer()
+    renderer = FigureRenderer(select=figures)
     try:
         for p in paths:
             if on_start is not None:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from hammerstein.cli._common import one_line, out_dir_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
+from hammerstein.report.render import figure_selection
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
 from hammerstein.simulation import announce_compiles
 
@@ -46,6 +47,11 @@ def add_parser(subparsers):
                    help=f"replace DIR/<scenario name> even when hammerstein did not write it "
                         f"(by default only a report directory with a {MARKER} file, or an empty "
                         f"directory, is replaced)")
+    p.add_argument("--figures", default="all", metavar="WHICH",
+                   help="figures to draw: 'all' (default, every figure of the reports), "
+                        "'none', or comma-separated file name patterns such as "
+                        "'maps-*,trajectory-*'; report.md notes each figure left out "
+                        "(the figures take most of a run's CPU time)")
     add_verbosity(p)
     p.set_defaults(handler=handler)
 
@@ -69,6 +75,11 @@ def handler(args):
     problem = out_dir_problem(args.out)
     if problem:
         print_err(f"hammerstein run: error: {problem}")
+        return 2
+    try:
+        figures = figure_selection(getattr(args, "figures", "all"))
+    except ValueError as exc:
+        print_err(f"hammerstein run: error: {exc}")
         return 2
     out = Path(args.out)
     remove_stale_temporaries(out)
@@ -94,7 +105,8 @@ def handler(args):
             failed.append(path)
 
     # figures of one scenario are drawn (2 worker processes) while the next one simulates
-    run_pipelined(args.scenarios, out, args.force, on_outcome=on_outcome, on_start=on_start)
+    run_pipelined(args.scenarios, out, args.force, on_outcome=on_outcome, on_start=on_start,
+                  figures=figures)
     return 1 if failed else 0
 
 

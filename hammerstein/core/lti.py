@@ -30,13 +30,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.lazy import lazy_module
 from hammerstein.simulation import simulate_hysteresis, simulate_plant
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
+scipy_linalg = lazy_module("scipy.linalg")  # lazy: ~0.1 s CPU of `from hammerstein import ...`
 
 __all__ = [
     "state_space_dynamics",
@@ -260,7 +260,7 @@ def continuous_system(system):
     z = np.linalg.eigvals(Ad)
     if np.any((np.abs(z.imag) < 1e-12) & (z.real <= 0)) or np.any(np.abs(z - 1) < 1e-12):
         raise DynamicsError("dynamics.A: a pole at z <= 0 or z = 1 has no continuous ZOH equivalent")
-    Ac = np.real(scipy.linalg.logm(Ad)) / system.dt
+    Ac = np.real(scipy_linalg.logm(Ad)) / system.dt
     Bc = np.linalg.solve(Ad - np.eye(Ad.shape[0]), Ac @ Bd)
     return control.ss(Ac, Bc, np.asarray(system.C), np.asarray(system.D),
                       inputs=system.input_labels, outputs=system.output_labels)

@@ -22,11 +22,13 @@ scenarios with the same identified dynamics share one Bode plot).
 
 from __future__ import annotations
 
+import fnmatch
 import gc
 import hashlib
 import io
 import multiprocessing
 import pickle
+import re
 import signal
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import wait as wait_futures
@@ -38,7 +40,7 @@ from typing import Callable
 from hammerstein.report.figures import save
 
 __all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "job_key", "WORKERS",
-           "REMEMBERED"]
+           "REMEMBERED", "figure_selection"]
 
 #: Worker processes of the pool of :class:`FigureRenderer` (the machine the
 #: targets are set on has 2 cores; the main process simulates meanwhile).
@@ -156,6 +158,7 @@ class FigureJobs:
     def __init__(self, renderer=None):
         self.renderer = renderer
         self._futures = []
+        self.skipped = []                   # PNGs the renderer's selection leaves out
 
     def add(self, path, function, *args, **kwargs):
         """Add the job ``save(function(*args, **kwargs), path)``.
@@ -181,6 +184,8 @@ class FigureJobs:
         job = FigureJob(Path(path), function, args, kwargs)
         if self.renderer is None:
             render_job(job)
+        elif not self.renderer.selects(job.path):
+            self.skipped.append(job.path)
         else:
             self._futures += self.renderer.submit([job])
 
@@ -206,6 +211,7 @@ class FigureJobs:
         for f in self._futures:
             if f.exception() is not None:
                 raise f.exception()
+        _note_skipped(self.skipped)
 
     def cancel(self, wait=True):
         """Cancel the jobs not started; wait for the running ones (before removing the directory).
@@ -244,12 +250,31 @@ class FigureRenderer:
     ----------
     workers : int
         Worker processes (default :data:`WORKERS`).
+    select : callable, optional
+        ``select(path) -> bool``: draw only the PNGs it accepts (e.g.
+        :func:`figure_selection`); every figure by default. A
+        ``report.md`` link to a PNG left out becomes a line saying so.
     """
 
-    def __init__(self, workers=WORKERS):
+    def __init__(self, workers=WORKERS, select=None):
         self.workers = int(workers) if "fork" in multiprocessing.get_all_start_methods() else 0
         self._pool = None
         self._drawn = {}                        # job_key -> future of its PNG bytes
+        self._select = select
+
+    def selects(self, path):
+        """Whether the figure ``path`` is to be drawn.
+
+        Parameters
+        ----------
+        path : pathlib.Path
+            The PNG file.
+
+        Returns
+        -------
+        bool
+        """
+        return self._select is None or bool(self._select(Path(path)))
 
     def __enter__(self):
         return self
@@ -341,3 +366,61 @@ class FigureRenderer:
             except Exception as exc:
                 out.append(_done(error=exc))
         return out
+
+
+def figure_selection(spec):
+    """The ``select`` of a :class:`FigureRenderer` from the ``run --figures`` value.
+
+    Parameters
+    ----------
+    spec : str
+        ``"all"`` (every figure), ``"none"``, or comma-separated shell
+        patterns matched against the PNG file names (``fnmatch``, e.g.
+        ``"loops*,sweep-*"``).
+
+    Returns
+    -------
+    callable or None
+        ``select(path) -> bool``; None for ``"all"``.
+
+    Raises
+    ------
+    ValueError
+        If ``spec`` is empty or holds an empty pattern.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> select = figure_selection("loops*,sweep-*")
+    >>> select(Path("r/loops-compensated.png")), select(Path("r/trajectory-x.png"))
+    (True, False)
+    >>> figure_selection("all") is None
+    True
+    """
+    spec = str(spec).strip()
+    if spec == "all":
+        return None
+    if spec == "none":
+        return lambda path: False
+    patterns = [p.strip() for p in spec.split(",")]
+    if not spec or any(not p for p in patterns):
+        raise ValueError(f"--figures: expected 'all', 'none' or comma-separated file name "
+                         f"patterns (e.g. 'maps-*,trajectory-*'), found {spec!r}")
+    return lambda path: any(fnmatch.fnmatchcase(Path(path).name, p) for p in patterns)
+
+
+def _note_skipped(paths):
+    """Replace the ``report.md`` image links to the PNGs ``paths`` (not drawn) by a note."""
+    by_dir = {}
+    for path in paths:
+        by_dir.setdefault(Path(path).parent, []).append(Path(path).name)
+    for directory, names in by_dir.items():
+        md = directory / "report.md"
+        if not md.is_file():
+            continue
+        text = md.read_text(encoding="utf-8")
+        for name in names:
+            text = re.sub(r"!\[([^\]]*)\]\(" + re.escape(name) + r"\)",
+                          lambda m, n=name: f"*{m.group(1) or n}: figure `{n}` not drawn "
+                                            f"(`run --figures`)*", text)
+        md.write_text(text, encoding="utf-8")

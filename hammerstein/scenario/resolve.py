@@ -115,6 +115,37 @@ def dynamics_warning(case):
             f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")
 
 
+def canonical_key(value):
+    """A hashable key equal for equal tables (dicts in any key order, arrays by content).
+
+    Parameters
+    ----------
+    value : object
+        A validated table: dicts, lists, tuples, numbers, strings, paths,
+        numpy arrays, None; anything else by identity (distinct objects
+        never compare equal, which only costs a second build).
+
+    Returns
+    -------
+    tuple or object
+        Hashable.
+
+    Examples
+    --------
+    >>> canonical_key({"b": [1.0, 2], "a": "x"}) == canonical_key({"a": "x", "b": (1.0, 2)})
+    True
+    """
+    if isinstance(value, dict):
+        return ("dict", tuple(sorted((str(k), canonical_key(v)) for k, v in value.items())))
+    if isinstance(value, (list, tuple)):
+        return ("seq", tuple(canonical_key(v) for v in value))
+    if isinstance(value, np.ndarray):
+        return ("array", value.dtype.str, value.shape, value.tobytes())
+    if isinstance(value, (str, int, float, bool, type(None), Path, np.generic)):
+        return (type(value).__name__, value)
+    return ("object", type(value).__qualname__, id(value))
+
+
 def resolve_scenario(spec, cache=None):
     """Identify, load and build what a validated scenario needs (step 2 of 2).
 
@@ -147,6 +178,7 @@ def resolve_scenario(spec, cache=None):
         return spec
     source, base, problems, cases = str(spec.path), spec.path.parent, [], []
     run = ResolveContext(base, IdentificationCache() if cache is None else cache)
+    built, warned = {}, {}   # canonical table and plant -> (compensator, error, identified), warnings
     for case in spec.cases:
         model, context = None, run.for_case()
         if case.model_spec is not None:
@@ -157,14 +189,25 @@ def resolve_scenario(spec, cache=None):
                 continue
         comp, caught = None, []
         if case.mode == "reference":
-            with warnings.catch_warnings(record=True) as rec:
-                warnings.simplefilter("always")
-                try:
-                    comp = build_compensator(case.compensator_spec, case.plant, context)
-                except (ValueError, PresetError) as exc:
-                    problems.append(f"{source}: {case.where}.compensator: {exc}")
-                    continue
-            caught = [str(w.message) for w in rec]
+            # one build (identification, convergence report) per distinct table and plant
+            key = (canonical_key(case.compensator_spec), id(case.plant))
+            if key not in built:
+                before = len(context.identified)
+                with warnings.catch_warnings(record=True) as rec:
+                    warnings.simplefilter("always")
+                    try:
+                        built[key] = (build_compensator(case.compensator_spec, case.plant, context),
+                                      None, list(context.identified[before:]))
+                    except (ValueError, PresetError) as exc:
+                        built[key] = (None, exc, [])
+                warned[key] = [str(w.message) for w in rec]
+            else:                       # the build's identifications belong to every case using it
+                context.identified.extend(built[key][2])
+            comp, error, _ = built[key]
+            if error is not None:
+                problems.append(f"{source}: {case.where}.compensator: {error}")
+                continue
+            caught = list(warned[key])
         extra = dynamics_warning(case)
         if extra:
             caught.append(extra)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -596,7 +597,7 @@ def _unpacked(flat, offsets, b, rows):
 def _balanced_order(lengths, n_threads):
     """Case order whose ``n_threads`` contiguous equal chunks hold similar work.
 
-    numba cuts a ``prange`` of n iterations into ``n_threads`` contiguous
+    The batch cuts the order into ``n_threads`` contiguous
     chunks of ``n // n_threads`` or one more iterations, one per thread.
     Cases sorted by length, longest first, go greedily to the chunk with the
     least work that still has room (longest processing time first, with
@@ -645,8 +646,9 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     references : sequence of array_like, each shape (m, n_samples_b)
         Reference displacements [µm] of each case (lengths may differ).
     parallel : bool, optional
-        Spread the cases over ``numba.get_num_threads()`` threads (numba
-        ``prange``, cases in an order that gives each thread equal work); by
+        Spread the cases over ``numba.get_num_threads()`` Python threads
+        running the compiled kernel without the GIL (cases in an order that
+        gives each thread equal work); by
         default when there are several cases and at least
         ``PARALLEL_MIN_SAMPLES`` samples. Results do not depend on it (each
         case is computed alone).
@@ -729,17 +731,17 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     worker = np.zeros(B, dtype=np.int64)
     if parallel is None:
         parallel = B > 1 and total >= PARALLEL_MIN_SAMPLES
-    n_threads = kernels.threads() if parallel else 1
+    n_threads = min(kernels.threads(), B) if parallel else 1
     order = _balanced_order(lengths, n_threads)
-    previous = kernels.threads()
-    kernels.set_threads(n_threads)
-    try:
-        kernels.chain_batch(order, offsets, _ragged(yrs, offsets), law_arrays,
-                            stack_pi(cpk, nc, m), _stack_linear(filters, nf, pc),
-                            stack_pi(ppk, npl, p), _stack_linear(lin, nx, p), True, state,
-                            u_out, y_out, status, sample, worker)
-    finally:
-        kernels.set_threads(previous)
+    args = (offsets, _ragged(yrs, offsets), law_arrays, stack_pi(cpk, nc, m),
+            _stack_linear(filters, nf, pc), stack_pi(ppk, npl, p), _stack_linear(lin, nx, p),
+            True, state, u_out, y_out, status, sample, worker)
+    chunks = np.array_split(order, n_threads)      # the equal-work chunks of _balanced_order
+    if n_threads == 1:
+        kernels.chain_batch(order, *args, 0)
+    else:                   # disjoint cases on n threads; the kernel releases the GIL
+        with ThreadPoolExecutor(n_threads) as pool:
+            list(pool.map(lambda k: kernels.chain_batch(chunks[k], *args, k), range(n_threads)))
     results = []
     for b in range(B):
         u, y = _unpacked(u_out, offsets, b, m), _unpacked(y_out, offsets, b, p)

@@ -191,6 +191,27 @@ def test_compensator_chain_matches_oracle(seed, dynamics, iterations):
     np.testing.assert_allclose(np.hstack([a.outputs, b.outputs]), got.outputs, rtol=0, atol=ATOL)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_chain_plant_part_is_the_plant_kernel_bit_for_bit(seed):
+    # the chain kernel runs the plant with the same inlined steps as the plant kernel:
+    # the plant fed the chain's inputs must give the chain's outputs exactly, and the
+    # compensator alone (no plant) the chain's inputs exactly
+    rng = np.random.default_rng(900 + seed)
+    m = int(rng.integers(1, 4))
+    comp = InverseMultiplicativeCompensator(square_model(rng, m), iterations=1 + seed % 2,
+                                            check="error")
+    plant = random_plant(rng, square_model(rng, m), True)
+    yr = random_inputs(rng, m, 250) * 2
+    got = sim.simulate_chain(comp, plant, yr)
+    assert not got.diverged
+    y, final = sim.simulate_plant(plant, got.inputs)
+    assert np.array_equal(y, got.outputs)
+    assert np.array_equal(final, got.plant_state)
+    u, c_final = sim.simulate_compensator(comp, yr)
+    assert np.array_equal(u, got.inputs)
+    assert np.array_equal(c_final, got.compensator_state)
+
+
 def test_literal_law_diverges_at_the_same_sample_as_the_oracle():
     plant = load_plant("rakotondrabe-2dof")
     comp = InverseMultiplicativeCompensator(plant.hysteresis, gain="identity", check="ignore")

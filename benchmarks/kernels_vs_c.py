@@ -1,0 +1,447 @@
+"""The compiled kernels against a plain C reference of the same arithmetic (not a test).
+
+Run: ``python benchmarks/kernels_vs_c.py [--quick] [--samples N]`` (from the
+repository root; needs ``gcc``).
+
+It writes a plain C implementation of the three hot loops of
+:mod:`hammerstein.simulation._kernels` on the same packed arrays (play
+operators grouped by input and padded to ``LANES``, weights ``W`` (p, n_plays),
+gains ``G`` (p, m), discrete state space ``A, B, C, D``):
+
+* ``plant``: multivariable PI (eq. (1) and (4) of the paper) -> linear
+  bending modes, per sample (:func:`~hammerstein.simulation._kernels.plant_kernel`);
+* ``chain``: compensator (delay law, ``iterations`` fixed-point steps with
+  the play states frozen at the previous sample, divergence check, commit)
+  -> PI -> bending modes (:func:`~hammerstein.simulation._kernels.chain_kernel`);
+* ``batch``: the chain over several cases with ragged records, one after the
+  other (:func:`~hammerstein.simulation._kernels.chain_batch` on one thread);
+
+compiles it with ``gcc -O3 -march=native -fassociative-math -fno-signed-zeros
+-fno-trapping-math`` (the reassociation numba's ``fastmath={'reassoc'}``
+allows, nothing more: no FMA contraction, exact non-finite semantics) and
+calls it through ctypes on the same random data as the numba kernels. For
+each size ``inputs x outputs x hysterons`` (hysterons = play operators per
+input; every output weights every play, two bending-mode states per output)
+it prints ns per sample of each, their ratio numba/C (target <= 1.3) and the
+largest difference of the outputs (the two differ only by the order of the
+weighted sums). Times are the best of several alternated calls, in CPU time
+of the process (steadier than wall time on a shared machine; each call runs
+``--samples`` samples); the load average is printed, other processes slow
+both sides alike (shared caches).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from hammerstein.simulation import _kernels as kernels  # noqa: E402
+from hammerstein.simulation._packing import (LANES, ChainState, LawArrays,  # noqa: E402
+                                             LinearArrays, PIArrays)
+
+TARGET = 1.3
+CFLAGS = ["-O3", "-march=native", "-fassociative-math", "-fno-signed-zeros",
+          "-fno-trapping-math", "-shared", "-fPIC"]
+SIZES = [(1, 1, 5), (1, 1, 15), (2, 2, 5), (2, 2, 15), (2, 2, 50), (3, 3, 15), (4, 4, 15),
+         (6, 6, 15), (6, 6, 50)]
+
+C_SOURCE = r"""
+#include <stdint.h>
+#include <math.h>
+
+static inline double play(double v, double u, double r) {
+    double hi = u + r, lo = u - r;
+    v = hi < v ? hi : v;
+    return lo > v ? lo : v;
+}
+
+/* s <- play(s, u): the plays of input k are start[k]..start[k+1] */
+static inline void commit(const double *u, int64_t m, const int64_t *start, const double *r,
+                          double *s) {
+    for (int64_t k = 0; k < m; k++) {
+        double uk = u[k];
+        for (int64_t j = start[k]; j < start[k + 1]; j++) s[j] = play(s[j], uk, r[j]);
+    }
+}
+
+/* y = W s + G u */
+static inline void output(const double *u, int64_t m, int64_t p, int64_t n, const double *W,
+                          const double *G, const double *s, double *y) {
+    for (int64_t l = 0; l < p; l++) {
+        double a = 0.0;
+        for (int64_t j = 0; j < n; j++) a += W[l * n + j] * s[j];
+        for (int64_t k = 0; k < m; k++) a += G[l * m + k] * u[k];
+        y[l] = a;
+    }
+}
+
+/* y = Gamma(u; s) without moving the plays */
+static inline void evaluate(const double *u, int64_t m, int64_t p, int64_t n,
+                            const int64_t *start, const double *r, const double *W,
+                            const double *G, const double *s, double *y) {
+    for (int64_t l = 0; l < p; l++) {
+        double g = 0.0;
+        for (int64_t k = 0; k < m; k++) g += G[l * m + k] * u[k];
+        y[l] = g;
+    }
+    for (int64_t k = 0; k < m; k++) {
+        double uk = u[k];
+        for (int64_t j = start[k]; j < start[k + 1]; j++) {
+            double v = play(s[j], uk, r[j]);
+            for (int64_t l = 0; l < p; l++) y[l] += W[l * n + j] * v;
+        }
+    }
+}
+
+/* y = C x + D h; x <- A x + B h */
+static inline void linear(const double *h, int64_t q, int64_t nx, const double *A,
+                          const double *B, const double *C, const double *D, double *x,
+                          double *xn, double *y) {
+    for (int64_t l = 0; l < q; l++) {
+        double a = 0.0;
+        for (int64_t i = 0; i < nx; i++) a += C[l * nx + i] * x[i];
+        for (int64_t i = 0; i < q; i++) a += D[l * q + i] * h[i];
+        y[l] = a;
+    }
+    for (int64_t i = 0; i < nx; i++) {
+        double a = 0.0;
+        for (int64_t j = 0; j < nx; j++) a += A[i * nx + j] * x[j];
+        for (int64_t j = 0; j < q; j++) a += B[i * q + j] * h[j];
+        xn[i] = a;
+    }
+    for (int64_t i = 0; i < nx; i++) x[i] = xn[i];
+}
+
+#define MAXV 64
+#define MAXX 256
+
+void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double *u,
+           const int64_t *start, const double *r, const double *W, const double *G, double *s,
+           const double *A, const double *B, const double *C, const double *D, double *x,
+           double *y) {
+    double ut[MAXV], h[MAXV], yt[MAXV], xn[MAXX];
+    for (int64_t t = 0; t < N; t++) {
+        for (int64_t k = 0; k < m; k++) ut[k] = u[k * N + t];
+        commit(ut, m, start, r, s);
+        output(ut, m, p, n, W, G, s, h);
+        linear(h, p, nx, A, B, C, D, x, xn, yt);
+        for (int64_t l = 0; l < p; l++) y[l * N + t] = yt[l];
+    }
+}
+
+/* delay law; returns the first failing sample (status in *status) or N */
+int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *Kinv,
+              int64_t iterations, double bound,
+              const int64_t *cstart, const double *cr, const double *cW, const double *cG,
+              int64_t cn, const int64_t *pstart, const double *pr, const double *pW,
+              const double *pG, int64_t pn, const double *A, const double *B, const double *C,
+              const double *D, int64_t nx, double *cu, double *cs, double *ps, double *x,
+              double *u_out, double *y_out, int64_t *status) {
+    double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], h[MAXV], yt[MAXV], xn[MAXX];
+    *status = 0;
+    evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, yhat);
+    for (int64_t t = 0; t < N; t++) {
+        for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
+        for (int64_t k = 0; k < m; k++) u[k] = cu[k];
+        for (int64_t it = 0; it < iterations; it++) {
+            if (it == 0) {
+                for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yhat[l];
+            } else {
+                evaluate(u, m, p, cn, cstart, cr, cW, cG, cs, yh);
+                for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yh[l];
+            }
+            for (int64_t k = 0; k < m; k++) {
+                double acc = 0.0;
+                for (int64_t l = 0; l < p; l++) acc += Kinv[k * p + l] * e[l];
+                u[k] += acc;
+            }
+        }
+        int64_t st = 0;
+        for (int64_t k = 0; k < m; k++) {
+            u_out[k * N + t] = u[k];
+            if (!isfinite(u[k])) st = 1;
+        }
+        if (st == 0)
+            for (int64_t k = 0; k < m; k++) if (fabs(u[k]) > bound) st = 2;
+        if (st) { *status = st; return t; }
+        commit(u, m, cstart, cr, cs);
+        output(u, m, p, cn, cW, cG, cs, yhat);
+        for (int64_t k = 0; k < m; k++) cu[k] = u[k];
+        commit(u, m, pstart, pr, ps);
+        output(u, m, p, pn, pW, pG, ps, h);
+        linear(h, p, nx, A, B, C, D, x, xn, yt);
+        for (int64_t l = 0; l < p; l++) y_out[l * N + t] = yt[l];
+    }
+    return N;
+}
+
+/* the chain over B cases of one model, records ragged (offsets), states per case */
+void batch(int64_t B, const int64_t *offsets, int64_t m, int64_t p, const double *yr,
+           const double *Kinv, int64_t iterations, double bound,
+           const int64_t *cstart, const double *cr, const double *cW, const double *cG,
+           int64_t cn, const int64_t *pstart, const double *pr, const double *pW,
+           const double *pG, int64_t pn, const double *A, const double *B_, const double *C,
+           const double *D, int64_t nx, double *cu, double *cs, double *ps, double *x,
+           double *u_out, double *y_out, int64_t *status, int64_t *sample) {
+    for (int64_t b = 0; b < B; b++) {
+        int64_t a = offsets[b], n = offsets[b + 1] - a;
+        sample[b] = chain(m, p, n, yr + p * a, Kinv + b * m * p, iterations, bound,
+                          cstart + b * (m + 1), cr + b * cn, cW + b * p * cn, cG + b * p * m, cn,
+                          pstart + b * (m + 1), pr + b * pn, pW + b * p * pn, pG + b * p * m, pn,
+                          A + b * nx * nx, B_ + b * nx * p, C + b * p * nx, D + b * p * p, nx,
+                          cu + b * m, cs + b * cn, ps + b * pn, x + b * nx,
+                          u_out + m * a, y_out + p * a, status + b);
+    }
+}
+"""
+
+
+def compile_reference(directory):
+    """Compile :data:`C_SOURCE` into a shared library in ``directory``; return it (ctypes)."""
+    src = Path(directory) / "kernels_ref.c"
+    lib = Path(directory) / "kernels_ref.so"
+    src.write_text(C_SOURCE)
+    subprocess.run(["gcc", *CFLAGS, str(src), "-o", str(lib), "-lm"], check=True)
+    cdll = ctypes.CDLL(str(lib))
+    i, d, P = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
+    cdll.plant.argtypes = [i, i, i, i, i] + [P] * 12
+    cdll.plant.restype = None
+    cdll.chain.argtypes = ([i, i, i, P, P, i, d, P, P, P, P, i, P, P, P, P, i, P, P, P, P, i]
+                           + [P] * 7)
+    cdll.chain.restype = i
+    cdll.batch.argtypes = ([i, P, i, i, P, P, i, d, P, P, P, P, i, P, P, P, P, i, P, P, P, P, i]
+                           + [P] * 8)
+    cdll.batch.restype = None
+    return cdll
+
+
+def _ptr(a):
+    return a.ctypes.data_as(ctypes.c_void_p)
+
+
+def random_pi(rng, m, p, n, gain=1.0):
+    """Packed PI: n plays per input (padded to LANES), dense positive weights, output gain ~ gain."""
+    per = -(-n // LANES) * LANES
+    start = np.arange(m + 1, dtype=np.int64) * per
+    r = np.zeros(m * per)
+    W = np.zeros((p, m * per))
+    for k in range(m):
+        r[k * per:k * per + n] = np.linspace(0.0, 3.0, n)
+        W[:, k * per:k * per + n] = rng.uniform(0.5, 1.5, (p, n)) * gain / n
+    for l in range(min(p, m)):          # a dominant direct transfer
+        W[l, l * per:l * per + n] *= 4.0
+    G = rng.uniform(-0.05, 0.05, (p, m))
+    return PIArrays(start, r, W / m, G)
+
+
+def bending_modes(rng, p, T=5e-5):
+    """Two states per output: lightly damped modes near 300 Hz, unit DC gain (Euler-free, exact)."""
+    nx = 2 * p
+    A = np.zeros((nx, nx))
+    B = np.zeros((nx, p))
+    C = np.zeros((p, nx))
+    D = np.zeros((p, p))
+    for l in range(p):
+        w = 2 * np.pi * rng.uniform(280, 320)
+        z = 0.05
+        rad = np.exp(-z * w * T)
+        wd = w * np.sqrt(1 - z * z) * T
+        a1, a2 = 2 * rad * np.cos(wd), -rad * rad
+        i = 2 * l
+        A[i, i], A[i, i + 1], A[i + 1, i] = a1, a2, 1.0
+        B[i, l] = 1.0
+        C[l, i] = 1.0 - a1 - a2                 # y(t) = (1 - a1 - a2) x1: unit DC gain
+        if p > 1:
+            C[l, (i + 2) % nx] = 0.01 * (1.0 - a1 - a2)   # a little cross-coupling
+    return LinearArrays(A, B, C, D)
+
+
+def reference(rng, p, N, T=5e-5):
+    t = np.arange(N) * T
+    return np.vstack([3.0 * np.sin(2 * np.pi * (50 + 13 * l) * t + l) for l in range(p)])
+
+
+def best_time(fn, repeats):
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.process_time()
+        fn()
+        best = min(best, time.process_time() - t0)
+    return best
+
+
+def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
+    """ns per sample of numba and C for the plant, chain and batch loops; max |dy|."""
+    rng = np.random.default_rng(m * 10000 + p * 100 + n)
+    pi = random_pi(rng, m, p, n)
+    comp = random_pi(rng, m, p, n)
+    lin = bending_modes(rng, p)
+    nx = lin.A.shape[0]
+    pn, cn = pi.r.size, comp.r.size
+    u = np.ascontiguousarray(reference(rng, m, N))
+    yr = np.ascontiguousarray(reference(rng, p, N))
+    # compensator gain: the inverse of the model's secant gain (direct transfer dominant)
+    Kmat = np.zeros((p, m))
+    for l in range(p):
+        for k in range(m):
+            Kmat[l, k] = comp.W[l, comp.start[k]:comp.start[k + 1]].sum() + comp.G[l, k]
+    K_inv = np.ascontiguousarray(np.linalg.inv(Kmat))
+    out = {}
+
+    # plant ---------------------------------------------------------------------
+    def nb_plant():
+        s, x, y = np.zeros(pn), np.zeros(nx), np.empty((p, N))
+        kernels.plant_kernel(u, pi, s, lin, x, y)
+        return y
+
+    def c_plant():
+        s, x, y = np.zeros(pn), np.zeros(nx), np.empty((p, N))
+        lib.plant(m, p, pn, nx, N, _ptr(u), _ptr(pi.start), _ptr(pi.r), _ptr(pi.W), _ptr(pi.G),
+                  _ptr(s), _ptr(lin.A), _ptr(lin.B), _ptr(lin.C), _ptr(lin.D), _ptr(x), _ptr(y))
+        return y
+
+    out["plant"] = _compare(nb_plant, c_plant, N, repeats)
+
+    # chain ---------------------------------------------------------------------
+    law = LawArrays(K_inv, iterations, 1e6, False, 0.0, False)
+    empty_filter = LinearArrays(np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p))
+
+    def nb_chain():
+        st = ChainState(np.zeros(m), np.zeros(m), np.zeros(cn), np.zeros(0), np.zeros(pn),
+                        np.zeros(nx))
+        uo, yo = np.empty((m, N)), np.empty((p, N))
+        status, _ = kernels.chain_kernel(yr, N, law, comp, empty_filter, pi, lin, True, st, uo, yo)
+        assert status == 0, "the benchmark's compensator diverged"
+        return yo
+
+    def c_chain():
+        cu, cs, ps, x = np.zeros(m), np.zeros(cn), np.zeros(pn), np.zeros(nx)
+        uo, yo = np.empty((m, N)), np.empty((p, N))
+        status = np.zeros(1, dtype=np.int64)
+        lib.chain(m, p, N, _ptr(yr), _ptr(K_inv), iterations, ctypes.c_double(1e6),
+                  _ptr(comp.start), _ptr(comp.r), _ptr(comp.W), _ptr(comp.G), cn,
+                  _ptr(pi.start), _ptr(pi.r), _ptr(pi.W), _ptr(pi.G), pn,
+                  _ptr(lin.A), _ptr(lin.B), _ptr(lin.C), _ptr(lin.D), nx,
+                  _ptr(cu), _ptr(cs), _ptr(ps), _ptr(x), _ptr(uo), _ptr(yo), _ptr(status))
+        assert status[0] == 0
+        return yo
+
+    out["chain"] = _compare(nb_chain, c_chain, N, repeats)
+
+    # batch (one thread) ----------------------------------------------------------
+    B = n_cases
+    lengths = np.full(B, N // B, dtype=np.int64)
+    lengths[: N - lengths.sum()] += 1
+    offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
+    flat = np.concatenate([yr[:, offsets[b]:offsets[b + 1]].ravel() for b in range(B)])
+
+    def tile(a):
+        return np.ascontiguousarray(np.broadcast_to(a, (B,) + np.shape(a)))
+
+    blaw = LawArrays(tile(K_inv), np.full(B, iterations, dtype=np.int64), np.full(B, 1e6),
+                     np.zeros(B, dtype=np.bool_), np.zeros(B), np.zeros(B, dtype=np.bool_))
+    bcomp = PIArrays(*(tile(a) for a in comp))
+    bpi = PIArrays(*(tile(a) for a in pi))
+    blin = LinearArrays(*(tile(a) for a in lin))
+    bfilter = LinearArrays(*(tile(a) for a in empty_filter))
+    order = np.arange(B, dtype=np.int64)
+
+    def nb_batch():
+        st = ChainState(np.zeros((B, m)), np.zeros((B, m)), np.zeros((B, cn)), np.zeros((B, 0)),
+                        np.zeros((B, pn)), np.zeros((B, nx)))
+        uo, yo = np.empty(m * N), np.empty(p * N)
+        status, sample, worker = (np.zeros(B, dtype=np.int64) for _ in range(3))
+        kernels.chain_batch(order, offsets, flat, blaw, bcomp, bfilter, bpi, blin, True, st,
+                            uo, yo, status, sample, worker, 0)
+        assert not status.any()
+        return yo
+
+    def c_batch():
+        cu, cs, ps, x = (np.zeros((B, k)) for k in (m, cn, pn, nx))
+        uo, yo = np.empty(m * N), np.empty(p * N)
+        status, sample = np.zeros(B, dtype=np.int64), np.zeros(B, dtype=np.int64)
+        lib.batch(B, _ptr(offsets), m, p, _ptr(flat), _ptr(blaw.K_inv), iterations,
+                  ctypes.c_double(1e6), _ptr(bcomp.start), _ptr(bcomp.r), _ptr(bcomp.W),
+                  _ptr(bcomp.G), cn, _ptr(bpi.start), _ptr(bpi.r), _ptr(bpi.W), _ptr(bpi.G), pn,
+                  _ptr(blin.A), _ptr(blin.B), _ptr(blin.C), _ptr(blin.D), nx,
+                  _ptr(cu), _ptr(cs), _ptr(ps), _ptr(x), _ptr(uo), _ptr(yo), _ptr(status),
+                  _ptr(sample))
+        assert not status.any()
+        return yo
+
+    out["batch"] = _compare(nb_batch, c_batch, N, repeats)
+    return out
+
+
+def _compare(nb, c, N, repeats):
+    y_nb, y_c = nb(), c()                      # compile / warm up, and the outputs
+    scale = max(1.0, float(np.max(np.abs(y_c))))
+    diff = float(np.max(np.abs(y_nb - y_c))) / scale
+    t_nb = t_c = np.inf
+    for _ in range(repeats):                   # alternated, best of each
+        t_nb = min(t_nb, best_time(nb, 1))
+        t_c = min(t_c, best_time(c, 1))
+    return {"numba_ns": t_nb / N * 1e9, "c_ns": t_c / N * 1e9, "ratio": t_nb / t_c,
+            "rel_diff": diff}
+
+
+def main(argv=None):
+    """Print numba/C per kernel and size.
+
+    Parameters
+    ----------
+    argv : list of str, optional
+        ``--quick``, ``--samples N``, ``--repeat R``, ``--iterations I``.
+
+    Returns
+    -------
+    int
+        0 when every ratio is within the target, else 1.
+    """
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer samples and repeats")
+    ap.add_argument("--samples", type=int, default=None)
+    ap.add_argument("--repeat", type=int, default=None)
+    ap.add_argument("--iterations", type=int, default=1,
+                    help="fixed-point iterations of the compensator (default 1)")
+    args = ap.parse_args(argv)
+    N = args.samples or (20_000 if args.quick else 100_000)
+    repeats = args.repeat or (3 if args.quick else 7)
+    import numba
+    print(f"kernels vs C  numba {numba.__version__}, gcc {' '.join(CFLAGS[:5])}, "
+          f"{N} samples a call, best of {repeats}, compensator iterations {args.iterations}")
+    load0 = os.getloadavg()[0]
+    c0 = time.process_time()
+    worst = 0.0
+    with tempfile.TemporaryDirectory(prefix="hammerstein-c-") as tmp:
+        lib = compile_reference(tmp)
+        print(f"{'size m x p x n':<15}" + "".join(
+            f"{k + ' nb/C [ns]':>22}{'ratio':>7}" for k in ("plant", "chain", "batch"))
+            + f"{'max rel |dy|':>14}")
+        for m, p, n in SIZES:
+            res = case(lib, m, p, n, N, repeats, args.iterations)
+            worst = max(worst, *(r["ratio"] for r in res.values()))
+            row = f"{f'{m} x {p} x {n}':<15}"
+            for k in ("plant", "chain", "batch"):
+                r = res[k]
+                row += f"{r['numba_ns']:>11.1f} /{r['c_ns']:>8.1f}{r['ratio']:>8.2f}"
+            row += f"{max(r['rel_diff'] for r in res.values()):>14.1e}"
+            print(row, flush=True)
+    cpu = time.process_time() - c0
+    print(f"worst ratio {worst:.2f} (target <= {TARGET}); process CPU {cpu:.1f} s; "
+          f"load average {load0:.2f} -> {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    return 0 if worst <= TARGET else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
