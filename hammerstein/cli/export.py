@@ -24,9 +24,9 @@ from hammerstein import __version__
 from hammerstein.cli._common import out_dir_problem, print_err
 from hammerstein.exceptions import ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c
-from hammerstein.export.build import (KINDS, build_compensator, limits_from_table, load_source,
-                                      write_files)
-from hammerstein.export.fmu import build_fmu, find_compiler, fmu_owned
+from hammerstein.export.build import (KINDS, build_compensator, check_fmu_owned, limits_from_table,
+                                      load_source, write_files)
+from hammerstein.export.fmu import build_fmu, find_compiler
 
 __all__ = ["add_parser", "handler"]
 
@@ -143,11 +143,7 @@ def handler(args):
         if args.target == "c":
             written = write_files(args.out, code.files(), MARKER.encode(), args.force)
         else:
-            target = os.path.join(args.out, f"{name}.fmu")
-            if os.path.lexists(target) and os.path.isfile(target) and not args.force \
-                    and not fmu_owned(target):
-                raise ExportError(f"{target}: exists and was not written by hammerstein export; "
-                                  f"remove it, choose another --out or --name, or pass --force")
+            check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
             data, binary = build_fmu(code, __version__, binary=not args.no_binary)
             written = write_files(args.out, {f"{name}.fmu": data}, {f"{name}.fmu": b"PK"}, True)
             if binary is None and not args.no_binary:

@@ -24,9 +24,10 @@ from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.presets import load_model, load_plant, read_toml, resolve_preset
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
 from hammerstein.export.c_code import AmplifierLimits
+from hammerstein.export.fmu import fmu_owned
 
 __all__ = ["KINDS", "ExportSource", "load_source", "build_compensator", "limits_from_table",
-           "check_owned", "write_files"]
+           "check_owned", "check_fmu_owned", "write_files"]
 
 #: Exportable compensator kinds: name -> description.
 KINDS = {
@@ -240,6 +241,32 @@ def check_owned(path, marker, force=False):
     except (FileLimitError, OSError):
         head = b""
     if head != marker:
+        raise ExportError(f"{path}: exists and was not written by hammerstein export; "
+                          f"remove it, choose another --out or --name, or pass --force")
+
+
+def check_fmu_owned(path, force=False):
+    """Refuse to replace an FMU hammerstein export did not write.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Target ``.fmu``.
+    force : bool
+        Replace any regular file anyway.
+
+    Raises
+    ------
+    ExportError
+        The target exists and is not a regular file, or (without ``force``)
+        is not an FMU whose model description names hammerstein export as
+        its generation tool.
+    """
+    if not os.path.lexists(path):
+        return
+    if not Path(path).is_file():
+        raise ExportError(f"{path}: exists and is not a regular file; expected a file to replace")
+    if not force and not fmu_owned(path):
         raise ExportError(f"{path}: exists and was not written by hammerstein export; "
                           f"remove it, choose another --out or --name, or pass --force")
 

@@ -724,8 +724,12 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
     >>> code = export_c(InverseMultiplicativeCompensator(model), "piezo", 5e-5)
     >>> sorted(code.files())
     ['piezo.c', 'piezo.h']
-    >>> print([ln for ln in code.header.splitlines() if ln.startswith("#define piezo_N")])
-    ['#define piezo_N_INPUTS 1', '#define piezo_N_OUTPUTS 1']
+    >>> for line in code.header.splitlines():
+    ...     if line.startswith(("#define piezo_N_IN", "#define piezo_PRE", "int piezo_step")):
+    ...         print(line)
+    #define piezo_N_INPUTS 1
+    #define piezo_PREVIEW 0
+    int piezo_step(piezo_state *s, const double reference[piezo_N_OUTPUTS], double voltage[piezo_N_INPUTS]);
     """
     N = check_name(name)
     if precision not in ("double", "float"):

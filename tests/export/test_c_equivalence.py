@@ -136,6 +136,12 @@ def rel_error(u_c, u_py):
     return float(np.max(np.abs(u_c - u_py)) / np.max(np.abs(u_py)))
 
 
+def within(u_c, comp, yr, u_py):
+    """``rel_error(u_c, u_py) <= tolerance(...)`` (the numpy loop runs only when needed)."""
+    err = rel_error(u_c, u_py)
+    return err <= 1e-12 or err <= tolerance(comp, yr, u_py)
+
+
 def tolerance(comp, yr, u_py):
     """1e-12, or 1.5 times the spread of Python's own two implementations (compiled kernel
     and numpy loop) when that is larger: with the coupled preset's ZPETC inverse the problem
@@ -160,15 +166,14 @@ def test_double_equals_python(kind, harness):
         assert np.all(status == 0), ref_name
         P = code.preview
         assert np.all(u_c[:, :P] == 0.0)                       # rest voltages while the preview fills
-        err = rel_error(u_c, u_py)
-        assert err <= tolerance(comp, yr, u_py), f"{kind} {ref_name}: {err:.3g}"
+        assert within(u_c, comp, yr, u_py), f"{kind} {ref_name}: {rel_error(u_c, u_py):.3g}"
         assert size <= 4096
     # chunked = whole: the state struct copied at an odd sample continues bit for bit
     u_split, _, _ = h.run(yr, split=1237)
     assert np.array_equal(u_split, u_c)
     # Python in three chunks (state continued) = C in one run
     u3 = python_voltages(comp, yr, chunks=3)
-    assert rel_error(u_c, u3) <= tolerance(comp, yr, u3)
+    assert within(u_c, comp, yr, u3)
 
 
 @needs_cc
@@ -193,7 +198,7 @@ def test_second_compiler(kind, harness):
     outs = [harness(code, cc).run(yr)[0] for cc in COMPILERS]
     u_py = python_voltages(comp, yr)
     for u in outs:
-        assert rel_error(u, u_py) <= tolerance(comp, yr, u_py)
+        assert within(u, comp, yr, u_py)
 
 
 # -- amplifier limits and divergence: naive references written here -----------------------
@@ -260,6 +265,6 @@ def test_long_references(kind, harness):
         yr = make(n)
         u_c, status, _ = h.run(yr)
         u_py = python_voltages(comp, yr)
-        assert rel_error(u_c, u_py) <= tolerance(comp, yr, u_py), ref_name
+        assert within(u_c, comp, yr, u_py), ref_name
         u_split, _, _ = h.run(yr, split=n // 2 + 7)
         assert np.array_equal(u_split, u_c)
