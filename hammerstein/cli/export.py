@@ -130,12 +130,14 @@ def handler(args):
                                     feedback=args.feedback, cutoff_hz=args.cutoff_hz,
                                     inversion=args.inversion, sampling_period=args.sampling_period,
                                     check=args.check)
-        m = source.model.n_inputs
+        inputs = list(source.model.input_names)
         if args.amplifier_range is not None:
-            table = {"range": list(args.amplifier_range), "slew_rate": args.slew_rate}
-            limits = limits_from_table(table, m, "amplifier")
+            table = {"range": list(args.amplifier_range)}
+            if args.slew_rate is not None:
+                table["slew_rate"] = args.slew_rate
+            limits = limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
         else:
-            limits = limits_from_table(source.amplifier, m, "amplifier")
+            limits = limits_from_table(source.amplifier, inputs, "amplifier")
         name = args.name or _default_name(source.name, args.kind)
         code = export_c(comp, name, T, precision=args.precision, limits=limits,
                         version=__version__, source_note=f"Built from {source.path.name} "

@@ -96,16 +96,21 @@ def load_source(model_or_preset):
     return ExportSource(path, path.stem, load_model(path), None, None, amplifier)
 
 
-def limits_from_table(table, m, where="amplifier"):
-    """Amplifier limits from an ``[amplifier]`` table.
+def limits_from_table(table, inputs, where="amplifier"):
+    """Amplifier limits from a preset's ``[amplifier]`` table.
+
+    The table of hammerstein's amplifier model: ``range = [min, max]`` [V],
+    ``slew_rate`` [V/s] and ``bandwidth_hz`` for every input, and optional
+    per-input sub-tables ``[amplifier.<input>]`` with the same keys that
+    override them. ``bandwidth_hz`` is the amplifier's own low-pass, which
+    acts in the hardware: it is not part of the exported code.
 
     Parameters
     ----------
     table : dict or None
-        ``range = [min, max]`` [V] (or one ``[min, max]`` per input) and
-        optional ``slew_rate`` [V/s] (one value or one per input).
-    m : int
-        Number of inputs.
+        The ``[amplifier]`` table.
+    inputs : list of str
+        The model's input names (m).
     where : str
         Key prefix for messages.
 
@@ -117,22 +122,43 @@ def limits_from_table(table, m, where="amplifier"):
     Raises
     ------
     ExportError
-        On a missing or malformed ``range`` or ``slew_rate``.
+        On an unknown key or input, a range that is not ``[min, max]`` with
+        ``min < max``, or a non-positive slew rate (the message names the key).
     """
     if table is None:
         return None
-    rng = table.get("range")
-    try:
-        a = np.asarray(rng, dtype=float)
-    except (TypeError, ValueError):
-        a = None
-    if a is None or not (a.shape == (2,) or a.shape == (m, 2)):
-        raise ExportError(f"{where}.range: expected [min, max] V or one [min, max] per input "
-                          f"({m}), found {rng!r}")
-    lo, hi = (a[0], a[1]) if a.shape == (2,) else (a[:, 0], a[:, 1])
-    limits = AmplifierLimits(lo, hi, table.get("slew_rate"))
-    limits.arrays(m)          # validated now, naming the key
-    return limits
+    keys = ("range", "slew_rate", "bandwidth_hz")
+    m = len(inputs)
+    lo, hi, slew = np.full(m, -np.inf), np.full(m, np.inf), np.full(m, np.inf)
+
+    def apply(tab, idx, at):
+        for key, value in tab.items():
+            if key == "range":
+                try:
+                    a = np.asarray(value, dtype=float)
+                except (TypeError, ValueError):
+                    a = None
+                if a is None or a.shape != (2,) or not np.all(np.isfinite(a)) or not a[0] < a[1]:
+                    raise ExportError(f"{at}.range: expected [min, max] V with min < max, found {value!r}")
+                lo[idx], hi[idx] = a
+            elif key == "slew_rate":
+                if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                        or not (np.isfinite(value) and value > 0):
+                    raise ExportError(f"{at}.slew_rate: expected a positive rate [V/s], found {value!r}")
+                slew[idx] = float(value)
+            elif key != "bandwidth_hz":
+                raise ExportError(f"{at}.{key}: unknown key (expected {', '.join(keys)} or an input "
+                                  f"name: {', '.join(inputs)})")
+
+    if not isinstance(table, dict):
+        raise ExportError(f"{where}: expected a table")
+    apply({k: v for k, v in table.items() if not isinstance(v, dict)}, slice(None), where)
+    for name, sub in table.items():
+        if isinstance(sub, dict):
+            if name not in inputs:
+                raise ExportError(f"{where}.{name}: not an input of the model ({', '.join(inputs)})")
+            apply(sub, inputs.index(name), f"{where}.{name}")
+    return AmplifierLimits(lo, hi, slew)
 
 
 def build_compensator(source, kind="multivariable", gain=None, iterations=None, feedback="delay",

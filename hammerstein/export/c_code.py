@@ -19,8 +19,10 @@ the order of the compiled simulation kernels (``hammerstein.simulation``):
   inverse PI then the inverse play of threshold r_1), or ``U = K^-1 Yr``.
 
 Optional amplifier limits (range [V], slew rate [V/s]) clamp U inside
-``NAME_step``; the clamped U is what the play operators of the law then
-follow (the voltage the actuator receives).
+``NAME_step`` after the law, as hammerstein's amplifier model does
+(``hammerstein.core.amplifier`` where present: range clip, then
+``amp += clip(x - amp, -S T, S T)``); the law keeps its own voltages, as
+the Python compensator does.
 """
 
 from __future__ import annotations
@@ -88,7 +90,8 @@ class AmplifierLimits:
     Parameters
     ----------
     minimum, maximum : array_like, shape (m,) or float
-        Voltage range of each input [V], ``minimum < maximum``.
+        Voltage range of each input [V], ``minimum < maximum``; ``-inf`` /
+        ``inf`` for no bound.
     slew_rate : array_like, shape (m,) or float, optional
         Largest |dU/dt| [V/s] (> 0); None: no slew limit.
 
@@ -133,8 +136,9 @@ class AmplifierLimits:
             slew = vec(self.slew_rate, "slew_rate", np.inf)
         except (TypeError, ValueError) as exc:
             raise ExportError(f"amplifier: expected numbers, {exc}") from None
-        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
-            raise ExportError(f"amplifier.range: expected finite [min, max] V with min < max, "
+        if np.any(np.isnan(lo)) or np.any(np.isnan(hi)) or not np.all(lo < hi) \
+                or np.any(lo == np.inf) or np.any(hi == -np.inf):
+            raise ExportError(f"amplifier.range: expected [min, max] V with min < max, "
                               f"found {lo.tolist()}, {hi.tolist()}")
         if np.any(np.isnan(slew)) or np.any(slew <= 0):
             raise ExportError(f"amplifier.slew_rate: expected a positive rate [V/s], found {slew.tolist()}")
@@ -284,27 +288,43 @@ def _reference_transform(model, precision, N):
 
 
 def _limits_code(limits, m, T, precision, N):
-    """Declarations and clamp statements on ``u[]`` (previous applied voltage ``s->u``)."""
+    """(declarations, output statements, init statements) of the amplifier limits.
+
+    The law's own state keeps the voltages it computed (as in Python); the
+    amplifier then clips them to the range and limits their slew from the
+    last voltage it delivered (``s->amp``, at rest the range value nearest 0):
+    ``x = clip(u, lo, hi)``, ``amp += clip(x - amp, -S T, S T)``.
+    """
     if limits is None:
-        return [], []
+        return [], [f"""    for (k = 0; k < {N}_N_INPUTS; ++k) {{
+        s->u[k] = u[k];
+        voltage[k] = (double)u[k];
+    }}"""], []
     lo, hi, slew = limits.arrays(m)
-    decls = [f"static const {N}_real {N}_u_min[{N}_N_INPUTS] = {_vec(lo, precision)};",
-             f"static const {N}_real {N}_u_max[{N}_N_INPUTS] = {_vec(hi, precision)};"]
-    code = [f"    for (k = 0; k < {N}_N_INPUTS; ++k) {{  /* amplifier range [V] */",
-            f"        if (u[k] < {N}_u_min[k]) {{ u[k] = {N}_u_min[k]; status |= {N}_STATUS_LIMIT; }}",
-            f"        if (u[k] > {N}_u_max[k]) {{ u[k] = {N}_u_max[k]; status |= {N}_STATUS_LIMIT; }}",
-            "    }"]
-    if np.any(np.isfinite(slew)):
-        step = np.where(np.isfinite(slew), slew * T, 1e300 if precision == "double" else 1e38)
-        decls.append(f"static const {N}_real {N}_u_step[{N}_N_INPUTS] = {_vec(step, precision)};"
-                     f"  /* slew rate [V/s] x sampling period */")
-        code += [f"    for (k = 0; k < {N}_N_INPUTS; ++k) {{  /* amplifier slew rate */",
-                 f"        if (u[k] > s->u[k] + {N}_u_step[k]) {{ u[k] = s->u[k] + {N}_u_step[k]; "
-                 f"status |= {N}_STATUS_LIMIT; }}",
-                 f"        if (u[k] < s->u[k] - {N}_u_step[k]) {{ u[k] = s->u[k] - {N}_u_step[k]; "
-                 f"status |= {N}_STATUS_LIMIT; }}",
-                 "    }"]
-    return decls, code
+    decls, code, init = [], [f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = u[k];",
+                             "    /* amplifier: range clip, then slew limit from the last delivered voltage */"], []
+    zero = "0.0" if precision == "double" else "0.0f"
+    for k in range(m):
+        rest = float(min(max(0.0, lo[k]), hi[k]))
+        init.append(f"    s->amp[{k}] = {_lit(rest, precision)};")
+        code.append(f"    {{  /* input {k} */")
+        code.append(f"        {N}_real x = u[{k}], d;")
+        if np.isfinite(lo[k]):
+            decls.append(f"static const {N}_real {N}_u_min{k} = {_lit(lo[k], precision)};  /* [V] */")
+            code.append(f"        if (x < {N}_u_min{k}) {{ x = {N}_u_min{k}; status |= {N}_STATUS_LIMIT; }}")
+        if np.isfinite(hi[k]):
+            decls.append(f"static const {N}_real {N}_u_max{k} = {_lit(hi[k], precision)};  /* [V] */")
+            code.append(f"        if (x > {N}_u_max{k}) {{ x = {N}_u_max{k}; status |= {N}_STATUS_LIMIT; }}")
+        if np.isfinite(slew[k]):
+            decls.append(f"static const {N}_real {N}_u_step{k} = {_lit(slew[k] * T, precision)};"
+                         f"  /* slew rate {slew[k]:g} V/s x T [V] */")
+            code += [f"        d = x - s->amp[{k}];",
+                     f"        if (d > {N}_u_step{k}) {{ x = s->amp[{k}] + {N}_u_step{k}; status |= {N}_STATUS_LIMIT; }}",
+                     f"        else if (d < -{N}_u_step{k}) {{ x = s->amp[{k}] - {N}_u_step{k}; status |= {N}_STATUS_LIMIT; }}"]
+        else:
+            code.append(f"        d = {zero};")
+        code += ["        (void)d;", f"        s->amp[{k}] = x;", f"        voltage[{k}] = (double)x;", "    }"]
+    return decls, code, init
 
 
 def _describe_limits(limits, m):
@@ -352,7 +372,7 @@ def _law_source(law, model, precision, N, limits, T):
                   f"static const {N}_real {N}_Cf[{N}_N_OUTPUTS][{N}_N_FILTER] = {_mat(Cf, precision)};",
                   f"static const {N}_real {N}_Df[{N}_N_OUTPUTS][{N}_N_OUTPUTS] = {_mat(Df, precision)};"]
     tdecls, tcode = _reference_transform(model, precision, N)
-    ldecls, lcode = _limits_code(limits, m, T, precision, N)
+    ldecls, lcode, _ = _limits_code(limits, m, T, precision, N)
     one = "1.0" if precision == "double" else "1.0f"
     zero = "0.0" if precision == "double" else "0.0f"
     body = []
@@ -488,14 +508,10 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
             for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = (double)s->u[k];
             return {N}_STATUS_DIVERGED;
         }}""")
+    step.append(f"""    {N}_commit(u, s->plays, s->gamma);""")
     step += lcode
-    step.append(f"""    {N}_commit(u, s->plays, s->gamma);
-    for (k = 0; k < {N}_N_INPUTS; ++k) {{
-        s->u[k] = u[k];
-        voltage[k] = (double)u[k];
-    }}
-    return status;
-}}
+    step.append("""    return status;
+}
 """)
     body.append("\n".join(step))
     members = [f"    {N}_real u[{N}_N_INPUTS];        /* U(t-T): last voltages [V] */",
@@ -572,7 +588,7 @@ def _per_axis_source(comp, model, precision, N, limits, T):
             decls.append(f"static const {N}_real {N}_ginv{l} = {_lit(inv, precision)};  /* 1/g [V/um] */")
             code.append(f"    u[{l}] = {N}_ginv{l} * r[{l}];")
     tdecls, tcode = _reference_transform(model, precision, N)
-    ldecls, lcode = _limits_code(limits, m, T, precision, N)
+    ldecls, lcode, _ = _limits_code(limits, m, T, precision, N)
     body = [_PLAY.format(N=N)] if any(isinstance(i, InversePI) for i in comp.inverses) else []
     init.append("    s->diverged = 0;")
     members.append("    int diverged;             /* latched divergence flag */")
@@ -598,11 +614,7 @@ def _per_axis_source(comp, model, precision, N, limits, T):
             s->diverged = 1;
             for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = (double)s->u[k];
             return {N}_STATUS_DIVERGED;
-        }}"""] + lcode + [f"""    for (k = 0; k < {N}_N_INPUTS; ++k) {{
-        s->u[k] = u[k];
-        voltage[k] = (double)u[k];
-    }}
-    (void)j;
+        }}"""] + lcode + [f"""    (void)j;
     return status;
 }}
 """]))
@@ -614,7 +626,7 @@ def _static_source(comp, model, precision, N, limits, T):
     zero = "0.0" if precision == "double" else "0.0f"
     decls = [f"static const {N}_real {N}_K_inv[{N}_N_INPUTS] = {_vec(np.diag(comp.K_inv), precision)};  /* 1/K_ll [V/um] */"]
     tdecls, tcode = _reference_transform(model, precision, N)
-    ldecls, lcode = _limits_code(limits, m, T, precision, N)
+    ldecls, lcode, _ = _limits_code(limits, m, T, precision, N)
     body = [f"""void {N}_init({N}_state *s)
 {{
     int k;
@@ -636,11 +648,7 @@ def _static_source(comp, model, precision, N, limits, T):
             s->diverged = 1;
             for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = (double)s->u[k];
             return {N}_STATUS_DIVERGED;
-        }}"""] + lcode + [f"""    for (k = 0; k < {N}_N_INPUTS; ++k) {{
-        s->u[k] = u[k];
-        voltage[k] = (double)u[k];
-    }}
-    return status;
+        }}"""] + lcode + [f"""    return status;
 }}
 """])]
     members = [f"    {N}_real u[{N}_N_INPUTS];   /* last voltages [V] */",
@@ -745,9 +753,18 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
              "per-axis": lambda: _per_axis_source(compensator, model, precision, N, limits, T),
              "static-gain": lambda: _static_source(compensator, model, precision, N, limits, T)}[kind]
     decls, body, members, defines, reals = build()
+    if limits is not None:          # the amplifier's state, its rest and the held voltage
+        _, _, amp_init = _limits_code(limits, model.n_inputs, T, precision, N)
+        body = [b.replace("voltage[k] = (double)s->u[k];", "voltage[k] = (double)s->amp[k];")
+                 .replace("    s->diverged = 0;\n", "\n".join(amp_init) + "\n    s->diverged = 0;\n")
+                for b in body]
+        members.insert(len(members) - 1,
+                       f"    {N}_real amp[{N}_N_INPUTS];    /* last voltages delivered by the amplifier [V] */")
+        reals += model.n_inputs
     m, p = model.n_inputs, model.n_outputs
     first = f"{MARKER} {version}: {description}. Do not edit: regenerate. */".replace("  ", " ")
     limits_text = _describe_limits(limits, m)
+    n_ints = sum(1 for mb in members if mb.lstrip().startswith("int "))
     ins = ", ".join(f"{i}: {nm} [V]" for i, nm in enumerate(model.input_names))
     outs = ", ".join(f"{i}: {nm} [um]" for i, nm in enumerate(model.output_names))
     guard = f"{N.upper()}_H_INCLUDED"
@@ -761,7 +778,7 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
  *
  * Usage (C99, no allocation, only the C standard library):
  *
- *     {N}_state s;                 (static or automatic, {reals} reals + 2 ints)
+ *     {N}_state s;                 (static or automatic: {reals} reals and {n_ints} int(s))
  *     {N}_init(&s);                 (start at rest: 0 V, demagnetised plays)
  *     every sampling period {N}_SAMPLING_PERIOD:
  *         status = {N}_step(&s, reference, voltage);

@@ -43,7 +43,7 @@ def test_c_files_written_then_replaced(tmp_path, capsys):
     (["--kind", "hammerstein", "--inversion", "stable"], 1, "inversion: 'stable'"),
     (["--gain", "identity"], 1, "rho(I - K^-1 J)"),
     (["--kind", "per-axis", "--iterations", "3"], 1, "takes no gain"),
-    (["--amplifier-range", "5", "-5"], 1, "amplifier.range"),
+    (["--amplifier-range", "5", "-5"], 1, "range: expected [min, max]"),
     (["--slew-rate", "100"], 2, "--slew-rate needs"),
     (["--name", "int"], 2, "--name"),
     (["--name", "9lives"], 2, "--name"),

@@ -106,18 +106,24 @@ def test_bad_options_name_the_field(kwargs, match):
         export_c(comp, args.pop("name"), args.pop("sampling_period"), **args)
 
 
-@pytest.mark.parametrize("table, ok", [
-    ({"range": [-10.0, 150.0]}, True),
-    ({"range": [[-10.0, 150.0], [0.0, 100.0]], "slew_rate": [1e5, 2e5]}, True),
-    ({"range": [1.0, 2.0, 3.0]}, False),
-    ({"range": "wide"}, False),
-    ({}, False),
-    ({"range": [0.0, 1.0], "slew_rate": -3.0}, False),
+@pytest.mark.parametrize("table, expected", [
+    ({"range": [-10.0, 150.0]}, ([-10.0, -10.0], [150.0, 150.0], [np.inf, np.inf])),
+    ({"range": [-10.0, 150.0], "slew_rate": 1e5, "bandwidth_hz": 5e3, "uy": {"range": [0.0, 100.0]}},
+     ([-10.0, 0.0], [150.0, 100.0], [1e5, 1e5])),
+    ({"ux": {"slew_rate": 2e5}}, ([-np.inf, -np.inf], [np.inf, np.inf], [2e5, np.inf])),
+    ({"range": [1.0, 2.0, 3.0]}, "range"),
+    ({"range": "wide"}, "range"),
+    ({"range": [2.0, 1.0]}, "range"),
+    ({"range": [0.0, 1.0], "slew_rate": -3.0}, "slew_rate"),
+    ({"gain": 3.0}, "amplifier.gain: unknown key"),
+    ({"uz": {"range": [0.0, 1.0]}}, "amplifier.uz: not an input"),
 ])
-def test_amplifier_table(table, ok):
-    if ok:
-        lo, hi, slew = limits_from_table(table, 2).arrays(2)
-        assert lo.shape == hi.shape == slew.shape == (2,) and np.all(lo < hi)
+def test_amplifier_table(table, expected):
+    """The [amplifier] table of a preset (range, slew_rate, bandwidth_hz, per-input tables)."""
+    if isinstance(expected, tuple):
+        got = limits_from_table(table, ["ux", "uy"]).arrays(2)
+        for a, b in zip(got, expected):
+            np.testing.assert_array_equal(a, b)
     else:
-        with pytest.raises(ExportError, match="amplifier"):
-            limits_from_table(table, 2)
+        with pytest.raises(ExportError, match=expected):
+            limits_from_table(table, ["ux", "uy"])
