@@ -13,6 +13,7 @@ bounded by a loose 1e-3.
 
 from __future__ import annotations
 
+import copy
 import warnings
 from pathlib import Path
 
@@ -267,6 +268,13 @@ def test_long_references(kind, harness):
         yr = make(n)
         u_c, status, _ = h.run(yr)
         u_py = python_voltages(comp, yr)
-        assert within(u_c, comp, yr, u_py), ref_name
+        if not within(u_c, comp, yr, u_py):
+            # the random walk through the ZPETC inverse over 200 000 samples: measured C vs
+            # Python 2.66e-12, Python's two backends 2.4e-12 from a long-double run of the C,
+            # the double C 0.99e-12 from it. Then the C must be at least as accurate as Python.
+            code = copy.copy(h.code)
+            code.header = code.header.replace("typedef double comp_real;", "typedef long double comp_real;")
+            u_ld, _, _ = harness(code).run(yr)
+            assert rel_error(u_c, u_ld) <= max(1e-12, rel_error(u_py, u_ld)), ref_name
         u_split, _, _ = h.run(yr, split=n // 2 + 7)
         assert np.array_equal(u_split, u_c)
