@@ -24,8 +24,8 @@ from hammerstein import __version__
 from hammerstein.cli._common import out_dir_problem, print_err
 from hammerstein.exceptions import ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c
-from hammerstein.export.build import (KINDS, build_compensator, check_fmu_owned, limits_from_table,
-                                      load_source, write_files)
+from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
+                                      limits_from_table, load_source, write_files)
 from hammerstein.export.fmu import build_fmu, find_compiler
 
 __all__ = ["add_parser", "handler"]
@@ -51,8 +51,9 @@ def add_parser(subparsers):
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--name", metavar="NAME",
                    help="C prefix and file stem (default: <preset>_<kind>, as a C identifier)")
-    p.add_argument("--kind", choices=list(KINDS), default="multivariable",
-                   help="compensator kind (default multivariable)")
+    p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default="multivariable",
+                   help="compensator kind (default multivariable; "
+                        f"{', '.join(REFUSED_KINDS)} are refused, naming why)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default=None,
                    help="inverse of the dynamics for --kind hammerstein (only zpetc runs sample by "
                         "sample)")

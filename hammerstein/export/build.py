@@ -21,12 +21,13 @@ from hammerstein.core.compensators import (InverseMultiplicativeCompensator,
                                            diagonal_compensator)
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, safe_write
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import load_model, load_plant, read_toml, resolve_preset
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
 from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
 
-__all__ = ["KINDS", "ExportSource", "load_source", "build_compensator", "limits_from_table",
+__all__ = ["KINDS", "REFUSED_KINDS", "ExportSource", "load_source", "build_compensator", "limits_from_table",
            "check_owned", "check_fmu_owned", "write_files"]
 
 #: Exportable compensator kinds: name -> description.
@@ -36,6 +37,14 @@ KINDS = {
     "per-axis": "per-axis analytic inverse PI of Kuhnen & Janocha",
     "static-gain": "U = K^-1 Yr, no hysteresis compensation",
     "hammerstein": "ZPETC inverse of the linear dynamics, then the multivariable law",
+}
+
+
+#: Compensator kinds of the scenario files that cannot be exported: name -> why.
+REFUSED_KINDS = {
+    "preisach-inverse": "it inverts a Preisach or generalised-PI model by a root search per "
+                        "sample and output, and the generator has no C code for those models",
+    "none": "there is no compensator to export",
 }
 
 
@@ -170,7 +179,7 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
     source : ExportSource
         From :func:`load_source`.
     kind : str
-        One of :data:`KINDS`.
+        One of :data:`KINDS` (those of :data:`REFUSED_KINDS` are refused).
     gain : {'secant', 'midpoint', 'identity'}, optional
         Normalisation K (default 'secant', 'midpoint' for 'hammerstein').
     iterations : int, optional
@@ -193,12 +202,20 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
     Raises
     ------
     ExportError
-        An unknown kind, a model file without ``sampling_period``, a
+        An unknown or refused kind, a model that is not a multivariable
+        classical PI (Preisach, generalised PI), a model file without ``sampling_period``, a
         Hammerstein compensator without dynamics, or the compensator's own
         construction errors (one line).
     """
+    if kind in REFUSED_KINDS:
+        raise ExportError(f"kind: {kind!r} cannot be exported to C: {REFUSED_KINDS[kind]}")
     if kind not in KINDS:
         raise ExportError(f"kind: expected one of {', '.join(KINDS)}, found {kind!r}")
+    if not isinstance(source.model, MultivariablePI):
+        raise ExportError(f"model: a {type(source.model).__name__} (of {source.path.name}) cannot be "
+                          f"exported to C: only the multivariable classical PI (with its offset, "
+                          f"output map and linear components) can; identify a PI model of the "
+                          f"actuator (hammerstein identify) and export that")
     T = sampling_period if sampling_period is not None else source.sampling_period
     if T is None:
         raise ExportError(f"sampling-period: {source.path} is a model file without a sampling "

@@ -127,3 +127,11 @@ def test_amplifier_table(table, expected):
     else:
         with pytest.raises(ExportError, match=expected):
             limits_from_table(table, ["ux", "uy"])
+
+
+def test_a_model_that_is_not_a_classical_pi_is_refused(tmp_path):
+    """A model class other than MultivariablePI (e.g. a Preisach model) is refused by name."""
+    from hammerstein.export.build import ExportSource, build_compensator
+    source = ExportSource(tmp_path / "preset.toml", "preset", _Preisach(), 5e-5, None, None)
+    with pytest.raises(ExportError, match="model: a _Preisach .* cannot be exported to C"):
+        build_compensator(source, "multivariable")
