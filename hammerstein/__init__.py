@@ -21,7 +21,8 @@ from __future__ import annotations
 import importlib
 
 from hammerstein.exceptions import (BaselineError, CompensatorDivergence, CompensatorError,
-                                    ConvergenceWarning, DataFileError, DynamicsError, FileLimitError,
+                                    ConvergenceWarning, DataFileError, DynamicsError, ExportError,
+                                    FileLimitError,
                                     HammersteinError, HammersteinWarning, HysteresisError,
                                     IdentificationError, Invalid, NestedInvalid, PresetError,
                                     RangeWarning, ScenarioError, SignalError)
@@ -128,13 +129,15 @@ _LAZY = {
     "paper_comparison": "hammerstein.report.replication",
     "replicate": "hammerstein.runner",
     "write_readme": "hammerstein.report.replication",
+    # export: the compensators as C99 code / FMUs
+    "export_c": "hammerstein.export",
 }
 
 _EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "SignalError",
                "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
                "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
                "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid",
-               "FileLimitError"]
+               "FileLimitError", "ExportError"]
 
 __all__ = sorted(_EXCEPTIONS + list(_LAZY)) + ["__version__"]
 

@@ -38,6 +38,7 @@ __all__ = [
     "Invalid",
     "NestedInvalid",
     "FileLimitError",
+    "ExportError",
 ]
 
 
@@ -164,3 +165,8 @@ class NestedInvalid(Invalid):
 class FileLimitError(HammersteinError, ValueError):
     """A file cannot be read or written safely: not a regular file, or larger than its size
     limit (:mod:`hammerstein.core.files`; the message names the file and why)."""
+
+
+class ExportError(HammersteinError, ValueError):
+    """A compensator, model or option cannot be exported as C code or an FMU
+    (:mod:`hammerstein.export`; the message names what cannot be and why)."""

@@ -71,6 +71,7 @@ COMMANDS = {
     "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
+    "export": ("hammerstein.cli.export", "write a compensator as C99 code or as an FMI 2.0 FMU"),
 }
 
 

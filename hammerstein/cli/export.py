@@ -1,0 +1,160 @@
+"""``hammerstein export``: a compensator as dependency-free C99 code or as an FMU.
+
+``hammerstein export MODEL_OR_PRESET --target c|fmu --out DIR [--name NAME]
+[--kind KIND] [--inversion zpetc] [--precision double|float] ...`` builds the
+compensator of ``KIND`` on the preset or model file (the scenario defaults:
+:mod:`hammerstein.export.build`), generates its C code
+(:func:`hammerstein.export.export_c`) and writes ``DIR/NAME.h`` and
+``DIR/NAME.c`` (``--target c``) or ``DIR/NAME.fmu`` (``--target fmu``, FMI 2.0
+co-simulation with the sources and, when a C compiler is found, a binary for
+this machine). See docs/real-time.md.
+
+Exit status: 0 on success; 1 when the compensator cannot be built or
+exported (one line naming what cannot be); 2 on a usage error. Nothing is
+written unless everything succeeded; a file that hammerstein export did not
+write is never replaced without ``--force``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+from hammerstein import __version__
+from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.exceptions import ExportError, FileLimitError, PresetError
+from hammerstein.export import MARKER, check_name, export_c
+from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
+                                      limits_from_table, load_source, write_files)
+from hammerstein.export.fmu import build_fmu, find_compiler
+
+__all__ = ["add_parser", "handler"]
+
+
+def add_parser(subparsers):
+    """Register ``hammerstein export`` (sets ``handler``).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``hammerstein`` sub-command registry.
+    """
+    p = subparsers.add_parser(
+        "export", help="write a compensator as C99 code or as an FMI 2.0 FMU",
+        description="Build the compensator of --kind on a preset or model file and write it as "
+                    "dependency-free C99 (NAME.h, NAME.c: static tables, no allocation) or as an "
+                    "FMI 2.0 co-simulation FMU (sources, and a binary for this machine when a C "
+                    "compiler is found). See docs/real-time.md.")
+    p.add_argument("source", metavar="MODEL_OR_PRESET",
+                   help="bundled preset name, preset file or model file (TOML)")
+    p.add_argument("--target", choices=["c", "fmu"], required=True, help="C sources or an FMU")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
+    p.add_argument("--name", metavar="NAME",
+                   help="C prefix and file stem (default: <preset>_<kind>, as a C identifier)")
+    p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default="multivariable",
+                   help="compensator kind (default multivariable; "
+                        f"{', '.join(REFUSED_KINDS)} are refused, naming why)")
+    p.add_argument("--inversion", choices=["zpetc", "stable"], default=None,
+                   help="inverse of the dynamics for --kind hammerstein (only zpetc runs sample by "
+                        "sample)")
+    p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
+                   help="normalisation K of the law (default secant; midpoint for hammerstein)")
+    p.add_argument("--iterations", type=int, default=None, metavar="N",
+                   help="fixed-point iterations per sample (default 1; 3 for hammerstein)")
+    p.add_argument("--feedback", choices=["delay", "lowpass"], default="delay")
+    p.add_argument("--cutoff-hz", type=float, default=None, metavar="HZ",
+                   help="cut-off of the low-pass feedback [Hz]")
+    p.add_argument("--check", choices=["error", "warn", "ignore"], default="error",
+                   help="convergence check rho(I - K^-1 J) < 1 of the law (default error)")
+    p.add_argument("--precision", choices=["double", "float"], default="double",
+                   help="arithmetic of the generated code (the interface stays double)")
+    p.add_argument("--sampling-period", type=float, default=None, metavar="S",
+                   help="sampling period [s] (required for a model file; default the preset's)")
+    p.add_argument("--amplifier-range", type=float, nargs=2, default=None, metavar=("MIN", "MAX"),
+                   help="clamp every voltage to [MIN, MAX] V inside step (overrides the file's "
+                        "[amplifier] range)")
+    p.add_argument("--slew-rate", type=float, default=None, metavar="V_PER_S",
+                   help="limit every voltage's rate of change [V/s] (needs a range)")
+    p.add_argument("--no-binary", action="store_true",
+                   help="--target fmu: sources only, do not compile a binary")
+    p.add_argument("--force", action="store_true",
+                   help="replace files in DIR that hammerstein export did not write")
+    p.set_defaults(handler=handler)
+
+
+def _default_name(stem, kind):
+    name = re.sub(r"[^A-Za-z0-9_]", "_", f"{stem}_{kind}")
+    if not re.match(r"[A-Za-z_]", name):
+        name = "c_" + name
+    return name[:40]
+
+
+def handler(args):
+    """Build, generate and write; exit status 0, 1 or 2.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        Parsed arguments of ``hammerstein export``.
+
+    Returns
+    -------
+    int
+        0 on success, 1 when the source cannot be read or the compensator
+        cannot be built or exported, 2 on a usage error (bad ``--out``,
+        ``--name``, an option that does not apply).
+    """
+    prog = "hammerstein export"
+    problem = out_dir_problem(args.out)
+    if problem:
+        print_err(f"{prog}: error: {problem}")
+        return 2
+    if args.slew_rate is not None and args.amplifier_range is None:
+        print_err(f"{prog}: error: --slew-rate needs --amplifier-range MIN MAX")
+        return 2
+    if args.iterations is not None and args.iterations < 1:
+        print_err(f"{prog}: error: --iterations: expected an integer >= 1, found {args.iterations}")
+        return 2
+    if args.name is not None:
+        try:
+            check_name(args.name)
+        except ExportError as exc:
+            print_err(f"{prog}: error: --{exc}")
+            return 2
+    try:
+        source = load_source(args.source)
+    except PresetError as exc:
+        print_err(f"error: {' '.join(str(exc).split())}")
+        return 1
+    try:
+        comp, T = build_compensator(source, args.kind, gain=args.gain, iterations=args.iterations,
+                                    feedback=args.feedback, cutoff_hz=args.cutoff_hz,
+                                    inversion=args.inversion, sampling_period=args.sampling_period,
+                                    check=args.check)
+        inputs = list(source.model.input_names)
+        if args.amplifier_range is not None:
+            table = {"range": list(args.amplifier_range)}
+            if args.slew_rate is not None:
+                table["slew_rate"] = args.slew_rate
+            limits = limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
+        else:
+            limits = limits_from_table(source.amplifier, inputs, "amplifier")
+        name = args.name or _default_name(source.name, args.kind)
+        code = export_c(comp, name, T, precision=args.precision, limits=limits,
+                        version=__version__, source_note=f"Built from {source.path.name} "
+                        f"(kind {args.kind}, {args.precision}).")
+        if args.target == "c":
+            written = write_files(args.out, code.files(), MARKER.encode(), args.force)
+        else:
+            check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
+            data, binary = build_fmu(code, __version__, binary=not args.no_binary)
+            written = write_files(args.out, {f"{name}.fmu": data}, {f"{name}.fmu": b"PK"}, True)
+            if binary is None and not args.no_binary:
+                print_err(f"warning: {written[0]}: no C compiler found ({find_compiler() or 'cc'}): "
+                          f"the FMU holds the sources only")
+    except (ExportError, FileLimitError) as exc:
+        print_err(f"error: {args.source}: {' '.join(str(exc).split())}")
+        return 1
+    for path in written:
+        print(f"wrote {path}")
+    return 0

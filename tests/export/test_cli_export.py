@@ -1,0 +1,146 @@
+"""``hammerstein export``: files written, refusals as one line, ownership of files."""
+
+from __future__ import annotations
+
+import zipfile
+
+import numpy as np
+import pytest
+
+from hammerstein import InverseMultiplicativeCompensator
+from hammerstein.cli.main import main
+from hammerstein.core.presets import load_plant, save_model
+from hammerstein.export import MARKER
+
+from conftest import Harness, needs_cc
+from test_c_equivalence import T, python_voltages, rel_error, sine
+
+
+def run(capsys, *argv):
+    code = main(["export", *argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_c_files_written_then_replaced(tmp_path, capsys):
+    out = tmp_path / "gen"
+    code, stdout, err = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out),
+                            "--kind", "hammerstein")
+    assert code == 0 and err == ""
+    h, c = out / "rakotondrabe_2dof_hammerstein.h", out / "rakotondrabe_2dof_hammerstein.c"
+    assert stdout.splitlines() == [f"wrote {h}", f"wrote {c}"]
+    for f in (h, c):
+        assert f.read_text().startswith(MARKER)
+    text = h.read_text()
+    for macro in ("N_INPUTS 2", "N_OUTPUTS 2", "PREVIEW 2", "SAMPLING_PERIOD 5e-05"):
+        assert f"#define rakotondrabe_2dof_hammerstein_{macro}" in text
+    # a second export replaces its own files
+    assert run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--kind",
+               "hammerstein")[0] == 0
+
+
+@pytest.mark.parametrize("argv, status, needle", [
+    (["--kind", "hammerstein", "--inversion", "stable"], 1, "inversion: 'stable'"),
+    (["--gain", "identity"], 1, "rho(I - K^-1 J)"),
+    (["--kind", "per-axis", "--iterations", "3"], 1, "takes no gain"),
+    (["--amplifier-range", "5", "-5"], 1, "range: expected [min, max]"),
+    (["--slew-rate", "100"], 2, "--slew-rate needs"),
+    (["--name", "int"], 2, "--name"),
+    (["--name", "9lives"], 2, "--name"),
+    (["--iterations", "0"], 2, "--iterations"),
+    (["--kind", "preisach-inverse"], 1, "kind: 'preisach-inverse' cannot be exported"),
+])
+def test_refusals_are_one_line(tmp_path, capsys, argv, status, needle):
+    code, stdout, err = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out",
+                            str(tmp_path / "o"), *argv)
+    assert code == status and stdout == ""
+    assert len(err.strip().splitlines()) == 1 and needle in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_model_file_needs_a_sampling_period(tmp_path, capsys):
+    model = tmp_path / "model.toml"
+    save_model(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis, model)
+    code, _, err = run(capsys, str(model), "--target", "c", "--out", str(tmp_path / "o"))
+    assert code == 1 and "--sampling-period" in err
+    code, _, err = run(capsys, str(model), "--target", "c", "--out", str(tmp_path / "o"),
+                       "--kind", "hammerstein", "--sampling-period", "1e-4")
+    assert code == 1 and "needs linear dynamics" in err
+    code, stdout, _ = run(capsys, str(model), "--target", "c", "--out", str(tmp_path / "o"),
+                          "--kind", "per-axis", "--sampling-period", "1e-4", "--name", "pa")
+    assert code == 0 and "#define pa_SAMPLING_PERIOD 0.0001" in (tmp_path / "o" / "pa.h").read_text()
+
+
+def test_never_overwrites_a_file_it_did_not_write(tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    mine = out / "mine.c"
+    mine.write_text("int main(void) { return 0; }\n")
+    code, _, err = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name", "mine")
+    assert code == 1 and "not written by hammerstein export" in err and "--force" in err
+    assert mine.read_text() == "int main(void) { return 0; }\n"
+    assert not (out / "mine.h").exists()                     # nothing written at all
+    fmu = out / "mine.fmu"
+    fmu.write_bytes(b"not a zip")
+    code, _, err = run(capsys, "rakotondrabe-2dof", "--target", "fmu", "--out", str(out),
+                       "--name", "mine", "--no-binary")
+    assert code == 1 and fmu.read_bytes() == b"not a zip"
+    code, _, _ = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name",
+                     "mine", "--force")
+    assert code == 0 and mine.read_text().startswith(MARKER)
+
+
+def test_out_is_a_file_is_a_usage_error(tmp_path, capsys):
+    f = tmp_path / "f"
+    f.write_text("x")
+    code, _, err = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(f))
+    assert code == 2 and len(err.splitlines()) == 1
+
+
+def test_fmu_written_and_replaced(tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = ["rakotondrabe-2dof", "--target", "fmu", "--out", str(out), "--kind", "static-gain",
+            "--name", "sg", "--no-binary"]
+    assert run(capsys, *argv)[0] == 0
+    names = zipfile.ZipFile(out / "sg.fmu").namelist()
+    assert "sources/sg.c" in names and "modelDescription.xml" in names
+    assert run(capsys, *argv)[0] == 0                          # its own FMU is replaced
+
+
+@needs_cc
+def test_cli_limits_and_float_compile(tmp_path, capsys):
+    """The command's amplifier options reach the code; its float export compiles -Werror clean."""
+    out = tmp_path / "o"
+    code, _, _ = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name", "fl",
+                     "--precision", "float", "--amplifier-range", "-1", "1", "--slew-rate", "1e4")
+    assert code == 0
+    assert "typedef float fl_real;" in (out / "fl.h").read_text()
+
+    class Code:                       # the harness needs only the name and the sizes
+        name, n_inputs = "fl", 2
+
+        @staticmethod
+        def files():
+            return {f.name: f.read_text() for f in (out / "fl.h", out / "fl.c")}
+    u, status, _ = Harness(Code, tmp_path / "h").run(sine(1000))
+    assert np.all(np.abs(u) <= 1.0) and np.any(status & 1)
+    assert np.all(np.abs(np.diff(u, axis=1)) <= 1e4 * T * (1 + 1e-6))
+
+
+@needs_cc
+def test_cli_code_equals_python(tmp_path, capsys):
+    """What the command writes is what export_c writes: same voltages as Python."""
+    out = tmp_path / "o"
+    assert run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name", "mv",
+               "--iterations", "2", "--gain", "midpoint")[0] == 0
+
+    class Code:
+        name, n_inputs = "mv", 2
+
+        @staticmethod
+        def files():
+            return {f.name: f.read_text() for f in (out / "mv.h", out / "mv.c")}
+    u, _, _ = Harness(Code, tmp_path / "h").run(sine(1500))
+    comp = InverseMultiplicativeCompensator(load_plant("rakotondrabe-2dof").hysteresis,
+                                            gain="midpoint", iterations=2)
+    assert rel_error(u, python_voltages(comp, sine(1500))) <= 1e-12
