@@ -38,6 +38,8 @@ __all__ = [
     "Invalid",
     "NestedInvalid",
     "FileLimitError",
+    "AmplifierError",
+    "AmplifierWarning",
 ]
 
 
@@ -164,3 +166,12 @@ class NestedInvalid(Invalid):
 class FileLimitError(HammersteinError, ValueError):
     """A file cannot be read or written safely: not a regular file, or larger than its size
     limit (:mod:`hammerstein.core.files`; the message names the file and why)."""
+
+
+class AmplifierError(HammersteinError, ValueError):
+    """A drive the amplifier cannot deliver (``limits = "error"``), or a bad ``[amplifier]``
+    table (the message names the input, the peak and the limit, or the key)."""
+
+
+class AmplifierWarning(HammersteinWarning):
+    """A drive beyond the amplifier's range or slew rate (``limits = "warn"``)."""

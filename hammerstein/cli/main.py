@@ -71,6 +71,9 @@ COMMANDS = {
     "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
+    "compensate": ("hammerstein.cli.compensate", "write the drive file (input voltages) for a reference"),
+    "evaluate": ("hammerstein.cli.evaluate", "metrics and figures of a measured response"),
+    "learn": ("hammerstein.cli.learn", "one iterative-learning step from drive and measured files"),
 }
 
 

@@ -45,12 +45,20 @@ class HammersteinPlant:
     The plant state is one flat vector: the ``n_hysterons`` play states
     followed by the ``n_linear_states`` states of the linear part.
 
+    Attributes
+    ----------
+    amplifier : hammerstein.core.amplifier.Amplifier or None
+        The preset's ``[amplifier]`` (range, slew rate, bandwidth of the
+        voltages that reach the actuator); None: unlimited.
+
     Raises
     ------
     HysteresisError
         If the dynamics do not match the hysteresis outputs or the sampling
         period.
     """
+
+    amplifier = None
 
     def __init__(self, hysteresis: MultivariablePI, sampling_period: float,
                  dynamics: control.StateSpace | None = None, name: str = "plant"):

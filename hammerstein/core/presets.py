@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from hammerstein.core.amplifier import amplifier_from_table
 from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize, sampled_bending_modes
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
@@ -25,7 +26,7 @@ from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, Outpu
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.lazy import lazy_module
-from hammerstein.exceptions import PresetError
+from hammerstein.exceptions import AmplifierError, PresetError
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
@@ -50,7 +51,7 @@ PRESET_DIR = resources.files("hammerstein") / "presets"
 
 #: Keys of a model or preset file, per table (anything else is reported with the closest key;
 #: the ``[model]`` keys are :data:`MODEL_KEYS`, ``kind = "state_space"`` dynamics A, B, C, D).
-FILE_KEYS = ("model", "preset", "dynamics", "identification")
+FILE_KEYS = ("model", "preset", "dynamics", "identification", "amplifier")
 PRESET_KEYS = ("name", "description", "sampling_period")
 DYNAMICS_KEYS = ("kind", "natural_frequency", "damping_ratio")
 
@@ -677,4 +678,9 @@ def load_plant(preset, dynamics=True, base_dir=None):
         elif cont is not None:
             lin = discretize(cont, float(T))
     name = meta.get("name", path.stem)
-    return HammersteinPlant(model, float(T), lin, name=name)
+    plant = HammersteinPlant(model, float(T), lin, name=name)
+    try:                               # the amplifier: hammerstein.core.amplifier
+        plant.amplifier = amplifier_from_table(data.get("amplifier"), model.input_names, str(path))
+    except AmplifierError as exc:
+        raise PresetError(str(exc)) from None
+    return plant

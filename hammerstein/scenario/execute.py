@@ -18,10 +18,14 @@ from typing import Any
 import numpy as np
 
 from hammerstein.core import metrics as met
+from hammerstein.core.amplifier import drive_metrics
+from hammerstein.core.drive import default_fade_samples
+from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.references import raster_line_index
-from hammerstein.simulation import simulate_chain
+from hammerstein.simulation import ChainResult, simulate_chain
 
-__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples"]
+__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples",
+           "runs_alone", "drive_rows"]
 
 
 @dataclass
@@ -94,20 +98,82 @@ def run_case(case):
         return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
+        fade = fade_samples(case)
         if hasattr(case.compensator, "run_reference"):   # inverse of G: preview and fade-in
-            res = case.compensator.run_reference(plant, case.signal, case.period_samples,
-                                                 fade_samples(case))
-        else:
-            res = simulate_chain(case.compensator, plant, case.signal)
+            res = case.compensator.run_reference(plant, case.signal, case.period_samples, fade)
+        else:                                            # from rest: faded in
+            res = simulate_chain(case.compensator, plant,
+                                 fade_in(case.signal, fade) if fade else case.signal)
+        commanded = res.inputs
+        res = _through_amplifier(case, res)
     caught += [str(w.message) for w in rec]
-    return chain_result(case, res, caught)
+    return chain_result(case, res, caught, commanded)
+
+
+def _through_amplifier(case, res):
+    """The chain with the plant's amplifier: limits checked (``compensator.limits``), then
+    the commanded voltages clipped, slew-limited and filtered before the plant."""
+    amp = getattr(case.plant, "amplifier", None)
+    if amp is None or res.diverged:
+        return res
+    T = case.plant.sampling_period
+    amp.check(res.inputs, T, getattr(case.compensator, "limits", None) or "warn")
+    applied, _ = amp.apply(res.inputs, T)
+    if np.array_equal(applied, res.inputs):
+        return res
+    y, p_final = case.plant.simulate(applied)
+    return ChainResult(applied, y, res.compensator_state, p_final)
+
+
+def runs_alone(case):
+    """True when a reference case cannot run in the batch kernel (fade-in, amplifier, own start-up).
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+
+    Returns
+    -------
+    bool
+    """
+    return (hasattr(case.compensator, "run_reference")
+            or getattr(case.plant, "amplifier", None) is not None
+            or fade_samples(case) > 0)
+
+
+def drive_rows(case, inputs):
+    """``peak_input`` [V] and ``peak_slew`` [V/s] rows per input of a drive (from rest).
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+    inputs : numpy.ndarray, shape (m, n_samples)
+        Commanded voltages [V].
+
+    Returns
+    -------
+    list of dict
+        Rows ``{channel, metric, value, unit}``, channel = the input's name.
+    """
+    peak, slew = drive_metrics(inputs, case.plant.sampling_period)
+    rows = []
+    for i, name in enumerate(case.plant.hysteresis.input_names):
+        rows.append({"channel": name, "metric": "peak_input", "value": float(peak[i]),
+                     "unit": "V"})
+        rows.append({"channel": name, "metric": "peak_slew", "value": float(slew[i]),
+                     "unit": "V/s"})
+    return rows
 
 
 def fade_samples(case):
-    """Fade-in of a compensator that inverts the dynamics [samples].
+    """Fade-in of a compensator from rest [samples].
 
-    ``compensator.fade_in`` [s] when given, else one period of the reference,
-    at most the ``settle_periods`` the metrics skip.
+    ``compensator.fade_in`` [s] when given. Otherwise, for a compensator
+    that inverts the dynamics (``run_reference``), one period of the
+    reference; for the others :func:`hammerstein.core.drive.default_fade_samples`
+    (one period when the reference does not start at rest and the plant's
+    amplifier has a slew rate, else 0); at most the ``settle_periods`` the
+    metrics skip.
 
     Parameters
     ----------
@@ -124,10 +190,13 @@ def fade_samples(case):
     settle = int(case.settle_periods * case.period_samples)
     if given is not None:
         return int(round(given / T))
+    if not hasattr(case.compensator, "run_reference"):
+        return default_fade_samples(case.signal, case.period_samples, settle, case.compensator,
+                                    getattr(case.plant, "amplifier", None))
     return int(min(case.period_samples, settle))
 
 
-def chain_result(case, res, caught):
+def chain_result(case, res, caught, commanded=None):
     """CaseResult of a compensated case from its simulated chain (ChainResult).
 
     Parameters
@@ -140,6 +209,9 @@ def chain_result(case, res, caught):
         (m, n_samples), and outputs [µm], shape (p, n_samples).
     caught : list of str
         Warning messages of the case (kept in the result).
+    commanded : numpy.ndarray, shape (m, n_samples), optional
+        The compensator's voltages before the amplifier [V] (default
+        ``res.inputs``): their ``peak_input`` and ``peak_slew`` are reported.
 
     Returns
     -------
@@ -161,6 +233,7 @@ def chain_result(case, res, caught):
         if case.signal_spec.get("kind") == "raster":  # per scan line
             line = raster_line_index(case.time, case.signal_spec["frequency"])
             rows += met.raster_line_metrics(case.signal, res.outputs, line)
+        rows += drive_rows(case, res.inputs if commanded is None else commanded)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
 
 

@@ -18,6 +18,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
@@ -153,6 +154,11 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
     "(docs/hammerstein-plant.md)")
+# every kind starts from rest (fade_in [s], hammerstein.core.drive) and reacts to the plant's
+# amplifier limits (limits, hammerstein.core.amplifier; "warn" in scenarios)
+for _kind in ("multivariable", "diagonal", "per-axis", "static-gain", "hammerstein"):
+    COMPENSATORS[_kind].fields["fade_in"] = Field(number("s", 0, exclusive=False))
+    COMPENSATORS[_kind].fields["limits"] = Field(choice(*LIMITS))   # default "warn"
 #: kinds that compensate the hysteresis only (rate independent): warned about dynamics
 RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
 
@@ -184,4 +190,8 @@ def build_compensator(spec, plant, base_dir):
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
         raise ValueError(f"kind: expected one of {', '.join(COMPENSATORS)}, found {kind!r}")
-    return COMPENSATORS[kind].build(spec, plant, Path(base_dir))
+    comp = COMPENSATORS[kind].build(spec, plant, Path(base_dir))
+    if comp is not None:               # start-up and amplifier reaction (scenario.execute)
+        comp.fade_in = spec.get("fade_in")
+        comp.limits = spec.get("limits", "warn")
+    return comp
