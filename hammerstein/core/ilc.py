@@ -40,10 +40,11 @@ dynamics and ``L`` the inverse of the model's Ghat (exact for ``'stable'``,
 the ZPETC's frequency response otherwise); with G = Ghat and Q = 1 it is
 ``|1 - gamma|`` < 1 for ``0 < gamma < 2``.
 
-An optional integer ``delay`` [samples] advances the error before
+An optional integer ``delay`` [samples] advances the measurement before
 learning (the measured response lags the drive by a transport delay the
 model does not have, e.g. the sensor's or the data acquisition's):
-``e(t) -> e(t + d)``.
+``e(t) = y_r(t) - y_k(t + d)``; the last d samples (not measured) hold the
+error of the sample before them.
 
 References
 ----------
@@ -230,8 +231,8 @@ class IterativeLearning:
     inversion : {'zpetc', 'stable'}
         The inverse of G (:func:`~hammerstein.core.inversion.preview_inverse`).
     delay : int
-        Samples by which the error is advanced (transport delay of the
-        measurement not in the model).
+        Samples by which the measurement is advanced (its transport delay
+        not in the model).
     gain, iterations : str, int
         Options of the hysteresis compensator
         (:class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`).
@@ -357,9 +358,12 @@ class IterativeLearning:
         if u.shape != (self.model.n_inputs, r.shape[1]):
             raise CompensatorError(f"drive: expected shape {(self.model.n_inputs, r.shape[1])}, "
                                    f"found {u.shape}")
+        d = self.delay
+        if d:                          # y_k(t) ~ model(t - d): align the measurement
+            y = np.concatenate([y[:, d:], np.zeros((y.shape[0], d))], axis=1)
         e = r - y
-        if self.delay:
-            e = np.concatenate([e[:, self.delay:], np.repeat(e[:, -1:], self.delay, axis=1)], axis=1)
+        if d:                          # the last d samples were not measured: hold the error
+            e[:, -d:] = e[:, -d - 1:-d]
         v = self.pi_output(u)
         N = e.shape[1]
         if period_samples and N >= period_samples + EXTENSION:
@@ -405,6 +409,8 @@ class IterativeLearning:
         if self.inversion == "zpetc" and self.dynamics is not None:
             # ZPETC: zero phase, gain error of the approximated zeros: L = Ghat^-1 * gain
             Linv = self._zpetc_response(f, Gh)
+        if plant_dynamics is None and self.delay:    # the measured response: Ghat z^-d
+            Gt = Gt * (z ** -self.delay)[:, None, None]
         Linv = Linv * (z ** self.delay)[:, None, None]
         if self._ba is not None:
             _, h = signal.freqz(*self._ba, worN=f, fs=1.0 / T)
