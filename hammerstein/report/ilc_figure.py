@@ -39,7 +39,7 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     k = np.asarray(iterations)
     mx, rms = np.atleast_2d(max_error), np.atleast_2d(rms_error)
     fig = plt.figure(figsize=(6.4, 4.0))
-    fixed_layout(fig, left=0.9, right=0.9 if scale else 0.25, top=1.0)
+    fixed_layout(fig, left=0.9, right=0.9 if scale else 0.25, top=0.55)
     ax = fig.add_subplot(1, 1, 1)
     for l, name in enumerate(names):
         line, = ax.semilogy(k, mx[l], marker="o", label=f"{name} max")
