@@ -96,7 +96,19 @@ def _fade_of(path):
 
 
 def history_rows(history_dir):
-    """The rows of ``DIR/history.csv``: (iteration, output, max_error, rms_error) tuples."""
+    """The rows of ``DIR/history.csv``.
+
+    Parameters
+    ----------
+    history_dir : str or pathlib.Path
+        The ``--history`` directory.
+
+    Returns
+    -------
+    list of tuple
+        ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
+        there is no history yet.
+    """
     path = Path(history_dir) / "history.csv"
     if not path.is_file():
         return []

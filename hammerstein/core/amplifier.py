@@ -280,6 +280,11 @@ class Amplifier:
             [V].
         state : numpy.ndarray, shape (2 m,)
             The slew limiter's last outputs, then the low-pass state unchanged.
+
+        Raises
+        ------
+        AmplifierError
+            When ``inputs`` does not have one row per channel.
         """
         u = np.array(inputs, dtype=float, ndmin=2)
         st = self.rest_state() if state is None else np.array(state, dtype=float)

@@ -64,18 +64,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from hammerstein.core.compensators import InverseMultiplicativeCompensator
+from hammerstein.core.drive import apply_amplifier, drive_signal
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.inversion import preview_inverse
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import CompensatorError, ConvergenceWarning
+from hammerstein.simulation import ChainResult
 
 signal = lazy_module("scipy.signal")
 
 #: samples of error continued past the record's end before the inverse and Q
 EXTENSION = 64
 
-__all__ = ["IterativeLearning", "ConvergenceCondition", "IterationRecord", "estimate_delay",
-           "error_summary"]
+__all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
+           "estimate_delay", "error_summary"]
 
 
 @dataclass
@@ -112,7 +114,17 @@ class ConvergenceCondition:
         return self.max_coupled <= 1.0 + 1e-6
 
     def summary(self, outputs):
-        """One line: the maxima per axis and coupled, and where the coupled one is."""
+        """One line: the maxima per axis and coupled, and where the coupled one is.
+
+        Parameters
+        ----------
+        outputs : list of str
+            Output names.
+
+        Returns
+        -------
+        str
+        """
         k = int(np.argmax(self.coupled))
         axes = ", ".join(f"{n} {v:.3f}" for n, v in zip(outputs, self.max_per_axis))
         return (f"max over frequency of ||I - gamma Q L G||: {axes}, coupled {self.max_coupled:.3f} "
@@ -308,14 +320,36 @@ class IterativeLearning:
         return signal.filtfilt(*self._ba, x, axis=1, padtype="odd")
 
     def inverse_dynamics(self, error):
-        """``G^-1 e`` over the whole record [µm of PI output], G at rest at the first sample."""
+        """``G^-1 e`` over the whole record, G at rest at the first sample.
+
+        Parameters
+        ----------
+        error : array_like, shape (p, n_samples)
+            [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, n_samples)
+            PI outputs [µm] (the error itself without dynamics).
+        """
         if self.dynamics is None:
             return np.array(error, dtype=float)
         e = np.asarray(error, dtype=float)
         return preview_inverse(self.dynamics, e, method=self.inversion, initial_state=None)
 
     def pi_output(self, drive):
-        """``v_k = Gamma(u_k)``: the model's PI output along the applied drive [µm], from rest."""
+        """``v_k = Gamma(u_k)``: the model's PI output along the applied drive, from rest.
+
+        Parameters
+        ----------
+        drive : array_like, shape (m, n_samples)
+            [V].
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, n_samples)
+            [µm].
+        """
         v, _ = self.model.simulate(np.asarray(drive, dtype=float))
         return v
 
@@ -472,3 +506,147 @@ class IterativeLearning:
         return cond
 
 
+
+
+class LearningCompensator:
+    """ILC against a (simulated) actuator, starting from another compensator's drive.
+
+    The scenarios' ``kind = "ilc"``: :meth:`run_reference` computes the start
+    compensator's drive (:func:`hammerstein.core.drive.drive_signal`: fade-in,
+    preview), then runs ``iterations`` trials against the plant (through its
+    amplifier), each measured with white sensor noise of ``sensor_noise``
+    µm RMS (seeded), and learns with :class:`IterativeLearning`. It keeps the
+    error of every trial (:attr:`history`, on the noise-free outputs over
+    the window after the fade-in and one period) and stops early when a
+    trial's max Euclidean error grows by more than 10 % over the previous
+    one, keeping the best drive (:attr:`stopped` says why it stopped).
+
+    Parameters
+    ----------
+    start : object
+        The start compensator (any kind); its ``model`` and, when it has
+        one, its ``dynamics`` are the model the learning inverts (identity
+        dynamics otherwise).
+    sampling_period : float
+        T [s].
+    iterations : int
+        Learning trials after the start drive (>= 1).
+    learning_gain, q_cutoff_hz, inversion
+        Of :class:`IterativeLearning`.
+    sensor_noise : float
+        RMS of the measurement noise [µm].
+    seed : int
+        Of the noise.
+    name : str
+
+    Attributes
+    ----------
+    history : list of IterationRecord
+    stopped : str
+    condition : ConvergenceCondition
+        Against the plant's dynamics, computed before iterating (a
+        :class:`~hammerstein.exceptions.ConvergenceWarning` when it fails).
+    """
+
+    def __init__(self, start, sampling_period, iterations=10, learning_gain=0.5,
+                 q_cutoff_hz=2000.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc"):
+        if int(iterations) != iterations or iterations < 1:
+            raise CompensatorError(f"iterations: expected an integer >= 1, found {iterations!r}")
+        self.start_compensator = start
+        self.sampling_period = float(sampling_period)
+        self.iterations, self.sensor_noise, self.seed, self.name = int(iterations), float(
+            sensor_noise), int(seed), name
+        self.learning = IterativeLearning(start.model, getattr(start, "dynamics", None),
+                                          sampling_period, learning_gain, q_cutoff_hz,
+                                          inversion=inversion)
+        self.history, self.stopped, self.condition = [], "", None
+
+    @property
+    def model(self):
+        """The PI model of the learning."""
+        return self.learning.model
+
+    def simulate(self, reference, initial_state=None):
+        """Refused: the learning needs the plant; use :meth:`run_reference`.
+
+        Parameters
+        ----------
+        reference : array_like, shape (p, n_samples)
+            [µm].
+        initial_state : array_like, optional
+            Unused.
+
+        Raises
+        ------
+        CompensatorError
+            Always.
+        """
+        raise CompensatorError("kind 'ilc' learns against a plant: call "
+                               "run_reference(plant, reference, period_samples, fade_samples)")
+
+    def run_reference(self, plant, reference, period_samples=None, fade_samples=0):
+        """The start drive, then the learning trials against ``plant``.
+
+        Parameters
+        ----------
+        plant : HammersteinPlant
+            The actuator (with its ``amplifier``, if any).
+        reference : array_like, shape (p, n_samples)
+            [µm].
+        period_samples : int, optional
+        fade_samples : int
+
+        Returns
+        -------
+        hammerstein.simulation.ChainResult
+            The best trial's drive (commanded) and the plant's outputs.
+        """
+        T = self.sampling_period
+        d = drive_signal(self.start_compensator, reference, T, period_samples, fade_samples)
+        target, u = d.reference, d.inputs
+        n = target.shape[1]
+        w0 = int(min(max(fade_samples, period_samples or 0), n - 1))
+        self.condition = self.learning.check(getattr(plant, "dynamics", None))
+        rng = np.random.default_rng(self.seed)
+        amp = getattr(plant, "amplifier", None)
+        self.history, best = [], None
+        self.stopped = f"after {self.iterations} iterations"
+        for k in range(self.iterations + 1):
+            y, _ = plant.simulate(apply_amplifier(amp, u, T))
+            rec = error_summary(target, y, slice(w0, None), k)
+            self.history.append(rec)
+            if best is None or rec.max_euclidean_error < best[0].max_euclidean_error:
+                best = (rec, u, y)
+            if k and rec.max_euclidean_error > 1.1 * self.history[-2].max_euclidean_error:
+                self.stopped = (f"at iteration {k}: the error grew by more than 10 % "
+                                f"(kept iteration {best[0].iteration})")
+                break
+            if k == self.iterations:
+                break
+            measured = y + rng.normal(0.0, self.sensor_noise, y.shape) if self.sensor_noise else y
+            u = self.learning.step(target, u, measured, period_samples)
+        return ChainResult(best[1], best[2], None, None)
+
+    def history_rows(self, names):
+        """Metric rows of the trials: channel ``iteration-<k>``, per-axis and Euclidean errors.
+
+        Parameters
+        ----------
+        names : list of str
+            Output names.
+
+        Returns
+        -------
+        list of dict
+        """
+        rows = []
+        for rec in self.history:
+            ch = f"iteration-{rec.iteration}"
+            for l, n in enumerate(names):
+                rows.append({"channel": ch, "metric": f"max_abs_error_{n}",
+                             "value": float(rec.max_error[l]), "unit": "µm"})
+                rows.append({"channel": ch, "metric": f"rms_error_{n}",
+                             "value": float(rec.rms_error[l]), "unit": "µm"})
+            rows.append({"channel": ch, "metric": "max_euclidean_error",
+                         "value": rec.max_euclidean_error, "unit": "µm"})
+        return rows

@@ -107,7 +107,12 @@ def run_case(case):
         commanded = res.inputs
         res = _through_amplifier(case, res)
     caught += [str(w.message) for w in rec]
-    return chain_result(case, res, caught, commanded)
+    result = chain_result(case, res, caught, commanded)
+    if hasattr(case.compensator, "history_rows") and not res.diverged:   # kind "ilc"
+        result.metrics += case.compensator.history_rows(names)
+        if "grew" in case.compensator.stopped:
+            result.warnings.append(f"ILC stopped {case.compensator.stopped}")
+    return result
 
 
 def _through_amplifier(case, res):

@@ -22,9 +22,11 @@ from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.core.ilc import LearningCompensator
 from hammerstein.scenario.identified import (hammerstein_identify_table, identify_dynamics_table,
                                              identify_table, resolve_dynamics, resolve_model)
-from hammerstein.scenario.schema import MAX_ITERATIONS, Field, Invalid, choice, integer, number, string
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer,
+                                         number, string)
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "RATE_INDEPENDENT", "build_compensator",
            "resolve_model"]
@@ -161,6 +163,47 @@ for _kind in ("multivariable", "diagonal", "per-axis", "static-gain", "hammerste
     COMPENSATORS[_kind].fields["limits"] = Field(choice(*LIMITS))   # default "warn"
 #: kinds that compensate the hysteresis only (rate independent): warned about dynamics
 RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
+
+
+def _start_table(v):
+    """The ``start`` table of kind "ilc": any other kind's table (default { kind = "hammerstein" })."""
+    if not isinstance(v, dict):
+        raise Invalid(f"expected a compensator table {{ kind = ..., ... }}, found {v!r}")
+    kind = v.get("kind", "hammerstein")
+    if kind not in COMPENSATORS or kind in ("none", "ilc"):
+        raise Invalid(f"kind: expected one of {', '.join(k for k in COMPENSATORS if k not in ('none', 'ilc'))}, "
+                      f"found {kind!r}")
+    problems = []
+    clean = check_table({**v, "kind": kind}, {"kind": Field(lambda x: x), **COMPENSATORS[kind].fields},
+                        "", problems, "")
+    if problems:
+        raise Invalid("; ".join(p.lstrip(": ").strip() for p in problems))
+    return clean
+
+
+def _build_ilc(spec, plant, base_dir):
+    start = build_compensator(spec.get("start") or {"kind": "hammerstein"}, plant, base_dir)
+    return LearningCompensator(
+        start, plant.sampling_period, iterations=spec.get("iterations", 10),
+        learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 2000.0),
+        inversion=spec.get("inversion", "zpetc"), sensor_noise=spec.get("sensor_noise", 0.0),
+        seed=spec.get("seed", 0))
+
+
+# kind "ilc" (hammerstein.core.ilc): iterative learning against the simulated plant
+COMPENSATORS["ilc"] = CompensatorKind(
+    _build_ilc,
+    {"start": Field(_start_table),            # default { kind = "hammerstein" }
+     "iterations": Field(integer(1, MAX_ITERATIONS), default=10),
+     "learning_gain": Field(number("", 0)),   # default 0.5, in (0, 2)
+     "q_cutoff_hz": Field(number("Hz", 0)),   # default 2000 Hz
+     "inversion": Field(choice(*INVERSIONS)),
+     "sensor_noise": Field(number("µm", 0, exclusive=False)),   # default 0
+     "seed": Field(integer(0, 2**31 - 1)),
+     "fade_in": Field(number("s", 0, exclusive=False)),
+     "limits": Field(choice(*LIMITS))},
+    "iterative learning control against the plant from another kind's drive: u_k+1 = "
+    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.core.ilc)")
 
 
 def build_compensator(spec, plant, base_dir):

@@ -76,3 +76,31 @@ def test_delay_estimate_finds_a_known_shift(shift):
     r = np.vstack([np.cos(2 * np.pi * 80 * t), np.sin(2 * np.pi * 80 * t) ** 3])
     measured = np.concatenate([np.zeros((2, shift)), r[:, :3000 - shift]], axis=1)
     assert estimate_delay(r, measured, 50) == shift
+
+
+def test_scenario_kind_ilc_learns_from_a_mismatched_start(tmp_path, repo_root):
+    from hammerstein.scenario.execute import run_case
+    from hammerstein.scenario.resolve import load_scenario
+    dyn = repo_root / "scenarios/presets/mismatch/fn+5.toml"
+    p = tmp_path / "ilc.toml"
+    p.write_text(f"""
+name = "ilc"
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "ilc"
+iterations = 4
+learning_gain = 0.7
+q_cutoff_hz = 1000.0
+sensor_noise = 0.04
+start = {{ kind = "hammerstein", dynamics = "{dyn}" }}
+[[cases]]
+name = "c"
+settle_periods = 2
+reference = {{ kind = "circle", radius = 20.0, frequency = 200.0, periods = 8 }}
+""")
+    res = run_case(load_scenario(p).cases[0])
+    m = {(r["channel"], r["metric"]): r["value"] for r in res.metrics}
+    first = m[("iteration-0", "max_euclidean_error")]
+    assert m[("x+y", "max_euclidean_error")] < first / 5
+    assert ("iteration-4", "max_abs_error_x") in m
