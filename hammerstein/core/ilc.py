@@ -77,7 +77,7 @@ signal = lazy_module("scipy.signal")
 EXTENSION = 64
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
-           "estimate_delay", "error_summary"]
+           "estimate_delay", "error_summary", "periodic_average"]
 
 
 @dataclass
@@ -210,6 +210,43 @@ def estimate_delay(reference, measured, max_lag):
         if c > best:
             best, arg = c, d
     return arg
+
+
+def periodic_average(signal_, period_samples, start):
+    """The part of a record from ``start`` on replaced by its average over the periods.
+
+    Parameters
+    ----------
+    signal_ : array_like, shape (p, n_samples)
+    period_samples : int
+        P.
+    start : int
+        First sample of the periodic part.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, n_samples)
+        Samples before ``start`` unchanged; sample ``start + j P + i`` = the
+        mean of the samples ``start + j' P + i`` over every j' in the record.
+
+    Examples
+    --------
+    >>> periodic_average([[9.0, 1.0, 2.0, 3.0, 4.0, 5.0]], 2, 1)
+    array([[9., 3., 3., 3., 3., 4.]])
+    """
+    x = np.array(signal_, dtype=float)
+    P, s = int(period_samples), int(start)
+    n = x.shape[1] - s
+    if P < 1 or n < 2 * P:
+        return x
+    idx = np.arange(n) % P
+    part = x[:, s:]
+    sums = np.zeros((x.shape[0], P))
+    counts = np.bincount(idx, minlength=P)
+    for r in range(x.shape[0]):
+        sums[r] = np.bincount(idx, weights=part[r], minlength=P)
+    x[:, s:] = (sums / counts)[:, idx]
+    return x
 
 
 def _frequency_response(A, B, C, D, z):
@@ -353,7 +390,7 @@ class IterativeLearning:
         v, _ = self.model.simulate(np.asarray(drive, dtype=float))
         return v
 
-    def step(self, reference, drive, measured, period_samples=None):
+    def step(self, reference, drive, measured, period_samples=None, steady_from=None):
         """One trial's update (see the module docstring).
 
         Parameters
@@ -372,6 +409,15 @@ class IterativeLearning:
             last samples' error depends on drive samples after the record
             (without this, measured, the end of a 200 Hz circle grows by a
             factor 1.35 per trial).
+        steady_from : int, optional
+            With ``period_samples``, for a reference that repeats from this
+            sample on: the error from it on is replaced by its average over
+            the periods (:func:`periodic_average`, blended in by a raised
+            cosine over the first period, so that no step enters the
+            inverse), which divides the
+            measurement noise that reaches the next drive by the square root
+            of the number of periods (a repetitive trajectory has one error
+            per period to learn).
 
         Returns
         -------
@@ -398,6 +444,11 @@ class IterativeLearning:
         e = r - y
         if d:                          # the last d samples were not measured: hold the error
             e[:, -d:] = e[:, -d - 1:-d]
+        if period_samples and steady_from is not None:    # blended in over one period
+            avg = periodic_average(e, period_samples, steady_from)
+            b = np.clip((np.arange(e.shape[1]) - steady_from) / period_samples, 0.0, 1.0)
+            b = 0.5 * (1.0 - np.cos(np.pi * b))
+            e = (1.0 - b) * e + b * avg
         v = self.pi_output(u)
         N = e.shape[1]
         if period_samples and N >= period_samples + EXTENSION:
@@ -607,6 +658,12 @@ class LearningCompensator:
         n = target.shape[1]
         w0 = int(min(max(fade_samples, period_samples or 0), n - 1))
         self.condition = self.learning.check(getattr(plant, "dynamics", None))
+        steady = None                   # a reference that repeats after the fade: averaged error
+        if period_samples and n >= w0 + 5 * period_samples and np.allclose(
+                target[:, w0 + period_samples:], target[:, w0:n - period_samples],
+                rtol=0, atol=1e-9 * max(float(np.max(np.abs(target))), 1.0)):
+            steady = w0 + 2 * period_samples     # after the start-up transient: learnt raw
+            w0 = steady + period_samples          # the errors reported: the averaged part
         rng = np.random.default_rng(self.seed)
         amp = getattr(plant, "amplifier", None)
         self.history, best = [], None
@@ -624,7 +681,7 @@ class LearningCompensator:
             if k == self.iterations:
                 break
             measured = y + rng.normal(0.0, self.sensor_noise, y.shape) if self.sensor_noise else y
-            u = self.learning.step(target, u, measured, period_samples)
+            u = self.learning.step(target, u, measured, period_samples, steady)
         return ChainResult(best[1], best[2], None, None)
 
     def history_rows(self, names):
