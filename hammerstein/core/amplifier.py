@@ -46,10 +46,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import AmplifierError, AmplifierWarning
 
-signal = lazy_module("scipy.signal")  # only for a finite bandwidth
 
 __all__ = ["Amplifier", "AmplifierChannel", "LIMITS", "amplifier_from_table", "drive_metrics",
            "AMPLIFIER_KEYS"]
@@ -431,5 +429,11 @@ def _slew_limit(x, prev, step):
 def _first_order(x, prev, beta):
     """``a[k] = a[k-1] + beta (x[k] - a[k-1])`` from ``a[-1] = prev``: (outputs, last)."""
     a = 1.0 - beta
-    y, _ = signal.lfilter([beta], [1.0, -a], x, zi=[a * float(prev)])
+    y, _ = _scipy_signal().lfilter([beta], [1.0, -a], x, zi=[a * float(prev)])
     return y, float(y[-1])
+
+
+def _scipy_signal():
+    """scipy.signal, imported on first use (about 0.3 s; a plain preset simulation never needs it)."""
+    import scipy.signal
+    return scipy.signal
