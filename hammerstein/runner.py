@@ -153,7 +153,7 @@ def _empty_metrics():
 
 def _version():
     try:
-        return version("hammerstein")
+        return version("hammerstein-piezo")   # the distribution name
     except PackageNotFoundError:
         return "unknown"
 

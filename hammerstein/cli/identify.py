@@ -251,9 +251,13 @@ def fit_figure(fit, input_unit, output_unit):
     """Measured vs model loops per component (rows outputs, columns inputs) and the error.
 
     Each loop panel (l, k) shows output l against input k over the records
-    whose excitation is input k, training samples in blue, held-out samples
-    in orange, the model dashed; the last column shows the error of output l
-    over all records (held-out part shaded).
+    whose excitation is input k: training samples as large blue points,
+    held-out samples as small orange points on them, the model as a thin
+    black line on top (a legend under the panels says so).
+    The last column shows the error of output l (measured minus model)
+    against time over all records, one after another (held-out part
+    shaded); the time is the records' time column, or sample times of the
+    given sampling period.
 
     Parameters
     ----------
@@ -268,15 +272,17 @@ def fit_figure(fit, input_unit, output_unit):
     Returns
     -------
     matplotlib.figure.Figure
-        p rows by m + 1 columns of axes; the caller saves and closes it.
+        p rows by m + 1 columns of axes and one legend; the caller saves and
+        closes it.
     """
     import matplotlib  # lazy: only for --plot
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     model = fit.model
     p, m = model.n_outputs, model.n_inputs
-    fig, axes = plt.subplots(p, m + 1, figsize=(3.2 * (m + 1), 2.6 * p), squeeze=False,
+    fig, axes = plt.subplots(p, m + 1, figsize=(3.4 * (m + 1), 2.7 * p + 0.5), squeeze=False,
                              layout="constrained")
+    handles = {}
     for l in range(p):
         for k in range(m):
             ax = axes[l][k]
@@ -285,29 +291,41 @@ def fit_figure(fit, input_unit, output_unit):
                 if s.excitation != k:
                     continue
                 used = s.train | s.held_out
-                ax.plot(rec.u[k][s.train], rec.y[l][s.train], ".", ms=1.5, color="tab:blue")
-                ax.plot(rec.u[k][s.held_out], rec.y[l][s.held_out], ".", ms=1.5,
-                        color="tab:orange")
-                ax.plot(rec.u[k][used], pred[l][used], "--", lw=0.8, color="k")
+                # the loops retrace one path: large training points, smaller held-out points
+                # on them, the model a thin line on top, so that each stays visible
+                for part, color, ms, label in ((s.train, "tab:blue", 4.0, "measured, training"),
+                                               (s.held_out, "tab:orange", 1.6,
+                                                "measured, held out")):
+                    if part.any():
+                        pts, = ax.plot(rec.u[k][part], rec.y[l][part], "o", ms=ms, mew=0,
+                                       color=color, zorder=2)
+                        handles.setdefault(label, pts)
+                line, = ax.plot(rec.u[k][used], pred[l][used], "-", lw=0.6, color="k", zorder=3)
+                handles.setdefault("model", line)
             ax.set_title(f"{model.output_names[l]} <- {model.input_names[k]} ({kind})", fontsize=9)
             ax.set_xlabel(f"{model.input_names[k]} [{input_unit}]", fontsize=8)
             ax.set_ylabel(f"{model.output_names[l]} [{output_unit}]", fontsize=8)
             ax.tick_params(labelsize=7)
         ax = axes[l][m]
-        start = 0
+        start = 0.0
         for rec, s, pred in zip(fit.records, fit.splits, fit.predictions):
-            idx = np.arange(rec.n_samples) + start
+            t = rec.timepts - rec.timepts[0] + start        # records one after another
             used = s.train | s.held_out
-            ax.plot(idx[used], (rec.y[l] - pred[l])[used], lw=0.6, color="tab:red")
+            ax.plot(t[used], (rec.y[l] - pred[l])[used], lw=0.6, color="tab:red")
             if s.held_out.any():
-                h = idx[s.held_out]
+                h = t[s.held_out]
                 ax.axvspan(h[0], h[-1], color="tab:orange", alpha=0.15, lw=0)
-            start += rec.n_samples
-        ax.set_title(f"error of {model.output_names[l]} (held out shaded)", fontsize=9)
-        ax.set_xlabel("sample (records in order)", fontsize=8)
-        ax.set_ylabel(f"[{output_unit}]", fontsize=8)
+            start = t[-1] + rec.sampling_period
+        name = model.output_names[l]
+        ax.set_title(f"error of {name} (held out shaded)", fontsize=9)
+        ax.set_xlabel("time [s]" + (" (records one after another)" if len(fit.records) > 1 else ""),
+                      fontsize=8)
+        ax.set_ylabel(f"{name} measured - model [{output_unit}]", fontsize=8)
         ax.tick_params(labelsize=7)
-    fig.suptitle("measured (training blue, held out orange) vs model (dashed)", fontsize=10)
+    order = [k for k in ("measured, training", "measured, held out", "model") if k in handles]
+    fig.legend([handles[k] for k in order], order, loc="outside lower center", ncol=len(order),
+               fontsize=8, frameon=False, markerscale=2)
+    fig.suptitle("identified model vs measured records", fontsize=10)
     return fig
 
 

@@ -7,7 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.lti import dc_gain
-from hammerstein.core.presets import PresetError, bundled_presets, load_plant, read_toml
+from hammerstein.core.presets import PresetError, bundled_presets, load_model, load_plant, read_toml
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.exceptions import HammersteinError
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -65,10 +67,16 @@ def handler(args):
     print("compensator kinds:")
     for name, kind in COMPENSATORS.items():
         print(f"  {name}: {kind.description}")
+    for title, kinds in (("reference kinds", REFERENCE_KINDS), ("drive kinds", DRIVE_KINDS)):
+        print(f"{title}:")
+        for name, kind in kinds.items():
+            print(f"  {name}: {kind.description}")
     root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
-    presets = [f for f in files if _is_preset(f)]
-    scenarios = [f for f in files if f not in presets]
+    kinds = {f: _file_kind(f) for f in files}
+    presets = [f for f in files if kinds[f] in ("preset", "dynamics")]
+    models = [f for f in files if kinds[f] == "model"]
+    scenarios = [f for f in files if kinds[f] == "scenario"]
     print(f"scenarios under {root}/:" if scenarios else
           f"scenarios: none found under {root}/ (run from the repository root)")
     for f in scenarios:
@@ -77,19 +85,45 @@ def handler(args):
         print(f"preset and dynamics files under {root}/ (preset = \"<path>\", "
               f"dynamics = \"<path>\"):")
         for f in presets:
-            print(f"  {f}{_dynamics_summary(f) if _is_full_preset(f) else '; dynamics only'}")
+            print(f"  {f}{_dynamics_summary(f) if kinds[f] == 'preset' else '; dynamics only'}")
+    if models:
+        print(f"model files under {root}/ (model = \"<path>\"):")
+        for f in models:
+            print(f"  {f}{_model_summary(f)}")
     return 0
 
 
-def _is_full_preset(path):
-    """True when the file has a ``[preset]`` table (a plant, not only dynamics)."""
-    return "preset" in read_toml(path)
+#: top-level tables a saved file may carry beside its content (``identify --out``, saved models)
+_SIDE_TABLES = {"identification"}
 
 
-def _is_preset(path):
-    """True for a preset (``[preset]``) or dynamics-only file, not a scenario."""
+def _file_kind(path):
+    """What a ``*.toml`` file is: ``'preset'``, ``'dynamics'``, ``'model'`` or ``'scenario'``.
+
+    A preset has a ``[preset]`` table; a dynamics file only ``[dynamics]``, a
+    model file (``identify --out``, a saved identified model) only
+    ``[model]`` (each maybe with its ``[identification]`` record); anything
+    else, and a file that does not parse, is a scenario (``validate``
+    reports its problem).
+    """
     try:
         doc = read_toml(path)
-        return "preset" in doc or set(doc) == {"dynamics"}
     except PresetError:
-        return False       # listed as a scenario: validate reports its problem
+        return "scenario"
+    keys = set(doc) - _SIDE_TABLES
+    if "preset" in doc:
+        return "preset"
+    if keys == {"dynamics"}:
+        return "dynamics"
+    if keys == {"model"}:
+        return "model"
+    return "scenario"
+
+
+def _model_summary(path):
+    """``; 2x2 PI (...), 60 hysterons`` of a model file, or why it does not load."""
+    try:
+        model = load_model(path)
+    except HammersteinError as exc:
+        return f"; invalid: {exc}"
+    return f"; {model.size_text()}"

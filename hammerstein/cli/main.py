@@ -83,7 +83,7 @@ def _version():
     if version:
         return version
     try:
-        return metadata.version("hammerstein")
+        return metadata.version("hammerstein-piezo")   # the distribution name
     except metadata.PackageNotFoundError:
         return "unknown"
 

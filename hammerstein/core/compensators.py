@@ -16,7 +16,7 @@ The family, each built from an identified model with one call:
   or first-order low-pass feedback; iterations per sample);
 - :func:`diagonal_compensator`: the same law on the direct transfers only;
 - :class:`PerAxisInverseCompensator`: the per-axis analytic inverse PI of
-  Kuhnen & Janocha (paper ref. [20], docs/per-axis-inverse.md, :mod:`hammerstein.inverse`);
+  Kuhnen & Janocha (paper ref. [20], docs/per-axis-inverse.md, :mod:`hammerstein.core.inverse`);
 - :class:`StaticGainCompensator`: no hysteresis compensation, ``U = K^-1 Yr``.
 
 All have ``simulate(reference (m, N) [µm], initial_state=None) -> (inputs
@@ -210,6 +210,14 @@ def convergence_report(model: MultivariablePI, gain=None, max_matrices=100_000):
                              worst_slopes=worst, radii=radii, n_matrices=radii.size)
 
 
+def _gain_text(K):
+    """The compensator gain K in a few numbers: its diagonal [µm/V] (and 'full' when coupled)."""
+    K = np.asarray(K, dtype=float)
+    diag = ", ".join(f"{k:.4g}" for k in np.diag(K))
+    full = np.any(K - np.diag(np.diag(K)) != 0)
+    return f"K {'full, diagonal' if full else 'diagonal'} [{diag}] µm/V"
+
+
 @dataclass
 class InverseMultiplicativeCompensator:
     """Multivariable inverse multiplicative compensator, Theorem 4.1.
@@ -375,6 +383,16 @@ class InverseMultiplicativeCompensator:
         """Length of the flat state: U(t-T), [v_f(t-T) for 'lowpass'], play states."""
         m = self.model.n_inputs
         return m * (2 if self.feedback == "lowpass" else 1) + self.model.n_hysterons
+
+    def __repr__(self):
+        """Class, model size, gain, convergence radius and law options (no arrays)."""
+        law = f"feedback={self.feedback!r}"
+        if self.feedback == "lowpass":
+            law += f", cutoff_hz={self.cutoff_hz:g}"
+        gain = self.gain if isinstance(self.gain, str) else "given"
+        return (f"InverseMultiplicativeCompensator(name={self.name!r}, model {self.model.size_text()}, "
+                f"gain={gain!r}: {_gain_text(self.K)}, max rho {self.convergence.max_radius:.3g}, "
+                f"iterations={self.iterations}, {law})")
 
     def initial_state(self, initial_state=None):
         """Validated copy of a flat compensator state (zeros by default).
@@ -655,6 +673,10 @@ class StaticGainCompensator:
 
     n_states = 0
 
+    def __repr__(self):
+        """Class, model size and the secant gains (no arrays)."""
+        return f"StaticGainCompensator(name={self.name!r}, model {self.model.size_text()}, {_gain_text(self.K)})"
+
     def initial_state(self, initial_state=None):
         """The (empty) state; anything but None or an empty array is an error.
 
@@ -722,7 +744,7 @@ class PerAxisInverseCompensator:
     """Per-axis inverse PI of Kuhnen & Janocha, the paper's "existing technique".
 
     Input l is the analytic inverse of the direct transfer ``Gamma_ll``
-    applied to reference l (:func:`hammerstein.inverse.kuhnen_inverse`,
+    applied to reference l (:func:`hammerstein.core.inverse.kuhnen_inverse`,
     docs/per-axis-inverse.md, paper ref. [20]); the cross-couplings are not compensated
     (paper Fig. 9). A linear direct gain g is inverted as ``1/g``.
 
@@ -736,7 +758,7 @@ class PerAxisInverseCompensator:
     Attributes
     ----------
     inverses : list
-        Per axis, an :class:`~hammerstein.inverse.InversePI` or the float
+        Per axis, an :class:`~hammerstein.core.inverse.InversePI` or the float
         ``1/g`` [V/µm].
 
     Notes
@@ -797,6 +819,14 @@ class PerAxisInverseCompensator:
         """Sum of the axes' inverse state lengths."""
         return int(self._offsets[-1])
 
+    def __repr__(self):
+        """Class, model size and the inverse of each axis (no arrays)."""
+        axes = ", ".join(
+            f"{name} {'gain ' + format(inv, '.4g') if isinstance(inv, float) else 'inverse PI'}"
+            for name, inv in zip(self.model.input_names, self.inverses))
+        return (f"PerAxisInverseCompensator(name={self.name!r}, model {self.model.size_text()}; "
+                f"{axes}; {self.n_states} states)")
+
     def initial_state(self, initial_state=None):
         """Validated copy of the flat state (zeros by default).
 
@@ -838,7 +868,7 @@ class PerAxisInverseCompensator:
         -------
         numpy.ndarray, shape (n_states,)
             So that the direct outputs follow the reference from the first
-            sample (:meth:`~hammerstein.inverse.InversePI.consistent_state`).
+            sample (:meth:`~hammerstein.core.inverse.InversePI.consistent_state`).
 
         Raises
         ------

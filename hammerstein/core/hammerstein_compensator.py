@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammerstein.core.compensators import CompensatorError, InverseMultiplicativeCompensator
+from hammerstein.core.compensators import CompensatorError, InverseMultiplicativeCompensator, _gain_text
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.hysteresis import state_vector
 from hammerstein.core.inversion import ZPETCInverse, preview_inverse
@@ -210,6 +210,16 @@ class HammersteinCompensator:
         except DynamicsError as exc:
             raise CompensatorError(f"dynamics: cannot be inverted: {exc}") from None
         self.preview_samples = 0 if self.inverse is None else self.inverse.preview_samples
+
+    def __repr__(self):
+        """Class, model size, the dynamics inverted, the inversion and its preview (no arrays)."""
+        d = self.dynamics
+        hc = self.hysteresis_compensator
+        return (f"HammersteinCompensator(name={self.name!r}, model {self.model.size_text()}; "
+                f"dynamics order {d.nstates} ({d.noutputs}x{d.ninputs}, T = {d.dt:g} s), "
+                f"inversion={self.inversion!r}, preview {self.preview_samples} samples; "
+                f"gain={hc.gain if isinstance(hc.gain, str) else 'given'!r}: {_gain_text(hc.K)}, "
+                f"max rho {hc.convergence.max_radius:.3g})")
 
     # -- sizes and states ---------------------------------------------------------------
     @property

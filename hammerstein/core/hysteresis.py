@@ -141,6 +141,12 @@ class PrandtlIshlinskii:
         """Number of play operators (hysterons)."""
         return self.thresholds.size
 
+    def __repr__(self):
+        """Class, size and key numbers (no arrays): thresholds [V] and weight sum [µm/V]."""
+        r = self.thresholds
+        return (f"PrandtlIshlinskii({self.n_hysterons} hysterons, thresholds {r[0]:.4g}..{r[-1]:.4g} V, "
+                f"weight sum {float(np.sum(self.weights)):.4g} µm/V)")
+
     def simulate(self, u, initial_state=None):
         """Output of the PI operator for an input record.
 
@@ -603,6 +609,37 @@ class MultivariablePI:
     def n_hysterons(self) -> int:
         """Total number of play operators, the length of the state vector."""
         return self._flat["thresholds"].size
+
+    def size_text(self):
+        """The model's size in words, e.g. ``'2x2 PI (ux, uy -> x, y), 40 hysterons'``.
+
+        Returns
+        -------
+        str
+        """
+        return (f"{self.n_outputs}x{self.n_inputs} PI ({', '.join(self.input_names)} -> "
+                f"{', '.join(self.output_names)}), {self.n_hysterons} hysterons")
+
+    def __repr__(self):
+        """Sizes, names and one word per component (no arrays), e.g. for ``print(model)``."""
+        def word(comp):
+            if comp is None:
+                return "-"
+            if isinstance(comp, PrandtlIshlinskii):
+                return f"PI({comp.n_hysterons})"
+            return f"gain {float(comp):.4g}"
+
+        rows = "; ".join(f"{out}: " + ", ".join(f"{inp} {word(c)}" for inp, c in
+                                                zip(self.input_names, row))
+                         for out, row in zip(self.output_names, self.components))
+        extra = ""
+        if self.output_offset is not None and np.any(np.asarray(self.output_offset) != 0):
+            extra += ", output_offset [" + ", ".join(
+                f"{c:.4g}" for c in np.asarray(self.output_offset, dtype=float)) + "] µm"
+        if self.output_map is not None:
+            extra += ", output map on " + ", ".join(
+                o for o, mp in zip(self.output_names, self.output_map) if mp is not None)
+        return f"MultivariablePI({self.size_text()}; {rows}{extra})"
 
     def hysterons(self):
         """Flat description of all hysterons, for kernels and interop.

@@ -328,7 +328,7 @@ class LeastSquaresPI:
 
     For fixed thresholds the PI output is linear in the weights,
     ``y = Phi w + c``, with ``Phi`` (n_samples, n) the play outputs
-    (:func:`hammerstein.hysteresis.play`) over the whole record and c an
+    (:func:`hammerstein.core.hysteresis.play`) over the whole record and c an
     optional output offset. The solve uses :func:`scipy.linalg.lstsq`
     (unconstrained) or :func:`scipy.optimize.lsq_linear` (bounded /
     non-negative weights; the offset is never bounded).

@@ -2,7 +2,7 @@
 
 Given references ``Yr`` (p, N) [µm], these functions return the desired PI
 outputs ``V`` (p, N) [µm] such that ``G V ~ Yr``; an inverse of the PI
-(e.g. :class:`hammerstein.compensators.InverseMultiplicativeCompensator`
+(e.g. :class:`hammerstein.core.compensators.InverseMultiplicativeCompensator`
 fed with V) then turns V into voltages.
 
 A ZOH-sampled actuator G has relative degree >= 1 (a one-sample delay at
@@ -95,7 +95,7 @@ def _discrete_square(system):
         raise DynamicsError(f"dynamics: expected a control.StateSpace, found {type(system).__name__}")
     if not system.isdtime(strict=True):
         raise DynamicsError("dynamics: expected a discrete-time system (dt > 0); "
-                            "discretise it first (hammerstein.dynamics.discretize)")
+                            "discretise it first (hammerstein.core.dynamics.discretize)")
     if system.ninputs != system.noutputs:
         raise DynamicsError(f"dynamics: expected a square system, found {system.noutputs} outputs "
                             f"and {system.ninputs} inputs")

@@ -270,7 +270,7 @@ def continuous_system(system):
 def sensor_filter(sensor, sampling_period):
     """Discrete transfer function of a sensor's low-pass, as it measures.
 
-    The :class:`hammerstein.sensors.Sensor` low-pass is the first-order
+    The :class:`hammerstein.core.sensors.Sensor` low-pass is the first-order
     ``wc / (s + wc)`` discretised by the bilinear transform; this returns the
     same ``(b, a)`` polynomials (in ``z^-1``) that ``Sensor.measure`` runs.
 

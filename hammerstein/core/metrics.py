@@ -39,7 +39,7 @@ UNITS = {
     "max_euclidean_error_percent": "%",
     "rms_error_percent": "%",
     "diverged_at_time": "s",
-    "model_rms_error": "µm",       # plant vs model, hammerstein.identified (paper Section 5.3)
+    "model_rms_error": "µm",       # plant vs model, hammerstein.scenario.identification (paper Section 5.3)
     "model_max_abs_error": "µm",
     "line_rms_error": "µm",        # raster references: per scan line (channel "line-<j>")
     "line_max_error": "µm",

@@ -10,7 +10,6 @@ compensator and the scenarios accept both. The schema is in the README.
 
 from __future__ import annotations
 
-import difflib
 import tomllib
 from importlib import resources
 from pathlib import Path
@@ -18,14 +17,17 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from hammerstein.core.amplifier import amplifier_from_table
 from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize, sampled_bending_modes
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii)
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.schema import Field, Invalid, did_you_mean, is_number, string, table_problems
+from hammerstein.core.creep import creep_from_table
+from hammerstein.core.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
+from hammerstein.core.amplifier import amplifier_from_table
 from hammerstein.exceptions import AmplifierError, PresetError
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
@@ -51,35 +53,39 @@ PRESET_DIR = resources.files("hammerstein") / "presets"
 
 #: Keys of a model or preset file, per table (anything else is reported with the closest key;
 #: the ``[model]`` keys are :data:`MODEL_KEYS`, ``kind = "state_space"`` dynamics A, B, C, D).
-FILE_KEYS = ("model", "preset", "dynamics", "identification", "amplifier")
-PRESET_KEYS = ("name", "description", "sampling_period")
-DYNAMICS_KEYS = ("kind", "natural_frequency", "damping_ratio")
+FILE_KEYS = ("model", "preset", "dynamics", "identification", "creep", "amplifier")
 
 
-def unknown_keys(table, allowed, where):
-    """The unknown keys of a table, each with the closest valid key.
+def _any(v):
+    return v
 
-    Parameters
-    ----------
-    table : dict
-        Parsed TOML table (anything else has no keys).
-    allowed : sequence of str
-        Valid keys.
-    where : str
-        Key path prefix (``"preset."``).
 
-    Returns
-    -------
-    list of str
-        ``where.key: unknown key (did you mean ...?)`` per unknown key.
-    """
-    out = []
-    for key in table if isinstance(table, dict) else ():
-        if key not in allowed:
-            hint = difflib.get_close_matches(str(key), list(allowed), n=1)
-            extra = f" (did you mean {hint[0]!r}?)" if hint else f" (valid keys: {', '.join(allowed)})"
-            out.append(f"{where}{key}: unknown key{extra}")
-    return out
+def _positive_time(v):
+    if not (is_number(v) and v > 0):
+        raise Invalid(f"expected a positive time [s], found {v!r}")
+    return float(v)
+
+
+#: Schemas (:class:`hammerstein.core.schema.Field`) of the tables of a model or preset file:
+#: the file's top level, ``[preset]`` and ``[dynamics]`` per kind (its values are checked by
+#: :func:`dynamics_from_table`; the ``[model]`` keys are :data:`MODEL_KEYS`).
+FILE_FIELDS = {key: Field(_any) for key in FILE_KEYS}
+PRESET_FIELDS = {"name": Field(string()), "description": Field(string()),
+                 "sampling_period": Field(_positive_time, required=True)}
+DYNAMICS_FIELDS = {
+    "none": {"kind": Field(_any), "description": Field(_any)},
+    "bending_modes": {"kind": Field(_any), "description": Field(_any),
+                      "natural_frequency": Field(_any, required=True),
+                      "damping_ratio": Field(_any, required=True)},
+    "state_space": {"kind": Field(_any), "description": Field(_any),
+                    **{k: Field(_any, required=k != "D") for k in "ABCD"}},
+}
+
+
+def _table_problems(table, fields, where):
+    """Problems of a table (:func:`hammerstein.core.schema.table_problems`), unknown keys first."""
+    _, problems = table_problems(table, fields, where)
+    return sorted(problems, key=lambda line: ": unknown key" not in line)
 
 
 def bundled_presets():
@@ -198,8 +204,12 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
-    problems = [f"model.{key}: unknown key{_hint(key, MODEL_KEYS)}"
-                for key in table if key not in MODEL_KEYS]
+    if is_mixed_table(table):   # Preisach / generalised-PI / polynomial components: core/preisach.py
+        try:
+            return hysteresis_from_table(table, source)
+        except HysteresisError as exc:
+            raise PresetError(str(exc)) from None
+    problems = _table_problems(table, {k: Field(_any) for k in MODEL_KEYS}, "model")
     for key in ("input_unit", "output_unit"):
         if key in table and not (isinstance(table[key], str) and table[key].strip()):
             problems.append(f"model.{key}: expected a unit name such as 'V' or 'µm', "
@@ -229,7 +239,7 @@ def model_from_table(table, source="model"):
                 continue
             unknown = sorted(set(comp) - set(COMPONENT_KEYS))
             if unknown:
-                problems += [f"{key}.{u}: unknown key{_hint(u, COMPONENT_KEYS)} (expected "
+                problems += [f"{key}.{u}: unknown key{did_you_mean(u, COMPONENT_KEYS)} (expected "
                              f"weights with optional thresholds, or gain)" for u in unknown]
                 continue
             try:
@@ -275,7 +285,7 @@ def model_from_table(table, source="model"):
                     continue
                 unknown = sorted(set(entry) - set(OUTPUT_MAP_KEYS))
                 if unknown:
-                    problems += [f"{key}.{u}: unknown key{_hint(u, OUTPUT_MAP_KEYS)} (expected "
+                    problems += [f"{key}.{u}: unknown key{did_you_mean(u, OUTPUT_MAP_KEYS)} (expected "
                                  f"knots and slopes)" for u in unknown]
                     continue
                 try:
@@ -308,11 +318,6 @@ OUTPUT_MAP_KEYS = ("knots", "slopes")
 COMPONENT_KEYS = ("weights", "thresholds", "gain")
 
 
-def _hint(key, known):
-    close = difflib.get_close_matches(str(key), known, n=1)
-    return f" (did you mean {close[0]!r}?)" if close else ""
-
-
 def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     """Inverse of :func:`model_from_table`: a TOML-ready dict.
 
@@ -335,6 +340,8 @@ def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     dict
         ``[model]`` table of the preset format (see :func:`model_from_table`).
     """
+    if not isinstance(model, MultivariablePI):      # mixed components (core/preisach.py)
+        return model.to_table(str(input_unit), str(output_unit))
     table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
              "input_unit": str(input_unit), "output_unit": str(output_unit)}
     if model.input_amplitude is not None:
@@ -384,7 +391,7 @@ def load_model(path):
     data = read_toml(path, "model file")
     if "model" not in data:
         raise PresetError(f"{path}: missing [model] table")
-    problems = unknown_keys(data, FILE_KEYS, "")
+    problems = _table_problems(data, FILE_FIELDS, "")
     if problems:
         raise PresetError(f"{path}: " + "; ".join(problems))
     return model_from_table(data["model"], str(path))
@@ -426,10 +433,6 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
         safe_write(path, tomli_w.dumps(doc), "model file")
     except FileLimitError as exc:
         raise PresetError(str(exc)) from None
-
-
-_DYNAMICS_KEYS = {"none": set(), "bending_modes": {"natural_frequency", "damping_ratio"},
-                  "state_space": {"A", "B", "C", "D"}}
 
 
 def dynamics_from_table(table, outputs, source="preset", build=True):
@@ -475,20 +478,15 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
     if not isinstance(table, dict):
         raise PresetError(f"{source}: dynamics: expected a table")
     kind = table.get("kind", "none")
-    if kind not in _DYNAMICS_KEYS:
+    if kind not in DYNAMICS_FIELDS:
         raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
-                          f"'none', found {kind!r}")
-    unknown = sorted(set(table) - _DYNAMICS_KEYS[kind] - {"kind", "description"})
-    if unknown:
-        raise PresetError(f"{source}: dynamics.{unknown[0]}: unknown key for kind = {kind!r} "
-                          f"(expected {', '.join(sorted(_DYNAMICS_KEYS[kind])) or 'none'})")
+                          f"'none', found {kind!r}{did_you_mean(kind, DYNAMICS_FIELDS)}")
+    problems = _table_problems(table, DYNAMICS_FIELDS[kind], "dynamics")
+    if problems:
+        raise PresetError(f"{source}: " + "; ".join(problems))
     if kind == "none":
         return None
     if kind == "state_space":
-        for key in ("A", "B", "C"):
-            if key not in table:
-                raise PresetError(f"{source}: dynamics.{key}: missing (kind = 'state_space' "
-                                  f"needs A, B, C and optionally D)")
         p = len(outputs)
         shapes = {}
         for key in ("A", "B", "C", "D"):
@@ -515,8 +513,6 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
         except DynamicsError as exc:
             raise PresetError(f"{source}: {exc}") from None
     for key in ("natural_frequency", "damping_ratio"):
-        if key not in table:
-            raise PresetError(f"{source}: dynamics.{key}: missing")
         if len(np.atleast_1d(table[key])) != len(outputs):
             raise PresetError(f"{source}: dynamics.{key}: expected {len(outputs)} values, one per output")
     if not build:
@@ -610,22 +606,24 @@ def save_dynamics(system, path, metadata=None):
     system : control.StateSpace
         p x p system (a discrete one is saved as its continuous ZOH equivalent).
     path : str or pathlib.Path
-        Destination, written atomically.
+        Destination, written atomically through an exclusive temporary file
+        and a rename (:func:`hammerstein.core.files.safe_write`).
     metadata : dict, optional
         Stored as an ``[identification]`` table.
+
+    Raises
+    ------
+    PresetError
+        The target exists and is not a regular file, or is read-only.
+    OSError
+        The directory cannot be created or written.
     """
-    path = Path(path)
     doc = {"identification": metadata} if metadata else {}
     doc["dynamics"] = dynamics_to_table(system)
-    tmp = path.with_name(path.name + ".tmp")
-    path.parent.mkdir(parents=True, exist_ok=True)
     try:
-        with open(tmp, "wb") as fh:
-            tomli_w.dump(doc, fh)
-        tmp.replace(path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+        safe_write(path, tomli_w.dumps(doc), "dynamics file")
+    except FileLimitError as exc:
+        raise PresetError(str(exc)) from None
 
 
 def load_plant(preset, dynamics=True, base_dir=None):
@@ -636,8 +634,9 @@ def load_plant(preset, dynamics=True, base_dir=None):
     preset : str or pathlib.Path
         Bundled preset name or preset file.
     dynamics : bool
-        ``True`` for the Hammerstein plant (PI + discretised linear
-        dynamics, ZOH with python-control); ``False`` for the static PI.
+        ``True`` for the Hammerstein plant (hysteresis, creep when the preset
+        has a ``[creep]`` table, discretised linear dynamics); ``False`` for
+        the static (rate-independent) hysteresis alone, without creep.
     base_dir : pathlib.Path, optional
         Directory that relative paths are resolved from.
 
@@ -656,16 +655,13 @@ def load_plant(preset, dynamics=True, base_dir=None):
     if not isinstance(meta, dict) or not isinstance(dyn, dict):
         raise PresetError(f"{path}: {'preset' if not isinstance(meta, dict) else 'dynamics'}: "
                           f"expected a table")
-    problems = unknown_keys(meta, PRESET_KEYS, "preset.")
-    if dyn.get("kind") != "state_space":  # its A, B, C, D are checked with the matrices
-        problems += unknown_keys(dyn, DYNAMICS_KEYS, "dynamics.")
+    problems = _table_problems(meta, PRESET_FIELDS, "preset")
+    fields = DYNAMICS_FIELDS["state_space" if dyn.get("kind") == "state_space" else "bending_modes"]
+    problems += [q for q in _table_problems(dyn, fields, "dynamics") if ": unknown key" in q]
+    problems.sort(key=lambda line: ": unknown key" not in line)
     if problems:
         raise PresetError(f"{path}: " + "; ".join(problems))
-    if "sampling_period" not in meta:
-        raise PresetError(f"{path}: preset.sampling_period: missing (seconds)")
     T = meta["sampling_period"]
-    if not isinstance(T, (int, float)) or isinstance(T, bool) or not (np.isfinite(T) and T > 0):
-        raise PresetError(f"{path}: preset.sampling_period: expected a positive time [s], found {T!r}")
     model = load_model(path)
     lin = None
     if dynamics:
@@ -678,9 +674,25 @@ def load_plant(preset, dynamics=True, base_dir=None):
         elif cont is not None:
             lin = discretize(cont, float(T))
     name = meta.get("name", path.stem)
-    plant = HammersteinPlant(model, float(T), lin, name=name)
+    creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
+    plant = HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
     try:                               # the amplifier: hammerstein.core.amplifier
         plant.amplifier = amplifier_from_table(data.get("amplifier"), model.input_names, str(path))
     except AmplifierError as exc:
         raise PresetError(str(exc)) from None
     return plant
+
+
+def _creep(table, outputs, path):
+    """The ``[creep.<output>]`` tables of a preset (core/creep.py), one entry per output."""
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise PresetError(f"{path}: creep: expected a table of [creep.<output>] tables")
+    unknown = [k for k in table if k not in outputs]
+    if unknown:
+        raise PresetError(f"{path}: creep.{unknown[0]}: unknown output (outputs are {outputs})")
+    try:
+        return [creep_from_table(table[o], f"creep.{o}") if o in table else None for o in outputs]
+    except HysteresisError as exc:
+        raise PresetError(f"{path}: {exc}") from None

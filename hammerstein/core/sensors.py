@@ -166,7 +166,7 @@ def characterize(plant, amplitude=10.0, frequency=50.0, periods=3, sensor=None):
 
 
 def identification_metadata(identifier, **extra):
-    """``[identification]`` table for :func:`hammerstein.presets.save_model`.
+    """``[identification]`` table for :func:`hammerstein.core.presets.save_model`.
 
     Parameters
     ----------
@@ -209,7 +209,7 @@ def identify_plant(plant, frequency, amplitude=10.0, n_hysterons=15, method="clo
     method : {"closed-form", "least-squares"}
     sensor : Sensor, optional
     partition : {"time", "input"} or array_like
-        Threshold partition (:func:`~hammerstein.identification.partition_thresholds`).
+        Threshold partition (:func:`~hammerstein.core.identification.partition_thresholds`).
     periods : int
         Periods per record.
     out : str or pathlib.Path, optional

@@ -66,7 +66,7 @@ def literal_gain_equivalent_scale(model: MultivariablePI) -> float:
 def stability_map(model: MultivariablePI, gain_scales) -> pd.DataFrame:
     """Spectral radius of the compensator iteration against a gain scaling.
 
-    For each scale s, :func:`~hammerstein.compensators.convergence_report`
+    For each scale s, :func:`~hammerstein.core.compensators.convergence_report`
     with the gain ``s K`` (K the diagonal secant gains of the direct
     transfers over ``model.input_amplitude``, docs/compensator.md) gives the largest
     and smallest ``rho(I - (s K)^-1 J)`` over the reachable slope matrices
@@ -76,7 +76,7 @@ def stability_map(model: MultivariablePI, gain_scales) -> pd.DataFrame:
     ----------
     model : MultivariablePI or compensator
         Identified square model with ``input_amplitude``, or a compensator
-        built on one (e.g. :func:`~hammerstein.compensators.diagonal_compensator`:
+        built on one (e.g. :func:`~hammerstein.core.compensators.diagonal_compensator`:
         its direct-transfer-only model is analysed).
     gain_scales : array_like, shape (n_scales,)
         Scales s > 0 [-]; s = 1 is the normalised law.

@@ -115,12 +115,12 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     title_h = _title_height(title, 4.0 * m + 1.5)
     # python-control's fonts (it sets them when it makes the axes itself)
     with plt.rc_context(control.config.defaults["ctrlplot.rcParams"]):
-        fig, ax = plt.subplots(2 * p, m, figsize=(4.0 * m + 1.5, 3.0 * p + 1.0 + title_h),
+        fig, ax = plt.subplots(2 * p, m, figsize=(4.0 * m + 1.5, 3.0 * p + 1.3 + title_h),
                                squeeze=False)
         # margins in inches, set before python-control draws: it places the "To <output>"
         # labels from the axes' positions, and with its own axes it would run tight_layout
         # (two extra draws of the whole figure)
-        fixed_layout(fig, 2 * p, m, left=1.35, right=0.25, bottom=0.6, top=title_h + 0.35,
+        fixed_layout(fig, 2 * p, m, left=1.35, right=0.25, bottom=0.6, top=title_h + 0.65,
                      wspace=0.45, hspace=0.35)
         with np.errstate(divide="ignore"):        # exact zeros (decoupled entries): -inf dB
             cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, ax=ax,
@@ -128,16 +128,19 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
                                      share_phase="row", share_frequency="col")
     suptitle(fig, title)
     fig = cplt.figure
-    for ax in np.ravel(cplt.axes):       # the true system dashed over the identified one
+    nyquist = [0.5 / dt for dt in dts]
+    for ax in np.ravel(cplt.axes):
         for line in ax.get_lines():
-            if line.get_label() == labels[1]:
-                line.set_linestyle("--")
-        legend = ax.get_legend()
-        if legend is not None:           # python-control drew it with the solid style
-            handles = {ln.get_label(): ln for ln in ax.get_lines()}
-            ax.legend([handles[t.get_text()] for t in legend.get_texts()],
-                      [t.get_text() for t in legend.get_texts()], loc=legend._loc,
-                      fontsize=legend.get_texts()[0].get_fontsize())
+            x = np.asarray(line.get_xdata(), dtype=float)
+            if x.size and np.all(x == x[0]) and np.any(np.isclose(x[0], nyquist)):
+                # python-control's Nyquist-frequency marker, drawn in each system's colour and
+                # style: a thin grey dotted reference line, so it does not read as a curve
+                line.set(color="0.55", linestyle=":", linewidth=0.9,
+                         label=f"Nyquist frequency ({min(nyquist):g} Hz)")
+            elif line.get_label() == labels[1]:
+                line.set_linestyle("--")   # the true system dashed over the identified one
+        if ax.get_legend() is not None:    # one legend for the figure, off the data
+            ax.get_legend().remove()
     axes = np.asarray(cplt.axes).reshape(2 * true.noutputs, true.ninputs)
     mag = np.abs(responses[1].magnitude)                             # (p, m, n_freq)
     zero = np.max(mag, axis=-1) <= 1e-12 * np.max(mag)               # (p, m): 0 up to round-off
@@ -147,10 +150,26 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
         for ax in axes[2 * i:2 * i + 2, j]:
             for line in [ln for ln in ax.get_lines() if ln.get_label() == labels[1]]:
                 line.remove()
-        axes[2 * i, j].text(0.02, 0.04, f"{labels[1]}: 0 (no coupling)",
-                            transform=axes[2 * i, j].transAxes, fontsize=8)
+        both = np.max(np.abs(responses[0].magnitude[i, j])) <= 1e-12 * np.max(mag)
+        note = (f"no data: {labels[0]} and {labels[1]} are 0 (no coupling)" if both
+                else f"{labels[1]}: 0 (no coupling)")
+        axes[2 * i, j].text(0.02, 0.04, note, transform=axes[2 * i, j].transAxes, fontsize=8)
     if zero.any():                          # scales without the removed curves
         for ax in axes.ravel():
             ax.relim()
             ax.autoscale_view(scalex=False)
+    drawn = {}
+    for ax in axes.ravel():
+        for line in ax.get_lines():
+            if line.get_label() in labels:
+                drawn.setdefault(line.get_label(), line)
+    handles = [drawn[k] for k in labels if k in drawn]
+    names = [h.get_label() for h in handles]
+    if nyquist:
+        handles.append(next(ln for ax in axes.ravel() for ln in ax.get_lines()
+                            if ln.get_label().startswith("Nyquist")))
+        names.append(handles[-1].get_label())
+    W, H = fig.get_size_inches()
+    fig.legend(handles, names, loc="lower center", ncol=len(names), fontsize=8, frameon=False,
+               bbox_to_anchor=(0.5, fig.subplotpars.top + 0.3 / H))
     return fig

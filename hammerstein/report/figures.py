@@ -441,20 +441,21 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     """XY plot, time plots (displacements, input voltages) and tracking errors.
 
     Layout: (a) the XY plot of the reference (dashed) and the output (solid)
-    after settling; (b) the displacements against time; (c) the per-axis
-    tracking errors y_r - y and (e) the Euclidean error ||Y_r - Y||, both
-    scaled on the settled part (the start-up transient is shaded, and its
-    peak is printed when it is off scale); (d) the input voltages when
-    ``inputs`` is given.
+    after settling, over the first two outputs; (b) every output's
+    displacement against time; (c) every output's tracking error y_r - y
+    and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
+    on the settled part (the start-up transient is shaded, and its peak is
+    printed when it is off scale); (d) the input voltages when ``inputs``
+    is given.
 
     Parameters
     ----------
     time : array_like, shape (n,)
         [s].
-    reference, outputs : array_like, shape (2, n)
-        ``(x_r, y_r)`` and ``(x, y)`` [µm] (outputs may hold NaN after a
-        divergence).
-    names : sequence of 2 str
+    reference, outputs : array_like, shape (p, n)
+        ``(x_r, y_r[, z_r ...])`` and ``(x, y[, z ...])`` [µm], p >= 2
+        (outputs may hold NaN after a divergence).
+    names : sequence of p str
         Output names.
     title : str
     settle_time : float
@@ -471,7 +472,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     r = np.asarray(reference, dtype=float)
     y = np.asarray(outputs, dtype=float)
     e = r - y
-    eu = np.sqrt(e[0] ** 2 + e[1] ** 2)
+    eu = np.sqrt(np.sum(e * e, axis=0))             # over all p outputs, as the metrics
+    names = list(names)
     steady = t >= settle_time * 1e3
     transient = settle_time > 0 and steady.any() and not steady.all()
     W = 15.0
@@ -516,7 +518,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     axe.set_ylabel("tracking error [µm]")
     axn = fig.add_subplot(gs[1, 2], sharex=axt)
     axn.plot(*decimate(t, eu), "-", color="k", linewidth=0.9)
-    axn.set_ylabel("||Y_r - Y|| [µm]")
+    axn.set_ylabel(f"||Y_r - Y|| over {', '.join(names)} [µm]")
     axn.set_xlabel("time [ms]")
     for a in (axt, axu, axe, axn):
         a.grid(True, alpha=0.3)
@@ -549,11 +551,13 @@ def divergence_figure(inputs, names, sample, reason, title):
     Parameters
     ----------
     inputs : array_like, shape (m, n)
-        Compensator output [V] (valid before ``sample``).
+        Compensator output [V] (valid before ``sample``); drawn up to and
+        including ``sample`` where finite.
     names : sequence of str
         Input names.
     sample : int
-        First sample where the divergence was detected.
+        First sample where the divergence was detected (marked by a dotted
+        line).
     reason : str
     title : str
 
@@ -561,16 +565,20 @@ def divergence_figure(inputs, names, sample, reason, title):
     -------
     matplotlib.figure.Figure
     """
-    u = np.asarray(inputs)[:, :sample]
+    # up to and including the detected sample, whose value the reason cites; the runner
+    # records no output from that sample on (NaN): the title says so then
+    u = np.asarray(inputs, dtype=float)[:, :sample + 1]
     k = np.arange(u.shape[1])
     W = 8.0
-    full = f"{title} ({reason})"
+    drawn = sample < u.shape[1] and np.isfinite(u[:, sample]).all()
+    full = f"{title}; detected at sample {sample}{'' if drawn else ' (not recorded)'}: {reason}"
     top = _title_height(full, W, fontsize=10) + 0.1
     fig, ax = plt.subplots(figsize=(W, top + 3.6 + 0.6))
     fixed_layout(fig, left=0.85, right=0.25, bottom=0.6, top=top)
     for i, n in enumerate(names):
         mag = np.abs(u[i])
-        ax.semilogy(k, np.where(mag > 0, mag, np.nan), "o-", label=f"|{n}| [V]", markersize=4)
+        ax.semilogy(k, np.where((mag > 0) & np.isfinite(mag), mag, np.nan), "o-",
+                    label=f"|{n}| [V]", markersize=4)
     ax.axvline(sample, color="r", linestyle=":", label=f"divergence detected (sample {sample})")
     ax.axhline(10.0, color="0.5", linestyle="--", linewidth=0.8, label="10 V drive range")
     ax.set_xlabel("sample")
@@ -602,10 +610,10 @@ def xy_overlay(curves, names, title):
     fig, ax = plt.subplots(figsize=(W, top + 6.0 + 0.6))
     fixed_layout(fig, left=0.8, right=legend_w, bottom=0.6, top=top)
     for i, c in enumerate(curves):
-        ax.plot(*decimate_path(*c["reference"][:2]), "--", color="0.4", linewidth=1.0)
+        ax.plot(*decimate_path(*c["reference"][:2]), "--", color="0.4", linewidth=1.0,
+                label="references" if i == 0 else "_reference")   # one entry for all
         ax.plot(*decimate_path(*c["outputs"][:2]), "-", color=f"C{i}", linewidth=1.1,
                 label=c["label"])
-    ax.plot([], [], "--", color="0.4", label="references")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(f"{names[0]} [µm]")
     ax.set_ylabel(f"{names[1]} [µm]")

@@ -1,7 +1,7 @@
 """Reports of identified models and model-vs-plant drives (paper Fig. 6, 7).
 
-:func:`report_identified` saves the identified models a scenario used
-(:func:`hammerstein.scenario.identified.save_identified_models`) and appends
+:func:`report_identified` saves the identified models the case results carry
+(:func:`hammerstein.report.model_files.save_identified_models`) and appends
 their sections to ``report.md``: the plant-vs-model loop grids of open-loop
 drives with a comparison model (Fig. 6), ``model-outputs-<case>.csv`` and,
 for 3 or more drive frequencies, the model RMS error against frequency
@@ -17,11 +17,11 @@ import pandas as pd
 
 from hammerstein.report.figures import scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
+from hammerstein.report.model_files import save_identified_dynamics, save_identified_models
 from hammerstein.report.tables import markdown_table
 from hammerstein.core.lti import align_dc_gain, compare_frequency_responses
 from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
 from hammerstein.report.render import FigureJobs
-from hammerstein.scenario.identified import save_identified_dynamics, save_identified_models
 
 __all__ = ["report_identified", "model_rms_table"]
 
@@ -47,8 +47,8 @@ def report_identified(scenario, results, directory, jobs=None):
     """
     directory = Path(directory)
     jobs = FigureJobs() if jobs is None else jobs
-    rows = save_identified_models(scenario, directory)
-    _report_dynamics(scenario, directory, jobs)
+    rows = save_identified_models(results, directory)
+    _report_dynamics(results, directory, jobs)
     # sweep cases ([[sweeps]], hammerstein.scenario.sweeps) are reported by their sweep's table and figure
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     figs = _comparison_figures(scenario, results, directory, jobs)
@@ -204,9 +204,9 @@ def _frequency_tables(scenario, results, directory, jobs):
     return out
 
 
-def _report_dynamics(scenario, directory, jobs):
+def _report_dynamics(results, directory, jobs):
     """Section "Identified dynamics": Bode figure identified vs true G (all entries), fits."""
-    rows = save_identified_dynamics(scenario, directory)
+    rows = save_identified_dynamics(results, directory)
     if not rows:
         return
     lines = ["", "## Identified dynamics (Hammerstein compensator)", "",

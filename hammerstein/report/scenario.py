@@ -20,11 +20,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.references import raster_line_index
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
+from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table", "COLUMNS"]
 
@@ -62,19 +63,14 @@ def _plant_label(spec):
     return "hammerstein" if spec.plant_spec.get("dynamics", True) else "static"
 
 
-def _num(v, unit=""):
-    """A number for people: ``50 µm``, ``0.25 s``, ``33.3333 Hz``."""
-    return f"{float(v):.6g}{' ' + unit if unit else ''}"
-
-
-def _length(s):
-    if "periods" in s:
-        return f"{_num(s['periods'])} period{'' if s['periods'] == 1 else 's'}"
-    return _num(s["duration"], "s") if "duration" in s else ""
+_num = words_number
 
 
 def signal_summary(mode, s):
     """A drive or reference table in words: ``sine on x, 50 µm, 50 Hz, 5 periods``.
+
+    The words are the kind's registry entry's
+    (:attr:`hammerstein.core.references.ReferenceKind.summary`).
 
     Parameters
     ----------
@@ -87,41 +83,9 @@ def signal_summary(mode, s):
     str
         Only the settings that apply; phase and offset only when not zero.
     """
-    kind = s.get("kind")
-    unit = "V" if mode == "drive" else "µm"
-    parts = []
-    if kind in ("sine", "triangle"):
-        on = s.get("input" if mode == "drive" else "output")
-        parts = [f"{kind} on {on}", _num(s["amplitude"], unit), _num(s["frequency"], "Hz")]
-    elif kind == "circle":
-        parts = ["circle", f"radius {_num(s['radius'], 'µm')}", _num(s["frequency"], "Hz")]
-    elif kind == "spiral":
-        parts = ["spiral", f"radius {_num(s['radius'], 'µm')}", _num(s["frequency"], "Hz"),
-                 f"decay τ {_num(s['tau'], 's')} after {_num(s.get('circle_periods', 1.0))} "
-                 f"circle(s)"]
-    elif kind == "lissajous":
-        a = s["amplitude"]
-        amp = (" × ".join(_num(x) for x in a) + " µm") if isinstance(a, list) else _num(a, "µm")
-        parts = ["Lissajous", amp, " / ".join(_num(f) for f in s["frequencies"]) + " Hz"]
-    elif kind == "raster":
-        fast, slow = s["outputs"]
-        size = s["size"]
-        parts = [f"raster, fast {fast}, slow {slow}",
-                 f"{_num(size[0])} × {_num(size[1])} µm", f"{s['lines']} lines",
-                 f"{_num(s['frequency'], 'Hz')} line rate", f"slow axis {s.get('slow', 'step')}"]
-        if s.get("smoothing"):
-            parts.append(f"turns rounded over {_num(100 * s['smoothing'])} % of a period")
-    elif kind == "file":
-        cols = ", ".join(f"{o} = {c!r}" for o, c in s.get("columns", {}).items())
-        parts = [f"file {s.get('file')}", f"time {s.get('time', 'time')!r}", cols]
-    else:
-        parts = [str(kind)]
-    if s.get("phase"):
-        parts.append(f"phase {_num(s['phase'], '°')}")
-    if s.get("offset"):
-        parts.append(f"offset {_num(s['offset'], unit)}")
-    if kind not in ("file",):
-        parts.append(_length(s))
+    kinds = DRIVE_KINDS if mode == "drive" else REFERENCE_KINDS
+    entry = kinds.get(s.get("kind"))
+    parts = [str(s.get("kind"))] if entry is None else entry.summary(s, "V" if mode == "drive" else "µm")
     return ", ".join(p for p in parts if p)
 
 
@@ -155,11 +119,15 @@ def compensator_summary(c):
     Returns
     -------
     str
-        E.g. ``multivariable: plant model, secant gain, 1 iteration``.
+        E.g. ``multivariable: plant model, secant gain, 1 iteration``; then
+        the notes of the kind's registry entry
+        (:attr:`hammerstein.scenario.registry.CompensatorKind.summary`),
+        e.g. that a Hammerstein compensator inverts the plant's true dynamics.
     """
     kind = c.get("kind", "none")
-    if kind == "none":
-        return "none"
+    entry = COMPENSATORS.get(kind)
+    if entry is not None and not entry.compensates:
+        return kind
     model = c.get("model", "plant")
     parts = [_identify_summary(c.get("identify")) if model == "identified"
              else f"{model} model"]
@@ -182,6 +150,8 @@ def compensator_summary(c):
     known = {"kind", "model", "identify", "gain", "iterations", "feedback", "cutoff_hz", "check"}
     parts += [f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
               for k, v in c.items() if k not in known and isinstance(v, (str, int, float))]
+    if entry is not None and entry.summary is not None:
+        parts += entry.summary(c)
     return f"{kind}: {', '.join(parts)}"
 
 
@@ -340,11 +310,11 @@ def _figures(scenario, results, directory, jobs):
     # trajectories
     traj = [r for r in ok if r.spec.mode == "reference" and r.spec.loop_channel is None]
     for r in traj:
-        names = out_names[:2]
+        names = out_names                      # every output (z too); the XY plot: the first two
         settle = r.spec.settle_periods * r.spec.period_samples * r.spec.plant.sampling_period
         fname = f"trajectory-{r.name}.png"
-        jobs.add(directory / fname, plots.trajectory_figure, r.spec.time, r.reference[:2],
-                 r.outputs[:2], names,
+        jobs.add(directory / fname, plots.trajectory_figure, r.spec.time, r.reference,
+                 r.outputs, names,
                  f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, {_compensator_title(r.spec)}",
                  settle_time=settle, inputs=r.inputs, input_names=in_names)
         figs.append((f"Case {r.name}: spatial domain, time domain (displacements, input "
@@ -361,24 +331,28 @@ def _figures(scenario, results, directory, jobs):
     return figs
 
 
-def _raster_figures(scenario, results, directory, jobs):
-    """Error maps of the raster references (jobs, one per case); return [(caption, file name)]."""
+def _scan_figures(scenario, results, directory, jobs):
+    """Error maps of the scanned (raster-style) references, one job per case; [(caption, file name)].
+
+    A reference kind is scanned when its registry entry has ``scan``
+    (:class:`hammerstein.core.references.ReferenceKind`).
+    """
     figs = []
     for r in results:
         s = r.spec.signal_spec
-        if r.spec.mode != "reference" or s.get("kind") != "raster" or r.divergence is not None:
+        entry = REFERENCE_KINDS.get(s.get("kind")) if r.spec.mode == "reference" else None
+        if entry is None or entry.scan is None or r.divergence is not None:
             continue
         names = list(r.spec.plant.hysteresis.output_names)
-        fast, slow = (names.index(o) for o in s["outputs"])
-        cycles = r.spec.time * float(s["frequency"])
+        scan = entry.scan(r.spec.time, s, names)
+        fast, slow = names.index(scan["fast"]), names.index(scan["slow"])
         e = r.reference - r.outputs
-        fname = f"raster-error-{r.name}.png"
+        fname = f"{s['kind']}-error-{r.name}.png"
         jobs.add(
             directory / fname, plots.raster_error_map,
             r.reference[fast], e[[fast, slow]],
             [f"{names[fast]}_r - {names[fast]} (fast)", f"{names[slow]}_r - {names[slow]} (slow)"],
-            raster_line_index(r.spec.time, s["frequency"]), np.mod(cycles, 1.0) < 0.5,
-            float(s["size"][0]), names[fast],
+            scan["line"], scan["trace"], scan["extent"], names[fast],
             f"{scenario.title}: {r.name}, tracking error per scan line")
         figs.append((f"Case {r.name}: tracking error per scan line against the fast-axis "
                      f"position (trace and retrace)", fname))
@@ -408,7 +382,7 @@ def write_report(scenario, results, directory, jobs=None):
         timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
                                    float_format="%.6g")
     figs = _figures(scenario, results, directory, jobs) if results else []
-    figs += _raster_figures(scenario, results, directory, jobs)
+    figs += _scan_figures(scenario, results, directory, jobs)
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]

@@ -4,7 +4,8 @@ Each ``[[sweeps]]`` table of a scenario (:class:`hammerstein.scenario.sweeps.Swe
 writes ``sweep-<name>.csv`` (:func:`sweep_table`: ``frequency_hz,
 compensator, axis, channel`` then one column per metric) and
 ``sweep-<name>.png`` (:func:`sweep_figure`: the metric against frequency in
-the p x m layout of the paper's Fig. 9); a ``[stability_map]`` writes
+the p x m layout of the paper's Fig. 9, or one row for a metric of all
+outputs together such as ``max_euclidean_error``, channel ``x+y``); a ``[stability_map]`` writes
 ``stability-map.csv`` and ``stability-map.png`` (:func:`stability_figure`).
 :func:`sweep_report_lines` writes them all and returns the ``report.md``
 sections.
@@ -25,6 +26,7 @@ __all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_line
 
 
 _LETTERS = "abcdefghijklmnopqrstuvwxyz"
+_POINTS = ["o", "s", "^", "v", "D", "x"]
 _METRIC_LABELS = {
     "rms_error": "RMS error", "max_abs_error": "max |error|",
     "rms_error_percent": "RMS error", "model_rms_error": "model RMS error",
@@ -70,7 +72,7 @@ def sweep_table(spec, metrics):
     pandas.DataFrame
         One row per (case, channel): ``frequency_hz, compensator, axis,
         channel``, then one column per metric (units in
-        :data:`hammerstein.metrics.UNITS`); ordered by compensator, axis,
+        :data:`hammerstein.core.metrics.UNITS`); ordered by compensator, axis,
         channel, frequency. Diverged cases carry ``diverged_at_time`` [s].
     """
     index = pd.DataFrame(spec.cases)
@@ -89,8 +91,46 @@ def sweep_table(spec, metrics):
     return out[["frequency_hz", "compensator", "axis", "channel"] + metric_cols].reset_index(drop=True)
 
 
+def _sweep_channels(table, metric, output_names):
+    """The channels (panel rows) of a sweep figure: those holding a value of ``metric``.
+
+    Per-output channels in ``output_names`` order, then the channels of all
+    outputs together (``x+y``: the Euclidean metrics), each in a row of its
+    own. When no channel holds a value (every case diverged), the outputs.
+    """
+    if metric in table:
+        held = table.loc[table[metric].notna(), "channel"]
+        held = list(dict.fromkeys(str(c) for c in held))
+    else:
+        held = []
+    rows = [o for o in output_names if o in held] + [c for c in held if c not in output_names]
+    return rows or list(output_names)
+
+
+def _panel_title(spec, channel, k, axis, output_names):
+    """What a sweep panel shows: channel, excitation, and whether it is the direct transfer."""
+    if channel not in output_names:                      # all outputs together
+        what = f"{channel} (all outputs together)"
+        if axis == "-":
+            return what
+        return f"{what}, {axis}_r" if spec.mode == "reference" else f"{what}, drive {axis}"
+    if axis == "-":                                       # one multi-axis reference or drive
+        src = "the reference" if spec.mode == "reference" else "the drive"
+        return f"{channel} for {src}"
+    if spec.mode == "reference":
+        direct, src = axis == channel, f"{axis}_r"
+    else:
+        direct, src = k == list(output_names).index(channel), axis
+    return f"{'direct' if direct else 'cross-coupling'}: {channel} vs {src}"
+
+
 def sweep_figure(table, spec, output_names, title, metric=None):
-    """Metric against frequency, panel (l, k) = output l for the excitation on axis k.
+    """Metric against frequency, panel (l, k) = channel l for the excitation on axis k.
+
+    The panel rows are the channels holding a value of the metric: the
+    outputs for per-output metrics (the p x m layout of the paper's Fig. 9),
+    the row of all outputs together (channel ``x+y``) for the Euclidean
+    metrics.
 
     Parameters
     ----------
@@ -98,7 +138,7 @@ def sweep_figure(table, spec, output_names, title, metric=None):
         :func:`sweep_table` output.
     spec : hammerstein.scenario.sweeps.SweepSpec
     output_names : sequence of str
-        The plant's outputs (panel rows).
+        The plant's outputs.
     title : str
     metric : str, optional
         Column to plot (default ``spec.metric``).
@@ -107,11 +147,12 @@ def sweep_figure(table, spec, output_names, title, metric=None):
     -------
     matplotlib.figure.Figure
         Log-scaled metric axis when all values are positive; cases that
-        diverged have no point.
+        diverged have no point; a panel without any value says so.
     """
     metric = metric or spec.metric
     axes_names = [a if a is not None else "-" for a in spec.axes]
-    p, m = len(output_names), len(axes_names)
+    channels = _sweep_channels(table, metric, output_names)
+    p, m = len(channels), len(axes_names)
     labels = list(dict.fromkeys(table["compensator"]))
     # one legend for the whole figure, under the title; none for a single unnamed series
     named = not (len(labels) == 1 and labels[0] in ("-", "", None))
@@ -121,28 +162,26 @@ def sweep_figure(table, spec, output_names, title, metric=None):
     unit = UNITS.get(metric, "")
     what = metric_label(metric)
     handles = {}
-    for l, out in enumerate(output_names):
+    for l, out in enumerate(channels):
         for k, axis in enumerate(axes_names):
             ax = axs[l][k]
             rows = table[(table["channel"] == out) & (table["axis"] == axis)]
             for j, lab in enumerate(labels):
                 r = rows[rows["compensator"] == lab].sort_values("frequency_hz")
                 if metric in r and r[metric].notna().any():
-                    line, = ax.plot(r["frequency_hz"], r[metric], label=lab, **plots._style(j))
+                    style = {**plots._style(j), "marker": _POINTS[j % len(_POINTS)],
+                             "markevery": None}           # every swept frequency is a point
+                    line, = ax.plot(r["frequency_hz"], r[metric], label=lab, **style)
                     handles.setdefault(lab, line)
             vals = rows[metric] if metric in rows else pd.Series(dtype=float)
             if vals.notna().any() and (vals.dropna() > 0).all():
                 ax.set_yscale("log")
                 plots.log_ticks(ax)
-            direct = (spec.mode == "reference" and axis == out) or \
-                     (spec.mode == "drive" and k == l)
-            if spec.mode == "reference":
-                src = f"{axis}_r" if axis != "-" else "reference"
-            else:
-                src = axis if axis != "-" else "drive"
-            kind = "direct" if direct else "cross-coupling"
-            ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {kind}: {out} vs {src}", fontsize=10,
-                         y=1.0)
+            elif not vals.notna().any():
+                ax.text(0.5, 0.5, f"no data: no case has a {what}\n(diverged or not computed)",
+                        transform=ax.transAxes, ha="center", va="center", fontsize=9)
+            panel = _panel_title(spec, out, k, axis, output_names)
+            ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {panel}", fontsize=10, y=1.0)
             ax.set_xlabel("frequency [Hz]")
             ax.set_ylabel(f"{what}, {out} [{unit}]" if unit else f"{what}, {out}")
             ax.grid(True, which="major", alpha=0.3)
@@ -212,8 +251,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
 
     Parameters
     ----------
-    scenario : hammerstein.scenarios.Scenario
-    results : list of hammerstein.runner.CaseResult
+    scenario : hammerstein.scenario.resolve.Scenario
+    results : list of hammerstein.scenario.execute.CaseResult
     directory : pathlib.Path
     metrics : pandas.DataFrame, optional
         Long metrics of ``results`` (computed when omitted).

@@ -89,12 +89,12 @@ def code_digest():
     -------
     str
         SHA-256 (hex) of the package's ``.py`` files (paths and contents)
-        and of the hammerstein, numpy, scipy, numba and nfoursid versions.
+        and of the hammerstein-piezo, numpy, scipy, numba and nfoursid versions.
     """
     if "value" not in _DIGEST:
         package = Path(__file__).resolve().parents[1]
         h = hashlib.sha256()
-        for dist in ("hammerstein", "numpy", "scipy", "numba", "nfoursid"):
+        for dist in ("hammerstein-piezo", "numpy", "scipy", "numba", "nfoursid"):
             h.update(f"{dist}={_version(dist)};".encode())
         for path in sorted(package.rglob("*.py")):
             h.update(path.relative_to(package).as_posix().encode() + b"\0")

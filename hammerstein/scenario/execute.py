@@ -21,10 +21,11 @@ from hammerstein.core import metrics as met
 from hammerstein.core.amplifier import drive_metrics
 from hammerstein.core.drive import default_fade_samples
 from hammerstein.core.hammerstein_compensator import fade_in
-from hammerstein.core.references import raster_line_index
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.scenario.registry import compensator_kind
 from hammerstein.simulation import ChainResult, simulate_chain
 
-__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples",
+__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples", "signal_kind",
            "runs_alone", "drive_rows"]
 
 
@@ -99,9 +100,9 @@ def run_case(case):
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         fade = fade_samples(case)
-        if hasattr(case.compensator, "run_reference"):   # inverse of G: preview and fade-in
+        if compensator_kind(case.compensator_spec).look_ahead:   # e.g. an inverse of G
             res = case.compensator.run_reference(plant, case.signal, case.period_samples, fade)
-        else:                                            # from rest: faded in
+        else:                                                    # from rest: faded in
             res = simulate_chain(case.compensator, plant,
                                  fade_in(case.signal, fade) if fade else case.signal)
         commanded = res.inputs
@@ -109,7 +110,7 @@ def run_case(case):
     caught += [str(w.message) for w in rec]
     result = chain_result(case, res, caught, commanded)
     if hasattr(case.compensator, "history_rows") and not res.diverged:   # kind "ilc"
-        result.metrics += case.compensator.history_rows(names)
+        result.metrics += case.compensator.history_rows(list(plant.hysteresis.output_names))
         if "grew" in case.compensator.stopped:
             result.warnings.append(f"ILC stopped {case.compensator.stopped}")
     return result
@@ -131,7 +132,7 @@ def _through_amplifier(case, res):
 
 
 def runs_alone(case):
-    """True when a reference case cannot run in the batch kernel (fade-in, amplifier, own start-up).
+    """True when a reference case cannot run in the batch kernel (fade-in, amplifier).
 
     Parameters
     ----------
@@ -141,9 +142,7 @@ def runs_alone(case):
     -------
     bool
     """
-    return (hasattr(case.compensator, "run_reference")
-            or getattr(case.plant, "amplifier", None) is not None
-            or fade_samples(case) > 0)
+    return getattr(case.plant, "amplifier", None) is not None or fade_samples(case) > 0
 
 
 def drive_rows(case, inputs):
@@ -170,15 +169,32 @@ def drive_rows(case, inputs):
     return rows
 
 
-def fade_samples(case):
-    """Fade-in of a compensator from rest [samples].
+def signal_kind(case):
+    """The registry entry of a case's drive or reference.
 
-    ``compensator.fade_in`` [s] when given. Otherwise, for a compensator
-    that inverts the dynamics (``run_reference``), one period of the
-    reference; for the others :func:`hammerstein.core.drive.default_fade_samples`
-    (one period when the reference does not start at rest and the plant's
-    amplifier has a slew rate, else 0); at most the ``settle_periods`` the
-    metrics skip.
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+
+    Returns
+    -------
+    hammerstein.core.references.ReferenceKind
+        From :data:`hammerstein.core.references.DRIVE_KINDS` (drives) or
+        :data:`hammerstein.core.references.REFERENCE_KINDS`.
+    """
+    kinds = DRIVE_KINDS if case.mode == "drive" else REFERENCE_KINDS
+    return kinds[case.signal_spec["kind"]]
+
+
+def fade_samples(case):
+    """Fade-in of the reference of a compensator kind that fades in [samples].
+
+    The compensator table's ``fade_in`` [s] when given, else one period of
+    the reference, at most the ``settle_periods`` the metrics skip. A kind
+    without the ``fades_in`` capability
+    (:class:`hammerstein.scenario.registry.CompensatorKind`) fades in only
+    when the reference does not start at rest and the plant's amplifier has
+    a slew rate (:func:`hammerstein.core.drive.default_fade_samples`).
 
     Parameters
     ----------
@@ -191,11 +207,11 @@ def fade_samples(case):
         Fade-in length [samples].
     """
     T = case.plant.sampling_period
-    given = getattr(case.compensator, "fade_in", None)
+    given = case.compensator_spec.get("fade_in")
     settle = int(case.settle_periods * case.period_samples)
     if given is not None:
         return int(round(given / T))
-    if not hasattr(case.compensator, "run_reference"):
+    if not compensator_kind(case.compensator_spec).fades_in:
         return default_fade_samples(case.signal, case.period_samples, settle, case.compensator,
                                     getattr(case.plant, "amplifier", None))
     return int(min(case.period_samples, settle))
@@ -235,9 +251,9 @@ def chain_result(case, res, caught, commanded=None):
         rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
                                     case.settle_periods, scale=case.scale,
                                     loop_channel=case.loop_channel)
-        if case.signal_spec.get("kind") == "raster":  # per scan line
-            line = raster_line_index(case.time, case.signal_spec["frequency"])
-            rows += met.raster_line_metrics(case.signal, res.outputs, line)
+        entry = signal_kind(case)
+        if entry.metrics is not None:  # e.g. per scan line
+            rows += entry.metrics(case.time, case.signal_spec, case.signal, res.outputs)
         rows += drive_rows(case, res.inputs if commanded is None else commanded)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
 

@@ -3,11 +3,14 @@
 Compensators are built by :func:`build_compensator` from the registry
 :data:`COMPENSATORS` (kind -> :class:`CompensatorKind`); add a kind by adding
 an entry (its ``fields`` are checked by ``hammerstein validate``, its
-``build`` runs when the scenario is resolved). A compensator is any object
-with ``.name`` and ``.simulate(reference (m, N), initial_state=None) ->
-(inputs (m, N), final_state)``. The model a kind is built from
+``build`` runs when the scenario is resolved, its capabilities say how the
+cases run and what the report says; nothing else switches on the kind's
+name). A compensator is any object with ``.name`` and
+``.simulate(reference (m, N), initial_state=None) -> (inputs (m, N),
+final_state)``; one that needs look-ahead also has ``.run_reference(plant,
+reference, period_samples, fade_samples) -> ChainResult``. The model a kind is built from
 (``model = "plant" | "identified" | <file>``) is resolved by
-:func:`hammerstein.scenario.identified.resolve_model`.
+:func:`hammerstein.scenario.identification.resolve_model`.
 """
 
 from __future__ import annotations
@@ -18,18 +21,20 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
+from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
 from hammerstein.core.ilc import LearningCompensator
-from hammerstein.scenario.identified import (hammerstein_identify_table, identify_dynamics_table,
-                                             identify_table, resolve_dynamics, resolve_model)
-from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer,
-                                         number, string)
+from hammerstein.core.presets import PresetError, load_dynamics
+from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
+from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
+                                                  identify_dynamics_table, identify_table)
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
+                                         string)
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 
-__all__ = ["CompensatorKind", "COMPENSATORS", "RATE_INDEPENDENT", "build_compensator",
-           "resolve_model"]
+__all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
 
 
 @dataclass
@@ -39,18 +44,72 @@ class CompensatorKind:
     Parameters
     ----------
     build : callable
-        ``build(spec: dict, plant, base_dir: Path) -> compensator or None``;
+        ``build(spec: dict, plant, context: ResolveContext) -> compensator or None``;
         ``spec`` is the validated ``[compensator]`` table (defaults filled).
     fields : dict of str to hammerstein.scenario.schema.Field
         The keys this kind accepts besides ``kind`` (validated by
         ``hammerstein validate``).
     description : str
         One line for ``hammerstein list`` and the README.
+    rate_independent : bool
+        It compensates the hysteresis only: a case whose frequency reaches
+        the plant's dynamics is warned about them.
+    batchable : bool
+        Sweep cases of this kind may run in the batch kernel
+        (:func:`hammerstein.simulation.simulate_chain_batch`) when the built
+        compensator is fusable.
+    look_ahead : bool
+        It needs the whole reference ahead (an inverse of the dynamics): the
+        case runs through the compensator's ``run_reference``.
+    fades_in : bool
+        The reference is faded in from rest over ``fade_in`` [s] of the
+        table (default one period, at most the settling the metrics skip).
+    compensates : bool
+        It tracks references (False: open-loop drives only).
+    summary : callable, optional
+        ``summary(spec) -> list of str``: notes the report adds to the
+        compensator's description (e.g. that it uses the plant's true
+        dynamics).
+    check : callable, optional
+        ``check(spec, plant, base_dir, files, settle_periods, period_samples)
+        -> list of "key: message"``: the kind's own checks of ``hammerstein
+        validate`` that need the plant and the case (nothing identified or
+        built); ``files`` caches the files read.
     """
 
-    build: Callable[[dict, Any, Path], Any]
+    build: Callable[[dict, Any, Any], Any]
     fields: dict = field(default_factory=dict)
     description: str = ""
+    rate_independent: bool = False
+    batchable: bool = False
+    look_ahead: bool = False
+    fades_in: bool = False
+    compensates: bool = True
+    summary: Callable | None = None
+    check: Callable | None = None
+
+
+def compensator_kind(spec):
+    """The registry entry of a compensator table (``kind``, default ``"none"``).
+
+    Parameters
+    ----------
+    spec : dict or None
+        A validated ``[compensator]`` table.
+
+    Returns
+    -------
+    CompensatorKind
+
+    Raises
+    ------
+    ValueError
+        Unknown kind (``kind: expected one of ...``, with the closest one).
+    """
+    kind = (spec or {}).get("kind", "none")
+    if kind not in COMPENSATORS:
+        raise ValueError(f"kind: {kind_problem(kind, COMPENSATORS)[0]}")
+    return COMPENSATORS[kind]
 
 
 def _gain(v):
@@ -64,20 +123,20 @@ def _gain(v):
                   f"finite numbers [µm/V], found {v!r}")
 
 
-def _build_none(spec, plant, base_dir):
+def _build_none(spec, plant, context):
     return None
 
 
-def _build_multivariable(spec, plant, base_dir):
-    model = resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+def _build_multivariable(spec, plant, context):
+    model = resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
         check=spec.get("check", "error"), **_feedback_options(spec, plant))
 
 
-def _spec_model(spec, plant, base_dir):
+def _spec_model(spec, plant, context):
     """The model of a compensator table (every kind resolves it like "multivariable")."""
-    return resolve_model(spec.get("model", "plant"), plant, base_dir, spec.get("identify"))
+    return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
 
 
 def _feedback_options(spec, plant):
@@ -88,24 +147,25 @@ def _feedback_options(spec, plant):
             "sampling_period": plant.sampling_period}
 
 
-def _build_diagonal(spec, plant, base_dir):
+def _build_diagonal(spec, plant, context):
     return diagonal_compensator(
-        _spec_model(spec, plant, base_dir), gain=spec.get("gain", "secant"),
+        _spec_model(spec, plant, context), gain=spec.get("gain", "secant"),
         iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
         **_feedback_options(spec, plant))
 
 
-def _build_per_axis(spec, plant, base_dir):
-    return PerAxisInverseCompensator(_spec_model(spec, plant, base_dir))
+def _build_per_axis(spec, plant, context):
+    return PerAxisInverseCompensator(_spec_model(spec, plant, context))
 
 
-def _build_static_gain(spec, plant, base_dir):
-    return StaticGainCompensator(_spec_model(spec, plant, base_dir))
+def _build_static_gain(spec, plant, context):
+    return StaticGainCompensator(_spec_model(spec, plant, context))
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------
 COMPENSATORS: dict[str, CompensatorKind] = {
-    "none": CompensatorKind(_build_none, {}, "no compensator (open-loop drives only)"),
+    "none": CompensatorKind(_build_none, {}, "no compensator (open-loop drives only)",
+                            compensates=False),
     "multivariable": CompensatorKind(
         _build_multivariable,
         {"model": Field(string(), default="plant"),
@@ -115,32 +175,75 @@ COMPENSATORS: dict[str, CompensatorKind] = {
          "check": Field(choice("error", "warn", "ignore"), default="error"),
          "feedback": Field(choice("delay", "lowpass")),  # default: the one-sample delay
          "cutoff_hz": Field(number("Hz", 0))},
-        "inverse multiplicative compensator of Theorem 4.1, normalised by K (docs/compensator.md)"),
+        "inverse multiplicative compensator of Theorem 4.1, normalised by K (docs/compensator.md)",
+        rate_independent=True, batchable=True),
 }
 _MODEL_KEYS = ("model", "identify")  # the model fields every kind shares with "multivariable"
 COMPENSATORS["diagonal"] = CompensatorKind(
     _build_diagonal, dict(COMPENSATORS["multivariable"].fields),
-    "the multivariable law on the direct transfers only (cross-couplings left)")
+    "the multivariable law on the direct transfers only (cross-couplings left)",
+    rate_independent=True, batchable=True)
 COMPENSATORS["per-axis"] = CompensatorKind(
     _build_per_axis, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
-    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (docs/per-axis-inverse.md)")
+    "per-axis analytic inverse PI of Kuhnen & Janocha, direct transfers only (docs/per-axis-inverse.md)",
+    rate_independent=True, batchable=True)
 COMPENSATORS["static-gain"] = CompensatorKind(
     _build_static_gain, {k: f for k, f in COMPENSATORS["multivariable"].fields.items() if k in _MODEL_KEYS},
-    "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)")
+    "no hysteresis compensation: U = K^-1 Yr, K the direct secant gains (reference)",
+    rate_independent=True, batchable=True)
 
 
-def _build_hammerstein(spec, plant, base_dir):
+def _build_hammerstein(spec, plant, context):
     model = None
     if spec.get("model", "plant") != "identified":
-        model = _spec_model(spec, plant, base_dir)
-    pi, G = resolve_dynamics(spec, plant, base_dir, model)
+        model = _spec_model(spec, plant, context)
+    pi, G = resolve_dynamics(spec, plant, context, model)
     comp = HammersteinCompensator(
         pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
         iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
         feedback=spec.get("feedback", "delay"), cutoff_hz=spec.get("cutoff_hz"),
         sampling_period=plant.sampling_period)
-    comp.fade_in = spec.get("fade_in")
     return comp
+
+
+def _hammerstein_notes(spec):
+    if dynamics_source(spec) == "plant":
+        return ["inverts the plant's true dynamics G (an oracle: nothing identified; "
+                "dynamics = \"identified\" identifies G)"]
+    return []
+
+
+def _dynamics_problems(spec, plant, base, files, settle, period_samples):
+    """Problems of the ``dynamics`` keys of ``kind = "hammerstein"`` (nothing identified).
+
+    ``dynamics`` is "plant", "identified" or a readable dynamics/preset file of
+    the plant's size; "plant" and "identified" need a plant with dynamics;
+    ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
+    within the settling the metrics skip. Returns ``key: message`` strings.
+    """
+    dyn = dynamics_source(spec)
+    out = []
+    if "identify_dynamics" in spec and dyn != "identified":
+        out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
+    if dyn in ("plant", "identified"):
+        if plant.is_static:
+            out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
+    else:
+        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
+        if ("dynamics", path) not in files:
+            try:
+                load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
+                files[("dynamics", path)] = None
+            except PresetError as exc:
+                files[("dynamics", path)] = f"dynamics: expected 'plant', 'identified' or a " \
+                                            f"dynamics file: {exc}"
+        if files[("dynamics", path)]:
+            out.append(files[("dynamics", path)])
+    fade = spec.get("fade_in")
+    if fade is not None and fade > settle * period_samples * plant.sampling_period + 1e-12:
+        out.append(f"fade_in: {fade:g} s is longer than the {settle:g} settling periods "
+                   f"({settle * period_samples * plant.sampling_period:g} s) the metrics skip")
+    return out
 
 
 COMPENSATORS["hammerstein"] = CompensatorKind(
@@ -155,14 +258,29 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
      "fade_in": Field(number("s", 0, exclusive=False))},   # default: one period (<= settling)
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
-    "(docs/hammerstein-plant.md)")
+    "(docs/hammerstein-plant.md)",
+    look_ahead=True, fades_in=True, summary=_hammerstein_notes, check=_dynamics_problems)
+
+
+def _build_preisach_inverse(spec, plant, context):
+    return PreisachInverseCompensator(_spec_model(spec, plant, context),
+                                      method=spec.get("method", "root"))
+
+
+COMPENSATORS["preisach-inverse"] = CompensatorKind(
+    _build_preisach_inverse,
+    {"model": Field(string(), default="plant"),
+     "method": Field(choice("root", "multiplicative"), default="root")},
+    "exact per-sample inverse of a Preisach model (monotone root per direct path), or its "
+    "inverse multiplicative law; rate independent (docs/plants.md)",
+    rate_independent=True)
+
+
 # every kind starts from rest (fade_in [s], hammerstein.core.drive) and reacts to the plant's
 # amplifier limits (limits, hammerstein.core.amplifier; "warn" in scenarios)
-for _kind in ("multivariable", "diagonal", "per-axis", "static-gain", "hammerstein"):
-    COMPENSATORS[_kind].fields["fade_in"] = Field(number("s", 0, exclusive=False))
+for _kind in ("multivariable", "diagonal", "per-axis", "static-gain", "hammerstein", "preisach-inverse"):
+    COMPENSATORS[_kind].fields.setdefault("fade_in", Field(number("s", 0, exclusive=False)))
     COMPENSATORS[_kind].fields["limits"] = Field(choice(*LIMITS))   # default "warn"
-#: kinds that compensate the hysteresis only (rate independent): warned about dynamics
-RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
 
 
 def _start_table(v):
@@ -170,9 +288,9 @@ def _start_table(v):
     if not isinstance(v, dict):
         raise Invalid(f"expected a compensator table {{ kind = ..., ... }}, found {v!r}")
     kind = v.get("kind", "hammerstein")
-    if kind not in COMPENSATORS or kind in ("none", "ilc"):
-        raise Invalid(f"kind: expected one of {', '.join(k for k in COMPENSATORS if k not in ('none', 'ilc'))}, "
-                      f"found {kind!r}")
+    others = [k for k in COMPENSATORS if k not in ("none", "ilc")]
+    if kind not in others:
+        raise Invalid(f"kind: expected one of {', '.join(others)}, found {kind!r}")
     problems = []
     clean = check_table({**v, "kind": kind}, {"kind": Field(lambda x: x), **COMPENSATORS[kind].fields},
                         "", problems, "")
@@ -181,8 +299,8 @@ def _start_table(v):
     return clean
 
 
-def _build_ilc(spec, plant, base_dir):
-    start = build_compensator(spec.get("start") or {"kind": "hammerstein"}, plant, base_dir)
+def _build_ilc(spec, plant, context):
+    start = build_compensator(spec.get("start") or {"kind": "hammerstein"}, plant, context)
     return LearningCompensator(
         start, plant.sampling_period, iterations=spec.get("iterations", 10),
         learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 2000.0),
@@ -203,10 +321,11 @@ COMPENSATORS["ilc"] = CompensatorKind(
      "fade_in": Field(number("s", 0, exclusive=False)),
      "limits": Field(choice(*LIMITS))},
     "iterative learning control against the plant from another kind's drive: u_k+1 = "
-    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.core.ilc)")
+    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.core.ilc)",
+    look_ahead=True, fades_in=True)
 
 
-def build_compensator(spec, plant, base_dir):
+def build_compensator(spec, plant, context):
     """Build the compensator of a ``[compensator]`` table.
 
     Parameters
@@ -216,8 +335,10 @@ def build_compensator(spec, plant, base_dir):
         (default ``"none"``).
     plant : HammersteinPlant
         The simulated plant (its PI model is ``model = "plant"``).
-    base_dir : pathlib.Path
-        Directory of the scenario file (relative model paths).
+    context : hammerstein.scenario.identification.ResolveContext or pathlib.Path
+        The case's context: the scenario's directory (relative model paths),
+        the run's identification cache and the record of what the case
+        identified; a directory gives a context of its own.
 
     Returns
     -------
@@ -230,10 +351,10 @@ def build_compensator(spec, plant, base_dir):
         Unknown kind; or the builder's own errors (CompensatorError,
         PresetError), e.g. a law refused by the convergence check.
     """
-    kind = spec.get("kind", "none")
-    if kind not in COMPENSATORS:
-        raise ValueError(f"kind: expected one of {', '.join(COMPENSATORS)}, found {kind!r}")
-    comp = COMPENSATORS[kind].build(spec, plant, Path(base_dir))
+    entry = compensator_kind(spec)
+    if not isinstance(context, ResolveContext):
+        context = ResolveContext(Path(context))
+    comp = entry.build(spec, plant, context)
     if comp is not None:               # start-up and amplifier reaction (scenario.execute)
         comp.fade_in = spec.get("fade_in")
         comp.limits = spec.get("limits", "warn")

@@ -3,7 +3,7 @@
 :func:`resolve_scenario` turns a validated scenario
 (:func:`hammerstein.scenario.validate.validate_scenario`) into what execution
 needs: it identifies the ``model = "identified"`` models on their plants
-(cached, :mod:`hammerstein.scenario.identified`), reads the model files,
+(:mod:`hammerstein.scenario.identification`, once per run), reads the model files,
 builds every compensator (:func:`hammerstein.scenario.registry.build_compensator`,
 whose convergence check may refuse a law) and computes the
 ``[stability_map]``. Problems found only here are collected and raised as
@@ -22,8 +22,9 @@ import numpy as np
 
 from hammerstein.core.lti import modal_parameters
 from hammerstein.core.presets import PresetError
-from hammerstein.scenario.identified import resolve_comparison_model
-from hammerstein.scenario.registry import RATE_INDEPENDENT, build_compensator
+from hammerstein.scenario.identification import ResolveContext, resolve_comparison_model
+from hammerstein.scenario.identification_cache import IdentificationCache
+from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import stability_map_frame
 from hammerstein.scenario.validate import ScenarioSpec, validate_scenario
@@ -71,8 +72,8 @@ def dynamics_warning(case):
     A case warns when its plant has dynamics and its highest reference (or
     drive) frequency f is above ``RESONANCE_FRACTION`` of the first
     resonance, or where ``|G(f) G(0)^-1 - I|_2 > GAIN_DEVIATION``, and it is
-    a reference tracked by a rate-independent compensator
-    (:data:`hammerstein.scenario.registry.RATE_INDEPENDENT`) or an open-loop
+    a reference tracked by a rate-independent compensator kind (capability
+    ``rate_independent`` of :class:`hammerstein.scenario.registry.CompensatorKind`) or an open-loop
     drive compared with a static (PI-only) model.
 
     Parameters
@@ -89,7 +90,8 @@ def dynamics_warning(case):
         return None
     kind = (case.compensator_spec or {}).get("kind", "none")
     static_model = case.mode == "drive" and case.model_spec is not None
-    if not (static_model or (case.mode == "reference" and kind in RATE_INDEPENDENT)):
+    rate_independent = compensator_kind(case.compensator_spec).rate_independent
+    if not (static_model or (case.mode == "reference" and rate_independent)):
         return None
     sig = case.signal_spec or {}
     f = max(np.atleast_1d(sig.get("frequencies", sig.get("frequency", 0.0))), default=0.0)
@@ -113,7 +115,7 @@ def dynamics_warning(case):
             f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")
 
 
-def resolve_scenario(spec):
+def resolve_scenario(spec, cache=None):
     """Identify, load and build what a validated scenario needs (step 2 of 2).
 
     Parameters
@@ -122,12 +124,16 @@ def resolve_scenario(spec):
         From :func:`hammerstein.scenario.validate.validate_scenario`. Other
         kinds than ``"cases"`` (identification scenarios) need no resolution
         and are returned as they are.
+    cache : hammerstein.scenario.identification_cache.IdentificationCache, optional
+        The identifications to share (default: a new cache for this
+        scenario, backed by the on-disk cache).
 
     Returns
     -------
     Scenario
         Cases with their compensators (and the warnings raised while
-        building them) and comparison models; the stability map.
+        building them), comparison models and identifications
+        (``CaseSpec.identified``); the stability map.
 
     Raises
     ------
@@ -140,11 +146,12 @@ def resolve_scenario(spec):
     if not isinstance(spec, ScenarioSpec):
         return spec
     source, base, problems, cases = str(spec.path), spec.path.parent, [], []
+    run = ResolveContext(base, IdentificationCache() if cache is None else cache)
     for case in spec.cases:
-        model = None
+        model, context = None, run.for_case()
         if case.model_spec is not None:
             try:
-                model = resolve_comparison_model(case.model_spec, case.plant, base)
+                model = resolve_comparison_model(case.model_spec, case.plant, context)
             except (ValueError, PresetError) as exc:  # one "key: message" per line
                 problems.extend(f"{source}: {case.where}.{line}" for line in str(exc).splitlines())
                 continue
@@ -153,7 +160,7 @@ def resolve_scenario(spec):
             with warnings.catch_warnings(record=True) as rec:
                 warnings.simplefilter("always")
                 try:
-                    comp = build_compensator(case.compensator_spec, case.plant, base)
+                    comp = build_compensator(case.compensator_spec, case.plant, context)
                 except (ValueError, PresetError) as exc:
                     problems.append(f"{source}: {case.where}.compensator: {exc}")
                     continue
@@ -161,11 +168,12 @@ def resolve_scenario(spec):
         extra = dynamics_warning(case)
         if extra:
             caught.append(extra)
-        cases.append(replace(case, compensator=comp, model=model, warnings=caught))
+        cases.append(replace(case, compensator=comp, model=model, warnings=caught,
+                             identified=list(context.identified)))
     smap = None
     if spec.stability_map is not None and spec.stability_plant is not None:
         smap = stability_map_frame(spec.stability_map, spec.stability_plant, spec.compensator_top,
-                                   base, problems, source)
+                                   run.for_case(), problems, source)
     if problems:
         raise ScenarioError(problems)
     return Scenario(name=spec.name, title=spec.title, description=spec.description,

@@ -25,7 +25,7 @@ cross-coupling x_r -> y, (d) direct y).
 compensators of sweep cases in batches on the compiled batch kernel
 (:func:`hammerstein.simulation.simulate_chain_batch`, both cores), the
 others case by case, with a progress bar on a terminal
-(:func:`hammerstein.progress.progress`, quiet off-terminal).
+(:func:`hammerstein.scenario.progress.progress`, quiet off-terminal).
 
 A top-level ``[stability_map]`` table (``scales`` = list of gain scalings s,
 or ``{ start, stop, num }`` log-spaced; optional ``compensators`` as above,
@@ -49,11 +49,11 @@ from hammerstein.core.compensators import check_reference_range
 from hammerstein.core.stability import stability_map
 from hammerstein.scenario.execute import chain_result, run_case, runs_alone
 from hammerstein.scenario.progress import progress
-from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.registry import COMPENSATORS, build_compensator, compensator_kind
 from hammerstein.core.metrics import UNITS
 from hammerstein.scenario.schema import (CASE, MAX_NAME, MAX_SWEEP_FREQUENCIES, NAME, Field, Invalid,
-                                         _short, check_table, choice, name_field, number, string)
-from hammerstein.simulation import _fusable, simulate_chain_batch
+                                         short_repr, check_table, choice, name_field, number, string)
+from hammerstein.simulation import is_fusable, simulate_chain_batch
 
 __all__ = [
     "SweepSpec",
@@ -110,7 +110,7 @@ def _frequencies(v):
         if len(set(v)) != len(v):
             raise Invalid(f"expected distinct frequencies [Hz], found duplicates in {v!r}")
         return [float(f) for f in v]
-    raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {_short(v)}")
+    raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {short_repr(v)}")
 
 
 def _labelled_tables(v):
@@ -118,7 +118,7 @@ def _labelled_tables(v):
         raise Invalid(f"expected a table of label = {{ kind = ... }} compensator tables, found {v!r}")
     for label, table in v.items():
         if not re.fullmatch(NAME, label) or len(label) > MAX_NAME:
-            raise Invalid(f"label {_short(label)}: expected at most {MAX_NAME} letters, digits, "
+            raise Invalid(f"label {short_repr(label)}: expected at most {MAX_NAME} letters, digits, "
                           f"'.', '_' or '-'")
         if not isinstance(table, dict):
             raise Invalid(f"{label}: expected a compensator table, found {table!r}")
@@ -231,20 +231,20 @@ def run_cases(cases, desc="cases"):
 
     Parameters
     ----------
-    cases : list of hammerstein.scenarios.CaseSpec
+    cases : list of hammerstein.scenario.validate.CaseSpec
     desc : str
         Label of the progress bar (shown only on a terminal).
 
     Returns
     -------
-    list of hammerstein.runner.CaseResult
+    list of hammerstein.scenario.execute.CaseResult
         In the order of ``cases``; divergences are results.
     """
     results = [None] * len(cases)
     batchable = [i for i, c in enumerate(cases)
                  if getattr(c, "sweep", None) is not None and c.mode == "reference"
-                 and not runs_alone(c)           # own start-up, fade-in, amplifier: run_case
-                 and _fusable(c.compensator)]
+                 and compensator_kind(c.compensator_spec).batchable and not runs_alone(c)
+                 and is_fusable(c.compensator)]
     rest = [i for i in range(len(cases)) if i not in set(batchable)]
     n_sweep = sum(1 for c in cases if getattr(c, "sweep", None) is not None)
     bar = progress(total=len(cases), desc=desc, unit="case") if n_sweep else None
@@ -341,7 +341,7 @@ def check_stability_table(table, problems, source):
     return clean
 
 
-def stability_map_frame(clean, plant, compensator_top, base_dir, problems, source):
+def stability_map_frame(clean, plant, compensator_top, context, problems, source):
     """Build the compensators of a checked ``[stability_map]`` table and compute the maps.
 
     Parameters
@@ -352,7 +352,8 @@ def stability_map_frame(clean, plant, compensator_top, base_dir, problems, sourc
         The scenario's top-level plant (identified models are identified on it).
     compensator_top : dict
         The scenario's ``[compensator]`` table (default compensator).
-    base_dir : pathlib.Path
+    context : hammerstein.scenario.identification.ResolveContext or pathlib.Path
+        The scenario's directory and identification cache.
     problems : list of str
         Receives ``source: stability_map.compensators.<label>: message``
         for a compensator that cannot be built or mapped.
@@ -369,12 +370,13 @@ def stability_map_frame(clean, plant, compensator_top, base_dir, problems, sourc
     comps = clean.get("compensators") or {"compensator": compensator_top}
     frames, laws = [], {}
     for label, spec in comps.items():
-        spec = {**spec, "check": "ignore"} if spec.get("kind", "none") in ("multivariable", "diagonal") \
-            else spec
+        entry = COMPENSATORS.get(spec.get("kind", "none"))
+        if entry is not None and entry.rate_independent and "check" in entry.fields:
+            spec = {**spec, "check": "ignore"}   # the map shows where the law converges
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                comp = build_compensator(spec, plant, base_dir)
+                comp = build_compensator(spec, plant, context)
             df = stability_map(comp, clean["scales"])
         except Exception as exc:  # report as a problem of this label
             problems.append(f"{source}: stability_map.compensators.{label}: {exc}")

@@ -20,7 +20,6 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 
 from __future__ import annotations
 
-import difflib
 import os
 import re
 from dataclasses import dataclass, field
@@ -30,11 +29,11 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.core import references as refs
-from hammerstein.core.presets import PresetError, load_dynamics, load_model, load_plant, read_toml
-from hammerstein.scenario.identified import comparison_spec, nyquist_problem
+from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
-from hammerstein.scenario.schema import (CASE, DRIVES, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT, REFERENCES,
+from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
                                          TOP, Field, ScenarioError, check_table, kind_problem,
                                          total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
@@ -80,12 +79,17 @@ class CaseSpec:
         ``identify``); None until resolved.
     model_spec : dict or None
         The case's ``model`` and validated ``identify`` entries
-        (:func:`hammerstein.scenario.identified.comparison_spec`).
+        (:func:`hammerstein.scenario.identify_tables.comparison_spec`).
     sweep : dict or None
         ``{sweep, case, compensator, axis, frequency_hz}`` of a sweep case.
     where : str
         Key path of the case in the file (``cases[0]``,
         ``sweeps[1](<case name>)``), for the problems of the resolution.
+    identified : list
+        What the case identified
+        (:class:`hammerstein.scenario.identification.IdentifiedModel`,
+        :class:`hammerstein.scenario.identification.IdentifiedDynamics`);
+        filled by the resolution.
     """
 
     name: str
@@ -108,6 +112,7 @@ class CaseSpec:
     model_spec: dict | None = None
     sweep: dict | None = None
     where: str = ""
+    identified: list = field(default_factory=list)
 
 
 @dataclass
@@ -182,10 +187,7 @@ def _merge_compensator(top, case):
 def _check_compensator(spec, where, problems, source, own=None):
     kind = spec.get("kind", "none")
     if kind not in COMPENSATORS:
-        hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
-        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
-        problems.append(f"{source}: {where}.kind: expected one of "
-                        f"{', '.join(map(repr, COMPENSATORS))}, found {kind!r}{extra}")
+        problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, COMPENSATORS)]
         return None
     schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
     clean = check_table(spec, schema, where, problems, source)
@@ -222,19 +224,13 @@ def _ignored_env(var):
     return f"; its value {text!r} is not a positive integer, the default applies"
 
 
-def _predicted_samples(kind, c, T):
+def _predicted_samples(entry, c, T):
     """Samples the signal of a checked table ``c`` will have (before generating it)."""
     if "duration" in c:
         return c["duration"] / T
-    if c.get("periods") is None or not ("frequency" in c or "frequencies" in c):
+    period = entry.period_of(c)
+    if c.get("periods") is None or period is None:
         return 0.0  # e.g. a file reference: as long as its file (bounded in bytes)
-    if kind == "lissajous":
-        try:
-            period = refs.lissajous_period(*c["frequencies"])
-        except refs.SignalError:
-            period = 1.0 / min(c["frequencies"])
-    else:
-        period = 1.0 / c["frequency"]
     return c["periods"] * period / T
 
 
@@ -244,27 +240,25 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     ``budget``: ``{"limit", "used", "over"}`` samples per scenario; a signal
     beyond it is reported once (later ones are then not generated).
     """
-    kinds = DRIVES if mode == "drive" else REFERENCES
+    kinds = refs.DRIVE_KINDS if mode == "drive" else refs.REFERENCE_KINDS
     where = f"{case_where}.{mode}"
     if not isinstance(spec, dict):
         problems.append(f"{source}: {where}: expected a table, found {spec!r}")
         return None
     kind = spec.get("kind")
     if kind not in kinds:
-        hint = difflib.get_close_matches(str(kind), list(kinds), n=1)
-        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
-        problems.append(f"{source}: {where}.kind: expected one of "
-                        f"{', '.join(map(repr, kinds))}, found {kind!r}{extra}")
+        problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, kinds)]
         return None
     n_before = len(problems)
-    clean = check_table(spec, {"kind": Field(lambda v: v), **kinds[kind]}, where, problems, source)
+    entry = kinds[kind]
+    clean = check_table(spec, {"kind": Field(lambda v: v), **entry.fields}, where, problems, source)
     if clean is None or len(problems) > n_before or plant is None:
         return None
     T = plant.sampling_period
     model = plant.hysteresis
+    names = list(model.input_names if mode == "drive" else model.output_names)
     c = {k: v for k, v in clean.items() if k != "kind"}
-    extras = {}
-    n = _predicted_samples(kind, c, T)
+    n = _predicted_samples(entry, c, T)
     if MAX_CASE_SAMPLES < n <= refs.MAX_SAMPLES:  # beyond: the generator's own message
         problems.append(f"{source}: {where}: the record would have {n:.3g} samples; expected at "
                         f"most {MAX_CASE_SAMPLES:.3g} per case ({MAX_CASE_SAMPLES * T:g} s at "
@@ -281,55 +275,7 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
                             f"HAMMERSTEIN_MAX_SAMPLES{_ignored_env('HAMMERSTEIN_MAX_SAMPLES')})")
             return None
     try:
-        if mode == "drive":
-            fn = refs.triangle_drive if kind == "triangle" else refs.sine_drive
-            t, sig = fn(T, model.input_names, **c)
-            extras["driven_input"] = model.input_names.index(c["input"])
-            period = 1.0 / c["frequency"]
-        elif kind in ("sine", "triangle"):
-            fn = refs.triangle if kind == "triangle" else refs.sine
-            t, sig = fn(T, model.output_names, **c)
-            extras["loop_channel"] = model.output_names.index(c["output"])
-            extras["scale"] = c["amplitude"]
-            period = 1.0 / c["frequency"]
-        elif kind == "file":
-            period = c.pop("period", None) or T
-            t, sig = refs.from_file(T, model.output_names, base_dir=base, **c)
-        elif kind == "raster":
-            outs = c.pop("outputs")
-            if len(set(outs)) != 2 or any(o not in model.output_names for o in outs):
-                raise refs.SignalError(f"outputs: expected two different outputs [fast, slow] "
-                                       f"of the plant {model.output_names}, found {outs}")
-            t, xy = refs.raster(T, **c)
-            sig = np.zeros((model.n_outputs, t.size))
-            for row, o in zip(xy, outs):
-                sig[model.output_names.index(o)] = row
-            period = 1.0 / c["frequency"]
-            extras["scale"] = float(max(c["size"]))
-        else:
-            outs = c.pop("outputs", None) or list(model.output_names[:2])
-            missing = [o for o in outs if o not in model.output_names]
-            if not missing and len(set(outs)) < len(outs):
-                raise refs.SignalError(f"outputs: expected two different outputs of the plant "
-                                       f"{model.output_names}, found {outs}")
-            if missing or model.n_outputs < 2:
-                raise refs.SignalError(f"outputs: expected two of the plant's outputs "
-                                       f"{model.output_names}, found {outs}")
-            fn = {"circle": refs.circle, "spiral": refs.spiral, "lissajous": refs.lissajous}[kind]
-            t, xy = fn(T, **c)
-            sig = np.zeros((model.n_outputs, t.size))
-            for row, o in zip(xy, outs):
-                sig[model.output_names.index(o)] = row
-            if kind == "lissajous":
-                try:
-                    period = refs.lissajous_period(*c["frequencies"])
-                except refs.SignalError:
-                    period = 1.0 / min(c["frequencies"])
-                amp = c["amplitude"]
-                extras["scale"] = float(np.max(amp))
-            else:
-                period = 1.0 / c["frequency"]
-                extras["scale"] = c["radius"]
+        t, sig, period, extras = entry.generate(c, T, names, base)
     except refs.SignalError as exc:
         problems.append(f"{source}: {where}.{exc}")
         return None
@@ -371,39 +317,6 @@ def _model_problems(name, identify, plant, base, files):
                 f"{model.n_outputs} output(s) {list(model.output_names)}; the plant has "
                 f"{pm.n_inputs} {list(pm.input_names)} and {pm.n_outputs} {list(pm.output_names)}"]
     return []
-
-
-def _dynamics_problems(spec, plant, base, files, settle, period_samples):
-    """Problems of the ``dynamics`` keys of ``kind = "hammerstein"`` (nothing identified).
-
-    ``dynamics`` is "plant", "identified" or a readable dynamics/preset file of
-    the plant's size; "plant" and "identified" need a plant with dynamics;
-    ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
-    within the settling the metrics skip. Returns ``key: message`` strings.
-    """
-    dyn = spec.get("dynamics") or ("identified" if spec.get("model") == "identified" else "plant")
-    out = []
-    if "identify_dynamics" in spec and dyn != "identified":
-        out.append(f"identify_dynamics: only used with dynamics = 'identified', found {dyn!r}")
-    if dyn in ("plant", "identified"):
-        if plant.is_static:
-            out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
-    else:
-        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
-        if ("dynamics", path) not in files:
-            try:
-                load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
-                files[("dynamics", path)] = None
-            except PresetError as exc:
-                files[("dynamics", path)] = f"dynamics: expected 'plant', 'identified' or a " \
-                                            f"dynamics file: {exc}"
-        if files[("dynamics", path)]:
-            out.append(files[("dynamics", path)])
-    fade = spec.get("fade_in")
-    if fade is not None and fade > settle * period_samples * plant.sampling_period + 1e-12:
-        out.append(f"fade_in: {fade:g} s is longer than the {settle:g} settling periods "
-                   f"({settle * period_samples * plant.sampling_period:g} s) the metrics skip")
-    return out
 
 
 def _validate_cases(path, data):
@@ -505,9 +418,9 @@ def _validate_cases(path, data):
                 comp_ok = False
         sig = _signal(where, mode, raw[mode], plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
-        if mode == "reference" and kind == "none":
+        if mode == "reference" and kind in COMPENSATORS and not COMPENSATORS[kind].compensates:
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
-                            f"(compensator.kind is 'none'); use drive for an open-loop run")
+                            f"(compensator.kind is {kind!r}); use drive for an open-loop run")
         if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
             continue
         t, signal, P, extras = sig
@@ -530,8 +443,8 @@ def _validate_cases(path, data):
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
             problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
-        if mode == "reference" and "dynamics" in COMPENSATORS[kind].fields:
-            more = _dynamics_problems(cclean, plant, base, model_files, settle, P)
+        if mode == "reference" and COMPENSATORS[kind].check is not None:   # the kind's own checks
+            more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
             problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
         if cmp_spec is not None:
             more = _model_problems(cmp_spec["model"], cmp_spec.get("identify"), plant, base,

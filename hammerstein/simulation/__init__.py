@@ -65,11 +65,13 @@ from hammerstein.simulation._packing import (LANES, ChainState, CompensatorLaw, 
                                              pack_model, state_vector)
 from hammerstein.simulation._oracle import compensator_step
 from hammerstein.simulation._compile import announce_compiles, compile_notices
-from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, ChainResult, _fusable,
+from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, ChainResult,
                                               compensator_law, compensator_state, is_fusable,
                                               simulate_chain, simulate_chain_batch,
                                               simulate_compensator, simulate_hysteresis,
                                               simulate_plant, simulate_plays)
+from hammerstein.simulation._preisach import (generalized_play_steps, linear_steps,
+                                              preisach_inverse_kernel, preisach_steps)
 
 __all__ = [
     "simulate_plays",
@@ -99,4 +101,8 @@ __all__ = [
     "PARALLEL_MIN_SAMPLES",
     "compile_notices",
     "announce_compiles",
+    "preisach_steps",
+    "linear_steps",
+    "generalized_play_steps",
+    "preisach_inverse_kernel",
 ]

@@ -126,8 +126,8 @@ SCENARIOS = {
     "unknown-plant-key": "plant.dynamic: unknown key (did you mean 'dynamics'?)",
     "unknown-preset": "rakotondrabe-2dfo: not a bundled preset",
     "unknown-reference-key": "cases[0].reference.amplitud: unknown key (did you mean 'amplitude'?)",
-    "unknown-reference-kind": "cases[0].reference.kind: expected one of 'sine', 'triangle', "
-                              "'circle', 'spiral', 'lissajous', 'raster', 'file', found 'sinus' "
+    "unknown-reference-kind": f"cases[0].reference.kind: expected one of "   # from the registry
+                              f"{', '.join(map(repr, refs.REFERENCE_KINDS))}, found 'sinus' "
                               "(did you mean 'sine'?)",
     "unknown-top-key": "nmae: unknown key (did you mean 'name'?)",
     "zero-frequency": "cases[0].drive.frequency: expected a number > 0 [Hz], found 0.0",

@@ -128,26 +128,43 @@ def test_a_copy_fails_with_the_drawing_it_copies(tmp_path, workers):
     assert not any(tmp_path.iterdir())
 
 
-def _slow_loop(*args, **kwargs):  # keeps a worker busy, then draws
+def _gated_loop(gate, *args, **kwargs):  # keeps a worker busy until the test opens the gate
     import time
-    time.sleep(1.0)
+    deadline = time.monotonic() + 120.0   # a test that forgot the gate fails instead of hanging
+    while not Path(gate).exists():
+        if time.monotonic() > deadline:
+            raise TimeoutError(f"the gate {gate} was never opened")
+        time.sleep(0.005)
     return plots.loop_grid(*args, **kwargs)
 
 
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="the pool needs fork")
 def test_a_copy_is_drawn_when_the_report_it_copies_is_abandoned(tmp_path):
+    from concurrent.futures.process import EXTRA_QUEUED_CALLS
     names = (["u1 [V]", "u2 [V]"], ["x [µm]", "y [µm]"])
     for d in ("busy", "a", "b"):
         (tmp_path / d).mkdir()
-    with FigureRenderer(workers=2) as renderer:
-        busy = FigureJobs(renderer)
-        for k in range(2):                        # both workers busy for a second
-            busy.add(tmp_path / "busy" / f"{k}.png", _slow_loop, _curves(k), *names, f"busy {k}")
-        a, b = FigureJobs(renderer), FigureJobs(renderer)
-        a.add(tmp_path / "a" / "loop.png", plots.loop_grid, _curves(), *names, "same")
-        b.add(tmp_path / "b" / "loop.png", plots.loop_grid, _curves(), *names, "same")
-        a.cancel()                                # report a abandoned before its figure started
-        b.wait()
-        busy.wait()
+    gate = tmp_path / "gate"
+    workers = 2
+    try:
+        with FigureRenderer(workers=workers) as renderer:
+            busy = FigureJobs(renderer)
+            # every worker and every slot of the pool's call queue holds a job that waits for the
+            # gate, so a job added now stays pending (cancellable) however loaded the machine is
+            for k in range(2 * workers + EXTRA_QUEUED_CALLS):
+                busy.add(tmp_path / "busy" / f"{k}.png", _gated_loop, str(gate), _curves(k), *names,
+                         f"busy {k}")
+            a, b = FigureJobs(renderer), FigureJobs(renderer)
+            a.add(tmp_path / "a" / "loop.png", plots.loop_grid, _curves(), *names, "same")
+            b.add(tmp_path / "b" / "loop.png", plots.loop_grid, _curves(), *names, "same")
+            a.cancel(wait=False)                      # report a abandoned before its figure started
+            assert all(f.cancelled() for f in a._futures)
+            gate.touch()                              # the busy jobs may finish now
+            a.cancel()                                # (returns once the pool has dropped a's job)
+            b.wait()
+            busy.wait()
+    finally:
+        gate.touch()                              # never leave a worker waiting
     assert not (tmp_path / "a" / "loop.png").exists()
+    assert len(list((tmp_path / "busy").iterdir())) == 2 * workers + EXTRA_QUEUED_CALLS
     assert (tmp_path / "b" / "loop.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

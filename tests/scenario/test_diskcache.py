@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from hammerstein.core.presets import model_to_table
-from hammerstein.scenario import diskcache, identified
+from hammerstein.scenario import diskcache
+from hammerstein.scenario import identification as identified
 
 SPEC = {"frequency": 50.0, "amplitude": 10.0, "periods": 2, "n_hysterons": 8,
         "method": "least-squares", "partition": "time", "bounds": "monotone"}
@@ -16,9 +17,7 @@ DYN = {"period": 0.02, "periods": 3, "max_order": 4}
 @pytest.fixture
 def cache(tmp_path, monkeypatch):
     monkeypatch.setenv(diskcache.ENV, str(tmp_path / "cache"))
-    identified.clear_cache()
     yield tmp_path / "cache" / "identified"
-    identified.clear_cache()
 
 
 def _no_identification(*args, **kwargs):
@@ -29,7 +28,7 @@ def test_pi_entry_round_trips_exactly(cache, static_plant, monkeypatch):
     model, meta = identified.identified_model(static_plant, SPEC)
     (entry,) = cache.iterdir()
     assert entry.name.startswith("pi-") and entry.suffix == ".json"
-    identified.clear_cache()                              # a new process, as far as it knows
+    # a new call has a cache of its own: a new process, as far as it knows
     monkeypatch.setattr(identified, "characterize", _no_identification)
     again, meta_again = identified.identified_model(static_plant, SPEC)
     assert model_to_table(again) == model_to_table(model) and meta_again == meta
@@ -40,7 +39,6 @@ def test_pi_entry_round_trips_exactly(cache, static_plant, monkeypatch):
 def test_hammerstein_entry_round_trips_exactly(cache, preset_plant, monkeypatch):
     pi, meta, ident, dmeta = identified.identified_hammerstein(preset_plant, SPEC, DYN)
     assert sorted(p.name.split("-")[0] for p in cache.iterdir()).count("hammerstein") == 1
-    identified.clear_cache()
     monkeypatch.setattr(identified, "characterize", _no_identification)
     monkeypatch.setattr(identified, "_fit_dynamics", _no_identification)
     pi2, meta2, ident2, dmeta2 = identified.identified_hammerstein(preset_plant, SPEC, DYN)
@@ -85,7 +83,6 @@ def test_a_bad_entry_is_ignored_and_left_alone(cache, static_plant, monkeypatch,
         entry.unlink()
         entry.mkdir()
     kept = None if damage == "directory" else entry.read_bytes()
-    identified.clear_cache()
     again, _ = identified.identified_model(static_plant, SPEC)       # identified again
     assert model_to_table(again) == model_to_table(model)
     if kept is None:
@@ -125,12 +122,10 @@ def test_unwritable_cache_costs_only_time(tmp_path, static_plant, monkeypatch):
     blocker = tmp_path / "not-a-dir"
     blocker.write_text("a file where the cache directory would be")
     monkeypatch.setenv(diskcache.ENV, str(blocker))
-    identified.clear_cache()
     try:
         model, _ = identified.identified_model(static_plant, SPEC)
     finally:
-        identified.clear_cache()
-    assert model.n_inputs == 2 and blocker.read_text().startswith("a file")
+        assert model.n_inputs == 2 and blocker.read_text().startswith("a file")
 
 
 @pytest.mark.parametrize("value", [{"x": (1, 2)}, {"x": np.float64(1.5)}, {"x": {1: "a"}}])

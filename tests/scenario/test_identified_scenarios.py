@@ -11,7 +11,8 @@ import pytest
 from hammerstein import PrandtlIshlinskii, load_model, load_plant
 from hammerstein.cli.main import main
 from hammerstein.core.compensators import convergence_report
-from hammerstein.scenario.identified import identified_model
+from hammerstein.scenario.identification import identified_model
+from hammerstein.scenario.identification_cache import IdentificationCache
 from hammerstein.scenario.records import resolve_data_path
 from hammerstein.runner import run_scenario
 from hammerstein.scenario.resolve import load_scenario
@@ -171,9 +172,11 @@ def test_identification_is_cached_per_plant_and_table():
     static = load_plant("rakotondrabe-2dof", dynamics=False)
     again = load_plant("rakotondrabe-2dof", dynamics=False)
     dyn = load_plant("rakotondrabe-2dof", dynamics=True)
-    a, _ = identified_model(static, {"frequency": 50.0})
-    assert identified_model(again, {"frequency": 50.0, "periods": 3})[0] is a  # same content
-    assert identified_model(dyn, {"frequency": 50.0})[0] is not a
+    cache = IdentificationCache(disk=False)
+    a, _ = identified_model(static, {"frequency": 50.0}, cache)
+    assert identified_model(again, {"frequency": 50.0, "periods": 3}, cache)[0] is a  # same content
+    assert identified_model(dyn, {"frequency": 50.0}, cache)[0] is not a
+    assert identified_model(static, {"frequency": 50.0}, IdentificationCache(disk=False))[0] is not a
 
 
 # -- Fig. 7 behaviour: error grows above the identification frequency ----------------

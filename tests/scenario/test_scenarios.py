@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from hammerstein import runner
+from hammerstein.core.references import REFERENCE_KINDS
 from hammerstein.scenario import registry
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError
@@ -101,9 +102,8 @@ settle_periods = -1
      "cases[0]: expected exactly one of reference"),
     (HEAD + "[[cases]]\nname = 'a'\n"
      "reference = { kind = 'circel', radius = 5.0, frequency = 50.0, periods = 2 }",
-     "cases[0].reference.kind: expected one of 'sine', 'triangle', 'circle', 'spiral', "
-     "'lissajous', 'raster', 'file', found "
-     "'circel' (did you mean 'circle'?)"),
+     f"cases[0].reference.kind: expected one of {', '.join(map(repr, REFERENCE_KINDS))}, "
+     "found 'circel' (did you mean 'circle'?)"),   # the list read from the registry
     (HEAD.replace('"multivariable"', '"multivariabel"') + GOOD_CASE,
      "compensator.kind: expected one of 'none', 'multivariable'"),
     (HEAD + "gain = 'identity'\n" + GOOD_CASE,

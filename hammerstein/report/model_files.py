@@ -1,0 +1,123 @@
+"""Saving what a run identified: model and dynamics files in the report directory.
+
+The case results carry their identifications (``result.spec.identified``:
+:class:`hammerstein.scenario.identification.IdentifiedModel` and
+:class:`hammerstein.scenario.identification.IdentifiedDynamics` records), so
+the report saves them without identifying anything again:
+``models/identified-<f>Hz-<method>.toml`` (:func:`save_identified_models`,
+loadable by ``model = "<file>"``) and ``models/hammerstein-<i>-pi.toml`` /
+``models/hammerstein-<i>-dynamics.toml`` (:func:`save_identified_dynamics`,
+loadable by ``dynamics = "<file>"``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from hammerstein.core.presets import save_dynamics, save_model
+
+__all__ = ["model_file_name", "save_identified_models", "save_identified_dynamics"]
+
+
+def model_file_name(spec):
+    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table.
+
+    Parameters
+    ----------
+    spec : dict
+        The ``identify`` table: ``frequency`` [Hz] and, optionally,
+        ``method`` (default ``"closed-form"``).
+
+    Returns
+    -------
+    str
+        The file name, frequency formatted with ``:g``.
+
+    Examples
+    --------
+    >>> model_file_name({"frequency": 50.0, "method": "least-squares"})
+    'identified-50Hz-least-squares.toml'
+    """
+    return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
+
+
+def _records(results, kind):
+    """[(case name, record)] of the identifications of ``kind`` ("pi", "hammerstein") the results carry."""
+    return [(r.name, rec) for r in results for rec in r.spec.identified if rec.kind == kind]
+
+
+def save_identified_models(results, directory):
+    """Save every identified PI model the cases used into ``directory/models/``.
+
+    File names are :func:`model_file_name`; a second, different model with
+    the same name gets the plant label (``-static`` / ``-hammerstein``), then
+    ``-2``, ``-3``... before ``.toml``.
+
+    Parameters
+    ----------
+    results : list of hammerstein.scenario.execute.CaseResult
+        Every case's result (sweep cases included).
+    directory : pathlib.Path
+        The report directory being written.
+
+    Returns
+    -------
+    list of dict
+        One row per case and role: ``case``, ``role`` ('compensator' or
+        'comparison'), ``file`` (relative to ``directory``), ``plant``.
+    """
+    directory = Path(directory)
+    files, names, rows = {}, set(), []
+    for case_name, rec in _records(results, "pi"):
+        if rec.key not in files:
+            base = model_file_name(rec.identify)[:-len(".toml")]
+            label = "hammerstein" if not rec.plant.is_static else "static"
+            name, i = f"{base}.toml", 1
+            if name in names:
+                name = f"{base}-{label}.toml"
+            while name in names:
+                i += 1
+                name = f"{base}-{label}-{i}.toml"
+            names.add(name)
+            files[rec.key] = f"models/{name}"
+            save_model(rec.model, directory / files[rec.key], rec.metadata)
+        rows.append({"case": case_name, "role": rec.role, "file": files[rec.key],
+                     "plant": rec.metadata["plant"]})
+    return rows
+
+
+def save_identified_dynamics(results, directory):
+    """Save the PI models and dynamics that ``kind = "hammerstein"`` cases identified.
+
+    Files ``models/hammerstein-<i>-pi.toml`` (model file, when the PI was
+    identified) and ``models/hammerstein-<i>-dynamics.toml`` (``[dynamics]
+    kind = "state_space"``, continuous ZOH equivalent: loadable by
+    ``dynamics = "<file>"``), one pair per distinct identification.
+
+    Parameters
+    ----------
+    results : list of hammerstein.scenario.execute.CaseResult
+    directory : pathlib.Path
+
+    Returns
+    -------
+    list of dict
+        One per distinct identification: ``cases``, ``pi_file``,
+        ``dynamics_file``, ``identifier`` (DynamicsIdentifier), ``plant``
+        (HammersteinPlant), ``metadata`` (of the dynamics).
+    """
+    directory = Path(directory)
+    out, index = [], {}
+    for name, rec in _records(results, "hammerstein"):
+        if rec.key not in index:
+            i = len(out) + 1
+            row = {"cases": [], "pi_file": None, "dynamics_file": f"models/hammerstein-{i}-dynamics.toml",
+                   "identifier": rec.identifier, "plant": rec.plant, "metadata": rec.metadata}
+            if rec.pi_metadata is not None:
+                row["pi_file"] = f"models/hammerstein-{i}-pi.toml"
+                save_model(rec.pi, directory / row["pi_file"], rec.pi_metadata)
+            save_dynamics(rec.identifier.system_, directory / row["dynamics_file"], rec.metadata)
+            index[rec.key] = row
+            out.append(row)
+        index[rec.key]["cases"].append(name)
+    return out

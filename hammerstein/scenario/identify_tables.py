@@ -1,0 +1,281 @@
+"""Identification tables of scenario files: ``identify`` and ``identify_dynamics`` (checked, nothing run).
+
+A compensator table (or an open-loop drive case that compares a model with
+the plant) may name the model "identified at f Hz on this plant"::
+
+    model = "identified"
+    identify = { frequency = 50.0, amplitude = 10.0, periods = 3, n_hysterons = 15,
+                 method = "least-squares", partition = "time", bounds = "monotone",
+                 sensor = false, seed = 0 }
+
+Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
+``kind = "hammerstein"`` has its own defaults
+(:data:`HAMMERSTEIN_IDENTIFY_DEFAULTS`) and an ``identify_dynamics`` table
+(:data:`IDENTIFY_DYNAMICS_FIELDS`). The identification itself is
+:mod:`hammerstein.scenario.identification`.
+"""
+
+from __future__ import annotations
+
+from hammerstein.core.schema import nested_table
+from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
+                                         choice, integer, number, short_repr)
+
+__all__ = [
+    "IDENTIFY_FIELDS",
+    "identify_table",
+    "HAMMERSTEIN_IDENTIFY_DEFAULTS",
+    "hammerstein_identify_table",
+    "IDENTIFY_DYNAMICS_FIELDS",
+    "identify_dynamics_table",
+    "nyquist_problem",
+    "comparison_spec",
+    "dynamics_source",
+]
+
+
+def _bounds(v):
+    if v in ("none", "nonnegative", "monotone"):
+        return v
+    if (isinstance(v, list) and len(v) == 2
+            and all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in v)
+            and v[0] < v[1]):
+        return [float(a) for a in v]
+    hint = choice("none", "nonnegative", "monotone")
+    try:
+        hint(v)
+    except Invalid as exc:
+        raise Invalid(f"{exc}, or [lo, hi] weight bounds [µm/V]") from None
+    return v
+
+
+def _n_hysterons(v):
+    if isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= MAX_HYSTERONS:
+        return v
+    if (isinstance(v, list) and v and all(isinstance(r, list) and r for r in v)
+            and all(isinstance(a, int) and not isinstance(a, bool) and 1 <= a <= MAX_HYSTERONS
+                    for r in v for a in r)):
+        return v
+    raise Invalid(f"expected an integer 1..{MAX_HYSTERONS} or a p x m table of them, "
+                  f"found {short_repr(v)}")
+
+
+def _amplitude(v):
+    if isinstance(v, list):
+        return [number("V", 0)(a) for a in v]
+    return number("V", 0)(v)
+
+
+#: Schema of the ``identify`` table: key -> Field (checker, default).
+IDENTIFY_FIELDS = {
+    "frequency": Field(number("Hz", 0), required=True),
+    "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
+    "periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=3),
+    "n_hysterons": Field(_n_hysterons, default=15),
+    "method": Field(choice("closed-form", "least-squares"), default="closed-form"),
+    "partition": Field(choice("time", "input"), default="time"),
+    "bounds": Field(_bounds, default="none"),
+    "sensor": Field(boolean(), default=False),
+    "seed": Field(integer(0), default=0),
+}
+
+
+def identify_table(value):
+    """Field checker of an ``identify`` table (all problems at once).
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled (``amplitude`` stays absent when not
+        given: the plant model's ``input_amplitude`` is used).
+
+    Raises
+    ------
+    NestedInvalid
+        Listing ``(key, message)`` for every problem (unknown keys with the
+        closest valid key, missing ``frequency``, bad values).
+    """
+    def cross(clean):
+        if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares":
+            yield "bounds: only used by method = 'least-squares'"
+
+    return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
+
+
+def nyquist_problem(spec, plant):
+    """``identify.frequency: ...`` when the excitation of ``spec`` is not below the plant's Nyquist frequency.
+
+    Parameters
+    ----------
+    spec : dict
+        Validated ``identify`` table (:func:`identify_table`).
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    str or None
+        The problem, or None when ``frequency < 1 / (2 T)``.
+    """
+    f, nyquist = spec["frequency"], 0.5 / plant.sampling_period
+    if f >= nyquist:
+        return f"identify.frequency: {f:g} Hz is beyond the Nyquist frequency {nyquist:g} Hz of the plant"
+    return None
+
+
+def comparison_spec(case, mode):
+    """Check the ``model`` / ``identify`` keys of a case (no model is loaded or identified).
+
+    Parameters
+    ----------
+    case : dict
+        The raw ``[[cases]]`` table: ``model`` ("identified", "plant" or a
+        model file path) and, with "identified", ``identify``
+        (:data:`IDENTIFY_FIELDS`).
+    mode : {'drive', 'reference'}
+        Only drives may name a comparison model.
+
+    Returns
+    -------
+    dict
+        ``{"model": ..., "identify": validated table}`` (``identify`` only
+        with "identified").
+
+    Raises
+    ------
+    ValueError
+        One ``key: message`` per line (unknown ``identify`` keys with hints,
+        a reference case, a missing table).
+    """
+    name = case.get("model")
+    lines = []
+    if mode != "drive":
+        lines.append("model: a model is compared with the plant in open-loop drive cases only; "
+                     "the compensator's model is compensator.model")
+    if not isinstance(name, str):
+        lines.append(f"model: expected 'identified', 'plant' or a model file path, found {name!r}"
+                     if "model" in case else
+                     "identify: only used with model = 'identified' (add model = \"identified\")")
+    spec = {"model": name}
+    if name == "identified":
+        if "identify" not in case:
+            lines.append("identify: missing (required with model = 'identified'), "
+                         "e.g. identify = { frequency = 50.0 }")
+        else:
+            try:
+                spec["identify"] = identify_table(case["identify"])
+            except Invalid as exc:
+                lines += [f"identify.{k}: {m}" for k, m in getattr(exc, "problems", [])] \
+                    or [f"identify: {exc}"]
+    elif "identify" in case and isinstance(name, str):
+        lines.append(f"identify: only used with model = 'identified', found model = {name!r}")
+    if lines:
+        raise ValueError("\n".join(lines))
+    return spec
+
+
+#: ``identify`` defaults of ``kind = "hammerstein"``: least squares with monotone direct
+#: transfers on 40 hysterons (time partition: dense near the reversals) and 5 periods (the
+#: sensor noise averages out; the static error at small radii is the lever once G is
+#: inverted). Any key given in the scenario overrides these.
+HAMMERSTEIN_IDENTIFY_DEFAULTS = {"method": "least-squares", "bounds": "monotone",
+                                 "partition": "time", "n_hysterons": 40, "periods": 5}
+
+
+def hammerstein_identify_table(value):
+    """Field checker of the ``identify`` table of ``kind = "hammerstein"``.
+
+    As :func:`identify_table`, with :data:`HAMMERSTEIN_IDENTIFY_DEFAULTS`
+    for the keys not given.
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled.
+
+    Raises
+    ------
+    NestedInvalid
+        As :func:`identify_table`.
+    """
+    if isinstance(value, dict):
+        value = {**HAMMERSTEIN_IDENTIFY_DEFAULTS, **value}
+    return identify_table(value)
+
+
+def _band(v):
+    if (isinstance(v, list) and len(v) == 2 and all(isinstance(a, (int, float))
+                                                    and not isinstance(a, bool) for a in v)
+            and 0 < v[0] < v[1]):
+        return [float(a) for a in v]
+    raise Invalid(f"expected [f_min, f_max] in Hz with 0 < f_min < f_max, found {v!r}")
+
+
+#: Schema of the ``identify_dynamics`` table (defaults: 8 V random-phase multisines on
+#: each input in turn, 20 Hz-1 kHz, 8 periods of 50 ms, order chosen from the data).
+IDENTIFY_DYNAMICS_FIELDS = {
+    "excitation": Field(choice("multisine"), default="multisine"),
+    "amplitude": Field(number("V", 0), default=8.0),
+    "band": Field(_band, default=[20.0, 1000.0]),
+    "period": Field(number("s", 0), default=0.05),
+    "periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=8),
+    "order": Field(integer(1, 50)),                    # default: chosen by held-out fit
+    "max_order": Field(integer(1, 50), default=8),
+    "sensor": Field(boolean()),                        # default: as identify.sensor
+    "seed": Field(integer(0), default=1),
+}
+
+
+def identify_dynamics_table(value):
+    """Field checker of an ``identify_dynamics`` table (every key optional).
+
+    Parameters
+    ----------
+    value : object
+        Parsed TOML value.
+
+    Returns
+    -------
+    dict
+        The table with defaults filled (``order`` and ``sensor`` stay absent
+        when not given: chosen from the data, and as ``identify.sensor``).
+
+    Raises
+    ------
+    NestedInvalid
+        Listing ``(key, message)`` for every problem.
+    """
+    def cross(clean):
+        if "order" in clean and clean["order"] > clean["max_order"]:
+            yield "order: expected <= max_order"
+
+    return nested_table(value, IDENTIFY_DYNAMICS_FIELDS,
+                         "{ amplitude = 8.0, band = [20.0, 1000.0] }", cross)
+
+
+
+def dynamics_source(spec):
+    """Where the G of a ``kind = "hammerstein"`` compensator table comes from.
+
+    Parameters
+    ----------
+    spec : dict
+        The (validated) compensator table.
+
+    Returns
+    -------
+    str
+        ``spec["dynamics"]`` when given, else ``"identified"`` with
+        ``model = "identified"`` and ``"plant"`` (the plant's true dynamics)
+        otherwise.
+    """
+    return spec.get("dynamics") or ("identified" if spec.get("model") == "identified" else "plant")
