@@ -26,6 +26,7 @@ from hammerstein.exceptions import (BaselineError, CompensatorDivergence, Compen
                                     HammersteinError, HammersteinWarning, HysteresisError,
                                     IdentificationError, Invalid, NestedInvalid, PresetError,
                                     RangeWarning, ScenarioError, SignalError)
+from hammerstein.exceptions import AmplifierError, AmplifierWarning
 
 __version__ = "0.1.0"
 
@@ -128,6 +129,8 @@ _LAZY = {
     "sweep_table": "hammerstein.report.sweeps",
     "paper_comparison": "hammerstein.report.replication",
     "replicate": "hammerstein.runner",
+    "drive_signal": "hammerstein.core.drive",
+    "IterativeLearning": "hammerstein.core.ilc",
     "write_readme": "hammerstein.report.replication",
     # export: the compensators as C99 code / FMUs
     "export_c": "hammerstein.export",
@@ -137,7 +140,7 @@ _EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "Sig
                "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
                "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
                "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid",
-               "FileLimitError", "ExportError"]
+               "FileLimitError", "ExportError", "AmplifierError", "AmplifierWarning"]
 
 __all__ = sorted(_EXCEPTIONS + list(_LAZY)) + ["__version__"]
 

@@ -39,6 +39,8 @@ __all__ = [
     "NestedInvalid",
     "FileLimitError",
     "ExportError",
+    "AmplifierError",
+    "AmplifierWarning",
 ]
 
 
@@ -170,3 +172,10 @@ class FileLimitError(HammersteinError, ValueError):
 class ExportError(HammersteinError, ValueError):
     """A compensator, model or option cannot be exported as C code or an FMU
     (:mod:`hammerstein.export`; the message names what cannot be and why)."""
+class AmplifierError(HammersteinError, ValueError):
+    """A drive the amplifier cannot deliver (``limits = "error"``), or a bad ``[amplifier]``
+    table (the message names the input, the peak and the limit, or the key)."""
+
+
+class AmplifierWarning(HammersteinWarning):
+    """A drive beyond the amplifier's range or slew rate (``limits = "warn"``)."""

@@ -72,6 +72,9 @@ COMMANDS = {
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
     "export": ("hammerstein.cli.export", "write a compensator as C99 code or as an FMI 2.0 FMU"),
+    "compensate": ("hammerstein.cli.compensate", "write the drive file (input voltages) for a reference"),
+    "evaluate": ("hammerstein.cli.evaluate", "metrics and figures of a measured response"),
+    "learn": ("hammerstein.cli.learn", "one iterative-learning step from drive and measured files"),
 }
 
 

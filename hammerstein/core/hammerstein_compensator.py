@@ -182,6 +182,9 @@ class HammersteinCompensator:
     True
     """
 
+    #: > 0 inside :meth:`simulate` and :meth:`chain` (:meth:`packed_law` refuses outside them)
+    _entered = 0
+
     def __init__(self, model, dynamics, inversion="zpetc", gain="midpoint", iterations=3,
                  check="error", feedback="delay", cutoff_hz=None, sampling_period=None,
                  name="hammerstein"):
@@ -345,7 +348,11 @@ class HammersteinCompensator:
             When the hysteresis compensator diverges.
         """
         if self.inverse is not None:           # the declared law, pre-filter included
-            return simulate_compensator(self, reference, self.initial_state(initial_state))
+            self._entered += 1
+            try:
+                return simulate_compensator(self, reference, self.initial_state(initial_state))
+            finally:
+                self._entered -= 1
         r = self.model.check_inputs(reference, "reference")
         cstate, fstate = self._split(self.initial_state(initial_state))
         v, fstate = self.inverse_dynamics(r, fstate)
@@ -361,7 +368,21 @@ class HammersteinCompensator:
             The hysteresis compensator's law with ``prefilter`` = the ZPETC
             state space (:meth:`ZPETCInverse.state_space`); None for
             ``'stable'`` (whole-record inverse, run by :meth:`chain`).
+
+        Raises
+        ------
+        CompensatorError
+            When asked outside :meth:`simulate` and :meth:`chain`, i.e. by
+            ``simulate_chain(compensator, plant, reference)`` on a raw
+            reference: without its preview and fade-in the inverse gives a
+            spike of V and a delayed output. The message names the right call.
         """
+        if not self._entered:
+            raise CompensatorError(
+                "simulate_chain(HammersteinCompensator, plant, reference) would run the inverse "
+                "without its preview and fade-in; call compensator.run_reference(plant, reference, "
+                "period_samples=..., fade_samples=...) or, for the voltages alone, "
+                "hammerstein.drive_signal(compensator, reference, sampling_period, ...)")
         if self.inverse is None:
             return None
         law = self.hysteresis_compensator.packed_law()
@@ -391,8 +412,12 @@ class HammersteinCompensator:
             Divergence reported, not raised; chunked runs equal one run.
         """
         if self.inverse is not None:           # one compiled loop: pre-filter, law, plant
-            return simulate_chain(self, plant, reference, self.initial_state(compensator_state),
-                                  plant_state)
+            self._entered += 1
+            try:
+                return simulate_chain(self, plant, reference,
+                                      self.initial_state(compensator_state), plant_state)
+            finally:
+                self._entered -= 1
         r = self.model.check_inputs(reference, "reference")
         cstate, fstate = self._split(self.initial_state(compensator_state))
         v, fstate = self.inverse_dynamics(r, fstate)

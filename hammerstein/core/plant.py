@@ -58,12 +58,20 @@ class HammersteinPlant:
     first, then the dynamics). :attr:`matrices` is the whole linear part
     (creep then dynamics); :attr:`dynamics` the bending modes alone.
 
+    Attributes
+    ----------
+    amplifier : hammerstein.core.amplifier.Amplifier or None
+        The preset's ``[amplifier]`` (range, slew rate, bandwidth of the
+        voltages that reach the actuator); None: unlimited.
+
     Raises
     ------
     HysteresisError
         If the dynamics do not match the hysteresis outputs or the sampling
         period.
     """
+
+    amplifier = None
 
     def __init__(self, hysteresis: MultivariablePI, sampling_period: float,
                  dynamics: control.StateSpace | None = None, name: str = "plant", creep=None):

@@ -27,7 +27,8 @@ from hammerstein.core.schema import Field, Invalid, did_you_mean, is_number, str
 from hammerstein.core.creep import creep_from_table
 from hammerstein.core.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
-from hammerstein.exceptions import PresetError
+from hammerstein.core.amplifier import amplifier_from_table
+from hammerstein.exceptions import AmplifierError, PresetError
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
@@ -52,7 +53,7 @@ PRESET_DIR = resources.files("hammerstein") / "presets"
 
 #: Keys of a model or preset file, per table (anything else is reported with the closest key;
 #: the ``[model]`` keys are :data:`MODEL_KEYS`, ``kind = "state_space"`` dynamics A, B, C, D).
-FILE_KEYS = ("model", "preset", "dynamics", "identification", "creep")
+FILE_KEYS = ("model", "preset", "dynamics", "identification", "creep", "amplifier")
 
 
 def _any(v):
@@ -674,7 +675,12 @@ def load_plant(preset, dynamics=True, base_dir=None):
             lin = discretize(cont, float(T))
     name = meta.get("name", path.stem)
     creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
-    return HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
+    plant = HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
+    try:                               # the amplifier: hammerstein.core.amplifier
+        plant.amplifier = amplifier_from_table(data.get("amplifier"), model.input_names, str(path))
+    except AmplifierError as exc:
+        raise PresetError(str(exc)) from None
+    return plant
 
 
 def _creep(table, outputs, path):

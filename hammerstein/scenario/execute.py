@@ -18,11 +18,15 @@ from typing import Any
 import numpy as np
 
 from hammerstein.core import metrics as met
+from hammerstein.core.amplifier import drive_metrics
+from hammerstein.core.drive import default_fade_samples
+from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.scenario.registry import compensator_kind
-from hammerstein.simulation import simulate_chain
+from hammerstein.simulation import ChainResult, simulate_chain
 
-__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples", "signal_kind"]
+__all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples", "signal_kind",
+           "runs_alone", "drive_rows"]
 
 
 @dataclass
@@ -95,13 +99,74 @@ def run_case(case):
         return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
+        fade = fade_samples(case)
         if compensator_kind(case.compensator_spec).look_ahead:   # e.g. an inverse of G
-            res = case.compensator.run_reference(plant, case.signal, case.period_samples,
-                                                 fade_samples(case))
-        else:
-            res = simulate_chain(case.compensator, plant, case.signal)
+            res = case.compensator.run_reference(plant, case.signal, case.period_samples, fade)
+        else:                                                    # from rest: faded in
+            res = simulate_chain(case.compensator, plant,
+                                 fade_in(case.signal, fade) if fade else case.signal)
+        commanded = res.inputs
+        res = _through_amplifier(case, res)
     caught += [str(w.message) for w in rec]
-    return chain_result(case, res, caught)
+    result = chain_result(case, res, caught, commanded)
+    if hasattr(case.compensator, "history_rows") and not res.diverged:   # kind "ilc"
+        result.metrics += case.compensator.history_rows(list(plant.hysteresis.output_names))
+        if "grew" in case.compensator.stopped:
+            result.warnings.append(f"ILC stopped {case.compensator.stopped}")
+    return result
+
+
+def _through_amplifier(case, res):
+    """The chain with the plant's amplifier: limits checked (``compensator.limits``), then
+    the commanded voltages clipped, slew-limited and filtered before the plant."""
+    amp = getattr(case.plant, "amplifier", None)
+    if amp is None or res.diverged:
+        return res
+    T = case.plant.sampling_period
+    amp.check(res.inputs, T, getattr(case.compensator, "limits", None) or "warn")
+    applied, _ = amp.apply(res.inputs, T)
+    if np.array_equal(applied, res.inputs):
+        return res
+    y, p_final = case.plant.simulate(applied)
+    return ChainResult(applied, y, res.compensator_state, p_final)
+
+
+def runs_alone(case):
+    """True when a reference case cannot run in the batch kernel (fade-in, amplifier).
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+
+    Returns
+    -------
+    bool
+    """
+    return getattr(case.plant, "amplifier", None) is not None or fade_samples(case) > 0
+
+
+def drive_rows(case, inputs):
+    """``peak_input`` [V] and ``peak_slew`` [V/s] rows per input of a drive (from rest).
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+    inputs : numpy.ndarray, shape (m, n_samples)
+        Commanded voltages [V].
+
+    Returns
+    -------
+    list of dict
+        Rows ``{channel, metric, value, unit}``, channel = the input's name.
+    """
+    peak, slew = drive_metrics(inputs, case.plant.sampling_period)
+    rows = []
+    for i, name in enumerate(case.plant.hysteresis.input_names):
+        rows.append({"channel": name, "metric": "peak_input", "value": float(peak[i]),
+                     "unit": "V"})
+        rows.append({"channel": name, "metric": "peak_slew", "value": float(slew[i]),
+                     "unit": "V/s"})
+    return rows
 
 
 def signal_kind(case):
@@ -125,9 +190,11 @@ def fade_samples(case):
     """Fade-in of the reference of a compensator kind that fades in [samples].
 
     The compensator table's ``fade_in`` [s] when given, else one period of
-    the reference, at most the ``settle_periods`` the metrics skip; 0 for a
-    kind without the ``fades_in`` capability
-    (:class:`hammerstein.scenario.registry.CompensatorKind`).
+    the reference, at most the ``settle_periods`` the metrics skip. A kind
+    without the ``fades_in`` capability
+    (:class:`hammerstein.scenario.registry.CompensatorKind`) fades in only
+    when the reference does not start at rest and the plant's amplifier has
+    a slew rate (:func:`hammerstein.core.drive.default_fade_samples`).
 
     Parameters
     ----------
@@ -139,17 +206,18 @@ def fade_samples(case):
     int
         Fade-in length [samples].
     """
-    if not compensator_kind(case.compensator_spec).fades_in:
-        return 0
     T = case.plant.sampling_period
     given = case.compensator_spec.get("fade_in")
     settle = int(case.settle_periods * case.period_samples)
     if given is not None:
         return int(round(given / T))
+    if not compensator_kind(case.compensator_spec).fades_in:
+        return default_fade_samples(case.signal, case.period_samples, settle, case.compensator,
+                                    getattr(case.plant, "amplifier", None))
     return int(min(case.period_samples, settle))
 
 
-def chain_result(case, res, caught):
+def chain_result(case, res, caught, commanded=None):
     """CaseResult of a compensated case from its simulated chain (ChainResult).
 
     Parameters
@@ -162,6 +230,9 @@ def chain_result(case, res, caught):
         (m, n_samples), and outputs [µm], shape (p, n_samples).
     caught : list of str
         Warning messages of the case (kept in the result).
+    commanded : numpy.ndarray, shape (m, n_samples), optional
+        The compensator's voltages before the amplifier [V] (default
+        ``res.inputs``): their ``peak_input`` and ``peak_slew`` are reported.
 
     Returns
     -------
@@ -183,6 +254,7 @@ def chain_result(case, res, caught):
         entry = signal_kind(case)
         if entry.metrics is not None:  # e.g. per scan line
             rows += entry.metrics(case.time, case.signal_spec, case.signal, res.outputs)
+        rows += drive_rows(case, res.inputs if commanded is None else commanded)
     return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
 
 

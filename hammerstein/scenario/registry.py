@@ -23,12 +23,14 @@ import numpy as np
 
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
+from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.core.ilc import LearningCompensator
 from hammerstein.core.presets import PresetError, load_dynamics
 from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
-from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, choice, integer, kind_problem, number,
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
                                          string)
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 
@@ -274,6 +276,55 @@ COMPENSATORS["preisach-inverse"] = CompensatorKind(
     rate_independent=True)
 
 
+# every kind starts from rest (fade_in [s], hammerstein.core.drive) and reacts to the plant's
+# amplifier limits (limits, hammerstein.core.amplifier; "warn" in scenarios)
+for _kind in ("multivariable", "diagonal", "per-axis", "static-gain", "hammerstein", "preisach-inverse"):
+    COMPENSATORS[_kind].fields.setdefault("fade_in", Field(number("s", 0, exclusive=False)))
+    COMPENSATORS[_kind].fields["limits"] = Field(choice(*LIMITS))   # default "warn"
+
+
+def _start_table(v):
+    """The ``start`` table of kind "ilc": any other kind's table (default { kind = "hammerstein" })."""
+    if not isinstance(v, dict):
+        raise Invalid(f"expected a compensator table {{ kind = ..., ... }}, found {v!r}")
+    kind = v.get("kind", "hammerstein")
+    others = [k for k in COMPENSATORS if k not in ("none", "ilc")]
+    if kind not in others:
+        raise Invalid(f"kind: expected one of {', '.join(others)}, found {kind!r}")
+    problems = []
+    clean = check_table({**v, "kind": kind}, {"kind": Field(lambda x: x), **COMPENSATORS[kind].fields},
+                        "", problems, "")
+    if problems:
+        raise Invalid("; ".join(p.lstrip(": ").strip() for p in problems))
+    return clean
+
+
+def _build_ilc(spec, plant, context):
+    start = build_compensator(spec.get("start") or {"kind": "hammerstein"}, plant, context)
+    return LearningCompensator(
+        start, plant.sampling_period, iterations=spec.get("iterations", 10),
+        learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 2000.0),
+        inversion=spec.get("inversion", "zpetc"), sensor_noise=spec.get("sensor_noise", 0.0),
+        seed=spec.get("seed", 0))
+
+
+# kind "ilc" (hammerstein.core.ilc): iterative learning against the simulated plant
+COMPENSATORS["ilc"] = CompensatorKind(
+    _build_ilc,
+    {"start": Field(_start_table),            # default { kind = "hammerstein" }
+     "iterations": Field(integer(1, MAX_ITERATIONS), default=10),
+     "learning_gain": Field(number("", 0)),   # default 0.5, in (0, 2)
+     "q_cutoff_hz": Field(number("Hz", 0)),   # default 2000 Hz
+     "inversion": Field(choice(*INVERSIONS)),
+     "sensor_noise": Field(number("µm", 0, exclusive=False)),   # default 0
+     "seed": Field(integer(0, 2**31 - 1)),
+     "fade_in": Field(number("s", 0, exclusive=False)),
+     "limits": Field(choice(*LIMITS))},
+    "iterative learning control against the plant from another kind's drive: u_k+1 = "
+    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.core.ilc)",
+    look_ahead=True, fades_in=True)
+
+
 def build_compensator(spec, plant, context):
     """Build the compensator of a ``[compensator]`` table.
 
@@ -303,4 +354,8 @@ def build_compensator(spec, plant, context):
     entry = compensator_kind(spec)
     if not isinstance(context, ResolveContext):
         context = ResolveContext(Path(context))
-    return entry.build(spec, plant, context)
+    comp = entry.build(spec, plant, context)
+    if comp is not None:               # start-up and amplifier reaction (scenario.execute)
+        comp.fade_in = spec.get("fade_in")
+        comp.limits = spec.get("limits", "warn")
+    return comp

@@ -47,7 +47,7 @@ import pandas as pd
 
 from hammerstein.core.compensators import check_reference_range
 from hammerstein.core.stability import stability_map
-from hammerstein.scenario.execute import chain_result, run_case
+from hammerstein.scenario.execute import chain_result, run_case, runs_alone
 from hammerstein.scenario.progress import progress
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator, compensator_kind
 from hammerstein.core.metrics import UNITS
@@ -243,7 +243,8 @@ def run_cases(cases, desc="cases"):
     results = [None] * len(cases)
     batchable = [i for i, c in enumerate(cases)
                  if getattr(c, "sweep", None) is not None and c.mode == "reference"
-                 and compensator_kind(c.compensator_spec).batchable and is_fusable(c.compensator)]
+                 and compensator_kind(c.compensator_spec).batchable and not runs_alone(c)
+                 and is_fusable(c.compensator)]
     rest = [i for i in range(len(cases)) if i not in set(batchable)]
     n_sweep = sum(1 for c in cases if getattr(c, "sweep", None) is not None)
     bar = progress(total=len(cases), desc=desc, unit="case") if n_sweep else None

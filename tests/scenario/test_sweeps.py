@@ -75,8 +75,9 @@ pa = { kind = "per-axis" }
     d = out.out_dir
     table = pd.read_csv(d / "sweep-s.csv")
     assert list(table.columns[:4]) == ["frequency_hz", "compensator", "axis", "channel"]
-    # 2 compensators x 2 axes x 3 frequencies x 3 channels (x, y, x+y)
-    assert len(table) == 2 * 2 * 3 * 3
+    # 2 compensators x 2 axes x 3 frequencies x (3 output channels x, y, x+y
+    # + 2 input channels ux, uy with peak_input and peak_slew)
+    assert len(table) == 2 * 2 * 3 * (3 + 2)
     assert sorted(table["frequency_hz"].unique()) == FREQS
     assert not list(d.glob("timeseries-*.csv"))
     assert (d / "sweep-s.png").is_file() and "sweep-s.png" in (d / "report.md").read_text()

@@ -1,0 +1,216 @@
+"""Shared parts of the hardware-loop commands (``compensate``, ``evaluate``, ``learn``).
+
+The actuator file (a preset or a model file), the reference (an inline TOML
+table as in scenarios, or a CSV file), column mappings and the drive file's
+ownership check.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from hammerstein.core.drive import DRIVE_MARK, read_signals
+from hammerstein.core.amplifier import amplifier_from_table
+from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.presets import load_dynamics, load_model, load_plant, read_toml
+from hammerstein.exceptions import DataFileError, HammersteinError, PresetError
+from hammerstein.scenario.validate import _signal
+
+__all__ = ["Reference", "load_actuator", "load_reference", "mapping", "owned_problem",
+           "add_actuator_arguments", "positive_float"]
+
+
+class Reference:
+    """A reference record: ``t`` (N,) [s], ``signal`` (p, N) [µm], ``period_samples``,
+    ``scale`` (radius / amplitude [µm] or None), ``spec`` (the inline table or None),
+    ``kind`` (e.g. ``"circle"``, ``"file"``)."""
+
+    def __init__(self, t, signal, period_samples=1, scale=None, spec=None, kind="file",
+                 loop_channel=None):
+        self.t, self.signal, self.period_samples = t, signal, int(period_samples)
+        self.scale, self.spec, self.kind, self.loop_channel = scale, spec, kind, loop_channel
+
+
+def positive_float(text):
+    """argparse type: a positive finite number."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, found {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number, found {text!r}")
+    return v
+
+
+def nonnegative_float(text):
+    """argparse type: a finite number >= 0."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, found {text!r}") from None
+    if not (math.isfinite(v) and v >= 0):
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, found {text!r}")
+    return v
+
+
+def mapping(text, names, option):
+    """``"x=X_meas,y=Y_meas"`` -> ``{"x": "X_meas", ...}``; a bare list renames in order.
+
+    Raises
+    ------
+    DataFileError
+        A name that is not one of ``names``.
+    """
+    if not text:
+        return {}
+    out = {}
+    items = [s.strip() for s in text.split(",") if s.strip()]
+    for i, item in enumerate(items):
+        if "=" in item:
+            k, v = (s.strip() for s in item.split("=", 1))
+        elif i < len(names):
+            k, v = names[i], item
+        else:
+            raise DataFileError(f"{option}: more columns than the model's {len(names)} "
+                                f"({', '.join(names)})")
+        if k not in names:
+            raise DataFileError(f"{option}: {k!r} is not one of the model's names "
+                                f"({', '.join(names)})")
+        out[k] = v
+    return out
+
+
+def load_actuator(path, sampling_period=None):
+    """The plant of a preset (PI + dynamics + amplifier) or of a model file (static PI).
+
+    Parameters
+    ----------
+    path : str
+        Preset name or file, or model file.
+    sampling_period : float, optional
+        T [s]; required for a model file without ``[preset]``; for a preset,
+        its dynamics are sampled again at T when it differs.
+
+    Returns
+    -------
+    HammersteinPlant
+        With ``amplifier`` (None when the file has none).
+
+    Raises
+    ------
+    PresetError
+    """
+    p = Path(path)
+    data = read_toml(p, "model file") if p.suffix == ".toml" or p.exists() else None
+    if data is None or "preset" in data:
+        plant = load_plant(path)
+        if sampling_period is not None and not np.isclose(sampling_period, plant.sampling_period):
+            dyn = None if plant.is_static else load_dynamics(path, plant.hysteresis.output_names,
+                                                             sampling_period)
+            amp = plant.amplifier
+            plant = HammersteinPlant(plant.hysteresis, float(sampling_period), dyn, plant.name)
+            plant.amplifier = amp
+        return plant
+    if sampling_period is None:
+        raise PresetError(f"{path}: a model file has no sampling period; give --sampling-period S")
+    model = load_model(p)
+    dyn = load_dynamics(p, model.output_names, sampling_period) if "dynamics" in data else None
+    plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
+    if "amplifier" in data:
+        plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
+    return plant
+
+
+def load_reference(text, plant, time="t", outputs=None, period=None):
+    """The reference of ``--reference``: an inline TOML table or a CSV file.
+
+    Parameters
+    ----------
+    text : str
+        ``'{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'``
+        (the keys of a scenario's ``reference``) or a CSV path (``t`` and one
+        column per output [µm]; resampled onto the plant's period).
+    plant : HammersteinPlant
+    time : str
+        Time column of a CSV file.
+    outputs : str, optional
+        ``--outputs`` mapping of a CSV file.
+    period : float, optional
+        Period of a periodic CSV reference [s] (``--period``): the ZPETC
+        preview's continuation past the end and the settling window.
+
+    Returns
+    -------
+    Reference
+
+    Raises
+    ------
+    DataFileError
+        Bad table or file (one line naming the key or column).
+    """
+    names = list(plant.hysteresis.output_names)
+    if text.lstrip().startswith("{"):
+        try:
+            spec = tomllib.loads("reference = " + text)["reference"]
+        except tomllib.TOMLDecodeError as exc:
+            raise DataFileError(f"--reference: not an inline TOML table ({exc})") from None
+        problems = []
+        got = _signal("reference", "reference", spec, plant, problems, "--reference", Path.cwd())
+        if got is None:
+            msg = "; ".join(p.replace("--reference: reference.", "--reference: ", 1)
+                            for p in problems) or "--reference: cannot generate the reference"
+            raise DataFileError(msg)
+        t, sig, period, extras = got
+        return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
+                         extras.get("loop_channel"))
+    t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--outputs"),
+                             plant.sampling_period, "--reference")
+    period_samples = 1 if period is None else max(int(round(period / plant.sampling_period)), 1)
+    return Reference(t, sig, period_samples, None, None, "file")
+
+
+def owned_problem(out, force):
+    """Why ``out`` must not be replaced (a file this project did not write), or None."""
+    p = Path(out)
+    if force or not p.is_file():
+        return None
+    try:
+        with open(p, encoding="utf-8", errors="replace") as fh:
+            first = fh.read(len(DRIVE_MARK))
+    except OSError:
+        return None
+    if first == DRIVE_MARK:
+        return None
+    return (f"--out: {out} exists and was not written by hammerstein; choose another name or "
+            f"pass --force to replace it")
+
+
+def add_actuator_arguments(p):
+    """The arguments shared by the hardware commands: actuator, reference, time, mappings."""
+    p.add_argument("actuator", metavar="MODEL_OR_PRESET",
+                   help="preset name or file (PI + dynamics + optional [amplifier]), or a model "
+                        "file (static PI; needs --sampling-period)")
+    p.add_argument("--reference", required=True, metavar="SPEC_OR_CSV",
+                   help="inline TOML table as a scenario's reference, e.g. '{ kind = \"circle\", "
+                        "radius = 30, frequency = 100, periods = 20 }', or a CSV file with t [s] "
+                        "and one column per output [µm]")
+    p.add_argument("--sampling-period", type=positive_float, metavar="S",
+                   help="sampling period [s] (default: the preset's)")
+    p.add_argument("--period", type=positive_float, metavar="S",
+                   help="period of a periodic CSV reference [s] (continuation past its end, "
+                        "settling window)")
+    p.add_argument("--time", default="t", metavar="COL", help="time column of the CSV files "
+                   "(default t)")
+    p.add_argument("--inputs", metavar="NAME=COL,...", help="input columns named otherwise")
+    p.add_argument("--outputs", metavar="NAME=COL,...", help="output columns named otherwise")
+
+
+def catch():
+    """The errors of bad input the hardware commands report as one line (exit 1)."""
+    return (HammersteinError, ValueError, OSError)
+

@@ -1,0 +1,235 @@
+"""``hammerstein evaluate``: the metrics, figure and report of a measured response.
+
+Reads a measured record (``t`` [s], one column per output [µm], optionally
+the applied inputs [V]) and the reference it should have followed (an
+inline TOML table as in scenarios, or a CSV file), and writes into
+``--out DIR`` what ``hammerstein run`` writes for a compensated case:
+``metrics.csv`` (the same metrics, over the same steady-state window after
+``--settle-periods``, :func:`hammerstein.core.metrics.tracking_metrics`),
+``trajectory-measured.png``, ``timeseries-measured.csv`` and
+``report.md``.
+
+The delay between the reference and the measurement is estimated by
+cross-correlation (integer samples, :func:`hammerstein.core.ilc.estimate_delay`)
+and reported (metrics ``delay_samples`` and ``delay``); it is not removed
+unless ``--remove-delay`` is given (then the measurement is advanced by it
+and the last samples, not measured, are dropped).
+
+Exit status: 0 written; 1 bad files (one line, nothing written); 2 a
+usage error. ``DIR`` is replaced only when it is empty or carries the
+``.hammerstein-report`` marker of a report (as for ``run``).
+"""
+
+from __future__ import annotations
+
+import sys
+from importlib import metadata
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+
+from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.cli._hardware import (catch, load_actuator, load_reference, mapping,
+                                       nonnegative_float, positive_float)
+from hammerstein.core import metrics as met
+from hammerstein.core.amplifier import drive_metrics
+from hammerstein.core.drive import read_signals
+from hammerstein.core.files import safe_write
+from hammerstein.core.ilc import estimate_delay
+from hammerstein.core.references import raster_line_index
+from hammerstein.exceptions import DataFileError
+from hammerstein.report.figures import save, trajectory_figure
+
+__all__ = ["add_parser", "evaluate"]
+
+MARKER = ".hammerstein-report"
+
+
+def add_parser(subparsers):
+    """Register the ``evaluate`` subcommand (sets ``handler``).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``add_subparsers()`` object of the ``hammerstein`` parser.
+    """
+    p = subparsers.add_parser(
+        "evaluate", help="metrics and figures of a measured response",
+        description="Compute the metrics, figure and report of `hammerstein run` on a measured "
+                    "response to a reference; the delay between them is estimated and reported.")
+    p.add_argument("--reference", required=True, metavar="SPEC_OR_CSV",
+                   help="inline TOML table as a scenario's reference, or a CSV file (t [s], one "
+                        "column per output [µm])")
+    p.add_argument("--measured", required=True, metavar="MEASURED.csv",
+                   help="t [s] from the drive's start, one column per output [µm], optionally "
+                        "one per input [V]")
+    p.add_argument("--out", required=True, metavar="DIR", help="report directory")
+    p.add_argument("--model", metavar="MODEL_OR_PRESET",
+                   help="names the inputs and outputs (default outputs x,y)")
+    p.add_argument("--outputs", metavar="NAME=COL,...",
+                   help="output names, or NAME=COLUMN for columns named otherwise (default x,y)")
+    p.add_argument("--inputs", metavar="NAME=COL,...",
+                   help="input columns [V] to report peak_input / peak_slew and plot")
+    p.add_argument("--time", default="t", metavar="COL", help="time column (default t)")
+    p.add_argument("--sampling-period", type=positive_float, metavar="S",
+                   help="resample the measurement onto this period [s] (default: its own)")
+    p.add_argument("--period", type=positive_float, metavar="S",
+                   help="period of a periodic CSV reference [s] (the settling window)")
+    p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
+                   help="periods excluded from the metrics (default 1, as scenarios)")
+    p.add_argument("--remove-delay", action="store_true",
+                   help="advance the measurement by the estimated delay before the metrics")
+    p.set_defaults(handler=_handle)
+
+
+def _names(text, default):
+    if not text:
+        return list(default), {}
+    names, cols = [], {}
+    for item in (s.strip() for s in text.split(",") if s.strip()):
+        name, _, col = item.partition("=")
+        names.append(name.strip())
+        if col:
+            cols[name.strip()] = col.strip()
+    return names, cols
+
+
+def evaluate(reference, measured, period_samples, sampling_period, output_names, settle_periods=1.0,
+             scale=None, loop_channel=None, remove_delay=False, raster_frequency=None):
+    """Metrics of a measured response (the rows of ``metrics.csv``).
+
+    Parameters
+    ----------
+    reference, measured : numpy.ndarray, shape (p, n_samples)
+        [µm], on the same time grid.
+    period_samples : int
+    sampling_period : float
+        [s].
+    output_names : list of str
+    settle_periods : float
+    scale : float, optional
+        Radius / amplitude [µm].
+    loop_channel : int, optional
+        Output of a single-axis sine reference.
+    remove_delay : bool
+        Advance the measurement by the estimated delay first.
+    raster_frequency : float, optional
+        Raster references: line metrics.
+
+    Returns
+    -------
+    rows : list of dict
+        ``{channel, metric, value, unit}``; ``delay_samples`` and ``delay``
+        [s] on the channel of all outputs.
+    delay : int
+        Estimated delay [samples] (> 0: the measurement lags).
+    measured : numpy.ndarray
+        The measurement the metrics used (advanced when ``remove_delay``).
+    reference : numpy.ndarray
+    """
+    max_lag = int(min(max(period_samples // 2, 50), reference.shape[1] // 4))
+    delay = estimate_delay(reference, measured, max_lag)
+    if remove_delay and delay > 0:
+        measured = measured[:, delay:]
+        reference = reference[:, :measured.shape[1]]
+    rows = met.tracking_metrics(reference, measured, output_names, period_samples, settle_periods,
+                                scale=scale, loop_channel=loop_channel)
+    if raster_frequency:
+        line = raster_line_index(np.arange(reference.shape[1]) * sampling_period, raster_frequency)
+        rows += met.raster_line_metrics(reference, measured, line)
+    allch = "+".join(output_names)
+    rows.append({"channel": allch, "metric": "delay_samples", "value": float(delay), "unit": ""})
+    rows.append({"channel": allch, "metric": "delay", "value": delay * sampling_period, "unit": "s"})
+    return rows, delay, measured, reference
+
+
+def _handle(args):
+    problem = out_dir_problem(args.out)
+    out = Path(args.out)
+    if not problem and out.is_dir() and any(out.iterdir()) and not (out / MARKER).is_file():
+        problem = (f"--out: {out} is a directory hammerstein did not write; choose an empty or "
+                   f"new directory")
+    if problem:
+        print_err(f"hammerstein evaluate: error: {problem}")
+        return 2
+    try:
+        if args.model:
+            plant = load_actuator(args.model, args.sampling_period or 1.0)
+            outs, ins = list(plant.hysteresis.output_names), list(plant.hysteresis.input_names)
+        else:
+            outs, ins = ["x", "y"], []
+        outs, out_cols = _names(args.outputs, outs) if not args.model else \
+            (outs, mapping(args.outputs, outs, "--outputs"))
+        t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,
+                               "--measured")
+        u = None
+        if args.inputs:
+            ins, in_cols = _names(args.inputs, ins) if not args.model else \
+                (ins, mapping(args.inputs, ins, "--inputs"))
+            _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured")
+        shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
+            output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
+        ref = load_reference(args.reference, shell, args.time, None, args.period)
+        N = min(ref.signal.shape[1], y.shape[1])
+        if N < 8:
+            raise DataFileError(f"--measured: {N} samples in common with the reference; expected "
+                                f"the measurement of the whole reference")
+        r, y = ref.signal[:, :N], y[:, :N]
+        rf = ref.spec.get("frequency") if ref.kind == "raster" and ref.spec else None
+        rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
+                                      ref.scale, ref.loop_channel, args.remove_delay, rf)
+        if u is not None:
+            peak, slew = drive_metrics(u[:, :N], T)
+            for i, n in enumerate(ins):
+                rows += [{"channel": n, "metric": "peak_input", "value": float(peak[i]), "unit": "V"},
+                         {"channel": n, "metric": "peak_slew", "value": float(slew[i]), "unit": "V/s"}]
+        _write(out, args, rows, delay, T, r, ym, outs, u, ins, ref)
+    except catch() as exc:
+        print_err(f"hammerstein evaluate: error: {' '.join(str(exc).split())}")
+        return 1
+    summary = next((f"{row['value']:.4g} µm" for row in rows
+                    if row["metric"] == "max_euclidean_error"), "")
+    print(f"wrote {out}/ (max Euclidean error {summary}, delay {delay} samples = "
+          f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay else ', not removed'})",
+          file=sys.stdout)
+    return 0
+
+
+def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
+    out.mkdir(parents=True, exist_ok=True)
+    try:
+        version = metadata.version("hammerstein")
+    except metadata.PackageNotFoundError:
+        version = "unknown"
+    safe_write(out / MARKER, f"{version}\n")
+    lines = ["case,channel,metric,value,unit"] + [
+        f"measured,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}" for row in rows]
+    safe_write(out / "metrics.csv", "\n".join(lines) + "\n")
+    n = y.shape[1]
+    t = np.arange(n) * T
+    cols = [t] + [r[i] for i in range(len(outs))] + [y[i] for i in range(len(outs))]
+    head = ["time_s"] + [f"{o}_ref_um" for o in outs] + [f"{o}_um" for o in outs]
+    if u is not None:
+        cols += [u[i, :n] for i in range(len(ins))]
+        head += [f"{i}_V" for i in ins]
+    body = "\n".join(",".join(f"{v:.9g}" for v in row) for row in np.column_stack(cols))
+    safe_write(out / "timeseries-measured.csv", ",".join(head) + "\n" + body + "\n")
+    figure = ""
+    if len(outs) == 2:
+        fig = trajectory_figure(t, r, y, outs, "measured response", args.settle_periods *
+                                ref.period_samples * T, inputs=None if u is None else u[:, :n],
+                                input_names=ins if u is not None else None)
+        tmp = out / ".trajectory-measured.png.part"
+        save(fig, tmp)
+        tmp.replace(out / "trajectory-measured.png")
+        figure = "\n![trajectory](trajectory-measured.png)\n"
+    table = "\n".join(f"| {row['channel']} | {row['metric']} | {row['value']:.6g} | {row['unit']} |"
+                      for row in rows)
+    text = (f"# Measured response\n\nreference: `{args.reference}`  \nmeasured: `{args.measured}`"
+            f"  \nsampling period {T:g} s, {n} samples, settling {args.settle_periods:g} period(s)"
+            f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
+            f"samples = {delay * T * 1e6:.4g} µs, "
+            f"{'removed before the metrics' if args.remove_delay else 'not removed: the metrics include it'}.\n"
+            f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n")
+    safe_write(out / "report.md", text)

@@ -1,0 +1,228 @@
+"""``hammerstein learn``: one iterative-learning trial from a drive file and its measured response.
+
+Reads the drive ``u_k`` that was applied (a file of ``hammerstein compensate``
+or of an earlier ``learn``), the measured response ``y_k`` and the
+reference; prints the trial's error and, once, the monotonic-convergence
+condition; writes ``u_{k+1}`` (:class:`hammerstein.core.ilc.IterativeLearning`)
+within the amplifier's limits. ``--history DIR`` appends the trial's error
+to ``DIR/history.csv`` and redraws ``DIR/convergence.png``.
+
+The reference is faded in as the first drive was: the drive file's header
+records the fade-in (``fade-in N samples``), which is used unless
+``--fade-in`` is given. The measured record's delay behind the model's
+prediction is estimated by cross-correlation (``--delay auto``, printed) and
+the error is advanced by it before learning.
+
+Exit status: 0 written; 1 bad files, shapes or a drive beyond the amplifier
+with ``--limits error`` (one line, nothing written); 2 a usage error.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
+from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
+                                       load_reference, mapping, nonnegative_float, owned_problem,
+                                       positive_float)
+from hammerstein.core.amplifier import LIMITS
+from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
+from hammerstein.core.files import safe_write
+from hammerstein.core.hammerstein_compensator import fade_in
+from hammerstein.core.ilc import IterativeLearning, error_summary, estimate_delay
+from hammerstein.exceptions import DataFileError
+from hammerstein.report.figures import save
+from hammerstein.report.ilc_figure import convergence_figure
+
+__all__ = ["add_parser", "history_rows"]
+
+HISTORY_MARK = ".hammerstein-history"
+
+
+def add_parser(subparsers):
+    """Register the ``learn`` subcommand (sets ``handler``).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``add_subparsers()`` object of the ``hammerstein`` parser.
+    """
+    p = subparsers.add_parser(
+        "learn", help="one iterative-learning step from drive and measured files",
+        description="Iterative learning control, one trial: from the drive applied (u_k), its "
+                    "measured response (y_k) and the reference, write the next drive u_k+1.")
+    add_actuator_arguments(p)
+    p.add_argument("--drive", required=True, metavar="U_K.csv", help="the drive that was applied")
+    p.add_argument("--measured", required=True, metavar="Y_K.csv",
+                   help="its measured response: t [s] from the drive's start, one column per "
+                        "output [µm] (resampled onto the drive's period)")
+    p.add_argument("--out", required=True, metavar="U_K+1.csv", help="the next drive")
+    p.add_argument("--history", metavar="DIR",
+                   help="append this trial's error to DIR/history.csv, draw DIR/convergence.png")
+    p.add_argument("--learning-gain", type=positive_float, default=0.5, metavar="G",
+                   help="gamma in (0, 2) (default 0.5: half the error per trial, half the noise)")
+    p.add_argument("--q-cutoff-hz", type=positive_float, default=2000.0, metavar="HZ",
+                   help="zero-phase low-pass Q of the update (default 2000 Hz)")
+    p.add_argument("--inversion", choices=["zpetc", "stable"], default="zpetc",
+                   help="inverse of the dynamics (default zpetc)")
+    p.add_argument("--delay", default="auto", metavar="auto|N",
+                   help="samples the measurement lags the model (default auto: cross-correlation)")
+    p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
+                   help="fade-in of the reference [s] (default: the drive file's)")
+    p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
+                   help="periods excluded from the printed error (default 1)")
+    p.add_argument("--limits", choices=list(LIMITS), default="error",
+                   help="beyond the amplifier: error (default), warn or clip")
+    p.add_argument("--force", action="store_true",
+                   help="replace an --out file that hammerstein did not write")
+    p.set_defaults(handler=_handle)
+
+
+def _fade_of(path):
+    """The ``fade-in N samples`` recorded in a drive file's header, or None."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for _ in range(20):
+            line = fh.readline()
+            if not line.startswith("#"):
+                break
+            m = re.search(r"fade-in (\d+) samples", line)
+            if m:
+                return int(m.group(1))
+    return None
+
+
+def history_rows(history_dir):
+    """The rows of ``DIR/history.csv``.
+
+    Parameters
+    ----------
+    history_dir : str or pathlib.Path
+        The ``--history`` directory.
+
+    Returns
+    -------
+    list of tuple
+        ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
+        there is no history yet.
+    """
+    path = Path(history_dir) / "history.csv"
+    if not path.is_file():
+        return []
+    rows = []
+    for line in path.read_text(encoding="utf-8").splitlines()[1:]:
+        k, out, mx, rms = line.split(",")[:4]
+        rows.append((int(k), out, float(mx), float(rms)))
+    return rows
+
+
+def _write_history(history, names, rec, scale):
+    d = Path(history)
+    if d.exists() and any(d.iterdir()) and not (d / HISTORY_MARK).exists():
+        raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
+                            f"choose an empty or new directory")
+    d.mkdir(parents=True, exist_ok=True)
+    (d / HISTORY_MARK).touch()
+    rows = history_rows(d)
+    k = 1 + max((r[0] for r in rows), default=-1)
+    rows += [(k, n, float(rec.max_error[i]), float(rec.rms_error[i])) for i, n in enumerate(names)]
+    text = "iteration,output,max_error_um,rms_error_um\n" + "".join(
+        f"{a},{b},{c!r},{e!r}\n" for a, b, c, e in rows)
+    safe_write(d / "history.csv", text, "history file")
+    its = sorted({r[0] for r in rows})
+    mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
+    rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
+    save(convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale),
+         d / "convergence.png")
+    return k
+
+
+def _handle(args):
+    problem = out_file_problem(args.out, "drive file")
+    if not problem and args.history:
+        problem = out_dir_problem(args.history)
+        problem = problem.replace("--out", "--history") if problem else None
+    if problem:
+        print_err(f"hammerstein learn: error: {problem}")
+        return 2
+    try:
+        plant = load_actuator(args.actuator, args.sampling_period)
+        model = plant.hysteresis
+        ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
+        T = plant.sampling_period
+        _, u, Tu = read_signals(args.drive, list(model.input_names), args.time,
+                                mapping(args.inputs, list(model.input_names), "--inputs"),
+                                None, "--drive")
+        if not np.isclose(Tu, T, rtol=1e-6):
+            raise DataFileError(f"--drive: sampled every {Tu:g} s; expected the actuator's {T:g} s "
+                                f"(give --sampling-period)")
+        N = ref.signal.shape[1]
+        if u.shape[1] != N:
+            raise DataFileError(f"--drive: {u.shape[1]} samples; expected the reference's {N}")
+        _, y, _ = read_signals(args.measured, list(model.output_names), args.time,
+                               mapping(args.outputs, list(model.output_names), "--outputs"), T,
+                               "--measured")
+        if y.shape[1] < N:
+            raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
+                                f"the drive's {N} (the measurement must cover the whole drive)")
+        y = y[:, :N]
+        fade = (int(round(args.fade_in / T)) if args.fade_in is not None else _fade_of(args.drive))
+        if fade is None:
+            fade = default_fade_samples(ref.signal, ref.period_samples)
+        target = fade_in(ref.signal, fade)
+        predicted, _ = plant.simulate(u)
+        if args.delay == "auto":
+            delay = max(estimate_delay(predicted, y, max(ref.period_samples, 50)), 0)
+        else:
+            try:
+                delay = int(args.delay)
+            except ValueError:
+                raise DataFileError(f"--delay: expected auto or an integer >= 0, found "
+                                    f"{args.delay!r}") from None
+            if delay < 0:
+                raise DataFileError(f"--delay: expected auto or an integer >= 0, found {delay}")
+        ilc = IterativeLearning(model, plant.dynamics, T, args.learning_gain, args.q_cutoff_hz,
+                                inversion=args.inversion, delay=delay)
+        cond = ilc.convergence()
+        settle = int(args.settle_periods * ref.period_samples)
+        shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
+        rec = error_summary(target[:, :N - delay], shifted, slice(min(settle, N - delay - 1), None))
+        u_next = ilc.step(target, u, y, ref.period_samples if ref.period_samples > 1 else None)
+        problems = []
+        if plant.amplifier is not None:
+            problems = plant.amplifier.check(u_next, T, args.limits)
+            if problems:
+                u_next, _ = plant.amplifier.limit(u_next, T)
+        owned = owned_problem(args.out, args.force)
+        if owned:
+            print_err(f"hammerstein learn: error: {owned}")
+            return 2
+        comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]\n"
+                   f"actuator {args.actuator}, sampling period {T:g} s, fade-in {fade} samples\n"
+                   f"learned from {args.drive} and {args.measured}: delay {delay} samples, "
+                   f"gain {args.learning_gain:g}, Q {args.q_cutoff_hz:g} Hz"
+                   + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else ""))
+        t = np.arange(N) * T
+        safe_write(args.out, signals_csv(t, dict(zip(model.input_names, u_next)), comment),
+                   "drive file")
+        k = _write_history(args.history, list(model.output_names), rec, ref.scale) \
+            if args.history else None
+    except catch() as exc:
+        print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
+        return 1
+    scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} µm)" \
+        if ref.scale else ""
+    axes = ", ".join(f"{n} max {a:.4g} RMS {b:.4g}" for n, a, b in
+                     zip(model.output_names, rec.max_error, rec.rms_error))
+    trial = f"trial {k}: " if k is not None else ""
+    print(f"{trial}max Euclidean error {rec.max_euclidean_error:.4g} µm{scale}; {axes} µm; "
+          f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
+    print(cond.summary(list(model.output_names)), file=sys.stdout)
+    if not cond.holds:
+        print_err("warning: the learning is not guaranteed to converge: lower --learning-gain "
+                  "or --q-cutoff-hz")
+    print(f"wrote {args.out}", file=sys.stdout)
+    return 0

@@ -1,0 +1,528 @@
+"""Drive signals: the voltages to apply for a reference, within the amplifier's limits.
+
+:func:`drive_signal` is the one call from a reference to the input
+voltages of any compensator (rate-independent kinds and the Hammerstein
+compensator alike), as the scenarios compute them:
+
+1. **fade-in from rest.** The reference is faded in from the rest output
+   (0 µm) by the raised cosine ``w(t) = (1 - cos(pi t / t_f)) / 2`` over
+   ``fade_samples`` samples (:func:`hammerstein.core.hammerstein_compensator.fade_in`;
+   value and slope continuous at both ends). ``fade_samples = 0`` keeps a
+   reference that already starts at rest as it is; the default
+   (:func:`default_fade_samples`) is one period of the reference for a
+   reference that does not start at rest (a circle starts at x = R, which
+   a compensator would otherwise ask for in one sample) when the
+   compensator inverts the dynamics or the amplifier has a slew rate.
+2. **the compensator**, from rest. The Hammerstein compensator's ZPETC
+   inverse reads the reference ``preview_samples`` ahead and is continued
+   past the record's end (periodically for a periodic reference,
+   :func:`hammerstein.core.hammerstein_compensator.continuation`), exactly
+   as :meth:`HammersteinCompensator.run_reference` does.
+3. **the amplifier's limits**
+   (:class:`hammerstein.core.amplifier.Amplifier`): ``peak_input`` and
+   ``peak_slew`` per input are measured on the commanded voltages; beyond the
+   range or slew rate ``limits = "error"`` refuses, ``"warn"`` warns and
+   ``"clip"`` does not, and both then clip and slew-limit the drive.
+
+:class:`DriveStream` computes the same voltages chunk by chunk (a reference
+read or generated in pieces): every chunk size gives the same numbers as
+the whole record (``'stable'`` inversion excepted: it inverts the whole
+record at once and is only run by :func:`drive_signal`).
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from hammerstein.core.amplifier import Amplifier, drive_metrics
+from hammerstein.core.hammerstein_compensator import continuation
+from hammerstein.core.files import FileLimitError, bounded_read_text
+from hammerstein.exceptions import CompensatorError, DataFileError
+
+__all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
+           "starts_at_rest", "apply_amplifier",
+           "read_signals", "signals_csv", "DRIVE_MARK"]
+
+
+def starts_at_rest(reference, rest=None, atol=1e-9):
+    """True when a reference starts at the rest output (its first sample at rest).
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    rest : array_like, shape (p,), optional
+        Rest output [µm]; zeros by default.
+    atol : float
+        Tolerance [µm].
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> starts_at_rest([[0.0, 1.0], [0.0, 0.5]]), starts_at_rest([[2.0, 1.0]])
+    (True, False)
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    if r.shape[1] == 0:
+        return True
+    r0 = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    return bool(np.all(np.abs(r[:, 0] - r0) <= atol))
+
+
+def default_fade_samples(reference, period_samples, settle_samples=None, compensator=None,
+                         amplifier=None):
+    """The default fade-in [samples]: one period for a reference that does not start at rest.
+
+    The rule, for every compensator kind: 0 for a reference that starts at
+    rest (0 µm); otherwise one period (at most ``settle_samples``) for a
+    compensator that inverts the dynamics (the inverse would otherwise ask
+    for a step of velocity, a spike of V) or when the amplifier has a
+    finite slew rate (a rate-independent compensator would otherwise step
+    its input from rest to the first sample's voltage, e.g. 9 V in one
+    sample for a circle). A rate-independent compensator on a plant
+    without a declared slew rate keeps its abrupt start (its ``peak_slew``
+    metric shows the step), so results of existing scenarios do not change.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    period_samples : int
+        One period of the reference [samples] (1 for a non-periodic record).
+    settle_samples : int, optional
+        At most this many (the samples the metrics skip).
+    compensator : object, optional
+        The compensator (one with ``run_reference`` inverts the dynamics);
+        None: treated as inverting the dynamics.
+    amplifier : hammerstein.core.amplifier.Amplifier, optional
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> circle = np.vstack([np.cos(np.linspace(0, 6.28, 100)), np.sin(np.linspace(0, 6.28, 100))])
+    >>> default_fade_samples(circle, 50), default_fade_samples(np.roll(circle, 25, axis=0), 50)
+    (50, 50)
+    >>> default_fade_samples(circle[::-1] * [[1], [0]], 50)         # starts at 0: no fade
+    0
+    """
+    if starts_at_rest(reference):
+        return 0
+    inverts = compensator is None or hasattr(compensator, "run_reference")
+    slew = amplifier is not None and any(np.isfinite(c.slew_rate) for c in amplifier.channels)
+    if not (inverts or slew):
+        return 0
+    n = int(period_samples)
+    return n if settle_samples is None else int(min(n, settle_samples))
+
+
+@dataclass
+class DriveResult:
+    """Voltages for a reference and what they ask of the amplifier.
+
+    Parameters
+    ----------
+    inputs : numpy.ndarray, shape (m, n_samples)
+        The drive [V]: the commanded voltages, range-clipped and
+        slew-limited when an amplifier is given and ``limits`` is not
+        ``"error"``.
+    commanded : numpy.ndarray, shape (m, n_samples)
+        The compensator's voltages before any limit [V].
+    reference : numpy.ndarray, shape (p, n_samples)
+        The faded reference the actuator should follow [µm].
+    peak_input : numpy.ndarray, shape (m,)
+        ``max |u|`` of ``commanded`` [V].
+    peak_slew : numpy.ndarray, shape (m,)
+        ``max |du| / T`` of ``commanded`` from rest [V/s].
+    fade_samples : int
+        The fade-in used [samples].
+    problems : list of str
+        The limits exceeded (empty without an amplifier).
+    """
+
+    inputs: np.ndarray
+    commanded: np.ndarray
+    reference: np.ndarray
+    peak_input: np.ndarray
+    peak_slew: np.ndarray
+    fade_samples: int
+    problems: list = field(default_factory=list)
+
+
+def _fade_weights(start, n, fade):
+    """Raised-cosine weights of samples ``start .. start + n - 1`` for a fade of ``fade`` samples."""
+    k = np.arange(start, start + n)
+    w = np.ones(n)
+    inside = k < fade
+    w[inside] = 0.5 * (1.0 - np.cos(np.pi * k[inside] / fade))
+    return w
+
+
+class DriveStream:
+    """A compensator's drive computed chunk by chunk, equal to the whole-record computation.
+
+    Feed the reference with :meth:`push` (any chunk sizes, in order), then
+    call :meth:`finish`; the concatenated returns are the commanded
+    voltages of :func:`drive_signal` (before the amplifier).
+
+    Parameters
+    ----------
+    compensator : object
+        Any compensator (``simulate(reference, initial_state)``); a
+        :class:`~hammerstein.core.hammerstein_compensator.HammersteinCompensator`
+        with ``inversion = "zpetc"`` runs its preview (the first
+        ``preview_samples`` voltages come once that much reference has
+        arrived).
+    fade_samples : int
+        Fade-in from rest [samples] (0: none).
+    period_samples : int, optional
+        Period of a periodic reference: the ZPETC inverse's continuation
+        past the end (see :func:`continuation`).
+
+    Raises
+    ------
+    CompensatorError
+        For a Hammerstein compensator with ``inversion = "stable"`` (whole
+        record only: use :func:`drive_signal`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.core.presets import load_plant
+    >>> from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+    >>> plant = load_plant("rakotondrabe-2dof")
+    >>> comp = HammersteinCompensator(plant.hysteresis, plant.dynamics)
+    >>> t = np.arange(2000) * plant.sampling_period
+    >>> yr = 20 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    >>> stream = DriveStream(comp, fade_samples=200, period_samples=200)
+    >>> parts = [stream.push(yr[:, i:i + 700]) for i in range(0, 2000, 700)] + [stream.finish()]
+    >>> whole = drive_signal(comp, yr, plant.sampling_period, 200, fade_samples=200).inputs
+    >>> float(np.max(np.abs(np.concatenate(parts, axis=1) - whole))) < 1e-9
+    True
+    """
+
+    def __init__(self, compensator, fade_samples=0, period_samples=None):
+        self.compensator = compensator
+        self.fade = max(int(fade_samples), 0)
+        self.period_samples = period_samples
+        inv = getattr(compensator, "inverse", None)
+        if hasattr(compensator, "run_reference") and inv is None:
+            raise CompensatorError("inversion = 'stable' inverts the whole record at once: "
+                                   "compute its drive with drive_signal(...), not in chunks")
+        self._zpetc = inv is not None and hasattr(compensator, "run_reference")
+        self.preview = compensator.preview_samples if self._zpetc else 0
+        self._n = 0                       # reference samples received
+        self._head = None                 # ZPETC: first P faded samples until the filter starts
+        self._tail = None                 # last samples, for the continuation
+        self._state = None
+        self._keep = max((period_samples or 0) + 8, 3)
+
+    def _faded(self, chunk):
+        w = _fade_weights(self._n, chunk.shape[1], self.fade) if self._n < self.fade else None
+        return chunk if w is None else chunk * w      # rest output = 0 µm
+
+    def _remember(self, faded):
+        self._tail = faded if self._tail is None else np.concatenate([self._tail, faded], axis=1)
+        self._tail = self._tail[:, -self._keep:]
+
+    def push(self, reference):
+        """Voltages for the next chunk of reference.
+
+        Parameters
+        ----------
+        reference : array_like, shape (p, n)
+            The next n reference samples [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (m, n')
+            Commanded voltages [V]; ``n' = n`` except for the ZPETC inverse,
+            whose first ``preview_samples`` voltages wait for that much reference.
+        """
+        comp = self.compensator
+        r = np.asarray(reference, dtype=float)
+        r = np.atleast_2d(r)
+        faded = self._faded(r)
+        self._n += r.shape[1]
+        self._remember(faded)
+        if not self._zpetc:
+            if self._state is None:
+                self._state = np.zeros(comp.n_states) if hasattr(comp, "n_states") else None
+            u, self._state = comp.simulate(faded, self._state)
+            return u
+        if self._state is None:                       # the inverse starts on the first P samples
+            self._head = faded if self._head is None else np.concatenate([self._head, faded], 1)
+            P = self.preview
+            if self._head.shape[1] < P or self._head.shape[1] == 0:
+                return np.zeros((comp.model.n_inputs, 0))
+            inv = comp.inverse
+            s0 = inv.initial_state(self._head[:, 0])
+            if P:
+                _, s0 = inv.filter(self._head[:, :P], s0)
+            state = np.zeros(comp.n_states)
+            state[comp.hysteresis_compensator.n_states:] = s0
+            self._state = state
+            faded, self._head = self._head[:, P:], None
+        if faded.shape[1] == 0:
+            return np.zeros((comp.model.n_inputs, 0))
+        u, self._state = comp.simulate(faded, self._state)
+        return u
+
+    def finish(self):
+        """The last voltages (ZPETC: the preview past the end, from the continuation).
+
+        Returns
+        -------
+        numpy.ndarray, shape (m, n'')
+            [V].
+        """
+        comp = self.compensator
+        if not self._zpetc or self._tail is None:
+            return np.zeros((getattr(comp, "model").n_inputs, 0)) if hasattr(comp, "model") \
+                else np.zeros((0, 0))
+        P = self.preview
+        ext = continuation(self._tail, P, self.period_samples)
+        if self._state is None:          # fewer than P samples in all: start on what there is
+            head = np.concatenate([self._head, ext], axis=1)
+            n = self._head.shape[1]
+            stream = DriveStream(comp, 0, None)
+            stream._zpetc, stream.preview = True, P
+            out = stream.push(head)
+            return out[:, :n]
+        u, self._state = comp.simulate(ext, self._state)
+        return u
+
+
+def drive_signal(compensator, reference, sampling_period, period_samples=None, fade_samples=None,
+                 amplifier=None, limits="error", settle_samples=None, where=""):
+    """The input voltages of a compensator for a reference, from rest, within the amplifier's limits.
+
+    The voltages equal those of the scenario route (``hammerstein run``,
+    timeseries ``<input>_V``) for the same compensator, reference and
+    fade-in; the steps are listed in the module docstring.
+
+    Parameters
+    ----------
+    compensator : object
+        Any compensator of :mod:`hammerstein.core.compensators` or a
+        :class:`~hammerstein.core.hammerstein_compensator.HammersteinCompensator`.
+    reference : array_like, shape (p, n_samples)
+        ``yr(t)`` [µm] at the sampling period, from t = 0.
+    sampling_period : float
+        T [s].
+    period_samples : int, optional
+        One period of a periodic reference [samples] (default fade length,
+        continuation of the ZPETC preview).
+    fade_samples : int, optional
+        Fade-in from rest [samples]; default :func:`default_fade_samples`.
+    amplifier : Amplifier, optional
+        The limits (e.g. ``plant.amplifier`` of a preset with an
+        ``[amplifier]`` table); None: none.
+    limits : {'error', 'warn', 'clip'}
+        Reaction to a drive beyond the amplifier
+        (:meth:`~hammerstein.core.amplifier.Amplifier.check`).
+    settle_samples : int, optional
+        Upper bound of the default fade.
+    where : str
+        Prefix of the limit messages (e.g. a case name).
+
+    Returns
+    -------
+    DriveResult
+
+    Raises
+    ------
+    AmplifierError
+        ``limits = "error"`` and the drive exceeds the amplifier.
+    CompensatorDivergence
+        When the compensator diverges.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.core.presets import load_plant
+    >>> from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    >>> plant = load_plant("rakotondrabe-2dof", dynamics=False)
+    >>> comp = InverseMultiplicativeCompensator(plant.hysteresis)
+    >>> t = np.arange(2000) * plant.sampling_period
+    >>> yr = 30 * np.vstack([np.cos(2 * np.pi * 10 * t), np.sin(2 * np.pi * 10 * t)])
+    >>> d = drive_signal(comp, yr, plant.sampling_period, period_samples=2000, fade_samples=2000)
+    >>> d.inputs.shape, bool(d.peak_slew.max() < 1e3)    # V/s: faded in, no step from rest
+    ((2, 2000), True)
+    >>> abrupt = drive_signal(comp, yr, plant.sampling_period, period_samples=2000, fade_samples=0)
+    >>> bool(abrupt.peak_slew.max() > 1e5)               # V/s: 0 -> 6 V in one 50 µs sample
+    True
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    if fade_samples is None:
+        fade_samples = default_fade_samples(r, period_samples or 1, settle_samples, compensator,
+                                            amplifier)
+    fade_samples = int(min(max(int(fade_samples), 0), r.shape[1]))
+    if hasattr(compensator, "run_reference") and getattr(compensator, "inverse", 1) is None:
+        lead, state, faded = compensator.start(r, period_samples, fade_samples)   # 'stable'
+        u, _ = compensator.simulate(lead, state)
+    else:
+        stream = DriveStream(compensator, fade_samples, period_samples)
+        u = np.concatenate([stream.push(r), stream.finish()], axis=1)
+        faded = r * _fade_weights(0, r.shape[1], fade_samples) if fade_samples else r
+    peak, slew = drive_metrics(u, sampling_period)
+    problems, out = [], u
+    if amplifier is not None:
+        problems = amplifier.check(u, sampling_period, limits, where)
+        if problems:
+            out, _ = amplifier.limit(u, sampling_period)
+    return DriveResult(out, u, faded, peak, slew, fade_samples, problems)
+
+
+def apply_amplifier(amplifier: Amplifier | None, inputs, sampling_period):
+    """What reaches the actuator from a drive: the amplifier's clip, slew limit and bandwidth.
+
+    Parameters
+    ----------
+    amplifier : Amplifier or None
+        None: the drive itself.
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, n_samples)
+        [V].
+    """
+    if amplifier is None:
+        return np.asarray(inputs, dtype=float)
+    return amplifier.apply(inputs, sampling_period)[0]
+
+
+#: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
+DRIVE_MARK = "# hammerstein"
+
+
+def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file"):
+    """Columns of a drive, measured or reference CSV file, on a uniform time grid.
+
+    File conventions: a header row (lines starting with ``#`` are comments);
+    time in column ``time`` [s], strictly increasing; one column per signal
+    named as the model's inputs [V] or outputs [µm] (``mapping`` maps other
+    names); other columns are ignored. With ``sampling_period`` the columns
+    are interpolated linearly onto ``t_k = k T`` from 0 to the file's last
+    time (a file starting after 0 is refused); without it the file's times
+    must be uniform (relative spread below 1e-6) and are kept.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file (read through the 256 MiB data-file limit,
+        ``HAMMERSTEIN_MAX_DATA_BYTES``).
+    names : list of str
+        The signals wanted, in order.
+    time : str
+        Time column [s].
+    mapping : dict of str to str, optional
+        ``{name: column}`` for columns named otherwise.
+    sampling_period : float, optional
+        Resample onto this period [s].
+    what : str
+        What the file is, for messages (e.g. ``"--measured"``).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (n_samples,)
+        [s].
+    values : numpy.ndarray, shape (len(names), n_samples)
+    sampling_period : float
+        [s].
+
+    Raises
+    ------
+    DataFileError
+        Unreadable file, missing column (the message lists the columns
+        found), non-numeric values, times not increasing or not uniform.
+    """
+    try:
+        text = bounded_read_text(path, "data", "data file")
+    except (FileLimitError, OSError) as exc:
+        raise DataFileError(f"{what}: {path}: {getattr(exc, 'strerror', None) or exc}") from None
+    try:
+        frame = pd.read_csv(io.StringIO(text), sep=None, engine="python", comment="#")
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
+        raise DataFileError(f"{what}: {path}: not a readable CSV file "
+                            f"({' '.join(str(exc).split())})") from None
+    frame.columns = [str(c).strip() for c in frame.columns]
+    mapping = dict(mapping or {})
+
+    def column(col, label):
+        if col not in frame.columns:
+            raise DataFileError(f"{what}: {path}: no column {col!r} for {label} (columns: "
+                                f"{', '.join(frame.columns)}; map another name with --inputs/"
+                                f"--outputs NAME=COLUMN or --time COLUMN)")
+        v = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
+        if v.size < 2 or not np.all(np.isfinite(v)):
+            bad = int(np.flatnonzero(~np.isfinite(v))[0]) + 2 if v.size else 1
+            raise DataFileError(f"{what}: {path}: column {col!r} is not a finite number on "
+                                f"data row {bad - 1}")
+        return v
+
+    t = column(time, "the time [s]")
+    if np.any(np.diff(t) <= 0):
+        raise DataFileError(f"{what}: {path}: the time column {time!r} is not strictly increasing")
+    vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
+    if sampling_period is None:
+        d = np.diff(t)
+        T = float(np.mean(d))
+        if np.max(np.abs(d - T)) > 1e-6 * T:
+            raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "
+                                f"{d.min():g} to {d.max():g} s); expected one sampling period")
+        return t, vals, T
+    T = float(sampling_period)
+    if t[0] > 1e-9 * max(1.0, abs(t[-1])):
+        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
+    n = int(np.floor(t[-1] / T + 1e-9)) + 1
+    grid = np.arange(n) * T
+    return grid, np.array([np.interp(grid, t, v) for v in vals]).reshape(len(names), n), T
+
+
+def signals_csv(t, columns, comment):
+    """CSV text of signals at full precision, headed by a ``# hammerstein`` comment.
+
+    Parameters
+    ----------
+    t : array_like, shape (n_samples,)
+        Time [s] (column ``t``).
+    columns : dict of str to array_like, each shape (n_samples,)
+        Name -> values, in column order.
+    comment : str
+        The comment lines' text (units, what wrote the file); each line is
+        prefixed with ``# hammerstein`` / ``#``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> print(signals_csv([0.0, 0.5], {"ux": [0.1, 1 / 3]}, "drive: t [s], ux [V]"), end="")
+    # hammerstein drive: t [s], ux [V]
+    t,ux
+    0,0.10000000000000001
+    0.5,0.33333333333333331
+    """
+    lines = comment.splitlines() or [""]
+    head = [f"{DRIVE_MARK} {lines[0]}".rstrip()] + [f"# {ln}".rstrip() for ln in lines[1:]]
+    data = np.column_stack([np.asarray(t, dtype=float)]
+                           + [np.asarray(v, dtype=float) for v in columns.values()])
+    buf = io.StringIO()
+    np.savetxt(buf, data, delimiter=",", fmt="%.17g")
+    return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()

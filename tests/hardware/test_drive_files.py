@@ -1,0 +1,179 @@
+"""Drive signals and drive files: the scenario route's voltages, chunks, limits, refusals.
+
+Expectations: the scenario route (``run_case`` of a resolved scenario and its
+timeseries) computed independently of :func:`drive_signal`; chunked == whole;
+the amplifier's limits as closed forms (a step from rest of V volts in one
+sample is V / T volts per second).
+"""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hammerstein.core.amplifier import amplifier_from_table
+from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+                                           StaticGainCompensator, diagonal_compensator)
+from hammerstein.core.drive import DriveStream, drive_signal, read_signals
+from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.exceptions import AmplifierError, CompensatorError
+from hammerstein.runner import run_scenario
+from hammerstein.scenario.execute import fade_samples, run_case
+from hammerstein.scenario.resolve import load_scenario
+from hammerstein.simulation import simulate_chain
+
+T = 5e-5
+
+
+def circle(n=3000, f=100.0, R=25.0):
+    t = np.arange(n) * T
+    return R * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+
+
+def kinds(plant):
+    m = plant.hysteresis
+    return {
+        "multivariable": InverseMultiplicativeCompensator(m),
+        "diagonal": diagonal_compensator(m),
+        "per-axis": PerAxisInverseCompensator(m),
+        "static-gain": StaticGainCompensator(m),
+        "hammerstein": HammersteinCompensator(m, plant.dynamics),
+    }
+
+
+KINDS = ["multivariable", "diagonal", "per-axis", "static-gain", "hammerstein"]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("chunk", [1, 3, 250, 1999])
+def test_chunked_equals_whole(preset_plant, kind, chunk):
+    comp = kinds(preset_plant)[kind]
+    yr = circle(2000)
+    whole = drive_signal(comp, yr, T, 200, fade_samples=200).inputs
+    stream = DriveStream(comp, 200, 200)
+    parts = [stream.push(yr[:, k:k + chunk]) for k in range(0, 2000, chunk)] + [stream.finish()]
+    np.testing.assert_allclose(np.concatenate(parts, axis=1), whole, rtol=0, atol=1e-9)
+
+
+SCENARIO = """
+name = "route"
+[plant]
+preset = "{preset}"
+dynamics = true
+[compensator]
+kind = "{kind}"
+{extra}
+[[cases]]
+name = "c"
+settle_periods = 2
+reference = {{ kind = "circle", radius = 25.0, frequency = 100.0, periods = 6 }}
+"""
+
+
+@pytest.mark.parametrize("kind, extra", [("hammerstein", ""), ("hammerstein", 'inversion = "stable"'),
+                                         ("multivariable", "fade_in = 0.01"),
+                                         ("per-axis", "")])
+def test_drive_reproduces_the_scenario_route(tmp_path, kind, extra):
+    p = tmp_path / "s.toml"
+    p.write_text(SCENARIO.format(preset="rakotondrabe-2dof", kind=kind, extra=extra))
+    case = load_scenario(p).cases[0]
+    route = run_case(case).inputs
+    T_ = case.plant.sampling_period
+    d = drive_signal(case.compensator, case.signal, T_, case.period_samples, fade_samples(case))
+    np.testing.assert_allclose(d.inputs, route, rtol=0, atol=1e-9)
+    # the timeseries CSV of `hammerstein run` holds the same voltages (to its 6 digits)
+    out = run_scenario(p, tmp_path / "out")
+    assert out.ok, out.error
+    ts = pd.read_csv(out.out_dir / "timeseries-c.csv")
+    np.testing.assert_allclose(ts[["ux_V", "uy_V"]].to_numpy().T, d.inputs, rtol=5e-6, atol=1e-9)
+
+
+def test_simulate_chain_refuses_the_hammerstein_compensator_and_names_the_call(preset_plant):
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    with pytest.raises(CompensatorError, match=r"run_reference\(plant, reference.*drive_signal"):
+        simulate_chain(comp, preset_plant, circle(400))
+    res = comp.run_reference(preset_plant, circle(400), 200, 200)     # the right call still runs
+    assert np.all(np.isfinite(res.outputs))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_no_kind_steps_beyond_the_slew_limit_without_its_reaction(preset_plant, kind):
+    amp = amplifier_from_table({"range": [-10, 10], "slew_rate": 2e4}, ["ux", "uy"])
+    comp = kinds(preset_plant)[kind]
+    yr = circle(2000, f=50.0)
+    d = drive_signal(comp, yr, T, 400, amplifier=amp, limits="error")   # default fade: passes
+    assert d.fade_samples == 400 and d.problems == []
+    assert np.all(np.abs(np.diff(np.concatenate([np.zeros((2, 1)), d.inputs], 1))) <= 2e4 * T)
+    with pytest.raises(AmplifierError, match="slew rate of .* beyond the amplifier's 2e\\+04 V/s"):
+        drive_signal(comp, yr, T, 400, fade_samples=0, amplifier=amp, limits="error")
+    clipped = drive_signal(comp, yr, T, 400, fade_samples=0, amplifier=amp, limits="clip")
+    steps = np.abs(np.diff(np.concatenate([np.zeros((2, 1)), clipped.inputs], 1)))
+    assert clipped.problems and steps.max() <= 2e4 * T * (1 + 1e-9)
+    assert clipped.peak_slew.max() > 2e4                            # measured on the command
+
+
+AMP_PRESET = "\n[amplifier]\nrange = [-5.0, 5.0]\n"
+
+
+def test_scenario_warns_once_per_input_and_saturates_the_plant(tmp_path, repo_root):
+    text = (repo_root / "hammerstein/presets/rakotondrabe-2dof.toml").read_text()
+    (tmp_path / "amp.toml").write_text(text + AMP_PRESET)
+    p = tmp_path / "s.toml"
+    p.write_text(SCENARIO.format(preset="amp.toml", kind="multivariable", extra=""))
+    case = load_scenario(p).cases[0]
+    res = run_case(case)
+    msgs = [w for w in res.warnings if "beyond the amplifier" in w]
+    assert len(msgs) == 2 and all("[-5, 5] V" in w for w in msgs)
+    assert {w.split()[1] for w in msgs} == {"ux", "uy"}
+    assert np.max(np.abs(res.inputs)) <= 5.0
+    y, _ = case.plant.simulate(np.clip(res.inputs, -5, 5))
+    np.testing.assert_allclose(res.outputs, y, atol=1e-12)
+    peaks = {(r["channel"], r["metric"]): r["value"] for r in res.metrics}
+    assert peaks[("ux", "peak_input")] > 5.0                         # the command, not the clip
+    p.write_text(SCENARIO.format(preset="amp.toml", kind="multivariable", extra='limits = "error"'))
+    out = run_scenario(p, tmp_path / "out")
+    assert not out.ok and "input ux needs" in out.error and "[-5, 5] V" in out.error
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "hammerstein", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=600)
+
+
+def test_compensate_writes_the_drive_and_refuses_what_the_amplifier_cannot(tmp_path, preset_plant,
+                                                                          repo_root):
+    ref = '{ kind = "circle", radius = 25, frequency = 100, periods = 6 }'
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "d.csv",
+               "--predicted", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    t, u, T_ = read_signals(tmp_path / "d.csv", ["ux", "uy"])
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    d = drive_signal(comp, circle(1200), T, 200)
+    np.testing.assert_allclose(u, d.inputs, rtol=0, atol=1e-12)       # full precision
+    assert T_ == pytest.approx(T)
+    # a CSV reference gives the same drive
+    pd.DataFrame({"t": t, "x": circle(1200)[0], "y": circle(1200)[1]}).to_csv(tmp_path / "r.csv",
+                                                                              index=False)
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", "r.csv", "--out", "d2.csv",
+               "--fade-in", "0.01", "--period", "0.01", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    np.testing.assert_allclose(read_signals(tmp_path / "d2.csv", ["ux", "uy"])[1], d.inputs,
+                               rtol=0, atol=1e-9)
+    # beyond a +-5 V amplifier: one line, exit 1, nothing written
+    text = (repo_root / "hammerstein/presets/rakotondrabe-2dof.toml").read_text()
+    (tmp_path / "amp.toml").write_text(text + AMP_PRESET)
+    res = _cli("compensate", "amp.toml", "--reference", ref, "--out", "d3.csv", cwd=tmp_path)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1, res.stderr
+    assert "beyond the amplifier's range [-5, 5] V" in res.stderr and not (tmp_path / "d3.csv").exists()
+    res = _cli("compensate", "amp.toml", "--reference", ref, "--out", "d3.csv", "--limits", "clip",
+               cwd=tmp_path)
+    assert res.returncode == 0 and np.max(np.abs(read_signals(tmp_path / "d3.csv",
+                                                              ["ux", "uy"])[1])) <= 5.0
+    # a file the project did not write is not replaced
+    (tmp_path / "mine.csv").write_text("t,ux\n0,1\n")
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "mine.csv",
+               cwd=tmp_path)
+    assert res.returncode == 2 and "--force" in res.stderr
+    assert (tmp_path / "mine.csv").read_text() == "t,ux\n0,1\n"

@@ -1,0 +1,101 @@
+"""``evaluate`` and ``learn`` through files, as a user with hardware would run them.
+
+The "hardware" is simulated here, outside the commands: an actuator 4 %
+stronger than the model with a known transport delay and sensor noise.
+``evaluate``'s metrics are compared with metrics computed in this file from
+their definitions; ``learn`` must reduce the error trial after trial.
+"""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hammerstein.core.drive import read_signals
+from hammerstein.core.presets import load_plant
+
+REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 10 }'
+T = 5e-5
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "hammerstein", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=600)
+
+
+def _hardware(drive_csv, measured_csv, delay, seed, gain=1.04):
+    plant = load_plant("rakotondrabe-2dof")
+    t, u, _ = read_signals(drive_csv, ["ux", "uy"])
+    clean, _ = plant.simulate(gain * u)
+    y = np.concatenate([np.zeros((2, delay)), clean[:, :clean.shape[1] - delay]], axis=1)
+    y = y + np.random.default_rng(seed).normal(0, 0.04, y.shape)
+    pd.DataFrame({"t": t, "x_meas": y[0], "y_meas": y[1], "ux": u[0], "uy": u[1]}).to_csv(
+        measured_csv, index=False)
+    return t, y, clean
+
+
+@pytest.mark.parametrize("delay", [0, 5])
+def test_evaluate_matches_independent_metrics_and_finds_the_delay(tmp_path, delay):
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    t, y, _ = _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", delay, 0)
+    res = _cli("evaluate", "--reference", REF, "--measured", "y0.csv", "--outputs",
+               "x=x_meas,y=y_meas", "--inputs", "ux,uy", "--out", "ev", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    m = pd.read_csv(tmp_path / "ev/metrics.csv").set_index(["channel", "metric"])["value"]
+    assert m[("x+y", "delay_samples")] == delay
+    w = t >= 0.01 - 1e-12                                  # settle_periods = 1: one 100 Hz period
+    r = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    e = np.linalg.norm(r[:, w] - y[:, w], axis=0)
+    assert m[("x+y", "max_euclidean_error")] == pytest.approx(e.max(), rel=1e-9)
+    assert m[("x", "rms_error")] == pytest.approx(np.sqrt(np.mean((r[0, w] - y[0, w]) ** 2)), rel=1e-9)
+    assert ("ux", "peak_input") in m.index
+    assert (tmp_path / "ev/trajectory-measured.png").is_file()
+
+
+@pytest.mark.slow
+def test_learn_through_files_reduces_the_error(tmp_path):
+    """Ten `learn` trials against the stronger, delayed, noisy actuator: <= 0.3 % of the radius."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    errors = []
+    for k in range(11):
+        t, _, clean = _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", 3, k)
+        r = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+        w = t >= 0.01 - 1e-12
+        errors.append(np.linalg.norm(r[:, w] - clean[:, w], axis=0).max())   # the true error
+        res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", f"u{k}.csv",
+                   "--measured", f"y{k}.csv", "--outputs", "x=x_meas,y=y_meas", "--out",
+                   f"u{k + 1}.csv", "--history", "hist", cwd=tmp_path)
+        assert res.returncode == 0, res.stderr
+    errors = np.array(errors)
+    assert errors[-1] <= 0.003 * 30, errors                       # <= 0.3 % of the radius
+    assert np.all(errors[1:] <= 1.1 * errors[:-1] + 0.01), errors  # no growth beyond noise
+    assert len(pd.read_csv(tmp_path / "hist/history.csv")) == 11 * 2
+    assert (tmp_path / "hist/convergence.png").is_file()
+
+
+def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_path):
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 3, 0)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv", "--measured",
+               "y0.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u1.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "measured delay 3 samples" in res.stdout
+    _, _, y0 = _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    _, _, y1 = _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 0, 0)
+    t = np.arange(y0.shape[1]) * T
+    r = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    w = t >= 0.01
+    e0 = np.abs(r[:, w] - y0[:, w]).max()
+    e1 = np.abs(r[:, w] - y1[:, w]).max()
+    assert e1 < 0.7 * e0
+    short = pd.read_csv(tmp_path / "y0.csv").iloc[:1000]
+    short.to_csv(tmp_path / "short.csv", index=False)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv", "--measured",
+               "short.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u2.csv", cwd=tmp_path)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1 and "--measured" in res.stderr
+    assert not (tmp_path / "u2.csv").exists()
