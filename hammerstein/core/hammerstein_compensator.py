@@ -38,6 +38,8 @@ taken after ``settle_periods``, which must cover the fade.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from hammerstein.core.compensators import CompensatorError, InverseMultiplicativeCompensator, _gain_text
@@ -358,6 +360,27 @@ class HammersteinCompensator:
         v, fstate = self.inverse_dynamics(r, fstate)
         u, cstate = self.hysteresis_compensator.simulate(v, cstate)
         return u, np.concatenate([cstate, fstate])
+
+    @contextlib.contextmanager
+    def previewed(self):
+        """Declare that the references given inside already carry the preview and the fade-in.
+
+        Outside :meth:`simulate`, :meth:`chain`, :func:`hammerstein.drive_signal`
+        and :meth:`run_reference`, :meth:`packed_law` refuses (see there). Code
+        that feeds the law itself, the reference of sample k + ``preview_samples``
+        at call k, starting from rest (a real-time loop, the C export, a test
+        of the fused kernels), runs it inside ``with compensator.previewed():``.
+
+        Yields
+        ------
+        HammersteinCompensator
+            This compensator.
+        """
+        self._entered += 1
+        try:
+            yield self
+        finally:
+            self._entered -= 1
 
     def packed_law(self):
         """The fused law: the ZPETC inverse as the kernel's linear reference pre-filter.

@@ -664,7 +664,8 @@ def _plan(compensator):
                               f"(non-causal) and cannot run sample by sample; export the "
                               f"Hammerstein compensator with inversion 'zpetc'")
         model = _check_model(compensator.model)
-        law = compensator.packed_law()
+        with compensator.previewed():      # the C step receives the reference P samples ahead
+            law = compensator.packed_law()
         P = int(compensator.preview_samples)
         return "law", model, _Law(law, P), P, \
             (f"Hammerstein compensator U = Gamma^c(G^-1 Yr): causal MIMO ZPETC inverse "

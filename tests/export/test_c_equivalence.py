@@ -13,6 +13,7 @@ bounded by a loose 1e-3.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import warnings
 from pathlib import Path
@@ -111,6 +112,11 @@ KINDS = ["multivariable", "multivariable-3it", "lowpass", "diagonal", "per-axis"
          "multivariable-mapped", "per-axis-mapped", "static-gain-mapped", "multivariable-3it-mapped"]
 
 
+def leading(comp):
+    """Context in which a Hammerstein compensator's law may run on a reference that leads by P."""
+    return comp.previewed() if isinstance(comp, HammersteinCompensator) else contextlib.nullcontext()
+
+
 def python_voltages(comp, yr, chunks=1, backend=None):
     """Python voltages aligned with the C calls (call k gets yr[:, k]), optionally in chunks;
     ``backend='numpy'``: the plain numpy reference loop of the fused law instead of ``simulate``."""
@@ -128,7 +134,8 @@ def python_voltages(comp, yr, chunks=1, backend=None):
             if backend is None:
                 u, state = comp.simulate(lead[:, a:b], state)
             else:
-                u, state = simulate_compensator(comp, lead[:, a:b], state, backend=backend)
+                with leading(comp):               # the reference here already leads by P
+                    u, state = simulate_compensator(comp, lead[:, a:b], state, backend=backend)
             parts.append(u)
         return np.hstack([np.zeros((yr.shape[0], P))] + parts)
 
@@ -148,7 +155,9 @@ def tolerance(comp, yr, u_py):
     and numpy loop) when that is larger: with the coupled preset's ZPETC inverse the problem
     is conditioned so that any double evaluation order moves U by ~1e-12 relative (measured:
     numba vs numpy 1.26e-12, each 0.85-1.1e-12 from a long-double run of the C)."""
-    if not is_fusable(comp):
+    with leading(comp):
+        fusable = is_fusable(comp)
+    if not fusable:
         return 1e-12
     return max(1e-12, 1.5 * rel_error(python_voltages(comp, yr, backend="numpy"), u_py))
 
