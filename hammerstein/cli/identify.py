@@ -378,7 +378,10 @@ def _handler(args):
             args.hold_out, args.train_fraction, args.skip, *names, output_map=args.output_map)
         extra = dyn = None
         meta = _metadata(args, fit, records)
-        rows = metrics_rows(fit, args.output_unit)
+        rows = metrics_rows(fit, args.output_unit) + level_metrics_rows(fit, args.output_unit)
+        if fit.levels:
+            meta["levels"] = [{k: (float(v) if isinstance(v, float) else v) for k, v in r.items()}
+                              for r in fit.levels]
         if args.dynamics:
             dyn = _dynamics(args, fit)
             extra = dyn.tables
@@ -445,6 +448,8 @@ def _report(args, fit, records, dyn=None):
     for label, reps in (("training", fit.train), ("held-out", fit.validation)):
         for name, rep in zip(model.output_names, reps or []):
             print(_line(label, "" if single else f" {name}", rep, ou))
+    for line in level_report_lines(fit, ou):
+        print(line)
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
             print(line)
@@ -455,6 +460,60 @@ def _report(args, fit, records, dyn=None):
         if dyn is not None:
             print(f"wrote {_bode_path(args.plot)}")
     print(f"wrote {args.out}")
+
+
+def level_report_lines(fit, output_unit):
+    """One line per amplitude level of the multi-amplitude records: errors per output.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        With ``levels`` (:func:`hammerstein.core.record_identification.level_errors`).
+    output_unit : str
+        Unit of the outputs.
+
+    Returns
+    -------
+    list of str
+        ``<source> level <p> % (held out|trained): <output> RMS ... %, loop amplitude ... %``.
+    """
+    lines, seen = [], {}
+    for row in fit.levels:
+        seen.setdefault((row["source"], row["percent"], row["held_out"]), []).append(row)
+    for (source, pct, held), rows in seen.items():
+        parts = [f"{r['output']} RMS {r['rms_percent']:.3g} %, loop amplitude "
+                 f"{r['amplitude_error_percent']:+.3g} % of {r['measured_peak_to_peak']:.4g} "
+                 f"{output_unit}" for r in rows]
+        lines.append(f"{Path(source).name} level {pct:.0f} % ({'held out' if held else 'trained'}): "
+                     + "; ".join(parts))
+    return lines
+
+
+def level_metrics_rows(fit, output_unit):
+    """Rows ``(case, channel, metric, value, unit)`` per amplitude level.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        With ``levels``.
+    output_unit : str
+        Unit of the outputs.
+
+    Returns
+    -------
+    list of tuple
+        Case ``<file stem>:level-<p>-<held-out|trained>``, channel the output:
+        ``rms_error_percent`` [%], ``loop_amplitude_error_percent`` [%],
+        ``peak_to_peak`` [output unit].
+    """
+    rows = []
+    for r in fit.levels:
+        case = (f"{Path(r['source']).stem}:level-{r['percent']:.0f}-"
+                f"{'held-out' if r['held_out'] else 'trained'}")
+        rows += [(case, r["output"], "rms_error_percent", r["rms_percent"], "%"),
+                 (case, r["output"], "loop_amplitude_error_percent", r["amplitude_error_percent"], "%"),
+                 (case, r["output"], "peak_to_peak", r["measured_peak_to_peak"], output_unit)]
+    return rows
 
 
 def _bode_path(plot):
