@@ -1,9 +1,13 @@
-"""The Hammerstein actuator: multivariable PI cascaded with linear dynamics.
+"""The Hammerstein actuator: multivariable hysteresis cascaded with linear dynamics.
 
-``U (m, N) [V] -> Gamma (multivariable PI) -> H (p, N) [µm] -> G(z) -> Y (p, N) [µm]``
+``U (m, N) [V] -> Gamma (hysteresis) -> H (p, N) [µm] -> creep -> G(z) -> Y (p, N) [µm]``
 
 The linear part makes the hysteresis rate dependent (paper, Sections 1 and 6;
 docs/hammerstein-plant.md). Without dynamics the plant is the static (rate-independent) model.
+The hysteresis is the multivariable classical PI of the paper or, for plants outside that
+class, a :class:`~hammerstein.core.preisach.MultivariableHysteresis` (Preisach, generalised
+PI, polynomial components); the optional creep (:mod:`hammerstein.core.creep`) is linear and
+sits between the hysteresis and the bending modes (docs/plants.md).
 """
 
 from __future__ import annotations
@@ -12,6 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from hammerstein.core.creep import Creep, creep_matrices, series_matrices
 from hammerstein.core.dynamics import SampledSystem
 from hammerstein.core.hysteresis import HysteresisError, MultivariablePI
 from hammerstein.simulation import simulate_plant, state_vector
@@ -23,12 +28,15 @@ __all__ = ["HammersteinPlant"]
 
 
 class HammersteinPlant:
-    """Multivariable PI hysteresis followed by discrete-time linear dynamics.
+    """Multivariable hysteresis followed by (creep and) discrete-time linear dynamics.
 
     Parameters
     ----------
-    hysteresis : MultivariablePI
-        Rate-independent part, m inputs [V] -> p outputs [µm].
+    hysteresis : MultivariablePI or MultivariableHysteresis
+        Rate-independent part, m inputs [V] -> p outputs [µm]: the classical
+        multivariable PI, or a model with Preisach / generalised-PI /
+        polynomial components (:mod:`hammerstein.core.preisach`; simulated
+        component by component, never by the fused PI kernels).
     sampling_period : float
         Sampling period T [s].
     dynamics : control.StateSpace, hammerstein.core.dynamics.SampledSystem or None
@@ -39,11 +47,16 @@ class HammersteinPlant:
         :attr:`dynamics` (python-control is imported only then).
     name : str
         Label used in reports.
+    creep : sequence of (Creep or None), length p, optional
+        Creep per output (:class:`hammerstein.core.creep.Creep`), applied to
+        the hysteresis output before the dynamics; None: no creep.
 
     Notes
     -----
-    The plant state is one flat vector: the ``n_hysterons`` play states
-    followed by the ``n_linear_states`` states of the linear part.
+    The plant state is one flat vector: the ``n_hysterons`` hysteresis states
+    followed by the ``n_linear_states`` states of the linear part (creep lags
+    first, then the dynamics). :attr:`matrices` is the whole linear part
+    (creep then dynamics); :attr:`dynamics` the bending modes alone.
 
     Raises
     ------
@@ -53,9 +66,17 @@ class HammersteinPlant:
     """
 
     def __init__(self, hysteresis: MultivariablePI, sampling_period: float,
-                 dynamics: control.StateSpace | None = None, name: str = "plant"):
+                 dynamics: control.StateSpace | None = None, name: str = "plant", creep=None):
         self.hysteresis, self.sampling_period, self.name = hysteresis, sampling_period, name
         self._dynamics = dynamics
+        self.creep = None
+        if creep is not None:
+            creep = list(creep)
+            if len(creep) != hysteresis.n_outputs or not all(
+                    c is None or isinstance(c, Creep) for c in creep):
+                raise HysteresisError(f"creep: expected {hysteresis.n_outputs} entries (a Creep "
+                                      f"or None per output), found {creep!r}")
+            self.creep = creep if any(c is not None for c in creep) else None
         if not (np.isfinite(self.sampling_period) and self.sampling_period > 0):
             raise HysteresisError(
                 f"sampling_period: expected a positive time [s], found {self.sampling_period!r}")
@@ -72,8 +93,10 @@ class HammersteinPlant:
                     f"found dt={d.dt}")
 
     def __repr__(self):
+        extra = "" if self.creep is None else f", creep={self.creep!r}"
         return (f"HammersteinPlant(hysteresis={self.hysteresis!r}, sampling_period="
-                f"{self.sampling_period!r}, dynamics={self._dynamics!r}, name={self.name!r})")
+                f"{self.sampling_period!r}, dynamics={self._dynamics!r}, name={self.name!r}"
+                f"{extra})")
 
     @property
     def dynamics(self):
@@ -93,13 +116,18 @@ class HammersteinPlant:
 
     @property
     def is_static(self) -> bool:
-        """True when the plant has no linear dynamics."""
-        return self._dynamics is None
+        """True when the plant has no linear part (no dynamics and no creep)."""
+        return self._dynamics is None and self.creep is None
+
+    @property
+    def n_creep_states(self) -> int:
+        """Number of creep lag states (0 without creep)."""
+        return 0 if self.creep is None else sum(c.n_states for c in self.creep if c is not None)
 
     @property
     def n_linear_states(self) -> int:
-        """Number of states of the linear part (0 for the static plant)."""
-        return 0 if self._dynamics is None else self._dynamics.nstates
+        """Number of states of the linear part, creep included (0 for the static plant)."""
+        return (0 if self._dynamics is None else self._dynamics.nstates) + self.n_creep_states
 
     @property
     def n_states(self) -> int:
@@ -108,20 +136,32 @@ class HammersteinPlant:
 
     @property
     def matrices(self):
-        """Discrete ``(A, B, C, D)`` of the linear part, identity-like if static."""
+        """Discrete ``(A, B, C, D)`` of the linear part (creep then dynamics), identity-like if static."""
+        p = self.hysteresis.n_outputs
         if self._dynamics is None:
-            p = self.hysteresis.n_outputs
-            return (np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p))
-        d = self._dynamics
-        return (np.asarray(d.A), np.asarray(d.B), np.asarray(d.C), np.asarray(d.D))
+            mats = (np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p))
+        else:
+            d = self._dynamics
+            mats = (np.asarray(d.A), np.asarray(d.B), np.asarray(d.C), np.asarray(d.D))
+        if self.creep is None:
+            return mats
+        return series_matrices(creep_matrices(self.creep, self.sampling_period), mats)
+
+    @property
+    def packable(self) -> bool:
+        """True when the fused PI kernels can run the hysteresis (a classical multivariable PI)."""
+        return getattr(self.hysteresis, "packable", True)
 
     def initial_state(self, initial_state=None):
-        """Validated copy of a flat plant state (zeros by default).
+        """Validated copy of a flat plant state.
 
         Parameters
         ----------
         initial_state : array_like, shape (n_states,), optional
-            Play states [V] then linear states [µm].
+            Hysteresis states then linear states [µm]. By default the
+            hysteresis model's default state (zeros for the classical PI:
+            play outputs [V]; the demagnetised state of a Preisach model)
+            and zero linear states.
 
         Returns
         -------
@@ -133,7 +173,13 @@ class HammersteinPlant:
         HysteresisError
             If the state does not have length ``n_states``.
         """
-        return state_vector(initial_state, self.n_states)
+        if initial_state is None and not self.packable:
+            return np.concatenate([self.hysteresis.initial_state(),
+                                   np.zeros(self.n_linear_states)])
+        state = state_vector(initial_state, self.n_states)
+        if not self.packable:
+            self.hysteresis.initial_state(state[:self.hysteresis.n_hysterons])
+        return state
 
     def simulate(self, inputs, initial_state=None):
         """Displacements for a record of input voltages (open loop).
@@ -143,7 +189,7 @@ class HammersteinPlant:
         inputs : array_like, shape (m, n_samples)
             Input voltages [V] at the sampling period.
         initial_state : array_like, shape (n_states,), optional
-            Play states then linear states; zeros by default.
+            Hysteresis states then linear states; see :meth:`initial_state`.
 
         Returns
         -------

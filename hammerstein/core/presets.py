@@ -24,6 +24,8 @@ from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, Outpu
                                          PrandtlIshlinskii)
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.creep import creep_from_table
+from hammerstein.core.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import PresetError
 
@@ -50,7 +52,7 @@ PRESET_DIR = resources.files("hammerstein") / "presets"
 
 #: Keys of a model or preset file, per table (anything else is reported with the closest key;
 #: the ``[model]`` keys are :data:`MODEL_KEYS`, ``kind = "state_space"`` dynamics A, B, C, D).
-FILE_KEYS = ("model", "preset", "dynamics", "identification")
+FILE_KEYS = ("model", "preset", "dynamics", "identification", "creep")
 PRESET_KEYS = ("name", "description", "sampling_period")
 DYNAMICS_KEYS = ("kind", "natural_frequency", "damping_ratio")
 
@@ -197,6 +199,11 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
+    if is_mixed_table(table):   # Preisach / generalised-PI / polynomial components: core/preisach.py
+        try:
+            return hysteresis_from_table(table, source)
+        except HysteresisError as exc:
+            raise PresetError(str(exc)) from None
     problems = [f"model.{key}: unknown key{_hint(key, MODEL_KEYS)}"
                 for key in table if key not in MODEL_KEYS]
     for key in ("input_unit", "output_unit"):
@@ -334,6 +341,8 @@ def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
     dict
         ``[model]`` table of the preset format (see :func:`model_from_table`).
     """
+    if not isinstance(model, MultivariablePI):      # mixed components (core/preisach.py)
+        return model.to_table(str(input_unit), str(output_unit))
     table = {"inputs": list(model.input_names), "outputs": list(model.output_names),
              "input_unit": str(input_unit), "output_unit": str(output_unit)}
     if model.input_amplitude is not None:
@@ -635,8 +644,9 @@ def load_plant(preset, dynamics=True, base_dir=None):
     preset : str or pathlib.Path
         Bundled preset name or preset file.
     dynamics : bool
-        ``True`` for the Hammerstein plant (PI + discretised linear
-        dynamics, ZOH with python-control); ``False`` for the static PI.
+        ``True`` for the Hammerstein plant (hysteresis, creep when the preset
+        has a ``[creep]`` table, discretised linear dynamics); ``False`` for
+        the static (rate-independent) hysteresis alone, without creep.
     base_dir : pathlib.Path, optional
         Directory that relative paths are resolved from.
 
@@ -677,4 +687,20 @@ def load_plant(preset, dynamics=True, base_dir=None):
         elif cont is not None:
             lin = discretize(cont, float(T))
     name = meta.get("name", path.stem)
-    return HammersteinPlant(model, float(T), lin, name=name)
+    creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
+    return HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
+
+
+def _creep(table, outputs, path):
+    """The ``[creep.<output>]`` tables of a preset (core/creep.py), one entry per output."""
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise PresetError(f"{path}: creep: expected a table of [creep.<output>] tables")
+    unknown = [k for k in table if k not in outputs]
+    if unknown:
+        raise PresetError(f"{path}: creep.{unknown[0]}: unknown output (outputs are {outputs})")
+    try:
+        return [creep_from_table(table[o], f"creep.{o}") if o in table else None for o in outputs]
+    except HysteresisError as exc:
+        raise PresetError(f"{path}: {exc}") from None

@@ -21,6 +21,7 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 from hammerstein.scenario.identified import (hammerstein_identify_table, identify_dynamics_table,
                                              identify_table, resolve_dynamics, resolve_model)
 from hammerstein.scenario.schema import MAX_ITERATIONS, Field, Invalid, choice, integer, number, string
@@ -153,6 +154,19 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
     "(docs/hammerstein-plant.md)")
+
+
+def _build_preisach_inverse(spec, plant, base_dir):
+    return PreisachInverseCompensator(_spec_model(spec, plant, base_dir),
+                                      method=spec.get("method", "root"))
+
+
+COMPENSATORS["preisach-inverse"] = CompensatorKind(
+    _build_preisach_inverse,
+    {"model": Field(string(), default="plant"),
+     "method": Field(choice("root", "multiplicative"), default="root")},
+    "exact per-sample inverse of a Preisach model (monotone root per direct path), or its "
+    "inverse multiplicative law; rate independent (docs/plants.md)")
 #: kinds that compensate the hysteresis only (rate independent): warned about dynamics
 RATE_INDEPENDENT = ("multivariable", "diagonal", "per-axis", "static-gain")
 

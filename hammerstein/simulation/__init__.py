@@ -70,6 +70,8 @@ from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, Ch
                                               simulate_chain, simulate_chain_batch,
                                               simulate_compensator, simulate_hysteresis,
                                               simulate_plant, simulate_plays)
+from hammerstein.simulation._preisach import (generalized_play_steps, linear_steps,
+                                              preisach_inverse_kernel, preisach_steps)
 
 __all__ = [
     "simulate_plays",
@@ -99,4 +101,8 @@ __all__ = [
     "PARALLEL_MIN_SAMPLES",
     "compile_notices",
     "announce_compiles",
+    "preisach_steps",
+    "linear_steps",
+    "generalized_play_steps",
+    "preisach_inverse_kernel",
 ]

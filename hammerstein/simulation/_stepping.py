@@ -9,6 +9,7 @@ import numpy as np
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError, HysteresisError
 from hammerstein.simulation import _kernels as kernels
 from hammerstein.simulation import _oracle as oracle
+from hammerstein.simulation._preisach import linear_steps
 from hammerstein.simulation._packing import (EMPTY_PACKED, STATUS_OK, ChainState, LawArrays,
                                              LinearArrays, PIArrays, check_linear,
                                              compensator_law_of, divergence_error,
@@ -74,6 +75,22 @@ def _mapped_plant(plant, u, state, backend):
         y[:, t] = C @ x + D @ h[:, t]
         x = A @ x + B @ h[:, t]
     return _with_offset_only(model, y), np.concatenate([plays, x])
+
+
+def _packable(model):
+    """False for hysteresis models the fused PI kernels cannot run (duck-typed ``packable``)."""
+    return bool(getattr(model, "packable", True))
+
+
+def _generic_plant(plant, u, state, backend):
+    """Plant whose hysteresis steps itself (``model.simulate``), then the compiled linear part."""
+    model = plant.hysteresis
+    nh = model.n_hysterons
+    h, hyst = model.simulate(u, state[:nh])
+    if plant.is_static:
+        return h, hyst
+    y, x = linear_steps(h, plant.matrices, state[nh:])
+    return y, np.concatenate([hyst, x])
 
 
 def _with_offset_only(model, y):
@@ -208,6 +225,8 @@ def simulate_plant(plant, inputs, initial_state=None, backend="numba"):
     u = model.check_inputs(inputs)
     state = plant.initial_state(initial_state)
     nh = model.n_hysterons
+    if not _packable(model):    # Preisach, generalised PI...: stepped by the model itself
+        return _generic_plant(plant, u, state, backend)
     if _has_map(model) and not plant.is_static:
         return _mapped_plant(plant, u, state, backend)
     if backend == "numpy":      # the offset is a sensor zero, after the dynamics
@@ -509,7 +528,8 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     law = _validated(compensator_law_of(compensator))
     if law is not None and law.check_reference is not None:
         law.check_reference(reference)          # as the compensator's simulate does
-    if backend == "numba" and law is not None and not _has_map(plant.hysteresis):
+    if (backend == "numba" and law is not None and not _has_map(plant.hysteresis)
+            and _packable(plant.hysteresis)):
         yr = _without_offset(law.model, law.model.check_inputs(reference, "reference"))
         cstate = state_vector(compensator_state, law.n_states)
         pstate = plant.initial_state(plant_state)
@@ -659,7 +679,7 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
             raise CompensatorError(
                 f"compensators: the batch kernel runs compensators with a packed_law() "
                 f"(e.g. InverseMultiplicativeCompensator) only, found {type(c).__name__}")
-    if any(_has_map(pl.hysteresis) for pl in plts):   # S between PI and dynamics: unfused
+    if any(_has_map(pl.hysteresis) or not _packable(pl.hysteresis) for pl in plts):  # unfused
         return [simulate_chain(c, pl, r) for c, pl, r in zip(comps, plts, references)]
     m = laws[0].model.n_inputs
     p = plts[0].hysteresis.n_outputs

@@ -1,0 +1,327 @@
+"""Compiled (numba) stepping kernels of the plants outside the classical PI class.
+
+Arrays only; the wrappers in :mod:`hammerstein.core.preisach`,
+:mod:`hammerstein.core.generalized_pi` and :mod:`hammerstein.core.creep`
+validate the arguments. States are updated in place, so a chunked run equals
+one long run. The numpy oracles of these loops live in the tests
+(``tests/core/test_preisach.py``).
+
+``ramp_preisach_kernel(u, edges, row, col, mu, s, y)``
+    Discrete Preisach model with ramp hysterons. The switching grid has the
+    cell edges ``edges`` (n_levels + 1,) [V]; hysteron ``q`` rises over cell
+    ``row[q]`` (its alpha cell) and falls over cell ``col[q]`` (its beta
+    cell, ``col <= row``), with state ``s[q]`` in [-1, 1] and weight
+    ``mu[q]`` [µm]: ``s <- max(rho_row(u), min(rho_col(u), s))``, where
+    ``rho_i(u)`` is -1 below cell i, +1 above it, linear across it. The
+    output (without the reversible part) is ``y[t] = sum_q mu[q] s[q]``.
+``generalized_play_kernel(u, r, w, gl, gr, s, y)``
+    Generalised PI (Al Janaideh, Rakheja and Su): plays
+    ``s_j <- max(gamma_l(u) - r_j, min(gamma_r(u) + r_j, s_j))`` with the
+    envelopes ``gamma(u) = a0 tanh(a1 u + a2) + a3``; ``y[t] = sum_j w_j s_j``.
+``linear_kernel(h, A, B, C, D, x, y)``
+    Discrete state space on a record: ``y = C x + D h``, ``x <- A x + B h``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["ramp_preisach_kernel", "generalized_play_kernel", "linear_kernel", "ramps",
+           "preisach_steps", "linear_steps", "generalized_play_steps",
+           "preisach_inverse_kernel"]
+
+
+@njit(cache=True, inline="always")
+def _ramp(u, lo, hi):
+    """-1 below ``lo``, +1 above ``hi``, linear in between."""
+    if u <= lo:
+        return -1.0
+    if u >= hi:
+        return 1.0
+    return 2.0 * (u - lo) / (hi - lo) - 1.0
+
+
+@njit(cache=True)
+def ramps(u, edges, rho):
+    """Ramp value of every grid cell at input ``u`` (``rho`` (n_levels,) out)."""
+    for i in range(rho.size):
+        rho[i] = _ramp(u, edges[i], edges[i + 1])
+
+
+@njit(cache=True)
+def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
+    """Ramp-hysteron Preisach model on a record (see the module docstring)."""
+    n_levels = edges.size - 1
+    rho = np.empty(n_levels)
+    nq = s.size
+    for t in range(u.size):
+        ut = u[t]
+        for i in range(n_levels):
+            rho[i] = _ramp(ut, edges[i], edges[i + 1])
+        acc = 0.0
+        for q in range(nq):
+            up = rho[row[q]]
+            down = rho[col[q]]
+            v = s[q]
+            if v > down:
+                v = down
+            if v < up:
+                v = up
+            s[q] = v
+            acc += mu[q] * v
+        y[t] = acc
+
+
+@njit(cache=True, inline="always")
+def _envelope(a, u):
+    return a[0] * np.tanh(a[1] * u + a[2]) + a[3]
+
+
+@njit(cache=True)
+def generalized_play_kernel(u, r, w, gl, gr, s, y):
+    """Generalised-PI plays under envelope functions (see the module docstring)."""
+    nr = r.size
+    for t in range(u.size):
+        lo = _envelope(gl, u[t])
+        hi = _envelope(gr, u[t])
+        acc = 0.0
+        for j in range(nr):
+            v = s[j]
+            if v > hi + r[j]:
+                v = hi + r[j]
+            if v < lo - r[j]:
+                v = lo - r[j]
+            s[j] = v
+            acc += w[j] * v
+        y[t] = acc
+
+
+@njit(cache=True)
+def linear_kernel(h, A, B, C, D, x, y):
+    """Discrete state space on a record; ``x`` in/out, ``y`` (q, N) out."""
+    nx = x.size
+    q, k = D.shape
+    xn = np.empty(nx)
+    for t in range(h.shape[1]):
+        for l in range(q):
+            a = 0.0
+            for i in range(nx):
+                a += C[l, i] * x[i]
+            for i in range(k):
+                a += D[l, i] * h[i, t]
+            y[l, t] = a
+        for i in range(nx):
+            a = 0.0
+            for j in range(nx):
+                a += A[i, j] * x[j]
+            for j in range(k):
+                a += B[i, j] * h[j, t]
+            xn[i] = a
+        for i in range(nx):
+            x[i] = xn[i]
+
+
+def preisach_steps(u, edges, row, col, mu, state):
+    """Ramp-hysteron Preisach model on validated arrays (compiled kernel).
+
+    Parameters
+    ----------
+    u : numpy.ndarray, shape (n_samples,)
+        Input [V].
+    edges : numpy.ndarray, shape (n_levels + 1,)
+        Cell edges of the switching grid [V], strictly increasing.
+    row, col : numpy.ndarray of int64, shape (n_hysterons,)
+        Rising (alpha) and falling (beta) cell of each hysteron, ``col <= row``.
+    mu : numpy.ndarray, shape (n_hysterons,)
+        Weights [µm].
+    state : numpy.ndarray, shape (n_hysterons,)
+        Hysteron states in [-1, 1]; not modified.
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (n_samples,)
+        ``sum_q mu_q s_q`` per sample [µm].
+    final_state : numpy.ndarray, shape (n_hysterons,)
+        States after the last sample.
+    """
+    s = np.array(state, dtype=float)
+    y = np.empty(u.size)
+    ramp_preisach_kernel(np.ascontiguousarray(u, dtype=float), edges, row, col, mu, s, y)
+    return y, s
+
+
+def linear_steps(h, matrices, state):
+    """Discrete state space ``(A, B, C, D)`` on a record (compiled kernel).
+
+    Parameters
+    ----------
+    h : numpy.ndarray, shape (k, n_samples)
+        Inputs of the linear system.
+    matrices : tuple of numpy.ndarray
+        ``A`` (n, n), ``B`` (n, k), ``C`` (q, n), ``D`` (q, k).
+    state : numpy.ndarray, shape (n,)
+        State before the first sample; not modified.
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (q, n_samples)
+        Outputs.
+    final_state : numpy.ndarray, shape (n,)
+        State after the last sample.
+    """
+    A, B, C, D = (np.ascontiguousarray(m, dtype=float) for m in matrices)
+    x = np.array(state, dtype=float)
+    y = np.empty((D.shape[0], h.shape[1]))
+    linear_kernel(np.ascontiguousarray(h, dtype=float), A, B, C, D, x, y)
+    return y, x
+
+
+def generalized_play_steps(u, thresholds, weights, gamma_l, gamma_r, state):
+    """Generalised-PI plays under envelope functions on validated arrays (compiled kernel).
+
+    Parameters
+    ----------
+    u : numpy.ndarray, shape (n_samples,)
+        Input [V].
+    thresholds, weights : numpy.ndarray, shape (n,)
+        Play thresholds [V] and weights [µm/V].
+    gamma_l, gamma_r : numpy.ndarray, shape (4,)
+        Envelope coefficients ``a0 tanh(a1 u + a2) + a3``, rising and falling input.
+    state : numpy.ndarray, shape (n,)
+        Play outputs before the first sample; not modified.
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (n_samples,)
+        ``sum_j w_j s_j`` per sample [µm].
+    final_state : numpy.ndarray, shape (n,)
+        Play outputs after the last sample.
+    """
+    s = np.array(state, dtype=float)
+    y = np.empty(u.size)
+    generalized_play_kernel(np.ascontiguousarray(u, dtype=float), thresholds, weights,
+                            gamma_l, gamma_r, s, y)
+    return y, s
+
+
+# -- exact inverse of a multivariable Preisach model -------------------------------
+@njit(cache=True)
+def _component(c, u, E, e_off, row, col, mu, q_off, rev, off, s, commit):
+    """Output of component c at input u from states s (committed when ``commit``)."""
+    e0 = e_off[c]
+    acc = 0.0
+    for q in range(q_off[c], q_off[c + 1]):
+        i = e0 + row[q]
+        j = e0 + col[q]
+        up = _ramp(u, E[i], E[i + 1])
+        down = _ramp(u, E[j], E[j + 1])
+        v = s[q]
+        if v > down:
+            v = down
+        if v < up:
+            v = up
+        if commit:
+            s[q] = v
+        acc += mu[q] * v
+    poly = 0.0
+    for n in range(rev.shape[1] - 1, -1, -1):
+        poly = (poly + rev[c, n]) * u
+    return acc + poly + off[c]
+
+
+@njit(cache=True)
+def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, rev, off, s, tol):
+    """u in [lo, hi] with component c = target (Illinois false position; clipped)."""
+    flo = _component(c, lo, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+    if flo >= 0.0:
+        return lo
+    fhi = _component(c, hi, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+    if fhi <= 0.0:
+        return hi
+    a, b, fa, fb = lo, hi, flo, fhi
+    side = 0
+    x = 0.5 * (a + b)
+    for _ in range(200):
+        x = (a * fb - b * fa) / (fb - fa)
+        if not (a < x < b):
+            x = 0.5 * (a + b)
+        fx = _component(c, x, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+        if abs(fx) <= tol or b - a <= 1e-13 * (1.0 + abs(x)):
+            return x
+        if fx < 0.0:
+            a, fa = x, fx
+            if side == -1:
+                fb *= 0.5
+            side = -1
+        else:
+            b, fb = x, fx
+            if side == 1:
+                fa *= 0.5
+            side = 1
+    return x
+
+
+@njit(cache=True)
+def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, rev, off, present, s, lo, hi,
+                            exact, K_inv, u_prev, u, tol, max_sweeps):
+    """Inputs u (m, N) that make the model follow yr (p = m, N); states s, u_prev in/out.
+
+    ``exact``: per sample, Gauss-Seidel over the outputs, each a monotone
+    scalar root of its direct path (cross-couplings at the current estimate),
+    then every state committed at the solution. Otherwise the inverse
+    multiplicative law ``u_t = u_{t-1} + K^-1 (yr_t - Gamma(u_{t-1}))``.
+    Returns the number of samples whose sweeps did not converge.
+    """
+    p, N = yr.shape
+    m = p
+    ut = np.empty(m)
+    g = np.empty(p)
+    unconverged = 0
+    for k in range(m):
+        ut[k] = u_prev[k]
+    for t in range(N):
+        if exact:
+            converged = False
+            for _ in range(max_sweeps):
+                delta = 0.0
+                for l in range(p):
+                    target = yr[l, t]
+                    for k in range(m):
+                        c = l * m + k
+                        if k != l and present[c]:
+                            target -= _component(c, ut[k], E, e_off, row, col, mu, q_off, rev,
+                                                 off, s, False)
+                    new = _root(l * m + l, target, lo[l], hi[l], E, e_off, row, col, mu, q_off,
+                                rev, off, s, tol)
+                    if abs(new - ut[l]) > delta:
+                        delta = abs(new - ut[l])
+                    ut[l] = new
+                if delta <= 1e-11:
+                    converged = True
+                    break
+            if not converged:
+                unconverged += 1
+        else:
+            for l in range(p):
+                g[l] = 0.0
+                for k in range(m):
+                    c = l * m + k
+                    if present[c]:
+                        g[l] += _component(c, ut[k], E, e_off, row, col, mu, q_off, rev, off, s,
+                                           False)
+            for k in range(m):
+                a = ut[k]
+                for l in range(p):
+                    a += K_inv[k, l] * (yr[l, t] - g[l])
+                ut[k] = min(max(a, lo[k]), hi[k])
+        for l in range(p):
+            for k in range(m):
+                c = l * m + k
+                if present[c]:
+                    _component(c, ut[k], E, e_off, row, col, mu, q_off, rev, off, s, True)
+        for k in range(m):
+            u[k, t] = ut[k]
+    for k in range(m):
+        u_prev[k] = ut[k]
+    return unconverged
