@@ -45,7 +45,7 @@ def add_parser(subparsers):
         The ``add_subparsers()`` object of the ``hammerstein`` parser.
     """
     p = subparsers.add_parser(
-        "excitation", help="write excitation files (hysteresis, dynamics, creep) to play on an actuator",
+        "excitation", help="write excitation files to play on an actuator before identifying it",
         description="Write, per input, the excitation records that 'hammerstein identify' "
                     "needs: a decreasing-amplitude sine (hysteresis and minor loops), two "
                     "random-phase multisines (dynamics; the second held out) and a voltage "

@@ -902,7 +902,7 @@ class DynamicsIdentifier:
                 if model is not None:
                     yv, yh = self._validate(model, ins, outs, held, split)
                     fits[i] = float(np.mean(_fit_percent(yv, yh)))
-                    info["validation_fit_percent"] = fits[i]
+                    info["validation_fit_percent"] = float(fits[i])
                     E = yv - yh
                     n_par = model[0].shape[0] * (model[0].shape[0] + 2 * p) + (
                         p * p if self.feedthrough else 0)
