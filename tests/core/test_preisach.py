@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
-                         PrandtlIshlinskii, simulate_chain)
+                         PrandtlIshlinskii, simulate_chain, simulate_chain_batch)
 from hammerstein.core.creep import Creep, creep_from_table
 from hammerstein.core.dynamics import sampled_bending_modes
 from hammerstein.core.generalized_pi import GeneralizedPI
@@ -365,3 +365,12 @@ def test_chain_on_a_preisach_plant_falls_back_to_compensator_then_plant():
     assert not res.diverged
     np.testing.assert_allclose(res.outputs, y, atol=1e-12)
     np.testing.assert_allclose(res.inputs, u, atol=1e-12)
+
+
+def test_batch_on_preisach_plants_runs_each_case_unfused():
+    pl = plant(mixed())
+    comp = InverseMultiplicativeCompensator(rakotondrabe_like())
+    refs = [circle(800), circle(600, radius=15.0, f=100.0)]
+    outs = simulate_chain_batch(comp, pl, refs)
+    for r, res in zip(refs, outs):
+        np.testing.assert_allclose(res.outputs, simulate_chain(comp, pl, r).outputs, atol=1e-12)
