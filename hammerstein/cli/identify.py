@@ -28,7 +28,9 @@ from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import out_file_problem
 from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
 from hammerstein.core.presets import PresetError, save_model
-from hammerstein.core.record_identification import dynamics_tables, identify_records
+from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_dynamics,
+                                                     identify_records)
+from hammerstein.report.dynamics_figure import measured_bode_figure
 from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.scenario.schema import MAX_HYSTERONS
 
@@ -101,7 +103,13 @@ def add_parser(subparsers):
                    help="also identify linear dynamics from --dynamics-records and write a "
                         "preset (PI + state_space dynamics) instead of a model file")
     p.add_argument("--dynamics-records", nargs="+", metavar="FILE.csv", default=[],
-                   help="broadband records (same columns) for --dynamics")
+                   help="broadband records (same columns) for --dynamics; with two or more "
+                        "per input the last of each input is held out to choose the order")
+    p.add_argument("--order", type=int, metavar="N",
+                   help="--dynamics: fixed model order of G (default: chosen on held-out data)")
+    p.add_argument("--max-order", type=int, metavar="N",
+                   help=f"--dynamics: largest candidate order (default "
+                        f"{DYNAMICS_DEFAULTS['max_order']})")
     p.add_argument("--force", action="store_true",
                    help="overwrite --out, --metrics or --plot even if the project did not write it")
     p.set_defaults(handler=_handler)
@@ -192,13 +200,23 @@ def _check_usage(args):
         raise _Usage("--dynamics-records: only used with --dynamics")
     if args.dynamics and not args.dynamics_records:
         raise _Usage("--dynamics: give the broadband records with --dynamics-records FILE ...")
+    for opt, value in (("--order", args.order), ("--max-order", args.max_order)):
+        if value is not None and not args.dynamics:
+            raise _Usage(f"{opt}: only used with --dynamics")
+        if value is not None and not 1 <= value <= 50:
+            raise _Usage(f"{opt}: expected an integer from 1 to 50, found {value}")
+    if args.order is not None and args.max_order is not None:
+        raise _Usage("--order and --max-order: give one of them")
     for unit, opt in ((args.input_unit, "--input-unit"), (args.output_unit, "--output-unit")):
         if not unit.strip():
             raise _Usage(f"{opt}: expected a unit name")
     inputs = list(args.data) + list(args.dynamics_records)
     _check_target(args.out, "--out", "model", args.force, inputs)
     targets = [Path(args.out).resolve()]
-    for path, opt, kind in ((args.metrics, "--metrics", "metrics"), (args.plot, "--plot", "plot")):
+    plots = [(args.metrics, "--metrics", "metrics"), (args.plot, "--plot", "plot")]
+    if args.plot and args.dynamics:
+        plots.append((_bode_path(args.plot), "--plot (its Bode figure)", "plot"))
+    for path, opt, kind in plots:
         if path is not None:
             _check_target(path, opt, kind, args.force, inputs)
             if Path(path).resolve() in targets:
@@ -376,16 +394,25 @@ def _handler(args):
             records, args.method, n, thresholds, "time" if thresholds is not None and
             args.partition == "auto" else args.partition, args.bounds, args.components,
             args.hold_out, args.train_fraction, args.skip, *names, output_map=args.output_map)
-        extra = None
+        extra = dyn = None
+        meta = _metadata(args, fit, records)
+        rows = metrics_rows(fit, args.output_unit) + level_metrics_rows(fit, args.output_unit)
+        if fit.levels:
+            meta["levels"] = [{k: (float(v) if isinstance(v, float) else v) for k, v in r.items()}
+                              for r in fit.levels]
         if args.dynamics:
-            extra = _dynamics_tables(args, fit)
-        rows = metrics_rows(fit, args.output_unit)
+            dyn = _dynamics(args, fit)
+            extra = dyn.tables
+            meta["dynamics"] = dyn.summary
+            rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
+                                          fit.model.input_names)
         if args.plot:
             _write_plot(args.plot, fit, args.input_unit, args.output_unit)
+            if dyn is not None:
+                _write_bode(_bode_path(args.plot), dyn, fit.model.output_names)
         if args.metrics:
             _write_metrics(args.metrics, rows)
-        save_model(fit.model, args.out, _metadata(args, fit, records), args.input_unit,
-                   args.output_unit, extra)
+        save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
     except (DataFileError, IdentificationError, HysteresisError, PresetError, FileLimitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
@@ -393,7 +420,7 @@ def _handler(args):
         print(f"error: {exc.filename or args.out}: cannot write ({exc.strerror or exc})",
               file=sys.stderr)
         return 1
-    _report(args, fit, records)
+    _report(args, fit, records, dyn)
     return 0
 
 
@@ -408,7 +435,7 @@ def _names(record, in_keys, out_keys):
     return ins, outs
 
 
-def _report(args, fit, records):
+def _report(args, fit, records, dyn=None):
     iu, ou = args.input_unit, args.output_unit
     model = fit.model
     for rec, s in zip(fit.records, fit.splits):
@@ -439,20 +466,178 @@ def _report(args, fit, records):
     for label, reps in (("training", fit.train), ("held-out", fit.validation)):
         for name, rep in zip(model.output_names, reps or []):
             print(_line(label, "" if single else f" {name}", rep, ou))
+    for line in level_report_lines(fit, ou):
+        print(line)
+    if dyn is not None:
+        for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
+            print(line)
     if args.metrics:
         print(f"wrote {args.metrics}")
     if args.plot:
         print(f"wrote {args.plot}")
+        if dyn is not None:
+            print(f"wrote {_bode_path(args.plot)}")
     print(f"wrote {args.out}")
 
 
-def _dynamics_tables(args, fit):
-    """``[preset]`` and ``[dynamics]`` tables of a preset with identified linear dynamics."""
+def level_report_lines(fit, output_unit):
+    """One line per amplitude level of the multi-amplitude records: errors per output.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        With ``levels`` (:func:`hammerstein.core.record_identification.level_errors`).
+    output_unit : str
+        Unit of the outputs.
+
+    Returns
+    -------
+    list of str
+        ``<source> level <p> % (held out|trained): <output> RMS ... %, loop amplitude ... %``.
+    """
+    lines, seen = [], {}
+    for row in fit.levels:
+        seen.setdefault((row["source"], row["percent"], row["held_out"]), []).append(row)
+    for (source, pct, held), rows in seen.items():
+        parts = [f"{r['output']} RMS {r['rms_percent']:.3g} %, loop amplitude "
+                 f"{r['amplitude_error_percent']:+.3g} % of {r['measured_peak_to_peak']:.4g} "
+                 f"{output_unit}" for r in rows]
+        lines.append(f"{Path(source).name} level {pct:.0f} % ({'held out' if held else 'trained'}): "
+                     + "; ".join(parts))
+    return lines
+
+
+def level_metrics_rows(fit, output_unit):
+    """Rows ``(case, channel, metric, value, unit)`` per amplitude level.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        With ``levels``.
+    output_unit : str
+        Unit of the outputs.
+
+    Returns
+    -------
+    list of tuple
+        Case ``<file stem>:level-<p>-<held-out|trained>``, channel the output:
+        ``rms_error_percent`` [%], ``loop_amplitude_error_percent`` [%],
+        ``peak_to_peak`` [output unit].
+    """
+    rows = []
+    for r in fit.levels:
+        case = (f"{Path(r['source']).stem}:level-{r['percent']:.0f}-"
+                f"{'held-out' if r['held_out'] else 'trained'}")
+        rows += [(case, r["output"], "rms_error_percent", r["rms_percent"], "%"),
+                 (case, r["output"], "loop_amplitude_error_percent", r["amplitude_error_percent"], "%"),
+                 (case, r["output"], "peak_to_peak", r["measured_peak_to_peak"], output_unit)]
+    return rows
+
+
+def _bode_path(plot):
+    """The Bode figure written next to ``--plot FILE.png``: ``FILE-dynamics.png``."""
+    path = Path(plot)
+    return path.with_name(f"{path.stem}-dynamics{path.suffix or '.png'}")
+
+
+def _write_bode(path, dyn, names):
+    import matplotlib.pyplot as plt  # lazy: only for --plot
+    s = dyn.summary
+    fig = measured_bode_figure(
+        dyn.identifier.system_, dyn.frf_frequency_hz, dyn.frf, names,
+        title=f"Identified G (order {s['order']}, held-out fit {s['held_out_fit_percent']:.1f} %) "
+              f"over the measured H1 estimate")
+    try:
+        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
+    finally:
+        plt.close(fig)
+
+
+def _matrix_text(M):
+    return "[" + ", ".join("[" + ", ".join(f"{v:.4g}" for v in row) + "]" for row in M) + "]"
+
+
+def dynamics_report_lines(summary, output_names, input_names):
+    """Printed report of identified dynamics (order, fits, modes, G(0)).
+
+    Parameters
+    ----------
+    summary : dict
+        ``RecordDynamics.summary`` (:func:`hammerstein.core.record_identification.identify_record_dynamics`).
+    output_names, input_names : sequence of str
+        Names of the p outputs and p inputs of the model.
+
+    Returns
+    -------
+    list of str
+        One line per item.
+    """
+    s = summary
+    lines = [f"dynamics: order {s['order']} (candidate order {s['candidate_order']}), chosen on "
+             f"{s['chosen_on']}; excited band {s['band_hz'][0]:.3g}-{s['band_hz'][1]:.4g} Hz"]
+    for c in s["candidates"]:
+        if "held_out_fit_percent" in c:
+            text = (f"  order {c['order']}: held-out fit {c['held_out_fit_percent']:.2f} %, modes "
+                    + ", ".join(f"{f:.4g}" for f in c["modes_hz"]) + " Hz")
+        else:
+            text = f"  order {c['order']}: rejected, {c.get('rejected', 'no mode left')}"
+        if c.get("dropped"):
+            text += "; dropped " + "; ".join(c["dropped"])
+        lines.append(text)
+    for i, mode in enumerate(s["modes"], start=1):
+        share = ", ".join(f"{n} {100 * v:.0f} %" for n, v in mode["axis_share"].items())
+        lines.append(f"  mode {i}: {mode['frequency_hz']:.5g} Hz, damping "
+                     f"{mode['damping_ratio']:.4g} ({share})")
+    lines.append(f"  G(0) unconstrained {_matrix_text(s['dc_gain_unconstrained'])} (rows "
+                 f"{','.join(output_names)}, columns {','.join(input_names)}); "
+                 + ("fitted with G(0) = I: the static gain belongs to the hysteresis model, "
+                    "identified quasi-statically" if s["unit_dc_gain"]
+                    else f"kept as identified: {_matrix_text(s['dc_gain'])}"))
+    lines.append(f"  held-out fit {s['held_out_fit_percent']:.2f} %, fit over all broadband "
+                 f"records " + ", ".join(f"{n} {v:.2f} %" for n, v in
+                                         zip(output_names, s["fit_percent"])))
+    return lines
+
+
+def dynamics_metrics_rows(summary, output_names, input_names):
+    """Rows ``(case, channel, metric, value, unit)`` of identified dynamics.
+
+    Parameters
+    ----------
+    summary : dict
+        ``RecordDynamics.summary``.
+    output_names, input_names : sequence of str
+        Names of the p outputs and p inputs.
+
+    Returns
+    -------
+    list of tuple
+        Case ``dynamics``: ``order``, ``held_out_fit_percent`` (channel
+        ``G``), ``fit_percent`` per output, ``dc_gain_unconstrained`` per
+        ``<output>:<input>``, ``frequency`` [Hz], ``damping_ratio`` and
+        ``share_<output>`` per ``mode-<i>``; case ``dynamics-order-<N>``:
+        ``held_out_fit_percent`` per candidate order that gave a model.
+    """
+    s = summary
+    rows = [("dynamics", "G", "order", s["order"], ""),
+            ("dynamics", "G", "held_out_fit_percent", s["held_out_fit_percent"], "%")]
+    rows += [("dynamics", n, "fit_percent", v, "%") for n, v in zip(output_names, s["fit_percent"])]
+    for l, out in enumerate(output_names):
+        for k, inp in enumerate(input_names):
+            rows.append(("dynamics", f"{out}:{inp}", "dc_gain_unconstrained",
+                         s["dc_gain_unconstrained"][l][k], ""))
+    for i, mode in enumerate(s["modes"], start=1):
+        rows += [("dynamics", f"mode-{i}", "frequency", mode["frequency_hz"], "Hz"),
+                 ("dynamics", f"mode-{i}", "damping_ratio", mode["damping_ratio"], "")]
+        rows += [("dynamics", f"mode-{i}", f"share_{n}", v, "") for n, v in mode["axis_share"].items()]
+    rows += [(f"dynamics-order-{c['order']}", "G", "held_out_fit_percent",
+              c["held_out_fit_percent"], "%") for c in s["candidates"] if "held_out_fit_percent" in c]
+    return rows
+
+
+def _dynamics(args, fit):
+    """Identified dynamics (:func:`identify_record_dynamics`) of the --dynamics-records."""
     dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
            for d in args.dynamics_records]
-    try:
-        return dynamics_tables(fit, dyn, name=Path(args.out).stem)
-    except ImportError:
-        raise IdentificationError(
-            "--dynamics: the linear-dynamics identifier (hammerstein.core.lti) is not part of "
-            "this installation") from None
+    return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, order=args.order,
+                                    max_order=args.max_order)

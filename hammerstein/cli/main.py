@@ -69,6 +69,7 @@ COMMANDS = {
     "validate": ("hammerstein.cli.validate", "check scenario files without simulating"),
     "list": ("hammerstein.cli.listing", "list bundled presets, compensator kinds and scenarios"),
     "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
+    "excitation": ("hammerstein.cli.excitation", "write excitation files to play on an actuator before identifying it"),
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
     "export": ("hammerstein.cli.export", "write a compensator as C99 code or as an FMI 2.0 FMU"),

@@ -49,6 +49,8 @@ __all__ = [
     "hammerstein_records",
     "DynamicsIdentifier",
     "identify_dynamics",
+    "excited_band",
+    "frf_h1",
     "compare_frequency_responses",
 ]
 
@@ -481,10 +483,13 @@ def _state_regressors(A, C, u):
     return RB, R0
 
 
-def _fit_bdx0(A, C, ins, outs, feedthrough):
+def _fit_bdx0(A, C, ins, outs, feedthrough, dc=None):
     """Least-squares B, D and one x0 per record given A, C [2, Section 9.2.4].
 
-    Returns B, D, x0 and the simulated outputs of each record.
+    With ``dc`` (p, m), under the linear equality constraint
+    ``G(1) = C (I - A)^-1 B + D = dc`` (null-space method: the particular
+    solution plus a least-squares combination of the null space of the
+    constraint). Returns B, D, x0 and the simulated outputs of each record.
     """
     n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
     R = len(ins)
@@ -501,7 +506,17 @@ def _fit_bdx0(A, C, ins, outs, feedthrough):
         blocks.append(X0)
         rows.append(np.concatenate(blocks, axis=2).reshape(N * p, -1))
         rhs.append(y.T.reshape(-1))
-    theta = np.linalg.lstsq(np.vstack(rows), np.concatenate(rhs), rcond=None)[0]
+    X, rhs = np.vstack(rows), np.concatenate(rhs)
+    if dc is None:
+        theta = np.linalg.lstsq(X, rhs, rcond=None)[0]
+    else:
+        E = np.zeros((p * m, X.shape[1]))
+        E[:, :n * m] = np.kron(C @ np.linalg.solve(np.eye(n) - A, np.eye(n)), np.eye(m))
+        if feedthrough:
+            E[:, n * m:n_shared] = np.eye(p * m)
+        theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
+        N = scipy.linalg.null_space(E)
+        theta = theta_p + N @ np.linalg.lstsq(X @ N, rhs - X @ theta_p, rcond=None)[0]
     B = theta[:n * m].reshape(n, m)
     D = theta[n * m:n_shared].reshape(p, m) if feedthrough else np.zeros((p, m))
     x0 = theta[n_shared:].reshape(R, n)
@@ -647,6 +662,26 @@ class DynamicsIdentifier:
         Fraction of each record kept for validation, in (0, 0.9].
     order_tolerance : float
         Percentage points of validation fit traded for a smaller order.
+    unit_dc_gain : bool
+        Fit B (and D) under the linear constraint ``G(z=1) = I`` (the
+        static gain belongs to a quasi-statically identified hysteresis
+        model); the unconstrained ``G(1)`` is kept in
+        ``dc_gain_unconstrained_``. Default False.
+    band_hz : tuple of float, optional
+        Excited band ``(f_lo, f_hi)`` [Hz]; default estimated from the input
+        spectra (:func:`excited_band`).
+    low_pole_fraction : float
+        Poles with a natural frequency below ``low_pole_fraction * f_lo`` are
+        removed from a candidate (the data cannot show them) and B refitted;
+        0 (default) keeps them.
+    cancel_tolerance : float
+        Modes whose largest gain in the band is below this fraction of G's
+        largest gain there (near pole-zero cancellations) are removed and B
+        refitted; 0 (default) keeps them.
+    validation_records : tuple of int, optional
+        Indices of records held out whole to choose the order (their
+        initial states are estimated on them); default: the last
+        ``validation_fraction`` of every record.
 
     Attributes
     ----------
@@ -666,6 +701,17 @@ class DynamicsIdentifier:
         Fit [%] per output of the final model over all records.
     initial_states_ : numpy.ndarray, shape (n_records, order_)
         Estimated initial state of each record.
+    dc_gain_unconstrained_ : numpy.ndarray, shape (p, p)
+        ``G(1)`` of the final A, C with B, D fitted without the constraint.
+    candidates_ : list of dict
+        Per candidate order: ``order``, kept ``modes`` ([Hz, damping]),
+        ``dropped`` poles, ``rejected`` reason, ``validation_fit_percent``.
+    candidate_order_ : int
+        The chosen candidate order (``order_`` may be smaller after removals).
+    band_hz_ : tuple of float
+        Excited band used [Hz].
+    validation_ : str
+        What was held out to choose the order.
     sampling_period_ : float
         T [s].
 
@@ -692,13 +738,18 @@ class DynamicsIdentifier:
     feedthrough: bool = False
     validation_fraction: float = 0.3
     order_tolerance: float = 0.1
+    unit_dc_gain: bool = False
+    band_hz: tuple | None = None
+    low_pole_fraction: float = 0.5
+    cancel_tolerance: float = 0.0
+    validation_records: tuple | None = None
 
     @staticmethod
     def _subspace(ins, outs, block_rows):
         return _MultiRecordMOESP(ins, outs, block_rows)
 
     _FITTED_ARRAYS = ("singular_values_", "orders_", "validation_fit_", "aic_", "fit_percent_",
-                      "initial_states_")
+                      "initial_states_", "dc_gain_unconstrained_")
 
     def to_dict(self):
         """The parameters (but the sensor) and fitted attributes as plain data (for JSON).
@@ -724,12 +775,21 @@ class DynamicsIdentifier:
                   "block_rows": None if self.block_rows is None else int(self.block_rows),
                   "feedthrough": bool(self.feedthrough),
                   "validation_fraction": float(self.validation_fraction),
-                  "order_tolerance": float(self.order_tolerance)}
+                  "order_tolerance": float(self.order_tolerance),
+                  "unit_dc_gain": bool(self.unit_dc_gain),
+                  "band_hz": None if self.band_hz is None else [float(v) for v in self.band_hz],
+                  "low_pole_fraction": float(self.low_pole_fraction),
+                  "cancel_tolerance": float(self.cancel_tolerance),
+                  "validation_records": None if self.validation_records is None
+                  else [int(v) for v in self.validation_records]}
         G = self.system_
         fitted = {k: np.asarray(getattr(G, k), dtype=float).tolist() for k in "ABCD"}
         fitted.update({"dt": float(G.dt), "name": str(G.name), "order_": int(self.order_),
                        "sampling_period_": float(self.sampling_period_)})
         fitted.update({k: np.asarray(getattr(self, k)).tolist() for k in self._FITTED_ARRAYS})
+        fitted.update({"candidates_": self.candidates_, "validation_": self.validation_,
+                       "candidate_order_": int(self.candidate_order_),
+                       "band_hz_": [float(v) for v in self.band_hz_]})
         return {"params": params, "fitted": fitted}
 
     @classmethod
@@ -761,6 +821,10 @@ class DynamicsIdentifier:
             ident.sampling_period_ = float(f["sampling_period_"])
             for k in cls._FITTED_ARRAYS:
                 setattr(ident, k, np.array(f[k], dtype=int if k == "orders_" else float))
+            ident.candidates_ = list(f["candidates_"])
+            ident.candidate_order_ = int(f["candidate_order_"])
+            ident.validation_ = str(f["validation_"])
+            ident.band_hz_ = tuple(float(v) for v in f["band_hz_"])
         except (KeyError, TypeError, ValueError) as exc:
             raise DynamicsError(f"from_dict: not a fitted identifier ({exc})") from None
         return ident
@@ -807,57 +871,318 @@ class DynamicsIdentifier:
             if not (isinstance(self.max_order, (int, np.integer)) and self.max_order >= 1):
                 raise DynamicsError(f"max_order: expected an integer >= 1, found {self.max_order!r}")
             candidates = np.arange(1, min(int(self.max_order), p * block_rows) + 1)
-
-        split = [int(round(u.shape[1] * (1 - self.validation_fraction))) for u in ins]
-        if min(split) <= 4 * block_rows:
+        band = excited_band(ins, T) if self.band_hz is None else tuple(float(v) for v in self.band_hz)
+        held = sorted({int(r) for r in (self.validation_records or ())})
+        if held and (held[0] < 0 or held[-1] >= len(ins) or len(held) == len(ins)):
+            raise DynamicsError(f"validation_records: expected indices of some (not all) of the "
+                                f"{len(ins)} records, found {held}")
+        if held:
+            est_idx = [r for r in range(len(ins)) if r not in held]
+            est_in, est_out = [ins[r] for r in est_idx], [outs[r] for r in est_idx]
+            split = None
+            self.validation_ = ("whole held-out record(s) " + ", ".join(str(r) for r in held)
+                                + " (initial state estimated on each)")
+        else:
+            split = [int(round(u.shape[1] * (1 - self.validation_fraction))) for u in ins]
+            est_in = [u[:, :s] for u, s in zip(ins, split)]
+            est_out = [y[:, :s] for y, s in zip(outs, split)]
+            self.validation_ = f"the last {100 * self.validation_fraction:.0f} % of each record"
+        if min(u.shape[1] for u in est_in) <= 4 * block_rows:
             raise DynamicsError(f"records: too short for {block_rows} block rows "
-                                f"(estimation parts of {min(split)} samples)")
-        est_in = [u[:, :s] for u, s in zip(ins, split)]
-        est_out = [y[:, :s] for y, s in zip(outs, split)]
+                                f"(estimation parts of {min(u.shape[1] for u in est_in)} samples)")
         fits = np.full(candidates.size, np.nan)
         aic = np.full(candidates.size, np.nan)
-        if candidates.size > 1:
+        infos, models = [], {}
+        if True:    # every candidate (a fixed order too) is checked and validated
             sid = self._subspace(est_in, est_out, block_rows)
             for i, n in enumerate(candidates):
-                A, C = sid.system_ac(int(n))
-                if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
-                    continue
-                B, D, x0, _ = _fit_bdx0(A, C, est_in, est_out, self.feedthrough)
-                yv = np.concatenate([y[:, s:] for y, s in zip(outs, split)], axis=1)
-                yh = np.concatenate([_simulate(A, B, C, D, u, x)[:, s:]
-                                     for u, s, x in zip(ins, split, x0)], axis=1)
-                fits[i] = float(np.mean(_fit_percent(yv, yh)))
-                res = [yv - yh]
-                E = np.concatenate(res, axis=1)
-                n_par = n * (n + 2 * p) + (p * p if self.feedthrough else 0)
-                sign, logdet = np.linalg.slogdet(E @ E.T / E.shape[1] + 1e-30 * np.eye(p))
-                aic[i] = E.shape[1] * logdet + 2 * n_par
+                model, info = self._candidate(*sid.system_ac(int(n)), est_in, est_out, band, T)
+                info["order"] = int(n)
+                models[int(n)] = model
+                if model is not None:
+                    yv, yh = self._validate(model, ins, outs, held, split)
+                    fits[i] = float(np.mean(_fit_percent(yv, yh)))
+                    info["validation_fit_percent"] = float(fits[i])
+                    E = yv - yh
+                    n_par = model[0].shape[0] * (model[0].shape[0] + 2 * p) + (
+                        p * p if self.feedthrough else 0)
+                    _, logdet = np.linalg.slogdet(E @ E.T / E.shape[1] + 1e-30 * np.eye(p))
+                    aic[i] = E.shape[1] * logdet + 2 * n_par
+                infos.append(info)
             if np.all(np.isnan(fits)):
-                raise DynamicsError("order: no candidate order gave a stable model")
+                why = "; ".join(f"order {c['order']}: {c.get('rejected', '')}" for c in infos[:4])
+                raise DynamicsError(f"order: no candidate order gave an acceptable model ({why})")
             best = np.nanmax(fits)
             chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
-        else:
-            chosen = int(candidates[0])
         sid_all = self._subspace(ins, outs, block_rows)
-        A, C = sid_all.system_ac(chosen)
-        if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
-            if candidates.size == 1:
-                raise DynamicsError(f"order: the model of order {chosen} is unstable")
-            A, C = sid.system_ac(chosen)      # stable on the estimation parts (checked above)
+        final, info = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
+        ref = models.get(chosen)
+        if final is None or (ref is not None and final[0].shape != ref[0].shape):
+            if ref is None:
+                raise DynamicsError(f"order: the model of order {chosen} is rejected: "
+                                    f"{info.get('rejected', 'no mode left')}")
+            A, C = ref[0], ref[2]   # stable and checked on the estimation records
+            B, D, x0, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
         else:
             sid = sid_all
-        B, D, x0, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough)
+            A, B, C, D, x0 = final
+            _, _, _, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+        B0, D0, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, None)
+        self.dc_gain_unconstrained_ = C @ np.linalg.solve(np.eye(A.shape[0]) - A, B0) + D0
         fit_all = _fit_percent(np.concatenate(outs, axis=1), np.concatenate(yhat, axis=1))
         self.system_ = control.ss(A, B, C, D, dt=T, name="identified_dynamics")
-        self.order_ = chosen
+        self.order_ = int(A.shape[0])
+        self.candidate_order_ = chosen
         self.singular_values_ = sid.singular_values.copy()
         self.orders_ = candidates
         self.validation_fit_ = fits
         self.aic_ = aic
+        self.candidates_ = infos
+        self.band_hz_ = band
         self.fit_percent_ = np.asarray(fit_all)
         self.initial_states_ = x0
         self.sampling_period_ = T
         return self
+
+    def _dc(self, p):
+        return np.eye(p) if self.unit_dc_gain else None
+
+    def _candidate(self, A, C, ins, outs, band, T):
+        """A candidate model from (A, C): stable, no pole far below the band, no cancelled mode.
+
+        Returns ``((A, B, C, D, x0), info)`` or ``(None, info)``; ``info`` holds
+        the kept ``modes`` ([Hz, damping]) and what was ``dropped`` or ``rejected``.
+        """
+        info = {"dropped": []}
+        z = np.linalg.eigvals(A)
+        if np.max(np.abs(z)) >= 1:
+            info["rejected"] = f"unstable (pole |z| = {np.max(np.abs(z)):.4g})"
+            return None, info
+        p = C.shape[0]
+        prune = self.low_pole_fraction > 0 or self.cancel_tolerance > 0
+        if prune:
+            modal = _real_modal(A, C, T)
+            if modal is not None:
+                A, C, mode_of, freq, zeta = modal
+                low = self.low_pole_fraction * band[0]
+                slow = np.flatnonzero(freq < low)
+                for i in slow:
+                    info["dropped"].append(f"pole at {freq[i]:.3g} Hz (damping {zeta[i]:.2f}) below "
+                                           f"{low:.3g} Hz, far below the excited band from {band[0]:.3g} Hz")
+                A, C, mode_of, freq, zeta = _keep_modes(A, C, mode_of, freq, zeta,
+                                                        np.setdiff1d(np.arange(freq.size), slow))
+                if A.shape[0] == 0:
+                    info["rejected"] = "every pole below the excited band"
+                    return None, info
+                if self.cancel_tolerance > 0:
+                    B, D, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+                    share = _mode_shares(A, B, C, D, mode_of, band, T)
+                    weak = np.flatnonzero(share < self.cancel_tolerance)
+                    if weak.size and weak.size < freq.size:
+                        for i in weak:
+                            info["dropped"].append(
+                                f"near-cancelled mode at {freq[i]:.4g} Hz (its largest gain is "
+                                f"{100 * share[i]:.2g} % of G's in the band)")
+                        A, C, mode_of, freq, zeta = _keep_modes(
+                            A, C, mode_of, freq, zeta, np.setdiff1d(np.arange(freq.size), weak))
+        B, D, x0, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+        sysd = control.ss(A, B, C, D, dt=T)
+        f, zz = modal_parameters(sysd)
+        info["modes"] = [[float(a), float(b)] for a, b in zip(f, zz)]
+        return (A, B, C, D, x0), info
+
+    def _validate(self, model, ins, outs, held, split):
+        """Measured and simulated outputs of the held-out parts, concatenated."""
+        A, B, C, D, x0 = model
+        if split is None:
+            yv, yh = [], []
+            for r in held:
+                u, y = ins[r], outs[r]
+                y_zero = _simulate(A, B, C, D, u, np.zeros(A.shape[0]))
+                _, R0 = _state_regressors(A, C, u)
+                xr = np.linalg.lstsq(R0.reshape(-1, A.shape[0]), (y - y_zero).T.reshape(-1),
+                                     rcond=None)[0]
+                yv.append(y)
+                yh.append(_simulate(A, B, C, D, u, xr))
+            return np.concatenate(yv, axis=1), np.concatenate(yh, axis=1)
+        yv = np.concatenate([y[:, s:] for y, s in zip(outs, split)], axis=1)
+        yh = np.concatenate([_simulate(A, B, C, D, u, x)[:, s:]
+                             for u, s, x in zip(ins, split, x0)], axis=1)
+        return yv, yh
+
+
+def excited_band(inputs, sampling_period, threshold=0.01):
+    """Frequency band excited by the input records (Welch power spectral density).
+
+    The band spans the frequencies whose summed input power spectral density
+    is at least ``threshold`` times its largest value (the excited lines of
+    a flat multisine, the passband of a filtered noise).
+
+    Parameters
+    ----------
+    inputs : list of array_like, each shape (m, n_samples)
+        Input records [any unit].
+    sampling_period : float
+        T [s].
+    threshold : float
+        Relative density that counts as excited.
+
+    Returns
+    -------
+    (f_lo, f_hi) : tuple of float
+        Lowest and highest excited frequency [Hz] (above 0).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(20000) * 1e-4
+    >>> u = np.sin(2 * np.pi * 50 * t) + np.sin(2 * np.pi * 700 * t)
+    >>> lo, hi = excited_band([u[None, :]], 1e-4)
+    >>> bool(40 < lo < 55 and 690 < hi < 710)
+    True
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    T = float(sampling_period)
+    total = None
+    for u in inputs:
+        u = np.atleast_2d(np.asarray(u, dtype=float))
+        nper = int(min(u.shape[1], 2 ** 18))     # resolution of the whole record
+        f, pxx = scipy.signal.welch(u - u.mean(axis=1, keepdims=True), fs=1.0 / T,
+                                    nperseg=nper, axis=1)
+        pxx = np.interp(np.linspace(0, 0.5 / T, 2 ** 16 + 1), f, pxx.sum(axis=0))
+        total = pxx if total is None else total + pxx
+    f = np.linspace(0, 0.5 / T, 2 ** 16 + 1)
+    dens = total[1:]
+    excited = np.flatnonzero(dens >= threshold * dens.max())
+    if excited.size == 0:
+        return float(f[1]), float(f[-1])
+    return float(f[1:][excited[0]]), float(f[1:][excited[-1]])
+
+
+def frf_h1(inputs, outputs, sampling_period, nperseg=None):
+    """H1 estimate of a p x m frequency response from several records.
+
+    ``H(f) = S_yu(f) S_uu(f)^-1`` with the cross- and auto-spectral density
+    matrices summed over the records (Welch averages,
+    :func:`scipy.signal.csd`, Hann window), so that records exciting one
+    input each combine into the full matrix (Bendat & Piersol, *Random
+    Data*, 4th ed., Wiley 2010, Section 9.3; Pintelon & Schoukens [4]).
+
+    Parameters
+    ----------
+    inputs : list of array_like, each shape (m, n_samples)
+        Inputs of G [µm] per record.
+    outputs : list of array_like, each shape (p, n_samples)
+        Measured outputs [µm] per record.
+    sampling_period : float
+        T [s].
+    nperseg : int, optional
+        Welch segment length; default the largest power of two up to a
+        quarter of the shortest record (at least 256 samples).
+
+    Returns
+    -------
+    frequency_hz : numpy.ndarray, shape (n_freq,)
+        [Hz], without 0.
+    H : numpy.ndarray, shape (p, m, n_freq)
+        Complex frequency response [µm/µm]; NaN where ``S_uu`` is singular.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((1, 20000))
+    >>> y = scipy.signal.lfilter([0.0, 0.5], [1.0, -0.5], u)
+    >>> f, H = frf_h1([u], [y], 1e-3)
+    >>> bool(abs(abs(H[0, 0, 0]) - 1.0) < 0.02)
+    True
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    ins, outs = _records(inputs, outputs)
+    T = float(sampling_period)
+    if nperseg is None:
+        shortest = min(u.shape[1] for u in ins)
+        nperseg = max(256, 2 ** int(np.floor(np.log2(max(shortest // 4, 2)))))
+        nperseg = min(nperseg, shortest)
+    m, p = ins[0].shape[0], outs[0].shape[0]
+    Suu = Syu = f = None
+    for u, y in zip(ins, outs):
+        uu = np.empty((m, m, nperseg // 2 + 1), complex)
+        yu = np.empty((p, m, nperseg // 2 + 1), complex)
+        for a in range(m):
+            for b in range(m):
+                f, uu[a, b] = scipy.signal.csd(u[b], u[a], fs=1 / T, nperseg=nperseg)
+            for c in range(p):
+                f, yu[c, a] = scipy.signal.csd(u[a], y[c], fs=1 / T, nperseg=nperseg)
+        Suu = uu if Suu is None else Suu + uu
+        Syu = yu if Syu is None else Syu + yu
+    H = np.full((p, m, f.size), np.nan, complex)
+    for k in range(1, f.size):
+        S = Suu[:, :, k]
+        if np.linalg.cond(S) < 1e8:
+            H[:, :, k] = Syu[:, :, k] @ np.linalg.inv(S)
+    return f[1:], H[:, :, 1:]
+
+
+def _real_modal(A, C, T):
+    """Real modal form: ``(A_m, C_m, mode_of_state, frequency_hz, damping)`` or None.
+
+    One 1 x 1 block per real pole, one 2 x 2 block ``[[sigma, omega], [-omega,
+    sigma]]`` per complex pair; None when the eigenvectors are ill-conditioned.
+    Natural frequency ``|s| / 2 pi`` [Hz] and damping ``-Re s / |s|`` of
+    each mode from ``s = ln(z) / T``.
+    """
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > 1e8:
+        return None
+    cols, mode_of, poles = [], [], []
+    for i in np.argsort(np.abs(lam)):
+        if lam[i].imag < -1e-12:
+            continue
+        if lam[i].imag > 1e-12:
+            cols += [V[:, i].real, V[:, i].imag]
+            mode_of += [len(poles)] * 2
+        else:
+            cols.append(V[:, i].real)
+            mode_of.append(len(poles))
+        poles.append(lam[i])
+    Tm = np.column_stack(cols)
+    if Tm.shape != A.shape or np.linalg.cond(Tm) > 1e10:
+        return None
+    Am = np.linalg.solve(Tm, A @ Tm)
+    s = np.log(np.asarray(poles, dtype=complex)) / T
+    wn = np.abs(s)
+    zeta = np.where(wn > 0, -s.real / np.where(wn > 0, wn, 1), 1.0)
+    return Am, C @ Tm, np.asarray(mode_of), wn / (2 * np.pi), zeta
+
+
+def _keep_modes(A, C, mode_of, freq, zeta, keep):
+    idx = np.flatnonzero(np.isin(mode_of, keep))
+    renum = {int(old): new for new, old in enumerate(keep)}
+    return (A[np.ix_(idx, idx)], C[:, idx], np.array([renum[int(m)] for m in mode_of[idx]], int),
+            freq[keep], zeta[keep])
+
+
+def _mode_shares(A, B, C, D, mode_of, band, T):
+    """Largest gain of each mode's term in the band over the largest gain of G there."""
+    f = np.logspace(np.log10(max(band[0], 1e-3)), np.log10(min(band[1], 0.49 / T)), 200)
+    z = np.exp(2j * np.pi * f * T)
+    n_modes = int(mode_of.max()) + 1 if mode_of.size else 0
+    total = np.zeros(f.size)
+    share = np.zeros(n_modes)
+    terms = []
+    for i in range(n_modes):
+        idx = np.flatnonzero(mode_of == i)
+        Ai, Bi, Ci = A[np.ix_(idx, idx)], B[idx], C[:, idx]
+        G = np.stack([Ci @ np.linalg.solve(zk * np.eye(idx.size) - Ai, Bi) for zk in z])
+        terms.append(np.linalg.norm(G, 2, axis=(1, 2)))
+    Gall = np.stack([C @ np.linalg.solve(zk * np.eye(A.shape[0]) - A, B) + D for zk in z])
+    total = np.linalg.norm(Gall, 2, axis=(1, 2))
+    for i, g in enumerate(terms):
+        share[i] = g.max() / max(total.max(), 1e-300)
+    return share
 
 
 def identify_dynamics(inputs, outputs, sampling_period, order=None, max_order=8, sensor=None,

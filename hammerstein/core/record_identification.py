@@ -78,6 +78,13 @@ __all__ = [
     "identify_records",
     "identify_record",
     "dynamics_tables",
+    "noise_level",
+    "amplitude_levels",
+    "level_errors",
+    "NOISE_FACTOR",
+    "identify_record_dynamics",
+    "RecordDynamics",
+    "DYNAMICS_DEFAULTS",
     "loop_asymmetry",
     "ASYMMETRY_NOTE_PERCENT",
     "OUTPUT_MAPS",
@@ -186,6 +193,10 @@ class Split:
         Index of the input the record is split on.
     description : str
         One sentence saying what was held out.
+    levels : list of dict
+        Amplitude levels of a multi-amplitude record (:func:`amplitude_levels`):
+        ``start``, ``stop`` (samples), ``amplitude`` (input unit),
+        ``percent`` (of the largest) and ``held_out``; empty otherwise.
     """
 
     train: np.ndarray
@@ -196,6 +207,7 @@ class Split:
     branches: list
     excitation: int
     description: str
+    levels: list = field(default_factory=list)
 
     def ascending(self, u):
         """Complete ascending branches of the training samples, (start, stop).
@@ -225,6 +237,62 @@ def _branches(u):
     bounds = [0] + reversal_points(u) + [u.size - 1]
     return [(a, b, bool(abs(u[b] - u[a]) >= COMPLETE_TRAVEL * span))
             for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
+
+
+#: Branches whose end amplitudes differ by at most this fraction of the span form one level.
+LEVEL_TOLERANCE = 0.05
+
+
+def amplitude_levels(u, branches=None):
+    """Amplitude levels of a record: runs of branches turning at the same amplitude.
+
+    A decreasing-amplitude sine (:func:`hammerstein.core.excitation.decreasing_sine`)
+    has one level per amplitude: the branches that end at the same distance
+    from the centre of the input span (within :data:`LEVEL_TOLERANCE` of the
+    span). Runs of fewer than three branches (less than a loop) are not levels.
+
+    Parameters
+    ----------
+    u : array_like, shape (n_samples,)
+        The excitation input [input unit].
+    branches : list of (int, int, bool), optional
+        Branches between reversal points (computed when None).
+
+    Returns
+    -------
+    list of dict
+        ``start``, ``stop`` (sample indices, the level is ``start:stop + 1``),
+        ``amplitude`` (input unit, from the centre of the span) and
+        ``percent`` of the largest level, in record order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(4000) / 1000
+    >>> u = np.sin(2 * np.pi * t) * np.where(t < 2, 10.0, 4.0)
+    >>> [round(lv["percent"]) for lv in amplitude_levels(u)]
+    [100, 40]
+    """
+    u = np.asarray(u, dtype=float)
+    if branches is None:
+        branches = _branches(u)
+    span = float(np.ptp(u))
+    if not span > 0:
+        return []
+    centre = 0.5 * (u.max() + u.min())
+    runs = []
+    for a, b, _ in branches:
+        amp = abs(u[b] - centre)
+        if runs and abs(runs[-1]["amplitude"] - amp) <= LEVEL_TOLERANCE * span:
+            runs[-1]["stop"] = b
+            runs[-1]["n"] += 1
+            runs[-1]["amplitude"] = max(runs[-1]["amplitude"], amp)
+        else:
+            runs.append({"start": a, "stop": b, "amplitude": amp, "n": 1})
+    levels = [r for r in runs if r["n"] >= 3]
+    top = max((r["amplitude"] for r in levels), default=0.0)
+    return [{"start": int(r["start"]), "stop": int(r["stop"]), "amplitude": float(r["amplitude"]),
+             "percent": 100.0 * r["amplitude"] / top} for r in levels]
 
 
 def _closed_loop(u, y):
@@ -304,6 +372,13 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
                 raise IdentificationError(f"{name}no reversal point to split at; use --hold-out none")
             s = min(cuts, key=lambda c: abs(c - train_fraction * n))
             held[s:] = True
+    elif hold_out == "auto" and len(levels := amplitude_levels(u, branches)) >= 3:
+        # a multi-amplitude record: hold out every second level (whole minor loops not
+        # trained on), the largest level always trains
+        for i, lv in enumerate(levels):
+            lv["held_out"] = i % 2 == 1
+            if lv["held_out"]:
+                held[lv["start"]:lv["stop"] + 1] = True
     elif hold_out == "auto":
         c = len(complete)
         if c >= 3:
@@ -345,6 +420,16 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
                     f"{name}no complete ascending branch left for the closed form; use "
                     f"--method least-squares")
     split = _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds)
+    if hold_out == "auto" and train_fraction is None and len(levels := amplitude_levels(u, branches)) >= 3:
+        for i, lv in enumerate(levels):
+            lv["held_out"] = bool(held[lv["start"]:lv["stop"] + 1].all())
+        split.levels = levels
+        held_txt = ", ".join(f"{lv['percent']:.0f} %" for lv in levels if lv["held_out"])
+        train_txt = ", ".join(f"{lv['percent']:.0f} %" for lv in levels if not lv["held_out"])
+        rest = split.description.partition(";")[2]
+        split.description = (f"held out whole amplitude levels {held_txt} of the largest (minor "
+                             f"loops not trained on; trained on {train_txt})"
+                             + (";" + rest if rest else ""))
     if not split.train.any():
         raise IdentificationError(
             f"{name}no training samples left after the burn-in; shorten the held-out part "
@@ -665,6 +750,8 @@ class RecordFit:
         Model outputs over each record (offset included).
     output_map : {"none", "deadzone"}
         Whether the model has a static output map (modified PI).
+    levels : list of dict
+        Per amplitude level of multi-amplitude records (:func:`level_errors`).
     """
 
     model: MultivariablePI
@@ -679,6 +766,7 @@ class RecordFit:
     validation: list | None
     predictions: list = field(repr=False)
     output_map: str = "none"
+    levels: list = field(default_factory=list)
 
 
 def _as_records(records):
@@ -760,6 +848,15 @@ def _fit_structure(engine, kinds, auto, names_out, names_in, prune):
                         continue          # keep at least one hysteresis component in the model
                     c2, o2, rms2 = engine.fit_output(l, trial)
                     if rms2 <= (1 + PRUNE_TOLERANCE) * base + 1e-12 * max(abs(o2), 1.0):
+                        above = _above_noise(engine, l, k, comps[k], simpler)
+                        if above is not None:
+                            notes.append(
+                                f"{names_out[l]} <- {names_in[k]}: kept, not "
+                                f"{'absent' if simpler == 'none' else 'a pure gain'} (its "
+                                f"{'contribution' if simpler == 'none' else 'hysteresis'} "
+                                f"{above[0]:.3g} RMS is above the noise {above[1]:.3g}, though "
+                                f"the training RMS grows only from {base:.3g} to {rms2:.3g})")
+                            continue
                         notes.append(f"{names_out[l]} <- {names_in[k]}: "
                                      f"{'absent' if simpler == 'none' else 'a pure gain'} "
                                      f"(training RMS {rms2:.3g} vs {base:.3g} as a PI)")
@@ -769,6 +866,60 @@ def _fit_structure(engine, kinds, auto, names_out, names_in, prune):
         grid.append(comps)
         offsets.append(off)
     return grid, offsets, notes
+
+
+#: A component whose contribution (or hysteresis) RMS exceeds this multiple of the noise stays.
+NOISE_FACTOR = 2.0
+
+
+def noise_level(y):
+    """Standard deviation of white measurement noise on a smooth record.
+
+    From the second difference, robustly: ``1.4826 MAD(d2 y) / sqrt(6)``
+    (for white noise of variance s^2 the second difference has variance
+    6 s^2; the median absolute deviation ignores turning points and record
+    boundaries).
+
+    Parameters
+    ----------
+    y : array_like, shape (n_samples,)
+        Output samples [output unit].
+
+    Returns
+    -------
+    float
+        Noise standard deviation [output unit].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.linspace(0, 1, 20000)
+    >>> y = 50 * np.sin(2 * np.pi * t) + 0.04 * np.random.default_rng(0).standard_normal(t.size)
+    >>> round(noise_level(y), 2)
+    0.04
+    """
+    d2 = np.diff(np.asarray(y, dtype=float), 2)
+    if d2.size == 0:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
+
+
+def _above_noise(engine, l, k, comp, simpler):
+    """(RMS, noise) when simplifying component (l, k) would drop more than the noise, else None."""
+    if not hasattr(engine, "phi") or comp is None:
+        return None
+    if isinstance(comp, PrandtlIshlinskii):
+        c = engine.phi[k] @ comp.weights
+    else:
+        c = comp * engine.lin[k]
+    if simpler == "gain":
+        if not isinstance(comp, PrandtlIshlinskii):
+            return None
+        X = np.column_stack([engine.lin[k], np.ones_like(engine.lin[k])])
+        c = c - X @ np.linalg.lstsq(X, c, rcond=None)[0]
+    rms = float(np.std(c))
+    noise = noise_level(engine.y[l])
+    return (rms, noise) if rms > NOISE_FACTOR * noise else None
 
 
 def _contribution(comp, engine, k):
@@ -893,7 +1044,45 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
         fit = _with_output_map(fit, output_map, bounds, scores[best], bool(asym))
     if fit.output_map == "none":
         fit.notes += asym
+    fit.levels = level_errors(fit)
     return fit
+
+
+def level_errors(fit):
+    """Errors of a fitted model per amplitude level (minor loop) of its records.
+
+    For every level of every multi-amplitude record (``Split.levels``) and
+    every output: the RMS error over the level in % of the measured output
+    range there, and the error of the loop amplitude (peak to peak over the
+    last half of the level, its steady loop) in % of the measured one.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        A fit whose splits may hold amplitude levels.
+
+    Returns
+    -------
+    list of dict
+        ``source``, ``percent`` (level amplitude, % of the largest),
+        ``held_out`` (bool), ``output``, ``rms_percent``,
+        ``amplitude_error_percent``, ``measured_peak_to_peak`` [output unit].
+    """
+    rows = []
+    for rec, s, pred in zip(fit.records, fit.splits, fit.predictions):
+        for lv in s.levels:
+            a, b = lv["start"], lv["stop"] + 1
+            h = a + (b - a) // 2
+            for l, name in enumerate(fit.model.output_names):
+                y, yh = rec.y[l, a:b], pred[l, a:b]
+                rng = float(np.ptp(y))
+                pp, pp_hat = float(np.ptp(rec.y[l, h:b])), float(np.ptp(pred[l, h:b]))
+                rows.append({"source": rec.source, "percent": lv["percent"],
+                             "held_out": bool(lv["held_out"]), "output": name,
+                             "rms_percent": 100 * float(np.sqrt(np.mean((y - yh) ** 2))) / max(rng, 1e-300),
+                             "amplitude_error_percent": 100 * (pp_hat - pp) / max(pp, 1e-300),
+                             "measured_peak_to_peak": pp})
+    return rows
 
 
 def _with_output_map(fit, output_map, bounds, classical, asymmetric):
@@ -1083,16 +1272,179 @@ def identify_record(record, method="least-squares", n_hysterons=15, thresholds=N
                             output_map=output_map)
 
 
-def dynamics_tables(fit, records, name="identified", **options):
-    """Identify the linear dynamics behind a fitted PI and return preset tables.
+#: Defaults of the dynamics identified from records (:func:`identify_record_dynamics`).
+DYNAMICS_DEFAULTS = {"max_order": 10, "unit_dc_gain": True, "low_pole_fraction": 0.5,
+                     "cancel_tolerance": 0.01}
+
+
+@dataclass
+class RecordDynamics:
+    """Linear dynamics G identified from broadband records (:func:`identify_record_dynamics`).
+
+    Parameters
+    ----------
+    identifier : hammerstein.core.lti.DynamicsIdentifier
+        The fitted identifier (``system_`` is the discrete G, G(1) = I by default).
+    continuous : control.StateSpace
+        G in continuous time (inverse ZOH map), p x p.
+    tables : dict
+        ``preset`` and ``dynamics`` tables of a preset file.
+    summary : dict
+        Plain data for the ``[identification.dynamics]`` table: ``order``,
+        ``chosen_on`` (the held-out data), ``band_hz``, ``candidates``
+        (order, held-out fit [%], kept modes, what was dropped or why the
+        order was rejected), ``modes`` (frequency [Hz], damping [-] and the
+        share of each axis), ``dc_gain_unconstrained`` (p, p),
+        ``dc_gain`` (p, p), ``held_out_fit_percent`` and ``fit_percent``
+        per output.
+    frf_frequency_hz : numpy.ndarray, shape (n_freq,)
+        Frequencies of the measured H1 estimate [Hz].
+    frf : numpy.ndarray, shape (p, p, n_freq)
+        Measured H1 frequency-response estimate of G (complex) [µm/µm].
+    """
+
+    identifier: object
+    continuous: object
+    tables: dict
+    summary: dict
+    frf_frequency_hz: np.ndarray = field(repr=False)
+    frf: np.ndarray = field(repr=False)
+
+
+def _held_out_records(records):
+    """Indices of the last record of each excited input when every input has two or more."""
+    by_input = {}
+    for i, rec in enumerate(records):
+        by_input.setdefault(_excitation(rec), []).append(i)
+    m = records[0].u.shape[0]
+    if len(by_input) == m and all(len(v) >= 2 for v in by_input.values()):
+        return tuple(sorted(v[-1] for v in by_input.values()))
+    return ()
+
+
+def identify_record_dynamics(fit, records, name="identified", **options):
+    """Identify the linear dynamics G behind a fitted PI from broadband records.
 
     The Hammerstein structure ``y = G(Gamma(u)) + c`` is identified in two
     steps: ``Gamma`` and ``c`` from the (slow) hysteresis records
     (:func:`identify_records`), then G from broadband records: the PI outputs
     ``H = Gamma(u)`` are the inputs of G and ``y - c`` its outputs
-    (:class:`hammerstein.core.lti.DynamicsIdentifier`, subspace method with
-    order selection on held-out samples). G is returned in continuous time
-    (inverse of the ZOH map), as a preset's ``[dynamics]`` table.
+    (:class:`hammerstein.core.lti.DynamicsIdentifier`, subspace method).
+
+    What makes G trustworthy (defaults :data:`DYNAMICS_DEFAULTS`):
+
+    * **unit static gain**: the PI, identified quasi-statically, holds the
+      static gain of the actuator, so G is fitted under the constraint
+      ``G(0) = I``; the unconstrained G(0) is reported;
+    * **order on held-out data**: when every input has two or more
+      broadband records, the last record of each input is held out whole and
+      the order is chosen on it (else the last 30 % of each record);
+    * **no pole outside what the data show**: poles below half the lowest
+      excited frequency (estimated from the input spectrum) and modes
+      whose largest gain in the band is below 1 % of G's (near pole-zero
+      cancellations) are removed and B refitted; unstable orders are rejected.
+
+    Parameters
+    ----------
+    fit : RecordFit
+        Square p x p model.
+    records : sequence of MultiRecord
+        Broadband records with the same columns, one sampling period.
+    name : str
+        Preset name.
+    **options
+        Options of :class:`~hammerstein.core.lti.DynamicsIdentifier`
+        (``order``, ``max_order``...), overriding the defaults.
+
+    Returns
+    -------
+    RecordDynamics
+
+    Raises
+    ------
+    IdentificationError
+        On a non-square model, no records, differing sampling periods, or a
+        failed identification.
+    """
+    model = fit.model
+    if model.n_inputs != model.n_outputs:
+        raise IdentificationError(
+            f"dynamics: expected a square model (one displacement per PI output), found "
+            f"{model.n_outputs} outputs x {model.n_inputs} inputs")
+    records = _as_records(records)
+    T = records[0].sampling_period
+    if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
+        raise IdentificationError("dynamics records: expected one sampling period for all")
+    off = np.zeros((model.n_outputs, 1)) if model.output_offset is None \
+        else model.output_offset[:, None]
+    ins = [model.simulate(r.u)[0] - off for r in records]
+    outs = [r.y - off for r in records]
+    opts = dict(DYNAMICS_DEFAULTS)
+    opts["validation_records"] = _held_out_records(records)
+    opts.update({k: v for k, v in options.items() if v is not None or k == "order"})
+    try:
+        ident = lti.DynamicsIdentifier(**opts).fit(ins, outs, T)
+        cont = lti.continuous_system(ident.system_)
+        frf_f, frf = lti.frf_h1(ins, outs, T)
+        in_band = (frf_f >= 0.9 * ident.band_hz_[0]) & (frf_f <= 1.1 * ident.band_hz_[1])
+        frf_f, frf = frf_f[in_band], frf[:, :, in_band]
+    except (ValueError, np.linalg.LinAlgError) as exc:
+        raise IdentificationError(f"dynamics: {exc}") from None
+    held = opts["validation_records"]
+    chosen_on = (("held-out records " + ", ".join(records[i].source for i in held)) if held
+                 else ident.validation_)
+    summary = _dynamics_summary(ident, cont, chosen_on, model.output_names)
+    mat = lambda M: [[float(v) for v in row] for row in np.atleast_2d(np.asarray(M))]
+    tables = {"preset": {"name": name, "sampling_period": float(T),
+                         "description": "PI identified from records + identified linear dynamics"},
+              "dynamics": {"kind": "state_space", "A": mat(cont.A), "B": mat(cont.B),
+                           "C": mat(cont.C), "D": mat(cont.D)}}
+    return RecordDynamics(ident, cont, tables, summary, frf_f, frf)
+
+
+def _dynamics_summary(ident, cont, chosen_on, names):
+    """Plain data of an identified G for ``[identification.dynamics]``."""
+    p = cont.noutputs
+    lam, V = np.linalg.eig(np.asarray(cont.A))
+    C = np.asarray(cont.C)
+    modes = []
+    f_all = np.abs(lam) / (2 * np.pi)
+    for i in np.argsort(f_all):
+        if lam[i].imag < -1e-9 * max(abs(lam[i]), 1.0):
+            continue
+        share = np.abs(C @ V[:, i])
+        share = share / max(share.sum(), 1e-300)
+        modes.append({"frequency_hz": float(f_all[i]),
+                      "damping_ratio": float(-lam[i].real / max(abs(lam[i]), 1e-300)),
+                      "axis_share": {n: float(v) for n, v in zip(names, share)}})
+    cands = []
+    for c in ident.candidates_:
+        entry = {"order": int(c["order"])}
+        if "validation_fit_percent" in c:
+            entry["held_out_fit_percent"] = float(c["validation_fit_percent"])
+            entry["modes_hz"] = [float(m[0]) for m in c["modes"]]
+        if c.get("rejected"):
+            entry["rejected"] = str(c["rejected"])
+        if c.get("dropped"):
+            entry["dropped"] = [str(d) for d in c["dropped"]]
+        cands.append(entry)
+    pick = np.flatnonzero(np.asarray(ident.orders_) == ident.candidate_order_)
+    held_fit = float(ident.validation_fit_[pick[0]]) if pick.size else float("nan")
+    return {"order": int(ident.order_), "candidate_order": int(ident.candidate_order_),
+            "chosen_on": str(chosen_on),
+            "band_hz": [float(v) for v in ident.band_hz_],
+            "candidates": cands, "modes": modes,
+            "dc_gain_unconstrained": [[float(v) for v in row] for row in ident.dc_gain_unconstrained_],
+            "dc_gain": [[float(v) for v in row] for row in lti.dc_gain(cont)],
+            "unit_dc_gain": bool(ident.unit_dc_gain),
+            "held_out_fit_percent": float(held_fit),
+            "fit_percent": [float(v) for v in ident.fit_percent_]}
+
+
+def dynamics_tables(fit, records, name="identified", **options):
+    """Identify the linear dynamics behind a fitted PI and return preset tables.
+
+    :func:`identify_record_dynamics` without the report: its ``tables``.
 
     Parameters
     ----------
@@ -1117,29 +1469,7 @@ def dynamics_tables(fit, records, name="identified", **options):
         On a non-square model, no records, differing sampling periods, or a
         failed identification.
     """
-    model = fit.model
-    if model.n_inputs != model.n_outputs:
-        raise IdentificationError(
-            f"dynamics: expected a square model (one displacement per PI output), found "
-            f"{model.n_outputs} outputs x {model.n_inputs} inputs")
-    records = _as_records(records)
-    T = records[0].sampling_period
-    if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
-        raise IdentificationError("dynamics records: expected one sampling period for all")
-    off = np.zeros((model.n_outputs, 1)) if model.output_offset is None \
-        else model.output_offset[:, None]
-    ins = [model.simulate(r.u)[0] - off for r in records]
-    outs = [r.y - off for r in records]
-    try:
-        ident = lti.DynamicsIdentifier(**options).fit(ins, outs, T)
-        cont = lti.continuous_system(ident.system_)
-    except (ValueError, np.linalg.LinAlgError) as exc:
-        raise IdentificationError(f"dynamics: {exc}") from None
-    mat = lambda M: [[float(v) for v in row] for row in np.atleast_2d(np.asarray(M))]
-    return {"preset": {"name": name, "sampling_period": float(T),
-                       "description": "PI identified from records + identified linear dynamics"},
-            "dynamics": {"kind": "state_space", "A": mat(cont.A), "B": mat(cont.B),
-                         "C": mat(cont.C), "D": mat(cont.D)}}
+    return identify_record_dynamics(fit, records, name, **options).tables
 
 
 # -- modified PI: static output map ---------------------------------------------------

@@ -17,7 +17,8 @@ import numpy as np  # noqa: E402
 
 from hammerstein.report.figures import _title_height, fixed_layout, suptitle  # noqa: E402
 
-__all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "state_space_data"]
+__all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "measured_bode_figure",
+           "state_space_data"]
 
 
 def state_space_data(system):
@@ -173,3 +174,86 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     fig.legend(handles, names, loc="lower center", ncol=len(names), fontsize=8, frameon=False,
                bbox_to_anchor=(0.5, fig.subplotpars.top + 0.3 / H))
     return fig
+
+
+def measured_bode_figure(identified, frequency_hz, frf, names=None,
+                         title="Identified G and its measured frequency response"):
+    """Bode plot of an identified p x p G over the measured frequency-response estimate.
+
+    The measured estimate (e.g. H1 from multisines,
+    :func:`hammerstein.core.lti.frf_h1`) is drawn as grey dots behind the
+    identified model (solid), both by python-control's ``bode_plot`` (the
+    estimate as a ``control.FrequencyResponseData``).
+
+    Parameters
+    ----------
+    identified : control.StateSpace
+        p x p system (continuous or discrete).
+    frequency_hz : array_like, shape (n_freq,)
+        Frequencies of the estimate [Hz], > 0.
+    frf : array_like, shape (p, p, n_freq)
+        Complex estimate [µm/µm]; NaN entries are left out.
+    names : sequence of str, optional
+        Axis names (p); default those of ``identified``.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        2 p rows (magnitude, phase per output) by p columns (inputs).
+
+    Examples
+    --------
+    >>> import numpy as np, control
+    >>> G = control.ss([[-100.0]], [[100.0]], [[1.0]], [[0.0]])
+    >>> f = np.logspace(0, 3, 50)
+    >>> H = np.asarray(control.frequency_response(G, 2 * np.pi * f).complex).reshape(1, 1, -1)
+    >>> fig = measured_bode_figure(G, f, H)
+    >>> len(fig.axes)
+    2
+    """
+    import control  # lazy: python-control only for runs with identified dynamics
+
+    f = np.asarray(frequency_hz, dtype=float)
+    H = np.asarray(frf, dtype=complex)
+    keep = (f > 0) & np.all(np.isfinite(H), axis=(0, 1))
+    f, H = f[keep], H[:, :, keep]
+    p, m = identified.noutputs, identified.ninputs
+    names = list(identified.output_labels) if names is None else [str(n) for n in names]
+    sys_named = control.ss(identified.A, identified.B, identified.C, identified.D, identified.dt,
+                           inputs=[f"{n}_h" for n in names[:m]], outputs=names[:p])
+    f_hi = min(f.max(), 0.49 / identified.dt) if identified.isdtime(strict=True) else f.max()
+    w = 2 * np.pi * np.logspace(np.log10(max(f.min(), 1e-2)), np.log10(f_hi), 400)
+    model = control.frequency_response(sys_named, w)
+    model.sysname = "identified"
+    measured = control.FrequencyResponseData(H, 2 * np.pi * f, inputs=sys_named.input_labels,
+                                             outputs=sys_named.output_labels)
+    meas = control.frequency_response(measured)
+    meas.sysname = "measured (H1)"
+    title_h = _title_height(title, 4.0 * m + 1.5)
+    with plt.rc_context(control.config.defaults["ctrlplot.rcParams"]):
+        fig, ax = plt.subplots(2 * p, m, figsize=(4.0 * m + 1.5, 3.0 * p + 1.0 + title_h),
+                               squeeze=False)
+        fixed_layout(fig, 2 * p, m, left=1.35, right=0.25, bottom=0.6, top=title_h + 0.35,
+                     wspace=0.45, hspace=0.35)
+        with np.errstate(divide="ignore"):
+            cplt = control.bode_plot([meas, model], Hz=True, dB=True, deg=True, ax=ax,
+                                     wrap_phase=True, share_magnitude="row",
+                                     share_phase="row", share_frequency="col")
+    suptitle(fig, title)
+    for a in np.ravel(cplt.axes):
+        for line in a.get_lines():
+            if line.get_label() == "measured (H1)":
+                line.set_linestyle("none")
+                line.set_marker(".")
+                line.set_markersize(2.0)
+                line.set_color("0.6")
+                line.set_zorder(1)
+        legend = a.get_legend()
+        if legend is not None:
+            handles = {ln.get_label(): ln for ln in a.get_lines()}
+            a.legend([handles[t.get_text()] for t in legend.get_texts()],
+                     [t.get_text() for t in legend.get_texts()], loc=legend._loc,
+                     fontsize=legend.get_texts()[0].get_fontsize())
+    return cplt.figure

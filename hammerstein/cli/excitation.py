@@ -1,0 +1,227 @@
+"""``hammerstein excitation``: write the excitation files to play on an actuator.
+
+Per input (the others held at 0): ``hysteresis-<input>.csv`` (a slow sine of
+decreasing amplitude, 100/80/60/40/20 %, two periods each), ``multisine-<input>.csv``
+and ``multisine-<input>-validation.csv`` (random-phase multisines, 10 Hz to half
+the Nyquist frequency at 80 % of the amplitude, independent phases; the
+second is held out to choose the order of the dynamics) and ``creep-<input>.csv``
+(a voltage staircase, 2 s per step); each file holds the time column ``t`` [s]
+and every input column [V] (:mod:`hammerstein.core.excitation`). A
+``README.md`` says what to measure and how to give the records back to
+``hammerstein identify``.
+
+Files: the directory is created if missing; an existing file is replaced
+only when this command wrote it (listed in the directory's
+``.hammerstein-excitation``), otherwise nothing is written and the command
+names ``--force`` (exit 2). Each file goes through a temporary file and a
+rename. Exit status: 0 on success, 1 when a file cannot be written, 2 on a
+usage error.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from hammerstein.cli._common import out_dir_problem
+from hammerstein.core.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
+from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
+
+__all__ = ["add_parser", "MANIFEST", "readme_text"]
+
+#: The file listing what this command wrote in a directory (one name per line).
+MANIFEST = ".hammerstein-excitation"
+_MANIFEST_HEAD = "# written by hammerstein excitation; files it may replace"
+
+
+def add_parser(subparsers):
+    """Register the ``excitation`` subcommand (sets ``handler``).
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The ``add_subparsers()`` object of the ``hammerstein`` parser.
+    """
+    p = subparsers.add_parser(
+        "excitation", help="write excitation files to play on an actuator before identifying it",
+        description="Write, per input, the excitation records that 'hammerstein identify' "
+                    "needs: a decreasing-amplitude sine (hysteresis and minor loops), two "
+                    "random-phase multisines (dynamics; the second held out) and a voltage "
+                    "staircase (creep), each a CSV file with the time and every input column, "
+                    "plus a README of what to measure.")
+    p.add_argument("--inputs", required=True, metavar="NAMES",
+                   help="input names, comma-separated (the column names), e.g. ux,uy")
+    p.add_argument("--amplitude", required=True, metavar="V|V1,V2,...",
+                   help="full amplitude [V], one for all inputs or one per input")
+    p.add_argument("--sampling-period", required=True, type=float, metavar="S",
+                   help="sampling period of the hardware [s], e.g. 5e-5")
+    p.add_argument("--out", required=True, metavar="DIR", help="directory to write")
+    p.add_argument("--sine-frequency", type=float, default=1.0, metavar="HZ",
+                   help="frequency of the decreasing-amplitude sine (default 1 Hz)")
+    p.add_argument("--f-min", type=float, default=10.0, metavar="HZ",
+                   help="lowest multisine frequency (default 10 Hz; also its resolution)")
+    p.add_argument("--f-max", type=float, metavar="HZ",
+                   help="highest multisine frequency (default half the Nyquist frequency)")
+    p.add_argument("--periods", type=int, default=4, metavar="N",
+                   help="periods per multisine record (default 4)")
+    p.add_argument("--hold", type=float, default=2.0, metavar="S",
+                   help="duration of each creep step (default 2 s)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the multisine phases (default 0)")
+    p.add_argument("--force", action="store_true",
+                   help="replace files in DIR that this command did not write")
+    p.set_defaults(handler=_handler)
+
+
+class _Usage(ValueError):
+    """A usage error (exit 2)."""
+
+
+def _amplitudes(text, m):
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise _Usage(f"--amplitude: expected a number [V] or one per input, found {text!r}") from None
+    if len(values) not in (1, m):
+        raise _Usage(f"--amplitude: expected 1 or {m} values (one per input), found {len(values)}")
+    if not all(np.isfinite(v) and v > 0 for v in values):
+        raise _Usage(f"--amplitude: expected positive amplitudes [V], found {text!r}")
+    return np.broadcast_to(np.array(values), (m,)).copy()
+
+
+def _owned(directory):
+    """Names this command wrote in ``directory`` (from its manifest)."""
+    path = directory / MANIFEST
+    if not path.is_file():
+        return set()
+    try:
+        text = bounded_read_text(path, "toml", "excitation manifest")
+    except (OSError, FileLimitError, UnicodeDecodeError):
+        return set()
+    lines = text.splitlines()
+    if not lines or lines[0] != _MANIFEST_HEAD:
+        return set()
+    return {ln.strip() for ln in lines[1:] if ln.strip()}
+
+
+def readme_text(records, names, amplitude, sampling_period):
+    """The README written with the excitation files: what to measure, how to identify.
+
+    Parameters
+    ----------
+    records : list of hammerstein.core.excitation.ExcitationRecord
+        The records written.
+    names : sequence of str
+        Input names.
+    amplitude : numpy.ndarray, shape (m,)
+        Full amplitude per input [V].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    str
+        Markdown text.
+    """
+    T = sampling_period
+    by_kind = {}
+    for r in records:
+        by_kind.setdefault(r.kind, []).append(f"{r.name}.csv")
+    dur = {r.kind: r.time.size * T for r in records}
+    lines = [
+        "# Excitation records (written by `hammerstein excitation`)", "",
+        f"Inputs {', '.join(names)}, amplitude {', '.join(f'{a:g}' for a in amplitude)} V, "
+        f"sampling period {T:g} s ({1 / T:g} Hz). Each file holds the time `t` [s] and every "
+        f"input column [V]; one input is driven, the others stay at 0 V.", "",
+        "| files | what for | signal | duration |", "|---|---|---|---|",
+        f"| {', '.join(by_kind['hysteresis'])} | hysteresis and its minor loops | sine, "
+        f"{', '.join(f'{100 * a:.0f}' for a in LEVELS)} % of the amplitude, two periods each | "
+        f"{dur['hysteresis']:g} s |",
+        f"| {', '.join(by_kind['multisine'])} | linear dynamics (estimation) | random-phase "
+        f"multisine at 80 % of the amplitude | {dur['multisine']:g} s |",
+        f"| {', '.join(by_kind['multisine-validation'])} | linear dynamics (held out: chooses "
+        f"the order) | the same band, other phases | {dur['multisine-validation']:g} s |",
+        f"| {', '.join(by_kind['creep'])} | creep | staircase "
+        f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *STAIRCASE_LEVELS))} % | {dur['creep']:g} s |",
+        "", "## What to measure", "",
+        "1. Play each file from rest (all inputs at 0 V for at least a second before) at "
+        "exactly this sampling period, and record every displacement (e.g. `x`, `y` in µm) "
+        "synchronously, one sample per row.",
+        "2. Add the displacements as new columns to a copy of the file (keep `t` and the input "
+        "columns); a sensor offset is fine (it is identified). Note the sensor's noise and "
+        "bandwidth.",
+        "3. Identify (the multisine files are the dynamics records; the validation ones are "
+        "held out to choose the order):", "",
+        "```",
+        f"hammerstein identify {' '.join(by_kind['hysteresis'])} --inputs {','.join(names)} "
+        f"--outputs x,y --time t --dynamics --dynamics-records "
+        f"{' '.join(by_kind['multisine'] + by_kind['multisine-validation'])} "
+        f"--out preset.toml --metrics fit.csv --plot fit.png",
+        "```", "",
+        "The staircase files record the creep (the slow drift after each step) for its "
+        "identification.", ""]
+    return "\n".join(lines)
+
+
+def _csv_bytes(record, names):
+    data = np.column_stack([record.time, record.u.T])
+    lines = [",".join(["t", *names])]
+    lines += [",".join(f"{v:.9g}" for v in row) for row in data]
+    return ("\n".join(lines) + "\n").encode()
+
+
+def _handler(args):
+    try:
+        names = [n.strip() for n in args.inputs.split(",")]
+        if not all(names) or len(set(names)) != len(names) or "t" in names:
+            raise _Usage(f"--inputs: expected distinct non-empty names other than t, found "
+                         f"{args.inputs!r}")
+        amplitude = _amplitudes(args.amplitude, len(names))
+        T = args.sampling_period
+        if not (np.isfinite(T) and T > 0):
+            raise _Usage(f"--sampling-period: expected a positive time [s], found {T}")
+        problem = out_dir_problem(args.out)
+        if problem:
+            raise _Usage(problem)
+        try:
+            records = excitation_set(names, amplitude, T, sine_frequency=args.sine_frequency,
+                                     f_min=args.f_min, f_max=args.f_max,
+                                     multisine_periods=args.periods, hold=args.hold,
+                                     seed=args.seed)
+        except ValueError as exc:
+            raise _Usage(str(exc)) from None
+        out = Path(args.out)
+        targets = [f"{r.name}.csv" for r in records] + ["README.md"]
+        owned = _owned(out)
+        for name in targets + [MANIFEST]:
+            path = out / name
+            if name == MANIFEST:
+                if path.exists() and not owned and not args.force and not path.is_file():
+                    raise _Usage(f"--out: {path} exists and is not a file")
+                continue
+            if _exists(path) and name not in owned and not args.force:
+                raise _Usage(f"--out: {path} exists and was not written by hammerstein "
+                             f"excitation; choose another directory or add --force")
+    except _Usage as exc:
+        print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
+        return 2
+    try:
+        manifest = "\n".join([_MANIFEST_HEAD, *sorted(owned | set(targets))]) + "\n"
+        safe_write(out / MANIFEST, manifest, "excitation manifest")   # first: claims the names
+        for r, name in zip(records, targets):
+            safe_write(out / name, _csv_bytes(r, names), "excitation file")
+        safe_write(out / "README.md", readme_text(records, names, amplitude, T), "README")
+    except (OSError, FileLimitError) as exc:
+        print(f"error: {getattr(exc, 'filename', None) or args.out}: cannot write "
+              f"({getattr(exc, 'strerror', None) or exc})", file=sys.stderr)
+        return 1
+    for r, name in zip(records, targets):
+        print(f"wrote {out / name}: {r.kind}, {r.time.size} samples ({r.time.size * T:g} s)")
+    print(f"wrote {out / 'README.md'}")
+    return 0
+
+
+def _exists(path):
+    """True when something (a file, a directory, a link) is at ``path``."""
+    return path.is_symlink() or path.exists()

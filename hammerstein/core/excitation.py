@@ -1,0 +1,328 @@
+"""Excitation signals to play on an actuator before identifying it.
+
+Three records per input (the other inputs held at 0), each sampled at the
+sampling period T of the hardware:
+
+* :func:`decreasing_sine` — a slow sine whose amplitude steps down (100, 80,
+  60, 40, 20 % of the full amplitude, two periods each): the major loop and
+  nested minor loops of the hysteresis. Each level starts and ends at a zero
+  crossing, so the signal is continuous, and each level lies inside the
+  previous one (wiping-out memory of a Preisach model: after its first period
+  each level draws its steady minor loop).
+* :func:`multisine` — a random-phase multisine (flat amplitude spectrum on the
+  grid ``j / period`` between ``f_min`` and ``f_max``, phases uniform,
+  Pintelon & Schoukens [1]) for the linear dynamics; several periods of one
+  realisation, so that the frequency response is estimated on exact DFT bins.
+* :func:`staircase` — voltage steps held for seconds each, for creep (the
+  slow drift after a step, Jung & Gweon [2]).
+
+:func:`excitation_set` builds all of them for m inputs. Signals are arrays of
+shape (m, n_samples) [V]; times (n_samples,) [s].
+
+References
+----------
+.. [1] R. Pintelon and J. Schoukens, *System Identification: A Frequency
+   Domain Approach*, 2nd ed., Wiley-IEEE, 2012, Section 2.5 (random-phase
+   multisines, crest factor, periodic excitation).
+.. [2] H. Jung and D.-G. Gweon, "Creep characteristics of piezoelectric
+   actuators", Review of Scientific Instruments 71(4), 1896-1900, 2000.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["LEVELS", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine", "multisine",
+           "staircase", "excitation_set"]
+
+#: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude).
+LEVELS = (1.0, 0.8, 0.6, 0.4, 0.2)
+#: Voltage levels of the creep staircase (fractions of the full amplitude), after 0.
+STAIRCASE_LEVELS = (0.5, 1.0, 0.5, 0.0, -0.5, -1.0, -0.5, 0.0)
+
+
+def _check_positive(value, name, unit):
+    v = float(value)
+    if not (np.isfinite(v) and v > 0):
+        raise ValueError(f"{name}: expected a positive number [{unit}], found {value!r}")
+    return v
+
+
+def decreasing_sine(sampling_period, amplitude, frequency=1.0, levels=LEVELS, periods=2):
+    """A sine whose amplitude steps down level by level.
+
+    ``u(t) = a_k A sin(2 pi f t)`` during level k (``periods`` periods each),
+    levels one after the other; ``u`` starts at 0 and each level ends at a
+    zero crossing.
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : float
+        Full amplitude A [V].
+    frequency : float
+        f [Hz]; slow enough to be quasi-static (default 1 Hz).
+    levels : sequence of float
+        Fractions a_k of A, in (0, 1], strictly decreasing.
+    periods : int
+        Periods per level (>= 1; the first period of a level is its
+        transient from the previous loop, the others are steady).
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s]; ``n_samples = len(levels) * periods * round(1 / (f T))``.
+    u : numpy.ndarray, shape (n_samples,)
+        [V].
+    level : numpy.ndarray, shape (n_samples,)
+        Index k of the level of each sample.
+
+    Raises
+    ------
+    ValueError
+        On a non-positive period, amplitude or frequency, fewer than 8
+        samples per period, or levels outside (0, 1] or not decreasing.
+
+    Examples
+    --------
+    >>> t, u, k = decreasing_sine(1e-3, 10.0, frequency=1.0, levels=(1.0, 0.5), periods=2)
+    >>> u.shape, round(float(u.max()), 6), round(float(u[k == 1].max()), 6)
+    ((4000,), 10.0, 5.0)
+    """
+    T = _check_positive(sampling_period, "sampling_period", "s")
+    A = _check_positive(amplitude, "amplitude", "V")
+    f = _check_positive(frequency, "frequency", "Hz")
+    a = np.asarray(levels, dtype=float)
+    if a.ndim != 1 or a.size == 0 or np.any(a <= 0) or np.any(a > 1) or np.any(np.diff(a) >= 0):
+        raise ValueError(f"levels: expected strictly decreasing fractions in (0, 1], found {levels!r}")
+    if int(periods) < 1:
+        raise ValueError(f"periods: expected >= 1, found {periods!r}")
+    n_period = int(round(1.0 / (f * T)))
+    if n_period < 8:
+        raise ValueError(f"frequency: expected at least 8 samples per period, found {n_period}")
+    n_level = n_period * int(periods)
+    phase = np.sin(2 * np.pi * np.arange(n_level) / n_period)
+    u = np.concatenate([A * ak * phase for ak in a])
+    level = np.repeat(np.arange(a.size), n_level)
+    return np.arange(u.size) * T, u, level
+
+
+def multisine(sampling_period, amplitude, f_min=10.0, f_max=None, period=None, periods=4, seed=0):
+    """A random-phase multisine with a flat amplitude spectrum.
+
+    ``u(t) = c sum_j cos(2 pi f_j t + phi_j)``, ``f_j = j / P`` for every
+    multiple of ``1 / P`` in ``[f_min, f_max]``, phases ``phi_j`` uniform in
+    [0, 2 pi) (seeded), scaled so that ``max |u| = amplitude``
+    (Pintelon & Schoukens [1]).
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : float
+        Peak |u| [V].
+    f_min : float
+        Lowest excited frequency [Hz] (default 10 Hz).
+    f_max : float, optional
+        Highest excited frequency [Hz]; default half the Nyquist frequency
+        ``1 / (4 T)``.
+    period : float, optional
+        Period P [s] (frequency resolution ``1 / P``); default ``1 / f_min``.
+    periods : int
+        Number of periods (>= 1).
+    seed : int
+        Seed of the phases (numpy ``default_rng``).
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s]; ``n_samples = periods * round(P / T)``.
+    u : numpy.ndarray, shape (n_samples,)
+        [V].
+    frequencies : numpy.ndarray, shape (n_lines,)
+        The excited frequencies f_j [Hz].
+
+    Raises
+    ------
+    ValueError
+        On a non-positive parameter, ``f_max`` at or above the Nyquist
+        frequency, or no multiple of ``1 / P`` in the band.
+
+    Examples
+    --------
+    >>> t, u, f = multisine(5e-5, 8.0, f_min=10.0, periods=2)
+    >>> u.shape, round(float(abs(u).max()), 9), float(f[0]), float(f[-1])
+    ((4000,), 8.0, 10.0, 5000.0)
+    """
+    T = _check_positive(sampling_period, "sampling_period", "s")
+    A = _check_positive(amplitude, "amplitude", "V")
+    f_lo = _check_positive(f_min, "f_min", "Hz")
+    f_hi = 0.25 / T if f_max is None else _check_positive(f_max, "f_max", "Hz")
+    if f_hi >= 0.5 / T:
+        raise ValueError(f"f_max: expected below the Nyquist frequency {0.5 / T:g} Hz, found {f_hi:g}")
+    P = 1.0 / f_lo if period is None else _check_positive(period, "period", "s")
+    if int(periods) < 1:
+        raise ValueError(f"periods: expected >= 1, found {periods!r}")
+    n_period = int(round(P / T))
+    df = 1.0 / (n_period * T)
+    j = np.arange(max(1, int(np.ceil(f_lo / df - 1e-9))), int(np.floor(f_hi / df + 1e-9)) + 1)
+    if j.size == 0:
+        raise ValueError(f"f_min, f_max: no multiple of 1/period = {df:g} Hz in [{f_lo:g}, {f_hi:g}] Hz")
+    phases = np.random.default_rng(seed).uniform(0.0, 2 * np.pi, j.size)
+    k = np.arange(n_period)
+    one = np.zeros(n_period)
+    for jj, ph in zip(j, phases):      # one line at a time: no (n_lines, n_period) array
+        one += np.cos(2 * np.pi * jj * k / n_period + ph)
+    one *= A / np.max(np.abs(one))
+    u = np.tile(one, int(periods))
+    return np.arange(u.size) * T, u, j * df
+
+
+def staircase(sampling_period, amplitude, hold=2.0, levels=STAIRCASE_LEVELS):
+    """Voltage steps held ``hold`` seconds each, starting from 0.
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : float
+        Full amplitude A [V]; the steps go to ``a_k A``.
+    hold : float
+        Duration of each step [s] (default 2 s), the first one at 0 V.
+    levels : sequence of float
+        Fractions a_k of A in [-1, 1], after the initial 0.
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s]; ``n_samples = (len(levels) + 1) * round(hold / T)``.
+    u : numpy.ndarray, shape (n_samples,)
+        [V].
+    step : numpy.ndarray, shape (n_samples,)
+        Index of the step of each sample (0 = the initial 0 V).
+
+    Raises
+    ------
+    ValueError
+        On a non-positive parameter or a level outside [-1, 1].
+
+    Examples
+    --------
+    >>> t, u, s = staircase(0.01, 10.0, hold=1.0, levels=(1.0, -1.0))
+    >>> u.shape, float(u[0]), float(u[150]), float(u[-1])
+    ((300,), 0.0, 10.0, -10.0)
+    """
+    T = _check_positive(sampling_period, "sampling_period", "s")
+    A = _check_positive(amplitude, "amplitude", "V")
+    H = _check_positive(hold, "hold", "s")
+    a = np.concatenate([[0.0], np.asarray(levels, dtype=float)])
+    if a.ndim != 1 or np.any(np.abs(a) > 1):
+        raise ValueError(f"levels: expected fractions in [-1, 1], found {levels!r}")
+    n_hold = max(1, int(round(H / T)))
+    step = np.repeat(np.arange(a.size), n_hold)
+    return np.arange(step.size) * T, A * a[step], step
+
+
+@dataclass(frozen=True)
+class ExcitationRecord:
+    """One excitation file: a time column and every input column.
+
+    Parameters
+    ----------
+    name : str
+        File stem, e.g. ``"hysteresis-ux"``.
+    kind : str
+        ``"hysteresis"``, ``"multisine"``, ``"multisine-validation"`` or ``"creep"``.
+    excited : int
+        Index of the excited input (the others are 0).
+    time : numpy.ndarray, shape (n_samples,)
+        [s].
+    u : numpy.ndarray, shape (m, n_samples)
+        [V].
+    """
+
+    name: str
+    kind: str
+    excited: int
+    time: np.ndarray
+    u: np.ndarray
+
+
+def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, levels=LEVELS,
+                   f_min=10.0, f_max=None, multisine_fraction=0.8, multisine_periods=4,
+                   hold=2.0, seed=0):
+    """Every excitation record for m inputs, one input at a time.
+
+    Per input k (the others at 0): the decreasing-amplitude sine
+    (:func:`decreasing_sine`, record ``hysteresis-<k>``), two multisines of
+    independent phases at ``multisine_fraction`` of the amplitude
+    (:func:`multisine`; ``multisine-<k>`` for estimation and
+    ``multisine-<k>-validation``, held out to choose the order of the
+    dynamics) and the staircase (:func:`staircase`, ``creep-<k>``).
+
+    Parameters
+    ----------
+    input_names : sequence of str
+        Names of the m inputs (column names).
+    amplitude : float or array_like, shape (m,)
+        Full amplitude per input [V].
+    sampling_period : float
+        T [s].
+    sine_frequency : float
+        Frequency of the decreasing-amplitude sine [Hz].
+    levels : sequence of float
+        Its amplitude levels (fractions).
+    f_min, f_max : float
+        Band of the multisines [Hz] (``f_max`` default: ``1 / (4 T)``).
+    multisine_fraction : float
+        Peak of the multisines as a fraction of the amplitude, in (0, 1].
+    multisine_periods : int
+        Periods per multisine record.
+    hold : float
+        Duration of a creep step [s].
+    seed : int
+        Seed of the multisine phases (input k, record r uses ``seed + 2 k + r``).
+
+    Returns
+    -------
+    list of ExcitationRecord
+        Four records per input, in input order.
+
+    Raises
+    ------
+    ValueError
+        On bad parameters (the message names the parameter).
+
+    Examples
+    --------
+    >>> recs = excitation_set(["ux", "uy"], 10.0, 5e-4, multisine_periods=1, hold=0.1)
+    >>> [r.name for r in recs][:4]
+    ['hysteresis-ux', 'multisine-ux', 'multisine-ux-validation', 'creep-ux']
+    >>> recs[5].u.shape[0], float(abs(recs[5].u[0]).max()), float(abs(recs[5].u[1]).max())
+    (2, 0.0, 8.0)
+    """
+    names = [str(n) for n in input_names]
+    m = len(names)
+    if m == 0 or len(set(names)) != m:
+        raise ValueError(f"inputs: expected distinct names, found {names!r}")
+    amp = np.broadcast_to(np.asarray(amplitude, dtype=float), (m,))
+    if not (0 < float(multisine_fraction) <= 1):
+        raise ValueError(f"multisine_fraction: expected in (0, 1], found {multisine_fraction!r}")
+    out = []
+    for k, name in enumerate(names):
+        def full(t, one, kind, stem, k=k):
+            u = np.zeros((m, t.size))
+            u[k] = one
+            out.append(ExcitationRecord(stem, kind, k, t, u))
+        t, one, _ = decreasing_sine(sampling_period, amp[k], sine_frequency, levels)
+        full(t, one, "hysteresis", f"hysteresis-{name}")
+        for r, suffix in enumerate(("", "-validation")):
+            t, one, _ = multisine(sampling_period, multisine_fraction * amp[k], f_min, f_max,
+                                  periods=multisine_periods, seed=seed + 2 * k + r)
+            full(t, one, "multisine" + suffix, f"multisine-{name}{suffix}")
+        t, one, _ = staircase(sampling_period, amp[k], hold)
+        full(t, one, "creep", f"creep-{name}")
+    return out

@@ -1,0 +1,110 @@
+"""``hammerstein excitation``: the files users play on hardware (issue 17, item 2).
+
+Expectations come from the issue's specification (amplitude levels 100..20 %,
+two 1 Hz periods each; multisine 10 Hz to half Nyquist at 80 %; 2 s steps),
+checked on the written CSV files by independent means (FFT, run lengths).
+"""
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.main import main
+
+T = 5e-4          # 2 kHz keeps the files small; the design scales with T
+
+
+def _run(out, *extra):
+    return main(["excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+                 str(T), "--out", str(out), *extra])
+
+
+def _read(path):
+    with open(path) as fh:
+        header = fh.readline().strip().split(",")
+    return header, np.loadtxt(path, delimiter=",", skiprows=1)
+
+
+@pytest.fixture(scope="module")
+def written(tmp_path_factory):
+    out = tmp_path_factory.mktemp("exc") / "records"
+    assert _run(out) == 0
+    return out
+
+
+def test_files_columns_and_the_undriven_input(written):
+    names = sorted(p.name for p in written.iterdir())
+    expected = [".hammerstein-excitation", "README.md"]
+    expected += [f"{k}-{i}.csv" for i in ("ux", "uy")
+                 for k in ("hysteresis", "multisine", "creep")]
+    expected += [f"multisine-{i}-validation.csv" for i in ("ux", "uy")]
+    assert names == sorted(expected)
+    for name in ("hysteresis-uy.csv", "multisine-uy.csv", "creep-uy.csv"):
+        header, d = _read(written / name)
+        assert header == ["t", "ux", "uy"]
+        np.testing.assert_allclose(np.diff(d[:, 0]), T, rtol=1e-6)
+        assert np.all(d[:, 1] == 0) and np.abs(d[:, 2]).max() > 0
+    readme = (written / "README.md").read_text()
+    assert "hammerstein identify hysteresis-ux.csv hysteresis-uy.csv" in readme
+
+
+def test_decreasing_sine_levels(written):
+    _, d = _read(written / "hysteresis-ux.csv")
+    u = d[:, 1]
+    n = int(round(1 / T))                      # samples per 1 Hz period
+    assert u.size == 5 * 2 * n
+    peaks = [np.abs(u[k * 2 * n:(k + 1) * 2 * n]).max() for k in range(5)]
+    np.testing.assert_allclose(peaks, [10, 8, 6, 4, 2], rtol=1e-4)
+
+
+def test_multisine_band_and_peak(written):
+    _, d = _read(written / "multisine-ux.csv")
+    u = d[:, 1]
+    assert np.abs(u).max() == pytest.approx(8.0, rel=1e-6)
+    n = int(round(0.1 / T))                    # one period (10 Hz grid)
+    spec = np.abs(np.fft.rfft(u[:n]))
+    f = np.fft.rfftfreq(n, T)
+    lines = f[spec > 1e-6 * spec.max()]
+    assert lines.min() == pytest.approx(10.0) and lines.max() == pytest.approx(0.25 / T)
+    np.testing.assert_allclose(u[:n], u[n:2 * n], atol=1e-6)      # periodic
+    _, v = _read(written / "multisine-ux-validation.csv")
+    assert np.corrcoef(u, v[:, 1])[0, 1] < 0.2                      # other phases
+
+
+def test_staircase_steps_held_two_seconds(written):
+    _, d = _read(written / "creep-ux.csv")
+    u = d[:, 1]
+    change = np.flatnonzero(np.diff(u) != 0) + 1
+    runs = np.diff(np.concatenate([[0], change, [u.size]]))
+    assert np.all(runs % int(round(2 / T)) == 0) and runs.min() == int(round(2 / T))
+    assert u.max() == 10 and u.min() == -10 and u[0] == 0
+
+
+def test_never_replaces_a_file_it_did_not_write(tmp_path, capsys):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "creep-ux.csv").write_text("my data\n")
+    assert _run(out) == 2
+    assert "--force" in capsys.readouterr().err
+    assert (out / "creep-ux.csv").read_text() == "my data\n"
+    assert sorted(p.name for p in out.iterdir()) == ["creep-ux.csv"]
+    assert _run(out) == 2 and _run(out, "--force") == 0
+    assert _run(out) == 0                              # its own files: replaced
+
+
+@pytest.mark.parametrize("opts,fragment", [
+    (["--amplitude", "-1"], "--amplitude"),
+    (["--amplitude", "1,2,3"], "one per input"),
+    (["--sampling-period", "0"], "--sampling-period"),
+    (["--f-min", "3000"], "f_min"),
+])
+def test_usage_errors(tmp_path, capsys, opts, fragment):
+    args = {"--amplitude": "10", "--sampling-period": str(T)}
+    for k, v in zip(opts[::2], opts[1::2]):
+        args[k] = v
+    flat = [x for kv in args.items() for x in kv if kv[0] in ("--amplitude", "--sampling-period")]
+    extra = [x for k, v in args.items() if k not in ("--amplitude", "--sampling-period")
+             for x in (k, v)]
+    status = main(["excitation", "--inputs", "ux,uy", *flat, "--out", str(tmp_path / "o"), *extra])
+    err = capsys.readouterr().err
+    assert status == 2 and fragment in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
