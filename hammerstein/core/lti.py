@@ -515,7 +515,7 @@ def _fit_bdx0(A, C, ins, outs, feedthrough, dc=None):
         if feedthrough:
             E[:, n * m:n_shared] = np.eye(p * m)
         theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
-        N = scipy.linalg.null_space(E)
+        N = scipy_linalg.null_space(E)
         theta = theta_p + N @ np.linalg.lstsq(X @ N, rhs - X @ theta_p, rcond=None)[0]
     B = theta[:n * m].reshape(n, m)
     D = theta[n * m:n_shared].reshape(p, m) if feedthrough else np.zeros((p, m))
