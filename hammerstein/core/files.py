@@ -40,7 +40,10 @@ from hammerstein.exceptions import FileLimitError
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals",
-           "interrupt"]
+           "interrupt", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
+           "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
+           "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
+           "parse_owner", "owner_alive"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
@@ -270,6 +273,52 @@ def umask():
     return mask
 
 
+_GROUP = {"open": False, "pending": []}
+
+
+@contextmanager
+def all_or_nothing():
+    """Write several files with :func:`safe_write` so that all of them or none is replaced.
+
+    Inside the block, :func:`safe_write` writes each temporary file but does
+    not rename it; when the block ends without an error every temporary is
+    renamed over its target (renames in one directory do not fail for want
+    of space), otherwise every temporary is removed and no target changes.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> try:
+    ...     with all_or_nothing():
+    ...         _ = safe_write(d / "a.txt", "a")
+    ...         raise OSError("disk full")
+    ... except OSError:
+    ...     pass
+    >>> sorted(p.name for p in d.iterdir())
+    []
+    """
+    if _GROUP["open"]:
+        yield
+        return
+    _GROUP["open"], _GROUP["pending"] = True, []
+    try:
+        yield
+        _GROUP["open"] = False
+        with deferred_signals():
+            while _GROUP["pending"]:
+                tmp, target = _GROUP["pending"].pop(0)
+                os.replace(tmp, target)
+    finally:
+        _GROUP["open"] = False
+        for tmp, _ in _GROUP["pending"]:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        _GROUP["pending"] = []
+
+
 def safe_write(path, data, what="file"):
     """Write ``data`` to ``path`` through an exclusive temporary file and a rename.
 
@@ -336,7 +385,10 @@ def safe_write(path, data, what="file"):
             fh.flush()
             os.fsync(fh.fileno())
         os.chmod(tmp, mode)
-        os.replace(tmp, target)
+        if _GROUP["open"]:
+            _GROUP["pending"].append((tmp, target))   # renamed when the group ends
+        else:
+            os.replace(tmp, target)
     except BaseException:
         if tmp is not None:
             try:
@@ -521,7 +573,8 @@ def replace_problem(path, inputs=(), force=False, command="hammerstein"):
     """
     for i in inputs:
         if i is not None and os.path.lexists(path) and same_file(path, i):
-            return f"{escape(path)} is also an input of this command ({escape(i)}); choose another name"
+            also = "" if str(i) == str(path) else f" ({escape(i)})"
+            return f"{escape(path)} is also an input of this command{also}; choose another name"
         if i is not None and Path(os.path.abspath(path)) == Path(os.path.abspath(i)):
             return f"{escape(path)} is also an input of this command; choose another name"
     if force or not os.path.lexists(path) or not os.path.exists(path):

@@ -106,3 +106,165 @@ def test_4_two_threads_share_one_out_directory(tmp_path):
     assert errors == []
     assert all(o.ok for r in results.values() for o in r), [o.error for r in results.values() for o in r]
     assert not [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
+
+
+# -- 1. identify replaces only what carries the provenance mark ---------------------------
+DATA = CORPUS / "data" / "good.csv"
+IDENTIFY = [DATA, "--time", "time_s", "--input", "u_V", "--output", "y_um", "--thresholds", "5"]
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _png_without_mark(path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig = plt.figure()
+    fig.savefig(path, format="png")
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("option,make", [
+    ("--out", lambda p: shutil.copy(REPO / "scenarios" / "presets" / "coupled-2dof.toml", p)),
+    ("--out", lambda p: p.write_text("[model]\n# my hand-written model\n")),
+    ("--metrics", lambda p: p.write_text("case,channel,metric,value,unit\nmine,x,y,1,um\n")),
+    ("--plot", _png_without_mark),
+])
+def test_1_identify_keeps_hand_written_outputs(capsys, tmp_path, option, make):
+    target = tmp_path / ("mine.png" if option == "--plot" else "mine.toml" if option == "--out"
+                         else "mine.csv")
+    make(target)
+    before = target.read_bytes()
+    extra = [] if option == "--out" else ["--out", tmp_path / "model.toml"]
+    status, _, err = _call(capsys, "identify", *IDENTIFY, *extra, option, target)
+    assert status == 2
+    assert len(err) == 1 and "--force" in err[0] and "not written by" in err[0]
+    assert target.read_bytes() == before
+    assert not (tmp_path / "model.toml").exists()       # nothing written at all
+
+
+def test_1_identify_replaces_its_own_outputs_and_force(capsys, tmp_path):
+    out, met, png = tmp_path / "m.toml", tmp_path / "m.csv", tmp_path / "m.png"
+    args = ["identify", *IDENTIFY, "--out", out, "--metrics", met, "--plot", png]
+    assert _call(capsys, *args)[0] == 0
+    for p in (out, met, png):
+        assert files.carries_provenance(p), p
+    assert _call(capsys, *args)[0] == 0               # its own files: replaced
+    out.write_text("[model]\n")                        # now a file of the user's
+    assert _call(capsys, *args)[0] == 2
+    assert out.read_text() == "[model]\n"
+    assert _call(capsys, *args, "--force")[0] == 0
+    assert files.carries_provenance(out)
+
+
+def test_1_identify_output_never_an_input(capsys, tmp_path):
+    data = tmp_path / "d.csv"
+    shutil.copy(DATA, data)
+    before = data.read_bytes()
+    status, _, err = _call(capsys, "identify", data, *IDENTIFY[1:], "--out", tmp_path / "m.toml",
+                           "--metrics", data, "--force")
+    assert status == 2 and "input" in err[0]
+    assert data.read_bytes() == before
+
+
+def test_17_failed_write_leaves_no_output(capsys, tmp_path, monkeypatch):
+    # the model write fails (disk full) after the figure was drawn: nothing stays
+    import hammerstein.cli.identify as ident
+
+    def full(*a, **k):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(ident, "_write_metrics", full)
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", tmp_path / "m.toml",
+                           "--plot", tmp_path / "m.png", "--metrics", tmp_path / "m.csv")
+    assert status == 1 and len(err) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+# -- 2. check --junit-xml ----------------------------------------------------------------
+@pytest.fixture
+def baseline(tmp_path, capsys):
+    base = tmp_path / "base.csv"
+    assert _call(capsys, "check", GOOD, "--baseline", base, "--update", "-q")[0] == 0
+    return base
+
+
+@pytest.mark.parametrize("content", ["my notes\n", "<?xml version='1.0'?>\n<testsuites/>\n"])
+def test_2_junit_never_overwrites_a_foreign_file(capsys, tmp_path, baseline, content):
+    notes = tmp_path / "notes.txt"
+    notes.write_text(content)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml", notes)
+    assert status == 2 and "--force" in err[0]
+    assert notes.read_text() == content
+    assert _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml", notes,
+                 "--force", "-q")[0] == 0
+    assert files.carries_provenance(notes)
+    assert _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml", notes, "-q")[0] == 0
+
+
+@pytest.mark.parametrize("which", ["baseline", "scenario"])
+def test_2_junit_is_never_an_input(capsys, tmp_path, baseline, which):
+    scen = tmp_path / "s.toml"
+    shutil.copy(GOOD, scen)
+    target = baseline if which == "baseline" else scen
+    before = target.read_bytes()
+    status, _, err = _call(capsys, "check", scen, "--baseline", baseline, "--junit-xml", target,
+                           "--force")
+    assert status == 2 and "input" in err[0]
+    assert target.read_bytes() == before
+
+
+def test_2_junit_write_error_names_the_junit_file(capsys, tmp_path, baseline, monkeypatch):
+    import hammerstein.cli.check as check
+
+    def full(path, data, what="file"):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(check, "safe_write", full)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml",
+                           tmp_path / "j.xml")
+    assert status == 1 and "JUnit" in err[-1] and "baseline" not in err[-1]
+
+
+def test_update_keeps_a_hand_written_baseline(capsys, tmp_path):
+    base = tmp_path / "base.csv"
+    text = "scenario,case,channel,metric,value,unit\nother,c,x,rms_error,1.0,µm\n"
+    base.write_text(text)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", base, "--update")
+    assert status == 2 and "--force" in err[0]
+    assert base.read_text() == text
+    assert _call(capsys, "check", GOOD, "--baseline", base, "--update", "--force", "-q")[0] == 0
+    kept = base.read_text()
+    assert "other,c,x,rms_error,1.0" in kept and files.carries_provenance(base)
+
+
+# -- 3. concurrent check --update of one baseline ------------------------------------------
+def test_3_concurrent_updates_all_land(tmp_path):
+    import subprocess
+    import sys
+    base = tmp_path / "base.csv"
+    procs = []
+    for i in range(4):
+        scen = tmp_path / f"c{i}.toml"
+        scen.write_text(GOOD.read_text().replace('name = "good-static"', f'name = "c{i}"', 1))
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "hammerstein", "check", str(scen), "--baseline", str(base),
+             "--update", "-q"], stderr=subprocess.PIPE, text=True))
+    errs = [p.communicate(timeout=600)[1] for p in procs]
+    assert [p.returncode for p in procs] == [0] * 4, errs
+    from hammerstein.scenario.regression import read_baseline
+    assert sorted(set(read_baseline(base)["scenario"])) == [f"c{i}" for i in range(4)]
+
+
+# -- 14. baseline inf, misspelt tolerance metrics -------------------------------------------
+def test_14_inf_in_baseline_is_an_error(capsys, tmp_path, baseline):
+    lines = baseline.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ",rms_error," in ln)
+    lines[i] = ",".join(lines[i].split(",")[:4] + ["inf"] + lines[i].split(",")[5:])
+    baseline.write_text("\n".join(lines) + "\n")
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline)
+    assert status == 2 and len(err) == 1 and "finite" in err[0] and "rms_error" in err[0]
+
+
+def test_14_misspelt_tolerance_metric_is_an_error(capsys, tmp_path, baseline):
+    tol = tmp_path / "tol.toml"
+    tol.write_text("[rms_eror]\nrtol = 0.5\n")
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--tolerances", tol)
+    assert status == 2 and "rms_eror" in err[0] and "rms_error" in err[0]
