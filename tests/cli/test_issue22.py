@@ -268,3 +268,158 @@ def test_14_misspelt_tolerance_metric_is_an_error(capsys, tmp_path, baseline):
     tol.write_text("[rms_eror]\nrtol = 0.5\n")
     status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--tolerances", tol)
     assert status == 2 and "rms_eror" in err[0] and "rms_error" in err[0]
+
+
+# -- 8. SIGKILL / SIGHUP of a run: no orphan worker, no temporary -------------------------
+def _start_run(tmp_path, scenarios):
+    import subprocess
+    import sys
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "hammerstein", "run", *map(str, scenarios),
+                             "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:  # a report in progress
+        if out.is_dir() and any(p.name.startswith(TMP_PREFIX) for p in out.iterdir()):
+            break
+        time.sleep(0.005)
+    return proc, out
+
+
+def _children(pid):
+    kids = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat_ = (d / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat_.rsplit(")", 1)[1].split()[1]) == pid:
+                kids.append(int(d.name))
+    return kids
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_8_sigkill_of_a_piped_run_ends_its_workers(tmp_path):
+    import signal
+    import subprocess
+    proc, _ = _start_run(tmp_path, [GOOD, GOOD2])
+    deadline = time.time() + 60
+    workers = []
+    while time.time() < deadline and proc.poll() is None and not workers:
+        workers = _children(proc.pid)
+        time.sleep(0.01)
+    if proc.poll() is not None:
+        pytest.skip("the run finished before its figure workers were seen")
+    proc.send_signal(signal.SIGKILL)
+    try:   # the pipes close when every holder (the workers too) is gone
+        proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:  # pragma: no cover - the defect
+        for w in workers:
+            os.kill(w, signal.SIGKILL)
+        pytest.fail("figure workers outlived their parent, holding its stdout/stderr")
+    time.sleep(0.2)
+    alive = [w for w in workers if Path(f"/proc/{w}").exists()
+             and " Z " not in Path(f"/proc/{w}/stat").read_text()]
+    assert alive == []
+
+
+def test_8_sighup_is_an_interruption(tmp_path):
+    import signal
+    proc, out = _start_run(tmp_path, [GOOD])
+    proc.send_signal(signal.SIGHUP)
+    _, stderr = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        pytest.skip("the run finished before the signal arrived")
+    assert proc.returncode == 128 + signal.SIGHUP and stderr == "interrupted\n", stderr
+    assert not [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
+
+
+# -- 12. a killed figure worker: the figures are drawn inline ----------------------------
+def test_12_broken_pool_falls_back_to_inline(tmp_path):
+    import signal
+    import numpy as np
+    from hammerstein.report.figures import divergence_figure
+    from hammerstein.report.render import FigureJobs, FigureRenderer
+    args = (np.zeros((2, 10)), ["u1", "u2"], 5, "test", "t")
+    with FigureRenderer() as renderer:
+        if renderer.workers < 2:
+            pytest.skip("no fork")
+        first = FigureJobs(renderer)
+        first.add(tmp_path / "a.png", divergence_figure, *args)
+        first.wait()
+        for pid in list(renderer._pool._processes):   # the OOM killer strikes
+            os.kill(pid, signal.SIGKILL)
+        time.sleep(0.5)
+        jobs = [FigureJobs(renderer) for _ in range(3)]
+        for i, j in enumerate(jobs):
+            j.add(tmp_path / f"b{i}.png", divergence_figure, *args)   # identical figure
+            j.add(tmp_path / f"c{i}.png", divergence_figure, *args[:3], "other", "t")
+        for j in jobs:
+            j.wait()
+    for i in range(3):
+        assert (tmp_path / f"b{i}.png").read_bytes()[:4] == b"\x89PNG"
+        assert (tmp_path / f"c{i}.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# -- 10, 11. closed or full stdio, environment of the dependencies --------------------------
+def _cli(args, **kw):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "hammerstein", *map(str, args)],
+                          capture_output=True, text=True, timeout=300, **kw)
+
+
+@pytest.mark.parametrize("close", ["stdout", "stderr"])
+@pytest.mark.parametrize("argv", [["validate", GOOD], ["list"], ["--version"]])
+def test_10_closed_stdio_keeps_the_exit_status(argv, close):
+    import subprocess
+    import sys
+    fd = 1 if close == "stdout" else 2
+    proc = subprocess.run([sys.executable, "-c",
+                           f"import os, runpy, sys; os.close({fd}); sys.argv = ['hammerstein', "
+                           f"*{[str(a) for a in argv]!r}]; runpy.run_module('hammerstein', "
+                           f"run_name='__main__')"],
+                          stdout=subprocess.PIPE if fd == 2 else None,
+                          stderr=subprocess.PIPE if fd == 1 else None, text=True, timeout=300)
+    assert proc.returncode == 0
+    assert "Traceback" not in ((proc.stderr or "") + (proc.stdout or ""))
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_10_full_stdout_is_an_error():
+    import subprocess
+    import sys
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "hammerstein", "validate", str(GOOD)],
+                              stdout=full, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 1
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and "cannot write the output" in lines[0]
+
+
+@pytest.mark.parametrize("var,value", [("NUMBA_NUM_THREADS", "0"), ("NUMBA_NUM_THREADS", "x"),
+                                       ("MPLBACKEND", "bogus")])
+def test_11_bad_dependency_variables_are_one_line(tmp_path, var, value):
+    proc = _cli(["run", GOOD, "--out", tmp_path, "-q"], env={**os.environ, var: value})
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and var in lines[0] and "ignored" in lines[0]
+
+
+def test_11_unwritable_numba_cache_falls_back(tmp_path, monkeypatch, capsys):
+    import hammerstein.cli.main as cli
+    monkeypatch.setattr(cli, "_writable_dir", lambda p: False)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    notes = cli._prepare_environment()
+    assert len(notes) == 1 and "no writable cache" in notes[0]
+    where = Path(os.environ.pop("NUMBA_CACHE_DIR"))
+    assert where.is_dir() and where.parent == tmp_path and (where.stat().st_mode & 0o077) == 0
+
+
+def test_13_ascii_stdout_does_not_fail_after_writing(tmp_path):
+    proc = _cli(["identify", *IDENTIFY, "--out", tmp_path / "m.toml"],
+                env={**os.environ, "PYTHONIOENCODING": "ascii"})
+    assert proc.returncode == 0, proc.stderr
+    assert "wrote" in proc.stdout
