@@ -40,6 +40,7 @@ from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.core.files import (FileLimitError, carries_provenance, escape, locked,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.runner import run_scenarios
+from hammerstein.scenario import diskcache
 from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
                                              load_tolerances, merge_baseline, read_baseline,
                                              resolve_tolerances, summary_line, write_baseline)
@@ -196,6 +197,8 @@ def _unknown_tolerances(overrides, metrics):
 
 
 def _check(args, baseline_path, baseline, tolerance, overrides=None):
+    diskcache.set_reporter((lambda line: print(line, file=sys.stderr))
+                           if getattr(args, "verbosity", 0) > 0 else None)  # -v: ignored cache entries
     announce_compiles((lambda message: print(message, file=sys.stderr))   # first run: one
                       if getattr(args, "verbosity", 0) >= 0 else None)      # line before compiling
     outcomes = _run(args.scenarios, args.out)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from hammerstein.cli._common import one_line, out_dir_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
+from hammerstein.scenario import diskcache
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
 from hammerstein.simulation import announce_compiles
 
@@ -73,7 +74,8 @@ def handler(args):
     out = Path(args.out)
     remove_stale_temporaries(out)
     verbosity = getattr(args, "verbosity", 0)
-    announce_compiles(print_err if verbosity >= 0 else None)   # first run: before compiling
+    announce_compiles(print_err if verbosity >= 0 else None)
+    diskcache.set_reporter(print_err if verbosity > 0 else None)   # -v: ignored cache entries   # first run: before compiling
     started, failed = {}, []
 
     def on_start(path):
