@@ -31,7 +31,7 @@ import sys
 import threading
 import warnings
 
-from hammerstein.cli._common import one_line, print_err
+from hammerstein.cli._common import SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
@@ -280,6 +280,8 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else list(argv)
     _fill_standard_fds()
     previous = _install_signal_handlers()
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr)  # no raw control chars
     try:
         code = _main(argv)
         return _flush_output(code)
@@ -294,6 +296,7 @@ def main(argv=None):
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        sys.stdout, sys.stderr = streams
 
 
 def _flush_output(code):
@@ -320,7 +323,7 @@ def _silence_stdout():
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, 1)
         os.close(devnull)
-        sys.stdout = open(1, "w", closefd=False)
+        sys.stdout = SafeStream(open(1, "w", closefd=False))
     except OSError:
         pass
 

@@ -18,6 +18,7 @@ import time
 from pathlib import Path
 
 from hammerstein.cli._common import one_line, out_dir_problem, print_err
+from hammerstein.core.files import escape
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.scenario import diskcache
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
@@ -80,7 +81,7 @@ def handler(args):
 
     def on_start(path):
         if verbosity > 0:
-            print_err(f"{path}: running ...")
+            print_err(f"{escape(path)}: running ...")
         started[path] = time.perf_counter()
 
     def on_outcome(path, outcome):
@@ -88,9 +89,9 @@ def handler(args):
             n_cases = outcome.metrics["case"].nunique()
             if verbosity >= 0:
                 took = f" in {time.perf_counter() - started[path]:.1f} s" if verbosity > 0 else ""
-                print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases){took}")
-                print_warnings(path, outcome.warnings, verbosity)
-                _print_divergences(path, outcome.metrics)
+                print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({n_cases} cases){took}")
+                print_warnings(escape(path), outcome.warnings, verbosity)
+                _print_divergences(escape(path), outcome.metrics)
         else:
             print_err(f"error: {one_line(outcome.error, str(path))}")
             failed.append(path)

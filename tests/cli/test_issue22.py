@@ -423,3 +423,47 @@ def test_13_ascii_stdout_does_not_fail_after_writing(tmp_path):
                 env={**os.environ, "PYTHONIOENCODING": "ascii"})
     assert proc.returncode == 0, proc.stderr
     assert "wrote" in proc.stdout
+
+
+# -- 7. terminal escapes, NUL and newlines in user strings ----------------------------------
+EVIL = "evil\x1b]0;pwned\x07\x1b[2J\nerror: forged"
+
+
+def _raw_control(text):
+    return [c for c in text if not c.isprintable() and c not in "\n\t"]
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_7_file_names_are_escaped(capsys, tmp_path, command):
+    scen = tmp_path / f"{EVIL}.toml"
+    shutil.copy(GOOD, scen)
+    extra = ["--out", tmp_path / "out", "-v"] if command == "run" else []
+    status, out, err = _call(capsys, command, scen, *extra)
+    assert status == 0
+    status_lines = out.splitlines() + err
+    assert _raw_control(out + "\n".join(err)) == []
+    assert not any(line.startswith("error: forged") for line in status_lines)
+    assert any("\\x1b]0;pwned\\x07" in line for line in status_lines)
+
+
+def test_7_bad_file_name_error_is_escaped(capsys, tmp_path):
+    scen = tmp_path / f"{EVIL}.toml"
+    scen.write_text("not = [toml")
+    status, out, err = _call(capsys, "validate", scen)
+    assert status == 1 and len(err) == 1 and _raw_control(err[0]) == []
+
+
+def test_7_title_is_escaped_in_report_md(capsys, tmp_path):
+    scen = tmp_path / "t.toml"
+    scen.write_text('title = "\\u001b[2J<script>alert(1)</script> *bold*"\n' + GOOD.read_text())
+    assert _call(capsys, "run", scen, "--out", tmp_path, "-q")[0] == 0
+    first = (tmp_path / "good-static" / "report.md").read_text(encoding="utf-8").splitlines()[0]
+    assert "<script>" not in first and "\x1b" not in first and "*bold*" not in first
+    assert first.startswith("# ") and "alert" in first
+
+
+def test_18_huge_message_is_bounded(capsys):
+    from hammerstein.cli._common import MAX_LINE, print_err
+    print_err("error: " + "x" * 2_000_000)
+    err = capsys.readouterr().err
+    assert len(err) < MAX_LINE + 100 and "more characters" in err
