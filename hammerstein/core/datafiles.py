@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import FileLimitError, bounded_read_bytes
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
@@ -195,9 +195,11 @@ def _read_table(path):
 
 def _column(frame, header, key, role, path):
     names = [str(c) for c in frame.columns]
-    available = ", ".join(f"{i}:{n}" if header else str(i) for i, n in enumerate(names))
-    if isinstance(key, str) and key.strip().lstrip("-").isdigit():
-        key = int(key)
+    shown = [f"{i}:{escape(n, 40)}" if header else str(i) for i, n in enumerate(names[:20])]
+    available = ", ".join(shown) + (f", ... ({len(names) - 20} more)" if len(names) > 20 else "")
+    path = escape(path)
+    if isinstance(key, str) and key.strip().lstrip("-").isdigit() and not (header and key in names):
+        key = int(key)   # a column index, unless the header has a column of that name
     if isinstance(key, (int, np.integer)):
         if not 0 <= key < frame.shape[1]:
             raise DataFileError(
@@ -207,7 +209,8 @@ def _column(frame, header, key, role, path):
     else:
         if key not in names:
             raise DataFileError(
-                f"{path}: no {role} column named {key!r}; available columns: {available}")
+                f"{path}: no {role} column named {escape(repr(key), 60)}; available columns: "
+                f"{available}")
         col = frame[key]
         name = str(key)
     values = pd.to_numeric(col, errors="coerce")

@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from hammerstein.core.files import FileLimitError, bounded_read_text, provenance_line, safe_write
+from hammerstein.core.files import (FileLimitError, bounded_read_text, confined_path,
+                                    provenance_line, safe_write)
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize, sampled_bending_modes
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii)
@@ -116,9 +117,7 @@ def resolve_preset(name_or_path, base_dir=None):
     presets = bundled_presets()
     if str(name_or_path) in presets:
         return presets[str(name_or_path)]
-    path = Path(name_or_path)
-    if not path.is_absolute() and base_dir is not None:
-        path = Path(base_dir) / path
+    path = confined_path(str(name_or_path), base_dir, PresetError)  # under the scenario's directory
     if path.exists():  # read_toml refuses a directory or special file, naming it
         return path
     raise PresetError(

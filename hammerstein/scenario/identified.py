@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.dynamics import DynamicsError
+from hammerstein.core.files import confined_path
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lti import (DynamicsIdentifier, excitation, hammerstein_records,
                                   modal_parameters)
@@ -431,10 +432,7 @@ def resolve_model(spec_model, plant, base_dir, identify=None):
             raise IdentificationError("identify: missing (required with model = 'identified'), "
                                       "e.g. identify = { frequency = 50.0 }")
         return identified_model(plant, identify)[0]
-    path = Path(spec_model)
-    if not path.is_absolute():
-        path = Path(base_dir) / path
-    return load_model(path)
+    return load_model(confined_path(spec_model, base_dir, PresetError))
 
 
 def comparison_spec(case, mode):
@@ -837,9 +835,7 @@ def resolve_dynamics(spec, plant, base_dir, model=None):
                                       "a Hammerstein compensator needs dynamics")
         G = plant.dynamics
     else:
-        path = Path(dyn)
-        if not path.is_absolute():
-            path = Path(base_dir) / path
+        path = confined_path(dyn, base_dir, PresetError)
         G = load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
     if model is None and spec.get("model") == "identified":
         # as with identified dynamics: the PI is characterised where this G is flat

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, bundled_data, read_records
+from hammerstein.core.files import confined_path, escape
 from hammerstein.core.identification import IdentificationError
 from hammerstein.core.record_identification import identify_records
 from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
@@ -215,9 +216,12 @@ def resolve_data_path(text, base_dir):
     pathlib.Path
     """
     if text.startswith("bundled:"):
-        return bundled_data(text[len("bundled:"):])
-    path = Path(text)
-    return path if path.is_absolute() else Path(base_dir) / path
+        name = text[len("bundled:"):]
+        if not name or Path(name).name != name or name in (".", "..") or "\\" in name:
+            raise DataFileError(f"{escape(text)}: expected bundled:<file name> of a file "
+                                f"shipped with hammerstein (no directory)")
+        return bundled_data(name)
+    return confined_path(text, base_dir, DataFileError)
 
 
 def load_identification_scenario(path, data):

@@ -30,6 +30,7 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.core import references as refs
+from hammerstein.core.files import confined_path
 from hammerstein.core.presets import PresetError, load_dynamics, load_model, load_plant, read_toml
 from hammerstein.scenario.identified import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -357,7 +358,10 @@ def _model_problems(name, identify, plant, base, files):
                            f"{identify.get('periods', 3)} periods would record {n:.3g} samples "
                            f"per input; expected at most {MAX_CASE_SAMPLES:.3g}")
         return [problem] if problem else []
-    path = Path(name) if Path(name).is_absolute() else base / name
+    try:
+        path = confined_path(name, base, PresetError)
+    except PresetError as exc:
+        return [str(exc)]
     if path not in files:
         try:
             files[path] = load_model(path)
@@ -389,7 +393,10 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
         if plant.is_static:
             out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
     else:
-        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
+        try:
+            path = confined_path(dyn, base, PresetError)
+        except PresetError as exc:
+            return out + [f"dynamics: {exc}"]
         if ("dynamics", path) not in files:
             try:
                 load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)

@@ -467,3 +467,82 @@ def test_18_huge_message_is_bounded(capsys):
     print_err("error: " + "x" * 2_000_000)
     err = capsys.readouterr().err
     assert len(err) < MAX_LINE + 100 and "more characters" in err
+
+
+# -- 6. paths of scenario files confined to the scenario's directory ---------------------
+SECRET = "s3cret-first-line-do-not-echo"
+
+
+@pytest.fixture
+def outside(tmp_path, monkeypatch):
+    monkeypatch.delenv(files.ALLOW_ENV, raising=False)
+    home = tmp_path / "scenario-dir"
+    home.mkdir()
+    secret = tmp_path / "secret.csv"
+    secret.write_text(f"{SECRET},b\n1,2\n")
+    return home, secret
+
+
+def _identification(home, file_value):
+    scen = home / "s.toml"
+    scen.write_text(f'kind = "identification"\n[data]\nfile = "{file_value}"\ninput = "u"\n'
+                    f'output = "y"\nsampling_period = 1e-3\n')
+    return scen
+
+
+@pytest.mark.parametrize("how", ["absolute", "dotdot", "bundled", "symlink"])
+def test_6_files_outside_the_scenario_directory_are_refused(capsys, outside, how):
+    home, secret = outside
+    value = {"absolute": str(secret), "dotdot": "../secret.csv",
+             "bundled": "bundled:../../../" + str(secret), "symlink": "link.csv"}[how]
+    if how == "symlink":
+        (home / "link.csv").symlink_to(secret)
+    scen = _identification(home, value)
+    for command in (["validate", scen], ["run", scen, "--out", home / "out"]):
+        status, out, err = _call(capsys, *command)
+        assert status == 1 and len(err) == 1, err
+        assert SECRET not in err[0] + out
+        assert ("outside the scenario's directory" in err[0] or "bundled:<file name>" in err[0])
+
+
+def test_6_allowed_directory_is_read(capsys, outside, monkeypatch):
+    home, secret = outside
+    monkeypatch.setenv(files.ALLOW_ENV, str(secret.parent))
+    status, _, err = _call(capsys, "validate", _identification(home, str(secret)))
+    assert "outside the scenario" not in " ".join(err)
+
+
+@pytest.mark.parametrize("key,value", [("model", "/etc/passwd"), ("model", "../m.toml")])
+def test_6_model_paths_are_confined(capsys, outside, key, value):
+    home, _ = outside
+    scen = home / "m.toml"
+    scen.write_text('[plant]\npreset = "rakotondrabe-2dof"\ndynamics = false\n'
+                    f'[compensator]\nkind = "multivariable"\n{key} = "{value}"\n'
+                    '[[cases]]\nname = "x"\nreference = { kind = "sine", output = "x", '
+                    'amplitude = 50.0, frequency = 50.0, periods = 3 }\n')
+    status, _, err = _call(capsys, "validate", scen)
+    assert status == 1 and "outside the scenario's directory" in err[0]
+    assert "root:" not in err[0]
+
+
+@pytest.mark.parametrize("value,fragment", [("a\\u0000b.csv", "NUL"),
+                                            ("x" * 1001, "at most 1000"),
+                                            ("d/" + "y" * 300 + ".csv", "at most 255")])
+def test_13_bad_paths_are_one_line(capsys, outside, value, fragment):
+    home, _ = outside
+    status, _, err = _call(capsys, "validate", _identification(home, value))
+    assert status == 1 and len(err) == 1 and fragment in err[0] and "unexpected" not in err[0]
+
+
+# -- 15. a numeric header name is a name before an index ----------------------------------
+def test_15_numeric_header_names_are_names(tmp_path):
+    import numpy as np
+    from hammerstein.core.datafiles import read_records
+    t = np.arange(200) * 1e-3
+    u = 5 * np.sin(2 * np.pi * 5 * t)
+    y = 2 * u + 1
+    path = tmp_path / "d.csv"
+    path.write_text("time,2,1\n" + "".join(f"{a!r},{c!r},{b!r}\n" for a, b, c in zip(t, u, y)))
+    rec = read_records(path, "1", "2", "time", None)
+    np.testing.assert_array_equal(rec.u[0], u)        # the column named "1", not index 1
+    np.testing.assert_array_equal(rec.y[0], y)
