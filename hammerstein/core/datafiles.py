@@ -198,6 +198,8 @@ def _column(frame, header, key, role, path):
     shown = [f"{i}:{escape(n, 40)}" if header else str(i) for i, n in enumerate(names[:20])]
     available = ", ".join(shown) + (f", ... ({len(names) - 20} more)" if len(names) > 20 else "")
     path = escape(path)
+    if header and isinstance(key, (int, np.integer)) and str(key) in names:
+        key = str(key)   # the header has a column of that name: a name, not an index
     if isinstance(key, str) and key.strip().lstrip("-").isdigit() and not (header and key in names):
         key = int(key)   # a column index, unless the header has a column of that name
     if isinstance(key, (int, np.integer)):

@@ -542,7 +542,7 @@ def test_15_numeric_header_names_are_names(tmp_path):
     u = 5 * np.sin(2 * np.pi * 5 * t)
     y = 2 * u + 1
     path = tmp_path / "d.csv"
-    path.write_text("time,2,1\n" + "".join(f"{a!r},{c!r},{b!r}\n" for a, b, c in zip(t, u, y)))
+    path.write_text("time,2,1\n" + "".join(f"{a:.17g},{c:.17g},{b:.17g}\n" for a, b, c in zip(t, u, y)))
     rec = read_records(path, "1", "2", "time", None)
     np.testing.assert_array_equal(rec.u[0], u)        # the column named "1", not index 1
     np.testing.assert_array_equal(rec.y[0], y)
