@@ -148,7 +148,8 @@ def _check_target(path, option, kind, force, inputs):
     problem = out_file_problem(path, f"{kind} file")  # empty, directory, special, under a file
     if problem:
         raise _Usage(problem.replace("--out", option, 1))
-    problem = replace_problem(path, inputs, force, "hammerstein identify")
+    problem = replace_problem(path, inputs, force, "hammerstein identify",
+                              "one of the data files")
     if problem:
         raise _Usage(f"{option}: {problem}")
 

@@ -548,7 +548,8 @@ def same_file(a, b):
             return False
 
 
-def replace_problem(path, inputs=(), force=False, command="hammerstein"):
+def replace_problem(path, inputs=(), force=False, command="hammerstein",
+                    inputs_are="an input of this command"):
     """Why the output ``path`` may not be written (one line), or None.
 
     An output may not be one of the command's ``inputs`` (even with
@@ -565,6 +566,8 @@ def replace_problem(path, inputs=(), force=False, command="hammerstein"):
         Replace a file without the mark.
     command : str
         Named in the message (``"hammerstein identify"``).
+    inputs_are : str
+        What the inputs are, for the message (``"one of the data files"``).
 
     Returns
     -------
@@ -575,9 +578,9 @@ def replace_problem(path, inputs=(), force=False, command="hammerstein"):
     for i in inputs:
         if i is not None and os.path.lexists(path) and same_file(path, i):
             also = "" if str(i) == str(path) else f" ({escape(i)})"
-            return f"{escape(path)} is also an input of this command{also}; choose another name"
+            return f"{escape(path)} is also {inputs_are}{also}; choose another name"
         if i is not None and Path(os.path.abspath(path)) == Path(os.path.abspath(i)):
-            return f"{escape(path)} is also an input of this command; choose another name"
+            return f"{escape(path)} is also {inputs_are}; choose another name"
     if force or not os.path.lexists(path) or not os.path.exists(path):
         return None
     if carries_provenance(path):

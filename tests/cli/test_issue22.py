@@ -162,7 +162,7 @@ def test_1_identify_output_never_an_input(capsys, tmp_path):
     before = data.read_bytes()
     status, _, err = _call(capsys, "identify", data, *IDENTIFY[1:], "--out", tmp_path / "m.toml",
                            "--metrics", data, "--force")
-    assert status == 2 and "input" in err[0]
+    assert status == 2 and "data files" in err[0]
     assert data.read_bytes() == before
 
 
