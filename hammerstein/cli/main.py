@@ -32,7 +32,7 @@ import threading
 import warnings
 
 from hammerstein.cli._common import SafeStream, one_line, print_err
-from hammerstein.core.files import escape, interrupt
+from hammerstein.core.files import escape, interrupt, start_budget
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
 # processes (simulation, figure workers) already use the cores; OpenBLAS threads
@@ -333,6 +333,7 @@ def _main(argv):
     if not any(a == "--version" for a in argv) or _command(argv) is not None:
         _prepare_environment()
     command = _command(argv)
+    start_budget()
     parser = build_parser(command) if command is not None else build_parser("")
     try:
         args = parser.parse_args(argv)

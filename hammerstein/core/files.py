@@ -39,7 +39,7 @@ from pathlib import Path
 from hammerstein.exceptions import FileLimitError
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
-           "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals",
+           "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
            "interrupt", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
            "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
            "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
@@ -52,7 +52,21 @@ LIMITS = {
     "data": ("HAMMERSTEIN_MAX_DATA_BYTES", 256 * 2**20),
     "baseline": ("HAMMERSTEIN_MAX_BASELINE_BYTES", 64 * 2**20),
     "cache": ("HAMMERSTEIN_MAX_CACHE_BYTES", 64 * 2**20),
+    "total": ("HAMMERSTEIN_MAX_TOTAL_BYTES", 1024 * 2**20),
 }
+
+_BUDGET = {"active": False, "used": 0, "seen": set()}
+
+
+def start_budget():
+    """Start counting the bytes of the data files a command reads (the command line calls it).
+
+    While counted, :func:`bounded_read_bytes` of ``kind="data"`` refuses a
+    file that would take the total over :func:`limit` ``("total")``
+    (``HAMMERSTEIN_MAX_TOTAL_BYTES``, default 1 GiB), so that many files
+    each under the per-file limit cannot exhaust the memory together.
+    """
+    _BUDGET["active"], _BUDGET["used"], _BUDGET["seen"] = True, 0, set()
 
 #: Suffix of the temporary files of :func:`safe_write`.
 TMP_SUFFIX = ".hammerstein-tmp"
@@ -61,15 +75,24 @@ TMP_SUFFIX = ".hammerstein-tmp"
 def _size(n):
     for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
         if n >= scale:
-            return f"{n / scale:.4g} {unit}"
+            text = f"{n / scale:.4g} {unit}"
+            return text if n % scale == 0 else f"{text} ({n} bytes)"  # never "4 MiB > 4 MiB"
     return f"{n} bytes"
+
+
+def _positive_int(text):
+    """``int(text)`` when ``text`` is ASCII digits of a positive integer, else None (``²`` is not)."""
+    text = (text or "").strip()
+    if text.isascii() and text.isdigit() and int(text) > 0:
+        return int(text)
+    return None
 
 
 def _hint(kind):
     """``raise it with VAR=BYTES``, noting an override that is not a positive integer."""
     var = LIMITS[kind][0]
     text = os.environ.get(var)
-    bad = "" if text is None or (text.strip().isdigit() and int(text) > 0) else \
+    bad = "" if text is None or _positive_int(text) else \
         f"; its value {text!r} is not a positive integer, the default applies"
     return f"raise it with {var}=BYTES{bad}"
 
@@ -82,7 +105,7 @@ def limit(kind):
 
     Parameters
     ----------
-    kind : {'toml', 'data', 'baseline', 'cache'}
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
         Key of :data:`LIMITS`.
 
     Returns
@@ -91,10 +114,7 @@ def limit(kind):
         Largest accepted size [bytes].
     """
     var, default = LIMITS[kind]
-    text = os.environ.get(var, "").strip()
-    if text.isdigit() and int(text) > 0:
-        return int(text)
-    return default
+    return _positive_int(os.environ.get(var)) or default
 
 
 def check_regular(path, what="file"):
@@ -132,7 +152,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
     Parameters
     ----------
     path : str or pathlib.Path
-    kind : {'toml', 'data', 'baseline', 'cache'}
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
         Selects the size limit.
     what : str
         What the file should be, for messages ("scenario file", ...).
@@ -163,6 +183,12 @@ def bounded_read_bytes(path, kind="toml", what="file"):
         if st.st_size > cap:
             raise FileLimitError(f"{path}: {_size(st.st_size)} is larger than the limit of "
                                  f"{_size(cap)} for a {what} ({_hint(kind)})")
+        counted = kind == "data" and _BUDGET["active"] and \
+            (st.st_dev, st.st_ino) not in _BUDGET["seen"]          # a file read again is free
+        if counted and _BUDGET["used"] + st.st_size > limit("total"):
+            raise FileLimitError(
+                f"{escape(path)}: {_size(st.st_size)} more would take the data files of this "
+                f"command over the total limit of {_size(limit('total'))} ({_hint('total')})")
         chunks, total = [], 0
         while True:  # the file may grow while read: never more than cap + 1 bytes
             chunk = os.read(fd, min(1 << 20, cap + 1 - total))
@@ -173,6 +199,9 @@ def bounded_read_bytes(path, kind="toml", what="file"):
             if total > cap:
                 raise FileLimitError(f"{path}: larger than the limit of {_size(cap)} for a "
                                      f"{what} ({_hint(kind)})")
+        if counted:
+            _BUDGET["used"] += total
+            _BUDGET["seen"].add((st.st_dev, st.st_ino))
         return b"".join(chunks)
     finally:
         os.close(fd)
@@ -184,7 +213,7 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     Parameters
     ----------
     path : str or pathlib.Path
-    kind : {'toml', 'data', 'baseline', 'cache'}
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
         Selects the size limit.
     what : str
         What the file should be, for messages.
@@ -813,7 +842,7 @@ def owner_alive(token):
     host = escape(os.uname().nodename if hasattr(os, "uname") else "-", 100).replace(" ", "_")
     if f["host"] != host or f["pidns"] != _pid_namespace() or f["pidns"] == "-":
         return None
-    if not f["pid"].isdigit():
+    if not (f["pid"].isascii() and f["pid"].isdigit()):
         return None
     start = _start_time(f["pid"])
     if start is None:

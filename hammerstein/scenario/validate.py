@@ -218,7 +218,7 @@ def _option_problems(spec, own=None):
 def _ignored_env(var):
     """``"; its value 'abc' is not a positive integer, the default applies"`` for a bad override, else ``""``."""
     text = os.environ.get(var)
-    if text is None or (text.strip().isdigit() and int(text) > 0):
+    if text is None or (text.strip().isascii() and text.strip().isdigit() and int(text) > 0):
         return ""
     return f"; its value {text!r} is not a positive integer, the default applies"
 

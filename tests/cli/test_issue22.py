@@ -546,3 +546,48 @@ def test_15_numeric_header_names_are_names(tmp_path):
     rec = read_records(path, "1", "2", "time", None)
     np.testing.assert_array_equal(rec.u[0], u)        # the column named "1", not index 1
     np.testing.assert_array_equal(rec.y[0], y)
+
+
+# -- 9, 18. memory bounded by the limits; limits and their messages -------------------------
+def test_9_cells_are_checked_before_parsing(tmp_path, monkeypatch):
+    from hammerstein.core.datafiles import DataFileError, read_records
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_CELLS", "100")
+    path = tmp_path / "d.csv"
+    path.write_text("t,u,y\n" + "".join(f"{i},{i % 7},{i % 5}\n" for i in range(50)))
+    with pytest.raises(DataFileError, match=r"51 rows x 3 columns = 153 cells .* HAMMERSTEIN_MAX_DATA_CELLS"):
+        read_records(path, "u", "y", "t", None)
+
+
+def test_9_total_bytes_budget_across_files(capsys, tmp_path, monkeypatch):
+    data = [tmp_path / f"d{i}.csv" for i in range(3)]
+    for d in data:
+        shutil.copy(DATA, d)
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOTAL_BYTES", str(2 * DATA.stat().st_size + 10))
+    status, _, err = _call(capsys, "identify", *data, *IDENTIFY[1:], "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1 and "HAMMERSTEIN_MAX_TOTAL_BYTES" in err[0]
+    assert str(data[2]) in err[0]
+    monkeypatch.delenv("HAMMERSTEIN_MAX_TOTAL_BYTES")
+    assert _call(capsys, "identify", *data, *IDENTIFY[1:], "--out", tmp_path / "m.toml")[0] == 0
+
+
+def test_13_field_over_128_kib_is_one_line(capsys, tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_text("t" * 200_000 + ",u_V,y_um\n1,2,3\n")
+    status, _, err = _call(capsys, "identify", path, "--sampling-period", "1e-3", "--input", "u_V",
+                           "--output", "y_um", "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1 and "unexpected" not in err[0]
+    assert len(err[0]) < 3000
+
+
+@pytest.mark.parametrize("value", ["\u00b2", "0", "-5", "1e3"])
+def test_18_bad_limit_overrides_are_ignored(monkeypatch, value):
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOML_BYTES", value)
+    assert files.limit("toml") == 4 * 2**20
+
+
+def test_18_limit_message_never_equal_sizes(tmp_path, monkeypatch):
+    path = tmp_path / "big.toml"
+    path.write_bytes(b"#" * (4 * 2**20 + 1))
+    with pytest.raises(files.FileLimitError) as info:
+        files.bounded_read_bytes(path, "toml", "scenario file")
+    assert "4194305 bytes" in str(info.value)
