@@ -26,6 +26,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from hammerstein.core.numbers import is_number
+
 from hammerstein.exceptions import Invalid, NestedInvalid, ScenarioError
 
 __all__ = [
@@ -91,7 +93,7 @@ def total_samples_budget():
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------
 def _is_number(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+    return is_number(v)   # huge ints, subnormals, NaN and inf refused (core/numbers.py)
 
 
 def number(unit, minimum=None, exclusive=True):

@@ -591,3 +591,50 @@ def test_18_limit_message_never_equal_sizes(tmp_path, monkeypatch):
     with pytest.raises(files.FileLimitError) as info:
         files.bounded_read_bytes(path, "toml", "scenario file")
     assert "4194305 bytes" in str(info.value)
+
+
+# -- 13, 16. numbers: huge ints, subnormals; API arrays checked like the CLI ------------------
+@pytest.mark.parametrize("value,problem", [
+    (10**400, "beyond the float range"), (-(10**400), "beyond the float range"),
+    (5e-324, "subnormal"), (float("inf"), "not finite"), (float("nan"), "not finite"),
+    (True, "not a number"), ("1", "not a number"), (1 + 0j, "not a number"),
+    (0, None), (2**63, None), (1e-300, None), (-3.5, None)])
+def test_13_number_problem(value, problem):
+    from hammerstein.core.numbers import number_problem
+    assert number_problem(value) == problem
+
+
+@pytest.mark.parametrize("value", ["1" + "0" * 400, "5e-324"])
+def test_13_huge_or_subnormal_frequency_is_one_line(capsys, tmp_path, value):
+    scen = tmp_path / "s.toml"
+    scen.write_text(GOOD.read_text().replace("frequency = 50.0", f"frequency = {value}"))
+    status, _, err = _call(capsys, "validate", scen)
+    assert status == 1 and err and all("frequency" in e and "unexpected" not in e for e in err)
+    assert all(len(e) < 400 for e in err)
+
+
+def _record(**change):
+    import numpy as np
+    from hammerstein.core.datafiles import MultiRecord
+    t = np.arange(2000) * 1e-3
+    u = 5 * np.sin(2 * np.pi * 2 * t)[None, :]
+    fields = dict(timepts=t, u=u, y=2 * u, input_names=("u",), output_names=("y",),
+                  sampling_period=1e-3, source="api")
+    fields.update(change)
+    return MultiRecord(**fields)
+
+
+@pytest.mark.parametrize("change,fragment", [
+    ("nan", "non-finite value nan"), ("complex", "complex"), ("short-y", "samples, expected"),
+    ("nan-T", "sampling_period")])
+def test_16_identify_records_checks_its_arrays(change, fragment):
+    import numpy as np
+    from hammerstein.core.record_identification import identify_records
+    from hammerstein.exceptions import IdentificationError
+    good = _record()
+    rec = {"nan": lambda: _record(y=np.where(np.arange(2000) == 77, np.nan, good.y)),
+           "complex": lambda: _record(u=good.u + 1j),
+           "short-y": lambda: _record(y=good.y[:, :-3]),
+           "nan-T": lambda: _record(sampling_period=float("nan"))}[change]()
+    with pytest.raises(IdentificationError, match=fragment):
+        identify_records([rec], n_hysterons=5)
