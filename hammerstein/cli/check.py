@@ -21,8 +21,17 @@ metrics that failed and the summary line); ``-v`` also prints each
 scenario's warnings, one line per distinct warning.
 
 ``--update`` rewrites the baseline on purpose: the rows of the scenarios
-run are replaced, the other scenarios kept; the file is written to a
-temporary file and renamed. It writes nothing if a scenario failed.
+run are replaced, the other scenarios kept; under an advisory lock
+(:func:`hammerstein.core.files.locked`) the baseline is read again, merged
+and written to a temporary file that is renamed, so concurrent updates all
+land. It writes nothing if a scenario failed.
+
+Ownership: the baseline (``--update``) and the ``--junit-xml`` file are
+replaced only when they carry the project's provenance line
+(:func:`hammerstein.core.files.carries_provenance`) or with ``--force``; an
+output is never one of the inputs (scenarios, baseline, tolerance file). A
+``--tolerances`` entry naming no metric of the scenarios or the baseline is
+a usage error (a misspelt name would otherwise be ignored).
 """
 
 from __future__ import annotations
