@@ -214,6 +214,14 @@ def resolve_data_path(text, base_dir):
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    DataFileError
+        ``bundled:`` with a directory in the name, or a path outside the
+        scenario's directory (:func:`hammerstein.core.files.confined_path`:
+        ``HAMMERSTEIN_ALLOW_PATHS`` allows more), a NUL character or a path
+        too long.
     """
     if text.startswith("bundled:"):
         name = text[len("bundled:"):]
