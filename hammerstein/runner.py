@@ -45,7 +45,8 @@ from typing import Callable
 
 import pandas as pd
 
-from hammerstein.core.files import deferred_signals, umask
+from hammerstein.core.files import (deferred_signals, owner_alive, owner_token, parse_owner,
+                                    release_owner, umask)
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.render import FigureJobs, FigureRenderer
@@ -179,20 +180,78 @@ def _ownership_problem(target, force):
 
 
 def _make_temporary(out_dir):
-    """A new ``.hammerstein-tmp.<pid>.*`` directory holding the marker, umask permissions."""
-    tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}{os.getpid()}.", dir=out_dir))
-    os.chmod(tmp, 0o777 & ~umask())
-    (tmp / MARKER).write_text(f"hammerstein {_version()}\n", encoding="utf-8")
+    """A new ``.hammerstein-tmp.<pid>.<nonce>.*`` directory holding the marker, umask permissions.
+
+    The marker's second line is the owner token
+    (:func:`hammerstein.core.files.owner_token`: host, PID namespace, PID,
+    process start time and a nonce of this call), live until
+    :func:`_release` .
+    """
+    token = owner_token()
+    nonce = parse_owner(token)["nonce"]
+    try:
+        tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}{os.getpid()}.{nonce}.", dir=out_dir))
+        os.chmod(tmp, 0o777 & ~umask())
+        (tmp / MARKER).write_text(f"hammerstein {_version()}\nowner {token}\n", encoding="utf-8")
+    except BaseException:
+        release_owner(token)
+        raise
+    _TOKENS[tmp] = token
     return tmp
+
+
+_TOKENS = {}   # temporary directory -> owner token of this process
+
+
+def _release(tmp):
+    """The temporary ``tmp`` is gone or renamed: its token is no longer live."""
+    token = _TOKENS.pop(tmp, None)
+    if token is not None:
+        release_owner(token)
+
+
+def _rmtree(tmp):
+    shutil.rmtree(tmp, ignore_errors=True)
+    _release(tmp)
+
+
+#: Age [s] after which an empty temporary (its process killed before it wrote its marker) is removed.
+EMPTY_GRACE = 60.0
+
+
+def _stale(p, marker, owned, before):
+    """Whether the temporary ``p`` was left by a run that is over."""
+    if not owned:  # killed between its creation and its marker: an empty directory, old enough
+        return p.stat().st_mtime < min(before, time.time() - EMPTY_GRACE)
+    text = marker.read_text(encoding="utf-8", errors="replace")[:4096]
+    owner = next((ln[6:] for ln in text.splitlines() if ln.startswith("owner ")), None)
+    if owner is not None:
+        return owner_alive(owner) is False
+    parts = p.name[len(TMP_PREFIX):].split(".", 1)   # an older version: its PID only
+    pid = int(parts[0])
+    if pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+        return False
+    except ProcessLookupError:
+        return True
+    except (PermissionError, OverflowError, OSError):
+        return False
 
 
 def remove_stale_temporaries(out_dir, before=None):
     """Remove temporary directories of killed runs in ``out_dir``.
 
     Only directories named ``.hammerstein-tmp.<pid>.*`` that hold the
-    :data:`MARKER` file (or are empty: killed before writing it), whose
-    marker is older than ``before`` (default now) and whose process
-    ``<pid>`` is gone (or is this process) are removed.
+    :data:`MARKER` file, whose marker is older than ``before`` (default now)
+    and whose owner is certainly gone are removed: the owner token of the
+    marker (:func:`hammerstein.core.files.owner_alive`: same host and PID
+    namespace, its process exited or its PID reused, or a finished call of
+    this process) - never judged by the PID alone, so runs in two PID
+    namespaces or two threads of one process sharing ``out_dir`` keep their
+    temporaries. An empty one (killed before writing its marker) is removed
+    once older than :data:`EMPTY_GRACE` seconds.
 
     Parameters
     ----------
@@ -214,7 +273,7 @@ def remove_stale_temporaries(out_dir, before=None):
         return removed
     for p in entries:
         parts = p.name[len(TMP_PREFIX):].split(".", 1)
-        if not p.name.startswith(TMP_PREFIX) or not parts[0].isdigit():
+        if not p.name.startswith(TMP_PREFIX) or not parts[0].isdigit() or p in _TOKENS:
             continue
         marker = p / MARKER
         try:
@@ -222,19 +281,10 @@ def remove_stale_temporaries(out_dir, before=None):
                 continue
             owned = marker.is_file()  # a directory named like the marker is not one
             when = marker.stat().st_mtime if owned else p.stat().st_mtime
-            if when >= before:
+            if when >= before or not _stale(p, marker, owned, before):
                 continue
-        except OSError:
+        except (OSError, ValueError):
             continue
-        pid = int(parts[0])
-        if pid != os.getpid():
-            try:
-                os.kill(pid, 0)
-                continue  # another run still working
-            except ProcessLookupError:
-                pass
-            except (PermissionError, OverflowError, OSError):
-                continue
         if owned:
             shutil.rmtree(p, ignore_errors=True)
         else:  # killed before its marker was written: removed only when empty
@@ -257,7 +307,7 @@ def _start_write(out_dir, writer):
         writer(tmp)
     except BaseException:
         if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
+            _rmtree(tmp)
         raise
     return tmp
 
@@ -284,13 +334,14 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None):
                 old = _make_temporary(out_dir)
                 os.rename(target, old / "previous")
             os.rename(tmp, target)
+            _release(tmp)
     except BaseException:
         if tmp is not None:
-            shutil.rmtree(tmp, ignore_errors=True)
+            _rmtree(tmp)
         raise
     finally:
         if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+            _rmtree(old)
     return target
 
 
@@ -397,7 +448,7 @@ class PendingScenario:
                 if self._jobs is not None:
                     self._jobs.cancel(wait)
             finally:
-                shutil.rmtree(tmp, ignore_errors=True)
+                _rmtree(tmp)
 
 
 def start_scenario(path, out_dir, taken=None, force=False, renderer=None):

@@ -8,6 +8,7 @@ multivariable PI of eq. (13) with (``preset_plant``) or without
 from __future__ import annotations
 
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,11 @@ ROOT = Path(__file__).resolve().parents[1]
 # in this process and in the CLI subprocesses the tests start. The cache's own tests
 # point it at a temporary directory.
 os.environ["HAMMERSTEIN_CACHE_DIR"] = "off"
+# Scenario files may name files only under their own directory (core/files.py
+# confined_path); the corpus reaches ../models and /dev/zero, and some tests name files
+# of another temporary directory. The confinement's own tests remove this variable.
+os.environ["HAMMERSTEIN_ALLOW_PATHS"] = os.pathsep.join(
+    [str(ROOT / "tests" / "corpus"), "/dev", tempfile.gettempdir()])
 
 
 @pytest.fixture(scope="session")

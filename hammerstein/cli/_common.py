@@ -6,7 +6,46 @@ import os
 import sys
 from pathlib import Path
 
-__all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem"]
+from hammerstein.core.files import escape
+
+__all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
+           "MAX_LINE"]
+
+#: Longest line printed on stderr (characters); longer messages are cut with a count.
+MAX_LINE = 2000
+
+_KEEP = {"\n", "\t"}
+
+
+class SafeStream:
+    """A text stream that escapes control characters before they reach a terminal.
+
+    Wraps ``sys.stdout`` / ``sys.stderr`` while a command runs: escape
+    sequences, NUL, carriage returns and the other control characters of a
+    file name, a column name or a title become visible escapes
+    (:func:`hammerstein.core.files.escape`), so no output can change the
+    window title, clear the screen or overwrite a line. Newlines and tabs
+    pass (the messages' own line structure); the places that print a user
+    string escape its newlines themselves.
+
+    Parameters
+    ----------
+    stream : io.TextIOBase
+        The stream written to.
+    """
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        """Write ``text`` with its control characters (but newline and tab) escaped."""
+        if not text.isprintable() and not all(c.isprintable() or c in _KEEP for c in text):
+            text = "".join(c if c.isprintable() or c in _KEEP else escape(c) for c in text)
+        return self._stream.write(text)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
 
 
 def out_dir_problem(out):
@@ -58,8 +97,8 @@ def out_file_problem(out, what="file"):
 
 
 def print_err(msg):
-    """Print ``msg`` on stderr."""
-    print(msg, file=sys.stderr)
+    """Print ``msg`` on stderr as one line: control characters and newlines escaped, at most :data:`MAX_LINE` characters."""
+    print(escape(msg, MAX_LINE), file=sys.stderr)
 
 
 def one_line(text, path=None):

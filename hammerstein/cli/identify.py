@@ -26,7 +26,8 @@ import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import out_file_problem
-from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
+from hammerstein.core.files import (FileLimitError, all_or_nothing, png_provenance,
+                                    provenance_line, replace_problem, safe_write)
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_dynamics,
                                                      identify_records)
@@ -143,34 +144,22 @@ def _parse_thresholds(text):
     return r.size, r
 
 
-def _written_by_us(path, kind):
-    """True when an existing file looks like one this command writes."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(4096)
-    except OSError:
-        return False
-    if kind == "model":
-        import tomllib  # lazy: only to read an existing model file
-        try:
-            return "model" in tomllib.loads(bounded_read_text(path, "toml", "model file"))
-        except (OSError, ValueError, tomllib.TOMLDecodeError, UnicodeDecodeError):
-            return False
-    if kind == "metrics":
-        return head.decode("utf-8", "replace").splitlines()[:1] == [METRICS_HEADER]
-    return head.startswith(b"\x89PNG") and b"Matplotlib" in head
-
-
 def _check_target(path, option, kind, force, inputs):
+    """A usage error when ``path`` cannot be written or is a file the project did not write.
+
+    Ownership is judged by content: an existing file is replaced only when
+    it carries the project's provenance mark (the first-line comment of a
+    model or metrics file, the text chunk of a PNG;
+    :func:`hammerstein.core.files.carries_provenance`) or with ``--force``;
+    an input of the command is never an output.
+    """
     problem = out_file_problem(path, f"{kind} file")  # empty, directory, special, under a file
     if problem:
         raise _Usage(problem.replace("--out", option, 1))
-    path = Path(path)
-    if any(path.resolve() == Path(d).resolve() for d in inputs):
-        raise _Usage(f"{option}: {path} is one of the data files")
-    if path.exists() and not force and not _written_by_us(path, kind):
-        raise _Usage(f"{option}: {path} exists and was not written by hammerstein identify; "
-                     f"choose another name or add --force to overwrite it")
+    problem = replace_problem(path, inputs, force, "hammerstein identify",
+                              "one of the data files")
+    if problem:
+        raise _Usage(f"{option}: {problem}")
 
 
 def _atomic_write(path, write):
@@ -262,7 +251,8 @@ def metrics_rows(fit, output_unit):
 def _write_metrics(path, rows):
     import pandas as pd  # lazy: only for --metrics
     frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
-    _atomic_write(path, lambda fh: fh.write(frame.to_csv(index=False, float_format="%.7g").encode()))
+    text = provenance_line("identify") + frame.to_csv(index=False, float_format="%.7g")
+    _atomic_write(path, lambda fh: fh.write(text.encode()))
 
 
 def fit_figure(fit, input_unit, output_unit):
@@ -351,7 +341,8 @@ def _write_plot(path, fit, input_unit, output_unit):
     import matplotlib.pyplot as plt  # lazy: only for --plot
     fig = fit_figure(fit, input_unit, output_unit)
     try:
-        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
+        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110,
+                                                   metadata=png_provenance("identify")))
     finally:
         plt.close(fig)
 
@@ -406,13 +397,14 @@ def _handler(args):
             meta["dynamics"] = dyn.summary
             rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
                                           fit.model.input_names)
-        if args.plot:
-            _write_plot(args.plot, fit, args.input_unit, args.output_unit)
-            if dyn is not None:
-                _write_bode(_bode_path(args.plot), dyn, fit.model.output_names)
-        if args.metrics:
-            _write_metrics(args.metrics, rows)
-        save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
+        with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
+            save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
+            if args.plot:
+                _write_plot(args.plot, fit, args.input_unit, args.output_unit)
+                if dyn is not None:
+                    _write_bode(_bode_path(args.plot), dyn, fit.model.output_names)
+            if args.metrics:
+                _write_metrics(args.metrics, rows)
     except (DataFileError, IdentificationError, HysteresisError, PresetError, FileLimitError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
@@ -548,7 +540,8 @@ def _write_bode(path, dyn, names):
         title=f"Identified G (order {s['order']}, held-out fit {s['held_out_fit_percent']:.1f} %) "
               f"over the measured H1 estimate")
     try:
-        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110))
+        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110,
+                                                   metadata=png_provenance("identify")))
     finally:
         plt.close(fig)
 

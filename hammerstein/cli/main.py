@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import errno
 import importlib
 from importlib import metadata
 import os
@@ -30,8 +31,8 @@ import sys
 import threading
 import warnings
 
-from hammerstein.cli._common import one_line, print_err
-from hammerstein.core.files import interrupt
+from hammerstein.cli._common import SafeStream, one_line, print_err
+from hammerstein.core.files import escape, interrupt, start_budget
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
 # processes (simulation, figure workers) already use the cores; OpenBLAS threads
@@ -124,16 +125,136 @@ def _on_signal(signum, frame):
     # later signals are ignored so that the clean-up in progress (removing a
     # temporary directory) is not interrupted in turn; inside the creation or
     # rename of a temporary the interruption waits for its end
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in _SIGNALS:
         signal.signal(sig, signal.SIG_IGN)
     interrupt(signum)
 
 
+#: Signals that end a command with ``interrupted`` (SIGHUP: the terminal or ssh went away).
+_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
 def _install_signal_handlers():
-    """SIGINT/SIGTERM -> a KeyboardInterrupt (:func:`hammerstein.core.files.interrupt`); returns the previous handlers (main thread only)."""
+    """SIGINT/SIGTERM/SIGHUP -> a KeyboardInterrupt (:func:`hammerstein.core.files.interrupt`); returns the previous handlers (main thread only)."""
     if threading.current_thread() is not threading.main_thread():
         return {}
-    return {sig: signal.signal(sig, _on_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+    nohup = getattr(signal, "SIGHUP", None)
+    return {sig: signal.signal(sig, _on_signal) for sig in _SIGNALS
+            if not (sig == nohup and signal.getsignal(sig) is signal.SIG_IGN)}  # nohup kept
+
+
+#: Backends matplotlib knows by name (MPLBACKEND); the reports draw with Agg anyway.
+_MPL_BACKENDS = {"agg", "cairo", "pdf", "pgf", "ps", "svg", "template", "gtk3agg", "gtk3cairo",
+                 "gtk4agg", "gtk4cairo", "macosx", "nbagg", "notebook", "qtagg", "qtcairo",
+                 "qt5agg", "qt5cairo", "tkagg", "tkcairo", "webagg", "wx", "wxagg", "wxcairo",
+                 "inline", "ipympl", "widget"}
+
+
+def _fill_standard_fds():
+    """Open /dev/null on a closed fd 0, 1 or 2 (``>&-``), so that no file the command
+    writes takes its number and ``print`` has somewhere to go."""
+    for fd in (0, 1, 2):
+        try:
+            os.fstat(fd)
+        except OSError:
+            try:
+                new = os.open(os.devnull, os.O_RDWR)
+            except OSError:
+                return
+            if new != fd:
+                os.dup2(new, fd)
+                os.close(new)
+    for name, fd in (("stdout", 1), ("stderr", 2)):
+        stream = getattr(sys, name)
+        if stream is None:
+            try:
+                setattr(sys, name, open(fd, "w", encoding="utf-8", errors="backslashreplace",
+                                        closefd=False))
+            except OSError:
+                pass
+        elif hasattr(stream, "reconfigure"):
+            try:  # PYTHONIOENCODING=ascii: a unit (µm) must not fail a finished command
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):
+                pass
+
+
+def _writable_dir(path):
+    """Whether ``path`` (or its nearest existing parent) is a directory one can write."""
+    p = os.path.abspath(path)
+    while not os.path.exists(p) and os.path.dirname(p) != p:
+        p = os.path.dirname(p)
+    return os.path.isdir(p) and os.access(p, os.W_OK | os.X_OK)
+
+
+def _numba_cache_dir():
+    """A private temporary numba cache: ``$TMPDIR/hammerstein-numba-<uid>`` (mode 0700, ours)."""
+    import tempfile
+    base = os.path.join(tempfile.gettempdir(), f"hammerstein-numba-{os.getuid()}")
+    try:
+        os.mkdir(base, 0o700)
+    except FileExistsError:
+        pass
+    except OSError:
+        return tempfile.mkdtemp(prefix="hammerstein-numba-")
+    st = os.lstat(base)
+    import stat as stat_
+    if (not stat_.S_ISDIR(st.st_mode) or st.st_uid != os.getuid()
+            or st.st_mode & 0o022):     # someone else's or writable by others: not trusted
+        return tempfile.mkdtemp(prefix="hammerstein-numba-")
+    return base
+
+
+def _prepare_environment():
+    """Check the environment variables of the dependencies before they are imported.
+
+    ``NUMBA_NUM_THREADS`` that is not a positive integer and an unknown
+    ``MPLBACKEND`` are removed; with no writable place for numba's cache
+    (package directory and ``~/.cache`` read-only, ``NUMBA_CACHE_DIR``
+    unset or not writable) a private temporary cache is used. Each change
+    is one ``note:`` line on stderr.
+
+    Returns
+    -------
+    list of str
+        The notes printed.
+    """
+    notes = []
+    threads = os.environ.get("NUMBA_NUM_THREADS")
+    if threads is not None and not (threads.strip().isascii() and threads.strip().isdigit()
+                                    and 0 < int(threads) <= 4096):
+        del os.environ["NUMBA_NUM_THREADS"]
+        notes.append(f"note: NUMBA_NUM_THREADS={escape(threads, 40)!s} is not a positive "
+                     f"integer; ignored")
+    backend = os.environ.get("MPLBACKEND")
+    if backend is not None and backend.strip().lower() not in _MPL_BACKENDS \
+            and not backend.startswith("module://"):
+        del os.environ["MPLBACKEND"]
+        notes.append(f"note: MPLBACKEND={escape(backend, 40)} is not a matplotlib backend; "
+                     f"ignored (the figures are drawn with Agg)")
+    cache = os.environ.get("NUMBA_CACHE_DIR", "").strip()
+    package = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                           "simulation")
+    if cache:
+        ok = _writable_dir(cache)
+    else:
+        xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
+        user = os.path.join(xdg, "numba") if xdg else os.path.expanduser("~/.cache/numba")
+        ok = _writable_dir(os.path.join(package, "__pycache__")) or (
+            not user.startswith("~") and _writable_dir(user))
+    if not ok:
+        try:
+            where = _numba_cache_dir()
+        except OSError:
+            where = None
+        if where is not None:
+            os.environ["NUMBA_CACHE_DIR"] = where
+            notes.append(f"note: no writable cache for the compiled kernels "
+                         f"({'NUMBA_CACHE_DIR' if cache else 'home directory'} read-only); "
+                         f"using {where}")
+    for line in notes:
+        print_err(line)
+    return notes
 
 
 def _command(argv):
@@ -155,15 +276,20 @@ def main(argv=None):
     Returns
     -------
     int
-        Exit status: 0 success, 1 a scenario failed, 2 usage error, 130
-        interrupted by SIGINT (Ctrl-C), 143 by SIGTERM; an interruption
+        Exit status: 0 success, 1 a scenario failed (or the output could
+        not be written: a full disk), 2 usage error, 130 interrupted by
+        SIGINT (Ctrl-C), 143 by SIGTERM, 129 by SIGHUP; an interruption
         prints the one line ``interrupted`` and removes the temporary
         directory of the report in progress.
     """
     argv = sys.argv[1:] if argv is None else list(argv)
+    _fill_standard_fds()
     previous = _install_signal_handlers()
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr)  # no raw control chars
     try:
-        return _main(argv)
+        code = _main(argv)
+        return _flush_output(code)
     except KeyboardInterrupt as exc:  # SIGINT or SIGTERM: one line, no traceback
         signum = getattr(exc, "signum", signal.SIGINT)
         try:
@@ -175,11 +301,44 @@ def main(argv=None):
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        sys.stdout, sys.stderr = streams
+
+
+def _flush_output(code):
+    """Flush stdout: a full disk or a failing device turns success into 1 with one line.
+
+    A reader that has gone (broken pipe) or a closed stdout is not an error.
+    """
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _silence_stdout()
+    except (OSError, ValueError) as exc:
+        _silence_stdout()
+        if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EIO, errno.EDQUOT,
+                                                        errno.EFBIG):
+            print_err(f"hammerstein: error: cannot write the output ({exc.strerror})")
+            return code or 1
+    return code
+
+
+def _silence_stdout():
+    """Point fd 1 at /dev/null so that the interpreter's last flush cannot fail."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.close(devnull)
+        sys.stdout = SafeStream(open(1, "w", closefd=False))
+    except OSError:
+        pass
 
 
 def _main(argv):
     """:func:`main` without the signal handling."""
+    if not any(a == "--version" for a in argv) or _command(argv) is not None:
+        _prepare_environment()
     command = _command(argv)
+    start_budget()
     parser = build_parser(command) if command is not None else build_parser("")
     try:
         args = parser.parse_args(argv)
@@ -190,15 +349,24 @@ def _main(argv):
         try:
             return int(args.handler(args))
         except BrokenPipeError:  # `hammerstein list | head`: the reader has gone; say nothing
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, sys.stdout.fileno())     # so that the final flush cannot fail
-            os.close(devnull)
+            _silence_stdout()
+            return 1
+        except OSError as exc:  # stdout on a full disk
+            if exc.filename is None and exc.errno in (errno.ENOSPC, errno.EIO, errno.EDQUOT):
+                _silence_stdout()
+                print_err(f"hammerstein {args.command}: error: cannot write the output "
+                          f"({exc.strerror})")
+                return 1
+            if os.environ.get("HAMMERSTEIN_DEBUG"):
+                raise
+            print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "
+                      f"{escape(one_line(exc))} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
             return 1
         except Exception as exc:  # a bug, not bad input: still one line, no traceback
             if os.environ.get("HAMMERSTEIN_DEBUG"):
                 raise
             print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "
-                      f"{one_line(exc)} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
+                      f"{escape(one_line(exc), 500)} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
             return 1
 
 
@@ -225,7 +393,8 @@ def run(argv=None):
     code = main(argv)
     for stream in (sys.stdout, sys.stderr):
         try:
-            stream.flush()
+            if stream is not None:
+                stream.flush()
         except (OSError, ValueError):  # a closed pipe: nothing more can be said
             pass
     atexit._run_exitfuncs()

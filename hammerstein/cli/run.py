@@ -18,8 +18,10 @@ import time
 from pathlib import Path
 
 from hammerstein.cli._common import one_line, out_dir_problem, print_err
+from hammerstein.core.files import escape
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.report.render import figure_selection
+from hammerstein.scenario import diskcache
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
 from hammerstein.simulation import announce_compiles
 
@@ -84,12 +86,13 @@ def handler(args):
     out = Path(args.out)
     remove_stale_temporaries(out)
     verbosity = getattr(args, "verbosity", 0)
-    announce_compiles(print_err if verbosity >= 0 else None)   # first run: before compiling
+    announce_compiles(print_err if verbosity >= 0 else None)
+    diskcache.set_reporter(print_err if verbosity > 0 else None)   # -v: ignored cache entries   # first run: before compiling
     started, failed = {}, []
 
     def on_start(path):
         if verbosity > 0:
-            print_err(f"{path}: running ...")
+            print_err(f"{escape(path)}: running ...")
         started[path] = time.perf_counter()
 
     def on_outcome(path, outcome):
@@ -97,9 +100,9 @@ def handler(args):
             n_cases = outcome.metrics["case"].nunique()
             if verbosity >= 0:
                 took = f" in {time.perf_counter() - started[path]:.1f} s" if verbosity > 0 else ""
-                print(f"{path}: wrote {outcome.out_dir}/ ({n_cases} cases){took}")
-                print_warnings(path, outcome.warnings, verbosity)
-                _print_divergences(path, outcome.metrics)
+                print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({n_cases} cases){took}")
+                print_warnings(escape(path), outcome.warnings, verbosity)
+                _print_divergences(escape(path), outcome.metrics)
         else:
             print_err(f"error: {one_line(outcome.error, str(path))}")
             failed.append(path)

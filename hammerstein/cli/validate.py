@@ -10,6 +10,7 @@ by its convergence check, an unreadable model file) is not checked here.
 from __future__ import annotations
 
 from hammerstein.cli._common import one_line, print_err
+from hammerstein.core.files import escape
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.validate import validate_scenario
 
@@ -62,5 +63,5 @@ def handler(args):
             print_err(f"error: {path}: unexpected {type(exc).__name__}: {one_line(exc)}")
             status = 1
             continue
-        print(f"{path}: ok ({len(sc.cases)} cases)")
+        print(f"{escape(path)}: ok ({len(sc.cases)} cases)")
     return status

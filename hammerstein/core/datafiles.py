@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import csv
 import io
+import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import FileLimitError, bounded_read_bytes
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
@@ -154,6 +156,29 @@ def _sniff_separator(sample):
     return r"\s+"
 
 
+_COMMENT = re.compile(rb"(?m)^[ \t]*#[^\n]*(\n|$)")
+_BLANK = re.compile(rb"(?m)^[ \t\r]*\n")
+
+#: Environment variable overriding :func:`max_cells`.
+CELLS_ENV = "HAMMERSTEIN_MAX_DATA_CELLS"
+
+
+def max_cells():
+    """Largest number of cells (rows x columns) of a data file, checked before parsing.
+
+    Default 40 million (a 20 kHz, 100 s record of 20 columns), so that the
+    parsed table (8 bytes a cell, twice while converting) stays within
+    about 1 GB whatever the file; ``HAMMERSTEIN_MAX_DATA_CELLS=N`` (a
+    positive integer) overrides it.
+
+    Returns
+    -------
+    int
+    """
+    text = os.environ.get(CELLS_ENV, "").strip()
+    return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else 40_000_000
+
+
 def _read_table(path):
     try:
         raw = bounded_read_bytes(path, "data", "data file")
@@ -162,25 +187,43 @@ def _read_table(path):
     except OSError as exc:
         raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
-        text = raw.decode("utf-16", errors="replace")
-    else:
-        text = raw.decode("utf-8-sig", errors="replace")
-    if "\x00" in text or text.count("\ufffd") > 0.01 * len(text) + 1:
+        raw = raw.decode("utf-16", errors="replace").encode("utf-8")
+    raw = raw.removeprefix(b"\xef\xbb\xbf")
+    # parsed as bytes: a str of the file (and pandas' StringIO, 4 bytes a character) would
+    # multiply the memory of a large record
+    bad = len(raw) - len(raw.decode("utf-8", errors="ignore").encode("utf-8"))
+    if b"\x00" in raw or bad > 0.01 * len(raw) + 1:
         raise DataFileError(f"{path}: not a text table (binary content); expected delimited "
                             f"text such as CSV")
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
+    if b"#" in raw:  # comment lines (not a '#' inside a line)
+        raw = _COMMENT.sub(b"", raw)
+    if _BLANK.search(raw):
+        raw = _BLANK.sub(b"", raw)
+    raw = raw.lstrip(b"\r\n")
+    if not raw.strip():
         raise DataFileError(f"{path}: the file is empty")
-    sep = _sniff_separator("\n".join(lines[:5]))
-    first = next(csv.reader([lines[0]], delimiter=sep)) if sep != r"\s+" else lines[0].split()
+    head = raw[:1 << 16].decode("utf-8", errors="replace").splitlines()
+    sep = _sniff_separator("\n".join(head[:5]))
+    try:
+        first = next(csv.reader([head[0]], delimiter=sep)) if sep != r"\s+" else head[0].split()
+    except csv.Error as exc:
+        raise DataFileError(f"{path}: cannot parse the first line ({escape(exc, 100)})") from None
     cells = [c.strip() for c in first if c.strip()]
     header = any(not _is_number(c) for c in cells)
+    n_rows = raw.count(b"\n") + (not raw.endswith(b"\n"))
+    n_cells = n_rows * max(len(first), 1)
+    cap = max_cells()
+    if n_cells > cap:
+        raise DataFileError(f"{path}: {n_rows} rows x {len(first)} columns = {n_cells} cells is more "
+                            f"than the limit of {cap} cells (raise it with {CELLS_ENV}=N)")
     try:
-        frame = pd.read_csv(io.StringIO("\n".join(lines)), sep=sep, header=0 if header else None,
-                            engine="python", skipinitialspace=True)
-    except (pd.errors.ParserError, ValueError) as exc:
+        frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
+                            engine="c", skipinitialspace=True, encoding="utf-8",
+                            encoding_errors="replace")
+    except (pd.errors.ParserError, ValueError, MemoryError) as exc:
         reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
-        raise DataFileError(f"{path}: cannot parse the table ({reason})") from None
+        raise DataFileError(f"{path}: cannot parse the table ({escape(reason, 200)})") from None
+    del raw
     if header:
         frame.columns = [str(c).strip() for c in frame.columns]
     else:
@@ -195,9 +238,13 @@ def _read_table(path):
 
 def _column(frame, header, key, role, path):
     names = [str(c) for c in frame.columns]
-    available = ", ".join(f"{i}:{n}" if header else str(i) for i, n in enumerate(names))
-    if isinstance(key, str) and key.strip().lstrip("-").isdigit():
-        key = int(key)
+    shown = [f"{i}:{escape(n, 40)}" if header else str(i) for i, n in enumerate(names[:20])]
+    available = ", ".join(shown) + (f", ... ({len(names) - 20} more)" if len(names) > 20 else "")
+    path = escape(path)
+    if header and isinstance(key, (int, np.integer)) and str(key) in names:
+        key = str(key)   # the header has a column of that name: a name, not an index
+    if isinstance(key, str) and key.strip().lstrip("-").isdigit() and not (header and key in names):
+        key = int(key)   # a column index, unless the header has a column of that name
     if isinstance(key, (int, np.integer)):
         if not 0 <= key < frame.shape[1]:
             raise DataFileError(
@@ -207,7 +254,8 @@ def _column(frame, header, key, role, path):
     else:
         if key not in names:
             raise DataFileError(
-                f"{path}: no {role} column named {key!r}; available columns: {available}")
+                f"{path}: no {role} column named {escape(repr(key), 60)}; available columns: "
+                f"{available}")
         col = frame[key]
         name = str(key)
     values = pd.to_numeric(col, errors="coerce")

@@ -39,8 +39,12 @@ from pathlib import Path
 from hammerstein.exceptions import FileLimitError
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
-           "bounded_read_text", "safe_write", "umask", "TMP_SUFFIX", "deferred_signals",
-           "interrupt"]
+           "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
+           "interrupt", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
+           "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
+           "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
+           "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
+           "MAX_PATH_CHARS", "MAX_NAME_BYTES"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
@@ -48,7 +52,21 @@ LIMITS = {
     "data": ("HAMMERSTEIN_MAX_DATA_BYTES", 256 * 2**20),
     "baseline": ("HAMMERSTEIN_MAX_BASELINE_BYTES", 64 * 2**20),
     "cache": ("HAMMERSTEIN_MAX_CACHE_BYTES", 64 * 2**20),
+    "total": ("HAMMERSTEIN_MAX_TOTAL_BYTES", 1024 * 2**20),
 }
+
+_BUDGET = {"active": False, "used": 0, "seen": set()}
+
+
+def start_budget():
+    """Start counting the bytes of the data files a command reads (the command line calls it).
+
+    While counted, :func:`bounded_read_bytes` of ``kind="data"`` refuses a
+    file that would take the total over :func:`limit` ``("total")``
+    (``HAMMERSTEIN_MAX_TOTAL_BYTES``, default 1 GiB), so that many files
+    each under the per-file limit cannot exhaust the memory together.
+    """
+    _BUDGET["active"], _BUDGET["used"], _BUDGET["seen"] = True, 0, set()
 
 #: Suffix of the temporary files of :func:`safe_write`.
 TMP_SUFFIX = ".hammerstein-tmp"
@@ -57,15 +75,24 @@ TMP_SUFFIX = ".hammerstein-tmp"
 def _size(n):
     for unit, scale in (("GiB", 2**30), ("MiB", 2**20), ("KiB", 2**10)):
         if n >= scale:
-            return f"{n / scale:.4g} {unit}"
+            text = f"{n / scale:.4g} {unit}"
+            return text if n % scale == 0 else f"{text} ({n} bytes)"  # never "4 MiB > 4 MiB"
     return f"{n} bytes"
+
+
+def _positive_int(text):
+    """``int(text)`` when ``text`` is ASCII digits of a positive integer, else None (``²`` is not)."""
+    text = (text or "").strip()
+    if text.isascii() and text.isdigit() and int(text) > 0:
+        return int(text)
+    return None
 
 
 def _hint(kind):
     """``raise it with VAR=BYTES``, noting an override that is not a positive integer."""
     var = LIMITS[kind][0]
     text = os.environ.get(var)
-    bad = "" if text is None or (text.strip().isdigit() and int(text) > 0) else \
+    bad = "" if text is None or _positive_int(text) else \
         f"; its value {text!r} is not a positive integer, the default applies"
     return f"raise it with {var}=BYTES{bad}"
 
@@ -78,7 +105,7 @@ def limit(kind):
 
     Parameters
     ----------
-    kind : {'toml', 'data', 'baseline', 'cache'}
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
         Key of :data:`LIMITS`.
 
     Returns
@@ -87,10 +114,7 @@ def limit(kind):
         Largest accepted size [bytes].
     """
     var, default = LIMITS[kind]
-    text = os.environ.get(var, "").strip()
-    if text.isdigit() and int(text) > 0:
-        return int(text)
-    return default
+    return _positive_int(os.environ.get(var)) or default
 
 
 def check_regular(path, what="file"):
@@ -128,7 +152,7 @@ def bounded_read_bytes(path, kind="toml", what="file"):
     Parameters
     ----------
     path : str or pathlib.Path
-    kind : {'toml', 'data', 'baseline', 'cache'}
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
         Selects the size limit.
     what : str
         What the file should be, for messages ("scenario file", ...).
@@ -159,6 +183,12 @@ def bounded_read_bytes(path, kind="toml", what="file"):
         if st.st_size > cap:
             raise FileLimitError(f"{path}: {_size(st.st_size)} is larger than the limit of "
                                  f"{_size(cap)} for a {what} ({_hint(kind)})")
+        counted = kind == "data" and _BUDGET["active"] and \
+            (st.st_dev, st.st_ino) not in _BUDGET["seen"]          # a file read again is free
+        if counted and _BUDGET["used"] + st.st_size > limit("total"):
+            raise FileLimitError(
+                f"{escape(path)}: {_size(st.st_size)} more would take the data files of this "
+                f"command over the total limit of {_size(limit('total'))} ({_hint('total')})")
         chunks, total = [], 0
         while True:  # the file may grow while read: never more than cap + 1 bytes
             chunk = os.read(fd, min(1 << 20, cap + 1 - total))
@@ -169,6 +199,9 @@ def bounded_read_bytes(path, kind="toml", what="file"):
             if total > cap:
                 raise FileLimitError(f"{path}: larger than the limit of {_size(cap)} for a "
                                      f"{what} ({_hint(kind)})")
+        if counted:
+            _BUDGET["used"] += total
+            _BUDGET["seen"].add((st.st_dev, st.st_ino))
         return b"".join(chunks)
     finally:
         os.close(fd)
@@ -180,7 +213,7 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     Parameters
     ----------
     path : str or pathlib.Path
-    kind : {'toml', 'data', 'baseline', 'cache'}
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
         Selects the size limit.
     what : str
         What the file should be, for messages.
@@ -270,6 +303,52 @@ def umask():
     return mask
 
 
+_GROUP = {"open": False, "pending": []}
+
+
+@contextmanager
+def all_or_nothing():
+    """Write several files with :func:`safe_write` so that all of them or none is replaced.
+
+    Inside the block, :func:`safe_write` writes each temporary file but does
+    not rename it; when the block ends without an error every temporary is
+    renamed over its target (renames in one directory do not fail for want
+    of space), otherwise every temporary is removed and no target changes.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> try:
+    ...     with all_or_nothing():
+    ...         _ = safe_write(d / "a.txt", "a")
+    ...         raise OSError("disk full")
+    ... except OSError:
+    ...     pass
+    >>> sorted(p.name for p in d.iterdir())
+    []
+    """
+    if _GROUP["open"]:
+        yield
+        return
+    _GROUP["open"], _GROUP["pending"] = True, []
+    try:
+        yield
+        _GROUP["open"] = False
+        with deferred_signals():
+            while _GROUP["pending"]:
+                tmp, target = _GROUP["pending"].pop(0)
+                os.replace(tmp, target)
+    finally:
+        _GROUP["open"] = False
+        for tmp, _ in _GROUP["pending"]:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+        _GROUP["pending"] = []
+
+
 def safe_write(path, data, what="file"):
     """Write ``data`` to ``path`` through an exclusive temporary file and a rename.
 
@@ -336,7 +415,10 @@ def safe_write(path, data, what="file"):
             fh.flush()
             os.fsync(fh.fileno())
         os.chmod(tmp, mode)
-        os.replace(tmp, target)
+        if _GROUP["open"]:
+            _GROUP["pending"].append((tmp, target))   # renamed when the group ends
+        else:
+            os.replace(tmp, target)
     except BaseException:
         if tmp is not None:
             try:
@@ -345,3 +427,514 @@ def safe_write(path, data, what="file"):
                 pass
         raise
     return target
+
+
+# -- provenance: the mark of the files the project writes ------------------------------
+#: Words that start the provenance mark of every single file the project writes.
+PROVENANCE = "generated by hammerstein"
+
+
+def _package_version():
+    try:
+        from importlib.metadata import version
+        return version("hammerstein")
+    except Exception:  # not installed (a source checkout on sys.path)
+        return "unknown"
+
+
+def provenance_line(command, style="#"):
+    """The first line of a text file written by ``hammerstein <command>``.
+
+    A file is replaced by the project only while it carries this line
+    (:func:`carries_provenance`), so a hand-written file at an output path
+    is never lost (the command stops with a usage error naming ``--force``).
+
+    Parameters
+    ----------
+    command : str
+        The command that writes the file (``"identify"``, ``"check"``).
+    style : {'#', 'xml'}
+        A ``#`` comment (TOML, CSV) or an XML comment.
+
+    Returns
+    -------
+    str
+        One line, ending with a newline.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``style``.
+
+    Examples
+    --------
+    >>> provenance_line("identify").startswith("# generated by hammerstein identify")
+    True
+    """
+    text = (f"{PROVENANCE} {command} {_package_version()}; hammerstein replaces this file "
+            f"only while this line is here")
+    if style == "xml":
+        return f"<!-- {text} -->\n"
+    if style != "#":
+        raise ValueError(f"style: expected '#' or 'xml', found {style!r}")
+    return f"# {text}\n"
+
+
+def png_provenance(command):
+    """PNG text chunks marking a figure written by ``hammerstein <command>``.
+
+    Pass it as ``metadata=`` to :meth:`matplotlib.figure.Figure.savefig`
+    (``format="png"``); :func:`carries_provenance` finds it.
+
+    Parameters
+    ----------
+    command : str
+
+    Returns
+    -------
+    dict
+        ``{"Comment": "generated by hammerstein <command> <version>"}``.
+    """
+    return {"Comment": f"{PROVENANCE} {command} {_package_version()}"}
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_marked(fd):
+    """Whether the PNG open on ``fd`` has a text chunk with :data:`PROVENANCE` (chunks walked, bounded)."""
+    import struct
+    os.lseek(fd, 8, os.SEEK_SET)
+    for _ in range(4096):  # a PNG has a few dozen chunks
+        head = os.read(fd, 8)
+        if len(head) < 8:
+            return False
+        length, kind = struct.unpack(">I4s", head)
+        if kind in (b"tEXt", b"iTXt", b"zTXt") and length <= 1 << 16:
+            data = os.read(fd, length)
+            if PROVENANCE.encode() in data:
+                return True
+            os.lseek(fd, 4, os.SEEK_CUR)
+        elif kind == b"IEND":
+            return False
+        else:
+            os.lseek(fd, length + 4, os.SEEK_CUR)
+    return False
+
+
+def carries_provenance(path):
+    """Whether the file at ``path`` carries the project's provenance mark.
+
+    A text file's first line (after a byte-order mark; for XML the line
+    after the declaration may hold it) starts with the comment of
+    :func:`provenance_line`; a PNG holds a text chunk of
+    :func:`png_provenance`. At most 4 KiB of a text file is read.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+
+    Returns
+    -------
+    bool
+        False also when the file cannot be read or is not a regular file.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError:
+        return False
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            return False
+        head = os.read(fd, 4096)
+        if head.startswith(_PNG_SIGNATURE):
+            return _png_marked(fd)
+        lines = head.removeprefix(b"\xef\xbb\xbf").split(b"\n")[:2]
+        first = lines[0].strip()
+        if first.startswith(b"# " + PROVENANCE.encode()):
+            return True
+        if first.startswith(b"<?xml") and len(lines) > 1:
+            first = lines[1].strip()
+        return first.startswith(b"<!-- " + PROVENANCE.encode())
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
+
+
+def same_file(a, b):
+    """Whether two paths name the same file (same inode, or the same resolved path).
+
+    Parameters
+    ----------
+    a, b : str or pathlib.Path
+
+    Returns
+    -------
+    bool
+    """
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):
+        try:
+            return Path(os.path.realpath(a)) == Path(os.path.realpath(b))
+        except (OSError, ValueError):
+            return False
+
+
+def replace_problem(path, inputs=(), force=False, command="hammerstein",
+                    inputs_are="an input of this command"):
+    """Why the output ``path`` may not be written (one line), or None.
+
+    An output may not be one of the command's ``inputs`` (even with
+    ``force``), and an existing file is replaced only when it carries the
+    provenance mark (:func:`carries_provenance`) or ``force`` is set.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The output file.
+    inputs : iterable of str or pathlib.Path
+        The files the command reads.
+    force : bool
+        Replace a file without the mark.
+    command : str
+        Named in the message (``"hammerstein identify"``).
+    inputs_are : str
+        What the inputs are, for the message (``"one of the data files"``).
+
+    Returns
+    -------
+    str or None
+        ``"<path> is also an input of this command (<input>)"`` or
+        ``"<path> exists and was not written by <command> (...); ... --force"``.
+    """
+    for i in inputs:
+        if i is not None and os.path.lexists(path) and same_file(path, i):
+            also = "" if str(i) == str(path) else f" ({escape(i)})"
+            return f"{escape(path)} is also {inputs_are}{also}; choose another name"
+        if i is not None and Path(os.path.abspath(path)) == Path(os.path.abspath(i)):
+            return f"{escape(path)} is also {inputs_are}; choose another name"
+    if force or not os.path.lexists(path) or not os.path.exists(path):
+        return None
+    if carries_provenance(path):
+        return None
+    return (f"{escape(path)} exists and was not written by {command} (no '{PROVENANCE}' mark); "
+            f"choose another name, or add --force to replace it")
+
+
+# -- advisory locks for read-modify-write ------------------------------------------------
+#: Longest wait [s] for the lock of another process updating the same file.
+LOCK_TIMEOUT = 120.0
+
+
+@contextmanager
+def locked(path, timeout=None):
+    """Hold an exclusive advisory lock (``fcntl.flock``) for a read-modify-write of ``path``.
+
+    The lock is taken on the directory of ``path`` (the file itself is
+    replaced by a rename, so a lock on it would not be seen by the next
+    writer); no lock file is left behind. Read the file again once the lock
+    is held.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to be read and rewritten.
+    timeout : float, optional
+        Longest wait [s] for another holder (default :data:`LOCK_TIMEOUT`).
+
+    Raises
+    ------
+    FileLimitError
+        The lock was not obtained within ``timeout`` (another process holds it).
+    OSError
+        The directory cannot be opened.
+    """
+    import time
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no advisory locks
+        yield
+        return
+    parent = os.path.dirname(os.path.abspath(path))
+    fd = os.open(parent, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    try:
+        limit_at = time.monotonic() + (LOCK_TIMEOUT if timeout is None else timeout)
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > limit_at:
+                    raise FileLimitError(f"{escape(path)}: another process has been updating it "
+                                         f"for more than {timeout or LOCK_TIMEOUT:g} s; "
+                                         f"try again later") from None
+                time.sleep(0.05)
+            except OSError:  # a file system without locks: go on unlocked
+                break
+        yield
+    finally:
+        os.close(fd)  # releases the lock
+
+
+# -- user strings in messages and reports -------------------------------------------------
+#: Longest excerpt of a user string quoted in a message (characters).
+EXCERPT = 200
+
+
+def escape(text, limit=EXCERPT):
+    """A user string made safe to print on one terminal line.
+
+    Control characters (escape sequences, NUL, newlines, DEL, C1 controls,
+    bidirectional overrides) become Python-style escapes (``\\x1b``,
+    ``\\n``) and a long string is cut to ``limit`` characters with the
+    number left out, so a file name or a value can neither forge a line
+    nor drive the terminal.
+
+    Parameters
+    ----------
+    text : object
+        Converted with ``str``.
+    limit : int or None
+        Longest excerpt (characters); None: no cut.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> escape("a\\x1b]0;owned\\x07b\\nerror: x")
+    'a\\\\x1b]0;owned\\\\x07b\\\\nerror: x'
+    >>> escape("x" * 300, limit=5)
+    'xxxxx... (295 more characters)'
+    """
+    s = str(text)
+    cut = ""
+    if limit is not None and len(s) > limit:
+        cut, s = f"... ({len(s) - limit} more characters)", s[:limit]
+    if s.isprintable():
+        return s + cut
+    out = []
+    for ch in s:
+        if ch.isprintable() or ch == " ":
+            out.append(ch)
+        else:
+            code = ord(ch)
+            out.append({"\n": "\\n", "\r": "\\r", "\t": "\\t"}.get(ch) or
+                       (f"\\x{code:02x}" if code < 0x100 else
+                        f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"))
+    return "".join(out) + cut
+
+
+def markdown_escape(text, limit=None):
+    """A user string made safe for one line of Markdown (report.md).
+
+    :func:`escape` first (no control characters or newlines), then the
+    characters Markdown or HTML would interpret (``\\ ` * _ { } [ ] < > ( )
+    # + - ! | ~``) are backslash-escaped.
+
+    Parameters
+    ----------
+    text : object
+    limit : int or None
+        As :func:`escape`.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> markdown_escape("<script>*x*</script>")
+    '\\\\<script\\\\>\\\\*x\\\\*\\\\</script\\\\>'
+    """
+    s = escape(text, limit)
+    return "".join("\\" + ch if ch in "\\`*_{}[]<>()#+-!|~" else ch for ch in s)
+
+
+# -- owners of temporaries: host, PID namespace, process start, call ----------------------
+_LIVE = set()          # nonces of the temporaries this process is working on
+
+
+def _pid_namespace():
+    try:
+        return str(os.stat("/proc/self/ns/pid").st_ino)
+    except OSError:
+        return "-"
+
+
+def _start_time(pid):
+    """Start time of process ``pid`` (clock ticks since boot, /proc), None if gone, '-' if unknown."""
+    try:
+        with open(f"/proc/{int(pid)}/stat", "rb") as fh:
+            data = fh.read(4096)
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError, OverflowError):
+        return "-"
+    try:
+        return data.rsplit(b")", 1)[1].split()[19].decode()
+    except (IndexError, UnicodeDecodeError):
+        return "-"
+
+
+def owner_token():
+    """A new owner token for a temporary: this host, PID namespace, process and call.
+
+    Registered as live in this process until :func:`release_owner`; a
+    temporary is judged stale by :func:`owner_alive` from its token, never
+    from its PID alone (two PID namespaces share PIDs, two threads share one).
+
+    Returns
+    -------
+    str
+        ``host=<hostname> pidns=<inode> pid=<pid> start=<ticks> nonce=<hex>``.
+    """
+    nonce = secrets.token_hex(8)
+    _LIVE.add(nonce)
+    host = escape(os.uname().nodename if hasattr(os, "uname") else "-", 100).replace(" ", "_")
+    return (f"host={host} pidns={_pid_namespace()} pid={os.getpid()} "
+            f"start={_start_time(os.getpid())} nonce={nonce}")
+
+
+def release_owner(token):
+    """Forget a token of :func:`owner_token` (its temporary is gone or renamed).
+
+    Parameters
+    ----------
+    token : str
+    """
+    _LIVE.discard(parse_owner(token).get("nonce"))
+
+
+def parse_owner(token):
+    """The fields of a token of :func:`owner_token` (``{}`` when it is not one).
+
+    Parameters
+    ----------
+    token : str
+
+    Returns
+    -------
+    dict of str to str
+    """
+    fields = dict(p.split("=", 1) for p in str(token).split() if "=" in p)
+    return fields if {"host", "pidns", "pid", "start", "nonce"} <= fields.keys() else {}
+
+
+def owner_alive(token):
+    """Whether the owner of a temporary may still be working on it.
+
+    Parameters
+    ----------
+    token : str
+        From :func:`owner_token`.
+
+    Returns
+    -------
+    bool or None
+        False when the owner is certainly gone (same host and PID
+        namespace, and its process has exited or its PID now belongs to a
+        process started at another time, or it is this process and the call
+        is over); True when it is alive; None when it cannot be told
+        (another host or PID namespace, no /proc): keep the temporary.
+    """
+    f = parse_owner(token)
+    if not f:
+        return None
+    host = escape(os.uname().nodename if hasattr(os, "uname") else "-", 100).replace(" ", "_")
+    if f["host"] != host or f["pidns"] != _pid_namespace() or f["pidns"] == "-":
+        return None
+    if not (f["pid"].isascii() and f["pid"].isdigit()):
+        return None
+    start = _start_time(f["pid"])
+    if start is None:
+        return False
+    if start == "-" or f["start"] == "-":
+        return None
+    if start != f["start"]:
+        return False           # the PID was reused by a later process
+    if int(f["pid"]) == os.getpid():
+        return f["nonce"] in _LIVE
+    return True
+
+
+# -- paths named in scenario files ----------------------------------------------------------
+#: Environment variable: directories (``os.pathsep``-separated) whose files a scenario may
+#: name besides those under its own directory (``/`` allows every file).
+ALLOW_ENV = "HAMMERSTEIN_ALLOW_PATHS"
+#: Longest path accepted in a file [characters], and longest name in it [bytes].
+MAX_PATH_CHARS, MAX_NAME_BYTES = 1000, 255
+
+
+def path_problem(text):
+    """Why ``text`` cannot be a file path (one line), or None: NUL character, too long.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    str or None
+    """
+    s = str(text)
+    if "\0" in s:
+        return f"{escape(s)}: a path cannot contain a NUL character"
+    if len(s) > MAX_PATH_CHARS:
+        return f"{escape(s, 60)}: a path of {len(s)} characters; expected at most {MAX_PATH_CHARS}"
+    for part in Path(s).parts:
+        if len(part.encode("utf-8", "surrogateescape")) > MAX_NAME_BYTES:
+            return (f"{escape(s, 60)}: a name of {len(part.encode('utf-8', 'surrogateescape'))} "
+                    f"bytes in the path; expected at most {MAX_NAME_BYTES}")
+    return None
+
+
+def confined_path(text, base_dir, error=FileLimitError):
+    """The path of a file named in a scenario, confined to the scenario's directory.
+
+    A relative path is resolved against ``base_dir`` (the scenario's
+    directory); the file (symbolic links followed) must lie under
+    ``base_dir`` or under a directory of ``$HAMMERSTEIN_ALLOW_PATHS``
+    (:data:`ALLOW_ENV`, ``os.pathsep``-separated; ``/`` allows every file),
+    so a scenario received from elsewhere cannot read ``/etc/shadow`` or
+    ``../../secret`` and echo it in a message.
+
+    Parameters
+    ----------
+    text : str
+        The path as written in the scenario.
+    base_dir : str or pathlib.Path or None
+        The scenario's directory; None (a call from the Python API): no
+        confinement, only :func:`path_problem`.
+    error : type
+        Exception class raised (the caller's: PresetError, DataFileError...).
+
+    Returns
+    -------
+    pathlib.Path
+        ``base_dir / text`` (or ``text`` when absolute), not resolved.
+
+    Raises
+    ------
+    error
+        A NUL character, a path too long, or a file outside the allowed
+        directories (the message names :data:`ALLOW_ENV`).
+    """
+    problem = path_problem(text)
+    if problem:
+        raise error(problem)
+    path = Path(text)
+    if base_dir is None:
+        return path
+    path = path if path.is_absolute() else Path(base_dir) / path
+    real = Path(os.path.realpath(path))
+    roots = [Path(os.path.realpath(base_dir))]
+    roots += [Path(os.path.realpath(d)) for d in os.environ.get(ALLOW_ENV, "").split(os.pathsep)
+              if d.strip() and "\0" not in d]
+    if any(real == r or r in real.parents for r in roots):
+        return path
+    raise error(f"{escape(text)}: outside the scenario's directory ({escape(base_dir)}); "
+                f"name a file under it, or allow its directory with {ALLOW_ENV}=DIR")

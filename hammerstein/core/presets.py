@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
-from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
+from hammerstein.core.files import (FileLimitError, bounded_read_text, confined_path,
+                                    provenance_line, safe_write)
 from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize, sampled_bending_modes
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii)
@@ -123,9 +124,7 @@ def resolve_preset(name_or_path, base_dir=None):
     presets = bundled_presets()
     if str(name_or_path) in presets:
         return presets[str(name_or_path)]
-    path = Path(name_or_path)
-    if not path.is_absolute() and base_dir is not None:
-        path = Path(base_dir) / path
+    path = confined_path(str(name_or_path), base_dir, PresetError)  # under the scenario's directory
     if path.exists():  # read_toml refuses a directory or special file, naming it
         return path
     raise PresetError(
@@ -404,7 +403,8 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
     ----------
     model : MultivariablePI
     path : str or pathlib.Path
-        Destination ``.toml``; written atomically through an exclusive
+        Destination ``.toml``, starting with the project's provenance line
+        (:func:`hammerstein.core.files.provenance_line`); written atomically through an exclusive
         temporary file and a rename (:func:`hammerstein.core.files.safe_write`:
         a symlink's target is written, a replaced file keeps its permissions,
         a new one gets the umask's).
@@ -430,7 +430,7 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
     doc.update(extra or {})
     doc["model"] = model_to_table(model, input_unit, output_unit)
     try:
-        safe_write(path, tomli_w.dumps(doc), "model file")
+        safe_write(path, provenance_line("identify") + tomli_w.dumps(doc), "model file")
     except FileLimitError as exc:
         raise PresetError(str(exc)) from None
 

@@ -55,6 +55,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg
 
+from hammerstein.core.numbers import check_array, is_number
 from hammerstein.core.datafiles import MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii, play)
@@ -769,12 +770,27 @@ class RecordFit:
     levels: list = field(default_factory=list)
 
 
+def _checked_record(rec, i):
+    """``rec`` with finite real float arrays of matching lengths and a valid sampling period."""
+    where = f"records[{i}]" + (f" ({rec.source})" if getattr(rec, "source", "") else "")
+    u = check_array(rec.u, f"{where}.u", IdentificationError, ndim=2)
+    y = check_array(rec.y, f"{where}.y", IdentificationError, ndim=2, length=u.shape[1])
+    t = check_array(rec.timepts, f"{where}.timepts", IdentificationError, ndim=1,
+                    length=u.shape[1])
+    T = rec.sampling_period
+    if not (is_number(T) and T > 0):
+        raise IdentificationError(f"{where}.sampling_period: expected a positive finite time [s], "
+                                  f"found {T!r}")
+    return replace(rec, u=u, y=y, timepts=t, sampling_period=float(T))
+
+
 def _as_records(records):
     out = []
     for rec in ([records] if isinstance(records, (Record, MultiRecord)) else list(records)):
         out.append(MultiRecord.from_record(rec) if isinstance(rec, Record) else rec)
     if not out:
         raise IdentificationError("records: expected at least one record, found none")
+    out = [_checked_record(rec, i) for i, rec in enumerate(out)]
     m, p = out[0].u.shape[0], out[0].y.shape[0]
     for rec in out[1:]:
         if rec.u.shape[0] != m or rec.y.shape[0] != p:

@@ -15,13 +15,12 @@ from __future__ import annotations
 import io
 from fractions import Fraction
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import FileLimitError, check_regular
+from hammerstein.core.files import FileLimitError, check_regular, confined_path
 from hammerstein.core.metrics import raster_line_metrics
 from hammerstein.core.schema import Field, Invalid, choice, integer, is_number, name_list, number, string
 from hammerstein.exceptions import SignalError
@@ -715,9 +714,7 @@ def from_file(sampling_period, outputs, file, columns, time="time", duration=Non
         (beyond the file's last time).
     """
     T = _positive(sampling_period, "sampling_period", "s")
-    path = Path(file)
-    if base_dir is not None and not path.is_absolute():
-        path = Path(base_dir) / path
+    path = confined_path(str(file), base_dir, lambda m: SignalError(f"file: {m}"))
     if not isinstance(columns, dict) or not columns:
         raise SignalError(f"columns: expected a table {{ <output> = \"<column>\" }}, found {columns!r}")
     names = [str(n) for n in outputs]

@@ -28,8 +28,8 @@ import re
 from dataclasses import dataclass
 from typing import Any, Callable
 
-import numpy as np
 
+from hammerstein.core.numbers import is_number as _finite_number
 from hammerstein.exceptions import Invalid, NestedInvalid
 
 __all__ = [
@@ -90,7 +90,8 @@ def did_you_mean(value, options):
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------
 def is_number(v):
-    """Whether ``v`` is a finite int or float (a bool is not a number).
+    """Whether ``v`` is a finite int or float (a bool is not a number; see
+    :func:`hammerstein.core.numbers.is_number`).
 
     Parameters
     ----------
@@ -100,7 +101,7 @@ def is_number(v):
     -------
     bool
     """
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+    return _finite_number(v)   # huge ints, subnormals, NaN and inf refused (core/numbers.py)
 
 
 def number(unit, minimum=None, exclusive=True):

@@ -27,6 +27,7 @@ import gc
 import hashlib
 import io
 import multiprocessing
+import os
 import pickle
 import re
 import signal
@@ -136,6 +137,11 @@ def _done(value=None, error=None):
     return f
 
 
+
+def _every(path):
+    """The selection of a renderer without ``selects``: every figure."""
+    return True
+
 class FigureJobs:
     """The figure jobs of one report directory.
 
@@ -159,6 +165,7 @@ class FigureJobs:
         self.renderer = renderer
         self._futures = []
         self.skipped = []                   # PNGs the renderer's selection leaves out
+        self._jobs = []
 
     def add(self, path, function, *args, **kwargs):
         """Add the job ``save(function(*args, **kwargs), path)``.
@@ -184,10 +191,11 @@ class FigureJobs:
         job = FigureJob(Path(path), function, args, kwargs)
         if self.renderer is None:
             render_job(job)
-        elif not self.renderer.selects(job.path):
+        elif not getattr(self.renderer, "selects", _every)(job.path):   # optional in a renderer
             self.skipped.append(job.path)
         else:
             self._futures += self.renderer.submit([job])
+            self._jobs.append(job)
 
     def done(self):
         """Whether every job has finished (successfully or not).
@@ -208,6 +216,10 @@ class FigureJobs:
             no worker still writes into the directory).
         """
         wait_futures(self._futures)
+        for i, (f, job) in enumerate(zip(self._futures, self._jobs)):
+            if not f.cancelled() and isinstance(f.exception(), BrokenProcessPool):
+                # a worker was killed (the OOM killer...): draw this figure here instead
+                self._futures[i] = _done(render_job(job))
         for f in self._futures:
             if f.exception() is not None:
                 raise f.exception()
@@ -229,9 +241,32 @@ class FigureJobs:
             wait_futures(self._futures)
 
 
+_PARENT = {"pid": None}
+
+
+def _die_with_parent(parent):
+    """Ask Linux to kill this worker when its parent dies (``prctl(PR_SET_PDEATHSIG, SIGKILL)``).
+
+    Without it a worker of a run killed by SIGKILL lives on under pid 1,
+    holding the run's stdout and stderr (``| tee`` never ends). Elsewhere
+    (no ``prctl``) the pool's own watchdog ends idle workers.
+    """
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL), 0, 0, 0)     # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError, TypeError):
+        return
+    if parent is not None and os.getppid() != parent:   # the parent died before the prctl
+        os._exit(1)
+
+
 def _worker_init():
-    # the parent handles Ctrl-C/SIGTERM (and cancels); a worker finishes its figure
+    _die_with_parent(_PARENT["pid"])
+    # the parent handles Ctrl-C/SIGTERM/SIGHUP (and cancels); a worker finishes its figure
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # the objects inherited from the parent live as long as the worker: the collector
     # need not walk them again every time a figure's many small objects trigger it
@@ -311,6 +346,9 @@ class FigureRenderer:
             its PNG when that one is done.
         """
         keys = [job_key(j) for j in jobs]
+        for key in [k for k, f in self._drawn.items()     # a failed drawing is not reused
+                    if f.done() and (f.cancelled() or f.exception() is not None)]:
+            del self._drawn[key]
         first = {}                          # index of each new key's first job in this batch
         for i, key in enumerate(keys):
             if key is None or (key not in self._drawn and key not in first):
@@ -351,7 +389,11 @@ class FigureRenderer:
         return copy
 
     def _start(self, jobs):
+        if self._pool is not None and getattr(self._pool, "_broken", False):
+            self._pool.shutdown(wait=False, cancel_futures=True)  # a worker died: inline now
+            self._pool, self.workers = None, 0
         if self._pool is None and self.workers >= 2 and jobs:
+            _PARENT["pid"] = os.getpid()
             self._pool = ProcessPoolExecutor(self.workers, multiprocessing.get_context("fork"),
                                              initializer=_worker_init)
         if self._pool is not None:

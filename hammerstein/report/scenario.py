@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import markdown_escape
 from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
 from hammerstein.report.render import FigureJobs
@@ -383,7 +384,7 @@ def write_report(scenario, results, directory, jobs=None):
                                    float_format="%.6g")
     figs = _figures(scenario, results, directory, jobs) if results else []
     figs += _scan_figures(scenario, results, directory, jobs)
-    lines = [f"# {scenario.title}", ""]
+    lines = [f"# {markdown_escape(scenario.title)}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]
     lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, seed {scenario.seed}).",

@@ -22,11 +22,18 @@ older versions are never read again and not removed either (an entry is a
 few kB: the paper's 8 identifications take 32 kB).
 
 Safety: an entry is written once, through a temporary file and a rename
-(:func:`hammerstein.core.files.safe_write`), and never over an existing
-file; a read is bounded (``HAMMERSTEIN_MAX_CACHE_BYTES``, default 64 MiB).
-An entry that cannot be read or parsed, or whose content does not match
-its key, is ignored and the identification runs as if there were no cache.
-Nothing is deleted. A cache that cannot be written (read-only home,
+(:func:`hammerstein.core.files.safe_write`, the user's umask), and never
+over an existing file; a read is bounded (``HAMMERSTEIN_MAX_CACHE_BYTES``,
+default 64 MiB). Trust, as ssh does for its files: the cache is used only
+when its directories belong to the user (or root) and are not writable by
+group or others (else one note and no cache), and an entry is used only
+when it is a regular file owned by the user, not writable by group or
+others, written for this user (its ``uid``), for this key (the key text is
+stored and compared) and with its content digest intact. An entry that
+cannot be read or parsed (not JSON, nested too deeply, a ``meta`` that is
+not a table...), or fails these checks, is ignored - one note with ``-v``
+(:func:`set_reporter`) - and the identification runs as if there were no
+cache. Nothing is deleted. A cache that cannot be written (read-only home,
 full disk) only costs the time of identifying again.
 """
 
@@ -35,19 +42,95 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import stat
 from importlib import metadata
 from pathlib import Path
 
-from hammerstein.core.files import FileLimitError, bounded_read_bytes, safe_write
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape, safe_write
 
-__all__ = ["cache_dir", "code_digest", "entry_path", "load", "store", "ENV"]
+__all__ = ["cache_dir", "code_digest", "entry_path", "load", "store", "ENV", "set_reporter",
+           "trust_problem"]
 
 #: Environment variable naming the cache directory (``off`` or empty: no cache).
 ENV = "HAMMERSTEIN_CACHE_DIR"
 #: Format of the entries (part of every key).
-FORMAT = 1
+FORMAT = 2
 
 _DIGEST = {}
+_REPORT = {"to": None, "said": set()}
+
+
+def set_reporter(report):
+    """Where the notes on ignored entries and untrusted directories go.
+
+    Parameters
+    ----------
+    report : callable or None
+        ``report(line)``; the command line passes its stderr printer with
+        ``-v``. None (default): the logger named "hammerstein.cache" (INFO).
+    """
+    _REPORT["to"] = report
+
+
+def _note(text):
+    if text in _REPORT["said"]:
+        return
+    _REPORT["said"].add(text)
+    if _REPORT["to"] is not None:
+        _REPORT["to"](f"note: {text}")
+    else:
+        import logging
+        logging.getLogger("hammerstein.cache").info(text)
+
+
+def trust_problem(path, directory=False):
+    """Why the cache file or directory ``path`` is not trusted (one line), or None.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+    directory : bool
+        Judge a directory (owner the user or root, not writable by group or
+        others unless sticky) instead of an entry (a regular file owned by
+        the user, not writable by group or others).
+
+    Returns
+    -------
+    str or None
+    """
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        return f"{escape(path)}: cannot be examined ({exc.strerror})"
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    if uid is None:
+        return None
+    if directory:
+        if not stat.S_ISDIR(st.st_mode):
+            return f"{escape(path)}: not a directory"
+        if st.st_uid not in (uid, 0):
+            return f"{escape(path)}: belongs to another user (uid {st.st_uid})"
+        if st.st_mode & 0o022 and not st.st_mode & stat.S_ISVTX:
+            return f"{escape(path)}: writable by group or others (chmod go-w it)"
+        return None
+    if not stat.S_ISREG(st.st_mode):
+        return f"{escape(path)}: not a regular file"
+    if st.st_uid != uid:
+        return f"{escape(path)}: written by another user (uid {st.st_uid})"
+    if st.st_mode & 0o022:
+        return f"{escape(path)}: writable by group or others"
+    return None
+
+
+def _directory_problem(d):
+    """The first untrusted directory from ``d`` up to its cache root, or None."""
+    for p in (d, d.parent):
+        problem = trust_problem(p, directory=True)
+        if problem:
+            return problem
+    return None
 
 
 def cache_dir():
@@ -145,16 +228,52 @@ def load(kind, key):
         too large, unreadable, not JSON, or written for another key.
     """
     path = entry_path(kind, key)
-    if path is None or not path.is_file():
+    if path is None or not os.path.lexists(path):
+        return None
+    problem = _directory_problem(path.parent)
+    if problem:
+        _note(f"identification cache not used: {problem}")
+        return None
+    problem = trust_problem(path)
+    if problem:
+        _note(f"identification cache entry ignored: {problem}")
         return None
     try:
         entry = json.loads(bounded_read_bytes(path, "cache", "identification cache entry"))
-    except (OSError, FileLimitError, ValueError):
+    except (OSError, FileLimitError, ValueError, RecursionError) as exc:
+        _note(f"identification cache entry ignored: {escape(path)}: not readable JSON "
+              f"({escape(type(exc).__name__)})")
         return None
+    why = _entry_problem(entry, kind, key)
+    if why:
+        _note(f"identification cache entry ignored: {escape(path)}: {why}")
+        return None
+    return entry["value"]
+
+
+def _value_digest(value):
+    return hashlib.sha256(json.dumps(value, sort_keys=True, allow_nan=True).encode()).hexdigest()
+
+
+def _entry_problem(entry, kind, key):
+    """Why a parsed entry is not the one of ``(kind, key)`` for this user (or None)."""
     if not isinstance(entry, dict) or entry.get("key") != _key_text(kind, key):
-        return None
+        return "written for another key"
+    if hasattr(os, "getuid") and entry.get("uid") != os.getuid():
+        return "written for another user"
     value = entry.get("value")
-    return value if isinstance(value, dict) else None
+    if not isinstance(value, dict):
+        return "its value is not a table"
+    if "meta" in value and not isinstance(value["meta"], dict):
+        return "its meta is not a table"
+    if "model" in value and not isinstance(value["model"], dict):
+        return "its model is not a table"
+    try:
+        if entry.get("digest") != _value_digest(value):
+            return "its content does not match its digest (edited)"
+    except (TypeError, ValueError, RecursionError):
+        return "its content cannot be digested"
+    return None
 
 
 def _same(a, b):
@@ -192,9 +311,19 @@ def store(kind, key, value):
     path = entry_path(kind, key)
     if path is None or os.path.lexists(path):
         return False
+    try:   # private directories: an entry is trusted only where others cannot write
+        path.parent.parent.parent.mkdir(parents=True, exist_ok=True)
+        for d in (path.parent.parent, path.parent):
+            d.mkdir(mode=0o700, exist_ok=True)
+    except OSError:
+        return False
+    if _directory_problem(path.parent):   # never write into a directory others may write
+        return False
     try:
-        text = json.dumps({"key": _key_text(kind, key), "value": value}, allow_nan=True)
-    except (TypeError, ValueError):
+        text = json.dumps({"key": _key_text(kind, key),
+                           "uid": os.getuid() if hasattr(os, "getuid") else None,
+                           "digest": _value_digest(value), "value": value}, allow_nan=True)
+    except (TypeError, ValueError, RecursionError):
         return False
     if not _same(json.loads(text)["value"], value):   # tuples or numpy scalars do not round-trip
         return False

@@ -32,6 +32,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from hammerstein.core.dynamics import DynamicsError
+from hammerstein.core.files import confined_path
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lazy import lazy_module
 from hammerstein.core.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
@@ -294,10 +295,7 @@ def resolve_model(spec_model, plant, context, identify=None, role="compensator")
         context.identified.append(IdentifiedModel(role, plant, spec, model, meta,
                                                   _pi_key(plant, spec)))
         return model
-    path = Path(spec_model)
-    if not path.is_absolute():
-        path = Path(context.base_dir) / path
-    return load_model(path)
+    return load_model(confined_path(spec_model, context.base_dir, PresetError))
 
 
 def resolve_comparison_model(spec, plant, context):
@@ -572,9 +570,7 @@ def resolve_dynamics(spec, plant, context, model=None):
                                       "a Hammerstein compensator needs dynamics")
         G = plant.dynamics
     else:
-        path = Path(dyn)
-        if not path.is_absolute():
-            path = Path(context.base_dir) / path
+        path = confined_path(dyn, context.base_dir, PresetError)
         G = load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
     if model is None and spec.get("model") == "identified":
         # as with identified dynamics: the PI is characterised where this G is flat

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, bundled_data, read_records
+from hammerstein.core.files import confined_path, escape
 from hammerstein.core.identification import IdentificationError
 from hammerstein.core.record_identification import identify_records
 from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
@@ -213,11 +214,22 @@ def resolve_data_path(text, base_dir):
     Returns
     -------
     pathlib.Path
+
+    Raises
+    ------
+    DataFileError
+        ``bundled:`` with a directory in the name, or a path outside the
+        scenario's directory (:func:`hammerstein.core.files.confined_path`:
+        ``HAMMERSTEIN_ALLOW_PATHS`` allows more), a NUL character or a path
+        too long.
     """
     if text.startswith("bundled:"):
-        return bundled_data(text[len("bundled:"):])
-    path = Path(text)
-    return path if path.is_absolute() else Path(base_dir) / path
+        name = text[len("bundled:"):]
+        if not name or Path(name).name != name or name in (".", "..") or "\\" in name:
+            raise DataFileError(f"{escape(text)}: expected bundled:<file name> of a file "
+                                f"shipped with hammerstein (no directory)")
+        return bundled_data(name)
+    return confined_path(text, base_dir, DataFileError)
 
 
 def load_identification_scenario(path, data):

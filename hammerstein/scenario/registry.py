@@ -24,6 +24,7 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.amplifier import LIMITS
+from hammerstein.core.files import confined_path
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
 from hammerstein.core.ilc import LearningCompensator
 from hammerstein.core.presets import PresetError, load_dynamics
@@ -229,7 +230,10 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
         if plant.is_static:
             out.append(f"dynamics: {dyn!r} needs a plant with dynamics (plant.dynamics = true)")
     else:
-        path = Path(dyn) if Path(dyn).is_absolute() else base / dyn
+        try:
+            path = confined_path(dyn, base, PresetError)
+        except PresetError as exc:
+            return out + [f"dynamics: {exc}"]
         if ("dynamics", path) not in files:
             try:
                 load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)

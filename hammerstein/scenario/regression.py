@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import FileLimitError, bounded_read_bytes, bounded_read_text, safe_write
+from hammerstein.core.files import (FileLimitError, bounded_read_bytes, bounded_read_text,
+                                    provenance_line, safe_write)
 from hammerstein.exceptions import BaselineError
 
 __all__ = [
@@ -421,7 +422,9 @@ def read_baseline(path):
     ------
     BaselineError
         One line naming the file: missing, empty, not CSV, a missing column,
-        a non-numeric value or a duplicated metric.
+        a non-numeric or infinite value or a duplicated metric. Leading
+        ``#`` comment lines (the provenance line) and a UTF-8 byte-order mark
+        are skipped.
     """
     path = Path(path)
     if path.is_dir():
@@ -429,7 +432,9 @@ def read_baseline(path):
     if not path.exists():
         raise BaselineError(f"{path}: baseline file not found (create it with --update)")
     try:
-        raw = bounded_read_bytes(path, "baseline", "baseline CSV file")
+        raw = bounded_read_bytes(path, "baseline", "baseline CSV file").removeprefix(b"\xef\xbb\xbf")
+        while raw.startswith(b"#"):  # the provenance line (and any comment line above the header)
+            raw = raw.split(b"\n", 1)[1] if b"\n" in raw else b""
         frame = pd.read_csv(io.BytesIO(raw), dtype={c: str for c in KEY_COLUMNS + ["unit"]},
                             keep_default_na=False, na_values={"value": ["nan", "NaN"]})
     except FileLimitError as exc:
@@ -443,7 +448,16 @@ def read_baseline(path):
     if "scenario" not in frame.columns:
         raise BaselineError(f"{path}: missing column scenario "
                             f"(expected {', '.join(BASELINE_COLUMNS)})")
-    return _normalise(frame, str(path))
+    frame = _normalise(frame, str(path))
+    inf = np.isinf(frame["value"].to_numpy())
+    if inf.any():
+        i = int(np.flatnonzero(inf)[0])
+        row = frame.iloc[i]
+        raise BaselineError(f"{path}: value: expected a finite number, found {row['value']} "
+                            f"(row {i + 1}, metric {row['scenario']}/{row['case']}/"
+                            f"{row['channel']}/{row['metric']}); an infinite baseline would "
+                            f"pass any value")
+    return frame
 
 
 def merge_baseline(old, new):
@@ -477,6 +491,11 @@ def merge_baseline(old, new):
 def write_baseline(frame, path):
     """Write a baseline CSV atomically (:func:`hammerstein.core.files.safe_write`).
 
+    Its first line is the project's provenance comment
+    (:func:`hammerstein.core.files.provenance_line`): ``check --update``
+    replaces only a baseline that carries it (or with ``--force``), and
+    :func:`read_baseline` skips it.
+
     An exclusive temporary file next to ``path`` is renamed over it: a
     replaced file keeps its permissions, a symlink's target is written, a
     target that is not a regular file is refused.
@@ -502,7 +521,8 @@ def write_baseline(frame, path):
     frame = _normalise(frame, "baseline")
     path = Path(path)
     try:
-        safe_write(path, frame.to_csv(index=False, lineterminator="\n"), "baseline CSV file")
+        safe_write(path, provenance_line("check --update") +
+                   frame.to_csv(index=False, lineterminator="\n"), "baseline CSV file")
     except FileLimitError as exc:
         raise BaselineError(str(exc)) from None
     return path

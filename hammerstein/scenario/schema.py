@@ -87,7 +87,7 @@ def total_samples_budget():
         :data:`MAX_TOTAL_SAMPLES`.
     """
     text = os.environ.get("HAMMERSTEIN_MAX_SAMPLES", "").strip()
-    return int(text) if text.isdigit() and int(text) > 0 else MAX_TOTAL_SAMPLES
+    return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else MAX_TOTAL_SAMPLES
 
 
 TOP = {

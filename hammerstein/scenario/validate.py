@@ -29,6 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.core import references as refs
+from hammerstein.core.files import confined_path
 from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -219,7 +220,7 @@ def _option_problems(spec, own=None):
 def _ignored_env(var):
     """``"; its value 'abc' is not a positive integer, the default applies"`` for a bad override, else ``""``."""
     text = os.environ.get(var)
-    if text is None or (text.strip().isdigit() and int(text) > 0):
+    if text is None or (text.strip().isascii() and text.strip().isdigit() and int(text) > 0):
         return ""
     return f"; its value {text!r} is not a positive integer, the default applies"
 
@@ -303,7 +304,10 @@ def _model_problems(name, identify, plant, base, files):
                            f"{identify.get('periods', 3)} periods would record {n:.3g} samples "
                            f"per input; expected at most {MAX_CASE_SAMPLES:.3g}")
         return [problem] if problem else []
-    path = Path(name) if Path(name).is_absolute() else base / name
+    try:
+        path = confined_path(name, base, PresetError)
+    except PresetError as exc:
+        return [str(exc)]
     if path not in files:
         try:
             files[path] = load_model(path)

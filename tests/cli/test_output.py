@@ -134,7 +134,7 @@ def test_check_junit_xml_pass_and_failure(scenario, tmp_path, capsys):
     assert [c.get("name") for c in cases] == ["w"]
     assert cases[0].find("failure") is None and root.get("failures") == "0"
     # make two metrics regress: the baseline says the errors were smaller
-    frame = pd.read_csv(base, keep_default_na=False)
+    frame = pd.read_csv(base, keep_default_na=False, comment="#")
     hit = (frame["case"] == "a") & (frame["metric"] == "rms_error") & (frame["channel"] == "x")
     hit |= (frame["case"] == "open") & (frame["metric"] == "peak_to_peak") & (frame["channel"] == "x")
     old = frame.loc[hit, "value"].astype(float).tolist()

@@ -81,7 +81,8 @@ def test_delay_estimate_finds_a_known_shift(shift):
 def test_scenario_kind_ilc_learns_from_a_mismatched_start(tmp_path, repo_root):
     from hammerstein.scenario.execute import run_case
     from hammerstein.scenario.resolve import load_scenario
-    dyn = repo_root / "scenarios/presets/mismatch/fn+5.toml"
+    dyn = tmp_path / "fn+5.toml"            # scenario files name files under their directory
+    dyn.write_bytes((repo_root / "scenarios/presets/mismatch/fn+5.toml").read_bytes())
     p = tmp_path / "ilc.toml"
     p.write_text(f"""
 name = "ilc"
@@ -93,7 +94,7 @@ iterations = 4
 learning_gain = 0.7
 q_cutoff_hz = 1000.0
 sensor_noise = 0.04
-start = {{ kind = "hammerstein", dynamics = "{dyn}" }}
+start = {{ kind = "hammerstein", dynamics = "{dyn.name}" }}
 [[cases]]
 name = "c"
 settle_periods = 2

@@ -1,0 +1,118 @@
+"""One checker of the numbers read from files and given to the API.
+
+TOML integers are Python ints of any size (``10**400`` is valid TOML), and
+a float may be subnormal (``5e-324``), so ``numpy.isfinite`` (which refuses
+a huge int with a TypeError) and a plain ``> 0`` test (which lets a
+subnormal through to a division that overflows) are not enough.
+:func:`is_number` accepts a real, finite, normal-or-zero number of any
+Python or numpy numeric type except bool; :func:`check_array` applies the
+same rule to an array of the API (NaN, infinity, complex values and shape
+mismatches refused with a message naming the argument).
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+import sys
+
+import numpy as np
+
+__all__ = ["is_number", "number_problem", "check_array", "FLOAT_MAX", "FLOAT_TINY"]
+
+#: Largest finite float64; a Python int beyond it cannot become a float.
+FLOAT_MAX = sys.float_info.max
+#: Smallest normal float64: a non-zero magnitude below it is subnormal (refused).
+FLOAT_TINY = sys.float_info.min
+
+
+def number_problem(v):
+    """Why ``v`` is not a usable real number (a short phrase), or None.
+
+    Parameters
+    ----------
+    v : object
+
+    Returns
+    -------
+    str or None
+        ``"not a number"``, ``"not finite"``, ``"beyond the float range"``
+        (a Python int over 1.8e308) or ``"subnormal"`` (0 < |v| < 2.2e-308).
+
+    Examples
+    --------
+    >>> [number_problem(v) for v in (1, 2.5, True, 10**400, float("nan"), 5e-324)]
+    [None, None, 'not a number', 'beyond the float range', 'not finite', 'subnormal']
+    """
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+        return "not a number"
+    if isinstance(v, numbers.Integral):
+        try:
+            x = float(v)
+        except OverflowError:
+            return "beyond the float range"
+    else:
+        x = float(v)
+    if not math.isfinite(x):
+        return "not finite"
+    if x != 0.0 and abs(x) < FLOAT_TINY:
+        return "subnormal"
+    return None
+
+
+def is_number(v):
+    """Whether ``v`` is a real, finite, non-subnormal number (bool excluded).
+
+    Parameters
+    ----------
+    v : object
+
+    Returns
+    -------
+    bool
+    """
+    return number_problem(v) is None
+
+
+def check_array(a, name, error=ValueError, ndim=None, length=None):
+    """``a`` as a finite real float64 array, or an error naming ``name``.
+
+    Parameters
+    ----------
+    a : array_like
+    name : str
+        Argument name for messages (``"u"``, ``"records[0].y"``).
+    error : type
+        Exception class raised.
+    ndim : int, optional
+        Required number of dimensions.
+    length : int, optional
+        Required length of the last axis (samples), e.g. that of the input.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64.
+
+    Raises
+    ------
+    error
+        Complex values, non-numeric data, NaN or infinite values (the first
+        index named), a wrong number of dimensions or a length mismatch.
+    """
+    arr = np.asarray(a)
+    if np.iscomplexobj(arr):
+        raise error(f"{name}: expected real values, found complex ones")
+    try:
+        arr = arr.astype(float)
+    except (TypeError, ValueError, OverflowError):
+        raise error(f"{name}: expected numbers") from None
+    if ndim is not None and arr.ndim != ndim:
+        raise error(f"{name}: expected {ndim} dimension(s), found shape {arr.shape}")
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        idx = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise error(f"{name}: non-finite value {arr[idx]} at index {idx if len(idx) > 1 else idx[0]}")
+    if length is not None and arr.shape[-1] != length:
+        raise error(f"{name}: {arr.shape[-1]} samples, expected {length} (as the other signal)")
+    return arr

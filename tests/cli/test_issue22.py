@@ -1,0 +1,640 @@
+"""Issue 22: reliability, second round (ownership by content, concurrency, hygiene, numbers).
+
+Each test is one defect of the issue, named by its number.
+"""
+
+import os
+import shutil
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from hammerstein.cli.main import main
+from hammerstein.core import files
+from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries, run_scenarios
+
+CORPUS = Path(__file__).resolve().parents[1] / "corpus"
+GOOD = CORPUS / "good" / "good-static.toml"
+GOOD2 = CORPUS / "good" / "good-static-2.toml"
+
+
+def _call(capsys, *argv):
+    status = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return status, out, err.splitlines()
+
+
+# -- 4. temporaries owned by a token, not by a PID ---------------------------------------
+def _fake_temporary(out, token, age=3600.0):
+    d = out / f"{TMP_PREFIX}2.deadbeef.x"
+    d.mkdir(parents=True)
+    (d / MARKER).write_text(f"hammerstein 0\nowner {token}\n")
+    old = time.time() - age
+    os.utime(d / MARKER, (old, old))
+    return d
+
+
+def _token(**change):
+    fields = files.parse_owner(files.owner_token())
+    files.release_owner(files.owner_token())
+    fields.update(change)
+    return " ".join(f"{k}={v}" for k, v in fields.items())
+
+
+def test_4_other_pid_namespace_keeps_its_temporary(tmp_path):
+    # pid 2 of another PID namespace: its liveness cannot be told here, so it stays
+    d = _fake_temporary(tmp_path, _token(pidns="1", pid="2"))
+    assert remove_stale_temporaries(tmp_path) == []
+    assert d.is_dir()
+
+
+def test_4_other_host_keeps_its_temporary(tmp_path):
+    d = _fake_temporary(tmp_path, _token(host="elsewhere"))
+    assert remove_stale_temporaries(tmp_path) == []
+    assert d.is_dir()
+
+
+def test_4_reused_pid_is_stale(tmp_path):
+    # same namespace, the PID alive but started at another time: its owner is gone
+    d = _fake_temporary(tmp_path, _token(pid=str(os.getppid()), start="1"))
+    assert remove_stale_temporaries(tmp_path) == [d]
+    assert not d.exists()
+
+
+def test_4_live_call_of_this_process_is_kept_finished_one_removed(tmp_path):
+    token = files.owner_token()
+    d = _fake_temporary(tmp_path, token)
+    assert files.owner_alive(token) is True
+    assert remove_stale_temporaries(tmp_path) == []
+    files.release_owner(token)
+    assert files.owner_alive(token) is False
+    assert remove_stale_temporaries(tmp_path) == [d]
+
+
+def test_4_young_empty_temporary_is_kept(tmp_path):
+    d = tmp_path / f"{TMP_PREFIX}{os.getpid()}.0.x"
+    d.mkdir()
+    old = time.time() - 1.0
+    os.utime(d, (old, old))
+    assert remove_stale_temporaries(tmp_path) == []
+    os.utime(d, (old - 3600, old - 3600))
+    assert remove_stale_temporaries(tmp_path) == [d]
+
+
+def test_4_two_threads_share_one_out_directory(tmp_path):
+    # each thread's sweep of stale temporaries must not remove the other's live report
+    out = tmp_path / "out"
+    results, errors = {}, []
+
+    def work(i, src):
+        try:
+            scen = tmp_path / f"s{i}.toml"
+            text = src.read_text()
+            scen.write_text(text.replace(f'name = "{src.stem}"', f'name = "x{i}"', 1))
+            results[i] = run_scenarios([scen], out)
+        except BaseException as exc:  # pragma: no cover - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work, args=(i, GOOD if i % 2 else GOOD2)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    assert all(o.ok for r in results.values() for o in r), [o.error for r in results.values() for o in r]
+    assert not [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
+
+
+# -- 1. identify replaces only what carries the provenance mark ---------------------------
+DATA = CORPUS / "data" / "good.csv"
+IDENTIFY = [DATA, "--time", "time_s", "--input", "u_V", "--output", "y_um", "--thresholds", "5"]
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _png_without_mark(path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig = plt.figure()
+    fig.savefig(path, format="png")
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("option,make", [
+    ("--out", lambda p: shutil.copy(REPO / "scenarios" / "presets" / "coupled-2dof.toml", p)),
+    ("--out", lambda p: p.write_text("[model]\n# my hand-written model\n")),
+    ("--metrics", lambda p: p.write_text("case,channel,metric,value,unit\nmine,x,y,1,um\n")),
+    ("--plot", _png_without_mark),
+])
+def test_1_identify_keeps_hand_written_outputs(capsys, tmp_path, option, make):
+    target = tmp_path / ("mine.png" if option == "--plot" else "mine.toml" if option == "--out"
+                         else "mine.csv")
+    make(target)
+    before = target.read_bytes()
+    extra = [] if option == "--out" else ["--out", tmp_path / "model.toml"]
+    status, _, err = _call(capsys, "identify", *IDENTIFY, *extra, option, target)
+    assert status == 2
+    assert len(err) == 1 and "--force" in err[0] and "not written by" in err[0]
+    assert target.read_bytes() == before
+    assert not (tmp_path / "model.toml").exists()       # nothing written at all
+
+
+def test_1_identify_replaces_its_own_outputs_and_force(capsys, tmp_path):
+    out, met, png = tmp_path / "m.toml", tmp_path / "m.csv", tmp_path / "m.png"
+    args = ["identify", *IDENTIFY, "--out", out, "--metrics", met, "--plot", png]
+    assert _call(capsys, *args)[0] == 0
+    for p in (out, met, png):
+        assert files.carries_provenance(p), p
+    assert _call(capsys, *args)[0] == 0               # its own files: replaced
+    out.write_text("[model]\n")                        # now a file of the user's
+    assert _call(capsys, *args)[0] == 2
+    assert out.read_text() == "[model]\n"
+    assert _call(capsys, *args, "--force")[0] == 0
+    assert files.carries_provenance(out)
+
+
+def test_1_identify_output_never_an_input(capsys, tmp_path):
+    data = tmp_path / "d.csv"
+    shutil.copy(DATA, data)
+    before = data.read_bytes()
+    status, _, err = _call(capsys, "identify", data, *IDENTIFY[1:], "--out", tmp_path / "m.toml",
+                           "--metrics", data, "--force")
+    assert status == 2 and "data files" in err[0]
+    assert data.read_bytes() == before
+
+
+def test_17_failed_write_leaves_no_output(capsys, tmp_path, monkeypatch):
+    # the model write fails (disk full) after the figure was drawn: nothing stays
+    import hammerstein.cli.identify as ident
+
+    def full(*a, **k):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(ident, "_write_metrics", full)
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", tmp_path / "m.toml",
+                           "--plot", tmp_path / "m.png", "--metrics", tmp_path / "m.csv")
+    assert status == 1 and len(err) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+# -- 2. check --junit-xml ----------------------------------------------------------------
+@pytest.fixture
+def baseline(tmp_path, capsys):
+    base = tmp_path / "base.csv"
+    assert _call(capsys, "check", GOOD, "--baseline", base, "--update", "-q")[0] == 0
+    return base
+
+
+@pytest.mark.parametrize("content", ["my notes\n", "<?xml version='1.0'?>\n<testsuites/>\n"])
+def test_2_junit_never_overwrites_a_foreign_file(capsys, tmp_path, baseline, content):
+    notes = tmp_path / "notes.txt"
+    notes.write_text(content)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml", notes)
+    assert status == 2 and "--force" in err[0]
+    assert notes.read_text() == content
+    assert _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml", notes,
+                 "--force", "-q")[0] == 0
+    assert files.carries_provenance(notes)
+    assert _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml", notes, "-q")[0] == 0
+
+
+@pytest.mark.parametrize("which", ["baseline", "scenario"])
+def test_2_junit_is_never_an_input(capsys, tmp_path, baseline, which):
+    scen = tmp_path / "s.toml"
+    shutil.copy(GOOD, scen)
+    target = baseline if which == "baseline" else scen
+    before = target.read_bytes()
+    status, _, err = _call(capsys, "check", scen, "--baseline", baseline, "--junit-xml", target,
+                           "--force")
+    assert status == 2 and "input" in err[0]
+    assert target.read_bytes() == before
+
+
+def test_2_junit_write_error_names_the_junit_file(capsys, tmp_path, baseline, monkeypatch):
+    import hammerstein.cli.check as check
+
+    def full(path, data, what="file"):
+        raise OSError(28, "No space left on device")
+    monkeypatch.setattr(check, "safe_write", full)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--junit-xml",
+                           tmp_path / "j.xml")
+    assert status == 1 and "JUnit" in err[-1] and "baseline" not in err[-1]
+
+
+def test_update_keeps_a_hand_written_baseline(capsys, tmp_path):
+    base = tmp_path / "base.csv"
+    text = "scenario,case,channel,metric,value,unit\nother,c,x,rms_error,1.0,µm\n"
+    base.write_text(text)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", base, "--update")
+    assert status == 2 and "--force" in err[0]
+    assert base.read_text() == text
+    assert _call(capsys, "check", GOOD, "--baseline", base, "--update", "--force", "-q")[0] == 0
+    kept = base.read_text()
+    assert "other,c,x,rms_error,1.0" in kept and files.carries_provenance(base)
+
+
+# -- 3. concurrent check --update of one baseline ------------------------------------------
+def test_3_concurrent_updates_all_land(tmp_path):
+    import subprocess
+    import sys
+    base = tmp_path / "base.csv"
+    procs = []
+    for i in range(4):
+        scen = tmp_path / f"c{i}.toml"
+        scen.write_text(GOOD.read_text().replace('name = "good-static"', f'name = "c{i}"', 1))
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "hammerstein", "check", str(scen), "--baseline", str(base),
+             "--update", "-q"], stderr=subprocess.PIPE, text=True))
+    errs = [p.communicate(timeout=600)[1] for p in procs]
+    assert [p.returncode for p in procs] == [0] * 4, errs
+    from hammerstein.scenario.regression import read_baseline
+    assert sorted(set(read_baseline(base)["scenario"])) == [f"c{i}" for i in range(4)]
+
+
+# -- 14. baseline inf, misspelt tolerance metrics -------------------------------------------
+def test_14_inf_in_baseline_is_an_error(capsys, tmp_path, baseline):
+    lines = baseline.read_text().splitlines()
+    i = next(k for k, ln in enumerate(lines) if ",rms_error," in ln)
+    lines[i] = ",".join(lines[i].split(",")[:4] + ["inf"] + lines[i].split(",")[5:])
+    baseline.write_text("\n".join(lines) + "\n")
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline)
+    assert status == 2 and len(err) == 1 and "finite" in err[0] and "rms_error" in err[0]
+
+
+def test_14_misspelt_tolerance_metric_is_an_error(capsys, tmp_path, baseline):
+    tol = tmp_path / "tol.toml"
+    tol.write_text("[rms_eror]\nrtol = 0.5\n")
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--tolerances", tol)
+    assert status == 2 and "rms_eror" in err[0] and "rms_error" in err[0]
+
+
+# -- 8. SIGKILL / SIGHUP of a run: no orphan worker, no temporary -------------------------
+def _start_run(tmp_path, scenarios):
+    import subprocess
+    import sys
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "hammerstein", "run", *map(str, scenarios),
+                             "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:  # a report in progress
+        if out.is_dir() and any(p.name.startswith(TMP_PREFIX) for p in out.iterdir()):
+            break
+        time.sleep(0.005)
+    return proc, out
+
+
+def _children(pid):
+    kids = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat_ = (d / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat_.rsplit(")", 1)[1].split()[1]) == pid:
+                kids.append(int(d.name))
+    return kids
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_8_sigkill_of_a_piped_run_ends_its_workers(tmp_path):
+    import signal
+    import subprocess
+    proc, _ = _start_run(tmp_path, [GOOD, GOOD2])
+    deadline = time.time() + 60
+    workers = []
+    while time.time() < deadline and proc.poll() is None and not workers:
+        workers = _children(proc.pid)
+        time.sleep(0.01)
+    if proc.poll() is not None:
+        pytest.skip("the run finished before its figure workers were seen")
+    proc.send_signal(signal.SIGKILL)
+    try:   # the pipes close when every holder (the workers too) is gone
+        proc.communicate(timeout=20)
+    except subprocess.TimeoutExpired:  # pragma: no cover - the defect
+        for w in workers:
+            os.kill(w, signal.SIGKILL)
+        pytest.fail("figure workers outlived their parent, holding its stdout/stderr")
+    time.sleep(0.2)
+    alive = [w for w in workers if Path(f"/proc/{w}").exists()
+             and " Z " not in Path(f"/proc/{w}/stat").read_text()]
+    assert alive == []
+
+
+def test_8_sighup_is_an_interruption(tmp_path):
+    import signal
+    proc, out = _start_run(tmp_path, [GOOD])
+    proc.send_signal(signal.SIGHUP)
+    _, stderr = proc.communicate(timeout=120)
+    if proc.returncode == 0:
+        pytest.skip("the run finished before the signal arrived")
+    assert proc.returncode == 128 + signal.SIGHUP and stderr == "interrupted\n", stderr
+    assert not [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
+
+
+# -- 12. a killed figure worker: the figures are drawn inline ----------------------------
+def test_12_broken_pool_falls_back_to_inline(tmp_path):
+    import signal
+    import numpy as np
+    from hammerstein.report.figures import divergence_figure
+    from hammerstein.report.render import FigureJobs, FigureRenderer
+    args = (np.zeros((2, 10)), ["u1", "u2"], 5, "test", "t")
+    with FigureRenderer() as renderer:
+        if renderer.workers < 2:
+            pytest.skip("no fork")
+        first = FigureJobs(renderer)
+        first.add(tmp_path / "a.png", divergence_figure, *args)
+        first.wait()
+        for pid in list(renderer._pool._processes):   # the OOM killer strikes
+            os.kill(pid, signal.SIGKILL)
+        time.sleep(0.5)
+        jobs = [FigureJobs(renderer) for _ in range(3)]
+        for i, j in enumerate(jobs):
+            j.add(tmp_path / f"b{i}.png", divergence_figure, *args)   # identical figure
+            j.add(tmp_path / f"c{i}.png", divergence_figure, *args[:3], "other", "t")
+        for j in jobs:
+            j.wait()
+    for i in range(3):
+        assert (tmp_path / f"b{i}.png").read_bytes()[:4] == b"\x89PNG"
+        assert (tmp_path / f"c{i}.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# -- 10, 11. closed or full stdio, environment of the dependencies --------------------------
+def _cli(args, **kw):
+    import subprocess
+    import sys
+    return subprocess.run([sys.executable, "-m", "hammerstein", *map(str, args)],
+                          capture_output=True, text=True, timeout=300, **kw)
+
+
+@pytest.mark.parametrize("close", ["stdout", "stderr"])
+@pytest.mark.parametrize("argv", [["validate", GOOD], ["list"], ["--version"]])
+def test_10_closed_stdio_keeps_the_exit_status(argv, close):
+    import subprocess
+    import sys
+    fd = 1 if close == "stdout" else 2
+    proc = subprocess.run([sys.executable, "-c",
+                           f"import os, runpy, sys; os.close({fd}); sys.argv = ['hammerstein', "
+                           f"*{[str(a) for a in argv]!r}]; runpy.run_module('hammerstein', "
+                           f"run_name='__main__')"],
+                          stdout=subprocess.PIPE if fd == 2 else None,
+                          stderr=subprocess.PIPE if fd == 1 else None, text=True, timeout=300)
+    assert proc.returncode == 0
+    assert "Traceback" not in ((proc.stderr or "") + (proc.stdout or ""))
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_10_full_stdout_is_an_error():
+    import subprocess
+    import sys
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "hammerstein", "validate", str(GOOD)],
+                              stdout=full, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 1
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and "cannot write the output" in lines[0]
+
+
+@pytest.mark.parametrize("var,value", [("NUMBA_NUM_THREADS", "0"), ("NUMBA_NUM_THREADS", "x"),
+                                       ("MPLBACKEND", "bogus")])
+def test_11_bad_dependency_variables_are_one_line(tmp_path, var, value):
+    proc = _cli(["run", GOOD, "--out", tmp_path, "-q"], env={**os.environ, var: value})
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1 and var in lines[0] and "ignored" in lines[0]
+
+
+def test_11_unwritable_numba_cache_falls_back(tmp_path, monkeypatch, capsys):
+    import hammerstein.cli.main as cli
+    monkeypatch.setattr(cli, "_writable_dir", lambda p: False)
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.setattr("tempfile.tempdir", str(tmp_path))
+    notes = cli._prepare_environment()
+    assert len(notes) == 1 and "no writable cache" in notes[0]
+    where = Path(os.environ.pop("NUMBA_CACHE_DIR"))
+    assert where.is_dir() and where.parent == tmp_path and (where.stat().st_mode & 0o077) == 0
+
+
+def test_13_ascii_stdout_does_not_fail_after_writing(tmp_path):
+    proc = _cli(["identify", *IDENTIFY, "--out", tmp_path / "m.toml"],
+                env={**os.environ, "PYTHONIOENCODING": "ascii"})
+    assert proc.returncode == 0, proc.stderr
+    assert "wrote" in proc.stdout
+
+
+# -- 7. terminal escapes, NUL and newlines in user strings ----------------------------------
+EVIL = "evil\x1b]0;pwned\x07\x1b[2J\nerror: forged"
+
+
+def _raw_control(text):
+    return [c for c in text if not c.isprintable() and c not in "\n\t"]
+
+
+@pytest.mark.parametrize("command", ["validate", "run"])
+def test_7_file_names_are_escaped(capsys, tmp_path, command):
+    scen = tmp_path / f"{EVIL}.toml"
+    shutil.copy(GOOD, scen)
+    extra = ["--out", tmp_path / "out", "-v"] if command == "run" else []
+    status, out, err = _call(capsys, command, scen, *extra)
+    assert status == 0
+    status_lines = out.splitlines() + err
+    assert _raw_control(out + "\n".join(err)) == []
+    assert not any(line.startswith("error: forged") for line in status_lines)
+    assert any("\\x1b]0;pwned\\x07" in line for line in status_lines)
+
+
+def test_7_bad_file_name_error_is_escaped(capsys, tmp_path):
+    scen = tmp_path / f"{EVIL}.toml"
+    scen.write_text("not = [toml")
+    status, out, err = _call(capsys, "validate", scen)
+    assert status == 1 and len(err) == 1 and _raw_control(err[0]) == []
+
+
+def test_7_title_is_escaped_in_report_md(capsys, tmp_path):
+    scen = tmp_path / "t.toml"
+    scen.write_text('title = "\\u001b[2J<script>alert(1)</script> *bold*"\n' + GOOD.read_text())
+    assert _call(capsys, "run", scen, "--out", tmp_path, "-q")[0] == 0
+    first = (tmp_path / "good-static" / "report.md").read_text(encoding="utf-8").splitlines()[0]
+    assert "<script>" not in first and "\x1b" not in first and "*bold*" not in first
+    assert first.startswith("# ") and "alert" in first
+
+
+def test_18_huge_message_is_bounded(capsys):
+    from hammerstein.cli._common import MAX_LINE, print_err
+    print_err("error: " + "x" * 2_000_000)
+    err = capsys.readouterr().err
+    assert len(err) < MAX_LINE + 100 and "more characters" in err
+
+
+# -- 6. paths of scenario files confined to the scenario's directory ---------------------
+SECRET = "s3cret-first-line-do-not-echo"
+
+
+@pytest.fixture
+def outside(tmp_path, monkeypatch):
+    monkeypatch.delenv(files.ALLOW_ENV, raising=False)
+    home = tmp_path / "scenario-dir"
+    home.mkdir()
+    secret = tmp_path / "secret.csv"
+    secret.write_text(f"{SECRET},b\n1,2\n")
+    return home, secret
+
+
+def _identification(home, file_value):
+    scen = home / "s.toml"
+    scen.write_text(f'kind = "identification"\n[data]\nfile = "{file_value}"\ninput = "u"\n'
+                    f'output = "y"\nsampling_period = 1e-3\n')
+    return scen
+
+
+@pytest.mark.parametrize("how", ["absolute", "dotdot", "bundled", "symlink"])
+def test_6_files_outside_the_scenario_directory_are_refused(capsys, outside, how):
+    home, secret = outside
+    value = {"absolute": str(secret), "dotdot": "../secret.csv",
+             "bundled": "bundled:../../../" + str(secret), "symlink": "link.csv"}[how]
+    if how == "symlink":
+        (home / "link.csv").symlink_to(secret)
+    scen = _identification(home, value)
+    for command in (["validate", scen], ["run", scen, "--out", home / "out"]):
+        status, out, err = _call(capsys, *command)
+        assert status == 1 and len(err) == 1, err
+        assert SECRET not in err[0] + out
+        assert ("outside the scenario's directory" in err[0] or "bundled:<file name>" in err[0])
+
+
+def test_6_allowed_directory_is_read(capsys, outside, monkeypatch):
+    home, secret = outside
+    monkeypatch.setenv(files.ALLOW_ENV, str(secret.parent))
+    status, _, err = _call(capsys, "validate", _identification(home, str(secret)))
+    assert "outside the scenario" not in " ".join(err)
+
+
+@pytest.mark.parametrize("key,value", [("model", "/etc/passwd"), ("model", "../m.toml")])
+def test_6_model_paths_are_confined(capsys, outside, key, value):
+    home, _ = outside
+    scen = home / "m.toml"
+    scen.write_text('[plant]\npreset = "rakotondrabe-2dof"\ndynamics = false\n'
+                    f'[compensator]\nkind = "multivariable"\n{key} = "{value}"\n'
+                    '[[cases]]\nname = "x"\nreference = { kind = "sine", output = "x", '
+                    'amplitude = 50.0, frequency = 50.0, periods = 3 }\n')
+    status, _, err = _call(capsys, "validate", scen)
+    assert status == 1 and "outside the scenario's directory" in err[0]
+    assert "root:" not in err[0]
+
+
+@pytest.mark.parametrize("value,fragment", [("a\\u0000b.csv", "NUL"),
+                                            ("x" * 1001, "at most 1000"),
+                                            ("d/" + "y" * 300 + ".csv", "at most 255")])
+def test_13_bad_paths_are_one_line(capsys, outside, value, fragment):
+    home, _ = outside
+    status, _, err = _call(capsys, "validate", _identification(home, value))
+    assert status == 1 and len(err) == 1 and fragment in err[0] and "unexpected" not in err[0]
+
+
+# -- 15. a numeric header name is a name before an index ----------------------------------
+def test_15_numeric_header_names_are_names(tmp_path):
+    import numpy as np
+    from hammerstein.core.datafiles import read_records
+    t = np.arange(200) * 1e-3
+    u = 5 * np.sin(2 * np.pi * 5 * t)
+    y = 2 * u + 1
+    path = tmp_path / "d.csv"
+    path.write_text("time,2,1\n" + "".join(f"{a:.17g},{c:.17g},{b:.17g}\n" for a, b, c in zip(t, u, y)))
+    rec = read_records(path, "1", "2", "time", None)
+    np.testing.assert_array_equal(rec.u[0], u)        # the column named "1", not index 1
+    np.testing.assert_array_equal(rec.y[0], y)
+
+
+# -- 9, 18. memory bounded by the limits; limits and their messages -------------------------
+def test_9_cells_are_checked_before_parsing(tmp_path, monkeypatch):
+    from hammerstein.core.datafiles import DataFileError, read_records
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_CELLS", "100")
+    path = tmp_path / "d.csv"
+    path.write_text("t,u,y\n" + "".join(f"{i},{i % 7},{i % 5}\n" for i in range(50)))
+    with pytest.raises(DataFileError, match=r"51 rows x 3 columns = 153 cells .* HAMMERSTEIN_MAX_DATA_CELLS"):
+        read_records(path, "u", "y", "t", None)
+
+
+def test_9_total_bytes_budget_across_files(capsys, tmp_path, monkeypatch):
+    data = [tmp_path / f"d{i}.csv" for i in range(3)]
+    for d in data:
+        shutil.copy(DATA, d)
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOTAL_BYTES", str(2 * DATA.stat().st_size + 10))
+    status, _, err = _call(capsys, "identify", *data, *IDENTIFY[1:], "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1 and "HAMMERSTEIN_MAX_TOTAL_BYTES" in err[0]
+    assert str(data[2]) in err[0]
+    monkeypatch.delenv("HAMMERSTEIN_MAX_TOTAL_BYTES")
+    assert _call(capsys, "identify", *data, *IDENTIFY[1:], "--out", tmp_path / "m.toml")[0] == 0
+
+
+def test_13_field_over_128_kib_is_one_line(capsys, tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_text("t" * 200_000 + ",u_V,y_um\n1,2,3\n")
+    status, _, err = _call(capsys, "identify", path, "--sampling-period", "1e-3", "--input", "u_V",
+                           "--output", "y_um", "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1 and "unexpected" not in err[0]
+    assert len(err[0]) < 3000
+
+
+@pytest.mark.parametrize("value", ["\u00b2", "0", "-5", "1e3"])
+def test_18_bad_limit_overrides_are_ignored(monkeypatch, value):
+    monkeypatch.setenv("HAMMERSTEIN_MAX_TOML_BYTES", value)
+    assert files.limit("toml") == 4 * 2**20
+
+
+def test_18_limit_message_never_equal_sizes(tmp_path, monkeypatch):
+    path = tmp_path / "big.toml"
+    path.write_bytes(b"#" * (4 * 2**20 + 1))
+    with pytest.raises(files.FileLimitError) as info:
+        files.bounded_read_bytes(path, "toml", "scenario file")
+    assert "4194305 bytes" in str(info.value)
+
+
+# -- 13, 16. numbers: huge ints, subnormals; API arrays checked like the CLI ------------------
+@pytest.mark.parametrize("value,problem", [
+    (10**400, "beyond the float range"), (-(10**400), "beyond the float range"),
+    (5e-324, "subnormal"), (float("inf"), "not finite"), (float("nan"), "not finite"),
+    (True, "not a number"), ("1", "not a number"), (1 + 0j, "not a number"),
+    (0, None), (2**63, None), (1e-300, None), (-3.5, None)])
+def test_13_number_problem(value, problem):
+    from hammerstein.core.numbers import number_problem
+    assert number_problem(value) == problem
+
+
+@pytest.mark.parametrize("value", ["1" + "0" * 400, "5e-324"])
+def test_13_huge_or_subnormal_frequency_is_one_line(capsys, tmp_path, value):
+    scen = tmp_path / "s.toml"
+    scen.write_text(GOOD.read_text().replace("frequency = 50.0", f"frequency = {value}"))
+    status, _, err = _call(capsys, "validate", scen)
+    assert status == 1 and err and all("frequency" in e and "unexpected" not in e for e in err)
+    assert all(len(e) < 400 for e in err)
+
+
+def _record(**change):
+    import numpy as np
+    from hammerstein.core.datafiles import MultiRecord
+    t = np.arange(2000) * 1e-3
+    u = 5 * np.sin(2 * np.pi * 2 * t)[None, :]
+    fields = dict(timepts=t, u=u, y=2 * u, input_names=("u",), output_names=("y",),
+                  sampling_period=1e-3, source="api")
+    fields.update(change)
+    return MultiRecord(**fields)
+
+
+@pytest.mark.parametrize("change,fragment", [
+    ("nan", "non-finite value nan"), ("complex", "complex"), ("short-y", "samples, expected"),
+    ("nan-T", "sampling_period")])
+def test_16_identify_records_checks_its_arrays(change, fragment):
+    import numpy as np
+    from hammerstein.core.record_identification import identify_records
+    from hammerstein.exceptions import IdentificationError
+    good = _record()
+    rec = {"nan": lambda: _record(y=np.where(np.arange(2000) == 77, np.nan, good.y)),
+           "complex": lambda: _record(u=good.u + 1j),
+           "short-y": lambda: _record(y=good.y[:, :-3]),
+           "nan-T": lambda: _record(sampling_period=float("nan"))}[change]()
+    with pytest.raises(IdentificationError, match=fragment):
+        identify_records([rec], n_hysterons=5)
