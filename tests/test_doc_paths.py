@@ -20,8 +20,9 @@ SOURCES = sorted((ROOT / "hammerstein").rglob("*.py"))
 PATH = re.compile(r"`(hammerstein(?:\.[A-Za-z_]\w*)+)")
 # any mention in a module's text (docstrings, comments, :func: roles), not a file name
 NAMED = re.compile(r"(?<![\w./-])(hammerstein(?:\.[A-Za-z_]\w*)+)")
-#: Dotted names that are not Python paths: the JUnit class name ``hammerstein check`` writes.
-NOT_PATHS = {"hammerstein.check"}
+#: Dotted names that are not Python paths: the JUnit class name ``hammerstein check`` writes,
+#: the logger the identification cache reports on.
+NOT_PATHS = {"hammerstein.check", "hammerstein.cache"}
 
 
 def _resolves(dotted):
