@@ -557,7 +557,7 @@ def _run_metrics(study, i, j, reference, outputs):
     return out
 
 
-def run_chunk(study, start, stop):
+def run_chunk(study, start, stop, parallel=None):
     """Metrics of cases ``start .. stop - 1`` at every frequency.
 
     Parameters
@@ -566,6 +566,10 @@ def run_chunk(study, start, stop):
         With its compensator built.
     start, stop : int
         Case range, ``0 <= start < stop <= study.cases``.
+    parallel : bool, optional
+        Spread the runs over numba's threads
+        (:func:`hammerstein.simulation.simulate_chain_batch`; default: when
+        large enough). Results do not depend on it.
 
     Returns
     -------
@@ -580,7 +584,7 @@ def run_chunk(study, start, stop):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         outs = simulate_chain_batch(study.compensator, [plants[a] for a, _ in runs],
-                                    [study.references[j] for _, j in runs], parallel=False)
+                                    [study.references[j] for _, j in runs], parallel=parallel)
     values = np.empty((len(plants), F, len(study.columns)))
     for (a, j), res in zip(runs, outs):
         values[a, j] = _run_metrics(study, start + a, j, study.references[j], res.outputs)
@@ -816,13 +820,13 @@ def run_study(study, client=None, chunk=None):
         it = iter(ranges)
         pending = as_completed()
         for a, b in list(zip(range(4 * n_workers), it)):
-            pending.add(client.submit(run_chunk, remote, *b, pure=False))
+            pending.add(client.submit(run_chunk, remote, *b, False, pure=False))
         for fut in pending:
             take(*fut.result())
             fut.release()
             nxt = next(it, None)
             if nxt is not None:
-                pending.add(client.submit(run_chunk, remote, *nxt, pure=False))
+                pending.add(client.submit(run_chunk, remote, *nxt, False, pure=False))
     return MonteCarloResult(study, acc.quantiles(), diverged, acc.exact, acc.values)
 
 
