@@ -98,7 +98,7 @@ def distributed_throughput(plants, folder):
     rates = {}
     for n in (1, 2):
         with LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                          dashboard_address=None) as cluster, Client(cluster) as client:
+                          dashboard_address=":0") as cluster, Client(cluster) as client:
             warm = make_study(n, folder)
             mc.run_study(warm, client=client, chunk=1)          # every worker compiles once
             w0 = time.perf_counter()

@@ -60,7 +60,7 @@ are reduced by :class:`QuantileAccumulator`: a log-spaced histogram
 count) always, plus the exact values while ``cases x frequencies x metrics``
 stays within :data:`EXACT_VALUES`; the quantiles P50/P95/P99 are exact then,
 otherwise read from the histogram (relative error at most
-``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.12 %); ``max`` is always exact. A
+``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.29 %); ``max`` is always exact. A
 diverged run counts as an infinite error. The budget: at most
 :data:`MAX_RUNS` runs (cases x frequencies) per study and
 :data:`MAX_RUN_SAMPLES` samples per run.
@@ -77,6 +77,7 @@ merged as they complete (merging is order independent).
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import re
 import warnings
@@ -762,13 +763,14 @@ def execution(workers=None, scheduler=None):
     except ImportError:
         raise ValueError("--workers/--scheduler need dask.distributed: "
                          "pip install 'dask[distributed]'") from None
+    logging.getLogger("distributed").setLevel(logging.ERROR)   # one line per problem on stderr
     cluster = None
     try:
         if scheduler:
             client = Client(scheduler, timeout="10s")
         else:
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                                   dashboard_address=None)
+                                   dashboard_address=":0")
             client = Client(cluster)
     except (OSError, TimeoutError) as exc:
         if cluster is not None:

@@ -196,3 +196,38 @@ def test_bad_studies_name_the_field(tmp_path, edit, expect):
     f.write_text(edit(STUDY.format(vary="")))
     with pytest.raises(ScenarioError, match=expect.replace(".", r"\.").replace("[", r"\[").replace("]", r"\]")):
         validate_scenario(f)
+
+
+@pytest.mark.parametrize("args", [["--workers", "0"], ["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"]])
+def test_cli_rejects_bad_worker_options(tmp_path, capsys, args):
+    from hammerstein.cli.main import main
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary=""))
+    assert main(["run", str(f), "--out", str(tmp_path / "r"), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--workers" in err[0]
+    assert not (tmp_path / "r" / "mc").exists()
+
+
+def test_cli_unreachable_scheduler_is_one_line(tmp_path, capsys):
+    from hammerstein.cli.main import main
+    pytest.importorskip("distributed")
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary=""))
+    assert main(["run", str(f), "--out", str(tmp_path / "r"), "--scheduler", "tcp://127.0.0.1:9",
+                 "-q"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "scheduler" in err[0]
+    assert not (tmp_path / "r" / "mc").exists()
+
+
+@pytest.mark.slow
+def test_cli_two_local_workers_write_the_same_report(tmp_path):
+    from hammerstein.cli.main import main
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary=VARY))
+    assert main(["run", str(f), "--out", str(tmp_path / "a"), "--figures", "none", "-q"]) == 0
+    assert main(["run", str(f), "--out", str(tmp_path / "b"), "--figures", "none", "-q",
+                 "--workers", "2"]) == 0
+    for name in ("metrics.csv", "montecarlo-mm.csv", "montecarlo-mm-cases.csv"):
+        assert (tmp_path / "a" / "mc" / name).read_bytes() == (tmp_path / "b" / "mc" / name).read_bytes()
