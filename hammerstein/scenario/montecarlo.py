@@ -601,8 +601,9 @@ class QuantileAccumulator:
         Number of cases that will be added.
     shape : tuple of int
         ``(n_frequencies, n_metrics)`` of one case's values.
-    exact_limit : int
-        Keep the exact values when ``cases * prod(shape)`` is at most this.
+    exact_limit : int, optional
+        Keep the exact values when ``cases * prod(shape)`` is at most this
+        (default :data:`EXACT_VALUES`).
 
     Notes
     -----
@@ -613,7 +614,8 @@ class QuantileAccumulator:
     maxima, values stored by case index).
     """
 
-    def __init__(self, cases, shape, exact_limit=EXACT_VALUES):
+    def __init__(self, cases, shape, exact_limit=None):
+        exact_limit = EXACT_VALUES if exact_limit is None else exact_limit
         self.cases, self.shape = cases, tuple(shape)
         self.n_bins = BINS_PER_DECADE * (_HI - _LO)
         self.counts = np.zeros(self.shape + (self.n_bins + 2,), dtype=np.int64)

@@ -231,3 +231,19 @@ def test_cli_two_local_workers_write_the_same_report(tmp_path):
                  "--workers", "2"]) == 0
     for name in ("metrics.csv", "montecarlo-mm.csv", "montecarlo-mm-cases.csv"):
         assert (tmp_path / "a" / "mc" / name).read_bytes() == (tmp_path / "b" / "mc" / name).read_bytes()
+
+
+def test_memory_of_a_huge_study_does_not_grow_with_the_cases():
+    small, huge = mc.QuantileAccumulator(10, (20, 6)), mc.QuantileAccumulator(10 ** 9, (20, 6))
+    assert huge.values is None and not huge.exact
+    assert huge.counts.nbytes == small.counts.nbytes < 10 * 2 ** 20
+
+
+def test_histogram_quantiles_of_a_study_match_its_exact_ones(study, monkeypatch):
+    exact = mc.run_study(study)
+    monkeypatch.setattr(mc, "EXACT_VALUES", 0)
+    hist = mc.run_study(study, chunk=3)
+    assert hist.values is None and not hist.exact
+    tol = 10 ** (1 / (2 * mc.BINS_PER_DECADE)) - 1
+    np.testing.assert_allclose(hist.quantiles[:-1], exact.quantiles[:-1], rtol=tol * 1.0001)
+    assert np.array_equal(hist.quantiles[-1], exact.quantiles[-1])
