@@ -285,6 +285,16 @@ class MonteCarloScenario:
     compensator_spec: dict = field(default_factory=dict)
     kind: str = "monte-carlo"
 
+    @property
+    def cases(self):
+        """``range`` over the drawn plants of all studies (``len`` = their number).
+
+        Returns
+        -------
+        range
+        """
+        return range(sum(s.cases for s in self.studies))
+
 
 def _nominal_modes(preset, base, outputs):
     """``(natural_frequency, damping_ratio)`` of a preset's bending modes, or None."""

@@ -48,7 +48,7 @@ def test_bundled_scenarios_exist():
 def test_bundled_scenarios_validate(path):
     """Validation only (nothing identified or simulated); the slow end-to-end tests run them."""
     sc = validate_scenario(path)
-    assert (getattr(sc, "studies", None) or sc.cases) and sc.name == path.stem   # studies: Monte-Carlo
+    assert sc.cases and sc.name == path.stem
 
 
 def test_every_problem_is_reported_at_once(tmp_path):
