@@ -23,6 +23,7 @@ from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.report.render import figure_selection
 from hammerstein.scenario import diskcache
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
+from hammerstein.scenario.montecarlo import execution
 from hammerstein.simulation import announce_compiles
 
 __all__ = ["add_parser", "handler"]
@@ -54,6 +55,12 @@ def add_parser(subparsers):
                         "'none', or comma-separated file name patterns such as "
                         "'maps-*,trajectory-*'; report.md notes each figure left out "
                         "(the figures take most of a run's CPU time)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="run Monte-Carlo studies on N local dask worker processes "
+                        "(default: in this process)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run Monte-Carlo studies on a running dask.distributed scheduler, "
+                        "e.g. tcp://127.0.0.1:8786 (see `dask scheduler`, `dask worker`)")
     add_verbosity(p)
     p.set_defaults(handler=handler)
 
@@ -83,6 +90,11 @@ def handler(args):
     except ValueError as exc:
         print_err(f"hammerstein run: error: {exc}")
         return 2
+    workers, scheduler = getattr(args, "workers", None), getattr(args, "scheduler", None)
+    if workers is not None and (workers < 1 or scheduler):
+        print_err("hammerstein run: error: --workers: expected a positive number of worker "
+                  "processes, without --scheduler")
+        return 2
     out = Path(args.out)
     remove_stale_temporaries(out)
     verbosity = getattr(args, "verbosity", 0)
@@ -108,8 +120,13 @@ def handler(args):
             failed.append(path)
 
     # figures of one scenario are drawn (2 worker processes) while the next one simulates
-    run_pipelined(args.scenarios, out, args.force, on_outcome=on_outcome, on_start=on_start,
-                  figures=figures)
+    try:
+        with execution(workers, scheduler):   # Monte-Carlo chunks on dask, or here
+            run_pipelined(args.scenarios, out, args.force, on_outcome=on_outcome,
+                          on_start=on_start, figures=figures)
+    except ValueError as exc:                 # dask missing or scheduler unreachable
+        print_err(f"hammerstein run: error: {one_line(str(exc))}")
+        return 1
     return 1 if failed else 0
 
 

@@ -38,6 +38,7 @@ from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_
                                          TOP, Field, ScenarioError, check_table, kind_problem,
                                          total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
+from hammerstein.scenario.montecarlo import is_montecarlo, validate_montecarlo
 
 __all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_scenario"]
 
@@ -486,6 +487,7 @@ def _validate_cases(path, data):
 VALIDATORS: dict[str, Callable] = {
     "cases": _validate_cases,
     "identification": load_identification_scenario,
+    "monte-carlo": validate_montecarlo,
 }
 
 
@@ -518,6 +520,8 @@ def validate_scenario(path):
     """
     path, data = read_scenario(path)
     kind = data.get("kind", "cases")
+    if kind == "cases" and is_montecarlo(data):   # [[sweeps]] kind = "monte-carlo"
+        kind = "monte-carlo"
     if kind not in VALIDATORS:
         raise ScenarioError([f"{path}: kind: {msg}" for msg in kind_problem(kind, VALIDATORS)])
     return VALIDATORS[kind](path, data)

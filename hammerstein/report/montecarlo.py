@@ -1,0 +1,142 @@
+"""Report of a Monte-Carlo robustness study (``[[sweeps]] kind = "monte-carlo"``).
+
+Per study ``<name>``: ``montecarlo-<name>.csv`` (:func:`quantile_table`:
+``frequency_hz, channel, metric, p50, p95, p99, max, unit, cases, diverged,
+quantiles``, the last column ``exact`` or ``histogram``),
+``montecarlo-<name>.png`` (:func:`quantile_figure`: P50/P95/P99/max of each
+metric against frequency) and, while every case's metrics are kept,
+``montecarlo-<name>-cases.csv`` (``case, frequency_hz`` then one column per
+``<channel>:<metric>``). ``metrics.csv`` holds the quantiles in the long
+format of every report (case = study name, metric
+``<metric>_<p50|p95|p99|max>_at_<f>Hz``), so ``hammerstein check`` gates
+them like any metric.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from hammerstein.report import figures as plots
+from hammerstein.report.tables import markdown_table, metrics_frame
+
+__all__ = ["quantile_table", "quantile_figure", "write_montecarlo_report"]
+
+_TAGS = ("p50", "p95", "p99", "max")
+
+
+def quantile_table(result):
+    """The quantiles of one study as a table.
+
+    Parameters
+    ----------
+    result : hammerstein.scenario.montecarlo.MonteCarloResult
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (frequency, channel, metric): ``frequency_hz, channel,
+        metric, p50, p95, p99, max`` [µm], ``unit``, ``cases``, ``diverged``,
+        ``quantiles`` (``exact`` or ``histogram``).
+    """
+    s = result.study
+    rows = []
+    for j, f in enumerate(s.frequencies):
+        for c, (ch, met) in enumerate(s.columns):
+            rows.append({"frequency_hz": f, "channel": ch, "metric": met,
+                         **{t: result.quantiles[a, j, c] for a, t in enumerate(_TAGS)},
+                         "unit": "µm", "cases": s.cases, "diverged": int(result.diverged[j]),
+                         "quantiles": "exact" if result.exact else "histogram"})
+    return pd.DataFrame(rows)
+
+
+def quantile_figure(table, title):
+    """P50, P95, P99 and max of each metric against frequency, one panel per (channel, metric).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`quantile_table` output.
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Log-scaled error axes when all plotted values are positive and finite
+        (infinite values, diverged runs, are not drawn).
+    """
+    panels = list(dict.fromkeys(zip(table["channel"], table["metric"])))
+    ncol = 2
+    nrow = -(-len(panels) // ncol)
+    fig, axs = plots.grid_figure(nrow, ncol, title, panel_w=4.6, panel_h=3.0, extra_top=0.3)
+    for n, (ch, met) in enumerate(panels):
+        ax = axs[n // ncol][n % ncol]
+        rows = table[(table["channel"] == ch) & (table["metric"] == met)].sort_values("frequency_hz")
+        for j, tag in enumerate(_TAGS):
+            v = rows[tag].to_numpy(dtype=float)
+            ok = np.isfinite(v)
+            ax.plot(rows["frequency_hz"].to_numpy()[ok], v[ok], label=tag.upper(),
+                    **{**plots._style(j), "marker": "os^D"[j], "markevery": None})
+        vals = rows[list(_TAGS)].to_numpy(dtype=float)
+        vals = vals[np.isfinite(vals)]
+        if vals.size and (vals > 0).all():
+            ax.set_yscale("log")
+        ax.set_title(f"{met.replace('_', ' ')}, {ch}", fontsize=10)
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel("[µm]")
+        ax.grid(True, alpha=0.3)
+        if n == 0:
+            ax.legend(fontsize=8, ncol=4)
+    for n in range(len(panels), nrow * ncol):
+        axs[n // ncol][n % ncol].set_visible(False)
+    plots.suptitle(fig, title)
+    return fig
+
+
+def write_montecarlo_report(scenario, results, directory, jobs):
+    """Write metrics.csv, the quantile tables and figures and report.md of a study.
+
+    Parameters
+    ----------
+    scenario : hammerstein.scenario.montecarlo.MonteCarloScenario
+    results : list of hammerstein.scenario.montecarlo.MonteCarloResult
+    directory : pathlib.Path
+        The (temporary) report directory.
+    jobs : hammerstein.report.render.FigureJobs
+        Receives the figures.
+    """
+    directory = Path(directory)
+    metrics_frame(results).to_csv(directory / "metrics.csv", index=False)
+    lines = [f"# {scenario.title}", ""]
+    if scenario.description:
+        lines += [scenario.description, ""]
+    lines += [f"Monte-Carlo robustness study: the compensator `{scenario.compensator_spec}` is "
+              f"built once from the nominal model and run against plants drawn around it "
+              f"(seed {scenario.seed}; case i depends only on the seed and i).", ""]
+    for res in results:
+        s = res.study
+        table = quantile_table(res)
+        table.to_csv(directory / f"montecarlo-{s.name}.csv", index=False)
+        png = directory / f"montecarlo-{s.name}.png"
+        jobs.add(png, quantile_figure, table,
+                 f"{scenario.title}: {s.name}, {s.cases} plants x {len(s.frequencies)} frequencies")
+        if res.values is not None:
+            cols = [f"{ch}:{m}" for ch, m in s.columns]
+            n, F, M = res.values.shape
+            frame = pd.DataFrame(res.values.reshape(n * F, M), columns=cols)
+            frame.insert(0, "frequency_hz", np.tile(np.asarray(s.frequencies), n))
+            frame.insert(0, "case", np.repeat(np.arange(n), F))
+            frame.to_csv(directory / f"montecarlo-{s.name}-cases.csv", index=False)
+        vary = ", ".join(f"{k} {v}" for k, v in s.vary.items()) or "nothing varied"
+        lines += [f"## {s.name}", "", s.description or "", "",
+                  f"{s.cases} plants x {len(s.frequencies)} frequencies; varied: {vary}. "
+                  f"Quantiles {'exact' if res.exact else 'from the streaming histogram'}; "
+                  f"diverged runs: {int(res.diverged.sum())}.", "",
+                  f"![{s.name}]({png.name})", "",
+                  markdown_table(table[["frequency_hz", "channel", "metric", "p50", "p95", "p99",
+                                        "max", "diverged"]]), ""]
+        if res.warnings:
+            lines += ["Warnings of the nominal build:", ""] + [f"- {w}" for w in res.warnings] + [""]
+    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")

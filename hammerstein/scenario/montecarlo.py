@@ -1,0 +1,898 @@
+"""Monte-Carlo robustness studies: ``[[sweeps]] kind = "monte-carlo"``.
+
+A scenario whose ``[[sweeps]]`` tables all have ``kind = "monte-carlo"`` is a
+robustness study of one compensator, built ONCE from the nominal model (the
+``[plant] preset``), against ``cases`` plants drawn around that nominal plant::
+
+    name = "robustness"
+    seed = 1
+    [plant]
+    preset = "rakotondrabe-2dof"
+    [compensator]
+    kind = "multivariable"
+    [[sweeps]]
+    kind = "monte-carlo"
+    name = "mismatch"
+    cases = 500                          # plants drawn (no 2000-case limit)
+    frequencies = [10.0, 50.0, 100.0]    # [Hz], each plant runs at each
+    reference = { kind = "sine", output = "x", amplitude = 30.0, periods = 4 }
+    settle_periods = 2
+    [sweeps.vary]
+    weights = { relative_sd = 0.05 }                         # every PI weight, independently
+    cross_coupling = { relative_sd = 0.2, distribution = "lognormal" }
+    natural_frequency = { relative_sd = 0.03, distribution = "uniform" }
+    damping_ratio = { relative_sd = 0.2 }
+    noise = { sd = 0.02 }                                    # [µm] sensor noise on the outputs
+
+Distributions
+-------------
+Each varied quantity q is multiplied by a factor ``f`` of mean 1 and relative
+standard deviation ``relative_sd`` = s: ``normal`` (default) ``f = 1 + s z``;
+``uniform`` ``f = 1 + s sqrt(3) (2 Phi(z) - 1)`` (uniform on ``1 +- s sqrt(3)``);
+``lognormal`` ``f = exp(sigma z - sigma^2 / 2)`` with ``sigma^2 = ln(1 + s^2)``
+(always positive). ``z`` are standard normal draws. Natural frequencies and
+damping ratios are kept positive: their factors are clipped at
+:data:`MIN_FACTOR`. ``weights`` draws one factor per hysteron weight of every
+component, ``cross_coupling`` one factor per cross-coupling component
+(l != k, all its weights), ``natural_frequency`` and ``damping_ratio`` one per
+bending mode (output); ``noise`` adds white Gaussian sensor noise of standard
+deviation ``sd`` [µm] to the measured outputs.
+
+Reproducibility
+---------------
+Case i (a drawn plant) uses only ``numpy.random.default_rng([seed, i])``,
+drawing every standard normal in a fixed order (weights, cross-couplings,
+natural frequencies, damping ratios) whatever is varied; the noise of its run
+at frequency index j uses ``default_rng([seed, i, j + 1])``. So case i's
+metrics depend only on (seed, i): any chunking, worker count or worker order
+gives bit-identical metrics (:func:`run_chunk`).
+
+Results and memory
+------------------
+Each case runs at every frequency through
+:func:`hammerstein.simulation.simulate_chain_batch` in chunks of
+:data:`CHUNK_CASES` plants; only scalar metrics per (case, frequency) leave a
+chunk (never a time series): per output ``rms_error`` and ``max_abs_error``,
+for all outputs together ``rms_euclidean_error`` and ``max_euclidean_error``
+(:func:`hammerstein.core.metrics.tracking_metrics`, same steady window). They
+are reduced by :class:`QuantileAccumulator`: a log-spaced histogram
+(:data:`BINS_PER_DECADE` bins per decade, memory independent of the case
+count) always, plus the exact values while ``cases x frequencies x metrics``
+stays within :data:`EXACT_VALUES`; the quantiles P50/P95/P99 are exact then,
+otherwise read from the histogram (relative error at most
+``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.29 %); ``max`` is always exact. A
+diverged run counts as an infinite error. The budget: at most
+:data:`MAX_RUNS` runs (cases x frequencies) per study and
+:data:`MAX_RUN_SAMPLES` samples per run.
+
+Distributed execution
+---------------------
+:func:`run_study` runs the chunks here, or on a ``dask.distributed`` client
+(:func:`execution`: ``hammerstein run --workers N`` or ``--scheduler
+ADDRESS``): the study is scattered once to every worker, chunks ``(start,
+stop)`` are submitted with at most a few per worker in flight, and results are
+merged as they complete (merging is order independent).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import re
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from hammerstein.core import references as refs
+from hammerstein.core.dynamics import sampled_bending_modes
+from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.core.metrics import UNITS, steady_window
+from hammerstein.core.plant import HammersteinPlant
+from hammerstein.exceptions import PresetError
+from hammerstein.core.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
+from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
+                                     name_field, number, string)
+from hammerstein.scenario.identification import ResolveContext
+from hammerstein.scenario.registry import COMPENSATORS, build_compensator
+from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
+from hammerstein.simulation import is_fusable, simulate_chain_batch
+
+__all__ = [
+    "MonteCarloStudy",
+    "MonteCarloScenario",
+    "MonteCarloResult",
+    "QuantileAccumulator",
+    "is_montecarlo",
+    "validate_montecarlo",
+    "draw_factors",
+    "case_plant",
+    "run_chunk",
+    "run_study",
+    "run_montecarlo_scenario",
+    "execution",
+    "QUANTILES",
+    "CHUNK_CASES",
+    "EXACT_VALUES",
+    "MAX_RUNS",
+    "MAX_RUN_SAMPLES",
+    "BINS_PER_DECADE",
+    "MIN_FACTOR",
+]
+
+#: Quantiles reported (with the maximum).
+QUANTILES = (0.50, 0.95, 0.99)
+#: Plants per chunk (one batch-kernel call runs chunk x frequencies runs).
+CHUNK_CASES = 50
+#: Exact metric values kept (beyond: histogram quantiles).
+EXACT_VALUES = 2_000_000
+#: Budget: runs (cases x frequencies) per study.
+MAX_RUNS = 100_000_000
+#: Budget: samples of one run (reference length).
+MAX_RUN_SAMPLES = 200_000
+#: Histogram resolution (log-spaced bins per decade) and range [10**LO, 10**HI].
+BINS_PER_DECADE = 400
+_LO, _HI = -9, 6
+#: Smallest factor of a natural frequency or damping ratio.
+MIN_FACTOR = 0.05
+
+DISTRIBUTIONS = ("normal", "uniform", "lognormal")
+VARIED = ("weights", "cross_coupling", "natural_frequency", "damping_ratio")
+
+
+# -- validation --------------------------------------------------------------------------
+def _distribution(v):
+    problems = []
+    c = check_table(v, {"relative_sd": Field(number("", 0, exclusive=False), required=True),
+                        "distribution": Field(choice(*DISTRIBUTIONS), default="normal")},
+                    "", problems, "")
+    if problems:
+        raise Invalid("; ".join(q.lstrip(": ") for q in problems))
+    return c
+
+
+def _noise(v):
+    problems = []
+    c = check_table(v, {"sd": Field(number("µm", 0, exclusive=False), required=True)}, "", problems, "")
+    if problems:
+        raise Invalid("; ".join(q.lstrip(": ") for q in problems))
+    return c
+
+
+VARY = {**{k: Field(_distribution) for k in VARIED}, "noise": Field(_noise)}
+
+
+def _frequencies(v):
+    if (isinstance(v, list) and v and all(isinstance(f, (int, float)) and not isinstance(f, bool)
+                                          and math.isfinite(f) and f > 0 for f in v)
+            and len(set(v)) == len(v)):
+        return [float(f) for f in v]
+    raise Invalid(f"expected a non-empty list of distinct positive frequencies [Hz], found {v!r}")
+
+
+SWEEP = {
+    "kind": Field(choice("monte-carlo"), required=True),
+    "name": Field(name_field(), required=True),
+    "description": Field(string()),
+    "cases": Field(integer(1, MAX_RUNS), required=True),
+    "frequencies": Field(_frequencies, required=True),
+    "reference": Field(lambda v: v, required=True),
+    "settle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
+    "vary": Field(lambda v: v, default={}),
+    "chunk": Field(integer(1, 100_000)),
+}
+
+
+def is_montecarlo(data):
+    """Whether a parsed scenario file is a Monte-Carlo study.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed TOML file.
+
+    Returns
+    -------
+    bool
+        True when it has ``[[sweeps]]`` tables, one of them with
+        ``kind = "monte-carlo"``.
+    """
+    sweeps = data.get("sweeps")
+    return isinstance(sweeps, list) and any(isinstance(s, dict) and s.get("kind") == "monte-carlo"
+                                            for s in sweeps)
+
+
+@dataclass
+class MonteCarloStudy:
+    """One ``[[sweeps]] kind = "monte-carlo"`` table, ready to run (picklable).
+
+    Parameters
+    ----------
+    name : str
+    description : str
+    cases : int
+        Number of drawn plants.
+    seed : int
+        The scenario's ``seed``.
+    frequencies : list of float
+        [Hz].
+    references : list of numpy.ndarray, each shape (p, n_samples_j)
+        Reference per frequency [µm].
+    period_samples : list of int
+        Samples per period, per frequency.
+    settle_periods : float
+    vary : dict
+        Validated ``[sweeps.vary]``: ``{quantity: {relative_sd,
+        distribution}}`` and optionally ``noise = {sd}``.
+    plant : HammersteinPlant
+        The nominal plant.
+    modes : tuple or None
+        ``(natural_frequency [Hz], damping_ratio)`` arrays of shape (p,) of
+        the nominal bending modes (None for other dynamics).
+    compensator : object or None
+        Built by :func:`run_montecarlo_scenario` from the nominal model.
+    chunk : int
+        Plants per chunk.
+    """
+
+    name: str
+    description: str
+    cases: int
+    seed: int
+    frequencies: list
+    references: list
+    period_samples: list
+    settle_periods: float
+    vary: dict
+    plant: object
+    modes: tuple | None
+    compensator: object = None
+    chunk: int = CHUNK_CASES
+
+    @property
+    def columns(self):
+        """``(channel, metric)`` of the metric axis of :func:`run_chunk`'s arrays."""
+        names = list(self.plant.hysteresis.output_names)
+        cols = [(n, m) for n in names for m in ("rms_error", "max_abs_error")]
+        allch = "+".join(names)
+        return cols + [(allch, "rms_euclidean_error"), (allch, "max_euclidean_error")]
+
+
+@dataclass
+class MonteCarloScenario:
+    """A validated Monte-Carlo scenario (top-level ``kind`` ``"monte-carlo"``).
+
+    Parameters
+    ----------
+    name, title, description : str
+    seed : int
+    path : pathlib.Path
+    studies : list of MonteCarloStudy
+    compensator_spec : dict
+        The ``[compensator]`` table (built once per study, on the nominal plant).
+    kind : str
+        ``"monte-carlo"``.
+    """
+
+    name: str
+    title: str
+    description: str
+    seed: int
+    path: Path
+    studies: list
+    compensator_spec: dict = field(default_factory=dict)
+    kind: str = "monte-carlo"
+
+    @property
+    def cases(self):
+        """``range`` over the drawn plants of all studies (``len`` = their number).
+
+        Returns
+        -------
+        range
+        """
+        return range(sum(s.cases for s in self.studies))
+
+
+def _nominal_modes(preset, base, outputs):
+    """``(natural_frequency, damping_ratio)`` of a preset's bending modes, or None."""
+    path = resolve_preset(preset, base)
+    dyn = read_toml(path, "preset file").get("dynamics", {})
+    if not isinstance(dyn, dict) or dyn.get("kind", "bending_modes") != "bending_modes":
+        return None
+    got = dynamics_from_table(dyn, outputs, str(path), build=False)
+    if not isinstance(got, tuple):
+        return None
+    p = len(outputs)
+    fn = np.broadcast_to(np.asarray(got[1], dtype=float), (p,)).copy()
+    zeta = np.broadcast_to(np.asarray(got[2], dtype=float), (p,)).copy()
+    return fn, zeta
+
+
+def validate_montecarlo(path, data):
+    """Validate a Monte-Carlo scenario file (nothing built or simulated).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        Scenario TOML file.
+    data : dict
+        Its parsed content.
+
+    Returns
+    -------
+    MonteCarloScenario
+
+    Raises
+    ------
+    ScenarioError
+        Every problem, one ``file: key: message`` line each (an unknown key,
+        a missing preset, ordinary ``[[cases]]`` mixed with the study, a
+        varied natural frequency of a preset without bending modes, a budget
+        exceeded, ...).
+    """
+    source, base, problems = str(path), Path(path).parent, []
+    own = {**{k: f for k, f in TOP.items() if k in ("name", "title", "description", "seed")},
+           "kind": Field(choice("cases", "monte-carlo"))}
+    top = check_table({k: v for k, v in data.items() if k not in ("plant", "compensator", "sweeps",
+                                                                 "cases")},
+                      own, "", problems, source) or {}
+    if "cases" in data:
+        problems.append(f"{source}: cases: a Monte-Carlo study (sweeps of kind 'monte-carlo') "
+                        f"cannot hold [[cases]]; put them in another scenario file")
+    plant_t = data.get("plant")
+    plant = None
+    if not isinstance(plant_t, dict) or not isinstance(plant_t.get("preset"), str):
+        problems.append(f"{source}: plant.preset: expected the nominal plant's preset name or file")
+    else:
+        unknown = [k for k in plant_t if k not in ("preset", "dynamics")]
+        if unknown:
+            problems.append(f"{source}: plant.{unknown[0]}: unknown key (expected preset, dynamics)")
+        try:
+            plant = load_plant(plant_t["preset"], dynamics=bool(plant_t.get("dynamics", True)),
+                               base_dir=base)
+        except PresetError as exc:
+            problems.append(f"{source}: plant.preset: {exc}")
+    comp = data.get("compensator", {"kind": "multivariable"})
+    if not isinstance(comp, dict) or comp.get("kind", "none") not in COMPENSATORS:
+        kind = comp.get("kind") if isinstance(comp, dict) else comp
+        problems += [f"{source}: compensator.kind: {m}" for m in kind_problem(kind, COMPENSATORS)]
+    elif not COMPENSATORS[comp.get("kind", "none")].compensates:
+        problems.append(f"{source}: compensator.kind: a Monte-Carlo study needs a compensator, "
+                        f"found {comp.get('kind', 'none')!r}")
+    studies, seen = [], set()
+    seed = top.get("seed", 0)
+    for i, raw in enumerate(data.get("sweeps", [])):
+        where = f"sweeps[{i}]"
+        if not isinstance(raw, dict) or raw.get("kind") != "monte-carlo":
+            problems.append(f"{source}: {where}.kind: expected 'monte-carlo' (a study's sweeps are "
+                            f"all Monte-Carlo sweeps; put frequency sweeps in another file)")
+            continue
+        n0 = len(problems)
+        c = check_table(raw, SWEEP, where, problems, source)
+        if c is None or len(problems) > n0:
+            continue
+        if c["name"] in seen:
+            problems.append(f"{source}: {where}.name: duplicate sweep name {c['name']!r}")
+        seen.add(c["name"])
+        vary = check_table(c["vary"], VARY, f"{where}.vary", problems, source)
+        if vary is None or plant is None or len(problems) > n0:
+            continue
+        modes = _nominal_modes(plant_t["preset"], base, list(plant.hysteresis.output_names)) \
+            if plant_t.get("dynamics", True) else None
+        for q in ("natural_frequency", "damping_ratio"):
+            if q in vary and modes is None:
+                problems.append(f"{source}: {where}.vary.{q}: the nominal plant has no bending "
+                                f"modes (preset dynamics of kind 'bending_modes') to vary")
+        if not plant.packable or not isinstance(plant.hysteresis, MultivariablePI):
+            problems.append(f"{source}: plant.preset: expected a classical multivariable PI plant "
+                            f"(Monte-Carlo studies run on the fused batch kernel)")
+            continue
+        if len(c["frequencies"]) * c["cases"] > MAX_RUNS:
+            problems.append(f"{source}: {where}.cases: {c['cases']} cases x "
+                            f"{len(c['frequencies'])} frequencies exceed the budget of "
+                            f"{MAX_RUNS:.3g} runs per study")
+        sig = c["reference"]
+        if not isinstance(sig, dict) or sig.get("kind") not in refs.REFERENCE_KINDS:
+            problems += [f"{source}: {where}.reference.kind: {m}"
+                         for m in kind_problem(sig.get("kind") if isinstance(sig, dict) else sig,
+                                               refs.REFERENCE_KINDS)]
+            continue
+        if "frequency" in sig:
+            problems.append(f"{source}: {where}.reference.frequency: given by the sweep's "
+                            f"frequencies; remove it from the template")
+            continue
+        entry = refs.REFERENCE_KINDS[sig["kind"]]
+        references, periods = [], []
+        T = plant.sampling_period
+        for f in c["frequencies"]:
+            tab = {**sig, "frequency": f}
+            rc = check_table(tab, {"kind": Field(lambda v: v), **entry.fields},
+                             f"{where}.reference", problems, source)
+            if rc is None or len(problems) > n0:
+                break
+            try:
+                _, r, period, _ = entry.generate({k: v for k, v in rc.items() if k != "kind"}, T,
+                                                 list(plant.hysteresis.output_names), base)
+            except refs.SignalError as exc:
+                problems.append(f"{source}: {where}.reference.{exc}")
+                break
+            P = max(int(round(period / T)), 1)
+            if r.shape[1] > MAX_RUN_SAMPLES:
+                problems.append(f"{source}: {where}.reference: {r.shape[1]} samples at {f:g} Hz; "
+                                f"expected at most {MAX_RUN_SAMPLES} per run")
+                break
+            if r.shape[1] < c["settle_periods"] * P + 1:
+                problems.append(f"{source}: {where}.settle_periods: {c['settle_periods']:g} periods "
+                                f"leave no sample of the {r.shape[1]}-sample record at {f:g} Hz")
+                break
+            references.append(np.ascontiguousarray(r, dtype=float))
+            periods.append(P)
+        if len(problems) > n0:
+            continue
+        studies.append(MonteCarloStudy(
+            name=c["name"], description=c.get("description", ""), cases=c["cases"], seed=seed,
+            frequencies=c["frequencies"], references=references, period_samples=periods,
+            settle_periods=float(c["settle_periods"]), vary=vary, plant=plant, modes=modes,
+            chunk=c.get("chunk", CHUNK_CASES)))
+    if not data.get("sweeps"):
+        problems.append(f"{source}: sweeps: expected one or more [[sweeps]] kind = 'monte-carlo'")
+    if "name" not in data and not (len(Path(path).stem) <= MAX_NAME
+                                   and re.fullmatch(NAME, Path(path).stem)):
+        problems.append(f"{source}: name: missing, and the file name is not usable as a report "
+                        f"directory name; give name = \"...\"")
+    if problems:
+        raise ScenarioError(problems)
+    return MonteCarloScenario(name=top.get("name", Path(path).stem),
+                              title=top.get("title", Path(path).stem),
+                              description=top.get("description", ""), seed=seed, path=Path(path),
+                              studies=studies, compensator_spec=dict(comp))
+
+
+# -- drawing ---------------------------------------------------------------------------------
+def _factor(z, spec, positive=False):
+    """Factors of mean 1 and relative sd ``spec['relative_sd']`` from standard normals ``z``."""
+    s, dist = spec["relative_sd"], spec.get("distribution", "normal")
+    if dist == "normal":
+        f = 1.0 + s * z
+    elif dist == "uniform":
+        from scipy.special import ndtr   # scipy is loaded lazily by the project
+        f = 1.0 + s * math.sqrt(3.0) * (2.0 * ndtr(z) - 1.0)
+    else:
+        sigma = math.sqrt(math.log1p(s * s))
+        f = np.exp(sigma * z - 0.5 * sigma * sigma)
+    return np.maximum(f, MIN_FACTOR) if positive else f
+
+
+def draw_factors(study, i):
+    """The multiplicative factors of case ``i`` (depend only on ``(seed, i)`` and the study).
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+    i : int
+        Case index, ``0 <= i < study.cases``.
+
+    Returns
+    -------
+    dict
+        ``weights`` (one array per component ``(l, k)`` of its hysteron
+        weights' factors), ``cross_coupling`` ((p, m) array, 1 on the
+        diagonal), ``natural_frequency`` and ``damping_ratio`` ((p,) arrays);
+        1 where the quantity is not varied.
+    """
+    model = study.plant.hysteresis
+    p, m = model.n_outputs, model.n_inputs
+    rng = np.random.default_rng([study.seed, i])
+    comps = [(l, k, c) for l, row in enumerate(model.components) for k, c in enumerate(row)]
+    sizes = [len(c.weights) if isinstance(c, PrandtlIshlinskii) else 0 for _, _, c in comps]
+    z_w = rng.standard_normal(sum(sizes))
+    z_c = rng.standard_normal(p * m).reshape(p, m)
+    z_f = rng.standard_normal(p)
+    z_d = rng.standard_normal(p)
+    v = study.vary
+    fw = _factor(z_w, v["weights"]) if "weights" in v else np.ones_like(z_w)
+    cut = np.cumsum([0] + sizes)
+    weights = {(l, k): fw[cut[j]:cut[j + 1]] for j, (l, k, _) in enumerate(comps)}
+    fc = _factor(z_c, v["cross_coupling"]) if "cross_coupling" in v else np.ones((p, m))
+    if p == m:
+        np.fill_diagonal(fc, 1.0)
+    return {"weights": weights, "cross_coupling": fc,
+            "natural_frequency": _factor(z_f, v["natural_frequency"], True)
+            if "natural_frequency" in v else np.ones(p),
+            "damping_ratio": _factor(z_d, v["damping_ratio"], True)
+            if "damping_ratio" in v else np.ones(p)}
+
+
+def case_plant(study, i):
+    """The plant of case ``i``: the nominal plant with the factors of :func:`draw_factors`.
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+    i : int
+
+    Returns
+    -------
+    HammersteinPlant
+        Weights w of component (l, k) become ``w * f_weights * f_cross[l, k]``
+        (a linear gain component: ``gain * f_cross[l, k]``); the bending
+        modes' natural frequencies and damping ratios are scaled by their
+        factors and re-sampled (zero-order hold); creep is the nominal one.
+    """
+    nominal = study.plant
+    model = nominal.hysteresis
+    f = draw_factors(study, i)
+    rows = []
+    for l, row in enumerate(model.components):
+        new = []
+        for k, c in enumerate(row):
+            g = f["cross_coupling"][l, k]
+            if isinstance(c, PrandtlIshlinskii):
+                new.append(PrandtlIshlinskii(c.thresholds, np.asarray(c.weights) * f["weights"][(l, k)] * g))
+            elif c is None:
+                new.append(None)
+            else:
+                new.append(float(c) * g)
+        rows.append(new)
+    hyst = MultivariablePI(rows, input_names=model.input_names, output_names=model.output_names,
+                           input_amplitude=model.input_amplitude, output_offset=model.output_offset,
+                           output_map=model.output_map)
+    lin = nominal.sampled_dynamics
+    if study.modes is not None and nominal.sampled_dynamics is not None:
+        fn, zeta = study.modes
+        lin = sampled_bending_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
+                                    list(model.output_names), nominal.sampling_period)
+    return HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
+                            creep=nominal.creep)
+
+
+# -- running ---------------------------------------------------------------------------------
+def _run_metrics(study, i, j, reference, outputs):
+    """Metric vector of case i at frequency index j (order of ``study.columns``)."""
+    y = outputs
+    if "noise" in study.vary and study.vary["noise"]["sd"] > 0:
+        rng = np.random.default_rng([study.seed, i, j + 1])
+        y = y + study.vary["noise"]["sd"] * rng.standard_normal(y.shape)
+    win = steady_window(y.shape[1], study.period_samples[j], study.settle_periods)
+    e = reference[:, win] - y[:, win]
+    rms = np.sqrt(np.mean(e ** 2, axis=1))
+    mx = np.max(np.abs(e), axis=1)
+    ee = np.sqrt(np.sum(e ** 2, axis=0))
+    out = np.empty(2 * e.shape[0] + 2)
+    out[0:-2:2], out[1:-2:2] = rms, mx
+    out[-2], out[-1] = np.sqrt(np.mean(ee ** 2)), ee.max()
+    out[~np.isfinite(out)] = np.inf     # a divergence (NaN outputs) is an infinite error
+    return out
+
+
+def run_chunk(study, start, stop, parallel=None):
+    """Metrics of cases ``start .. stop - 1`` at every frequency.
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+        With its compensator built.
+    start, stop : int
+        Case range, ``0 <= start < stop <= study.cases``.
+    parallel : bool, optional
+        Spread the runs over numba's threads
+        (:func:`hammerstein.simulation.simulate_chain_batch`; default: when
+        large enough). Results do not depend on it.
+
+    Returns
+    -------
+    start : int
+    values : numpy.ndarray, shape (stop - start, n_frequencies, n_metrics)
+        In the units of the metrics (µm); ``inf`` for a diverged run.
+        Row ``i - start`` depends only on ``(study.seed, i)``.
+    """
+    plants = [case_plant(study, i) for i in range(start, stop)]
+    F = len(study.frequencies)
+    runs = [(a, j) for a in range(len(plants)) for j in range(F)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        outs = simulate_chain_batch(study.compensator, [plants[a] for a, _ in runs],
+                                    [study.references[j] for _, j in runs], parallel=parallel)
+    values = np.empty((len(plants), F, len(study.columns)))
+    for (a, j), res in zip(runs, outs):
+        values[a, j] = _run_metrics(study, start + a, j, study.references[j], res.outputs)
+    return start, values
+
+
+class QuantileAccumulator:
+    """Order-independent reduction of per-case metric values to quantiles.
+
+    Parameters
+    ----------
+    cases : int
+        Number of cases that will be added.
+    shape : tuple of int
+        ``(n_frequencies, n_metrics)`` of one case's values.
+    exact_limit : int, optional
+        Keep the exact values when ``cases * prod(shape)`` is at most this
+        (default :data:`EXACT_VALUES`).
+
+    Notes
+    -----
+    Memory: ``prod(shape) * (n_bins + 1)`` counters (``n_bins`` =
+    ``BINS_PER_DECADE * 15`` log-spaced bins on ``[1e-9, 1e6]``, plus
+    under/overflow), independent of ``cases``, and the exact values when
+    kept. Adding chunks in any order gives identical results (integer counts,
+    maxima, values stored by case index).
+
+    Examples
+    --------
+    The P50 of 1, 2, ..., 100 is 50 (inverted CDF: the smallest value with at
+    least half of the values at or below it); the histogram gives it within
+    its bin width.
+
+    >>> import numpy as np
+    >>> from hammerstein.scenario.montecarlo import QuantileAccumulator
+    >>> v = np.arange(1.0, 101.0).reshape(100, 1, 1)
+    >>> exact, hist = QuantileAccumulator(100, (1, 1)), QuantileAccumulator(100, (1, 1), exact_limit=0)
+    >>> for start in (50, 0):                      # chunks in any order
+    ...     exact.add(start, v[start:start + 50]); hist.add(start, v[start:start + 50])
+    >>> exact.quantiles()[:, 0, 0].tolist()        # P50, P95, P99, max
+    [50.0, 95.0, 99.0, 100.0]
+    >>> bool(abs(hist.quantiles()[0, 0, 0] / 50.0 - 1) < 0.003)
+    True
+    """
+
+    def __init__(self, cases, shape, exact_limit=None):
+        exact_limit = EXACT_VALUES if exact_limit is None else exact_limit
+        self.cases, self.shape = cases, tuple(shape)
+        self.n_bins = BINS_PER_DECADE * (_HI - _LO)
+        self.counts = np.zeros(self.shape + (self.n_bins + 2,), dtype=np.int64)
+        self.maximum = np.full(self.shape, -np.inf)
+        self.count = 0
+        self.values = (np.full((cases,) + self.shape, np.nan)
+                       if cases * int(np.prod(self.shape)) <= exact_limit else None)
+
+    def _bin(self, v):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            b = np.floor((np.log10(v) - _LO) * BINS_PER_DECADE)
+        b = np.where(v <= 10.0 ** _LO, -1, b)
+        b = np.where(~np.isfinite(b) & (v > 0), self.n_bins, b)
+        return (np.clip(b, -1, self.n_bins) + 1).astype(np.int64)   # 0: underflow, n+1: overflow
+
+    def add(self, start, values):
+        """Add the values of cases ``start .. start + len(values) - 1``.
+
+        Parameters
+        ----------
+        start : int
+        values : numpy.ndarray, shape (n_cases, n_frequencies, n_metrics)
+        """
+        n = values.shape[0]
+        bins = self._bin(values)
+        flat = (np.arange(int(np.prod(self.shape))).reshape(self.shape) * (self.n_bins + 2))
+        np.add.at(self.counts.reshape(-1), (flat[None] + bins).ravel(), 1)
+        self.maximum = np.maximum(self.maximum, values.max(axis=0))
+        self.count += n
+        if self.values is not None:
+            self.values[start:start + n] = values
+
+    @property
+    def exact(self):
+        """Whether the quantiles are exact (all values kept)."""
+        return self.values is not None
+
+    def quantiles(self, q=QUANTILES):
+        """Quantiles ``q`` and the maximum of every (frequency, metric).
+
+        Parameters
+        ----------
+        q : sequence of float
+            In [0, 1].
+
+        Returns
+        -------
+        numpy.ndarray, shape (len(q) + 1, n_frequencies, n_metrics)
+            Exact quantiles (inverted CDF: the smallest value with at least
+            ``q n`` values at or below it) when :attr:`exact`, else the
+            geometric centre of the histogram bin holding that value (0 for
+            the underflow bin, inf for the overflow bin); last: the maximum.
+        """
+        out = np.empty((len(q) + 1,) + self.shape)
+        if self.exact:
+            out[:-1] = np.quantile(self.values[:self.count], q, axis=0, method="inverted_cdf")
+        else:
+            cum = np.cumsum(self.counts, axis=-1)
+            edges = _LO + (np.arange(self.n_bins) + 0.5) / BINS_PER_DECADE
+            centres = np.concatenate([[0.0], 10.0 ** edges, [np.inf]])
+            for a, qq in enumerate(q):
+                k = np.maximum(np.ceil(qq * self.count), 1)
+                idx = np.argmax(cum >= k, axis=-1)
+                out[a] = centres[idx]
+        out[-1] = self.maximum
+        return out
+
+
+@dataclass
+class MonteCarloResult:
+    """Quantiles of one study.
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+    quantiles : numpy.ndarray, shape (4, n_frequencies, n_metrics)
+        P50, P95, P99, max [µm].
+    diverged : numpy.ndarray, shape (n_frequencies,)
+        Cases whose compensator diverged (or whose errors are not finite).
+    exact : bool
+        Exact quantiles (else histogram, relative error <= 0.3 %).
+    values : numpy.ndarray or None, shape (cases, n_frequencies, n_metrics)
+        Every case's metrics when kept (:data:`EXACT_VALUES`).
+    warnings : list of str
+    """
+
+    study: MonteCarloStudy
+    quantiles: np.ndarray
+    diverged: np.ndarray
+    exact: bool
+    values: np.ndarray | None = None
+    warnings: list = field(default_factory=list)
+
+    @property
+    def name(self):
+        """The sweep's name."""
+        return self.study.name
+
+    @property
+    def metrics(self):
+        """Rows ``{channel, metric, value, unit}``: ``<metric>_p50/_p95/_p99/_max@<f>Hz``.
+
+        Returns
+        -------
+        list of dict
+        """
+        rows = []
+        for j, f in enumerate(self.study.frequencies):
+            for c, (ch, met) in enumerate(self.study.columns):
+                for a, tag in enumerate(("p50", "p95", "p99", "max")):
+                    rows.append({"channel": ch, "metric": f"{met}_{tag}_at_{f:g}Hz",
+                                 "value": float(self.quantiles[a, j, c]), "unit": UNITS.get(met, "µm")})
+            rows.append({"channel": "-", "metric": f"diverged_cases_at_{f:g}Hz",
+                         "value": float(self.diverged[j]), "unit": "cases"})
+        return rows
+
+
+_CLIENT = {"client": None}
+
+
+@contextlib.contextmanager
+def execution(workers=None, scheduler=None):
+    """Run the Monte-Carlo chunks of this block on dask.distributed (default: this process).
+
+    Parameters
+    ----------
+    workers : int, optional
+        Start a ``LocalCluster`` of this many single-threaded worker processes.
+    scheduler : str, optional
+        Address of a running ``dask scheduler`` (e.g. ``tcp://127.0.0.1:8786``).
+
+    Yields
+    ------
+    distributed.Client or None
+
+    Raises
+    ------
+    ValueError
+        When ``dask.distributed`` is not installed or the scheduler cannot be
+        reached (one line).
+    """
+    if not workers and not scheduler:
+        yield None
+        return
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise ValueError("--workers/--scheduler need dask.distributed: "
+                         "pip install 'dask[distributed]'") from None
+    logging.getLogger("distributed").setLevel(logging.ERROR)   # one line per problem on stderr
+    cluster = None
+    try:
+        if scheduler:
+            client = Client(scheduler, timeout="10s")
+        else:
+            cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                                   dashboard_address=":0")
+            client = Client(cluster)
+    except (OSError, TimeoutError) as exc:
+        if cluster is not None:
+            cluster.close()
+        raise ValueError(f"cannot reach the dask scheduler {scheduler or ''}: {exc}") from None
+    _CLIENT["client"] = client
+    try:
+        yield client
+    finally:
+        _CLIENT["client"] = None
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def run_study(study, client=None, chunk=None):
+    """Run every case of a study; quantiles of every metric per frequency.
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+        With its compensator built.
+    client : distributed.Client, optional
+        Run the chunks on this dask cluster (default: here, in order).
+    chunk : int, optional
+        Plants per chunk (default ``study.chunk``); does not change any result.
+
+    Returns
+    -------
+    MonteCarloResult
+    """
+    chunk = chunk or study.chunk
+    acc = QuantileAccumulator(study.cases, (len(study.frequencies), len(study.columns)))
+    ranges = [(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)]
+    diverged = np.zeros(len(study.frequencies), dtype=np.int64)
+
+    def take(start, values):
+        nonlocal diverged
+        diverged = diverged + np.sum(~np.isfinite(values).all(axis=2), axis=0)
+        acc.add(start, values)
+
+    if client is None:
+        for a, b in ranges:
+            take(*run_chunk(study, a, b))
+    else:
+        from distributed import as_completed
+        remote = client.scatter(study, broadcast=True)
+        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        it = iter(ranges)
+        pending = as_completed()
+        for a, b in list(zip(range(4 * n_workers), it)):
+            pending.add(client.submit(run_chunk, remote, *b, False, pure=False))
+        for fut in pending:
+            take(*fut.result())
+            fut.release()
+            nxt = next(it, None)
+            if nxt is not None:
+                pending.add(client.submit(run_chunk, remote, *nxt, False, pure=False))
+    return MonteCarloResult(study, acc.quantiles(), diverged, acc.exact, acc.values)
+
+
+def run_montecarlo_scenario(scenario):
+    """Build the compensator once per study from the nominal model and run every study.
+
+    Parameters
+    ----------
+    scenario : MonteCarloScenario
+
+    Returns
+    -------
+    list of MonteCarloResult
+
+    Raises
+    ------
+    ScenarioError
+        When the compensator cannot be built or cannot run on the batch kernel.
+    """
+    source = str(scenario.path)
+    context = ResolveContext(scenario.path.parent)
+    results = []
+    for study in scenario.studies:
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            try:
+                comp = build_compensator(scenario.compensator_spec, study.plant, context)
+            except (ValueError, PresetError) as exc:
+                raise ScenarioError([f"{source}: compensator: {exc}"]) from None
+        if not is_fusable(comp):
+            raise ScenarioError([f"{source}: compensator.kind: {scenario.compensator_spec.get('kind')!r} "
+                                 f"cannot run on the batch kernel; a Monte-Carlo study needs an "
+                                 f"inverse multiplicative compensator (e.g. 'multivariable')"])
+        study.compensator = comp
+        res = run_study(study, _CLIENT["client"])
+        res.warnings = list(dict.fromkeys(str(w.message) for w in rec))
+        results.append(res)
+    return results

@@ -1,0 +1,249 @@
+"""Monte-Carlo studies: reproducibility per (seed, case), chunking and dask invariance,
+distributions, streaming quantiles against naive references, validation messages."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from hammerstein.core.hysteresis import PrandtlIshlinskii
+from hammerstein.exceptions import ScenarioError
+from hammerstein.scenario import montecarlo as mc
+from hammerstein.scenario.identification import ResolveContext
+from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.validate import validate_scenario
+from hammerstein.simulation import simulate_chain
+
+STUDY = """
+name = "mc"
+seed = 11
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "multivariable"
+[[sweeps]]
+kind = "monte-carlo"
+name = "mm"
+cases = 7
+frequencies = [50.0, 120.0]
+reference = {{ kind = "sine", output = "x", amplitude = 20.0, periods = 2 }}
+settle_periods = 1
+[sweeps.vary]
+{vary}
+"""
+
+VARY = """weights = { relative_sd = 0.05 }
+cross_coupling = { relative_sd = 0.2, distribution = "lognormal" }
+natural_frequency = { relative_sd = 0.05, distribution = "uniform" }
+damping_ratio = { relative_sd = 0.2 }
+noise = { sd = 0.05 }"""
+
+
+def _study(tmp_path, vary=VARY, name="s.toml"):
+    f = tmp_path / name
+    f.write_text(STUDY.format(vary=vary))
+    sc = validate_scenario(f)
+    study = sc.studies[0]
+    study.compensator = build_compensator(sc.compensator_spec, study.plant, ResolveContext(tmp_path))
+    return study
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    return _study(tmp_path_factory.mktemp("mc"))
+
+
+def test_case_depends_only_on_seed_and_index(study):
+    _, whole = mc.run_chunk(study, 0, 7)
+    parts = [mc.run_chunk(study, a, b) for a, b in [(5, 7), (0, 2), (2, 5)]]   # any order
+    again = np.empty_like(whole)
+    for start, v in parts:
+        again[start:start + len(v)] = v
+    assert np.array_equal(whole, again)                      # bit for bit
+    assert not np.array_equal(whole[0], whole[1])            # the cases do differ
+
+
+def test_chunk_size_does_not_change_the_study(study):
+    a, b = mc.run_study(study, chunk=7), mc.run_study(study, chunk=2)
+    assert np.array_equal(a.values, b.values) and np.array_equal(a.quantiles, b.quantiles)
+    assert a.exact and a.values.shape == (7, 2, len(study.columns))
+
+
+def test_metrics_equal_a_naive_simulation_of_the_drawn_plant(study):
+    _, v = mc.run_chunk(study, 3, 4)
+    plant = mc.case_plant(study, 3)
+    for j, r in enumerate(study.references):
+        y = simulate_chain(study.compensator, plant, r).outputs
+        y = y + study.vary["noise"]["sd"] * np.random.default_rng([study.seed, 3, j + 1]).standard_normal(y.shape)
+        P = study.period_samples[j]
+        e = r[:, P:] - y[:, P:]                              # settle_periods = 1
+        expect = []
+        for l in range(2):
+            expect += [math.sqrt(np.mean(e[l] ** 2)), np.max(np.abs(e[l]))]
+        ee = np.hypot(e[0], e[1])
+        expect += [math.sqrt(np.mean(ee ** 2)), ee.max()]
+        np.testing.assert_allclose(v[0, j], expect, rtol=1e-12)
+
+
+def test_no_variation_gives_the_nominal_plant(tmp_path):
+    s = _study(tmp_path, vary="")
+    plant, nominal = mc.case_plant(s, 4), s.plant
+    for row_a, row_b in zip(plant.hysteresis.components, nominal.hysteresis.components):
+        for a, b in zip(row_a, row_b):
+            if isinstance(a, PrandtlIshlinskii):
+                assert np.array_equal(a.weights, b.weights)
+    r = s.references[0]
+    assert np.array_equal(simulate_chain(s.compensator, plant, r).outputs,
+                          simulate_chain(s.compensator, nominal, r).outputs)
+
+
+def test_factors_of_one_case_are_reproducible_and_diagonal_untouched(study):
+    a, b, c = mc.draw_factors(study, 5), mc.draw_factors(study, 5), mc.draw_factors(study, 6)
+    assert np.array_equal(a["natural_frequency"], b["natural_frequency"])
+    assert not np.array_equal(a["natural_frequency"], c["natural_frequency"])
+    assert np.array_equal(np.diag(a["cross_coupling"]), [1.0, 1.0])
+    assert all(np.array_equal(a["weights"][k], b["weights"][k]) for k in a["weights"])
+
+
+@pytest.mark.parametrize("dist", ["normal", "uniform", "lognormal"])
+def test_distributions_have_mean_one_and_the_stated_relative_sd(dist):
+    z = np.random.default_rng(0).standard_normal(400_000)
+    f = mc._factor(z, {"relative_sd": 0.1, "distribution": dist})
+    se = 0.1 / math.sqrt(z.size)
+    assert abs(f.mean() - 1.0) < 5 * se
+    assert abs(f.std() - 0.1) < 0.002
+    if dist == "uniform":
+        half = 0.1 * math.sqrt(3.0)
+        assert f.min() >= 1 - half and f.max() <= 1 + half
+    if dist == "lognormal":
+        assert f.min() > 0
+
+
+def test_positive_quantities_are_clipped():
+    f = mc._factor(np.array([-50.0, 0.0]), {"relative_sd": 0.5}, positive=True)
+    assert f[0] == mc.MIN_FACTOR and f[1] == 1.0
+
+
+def _naive_quantile(x, q):
+    s = np.sort(x)
+    return s[max(math.ceil(q * len(s)), 1) - 1]
+
+
+def test_accumulator_exact_and_histogram_against_naive_quantiles():
+    rng = np.random.default_rng(3)
+    vals = rng.lognormal(0.0, 1.0, size=(1000, 2, 3))
+    vals[17, 1, 2] = np.inf                                  # a diverged run
+    exact = mc.QuantileAccumulator(1000, (2, 3))
+    hist = mc.QuantileAccumulator(1000, (2, 3), exact_limit=0)
+    order = rng.permutation(np.arange(0, 1000, 100))
+    for start in order:                                      # chunks in any order
+        exact.add(start, vals[start:start + 100])
+        hist.add(start, vals[start:start + 100])
+    qe, qh = exact.quantiles(), hist.quantiles()
+    tol = 10 ** (1 / (2 * mc.BINS_PER_DECADE)) - 1
+    for j in range(2):
+        for c in range(3):
+            x = vals[:, j, c]
+            for a, q in enumerate(mc.QUANTILES):
+                ref = _naive_quantile(x, q)
+                assert qe[a, j, c] == ref
+                assert abs(qh[a, j, c] / ref - 1) <= tol * 1.0001
+            assert qe[-1, j, c] == qh[-1, j, c] == x.max()
+    assert np.isinf(qe[-1, 1, 2])
+    whole = mc.QuantileAccumulator(1000, (2, 3), exact_limit=0)
+    whole.add(0, vals)
+    assert np.array_equal(whole.counts, hist.counts)
+
+
+def test_dask_in_process_cluster_is_bit_identical(study):
+    distributed = pytest.importorskip("distributed")
+    local = mc.run_study(study, chunk=3)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        remote = mc.run_study(study, client=client, chunk=2)
+    assert np.array_equal(local.values, remote.values)
+    assert np.array_equal(local.quantiles, remote.quantiles)
+    assert np.array_equal(local.diverged, remote.diverged)
+
+
+@pytest.mark.parametrize("vary, expect", [
+    ("gain = { relative_sd = 0.1 }", "sweeps[0].vary.gain"),
+    ("weights = { relative_sd = -0.1 }", "sweeps[0].vary.weights"),
+    ("weights = { relative_sd = 0.1, distribution = \"cauchy\" }", "sweeps[0].vary.weights"),
+    ("noise = { level = 1 }", "sweeps[0].vary.noise"),
+])
+def test_bad_vary_tables_name_the_field(tmp_path, vary, expect):
+    f = tmp_path / "bad.toml"
+    f.write_text(STUDY.format(vary=vary))
+    with pytest.raises(ScenarioError, match=expect.replace(".", r"\.").replace("[", r"\[").replace("]", r"\]")):
+        validate_scenario(f)
+
+
+@pytest.mark.parametrize("edit, expect", [
+    (lambda s: s.replace("[plant]", "[[cases]]\nname = \"x\"\ndrive = { kind = \"sine\", input = \"ux\", "
+                         "amplitude = 1.0, frequency = 10.0 }\n[plant]"), "cases:"),
+    (lambda s: s.replace("cases = 7", "cases = 0"), "sweeps[0].cases"),
+    (lambda s: s.replace('preset = "rakotondrabe-2dof"', 'preset = "rakotondrabe-2dof"\ndynamics = false')
+     + 'natural_frequency = { relative_sd = 0.1 }\n', "vary.natural_frequency"),
+    (lambda s: s.replace('kind = "multivariable"', 'kind = "none"'), "compensator.kind"),
+    (lambda s: s.replace("periods = 2 }", "periods = 2, frequency = 3.0 }"), "reference.frequency"),
+])
+def test_bad_studies_name_the_field(tmp_path, edit, expect):
+    f = tmp_path / "bad.toml"
+    f.write_text(edit(STUDY.format(vary="")))
+    with pytest.raises(ScenarioError, match=expect.replace(".", r"\.").replace("[", r"\[").replace("]", r"\]")):
+        validate_scenario(f)
+
+
+@pytest.mark.parametrize("args", [["--workers", "0"], ["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"]])
+def test_cli_rejects_bad_worker_options(tmp_path, capsys, args):
+    from hammerstein.cli.main import main
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary=""))
+    assert main(["run", str(f), "--out", str(tmp_path / "r"), *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--workers" in err[0]
+    assert not (tmp_path / "r" / "mc").exists()
+
+
+def test_cli_unreachable_scheduler_is_one_line(tmp_path, capsys):
+    from hammerstein.cli.main import main
+    pytest.importorskip("distributed")
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary=""))
+    assert main(["run", str(f), "--out", str(tmp_path / "r"), "--scheduler", "tcp://127.0.0.1:9",
+                 "-q"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "scheduler" in err[0]
+    assert not (tmp_path / "r" / "mc").exists()
+
+
+@pytest.mark.slow
+def test_cli_two_local_workers_write_the_same_report(tmp_path):
+    from hammerstein.cli.main import main
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary=VARY))
+    assert main(["run", str(f), "--out", str(tmp_path / "a"), "--figures", "none", "-q"]) == 0
+    assert main(["run", str(f), "--out", str(tmp_path / "b"), "--figures", "none", "-q",
+                 "--workers", "2"]) == 0
+    for name in ("metrics.csv", "montecarlo-mm.csv", "montecarlo-mm-cases.csv"):
+        assert (tmp_path / "a" / "mc" / name).read_bytes() == (tmp_path / "b" / "mc" / name).read_bytes()
+
+
+def test_memory_of_a_huge_study_does_not_grow_with_the_cases():
+    small, huge = mc.QuantileAccumulator(10, (20, 6)), mc.QuantileAccumulator(10 ** 9, (20, 6))
+    assert huge.values is None and not huge.exact
+    assert huge.counts.nbytes == small.counts.nbytes < 10 * 2 ** 20
+
+
+def test_histogram_quantiles_of_a_study_match_its_exact_ones(study, monkeypatch):
+    exact = mc.run_study(study)
+    monkeypatch.setattr(mc, "EXACT_VALUES", 0)
+    hist = mc.run_study(study, chunk=3)
+    assert hist.values is None and not hist.exact
+    tol = 10 ** (1 / (2 * mc.BINS_PER_DECADE)) - 1
+    np.testing.assert_allclose(hist.quantiles[:-1], exact.quantiles[:-1], rtol=tol * 1.0001)
+    assert np.array_equal(hist.quantiles[-1], exact.quantiles[-1])
