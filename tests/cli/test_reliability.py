@@ -85,7 +85,7 @@ def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
 
 
 def test_report_directories_get_umask_permissions(capsys, tmp_path):
-    assert _call(capsys, "run", GOOD, "--out", tmp_path)[0] == 0
+    assert _call(capsys, "run", GOOD, "--out", tmp_path, "--figures", "none")[0] == 0
     mode = stat.S_IMODE(os.stat(tmp_path / "good-static").st_mode)
     assert mode == 0o777 & ~umask()
 
