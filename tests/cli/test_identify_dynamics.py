@@ -42,7 +42,7 @@ def _records(tmp_path):
     slow, broadband = [], []
     n = int(round(3 / (10.0 * T)))                 # 3 periods of a 10 Hz, 10 V sine from rest
     t = np.arange(n) * T
-    n_period = int(round(0.05 / T))                # multisine: 20 Hz grid up to 2 kHz, 3 periods
+    n_period = int(round(0.05 / T))                # multisine: 20 Hz grid up to 2 kHz, 2 periods
     f = 20.0 * np.arange(1, 101)
     for k, name in enumerate(["ux", "uy"]):
         u = np.zeros((2, n))
@@ -50,8 +50,8 @@ def _records(tmp_path):
         slow.append(measure(f"slow_{name}.csv", u))
         phases = rng.uniform(0, 2 * np.pi, f.size)
         s = np.cos(2 * np.pi * f[:, None] * (np.arange(n_period) * T) + phases[:, None]).sum(0)
-        u = np.zeros((2, 3 * n_period))
-        u[k] = np.tile(8 * s / np.abs(s).max(), 3)
+        u = np.zeros((2, 2 * n_period))
+        u[k] = np.tile(8 * s / np.abs(s).max(), 2)
         broadband.append(measure(f"broadband_{name}.csv", u))
     return slow, broadband
 

@@ -234,6 +234,7 @@ def test_sensor_option_is_seeded():
 
 
 # -- measured records: kind = "identification" -----------------------------------------
+@pytest.mark.slow  # a bundled scenario end to end with its figures
 def test_real_data_scenario_held_out_below_half_percent(tmp_path):
     status = main(["run", str(ROOT / "scenarios" / "real-data-piezo-stack.toml"),
                    "--out", str(tmp_path)])
@@ -326,6 +327,7 @@ def test_bundled_data_path_form(tmp_path):
     assert resolve_data_path("rec.csv", tmp_path) == tmp_path / "rec.csv"
 
 
+@pytest.mark.slow  # a bundled scenario end to end with its figures
 def test_fig06_bundled_scenario_report(tmp_path):
     outcome = run_scenario(ROOT / "scenarios" / "paper" / "fig06-model-validation.toml", tmp_path)
     assert outcome.ok, outcome.error
