@@ -42,8 +42,9 @@ def test_every_bundled_scenario_runs(reports):
         if read_toml(path).get("kind", "cases") != "cases":  # e.g. a measured record
             plant_cols = {"time_s"}
         for case in m.case.unique():
-            if not (d / f"timeseries-{case}.csv").exists() and list(d.glob("sweep-*.csv")):
-                continue  # sweep cases (hammerstein.sweeps) write sweep-<name>.csv instead
+            if not (d / f"timeseries-{case}.csv").exists() and (
+                    list(d.glob("sweep-*.csv")) or list(d.glob("montecarlo-*.csv"))):
+                continue  # sweep cases write sweep-<name>.csv, Monte-Carlo studies their quantiles
             ts = pd.read_csv(d / f"timeseries-{case}.csv")
             assert plant_cols <= set(ts.columns)
         text = (d / "report.md").read_text(encoding="utf-8")
