@@ -20,6 +20,11 @@ The paper run (``hammerstein run scenarios/paper/*.toml``) writes about 25
 figures; the sum of the totals below for its mix is the plotting part of its
 wall time. Other processes on the machine inflate the numbers (the load
 average is printed).
+
+``--encoding`` draws every figure once and prints, for the PNG encodings
+:func:`hammerstein.report.figures.save` could use (RGBA as matplotlib's
+``savefig`` writes it, or RGB: the canvas is opaque; zlib levels 1, 3, 6),
+the CPU time to encode all of them and their total size.
 """
 
 from __future__ import annotations
@@ -151,10 +156,50 @@ def cases():
     return out
 
 
+def encodings(repeat):
+    """Print CPU time and size of every figure's PNG per encoding (mode, zlib level)."""
+    import io
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    images = []
+    for _, build in cases():
+        fig = build()
+        plots._ticks_in_view(fig)
+        fig.set_dpi(plots.DPI)
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        images.append(Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(),
+                                       "raw", "RGBA", 0, 1).copy())
+        plots.plt.close(fig)
+    print(f"{len(images)} figures, {sum(i.width * i.height for i in images) / 1e6:.1f} Mpixel; "
+          f"encoding CPU best of {repeat}")
+    print(f"{'mode':<6} {'zlib level':>10} {'cpu [ms]':>9} {'size [kB]':>10}")
+    for mode in ("RGBA", "RGB"):
+        for level in (1, 3, 6):
+            best = None
+            for _ in range(repeat):
+                c0, size = time.process_time(), 0
+                for image in images:
+                    out = io.BytesIO()
+                    (image if mode == "RGBA" else image.convert("RGB")).save(
+                        out, format="png", compress_level=level)
+                    size += out.tell()
+                cpu = time.process_time() - c0
+                best = cpu if best is None else min(best, cpu)
+            print(f"{mode:<6} {level:>10} {best * 1e3:9.1f} {size / 1e3:10.0f}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="runs per figure (best is shown)")
+    ap.add_argument("--encoding", action="store_true",
+                    help="compare PNG encodings (CPU time and size) instead")
     args = ap.parse_args(argv)
+    if args.encoding:
+        encodings(args.repeat)
+        return
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"figure functions, best of {args.repeat} (ms); load average {load:.2f}; "
           f"PNG at {plots.DPI} dpi, at most {plots.MAX_POINTS} points per line")
