@@ -29,6 +29,7 @@ from hammerstein.cli._common import out_file_problem
 from hammerstein.core.files import (FileLimitError, all_or_nothing, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.core.presets import PresetError, save_model
+from hammerstein.core.preisach_identification import identify_preisach_records
 from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_dynamics,
                                                      identify_records)
 from hammerstein.report.dynamics_figure import measured_bode_figure
@@ -80,6 +81,16 @@ def add_parser(subparsers):
                    help="auto (default): components whose contribution is below the noise "
                         "become pure gains or absent; all: every component a PI; or explicit "
                         "kinds pi, gain, none per OUT:IN")
+    p.add_argument("--model", choices=["auto", "classical", "preisach"], default="auto",
+                   help="model class of the hysteresis. classical: multivariable classical PI "
+                        "(+ output map); preisach: discrete Preisach model, density by "
+                        "non-negative least squares with smoothing (monotone direct paths, "
+                        "signed cross-couplings); auto (default): with multi-amplitude records "
+                        "(held-out amplitude levels) both are fitted and the one with the "
+                        "lower held-out minor-loop error is kept; otherwise classical")
+    p.add_argument("--preisach-levels", type=int, default=16, metavar="N",
+                   help="--model preisach/auto: cells of each input's switching grid "
+                        "(N (N + 1) / 2 hysterons per component; default 16)")
     p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
                    help="auto (default): hold out the last complete branches or periods of "
                         "each record; none: train on everything, no validation")
@@ -185,6 +196,11 @@ def _check_usage(args):
         raise _Usage("--bounds: only used by --method least-squares")
     if args.output_map == "deadzone" and args.method == "closed-form":
         raise _Usage("--output-map deadzone: only used by --method least-squares")
+    if not 2 <= args.preisach_levels <= 60:
+        raise _Usage(f"--preisach-levels: expected an integer from 2 to 60, found "
+                     f"{args.preisach_levels}")
+    if args.model == "preisach" and args.method == "closed-form":
+        raise _Usage("--model preisach: fitted by least squares; leave out --method closed-form")
     if args.dynamics_records and not args.dynamics:
         raise _Usage("--dynamics-records: only used with --dynamics")
     if args.dynamics and not args.dynamics_records:
@@ -381,10 +397,7 @@ def _handler(args):
         records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
                    for d in args.data]
         names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
-        fit = identify_records(
-            records, args.method, n, thresholds, "time" if thresholds is not None and
-            args.partition == "auto" else args.partition, args.bounds, args.components,
-            args.hold_out, args.train_fraction, args.skip, *names, output_map=args.output_map)
+        fit = _identify(args, records, n, thresholds, names)
         extra = dyn = None
         meta = _metadata(args, fit, records)
         rows = metrics_rows(fit, args.output_unit) + level_metrics_rows(fit, args.output_unit)
@@ -416,6 +429,55 @@ def _handler(args):
     return 0
 
 
+def _minor_loop_error(fit):
+    """Mean held-out level RMS [% of the level's range], or None without held-out levels."""
+    rows = [r["rms_percent"] for r in fit.levels if r["held_out"]]
+    return float(np.mean(rows)) if rows else None
+
+
+def _identify(args, records, n, thresholds, names):
+    """The fit of ``--model``: classical PI, Preisach, or the better on held-out minor loops."""
+    fits, errors = {}, {}
+    if args.model in ("classical", "auto"):
+        try:
+            fits["classical"] = identify_records(
+                records, args.method, n, thresholds, "time" if thresholds is not None and
+                args.partition == "auto" else args.partition, args.bounds, args.components,
+                args.hold_out, args.train_fraction, args.skip, *names,
+                output_map=args.output_map)
+        except (IdentificationError, HysteresisError):
+            raise                    # a problem of the records: the same for every class
+    levels = any(r["held_out"] for f in fits.values() for r in f.levels)
+    if args.model == "preisach" or (args.model == "auto" and levels):
+        try:
+            fits["preisach"] = identify_preisach_records(
+                records, args.preisach_levels, "auto", args.components, args.hold_out,
+                args.train_fraction, args.skip, *names)
+        except (IdentificationError, HysteresisError) as exc:
+            if args.model == "preisach" or not fits:
+                raise
+            errors["preisach"] = str(exc)
+    if len(fits) == 1:
+        fit = next(iter(fits.values()))
+        if args.model == "auto":
+            why = ("; ".join(f"{k} failed: {v}" for k, v in errors.items()) if errors else
+                   "no held-out amplitude level (minor loop) to compare the classes on")
+            fit.notes.insert(0, f"model auto: {'classical PI' if 'classical' in fits else 'preisach'} "
+                                f"({why})")
+        return fit
+    scores = {k: _minor_loop_error(f) for k, f in fits.items()}
+    best = min(scores, key=lambda k: scores[k])
+    fit = fits[best]
+    lines = [f"model auto: chose {best} (lowest mean held-out minor-loop RMS error, % of each "
+             f"level's output range)"]
+    for k, f in fits.items():
+        worst = max(v["rms_percent"] for v in f.validation) if f.validation else float("nan")
+        lines.append(f"model auto: {k} {scores[k]:.3g} % mean held-out minor-loop RMS (largest "
+                     f"held-out RMS of an output {worst:.3g} % of its range)")
+    fit.notes[:0] = lines
+    return fit
+
+
 def _names(record, in_keys, out_keys):
     """Model names: the column names, or u0.. / y0.. for headerless files."""
     ins = [n if not n.startswith("column ") else f"u{i}" for i, n in enumerate(record.input_names)]
@@ -444,13 +506,17 @@ def _report(args, fit, records, dyn=None):
             if fit.structure[l][k] == "pi":
                 parts.append(f"{inp}: PI {c.n_hysterons} hysterons, thresholds "
                              f"{c.thresholds[0]:.4g}..{c.thresholds[-1]:.4g} {iu}")
+            elif fit.structure[l][k] == "preisach":
+                parts.append(f"{inp}: Preisach {c.n_levels} levels ({c.n_states} hysterons"
+                             f"{', signed density' if c.signed else ''}), grid "
+                             f"{c.edges[0]:.4g}..{c.edges[-1]:.4g} {iu}")
             elif fit.structure[l][k] == "gain":
                 parts.append(f"{inp}: gain {c:.4g} {ou}/{iu}")
             else:
                 parts.append(f"{inp}: absent")
         off = 0.0 if model.output_offset is None else model.output_offset[l]
         print(f"  {out} <- " + "; ".join(parts) + f"; output offset {off:.4g} {ou}")
-        mp = None if model.output_map is None else model.output_map[l]
+        mp = None if getattr(model, "output_map", None) is None else model.output_map[l]
         if mp is not None:
             print(f"  {out}: output map, {mp.knots.size} knots, slopes "
                   f"{mp.slopes.min():.4g}..{mp.slopes.max():.4g}")

@@ -70,7 +70,7 @@ __all__ = ["PreisachModel", "Polynomial", "MultivariableHysteresis", "component_
            "component_to_table", "hysteresis_from_table", "is_mixed_table"]
 
 PREISACH_KEYS = ("kind", "edges", "range", "n_levels", "weights", "everett", "density",
-                 "reversible", "offset")
+                 "reversible", "offset", "signed")
 DENSITY_KEYS = ("kind", "total", "bias", "bias_width", "tilt", "coercivity", "coercivity_width")
 POLYNOMIAL_KEYS = ("kind", "coefficients", "offset")
 PI_KEYS = ("kind", "thresholds", "weights", "gain")
@@ -118,6 +118,10 @@ class PreisachModel:
         ``c_1 u + c_2 u^2 + ...`` [µm/V^n].
     offset : float
         Constant added to the output [µm].
+    signed : bool
+        Allow negative weights (a cross-coupling whose hysteresis runs the
+        other way or is not monotone; never for a path that must stay
+        invertible). Default False: ``weights >= 0``.
 
     Notes
     -----
@@ -146,7 +150,7 @@ class PreisachModel:
     array([-1.,  0.,  1.,  1.,  0., -1.])
     """
 
-    def __init__(self, edges, weights, reversible=(), offset=0.0):
+    def __init__(self, edges, weights, reversible=(), offset=0.0, signed=False):
         self.edges = _array(edges, "edges")
         n = self.edges.size - 1
         if n < 1 or np.any(np.diff(self.edges) <= 0):
@@ -159,8 +163,12 @@ class PreisachModel:
         if np.any(np.triu(w, 1) != 0):
             raise HysteresisError("weights: expected zeros above the diagonal (alpha >= beta: "
                                   "column j <= row i)")
-        if np.any(w < 0):
-            raise HysteresisError("weights: expected non-negative hysteron weights [µm]")
+        if not isinstance(signed, (bool, np.bool_)):
+            raise HysteresisError(f"signed: expected true or false, found {signed!r}")
+        self.signed = bool(signed)
+        if np.any(w < 0) and not self.signed:
+            raise HysteresisError("weights: expected non-negative hysteron weights [µm] (or "
+                                  "signed = true for a cross-coupling)")
         self.weights = w
         self.reversible = _array(list(reversible), "reversible") if len(reversible) else np.zeros(0)
         self.offset = _number(offset, "offset")
@@ -371,6 +379,8 @@ class PreisachModel:
             table["reversible"] = self.reversible.tolist()
         if self.offset:
             table["offset"] = self.offset
+        if self.signed:
+            table["signed"] = True
         return table
 
 
@@ -551,7 +561,9 @@ def _preisach_from_table(comp):
                               f"weights, everett or density")
     rev, off = comp.get("reversible", ()), comp.get("offset", 0.0)
     if given[0] == "weights":
-        return PreisachModel(edges, comp["weights"], rev, off)
+        return PreisachModel(edges, comp["weights"], rev, off, comp.get("signed", False))
+    if "signed" in comp:
+        raise HysteresisError(f"signed: only with explicit weights, found with {given[0]}")
     if given[0] == "everett":
         return PreisachModel.from_everett(edges, comp["everett"], rev, off)
     dens = comp["density"]
