@@ -19,7 +19,8 @@ For each plant (default: the bundled ``realistic-2dof`` and
 Prints one table per plant with every target of issue 17 and the measured
 value, and the CPU time and load.
 
-Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...] [--keep DIR]``
+Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...]
+[--model auto|classical|preisach ...] [--keep DIR]``
 """
 
 from __future__ import annotations
@@ -130,11 +131,11 @@ def _metrics(path):
                 for r in csv.DictReader(fh)]
 
 
-def run_plant(spec, work, rng):
+def run_plant(spec, work, rng, model_class="auto"):
     source = str((ROOT / spec).resolve()) if spec.endswith(".toml") else spec
     plant = load_plant(source)
     name = Path(spec).stem
-    d = work / name
+    d = work / f"{name}-{model_class}"
     rec = d / "records"
     T = plant.sampling_period
     cpu = {}
@@ -150,7 +151,7 @@ def run_plant(spec, work, rng):
     printed, cpu["identify"] = _cli("identify", *hyst, "--inputs", "ux,uy", "--outputs", "x,y",
                                     "--time", "t", "--dynamics", "--dynamics-records", *dyn,
                                     "--out", str(preset), "--metrics", str(d / "fit.csv"),
-                                    "--force", cwd=d)
+                                    "--model", model_class, "--force", cwd=d)
     summary = read_toml(preset)["identification"]["dynamics"]
     f_true, z_true = modal_parameters(plant.dynamics)
     f_id = np.array([m["frequency_hz"] for m in summary["modes"]])
@@ -201,24 +202,27 @@ def main(argv=None):
     ap.add_argument("--plants", nargs="+",
                     default=["realistic-2dof", "scenarios/presets/realistic-b.toml"])
     ap.add_argument("--keep", metavar="DIR", help="work in DIR and keep the files")
+    ap.add_argument("--model", nargs="+", default=["auto"],
+                    choices=["auto", "classical", "preisach"],
+                    help="identify --model class(es) to compare (default: auto)")
     ap.add_argument("--verbose", action="store_true", help="print identify's output too")
     args = ap.parse_args(argv)
     rng = np.random.default_rng(17)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(args.keep or tmp)
         work.mkdir(parents=True, exist_ok=True)
-        for spec in args.plants:
-            name, rows, cpu, printed = run_plant(spec, work, rng)
-            print(f"\n## {name} (identified through the CLI from the excitation records, "
-                  f"40 nm noise)\n")
+        runs = [(spec, mc) for spec in args.plants for mc in args.model]
+        for spec, model_class in runs:
+            name, rows, cpu, printed = run_plant(spec, work, rng, model_class)
+            print(f"\n## {name}, identify --model {model_class} (identified through the CLI from "
+                  f"the excitation records, 40 nm noise)\n")
             if args.verbose:
                 print(printed)
             print("| target | measured |\n|---|---|")
             for k, v in rows:
                 print(f"| {k} | {v} |")
             print("\nCPU s: " + ", ".join(f"{k} {v:.1f}" for k, v in cpu.items())
-                  + f"; load {os.getloadavg()[0]:.1f}")
-
+                  + f"; load {os.getloadavg()[0]:.1f}", flush=True)
 
 if __name__ == "__main__":
     main()

@@ -44,8 +44,9 @@ import numpy as np
 
 from hammerstein.core.compensators import CompensatorError, InverseMultiplicativeCompensator, _gain_text
 from hammerstein.core.dynamics import DynamicsError
-from hammerstein.core.hysteresis import state_vector
+from hammerstein.core.hysteresis import MultivariablePI, state_vector
 from hammerstein.core.inversion import ZPETCInverse, preview_inverse
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 from hammerstein.simulation import (ChainResult, LinearArrays, simulate_chain,
                                     simulate_compensator)
 
@@ -128,9 +129,15 @@ class HammersteinCompensator:
 
     Parameters
     ----------
-    model : MultivariablePI
-        PI model of the actuator's hysteresis (m inputs [V], p outputs [µm]),
-        e.g. identified.
+    model : MultivariablePI or MultivariableHysteresis
+        Model of the actuator's hysteresis (m inputs [V], p outputs [µm]),
+        e.g. identified. A classical PI is inverted by the inverse
+        multiplicative law (below); any other model (a Preisach model,
+        :class:`~hammerstein.core.preisach.MultivariableHysteresis`) by the
+        exact per-sample root of
+        :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
+        (monotone Preisach direct paths), after the same inverse of G; the
+        law's options (gain, iterations, check, feedback) then do not apply.
     dynamics : control.StateSpace
         Discrete p x p linear part G (``dt`` = the plant's sampling period),
         e.g. identified (:class:`hammerstein.core.lti.DynamicsIdentifier`).
@@ -145,7 +152,7 @@ class HammersteinCompensator:
 
     Attributes
     ----------
-    hysteresis_compensator : InverseMultiplicativeCompensator
+    hysteresis_compensator : InverseMultiplicativeCompensator or PreisachInverseCompensator
     inverse : ZPETCInverse or None
         The causal inverse (``'zpetc'``).
     preview_samples : int
@@ -202,8 +209,18 @@ class HammersteinCompensator:
         if feedback != "delay":
             options = {"feedback": feedback, "cutoff_hz": cutoff_hz,
                        "sampling_period": sampling_period or dynamics.dt}
-        self.hysteresis_compensator = InverseMultiplicativeCompensator(
-            model, gain=gain, iterations=iterations, check=check, **options)
+        #: True when the static part is the exact Preisach inverse (a model that is not a PI)
+        self.exact_static = not isinstance(model, MultivariablePI)
+        if self.exact_static:
+            try:
+                self.hysteresis_compensator = PreisachInverseCompensator(model, name=name)
+            except CompensatorError as exc:
+                raise CompensatorError(
+                    f"kind 'hammerstein' with a {type(model).__name__} model: its static part is "
+                    f"the exact Preisach inverse, which refuses this model: {exc}") from None
+        else:
+            self.hysteresis_compensator = InverseMultiplicativeCompensator(
+                model, gain=gain, iterations=iterations, check=check, **options)
         self.dynamics = dynamics
         self.inversion = inversion
         self.name = name
@@ -217,6 +234,11 @@ class HammersteinCompensator:
         """Class, model size, the dynamics inverted, the inversion and its preview (no arrays)."""
         d = self.dynamics
         hc = self.hysteresis_compensator
+        if self.exact_static:
+            return (f"HammersteinCompensator(name={self.name!r}, model "
+                    f"{type(self.model).__name__} {self.model.n_outputs}x{self.model.n_inputs}; "
+                    f"dynamics order {d.nstates}, inversion={self.inversion!r}, preview "
+                    f"{self.preview_samples} samples; static part: exact Preisach inverse)")
         return (f"HammersteinCompensator(name={self.name!r}, model {self.model.size_text()}; "
                 f"dynamics order {d.nstates} ({d.noutputs}x{d.ninputs}, T = {d.dt:g} s), "
                 f"inversion={self.inversion!r}, preview {self.preview_samples} samples; "
@@ -240,7 +262,8 @@ class HammersteinCompensator:
         return self.hysteresis_compensator.n_states + self.n_filter_states
 
     def initial_state(self, initial_state=None):
-        """Validated copy of a flat state (zeros by default).
+        """Validated copy of a flat state (zeros by default; the Preisach model's default
+        hysteron states when the static part is the exact Preisach inverse).
 
         Parameters
         ----------
@@ -256,6 +279,9 @@ class HammersteinCompensator:
         HysteresisError
             If the state has the wrong length or non-finite values.
         """
+        if initial_state is None and self.exact_static:   # the Preisach model's rest state
+            return np.concatenate([self.hysteresis_compensator.initial_state(),
+                                   np.zeros(self.n_filter_states)])
         return state_vector(initial_state, self.n_states)
 
     def _split(self, state):
@@ -315,7 +341,7 @@ class HammersteinCompensator:
         """
         faded = fade_in(reference, fade_samples)
         P = self.preview_samples
-        state = np.zeros(self.n_states)
+        state = self.initial_state()
         if self.inverse is None:
             return faded, state, faded
         ext = np.concatenate([faded, continuation(faded, P, period_samples)], axis=1)
@@ -349,7 +375,7 @@ class HammersteinCompensator:
         CompensatorDivergence
             When the hysteresis compensator diverges.
         """
-        if self.inverse is not None:           # the declared law, pre-filter included
+        if self.inverse is not None and not self.exact_static:   # the declared law, pre-filter included
             self._entered += 1
             try:
                 return simulate_compensator(self, reference, self.initial_state(initial_state))
@@ -406,7 +432,7 @@ class HammersteinCompensator:
                 "without its preview and fade-in; call compensator.run_reference(plant, reference, "
                 "period_samples=..., fade_samples=...) or, for the voltages alone, "
                 "hammerstein.drive_signal(compensator, reference, sampling_period, ...)")
-        if self.inverse is None:
+        if self.inverse is None or self.exact_static:   # run by simulate (no fused law)
             return None
         law = self.hysteresis_compensator.packed_law()
         return law._replace(prefilter=LinearArrays(*(np.ascontiguousarray(M, dtype=float)

@@ -271,8 +271,13 @@ class PreisachIdentifier:
             ubs.append(ub)
             Ds.append(D)
             sizes.append(A.shape[1])
-        A = np.column_stack(parts + [np.ones((ys.size, 1))])
-        lb, ub = np.concatenate(lbs + [[-np.inf]]), np.concatenate(ubs + [[np.inf]])
+        # one offset per record: each record starts from its own remanent state, which a
+        # shared offset would push into the cross-couplings' hysteron states
+        ids = self._record_ids
+        offsets = (ids[:, None] == np.arange(ids.max() + 1)[None, :]).astype(float)
+        A = np.column_stack(parts + [offsets])
+        no = offsets.shape[1]
+        lb, ub = np.concatenate(lbs + [np.full(no, -np.inf)]), np.concatenate(ubs + [np.full(no, np.inf)])
         # the direct path's linear term: increasing (an exactly invertible model)
         if kinds[l] == "preisach":
             off = sum(sizes[:l]) + self.n_levels * (self.n_levels + 1) // 2
@@ -294,6 +299,8 @@ class PreisachIdentifier:
         x = self._solve(R0, b0, lb, ub, D * np.sqrt(ys.size) * self.n_levels ** 2, lam)
         comps, c = [], 0
         nq = self.n_levels * (self.n_levels + 1) // 2
+        counts = offsets.sum(axis=0)
+        offset = float(np.sum(x[-no:] * counts) / counts.sum())
         for k in range(m):
             xk = x[c:c + sizes[k]]
             c += sizes[k]
@@ -309,7 +316,7 @@ class PreisachIdentifier:
                 if k == l:
                     w = np.maximum(w, 0.0)
                 comps.append(PreisachModel(self._edges[k], w, rev, signed=k != l))
-        return comps, float(x[-1])
+        return comps, offset
 
     def _model(self, grid, offsets, in_names, out_names):
         grid = [list(row) for row in grid]
@@ -382,6 +389,7 @@ class PreisachIdentifier:
         blocks = self._design(records, splits, m)
         train_rows = [s.train[keep] for s, keep in zip(splits, self._rows)]
         sel = np.concatenate(train_rows)
+        self._record_ids = np.concatenate([np.full(int(tr.sum()), i) for i, tr in enumerate(train_rows)])
         blocks = [[(st[:, tr], u[tr]) for (st, u), tr in zip(bk, train_rows)] for bk in blocks]
         ys = [np.concatenate([r.y[l][keep][tr] for r, keep, tr in zip(records, self._rows, train_rows)])
               for l in range(p)]

@@ -21,11 +21,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+from hammerstein.core.compensators import (CompensatorError, InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.files import confined_path
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.ilc import LearningCompensator
 from hammerstein.core.presets import PresetError, load_dynamics
 from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
@@ -129,7 +130,7 @@ def _build_none(spec, plant, context):
 
 
 def _build_multivariable(spec, plant, context):
-    model = resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
+    model = _pi_model(spec, plant, context)
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
         check=spec.get("check", "error"), **_feedback_options(spec, plant))
@@ -138,6 +139,19 @@ def _build_multivariable(spec, plant, context):
 def _spec_model(spec, plant, context):
     """The model of a compensator table (every kind resolves it like "multivariable")."""
     return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
+
+
+def _pi_model(spec, plant, context):
+    """The model of a kind built on the classical PI's inverse law; a clear error otherwise."""
+    model = _spec_model(spec, plant, context)
+    if not isinstance(model, MultivariablePI):
+        kind = spec.get("kind", "multivariable")
+        raise CompensatorError(
+            f"compensator.kind = {kind!r}: needs a classical PI model (MultivariablePI), but "
+            f"model = {spec.get('model', 'plant')!r} is a {type(model).__name__} (Preisach or "
+            f"mixed components); use kind = 'hammerstein' or 'preisach-inverse' (exact inverse "
+            f"of a Preisach model), or identify a classical PI")
+    return model
 
 
 def _feedback_options(spec, plant):
@@ -150,17 +164,17 @@ def _feedback_options(spec, plant):
 
 def _build_diagonal(spec, plant, context):
     return diagonal_compensator(
-        _spec_model(spec, plant, context), gain=spec.get("gain", "secant"),
+        _pi_model(spec, plant, context), gain=spec.get("gain", "secant"),
         iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
         **_feedback_options(spec, plant))
 
 
 def _build_per_axis(spec, plant, context):
-    return PerAxisInverseCompensator(_spec_model(spec, plant, context))
+    return PerAxisInverseCompensator(_pi_model(spec, plant, context))
 
 
 def _build_static_gain(spec, plant, context):
-    return StaticGainCompensator(_spec_model(spec, plant, context))
+    return StaticGainCompensator(_pi_model(spec, plant, context))
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------
