@@ -88,9 +88,9 @@ def add_parser(subparsers):
                         "signed cross-couplings); auto (default): with multi-amplitude records "
                         "(held-out amplitude levels) both are fitted and the one with the "
                         "lower held-out minor-loop error is kept; otherwise classical")
-    p.add_argument("--preisach-levels", type=int, default=16, metavar="N",
+    p.add_argument("--preisach-levels", type=int, default=20, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
-                        "(N (N + 1) / 2 hysterons per component; default 16)")
+                        "(N (N + 1) / 2 hysterons per component; default 20)")
     p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
                    help="auto (default): hold out the last complete branches or periods of "
                         "each record; none: train on everything, no validation")

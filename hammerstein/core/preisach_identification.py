@@ -10,7 +10,11 @@ amplitude levels of a decreasing-amplitude sine are held out, so the
 validation is on minor loops not trained on).
 
 The model is linear in its weights. For each input k the switching grid is
-``n_levels`` equal cells over the input's measured range (2 % margin); the
+``n_levels`` equal cells over the input's measured range widened by 10 % of
+its span on each side (the compensators drive up to 1.2 times the measured
+amplitude; the hysterons outside the measured range never switch, their
+weights are set by the smoothing penalty, a linear extrapolation of the
+density); the
 state trajectory ``s_ij(t)`` of every hysteron (i, j), ``j <= i``, is computed
 once from the input (the compiled kernel, one hysteron at a time, from the
 demagnetised state), and output l is the linear combination
@@ -182,7 +186,7 @@ class PreisachIdentifier:
     True
     """
 
-    def __init__(self, n_levels=16, smoothing="auto", components="auto", margin=0.02):
+    def __init__(self, n_levels=20, smoothing="auto", components="auto", margin=0.1):
         if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) \
                 or not 2 <= n_levels <= 60:
             raise IdentificationError(f"n_levels: expected an integer from 2 to 60, found {n_levels!r}")
@@ -271,10 +275,10 @@ class PreisachIdentifier:
             ubs.append(ub)
             Ds.append(D)
             sizes.append(A.shape[1])
-        # one offset per record: each record starts from its own remanent state, which a
-        # shared offset would push into the cross-couplings' hysteron states
-        ids = self._record_ids
-        offsets = (ids[:, None] == np.arange(ids.max() + 1)[None, :]).astype(float)
+        # one output offset shared by the records (per-record offsets were tried: they
+        # leave the offsets free to absorb the rest outputs, and the cross-couplings'
+        # held-out minor loops came out worse, 2.5 % vs 1.3 % RMS on realistic-2dof)
+        offsets = np.ones((ys.size, 1))
         A = np.column_stack(parts + [offsets])
         no = offsets.shape[1]
         lb, ub = np.concatenate(lbs + [np.full(no, -np.inf)]), np.concatenate(ubs + [np.full(no, np.inf)])
@@ -453,7 +457,7 @@ class PreisachIdentifier:
         return self
 
 
-def identify_preisach_records(records, n_levels=16, smoothing="auto", components="auto",
+def identify_preisach_records(records, n_levels=20, smoothing="auto", components="auto",
                               hold_out="auto", train_fraction=None, skip_seconds=None,
                               input_names=None, output_names=None):
     """Identify a multivariable Preisach model; a :class:`RecordFit` like the PI's.
