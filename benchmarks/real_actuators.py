@@ -85,8 +85,11 @@ settle_periods = 1
 
 def _cli(*args, cwd):
     t0 = os.times()
+    env = dict(os.environ)               # the scenarios name presets of this checkout
+    env["HAMMERSTEIN_ALLOW_PATHS"] = os.pathsep.join(
+        p for p in (env.get("HAMMERSTEIN_ALLOW_PATHS"), str(ROOT / "scenarios" / "presets")) if p)
     res = subprocess.run([sys.executable, "-m", "hammerstein", *args], cwd=cwd,
-                         capture_output=True, text=True)
+                         capture_output=True, text=True, env=env)
     t1 = os.times()
     cpu = (t1.children_user - t0.children_user) + (t1.children_system - t0.children_system)
     if res.returncode != 0:
