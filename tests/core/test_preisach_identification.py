@@ -228,3 +228,9 @@ def test_hammerstein_refuses_a_non_invertible_model_naming_kind_and_class():
                                      [None, Polynomial([1.0])]])
     with pytest.raises(CompensatorError, match="kind 'hammerstein' with a MultivariableHysteresis"):
         HammersteinCompensator(model, G)
+
+
+def test_ilc_over_a_preisach_model_is_refused_naming_kind_and_class(tmp_path):
+    from hammerstein.scenario.registry import build_compensator
+    with pytest.raises(CompensatorError, match="kind = 'ilc'.*MultivariableHysteresis"):
+        build_compensator({"kind": "ilc", "iterations": 2}, load_plant("realistic-2dof"), tmp_path)
