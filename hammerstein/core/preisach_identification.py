@@ -283,7 +283,7 @@ class PreisachIdentifier:
         no = offsets.shape[1]
         lb, ub = np.concatenate(lbs + [np.full(no, -np.inf)]), np.concatenate(ubs + [np.full(no, np.inf)])
         # the direct path's linear term: increasing (an exactly invertible model)
-        if kinds[l] == "preisach":
+        if l < m and kinds[l] == "preisach":
             off = sum(sizes[:l]) + self.n_levels * (self.n_levels + 1) // 2
             u = A[:, off]
             secant = np.ptp(ys) / max(np.ptp(u), 1e-300)
@@ -387,13 +387,10 @@ class PreisachIdentifier:
         out_names = list(output_names or records[0].output_names)
         kinds0, auto = parse_components(self.components, in_names, out_names)
         kinds = [["preisach" if kd == "pi" else kd for kd in row] for row in kinds0]
-        if p != m and any(kinds[l][l] == "preisach" for l in range(min(p, m))):
-            pass
         self._cache = {}
         blocks = self._design(records, splits, m)
         train_rows = [s.train[keep] for s, keep in zip(splits, self._rows)]
         sel = np.concatenate(train_rows)
-        self._record_ids = np.concatenate([np.full(int(tr.sum()), i) for i, tr in enumerate(train_rows)])
         blocks = [[(st[:, tr], u[tr]) for (st, u), tr in zip(bk, train_rows)] for bk in blocks]
         ys = [np.concatenate([r.y[l][keep][tr] for r, keep, tr in zip(records, self._rows, train_rows)])
               for l in range(p)]
