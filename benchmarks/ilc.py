@@ -27,13 +27,16 @@ from hammerstein.core import references as refs
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.ilc import LearningCompensator
 from hammerstein.core.presets import load_dynamics, load_plant
+from hammerstein.scenario.registry import build_compensator
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def cases(quick):
+def cases(quick, full=False):
     circles = [(15.0, 10.0), (15.0, 200.0), (50.0, 50.0), (50.0, 200.0)] if not quick else \
         [(15.0, 200.0)]
+    if full and not quick:
+        circles = [(R, f) for R in (15.0, 30.0, 50.0) for f in (10.0, 50.0, 100.0, 200.0)]
     for R, f in circles:
         periods = 6 if f < 50 else 12
         yield f"circle {R:g} µm {f:g} Hz", R, f, ("circle", R, f, periods)
@@ -50,25 +53,49 @@ def signal(spec, T):
     return xy, int(round(1 / f / T))
 
 
+def actuators(which, quick):
+    """(label, plant, start-compensator factory) of the actuators benchmarked."""
+    if which == "rakotondrabe":
+        plant = load_plant("rakotondrabe-2dof")
+        T = plant.sampling_period
+        for mm in (["fn+5", "fn-5", "zeta+30", "zeta-30"] if not quick else ["fn+5"]):
+            G = load_dynamics(ROOT / f"scenarios/presets/mismatch/{mm}.toml",
+                              plant.hysteresis.output_names, T)
+            yield mm, plant, (lambda G=G: HammersteinCompensator(plant.hysteresis, G))
+        return
+    spec = {"kind": "hammerstein", "model": "identified",
+            "identify": {"frequency": 50.0, "sensor": True}, "dynamics": "identified"}
+    for name in (["realistic-2dof", "realistic-b"] if not quick else ["realistic-2dof"]):
+        plant = load_plant(name if name == "realistic-2dof"
+                           else ROOT / f"scenarios/presets/{name}.toml")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            start = build_compensator(spec, plant, ROOT / "scenarios")   # identified once
+        yield name, plant, (lambda start=start: start)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--gain", type=float, default=0.5)
     ap.add_argument("--q", type=float, default=2000.0)
     ap.add_argument("--iterations", type=int, default=10)
+    ap.add_argument("--plant", choices=["rakotondrabe", "realistic"], default="rakotondrabe",
+                    help="realistic: the actuators outside the model class (realistic-2dof and "
+                         "scenarios/presets/realistic-b.toml), start drive identified on them")
+    ap.add_argument("--time-domain", action="store_true",
+                    help="learn periodic references through the time-domain inverse and Q only "
+                         "(no per-harmonic learning)")
     args = ap.parse_args()
-    plant = load_plant("rakotondrabe-2dof")
-    T = plant.sampling_period
-    mismatches = ["fn+5", "fn-5", "zeta+30", "zeta-30"] if not args.quick else ["fn+5"]
-    print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise")
-    for mm in mismatches:
-        G = load_dynamics(ROOT / f"scenarios/presets/mismatch/{mm}.toml",
-                          plant.hysteresis.output_names, T)
-        for label, scale, f, spec in cases(args.quick):
+    print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise, "
+          f"{'time-domain' if args.time_domain else 'per-harmonic'} learning of periodic references")
+    for mm, plant, make_start in actuators(args.plant, args.quick):
+        T = plant.sampling_period
+        for label, scale, f, spec in cases(args.quick, full=args.plant == "realistic"):
             yr, P = signal(spec, T)
-            start = HammersteinCompensator(plant.hysteresis, G)
+            start = make_start()
             ilc = LearningCompensator(start, T, args.iterations, args.gain, args.q,
-                                      sensor_noise=0.04, seed=1)
+                                      sensor_noise=0.04, seed=1, harmonics=not args.time_domain)
             fade = P if spec[0] == "circle" else 0
             c0 = time.process_time()
             with warnings.catch_warnings():
@@ -77,7 +104,7 @@ def main():
             cpu = time.process_time() - c0
             e = np.array([r.max_euclidean_error for r in ilc.history]) / scale * 100
             growth = np.max(e[1:] / e[:-1]) if e.size > 1 else 1.0
-            print(f"{mm:8s} {label:24s} " + " ".join(f"{v:.3g}" for v in e)
+            print(f"{mm:14s} {label:24s} " + " ".join(f"{v:.3g}" for v in e)
                   + f" | final {e[-1]:.3f} % {'OK' if e.min() <= 0.3 else 'MISS'}, "
                     f"max growth x{growth:.2f}, {ilc.stopped}, CPU {cpu:.1f} s")
 
