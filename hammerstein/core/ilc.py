@@ -76,7 +76,7 @@ EXTENSION = 64
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
            "estimate_delay", "error_summary", "periodic_average", "periodic_error",
-           "HarmonicGains"]
+           "HarmonicGains", "harmonic_base_gains", "repeating_from"]
 
 
 @dataclass
@@ -825,6 +825,94 @@ class IterativeLearning:
 
 
 
+def repeating_from(target, period_samples, fade_samples):
+    """First sample of the periodic learning of a reference that repeats after its fade-in, or None.
+
+    Parameters
+    ----------
+    target : array_like, shape (p, n_samples)
+        The faded reference [µm].
+    period_samples : int or None
+        P.
+    fade_samples : int
+        Fade-in [samples].
+
+    Returns
+    -------
+    int or None
+        ``max(fade, P) + 2 P`` (two periods after the fade-in: the start-up
+        transient is learnt in the time domain) when the reference repeats
+        from ``max(fade, P)`` on with at least five periods there; else None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> c = np.vstack([np.cos(2 * np.pi * np.arange(1000) / 100)])
+    >>> repeating_from(c, 100, 100), repeating_from(c[:, :500], 100, 100)
+    (300, None)
+    """
+    r = np.atleast_2d(np.asarray(target, dtype=float))
+    n = r.shape[1]
+    if not period_samples or period_samples < 2:
+        return None
+    P = int(period_samples)
+    w0 = int(min(max(fade_samples, P), n - 1))
+    if n < w0 + 5 * P or not np.allclose(r[:, w0 + P:], r[:, w0:n - P], rtol=0,
+                                         atol=1e-9 * max(float(np.max(np.abs(r))), 1.0)):
+        return None
+    return w0 + 2 * P
+
+
+def harmonic_base_gains(learning, period_samples, plant_dynamics=None, band_hz=None):
+    """Starting gain per harmonic of the period: ``gamma |Q(f_h)|^2`` where the condition holds, else 0.
+
+    Harmonic h (``f_h = h / (P T)``) learns with ``gamma |Q(f_h)|^2``, Q
+    the zero-phase Butterworth of cut-off ``band_hz`` (the time-domain
+    law's Q, sampled at the harmonics) and, when the plant's dynamics G
+    are known (a simulated actuator), only where
+    ``||I - gamma |Q|^2 Ghat(z_h)^-1 G(z_h)|| < 1`` at
+    ``z_h = exp(2 pi j h / P)`` (the per-harmonic monotonic-convergence
+    condition of the exact periodic inverse); 0 elsewhere.
+
+    Parameters
+    ----------
+    learning : IterativeLearning
+        Its gain, Q order, model dynamics and sampling period.
+    period_samples : int
+        P.
+    plant_dynamics : control.StateSpace, optional
+        G.
+    band_hz : float, optional
+        Cut-off of Q [Hz] (default: no Q, every harmonic up to Nyquist).
+
+    Returns
+    -------
+    numpy.ndarray, shape (P // 2 + 1,)
+    """
+    P = int(period_samples)
+    T = learning.sampling_period
+    h = np.arange(P // 2 + 1)
+    fh = h / (P * T)
+    gamma = learning.learning_gain
+    if band_hz is None:
+        base = np.full(fh.shape, gamma)
+    else:                                       # |Q|^2 of the time-domain law at f_h
+        b, a = _scipy_signal().butter(learning.q_order, band_hz, fs=1.0 / T)
+        _, q = _scipy_signal().freqz(b, a, worN=fh, fs=1.0 / T)
+        base = gamma * np.abs(q) ** 2
+    if plant_dynamics is not None:
+        z = np.exp(2j * np.pi * h / P)
+        p = learning.model.n_outputs
+        Gt = _frequency_response(*(np.asarray(getattr(plant_dynamics, k), dtype=float)
+                                   for k in "ABCD"), z)
+        Gh = np.broadcast_to(np.eye(p), Gt.shape).astype(complex) if learning.dynamics is None \
+            else _frequency_response(*(np.asarray(getattr(learning.dynamics, k), dtype=float)
+                                       for k in "ABCD"), z)
+        M = np.eye(p) - base[:, None, None] * np.linalg.solve(Gh, Gt)
+        base[np.linalg.svd(M, compute_uv=False)[:, 0] >= 1.0] = 0.0
+    return base
+
+
 class LearningCompensator:
     """ILC against a (simulated) actuator, starting from another compensator's drive.
 
@@ -986,15 +1074,7 @@ class LearningCompensator:
         return ChainResult(best[1], best[2], None, None)
 
     def harmonic_base_gains(self, period_samples, plant_dynamics=None, band_hz=None):
-        """Starting gain per harmonic of the period: ``gamma |Q(f_h)|^2`` where the condition holds, else 0.
-
-        Harmonic h (``f_h = h / (P T)``) learns with ``gamma |Q(f_h)|^2``, Q
-        the zero-phase Butterworth of cut-off ``band_hz`` (the time-domain
-        law's Q, sampled at the harmonics) and, when the plant's dynamics G
-        are known (a simulated actuator), only where
-        ``||I - gamma |Q|^2 Ghat(z_h)^-1 G(z_h)|| < 1`` at
-        ``z_h = exp(2 pi j h / P)`` (the per-harmonic monotonic-convergence
-        condition of the exact periodic inverse); 0 elsewhere.
+        """:func:`harmonic_base_gains` of this learning.
 
         Parameters
         ----------
@@ -1003,35 +1083,13 @@ class LearningCompensator:
         plant_dynamics : control.StateSpace, optional
             G.
         band_hz : float, optional
-            Cut-off of Q [Hz] (default: no Q, every harmonic up to Nyquist).
+            Cut-off of Q [Hz].
 
         Returns
         -------
         numpy.ndarray, shape (P // 2 + 1,)
         """
-        P = int(period_samples)
-        h = np.arange(P // 2 + 1)
-        fh = h / (P * self.sampling_period)
-        gamma = self.learning.learning_gain
-        if band_hz is None:
-            base = np.full(fh.shape, gamma)
-        else:                                       # |Q|^2 of the time-domain law at f_h
-            b, a = _scipy_signal().butter(self.learning.q_order, band_hz,
-                                          fs=1.0 / self.sampling_period)
-            _, q = _scipy_signal().freqz(b, a, worN=fh, fs=1.0 / self.sampling_period)
-            base = gamma * np.abs(q) ** 2
-        Gh_dyn = self.learning.dynamics
-        if plant_dynamics is not None:
-            z = np.exp(2j * np.pi * h / P)
-            p = self.learning.model.n_outputs
-            Gt = _frequency_response(*(np.asarray(getattr(plant_dynamics, k), dtype=float)
-                                       for k in "ABCD"), z)
-            Gh = np.broadcast_to(np.eye(p), Gt.shape).astype(complex) if Gh_dyn is None else \
-                _frequency_response(*(np.asarray(getattr(Gh_dyn, k), dtype=float)
-                                      for k in "ABCD"), z)
-            M = np.eye(p) - base[:, None, None] * np.linalg.solve(Gh, Gt)
-            base[np.linalg.svd(M, compute_uv=False)[:, 0] >= 1.0] = 0.0
-        return base
+        return harmonic_base_gains(self.learning, period_samples, plant_dynamics, band_hz)
 
     def history_rows(self, names):
         """Metric rows of the trials: channel ``iteration-<k>``, per-axis and Euclidean errors.
