@@ -52,11 +52,18 @@ class Creep:
         Lag time constants tau_k [s], positive.
     weights : array_like, shape (n,)
         Weights w_k [-] (fraction of h added by lag k at steady state).
+    instantaneous : float
+        d [-], the share of h passed at once: ``y = d h + sum_k w_k x_k``
+        (default 1, the plant form above). An identified creep
+        (:mod:`hammerstein.core.creep_identification`) has ``d < 1``: the
+        hysteresis model, identified on slow sines, already holds the creep
+        that is complete at their frequency.
 
     Raises
     ------
     HysteresisError
-        On non-positive time constants, non-finite weights or different lengths.
+        On non-positive time constants, non-finite weights, different lengths
+        or a non-positive ``instantaneous``.
 
     Examples
     --------
@@ -71,7 +78,7 @@ class Creep:
     (1.063212, 1.063212)
     """
 
-    def __init__(self, time_constants, weights):
+    def __init__(self, time_constants, weights, instantaneous=1.0):
         tau = np.atleast_1d(np.array(time_constants, dtype=float))
         w = np.atleast_1d(np.array(weights, dtype=float))
         if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)) or np.any(tau <= 0):
@@ -80,10 +87,34 @@ class Creep:
         if w.shape != tau.shape or not np.all(np.isfinite(w)):
             raise HysteresisError(f"weights: expected {tau.size} finite values (one per time "
                                   f"constant), found {w.tolist()}")
+        if isinstance(instantaneous, bool) or not isinstance(instantaneous, (int, float, np.floating)) \
+                or not (np.isfinite(instantaneous) and instantaneous > 0):
+            raise HysteresisError(f"instantaneous: expected a positive number, found {instantaneous!r}")
         self.time_constants, self.weights = tau, w
+        self.instantaneous = float(instantaneous)
 
     def __repr__(self):
-        return f"Creep(time_constants={self.time_constants.tolist()}, weights={self.weights.tolist()})"
+        d = "" if self.instantaneous == 1.0 else f", instantaneous={self.instantaneous!r}"
+        return (f"Creep(time_constants={self.time_constants.tolist()}, "
+                f"weights={self.weights.tolist()}{d})")
+
+    def step_response(self, t):
+        """Output after a unit step of h at t = 0 (continuous time).
+
+        ``s(t) = d + sum_k w_k (1 - exp(-t / tau_k))``.
+
+        Parameters
+        ----------
+        t : array_like, shape (n_times,)
+            Times after the step [s], >= 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_times,)
+            [-] (µm per µm of h).
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return self.instantaneous + (1 - np.exp(-t[:, None] / self.time_constants)) @ self.weights
 
     @classmethod
     def log_law(cls, rate_per_decade, t_min, t_max, per_decade=2):
@@ -138,10 +169,11 @@ class Creep:
         -------
         A, B, C, D : numpy.ndarray
             Shapes (n, n), (n, 1), (1, n), (1, 1): ``A = diag(exp(-T/tau))``,
-            ``B = 1 - exp(-T/tau)``, ``C = w``, ``D = 1``.
+            ``B = 1 - exp(-T/tau)``, ``C = w``, ``D = d`` (``instantaneous``).
         """
         a = np.exp(-float(sampling_period) / self.time_constants)
-        return (np.diag(a), (1 - a)[:, None], self.weights[None, :].copy(), np.ones((1, 1)))
+        return (np.diag(a), (1 - a)[:, None], self.weights[None, :].copy(),
+                np.full((1, 1), self.instantaneous))
 
     def simulate(self, h, sampling_period, initial_state=None):
         """Creep output for a hysteresis output record.
@@ -173,14 +205,18 @@ class Creep:
         -------
         dict
         """
-        return {"kind": "lags", "time_constants": self.time_constants.tolist(),
-                "weights": self.weights.tolist()}
+        table = {"kind": "lags", "time_constants": self.time_constants.tolist(),
+                 "weights": self.weights.tolist()}
+        if self.instantaneous != 1.0:
+            table["instantaneous"] = self.instantaneous
+        return table
 
 
 def creep_from_table(table, where="creep"):
     """A :class:`Creep` from a ``[creep.<output>]`` table.
 
-    ``kind = "lags"`` with ``time_constants`` [s] and ``weights`` [-], or
+    ``kind = "lags"`` with ``time_constants`` [s], ``weights`` [-] and
+    optional ``instantaneous`` [-] (d, default 1), or
     ``kind = "log"`` with ``rate_per_decade`` [-], ``t_min``, ``t_max`` [s] and
     optional ``per_decade`` (default 2); ``kind = "none"`` for no creep.
 
@@ -207,7 +243,8 @@ def creep_from_table(table, where="creep"):
             "none": ()}
     if kind not in need:
         raise HysteresisError(f"{where}.kind: expected 'lags', 'log' or 'none', found {kind!r}")
-    allowed = set(need[kind]) | {"kind", "description"} | ({"per_decade"} if kind == "log" else set())
+    allowed = set(need[kind]) | {"kind", "description"} | (
+        {"per_decade"} if kind == "log" else {"instantaneous"} if kind == "lags" else set())
     unknown = sorted(set(table) - allowed)
     if unknown:
         raise HysteresisError(f"{where}.{unknown[0]}: unknown key for kind = {kind!r} "
@@ -220,7 +257,7 @@ def creep_from_table(table, where="creep"):
         if kind == "none":
             return None
         if kind == "lags":
-            return Creep(table["time_constants"], table["weights"])
+            return Creep(table["time_constants"], table["weights"], table.get("instantaneous", 1.0))
         for key in ("rate_per_decade", "t_min", "t_max"):
             if not isinstance(table[key], (int, float)) or isinstance(table[key], bool):
                 raise HysteresisError(f"{key}: expected a number, found {table[key]!r}")
@@ -272,7 +309,7 @@ def creep_matrices(creeps, sampling_period):
             continue
         a, b, cc, _ = c.discrete(sampling_period)
         j = i + c.n_states
-        A[i:j, i:j], B[i:j, l], C[l, i:j] = a, b[:, 0], cc[0]
+        A[i:j, i:j], B[i:j, l], C[l, i:j], D[l, l] = a, b[:, 0], cc[0], c.instantaneous
         i = j
     return A, B, C, D
 

@@ -60,6 +60,7 @@ from hammerstein.core.datafiles import MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii, play)
 from hammerstein.core import lti
+from hammerstein.core.creep_identification import CreepIdentifier, hysteresis_frequency
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError,
                                              partition_thresholds)
 
@@ -78,6 +79,7 @@ __all__ = [
     "parse_components",
     "identify_records",
     "identify_record",
+    "identify_record_creep",
     "dynamics_tables",
     "noise_level",
     "amplitude_levels",
@@ -1486,6 +1488,39 @@ def dynamics_tables(fit, records, name="identified", **options):
         failed identification.
     """
     return identify_record_dynamics(fit, records, name, **options).tables
+
+
+def identify_record_creep(fit, records, dynamics=None, **options):
+    """Identify the creep after a fitted hysteresis model from staircase records.
+
+    :class:`hammerstein.core.creep_identification.CreepIdentifier` on the
+    fitted model, normalised at the frequency of the hysteresis records of
+    ``fit`` (:func:`hammerstein.core.creep_identification.hysteresis_frequency`).
+
+    Parameters
+    ----------
+    fit : RecordFit
+        The fitted hysteresis model and its records.
+    records : sequence of MultiRecord
+        Staircase records with the same columns.
+    dynamics : control.StateSpace, optional
+        Identified discrete dynamics G (e.g. ``RecordDynamics.identifier.system_``).
+    **options
+        Options of :class:`~hammerstein.core.creep_identification.CreepIdentifier`.
+
+    Returns
+    -------
+    CreepIdentifier
+        Fitted.
+
+    Raises
+    ------
+    IdentificationError
+        On records that are not staircases or do not match the model.
+    """
+    opts = {"hysteresis_frequency_hz": hysteresis_frequency(fit.records)}
+    opts.update({k: v for k, v in options.items() if v is not None})
+    return CreepIdentifier(**opts).fit(fit.model, _as_records(records), dynamics)
 
 
 # -- modified PI: static output map ---------------------------------------------------
