@@ -37,7 +37,8 @@ import numpy as np
 from hammerstein.exceptions import HysteresisError
 from hammerstein.simulation import linear_steps
 
-__all__ = ["Creep", "creep_matrices", "creep_from_table", "creep_to_table", "series_matrices"]
+__all__ = ["Creep", "creep_matrices", "creep_from_table", "creep_to_table", "series_matrices",
+           "creep_dynamics", "minimum_phase_margin"]
 
 CREEP_KEYS = ("kind", "time_constants", "weights", "rate_per_decade", "t_min", "t_max",
               "per_decade", "description")
@@ -334,3 +335,79 @@ def series_matrices(first, second):
     B = np.vstack([B1, B2 @ D1])
     C = np.hstack([D2 @ C1, C2])
     return A, B, C, D2 @ D1
+
+
+def minimum_phase_margin(creep, sampling_period):
+    """How far the discrete creep is from losing minimum phase.
+
+    The ZOH creep of one output is ``c(z) = d + sum_k w_k (1 - a_k) / (z - a_k)``,
+    ``a_k = exp(-T / tau_k)``. On and outside the unit circle ``|z| >= 1``,
+    ``Re (1 - a) / (z - a) >= -(1 - a) / (1 + a)`` (the image of the circle
+    is a circle through ``1`` and ``-(1 - a) / (1 + a)``), so with ``w_k >= 0``
+    ``Re c(z) >= d - sum_k w_k (1 - a_k) / (1 + a_k) > 0``: no zero there when
+    the margin is positive. A positive sum of lags is a positive-real
+    operator; in continuous time ``d + sum w_k / (1 + s tau_k)`` has positive
+    real part in the closed right half-plane for any ``d > 0``.
+
+    Parameters
+    ----------
+    creep : Creep
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    float
+        ``d - sum_k |w_k| (1 - a_k) / (1 + a_k)`` [-]; positive: minimum phase
+        (its zeros, the poles of its inverse, lie inside the unit circle).
+    """
+    a = np.exp(-float(sampling_period) / creep.time_constants)
+    w = creep.weights
+    bound = np.sum(np.where(w >= 0, w * (1 - a) / (1 + a), np.abs(w)))
+    return float(creep.instantaneous - bound)
+
+
+def creep_dynamics(creeps, dynamics):
+    """The discrete linear part ``G (I + C)``: creep per output, then G.
+
+    The same discretisation as the plant's (creep and G sampled separately,
+    :class:`hammerstein.core.plant.HammersteinPlant`); the
+    creep is checked minimum phase (:func:`minimum_phase_margin`), so the
+    combined system has the zeros of G and those of the creep, the latter
+    inside the unit circle: its ZPETC or stable inverse (Croft, Shed and
+    Devasia [2]_ invert creep and vibration together) inverts the creep
+    exactly.
+
+    Parameters
+    ----------
+    creeps : sequence of (Creep or None), length p
+    dynamics : control.StateSpace
+        Discrete p x p G (``dt`` = T).
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete p x p, states of the creep then of G.
+
+    Raises
+    ------
+    HysteresisError
+        On a creep count other than p or a creep that is not minimum phase
+        (weights negative beyond the margin).
+    """
+    import control  # lazy: python-control is loaded by the callers that invert G
+
+    T = float(dynamics.dt)
+    creeps = list(creeps)
+    if len(creeps) != dynamics.noutputs:
+        raise HysteresisError(f"creep: expected {dynamics.noutputs} entries (one per output), "
+                              f"found {len(creeps)}")
+    for l, c in enumerate(creeps):
+        if c is not None and minimum_phase_margin(c, T) <= 0:
+            raise HysteresisError(f"creep: output {l} is not minimum phase at T = {T:g} s "
+                                  f"(instantaneous {c.instantaneous:g} below the bound of its "
+                                  f"weights); it cannot be inverted")
+    mats = series_matrices(creep_matrices(creeps, T),
+                           tuple(np.asarray(M, dtype=float) for M in
+                                 (dynamics.A, dynamics.B, dynamics.C, dynamics.D)))
+    return control.ss(*mats, T)

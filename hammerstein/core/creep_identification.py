@@ -147,7 +147,8 @@ class CreepIdentifier:
     hysteresis_frequency_hz : float
         Frequency of the records the hysteresis model was identified on [Hz]
         (the creep is normalised to unit gain there); default 1 Hz, the
-        ``hammerstein excitation`` sine.
+        ``hammerstein excitation`` sine; ``numpy.inf`` when the model is the
+        instantaneous response itself (d = 1, e.g. a known hysteresis).
     max_rows : int
         Samples used per output (the records are sub-sampled evenly above it;
         creep is slow).
@@ -215,7 +216,7 @@ class CreepIdentifier:
                                       f"{tau.tolist()}")
         if not (np.isfinite(smoothing) and smoothing >= 0):
             raise IdentificationError(f"creep: smoothing: expected >= 0, found {smoothing!r}")
-        if not (np.isfinite(hysteresis_frequency_hz) and hysteresis_frequency_hz > 0):
+        if not (hysteresis_frequency_hz > 0):       # inf: the model is the instantaneous part
             raise IdentificationError(f"creep: hysteresis_frequency_hz: expected a positive "
                                       f"frequency [Hz], found {hysteresis_frequency_hz!r}")
         self.time_constants = np.sort(tau)

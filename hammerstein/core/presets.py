@@ -38,6 +38,7 @@ __all__ = [
     "bundled_presets",
     "resolve_preset",
     "read_toml",
+    "load_creep",
     "model_from_table",
     "model_to_table",
     "load_model",
@@ -549,6 +550,31 @@ def dynamics_to_table(system):
                     **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
     return {"kind": "state_space",
             **{k: np.asarray(getattr(mats, k), dtype=float).tolist() for k in "ABCD"}}
+
+
+def load_creep(path, outputs):
+    """The ``[creep]`` of a preset file, one entry per output, or None without creep.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file (e.g. written by ``hammerstein identify --creep-records``).
+    outputs : list of str
+        Output names of the plant (p).
+
+    Returns
+    -------
+    list of (Creep or None) or None
+        None when the file has no ``[creep]`` table or none of its outputs creeps.
+
+    Raises
+    ------
+    PresetError
+        A malformed ``[creep]`` table (names the key).
+    """
+    data = read_toml(path)
+    creeps = _creep(data.get("creep"), list(outputs), path)
+    return creeps if creeps is not None and any(c is not None for c in creeps) else None
 
 
 def load_dynamics(path, outputs, sampling_period):
