@@ -39,6 +39,7 @@ __all__ = [
     "resolve_preset",
     "read_toml",
     "load_creep",
+    "identified_from",
     "model_from_table",
     "model_to_table",
     "load_model",
@@ -383,6 +384,10 @@ def load_model(path):
     Returns
     -------
     MultivariablePI
+        A model identified from records (an ``[identification]`` table with
+        ``sources``, written by ``hammerstein identify``) carries
+        ``identified_from``, e.g. ``"records hysteresis-ux.csv,
+        hysteresis-uy.csv (preset id.toml)"``, which the warnings quote.
 
     Raises
     ------
@@ -394,7 +399,37 @@ def load_model(path):
     problems = _table_problems(data, FILE_FIELDS, "")
     if problems:
         raise PresetError(f"{path}: " + "; ".join(problems))
-    return model_from_table(data["model"], str(path))
+    model = model_from_table(data["model"], str(path))
+    origin = identified_from(data, path)
+    if origin:
+        try:
+            model.identified_from = origin
+        except AttributeError:          # a model class without instance attributes
+            pass
+    return model
+
+
+def identified_from(data, path):
+    """``"records A.csv, B.csv (preset NAME.toml)"`` for a file written by ``hammerstein identify``.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed file.
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    str or None
+        None when the file has no ``[identification]`` table with ``sources``.
+    """
+    ident = data.get("identification")
+    sources = ident.get("sources") if isinstance(ident, dict) else None
+    if not isinstance(sources, list) or not sources:
+        return None
+    return (f"records {', '.join(Path(str(s)).name for s in sources)} "
+            f"(preset {Path(str(path)).name})")
 
 
 def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", extra=None):
