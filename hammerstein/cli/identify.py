@@ -401,15 +401,21 @@ def _handler(args):
             dyn = _dynamics(args, fit)
             extra = dyn.tables
             meta["dynamics"] = dyn.summary
-            rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
-                                          fit.model.input_names)
         creep = None
         if args.creep_records:
             creep = _creep(args, fit, dyn)
+            if dyn is not None:   # G again, on the PI outputs through the creep: G(0) = I for G (I + C)
+                dyn = _dynamics(args, fit, creep.creeps_)
+                extra = dict(dyn.tables)
+                meta["dynamics"] = dyn.summary
+                meta["dynamics"]["inputs"] = "hysteresis model outputs through the identified creep"
             extra = dict(extra or {})
             extra["creep"] = creep_to_table(creep.creeps_, fit.model.output_names)
             meta["creep"] = creep.summary()
             rows += creep_metrics_rows(creep, args.output_unit)
+        if dyn is not None:
+            rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
+                                          fit.model.input_names)
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
             if args.plot:
@@ -644,12 +650,12 @@ def dynamics_metrics_rows(summary, output_names, input_names):
     return rows
 
 
-def _dynamics(args, fit):
+def _dynamics(args, fit, creep=None):
     """Identified dynamics (:func:`identify_record_dynamics`) of the --dynamics-records."""
     dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
            for d in args.dynamics_records]
-    return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, order=args.order,
-                                    max_order=args.max_order)
+    return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, creep=creep,
+                                    order=args.order, max_order=args.max_order)
 
 
 def _creep(args, fit, dyn):
