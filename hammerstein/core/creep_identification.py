@@ -309,7 +309,7 @@ class CreepIdentifier:
             targets.append((np.asarray(rec.y, dtype=float) - off[:, None] - base)[:, rows].ravel())
             seg_counts.append(n_steps)
         # lag columns shared by the records, offset columns per record; the
-        # offsets are free: projected out (QR), NNLS on the lag weights alone
+        # offsets are free: projected out, NNLS on the lag weights alone
         n_lag = p * K
         n_off = p * sum(seg_counts)
         n_rows = sum(b.shape[0] for b in blocks)
