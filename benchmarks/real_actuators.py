@@ -19,7 +19,11 @@ For each plant (default: the bundled ``realistic-2dof`` and
 Prints one table per plant with every target of issue 17 and the measured
 value, and the CPU time and load.
 
-Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...] [--keep DIR]``
+With ``--creep`` the staircases go to ``identify --creep-records`` too, and
+the compensator inverts the identified creep with the dynamics (scenario
+``creep = "auto"``: the identified preset's ``[creep]``).
+
+Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...] [--keep DIR] [--creep]``
 """
 
 from __future__ import annotations
@@ -130,7 +134,7 @@ def _metrics(path):
                 for r in csv.DictReader(fh)]
 
 
-def run_plant(spec, work, rng):
+def run_plant(spec, work, rng, creep=False):
     source = str((ROOT / spec).resolve()) if spec.endswith(".toml") else spec
     plant = load_plant(source)
     name = Path(spec).stem
@@ -147,8 +151,9 @@ def run_plant(spec, work, rng):
     dyn = [str(rec / f"multisine-{i}.csv") for i in ("ux", "uy")] + \
           [str(rec / f"multisine-{i}-validation.csv") for i in ("ux", "uy")]
     preset = d / "identified.toml"
+    stairs = ["--creep-records", *[str(rec / f"creep-{i}.csv") for i in ("ux", "uy")]] if creep else []
     printed, cpu["identify"] = _cli("identify", *hyst, "--inputs", "ux,uy", "--outputs", "x,y",
-                                    "--time", "t", "--dynamics", "--dynamics-records", *dyn,
+                                    "--time", "t", "--dynamics", "--dynamics-records", *dyn, *stairs,
                                     "--out", str(preset), "--metrics", str(d / "fit.csv"),
                                     "--force", cwd=d)
     summary = read_toml(preset)["identification"]["dynamics"]
@@ -202,13 +207,15 @@ def main(argv=None):
                     default=["realistic-2dof", "scenarios/presets/realistic-b.toml"])
     ap.add_argument("--keep", metavar="DIR", help="work in DIR and keep the files")
     ap.add_argument("--verbose", action="store_true", help="print identify's output too")
+    ap.add_argument("--creep", action="store_true",
+                    help="identify the creep from the staircases and invert it with G")
     args = ap.parse_args(argv)
     rng = np.random.default_rng(17)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(args.keep or tmp)
         work.mkdir(parents=True, exist_ok=True)
         for spec in args.plants:
-            name, rows, cpu, printed = run_plant(spec, work, rng)
+            name, rows, cpu, printed = run_plant(spec, work, rng, args.creep)
             print(f"\n## {name} (identified through the CLI from the excitation records, "
                   f"40 nm noise)\n")
             if args.verbose:

@@ -99,6 +99,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     spec = {"kind": kind, "model": "plant"}
     if kind == "hammerstein":
         spec["inversion"] = inversion
+        spec["creep"] = "plant"        # the actuator's creep (e.g. identified) is inverted with G
     comp = build_compensator(spec, plant, Path.cwd())
     fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
     if fade == 0 and not starts_at_rest(reference.signal):

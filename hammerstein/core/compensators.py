@@ -542,8 +542,11 @@ def check_reference_range(model: MultivariablePI, reference, warn=True):
     if warn and np.any(ratio > 1 + 1e-9):
         bad = [f"{model.output_names[l]}: {reach[l]:.4g} µm > {peaks[l]:.4g} µm"
                for l in np.flatnonzero(ratio > 1 + 1e-9)]
+        origin = getattr(model, "identified_from", None)   # core/presets.load_model
+        where = f", identified from {origin}" if origin else ""
         warnings.warn("reference: beyond the range the model was identified on ("
-                      + "; ".join(bad) + "); the compensator extrapolates", RangeWarning, stacklevel=3)
+                      + "; ".join(bad) + f"{where}); the compensator extrapolates", RangeWarning,
+                      stacklevel=3)
     return ratio
 
 
