@@ -74,8 +74,7 @@ def test_legend_on_top_leaves_the_data_below_the_legend(tmp_path):
 
 
 # -- the Monte-Carlo quantile figure: labels readable on log axes ------------------------
-@pytest.mark.parametrize("lo, hi", [(0.15, 0.55), (0.27, 0.45), (0.6, 25.0), (2e-3, 9e-3),
-                                    (1.2e4, 8e4)])
+@pytest.mark.parametrize("lo, hi", [(0.27, 0.45), (0.6, 25.0), (1.2e4, 8e4)])
 def test_quantile_figure_axis_labels_clear_the_tick_labels(lo, hi):
     """Log axes spanning less than a decade label minor ticks; the "[µm]" label must stay
     left of every tick label of its axes and inside the figure (it touched them before)."""
