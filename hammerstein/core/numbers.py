@@ -7,7 +7,10 @@ subnormal through to a division that overflows) are not enough.
 :func:`is_number` accepts a real, finite, normal-or-zero number of any
 Python or numpy numeric type except bool; :func:`check_array` applies the
 same rule to an array of the API (NaN, infinity, complex values and shape
-mismatches refused with a message naming the argument).
+mismatches refused with a message naming the argument);
+:func:`integer_problem` and :func:`check_integer` are the integer checker of
+both the scenario files and the API (``iterations = 10**9`` refused with the
+maximum named).
 """
 
 from __future__ import annotations
@@ -18,12 +21,16 @@ import sys
 
 import numpy as np
 
-__all__ = ["is_number", "number_problem", "check_array", "FLOAT_MAX", "FLOAT_TINY"]
+__all__ = ["is_number", "number_problem", "check_array", "integer_problem", "check_integer",
+           "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS"]
 
 #: Largest finite float64; a Python int beyond it cannot become a float.
 FLOAT_MAX = sys.float_info.max
 #: Smallest normal float64: a non-zero magnitude below it is subnormal (refused).
 FLOAT_TINY = sys.float_info.min
+#: Most fixed-point (or learning) iterations per sample of a compensator, in a
+#: scenario file, on the command line and through the API alike.
+MAX_ITERATIONS = 100
 
 
 def number_problem(v):
@@ -116,3 +123,84 @@ def check_array(a, name, error=ValueError, ndim=None, length=None):
     if length is not None and arr.shape[-1] != length:
         raise error(f"{name}: {arr.shape[-1]} samples, expected {length} (as the other signal)")
     return arr
+
+
+def _short(v, n=60):
+    """``repr(v)``, or the digit count of an integer longer than ``n`` digits."""
+    text = repr(v)
+    if len(text) <= n:
+        return text
+    if isinstance(v, numbers.Integral):
+        return f"{'-' if v < 0 else ''}an integer of {len(str(abs(int(v))))} digits"
+    return text[:n] + "..."
+
+
+def integer_problem(v, minimum=0, maximum=None):
+    """Why ``v`` is not an integer in ``minimum..maximum`` (a phrase), or None.
+
+    Python ints of any size and numpy integers are integers; bools, floats
+    (even ``3.0``) and strings are not.
+
+    Parameters
+    ----------
+    v : object
+        The value.
+    minimum : int
+        Smallest accepted value.
+    maximum : int, optional
+        Largest accepted value.
+
+    Returns
+    -------
+    str or None
+        ``"expected an integer >= 1, found 0"`` or
+        ``"expected an integer 1..100, found 1000000000"``.
+
+    Examples
+    --------
+    >>> integer_problem(10**9, 1, MAX_ITERATIONS)
+    'expected an integer 1..100, found 1000000000'
+    >>> integer_problem(3, 1, 100) is None
+    True
+    """
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Integral) or v < minimum:
+        return f"expected an integer >= {minimum}, found {_short(v)}"
+    if maximum is not None and v > maximum:
+        return f"expected an integer {minimum}..{maximum}, found {_short(int(v))}"
+    return None
+
+
+def check_integer(v, name, minimum=0, maximum=None, error=ValueError):
+    """``v`` as a Python int in ``minimum..maximum``, or an error naming ``name``.
+
+    Parameters
+    ----------
+    v : object
+        The value (an int or numpy integer).
+    name : str
+        Field or argument name for the message (``"iterations"``).
+    minimum, maximum : int
+        Bounds (``maximum`` optional), inclusive.
+    error : type
+        Exception class raised.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    error
+        ``"<name>: expected an integer 1..100, found 1000000000"``.
+
+    Examples
+    --------
+    >>> check_integer(10**9, "iterations", 1, MAX_ITERATIONS)
+    Traceback (most recent call last):
+    ...
+    ValueError: iterations: expected an integer 1..100, found 1000000000
+    """
+    problem = integer_problem(v, minimum, maximum)
+    if problem:
+        raise error(f"{name}: {problem}")
+    return int(v)

@@ -638,3 +638,52 @@ def test_16_identify_records_checks_its_arrays(change, fragment):
            "nan-T": lambda: _record(sampling_period=float("nan"))}[change]()
     with pytest.raises(IdentificationError, match=fragment):
         identify_records([rec], n_hysterons=5)
+
+
+# -- 16. iterations and other integers through the API: the scenario files' bound ---------
+def _static_model():
+    from hammerstein.core.presets import load_plant
+    return load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+
+
+@pytest.mark.parametrize("value,fragment", [
+    (10 ** 9, "iterations: expected an integer 1..100, found 1000000000"),
+    (10 ** 400, "found an integer of 401 digits"),
+    (101, "1..100"),
+    (0, "iterations: expected an integer >= 1, found 0"),
+    (2.0, "expected an integer >= 1, found 2.0"),
+    (True, "expected an integer >= 1, found True"),
+])
+def test_16_api_iterations_are_capped_like_the_scenario_files(value, fragment):
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.exceptions import CompensatorError
+    with pytest.raises(CompensatorError, match="^iterations: ") as info:
+        InverseMultiplicativeCompensator(_static_model(), iterations=value)
+    assert fragment in str(info.value) and len(str(info.value)) < 120
+
+
+def test_16_api_bound_equals_the_scenario_bound():
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.numbers import MAX_ITERATIONS
+    from hammerstein.scenario.schema import MAX_ITERATIONS as SCENARIO_MAX
+    import numpy as np
+    assert MAX_ITERATIONS == SCENARIO_MAX
+    comp = InverseMultiplicativeCompensator(_static_model(), iterations=np.int64(MAX_ITERATIONS))
+    assert comp.iterations == MAX_ITERATIONS and type(comp.iterations) is int
+
+
+def test_16_ilc_iterations_are_capped():
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.ilc import LearningCompensator
+    from hammerstein.exceptions import CompensatorError
+    start = InverseMultiplicativeCompensator(_static_model())
+    with pytest.raises(CompensatorError, match=r"^iterations: expected an integer 1\.\.100"):
+        LearningCompensator(start, 1e-4, iterations=10 ** 9)
+
+
+def test_16_export_iterations_are_capped(capsys, tmp_path):
+    status, _, err = _call(capsys, "export", "rakotondrabe-2dof", "--target", "c", "--out", tmp_path / "o",
+                           "--iterations", str(10 ** 9))
+    assert status == 2 and len(err) == 1
+    assert "--iterations: expected an integer 1..100, found 1000000000" in err[0]
+    assert not (tmp_path / "o").exists()
