@@ -154,7 +154,8 @@ def _inverse_gain(model, gain):
         elif K.ndim == 1 and K.size == m:
             K = np.diag(K)
         if K.shape != (m, m) or not np.all(np.isfinite(K)):
-            raise CompensatorError(f"gain: expected an {m}x{m} finite matrix [µm/V], found shape {K.shape}")
+            found = f"shape {K.shape}" if K.shape != (m, m) else "non-finite values"
+            raise CompensatorError(f"gain: expected a {m}x{m} finite matrix [µm/V], found {found}")
     try:
         Kinv = np.linalg.inv(K)
     except np.linalg.LinAlgError as exc:

@@ -22,12 +22,17 @@ import sys
 import numpy as np
 
 __all__ = ["is_number", "number_problem", "check_array", "integer_problem", "check_integer",
-           "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS"]
+           "magnitude_problem", "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS", "MAX_MAGNITUDE"]
 
 #: Largest finite float64; a Python int beyond it cannot become a float.
 FLOAT_MAX = sys.float_info.max
 #: Smallest normal float64: a non-zero magnitude below it is subnormal (refused).
 FLOAT_TINY = sys.float_info.min
+#: Largest magnitude of a signal value (data file, API array, simulated output or
+#: voltage): beyond ``sqrt(FLOAT_MAX)`` = 1.34e154 the squares of an RMS overflow to
+#: inf and LAPACK's scaling (DLASCL) fails, so 1e150 leaves room for sums over
+#: 1e8 samples. No actuator moves 1e150 µm.
+MAX_MAGNITUDE = 1e150
 #: Most fixed-point (or learning) iterations per sample of a compensator, in a
 #: scenario file, on the command line and through the API alike.
 MAX_ITERATIONS = 100
@@ -105,7 +110,8 @@ def check_array(a, name, error=ValueError, ndim=None, length=None):
     ------
     error
         Complex values, non-numeric data, NaN or infinite values (the first
-        index named), a wrong number of dimensions or a length mismatch.
+        index named), a magnitude beyond :data:`MAX_MAGNITUDE`, a wrong
+        number of dimensions or a length mismatch.
     """
     arr = np.asarray(a)
     if np.iscomplexobj(arr):
@@ -120,6 +126,9 @@ def check_array(a, name, error=ValueError, ndim=None, length=None):
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise error(f"{name}: non-finite value {arr[idx]} at index {idx if len(idx) > 1 else idx[0]}")
+    problem = magnitude_problem(arr)
+    if problem:
+        raise error(f"{name}: {problem}")
     if length is not None and arr.shape[-1] != length:
         raise error(f"{name}: {arr.shape[-1]} samples, expected {length} (as the other signal)")
     return arr
@@ -204,3 +213,40 @@ def check_integer(v, name, minimum=0, maximum=None, error=ValueError):
     if problem:
         raise error(f"{name}: {problem}")
     return int(v)
+
+
+def magnitude_problem(a, unit=""):
+    """Why the values of ``a`` are too large to compute with (a phrase), or None.
+
+    NaN values are skipped (they mark a divergence); an infinite value or a
+    magnitude beyond :data:`MAX_MAGNITUDE` is a problem: the squares of the
+    metrics would overflow and a linear solve would fail inside LAPACK.
+
+    Parameters
+    ----------
+    a : array_like
+        Values of any shape.
+    unit : str
+        Unit appended to the value in the message (``"µm"``).
+
+    Returns
+    -------
+    str or None
+        ``"3.04e+301 µm at index (0, 17) is beyond the limit 1e+150"``.
+
+    Examples
+    --------
+    >>> magnitude_problem([[1.0, -2e300]], "V")
+    '-2e+300 V at index (0, 1) is beyond the limit 1e+150'
+    >>> magnitude_problem([1.0, float("nan")]) is None
+    True
+    """
+    arr = np.asarray(a, dtype=float)
+    with np.errstate(invalid="ignore"):
+        big = np.abs(arr) > MAX_MAGNITUDE     # False for NaN, True for inf
+    if not big.any():
+        return None
+    idx = tuple(int(i) for i in np.argwhere(big)[0])
+    where = idx[0] if len(idx) == 1 else idx
+    return (f"{arr[idx]:.3g}{' ' + unit if unit else ''} at index {where} is beyond the limit "
+            f"{MAX_MAGNITUDE:.0e}")

@@ -687,3 +687,69 @@ def test_16_export_iterations_are_capped(capsys, tmp_path):
     assert status == 2 and len(err) == 1
     assert "--iterations: expected an integer 1..100, found 1000000000" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+# -- 15. outputs that overflow: refused with one line, nothing written ----------------------
+def _huge_preset(directory, scale):
+    # the 1x1 corpus preset with its weights scaled: outputs of ~scale µm
+    text = (CORPUS / "models" / "preset-static.toml").read_text()
+    text = text.replace("weights = [1.0, 0.5, 0.2]",
+                        f"weights = [{1.0 * scale!r}, {0.5 * scale!r}, {0.2 * scale!r}]")
+    (directory / "huge.toml").write_text(text)
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e160])
+def test_15_overflowing_outputs_are_refused(capsys, tmp_path, scale):
+    _huge_preset(tmp_path, scale)
+    scen = tmp_path / "s.toml"
+    scen.write_text('[plant]\npreset = "huge.toml"\ndynamics = false\n[compensator]\nkind = "none"\n'
+                    '[[cases]]\nname = "open"\ndrive = { kind = "sine", input = "ux", amplitude = 10.0, '
+                    'frequency = 50.0, periods = 2 }\n')
+    status, out, err = _call(capsys, "run", scen, "--out", tmp_path / "out")
+    assert status == 1 and len(err) == 1, err
+    assert "case 'open': simulated outputs:" in err[0] and "beyond the limit 1e+150" in err[0]
+    assert not (tmp_path / "out" / "s").exists()
+    assert "DLASCL" not in out
+
+
+def test_15_moderate_outputs_still_run(capsys, tmp_path):
+    # 1e140 µm is absurd but computable: the bound is the float range, not physics
+    _huge_preset(tmp_path, 1e140)
+    scen = tmp_path / "s.toml"
+    scen.write_text('[plant]\npreset = "huge.toml"\ndynamics = false\n[compensator]\nkind = "none"\n'
+                    '[[cases]]\nname = "open"\ndrive = { kind = "sine", input = "ux", amplitude = 10.0, '
+                    'frequency = 50.0, periods = 2 }\n')
+    status, _, err = _call(capsys, "run", scen, "--out", tmp_path / "out")
+    assert status == 0, err
+    import pandas as pd
+    frame = pd.read_csv(tmp_path / "out" / "s" / "metrics.csv")
+    assert np_isfinite_all(frame["value"])
+
+
+def np_isfinite_all(values):
+    import numpy as np
+    return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
+
+
+@pytest.mark.parametrize("value", ["1e300", "-3e151", "1.8e308"])
+def test_15_data_values_beyond_the_limit_are_one_line(capsys, tmp_path, value):
+    lines = DATA.read_text().splitlines()
+    row = lines[5].split(",")
+    row[2] = value
+    lines[5] = ",".join(row)
+    data = tmp_path / "d.csv"
+    data.write_text("\n".join(lines) + "\n")
+    status, out, err = _call(capsys, "identify", data, "--time", "time_s", "--input", "u_V",
+                             "--output", "y_um", "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1, err
+    assert "output column 'y_um'" in err[0] and "data row 5" in err[0]
+    assert "beyond the limit" in err[0] or "infinite" in err[0]
+    assert not (tmp_path / "m.toml").exists()
+
+
+def test_15_api_arrays_beyond_the_limit():
+    import numpy as np
+    from hammerstein.core.numbers import check_array
+    with pytest.raises(ValueError, match=r"^u: -2e\+300 at index \(1, 3\) is beyond the limit 1e\+150$"):
+        check_array(np.where(np.arange(8).reshape(2, 4) == 7, -2e300, 1.0), "u")
+    assert check_array([1e149], "u")[0] == 1e149
