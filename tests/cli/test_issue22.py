@@ -753,3 +753,17 @@ def test_15_api_arrays_beyond_the_limit():
     with pytest.raises(ValueError, match=r"^u: -2e\+300 at index \(1, 3\) is beyond the limit 1e\+150$"):
         check_array(np.where(np.arange(8).reshape(2, 4) == 7, -2e300, 1.0), "u")
     assert check_array([1e149], "u")[0] == 1e149
+
+
+def test_15_dynamics_fit_refuses_overflowing_records_before_lapack(capfd):
+    # LAPACK printed "** On entry to DLASCL" on stdout and spun for minutes on such records
+    import numpy as np
+    from hammerstein.core.lti import DynamicsIdentifier
+    from hammerstein.exceptions import DynamicsError
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal((1, 400))
+    y = np.convolve(u[0], [0.0, 0.5, 0.25])[:400][None, :] * 1e300
+    with pytest.raises(DynamicsError, match=r"records\[0\]: outputs: .* is beyond the limit 1e\+150"):
+        DynamicsIdentifier(order=2).fit(u, y, 1e-3)
+    out, err = capfd.readouterr()
+    assert "DLASCL" not in out + err
