@@ -257,6 +257,17 @@ def _prepare_environment():
     return notes
 
 
+def _guard_kernel_cache():
+    """A numba cache that cannot be written (full disk, quota, read-only) costs one
+    ``note:`` line, not the run (:func:`hammerstein.simulation.guard_cache_writes`).
+
+    Only when the command's module has loaded the kernels (``list``, ``--help``
+    stay free of numba).
+    """
+    if "hammerstein.simulation" in sys.modules:
+        importlib.import_module("hammerstein.simulation._compile").guard_cache_writes(print_err)
+
+
 def _command(argv):
     """The subcommand named in ``argv`` (its first argument not starting with '-'), or None."""
     for a in argv:
@@ -344,6 +355,7 @@ def _main(argv):
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: usage error (2) or --help (0)
         return int(exc.code or 0)
+    _guard_kernel_cache()
     with warnings.catch_warnings():  # stray warnings: one line each, no source line
         warnings.showwarning = _one_line_warning
         try:

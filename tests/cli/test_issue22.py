@@ -767,3 +767,74 @@ def test_15_dynamics_fit_refuses_overflowing_records_before_lapack(capfd):
         DynamicsIdentifier(order=2).fit(u, y, 1e-3)
     out, err = capfd.readouterr()
     assert "DLASCL" not in out + err
+
+
+# -- 11. a numba cache that cannot be written is not a report-write failure -----------------
+@pytest.mark.parametrize("code", ["ENOSPC", "EDQUOT", "EROFS"])
+def test_11_cache_write_failure_runs_from_memory(monkeypatch, code):
+    import errno
+    import numba
+    import numpy as np
+    from numba.core import caching
+    from hammerstein.simulation import _compile
+
+    def full(self, key, data):
+        raise OSError(getattr(errno, code), os.strerror(getattr(errno, code)))
+    monkeypatch.setattr(caching.IndexDataCacheFile, "save", full)
+    monkeypatch.setitem(_compile._GUARD, "failed", None)
+    notes = []
+    _compile.guard_cache_writes(notes.append)
+    monkeypatch.setitem(_compile._GUARD, "notify", notes.append)
+
+    @numba.njit(cache=True)
+    def triple(x):          # a kernel compiled (and cached) here for the first time
+        return 3.0 * x
+
+    @numba.njit(cache=True)
+    def quadruple(x):
+        return 4.0 * x
+    assert triple(np.float64(2.0)) == 6.0 and quadruple(np.float64(2.0)) == 8.0
+    assert len(notes) == 1, notes     # one line, not one per kernel
+    assert notes[0].startswith("note: cannot write the compiled-kernel cache")
+    assert os.strerror(getattr(errno, code)) in notes[0] and "\n" not in notes[0]
+
+
+def test_11_other_cache_errors_still_propagate(monkeypatch):
+    import numba
+    import numpy as np
+    from numba.core import caching
+    from hammerstein.simulation import _compile
+
+    def broken(self, key, data):
+        raise OSError(5, "Input/output error")      # EIO: not a full or read-only cache
+    monkeypatch.setattr(caching.IndexDataCacheFile, "save", broken)
+    monkeypatch.setitem(_compile._GUARD, "failed", None)
+    _compile.guard_cache_writes(lambda m: None)
+
+    @numba.njit(cache=True)
+    def quintuple(x):
+        return 5.0 * x
+    with pytest.raises(OSError, match="Input/output"):
+        quintuple(np.float64(1.0))
+
+
+@pytest.mark.slow
+def test_11_full_tmpfs_numba_cache_is_one_note(tmp_path):
+    # a real full disk: a 64 KiB tmpfs as NUMBA_CACHE_DIR (root only; skipped elsewhere)
+    import subprocess
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs",
+                                            str(cache)], capture_output=True).returncode:
+        pytest.skip("mounting a tmpfs needs root (CAP_SYS_ADMIN)")
+    try:
+        proc = _cli(["run", GOOD, "--out", tmp_path / "out"],
+                    env={**os.environ, "NUMBA_CACHE_DIR": str(cache)})
+    finally:
+        subprocess.run(["umount", str(cache)], capture_output=True)
+    err = proc.stderr.splitlines()
+    assert proc.returncode == 0, err
+    notes = [e for e in err if "compiled-kernel cache" in e]
+    assert len(notes) == 1 and "No space left on device" in notes[0]
+    assert not [e for e in err if "cannot write the report" in e]
+    assert (tmp_path / "out" / "good-static" / "metrics.csv").is_file()
