@@ -838,3 +838,62 @@ def test_11_full_tmpfs_numba_cache_is_one_note(tmp_path):
     assert len(notes) == 1 and "No space left on device" in notes[0]
     assert not [e for e in err if "cannot write the report" in e]
     assert (tmp_path / "out" / "good-static" / "metrics.csv").is_file()
+
+
+# -- 5. cache entries with zero or negative weights: re-validated, ignored with one note ----
+CACHE_SPEC = {"frequency": 50.0, "amplitude": 10.0, "periods": 2, "n_hysterons": 8,
+              "method": "least-squares", "partition": "time", "bounds": "monotone"}
+
+
+@pytest.fixture
+def cache_notes(tmp_path, monkeypatch):
+    from hammerstein.scenario import diskcache
+    monkeypatch.setenv(diskcache.ENV, str(tmp_path / "cache"))
+    notes = []
+    diskcache.set_reporter(notes.append)
+    diskcache._REPORT["said"].clear()
+    yield notes
+    diskcache.set_reporter(None)
+
+
+@pytest.mark.parametrize("damage", ["zero", "negative-first", "negative-later", "all-zero"])
+def test_5_cache_entry_with_bad_weights_is_ignored(cache_notes, static_plant, damage):
+    import json
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.presets import model_to_table
+    from hammerstein.scenario import diskcache
+    from hammerstein.scenario import identification as identified
+    model, _ = identified.identified_model(static_plant, CACHE_SPEC)
+    table = model_to_table(model)
+    (entry,) = diskcache.cache_dir().iterdir()
+    data = json.loads(entry.read_text())
+    out = next(iter(data["value"]["model"]["components"]))
+    inp = next(iter(data["value"]["model"]["components"][out]))
+    direct = data["value"]["model"]["components"][out][inp]
+    w = direct["weights"]
+    direct["weights"] = {"zero": [0.0] + w[1:], "negative-first": [-abs(w[0])] + w[1:],
+                         "negative-later": w[:1] + [-2 * sum(w)] + w[2:],
+                         "all-zero": [0.0] * len(w)}[damage]
+    data["digest"] = diskcache._value_digest(data["value"])     # written by this user's process
+    entry.write_text(json.dumps(data))
+    before = entry.read_bytes()
+    again, _ = identified.identified_model(static_plant, CACHE_SPEC)
+    assert model_to_table(again) == table                      # identified again
+    InverseMultiplicativeCompensator(again)                     # and usable
+    assert len(cache_notes) == 1, cache_notes
+    assert cache_notes[0].startswith("note: identification cache entry ignored: ")
+    assert entry.name in cache_notes[0] and "is not positive" in cache_notes[0]
+    assert entry.read_bytes() == before                         # nothing deleted or rewritten
+
+
+def test_5_cached_model_problem_closed_forms():
+    from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.scenario.identification_cache import cached_model_problem
+
+    def model(w):
+        return MultivariablePI([[PrandtlIshlinskii([0.0, 1.0, 2.0], w)]], input_amplitude=[5.0])
+    monotone = ((("bounds", "monotone"),),)
+    assert cached_model_problem(model([1.0, -0.5, 0.2]), monotone) is None      # S = 1, .5, .7
+    assert "S_3 = -0.2" in cached_model_problem(model([1.0, -0.5, -0.7]), monotone)
+    assert cached_model_problem(model([1.0, -0.5, -0.7]), ((("bounds", "none"),),)) is None
+    assert "S_1 = 0" in cached_model_problem(model([0.0, 0.5, 0.2]), ())
