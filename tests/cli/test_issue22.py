@@ -897,3 +897,48 @@ def test_5_cached_model_problem_closed_forms():
     assert "S_3 = -0.2" in cached_model_problem(model([1.0, -0.5, -0.7]), monotone)
     assert cached_model_problem(model([1.0, -0.5, -0.7]), ((("bounds", "none"),),)) is None
     assert "S_1 = 0" in cached_model_problem(model([0.0, 0.5, 0.2]), ())
+
+
+# -- 18. files with a UTF-8 byte-order mark read like those without, by every command ---------
+BOM = b"\xef\xbb\xbf"
+
+
+def _bom_inputs(d, bom):
+    import numpy as np
+    d.mkdir()
+    t = np.arange(2000) * 5e-5
+    ref = "t,x,y\n" + "".join(f"{float(a)!r},{float(20 * np.sin(2 * np.pi * 50 * a))!r},"
+                                 f"{float(10 * np.sin(2 * np.pi * 50 * a + 1))!r}\n" for a in t)
+    meas = "t,x,y\n" + "".join(f"{float(a)!r},{float(18 * np.sin(2 * np.pi * 50 * a))!r},"
+                                  f"{float(11 * np.sin(2 * np.pi * 50 * a + 1))!r}\n" for a in t)
+    drive = "t,ux,uy\n" + "".join(f"{float(a)!r},{float(4 * np.sin(2 * np.pi * 50 * a))!r},"
+                                     f"{float(3 * np.sin(2 * np.pi * 50 * a + 1))!r}\n" for a in t)
+    texts = {"ref.csv": ref, "meas.csv": meas, "drive.csv": drive, "data.csv": DATA.read_text(),
+             "model.toml": (CORPUS / "models" / "preset-static.toml").read_text(),
+             "s.toml": GOOD.read_text().replace('name = "good-static"', 'name = "s"')}
+    for name, text in texts.items():
+        (d / name).write_bytes((BOM if bom else b"") + text.encode())
+
+
+@pytest.mark.parametrize("argv,output", [
+    (["validate", "s.toml"], None),
+    (["run", "s.toml", "--out", "out"], "out/s/metrics.csv"),
+    (["identify", "data.csv", "--time", "time_s", "--input", "u_V", "--output", "y_um",
+      "--thresholds", "5", "--out", "m.toml"], "m.toml"),
+    (["export", "model.toml", "--target", "c", "--out", "exp", "--no-binary"], "exp/static_1x1_multivariable.c"),
+    (["compensate", "rakotondrabe-2dof", "--reference", "ref.csv", "--out", "u.csv"], "u.csv"),
+    (["evaluate", "--reference", "ref.csv", "--measured", "meas.csv", "--outputs", "x=x,y=y",
+      "--out", "ev"], "ev/metrics.csv"),
+    (["learn", "rakotondrabe-2dof", "--reference", "ref.csv", "--drive", "drive.csv",
+      "--measured", "meas.csv", "--outputs", "x=x,y=y", "--out", "u1.csv"], "u1.csv"),
+])
+def test_18_byte_order_mark_is_not_content(capsys, tmp_path, monkeypatch, argv, output):
+    results = {}
+    for bom in (False, True):
+        d = tmp_path / ("bom" if bom else "plain")
+        _bom_inputs(d, bom)
+        monkeypatch.chdir(d)
+        status, out, err = _call(capsys, *argv)
+        assert status == 0, err
+        results[bom] = (d / output).read_bytes() if output else out
+    assert results[True] == results[False]
