@@ -942,3 +942,38 @@ def test_18_byte_order_mark_is_not_content(capsys, tmp_path, monkeypatch, argv, 
         assert status == 0, err
         results[bom] = (d / output).read_bytes() if output else out
     assert results[True] == results[False]
+
+
+# -- 18. library warnings and log records: one line each, naming the file, printed once ------
+def test_18_stray_warnings_name_the_input_file_once(capsys, monkeypatch):
+    import warnings as warnings_
+    from hammerstein.cli import identify
+
+    def noisy(args):
+        for _ in range(5):   # an overflow inside a loop: printed once
+            warnings_.warn("overflow encountered in square", RuntimeWarning)
+        warnings_.warn("Polyfit may be poorly\nconditioned", UserWarning)
+        return 0
+    monkeypatch.setattr(identify, "_handler", noisy)
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", "m.toml")
+    assert status == 0
+    assert err == [f"warning: {DATA}: RuntimeWarning: overflow encountered in square",
+                   f"warning: {DATA}: UserWarning: Polyfit may be poorly conditioned"]
+
+
+def test_18_library_log_records_are_one_line(capsys, monkeypatch):
+    import logging
+    from hammerstein.cli import listing
+    monkeypatch.setattr(logging.getLogger(), "handlers", [])   # as outside pytest
+
+    def noisy(args):
+        logging.getLogger("matplotlib").warning("mkdir -p failed for path %s:\n%s", "/x/.config",
+                                                "[Errno 13] Permission denied")
+        logging.getLogger("matplotlib").info("not shown: below WARNING")
+        return 0
+    monkeypatch.setattr(listing, "handler", noisy)
+    status, _, err = _call(capsys, "list")
+    assert status == 0
+    assert err == ["warning: hammerstein list: matplotlib: mkdir -p failed for path /x/.config: "
+                   "[Errno 13] Permission denied"]
+    assert logging.getLogger().handlers == []     # the handler lives only during the command
