@@ -303,7 +303,7 @@ def _prepare_environment():
 
 def _guard_kernel_cache():
     """A numba cache that cannot be written (full disk, quota, read-only) costs one
-    ``note:`` line, not the run (:func:`hammerstein.simulation.guard_cache_writes`).
+    ``note:`` line, not the run (``guard_cache_writes`` of ``hammerstein/simulation/_compile.py``).
 
     Only when the command's module has loaded the kernels (``list``, ``--help``
     stay free of numba).
