@@ -977,3 +977,20 @@ def test_18_library_log_records_are_one_line(capsys, monkeypatch):
     assert err == ["warning: hammerstein list: matplotlib: mkdir -p failed for path /x/.config: "
                    "[Errno 13] Permission denied"]
     assert logging.getLogger().handlers == []     # the handler lives only during the command
+
+
+# -- the column options of the signal-file commands: one definition -------------------------
+def test_column_options_are_one_definition():
+    from hammerstein.cli.main import build_parser
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices
+
+    def options(command):
+        return {a.option_strings[0]: (a.dest, a.metavar, a.default, a.required, a.nargs)
+                for a in sub[command]._actions if a.option_strings
+                and a.option_strings[0] in ("--time", "--inputs", "--outputs")}
+    expected = {"--time": ("time", "COL", "t", False, None),
+                "--inputs": ("inputs", "NAME=COL,...", None, False, None),
+                "--outputs": ("outputs", "NAME=COL,...", None, False, None)}
+    for command in ("compensate", "learn", "evaluate"):
+        assert options(command) == expected, command
