@@ -994,3 +994,21 @@ def test_column_options_are_one_definition():
                 "--outputs": ("outputs", "NAME=COL,...", None, False, None)}
     for command in ("compensate", "learn", "evaluate"):
         assert options(command) == expected, command
+
+
+@pytest.mark.parametrize("option", ["--measured", "--reference"])
+def test_15_signal_files_beyond_the_limit_are_one_line(capsys, tmp_path, monkeypatch, option):
+    # evaluate wrote "max Euclidean error inf" from a measured column of 1e300 µm
+    _bom_inputs(tmp_path / "d", False)
+    monkeypatch.chdir(tmp_path / "d")
+    name = "meas.csv" if option == "--measured" else "ref.csv"
+    lines = Path(name).read_text().splitlines()
+    cells = lines[3].split(",")
+    cells[1] = "3e300"
+    lines[3] = ",".join(cells)
+    Path(name).write_text("\n".join(lines) + "\n")
+    status, _, err = _call(capsys, "evaluate", "--reference", "ref.csv", "--measured", "meas.csv",
+                           "--outputs", "x=x,y=y", "--out", "ev")
+    assert status == 1 and len(err) == 1, err
+    assert "column 'x': value 3e+300 on data row 3 is beyond the limit 1e+150" in err[0]
+    assert not Path("ev").exists()
