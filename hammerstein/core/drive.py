@@ -42,6 +42,7 @@ import pandas as pd
 from hammerstein.core.amplifier import Amplifier, drive_metrics
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.files import FileLimitError, bounded_read_text
+from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import CompensatorError, DataFileError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
@@ -525,6 +526,10 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
             bad = int(np.flatnonzero(~np.isfinite(v))[0]) + 2 if v.size else 1
             raise DataFileError(f"{what}: {path}: column {col!r} is not a finite number on "
                                 f"data row {bad - 1}")
+        big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)   # the squares of the metrics overflow
+        if big.size:
+            raise DataFileError(f"{what}: {path}: column {col!r}: value {v[big[0]]:.3g} on data "
+                                f"row {int(big[0]) + 1} is beyond the limit {MAX_MAGNITUDE:.0e}")
         return v
 
     t = column(time, "the time [s]")

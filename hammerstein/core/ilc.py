@@ -67,6 +67,7 @@ from hammerstein.core.compensators import InverseMultiplicativeCompensator
 from hammerstein.core.drive import apply_amplifier, drive_signal
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.inversion import preview_inverse
+from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
 from hammerstein.exceptions import CompensatorError, ConvergenceWarning
 from hammerstein.simulation import ChainResult
 
@@ -945,7 +946,8 @@ class LearningCompensator:
     sampling_period : float
         T [s].
     iterations : int
-        Learning trials after the start drive (>= 1).
+        Learning trials after the start drive, 1 to
+        :data:`~hammerstein.core.numbers.MAX_ITERATIONS` (100).
     learning_gain, q_cutoff_hz, inversion
         Of :class:`IterativeLearning`.
     sensor_noise : float
@@ -972,8 +974,7 @@ class LearningCompensator:
     def __init__(self, start, sampling_period, iterations=10, learning_gain=0.5,
                  q_cutoff_hz=2000.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
                  harmonics=True):
-        if int(iterations) != iterations or iterations < 1:
-            raise CompensatorError(f"iterations: expected an integer >= 1, found {iterations!r}")
+        iterations = check_integer(iterations, "iterations", 1, MAX_ITERATIONS, CompensatorError)
         self.start_compensator = start
         self.sampling_period = float(sampling_period)
         self.iterations, self.sensor_noise, self.seed, self.name = int(iterations), float(
