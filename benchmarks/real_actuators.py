@@ -19,8 +19,12 @@ For each plant (default: the bundled ``realistic-2dof`` and
 Prints one table per plant with every target of issue 17 and the measured
 value, and the CPU time and load.
 
-Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...]
-[--model auto|classical|preisach ...] [--keep DIR]``
+With ``--creep`` the staircases go to ``identify --creep-records`` too, and
+the compensator inverts the identified creep with the dynamics (scenario
+``creep = "auto"``: the identified preset's ``[creep]``).
+
+Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...] [--keep DIR] [--creep]
+[--model auto|classical|preisach ...]``
 """
 
 from __future__ import annotations
@@ -134,7 +138,7 @@ def _metrics(path):
                 for r in csv.DictReader(fh)]
 
 
-def run_plant(spec, work, rng, model_class="auto"):
+def run_plant(spec, work, rng, creep=False, model_class="auto"):
     source = str((ROOT / spec).resolve()) if spec.endswith(".toml") else spec
     plant = load_plant(source)
     name = Path(spec).stem
@@ -151,8 +155,9 @@ def run_plant(spec, work, rng, model_class="auto"):
     dyn = [str(rec / f"multisine-{i}.csv") for i in ("ux", "uy")] + \
           [str(rec / f"multisine-{i}-validation.csv") for i in ("ux", "uy")]
     preset = d / "identified.toml"
+    stairs = ["--creep-records", *[str(rec / f"creep-{i}.csv") for i in ("ux", "uy")]] if creep else []
     printed, cpu["identify"] = _cli("identify", *hyst, "--inputs", "ux,uy", "--outputs", "x,y",
-                                    "--time", "t", "--dynamics", "--dynamics-records", *dyn,
+                                    "--time", "t", "--dynamics", "--dynamics-records", *dyn, *stairs,
                                     "--out", str(preset), "--metrics", str(d / "fit.csv"),
                                     "--model", model_class, "--force", cwd=d)
     summary = read_toml(preset)["identification"]["dynamics"]
@@ -209,6 +214,8 @@ def main(argv=None):
                     choices=["auto", "classical", "preisach"],
                     help="identify --model class(es) to compare (default: auto)")
     ap.add_argument("--verbose", action="store_true", help="print identify's output too")
+    ap.add_argument("--creep", action="store_true",
+                    help="identify the creep from the staircases and invert it with G")
     args = ap.parse_args(argv)
     rng = np.random.default_rng(17)
     with tempfile.TemporaryDirectory() as tmp:
@@ -216,7 +223,7 @@ def main(argv=None):
         work.mkdir(parents=True, exist_ok=True)
         runs = [(spec, mc) for spec in args.plants for mc in args.model]
         for spec, model_class in runs:
-            name, rows, cpu, printed = run_plant(spec, work, rng, model_class)
+            name, rows, cpu, printed = run_plant(spec, work, rng, args.creep, model_class)
             print(f"\n## {name}, identify --model {model_class} (identified through the CLI from "
                   f"the excitation records, 40 nm noise)\n")
             if args.verbose:

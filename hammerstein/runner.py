@@ -47,6 +47,7 @@ import pandas as pd
 
 from hammerstein.core.files import (deferred_signals, owner_alive, owner_token, parse_owner,
                                     release_owner, umask)
+from hammerstein.core.numbers import magnitude_problem
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.render import FigureJobs, FigureRenderer
@@ -366,6 +367,53 @@ def _write_warnings(pairs, directory):
             Path(directory) / "warnings.csv", index=False)
 
 
+#: Signals of a case result checked for overflow: attribute, what it is, unit.
+_SIGNALS_CHECKED = (("outputs", "simulated outputs", "µm"), ("inputs", "compensator voltages", "V"),
+                    ("model_outputs", "model outputs", "µm"), ("reference", "reference", "µm"))
+
+
+def overflow_problem(results):
+    """Why the simulated cases cannot be reported (an overflow), or None.
+
+    A case whose outputs, voltages or reference reach a magnitude beyond
+    :data:`hammerstein.core.numbers.MAX_MAGNITUDE` (or infinity), or a
+    metric that is infinite, would write ``rms_error = inf`` and figures
+    with no scale: the scenario is refused instead, naming the first case
+    and quantity. NaN (after a divergence) is not an overflow.
+
+    Parameters
+    ----------
+    results : list
+        Case results (:class:`hammerstein.scenario.execute.CaseResult` or
+        any object with ``name``, ``metrics`` and signal arrays).
+
+    Returns
+    -------
+    str or None
+        ``"case 'open': simulated outputs: 3.04e+301 µm at index (0, 5) is
+        beyond the limit 1e+150"``.
+    """
+    if not isinstance(results, (list, tuple)):
+        return None
+    for r in results:
+        name = getattr(r, "name", None)
+        if not isinstance(name, str):
+            continue
+        for attr, what, unit in _SIGNALS_CHECKED:
+            a = getattr(r, attr, None)
+            if a is None or not hasattr(a, "dtype") or a.dtype.kind not in "fiu":
+                continue
+            problem = magnitude_problem(a, unit)
+            if problem:
+                return f"case {name!r}: {what}: {problem}"
+        for row in getattr(r, "metrics", None) or ():
+            v = row.get("value") if isinstance(row, dict) else None
+            if isinstance(v, float) and v in (float("inf"), float("-inf")):
+                return (f"case {name!r}: metric {row.get('metric')} of {row.get('channel')} is "
+                        f"infinite (the signals overflow)")
+    return None
+
+
 def _message(path, exc):
     """One failure message without exception class names (kept only for an unexpected bug)."""
     if isinstance(exc, OSError):
@@ -500,6 +548,9 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
         scenario = resolve_scenario(spec)
         kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
         results = kind.simulate(scenario)
+        problem = overflow_problem(results)
+        if problem:  # an overflowing case: nothing written, one line
+            raise ScenarioError([f"{path}: {problem}"])
         frame = metrics_frame(results)
         caught = _case_warnings(results)
         jobs = FigureJobs(renderer)

@@ -8,14 +8,22 @@ multivariable PI of eq. (13) with (``preset_plant``) or without
 from __future__ import annotations
 
 import os
-import tempfile
-from pathlib import Path
 
-import numpy as np
-import pytest
+# One OpenBLAS thread, as the CLI runs it (README "Performance"), set before numpy is
+# imported: the identifications' least squares are small, and OpenBLAS threads spinning
+# on a busy 2-core machine tripled their CPU time (tests/core/test_lti.py and
+# tests/cli/test_identify_dynamics.py: 24-29 s of CPU with the default threads, 9-10 s
+# with one). A value the user sets is kept.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-from hammerstein import InverseMultiplicativeCompensator, load_plant
-from hammerstein import simulation as sim
+import tempfile  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from hammerstein import InverseMultiplicativeCompensator, load_plant  # noqa: E402
+from hammerstein import simulation as sim  # noqa: E402
 
 #: the repository root (scenarios/, baselines/, tests/corpus/ live below it)
 ROOT = Path(__file__).resolve().parents[1]

@@ -9,7 +9,7 @@ from pathlib import Path
 from hammerstein.core.files import escape
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
-           "MAX_LINE"]
+           "MAX_LINE", "add_column_options"]
 
 #: Longest line printed on stderr (characters); longer messages are cut with a count.
 MAX_LINE = 2000
@@ -94,6 +94,28 @@ def out_file_problem(out, what="file"):
         return f"--out: {out} is read-only; make it writable (chmod u+w) or choose another name"
     problem = out_dir_problem(p.resolve().parent if p.is_symlink() else p.parent)
     return problem.replace("--out: ", f"--out: {out}: ", 1) if problem else None
+
+
+def add_column_options(p, inputs_help="input columns named otherwise",
+                       outputs_help="output columns named otherwise",
+                       time_help="time column of the CSV files (default t)"):
+    """``--time COL`` (default ``t``), ``--inputs NAME=COL,...`` and ``--outputs NAME=COL,...`` on ``p``.
+
+    The column options of the commands that read signal CSV files
+    (``compensate``, ``learn``, ``evaluate``): one definition, so their
+    names, metavars and defaults cannot drift apart; each command words
+    its own help.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    inputs_help, outputs_help, time_help : str
+        Help texts of ``--inputs``, ``--outputs`` and ``--time``.
+    """
+    p.add_argument("--outputs", metavar="NAME=COL,...", help=outputs_help)
+    p.add_argument("--inputs", metavar="NAME=COL,...", help=inputs_help)
+    p.add_argument("--time", default="t", metavar="COL", help=time_help)
 
 
 def print_err(msg):

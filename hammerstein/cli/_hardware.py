@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hammerstein.cli._common import add_column_options
 from hammerstein.core.drive import DRIVE_MARK, read_signals
 from hammerstein.core.amplifier import amplifier_from_table
 from hammerstein.core.plant import HammersteinPlant
@@ -204,10 +205,7 @@ def add_actuator_arguments(p):
     p.add_argument("--period", type=positive_float, metavar="S",
                    help="period of a periodic CSV reference [s] (continuation past its end, "
                         "settling window)")
-    p.add_argument("--time", default="t", metavar="COL", help="time column of the CSV files "
-                   "(default t)")
-    p.add_argument("--inputs", metavar="NAME=COL,...", help="input columns named otherwise")
-    p.add_argument("--outputs", metavar="NAME=COL,...", help="output columns named otherwise")
+    add_column_options(p)
 
 
 def catch():

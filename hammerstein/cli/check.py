@@ -48,7 +48,8 @@ from hammerstein.cli._common import out_dir_problem, out_file_problem
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.core.files import (FileLimitError, carries_provenance, escape, locked,
                                     provenance_line, replace_problem, safe_write)
-from hammerstein.runner import run_scenarios
+from hammerstein.report.render import figure_selection
+from hammerstein.runner import run_pipelined, run_scenarios
 from hammerstein.scenario import diskcache
 from hammerstein.scenario.regression import (BaselineError, compare_metrics, is_regression,
                                              load_tolerances, merge_baseline, read_baseline,
@@ -90,7 +91,8 @@ def add_parser(subparsers):
     p.add_argument("--update", action="store_true",
                    help="rewrite the baseline rows of these scenarios with the current metrics")
     p.add_argument("--out", metavar="DIR",
-                   help="keep the reports in DIR (default: a temporary directory)")
+                   help="keep the reports, with their figures, in DIR (default: a "
+                        "temporary directory, and no figures are drawn)")
     p.add_argument("--rtol", type=float, metavar="R",
                    help="relative tolerance for every metric (e.g. 0.05 = 5 %%)")
     p.add_argument("--atol", type=float, metavar="A",
@@ -391,4 +393,5 @@ def _run(paths, out):
     if out is not None:
         return run_scenarios(paths, out)
     with tempfile.TemporaryDirectory(prefix="hammerstein-check-") as tmp:
-        return run_scenarios(paths, tmp)
+        # the reports are thrown away: only their metrics are compared, so no figure is drawn
+        return run_pipelined(paths, tmp, figures=figure_selection("none"))

@@ -23,10 +23,10 @@ from hammerstein.cli._common import out_file_problem, print_err
 from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.core.amplifier import LIMITS
-from hammerstein.core.drive import apply_amplifier, drive_signal, signals_csv
+from hammerstein.core.drive import apply_amplifier, drive_signal, signals_csv, starts_at_rest
 from hammerstein.core.files import safe_write
 from hammerstein.core.hammerstein_compensator import INVERSIONS
-from hammerstein.exceptions import CompensatorDivergence
+from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
 __all__ = ["add_parser", "compensate"]
@@ -81,7 +81,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
         Compensator kind (default: ``"hammerstein"`` with dynamics).
     inversion : {'zpetc', 'stable'}
     fade_in : float, optional
-        [s].
+        [s]; 0 only for a reference that starts at rest.
     limits : {'error', 'warn', 'clip'}
 
     Returns
@@ -89,13 +89,28 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     comp : object
         The compensator.
     drive : hammerstein.core.drive.DriveResult
+
+    Raises
+    ------
+    CompensatorError
+        ``fade_in = 0`` for a reference that does not start at rest.
     """
     kind = kind or ("multivariable" if plant.is_static else "hammerstein")
     spec = {"kind": kind, "model": "plant"}
     if kind == "hammerstein":
         spec["inversion"] = inversion
+        spec["creep"] = "plant"        # the actuator's creep (e.g. identified) is inverted with G
     comp = build_compensator(spec, plant, Path.cwd())
     fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
+    if fade == 0 and not starts_at_rest(reference.signal):
+        first = ", ".join(f"{n} = {v:.4g} µm" for n, v in
+                          zip(plant.hysteresis.output_names, reference.signal[:, 0]))
+        raise CompensatorError(
+            f"--fade-in 0: the reference starts at {first}, not at rest (0 µm); the drive would "
+            f"start with a step that the actuator (and the exported C, which starts at rest) "
+            f"cannot follow: give a fade-in > 0 (default: one period, "
+            f"{reference.period_samples * plant.sampling_period:g} s) or a reference that starts "
+            f"at rest")
     drive = drive_signal(comp, reference.signal, plant.sampling_period, reference.period_samples,
                          fade, plant.amplifier, limits)
     return comp, drive

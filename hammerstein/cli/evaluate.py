@@ -29,7 +29,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.cli._common import add_column_options, out_dir_problem, print_err
 from hammerstein.cli._hardware import (catch, load_actuator, load_reference, mapping,
                                        nonnegative_float, positive_float)
 from hammerstein.core import metrics as met
@@ -67,11 +67,10 @@ def add_parser(subparsers):
     p.add_argument("--out", required=True, metavar="DIR", help="report directory")
     p.add_argument("--model", metavar="MODEL_OR_PRESET",
                    help="names the inputs and outputs (default outputs x,y)")
-    p.add_argument("--outputs", metavar="NAME=COL,...",
-                   help="output names, or NAME=COLUMN for columns named otherwise (default x,y)")
-    p.add_argument("--inputs", metavar="NAME=COL,...",
-                   help="input columns [V] to report peak_input / peak_slew and plot")
-    p.add_argument("--time", default="t", metavar="COL", help="time column (default t)")
+    add_column_options(
+        p, outputs_help="output names, or NAME=COLUMN for columns named otherwise (default x,y)",
+        inputs_help="input columns [V] to report peak_input / peak_slew and plot",
+        time_help="time column (default t)")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
                    help="resample the measurement onto this period [s] (default: its own)")
     p.add_argument("--period", type=positive_float, metavar="S",

@@ -22,6 +22,7 @@ import re
 
 from hammerstein import __version__
 from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c
 from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
@@ -112,8 +113,9 @@ def handler(args):
     if args.slew_rate is not None and args.amplifier_range is None:
         print_err(f"{prog}: error: --slew-rate needs --amplifier-range MIN MAX")
         return 2
-    if args.iterations is not None and args.iterations < 1:
-        print_err(f"{prog}: error: --iterations: expected an integer >= 1, found {args.iterations}")
+    problem = None if args.iterations is None else integer_problem(args.iterations, 1, MAX_ITERATIONS)
+    if problem:
+        print_err(f"{prog}: error: --iterations: {problem}")
         return 2
     if args.name is not None:
         try:

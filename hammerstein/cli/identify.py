@@ -29,9 +29,10 @@ from hammerstein.cli._common import out_file_problem
 from hammerstein.core.files import (FileLimitError, all_or_nothing, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.core.presets import PresetError, save_model
+from hammerstein.core.creep import creep_to_table
 from hammerstein.core.preisach_identification import identify_preisach_records
-from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_dynamics,
-                                                     identify_records)
+from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_creep,
+                                                     identify_record_dynamics, identify_records)
 from hammerstein.report.dynamics_figure import measured_bode_figure
 from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.scenario.schema import MAX_HYSTERONS
@@ -122,6 +123,11 @@ def add_parser(subparsers):
     p.add_argument("--max-order", type=int, metavar="N",
                    help=f"--dynamics: largest candidate order (default "
                         f"{DYNAMICS_DEFAULTS['max_order']})")
+    p.add_argument("--creep-records", nargs="+", metavar="FILE.csv", default=[],
+                   help="voltage staircases (same columns, e.g. creep-<input>.csv of "
+                        "'hammerstein excitation'): identify the creep after the hysteresis "
+                        "(first-order lags 0.01-100 s, non-negative weights) and write it as "
+                        "[creep] (with --dynamics, fitted through the identified G)")
     p.add_argument("--force", action="store_true",
                    help="overwrite --out, --metrics or --plot even if the project did not write it")
     p.set_defaults(handler=_handler)
@@ -215,7 +221,7 @@ def _check_usage(args):
     for unit, opt in ((args.input_unit, "--input-unit"), (args.output_unit, "--output-unit")):
         if not unit.strip():
             raise _Usage(f"{opt}: expected a unit name")
-    inputs = list(args.data) + list(args.dynamics_records)
+    inputs = list(args.data) + list(args.dynamics_records) + list(args.creep_records)
     _check_target(args.out, "--out", "model", args.force, inputs)
     targets = [Path(args.out).resolve()]
     plots = [(args.metrics, "--metrics", "metrics"), (args.plot, "--plot", "plot")]
@@ -408,6 +414,19 @@ def _handler(args):
             dyn = _dynamics(args, fit)
             extra = dyn.tables
             meta["dynamics"] = dyn.summary
+        creep = None
+        if args.creep_records:
+            creep = _creep(args, fit, dyn)
+            if dyn is not None:   # G again, on the PI outputs through the creep: G(0) = I for G (I + C)
+                dyn = _dynamics(args, fit, creep.creeps_)
+                extra = dict(dyn.tables)
+                meta["dynamics"] = dyn.summary
+                meta["dynamics"]["inputs"] = "hysteresis model outputs through the identified creep"
+            extra = dict(extra or {})
+            extra["creep"] = creep_to_table(creep.creeps_, fit.model.output_names)
+            meta["creep"] = creep.summary()
+            rows += creep_metrics_rows(creep, args.output_unit)
+        if dyn is not None:
             rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
                                           fit.model.input_names)
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
@@ -425,7 +444,7 @@ def _handler(args):
         print(f"error: {exc.filename or args.out}: cannot write ({exc.strerror or exc})",
               file=sys.stderr)
         return 1
-    _report(args, fit, records, dyn)
+    _report(args, fit, records, dyn, creep)
     return 0
 
 
@@ -489,7 +508,7 @@ def _names(record, in_keys, out_keys):
     return ins, outs
 
 
-def _report(args, fit, records, dyn=None):
+def _report(args, fit, records, dyn=None, creep=None):
     iu, ou = args.input_unit, args.output_unit
     model = fit.model
     for rec, s in zip(fit.records, fit.splits):
@@ -528,6 +547,9 @@ def _report(args, fit, records, dyn=None):
         print(line)
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
+            print(line)
+    if creep is not None:
+        for line in creep.report_lines(ou):
             print(line)
     if args.metrics:
         print(f"wrote {args.metrics}")
@@ -694,9 +716,46 @@ def dynamics_metrics_rows(summary, output_names, input_names):
     return rows
 
 
-def _dynamics(args, fit):
+def _dynamics(args, fit, creep=None):
     """Identified dynamics (:func:`identify_record_dynamics`) of the --dynamics-records."""
     dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
            for d in args.dynamics_records]
-    return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, order=args.order,
-                                    max_order=args.max_order)
+    return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, creep=creep,
+                                    order=args.order, max_order=args.max_order)
+
+
+def _creep(args, fit, dyn):
+    """Identified creep (:func:`identify_record_creep`) of the --creep-records."""
+    recs = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
+            for d in args.creep_records]
+    return identify_record_creep(fit, recs, None if dyn is None else dyn.identifier.system_)
+
+
+def creep_metrics_rows(creep, output_unit="µm"):
+    """Rows ``(case, channel, metric, value, unit)`` of an identified creep.
+
+    Parameters
+    ----------
+    creep : hammerstein.core.creep_identification.CreepIdentifier
+        Fitted.
+    output_unit : str
+        Unit of the outputs.
+
+    Returns
+    -------
+    list of tuple
+        Case ``creep``, channel the output: ``drift_0p1_to_10s_percent`` [%],
+        ``instantaneous`` [-], ``residual_rms`` and
+        ``residual_rms_without_creep`` [output unit], and
+        ``weight_tau_<tau>s`` [-] per lag.
+    """
+    rows = []
+    for l, out in enumerate(creep.output_names_):
+        rows += [("creep", out, "drift_0p1_to_10s_percent", 100 * creep.drift_[l], "%"),
+                 ("creep", out, "instantaneous", creep.instantaneous_[l], ""),
+                 ("creep", out, "residual_rms", creep.residual_rms_[l], output_unit),
+                 ("creep", out, "residual_rms_without_creep", creep.residual_rms_no_creep_[l],
+                  output_unit)]
+        rows += [("creep", out, f"weight_tau_{tau:.4g}s", w, "")
+                 for tau, w in zip(creep.time_constants_, creep.weights_[l])]
+    return rows

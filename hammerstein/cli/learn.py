@@ -11,7 +11,12 @@ The reference is faded in as the first drive was: the drive file's header
 records the fade-in (``fade-in N samples``), which is used unless
 ``--fade-in`` is given. The measured record's delay behind the model's
 prediction is estimated by cross-correlation (``--delay auto``, printed) and
-the error is advanced by it before learning.
+the error is advanced by it before learning. A reference that repeats after
+its fade-in is learnt per harmonic of its period from two periods after the
+fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
+``gamma |Q|^2`` per harmonic, not learnt at the noise floor); with
+``--history DIR`` the per-harmonic gains carry over from trial to trial in
+``DIR/harmonics.csv`` (halved where a harmonic's error keeps growing).
 
 Exit status: 0 written; 1 bad files, shapes or a drive beyond the amplifier
 with ``--limits error`` (one line, nothing written); 2 a usage error.
@@ -31,9 +36,10 @@ from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actua
                                        positive_float)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
-from hammerstein.core.files import safe_write
+from hammerstein.core.files import bounded_read_text, safe_write
 from hammerstein.core.hammerstein_compensator import fade_in
-from hammerstein.core.ilc import IterativeLearning, error_summary, estimate_delay
+from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
+                                  harmonic_base_gains, repeating_from)
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -140,6 +146,32 @@ def _write_history(history, names, rec, scale):
     return k
 
 
+GAINS_FILE = "harmonics.csv"
+
+
+def _restore_gains(history_dir, gains):
+    """The per-harmonic gains of the previous trials (``DIR/harmonics.csv``), when they match."""
+    path = Path(history_dir) / GAINS_FILE
+    if not path.is_file() or not (Path(history_dir) / HISTORY_MARK).exists():
+        return
+    rows = [line.split(",") for line in bounded_read_text(path, "data", "harmonics file").splitlines()[1:]
+            if line.strip()]
+    if len(rows) != gains.base.size:
+        return                          # another reference: start afresh
+    table = np.array([[float(v) for v in r[1:4]] for r in rows])
+    gains.gains = table[:, 0].copy()
+    gains.previous = table[:, 1].copy()
+    gains.growths = table[:, 2].astype(int)
+
+
+def _save_gains(history_dir, gains):
+    prev = gains.previous if gains.previous is not None else np.zeros(gains.gains.shape)
+    growths = getattr(gains, "growths", np.zeros(gains.gains.shape, dtype=int))
+    text = "harmonic,gain,previous_error_um,growths\n" + "".join(
+        f"{h},{float(g)!r},{float(e)!r},{int(n)}\n" for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
+    safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file")
+
+
 def _handle(args):
     problem = out_file_problem(args.out, "drive file")
     if not problem and args.history:
@@ -190,7 +222,14 @@ def _handle(args):
         settle = int(args.settle_periods * ref.period_samples)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         rec = error_summary(target[:, :N - delay], shifted, slice(min(settle, N - delay - 1), None))
-        u_next = ilc.step(target, u, y, ref.period_samples if ref.period_samples > 1 else None)
+        P = ref.period_samples if ref.period_samples > 1 else None
+        steady = repeating_from(target, P, fade)
+        gains = None
+        if steady is not None:         # a repeating reference: learnt per harmonic of its period
+            gains = HarmonicGains(harmonic_base_gains(ilc, P, None, args.q_cutoff_hz))
+            if args.history:
+                _restore_gains(args.history, gains)
+        u_next = ilc.step(target, u, y, P, steady, gains)
         problems = []
         if plant.amplifier is not None:
             problems = plant.amplifier.check(u_next, T, args.limits)
@@ -210,6 +249,8 @@ def _handle(args):
                    "drive file")
         k = _write_history(args.history, list(model.output_names), rec, ref.scale) \
             if args.history else None
+        if args.history and gains is not None:
+            _save_gains(args.history, gains)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1

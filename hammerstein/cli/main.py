@@ -25,13 +25,14 @@ import atexit
 import errno
 import importlib
 from importlib import metadata
+import logging
 import os
 import signal
 import sys
 import threading
 import warnings
 
-from hammerstein.cli._common import SafeStream, one_line, print_err
+from hammerstein.cli._common import MAX_LINE, SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt, start_budget
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
@@ -52,10 +53,53 @@ class _Parser(argparse.ArgumentParser):
                      f"(see '{self.prog} --help')\n")
 
 
+#: What a stray warning is about: the one input file of the command, else ``hammerstein
+#: <command>``; and the warnings already printed (each distinct one is printed once).
+_WARNING_STATE = {"subject": "hammerstein", "said": set()}
+
+#: Arguments naming the files a command reads, in order of importance.
+_INPUT_ARGUMENTS = ("scenarios", "data", "source", "actuator", "measured", "drive", "reference")
+
+
+def _warning_subject(args):
+    """The file a stray warning of this command is about (its one input file), else the command."""
+    found = []
+    for name in _INPUT_ARGUMENTS:
+        value = getattr(args, name, None)
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, str) and v not in found and os.path.isfile(v):
+                found.append(v)
+    return found[0] if len(found) == 1 else f"hammerstein {getattr(args, 'command', '')}".strip()
+
+
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
-    """warnings.showwarning replacement: one ``warning: Category: message`` line."""
-    print(f"warning: {category.__name__}: {' '.join(str(message).split())}",
-          file=sys.stderr if file is None else file)
+    """warnings.showwarning replacement: one ``warning: <file>: Category: message`` line.
+
+    The file is the command's input (:func:`_warning_subject`); a warning
+    repeated (the same overflow in a loop) is printed once.
+    """
+    _print_warning(category.__name__, message, file)
+
+
+def _print_warning(source, message, file=None):
+    """One ``warning: <file>: <source>: <message>`` line, each distinct one once."""
+    text = f"warning: {_WARNING_STATE['subject']}: {source}: {' '.join(str(message).split())}"
+    if text in _WARNING_STATE["said"]:
+        return
+    _WARNING_STATE["said"].add(text)
+    print(escape(text, MAX_LINE), file=sys.stderr if file is None else file)
+
+
+class _OneLineLog(logging.Handler):
+    """Log records of the libraries (matplotlib's "mkdir -p failed", numba, dask) as one
+    ``warning: <file>: <logger>: message`` line each, like the stray warnings."""
+
+    def emit(self, record):
+        try:
+            msg = record.getMessage()
+        except Exception:   # noqa: BLE001 - a library's malformed log call must not fail the command
+            msg = str(record.msg)
+        _print_warning(record.name, msg)
 
 
 # -- the commands: name -> (module with add_parser(subparsers), one-line help) ------------
@@ -257,6 +301,17 @@ def _prepare_environment():
     return notes
 
 
+def _guard_kernel_cache():
+    """A numba cache that cannot be written (full disk, quota, read-only) costs one
+    ``note:`` line, not the run (``guard_cache_writes`` of ``hammerstein/simulation/_compile.py``).
+
+    Only when the command's module has loaded the kernels (``list``, ``--help``
+    stay free of numba).
+    """
+    if "hammerstein.simulation" in sys.modules:
+        importlib.import_module("hammerstein.simulation._compile").guard_cache_writes(print_err)
+
+
 def _command(argv):
     """The subcommand named in ``argv`` (its first argument not starting with '-'), or None."""
     for a in argv:
@@ -344,6 +399,14 @@ def _main(argv):
         args = parser.parse_args(argv)
     except SystemExit as exc:  # argparse: usage error (2) or --help (0)
         return int(exc.code or 0)
+    _guard_kernel_cache()
+    _WARNING_STATE["subject"] = _warning_subject(args)
+    _WARNING_STATE["said"] = set()
+    root = logging.getLogger()
+    log_handler = None
+    if not root.handlers:   # else the embedding program chose where logs go
+        log_handler = _OneLineLog(logging.WARNING)
+        root.addHandler(log_handler)
     with warnings.catch_warnings():  # stray warnings: one line each, no source line
         warnings.showwarning = _one_line_warning
         try:
@@ -368,6 +431,9 @@ def _main(argv):
             print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "
                       f"{escape(one_line(exc), 500)} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
             return 1
+        finally:
+            if log_handler is not None:
+                root.removeHandler(log_handler)
 
 
 def run(argv=None):

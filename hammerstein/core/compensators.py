@@ -35,6 +35,7 @@ import numpy as np
 
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.inverse import kuhnen_inverse
+from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
 from hammerstein.exceptions import (CompensatorDivergence, CompensatorError, ConvergenceWarning,
                                     HysteresisError, RangeWarning)
 from hammerstein.simulation import CompensatorLaw, simulate_compensator, state_vector
@@ -153,7 +154,8 @@ def _inverse_gain(model, gain):
         elif K.ndim == 1 and K.size == m:
             K = np.diag(K)
         if K.shape != (m, m) or not np.all(np.isfinite(K)):
-            raise CompensatorError(f"gain: expected an {m}x{m} finite matrix [µm/V], found shape {K.shape}")
+            found = f"shape {K.shape}" if K.shape != (m, m) else "non-finite values"
+            raise CompensatorError(f"gain: expected a {m}x{m} finite matrix [µm/V], found {found}")
     try:
         Kinv = np.linalg.inv(K)
     except np.linalg.LinAlgError as exc:
@@ -239,7 +241,8 @@ class InverseMultiplicativeCompensator:
         ends); ``'identity'`` the literal law of the paper; or an explicit
         matrix.
     iterations : int
-        Fixed-point iterations per sample (1 = the paper's law); further
+        Fixed-point iterations per sample (1 = the paper's law), 1 to
+        :data:`~hammerstein.core.numbers.MAX_ITERATIONS` (100); further
         iterations use the play states frozen at the previous sample.
     check : {'error', 'warn', 'ignore'}
         What to do when :func:`convergence_report` finds
@@ -326,8 +329,8 @@ class InverseMultiplicativeCompensator:
     sampling_period: float | None = None
 
     def __post_init__(self):
-        if not isinstance(self.iterations, (int, np.integer)) or self.iterations < 1:
-            raise CompensatorError(f"iterations: expected an integer >= 1, found {self.iterations!r}")
+        self.iterations = check_integer(self.iterations, "iterations", 1, MAX_ITERATIONS,
+                                        CompensatorError)
         self._check_feedback()
         if self.check not in ("error", "warn", "ignore"):
             raise CompensatorError(f"check: expected 'error', 'warn' or 'ignore', found {self.check!r}")
@@ -542,8 +545,11 @@ def check_reference_range(model: MultivariablePI, reference, warn=True):
     if warn and np.any(ratio > 1 + 1e-9):
         bad = [f"{model.output_names[l]}: {reach[l]:.4g} µm > {peaks[l]:.4g} µm"
                for l in np.flatnonzero(ratio > 1 + 1e-9)]
+        origin = getattr(model, "identified_from", None)   # core/presets.load_model
+        where = f", identified from {origin}" if origin else ""
         warnings.warn("reference: beyond the range the model was identified on ("
-                      + "; ".join(bad) + "); the compensator extrapolates", RangeWarning, stacklevel=3)
+                      + "; ".join(bad) + f"{where}); the compensator extrapolates", RangeWarning,
+                      stacklevel=3)
     return ratio
 
 

@@ -37,7 +37,8 @@ import numpy as np
 from hammerstein.exceptions import HysteresisError
 from hammerstein.simulation import linear_steps
 
-__all__ = ["Creep", "creep_matrices", "creep_from_table", "creep_to_table", "series_matrices"]
+__all__ = ["Creep", "creep_matrices", "creep_from_table", "creep_to_table", "series_matrices",
+           "creep_dynamics", "minimum_phase_margin"]
 
 CREEP_KEYS = ("kind", "time_constants", "weights", "rate_per_decade", "t_min", "t_max",
               "per_decade", "description")
@@ -52,11 +53,18 @@ class Creep:
         Lag time constants tau_k [s], positive.
     weights : array_like, shape (n,)
         Weights w_k [-] (fraction of h added by lag k at steady state).
+    instantaneous : float
+        d [-], the share of h passed at once: ``y = d h + sum_k w_k x_k``
+        (default 1, the plant form above). An identified creep
+        (:mod:`hammerstein.core.creep_identification`) has ``d < 1``: the
+        hysteresis model, identified on slow sines, already holds the creep
+        that is complete at their frequency.
 
     Raises
     ------
     HysteresisError
-        On non-positive time constants, non-finite weights or different lengths.
+        On non-positive time constants, non-finite weights, different lengths
+        or a non-positive ``instantaneous``.
 
     Examples
     --------
@@ -71,7 +79,7 @@ class Creep:
     (1.063212, 1.063212)
     """
 
-    def __init__(self, time_constants, weights):
+    def __init__(self, time_constants, weights, instantaneous=1.0):
         tau = np.atleast_1d(np.array(time_constants, dtype=float))
         w = np.atleast_1d(np.array(weights, dtype=float))
         if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)) or np.any(tau <= 0):
@@ -80,10 +88,34 @@ class Creep:
         if w.shape != tau.shape or not np.all(np.isfinite(w)):
             raise HysteresisError(f"weights: expected {tau.size} finite values (one per time "
                                   f"constant), found {w.tolist()}")
+        if isinstance(instantaneous, bool) or not isinstance(instantaneous, (int, float, np.floating)) \
+                or not (np.isfinite(instantaneous) and instantaneous > 0):
+            raise HysteresisError(f"instantaneous: expected a positive number, found {instantaneous!r}")
         self.time_constants, self.weights = tau, w
+        self.instantaneous = float(instantaneous)
 
     def __repr__(self):
-        return f"Creep(time_constants={self.time_constants.tolist()}, weights={self.weights.tolist()})"
+        d = "" if self.instantaneous == 1.0 else f", instantaneous={self.instantaneous!r}"
+        return (f"Creep(time_constants={self.time_constants.tolist()}, "
+                f"weights={self.weights.tolist()}{d})")
+
+    def step_response(self, t):
+        """Output after a unit step of h at t = 0 (continuous time).
+
+        ``s(t) = d + sum_k w_k (1 - exp(-t / tau_k))``.
+
+        Parameters
+        ----------
+        t : array_like, shape (n_times,)
+            Times after the step [s], >= 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_times,)
+            [-] (µm per µm of h).
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return self.instantaneous + (1 - np.exp(-t[:, None] / self.time_constants)) @ self.weights
 
     @classmethod
     def log_law(cls, rate_per_decade, t_min, t_max, per_decade=2):
@@ -138,10 +170,11 @@ class Creep:
         -------
         A, B, C, D : numpy.ndarray
             Shapes (n, n), (n, 1), (1, n), (1, 1): ``A = diag(exp(-T/tau))``,
-            ``B = 1 - exp(-T/tau)``, ``C = w``, ``D = 1``.
+            ``B = 1 - exp(-T/tau)``, ``C = w``, ``D = d`` (``instantaneous``).
         """
         a = np.exp(-float(sampling_period) / self.time_constants)
-        return (np.diag(a), (1 - a)[:, None], self.weights[None, :].copy(), np.ones((1, 1)))
+        return (np.diag(a), (1 - a)[:, None], self.weights[None, :].copy(),
+                np.full((1, 1), self.instantaneous))
 
     def simulate(self, h, sampling_period, initial_state=None):
         """Creep output for a hysteresis output record.
@@ -173,14 +206,18 @@ class Creep:
         -------
         dict
         """
-        return {"kind": "lags", "time_constants": self.time_constants.tolist(),
-                "weights": self.weights.tolist()}
+        table = {"kind": "lags", "time_constants": self.time_constants.tolist(),
+                 "weights": self.weights.tolist()}
+        if self.instantaneous != 1.0:
+            table["instantaneous"] = self.instantaneous
+        return table
 
 
 def creep_from_table(table, where="creep"):
     """A :class:`Creep` from a ``[creep.<output>]`` table.
 
-    ``kind = "lags"`` with ``time_constants`` [s] and ``weights`` [-], or
+    ``kind = "lags"`` with ``time_constants`` [s], ``weights`` [-] and
+    optional ``instantaneous`` [-] (d, default 1), or
     ``kind = "log"`` with ``rate_per_decade`` [-], ``t_min``, ``t_max`` [s] and
     optional ``per_decade`` (default 2); ``kind = "none"`` for no creep.
 
@@ -207,7 +244,8 @@ def creep_from_table(table, where="creep"):
             "none": ()}
     if kind not in need:
         raise HysteresisError(f"{where}.kind: expected 'lags', 'log' or 'none', found {kind!r}")
-    allowed = set(need[kind]) | {"kind", "description"} | ({"per_decade"} if kind == "log" else set())
+    allowed = set(need[kind]) | {"kind", "description"} | (
+        {"per_decade"} if kind == "log" else {"instantaneous"} if kind == "lags" else set())
     unknown = sorted(set(table) - allowed)
     if unknown:
         raise HysteresisError(f"{where}.{unknown[0]}: unknown key for kind = {kind!r} "
@@ -220,7 +258,7 @@ def creep_from_table(table, where="creep"):
         if kind == "none":
             return None
         if kind == "lags":
-            return Creep(table["time_constants"], table["weights"])
+            return Creep(table["time_constants"], table["weights"], table.get("instantaneous", 1.0))
         for key in ("rate_per_decade", "t_min", "t_max"):
             if not isinstance(table[key], (int, float)) or isinstance(table[key], bool):
                 raise HysteresisError(f"{key}: expected a number, found {table[key]!r}")
@@ -272,7 +310,7 @@ def creep_matrices(creeps, sampling_period):
             continue
         a, b, cc, _ = c.discrete(sampling_period)
         j = i + c.n_states
-        A[i:j, i:j], B[i:j, l], C[l, i:j] = a, b[:, 0], cc[0]
+        A[i:j, i:j], B[i:j, l], C[l, i:j], D[l, l] = a, b[:, 0], cc[0], c.instantaneous
         i = j
     return A, B, C, D
 
@@ -297,3 +335,79 @@ def series_matrices(first, second):
     B = np.vstack([B1, B2 @ D1])
     C = np.hstack([D2 @ C1, C2])
     return A, B, C, D2 @ D1
+
+
+def minimum_phase_margin(creep, sampling_period):
+    """How far the discrete creep is from losing minimum phase.
+
+    The ZOH creep of one output is ``c(z) = d + sum_k w_k (1 - a_k) / (z - a_k)``,
+    ``a_k = exp(-T / tau_k)``. On and outside the unit circle ``|z| >= 1``,
+    ``Re (1 - a) / (z - a) >= -(1 - a) / (1 + a)`` (the image of the circle
+    is a circle through ``1`` and ``-(1 - a) / (1 + a)``), so with ``w_k >= 0``
+    ``Re c(z) >= d - sum_k w_k (1 - a_k) / (1 + a_k) > 0``: no zero there when
+    the margin is positive. A positive sum of lags is a positive-real
+    operator; in continuous time ``d + sum w_k / (1 + s tau_k)`` has positive
+    real part in the closed right half-plane for any ``d > 0``.
+
+    Parameters
+    ----------
+    creep : Creep
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    float
+        ``d - sum_k |w_k| (1 - a_k) / (1 + a_k)`` [-]; positive: minimum phase
+        (its zeros, the poles of its inverse, lie inside the unit circle).
+    """
+    a = np.exp(-float(sampling_period) / creep.time_constants)
+    w = creep.weights
+    bound = np.sum(np.where(w >= 0, w * (1 - a) / (1 + a), np.abs(w)))
+    return float(creep.instantaneous - bound)
+
+
+def creep_dynamics(creeps, dynamics):
+    """The discrete linear part ``G (I + C)``: creep per output, then G.
+
+    The same discretisation as the plant's (creep and G sampled separately,
+    :class:`hammerstein.core.plant.HammersteinPlant`); the
+    creep is checked minimum phase (:func:`minimum_phase_margin`), so the
+    combined system has the zeros of G and those of the creep, the latter
+    inside the unit circle: its ZPETC or stable inverse (Croft, Shed and
+    Devasia [2]_ invert creep and vibration together) inverts the creep
+    exactly.
+
+    Parameters
+    ----------
+    creeps : sequence of (Creep or None), length p
+    dynamics : control.StateSpace
+        Discrete p x p G (``dt`` = T).
+
+    Returns
+    -------
+    control.StateSpace
+        Discrete p x p, states of the creep then of G.
+
+    Raises
+    ------
+    HysteresisError
+        On a creep count other than p or a creep that is not minimum phase
+        (weights negative beyond the margin).
+    """
+    import control  # lazy: python-control is loaded by the callers that invert G
+
+    T = float(dynamics.dt)
+    creeps = list(creeps)
+    if len(creeps) != dynamics.noutputs:
+        raise HysteresisError(f"creep: expected {dynamics.noutputs} entries (one per output), "
+                              f"found {len(creeps)}")
+    for l, c in enumerate(creeps):
+        if c is not None and minimum_phase_margin(c, T) <= 0:
+            raise HysteresisError(f"creep: output {l} is not minimum phase at T = {T:g} s "
+                                  f"(instantaneous {c.instantaneous:g} below the bound of its "
+                                  f"weights); it cannot be inverted")
+    mats = series_matrices(creep_matrices(creeps, T),
+                           tuple(np.asarray(M, dtype=float) for M in
+                                 (dynamics.A, dynamics.B, dynamics.C, dynamics.D)))
+    return control.ss(*mats, T)

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
+from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
@@ -268,8 +269,13 @@ def _column(frame, header, key, role, path):
                 else "non-numeric or empty cell (empty or NaN)")
         raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}")
     arr = values.to_numpy(dtype=float)
-    if not np.all(np.isfinite(arr)):
-        raise DataFileError(f"{path}: {role} column {name!r}: infinite values")
+    big = np.flatnonzero(np.abs(arr) > MAX_MAGNITUDE)   # inf (or 1.8e308) included
+    if big.size:    # the squares of the fit would overflow (core/numbers.py)
+        v = arr[big[0]]
+        what = "infinite values" if np.isinf(v) else f"value {v:.3g}"
+        raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {big[0] + 1} "
+                            f"{'' if np.isinf(v) else f'is beyond the limit {MAX_MAGNITUDE:.0e}'}"
+                            .rstrip())
     return arr, name
 
 

@@ -33,6 +33,7 @@ record at once and is only run by :func:`drive_signal`).
 from __future__ import annotations
 
 import io
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -41,6 +42,7 @@ import pandas as pd
 from hammerstein.core.amplifier import Amplifier, drive_metrics
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.files import FileLimitError, bounded_read_text
+from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import CompensatorError, DataFileError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
@@ -77,7 +79,7 @@ def starts_at_rest(reference, rest=None, atol=1e-9):
 
 
 def default_fade_samples(reference, period_samples, settle_samples=None, compensator=None,
-                         amplifier=None):
+                         amplifier=None, sampling_period=None):
     """The default fade-in [samples]: one period for a reference that does not start at rest.
 
     The rule, for every compensator kind: 0 for a reference that starts at
@@ -89,6 +91,12 @@ def default_fade_samples(reference, period_samples, settle_samples=None, compens
     sample for a circle). A rate-independent compensator on a plant
     without a declared slew rate keeps its abrupt start (its ``peak_slew``
     metric shows the step), so results of existing scenarios do not change.
+    With a slew rate, the ``sampling_period`` and a rate-independent
+    compensator, the fade is doubled (beyond ``settle_samples`` if need
+    be, up to the record's length) until the compensator's voltages during
+    the fade-in never step faster than the slew rate, or than the period
+    after the fade where the reference itself needs more (measured by
+    running the compensator over the fade and one period, from rest).
 
     Parameters
     ----------
@@ -102,6 +110,8 @@ def default_fade_samples(reference, period_samples, settle_samples=None, compens
         The compensator (one with ``run_reference`` inverts the dynamics);
         None: treated as inverting the dynamics.
     amplifier : hammerstein.core.amplifier.Amplifier, optional
+    sampling_period : float, optional
+        T [s], needed to hold the fade-in within the slew rate.
 
     Returns
     -------
@@ -123,7 +133,30 @@ def default_fade_samples(reference, period_samples, settle_samples=None, compens
     if not (inverts or slew):
         return 0
     n = int(period_samples)
-    return n if settle_samples is None else int(min(n, settle_samples))
+    n = n if settle_samples is None else int(min(n, settle_samples))
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    if not (slew and sampling_period and not inverts and hasattr(compensator, "simulate")):
+        return n
+    limit = np.array([c.slew_rate for c in amplifier.channels]) * float(sampling_period)
+    rest = np.array([c.rest for c in amplifier.channels])
+    n = max(n, 1)
+    while n < r.shape[1]:
+        m = min(n + 1 + int(period_samples), r.shape[1])
+        with warnings.catch_warnings():          # a probe: the case's own run warns
+            warnings.simplefilter("ignore")
+            u, _ = compensator.simulate(r[:, :m] * _fade_weights(0, m, n))
+        if _fade_within_slew(u, n, rest, limit):
+            break
+        n = int(min(2 * n, r.shape[1]))
+    return n
+
+
+def _fade_within_slew(u, fade, rest, limit):
+    """True when no step of the first ``fade + 1`` voltages (from rest) exceeds the slew limit
+    [V per sample] or, where the reference itself needs more, the steps after the fade."""
+    steps = np.abs(np.diff(np.concatenate([rest[:, None], u], axis=1), axis=1))
+    after = np.max(steps[:, fade + 1:], axis=1) if steps.shape[1] > fade + 1 else 0.0
+    return bool(np.all(np.max(steps[:, :fade + 1], axis=1) <= np.maximum(limit, after) * (1 + 1e-9)))
 
 
 @dataclass
@@ -324,7 +357,9 @@ def drive_signal(compensator, reference, sampling_period, period_samples=None, f
         One period of a periodic reference [samples] (default fade length,
         continuation of the ZPETC preview).
     fade_samples : int, optional
-        Fade-in from rest [samples]; default :func:`default_fade_samples`.
+        Fade-in from rest [samples]; default :func:`default_fade_samples`,
+        doubled (up to the record's length) while the fade-in would step an
+        input faster than the amplifier's slew rate.
     amplifier : Amplifier, optional
         The limits (e.g. ``plant.amplifier`` of a preset with an
         ``[amplifier]`` table); None: none.
@@ -364,17 +399,23 @@ def drive_signal(compensator, reference, sampling_period, period_samples=None, f
     True
     """
     r = np.atleast_2d(np.asarray(reference, dtype=float))
-    if fade_samples is None:
+    default = fade_samples is None
+    if default:
         fade_samples = default_fade_samples(r, period_samples or 1, settle_samples, compensator,
-                                            amplifier)
+                                            amplifier, sampling_period)
     fade_samples = int(min(max(int(fade_samples), 0), r.shape[1]))
-    if hasattr(compensator, "run_reference") and getattr(compensator, "inverse", 1) is None:
-        lead, state, faded = compensator.start(r, period_samples, fade_samples)   # 'stable'
-        u, _ = compensator.simulate(lead, state)
-    else:
-        stream = DriveStream(compensator, fade_samples, period_samples)
-        u = np.concatenate([stream.push(r), stream.finish()], axis=1)
-        faded = r * _fade_weights(0, r.shape[1], fade_samples) if fade_samples else r
+    u, faded = _compensate(compensator, r, period_samples, fade_samples)
+    if default and fade_samples and amplifier is not None:
+        # the default never steps an input faster than the slew limit while fading in (or, where
+        # the reference itself needs more, than after the fade): a fade too short for the first
+        # voltages is doubled until it is not (or covers the record)
+        limit = np.array([c.slew_rate for c in amplifier.channels]) * float(sampling_period)
+        rest = np.array([c.rest for c in amplifier.channels])
+        while fade_samples < r.shape[1]:
+            if _fade_within_slew(u, fade_samples, rest, limit):
+                break
+            fade_samples = int(min(2 * fade_samples, r.shape[1]))
+            u, faded = _compensate(compensator, r, period_samples, fade_samples)
     peak, slew = drive_metrics(u, sampling_period)
     problems, out = [], u
     if amplifier is not None:
@@ -382,6 +423,18 @@ def drive_signal(compensator, reference, sampling_period, period_samples=None, f
         if problems:
             out, _ = amplifier.limit(u, sampling_period)
     return DriveResult(out, u, faded, peak, slew, fade_samples, problems)
+
+
+def _compensate(compensator, r, period_samples, fade_samples):
+    """The compensator's voltages (m, N) and the faded reference (p, N) [µm], from rest."""
+    if hasattr(compensator, "run_reference") and getattr(compensator, "inverse", 1) is None:
+        lead, state, faded = compensator.start(r, period_samples, fade_samples)   # 'stable'
+        u, _ = compensator.simulate(lead, state)
+    else:
+        stream = DriveStream(compensator, fade_samples, period_samples)
+        u = np.concatenate([stream.push(r), stream.finish()], axis=1)
+        faded = r * _fade_weights(0, r.shape[1], fade_samples) if fade_samples else r
+    return u, faded
 
 
 def apply_amplifier(amplifier: Amplifier | None, inputs, sampling_period):
@@ -473,6 +526,10 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
             bad = int(np.flatnonzero(~np.isfinite(v))[0]) + 2 if v.size else 1
             raise DataFileError(f"{what}: {path}: column {col!r} is not a finite number on "
                                 f"data row {bad - 1}")
+        big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)   # the squares of the metrics overflow
+        if big.size:
+            raise DataFileError(f"{what}: {path}: column {col!r}: value {v[big[0]]:.3g} on data "
+                                f"row {int(big[0]) + 1} is beyond the limit {MAX_MAGNITUDE:.0e}")
         return v
 
     t = column(time, "the time [s]")

@@ -218,7 +218,9 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     what : str
         What the file should be, for messages.
     encoding : str
-        Text encoding.
+        Text encoding. With UTF-8 (the default) a leading byte-order mark
+        (``EF BB BF``, written by some Windows editors and by Excel's "CSV
+        UTF-8") is dropped: it marks the encoding, it is not text.
 
     Returns
     -------
@@ -231,7 +233,10 @@ def bounded_read_text(path, kind="toml", what="file", encoding="utf-8"):
     UnicodeDecodeError
         The bytes are not text in ``encoding``.
     """
-    return bounded_read_bytes(path, kind, what).decode(encoding)
+    raw = bounded_read_bytes(path, kind, what)
+    if encoding.lower().replace("_", "-") in ("utf-8", "utf8"):
+        encoding = "utf-8-sig"      # the BOM, if any, is not part of the text
+    return raw.decode(encoding)
 
 
 class _Interrupted(KeyboardInterrupt):

@@ -67,6 +67,7 @@ from hammerstein.core.compensators import InverseMultiplicativeCompensator
 from hammerstein.core.drive import apply_amplifier, drive_signal
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.inversion import preview_inverse
+from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
 from hammerstein.exceptions import CompensatorError, ConvergenceWarning
 from hammerstein.simulation import ChainResult
 
@@ -75,7 +76,8 @@ from hammerstein.simulation import ChainResult
 EXTENSION = 64
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
-           "estimate_delay", "error_summary", "periodic_average"]
+           "estimate_delay", "error_summary", "periodic_average", "periodic_error",
+           "HarmonicGains", "harmonic_base_gains", "repeating_from"]
 
 
 @dataclass
@@ -247,6 +249,145 @@ def periodic_average(signal_, period_samples, start):
     return x
 
 
+def periodic_error(error, period_samples, start):
+    """One period of a periodic error averaged over the periods, its spectrum and its noise.
+
+    The record from ``start`` on holds ``n_p`` whole periods (a partial last
+    one is left out); their mean is the periodic (repeatable) error, what
+    is left is the non-periodic part: measurement noise and whatever does
+    not repeat from one period to the next.
+
+    Parameters
+    ----------
+    error : array_like, shape (p, n_samples)
+        ``e = y_r - y`` [µm].
+    period_samples : int
+        P.
+    start : int
+        First sample of the periodic part.
+
+    Returns
+    -------
+    spectrum : numpy.ndarray, shape (p, P // 2 + 1), complex
+        ``E_h = (2 / P) sum_i ebar_i exp(-2 pi j h i / P)``: harmonic h of the
+        averaged period, amplitude [µm] (``E_0 / 2`` is the mean).
+    noise : float
+        Expected amplitude [µm] of a harmonic of the averaged period due to
+        the non-periodic part alone, ``2 sigma / sqrt(P n_p)`` for white
+        noise of standard deviation ``sigma`` (estimated from the residuals
+        with ``n_p - 1`` degrees of freedom); ``inf`` with fewer than two
+        periods.
+
+    Raises
+    ------
+    CompensatorError
+        Less than one period from ``start`` on.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> i = np.arange(400)
+    >>> E, noise = periodic_error([3.0 * np.cos(2 * np.pi * i / 100)], 100, 0)
+    >>> round(float(abs(E[0, 1])), 6), bool(noise < 1e-12)
+    (3.0, True)
+    """
+    e = np.asarray(error, dtype=float)
+    P, s = int(period_samples), int(start)
+    n_p = (e.shape[1] - s) // P
+    if P < 2 or n_p < 1:
+        raise CompensatorError(f"periodic_error: expected at least one period of {P} samples "
+                               f"from sample {s}, found {e.shape[1] - s} samples")
+    seg = e[:, s:s + n_p * P].reshape(e.shape[0], n_p, P)
+    mean = seg.mean(axis=1)
+    spectrum = np.fft.rfft(mean, axis=1) * (2.0 / P)
+    if n_p < 2:
+        return spectrum, np.inf
+    sigma = float(np.sqrt(np.sum((seg - mean[:, None, :]) ** 2) / (e.shape[0] * P * (n_p - 1))))
+    return spectrum, 2.0 * sigma / np.sqrt(P * n_p)
+
+
+class HarmonicGains:
+    """Per-harmonic learning gains of a periodic error, adapted from trial to trial.
+
+    Each harmonic h of the trajectory's period learns with its own gain
+    ``g_h`` (a Q given per harmonic instead of a low-pass): ``base`` where
+    the monotonic-convergence condition holds (0 elsewhere), then, from the
+    measured errors of successive trials,
+
+    * a harmonic whose averaged error is within ``threshold`` times its
+      noise amplitude (:func:`periodic_error`) is not learnt in this trial
+      (learning it would only move noise into the drive: the error at the
+      noise floor cannot fall, it can only grow);
+    * a harmonic whose error grew by more than 10 % plus its noise in
+      ``patience`` successive trials has its gain halved for the trials
+      that follow (one growth alone is not enough: the hysteresis moves
+      error between harmonics while the large ones are learnt)
+      (the condition does not hold there for the actual actuator:
+      a gain-scheduling safeguard in the spirit of the model-less,
+      measurement-corrected inversion-based iterative control of Kim and
+      Zou [1]_, which corrects the learning per frequency from the measured
+      response of the previous trial).
+
+    Parameters
+    ----------
+    base : array_like, shape (n_h,)
+        Starting gain per harmonic (``gamma`` where the condition holds).
+    threshold : float
+        Noise multiple below which a harmonic is not learnt.
+    patience : int
+        Successive growths that halve a harmonic's gain.
+
+    References
+    ----------
+    .. [1] K.-S. Kim and Q. Zou, "Model-less inversion-based iterative
+       control for output tracking: piezo actuator example", Proc. American
+       Control Conference, 2710-2715, 2008.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = HarmonicGains([0.5, 0.5, 0.5])
+    >>> g.update(np.array([[1.0, 1e-3, 2.0]]), 0.01)
+    array([0.5, 0. , 0.5])
+    >>> g.update(np.array([[0.5, 1e-3, 3.0]]), 0.01)      # harmonic 2 grew once
+    array([0.5, 0. , 0.5])
+    >>> g.update(np.array([[0.2, 1e-3, 4.0]]), 0.01)      # twice in a row: halved
+    array([0.5 , 0.  , 0.25])
+    """
+
+    def __init__(self, base, threshold=3.0, patience=2):
+        self.patience = int(patience)
+        self.base = np.array(base, dtype=float)
+        self.gains = self.base.copy()
+        self.threshold = float(threshold)
+        self.previous = None
+
+    def update(self, spectrum, noise):
+        """The gains of the next update from this trial's averaged error.
+
+        Parameters
+        ----------
+        spectrum : numpy.ndarray, shape (p, n_h)
+            Harmonic amplitudes of the averaged error [µm] (:func:`periodic_error`).
+        noise : float
+            Noise amplitude of one harmonic of one axis [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_h,)
+        """
+        amp = np.linalg.norm(np.atleast_2d(spectrum), axis=0)
+        floor = self.threshold * noise * np.sqrt(np.atleast_2d(spectrum).shape[0])
+        if self.previous is not None and self.previous.shape == amp.shape:
+            grew = amp > 1.1 * self.previous + floor
+            self.growths = np.where(grew, self.growths + 1, 0)
+            self.gains[self.growths >= self.patience] *= 0.5
+        else:
+            self.growths = np.zeros(amp.shape, dtype=int)
+        self.previous = amp
+        return np.where(amp > floor, self.gains, 0.0)
+
+
 def _frequency_response(A, B, C, D, z):
     """G(z) of a discrete state space at points z: shape (n_z, p, p)."""
     n = A.shape[0]
@@ -388,7 +529,83 @@ class IterativeLearning:
         v, _ = self.model.simulate(np.asarray(drive, dtype=float))
         return v
 
-    def step(self, reference, drive, measured, period_samples=None, steady_from=None):
+    def harmonic_inverse(self, spectrum, gains, period_samples):
+        """One period of ``g_h Ghat(z_h)^-1 E_h``: the exact inverse of the model's dynamics per harmonic.
+
+        A periodic error is learnt per harmonic of its period: at
+        ``z_h = exp(2 pi j h / P)`` the inverse of the (square) model dynamics
+        is exact, minimum phase or not (no ZPETC approximation, no preview
+        truncation): the periodic form of the inversion-based iterative
+        control of [1] (module references).
+
+        Parameters
+        ----------
+        spectrum : numpy.ndarray, shape (p, P // 2 + 1), complex
+            Harmonics of one period of the error (:func:`periodic_error`) [µm].
+        gains : array_like, shape (P // 2 + 1,)
+            Learning gain per harmonic.
+        period_samples : int
+            P.
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, P)
+            PI-output update over one period [µm].
+        """
+        E = np.asarray(spectrum, dtype=complex)
+        P = int(period_samples)
+        g = np.asarray(gains, dtype=float)
+        dV = np.zeros_like(E)
+        on = np.flatnonzero(g)
+        if on.size:
+            if self.dynamics is None:
+                dV[:, on] = E[:, on]
+            else:
+                z = np.exp(2j * np.pi * on / P)
+                Gh = _frequency_response(*(np.asarray(getattr(self.dynamics, k), dtype=float)
+                                           for k in "ABCD"), z)
+                dV[:, on] = np.linalg.solve(Gh, E[:, on].T[:, :, None])[:, :, 0].T
+            dV[:, on] *= g[on]
+        return np.fft.irfft(dV * (P / 2.0), n=P, axis=1)
+
+    def noise_shrink(self, error):
+        """Factor in [0, 1] on the time-domain update: the share of the error Q passes that is not noise.
+
+        The measurement noise is estimated from the part of the error above
+        Q, ``e - Q e`` (white noise assumed: its variance is
+        ``mean((e - Q e)^2) / mean((1 - |Q|)^2)`` over the frequencies up
+        to Nyquist), its power within Q follows (``sigma^2 mean(|Q|^2)``)
+        and the factor is ``max(0, 1 - noise power / power of Q e)``: the
+        Wiener shrinkage of the update (1 far above the noise floor, 0 at
+        it), so that a trial at the noise floor does not feed the noise
+        back into the drive. An error above Q that is not noise makes the
+        estimate larger, the factor smaller: the learning slows, it never
+        speeds up. 1 without Q.
+
+        Parameters
+        ----------
+        error : array_like, shape (p, n_samples)
+            [µm].
+
+        Returns
+        -------
+        float
+        """
+        if self._ba is None:
+            return 1.0
+        e = np.asarray(error, dtype=float)
+        if e.shape[1] < 3 * (self.q_order + 1) + 1:
+            return 1.0
+        low = self.q_filter(e)
+        f = np.linspace(0.0, 0.5 / self.sampling_period, 512)
+        _, h = _scipy_signal().freqz(*self._ba, worN=f, fs=1.0 / self.sampling_period)
+        q = np.abs(h) ** 2
+        sigma2 = float(np.mean((e - low) ** 2)) / max(float(np.mean((1.0 - q) ** 2)), 1e-12)
+        power = float(np.mean(low ** 2))
+        return float(max(0.0, 1.0 - sigma2 * float(np.mean(q ** 2)) / power)) if power > 0 else 0.0
+
+    def step(self, reference, drive, measured, period_samples=None, steady_from=None,
+             harmonic_gains=None):
         """One trial's update (see the module docstring).
 
         Parameters
@@ -416,6 +633,12 @@ class IterativeLearning:
             measurement noise that reaches the next drive by the square root
             of the number of periods (a repetitive trajectory has one error
             per period to learn).
+        harmonic_gains : HarmonicGains, optional
+            With ``steady_from``: the periodic part learns per harmonic of
+            the period (:meth:`harmonic_inverse`, gains from
+            :meth:`HarmonicGains.update` on this trial's averaged error,
+            kept in :attr:`last_gains`) instead of through the time-domain
+            inverse and the low-pass Q, which then shape only the start-up.
 
         Returns
         -------
@@ -442,6 +665,7 @@ class IterativeLearning:
         e = r - y
         if d:                          # the last d samples were not measured: hold the error
             e[:, -d:] = e[:, -d - 1:-d]
+        e_raw = e
         if period_samples and steady_from is not None:    # blended in over one period
             avg = periodic_average(e, period_samples, steady_from)
             b = np.clip((np.arange(e.shape[1]) - steady_from) / period_samples, 0.0, 1.0)
@@ -454,7 +678,20 @@ class IterativeLearning:
         else:
             ext = continuation(e, EXTENSION)
         dv = self.inverse_dynamics(np.concatenate([e, ext], axis=1))
-        v_next = v + self.q_filter(self.learning_gain * dv)[:, :N]
+        self.last_shrink = self.noise_shrink(e_raw)
+        dv = self.q_filter(self.learning_gain * self.last_shrink * dv)[:, :N]
+        self.last_gains = None
+        if harmonic_gains is not None and period_samples and steady_from is not None \
+                and N - steady_from >= period_samples:
+            P, s0 = int(period_samples), int(steady_from)
+            E, noise = periodic_error(e_raw, P, s0)
+            g = harmonic_gains.update(E, noise if np.isfinite(noise) else 0.0)
+            self.last_gains = g
+            harm = self.harmonic_inverse(E, g, P)[:, (np.arange(N) - s0) % P]
+            b = np.clip((np.arange(N) - s0 + P) / P, 0.0, 1.0)     # periodic from s0 on
+            b = 0.5 * (1.0 - np.cos(np.pi * b))
+            dv = (1.0 - b) * dv + b * harm
+        v_next = v + dv
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")      # range warnings: the learning extrapolates
             u_next, _ = self.hysteresis_compensator.simulate(v_next)
@@ -477,6 +714,45 @@ class IterativeLearning:
         ConvergenceCondition
         """
         T = self.sampling_period
+        f, LG = self._loop(plant_dynamics, n_frequencies)
+        I = np.eye(self.model.n_outputs)
+        if self._ba is not None:
+            _, h = _scipy_signal().freqz(*self._ba, worN=f, fs=1.0 / T)
+            q = np.abs(h) ** 2
+        else:
+            q = np.ones(f.size)
+        M = I - self.learning_gain * q[:, None, None] * LG
+        per_axis = np.abs(np.diagonal(M, axis1=1, axis2=2)).T
+        coupled = np.linalg.svd(M, compute_uv=False)[:, 0]
+        return ConvergenceCondition(f, per_axis, coupled)
+
+    def set_q_cutoff(self, q_cutoff_hz):
+        """Change the cut-off of Q [Hz] (None: no Q).
+
+        Parameters
+        ----------
+        q_cutoff_hz : float or None
+
+        Raises
+        ------
+        CompensatorError
+            A cut-off not below Nyquist.
+        """
+        nyquist = 0.5 / self.sampling_period
+        if q_cutoff_hz is not None and not (0 < q_cutoff_hz < nyquist):
+            raise CompensatorError(f"q_cutoff_hz: expected a frequency in (0, {nyquist:g}) Hz "
+                                   f"(below Nyquist), found {q_cutoff_hz!r}")
+        self.q_cutoff_hz = q_cutoff_hz
+        self._ba = None if q_cutoff_hz is None else _scipy_signal().butter(
+            self.q_order, q_cutoff_hz, fs=1.0 / self.sampling_period)
+
+    def _loop(self, plant_dynamics, n_frequencies):
+        """Frequencies and ``L(w) G(w)`` (n_f, p, p), cached per plant."""
+        key = (n_frequencies, self.delay)
+        cache = getattr(self, "_loop_cache", None)
+        if cache is not None and cache[0] == key and cache[3] is plant_dynamics:
+            return cache[1], cache[2]
+        T = self.sampling_period
         f = np.geomspace(1.0, 0.5 / T * 0.999, n_frequencies)
         z = np.exp(2j * np.pi * f * T)
         p = self.model.n_outputs
@@ -495,15 +771,8 @@ class IterativeLearning:
         if plant_dynamics is None and self.delay:    # the measured response: Ghat z^-d
             Gt = Gt * (z ** -self.delay)[:, None, None]
         Linv = Linv * (z ** self.delay)[:, None, None]
-        if self._ba is not None:
-            _, h = _scipy_signal().freqz(*self._ba, worN=f, fs=1.0 / T)
-            q = np.abs(h) ** 2
-        else:
-            q = np.ones(f.size)
-        M = I - self.learning_gain * q[:, None, None] * Linv @ Gt
-        per_axis = np.abs(np.diagonal(M, axis1=1, axis2=2)).T
-        coupled = np.linalg.svd(M, compute_uv=False)[:, 0]
-        return ConvergenceCondition(f, per_axis, coupled)
+        self._loop_cache = (key, f, Linv @ Gt, plant_dynamics)
+        return f, Linv @ Gt
 
     def _zpetc_response(self, f, Gh):
         """Frequency response of the whole-record ZPETC inverse, measured on unit sines."""
@@ -557,6 +826,94 @@ class IterativeLearning:
 
 
 
+def repeating_from(target, period_samples, fade_samples):
+    """First sample of the periodic learning of a reference that repeats after its fade-in, or None.
+
+    Parameters
+    ----------
+    target : array_like, shape (p, n_samples)
+        The faded reference [µm].
+    period_samples : int or None
+        P.
+    fade_samples : int
+        Fade-in [samples].
+
+    Returns
+    -------
+    int or None
+        ``max(fade, P) + 2 P`` (two periods after the fade-in: the start-up
+        transient is learnt in the time domain) when the reference repeats
+        from ``max(fade, P)`` on with at least five periods there; else None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> c = np.vstack([np.cos(2 * np.pi * np.arange(1000) / 100)])
+    >>> repeating_from(c, 100, 100), repeating_from(c[:, :500], 100, 100)
+    (300, None)
+    """
+    r = np.atleast_2d(np.asarray(target, dtype=float))
+    n = r.shape[1]
+    if not period_samples or period_samples < 2:
+        return None
+    P = int(period_samples)
+    w0 = int(min(max(fade_samples, P), n - 1))
+    if n < w0 + 5 * P or not np.allclose(r[:, w0 + P:], r[:, w0:n - P], rtol=0,
+                                         atol=1e-9 * max(float(np.max(np.abs(r))), 1.0)):
+        return None
+    return w0 + 2 * P
+
+
+def harmonic_base_gains(learning, period_samples, plant_dynamics=None, band_hz=None):
+    """Starting gain per harmonic of the period: ``gamma |Q(f_h)|^2`` where the condition holds, else 0.
+
+    Harmonic h (``f_h = h / (P T)``) learns with ``gamma |Q(f_h)|^2``, Q
+    the zero-phase Butterworth of cut-off ``band_hz`` (the time-domain
+    law's Q, sampled at the harmonics) and, when the plant's dynamics G
+    are known (a simulated actuator), only where
+    ``||I - gamma |Q|^2 Ghat(z_h)^-1 G(z_h)|| < 1`` at
+    ``z_h = exp(2 pi j h / P)`` (the per-harmonic monotonic-convergence
+    condition of the exact periodic inverse); 0 elsewhere.
+
+    Parameters
+    ----------
+    learning : IterativeLearning
+        Its gain, Q order, model dynamics and sampling period.
+    period_samples : int
+        P.
+    plant_dynamics : control.StateSpace, optional
+        G.
+    band_hz : float, optional
+        Cut-off of Q [Hz] (default: no Q, every harmonic up to Nyquist).
+
+    Returns
+    -------
+    numpy.ndarray, shape (P // 2 + 1,)
+    """
+    P = int(period_samples)
+    T = learning.sampling_period
+    h = np.arange(P // 2 + 1)
+    fh = h / (P * T)
+    gamma = learning.learning_gain
+    if band_hz is None:
+        base = np.full(fh.shape, gamma)
+    else:                                       # |Q|^2 of the time-domain law at f_h
+        b, a = _scipy_signal().butter(learning.q_order, band_hz, fs=1.0 / T)
+        _, q = _scipy_signal().freqz(b, a, worN=fh, fs=1.0 / T)
+        base = gamma * np.abs(q) ** 2
+    if plant_dynamics is not None:
+        z = np.exp(2j * np.pi * h / P)
+        p = learning.model.n_outputs
+        Gt = _frequency_response(*(np.asarray(getattr(plant_dynamics, k), dtype=float)
+                                   for k in "ABCD"), z)
+        Gh = np.broadcast_to(np.eye(p), Gt.shape).astype(complex) if learning.dynamics is None \
+            else _frequency_response(*(np.asarray(getattr(learning.dynamics, k), dtype=float)
+                                       for k in "ABCD"), z)
+        M = np.eye(p) - base[:, None, None] * np.linalg.solve(Gh, Gt)
+        base[np.linalg.svd(M, compute_uv=False)[:, 0] >= 1.0] = 0.0
+    return base
+
+
 class LearningCompensator:
     """ILC against a (simulated) actuator, starting from another compensator's drive.
 
@@ -566,9 +923,19 @@ class LearningCompensator:
     amplifier), each measured with white sensor noise of ``sensor_noise``
     µm RMS (seeded), and learns with :class:`IterativeLearning`. It keeps the
     error of every trial (:attr:`history`, on the noise-free outputs over
-    the window after the fade-in and one period) and stops early when a
-    trial's max Euclidean error grows by more than 10 % over the previous
-    one, keeping the best drive (:attr:`stopped` says why it stopped).
+    the window after the fade-in and one period).
+
+    A reference that repeats after its fade-in is learnt, from two periods
+    after the fade-in on, per harmonic of its period
+    (:meth:`IterativeLearning.harmonic_inverse`, gains
+    :meth:`harmonic_base_gains` adapted by :class:`HarmonicGains`: no
+    learning at the noise floor, halved where an error keeps growing); the
+    start-up before it, and references that do not repeat, through the
+    time-domain inverse and Q, scaled by the noise shrinkage
+    (:meth:`IterativeLearning.noise_shrink`). A trial more than 10 % worse
+    than the best one so far is not learnt from: the next trial learns
+    again from the best drive with half the gain (:attr:`notes`). The drive
+    returned is the best trial's.
 
     Parameters
     ----------
@@ -579,7 +946,8 @@ class LearningCompensator:
     sampling_period : float
         T [s].
     iterations : int
-        Learning trials after the start drive (>= 1).
+        Learning trials after the start drive, 1 to
+        :data:`~hammerstein.core.numbers.MAX_ITERATIONS` (100).
     learning_gain, q_cutoff_hz, inversion
         Of :class:`IterativeLearning`.
     sensor_noise : float
@@ -587,20 +955,26 @@ class LearningCompensator:
     seed : int
         Of the noise.
     name : str
+    harmonics : bool
+        Learn a repeating reference per harmonic (default); False: the
+        time-domain law over the whole record.
 
     Attributes
     ----------
     history : list of IterationRecord
     stopped : str
+    notes : list of str
+        What the learning changed on its own (gain halved after a worse
+        trial); reported as warnings of the case.
     condition : ConvergenceCondition
         Against the plant's dynamics, computed before iterating (a
         :class:`~hammerstein.exceptions.ConvergenceWarning` when it fails).
     """
 
     def __init__(self, start, sampling_period, iterations=10, learning_gain=0.5,
-                 q_cutoff_hz=2000.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc"):
-        if int(iterations) != iterations or iterations < 1:
-            raise CompensatorError(f"iterations: expected an integer >= 1, found {iterations!r}")
+                 q_cutoff_hz=2000.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
+                 harmonics=True):
+        iterations = check_integer(iterations, "iterations", 1, MAX_ITERATIONS, CompensatorError)
         self.start_compensator = start
         self.sampling_period = float(sampling_period)
         self.iterations, self.sensor_noise, self.seed, self.name = int(iterations), float(
@@ -609,6 +983,7 @@ class LearningCompensator:
                                           sampling_period, learning_gain, q_cutoff_hz,
                                           inversion=inversion)
         self.history, self.stopped, self.condition = [], "", None
+        self.harmonics, self.notes, self.q_cutoff_hz = bool(harmonics), [], q_cutoff_hz
 
     @property
     def model(self):
@@ -655,32 +1030,67 @@ class LearningCompensator:
         target, u = d.reference, d.inputs
         n = target.shape[1]
         w0 = int(min(max(fade_samples, period_samples or 0), n - 1))
-        self.condition = self.learning.check(getattr(plant, "dynamics", None))
+        G = getattr(plant, "dynamics", None)
+        self.notes = []
+        self.learning.set_q_cutoff(self.q_cutoff_hz)
+        q0 = self.learning.q_cutoff_hz
+        self.condition = self.learning.check(G)
         steady = None                   # a reference that repeats after the fade: averaged error
         if period_samples and n >= w0 + 5 * period_samples and np.allclose(
                 target[:, w0 + period_samples:], target[:, w0:n - period_samples],
                 rtol=0, atol=1e-9 * max(float(np.max(np.abs(target))), 1.0)):
             steady = w0 + 2 * period_samples     # after the start-up transient: learnt raw
             w0 = steady + period_samples          # the errors reported: the averaged part
+        gains = None
+        if self.harmonics and steady is not None:
+            gains = HarmonicGains(self.harmonic_base_gains(period_samples, G, q0))
         rng = np.random.default_rng(self.seed)
         amp = getattr(plant, "amplifier", None)
         self.history, best = [], None
         self.stopped = f"after {self.iterations} iterations"
+        gamma0, halvings = self.learning.learning_gain, 0
         for k in range(self.iterations + 1):
             y, _ = plant.simulate(apply_amplifier(amp, u, T))
+            measured = y + rng.normal(0.0, self.sensor_noise, y.shape) if self.sensor_noise else y
             rec = error_summary(target, y, slice(w0, None), k)
             self.history.append(rec)
             if best is None or rec.max_euclidean_error < best[0].max_euclidean_error:
-                best = (rec, u, y)
-            if k and rec.max_euclidean_error > 1.1 * self.history[-2].max_euclidean_error:
-                self.stopped = (f"at iteration {k}: the error grew by more than 10 % "
-                                f"(kept iteration {best[0].iteration})")
-                break
+                best = (rec, u, y, measured)
+            elif rec.max_euclidean_error > 1.1 * best[0].max_euclidean_error:
+                # worse than the best trial: learn again from the best one with half the gain
+                halvings += 1
+                self.learning.learning_gain = gamma0 * 0.5 ** halvings
+                if gains is not None:
+                    gains.gains *= 0.5
+                    gains.previous = None
+                u, measured = best[1], best[3]
+                self.notes.append(f"trial {k} worse than trial {best[0].iteration}: learning "
+                                  f"again from it with gain x{0.5 ** halvings:g}")
             if k == self.iterations:
                 break
-            measured = y + rng.normal(0.0, self.sensor_noise, y.shape) if self.sensor_noise else y
-            u = self.learning.step(target, u, measured, period_samples, steady)
+            u = self.learning.step(target, u, measured, period_samples, steady, gains)
+        self.learning.learning_gain = gamma0
+        if best[0].iteration != self.history[-1].iteration:
+            self.stopped += f" (kept iteration {best[0].iteration}, the best)"
         return ChainResult(best[1], best[2], None, None)
+
+    def harmonic_base_gains(self, period_samples, plant_dynamics=None, band_hz=None):
+        """:func:`harmonic_base_gains` of this learning.
+
+        Parameters
+        ----------
+        period_samples : int
+            P.
+        plant_dynamics : control.StateSpace, optional
+            G.
+        band_hz : float, optional
+            Cut-off of Q [Hz].
+
+        Returns
+        -------
+        numpy.ndarray, shape (P // 2 + 1,)
+        """
+        return harmonic_base_gains(self.learning, period_samples, plant_dynamics, band_hz)
 
     def history_rows(self, names):
         """Metric rows of the trials: channel ``iteration-<k>``, per-axis and Euclidean errors.

@@ -33,6 +33,7 @@ import numpy as np
 
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.lazy import lazy_module
+from hammerstein.core.numbers import magnitude_problem
 from hammerstein.simulation import simulate_hysteresis, simulate_plant
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
@@ -436,6 +437,10 @@ def _records(inputs, outputs):
                                 f"length, found {u.shape} and {y.shape}")
         if not (np.all(np.isfinite(u)) and np.all(np.isfinite(y))):
             raise DynamicsError(f"records[{i}]: expected finite signals")
+        for what, a in (("inputs", u), ("outputs", y)):   # LAPACK fails (DLASCL) beyond it
+            problem = magnitude_problem(a)
+            if problem:
+                raise DynamicsError(f"records[{i}]: {what}: {problem}")
         if ins and (u.shape[0] != ins[0].shape[0] or y.shape[0] != outs[0].shape[0]):
             raise DynamicsError(f"records[{i}]: signal counts differ from record 0")
         ins.append(u)

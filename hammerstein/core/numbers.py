@@ -7,7 +7,10 @@ subnormal through to a division that overflows) are not enough.
 :func:`is_number` accepts a real, finite, normal-or-zero number of any
 Python or numpy numeric type except bool; :func:`check_array` applies the
 same rule to an array of the API (NaN, infinity, complex values and shape
-mismatches refused with a message naming the argument).
+mismatches refused with a message naming the argument);
+:func:`integer_problem` and :func:`check_integer` are the integer checker of
+both the scenario files and the API (``iterations = 10**9`` refused with the
+maximum named).
 """
 
 from __future__ import annotations
@@ -18,12 +21,21 @@ import sys
 
 import numpy as np
 
-__all__ = ["is_number", "number_problem", "check_array", "FLOAT_MAX", "FLOAT_TINY"]
+__all__ = ["is_number", "number_problem", "check_array", "integer_problem", "check_integer",
+           "magnitude_problem", "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS", "MAX_MAGNITUDE"]
 
 #: Largest finite float64; a Python int beyond it cannot become a float.
 FLOAT_MAX = sys.float_info.max
 #: Smallest normal float64: a non-zero magnitude below it is subnormal (refused).
 FLOAT_TINY = sys.float_info.min
+#: Largest magnitude of a signal value (data file, API array, simulated output or
+#: voltage): beyond ``sqrt(FLOAT_MAX)`` = 1.34e154 the squares of an RMS overflow to
+#: inf and LAPACK's scaling (DLASCL) fails, so 1e150 leaves room for sums over
+#: 1e8 samples. No actuator moves 1e150 µm.
+MAX_MAGNITUDE = 1e150
+#: Most fixed-point (or learning) iterations per sample of a compensator, in a
+#: scenario file, on the command line and through the API alike.
+MAX_ITERATIONS = 100
 
 
 def number_problem(v):
@@ -98,7 +110,8 @@ def check_array(a, name, error=ValueError, ndim=None, length=None):
     ------
     error
         Complex values, non-numeric data, NaN or infinite values (the first
-        index named), a wrong number of dimensions or a length mismatch.
+        index named), a magnitude beyond :data:`MAX_MAGNITUDE`, a wrong
+        number of dimensions or a length mismatch.
     """
     arr = np.asarray(a)
     if np.iscomplexobj(arr):
@@ -113,6 +126,127 @@ def check_array(a, name, error=ValueError, ndim=None, length=None):
     if bad.any():
         idx = tuple(int(i) for i in np.argwhere(bad)[0])
         raise error(f"{name}: non-finite value {arr[idx]} at index {idx if len(idx) > 1 else idx[0]}")
+    problem = magnitude_problem(arr)
+    if problem:
+        raise error(f"{name}: {problem}")
     if length is not None and arr.shape[-1] != length:
         raise error(f"{name}: {arr.shape[-1]} samples, expected {length} (as the other signal)")
     return arr
+
+
+def _short(v, n=60):
+    """``repr(v)``, or the digit count of an integer longer than ``n`` digits."""
+    text = repr(v)
+    if len(text) <= n:
+        return text
+    if isinstance(v, numbers.Integral):
+        return f"{'-' if v < 0 else ''}an integer of {len(str(abs(int(v))))} digits"
+    return text[:n] + "..."
+
+
+def integer_problem(v, minimum=0, maximum=None):
+    """Why ``v`` is not an integer in ``minimum..maximum`` (a phrase), or None.
+
+    Python ints of any size and numpy integers are integers; bools, floats
+    (even ``3.0``) and strings are not.
+
+    Parameters
+    ----------
+    v : object
+        The value.
+    minimum : int
+        Smallest accepted value.
+    maximum : int, optional
+        Largest accepted value.
+
+    Returns
+    -------
+    str or None
+        ``"expected an integer >= 1, found 0"`` or
+        ``"expected an integer 1..100, found 1000000000"``.
+
+    Examples
+    --------
+    >>> integer_problem(10**9, 1, MAX_ITERATIONS)
+    'expected an integer 1..100, found 1000000000'
+    >>> integer_problem(3, 1, 100) is None
+    True
+    """
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Integral) or v < minimum:
+        return f"expected an integer >= {minimum}, found {_short(v)}"
+    if maximum is not None and v > maximum:
+        return f"expected an integer {minimum}..{maximum}, found {_short(int(v))}"
+    return None
+
+
+def check_integer(v, name, minimum=0, maximum=None, error=ValueError):
+    """``v`` as a Python int in ``minimum..maximum``, or an error naming ``name``.
+
+    Parameters
+    ----------
+    v : object
+        The value (an int or numpy integer).
+    name : str
+        Field or argument name for the message (``"iterations"``).
+    minimum, maximum : int
+        Bounds (``maximum`` optional), inclusive.
+    error : type
+        Exception class raised.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    error
+        ``"<name>: expected an integer 1..100, found 1000000000"``.
+
+    Examples
+    --------
+    >>> check_integer(10**9, "iterations", 1, MAX_ITERATIONS)
+    Traceback (most recent call last):
+    ...
+    ValueError: iterations: expected an integer 1..100, found 1000000000
+    """
+    problem = integer_problem(v, minimum, maximum)
+    if problem:
+        raise error(f"{name}: {problem}")
+    return int(v)
+
+
+def magnitude_problem(a, unit=""):
+    """Why the values of ``a`` are too large to compute with (a phrase), or None.
+
+    NaN values are skipped (they mark a divergence); an infinite value or a
+    magnitude beyond :data:`MAX_MAGNITUDE` is a problem: the squares of the
+    metrics would overflow and a linear solve would fail inside LAPACK.
+
+    Parameters
+    ----------
+    a : array_like
+        Values of any shape.
+    unit : str
+        Unit appended to the value in the message (``"µm"``).
+
+    Returns
+    -------
+    str or None
+        ``"3.04e+301 µm at index (0, 17) is beyond the limit 1e+150"``.
+
+    Examples
+    --------
+    >>> magnitude_problem([[1.0, -2e300]], "V")
+    '-2e+300 V at index (0, 1) is beyond the limit 1e+150'
+    >>> magnitude_problem([1.0, float("nan")]) is None
+    True
+    """
+    arr = np.asarray(a, dtype=float)
+    with np.errstate(invalid="ignore"):
+        big = np.abs(arr) > MAX_MAGNITUDE     # False for NaN, True for inf
+    if not big.any():
+        return None
+    idx = tuple(int(i) for i in np.argwhere(big)[0])
+    where = idx[0] if len(idx) == 1 else idx
+    return (f"{arr[idx]:.3g}{' ' + unit if unit else ''} at index {where} is beyond the limit "
+            f"{MAX_MAGNITUDE:.0e}")

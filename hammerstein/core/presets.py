@@ -38,6 +38,8 @@ __all__ = [
     "bundled_presets",
     "resolve_preset",
     "read_toml",
+    "load_creep",
+    "identified_from",
     "model_from_table",
     "model_to_table",
     "load_model",
@@ -382,6 +384,10 @@ def load_model(path):
     Returns
     -------
     MultivariablePI
+        A model identified from records (an ``[identification]`` table with
+        ``sources``, written by ``hammerstein identify``) carries
+        ``identified_from``, e.g. ``"records hysteresis-ux.csv,
+        hysteresis-uy.csv (preset id.toml)"``, which the warnings quote.
 
     Raises
     ------
@@ -393,7 +399,37 @@ def load_model(path):
     problems = _table_problems(data, FILE_FIELDS, "")
     if problems:
         raise PresetError(f"{path}: " + "; ".join(problems))
-    return model_from_table(data["model"], str(path))
+    model = model_from_table(data["model"], str(path))
+    origin = identified_from(data, path)
+    if origin:
+        try:
+            model.identified_from = origin
+        except AttributeError:          # a model class without instance attributes
+            pass
+    return model
+
+
+def identified_from(data, path):
+    """``"records A.csv, B.csv (preset NAME.toml)"`` for a file written by ``hammerstein identify``.
+
+    Parameters
+    ----------
+    data : dict
+        The parsed file.
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    str or None
+        None when the file has no ``[identification]`` table with ``sources``.
+    """
+    ident = data.get("identification")
+    sources = ident.get("sources") if isinstance(ident, dict) else None
+    if not isinstance(sources, list) or not sources:
+        return None
+    return (f"records {', '.join(Path(str(s)).name for s in sources)} "
+            f"(preset {Path(str(path)).name})")
 
 
 def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", extra=None):
@@ -549,6 +585,31 @@ def dynamics_to_table(system):
                     **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
     return {"kind": "state_space",
             **{k: np.asarray(getattr(mats, k), dtype=float).tolist() for k in "ABCD"}}
+
+
+def load_creep(path, outputs):
+    """The ``[creep]`` of a preset file, one entry per output, or None without creep.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        TOML file (e.g. written by ``hammerstein identify --creep-records``).
+    outputs : list of str
+        Output names of the plant (p).
+
+    Returns
+    -------
+    list of (Creep or None) or None
+        None when the file has no ``[creep]`` table or none of its outputs creeps.
+
+    Raises
+    ------
+    PresetError
+        A malformed ``[creep]`` table (names the key).
+    """
+    data = read_toml(path)
+    creeps = _creep(data.get("creep"), list(outputs), path)
+    return creeps if creeps is not None and any(c is not None for c in creeps) else None
 
 
 def load_dynamics(path, outputs, sampling_period):

@@ -60,6 +60,9 @@ from hammerstein.core.datafiles import MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii, play)
 from hammerstein.core import lti
+from hammerstein.core.creep import creep_matrices
+from hammerstein.core.creep_identification import CreepIdentifier, hysteresis_frequency
+from hammerstein.simulation import linear_steps
 from hammerstein.core.identification import (ClosedFormPI, IdentificationError,
                                              partition_thresholds)
 
@@ -78,6 +81,7 @@ __all__ = [
     "parse_components",
     "identify_records",
     "identify_record",
+    "identify_record_creep",
     "dynamics_tables",
     "noise_level",
     "amplitude_levels",
@@ -1338,7 +1342,7 @@ def _held_out_records(records):
     return ()
 
 
-def identify_record_dynamics(fit, records, name="identified", **options):
+def identify_record_dynamics(fit, records, name="identified", creep=None, **options):
     """Identify the linear dynamics G behind a fitted PI from broadband records.
 
     The Hammerstein structure ``y = G(Gamma(u)) + c`` is identified in two
@@ -1368,6 +1372,13 @@ def identify_record_dynamics(fit, records, name="identified", **options):
         Broadband records with the same columns, one sampling period.
     name : str
         Preset name.
+    creep : sequence of (Creep or None), optional
+        Identified creep per output (:func:`identify_record_creep`): G's
+        inputs are then the PI outputs through the creep, ``(I + C) H``
+        (each record from rest), so that G(0) = I holds for the cascade the
+        compensator inverts. Without it, the part of the creep faster than
+        the hysteresis records but slower than the broadband band (a few %)
+        would be fitted into G.
     **options
         Options of :class:`~hammerstein.core.lti.DynamicsIdentifier`
         (``order``, ``max_order``...), overriding the defaults.
@@ -1394,6 +1405,9 @@ def identify_record_dynamics(fit, records, name="identified", **options):
     off = np.zeros((model.n_outputs, 1)) if model.output_offset is None \
         else model.output_offset[:, None]
     ins = [model.simulate(r.u)[0] - off for r in records]
+    if creep is not None and any(c is not None for c in creep):
+        mats = creep_matrices(list(creep), T)
+        ins = [linear_steps(h, mats, np.zeros(mats[0].shape[0]))[0] for h in ins]
     outs = [r.y - off for r in records]
     opts = dict(DYNAMICS_DEFAULTS)
     opts["validation_records"] = _held_out_records(records)
@@ -1486,6 +1500,39 @@ def dynamics_tables(fit, records, name="identified", **options):
         failed identification.
     """
     return identify_record_dynamics(fit, records, name, **options).tables
+
+
+def identify_record_creep(fit, records, dynamics=None, **options):
+    """Identify the creep after a fitted hysteresis model from staircase records.
+
+    :class:`hammerstein.core.creep_identification.CreepIdentifier` on the
+    fitted model, normalised at the frequency of the hysteresis records of
+    ``fit`` (:func:`hammerstein.core.creep_identification.hysteresis_frequency`).
+
+    Parameters
+    ----------
+    fit : RecordFit
+        The fitted hysteresis model and its records.
+    records : sequence of MultiRecord
+        Staircase records with the same columns.
+    dynamics : control.StateSpace, optional
+        Identified discrete dynamics G (e.g. ``RecordDynamics.identifier.system_``).
+    **options
+        Options of :class:`~hammerstein.core.creep_identification.CreepIdentifier`.
+
+    Returns
+    -------
+    CreepIdentifier
+        Fitted.
+
+    Raises
+    ------
+    IdentificationError
+        On records that are not staircases or do not match the model.
+    """
+    opts = {"hysteresis_frequency_hz": hysteresis_frequency(fit.records)}
+    opts.update({k: v for k, v in options.items() if v is not None})
+    return CreepIdentifier(**opts).fit(fit.model, _as_records(records), dynamics)
 
 
 # -- modified PI: static output map ---------------------------------------------------

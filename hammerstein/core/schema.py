@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 
+from hammerstein.core.numbers import integer_problem
 from hammerstein.core.numbers import is_number as _finite_number
 from hammerstein.exceptions import Invalid, NestedInvalid
 
@@ -144,7 +145,7 @@ def integer(minimum=0, maximum=None):
         Smallest accepted value.
     maximum : int, optional
         Largest accepted value (an upper bound of validate, e.g.
-        :data:`MAX_ITERATIONS`).
+        :data:`hammerstein.core.numbers.MAX_ITERATIONS`).
 
     Returns
     -------
@@ -158,10 +159,11 @@ def integer(minimum=0, maximum=None):
         not one) or is outside ``minimum..maximum``.
     """
     def check(v):
-        if not isinstance(v, int) or isinstance(v, bool) or v < minimum:
+        if not isinstance(v, int) or isinstance(v, bool):   # a TOML value is a Python int
             raise Invalid(f"expected an integer >= {minimum}, found {short_repr(v)}")
-        if maximum is not None and v > maximum:
-            raise Invalid(f"expected an integer {minimum}..{maximum}, found {short_repr(v)}")
+        problem = integer_problem(v, minimum, maximum)   # the API's checker (core/numbers.py)
+        if problem:
+            raise Invalid(problem)
         return v
     return check
 

@@ -29,11 +29,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
-from matplotlib.ticker import Locator, NullLocator  # noqa: E402
+from matplotlib.ticker import Locator, LogFormatterSciNotation, NullLocator  # noqa: E402
 from PIL import Image  # noqa: E402
 from PIL.PngImagePlugin import PngInfo  # noqa: E402
 
-__all__ = ["loop_grid", "decorate_grid", "trajectory_figure", "divergence_figure", "xy_overlay",
+__all__ = ["plain_log_labels", "loop_grid", "decorate_grid", "trajectory_figure", "divergence_figure", "xy_overlay",
            "raster_error_map", "save", "scenario_prefix", "grid_figure", "decimate",
            "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
            "MAX_POINTS", "DPI"]
@@ -288,6 +288,30 @@ def scenario_prefix(scenario):
     title = str(getattr(scenario, "title", "") or "")
     head = title.split(":", 1)[0].strip()
     return head if ":" in title and 0 < len(head) <= 24 else scenario.name
+
+
+class _PlainLogFormatter(LogFormatterSciNotation):
+    """Label the ticks matplotlib's log formatter labels, as plain numbers (``0.3``, ``20``)."""
+
+    def __call__(self, x, pos=None):
+        return f"{x:g}" if super().__call__(x, pos) else ""
+
+
+def plain_log_labels(axis):
+    """Label a log-scaled axis with plain numbers instead of powers of ten.
+
+    On a log axis spanning less than about a decade matplotlib labels minor
+    ticks too, as ``3×10⁻¹``: text twice as wide as ``0.3``, which pushes the
+    axis label off a fixed layout's margin onto the tick labels. The same
+    ticks keep a label; only its text changes (``f"{x:g}"``).
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        ``ax.yaxis`` or ``ax.xaxis`` of a log-scaled axes.
+    """
+    axis.set_major_formatter(_PlainLogFormatter(labelOnlyBase=False))
+    axis.set_minor_formatter(_PlainLogFormatter(labelOnlyBase=False))
 
 
 def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6, extra_top=0.0):

@@ -14,7 +14,7 @@ import numpy as np  # noqa: E402
 
 from hammerstein.report.figures import fixed_layout, legend_on_top  # noqa: E402
 
-__all__ = ["convergence_figure"]
+__all__ = ["convergence_figure", "iteration_history"]
 
 
 def convergence_figure(iterations, max_error, rms_error, names, title, scale=None):
@@ -55,3 +55,44 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     legend_on_top(ax, 2 * len(names))
     fig.suptitle(title, fontsize=11)
     return fig
+
+
+def iteration_history(rows, names):
+    """The per-trial errors of a case from its ``iteration-<k>`` metric rows.
+
+    Parameters
+    ----------
+    rows : iterable of dict
+        Metric rows (``channel``, ``metric``, ``value``), as
+        :meth:`hammerstein.core.ilc.LearningCompensator.history_rows` writes
+        them: channel ``iteration-<k>``, metrics ``max_abs_error_<output>``
+        and ``rms_error_<output>`` [µm].
+    names : sequence of p str
+        Output names.
+
+    Returns
+    -------
+    iterations : numpy.ndarray, shape (n,)
+        The trials k found, ascending (empty when there are none).
+    max_error, rms_error : numpy.ndarray, shape (p, n)
+        [µm]; NaN where a row is missing.
+
+    Examples
+    --------
+    >>> rows = [{"channel": "iteration-1", "metric": "max_abs_error_x", "value": 2.0},
+    ...         {"channel": "iteration-0", "metric": "max_abs_error_x", "value": 4.0},
+    ...         {"channel": "x", "metric": "max_abs_error_x", "value": 9.0}]
+    >>> k, mx, rms = iteration_history(rows, ["x"])
+    >>> k.tolist(), mx.tolist()
+    ([0, 1], [[4.0, 2.0]])
+    """
+    table = {}
+    for r in rows:
+        ch = str(r.get("channel", ""))
+        if not ch.startswith("iteration-") or not ch[10:].isdigit():
+            continue
+        table[(int(ch[10:]), r["metric"])] = float(r["value"])
+    its = np.array(sorted({k for k, _ in table}), dtype=int)
+    mx = np.array([[table.get((k, f"max_abs_error_{n}"), np.nan) for k in its] for n in names])
+    rms = np.array([[table.get((k, f"rms_error_{n}"), np.nan) for k in its] for n in names])
+    return its, mx.reshape(len(names), its.size), rms.reshape(len(names), its.size)

@@ -83,6 +83,7 @@ def quantile_figure(table, title):
         vals = vals[np.isfinite(vals)]
         if vals.size and (vals > 0).all():
             ax.set_yscale("log")
+            plots.plain_log_labels(ax.yaxis)
         ax.set_title(f"{met.replace('_', ' ')}, {ch}", fontsize=10)
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel("[µm]")

@@ -23,6 +23,7 @@ import pandas as pd
 from hammerstein.core.files import markdown_escape
 from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
+from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
@@ -320,6 +321,16 @@ def _figures(scenario, results, directory, jobs):
                  settle_time=settle, inputs=r.inputs, input_names=in_names)
         figs.append((f"Case {r.name}: spatial domain, time domain (displacements, input "
                      f"voltages), tracking error", fname))
+    for r in ok:                       # kind "ilc": error per learning trial
+        its, mx, rms = iteration_history(r.metrics, out_names)
+        if its.size:
+            fname = f"convergence-{r.name}.png"
+            scale = r.spec.signal_spec.get("radius", r.spec.signal_spec.get("amplitude"))
+            jobs.add(directory / fname, convergence_figure, its, mx, rms, out_names,
+                     f"{prefix}: {r.name}, iterative learning: tracking error per trial",
+                     scale if isinstance(scale, (int, float)) else None)
+            figs.append((f"Case {r.name}: iterative learning, max and RMS tracking error per "
+                         f"axis against the trial", fname))
     if len(traj) > 1:
         curves = []
         for r in traj:

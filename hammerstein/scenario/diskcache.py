@@ -49,7 +49,7 @@ from pathlib import Path
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape, safe_write
 
 __all__ = ["cache_dir", "code_digest", "entry_path", "load", "store", "ENV", "set_reporter",
-           "trust_problem"]
+           "trust_problem", "note"]
 
 #: Environment variable naming the cache directory (``off`` or empty: no cache).
 ENV = "HAMMERSTEIN_CACHE_DIR"
@@ -70,6 +70,17 @@ def set_reporter(report):
         ``-v``. None (default): the logger named "hammerstein.cache" (INFO).
     """
     _REPORT["to"] = report
+
+
+def note(text):
+    """Report ``text`` once per process (the ``-v`` note of an ignored entry or directory).
+
+    Parameters
+    ----------
+    text : str
+        One line, without the ``note: `` prefix; control characters escaped.
+    """
+    _note(escape(text, 1000))
 
 
 def _note(text):

@@ -111,8 +111,7 @@ def run_case(case):
     result = chain_result(case, res, caught, commanded)
     if hasattr(case.compensator, "history_rows") and not res.diverged:   # kind "ilc"
         result.metrics += case.compensator.history_rows(list(plant.hysteresis.output_names))
-        if "grew" in case.compensator.stopped:
-            result.warnings.append(f"ILC stopped {case.compensator.stopped}")
+        result.warnings += [f"ILC: {n}" for n in getattr(case.compensator, "notes", [])]
     return result
 
 
@@ -213,7 +212,7 @@ def fade_samples(case):
         return int(round(given / T))
     if not compensator_kind(case.compensator_spec).fades_in:
         return default_fade_samples(case.signal, case.period_samples, settle, case.compensator,
-                                    getattr(case.plant, "amplifier", None))
+                                    getattr(case.plant, "amplifier", None), T)
     return int(min(case.period_samples, settle))
 
 

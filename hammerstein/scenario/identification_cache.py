@@ -17,10 +17,13 @@ import hashlib
 import numpy as np
 
 from hammerstein.core.dynamics import DynamicsError
+from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.core.presets import PresetError, model_from_table, model_to_table
 from hammerstein.scenario import diskcache
 
-__all__ = ["IdentificationCache", "plant_fingerprint", "spec_key", "round_trip_table"]
+__all__ = ["IdentificationCache", "plant_fingerprint", "spec_key", "round_trip_table",
+           "cached_model_problem"]
 
 
 def plant_fingerprint(plant):
@@ -81,6 +84,71 @@ def round_trip_table(model):
     except PresetError:
         same = False
     return table if same else None
+
+
+def _bounds_of(key):
+    """The ``bounds`` of the identify table inside a content key, or None."""
+    if isinstance(key, tuple):
+        if len(key) == 2 and key[0] == "bounds" and isinstance(key[1], str):
+            return key[1]
+        for part in key:
+            found = _bounds_of(part)
+            if found is not None:
+                return found
+    return None
+
+
+def cached_model_problem(model, key=()):
+    """Why an identified PI model read from the disk cache cannot be used (a phrase), or None.
+
+    The checks of a model file (:func:`hammerstein.core.presets.model_from_table`
+    already ran), plus what an identification guarantees and the compensators
+    need: finite weights and gains within
+    :data:`hammerstein.core.numbers.MAX_MAGNITUDE`; for a square model, a
+    first slope ``S_1 = w_1 > 0`` of every direct transfer (a zero or
+    negative one gives no compensator) and, when the identify table of the
+    key asked for ``bounds = "monotone"`` or ``"nonnegative"``, every
+    cumulative weight sum ``S_i > 0`` (Kuhnen's invertibility condition,
+    paper Section 3).
+
+    Parameters
+    ----------
+    model : hammerstein.core.hysteresis.MultivariablePI
+        The model rebuilt from the entry.
+    key : tuple
+        The entry's content key (with the validated identify table).
+
+    Returns
+    -------
+    str or None
+        E.g. ``"direct transfer x <- ux: cumulative weight sum S_1 = 0 µm/V
+        is not positive"``.
+    """
+    bounds = _bounds_of(key)
+    for l in range(model.n_outputs):
+        for k in range(model.n_inputs):
+            comp = model.components[l][k]
+            name = f"{model.output_names[l]} <- {model.input_names[k]}"
+            weights = np.atleast_1d(np.asarray(getattr(comp, "weights", comp if comp is not None
+                                                       else 0.0), dtype=float))
+            if not np.all(np.isfinite(weights)) or np.any(np.abs(weights) > MAX_MAGNITUDE):
+                return f"{name}: weights not finite or beyond {MAX_MAGNITUDE:.0e} µm/V"
+            if l != k or model.n_outputs != model.n_inputs:
+                continue
+            sums = np.cumsum(weights)
+            bad = np.flatnonzero(sums <= 0) if bounds in ("monotone", "nonnegative") \
+                else np.flatnonzero(sums[:1] <= 0)
+            if bad.size:
+                i = int(bad[0])
+                return (f"direct transfer {name}: cumulative weight sum S_{i + 1} = "
+                        f"{sums[i]:.6g} µm/V is not positive")
+    return None
+
+
+def _model_in(value):
+    """The PI model of a cached value (a model, or a tuple starting with one), or None."""
+    first = value[0] if isinstance(value, tuple) and value else value
+    return first if isinstance(first, MultivariablePI) else None
 
 
 class IdentificationCache:
@@ -150,6 +218,13 @@ class IdentificationCache:
         if stored is None:
             return None
         try:
-            return load(stored)
+            value = load(stored)
         except (KeyError, TypeError, ValueError, PresetError, DynamicsError):
             return None     # an entry of an older shape: identify again
+        model = _model_in(value)
+        problem = cached_model_problem(model, key) if model is not None else None
+        if problem:         # re-validated like a model file: identify again, one -v note
+            diskcache.note(f"identification cache entry ignored: "
+                           f"{diskcache.entry_path(kind, key)}: its model: {problem}")
+            return None
+        return value

@@ -28,7 +28,7 @@ from hammerstein.core.files import confined_path
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.ilc import LearningCompensator
-from hammerstein.core.presets import PresetError, load_dynamics
+from hammerstein.core.presets import PresetError, load_creep, load_dynamics
 from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
@@ -217,8 +217,28 @@ def _build_hammerstein(spec, plant, context):
         pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
         iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
         feedback=spec.get("feedback", "delay"), cutoff_hz=spec.get("cutoff_hz"),
-        sampling_period=plant.sampling_period)
+        sampling_period=plant.sampling_period, creep=_spec_creep(spec, plant, context))
     return comp
+
+
+def _spec_creep(spec, plant, context):
+    """The creep a ``kind = "hammerstein"`` compensator inverts with G (None: none).
+
+    ``creep = "auto"`` (default): the ``[creep]`` of the dynamics file when
+    ``dynamics`` is a file (e.g. a preset written by ``hammerstein identify
+    --creep-records``), none with ``dynamics = "plant"`` or ``"identified"``;
+    ``"plant"``: the plant's true creep (an oracle); ``"none"``.
+    """
+    which = spec.get("creep", "auto")
+    if which == "none":
+        return None
+    if which == "plant":
+        return plant.creep
+    dyn = dynamics_source(spec)
+    if dyn in ("plant", "identified"):
+        return None
+    base = context.base_dir if hasattr(context, "base_dir") else Path(context)
+    return load_creep(confined_path(dyn, base, PresetError), plant.hysteresis.output_names)
 
 
 def _hammerstein_notes(spec):
@@ -273,6 +293,7 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
      "dynamics": Field(string()),          # default: "identified" with model = "identified", else "plant"
      "identify_dynamics": Field(identify_dynamics_table),
      "inversion": Field(choice(*INVERSIONS), default="zpetc"),
+     "creep": Field(choice("auto", "plant", "none"), default="auto"),   # inverted with G
      "fade_in": Field(number("s", 0, exclusive=False))},   # default: one period (<= settling)
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "

@@ -21,7 +21,9 @@ from typing import Any
 import numpy as np
 
 from hammerstein.core.lti import modal_parameters
-from hammerstein.core.presets import PresetError
+from hammerstein.core.dynamics import SampledSystem
+from hammerstein.core.files import confined_path
+from hammerstein.core.presets import PresetError, identified_from, load_dynamics, read_toml
 from hammerstein.scenario.identification import ResolveContext, resolve_comparison_model
 from hammerstein.scenario.identification_cache import IdentificationCache
 from hammerstein.scenario.registry import build_compensator, compensator_kind
@@ -66,7 +68,31 @@ class Scenario:
     kind: str = "cases"
 
 
-def dynamics_warning(case):
+def _identified_dynamics(case, base):
+    """(sampled G, label) of the dynamics in the case's model file, or None.
+
+    The model of the compensator (or the comparison model of a drive) named
+    by a file that has a ``[dynamics]`` table (a preset written by
+    ``hammerstein identify --dynamics``): what was measured, not the plant.
+    """
+    spec = (case.model_spec if case.mode == "drive" else case.compensator_spec) or {}
+    name = spec.get("model")
+    if base is None or not isinstance(name, str) or name in ("plant", "identified"):
+        return None
+    try:
+        path = confined_path(name, base, PresetError)
+        data = read_toml(path)
+        if "dynamics" not in data:
+            return None
+        G = load_dynamics(path, list(case.plant.hysteresis.output_names),
+                          case.plant.sampling_period)
+    except (PresetError, ValueError, OSError):
+        return None                      # the build reports a bad file
+    origin = identified_from(data, path) or f"the file {path.name}"
+    return SampledSystem.from_system(G), f"the linear dynamics identified from {origin}"
+
+
+def dynamics_warning(case, base=None):
     """One warning when a rate-independent treatment meets frequencies the dynamics shape.
 
     A case warns when its plant has dynamics and its highest reference (or
@@ -76,9 +102,17 @@ def dynamics_warning(case):
     ``rate_independent`` of :class:`hammerstein.scenario.registry.CompensatorKind`) or an open-loop
     drive compared with a static (PI-only) model.
 
+    The dynamics judged are what was identified when the case's model is a
+    file with a ``[dynamics]`` table (``hammerstein identify --dynamics``
+    writes one; the message says so and names the records and the preset),
+    else the plant's.
+
     Parameters
     ----------
     case : hammerstein.scenario.validate.CaseSpec
+    base : pathlib.Path, optional
+        The scenario's directory (model files are relative to it); None:
+        the plant's dynamics.
 
     Returns
     -------
@@ -97,7 +131,10 @@ def dynamics_warning(case):
     f = max(np.atleast_1d(sig.get("frequencies", sig.get("frequency", 0.0))), default=0.0)
     if not f > 0:
         return None
-    lin = plant.sampled_dynamics  # numpy only: python-control is not loaded for a warning
+    found = _identified_dynamics(case, base)
+    lin, what = found if found else (plant.sampled_dynamics, "the plant's linear dynamics")
+    if lin is None:
+        return None
     fn, zeta = modal_parameters(lin)
     resonant = fn[zeta < 1.0 / np.sqrt(2.0)]
     f_res = float(resonant.min()) if resonant.size else float(fn.min())
@@ -106,7 +143,7 @@ def dynamics_warning(case):
                                - np.eye(c.shape[0]), 2))
     if f <= RESONANCE_FRACTION * f_res and dev <= GAIN_DEVIATION:
         return None
-    effect = (f"at {f:g} Hz the plant's linear dynamics (first resonance {f_res:.0f} Hz) "
+    effect = (f"at {f:g} Hz {what} (first resonance {f_res:.0f} Hz) "
               f"change the response by {100 * dev:.1f} %")
     if static_model:
         return (f"the comparison model is static (PI only): {effect}, which it does not "
@@ -208,7 +245,7 @@ def resolve_scenario(spec, cache=None):
                 problems.append(f"{source}: {case.where}.compensator: {error}")
                 continue
             caught = list(warned[key])
-        extra = dynamics_warning(case)
+        extra = dynamics_warning(case, base)
         if extra:
             caught.append(extra)
         cases.append(replace(case, compensator=comp, model=model, warnings=caught,

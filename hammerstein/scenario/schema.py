@@ -28,6 +28,7 @@ import os
 from hammerstein.core.schema import (MAX_NAME, MAX_TEXT, NAME, Field, Invalid, NestedInvalid, boolean,
                                      check_table, choice, integer, kind_problem, name_field,
                                      name_list, number, short_repr, string)
+from hammerstein.core.numbers import MAX_ITERATIONS as _MAX_ITERATIONS
 from hammerstein.exceptions import ScenarioError
 
 __all__ = [
@@ -60,8 +61,8 @@ __all__ = [
 
 
 # -- upper bounds (documented in the README, checked by validate) -------------------
-#: Most fixed-point iterations per sample of a compensator.
-MAX_ITERATIONS = 100
+#: Most fixed-point iterations per sample of a compensator (the API's bound, core/numbers.py).
+MAX_ITERATIONS = _MAX_ITERATIONS
 #: Most cases of a scenario (after expanding the sweeps).
 MAX_CASES = 2000
 #: Most hysterons per component of an identified model.

@@ -8,21 +8,27 @@ event, which numba raises only when the on-disk cache does not hold the
 kernel (a cache hit loads it without the event). Nothing is printed by the
 library itself: without :func:`compile_notices` the notice goes to the
 ``hammerstein.simulation`` logger at INFO level (silent by default).
+
+:func:`guard_cache_writes` keeps a cache that cannot be written (full disk,
+quota, read-only file system) from failing a run: the kernel compiled in
+memory is used, the cache is not written again in this process, and one
+notice says so.
 """
 
 from __future__ import annotations
 
+import errno
 import logging
 import threading
 import time
 from contextlib import contextmanager
 
-from numba.core import event
+from numba.core import caching, event
 
 from hammerstein.simulation import _kernels
 
 __all__ = ["COMPILE_SECONDS", "MIN_NOTICE_SECONDS", "compile_notices", "announce_compiles",
-           "compile_estimate"]
+           "compile_estimate", "guard_cache_writes"]
 
 _LOG = logging.getLogger("hammerstein.simulation")
 
@@ -179,3 +185,62 @@ def announce_compiles(notify):
         listener = _Notices(notify)
         event.register("numba:compile", listener)
         _PROCESS["listener"] = listener
+
+
+#: errno values of a cache directory that cannot take the file: full disk, quota,
+#: file size limit, read-only file system, permission.
+CACHE_WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS,
+                                errno.EACCES, errno.EPERM})
+
+_GUARD = {"notify": None, "failed": None, "original": None}
+
+
+def guard_cache_writes(notify=None):
+    """Survive a numba cache that cannot be written; the kernels run from memory.
+
+    numba writes a compiled kernel to its on-disk cache and, on Linux, lets
+    an ``OSError`` of that write (``ENOSPC``, ``EDQUOT``, ``EFBIG``,
+    ``EROFS``, ``EACCES``, ``EPERM``) escape from the kernel's first call,
+    where it read as a failure of whatever the caller was writing. After
+    this call such an error is caught: the kernel compiled in memory is
+    used, no further cache write is tried in this process, and ``notify``
+    gets one line naming the cache file and the reason. numba writes to a
+    temporary and renames it, so a failed write leaves no partial cache
+    entry. Other errors still propagate.
+
+    Parameters
+    ----------
+    notify : callable, optional
+        Called once with the one-line message; default the
+        ``hammerstein.simulation`` logger at WARNING level. Calling again
+        replaces it.
+
+    Returns
+    -------
+    OSError or None
+        The cache write error caught so far in this process, if any.
+    """
+    _GUARD["notify"] = notify
+    if _GUARD["original"] is None:
+        original = caching.Cache.save_overload
+        _GUARD["original"] = original
+
+        def save_overload(self, sig, data):
+            if _GUARD["failed"] is not None:
+                return None
+            try:
+                return original(self, sig, data)
+            except OSError as exc:
+                if exc.errno not in CACHE_WRITE_ERRNOS:
+                    raise
+                _GUARD["failed"] = exc
+                where = getattr(exc, "filename", None) or getattr(self, "_cache_path", None)
+                where = f" {where}" if where else ""
+                message = (f"note: cannot write the compiled-kernel cache{where} "
+                           f"({exc.strerror or exc}); the kernels are compiled for this run "
+                           f"only (set NUMBA_CACHE_DIR to a writable directory)")
+                (_GUARD["notify"] or _LOG.warning)(message)
+                return None
+
+        caching.Cache.save_overload = save_overload
+    return _GUARD["failed"]

@@ -401,7 +401,9 @@ def test_10_full_stdout_is_an_error():
 @pytest.mark.parametrize("var,value", [("NUMBA_NUM_THREADS", "0"), ("NUMBA_NUM_THREADS", "x"),
                                        ("MPLBACKEND", "bogus")])
 def test_11_bad_dependency_variables_are_one_line(tmp_path, var, value):
-    proc = _cli(["run", GOOD, "--out", tmp_path, "-q"], env={**os.environ, var: value})
+    # figures only where the variable is matplotlib's (numba's are read by the kernels)
+    figures = [] if var == "MPLBACKEND" else ["--figures", "none"]
+    proc = _cli(["run", GOOD, "--out", tmp_path, "-q", *figures], env={**os.environ, var: value})
     assert proc.returncode == 0, proc.stderr
     lines = proc.stderr.splitlines()
     assert len(lines) == 1 and var in lines[0] and "ignored" in lines[0]
@@ -638,3 +640,377 @@ def test_16_identify_records_checks_its_arrays(change, fragment):
            "nan-T": lambda: _record(sampling_period=float("nan"))}[change]()
     with pytest.raises(IdentificationError, match=fragment):
         identify_records([rec], n_hysterons=5)
+
+
+# -- 16. iterations and other integers through the API: the scenario files' bound ---------
+def _static_model():
+    from hammerstein.core.presets import load_plant
+    return load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+
+
+@pytest.mark.parametrize("value,fragment", [
+    (10 ** 9, "iterations: expected an integer 1..100, found 1000000000"),
+    (10 ** 400, "found an integer of 401 digits"),
+    (101, "1..100"),
+    (0, "iterations: expected an integer >= 1, found 0"),
+    (2.0, "expected an integer >= 1, found 2.0"),
+    (True, "expected an integer >= 1, found True"),
+])
+def test_16_api_iterations_are_capped_like_the_scenario_files(value, fragment):
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.exceptions import CompensatorError
+    with pytest.raises(CompensatorError, match="^iterations: ") as info:
+        InverseMultiplicativeCompensator(_static_model(), iterations=value)
+    assert fragment in str(info.value) and len(str(info.value)) < 120
+
+
+def test_16_api_bound_equals_the_scenario_bound():
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.numbers import MAX_ITERATIONS
+    from hammerstein.scenario.schema import MAX_ITERATIONS as SCENARIO_MAX
+    import numpy as np
+    assert MAX_ITERATIONS == SCENARIO_MAX
+    comp = InverseMultiplicativeCompensator(_static_model(), iterations=np.int64(MAX_ITERATIONS))
+    assert comp.iterations == MAX_ITERATIONS and type(comp.iterations) is int
+
+
+def test_16_ilc_iterations_are_capped():
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.ilc import LearningCompensator
+    from hammerstein.exceptions import CompensatorError
+    start = InverseMultiplicativeCompensator(_static_model())
+    with pytest.raises(CompensatorError, match=r"^iterations: expected an integer 1\.\.100"):
+        LearningCompensator(start, 1e-4, iterations=10 ** 9)
+
+
+def test_16_export_iterations_are_capped(capsys, tmp_path):
+    status, _, err = _call(capsys, "export", "rakotondrabe-2dof", "--target", "c", "--out", tmp_path / "o",
+                           "--iterations", str(10 ** 9))
+    assert status == 2 and len(err) == 1
+    assert "--iterations: expected an integer 1..100, found 1000000000" in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+# -- 15. outputs that overflow: refused with one line, nothing written ----------------------
+def _huge_preset(directory, scale):
+    # the 1x1 corpus preset with its weights scaled: outputs of ~scale µm
+    text = (CORPUS / "models" / "preset-static.toml").read_text()
+    text = text.replace("weights = [1.0, 0.5, 0.2]",
+                        f"weights = [{1.0 * scale!r}, {0.5 * scale!r}, {0.2 * scale!r}]")
+    (directory / "huge.toml").write_text(text)
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e160])
+def test_15_overflowing_outputs_are_refused(capsys, tmp_path, scale):
+    _huge_preset(tmp_path, scale)
+    scen = tmp_path / "s.toml"
+    scen.write_text('[plant]\npreset = "huge.toml"\ndynamics = false\n[compensator]\nkind = "none"\n'
+                    '[[cases]]\nname = "open"\ndrive = { kind = "sine", input = "ux", amplitude = 10.0, '
+                    'frequency = 50.0, periods = 2 }\n')
+    status, out, err = _call(capsys, "run", scen, "--out", tmp_path / "out")
+    assert status == 1 and len(err) == 1, err
+    assert "case 'open': simulated outputs:" in err[0] and "beyond the limit 1e+150" in err[0]
+    assert not (tmp_path / "out" / "s").exists()
+    assert "DLASCL" not in out
+
+
+def test_15_moderate_outputs_still_run(capsys, tmp_path):
+    # 1e140 µm is absurd but computable: the bound is the float range, not physics
+    _huge_preset(tmp_path, 1e140)
+    scen = tmp_path / "s.toml"
+    scen.write_text('[plant]\npreset = "huge.toml"\ndynamics = false\n[compensator]\nkind = "none"\n'
+                    '[[cases]]\nname = "open"\ndrive = { kind = "sine", input = "ux", amplitude = 10.0, '
+                    'frequency = 50.0, periods = 2 }\n')
+    status, _, err = _call(capsys, "run", scen, "--out", tmp_path / "out")
+    assert status == 0, err
+    import pandas as pd
+    frame = pd.read_csv(tmp_path / "out" / "s" / "metrics.csv")
+    assert np_isfinite_all(frame["value"])
+
+
+def np_isfinite_all(values):
+    import numpy as np
+    return bool(np.all(np.isfinite(np.asarray(values, dtype=float))))
+
+
+@pytest.mark.parametrize("value", ["1e300", "-3e151", "1.8e308"])
+def test_15_data_values_beyond_the_limit_are_one_line(capsys, tmp_path, value):
+    lines = DATA.read_text().splitlines()
+    row = lines[5].split(",")
+    row[2] = value
+    lines[5] = ",".join(row)
+    data = tmp_path / "d.csv"
+    data.write_text("\n".join(lines) + "\n")
+    status, out, err = _call(capsys, "identify", data, "--time", "time_s", "--input", "u_V",
+                             "--output", "y_um", "--out", tmp_path / "m.toml")
+    assert status == 1 and len(err) == 1, err
+    assert "output column 'y_um'" in err[0] and "data row 5" in err[0]
+    assert "beyond the limit" in err[0] or "infinite" in err[0]
+    assert not (tmp_path / "m.toml").exists()
+
+
+def test_15_api_arrays_beyond_the_limit():
+    import numpy as np
+    from hammerstein.core.numbers import check_array
+    with pytest.raises(ValueError, match=r"^u: -2e\+300 at index \(1, 3\) is beyond the limit 1e\+150$"):
+        check_array(np.where(np.arange(8).reshape(2, 4) == 7, -2e300, 1.0), "u")
+    assert check_array([1e149], "u")[0] == 1e149
+
+
+def test_15_dynamics_fit_refuses_overflowing_records_before_lapack(capfd):
+    # LAPACK printed "** On entry to DLASCL" on stdout and spun for minutes on such records
+    import numpy as np
+    from hammerstein.core.lti import DynamicsIdentifier
+    from hammerstein.exceptions import DynamicsError
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal((1, 400))
+    y = np.convolve(u[0], [0.0, 0.5, 0.25])[:400][None, :] * 1e300
+    with pytest.raises(DynamicsError, match=r"records\[0\]: outputs: .* is beyond the limit 1e\+150"):
+        DynamicsIdentifier(order=2).fit(u, y, 1e-3)
+    out, err = capfd.readouterr()
+    assert "DLASCL" not in out + err
+
+
+# -- 11. a numba cache that cannot be written is not a report-write failure -----------------
+@pytest.mark.parametrize("code", ["ENOSPC", "EDQUOT", "EROFS"])
+def test_11_cache_write_failure_runs_from_memory(monkeypatch, code):
+    import errno
+    import numba
+    import numpy as np
+    from numba.core import caching
+    from hammerstein.simulation import _compile
+
+    def full(self, key, data):
+        raise OSError(getattr(errno, code), os.strerror(getattr(errno, code)))
+    monkeypatch.setattr(caching.IndexDataCacheFile, "save", full)
+    monkeypatch.setitem(_compile._GUARD, "failed", None)
+    notes = []
+    _compile.guard_cache_writes(notes.append)
+    monkeypatch.setitem(_compile._GUARD, "notify", notes.append)
+
+    @numba.njit(cache=True)
+    def triple(x):          # a kernel compiled (and cached) here for the first time
+        return 3.0 * x
+
+    @numba.njit(cache=True)
+    def quadruple(x):
+        return 4.0 * x
+    assert triple(np.float64(2.0)) == 6.0 and quadruple(np.float64(2.0)) == 8.0
+    assert len(notes) == 1, notes     # one line, not one per kernel
+    assert notes[0].startswith("note: cannot write the compiled-kernel cache")
+    assert os.strerror(getattr(errno, code)) in notes[0] and "\n" not in notes[0]
+
+
+def test_11_other_cache_errors_still_propagate(monkeypatch):
+    import numba
+    import numpy as np
+    from numba.core import caching
+    from hammerstein.simulation import _compile
+
+    def broken(self, key, data):
+        raise OSError(5, "Input/output error")      # EIO: not a full or read-only cache
+    monkeypatch.setattr(caching.IndexDataCacheFile, "save", broken)
+    monkeypatch.setitem(_compile._GUARD, "failed", None)
+    _compile.guard_cache_writes(lambda m: None)
+
+    @numba.njit(cache=True)
+    def quintuple(x):
+        return 5.0 * x
+    with pytest.raises(OSError, match="Input/output"):
+        quintuple(np.float64(1.0))
+
+
+@pytest.mark.slow
+def test_11_full_tmpfs_numba_cache_is_one_note(tmp_path):
+    # a real full disk: a 64 KiB tmpfs as NUMBA_CACHE_DIR (root only; skipped elsewhere)
+    import subprocess
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs",
+                                            str(cache)], capture_output=True).returncode:
+        pytest.skip("mounting a tmpfs needs root (CAP_SYS_ADMIN)")
+    try:
+        proc = _cli(["run", GOOD, "--out", tmp_path / "out"],
+                    env={**os.environ, "NUMBA_CACHE_DIR": str(cache)})
+    finally:
+        subprocess.run(["umount", str(cache)], capture_output=True)
+    err = proc.stderr.splitlines()
+    assert proc.returncode == 0, err
+    notes = [e for e in err if "compiled-kernel cache" in e]
+    assert len(notes) == 1 and "No space left on device" in notes[0]
+    assert not [e for e in err if "cannot write the report" in e]
+    assert (tmp_path / "out" / "good-static" / "metrics.csv").is_file()
+
+
+# -- 5. cache entries with zero or negative weights: re-validated, ignored with one note ----
+CACHE_SPEC = {"frequency": 50.0, "amplitude": 10.0, "periods": 2, "n_hysterons": 8,
+              "method": "least-squares", "partition": "time", "bounds": "monotone"}
+
+
+@pytest.fixture
+def cache_notes(tmp_path, monkeypatch):
+    from hammerstein.scenario import diskcache
+    monkeypatch.setenv(diskcache.ENV, str(tmp_path / "cache"))
+    notes = []
+    diskcache.set_reporter(notes.append)
+    diskcache._REPORT["said"].clear()
+    yield notes
+    diskcache.set_reporter(None)
+
+
+@pytest.mark.parametrize("damage", ["zero", "negative-first", "negative-later", "all-zero"])
+def test_5_cache_entry_with_bad_weights_is_ignored(cache_notes, static_plant, damage):
+    import json
+    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.core.presets import model_to_table
+    from hammerstein.scenario import diskcache
+    from hammerstein.scenario import identification as identified
+    model, _ = identified.identified_model(static_plant, CACHE_SPEC)
+    table = model_to_table(model)
+    (entry,) = diskcache.cache_dir().iterdir()
+    data = json.loads(entry.read_text())
+    out = next(iter(data["value"]["model"]["components"]))
+    inp = next(iter(data["value"]["model"]["components"][out]))
+    direct = data["value"]["model"]["components"][out][inp]
+    w = direct["weights"]
+    direct["weights"] = {"zero": [0.0] + w[1:], "negative-first": [-abs(w[0])] + w[1:],
+                         "negative-later": w[:1] + [-2 * sum(w)] + w[2:],
+                         "all-zero": [0.0] * len(w)}[damage]
+    data["digest"] = diskcache._value_digest(data["value"])     # written by this user's process
+    entry.write_text(json.dumps(data))
+    before = entry.read_bytes()
+    again, _ = identified.identified_model(static_plant, CACHE_SPEC)
+    assert model_to_table(again) == table                      # identified again
+    InverseMultiplicativeCompensator(again)                     # and usable
+    assert len(cache_notes) == 1, cache_notes
+    assert cache_notes[0].startswith("note: identification cache entry ignored: ")
+    assert entry.name in cache_notes[0] and "is not positive" in cache_notes[0]
+    assert entry.read_bytes() == before                         # nothing deleted or rewritten
+
+
+def test_5_cached_model_problem_closed_forms():
+    from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.scenario.identification_cache import cached_model_problem
+
+    def model(w):
+        return MultivariablePI([[PrandtlIshlinskii([0.0, 1.0, 2.0], w)]], input_amplitude=[5.0])
+    monotone = ((("bounds", "monotone"),),)
+    assert cached_model_problem(model([1.0, -0.5, 0.2]), monotone) is None      # S = 1, .5, .7
+    assert "S_3 = -0.2" in cached_model_problem(model([1.0, -0.5, -0.7]), monotone)
+    assert cached_model_problem(model([1.0, -0.5, -0.7]), ((("bounds", "none"),),)) is None
+    assert "S_1 = 0" in cached_model_problem(model([0.0, 0.5, 0.2]), ())
+
+
+# -- 18. files with a UTF-8 byte-order mark read like those without, by every command ---------
+BOM = b"\xef\xbb\xbf"
+
+
+def _bom_inputs(d, bom):
+    import numpy as np
+    d.mkdir()
+    t = np.arange(2000) * 5e-5
+    ref = "t,x,y\n" + "".join(f"{float(a)!r},{float(20 * np.sin(2 * np.pi * 50 * a))!r},"
+                                 f"{float(10 * np.sin(2 * np.pi * 50 * a + 1))!r}\n" for a in t)
+    meas = "t,x,y\n" + "".join(f"{float(a)!r},{float(18 * np.sin(2 * np.pi * 50 * a))!r},"
+                                  f"{float(11 * np.sin(2 * np.pi * 50 * a + 1))!r}\n" for a in t)
+    drive = "t,ux,uy\n" + "".join(f"{float(a)!r},{float(4 * np.sin(2 * np.pi * 50 * a))!r},"
+                                     f"{float(3 * np.sin(2 * np.pi * 50 * a + 1))!r}\n" for a in t)
+    texts = {"ref.csv": ref, "meas.csv": meas, "drive.csv": drive, "data.csv": DATA.read_text(),
+             "model.toml": (CORPUS / "models" / "preset-static.toml").read_text(),
+             "s.toml": GOOD.read_text().replace('name = "good-static"', 'name = "s"')}
+    for name, text in texts.items():
+        (d / name).write_bytes((BOM if bom else b"") + text.encode())
+
+
+@pytest.mark.parametrize("argv,output", [
+    (["validate", "s.toml"], None),
+    (["run", "s.toml", "--out", "out"], "out/s/metrics.csv"),
+    (["identify", "data.csv", "--time", "time_s", "--input", "u_V", "--output", "y_um",
+      "--thresholds", "5", "--out", "m.toml"], "m.toml"),
+    (["export", "model.toml", "--target", "c", "--out", "exp", "--no-binary"], "exp/static_1x1_multivariable.c"),
+    (["compensate", "rakotondrabe-2dof", "--reference", "ref.csv", "--out", "u.csv"], "u.csv"),
+    (["evaluate", "--reference", "ref.csv", "--measured", "meas.csv", "--outputs", "x=x,y=y",
+      "--out", "ev"], "ev/metrics.csv"),
+    (["learn", "rakotondrabe-2dof", "--reference", "ref.csv", "--drive", "drive.csv",
+      "--measured", "meas.csv", "--outputs", "x=x,y=y", "--out", "u1.csv"], "u1.csv"),
+])
+def test_18_byte_order_mark_is_not_content(capsys, tmp_path, monkeypatch, argv, output):
+    results = {}
+    for bom in (False, True):
+        d = tmp_path / ("bom" if bom else "plain")
+        _bom_inputs(d, bom)
+        monkeypatch.chdir(d)
+        status, out, err = _call(capsys, *argv)
+        assert status == 0, err
+        results[bom] = (d / output).read_bytes() if output else out
+    assert results[True] == results[False]
+
+
+# -- 18. library warnings and log records: one line each, naming the file, printed once ------
+def test_18_stray_warnings_name_the_input_file_once(capsys, monkeypatch):
+    import warnings as warnings_
+    from hammerstein.cli import identify
+
+    def noisy(args):
+        for _ in range(5):   # an overflow inside a loop: printed once
+            warnings_.warn("overflow encountered in square", RuntimeWarning)
+        warnings_.warn("Polyfit may be poorly\nconditioned", UserWarning)
+        return 0
+    monkeypatch.setattr(identify, "_handler", noisy)
+    status, _, err = _call(capsys, "identify", *IDENTIFY, "--out", "m.toml")
+    assert status == 0
+    assert err == [f"warning: {DATA}: RuntimeWarning: overflow encountered in square",
+                   f"warning: {DATA}: UserWarning: Polyfit may be poorly conditioned"]
+
+
+def test_18_library_log_records_are_one_line(capsys, monkeypatch):
+    import logging
+    from hammerstein.cli import listing
+    monkeypatch.setattr(logging.getLogger(), "handlers", [])   # as outside pytest
+
+    def noisy(args):
+        logging.getLogger("matplotlib").warning("mkdir -p failed for path %s:\n%s", "/x/.config",
+                                                "[Errno 13] Permission denied")
+        logging.getLogger("matplotlib").info("not shown: below WARNING")
+        return 0
+    monkeypatch.setattr(listing, "handler", noisy)
+    status, _, err = _call(capsys, "list")
+    assert status == 0
+    assert err == ["warning: hammerstein list: matplotlib: mkdir -p failed for path /x/.config: "
+                   "[Errno 13] Permission denied"]
+    assert logging.getLogger().handlers == []     # the handler lives only during the command
+
+
+# -- the column options of the signal-file commands: one definition -------------------------
+def test_column_options_are_one_definition():
+    from hammerstein.cli.main import build_parser
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command").choices
+
+    def options(command):
+        return {a.option_strings[0]: (a.dest, a.metavar, a.default, a.required, a.nargs)
+                for a in sub[command]._actions if a.option_strings
+                and a.option_strings[0] in ("--time", "--inputs", "--outputs")}
+    expected = {"--time": ("time", "COL", "t", False, None),
+                "--inputs": ("inputs", "NAME=COL,...", None, False, None),
+                "--outputs": ("outputs", "NAME=COL,...", None, False, None)}
+    for command in ("compensate", "learn", "evaluate"):
+        assert options(command) == expected, command
+
+
+@pytest.mark.parametrize("option", ["--measured", "--reference"])
+def test_15_signal_files_beyond_the_limit_are_one_line(capsys, tmp_path, monkeypatch, option):
+    # evaluate wrote "max Euclidean error inf" from a measured column of 1e300 µm
+    _bom_inputs(tmp_path / "d", False)
+    monkeypatch.chdir(tmp_path / "d")
+    name = "meas.csv" if option == "--measured" else "ref.csv"
+    lines = Path(name).read_text().splitlines()
+    cells = lines[3].split(",")
+    cells[1] = "3e300"
+    lines[3] = ",".join(cells)
+    Path(name).write_text("\n".join(lines) + "\n")
+    status, _, err = _call(capsys, "evaluate", "--reference", "ref.csv", "--measured", "meas.csv",
+                           "--outputs", "x=x,y=y", "--out", "ev")
+    assert status == 1 and len(err) == 1, err
+    assert "column 'x': value 3e+300 on data row 3 is beyond the limit 1e+150" in err[0]
+    assert not Path("ev").exists()

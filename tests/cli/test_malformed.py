@@ -377,7 +377,7 @@ def test_stray_python_warning_and_unexpected_error_are_one_line(capsys, monkeypa
         return 0
     monkeypatch.setattr(listing, "handler", noisy)
     status, out, err = _call(capsys, "list")
-    assert status == 0 and err == ["warning: RuntimeWarning: first line second line"]
+    assert status == 0 and err == ["warning: hammerstein list: RuntimeWarning: first line second line"]
 
     def broken(args):
         raise TypeError("bug\nwith two lines")
@@ -394,7 +394,7 @@ def test_real_stderr_through_python_m(tmp_path):
     warn = GOOD / "warn-out-of-range.toml"
     env = {**os.environ, "PYTHONWARNINGS": "default"}
     run = subprocess.run([sys.executable, "-m", "hammerstein", "run", GOOD / "good-static-2.toml",
-                          bad, warn, "--out", tmp_path / "out"],
+                          bad, warn, "--out", tmp_path / "out", "--figures", "none"],
                          capture_output=True, text=True, env=env, timeout=120)
     lines = run.stderr.splitlines()
     assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr

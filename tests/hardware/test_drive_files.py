@@ -6,8 +6,9 @@ the amplifier's limits as closed forms (a step from rest of V volts in one
 sample is V / T volts per second).
 """
 
+import contextlib
+import io
 import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
@@ -16,6 +17,7 @@ import pytest
 from hammerstein.core.amplifier import amplifier_from_table
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
+from hammerstein.cli.main import main
 from hammerstein.core.drive import DriveStream, drive_signal, read_signals
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import AmplifierError, CompensatorError
@@ -138,8 +140,16 @@ def test_scenario_warns_once_per_input_and_saturates_the_plant(tmp_path, repo_ro
 
 
 def _cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "hammerstein", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=600)
+    """``hammerstein ARGS`` run in ``cwd`` by the CLI's ``main()`` in this process.
+
+    These tests are about the files the commands read and write, not about the
+    process (tests/cli covers that): in-process saves a Python start and the
+    imports per command. Returns the status and the captured stdout/stderr.
+    """
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(args))
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def test_compensate_writes_the_drive_and_refuses_what_the_amplifier_cannot(tmp_path, preset_plant,

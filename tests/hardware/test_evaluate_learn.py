@@ -6,13 +6,15 @@ stronger than the model with a known transport delay and sensor noise.
 their definitions; ``learn`` must reduce the error trial after trial.
 """
 
+import contextlib
+import io
 import subprocess
-import sys
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from hammerstein.cli.main import main
 from hammerstein.core.drive import read_signals
 from hammerstein.core.presets import load_plant
 
@@ -21,8 +23,16 @@ T = 5e-5
 
 
 def _cli(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "hammerstein", *args], capture_output=True,
-                          text=True, cwd=cwd, timeout=600)
+    """``hammerstein ARGS`` run in ``cwd`` by the CLI's ``main()`` in this process.
+
+    These tests are about the files the commands read and write, not about the
+    process (tests/cli covers that): in-process saves a Python start and the
+    imports per command. Returns the status and the captured stdout/stderr.
+    """
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(list(args))
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _hardware(drive_csv, measured_csv, delay, seed, gain=1.04):

@@ -71,3 +71,38 @@ def test_legend_on_top_leaves_the_data_below_the_legend(tmp_path):
     assert box.y0 >= top_of_data - 1.0                        # pixels: legend above every curve
     plots.save(fig, tmp_path / "f.png")
     assert (tmp_path / "f.png").stat().st_size > 0
+
+
+# -- the Monte-Carlo quantile figure: labels readable on log axes ------------------------
+@pytest.mark.parametrize("lo, hi", [(0.27, 0.45), (0.6, 25.0), (1.2e4, 8e4)])
+def test_quantile_figure_axis_labels_clear_the_tick_labels(lo, hi):
+    """Log axes spanning less than a decade label minor ticks; the "[µm]" label must stay
+    left of every tick label of its axes and inside the figure (it touched them before)."""
+    import matplotlib.pyplot as plt
+    import pandas as pd
+    from hammerstein.report.montecarlo import quantile_figure
+    freqs = [10.0, 50.0, 100.0, 200.0]
+    rows = []
+    for ch, met in [("x", "rms_error"), ("y", "max_abs_error"), ("x+y", "rms_euclidean_error")]:
+        for j, f in enumerate(freqs):
+            q = lo * (hi / lo) ** (np.array([0.0, 0.5, 0.8, 1.0]) * (j + 1) / len(freqs))
+            rows.append({"frequency_hz": f, "channel": ch, "metric": met,
+                         "p50": q[0], "p95": q[1], "p99": q[2], "max": q[3]})
+    fig = quantile_figure(pd.DataFrame(rows), "t")
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    page = fig.bbox
+    for ax in [a for a in fig.axes if a.get_visible()]:
+        assert ax.get_yscale() == "log"
+        label = ax.yaxis.label.get_window_extent(renderer)
+        lo_y, hi_y = ax.get_ylim()
+        ticks = [t.get_window_extent(renderer) for t in
+                 ax.get_yticklabels() + ax.get_yticklabels(minor=True)
+                 if t.get_text() and lo_y <= t.get_position()[1] <= hi_y]   # those drawn
+        assert ticks                                          # the axis carries numbers
+        assert label.x1 < min(b.x0 for b in ticks)            # left of them, not touching
+        assert page.x0 <= label.x0 and label.x1 <= page.x1    # not cut by the figure edge
+        for other in fig.axes:                                # not on a neighbour's panel
+            if other is not ax and other.get_visible():
+                assert not label.overlaps(other.get_window_extent(renderer))
+    plt.close(fig)

@@ -1,0 +1,127 @@
+"""Creep identified from staircases (core/creep_identification.py).
+
+Expectations are derived independently of the fit: the true creep's closed-form
+step response ``s(t) = d + sum_k w_k (1 - exp(-t / tau_k))`` (lags on another
+grid than the identifier's, and a log law), the normalisation's closed form at
+the hysteresis frequency, and the minimum-phase bound of the discrete creep.
+"""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from hammerstein.core.creep import Creep, creep_from_table
+from hammerstein.core.creep_identification import (CreepIdentifier, hysteresis_frequency,
+                                                   staircase_steps)
+from hammerstein.core.excitation import decreasing_sine, excitation_set
+from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.presets import load_plant
+from hammerstein.exceptions import IdentificationError
+
+T = 1e-3           # creep is slow: 1 kHz is enough and keeps the tests fast
+NOISE_UM = 0.04
+TIMES = np.array([0.1, 0.3, 1.0, 3.0, 10.0])
+
+
+def _drift(creep, t=TIMES):
+    s = creep.step_response(t)
+    return (s - s[0]) / s[0]
+
+
+@pytest.fixture(scope="module")
+def hysteresis():
+    return load_plant("realistic-2dof").hysteresis   # Preisach, asymmetric, not a PI
+
+
+def _records(hysteresis, creeps, seed=3, noise=NOISE_UM, hold=2.0):
+    plant = HammersteinPlant(hysteresis, T, None, creep=creeps)
+    rng = np.random.default_rng(seed)
+    out = []
+    for r in excitation_set(["ux", "uy"], 10.0, T, multisine_periods=1, hold=hold):
+        if r.kind == "creep":
+            y, _ = plant.simulate(r.u)
+            out.append(SimpleNamespace(u=r.u, y=y + noise * rng.standard_normal(y.shape),
+                                       sampling_period=T, source=r.name))
+    return out
+
+
+@pytest.mark.parametrize("true", [
+    Creep([0.05, 0.5, 5.0], [0.01, 0.01, 0.01]),               # another grid than 0.01-100 s
+    Creep.log_law(0.015, 0.01, 100.0, per_decade=3),             # log law, 3 lags per decade
+], ids=["lags-other-grid", "log-law"])
+def test_known_creep_is_recovered_through_a_hysteretic_plant_with_noise(hysteresis, true):
+    ident = CreepIdentifier().fit(hysteresis, _records(hysteresis, [true, true]))
+    want = _drift(true)
+    for l in range(2):
+        got = _drift(ident.creeps_[l])
+        # drift after a step, 0.1 s to 10 s: within 10 % of the true drift at 10 s
+        assert np.max(np.abs(got - want)) <= 0.10 * want[-1], (l, got, want)
+        assert np.all(ident.weights_[l] >= 0)
+        # the residual is the sensor noise: creep explains the rest
+        assert ident.residual_rms_[l] < 1.1 * NOISE_UM < ident.residual_rms_no_creep_[l]
+
+
+def test_normalised_to_unit_gain_at_the_hysteresis_frequency(hysteresis):
+    true = Creep([0.05, 0.5], [0.02, 0.01])
+    ident = CreepIdentifier([0.03, 0.3, 3.0], hysteresis_frequency_hz=2.0).fit(
+        hysteresis, _records(hysteresis, [true, None]))
+    w = 2 * np.pi * 2.0
+    for c in ident.creeps_:
+        # real part of d + sum_k w_k / (1 + j w tau_k) at f_h
+        re = c.instantaneous + np.sum(c.weights / (1 + (w * c.time_constants) ** 2))
+        assert re == pytest.approx(1.0, abs=1e-12)
+    # the output without creep gets (almost) none
+    assert ident.weights_[1].sum() < 0.1 * ident.weights_[0].sum()
+
+
+@pytest.fixture(scope="module")
+def one_lag(hysteresis):
+    return CreepIdentifier().fit(hysteresis, _records(hysteresis, [Creep([0.3], [0.03])] * 2))
+
+
+def test_minimum_phase_bound_of_the_discrete_creep(one_lag):
+    """Zeros of the ZOH creep d + sum w_k (1 - a_k) / (z - a_k) lie inside the unit circle."""
+    ident = one_lag
+    for c in ident.creeps_:
+        A, B, C, D = c.discrete(T)
+        zeros = np.linalg.eigvals(A - B @ C / D[0, 0])        # zeros of a SISO state space
+        assert np.all(np.abs(zeros) < 1)
+
+
+def test_preset_table_round_trip(one_lag):
+    ident = one_lag
+    for c in ident.creeps_:
+        back = creep_from_table(c.to_table())
+        np.testing.assert_array_equal(back.time_constants, c.time_constants)
+        np.testing.assert_array_equal(back.weights, c.weights)
+        assert back.instantaneous == c.instantaneous < 1
+        np.testing.assert_allclose(back.step_response(TIMES), c.step_response(TIMES), rtol=0)
+
+
+def test_summary_and_report_carry_the_fit(one_lag):
+    ident = one_lag
+    s = ident.summary()
+    assert s["time_constants_s"][0] == pytest.approx(0.01) and s["identifiable_up_to_s"] == 2.0
+    assert set(s["outputs"]) == {"x", "y"}
+    assert s["outputs"]["x"]["drift_0p1_to_10s_percent"] == pytest.approx(100 * ident.drift_[0])
+    text = "\n".join(ident.report_lines())
+    assert "drift" in text and "residual RMS" in text and "extrapolated" in text
+
+
+def test_staircase_steps_and_hysteresis_frequency():
+    u = np.array([[0.0, 0.0, 1.0, 1.0, -1.0], [0.0, 0.0, 0.0, 2.0, 2.0]])
+    assert staircase_steps(u).tolist() == [0, 0, 1, 2, 3]
+    _, s, _ = decreasing_sine(1e-3, 10.0, frequency=2.0)
+    rec = SimpleNamespace(u=s[None, :], sampling_period=1e-3)
+    assert hysteresis_frequency([rec]) == pytest.approx(2.0, rel=0.05)
+
+
+def test_records_that_are_not_staircases_are_refused(hysteresis):
+    t = np.arange(2000) * T
+    u = np.vstack([np.sin(2 * np.pi * t), np.zeros_like(t)])
+    rec = SimpleNamespace(u=u, y=hysteresis.simulate(u)[0], sampling_period=T, source="sine.csv")
+    with pytest.raises(IdentificationError, match="sine.csv: expected a voltage staircase"):
+        CreepIdentifier().fit(hysteresis, [rec])
+    with pytest.raises(IdentificationError, match="time_constants"):
+        CreepIdentifier([0.1, -1.0])

@@ -1,0 +1,85 @@
+"""Fade-in leftovers: the default never outruns the slew limit; --fade-in 0 needs a reference at rest.
+
+Expectations are independent of the implementation: the slew limit is
+checked on every step of the voltages from the amplifier's rest (including
+the first), for every kind, with a settle bound that would make the
+fade far too short; a circle starting at x = R with
+``--fade-in 0`` is refused with one line and nothing written, while a
+sine starting at rest is accepted with ``--fade-in 0``.
+"""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from hammerstein.core.amplifier import amplifier_from_table
+from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+                                           StaticGainCompensator, diagonal_compensator)
+from hammerstein.core.drive import default_fade_samples, drive_signal
+from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+
+T = 5e-5
+
+
+def _kinds(plant):
+    m = plant.hysteresis
+    return {"multivariable": InverseMultiplicativeCompensator(m), "diagonal": diagonal_compensator(m),
+            "per-axis": PerAxisInverseCompensator(m), "static-gain": StaticGainCompensator(m),
+            "hammerstein": HammersteinCompensator(m, plant.dynamics)}
+
+
+def _circle(n, f, R):
+    t = np.arange(n) * T
+    return R * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+
+
+def _steps(u, rest=0.0):
+    return np.abs(np.diff(np.concatenate([np.full((u.shape[0], 1), rest), u], axis=1), axis=1))
+
+
+@pytest.mark.parametrize("kind", ["multivariable", "diagonal", "per-axis", "static-gain", "hammerstein"])
+def test_default_fade_never_steps_faster_than_the_slew_limit(preset_plant, kind):
+    # a 25 µm circle at 20 Hz starts near 5 V and needs 2 pi 20 * 5 = 630 V/s; the metrics skip
+    # only 10 samples, and a 10-sample fade would step about 5 * pi / 2 / 10 = 0.8 V per sample
+    # (16000 V/s) on an amplifier of 4000 V/s: the default must be longer than the settle bound
+    slew = 4000.0                                          # V/s
+    amp = amplifier_from_table({"range": [-10, 10], "slew_rate": slew}, ["ux", "uy"])
+    comp = _kinds(preset_plant)[kind]
+    yr = _circle(6000, 20.0, 25.0)
+    d = drive_signal(comp, yr, T, 1000, amplifier=amp, limits="error", settle_samples=10)
+    assert d.fade_samples > 10 and d.problems == []
+    assert np.max(_steps(d.commanded)) <= slew * T * (1 + 1e-9)     # every step, the first too
+
+
+def test_scenario_default_fade_of_a_rate_independent_kind_holds_the_slew_limit(preset_plant):
+    amp = amplifier_from_table({"range": [-10, 10], "slew_rate": 2000.0}, ["ux", "uy"])
+    comp = InverseMultiplicativeCompensator(preset_plant.hysteresis)
+    yr = _circle(6000, 20.0, 25.0)
+    n = default_fade_samples(yr, 1000, 10, comp, amp, T)          # the scenarios' call
+    k = np.arange(6000)
+    u, _ = comp.simulate(yr * np.where(k < n, 0.5 * (1 - np.cos(np.pi * k / n)), 1.0))
+    assert n > 10 and np.max(_steps(u)) <= 2000.0 * T * (1 + 1e-9)
+    # without T (older callers): the settle bound, as before; without a slew rate: no fade
+    assert default_fade_samples(yr, 1000, 10, comp, amp) == 10
+    assert default_fade_samples(yr, 1000, 10, comp, None, T) == 0
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "hammerstein", *args], capture_output=True,
+                          text=True, cwd=cwd, timeout=600)
+
+
+def test_compensate_fade_in_0_refuses_a_reference_not_at_rest(tmp_path):
+    circle = '{ kind = "circle", radius = 25, frequency = 100, periods = 4 }'
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", circle, "--out", "d.csv",
+               "--fade-in", "0", cwd=tmp_path)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1, res.stderr
+    assert "--fade-in 0" in res.stderr and "x = 25 µm" in res.stderr and "not at rest" in res.stderr
+    assert not (tmp_path / "d.csv").exists()
+    sine = '{ kind = "sine", output = "x", amplitude = 20, frequency = 100, periods = 4 }'
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", sine, "--out", "s.csv",
+               "--fade-in", "0", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "fade-in 0 samples" in (tmp_path / "s.csv").read_text()
