@@ -31,15 +31,12 @@ import os
 import pickle
 import re
 import signal
-from contextlib import contextmanager
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import wait as wait_futures
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
-
-from matplotlib.markers import MarkerStyle
 
 from hammerstein.report.figures import save
 
@@ -74,36 +71,6 @@ class FigureJob:
     kwargs: dict = field(default_factory=dict)
 
 
-def _copy_marker(style, marker, _set_marker=MarkerStyle._set_marker):
-    """``MarkerStyle._set_marker`` that copies another ``MarkerStyle`` by rebuilding it.
-
-    matplotlib copies the properties of an axis's first tick into every new
-    tick (three lines each, ``Line2D.update_from``), and ``MarkerStyle(other)``
-    deep-copies the other marker's whole state (paths, transforms, bound
-    methods): about a third of the CPU of creating a tick (5 000 deep copies
-    in the paper run). The same marker is rebuilt from its definition: its
-    marker, fill style and user transform, cap and join styles.
-    """
-    if type(marker) is MarkerStyle and not isinstance(marker._marker, MarkerStyle):
-        style._user_transform = marker._user_transform
-        style._user_capstyle = marker._user_capstyle
-        style._user_joinstyle = marker._user_joinstyle
-        style._fillstyle = marker._fillstyle
-        _set_marker(style, marker._marker)
-    else:
-        _set_marker(style, marker)
-
-
-@contextmanager
-def _cheap_tick_copies():
-    """Within: ``MarkerStyle._set_marker`` is :func:`_copy_marker` (restored on exit)."""
-    MarkerStyle._set_marker = _copy_marker
-    try:
-        yield
-    finally:
-        MarkerStyle._set_marker = _copy_marker.__defaults__[0]
-
-
 def render_job(job):
     """Draw and write one figure job (the function the pool workers run).
 
@@ -118,8 +85,7 @@ def render_job(job):
         identical job).
     """
     buffer = io.BytesIO()
-    with _cheap_tick_copies():
-        save(job.function(*job.args, **job.kwargs), buffer)
+    save(job.function(*job.args, **job.kwargs), buffer)
     png = buffer.getvalue()
     job.path.write_bytes(png)
     return png
