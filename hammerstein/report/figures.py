@@ -787,11 +787,28 @@ def _ticks_in_view(fig):
                     ticker.locator.set_axis(axis)
 
 
+def _unlabelled_axes_not_placed(fig):
+    """Skip the label placement of every axis of ``fig`` whose label is empty.
+
+    Before drawing an axis, matplotlib places its label clear of the tick
+    labels of the axis and of every axis sharing it (one more tick update
+    per sibling, quadratic in the panels of a column sharing x): 9 % of the
+    figures' CPU. An empty label draws nothing wherever it is, so it gets
+    a fixed place instead (``set_label_coords``, which turns the automatic
+    placement off); the pixels do not change.
+    """
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            if axis.label.get_text() == "":
+                axis.set_label_coords(0.5, 0.5)
+
+
 def save(fig, path):
     """Write a figure as PNG (:data:`DPI`, RGB, zlib level 1) and close it.
 
     One draw (no tight bounding box), tick objects only for the ticks drawn
-    (:class:`_TicksInView`). The Agg canvas is opaque (a white figure), so
+    (:class:`_TicksInView`), no label placement for axes without a label
+    (:func:`_unlabelled_axes_not_placed`). The Agg canvas is opaque (a white figure), so
     its alpha channel is dropped: RGB at zlib level 1 encodes in about 65 %
     of the time of RGBA at level 3, in files about 8 % smaller (measured on
     the figures of the paper run, ``benchmarks/figures.py``). A figure with
@@ -805,6 +822,7 @@ def save(fig, path):
         Where to write (a file is overwritten).
     """
     _ticks_in_view(fig)
+    _unlabelled_axes_not_placed(fig)
     fig.set_dpi(DPI)
     canvas = FigureCanvasAgg(fig)
     canvas.draw()
