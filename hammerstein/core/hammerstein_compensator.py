@@ -326,6 +326,8 @@ class HammersteinCompensator:
 
     #: > 0 inside :meth:`simulate` and :meth:`chain` (:meth:`packed_law` refuses outside them)
     _entered = 0
+    #: the ZPETC pre-filter's LinearArrays, built by the first :meth:`packed_law`
+    _prefilter = None
 
     def __init__(self, model, dynamics, inversion="zpetc", gain="midpoint", iterations=3,
                  check="error", feedback="delay", cutoff_hz=None, sampling_period=None,
@@ -581,9 +583,10 @@ class HammersteinCompensator:
                 "hammerstein.drive_signal(compensator, reference, sampling_period, ...)")
         if self.inverse is None or self.exact_static:   # run by simulate (no fused law)
             return None
-        law = self.hysteresis_compensator.packed_law()
-        return law._replace(prefilter=LinearArrays(*(np.ascontiguousarray(M, dtype=float)
-                                                     for M in self.inverse.state_space())))
+        if self._prefilter is None:      # the inverse is fixed at construction: built once
+            self._prefilter = LinearArrays(*(np.ascontiguousarray(M, dtype=float)
+                                             for M in self.inverse.state_space()))
+        return self.hysteresis_compensator.packed_law()._replace(prefilter=self._prefilter)
 
     def chain(self, plant, reference, compensator_state=None, plant_state=None):
         """Reference (lead) -> G^-1 -> PI compensator -> plant, compiled.
