@@ -87,3 +87,45 @@ def test_batched_hammerstein_tracks_the_reference(scenario):
     for res in run_cases(cases):
         rms = {r["channel"]: r["value"] for r in res.metrics if r["metric"] == "rms_error"}
         assert rms["x"] < 0.02 * 20.0, (res.name, rms)
+
+
+def test_preisach_plant_and_exact_static_part_equal_one_by_one(tmp_path):
+    """Off the fused path: a Preisach plant (the batch runs each case's law unfused) and a
+    Preisach model (exact static inverse, no fused law: the case runs alone)."""
+    from pathlib import Path
+
+    from hammerstein.core.presets import load_plant, save_model
+
+    save_model(load_plant("rakotondrabe-2dof").hysteresis, tmp_path / "pi.toml")
+    src = Path(__file__).resolve().parents[2] / "scenarios" / "presets" / "realistic-b-nocreep.toml"
+    text = src.read_text(encoding="utf-8")   # its generalised-PI cross-coupling as a gain
+    gpi = text.index("[model.components.x.uy]")
+    text = text[:gpi] + "[model.components.x.uy]\nkind = \"polynomial\"\ncoefficients = [0.2]\n\n" + \
+        text[text.index("[model.components.y.ux]"):]
+    (tmp_path / "plant.toml").write_text(text, encoding="utf-8")
+    path = tmp_path / "pb.toml"
+    path.write_text(f"""
+name = "pb"
+[plant]
+preset = "plant.toml"
+[compensator]
+kind = "hammerstein"
+[[sweeps]]
+name = "s"
+frequencies = [40.0, 160.0]
+reference = {{ kind = "sine", output = "x", amplitude = 10.0, periods = 3 }}
+settle_periods = 2
+[sweeps.compensators]
+pi = {{ kind = "hammerstein", model = "pi.toml", check = "ignore" }}
+exact = {{ kind = "hammerstein", model = "plant" }}
+""", encoding="utf-8")
+    cases = load_scenario(path).cases
+    assert all(_batchable(c) for c in cases)
+    exact = [c for c in cases if "exact" in c.name]
+    assert len(exact) == 2 and all(c.compensator.fused_run(c.signal) is None for c in exact)
+    for case, got in zip(cases, run_cases(cases)):
+        ref = run_case(case)
+        np.testing.assert_allclose(got.inputs, ref.inputs, rtol=1e-12, atol=1e-12, err_msg=case.name)
+        np.testing.assert_allclose(got.outputs, ref.outputs, rtol=1e-12, atol=1e-12,
+                                   err_msg=case.name)
+        assert got.warnings == ref.warnings and len(got.metrics) == len(ref.metrics)
