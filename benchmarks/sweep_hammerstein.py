@@ -120,7 +120,7 @@ def main(argv=None):
     print(f"hammerstein batched / rate-independent: wall {hb[0] / ri[0]:.2f}x, "
           f"CPU {hb[1] / ri[1]:.2f}x (target <= 1.2x)")
     print(f"hammerstein batched / rate-indep. 3 it: wall {hb[0] / r3[0]:.2f}x, "
-          f"CPU {hb[1] / r3[1]:.2f}x (the same static law: the ZPETC pre-filter's share)")
+          f"CPU {hb[1] / r3[1]:.2f}x (the same static law: the share of the inverse of G)")
     print(f"hammerstein one by one / batched:       wall {h1[0] / hb[0]:.2f}x, "
           f"CPU {h1[1] / hb[1]:.2f}x")
     print(f"load average now {os.getloadavg()[0]:.2f}")
