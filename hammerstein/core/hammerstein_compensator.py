@@ -326,6 +326,8 @@ class HammersteinCompensator:
 
     #: > 0 inside :meth:`simulate` and :meth:`chain` (:meth:`packed_law` refuses outside them)
     _entered = 0
+    #: the ZPETC pre-filter's LinearArrays, built by the first :meth:`packed_law`
+    _prefilter = None
 
     def __init__(self, model, dynamics, inversion="zpetc", gain="midpoint", iterations=3,
                  check="error", feedback="delay", cutoff_hz=None, sampling_period=None,
@@ -581,9 +583,10 @@ class HammersteinCompensator:
                 "hammerstein.drive_signal(compensator, reference, sampling_period, ...)")
         if self.inverse is None or self.exact_static:   # run by simulate (no fused law)
             return None
-        law = self.hysteresis_compensator.packed_law()
-        return law._replace(prefilter=LinearArrays(*(np.ascontiguousarray(M, dtype=float)
-                                                     for M in self.inverse.state_space())))
+        if self._prefilter is None:      # the inverse is fixed at construction: built once
+            self._prefilter = LinearArrays(*(np.ascontiguousarray(M, dtype=float)
+                                             for M in self.inverse.state_space()))
+        return self.hysteresis_compensator.packed_law()._replace(prefilter=self._prefilter)
 
     def chain(self, plant, reference, compensator_state=None, plant_state=None):
         """Reference (lead) -> G^-1 -> PI compensator -> plant, compiled.
@@ -643,3 +646,41 @@ class HammersteinCompensator:
         """
         lead, state, _ = self.start(reference, period_samples, fade_samples)
         return self.chain(plant, lead, state)
+
+    def fused_run(self, reference, period_samples=None, fade_samples=0):
+        """What :meth:`run_reference` feeds the compiled chain kernel, for a batch of records.
+
+        :meth:`start` (fade-in, preview, inverse at rest), then for
+        ``'zpetc'`` this compensator's law with the ZPETC pre-filter on the
+        lead reference; for ``'stable'`` the hysteresis compensator's law on
+        ``V = G^-1 Yr`` of the whole record, exactly as :meth:`chain` does.
+        :func:`hammerstein.simulation.simulate_chain_batch` on the three
+        values, with the plant at rest, gives the inputs and outputs of
+        :meth:`run_reference`.
+
+        Parameters
+        ----------
+        reference : array_like, shape (p, n_samples)
+            ``yr(t)`` [µm].
+        period_samples : int, optional
+            Period of a periodic reference [samples].
+        fade_samples : int
+            Fade-in length [samples].
+
+        Returns
+        -------
+        tuple or None
+            ``(law, kernel_reference, state)``: a
+            :class:`hammerstein.simulation.CompensatorLaw`, its reference
+            (p, n_samples) [µm] and its initial flat state (``law.n_states``,);
+            None when the static part is the exact Preisach inverse (no fused law).
+        """
+        if self.exact_static:
+            return None
+        lead, state, _ = self.start(reference, period_samples, fade_samples)
+        if self.inverse is not None:
+            with self.previewed():
+                return self.packed_law(), lead, state
+        cstate, fstate = self._split(state)
+        v, _ = self.inverse_dynamics(self.model.check_inputs(lead, "reference"), fstate)
+        return self.hysteresis_compensator.packed_law(), v, cstate

@@ -59,7 +59,9 @@ class CompensatorKind:
     batchable : bool
         Sweep cases of this kind may run in the batch kernel
         (:func:`hammerstein.simulation.simulate_chain_batch`) when the built
-        compensator is fusable.
+        compensator is fusable; a ``look_ahead`` kind when its compensator has
+        ``fused_run`` (the kernel's law, reference and initial state of its
+        ``run_reference``).
     look_ahead : bool
         It needs the whole reference ahead (an inverse of the dynamics): the
         case runs through the compensator's ``run_reference``.
@@ -298,7 +300,8 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
     "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
     "(docs/hammerstein-plant.md)",
-    look_ahead=True, fades_in=True, summary=_hammerstein_notes, check=_dynamics_problems)
+    batchable=True, look_ahead=True, fades_in=True, summary=_hammerstein_notes,
+    check=_dynamics_problems)
 
 
 def _build_preisach_inverse(spec, plant, context):

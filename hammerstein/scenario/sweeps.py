@@ -22,9 +22,10 @@ excitation on axis k ((a) direct x, (b) cross-coupling y_r -> x, (c)
 cross-coupling x_r -> y, (d) direct y).
 
 :func:`run_cases` simulates the cases of a scenario: inverse multiplicative
-compensators of sweep cases in batches on the compiled batch kernel
-(:func:`hammerstein.simulation.simulate_chain_batch`, both cores), the
-others case by case, with a progress bar on a terminal
+compensators and Hammerstein compensators of sweep cases in batches on the
+compiled batch kernel (:func:`hammerstein.simulation.simulate_chain_batch`,
+both cores; per-case initial states carry the Hammerstein compensator's
+fade-in and preview), the others case by case, with a progress bar on a terminal
 (:func:`hammerstein.scenario.progress.progress`, quiet off-terminal).
 
 A top-level ``[stability_map]`` table (``scales`` = list of gain scalings s,
@@ -47,7 +48,7 @@ import pandas as pd
 
 from hammerstein.core.compensators import check_reference_range
 from hammerstein.core.stability import stability_map
-from hammerstein.scenario.execute import chain_result, run_case, runs_alone
+from hammerstein.scenario.execute import chain_result, fade_samples, run_case, runs_alone
 from hammerstein.scenario.progress import progress
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator, compensator_kind
 from hammerstein.core.metrics import UNITS
@@ -226,8 +227,56 @@ def expand_sweeps(sweeps, source, problems):
 
 
 # -- simulation -------------------------------------------------------------------------
+def _batchable(case):
+    """True when a sweep case may run in the batch kernel (its inputs are prepared later)."""
+    if getattr(case, "sweep", None) is None or case.mode != "reference":
+        return False
+    kind = compensator_kind(case.compensator_spec)
+    if not kind.batchable:
+        return False
+    if kind.look_ahead:          # fade-in and preview prepared by the compensator's fused_run
+        return (getattr(case.plant, "amplifier", None) is None
+                and callable(getattr(case.compensator, "fused_run", None)))
+    return not runs_alone(case) and is_fusable(case.compensator)
+
+
+def _prepared(case):
+    """``(law or compensator, kernel reference, initial state, warnings)`` of a batchable case.
+
+    A look-ahead kind (kind "hammerstein") gets what its ``run_reference``
+    feeds the chain kernel (``fused_run``: fade-in, preview, inverse of G at
+    rest) and the reference check of ``simulate_chain`` on it, as
+    :func:`hammerstein.scenario.execute.run_case` runs it; None when the
+    compensator has no fused law (the case then runs alone).
+    """
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        if compensator_kind(case.compensator_spec).look_ahead:
+            fused = case.compensator.fused_run(case.signal, case.period_samples,
+                                               fade_samples(case))
+            if fused is None:
+                return None
+            law, reference, state = fused
+            if law.check_reference is not None:
+                law.check_reference(reference)
+            comp = law
+        else:
+            check_reference_range(case.compensator.model, case.signal)
+            comp, reference, state = case.compensator, case.signal, None
+    return comp, reference, state, list(case.warnings) + [str(w.message) for w in rec]
+
+
 def run_cases(cases, desc="cases"):
     """Simulate every case of a scenario; sweep cases batched where possible.
+
+    Sweep cases of a ``batchable`` compensator kind
+    (:class:`hammerstein.scenario.registry.CompensatorKind`) run in the batch
+    kernel (:func:`hammerstein.simulation.simulate_chain_batch`), each from
+    its own initial compensator state: for kind "hammerstein" the faded-in
+    lead reference and the ZPETC inverse's start state (or ``V = G^-1 Yr``
+    of the stable inversion), as its ``run_reference`` does
+    (``HammersteinCompensator.fused_run``). Results equal the one-by-one run
+    (:func:`hammerstein.scenario.execute.run_case`).
 
     Parameters
     ----------
@@ -241,31 +290,36 @@ def run_cases(cases, desc="cases"):
         In the order of ``cases``; divergences are results.
     """
     results = [None] * len(cases)
-    batchable = [i for i, c in enumerate(cases)
-                 if getattr(c, "sweep", None) is not None and c.mode == "reference"
-                 and compensator_kind(c.compensator_spec).batchable and not runs_alone(c)
-                 and is_fusable(c.compensator)]
+    batchable = [i for i, c in enumerate(cases) if _batchable(c)]
     rest = [i for i in range(len(cases)) if i not in set(batchable)]
     n_sweep = sum(1 for c in cases if getattr(c, "sweep", None) is not None)
     bar = progress(total=len(cases), desc=desc, unit="case") if n_sweep else None
     try:
-        # long cases first, so the batches hold similar work
-        batchable.sort(key=lambda i: -cases[i].signal.shape[1])
-        for start in range(0, len(batchable), BATCH_SIZE):
-            chunk = batchable[start:start + BATCH_SIZE]
-            caught = {}
-            for i in chunk:
-                with warnings.catch_warnings(record=True) as rec:
-                    warnings.simplefilter("always")
-                    check_reference_range(cases[i].compensator.model, cases[i].signal)
-                caught[i] = list(cases[i].warnings) + [str(w.message) for w in rec]
-            outs = simulate_chain_batch([cases[i].compensator for i in chunk],
-                                        [cases[i].plant for i in chunk],
-                                        [cases[i].signal for i in chunk])
-            for i, res in zip(chunk, outs):
-                results[i] = chain_result(cases[i], res, caught[i])
-            if bar is not None:
-                bar.update(len(chunk))
+        # look-ahead kinds (a pre-filter in the law) apart, so no batch pads one kind's
+        # arrays to the other's; long cases first, so the batches hold similar work
+        batchable.sort(key=lambda i: (compensator_kind(cases[i].compensator_spec).look_ahead,
+                                      -cases[i].signal.shape[1]))
+        groups = [[i for i in batchable if compensator_kind(cases[i].compensator_spec).look_ahead == g]
+                  for g in (False, True)]
+        for group in groups:
+            for start in range(0, len(group), BATCH_SIZE):
+                chunk = []
+                prepared = {}
+                for i in group[start:start + BATCH_SIZE]:
+                    prep = _prepared(cases[i])
+                    if prep is None:
+                        rest.append(i)
+                        continue
+                    chunk.append(i)
+                    prepared[i] = prep
+                outs = simulate_chain_batch([prepared[i][0] for i in chunk],
+                                            [cases[i].plant for i in chunk],
+                                            [prepared[i][1] for i in chunk],
+                                            compensator_states=[prepared[i][2] for i in chunk])
+                for i, res in zip(chunk, outs):
+                    results[i] = chain_result(cases[i], res, prepared[i][3])
+                if bar is not None:
+                    bar.update(len(chunk))
         for i in rest:
             results[i] = run_case(cases[i])
             if bar is not None:

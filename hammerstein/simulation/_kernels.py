@@ -115,26 +115,23 @@ def _output(u, W, G, s, y):
 
 
 @njit(cache=True, inline="always")
-def _evaluate(u, start, r, W, G, s, y):
-    """``y = Gamma(u; s)`` without moving the plays (frozen states)."""
-    p = uint64(W.shape[0])
-    m = uint64(G.shape[1])
-    for l in range(p):
-        l = uint64(l)
-        g = 0.0
-        for k in range(m):
-            k = uint64(k)
-            g += G[l, k] * u[k]
-        y[l] = g
-    for k in range(m):
+def _evaluate(u, start, r, W, G, s, v, y):
+    """``y = Gamma(u; s)`` without moving the plays (frozen states).
+
+    The moved plays go to the scratch ``v`` (n_plays,), zero where no play
+    is (padding), then ``y = W v + G u`` is :func:`_output`: two vectorised
+    loops. The former single loop (each moved play added to every output in
+    turn) measured ~125 ns a call on the bundled 2x2 model, ~2/3 of a
+    3-iteration Hammerstein chain sample; this form costs what the commit
+    and output of a sample cost.
+    """
+    for k in range(uint64(start.size - 1)):
         k = uint64(k)
         uk = u[k]
         for j in range(uint64(start[k]), uint64(start[k + 1])):
             j = uint64(j)
-            v = _play(s[j], uk, r[j])
-            for l in range(p):
-                l = uint64(l)
-                y[l] += W[l, j] * v
+            v[j] = _play(s[j], uk, r[j])
+    _output(u, W, G, v, y)
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -290,9 +287,10 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     h = np.empty(pp)
     yt = np.empty(pp)
     xn = np.empty(x.size)
+    sv = np.zeros(cs.size)        # plays moved by _evaluate (zero in the padding)
     # Gamma(U(t-T); s(t-T)), reused by the first iteration; later samples
     # get it from the commit (a play moved to U is idempotent at U)
-    _evaluate(cu, cstart, cr, cW, cG, cs, yhat)
+    _evaluate(cu, cstart, cr, cW, cG, cs, sv, yhat)
     for t in range(n_samples):
         if prefiltered:
             for l in range(p):
@@ -322,7 +320,7 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
                     for l in range(p):
                         e[l] = ref[l] - yhat[l]
                 else:
-                    _evaluate(u, cstart, cr, cW, cG, cs, yh)
+                    _evaluate(u, cstart, cr, cW, cG, cs, sv, yh)
                     for l in range(p):
                         e[l] = ref[l] - yh[l]
                 for k in range(m):

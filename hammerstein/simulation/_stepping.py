@@ -11,7 +11,8 @@ from hammerstein.exceptions import CompensatorDivergence, CompensatorError, Hyst
 from hammerstein.simulation import _kernels as kernels
 from hammerstein.simulation import _oracle as oracle
 from hammerstein.simulation._preisach import linear_steps
-from hammerstein.simulation._packing import (EMPTY_PACKED, STATUS_OK, ChainState, LawArrays,
+from hammerstein.simulation._packing import (EMPTY_PACKED, STATUS_OK, ChainState, CompensatorLaw,
+                                             LawArrays,
                                              LinearArrays, PIArrays, check_linear,
                                              compensator_law_of, divergence_error,
                                              identity_filter, linear_arrays, pack_model,
@@ -627,12 +628,23 @@ def _stack_linear(systems, n, k):
                         _stack([s.D for s in systems], (k, k)))
 
 
-def simulate_chain_batch(compensators, plants, references, parallel=None):
+class _DeclaredLaw:
+    """A compensator declaring a given :class:`CompensatorLaw` (the unfused batch fallback)."""
+
+    def __init__(self, law):
+        self.law = law
+
+    def packed_law(self):
+        return self.law
+
+
+def simulate_chain_batch(compensators, plants, references, parallel=None, compensator_states=None):
     """Many independent compensator -> plant cases in one compiled call.
 
     Cases may differ by reference (frequency, amplitude, axis, length), by
     compensator model, gain and law, and by plant, as long as the numbers of
-    inputs and outputs agree. Each case starts from zero states. The
+    inputs and outputs agree. Each case starts from zero plant states and
+    from its own compensator state (zeros by default). The
     records are packed end to end (memory in proportion to the samples, not
     to the number of cases times the longest case), and each case's result
     equals :func:`simulate_chain` on it bit for bit.
@@ -640,7 +652,9 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     Parameters
     ----------
     compensators : compensator or sequence of compensators
-        Fusable (``packed_law()``), one per case or one for all cases.
+        Fusable (``packed_law()``) or a :class:`CompensatorLaw` itself (e.g.
+        from ``HammersteinCompensator.fused_run``), one per case or one for
+        all cases.
     plants : HammersteinPlant or sequence of them
         One per case, or one for all cases.
     references : sequence of array_like, each shape (m, n_samples_b)
@@ -652,6 +666,10 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
         default when there are several cases and at least
         ``PARALLEL_MIN_SAMPLES`` samples. Results do not depend on it (each
         case is computed alone).
+    compensator_states : sequence of (array_like or None), optional
+        Initial flat state of each case's compensator (``U(t-T)`` [V],
+        ``v_f`` [V] for the low-pass law, play states [V], pre-filter state
+        [µm]; see :func:`compensator_state`); None or a None entry: zeros.
 
     Returns
     -------
@@ -674,14 +692,22 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
     if len(comps) != B or len(plts) != B:
         raise HysteresisError(
             f"compensators/plants: expected 1 or {B} of each, found {len(comps)} and {len(plts)}")
-    laws = [_validated(compensator_law_of(c)) for c in comps]
+    laws = [_validated(c if isinstance(c, CompensatorLaw) else compensator_law_of(c))
+            for c in comps]
     for c, law in zip(comps, laws):
         if law is None:
             raise CompensatorError(
                 f"compensators: the batch kernel runs compensators with a packed_law() "
                 f"(e.g. InverseMultiplicativeCompensator) only, found {type(c).__name__}")
+    states = [None] * B if compensator_states is None else list(compensator_states)
+    if len(states) != B:
+        raise HysteresisError(f"compensator_states: expected {B} states (or None), "
+                              f"found {len(states)}")
+    states = [state_vector(s, law.n_states, f"compensator_states[{b}]")
+              for b, (s, law) in enumerate(zip(states, laws))]
     if any(_has_map(pl.hysteresis) or not _packable(pl.hysteresis) for pl in plts):  # unfused
-        return [simulate_chain(c, pl, r) for c, pl, r in zip(comps, plts, references)]
+        return [simulate_chain(_DeclaredLaw(law), pl, r, s)
+                for law, pl, r, s in zip(laws, plts, references, states)]
     m = laws[0].model.n_inputs
     p = plts[0].hysteresis.n_outputs
     yrs = []
@@ -692,15 +718,17 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
         yrs.append(_without_offset(law.model, law.model.check_inputs(r, f"references[{b}]")))
     lengths = np.array([r.shape[1] for r in yrs], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
-    # pack each distinct model / plant once
+    # pack each distinct model / plant (and initial play state: equal plays merge) once
     cache = {}
 
-    def packed(model):
-        if id(model) not in cache:
-            cache[id(model)] = pack_model(model)
-        return cache[id(model)]
+    def packed(model, plays=None):
+        key = (id(model), None if plays is None or not plays.any() else plays.tobytes())
+        if key not in cache:
+            cache[key] = pack_model(model, None if key[1] is None else plays)
+        return cache[key]
 
-    cpk = [packed(law.model) for law in laws]
+    splits = [law.split_state(s) for law, s in zip(laws, states)]
+    cpk = [packed(law.model, sp[2]) for law, sp in zip(laws, splits)]
     ppk = [packed(pl.hysteresis) for pl in plts]
     nc = max(k.r.size for k in cpk)
     npl = max(k.r.size for k in ppk)
@@ -725,6 +753,12 @@ def simulate_chain_batch(compensators, plants, references, parallel=None):
         np.array([law.prefilter is not None for law in laws], dtype=np.bool_))
     state = ChainState(np.zeros((B, m)), np.zeros((B, m)), np.zeros((B, nc)), np.zeros((B, nf)),
                        np.zeros((B, npl)), np.zeros((B, nx)))
+    for b, (u_prev, vf, splay, xf) in enumerate(splits):
+        state.cu[b] = u_prev
+        if vf is not None:
+            state.cvf[b] = vf
+        state.cs[b, :cpk[b].r.size] = cpk[b].plays(splay)
+        state.xf[b, :xf.size] = xf
     total = int(offsets[-1])
     u_out, y_out = np.full(m * total, np.nan), np.full(p * total, np.nan)
     status, sample = np.zeros(B, dtype=np.int64), np.zeros(B, dtype=np.int64)

@@ -513,3 +513,51 @@ def test_announce_compiles_keeps_one_listener():
     assert len(event._registered["numba:compile"]) == before + 1
     sim.announce_compiles(None)
     assert len(event._registered["numba:compile"]) == before
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_batch_with_initial_states_continues_each_case(parallel):
+    """Per-case compensator states (play, v_f and pre-filter states): chunked == whole.
+
+    Each case's first part runs alone; the batch continues every case from its
+    final state, so its voltages and final states are those of the whole run,
+    and all its results those of the continuation run alone (plant at rest)."""
+    rng = np.random.default_rng(640)
+    model = square_model(rng, 2)
+    inner = InverseMultiplicativeCompensator(model, iterations=2, check="ignore")
+    comps = [Prefiltered(inner, stable_filter(rng, 3, 2)), inner,
+             Prefiltered(_lowpass(model, 250.0), stable_filter(rng, 1, 2)), _lowpass(model, 400.0)]
+    plant = random_plant(rng, model, True)
+    refs = [random_inputs(rng, 2, n) * 2 for n in (220, 160, 190, 130)]
+    cut = [70, 40, 100, 65]
+    whole = [sim.simulate_chain(c, plant, yr) for c, yr in zip(comps, refs)]
+    first = [sim.simulate_chain(c, plant, yr[:, :k]) for c, yr, k in zip(comps, refs, cut)]
+    states = [f.compensator_state for f in first]
+    assert all(np.any(s != 0) for s in states)
+    # a CompensatorLaw is accepted in place of its compensator
+    batch_comps = [comps[0].packed_law()] + comps[1:]
+    got = sim.simulate_chain_batch(batch_comps, plant, [yr[:, k:] for yr, k in zip(refs, cut)],
+                                   parallel=parallel, compensator_states=states)
+    for b, (c, yr, k) in enumerate(zip(comps, refs, cut)):
+        assert not whole[b].diverged and not got[b].diverged
+        # chunked == whole (to rounding: the first sample after the cut evaluates Gamma anew)
+        np.testing.assert_allclose(got[b].inputs, whole[b].inputs[:, k:], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(got[b].compensator_state, whole[b].compensator_state,
+                                   rtol=1e-12, atol=1e-12)
+        # and the continuation run alone from the same state, bit for bit
+        alone = sim.simulate_chain(c, plant, yr[:, k:], states[b])
+        np.testing.assert_array_equal(got[b].inputs, alone.inputs)
+        np.testing.assert_array_equal(got[b].outputs, alone.outputs)
+        np.testing.assert_array_equal(got[b].compensator_state, alone.compensator_state)
+
+
+def test_batch_initial_state_of_the_wrong_length_is_named():
+    rng = np.random.default_rng(650)
+    model = square_model(rng, 2)
+    comp = InverseMultiplicativeCompensator(model, check="ignore")
+    plant = random_plant(rng, model, False)
+    with pytest.raises(HysteresisError, match=r"compensator_states\[1\]"):
+        sim.simulate_chain_batch(comp, plant, [np.zeros((2, 5))] * 2,
+                                 compensator_states=[None, np.zeros(3)])
+    with pytest.raises(HysteresisError, match="compensator_states: expected 2"):
+        sim.simulate_chain_batch(comp, plant, [np.zeros((2, 5))] * 2, compensator_states=[None])

@@ -1,0 +1,130 @@
+"""A 200-frequency sweep with ``kind = "hammerstein"`` against a rate-independent kind.
+
+Run: ``python benchmarks/sweep_hammerstein.py [--repeat 5] [--inversion zpetc|stable]``
+(from the repository root; ``NUMBA_NUM_THREADS`` unset for both cores).
+
+Not a test. Two scenarios on the same plant (the bundled preset with its
+bending modes, T = 50 µs): one ``[[sweeps]]`` table of 200 frequencies
+(10..420 Hz, log spaced), a 20 µm sine on x, 6 periods, 4 settling, with
+``kind = "multivariable"`` (rate independent, 1 iteration) and with
+``kind = "hammerstein"`` (true plant models, ZPETC inverse of the bending
+modes as the law's pre-filter, 3 iterations, faded in over one period),
+and ``kind = "multivariable"`` with ``iterations = 3`` (the Hammerstein
+kind's static law without the inverse of G).
+The scenarios are loaded once (the compensators built); what is timed is
+:func:`hammerstein.scenario.sweeps.run_cases` on their cases (simulation and
+metrics, the part of ``hammerstein run`` the batching changes), and for
+comparison the same Hammerstein cases one by one
+(:func:`hammerstein.scenario.execute.run_case`, the path before the batch).
+
+The three runs are alternated ``--repeat`` times after a warm-up; printed:
+the median wall and CPU (``time.process_time``: both threads of a batch)
+of each, the ratios of the medians, and the load average before and after
+(other processes on the 2 cores inflate the wall times; the CPU time is the
+steadier number).
+
+Target (issue 20): the Hammerstein sweep within 1.2x of the rate-independent one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+SCENARIO = """
+name = "sweep-{kind}"
+[plant]
+preset = "rakotondrabe-2dof"
+dynamics = true
+[compensator]
+{table}
+[[sweeps]]
+name = "s"
+frequencies = [{freqs}]
+reference = {{ kind = "sine", output = "x", amplitude = 20.0, periods = 6 }}
+settle_periods = 4
+"""
+
+
+def scenarios(folder, inversion, n_freqs=200):
+    """The two resolved scenarios (rate independent, Hammerstein) of the benchmark."""
+    from hammerstein.scenario.resolve import load_scenario
+
+    freqs = ", ".join(f"{f:.6g}" for f in np.geomspace(10.0, 420.0, n_freqs))
+    out = {}
+    for kind, table in (("multivariable", 'kind = "multivariable"'),
+                        ("multivariable-3", 'kind = "multivariable"\niterations = 3'),
+                        ("hammerstein", f'kind = "hammerstein"\ninversion = "{inversion}"')):
+        path = Path(folder) / f"{kind}.toml"
+        path.write_text(SCENARIO.format(kind=kind, table=table, freqs=freqs), encoding="utf-8")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out[kind] = load_scenario(path).cases
+    return out
+
+
+def timed(fn):
+    c0, w0 = time.process_time(), time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fn()
+    return time.perf_counter() - w0, time.process_time() - c0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--inversion", choices=("zpetc", "stable"), default="zpetc")
+    ap.add_argument("--frequencies", type=int, default=200)
+    args = ap.parse_args(argv)
+
+    from hammerstein.scenario.execute import run_case
+    from hammerstein.scenario.sweeps import run_cases
+    from hammerstein.simulation._kernels import threads
+
+    print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} "
+          f"cores; numba threads {threads()}")
+    with tempfile.TemporaryDirectory() as folder:
+        cases = scenarios(folder, args.inversion, args.frequencies)
+    samples = {k: sum(c.signal.shape[1] for c in v) for k, v in cases.items()}
+    print(f"{args.frequencies} frequencies, {samples['hammerstein']} samples per sweep "
+          f"(inversion {args.inversion})")
+    runs = {
+        "rate-independent (batched)": lambda: run_cases(cases["multivariable"]),
+        "rate-indep., 3 iterations": lambda: run_cases(cases["multivariable-3"]),
+        "hammerstein (batched)": lambda: run_cases(cases["hammerstein"]),
+        "hammerstein (one by one)": lambda: [run_case(c) for c in cases["hammerstein"]],
+    }
+    for fn in runs.values():      # warm-up: compile or load the kernels
+        timed(fn)
+    got = {k: [] for k in runs}
+    for _ in range(args.repeat):  # alternated
+        for k, fn in runs.items():
+            got[k].append(timed(fn))
+    med = {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v))
+           for k, v in got.items()}
+    print(f"{'':30s} {'wall [s]':>9s} {'CPU [s]':>9s}   (medians of {args.repeat}, alternated)")
+    for k, (w, c) in med.items():
+        print(f"{k:30s} {w:9.3f} {c:9.3f}")
+    ri, r3, hb, h1 = (med[k] for k in runs)
+    print(f"hammerstein batched / rate-independent: wall {hb[0] / ri[0]:.2f}x, "
+          f"CPU {hb[1] / ri[1]:.2f}x (target <= 1.2x)")
+    print(f"hammerstein batched / rate-indep. 3 it: wall {hb[0] / r3[0]:.2f}x, "
+          f"CPU {hb[1] / r3[1]:.2f}x (the same static law: the share of the inverse of G)")
+    print(f"hammerstein one by one / batched:       wall {h1[0] / hb[0]:.2f}x, "
+          f"CPU {h1[1] / hb[1]:.2f}x")
+    print(f"load average now {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
