@@ -152,3 +152,49 @@ reference = { kind = "circle", radius = 30.0, frequency = 100.0, periods = 10 }
     first = m[("iteration-0", "max_euclidean_error")]
     assert m[("x+y", "max_euclidean_error")] < first / 5
     assert ("iteration-4", "max_abs_error_x") in m
+
+
+def test_learn_through_files_with_a_preisach_preset(tmp_path, repo_root):
+    """`compensate` then three `learn` calls on a Preisach preset (model above, the actuator's
+    modes), against realistic-2dof with a 3-sample delay and 40 nm noise: the true error falls
+    by a factor 5 and never grows by more than 10 %."""
+    import contextlib
+    import io
+
+    import pandas as pd
+
+    from hammerstein.cli.main import main
+    from hammerstein.core.drive import read_signals
+    text = (repo_root / "hammerstein/presets/realistic-2dof.toml").read_text(encoding="utf-8")
+    dynamics = text[text.index("[dynamics]"):text.index("[creep")]
+    (tmp_path / "p.toml").write_text('[preset]\nname = "preisach-model"\nsampling_period = 5e-5\n'
+                                     + MODEL_TOML + dynamics, encoding="utf-8")
+    ref = '{ kind = "circle", radius = 30, frequency = 100, periods = 10 }'
+    plant = load_plant("realistic-2dof")
+
+    def cli(*args):
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.chdir(tmp_path), contextlib.redirect_stdout(out), \
+                contextlib.redirect_stderr(err), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            code = main(list(args))
+        assert code == 0, err.getvalue()
+
+    cli("compensate", "p.toml", "--reference", ref, "--out", "u0.csv")
+    errors = []
+    for k in range(4):
+        t, u, _ = read_signals(tmp_path / f"u{k}.csv", ["ux", "uy"])
+        clean, _ = plant.simulate(u)
+        r = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+        w = t >= 0.04 - 1e-12
+        errors.append(np.linalg.norm(r[:, w] - clean[:, w], axis=0).max())
+        y = np.concatenate([np.zeros((2, 3)), clean[:, :-3]], axis=1)
+        y = y + np.random.default_rng(k).normal(0.0, 0.04, y.shape)
+        pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(tmp_path / f"y{k}.csv", index=False)
+        if k < 3:
+            cli("learn", "p.toml", "--reference", ref, "--drive", f"u{k}.csv", "--measured",
+                f"y{k}.csv", "--out", f"u{k + 1}.csv", "--learning-gain", "0.8",
+                "--q-cutoff-hz", "500", "--delay", "3")
+    errors = np.array(errors)
+    assert np.all(errors[1:] <= 1.1 * errors[:-1]), errors
+    assert errors[-1] < errors[0] / 5, errors
