@@ -20,9 +20,18 @@ branches each with their own slopes), which is the law
   (ZPETC or stable inversion,
   :func:`hammerstein.core.inversion.preview_inverse`); the error is
   continued past the record's end first (:meth:`IterativeLearning.step`).
-* ``Gamma^c`` is the inverse multiplicative law with 50 fixed-point
-  iterations and the secant gain (exact to 1e-6 µm on the bundled model;
-  3 iterations leave 0.14 µm, which the learning would then have to fight).
+* ``Gamma^c`` is, for a classical PI model, the inverse multiplicative law
+  with 50 fixed-point iterations and the secant gain (exact to 1e-6 µm on
+  the bundled model; 3 iterations leave 0.14 µm, which the learning would
+  then have to fight); for a Preisach model (``identify --model preisach``
+  or ``auto``), the exact per-sample root of
+  :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
+  (monotone direct paths), so that ``Gamma(u_{k+1}) = v_{k+1}`` to 1e-10 µm
+  where reachable. ``J_k^-1`` is then the local gain of the Preisach
+  inverse along the trajectory, the slope of the density integrated over
+  the hysterons that switch at each sample, on the branch the input is
+  on; it is taken exactly (the root of the next trial's PI output) rather
+  than as a finite difference, which it equals to first order in ``dv``.
 * ``Q`` is a zero-phase low-pass: a Butterworth filter of order ``q_order``
   and cut-off ``q_cutoff_hz`` run forward and backward
   (:func:`scipy.signal.filtfilt`), ``|Q(w)| = |B(w)|^2``, no phase. It
@@ -67,7 +76,9 @@ from hammerstein.core.compensators import InverseMultiplicativeCompensator
 from hammerstein.core.drive import apply_amplifier, drive_signal
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.inversion import preview_inverse
+from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 from hammerstein.exceptions import CompensatorError, ConvergenceWarning
 from hammerstein.simulation import ChainResult
 
@@ -402,8 +413,10 @@ class IterativeLearning:
 
     Parameters
     ----------
-    model : MultivariablePI
-        Hysteresis of the model (m inputs [V], p outputs [µm]).
+    model : MultivariablePI or MultivariableHysteresis
+        Hysteresis of the model (m inputs [V], p outputs [µm]): a classical
+        PI, or a Preisach model with monotone direct paths (its exact
+        inverse, :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`).
     dynamics : control.StateSpace or None
         Discrete p x p linear part of the model (None: static, ``G = I``).
     sampling_period : float
@@ -429,7 +442,8 @@ class IterativeLearning:
     ------
     CompensatorError
         Gain outside (0, 2), a cut-off not below Nyquist, a negative delay,
-        dynamics that are not p x p.
+        dynamics that are not p x p, a Preisach model its exact inverse
+        refuses (not square, a direct path that is not increasing).
 
     Examples
     --------
@@ -472,8 +486,17 @@ class IterativeLearning:
         self.model, self.dynamics, self.sampling_period = model, dynamics, float(sampling_period)
         self.learning_gain, self.q_cutoff_hz, self.q_order = float(learning_gain), q_cutoff_hz, int(q_order)
         self.inversion, self.delay = inversion, int(delay)
-        self.hysteresis_compensator = InverseMultiplicativeCompensator(
-            model, gain=gain, iterations=iterations, check="ignore")   # Gamma^c: the exact inverse
+        #: True when the hysteresis is not a classical PI: Gamma^c is the exact Preisach inverse
+        self.exact_static = not isinstance(model, MultivariablePI)
+        if self.exact_static:
+            try:
+                self.hysteresis_compensator = PreisachInverseCompensator(model)   # exact root
+            except CompensatorError as exc:
+                raise CompensatorError(f"model: the learning inverts the hysteresis exactly, which "
+                                       f"refuses this {type(model).__name__}: {exc}") from None
+        else:
+            self.hysteresis_compensator = InverseMultiplicativeCompensator(
+                model, gain=gain, iterations=iterations, check="ignore")   # Gamma^c: the exact inverse
         self._ba = None
         if q_cutoff_hz is not None:
             self._ba = _scipy_signal().butter(self.q_order, q_cutoff_hz, fs=1.0 / sampling_period)
@@ -987,7 +1010,7 @@ class LearningCompensator:
 
     @property
     def model(self):
-        """The PI model of the learning."""
+        """The hysteresis model of the learning (classical PI or Preisach)."""
         return self.learning.model
 
     def simulate(self, reference, initial_state=None):

@@ -343,13 +343,6 @@ def _start_table(v):
 
 def _build_ilc(spec, plant, context):
     start = build_compensator(spec.get("start") or {"kind": "hammerstein"}, plant, context)
-    model = getattr(start, "model", None)
-    if model is not None and not isinstance(model, MultivariablePI):
-        raise CompensatorError(
-            f"compensator.kind = 'ilc': its learning law inverts a classical PI model "
-            f"(MultivariablePI), but its start compensator's model is a {type(model).__name__} "
-            f"(Preisach or mixed components); run kind = 'hammerstein' or 'preisach-inverse' "
-            f"instead, or start from a classical PI (start.model = a PI model file)")
     return LearningCompensator(
         start, plant.sampling_period, iterations=spec.get("iterations", 10),
         learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 2000.0),
