@@ -58,6 +58,9 @@ def test_creep_is_reported_and_written(records, capsys):
         assert f"  {name}: drift +" in printed
     rows = (d / "fit.csv").read_text().splitlines()
     assert any(r.startswith("creep,x,drift_0p1_to_10s_percent,") for r in rows)
+    # the hysteresis was refitted once on the records with the creep removed
+    assert "creep refit 1: hysteresis refitted on the records with the identified creep removed" \
+        in printed and "creep refit 2" not in printed
 
 
 @pytest.mark.slow
@@ -69,4 +72,19 @@ def test_records_that_are_not_staircases_exit_1_with_one_line(records, capsys):
     assert main(args) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "expected a voltage staircase" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--creep-refits", "2"], "--creep-refits: only used with --creep-records"),
+    (["--creep-records", "s.csv", "--creep-refits", "9"], "--creep-refits: expected an integer "
+                                                          "from 0 to 5, found 9"),
+], ids=["without-records", "too-many"])
+def test_creep_refits_usage_errors_exit_2(tmp_path, capsys, extra, message):
+    out = tmp_path / "m.toml"
+    args = ["identify", str(tmp_path / "h.csv"), "--inputs", "ux", "--outputs", "x", "--time", "t",
+            *extra, "--out", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err
     assert not out.exists()
