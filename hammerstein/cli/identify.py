@@ -28,6 +28,7 @@ from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import out_file_problem
 from hammerstein.core.files import (FileLimitError, all_or_nothing, png_provenance,
                                     provenance_line, replace_problem, safe_write)
+from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.creep import creep_to_table
 from hammerstein.core.creep_identification import remove_creep
@@ -130,10 +131,12 @@ def add_parser(subparsers):
                         "(first-order lags 0.01-100 s, non-negative weights) and write it as "
                         "[creep] (with --dynamics, fitted through the identified G); the "
                         "hysteresis is then refitted on the records with the creep removed")
-    p.add_argument("--creep-refits", type=int, default=1, metavar="N",
+    p.add_argument("--creep-refits", type=int, default=None, metavar="N",
                    help="--creep-records: refits of the hysteresis on the records with the "
                         "identified creep removed, each followed by a new creep fit "
-                        "(default 1; 0: the hysteresis keeps the creep of its records)")
+                        "(default: 1 for a Preisach model, 0 for a classical PI, whose step "
+                        "levels the refit made worse on an actuator outside its class; 0: the "
+                        "hysteresis keeps the creep of its records)")
     p.add_argument("--force", action="store_true",
                    help="overwrite --out, --metrics or --plot even if the project did not write it")
     p.set_defaults(handler=_handler)
@@ -213,9 +216,9 @@ def _check_usage(args):
                      f"{args.preisach_levels}")
     if args.model == "preisach" and args.method == "closed-form":
         raise _Usage("--model preisach: fitted by least squares; leave out --method closed-form")
-    if args.creep_refits != 1 and not args.creep_records:
+    if args.creep_refits is not None and not args.creep_records:
         raise _Usage("--creep-refits: only used with --creep-records")
-    if not 0 <= args.creep_refits <= 5:
+    if args.creep_refits is not None and not 0 <= args.creep_refits <= 5:
         raise _Usage(f"--creep-refits: expected an integer from 0 to 5, found {args.creep_refits}")
     if args.dynamics_records and not args.dynamics:
         raise _Usage("--dynamics-records: only used with --dynamics")
@@ -470,7 +473,13 @@ def _refit_without_creep(args, records, n, thresholds, names, fit, creep, dyn):
     hysteresis is refitted on v, and the creep is fitted again after the new
     model; ``--creep-refits`` times.
     """
-    for i in range(args.creep_refits):
+    refits = args.creep_refits
+    if refits is None:
+        refits = 0 if isinstance(fit.model, MultivariablePI) else 1
+        if refits == 0:
+            fit.notes.append("creep refit: none for a classical PI (the default; --creep-refits N "
+                             "refits it on the records with the creep removed)")
+    for i in range(refits):
         before = _fit_rms(fit)
         clean = remove_creep(records, creep.creeps_, fit.model.output_offset)
         fit = _identify(args, clean, n, thresholds, names)

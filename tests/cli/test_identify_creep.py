@@ -43,7 +43,7 @@ def test_creep_is_reported_and_written(records, capsys):
     d, files = records
     out = d / "model.toml"
     args = ["identify", *files["hysteresis"], "--inputs", "ux,uy", "--outputs", "x,y", "--time",
-            "t", "--creep-records", *files["creep"], "--out", str(out), "--metrics",
+            "t", "--creep-records", *files["creep"], "--creep-refits", "1", "--out", str(out), "--metrics",
             str(d / "fit.csv")]
     assert main(args) == 0, capsys.readouterr().err
     printed = capsys.readouterr().out
