@@ -25,6 +25,7 @@ from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, Outpu
 from hammerstein.core.lti import continuous_system, state_space_dynamics
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.schema import Field, Invalid, did_you_mean, is_number, string, table_problems
+from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.core.creep import creep_from_table
 from hammerstein.core.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
@@ -176,6 +177,48 @@ def read_toml(path, what="TOML file"):
         raise PresetError(f"{path}: cannot read: {exc.strerror}") from None
 
 
+def _huge_numbers(value, key, limit=MAX_MAGNITUDE):
+    """Every number of a parsed TOML value whose magnitude exceeds ``limit``.
+
+    Parameters
+    ----------
+    value : object
+        A parsed TOML value (tables, arrays, numbers, strings).
+    key : str
+        Dotted key of ``value``, used to name each offending entry.
+    limit : float
+        Largest magnitude accepted (default :data:`~hammerstein.core.numbers.MAX_MAGNITUDE`,
+        beyond which the squares of a sum overflow).
+
+    Returns
+    -------
+    list of (str, float)
+        ``(key, value)`` pairs, array entries named ``key[i]``; at most 5.
+
+    Examples
+    --------
+    >>> _huge_numbers({"components": {"x": {"ux": {"weights": [1.0, 1e300]}}}}, "model")
+    [('model.components.x.ux.weights[1]', 1e+300)]
+    """
+    found = []
+    stack = [(key, value)]
+    while stack and len(found) < 5:
+        k, v = stack.pop()
+        if isinstance(v, dict):
+            stack.extend((f"{k}.{name}", item) for name, item in reversed(list(v.items())))
+        elif isinstance(v, list):
+            stack.extend((f"{k}[{i}]", item) for i, item in reversed(list(enumerate(v))))
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            try:
+                x = float(v)
+            except OverflowError:     # a TOML integer beyond the float range
+                x = float("inf") if v > 0 else -float("inf")
+            literal_nonfinite = isinstance(v, float) and not np.isfinite(x)
+            if abs(x) > limit and not literal_nonfinite:   # nan/inf: the field's own check names them
+                found.append((k, x))
+    return found
+
+
 def model_from_table(table, source="model"):
     """Build a :class:`MultivariablePI` from a parsed ``[model]`` table.
 
@@ -201,10 +244,16 @@ def model_from_table(table, source="model"):
     Raises
     ------
     PresetError
-        Naming the key that is missing or wrong.
+        Naming the key that is missing or wrong, or a number beyond
+        :data:`~hammerstein.core.numbers.MAX_MAGNITUDE` (e.g. a weight of
+        1e300, whose outputs would overflow when simulated).
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
+    huge = _huge_numbers(table, "model")
+    if huge:
+        raise PresetError(f"{source}: " + "; ".join(
+            f"{key}: {value:.3g} is beyond the magnitude limit {MAX_MAGNITUDE:.0e}" for key, value in huge))
     if is_mixed_table(table):   # Preisach / generalised-PI / polynomial components: core/preisach.py
         try:
             return hysteresis_from_table(table, source)

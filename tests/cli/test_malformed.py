@@ -89,6 +89,7 @@ SCENARIOS = {
     "model-mismatched-lengths": "model.components.x.ux: weights: expected 3 weights to match the "
                                 "thresholds, found 2",
     "model-nan-weights": "model.components.x.ux: weights: expected finite values",
+    "model-huge-weights": "model.components.x.ux.weights[1]: 1e+300 is beyond the magnitude limit 1e+150",
     "model-negative-thresholds": "model.components.x.ux: thresholds: expected non-negative thresholds, found -1",
     "model-no-model-table": "missing [model] table",
     "model-string-weights": "model.components.x.ux: weights: expected numbers",
