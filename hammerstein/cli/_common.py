@@ -9,7 +9,24 @@ from pathlib import Path
 from hammerstein.core.files import escape
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
-           "MAX_LINE", "add_column_options"]
+           "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject"]
+
+#: What a stray warning (a library's ``warnings.warn`` or log record) is about: the
+#: input file being processed (:func:`set_warning_subject`), else ``hammerstein
+#: <command>``; and the warning lines already printed (each distinct one once).
+WARNING_STATE = {"subject": "hammerstein", "said": set()}
+
+
+def set_warning_subject(subject):
+    """Name the file that stray warnings from now on are about.
+
+    Parameters
+    ----------
+    subject : str
+        Printed after ``warning:``, e.g. the scenario file ``hammerstein run``
+        is simulating (several scenarios in one run: each its own).
+    """
+    WARNING_STATE["subject"] = str(subject)
 
 #: Longest line printed on stderr (characters); longer messages are cut with a count.
 MAX_LINE = 2000

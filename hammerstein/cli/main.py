@@ -32,7 +32,7 @@ import sys
 import threading
 import warnings
 
-from hammerstein.cli._common import MAX_LINE, SafeStream, one_line, print_err
+from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt, start_budget
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
@@ -53,9 +53,9 @@ class _Parser(argparse.ArgumentParser):
                      f"(see '{self.prog} --help')\n")
 
 
-#: What a stray warning is about: the one input file of the command, else ``hammerstein
-#: <command>``; and the warnings already printed (each distinct one is printed once).
-_WARNING_STATE = {"subject": "hammerstein", "said": set()}
+#: What a stray warning is about (shared with the commands, which name the file they
+#: are processing): the one input file of the command, else ``hammerstein <command>``.
+_WARNING_STATE = WARNING_STATE
 
 #: Arguments naming the files a command reads, in order of importance.
 _INPUT_ARGUMENTS = ("scenarios", "data", "source", "actuator", "measured", "drive", "reference")

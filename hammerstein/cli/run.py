@@ -17,7 +17,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from hammerstein.cli._common import one_line, out_dir_problem, print_err
+from hammerstein.cli._common import one_line, out_dir_problem, print_err, set_warning_subject
 from hammerstein.core.files import escape
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.report.render import figure_selection
@@ -103,6 +103,7 @@ def handler(args):
     started, failed = {}, []
 
     def on_start(path):
+        set_warning_subject(path)       # a stray warning names the scenario it came from
         if verbosity > 0:
             print_err(f"{escape(path)}: running ...")
         started[path] = time.perf_counter()

@@ -701,7 +701,22 @@ def _huge_preset(directory, scale):
 
 
 @pytest.mark.parametrize("scale", [1e300, 1e160])
+def test_15_huge_weights_are_refused_on_loading(capsys, tmp_path, scale):
+    # a weight beyond 1e150 is refused when the preset is read, its key named
+    _huge_preset(tmp_path, scale)
+    scen = tmp_path / "s.toml"
+    scen.write_text('[plant]\npreset = "huge.toml"\ndynamics = false\n[compensator]\nkind = "none"\n'
+                    '[[cases]]\nname = "open"\ndrive = { kind = "sine", input = "ux", amplitude = 10.0, '
+                    'frequency = 50.0, periods = 2 }\n')
+    status, out, err = _call(capsys, "run", scen, "--out", tmp_path / "out")
+    assert status == 1 and len(err) == 1, err
+    assert f"model.components.x.ux.weights[0]: {scale:.3g} is beyond the magnitude limit 1e+150" in err[0]
+    assert not (tmp_path / "out" / "s").exists()
+
+
+@pytest.mark.parametrize("scale", [1e149, 5e149])
 def test_15_overflowing_outputs_are_refused(capsys, tmp_path, scale):
+    # weights under the limit whose outputs (about 10 V x the weight sum) are beyond it
     _huge_preset(tmp_path, scale)
     scen = tmp_path / "s.toml"
     scen.write_text('[plant]\npreset = "huge.toml"\ndynamics = false\n[compensator]\nkind = "none"\n'
