@@ -455,7 +455,8 @@ def main(argv=None):
     Parameters
     ----------
     argv : list of str, optional
-        ``--quick``, ``--samples N``, ``--repeat R``, ``--iterations I``.
+        ``--quick``, ``--samples N``, ``--repeat R``, ``--iterations I``, ``--prefilter``,
+        ``--sizes 2x2x5,6x6x50``.
 
     Returns
     -------
@@ -468,6 +469,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=None)
     ap.add_argument("--iterations", type=int, default=1,
                     help="fixed-point iterations of the compensator (default 1)")
+    ap.add_argument("--sizes", default=None,
+                    help="comma-separated m x p x n sizes, e.g. 2x2x5,6x6x50 (default: all)")
     ap.add_argument("--prefilter", action="store_true",
                     help="chain and batch with a ZPETC-shaped reference pre-filter (the law of "
                          "a Hammerstein compensator, p * 4 states)")
@@ -486,7 +489,9 @@ def main(argv=None):
         print(f"{'size m x p x n':<15}" + "".join(
             f"{k + ' nb/C [ns]':>22}{'ratio':>7}" for k in ("plant", "chain", "batch"))
             + f"{'max rel |dy|':>14}")
-        for m, p, n in SIZES:
+        sizes = SIZES if not args.sizes else [tuple(int(v) for v in t.lower().split("x"))
+                                              for t in args.sizes.split(",")]
+        for m, p, n in sizes:
             res = case(lib, m, p, n, N, repeats, args.iterations, prefilter=args.prefilter)
             worst = max(worst, *(r["ratio"] for r in res.values()))
             row = f"{f'{m} x {p} x {n}':<15}"
