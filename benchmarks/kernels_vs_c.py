@@ -1,7 +1,7 @@
 """The compiled kernels against a plain C reference of the same arithmetic (not a test).
 
-Run: ``python benchmarks/kernels_vs_c.py [--quick] [--samples N]`` (from the
-repository root; needs ``gcc``).
+Run: ``python benchmarks/kernels_vs_c.py [--quick] [--samples N] [--iterations I]
+[--prefilter]`` (from the repository root; needs ``gcc``).
 
 It writes a plain C implementation of the three hot loops of
 :mod:`hammerstein.simulation._kernels` on the same packed arrays (play
@@ -10,9 +10,13 @@ gains ``G`` (p, m), discrete state space ``A, B, C, D``):
 
 * ``plant``: multivariable PI (eq. (1) and (4) of the paper) -> linear
   bending modes, per sample (:func:`~hammerstein.simulation._kernels.plant_kernel`);
-* ``chain``: compensator (delay law, ``iterations`` fixed-point steps with
-  the play states frozen at the previous sample, divergence check, commit)
-  -> PI -> bending modes (:func:`~hammerstein.simulation._kernels.chain_kernel`);
+* ``chain``: optional reference pre-filter (``--prefilter``: a state space
+  shaped like a Hammerstein compensator's ZPETC inverse of G, the law's
+  ``prefiltered`` branch) -> compensator (delay law, ``iterations``
+  fixed-point steps with the play states frozen at the previous sample,
+  each re-evaluation moving the plays into a scratch vector then summing
+  them like a sample's output, divergence check, commit) -> PI -> bending
+  modes (:func:`~hammerstein.simulation._kernels.chain_kernel`);
 * ``batch``: the chain over several cases with ragged records, one after the
   other (:func:`~hammerstein.simulation._kernels.chain_batch` on one thread);
 
@@ -85,22 +89,16 @@ static inline void output(const double *u, int64_t m, int64_t p, int64_t n, cons
     }
 }
 
-/* y = Gamma(u; s) without moving the plays */
+/* y = Gamma(u; s) without moving the plays: the moved plays go to the scratch v
+   (n,), zero where no play is, then y = W v + G u (the kernel's _evaluate) */
 static inline void evaluate(const double *u, int64_t m, int64_t p, int64_t n,
                             const int64_t *start, const double *r, const double *W,
-                            const double *G, const double *s, double *y) {
-    for (int64_t l = 0; l < p; l++) {
-        double g = 0.0;
-        for (int64_t k = 0; k < m; k++) g += G[l * m + k] * u[k];
-        y[l] = g;
-    }
+                            const double *G, const double *s, double *v, double *y) {
     for (int64_t k = 0; k < m; k++) {
         double uk = u[k];
-        for (int64_t j = start[k]; j < start[k + 1]; j++) {
-            double v = play(s[j], uk, r[j]);
-            for (int64_t l = 0; l < p; l++) y[l] += W[l * n + j] * v;
-        }
+        for (int64_t j = start[k]; j < start[k + 1]; j++) v[j] = play(s[j], uk, r[j]);
     }
+    output(u, m, p, n, W, G, v, y);
 }
 
 /* y = C x + D h; x <- A x + B h */
@@ -124,6 +122,7 @@ static inline void linear(const double *h, int64_t q, int64_t nx, const double *
 
 #define MAXV 64
 #define MAXX 256
+#define MAXS 4096
 
 void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double *u,
            const int64_t *start, const double *r, const double *W, const double *G, double *s,
@@ -139,25 +138,35 @@ void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double 
     }
 }
 
-/* delay law; returns the first failing sample (status in *status) or N */
+/* reference pre-filter (if prefiltered: ref = Cf xf + Df yr(t), xf <- Af xf + Bf yr(t),
+   e.g. a Hammerstein compensator's ZPETC inverse of G) -> delay law; returns the first
+   failing sample (status in *status) or N */
 int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *Kinv,
-              int64_t iterations, double bound,
+              int64_t iterations, double bound, int64_t prefiltered, const double *Af,
+              const double *Bf, const double *Cf, const double *Df, int64_t nf, double *xf,
               const int64_t *cstart, const double *cr, const double *cW, const double *cG,
               int64_t cn, const int64_t *pstart, const double *pr, const double *pW,
               const double *pG, int64_t pn, const double *A, const double *B, const double *C,
               const double *D, int64_t nx, double *cu, double *cs, double *ps, double *x,
               double *u_out, double *y_out, int64_t *status) {
-    double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], h[MAXV], yt[MAXV], xn[MAXX];
+    double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], yrt[MAXV], h[MAXV], yt[MAXV];
+    double xn[MAXX], xfn[MAXX], sv[MAXS];
     *status = 0;
-    evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, yhat);
+    for (int64_t j = 0; j < cn; j++) sv[j] = 0.0;
+    evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, sv, yhat);
     for (int64_t t = 0; t < N; t++) {
-        for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
+        if (prefiltered) {
+            for (int64_t l = 0; l < p; l++) yrt[l] = yr[l * N + t];
+            linear(yrt, p, nf, Af, Bf, Cf, Df, xf, xfn, ref);
+        } else {
+            for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
+        }
         for (int64_t k = 0; k < m; k++) u[k] = cu[k];
         for (int64_t it = 0; it < iterations; it++) {
             if (it == 0) {
                 for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yhat[l];
             } else {
-                evaluate(u, m, p, cn, cstart, cr, cW, cG, cs, yh);
+                evaluate(u, m, p, cn, cstart, cr, cW, cG, cs, sv, yh);
                 for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yh[l];
             }
             for (int64_t k = 0; k < m; k++) {
@@ -187,15 +196,18 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
 
 /* the chain over B cases of one model, records ragged (offsets), states per case */
 void batch(int64_t B, const int64_t *offsets, int64_t m, int64_t p, const double *yr,
-           const double *Kinv, int64_t iterations, double bound,
-           const int64_t *cstart, const double *cr, const double *cW, const double *cG,
-           int64_t cn, const int64_t *pstart, const double *pr, const double *pW,
-           const double *pG, int64_t pn, const double *A, const double *B_, const double *C,
-           const double *D, int64_t nx, double *cu, double *cs, double *ps, double *x,
-           double *u_out, double *y_out, int64_t *status, int64_t *sample) {
+           const double *Kinv, int64_t iterations, double bound, int64_t prefiltered,
+           const double *Af, const double *Bf, const double *Cf, const double *Df, int64_t nf,
+           double *xf, const int64_t *cstart, const double *cr, const double *cW,
+           const double *cG, int64_t cn, const int64_t *pstart, const double *pr,
+           const double *pW, const double *pG, int64_t pn, const double *A, const double *B_,
+           const double *C, const double *D, int64_t nx, double *cu, double *cs, double *ps,
+           double *x, double *u_out, double *y_out, int64_t *status, int64_t *sample) {
     for (int64_t b = 0; b < B; b++) {
         int64_t a = offsets[b], n = offsets[b + 1] - a;
-        sample[b] = chain(m, p, n, yr + p * a, Kinv + b * m * p, iterations, bound,
+        sample[b] = chain(m, p, n, yr + p * a, Kinv + b * m * p, iterations, bound, prefiltered,
+                          Af + b * nf * nf, Bf + b * nf * p, Cf + b * p * nf, Df + b * p * p, nf,
+                          xf + b * nf,
                           cstart + b * (m + 1), cr + b * cn, cW + b * p * cn, cG + b * p * m, cn,
                           pstart + b * (m + 1), pr + b * pn, pW + b * p * pn, pG + b * p * m, pn,
                           A + b * nx * nx, B_ + b * nx * p, C + b * p * nx, D + b * p * p, nx,
@@ -216,11 +228,11 @@ def compile_reference(directory):
     i, d, P = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
     cdll.plant.argtypes = [i, i, i, i, i] + [P] * 12
     cdll.plant.restype = None
-    cdll.chain.argtypes = ([i, i, i, P, P, i, d, P, P, P, P, i, P, P, P, P, i, P, P, P, P, i]
-                           + [P] * 7)
+    cdll.chain.argtypes = ([i, i, i, P, P, i, d, i, P, P, P, P, i, P, P, P, P, P, i, P, P, P, P,
+                            i, P, P, P, P, i] + [P] * 7)
     cdll.chain.restype = i
-    cdll.batch.argtypes = ([i, P, i, i, P, P, i, d, P, P, P, P, i, P, P, P, P, i, P, P, P, P, i]
-                           + [P] * 8)
+    cdll.batch.argtypes = ([i, P, i, i, P, P, i, d, i, P, P, P, P, i, P, P, P, P, P, i, P, P, P,
+                            P, i, P, P, P, P, i] + [P] * 8)
     cdll.batch.restype = None
     return cdll
 
@@ -266,6 +278,38 @@ def bending_modes(rng, p, T=5e-5):
     return LinearArrays(A, B, C, D)
 
 
+def zpetc_like_prefilter(rng, p, window=4):
+    """A reference pre-filter shaped like a Hammerstein compensator's ZPETC inverse of G.
+
+    :meth:`hammerstein.core.inversion.ZPETCInverse.state_space` of the bundled
+    2x2 plant: a shift register of the ``window - 1`` past reference samples
+    (p each) plus one acceptable-mode state per output (a stable pole), taps
+    on the window (``Cf``, ``Df``) and on the modes' input; ``p * window``
+    states, dense matrices as the kernels receive them (mostly zeros). Unit
+    DC gain, so the filtered reference keeps the amplitude of ``yr``.
+    """
+    L = window
+    nw = p * (L - 1)
+    n = nw + p
+    Af, Bf = np.zeros((n, n)), np.zeros((n, p))
+    Cf, Df = np.zeros((p, n)), np.zeros((p, p))
+    for l in range(p):
+        taps = rng.uniform(-1.0, 1.0, L)
+        taps[0] += 1.0 - taps.sum()                  # unit DC gain of the window part
+        pole = rng.uniform(0.2, 0.6)
+        Df[l, l] = taps[0]
+        for j in range(L - 1):                       # slot j holds r(k - (L - 1 - j))
+            Cf[l, j * p + l] = taps[L - 1 - j]
+            Af[nw + l, j * p + l] = 0.05 * taps[L - 1 - j]
+        Af[nw + l, nw + l] = pole
+        Bf[nw + l, l] = 0.05 * taps[0]
+        Cf[l, nw + l] = 1e-3
+    for j in range(L - 2):                           # shift the window by one sample
+        Af[j * p:(j + 1) * p, (j + 1) * p:(j + 2) * p] = np.eye(p)
+    Bf[(L - 2) * p:(L - 1) * p] = np.eye(p)
+    return LinearArrays(Af, Bf, Cf, Df)
+
+
 def reference(rng, p, N, T=5e-5):
     t = np.arange(N) * T
     return np.vstack([3.0 * np.sin(2 * np.pi * (50 + 13 * l) * t + l) for l in range(p)])
@@ -280,8 +324,13 @@ def best_time(fn, repeats):
     return best
 
 
-def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
-    """ns per sample of numba and C for the plant, chain and batch loops; max |dy|."""
+def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8, prefilter=False):
+    """ns per sample of numba and C for the plant, chain and batch loops; max |dy|.
+
+    ``prefilter``: the chain and batch run a Hammerstein compensator's law
+    (:func:`zpetc_like_prefilter` before the law); otherwise the inverse
+    multiplicative law alone (the identity pre-filter, skipped).
+    """
     rng = np.random.default_rng(m * 10000 + p * 100 + n)
     pi = random_pi(rng, m, p, n)
     comp = random_pi(rng, m, p, n)
@@ -313,23 +362,27 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
     out["plant"] = _compare(nb_plant, c_plant, N, repeats)
 
     # chain ---------------------------------------------------------------------
-    law = LawArrays(K_inv, iterations, 1e6, False, 0.0, False)
-    empty_filter = LinearArrays(np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p))
+    law = LawArrays(K_inv, iterations, 1e6, False, 0.0, bool(prefilter))
+    filt = (zpetc_like_prefilter(rng, p) if prefilter else
+            LinearArrays(np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p)))
+    nf = filt.A.shape[0]
 
     def nb_chain():
-        st = ChainState(np.zeros(m), np.zeros(m), np.zeros(cn), np.zeros(0), np.zeros(pn),
+        st = ChainState(np.zeros(m), np.zeros(m), np.zeros(cn), np.zeros(nf), np.zeros(pn),
                         np.zeros(nx))
         uo, yo = np.empty((m, N)), np.empty((p, N))
-        status, _ = kernels.chain_kernel(yr, N, law, comp, empty_filter, pi, lin, True, st, uo, yo)
+        status, _ = kernels.chain_kernel(yr, N, law, comp, filt, pi, lin, True, st, uo, yo)
         assert status == 0, "the benchmark's compensator diverged"
         return yo
 
     def c_chain():
         cu, cs, ps, x = np.zeros(m), np.zeros(cn), np.zeros(pn), np.zeros(nx)
+        xf = np.zeros(nf)
         uo, yo = np.empty((m, N)), np.empty((p, N))
         status = np.zeros(1, dtype=np.int64)
         lib.chain(m, p, N, _ptr(yr), _ptr(K_inv), iterations, ctypes.c_double(1e6),
-                  _ptr(comp.start), _ptr(comp.r), _ptr(comp.W), _ptr(comp.G), cn,
+                  int(prefilter), _ptr(filt.A), _ptr(filt.B), _ptr(filt.C), _ptr(filt.D), nf,
+                  _ptr(xf), _ptr(comp.start), _ptr(comp.r), _ptr(comp.W), _ptr(comp.G), cn,
                   _ptr(pi.start), _ptr(pi.r), _ptr(pi.W), _ptr(pi.G), pn,
                   _ptr(lin.A), _ptr(lin.B), _ptr(lin.C), _ptr(lin.D), nx,
                   _ptr(cu), _ptr(cs), _ptr(ps), _ptr(x), _ptr(uo), _ptr(yo), _ptr(status))
@@ -349,15 +402,15 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
         return np.ascontiguousarray(np.broadcast_to(a, (B,) + np.shape(a)))
 
     blaw = LawArrays(tile(K_inv), np.full(B, iterations, dtype=np.int64), np.full(B, 1e6),
-                     np.zeros(B, dtype=np.bool_), np.zeros(B), np.zeros(B, dtype=np.bool_))
+                     np.zeros(B, dtype=np.bool_), np.zeros(B), np.full(B, bool(prefilter)))
     bcomp = PIArrays(*(tile(a) for a in comp))
     bpi = PIArrays(*(tile(a) for a in pi))
     blin = LinearArrays(*(tile(a) for a in lin))
-    bfilter = LinearArrays(*(tile(a) for a in empty_filter))
+    bfilter = LinearArrays(*(tile(a) for a in filt))
     order = np.arange(B, dtype=np.int64)
 
     def nb_batch():
-        st = ChainState(np.zeros((B, m)), np.zeros((B, m)), np.zeros((B, cn)), np.zeros((B, 0)),
+        st = ChainState(np.zeros((B, m)), np.zeros((B, m)), np.zeros((B, cn)), np.zeros((B, nf)),
                         np.zeros((B, pn)), np.zeros((B, nx)))
         uo, yo = np.empty(m * N), np.empty(p * N)
         status, sample, worker = (np.zeros(B, dtype=np.int64) for _ in range(3))
@@ -367,11 +420,12 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8):
         return yo
 
     def c_batch():
-        cu, cs, ps, x = (np.zeros((B, k)) for k in (m, cn, pn, nx))
+        cu, cs, ps, x, xf = (np.zeros((B, k)) for k in (m, cn, pn, nx, nf))
         uo, yo = np.empty(m * N), np.empty(p * N)
         status, sample = np.zeros(B, dtype=np.int64), np.zeros(B, dtype=np.int64)
         lib.batch(B, _ptr(offsets), m, p, _ptr(flat), _ptr(blaw.K_inv), iterations,
-                  ctypes.c_double(1e6), _ptr(bcomp.start), _ptr(bcomp.r), _ptr(bcomp.W),
+                  ctypes.c_double(1e6), int(prefilter), _ptr(bfilter.A), _ptr(bfilter.B),
+                  _ptr(bfilter.C), _ptr(bfilter.D), nf, _ptr(xf), _ptr(bcomp.start), _ptr(bcomp.r), _ptr(bcomp.W),
                   _ptr(bcomp.G), cn, _ptr(bpi.start), _ptr(bpi.r), _ptr(bpi.W), _ptr(bpi.G), pn,
                   _ptr(blin.A), _ptr(blin.B), _ptr(blin.C), _ptr(blin.D), nx,
                   _ptr(cu), _ptr(cs), _ptr(ps), _ptr(x), _ptr(uo), _ptr(yo), _ptr(status),
@@ -401,7 +455,8 @@ def main(argv=None):
     Parameters
     ----------
     argv : list of str, optional
-        ``--quick``, ``--samples N``, ``--repeat R``, ``--iterations I``.
+        ``--quick``, ``--samples N``, ``--repeat R``, ``--iterations I``, ``--prefilter``,
+        ``--sizes 2x2x5,6x6x50``.
 
     Returns
     -------
@@ -414,12 +469,18 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=None)
     ap.add_argument("--iterations", type=int, default=1,
                     help="fixed-point iterations of the compensator (default 1)")
+    ap.add_argument("--sizes", default=None,
+                    help="comma-separated m x p x n sizes, e.g. 2x2x5,6x6x50 (default: all)")
+    ap.add_argument("--prefilter", action="store_true",
+                    help="chain and batch with a ZPETC-shaped reference pre-filter (the law of "
+                         "a Hammerstein compensator, p * 4 states)")
     args = ap.parse_args(argv)
     N = args.samples or (20_000 if args.quick else 100_000)
     repeats = args.repeat or (3 if args.quick else 7)
     import numba
     print(f"kernels vs C  numba {numba.__version__}, gcc {' '.join(CFLAGS[:5])}, "
-          f"{N} samples a call, best of {repeats}, compensator iterations {args.iterations}")
+          f"{N} samples a call, best of {repeats}, compensator iterations {args.iterations}, "
+          f"pre-filter {'ZPETC-shaped' if args.prefilter else 'none'}")
     load0 = os.getloadavg()[0]
     c0 = time.process_time()
     worst = 0.0
@@ -428,8 +489,10 @@ def main(argv=None):
         print(f"{'size m x p x n':<15}" + "".join(
             f"{k + ' nb/C [ns]':>22}{'ratio':>7}" for k in ("plant", "chain", "batch"))
             + f"{'max rel |dy|':>14}")
-        for m, p, n in SIZES:
-            res = case(lib, m, p, n, N, repeats, args.iterations)
+        sizes = SIZES if not args.sizes else [tuple(int(v) for v in t.lower().split("x"))
+                                              for t in args.sizes.split(",")]
+        for m, p, n in sizes:
+            res = case(lib, m, p, n, N, repeats, args.iterations, prefilter=args.prefilter)
             worst = max(worst, *(r["ratio"] for r in res.values()))
             row = f"{f'{m} x {p} x {n}':<15}"
             for k in ("plant", "chain", "batch"):

@@ -1,6 +1,7 @@
 """A 200-frequency sweep with ``kind = "hammerstein"`` against a rate-independent kind.
 
-Run: ``python benchmarks/sweep_hammerstein.py [--repeat 5] [--inversion zpetc|stable]``
+Run: ``python benchmarks/sweep_hammerstein.py [--repeat 5] [--inversion zpetc|stable]
+[--iterations-study]``
 (from the repository root; ``NUMBA_NUM_THREADS`` unset for both cores).
 
 Not a test. Two scenarios on the same plant (the bundled preset with its
@@ -24,12 +25,21 @@ of each, the ratios of the medians, and the load average before and after
 steadier number).
 
 Target (issue 20): the Hammerstein sweep within 1.2x of the rate-independent one.
+
+``--iterations-study`` instead runs the bundled ``scenarios/hammerstein-*.toml``
+(copied to a temporary folder, ``iterations = 1, 2, 3`` written into every
+``kind = "hammerstein"`` table) and prints, per scenario, the ratio of each
+case's tracking error (``rms_error`` of every channel, ``max_euclidean_error``)
+with 1 and 2 iterations to the error with 3 (the default): what the law's
+iterations buy once G is inverted (the cost side is the ``rate-indep., 3
+iterations`` row of the timing).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import shutil
 import statistics
 import sys
 import tempfile
@@ -73,6 +83,52 @@ def scenarios(folder, inversion, n_freqs=200):
     return out
 
 
+def iterations_study(min_error=0.05):
+    """Error ratios of 1 and 2 law iterations against 3 on the bundled Hammerstein scenarios.
+
+    Channels whose error with 3 iterations is below ``min_error`` µm (the
+    cross-coupling channels of a sine on one axis) are left out of the ratios.
+    """
+    import pandas as pd
+
+    from hammerstein.scenario.resolve import load_scenario
+    from hammerstein.scenario.sweeps import run_cases
+
+    root = Path(__file__).resolve().parents[1] / "scenarios"
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        shutil.copytree(root, Path(folder) / "s")
+        for path in sorted(root.glob("hammerstein-*.toml")):
+            text = path.read_text(encoding="utf-8")
+            for it in (1, 2, 3):
+                copy = Path(folder) / "s" / f"{path.stem}-it{it}.toml"
+                copy.write_text(text.replace('kind = "hammerstein"',
+                                             f'kind = "hammerstein", iterations = {it}')
+                                if '{ kind = "hammerstein"' in text else
+                                text.replace('kind = "hammerstein"\n',
+                                             f'kind = "hammerstein"\niterations = {it}\n'),
+                                encoding="utf-8")
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    cases = load_scenario(copy).cases
+                    for case, res in zip(cases, run_cases(cases)):
+                        for r in res.metrics:
+                            if r["metric"] in ("rms_error", "max_euclidean_error"):
+                                rows.append((path.stem, it, case.name, r["channel"], r["metric"],
+                                             r["value"]))
+    df = pd.DataFrame(rows, columns=["scenario", "it", "case", "channel", "metric", "value"])
+    wide = df.pivot_table(index=["scenario", "metric", "case", "channel"], columns="it",
+                          values="value")
+    wide = wide[wide[3] >= min_error]
+    print(f"tracking error with 1 and 2 iterations / with 3 (channels with >= {min_error} um):")
+    print(f"{'scenario':36s} {'metric':20s} {'n':>3s} {'1 it median':>12s} {'1 it max':>9s} "
+          f"{'2 it median':>12s} {'2 it max':>9s}")
+    for (scen, metric), g in wide.groupby(level=["scenario", "metric"]):
+        r1, r2 = g[1] / g[3], g[2] / g[3]
+        print(f"{scen:36s} {metric:20s} {len(g):3d} {r1.median():11.2f}x {r1.max():8.2f}x "
+              f"{r2.median():11.2f}x {r2.max():8.2f}x")
+
+
 def timed(fn):
     c0, w0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
@@ -86,7 +142,12 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--inversion", choices=("zpetc", "stable"), default="zpetc")
     ap.add_argument("--frequencies", type=int, default=200)
+    ap.add_argument("--iterations-study", action="store_true",
+                    help="tracking errors with 1/2/3 law iterations on scenarios/hammerstein-*.toml")
     args = ap.parse_args(argv)
+    if args.iterations_study:
+        iterations_study()
+        return
 
     from hammerstein.scenario.execute import run_case
     from hammerstein.scenario.sweeps import run_cases

@@ -575,6 +575,9 @@ PARALLEL_MIN_SAMPLES = 20_000
 
 
 def _stack(arrays, shape, dtype=float):
+    """Arrays of up to ``shape`` stacked on a leading case axis, zero padded."""
+    if arrays and all(a.shape == shape for a in arrays):    # a sweep: one model size, no padding
+        return np.stack(arrays).astype(dtype, copy=False)
     out = np.zeros((len(arrays),) + shape, dtype=dtype)
     for b, a in enumerate(arrays):
         out[(b,) + tuple(slice(0, n) for n in a.shape)] = a
@@ -692,7 +695,17 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
     if len(comps) != B or len(plts) != B:
         raise HysteresisError(
             f"compensators/plants: expected 1 or {B} of each, found {len(comps)} and {len(plts)}")
-    laws = [_validated(c if isinstance(c, CompensatorLaw) else compensator_law_of(c))
+    checked = {}
+
+    def validated(law):         # a pre-filter shared by many cases is checked once
+        if law is None or law.prefilter is None:
+            return law
+        key = (id(law.prefilter), law.model.n_outputs)
+        if key not in checked:
+            checked[key] = (law.prefilter, _validated(law).prefilter)
+        return law._replace(prefilter=checked[key][1])
+
+    laws = [validated(c if isinstance(c, CompensatorLaw) else compensator_law_of(c))
             for c in comps]
     for c, law in zip(comps, laws):
         if law is None:

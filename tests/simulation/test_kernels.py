@@ -385,6 +385,32 @@ def test_batch_runs_prefiltered_and_plain_cases():
             np.testing.assert_array_equal(got.compensator_state, one.compensator_state)
 
 
+def test_batch_of_one_shared_prefilter_equals_single_runs():
+    """Equal-size cases (stacked without padding) sharing one pre-filter (checked once)."""
+    rng = np.random.default_rng(625)
+    model = square_model(rng, 2)
+    comp = Prefiltered(InverseMultiplicativeCompensator(model, iterations=3, check="ignore"),
+                       stable_filter(rng, 3, 2))
+    plant = random_plant(rng, model, True)
+    refs = [random_inputs(rng, 2, n) for n in (140, 60, 100, 80)]
+    for got, yr in zip(sim.simulate_chain_batch(comp, plant, refs), refs):
+        one = sim.simulate_chain(comp, plant, yr)
+        np.testing.assert_array_equal(got.inputs, one.inputs)
+        np.testing.assert_array_equal(got.outputs, one.outputs)
+        np.testing.assert_array_equal(got.compensator_state, one.compensator_state)
+
+
+def test_shared_prefilter_of_the_wrong_shape_is_named_in_a_batch():
+    rng = np.random.default_rng(635)
+    model = square_model(rng, 2)
+    f = stable_filter(rng, 2, 2)
+    bad = Prefiltered(InverseMultiplicativeCompensator(model, check="ignore"),
+                      f._replace(C=np.zeros((3, 2))))
+    with pytest.raises(HysteresisError, match=r"prefilter\.C: expected shape \(2, 2\)"):
+        sim.simulate_chain_batch(bad, random_plant(rng, model, False),
+                                 [random_inputs(rng, 2, 10)] * 3)
+
+
 def test_prefilter_of_the_wrong_shape_is_named():
     rng = np.random.default_rng(630)
     model = square_model(rng, 2)
