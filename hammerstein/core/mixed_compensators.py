@@ -19,9 +19,10 @@ each kind is built over it as follows (:func:`mixed_compensator`):
   (``(S_min + S_max) / 2`` of the slopes along each direct path's major
   loop), ``"identity"`` or a matrix [µm/V]. One step per sample
   (``iterations = 1``) and the one-sample delay feedback.
-* ``diagonal``: the same law on the direct paths only (cross-couplings left).
+* ``diagonal``: the same law on the direct paths only (cross-couplings left,
+  their constant output at rest kept: :func:`diagonal_model`).
 * ``per-axis``: the exact inverse of each direct path alone (a monotone
-  scalar root per sample, cross-couplings left): the analogue of the
+  scalar root per sample, cross-couplings left as for ``diagonal``): the analogue of the
   per-axis analytic inverse PI of Kuhnen and Janocha.
 * ``static-gain``: ``U = K^-1 (Yr - c)``, K the direct secant gains and c the
   centre of each direct path's major loop at zero input (no hysteresis
@@ -39,7 +40,7 @@ import warnings
 
 import numpy as np
 
-from hammerstein.core.preisach import MultivariableHysteresis
+from hammerstein.core.preisach import MultivariableHysteresis, Polynomial
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 from hammerstein.exceptions import CompensatorError, ConvergenceWarning
 
@@ -162,8 +163,23 @@ def mixed_gain(model, gain="secant"):
     return K
 
 
+def _rest_output(component):
+    """A component's output at zero input from its rest state [µm] (0 for an absent one)."""
+    if component is None:
+        return 0.0
+    if isinstance(component, (int, float)):
+        return 0.0                           # a gain
+    return float(np.asarray(component.simulate(np.zeros(1))[0]).ravel()[0])
+
+
 def diagonal_model(model):
-    """The model with its direct paths only (cross-couplings removed).
+    """The model with its direct paths only (cross-couplings' variation removed).
+
+    Each cross-coupling (l, k), k != l, is replaced by its output at zero
+    input from rest, a constant: an identified model may carry a large
+    constant in a cross-coupling (a Preisach coupling's demagnetised
+    hysterons, balanced by the direct path's offset), which is part of the
+    output at rest, not of the coupling the diagonal kinds leave out.
 
     Parameters
     ----------
@@ -173,10 +189,18 @@ def diagonal_model(model):
     Returns
     -------
     MultivariableHysteresis
-        Same names and amplitude; component (l, k) None for k != l.
+        Same names and amplitude; component (l, k), k != l, None or a
+        constant ``Polynomial([0], offset=c_lk)``.
     """
     m = model.n_inputs
-    grid = [[model.components[l][k] if k == l else None for k in range(m)] for l in range(m)]
+    grid = [[None] * m for _ in range(m)]
+    for l in range(m):
+        for k in range(m):
+            c = model.components[l][k]
+            if k == l:
+                grid[l][k] = c
+            elif _rest_output(c) != 0.0:
+                grid[l][k] = Polynomial([0.0], offset=_rest_output(c))
     return MultivariableHysteresis(grid, model.input_names, model.output_names,
                                    model.input_amplitude)
 
@@ -309,7 +333,8 @@ def _square(model, kind):
                                f"{model.n_inputs} and {model.n_outputs}")
 
 
-def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", feedback="delay"):
+def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", feedback="delay",
+                      inverse=PreisachInverseCompensator):
     """A rate-independent kind over a model that is not a classical PI (module notes).
 
     Parameters
@@ -325,10 +350,19 @@ def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", f
         Convergence check of the law (module notes).
     feedback : {'delay'}
         The one-sample delay (the low-pass feedback is the PI law's).
+    inverse : callable
+        ``inverse(model, method=..., name=...)`` returns a compensator over a
+        model with a forward operator and an exact inverse:
+        ``method = "root"`` its exact per-sample inverse, ``"multiplicative"``
+        the law with Gamma the model's forward operator and settable ``K``,
+        ``K_inv`` [µm/V]. Default the Preisach model's
+        (:class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`);
+        another model class passes its own.
 
     Returns
     -------
     PreisachInverseCompensator or LinearInverseCompensator
+        (or what ``inverse`` returns)
         ``name`` the kind.
 
     Raises
@@ -359,7 +393,7 @@ def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", f
     if kind == "static-gain":
         return LinearInverseCompensator(model, name="static-gain")
     if kind == "per-axis":
-        return PreisachInverseCompensator(diagonal_model(model), method="root", name="per-axis")
+        return inverse(diagonal_model(model), method="root", name="per-axis")
     if iterations != 1:
         raise CompensatorError(f"iterations: the inverse multiplicative law over a "
                                f"{type(model).__name__} runs one step per sample (iterations = 1), "
@@ -369,7 +403,7 @@ def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", f
                                f"{feedback!r}")
     target = model if kind == "multivariable" else diagonal_model(model)
     K = mixed_gain(target, gain)
-    comp = PreisachInverseCompensator(target, method="multiplicative", name=kind)
+    comp = inverse(target, method="multiplicative", name=kind)
     comp.K, comp.K_inv = K, np.linalg.inv(K)
     comp.convergence_radius = _check_law(target, K, check, kind)
     return comp
