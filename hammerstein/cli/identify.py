@@ -31,7 +31,7 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, png_provenan
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.creep import creep_to_table
-from hammerstein.core.creep_identification import remove_creep
+from hammerstein.core.creep_identification import remove_creep, step_level_errors
 from hammerstein.core.preisach_identification import identify_preisach_records
 from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_creep,
                                                      identify_record_dynamics, identify_records)
@@ -482,7 +482,9 @@ def _refit_without_creep(args, records, n, thresholds, names, fit, creep, dyn):
     for i in range(refits):
         before = _fit_rms(fit)
         clean = remove_creep(records, creep.creeps_, fit.model.output_offset)
-        fit = _identify(args, clean, n, thresholds, names)
+        chosen = [note for note in fit.notes if note.startswith("model auto")]
+        fit = _identify(args, clean, n, thresholds, names, _class_of(fit))   # the class kept
+        fit.notes[:0] = chosen
         creep = _creep(args, fit, dyn)
         fit.notes.append(f"creep refit {i + 1}: hysteresis refitted on the records with the "
                          f"identified creep removed (v = (I + C)^-1 y); held-out RMS "
@@ -502,10 +504,48 @@ def _minor_loop_error(fit):
     return float(np.mean(rows)) if rows else None
 
 
-def _identify(args, records, n, thresholds, names):
-    """The fit of ``--model``: classical PI, Preisach, or the better on held-out minor loops."""
+def _class_of(fit):
+    """The ``--model`` class of a fit (``"classical"`` or ``"preisach"``)."""
+    return "preisach" if fit.method == "preisach" else "classical"
+
+
+def _creep_recs(args):
+    """The --creep-records, read once per command."""
+    if getattr(args, "_creep_read", None) is None:
+        args._creep_read = [read_records(d, args.inputs, args.outputs, args.time,
+                                         args.sampling_period) for d in args.creep_records]
+    return args._creep_read
+
+
+def _step_level_error(fit, recs):
+    """Held-out step levels of the staircases for a fit: (RMS [% of range], RMS, largest [unit]).
+
+    The creep is fitted for this model (``identify_record_creep`` without G:
+    the levels are read after the ringing), then the model with its creep
+    predicts every step level of the staircases
+    (:func:`hammerstein.core.creep_identification.step_level_errors`).
+    """
+    creep = identify_record_creep(fit, recs)
+    errs = step_level_errors(fit.model, recs, creep.creeps_)
+    span = np.max([np.ptp(np.asarray(r.y, dtype=float), axis=1) for r in recs], axis=0)
+    rel = np.concatenate([(e / span[:, None]).ravel() for e in errs])
+    ab = np.concatenate([e.ravel() for e in errs])
+    rel, ab = rel[np.isfinite(rel)], ab[np.isfinite(ab)]
+    return (100 * float(np.sqrt(np.mean(rel ** 2))), float(np.sqrt(np.mean(ab ** 2))),
+            float(np.max(np.abs(ab))))
+
+
+def _identify(args, records, n, thresholds, names, model_class=None):
+    """The fit of ``--model``: classical PI, Preisach, or the better on held-out data.
+
+    ``auto`` judges the classes on the held-out minor loops of the
+    multi-amplitude records and, with ``--creep-records``, also on the step
+    levels of the staircases (held out: the hysteresis is not fitted on
+    them); ``model_class`` forces one class (a refit keeps the chosen one).
+    """
+    choice = model_class or args.model
     fits, errors = {}, {}
-    if args.model in ("classical", "auto"):
+    if choice in ("classical", "auto"):
         try:
             fits["classical"] = identify_records(
                 records, args.method, n, thresholds, "time" if thresholds is not None and
@@ -515,32 +555,47 @@ def _identify(args, records, n, thresholds, names):
         except (IdentificationError, HysteresisError):
             raise                    # a problem of the records: the same for every class
     levels = any(r["held_out"] for f in fits.values() for r in f.levels)
-    if args.model == "preisach" or (args.model == "auto" and levels):
+    if choice == "preisach" or (choice == "auto" and levels):
         try:
             fits["preisach"] = identify_preisach_records(
                 records, args.preisach_levels, "auto", args.components, args.hold_out,
                 args.train_fraction, args.skip, *names)
         except (IdentificationError, HysteresisError) as exc:
-            if args.model == "preisach" or not fits:
+            if choice == "preisach" or not fits:
                 raise
             errors["preisach"] = str(exc)
     if len(fits) == 1:
         fit = next(iter(fits.values()))
-        if args.model == "auto":
+        if choice == "auto":
             why = ("; ".join(f"{k} failed: {v}" for k, v in errors.items()) if errors else
                    "no held-out amplitude level (minor loop) to compare the classes on")
             fit.notes.insert(0, f"model auto: {'classical PI' if 'classical' in fits else 'preisach'} "
                                 f"({why})")
         return fit
-    scores = {k: _minor_loop_error(f) for k, f in fits.items()}
+    loops = {k: _minor_loop_error(f) for k, f in fits.items()}
+    stairs = {k: _step_level_error(f, _creep_recs(args)) for k, f in fits.items()} \
+        if args.creep_records else {}
+    if stairs:   # both held out; the geometric mean weighs each by its ratio between classes
+        scores = {k: float(np.sqrt(loops[k] * stairs[k][0])) for k in fits}
+        rule = ("lowest geometric mean of the held-out minor-loop RMS error (% of each level's "
+                "output range) and the staircases' step-level RMS error (% of each output's "
+                "range; --creep-records, not used to fit the hysteresis)")
+    else:
+        scores = loops
+        rule = "lowest mean held-out minor-loop RMS error, % of each level's output range"
     best = min(scores, key=lambda k: scores[k])
     fit = fits[best]
-    lines = [f"model auto: chose {best} (lowest mean held-out minor-loop RMS error, % of each "
-             f"level's output range)"]
+    lines = [f"model auto: chose {best} ({rule})"]
     for k, f in fits.items():
         worst = max(v["rms_percent"] for v in f.validation) if f.validation else float("nan")
-        lines.append(f"model auto: {k} {scores[k]:.3g} % mean held-out minor-loop RMS (largest "
-                     f"held-out RMS of an output {worst:.3g} % of its range)")
+        text = (f"model auto: {k} {loops[k]:.3g} % mean held-out minor-loop RMS (largest "
+                f"held-out RMS of an output {worst:.3g} % of its range)")
+        if stairs:
+            pct, rms, big = stairs[k]
+            text += (f"; staircase step levels (model + its creep, from rest) RMS "
+                     f"{rms:.3g} {args.output_unit} = {pct:.3g} % of the range, largest "
+                     f"{big:.3g} {args.output_unit}; score {scores[k]:.3g} %")
+        lines.append(text)
     fit.notes[:0] = lines
     return fit
 
@@ -774,9 +829,7 @@ def _dynamics(args, fit, creep=None):
 
 def _creep(args, fit, dyn):
     """Identified creep (:func:`identify_record_creep`) of the --creep-records."""
-    recs = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
-            for d in args.creep_records]
-    return identify_record_creep(fit, recs, None if dyn is None else dyn.identifier.system_)
+    return identify_record_creep(fit, _creep_recs(args), None if dyn is None else dyn.identifier.system_)
 
 
 def creep_metrics_rows(creep, output_unit="µm"):

@@ -201,6 +201,19 @@ def _fade_weights(start, n, fade):
     return w
 
 
+def _rest_state(compensator):
+    """The compensator's own state at rest (its ``initial_state()``), else zeros.
+
+    Zeros are the rest of a PI compensator, not of every compensator: the
+    exact inverse of a Preisach model starts from the model's demagnetised
+    hysterons (zero hysteron states would put the inverse on another memory
+    than the actuator's and offset every level it tracks afterwards).
+    """
+    if hasattr(compensator, "initial_state"):
+        return np.array(compensator.initial_state(), dtype=float)
+    return np.zeros(compensator.n_states) if hasattr(compensator, "n_states") else None
+
+
 class DriveStream:
     """A compensator's drive computed chunk by chunk, equal to the whole-record computation.
 
@@ -290,7 +303,7 @@ class DriveStream:
         self._remember(faded)
         if not self._zpetc:
             if self._state is None:
-                self._state = np.zeros(comp.n_states) if hasattr(comp, "n_states") else None
+                self._state = _rest_state(comp)
             u, self._state = comp.simulate(faded, self._state)
             return u
         if self._state is None:                       # the inverse starts on the first P samples
@@ -302,7 +315,7 @@ class DriveStream:
             s0 = inv.initial_state(self._head[:, 0])
             if P:
                 _, s0 = inv.filter(self._head[:, :P], s0)
-            state = np.zeros(comp.n_states)
+            state = _rest_state(comp)      # e.g. a Preisach model's demagnetised hysterons
             state[comp.hysteresis_compensator.n_states:] = s0
             self._state = state
             faded, self._head = self._head[:, P:], None

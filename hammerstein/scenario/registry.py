@@ -34,6 +34,7 @@ from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_i
                                                   identify_dynamics_table, identify_table)
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
                                          string)
+from hammerstein.core.mixed_compensators import mixed_compensator
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
@@ -132,7 +133,9 @@ def _build_none(spec, plant, context):
 
 
 def _build_multivariable(spec, plant, context):
-    model = _pi_model(spec, plant, context)
+    model = _spec_model(spec, plant, context)
+    if not isinstance(model, MultivariablePI):
+        return _mixed(spec, model, "multivariable")
     return InverseMultiplicativeCompensator(
         model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
         check=spec.get("check", "error"), **_feedback_options(spec, plant))
@@ -143,17 +146,13 @@ def _spec_model(spec, plant, context):
     return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
 
 
-def _pi_model(spec, plant, context):
-    """The model of a kind built on the classical PI's inverse law; a clear error otherwise."""
-    model = _spec_model(spec, plant, context)
-    if not isinstance(model, MultivariablePI):
-        kind = spec.get("kind", "multivariable")
-        raise CompensatorError(
-            f"compensator.kind = {kind!r}: needs a classical PI model (MultivariablePI), but "
-            f"model = {spec.get('model', 'plant')!r} is a {type(model).__name__} (Preisach or "
-            f"mixed components); use kind = 'hammerstein' or 'preisach-inverse' (exact inverse "
-            f"of a Preisach model), or identify a classical PI")
-    return model
+def _mixed(spec, model, kind):
+    """A rate-independent kind over a model that is not a classical PI (a Preisach or mixed
+    model): :func:`hammerstein.core.mixed_compensators.mixed_compensator`."""
+    return mixed_compensator(model, kind, gain=spec.get("gain", "secant"),
+                             iterations=spec.get("iterations", 1),
+                             check=spec.get("check", "error"),
+                             feedback=spec.get("feedback", "delay"))
 
 
 def _feedback_options(spec, plant):
@@ -165,18 +164,27 @@ def _feedback_options(spec, plant):
 
 
 def _build_diagonal(spec, plant, context):
+    model = _spec_model(spec, plant, context)
+    if not isinstance(model, MultivariablePI):
+        return _mixed(spec, model, "diagonal")
     return diagonal_compensator(
-        _pi_model(spec, plant, context), gain=spec.get("gain", "secant"),
+        model, gain=spec.get("gain", "secant"),
         iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
         **_feedback_options(spec, plant))
 
 
 def _build_per_axis(spec, plant, context):
-    return PerAxisInverseCompensator(_pi_model(spec, plant, context))
+    model = _spec_model(spec, plant, context)
+    if not isinstance(model, MultivariablePI):
+        return _mixed(spec, model, "per-axis")
+    return PerAxisInverseCompensator(model)
 
 
 def _build_static_gain(spec, plant, context):
-    return StaticGainCompensator(_pi_model(spec, plant, context))
+    model = _spec_model(spec, plant, context)
+    if not isinstance(model, MultivariablePI):
+        return _mixed(spec, model, "static-gain")
+    return StaticGainCompensator(model)
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------

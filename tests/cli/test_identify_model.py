@@ -100,3 +100,47 @@ def test_preisach_levels_out_of_range_is_a_usage_error(files, capsys):
                  "--preisach-levels", "1", "--out", str(d / "x.toml")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--preisach-levels" in err
+
+
+def test_auto_with_creep_records_judges_the_step_levels_too(files, capsys):
+    # a staircase from rest per input (the actuator has no creep: the levels are its hysteresis);
+    # both classes are judged on them too, one line each, and the numbers printed are those of
+    # the chosen model and its creep on the staircases, recomputed here
+    from hammerstein.core.creep import creep_from_table
+    from hammerstein.core.excitation import staircase
+    from hammerstein.core.presets import read_toml
+    act, d, recs = files
+    rng = np.random.default_rng(5)
+    stairs = []
+    for k in range(2):
+        t, one, _ = staircase(T, 10.0, hold=0.5)
+        u = np.zeros((2, t.size))
+        u[k] = one
+        write(d / f"stairs-{k}.csv", t, u, act.simulate(u)[0] + 0.04 * rng.standard_normal((2, t.size)))
+        stairs.append((u, act.simulate(u)[0]))
+    out = d / "auto-creep.toml"
+    assert main(["identify", *recs, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t",
+                 "--creep-records", str(d / "stairs-0.csv"), str(d / "stairs-1.csv"),
+                 "--creep-refits", "0", "--out", str(out), "--preisach-levels", "12"]) == 0, \
+        capsys.readouterr().err
+    lines = [ln.strip() for ln in capsys.readouterr().out.splitlines() if "model auto:" in ln]
+    assert "staircases' step-level RMS" in lines[0]
+    per = {ln.split()[2]: ln for ln in lines[1:]}
+    assert set(per) == {"classical", "preisach"}
+    chosen = lines[0].split()[3]
+    rms = float(per[chosen].split("step levels (model + its creep, from rest) RMS ")[1].split()[0])
+    model = load_model(str(out))
+    table = read_toml(out)["creep"]
+    creeps = [creep_from_table(table[name], f"creep.{name}") for name in ("x", "y")]
+    errs = []
+    for u, y in stairs:                 # noise-free actuator: the levels of the steps
+        h = model.simulate(u)[0]
+        off = np.zeros(2) if model.output_offset is None else np.asarray(model.output_offset)
+        for l in range(2):
+            h[l] = creeps[l].simulate((h[l] - off[l])[None], T)[0][0] + off[l]
+        edges = np.flatnonzero(np.any(np.diff(u, axis=1) != 0, axis=0)) + 1
+        for a, b in zip(np.r_[0, edges], np.r_[edges, u.shape[1]]):
+            a += int(round(0.1 / T))
+            errs.append(np.mean(y[:, a:b] - h[:, a:b], axis=1))
+    # the printed RMS is on the noisy records: within the noise's share of a level mean
+    assert rms == pytest.approx(float(np.sqrt(np.mean(np.square(errs)))), abs=0.02 + 0.05 * rms)
