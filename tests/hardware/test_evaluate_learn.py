@@ -109,3 +109,33 @@ def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_pa
                "short.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u2.csv", cwd=tmp_path)
     assert res.returncode == 1 and res.stderr.count("\n") == 1 and "--measured" in res.stderr
     assert not (tmp_path / "u2.csv").exists()
+
+
+def test_learn_with_history_returns_to_the_best_drive_after_a_worse_trial(tmp_path):
+    """A trial more than 10 % worse than the best is not learnt from: the next drive is the one
+    learnt from the best trial's files with half the gain (compared with a fresh `learn` run on
+    those files with the halved gain), and one line says so."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 3, 0)
+    common = ["--reference", REF, "--outputs", "x=x_meas,y=y_meas", "--delay", "3"]
+    res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u0.csv", "--measured", "y0.csv",
+               "--out", "u1.csv", "--history", "hist", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "not learnt from" not in res.stdout
+    # trial 1 as applied by a faulty amplifier: 20 % weaker, far worse than trial 0
+    _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 3, 1, gain=0.8)
+    res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u1.csv", "--measured", "y1.csv",
+               "--out", "u2.csv", "--history", "hist", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    lines = [ln for ln in res.stdout.splitlines() if "not learnt from" in ln]
+    assert len(lines) == 1 and "trial 0" in lines[0] and "x0.5" in lines[0], res.stdout
+    res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u0.csv", "--measured", "y0.csv",
+               "--out", "fresh.csv", "--learning-gain", "0.25", "--history", "fresh", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    _, u2, _ = read_signals(tmp_path / "u2.csv", ["ux", "uy"])
+    _, fresh, _ = read_signals(tmp_path / "fresh.csv", ["ux", "uy"])
+    _, u1, _ = read_signals(tmp_path / "u1.csv", ["ux", "uy"])
+    np.testing.assert_allclose(u2, fresh, rtol=0, atol=1e-12)
+    assert np.max(np.abs(u2 - u1)) > 1e-3                # not learnt from trial 1
+    assert len(pd.read_csv(tmp_path / "hist/history.csv")) == 2 * 2   # both trials recorded
