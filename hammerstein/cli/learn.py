@@ -11,7 +11,9 @@ The reference is faded in as the first drive was: the drive file's header
 records the fade-in (``fade-in N samples``), which is used unless
 ``--fade-in`` is given. The measured record's delay behind the model's
 prediction is estimated by cross-correlation (``--delay auto``, printed) and
-the error is advanced by it before learning. A reference that repeats after
+the error is advanced by it before learning; when one sample is less than
+2 degrees of the reference's fundamental, a line says the estimate cannot
+tell the delay from the model's phase error (give ``--delay N``). A reference that repeats after
 its fade-in is learnt per harmonic of its period from two periods after the
 fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
 ``gamma |Q|^2`` per harmonic, not learnt at the noise floor); with
@@ -161,6 +163,11 @@ BEST_FILE = "best-trial.csv"
 STATE_FILE = "learning.csv"
 #: a trial worse than the best one so far by more than this factor is not learnt from
 WORSE = 1.1
+#: below this phase of one sample at the reference's fundamental [deg] (a period longer than
+#: 360 / DELAY_PHASE_DEG samples), ``--delay auto`` says the delay is not observable: on
+#: realistic-2dof with a 3-sample delay the cross-correlation finds 3 at 200 Hz (3.6 deg per
+#: sample) but 2-9 at 50 Hz (0.9 deg) and 0-5 at 10 Hz, the identified model's phase error
+DELAY_PHASE_DEG = 2.0
 
 
 def _read_state(history_dir, n_samples):
@@ -262,8 +269,15 @@ def _handle(args):
             fade = default_fade_samples(ref.signal, ref.period_samples)
         target = fade_in(ref.signal, fade)
         predicted, _ = plant.simulate(u)
+        delay_note = None
         if args.delay == "auto":
             delay = max(estimate_delay(predicted, y, max(ref.period_samples, 50)), 0)
+            per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
+            if per_sample is not None and per_sample < DELAY_PHASE_DEG:
+                delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
+                              f"sample is only {per_sample:.2g} deg of the reference's fundamental "
+                              f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "
+                              f"error: give --delay N when you know your acquisition's delay")
         else:
             try:
                 delay = int(args.delay)
@@ -354,6 +368,8 @@ def _handle(args):
     trial = f"trial {k}: " if k is not None else ""
     print(f"{trial}max Euclidean error {rec.max_euclidean_error:.4g} µm{scale}; {axes} µm; "
           f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
+    if delay_note is not None:
+        print(delay_note, file=sys.stdout)
     if note is not None:
         print(note, file=sys.stdout)
     print(cond.summary(list(model.output_names)), file=sys.stdout)
