@@ -11,12 +11,22 @@ The reference is faded in as the first drive was: the drive file's header
 records the fade-in (``fade-in N samples``), which is used unless
 ``--fade-in`` is given. The measured record's delay behind the model's
 prediction is estimated by cross-correlation (``--delay auto``, printed) and
-the error is advanced by it before learning. A reference that repeats after
+the error is advanced by it before learning; when one sample is less than
+2 degrees of the reference's fundamental, a line says the estimate cannot
+tell the delay from the model's phase error (give ``--delay N``). A reference that repeats after
 its fade-in is learnt per harmonic of its period from two periods after the
 fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
 ``gamma |Q|^2`` per harmonic, not learnt at the noise floor); with
 ``--history DIR`` the per-harmonic gains carry over from trial to trial in
 ``DIR/harmonics.csv`` (halved where a harmonic's error keeps growing).
+
+With ``--history DIR`` the best trial so far is kept in ``DIR/best-trial.csv``
+(its drive and measured response; ``DIR/learning.csv`` its error and the
+gain halvings): a trial whose error (the measured max Euclidean error,
+averaged over the periods for a repeating reference) is more than 10 %
+above the best one is not learnt from; the next drive is learnt from the
+best trial's drive and response with half the gain (halved again at each
+such trial), and one line says so, as the scenarios' ``kind = "ilc"`` does.
 
 Exit status: 0 written; 1 bad files, shapes or a drive beyond the amplifier
 with ``--limits error`` (one line, nothing written); 2 a usage error.
@@ -39,7 +49,7 @@ from hammerstein.core.drive import default_fade_samples, read_signals, signals_c
 from hammerstein.core.files import bounded_read_text, safe_write
 from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
-                                  harmonic_base_gains, repeating_from)
+                                  harmonic_base_gains, periodic_average, repeating_from)
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -68,7 +78,9 @@ def add_parser(subparsers):
                         "output [µm] (resampled onto the drive's period)")
     p.add_argument("--out", required=True, metavar="U_K+1.csv", help="the next drive")
     p.add_argument("--history", metavar="DIR",
-                   help="append this trial's error to DIR/history.csv, draw DIR/convergence.png")
+                   help="append this trial's error to DIR/history.csv, draw DIR/convergence.png, keep the "
+                        "best trial: a trial 10 %% worse than it is not learnt from (the next "
+                        "drive is learnt from the best one with half the gain)")
     p.add_argument("--learning-gain", type=positive_float, default=0.5, metavar="G",
                    help="gamma in (0, 2) (default 0.5: half the error per trial, half the noise)")
     p.add_argument("--q-cutoff-hz", type=positive_float, default=2000.0, metavar="HZ",
@@ -147,6 +159,57 @@ def _write_history(history, names, rec, scale):
 
 
 GAINS_FILE = "harmonics.csv"
+BEST_FILE = "best-trial.csv"
+STATE_FILE = "learning.csv"
+#: a trial worse than the best one so far by more than this factor is not learnt from
+WORSE = 1.1
+#: below this phase of one sample at the reference's fundamental [deg] (a period longer than
+#: 360 / DELAY_PHASE_DEG samples), ``--delay auto`` says the delay is not observable: on
+#: realistic-2dof with a 3-sample delay the cross-correlation finds 3 at 200 Hz (3.6 deg per
+#: sample) but 2-9 at 50 Hz (0.9 deg) and 0-5 at 10 Hz, the identified model's phase error
+DELAY_PHASE_DEG = 2.0
+
+
+def _read_state(history_dir, n_samples):
+    """``{trial, score, halvings}`` of the best trial in ``DIR/learning.csv``, or None.
+
+    None when the directory is not one ``learn`` made, has no state yet, or
+    holds the state of a record of another length (another reference).
+    """
+    d = Path(history_dir)
+    path = d / STATE_FILE
+    if not path.is_file() or not (d / HISTORY_MARK).exists() or not (d / BEST_FILE).is_file():
+        return None
+    values = {}
+    for line in bounded_read_text(path, "data", "learning state file").splitlines()[1:]:
+        if "," in line:
+            key, value = line.split(",", 1)
+            values[key.strip()] = value.strip()
+    try:
+        state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
+                 "halvings": int(values["halvings"]), "samples": int(values["samples"])}
+    except (KeyError, ValueError):
+        raise DataFileError(f"--history: {path} is not a learning state file written by "
+                            f"hammerstein learn; choose a new --history directory") from None
+    return state if state["samples"] == n_samples else None
+
+
+def _write_state(history_dir, state):
+    text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
+        ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
+        ("samples", "samples")))
+    safe_write(Path(history_dir) / STATE_FILE, text, "learning state file")
+
+
+def _judged_error(target, y, delay, period, steady):
+    """The error a trial is judged by [µm]: max Euclidean error of the measurement, averaged
+    over the periods from ``steady`` on for a repeating reference (its noise divided by the
+    square root of their number), else over the whole record after the delay."""
+    N = target.shape[1]
+    e = target[:, :N - delay] - y[:, delay:N]
+    if steady is not None and period and e.shape[1] - steady >= 2 * period:
+        e = periodic_average(e, period, steady)[:, steady:]
+    return float(np.max(np.linalg.norm(e, axis=0)))
 
 
 def _restore_gains(history_dir, gains):
@@ -206,8 +269,15 @@ def _handle(args):
             fade = default_fade_samples(ref.signal, ref.period_samples)
         target = fade_in(ref.signal, fade)
         predicted, _ = plant.simulate(u)
+        delay_note = None
         if args.delay == "auto":
             delay = max(estimate_delay(predicted, y, max(ref.period_samples, 50)), 0)
+            per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
+            if per_sample is not None and per_sample < DELAY_PHASE_DEG:
+                delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
+                              f"sample is only {per_sample:.2g} deg of the reference's fundamental "
+                              f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "
+                              f"error: give --delay N when you know your acquisition's delay")
         else:
             try:
                 delay = int(args.delay)
@@ -216,20 +286,49 @@ def _handle(args):
                                     f"{args.delay!r}") from None
             if delay < 0:
                 raise DataFileError(f"--delay: expected auto or an integer >= 0, found {delay}")
-        ilc = IterativeLearning(model, plant.dynamics, T, args.learning_gain, args.q_cutoff_hz,
-                                inversion=args.inversion, delay=delay)
-        cond = ilc.convergence()
+        if delay >= N - 1:
+            raise DataFileError(f"--delay: {delay} samples; expected fewer than the record's {N - 1}")
         settle = int(args.settle_periods * ref.period_samples)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         rec = error_summary(target[:, :N - delay], shifted, slice(min(settle, N - delay - 1), None))
         P = ref.period_samples if ref.period_samples > 1 else None
         steady = repeating_from(target, P, fade)
+        # the best trial so far (--history): a trial more than 10 % worse is not learnt from
+        state = _read_state(args.history, N) if args.history else None
+        score = _judged_error(target, y, delay, P, steady)
+        k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
+            if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
+        learn_u, learn_y, note, halvings, best = u, y, None, 0, True
+        if state is not None:
+            halvings = state["halvings"]
+            best = score < state["score"]
+            if score > WORSE * state["score"]:
+                halvings += 1
+                _, bu, _ = read_signals(Path(args.history) / BEST_FILE, list(model.input_names),
+                                        "t", None, None, "--history best trial")
+                _, by, _ = read_signals(Path(args.history) / BEST_FILE, list(model.output_names),
+                                        "t", None, None, "--history best trial")
+                if bu.shape != u.shape or by.shape != y.shape:
+                    raise DataFileError(f"--history: {BEST_FILE} does not match the drive's "
+                                        f"{N} samples; choose a new --history directory")
+                learn_u, learn_y = bu, by
+                note = (f"trial {k_next} is {score / state['score']:.3g} times the error of trial "
+                        f"{state['trial']} (the best so far, {state['score']:.4g} µm averaged): "
+                        f"not learnt from; learning again from trial {state['trial']}'s drive "
+                        f"with gain x{0.5 ** halvings:g}")
+        gain = args.learning_gain * 0.5 ** halvings
+        ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
+                                inversion=args.inversion, delay=delay)
+        cond = ilc.convergence()
         gains = None
         if steady is not None:         # a repeating reference: learnt per harmonic of its period
             gains = HarmonicGains(harmonic_base_gains(ilc, P, None, args.q_cutoff_hz))
             if args.history:
                 _restore_gains(args.history, gains)
-        u_next = ilc.step(target, u, y, P, steady, gains)
+                if note is not None:   # as the gain: halved, and no growth compared with the worse trial
+                    gains.gains *= 0.5
+                    gains.previous = None
+        u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
         problems = []
         if plant.amplifier is not None:
             problems = plant.amplifier.check(u_next, T, args.limits)
@@ -242,7 +341,7 @@ def _handle(args):
         comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]\n"
                    f"actuator {args.actuator}, sampling period {T:g} s, fade-in {fade} samples\n"
                    f"learned from {args.drive} and {args.measured}: delay {delay} samples, "
-                   f"gain {args.learning_gain:g}, Q {args.q_cutoff_hz:g} Hz"
+                   f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else ""))
         t = np.arange(N) * T
         safe_write(args.out, signals_csv(t, dict(zip(model.input_names, u_next)), comment),
@@ -251,6 +350,14 @@ def _handle(args):
             if args.history else None
         if args.history and gains is not None:
             _save_gains(args.history, gains)
+        if args.history:
+            if best:
+                safe_write(Path(args.history) / BEST_FILE, signals_csv(
+                    t, {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))},
+                    f"learn best trial {k}: the drive [V] and its measured response [µm]"),
+                    "best trial file")
+                state = {"trial": k, "score": score, "samples": N}
+            _write_state(args.history, {**state, "halvings": halvings})
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
@@ -261,6 +368,10 @@ def _handle(args):
     trial = f"trial {k}: " if k is not None else ""
     print(f"{trial}max Euclidean error {rec.max_euclidean_error:.4g} µm{scale}; {axes} µm; "
           f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
+    if delay_note is not None:
+        print(delay_note, file=sys.stdout)
+    if note is not None:
+        print(note, file=sys.stdout)
     print(cond.summary(list(model.output_names)), file=sys.stdout)
     if not cond.holds:
         print_err("warning: the learning is not guaranteed to converge: lower --learning-gain "

@@ -87,7 +87,7 @@ from hammerstein.simulation import ChainResult
 EXTENSION = 64
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
-           "estimate_delay", "error_summary", "periodic_average", "periodic_error",
+           "estimate_delay", "error_summary", "periodic_average", "periodic_error", "periodic_snr",
            "HarmonicGains", "harmonic_base_gains", "repeating_from"]
 
 
@@ -258,6 +258,78 @@ def periodic_average(signal_, period_samples, start):
         sums[r] = np.bincount(idx, weights=part[r], minlength=P)
     x[:, s:] = (sums / counts)[:, idx]
     return x
+
+
+def periodic_snr(error, period_samples, start, weights=None):
+    """Energy of the period-averaged error over the energy the noise alone would leave in it.
+
+    The record from ``start`` on holds ``n_p`` whole periods; their mean
+    ``ebar`` (p, P) is the repeatable error, the residuals about it the
+    non-periodic part (noise), of variance ``sigma^2`` per sample
+    (``n_p - 1`` degrees of freedom). Averaging leaves ``sigma^2 / n_p``
+    of noise per sample of ``ebar``, so
+
+        ``rho = mean(ebar^2) / (sigma^2 / n_p)``
+
+    is 1 in expectation when the record is noise only, ``1 + SNR`` otherwise.
+    ``1 - 1 / rho`` is then the Wiener factor of the update (the share of
+    the averaged error that is not noise; Wiener, "Extrapolation,
+    interpolation and smoothing of stationary time series", 1949): learning
+    ``(1 - 1/rho)`` of a measured error ``E + N`` leaves, in expectation,
+    ``|E|^2 |N|^2 / (|E|^2 + |N|^2)``, less than both the error and the
+    noise (exact model), so a trial at the noise floor moves the drive
+    little and the next trial cannot get much worse.
+
+    Parameters
+    ----------
+    error : array_like, shape (p, n_samples)
+        ``e = y_r - y`` [µm].
+    period_samples : int
+        P.
+    start : int
+        First sample of the periodic part.
+    weights : array_like, shape (P // 2 + 1,), optional
+        Weight per harmonic of the period (the learning's band, e.g. its
+        gains ``gamma |Q(f_h)|^2``): ``rho`` is then the weighted energy of
+        the averaged error's harmonics over that of the noise
+        (:func:`periodic_error`), so that the noise outside the band the
+        learning acts on does not hide the error inside it. Default: every
+        harmonic alike (the time-domain form above).
+
+    Returns
+    -------
+    float
+        ``rho`` (``inf`` with fewer than two periods or no residual).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> n = np.random.default_rng(0).normal(0.0, 1.0, (2, 100 * 400))
+    >>> bool(abs(periodic_snr(n, 400, 0) - 1.0) < 0.1)
+    True
+    >>> i = np.arange(100 * 400)
+    >>> bool(periodic_snr(n + 0.3 * np.cos(2 * np.pi * i / 400), 400, 0) > 4.0)
+    True
+    """
+    e = np.asarray(error, dtype=float)
+    P, s = int(period_samples), int(start)
+    n_p = (e.shape[1] - s) // P if P > 0 else 0
+    if P < 2 or n_p < 2:
+        return np.inf
+    seg = e[:, s:s + n_p * P].reshape(e.shape[0], n_p, P)
+    mean = seg.mean(axis=1)
+    sigma2 = float(np.sum((seg - mean[:, None, :]) ** 2) / (e.shape[0] * P * (n_p - 1)))
+    if sigma2 <= 0.0:
+        return np.inf
+    if weights is None:
+        return float(np.mean(mean ** 2) / (sigma2 / n_p))
+    w = np.asarray(weights, dtype=float)
+    spectrum = np.fft.rfft(mean, axis=1) * (2.0 / P)
+    noise2 = 4.0 * sigma2 / (P * n_p)               # expected |E_h|^2 of noise, per output
+    denominator = float(np.sum(w) * e.shape[0] * noise2)
+    if denominator <= 0.0:
+        return np.inf
+    return float(np.sum(w * np.sum(np.abs(spectrum) ** 2, axis=0)) / denominator)
 
 
 def periodic_error(error, period_samples, start):
@@ -627,6 +699,45 @@ class IterativeLearning:
         power = float(np.mean(low ** 2))
         return float(max(0.0, 1.0 - sigma2 * float(np.mean(q ** 2)) / power)) if power > 0 else 0.0
 
+    def noise_shrink_profile(self, error, window=None):
+        """Per-sample factor in [0, 1] on the time-domain update: :meth:`noise_shrink`, local in time.
+
+        The noise variance ``sigma^2`` is estimated as in :meth:`noise_shrink`
+        (from ``e - Q e``); the power of ``Q e`` (summed over the outputs) is
+        averaged over a sliding window of ``window`` samples (default 8
+        periods of the cut-off, ``8 / (q_cutoff_hz T)``) and the factor is
+        ``max(0, 1 - p sigma^2 mean(|Q|^2) / local power)``: the Wiener
+        shrinkage where the error is, 0 where what Q passes is noise alone
+        (a raster at the noise floor keeps its error at the line turns;
+        elsewhere its update would only be noise). All ones without Q.
+
+        Parameters
+        ----------
+        error : array_like, shape (p, n_samples)
+            [µm].
+        window : int, optional
+            Samples of the sliding average.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_samples,)
+        """
+        e = np.asarray(error, dtype=float)
+        if self._ba is None or e.shape[1] < 3 * (self.q_order + 1) + 1:
+            return np.ones(e.shape[1])
+        low = self.q_filter(e)
+        f = np.linspace(0.0, 0.5 / self.sampling_period, 512)
+        _, h = _scipy_signal().freqz(*self._ba, worN=f, fs=1.0 / self.sampling_period)
+        q = np.abs(h) ** 2
+        sigma2 = float(np.mean((e - low) ** 2)) / max(float(np.mean((1.0 - q) ** 2)), 1e-12)
+        noise = e.shape[0] * sigma2 * float(np.mean(q ** 2))
+        n_w = int(window or max(16, round(8.0 / (self.q_cutoff_hz * self.sampling_period))))
+        n_w = min(n_w, e.shape[1])
+        power = np.convolve(np.sum(low ** 2, axis=0), np.ones(n_w) / n_w, mode="same")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = np.where(power > 0, 1.0 - noise / power, 0.0)
+        return np.clip(out, 0.0, 1.0)
+
     def step(self, reference, drive, measured, period_samples=None, steady_from=None,
              harmonic_gains=None):
         """One trial's update (see the module docstring).
@@ -701,8 +812,15 @@ class IterativeLearning:
         else:
             ext = continuation(e, EXTENSION)
         dv = self.inverse_dynamics(np.concatenate([e, ext], axis=1))
-        self.last_shrink = self.noise_shrink(e_raw)
-        dv = self.q_filter(self.learning_gain * self.last_shrink * dv)[:, :N]
+        # the Wiener factor of a repeating reference, from its averaged error (periodic_snr)
+        self.last_scale = 1.0
+        if period_samples and steady_from is not None:
+            rho = periodic_snr(e_raw, period_samples, steady_from)
+            self.last_scale = float(max(0.0, 1.0 - 1.0 / rho)) if np.isfinite(rho) else 1.0
+        shrink = self.noise_shrink_profile(e_raw)
+        self.last_shrink = float(np.mean(shrink))
+        shrink = np.concatenate([shrink, np.full(dv.shape[1] - N, shrink[-1])]) * self.last_scale
+        dv = self.q_filter(self.learning_gain * shrink * dv)[:, :N]
         self.last_gains = None
         if harmonic_gains is not None and period_samples and steady_from is not None \
                 and N - steady_from >= period_samples:

@@ -31,8 +31,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from hammerstein.exceptions import HysteresisError
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.files import confined_path
+from hammerstein.core.datafiles import MultiRecord
+from hammerstein.core.excitation import decreasing_sine
+from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lazy import lazy_module
 from hammerstein.core.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
@@ -44,6 +48,9 @@ from hammerstein.scenario.identify_tables import (comparison_spec, dynamics_sour
                                                   identify_table, nyquist_problem)
 from hammerstein.scenario.schema import Invalid
 
+# lazy: scipy.optimize, only for identify.model = "preisach" / "auto"
+preisach_identification = lazy_module("hammerstein.core.preisach_identification")
+record_identification = lazy_module("hammerstein.core.record_identification")
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
@@ -214,6 +221,60 @@ def _stored(table, **rest):
     return None if table is None else {"model": table, **rest}
 
 
+def _identify_records(plant, spec, amp, sensor):
+    """A Preisach model (``model = "preisach"``) or the better class (``"auto"``) from
+    decreasing-amplitude sine records of each input in turn (the hysteresis records of
+    ``hammerstein excitation``, at the identify frequency), as ``hammerstein identify`` does."""
+    model = plant.hysteresis
+    T, f = plant.sampling_period, spec["frequency"]
+    records = []
+    for k in range(model.n_inputs):
+        try:
+            t, uk, _ = decreasing_sine(T, float(amp[k]), frequency=f, periods=2)
+        except ValueError as exc:
+            raise IdentificationError(f"identify (model = {spec['model']!r} at {f:g} Hz): {exc}") from None
+        u = np.zeros((model.n_inputs, t.size))
+        u[k] = uk
+        y, _ = plant.simulate(u)
+        if sensor is not None:
+            y = sensor.measure(y, T)
+        records.append(MultiRecord(t, u, y, tuple(model.input_names), tuple(model.output_names),
+                                   float(T), f"decreasing sine on {model.input_names[k]}"))
+    names = (list(model.input_names), list(model.output_names))
+    fits = {}
+    try:
+        fits["preisach"] = preisach_identification.identify_preisach_records(
+            records, PREISACH_LEVELS, "auto", "auto", "auto", None, None, *names)
+        if spec["model"] == "auto":
+            bounds = None if spec["bounds"] == "none" else spec["bounds"]
+            fits["classical"] = record_identification.identify_records(
+                records, spec["method"], spec["n_hysterons"], None, "auto", bounds, "auto", "auto",
+                None, None, *names)
+    except (IdentificationError, HysteresisError) as exc:
+        raise IdentificationError(f"identify (model = {spec['model']!r} at {f:g} Hz): {exc}") from None
+    scores = {}
+    for key, fit in fits.items():
+        rows = [r["rms_percent"] for r in fit.levels if r["held_out"]]
+        scores[key] = float(np.mean(rows)) if rows else float("inf")
+    chosen = min(fits, key=lambda key: (scores[key], key != "preisach"))
+    meta = {"method": chosen, "model": spec["model"], "frequency_hz": float(f),
+            "amplitude_V": [float(a) for a in amp], "records": "decreasing-amplitude sines",
+            "held_out_minor_loop_rms_percent": {k: v for k, v in scores.items() if np.isfinite(v)},
+            "sampling_period_s": float(T),
+            "plant": f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})",
+            "sensor": None if sensor is None else {
+                "resolution_um": sensor.resolution, "bandwidth_hz": sensor.bandwidth_hz,
+                "noise_rms_um": sensor.noise_rms, "seed": spec["seed"]}}
+    if meta["sensor"] is None:
+        del meta["sensor"]
+    return fits[chosen].model, meta
+
+
+#: Levels of each input's switching grid of a Preisach model identified in a scenario
+#: (``identify.model = "preisach"``; the default of ``hammerstein identify --preisach-levels``).
+PREISACH_LEVELS = 20
+
+
 def _identify_pi(plant, spec):
     model = plant.hysteresis
     f = spec["frequency"]
@@ -232,6 +293,8 @@ def _identify_pi(plant, spec):
         raise IdentificationError(f"identify.amplitude: expected one value or {model.n_inputs} "
                                   f"[V], found {spec.get('amplitude')!r}")
     sensor = _sensor(spec["sensor"], spec["seed"])
+    if spec.get("model", "classical") != "classical":
+        return _identify_records(plant, spec, amp, sensor)
     records = characterize(plant, amp, f, spec["periods"], sensor)
     options = {"partition": spec["partition"]}
     if spec["method"] == "least-squares":
@@ -375,7 +438,14 @@ def _fit_dynamics(plant, model, dspec, sensor_flag):
     _, volts = excitation(plant.sampling_period, plant.hysteresis.n_inputs, dspec["amplitude"],
                           f_max=hi, f_min=lo, period=dspec["period"], periods=dspec["periods"],
                           seed=dspec["seed"])
-    ins, outs = hammerstein_records(plant, model, volts, sensor)
+    if isinstance(model, MultivariablePI):
+        ins, outs = hammerstein_records(plant, model, volts, sensor)
+    else:                 # a Preisach model (identify.model = "preisach"): its own simulate
+        ins, outs = [], []
+        for u in volts:
+            y, _ = plant.simulate(u)
+            outs.append(y if sensor is None else sensor.measure(y, plant.sampling_period))
+            ins.append(model.simulate(u)[0])
     try:
         return DynamicsIdentifier(order=dspec.get("order"), max_order=dspec["max_order"],
                                   sensor=sensor).fit(ins, outs, plant.sampling_period)

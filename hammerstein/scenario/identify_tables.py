@@ -8,6 +8,13 @@ the plant) may name the model "identified at f Hz on this plant"::
                  method = "least-squares", partition = "time", bounds = "monotone",
                  sensor = false, seed = 0 }
 
+``model = "classical" | "preisach" | "auto"`` (default ``"classical"``) is
+the class identified: a classical PI from sine records at ``frequency``
+(the keys above), or a discrete Preisach model (20 levels per input) from
+decreasing-amplitude sine records at that frequency (minor loops, as
+``hammerstein excitation`` records them), or the one of the two with the
+lower held-out minor-loop error (as ``hammerstein identify --model auto``).
+
 Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
 ``kind = "hammerstein"`` has its own defaults
 (:data:`HAMMERSTEIN_IDENTIFY_DEFAULTS`) and an ``identify_dynamics`` table
@@ -77,6 +84,8 @@ IDENTIFY_FIELDS = {
     "bounds": Field(_bounds, default="none"),
     "sensor": Field(boolean(), default=False),
     "seed": Field(integer(0), default=0),
+    # absent = "classical" (the content keys of existing scenarios, and their results, unchanged)
+    "model": Field(choice("classical", "preisach", "auto")),
 }
 
 
@@ -101,7 +110,8 @@ def identify_table(value):
         closest valid key, missing ``frequency``, bad values).
     """
     def cross(clean):
-        if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares":
+        if clean.get("bounds", "none") != "none" and clean.get("method") != "least-squares" \
+                and clean.get("model", "classical") == "classical":
             yield "bounds: only used by method = 'least-squares'"
 
     return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)

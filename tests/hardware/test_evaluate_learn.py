@@ -95,6 +95,9 @@ def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_pa
                "y0.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u1.csv", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert "measured delay 3 samples" in res.stdout
+    # 100 Hz at 20 kHz: one sample is 360 / 200 = 1.8 deg of the fundamental, under 2 deg
+    assert "--delay auto: 3 samples from the model's prediction, but one sample is only 1.8 deg" \
+        in res.stdout
     _, _, y0 = _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
     _, _, y1 = _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 0, 0)
     t = np.arange(y0.shape[1]) * T
@@ -109,3 +112,49 @@ def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_pa
                "short.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u2.csv", cwd=tmp_path)
     assert res.returncode == 1 and res.stderr.count("\n") == 1 and "--measured" in res.stderr
     assert not (tmp_path / "u2.csv").exists()
+
+
+def test_learn_with_history_returns_to_the_best_drive_after_a_worse_trial(tmp_path):
+    """A trial more than 10 % worse than the best is not learnt from: the next drive is the one
+    learnt from the best trial's files with half the gain (compared with a fresh `learn` run on
+    those files with the halved gain), and one line says so."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 3, 0)
+    common = ["--reference", REF, "--outputs", "x=x_meas,y=y_meas", "--delay", "3"]
+    res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u0.csv", "--measured", "y0.csv",
+               "--out", "u1.csv", "--history", "hist", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "not learnt from" not in res.stdout
+    # trial 1 as applied by a faulty amplifier: 20 % weaker, far worse than trial 0
+    _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 3, 1, gain=0.8)
+    res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u1.csv", "--measured", "y1.csv",
+               "--out", "u2.csv", "--history", "hist", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    lines = [ln for ln in res.stdout.splitlines() if "not learnt from" in ln]
+    assert len(lines) == 1 and "trial 0" in lines[0] and "x0.5" in lines[0], res.stdout
+    res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u0.csv", "--measured", "y0.csv",
+               "--out", "fresh.csv", "--learning-gain", "0.25", "--history", "fresh", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    _, u2, _ = read_signals(tmp_path / "u2.csv", ["ux", "uy"])
+    _, fresh, _ = read_signals(tmp_path / "fresh.csv", ["ux", "uy"])
+    _, u1, _ = read_signals(tmp_path / "u1.csv", ["ux", "uy"])
+    np.testing.assert_allclose(u2, fresh, rtol=0, atol=1e-12)
+    assert np.max(np.abs(u2 - u1)) > 1e-3                # not learnt from trial 1
+    assert len(pd.read_csv(tmp_path / "hist/history.csv")) == 2 * 2   # both trials recorded
+
+
+@pytest.mark.parametrize("frequency, delay, says", [(400, 3, False), (400, 7, False), (50, 0, True)])
+def test_delay_auto_says_when_one_sample_is_too_little_phase(tmp_path, frequency, delay, says):
+    """One sample is 360 f T degrees of the fundamental: 7.2 deg at 400 Hz (the delay found,
+    no remark), 0.9 deg at 50 Hz (a model phase error of 1 deg moves the estimate: one line)."""
+    ref = f'{{ kind = "circle", radius = 20, frequency = {frequency}, periods = 6 }}'
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", delay, 0)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", ref, "--drive", "u0.csv", "--measured",
+               "y0.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u1.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert f"measured delay {delay} samples" in res.stdout
+    per_sample = 360.0 * frequency * T
+    assert (f"one sample is only {per_sample:.2g} deg" in res.stdout) == says, res.stdout
