@@ -20,6 +20,7 @@ points kept). ``benchmarks/figures.py`` times every figure function.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import textwrap
 
@@ -28,6 +29,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.axis import Axis  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 from matplotlib.ticker import Locator, LogFormatterSciNotation, NullLocator  # noqa: E402
 from PIL import Image  # noqa: E402
@@ -803,6 +805,54 @@ def _unlabelled_axes_not_placed(fig):
                 axis.set_label_coords(0.5, 0.5)
 
 
+@contextlib.contextmanager
+def _ticks_updated_once():
+    """While drawing one figure, update each axis' ticks once (not three times).
+
+    Drawing a labelled axis, matplotlib updates its ticks (locator,
+    formatter, positions of every tick) and measures its tick labels when
+    drawing them, again to place the axis label clear of them, and a third
+    time for the spine's extent that placement reads
+    (``Axis._update_ticks``, ``Axis._get_ticklabel_bboxes``). Within one
+    draw nothing changes in between, so the first result is reused while the
+    view interval of the axis is the one it was computed for (anything that
+    moves the view limits computes it again); the ticks and the pixels are
+    the same (``tests/report/test_tick_memo.py``). Measured on the paper
+    run's 27 figures drawn in one process: 6.0-7.6 s of CPU against
+    7.2-7.9 s without it (3 alternated rounds, load 0.6-1.0), byte-identical
+    PNGs.
+    """
+    update = getattr(Axis, "_update_ticks", None)
+    bboxes = getattr(Axis, "_get_ticklabel_bboxes", None)
+    if update is None or bboxes is None:                 # another matplotlib: draw as it does
+        yield
+        return
+    ticks_of, boxes_of = {}, {}
+
+    def view(axis):
+        return tuple(float(v) for v in axis.get_view_interval())
+
+    def update_once(axis):
+        key = view(axis)
+        hit = ticks_of.get(id(axis))
+        if hit is None or hit[0] != key or hit[1] is not axis:
+            hit = ticks_of[id(axis)] = (key, axis, update(axis))
+        return list(hit[2])
+
+    def bboxes_once(axis, ticks, renderer):
+        key = (view(axis), tuple(id(t) for t in ticks), id(renderer))
+        hit = boxes_of.get(id(axis))
+        if hit is None or hit[0] != key or hit[1] is not axis:
+            hit = boxes_of[id(axis)] = (key, axis, bboxes(axis, ticks, renderer))
+        return [b.frozen() for b in hit[2][0]], [b.frozen() for b in hit[2][1]]
+
+    Axis._update_ticks, Axis._get_ticklabel_bboxes = update_once, bboxes_once
+    try:
+        yield
+    finally:
+        Axis._update_ticks, Axis._get_ticklabel_bboxes = update, bboxes
+
+
 def save(fig, path):
     """Write a figure as PNG (:data:`DPI`, RGB, zlib level 1) and close it.
 
@@ -825,7 +875,8 @@ def save(fig, path):
     _unlabelled_axes_not_placed(fig)
     fig.set_dpi(DPI)
     canvas = FigureCanvasAgg(fig)
-    canvas.draw()
+    with _ticks_updated_once():
+        canvas.draw()
     image = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw",
                              "RGBA", 0, 1)
     if image.getextrema()[3][0] == 255:
