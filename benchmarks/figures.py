@@ -200,14 +200,22 @@ def encodings(repeat):
             print(f"{mode:<6} {level:>10} {best * 1e3:9.1f} {size / 1e3:10.0f}")
 
 
-def phases():
-    """Print the CPU time of every drawing phase summed over the figures (see the module doc)."""
+def phases(paper_run=False):
+    """Print the CPU time of every drawing phase summed over the figures (see the module doc).
+
+    Parameters
+    ----------
+    paper_run : bool
+        Time the figures of the paper run (:func:`paper_jobs`) instead of
+        the representative ones of :func:`cases`.
+    """
     import io
     from collections import defaultdict
 
     import matplotlib.axis as maxis
     import matplotlib.text as mtext
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.axes import Axes
+    from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
     from PIL import Image
 
     spent, depth = defaultdict(float), defaultdict(int)
@@ -233,8 +241,15 @@ def phases():
             (maxis.XAxis, "_update_label_position", "  axis label placement (x)"),
             (maxis.YAxis, "_update_label_position", "  axis label placement (y)"),
             (mtext.Text, "draw", "  text drawn"),
+            (RendererAgg, "draw_text", "    glyphs laid out and rasterised"),
+            (mtext.Text, "_get_layout", "    text measured (layout)"),
+            (Axes, "__init__", "axes created (build and draw)"),
             (Image.Image, "save", "PNG encoding")]
-    builders = cases()
+    if paper_run:
+        builders = [(job.path.name, (lambda job=job: job.function(*job.args, **job.kwargs)))
+                    for _, job in paper_jobs()]
+    else:
+        builders = cases()
     for _, build in builders:                           # warm: fonts, mathtext, caches
         plots.save(build(), io.BytesIO())
     originals = [(owner, name, timed(owner, name, key)) for owner, name, key in keys]
@@ -381,8 +396,12 @@ def main(argv=None):
     ap.add_argument("--phases", action="store_true",
                     help="CPU time per drawing phase (ticks, text, encoding) instead")
     ap.add_argument("--paper", action="store_true",
-                    help="CPU time of every figure of the paper run (its own data) instead")
+                    help="CPU time of every figure of the paper run (its own data) instead; "
+                         "with --phases, its CPU time per drawing phase")
     args = ap.parse_args(argv)
+    if args.paper and args.phases:
+        phases(paper_run=True)
+        return
     if args.paper:
         paper(args.repeat)
         return
