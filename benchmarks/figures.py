@@ -46,6 +46,10 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
+# As the CLI: one OpenBLAS thread, so that identifications run by --paper (and cached
+# on disk) are the ones `hammerstein run` computes, to the last digit.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import numpy as np
 import pandas as pd
 
