@@ -116,3 +116,20 @@ def test_a_view_changed_between_draws_gets_new_ticks():
         canvas.draw()
         labels = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
     assert "100" in labels
+
+
+def test_figures_saved_from_threads_equal_those_saved_one_by_one():
+    import io
+    from concurrent.futures import ThreadPoolExecutor
+
+    def png(name):
+        buffer = io.BytesIO()
+        figures.save(FIGURES[name](), buffer)
+        return buffer.getvalue()
+
+    names = sorted(FIGURES) * 3
+    serial = [png(name) for name in names]
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        threaded = list(pool.map(png, names))
+    assert threaded == serial
+    assert Axis._update_ticks.__qualname__ == "Axis._update_ticks"     # matplotlib's, restored
