@@ -28,6 +28,7 @@ import argparse
 import glob
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -83,7 +84,8 @@ def time_run(scenarios, out, cache=True):
 
 
 def main(argv=None):
-    """Print one row per run: best wall, its CPU time, the target, the load average.
+    """Print one row per run: best wall, its CPU time, the target, the median and range of
+    the CPU times of the repeats, the load average.
 
     Parameters
     ----------
@@ -103,18 +105,19 @@ def main(argv=None):
     args = ap.parse_args(argv)
     names = [args.only] if args.only else list(RUNS)
     print(f"{'run':<8} {'best wall [s]':>13} {'user [s]':>9} {'sys [s]':>8} {'target [s]':>10}  "
-          f"load average before -> after")
+          f"{'CPU median (min-max) [s]':>24}  load average before -> after")
     with tempfile.TemporaryDirectory(prefix="hammerstein-bench-") as tmp:
         for name in names:
             scenarios, target = RUNS[name]
             time_run(scenarios, tmp, not args.no_cache)  # warm: numba, identifications, files
             load0 = os.getloadavg()[0]
-            best = min((time_run(scenarios, tmp, not args.no_cache)
-                        for _ in range(max(1, args.repeat))),
-                       key=lambda t: t[0])
+            runs = [time_run(scenarios, tmp, not args.no_cache) for _ in range(max(1, args.repeat))]
+            best = min(runs, key=lambda t: t[0])
+            cpu = sorted(user + system for _, user, system in runs)
             load1 = os.getloadavg()[0]
+            spread = f"{statistics.median(cpu):.2f} ({cpu[0]:.2f}-{cpu[-1]:.2f})"
             print(f"{name:<8} {best[0]:>13.2f} {best[1]:>9.2f} {best[2]:>8.2f} {target:>10.1f}  "
-                  f"{load0:.2f} -> {load1:.2f}")
+                  f"{spread:>24}  {load0:.2f} -> {load1:.2f}")
     return 0
 
 

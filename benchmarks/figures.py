@@ -46,6 +46,10 @@ import time
 from pathlib import Path
 from types import SimpleNamespace
 
+# As the CLI: one OpenBLAS thread, so that identifications run by --paper (and cached
+# on disk) are the ones `hammerstein run` computes, to the last digit.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 import numpy as np
 import pandas as pd
 
@@ -200,14 +204,22 @@ def encodings(repeat):
             print(f"{mode:<6} {level:>10} {best * 1e3:9.1f} {size / 1e3:10.0f}")
 
 
-def phases():
-    """Print the CPU time of every drawing phase summed over the figures (see the module doc)."""
+def phases(paper_run=False):
+    """Print the CPU time of every drawing phase summed over the figures (see the module doc).
+
+    Parameters
+    ----------
+    paper_run : bool
+        Time the figures of the paper run (:func:`paper_jobs`) instead of
+        the representative ones of :func:`cases`.
+    """
     import io
     from collections import defaultdict
 
     import matplotlib.axis as maxis
     import matplotlib.text as mtext
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.axes import Axes
+    from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
     from PIL import Image
 
     spent, depth = defaultdict(float), defaultdict(int)
@@ -233,8 +245,15 @@ def phases():
             (maxis.XAxis, "_update_label_position", "  axis label placement (x)"),
             (maxis.YAxis, "_update_label_position", "  axis label placement (y)"),
             (mtext.Text, "draw", "  text drawn"),
+            (RendererAgg, "draw_text", "    glyphs laid out and rasterised"),
+            (mtext.Text, "_get_layout", "    text measured (layout)"),
+            (Axes, "__init__", "axes created (build and draw)"),
             (Image.Image, "save", "PNG encoding")]
-    builders = cases()
+    if paper_run:
+        builders = [(job.path.name, (lambda job=job: job.function(*job.args, **job.kwargs)))
+                    for _, job in paper_jobs()]
+    else:
+        builders = cases()
     for _, build in builders:                           # warm: fonts, mathtext, caches
         plots.save(build(), io.BytesIO())
     originals = [(owner, name, timed(owner, name, key)) for owner, name, key in keys]
@@ -256,6 +275,123 @@ def phases():
     print(f"{'total':<44} {total * 1e3:8.1f}")
 
 
+def paper_jobs(scenarios=None):
+    """The figure jobs of ``hammerstein run scenarios/paper/*.toml``, each drawn once.
+
+    Runs the scenarios (into a temporary directory) with a renderer that
+    records the jobs instead of drawing them; jobs equal by
+    :func:`hammerstein.report.render.job_key` (which the run's renderer
+    copies instead of drawing) are kept once.
+
+    Parameters
+    ----------
+    scenarios : list of str, optional
+        Scenario files (default: ``scenarios/paper/*.toml``).
+
+    Returns
+    -------
+    list of (str, hammerstein.report.render.FigureJob)
+        The scenario file's stem and the job.
+    """
+    from concurrent.futures import Future
+
+    from hammerstein import runner
+    from hammerstein.report.render import job_key
+
+    root = Path(__file__).resolve().parents[1]
+    scenarios = scenarios or sorted(str(p) for p in (root / "scenarios" / "paper").glob("*.toml"))
+    jobs, keys, current = [], set(), [""]
+
+    class Recorder:
+        def __init__(self, *args, **kwargs):
+            pass
+
+        def submit(self, batch):
+            out = []
+            for job in batch:
+                key = job_key(job)
+                if key is None or key not in keys:
+                    keys.add(key)
+                    jobs.append((current[0], job))
+                f = Future()
+                f.set_result(b"")
+                out.append(f)
+            return out
+
+        def close(self, cancel=False):
+            pass
+
+    saved = runner.FigureRenderer
+    runner.FigureRenderer = Recorder
+    try:
+        with tempfile.TemporaryDirectory(prefix="hammerstein-figures-") as tmp:
+            outcomes = runner.run_pipelined(scenarios, tmp,
+                                            on_start=lambda p: current.__setitem__(0, Path(p).stem))
+    finally:
+        runner.FigureRenderer = saved
+    failed = [o.error for o in outcomes if not o.ok]
+    if failed:
+        raise RuntimeError("; ".join(failed))
+    return jobs
+
+
+def paper(repeat):
+    """Print the CPU time of every figure of the paper run (build, draw, PNG encoding).
+
+    Parameters
+    ----------
+    repeat : int
+        Drawings per figure (the smallest CPU time of each phase is shown).
+    """
+    import io
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from PIL import Image
+
+    jobs = paper_jobs()
+    for _, job in jobs:                                   # warm: fonts, mathtext, lazy imports
+        plots.save(job.function(*job.args, **job.kwargs), io.BytesIO())
+    spent = {}
+    draw, encode = FigureCanvasAgg.draw, Image.Image.save
+
+    def timed(original, key):
+        def wrapper(*args, **kwargs):
+            c0 = time.process_time()
+            try:
+                return original(*args, **kwargs)
+            finally:
+                spent[key] = spent.get(key, 0.0) + time.process_time() - c0
+        return wrapper
+
+    FigureCanvasAgg.draw, Image.Image.save = timed(draw, "draw"), timed(encode, "encode")
+    rows = []
+    try:
+        for scenario, job in jobs:
+            best = None
+            for _ in range(max(1, repeat)):
+                spent.clear()
+                c0 = time.process_time()
+                fig = job.function(*job.args, **job.kwargs)
+                build = time.process_time() - c0
+                plots.save(fig, io.BytesIO())
+                total = time.process_time() - c0
+                row = (build, spent.get("draw", 0.0), spent.get("encode", 0.0), total)
+                best = row if best is None else tuple(map(min, best, row))
+            rows.append((f"{scenario[:24]}/{job.path.name}", job.function.__name__,
+                         best))
+    finally:
+        FigureCanvasAgg.draw, Image.Image.save = draw, encode
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"{len(rows)} figures of the paper run (each drawn once), CPU [ms], best of "
+          f"{repeat}; load average {load:.2f}")
+    print(f"{'figure':<62} {'function':<24} {'build':>7} {'draw':>7} {'encode':>7} {'total':>7}")
+    sums = [0.0] * 4
+    for name, function, best in rows:
+        sums = [a + b for a, b in zip(sums, best)]
+        print(f"{name:<62} {function:<24} " + " ".join(f"{v * 1e3:7.0f}" for v in best))
+    print(f"{'sum':<62} {'':<24} " + " ".join(f"{v * 1e3:7.0f}" for v in sums))
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="runs per figure (best is shown)")
@@ -263,7 +399,16 @@ def main(argv=None):
                     help="compare PNG encodings (CPU time and size) instead")
     ap.add_argument("--phases", action="store_true",
                     help="CPU time per drawing phase (ticks, text, encoding) instead")
+    ap.add_argument("--paper", action="store_true",
+                    help="CPU time of every figure of the paper run (its own data) instead; "
+                         "with --phases, its CPU time per drawing phase")
     args = ap.parse_args(argv)
+    if args.paper and args.phases:
+        phases(paper_run=True)
+        return
+    if args.paper:
+        paper(args.repeat)
+        return
     if args.phases:
         phases()
         return

@@ -54,7 +54,6 @@ import dataclasses
 
 import numpy as np
 import scipy.linalg
-from scipy.optimize import nnls
 
 from hammerstein.core.creep import Creep, minimum_phase_margin
 from hammerstein.exceptions import IdentificationError
@@ -503,6 +502,7 @@ class CreepIdentifier:
         H = H + 1e-12 * np.trace(H) / H.shape[0] * np.eye(H.shape[0])
         R = scipy.linalg.cholesky(H, lower=False)
         try:
+            from scipy.optimize import nnls  # lazy: ~0.3 s to import; creep fits only
             wflat, _ = nnls(R, scipy.linalg.solve_triangular(R, b, trans="T"), maxiter=50 * n_lag)
         except RuntimeError as exc:
             raise IdentificationError(f"creep: non-negative least squares failed: {exc}") from None

@@ -65,7 +65,6 @@ References
 from __future__ import annotations
 
 import numpy as np
-import scipy.optimize
 
 from hammerstein.core.identification import IdentificationError
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -262,7 +261,8 @@ class PreisachIdentifier:
         col = np.where(col > 0, col, 1.0)
         # ||A x - y|| = ||R x - Q^T y|| + const: the bounded solver works on the small R
         Q, R = np.linalg.qr(R0 / col)
-        res = scipy.optimize.lsq_linear(R, Q.T @ b0, bounds=(lb * col, ub * col), method="bvls")
+        from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; Preisach fits only
+        res = lsq_linear(R, Q.T @ b0, bounds=(lb * col, ub * col), method="bvls")
         return res.x / col
 
     def _fit_output(self, blocks, ys, l, kinds, lam):

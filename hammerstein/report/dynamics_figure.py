@@ -65,6 +65,11 @@ def dynamics_bode_figure_from_data(identified, true, **kwargs):
     return dynamics_bode_figure(*systems, **kwargs)
 
 
+#: Imported on first use (see :mod:`hammerstein.report.render`: a figure worker
+#: forked once the run has loaded them draws this figure).
+dynamics_bode_figure_from_data.imports = ("control",)
+
+
 def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identified", "true"),
                          title="Linear dynamics G: identified vs true"):
     """Bode plot of every entry of two p x p systems, overlaid.

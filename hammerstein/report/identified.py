@@ -18,7 +18,7 @@ import pandas as pd
 from hammerstein.report.figures import scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
 from hammerstein.report.model_files import save_identified_dynamics, save_identified_models
-from hammerstein.report.tables import markdown_table
+from hammerstein.report.tables import markdown_table, write_signals_csv
 from hammerstein.core.lti import align_dc_gain, compare_frequency_responses
 from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
 from hammerstein.report.render import FigureJobs
@@ -116,8 +116,7 @@ def _comparison_figures(scenario, results, directory, jobs):
         model = r.spec.plant.hysteresis
         cols = {"time_s": r.spec.time}
         cols.update({f"{o}_model_um": r.model_outputs[l] for l, o in enumerate(model.output_names)})
-        pd.DataFrame(cols).to_csv(directory / f"model-outputs-{r.name}.csv", index=False,
-                                  float_format="%.6g")
+        write_signals_csv(directory / f"model-outputs-{r.name}.csv", cols)
         label = "hammerstein" if not r.spec.plant.is_static else "static"
         groups.setdefault((label, _model_label(r.spec.model_spec)), []).append(r)
     figs = []

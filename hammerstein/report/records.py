@@ -12,12 +12,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from hammerstein.core.presets import save_model
 from hammerstein.report.model_figures import record_fit_figure
 from hammerstein.report.render import FigureJobs
-from hammerstein.report.tables import markdown_table, metrics_frame
+from hammerstein.report.tables import markdown_table, metrics_frame, write_signals_csv
 
 __all__ = ["write_identification_report"]
 
@@ -52,8 +51,7 @@ def write_identification_report(scenario, results, directory, jobs=None):
         for l, name in enumerate(model.output_names):
             cols[f"{name}_{ou_tag}"] = rec.y[l][mask]
             cols[f"{name}_model_{ou_tag}"] = pred[l][mask]
-        pd.DataFrame(cols).to_csv(directory / f"timeseries-{r}.csv", index=False,
-                                  float_format="%.7g")
+        write_signals_csv(directory / f"timeseries-{r}.csv", cols, float_format="%.7g")
     model_file = f"models/identified-{spec['method']}.toml"
     val = fit.validation
     save_model(model, directory / model_file, {

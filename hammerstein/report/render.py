@@ -18,6 +18,13 @@ A renderer draws a figure once per run: a job whose function and arguments
 equal (by the hash of their pickle) those of a job it has already drawn gets
 a copy of that PNG instead of a second drawing (the paper run's five
 scenarios with the same identified dynamics share one Bode plot).
+
+A figure function may name the modules it imports on first use in an
+``imports`` attribute (the Bode plots: ``("control",)``, python-control and
+scipy.signal, about 1 s of CPU to import). The workers are forked with the
+first job, usually before the run has loaded them; when the main process has
+loaded them since, such a job goes to one more worker forked then, which
+inherits them, instead of importing them a second time in a worker.
 """
 
 from __future__ import annotations
@@ -31,6 +38,8 @@ import os
 import pickle
 import re
 import signal
+import sys
+import types
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures import wait as wait_futures
 from concurrent.futures.process import BrokenProcessPool
@@ -41,7 +50,7 @@ from typing import Callable
 from hammerstein.report.figures import save
 
 __all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "job_key", "WORKERS",
-           "REMEMBERED", "figure_selection"]
+           "LATE_WORKERS", "REMEMBERED", "figure_selection", "loaded_modules"]
 
 #: Worker processes of the pool of :class:`FigureRenderer` (the machine the
 #: targets are set on has 2 cores; the main process simulates meanwhile).
@@ -91,6 +100,9 @@ def render_job(job):
     return png
 
 
+#: Workers forked later for jobs whose ``imports`` the first workers lack (see the module doc).
+LATE_WORKERS = 1
+
 #: Drawn figures a :class:`FigureRenderer` remembers for copies (oldest dropped first).
 REMEMBERED = 64
 
@@ -136,6 +148,26 @@ def _done(value=None, error=None):
         f.set_exception(error)
     return f
 
+
+
+def loaded_modules():
+    """Names of the modules whose code has run in this process.
+
+    A module registered by :func:`hammerstein.core.lazy.lazy_module` and
+    not used yet is left out (its type is not yet ``ModuleType``; testing
+    the type does not load it).
+
+    Returns
+    -------
+    frozenset of str
+    """
+    return frozenset(name for name, module in list(sys.modules.items())
+                     if type(module) is types.ModuleType)
+
+
+def _job_imports(job):
+    """The modules ``job``'s function imports on first use (its ``imports`` attribute)."""
+    return frozenset(getattr(job.function, "imports", ()) or ())
 
 
 def _every(path):
@@ -294,6 +326,8 @@ class FigureRenderer:
     def __init__(self, workers=WORKERS, select=None):
         self.workers = int(workers) if "fork" in multiprocessing.get_all_start_methods() else 0
         self._pool = None
+        self._late = None                       # (pool, modules it inherited) for late imports
+        self._forked_with = frozenset()         # modules loaded when self._pool was forked
         self._drawn = {}                        # job_key -> future of its PNG bytes
         self._select = select
 
@@ -329,6 +363,9 @@ class FigureRenderer:
         if self._pool is not None:
             self._pool.shutdown(wait=True, cancel_futures=cancel)
             self._pool = None
+        if self._late is not None:
+            self._late[0].shutdown(wait=True, cancel_futures=cancel)
+            self._late = None
 
     def submit(self, jobs):
         """Start the jobs; return one ``concurrent.futures.Future`` per job.
@@ -388,19 +425,43 @@ class FigureRenderer:
         first.add_done_callback(chain)
         return copy
 
+    def _fork(self, workers):
+        _PARENT["pid"] = os.getpid()
+        return ProcessPoolExecutor(workers, multiprocessing.get_context("fork"),
+                                   initializer=_worker_init)
+
+    def _broken(self):
+        """Whether a worker of a pool died (the renderer then draws inline)."""
+        pools = [self._pool] + ([self._late[0]] if self._late is not None else [])
+        return any(p is not None and getattr(p, "_broken", False) for p in pools)
+
+    def _pool_for(self, job):
+        """The pool that draws ``job``: a late worker if it needs modules loaded since the fork."""
+        needs = _job_imports(job)
+        if not needs or needs <= self._forked_with:
+            return self._pool
+        if self._late is not None and needs <= self._late[1]:
+            return self._late[0]
+        loaded = loaded_modules()
+        if self._late is None and needs <= loaded:
+            self._late = (self._fork(LATE_WORKERS), loaded)
+            return self._late[0]
+        return self._pool
+
     def _start(self, jobs):
-        if self._pool is not None and getattr(self._pool, "_broken", False):
-            self._pool.shutdown(wait=False, cancel_futures=True)  # a worker died: inline now
-            self._pool, self.workers = None, 0
+        if self._broken():                                   # a worker died: inline now
+            for pool in [self._pool] + ([self._late[0]] if self._late is not None else []):
+                if pool is not None:
+                    pool.shutdown(wait=False, cancel_futures=True)
+            self._pool, self._late, self.workers = None, None, 0
         if self._pool is None and self.workers >= 2 and jobs:
-            _PARENT["pid"] = os.getpid()
-            self._pool = ProcessPoolExecutor(self.workers, multiprocessing.get_context("fork"),
-                                             initializer=_worker_init)
+            self._forked_with = loaded_modules()
+            self._pool = self._fork(self.workers)
         if self._pool is not None:
             try:
-                return [self._pool.submit(render_job, j) for j in jobs]
+                return [self._pool_for(j).submit(render_job, j) for j in jobs]
             except BrokenProcessPool:  # a worker died: draw the rest here
-                self._pool, self.workers = None, 0
+                self._pool, self._late, self.workers = None, None, 0
         out = []
         for j in jobs:
             try:

@@ -26,10 +26,33 @@ from hammerstein.report import figures as plots
 from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.sweeps import sweep_report_lines
-from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame
+from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame, write_signals_csv
 from hammerstein.scenario.registry import COMPENSATORS
 
-__all__ = ["metrics_frame", "timeseries_frame", "write_report", "markdown_table", "COLUMNS"]
+__all__ = ["metrics_frame", "timeseries_frame", "timeseries_columns", "write_report", "markdown_table", "COLUMNS"]
+
+
+def timeseries_columns(result):
+    """Columns of :func:`timeseries_frame` (name -> values, shape (n_samples,) each).
+
+    Parameters
+    ----------
+    result : CaseResult
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+    """
+    model = result.spec.plant.hysteresis
+    cols = {"time_s": result.spec.time}
+    if result.reference is not None:
+        for l, o in enumerate(model.output_names):
+            cols[f"{o}_ref_um"] = result.reference[l]
+    for k, i in enumerate(model.input_names):
+        cols[f"{i}_V"] = result.inputs[k]
+    for l, o in enumerate(model.output_names):
+        cols[f"{o}_um"] = result.outputs[l]
+    return cols
 
 
 def timeseries_frame(result):
@@ -49,16 +72,7 @@ def timeseries_frame(result):
         Columns ``time_s``, ``<output>_ref_um`` (compensated cases only),
         ``<input>_V``, ``<output>_um``.
     """
-    model = result.spec.plant.hysteresis
-    cols = {"time_s": result.spec.time}
-    if result.reference is not None:
-        for l, o in enumerate(model.output_names):
-            cols[f"{o}_ref_um"] = result.reference[l]
-    for k, i in enumerate(model.input_names):
-        cols[f"{i}_V"] = result.inputs[k]
-    for l, o in enumerate(model.output_names):
-        cols[f"{o}_um"] = result.outputs[l]
-    return pd.DataFrame(cols)
+    return pd.DataFrame(timeseries_columns(result))
 
 
 def _plant_label(spec):
@@ -391,8 +405,7 @@ def write_report(scenario, results, directory, jobs=None):
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     frame = frame[frame["case"].isin([r.name for r in results])]
     for r in results:
-        timeseries_frame(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False,
-                                   float_format="%.6g")
+        write_signals_csv(directory / f"timeseries-{r.name}.csv", timeseries_columns(r))
     figs = _figures(scenario, results, directory, jobs) if results else []
     figs += _scan_figures(scenario, results, directory, jobs)
     lines = [f"# {markdown_escape(scenario.title)}", ""]

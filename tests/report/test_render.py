@@ -168,3 +168,44 @@ def test_a_copy_is_drawn_when_the_report_it_copies_is_abandoned(tmp_path):
     assert not (tmp_path / "a" / "loop.png").exists()
     assert len(list((tmp_path / "busy").iterdir())) == 2 * workers + EXTRA_QUEUED_CALLS
     assert (tmp_path / "b" / "loop.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+LATE_MODULE = "hammerstein_test_late_import"
+
+
+def _module_seen(report, *args, **kwargs):  # module level: the pool pickles it by reference
+    """Write whether this process has run LATE_MODULE's code; draw a tiny figure."""
+    import sys
+    import types
+    module = sys.modules.get(LATE_MODULE)
+    Path(report).write_text(str(type(module) is types.ModuleType and module.LOADED))
+    return plots.loop_grid(_curves(), ["u1 [V]", "u2 [V]"], ["x [µm]", "y [µm]"], "late")
+
+
+def _module_needed(report, *args, **kwargs):
+    return _module_seen(report)
+
+
+_module_needed.imports = (LATE_MODULE,)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="the pool needs fork")
+def test_a_job_needing_a_module_loaded_after_the_fork_gets_a_worker_that_has_it(tmp_path,
+                                                                                 monkeypatch):
+    import importlib
+    import sys
+    (tmp_path / f"{LATE_MODULE}.py").write_text("LOADED = True\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    try:
+        with FigureRenderer(workers=2) as renderer:
+            jobs = FigureJobs(renderer)
+            _loop_jobs(tmp_path, jobs)                     # forks the pool: the module not loaded
+            importlib.import_module(LATE_MODULE)           # loaded since, in this process only
+            jobs.add(tmp_path / "plain.png", _module_seen, str(tmp_path / "plain.txt"))
+            jobs.add(tmp_path / "needs.png", _module_needed, str(tmp_path / "needs.txt"))
+            jobs.wait()
+    finally:
+        sys.modules.pop(LATE_MODULE, None)
+    assert (tmp_path / "plain.txt").read_text() == "False"     # a worker forked before the import
+    assert (tmp_path / "needs.txt").read_text() == "True"      # the late worker inherited it
+    assert (tmp_path / "needs.png").read_bytes() == (tmp_path / "plain.png").read_bytes()
