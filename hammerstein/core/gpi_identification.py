@@ -29,7 +29,8 @@ the weights are the bounded linear least-squares solution
 Parametrisation of a component from input k (amplitude ``A`` [V], the largest
 measured ``|u_k|``): ``gamma_l = [A, b_l / A, a2_l, 0]`` and ``gamma_r = [rho A,
 b_r / A, a2_r, d A]`` (a common scale and a common shift of both envelopes are
-the weights' and the offset's business); the thresholds are ``r_j = j S / n``,
+the weights' and the offset's business); the thresholds are ``r_j = S (j / n)^1.5``
+(denser near zero, where the small minor loops live),
 ``j = 0 .. n - 1``, with ``S`` half the span of the mean envelope over the
 measured input range, so that they follow the envelopes. Bounds: ``b`` in
 [0.02, 4], ``a2`` in [-2, 2], ``rho`` in [0.3, 3], ``d`` in [-1, 1].
@@ -64,6 +65,7 @@ References
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 import scipy.optimize
 
 from hammerstein.core.generalized_pi import GeneralizedPI, envelope
@@ -72,16 +74,18 @@ from hammerstein.core.preisach import MultivariableHysteresis, Polynomial
 from hammerstein.core.record_identification import (
     NOISE_FACTOR, RecordFit, _as_records, _window_metrics, level_errors, noise_level,
     parse_components, split_record)
-from hammerstein.simulation import generalized_play_steps
+from hammerstein.simulation import generalized_play_states
 
 __all__ = ["GeneralizedPIIdentifier", "identify_gpi_records"]
 
 #: Rows of the regression kept per record (quasi-static records are decimated to this).
-MAX_ROWS_PER_RECORD = 8000
+MAX_ROWS_PER_RECORD = 3000
 #: Lower bound of a direct path's linear reversible term, fraction of its secant slope.
 MIN_SLOPE_FRACTION = 1e-3
 #: Degree of the signed reversible polynomial of a cross-coupling.
 CROSS_DEGREE = 3
+#: Thresholds ``r_j = S (j / n)^power``: denser near 0, where the small minor loops live.
+THRESHOLD_POWER = 1.5
 #: Normalised envelope parameters ``(b_l, a2_l, rho, b_r, a2_r, d)``: start, lower and upper bounds.
 THETA0 = np.array([0.3, 0.0, 1.0, 0.3, 0.0, 0.0])
 THETA_LO = np.array([0.02, -2.0, 0.3, 0.02, -2.0, -1.0])
@@ -109,7 +113,7 @@ def envelopes(theta, amplitude):
 
 
 def play_thresholds(gamma_l, gamma_r, lo, hi, n):
-    """Thresholds ``r_j = j S / n`` following the envelopes (see the module notes).
+    """Thresholds ``r_j = S (j / n)^1.5`` following the envelopes (see the module notes).
 
     Parameters
     ----------
@@ -127,7 +131,7 @@ def play_thresholds(gamma_l, gamma_r, lo, hi, n):
     """
     mid = lambda u: 0.5 * (envelope(gamma_l, u) + envelope(gamma_r, u))  # noqa: E731
     span = max(0.5 * float(mid(hi) - mid(lo)), 1e-9)
-    return span * np.arange(n) / n
+    return span * (np.arange(n) / n) ** THRESHOLD_POWER
 
 
 def _kept_rows(rec, m):
@@ -146,14 +150,9 @@ def _kept_rows(rec, m):
 
 def _play_states(u, thresholds, gamma_l, gamma_r):
     """Play trajectories (n_samples, n) from the model's rest state at u = 0."""
-    proto = GeneralizedPI(thresholds, np.ones(thresholds.size), gamma_l, gamma_r)
-    s0 = proto.initial_state()
-    out = np.empty((u.size, thresholds.size))
-    one = np.ones(1)
-    for j in range(thresholds.size):
-        out[:, j], _ = generalized_play_steps(u, thresholds[j:j + 1], one, gamma_l, gamma_r,
-                                              s0[j:j + 1])
-    return out
+    s0 = np.maximum(envelope(gamma_l, 0.0) - thresholds,        # GeneralizedPI.initial_state
+                    np.minimum(envelope(gamma_r, 0.0) + thresholds, 0.0))
+    return generalized_play_states(u, thresholds, gamma_l, gamma_r, s0)[0]
 
 
 class GeneralizedPIIdentifier:
@@ -162,7 +161,7 @@ class GeneralizedPIIdentifier:
     Parameters
     ----------
     n_plays : int
-        Play operators per component (thresholds ``r_j = j S / n``).
+        Play operators per component (thresholds ``r_j = S (j / n)^1.5``).
     components : "auto", "all", str or dict
         As :func:`hammerstein.core.record_identification.parse_components`;
         ``"gain"`` components are fitted as a linear term, ``"none"`` left out.
@@ -266,9 +265,19 @@ class GeneralizedPIIdentifier:
         lb = np.concatenate(lbs + [[-np.inf]])
         col = np.linalg.norm(A, axis=0)
         col = np.where(col > 0, col, 1.0)
-        Q, R = np.linalg.qr(A / col)
-        res = scipy.optimize.lsq_linear(R, Q.T @ y, bounds=(lb * col, np.full(lb.size, np.inf)),
-                                        method="bvls")
+        # ||A x - y|| = ||R x - Q^T y|| + const: R of [A | y] holds Q^T y in its last column
+        # (no Q formed); the bounded solver works on the small R. R is the Cholesky factor of
+        # the Gram matrix of [A | y] (a tiny ridge for a record fitted exactly), by far cheaper
+        # than a QR of the tall matrix; QR when the Gram matrix is too ill-conditioned.
+        Ay = np.column_stack([A / col, y])
+        gram = Ay.T @ Ay
+        gram[np.diag_indices_from(gram)] += 1e-13 * np.trace(gram)
+        try:
+            R = scipy.linalg.cholesky(gram, lower=False)
+        except np.linalg.LinAlgError:
+            R = np.linalg.qr(Ay, mode="r")
+        res = scipy.optimize.lsq_linear(R[:-1, :-1], R[:-1, -1],
+                                        bounds=(lb * col, np.full(lb.size, np.inf)), method="bvls")
         return res.x / col, A, pieces
 
     def _fit_output(self, l, kinds):
