@@ -24,7 +24,10 @@ the compensator inverts the identified creep with the dynamics (scenario
 ``creep = "auto"``: the identified preset's ``[creep]``).
 
 Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...] [--keep DIR] [--creep]
-[--model auto|classical|preisach ...]``
+[--model auto|classical|preisach|generalized ...]``
+
+``--plants scenarios/presets/realistic-gpi.toml`` is the actuator with
+generalised-PI direct paths.
 """
 
 from __future__ import annotations
@@ -229,7 +232,7 @@ def main(argv=None):
                     default=["realistic-2dof", "scenarios/presets/realistic-b.toml"])
     ap.add_argument("--keep", metavar="DIR", help="work in DIR and keep the files")
     ap.add_argument("--model", nargs="+", default=["auto"],
-                    choices=["auto", "classical", "preisach"],
+                    choices=["auto", "classical", "preisach", "generalized"],
                     help="identify --model class(es) to compare (default: auto)")
     ap.add_argument("--verbose", action="store_true", help="print identify's output too")
     ap.add_argument("--creep", action="store_true",

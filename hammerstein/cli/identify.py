@@ -33,6 +33,7 @@ from hammerstein.core.presets import PresetError, save_model
 from hammerstein.core.creep import creep_to_table
 from hammerstein.core.creep_identification import remove_creep, step_level_errors
 from hammerstein.core.preisach_identification import identify_preisach_records
+from hammerstein.core.gpi_identification import identify_gpi_records
 from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_creep,
                                                      identify_record_dynamics, identify_records)
 from hammerstein.report.dynamics_figure import measured_bode_figure
@@ -84,13 +85,16 @@ def add_parser(subparsers):
                    help="auto (default): components whose contribution is below the noise "
                         "become pure gains or absent; all: every component a PI; or explicit "
                         "kinds pi, gain, none per OUT:IN")
-    p.add_argument("--model", choices=["auto", "classical", "preisach"], default="auto",
+    p.add_argument("--model", choices=["auto", "classical", "preisach", "generalized"],
+                   default="auto",
                    help="model class of the hysteresis. classical: multivariable classical PI "
                         "(+ output map); preisach: discrete Preisach model, density by "
                         "non-negative least squares with smoothing (monotone direct paths, "
-                        "signed cross-couplings); auto (default): with multi-amplitude records "
-                        "(held-out amplitude levels) both are fitted and the one with the "
-                        "lower held-out minor-loop error is kept; otherwise classical")
+                        "signed cross-couplings); generalized: generalised PI (plays under "
+                        "per-side envelope functions, fitted by variable projection); auto "
+                        "(default): with multi-amplitude records (held-out amplitude levels) "
+                        "all three are fitted and the one with the lowest held-out minor-loop "
+                        "error is kept; otherwise classical")
     p.add_argument("--preisach-levels", type=int, default=20, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
                         "(N (N + 1) / 2 hysterons per component; default 20)")
@@ -214,8 +218,9 @@ def _check_usage(args):
     if not 2 <= args.preisach_levels <= 60:
         raise _Usage(f"--preisach-levels: expected an integer from 2 to 60, found "
                      f"{args.preisach_levels}")
-    if args.model == "preisach" and args.method == "closed-form":
-        raise _Usage("--model preisach: fitted by least squares; leave out --method closed-form")
+    if args.model in ("preisach", "generalized") and args.method == "closed-form":
+        raise _Usage(f"--model {args.model}: fitted by least squares; leave out --method "
+                     f"closed-form")
     if args.creep_refits is not None and not args.creep_records:
         raise _Usage("--creep-refits: only used with --creep-records")
     if args.creep_refits is not None and not 0 <= args.creep_refits <= 5:
@@ -564,12 +569,13 @@ def _identify(args, records, n, thresholds, names, model_class=None):
             if choice == "preisach" or not fits:
                 raise
             errors["preisach"] = str(exc)
+    _fit_generalized(args, records, names, levels, fits, errors)
     if len(fits) == 1:
         fit = next(iter(fits.values()))
         if choice == "auto":
             why = ("; ".join(f"{k} failed: {v}" for k, v in errors.items()) if errors else
                    "no held-out amplitude level (minor loop) to compare the classes on")
-            fit.notes.insert(0, f"model auto: {'classical PI' if 'classical' in fits else 'preisach'} "
+            fit.notes.insert(0, f"model auto: {_CLASS_LABEL.get(next(iter(fits)), next(iter(fits)))} "
                                 f"({why})")
         return fit
     loops = {k: _minor_loop_error(f) for k, f in fits.items()}
@@ -598,6 +604,25 @@ def _identify(args, records, n, thresholds, names, model_class=None):
         lines.append(text)
     fit.notes[:0] = lines
     return fit
+
+
+_CLASS_LABEL = {"classical": "classical PI", "generalized": "generalized PI"}
+#: Play operators per component of `--model generalized` (and of auto's third class).
+GPI_PLAYS = 10
+
+
+def _fit_generalized(args, records, names, levels, fits, errors):
+    """``--model generalized``, or the third class of ``auto``: into ``fits`` / ``errors``."""
+    if not (args.model == "generalized" or (args.model == "auto" and levels)):
+        return
+    try:
+        fits["generalized"] = identify_gpi_records(
+            records, GPI_PLAYS, args.components, args.hold_out, args.train_fraction, args.skip,
+            *names)
+    except (IdentificationError, HysteresisError) as exc:
+        if args.model == "generalized" or not fits:
+            raise
+        errors["generalized"] = str(exc)
 
 
 def _names(record, in_keys, out_keys):
@@ -632,6 +657,11 @@ def _report(args, fit, records, dyn=None, creep=None):
                 parts.append(f"{inp}: Preisach {c.n_levels} levels ({c.n_states} hysterons"
                              f"{', signed density' if c.signed else ''}), grid "
                              f"{c.edges[0]:.4g}..{c.edges[-1]:.4g} {iu}")
+            elif fit.structure[l][k] == "generalized":
+                parts.append(f"{inp}: generalized PI {c.n_states} plays, envelopes "
+                             f"{c.gamma_l[0]:.4g} tanh({c.gamma_l[1]:.4g} u + {c.gamma_l[2]:.3g}) "
+                             f"rising, {c.gamma_r[0]:.4g} tanh({c.gamma_r[1]:.4g} u + "
+                             f"{c.gamma_r[2]:.3g}) + {c.gamma_r[3]:.3g} falling")
             elif fit.structure[l][k] == "gain":
                 parts.append(f"{inp}: gain {c:.4g} {ou}/{iu}")
             else:

@@ -27,7 +27,7 @@ from hammerstein.simulation import generalized_play_steps
 
 __all__ = ["GeneralizedPI", "envelope"]
 
-GPI_KEYS = ("kind", "thresholds", "weights", "gamma_l", "gamma_r", "offset")
+GPI_KEYS = ("kind", "thresholds", "weights", "gamma_l", "gamma_r", "offset", "reversible")
 
 
 def _vector(value, name, size=None, ndim=1):
@@ -75,6 +75,11 @@ class GeneralizedPI:
         ``a0 > 0`` so both increase with ``u``.
     offset : float
         Constant added to the output [µm].
+    reversible : array_like, shape (d,), optional
+        Coefficients ``c_1 .. c_d`` [µm/V^n] of a reversible polynomial
+        ``sum_n c_n u^n`` added to the output (e.g. the even u^2 term of a
+        cross-coupling, as in the Preisach model's reversible part); none by
+        default.
 
     Notes
     -----
@@ -99,7 +104,7 @@ class GeneralizedPI:
     array([0., 1., 2., 2.])
     """
 
-    def __init__(self, thresholds, weights, gamma_l, gamma_r, offset=0.0):
+    def __init__(self, thresholds, weights, gamma_l, gamma_r, offset=0.0, reversible=()):
         self.thresholds = _vector(thresholds, "thresholds")
         n = self.thresholds.size
         if n == 0 or np.any(self.thresholds < 0) or np.any(np.diff(self.thresholds) <= 0):
@@ -113,11 +118,30 @@ class GeneralizedPI:
                 raise HysteresisError(f"{name}: expected a0 > 0 and a1 > 0 (an increasing "
                                       f"envelope a0 tanh(a1 u + a2) + a3), found {g.tolist()}")
         self.offset = float(_vector(offset, "offset", ndim=0))
+        self.reversible = _vector(reversible, "reversible").reshape(-1)
 
     def __repr__(self):
         return (f"GeneralizedPI(thresholds={self.thresholds.tolist()}, weights="
                 f"{self.weights.tolist()}, gamma_l={self.gamma_l.tolist()}, "
-                f"gamma_r={self.gamma_r.tolist()}, offset={self.offset})")
+                f"gamma_r={self.gamma_r.tolist()}, offset={self.offset}"
+                + (f", reversible={self.reversible.tolist()})" if self.reversible.size else ")"))
+
+    def reversible_part(self, u):
+        """The reversible polynomial ``sum_n c_n u^n`` [µm] (zero when none is given).
+
+        Parameters
+        ----------
+        u : array_like
+            Input [V].
+
+        Returns
+        -------
+        numpy.ndarray
+            Same shape as ``u``.
+        """
+        u = np.asarray(u, dtype=float)
+        return np.polyval(np.r_[self.reversible[::-1], 0.0], u) if self.reversible.size \
+            else np.zeros_like(u)
 
     @property
     def n_states(self) -> int:
@@ -173,6 +197,8 @@ class GeneralizedPI:
         s = self.initial_state(initial_state)
         y, s = generalized_play_steps(u, self.thresholds, self.weights, self.gamma_l,
                                       self.gamma_r, s)
+        if self.reversible.size:
+            y = y + self.reversible_part(u)
         return y + self.offset, s
 
     def to_table(self):
@@ -182,11 +208,14 @@ class GeneralizedPI:
         -------
         dict
             Keys ``kind``, ``thresholds``, ``weights``, ``gamma_l``,
-            ``gamma_r``, ``offset``.
+            ``gamma_r``, ``offset`` and, when there is one, ``reversible``.
         """
-        return {"kind": "generalized_pi", "thresholds": self.thresholds.tolist(),
-                "weights": self.weights.tolist(), "gamma_l": self.gamma_l.tolist(),
-                "gamma_r": self.gamma_r.tolist(), "offset": self.offset}
+        table = {"kind": "generalized_pi", "thresholds": self.thresholds.tolist(),
+                 "weights": self.weights.tolist(), "gamma_l": self.gamma_l.tolist(),
+                 "gamma_r": self.gamma_r.tolist(), "offset": self.offset}
+        if self.reversible.size:
+            table["reversible"] = self.reversible.tolist()
+        return table
 
     @classmethod
     def from_table(cls, table):
@@ -215,4 +244,4 @@ class GeneralizedPI:
                 raise HysteresisError(f"{key}: missing (kind = 'generalized_pi' needs thresholds, "
                                       f"weights, gamma_l and gamma_r)")
         return cls(table["thresholds"], table["weights"], table["gamma_l"], table["gamma_r"],
-                   table.get("offset", 0.0))
+                   table.get("offset", 0.0), table.get("reversible", ()))

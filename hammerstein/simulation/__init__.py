@@ -70,8 +70,9 @@ from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, Ch
                                               simulate_chain, simulate_chain_batch,
                                               simulate_compensator, simulate_hysteresis,
                                               simulate_plant, simulate_plays)
-from hammerstein.simulation._preisach import (generalized_play_steps, linear_steps,
-                                              preisach_inverse_kernel, preisach_steps)
+from hammerstein.simulation._preisach import (generalized_play_states, generalized_play_steps,
+                                              linear_steps, preisach_inverse_kernel,
+                                              preisach_steps)
 
 __all__ = [
     "simulate_plays",
@@ -104,5 +105,6 @@ __all__ = [
     "preisach_steps",
     "linear_steps",
     "generalized_play_steps",
+    "generalized_play_states",
     "preisach_inverse_kernel",
 ]

@@ -29,7 +29,7 @@ from numba import njit
 
 __all__ = ["ramp_preisach_kernel", "generalized_play_kernel", "linear_kernel", "ramps",
            "preisach_steps", "linear_steps", "generalized_play_steps",
-           "preisach_inverse_kernel"]
+           "preisach_inverse_kernel", "generalized_play_states"]
 
 
 @njit(cache=True, inline="always")
@@ -95,6 +95,23 @@ def generalized_play_kernel(u, r, w, gl, gr, s, y):
             s[j] = v
             acc += w[j] * v
         y[t] = acc
+
+
+@njit(cache=True)
+def generalized_play_states_kernel(u, r, gl, gr, s, out):
+    """Every play's trajectory ``out`` (n_samples, n) under the envelopes; ``s`` in/out."""
+    nr = r.size
+    for t in range(u.size):
+        lo = _envelope(gl, u[t])
+        hi = _envelope(gr, u[t])
+        for j in range(nr):
+            v = s[j]
+            if v > hi + r[j]:
+                v = hi + r[j]
+            if v < lo - r[j]:
+                v = lo - r[j]
+            s[j] = v
+            out[t, j] = v
 
 
 @njit(cache=True)
@@ -205,25 +222,76 @@ def generalized_play_steps(u, thresholds, weights, gamma_l, gamma_r, state):
     return y, s
 
 
+def generalized_play_states(u, thresholds, gamma_l, gamma_r, state):
+    """Trajectory of every generalised play on validated arrays (compiled kernel).
+
+    Parameters
+    ----------
+    u : numpy.ndarray, shape (n_samples,)
+        Input [V].
+    thresholds : numpy.ndarray, shape (n,)
+        Play thresholds [V].
+    gamma_l, gamma_r : numpy.ndarray, shape (4,)
+        Envelope coefficients ``a0 tanh(a1 u + a2) + a3``, rising and falling input.
+    state : numpy.ndarray, shape (n,)
+        Play outputs before the first sample; not modified.
+
+    Returns
+    -------
+    states : numpy.ndarray, shape (n_samples, n)
+        Play outputs after each sample.
+    final_state : numpy.ndarray, shape (n,)
+        Play outputs after the last sample.
+    """
+    s = np.array(state, dtype=float)
+    out = np.empty((u.size, s.size))
+    generalized_play_states_kernel(np.ascontiguousarray(u, dtype=float),
+                                   np.ascontiguousarray(thresholds, dtype=float),
+                                   np.ascontiguousarray(gamma_l, dtype=float),
+                                   np.ascontiguousarray(gamma_r, dtype=float), s, out)
+    return out, s
+
+
 # -- exact inverse of a multivariable Preisach model -------------------------------
 @njit(cache=True)
-def _component(c, u, E, e_off, row, col, mu, q_off, rev, off, s, commit):
-    """Output of component c at input u from states s (committed when ``commit``)."""
+def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
+               commit):
+    """Output of component c at input u from states s (committed when ``commit``).
+
+    A component is ramp hysterons ``q_off[c]:q_off[c+1]`` (cells in ``E``) or
+    generalised plays ``p_off[c]:p_off[c+1]`` (thresholds ``pr``, weights
+    ``pw``, envelopes ``env[c] = gamma_l | gamma_r``), plus a polynomial; its
+    states start at ``s[s_off[c]]`` (hysterons, then plays).
+    """
     e0 = e_off[c]
+    base = s_off[c] - q_off[c]
     acc = 0.0
     for q in range(q_off[c], q_off[c + 1]):
         i = e0 + row[q]
         j = e0 + col[q]
         up = _ramp(u, E[i], E[i + 1])
         down = _ramp(u, E[j], E[j + 1])
-        v = s[q]
+        v = s[base + q]
         if v > down:
             v = down
         if v < up:
             v = up
         if commit:
-            s[q] = v
+            s[base + q] = v
         acc += mu[q] * v
+    if p_off[c + 1] > p_off[c]:
+        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
+        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
+        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        for j in range(p_off[c], p_off[c + 1]):
+            v = s[base + j]
+            if v > hi + pr[j]:
+                v = hi + pr[j]
+            if v < lo - pr[j]:
+                v = lo - pr[j]
+            if commit:
+                s[base + j] = v
+            acc += pw[j] * v
     poly = 0.0
     for n in range(rev.shape[1] - 1, -1, -1):
         poly = (poly + rev[c, n]) * u
@@ -231,12 +299,15 @@ def _component(c, u, E, e_off, row, col, mu, q_off, rev, off, s, commit):
 
 
 @njit(cache=True)
-def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, rev, off, s, tol):
+def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off,
+          s, tol):
     """u in [lo, hi] with component c = target (Illinois false position; clipped)."""
-    flo = _component(c, lo, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+    flo = _component(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                      rev, off, s, False) - target
     if flo >= 0.0:
         return lo
-    fhi = _component(c, hi, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+    fhi = _component(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                      rev, off, s, False) - target
     if fhi <= 0.0:
         return hi
     a, b, fa, fb = lo, hi, flo, fhi
@@ -246,7 +317,8 @@ def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, rev, off, s, tol):
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
-        fx = _component(c, x, E, e_off, row, col, mu, q_off, rev, off, s, False) - target
+        fx = _component(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                         rev, off, s, False) - target
         if abs(fx) <= tol or b - a <= 1e-13 * (1.0 + abs(x)):
             return x
         if fx < 0.0:
@@ -263,13 +335,16 @@ def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, rev, off, s, tol):
 
 
 @njit(cache=True)
-def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, rev, off, present, s, lo, hi,
-                            exact, K_inv, u_prev, u, tol, max_sweeps):
+def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off,
+                            present, s, lo, hi, exact, K_inv, u_prev, u, tol, max_sweeps):
     """Inputs u (m, N) that make the model follow yr (p = m, N); states s, u_prev in/out.
 
     ``exact``: per sample, Gauss-Seidel over the outputs, each a monotone
     scalar root of its direct path (cross-couplings at the current estimate),
-    then every state committed at the solution. Otherwise the inverse
+    then every state committed at the solution; sweeps that do not settle in
+    ``max_sweeps`` (a cycle where a direct path is nearly flat against a
+    cross-coupling) are repeated under-relaxed, ``u += omega (root - u)`` with
+    omega = 1/2, 1/4, 1/8, 1/16. Otherwise the inverse
     multiplicative law ``u_t = u_{t-1} + K^-1 (yr_t - Gamma(u_{t-1}))``.
     Returns the number of samples whose sweeps did not converge.
     """
@@ -283,23 +358,28 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, rev, off, present
     for t in range(N):
         if exact:
             converged = False
-            for _ in range(max_sweeps):
-                delta = 0.0
-                for l in range(p):
-                    target = yr[l, t]
-                    for k in range(m):
-                        c = l * m + k
-                        if k != l and present[c]:
-                            target -= _component(c, ut[k], E, e_off, row, col, mu, q_off, rev,
-                                                 off, s, False)
-                    new = _root(l * m + l, target, lo[l], hi[l], E, e_off, row, col, mu, q_off,
-                                rev, off, s, tol)
-                    if abs(new - ut[l]) > delta:
-                        delta = abs(new - ut[l])
-                    ut[l] = new
-                if delta <= 1e-11:
-                    converged = True
+            omega = 1.0
+            for _ in range(5):          # plain sweeps; if they cycle, under-relaxed ones
+                for _ in range(max_sweeps):
+                    delta = 0.0
+                    for l in range(p):
+                        target = yr[l, t]
+                        for k in range(m):
+                            c = l * m + k
+                            if k != l and present[c]:
+                                target -= _component(c, ut[k], E, e_off, row, col, mu, q_off, pr,
+                                                     pw, p_off, env, s_off, rev, off, s, False)
+                        new = _root(l * m + l, target, lo[l], hi[l], E, e_off, row, col, mu,
+                                    q_off, pr, pw, p_off, env, s_off, rev, off, s, tol)
+                        if abs(new - ut[l]) > delta:
+                            delta = abs(new - ut[l])
+                        ut[l] = new if omega == 1.0 else ut[l] + omega * (new - ut[l])
+                    if delta <= 1e-11:
+                        converged = True
+                        break
+                if converged:
                     break
+                omega *= 0.5
             if not converged:
                 unconverged += 1
         else:
@@ -308,8 +388,8 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, rev, off, present
                 for k in range(m):
                     c = l * m + k
                     if present[c]:
-                        g[l] += _component(c, ut[k], E, e_off, row, col, mu, q_off, rev, off, s,
-                                           False)
+                        g[l] += _component(c, ut[k], E, e_off, row, col, mu, q_off, pr, pw, p_off,
+                                           env, s_off, rev, off, s, False)
             for k in range(m):
                 a = ut[k]
                 for l in range(p):
@@ -319,7 +399,8 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, rev, off, present
             for k in range(m):
                 c = l * m + k
                 if present[c]:
-                    _component(c, ut[k], E, e_off, row, col, mu, q_off, rev, off, s, True)
+                    _component(c, ut[k], E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
+                               off, s, True)
         for k in range(m):
             u[k, t] = ut[k]
     for k in range(m):

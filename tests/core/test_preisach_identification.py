@@ -225,7 +225,7 @@ def test_non_pi_model_refused_by_pi_kinds_with_a_clear_message(tmp_path):
 
 def test_hammerstein_refuses_a_non_invertible_model_naming_kind_and_class():
     G = load_plant("realistic-2dof").dynamics
-    model = MultivariableHysteresis([[GeneralizedPI([0.0], [1.0], [1, 1, 0, 0], [1, 1, 0, 0]), None],
+    model = MultivariableHysteresis([[GeneralizedPI([0.0], [-1.0], [1, 1, 0, 0], [1, 1, 0, 0]), None],
                                      [None, Polynomial([1.0])]])
     with pytest.raises(CompensatorError, match="kind 'hammerstein' with a MultivariableHysteresis"):
         HammersteinCompensator(model, G)

@@ -82,8 +82,10 @@ def test_unreachable_reference_saturates_at_the_bound():
 @pytest.mark.parametrize("build,message", [
     (lambda: MultivariableHysteresis([[PreisachModel(EDGES, np.eye(21))],
                                       [PreisachModel(EDGES, np.eye(21))]]), "as many inputs"),
-    (lambda: MultivariableHysteresis([[GeneralizedPI([0.0], [1.0], [1, 1, 0, 0], [1, 1, 0, 0])]]),
-     "expected a PreisachModel direct path"),
+    (lambda: MultivariableHysteresis([[Polynomial([1.0])]]),
+     "expected a PreisachModel or GeneralizedPI direct path"),
+    (lambda: MultivariableHysteresis([[GeneralizedPI([0.0, 1.0], [1.0, -0.2], [1, 1, 0, 0],
+                                                     [1, 1, 0, 0])]]), "not increasing"),
     (lambda: MultivariableHysteresis([[PreisachModel(EDGES, np.zeros((21, 21)), [1.0, -0.2])]],
                                      input_amplitude=[10.0]), "not increasing"),
     (lambda: 3.0, "expected a MultivariableHysteresis"),

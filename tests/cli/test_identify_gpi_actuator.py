@@ -1,0 +1,116 @@
+"""``hammerstein identify --model generalized|auto`` on a generalised-PI actuator (issue 17).
+
+The records are the excitation files of :mod:`hammerstein.core.excitation`
+played through ``gpi_actuator.GPIActuator`` (written without the package:
+generalised-PI direct paths with asymmetric saturating envelopes, hysteretic
+and even cross-couplings, three bending modes with dynamic coupling, 40 nm
+noise). Expectations come from the simulator itself: its quasi-static loops
+``G(0) H(u)`` and its response to the compensator's voltages.
+"""
+
+import numpy as np
+import pytest
+
+from gpi_actuator import T, GPIActuator, _lsim
+from outside_actuator import write_csv
+from hammerstein.cli.main import main
+from hammerstein.core.excitation import decreasing_sine, excitation_set
+from hammerstein.core.generalized_pi import GeneralizedPI
+from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.core.presets import load_model, load_plant
+
+
+def test_model_generalized_on_a_quasi_static_record(tmp_path, capsys):
+    """A one-input generalised PI (thresholds and envelopes other than the identifier's)
+    identified through the CLI; the file is a generalised PI that predicts the true loops."""
+    true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
+                         gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4])
+    t, u, _ = decreasing_sine(1e-3, 10.0)
+    y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="")
+    out = tmp_path / "gpi.toml"
+    base = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
+            "--model", "generalized", "--out", str(out)]
+    assert main(base) == 0, capsys.readouterr().err
+    assert "u: generalized PI 10 plays" in capsys.readouterr().out
+    model = load_model(str(out))
+    assert isinstance(model.components[0][0], GeneralizedPI)
+    v = 6.0 * np.sin(2 * np.pi * np.arange(2000) / 1000)       # a minor loop never recorded
+    np.testing.assert_allclose(model.simulate(v[None])[0][0, 1000:],
+                               true.simulate(v)[0][1000:], atol=0.01 * np.ptp(y))
+    assert main(base[:-2] + ["--method", "closed-form", "--out", str(tmp_path / "b.toml")]) == 2
+    assert "--model generalized: fitted by least squares" in capsys.readouterr().err
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    d = tmp_path_factory.mktemp("gpi")
+    act = GPIActuator()
+    rng = np.random.default_rng(11)
+    files = {}
+    for r in excitation_set(["ux", "uy"], 10.0, T, sine_frequency=5.0, hold=0.1):
+        if r.kind == "creep":
+            continue
+        write_csv(d / f"{r.name}.csv", r.time, r.u, act.simulate(r.u, rng=rng))
+        files.setdefault(r.kind, []).append(str(d / f"{r.name}.csv"))
+    return act, d, files
+
+
+def identify(d, files, model, capsys):
+    out = d / f"{model}.toml"
+    args = ["identify", *files["hysteresis"], "--inputs", "ux,uy", "--outputs", "x,y",
+            "--time", "t", "--model", model, "--dynamics", "--dynamics-records",
+            *files["multisine"], *files["multisine-validation"], "--out", str(out)]
+    assert main(args) == 0, capsys.readouterr().err
+    return load_plant(out), capsys.readouterr().out
+
+
+def loop_error(act, model, k, fraction):
+    """Quasi-static loop amplitude of output k (1 Hz sine at ``fraction`` of 10 V): model vs the
+    actuator's own steady state G(0) H(u), relative."""
+    n = int(round(1 / T))
+    u = np.zeros((2, 2 * n))
+    u[k] = fraction * 10.0 * np.sin(2 * np.pi * np.arange(2 * n) / n)
+    true = (act.dc_gain() @ act.hysteresis(u))[k, n:]
+    est = model.simulate(u)[0][k, n:]
+    return np.ptp(est) / np.ptp(true) - 1
+
+
+@pytest.mark.slow
+def test_generalized_model_minor_loops_and_compensation(recorded, capsys):
+    act, d, files = recorded
+    plant, printed = identify(d, files, "generalized", capsys)
+    assert "generalized PI 10 plays" in printed
+    assert isinstance(plant.hysteresis.components[0][0], GeneralizedPI)
+    for k in range(2):                      # minor loops never recorded (issue 17: within 2 %)
+        for frac in (0.3, 0.15):
+            assert abs(loop_error(act, plant.hysteresis, k, frac)) < 0.02, (k, frac)
+    # the Hammerstein compensator over the identified preset drives the actuator itself
+    comp = HammersteinCompensator(plant.hysteresis, plant.dynamics)
+    R, f, n = 30.0, 50.0, 8000
+    t = np.arange(n) * T
+    ref = np.vstack([R * np.cos(2 * np.pi * f * t), R * np.sin(2 * np.pi * f * t)])
+    lead, state, faded = comp.start(ref, period_samples=400, fade_samples=800)
+    u, _ = comp.simulate(lead, state)
+    y = act.simulate(u, noise=False)
+    err = np.linalg.norm(y[:, 4000:] - faded[:, 4000:], axis=0)
+    # measured 2.3 % of R worst, 1.2 % median: all of it from the identified G (the actuator's
+    # G(0) is not I, [[1.003, 0.013], [-0.066, 1.008]]); the identified hysteresis through the
+    # actuator's own modes (G(0)^-1 H_id, independent of the package's dynamics) is exact
+    assert err.max() < 0.03 * R and np.median(err) < 0.02 * R, (err.max(), np.median(err))
+    h_id = np.linalg.solve(act.dc_gain(), plant.hysteresis.simulate(u)[0])
+    y_h = _lsim(act.Ad, act.Bd, act.C, np.ascontiguousarray(h_id.T)).T
+    assert np.linalg.norm(y_h[:, 4000:] - faded[:, 4000:], axis=0).max() < 0.005 * R
+
+
+@pytest.mark.slow
+def test_auto_fits_three_classes_and_keeps_the_lowest_minor_loop_error(recorded, capsys):
+    act, d, files = recorded
+    plant, printed = identify(d, files, "auto", capsys)
+    lines = [ln.strip() for ln in printed.splitlines() if "model auto:" in ln]
+    chosen = lines[0].split()[3]
+    scores = {ln.split()[2]: float(ln.split()[3]) for ln in lines[1:]}
+    assert set(scores) == {"classical", "preisach", "generalized"}
+    assert scores[chosen] == min(scores.values())
+    assert scores["classical"] > min(scores["preisach"], scores["generalized"])

@@ -1,0 +1,231 @@
+"""Generalised-PI identification from records, its exact inverse, and the Hammerstein
+compensator over its model (also on a plant outside its class).
+
+Expectations come from the true actuators (their own loops simulated independently of the
+fit), from closed forms (an even coupling is the same at +A and -A; a play under envelopes
+followed by hand), from round trips (forward(inverse(y)) = y, file round trip) and from a
+naive per-sample bisection written here.
+"""
+
+import numpy as np
+import pytest
+
+from hammerstein.core.datafiles import MultiRecord
+from hammerstein.core.excitation import decreasing_sine
+from hammerstein.core.generalized_pi import GeneralizedPI, envelope
+from hammerstein.core.gpi_identification import GeneralizedPIIdentifier, play_thresholds
+from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.core.presets import load_model, load_plant, save_model
+from hammerstein.exceptions import HysteresisError, IdentificationError
+
+T = 1e-3          # quasi-static records: the hysteresis is rate independent
+
+
+def records(hysteresis, noise=0.0, seed=0, amplitude=10.0):
+    """One decreasing-amplitude sine per input (others at 0), outputs from ``hysteresis``."""
+    rng = np.random.default_rng(seed)
+    m = hysteresis.n_inputs
+    out = []
+    for k in range(m):
+        t, one, _ = decreasing_sine(T, amplitude)
+        u = np.zeros((m, t.size))
+        u[k] = one
+        y, _ = hysteresis.simulate(u)
+        y = y + noise * rng.standard_normal(y.shape)
+        out.append(MultiRecord(t, u, y, tuple(hysteresis.input_names),
+                               tuple(hysteresis.output_names), T, f"rec-{k}"))
+    return out
+
+
+def gpi_actuator():
+    """Asymmetric saturating GPI direct paths (thresholds and envelopes the identifier does not
+    use), a hysteretic GPI cross-coupling x <- uy and an even one y <- ux."""
+    x = GeneralizedPI([0.0, 0.6, 1.7, 3.1, 5.2], [1.1, 0.35, 0.22, 0.15, 0.08],
+                      gamma_l=[18.0, 0.065, 0.12, 0.0], gamma_r=[15.0, 0.075, -0.02, 0.6])
+    y = GeneralizedPI([0.0, 0.9, 2.2, 4.0], [0.9, 0.4, 0.2, 0.1],
+                      gamma_l=[14.0, 0.08, -0.1, 0.3], gamma_r=[17.0, 0.06, 0.05, -0.2])
+    xy = GeneralizedPI([0.0, 1.5, 3.0], [0.15, 0.06, 0.04],
+                       gamma_l=[12.0, 0.09, 0.1, 0.0], gamma_r=[11.0, 0.1, 0.0, 0.3])
+    return MultivariableHysteresis([[x, xy], [Polynomial([0.06, -0.03]), y]], ["ux", "uy"],
+                                   ["x", "y"], [10.0, 10.0])
+
+
+def preisach_actuator():
+    """Asymmetric Preisach direct paths and an even cross-coupling: outside the GPI class."""
+    e = np.linspace(-10.5, 10.5, 31)
+    x = PreisachModel.from_density(e, total=24.0, bias_width=7.0, tilt=0.5, coercivity_width=3.0,
+                                   reversible=[3.0, 0.035])
+    y = PreisachModel.from_density(e, total=22.0, bias=0.3, bias_width=6.0, tilt=-0.4,
+                                   coercivity_width=2.6, reversible=[2.8, -0.04])
+    return MultivariableHysteresis([[x, None], [Polynomial([0.05, 0.03]), y]], ["ux", "uy"],
+                                   ["x", "y"], [10.0, 10.0])
+
+
+def loop_amplitude(model, k, fraction, amplitude=10.0):
+    """Peak-to-peak of output k over the second period of a 1 Hz sine of input k."""
+    n = int(round(1 / T))
+    u = np.zeros((model.n_inputs, 2 * n))
+    u[k] = fraction * amplitude * np.sin(2 * np.pi * np.arange(2 * n) / n)
+    return float(np.ptp(model.simulate(u)[0][k, n:]))
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    true = gpi_actuator()
+    return true, GeneralizedPIIdentifier(n_plays=8).fit(records(true, noise=0.01))
+
+
+def test_recovers_loops_and_minor_loops_of_other_thresholds_and_envelopes(fitted):
+    true, est = fitted
+    assert sorted({round(r["percent"]) for r in est.fit_.levels if r["held_out"]}) == [40, 80]
+    for row in est.fit_.levels:                 # direct paths, held-out and trained levels
+        if row["output"] == ("x" if row["source"] == "rec-0" else "y"):
+            assert row["rms_percent"] < 1.0, row
+    for k in range(2):                           # minor loops never recorded (30 %, 15 %)
+        for frac in (0.3, 0.15):
+            a, b = loop_amplitude(true, k, frac), loop_amplitude(est.model_, k, frac)
+            assert abs(b / a - 1) < 0.02, (k, frac, a, b)
+
+
+def test_direct_paths_monotone_and_cross_couplings_kept(fitted):
+    true, est = fitted
+    for l in range(2):
+        d = est.model_.components[l][l]
+        assert isinstance(d, GeneralizedPI) and np.all(d.weights >= 0) and d.reversible[0] > 0
+    assert est.structure_ == [["generalized", "generalized"], ["generalized", "generalized"]]
+    u = np.zeros((2, 4))                         # the even coupling: same at +A and -A (closed form)
+    u[0] = [0.0, 10.0, 0.0, -10.0]
+    yt, ye = true.simulate(u)[0][1], est.model_.simulate(u)[0][1]
+    assert abs(ye[1] - yt[1]) < 0.3 and abs(ye[3] - yt[3]) < 0.3     # µm, 3 µm even coupling
+    u = np.zeros((2, 2000))                      # the hysteretic coupling's loop, 1 Hz, full range
+    u[1] = 10 * np.sin(2 * np.pi * np.arange(2000) * T)
+    np.testing.assert_allclose(est.model_.simulate(u)[0][0, 1000:], true.simulate(u)[0][0, 1000:],
+                               atol=0.25)
+
+
+def test_round_trip_identify_preset_load(fitted, tmp_path):
+    _, est = fitted
+    path = tmp_path / "identified.toml"
+    save_model(est.model_, path, {"method": "generalized-pi"})
+    back = load_model(str(path))
+    assert isinstance(back.components[1][0], GeneralizedPI)
+    assert back.components[1][0].reversible.size == 3
+    u = records(est.model_)[1].u
+    np.testing.assert_allclose(back.simulate(u)[0], est.model_.simulate(u)[0], atol=1e-9)
+
+
+def test_thresholds_follow_the_envelopes():
+    gl, gr = [4.0, 0.2, 0.1, 0.0], [5.0, 0.15, -0.1, 0.5]
+    r = play_thresholds(gl, gr, -10.0, 10.0, 4)
+    mid = 0.5 * (envelope(gl, 10.0) + envelope(gr, 10.0) - envelope(gl, -10.0) - envelope(gr, -10.0))
+    np.testing.assert_allclose(r, 0.5 * mid * np.array([0.0, 0.25, 0.5, 0.75]) ** 1.5)
+
+
+def test_reversible_polynomial_closed_form():
+    g = GeneralizedPI([0.0], [0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], offset=0.5,
+                      reversible=[0.2, -0.03])
+    u = np.array([0.0, 2.0, -3.0])
+    np.testing.assert_allclose(g.simulate(u)[0], 0.5 + 0.2 * u - 0.03 * u ** 2)
+    with pytest.raises(HysteresisError, match="reversible"):
+        GeneralizedPI([0.0], [1.0], [1, 1, 0, 0], [1, 1, 0, 0], reversible=["a"])
+
+
+@pytest.mark.parametrize("kwargs, match", [({"n_plays": 1}, "n_plays"),
+                                           ({"max_evaluations": 0}, "max_evaluations")])
+def test_bad_parameters_are_named(kwargs, match):
+    with pytest.raises(IdentificationError, match=match):
+        GeneralizedPIIdentifier(**kwargs)
+
+
+def test_drops_only_couplings_below_the_noise():
+    true = gpi_actuator()
+    true.components[0][1] = None                # no x <- uy at all
+    true = MultivariableHysteresis(true.components, ["ux", "uy"], ["x", "y"], [10.0, 10.0])
+    est = GeneralizedPIIdentifier(n_plays=6, max_evaluations=20).fit(records(true, noise=0.01))
+    assert est.model_.components[0][1] is None
+    assert est.model_.components[1][0] is not None        # 3 µm even coupling stays
+    assert any("x <- uy: absent" in n for n in est.notes_)
+
+
+# -- the exact inverse over a GPI model -------------------------------------------------------
+def naive_inverse(model, yr, lo=-12.0, hi=12.0):
+    """Per sample, Gauss-Seidel over the outputs with a bisection on each direct path; each
+    trial a fresh one-sample simulation from the committed state (no shared code)."""
+    m, n = model.n_inputs, yr.shape[1]
+    state = model.initial_state()
+    u_now = np.zeros(m)
+    out = np.empty((m, n))
+
+    def out_at(u, s):
+        return model.simulate(u[:, None], s)[0][:, 0]
+
+    for t in range(n):
+        for _ in range(60):
+            before = u_now.copy()
+            for l in range(m):
+                a, b = lo, hi
+                for _ in range(80):
+                    mid = 0.5 * (a + b)
+                    trial = u_now.copy()
+                    trial[l] = mid
+                    if out_at(trial, state)[l] < yr[l, t]:
+                        a = mid
+                    else:
+                        b = mid
+                u_now[l] = 0.5 * (a + b)
+            if np.max(np.abs(u_now - before)) < 1e-12:
+                break
+        out[:, t] = u_now
+        state = model.simulate(u_now[:, None], state)[1]
+    return out
+
+
+def reference(n):
+    t = np.arange(n) * T
+    return np.vstack([14 * np.sin(2 * np.pi * t) * np.exp(-t), 8 * np.cos(2 * np.pi * 1.5 * t) - 2])  # in reach
+
+
+def test_inverse_round_trip_and_chunks(fitted):
+    _, est = fitted
+    comp = PreisachInverseCompensator(est.model_)
+    yr = reference(3000)
+    u, _ = comp.simulate(yr)
+    assert np.max(np.abs(est.model_.simulate(u)[0] - yr)) < 1e-9
+    u1, s1 = comp.simulate(yr[:, :1234])
+    u2, _ = comp.simulate(yr[:, 1234:], s1)
+    np.testing.assert_allclose(np.hstack([u1, u2]), u, atol=1e-12)
+
+
+def test_inverse_matches_a_naive_bisection(fitted):
+    _, est = fitted
+    yr = reference(40)
+    u, _ = PreisachInverseCompensator(est.model_, input_bound=[12.0, 12.0]).simulate(yr)
+    np.testing.assert_allclose(u, naive_inverse(est.model_, yr), atol=1e-7)
+
+
+# -- the Hammerstein compensator over a GPI model -------------------------------------------
+def circle(n, f, R, Ts):
+    t = np.arange(n) * Ts
+    return np.vstack([R * np.cos(2 * np.pi * f * t), R * np.sin(2 * np.pi * f * t)])
+
+
+@pytest.mark.parametrize("plant_kind", ["gpi", "preisach"])
+def test_hammerstein_over_a_gpi_model(plant_kind):
+    true = gpi_actuator() if plant_kind == "gpi" else preisach_actuator()
+    est = GeneralizedPIIdentifier(n_plays=8).fit(records(true, noise=0.02))
+    G = load_plant("realistic-2dof").dynamics
+    plant = HammersteinPlant(true, G.dt, G)
+    comp = HammersteinCompensator(est.model_, G)
+    assert comp.exact_static
+    R, f, n = 10.0, 50.0, 3000                  # y reaches about +-12 µm
+    ref = circle(n, f, R, G.dt)
+    res = comp.run_reference(plant, ref, period_samples=int(round(1 / (f * G.dt))), fade_samples=400)
+    err = np.linalg.norm(res.outputs[:, 1600:] - ref[:, 1600:], axis=0)
+    # identified hysteresis, true G. Measured: GPI plant 2.3 % of R worst, 0.8 % median (the
+    # fit's own error from 20 nm noise); Preisach plant (outside the class, non-congruent minor
+    # loops) 6.9 % worst, 4.2 % median although its held-out levels fit to 0.1 % RMS
+    worst, median = {"gpi": (0.03, 0.012), "preisach": (0.1, 0.06)}[plant_kind]
+    assert err.max() < worst * R and np.median(err) < median * R, (err.max(), np.median(err))
