@@ -127,7 +127,7 @@ def test_auto_with_creep_records_judges_the_step_levels_too(files, capsys):
     lines = [ln.strip() for ln in capsys.readouterr().out.splitlines() if "model auto:" in ln]
     assert "staircases' step-level RMS" in lines[0]
     per = {ln.split()[2]: ln for ln in lines[1:]}
-    assert set(per) == {"classical", "preisach"}
+    assert set(per) == {"classical", "preisach", "generalized"}
     chosen = lines[0].split()[3]
     rms = float(per[chosen].split("step levels (model + its creep, from rest) RMS ")[1].split()[0])
     model = load_model(str(out))
