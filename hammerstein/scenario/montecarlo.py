@@ -80,6 +80,7 @@ import contextlib
 import logging
 import math
 import re
+import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -111,10 +112,13 @@ __all__ = [
     "case_plant",
     "run_chunk",
     "run_study",
+    "auto_chunk",
     "run_montecarlo_scenario",
     "execution",
     "QUANTILES",
     "CHUNK_CASES",
+    "BATCH_SAMPLES",
+    "TASK_SAMPLES",
     "EXACT_VALUES",
     "MAX_RUNS",
     "MAX_RUN_SAMPLES",
@@ -124,8 +128,15 @@ __all__ = [
 
 #: Quantiles reported (with the maximum).
 QUANTILES = (0.50, 0.95, 0.99)
-#: Plants per chunk (one batch-kernel call runs chunk x frequencies runs).
+#: Plants per chunk run here (the unit of accumulation; dask chunks: :func:`auto_chunk`).
 CHUNK_CASES = 50
+#: Samples of one batch-kernel call inside a chunk (its buffers stay a few MB: fewer page
+#: faults and cache misses than one call per chunk).
+BATCH_SAMPLES = 500_000
+#: Samples of one dask task (about 1 to 3 s of work; :func:`auto_chunk`).
+TASK_SAMPLES = 20_000_000
+#: Tasks per dask worker thread at least (load balance), when the study is large enough.
+TASKS_PER_WORKER = 4
 #: Exact metric values kept (beyond: histogram quantiles).
 EXACT_VALUES = 2_000_000
 #: Budget: runs (cases x frequencies) per study.
@@ -233,8 +244,9 @@ class MonteCarloStudy:
         the nominal bending modes (None for other dynamics).
     compensator : object or None
         Built by :func:`run_montecarlo_scenario` from the nominal model.
-    chunk : int
-        Plants per chunk.
+    chunk : int or None
+        Plants per chunk (the sweep's ``chunk``; None: :data:`CHUNK_CASES`
+        here, :func:`auto_chunk` on dask).
     """
 
     name: str
@@ -249,7 +261,7 @@ class MonteCarloStudy:
     plant: object
     modes: tuple | None
     compensator: object = None
-    chunk: int = CHUNK_CASES
+    chunk: int | None = None
 
     @property
     def columns(self):
@@ -436,7 +448,7 @@ def validate_montecarlo(path, data):
             name=c["name"], description=c.get("description", ""), cases=c["cases"], seed=seed,
             frequencies=c["frequencies"], references=references, period_samples=periods,
             settle_periods=float(c["settle_periods"]), vary=vary, plant=plant, modes=modes,
-            chunk=c.get("chunk", CHUNK_CASES)))
+            chunk=c.get("chunk")))
     if not data.get("sweeps"):
         problems.append(f"{source}: sweeps: expected one or more [[sweeps]] kind = 'monte-carlo'")
     if "name" not in data and not (len(Path(path).stem) <= MAX_NAME
@@ -550,26 +562,47 @@ def case_plant(study, i):
 
 
 # -- running ---------------------------------------------------------------------------------
-def _run_metrics(study, i, j, reference, outputs):
-    """Metric vector of case i at frequency index j (order of ``study.columns``)."""
+def _batch_plants(study):
+    """Plants per batch-kernel call inside a chunk (about :data:`BATCH_SAMPLES` samples)."""
+    per_plant = sum(r.shape[1] for r in study.references)
+    return max(1, BATCH_SAMPLES // max(per_plant, 1))
+
+
+def _frequency_metrics(study, cases, j, outputs):
+    """Metric rows of cases ``cases`` (a range) at frequency index j (order of ``study.columns``).
+
+    ``outputs`` has shape (n_cases, p, n_samples). Each case's row is computed
+    from its own record only (reductions along a contiguous last axis,
+    numpy's pairwise sum per row), so it does not depend on the other cases
+    of the batch: any chunking gives the same bits.
+    """
     y = outputs
-    if "noise" in study.vary and study.vary["noise"]["sd"] > 0:
-        rng = np.random.default_rng([study.seed, i, j + 1])
-        y = y + study.vary["noise"]["sd"] * rng.standard_normal(y.shape)
-    win = steady_window(y.shape[1], study.period_samples[j], study.settle_periods)
-    e = reference[:, win] - y[:, win]
-    rms = np.sqrt(np.mean(e ** 2, axis=1))
-    mx = np.max(np.abs(e), axis=1)
-    ee = np.sqrt(np.sum(e ** 2, axis=0))
-    out = np.empty(2 * e.shape[0] + 2)
-    out[0:-2:2], out[1:-2:2] = rms, mx
-    out[-2], out[-1] = np.sqrt(np.mean(ee ** 2)), ee.max()
+    sd = study.vary.get("noise", {}).get("sd", 0.0)
+    if sd > 0:
+        y = y.copy()
+        for a, i in enumerate(cases):
+            rng = np.random.default_rng([study.seed, i, j + 1])
+            y[a] += sd * rng.standard_normal(y.shape[1:])
+    win = steady_window(y.shape[2], study.period_samples[j], study.settle_periods)
+    e = study.references[j][None, :, win] - y[:, :, win]          # (n, p, W), C-contiguous
+    e2 = e ** 2
+    n, p = e.shape[0], e.shape[1]
+    out = np.empty((n, 2 * p + 2))
+    out[:, 0:-2:2] = np.sqrt(np.mean(e2, axis=2))
+    out[:, 1:-2:2] = np.max(np.abs(e), axis=2)
+    ee = np.sqrt(np.sum(e2, axis=1))                                 # (n, W): Euclidean error
+    out[:, -2] = np.sqrt(np.mean(ee ** 2, axis=1))
+    out[:, -1] = np.max(ee, axis=1)
     out[~np.isfinite(out)] = np.inf     # a divergence (NaN outputs) is an infinite error
     return out
 
 
 def run_chunk(study, start, stop, parallel=None):
     """Metrics of cases ``start .. stop - 1`` at every frequency.
+
+    The chunk's plants run in batches of about :data:`BATCH_SAMPLES` samples
+    (one :func:`hammerstein.simulation.simulate_chain_batch` call each, so
+    memory does not grow with the chunk); only the metric values are kept.
 
     Parameters
     ----------
@@ -589,17 +622,41 @@ def run_chunk(study, start, stop, parallel=None):
         In the units of the metrics (µm); ``inf`` for a diverged run.
         Row ``i - start`` depends only on ``(study.seed, i)``.
     """
-    plants = [case_plant(study, i) for i in range(start, stop)]
     F = len(study.frequencies)
-    runs = [(a, j) for a in range(len(plants)) for j in range(F)]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        outs = simulate_chain_batch(study.compensator, [plants[a] for a, _ in runs],
-                                    [study.references[j] for _, j in runs], parallel=parallel)
-    values = np.empty((len(plants), F, len(study.columns)))
-    for (a, j), res in zip(runs, outs):
-        values[a, j] = _run_metrics(study, start + a, j, study.references[j], res.outputs)
+    values = np.empty((stop - start, F, len(study.columns)))
+    step = _batch_plants(study)
+    for a in range(start, stop, step):
+        b = min(a + step, stop)
+        plants = [case_plant(study, i) for i in range(a, b)]
+        n = b - a
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            outs = simulate_chain_batch(study.compensator, [pl for _ in range(F) for pl in plants],
+                                        [r for r in study.references for _ in range(n)],
+                                        parallel=parallel)
+        for j in range(F):      # runs of frequency j: outs[j * n:(j + 1) * n], same length
+            y = np.stack([res.outputs for res in outs[j * n:(j + 1) * n]])
+            values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
     return start, values
+
+
+def _remote_chunk(study, start, stop, exact):
+    """:func:`run_chunk` on a dask worker, returning only what the accumulator needs.
+
+    Returns ``(start, values)`` when the accumulator keeps exact values, else
+    ``(start, (bins, maximum, diverged))``: int16 histogram bin per value
+    (:meth:`QuantileAccumulator.bins`), the chunk's maximum per (frequency,
+    metric) and its diverged runs per frequency (a quarter of the bytes).
+    """
+    start, values = run_chunk(study, start, stop, parallel=False)
+    if exact:
+        return start, values
+    return start, (QuantileAccumulator.bins(values), values.max(axis=0), _diverged(values))
+
+
+def _diverged(values):
+    """Diverged runs per frequency of a chunk's values (any metric not finite)."""
+    return np.sum(~np.isfinite(values).all(axis=2), axis=0)
 
 
 class QuantileAccumulator:
@@ -651,12 +708,27 @@ class QuantileAccumulator:
         self.values = (np.full((cases,) + self.shape, np.nan)
                        if cases * int(np.prod(self.shape)) <= exact_limit else None)
 
-    def _bin(self, v):
+    @staticmethod
+    def bins(values):
+        """Histogram bin of every value (0: underflow, ``n_bins + 1``: overflow and inf).
+
+        Parameters
+        ----------
+        values : numpy.ndarray
+            Non-negative metric values (any shape).
+
+        Returns
+        -------
+        numpy.ndarray of int16, same shape
+            Bin ``k`` (1 <= k <= n_bins) holds
+            ``[10**(LO + (k-1)/BPD), 10**(LO + k/BPD))``.
+        """
+        n_bins = BINS_PER_DECADE * (_HI - _LO)
         with np.errstate(divide="ignore", invalid="ignore"):
-            b = np.floor((np.log10(v) - _LO) * BINS_PER_DECADE)
-        b = np.where(v <= 10.0 ** _LO, -1, b)
-        b = np.where(~np.isfinite(b) & (v > 0), self.n_bins, b)
-        return (np.clip(b, -1, self.n_bins) + 1).astype(np.int64)   # 0: underflow, n+1: overflow
+            b = np.floor((np.log10(values) - _LO) * BINS_PER_DECADE)
+        b = np.where(values <= 10.0 ** _LO, -1, b)
+        b = np.where(~np.isfinite(b) & (values > 0), n_bins, b)
+        return (np.clip(b, -1, n_bins) + 1).astype(np.int16)
 
     def add(self, start, values):
         """Add the values of cases ``start .. start + len(values) - 1``.
@@ -666,14 +738,26 @@ class QuantileAccumulator:
         start : int
         values : numpy.ndarray, shape (n_cases, n_frequencies, n_metrics)
         """
-        n = values.shape[0]
-        bins = self._bin(values)
-        flat = (np.arange(int(np.prod(self.shape))).reshape(self.shape) * (self.n_bins + 2))
-        np.add.at(self.counts.reshape(-1), (flat[None] + bins).ravel(), 1)
-        self.maximum = np.maximum(self.maximum, values.max(axis=0))
-        self.count += n
+        self.add_bins(self.bins(values), values.max(axis=0))
         if self.values is not None:
-            self.values[start:start + n] = values
+            self.values[start:start + values.shape[0]] = values
+
+    def add_bins(self, bins, maximum):
+        """Add cases given by their histogram bins only (exact values not kept).
+
+        Parameters
+        ----------
+        bins : numpy.ndarray of int, shape (n_cases, n_frequencies, n_metrics)
+            From :meth:`bins`.
+        maximum : numpy.ndarray, shape (n_frequencies, n_metrics)
+            Their maximum.
+        """
+        width = self.n_bins + 2
+        flat = np.arange(int(np.prod(self.shape)), dtype=np.int64).reshape(self.shape) * width
+        idx = (flat[None] + bins).ravel()
+        self.counts += np.bincount(idx, minlength=self.counts.size).reshape(self.counts.shape)
+        self.maximum = np.maximum(self.maximum, maximum)
+        self.count += bins.shape[0]
 
     @property
     def exact(self):
@@ -815,7 +899,31 @@ def execution(workers=None, scheduler=None):
             cluster.close()
 
 
-def run_study(study, client=None, chunk=None):
+def auto_chunk(study, n_workers):
+    """Plants per dask task: coarse (about :data:`TASK_SAMPLES` samples) but several per worker.
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+    n_workers : int
+        Worker threads of the cluster.
+
+    Returns
+    -------
+    int
+        ``ceil(TASK_SAMPLES / s)`` plants (``s`` samples per plant: the sum
+        of the reference lengths), reduced to give every worker at least
+        :data:`TASKS_PER_WORKER` tasks, but never below
+        ``ceil(TASK_SAMPLES / (8 s))`` plants (a task's fixed cost, about
+        10 ms of scheduling and transfer, stays below 1 % of its run time).
+    """
+    per_plant = max(sum(r.shape[1] for r in study.references), 1)
+    coarse = math.ceil(TASK_SAMPLES / per_plant)
+    balanced = math.ceil(study.cases / (TASKS_PER_WORKER * max(int(n_workers), 1)))
+    return max(1, min(coarse, max(balanced, math.ceil(coarse / 8))))
+
+
+def run_study(study, client=None, chunk=None, timings=None):
     """Run every case of a study; quantiles of every metric per frequency.
 
     Parameters
@@ -825,39 +933,55 @@ def run_study(study, client=None, chunk=None):
     client : distributed.Client, optional
         Run the chunks on this dask cluster (default: here, in order).
     chunk : int, optional
-        Plants per chunk (default ``study.chunk``); does not change any result.
+        Plants per chunk (default ``study.chunk`` here, :func:`auto_chunk`
+        on dask unless the sweep sets ``chunk``); does not change any result.
+    timings : dict, optional
+        Filled with ``chunk``, ``tasks`` and ``accumulate`` (CPU seconds
+        this process spent merging results) for benchmarks.
 
     Returns
     -------
     MonteCarloResult
     """
-    chunk = chunk or study.chunk
-    acc = QuantileAccumulator(study.cases, (len(study.frequencies), len(study.columns)))
-    ranges = [(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)]
+    shape = (len(study.frequencies), len(study.columns))
+    acc = QuantileAccumulator(study.cases, shape)
     diverged = np.zeros(len(study.frequencies), dtype=np.int64)
-
-    def take(start, values):
-        nonlocal diverged
-        diverged = diverged + np.sum(~np.isfinite(values).all(axis=2), axis=0)
-        acc.add(start, values)
-
+    spent = 0.0
     if client is None:
-        for a, b in ranges:
-            take(*run_chunk(study, a, b))
+        chunk = chunk or study.chunk or CHUNK_CASES
+        for a in range(0, study.cases, chunk):
+            start, values = run_chunk(study, a, min(a + chunk, study.cases))
+            t = time.process_time()
+            diverged += _diverged(values)
+            acc.add(start, values)
+            spent += time.process_time() - t
     else:
         from distributed import as_completed
+        n_workers = max(sum(w.get("nthreads", 1) for w in
+                            client.scheduler_info().get("workers", {}).values()), 1)
+        chunk = chunk or study.chunk or auto_chunk(study, n_workers)
+        ranges = iter([(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)])
         remote = client.scatter(study, broadcast=True)
-        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        it = iter(ranges)
+        exact = acc.exact
         pending = as_completed()
-        for a, b in list(zip(range(4 * n_workers), it)):
-            pending.add(client.submit(run_chunk, remote, *b, False, pure=False))
+        for _, (a, b) in zip(range(2 * n_workers), ranges):   # 2 in flight per worker
+            pending.add(client.submit(_remote_chunk, remote, a, b, exact, pure=False))
         for fut in pending:
-            take(*fut.result())
+            start, got = fut.result()
             fut.release()
-            nxt = next(it, None)
+            nxt = next(ranges, None)
             if nxt is not None:
-                pending.add(client.submit(run_chunk, remote, *nxt, False, pure=False))
+                pending.add(client.submit(_remote_chunk, remote, *nxt, exact, pure=False))
+            t = time.process_time()
+            if exact:
+                diverged += _diverged(got)
+                acc.add(start, got)
+            else:
+                acc.add_bins(got[0], got[1])
+                diverged += got[2]
+            spent += time.process_time() - t
+    if timings is not None:
+        timings.update(chunk=chunk, tasks=math.ceil(study.cases / chunk), accumulate=spent)
     return MonteCarloResult(study, acc.quantiles(), diverged, acc.exact, acc.values)
 
 
