@@ -957,8 +957,7 @@ def run_study(study, client=None, chunk=None, timings=None):
             spent += time.process_time() - t
     else:
         from distributed import as_completed
-        n_workers = max(sum(w.get("nthreads", 1) for w in
-                            client.scheduler_info().get("workers", {}).values()), 1)
+        n_workers = max(sum(client.nthreads().values()), 1)          # worker threads
         chunk = chunk or study.chunk or auto_chunk(study, n_workers)
         ranges = iter([(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)])
         remote = client.scatter(study, broadcast=True)

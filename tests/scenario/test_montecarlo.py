@@ -157,16 +157,92 @@ def test_accumulator_exact_and_histogram_against_naive_quantiles():
     assert np.array_equal(whole.counts, hist.counts)
 
 
-def test_dask_in_process_cluster_is_bit_identical(study):
+@pytest.fixture(scope="module")
+def local_result(study):
+    return mc.run_study(study, chunk=3)
+
+
+@pytest.fixture(scope="module")
+def clusters():
+    """In-process LocalCluster of n single-threaded workers, created once per n."""
     distributed = pytest.importorskip("distributed")
-    local = mc.run_study(study, chunk=3)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    made = {}
+
+    def get(n):
+        if n not in made:
+            made[n] = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=False,
+                                               dashboard_address=":0")
+        return made[n]
+
+    yield get
+    for c in made.values():
+        c.close()
+
+
+@pytest.mark.parametrize("n_workers, chunk", [(1, None), (2, None), (2, 2), (1, 7), (2, 1)])
+def test_dask_in_process_cluster_is_bit_identical(study, local_result, clusters, n_workers, chunk):
+    distributed = pytest.importorskip("distributed")
+    with distributed.Client(clusters(n_workers)) as client:
+        assert len(client.nthreads()) == n_workers
+        remote = mc.run_study(study, client=client, chunk=chunk)
+    assert np.array_equal(local_result.values, remote.values)
+    assert np.array_equal(local_result.quantiles, remote.quantiles)
+    assert np.array_equal(local_result.diverged, remote.diverged)
+
+
+def test_dask_histogram_results_are_compact_and_equal_the_local_histogram(
+        study, clusters, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(mc, "EXACT_VALUES", 0)       # workers return int16 bins, not values
+    local = mc.run_study(study, chunk=7)
+    start, (bins, mx, div) = mc._remote_chunk(study, 2, 5, False)
+    _, values = mc.run_chunk(study, 2, 5)
+    assert bins.dtype == np.int16 and np.array_equal(bins, mc.QuantileAccumulator.bins(values))
+    assert np.array_equal(mx, values.max(axis=0)) and start == 2
+    with distributed.Client(clusters(2)) as client:
         remote = mc.run_study(study, client=client, chunk=2)
-    assert np.array_equal(local.values, remote.values)
+    assert remote.values is None and not remote.exact
     assert np.array_equal(local.quantiles, remote.quantiles)
     assert np.array_equal(local.diverged, remote.diverged)
+
+
+def test_batches_inside_a_chunk_do_not_change_the_bits(study, monkeypatch):
+    _, whole = mc.run_chunk(study, 0, 7)
+    monkeypatch.setattr(mc, "BATCH_SAMPLES", 1)      # one plant per batch-kernel call
+    assert mc._batch_plants(study) == 1
+    _, single = mc.run_chunk(study, 0, 7)
+    assert np.array_equal(whole, single)
+
+
+def test_metrics_equal_a_per_run_naive_reduction(study):
+    """Vectorised metrics == the same formulas applied run by run (bit for bit)."""
+    _, v = mc.run_chunk(study, 0, 3)
+    from hammerstein.simulation import simulate_chain_batch
+    for i in range(3):
+        plant = mc.case_plant(study, i)
+        for j, r in enumerate(study.references):
+            y = simulate_chain_batch(study.compensator, [plant], [r])[0].outputs
+            noise = np.random.default_rng([study.seed, i, j + 1]).standard_normal(y.shape)
+            y = y + study.vary["noise"]["sd"] * noise
+            P = study.period_samples[j]
+            e = r[:, P:] - y[:, P:]
+            ee = np.sqrt(np.sum(e ** 2, axis=0))
+            expect = [np.sqrt(np.mean(e[0] ** 2)), np.max(np.abs(e[0])),
+                      np.sqrt(np.mean(e[1] ** 2)), np.max(np.abs(e[1])),
+                      np.sqrt(np.mean(ee ** 2)), ee.max()]
+            assert v[i, j].tolist() == expect
+
+
+@pytest.mark.parametrize("cases, workers", [(1, 1), (7, 2), (100, 1), (10_000, 2), (10 ** 6, 64)])
+def test_auto_chunk_is_coarse_and_balanced(study, cases, workers):
+    s = mc.MonteCarloStudy(**{**study.__dict__, "cases": cases})
+    per_plant = sum(r.shape[1] for r in s.references)
+    c = mc.auto_chunk(s, workers)
+    assert 1 <= c <= math.ceil(mc.TASK_SAMPLES / per_plant)             # at most ~one coarse task
+    tasks = math.ceil(cases / c)
+    if cases * per_plant >= mc.TASKS_PER_WORKER * workers * mc.TASK_SAMPLES:
+        assert tasks >= mc.TASKS_PER_WORKER * workers                     # every worker busy
+    assert c * per_plant >= min(mc.TASK_SAMPLES // 8, per_plant)          # never tiny tasks
 
 
 @pytest.mark.parametrize("vary, expect", [
