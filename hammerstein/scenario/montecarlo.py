@@ -77,11 +77,14 @@ merged as they complete (merging is order independent).
 from __future__ import annotations
 
 import contextlib
+import functools
+import itertools
 import logging
 import math
 import re
 import time
 import warnings
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -99,7 +102,7 @@ from hammerstein.core.schema import (Field, Invalid, check_table, choice, intege
 from hammerstein.scenario.identification import ResolveContext
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
-from hammerstein.simulation import is_fusable, simulate_chain_batch
+from hammerstein.simulation import compensator_law_of, is_fusable, simulate_chain_batch
 
 __all__ = [
     "MonteCarloStudy",
@@ -128,8 +131,9 @@ __all__ = [
 
 #: Quantiles reported (with the maximum).
 QUANTILES = (0.50, 0.95, 0.99)
-#: Plants per chunk run here (the unit of accumulation; dask chunks: :func:`auto_chunk`).
-CHUNK_CASES = 50
+#: Plants per chunk run here (chunks run on numba's threads, one chunk per thread at a time;
+#: dask chunks: :func:`auto_chunk`).
+CHUNK_CASES = 10
 #: Samples of one batch-kernel call inside a chunk (its buffers stay a few MB: fewer page
 #: faults and cache misses than one call per chunk).
 BATCH_SAMPLES = 500_000
@@ -625,19 +629,30 @@ def run_chunk(study, start, stop, parallel=None):
     F = len(study.frequencies)
     values = np.empty((stop - start, F, len(study.columns)))
     step = _batch_plants(study)
+    law = _kernel_law(study)
     for a in range(start, stop, step):
         b = min(a + step, stop)
         plants = [case_plant(study, i) for i in range(a, b)]
         n = b - a
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            outs = simulate_chain_batch(study.compensator, [pl for _ in range(F) for pl in plants],
-                                        [r for r in study.references for _ in range(n)],
-                                        parallel=parallel)
+        outs = simulate_chain_batch([law] * (F * n), [pl for _ in range(F) for pl in plants],
+                                    [r for r in study.references for _ in range(n)],
+                                    parallel=parallel)
         for j in range(F):      # runs of frequency j: outs[j * n:(j + 1) * n], same length
             y = np.stack([res.outputs for res in outs[j * n:(j + 1) * n]])
-            values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
+            with np.errstate(all="ignore"):         # a diverged run: NaN outputs, inf metrics
+                values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
     return start, values
+
+
+def _kernel_law(study):
+    """The compensator's fused law without its per-run reference check.
+
+    The range check depends on the compensator and the references only (the
+    same for every case): :func:`run_montecarlo_scenario` runs it once per
+    frequency and reports its warnings. Without it no chunk touches the
+    global warnings filters (not thread-safe), and no warning is raised per run.
+    """
+    return compensator_law_of(study.compensator)._replace(check_reference=None)
 
 
 def _remote_chunk(study, start, stop, exact):
@@ -899,6 +914,20 @@ def execution(workers=None, scheduler=None):
             cluster.close()
 
 
+def _bounded(pool, calls, in_flight):
+    """Results of ``calls`` run on ``pool`` as they complete, at most ``in_flight`` pending."""
+    calls, pending = iter(calls), set()
+    for call in itertools.islice(calls, in_flight):
+        pending.add(pool.submit(call))
+    while pending:
+        finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+        for fut in finished:
+            nxt = next(calls, None)
+            if nxt is not None:
+                pending.add(pool.submit(nxt))
+            yield fut.result()
+
+
 def auto_chunk(study, n_workers):
     """Plants per dask task: coarse (about :data:`TASK_SAMPLES` samples) but several per worker.
 
@@ -949,12 +978,22 @@ def run_study(study, client=None, chunk=None, timings=None):
     spent = 0.0
     if client is None:
         chunk = chunk or study.chunk or CHUNK_CASES
-        for a in range(0, study.cases, chunk):
-            start, values = run_chunk(study, a, min(a + chunk, study.cases))
+        ranges = [(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)]
+        import numba    # loaded by the kernels already; here only for its thread count
+        n_threads = min(numba.get_num_threads(), len(ranges))
+        if n_threads <= 1:                    # one chunk: the batch kernel's own threads
+            done = (run_chunk(study, a, b) for a, b in ranges)
+        else:                                 # chunks on threads: one's Python, another's kernel
+            pool = ThreadPoolExecutor(n_threads)
+            done = _bounded(pool, [functools.partial(run_chunk, study, a, b, False)
+                                   for a, b in ranges], 2 * n_threads)
+        for start, values in done:
             t = time.process_time()
             diverged += _diverged(values)
             acc.add(start, values)
             spent += time.process_time() - t
+        if n_threads > 1:
+            pool.shutdown()
     else:
         from distributed import as_completed
         n_workers = max(sum(client.nthreads().values()), 1)          # worker threads
@@ -1010,11 +1049,15 @@ def run_montecarlo_scenario(scenario):
                 comp = build_compensator(scenario.compensator_spec, study.plant, context)
             except (ValueError, PresetError) as exc:
                 raise ScenarioError([f"{source}: compensator: {exc}"]) from None
-        if not is_fusable(comp):
-            raise ScenarioError([f"{source}: compensator.kind: {scenario.compensator_spec.get('kind')!r} "
-                                 f"cannot run on the batch kernel; a Monte-Carlo study needs an "
-                                 f"inverse multiplicative compensator (e.g. 'multivariable')"])
-        study.compensator = comp
+            if not is_fusable(comp):
+                raise ScenarioError([f"{source}: compensator.kind: "
+                                     f"{scenario.compensator_spec.get('kind')!r} cannot run on the "
+                                     f"batch kernel; a Monte-Carlo study needs an inverse "
+                                     f"multiplicative compensator (e.g. 'multivariable')"])
+            study.compensator = comp
+            check = compensator_law_of(comp).check_reference
+            for r in study.references if check is not None else []:
+                check(r)                # range warnings: once per frequency, not per case
         res = run_study(study, _CLIENT["client"])
         res.warnings = list(dict.fromkeys(str(w.message) for w in rec))
         results.append(res)
