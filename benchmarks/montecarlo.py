@@ -59,8 +59,8 @@ kind = "monte-carlo"
 name = "mismatch"
 cases = {cases}
 frequencies = {freqs}
-reference = {{ kind = "sine", output = "x", amplitude = 30.0, duration = 0.235 }}
-settle_periods = 1
+reference = {{ kind = "sine", output = "x", amplitude = 30.0, duration = {duration} }}
+settle_periods = {settle}
 [sweeps.vary]
 weights = {{ relative_sd = 0.05 }}
 cross_coupling = {{ relative_sd = 0.2, distribution = "lognormal" }}
@@ -69,11 +69,12 @@ damping_ratio = {{ relative_sd = 0.2 }}
 """
 
 
-def make_study(cases, folder):
-    """A built study of ``cases`` plants x 20 frequencies."""
+def make_study(cases, folder, duration=0.235):
+    """A built study of ``cases`` plants x 20 frequencies (``duration`` [s] per run)."""
     freqs = [round(float(f), 3) for f in np.geomspace(10.0, 400.0, 20)]
-    path = Path(folder) / f"bench-{cases}.toml"
-    path.write_text(TEMPLATE.format(cases=cases, freqs=freqs))
+    path = Path(folder) / f"bench-{cases}-{duration}.toml"
+    path.write_text(TEMPLATE.format(cases=cases, freqs=freqs, duration=duration,
+                                settle=1 if duration >= 0.2 else 0))
     sc = validate_scenario(path)
     study = sc.studies[0]
     study.compensator = build_compensator(sc.compensator_spec, study.plant, ResolveContext(folder))
@@ -123,12 +124,13 @@ class HandCluster:
 
     def __init__(self, n, folder):
         import subprocess
-        dask = str(Path(sys.executable).parent / "dask")
+        dask = [sys.executable, "-m"]          # this interpreter's dask, loopback only
         self.file = Path(folder) / f"scheduler-{n}.json"
         env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1",
                "PYTHONPATH": str(ROOT)}
         log = open(Path(folder) / f"dask-{n}.log", "w")
-        self.procs = [subprocess.Popen([dask, "scheduler", "--scheduler-file", str(self.file),
+        self.procs = [subprocess.Popen([*dask, "distributed.cli.dask_scheduler",
+                                        "--scheduler-file", str(self.file), "--host", "127.0.0.1",
                                         "--port", "0", "--no-dashboard"], env=env,
                                        stdout=log, stderr=log)]
         t0 = time.perf_counter()
@@ -136,7 +138,8 @@ class HandCluster:
             time.sleep(0.1)
         for k in range(n):
             self.procs.append(subprocess.Popen(
-                [dask, "worker", "--scheduler-file", str(self.file), "--nthreads", "1",
+                [*dask, "distributed.cli.dask_worker", "--scheduler-file", str(self.file),
+                 "--host", "127.0.0.1", "--nthreads", "1",
                  "--no-nanny", "--no-dashboard", "--memory-limit", "0",
                  "--local-directory", str(Path(folder) / f"w{n}-{k}")],
                 env=env, stdout=log, stderr=log))
@@ -199,10 +202,10 @@ def dask_run(route, n, study, folder):
                 compute=[compute.get(w, 0.0) for w in workers], procs=procs)
 
 
-def distributed_throughput(plants, folder, routes, check_local):
+def distributed_throughput(plants, folder, routes, check_local, counts=(1, 2), duration=0.235):
     """Same study on 1 and 2 workers per route; throughput, ratio, CPU, RSS; bit-identity."""
     import pickle
-    study = make_study(plants, folder)
+    study = make_study(plants, folder, duration)
     runs = plants * len(study.frequencies)
     blob = pickle.dumps(study)
     t = time.perf_counter()
@@ -221,7 +224,7 @@ def distributed_throughput(plants, folder, routes, check_local):
               f"{time.process_time() - c0:.1f} s CPU")
     got, summary = {}, []
     for route in routes:
-        for n in (1, 2):
+        for n in counts:
             r = dask_run(route, n, study, folder)
             got[route, n] = r
             same = []
@@ -229,7 +232,7 @@ def distributed_throughput(plants, folder, routes, check_local):
                 same.append(np.array_equal(r["res"].quantiles, ref.quantiles)
                             and np.array_equal(r["res"].diverged, ref.diverged)
                             and (ref.values is None or np.array_equal(r["res"].values, ref.values)))
-            first = got[routes[0], 1]["res"]
+            first = next(iter(got.values()))["res"]
             same.append(np.array_equal(r["res"].quantiles, first.quantiles))
             wcpu = sum(r["worker_cpu"])
             tm = r["timings"]
@@ -245,6 +248,8 @@ def distributed_throughput(plants, folder, routes, check_local):
                   + (f", scheduler {r['procs']['scheduler'][0]:.1f} s CPU, "
                      f"{r['procs']['scheduler'][1]:.0f} MiB" if r["procs"] else "")
                   + f"; bit-identical: {all(same)}; load {os.getloadavg()[0]:.1f}")
+        if (route, 1) not in got or (route, 2) not in got:
+            continue
         one, two = got[route, 1], got[route, 2]
         ratio = one["wall"] / two["wall"]
         per_cpu = (runs / sum(two["worker_cpu"])) / (runs / sum(one["worker_cpu"]))
@@ -264,6 +269,9 @@ def main(argv=None):
                     help="plants of the dask study (x 20 frequencies = cases)")
     ap.add_argument("--routes", default="hand,local",
                     help="hand (dask scheduler + dask worker processes), local (LocalCluster)")
+    ap.add_argument("--workers", default="1,2", help="worker counts to run, e.g. 1,2 or 2")
+    ap.add_argument("--duration", type=float, default=0.235,
+                    help="seconds of sine per run of the dask study (0.235: 4 700 samples)")
     ap.add_argument("--no-check", action="store_true",
                     help="do not run the dask study locally to compare bit for bit")
     args = ap.parse_args(argv)
@@ -273,7 +281,8 @@ def main(argv=None):
             local(args.plants, folder)
         if args.dask:
             distributed_throughput(args.dask_plants, folder, args.routes.split(","),
-                                   not args.no_check)
+                                   not args.no_check, [int(n) for n in args.workers.split(",")],
+                                   args.duration)
     print(f"load average now {os.getloadavg()[0]:.2f}")
 
 

@@ -32,7 +32,8 @@ standard deviation ``relative_sd`` = s: ``normal`` (default) ``f = 1 + s z``;
 ``lognormal`` ``f = exp(sigma z - sigma^2 / 2)`` with ``sigma^2 = ln(1 + s^2)``
 (always positive). ``z`` are standard normal draws. Natural frequencies and
 damping ratios are kept positive: their factors are clipped at
-:data:`MIN_FACTOR`. ``weights`` draws one factor per hysteron weight of every
+:data:`MIN_FACTOR` (a damping ratio drawn above 1 is an overdamped mode,
+two real poles). ``weights`` draws one factor per hysteron weight of every
 component, ``cross_coupling`` one factor per cross-coupling component
 (l != k, all its weights), ``natural_frequency`` and ``damping_ratio`` one per
 bending mode (output); ``noise`` adds white Gaussian sensor noise of standard
@@ -50,28 +51,35 @@ gives bit-identical metrics (:func:`run_chunk`).
 Results and memory
 ------------------
 Each case runs at every frequency through
-:func:`hammerstein.simulation.simulate_chain_batch` in chunks of
-:data:`CHUNK_CASES` plants; only scalar metrics per (case, frequency) leave a
-chunk (never a time series): per output ``rms_error`` and ``max_abs_error``,
-for all outputs together ``rms_euclidean_error`` and ``max_euclidean_error``
-(:func:`hammerstein.core.metrics.tracking_metrics`, same steady window). They
-are reduced by :class:`QuantileAccumulator`: a log-spaced histogram
-(:data:`BINS_PER_DECADE` bins per decade, memory independent of the case
-count) always, plus the exact values while ``cases x frequencies x metrics``
-stays within :data:`EXACT_VALUES`; the quantiles P50/P95/P99 are exact then,
-otherwise read from the histogram (relative error at most
-``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.29 %); ``max`` is always exact. A
-diverged run counts as an infinite error. The budget: at most
-:data:`MAX_RUNS` runs (cases x frequencies) per study and
-:data:`MAX_RUN_SAMPLES` samples per run.
+:func:`hammerstein.simulation.simulate_chain_batch`: the study is cut into
+chunks of plants (:data:`CHUNK_CASES` here, :func:`auto_chunk` on dask), a
+chunk into batch-kernel calls of about :data:`BATCH_SAMPLES` samples (their
+buffers stay a few MB whatever the chunk); only scalar metrics per (case,
+frequency) leave a chunk (never a time series): per output ``rms_error``
+and ``max_abs_error``, for all outputs together ``rms_euclidean_error`` and
+``max_euclidean_error`` (:func:`hammerstein.core.metrics.tracking_metrics`,
+same steady window). They are reduced by :class:`QuantileAccumulator`: a
+log-spaced histogram (:data:`BINS_PER_DECADE` bins per decade, memory
+independent of the case count) always, plus the exact values while ``cases
+x frequencies x metrics`` stays within :data:`EXACT_VALUES`; the quantiles
+P50/P95/P99 are exact then, otherwise read from the histogram (relative
+error at most ``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.29 %); ``max`` is
+always exact. A diverged run counts as an infinite error. The budget: at
+most :data:`MAX_RUNS` runs (cases x frequencies) per study and
+:data:`MAX_RUN_SAMPLES` samples per run. The compensator's reference range
+check runs once per frequency (its warning is the report's, not one per case).
 
 Distributed execution
 ---------------------
-:func:`run_study` runs the chunks here, or on a ``dask.distributed`` client
-(:func:`execution`: ``hammerstein run --workers N`` or ``--scheduler
-ADDRESS``): the study is scattered once to every worker, chunks ``(start,
-stop)`` are submitted with at most a few per worker in flight, and results are
-merged as they complete (merging is order independent).
+:func:`run_study` runs the chunks here (on numba's threads: one chunk per
+thread, so one chunk's Python work overlaps another's kernel), or on a
+``dask.distributed`` client (:func:`execution`: ``hammerstein run --workers
+N`` or ``--scheduler ADDRESS``): the study is scattered once to every
+worker, coarse chunks (:func:`auto_chunk`: about :data:`TASK_SAMPLES`
+samples, a second or more of work each) are submitted with two per worker
+thread in flight, and each returns only what the accumulator needs (the
+values while they are kept, else int16 histogram bins, the maximum and the
+diverged count); merging is order independent.
 """
 
 from __future__ import annotations
@@ -91,7 +99,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core import references as refs
-from hammerstein.core.dynamics import sampled_bending_modes
+from hammerstein.core.dynamics import SampledSystem
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.metrics import UNITS, steady_window
 from hammerstein.core.plant import HammersteinPlant
@@ -113,6 +121,7 @@ __all__ = [
     "validate_montecarlo",
     "draw_factors",
     "case_plant",
+    "sampled_modes",
     "run_chunk",
     "run_study",
     "auto_chunk",
@@ -139,6 +148,8 @@ CHUNK_CASES = 10
 BATCH_SAMPLES = 500_000
 #: Samples of one dask task (about 1 to 3 s of work; :func:`auto_chunk`).
 TASK_SAMPLES = 20_000_000
+#: A run's fixed cost (drawing, packing, metrics: about 0.1 ms) in kernel samples (~100 ns each).
+RUN_COST_SAMPLES = 1_000
 #: Tasks per dask worker thread at least (load balance), when the study is large enough.
 TASKS_PER_WORKER = 4
 #: Exact metric values kept (beyond: histogram quantiles).
@@ -536,7 +547,9 @@ def case_plant(study, i):
         Weights w of component (l, k) become ``w * f_weights * f_cross[l, k]``
         (a linear gain component: ``gain * f_cross[l, k]``); the bending
         modes' natural frequencies and damping ratios are scaled by their
-        factors and re-sampled (zero-order hold); creep is the nominal one.
+        factors and re-sampled (zero-order hold, :func:`sampled_modes`;
+        the nominal sampled modes when neither is varied); creep is the
+        nominal one.
     """
     nominal = study.plant
     model = nominal.hysteresis
@@ -557,19 +570,92 @@ def case_plant(study, i):
                            input_amplitude=model.input_amplitude, output_offset=model.output_offset,
                            output_map=model.output_map)
     lin = nominal.sampled_dynamics
-    if study.modes is not None and nominal.sampled_dynamics is not None:
+    if (study.modes is not None and nominal.sampled_dynamics is not None
+            and ("natural_frequency" in study.vary or "damping_ratio" in study.vary)):
         fn, zeta = study.modes
-        lin = sampled_bending_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
-                                    list(model.output_names), nominal.sampling_period)
+        lin = sampled_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
+                            nominal.sampling_period, lin)
     return HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
                             creep=nominal.creep)
 
 
+def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):
+    """Zero-order hold of decoupled second-order bending modes, in closed form.
+
+    The same system as
+    :func:`hammerstein.core.dynamics.sampled_bending_modes` (states: position
+    and velocity / omega_n of each mode, ``dx/dt = A x + B u`` with the block
+    ``A = [[0, w], [-w, -2 zeta w]]``, ``B = [0, w]^T``), without a matrix
+    exponential: with ``s = zeta w``, ``q = w^2 (1 - zeta^2)``, ``c = cos(sqrt(q) T)``
+    and ``S = sin(sqrt(q) T) / sqrt(q)`` (``cosh``/``sinh`` of ``sqrt(-q) T``
+    for an overdamped mode, ``c = 1``, ``S = T`` for a critically damped one),
+    ``exp(A T) = exp(-s T) (c I + S (A + s I))`` (Cayley-Hamilton: ``(A + s
+    I)^2 = -q I``) and ``B_d = int_0^T exp(A t) dt B = [1 - exp(-s T) (c + s
+    S), w exp(-s T) S]^T`` (the unit-step response; e.g. Franklin, Powell &
+    Workman, *Digital Control of Dynamic Systems*, Sec. 4.3.3). It agrees
+    with the Pade-based ``scipy.linalg.expm`` of the ZOH definition within a
+    few 1e-16 of the matrices' norm, uses no BLAS (no thread pool, whatever
+    ``OPENBLAS_NUM_THREADS``) and takes a few microseconds per mode.
+
+    Parameters
+    ----------
+    natural_frequency : numpy.ndarray, shape (p,)
+        [Hz], > 0.
+    damping_ratio : numpy.ndarray, shape (p,)
+        > 0 (above 1: an overdamped mode).
+    sampling_period : float
+        T [s], > 0.
+    nominal : SampledSystem
+        The nominal sampled modes (gives C, D, the names and the sampling
+        period).
+
+    Returns
+    -------
+    SampledSystem
+        A_d, shape (2p, 2p), block diagonal; B_d, shape (2p, p); C, D of
+        ``nominal``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.core.dynamics import sampled_bending_modes
+    >>> from hammerstein.scenario.montecarlo import sampled_modes
+    >>> ref = sampled_bending_modes([900.0, 1100.0], [0.05, 0.2], ["x", "y"], 1e-4)
+    >>> got = sampled_modes(np.array([900.0, 1100.0]), np.array([0.05, 0.2]), 1e-4, ref)
+    >>> bool(np.abs(got.A - ref.A).max() < 1e-15 and np.abs(got.B - ref.B).max() < 1e-15)
+    True
+    """
+    T = float(sampling_period)
+    p = len(natural_frequency)
+    A, B = np.zeros((2 * p, 2 * p)), np.zeros((2 * p, p))
+    for l in range(p):
+        w = 2.0 * math.pi * float(natural_frequency[l])
+        z = float(damping_ratio[l])
+        sig = z * w
+        q = w * w * (1.0 - z * z)
+        if q > 0.0:
+            wd = math.sqrt(q)
+            c, S = math.cos(wd * T), math.sin(wd * T) / wd
+        elif q < 0.0:
+            g = math.sqrt(-q)
+            c, S = math.cosh(g * T), math.sinh(g * T) / g
+        else:
+            c, S = 1.0, T
+        e = math.exp(-sig * T)
+        i = 2 * l
+        A[i, i], A[i, i + 1] = e * (c + sig * S), e * w * S
+        A[i + 1, i], A[i + 1, i + 1] = -e * w * S, e * (c - sig * S)
+        B[i, l], B[i + 1, l] = 1.0 - e * (c + sig * S), w * e * S
+    return SampledSystem(A, B, nominal.C, nominal.D, nominal.dt, inputs=nominal.inputs,
+                         outputs=nominal.outputs, states=nominal.states, name=nominal.name)
+
+
 # -- running ---------------------------------------------------------------------------------
 def _batch_plants(study):
-    """Plants per batch-kernel call inside a chunk (about :data:`BATCH_SAMPLES` samples)."""
-    per_plant = sum(r.shape[1] for r in study.references)
-    return max(1, BATCH_SAMPLES // max(per_plant, 1))
+    """Plants per batch-kernel call inside a chunk (about :data:`BATCH_SAMPLES` samples,
+    counting :data:`RUN_COST_SAMPLES` per run so short runs are not batched by the thousand)."""
+    per_plant = sum(r.shape[1] for r in study.references) + RUN_COST_SAMPLES * len(study.references)
+    return max(1, BATCH_SAMPLES // per_plant)
 
 
 def _frequency_metrics(study, cases, j, outputs):
@@ -940,13 +1026,14 @@ def auto_chunk(study, n_workers):
     Returns
     -------
     int
-        ``ceil(TASK_SAMPLES / s)`` plants (``s`` samples per plant: the sum
-        of the reference lengths), reduced to give every worker at least
+        ``ceil(TASK_SAMPLES / s)`` plants (``s``: samples per plant, the sum
+        of the reference lengths, plus :data:`RUN_COST_SAMPLES` per run for
+        its fixed Python cost), reduced to give every worker at least
         :data:`TASKS_PER_WORKER` tasks, but never below
         ``ceil(TASK_SAMPLES / (8 s))`` plants (a task's fixed cost, about
         10 ms of scheduling and transfer, stays below 1 % of its run time).
     """
-    per_plant = max(sum(r.shape[1] for r in study.references), 1)
+    per_plant = sum(r.shape[1] for r in study.references) + RUN_COST_SAMPLES * len(study.references)
     coarse = math.ceil(TASK_SAMPLES / per_plant)
     balanced = math.ceil(study.cases / (TASKS_PER_WORKER * max(int(n_workers), 1)))
     return max(1, min(coarse, max(balanced, math.ceil(coarse / 8))))
