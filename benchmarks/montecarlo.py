@@ -1,20 +1,27 @@
 """Monte-Carlo robustness study: wall, CPU time and peak memory; dask 1 vs 2 workers.
 
-Run: ``python benchmarks/montecarlo.py [--plants 500] [--dask-plants 100] [--no-dask]``
-(from the repository root, kernels compiled once beforehand by any run).
+Run (from the repository root, kernels compiled once beforehand by any run)::
+
+    python benchmarks/montecarlo.py                     # the 10 000-run study, in this process
+    python benchmarks/montecarlo.py --no-local --dask --dask-plants 5000 --routes hand
 
 Not a test. Part 1 runs a study of ``--plants`` mismatched plants (PI weights
 5 %, cross-couplings 20 % lognormal, natural frequencies 3 % uniform, damping
 20 %) x 20 frequencies (10 .. 400 Hz, 0.235 s of x-axis sine each: 4 700
 samples per run, 47 M samples for 500 plants) in this process
-(:func:`hammerstein.scenario.montecarlo.run_study`, the batch kernel on
-numba's threads) and prints the wall time, the CPU time of the process (all
-threads) and its peak RSS. Part 2 runs ``--dask-plants`` plants on a
-``dask.distributed`` LocalCluster of 1 and then 2 single-threaded worker
-processes (after a warm-up chunk on every worker: each compiles, or loads
-numba's cache, once) and prints the throughput (runs/s) and the ratio, and
-checks the quantiles are bit-identical to the local run. The load average is
-printed before and after: on a shared machine the wall time follows the load.
+(:func:`hammerstein.scenario.montecarlo.run_study`, chunks on numba's
+threads) and prints the wall time, the CPU time of the process (all threads)
+and its peak RSS. Part 2 (``--dask``) runs ``--dask-plants`` plants on 1 and
+then 2 single-threaded dask workers, per route: ``hand`` starts ``dask
+scheduler`` + ``dask worker`` processes as a user does (loopback only),
+``local`` a LocalCluster. After a warm-up chunk on every worker (each
+compiles, or loads numba's cache, once) it prints the throughput (cases/s),
+the CPU time and peak RSS of every process, the workers' task compute time,
+the client's CPU (and the part spent accumulating), the 2/1 ratio of the
+throughput and of the cases per worker CPU-second, and checks the quantiles
+are bit-identical to the local run. The last line (``SUMMARY``) is the one to
+quote. The load average is printed before and after: on a shared machine the
+wall time follows the load, the cases per CPU-second much less.
 
 Targets (2-core machine): 10 000 runs (500 plants x 20 frequencies) <= 10 s
 wall and <= 1 GB peak memory; 2 dask workers >= 1.7x the one-worker
@@ -32,9 +39,10 @@ import time
 from pathlib import Path
 
 # As `hammerstein run` (hammerstein/cli/main.py): one OpenBLAS thread unless the user sets
-# it, before numpy is imported (the LocalCluster workers inherit it). The per-plant ZOH
-# (scipy.linalg.expm of a 6 x 6 matrix) with OpenBLAS's default threads on the busy 2-core
-# machine took the 10 000-run study from 5.7 to 10.1 s of CPU (23.4 s wall instead of 10.4).
+# it, before numpy is imported (the workers inherit it). With the per-plant ZOH done by
+# scipy.linalg.expm, OpenBLAS's default threads on the busy 2-core machine took the
+# 10 000-run study from 5.7 to 10.1 s of CPU; the ZOH is now closed-form (no BLAS), the
+# setting stays for the few small BLAS calls left.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
