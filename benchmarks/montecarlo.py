@@ -257,6 +257,7 @@ def distributed_throughput(plants, folder, routes, check_local, counts=(1, 2), d
                      f"{r['procs']['scheduler'][1]:.0f} MiB" if r["procs"] else "")
                   + f"; bit-identical: {all(same)}; load {os.getloadavg()[0]:.1f}")
         if (route, 1) not in got or (route, 2) not in got:
+            summary.append(f"{route}: no 2/1 ratio (worker counts {', '.join(map(str, counts))})")
             continue
         one, two = got[route, 1], got[route, 2]
         ratio = one["wall"] / two["wall"]
