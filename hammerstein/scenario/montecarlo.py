@@ -32,7 +32,8 @@ standard deviation ``relative_sd`` = s: ``normal`` (default) ``f = 1 + s z``;
 ``lognormal`` ``f = exp(sigma z - sigma^2 / 2)`` with ``sigma^2 = ln(1 + s^2)``
 (always positive). ``z`` are standard normal draws. Natural frequencies and
 damping ratios are kept positive: their factors are clipped at
-:data:`MIN_FACTOR`. ``weights`` draws one factor per hysteron weight of every
+:data:`MIN_FACTOR` (a damping ratio drawn above 1 is an overdamped mode,
+two real poles). ``weights`` draws one factor per hysteron weight of every
 component, ``cross_coupling`` one factor per cross-coupling component
 (l != k, all its weights), ``natural_frequency`` and ``damping_ratio`` one per
 bending mode (output); ``noise`` adds white Gaussian sensor noise of standard
@@ -50,44 +51,55 @@ gives bit-identical metrics (:func:`run_chunk`).
 Results and memory
 ------------------
 Each case runs at every frequency through
-:func:`hammerstein.simulation.simulate_chain_batch` in chunks of
-:data:`CHUNK_CASES` plants; only scalar metrics per (case, frequency) leave a
-chunk (never a time series): per output ``rms_error`` and ``max_abs_error``,
-for all outputs together ``rms_euclidean_error`` and ``max_euclidean_error``
-(:func:`hammerstein.core.metrics.tracking_metrics`, same steady window). They
-are reduced by :class:`QuantileAccumulator`: a log-spaced histogram
-(:data:`BINS_PER_DECADE` bins per decade, memory independent of the case
-count) always, plus the exact values while ``cases x frequencies x metrics``
-stays within :data:`EXACT_VALUES`; the quantiles P50/P95/P99 are exact then,
-otherwise read from the histogram (relative error at most
-``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.29 %); ``max`` is always exact. A
-diverged run counts as an infinite error. The budget: at most
-:data:`MAX_RUNS` runs (cases x frequencies) per study and
-:data:`MAX_RUN_SAMPLES` samples per run.
+:func:`hammerstein.simulation.simulate_chain_batch`: the study is cut into
+chunks of plants (:data:`CHUNK_CASES` here, :func:`auto_chunk` on dask), a
+chunk into batch-kernel calls of about :data:`BATCH_SAMPLES` samples (their
+buffers stay a few MB whatever the chunk); only scalar metrics per (case,
+frequency) leave a chunk (never a time series): per output ``rms_error``
+and ``max_abs_error``, for all outputs together ``rms_euclidean_error`` and
+``max_euclidean_error`` (:func:`hammerstein.core.metrics.tracking_metrics`,
+same steady window). They are reduced by :class:`QuantileAccumulator`: a
+log-spaced histogram (:data:`BINS_PER_DECADE` bins per decade, memory
+independent of the case count) always, plus the exact values while ``cases
+x frequencies x metrics`` stays within :data:`EXACT_VALUES`; the quantiles
+P50/P95/P99 are exact then, otherwise read from the histogram (relative
+error at most ``10**(1 / (2 BINS_PER_DECADE)) - 1`` = 0.29 %); ``max`` is
+always exact. A diverged run counts as an infinite error. The budget: at
+most :data:`MAX_RUNS` runs (cases x frequencies) per study and
+:data:`MAX_RUN_SAMPLES` samples per run. The compensator's reference range
+check runs once per frequency (its warning is the report's, not one per case).
 
 Distributed execution
 ---------------------
-:func:`run_study` runs the chunks here, or on a ``dask.distributed`` client
-(:func:`execution`: ``hammerstein run --workers N`` or ``--scheduler
-ADDRESS``): the study is scattered once to every worker, chunks ``(start,
-stop)`` are submitted with at most a few per worker in flight, and results are
-merged as they complete (merging is order independent).
+:func:`run_study` runs the chunks here (on numba's threads: one chunk per
+thread, so one chunk's Python work overlaps another's kernel), or on a
+``dask.distributed`` client (:func:`execution`: ``hammerstein run --workers
+N`` or ``--scheduler ADDRESS``): the study is scattered once to every
+worker, coarse chunks (:func:`auto_chunk`: about :data:`TASK_SAMPLES`
+samples, a second or more of work each) are submitted with two per worker
+thread in flight, and each returns only what the accumulator needs (the
+values while they are kept, else int16 histogram bins, the maximum and the
+diverged count); merging is order independent.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import itertools
 import logging
 import math
 import re
+import time
 import warnings
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from hammerstein.core import references as refs
-from hammerstein.core.dynamics import sampled_bending_modes
+from hammerstein.core.dynamics import SampledSystem
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.metrics import UNITS, steady_window
 from hammerstein.core.plant import HammersteinPlant
@@ -98,7 +110,7 @@ from hammerstein.core.schema import (Field, Invalid, check_table, choice, intege
 from hammerstein.scenario.identification import ResolveContext
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
-from hammerstein.simulation import is_fusable, simulate_chain_batch
+from hammerstein.simulation import compensator_law_of, is_fusable, simulate_chain_batch
 
 __all__ = [
     "MonteCarloStudy",
@@ -109,12 +121,16 @@ __all__ = [
     "validate_montecarlo",
     "draw_factors",
     "case_plant",
+    "sampled_modes",
     "run_chunk",
     "run_study",
+    "auto_chunk",
     "run_montecarlo_scenario",
     "execution",
     "QUANTILES",
     "CHUNK_CASES",
+    "BATCH_SAMPLES",
+    "TASK_SAMPLES",
     "EXACT_VALUES",
     "MAX_RUNS",
     "MAX_RUN_SAMPLES",
@@ -124,8 +140,18 @@ __all__ = [
 
 #: Quantiles reported (with the maximum).
 QUANTILES = (0.50, 0.95, 0.99)
-#: Plants per chunk (one batch-kernel call runs chunk x frequencies runs).
-CHUNK_CASES = 50
+#: Plants per chunk run here (chunks run on numba's threads, one chunk per thread at a time;
+#: dask chunks: :func:`auto_chunk`).
+CHUNK_CASES = 10
+#: Samples of one batch-kernel call inside a chunk (its buffers stay a few MB: fewer page
+#: faults and cache misses than one call per chunk).
+BATCH_SAMPLES = 500_000
+#: Samples of one dask task (about 1 to 3 s of work; :func:`auto_chunk`).
+TASK_SAMPLES = 20_000_000
+#: A run's fixed cost (drawing, packing, metrics: about 0.1 ms) in kernel samples (~100 ns each).
+RUN_COST_SAMPLES = 1_000
+#: Tasks per dask worker thread at least (load balance), when the study is large enough.
+TASKS_PER_WORKER = 4
 #: Exact metric values kept (beyond: histogram quantiles).
 EXACT_VALUES = 2_000_000
 #: Budget: runs (cases x frequencies) per study.
@@ -233,8 +259,9 @@ class MonteCarloStudy:
         the nominal bending modes (None for other dynamics).
     compensator : object or None
         Built by :func:`run_montecarlo_scenario` from the nominal model.
-    chunk : int
-        Plants per chunk.
+    chunk : int or None
+        Plants per chunk (the sweep's ``chunk``; None: :data:`CHUNK_CASES`
+        here, :func:`auto_chunk` on dask).
     """
 
     name: str
@@ -249,7 +276,7 @@ class MonteCarloStudy:
     plant: object
     modes: tuple | None
     compensator: object = None
-    chunk: int = CHUNK_CASES
+    chunk: int | None = None
 
     @property
     def columns(self):
@@ -436,7 +463,7 @@ def validate_montecarlo(path, data):
             name=c["name"], description=c.get("description", ""), cases=c["cases"], seed=seed,
             frequencies=c["frequencies"], references=references, period_samples=periods,
             settle_periods=float(c["settle_periods"]), vary=vary, plant=plant, modes=modes,
-            chunk=c.get("chunk", CHUNK_CASES)))
+            chunk=c.get("chunk")))
     if not data.get("sweeps"):
         problems.append(f"{source}: sweeps: expected one or more [[sweeps]] kind = 'monte-carlo'")
     if "name" not in data and not (len(Path(path).stem) <= MAX_NAME
@@ -520,7 +547,9 @@ def case_plant(study, i):
         Weights w of component (l, k) become ``w * f_weights * f_cross[l, k]``
         (a linear gain component: ``gain * f_cross[l, k]``); the bending
         modes' natural frequencies and damping ratios are scaled by their
-        factors and re-sampled (zero-order hold); creep is the nominal one.
+        factors and re-sampled (zero-order hold, :func:`sampled_modes`;
+        the nominal sampled modes when neither is varied); creep is the
+        nominal one.
     """
     nominal = study.plant
     model = nominal.hysteresis
@@ -541,35 +570,129 @@ def case_plant(study, i):
                            input_amplitude=model.input_amplitude, output_offset=model.output_offset,
                            output_map=model.output_map)
     lin = nominal.sampled_dynamics
-    if study.modes is not None and nominal.sampled_dynamics is not None:
+    if (study.modes is not None and nominal.sampled_dynamics is not None
+            and ("natural_frequency" in study.vary or "damping_ratio" in study.vary)):
         fn, zeta = study.modes
-        lin = sampled_bending_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
-                                    list(model.output_names), nominal.sampling_period)
+        lin = sampled_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
+                            nominal.sampling_period, lin)
     return HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
                             creep=nominal.creep)
 
 
+def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):
+    """Zero-order hold of decoupled second-order bending modes, in closed form.
+
+    The same system as
+    :func:`hammerstein.core.dynamics.sampled_bending_modes` (states: position
+    and velocity / omega_n of each mode, ``dx/dt = A x + B u`` with the block
+    ``A = [[0, w], [-w, -2 zeta w]]``, ``B = [0, w]^T``), without a matrix
+    exponential: with ``s = zeta w``, ``q = w^2 (1 - zeta^2)``, ``c = cos(sqrt(q) T)``
+    and ``S = sin(sqrt(q) T) / sqrt(q)`` (``cosh``/``sinh`` of ``sqrt(-q) T``
+    for an overdamped mode, ``c = 1``, ``S = T`` for a critically damped one),
+    ``exp(A T) = exp(-s T) (c I + S (A + s I))`` (Cayley-Hamilton: ``(A + s
+    I)^2 = -q I``) and ``B_d = int_0^T exp(A t) dt B = [1 - exp(-s T) (c + s
+    S), w exp(-s T) S]^T`` (the unit-step response; e.g. Franklin, Powell &
+    Workman, *Digital Control of Dynamic Systems*, Sec. 4.3.3). It agrees
+    with the Pade-based ``scipy.linalg.expm`` of the ZOH definition within a
+    few 1e-16 of the matrices' norm, uses no BLAS (no thread pool, whatever
+    ``OPENBLAS_NUM_THREADS``) and takes a few microseconds per mode.
+
+    Parameters
+    ----------
+    natural_frequency : numpy.ndarray, shape (p,)
+        [Hz], > 0.
+    damping_ratio : numpy.ndarray, shape (p,)
+        > 0 (above 1: an overdamped mode).
+    sampling_period : float
+        T [s], > 0.
+    nominal : SampledSystem
+        The nominal sampled modes (gives C, D, the names and the sampling
+        period).
+
+    Returns
+    -------
+    SampledSystem
+        A_d, shape (2p, 2p), block diagonal; B_d, shape (2p, p); C, D of
+        ``nominal``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.core.dynamics import sampled_bending_modes
+    >>> from hammerstein.scenario.montecarlo import sampled_modes
+    >>> ref = sampled_bending_modes([900.0, 1100.0], [0.05, 0.2], ["x", "y"], 1e-4)
+    >>> got = sampled_modes(np.array([900.0, 1100.0]), np.array([0.05, 0.2]), 1e-4, ref)
+    >>> bool(np.abs(got.A - ref.A).max() < 1e-15 and np.abs(got.B - ref.B).max() < 1e-15)
+    True
+    """
+    T = float(sampling_period)
+    p = len(natural_frequency)
+    A, B = np.zeros((2 * p, 2 * p)), np.zeros((2 * p, p))
+    for l in range(p):
+        w = 2.0 * math.pi * float(natural_frequency[l])
+        z = float(damping_ratio[l])
+        sig = z * w
+        q = w * w * (1.0 - z * z)
+        if q > 0.0:
+            wd = math.sqrt(q)
+            c, S = math.cos(wd * T), math.sin(wd * T) / wd
+        elif q < 0.0:
+            g = math.sqrt(-q)
+            c, S = math.cosh(g * T), math.sinh(g * T) / g
+        else:
+            c, S = 1.0, T
+        e = math.exp(-sig * T)
+        i = 2 * l
+        A[i, i], A[i, i + 1] = e * (c + sig * S), e * w * S
+        A[i + 1, i], A[i + 1, i + 1] = -e * w * S, e * (c - sig * S)
+        B[i, l], B[i + 1, l] = 1.0 - e * (c + sig * S), w * e * S
+    return SampledSystem(A, B, nominal.C, nominal.D, nominal.dt, inputs=nominal.inputs,
+                         outputs=nominal.outputs, states=nominal.states, name=nominal.name)
+
+
 # -- running ---------------------------------------------------------------------------------
-def _run_metrics(study, i, j, reference, outputs):
-    """Metric vector of case i at frequency index j (order of ``study.columns``)."""
+def _batch_plants(study):
+    """Plants per batch-kernel call inside a chunk (about :data:`BATCH_SAMPLES` samples,
+    counting :data:`RUN_COST_SAMPLES` per run so short runs are not batched by the thousand)."""
+    per_plant = sum(r.shape[1] for r in study.references) + RUN_COST_SAMPLES * len(study.references)
+    return max(1, BATCH_SAMPLES // per_plant)
+
+
+def _frequency_metrics(study, cases, j, outputs):
+    """Metric rows of cases ``cases`` (a range) at frequency index j (order of ``study.columns``).
+
+    ``outputs`` has shape (n_cases, p, n_samples). Each case's row is computed
+    from its own record only (reductions along a contiguous last axis,
+    numpy's pairwise sum per row), so it does not depend on the other cases
+    of the batch: any chunking gives the same bits.
+    """
     y = outputs
-    if "noise" in study.vary and study.vary["noise"]["sd"] > 0:
-        rng = np.random.default_rng([study.seed, i, j + 1])
-        y = y + study.vary["noise"]["sd"] * rng.standard_normal(y.shape)
-    win = steady_window(y.shape[1], study.period_samples[j], study.settle_periods)
-    e = reference[:, win] - y[:, win]
-    rms = np.sqrt(np.mean(e ** 2, axis=1))
-    mx = np.max(np.abs(e), axis=1)
-    ee = np.sqrt(np.sum(e ** 2, axis=0))
-    out = np.empty(2 * e.shape[0] + 2)
-    out[0:-2:2], out[1:-2:2] = rms, mx
-    out[-2], out[-1] = np.sqrt(np.mean(ee ** 2)), ee.max()
+    sd = study.vary.get("noise", {}).get("sd", 0.0)
+    if sd > 0:
+        y = y.copy()
+        for a, i in enumerate(cases):
+            rng = np.random.default_rng([study.seed, i, j + 1])
+            y[a] += sd * rng.standard_normal(y.shape[1:])
+    win = steady_window(y.shape[2], study.period_samples[j], study.settle_periods)
+    e = study.references[j][None, :, win] - y[:, :, win]          # (n, p, W), C-contiguous
+    e2 = e ** 2
+    n, p = e.shape[0], e.shape[1]
+    out = np.empty((n, 2 * p + 2))
+    out[:, 0:-2:2] = np.sqrt(np.mean(e2, axis=2))
+    out[:, 1:-2:2] = np.max(np.abs(e), axis=2)
+    ee = np.sqrt(np.sum(e2, axis=1))                                 # (n, W): Euclidean error
+    out[:, -2] = np.sqrt(np.mean(ee ** 2, axis=1))
+    out[:, -1] = np.max(ee, axis=1)
     out[~np.isfinite(out)] = np.inf     # a divergence (NaN outputs) is an infinite error
     return out
 
 
 def run_chunk(study, start, stop, parallel=None):
     """Metrics of cases ``start .. stop - 1`` at every frequency.
+
+    The chunk's plants run in batches of about :data:`BATCH_SAMPLES` samples
+    (one :func:`hammerstein.simulation.simulate_chain_batch` call each, so
+    memory does not grow with the chunk); only the metric values are kept.
 
     Parameters
     ----------
@@ -589,17 +712,52 @@ def run_chunk(study, start, stop, parallel=None):
         In the units of the metrics (µm); ``inf`` for a diverged run.
         Row ``i - start`` depends only on ``(study.seed, i)``.
     """
-    plants = [case_plant(study, i) for i in range(start, stop)]
     F = len(study.frequencies)
-    runs = [(a, j) for a in range(len(plants)) for j in range(F)]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        outs = simulate_chain_batch(study.compensator, [plants[a] for a, _ in runs],
-                                    [study.references[j] for _, j in runs], parallel=parallel)
-    values = np.empty((len(plants), F, len(study.columns)))
-    for (a, j), res in zip(runs, outs):
-        values[a, j] = _run_metrics(study, start + a, j, study.references[j], res.outputs)
+    values = np.empty((stop - start, F, len(study.columns)))
+    step = _batch_plants(study)
+    law = _kernel_law(study)
+    for a in range(start, stop, step):
+        b = min(a + step, stop)
+        plants = [case_plant(study, i) for i in range(a, b)]
+        n = b - a
+        outs = simulate_chain_batch([law] * (F * n), [pl for _ in range(F) for pl in plants],
+                                    [r for r in study.references for _ in range(n)],
+                                    parallel=parallel)
+        for j in range(F):      # runs of frequency j: outs[j * n:(j + 1) * n], same length
+            y = np.stack([res.outputs for res in outs[j * n:(j + 1) * n]])
+            with np.errstate(all="ignore"):         # a diverged run: NaN outputs, inf metrics
+                values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
     return start, values
+
+
+def _kernel_law(study):
+    """The compensator's fused law without its per-run reference check.
+
+    The range check depends on the compensator and the references only (the
+    same for every case): :func:`run_montecarlo_scenario` runs it once per
+    frequency and reports its warnings. Without it no chunk touches the
+    global warnings filters (not thread-safe), and no warning is raised per run.
+    """
+    return compensator_law_of(study.compensator)._replace(check_reference=None)
+
+
+def _remote_chunk(study, start, stop, exact):
+    """:func:`run_chunk` on a dask worker, returning only what the accumulator needs.
+
+    Returns ``(start, values)`` when the accumulator keeps exact values, else
+    ``(start, (bins, maximum, diverged))``: int16 histogram bin per value
+    (:meth:`QuantileAccumulator.bins`), the chunk's maximum per (frequency,
+    metric) and its diverged runs per frequency (a quarter of the bytes).
+    """
+    start, values = run_chunk(study, start, stop, parallel=False)
+    if exact:
+        return start, values
+    return start, (QuantileAccumulator.bins(values), values.max(axis=0), _diverged(values))
+
+
+def _diverged(values):
+    """Diverged runs per frequency of a chunk's values (any metric not finite)."""
+    return np.sum(~np.isfinite(values).all(axis=2), axis=0)
 
 
 class QuantileAccumulator:
@@ -651,12 +809,27 @@ class QuantileAccumulator:
         self.values = (np.full((cases,) + self.shape, np.nan)
                        if cases * int(np.prod(self.shape)) <= exact_limit else None)
 
-    def _bin(self, v):
+    @staticmethod
+    def bins(values):
+        """Histogram bin of every value (0: underflow, ``n_bins + 1``: overflow and inf).
+
+        Parameters
+        ----------
+        values : numpy.ndarray
+            Non-negative metric values (any shape).
+
+        Returns
+        -------
+        numpy.ndarray of int16, same shape
+            Bin ``k`` (1 <= k <= n_bins) holds
+            ``[10**(LO + (k-1)/BPD), 10**(LO + k/BPD))``.
+        """
+        n_bins = BINS_PER_DECADE * (_HI - _LO)
         with np.errstate(divide="ignore", invalid="ignore"):
-            b = np.floor((np.log10(v) - _LO) * BINS_PER_DECADE)
-        b = np.where(v <= 10.0 ** _LO, -1, b)
-        b = np.where(~np.isfinite(b) & (v > 0), self.n_bins, b)
-        return (np.clip(b, -1, self.n_bins) + 1).astype(np.int64)   # 0: underflow, n+1: overflow
+            b = np.floor((np.log10(values) - _LO) * BINS_PER_DECADE)
+        b = np.where(values <= 10.0 ** _LO, -1, b)
+        b = np.where(~np.isfinite(b) & (values > 0), n_bins, b)
+        return (np.clip(b, -1, n_bins) + 1).astype(np.int16)
 
     def add(self, start, values):
         """Add the values of cases ``start .. start + len(values) - 1``.
@@ -666,14 +839,26 @@ class QuantileAccumulator:
         start : int
         values : numpy.ndarray, shape (n_cases, n_frequencies, n_metrics)
         """
-        n = values.shape[0]
-        bins = self._bin(values)
-        flat = (np.arange(int(np.prod(self.shape))).reshape(self.shape) * (self.n_bins + 2))
-        np.add.at(self.counts.reshape(-1), (flat[None] + bins).ravel(), 1)
-        self.maximum = np.maximum(self.maximum, values.max(axis=0))
-        self.count += n
+        self.add_bins(self.bins(values), values.max(axis=0))
         if self.values is not None:
-            self.values[start:start + n] = values
+            self.values[start:start + values.shape[0]] = values
+
+    def add_bins(self, bins, maximum):
+        """Add cases given by their histogram bins only (exact values not kept).
+
+        Parameters
+        ----------
+        bins : numpy.ndarray of int, shape (n_cases, n_frequencies, n_metrics)
+            From :meth:`bins`.
+        maximum : numpy.ndarray, shape (n_frequencies, n_metrics)
+            Their maximum.
+        """
+        width = self.n_bins + 2
+        flat = np.arange(int(np.prod(self.shape)), dtype=np.int64).reshape(self.shape) * width
+        idx = (flat[None] + bins).ravel()
+        self.counts += np.bincount(idx, minlength=self.counts.size).reshape(self.counts.shape)
+        self.maximum = np.maximum(self.maximum, maximum)
+        self.count += bins.shape[0]
 
     @property
     def exact(self):
@@ -815,7 +1000,46 @@ def execution(workers=None, scheduler=None):
             cluster.close()
 
 
-def run_study(study, client=None, chunk=None):
+def _bounded(pool, calls, in_flight):
+    """Results of ``calls`` run on ``pool`` as they complete, at most ``in_flight`` pending."""
+    calls, pending = iter(calls), set()
+    for call in itertools.islice(calls, in_flight):
+        pending.add(pool.submit(call))
+    while pending:
+        finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+        for fut in finished:
+            nxt = next(calls, None)
+            if nxt is not None:
+                pending.add(pool.submit(nxt))
+            yield fut.result()
+
+
+def auto_chunk(study, n_workers):
+    """Plants per dask task: coarse (about :data:`TASK_SAMPLES` samples) but several per worker.
+
+    Parameters
+    ----------
+    study : MonteCarloStudy
+    n_workers : int
+        Worker threads of the cluster.
+
+    Returns
+    -------
+    int
+        ``ceil(TASK_SAMPLES / s)`` plants (``s``: samples per plant, the sum
+        of the reference lengths, plus :data:`RUN_COST_SAMPLES` per run for
+        its fixed Python cost), reduced to give every worker at least
+        :data:`TASKS_PER_WORKER` tasks, but never below
+        ``ceil(TASK_SAMPLES / (8 s))`` plants (a task's fixed cost, about
+        10 ms of scheduling and transfer, stays below 1 % of its run time).
+    """
+    per_plant = sum(r.shape[1] for r in study.references) + RUN_COST_SAMPLES * len(study.references)
+    coarse = math.ceil(TASK_SAMPLES / per_plant)
+    balanced = math.ceil(study.cases / (TASKS_PER_WORKER * max(int(n_workers), 1)))
+    return max(1, min(coarse, max(balanced, math.ceil(coarse / 8))))
+
+
+def run_study(study, client=None, chunk=None, timings=None):
     """Run every case of a study; quantiles of every metric per frequency.
 
     Parameters
@@ -825,39 +1049,64 @@ def run_study(study, client=None, chunk=None):
     client : distributed.Client, optional
         Run the chunks on this dask cluster (default: here, in order).
     chunk : int, optional
-        Plants per chunk (default ``study.chunk``); does not change any result.
+        Plants per chunk (default ``study.chunk`` here, :func:`auto_chunk`
+        on dask unless the sweep sets ``chunk``); does not change any result.
+    timings : dict, optional
+        Filled with ``chunk``, ``tasks`` and ``accumulate`` (CPU seconds
+        this process spent merging results) for benchmarks.
 
     Returns
     -------
     MonteCarloResult
     """
-    chunk = chunk or study.chunk
-    acc = QuantileAccumulator(study.cases, (len(study.frequencies), len(study.columns)))
-    ranges = [(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)]
+    shape = (len(study.frequencies), len(study.columns))
+    acc = QuantileAccumulator(study.cases, shape)
     diverged = np.zeros(len(study.frequencies), dtype=np.int64)
-
-    def take(start, values):
-        nonlocal diverged
-        diverged = diverged + np.sum(~np.isfinite(values).all(axis=2), axis=0)
-        acc.add(start, values)
-
+    spent = 0.0
     if client is None:
-        for a, b in ranges:
-            take(*run_chunk(study, a, b))
+        chunk = chunk or study.chunk or CHUNK_CASES
+        ranges = [(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)]
+        import numba    # loaded by the kernels already; here only for its thread count
+        n_threads = min(numba.get_num_threads(), len(ranges))
+        if n_threads <= 1:                    # one chunk: the batch kernel's own threads
+            done = (run_chunk(study, a, b) for a, b in ranges)
+        else:                                 # chunks on threads: one's Python, another's kernel
+            pool = ThreadPoolExecutor(n_threads)
+            done = _bounded(pool, [functools.partial(run_chunk, study, a, b, False)
+                                   for a, b in ranges], 2 * n_threads)
+        for start, values in done:
+            t = time.process_time()
+            diverged += _diverged(values)
+            acc.add(start, values)
+            spent += time.process_time() - t
+        if n_threads > 1:
+            pool.shutdown()
     else:
         from distributed import as_completed
+        n_workers = max(sum(client.nthreads().values()), 1)          # worker threads
+        chunk = chunk or study.chunk or auto_chunk(study, n_workers)
+        ranges = iter([(a, min(a + chunk, study.cases)) for a in range(0, study.cases, chunk)])
         remote = client.scatter(study, broadcast=True)
-        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        it = iter(ranges)
+        exact = acc.exact
         pending = as_completed()
-        for a, b in list(zip(range(4 * n_workers), it)):
-            pending.add(client.submit(run_chunk, remote, *b, False, pure=False))
+        for _, (a, b) in zip(range(2 * n_workers), ranges):   # 2 in flight per worker
+            pending.add(client.submit(_remote_chunk, remote, a, b, exact, pure=False))
         for fut in pending:
-            take(*fut.result())
+            start, got = fut.result()
             fut.release()
-            nxt = next(it, None)
+            nxt = next(ranges, None)
             if nxt is not None:
-                pending.add(client.submit(run_chunk, remote, *nxt, False, pure=False))
+                pending.add(client.submit(_remote_chunk, remote, *nxt, exact, pure=False))
+            t = time.process_time()
+            if exact:
+                diverged += _diverged(got)
+                acc.add(start, got)
+            else:
+                acc.add_bins(got[0], got[1])
+                diverged += got[2]
+            spent += time.process_time() - t
+    if timings is not None:
+        timings.update(chunk=chunk, tasks=math.ceil(study.cases / chunk), accumulate=spent)
     return MonteCarloResult(study, acc.quantiles(), diverged, acc.exact, acc.values)
 
 
@@ -887,11 +1136,15 @@ def run_montecarlo_scenario(scenario):
                 comp = build_compensator(scenario.compensator_spec, study.plant, context)
             except (ValueError, PresetError) as exc:
                 raise ScenarioError([f"{source}: compensator: {exc}"]) from None
-        if not is_fusable(comp):
-            raise ScenarioError([f"{source}: compensator.kind: {scenario.compensator_spec.get('kind')!r} "
-                                 f"cannot run on the batch kernel; a Monte-Carlo study needs an "
-                                 f"inverse multiplicative compensator (e.g. 'multivariable')"])
-        study.compensator = comp
+            if not is_fusable(comp):
+                raise ScenarioError([f"{source}: compensator.kind: "
+                                     f"{scenario.compensator_spec.get('kind')!r} cannot run on the "
+                                     f"batch kernel; a Monte-Carlo study needs an inverse "
+                                     f"multiplicative compensator (e.g. 'multivariable')"])
+            study.compensator = comp
+            check = compensator_law_of(comp).check_reference
+            for r in study.references if check is not None else []:
+                check(r)                # range warnings: once per frequency, not per case
         res = run_study(study, _CLIENT["client"])
         res.warnings = list(dict.fromkeys(str(w.message) for w in rec))
         results.append(res)

@@ -157,16 +157,92 @@ def test_accumulator_exact_and_histogram_against_naive_quantiles():
     assert np.array_equal(whole.counts, hist.counts)
 
 
-def test_dask_in_process_cluster_is_bit_identical(study):
+@pytest.fixture(scope="module")
+def local_result(study):
+    return mc.run_study(study, chunk=3)
+
+
+@pytest.fixture(scope="module")
+def clusters():
+    """In-process LocalCluster of n single-threaded workers, created once per n."""
     distributed = pytest.importorskip("distributed")
-    local = mc.run_study(study, chunk=3)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    made = {}
+
+    def get(n):
+        if n not in made:
+            made[n] = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=False,
+                                               dashboard_address=":0")
+        return made[n]
+
+    yield get
+    for c in made.values():
+        c.close()
+
+
+@pytest.mark.parametrize("n_workers, chunk", [(1, None), (2, None), (2, 2), (1, 7), (2, 1)])
+def test_dask_in_process_cluster_is_bit_identical(study, local_result, clusters, n_workers, chunk):
+    distributed = pytest.importorskip("distributed")
+    with distributed.Client(clusters(n_workers)) as client:
+        assert len(client.nthreads()) == n_workers
+        remote = mc.run_study(study, client=client, chunk=chunk)
+    assert np.array_equal(local_result.values, remote.values)
+    assert np.array_equal(local_result.quantiles, remote.quantiles)
+    assert np.array_equal(local_result.diverged, remote.diverged)
+
+
+def test_dask_histogram_results_are_compact_and_equal_the_local_histogram(
+        study, clusters, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    monkeypatch.setattr(mc, "EXACT_VALUES", 0)       # workers return int16 bins, not values
+    local = mc.run_study(study, chunk=7)
+    start, (bins, mx, div) = mc._remote_chunk(study, 2, 5, False)
+    _, values = mc.run_chunk(study, 2, 5)
+    assert bins.dtype == np.int16 and np.array_equal(bins, mc.QuantileAccumulator.bins(values))
+    assert np.array_equal(mx, values.max(axis=0)) and start == 2
+    with distributed.Client(clusters(2)) as client:
         remote = mc.run_study(study, client=client, chunk=2)
-    assert np.array_equal(local.values, remote.values)
+    assert remote.values is None and not remote.exact
     assert np.array_equal(local.quantiles, remote.quantiles)
     assert np.array_equal(local.diverged, remote.diverged)
+
+
+def test_batches_inside_a_chunk_do_not_change_the_bits(study, monkeypatch):
+    _, whole = mc.run_chunk(study, 0, 7)
+    monkeypatch.setattr(mc, "BATCH_SAMPLES", 1)      # one plant per batch-kernel call
+    assert mc._batch_plants(study) == 1
+    _, single = mc.run_chunk(study, 0, 7)
+    assert np.array_equal(whole, single)
+
+
+def test_metrics_equal_a_per_run_naive_reduction(study):
+    """Vectorised metrics == the same formulas applied run by run (bit for bit)."""
+    _, v = mc.run_chunk(study, 0, 3)
+    from hammerstein.simulation import simulate_chain_batch
+    for i in range(3):
+        plant = mc.case_plant(study, i)
+        for j, r in enumerate(study.references):
+            y = simulate_chain_batch(study.compensator, [plant], [r])[0].outputs
+            noise = np.random.default_rng([study.seed, i, j + 1]).standard_normal(y.shape)
+            y = y + study.vary["noise"]["sd"] * noise
+            P = study.period_samples[j]
+            e = r[:, P:] - y[:, P:]
+            ee = np.sqrt(np.sum(e ** 2, axis=0))
+            expect = [np.sqrt(np.mean(e[0] ** 2)), np.max(np.abs(e[0])),
+                      np.sqrt(np.mean(e[1] ** 2)), np.max(np.abs(e[1])),
+                      np.sqrt(np.mean(ee ** 2)), ee.max()]
+            assert v[i, j].tolist() == expect
+
+
+@pytest.mark.parametrize("cases, workers", [(1, 1), (7, 2), (100, 1), (10_000, 2), (10 ** 6, 64)])
+def test_auto_chunk_is_coarse_and_balanced(study, cases, workers):
+    s = mc.MonteCarloStudy(**{**study.__dict__, "cases": cases})
+    per_plant = sum(r.shape[1] + mc.RUN_COST_SAMPLES for r in s.references)
+    c = mc.auto_chunk(s, workers)
+    assert 1 <= c <= math.ceil(mc.TASK_SAMPLES / per_plant)             # at most ~one coarse task
+    tasks = math.ceil(cases / c)
+    if cases * per_plant >= mc.TASKS_PER_WORKER * workers * mc.TASK_SAMPLES:
+        assert tasks >= mc.TASKS_PER_WORKER * workers                     # every worker busy
+    assert c * per_plant >= min(mc.TASK_SAMPLES // 8, per_plant)          # never tiny tasks
 
 
 @pytest.mark.parametrize("vary, expect", [
@@ -247,3 +323,95 @@ def test_histogram_quantiles_of_a_study_match_its_exact_ones(study, monkeypatch)
     tol = 10 ** (1 / (2 * mc.BINS_PER_DECADE)) - 1
     np.testing.assert_allclose(hist.quantiles[:-1], exact.quantiles[:-1], rtol=tol * 1.0001)
     assert np.array_equal(hist.quantiles[-1], exact.quantiles[-1])
+
+
+@pytest.mark.slow
+def test_cli_on_a_scheduler_and_two_workers_started_by_hand(tmp_path):
+    """As the README shows: `dask scheduler` + two `dask worker` processes, then --scheduler."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+    import hammerstein
+    from hammerstein.cli.main import main
+    pytest.importorskip("distributed")
+    # this interpreter's dask (python -m, not a `dask` script that may belong to another
+    # Python), this checkout's hammerstein, loopback only
+    root = str(Path(hammerstein.__file__).resolve().parents[1])
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1",
+           "PYTHONPATH": os.pathsep.join([root, os.environ.get("PYTHONPATH", "")])}
+    sched_file = tmp_path / "scheduler.json"
+    log = open(tmp_path / "dask.log", "w")
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
+                               "--scheduler-file", str(sched_file), "--host", "127.0.0.1",
+                               "--port", "0", "--no-dashboard"],
+                              env=env, stdout=log, stderr=log)]
+    try:
+        t0 = time.monotonic()
+        while not sched_file.exists() and time.monotonic() - t0 < 60:
+            time.sleep(0.1)
+        address = json.loads(sched_file.read_text())["address"]
+        procs += [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address,
+                                    "--host", "127.0.0.1", "--nthreads", "1", "--no-dashboard",
+                                    "--local-directory", str(tmp_path / f"w{k}")],
+                                   env=env, stdout=log, stderr=log)
+                  for k in range(2)]
+        f = tmp_path / "s.toml"
+        f.write_text(STUDY.format(vary=VARY).replace("cases = 7", "cases = 40\nchunk = 3"))
+        assert main(["run", str(f), "--out", str(tmp_path / "a"), "--figures", "none", "-q"]) == 0
+        assert main(["run", str(f), "--out", str(tmp_path / "b"), "--figures", "none", "-q",
+                     "--scheduler", address]) == 0
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            p.wait(timeout=60)
+        log.close()
+    for name in ("metrics.csv", "montecarlo-mm.csv", "montecarlo-mm-cases.csv"):
+        assert (tmp_path / "a" / "mc" / name).read_bytes() == (tmp_path / "b" / "mc" / name).read_bytes()
+
+
+@pytest.mark.parametrize("amplitude, expect", [(20.0, 0), (500.0, 1)])
+def test_range_warning_is_reported_once_per_study_not_per_case(tmp_path, amplitude, expect):
+    f = tmp_path / "s.toml"
+    f.write_text(STUDY.format(vary="").replace("amplitude = 20.0", f"amplitude = {amplitude}"))
+    res, = mc.run_montecarlo_scenario(validate_scenario(f))
+    assert len(res.warnings) == expect                       # 7 cases x 2 frequencies: one line
+    assert all("beyond the range" in w for w in res.warnings)
+
+
+@pytest.mark.parametrize("fn, zeta, T", [
+    ([900.0, 1100.0], [0.05, 0.2], 1e-4), ([10.0, 3000.0], [1.0, 0.999999], 1e-5),
+    ([50.0, 200.0], [0.01, 0.7], 1e-3), ([2000.0, 1.0], [2.5, 1.000001], 2e-5),
+    ([5000.0, 5000.0], [0.3, 1.0], 1e-3)])
+def test_closed_form_zoh_equals_the_matrix_exponential(fn, zeta, T):
+    """sampled_modes == expm(T [[A, B], [0, 0]]) of the continuous modes (overdamped too)."""
+    from hammerstein.core.dynamics import sampled_bending_modes, zoh
+    fn, zeta = np.array(fn), np.array(zeta)
+    p = len(fn)
+    A, B = np.zeros((2 * p, 2 * p)), np.zeros((2 * p, p))
+    for l in range(p):
+        w = 2 * math.pi * fn[l]
+        A[2 * l:2 * l + 2, 2 * l:2 * l + 2] = [[0.0, w], [-w, -2 * zeta[l] * w]]
+        B[2 * l + 1, l] = w
+    Ad, Bd = zoh(A, B, T)
+    nominal = sampled_bending_modes([100.0] * p, [0.1] * p, None, T)
+    got = mc.sampled_modes(fn, zeta, T, nominal)
+    scale = max(1.0, np.abs(np.hstack([Ad, Bd])).max())
+    assert np.abs(got.A - Ad).max() <= 2e-15 * scale
+    assert np.abs(got.B - Bd).max() <= 2e-15 * scale
+    assert np.array_equal(got.C, nominal.C) and got.dt == T and got.outputs == nominal.outputs
+    if np.all(zeta <= 1):                                   # the project's own ZOH
+        ref = sampled_bending_modes(fn, zeta, None, T)
+        assert np.abs(got.A - ref.A).max() <= 2e-15 * scale
+
+
+def test_an_overdamped_drawn_mode_runs(tmp_path):
+    """A damping factor taking a mode above zeta = 1 is an overdamped mode, not an error."""
+    s = _study(tmp_path, vary="damping_ratio = { relative_sd = 60.0 }")
+    zetas = [s.modes[1] * mc.draw_factors(s, i)["damping_ratio"] for i in range(s.cases)]
+    assert max(z.max() for z in zetas) > 1.0
+    res = mc.run_study(s)
+    assert np.all(np.isfinite(res.quantiles))
