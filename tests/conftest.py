@@ -82,6 +82,42 @@ def compiled_kernels():
         sim.simulate_chain_batch([comp, comp], [plant, static], [yr, yr], parallel=parallel)
 
 
+# Figures of the runs the tests start in this process (``main(["run", ...])``,
+# ``run_scenarios``, ``check --out``) are drawn inline, not in the runner's pool of forked
+# workers: the same figure functions write the same PNGs (tests/report/test_render.py
+# compares pool and inline files byte for byte), without forking this large process for
+# every run (about 0.2 s of CPU per run). The pool itself is still what runs for the
+# tests marked ``figure_pool`` (the runner's pool: pipelined figures, a worker's error,
+# concurrent runs), for the slow end-to-end runs of every bundled scenario (``slow``:
+# every report's figure jobs pickled and drawn in the workers) and in every ``python -m
+# hammerstein`` subprocess.
+_RUNNER_FIGURES = {"pool": True}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    # before the item's fixtures (a module-scoped fixture may run the CLI for it)
+    _RUNNER_FIGURES["pool"] = any(item.get_closest_marker(name) is not None
+                                  for name in ("figure_pool", "slow"))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _runner_figures_inline():
+    """Make the runner's :class:`FigureRenderer` inline unless the test wants the pool."""
+    import hammerstein.runner as runner
+
+    pooled = runner.FigureRenderer
+
+    def renderer(*args, **kwargs):
+        if not _RUNNER_FIGURES["pool"]:
+            kwargs.setdefault("workers", 0)
+        return pooled(*args, **kwargs)
+
+    runner.FigureRenderer = renderer
+    yield
+    runner.FigureRenderer = pooled
+
+
 # ---------------------------------------------------------------------------------------
 # ``--cpu-report N``: CPU time (user + system) of each test, its fixtures' setup and
 # teardown included, of this process and of every child process it waited for

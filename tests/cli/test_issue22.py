@@ -84,6 +84,7 @@ def test_4_young_empty_temporary_is_kept(tmp_path):
     assert remove_stale_temporaries(tmp_path) == [d]
 
 
+@pytest.mark.figure_pool   # four threads: figures in the workers, as the CLI draws them
 def test_4_two_threads_share_one_out_directory(tmp_path):
     # each thread's sweep of stale temporaries must not remove the other's live report
     out = tmp_path / "out"
