@@ -80,3 +80,127 @@ def compiled_kernels():
     sim.simulate_chain(comp, static, yr)
     for parallel in (False, True):
         sim.simulate_chain_batch([comp, comp], [plant, static], [yr, yr], parallel=parallel)
+
+
+# Figures of the runs the tests start in this process (``main(["run", ...])``,
+# ``run_scenarios``, ``check --out``) are drawn inline, not in the runner's pool of forked
+# workers: the same figure functions write the same PNGs (tests/report/test_render.py
+# compares pool and inline files byte for byte), without forking this large process for
+# every run (about 0.2 s of CPU per run). The pool itself is still what runs for the
+# tests marked ``figure_pool`` (the runner's pool: pipelined figures, a worker's error,
+# concurrent runs), for the slow end-to-end runs of every bundled scenario (``slow``:
+# every report's figure jobs pickled and drawn in the workers) and in every ``python -m
+# hammerstein`` subprocess.
+_RUNNER_FIGURES = {"pool": True}
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item):
+    # before the item's fixtures (a module-scoped fixture may run the CLI for it)
+    _RUNNER_FIGURES["pool"] = any(item.get_closest_marker(name) is not None
+                                  for name in ("figure_pool", "slow"))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _runner_figures_inline():
+    """Make the runner's :class:`FigureRenderer` inline unless the test wants the pool."""
+    import hammerstein.runner as runner
+
+    pooled = runner.FigureRenderer
+
+    def renderer(*args, **kwargs):
+        if not _RUNNER_FIGURES["pool"]:
+            kwargs.setdefault("workers", 0)
+        return pooled(*args, **kwargs)
+
+    runner.FigureRenderer = renderer
+    yield
+    runner.FigureRenderer = pooled
+
+
+# ---------------------------------------------------------------------------------------
+# ``--cpu-report N``: CPU time (user + system) of each test, its fixtures' setup and
+# teardown included, of this process and of every child process it waited for
+# (``getrusage(RUSAGE_SELF)`` + ``getrusage(RUSAGE_CHILDREN)``: CLI subprocesses, figure
+# workers, compilers). Prints the N most expensive tests and files, the CPU spent before
+# the first test (interpreter start-up, imports, collection) and the total. A measuring
+# aid for keeping the default suite cheap (README "Performance and python-control");
+# session-scoped fixtures are charged to the first test that uses them.
+# ---------------------------------------------------------------------------------------
+
+def _cpu_seconds():
+    """User + system CPU seconds of this process and its waited-for children."""
+    import resource
+
+    own = resource.getrusage(resource.RUSAGE_SELF)
+    kids = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (own.ru_utime + own.ru_stime, kids.ru_utime + kids.ru_stime)
+
+
+def pytest_addoption(parser):
+    parser.addoption(
+        "--cpu-report", type=int, default=0, metavar="N",
+        help="print the N tests and test files that took the most CPU time "
+             "(user + system, child processes included)")
+    parser.addoption(
+        "--cpu-report-csv", default=None, metavar="PATH",
+        help="with --cpu-report: also write every test's CPU time to PATH (CSV: test, "
+             "this process s, child processes s)")
+
+
+def pytest_configure(config):
+    config._cpu_report = {} if config.getoption("cpu_report") else None
+
+
+def pytest_collection_finish(session):
+    if session.config._cpu_report is not None:
+        session.config._cpu_before_tests = _cpu_seconds()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    report = item.config._cpu_report
+    if report is None:
+        return (yield)
+    own0, kids0 = _cpu_seconds()
+    try:
+        return (yield)
+    finally:
+        own1, kids1 = _cpu_seconds()
+        report[item.nodeid] = (own1 - own0, kids1 - kids0)
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    report = config._cpu_report
+    if report is None:
+        return
+    n = config.getoption("cpu_report")
+    write = terminalreporter.write_line
+    own, kids = _cpu_seconds()
+    start_own, start_kids = getattr(config, "_cpu_before_tests", (0.0, 0.0))
+    tests_own = sum(o for o, _ in report.values())
+    tests_kids = sum(k for _, k in report.values())
+    terminalreporter.section(f"CPU time (user + system), {len(report)} tests")
+    write(f"total {own + kids:8.2f} s (this process {own:.2f} s, child processes "
+          f"{kids:.2f} s)")
+    write(f"before the first test (start-up, imports, collection) "
+          f"{start_own + start_kids:8.2f} s")
+    write(f"tests {tests_own + tests_kids:8.2f} s (child processes {tests_kids:.2f} s)")
+    files = {}
+    for nodeid, (o, k) in report.items():
+        o_f, k_f, c_f = files.get(nodeid.split("::")[0], (0.0, 0.0, 0))
+        files[nodeid.split("::")[0]] = (o_f + o, k_f + k, c_f + 1)
+    write(f"-- {n} most expensive files: CPU s (child processes s), tests")
+    for name, (o, k, c) in sorted(files.items(), key=lambda kv: -sum(kv[1][:2]))[:n]:
+        write(f"{o + k:8.2f} ({k:6.2f}) {c:5d}  {name}")
+    write(f"-- {n} most expensive tests: CPU s (child processes s)")
+    for nodeid, (o, k) in sorted(report.items(), key=lambda kv: -sum(kv[1]))[:n]:
+        write(f"{o + k:8.2f} ({k:6.2f})  {nodeid}")
+    path = config.getoption("cpu_report_csv")
+    if path:
+        import csv
+
+        with open(path, "x", newline="", encoding="utf-8") as f:   # never overwrites
+            rows = csv.writer(f)
+            rows.writerow(["test", "self_s", "children_s"])
+            rows.writerows([k, f"{o:.4f}", f"{c:.4f}"] for k, (o, c) in report.items())

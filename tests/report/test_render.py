@@ -51,6 +51,7 @@ def test_worker_error_raised_after_every_job_finished(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["loop-0.png", "loop-1.png", "loop-2.png"]
 
 
+@pytest.mark.figure_pool
 def test_failed_figure_is_the_scenarios_one_line_error(tmp_path, monkeypatch):
     monkeypatch.setattr(plots, "trajectory_figure", _failing_figure)
     outcomes = run_pipelined([ROOT / "scenarios" / "default.toml"], tmp_path)
@@ -60,6 +61,7 @@ def test_failed_figure_is_the_scenarios_one_line_error(tmp_path, monkeypatch):
     assert not any(p.name == o.name or p.name.startswith(TMP_PREFIX) for p in tmp_path.iterdir())
 
 
+@pytest.mark.figure_pool
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="the pool needs fork")
 def test_pipelined_run_writes_every_figure_in_place(tmp_path):
     outcomes = run_pipelined([ROOT / "scenarios" / "default.toml"], tmp_path)
