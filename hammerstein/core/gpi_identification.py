@@ -72,8 +72,8 @@ from hammerstein.core.generalized_pi import GeneralizedPI, envelope
 from hammerstein.core.identification import IdentificationError
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial
 from hammerstein.core.record_identification import (
-    NOISE_FACTOR, RecordFit, _as_records, _window_metrics, level_errors, noise_level,
-    parse_components, split_record)
+    RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
+    weak_couplings)
 from hammerstein.simulation import generalized_play_states
 
 __all__ = ["GeneralizedPIIdentifier", "identify_gpi_records"]
@@ -369,15 +369,8 @@ class GeneralizedPIIdentifier:
         IdentificationError
             On records that cannot be split or a model that cannot be fitted.
         """
-        records = _as_records(records)
-        if splits is None:
-            pairs = [split_record(r, "least-squares", hold_out, train_fraction, skip_seconds)
-                     for r in records]
-            records, splits = [r for r, _ in pairs], [s for _, s in pairs]
-        if any(s.periodic for s in splits):
-            raise IdentificationError(
-                "records: a single closed loop cannot identify a generalised PI model's minor "
-                "loops; record the decreasing-amplitude sine of `hammerstein excitation`")
+        records, splits = split_level_records(records, hold_out, train_fraction, skip_seconds,
+                                              splits, "a generalised PI model")
         m, p = records[0].u.shape[0], records[0].y.shape[0]
         in_names = list(input_names or records[0].input_names)
         out_names = list(output_names or records[0].output_names)
@@ -401,7 +394,6 @@ class GeneralizedPIIdentifier:
                                    zip(records, keeps, self._train)]) for l in range(p)]
         self._evaluations = 0
         held = any(s.held_out.any() for s in splits)
-        notes = []
 
         def fit_all():
             grid, offs, thetas = [], [], []
@@ -414,26 +406,19 @@ class GeneralizedPIIdentifier:
             return model, thetas, [model.simulate(r.u)[0] for r in records]
 
         model, thetas, pred = fit_all()
-        changed = False                       # drop cross-couplings below the noise (never above)
-        for l in range(p):
-            noise = float(np.median([noise_level(r.y[l]) for r in records]))
-            for k in range(m):
-                c = model.components[l][k]
-                if k == l or not auto[l, k] or c is None:
-                    continue
-                c0 = GeneralizedPI(c.thresholds, c.weights, c.gamma_l, c.gamma_r, 0.0,
-                                   c.reversible) if isinstance(c, GeneralizedPI) else c
-                contrib = np.concatenate([c0.simulate(r.u[k])[0] if isinstance(c0, GeneralizedPI)
-                                          else c0 * r.u[k] for r in records])
-                rms = float(np.std(contrib))
-                if rms <= NOISE_FACTOR * noise:
-                    kinds[l][k] = "none"
-                    changed = True
-                    notes.append(f"{out_names[l]} <- {in_names[k]}: absent (its contribution "
-                                 f"{rms:.3g} RMS is below twice the noise {noise:.3g})")
-                else:
-                    notes.append(f"{out_names[l]} <- {in_names[k]}: kept (contribution "
-                                 f"{rms:.3g} RMS, noise {noise:.3g})")
+
+        def contribution(c, u):               # without its offset: what varies with the input
+            if isinstance(c, GeneralizedPI):
+                return GeneralizedPI(c.thresholds, c.weights, c.gamma_l, c.gamma_r, 0.0,
+                                     c.reversible).simulate(u)[0]
+            return c * u
+
+        # drop cross-couplings below the noise (never one above it)
+        absent, notes = weak_couplings(records, auto, model.components, contribution,
+                                       in_names, out_names)
+        for l, k in absent:
+            kinds[l][k] = "none"
+        changed = bool(absent)
         if changed:
             model, thetas, pred = fit_all()
         notes.insert(0, f"generalized PI: {self.n_plays} plays per component, envelopes by "

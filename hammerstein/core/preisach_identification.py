@@ -69,8 +69,8 @@ import numpy as np
 from hammerstein.core.identification import IdentificationError
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.core.record_identification import (
-    NOISE_FACTOR, RecordFit, _as_records, _window_metrics, level_errors, noise_level,
-    parse_components, split_record)
+    RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
+    weak_couplings)
 from hammerstein.simulation import preisach_steps
 
 __all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "identify_preisach_records"]
@@ -373,15 +373,8 @@ class PreisachIdentifier:
         IdentificationError
             On records that cannot be split or a model that cannot be fitted.
         """
-        records = _as_records(records)
-        if splits is None:
-            pairs = [split_record(r, "least-squares", hold_out, train_fraction, skip_seconds)
-                     for r in records]
-            records, splits = [r for r, _ in pairs], [s for _, s in pairs]
-        if any(s.periodic for s in splits):
-            raise IdentificationError(
-                "records: a single closed loop cannot identify a Preisach model (its minor loops "
-                "are not in it); record the decreasing-amplitude sine of `hammerstein excitation`")
+        records, splits = split_level_records(records, hold_out, train_fraction, skip_seconds,
+                                              splits, "a Preisach model")
         m, p = records[0].u.shape[0], records[0].y.shape[0]
         in_names = list(input_names or records[0].input_names)
         out_names = list(output_names or records[0].output_names)
@@ -417,22 +410,12 @@ class PreisachIdentifier:
                 f"{k:g}: {v:.3g} %" for k, v in scores.items())
                 + f" mean {'held-out' if held else 'training'} RMS of the output range)")
         # drop cross-couplings below the noise (never one above it)
-        changed = False
-        for l in range(p):
-            noise = float(np.median([noise_level(r.y[l]) for r in records]))
-            for k in range(m):
-                if k == l or not auto[l, k] or grid[l][k] is None:
-                    continue
-                contrib = np.concatenate([grid[l][k].simulate(r.u[k])[0] for r in records])
-                rms = float(np.std(contrib))
-                if rms <= NOISE_FACTOR * noise:
-                    kinds[l][k] = "none"
-                    changed = True
-                    notes.append(f"{out_names[l]} <- {in_names[k]}: absent (its contribution "
-                                 f"{rms:.3g} RMS is below twice the noise {noise:.3g})")
-                else:
-                    notes.append(f"{out_names[l]} <- {in_names[k]}: kept (contribution "
-                                 f"{rms:.3g} RMS, noise {noise:.3g})")
+        absent, more = weak_couplings(records, auto, grid, lambda c, u: c.simulate(u)[0],
+                                      in_names, out_names)
+        notes += more
+        for l, k in absent:
+            kinds[l][k] = "none"
+        changed = bool(absent)
         if changed:
             grid, offs = [], []
             for l in range(p):

@@ -84,6 +84,8 @@ __all__ = [
     "identify_record_creep",
     "dynamics_tables",
     "noise_level",
+    "split_level_records",
+    "weak_couplings",
     "amplitude_levels",
     "level_errors",
     "NOISE_FACTOR",
@@ -922,6 +924,89 @@ def noise_level(y):
     if d2.size == 0:
         return 0.0
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / np.sqrt(6.0))
+
+
+def split_level_records(records, hold_out="auto", train_fraction=None, skip_seconds=None,
+                        splits=None, model_class="this model class"):
+    """Records and their splits for a model judged on minor loops (Preisach, generalised PI).
+
+    Parameters
+    ----------
+    records : MultiRecord, Record or sequence of them
+        Inputs shape (m, n_samples) [V], outputs shape (p, n_samples) [µm].
+    hold_out, train_fraction, skip_seconds
+        See :func:`split_record`.
+    splits : list of Split, optional
+        Given splits (then ``records`` are used as they are).
+    model_class : str
+        Named in the error, e.g. ``"a Preisach model"``.
+
+    Returns
+    -------
+    records : list of Record
+    splits : list of Split
+
+    Raises
+    ------
+    IdentificationError
+        On a single closed loop (its minor loops are not in it) or records
+        that cannot be split.
+    """
+    records = _as_records(records)
+    if splits is None:
+        pairs = [split_record(r, "least-squares", hold_out, train_fraction, skip_seconds)
+                 for r in records]
+        records, splits = [r for r, _ in pairs], [s for _, s in pairs]
+    if any(s.periodic for s in splits):
+        raise IdentificationError(
+            f"records: a single closed loop cannot identify {model_class} (its minor loops "
+            "are not in it); record the decreasing-amplitude sine of `hammerstein excitation`")
+    return records, splits
+
+
+def weak_couplings(records, auto, components, contribution, input_names, output_names):
+    """Cross-couplings below the noise, dropped by ``components = "auto"`` (never one above it).
+
+    A cross-coupling (l, k) chosen automatically is absent when the RMS of its
+    contribution over the records is at most :data:`NOISE_FACTOR` times the
+    output's measurement noise (:func:`noise_level`, median over the records).
+
+    Parameters
+    ----------
+    records : list of Record
+        Inputs shape (m, n_samples) [V], outputs shape (p, n_samples) [µm].
+    auto : numpy.ndarray of bool, shape (p, m)
+        Components whose presence is decided here (:func:`parse_components`).
+    components : list of list
+        The fitted components, ``components[l][k]`` (None when absent).
+    contribution : callable
+        ``contribution(component, u)`` -> output [µm] of a component for the
+        input samples ``u`` (shape (n_samples,)).
+    input_names, output_names : sequence of str
+
+    Returns
+    -------
+    absent : list of (int, int)
+        The (output, input) pairs to drop.
+    notes : list of str
+        One line per judged cross-coupling.
+    """
+    absent, notes = [], []
+    for l in range(len(output_names)):
+        noise = float(np.median([noise_level(r.y[l]) for r in records]))
+        for k in range(len(input_names)):
+            c = components[l][k]
+            if k == l or not auto[l, k] or c is None:
+                continue
+            rms = float(np.std(np.concatenate([contribution(c, r.u[k]) for r in records])))
+            if rms <= NOISE_FACTOR * noise:
+                absent.append((l, k))
+                notes.append(f"{output_names[l]} <- {input_names[k]}: absent (its contribution "
+                             f"{rms:.3g} RMS is below twice the noise {noise:.3g})")
+            else:
+                notes.append(f"{output_names[l]} <- {input_names[k]}: kept (contribution "
+                             f"{rms:.3g} RMS, noise {noise:.3g})")
+    return absent, notes
 
 
 def _above_noise(engine, l, k, comp, simpler):
