@@ -78,7 +78,7 @@ def test_creep_identified_and_compensated_on_an_outside_actuator(tmp_path, capsy
     printed = capsys.readouterr().out
     assert "creep: 9 lags" in printed and "drift" in printed
     chose = [line for line in printed.splitlines() if "model auto:" in line]
-    assert len(chose) == 3 and "chose" in chose[0], chose
+    assert len(chose) == 4 and "chose" in chose[0], chose
     assert all("staircase step levels" in line for line in chose[1:]), chose
     summary = read_toml(preset)["identification"]["creep"]
     assert set(summary["outputs"]) == {"x", "y"}
