@@ -10,7 +10,7 @@ trials 0..10 on the noise-free output, over the window after the fade-in
 and one period, the largest growth from one trial to the next, and the CPU
 time. Targets: <= 0.3 % within 10 iterations, no growth above 10 %.
 
-    python benchmarks/ilc.py [--quick] [--gain 0.5] [--q 2000]
+    python benchmarks/ilc.py [--quick] [--gain 0.5] [--q 2000] [--only raster]
     python benchmarks/ilc.py --plant realistic --gain 0.8 --q 500    # realistic-2dof, realistic-b
     python benchmarks/ilc.py --plant realistic --model preisach --gain 0.8 --q 500
     python benchmarks/ilc.py --files --gain 0.8 --q 500              # learn through files
@@ -231,6 +231,9 @@ def main():
                          "(no per-harmonic learning)")
     ap.add_argument("--delay", default="auto",
                     help="--delay of learn in the --files route (auto or the known 3 samples)")
+    ap.add_argument("--only", default=None,
+                    help="run only the cases whose actuator or case label contains this text "
+                         "(e.g. 'raster', 'fn-5', 'realistic-b'); identification still runs per actuator")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
     args = ap.parse_args()
@@ -245,6 +248,8 @@ def main():
     for mm, plant, make_start in actuators(args.plant, args.quick, args.model):
         T = plant.sampling_period
         for label, scale, f, spec in cases(args.quick, full=args.plant == "realistic"):
+            if args.only and args.only not in f"{mm} {label}":
+                continue
             yr, P = signal(spec, T)
             start = make_start()
             ilc = LearningCompensator(start, T, args.iterations, args.gain, args.q,

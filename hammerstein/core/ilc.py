@@ -509,11 +509,22 @@ class IterativeLearning:
     gain, iterations : str, int
         Options of the hysteresis compensator
         (:class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`).
+    significance : float
+        z, in standard deviations of the noise-power estimate: the
+        time-domain update learns only an error whose power exceeds what
+        noise alone would leave by ``z sqrt(2 / dof)`` (a chi-square test;
+        :meth:`noise_shrink_profile`, and the period-averaged factor of
+        :meth:`step`). The default 6 is exceeded by noise alone with a
+        probability of about 1e-5 per window, so a trial at the noise floor
+        leaves the drive where it is (on a deterministic actuator the next
+        trial is then the same); 0 is the plain Wiener factor, which passes
+        a share of the noise into every drive.
 
     Raises
     ------
     CompensatorError
         Gain outside (0, 2), a cut-off not below Nyquist, a negative delay,
+        a significance that is not a number >= 0,
         dynamics that are not p x p, a Preisach model its exact inverse
         refuses (not square, a direct path that is not increasing).
 
@@ -541,7 +552,8 @@ class IterativeLearning:
     """
 
     def __init__(self, model, dynamics, sampling_period, learning_gain=0.5, q_cutoff_hz=None,
-                 q_order=2, inversion="zpetc", delay=0, gain="secant", iterations=50):
+                 q_order=2, inversion="zpetc", delay=0, gain="secant", iterations=50,
+                 significance=6.0):
         if not (0 < learning_gain < 2):
             raise CompensatorError(f"learning_gain: expected a number in (0, 2), found {learning_gain!r}")
         nyquist = 0.5 / sampling_period
@@ -558,6 +570,10 @@ class IterativeLearning:
         self.model, self.dynamics, self.sampling_period = model, dynamics, float(sampling_period)
         self.learning_gain, self.q_cutoff_hz, self.q_order = float(learning_gain), q_cutoff_hz, int(q_order)
         self.inversion, self.delay = inversion, int(delay)
+        if not (np.isfinite(significance) and significance >= 0):
+            raise CompensatorError(f"significance: expected a number >= 0 (standard deviations), "
+                                   f"found {significance!r}")
+        self.significance = float(significance)
         #: True when the hysteresis is not a classical PI: Gamma^c is the exact Preisach inverse
         self.exact_static = not isinstance(model, MultivariablePI)
         if self.exact_static:
@@ -699,17 +715,29 @@ class IterativeLearning:
         power = float(np.mean(low ** 2))
         return float(max(0.0, 1.0 - sigma2 * float(np.mean(q ** 2)) / power)) if power > 0 else 0.0
 
-    def noise_shrink_profile(self, error, window=None):
+    def noise_shrink_profile(self, error, window=None, significance=None):
         """Per-sample factor in [0, 1] on the time-domain update: :meth:`noise_shrink`, local in time.
 
         The noise variance ``sigma^2`` is estimated as in :meth:`noise_shrink`
         (from ``e - Q e``); the power of ``Q e`` (summed over the outputs) is
         averaged over a sliding window of ``window`` samples (default 8
         periods of the cut-off, ``8 / (q_cutoff_hz T)``) and the factor is
-        ``max(0, 1 - p sigma^2 mean(|Q|^2) / local power)``: the Wiener
+        ``max(0, 1 - c p sigma^2 mean(|Q|^2) / local power)``: the Wiener
         shrinkage where the error is, 0 where what Q passes is noise alone
         (a raster at the noise floor keeps its error at the line turns;
         elsewhere its update would only be noise). All ones without Q.
+
+        Noise alone makes the window's power ``p sigma^2 mean(|Q|^2)`` times
+        a chi-square variable over its ``dof`` degrees of freedom,
+        ``dof = p n_w mean(|Q|^4)^-1 mean(|Q|^2)^2`` (white noise through the
+        power response ``|Q|^2`` of the zero-phase Q, averaged over ``n_w``
+        samples; e.g. Bendat and Piersol, "Random data", 4th ed., 2010,
+        Sec. 8.2), whose relative spread is ``sqrt(2 / dof)``. The plain
+        Wiener factor (``c = 1``) therefore learns noise wherever a window
+        happens to hold more of it than average (on a large share of the
+        samples of a trial at the noise floor, which is what made rasters
+        grow there); ``c = 1 + z sqrt(2 / dof)`` learns only a local error
+        that noise alone would reach with a z-standard-deviation chance.
 
         Parameters
         ----------
@@ -717,6 +745,8 @@ class IterativeLearning:
             [µm].
         window : int, optional
             Samples of the sliding average.
+        significance : float, optional
+            z (default the learning's :attr:`significance`).
 
         Returns
         -------
@@ -734,6 +764,10 @@ class IterativeLearning:
         n_w = int(window or max(16, round(8.0 / (self.q_cutoff_hz * self.sampling_period))))
         n_w = min(n_w, e.shape[1])
         power = np.convolve(np.sum(low ** 2, axis=0), np.ones(n_w) / n_w, mode="same")
+        # noise alone makes the window's power a chi-square of dof degrees of freedom
+        dof = e.shape[0] * n_w * float(np.mean(q ** 2)) ** 2 / max(float(np.mean(q ** 4)), 1e-300)
+        z = self.significance if significance is None else float(significance)
+        noise = noise * (1.0 + z * np.sqrt(2.0 / dof))
         with np.errstate(divide="ignore", invalid="ignore"):
             out = np.where(power > 0, 1.0 - noise / power, 0.0)
         return np.clip(out, 0.0, 1.0)
@@ -816,7 +850,9 @@ class IterativeLearning:
         self.last_scale = 1.0
         if period_samples and steady_from is not None:
             rho = periodic_snr(e_raw, period_samples, steady_from)
-            self.last_scale = float(max(0.0, 1.0 - 1.0 / rho)) if np.isfinite(rho) else 1.0
+            # noise alone: rho ~ chi-square / dof with dof = p P (the averaged period's samples)
+            c = 1.0 + self.significance * np.sqrt(2.0 / (e_raw.shape[0] * int(period_samples)))
+            self.last_scale = float(max(0.0, 1.0 - c / rho)) if np.isfinite(rho) else 1.0
         shrink = self.noise_shrink_profile(e_raw)
         self.last_shrink = float(np.mean(shrink))
         shrink = np.concatenate([shrink, np.full(dv.shape[1] - N, shrink[-1])]) * self.last_scale
@@ -1073,7 +1109,7 @@ class LearningCompensator:
     learning at the noise floor, halved where an error keeps growing); the
     start-up before it, and references that do not repeat, through the
     time-domain inverse and Q, scaled by the noise shrinkage
-    (:meth:`IterativeLearning.noise_shrink`). A trial more than 10 % worse
+    (:meth:`IterativeLearning.noise_shrink_profile`, with its significance test). A trial more than 10 % worse
     than the best one so far is not learnt from: the next trial learns
     again from the best drive with half the gain (:attr:`notes`). The drive
     returned is the best trial's.
