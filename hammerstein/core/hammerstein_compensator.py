@@ -126,8 +126,10 @@ def continuation(reference, samples, period_samples=None):
     if period_samples and N >= period_samples + 8 and period_samples >= samples:
         last, before = r[:, N - 8:], r[:, N - period_samples - 8:N - period_samples]
         # |last - before| <= atol: np.allclose(rtol=0) on finite records, without its
-        # ~40 us of overhead (a start-up of every case of a sweep)
-        if np.all(np.abs(last - before) <= 1e-9 * max(np.max(np.abs(r)), 1.0)):
+        # ~40 us of overhead (a start-up of every case of a sweep); atol >= 1e-9, so
+        # the record's maximum (a pass over it) is needed only for larger differences
+        d = np.abs(last - before)
+        if np.all(d <= 1e-9) or np.all(d <= 1e-9 * max(np.max(np.abs(r)), 1.0)):
             return r[:, N - period_samples:N - period_samples + samples].copy()
     if N < 3:
         return np.repeat(r[:, -1:], samples, axis=1)

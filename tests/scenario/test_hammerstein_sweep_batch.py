@@ -198,3 +198,26 @@ m = { kind = "multivariable" }
         if any("beyond the range" in w for w in res.warnings):
             beyond.add(case.name)
     assert beyond == {c.name for c in cases if "-y-" in c.name}
+
+
+@pytest.mark.parametrize("scale, offset, periodic", [
+    (1.0, 0.0, True),          # exactly periodic
+    (1.0, 5e-9, False),        # beyond atol = 1e-9 (max |r| <= 1)
+    (100.0, 5e-9, True),       # within atol = 1e-9 * max |r| = 1e-7
+    (100.0, 5e-7, False),
+])
+def test_continuation_periodic_tolerance(scale, offset, periodic):
+    """The continuation repeats the record one period earlier when its last 8 samples
+    repeat those one period earlier to ``1e-9 max(max |r|, 1)``, else extrapolates."""
+    from hammerstein.core.hammerstein_compensator import continuation
+    period = 10
+    k = np.arange(35)
+    r = scale * np.sin(2 * np.pi * k / period)[np.newaxis] * 0.9
+    r[0, -8:] += offset
+    got = continuation(r, 3, period)
+    if periodic:
+        np.testing.assert_array_equal(got, r[:, 35 - period:35 - period + 3])
+    else:
+        a, b, c = r[0, -3], r[0, -2], r[0, -1]      # quadratic through the last three
+        kk = np.arange(1, 4)
+        np.testing.assert_allclose(got[0], c + (c - b) * kk + (c - 2 * b + a) / 2 * kk * (kk + 1))
