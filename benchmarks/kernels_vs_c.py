@@ -12,7 +12,8 @@ gains ``G`` (p, m), discrete state space ``A, B, C, D``):
   bending modes, per sample (:func:`~hammerstein.simulation._kernels.plant_kernel`);
 * ``chain``: optional reference pre-filter (``--prefilter``: a state space
   shaped like a Hammerstein compensator's ZPETC inverse of G, the law's
-  ``prefiltered`` branch) -> compensator (delay law, ``iterations``
+  ``prefiltered`` branch, stepped on its non-zero entries as the kernel
+  does) -> compensator (delay law, ``iterations``
   fixed-point steps with the play states frozen at the previous sample,
   each re-evaluation moving the plays into a scratch vector then summing
   them like a sample's output, divergence check, commit) -> PI -> bending
@@ -124,6 +125,40 @@ static inline void linear(const double *h, int64_t q, int64_t nx, const double *
 #define MAXX 256
 #define MAXS 4096
 
+/* the non-zero entries of [[C, D], [A, B]] row by row (compressed rows; columns: the
+   state, then the input), as the kernels step a reference pre-filter */
+static int64_t sparse_rows(int64_t q, int64_t nx, const double *A, const double *B,
+                           const double *C, const double *D, int64_t *ptr, int64_t *col,
+                           double *val) {
+    int64_t n = 0;
+    ptr[0] = 0;
+    for (int64_t l = 0; l < q + nx; l++) {
+        for (int64_t j = 0; j < nx + q; j++) {
+            double a = l < q ? (j < nx ? C[l * nx + j] : D[l * q + j - nx])
+                             : (j < nx ? A[(l - q) * nx + j] : B[(l - q) * q + j - nx]);
+            if (a != 0.0) { col[n] = j; val[n] = a; n++; }
+        }
+        ptr[l + 1] = n;
+    }
+    return n;
+}
+
+/* y = C x + D h, x <- A x + B h on the non-zero entries; z = [x; h] */
+static inline void sparse_linear(const int64_t *ptr, const int64_t *col, const double *val,
+                                 int64_t q, int64_t nx, double *z, double *zn, double *y) {
+    for (int64_t l = 0; l < q; l++) {
+        double a = 0.0;
+        for (int64_t n = ptr[l]; n < ptr[l + 1]; n++) a += val[n] * z[col[n]];
+        y[l] = a;
+    }
+    for (int64_t i = 0; i < nx; i++) {
+        double a = 0.0;
+        for (int64_t n = ptr[q + i]; n < ptr[q + i + 1]; n++) a += val[n] * z[col[n]];
+        zn[i] = a;
+    }
+    for (int64_t i = 0; i < nx; i++) z[i] = zn[i];
+}
+
 void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double *u,
            const int64_t *start, const double *r, const double *W, const double *G, double *s,
            const double *A, const double *B, const double *C, const double *D, double *x,
@@ -149,15 +184,19 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
               const double *pG, int64_t pn, const double *A, const double *B, const double *C,
               const double *D, int64_t nx, double *cu, double *cs, double *ps, double *x,
               double *u_out, double *y_out, int64_t *status) {
-    double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], yrt[MAXV], h[MAXV], yt[MAXV];
-    double xn[MAXX], xfn[MAXX], sv[MAXS];
+    double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], h[MAXV], yt[MAXV];
+    double xn[MAXX], sv[MAXS];
+    static double fval[(MAXX + MAXV) * (MAXX + MAXV)], z[MAXX + MAXV], zn[MAXX];
+    static int64_t fcol[(MAXX + MAXV) * (MAXX + MAXV)], fptr[MAXX + MAXV + 1];
     *status = 0;
     for (int64_t j = 0; j < cn; j++) sv[j] = 0.0;
+    sparse_rows(p, nf, Af, Bf, Cf, Df, fptr, fcol, fval);
+    for (int64_t i = 0; i < nf; i++) z[i] = xf[i];
     evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, sv, yhat);
     for (int64_t t = 0; t < N; t++) {
         if (prefiltered) {
-            for (int64_t l = 0; l < p; l++) yrt[l] = yr[l * N + t];
-            linear(yrt, p, nf, Af, Bf, Cf, Df, xf, xfn, ref);
+            for (int64_t l = 0; l < p; l++) z[nf + l] = yr[l * N + t];
+            sparse_linear(fptr, fcol, fval, p, nf, z, zn, ref);
         } else {
             for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
         }
@@ -182,7 +221,11 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
         }
         if (st == 0)
             for (int64_t k = 0; k < m; k++) if (fabs(u[k]) > bound) st = 2;
-        if (st) { *status = st; return t; }
+        if (st) {
+            for (int64_t i = 0; i < nf; i++) xf[i] = z[i];
+            *status = st;
+            return t;
+        }
         commit(u, m, cstart, cr, cs);
         output(u, m, p, cn, cW, cG, cs, yhat);
         for (int64_t k = 0; k < m; k++) cu[k] = u[k];
@@ -191,6 +234,7 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
         linear(h, p, nx, A, B, C, D, x, xn, yt);
         for (int64_t l = 0; l < p; l++) y_out[l * N + t] = yt[l];
     }
+    for (int64_t i = 0; i < nf; i++) xf[i] = z[i];
     return N;
 }
 

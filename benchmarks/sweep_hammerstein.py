@@ -1,7 +1,7 @@
 """A 200-frequency sweep with ``kind = "hammerstein"`` against a rate-independent kind.
 
 Run: ``python benchmarks/sweep_hammerstein.py [--repeat 5] [--inversion zpetc|stable]
-[--iterations-study]``
+[--iterations-study] [--update-sizes]``
 (from the repository root; ``NUMBA_NUM_THREADS`` unset for both cores).
 
 Not a test. Two scenarios on the same plant (the bundled preset with its
@@ -33,6 +33,10 @@ case's tracking error (``rms_error`` of every channel, ``max_euclidean_error``)
 with 1 and 2 iterations to the error with 3 (the default): what the law's
 iterations buy once G is inverted (the cost side is the ``rate-indep., 3
 iterations`` row of the timing).
+
+``--update-sizes`` prints the size of the law's 1st, 2nd and 3rd update on
+some of the Hammerstein cases (:func:`update_sizes`): what an adaptive stop
+of the iterations at a tolerance would save.
 """
 
 from __future__ import annotations
@@ -129,6 +133,47 @@ def iterations_study(min_error=0.05):
               f"{r2.median():11.2f}x {r2.max():8.2f}x")
 
 
+def update_sizes(n_freqs=12, every=3):
+    """Size of each law iteration's update on Hammerstein sweep cases (an adaptive stop's gain).
+
+    Runs the delay law of the benchmark's Hammerstein cases (every ``every``-th
+    of ``n_freqs`` frequencies) sample by sample in numpy, from its fused start
+    (lead reference, ZPETC pre-filter, play states), and prints per case the
+    median ``max_k |dU_k|`` [V] of iterations 1, 2 and 3 and the share of
+    samples whose 2nd (3rd) update is below 1e-9 V or 1e-12 of the input range:
+    the samples on which an adaptive stop at that tolerance would skip an
+    evaluation of ``Gamma``.
+    """
+    from hammerstein.scenario.execute import fade_samples
+
+    with tempfile.TemporaryDirectory() as folder:
+        cases = scenarios(folder, "zpetc", n_freqs)["hammerstein"]
+    print(f"{'case':16s} {'samples':>7s} {'|dU1|':>9s} {'|dU2|':>9s} {'|dU3|':>9s} "
+          f"{'dU2<1e-9V':>10s} {'dU2<1e-12 range':>16s} {'dU3<1e-9V':>10s}  (medians [V], shares)")
+    for c in cases[::every]:
+        law, lead, state = c.compensator.fused_run(c.signal, c.period_samples, fade_samples(c))
+        model = law.model
+        u_prev, _, s, xf = law.split_state(state)
+        Af, Bf, Cf, Df = law.prefilter
+        span = 2.0 * float(np.max(model.input_amplitude))
+        d = np.empty((3, lead.shape[1]))
+        for t in range(lead.shape[1]):
+            target = Cf @ xf + Df @ lead[:, t]
+            xf = Af @ xf + Bf @ lead[:, t]
+            u = u_prev
+            for it in range(3):
+                y, _ = model.evaluate(u, s)
+                du = law.K_inv @ (target - y)
+                d[it, t] = np.max(np.abs(du))
+                u = u + du
+            _, s = model.evaluate(u, s)
+            u_prev = u
+        med = np.median(d, axis=1)
+        print(f"{c.name:16s} {d.shape[1]:7d} {med[0]:9.2e} {med[1]:9.2e} {med[2]:9.2e} "
+              f"{np.mean(d[1] < 1e-9):10.3f} {np.mean(d[1] < 1e-12 * span):16.3f} "
+              f"{np.mean(d[2] < 1e-9):10.3f}")
+
+
 def timed(fn):
     c0, w0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
@@ -144,9 +189,14 @@ def main(argv=None):
     ap.add_argument("--frequencies", type=int, default=200)
     ap.add_argument("--iterations-study", action="store_true",
                     help="tracking errors with 1/2/3 law iterations on scenarios/hammerstein-*.toml")
+    ap.add_argument("--update-sizes", action="store_true",
+                    help="size of each law iteration's update on Hammerstein sweep cases")
     args = ap.parse_args(argv)
     if args.iterations_study:
         iterations_study()
+        return
+    if args.update_sizes:
+        update_sizes()
         return
 
     from hammerstein.scenario.execute import run_case

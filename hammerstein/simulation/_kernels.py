@@ -215,6 +215,66 @@ def _linear(h, A, B, C, D, x, xn, y):
         x[i] = xn[i]
 
 
+@njit(cache=True, inline="always")
+def _sparse_rows(A, B, C, D):
+    """The non-zero entries of ``[[C, D], [A, B]]``, row by row (compressed rows).
+
+    Row l < q is output l, row q + i the update of state i; column j < nx
+    is state j, column nx + k input k. Returns ``(ptr, col, val)``: row l's
+    entries are ``col[ptr[l]:ptr[l+1]]`` and ``val[...]``, in column order.
+    """
+    q = D.shape[0]
+    k = D.shape[1]
+    nx = A.shape[0]
+    ptr = np.zeros(q + nx + 1, dtype=np.int64)
+    col = np.empty((q + nx) * (nx + k), dtype=np.int64)
+    val = np.empty((q + nx) * (nx + k))
+    n = 0
+    for l in range(q + nx):
+        for j in range(nx + k):
+            if l < q:
+                a = C[l, j] if j < nx else D[l, j - nx]
+            else:
+                a = A[l - q, j] if j < nx else B[l - q, j - nx]
+            if a != 0.0:
+                col[n] = j
+                val[n] = a
+                n += 1
+        ptr[l + 1] = n
+    return ptr, col, val
+
+
+@njit(cache=True, inline="always")
+def _sparse_linear(ptr, col, val, q, z, zn, y):
+    """:func:`_linear` on the non-zero entries of :func:`_sparse_rows`.
+
+    ``z`` (nx + k,) holds the state then the input ``h``; ``y = C x + D h``,
+    then the new state ``A x + B h`` replaces ``z[:nx]`` (``zn`` scratch).
+    The reference pre-filter of a Hammerstein compensator (the ZPETC inverse
+    of G: a shift register of past reference samples and a few mode
+    states) has 22 non-zero entries of 100 on the bundled 2x2 plant; summed
+    in column order they differ from the dense sums by rounding only.
+    """
+    nx = uint64(ptr.size - 1) - uint64(q)
+    for l in range(uint64(q)):
+        l = uint64(l)
+        a = 0.0
+        for n in range(uint64(ptr[l]), uint64(ptr[l + 1])):
+            n = uint64(n)
+            a += val[n] * z[uint64(col[n])]
+        y[l] = a
+    for i in range(nx):
+        i = uint64(i)
+        a = 0.0
+        for n in range(uint64(ptr[uint64(q) + i]), uint64(ptr[uint64(q) + i + 1])):
+            n = uint64(n)
+            a += val[n] * z[uint64(col[n])]
+        zn[i] = a
+    for i in range(nx):
+        i = uint64(i)
+        z[i] = zn[i]
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def plant_kernel(u, pi, s, lin, x, y):
     """Hammerstein plant: PI (``PIArrays``) then linear part (``LinearArrays``).
@@ -245,8 +305,8 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     """Reference pre-filter -> compensator -> multivariable PI -> linear dynamics, one loop.
 
     Pre-filter (``law.prefiltered``): ``v = Cf xf + Df Yr(t)``,
-    ``xf <- Af xf + Bf Yr(t)`` (``prefilter`` a ``LinearArrays``); else
-    ``v = Yr(t)``.
+    ``xf <- Af xf + Bf Yr(t)`` (``prefilter`` a ``LinearArrays``, stepped on
+    its non-zero entries, :func:`_sparse_linear`); else ``v = Yr(t)``.
     Compensator (delay): from ``U = U(t-T)``, ``iterations`` times
     ``U <- U + K^-1 (v - Gamma(U; s(t-T)))``, then commit the plays.
     Compensator (low-pass): ``w = U(t-T) - K^-1 Gamma(U(t-T))``,
@@ -282,8 +342,13 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     yhat = np.empty(p)
     v = np.empty(m)
     ref = np.empty(p)
-    yrt = np.empty(p)
-    xfn = np.empty(xf.size)
+    nf = xf.size
+    # the pre-filter on its non-zero entries; z holds its state then yr(t) (copied back to xf)
+    fptr, fcol, fval = _sparse_rows(Af, Bf, Cf, Df)
+    z = np.empty(nf + p)
+    for i in range(nf):
+        z[i] = xf[i]
+    zn = np.empty(nf)
     h = np.empty(pp)
     yt = np.empty(pp)
     xn = np.empty(x.size)
@@ -294,8 +359,8 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     for t in range(n_samples):
         if prefiltered:
             for l in range(p):
-                yrt[l] = yr[l, t]
-            _linear(yrt, Af, Bf, Cf, Df, xf, xfn, ref)
+                z[nf + l] = yr[l, t]
+            _sparse_linear(fptr, fcol, fval, p, z, zn, ref)
         else:
             for l in range(p):
                 ref[l] = yr[l, t]
@@ -338,6 +403,8 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
                 if abs(u[k]) > bound:
                     status = STATUS_BOUND
         if status != STATUS_OK:
+            for i in range(nf):
+                xf[i] = z[i]
             return status, t
         _commit(u, cstart, cr, cs)
         _output(u, cW, cG, cs, yhat)
@@ -349,6 +416,8 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
             _linear(h, A, B, C, D, x, xn, yt)
             for l in range(pp):
                 y_out[l, t] = yt[l]
+    for i in range(nf):
+        xf[i] = z[i]
     return STATUS_OK, n_samples
 
 

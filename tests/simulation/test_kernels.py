@@ -354,6 +354,52 @@ def test_prefilter_equals_the_compensator_on_the_filtered_reference(seed, law):
     np.testing.assert_allclose(np.hstack([u1, u2]), got.inputs, rtol=0, atol=ATOL)
 
 
+def sparse_filter(rng, p, window=4):
+    """Mostly zeros, as a ZPETC inverse's state space: a shift register of the past
+    ``window - 1`` reference samples (entries exactly 1), one stable mode per output fed
+    by the window, taps on the window; a state row and column of zeros besides."""
+    nw = p * (window - 1)
+    n = nw + p + 1                                   # the last state: all-zero row and column
+    A, B = np.zeros((n, n)), np.zeros((n, p))
+    C, D = np.zeros((p, n)), np.diag(rng.uniform(0.5, 1.5, p))
+    for j in range(window - 2):
+        A[j * p:(j + 1) * p, (j + 1) * p:(j + 2) * p] = np.eye(p)
+    B[(window - 2) * p:(window - 1) * p] = np.eye(p)
+    for l in range(p):
+        A[nw + l, nw + l] = rng.uniform(0.2, 0.6)
+        A[nw + l, l::p][:window - 1] = rng.normal(size=window - 1)
+        C[l, l:nw:p] = rng.normal(size=window - 1)
+        C[l, nw + l] = rng.normal()
+    return sim.LinearArrays(A, B, C, D)
+
+
+@pytest.mark.parametrize("p", [1, 2, 3])
+def test_sparse_prefilter_equals_the_written_out_filter(p):
+    """The kernel steps the pre-filter on its non-zero entries: same outputs and final
+    state as the dense filter written out (``filter_loop``), chunked == whole."""
+    rng = np.random.default_rng(620 + p)
+    model = square_model(rng, p)
+    inner = InverseMultiplicativeCompensator(model, iterations=3, check="ignore")
+    f = sparse_filter(rng, p)
+    assert np.count_nonzero(np.hstack([f.A, f.B])) < f.A.size / 2
+    comp = Prefiltered(inner, f)
+    plant = random_plant(rng, square_model(rng, p), True)
+    yr = random_inputs(rng, p, 300)
+    x0 = rng.normal(size=f.A.shape[0])
+    x0[-1] = 0.0
+    state0 = np.concatenate([np.zeros(p + model.n_hysterons), x0])
+    v, xf_final = filter_loop(f, yr, x0)
+    expected = sim.simulate_chain(inner, plant, v)
+    got = sim.simulate_chain(comp, plant, yr, state0)
+    np.testing.assert_allclose(got.inputs, expected.inputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(got.outputs, expected.outputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(got.compensator_state[-x0.size:], xf_final, rtol=0, atol=ATOL)
+    a = sim.simulate_chain(comp, plant, yr[:, :137], state0)
+    b = sim.simulate_chain(comp, plant, yr[:, 137:], a.compensator_state, a.plant_state)
+    np.testing.assert_array_equal(np.hstack([a.outputs, b.outputs]), got.outputs)
+    np.testing.assert_array_equal(b.compensator_state, got.compensator_state)
+
+
 @pytest.mark.parametrize("feedback", ["delay", "lowpass"])
 def test_empty_prefilter_is_the_exact_identity(feedback):
     rng = np.random.default_rng(610)
