@@ -6,6 +6,7 @@ which imports the numerical stack once instead of once per process: about
 """
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -68,6 +69,8 @@ def _jobs(tmp):
 @pytest.fixture(scope="session")
 def forked_cli(tmp_path_factory):
     """Results of the jobs of :func:`_jobs`, by name: ``(dict(status, stdout, stderr), tmp)``."""
+    if not hasattr(os, "fork"):
+        pytest.skip("needs os.fork (the processes are forked children of one interpreter)")
     tmp = tmp_path_factory.mktemp("forked-cli")
     jobs = _jobs(tmp)
     names = list(jobs)
