@@ -237,12 +237,23 @@ def test_update_keeps_a_hand_written_baseline(capsys, tmp_path):
 
 
 # -- 3. concurrent check --update of one baseline ------------------------------------------
-# Two processes in the default suite (each `python -m hammerstein` costs 1-2 s of CPU, mostly
-# imports); the slow job runs four at once, as before.
-@pytest.mark.parametrize("n", [2, pytest.param(4, marks=pytest.mark.slow)])
-def test_3_concurrent_updates_all_land(tmp_path, n):
+# Two processes at the same time in the default suite (forked children of one interpreter:
+# tests/cli/forked_cli.py); the slow job runs four fresh processes at once, as before.
+def test_3_concurrent_updates_all_land(forked_cli):
+    results, tmp = forked_cli
+    n = sum(name.startswith("update-") for name in results)
+    assert n >= 2
+    runs = [results[f"update-{i}"] for i in range(n)]
+    assert [r["status"] for r in runs] == [0] * n, [r["stderr"] for r in runs]
+    from hammerstein.scenario.regression import read_baseline
+    assert sorted(set(read_baseline(tmp / "base.csv")["scenario"])) == [f"c{i}" for i in range(n)]
+
+
+@pytest.mark.slow
+def test_3_concurrent_updates_all_land_fresh_processes(tmp_path):
     import subprocess
     import sys
+    n = 4
     base = tmp_path / "base.csv"
     procs = []
     for i in range(n):
@@ -304,6 +315,28 @@ def _children(pid):
 
 
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
+def test_8_sigkill_of_a_run_ends_its_workers(forked_cli):
+    # a `python -m hammerstein run` of two scenarios (tests/cli/conftest.py) SIGKILLed once its
+    # figure workers exist: none of them outlives it (20 s allowed)
+    run = forked_cli[0]["sigkill-workers"]
+    if not run["signalled"]:
+        pytest.skip("the run finished before its figure workers were seen")
+    assert run["status"] == -9 and run["workers"]
+    assert run["workers_alive"] == []
+
+
+def test_8_sighup_is_an_interruption(forked_cli):
+    import signal
+    results, tmp = forked_cli
+    run = results["sighup"]
+    if not run["signalled"]:
+        pytest.skip("the run finished before the signal arrived")
+    assert run["status"] == 128 + signal.SIGHUP and run["stderr"] == "interrupted\n", run["stderr"]
+    assert not [p for p in (tmp / "sighup").iterdir() if p.name.startswith(TMP_PREFIX)]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 def test_8_sigkill_of_a_piped_run_ends_its_workers(tmp_path):
     import signal
     import subprocess
@@ -326,17 +359,6 @@ def test_8_sigkill_of_a_piped_run_ends_its_workers(tmp_path):
     alive = [w for w in workers if Path(f"/proc/{w}").exists()
              and " Z " not in Path(f"/proc/{w}/stat").read_text()]
     assert alive == []
-
-
-def test_8_sighup_is_an_interruption(tmp_path):
-    import signal
-    proc, out = _start_run(tmp_path, [GOOD])
-    proc.send_signal(signal.SIGHUP)
-    _, stderr = proc.communicate(timeout=120)
-    if proc.returncode == 0:
-        pytest.skip("the run finished before the signal arrived")
-    assert proc.returncode == 128 + signal.SIGHUP and stderr == "interrupted\n", stderr
-    assert not [p for p in out.iterdir() if p.name.startswith(TMP_PREFIX)]
 
 
 # -- 12. a killed figure worker: the figures are drawn inline ----------------------------
@@ -375,33 +397,52 @@ def _cli(args, **kw):
 
 
 @pytest.mark.parametrize("close", ["stdout", "stderr"])
-@pytest.mark.parametrize("argv", [["validate", GOOD], ["list"], ["--version"]])
-def test_10_closed_stdio_keeps_the_exit_status(argv, close):
-    import subprocess
-    import sys
-    fd = 1 if close == "stdout" else 2
-    proc = subprocess.run([sys.executable, "-c",
-                           f"import os, runpy, sys; os.close({fd}); sys.argv = ['hammerstein', "
-                           f"*{[str(a) for a in argv]!r}]; runpy.run_module('hammerstein', "
-                           f"run_name='__main__')"],
-                          stdout=subprocess.PIPE if fd == 2 else None,
-                          stderr=subprocess.PIPE if fd == 1 else None, text=True, timeout=300)
-    assert proc.returncode == 0
-    assert "Traceback" not in ((proc.stderr or "") + (proc.stdout or ""))
+@pytest.mark.parametrize("argv", ["validate", "list", "version"])
+def test_10_closed_stdio_keeps_the_exit_status(forked_cli, argv, close):
+    # a process whose fd 1 or 2 is closed before `python -m hammerstein` starts its command
+    run = forked_cli[0][f"closed-{close}-{argv}"]
+    assert run["status"] == 0
+    assert "Traceback" not in ((run["stderr"] or "") + (run["stdout"] or ""))
 
 
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
-def test_10_full_stdout_is_an_error():
-    import subprocess
-    import sys
-    with open("/dev/full", "w") as full:
-        proc = subprocess.run([sys.executable, "-m", "hammerstein", "validate", str(GOOD)],
-                              stdout=full, stderr=subprocess.PIPE, text=True, timeout=300)
-    assert proc.returncode == 1
-    lines = proc.stderr.splitlines()
+def test_10_full_stdout_is_an_error(forked_cli):
+    run = forked_cli[0]["full-stdout"]
+    assert run["status"] == 1
+    lines = run["stderr"].splitlines()
     assert len(lines) == 1 and "cannot write the output" in lines[0]
 
 
+# Variables read at the interpreter's or a dependency's start-up need a fresh process; the
+# independent ones share it: two bad dependency variables (one note line each, the command
+# still succeeds and draws its figure with Agg) and an ASCII stdout (13).
+def test_11_13_start_up_variables_in_one_fresh_process(tmp_path):
+    env = {**os.environ, "NUMBA_NUM_THREADS": "x", "MPLBACKEND": "bogus",
+           "PYTHONIOENCODING": "ascii"}
+    proc = _cli(["identify", *IDENTIFY, "--out", tmp_path / "m.toml", "--plot", tmp_path / "m.png"],
+                env=env)
+    assert proc.returncode == 0, proc.stderr
+    assert "wrote" in proc.stdout                                   # 13: after writing, no failure
+    assert (tmp_path / "m.png").read_bytes()[:4] == b"\x89PNG"      # drawn although MPLBACKEND is bad
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 2, lines
+    for var, line in zip(("NUMBA_NUM_THREADS", "MPLBACKEND"), lines):
+        assert var in line and "ignored" in line, line
+
+
+@pytest.mark.parametrize("var,value", [("NUMBA_NUM_THREADS", "0"), ("NUMBA_NUM_THREADS", "x"),
+                                       ("NUMBA_NUM_THREADS", "-3"), ("MPLBACKEND", "bogus")])
+def test_11_bad_dependency_variables_are_removed_with_one_note(monkeypatch, capsys, var, value):
+    import hammerstein.cli.main as cli
+    monkeypatch.setenv(var, value)
+    monkeypatch.setattr(cli, "_writable_dir", lambda p: True)
+    notes = cli._prepare_environment()
+    assert len(notes) == 1 and var in notes[0] and "ignored" in notes[0]
+    assert var not in os.environ
+    assert capsys.readouterr().err.splitlines() == notes
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("var,value", [("NUMBA_NUM_THREADS", "0"), ("NUMBA_NUM_THREADS", "x"),
                                        ("MPLBACKEND", "bogus")])
 def test_11_bad_dependency_variables_are_one_line(tmp_path, var, value):
@@ -424,6 +465,7 @@ def test_11_unwritable_numba_cache_falls_back(tmp_path, monkeypatch, capsys):
     assert where.is_dir() and where.parent == tmp_path and (where.stat().st_mode & 0o077) == 0
 
 
+@pytest.mark.slow
 def test_13_ascii_stdout_does_not_fail_after_writing(tmp_path):
     proc = _cli(["identify", *IDENTIFY, "--out", tmp_path / "m.toml"],
                 env={**os.environ, "PYTHONIOENCODING": "ascii"})

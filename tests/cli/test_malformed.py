@@ -13,9 +13,6 @@ Each corpus file is listed below with a fragment its error must contain
 (the key path and what was expected), so a new corpus file needs an entry.
 """
 
-import os
-import subprocess
-import sys
 import warnings
 from pathlib import Path
 
@@ -389,21 +386,21 @@ def test_stray_python_warning_and_unexpected_error_are_one_line(capsys, monkeypa
     assert err[0].startswith("hammerstein list: error: unexpected TypeError: bug; with two lines")
 
 
-def test_real_stderr_through_python_m(tmp_path):
-    """The console entry (python -m hammerstein): the real stderr, no traceback."""
+def test_real_stderr_through_python_m(forked_cli):
+    """The console entry (python -m hammerstein): the real stderr, no traceback (its
+    process: tests/cli/conftest.py, with Python's default warning filter)."""
+    results, tmp = forked_cli
+    run = results["real-stderr"]
     bad = CORPUS / "scenarios" / "unknown-reference-key.toml"
     warn = GOOD / "warn-out-of-range.toml"
-    env = {**os.environ, "PYTHONWARNINGS": "default"}
-    run = subprocess.run([sys.executable, "-m", "hammerstein", "run", GOOD / "good-static-2.toml",
-                          bad, warn, "--out", tmp_path / "out", "--figures", "none"],
-                         capture_output=True, text=True, env=env, timeout=120)
-    lines = run.stderr.splitlines()
-    assert run.returncode == 1 and "Traceback" not in run.stderr, run.stderr
+    lines = run["stderr"].splitlines()
+    assert run["status"] == 1 and "Traceback" not in run["stderr"], run["stderr"]
     assert len(lines) == 2
     assert lines[0] == (f"error: {bad}: cases[0].reference.amplitud: unknown key (did you mean "
                         f"'amplitude'?); cases[0].reference.amplitude: missing (required)")
     assert lines[1].startswith(f"warning: {warn}: beyond-range: reference: beyond the range")
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["good-static-2", "warn-out-of-range"]
+    assert sorted(p.name for p in (tmp / "real-stderr").iterdir()) == ["good-static-2",
+                                                                      "warn-out-of-range"]
 
 
 # -- numerical guards (issue 6, item 2) through the Python API ---------------------------

@@ -68,17 +68,46 @@ def _fresh(code):
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-def _loaded_snippet():
-    return ("import json, sys; print(json.dumps(sorted({k.split('.')[0] for k in sys.modules} "
-            f"& set({HEAVY!r}))))")
+# One fresh interpreter goes through three steps, each a snapshot of what it has loaded:
+# `import hammerstein`, then one name of the lazy face, then the core used with matplotlib
+# and tqdm made unimportable (they are not loaded yet: the second snapshot says so).
+_STEPS = """
+import json, sys
+heavy = set(%r)
+def loaded():
+    return sorted({k.split('.')[0] for k in sys.modules} & heavy)
+snapshots = {}
+import hammerstein
+snapshots["import hammerstein"] = loaded()
+from hammerstein import MultivariablePI
+snapshots["MultivariablePI"] = loaded()
+sys.modules["matplotlib"] = None          # importing them now raises ImportError
+sys.modules["tqdm"] = None
+import numpy as np
+from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
+                         PrandtlIshlinskii, simulate_chain)
+model = MultivariablePI([[PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5]), 0.05],
+                         [None, PrandtlIshlinskii([0.0, 2.0], [1.0, 0.3])]],
+                        input_amplitude=[10.0, 10.0])
+reference = np.vstack([np.linspace(0, 4, 50), np.linspace(0, -3, 50)])
+result = simulate_chain(InverseMultiplicativeCompensator(model), HammersteinPlant(model, 1e-4),
+                        reference)
+snapshots["tracking error"] = float(np.max(np.abs(result.outputs - reference)))
+print(json.dumps(snapshots))
+""" % (HEAVY,)
 
 
-def test_import_hammerstein_loads_no_third_party_package():
-    assert _fresh("import hammerstein; " + _loaded_snippet()) == []
+@pytest.fixture(scope="module")
+def fresh_steps():
+    return _fresh(_STEPS)
 
 
-def test_lazy_face_loads_what_a_name_needs():
-    loaded = _fresh("from hammerstein import MultivariablePI; " + _loaded_snippet())
+def test_import_hammerstein_loads_no_third_party_package(fresh_steps):
+    assert fresh_steps["import hammerstein"] == []
+
+
+def test_lazy_face_loads_what_a_name_needs(fresh_steps):
+    loaded = fresh_steps["MultivariablePI"]
     assert "numpy" in loaded
     assert not {"control", "pandas", "matplotlib", "tqdm"} & set(loaded)
 
@@ -92,21 +121,6 @@ def test_every_public_name_resolves_and_dir_lists_it():
         hammerstein.no_such_name
 
 
-def test_core_runs_without_matplotlib_and_tqdm():
-    code = """
-import json, sys
-sys.modules["matplotlib"] = None          # importing them now raises ImportError
-sys.modules["tqdm"] = None
-import numpy as np
-from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
-                         PrandtlIshlinskii, simulate_chain)
-model = MultivariablePI([[PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5]), 0.05],
-                         [None, PrandtlIshlinskii([0.0, 2.0], [1.0, 0.3])]],
-                        input_amplitude=[10.0, 10.0])
-reference = np.vstack([np.linspace(0, 4, 50), np.linspace(0, -3, 50)])
-result = simulate_chain(InverseMultiplicativeCompensator(model), HammersteinPlant(model, 1e-4),
-                        reference)
-print(json.dumps(float(np.max(np.abs(result.outputs - reference)))))
-"""
+def test_core_runs_without_matplotlib_and_tqdm(fresh_steps):
     # the compensator inverts its own model: the static plant tracks the ramp
-    assert _fresh(code) < 0.5
+    assert fresh_steps["tracking error"] < 0.5
