@@ -20,6 +20,14 @@ given the two layouts of equal matrices, returned different (equally valid)
 bases; the start drive of ``ilc-realistic-2dof`` then moved by 3e-12 V and
 the learning's trial-by-trial decisions carried that to 1.5e-8 µm in the
 metrics (measured; cold and warm caches now agree bit for bit).
+
+An identification runs with one BLAS thread (:func:`threadpoolctl.threadpool_limits`
+around ``compute``): OpenBLAS with 2 threads splits the least-squares products
+otherwise, and the identified weights moved in their 13th digit (measured on
+``hammerstein-trajectories``: ``OPENBLAS_NUM_THREADS=2`` changed every PI weight by
+up to 1e-12 relative, the numba threads nothing), so that an entry written on one
+machine gave other numbers than a fresh run on another. The command line sets one
+BLAS thread already unless ``OPENBLAS_NUM_THREADS`` says otherwise.
 """
 
 from __future__ import annotations
@@ -28,6 +36,7 @@ import hashlib
 import json
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.hysteresis import MultivariablePI
@@ -218,7 +227,8 @@ class IdentificationCache:
             return self._entries[full]
         value = self._from_disk(kind, key, load) if self.disk and load is not None else None
         if value is None:
-            value = compute()
+            with threadpool_limits(limits=1, user_api="blas"):
+                value = compute()
             stored = dump(value) if dump is not None and load is not None else None
             if stored is not None:
                 if self.disk:
