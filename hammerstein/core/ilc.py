@@ -185,19 +185,40 @@ def error_summary(reference, outputs, window=slice(None), iteration=0):
 
 
 def estimate_delay(reference, measured, max_lag):
-    """Delay of a measured record behind a reference, by cross-correlation [samples].
+    """Delay of a measured record behind a reference, by normalised cross-correlation [samples].
+
+    The lag ``k`` in ``-L..L`` (``L = min(max_lag, (n - 1) // 3)``) that
+    maximises the normalised cross-correlation over one fixed window of the
+    reference, ``t = L .. n - L - 1``::
+
+        rho(k) = sum_t a(t) b(t + k) / sqrt(sum_t b(t + k)^2)
+
+    ``a``, ``b`` the channels (stacked) with their means over the window
+    removed. By the Cauchy-Schwarz inequality ``rho(k)`` is largest where
+    ``b(t + k)`` is proportional to ``a(t)``: a record that is the reference
+    delayed by ``d`` samples (``d <= L``, the first samples held at rest)
+    gives exactly ``d``. The plain sum ``sum_t a(t) b(t + k)`` over the
+    overlap ``n - |k|`` is biased towards 0 by the shrinking overlap, by
+    ``P^2 / (4 pi^2 n)`` samples for a sinusoid of P samples (2 samples
+    found short for a 10 Hz circle of 12 periods at 20 kHz). Cross-correlation
+    delay estimation: C. H. Knapp and G. C. Carter, IEEE Trans. ASSP 24(4),
+    320-327, 1976.
+
+    For a reference that repeats with period P, a delay is found only
+    modulo P: keep ``max_lag`` below P / 2.
 
     Parameters
     ----------
     reference, measured : array_like, shape (p, n_samples)
-        Summed over channels after removing each channel's mean.
+        [any unit, the same for both]; ``measured`` at least as long as
+        ``reference`` (only its first n_samples are used).
     max_lag : int
-        Largest delay searched (both signs).
+        Largest delay searched (both signs) [samples].
 
     Returns
     -------
     int
-        d > 0 when ``measured(t) ~ reference(t - d)``.
+        d > 0 when ``measured(t) ~ reference(t - d)``; 0 for a constant record.
 
     Examples
     --------
@@ -207,20 +228,26 @@ def estimate_delay(reference, measured, max_lag):
     4
     """
     a = np.atleast_2d(np.asarray(reference, dtype=float))
-    b = np.atleast_2d(np.asarray(measured, dtype=float))
-    a = a - a.mean(axis=1, keepdims=True)
-    b = b - b.mean(axis=1, keepdims=True)
     n = a.shape[1]
-    L = int(min(max_lag, n - 1))
-    best, arg = -np.inf, 0
-    for d in range(-L, L + 1):
-        if d >= 0:
-            c = float(np.sum(a[:, :n - d] * b[:, d:]))
-        else:
-            c = float(np.sum(a[:, -d:] * b[:, :n + d]))
-        if c > best:
-            best, arg = c, d
-    return arg
+    b = np.atleast_2d(np.asarray(measured, dtype=float))[:, :n]
+    L = int(max(0, min(int(max_lag), (n - 1) // 3)))
+    W = n - 2 * L
+    if W < 2:
+        return 0
+    aw = a[:, L:n - L]
+    aw = aw - aw.mean(axis=1, keepdims=True)
+    # sum over channels and window of a(t) b(t + k), k = -L..L: one 'valid' correlation per channel
+    cross = sum(_scipy_signal().correlate(b[i], aw[i], mode="valid") for i in range(a.shape[0]))
+    c1 = np.concatenate([np.zeros((b.shape[0], 1)), np.cumsum(b, axis=1)], axis=1)
+    c2 = np.concatenate([np.zeros((b.shape[0], 1)), np.cumsum(b * b, axis=1)], axis=1)
+    s1 = c1[:, W:] - c1[:, :-W]                 # window sums of b from each start s = 0..2L
+    s2 = c2[:, W:] - c2[:, :-W]
+    energy = np.sum(np.maximum(s2 - s1 * s1 / W, 0.0), axis=0)    # of b minus its window mean
+    scale = np.max(energy) if energy.size else 0.0
+    if not scale > 0:
+        return 0
+    rho = np.where(energy > 1e-12 * scale, cross / np.sqrt(np.maximum(energy, 1e-300)), -np.inf)
+    return int(np.argmax(rho)) - L
 
 
 def periodic_average(signal_, period_samples, start):

@@ -49,7 +49,7 @@ from pathlib import Path
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape, safe_write
 
 __all__ = ["cache_dir", "code_digest", "entry_path", "load", "store", "ENV", "set_reporter",
-           "trust_problem", "note"]
+           "trust_problem", "note", "same_data"]
 
 #: Environment variable naming the cache directory (``off`` or empty: no cache).
 ENV = "HAMMERSTEIN_CACHE_DIR"
@@ -287,14 +287,24 @@ def _entry_problem(entry, kind, key):
     return None
 
 
-def _same(a, b):
-    """Equal JSON data, NaN equal to NaN, and of the same types (no tuple for a list)."""
+def same_data(a, b):
+    """Equal JSON data, NaN equal to NaN, and of the same types (no tuple for a list).
+
+    Parameters
+    ----------
+    a, b : object
+        JSON data (dicts, lists, str, int, float, bool, None).
+
+    Returns
+    -------
+    bool
+    """
     if type(a) is not type(b):
         return False
     if isinstance(a, dict):
-        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+        return a.keys() == b.keys() and all(same_data(a[k], b[k]) for k in a)
     if isinstance(a, list):
-        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+        return len(a) == len(b) and all(same_data(x, y) for x, y in zip(a, b))
     if isinstance(a, float):
         return a == b or (a != a and b != b)
     return a == b
@@ -336,7 +346,7 @@ def store(kind, key, value):
                            "digest": _value_digest(value), "value": value}, allow_nan=True)
     except (TypeError, ValueError, RecursionError):
         return False
-    if not _same(json.loads(text)["value"], value):   # tuples or numpy scalars do not round-trip
+    if not same_data(json.loads(text)["value"], value):   # tuples or numpy scalars do not round-trip
         return False
     try:
         safe_write(path, text, "identification cache entry")
