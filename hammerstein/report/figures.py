@@ -555,8 +555,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     for a in (axt, axu, axe, axn):
         a.grid(True, alpha=0.3)
         a.set_xlim(t[0], t[-1])
-    plt.setp(axt.get_xticklabels(), visible=False)
-    plt.setp(axe.get_xticklabels(), visible=False)
+    for a in (axt, axe):       # x labels under (d) and (e) only; not get_xticklabels (ticks now)
+        a.tick_params(labelbottom=False)
     notes = {axe: "", axn: ""}
     if transient:
         _settled_ylim(axe, [e[:, steady]])
