@@ -48,6 +48,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from hammerstein.report.figures import save
 
 __all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "job_key", "WORKERS",
@@ -122,6 +124,26 @@ LATE_WORKERS = 1
 REMEMBERED = 64
 
 
+def _array_values(dtype, shape, data):
+    """Stands for an array in :func:`job_key`'s pickle (never called: the pickle is only hashed)."""
+    raise NotImplementedError
+
+
+class _KeyPickler(pickle.Pickler):
+    """Pickles every numeric array by its dtype, shape and values in C order.
+
+    numpy pickles a Fortran-ordered array differently from a C-ordered one
+    holding the same values; an identification computed in the run gives
+    Fortran-ordered matrices and the same one read from the on-disk cache
+    C-ordered ones, so their Bode plots were not recognised as equal.
+    """
+
+    def reducer_override(self, obj):
+        if isinstance(obj, np.ndarray) and not obj.dtype.hasobject:
+            return _array_values, (obj.dtype.str, obj.shape, np.ascontiguousarray(obj).tobytes())
+        return NotImplemented
+
+
 def job_key(job):
     """Hash of a job's function and arguments: equal keys draw equal PNGs.
 
@@ -133,14 +155,17 @@ def job_key(job):
     -------
     bytes or None
         16-byte BLAKE2 digest of the pickled ``(module, name, args,
-        kwargs)``; None when they do not pickle.
+        kwargs)``, numeric arrays pickled by dtype, shape and values (not
+        their memory layout); None when they do not pickle.
     """
+    buffer = io.BytesIO()
     try:
-        blob = pickle.dumps((job.function.__module__, job.function.__qualname__, job.args,
-                             sorted(job.kwargs.items())), protocol=pickle.HIGHEST_PROTOCOL)
+        _KeyPickler(buffer, protocol=pickle.HIGHEST_PROTOCOL).dump(
+            (job.function.__module__, job.function.__qualname__, job.args,
+             sorted(job.kwargs.items())))
     except Exception:  # an argument that does not pickle: no copy, draw it
         return None
-    return hashlib.blake2b(blob, digest_size=16).digest()
+    return hashlib.blake2b(buffer.getvalue(), digest_size=16).digest()
 
 
 def _settle(future, done, path=None):

@@ -49,3 +49,23 @@ def test_default_workers_leave_a_core_to_the_main_process():
     assert 1 <= render.WORKERS <= 2
     assert render.WORKERS <= max(1, cores - 1)
     assert FigureRenderer().workers in (0, render.WORKERS)       # 0 where fork is unavailable
+
+
+def test_job_key_depends_on_array_values_not_memory_layout():
+    from hammerstein.report.render import FigureJob, job_key
+    a = np.arange(12.0).reshape(3, 4)
+    f = np.asfortranarray(a)
+    assert f.flags.f_contiguous and not f.flags.c_contiguous
+
+    def key(*args, **kwargs):
+        return job_key(FigureJob(Path("x.png"), plots.loop_grid, args, kwargs))
+    assert key({"C": a}, [a]) == key({"C": f}, [f])                 # cached vs fresh identification
+    assert key(a[:, ::2]) == key(np.ascontiguousarray(a[:, ::2]))  # strided view
+    assert key(a) != key(a.reshape(4, 3))                           # same bytes, other shape
+    assert key(a) != key(a.astype(np.float32))                      # other dtype
+    b = a.copy()
+    b[2, 3] = np.nextafter(b[2, 3], 20.0)
+    assert key(a) != key(b)                                          # one value, one ulp apart
+    assert key(k=a) != key(a)                                        # keyword vs positional
+    objects = np.array([1, "a"], dtype=object)                       # pickled as numpy does
+    assert key(objects) == key(objects.copy())
