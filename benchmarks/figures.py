@@ -22,11 +22,9 @@ wall time. Other processes on the machine inflate the numbers (the load
 average is printed).
 
 ``--encoding`` draws every figure once and prints, for the PNG encodings
-:func:`hammerstein.report.figures.save` could use (Pillow's writer, which
-matplotlib's ``savefig`` uses, in RGBA or RGB: the canvas is opaque; zlib
-levels 1, 3, 6; and :func:`hammerstein.report.figures.png_bytes`, which
-``save`` uses), the CPU time to encode all of them and their total size
-(``--paper --encoding``: on the paper run's figures).
+:func:`hammerstein.report.figures.save` could use (RGBA as matplotlib's
+``savefig`` writes it, or RGB: the canvas is opaque; zlib levels 1, 3, 6),
+the CPU time to encode all of them and their total size.
 
 ``--phases`` draws every figure once to warm the caches, then once more and
 prints where the CPU goes (inclusive process time summed over the figures):
@@ -171,67 +169,39 @@ def cases():
     return out
 
 
-def encodings(repeat, paper_run=False):
-    """Print CPU time and size of every figure's PNG per encoding (writer, mode, zlib level).
-
-    Pillow's writer (as matplotlib's ``savefig`` uses it: adaptive filter per
-    row) in RGBA and RGB at zlib levels 1, 3, 6, and
-    :func:`hammerstein.report.figures.png_bytes` ("Up" filter on every row,
-    level 1, what :func:`hammerstein.report.figures.save` writes); every
-    encoding decodes to the same pixels (checked here).
-
-    Parameters
-    ----------
-    repeat : int
-        Encodings of the set (the smallest CPU time is shown).
-    paper_run : bool
-        The figures of the paper run (:func:`paper_jobs`) instead of :func:`cases`.
-    """
+def encodings(repeat):
+    """Print CPU time and size of every figure's PNG per encoding (mode, zlib level)."""
     import io
 
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from PIL import Image
 
-    builders = ([(lambda job=job: job.function(*job.args, **job.kwargs)) for _, job in paper_jobs()]
-                if paper_run else [build for _, build in cases()])
     images = []
-    for build in builders:
+    for _, build in cases():
         fig = build()
         plots._ticks_in_view(fig)
         fig.set_dpi(plots.DPI)
-        canvas = plots._Canvas(fig)
+        canvas = FigureCanvasAgg(fig)
         canvas.draw()
         images.append(Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(),
                                        "raw", "RGBA", 0, 1).copy())
         plots.plt.close(fig)
     print(f"{len(images)} figures, {sum(i.width * i.height for i in images) / 1e6:.1f} Mpixel; "
           f"encoding CPU best of {repeat}")
-    print(f"{'writer':<10} {'mode':<6} {'zlib level':>10} {'cpu [ms]':>9} {'size [kB]':>10}")
-    rgb = [np.asarray(image.convert("RGB")) for image in images]
-
-    def pillow(mode, level):
-        out = []
-        for image in images:
-            buffer = io.BytesIO()
-            (image if mode == "RGBA" else image.convert("RGB")).save(
-                buffer, format="png", compress_level=level)
-            out.append(buffer.getvalue())
-        return out
-
-    variants = [("Pillow", mode, level, (lambda mode=mode, level=level: pillow(mode, level)))
-                for mode in ("RGBA", "RGB") for level in (1, 3, 6)]
-    variants.append(("png_bytes", "RGB", 1, lambda: [plots.png_bytes(a) for a in rgb]))
-    for writer, mode, level, encode in variants:
-        best = None
-        for _ in range(repeat):
-            c0 = time.process_time()
-            files = encode()
-            cpu = time.process_time() - c0
-            best = cpu if best is None else min(best, cpu)
-        for data, pixels in zip(files, rgb):                # lossless, whatever the writer
-            decoded = np.asarray(Image.open(io.BytesIO(data)).convert("RGB"))
-            assert np.array_equal(decoded, pixels), f"{writer} {mode} {level}: pixels differ"
-        size = sum(len(data) for data in files)
-        print(f"{writer:<10} {mode:<6} {level:>10} {best * 1e3:9.1f} {size / 1e3:10.0f}")
+    print(f"{'mode':<6} {'zlib level':>10} {'cpu [ms]':>9} {'size [kB]':>10}")
+    for mode in ("RGBA", "RGB"):
+        for level in (1, 3, 6):
+            best = None
+            for _ in range(repeat):
+                c0, size = time.process_time(), 0
+                for image in images:
+                    out = io.BytesIO()
+                    (image if mode == "RGBA" else image.convert("RGB")).save(
+                        out, format="png", compress_level=level)
+                    size += out.tell()
+                cpu = time.process_time() - c0
+                best = cpu if best is None else min(best, cpu)
+            print(f"{mode:<6} {level:>10} {best * 1e3:9.1f} {size / 1e3:10.0f}")
 
 
 def phases(paper_run=False):
@@ -277,7 +247,7 @@ def phases(paper_run=False):
             (plots._TextCachingRenderer, "draw_text", "    glyphs laid out and rasterised"),
             (mtext.Text, "_get_layout", "    text measured (layout)"),
             (Axes, "__init__", "axes created (build and draw)"),
-            (plots, "png_bytes", "PNG encoding")]
+            (Image.Image, "save", "PNG encoding")]
     if paper_run:
         builders = [(job.path.name, (lambda job=job: job.function(*job.args, **job.kwargs)))
                     for _, job in paper_jobs()]
@@ -380,7 +350,7 @@ def paper(repeat):
     for _, job in jobs:                                   # warm: fonts, mathtext, lazy imports
         plots.save(job.function(*job.args, **job.kwargs), io.BytesIO())
     spent = {}
-    draw, encode = FigureCanvasAgg.draw, plots.png_bytes
+    draw, encode = FigureCanvasAgg.draw, Image.Image.save
 
     def timed(original, key):
         def wrapper(*args, **kwargs):
@@ -391,7 +361,7 @@ def paper(repeat):
                 spent[key] = spent.get(key, 0.0) + time.process_time() - c0
         return wrapper
 
-    FigureCanvasAgg.draw, plots.png_bytes = timed(draw, "draw"), timed(encode, "encode")
+    FigureCanvasAgg.draw, Image.Image.save = timed(draw, "draw"), timed(encode, "encode")
     rows = []
     try:
         for scenario, job in jobs:
@@ -408,7 +378,7 @@ def paper(repeat):
             rows.append((f"{scenario[:24]}/{job.path.name}", job.function.__name__,
                          best))
     finally:
-        FigureCanvasAgg.draw, plots.png_bytes = draw, encode
+        FigureCanvasAgg.draw, Image.Image.save = draw, encode
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"{len(rows)} figures of the paper run (each drawn once), CPU [ms], best of "
           f"{repeat}; load average {load:.2f}")
@@ -431,9 +401,6 @@ def main(argv=None):
                     help="CPU time of every figure of the paper run (its own data) instead; "
                          "with --phases, its CPU time per drawing phase")
     args = ap.parse_args(argv)
-    if args.encoding:
-        encodings(args.repeat, paper_run=args.paper)
-        return
     if args.paper and args.phases:
         phases(paper_run=True)
         return
@@ -442,6 +409,9 @@ def main(argv=None):
         return
     if args.phases:
         phases()
+        return
+    if args.encoding:
+        encodings(args.repeat)
         return
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"figure functions, best of {args.repeat} (ms); load average {load:.2f}; "

@@ -24,7 +24,6 @@ import contextlib
 import math
 import textwrap
 import threading
-import zlib
 
 import matplotlib
 
@@ -37,11 +36,12 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hi
 from matplotlib.ft2font import RenderMode  # noqa: E402
 from matplotlib.ticker import Locator, LogFormatterSciNotation, NullLocator  # noqa: E402
 from PIL import Image  # noqa: E402
+from PIL.PngImagePlugin import PngInfo  # noqa: E402
 
 __all__ = ["plain_log_labels", "loop_grid", "decorate_grid", "trajectory_figure", "divergence_figure", "xy_overlay",
            "raster_error_map", "save", "scenario_prefix", "grid_figure", "decimate",
            "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
-           "MAX_POINTS", "DPI", "png_bytes"]
+           "MAX_POINTS", "DPI"]
 
 #: Largest number of points drawn per line: a 15-inch figure at :data:`DPI` is
 #: 1800 pixels wide, so 2 points (min and max) per pixel column of a panel.
@@ -998,82 +998,15 @@ class _Canvas(FigureCanvasAgg):
         return self.renderer
 
 
-def _png_chunk(kind, data):
-    return (len(data).to_bytes(4, "big") + kind + data
-            + zlib.crc32(data, zlib.crc32(kind)).to_bytes(4, "big"))
-
-
-def png_bytes(pixels, text=()):
-    """Encode 8-bit RGB or RGBA pixels as a PNG file, every row with the "Up" filter.
-
-    PNG (ISO/IEC 15948, W3C PNG specification, 2nd ed.): signature, ``IHDR``
-    (bit depth 8, colour type 2 for RGB or 6 for RGBA, no interlace),
-    optional ``tEXt`` chunks, one ``IDAT`` with the zlib stream (level 1) of
-    the filtered rows, ``IEND``. Each row is stored minus the row above
-    (filter type 2, "Up", modulo 256; the first row as it is): on figures,
-    mostly uniform areas and axis-parallel lines, that compresses about as
-    well as Pillow's adaptive choice among the five filters per row (5.33 MB
-    instead of 5.21 MB for the paper run's figures) in about a third of
-    Pillow's encoding CPU, which goes mostly into trying every filter on
-    every row (``benchmarks/figures.py --encoding``). Lossless: decoding
-    gives ``pixels`` back exactly.
-
-    Parameters
-    ----------
-    pixels : numpy.ndarray of uint8, shape (height, width, 3) or (height, width, 4)
-        RGB or RGBA rows, top row first.
-    text : sequence of (str, str)
-        ``tEXt`` keyword and value pairs (Latin-1).
-
-    Returns
-    -------
-    bytes
-        The PNG file.
-
-    Raises
-    ------
-    ValueError
-        If ``pixels`` is not a non-empty uint8 array of shape
-        (height, width, 3 or 4).
-
-    Examples
-    --------
-    >>> import io, numpy as np
-    >>> from PIL import Image
-    >>> rgb = np.arange(2 * 3 * 3, dtype=np.uint8).reshape(2, 3, 3)
-    >>> np.array_equal(np.asarray(Image.open(io.BytesIO(png_bytes(rgb)))), rgb)
-    True
-    """
-    pixels = np.asarray(pixels)
-    if (pixels.dtype != np.uint8 or pixels.ndim != 3 or pixels.shape[2] not in (3, 4)
-            or pixels.shape[0] == 0 or pixels.shape[1] == 0):
-        raise ValueError(f"pixels: expected a non-empty uint8 array of shape (height, width, 3 "
-                         f"or 4), found {pixels.dtype} of shape {pixels.shape}")
-    h, w, c = pixels.shape
-    flat = np.ascontiguousarray(pixels).reshape(h, w * c)      # rows of bytes (a strided view: copied)
-    rows = np.empty((h, 1 + w * c), dtype=np.uint8)
-    rows[:, 0] = 2                                              # filter type "Up" on every row
-    rows[0, 1:] = flat[0]
-    np.subtract(flat[1:], flat[:-1], out=rows[1:, 1:])          # uint8: modulo 256, as the filter is
-    header = w.to_bytes(4, "big") + h.to_bytes(4, "big") + bytes([8, 2 if c == 3 else 6, 0, 0, 0])
-    chunks = [_png_chunk(b"IHDR", header)]
-    chunks += [_png_chunk(b"tEXt", key.encode("latin-1") + b"\0" + value.encode("latin-1"))
-               for key, value in text]
-    chunks += [_png_chunk(b"IDAT", zlib.compress(rows, 1)), _png_chunk(b"IEND", b"")]
-    return b"\x89PNG\r\n\x1a\n" + b"".join(chunks)
-
-
 def save(fig, path):
     """Write a figure as PNG (:data:`DPI`, RGB, zlib level 1) and close it.
 
     One draw (no tight bounding box), tick objects only for the ticks drawn
     (:class:`_TicksInView`), no label placement for axes without a label
     (:func:`_unlabelled_axes_not_placed`). The Agg canvas is opaque (a white figure), so
-    its alpha channel is dropped and the pixels are encoded by
-    :func:`png_bytes` ("Up" filter, zlib level 1): 0.31 s of CPU for the
-    paper run's 26 figures against 0.84 s with Pillow's writer at the same
-    level (which ``savefig`` uses), files about 2 % larger
-    (``benchmarks/figures.py --paper --encoding``). A figure with
+    its alpha channel is dropped: RGB at zlib level 1 encodes in about 65 %
+    of the time of RGBA at level 3, in files about 8 % smaller (measured on
+    the figures of the paper run, ``benchmarks/figures.py``). A figure with
     transparent pixels keeps its alpha channel.
 
     Parameters
@@ -1089,16 +1022,11 @@ def save(fig, path):
     canvas = _Canvas(fig)
     with _DRAW_LOCK, _ticks_updated_once():
         canvas.draw()
-    rgba = np.asarray(canvas.buffer_rgba())
-    pixels = rgba
-    if rgba[..., 3].min() == 255:                  # opaque: RGB (Pillow's conversion, contiguous)
-        pixels = np.asarray(Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba, "raw",
-                                             "RGBA", 0, 1).convert("RGB"))
-    png = png_bytes(pixels, [("Software", f"Matplotlib version{matplotlib.__version__}, "
-                                          f"https://matplotlib.org/")])
+    image = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba(), "raw",
+                             "RGBA", 0, 1)
+    if image.getextrema()[3][0] == 255:
+        image = image.convert("RGB")
+    info = PngInfo()
+    info.add_text("Software", f"Matplotlib version{matplotlib.__version__}, https://matplotlib.org/")
+    image.save(path, format="png", compress_level=1, pnginfo=info)
     plt.close(fig)
-    if hasattr(path, "write"):
-        path.write(png)
-    else:
-        with open(path, "wb") as f:
-            f.write(png)
