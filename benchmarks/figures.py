@@ -219,8 +219,7 @@ def phases(paper_run=False):
     import matplotlib.axis as maxis
     import matplotlib.text as mtext
     from matplotlib.axes import Axes
-    from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg
-    from PIL import Image
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     spent, depth = defaultdict(float), defaultdict(int)
 
@@ -245,7 +244,7 @@ def phases(paper_run=False):
             (maxis.XAxis, "_update_label_position", "  axis label placement (x)"),
             (maxis.YAxis, "_update_label_position", "  axis label placement (y)"),
             (mtext.Text, "draw", "  text drawn"),
-            (RendererAgg, "draw_text", "    glyphs laid out and rasterised"),
+            (plots._TextCachingRenderer, "draw_text", "    glyphs laid out and rasterised"),
             (mtext.Text, "_get_layout", "    text measured (layout)"),
             (Axes, "__init__", "axes created (build and draw)"),
             (Image.Image, "save", "PNG encoding")]
@@ -346,7 +345,6 @@ def paper(repeat):
     import io
 
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from PIL import Image
 
     jobs = paper_jobs()
     for _, job in jobs:                                   # warm: fonts, mathtext, lazy imports

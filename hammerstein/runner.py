@@ -637,8 +637,8 @@ def run_scenario(path, out_dir, taken=None, force=False, renderer=None):
 def run_pipelined(paths, out_dir, force=False, on_outcome=None, on_start=None, figures=None):
     """Run scenarios in order, drawing the figures of one while the next simulates.
 
-    Figures go to a :class:`hammerstein.report.render.FigureRenderer` (2
-    worker processes); each report is renamed into place once its figures
+    Figures go to a :class:`hammerstein.report.render.FigureRenderer`
+    (:data:`hammerstein.report.render.WORKERS` worker processes); each report is renamed into place once its figures
     are drawn, in the order of ``paths``. An interruption cancels the
     figures and removes every temporary directory of the run.
 

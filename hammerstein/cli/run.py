@@ -120,7 +120,7 @@ def handler(args):
             print_err(f"error: {one_line(outcome.error, str(path))}")
             failed.append(path)
 
-    # figures of one scenario are drawn (2 worker processes) while the next one simulates
+    # figures of one scenario are drawn (worker processes) while the next one simulates
     try:
         with execution(workers, scheduler):   # Monte-Carlo chunks on dask, or here
             run_pipelined(args.scenarios, out, args.force, on_outcome=on_outcome,

@@ -31,6 +31,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.axis import Axis  # noqa: E402
+from matplotlib.font_manager import fontManager, get_font  # noqa: E402
 from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag  # noqa: E402
 from matplotlib.ft2font import RenderMode  # noqa: E402
 from matplotlib.ticker import Locator, LogFormatterSciNotation, NullLocator  # noqa: E402
@@ -555,8 +556,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     for a in (axt, axu, axe, axn):
         a.grid(True, alpha=0.3)
         a.set_xlim(t[0], t[-1])
-    plt.setp(axt.get_xticklabels(), visible=False)
-    plt.setp(axe.get_xticklabels(), visible=False)
+    for a in (axt, axe):       # x labels under (d) and (e) only; not get_xticklabels (ticks now)
+        a.tick_params(labelbottom=False)
     notes = {axe: "", axn: ""}
     if transient:
         _settled_ylim(axe, [e[:, steady]])
@@ -863,7 +864,7 @@ def _ticks_updated_once():
 
 
 _TEXT_CACHE_ENTRIES = 50_000                # per cache; about 10 MB of glyph bitmaps at most
-_layouts, _extents, _glyphs, _rotations = {}, {}, {}, {}
+_layouts, _extents, _glyphs, _rotations, _heights = {}, {}, {}, {}, {}
 
 
 def _cached(cache, key, compute):
@@ -915,6 +916,30 @@ class _TextCachingRenderer(RendererAgg):
         size = prop.get_size_in_points()
         self._draw_text_glyphs_and_boxes(
             gc, x, y, angle, ((ft, size, index, 0, 1, dx, dy) for ft, index, dx, dy in items), [])
+
+    def _get_font_height_metrics(self, prop):
+        """Line metrics of ``prop``'s font, as ``Text._get_layout`` computes them, once per font.
+
+        Matplotlib asks a renderer with this method instead of looking up
+        the font and reading its ``OS/2`` or ``hhea`` table for every text
+        it lays out; the values are those of its own code (matplotlib
+        3.10's ``Text._get_layout``), scaled to the font size and this
+        renderer's resolution (the figure's in :func:`save`).
+        """
+        def metrics():
+            font = get_font(fontManager._find_fonts_by_props(prop))
+            for table_name, gap, ascent, descent in (
+                    ("OS/2", "sTypoLineGap", "sTypoAscender", "sTypoDescender"),
+                    ("hhea", "lineGap", "ascent", "descent")):
+                table = font.get_sfnt_table(table_name)
+                if table is None:
+                    continue
+                scale = (1 / font.get_sfnt_table("head")["unitsPerEm"]
+                         * prop.get_size_in_points() * self.dpi / 72)
+                return table[ascent] * scale, -table[descent] * scale, table[gap] * scale
+            return None, None, None                     # matplotlib measures "lp" itself
+
+        return _cached(_heights, (_hashable(tuple(vars(prop).values())), self.dpi), metrics)
 
     def get_text_width_height_descent(self, s, prop, ismath):
         if ismath:

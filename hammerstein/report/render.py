@@ -6,9 +6,10 @@ The report code does not draw: it adds one :class:`FigureJob` per PNG
 :class:`FigureRenderer`. Without a
 renderer (``FigureJobs()``) every job is drawn at once in the calling
 process, as a plain function call would. The runner of ``hammerstein
-run``/``check``/``replicate`` uses a renderer with a pool of 2 worker
-processes (``multiprocessing`` fork context: the workers inherit the
-imported matplotlib and draw while the next scenario simulates); it waits
+run``/``check``/``replicate`` uses a renderer with a pool of worker
+processes (:data:`WORKERS`: 1 on a 2-core machine, 2 on more cores;
+``multiprocessing`` fork context: the workers inherit the imported
+matplotlib and draw while the next scenario simulates); it waits
 for a report's figures (:meth:`FigureJobs.wait`) before the report
 directory is renamed into place, and an error raised in a worker is raised
 again there, so it becomes the scenario's one-line error. Where fork is not
@@ -47,14 +48,30 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+import numpy as np
+
 from hammerstein.report.figures import save
 
 __all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "job_key", "WORKERS",
            "LATE_WORKERS", "REMEMBERED", "figure_selection", "loaded_modules"]
 
-#: Worker processes of the pool of :class:`FigureRenderer` (the machine the
-#: targets are set on has 2 cores; the main process simulates meanwhile).
-WORKERS = 2
+def _usable_cores():
+    """The CPU cores this process may run on (its affinity mask where the OS has one)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+#: Worker processes of the pool of :class:`FigureRenderer`: one core is left to
+#: the main process, which simulates meanwhile (at most 2 workers, at least 1).
+#: On a 2-core machine that is 1 worker: with 2 workers the three processes
+#: shared the two cores and each ran slower per unit of work (the paper run's
+#: 26 figures took 4.7 s of CPU in one process alone, 6.6-6.8 s each in two
+#: processes run side by side); the paper run with 1 worker measured 9.6-9.75 s
+#: of CPU (medians of 3) against 10.3-12.2 s with 2, alternated at load 2.4-3.7
+#: (``benchmarks/cli.py --only paper``).
+WORKERS = min(2, max(1, _usable_cores() - 1))
 
 
 @dataclass(frozen=True)
@@ -107,6 +124,26 @@ LATE_WORKERS = 1
 REMEMBERED = 64
 
 
+def _array_values(dtype, shape, data):
+    """Stands for an array in :func:`job_key`'s pickle (never called: the pickle is only hashed)."""
+    raise NotImplementedError
+
+
+class _KeyPickler(pickle.Pickler):
+    """Pickles every numeric array by its dtype, shape and values in C order.
+
+    numpy pickles a Fortran-ordered array differently from a C-ordered one
+    holding the same values; an identification computed in the run gives
+    Fortran-ordered matrices and the same one read from the on-disk cache
+    C-ordered ones, so their Bode plots were not recognised as equal.
+    """
+
+    def reducer_override(self, obj):
+        if isinstance(obj, np.ndarray) and not obj.dtype.hasobject:
+            return _array_values, (obj.dtype.str, obj.shape, np.ascontiguousarray(obj).tobytes())
+        return NotImplemented
+
+
 def job_key(job):
     """Hash of a job's function and arguments: equal keys draw equal PNGs.
 
@@ -118,14 +155,17 @@ def job_key(job):
     -------
     bytes or None
         16-byte BLAKE2 digest of the pickled ``(module, name, args,
-        kwargs)``; None when they do not pickle.
+        kwargs)``, numeric arrays pickled by dtype, shape and values (not
+        their memory layout); None when they do not pickle.
     """
+    buffer = io.BytesIO()
     try:
-        blob = pickle.dumps((job.function.__module__, job.function.__qualname__, job.args,
-                             sorted(job.kwargs.items())), protocol=pickle.HIGHEST_PROTOCOL)
+        _KeyPickler(buffer, protocol=pickle.HIGHEST_PROTOCOL).dump(
+            (job.function.__module__, job.function.__qualname__, job.args,
+             sorted(job.kwargs.items())))
     except Exception:  # an argument that does not pickle: no copy, draw it
         return None
-    return hashlib.blake2b(blob, digest_size=16).digest()
+    return hashlib.blake2b(buffer.getvalue(), digest_size=16).digest()
 
 
 def _settle(future, done, path=None):
@@ -311,12 +351,12 @@ class FigureRenderer:
     A context manager; the pool starts with the first job and stops on
     exit (pending jobs are cancelled when leaving on an
     error). Inline where the fork start method is unavailable, with
-    ``workers < 2``, or after the pool broke (a worker killed).
+    ``workers=0``, or after the pool broke (a worker killed).
 
     Parameters
     ----------
     workers : int
-        Worker processes (default :data:`WORKERS`).
+        Worker processes (default :data:`WORKERS`); 0 draws inline.
     select : callable, optional
         ``select(path) -> bool``: draw only the PNGs it accepts (e.g.
         :func:`figure_selection`); every figure by default. A
@@ -454,7 +494,7 @@ class FigureRenderer:
                 if pool is not None:
                     pool.shutdown(wait=False, cancel_futures=True)
             self._pool, self._late, self.workers = None, None, 0
-        if self._pool is None and self.workers >= 2 and jobs:
+        if self._pool is None and self.workers >= 1 and jobs:
             self._forked_with = loaded_modules()
             self._pool = self._fork(self.workers)
         if self._pool is not None:
