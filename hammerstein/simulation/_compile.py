@@ -37,7 +37,7 @@ _LOG = logging.getLogger("hammerstein.simulation")
 #: ``chain_batch`` links ``chain_kernel``, compiled first when it is not
 #: cached either.
 COMPILE_SECONDS = {"play_kernel": 0.4, "pi_kernel": 0.5, "plant_kernel": 1.0,
-                   "chain_kernel": 3.0, "chain_batch": 3.0}
+                   "chain_kernel": 4.5, "chain_batch": 3.0}
 
 #: Compilations estimated below this [s] pass without a notice.
 MIN_NOTICE_SECONDS = 1.5
