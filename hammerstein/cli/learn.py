@@ -229,13 +229,16 @@ def _restore_gains(history_dir, gains):
     gains.gains = table[:, 0].copy()
     gains.previous = table[:, 1].copy()
     gains.growths = table[:, 2].astype(int)
+    gains.converged = any(len(r) > 4 and r[4].strip() == "1" for r in rows)   # older files: 4 columns
 
 
 def _save_gains(history_dir, gains):
     prev = gains.previous if gains.previous is not None else np.zeros(gains.gains.shape)
     growths = getattr(gains, "growths", np.zeros(gains.gains.shape, dtype=int))
-    text = "harmonic,gain,previous_error_um,growths\n" + "".join(
-        f"{h},{float(g)!r},{float(e)!r},{int(n)}\n" for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
+    done = int(bool(gains.converged))
+    text = "harmonic,gain,previous_error_um,growths,converged\n" + "".join(
+        f"{h},{float(g)!r},{float(e)!r},{int(n)},{done}\n"
+        for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
     safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file")
 
 
