@@ -83,8 +83,8 @@ def add_parser(subparsers):
                         "drive is learnt from the best one with half the gain)")
     p.add_argument("--learning-gain", type=positive_float, default=0.5, metavar="G",
                    help="gamma in (0, 2) (default 0.5: half the error per trial, half the noise)")
-    p.add_argument("--q-cutoff-hz", type=positive_float, default=2000.0, metavar="HZ",
-                   help="zero-phase low-pass Q of the update (default 2000 Hz)")
+    p.add_argument("--q-cutoff-hz", type=positive_float, default=500.0, metavar="HZ",
+                   help="zero-phase low-pass Q of the update (default 500 Hz)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default="zpetc",
                    help="inverse of the dynamics (default zpetc)")
     p.add_argument("--delay", default="auto", metavar="auto|N",

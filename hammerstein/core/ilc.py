@@ -1217,7 +1217,7 @@ class LearningCompensator:
     """
 
     def __init__(self, start, sampling_period, iterations=10, learning_gain=0.5,
-                 q_cutoff_hz=2000.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
+                 q_cutoff_hz=500.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
                  harmonics=True):
         iterations = check_integer(iterations, "iterations", 1, MAX_ITERATIONS, CompensatorError)
         self.start_compensator = start
