@@ -436,7 +436,16 @@ class HarmonicGains:
       a gain-scheduling safeguard in the spirit of the model-less,
       measurement-corrected inversion-based iterative control of Kim and
       Zou [1]_, which corrects the learning per frequency from the measured
-      response of the previous trial).
+      response of the previous trial);
+    * once a trial learns no harmonic (every one within its noise floor),
+      the learning has converged and a dead zone widens: from then on a
+      harmonic is learnt only above ``resume`` times its floor. Near the
+      floor a harmonic's measured amplitude is a noisy sample of a small
+      true one; learning it shrinks that amplitude but turns its phase,
+      and the peak of a sum of several such harmonics (the max Euclidean
+      error) can grow: the dead-zone modification of ILC for bounded
+      disturbances of Xu and Viswanathan [2]_ (a disturbance that rises
+      above the wider zone is learnt again).
 
     Parameters
     ----------
@@ -446,12 +455,28 @@ class HarmonicGains:
         Noise multiple below which a harmonic is not learnt.
     patience : int
         Successive growths that halve a harmonic's gain.
+    resume : float
+        After convergence, the multiple of the floor (``threshold`` times
+        the noise) above which a harmonic is learnt again; 1 turns the dead
+        zone off.
+
+    Attributes
+    ----------
+    converged : bool
+        True once an update learnt no harmonic (sticky).
+
+    Raises
+    ------
+    CompensatorError
+        ``resume`` not a number >= 1.
 
     References
     ----------
     .. [1] K.-S. Kim and Q. Zou, "Model-less inversion-based iterative
        control for output tracking: piezo actuator example", Proc. American
        Control Conference, 2710-2715, 2008.
+    .. [2] J.-X. Xu and B. Viswanathan, "Adaptive robust iterative learning
+       control with dead zone scheme", Automatica 36(1), 91-99, 2000.
 
     Examples
     --------
@@ -463,14 +488,27 @@ class HarmonicGains:
     array([0.5, 0. , 0.5])
     >>> g.update(np.array([[0.2, 1e-3, 4.0]]), 0.01)      # twice in a row: halved
     array([0.5 , 0.  , 0.25])
+
+    Converged (nothing above the floor 0.03), a harmonic just above the
+    floor is not learnt; one above twice the floor is:
+
+    >>> g.update(np.array([[0.02, 1e-3, 0.02]]), 0.01)
+    array([0., 0., 0.])
+    >>> g.update(np.array([[0.04, 1e-3, 0.07]]), 0.01)
+    array([0.  , 0.  , 0.25])
     """
 
-    def __init__(self, base, threshold=3.0, patience=2):
+    def __init__(self, base, threshold=3.0, patience=2, resume=2.0):
         self.patience = int(patience)
         self.base = np.array(base, dtype=float)
         self.gains = self.base.copy()
         self.threshold = float(threshold)
+        if not resume >= 1:
+            raise CompensatorError(f"resume: expected a multiple of the noise floor >= 1, "
+                                   f"found {resume!r}")
+        self.resume = float(resume)
         self.previous = None
+        self.converged = False
 
     def update(self, spectrum, noise):
         """The gains of the next update from this trial's averaged error.
@@ -495,7 +533,10 @@ class HarmonicGains:
         else:
             self.growths = np.zeros(amp.shape, dtype=int)
         self.previous = amp
-        return np.where(amp > floor, self.gains, 0.0)
+        learnt = amp > (self.resume * floor if self.converged else floor)
+        if not learnt.any():
+            self.converged = True
+        return np.where(learnt, self.gains, 0.0)
 
 
 def _frequency_response(A, B, C, D, z):
@@ -1176,7 +1217,7 @@ class LearningCompensator:
     """
 
     def __init__(self, start, sampling_period, iterations=10, learning_gain=0.5,
-                 q_cutoff_hz=2000.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
+                 q_cutoff_hz=500.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
                  harmonics=True):
         iterations = check_integer(iterations, "iterations", 1, MAX_ITERATIONS, CompensatorError)
         self.start_compensator = start

@@ -353,7 +353,7 @@ def _build_ilc(spec, plant, context):
     start = build_compensator(spec.get("start") or {"kind": "hammerstein"}, plant, context)
     return LearningCompensator(
         start, plant.sampling_period, iterations=spec.get("iterations", 10),
-        learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 2000.0),
+        learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 500.0),
         inversion=spec.get("inversion", "zpetc"), sensor_noise=spec.get("sensor_noise", 0.0),
         seed=spec.get("seed", 0))
 
@@ -364,7 +364,7 @@ COMPENSATORS["ilc"] = CompensatorKind(
     {"start": Field(_start_table),            # default { kind = "hammerstein" }
      "iterations": Field(integer(1, MAX_ITERATIONS), default=10),
      "learning_gain": Field(number("", 0)),   # default 0.5, in (0, 2)
-     "q_cutoff_hz": Field(number("Hz", 0)),   # default 2000 Hz
+     "q_cutoff_hz": Field(number("Hz", 0)),   # default 500 Hz
      "inversion": Field(choice(*INVERSIONS)),
      "sensor_noise": Field(number("µm", 0, exclusive=False)),   # default 0
      "seed": Field(integer(0, 2**31 - 1)),
