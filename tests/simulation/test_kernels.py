@@ -587,6 +587,7 @@ def test_announce_compiles_keeps_one_listener():
     assert len(event._registered["numba:compile"]) == before
 
 
+@pytest.mark.filterwarnings("ignore::hammerstein.exceptions.RangeWarning")   # random references
 @pytest.mark.parametrize("parallel", [False, True])
 def test_batch_with_initial_states_continues_each_case(parallel):
     """Per-case compensator states (play, v_f and pre-filter states): chunked == whole.
