@@ -10,10 +10,11 @@ trials 0..10 on the noise-free output, over the window after the fade-in
 and one period, the largest growth from one trial to the next, and the CPU
 time. Targets: <= 0.3 % within 10 iterations, no growth above 10 %.
 
-    python benchmarks/ilc.py [--quick] [--gain 0.5] [--q 2000] [--only raster]
+    python benchmarks/ilc.py [--quick] [--gain 0.5] [--q 500] [--only raster]
     python benchmarks/ilc.py --plant realistic --gain 0.8 --q 500    # realistic-2dof, realistic-b
     python benchmarks/ilc.py --plant realistic --model preisach --gain 0.8 --q 500
     python benchmarks/ilc.py --files --gain 0.8 --q 500              # learn through files
+    python benchmarks/ilc.py --files --model preisach --lab-delay given   # delay in every record
 """
 
 from __future__ import annotations
@@ -88,7 +89,8 @@ def actuators(which, quick, model_class="classical"):
 _CHILD_CPU = [0.0]
 
 
-def identified_through_files(plant, name, model_class, keep=None):
+def identified_through_files(plant, name, model_class, keep=None, record_delay=0,
+                             identify_delay=0):
     """The Hammerstein compensator over a model identified as a user would, through the CLI.
 
     ``hammerstein excitation`` (10 V, the plant's sampling period), every
@@ -97,7 +99,9 @@ def identified_through_files(plant, name, model_class, keep=None):
     20-level Preisach grid for ``preisach``; ``auto`` keeps the class that
     predicts the held-out minor loops better). No creep identified. With
     ``keep`` (a directory) the identified preset is copied there as
-    ``model.toml``.
+    ``model.toml``. ``record_delay``: samples the recorded outputs lag (the
+    acquisition's delay, in every record as in a lab); ``identify_delay``:
+    the ``identify --delay`` given.
     """
     import subprocess
     import sys
@@ -122,6 +126,8 @@ def identified_through_files(plant, name, model_class, keep=None):
         for path in sorted(rec.glob("*.csv")):
             data = np.loadtxt(path, delimiter=",", skiprows=1)
             y, _ = plant.simulate(data[:, 1:3].T)
+            if record_delay:
+                y = np.concatenate([np.zeros((2, record_delay)), y[:, :-record_delay]], axis=1)
             y = y + 0.04 * rng.standard_normal(y.shape)
             np.savetxt(path, np.column_stack([data, y.T]), delimiter=",", header="t,ux,uy,x,y",
                        comments="", fmt="%.9g")
@@ -130,7 +136,8 @@ def identified_through_files(plant, name, model_class, keep=None):
               [str(rec / f"multisine-{i}-validation.csv") for i in ("ux", "uy")]
         preset = d / f"{name}-identified.toml"
         cli("identify", *hyst, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t", "--dynamics",
-            "--dynamics-records", *dyn, "--out", str(preset), "--model", model_class)
+            "--dynamics-records", *dyn, "--out", str(preset), "--model", model_class,
+            "--delay", str(identify_delay))
         model = load_model(str(preset))
         G = load_plant(str(preset)).dynamics
         if keep is not None:
@@ -172,7 +179,9 @@ def through_files(args):
                 "preset": {"name": "realistic-2dof-identified", "sampling_period": T},
                 "dynamics": dynamics_to_table(start.dynamics)})
         else:          # the preset written by identify --model preisach/auto --dynamics
-            identified_through_files(plant, "realistic-2dof", args.model, keep=d)
+            lab = 3 if args.lab_delay else 0     # the learning trials' delay, in the records too
+            identified_through_files(plant, "realistic-2dof", args.model, keep=d, record_delay=lab,
+                                     identify_delay=lab if args.lab_delay == "given" else 0)
         for R, f in circles:
             ref = f'{{ kind = "circle", radius = {R:g}, frequency = {f:g}, periods = {6 if f < 50 else 12} }}'
             P = int(round(1 / f / T))
@@ -216,7 +225,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--gain", type=float, default=0.5)
-    ap.add_argument("--q", type=float, default=2000.0)
+    ap.add_argument("--q", type=float, default=500.0)        # learn's default
     ap.add_argument("--iterations", type=int, default=10)
     ap.add_argument("--plant", choices=["rakotondrabe", "realistic"], default="rakotondrabe",
                     help="realistic: the actuators outside the model class (realistic-2dof and "
@@ -234,12 +243,18 @@ def main():
     ap.add_argument("--only", default=None,
                     help="run only the cases whose actuator or case label contains this text "
                          "(e.g. 'raster', 'fn-5', 'realistic-b'); identification still runs per actuator")
+    ap.add_argument("--lab-delay", choices=["given", "ignored"], default=None,
+                    help="--files with a Preisach/auto model: the 3-sample delay in the "
+                         "identification records too, as in a lab; given: identify --delay 3, "
+                         "ignored: identify without it")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
     args = ap.parse_args()
     if args.files:
         print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise, "
-              f"3-sample delay, learn through files, identified model: {args.model}")
+              f"3-sample delay, learn through files, identified model: {args.model}"
+              + (f"; the delay in the identification records too, {args.lab_delay} to identify"
+                 if args.lab_delay else ""))
         through_files(args)
         return
     print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise, "

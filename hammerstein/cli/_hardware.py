@@ -100,11 +100,15 @@ def load_actuator(path, sampling_period=None):
     Returns
     -------
     HammersteinPlant
-        With ``amplifier`` (None when the file has none).
+        With ``amplifier`` (None when the file has none) and
+        ``measurement_delay`` [samples]: the ``[identification]
+        measurement_delay_samples`` of a file written by ``identify --delay``,
+        else None.
 
     Raises
     ------
     PresetError
+        Also for a ``measurement_delay_samples`` that is not an integer >= 0.
     """
     p = Path(path)
     data = read_toml(p, "model file") if p.suffix == ".toml" or p.exists() else None
@@ -116,15 +120,29 @@ def load_actuator(path, sampling_period=None):
             amp = plant.amplifier
             plant = HammersteinPlant(plant.hysteresis, float(sampling_period), dyn, plant.name)
             plant.amplifier = amp
-        return plant
-    if sampling_period is None:
-        raise PresetError(f"{path}: a model file has no sampling period; give --sampling-period S")
-    model = load_model(p)
-    dyn = load_dynamics(p, model.output_names, sampling_period) if "dynamics" in data else None
-    plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
-    if "amplifier" in data:
-        plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
+    else:
+        if sampling_period is None:
+            raise PresetError(f"{path}: a model file has no sampling period; give "
+                              f"--sampling-period S")
+        model = load_model(p)
+        dyn = load_dynamics(p, model.output_names, sampling_period) if "dynamics" in data else None
+        plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
+        if "amplifier" in data:
+            plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
+    plant.measurement_delay = _measurement_delay(data, path)
     return plant
+
+
+def _measurement_delay(data, path):
+    """``[identification] measurement_delay_samples`` of a model file, or None."""
+    ident = (data or {}).get("identification")
+    if not isinstance(ident, dict) or "measurement_delay_samples" not in ident:
+        return None
+    value = ident["measurement_delay_samples"]
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise PresetError(f"{path}: [identification] measurement_delay_samples: expected an "
+                          f"integer >= 0 [samples], found {value!r}")
+    return value
 
 
 def load_reference(text, plant, time="t", outputs=None, period=None):

@@ -20,6 +20,7 @@ project did not write is never overwritten without ``--force``.
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +40,9 @@ from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_
 from hammerstein.report.dynamics_figure import measured_bode_figure
 from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.scenario.schema import MAX_HYSTERONS
+
+#: Largest --delay [samples].
+MAX_DELAY = 10000
 
 __all__ = ["add_parser"]
 
@@ -68,6 +72,11 @@ def add_parser(subparsers):
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
     p.add_argument("--sampling-period", type=float, metavar="S",
                    help="sampling period [s] when there is no time column")
+    p.add_argument("--delay", type=int, default=0, metavar="N",
+                   help="samples every record's measured outputs lag its inputs (the "
+                        "acquisition's delay, not the actuator's): the outputs are advanced by N "
+                        "before anything is fitted, so G does not carry it, and the model file "
+                        "keeps it for `learn --delay auto` (default 0)")
     p.add_argument("--input-unit", default="V", metavar="UNIT", help="input unit (default V)")
     p.add_argument("--output-unit", default="µm", metavar="UNIT", help="output unit (default µm)")
     p.add_argument("--method", choices=["closed-form", "least-squares"], default="least-squares",
@@ -209,6 +218,8 @@ def _check_usage(args):
     if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
                                                  and args.sampling_period > 0):
         raise _Usage(f"--sampling-period: expected a positive time [s], found {args.sampling_period}")
+    if not 0 <= args.delay <= MAX_DELAY:
+        raise _Usage(f"--delay: expected an integer from 0 to {MAX_DELAY} [samples], found {args.delay}")
     if args.skip is not None and not (np.isfinite(args.skip) and args.skip >= 0):
         raise _Usage(f"--skip: expected a time >= 0 [s], found {args.skip}")
     if args.bounds != "none" and args.method == "closed-form":
@@ -402,6 +413,8 @@ def _metadata(args, fit, records):
             "notes": list(fit.notes),
             "train_rms": [r["rms"] for r in fit.train],
             "train_rms_percent_of_range": max(r["rms_percent"] for r in fit.train)}
+    if args.delay:
+        meta["measurement_delay_samples"] = int(args.delay)
     if val is not None:
         meta.update(validation_rms=[r["rms"] for r in val],
                     validation_rms_percent_by_output=[r["rms_percent"] for r in val],
@@ -418,8 +431,7 @@ def _handler(args):
         print(f"hammerstein identify: error: {exc}", file=sys.stderr)
         return 2
     try:
-        records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
-                   for d in args.data]
+        records = [_read(args, d) for d in args.data]
         names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
         fit = _identify(args, records, n, thresholds, names)
         extra = dyn = creep = None
@@ -514,11 +526,26 @@ def _class_of(fit):
     return "preisach" if fit.method == "preisach" else "classical"
 
 
+def _read(args, path):
+    """One record of ``path`` with its outputs advanced by ``--delay`` samples.
+
+    Sample ``t`` of the outputs becomes sample ``t + N`` of the file: the last
+    N inputs, whose response was not measured, are dropped.
+    """
+    rec = read_records(path, args.inputs, args.outputs, args.time, args.sampling_period)
+    d = args.delay
+    if not d:
+        return rec
+    n = rec.u.shape[1]
+    if n <= 10 * d:
+        raise DataFileError(f"{path}: {n} samples; --delay {d} needs more than {10 * d}")
+    return replace(rec, timepts=rec.timepts[:n - d], u=rec.u[:, :n - d], y=rec.y[:, d:])
+
+
 def _creep_recs(args):
     """The --creep-records, read once per command."""
     if getattr(args, "_creep_read", None) is None:
-        args._creep_read = [read_records(d, args.inputs, args.outputs, args.time,
-                                         args.sampling_period) for d in args.creep_records]
+        args._creep_read = [_read(args, d) for d in args.creep_records]
     return args._creep_read
 
 
@@ -644,6 +671,11 @@ def _report(args, fit, records, dyn=None, creep=None):
               f"excitation {model.input_names[s.excitation]}; {s.description}")
     print(f"{fit.method}: {model.n_outputs} output(s) x {model.n_inputs} input(s), partition "
           f"{fit.partition}, inputs [{iu}] -> outputs [{ou}]")
+    if args.delay:
+        T = fit.records[0].sampling_period
+        print(f"  measurement delay {args.delay} samples ({args.delay * T:.4g} s): every record's "
+              f"outputs advanced by it, so G is the actuator's; the model file keeps it for "
+              f"`learn --delay auto`")
     for note in fit.notes:
         print(f"  {note}")
     for l, out in enumerate(model.output_names):
@@ -851,8 +883,7 @@ def dynamics_metrics_rows(summary, output_names, input_names):
 
 def _dynamics(args, fit, creep=None):
     """Identified dynamics (:func:`identify_record_dynamics`) of the --dynamics-records."""
-    dyn = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
-           for d in args.dynamics_records]
+    dyn = [_read(args, d) for d in args.dynamics_records]
     return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, creep=creep,
                                     order=args.order, max_order=args.max_order)
 

@@ -88,7 +88,9 @@ def add_parser(subparsers):
     p.add_argument("--inversion", choices=["zpetc", "stable"], default="zpetc",
                    help="inverse of the dynamics (default zpetc)")
     p.add_argument("--delay", default="auto", metavar="auto|N",
-                   help="samples the measurement lags the model (default auto: cross-correlation)")
+                   help="samples the measurement lags the model (default auto: the model file's "
+                        "measurement delay when `identify --delay` wrote one, else "
+                        "cross-correlation with the model's prediction)")
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
                    help="fade-in of the reference [s] (default: the drive file's)")
     p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
@@ -293,14 +295,18 @@ def _handle(args):
         target = fade_in(ref.signal, fade)
         predicted, _ = plant.simulate(u)
         delay_note = None
-        if args.delay == "auto":
+        if args.delay == "auto" and plant.measurement_delay is not None:
+            delay = plant.measurement_delay          # identify --delay: the acquisition's
+            print(f"delay {delay} samples: the model file's measurement delay (identify --delay)")
+        elif args.delay == "auto":
             delay = max(estimate_delay(predicted, y, max(ref.period_samples // 2, 50)), 0)
             per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
             if per_sample is not None and per_sample < DELAY_PHASE_DEG:
                 delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
                               f"sample is only {per_sample:.2g} deg of the reference's fundamental "
                               f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "
-                              f"error: give --delay N when you know your acquisition's delay")
+                              f"error: give --delay N (or identify with --delay N) when you know your "
+                              f"acquisition's delay")
         else:
             try:
                 delay = int(args.delay)
