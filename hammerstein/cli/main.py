@@ -312,6 +312,29 @@ def _guard_kernel_cache():
         importlib.import_module("hammerstein.simulation._compile").guard_cache_writes(print_err)
 
 
+#: Commands that run scenarios: on a cold numba cache their chain kernel is compiled in a
+#: helper process while they import, validate and resolve (``prefetch`` in
+#: ``hammerstein/simulation/_compile.py``).
+_PREFETCHING = ("run", "check")
+
+
+def _prefetch_kernels(command, argv):
+    """Start compiling the chain kernel on another core, before the command's imports.
+
+    Only for :data:`_PREFETCHING` commands that name an existing file and ask
+    for no help; a failure to start the helper is not an error (the run
+    compiles the kernel itself).
+    """
+    if command not in _PREFETCHING or any(a in ("-h", "--help") for a in argv):
+        return
+    if not any(a != command and os.path.isfile(a) for a in argv):
+        return
+    try:
+        importlib.import_module("hammerstein.simulation._compile").prefetch()
+    except Exception:       # noqa: BLE001 - an optimisation never fails a run
+        pass
+
+
 def _command(argv):
     """The subcommand named in ``argv`` (its first argument not starting with '-'), or None."""
     for a in argv:
@@ -394,6 +417,7 @@ def _main(argv):
         _prepare_environment()
     command = _command(argv)
     start_budget()
+    _prefetch_kernels(command, argv)
     parser = build_parser(command) if command is not None else build_parser("")
     try:
         args = parser.parse_args(argv)

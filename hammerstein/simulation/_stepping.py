@@ -10,6 +10,7 @@ import numpy as np
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError, HysteresisError
 from hammerstein.simulation import _kernels as kernels
 from hammerstein.simulation import _oracle as oracle
+from hammerstein.simulation._compile import await_prefetch
 from hammerstein.simulation._preisach import linear_steps
 from hammerstein.simulation._packing import (EMPTY_PACKED, STATUS_OK, ChainState, CompensatorLaw,
                                              LawArrays,
@@ -357,6 +358,7 @@ def _run_chain_kernel(law, yr, cstate, plant=None, pstate=None):
     state = ChainState(u_prev.copy(), np.zeros(m) if vf is None else vf.copy(),
                        cpk.plays(splay), xf.copy(), ps, x)
     prefilter = identity_filter(p) if law.prefilter is None else law.prefilter
+    await_prefetch()            # a cold cache: the kernel may be compiling in a helper process
     status, sample = kernels.chain_kernel(
         np.ascontiguousarray(yr), n, _law_arrays(law), cpk.arrays, prefilter, ppk.arrays,
         linear, plant is not None, state, u, y)
@@ -784,6 +786,7 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
             _stack_linear(filters, nf, pc), stack_pi(ppk, npl, p), _stack_linear(lin, nx, p),
             True, state, u_out, y_out, status, sample, worker)
     chunks = np.array_split(order, n_threads)      # the equal-work chunks of _balanced_order
+    await_prefetch()            # chain_batch links chain_kernel: load it if a helper compiles it
     if n_threads == 1:
         kernels.chain_batch(order, *args, 0)
     else:                   # disjoint cases on n threads; the kernel releases the GIL
