@@ -138,6 +138,10 @@ __all__ = [
     "MIN_FACTOR",
 ]
 
+#: How long [s] ``--scheduler ADDRESS`` tries to reach the scheduler before the run
+#: fails with one line (dask retries a refused connection until then).
+SCHEDULER_TIMEOUT_S = 10
+
 #: Quantiles reported (with the maximum).
 QUANTILES = (0.50, 0.95, 0.99)
 #: Plants per chunk run here (chunks run on numba's threads, one chunk per thread at a time;
@@ -981,7 +985,7 @@ def execution(workers=None, scheduler=None):
     cluster = None
     try:
         if scheduler:
-            client = Client(scheduler, timeout="10s")
+            client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
         else:
             cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
                                    dashboard_address=":0")
