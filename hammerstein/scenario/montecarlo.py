@@ -136,6 +136,7 @@ __all__ = [
     "MAX_RUN_SAMPLES",
     "BINS_PER_DECADE",
     "MIN_FACTOR",
+    "SCHEDULER_TIMEOUT_S",
 ]
 
 #: How long [s] ``--scheduler ADDRESS`` tries to reach the scheduler before the run

@@ -167,7 +167,7 @@ def naive_inverse(model, yr, lo=-12.0, hi=12.0):
             before = u_now.copy()
             for l in range(m):
                 a, b = lo, hi
-                for _ in range(80):
+                for _ in range(48):          # (hi - lo) / 2**48 = 8.5e-14 V
                     mid = 0.5 * (a + b)
                     trial = u_now.copy()
                     trial[l] = mid
