@@ -103,6 +103,7 @@ def test_preisach_levels_out_of_range_is_a_usage_error(files, capsys):
     assert err.count("\n") == 1 and "--preisach-levels" in err
 
 
+@pytest.mark.slow   # three classes fitted and judged on the staircases too: ~4.5 s of CPU
 def test_auto_with_creep_records_judges_the_step_levels_too(files, capsys):
     # a staircase from rest per input (the actuator has no creep: the levels are its hysteresis);
     # both classes are judged on them too, one line each, and the numbers printed are those of

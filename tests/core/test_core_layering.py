@@ -68,9 +68,10 @@ def _fresh(code):
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-# One fresh interpreter goes through three steps, each a snapshot of what it has loaded:
+# One fresh interpreter goes through four steps, each a snapshot of what it has loaded:
 # `import hammerstein`, then one name of the lazy face, then the core used with matplotlib
-# and tqdm made unimportable (they are not loaded yet: the second snapshot says so).
+# and tqdm made unimportable (they are not loaded yet: the second snapshot says so), then a
+# bundled preset with its bending modes simulated (python-control still not loaded).
 _STEPS = """
 import json, sys
 heavy = set(%r)
@@ -93,6 +94,11 @@ reference = np.vstack([np.linspace(0, 4, 50), np.linspace(0, -3, 50)])
 result = simulate_chain(InverseMultiplicativeCompensator(model), HammersteinPlant(model, 1e-4),
                         reference)
 snapshots["tracking error"] = float(np.max(np.abs(result.outputs - reference)))
+from hammerstein.core.presets import load_plant
+plant = load_plant("rakotondrabe-2dof", dynamics=True)
+y, _ = plant.simulate(np.zeros((2, 50)))
+snapshots["preset plant simulated"] = [type(sys.modules.get("control")).__name__,
+                                       "scipy.signal" in sys.modules]
 print(json.dumps(snapshots))
 """ % (HEAVY,)
 
@@ -124,3 +130,9 @@ def test_every_public_name_resolves_and_dir_lists_it():
 def test_core_runs_without_matplotlib_and_tqdm(fresh_steps):
     # the compensator inverts its own model: the static plant tracks the ramp
     assert fresh_steps["tracking error"] < 0.5
+
+
+def test_simulating_a_preset_plant_does_not_import_python_control(fresh_steps):
+    # the preset's modes are simulated from its state-space matrices: python-control stays
+    # the lazy module the package installs, scipy.signal is never imported
+    assert fresh_steps["preset plant simulated"] == ["_LazyModule", False]
