@@ -27,7 +27,7 @@ from hammerstein.simulation import generalized_play_steps
 
 __all__ = ["GeneralizedPI", "envelope"]
 
-GPI_KEYS = ("kind", "thresholds", "weights", "gamma_l", "gamma_r", "offset", "reversible")
+GPI_KEYS = ("kind", "thresholds", "weights", "gamma_l", "gamma_r", "offset", "reversible", "rest")
 
 
 def _vector(value, name, size=None, ndim=1):
@@ -80,11 +80,22 @@ class GeneralizedPI:
         ``sum_n c_n u^n`` added to the output (e.g. the even u^2 term of a
         cross-coupling, as in the Preisach model's reversible part); none by
         default.
+    rest : float
+        Rest value ``sigma`` of the plays [V, envelope units]: the play
+        outputs at rest at ``u = 0`` are ``sigma`` clipped to each play's
+        band (see Notes); 0 by default.
 
     Notes
     -----
     The state is the n play outputs [V]; the default initial state is the
-    plays at rest at ``u = 0``: ``s_j = clip(0, gamma_l(0) - r_j, gamma_r(0) + r_j)``.
+    plays at rest at ``u = 0``:
+    ``s_j = clip(sigma, gamma_l(0) - r_j, gamma_r(0) + r_j)``. Where the
+    envelopes are apart at ``u = 0`` (``gamma_l(0) < gamma_r(0)``), a play
+    may rest anywhere in its band, and where it rests decides the first
+    loops from rest (the initial loading curve and the small loops that never
+    wipe it out); ``sigma`` is that place, identified from the initial
+    loading curve of the records
+    (:class:`~hammerstein.core.gpi_identification.GeneralizedPIIdentifier`).
 
     Raises
     ------
@@ -104,7 +115,7 @@ class GeneralizedPI:
     array([0., 1., 2., 2.])
     """
 
-    def __init__(self, thresholds, weights, gamma_l, gamma_r, offset=0.0, reversible=()):
+    def __init__(self, thresholds, weights, gamma_l, gamma_r, offset=0.0, reversible=(), rest=0.0):
         self.thresholds = _vector(thresholds, "thresholds")
         n = self.thresholds.size
         if n == 0 or np.any(self.thresholds < 0) or np.any(np.diff(self.thresholds) <= 0):
@@ -119,12 +130,14 @@ class GeneralizedPI:
                                       f"envelope a0 tanh(a1 u + a2) + a3), found {g.tolist()}")
         self.offset = float(_vector(offset, "offset", ndim=0))
         self.reversible = _vector(reversible, "reversible").reshape(-1)
+        self.rest = float(_vector(rest, "rest", ndim=0))
 
     def __repr__(self):
         return (f"GeneralizedPI(thresholds={self.thresholds.tolist()}, weights="
                 f"{self.weights.tolist()}, gamma_l={self.gamma_l.tolist()}, "
                 f"gamma_r={self.gamma_r.tolist()}, offset={self.offset}"
-                + (f", reversible={self.reversible.tolist()})" if self.reversible.size else ")"))
+                + (f", reversible={self.reversible.tolist()}" if self.reversible.size else "")
+                + (f", rest={self.rest})" if self.rest else ")"))
 
     def reversible_part(self, u):
         """The reversible polynomial ``sum_n c_n u^n`` [µm] (zero when none is given).
@@ -168,7 +181,7 @@ class GeneralizedPI:
         if initial_state is None:
             lo = envelope(self.gamma_l, 0.0) - self.thresholds
             hi = envelope(self.gamma_r, 0.0) + self.thresholds
-            return np.maximum(lo, np.minimum(hi, 0.0))
+            return np.maximum(lo, np.minimum(hi, self.rest))
         return _vector(initial_state, "initial_state", self.n_states).copy()
 
     def simulate(self, u, initial_state=None):
@@ -208,13 +221,16 @@ class GeneralizedPI:
         -------
         dict
             Keys ``kind``, ``thresholds``, ``weights``, ``gamma_l``,
-            ``gamma_r``, ``offset`` and, when there is one, ``reversible``.
+            ``gamma_r``, ``offset`` and, when there is one, ``reversible``
+            and ``rest`` (not 0).
         """
         table = {"kind": "generalized_pi", "thresholds": self.thresholds.tolist(),
                  "weights": self.weights.tolist(), "gamma_l": self.gamma_l.tolist(),
                  "gamma_r": self.gamma_r.tolist(), "offset": self.offset}
         if self.reversible.size:
             table["reversible"] = self.reversible.tolist()
+        if self.rest:
+            table["rest"] = self.rest
         return table
 
     @classmethod
@@ -224,7 +240,8 @@ class GeneralizedPI:
         Parameters
         ----------
         table : dict
-            Keys as written by :meth:`to_table` (``offset`` optional).
+            Keys as written by :meth:`to_table` (``offset``, ``reversible``
+            and ``rest`` optional).
 
         Returns
         -------
@@ -244,4 +261,4 @@ class GeneralizedPI:
                 raise HysteresisError(f"{key}: missing (kind = 'generalized_pi' needs thresholds, "
                                       f"weights, gamma_l and gamma_r)")
         return cls(table["thresholds"], table["weights"], table["gamma_l"], table["gamma_r"],
-                   table.get("offset", 0.0), table.get("reversible", ()))
+                   table.get("offset", 0.0), table.get("reversible", ()), table.get("rest", 0.0))

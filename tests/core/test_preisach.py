@@ -190,6 +190,26 @@ def test_generalized_pi_matches_the_oracle_and_chunks(seed):
     np.testing.assert_array_equal(s2, s)
 
 
+def test_generalized_pi_rest_value_is_clipped_to_each_play_band():
+    # gamma_l(0) = 12 tanh(0.05) + 0.2 = 0.7996, gamma_r(0) = 11 tanh(-0.02) = -0.2200: the
+    # band of play j at rest is [0.7996 - r_j, -0.2200 + r_j]; r = 0 has an empty band (both
+    # bounds clip to gamma_l(0) - r first, as the play law max(lo, min(hi, s)) does)
+    lo = 12.0 * np.tanh(0.05) + 0.2 - np.array([0.0, 0.8, 2.0, 4.0])
+    hi = 11.0 * np.tanh(-0.02) + np.array([0.0, 0.8, 2.0, 4.0])
+    for rest, expected in [(0.0, [lo[0], 0.0, 0.0, 0.0]), (-1.5, [lo[0], lo[1], lo[2], -1.5]),
+                           (3.0, [lo[0], hi[1], 1.78, 3.0])]:
+        g = GeneralizedPI(gpi().thresholds, gpi().weights, gpi().gamma_l, gpi().gamma_r,
+                          rest=rest)
+        np.testing.assert_allclose(g.initial_state(), expected, atol=1e-4)
+        np.testing.assert_allclose(g.initial_state(), np.maximum(lo, np.minimum(hi, rest)))
+        y, _ = g.simulate(np.zeros(3))            # at rest: the weighted rest states
+        np.testing.assert_allclose(y, g.weights @ g.initial_state(), atol=1e-12)
+        back = GeneralizedPI.from_table(g.to_table())
+        assert back.rest == rest and ("rest" in g.to_table()) == (rest != 0.0)
+    with pytest.raises(HysteresisError, match="rest"):
+        GeneralizedPI([0.0], [1.0], [1.0, 1.0, 0, 0], [1.0, 1.0, 0, 0], rest=float("nan"))
+
+
 def test_generalized_pi_with_near_linear_envelopes_is_the_classical_pi():
     r, w = [0.0, 1.0, 2.5], [1.0, 0.5, 0.25]
     lin = [1e4, 1e-4, 0.0, 0.0]                   # 1e4 tanh(1e-4 u) = u - 3e-5 at 10 V
