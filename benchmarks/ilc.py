@@ -150,10 +150,6 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
     return HammersteinCompensator(model, G)
 
 
-#: ``identify --delay`` of each --lab-delay (None: not given, auto).
-LAB_IDENTIFY_DELAY = {"given": 3, "ignored": 0, "auto": None}
-
-
 def file_cases(args):
     """(label, reference TOML, scale [µm]) of the --files route."""
     circles = [(15.0, 10.0), (50.0, 10.0), (50.0, 50.0), (50.0, 200.0), (15.0, 200.0)]
@@ -214,10 +210,11 @@ def through_files(args):
                 "preset": {"name": "realistic-2dof-identified", "sampling_period": T},
                 "dynamics": dynamics_to_table(start.dynamics)})
         else:          # the preset written by identify --model ... --dynamics
-            lab = 3 if args.lab_delay else 0     # the learning trials' delay, in the records too
+            lab = args.lab_samples if args.lab_delay else 0   # the trials' delay, in the records too
             c0 = time.process_time()
+            given = {"given": lab, "ignored": 0, "auto": None}.get(args.lab_delay, 0)  # --delay
             identified_through_files(plant, "realistic-2dof", args.model, keep=d, record_delay=lab,
-                                     identify_delay=LAB_IDENTIFY_DELAY.get(args.lab_delay, 0))
+                                     identify_delay=given)
             ident = read_toml(d / "model.toml").get("identification", {})
             est = ident.get("measurement_delay_estimate", {})
             print(f"# identified ({args.model}) in {_CHILD_CPU[0]:.1f} s CPU of CLI children: "
@@ -245,7 +242,8 @@ def through_files(args):
                 clean, _ = plant.simulate(u)
                 errors.append(np.linalg.norm(target[:, w] - clean[:, w], axis=0).max()
                               / scale * 100)
-                y = np.concatenate([np.zeros((2, 3)), clean[:, :-3]], axis=1)
+                lag = args.lab_samples
+                y = np.concatenate([np.zeros((2, lag)), clean[:, :clean.shape[1] - lag]], axis=1)
                 y = y + np.random.default_rng(k).normal(0.0, 0.04, y.shape)
                 pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(case / f"y{k}.csv",
                                                                     index=False)
@@ -308,12 +306,15 @@ def main():
                          "--model classical); given: identify --delay 3, ignored: identify "
                          "--delay 0, auto: identify without --delay (estimated from the "
                          "multisines); adds the 40x40 um rasters at 10 and 40 Hz")
+    ap.add_argument("--lab-samples", type=int, default=3,
+                    help="--files: the lab's delay [samples] in every trial (and, with "
+                         "--lab-delay, in every identification record); default 3")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
     args = ap.parse_args()
     if args.files:
         print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise, "
-              f"3-sample delay, learn through files, identified model: {args.model}"
+              f"{args.lab_samples}-sample delay, learn through files, identified model: {args.model}"
               + (f"; the delay in the identification records too, {args.lab_delay} to identify"
                  if args.lab_delay else ""))
         through_files(args)
