@@ -258,8 +258,8 @@ def through_files(args):
                               str(case / "hist"), "--learning-gain", str(args.gain),
                               "--q-cutoff-hz", str(args.q), "--limits", "clip",
                               "--delay", args.delay])
-                delays.update(int(v) for v in re.findall(r"^delay (\d+) samples", said.getvalue(),
-                                                         re.M))
+                delays.update(int(v) for v in re.findall(r"measured delay (\d+) samples",
+                                                         said.getvalue()))
                 if rc != 0:
                     print(f"learn failed at trial {k}")
                     break
