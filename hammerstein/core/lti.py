@@ -1141,7 +1141,7 @@ def frf_h1(inputs, outputs, sampling_period, nperseg=None):
 class MeasurementDelay:
     """Acquisition delay estimated from broadband records (:func:`estimate_measurement_delay`).
 
-    Attributes
+    Parameters
     ----------
     delay : int
         Estimated delay [samples] (the nearest integer to ``samples``);
