@@ -200,7 +200,10 @@ def through_files(args):
     spec = {"kind": "hammerstein", "model": "identified",
             "identify": {"frequency": 50.0, "sensor": True}, "dynamics": "identified"}
     summary = []
-    with tempfile.TemporaryDirectory() as tmp:
+    keep = Path(args.keep) if args.keep else None
+    if keep is not None:
+        keep.mkdir(parents=True, exist_ok=False)
+    with tempfile.TemporaryDirectory() if keep is None else contextlib.nullcontext(keep) as tmp:
         d = Path(tmp)
         if args.model == "classical" and not args.lab_delay:
             with warnings.catch_warnings():
@@ -260,6 +263,8 @@ def through_files(args):
                               "--delay", args.delay])
                 delays.update(int(v) for v in re.findall(r"measured delay (\d+) samples",
                                                          said.getvalue()))
+                if keep is not None:
+                    (case / f"learn{k}.txt").write_text(said.getvalue())
                 if rc != 0:
                     print(f"learn failed at trial {k}")
                     break
@@ -309,6 +314,9 @@ def main():
     ap.add_argument("--lab-samples", type=int, default=3,
                     help="--files: the lab's delay [samples] in every trial (and, with "
                          "--lab-delay, in every identification record); default 3")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="--files: keep the model, drives, measurements, learn's printout and "
+                         "history of every case in DIR (a new directory)")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
     args = ap.parse_args()
