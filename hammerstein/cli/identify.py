@@ -808,11 +808,12 @@ def delay_report_lines(delay, estimate, sampling_period, given=True):
     Returns
     -------
     list of str
-        None for no delay given and none estimated.
+        Empty when no delay was given and none estimated.
     """
     T = float(sampling_period)
     advanced = (f"every record's outputs advanced by it, so G is the actuator's; the model file "
-                f"keeps it for `learn --delay auto`")
+                f"keeps it for `learn --delay auto`" if delay else
+                f"the records taken as they are; the model file keeps 0 for `learn --delay auto`")
     if estimate is None:
         return [f"measurement delay {delay} samples ({delay * T:.4g} s, --delay {delay}): "
                 + advanced] if delay else []
