@@ -15,6 +15,7 @@ time. Targets: <= 0.3 % within 10 iterations, no growth above 10 %.
     python benchmarks/ilc.py --plant realistic --model preisach --gain 0.8 --q 500
     python benchmarks/ilc.py --files --gain 0.8 --q 500              # learn through files
     python benchmarks/ilc.py --files --model preisach --lab-delay given   # delay in every record
+    python benchmarks/ilc.py --files --model classical --lab-delay auto   # ... found by identify
 """
 
 from __future__ import annotations
@@ -101,7 +102,8 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
     ``keep`` (a directory) the identified preset is copied there as
     ``model.toml``. ``record_delay``: samples the recorded outputs lag (the
     acquisition's delay, in every record as in a lab); ``identify_delay``:
-    the ``identify --delay`` given.
+    the ``identify --delay`` given (None: not given, ``auto`` with
+    ``--dynamics``).
     """
     import subprocess
     import sys
@@ -115,8 +117,11 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
 
         def cli(*a):
             t0 = os.times()
+            # the package of this checkout (a worktree's), not whichever one is installed
+            env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+                [str(ROOT)] + [v for v in [os.environ.get("PYTHONPATH")] if v]))
             res = subprocess.run([sys.executable, "-m", "hammerstein", *a], cwd=d,
-                                 capture_output=True, text=True)
+                                 capture_output=True, text=True, env=env)
             t1 = os.times()
             _CHILD_CPU[0] += t1.children_user - t0.children_user + t1.children_system - t0.children_system
             if res.returncode != 0:
@@ -137,7 +142,7 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
         preset = d / f"{name}-identified.toml"
         cli("identify", *hyst, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t", "--dynamics",
             "--dynamics-records", *dyn, "--out", str(preset), "--model", model_class,
-            "--delay", str(identify_delay))
+            *([] if identify_delay is None else ["--delay", str(identify_delay)]))
         model = load_model(str(preset))
         G = load_plant(str(preset)).dynamics
         if keep is not None:
@@ -145,65 +150,110 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
     return HammersteinCompensator(model, G)
 
 
+def file_cases(args):
+    """(label, reference TOML, scale [µm]) of the --files route."""
+    circles = [(15.0, 10.0), (50.0, 10.0), (50.0, 50.0), (50.0, 200.0), (15.0, 200.0)]
+    if args.quick:
+        circles = [(50.0, 200.0)]
+    elif args.model == "classical" and not args.lab_delay:
+        circles = circles[2:]                      # the cases measured before
+    for R, f in circles:
+        yield (f"circle {R:g} µm {f:g} Hz",
+               f'{{ kind = "circle", radius = {R:g}, frequency = {f:g}, periods = '
+               f'{6 if f < 50 else 12} }}', R)
+    if args.lab_delay and not args.quick:
+        for f in (10.0, 40.0):
+            yield (f"raster 40x40 µm {f:g} Hz",
+                   f'{{ kind = "raster", outputs = ["x", "y"], size = [40.0, 40.0], lines = 16, '
+                   f'frequency = {f:g}, slow = "step", smoothing = 0.1 }}', 40.0)
+
+
 def through_files(args):
     """Ten ``learn`` trials through files against realistic-2dof, as a user with hardware would.
 
     The model is identified on the actuator through the sensor (as the
-    scenarios' ``model = "identified"``) and saved as a preset file; the
-    first drive comes from ``hammerstein compensate`` on it; each trial
-    applies the drive file to the actuator, writes the measured response
-    (40 nm noise, a 3-sample delay) to a CSV and calls ``hammerstein learn``.
-    Printed: the true max Euclidean error per trial [% of the radius].
+    scenarios' ``model = "identified"``) and saved as a preset file, or, with
+    ``--lab-delay``, through ``hammerstein identify`` on excitation records
+    that carry the lab's 3-sample delay; the first drive comes from
+    ``hammerstein compensate`` on it; each trial applies the drive file to
+    the actuator, writes the measured response (40 nm noise, a 3-sample
+    delay) to a CSV and calls ``hammerstein learn``. Printed: the true max
+    Euclidean error per trial [% of the radius, of the raster's size] after
+    the fade-in and three periods, the delay ``learn`` used, the final and
+    smallest error and the largest growth from one trial to the next.
     """
+    import contextlib
+    import io
+    import re
     import tempfile
 
     import pandas as pd
 
+    from hammerstein.cli._hardware import load_reference
+    from hammerstein.cli.learn import _fade_of
     from hammerstein.cli.main import main as cli
     from hammerstein.core.drive import read_signals
-    from hammerstein.core.presets import dynamics_to_table, save_model
+    from hammerstein.core.hammerstein_compensator import fade_in
+    from hammerstein.core.presets import dynamics_to_table, read_toml, save_model
     plant = load_plant("realistic-2dof")
     T = plant.sampling_period
     spec = {"kind": "hammerstein", "model": "identified",
             "identify": {"frequency": 50.0, "sensor": True}, "dynamics": "identified"}
-    circles = [(50.0, 50.0), (50.0, 200.0), (15.0, 200.0)] if not args.quick else [(50.0, 200.0)]
-    if args.model != "classical":
-        circles = [(15.0, 10.0), (50.0, 10.0)] + circles
-    with tempfile.TemporaryDirectory() as tmp:
+    summary = []
+    keep = Path(args.keep) if args.keep else None
+    if keep is not None:
+        keep.mkdir(parents=True, exist_ok=False)
+    with tempfile.TemporaryDirectory() if keep is None else contextlib.nullcontext(keep) as tmp:
         d = Path(tmp)
-        if args.model == "classical":
+        if args.model == "classical" and not args.lab_delay:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 start = build_compensator(spec, plant, ROOT / "scenarios")
             save_model(start.model, d / "model.toml", extra={
                 "preset": {"name": "realistic-2dof-identified", "sampling_period": T},
                 "dynamics": dynamics_to_table(start.dynamics)})
-        else:          # the preset written by identify --model preisach/auto --dynamics
-            lab = 3 if args.lab_delay else 0     # the learning trials' delay, in the records too
-            identified_through_files(plant, "realistic-2dof", args.model, keep=d, record_delay=lab,
-                                     identify_delay=lab if args.lab_delay == "given" else 0)
-        for R, f in circles:
-            ref = f'{{ kind = "circle", radius = {R:g}, frequency = {f:g}, periods = {6 if f < 50 else 12} }}'
-            P = int(round(1 / f / T))
+        else:          # the preset written by identify --model ... --dynamics
+            lab = args.lab_samples if args.lab_delay else 0   # the trials' delay, in the records too
             c0 = time.process_time()
-            case = d / f"c{R:g}-{f:g}"
+            given = {"given": lab, "ignored": 0, "auto": None}.get(args.lab_delay, 0)  # --delay
+            identified_through_files(plant, "realistic-2dof", args.model, keep=d, record_delay=lab,
+                                     identify_delay=given)
+            ident = read_toml(d / "model.toml").get("identification", {})
+            est = ident.get("measurement_delay_estimate", {})
+            print(f"# identified ({args.model}) in {_CHILD_CPU[0]:.1f} s CPU of CLI children: "
+                  f"model file's measurement delay {ident.get('measurement_delay_samples')} "
+                  f"samples (estimate {est.get('samples', float('nan')):.2f} +- "
+                  f"{est.get('std_samples', float('nan')):.2f}); G's modes "
+                  + ", ".join(f"{m['frequency_hz']:.0f} Hz/{m['damping_ratio']:.2f}"
+                              for m in ident.get("dynamics", {}).get("modes", [])), flush=True)
+        for label, ref, scale in file_cases(args):
+            if args.only and args.only not in label:
+                continue
+            c0 = time.process_time()
+            case = d / re.sub(r"[^0-9a-z]+", "-", label)
             case.mkdir()
             rc = cli(["compensate", str(d / "model.toml"), "--reference", ref, "--out",
                       str(case / "u0.csv")])
-            errors = []
+            reference = load_reference(ref, plant)
+            P = reference.period_samples
+            fade = _fade_of(case / "u0.csv")
+            target = fade_in(reference.signal, fade)
+            w = slice(fade + 3 * P, None)   # after the fade-in and three periods (4P for circles)
+            errors, delays = [], set()
             for k in range(args.iterations + 1):
                 t, u, _ = read_signals(case / f"u{k}.csv", ["ux", "uy"])
                 clean, _ = plant.simulate(u)
-                yr = R * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
-                w = slice(4 * P, None)     # the scenarios' window: fade, two periods, one more
-                errors.append(np.linalg.norm(yr[:, w] - clean[:, w], axis=0).max() / R * 100)
-                y = np.concatenate([np.zeros((2, 3)), clean[:, :-3]], axis=1)
+                errors.append(np.linalg.norm(target[:, w] - clean[:, w], axis=0).max()
+                              / scale * 100)
+                lag = args.lab_samples
+                y = np.concatenate([np.zeros((2, lag)), clean[:, :clean.shape[1] - lag]], axis=1)
                 y = y + np.random.default_rng(k).normal(0.0, 0.04, y.shape)
                 pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(case / f"y{k}.csv",
                                                                     index=False)
                 if k == args.iterations:
                     break
-                with warnings.catch_warnings():
+                said = io.StringIO()
+                with warnings.catch_warnings(), contextlib.redirect_stdout(said):
                     warnings.simplefilter("ignore")
                     rc = cli(["learn", str(d / "model.toml"), "--reference", ref, "--drive",
                               str(case / f"u{k}.csv"), "--measured", str(case / f"y{k}.csv"),
@@ -211,14 +261,26 @@ def through_files(args):
                               str(case / "hist"), "--learning-gain", str(args.gain),
                               "--q-cutoff-hz", str(args.q), "--limits", "clip",
                               "--delay", args.delay])
+                delays.update(int(v) for v in re.findall(r"measured delay (\d+) samples",
+                                                         said.getvalue()))
+                if keep is not None:
+                    (case / f"learn{k}.txt").write_text(said.getvalue())
                 if rc != 0:
                     print(f"learn failed at trial {k}")
                     break
             e = np.array(errors)
             growth = np.max(e[1:] / e[:-1]) if e.size > 1 else 1.0
-            print(f"files          circle {R:g} µm {f:g} Hz".ljust(40) + " ".join(f"{v:.3g}" for v in e)
-                  + f" | min {e.min():.3f} % {'OK' if e.min() <= 0.3 else 'MISS'}, max growth "
-                    f"x{growth:.2f}, CPU {time.process_time() - c0:.1f} s", flush=True)
+            ok = e[-1] <= 0.3 and growth <= 1.10
+            summary.append((label, e[-1], growth, ok))
+            print(f"files {label}".ljust(34) + " ".join(f"{v:.3g}" for v in e)
+                  + f" | final {e[-1]:.3f} % (min {e.min():.3f}), max growth x{growth:.2f}, "
+                    f"learn's delay {sorted(delays)} {'OK' if ok else 'MISS'}, "
+                    f"CPU {time.process_time() - c0:.1f} s", flush=True)
+    if summary:
+        print(f"# {len(summary)} cases: {sum(ok for *_, ok in summary)} within 0.3 % after "
+              f"{args.iterations} trials and x1.10; worst final "
+              f"{max(v for _, v, _, _ in summary):.3f} %, largest growth "
+              f"x{max(g for _, _, g, _ in summary):.3f}; load {os.getloadavg()[0]:.2f}", flush=True)
 
 
 def main():
@@ -243,16 +305,24 @@ def main():
     ap.add_argument("--only", default=None,
                     help="run only the cases whose actuator or case label contains this text "
                          "(e.g. 'raster', 'fn-5', 'realistic-b'); identification still runs per actuator")
-    ap.add_argument("--lab-delay", choices=["given", "ignored"], default=None,
-                    help="--files with a Preisach/auto model: the 3-sample delay in the "
-                         "identification records too, as in a lab; given: identify --delay 3, "
-                         "ignored: identify without it")
+    ap.add_argument("--lab-delay", choices=["given", "ignored", "auto"], default=None,
+                    help="--files: the 3-sample delay in the identification records too, as in "
+                         "a lab, and the model identified from them through the CLI (also "
+                         "--model classical); given: identify --delay 3, ignored: identify "
+                         "--delay 0, auto: identify without --delay (estimated from the "
+                         "multisines); adds the 40x40 um rasters at 10 and 40 Hz")
+    ap.add_argument("--lab-samples", type=int, default=3,
+                    help="--files: the lab's delay [samples] in every trial (and, with "
+                         "--lab-delay, in every identification record); default 3")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="--files: keep the model, drives, measurements, learn's printout and "
+                         "history of every case in DIR (a new directory)")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
     args = ap.parse_args()
     if args.files:
         print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise, "
-              f"3-sample delay, learn through files, identified model: {args.model}"
+              f"{args.lab_samples}-sample delay, learn through files, identified model: {args.model}"
               + (f"; the delay in the identification records too, {args.lab_delay} to identify"
                  if args.lab_delay else ""))
         through_files(args)

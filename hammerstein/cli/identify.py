@@ -37,6 +37,8 @@ from hammerstein.core.preisach_identification import identify_preisach_records
 from hammerstein.core.gpi_identification import identify_gpi_records
 from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_creep,
                                                      identify_record_dynamics, identify_records)
+from hammerstein.core.dynamics import DynamicsError
+from hammerstein.core.lti import estimate_measurement_delay
 from hammerstein.report.dynamics_figure import measured_bode_figure
 from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.scenario.schema import MAX_HYSTERONS
@@ -72,11 +74,14 @@ def add_parser(subparsers):
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
     p.add_argument("--sampling-period", type=float, metavar="S",
                    help="sampling period [s] when there is no time column")
-    p.add_argument("--delay", type=int, default=0, metavar="N",
+    p.add_argument("--delay", default=None, metavar="auto|N",
                    help="samples every record's measured outputs lag its inputs (the "
                         "acquisition's delay, not the actuator's): the outputs are advanced by N "
                         "before anything is fitted, so G does not carry it, and the model file "
-                        "keeps it for `learn --delay auto` (default 0)")
+                        "keeps it for `learn --delay auto`. auto: estimated from the phase slope "
+                        "of the --dynamics-records' measured frequency response over the upper "
+                        "half of their band (needs --dynamics). Default: auto with --dynamics "
+                        "(0 with a note when the records cannot tell it), else 0")
     p.add_argument("--input-unit", default="V", metavar="UNIT", help="input unit (default V)")
     p.add_argument("--output-unit", default="µm", metavar="UNIT", help="output unit (default µm)")
     p.add_argument("--method", choices=["closed-form", "least-squares"], default="least-squares",
@@ -218,8 +223,7 @@ def _check_usage(args):
     if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
                                                  and args.sampling_period > 0):
         raise _Usage(f"--sampling-period: expected a positive time [s], found {args.sampling_period}")
-    if not 0 <= args.delay <= MAX_DELAY:
-        raise _Usage(f"--delay: expected an integer from 0 to {MAX_DELAY} [samples], found {args.delay}")
+    _parse_delay(args)
     if args.skip is not None and not (np.isfinite(args.skip) and args.skip >= 0):
         raise _Usage(f"--skip: expected a time >= 0 [s], found {args.skip}")
     if args.bounds != "none" and args.method == "closed-form":
@@ -263,6 +267,57 @@ def _check_usage(args):
                 raise _Usage(f"{opt}: {path} is already another output of this command")
             targets.append(Path(path).resolve())
     return n, thresholds
+
+
+def _parse_delay(args):
+    """``args.delay`` as an int or ``"auto"``; ``args.delay_given`` whether the user gave it."""
+    text = args.delay
+    args.delay_given = text is not None
+    args.delay_estimate = None
+    if text is None:
+        args.delay = "auto" if args.dynamics else 0
+        return
+    text = str(text).strip()
+    if text == "auto":
+        if not args.dynamics:
+            raise _Usage("--delay auto: estimated from the broadband records; give --dynamics "
+                         "--dynamics-records FILE ... or --delay N")
+        args.delay = "auto"
+        return
+    try:
+        value = int(text)
+    except ValueError:
+        value = None
+    if value is None or not 0 <= value <= MAX_DELAY:
+        raise _Usage(f"--delay: expected auto or an integer from 0 to {MAX_DELAY} [samples], "
+                     f"found {text!r}")
+    args.delay = value
+
+
+def _estimate_delay(args):
+    """``--delay auto``: the integer delay of the --dynamics-records (read as they are).
+
+    Sets ``args.delay`` (int) and ``args.delay_estimate``
+    (:class:`hammerstein.core.lti.MeasurementDelay`). An estimate the records
+    cannot support is a data error naming --delay when ``auto`` was given,
+    else (the default) the delay stays 0 and the report says why.
+    """
+    records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
+               for d in args.dynamics_records]
+    T = records[0].sampling_period
+    if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
+        raise DataFileError("--delay auto: the --dynamics-records have different sampling periods")
+    try:
+        est = estimate_measurement_delay([r.u for r in records], [r.y for r in records], T)
+    except DynamicsError as exc:
+        raise DataFileError(f"--delay auto: {exc}") from None
+    if est.problem is None and est.delay > MAX_DELAY:
+        est = replace(est, problem=f"{est.delay} samples, more than {MAX_DELAY}")
+    if est.problem is not None and args.delay_given:
+        raise DataFileError(f"--delay auto: no delay estimate from the --dynamics-records: "
+                            f"{est.problem}; give --delay N")
+    args.delay_estimate = est
+    args.delay = est.delay if est.problem is None else 0
 
 
 def _line(label, name, rep, unit):
@@ -413,8 +468,19 @@ def _metadata(args, fit, records):
             "notes": list(fit.notes),
             "train_rms": [r["rms"] for r in fit.train],
             "train_rms_percent_of_range": max(r["rms_percent"] for r in fit.train)}
-    if args.delay:
+    est = args.delay_estimate
+    if args.delay or (est is not None and est.problem is None):
         meta["measurement_delay_samples"] = int(args.delay)
+    if est is not None:
+        meta["measurement_delay_estimate"] = {
+            "method": "phase slope of the measured H1 frequency response of the dynamics records",
+            "samples": float(est.samples), "std_samples": float(est.std),
+            "band_hz": [float(v) for v in est.band_hz],
+            "halves_samples": [float(v) for v in est.halves],
+            "residual_phase_deg": float(est.residual_deg), "lines": int(est.n_lines),
+            "used": est.problem is None}
+        if est.problem is not None:
+            meta["measurement_delay_estimate"]["problem"] = str(est.problem)
     if val is not None:
         meta.update(validation_rms=[r["rms"] for r in val],
                     validation_rms_percent_by_output=[r["rms_percent"] for r in val],
@@ -431,6 +497,8 @@ def _handler(args):
         print(f"hammerstein identify: error: {exc}", file=sys.stderr)
         return 2
     try:
+        if args.delay == "auto":
+            _estimate_delay(args)
         records = [_read(args, d) for d in args.data]
         names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
         fit = _identify(args, records, n, thresholds, names)
@@ -671,11 +739,9 @@ def _report(args, fit, records, dyn=None, creep=None):
               f"excitation {model.input_names[s.excitation]}; {s.description}")
     print(f"{fit.method}: {model.n_outputs} output(s) x {model.n_inputs} input(s), partition "
           f"{fit.partition}, inputs [{iu}] -> outputs [{ou}]")
-    if args.delay:
-        T = fit.records[0].sampling_period
-        print(f"  measurement delay {args.delay} samples ({args.delay * T:.4g} s): every record's "
-              f"outputs advanced by it, so G is the actuator's; the model file keeps it for "
-              f"`learn --delay auto`")
+    for line in delay_report_lines(args.delay, args.delay_estimate, fit.records[0].sampling_period,
+                                   args.delay_given):
+        print(f"  {line}")
     for note in fit.notes:
         print(f"  {note}")
     for l, out in enumerate(model.output_names):
@@ -723,6 +789,40 @@ def _report(args, fit, records, dyn=None, creep=None):
         if dyn is not None:
             print(f"wrote {_bode_path(args.plot)}")
     print(f"wrote {args.out}")
+
+
+def delay_report_lines(delay, estimate, sampling_period, given=True):
+    """Report lines of the measurement delay: its value and how it was chosen.
+
+    Parameters
+    ----------
+    delay : int
+        The delay used [samples].
+    estimate : hammerstein.core.lti.MeasurementDelay or None
+        The ``--delay auto`` estimate (None when ``--delay N`` was given).
+    sampling_period : float
+        T [s].
+    given : bool
+        Whether ``--delay`` was on the command line (else auto was the default).
+
+    Returns
+    -------
+    list of str
+        Empty when no delay was given and none estimated.
+    """
+    T = float(sampling_period)
+    advanced = (f"every record's outputs advanced by it, so G is the actuator's; the model file "
+                f"keeps it for `learn --delay auto`" if delay else
+                f"the records taken as they are; the model file keeps 0 for `learn --delay auto`")
+    if estimate is None:
+        return [f"measurement delay {delay} samples ({delay * T:.4g} s, --delay {delay}): "
+                + advanced] if delay else []
+    how = "--delay auto" if given else "auto, the default with --dynamics"
+    if estimate.problem is not None:
+        return [f"measurement delay not estimated ({how}): {estimate.problem}; taken as 0, "
+                f"not written (learn estimates its own; give --delay N when you know it)"]
+    return [f"measurement delay {delay} samples ({delay * T:.4g} s, {how}): " + advanced,
+            f"  estimated from the {estimate.method}"]
 
 
 def level_report_lines(fit, output_unit):

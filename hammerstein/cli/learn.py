@@ -305,8 +305,8 @@ def _handle(args):
                 delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
                               f"sample is only {per_sample:.2g} deg of the reference's fundamental "
                               f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "
-                              f"error: give --delay N (or identify with --delay N) when you know your "
-                              f"acquisition's delay")
+                              f"error: give --delay N when you know your acquisition's delay, or "
+                              f"identify with --dynamics (the delay found from the multisines)")
         else:
             try:
                 delay = int(args.delay)

@@ -9,7 +9,13 @@ record. Expectations derived without the code under test:
   (the same numbers reach the fit);
 * the model file keeps N, and ``learn --delay auto`` takes it instead of
   estimating one (a wrong value is refused, naming the field);
-* a negative delay is a usage error, one longer than the records a data error.
+* a negative delay is a usage error, one longer than the records a data error;
+* without ``--delay`` (``auto``, the default with ``--dynamics``) the inserted
+  delay is found from the broadband records, and the model is then the one
+  ``--delay N`` gives for that N, bit for bit; delay-free records give 0;
+* ``--delay auto`` without broadband records is a usage error, and records
+  that cannot tell the delay a data error (one line, nothing written); with
+  the default the delay stays 0, is not written, and the report says so.
 """
 
 import contextlib
@@ -18,7 +24,9 @@ import io
 import numpy as np
 import pytest
 
+import hammerstein.cli.identify as identify_cli
 from hammerstein.cli.main import main
+from hammerstein.core.lti import MeasurementDelay
 from hammerstein.core.drive import read_signals
 from hammerstein.core.presets import load_plant, read_toml
 
@@ -62,23 +70,33 @@ def _records(directory, delay, drop):
     return files
 
 
-def _identify(files, out, *extra):
-    err = io.StringIO()
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+def _identify(files, out, *extra, dynamics=True, printed=None):
+    err, out_text = io.StringIO(), io.StringIO()
+    dyn = ["--dynamics", "--dynamics-records", *files["broadband"]] if dynamics else []
+    with contextlib.redirect_stdout(out_text), contextlib.redirect_stderr(err):
         code = main(["identify", *files["slow"], "--inputs", "ux,uy", "--outputs", "x,y",
-                     "--time", "time", "--dynamics", "--dynamics-records", *files["broadband"],
-                     "--out", str(out), *extra])
+                     "--time", "time", *dyn, "--out", str(out), *extra])
+    if printed is not None:
+        printed.append(out_text.getvalue())
     return code, err.getvalue()
 
 
 @pytest.fixture(scope="module")
 def pair(tmp_path_factory):
-    """Model files from delayed records with --delay D and from delay-free records cut by D."""
+    """Model files from delayed records with --delay D and from delay-free records cut by D
+    (the latter without --delay: auto, the default with --dynamics)."""
     a = tmp_path_factory.mktemp("delayed")
     b = tmp_path_factory.mktemp("plain")
     assert _identify(_records(a, D, 0), a / "model.toml", "--delay", str(D))[0] == 0
     assert _identify(_records(b, 0, D), b / "model.toml")[0] == 0
     return a / "model.toml", b / "model.toml"
+
+
+@pytest.fixture(scope="module")
+def delayed_files(tmp_path_factory):
+    """Delayed records (D samples) in a directory of their own."""
+    d = tmp_path_factory.mktemp("delayed-auto")
+    return d, _records(d, D, 0)
 
 
 def test_delayed_records_with_delay_give_the_delay_free_model(pair):
@@ -88,7 +106,63 @@ def test_delayed_records_with_delay_give_the_delay_free_model(pair):
     u = np.vstack([np.linspace(0, 9, 300), np.linspace(0, -7, 300)])
     np.testing.assert_array_equal(delayed.hysteresis.simulate(u)[0], plain.hysteresis.simulate(u)[0])
     assert read_toml(pair[0])["identification"]["measurement_delay_samples"] == D
-    assert "measurement_delay_samples" not in read_toml(pair[1])["identification"]
+    assert read_toml(pair[1])["identification"]["measurement_delay_samples"] == 0   # auto
+
+
+def _same_model(a, b):
+    pa, pb = load_plant(str(a)), load_plant(str(b))
+    for name in ("A", "B", "C", "D"):
+        np.testing.assert_array_equal(getattr(pa.dynamics, name), getattr(pb.dynamics, name))
+    u = np.vstack([np.linspace(0, 9, 300), np.linspace(0, -7, 300)])
+    np.testing.assert_array_equal(pa.hysteresis.simulate(u)[0], pb.hysteresis.simulate(u)[0])
+
+
+@pytest.mark.parametrize("extra", [[], ["--delay", "auto"]])
+def test_auto_finds_the_inserted_delay_and_gives_the_model_of_delay_n(pair, delayed_files, extra):
+    directory, files = delayed_files
+    out, printed = directory / f"auto{len(extra)}.toml", []
+    code, err = _identify(files, out, *extra, printed=printed)
+    assert code == 0, err
+    ident = read_toml(out)["identification"]
+    assert ident["measurement_delay_samples"] == D
+    assert ident["measurement_delay_estimate"]["used"] is True
+    _same_model(out, pair[0])                       # the model of --delay D, bit for bit
+    assert f"measurement delay {D} samples" in printed[0]
+    assert ("--delay auto" if extra else "auto, the default with --dynamics") in printed[0]
+    assert "estimated from the phase slope" in printed[0]
+
+
+def test_auto_refusals_are_one_line(delayed_files, tmp_path):
+    _, files = delayed_files
+    out = tmp_path / "m.toml"
+    for extra, dynamics, status, says in (
+            (["--delay", "auto"], False, 2, "--delay auto"),        # nothing to estimate from
+            (["--delay", "three"], True, 2, "--delay"),
+            (["--delay", "2.5"], True, 2, "--delay")):
+        code, err = _identify(files, out, *extra, dynamics=dynamics)
+        assert code == status and says in err and err.count("\n") == 1, (extra, err)
+        assert not out.exists()
+    # broadband records that cannot tell the delay: the 10 Hz sines as --dynamics-records
+    code, err = _identify({"slow": files["slow"], "broadband": files["slow"]}, out,
+                          "--delay", "auto")
+    assert code == 1 and err.startswith("error: --delay auto: ")
+    assert err.count("\n") == 1 and not out.exists()
+
+
+def test_default_auto_keeps_zero_when_the_records_cannot_tell(pair, monkeypatch, tmp_path):
+    """The default (no --delay) with an estimate refused: delay 0, not written, said so; the
+    model is the one of delay 0 (the delay-free records of ``pair``)."""
+    refused = MeasurementDelay(5, 5.4, (1000.0, 2000.0), 0.3, (5.1, 5.6), 12.0, 13,
+                               "refused for the test")
+    monkeypatch.setattr(identify_cli, "estimate_measurement_delay", lambda *a, **k: refused)
+    out, printed = tmp_path / "m.toml", []
+    code, err = _identify(_records(tmp_path, 0, D), out, printed=printed)
+    assert code == 0, err
+    ident = read_toml(out)["identification"]
+    assert "measurement_delay_samples" not in ident
+    assert ident["measurement_delay_estimate"]["used"] is False
+    assert "measurement delay not estimated" in printed[0] and "refused for the test" in printed[0]
+    _same_model(out, pair[1])
 
 
 def _learn(model, directory):
