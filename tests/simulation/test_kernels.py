@@ -422,6 +422,34 @@ def sparse_filter(rng, p, window=4):
     return sim.LinearArrays(A, B, C, D)
 
 
+@pytest.mark.parametrize("quiet", [0, 5, 300, 700])
+def test_prefilter_state_at_a_divergence_is_the_state_after_that_sample(quiet):
+    # the kernel filters the reference ahead of the law, a block of samples at a time; at a
+    # diverging sample (the literal law on a sine after `quiet` samples at rest, in the
+    # first, second or third block) the pre-filter state it leaves is the written-out
+    # filter's state after that sample, and the inputs before it are the filtered law's
+    from hammerstein.simulation._stepping import _run_chain_kernel
+    plant = load_plant("rakotondrabe-2dof")
+    rng = np.random.default_rng(77)
+    f = stable_filter(rng, 3, 2)
+    comp = Prefiltered(InverseMultiplicativeCompensator(plant.hysteresis, gain="identity",
+                                                        check="ignore"), f)
+    t = np.arange(quiet + 400) * T
+    yr = np.vstack([50 * np.sin(2 * np.pi * 50 * t), 20 * np.cos(2 * np.pi * 30 * t)])
+    yr[:, :quiet] = 0.0
+    law = sim.compensator_law(comp) and comp.packed_law()
+    x0 = 1e-6 * rng.normal(size=3)          # decays within the quiet samples
+    state = np.concatenate([np.zeros(2 + plant.hysteresis.n_hysterons), x0])
+    u, _, c_final, _, status, sample = _run_chain_kernel(law, yr, state)
+    assert status != 0 and quiet <= sample < quiet + 400
+    _, x_after = filter_loop(f, yr[:, :sample + 1], x0)
+    np.testing.assert_allclose(c_final[-3:], x_after, rtol=1e-12, atol=1e-12)
+    v, _ = filter_loop(f, yr[:, :sample], x0)
+    inner = InverseMultiplicativeCompensator(plant.hysteresis, gain="identity", check="ignore")
+    u_ref, _ = sim.simulate_compensator(inner, v)
+    np.testing.assert_allclose(u[:, :sample], u_ref, rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("p", [1, 2, 3])
 def test_sparse_prefilter_equals_the_written_out_filter(p):
     """The kernel steps the pre-filter on its non-zero entries: same outputs and final
