@@ -310,6 +310,26 @@ def _sparse_linear(ptr, col, val, q, z, zn, y):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _prefilter_block(yr, t0, t1, ptr, col, val, z, zn, vb):
+    """Pre-filter samples ``t0:t1`` of ``yr`` (p, N) into ``vb[:, :t1 - t0]`` (:func:`_sparse_linear`).
+
+    ``z`` holds the filter state then room for p inputs (the state is
+    updated in place). A function of its own called by :func:`chain_kernel`
+    (ahead of the law, and to re-step a block up to a diverging sample), not
+    inlined: two inlined copies measured ~0.5 s more compile CPU.
+    """
+    p = yr.shape[0]
+    nf = z.size - p
+    v = np.empty(p)
+    for t in range(t0, t1):
+        for l in range(p):
+            z[nf + l] = yr[l, t]
+        _sparse_linear(ptr, col, val, p, z, zn, v)
+        for l in range(p):
+            vb[l, t - t0] = v[l]
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def plant_kernel(u, pi, s, lin, x, y):
     """Hammerstein plant: PI (``PIArrays``) then linear part (``LinearArrays``).
 
@@ -406,12 +426,8 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
             if tb == 0:
                 for i in range(nf):
                     zb[i] = z[i]
-                for tt in range(t, min(t + PREFILTER_BLOCK, n_samples)):
-                    for l in range(p):
-                        z[nf + l] = yr[l, tt]
-                    _sparse_linear(fptr, fcol, fval, p, z, zn, ref)
-                    for l in range(p):
-                        vb[l, tt - t] = ref[l]
+                _prefilter_block(yr, t, min(t + PREFILTER_BLOCK, n_samples), fptr, fcol, fval,
+                                 z, zn, vb)
             for l in range(p):
                 ref[l] = vb[l, tb]
         else:
@@ -459,10 +475,7 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
             if prefiltered:
                 for i in range(nf):
                     z[i] = zb[i]
-                for tt in range(t - tb, t + 1):
-                    for l in range(p):
-                        z[nf + l] = yr[l, tt]
-                    _sparse_linear(fptr, fcol, fval, p, z, zn, ref)
+                _prefilter_block(yr, t - tb, t + 1, fptr, fcol, fval, z, zn, vb)
             for i in range(nf):
                 xf[i] = z[i]
             return status, t
