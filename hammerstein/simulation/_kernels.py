@@ -367,7 +367,10 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     steps; on the 200-frequency Hammerstein sweep ~9 ms less of ~120 ms of
     kernel CPU: its short sparse rows pipeline better in a loop of their own).
     Compensator (delay): from ``U = U(t-T)``, ``iterations`` times
-    ``U <- U + K^-1 (v - Gamma(U; s(t-T)))``, then commit the plays.
+    ``U <- U + K^-1 (v - Gamma(U; s(t-T)))``, then commit the plays (for a
+    2 x 2 model the same sums in scalars, ``Gamma`` by :func:`_moved_pair`:
+    ~13 ns a sample less with 3 iterations, bit for bit the general loops'
+    results on the 200-frequency sweep).
     Compensator (low-pass): ``w = U(t-T) - K^-1 Gamma(U(t-T))``,
     ``v_f <- a v_f + (1 - a) w``, ``U = K^-1 v + v_f``, then commit.
     ``comp`` and ``plant`` are ``PIArrays``, ``linear`` the plant's
@@ -411,6 +414,12 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     h = np.empty(pp)
     yt = np.empty(pp)
     xn = np.empty(x.size)
+    # the delay law of a 2 x 2 model in scalars: ~13 ns a sample less with 3 iterations
+    two = m == 2 and p == 2
+    k00 = Kinv[0, 0] if two else 0.0
+    k01 = Kinv[0, 1] if two else 0.0
+    k10 = Kinv[1, 0] if two else 0.0
+    k11 = Kinv[1, 1] if two else 0.0
     # Gamma(U(t-T); s(t-T)), reused by the first iteration; later samples
     # get it from the commit (a play moved to U is idempotent at U)
     _evaluate(cu, cstart, cr, cW, cG, cs, yhat)
@@ -446,6 +455,24 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
                 for l in range(p):
                     acc += Kinv[k, l] * ref[l]
                 u[k] = acc + cvf[k]
+        elif two:      # 2 inputs, 2 outputs: the same sums, in scalars (registers)
+            u[0] = cu[0]
+            u[1] = cu[1]
+            y0 = yhat[0]
+            y1 = yhat[1]
+            for it in range(iterations):
+                if it > 0:
+                    y0, y1 = _moved_pair(u, cstart, cr, cW, cG, cs, uint64(0), uint64(1))
+                e0 = ref[0] - y0
+                e1 = ref[1] - y1
+                a0 = 0.0
+                a0 += k00 * e0
+                a0 += k01 * e1
+                a1 = 0.0
+                a1 += k10 * e0
+                a1 += k11 * e1
+                u[0] += a0
+                u[1] += a1
         else:
             for k in range(m):
                 u[k] = cu[k]
