@@ -221,3 +221,93 @@ def test_continuation_periodic_tolerance(scale, offset, periodic):
         a, b, c = r[0, -3], r[0, -2], r[0, -1]      # quadratic through the last three
         kk = np.arange(1, 4)
         np.testing.assert_allclose(got[0], c + (c - b) * kk + (c - 2 * b + a) / 2 * kk * (kk + 1))
+
+
+@pytest.mark.parametrize("scale, offset, periodic", [
+    (1.0, 0.0, True), (1.0, 5e-9, False), (100.0, 5e-9, True), (100.0, 5e-7, False)])
+def test_continuations_of_many_records_follow_the_same_rule(scale, offset, periodic):
+    """``continuations`` on records side by side: each one repeated one period earlier
+    (to the same tolerance as one record) or extrapolated by the quadratic through its
+    last three samples; short records hold their last sample; 0 samples is empty."""
+    from hammerstein.core.hammerstein_compensator import continuations
+    period = 10
+    k = np.arange(35)
+    r = scale * np.sin(2 * np.pi * k / period)[np.newaxis] * 0.9
+    r[0, -8:] += offset
+    poly = np.vstack([0.5 * k ** 2 - 3.0 * k + 1.0, -2.0 * k + 4.0])[:, :23]   # degree 2 and 1
+    records = [np.vstack([r, -r]), poly, np.array([[1.0, 2.0], [3.0, -4.0]]), np.vstack([r, r])[:, :20]]
+    got = continuations(records, 3, [period, None, 5, period])
+    if periodic:
+        np.testing.assert_array_equal(got[0], np.vstack([r, -r])[:, 25:28])
+    else:
+        a, b, c = r[0, -3], r[0, -2], r[0, -1]
+        q = np.arange(1, 4)
+        np.testing.assert_array_equal(got[0][0], c + (c - b) * q + (c - 2 * b + a) / 2 * (q * (q + 1)))
+        np.testing.assert_array_equal(got[0][1], -got[0][0])
+    # a polynomial of degree <= 2 is extrapolated exactly (not periodic)
+    kp = np.arange(23, 26)
+    np.testing.assert_allclose(got[1], np.vstack([0.5 * kp ** 2 - 3.0 * kp + 1.0, -2.0 * kp + 4.0]),
+                               rtol=1e-14, atol=1e-12)
+    np.testing.assert_array_equal(got[2], [[2.0] * 3, [-4.0] * 3])     # 2 samples: held
+    # 20 samples < period + 8: not tested for periodicity, a quadratic
+    assert got[3].shape == (2, 3)
+    assert [g.shape for g in continuations(records, 0, [period] * 4)] == [(2, 0)] * 3 + [(2, 0)]
+
+
+def test_fused_runs_equal_the_start_up_of_each_record_bit_for_bit(scenario):
+    """The start-up of several records at once (``fused_runs``: fade weights, continuation
+    and ZPETC preview of all records together) gives each record the lead reference and
+    state of the start-up written with the inverse's public calls, bit for bit: records
+    of different lengths, fades (0: the first sample away from rest, the general path)
+    and periods, beside each other in one call."""
+    rng = np.random.default_rng(11)
+    case = next(c for c in scenario.cases if c.name.startswith("s-zpetc-x"))
+    comp = case.compensator
+    refs, periods, fades = [], [], []
+    for n, period, fade in ((200, None, 37), (333, 50, 50), (90, 30, 0), (500, None, 1),
+                            (64, 16, 64), (400, 100, 120)):
+        t = np.arange(n)
+        ref = np.vstack([10 * np.sin(2 * np.pi * t / (period or 77)),
+                         np.cumsum(rng.normal(size=n))]) + (0.0 if fade else 1.0)
+        refs.append(ref)
+        periods.append(period)
+        fades.append(fade)
+    got = comp.fused_runs(refs, periods, fades)
+    assert len(got) == len(refs)
+    for (law, lead, state), ref, period, fade in zip(got, refs, periods, fades):
+        lead0, state0 = _general_start(comp, ref, period, fade)
+        assert np.array_equal(lead, lead0) and np.array_equal(state, state0)
+        assert law.prefilter is not None and law.n_states == state.size
+        one = comp.fused_run(ref, period, fade)
+        assert np.array_equal(one[1], lead) and np.array_equal(one[2], state)
+    with pytest.raises(ValueError, match="one of each per record"):
+        comp.fused_runs(refs, periods[:-1], fades)
+    stable = next(c for c in scenario.cases if c.name.startswith("s-stable-x")).compensator
+    for (law, v, state), ref in zip(stable.fused_runs(refs[:2], periods[:2], fades[:2]), refs):
+        one = stable.fused_run(ref, periods[0] if ref is refs[0] else periods[1],
+                               fades[0] if ref is refs[0] else fades[1])
+        assert np.array_equal(v, one[1]) and np.array_equal(state, one[2])
+
+
+def test_a_warning_of_the_joint_start_up_reprepares_the_cases_one_by_one(scenario, monkeypatch):
+    """Warnings cannot be told apart in a joint start-up: when ``fused_runs`` warns, the
+    group's cases are prepared again one by one, so each keeps its own warnings."""
+    import warnings
+
+    from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+    real = HammersteinCompensator.fused_runs
+    calls = []
+
+    def warning(self, *args):
+        calls.append(len(args[0]))
+        warnings.warn("from the joint start-up", RuntimeWarning)
+        return real(self, *args)
+
+    monkeypatch.setattr(HammersteinCompensator, "fused_runs", warning)
+    cases = [c for c in scenario.cases if c.name.startswith("s-zpetc-") and "lowpass" not in c.name]
+    got = run_cases(cases)
+    assert calls == [len(cases)]
+    for case, res in zip(cases, got):
+        ref = run_case(case)
+        assert res.warnings == ref.warnings and not any("joint" in w for w in res.warnings)
+        np.testing.assert_array_equal(res.outputs, ref.outputs)

@@ -195,6 +195,51 @@ def test_compensator_chain_matches_oracle(seed, dynamics, iterations):
     np.testing.assert_allclose(np.hstack([a.outputs, b.outputs]), got.outputs, rtol=0, atol=ATOL)
 
 
+def _naive_delay_law(model, K_inv, iterations, yr):
+    """The delay law written out hysteron by hysteron (plain Python, no packing, no pairs).
+
+    ``Gamma(U; s)`` adds, for every hysteron h (input k, output l, threshold
+    r, weight w), ``w * max(U_k - r, min(U_k + r, s_h))`` to output l, then
+    the pure gains; the plays s stay frozen over a sample's iterations and
+    are moved to the final U.
+    """
+    f = model.hysterons()
+    m, n = K_inv.shape[0], yr.shape[1]
+    s = np.zeros(f["thresholds"].size)
+
+    def gamma(u, s):
+        moved = np.maximum(u[f["input_index"]] - f["thresholds"],
+                           np.minimum(u[f["input_index"]] + f["thresholds"], s))
+        y = f["gain"] @ u
+        for h in range(s.size):
+            y[f["output_index"][h]] += f["weights"][h] * moved[h]
+        return y, moved
+
+    u_prev = np.zeros(m)
+    out = np.empty((m, n))
+    for t in range(n):
+        u = u_prev.copy()
+        for _ in range(iterations):
+            u = u + K_inv @ (yr[:, t] - gamma(u, s)[0])
+        s = gamma(u, s)[1]
+        out[:, t] = u_prev = u
+    return out
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 4])
+def test_law_iterations_match_the_written_out_law_to_rounding(m):
+    # the law's re-evaluations Gamma(U; s) run outputs in pairs (an odd last one alone),
+    # each play moved in a register: the same sums as the hysteron-by-hysteron law
+    # regrouped, so equal to rounding (1e-12 of the input range), on 1 to 4 outputs
+    rng = np.random.default_rng(1200 + m)
+    model = square_model(rng, m)
+    comp = InverseMultiplicativeCompensator(model, iterations=3, check="error")
+    yr = random_inputs(rng, m, 400) * 2
+    u, _ = sim.simulate_compensator(comp, yr)
+    ref = _naive_delay_law(model, np.asarray(comp.packed_law().K_inv), 3, yr)
+    np.testing.assert_allclose(u, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_chain_plant_part_is_the_plant_kernel_bit_for_bit(seed):
     # the chain kernel runs the plant with the same inlined steps as the plant kernel:
@@ -375,6 +420,34 @@ def sparse_filter(rng, p, window=4):
         C[l, l:nw:p] = rng.normal(size=window - 1)
         C[l, nw + l] = rng.normal()
     return sim.LinearArrays(A, B, C, D)
+
+
+@pytest.mark.parametrize("quiet", [0, 5, 300, 700])
+def test_prefilter_state_at_a_divergence_is_the_state_after_that_sample(quiet):
+    # the kernel filters the reference ahead of the law, a block of samples at a time; at a
+    # diverging sample (the literal law on a sine after `quiet` samples at rest, in the
+    # first, second or third block) the pre-filter state it leaves is the written-out
+    # filter's state after that sample, and the inputs before it are the filtered law's
+    from hammerstein.simulation._stepping import _run_chain_kernel
+    plant = load_plant("rakotondrabe-2dof")
+    rng = np.random.default_rng(77)
+    f = stable_filter(rng, 3, 2)
+    comp = Prefiltered(InverseMultiplicativeCompensator(plant.hysteresis, gain="identity",
+                                                        check="ignore"), f)
+    t = np.arange(quiet + 400) * T
+    yr = np.vstack([50 * np.sin(2 * np.pi * 50 * t), 20 * np.cos(2 * np.pi * 30 * t)])
+    yr[:, :quiet] = 0.0
+    law = sim.compensator_law(comp) and comp.packed_law()
+    x0 = 1e-6 * rng.normal(size=3)          # decays within the quiet samples
+    state = np.concatenate([np.zeros(2 + plant.hysteresis.n_hysterons), x0])
+    u, _, c_final, _, status, sample = _run_chain_kernel(law, yr, state)
+    assert status != 0 and quiet <= sample < quiet + 400
+    _, x_after = filter_loop(f, yr[:, :sample + 1], x0)
+    np.testing.assert_allclose(c_final[-3:], x_after, rtol=1e-12, atol=1e-12)
+    v, _ = filter_loop(f, yr[:, :sample], x0)
+    inner = InverseMultiplicativeCompensator(plant.hysteresis, gain="identity", check="ignore")
+    u_ref, _ = sim.simulate_compensator(inner, v)
+    np.testing.assert_allclose(u[:, :sample], u_ref, rtol=0, atol=1e-9)
 
 
 @pytest.mark.parametrize("p", [1, 2, 3])
