@@ -197,7 +197,6 @@ def pytest_collection_finish(session):
         session.config._cpu_before_tests = _cpu_seconds()
 
 
-
 @pytest.hookimpl(wrapper=True)
 def pytest_runtest_protocol(item, nextitem):
     report = item.config._cpu_report
