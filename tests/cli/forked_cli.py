@@ -30,6 +30,7 @@ seen before the signal) and ``workers_alive`` (those of them still running,
 not zombies, up to 20 s after the command ended).
 """
 
+import gc
 import json
 import os
 import runpy
@@ -46,6 +47,12 @@ from hammerstein.cli.main import build_parser
 
 build_parser()          # every command module, hence everything the commands import
 control.ss              # python-control is a lazy module: `list` uses it (DC gains)
+
+# What is imported above lives as long as every child: out of the collector's reach (as in
+# the figure workers, hammerstein/report/render.py), a child's collections do not walk, and
+# so do not copy, the inherited pages of the whole numerical stack again.
+gc.collect()
+gc.freeze()
 
 STATUS_IF_RETURNED = 99  # the console script ends with os._exit and never returns
 
