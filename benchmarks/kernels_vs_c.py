@@ -12,18 +12,24 @@ gains ``G`` (p, m), discrete state space ``A, B, C, D``):
   bending modes, per sample (:func:`~hammerstein.simulation._kernels.plant_kernel`);
 * ``chain``: optional reference pre-filter (``--prefilter``: a state space
   shaped like a Hammerstein compensator's ZPETC inverse of G, the law's
-  ``prefiltered`` branch, stepped on its non-zero entries as the kernel
-  does) -> compensator (delay law, ``iterations``
-  fixed-point steps with the play states frozen at the previous sample,
-  each re-evaluation moving the plays into a scratch vector then summing
-  them like a sample's output, divergence check, commit) -> PI -> bending
-  modes (:func:`~hammerstein.simulation._kernels.chain_kernel`);
+  ``prefiltered`` branch, stepped on its non-zero entries and run ahead of
+  the law 256 samples at a time, samples in pairs with the state alternating
+  between two buffers, as the kernel does) -> compensator (delay law,
+  ``iterations`` fixed-point steps with the play states frozen at the
+  previous sample, each re-evaluation ``Gamma(U; s)`` taking the outputs in
+  pairs, one pass over the plays per pair with each moved play in a
+  register; a 2 x 2 model's law in scalars, as the kernel's; divergence
+  check, commit) -> PI -> bending modes
+  (:func:`~hammerstein.simulation._kernels.chain_kernel`);
 * ``batch``: the chain over several cases with ragged records, one after the
   other (:func:`~hammerstein.simulation._kernels.chain_batch` on one thread);
 
 compiles it with ``gcc -O3 -march=native -fassociative-math -fno-signed-zeros
--fno-trapping-math`` (the reassociation numba's ``fastmath={'reassoc'}``
-allows, nothing more: no FMA contraction, exact non-finite semantics) and
+-fno-trapping-math -ffp-contract=off`` (the reassociation numba's
+``fastmath={'reassoc'}`` allows, nothing more: exact non-finite semantics,
+and no FMA contraction, which numba's flags do not allow either and which
+gcc does by default in GNU C on a CPU with FMA: without
+``-ffp-contract=off`` the reference has ~195 fused multiply-adds) and
 calls it through ctypes on the same random data as the numba kernels. For
 each size ``inputs x outputs x hysterons`` (hysterons = play operators per
 input; every output weights every play, two bending-mode states per output)
@@ -56,7 +62,7 @@ from hammerstein.simulation._packing import (LANES, ChainState, LawArrays,  # no
 
 TARGET = 1.3
 CFLAGS = ["-O3", "-march=native", "-fassociative-math", "-fno-signed-zeros",
-          "-fno-trapping-math", "-shared", "-fPIC"]
+          "-fno-trapping-math", "-ffp-contract=off", "-shared", "-fPIC"]
 SIZES = [(1, 1, 5), (1, 1, 15), (2, 2, 5), (2, 2, 15), (2, 2, 50), (3, 3, 15), (4, 4, 15),
          (6, 6, 15), (6, 6, 50)]
 
@@ -90,16 +96,42 @@ static inline void output(const double *u, int64_t m, int64_t p, int64_t n, cons
     }
 }
 
-/* y = Gamma(u; s) without moving the plays: the moved plays go to the scratch v
-   (n,), zero where no play is, then y = W v + G u (the kernel's _evaluate) */
-static inline void evaluate(const double *u, int64_t m, int64_t p, int64_t n,
-                            const int64_t *start, const double *r, const double *W,
-                            const double *G, const double *s, double *v, double *y) {
+/* outputs l and l1 of Gamma(u; s), the plays moved to u but not stored: one pass over the
+   plays, each moved play (a register) weighted into both outputs, then G u (the kernel's
+   _moved_pair) */
+static inline void moved_pair(const double *u, int64_t m, int64_t n, const int64_t *start,
+                              const double *r, const double *W, const double *G,
+                              const double *s, int64_t l, int64_t l1, double *y0, double *y1) {
+    double a0 = 0.0, a1 = 0.0;
+    const double *w0 = W + l * n, *w1 = W + l1 * n;
     for (int64_t k = 0; k < m; k++) {
         double uk = u[k];
-        for (int64_t j = start[k]; j < start[k + 1]; j++) v[j] = play(s[j], uk, r[j]);
+        for (int64_t j = start[k]; j < start[k + 1]; j++) {
+            double vj = play(s[j], uk, r[j]);
+            a0 += w0[j] * vj;
+            a1 += w1[j] * vj;
+        }
     }
-    output(u, m, p, n, W, G, v, y);
+    for (int64_t k = 0; k < m; k++) {
+        a0 += G[l * m + k] * u[k];
+        a1 += G[l1 * m + k] * u[k];
+    }
+    *y0 = a0;
+    *y1 = a1;
+}
+
+/* y = Gamma(u; s) without moving the plays: outputs in pairs, an odd last one paired with
+   itself (the kernel's _evaluate) */
+static inline void evaluate(const double *u, int64_t m, int64_t p, int64_t n,
+                            const int64_t *start, const double *r, const double *W,
+                            const double *G, const double *s, double *y) {
+    for (int64_t l = 0; l < p; l += 2) {
+        int64_t l1 = l + 1 < p ? l + 1 : l;
+        double a0, a1;
+        moved_pair(u, m, n, start, r, W, G, s, l, l1, &a0, &a1);
+        y[l] = a0;
+        y[l1] = a1;
+    }
 }
 
 /* y = C x + D h; x <- A x + B h */
@@ -123,7 +155,6 @@ static inline void linear(const double *h, int64_t q, int64_t nx, const double *
 
 #define MAXV 64
 #define MAXX 256
-#define MAXS 4096
 
 /* the non-zero entries of [[C, D], [A, B]] row by row (compressed rows; columns: the
    state, then the input), as the kernels step a reference pre-filter */
@@ -143,9 +174,10 @@ static int64_t sparse_rows(int64_t q, int64_t nx, const double *A, const double 
     return n;
 }
 
-/* y = C x + D h, x <- A x + B h on the non-zero entries; z = [x; h] */
+/* y = C x + D h, new state A x + B h into zn on the non-zero entries; z = [x; h] (z is not
+   written: the caller alternates two buffers) */
 static inline void sparse_linear(const int64_t *ptr, const int64_t *col, const double *val,
-                                 int64_t q, int64_t nx, double *z, double *zn, double *y) {
+                                 int64_t q, int64_t nx, const double *z, double *zn, double *y) {
     for (int64_t l = 0; l < q; l++) {
         double a = 0.0;
         for (int64_t n = ptr[l]; n < ptr[l + 1]; n++) a += val[n] * z[col[n]];
@@ -156,7 +188,32 @@ static inline void sparse_linear(const int64_t *ptr, const int64_t *col, const d
         for (int64_t n = ptr[q + i]; n < ptr[q + i + 1]; n++) a += val[n] * z[col[n]];
         zn[i] = a;
     }
-    for (int64_t i = 0; i < nx; i++) z[i] = zn[i];
+}
+
+#define BLOCK 256
+
+/* pre-filter samples t0..t1 of yr (p rows of stride N) into vb (p rows of stride BLOCK), in
+   pairs, the state alternating between z and a second buffer; z = [state; input] holds the
+   state after t1 (the kernel's _prefilter_block) */
+static void prefilter_block(const double *yr, int64_t N, int64_t t0, int64_t t1,
+                            const int64_t *ptr, const int64_t *col, const double *val,
+                            int64_t p, int64_t nf, double *z, double *vb) {
+    double v[MAXV], z2[MAXX + MAXV];
+    int64_t t = t0;
+    for (; t + 1 < t1; t += 2) {
+        for (int64_t l = 0; l < p; l++) z[nf + l] = yr[l * N + t];
+        sparse_linear(ptr, col, val, p, nf, z, z2, v);
+        for (int64_t l = 0; l < p; l++) vb[l * BLOCK + t - t0] = v[l];
+        for (int64_t l = 0; l < p; l++) z2[nf + l] = yr[l * N + t + 1];
+        sparse_linear(ptr, col, val, p, nf, z2, z, v);
+        for (int64_t l = 0; l < p; l++) vb[l * BLOCK + t + 1 - t0] = v[l];
+    }
+    if (t < t1) {
+        for (int64_t l = 0; l < p; l++) z[nf + l] = yr[l * N + t];
+        sparse_linear(ptr, col, val, p, nf, z, z2, v);
+        for (int64_t l = 0; l < p; l++) vb[l * BLOCK + t - t0] = v[l];
+        for (int64_t i = 0; i < nf; i++) z[i] = z2[i];
+    }
 }
 
 void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double *u,
@@ -174,8 +231,9 @@ void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double 
 }
 
 /* reference pre-filter (if prefiltered: ref = Cf xf + Df yr(t), xf <- Af xf + Bf yr(t),
-   e.g. a Hammerstein compensator's ZPETC inverse of G) -> delay law; returns the first
-   failing sample (status in *status) or N */
+   e.g. a Hammerstein compensator's ZPETC inverse of G, run ahead of the law BLOCK samples at
+   a time) -> delay law (a 2 x 2 model in scalars); returns the first failing sample (status
+   in *status) or N */
 int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *Kinv,
               int64_t iterations, double bound, int64_t prefiltered, const double *Af,
               const double *Bf, const double *Cf, const double *Df, int64_t nf, double *xf,
@@ -185,33 +243,58 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
               const double *D, int64_t nx, double *cu, double *cs, double *ps, double *x,
               double *u_out, double *y_out, int64_t *status) {
     double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], h[MAXV], yt[MAXV];
-    double xn[MAXX], sv[MAXS];
-    static double fval[(MAXX + MAXV) * (MAXX + MAXV)], z[MAXX + MAXV], zn[MAXX];
+    double xn[MAXX];
+    static double fval[(MAXX + MAXV) * (MAXX + MAXV)], z[MAXX + MAXV], zb[MAXX];
+    static double vb[MAXV * BLOCK];
     static int64_t fcol[(MAXX + MAXV) * (MAXX + MAXV)], fptr[MAXX + MAXV + 1];
+    int two = m == 2 && p == 2;
+    double k00 = two ? Kinv[0] : 0.0, k01 = two ? Kinv[1] : 0.0;
+    double k10 = two ? Kinv[2] : 0.0, k11 = two ? Kinv[3] : 0.0;
     *status = 0;
-    for (int64_t j = 0; j < cn; j++) sv[j] = 0.0;
     sparse_rows(p, nf, Af, Bf, Cf, Df, fptr, fcol, fval);
     for (int64_t i = 0; i < nf; i++) z[i] = xf[i];
-    evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, sv, yhat);
+    evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, yhat);
     for (int64_t t = 0; t < N; t++) {
+        int64_t tb = t % BLOCK;
         if (prefiltered) {
-            for (int64_t l = 0; l < p; l++) z[nf + l] = yr[l * N + t];
-            sparse_linear(fptr, fcol, fval, p, nf, z, zn, ref);
+            if (tb == 0) {
+                for (int64_t i = 0; i < nf; i++) zb[i] = z[i];
+                prefilter_block(yr, N, t, t + BLOCK < N ? t + BLOCK : N, fptr, fcol, fval, p,
+                                nf, z, vb);
+            }
+            for (int64_t l = 0; l < p; l++) ref[l] = vb[l * BLOCK + tb];
         } else {
             for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
         }
-        for (int64_t k = 0; k < m; k++) u[k] = cu[k];
-        for (int64_t it = 0; it < iterations; it++) {
-            if (it == 0) {
-                for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yhat[l];
-            } else {
-                evaluate(u, m, p, cn, cstart, cr, cW, cG, cs, sv, yh);
-                for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yh[l];
+        if (two) {
+            double y0 = yhat[0], y1 = yhat[1];
+            u[0] = cu[0];
+            u[1] = cu[1];
+            for (int64_t it = 0; it < iterations; it++) {
+                if (it > 0) moved_pair(u, 2, cn, cstart, cr, cW, cG, cs, 0, 1, &y0, &y1);
+                double e0 = ref[0] - y0, e1 = ref[1] - y1;
+                double a0 = 0.0, a1 = 0.0;
+                a0 += k00 * e0;
+                a0 += k01 * e1;
+                a1 += k10 * e0;
+                a1 += k11 * e1;
+                u[0] += a0;
+                u[1] += a1;
             }
-            for (int64_t k = 0; k < m; k++) {
-                double acc = 0.0;
-                for (int64_t l = 0; l < p; l++) acc += Kinv[k * p + l] * e[l];
-                u[k] += acc;
+        } else {
+            for (int64_t k = 0; k < m; k++) u[k] = cu[k];
+            for (int64_t it = 0; it < iterations; it++) {
+                if (it == 0) {
+                    for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yhat[l];
+                } else {
+                    evaluate(u, m, p, cn, cstart, cr, cW, cG, cs, yh);
+                    for (int64_t l = 0; l < p; l++) e[l] = ref[l] - yh[l];
+                }
+                for (int64_t k = 0; k < m; k++) {
+                    double acc = 0.0;
+                    for (int64_t l = 0; l < p; l++) acc += Kinv[k * p + l] * e[l];
+                    u[k] += acc;
+                }
             }
         }
         int64_t st = 0;
@@ -222,6 +305,10 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
         if (st == 0)
             for (int64_t k = 0; k < m; k++) if (fabs(u[k]) > bound) st = 2;
         if (st) {
+            if (prefiltered) {
+                for (int64_t i = 0; i < nf; i++) z[i] = zb[i];
+                prefilter_block(yr, N, t - tb, t + 1, fptr, fcol, fval, p, nf, z, vb);
+            }
             for (int64_t i = 0; i < nf; i++) xf[i] = z[i];
             *status = st;
             return t;
@@ -522,7 +609,7 @@ def main(argv=None):
     N = args.samples or (20_000 if args.quick else 100_000)
     repeats = args.repeat or (3 if args.quick else 7)
     import numba
-    print(f"kernels vs C  numba {numba.__version__}, gcc {' '.join(CFLAGS[:5])}, "
+    print(f"kernels vs C  numba {numba.__version__}, gcc {' '.join(CFLAGS[:6])}, "
           f"{N} samples a call, best of {repeats}, compensator iterations {args.iterations}, "
           f"pre-filter {'ZPETC-shaped' if args.prefilter else 'none'}")
     load0 = os.getloadavg()[0]
