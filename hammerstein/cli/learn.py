@@ -178,7 +178,9 @@ WORSE = 1.1
 #: (noise of the period-averaged measurement, :func:`_judged_error`): on realistic-2dof with
 #: 40 nm of noise, trials judged 1.15-1.38 times worse on the averaged measurement (0.05-0.07
 #: µm, averaged noise ~14 nm) were as good or better in truth, and learning again from the
-#: older drive made the next trial 1.29 times worse
+#: older drive made the next trial 1.29 times worse. A non-repeating reference (a raster) uses
+#: it as the z of :func:`hammerstein.core.trial_noise.compare_trials` (standard deviations of
+#: the difference of two mean squares less the noise)
 NOISE_MARGIN = 3.0
 #: below this phase of one sample at the reference's fundamental [deg] (a period longer than
 #: 360 / DELAY_PHASE_DEG samples), ``--delay auto`` says the delay is not observable. The
