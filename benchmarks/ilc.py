@@ -16,6 +16,7 @@ time. Targets: <= 0.3 % within 10 iterations, no growth above 10 %.
     python benchmarks/ilc.py --files --gain 0.8 --q 500              # learn through files
     python benchmarks/ilc.py --files --model preisach --lab-delay given   # delay in every record
     python benchmarks/ilc.py --files --model classical --lab-delay auto   # ... found by identify
+    python -m benchmarks.ilc --files --model preisach --lab-delay auto --actuator realistic-b
 """
 
 from __future__ import annotations
@@ -169,7 +170,8 @@ def file_cases(args):
 
 
 def through_files(args):
-    """Ten ``learn`` trials through files against realistic-2dof, as a user with hardware would.
+    """Ten ``learn`` trials through files against an actuator (``--actuator``, default
+    realistic-2dof), as a user with hardware would.
 
     The model is identified on the actuator through the sensor (as the
     scenarios' ``model = "identified"``) and saved as a preset file, or, with
@@ -195,7 +197,8 @@ def through_files(args):
     from hammerstein.core.drive import read_signals
     from hammerstein.core.hammerstein_compensator import fade_in
     from hammerstein.core.presets import dynamics_to_table, read_toml, save_model
-    plant = load_plant("realistic-2dof")
+    name = args.actuator
+    plant = load_plant(name if name == "realistic-2dof" else ROOT / f"scenarios/presets/{name}.toml")
     T = plant.sampling_period
     spec = {"kind": "hammerstein", "model": "identified",
             "identify": {"frequency": 50.0, "sensor": True}, "dynamics": "identified"}
@@ -210,13 +213,13 @@ def through_files(args):
                 warnings.simplefilter("ignore")
                 start = build_compensator(spec, plant, ROOT / "scenarios")
             save_model(start.model, d / "model.toml", extra={
-                "preset": {"name": "realistic-2dof-identified", "sampling_period": T},
+                "preset": {"name": f"{name}-identified", "sampling_period": T},
                 "dynamics": dynamics_to_table(start.dynamics)})
         else:          # the preset written by identify --model ... --dynamics
             lab = args.lab_samples if args.lab_delay else 0   # the trials' delay, in the records too
             c0 = time.process_time()
             given = {"given": lab, "ignored": 0, "auto": None}.get(args.lab_delay, 0)  # --delay
-            identified_through_files(plant, "realistic-2dof", args.model, keep=d, record_delay=lab,
+            identified_through_files(plant, name, args.model, keep=d, record_delay=lab,
                                      identify_delay=given)
             ident = read_toml(d / "model.toml").get("identification", {})
             est = ident.get("measurement_delay_estimate", {})
@@ -319,10 +322,14 @@ def main():
                          "history of every case in DIR (a new directory)")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
+    ap.add_argument("--actuator", choices=["realistic-2dof", "realistic-b"], default="realistic-2dof",
+                    help="--files: the actuator the trials run on (realistic-b: "
+                         "scenarios/presets/realistic-b.toml)")
     args = ap.parse_args()
     if args.files:
-        print(f"load {os.getloadavg()[0]:.2f}; gain {args.gain}, Q {args.q:g} Hz, 40 nm noise, "
-              f"{args.lab_samples}-sample delay, learn through files, identified model: {args.model}"
+        print(f"load {os.getloadavg()[0]:.2f}; {args.actuator}; gain {args.gain}, Q {args.q:g} Hz, "
+              f"40 nm noise, {args.lab_samples}-sample delay, learn through files, identified model: "
+              f"{args.model}"
               + (f"; the delay in the identification records too, {args.lab_delay} to identify"
                  if args.lab_delay else ""))
         through_files(args)

@@ -22,11 +22,19 @@ fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
 
 With ``--history DIR`` the best trial so far is kept in ``DIR/best-trial.csv``
 (its drive and measured response; ``DIR/learning.csv`` its error and the
-gain halvings): a trial whose error (the measured max Euclidean error,
-averaged over the periods for a repeating reference) is more than 10 %
-above the best one is not learnt from; the next drive is learnt from the
-best trial's drive and response with half the gain (halved again at each
-such trial), and one line says so, as the scenarios' ``kind = "ilc"`` does.
+gain halvings): a trial whose error is more than 10 % above the best one,
+beyond what the sensor noise can explain, is not learnt from; the next
+drive is learnt from the best trial's drive and response with half the
+gain (halved again at each such trial), and one line says so, as the
+scenarios' ``kind = "ilc"`` does. The error judged: for a repeating
+reference, the max Euclidean error averaged over the periods, with a
+margin of 3 standard deviations of the periods' spread
+(:func:`_judged_error`); for one that does not repeat (a raster), the RMS
+Euclidean error less the noise's power, over the window the printed error
+covers (after the fade-in and ``--settle-periods``), the noise estimated
+from each record's content above the learning's band and the margin 3
+standard deviations of the difference
+(:func:`hammerstein.core.trial_noise.compare_trials`).
 
 Exit status: 0 written; 1 bad files, shapes or a drive beyond the amplifier
 with ``--limits error`` (one line, nothing written); 2 a usage error.
@@ -50,6 +58,7 @@ from hammerstein.core.files import bounded_read_text, safe_write
 from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
                                   harmonic_base_gains, periodic_average, repeating_from)
+from hammerstein.core.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -79,8 +88,8 @@ def add_parser(subparsers):
     p.add_argument("--out", required=True, metavar="U_K+1.csv", help="the next drive")
     p.add_argument("--history", metavar="DIR",
                    help="append this trial's error to DIR/history.csv, draw DIR/convergence.png, keep the "
-                        "best trial: a trial 10 %% worse than it is not learnt from (the next "
-                        "drive is learnt from the best one with half the gain)")
+                        "best trial: a trial 10 %% worse than it beyond the sensor noise is not "
+                        "learnt from (the next drive is learnt from the best one with half the gain)")
     p.add_argument("--learning-gain", type=positive_float, default=0.5, metavar="G",
                    help="gamma in (0, 2) (default 0.5: half the error per trial, half the noise)")
     p.add_argument("--q-cutoff-hz", type=positive_float, default=500.0, metavar="HZ",
@@ -169,7 +178,9 @@ WORSE = 1.1
 #: (noise of the period-averaged measurement, :func:`_judged_error`): on realistic-2dof with
 #: 40 nm of noise, trials judged 1.15-1.38 times worse on the averaged measurement (0.05-0.07
 #: µm, averaged noise ~14 nm) were as good or better in truth, and learning again from the
-#: older drive made the next trial 1.29 times worse
+#: older drive made the next trial 1.29 times worse. A non-repeating reference (a raster) uses
+#: it as the z of :func:`hammerstein.core.trial_noise.compare_trials` (standard deviations of
+#: the difference of two mean squares less the noise)
 NOISE_MARGIN = 3.0
 #: below this phase of one sample at the reference's fundamental [deg] (a period longer than
 #: 360 / DELAY_PHASE_DEG samples), ``--delay auto`` says the delay is not observable. The
@@ -213,8 +224,44 @@ def _write_state(history_dir, state):
     safe_write(Path(history_dir) / STATE_FILE, text, "learning state file")
 
 
+def _window_error(target, y, delay, start, sampling_period, q_cutoff_hz):
+    """The measured error of a non-repeating reference over the judged window, or None.
+
+    Parameters
+    ----------
+    target, y : numpy.ndarray, shape (p, N)
+        The faded reference and the measured response [µm].
+    delay : int
+        Samples the measurement lags [samples].
+    start : int
+        First sample judged (after the fade-in and the settling) [samples].
+    sampling_period : float
+        T [s].
+    q_cutoff_hz : float
+        Q's cut-off [Hz]: the noise is estimated from the error's content
+        above ``min(2 q_cutoff_hz, fs / 4)`` (what the learning puts into
+        the drive stays below Q; the actuator's modes and the reference's
+        harmonics there are lines the median leaves out).
+
+    Returns
+    -------
+    hammerstein.core.trial_noise.TrialError or None
+        None when the window holds fewer than ``2 SEGMENT`` samples (too
+        short a record to estimate the noise from).
+    """
+    N = target.shape[1]
+    e = target[:, start:N - delay] - y[:, start + delay:N]
+    if e.shape[1] < 2 * SEGMENT:
+        return None
+    return trial_error(e, sampling_period, min(2.0 * q_cutoff_hz, 0.25 / sampling_period))
+
+
 def _judged_error(target, y, delay, period, steady):
     """The error a trial is judged by, and the noise of that judgement [µm].
+
+    Used for a repeating reference; a reference that does not repeat is
+    judged on its RMS error less the noise (:func:`_window_error`), unless
+    its record is too short for the noise estimate.
 
     The score is the max Euclidean error of the measurement, averaged over the
     periods from ``steady`` on for a repeating reference (its noise divided by
@@ -232,6 +279,18 @@ def _judged_error(target, y, delay, period, steady):
         spread = np.sum((e[:, steady:] - averaged) ** 2, axis=1) / (n - period)
         return float(np.max(np.linalg.norm(averaged, axis=0))), float(np.sqrt(np.max(spread) * period / n))
     return float(np.max(np.linalg.norm(e, axis=0))), 0.0
+
+
+def _read_best(history_dir, model, u_shape, y_shape, n_samples):
+    """The best trial's drive and measured response (``DIR/best-trial.csv``)."""
+    _, bu, _ = read_signals(Path(history_dir) / BEST_FILE, list(model.input_names),
+                            "t", None, None, "--history best trial")
+    _, by, _ = read_signals(Path(history_dir) / BEST_FILE, list(model.output_names),
+                            "t", None, None, "--history best trial")
+    if bu.shape != u_shape or by.shape != y_shape:
+        raise DataFileError(f"--history: {BEST_FILE} does not match the drive's "
+                            f"{n_samples} samples; choose a new --history directory")
+    return bu, by
 
 
 def _restore_gains(history_dir, gains):
@@ -327,24 +386,37 @@ def _handle(args):
         score, score_noise = _judged_error(target, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise
+        # a reference that does not repeat: its RMS error less the noise, over the printed window
+        judged = None if steady is not None else _window_error(
+            target, y, delay, min(max(fade, settle), N - delay - 1), T, args.q_cutoff_hz)
+        if judged is not None:
+            score = compare_trials(judged, judged).score
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
             if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
         learn_u, learn_y, note, halvings, best = u, y, None, 0, True
         if state is not None:
             halvings = state["halvings"]
-            best = score < state["score"]
-            if score > WORSE * state["score"] + margin:
+            best_score, what = state["score"], "averaged"
+            best = score < best_score
+            worse = score > WORSE * best_score + margin
+            bu = by = None
+            if judged is not None:       # judged against the best trial's record, same statistic
+                bu, by = _read_best(args.history, model, u.shape, y.shape, N)
+                cmp = compare_trials(judged, _window_error(
+                    target, by, delay, min(max(fade, settle), N - delay - 1), T, args.q_cutoff_hz),
+                    WORSE, NOISE_MARGIN)
+                score, best_score, margin, worse, best = (cmp.score, cmp.best_score, cmp.margin,
+                                                          cmp.worse, cmp.better)
+                what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
+                        f"estimated from the records")
+            if worse:
                 halvings += 1
-                _, bu, _ = read_signals(Path(args.history) / BEST_FILE, list(model.input_names),
-                                        "t", None, None, "--history best trial")
-                _, by, _ = read_signals(Path(args.history) / BEST_FILE, list(model.output_names),
-                                        "t", None, None, "--history best trial")
-                if bu.shape != u.shape or by.shape != y.shape:
-                    raise DataFileError(f"--history: {BEST_FILE} does not match the drive's "
-                                        f"{N} samples; choose a new --history directory")
+                if bu is None:
+                    bu, by = _read_best(args.history, model, u.shape, y.shape, N)
                 learn_u, learn_y = bu, by
-                note = (f"trial {k_next} is {score / state['score']:.3g} times the error of trial "
-                        f"{state['trial']} (the best so far, {state['score']:.4g} µm averaged; "
+                ratio = f"{score / best_score:.3g} times" if best_score > 0 else "more than"
+                note = (f"trial {k_next} is {ratio} the error of trial "
+                        f"{state['trial']} (the best so far, {best_score:.4g} µm {what}; "
                         f"{margin:.2g} µm of noise margin): "
                         f"not learnt from; learning again from trial {state['trial']}'s drive "
                         f"with gain x{0.5 ** halvings:g}")
