@@ -322,7 +322,8 @@ def main():
                          "history of every case in DIR (a new directory)")
     ap.add_argument("--files", action="store_true",
                     help="realistic-2dof through compensate/learn files (the hardware route)")
-    ap.add_argument("--actuator", choices=["realistic-2dof", "realistic-b"], default="realistic-2dof",
+    ap.add_argument("--actuator", choices=["realistic-2dof", "realistic-b", "realistic-gpi"],
+                    default="realistic-2dof",
                     help="--files: the actuator the trials run on (realistic-b: "
                          "scenarios/presets/realistic-b.toml)")
     args = ap.parse_args()
