@@ -387,10 +387,11 @@ def _handle(args):
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise
         # a reference that does not repeat: its RMS error less the noise, over the printed window
+        judged_start = min(max(fade, settle), N - delay - 1)
         judged = None if steady is not None else _window_error(
-            target, y, delay, min(max(fade, settle), N - delay - 1), T, args.q_cutoff_hz)
+            target, y, delay, judged_start, T, args.q_cutoff_hz)
         if judged is not None:
-            score = compare_trials(judged, judged).score
+            score = judged.score
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
             if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
         learn_u, learn_y, note, halvings, best = u, y, None, 0, True
@@ -403,8 +404,7 @@ def _handle(args):
             if judged is not None:       # judged against the best trial's record, same statistic
                 bu, by = _read_best(args.history, model, u.shape, y.shape, N)
                 cmp = compare_trials(judged, _window_error(
-                    target, by, delay, min(max(fade, settle), N - delay - 1), T, args.q_cutoff_hz),
-                    WORSE, NOISE_MARGIN)
+                    target, by, delay, judged_start, T, args.q_cutoff_hz), WORSE, NOISE_MARGIN)
                 score, best_score, margin, worse, best = (cmp.score, cmp.best_score, cmp.margin,
                                                           cmp.worse, cmp.better)
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "

@@ -148,6 +148,15 @@ class TrialError:
     samples: int
     noise: NoiseLevel
 
+    @property
+    def score(self):
+        """``S``, the RMS Euclidean error less the noise [µm].
+
+        ``sqrt(max(0, sum_l (m_l - sigma_l^2)))``, as
+        :func:`compare_trials` scores a trial.
+        """
+        return float(np.sqrt(max(float(np.sum(self.mean_square - self.noise.sigma ** 2)), 0.0)))
+
 
 def trial_error(error, sampling_period, low_hz=None):
     """The mean square and the noise of a trial's measured error.
