@@ -30,6 +30,11 @@ from hammerstein.core.lti import MeasurementDelay
 from hammerstein.core.drive import read_signals
 from hammerstein.core.presets import load_plant, read_toml
 
+# Every test here reads presets identified through the CLI (two identify runs with --dynamics,
+# about 3 s of CPU): end-to-end, run by .ci/run with -m slow; the delay estimate itself is
+# tested in tests/core/test_measurement_delay.py in the default run.
+pytestmark = pytest.mark.slow
+
 D = 4                      # samples
 
 

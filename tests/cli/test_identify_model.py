@@ -54,6 +54,7 @@ def loop_pp(model, k, frac):
     return np.ptp(model.simulate(u)[0][k, n:])
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_auto_chooses_the_class_with_the_lower_minor_loop_error(files, capsys):
     act, d, recs = files
     out = d / "auto.toml"

@@ -416,6 +416,7 @@ def test_10_full_stdout_is_an_error(forked_cli):
 # Variables read at the interpreter's or a dependency's start-up need a fresh process; the
 # independent ones share it: two bad dependency variables (one note line each, the command
 # still succeeds and draws its figure with Agg) and an ASCII stdout (13).
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_11_13_start_up_variables_in_one_fresh_process(tmp_path):
     env = {**os.environ, "NUMBA_NUM_THREADS": "x", "MPLBACKEND": "bogus",
            "PYTHONIOENCODING": "ascii"}

@@ -240,6 +240,7 @@ def circle(n, f, R, Ts):
     return np.vstack([R * np.cos(2 * np.pi * f * t), R * np.sin(2 * np.pi * f * t)])
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 @pytest.mark.parametrize("plant_kind", ["gpi", "preisach"])
 def test_hammerstein_over_a_gpi_model(plant_kind):
     true = gpi_actuator() if plant_kind == "gpi" else preisach_actuator()

@@ -216,6 +216,7 @@ def _identified(plant):
     return _IDENTIFIED[plant]
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 @pytest.mark.parametrize("plant", ["preisach", "classical"])
 def test_every_kind_over_an_identified_preisach_model_on_the_true_plant(plant):
     true, est = _identified(plant)

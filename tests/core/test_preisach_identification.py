@@ -162,6 +162,7 @@ def circle(n, f, R, Ts):
     return np.vstack([R * np.cos(2 * np.pi * f * t), R * np.sin(2 * np.pi * f * t)])
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_hammerstein_over_preisach_model_on_a_generalized_pi_plant():
     true = gpi_actuator()
     est = PreisachIdentifier(n_levels=14).fit(records(true, noise=0.02))

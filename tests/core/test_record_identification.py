@@ -186,6 +186,7 @@ def three_by_two(tmp_path_factory):
     return tmp, files
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_three_by_two_structure_and_held_out_record(three_by_two, capsys):
     tmp, files = three_by_two
     out = tmp / "mimo.toml"

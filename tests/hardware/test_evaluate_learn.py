@@ -114,6 +114,7 @@ def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_pa
     assert not (tmp_path / "u2.csv").exists()
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_learn_with_history_returns_to_the_best_drive_after_a_worse_trial(tmp_path):
     """A trial more than 10 % worse than the best is not learnt from: the next drive is the one
     learnt from the best trial's files with half the gain (compared with a fresh `learn` run on
@@ -160,6 +161,7 @@ def test_delay_auto_says_when_one_sample_is_too_little_phase(tmp_path, frequency
     assert (f"one sample is only {per_sample:.2g} deg" in res.stdout) == says, res.stdout
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_learn_history_does_not_judge_a_trial_worse_on_noise_alone(tmp_path):
     """The same drive measured twice (noise seeds 7 and 0, 40 nm): the averaged measurement of
     the second is more than 10 % worse (checked here from the two histories' best scores), its

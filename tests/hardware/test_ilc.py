@@ -107,6 +107,7 @@ reference = {{ kind = "circle", radius = 20.0, frequency = 200.0, periods = 8 }}
     assert ("iteration-4", "max_abs_error_x") in m
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_learning_outside_the_model_class_never_grows_by_more_than_10_percent():
     """realistic-2dof (Preisach loops, three coupled modes, creep), its model identified through
     the sensor (a classical PI and identified modes), 40 nm noise, 10 trials: every trial's max

@@ -79,7 +79,10 @@ def test_update_is_the_linearised_inverse_to_first_order():
     np.testing.assert_allclose(du, e / J, rtol=0.05)
 
 
-@pytest.mark.parametrize("R, f, periods", [(50.0, 200.0, 12), (15.0, 10.0, 6)])
+@pytest.mark.parametrize("R, f, periods", [
+    (50.0, 200.0, 12),
+    pytest.param(15.0, 10.0, 6, marks=pytest.mark.slow),   # 2 s: in .ci/run's -m slow
+])
 def test_learning_on_a_plant_outside_the_preisach_model_never_grows(R, f, periods):
     plant = load_plant("realistic-2dof")
     T = plant.sampling_period

@@ -27,6 +27,7 @@ import subprocess
 
 import numpy as np
 import pandas as pd
+import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.core import references as refs
@@ -72,6 +73,7 @@ def _learn(tmp_path, drive, measured, out, history):
     return res.stdout
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_the_same_drive_measured_twice_is_never_judged_worse(tmp_path):
     clean = _start(tmp_path)
     P = int(round(1 / F / T))
@@ -89,6 +91,7 @@ def test_the_same_drive_measured_twice_is_never_judged_worse(tmp_path):
         assert "not learnt from" not in said, said
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_a_trial_with_one_and_a_half_times_the_error_is_judged_worse(tmp_path):
     _start(tmp_path)
     P = int(round(1 / F / T))

@@ -118,6 +118,7 @@ def test_a_view_changed_between_draws_gets_new_ticks():
     assert "100" in labels
 
 
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_figures_saved_from_threads_equal_those_saved_one_by_one():
     import io
     from concurrent.futures import ThreadPoolExecutor
