@@ -607,7 +607,8 @@ class IterativeLearning:
         measured on ``realistic-gpi`` through ``learn``, 0.2, 0.3, 0.5 and
         1.0 left the 15 µm, 10 Hz circle at 0.38, 0.43, 0.32 and 0.40 %
         after 10 trials, 0.7 at 0.28 % (no growth above x1.02 with any of
-        them; x1.73 without the floor).
+        them; x1.73 without the floor). Its cost there: the 50 µm, 10 Hz
+        circle ends at 0.234 % instead of 0.075 % (0.146 % at 0.5).
 
     Raises
     ------
