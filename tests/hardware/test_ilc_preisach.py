@@ -4,7 +4,8 @@ Expectations, derived without the learning's own numbers:
 
 * static model = plant, gain 1, no Q: one update puts the model's output on
   the reference (``v_1 = v_0 + e_0 = y_r``, then the exact inverse), so the
-  second trial's error is the root tolerance, whatever the first one was;
+  second trial's error is the root tolerance, whatever the first one was
+  (without the gain floor of ``IterativeLearning.limit_update``);
 * a plant outside the model's class (realistic-2dof: Preisach on a finer,
   asymmetric grid with ``u^2`` terms, hysteretic cross-couplings and log
   creep; the learning model a symmetric 10-level Preisach without
@@ -51,7 +52,8 @@ def test_static_exact_model_reaches_the_reference_in_one_update():
     t = np.arange(3000) * T       # a decaying circle with minor loops: every branch kind
     yr = 25 * np.exp(-t / 0.05) * np.vstack([np.sin(2 * np.pi * 40 * t), np.cos(2 * np.pi * 40 * t) - 1])
     u0 = rng.uniform(-3, 3, (2, 1)) + 0.5 * PreisachInverseCompensator(model).simulate(yr)[0]
-    ilc = IterativeLearning(model, None, T, learning_gain=1.0, q_cutoff_hz=None)
+    # slope_floor=0: the exact law (the floor, a robustness margin, shortens steps where the model is flat)
+    ilc = IterativeLearning(model, None, T, learning_gain=1.0, q_cutoff_hz=None, slope_floor=0.0)
     y0, _ = model.simulate(u0)
     u1 = ilc.step(yr, u0, y0)
     y1, _ = model.simulate(u1)
