@@ -18,9 +18,11 @@ from the per-sample static law alone, without the learning's numbers:
 """
 
 import numpy as np
+import pytest
 
 from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.core.ilc import IterativeLearning
+from hammerstein.exceptions import CompensatorError
 
 THRESHOLDS = np.array([0.0, 0.3, 0.6, 0.9, 1.2, 1.5])
 
@@ -60,7 +62,5 @@ def test_the_gain_floor_keeps_every_trial_within_ten_percent_and_converges():
 
 
 def test_the_floor_is_checked():
-    import pytest
-    from hammerstein.exceptions import CompensatorError
     with pytest.raises(CompensatorError, match="slope_floor"):
         IterativeLearning(_pi(1.0), None, 1e-4, slope_floor=1.5)
