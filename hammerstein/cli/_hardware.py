@@ -59,6 +59,14 @@ def nonnegative_float(text):
     return v
 
 
+def fraction(text):
+    """argparse type: a finite number in [0, 1]."""
+    v = nonnegative_float(text)
+    if v > 1:
+        raise argparse.ArgumentTypeError(f"expected a fraction in [0, 1], found {text!r}")
+    return v
+
+
 def mapping(text, names, option):
     """``"x=X_meas,y=Y_meas"`` -> ``{"x": "X_meas", ...}``; a bare list renames in order.
 

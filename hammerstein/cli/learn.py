@@ -50,7 +50,7 @@ import numpy as np
 
 from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
 from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
-                                       load_reference, mapping, nonnegative_float, owned_problem,
+                                       fraction, load_reference, mapping, nonnegative_float, owned_problem,
                                        positive_float)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
@@ -96,6 +96,10 @@ def add_parser(subparsers):
                    help="zero-phase low-pass Q of the update (default 500 Hz)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default="zpetc",
                    help="inverse of the dynamics (default zpetc)")
+    p.add_argument("--slope-floor", type=fraction, metavar="F",
+                   help="in [0, 1]: no local gain of the model below F x its loop's mean slope is "
+                        "inverted (a trust region after input reversals; default 0.7 for a Preisach "
+                        "or generalised-PI model, 0 for a classical PI)")
     p.add_argument("--delay", default="auto", metavar="auto|N",
                    help="samples the measurement lags the model (default auto: the model file's "
                         "measurement delay when `identify --delay` wrote one, else "
@@ -422,7 +426,7 @@ def _handle(args):
                         f"with gain x{0.5 ** halvings:g}")
         gain = args.learning_gain * 0.5 ** halvings
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
-                                inversion=args.inversion, delay=delay)
+                                inversion=args.inversion, delay=delay, slope_floor=args.slope_floor)
         cond = ilc.convergence()
         gains = None
         if steady is not None:         # a repeating reference: learnt per harmonic of its period

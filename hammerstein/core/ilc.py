@@ -1302,8 +1302,10 @@ class LearningCompensator:
     iterations : int
         Learning trials after the start drive, 1 to
         :data:`~hammerstein.core.numbers.MAX_ITERATIONS` (100).
-    learning_gain, q_cutoff_hz, inversion
-        Of :class:`IterativeLearning`.
+    learning_gain, q_cutoff_hz, inversion, slope_floor
+        Of :class:`IterativeLearning` (``slope_floor`` None: its default by
+        model class, 0.7 for a Preisach or generalised-PI model, 0 for a
+        classical PI).
     sensor_noise : float
         RMS of the measurement noise [µm].
     seed : int
@@ -1327,7 +1329,7 @@ class LearningCompensator:
 
     def __init__(self, start, sampling_period, iterations=10, learning_gain=0.5,
                  q_cutoff_hz=500.0, inversion="zpetc", sensor_noise=0.0, seed=0, name="ilc",
-                 harmonics=True):
+                 harmonics=True, slope_floor=None):
         iterations = check_integer(iterations, "iterations", 1, MAX_ITERATIONS, CompensatorError)
         self.start_compensator = start
         self.sampling_period = float(sampling_period)
@@ -1335,7 +1337,7 @@ class LearningCompensator:
             sensor_noise), int(seed), name
         self.learning = IterativeLearning(start.model, getattr(start, "dynamics", None),
                                           sampling_period, learning_gain, q_cutoff_hz,
-                                          inversion=inversion)
+                                          inversion=inversion, slope_floor=slope_floor)
         self.history, self.stopped, self.condition = [], "", None
         self.harmonics, self.notes, self.q_cutoff_hz = bool(harmonics), [], q_cutoff_hz
 

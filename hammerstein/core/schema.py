@@ -136,6 +136,27 @@ def number(unit, minimum=None, exclusive=True):
     return check
 
 
+def fraction():
+    """Checker of a number in [0, 1] (a share, no unit).
+
+    Returns
+    -------
+    callable
+        ``check(value) -> float``.
+
+    Raises
+    ------
+    Invalid
+        From the returned checker, when the value is not a finite number (a
+        bool is not one) or is outside [0, 1].
+    """
+    def check(v):
+        if not is_number(v) or not 0 <= v <= 1:
+            raise Invalid(f"expected a fraction in [0, 1], found {short_repr(v)}")
+        return float(v)
+    return check
+
+
 def integer(minimum=0, maximum=None):
     """Checker of an integer ``>= minimum`` (and ``<= maximum`` when given).
 

@@ -32,7 +32,7 @@ from hammerstein.core.presets import PresetError, load_creep, load_dynamics
 from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
-from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, fraction, integer, kind_problem, number,
                                          string)
 from hammerstein.core.mixed_compensators import mixed_compensator
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
@@ -355,7 +355,7 @@ def _build_ilc(spec, plant, context):
         start, plant.sampling_period, iterations=spec.get("iterations", 10),
         learning_gain=spec.get("learning_gain", 0.5), q_cutoff_hz=spec.get("q_cutoff_hz", 500.0),
         inversion=spec.get("inversion", "zpetc"), sensor_noise=spec.get("sensor_noise", 0.0),
-        seed=spec.get("seed", 0))
+        seed=spec.get("seed", 0), slope_floor=spec.get("slope_floor"))
 
 
 # kind "ilc" (hammerstein.core.ilc): iterative learning against the simulated plant
@@ -368,6 +368,9 @@ COMPENSATORS["ilc"] = CompensatorKind(
      "inversion": Field(choice(*INVERSIONS)),
      "sensor_noise": Field(number("µm", 0, exclusive=False)),   # default 0
      "seed": Field(integer(0, 2**31 - 1)),
+     # fraction of the loop's mean slope below which the model's local gain is not inverted
+     # (IterativeLearning.limit_update); default by model class: 0.7 Preisach/GPI, 0 classical
+     "slope_floor": Field(fraction()),
      "fade_in": Field(number("s", 0, exclusive=False)),
      "limits": Field(choice(*LIMITS))},
     "iterative learning control against the plant from another kind's drive: u_k+1 = "

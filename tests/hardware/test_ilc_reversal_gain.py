@@ -64,3 +64,48 @@ def test_the_gain_floor_keeps_every_trial_within_ten_percent_and_converges():
 def test_the_floor_is_checked():
     with pytest.raises(CompensatorError, match="slope_floor"):
         IterativeLearning(_pi(1.0), None, 1e-4, slope_floor=1.5)
+
+
+# -- the floor reaches the scenario kind and `learn` ---------------------------------------
+ILC_SCENARIO = """
+name = "floor"
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "ilc"
+iterations = 2
+slope_floor = {floor}
+[[cases]]
+name = "c"
+reference = {{ kind = "circle", radius = 10.0, frequency = 100.0, periods = 8 }}
+"""
+
+
+@pytest.mark.parametrize("floor, expected", [("0.4", 0.4), ("0", 0.0)])
+def test_scenario_slope_floor_reaches_the_learning(tmp_path, floor, expected):
+    from hammerstein.scenario.resolve import load_scenario
+    p = tmp_path / "s.toml"
+    p.write_text(ILC_SCENARIO.format(floor=floor), encoding="utf-8")
+    assert load_scenario(p).cases[0].compensator.learning.slope_floor == expected
+
+
+@pytest.mark.parametrize("floor", ["1.5", "-0.1", '"high"', "true"])
+def test_scenario_slope_floor_outside_zero_one_is_named(tmp_path, floor):
+    from hammerstein.exceptions import ScenarioError
+    from hammerstein.scenario.resolve import load_scenario
+    p = tmp_path / "s.toml"
+    p.write_text(ILC_SCENARIO.format(floor=floor), encoding="utf-8")
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(p)
+    assert any("compensator.slope_floor" in line and "[0, 1]" in line for line in err.value.problems)
+
+
+@pytest.mark.parametrize("floor", ["1.5", "-1", "nan", "x"])
+def test_learn_slope_floor_outside_zero_one_is_a_usage_error(tmp_path, capsys, floor):
+    from hammerstein.cli.main import main
+    assert main(["learn", "rakotondrabe-2dof", "--reference", "r.csv", "--drive", "u.csv",
+                 "--measured", "y.csv", "--out", str(tmp_path / "u1.csv"),
+                 "--slope-floor", floor]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--slope-floor" in err[0]
+    assert not (tmp_path / "u1.csv").exists()
