@@ -105,8 +105,8 @@ def is_number(v):
     return _finite_number(v)   # huge ints, subnormals, NaN and inf refused (core/numbers.py)
 
 
-def number(unit, minimum=None, exclusive=True):
-    """Checker of a finite number [unit], optionally ``> minimum`` (or ``>=``).
+def number(unit, minimum=None, exclusive=True, maximum=None):
+    """Checker of a finite number [unit], optionally ``> minimum`` (or ``>=``) and ``<= maximum``.
 
     Parameters
     ----------
@@ -116,6 +116,8 @@ def number(unit, minimum=None, exclusive=True):
         Lower bound in the same unit; None for no bound.
     exclusive : bool
         Whether the bound is strict (``> minimum``) or not (``>= minimum``).
+    maximum : float, optional
+        Upper bound (``<= maximum``) in the same unit; None for no bound.
 
     Returns
     -------
@@ -130,29 +132,10 @@ def number(unit, minimum=None, exclusive=True):
     """
     def check(v):
         bound = "" if minimum is None else f" {'>' if exclusive else '>='} {minimum:g}"
-        if not is_number(v) or (minimum is not None and (v <= minimum if exclusive else v < minimum)):
+        bound += "" if maximum is None else f"{',' if bound else ''} <= {maximum:g}"
+        if not is_number(v) or (minimum is not None and (v <= minimum if exclusive else v < minimum)) \
+                or (maximum is not None and v > maximum):
             raise Invalid(f"expected a number{bound} [{unit}], found {short_repr(v)}")
-        return float(v)
-    return check
-
-
-def fraction():
-    """Checker of a number in [0, 1] (a share, no unit).
-
-    Returns
-    -------
-    callable
-        ``check(value) -> float``.
-
-    Raises
-    ------
-    Invalid
-        From the returned checker, when the value is not a finite number (a
-        bool is not one) or is outside [0, 1].
-    """
-    def check(v):
-        if not is_number(v) or not 0 <= v <= 1:
-            raise Invalid(f"expected a fraction in [0, 1], found {short_repr(v)}")
         return float(v)
     return check
 

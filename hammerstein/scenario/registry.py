@@ -32,7 +32,7 @@ from hammerstein.core.presets import PresetError, load_creep, load_dynamics
 from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
-from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, fraction, integer, kind_problem, number,
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
                                          string)
 from hammerstein.core.mixed_compensators import mixed_compensator
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
@@ -370,7 +370,7 @@ COMPENSATORS["ilc"] = CompensatorKind(
      "seed": Field(integer(0, 2**31 - 1)),
      # fraction of the loop's mean slope below which the model's local gain is not inverted
      # (IterativeLearning.limit_update); default by model class: 0.7 Preisach/GPI, 0 classical
-     "slope_floor": Field(fraction()),
+     "slope_floor": Field(number("", 0, exclusive=False, maximum=1)),
      "fade_in": Field(number("s", 0, exclusive=False)),
      "limits": Field(choice(*LIMITS))},
     "iterative learning control against the plant from another kind's drive: u_k+1 = "

@@ -26,7 +26,7 @@ from __future__ import annotations
 import os
 
 from hammerstein.core.schema import (MAX_NAME, MAX_TEXT, NAME, Field, Invalid, NestedInvalid, boolean,
-                                     check_table, choice, fraction, integer, kind_problem, name_field,
+                                     check_table, choice, integer, kind_problem, name_field,
                                      name_list, number, short_repr, string)
 from hammerstein.core.numbers import MAX_ITERATIONS as _MAX_ITERATIONS
 from hammerstein.exceptions import ScenarioError
@@ -38,7 +38,6 @@ __all__ = [
     "NestedInvalid",
     "check_table",
     "number",
-    "fraction",
     "integer",
     "string",
     "boolean",
