@@ -14,7 +14,8 @@ from hammerstein.core.datafiles import MultiRecord
 from hammerstein.core.excitation import decreasing_sine
 from hammerstein.core.generalized_pi import GeneralizedPI, envelope
 from hammerstein.core.gpi_identification import (
-    GeneralizedPIIdentifier, monotone_quadratic_columns, play_thresholds, quadratic_coefficients)
+    GeneralizedPIIdentifier, envelopes, monotone_quadratic_columns, play_thresholds,
+    quadratic_coefficients)
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -153,6 +154,15 @@ def test_thresholds_follow_the_envelopes():
     np.testing.assert_allclose(r, 0.5 * mid * np.array([0.0, 0.25, 0.5, 0.75]) ** 1.5)
 
 
+def test_uniform_thresholds_closed_form():
+    gl, gr = [4.0, 0.2, 0.1, 0.0], [5.0, 0.15, -0.1, 0.5]
+    r = play_thresholds(gl, gr, -10.0, 10.0, 4, "uniform")
+    np.testing.assert_allclose(r, play_thresholds(gl, gr, -10.0, 10.0, 4)[-1]
+                               * np.array([0.0, 0.25, 0.5, 0.75]) / 0.75 ** 1.5)
+    with pytest.raises(ValueError, match="spacing"):
+        play_thresholds(gl, gr, -10.0, 10.0, 4, "cubic")
+
+
 def test_reversible_polynomial_closed_form():
     g = GeneralizedPI([0.0], [0.0], [1.0, 1.0, 0.0, 0.0], [1.0, 1.0, 0.0, 0.0], offset=0.5,
                       reversible=[0.2, -0.03])
@@ -163,7 +173,8 @@ def test_reversible_polynomial_closed_form():
 
 
 @pytest.mark.parametrize("kwargs, match", [({"n_plays": 1}, "n_plays"),
-                                           ({"max_evaluations": 0}, "max_evaluations")])
+                                           ({"max_evaluations": 0}, "max_evaluations"),
+                                           ({"threshold_spacing": "cubic"}, "threshold_spacing")])
 def test_bad_parameters_are_named(kwargs, match):
     with pytest.raises(IdentificationError, match=match):
         GeneralizedPIIdentifier(**kwargs)
@@ -296,3 +307,37 @@ def test_direct_path_with_a_quadratic_reversible_term_is_recovered():
     np.testing.assert_allclose(theta[:5], [0.9, -0.08, 15.0 / 13.0, 0.75, 0.06], atol=0.01)
     c = est.model_.components[0][0].reversible
     np.testing.assert_allclose(c, [3.6, -0.025], rtol=0.03)
+
+
+def test_threshold_spacing_auto_keeps_the_lower_held_out_error_and_says_so():
+    """``threshold_spacing="auto"`` is the two explicit fits, the lower held-out score kept.
+
+    The actuator's thresholds are exactly the identifier's uniform ones (its
+    envelopes in the identifier's parametrisation, A = 10 V). The expectation
+    is not which spacing wins (the held-out levels hardly tell them apart:
+    see the class notes) but that auto's scores are those of the two explicit
+    fits, its choice their minimum, reported in the attributes, the fit's
+    ``partition`` and the notes, and its model the chosen explicit fit's.
+    """
+    gl, gr = envelopes([0.8, 0.1, 1.1, 0.9, -0.05, 0.04, 0.0], 10.0)
+    true = GeneralizedPI(play_thresholds(gl, gr, -10.0, 10.0, 6, "uniform"),
+                         [1.0, 0.5, 0.4, 0.3, 0.2, 0.15], gl, gr, 0.0, [0.3])
+    t, u, _ = decreasing_sine(T, 10.0)
+    y, _ = true.simulate(u)
+    rec = MultiRecord(t, u[np.newaxis], y[np.newaxis], ("u",), ("y",), T, "sim")
+    fits = {sp: GeneralizedPIIdentifier(n_plays=6, max_evaluations=BUDGET,
+                                        threshold_spacing=sp).fit(rec)
+            for sp in ("power", "uniform", "auto")}
+    auto = fits["auto"]
+    scores = {sp: fits[sp].spacing_scores_[sp] for sp in ("power", "uniform")}
+    assert fits["power"].threshold_spacing_ == "power"
+    assert list(fits["power"].spacing_scores_) == ["power"]
+    assert auto.spacing_scores_ == pytest.approx(scores, rel=1e-9)
+    best = min(scores, key=scores.get)
+    assert auto.threshold_spacing_ == auto.fit_.partition == best
+    assert auto.fit_.partition_scores == pytest.approx(scores, rel=1e-9)
+    assert auto.notes_[0].startswith(f"threshold spacing auto: chose {best} (power ")
+    np.testing.assert_allclose(auto.model_.components[0][0].thresholds,
+                               fits[best].model_.components[0][0].thresholds, rtol=1e-12)
+    r = fits["uniform"].model_.components[0][0].thresholds
+    np.testing.assert_allclose(np.diff(r), r[1], rtol=1e-9)          # uniform: S j / n
