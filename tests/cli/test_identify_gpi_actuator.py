@@ -17,7 +17,7 @@ from hammerstein.cli.main import main
 from hammerstein.core.excitation import decreasing_sine, excitation_set
 from hammerstein.core.generalized_pi import GeneralizedPI
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.presets import load_model, load_plant
+from hammerstein.core.presets import load_model, load_plant, read_toml
 
 
 def test_model_generalized_on_a_quasi_static_record(tmp_path, capsys):
@@ -41,6 +41,15 @@ def test_model_generalized_on_a_quasi_static_record(tmp_path, capsys):
                                true.simulate(v)[0][1000:], atol=0.01 * np.ptp(y))
     assert main(base[:-2] + ["--method", "closed-form", "--out", str(tmp_path / "b.toml")]) == 2
     assert "--model generalized: fitted by least squares" in capsys.readouterr().err
+    # --threshold-spacing auto: both spacings fitted, the choice printed as the partition, its
+    # reason in the notes, the scores in the file's identification metadata
+    assert main(base[:-1] + [str(tmp_path / "c.toml"), "--threshold-spacing", "auto"]) == 0
+    printed = capsys.readouterr().out
+    meta = read_toml(str(tmp_path / "c.toml"))["identification"]
+    assert set(meta["partition_scores_percent"]) == {"power", "uniform"}
+    best = min(meta["partition_scores_percent"], key=meta["partition_scores_percent"].get)
+    assert meta["partition"] == best and f"partition {best}," in printed
+    assert f"threshold spacing auto: chose {best} (power " in printed
 
 
 @pytest.fixture(scope="module")
