@@ -595,8 +595,8 @@ def _minor_loop_error(fit):
 
 
 def _class_of(fit):
-    """The ``--model`` class of a fit (``"classical"`` or ``"preisach"``)."""
-    return "preisach" if fit.method == "preisach" else "classical"
+    """The ``--model`` class of a fit (``"classical"``, ``"preisach"`` or ``"generalized"``)."""
+    return {"preisach": "preisach", "generalized-pi": "generalized"}.get(fit.method, "classical")
 
 
 def _read(args, path):
@@ -669,7 +669,7 @@ def _identify(args, records, n, thresholds, names, model_class=None):
             if choice == "preisach" or not fits:
                 raise
             errors["preisach"] = str(exc)
-    _fit_generalized(args, records, names, levels, fits, errors)
+    _fit_generalized(args, choice, records, names, levels, fits, errors)
     if len(fits) == 1:
         fit = next(iter(fits.values()))
         if choice == "auto":
@@ -711,16 +711,16 @@ _CLASS_LABEL = {"classical": "classical PI", "generalized": "generalized PI"}
 GPI_PLAYS = 10
 
 
-def _fit_generalized(args, records, names, levels, fits, errors):
-    """``--model generalized``, or the third class of ``auto``: into ``fits`` / ``errors``."""
-    if not (args.model == "generalized" or (args.model == "auto" and levels)):
+def _fit_generalized(args, choice, records, names, levels, fits, errors):
+    """``--model generalized`` (or a refit of that class), or the third class of ``auto``."""
+    if not (choice == "generalized" or (choice == "auto" and levels)):
         return
     try:
         fits["generalized"] = identify_gpi_records(
             records, GPI_PLAYS, args.components, args.hold_out, args.train_fraction, args.skip,
             *names, threshold_spacing=args.threshold_spacing)
     except (IdentificationError, HysteresisError) as exc:
-        if args.model == "generalized" or not fits:
+        if choice == "generalized" or not fits:
             raise
         errors["generalized"] = str(exc)
 

@@ -123,3 +123,36 @@ def test_auto_fits_three_classes_and_keeps_the_lowest_minor_loop_error(recorded,
     assert set(scores) == {"classical", "preisach", "generalized"}
     assert scores[chosen] == min(scores.values())
     assert scores["classical"] > min(scores["preisach"], scores["generalized"])
+
+
+@pytest.mark.parametrize("asked", ["generalized", "auto"])
+def test_a_refit_keeps_the_generalized_class(monkeypatch, asked):
+    """The creep refit re-identifies the class that was kept, and only it.
+
+    It used to map a generalised-PI fit to "classical": with ``--model
+    generalized`` the refit then fitted a classical PI too and chose between the
+    two by their held-out error, which could hand back a class the user had not
+    asked for; with ``auto`` it paid for a classical fit it then compared again.
+    """
+    from types import SimpleNamespace
+
+    import hammerstein.cli.identify as cli
+    calls = []
+
+    def fake(kind):
+        def fit(*args, **kwargs):
+            calls.append(kind)
+            return SimpleNamespace(method={"classical": "lsq"}.get(kind, kind), levels=[],
+                                   notes=[], validation=[])
+        return fit
+    monkeypatch.setattr(cli, "identify_records", fake("classical"))
+    monkeypatch.setattr(cli, "identify_preisach_records", fake("preisach"))
+    monkeypatch.setattr(cli, "identify_gpi_records", fake("generalized-pi"))
+    args = SimpleNamespace(model=asked, method="lsq", partition="auto", bounds="auto",
+                           components="auto", hold_out="auto", train_fraction=None, skip=0,
+                           output_map="auto", preisach_levels=None, threshold_spacing="power",
+                           creep_records=None)
+    first = SimpleNamespace(method="generalized-pi")
+    assert cli._class_of(first) == "generalized"
+    fit = cli._identify(args, [], 10, None, (["u"], ["y"]), cli._class_of(first))
+    assert calls == ["generalized-pi"] and fit.method == "generalized-pi"
