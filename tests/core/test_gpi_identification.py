@@ -13,9 +13,7 @@ import pytest
 from hammerstein.core.datafiles import MultiRecord
 from hammerstein.core.excitation import decreasing_sine
 from hammerstein.core.generalized_pi import GeneralizedPI, envelope
-from hammerstein.core.gpi_identification import (
-    GeneralizedPIIdentifier, envelopes, monotone_quadratic_columns, play_thresholds,
-    quadratic_coefficients)
+from hammerstein.core.gpi_identification import GeneralizedPIIdentifier, envelopes, play_thresholds
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -270,44 +268,6 @@ def test_hammerstein_over_a_gpi_model(plant_kind):
     # loops) 6.9 % worst, 4.2 % median although its held-out levels fit to 0.1 % RMS
     worst, median = {"gpi": (0.03, 0.012), "preisach": (0.1, 0.06)}[plant_kind]
     assert err.max() < worst * R and np.median(err) < median * R, (err.max(), np.median(err))
-
-
-def test_monotone_quadratic_columns_slopes_at_the_ends():
-    """Coefficients are the slopes at lo and hi; slopes >= m there give p' >= m on [lo, hi]."""
-    lo, hi = -0.8, 1.0
-    u = np.linspace(lo, hi, 2001)
-    rng = np.random.default_rng(3)
-    for g in rng.uniform(0.01, 5.0, size=(20, 2)):
-        p = monotone_quadratic_columns(u, lo, hi) @ g
-        assert np.all(monotone_quadratic_columns(np.zeros(1), lo, hi) == 0.0)
-        c1, c2 = quadratic_coefficients(g, lo, hi)
-        np.testing.assert_allclose(p, c1 * u + c2 * u ** 2, atol=1e-12)
-        slope = c1 + 2 * c2 * u                  # exact derivative of the monomial form
-        np.testing.assert_allclose(slope[[0, -1]], g, rtol=1e-12)
-        assert np.all(slope >= g.min() - 1e-12)
-
-
-def test_direct_path_with_a_quadratic_reversible_term_is_recovered():
-    """A direct path with ``c_1 u + c_2 u^2`` (realistic-gpi's y path): exact envelopes.
-
-    Only the scale and shift of the envelopes are the weights' business
-    (module notes), so the fitted normalised parameters must equal the true
-    envelopes mapped by ``b = a1 A``, ``rho = a0_r / a0_l``: (0.9, -0.08,
-    15/13, 0.75, 0.06) with A = 10 V, and the reversible polynomial the true
-    one. With a linear reversible term only (before), the same noiseless fit
-    ended at (0.47, 0.06, 1.0, 0.50, 0.25) and 15 % loops 0.48 µm off in shape.
-    """
-    true = GeneralizedPI([0.0, 0.9, 2.0, 3.4, 5.2], [1.1, 0.55, 0.33, 0.22, 0.13],
-                         gamma_l=[13.0, 0.09, -0.08, 0.3], gamma_r=[15.0, 0.075, 0.06, -0.2],
-                         reversible=[3.6, -0.025])
-    t, u, _ = decreasing_sine(5e-4, 10.0)
-    y, _ = true.simulate(u)
-    rec = MultiRecord(t, u[np.newaxis], y[np.newaxis], ("u",), ("y",), 5e-4, "sim")
-    est = GeneralizedPIIdentifier(n_plays=10, max_evaluations=BUDGET).fit(rec)
-    theta = est.envelope_parameters_[0][0]
-    np.testing.assert_allclose(theta[:5], [0.9, -0.08, 15.0 / 13.0, 0.75, 0.06], atol=0.01)
-    c = est.model_.components[0][0].reversible
-    np.testing.assert_allclose(c, [3.6, -0.025], rtol=0.03)
 
 
 def test_threshold_spacing_auto_keeps_the_lower_held_out_error_and_says_so():
