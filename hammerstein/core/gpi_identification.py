@@ -230,9 +230,11 @@ class GeneralizedPIIdentifier:
         ``"auto"`` of the classical PI. ``"auto"`` doubles the CPU. Why it is
         not the default, measured: the held-out levels (40 % and 80 %) hardly
         tell the spacings apart. On ``realistic-gpi`` (identify's records)
-        they score power 0.725 %, uniform 0.712 % and auto keeps uniform,
-        whose benchmark circles are all within 2 % (15 µm at 20 Hz 0.87 %
-        against 2.39 % with power); on the test suite's 2 x 2 GPI actuator
+        they score power 0.725 %, uniform 0.712 % and auto keeps uniform
+        (measured with a quadratic reversible term on the direct paths, tried
+        and not kept: with it, uniform put the benchmark's 15 µm 20 Hz circle
+        at 0.87 %; with the linear term, uniform gives 2.34 % and power
+        2.59 %); on the test suite's 2 x 2 GPI actuator
         (8 plays, 10 nm noise) they score 0.311 / 0.298 %, 0.310 / 0.285 %
         and 0.283 / 0.286 % over noise seeds 0-2, so auto keeps uniform for
         seeds 0 and 1, whose never-recorded 15 % loop of y is then 6.7 / 6.6 % off
