@@ -588,12 +588,6 @@ def _fit_rms(fit):
     return max(float(r["rms"]) for r in reps) if reps else float("nan")
 
 
-def _minor_loop_error(fit):
-    """Mean held-out level RMS [% of the level's range], or None without held-out levels."""
-    rows = [r["rms_percent"] for r in fit.levels if r["held_out"]]
-    return float(np.mean(rows)) if rows else None
-
-
 def _class_of(fit):
     """The ``--model`` class of a fit (``"classical"``, ``"preisach"`` or ``"generalized"``)."""
     return {"preisach": "preisach", "generalized-pi": "generalized"}.get(fit.method, "classical")
@@ -678,7 +672,7 @@ def _identify(args, records, n, thresholds, names, model_class=None):
             fit.notes.insert(0, f"model auto: {_CLASS_LABEL.get(next(iter(fits)), next(iter(fits)))} "
                                 f"({why})")
         return fit
-    loops = {k: _minor_loop_error(f) for k, f in fits.items()}
+    loops = {k: f.minor_loop_error for k, f in fits.items()}
     stairs = {k: _step_level_error(f, _creep_recs(args)) for k, f in fits.items()} \
         if args.creep_records else {}
     if stairs:   # both held out; the geometric mean weighs each by its ratio between classes

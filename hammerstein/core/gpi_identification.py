@@ -559,9 +559,8 @@ class GeneralizedPIIdentifier:
 def _spacing_score(fit_thetas):
     """Held-out error of one spacing's fit [%]: minor loops, else windows, else None."""
     fit = fit_thetas[0]
-    rows = [r["rms_percent"] for r in fit.levels if r["held_out"]]
-    if rows:
-        return float(np.mean(rows))
+    if fit.minor_loop_error is not None:
+        return fit.minor_loop_error
     if fit.validation:
         return float(np.mean([w["rms_percent"] for w in fit.validation]))
     return None

@@ -775,6 +775,17 @@ class RecordFit:
     output_map: str = "none"
     levels: list = field(default_factory=list)
 
+    @property
+    def minor_loop_error(self):
+        """Mean RMS error of the held-out amplitude levels [% of each level's output range].
+
+        The minor loops the fit never saw (:func:`level_errors`); what
+        ``identify --model auto`` and the generalised PI's
+        ``threshold_spacing="auto"`` compare. None without held-out levels.
+        """
+        rows = [r["rms_percent"] for r in self.levels if r["held_out"]]
+        return float(np.mean(rows)) if rows else None
+
 
 def _checked_record(rec, i):
     """``rec`` with finite real float arrays of matching lengths and a valid sampling period."""
