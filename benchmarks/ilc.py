@@ -263,7 +263,9 @@ def through_files(args):
                               "--out", str(case / f"u{k + 1}.csv"), "--history",
                               str(case / "hist"), "--learning-gain", str(args.gain),
                               "--q-cutoff-hz", str(args.q), "--limits", "clip",
-                              "--delay", args.delay])
+                              "--delay", args.delay]
+                             + ([] if args.slope_floor is None
+                                else ["--slope-floor", str(args.slope_floor)]))
                 delays.update(int(v) for v in re.findall(r"measured delay (\d+) samples",
                                                          said.getvalue()))
                 if keep is not None:
@@ -317,6 +319,8 @@ def main():
     ap.add_argument("--lab-samples", type=int, default=3,
                     help="--files: the lab's delay [samples] in every trial (and, with "
                          "--lab-delay, in every identification record); default 3")
+    ap.add_argument("--slope-floor", type=float, default=None,
+                    help="--files: learn --slope-floor (default: learn's own)")
     ap.add_argument("--keep", metavar="DIR",
                     help="--files: keep the model, drives, measurements, learn's printout and "
                          "history of every case in DIR (a new directory)")

@@ -24,7 +24,7 @@ the compensator inverts the identified creep with the dynamics (scenario
 ``creep = "auto"``: the identified preset's ``[creep]``).
 
 Usage: ``python benchmarks/real_actuators.py [--plants NAME_OR_PATH ...] [--keep DIR] [--creep]
-[--model auto|classical|preisach|generalized ...]``
+[--model auto|classical|preisach|generalized ...] [--seed N]``
 
 ``--plants scenarios/presets/realistic-gpi.toml`` is the actuator with
 generalised-PI direct paths.
@@ -237,8 +237,10 @@ def main(argv=None):
     ap.add_argument("--verbose", action="store_true", help="print identify's output too")
     ap.add_argument("--creep", action="store_true",
                     help="identify the creep from the staircases and invert it with G")
+    ap.add_argument("--seed", type=int, default=17,
+                    help="seed of the sensor noise added to the records (default 17)")
     args = ap.parse_args(argv)
-    rng = np.random.default_rng(17)
+    rng = np.random.default_rng(args.seed)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(args.keep or tmp)
         work.mkdir(parents=True, exist_ok=True)
