@@ -109,11 +109,11 @@ def add_parser(subparsers):
                         "(default): with multi-amplitude records (held-out amplitude levels) "
                         "all three are fitted and the one with the lowest held-out minor-loop "
                         "error is kept; otherwise classical")
-    p.add_argument("--threshold-spacing", choices=["power", "uniform", "auto"], default="power",
-                   help="--model generalized/auto: play thresholds S (j/n)^1.5 (power, default: "
-                        "dense near zero), S j/n (uniform), or auto: both fitted, the lower "
-                        "mean held-out minor-loop error kept (twice the CPU; the held-out "
-                        "levels hardly tell the two apart, see the README)")
+    p.add_argument("--threshold-spacing", choices=["power", "uniform", "auto"], default="uniform",
+                   help="--model generalized/auto: play thresholds S j/n (uniform, default; 16 "
+                        "plays per component), S (j/n)^1.5 (power: dense near zero), or auto: "
+                        "both fitted, the lower mean held-out minor-loop error kept (twice the "
+                        "CPU; the held-out levels hardly tell the two apart, see the README)")
     p.add_argument("--preisach-levels", type=int, default=20, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
                         "(N (N + 1) / 2 hysterons per component; default 20)")
@@ -702,7 +702,7 @@ def _identify(args, records, n, thresholds, names, model_class=None):
 
 _CLASS_LABEL = {"classical": "classical PI", "generalized": "generalized PI"}
 #: Play operators per component of `--model generalized` (and of auto's third class).
-GPI_PLAYS = 10
+GPI_PLAYS = 16
 
 
 def _fit_generalized(args, choice, records, names, levels, fits, errors):

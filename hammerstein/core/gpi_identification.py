@@ -29,9 +29,9 @@ the weights are the bounded linear least-squares solution
 Parametrisation of a component from input k (amplitude ``A`` [V], the largest
 measured ``|u_k|``): ``gamma_l = [A, b_l / A, a2_l, 0]`` and ``gamma_r = [rho A,
 b_r / A, a2_r, d A]`` (a common scale and a common shift of both envelopes are
-the weights' and the offset's business); the thresholds are ``r_j = S (j / n)^1.5``
-(denser near zero, where the small minor loops live; ``S j / n`` with
-``threshold_spacing="uniform"``, either by held-out error with ``"auto"``),
+the weights' and the offset's business); the thresholds are ``r_j = S j / n``
+(``threshold_spacing="uniform"``, the default, 16 plays; ``S (j / n)^1.5``, denser
+near zero, with ``"power"``; either by held-out error with ``"auto"``),
 ``j = 0 .. n - 1``, with ``S`` half the span of the mean envelope over the
 measured input range, so that they follow the envelopes. Bounds: ``b`` in
 [0.02, 4], ``a2`` in [-2, 2], ``rho`` in [0.3, 3], ``d`` in [-1, 1].
@@ -56,9 +56,11 @@ before, the 5.2 % a fit whose rest value was wrong).
 * **Direct paths** (k = l) are monotone, hence exactly invertible
   (:class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`):
   ``w_j >= 0`` and a quadratic reversible term ``c_1 u + c_2 u^2`` whose slope
-  is at least ``10^-3`` times the path's secant slope on the whole measured
-  input range (the envelopes increase with u, so every play does). The
-  quadratic is fitted by its slopes at the two ends of the range
+  is at least ``10^-3`` times the path's secant slope on the measured input
+  range and on ``[-1.2 A, 1.2 A]`` (``A`` the input amplitude; the exact
+  inverse keeps its inputs there), so the path increases wherever the
+  inverse may drive it (the envelopes increase with u, so every play does).
+  The quadratic is fitted by its slopes at the two ends of that range
   (:func:`monotone_quadratic_columns`): its slope is linear in u, so bounds on
   those two coefficients are exactly a bound on the slope everywhere between.
   A real actuator's anhysteretic curve is not odd (``realistic-gpi``'s paths
@@ -111,6 +113,10 @@ __all__ = ["GeneralizedPIIdentifier", "identify_gpi_records"]
 MAX_ROWS_PER_RECORD = 3000
 #: Lower bound of a direct path's reversible slope on the input range, fraction of the secant.
 MIN_SLOPE_FRACTION = 1e-3
+#: The exact inverse keeps inputs within this many times the model's input amplitude
+#: (:class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`): a direct path's
+#: reversible slope is kept positive there, not only on the measured range.
+INVERSE_RANGE = 1.2
 #: Degree of the signed reversible polynomial of a cross-coupling.
 CROSS_DEGREE = 3
 #: Thresholds ``r_j = S (j / n)^power`` of the ``"power"`` spacing: denser near 0, where the
@@ -272,7 +278,8 @@ class GeneralizedPIIdentifier:
     Parameters
     ----------
     n_plays : int
-        Play operators per component (thresholds: see ``threshold_spacing``).
+        Play operators per component (thresholds: see ``threshold_spacing``);
+        16 by default (see ``threshold_spacing`` for why).
     components : "auto", "all", str or dict
         As :func:`hammerstein.core.record_identification.parse_components`;
         ``"gain"`` components are fitted as a linear term, ``"none"`` left out.
@@ -287,27 +294,35 @@ class GeneralizedPIIdentifier:
         through ``hammerstein identify --model generalized --creep-records``,
         60 trials left the fit short of its minimum (circles 2.3-4.7 % of the
         radius); 300 gave 1.06-2.59 %.
-    threshold_spacing : {"power", "uniform", "auto"}
-        Play thresholds ``r_j = S (j / n)^1.5`` (``"power"``, the default:
-        dense near zero, where the small minor loops live), ``S j / n``
-        (``"uniform"``), or both fitted and the one with the lower mean
-        held-out minor-loop RMS error (% of each held-out level's output
-        range; without held-out levels the mean held-out RMS, without any
-        held-out sample the first, ``"power"``) kept, like the partition
-        ``"auto"`` of the classical PI. ``"auto"`` doubles the CPU. Why it is
-        not the default, measured: the held-out levels (40 % and 80 %) hardly
-        tell the spacings apart. On ``realistic-gpi`` (identify's records)
-        they score power 0.725 %, uniform 0.712 % and auto keeps uniform
-        (measured with a quadratic reversible term on the direct paths, tried
-        and not kept: with it, uniform put the benchmark's 15 µm 20 Hz circle
-        at 0.87 %; with the linear term, uniform gives 2.34 % and power
-        2.59 %); on the test suite's 2 x 2 GPI actuator
-        (8 plays, 10 nm noise) they score 0.311 / 0.298 %, 0.310 / 0.285 %
-        and 0.283 / 0.286 % over noise seeds 0-2, so auto keeps uniform for
-        seeds 0 and 1, whose never-recorded 15 % loop of y is then 6.7 / 6.6 % off
-        in amplitude (power: within 0.7 %). The score differences (1-8 %)
-        are of the order of the seed-to-seed spread: the held-out levels do
-        not see the small loops the spacing decides.
+    threshold_spacing : {"uniform", "power", "auto"}
+        Play thresholds ``r_j = S j / n`` (``"uniform"``, the default),
+        ``S (j / n)^1.5`` (``"power"``: dense near zero), or both fitted and
+        the one with the lower mean held-out minor-loop RMS error (% of each
+        held-out level's output range; without held-out levels the mean
+        held-out RMS, without any held-out sample the first, ``"power"``)
+        kept, like the partition ``"auto"`` of the classical PI (twice the
+        CPU). Why 16 uniform plays by default, measured on three
+        generalised-PI actuators outside the fitted class (their thresholds,
+        envelopes and reversible terms are not the identifier's), all with
+        the quadratic reversible term of the direct paths:
+        ``scenarios/presets/realistic-gpi.toml`` (records of ``hammerstein
+        excitation``, 40 nm noise, identified and compensated through the
+        CLI, ``benchmarks/real_actuators.py --creep --model generalized``,
+        noise seeds 17, 18, 19): 15 µm circle at 20 Hz 1.81, 1.86, 1.89 % of
+        the radius with 16 uniform plays, against 0.87, 4.18, 0.69 % with
+        10 uniform plays and 2.39 % (seed 17) with 10 power-spaced plays; the
+        test suite's CLI actuator (``tests/gpi_actuator.py``): loops at 15 %
+        and 30 % within 0.3 % with 16 uniform plays, the y loop at 30 % 2.2 %
+        off with 10 power-spaced ones; the test suite's noiseless-reversible
+        actuator (10 nm noise, seeds 0-2): the never-recorded 15 % loop of
+        y 6.6-6.7 % off with 8 uniform plays, 2.8 % with 10, 1.3-1.4 % with
+        16 (power-spaced 8: 0.1 %). Fewer uniform plays leave the small loops
+        to a coarse grid near zero, and which grid point lands near the
+        actuator's own thresholds decides them (the seed-to-seed spread of
+        10 plays); 16 make that spread small. The held-out levels (40 % and
+        80 %) hardly tell the spacings apart (score differences of 1-8 %,
+        of the order of the seed-to-seed spread), which is why ``"auto"`` is
+        not the default.
 
     Attributes
     ----------
@@ -358,8 +373,8 @@ class GeneralizedPIIdentifier:
     True
     """
 
-    def __init__(self, n_plays=10, components="auto", max_evaluations=300,
-                 threshold_spacing="power"):
+    def __init__(self, n_plays=16, components="auto", max_evaluations=300,
+                 threshold_spacing="uniform"):
         if isinstance(n_plays, bool) or not isinstance(n_plays, (int, np.integer)) \
                 or not 2 <= n_plays <= 40:
             raise IdentificationError(f"n_plays: expected an integer from 2 to 40, found {n_plays!r}")
@@ -380,6 +395,11 @@ class GeneralizedPIIdentifier:
                 f"threshold_spacing={self.threshold_spacing!r})")
 
     # -- the regression ----------------------------------------------------------------
+    def _slope_range(self, k):
+        """Normalised range on which a direct path's reversible slope is bounded below."""
+        return (min(self._lo[k] / self._amp[k], -INVERSE_RANGE),
+                max(self._hi[k] / self._amp[k], INVERSE_RANGE))
+
     def _component_columns(self, k, theta, direct):
         """Play and polynomial columns of input k on the kept training rows, and the envelopes."""
         gl, gr = envelopes(theta, self._amp[k])
@@ -388,8 +408,7 @@ class GeneralizedPIIdentifier:
         states = [_play_states(u[k], r, gl, gr, rest)[tr] for u, tr in zip(self._u, self._train)]
         u = np.concatenate([u[k][tr] for u, tr in zip(self._u, self._train)]) / self._amp[k]
         if direct:
-            poly = monotone_quadratic_columns(u, self._lo[k] / self._amp[k],
-                                              self._hi[k] / self._amp[k])
+            poly = monotone_quadratic_columns(u, *self._slope_range(k))
         else:
             poly = np.column_stack([u ** d for d in range(1, CROSS_DEGREE + 1)])
         return np.column_stack([np.concatenate(states), poly]), r, gl, gr
@@ -477,8 +496,7 @@ class GeneralizedPIIdentifier:
                 poly = xk[self.n_plays:]
                 if k == l:
                     w = np.maximum(w, 0.0)
-                    poly = quadratic_coefficients(poly, self._lo[k] / self._amp[k],
-                                                  self._hi[k] / self._amp[k])
+                    poly = quadratic_coefficients(poly, *self._slope_range(k))
                 rev = poly / self._amp[k] ** np.arange(1, xk.size - self.n_plays + 1)
                 comps.append(GeneralizedPI(r, w, gl, gr, 0.0, rev, thetas[k][6] * self._amp[k]))
         return comps, float(x[-1]), thetas
@@ -640,9 +658,9 @@ def _spacing_score(fit_thetas):
     return None
 
 
-def identify_gpi_records(records, n_plays=10, components="auto", hold_out="auto",
+def identify_gpi_records(records, n_plays=16, components="auto", hold_out="auto",
                          train_fraction=None, skip_seconds=None, input_names=None,
-                         output_names=None, threshold_spacing="power"):
+                         output_names=None, threshold_spacing="uniform"):
     """Identify a multivariable generalised PI model; a :class:`RecordFit` like the PI's.
 
     Parameters

@@ -33,7 +33,7 @@ def test_model_generalized_on_a_quasi_static_record(tmp_path, capsys):
     base = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
             "--model", "generalized", "--out", str(out)]
     assert main(base) == 0, capsys.readouterr().err
-    assert "u: generalized PI 10 plays" in capsys.readouterr().out
+    assert "u: generalized PI 16 plays" in capsys.readouterr().out
     model = load_model(str(out))
     assert isinstance(model.components[0][0], GeneralizedPI)
     v = 6.0 * np.sin(2 * np.pi * np.arange(2000) / 1000)       # a minor loop never recorded
@@ -90,7 +90,7 @@ def loop_error(act, model, k, fraction):
 def test_generalized_model_minor_loops_and_compensation(recorded, capsys):
     act, d, files = recorded
     plant, printed = identify(d, files, "generalized", capsys)
-    assert "generalized PI 10 plays" in printed
+    assert "generalized PI 16 plays" in printed
     assert isinstance(plant.hysteresis.components[0][0], GeneralizedPI)
     for k in range(2):                      # minor loops never recorded (issue 17: within 2 %)
         for frac in (0.3, 0.15):

@@ -13,7 +13,9 @@ import pytest
 from hammerstein.core.datafiles import MultiRecord
 from hammerstein.core.excitation import decreasing_sine
 from hammerstein.core.generalized_pi import GeneralizedPI, envelope
-from hammerstein.core.gpi_identification import GeneralizedPIIdentifier, envelopes, play_thresholds
+from hammerstein.core.gpi_identification import (
+    GeneralizedPIIdentifier, envelopes, monotone_quadratic_columns, play_thresholds,
+    quadratic_coefficients)
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -77,8 +79,10 @@ def loop_amplitude(model, k, fraction, amplitude=10.0):
 
 @pytest.fixture(scope="module")
 def fitted():
+    # the defaults (16 uniform plays): with 8 uniform plays y's 15 % loop below was 6.7 % off,
+    # with 10 2.8 % (the class notes)
     true = gpi_actuator()
-    est = GeneralizedPIIdentifier(n_plays=8, max_evaluations=BUDGET)
+    est = GeneralizedPIIdentifier(max_evaluations=BUDGET)
     return true, est.fit(records(true, noise=0.01))
 
 
@@ -107,7 +111,8 @@ def test_rest_value_identified_from_the_initial_loading_curve():
                                    d.reversible, rest)
     true = MultivariableHysteresis(grid, base.input_names, base.output_names, [10.0, 10.0])
     assert np.ptp(true.components[1][1].initial_state()) == 0.0 != true.components[1][1].rest
-    est = GeneralizedPIIdentifier(n_plays=8, max_evaluations=BUDGET).fit(records(true, noise=0.01))
+    est = GeneralizedPIIdentifier(n_plays=8, max_evaluations=BUDGET,
+                                  threshold_spacing="power").fit(records(true, noise=0.01))
     for k in range(2):
         u = np.zeros((2, 250))                  # from rest to the first peak and back to 7 V
         u[k] = 10 * np.sin(2 * np.pi * np.arange(250) * T)
@@ -254,7 +259,7 @@ def circle(n, f, R, Ts):
 @pytest.mark.parametrize("plant_kind", ["gpi", "preisach"])
 def test_hammerstein_over_a_gpi_model(plant_kind):
     true = gpi_actuator() if plant_kind == "gpi" else preisach_actuator()
-    est = GeneralizedPIIdentifier(n_plays=8, max_evaluations=BUDGET).fit(records(true, noise=0.02))
+    est = GeneralizedPIIdentifier(max_evaluations=BUDGET).fit(records(true, noise=0.02))
     G = load_plant("realistic-2dof").dynamics
     plant = HammersteinPlant(true, G.dt, G)
     comp = HammersteinCompensator(est.model_, G)
@@ -302,3 +307,55 @@ def test_threshold_spacing_auto_keeps_the_lower_held_out_error_and_says_so():
                                fits[best].model_.components[0][0].thresholds, rtol=1e-12)
     r = fits["uniform"].model_.components[0][0].thresholds
     np.testing.assert_allclose(np.diff(r), r[1], rtol=1e-9)          # uniform: S j / n
+
+
+def test_monotone_quadratic_columns_slopes_at_the_ends():
+    """Coefficients are the slopes at lo and hi; slopes >= m there give p' >= m on [lo, hi]."""
+    lo, hi = -0.8, 1.0
+    u = np.linspace(lo, hi, 2001)
+    rng = np.random.default_rng(3)
+    assert np.all(monotone_quadratic_columns(np.zeros(1), lo, hi) == 0.0)
+    for g in rng.uniform(0.01, 5.0, size=(20, 2)):
+        p = monotone_quadratic_columns(u, lo, hi) @ g
+        c1, c2 = quadratic_coefficients(g, lo, hi)
+        np.testing.assert_allclose(p, c1 * u + c2 * u ** 2, atol=1e-12)
+        slope = c1 + 2 * c2 * u                  # exact derivative of the monomial form
+        np.testing.assert_allclose(slope[[0, -1]], g, rtol=1e-12)
+        assert np.all(slope >= g.min() - 1e-12)
+
+
+def test_direct_paths_increase_wherever_the_inverse_drives_them(fitted):
+    """The reversible quadratic's slope stays positive on [-1.2 A, 1.2 A], not only on the
+    measured range: the exact inverse (inputs kept within 1.2 x the amplitude) accepts the model
+    and its forward model increases along a ramp over that whole range."""
+    _, est = fitted
+    u = np.linspace(-12.0, 12.0, 4801)
+    for l in range(2):
+        c1, *rest = est.model_.components[l][l].reversible
+        c2 = rest[0] if rest else 0.0
+        assert np.all(c1 + 2 * c2 * u > 0), (l, c1, c2)
+        assert np.all(np.diff(est.model_.components[l][l].simulate(u)[0]) > 0)
+    PreisachInverseCompensator(est.model_)       # would raise on a decreasing direct path
+
+
+def test_direct_path_with_a_quadratic_reversible_term_is_recovered():
+    """A direct path with ``c_1 u + c_2 u^2`` (realistic-gpi's y path) predicts its loops.
+
+    With a linear reversible term only, the noiseless fit bent the envelopes to
+    mimic the curvature and small loops from rest were 0.48 µm off in shape;
+    with the quadratic the reversible curvature is the true one and the
+    never-recorded 15 % and 30 % loops follow the truth.
+    """
+    true = GeneralizedPI([0.0, 0.9, 2.0, 3.4, 5.2], [1.1, 0.55, 0.33, 0.22, 0.13],
+                         gamma_l=[13.0, 0.09, -0.08, 0.3], gamma_r=[15.0, 0.075, 0.06, -0.2],
+                         reversible=[3.6, -0.025])
+    t, u, _ = decreasing_sine(5e-4, 10.0)
+    y, _ = true.simulate(u)
+    rec = MultiRecord(t, u[np.newaxis], y[np.newaxis], ("u",), ("y",), 5e-4, "sim")
+    est = GeneralizedPIIdentifier(max_evaluations=BUDGET).fit(rec)
+    c = est.model_.components[0][0].reversible
+    np.testing.assert_allclose(c[1], -0.025, rtol=0.05)
+    for frac in (0.3, 0.15):
+        v = frac * 10.0 * np.sin(2 * np.pi * np.arange(4000) / 2000)
+        np.testing.assert_allclose(est.model_.simulate(v[None])[0][0, 2000:],
+                                   true.simulate(v)[0][2000:], atol=0.01 * np.ptp(y) * frac)
