@@ -97,20 +97,22 @@ static inline void output(const double *u, int64_t m, int64_t p, int64_t n, cons
 }
 
 /* outputs l and l1 of Gamma(u; s), the plays moved to u but not stored: one pass over the
-   plays, each moved play (a register) weighted into both outputs, then G u (the kernel's
-   _moved_pair) */
+   plays, each moved play (a register) weighted into both outputs, each input's plays summed
+   apart and added, then G u (the kernel's _moved_pair) */
 static inline void moved_pair(const double *u, int64_t m, int64_t n, const int64_t *start,
                               const double *r, const double *W, const double *G,
                               const double *s, int64_t l, int64_t l1, double *y0, double *y1) {
     double a0 = 0.0, a1 = 0.0;
     const double *w0 = W + l * n, *w1 = W + l1 * n;
     for (int64_t k = 0; k < m; k++) {
-        double uk = u[k];
+        double uk = u[k], b0 = 0.0, b1 = 0.0;
         for (int64_t j = start[k]; j < start[k + 1]; j++) {
             double vj = play(s[j], uk, r[j]);
-            a0 += w0[j] * vj;
-            a1 += w1[j] * vj;
+            b0 += w0[j] * vj;
+            b1 += w1[j] * vj;
         }
+        a0 += b0;
+        a1 += b1;
     }
     for (int64_t k = 0; k < m; k++) {
         a0 += G[l * m + k] * u[k];
@@ -118,6 +120,27 @@ static inline void moved_pair(const double *u, int64_t m, int64_t n, const int64
     }
     *y0 = a0;
     *y1 = a1;
+}
+
+/* Gamma(u; s) of a 2 x 2 model, u in registers: each input's plays summed apart, G u apart,
+   added last (the kernel's _gamma2) */
+static inline void gamma2(double u0, double u1, const int64_t *start, const double *r,
+                          const double *W, const double *G, const double *s, int64_t n,
+                          double *y0, double *y1) {
+    double a0 = 0.0, a1 = 0.0, b0 = 0.0, b1 = 0.0;
+    for (int64_t j = start[0]; j < start[1]; j++) {
+        double vj = play(s[j], u0, r[j]);
+        a0 += W[j] * vj;
+        a1 += W[n + j] * vj;
+    }
+    for (int64_t j = start[1]; j < start[2]; j++) {
+        double vj = play(s[j], u1, r[j]);
+        b0 += W[j] * vj;
+        b1 += W[n + j] * vj;
+    }
+    double g0 = G[0] * u0 + G[1] * u1, g1 = G[2] * u0 + G[3] * u1;
+    *y0 = (a0 + b0) + g0;
+    *y1 = (a1 + b1) + g1;
 }
 
 /* y = Gamma(u; s) without moving the plays: outputs in pairs, an odd last one paired with
@@ -267,20 +290,15 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
             for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
         }
         if (two) {
-            double y0 = yhat[0], y1 = yhat[1];
-            u[0] = cu[0];
-            u[1] = cu[1];
+            double y0 = yhat[0], y1 = yhat[1], u0 = cu[0], u1 = cu[1];
             for (int64_t it = 0; it < iterations; it++) {
-                if (it > 0) moved_pair(u, 2, cn, cstart, cr, cW, cG, cs, 0, 1, &y0, &y1);
+                if (it > 0) gamma2(u0, u1, cstart, cr, cW, cG, cs, cn, &y0, &y1);
                 double e0 = ref[0] - y0, e1 = ref[1] - y1;
-                double a0 = 0.0, a1 = 0.0;
-                a0 += k00 * e0;
-                a0 += k01 * e1;
-                a1 += k10 * e0;
-                a1 += k11 * e1;
-                u[0] += a0;
-                u[1] += a1;
+                u0 += k00 * e0 + k01 * e1;
+                u1 += k10 * e0 + k11 * e1;
             }
+            u[0] = u0;
+            u[1] = u1;
         } else {
             for (int64_t k = 0; k < m; k++) u[k] = cu[k];
             for (int64_t it = 0; it < iterations; it++) {
