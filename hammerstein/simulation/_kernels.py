@@ -571,6 +571,14 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     :func:`_gamma2`; results equal the general loops' to rounding).
     Compensator (low-pass): ``w = U(t-T) - K^-1 Gamma(U(t-T))``,
     ``v_f <- a v_f + (1 - a) w``, ``U = K^-1 v + v_f``, then commit.
+    Plant (``run_plant``): the step of sample t - 1 (PI then ``linear``, on
+    ``U(t-1)``) runs at the top of sample t, ahead of the law's step of
+    sample t, which does not depend on it (the last sample's after the
+    loop): the same operations on the same values as stepping it after the
+    commit of sample t - 1, with the law's chain of dependent evaluations
+    next to independent work (on the 200-frequency sweep's kernel, serial,
+    2 rounds alternated, medians of 7, load 2.0: hammerstein 115.8/115.5 ->
+    112.8/111.7 ns a sample, rate independent 78.3/79.0 -> 76.1/76.9).
     ``comp`` and ``plant`` are ``PIArrays``, ``linear`` the plant's
     ``LinearArrays`` (used when ``run_plant``), ``law`` a ``LawArrays``.
     The ``state`` fields (``ChainState``) are updated in place up to the
@@ -642,6 +650,15 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
         else:
             for l in range(p):
                 ref[l] = yr[l, t]
+        if run_plant and t > 0:
+            # the plant's step of sample t - 1 (its input U(t-1) = cu), ahead of the law's
+            # step of sample t: the two do not depend on each other, and the law's
+            # iterations are a chain of dependent evaluations the plant's work fills
+            _commit(cu, pstart, pr, ps)
+            _output(cu, pW, pG, ps, h)
+            _linear_step(h, A, B, C, D, x, xn, yt)
+            for l in range(pp):
+                y_out[l, t - 1] = yt[l]
         if lowpass:
             for k in range(m):
                 acc = 0.0
@@ -706,12 +723,12 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
         _output(u, cW, cG, cs, yhat)
         for k in range(m):
             cu[k] = u[k]
-        if run_plant:
-            _commit(u, pstart, pr, ps)
-            _output(u, pW, pG, ps, h)
-            _linear_step(h, A, B, C, D, x, xn, yt)
-            for l in range(pp):
-                y_out[l, t] = yt[l]
+    if run_plant and n_samples > 0:   # the plant's step of the last sample
+        _commit(cu, pstart, pr, ps)
+        _output(cu, pW, pG, ps, h)
+        _linear_step(h, A, B, C, D, x, xn, yt)
+        for l in range(pp):
+            y_out[l, n_samples - 1] = yt[l]
     for i in range(nf):
         xf[i] = z[i]
     return STATUS_OK, n_samples
