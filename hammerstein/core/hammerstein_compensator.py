@@ -196,43 +196,32 @@ def continuations(records, samples, period_samples=None):
     list of numpy.ndarray, each shape (p, samples)
         In the order of ``records``.
     """
-    if samples <= 0:
-        return [np.zeros((r.shape[0], 0)) for r in records]
-    return _continuations(lambda b, i0, i1: records[b][:, i0:i1],
-                          lambda bs: [max(records[b].max(), -records[b].min()) for b in bs],
-                          [r.shape[1] for r in records], samples, period_samples)
-
-
-def _continuations(window, peaks, lengths, samples, period_samples):
-    """:func:`continuations` of records read through ``window(b, i0, i1)`` ((p, i1 - i0) samples
-    of record b) and ``peaks(bs)`` (``max(r.max(), -r.min())`` of each record b of the list
-    ``bs``, asked once, for the records whose periodic test needs it); ``samples`` > 0."""
-    B = len(lengths)
+    B = len(records)
     periods = [None] * B if period_samples is None else list(period_samples)
     out = [None] * B
+    if samples <= 0:
+        return [np.zeros((r.shape[0], 0)) for r in records]
     # periodic records whose last 8 samples repeat those one period earlier
-    tested = [b for b in range(B) if periods[b] and lengths[b] >= periods[b] + 8
+    tested = [b for b in range(B) if periods[b] and records[b].shape[1] >= periods[b] + 8
               and periods[b] >= samples]
     if tested:
-        d = np.abs(np.stack([window(b, lengths[b] - 8, lengths[b]) for b in tested])
-                   - np.stack([window(b, lengths[b] - periods[b] - 8, lengths[b] - periods[b])
-                               for b in tested]))
+        d = np.abs(np.stack([records[b][:, -8:] for b in tested])
+                   - np.stack([records[b][:, records[b].shape[1] - periods[b] - 8:
+                                             records[b].shape[1] - periods[b]] for b in tested]))
         small = np.all(d <= 1e-9, axis=(1, 2))
         dmax = np.max(d, axis=(1, 2))
-        need = [i for i in range(len(tested)) if not small[i]]
-        peak = dict(zip(need, peaks([tested[i] for i in need]) if need else []))
         for i, b in enumerate(tested):
-            if small[i] or dmax[i] <= 1e-9 * max(peak[i], 1.0):
-                N = lengths[b]
-                out[b] = window(b, N - periods[b], N - periods[b] + samples).copy()
+            r = records[b]
+            if small[i] or dmax[i] <= 1e-9 * max(max(r.max(), -r.min()), 1.0):
+                N = r.shape[1]
+                out[b] = r[:, N - periods[b]:N - periods[b] + samples].copy()
     rest = [b for b in range(B) if out[b] is None]
-    short = [b for b in rest if lengths[b] < 3]
+    short = [b for b in rest if records[b].shape[1] < 3]
     for b in short:
-        out[b] = np.repeat(window(b, lengths[b] - 1, lengths[b]) if lengths[b] else
-                           window(b, 0, 0), samples, axis=1)
-    quad = [b for b in rest if lengths[b] >= 3]
+        out[b] = np.repeat(records[b][:, -1:], samples, axis=1)
+    quad = [b for b in rest if records[b].shape[1] >= 3]
     if quad:
-        last3 = np.stack([window(b, lengths[b] - 3, lengths[b]) for b in quad])  # (Q, p, 3)
+        last3 = np.stack([records[b][:, -3:] for b in quad])      # (Q, p, 3)
         a, b_, c = last3[:, :, 0, None], last3[:, :, 1, None], last3[:, :, 2, None]
         k = np.arange(1, samples + 1)
         # Newton forward form through (-2, a), (-1, b), (0, c), as continuation()
@@ -606,103 +595,58 @@ class HammersteinCompensator:
         if self.inverse is None:
             faded = fade_in(reference, fade_samples)
             return faded, self.initial_state(), faded
-        lead, state, head = self._starts([reference], [period_samples], [fade_samples])[0]
-        N, h = lead.shape[1], min(self.preview_samples, lead.shape[1])
-        return lead, state, np.concatenate([head[:, :h], lead[:, :N - h]], axis=1)
+        return self._starts([reference], [period_samples], [fade_samples])[0]
 
     def _starts(self, references, period_samples, fade_samples):
         """:meth:`start` of several records (``'zpetc'``), the numpy work done for all at once.
 
-        Record b's faded reference (the same values as :func:`fade_in`, its
-        weights computed for all records in one call) followed by its
-        continuation (:func:`continuations`) is ``E_b`` (p, n_b + P); its
-        lead ``E_b[:, P:]`` is written straight into one buffer holding
-        all the leads end to end, each C-contiguous (p, n_b), in the order
-        of ``references`` (the ragged layout of
-        :func:`hammerstein.simulation.simulate_chain_batch`, which then
-        reads them without a copy), and its first P samples ``E_b[:, :P]``
-        into a small array of their own. The inverse's state after the P
-        preview samples comes from :func:`_zpetc_preview_states` for all
-        records, or from ``inverse.filter`` for a record that does not
-        start at rest. Leads and states are those of :meth:`start` on each
-        record alone, bit for bit (``start`` calls this with one record).
+        Each record gets one (p, n + P) buffer: the faded record (the same
+        values as :func:`fade_in`, its weights computed for all records in one
+        call), then its continuation (:func:`continuations`); the inverse's
+        state after the P preview samples comes from
+        :func:`_zpetc_preview_states` for all records, or from
+        ``inverse.filter`` for a record that does not start at rest. The
+        results are those of :meth:`start` on each record alone, bit for bit
+        (``start`` calls this with one record).
 
         Returns
         -------
-        list of (lead, state, head)
-            Lead (p, n_b) and state as :meth:`start` returns them, and
-            ``E_b[:, :P]`` (p, P), in the order of ``references``.
+        list of (lead, state, faded)
+            As :meth:`start` returns them, in the order of ``references``.
         """
         P = self.preview_samples
         refs = [np.asarray(r, dtype=float) for r in references]
-        lengths = [r.shape[-1] for r in refs]
-        ns = [int(min(max(f, 0), N)) for f, N in zip(fade_samples, lengths)]
+        ns = [int(min(max(f, 0), r.shape[-1])) for f, r in zip(fade_samples, refs)]
         weights = _fade_weights(ns)
-        rows = refs[0].shape[0]
-        offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int64)
-        buf = np.empty(rows * int(offsets[-1]))
-        leads, heads, at = [], [], 0
-        for b, (r, n, N) in enumerate(zip(refs, ns, lengths)):
-            lead = buf[rows * offsets[b]:rows * offsets[b + 1]].reshape(rows, N)
-            head = np.empty((rows, P))
-            h = min(P, N)
-            head[:, :h] = r[:, :h]
-            lead[:, :N - h] = r[:, h:]
+        exts, at = [], 0
+        for r, n in zip(refs, ns):
+            N = r.shape[-1]
+            ext = np.empty((r.shape[0], N + P))
+            ext[:, :N] = r
             if n:        # rest + w (r - rest) with rest 0: w r, then + 0.0 (-0.0 -> 0.0)
-                w = weights[at:at + n]
-                seg = head[:, :min(n, h)]
-                seg *= w[:min(n, h)]
+                seg = ext[:, :n]
+                seg *= weights[at:at + n]
                 seg += 0.0
-                if n > h:
-                    seg = lead[:, :n - h]
-                    seg *= w[h:]
-                    seg += 0.0
                 at += n
-            leads.append(lead)
-            heads.append(head)
-
-        def window(b, i0, i1):       # faded samples i0:i1 of record b (i1 <= its length)
-            h = min(P, lengths[b])
-            if i1 <= h:
-                return heads[b][:, i0:i1]
-            if i0 >= h:
-                return leads[b][:, i0 - h:i1 - h]
-            return np.concatenate([heads[b][:, i0:h], leads[b][:, :i1 - h]], axis=1)
-
-        def peaks(bs):               # max(F.max(), -F.min()) of the faded records bs (N > P)
-            for b in bs:             # a value of F in the lead's tail: neutral for both
-                leads[b][:, lengths[b] - P:] = leads[b][:, :1]
-            rows_at = (rows * offsets[:-1, None] + np.arange(rows) * np.asarray(lengths)[:, None])
-            rows_at = rows_at.reshape(-1)            # every lead row: one reduceat for them all
-            hi = np.maximum.reduceat(buf, rows_at).reshape(-1, rows)[bs].max(axis=1)
-            lo = np.minimum.reduceat(buf, rows_at).reshape(-1, rows)[bs].min(axis=1)
-            hs = np.stack([heads[b] for b in bs])
-            hi = np.maximum(hi, hs.max(axis=(1, 2))) if P else hi
-            lo = np.minimum(lo, hs.min(axis=(1, 2))) if P else lo
-            return [max(a, -c) for a, c in zip(hi.tolist(), lo.tolist())]
-
-        if P:
-            for b, cont in enumerate(_continuations(window, peaks, lengths, P, period_samples)):
-                N = lengths[b]
-                if N >= P:
-                    leads[b][:, N - P:] = cont
-                else:                # E_b = [faded | cont]: the head takes cont's start
-                    leads[b][:, :] = cont[:, P - N:]
-                    heads[b][:, N:] = cont[:, :P - N]
+            exts.append(ext)
+        for ext, r, cont in zip(exts, refs, continuations([e[:, :r.shape[-1]] for e, r in
+                                                           zip(exts, refs)], P, period_samples)):
+            ext[:, r.shape[-1]:] = cont
         nc = self.hysteresis_compensator.n_states
         # initial states: the hysteresis compensator at rest (initial_state()), then the inverse's
         state = np.tile(self.initial_state(), (len(refs), 1))
         fast = np.zeros(len(refs), dtype=bool)
         if P:
-            s0, fast = _zpetc_preview_states(self.inverse, np.stack(heads))
+            s0, fast = _zpetc_preview_states(self.inverse, np.stack([e[:, :P] for e in exts]))
             if fast.any():
                 state[fast, nc:] = s0[fast]
         for b in np.flatnonzero(~fast):
-            s0 = self.inverse.initial_state(heads[b][:, 0] if P else leads[b][:, 0])
+            s0 = self.inverse.initial_state(exts[b][:, 0])
             if P:
-                _, s0 = self.inverse.filter(heads[b], s0)
+                _, s0 = self.inverse.filter(exts[b][:, :P], s0)
             state[b, nc:] = s0
-        return [(lead, state[b], head) for b, (lead, head) in enumerate(zip(leads, heads))]
+        return [(ext[:, P:], state[b], ext[:, :r.shape[-1]])
+                for b, (ext, r) in enumerate(zip(exts, refs))]
 
     # -- the compensator protocol ----------------------------------------------------------
     def simulate(self, reference, initial_state=None):
@@ -895,11 +839,7 @@ class HammersteinCompensator:
         run as a few numpy calls on all of them (:meth:`_starts`) instead of
         ~20 calls a record: the start-up of a 200-frequency sweep's cases
         took ~90 us a case one by one. Each result equals :meth:`fused_run`
-        on its record, bit for bit. For ``'zpetc'`` the leads lie end to
-        end in one buffer, in order (the layout in which
-        :func:`hammerstein.simulation.simulate_chain_batch` packs its
-        records, so a batch of these cases in this order reads them in
-        place instead of copying them). ``'stable'`` and the exact Preisach
+        on its record, bit for bit. ``'stable'`` and the exact Preisach
         static part run :meth:`fused_run` record by record.
 
         Parameters

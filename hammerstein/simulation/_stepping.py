@@ -586,46 +586,9 @@ def _stack(arrays, shape, dtype=float):
     return out
 
 
-def _laid_end_to_end(arrays, offsets, rows):
-    """The flat buffer that already holds ``arrays`` in the ragged layout, or None.
-
-    True of records written end to end into one buffer by their producer
-    (the leads of ``HammersteinCompensator.fused_runs``): each C-contiguous
-    float64 (rows, n_b), record b starting ``rows * offsets[b]`` values
-    after record 0, all within the memory of record 0's base array. Then
-    that memory, viewed, is the packed buffer (nothing is copied; the
-    kernel only reads it).
-    """
-    first = arrays[0]
-    root = first
-    while isinstance(root.base, np.ndarray):
-        root = root.base
-    if not (root.dtype == np.float64 and root.flags.c_contiguous):
-        return None
-    p0 = first.__array_interface__["data"][0]
-    for b, a in enumerate(arrays):
-        if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous
-                and a.shape == (rows, offsets[b + 1] - offsets[b])
-                and a.__array_interface__["data"][0] == p0 + 8 * rows * int(offsets[b])):
-            return None
-    start, rest = divmod(p0 - root.__array_interface__["data"][0], 8)
-    size = rows * int(offsets[-1])
-    if rest or start < 0 or start + size > root.size:
-        return None
-    return root.reshape(-1)[start:start + size]
-
-
 def _ragged(arrays, offsets):
-    """Records (rows, n_b) packed end to end: case b is ``flat[rows*off[b]:rows*off[b+1]]``.
-
-    Records that already lie so in one buffer (:func:`_laid_end_to_end`) are
-    used in place; others are copied into a new buffer.
-    """
+    """Records (rows, n_b) packed end to end: case b is ``flat[rows*off[b]:rows*off[b+1]]``."""
     rows = arrays[0].shape[0] if arrays else 0
-    if arrays and rows and offsets[-1]:
-        flat = _laid_end_to_end(arrays, offsets, rows)
-        if flat is not None:
-            return flat
     flat = np.empty(rows * int(offsets[-1]))
     for b, a in enumerate(arrays):
         flat[rows * offsets[b]:rows * offsets[b + 1]] = a.ravel()
@@ -688,10 +651,8 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
     inputs and outputs agree. Each case starts from zero plant states and
     from its own compensator state (zeros by default). The
     records are packed end to end (memory in proportion to the samples, not
-    to the number of cases times the longest case; records that already lie
-    so in one buffer, e.g. the leads of ``HammersteinCompensator.fused_runs``,
-    are read in place), and each case's result equals
-    :func:`simulate_chain` on it bit for bit.
+    to the number of cases times the longest case), and each case's result
+    equals :func:`simulate_chain` on it bit for bit.
 
     Parameters
     ----------

@@ -642,42 +642,6 @@ def test_batch_records_are_ragged_not_padded():
         assert got.inputs.base.size == 2 * total
 
 
-def test_records_laid_end_to_end_are_packed_in_place():
-    """Records already lying end to end in one buffer are the batch's packed records (no
-    copy); records that do not (a gap, another order, a strided view, another dtype) are
-    copied; the packed values are the records' either way, and so are the results."""
-    from hammerstein.simulation._stepping import _ragged
-    rng = np.random.default_rng(660)
-    lengths = [5, 1, 7]
-    offsets = np.concatenate([[0], np.cumsum(lengths)])
-    buf = rng.normal(size=2 * (offsets[-1] + 3))
-    inside = buf[4:]                                 # a view, not at the start of its base
-    recs = [inside[2 * offsets[b]:2 * offsets[b + 1]].reshape(2, n) for b, n in enumerate(lengths)]
-    expected = np.concatenate([r.ravel() for r in recs])
-    flat = _ragged(recs, offsets)
-    assert np.shares_memory(flat, buf) and np.array_equal(flat, expected)
-    apart = [recs[0], recs[1], inside[2 * 6 + 2:2 * 13 + 2].reshape(2, 7)]      # a gap
-    strided = [buf.reshape(2, -1)[:, :5], recs[1], recs[2]]
-    pair = [inside[:6].reshape(2, 3), inside[6:12].reshape(2, 3)]
-    for bad, offs in ((apart, offsets), ([recs[0], recs[1].astype(np.float32), recs[2]], offsets),
-                      (strided, offsets), ([r.copy() for r in recs], offsets),
-                      (pair[::-1], np.array([0, 3, 6]))):             # another order
-        flat = _ragged(bad, offs)
-        assert not np.shares_memory(flat, buf)
-        assert np.array_equal(flat, np.concatenate([np.asarray(r, dtype=float).ravel()
-                                                    for r in bad]))
-    model = square_model(rng, 2)
-    comp = InverseMultiplicativeCompensator(model, iterations=3, check="ignore")
-    plant = random_plant(rng, square_model(rng, 2), True)
-    one = rng.normal(size=2 * 300)
-    recs = [one[2 * a:2 * b].reshape(2, b - a) for a, b in ((0, 120), (120, 121), (121, 300))]
-    laid = sim.simulate_chain_batch(comp, plant, recs, parallel=False)
-    copied = sim.simulate_chain_batch(comp, plant, [r.copy() for r in recs], parallel=False)
-    for a, b in zip(laid, copied):
-        np.testing.assert_array_equal(a.inputs, b.inputs)
-        np.testing.assert_array_equal(a.outputs, b.outputs)
-
-
 @pytest.mark.parametrize("n_threads", [1, 2])
 def test_batch_is_the_same_on_one_or_two_threads(n_threads):
     import numba
