@@ -452,7 +452,8 @@ def test_prefilter_state_at_a_divergence_is_the_state_after_that_sample(quiet):
 
 @pytest.mark.parametrize("p", [1, 2, 3])
 def test_sparse_prefilter_equals_the_written_out_filter(p):
-    """The kernel steps the pre-filter on its non-zero entries: same outputs and final
+    """The kernel steps the pre-filter on its non-zero entries (delay lines read from the
+    reference, the other terms summed a block at a time): same outputs and final
     state as the dense filter written out (``filter_loop``), chunked == whole."""
     rng = np.random.default_rng(620 + p)
     model = square_model(rng, p)
