@@ -12,14 +12,17 @@ gains ``G`` (p, m), discrete state space ``A, B, C, D``):
   bending modes, per sample (:func:`~hammerstein.simulation._kernels.plant_kernel`);
 * ``chain``: optional reference pre-filter (``--prefilter``: a state space
   shaped like a Hammerstein compensator's ZPETC inverse of G, the law's
-  ``prefiltered`` branch, stepped on its non-zero entries and run ahead of
-  the law 256 samples at a time, samples in pairs with the state alternating
-  between two buffers, as the kernel does) -> compensator (delay law,
+  ``prefiltered`` branch, run ahead of the law 256 samples at a time, its
+  delay lines read from the reference, the other terms summed over the block
+  term by term and its dynamic states stepped sample by sample, as the
+  kernel does) -> plant step of the previous sample, ahead of the law, as the
+  kernel does -> compensator (delay law,
   ``iterations`` fixed-point steps with the play states frozen at the
   previous sample, each re-evaluation ``Gamma(U; s)`` taking the outputs in
   pairs, one pass over the plays per pair with each moved play in a
-  register; a 2 x 2 model's law in scalars, as the kernel's; divergence
-  check, commit) -> PI -> bending modes
+  register, each input's plays summed apart; a 2 x 2 model's law in
+  scalars, U in registers, as the kernel's; divergence check, commit)
+  -> PI -> bending modes
   (:func:`~hammerstein.simulation._kernels.chain_kernel`);
 * ``batch``: the chain over several cases with ragged records, one after the
   other (:func:`~hammerstein.simulation._kernels.chain_batch` on one thread);
@@ -97,20 +100,22 @@ static inline void output(const double *u, int64_t m, int64_t p, int64_t n, cons
 }
 
 /* outputs l and l1 of Gamma(u; s), the plays moved to u but not stored: one pass over the
-   plays, each moved play (a register) weighted into both outputs, then G u (the kernel's
-   _moved_pair) */
+   plays, each moved play (a register) weighted into both outputs, each input's plays summed
+   apart and added, then G u (the kernel's _moved_pair) */
 static inline void moved_pair(const double *u, int64_t m, int64_t n, const int64_t *start,
                               const double *r, const double *W, const double *G,
                               const double *s, int64_t l, int64_t l1, double *y0, double *y1) {
     double a0 = 0.0, a1 = 0.0;
     const double *w0 = W + l * n, *w1 = W + l1 * n;
     for (int64_t k = 0; k < m; k++) {
-        double uk = u[k];
+        double uk = u[k], b0 = 0.0, b1 = 0.0;
         for (int64_t j = start[k]; j < start[k + 1]; j++) {
             double vj = play(s[j], uk, r[j]);
-            a0 += w0[j] * vj;
-            a1 += w1[j] * vj;
+            b0 += w0[j] * vj;
+            b1 += w1[j] * vj;
         }
+        a0 += b0;
+        a1 += b1;
     }
     for (int64_t k = 0; k < m; k++) {
         a0 += G[l * m + k] * u[k];
@@ -118,6 +123,27 @@ static inline void moved_pair(const double *u, int64_t m, int64_t n, const int64
     }
     *y0 = a0;
     *y1 = a1;
+}
+
+/* Gamma(u; s) of a 2 x 2 model, u in registers: each input's plays summed apart, G u apart,
+   added last (the kernel's _gamma2) */
+static inline void gamma2(double u0, double u1, const int64_t *start, const double *r,
+                          const double *W, const double *G, const double *s, int64_t n,
+                          double *y0, double *y1) {
+    double a0 = 0.0, a1 = 0.0, b0 = 0.0, b1 = 0.0;
+    for (int64_t j = start[0]; j < start[1]; j++) {
+        double vj = play(s[j], u0, r[j]);
+        a0 += W[j] * vj;
+        a1 += W[n + j] * vj;
+    }
+    for (int64_t j = start[1]; j < start[2]; j++) {
+        double vj = play(s[j], u1, r[j]);
+        b0 += W[j] * vj;
+        b1 += W[n + j] * vj;
+    }
+    double g0 = G[0] * u0 + G[1] * u1, g1 = G[2] * u0 + G[3] * u1;
+    *y0 = (a0 + b0) + g0;
+    *y1 = (a1 + b1) + g1;
 }
 
 /* y = Gamma(u; s) without moving the plays: outputs in pairs, an odd last one paired with
@@ -156,64 +182,122 @@ static inline void linear(const double *h, int64_t q, int64_t nx, const double *
 #define MAXV 64
 #define MAXX 256
 
-/* the non-zero entries of [[C, D], [A, B]] row by row (compressed rows; columns: the
-   state, then the input), as the kernels step a reference pre-filter */
-static int64_t sparse_rows(int64_t q, int64_t nx, const double *A, const double *B,
-                           const double *C, const double *D, int64_t *ptr, int64_t *col,
-                           double *val) {
-    int64_t n = 0;
-    ptr[0] = 0;
-    for (int64_t l = 0; l < q + nx; l++) {
-        for (int64_t j = 0; j < nx + q; j++) {
-            double a = l < q ? (j < nx ? C[l * nx + j] : D[l * q + j - nx])
-                             : (j < nx ? A[(l - q) * nx + j] : B[(l - q) * q + j - nx]);
-            if (a != 0.0) { col[n] = j; val[n] = a; n++; }
-        }
-        ptr[l + 1] = n;
-    }
-    return n;
-}
-
-/* y = C x + D h, new state A x + B h into zn on the non-zero entries; z = [x; h] (z is not
-   written: the caller alternates two buffers) */
-static inline void sparse_linear(const int64_t *ptr, const int64_t *col, const double *val,
-                                 int64_t q, int64_t nx, const double *z, double *zn, double *y) {
-    for (int64_t l = 0; l < q; l++) {
-        double a = 0.0;
-        for (int64_t n = ptr[l]; n < ptr[l + 1]; n++) a += val[n] * z[col[n]];
-        y[l] = a;
-    }
-    for (int64_t i = 0; i < nx; i++) {
-        double a = 0.0;
-        for (int64_t n = ptr[q + i]; n < ptr[q + i + 1]; n++) a += val[n] * z[col[n]];
-        zn[i] = a;
-    }
-}
-
 #define BLOCK 256
+#define MAXT ((MAXX + MAXV) * (MAXX + MAXV))
 
-/* pre-filter samples t0..t1 of yr (p rows of stride N) into vb (p rows of stride BLOCK), in
-   pairs, the state alternating between z and a second buffer; z = [state; input] holds the
-   state after t1 (the kernel's _prefilter_block) */
-static void prefilter_block(const double *yr, int64_t N, int64_t t0, int64_t t1,
-                            const int64_t *ptr, const int64_t *col, const double *val,
-                            int64_t p, int64_t nf, double *z, double *vb) {
-    double v[MAXV], z2[MAXX + MAXV];
-    int64_t t = t0;
-    for (; t + 1 < t1; t += 2) {
-        for (int64_t l = 0; l < p; l++) z[nf + l] = yr[l * N + t];
-        sparse_linear(ptr, col, val, p, nf, z, z2, v);
-        for (int64_t l = 0; l < p; l++) vb[l * BLOCK + t - t0] = v[l];
-        for (int64_t l = 0; l < p; l++) z2[nf + l] = yr[l * N + t + 1];
-        sparse_linear(ptr, col, val, p, nf, z2, z, v);
-        for (int64_t l = 0; l < p; l++) vb[l * BLOCK + t + 1 - t0] = v[l];
+/* the pre-filter [[C, D], [A, B]] split into delay lines (a state whose update is a single
+   1.0 on an input or on such a state, one per input and lag) and dynamic states; each
+   computed row (outputs, then dynamic states) in column order, split at its first dynamic
+   state into a head and a tail (the kernel's _prefilter_plan) */
+static int64_t f_L, f_nd, f_lag[MAXX], f_src[MAXX], f_dyn[MAXX], f_hist[MAXV][MAXX + 1];
+static int64_t f_sptr[MAXX + MAXV + 1], f_sin[MAXT], f_slag[MAXT];
+static int64_t f_rptr[MAXX + MAXV + 1], f_rkind[MAXT], f_rcol[MAXT], f_rlag[MAXT];
+static double f_sval[MAXT], f_rval[MAXT];
+
+static void prefilter_plan(int64_t q, int64_t nx, const double *A, const double *B,
+                           const double *C, const double *D) {
+    int64_t k = q, one[MAXX], where[MAXX];
+    for (int64_t i = 0; i < nx; i++) {
+        int64_t cnt = 0, c = -1, unit = 0;
+        for (int64_t j = 0; j < nx + k; j++) {
+            double a = j < nx ? A[i * nx + j] : B[i * k + j - nx];
+            if (a != 0.0) { cnt++; c = j; unit = a == 1.0; }
+        }
+        one[i] = cnt == 1 && unit ? c : -1;
     }
-    if (t < t1) {
-        for (int64_t l = 0; l < p; l++) z[nf + l] = yr[l * N + t];
-        sparse_linear(ptr, col, val, p, nf, z, z2, v);
-        for (int64_t l = 0; l < p; l++) vb[l * BLOCK + t - t0] = v[l];
-        for (int64_t i = 0; i < nf; i++) z[i] = z2[i];
+    for (int again = 1; again;) {
+        for (int64_t i = 0; i < nx; i++) f_lag[i] = 0;
+        for (int changed = 1; changed;) {
+            changed = 0;
+            for (int64_t i = 0; i < nx; i++) {
+                int64_t c = one[i];
+                if (f_lag[i] == 0 && c >= 0) {
+                    if (c >= nx) { f_lag[i] = 1; f_src[i] = c - nx; changed = 1; }
+                    else if (f_lag[c] > 0) { f_lag[i] = f_lag[c] + 1; f_src[i] = f_src[c]; changed = 1; }
+                }
+            }
+        }
+        again = 0;
+        for (int64_t i = 0; i < nx; i++)
+            for (int64_t j = 0; j < i; j++)
+                if (f_lag[i] > 0 && f_lag[j] == f_lag[i] && f_src[j] == f_src[i]) { one[i] = -1; again = 1; }
     }
+    f_L = 0; f_nd = 0;
+    for (int64_t i = 0; i < nx; i++) if (f_lag[i] > f_L) f_L = f_lag[i];
+    for (int64_t l = 0; l < k; l++) for (int64_t d = 0; d <= f_L; d++) f_hist[l][d] = -1;
+    for (int64_t i = 0; i < nx; i++) {
+        if (f_lag[i] == 0) { f_dyn[f_nd] = i; where[i] = f_nd++; }
+        else f_hist[f_src[i]][f_lag[i]] = i;
+    }
+    int64_t ns = 0, nr = 0;
+    f_sptr[0] = f_rptr[0] = 0;
+    for (int64_t w = 0; w < q + f_nd; w++) {
+        int tail = 0;
+        for (int64_t j = 0; j < nx + k; j++) {
+            double a = w < q ? (j < nx ? C[w * nx + j] : D[w * k + j - nx])
+                             : (j < nx ? A[f_dyn[w - q] * nx + j] : B[f_dyn[w - q] * k + j - nx]);
+            if (a == 0.0) continue;
+            int stat = j >= nx || f_lag[j] > 0;
+            tail = tail || !stat;
+            int64_t in = j >= nx ? j - nx : f_src[j], lg = j >= nx ? 0 : f_lag[j];
+            if (!tail) { f_sin[ns] = in; f_slag[ns] = lg; f_sval[ns++] = a; }
+            else {
+                f_rkind[nr] = !stat; f_rcol[nr] = stat ? in : where[j]; f_rlag[nr] = stat ? lg : 0;
+                f_rval[nr++] = a;
+            }
+        }
+        f_sptr[w + 1] = ns;
+        f_rptr[w + 1] = nr;
+    }
+}
+
+/* pre-filter samples t0..t1 of yr (p rows of stride N) into vb (p rows of stride BLOCK):
+   the delay lines read from a history of the reference, each row's head summed over the
+   block term by term, the dynamic states stepped sample by sample, the outputs' tails added
+   over the block term by term; z (nf,) the state after t1 (the kernel's _prefilter_block) */
+static void prefilter_block(const double *yr, int64_t N, int64_t t0, int64_t t1, int64_t p,
+                            int64_t nf, double *z, double *vb) {
+    static double H[MAXV * (MAXX + 1 + BLOCK)], S[(MAXV + MAXX) * BLOCK], X[MAXX * (BLOCK + 1)];
+    int64_t L = f_L, nd = f_nd, q = p, n = t1 - t0, HW = f_L + BLOCK, XW = BLOCK + 1;
+    for (int64_t l = 0; l < p; l++) {
+        for (int64_t d = 1; d <= L; d++) {
+            int64_t i = f_hist[l][d];
+            H[l * HW + L - d] = i >= 0 ? z[i] : 0.0;
+        }
+        for (int64_t k = 0; k < n; k++) H[l * HW + L + k] = yr[l * N + t0 + k];
+    }
+    for (int64_t w = 0; w < q + nd; w++) {
+        double *Sw = S + w * BLOCK;
+        for (int64_t k = 0; k < n; k++) Sw[k] = 0.0;
+        for (int64_t m = f_sptr[w]; m < f_sptr[w + 1]; m++) {
+            double a = f_sval[m];
+            const double *Hl = H + f_sin[m] * HW + L - f_slag[m];
+            for (int64_t k = 0; k < n; k++) Sw[k] += a * Hl[k];
+        }
+    }
+    for (int64_t e = 0; e < nd; e++) X[e * XW] = z[f_dyn[e]];
+    for (int64_t k = 0; k < n; k++)
+        for (int64_t e = 0; e < nd; e++) {
+            int64_t w = q + e;
+            double a = S[w * BLOCK + k];
+            for (int64_t m = f_rptr[w]; m < f_rptr[w + 1]; m++)
+                a += f_rkind[m] ? f_rval[m] * X[f_rcol[m] * XW + k]
+                                : f_rval[m] * H[f_rcol[m] * HW + L - f_rlag[m] + k];
+            X[e * XW + k + 1] = a;
+        }
+    for (int64_t w = 0; w < q; w++) {
+        double *Sw = S + w * BLOCK;
+        for (int64_t m = f_rptr[w]; m < f_rptr[w + 1]; m++) {
+            double a = f_rval[m];
+            const double *src = f_rkind[m] ? X + f_rcol[m] * XW
+                                           : H + f_rcol[m] * HW + L - f_rlag[m];
+            for (int64_t k = 0; k < n; k++) Sw[k] += a * src[k];
+        }
+        for (int64_t k = 0; k < n; k++) vb[w * BLOCK + k] = Sw[k];
+    }
+    for (int64_t e = 0; e < nd; e++) z[f_dyn[e]] = X[e * XW + n];
+    for (int64_t i = 0; i < nf; i++)
+        if (f_lag[i] > 0) z[i] = H[f_src[i] * HW + L + n - f_lag[i]];
 }
 
 void plant(int64_t m, int64_t p, int64_t n, int64_t nx, int64_t N, const double *u,
@@ -244,14 +328,13 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
               double *u_out, double *y_out, int64_t *status) {
     double u[MAXV], e[MAXV], yh[MAXV], yhat[MAXV], ref[MAXV], h[MAXV], yt[MAXV];
     double xn[MAXX];
-    static double fval[(MAXX + MAXV) * (MAXX + MAXV)], z[MAXX + MAXV], zb[MAXX];
+    static double z[MAXX + MAXV], zb[MAXX];
     static double vb[MAXV * BLOCK];
-    static int64_t fcol[(MAXX + MAXV) * (MAXX + MAXV)], fptr[MAXX + MAXV + 1];
     int two = m == 2 && p == 2;
     double k00 = two ? Kinv[0] : 0.0, k01 = two ? Kinv[1] : 0.0;
     double k10 = two ? Kinv[2] : 0.0, k11 = two ? Kinv[3] : 0.0;
     *status = 0;
-    sparse_rows(p, nf, Af, Bf, Cf, Df, fptr, fcol, fval);
+    prefilter_plan(p, nf, Af, Bf, Cf, Df);
     for (int64_t i = 0; i < nf; i++) z[i] = xf[i];
     evaluate(cu, m, p, cn, cstart, cr, cW, cG, cs, yhat);
     for (int64_t t = 0; t < N; t++) {
@@ -259,28 +342,28 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
         if (prefiltered) {
             if (tb == 0) {
                 for (int64_t i = 0; i < nf; i++) zb[i] = z[i];
-                prefilter_block(yr, N, t, t + BLOCK < N ? t + BLOCK : N, fptr, fcol, fval, p,
-                                nf, z, vb);
+                prefilter_block(yr, N, t, t + BLOCK < N ? t + BLOCK : N, p, nf, z, vb);
             }
             for (int64_t l = 0; l < p; l++) ref[l] = vb[l * BLOCK + tb];
         } else {
             for (int64_t l = 0; l < p; l++) ref[l] = yr[l * N + t];
         }
+        if (t > 0) {             /* the plant's step of sample t - 1, ahead of the law's */
+            commit(cu, m, pstart, pr, ps);
+            output(cu, m, p, pn, pW, pG, ps, h);
+            linear(h, p, nx, A, B, C, D, x, xn, yt);
+            for (int64_t l = 0; l < p; l++) y_out[l * N + t - 1] = yt[l];
+        }
         if (two) {
-            double y0 = yhat[0], y1 = yhat[1];
-            u[0] = cu[0];
-            u[1] = cu[1];
+            double y0 = yhat[0], y1 = yhat[1], u0 = cu[0], u1 = cu[1];
             for (int64_t it = 0; it < iterations; it++) {
-                if (it > 0) moved_pair(u, 2, cn, cstart, cr, cW, cG, cs, 0, 1, &y0, &y1);
+                if (it > 0) gamma2(u0, u1, cstart, cr, cW, cG, cs, cn, &y0, &y1);
                 double e0 = ref[0] - y0, e1 = ref[1] - y1;
-                double a0 = 0.0, a1 = 0.0;
-                a0 += k00 * e0;
-                a0 += k01 * e1;
-                a1 += k10 * e0;
-                a1 += k11 * e1;
-                u[0] += a0;
-                u[1] += a1;
+                u0 += k00 * e0 + k01 * e1;
+                u1 += k10 * e0 + k11 * e1;
             }
+            u[0] = u0;
+            u[1] = u1;
         } else {
             for (int64_t k = 0; k < m; k++) u[k] = cu[k];
             for (int64_t it = 0; it < iterations; it++) {
@@ -307,7 +390,7 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
         if (st) {
             if (prefiltered) {
                 for (int64_t i = 0; i < nf; i++) z[i] = zb[i];
-                prefilter_block(yr, N, t - tb, t + 1, fptr, fcol, fval, p, nf, z, vb);
+                prefilter_block(yr, N, t - tb, t + 1, p, nf, z, vb);
             }
             for (int64_t i = 0; i < nf; i++) xf[i] = z[i];
             *status = st;
@@ -316,10 +399,12 @@ int64_t chain(int64_t m, int64_t p, int64_t N, const double *yr, const double *K
         commit(u, m, cstart, cr, cs);
         output(u, m, p, cn, cW, cG, cs, yhat);
         for (int64_t k = 0; k < m; k++) cu[k] = u[k];
-        commit(u, m, pstart, pr, ps);
-        output(u, m, p, pn, pW, pG, ps, h);
+    }
+    if (N > 0) {                 /* the plant's step of the last sample */
+        commit(cu, m, pstart, pr, ps);
+        output(cu, m, p, pn, pW, pG, ps, h);
         linear(h, p, nx, A, B, C, D, x, xn, yt);
-        for (int64_t l = 0; l < p; l++) y_out[l * N + t] = yt[l];
+        for (int64_t l = 0; l < p; l++) y_out[l * N + N - 1] = yt[l];
     }
     for (int64_t i = 0; i < nf; i++) xf[i] = z[i];
     return N;

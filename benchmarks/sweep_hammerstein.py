@@ -1,7 +1,7 @@
 """A 200-frequency sweep with ``kind = "hammerstein"`` against a rate-independent kind.
 
 Run: ``python benchmarks/sweep_hammerstein.py [--repeat 5] [--inversion zpetc|stable]
-[--iterations-study] [--update-sizes]``
+[--iterations-study] [--phases] [--update-sizes]``
 (from the repository root; ``NUMBA_NUM_THREADS`` unset for both cores).
 
 Not a test. Two scenarios on the same plant (the bundled preset with its
@@ -33,6 +33,11 @@ case's tracking error (``rms_error`` of every channel, ``max_euclidean_error``)
 with 1 and 2 iterations to the error with 3 (the default): what the law's
 iterations buy once G is inverted (the cost side is the ``rate-indep., 3
 iterations`` row of the timing).
+
+``--phases`` instead prints, per phase of :func:`run_cases`, the CPU time of
+the rate-independent and the Hammerstein sweep and their difference
+(medians of ``--repeat`` alternated runs, :func:`phases`): where the
+Hammerstein sweep's excess goes.
 
 ``--update-sizes`` prints the size of the law's 1st, 2nd and 3rd update on
 some of the Hammerstein cases (:func:`update_sizes`): what an adaptive stop
@@ -174,6 +179,80 @@ def update_sizes(n_freqs=12, every=3):
               f"{np.mean(d[2] < 1e-9):10.3f}")
 
 
+def phases(cases, repeat):
+    """Per-phase CPU [ms] of :func:`run_cases` on the rate-independent and Hammerstein cases.
+
+    Each phase's function is wrapped to add up its ``time.process_time``
+    (the kernel's: the threads that run it, summed): ``start-up``
+    (``_prepared_chunk``: the Hammerstein cases' fade-in, preview and
+    continuation), ``reference check``, ``batch`` (``simulate_chain_batch``
+    whole), of it ``packing`` (``_ragged``) and ``kernel`` (the kernel
+    calls), and ``metrics`` (``chain_result``). The two kinds alternate,
+    ``repeat`` times after a warm-up; returns ``{phase: (rate independent,
+    hammerstein)}`` medians [ms], ``total`` included.
+    """
+    import functools
+    from concurrent.futures import ThreadPoolExecutor
+
+    from hammerstein.scenario import sweeps
+    from hammerstein.simulation import _stepping
+
+    acc = {}
+    saved = []
+
+    def wrap(mod, name, key):
+        f = getattr(mod, name)
+        saved.append((mod, name, f))
+
+        @functools.wraps(f)
+        def g(*a, **k):
+            c0 = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                acc[key] = acc.get(key, 0.0) + time.process_time() - c0
+        setattr(mod, name, g)
+
+    wrap(sweeps, "_prepared_chunk", "start-up")
+    wrap(sweeps, "_check_references", "reference check")
+    wrap(sweeps, "simulate_chain_batch", "batch")
+    wrap(sweeps, "chain_result", "metrics")
+    wrap(_stepping, "_ragged", "packing")
+
+    class Pool(ThreadPoolExecutor):          # the kernel on several threads
+        def __enter__(self):
+            self._c0 = time.process_time()
+            return super().__enter__()
+
+        def __exit__(self, *exc):
+            out = super().__exit__(*exc)
+            acc["kernel"] = acc.get("kernel", 0.0) + time.process_time() - self._c0
+            return out
+
+    saved.append((_stepping, "ThreadPoolExecutor", ThreadPoolExecutor))
+    _stepping.ThreadPoolExecutor = Pool
+    kinds = ("multivariable", "hammerstein")
+    got = {k: [] for k in kinds}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for k in kinds:                  # warm-up
+                sweeps.run_cases(cases[k])
+            for _ in range(repeat):
+                for k in kinds:
+                    acc.clear()
+                    c0 = time.process_time()
+                    sweeps.run_cases(cases[k])
+                    acc["total"] = time.process_time() - c0
+                    got[k].append(dict(acc))
+    finally:
+        for mod, name, f in saved:
+            setattr(mod, name, f)
+    keys = ("total", "start-up", "reference check", "batch", "packing", "kernel", "metrics")
+    return {key: tuple(1e3 * statistics.median(r.get(key, 0.0) for r in got[k]) for k in kinds)
+            for key in keys}
+
+
 def timed(fn):
     c0, w0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
@@ -189,6 +268,8 @@ def main(argv=None):
     ap.add_argument("--frequencies", type=int, default=200)
     ap.add_argument("--iterations-study", action="store_true",
                     help="tracking errors with 1/2/3 law iterations on scenarios/hammerstein-*.toml")
+    ap.add_argument("--phases", action="store_true",
+                    help="per-phase CPU of the rate-independent and Hammerstein sweeps")
     ap.add_argument("--update-sizes", action="store_true",
                     help="size of each law iteration's update on Hammerstein sweep cases")
     args = ap.parse_args(argv)
@@ -210,6 +291,13 @@ def main(argv=None):
     samples = {k: sum(c.signal.shape[1] for c in v) for k, v in cases.items()}
     print(f"{args.frequencies} frequencies, {samples['hammerstein']} samples per sweep "
           f"(inversion {args.inversion})")
+    if args.phases:
+        print(f"{'CPU [ms]':18s} {'rate-indep.':>12s} {'hammerstein':>12s} {'excess':>8s}   "
+              f"(medians of {args.repeat}, alternated)")
+        for key, (ri, ha) in phases(cases, args.repeat).items():
+            print(f"{key:18s} {ri:12.1f} {ha:12.1f} {ha - ri:8.1f}")
+        print(f"load average now {os.getloadavg()[0]:.2f}")
+        return
     runs = {
         "rate-independent (batched)": lambda: run_cases(cases["multivariable"]),
         "rate-indep., 3 iterations": lambda: run_cases(cases["multivariable-3"]),

@@ -265,13 +265,21 @@ def test_fused_runs_equal_the_start_up_of_each_record_bit_for_bit(scenario):
     comp = case.compensator
     refs, periods, fades = [], [], []
     for n, period, fade in ((200, None, 37), (333, 50, 50), (90, 30, 0), (500, None, 1),
-                            (64, 16, 64), (400, 100, 120)):
+                            (64, 16, 64), (400, 100, 120), (1, None, 0), (2, None, 2)):
         t = np.arange(n)
         ref = np.vstack([10 * np.sin(2 * np.pi * t / (period or 77)),
                          np.cumsum(rng.normal(size=n))]) + (0.0 if fade else 1.0)
         refs.append(ref)
         periods.append(period)
         fades.append(fade)
+    # periodic to 1e-9 of its peak only (5e-9 apart, peak 90): repeated, not extrapolated
+    t = np.arange(350)
+    ref = 90 * np.vstack([np.sin(2 * np.pi * t / 50), np.cos(2 * np.pi * t / 50)])
+    ref[:, -8:] += 5e-9
+    refs.append(ref)
+    periods.append(50)
+    fades.append(40)
+    assert comp.preview_samples > 1                  # the records of 1 and 2 samples are shorter
     got = comp.fused_runs(refs, periods, fades)
     assert len(got) == len(refs)
     for (law, lead, state), ref, period, fade in zip(got, refs, periods, fades):

@@ -452,7 +452,8 @@ def test_prefilter_state_at_a_divergence_is_the_state_after_that_sample(quiet):
 
 @pytest.mark.parametrize("p", [1, 2, 3])
 def test_sparse_prefilter_equals_the_written_out_filter(p):
-    """The kernel steps the pre-filter on its non-zero entries: same outputs and final
+    """The kernel steps the pre-filter on its non-zero entries (delay lines read from the
+    reference, the other terms summed a block at a time): same outputs and final
     state as the dense filter written out (``filter_loop``), chunked == whole."""
     rng = np.random.default_rng(620 + p)
     model = square_model(rng, p)
@@ -473,6 +474,67 @@ def test_sparse_prefilter_equals_the_written_out_filter(p):
     np.testing.assert_allclose(got.compensator_state[-x0.size:], xf_final, rtol=0, atol=ATOL)
     a = sim.simulate_chain(comp, plant, yr[:, :137], state0)
     b = sim.simulate_chain(comp, plant, yr[:, 137:], a.compensator_state, a.plant_state)
+    np.testing.assert_array_equal(np.hstack([a.outputs, b.outputs]), got.outputs)
+    np.testing.assert_array_equal(b.compensator_state, got.compensator_state)
+
+
+def tangled_filter(rng, p):
+    """Delay lines next to states that only look like them (10 states, input k = min(1, p-1)).
+
+    s0 = r0 one sample back, s1 = s0 one back (r0 two back), s2 = r0 one back again (a
+    second delay line of the same input and lag: its initial value differs), s3 = s2 one
+    back, s4 a mode fed by s1, s3 and rk, s5 = s4 one back (a delay of a mode), s6 = s6
+    (holds its value), s7 and s8 swap (a ring), s9 = rk one back."""
+    k = min(1, p - 1)
+    n = 10
+    A, B = np.zeros((n, n)), np.zeros((n, p))
+    B[0, 0] = 1.0
+    A[1, 0] = 1.0
+    B[2, 0] = 1.0
+    A[3, 2] = 1.0
+    A[4, 4], A[4, 1], A[4, 3], B[4, k] = 0.5, 0.3, -0.2, 0.7
+    A[5, 4] = 1.0
+    A[6, 6] = 1.0
+    A[7, 8] = A[8, 7] = 1.0
+    B[9, k] = 1.0
+    C = rng.normal(size=(p, n))
+    D = np.eye(p) + 0.1 * rng.normal(size=(p, p))
+    return sim.LinearArrays(A, B, C, D)
+
+
+def test_prefilter_plan_reads_only_true_delay_lines():
+    from hammerstein.simulation._kernels import _prefilter_plan
+    f = tangled_filter(np.random.default_rng(630), 2)
+    lag, src, dyn = _prefilter_plan(f.A, f.B, f.C, f.D)[:3]
+    # s0, s1: r0 one and two back; s9: r1 one back; s2 repeats s0's line, so s2 and s3
+    # (which copies it), the mode s4, its copy s5, the held s6 and the ring s7, s8 step
+    assert lag.tolist() == [1, 2, 0, 0, 0, 0, 0, 0, 0, 1]
+    assert src[[0, 1, 9]].tolist() == [0, 0, 1]
+    assert dyn.tolist() == [2, 3, 4, 5, 6, 7, 8]
+
+
+@pytest.mark.parametrize("p", [1, 2])
+def test_prefilter_with_tangled_delay_lines_equals_the_written_out_filter(p):
+    """The kernel reads the delay lines of a pre-filter from the reference: same outputs
+    and final state as the filter written out, from a random initial state (the two delay
+    lines of one input and lag start apart), over several blocks, chunked == whole."""
+    rng = np.random.default_rng(640 + p)
+    model = square_model(rng, p)
+    inner = InverseMultiplicativeCompensator(model, iterations=3, check="ignore")
+    f = tangled_filter(rng, p)
+    comp = Prefiltered(inner, f)
+    plant = random_plant(rng, square_model(rng, p), True)
+    yr = random_inputs(rng, p, 700)
+    x0 = rng.normal(size=f.A.shape[0])
+    state0 = np.concatenate([np.zeros(p + model.n_hysterons), x0])
+    v, xf_final = filter_loop(f, yr, x0)
+    expected = sim.simulate_chain(inner, plant, v)
+    got = sim.simulate_chain(comp, plant, yr, state0)
+    np.testing.assert_allclose(got.inputs, expected.inputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(got.outputs, expected.outputs, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(got.compensator_state[-x0.size:], xf_final, rtol=0, atol=ATOL)
+    a = sim.simulate_chain(comp, plant, yr[:, :301], state0)
+    b = sim.simulate_chain(comp, plant, yr[:, 301:], a.compensator_state, a.plant_state)
     np.testing.assert_array_equal(np.hstack([a.outputs, b.outputs]), got.outputs)
     np.testing.assert_array_equal(b.compensator_state, got.compensator_state)
 
