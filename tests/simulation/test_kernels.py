@@ -457,23 +457,30 @@ def test_sparse_prefilter_equals_the_written_out_filter(p):
     state as the dense filter written out (``filter_loop``), chunked == whole."""
     rng = np.random.default_rng(620 + p)
     model = square_model(rng, p)
-    inner = InverseMultiplicativeCompensator(model, iterations=3, check="ignore")
     f = sparse_filter(rng, p)
     assert np.count_nonzero(np.hstack([f.A, f.B])) < f.A.size / 2
-    comp = Prefiltered(inner, f)
     plant = random_plant(rng, square_model(rng, p), True)
     yr = random_inputs(rng, p, 300)
     x0 = rng.normal(size=f.A.shape[0])
     x0[-1] = 0.0
-    state0 = np.concatenate([np.zeros(p + model.n_hysterons), x0])
+    check_prefiltered_chain(model, f, plant, yr, x0, 137)
+
+
+def check_prefiltered_chain(model, f, plant, yr, x0, split):
+    """The chain with the pre-filter ``f`` (initial state ``x0``) ahead of the 3-iteration law
+    of ``model``: the law run on the filter written out (``filter_loop``), the same final
+    filter state, and chunked at ``split`` == whole."""
+    inner = InverseMultiplicativeCompensator(model, iterations=3, check="ignore")
+    comp = Prefiltered(inner, f)
+    state0 = np.concatenate([np.zeros(model.n_inputs + model.n_hysterons), x0])
     v, xf_final = filter_loop(f, yr, x0)
     expected = sim.simulate_chain(inner, plant, v)
     got = sim.simulate_chain(comp, plant, yr, state0)
     np.testing.assert_allclose(got.inputs, expected.inputs, rtol=0, atol=ATOL)
     np.testing.assert_allclose(got.outputs, expected.outputs, rtol=0, atol=ATOL)
     np.testing.assert_allclose(got.compensator_state[-x0.size:], xf_final, rtol=0, atol=ATOL)
-    a = sim.simulate_chain(comp, plant, yr[:, :137], state0)
-    b = sim.simulate_chain(comp, plant, yr[:, 137:], a.compensator_state, a.plant_state)
+    a = sim.simulate_chain(comp, plant, yr[:, :split], state0)
+    b = sim.simulate_chain(comp, plant, yr[:, split:], a.compensator_state, a.plant_state)
     np.testing.assert_array_equal(np.hstack([a.outputs, b.outputs]), got.outputs)
     np.testing.assert_array_equal(b.compensator_state, got.compensator_state)
 
@@ -520,23 +527,11 @@ def test_prefilter_with_tangled_delay_lines_equals_the_written_out_filter(p):
     lines of one input and lag start apart), over several blocks, chunked == whole."""
     rng = np.random.default_rng(640 + p)
     model = square_model(rng, p)
-    inner = InverseMultiplicativeCompensator(model, iterations=3, check="ignore")
     f = tangled_filter(rng, p)
-    comp = Prefiltered(inner, f)
     plant = random_plant(rng, square_model(rng, p), True)
     yr = random_inputs(rng, p, 700)
     x0 = rng.normal(size=f.A.shape[0])
-    state0 = np.concatenate([np.zeros(p + model.n_hysterons), x0])
-    v, xf_final = filter_loop(f, yr, x0)
-    expected = sim.simulate_chain(inner, plant, v)
-    got = sim.simulate_chain(comp, plant, yr, state0)
-    np.testing.assert_allclose(got.inputs, expected.inputs, rtol=0, atol=ATOL)
-    np.testing.assert_allclose(got.outputs, expected.outputs, rtol=0, atol=ATOL)
-    np.testing.assert_allclose(got.compensator_state[-x0.size:], xf_final, rtol=0, atol=ATOL)
-    a = sim.simulate_chain(comp, plant, yr[:, :301], state0)
-    b = sim.simulate_chain(comp, plant, yr[:, 301:], a.compensator_state, a.plant_state)
-    np.testing.assert_array_equal(np.hstack([a.outputs, b.outputs]), got.outputs)
-    np.testing.assert_array_equal(b.compensator_state, got.compensator_state)
+    check_prefiltered_chain(model, f, plant, yr, x0, 301)
 
 
 @pytest.mark.parametrize("feedback", ["delay", "lowpass"])
