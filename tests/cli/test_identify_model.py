@@ -62,10 +62,17 @@ def test_auto_chooses_the_class_with_the_lower_minor_loop_error(files, capsys):
                  "--out", str(out), "--preisach-levels", "12"]) == 0, capsys.readouterr().err
     printed = capsys.readouterr().out
     lines = [ln.strip() for ln in printed.splitlines() if "model auto:" in ln]
-    assert lines[0].startswith("model auto: chose preisach")
+    chosen = lines[0].split()[3]
     scores = {ln.split()[2]: float(ln.split()[3]) for ln in lines[1:]}
     assert set(scores) == {"classical", "preisach", "generalized"}
-    assert scores["preisach"] < min(scores["classical"], scores["generalized"])
+    assert scores[chosen] == min(scores.values())
+    # the actuator is not a PI: both classes that draw asymmetric, non-PI minor loops beat the
+    # classical PI by far (measured 4.51 % against 12.6 %). Between them the held-out levels
+    # decide; on these records the generalised PI (quadratic reversible term, 16 plays) ties
+    # with the Preisach model (4.51 %) and draws the never-recorded 15 % and 30 % loops within
+    # 0.23 % (the Preisach model of 12 levels: 1.56 %)
+    assert chosen in ("preisach", "generalized")
+    assert 2 * max(scores["preisach"], scores["generalized"]) < scores["classical"]
     model = load_model(str(out))                     # the file round trip
     assert isinstance(model, MultivariableHysteresis)
     for k in range(2):
