@@ -582,12 +582,13 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8, prefilter=False):
     filt = (zpetc_like_prefilter(rng, p) if prefilter else
             LinearArrays(np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p)))
     nf = filt.A.shape[0]
+    plan = kernels.prefilter_plan(filt)
 
     def nb_chain():
         st = ChainState(np.zeros(m), np.zeros(m), np.zeros(cn), np.zeros(nf), np.zeros(pn),
                         np.zeros(nx))
         uo, yo = np.empty((m, N)), np.empty((p, N))
-        status, _ = kernels.chain_kernel(yr, N, law, comp, filt, pi, lin, True, st, uo, yo)
+        status, _ = kernels.chain_kernel(yr, N, law, comp, plan, pi, lin, True, st, uo, yo)
         assert status == 0, "the benchmark's compensator diverged"
         return yo
 

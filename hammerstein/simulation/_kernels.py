@@ -414,6 +414,26 @@ def _prefilter_plan(A, B, C, D):
     return lag, src, dyn, hist, sptr, sin, slag, sval, rptr, rkind, rcol, rlag, rval
 
 
+def prefilter_plan(prefilter):
+    """:func:`_prefilter_plan` of a pre-filter, computed in Python (nothing compiled).
+
+    Parameters
+    ----------
+    prefilter : LinearArrays
+        ``A`` (nx, nx), ``B`` (nx, p), ``C`` (p, nx), ``D`` (p, p) of the
+        reference pre-filter (:func:`~hammerstein.simulation._packing.identity_filter`
+        when there is none).
+
+    Returns
+    -------
+    tuple
+        The plan :func:`chain_kernel` takes: the same arrays, of the same
+        types, as the compiled :func:`_prefilter_plan` returns (a structural
+        split and copies of the non-zero entries, so the values are equal).
+    """
+    return _prefilter_plan.py_func(*(np.ascontiguousarray(a, dtype=float) for a in prefilter))
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def _prefilter_block(yr, t0, t1, plan, z, vb, H, S, X):
     """Pre-filter samples ``t0:t1`` of ``yr`` (p, N) into ``vb[:, :t1 - t0]``.
@@ -553,14 +573,18 @@ def plant_kernel(u, pi, s, lin, x, y):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, state,
+def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state,
                  u_out, y_out):
     """Reference pre-filter -> compensator -> multivariable PI -> linear dynamics, one loop.
 
     Pre-filter (``law.prefiltered``): ``v = Cf xf + Df Yr(t)``,
-    ``xf <- Af xf + Bf Yr(t)`` (``prefilter`` a ``LinearArrays``, its delay
-    lines read from the reference and its other terms summed a block at a
-    time, :func:`_prefilter_block`); else ``v = Yr(t)``. The
+    ``xf <- Af xf + Bf Yr(t)``, given as ``plan``, the split of
+    :func:`_prefilter_plan` (its delay lines read from the reference, its
+    other terms summed a block at a time, :func:`_prefilter_block`);
+    else ``v = Yr(t)``. The plan is made by the caller: a single run in
+    Python (``_prefilter_plan.py_func``, so that a run without a batch does
+    not compile the planner: about 1.4 s of a cold first run), a batch case
+    in :func:`_batch_case`. The
     pre-filter does not depend on the law: it runs ahead, ``PREFILTER_BLOCK``
     samples at a time into a scratch block that the law then reads (the
     same operations on the same values as stepping it between the law's
@@ -598,7 +622,6 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     prefiltered = law.prefiltered
     cstart, cr, cW, cG = comp
     pstart, pr, pW, pG = plant
-    Af, Bf, Cf, Df = prefilter
     A, B, C, D = linear
     cu, cvf, cs, xf, ps, x = state
     m = cG.shape[1]
@@ -612,7 +635,6 @@ def chain_kernel(yr, n_samples, law, comp, prefilter, plant, linear, run_plant, 
     ref = np.empty(p)
     nf = xf.size
     # the pre-filter's delay lines and dynamic states; z holds its state (copied back to xf)
-    plan = _prefilter_plan(Af, Bf, Cf, Df)
     z = np.empty(nf)
     for i in range(nf):
         z[i] = xf[i]
@@ -795,8 +817,9 @@ def _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, 
     m = comp.G.shape[2]
     pp = plant.W.shape[1]
     local = _case_state(state, b)
+    Af, Bf, Cf, Df = _case_linear(prefilter, b)
     st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
-                          _case_law(law, b), _case_pi(comp, b), _case_linear(prefilter, b),
+                          _case_law(law, b), _case_pi(comp, b), _prefilter_plan(Af, Bf, Cf, Df),
                           _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
                           _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
     _store_state(state, b, local)

@@ -38,8 +38,8 @@ def chain_kernel_arguments():
     Returns
     -------
     tuple
-        ``(yr, n_samples, law, comp, prefilter, plant, linear, run_plant,
-        state, u_out, y_out)`` for one input and one output, no plays,
+        ``(yr, n_samples, law, comp, plan, plant, linear, run_plant,
+        state, u_out, y_out)`` (``plan`` the empty pre-filter's) for one input and one output, no plays,
         zero samples.
     """
     one = np.zeros((1, 1))
@@ -47,8 +47,8 @@ def chain_kernel_arguments():
     linear = LinearArrays(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.eye(1))
     law = LawArrays(one.copy(), 1, 1.0, False, 0.0, False)
     state = ChainState(*(np.zeros(k) for k in (1, 1, 0, 0, 0, 0)))
-    return (np.zeros((1, 0)), 0, law, pi, linear, pi, linear, True, state,
-            np.zeros((1, 0)), np.zeros((1, 0)))
+    return (np.zeros((1, 0)), 0, law, pi, kernels.prefilter_plan(linear), pi, linear, True,
+            state, np.zeros((1, 0)), np.zeros((1, 0)))
 
 
 def _die_with(parent):

@@ -360,8 +360,8 @@ def _run_chain_kernel(law, yr, cstate, plant=None, pstate=None):
     prefilter = identity_filter(p) if law.prefilter is None else law.prefilter
     await_prefetch()            # a cold cache: the kernel may be compiling in a helper process
     status, sample = kernels.chain_kernel(
-        np.ascontiguousarray(yr), n, _law_arrays(law), cpk.arrays, prefilter, ppk.arrays,
-        linear, plant is not None, state, u, y)
+        np.ascontiguousarray(yr), n, _law_arrays(law), cpk.arrays, kernels.prefilter_plan(prefilter),
+        ppk.arrays, linear, plant is not None, state, u, y)
     cs_h = cpk.hysteron_state(state.cs)
     c_final = np.concatenate([state.cu, state.cvf, cs_h, state.xf] if law.lowpass
                              else [state.cu, cs_h, state.xf])

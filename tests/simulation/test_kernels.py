@@ -518,6 +518,13 @@ def test_prefilter_plan_reads_only_true_delay_lines():
     assert lag.tolist() == [1, 2, 0, 0, 0, 0, 0, 0, 0, 1]
     assert src[[0, 1, 9]].tolist() == [0, 0, 1]
     assert dyn.tolist() == [2, 3, 4, 5, 6, 7, 8]
+    # the plan a single run makes in Python (nothing compiled) is the compiled planner's
+    from hammerstein.simulation._kernels import prefilter_plan
+    compiled, python = _prefilter_plan(f.A, f.B, f.C, f.D), prefilter_plan(f)
+    used = [None] * 5 + [compiled[4][-1]] * 3 + [None] + [compiled[8][-1]] * 4  # head, tail
+    for a, b, n in zip(compiled, python, used):
+        assert a.dtype == b.dtype and a.shape == b.shape
+        np.testing.assert_array_equal(a[:n], b[:n])    # past the rows' ends: scratch
 
 
 @pytest.mark.parametrize("p", [1, 2])
