@@ -66,6 +66,20 @@ def test_even_cross_coupling_has_the_same_sign_at_plus_and_minus_10_volts():
     assert (plus + minus) / 2 > 2 * abs(plus - minus) / 2    # even part above the odd one
 
 
+def state_after_steps(A, b, k):
+    """State after k steps of ``x <- A x + b`` from 0, i.e. the sum of ``A^i b`` for i < k.
+
+    By binary splitting over the bits of k (``x_2m = x_m + A^m x_m``, ``x_m+1 = A x_m + b``):
+    a few dozen matrix products instead of k steps (200 000 for 10 s at 50 µs).
+    """
+    x, P = np.zeros(A.shape[0]), np.eye(A.shape[0])          # x_m and A^m, m = 0
+    for bit in bin(k)[2:]:
+        x, P = x + P @ x, P @ P
+        if bit == "1":
+            x, P = A @ x + b, A @ P
+    return x
+
+
 @pytest.mark.parametrize("name", PRESETS)
 def test_creep_after_a_step(name):
     preset, _, creeps = PRESETS[name]
@@ -75,16 +89,10 @@ def test_creep_after_a_step(name):
     if not creeps:
         assert plant.creep is None
         return
-    # step response of the linear part alone (creep then modes), by the matrices
-    n = int(10.0 / T) + 1
-    x = np.zeros(A.shape[0])
+    # step response of the linear part alone (creep then modes), by the matrices: y at 0.1 s
+    # and at 10 s after a unit step on ux
     h = np.array([1.0, 0.0])
-    ys = {}
-    marks = {int(round(0.1 / T)): 0.1, n - 1: 10.0}
-    for i in range(n):
-        if i in marks:
-            ys[marks[i]] = (C @ x + D @ h)[0]
-        x = A @ x + B @ h
+    ys = {t: (C @ state_after_steps(A, B @ h, int(round(t / T))) + D @ h)[0] for t in (0.1, 10.0)}
     growth = ys[10.0] / ys[0.1] - 1
     assert 0.015 < growth < 0.035
 
