@@ -298,27 +298,77 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
     return acc + poly + off[c]
 
 
+#: First step of the bracket search around the guess, as a fraction of the input range,
+#: and its growth factor: the root moves by ~1e-6-1e-3 of the range between Gauss-Seidel
+#: sweeps and samples, so it is usually bracketed in 1-4 evaluations.
+BRACKET_STEP = 1e-5
+BRACKET_GROWTH = 16.0
+
+
 @njit(cache=True)
-def _root(c, target, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off,
-          s, tol):
-    """u in [lo, hi] with component c = target (Illinois false position; clipped)."""
-    flo = _component(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                      rev, off, s, False) - target
-    if flo >= 0.0:
-        return lo
-    fhi = _component(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                      rev, off, s, False) - target
-    if fhi <= 0.0:
-        return hi
-    a, b, fa, fb = lo, hi, flo, fhi
+def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+          rev, off, s, tol):
+    """u in [lo, hi] with component c = target (Illinois false position; clipped).
+
+    The component is non-decreasing in u. The root is bracketed from ``guess``
+    (the current estimate: the previous sweep's or sample's input) by steps
+    growing from ``BRACKET_STEP (hi - lo)`` by ``BRACKET_GROWTH`` towards the
+    sign change, up to the bound, which is returned when the target is out of
+    reach there (as from a bracket of the whole range); then Illinois false
+    position inside the bracket, to ``|f| <= tol`` or a bracket of 1e-13
+    relative.
+    """
+    x = min(max(guess, lo), hi)
+    fx = _component(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                    rev, off, s, False) - target
+    if abs(fx) <= tol:
+        return x
+    step = BRACKET_STEP * (hi - lo)
+    if fx < 0.0:                       # the root is above x
+        a, fa = x, fx
+        while True:
+            b = x + step
+            if b >= hi:
+                b = hi
+                fb = _component(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env,
+                                s_off, rev, off, s, False) - target
+                if fb <= 0.0:
+                    return hi
+                break
+            fb = _component(c, b, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                            rev, off, s, False) - target
+            if fb >= 0.0:
+                break
+            a, fa = b, fb
+            step *= BRACKET_GROWTH
+    else:                              # the root is below x
+        b, fb = x, fx
+        while True:
+            a = x - step
+            if a <= lo:
+                a = lo
+                fa = _component(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env,
+                                s_off, rev, off, s, False) - target
+                if fa >= 0.0:
+                    return lo
+                break
+            fa = _component(c, a, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                            rev, off, s, False) - target
+            if fa <= 0.0:
+                break
+            b, fb = a, fa
+            step *= BRACKET_GROWTH
+    if abs(fa) <= tol:
+        return a
+    if abs(fb) <= tol:
+        return b
     side = 0
-    x = 0.5 * (a + b)
     for _ in range(200):
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
         fx = _component(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                         rev, off, s, False) - target
+                        rev, off, s, False) - target
         if abs(fx) <= tol or b - a <= 1e-13 * (1.0 + abs(x)):
             return x
         if fx < 0.0:
@@ -369,8 +419,8 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
                             if k != l and present[c]:
                                 target -= _component(c, ut[k], E, e_off, row, col, mu, q_off, pr,
                                                      pw, p_off, env, s_off, rev, off, s, False)
-                        new = _root(l * m + l, target, lo[l], hi[l], E, e_off, row, col, mu,
-                                    q_off, pr, pw, p_off, env, s_off, rev, off, s, tol)
+                        new = _root(l * m + l, target, ut[l], lo[l], hi[l], E, e_off, row, col,
+                                    mu, q_off, pr, pw, p_off, env, s_off, rev, off, s, tol)
                         if abs(new - ut[l]) > delta:
                             delta = abs(new - ut[l])
                         ut[l] = new if omega == 1.0 else ut[l] + omega * (new - ut[l])
