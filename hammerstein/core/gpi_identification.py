@@ -405,43 +405,82 @@ class GeneralizedPIIdentifier:
         return (min(self._lo[k] / self._amp[k], -INVERSE_RANGE),
                 max(self._hi[k] / self._amp[k], INVERSE_RANGE))
 
-    def _component_columns(self, k, theta, direct):
-        """Play and polynomial columns of input k on the kept training rows, and the envelopes."""
+    def _component_width(self, kind, direct):
+        """Columns of a component of ``kind`` in the regression (plays, then polynomial)."""
+        if kind == "generalized":
+            return self.n_plays + (2 if direct else CROSS_DEGREE)
+        return 1 if kind == "gain" else 0
+
+    def _training_input(self, k):
+        """Input k on the kept training rows, every record end to end, normalised."""
+        return np.concatenate([u[k][tr] for u, tr in zip(self._u, self._train)]) / self._amp[k]
+
+    def _polynomial_columns(self, k, direct):
+        """Reversible-term columns of input k (the same at every envelope trial: cached)."""
+        key = (k, direct)
+        if key not in self._poly_cache:
+            u = self._training_input(k)
+            if direct:
+                poly = monotone_quadratic_columns(u, *self._slope_range(k))
+            else:
+                poly = np.column_stack([u ** d for d in range(1, CROSS_DEGREE + 1)])
+            self._poly_cache[key] = poly
+        return self._poly_cache[key]
+
+    def _component_columns(self, k, theta, direct, out):
+        """Play and polynomial columns of input k on the kept training rows, into ``out``.
+
+        ``out`` (n_rows, n_plays + n_poly) receives the plays of each record (its
+        training rows) one record after the other, then the polynomial columns.
+        Returns the thresholds and envelopes ``(r, gl, gr)``.
+        """
         gl, gr = envelopes(theta, self._amp[k])
         r = play_thresholds(gl, gr, self._lo[k], self._hi[k], self.n_plays, self._spacing)
         rest = theta[6] * self._amp[k]
-        states = [_play_states(u[k], r, gl, gr, rest)[tr] for u, tr in zip(self._u, self._train)]
-        u = np.concatenate([u[k][tr] for u, tr in zip(self._u, self._train)]) / self._amp[k]
-        if direct:
-            poly = monotone_quadratic_columns(u, *self._slope_range(k))
-        else:
-            poly = np.column_stack([u ** d for d in range(1, CROSS_DEGREE + 1)])
-        return np.column_stack([np.concatenate(states), poly]), r, gl, gr
+        row = 0
+        for u, tr in zip(self._u, self._train):
+            states = _play_states(u[k], r, gl, gr, rest)[tr]
+            out[row:row + states.shape[0], :self.n_plays] = states
+            row += states.shape[0]
+        out[:, self.n_plays:] = self._polynomial_columns(k, direct)
+        return r, gl, gr
 
     def _solve(self, l, kinds, thetas):
-        """Bounded least-squares weights of output l for given envelopes; (x, A, pieces)."""
+        """Bounded least-squares weights of output l for given envelopes; (x, A, pieces).
+
+        The regression matrix ``A`` (training rows, the components' columns then a
+        column of ones) is written into one buffer per output, reused by every
+        envelope trial (the same values as stacking the columns, without the copies).
+        """
         m = len(kinds)
-        parts, lbs, pieces = [], [], []
+        lbs, pieces = [], []
         y = self._y[l]
+        widths = [self._component_width(kinds[k], k == l) for k in range(m)]
+        shape = (y.size, sum(widths) + 1)
+        A = self._buffers.get(l)
+        if A is None or A.shape != shape:
+            A = self._buffers[l] = np.empty(shape)
+        c = 0
         for k in range(m):
+            block = A[:, c:c + widths[k]]
             if kinds[k] == "generalized":
-                A, r, gl, gr = self._component_columns(k, thetas[k], k == l)
-                lb = np.full(A.shape[1], -np.inf)
+                r, gl, gr = self._component_columns(k, thetas[k], k == l, block)
+                lb = np.full(widths[k], -np.inf)
                 if k == l:
                     lb[:self.n_plays] = 0.0
                     secant = np.ptp(y) / max(self._hi[k] - self._lo[k], 1e-300)
                     lb[self.n_plays:] = MIN_SLOPE_FRACTION * abs(secant) * self._amp[k]
-                pieces.append((r, gl, gr, A.shape[1]))
+                pieces.append((r, gl, gr, widths[k]))
             elif kinds[k] == "gain":
-                A = np.concatenate([u[k][tr] for u, tr in zip(self._u, self._train)])[:, None]
+                block[:, 0] = np.concatenate([u[k][tr] for u, tr in zip(self._u, self._train)])
                 lb = np.array([-np.inf])
                 pieces.append((None, None, None, 1))
             else:
-                A, lb = np.zeros((y.size, 0)), np.zeros(0)
+                lb = np.zeros(0)
                 pieces.append((None, None, None, 0))
-            parts.append(A)
             lbs.append(lb)
-        A = np.column_stack(parts + [np.ones((y.size, 1))])
+            c += widths[k]
+        A[:, c] = 1.0
         lb = np.concatenate(lbs + [[-np.inf]])
         col = np.linalg.norm(A, axis=0)
         col = np.where(col > 0, col, 1.0)
@@ -449,7 +488,9 @@ class GeneralizedPIIdentifier:
         # (no Q formed); the bounded solver works on the small R. R is the Cholesky factor of
         # the Gram matrix of [A | y] (a tiny ridge for a record fitted exactly), by far cheaper
         # than a QR of the tall matrix; QR when the Gram matrix is too ill-conditioned.
-        Ay = np.column_stack([A / col, y])
+        Ay = np.empty((y.size, A.shape[1] + 1))
+        np.divide(A, col, out=Ay[:, :-1])
+        Ay[:, -1] = y
         gram = Ay.T @ Ay
         gram[np.diag_indices_from(gram)] += 1e-13 * np.trace(gram)
         try:
@@ -576,6 +617,7 @@ class GeneralizedPIIdentifier:
             raise IdentificationError("records: no training samples")
         self._y = [np.concatenate([r.y[l][keep][tr] for r, keep, tr in
                                    zip(records, keeps, self._train)]) for l in range(p)]
+        self._poly_cache, self._buffers = {}, {}
         held = any(s.held_out.any() for s in splits)
         tried = list(THRESHOLD_SPACINGS) if self.threshold_spacing == "auto" \
             else [self.threshold_spacing]
@@ -607,7 +649,7 @@ class GeneralizedPIIdentifier:
         self.structure_, self.notes_, self.fit_ = fit.structure, notes, fit
         self.threshold_spacing_ = best
         self.spacing_scores_ = dict(scores)
-        del self._u, self._y, self._train
+        del self._u, self._y, self._train, self._poly_cache, self._buffers
         return self
 
     def _fit_spacing(self, spacing, records, splits, kinds, auto, in_names, out_names, held):
