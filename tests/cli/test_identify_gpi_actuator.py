@@ -25,7 +25,7 @@ def test_model_generalized_on_a_quasi_static_record(tmp_path, capsys):
     identified through the CLI; the file is a generalised PI that predicts the true loops."""
     true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
                          gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4])
-    t, u, _ = decreasing_sine(1e-3, 10.0)
+    t, u, _ = decreasing_sine(2.5e-3, 10.0)     # quasi-static: 400 samples a period
     y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
     path = tmp_path / "rec.csv"
     np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="")
