@@ -12,9 +12,11 @@ run in the same compiled kernel, a direct path of either class. So the input tha
 makes the model output equal a reference is a scalar root per direct path:
 
 * per sample t, Gauss-Seidel over the outputs l: solve
-  ``Gamma_ll(u_l) = y_r,l - sum_{k != l} Gamma_lk(u_k)`` for u_l (Illinois
-  false position inside the input bounds; the cross-couplings at the current
-  estimate of the other inputs), until no input moves by more than 1e-11 V;
+  ``Gamma_ll(u_l) = y_r,l - sum_{k != l} Gamma_lk(u_k)`` for u_l (the root
+  bracketed from the current estimate of u_l by growing steps, up to the input
+  bounds, then Illinois false position inside the bracket; the cross-couplings
+  at the current estimate of the other inputs), until no input moves by more
+  than 1e-11 V;
 * then commit every state at the solution (the trial evaluations never
   change the memory).
 
