@@ -212,7 +212,9 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
     if u is not None:
         cols += [u[i, :n] for i in range(len(ins))]
         head += [f"{i}_V" for i in ins]
-    body = "\n".join(",".join(f"{v:.9g}" for v in row) for row in np.column_stack(cols))
+    data = np.column_stack(cols)
+    row = ",".join(["%.9g"] * data.shape[1])      # one %-format per row (as excitation)
+    body = "\n".join(row % tuple(values) for values in data.tolist())
     safe_write(out / "timeseries-measured.csv", ",".join(head) + "\n" + body + "\n")
     figure = ""
     if len(outs) == 2:
