@@ -55,6 +55,19 @@ def repo_root():
     return ROOT
 
 
+@pytest.fixture
+def no_figures():
+    """A figure renderer that draws none: for runs whose report text and tables are checked.
+
+    Pass it as ``run_scenario(..., renderer=no_figures)``; ``report.md`` then says
+    that each figure was left out (what ``hammerstein run --figures none`` does).
+    """
+    from hammerstein.report.render import FigureRenderer
+
+    with FigureRenderer(workers=0, select=lambda path: False) as renderer:
+        yield renderer
+
+
 @pytest.fixture(scope="session")
 def static_plant():
     """The bundled preset without dynamics: the rate-independent 2x2 PI."""

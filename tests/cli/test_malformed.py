@@ -482,7 +482,7 @@ def test_two_scenarios_with_one_name_do_not_overwrite_each_other(tmp_path, capsy
     first.write_text(text, encoding="utf-8")
     second.write_text(text, encoding="utf-8")
     out = tmp_path / "out"
-    assert main(["run", str(first), str(second), "--out", str(out)]) == 1
+    assert main(["run", str(first), str(second), "--out", str(out), "--figures", "none"]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "is also the name of" in err[0] and str(second) in err[0]
     assert len([p for p in out.iterdir() if not p.name.startswith(".")]) == 1

@@ -60,7 +60,7 @@ def scenario(tmp_path):
 
 
 def test_run_prints_one_line_per_distinct_warning(scenario, tmp_path, capsys):
-    assert main(["run", str(scenario), "--out", str(tmp_path / "r")]) == 0
+    assert main(["run", str(scenario), "--out", str(tmp_path / "r"), "--figures", "none"]) == 0
     out, err = capsys.readouterr()
     lines = err.splitlines()
     assert len(lines) == 1, err
@@ -75,11 +75,12 @@ def test_run_prints_one_line_per_distinct_warning(scenario, tmp_path, capsys):
 
 
 def test_run_verbose_and_quiet(scenario, tmp_path, capsys):
-    assert main(["run", "-v", str(scenario), "--out", str(tmp_path / "r")]) == 0
+    # what is printed, not the figures: none drawn
+    assert main(["run", "-v", str(scenario), "--out", str(tmp_path / "r"), "--figures", "none"]) == 0
     out, err = capsys.readouterr()
     assert sum(line.startswith("warning:") for line in err.splitlines()) == 4
     assert "running" in err and " s" in out
-    assert main(["run", "-q", str(scenario), "--out", str(tmp_path / "r")]) == 0
+    assert main(["run", "-q", str(scenario), "--out", str(tmp_path / "r"), "--figures", "none"]) == 0
     out, err = capsys.readouterr()
     assert out == "" and err == ""
     assert main(["run", "-q", "-v", str(scenario)]) == 2        # exclusive

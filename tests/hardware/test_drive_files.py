@@ -80,7 +80,7 @@ reference = {{ kind = "circle", radius = 25.0, frequency = 100.0, periods = 6 }}
 @pytest.mark.parametrize("kind, extra", [("hammerstein", ""), ("hammerstein", 'inversion = "stable"'),
                                          ("multivariable", "fade_in = 0.01"),
                                          ("per-axis", "")])
-def test_drive_reproduces_the_scenario_route(tmp_path, kind, extra):
+def test_drive_reproduces_the_scenario_route(tmp_path, kind, extra, no_figures):
     p = tmp_path / "s.toml"
     p.write_text(SCENARIO.format(preset="rakotondrabe-2dof", kind=kind, extra=extra))
     case = load_scenario(p).cases[0]
@@ -89,7 +89,7 @@ def test_drive_reproduces_the_scenario_route(tmp_path, kind, extra):
     d = drive_signal(case.compensator, case.signal, T_, case.period_samples, fade_samples(case))
     np.testing.assert_allclose(d.inputs, route, rtol=0, atol=1e-9)
     # the timeseries CSV of `hammerstein run` holds the same voltages (to its 6 digits)
-    out = run_scenario(p, tmp_path / "out")
+    out = run_scenario(p, tmp_path / "out", renderer=no_figures)
     assert out.ok, out.error
     ts = pd.read_csv(out.out_dir / "timeseries-c.csv")
     np.testing.assert_allclose(ts[["ux_V", "uy_V"]].to_numpy().T, d.inputs, rtol=5e-6, atol=1e-9)
@@ -122,7 +122,7 @@ def test_no_kind_steps_beyond_the_slew_limit_without_its_reaction(preset_plant, 
 AMP_PRESET = "\n[amplifier]\nrange = [-5.0, 5.0]\n"
 
 
-def test_scenario_warns_once_per_input_and_saturates_the_plant(tmp_path, repo_root):
+def test_scenario_warns_once_per_input_and_saturates_the_plant(tmp_path, repo_root, no_figures):
     text = (repo_root / "hammerstein/presets/rakotondrabe-2dof.toml").read_text()
     (tmp_path / "amp.toml").write_text(text + AMP_PRESET)
     p = tmp_path / "s.toml"
@@ -138,7 +138,7 @@ def test_scenario_warns_once_per_input_and_saturates_the_plant(tmp_path, repo_ro
     peaks = {(r["channel"], r["metric"]): r["value"] for r in res.metrics}
     assert peaks[("ux", "peak_input")] > 5.0                         # the command, not the clip
     p.write_text(SCENARIO.format(preset="amp.toml", kind="multivariable", extra='limits = "error"'))
-    out = run_scenario(p, tmp_path / "out")
+    out = run_scenario(p, tmp_path / "out", renderer=no_figures)
     assert not out.ok and "input ux needs" in out.error and "[-5, 5] V" in out.error
 
 

@@ -14,6 +14,7 @@ from hammerstein.core.compensators import convergence_report
 from hammerstein.scenario.identification import identified_model
 from hammerstein.scenario.identification_cache import IdentificationCache
 from hammerstein.scenario.records import resolve_data_path
+from hammerstein.report.render import FigureRenderer
 from hammerstein.runner import run_scenario
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError
@@ -122,7 +123,8 @@ drive = { kind = "sine", input = "uy", amplitude = 10.0, frequency = 50.0, perio
 model = "identified"
 identify = { frequency = 50.0 }
 ''')
-    outcome = run_scenario(path, tmp / "reports")
+    with FigureRenderer(workers=0, select=lambda png: False) as no_figures:   # tables only
+        outcome = run_scenario(path, tmp / "reports", renderer=no_figures)
     assert outcome.ok, outcome.error
     return outcome
 
@@ -140,7 +142,7 @@ def test_identified_model_saved_and_reproduces_fig5_peaks(static_run):
     assert "(models/identified-50Hz-closed-form.toml)" in report
 
 
-def test_saved_model_file_is_usable_by_path(static_run, tmp_path):
+def test_saved_model_file_is_usable_by_path(static_run, tmp_path, no_figures):
     saved = static_run.out_dir / "models" / "identified-50Hz-closed-form.toml"
     path = _write(tmp_path, PLANT.format(dyn="false") + f'''
 [compensator]
@@ -150,7 +152,7 @@ model = "{saved.as_posix()}"
 name = "x"
 reference = {{ kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, periods = 3 }}
 ''')
-    outcome = run_scenario(path, tmp_path / "reports")
+    outcome = run_scenario(path, tmp_path / "reports", renderer=no_figures)
     assert outcome.ok, outcome.error
     same = static_run.metrics.set_index(["case", "channel", "metric"]).value
     other = outcome.metrics.set_index(["case", "channel", "metric"]).value
@@ -264,7 +266,7 @@ def _synthetic_record(path, n_periods=5, T=1e-3, f=2.0, noise=0.0):
     pd.DataFrame({"t": t, "volts": u, "microns": y}).to_csv(path, index=False)
 
 
-def test_identification_scenario_relative_path_and_exact_record(tmp_path):
+def test_identification_scenario_relative_path_and_exact_record(tmp_path, no_figures):
     (tmp_path / "data").mkdir()
     _synthetic_record(tmp_path / "data" / "rec.csv")
     path = _write(tmp_path, '''
@@ -282,7 +284,7 @@ train_fraction = 0.5
 ''')
     sc = load_scenario(path)
     assert sc.kind == "identification" and sc.cases == ["train", "validation"]
-    outcome = run_scenario(path, tmp_path / "r")
+    outcome = run_scenario(path, tmp_path / "r", renderer=no_figures)
     assert outcome.ok, outcome.error
     assert _metric(outcome.metrics, "validation", "microns", "rms_error") < 1e-9
     assert main(["validate", str(path)]) == 0

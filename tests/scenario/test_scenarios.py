@@ -173,7 +173,7 @@ class _StaticGain:
         return np.asarray(reference) / self.g, None
 
 
-def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch):
+def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch, no_figures):
     from hammerstein.scenario.schema import Field, number
     monkeypatch.setitem(registry.COMPENSATORS, "static-gain", registry.CompensatorKind(
         lambda spec, plant, base: _StaticGain(spec["gain"]),
@@ -182,7 +182,7 @@ def test_registry_accepts_a_new_compensator_kind(tmp_path, monkeypatch):
     p = _write(tmp_path, text)
     sc = load_scenario(p)
     assert isinstance(sc.cases[0].compensator, _StaticGain)
-    out = runner.run_scenario(p, tmp_path / "out")
+    out = runner.run_scenario(p, tmp_path / "out", renderer=no_figures)
     assert out.ok, out.error
     rms = out.metrics.query("channel == 'x' and metric == 'rms_error'")["value"].item()
     assert rms > 1.0  # a static gain cannot cancel the hysteresis

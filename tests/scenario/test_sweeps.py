@@ -96,7 +96,7 @@ reference = { kind = "sine", output = "y", amplitude = 50.0, frequency = 25.0, p
     np.testing.assert_allclose(a.loc[b.index], b, rtol=1e-9, atol=1e-9)
 
 
-def test_per_axis_exact_on_direct_axes_and_multivariable_cuts_cross_couplings(tmp_path):
+def test_per_axis_exact_on_direct_axes_and_multivariable_cuts_cross_couplings(tmp_path, no_figures):
     """Static plant: per-axis inverse ∘ model = identity on the direct axes; the multivariable
     compensator leaves >= 5x smaller residual cross-couplings than the per-axis baseline."""
     text = HEAD + """
@@ -108,7 +108,7 @@ reference = { kind = "sine", output = ["x", "y"], amplitude = 50.0, periods = 3 
 mv = { kind = "multivariable", iterations = 3 }
 pa = { kind = "per-axis" }
 """
-    out = run_scenario(_write(tmp_path, text), tmp_path / "out")
+    out = run_scenario(_write(tmp_path, text), tmp_path / "out", renderer=no_figures)
     assert out.ok, out.error
     t = pd.read_csv(out.out_dir / "sweep-fam.csv")
     rms = t.set_index(["compensator", "axis", "channel"])["rms_error"]
@@ -119,7 +119,7 @@ pa = { kind = "per-axis" }
         assert rms[("mv", ax, other)] * 5 <= rms[("pa", ax, other)]
 
 
-def test_compensator_only_sweep_and_lowpass_feedback(tmp_path):
+def test_compensator_only_sweep_and_lowpass_feedback(tmp_path, no_figures):
     text = HEAD + """
 [[sweeps]]
 name = "fam"
@@ -134,7 +134,7 @@ none = { kind = "static-gain" }
     assert [c.name for c in sc.cases] == ["fam-delay", "fam-lowpass", "fam-diag", "fam-none"]
     assert sc.cases[1].compensator.feedback == "lowpass"
     assert sc.cases[1].compensator.filter_coefficient == pytest.approx(np.exp(-2 * np.pi * 4000 * 50e-6))
-    out = run_scenario(_write(tmp_path, text), tmp_path / "out")
+    out = run_scenario(_write(tmp_path, text), tmp_path / "out", renderer=no_figures)
     t = pd.read_csv(out.out_dir / "sweep-fam.csv").set_index(["compensator", "channel"])
     e = t["max_euclidean_error"]
     assert e[("delay", "x+y")] < e[("diag", "x+y")] < e[("none", "x+y")]
@@ -151,7 +151,7 @@ compensator = { feedback = "lowpass" }
         load_scenario(_write(tmp_path, text))
 
 
-def test_stability_map_table(tmp_path):
+def test_stability_map_table(tmp_path, no_figures):
     text = HEAD + """
 [stability_map]
 scales = [0.1, 1.0, 5.0]
@@ -159,7 +159,7 @@ scales = [0.1, 1.0, 5.0]
 name = "c"
 reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, periods = 2 }
 """
-    out = run_scenario(_write(tmp_path, text), tmp_path / "out")
+    out = run_scenario(_write(tmp_path, text), tmp_path / "out", renderer=no_figures)
     assert out.ok, out.error
     t = pd.read_csv(out.out_dir / "stability-map.csv")
     assert list(t["scale"]) == [0.1, 1.0, 5.0]
