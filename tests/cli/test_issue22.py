@@ -986,7 +986,7 @@ def _bom_inputs(d, bom):
 
 @pytest.mark.parametrize("argv,output", [
     (["validate", "s.toml"], None),
-    (["run", "s.toml", "--out", "out"], "out/s/metrics.csv"),
+    (["run", "s.toml", "--out", "out", "--figures", "none"], "out/s/metrics.csv"),
     (["identify", "data.csv", "--time", "time_s", "--input", "u_V", "--output", "y_um",
       "--thresholds", "5", "--out", "m.toml"], "m.toml"),
     (["export", "model.toml", "--target", "c", "--out", "exp", "--no-binary"], "exp/static_1x1_multivariable.c"),
