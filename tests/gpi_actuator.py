@@ -115,7 +115,8 @@ class GPIActuator:
 
     def simulate(self, u, noise=True, rng=None):
         """Measured displacements (2, N) [µm] for voltages u (2, N) [V], from rest."""
-        y = _lsim(self.Ad, self.Bd, self.C, np.ascontiguousarray(self.hysteresis(u).T)).T
+        Ad, Bd, C = map(np.ascontiguousarray, (self.Ad, self.Bd, self.C))
+        y = _lsim(Ad, Bd, C, np.ascontiguousarray(self.hysteresis(u).T)).T
         if noise:
             rng = np.random.default_rng(self.seed) if rng is None else rng
             y = y + self.noise_um * rng.standard_normal(y.shape)

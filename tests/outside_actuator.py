@@ -40,12 +40,13 @@ def _preisach(u, alpha, beta, w, state):
 
 
 @numba.njit(cache=True)
-def _lsim(Ad, Bd, C, h):
+def _lsim(Ad, Bd, C, h_t):
+    """Zero-order-hold state space from rest; ``h_t`` (N, k) -> y (q, N)."""
     x = np.zeros(Ad.shape[0])
-    y = np.empty((C.shape[0], h.shape[1]))
-    for k in range(h.shape[1]):
+    y = np.empty((C.shape[0], h_t.shape[0]))
+    for k in range(h_t.shape[0]):
         y[:, k] = C @ x
-        x = Ad @ x + Bd @ h[:, k]
+        x = Ad @ x + Bd @ h_t[k]
     return y
 
 
@@ -130,7 +131,8 @@ class OutsideActuator:
         h = self.hysteresis(u)
         if self.creep:
             h = h + self._creep(h)
-        y = _lsim(self.Ad, self.Bd, self.C, np.ascontiguousarray(h))
+        Ad, Bd, C = map(np.ascontiguousarray, (self.Ad, self.Bd, self.C))
+        y = _lsim(Ad, Bd, C, np.ascontiguousarray(h.T))
         if noise:
             rng = np.random.default_rng(self.seed) if rng is None else rng
             y = y + self.noise_um * rng.standard_normal(y.shape)

@@ -109,7 +109,8 @@ def test_generalized_model_minor_loops_and_compensation(recorded, capsys):
     # actuator's own modes (G(0)^-1 H_id, independent of the package's dynamics) is exact
     assert err.max() < 0.03 * R and np.median(err) < 0.02 * R, (err.max(), np.median(err))
     h_id = np.linalg.solve(act.dc_gain(), plant.hysteresis.simulate(u)[0])
-    y_h = _lsim(act.Ad, act.Bd, act.C, np.ascontiguousarray(h_id.T)).T
+    Ad, Bd, C = map(np.ascontiguousarray, (act.Ad, act.Bd, act.C))
+    y_h = _lsim(Ad, Bd, C, np.ascontiguousarray(h_id.T)).T
     assert np.linalg.norm(y_h[:, 4000:] - faded[:, 4000:], axis=0).max() < 0.005 * R
 
 
