@@ -14,6 +14,7 @@ References
 
 from __future__ import annotations
 
+import operator
 from typing import Sequence
 
 import numpy as np
@@ -177,6 +178,35 @@ class SampledSystem:
         bool
         """
         return True
+
+    def __getitem__(self, key):
+        """The subsystem from input j to output i, every state kept, as ``control.StateSpace[i, j]``.
+
+        Parameters
+        ----------
+        key : tuple of (int, int)
+            ``(i, j)``: output and input index.
+
+        Returns
+        -------
+        SampledSystem
+            1 input, 1 output, the same n states.
+
+        Raises
+        ------
+        DynamicsError
+            When ``key`` is not two indices within the outputs and inputs.
+        """
+        try:
+            i, j = (operator.index(k) for k in key)
+            if not (-self.noutputs <= i < self.noutputs and -self.ninputs <= j < self.ninputs):
+                raise IndexError
+        except (TypeError, ValueError, IndexError):
+            raise DynamicsError(f"subsystem: expected (output, input) indices of a "
+                                f"{self.noutputs}x{self.ninputs} system, found {key!r}") from None
+        return SampledSystem(self.A, self.B[:, [j]], self.C[[i], :], self.D[[i]][:, [j]], self.dt,
+                             [self.inputs[j]], [self.outputs[i]], self.states,
+                             f"{self.name}$indexed")
 
     def poles(self):
         """Eigenvalues of ``A`` (discrete poles z), as ``control.StateSpace.poles``.

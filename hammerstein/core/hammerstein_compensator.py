@@ -360,9 +360,13 @@ class HammersteinCompensator:
         :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
         (monotone Preisach direct paths), after the same inverse of G; the
         law's options (gain, iterations, check, feedback) then do not apply.
-    dynamics : control.StateSpace
+    dynamics : control.StateSpace or hammerstein.core.dynamics.SampledSystem
         Discrete p x p linear part G (``dt`` = the plant's sampling period),
         e.g. identified (:class:`hammerstein.core.lti.DynamicsIdentifier`).
+        A ``SampledSystem`` (``plant.sampled_dynamics``) is inverted by
+        ``'zpetc'`` without importing python-control (about 1 s of imports);
+        ``'stable'`` and the creep inverse convert it to a
+        ``control.StateSpace``.
     inversion : {'zpetc', 'stable'}
         Inverse of G (see the module docstring).
     gain, iterations, check, feedback, cutoff_hz, sampling_period
@@ -383,10 +387,10 @@ class HammersteinCompensator:
     Attributes
     ----------
     hysteresis_compensator : InverseMultiplicativeCompensator or PreisachInverseCompensator
-    dynamics : control.StateSpace
+    dynamics : control.StateSpace or hammerstein.core.dynamics.SampledSystem
         The system inverted: G, or ``G (I + C)`` with creep.
-    bending_dynamics : control.StateSpace
-        G alone.
+    bending_dynamics : control.StateSpace or hammerstein.core.dynamics.SampledSystem
+        G alone (as given for ``'zpetc'`` without creep, else a ``control.StateSpace``).
     creep : list of (Creep or None) or None
     inverse : ZPETCInverse or None
         The causal inverse (``'zpetc'``).
@@ -460,6 +464,10 @@ class HammersteinCompensator:
         else:
             self.hysteresis_compensator = InverseMultiplicativeCompensator(
                 model, gain=gain, iterations=iterations, check=check, **options)
+        needs_control = inversion != "zpetc" or (creep is not None
+                                                 and any(c is not None for c in creep))
+        if needs_control and hasattr(dynamics, "to_control"):
+            dynamics = dynamics.to_control()     # 'stable' and the creep cascade use python-control
         self.bending_dynamics = dynamics
         self.creep = None
         if creep is not None and any(c is not None for c in creep):

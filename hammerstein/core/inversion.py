@@ -58,7 +58,7 @@ import numpy as np
 import scipy.linalg
 
 from hammerstein.core.lazy import lazy_module
-from hammerstein.core.dynamics import DynamicsError
+from hammerstein.core.dynamics import DynamicsError, SampledSystem
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
@@ -89,10 +89,14 @@ class InverseSystem:
 
 
 def _discrete_square(system):
-    if isinstance(system, control.TransferFunction):
-        system = control.ss(system)
-    if not isinstance(system, control.StateSpace):
-        raise DynamicsError(f"dynamics: expected a control.StateSpace, found {type(system).__name__}")
+    # a SampledSystem (the plants' own dynamics) is taken as it is: python-control and
+    # scipy.signal (~1 s of imports) are not needed to invert it
+    if not isinstance(system, SampledSystem):
+        if isinstance(system, control.TransferFunction):
+            system = control.ss(system)
+        if not isinstance(system, control.StateSpace):
+            raise DynamicsError(f"dynamics: expected a control.StateSpace or a SampledSystem, "
+                                f"found {type(system).__name__}")
     if not system.isdtime(strict=True):
         raise DynamicsError("dynamics: expected a discrete-time system (dt > 0); "
                             "discretise it first (hammerstein.core.dynamics.discretize)")
@@ -111,7 +115,7 @@ def inverse_system(system, tol=1e-9):
 
     Parameters
     ----------
-    system : control.StateSpace
+    system : control.StateSpace or hammerstein.core.dynamics.SampledSystem
         Discrete p x p system G (PI outputs [µm] -> displacements [µm]).
     tol : float
         A Markov-parameter row counts as zero below ``tol`` times the largest
@@ -217,7 +221,11 @@ def _minimal(system, tol=1e-9):
     n1 = A1.shape[0]
     O = np.vstack([C1 @ np.linalg.matrix_power(A1, k) for k in range(n1)])
     Vo = basis(O.T)
-    return control.ss(Vo.T @ A1 @ Vo, Vo.T @ B1, C1 @ Vo, D, dt=system.dt)
+    n2 = Vo.shape[1]
+    return SampledSystem(Vo.T @ A1 @ Vo, Vo.T @ B1, C1 @ Vo, D, system.dt,
+                         [f"u[{j}]" for j in range(D.shape[1])],
+                         [f"y[{i}]" for i in range(D.shape[0])],
+                         [f"x[{k}]" for k in range(n2)], "minimal")
 
 
 def _zpetc_design(system, good, tol):
@@ -288,8 +296,9 @@ class ZPETCInverse:
 
     Parameters
     ----------
-    system : control.StateSpace
-        Discrete p x p system G (``dt`` = T).
+    system : control.StateSpace or hammerstein.core.dynamics.SampledSystem
+        Discrete p x p system G (``dt`` = T); a ``SampledSystem`` (a plant's own
+        dynamics) is inverted without importing python-control.
     nyquist_radius : float
         Radius beyond which a zero in the left half of the z-plane is
         unacceptable, in (0, 1].

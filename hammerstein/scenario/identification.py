@@ -614,8 +614,9 @@ def resolve_dynamics(spec, plant, context, model=None):
     Returns
     -------
     pi : MultivariablePI
-    G : control.StateSpace
-        Discrete, ``dt`` = the plant's sampling period.
+    G : control.StateSpace or hammerstein.core.dynamics.SampledSystem
+        Discrete, ``dt`` = the plant's sampling period (the plant's own
+        dynamics as a ``SampledSystem``).
 
     Raises
     ------
@@ -635,17 +636,18 @@ def resolve_dynamics(spec, plant, context, model=None):
             plant, pi, pmeta, ident, dmeta, _hammerstein_key(plant, identify, dspec, given, sensor_flag)))
         return pi, ident.system_
     if dyn == "plant":
-        if plant.dynamics is None:
+        G = plant.sampled_dynamics       # inverted without python-control (see ZPETCInverse)
+        if G is None:
             raise IdentificationError("dynamics: the plant is static (no dynamics); "
                                       "a Hammerstein compensator needs dynamics")
-        G = plant.dynamics
     else:
         path = confined_path(dyn, context.base_dir, PresetError)
         G = load_dynamics(path, plant.hysteresis.output_names, plant.sampling_period)
     if model is None and spec.get("model") == "identified":
         # as with identified dynamics: the PI is characterised where this G is flat
         ispec = identify_table(spec.get("identify"))
-        f_pi = min(ispec["frequency"], max(flat_frequency(G), 0.01))
+        f_pi = min(ispec["frequency"],
+                   max(flat_frequency(G.to_control() if hasattr(G, "to_control") else G), 0.01))
         return identified_model(plant, {**ispec, "frequency": f_pi}, context.cache)[0], G
     pi = model if model is not None else resolve_model(spec.get("model", "plant"), plant, context,
                                                        spec.get("identify"))

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from hammerstein.core.dynamics import bending_modes, discretize, sampled_bending_modes, zoh
+from hammerstein.exceptions import DynamicsError
 from hammerstein.core.presets import load_plant
 
 
@@ -52,3 +53,38 @@ def test_plant_dynamics_is_a_control_system_on_access():
 
 # That simulating a preset plant imports neither python-control nor scipy.signal is checked
 # in the fresh interpreter of tests/core/test_core_layering.py (one process for all such checks).
+
+
+@pytest.mark.parametrize("key", [(0, 0), (0, 1), (1, 0), (1, 1)])
+def test_subsystem_indexing_equals_python_control(key):
+    s = sampled_bending_modes([310.0, 290.0], [0.15, 0.2], ["x", "y"], 5e-5)
+    s.B = s.B + np.array([[0.0, 0.1], [0.2, 0.0], [0.0, 0.3], [0.4, 0.0]])   # cross-couplings
+    got, ref = s[key], s.to_control()[key]
+    for k in "ABCD":
+        assert np.array_equal(getattr(got, k), np.asarray(getattr(ref, k))), k
+    assert got.dt == ref.dt and got.inputs == ref.input_labels and got.outputs == ref.output_labels
+
+
+@pytest.mark.parametrize("key", [(2, 0), (0, 5), 0, ("x", 0), (0, 1, 0)])
+def test_subsystem_indexing_names_what_was_expected(key):
+    s = sampled_bending_modes([310.0, 290.0], [0.15, 0.2], ["x", "y"], 5e-5)
+    with pytest.raises(DynamicsError, match=r"subsystem: expected \(output, input\) indices of a 2x2"):
+        s[key]
+
+
+@pytest.mark.parametrize("coupled", [False, True])
+def test_zpetc_of_a_sampled_system_equals_that_of_its_control_system(coupled):
+    # the ZPETC design reads A, B, C, D, dt (and the diagonal subsystems when G is decoupled):
+    # from the SampledSystem it must give the filter of the control.StateSpace bit for bit
+    from hammerstein.core.inversion import ZPETCInverse
+    s = sampled_bending_modes([310.0, 290.0], [0.15, 0.2], ["x", "y"], 5e-5)
+    if coupled:
+        s.C = s.C + np.array([[0.0, 0.0, 0.05, 0.0], [0.08, 0.0, 0.0, 0.0]])  # modes coupled
+    a, b = ZPETCInverse(s), ZPETCInverse(s.to_control())
+    assert a.decoupled == b.decoupled == (not coupled)
+    assert a.preview_samples == b.preview_samples and a.window == b.window
+    for attr in ("_taps_v", "_taps_w", "_Ag", "_Bg", "_Cg", "relative_degree"):
+        assert np.array_equal(getattr(a, attr), getattr(b, attr)), attr
+    yr = np.vstack([np.sin(np.arange(300) / 20.0), np.cos(np.arange(300) / 30.0)])
+    assert np.array_equal(a.filter(yr, a.initial_state(yr[:, 0]))[0],
+                          b.filter(yr, b.initial_state(yr[:, 0]))[0])

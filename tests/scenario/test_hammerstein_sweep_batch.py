@@ -319,3 +319,37 @@ def test_a_warning_of_the_joint_start_up_reprepares_the_cases_one_by_one(scenari
         ref = run_case(case)
         assert res.warnings == ref.warnings and not any("joint" in w for w in res.warnings)
         np.testing.assert_array_equal(res.outputs, ref.outputs)
+
+
+
+def test_the_plants_own_dynamics_are_inverted_as_python_control_would(tmp_path):
+    # dynamics = "plant" hands the preset's SampledSystem to the ZPETC design (no
+    # python-control); the same compensator built on the plant's control.StateSpace must
+    # run every sample of the case to the same bits
+    from hammerstein.core.dynamics import SampledSystem
+    from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+    from hammerstein.scenario.execute import fade_samples
+
+    path = tmp_path / "own.toml"
+    path.write_text("""
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "hammerstein"
+dynamics = "plant"
+[[sweeps]]
+name = "s"
+frequencies = [40.0, 250.0]
+reference = { kind = "sine", output = "x", amplitude = 20.0, periods = 3 }
+settle_periods = 1
+""", encoding="utf-8")
+    cases = load_scenario(path).cases
+    comp = cases[0].compensator
+    assert isinstance(comp.dynamics, SampledSystem)
+    other = HammersteinCompensator(comp.model, cases[0].plant.dynamics)
+    assert not isinstance(other.dynamics, SampledSystem)
+    for case, res in zip(cases, run_cases(cases)):
+        ref = other.run_reference(case.plant, case.signal, case.period_samples, fade_samples(case))
+        assert res.divergence is None
+        assert np.array_equal(res.inputs, ref.inputs)
+        assert np.array_equal(res.outputs, ref.outputs)
