@@ -69,7 +69,7 @@ __all__ = [
 ]
 
 #: Sweep cases per call of the batch kernel (the progress bar moves per batch).
-BATCH_SIZE = 16
+BATCH_SIZE = 64
 
 
 @dataclass
