@@ -206,6 +206,42 @@ def _evaluate(u, start, r, W, G, s, y):
         l += 2
 
 
+#: threshold of the ordering check of :func:`_ordered_plays`, relative to the largest |r| and |s|
+ORDER_TOLERANCE = 1e-12
+
+
+@njit(cache=True, inline="always")
+def _ordered_plays(start, r, W, s, k, tol):
+    """Number of weighted plays of input k in the order the 2 x 2 law's closed form needs, or -1.
+
+    The plays of input k are ``start[k]:start[k+1]``; trailing plays with no
+    weight in any output (the padding of :func:`pack_model`, the zero
+    padding of a batch) are left out. Returns their count ``L`` when the
+    thresholds are non-decreasing and the play states are ordered as any
+    input history leaves them: ``s_j + r_j`` non-decreasing and ``s_j - r_j``
+    non-increasing in j (play outputs are 1-Lipschitz in the threshold, and
+    a play step on sorted thresholds keeps both orders). Else -1 (play
+    states given out of that order). ``tol`` [V] absorbs the rounding of
+    the play steps. Runs once per kernel call, before the time loop.
+    """
+    lo = start[k]
+    L = start[k + 1] - lo
+    while L > 0:
+        used = False
+        for l in range(W.shape[0]):
+            if W[l, lo + L - 1] != 0.0:
+                used = True
+        if used:
+            break
+        L -= 1
+    for i in range(1, L):
+        j = lo + i
+        if (r[j] < r[j - 1] or s[j] + r[j] < s[j - 1] + r[j - 1] - tol
+                or s[j] - r[j] > s[j - 1] - r[j - 1] + tol):
+            return -1
+    return L
+
+
 @njit(cache=True, fastmath=FASTMATH)
 def pi_kernel(u, pi, s, y):
     """Multivariable PI forward model: ``u`` (m, N) -> ``y`` (p, N); ``s`` in/out.
@@ -573,7 +609,7 @@ def plant_kernel(u, pi, s, lin, x, y):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state,
+def chain_kernel(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plant, state,
                  u_out, y_out):
     """Reference pre-filter -> compensator -> multivariable PI -> linear dynamics, one loop.
 
@@ -581,7 +617,9 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
     ``xf <- Af xf + Bf Yr(t)``, given as ``plan``, the split of
     :func:`_prefilter_plan` (its delay lines read from the reference, its
     other terms summed a block at a time, :func:`_prefilter_block`);
-    else ``v = Yr(t)``. The plan is made by the caller: a single run in
+    else ``v = Yr(t)``; ``plan`` None (no pre-filter) compiles the kernel
+    without the pre-filter's code, about 0.6 s less of a cold first run's
+    compile. The plan is made by the caller: a single run in
     Python (``_prefilter_plan.py_func``, so that a run without a batch does
     not compile the planner: about 1.4 s of a cold first run), a batch case
     in :func:`_batch_case`. The
@@ -603,6 +641,15 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
     next to independent work (on the 200-frequency sweep's kernel, serial,
     2 rounds alternated, medians of 7, load 2.0: hammerstein 115.8/115.5 ->
     112.8/111.7 ns a sample, rate independent 78.3/79.0 -> 76.1/76.9).
+    ``slopes`` is None, or for a 2 x 2 law with 2 or 3 iterations and delay
+    feedback the table of :func:`~hammerstein.simulation._packing.law_slopes`,
+    with which the law runs in closed form where ``Gamma`` is linear around
+    ``U(t-T)`` (see the comment in the code): the same law, results equal to
+    rounding (the iterations' chain of dependent evaluations becomes one
+    product: on the 200-frequency Hammerstein sweep's kernel, 3 iterations
+    cost about what 1 does). A None argument compiles the kernel without
+    that code (numba prunes the branches), so runs that never use it compile
+    less.
     ``comp`` and ``plant`` are ``PIArrays``, ``linear`` the plant's
     ``LinearArrays`` (used when ``run_plant``), ``law`` a ``LawArrays``.
     The ``state`` fields (``ChainState``) are updated in place up to the
@@ -638,9 +685,10 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
     z = np.empty(nf)
     for i in range(nf):
         z[i] = xf[i]
-    fH = np.empty((p, plan[3].shape[1] - 1 + PREFILTER_BLOCK if prefiltered else 0))
-    fS = np.empty((p + plan[2].size, PREFILTER_BLOCK if prefiltered else 0))
-    fX = np.empty((plan[2].size, PREFILTER_BLOCK + 1))
+    if plan is not None:        # (a None plan compiles a kernel without the pre-filter)
+        fH = np.empty((p, plan[3].shape[1] - 1 + PREFILTER_BLOCK if prefiltered else 0))
+        fS = np.empty((p + plan[2].size, PREFILTER_BLOCK if prefiltered else 0))
+        fX = np.empty((plan[2].size, PREFILTER_BLOCK + 1))
     h = np.empty(pp)
     yt = np.empty(pp)
     xn = np.empty(x.size)
@@ -653,6 +701,46 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
     # Gamma(U(t-T); s(t-T)), reused by the first iteration; later samples
     # get it from the commit (a play moved to U is idempotent at U)
     _evaluate(cu, cstart, cr, cW, cG, cs, yhat)
+    # The 2 x 2 delay law in closed form (2 or 3 iterations). After a commit at U, the
+    # plays of input k lying at U_k - r (bit for bit as the play step leaves them) follow
+    # any rise of U_k; with the orders of _ordered_plays they are a prefix aup[k] of the
+    # sorted plays, and the next one starts moving once the rise passes
+    # gup[k] = s_j + r_j - U_k (j = aup[k]). Within those gaps Gamma(U + dU) =
+    # Gamma(U) + S dU, S[l, k] the prefix's weights plus G[l, k] (sup, from the prefix
+    # sums cum[l, start[k] + k + a], G included); likewise for a fall (adn, gdn, sdn). The
+    # iterations d <- d + K^-1 (e - S d) from d = 0 then are d_i = N_i e, N_1 = K^-1,
+    # N_(i+1) = (I - K^-1 S) N_i + K^-1: the law's chain of dependent evaluations
+    # becomes one product, valid when every evaluated d_i keeps the directions of S
+    # within the gaps (else the iterations run as written). A rise keeps the rising
+    # prefix (its plays stay at U - r) and restarts the falling one, a fall the
+    # opposite: the prefixes depend on the state alone, so chunked runs equal whole
+    # runs. (Written in the loop, not in an inlined helper: a helper taking arrays and
+    # branching measured 20-40 ns a sample of reference counting.)
+    closed_form = False
+    if slopes is not None:      # (a None argument compiles a kernel without any of this)
+        closed_form = two and (iterations == 2 or iterations == 3) and not lowpass
+        L0 = -1
+        L1 = -1
+        if closed_form:
+            big = 1.0
+            for j in range(cr.size):
+                big = max(big, abs(cr[j]), abs(cs[j]))
+            L0 = _ordered_plays(cstart, cr, cW, cs, 0, ORDER_TOLERANCE * big)
+            L1 = _ordered_plays(cstart, cr, cW, cs, 1, ORDER_TOLERANCE * big)
+            closed_form = L0 > 0 and L1 > 0
+        nL = np.array([L0, L1])
+        aup = np.full(2, -1, dtype=np.int64)    # -1: slopes not yet set
+        adn = np.full(2, -1, dtype=np.int64)
+        gup = np.full(2, -1.0)
+        gdn = np.full(2, -1.0)
+        sup = np.zeros((2, 2))
+        sdn = np.zeros((2, 2))
+        ub = np.empty(2 if closed_form else 0)  # U before the last commit (its move's direction)
+        for k in range(ub.size):
+            ub[k] = cu[k]
+    s00, s10, s01, s11 = np.nan, np.nan, np.nan, np.nan
+    m200, m201, m210, m211 = 0.0, 0.0, 0.0, 0.0
+    m300, m301, m310, m311 = 0.0, 0.0, 0.0, 0.0
     # the pre-filter runs ahead over blocks of PREFILTER_BLOCK samples (its outputs in
     # vb): it does not depend on the law, and its short sparse rows run faster in a
     # loop of their own than between the law's steps; zb keeps its state at the
@@ -661,15 +749,18 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
     zb = np.empty(nf)
     for t in range(n_samples):
         tb = t % PREFILTER_BLOCK
-        if prefiltered:
-            if tb == 0:
-                for i in range(nf):
-                    zb[i] = z[i]
-                _prefilter_block(yr, t, min(t + PREFILTER_BLOCK, n_samples), plan, z, vb, fH,
-                                 fS, fX)
-            for l in range(p):
-                ref[l] = vb[l, tb]
-        else:
+        filtered = False
+        if plan is not None:
+            if prefiltered:
+                if tb == 0:
+                    for i in range(nf):
+                        zb[i] = z[i]
+                    _prefilter_block(yr, t, min(t + PREFILTER_BLOCK, n_samples), plan, z, vb,
+                                     fH, fS, fX)
+                for l in range(p):
+                    ref[l] = vb[l, tb]
+                filtered = True
+        if not filtered:
             for l in range(p):
                 ref[l] = yr[l, t]
         if run_plant and t > 0:
@@ -681,6 +772,33 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
             _linear_step(h, A, B, C, D, x, xn, yt)
             for l in range(pp):
                 y_out[l, t - 1] = yt[l]
+        if slopes is not None:
+            if closed_form:   # prefixes, gaps, slopes around U(t-T)
+                for k in range(2):
+                    uk = cu[k]
+                    lo = cstart[k]
+                    L = nL[k]
+                    a = max(aup[k], 0) if uk >= ub[k] else 0
+                    b = max(adn[k], 0) if uk <= ub[k] else 0
+                    while a < L and cs[lo + a] == uk - cr[lo + a]:
+                        a += 1
+                    while b < L and cs[lo + b] == uk + cr[lo + b]:
+                        b += 1
+                    ju = lo + min(a, L - 1)
+                    jd = lo + min(b, L - 1)
+                    gu = (cs[ju] + cr[ju]) - uk
+                    gd = (uk + cr[jd]) - cs[jd]
+                    gup[k] = gu if a < L else np.inf
+                    gdn[k] = gd if b < L else np.inf
+                    if a != aup[k]:          # the slopes change with the prefixes only
+                        sup[0, k] = slopes[0, lo + k + a]
+                        sup[1, k] = slopes[1, lo + k + a]
+                        aup[k] = a
+                    if b != adn[k]:
+                        sdn[0, k] = slopes[0, lo + k + b]
+                        sdn[1, k] = slopes[1, lo + k + b]
+                        adn[k] = b
+                    ub[k] = uk
         if lowpass:
             for k in range(m):
                 acc = 0.0
@@ -695,19 +813,58 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
                     acc += Kinv[k, l] * ref[l]
                 u[k] = acc + cvf[k]
         elif two:      # 2 inputs, 2 outputs: the same sums, in scalars (registers)
-            u0 = cu[0]
-            u1 = cu[1]
-            y0 = yhat[0]
-            y1 = yhat[1]
-            for it in range(iterations):
-                if it > 0:
-                    y0, y1 = _gamma2(u0, u1, cstart, cr, cW, cG, cs)
-                e0 = ref[0] - y0
-                e1 = ref[1] - y1
-                u0 += k00 * e0 + k01 * e1
-                u1 += k10 * e0 + k11 * e1
-            u[0] = u0
-            u[1] = u1
+            e0 = ref[0] - yhat[0]
+            e1 = ref[1] - yhat[1]
+            closed = False
+            if slopes is not None:
+                if closed_form:   # (see above): d_1 = K^-1 e sets the directions
+                    f0 = k00 * e0 + k01 * e1
+                    f1 = k10 * e0 + k11 * e1
+                    up0 = f0 >= 0.0
+                    up1 = f1 >= 0.0
+                    q00 = sup[0, 0] if up0 else sdn[0, 0]
+                    q10 = sup[1, 0] if up0 else sdn[1, 0]
+                    q01 = sup[0, 1] if up1 else sdn[0, 1]
+                    q11 = sup[1, 1] if up1 else sdn[1, 1]
+                    if q00 != s00 or q10 != s10 or q01 != s01 or q11 != s11:
+                        s00, s10, s01, s11 = q00, q10, q01, q11
+                        a00 = 1.0 - (k00 * q00 + k01 * q10)        # I - K^-1 S
+                        a01 = -(k00 * q01 + k01 * q11)
+                        a10 = -(k10 * q00 + k11 * q10)
+                        a11 = 1.0 - (k10 * q01 + k11 * q11)
+                        m200 = (a00 * k00 + a01 * k10) + k00      # N_2
+                        m201 = (a00 * k01 + a01 * k11) + k01
+                        m210 = (a10 * k00 + a11 * k10) + k10
+                        m211 = (a10 * k01 + a11 * k11) + k11
+                        m300 = (a00 * m200 + a01 * m210) + k00    # N_3
+                        m301 = (a00 * m201 + a01 * m211) + k01
+                        m310 = (a10 * m200 + a11 * m210) + k10
+                        m311 = (a10 * m201 + a11 * m211) + k11
+                    g0 = gup[0] if up0 else gdn[0]
+                    g1 = gup[1] if up1 else gdn[1]
+                    h0 = m200 * e0 + m201 * e1                   # d_2
+                    h1 = m210 * e0 + m211 * e1
+                    if iterations == 3:
+                        closed = ((abs(f0) <= g0) & (abs(f1) <= g1) & ((h0 >= 0.0) == up0)
+                                  & ((h1 >= 0.0) == up1) & (abs(h0) <= g0) & (abs(h1) <= g1))
+                        h0 = m300 * e0 + m301 * e1               # d_3
+                        h1 = m310 * e0 + m311 * e1
+                    else:
+                        closed = (abs(f0) <= g0) & (abs(f1) <= g1)
+                    u[0] = cu[0] + h0
+                    u[1] = cu[1] + h1
+            if not closed:
+                u0 = cu[0]
+                u1 = cu[1]
+                for it in range(iterations):
+                    if it > 0:
+                        y0, y1 = _gamma2(u0, u1, cstart, cr, cW, cG, cs)
+                        e0 = ref[0] - y0
+                        e1 = ref[1] - y1
+                    u0 += k00 * e0 + k01 * e1
+                    u1 += k10 * e0 + k11 * e1
+                u[0] = u0
+                u[1] = u1
         else:
             for k in range(m):
                 u[k] = cu[k]
@@ -734,10 +891,11 @@ def chain_kernel(yr, n_samples, law, comp, plan, plant, linear, run_plant, state
                 if abs(u[k]) > bound:
                     status = STATUS_BOUND
         if status != STATUS_OK:       # the pre-filter's state after sample t
-            if prefiltered:
-                for i in range(nf):
-                    z[i] = zb[i]
-                _prefilter_block(yr, t - tb, t + 1, plan, z, vb, fH, fS, fX)
+            if plan is not None:
+                if prefiltered:
+                    for i in range(nf):
+                        z[i] = zb[i]
+                    _prefilter_block(yr, t - tb, t + 1, plan, z, vb, fH, fS, fX)
             for i in range(nf):
                 xf[i] = z[i]
             return status, t
@@ -810,25 +968,45 @@ def _record(flat, offsets, b, rows):
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+def _batch_case(b, offsets, yr, law, comp, prefilter, slopes, plant, linear, run_plant, state,
                 u_out, y_out, status, sample):
     """Case b of :func:`chain_batch` (its private state copies live in this frame)."""
     p = comp.W.shape[1]
     m = comp.G.shape[2]
     pp = plant.W.shape[1]
     local = _case_state(state, b)
-    Af, Bf, Cf, Df = _case_linear(prefilter, b)
-    st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
-                          _case_law(law, b), _case_pi(comp, b), _prefilter_plan(Af, Bf, Cf, Df),
-                          _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
-                          _record(u_out, offsets, b, m), _record(y_out, offsets, b, pp))
+    yb = _record(yr, offsets, b, p)
+    n = offsets[b + 1] - offsets[b]
+    ub = _record(u_out, offsets, b, m)
+    vb = _record(y_out, offsets, b, pp)
+    # one call per compiled kernel: a None argument prunes the branches that pass arrays
+    if prefilter is None:
+        if slopes is None:
+            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), None, None,
+                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                                  ub, vb)
+        else:
+            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), None, slopes[b],
+                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                                  ub, vb)
+    else:
+        Af, Bf, Cf, Df = _case_linear(prefilter, b)
+        plan = _prefilter_plan(Af, Bf, Cf, Df)
+        if slopes is None:
+            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), plan, None,
+                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                                  ub, vb)
+        else:
+            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), plan, slopes[b],
+                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
+                                  ub, vb)
     _store_state(state, b, local)
     status[b] = st
     sample[b] = sm
 
 
 @njit(cache=True, nogil=True, fastmath=FASTMATH)
-def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
+def chain_batch(order, offsets, yr, law, comp, prefilter, slopes, plant, linear, run_plant, state,
                 u_out, y_out, status, sample, worker, thread):
     """Independent chain cases ``order`` (n_cases,) int64, one after the other, without the GIL.
 
@@ -844,6 +1022,13 @@ def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_pla
     single run (one compiled loop serves both, so batches equal single runs
     bit for bit).
 
+    ``prefilter`` is None when no case has a reference pre-filter (a kernel
+    compiled without it). ``slopes`` is None (a kernel compiled without the
+    closed-form 2 x 2 law)
+    or the cases' :func:`~hammerstein.simulation._packing.law_slopes` tables
+    (B, 2, n_cols), zero padded; a case whose law does not take the closed
+    form ignores its row.
+
     ``order`` may be any subset of the cases: the caller runs disjoint
     subsets on several Python threads at once (``nogil``; see
     ``_stepping.simulate_chain_batch``), which compiles in a fraction of the
@@ -854,8 +1039,8 @@ def chain_batch(order, offsets, yr, law, comp, prefilter, plant, linear, run_pla
     for i in range(order.size):
         b = order[i]
         worker[b] = thread
-        _batch_case(b, offsets, yr, law, comp, prefilter, plant, linear, run_plant, state,
-                    u_out, y_out, status, sample)
+        _batch_case(b, offsets, yr, law, comp, prefilter, slopes, plant, linear, run_plant,
+                    state, u_out, y_out, status, sample)
 
 
 def threads() -> int:

@@ -16,7 +16,7 @@ from hammerstein.exceptions import CompensatorDivergence, CompensatorError, Hyst
 
 __all__ = ["finite_array", "state_vector", "LANES", "PackedModel", "pack_model",
            "PIArrays", "LinearArrays", "LawArrays", "ChainState", "CompensatorLaw",
-           "compensator_law_of", "identity_filter", "linear_arrays", "check_linear",
+           "compensator_law_of", "identity_filter", "linear_arrays", "check_linear", "law_slopes",
            "STATUS_OK", "STATUS_NONFINITE", "STATUS_BOUND", "divergence_error"]
 
 #: status codes of the chain kernels: ok, non-finite input voltage, beyond the bound
@@ -407,6 +407,43 @@ def linear_arrays(matrices):
     LinearArrays
     """
     return LinearArrays(*(np.ascontiguousarray(M, dtype=float) for M in matrices))
+
+
+def law_slopes(comp, iterations, lowpass):
+    """The table of the chain kernel's closed-form 2 x 2 delay law, or None where it does not apply.
+
+    For a 2-input, 2-output law with 2 or 3 iterations and delay feedback,
+    the kernel steps the law in closed form wherever ``Gamma`` is linear
+    around the last input (see :func:`hammerstein.simulation._kernels.chain_kernel`):
+    the slope of output l in input k when the first ``a`` plays of input k
+    move with it is ``sum(W[l, start[k]:start[k] + a]) + G[l, k]``, read from
+    ``table[l, start[k] + k + a]``. Any other law runs without it, and
+    passing None compiles the kernel without that code (a shorter cold
+    compile for the laws that never use it).
+
+    Parameters
+    ----------
+    comp : PIArrays
+        The packed compensator model.
+    iterations : int
+        The law's fixed-point iterations.
+    lowpass : bool
+        True for the low-pass feedback law.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2, n_plays + 2), or None
+        [µm/V] (prefix sums of the weights, G added).
+    """
+    start, _, W, G = comp
+    if G.shape != (2, 2) or iterations not in (2, 3) or lowpass:
+        return None
+    out = np.empty((2, W.shape[1] + 2))
+    for k in range(2):
+        lo, hi = int(start[k]), int(start[k + 1])
+        out[:, lo + k] = G[:, k]
+        out[:, lo + k + 1:hi + k + 1] = np.cumsum(W[:, lo:hi], axis=1) + G[:, k:k + 1]
+    return out
 
 
 # -- packing -----------------------------------------------------------------------------

@@ -38,16 +38,18 @@ def chain_kernel_arguments():
     Returns
     -------
     tuple
-        ``(yr, n_samples, law, comp, plan, plant, linear, run_plant,
-        state, u_out, y_out)`` (``plan`` the empty pre-filter's) for one input and one output, no plays,
-        zero samples.
+        ``(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plant,
+        state, u_out, y_out)`` (``plan`` and ``slopes`` None: the kernel
+        without a reference pre-filter and without the closed-form 2 x 2
+        law, as the default run uses it) for one input and one output, no
+        plays, zero samples.
     """
     one = np.zeros((1, 1))
     pi = PIArrays(np.zeros(2, dtype=np.int64), np.zeros(0), np.zeros((1, 0)), np.zeros((1, 1)))
     linear = LinearArrays(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.eye(1))
     law = LawArrays(one.copy(), 1, 1.0, False, 0.0, False)
     state = ChainState(*(np.zeros(k) for k in (1, 1, 0, 0, 0, 0)))
-    return (np.zeros((1, 0)), 0, law, pi, kernels.prefilter_plan(linear), pi, linear, True,
+    return (np.zeros((1, 0)), 0, law, pi, None, None, pi, linear, True,
             state, np.zeros((1, 0)), np.zeros((1, 0)))
 
 

@@ -15,7 +15,7 @@ from hammerstein.simulation._preisach import linear_steps
 from hammerstein.simulation._packing import (EMPTY_PACKED, STATUS_OK, ChainState, CompensatorLaw,
                                              LawArrays,
                                              LinearArrays, PIArrays, check_linear,
-                                             compensator_law_of, divergence_error,
+                                             compensator_law_of, divergence_error, law_slopes,
                                              identity_filter, linear_arrays, pack_model,
                                              state_vector)
 
@@ -357,11 +357,12 @@ def _run_chain_kernel(law, yr, cstate, plant=None, pstate=None):
         y = np.empty((plant.hysteresis.n_outputs, n))
     state = ChainState(u_prev.copy(), np.zeros(m) if vf is None else vf.copy(),
                        cpk.plays(splay), xf.copy(), ps, x)
-    prefilter = identity_filter(p) if law.prefilter is None else law.prefilter
+    plan = None if law.prefilter is None else kernels.prefilter_plan(law.prefilter)
     await_prefetch()            # a cold cache: the kernel may be compiling in a helper process
     status, sample = kernels.chain_kernel(
-        np.ascontiguousarray(yr), n, _law_arrays(law), cpk.arrays, kernels.prefilter_plan(prefilter),
-        ppk.arrays, linear, plant is not None, state, u, y)
+        np.ascontiguousarray(yr), n, _law_arrays(law), cpk.arrays, plan,
+        law_slopes(cpk.arrays, law.iterations, law.lowpass), ppk.arrays, linear, plant is not None,
+        state, u, y)
     cs_h = cpk.hysteron_state(state.cs)
     c_final = np.concatenate([state.cu, state.cvf, cs_h, state.xf] if law.lowpass
                              else [state.cu, cs_h, state.xf])
@@ -782,9 +783,19 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
         parallel = B > 1 and total >= PARALLEL_MIN_SAMPLES
     n_threads = min(kernels.threads(), B) if parallel else 1
     order = _balanced_order(lengths, n_threads)
+    # the closed-form 2 x 2 law's tables: None (a kernel without it) when no case takes it
+    tables = [law_slopes(k.arrays, law.iterations, law.lowpass) for k, law in zip(cpk, laws)]
+    slopes = None
+    if any(tab is not None for tab in tables):
+        slopes = np.zeros((B, 2, nc + 2))
+        for b, tab in enumerate(tables):
+            if tab is not None:
+                slopes[b, :, :tab.shape[1]] = tab
+    prefilters = (_stack_linear(filters, nf, pc)
+                  if any(law.prefilter is not None for law in laws) else None)
     args = (offsets, _ragged(yrs, offsets), law_arrays, stack_pi(cpk, nc, m),
-            _stack_linear(filters, nf, pc), stack_pi(ppk, npl, p), _stack_linear(lin, nx, p),
-            True, state, u_out, y_out, status, sample, worker)
+            prefilters, slopes, stack_pi(ppk, npl, p),
+            _stack_linear(lin, nx, p), True, state, u_out, y_out, status, sample, worker)
     chunks = np.array_split(order, n_threads)      # the equal-work chunks of _balanced_order
     await_prefetch()            # chain_batch links chain_kernel: load it if a helper compiles it
     if n_threads == 1:

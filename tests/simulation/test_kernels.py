@@ -240,6 +240,52 @@ def test_law_iterations_match_the_written_out_law_to_rounding(m):
     np.testing.assert_allclose(u, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
 
 
+@pytest.mark.parametrize("iterations", [2, 3])
+@pytest.mark.parametrize("seed", range(3))
+def test_closed_form_2x2_law_is_the_written_out_law_and_chunks(seed, iterations, monkeypatch):
+    # a 2 x 2 law with 2 or 3 iterations runs in closed form where Gamma is linear around
+    # U(t-T) (d_i = N_i e): the written-out law to rounding, on references with reversals and
+    # steps (where it falls back on the iterations); the prefixes it keeps are a function
+    # of the state, so chunks cut anywhere give the whole run (to rounding: a chunk
+    # packs the plays of its own initial state, merging others, which regroups the sums)
+    from hammerstein.simulation import _stepping
+    rng = np.random.default_rng(1500 + seed)
+    model = square_model(rng, 2)
+    comp = InverseMultiplicativeCompensator(model, iterations=iterations, check="error")
+    yr = random_inputs(rng, 2, 3000) * 2
+    u, c = sim.simulate_compensator(comp, yr)
+    ref = _naive_delay_law(model, np.asarray(comp.packed_law().K_inv), iterations, yr)
+    np.testing.assert_allclose(u, ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+    for cut in (1, 777, 1500, 2999):
+        ua, ca = sim.simulate_compensator(comp, yr[:, :cut])
+        ub, cb = sim.simulate_compensator(comp, yr[:, cut:], ca)
+        np.testing.assert_allclose(np.hstack([ua, ub]), u, rtol=0,
+                                   atol=1e-12 * np.max(np.abs(ref)))
+        np.testing.assert_allclose(cb, c, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+    # the closed form did run: the kernel without its table (the iterations as written)
+    # rounds otherwise somewhere in 3000 samples
+    monkeypatch.setattr(_stepping, "law_slopes", lambda *args: None)
+    u_iterated, _ = sim.simulate_compensator(comp, yr)
+    np.testing.assert_allclose(u_iterated, u, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+    assert not np.array_equal(u_iterated, u)
+
+
+def test_closed_form_2x2_law_falls_back_on_play_states_out_of_order():
+    # play states given by hand need not be ordered as an input history leaves them; the
+    # closed form's prefixes would then miss plays, so the kernel runs the iterations: the
+    # numpy oracle's result, from the same state
+    rng = np.random.default_rng(1600)
+    model = square_model(rng, 2)
+    comp = InverseMultiplicativeCompensator(model, iterations=3, check="error")
+    yr = random_inputs(rng, 2, 500) * 2
+    state = np.zeros(comp.n_states)
+    state[2:] = rng.uniform(-2.0, 2.0, comp.n_states - 2)      # the plays, out of order
+    u, c = sim.simulate_compensator(comp, yr, state)
+    u_ref, c_ref = sim.simulate_compensator(comp, yr, state, backend="numpy")
+    np.testing.assert_allclose(u, u_ref, rtol=0, atol=ATOL)
+    np.testing.assert_allclose(c, c_ref, rtol=0, atol=ATOL)
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_chain_plant_part_is_the_plant_kernel_bit_for_bit(seed):
     # the chain kernel runs the plant with the same inlined steps as the plant kernel:
