@@ -27,6 +27,7 @@ import importlib
 from importlib import metadata
 import logging
 import os
+import re
 import signal
 import sys
 import threading
@@ -327,12 +328,31 @@ def _prefetch_kernels(command, argv):
     """
     if command not in _PREFETCHING or any(a in ("-h", "--help") for a in argv):
         return
-    if not any(a != command and os.path.isfile(a) for a in argv):
+    files = [a for a in argv if a != command and os.path.isfile(a)]
+    if not files:
         return
     try:
-        importlib.import_module("hammerstein.simulation._compile").prefetch()
+        importlib.import_module("hammerstein.simulation._compile").prefetch(
+            "hammerstein" if any(_mentions_hammerstein(f) for f in files) else "default")
     except Exception:       # noqa: BLE001 - an optimisation never fails a run
         pass
+
+
+#: A scenario's compensator table of kind "hammerstein" (inline or not); a hint only
+_HAMMERSTEIN_KIND = re.compile(rb'kind\s*=\s*["\']hammerstein["\']')
+
+
+def _mentions_hammerstein(path, limit=1 << 20):
+    """True when the first ``limit`` bytes of ``path`` name a ``kind = "hammerstein"`` table.
+
+    Which chain kernel the helper compiles (:func:`_prefetch_kernels`): a
+    hint read before validation, bounded, never an error (False).
+    """
+    try:
+        with open(path, "rb") as fh:
+            return bool(_HAMMERSTEIN_KIND.search(fh.read(limit)))
+    except OSError:
+        return False
 
 
 def _command(argv):

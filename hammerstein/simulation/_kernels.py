@@ -39,6 +39,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 from numba import njit, uint64
+from numba.core import types
+from numba.extending import overload
 
 from hammerstein.simulation._packing import (STATUS_BOUND, STATUS_NONFINITE, STATUS_OK, ChainState,
                                              LawArrays, LinearArrays, PIArrays)
@@ -778,26 +780,26 @@ def chain_kernel(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plan
                     uk = cu[k]
                     lo = cstart[k]
                     L = nL[k]
-                    a = max(aup[k], 0) if uk >= ub[k] else 0
-                    b = max(adn[k], 0) if uk <= ub[k] else 0
-                    while a < L and cs[lo + a] == uk - cr[lo + a]:
-                        a += 1
-                    while b < L and cs[lo + b] == uk + cr[lo + b]:
-                        b += 1
-                    ju = lo + min(a, L - 1)
-                    jd = lo + min(b, L - 1)
+                    ia = max(aup[k], 0) if uk >= ub[k] else 0
+                    ib = max(adn[k], 0) if uk <= ub[k] else 0
+                    while ia < L and cs[lo + ia] == uk - cr[lo + ia]:
+                        ia += 1
+                    while ib < L and cs[lo + ib] == uk + cr[lo + ib]:
+                        ib += 1
+                    ju = lo + min(ia, L - 1)
+                    jd = lo + min(ib, L - 1)
                     gu = (cs[ju] + cr[ju]) - uk
                     gd = (uk + cr[jd]) - cs[jd]
-                    gup[k] = gu if a < L else np.inf
-                    gdn[k] = gd if b < L else np.inf
-                    if a != aup[k]:          # the slopes change with the prefixes only
-                        sup[0, k] = slopes[0, lo + k + a]
-                        sup[1, k] = slopes[1, lo + k + a]
-                        aup[k] = a
-                    if b != adn[k]:
-                        sdn[0, k] = slopes[0, lo + k + b]
-                        sdn[1, k] = slopes[1, lo + k + b]
-                        adn[k] = b
+                    gup[k] = gu if ia < L else np.inf
+                    gdn[k] = gd if ib < L else np.inf
+                    if ia != aup[k]:         # the slopes change with the prefixes only
+                        sup[0, k] = slopes[0, lo + k + ia]
+                        sup[1, k] = slopes[1, lo + k + ia]
+                        aup[k] = ia
+                    if ib != adn[k]:
+                        sdn[0, k] = slopes[0, lo + k + ib]
+                        sdn[1, k] = slopes[1, lo + k + ib]
+                        adn[k] = ib
                     ub[k] = uk
         if lowpass:
             for k in range(m):
@@ -931,6 +933,36 @@ def _case_law(law, b):
                      law.pole[b], law.prefiltered[b])
 
 
+def _case_plan(prefilter, b):
+    """Case b's pre-filter plan (:func:`_prefilter_plan`), or None without pre-filters."""
+
+
+def _case_slopes(slopes, b):
+    """Case b's closed-form law table, or None without tables."""
+
+
+# Chosen by the argument's type when the calling kernel compiles: a None pre-filter (or
+# table) gives a None plan (or table), so chain_batch compiles the one chain_kernel
+# specialisation it calls. (An `if prefilter is None:` on an array argument is not pruned
+# by numba: both branches, and so every specialisation, would be compiled.)
+@overload(_case_plan, jit_options={"cache": True})
+def _case_plan_impl(prefilter, b):
+    if isinstance(prefilter, types.NoneType):
+        return lambda prefilter, b: None
+
+    def plan(prefilter, b):
+        Af, Bf, Cf, Df = _case_linear(prefilter, b)
+        return _prefilter_plan(Af, Bf, Cf, Df)
+    return plan
+
+
+@overload(_case_slopes, jit_options={"cache": True})
+def _case_slopes_impl(slopes, b):
+    if isinstance(slopes, types.NoneType):
+        return lambda slopes, b: None
+    return lambda slopes, b: slopes[b]
+
+
 @njit(cache=True, inline="always")
 def _case_state(st, b):
     """Copies of case b's states, private to the thread that runs it.
@@ -975,31 +1007,11 @@ def _batch_case(b, offsets, yr, law, comp, prefilter, slopes, plant, linear, run
     m = comp.G.shape[2]
     pp = plant.W.shape[1]
     local = _case_state(state, b)
-    yb = _record(yr, offsets, b, p)
-    n = offsets[b + 1] - offsets[b]
-    ub = _record(u_out, offsets, b, m)
-    vb = _record(y_out, offsets, b, pp)
-    # one call per compiled kernel: a None argument prunes the branches that pass arrays
-    if prefilter is None:
-        if slopes is None:
-            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), None, None,
-                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
-                                  ub, vb)
-        else:
-            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), None, slopes[b],
-                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
-                                  ub, vb)
-    else:
-        Af, Bf, Cf, Df = _case_linear(prefilter, b)
-        plan = _prefilter_plan(Af, Bf, Cf, Df)
-        if slopes is None:
-            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), plan, None,
-                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
-                                  ub, vb)
-        else:
-            st, sm = chain_kernel(yb, n, _case_law(law, b), _case_pi(comp, b), plan, slopes[b],
-                                  _case_pi(plant, b), _case_linear(linear, b), run_plant, local,
-                                  ub, vb)
+    st, sm = chain_kernel(_record(yr, offsets, b, p), offsets[b + 1] - offsets[b],
+                          _case_law(law, b), _case_pi(comp, b), _case_plan(prefilter, b),
+                          _case_slopes(slopes, b), _case_pi(plant, b), _case_linear(linear, b),
+                          run_plant, local, _record(u_out, offsets, b, m),
+                          _record(y_out, offsets, b, pp))
     _store_state(state, b, local)
     status[b] = st
     sample[b] = sm

@@ -32,8 +32,19 @@ from hammerstein.simulation._packing import ChainState, LawArrays, LinearArrays,
 __all__ = ["chain_kernel_arguments", "main"]
 
 
-def chain_kernel_arguments():
+#: the variants the helper can compile: the default run's kernel (no reference pre-filter,
+#: no closed-form law) and the Hammerstein kind's (ZPETC pre-filter, 2 x 2 closed form)
+VARIANTS = ("default", "hammerstein")
+
+
+def chain_kernel_arguments(variant="default"):
     """Arguments of a zero-sample :func:`chain_kernel` call, typed as every chain run's.
+
+    Parameters
+    ----------
+    variant : {'default', 'hammerstein'}
+        ``'hammerstein'``: typed as a ``kind = "hammerstein"`` (ZPETC) run,
+        with a pre-filter plan and a closed-form table.
 
     Returns
     -------
@@ -49,7 +60,11 @@ def chain_kernel_arguments():
     linear = LinearArrays(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.eye(1))
     law = LawArrays(one.copy(), 1, 1.0, False, 0.0, False)
     state = ChainState(*(np.zeros(k) for k in (1, 1, 0, 0, 0, 0)))
-    return (np.zeros((1, 0)), 0, law, pi, None, None, pi, linear, True,
+    if variant == "hammerstein":    # the types of a ZPETC plan and a closed-form table
+        plan, slopes = kernels.prefilter_plan(linear), np.zeros((2, 4))
+    else:
+        plan, slopes = None, None
+    return (np.zeros((1, 0)), 0, law, pi, plan, slopes, pi, linear, True,
             state, np.zeros((1, 0)), np.zeros((1, 0)))
 
 
@@ -68,8 +83,9 @@ def main(argv=None):
     Parameters
     ----------
     argv : list of str, optional
-        ``[parent_pid]`` (default ``sys.argv[1:]``); without it the helper
-        is not tied to a parent.
+        ``[parent_pid, variant]`` (default ``sys.argv[1:]``); without a pid
+        the helper is not tied to a parent; ``variant`` one of
+        :data:`VARIANTS` (default ``'default'``).
 
     Returns
     -------
@@ -79,7 +95,8 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     if argv and not _die_with(int(argv[0])):
         return 1
-    kernels.chain_kernel(*chain_kernel_arguments())
+    variant = argv[1] if len(argv) > 1 and argv[1] in VARIANTS else "default"
+    kernels.chain_kernel(*chain_kernel_arguments(variant))
     return 0
 
 

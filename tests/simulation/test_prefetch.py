@@ -91,6 +91,25 @@ def test_the_helper_compiles_the_signature_of_every_chain_run(chain_calls, kind,
         if prefiltered:
             assert isinstance(args[4], tuple) and len(args[4]) == 13
         assert got[5] == (numba.typeof(np.zeros((2, 3))) if closed else expected[5])
+        if kind == "hammerstein":    # the helper's other variant, chosen for such scenarios
+            assert got == _types(chain_kernel_arguments("hammerstein"))
+
+
+@pytest.mark.parametrize("name, hammerstein", [
+    ("default.toml", False), ("hammerstein-trajectories.toml", True),
+    ("hammerstein-robustness.toml", True)])
+def test_the_cli_asks_the_helper_for_the_hammerstein_kernel_when_a_scenario_names_the_kind(
+        name, hammerstein):
+    assert cli_main._mentions_hammerstein(str(ROOT / "scenarios" / name)) is hammerstein
+
+
+def test_the_hint_reads_no_further_than_its_limit_and_never_fails(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text("x" * 100 + '\n[compensator]\nkind = "hammerstein"\n', encoding="utf-8")
+    assert cli_main._mentions_hammerstein(str(path))
+    assert not cli_main._mentions_hammerstein(str(path), limit=100)
+    assert not cli_main._mentions_hammerstein(str(tmp_path / "absent.toml"))
+    assert not cli_main._mentions_hammerstein(str(tmp_path))          # a directory
 
 
 def test_the_helper_compiles_the_signature_of_a_scenario_run(chain_calls, tmp_path):
@@ -111,19 +130,20 @@ def test_no_helper_when_the_kernel_is_compiled_or_cached():
 
 
 @pytest.mark.parametrize("argv, started", [
-    (["run", "scenarios/default.toml"], True),
-    (["check", "scenarios/default.toml", "--baseline", "b.csv"], True),
-    (["run", "missing.toml"], False),                 # nothing to run: no helper
-    (["run", "scenarios/default.toml", "--help"], False),
-    (["validate", "scenarios/default.toml"], False),  # simulates nothing
-    (["list"], False),
+    (["run", "scenarios/default.toml"], ["default"]),
+    (["check", "scenarios/default.toml", "--baseline", "b.csv"], ["default"]),
+    (["run", "scenarios/default.toml", "scenarios/hammerstein-robustness.toml"], ["hammerstein"]),
+    (["run", "missing.toml"], []),                 # nothing to run: no helper
+    (["run", "scenarios/default.toml", "--help"], []),
+    (["validate", "scenarios/default.toml"], []),  # simulates nothing
+    (["list"], []),
 ])
 def test_the_cli_starts_the_helper_only_for_runs_of_existing_files(monkeypatch, argv, started):
     monkeypatch.chdir(ROOT)
     calls = []
-    monkeypatch.setattr(_compile, "prefetch", lambda: calls.append(1) or False)
+    monkeypatch.setattr(_compile, "prefetch", lambda variant: calls.append(variant) or False)
     cli_main._prefetch_kernels(cli_main._command(argv), argv)
-    assert bool(calls) == started
+    assert calls == started
 
 
 def test_a_helper_still_running_at_exit_is_stopped(monkeypatch):
