@@ -1,7 +1,7 @@
 """A 200-frequency sweep with ``kind = "hammerstein"`` against a rate-independent kind.
 
 Run: ``python benchmarks/sweep_hammerstein.py [--repeat 5] [--inversion zpetc|stable]
-[--iterations-study] [--phases] [--update-sizes]``
+[--iterations-study] [--phases] [--update-sizes] [--cli]``
 (from the repository root; ``NUMBA_NUM_THREADS`` unset for both cores).
 
 Not a test. Two scenarios on the same plant (the bundled preset with its
@@ -38,6 +38,11 @@ iterations`` row of the timing).
 the rate-independent and the Hammerstein sweep and their difference
 (medians of ``--repeat`` alternated runs, :func:`phases`): where the
 Hammerstein sweep's excess goes.
+
+``--cli`` instead times whole ``hammerstein run`` processes on the two
+sweeps (rate independent and Hammerstein; imports, the compensators'
+construction, simulation, report and figure), alternated, warm caches:
+the ratio a user feels (:func:`cli_runs`).
 
 ``--update-sizes`` prints the size of the law's 1st, 2nd and 3rd update on
 some of the Hammerstein cases (:func:`update_sizes`): what an adaptive stop
@@ -253,6 +258,45 @@ def phases(cases, repeat):
             for key in keys}
 
 
+def cli_runs(repeat, inversion, n_freqs=200):
+    """Whole ``hammerstein run`` processes on the two sweeps, alternated: what a user waits for.
+
+    Each run is a fresh interpreter (imports, validation, the compensators'
+    construction, the simulation, the report with its figure), timed from
+    outside by ``resource.getrusage(RUSAGE_CHILDREN)`` (user + system CPU)
+    and the wall clock; the numba cache is warm. Returns ``{kind: (wall
+    median, CPU median)}`` [s].
+    """
+    import resource
+    import subprocess
+
+    root = Path(__file__).resolve().parents[1]
+    freqs = ", ".join(f"{f:.6g}" for f in np.geomspace(10.0, 420.0, n_freqs))
+    kinds = {"rate-independent": 'kind = "multivariable"',
+             "hammerstein": f'kind = "hammerstein"\ninversion = "{inversion}"'}
+    got = {k: [] for k in kinds}
+    with tempfile.TemporaryDirectory() as folder:
+        paths = {}
+        for k, table in kinds.items():
+            paths[k] = Path(folder) / f"{k}.toml"
+            paths[k].write_text(SCENARIO.format(kind=k, table=table, freqs=freqs),
+                                encoding="utf-8")
+        for i in range(repeat + 1):              # the first round warms the caches
+            for k, path in paths.items():
+                out = Path(folder) / f"out-{k}-{i}"
+                r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+                w0 = time.perf_counter()
+                subprocess.run([sys.executable, "-m", "hammerstein", "run", str(path), "--out",
+                                str(out), "-q"], cwd=root, check=True)
+                wall = time.perf_counter() - w0
+                r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+                cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+                if i:
+                    got[k].append((wall, cpu))
+    return {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v))
+            for k, v in got.items()}
+
+
 def timed(fn):
     c0, w0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
@@ -272,7 +316,21 @@ def main(argv=None):
                     help="per-phase CPU of the rate-independent and Hammerstein sweeps")
     ap.add_argument("--update-sizes", action="store_true",
                     help="size of each law iteration's update on Hammerstein sweep cases")
+    ap.add_argument("--cli", action="store_true",
+                    help="whole `hammerstein run` processes on the two sweeps, alternated")
     args = ap.parse_args(argv)
+    if args.cli:
+        print(f"load average {' '.join(f'{x:.2f}' for x in os.getloadavg())} on "
+              f"{os.cpu_count()} cores; `hammerstein run` on each sweep (report and figure)")
+        med = cli_runs(args.repeat, args.inversion, args.frequencies)
+        print(f"{'':18s} {'wall [s]':>9s} {'CPU [s]':>9s}   (medians of {args.repeat}, alternated)")
+        for k, (w, c) in med.items():
+            print(f"{k:18s} {w:9.2f} {c:9.2f}")
+        (rw, rc), (hw, hc) = med["rate-independent"], med["hammerstein"]
+        print(f"hammerstein / rate-independent: wall {hw / rw:.2f}x, CPU {hc / rc:.2f}x "
+              f"(target <= 1.2x)")
+        print(f"load average now {os.getloadavg()[0]:.2f}")
+        return
     if args.iterations_study:
         iterations_study()
         return
