@@ -23,7 +23,9 @@ gains ``G`` (p, m), discrete state space ``A, B, C, D``):
   register, each input's plays summed apart; a 2 x 2 model's law in
   scalars, U in registers, as the kernel's; divergence check, commit)
   -> PI -> bending modes
-  (:func:`~hammerstein.simulation._kernels.chain_kernel`);
+  (:func:`~hammerstein.simulation._kernels.chain_kernel`, called with
+  ``slopes`` None: the iterations as written, which the C reference steps;
+  a 2 x 2 law with 2-3 iterations otherwise runs in closed form, faster);
 * ``batch``: the chain over several cases with ragged records, one after the
   other (:func:`~hammerstein.simulation._kernels.chain_batch` on one thread);
 
@@ -582,13 +584,16 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8, prefilter=False):
     filt = (zpetc_like_prefilter(rng, p) if prefilter else
             LinearArrays(np.zeros((0, 0)), np.zeros((0, p)), np.zeros((p, 0)), np.eye(p)))
     nf = filt.A.shape[0]
-    plan = kernels.prefilter_plan(filt)
+    # the C reference steps the law's iterations as written: the kernel is compared without
+    # the closed-form 2 x 2 law (slopes None), with the pre-filter's plan only when it has one
+    plan = kernels.prefilter_plan(filt) if prefilter else None
 
     def nb_chain():
         st = ChainState(np.zeros(m), np.zeros(m), np.zeros(cn), np.zeros(nf), np.zeros(pn),
                         np.zeros(nx))
         uo, yo = np.empty((m, N)), np.empty((p, N))
-        status, _ = kernels.chain_kernel(yr, N, law, comp, plan, pi, lin, True, st, uo, yo)
+        status, _ = kernels.chain_kernel(yr, N, law, comp, plan, None, pi, lin, True, st, uo,
+                                         yo)
         assert status == 0, "the benchmark's compensator diverged"
         return yo
 
@@ -623,7 +628,7 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8, prefilter=False):
     bcomp = PIArrays(*(tile(a) for a in comp))
     bpi = PIArrays(*(tile(a) for a in pi))
     blin = LinearArrays(*(tile(a) for a in lin))
-    bfilter = LinearArrays(*(tile(a) for a in filt))
+    bfilter = LinearArrays(*(tile(a) for a in filt))    # (the C reference reads it always)
     order = np.arange(B, dtype=np.int64)
 
     def nb_batch():
@@ -631,8 +636,8 @@ def case(lib, m, p, n, N, repeats, iterations=1, n_cases=8, prefilter=False):
                         np.zeros((B, pn)), np.zeros((B, nx)))
         uo, yo = np.empty(m * N), np.empty(p * N)
         status, sample, worker = (np.zeros(B, dtype=np.int64) for _ in range(3))
-        kernels.chain_batch(order, offsets, flat, blaw, bcomp, bfilter, bpi, blin, True, st,
-                            uo, yo, status, sample, worker, 0)
+        kernels.chain_batch(order, offsets, flat, blaw, bcomp, bfilter if prefilter else None,
+                            None, bpi, blin, True, st, uo, yo, status, sample, worker, 0)
         assert not status.any()
         return yo
 
