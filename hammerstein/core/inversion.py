@@ -62,6 +62,9 @@ from hammerstein.core.dynamics import DynamicsError, SampledSystem
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
+#: entries of the acceptable-mode filter's real Schur form below this are numerical zeros
+SCHUR_ZERO = 1e-13
+
 __all__ = ["InverseSystem", "inverse_system", "ZPETCInverse", "preview_inverse"]
 
 
@@ -233,6 +236,11 @@ def _zpetc_design(system, good, tol):
     inv = inverse_system(system, tol)
     p = inv.D.shape[0]
     Ag, Bg, Cg, Ab, Bb, Cb, _ = _split(inv.A, inv.B, inv.C, good)
+    # the real Schur form (orthonormal basis) leaves the inverse's poles at z = 0 (one per
+    # unit of relative degree) as entries of ~1e-16 instead of 0: snapped to 0, such a
+    # state is a delay, which the kernels' pre-filter reads from the reference instead
+    # of stepping it (what it changes is below the rounding of the other terms)
+    Ag = np.where(np.abs(Ag) <= SCHUR_ZERO, 0.0, Ag)
     nb = Ab.shape[0]
     c = np.real(np.poly(Ab))[::-1] if nb else np.ones(1)        # ascending, c[nb] = 1
     b1 = float(np.sum(c))

@@ -533,7 +533,18 @@ def _prefilter_block(yr, t0, t1, plan, z, vb, H, S, X):
     for e in range(nd):
         e = uint64(e)
         X[e, 0] = z[uint64(dyn[e])]
-    for k in range(n):        # the dynamic states, sample by sample: X[:, k] before sample k
+    feedback = False          # does a dynamic state's update read a dynamic state?
+    for e in range(nd):
+        e = uint64(e)
+        if rptr[q + e + uint64(1)] > rptr[q + e]:
+            feedback = True
+    if not feedback:          # no: each state is its row's head, shifted one sample (vectorised)
+        for e in range(nd):
+            e = uint64(e)
+            for k in range(n):
+                k = uint64(k)
+                X[e, k + uint64(1)] = S[q + e, k]
+    for k in range(n if feedback else 0):  # the dynamic states, sample by sample: X[:, k] before sample k
         k = uint64(k)
         for e in range(nd):
             e = uint64(e)
