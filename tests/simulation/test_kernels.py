@@ -820,3 +820,28 @@ def test_batch_initial_state_of_the_wrong_length_is_named():
                                  compensator_states=[None, np.zeros(3)])
     with pytest.raises(HysteresisError, match="compensator_states: expected 2"):
         sim.simulate_chain_batch(comp, plant, [np.zeros((2, 5))] * 2, compensator_states=[None])
+
+
+def test_compile_estimate_counts_the_chain_kernel_specialisation(monkeypatch):
+    # the chain kernel with a pre-filter plan and a closed-form table compiles longer than
+    # the default run's; the batch adds the chain kernel when that specialisation is
+    # neither compiled nor cached, and the planner with a pre-filter
+    import numba
+
+    from hammerstein.simulation import _compile
+    from hammerstein.simulation._prefetch import chain_kernel_arguments
+    base, extra = _compile.COMPILE_SECONDS, _compile.COMPILE_EXTRA_SECONDS
+    default = tuple(numba.typeof(a) for a in chain_kernel_arguments("default"))
+    hamm = tuple(numba.typeof(a) for a in chain_kernel_arguments("hammerstein"))
+    assert _compile.compile_estimate("chain_kernel", default) == base["chain_kernel"]
+    assert _compile.compile_estimate("chain_kernel", hamm) == pytest.approx(
+        base["chain_kernel"] + extra["prefilter"] + extra["closed_form"])
+    batch = (None,) * 5 + (hamm[4], hamm[5])            # chain_batch's prefilter and slopes
+    monkeypatch.setattr(_compile, "_chain_variant_ready", lambda prefiltered, closed: False)
+    cold = _compile.compile_estimate("chain_batch", batch)
+    monkeypatch.setattr(_compile, "_chain_variant_ready", lambda prefiltered, closed: True)
+    warm = _compile.compile_estimate("chain_batch", batch)
+    assert cold - warm == pytest.approx(base["chain_kernel"] + extra["prefilter"]
+                                        + extra["closed_form"])
+    assert warm == pytest.approx(base["chain_batch"] + extra["planner"])
+    assert _compile.compile_estimate("plant_kernel", default) == base["plant_kernel"]
