@@ -783,8 +783,14 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
         parallel = B > 1 and total >= PARALLEL_MIN_SAMPLES
     n_threads = min(kernels.threads(), B) if parallel else 1
     order = _balanced_order(lengths, n_threads)
-    # the closed-form 2 x 2 law's tables: None (a kernel without it) when no case takes it
-    tables = [law_slopes(k.arrays, law.iterations, law.lowpass) for k, law in zip(cpk, laws)]
+    # the closed-form 2 x 2 law's tables: None (a kernel without it) when no case takes it;
+    # one table per distinct packed model and law (a sweep's cases share them)
+    memo = {}
+    for k, law in zip(cpk, laws):
+        key = (id(k), law.iterations, law.lowpass)
+        if key not in memo:
+            memo[key] = law_slopes(k.arrays, law.iterations, law.lowpass)
+    tables = [memo[(id(k), law.iterations, law.lowpass)] for k, law in zip(cpk, laws)]
     slopes = None
     if any(tab is not None for tab in tables):
         slopes = np.zeros((B, 2, nc + 2))
