@@ -67,18 +67,17 @@ def _dispatchers():
     return {name: getattr(_kernels, name) for name in COMPILE_SECONDS}
 
 
-def _on_disk(dispatcher, signature=None):
+def _on_disk(dispatcher, match=None):
     """True when numba's on-disk cache holds a compiled version of ``dispatcher``.
 
     Reads the cache index (stamped with the source file, so an edited kernel
-    reads as absent); any failure reads as absent. With ``signature`` (a
-    tuple of numba types), only a version of that signature counts.
+    reads as absent); any failure reads as absent. With ``match`` (a
+    predicate on a signature, a tuple of numba types), only a version whose
+    signature it accepts counts.
     """
     try:
         index = dispatcher._cache._cache_file._load_index()
-        if signature is None:
-            return bool(index)
-        return any(key[0] == signature for key in index)
+        return bool(index) if match is None else any(match(key[0]) for key in index)
     except Exception:      # noqa: BLE001 - a private numba API; absent means "estimate it"
         return False
 
@@ -92,12 +91,7 @@ def _chain_variant_ready(prefiltered, closed):
         return (len(sig) > 5 and (not isinstance(sig[4], numba.types.NoneType)) == prefiltered
                 and (not isinstance(sig[5], numba.types.NoneType)) == closed)
 
-    if any(matches(sig) for sig in chain.signatures):
-        return True
-    try:
-        return any(matches(key[0]) for key in chain._cache._cache_file._load_index())
-    except Exception:      # noqa: BLE001 - a private numba API; absent means "estimate it"
-        return False
+    return any(matches(sig) for sig in chain.signatures) or _on_disk(chain, matches)
 
 
 def compile_estimate(name, args=None):
@@ -301,7 +295,7 @@ def prefetch(variant="default"):
     chain = _kernels.chain_kernel
     signature = tuple(numba.typeof(a) for a in _prefetch.chain_kernel_arguments(variant))
     if (_PREFETCH["process"] is not None or signature in chain.signatures
-            or _on_disk(chain, signature)):
+            or _on_disk(chain, lambda sig: sig == signature)):
         return False
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     path = os.environ.get("PYTHONPATH")
