@@ -464,13 +464,12 @@ class HammersteinCompensator:
         else:
             self.hysteresis_compensator = InverseMultiplicativeCompensator(
                 model, gain=gain, iterations=iterations, check=check, **options)
-        needs_control = inversion != "zpetc" or (creep is not None
-                                                 and any(c is not None for c in creep))
-        if needs_control and hasattr(dynamics, "to_control"):
+        with_creep = creep is not None and any(c is not None for c in creep)
+        if (inversion != "zpetc" or with_creep) and hasattr(dynamics, "to_control"):
             dynamics = dynamics.to_control()     # 'stable' and the creep cascade use python-control
         self.bending_dynamics = dynamics
         self.creep = None
-        if creep is not None and any(c is not None for c in creep):
+        if with_creep:
             try:
                 dynamics = creep_dynamics(creep, dynamics)
             except HysteresisError as exc:

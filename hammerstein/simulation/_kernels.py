@@ -719,8 +719,8 @@ def chain_kernel(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plan
     # any rise of U_k; with the orders of _ordered_plays they are a prefix aup[k] of the
     # sorted plays, and the next one starts moving once the rise passes
     # gup[k] = s_j + r_j - U_k (j = aup[k]). Within those gaps Gamma(U + dU) =
-    # Gamma(U) + S dU, S[l, k] the prefix's weights plus G[l, k] (sup, from the prefix
-    # sums cum[l, start[k] + k + a], G included); likewise for a fall (adn, gdn, sdn). The
+    # Gamma(U) + S dU, S[l, k] the prefix's weights plus G[l, k] (sup, read from the
+    # table slopes[l, start[k] + k + a]); likewise for a fall (adn, gdn, sdn). The
     # iterations d <- d + K^-1 (e - S d) from d = 0 then are d_i = N_i e, N_1 = K^-1,
     # N_(i+1) = (I - K^-1 S) N_i + K^-1: the law's chain of dependent evaluations
     # becomes one product, valid when every evaluated d_i keeps the directions of S
