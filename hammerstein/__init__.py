@@ -22,7 +22,7 @@ import importlib
 
 from hammerstein.exceptions import (BaselineError, CompensatorDivergence, CompensatorError,
                                     ConvergenceWarning, DataFileError, DynamicsError, ExportError,
-                                    FileLimitError,
+                                    FileLimitError, OutputError,
                                     HammersteinError, HammersteinWarning, HysteresisError,
                                     IdentificationError, Invalid, NestedInvalid, PresetError,
                                     RangeWarning, ScenarioError, SignalError)
@@ -140,7 +140,7 @@ _EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "Sig
                "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
                "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
                "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid",
-               "FileLimitError", "ExportError", "AmplifierError", "AmplifierWarning"]
+               "FileLimitError", "OutputError", "ExportError", "AmplifierError", "AmplifierWarning"]
 
 __all__ = sorted(_EXCEPTIONS + list(_LAZY)) + ["__version__"]
 

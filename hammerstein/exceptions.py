@@ -22,6 +22,7 @@ from __future__ import annotations
 
 __all__ = [
     "HammersteinError",
+    "OutputError",
     "HammersteinWarning",
     "HysteresisError",
     "SignalError",
@@ -167,6 +168,14 @@ class NestedInvalid(Invalid):
 class FileLimitError(HammersteinError, ValueError):
     """A file cannot be read or written safely: not a regular file, or larger than its size
     limit (:mod:`hammerstein.core.files`; the message names the file and why)."""
+
+
+class OutputError(FileLimitError, OSError):
+    """An output file may not or could not be written: it is an input of the command, it
+    resolves outside the output directory, its name is not acceptable, or the write failed (a
+    full disk); the message names the file (:func:`hammerstein.core.files.safe_write`).
+
+    Also an :class:`OSError`, so handlers of failed writes catch it."""
 
 
 class ExportError(HammersteinError, ValueError):

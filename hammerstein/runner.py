@@ -349,10 +349,6 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None):
     return target
 
 
-def _atomic_write(out_dir, name, writer, force=False):
-    return _finish_write(out_dir, name, _start_write(out_dir, writer), force)
-
-
 def _case_warnings(results):
     """Distinct ``(case, message)`` pairs of the results' warnings, in order."""
     pairs = [(str(getattr(r, "name", "")), " ".join(str(w).split()))

@@ -24,7 +24,7 @@ from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actua
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import apply_amplifier, drive_signal, signals_csv, starts_at_rest
-from hammerstein.core.files import safe_write
+from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.core.hammerstein_compensator import INVERSIONS
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
@@ -118,6 +118,10 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
 
 def _handle(args):
     problem = out_file_problem(args.out, "drive file")
+    if not problem:
+        guard_inputs(args.actuator, args.reference)   # never an output, even with --force
+        problem = output_problem(args.out)
+        problem = f"--out: {problem}" if problem else None
     if problem:
         print_err(f"hammerstein compensate: error: {problem}")
         return 2

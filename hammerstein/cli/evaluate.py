@@ -35,7 +35,7 @@ from hammerstein.cli._hardware import (catch, load_actuator, load_reference, map
 from hammerstein.core import metrics as met
 from hammerstein.core.amplifier import drive_metrics
 from hammerstein.core.drive import read_signals
-from hammerstein.core.files import safe_write
+from hammerstein.core.files import guard_inputs, safe_write
 from hammerstein.core.ilc import estimate_delay
 from hammerstein.core.references import raster_line_index
 from hammerstein.exceptions import DataFileError
@@ -152,6 +152,7 @@ def _handle(args):
     if problem:
         print_err(f"hammerstein evaluate: error: {problem}")
         return 2
+    guard_inputs(args.model, args.measured, args.reference)   # never an output, even with --force
     try:
         if args.model:
             plant = load_actuator(args.model, args.sampling_period or 1.0)
@@ -201,10 +202,10 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
         version = metadata.version("hammerstein")
     except metadata.PackageNotFoundError:
         version = "unknown"
-    safe_write(out / MARKER, f"{version}\n")
+    safe_write(out / MARKER, f"{version}\n", "report marker", root=out)
     lines = ["case,channel,metric,value,unit"] + [
         f"measured,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}" for row in rows]
-    safe_write(out / "metrics.csv", "\n".join(lines) + "\n")
+    safe_write(out / "metrics.csv", "\n".join(lines) + "\n", "metrics file", root=out)
     n = y.shape[1]
     t = np.arange(n) * T
     cols = [t] + [r[i] for i in range(len(outs))] + [y[i] for i in range(len(outs))]
@@ -215,15 +216,14 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
     data = np.column_stack(cols)
     row = ",".join(["%.9g"] * data.shape[1])      # one %-format per row (as excitation)
     body = "\n".join(row % tuple(values) for values in data.tolist())
-    safe_write(out / "timeseries-measured.csv", ",".join(head) + "\n" + body + "\n")
+    safe_write(out / "timeseries-measured.csv", ",".join(head) + "\n" + body + "\n",
+               "time series file", root=out)
     figure = ""
     if len(outs) == 2:
         fig = trajectory_figure(t, r, y, outs, "measured response", args.settle_periods *
                                 ref.period_samples * T, inputs=None if u is None else u[:, :n],
                                 input_names=ins if u is not None else None)
-        tmp = out / ".trajectory-measured.png.part"
-        save(fig, tmp)
-        tmp.replace(out / "trajectory-measured.png")
+        safe_write(out / "trajectory-measured.png", lambda fh: save(fig, fh), "figure", root=out)
         figure = "\n![trajectory](trajectory-measured.png)\n"
     table = "\n".join(f"| {row['channel']} | {row['metric']} | {row['value']:.6g} | {row['unit']} |"
                       for row in rows)
@@ -233,4 +233,4 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
             f"samples = {delay * T * 1e6:.4g} µs, "
             f"{'removed before the metrics' if args.remove_delay else 'not removed: the metrics include it'}.\n"
             f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n")
-    safe_write(out / "report.md", text)
+    safe_write(out / "report.md", text, "report", root=out)

@@ -20,6 +20,8 @@ usage error.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import sys
 from pathlib import Path
 
@@ -27,7 +29,8 @@ import numpy as np
 
 from hammerstein.cli._common import out_dir_problem
 from hammerstein.core.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
-from hammerstein.core.files import FileLimitError, bounded_read_text, safe_write
+from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, name_problem,
+                                    safe_write)
 
 __all__ = ["add_parser", "MANIFEST", "readme_text"]
 
@@ -178,6 +181,12 @@ def _handler(args):
         if not all(names) or len(set(names)) != len(names) or "t" in names:
             raise _Usage(f"--inputs: expected distinct non-empty names other than t, found "
                          f"{args.inputs!r}")
+        for n in names:              # each becomes part of file names and a CSV column
+            problem = name_problem(n, "--inputs: name", 64) or \
+                (f"--inputs: name '{n}': a quote or a comma; expected a plain name"
+                 if any(c in n for c in "\",'") else None)
+            if problem:
+                raise _Usage(problem)
         amplitude = _amplitudes(args.amplitude, len(names))
         T = args.sampling_period
         if not (np.isfinite(T) and T > 0):
@@ -207,15 +216,24 @@ def _handler(args):
     except _Usage as exc:
         print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
         return 2
+    created = not os.path.lexists(out)
     try:
         manifest = "\n".join([_MANIFEST_HEAD, *sorted(owned | set(targets))]) + "\n"
-        safe_write(out / MANIFEST, manifest, "excitation manifest")   # first: claims the names
-        for r, name in zip(records, targets):
-            safe_write(out / name, _csv_bytes(r, names), "excitation file")
-        safe_write(out / "README.md", readme_text(records, names, amplitude, T), "README")
-    except (OSError, FileLimitError) as exc:
-        print(f"error: {getattr(exc, 'filename', None) or args.out}: cannot write "
-              f"({getattr(exc, 'strerror', None) or exc})", file=sys.stderr)
+        with all_or_nothing():       # a failed write (full disk) leaves no file, not even the manifest
+            safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
+            for r, name in zip(records, targets):
+                safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
+            safe_write(out / "README.md", readme_text(records, names, amplitude, T), "README",
+                       root=out)
+    except (FileLimitError, OSError) as exc:
+        if created:                  # the directory this run made, empty again: removed
+            with contextlib.suppress(OSError):
+                os.rmdir(out)
+        if isinstance(exc, FileLimitError):
+            print(f"hammerstein excitation: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        else:
+            print(f"hammerstein excitation: error: {exc.filename or args.out}: cannot write "
+                  f"({exc.strerror or exc})", file=sys.stderr)
         return 1
     for r, name in zip(records, targets):
         print(f"wrote {out / name}: {r.kind}, {r.time.size} samples ({r.time.size * T:g} s)")

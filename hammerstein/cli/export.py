@@ -22,6 +22,7 @@ import re
 
 from hammerstein import __version__
 from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.core.files import guard_inputs
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c
@@ -123,6 +124,7 @@ def handler(args):
         except ExportError as exc:
             print_err(f"{prog}: error: --{exc}")
             return 2
+    guard_inputs(args.source)      # a model file is never an output
     try:
         source = load_source(args.source)
     except PresetError as exc:

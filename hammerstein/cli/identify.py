@@ -27,7 +27,7 @@ import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import out_file_problem
-from hammerstein.core.files import (FileLimitError, all_or_nothing, png_provenance,
+from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import PresetError, save_model
@@ -211,12 +211,6 @@ def _check_target(path, option, kind, force, inputs):
         raise _Usage(f"{option}: {problem}")
 
 
-def _atomic_write(path, write):
-    """``write(binary file)`` through an exclusive temporary file next to ``path``, then rename
-    (:func:`hammerstein.core.files.safe_write`: symlink target written, permissions kept)."""
-    safe_write(path, write, "file")
-
-
 def _check_usage(args):
     n, thresholds = _parse_thresholds(args.thresholds)
     if args.train_fraction is not None and not 0 < args.train_fraction <= 1:
@@ -260,6 +254,7 @@ def _check_usage(args):
         if not unit.strip():
             raise _Usage(f"{opt}: expected a unit name")
     inputs = list(args.data) + list(args.dynamics_records) + list(args.creep_records)
+    guard_inputs(*inputs)          # never an output, even with --force (safe_write refuses it)
     _check_target(args.out, "--out", "model", args.force, inputs)
     targets = [Path(args.out).resolve()]
     plots = [(args.metrics, "--metrics", "metrics"), (args.plot, "--plot", "plot")]
@@ -363,7 +358,7 @@ def _write_metrics(path, rows):
     import pandas as pd  # lazy: only for --metrics
     frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
     text = provenance_line("identify") + frame.to_csv(index=False, float_format="%.7g")
-    _atomic_write(path, lambda fh: fh.write(text.encode()))
+    safe_write(path, text, "metrics file")
 
 
 def fit_figure(fit, input_unit, output_unit):
@@ -452,8 +447,8 @@ def _write_plot(path, fit, input_unit, output_unit):
     import matplotlib.pyplot as plt  # lazy: only for --plot
     fig = fit_figure(fit, input_unit, output_unit)
     try:
-        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110,
-                                                   metadata=png_provenance("identify")))
+        safe_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110,
+                                                metadata=png_provenance("identify")), "figure")
     finally:
         plt.close(fig)
 
@@ -892,8 +887,8 @@ def _write_bode(path, dyn, names):
         title=f"Identified G (order {s['order']}, held-out fit {s['held_out_fit_percent']:.1f} %) "
               f"over the measured H1 estimate")
     try:
-        _atomic_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110,
-                                                   metadata=png_provenance("identify")))
+        safe_write(path, lambda fh: fig.savefig(fh, format="png", dpi=110,
+                                                metadata=png_provenance("identify")), "figure")
     finally:
         plt.close(fig)
 

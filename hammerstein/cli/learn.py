@@ -54,7 +54,7 @@ from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actua
                                        positive_float)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
-from hammerstein.core.files import bounded_read_text, safe_write
+from hammerstein.core.files import bounded_read_text, guard_inputs, output_problem, safe_write
 from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
                                   harmonic_base_gains, periodic_average, repeating_from)
@@ -158,18 +158,19 @@ def _write_history(history, names, rec, scale):
         raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
                             f"choose an empty or new directory")
     d.mkdir(parents=True, exist_ok=True)
-    (d / HISTORY_MARK).touch()
+    if not (d / HISTORY_MARK).exists():
+        safe_write(d / HISTORY_MARK, "", "history mark", root=d)
     rows = history_rows(d)
     k = 1 + max((r[0] for r in rows), default=-1)
     rows += [(k, n, float(rec.max_error[i]), float(rec.rms_error[i])) for i, n in enumerate(names)]
     text = "iteration,output,max_error_um,rms_error_um\n" + "".join(
         f"{a},{b},{c!r},{e!r}\n" for a, b, c, e in rows)
-    safe_write(d / "history.csv", text, "history file")
+    safe_write(d / "history.csv", text, "history file", root=d)
     its = sorted({r[0] for r in rows})
     mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
-    save(convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale),
-         d / "convergence.png")
+    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale)
+    safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
     return k
 
 
@@ -225,7 +226,7 @@ def _write_state(history_dir, state):
     text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
         ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
         ("samples", "samples")))
-    safe_write(Path(history_dir) / STATE_FILE, text, "learning state file")
+    safe_write(Path(history_dir) / STATE_FILE, text, "learning state file", root=history_dir)
 
 
 def _window_error(target, y, delay, start, sampling_period, q_cutoff_hz):
@@ -320,11 +321,15 @@ def _save_gains(history_dir, gains):
     text = "harmonic,gain,previous_error_um,growths,converged\n" + "".join(
         f"{h},{float(g)!r},{float(e)!r},{int(n)},{done}\n"
         for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
-    safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file")
+    safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file", root=history_dir)
 
 
 def _handle(args):
     problem = out_file_problem(args.out, "drive file")
+    if not problem:
+        guard_inputs(args.actuator, args.reference, args.drive, args.measured)
+        problem = output_problem(args.out)         # an input is never an output, even with --force
+        problem = f"--out: {problem}" if problem else None
     if not problem and args.history:
         problem = out_dir_problem(args.history)
         problem = problem.replace("--out", "--history") if problem else None
@@ -463,7 +468,7 @@ def _handle(args):
                 safe_write(Path(args.history) / BEST_FILE, signals_csv(
                     t, {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))},
                     f"learn best trial {k}: the drive [V] and its measured response [µm]"),
-                    "best trial file")
+                    "best trial file", root=args.history)
                 state = {"trial": k, "score": score, "samples": N}
             _write_state(args.history, {**state, "halvings": halvings})
     except catch() as exc:

@@ -34,7 +34,7 @@ import threading
 import warnings
 
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
-from hammerstein.core.files import escape, interrupt, start_budget
+from hammerstein.core.files import escape, interrupt, reset_guard, start_budget
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
 # processes (simulation, figure workers) already use the cores; OpenBLAS threads
@@ -437,6 +437,7 @@ def _main(argv):
         _prepare_environment()
     command = _command(argv)
     start_budget()
+    reset_guard()     # the inputs a command declares are its own
     _prefetch_kernels(command, argv)
     parser = build_parser(command) if command is not None else build_parser("")
     try:

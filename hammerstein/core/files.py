@@ -30,13 +30,15 @@ baseline CSV                HAMMERSTEIN_MAX_BASELINE_BYTES  64 MiB
 
 from __future__ import annotations
 
+import errno
 import os
+import re
 import secrets
 import stat
 from contextlib import contextmanager
 from pathlib import Path
 
-from hammerstein.exceptions import FileLimitError
+from hammerstein.exceptions import FileLimitError, OutputError
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
@@ -44,7 +46,9 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
            "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
-           "MAX_PATH_CHARS", "MAX_NAME_BYTES"]
+           "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
+           "output_problem", "name_problem", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
+           "C_HEADERS"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
@@ -354,7 +358,7 @@ def all_or_nothing():
         _GROUP["pending"] = []
 
 
-def safe_write(path, data, what="file"):
+def safe_write(path, data, what="file", root=None):
     """Write ``data`` to ``path`` through an exclusive temporary file and a rename.
 
     Parameters
@@ -367,6 +371,10 @@ def safe_write(path, data, what="file"):
         binary file object.
     what : str
         What the file is, for messages.
+    root : str or pathlib.Path, optional
+        The output directory the file must stay in (``--out DIR``): a path
+        that resolves outside it (``..``, a symbolic link planted in it) is
+        refused (:func:`output_problem`).
 
     Returns
     -------
@@ -375,13 +383,22 @@ def safe_write(path, data, what="file"):
 
     Raises
     ------
+    OutputError
+        The target is an input of the running command (:func:`guard_inputs`:
+        same resolved path or same inode, through a symbolic or hard link),
+        resolves outside ``root``, or the write failed (a full disk: the
+        message names the file; the temporary is removed, the target is
+        untouched).
     FileLimitError
         The target exists and is not a regular file or is read-only, or its
         directory is not a directory.
     OSError
-        The directory cannot be created or written.
+        The directory cannot be created.
     """
     path = Path(path)
+    problem = output_problem(path, root)
+    if problem:
+        raise OutputError(problem)
     target = Path(os.path.realpath(path)) if path.is_symlink() else path
     mode = None
     try:
@@ -412,14 +429,20 @@ def safe_write(path, data, what="file"):
                     tmp = name
                 except FileExistsError:
                     continue
-        with os.fdopen(fd, "wb") as fh:
-            if callable(data):
-                data(fh)
-            else:
-                fh.write(data.encode("utf-8") if isinstance(data, str) else data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, mode)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                if callable(data):
+                    data(fh)
+                else:
+                    fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.chmod(tmp, mode)
+        except OSError as exc:
+            if exc.errno not in _WRITE_ERRNOS:
+                raise
+            raise OutputError(f"{escape(path)}: cannot write the {what} ({exc.strerror}); "
+                              f"nothing was written") from None
         if _GROUP["open"]:
             _GROUP["pending"].append((tmp, target))   # renamed when the group ends
         else:
@@ -943,3 +966,217 @@ def confined_path(text, base_dir, error=FileLimitError):
         return path
     raise error(f"{escape(text)}: outside the scenario's directory ({escape(base_dir)}); "
                 f"name a file under it, or allow its directory with {ALLOW_ENV}=DIR")
+
+
+# -- the output guard: what a command may write -------------------------------------------
+#: Errors of a failed write reported as :class:`OutputError` naming the file.
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS}
+
+#: The files the running command reads: ``(as given, resolved path, (st_dev, st_ino))``.
+_INPUTS = []
+
+
+def reset_guard():
+    """Forget the inputs of :func:`guard_inputs` (a new command starts)."""
+    _INPUTS.clear()
+
+
+def guard_inputs(*paths):
+    """Declare files the running command reads: :func:`safe_write` never writes them.
+
+    Each path is remembered by its resolved path (symbolic links followed)
+    and, when it exists, its device and inode (a hard link names the same
+    inode), so no output of the command can replace or alter one of its
+    inputs, with or without ``--force``.
+
+    Parameters
+    ----------
+    *paths : str, pathlib.Path or None
+        Input files; None and inline values that name no file are ignored
+        (a name that does not exist is still remembered by its path).
+    """
+    for p in paths:
+        if p is None or not str(p).strip() or "\0" in str(p):
+            continue
+        try:
+            st = os.stat(p)
+            ident = (st.st_dev, st.st_ino)
+        except (OSError, ValueError):
+            ident = None
+        try:
+            real = os.path.realpath(p)
+        except (OSError, ValueError):
+            continue
+        _INPUTS.append((str(p), real, ident))
+
+
+def _input_of(path):
+    """The input (as given) that ``path`` names, or None."""
+    if not _INPUTS:
+        return None
+    try:
+        real = os.path.realpath(path)
+    except (OSError, ValueError):
+        return None
+    try:
+        st = os.stat(path)
+        ident = (st.st_dev, st.st_ino)
+    except (OSError, ValueError):
+        ident = None
+    for given, r, i in _INPUTS:
+        if r == real or (ident is not None and i == ident):
+            return given
+    return None
+
+
+def _inside(real, root_real):
+    return real == root_real or real.startswith(root_real.rstrip(os.sep) + os.sep)
+
+
+def output_problem(path, root=None):
+    """Why the output ``path`` may not be written (one line), or None.
+
+    Refused: a final name that :func:`name_problem` refuses; a path that
+    names an input of the running command (:func:`guard_inputs`; resolved
+    path or same inode, so also through a symbolic or a hard link); with
+    ``root``, a path that resolves (``..``, symbolic links, among them one
+    planted inside ``root``) outside the directory ``root``.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The output file.
+    root : str or pathlib.Path, optional
+        The output directory (``--out DIR``).
+
+    Returns
+    -------
+    str or None
+        ``"<path>: ..."`` naming the problem.
+    """
+    p = Path(path)
+    problem = name_problem(p.name, "file name", MAX_NAME_BYTES) if p.name else None
+    if problem:
+        return f"{escape(path)}: {problem}"
+    given = _input_of(p)
+    if given is not None:
+        also = "" if given == str(path) else f" ({escape(given)})"
+        return (f"{escape(path)} is also an input of this command{also}; "
+                f"an input is never an output: choose another name")
+    if root is not None:
+        real, root_real = os.path.realpath(p), os.path.realpath(root)
+        if not _inside(real, root_real):
+            how = (f"is a symbolic link to {escape(real)}" if os.path.islink(p)
+                   else f"resolves to {escape(real)}")
+            return (f"{escape(path)} {how}, outside the output directory {escape(root)}; "
+                    f"nothing is written outside it: remove the link or choose another directory")
+    return None
+
+
+#: Longest name of a signal, model or C prefix turned into a file name [characters].
+MAX_NAME_CHARS = 100
+
+
+def name_problem(name, what="name", limit=MAX_NAME_CHARS):
+    """Why ``name`` cannot become (part of) a file name (one line), or None.
+
+    Refused: an empty name, ``.`` or ``..``, a path separator (``/``,
+    ``\\``), a control character (newline, escape, NUL, DEL, C1, and the
+    bidirectional overrides), or more than ``limit`` characters.
+
+    Parameters
+    ----------
+    name : str
+    what : str
+        What the name is, for the message (``"--inputs name"``).
+    limit : int
+        Longest name [characters].
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> name_problem("x") is None
+    True
+    >>> name_problem("../evil", "--inputs name")
+    "--inputs name '../evil': a path separator ('/'); expected a plain name"
+    """
+    s = str(name)
+    if not s.strip() or s in (".", ".."):
+        return f"{what} '{escape(s)}': expected a non-empty name (not '.' or '..')"
+    if len(s) > limit:
+        return f"{what} '{escape(s, 40)}': {len(s)} characters; expected at most {limit}"
+    for sep in ("/", "\\"):
+        if sep in s:
+            return f"{what} '{escape(s)}': a path separator ({sep!r}); expected a plain name"
+    if not s.isprintable():
+        bad = next(c for c in s if not c.isprintable())
+        return (f"{what} '{escape(s)}': a control character ({escape(bad)}); "
+                f"expected printable characters")
+    return None
+
+
+#: Identifiers a C prefix may not be: the C keywords and the names the standard library owns.
+C_RESERVED = {
+    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else",
+    "enum", "extern", "float", "for", "goto", "if", "inline", "int", "long", "register",
+    "restrict", "return", "short", "signed", "sizeof", "static", "struct", "switch", "typedef",
+    "union", "unsigned", "void", "volatile", "while", "bool", "true", "false", "alignas",
+    "alignof", "static_assert", "thread_local", "noreturn", "complex", "imaginary", "main",
+    "errno", "assert", "setjmp", "longjmp", "offsetof", "va_arg", "va_start", "va_end",
+    "va_copy", "va_list", "NULL", "EOF", "FILE", "stdin", "stdout", "stderr", "size_t",
+    "ptrdiff_t", "math_errhandling", "INFINITY", "NAN", "HUGE_VAL", "signal", "raise", "exit",
+    "abort", "malloc", "free", "memcpy", "memset", "printf", "sin", "cos", "exp", "log", "pow",
+    "sqrt", "fabs", "floor", "ceil", "round", "fmin", "fmax", "tanh"}
+#: Base names of the C standard headers (and of the FMI headers an FMU includes).
+C_HEADERS = {
+    "assert", "complex", "ctype", "errno", "fenv", "float", "inttypes", "iso646", "limits",
+    "locale", "math", "setjmp", "signal", "stdalign", "stdarg", "stdatomic", "stdbit",
+    "stdbool", "stdckdint", "stddef", "stdint", "stdio", "stdlib", "stdnoreturn", "string",
+    "tgmath", "threads", "time", "uchar", "wchar", "wctype", "unistd", "fcntl", "strings",
+    "fmi2Functions", "fmi2FunctionTypes", "fmi2TypesPlatform", "fmi3Functions"}
+_C_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,39}")
+
+
+def c_name_problem(name, what="--name"):
+    """Why ``name`` cannot be the prefix and file stem of exported C code (one line), or None.
+
+    It must be a C identifier of 1-40 letters, digits or ``_`` not starting
+    with a digit; not a keyword or a name the C library owns
+    (:data:`C_RESERVED`: ``main``, ``errno``, ...); not reserved to the
+    implementation (starting with ``__`` or ``_`` and a capital letter);
+    and not the base name of a standard header (:data:`C_HEADERS`, compared
+    without case: ``math.h`` would shadow ``<math.h>``).
+
+    Parameters
+    ----------
+    name : str
+    what : str
+        The option, for the message.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> c_name_problem("piezo_x") is None
+    True
+    >>> c_name_problem("math").startswith("--name: 'math' is the name of the C standard header")
+    True
+    """
+    if not isinstance(name, str) or not _C_IDENT.fullmatch(name):
+        return (f"{what}: expected a C identifier of 1-40 letters, digits "
+                f"or '_' not starting with a digit, found '{escape(name, 60)}'")
+    if name in C_RESERVED:
+        return (f"{what}: {name!r} is a C keyword or a name the C library owns; "
+                f"choose another prefix (e.g. {name}_comp)")
+    if name.startswith("__") or re.match(r"_[A-Z]", name):
+        return (f"{what}: {name!r} is reserved to the C implementation (it starts with '__' or "
+                f"'_' and a capital letter); choose another prefix")
+    if name.lower() in {h.lower() for h in C_HEADERS}:
+        return (f"{what}: {name!r} is the name of the C standard header <{name.lower()}.h>, which "
+                f"{name}.h would shadow; choose another prefix (e.g. {name}_comp)")
+    return None

@@ -19,7 +19,7 @@ import numpy as np
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator,
                                            PerAxisInverseCompensator, StaticGainCompensator,
                                            diagonal_compensator)
-from hammerstein.core.files import FileLimitError, bounded_read_bytes, safe_write
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, output_problem, safe_write
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import load_model, load_plant, read_toml, resolve_preset
@@ -345,11 +345,14 @@ def write_files(out_dir, files, marker, force=False):
     out = Path(out_dir)
     marks = marker if isinstance(marker, dict) else {f: marker for f in files}
     for fname in files:
+        problem = output_problem(out / fname, out)   # a link planted in DIR, an input: even with force
+        if problem:
+            raise ExportError(problem)
         check_owned(out / fname, marks[fname], force)
     written = []
     for fname, data in files.items():
         try:
-            written.append(safe_write(out / fname, data, "generated file"))
+            written.append(safe_write(out / fname, data, "generated file", root=out))
         except FileLimitError as exc:
             raise ExportError(str(exc)) from None
         except OSError as exc:
