@@ -46,7 +46,7 @@ from typing import Callable
 import pandas as pd
 
 from hammerstein.core.files import (deferred_signals, owner_alive, owner_token, parse_owner,
-                                    release_owner, umask)
+                                    release_owner, replace_directory, safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
@@ -196,7 +196,7 @@ def _make_temporary(out_dir):
     try:
         tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}{os.getpid()}.{nonce}.", dir=out_dir))
         os.chmod(tmp, 0o777 & ~umask())
-        (tmp / MARKER).write_text(f"hammerstein {_version()}\nowner {token}\n", encoding="utf-8")
+        safe_write(tmp / MARKER, f"hammerstein {_version()}\nowner {token}\n", "report marker")
     except BaseException:
         release_owner(token)
         raise
@@ -336,8 +336,7 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None):
         with deferred_signals():  # the swap is never left half done
             if os.path.lexists(target):
                 old = _make_temporary(out_dir)
-                os.rename(target, old / "previous")
-            os.rename(tmp, target)
+            replace_directory(tmp, target, old)
             _release(tmp)
     except BaseException:
         if tmp is not None:
@@ -359,8 +358,9 @@ def _case_warnings(results):
 def _write_warnings(pairs, directory):
     """``warnings.csv`` (columns ``case, message``) when there are warnings."""
     if pairs:
-        pd.DataFrame(pairs, columns=["case", "message"]).to_csv(
-            Path(directory) / "warnings.csv", index=False)
+        safe_write(Path(directory) / "warnings.csv",
+                   pd.DataFrame(pairs, columns=["case", "message"]).to_csv(index=False),
+                   "warnings file")
 
 
 #: Signals of a case result checked for overflow: attribute, what it is, unit.

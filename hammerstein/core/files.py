@@ -47,7 +47,7 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
            "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
-           "output_problem", "name_problem", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
+           "output_problem", "name_problem", "append_text", "replace_directory", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
            "C_HEADERS"]
 
 #: Default size limits [bytes] and the environment variables overriding them.
@@ -455,6 +455,62 @@ def safe_write(path, data, what="file", root=None):
                 pass
         raise
     return target
+
+
+def append_text(path, text, what="file", root=None):
+    """Add ``text`` at the end of the text file ``path`` (created if missing) through :func:`safe_write`.
+
+    The whole file is written again through a temporary and a rename, so a
+    reader sees the old or the new content, never a partial line.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    text : str
+    what : str
+        What the file is, for messages.
+    root : str or pathlib.Path, optional
+        As :func:`safe_write`.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    OutputError, FileLimitError, OSError
+        As :func:`safe_write`; UnicodeDecodeError when the file is not UTF-8.
+    """
+    old = bounded_read_text(path, "data", what) if os.path.lexists(path) else ""
+    return safe_write(path, old + text, what, root)
+
+
+def replace_directory(new, target, parking=None):
+    """Rename the finished directory ``new`` to ``target`` (a report's last step).
+
+    An existing ``target`` is first moved into ``parking`` (as
+    ``parking/previous``, a temporary directory of the caller, which removes
+    it), so the swap is two renames in one directory, never a copy; run it
+    inside :func:`deferred_signals`.
+
+    Parameters
+    ----------
+    new : str or pathlib.Path
+        The directory written.
+    target : str or pathlib.Path
+        Its final name.
+    parking : str or pathlib.Path, optional
+        Where an existing ``target`` goes; None: ``target`` must not exist.
+
+    Raises
+    ------
+    OSError
+        A rename failed (``new`` is then left for the caller to remove).
+    """
+    if parking is not None and os.path.lexists(target):
+        os.rename(target, Path(parking) / "previous")
+    os.rename(new, target)
 
 
 # -- provenance: the mark of the files the project writes ------------------------------

@@ -29,6 +29,7 @@ import zipfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+from hammerstein.core.files import safe_write
 from hammerstein.exceptions import ExportError
 from hammerstein.export.c_code import CExport
 
@@ -438,11 +439,11 @@ def compile_binary(code: CExport, wrapper, compiler=None):
     with tempfile.TemporaryDirectory(prefix="hammerstein-fmu-") as tmp:
         tmp = Path(tmp)
         for fname, text in code.files().items():
-            (tmp / fname).write_text(text)
-        (tmp / "fmi2.c").write_text(wrapper)
+            safe_write(tmp / fname, text, "C source")
+        safe_write(tmp / "fmi2.c", wrapper, "C source")
         inc = _fmi_include_dir()
         if inc is None:
-            (tmp / "fmi2Functions.h").write_text(FMI2_MINIMAL_HEADER)
+            safe_write(tmp / "fmi2Functions.h", FMI2_MINIMAL_HEADER, "C header")
         lib = tmp / (code.name + ext)
         cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-I", str(tmp)] \
             + (["-I", str(inc)] if inc else []) \

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import append_text, safe_write
 from hammerstein.report.figures import scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
 from hammerstein.report.model_files import save_identified_dynamics, save_identified_models
@@ -68,8 +69,7 @@ def report_identified(scenario, results, directory, jobs=None):
             lines += [f"### {caption}", "", f"![{caption}]({fname[0]})", "",
                       f"Table: [`{fname[1]}`]({fname[1]}).", "", markdown_table(table), ""]
     if not rows:
-        with open(directory / "report.md", "a", encoding="utf-8") as fh:
-            fh.write("\n".join(lines) + "\n")
+        append_text(directory / "report.md", "\n".join(lines) + "\n", "report")
         return
     lines += ["", "## Identified models", "",
              "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
@@ -81,8 +81,7 @@ def report_identified(scenario, results, directory, jobs=None):
     for (fname, plant, role), cases in by_file.items():
         shown = ", ".join(cases) if len(cases) <= 4 else f"{', '.join(cases[:3])}, ... ({len(cases)} cases)"
         lines.append(f"| [`{fname}`]({fname}) | {plant} | {role} | {shown} |")
-    with open(directory / "report.md", "a", encoding="utf-8") as fh:
-        fh.write("\n".join(lines) + "\n")
+    append_text(directory / "report.md", "\n".join(lines) + "\n", "report")
 
 
 def _last_period(x, P):
@@ -184,7 +183,7 @@ def _frequency_tables(scenario, results, directory, jobs):
         model = first.spec.plant.hysteresis
         suffix = "" if i == 0 else f"-{i + 1}"
         fig_name, csv_name = f"model-rms-vs-frequency{suffix}.png", f"model-rms-vs-frequency{suffix}.csv"
-        g.to_csv(directory / csv_name, index=False, float_format="%.6g")
+        safe_write(directory / csv_name, g.to_csv(index=False, float_format="%.6g"), "table")
         f_id = None
         for r in results:
             ms = getattr(r.spec, "model_spec", None) or {}
@@ -239,5 +238,4 @@ def _report_dynamics(results, directory, jobs):
                   + " / ".join(f"{100 * v:.2f} %" for v in cmp_["relative_error"].max(axis=(0, 1))),
                   f"- files: [`{r['dynamics_file']}`]({r['dynamics_file']})"
                   + (f", PI [`{r['pi_file']}`]({r['pi_file']})" if r["pi_file"] else ""), ""]
-    with open(directory / "report.md", "a", encoding="utf-8") as fh:
-        fh.write("\n".join(lines) + "\n")
+    append_text(directory / "report.md", "\n".join(lines) + "\n", "report")

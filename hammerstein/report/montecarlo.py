@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import safe_write
 from hammerstein.report import figures as plots
 from hammerstein.report.tables import markdown_table, metrics_frame
 
@@ -109,7 +110,7 @@ def write_montecarlo_report(scenario, results, directory, jobs):
         Receives the figures.
     """
     directory = Path(directory)
-    metrics_frame(results).to_csv(directory / "metrics.csv", index=False)
+    safe_write(directory / "metrics.csv", metrics_frame(results).to_csv(index=False), "metrics file")
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description, ""]
@@ -119,7 +120,7 @@ def write_montecarlo_report(scenario, results, directory, jobs):
     for res in results:
         s = res.study
         table = quantile_table(res)
-        table.to_csv(directory / f"montecarlo-{s.name}.csv", index=False)
+        safe_write(directory / f"montecarlo-{s.name}.csv", table.to_csv(index=False), "table")
         png = directory / f"montecarlo-{s.name}.png"
         jobs.add(png, quantile_figure, table,
                  f"{scenario.title}: {s.name}, {s.cases} plants x {len(s.frequencies)} frequencies")
@@ -129,7 +130,8 @@ def write_montecarlo_report(scenario, results, directory, jobs):
             frame = pd.DataFrame(res.values.reshape(n * F, M), columns=cols)
             frame.insert(0, "frequency_hz", np.tile(np.asarray(s.frequencies), n))
             frame.insert(0, "case", np.repeat(np.arange(n), F))
-            frame.to_csv(directory / f"montecarlo-{s.name}-cases.csv", index=False)
+            safe_write(directory / f"montecarlo-{s.name}-cases.csv", frame.to_csv(index=False),
+                       "table")
         vary = ", ".join(f"{k} {v}" for k, v in s.vary.items()) or "nothing varied"
         lines += [f"## {s.name}", "", s.description or "", "",
                   f"{s.cases} plants x {len(s.frequencies)} frequencies; varied: {vary}. "
@@ -140,4 +142,4 @@ def write_montecarlo_report(scenario, results, directory, jobs):
                                         "max", "diverged"]]), ""]
         if res.warnings:
             lines += ["Warnings of the nominal build:", ""] + [f"- {w}" for w in res.warnings] + [""]
-    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")
+    safe_write(directory / "report.md", "\n".join(lines), "report")

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hammerstein.core.files import safe_write
 from hammerstein.core.presets import save_model
 from hammerstein.report.model_figures import record_fit_figure
 from hammerstein.report.render import FigureJobs
@@ -41,7 +42,7 @@ def write_identification_report(scenario, results, directory, jobs=None):
     iu, ou = dat["input_unit"], dat["output_unit"]
     model = fit.model
     frame = metrics_frame(results)
-    frame.to_csv(directory / "metrics.csv", index=False)
+    safe_write(directory / "metrics.csv", frame.to_csv(index=False), "metrics file")
     rec, split, pred = fit.records[0], fit.splits[0], fit.predictions[0]
     iu_tag, ou_tag = iu.replace("µ", "u"), ou.replace("µ", "u")   # ASCII column names
     for r, mask in (("train", split.train), ("validation", split.held_out)):
@@ -88,4 +89,4 @@ def write_identification_report(scenario, results, directory, jobs=None):
               "![Measured vs model](record-fit.png)", "",
               "## Metrics", "", f"RMS error in {ou} and in % of the measured output range "
               "(peak to peak) of each window.", "", markdown_table(frame), ""]
-    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")
+    safe_write(directory / "report.md", "\n".join(lines), "report")

@@ -50,6 +50,7 @@ from typing import Callable
 
 import numpy as np
 
+from hammerstein.core.files import safe_write
 from hammerstein.report.figures import save
 
 __all__ = ["FigureJob", "FigureJobs", "FigureRenderer", "render_job", "job_key", "WORKERS",
@@ -113,7 +114,7 @@ def render_job(job):
     buffer = io.BytesIO()
     save(job.function(*job.args, **job.kwargs), buffer)
     png = buffer.getvalue()
-    job.path.write_bytes(png)
+    safe_write(job.path, png, "figure")
     return png
 
 
@@ -173,7 +174,7 @@ def _settle(future, done, path=None):
     try:
         png = done.result()
         if path is not None:
-            path.write_bytes(png)
+            safe_write(path, png, "figure")
     except BaseException as exc:     # the drawing's error, or this write's
         future.set_exception(exc)
     else:
@@ -566,4 +567,4 @@ def _note_skipped(paths):
             text = re.sub(r"!\[([^\]]*)\]\(" + re.escape(name) + r"\)",
                           lambda m, n=name: f"*{m.group(1) or n}: figure `{n}` not drawn "
                                             f"(`run --figures`)*", text)
-        md.write_text(text, encoding="utf-8")
+        safe_write(md, text, "report")

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import markdown_escape
+from hammerstein.core.files import markdown_escape, safe_write
 from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
 from hammerstein.report.ilc_figure import convergence_figure, iteration_history
@@ -400,7 +400,7 @@ def write_report(scenario, results, directory, jobs=None):
     directory = Path(directory)
     jobs = FigureJobs() if jobs is None else jobs
     frame = metrics_frame(results)
-    frame.to_csv(directory / "metrics.csv", index=False)
+    safe_write(directory / "metrics.csv", frame.to_csv(index=False), "metrics file")
     sweep_lines = sweep_report_lines(scenario, results, directory, frame, jobs)
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     frame = frame[frame["case"].isin([r.name for r in results])]
@@ -437,4 +437,4 @@ def write_report(scenario, results, directory, jobs=None):
               "`timeseries-<case>.csv`.", ""]
     if not frame.empty:
         lines += [markdown_table(frame), ""]
-    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")
+    safe_write(directory / "report.md", "\n".join(lines), "report")

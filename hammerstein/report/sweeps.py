@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from hammerstein.core.files import safe_write
 from hammerstein.core.metrics import UNITS
 from hammerstein.report import figures as plots
 from hammerstein.report.render import FigureJobs
@@ -278,7 +279,7 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
     for spec in specs:
         table = sweep_table(spec, metrics)
         csv = f"sweep-{spec.name}.csv"
-        table.to_csv(directory / csv, index=False, float_format="%.6g")
+        safe_write(directory / csv, table.to_csv(index=False, float_format="%.6g"), "table")
         png = None
         if len(spec.frequencies) > 1:
             png = f"sweep-{spec.name}.png"
@@ -315,7 +316,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
         if warned:
             lines += ["Warnings:", ""] + [f"- {n} case(s): {w}" for w, n in warned.items()] + [""]
     if smap is not None:
-        smap.to_csv(directory / "stability-map.csv", index=False, float_format="%.6g")
+        safe_write(directory / "stability-map.csv", smap.to_csv(index=False, float_format="%.6g"),
+                   "table")
         jobs.add(directory / "stability-map.png", stability_figure, smap, f"{scenario.title}")
         laws = pd.DataFrame([{"compensator": k, **v} for k, v in smap.attrs.get("laws", {}).items()])
         lines += ["## Stability map", "",

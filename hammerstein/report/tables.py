@@ -10,6 +10,8 @@ import re
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import safe_write
+
 __all__ = ["COLUMNS", "metrics_frame", "markdown_table", "write_signals_csv", "CSV_CHUNK_ROWS"]
 
 #: Rows formatted per string operation by :func:`write_signals_csv`.
@@ -100,18 +102,21 @@ def write_signals_csv(path, columns, float_format="%.6g"):
     n = arrays[0].shape[0] if arrays and arrays[0].ndim == 1 else -1
     if (len(arrays) < 2 or n < 0 or any(a.ndim != 1 or a.shape[0] != n or a.dtype != np.float64
                                         for a in arrays)):
-        pd.DataFrame(columns).to_csv(path, index=False, float_format=float_format)
+        safe_write(path, pd.DataFrame(columns).to_csv(index=False, float_format=float_format),
+                   "CSV file")
         return
     sep = os.linesep
     head = io.StringIO()
     csv.writer(head, lineterminator=sep).writerow(names)   # quoted as pandas quotes them
     table = np.column_stack(arrays)
     row = ",".join([float_format] * len(arrays)) + sep
-    with open(path, "w", encoding="utf-8", newline="") as f:
-        f.write(head.getvalue())
+
+    def write(fh):
+        fh.write(head.getvalue().encode("utf-8"))
         for start in range(0, n, CSV_CHUNK_ROWS):
             block = table[start:start + CSV_CHUNK_ROWS]
             text = (row * block.shape[0]) % tuple(block.ravel().tolist())
             if np.isnan(block).any():
                 text = _NAN_FIELD.sub("", text)
-            f.write(text)
+            fh.write(text.encode("utf-8"))
+    safe_write(path, write, "CSV file")
