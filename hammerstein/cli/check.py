@@ -46,8 +46,8 @@ import pandas as pd
 
 from hammerstein.cli._common import out_dir_problem, out_file_problem
 from hammerstein.cli._output import add_verbosity, print_warnings
-from hammerstein.core.files import (FileLimitError, carries_provenance, escape, locked,
-                                    provenance_line, replace_problem, safe_write)
+from hammerstein.core.files import (FileLimitError, carries_provenance, escape, guard_inputs,
+                                    locked, provenance_line, replace_problem, safe_write)
 from hammerstein.report.render import figure_selection
 from hammerstein.runner import run_pipelined, run_scenarios
 from hammerstein.scenario import diskcache
@@ -155,6 +155,7 @@ def run_check(args):
         return 2
     force = getattr(args, "force", False)
     inputs = list(args.scenarios) + ([args.tolerances] if args.tolerances else [])
+    guard_inputs(*inputs)          # never an output (the baseline is read and rewritten: not here)
     problem = out_dir_problem(args.out) if args.out is not None else None
     if problem is None and args.update:
         problem = out_file_problem(baseline_path, "baseline CSV file")

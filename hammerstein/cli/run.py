@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from hammerstein.cli._common import one_line, out_dir_problem, print_err, set_warning_subject
-from hammerstein.core.files import escape
+from hammerstein.core.files import escape, guard_inputs
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.report.render import figure_selection
 from hammerstein.scenario import diskcache
@@ -96,6 +96,7 @@ def handler(args):
                   "processes, without --scheduler")
         return 2
     out = Path(args.out)
+    guard_inputs(*args.scenarios)   # a scenario file is never an output
     remove_stale_temporaries(out)
     verbosity = getattr(args, "verbosity", 0)
     announce_compiles(print_err if verbosity >= 0 else None)

@@ -449,10 +449,10 @@ def write_readme(root, outcomes=None):
     L += _discussion(metrics, comp, fam)
     for name, frame in (("paper-numbers.csv", comp), ("family-comparison.csv", fam),
                         ("fig09-trends.csv", t9), ("fig07-trends.csv", t7)):
-        safe_write(root / name, frame.to_csv(index=False, float_format="%.6g"), "CSV file")
+        safe_write(root / name, frame.to_csv(index=False, float_format="%.6g"), "CSV file", root=root)
     if fig8:
-        safe_write(root / "fig08-identified-maps.png", png.getvalue(), "figure")
-    return safe_write(root / "README.md", "\n".join(L), "README")
+        safe_write(root / "fig08-identified-maps.png", png.getvalue(), "figure", root=root)
+    return safe_write(root / "README.md", "\n".join(L), "README", root=root)
 
 
 def _fig09_reading(t9):

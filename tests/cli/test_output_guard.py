@@ -71,6 +71,19 @@ def test_n1_export_never_writes_through_a_link_in_out(tmp_path, force):
     assert _tree(tmp_path / "gex") == ["p.c"]          # no other file, no temporary
 
 
+def test_n1_export_fmu_never_writes_through_a_link_in_out(tmp_path):
+    precious = tmp_path / "precious.fmu"
+    precious.write_bytes(b"PK keep")
+    (tmp_path / "gex").mkdir()
+    os.symlink(precious, tmp_path / "gex" / "p.fmu")
+    res = _cli("export", "rakotondrabe-2dof", "--target", "fmu", "--no-binary", "--out", "gex",
+               "--name", "p", "--force", cwd=tmp_path)
+    assert res.returncode == 1
+    assert "outside the output directory" in _one_line(res)
+    assert precious.read_bytes() == b"PK keep"
+    assert _tree(tmp_path / "gex") == ["p.fmu"]
+
+
 def test_export_link_inside_out_to_a_file_inside_out_is_written(tmp_path):
     """A link that stays inside --out is not an escape: the file it names is replaced."""
     out = tmp_path / "gex"
