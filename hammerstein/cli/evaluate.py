@@ -22,6 +22,8 @@ usage error. ``DIR`` is replaced only when it is empty or carries the
 
 from __future__ import annotations
 
+import contextlib
+import os
 import sys
 from importlib import metadata
 from pathlib import Path
@@ -35,7 +37,7 @@ from hammerstein.cli._hardware import (catch, load_actuator, load_reference, map
 from hammerstein.core import metrics as met
 from hammerstein.core.amplifier import drive_metrics
 from hammerstein.core.drive import read_signals
-from hammerstein.core.files import guard_inputs, safe_write
+from hammerstein.core.files import all_or_nothing, guard_inputs, safe_write
 from hammerstein.core.ilc import estimate_delay
 from hammerstein.core.references import raster_line_index
 from hammerstein.exceptions import DataFileError
@@ -184,7 +186,15 @@ def _handle(args):
             for i, n in enumerate(ins):
                 rows += [{"channel": n, "metric": "peak_input", "value": float(peak[i]), "unit": "V"},
                          {"channel": n, "metric": "peak_slew", "value": float(slew[i]), "unit": "V/s"}]
-        _write(out, args, rows, delay, T, r, ym, outs, u, ins, ref)
+        created = not os.path.lexists(out)
+        try:
+            with all_or_nothing():     # a failed write (full disk) leaves none of the files
+                _write(out, args, rows, delay, T, r, ym, outs, u, ins, ref)
+        except BaseException:
+            if created:                # the directory this run made, empty again: removed
+                with contextlib.suppress(OSError):
+                    os.rmdir(out)
+            raise
     except catch() as exc:
         print_err(f"hammerstein evaluate: error: {' '.join(str(exc).split())}")
         return 1

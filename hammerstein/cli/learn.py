@@ -54,7 +54,8 @@ from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actua
                                        positive_float)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
-from hammerstein.core.files import bounded_read_text, guard_inputs, output_problem, safe_write
+from hammerstein.core.files import (all_or_nothing, bounded_read_text, guard_inputs, output_problem,
+                                    safe_write)
 from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
                                   harmonic_base_gains, periodic_average, repeating_from)
@@ -457,23 +458,37 @@ def _handle(args):
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else ""))
         t = np.arange(N) * T
-        safe_write(args.out, signals_csv(t, dict(zip(model.input_names, u_next)), comment),
-                   "drive file")
-        k = _write_history(args.history, list(model.output_names), rec, ref.scale) \
-            if args.history else None
-        if args.history and gains is not None:
-            _save_gains(args.history, gains)
-        if args.history:
-            if best:
-                safe_write(Path(args.history) / BEST_FILE, signals_csv(
-                    t, {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))},
-                    f"learn best trial {k}: the drive [V] and its measured response [µm]"),
-                    "best trial file", root=args.history)
-                state = {"trial": k, "score": score, "samples": N}
-            _write_state(args.history, {**state, "halvings": halvings})
+        with all_or_nothing():    # the drive and the history together, or none (a full disk)
+            k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
+                               score, halvings)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
+    return _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond)
+
+
+def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
+                   halvings):
+    """Write the next drive and, with ``--history``, the trial's history; the trial number or None."""
+    safe_write(args.out, signals_csv(t, dict(zip(model.input_names, u_next)), comment),
+               "drive file")
+    if not args.history:
+        return None
+    k = _write_history(args.history, list(model.output_names), rec, ref.scale)
+    if gains is not None:
+        _save_gains(args.history, gains)
+    if best:
+        safe_write(Path(args.history) / BEST_FILE, signals_csv(
+            t, {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))},
+            f"learn best trial {k}: the drive [V] and its measured response [µm]"),
+            "best trial file", root=args.history)
+        state = {"trial": k, "score": score, "samples": t.size}
+    _write_state(args.history, {**state, "halvings": halvings})
+    return k
+
+
+def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond):
+    """Print the trial's error, notes and convergence condition; exit status 0."""
     scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} µm)" \
         if ref.scale else ""
     axes = ", ".join(f"{n} max {a:.4g} RMS {b:.4g}" for n, a, b in

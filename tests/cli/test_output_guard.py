@@ -230,3 +230,19 @@ def test_full_disk_compensate_names_the_drive_file_and_keeps_the_old_one(tmp_pat
     assert "drive.csv" in line and "No space left on device" in line
     assert _tree(tmp_path) == ["drive.csv"]
     assert (tmp_path / "drive.csv").read_text().endswith("old\n")
+
+
+def test_full_disk_evaluate_leaves_no_report_and_no_marker(tmp_path, monkeypatch):
+    t = [k * 5e-5 for k in range(400)]
+    (tmp_path / "meas.csv").write_text("t,x,y\n" + "".join(f"{v!r},0.5,0.25\n" for v in t))
+    ok = _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "first",
+              cwd=tmp_path)
+    assert ok.returncode == 0, ok.stderr                 # the files are valid: only the disk fails
+    _full_disk(monkeypatch)
+    res = _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "ev",
+               cwd=tmp_path)
+    assert res.returncode == 1
+    line = _one_line(res)
+    assert "ev/" in line and "No space left on device" in line
+    assert not (tmp_path / "ev").exists()
+    assert "ev" not in _tree(tmp_path)
