@@ -397,6 +397,7 @@ def main(argv=None):
         print_err("interrupted")
         return 128 + int(signum)
     finally:
+        reset_guard()        # an embedding program's later writes are its own
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         sys.stdout, sys.stderr = streams

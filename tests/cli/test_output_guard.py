@@ -246,3 +246,13 @@ def test_full_disk_evaluate_leaves_no_report_and_no_marker(tmp_path, monkeypatch
     assert "ev/" in line and "No space left on device" in line
     assert not (tmp_path / "ev").exists()
     assert "ev" not in _tree(tmp_path)
+
+
+def test_the_inputs_of_one_command_do_not_outlive_it(tmp_path):
+    """main() forgets the inputs it declared: a later write by the calling program is its own."""
+    _inputs(tmp_path)
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", "ref.csv", "--out", "ref.csv",
+               "--force", cwd=tmp_path)
+    assert res.returncode == 2
+    safe_write(tmp_path / "ref.csv", "t,x,y\n1,1,1\n")
+    assert (tmp_path / "ref.csv").read_text() == "t,x,y\n1,1,1\n"
