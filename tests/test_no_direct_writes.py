@@ -5,7 +5,7 @@ temporary in the same directory, fsync, rename; inputs and places outside ``--ou
 refused). This test walks the package's source with :mod:`ast` and fails on any other way
 to write, rename, link or copy a file:
 
-- ``open(path, mode)`` with ``w``, ``a``, ``x`` or ``+`` (or a mode that is not a constant),
+- ``open(path, mode)`` / ``Path.open(mode)`` with ``w``, ``a``, ``x`` or ``+`` (or a mode that is not a constant),
   ``os.open`` with a writing flag, ``os.fdopen`` for writing;
 - ``Path.write_text`` / ``write_bytes`` / ``touch`` / ``symlink_to`` / ``hardlink_to``,
   ``Path.rename`` / ``Path.replace`` (one argument);
@@ -85,9 +85,12 @@ def problem(call):
     func = call.func
     full = _name(func) or ""
     attr = func.attr if isinstance(func, ast.Attribute) else None
-    if full == "open":
+    if full in ("open", "io.open", "codecs.open"):
         if _writes_mode(_mode(call, 1)):
-            return "open() for writing"
+            return f"{full}() for writing"
+    elif attr == "open" and full not in ("os.open", "tarfile.open"):       # Path.open(mode)
+        if _writes_mode(_mode(call, 0)):
+            return "Path.open() for writing"
     elif full == "os.open":
         flags = {n.attr if isinstance(n, ast.Attribute) else getattr(n, "id", None)
                  for arg in call.args[1:2] for n in ast.walk(arg)}
@@ -156,7 +159,8 @@ def test_the_allow_list_names_existing_functions():
 
 
 @pytest.mark.parametrize("snippet", [
-    "open(p, 'w')", "open(p, mode='ab')", "open(p, m)", "open(p, 'r+')",
+    "open(p, 'w')", "open(p, mode='ab')", "open(p, m)", "open(p, 'r+')", "p.open('w')",
+    "io.open(p, 'x')",
     "os.open(p, os.O_WRONLY | os.O_CREAT)", "os.fdopen(fd, 'wb')",
     "Path(p).write_text('x')", "p.write_bytes(b'')", "p.touch()", "p.symlink_to(q)",
     "os.replace(a, b)", "os.rename(a, b)", "os.link(a, b)", "shutil.copy(a, b)",
@@ -171,7 +175,7 @@ def test_each_way_of_writing_is_caught(snippet):
 
 
 @pytest.mark.parametrize("snippet", [
-    "open(p)", "open(p, 'rb')", "os.open(p, os.O_RDONLY | os.O_NONBLOCK)",
+    "open(p)", "open(p, 'rb')", "p.open()", "p.open('rb')", "tarfile.open(p)", "os.open(p, os.O_RDONLY | os.O_NONBLOCK)",
     "frame.to_csv(index=False)", "fig.savefig(fh, format='png')", "np.savetxt(buf, a)",
     "save(fig, buffer)", "zipfile.ZipFile(buf, 'w')", "zipfile.ZipFile(p)",
     "text.replace('a', 'b')", "frame.rename(columns=m)", "safe_write(p, lambda fh: save(f, fh))",
