@@ -48,20 +48,52 @@ class SafeStream:
     pass (the messages' own line structure); the places that print a user
     string escape its newlines themselves.
 
+    With ``max_line`` (stderr), no line is longer than ``max_line``
+    characters whichever way it is written (one ``print``, several
+    ``write`` calls): the rest of a longer line is replaced by `` ...
+    (cut)``, so a message quoting a 140 000-character CSV cell stays one
+    readable line.
+
     Parameters
     ----------
     stream : io.TextIOBase
         The stream written to.
+    max_line : int, optional
+        Longest line written (characters); default unlimited.
     """
 
-    def __init__(self, stream):
+    _CUT = " ... (cut)"
+
+    def __init__(self, stream, max_line=None):
         self._stream = stream
+        self._max = max_line
+        self._col = 0           # characters of the current line already written
 
     def write(self, text):
         """Write ``text`` with its control characters (but newline and tab) escaped."""
         if not text.isprintable() and not all(c.isprintable() or c in _KEEP for c in text):
             text = "".join(c if c.isprintable() or c in _KEEP else escape(c) for c in text)
+        if self._max is not None:
+            text = self._cap(text)
         return self._stream.write(text)
+
+    def _cap(self, text):
+        """``text`` with every line cut at ``max_line`` characters (counting earlier writes)."""
+        room = self._max - len(self._CUT)
+        parts = text.split("\n")
+        out = []
+        for i, part in enumerate(parts):
+            if i:
+                self._col = 0
+            if self._col > room:              # already cut: drop the rest of the line
+                part = ""
+            elif self._col + len(part) > self._max:
+                part = part[:room - self._col] + self._CUT
+                self._col = room + 1
+            else:
+                self._col += len(part)
+            out.append(part)
+        return "\n".join(out)
 
     def __getattr__(self, name):
         return getattr(self._stream, name)

@@ -434,6 +434,9 @@ def _read_table(path):
     # parsed as bytes: a str of the file (and pandas' StringIO, 4 bytes a character) would
     # multiply the memory of a large record
     bad = len(raw) - len(raw.decode("utf-8", errors="ignore").encode("utf-8"))
+    if b"\x00" in raw and _utf16_without_bom(raw):
+        raise DataFileError(f"{path}: UTF-16 text without a byte-order mark; save it as UTF-8 "
+                            f"(or UTF-16 with a byte-order mark)")
     if b"\x00" in raw or bad > 0.01 * len(raw) + 1:
         raise DataFileError(f"{path}: not a text table (binary content); expected delimited "
                             f"text such as CSV")
@@ -464,6 +467,11 @@ def _read_table(path):
                             encoding_errors="replace")
     except (pd.errors.ParserError, ValueError, MemoryError) as exc:
         reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", reason)
+        if m:
+            raise DataFileError(f"{escape(path)}: ragged rows: line {m.group(2)} has {m.group(3)} "
+                                f"fields, the first row has {m.group(1)}; expected the same "
+                                f"number of fields on every row") from None
         raise DataFileError(f"{path}: cannot parse the table ({escape(reason, 200)})") from None
     del raw
     if header:
@@ -500,12 +508,15 @@ def _column(frame, header, key, role, path):
                 f"{available}")
         col = frame[key]
         name = str(key)
+    if pd.api.types.is_bool_dtype(col):
+        raise DataFileError(f"{path}: {role} column {escape(repr(name), CELL_EXCERPT)}: boolean "
+                            f"cells (True/False), not numbers")
     values = pd.to_numeric(col, errors="coerce")
     bad = values.isna()
     if bad.any():
         row = int(np.flatnonzero(bad.to_numpy())[0])
         cell = col.iloc[row]
-        what = (f"non-numeric or empty cell {str(cell).strip()!r}" if isinstance(cell, str) and cell.strip()
+        what = (f"non-numeric or empty cell {escape(repr(str(cell).strip()), CELL_EXCERPT)}" if isinstance(cell, str) and cell.strip()
                 and cell.strip().lower() not in ("nan", "na", "n/a", "null", "none")
                 else "non-numeric or empty cell (empty or NaN)")
         raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}")
