@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from pathlib import Path
 
 from hammerstein.core.files import escape
-from hammerstein.core.numbers import number_problem
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
            "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject",
@@ -254,7 +254,10 @@ def number_type(low=None, high=None, low_open=False, unit=""):
             v = float(text)
         except (TypeError, ValueError):
             raise argparse.ArgumentTypeError(f"expected {expected}, found {shown}") from None
-        problem = number_problem(v)
+        # the checker of hammerstein.core.numbers.number_problem for a parsed float (that module
+        # imports numpy, which `hammerstein --help` must not)
+        problem = ("not finite" if not math.isfinite(v) else
+                   "subnormal" if v != 0.0 and abs(v) < sys.float_info.min else None)
         if problem:
             raise argparse.ArgumentTypeError(f"expected {expected}, found {shown} ({problem})")
         if (low is not None and (v < low or (low_open and v == low))) or \
