@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -12,7 +13,7 @@ from hammerstein.core.files import escape
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
            "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject",
-           "number_type", "integer_type", "workers_type", "max_workers"]
+           "number_type", "integer_type", "workers_type", "max_workers", "scheduler_type"]
 
 #: What a stray warning (a library's ``warnings.warn`` or log record) is about: the
 #: input file being processed (:func:`set_warning_subject`), else ``hammerstein
@@ -350,3 +351,52 @@ def max_workers():
     except (AttributeError, OSError):
         cores = os.cpu_count() or 1
     return max(int(cores), 1)
+
+
+_HOST = re.compile(r"^(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.-]{0,252}[A-Za-z0-9])?)$")
+
+
+def scheduler_type(text):
+    """An argparse ``type`` for ``--scheduler``: ``[tcp://]HOST:PORT``, parsed before connecting.
+
+    Only TCP is accepted: ``tls://`` needs certificates that the command
+    line does not configure, ``inproc://`` names a scheduler inside another
+    process (unreachable from this one), and other schemes are not dask
+    transports. The port must be 1-65535 (``99999`` would make the client
+    wait its whole time-out before failing).
+
+    Parameters
+    ----------
+    text : str
+        ``tcp://127.0.0.1:8786``, ``127.0.0.1:8786``, ``[::1]:8786``.
+
+    Returns
+    -------
+    str
+        The address with its scheme (``tcp://HOST:PORT``).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        One line saying what is wrong and what is expected.
+    """
+    shown = escape(repr(text), 80)
+    t = str(text).strip()
+    scheme, sep, rest = t.partition("://")
+    if not sep:
+        scheme, rest = "tcp", t
+    scheme = scheme.lower()
+    if scheme != "tcp":
+        why = {"tls": "needs TLS certificates, which the command line does not configure",
+               "inproc": "names a scheduler inside another process, unreachable from this one"}
+        raise argparse.ArgumentTypeError(
+            f"expected tcp://HOST:PORT, found {shown} ({scheme}:// "
+            f"{why.get(scheme, 'is not a transport hammerstein uses')})")
+    host, colon, port = rest.rpartition(":")
+    if not colon or not host or not _HOST.match(host):
+        raise argparse.ArgumentTypeError(f"expected tcp://HOST:PORT (e.g. tcp://127.0.0.1:8786), "
+                                         f"found {shown}")
+    if not (port.isascii() and port.isdigit() and 1 <= int(port) <= 65535):
+        raise argparse.ArgumentTypeError(f"expected a port 1..65535 in tcp://HOST:PORT, found "
+                                         f"{shown}")
+    return f"tcp://{host}:{int(port)}"
