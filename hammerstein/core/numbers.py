@@ -326,8 +326,12 @@ def samples_problem(n, what, sampling_period=None, rows=1):
     span = ""
     if sampling_period is not None and is_number(sampling_period) and sampling_period > 0:
         span = f"{cap * float(sampling_period):.3g} s at T = {float(sampling_period):g} s; "
+    text = os.environ.get(RECORD_SAMPLES_ENV)
+    ignored = "" if text is None or max_record_samples() != DEFAULT_RECORD_SAMPLES or \
+        text.strip() == str(DEFAULT_RECORD_SAMPLES) else \
+        f"; its value {text[:40]!r} is not a positive integer, the default applies"
     return (f"{what}: the record would have {n:.3g} samples{size}; expected at most {cap:.3g} "
-            f"({span}raise it with {RECORD_SAMPLES_ENV}=N)")
+            f"({span}raise it with {RECORD_SAMPLES_ENV}=N{ignored})")
 
 
 def check_samples(n, what, error=ValueError, sampling_period=None, rows=1):

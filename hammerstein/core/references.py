@@ -21,6 +21,7 @@ import numpy as np
 from hammerstein.core.datafiles import numeric_column, signal_table
 from hammerstein.core.files import FileLimitError, check_regular, confined_path, escape
 from hammerstein.core.metrics import raster_line_metrics
+from hammerstein.core.numbers import check_samples
 from hammerstein.core.schema import Field, Invalid, choice, integer, is_number, name_list, number, string
 from hammerstein.exceptions import SignalError
 
@@ -50,7 +51,9 @@ __all__ = [
 #: Fewest samples per period accepted for any periodic signal.
 MIN_SAMPLES_PER_PERIOD = 8
 
-#: Most samples in one record (80 MB per signal row; 500 s at T = 50 µs).
+#: Default most samples in one record (80 MB per signal row; 500 s at T = 50 µs);
+#: ``HAMMERSTEIN_MAX_RECORD_SAMPLES`` changes the limit checked
+#: (:func:`hammerstein.core.numbers.check_samples`).
 MAX_SAMPLES = 10_000_000
 
 #: Largest trajectory file :func:`from_file` reads [bytes].
@@ -117,10 +120,7 @@ def time_vector(sampling_period, period=None, periods=None, duration=None):
         length = _positive(periods, "periods", "-") * period
     else:
         length = _positive(duration, "duration", "s")
-    if not length / T <= MAX_SAMPLES:
-        raise SignalError(f"{'periods' if periods is not None else 'duration'}: the record would "
-                          f"have {length / T:.3g} samples; expected at most {MAX_SAMPLES:.0e} "
-                          f"({MAX_SAMPLES * T:g} s at T = {T:g} s)")
+    check_samples(length / T, "periods" if periods is not None else "duration", SignalError, T)
     n = max(int(round(length / T)), 1)
     return np.arange(n) * T
 
@@ -745,11 +745,8 @@ def from_file(sampling_period, outputs, file, columns, time="time", duration=Non
             raise SignalError(f"duration: {d:g} s is beyond the last time {end:g} s of {path}; "
                               f"the reference would need extrapolation")
         end = d
-    n = np.floor(end / T + 1e-9) + 1
-    if n > MAX_SAMPLES:
-        raise SignalError(f"file: the record would have {n:.3g} samples at T = {T:g} s; "
-                          f"expected at most {MAX_SAMPLES:.0e}")
-    n = int(n)
+    n = check_samples(np.floor(end / T + 1e-9) + 1, f"file: {escape(path)}: {end:g} s",
+                      SignalError, T)
     t = np.arange(n) * T
     ref = np.zeros((len(names), n))
     for out, col in columns.items():
