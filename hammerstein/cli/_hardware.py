@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import tomllib
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -16,10 +17,10 @@ import numpy as np
 from hammerstein.cli._common import add_column_options, number_type
 from hammerstein.core.drive import DRIVE_MARK, read_signals
 from hammerstein.core.amplifier import amplifier_from_table
-from hammerstein.core.numbers import magnitude_problem
+from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.core.plant import HammersteinPlant
 from hammerstein.core.presets import load_dynamics, load_model, load_plant, read_toml, resolve_preset
-from hammerstein.exceptions import DataFileError, HammersteinError, PresetError
+from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
 from hammerstein.scenario.validate import _signal
 
 __all__ = ["Reference", "load_actuator", "load_reference", "mapping", "owned_problem",
@@ -189,12 +190,22 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
         if problem:
             raise DataFileError(f"--reference: {problem} (its squares "
                                 f"would overflow the metrics); expected displacements in µm")
+        _warn_implausible(sig, "--reference")
         return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
                          extras.get("loop_channel"))
     t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--outputs"),
                              plant.sampling_period, "--reference")
+    _warn_implausible(sig, text)
     period_samples = 1 if period is None else max(int(round(period / plant.sampling_period)), 1)
     return Reference(t, sig, period_samples, None, None, "file")
+
+
+def _warn_implausible(signal, what):
+    """A RangeWarning (one ``warning:`` line) when a reference's peak is no actuator's (a unit slip)."""
+    if signal.size:
+        problem = plausibility_problem(float(np.max(np.abs(signal))), "µm", "reference peak")
+        if problem:
+            warnings.warn(f"{what}: {problem}", RangeWarning, stacklevel=2)
 
 
 def owned_problem(out, force):

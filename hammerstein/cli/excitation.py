@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.cli._common import integer_type, number_type, out_dir_problem
+from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.core.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
 from hammerstein.core.files import FileLimitError, bounded_read_text, escape, safe_write
-from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem
+from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
 
 __all__ = ["add_parser", "MANIFEST", "readme_text"]
 
@@ -94,6 +94,11 @@ def _amplitudes(text, m):
     if bad:
         raise _Usage(f"--amplitude: expected positive amplitudes [V] up to {MAX_MAGNITUDE:.0e}, "
                      f"found {escape(repr(text), 60)}")
+    for v in values:        # valid, but said: a unit slip (mV for V) would break the actuator
+        problem = plausibility_problem(v, "V", "--amplitude")
+        if problem:
+            print_err(f"warning: hammerstein excitation: {problem}")
+            break
     return np.broadcast_to(np.array(values), (m,)).copy()
 
 

@@ -26,7 +26,7 @@ import numpy as np
 __all__ = ["is_number", "number_problem", "check_array", "integer_problem", "check_integer",
            "magnitude_problem", "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS", "MAX_MAGNITUDE", "MAX_HYSTERONS",
            "RECORD_SAMPLES_ENV", "DEFAULT_RECORD_SAMPLES", "max_record_samples", "samples_problem",
-           "check_samples"]
+           "check_samples", "PLAUSIBLE", "plausibility_problem"]
 
 #: Largest finite float64; a Python int beyond it cannot become a float.
 FLOAT_MAX = sys.float_info.max
@@ -375,3 +375,55 @@ def check_samples(n, what, error=ValueError, sampling_period=None, rows=1):
     if problem:
         raise error(problem)
     return int(n)
+
+
+#: Plausible magnitudes of a piezoelectric actuator's signals, per unit: ``(smallest
+#: non-zero, largest)``. Beyond them a value is computed with but warned about, naming
+#: the likely unit mistake.
+PLAUSIBLE = {"µm": (1e-4, 1e4), "V": (None, 2e3), "Hz": (None, 1e5)}
+
+
+def plausibility_problem(value, unit, what="value"):
+    """Why a magnitude is implausible for a piezoelectric actuator (a warning), or None.
+
+    Ranges (:data:`PLAUSIBLE`): displacements 0.1 nm to 10 mm (``µm``),
+    voltages up to 2 kV (``V``), frequencies up to 100 kHz (``Hz``). The
+    message names the likely unit mistake: metres or millimetres given for
+    µm (too small), nanometres for µm (too large), millivolts for volts,
+    rad/s for Hz.
+
+    Parameters
+    ----------
+    value : float
+        A peak magnitude (its absolute value is judged).
+    unit : {'µm', 'V', 'Hz'}
+    what : str
+        What the value is, at the front of the message (``"reference peak"``).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> plausibility_problem(1e38, "µm", "amplitude")
+    'amplitude 1e+38 µm is beyond 1e+04 µm (10 mm), implausible for a piezoelectric actuator; was it given in nm (1 µm = 1000 nm)?'
+    >>> plausibility_problem(3e-5, "µm", "radius")
+    'radius 3e-05 µm is below 0.0001 µm (0.1 nm), implausible for a piezoelectric actuator; was it given in m or mm (1 mm = 1000 µm)?'
+    >>> plausibility_problem(150.0, "V") is None
+    True
+    """
+    low, high = PLAUSIBLE[unit]
+    v = abs(float(value))
+    if not math.isfinite(v):
+        return None     # the number checkers refuse it
+    if high is not None and v > high:
+        limit, slip = {"µm": ("1e+04 µm (10 mm)", "nm (1 µm = 1000 nm)"),
+                       "V": (f"{high:g} V", "mV (1 V = 1000 mV)"),
+                       "Hz": (f"{high:g} Hz", "rad/s (1 Hz = 2 pi rad/s)")}[unit]
+        return (f"{what} {v:g} {unit} is beyond {limit}, implausible for a piezoelectric "
+                f"actuator; was it given in {slip}?")
+    if low is not None and 0 < v < low:
+        return (f"{what} {v:g} {unit} is below {low:g} µm (0.1 nm), implausible for a "
+                f"piezoelectric actuator; was it given in m or mm (1 mm = 1000 µm)?")
+    return None

@@ -23,7 +23,8 @@ from hammerstein.core.datafiles import Record
 from hammerstein.core.drive import read_signals
 from hammerstein.core.excitation import excitation_set, multisine, staircase
 from hammerstein.core.hysteresis import PrandtlIshlinskii
-from hammerstein.core.numbers import RECORD_SAMPLES_ENV, check_samples, max_record_samples
+from hammerstein.core.numbers import (RECORD_SAMPLES_ENV, check_samples, max_record_samples,
+                                      plausibility_problem)
 from hammerstein.core.record_identification import identify_records
 from hammerstein.exceptions import (DataFileError, HysteresisError, IdentificationError,
                                     SignalError)
@@ -387,3 +388,40 @@ def test_the_staircase_budget_counts_every_step():
     with pytest.raises(ValueError) as info:
         staircase(5e-5, 1.0, hold=1e9)
     assert "1.8e+14 samples" in str(info.value)
+
+
+# -- plausibility: valid values no actuator has are said, naming the likely unit slip ------------
+@pytest.mark.parametrize("value, unit, slip", [
+    (1e38, "µm", "nm"), (3e-5, "µm", "m or mm"), (10_000.0, "V", "mV"), (6.3e5, "Hz", "rad/s"),
+    (30.0, "µm", None), (150.0, "V", None), (100.0, "Hz", None), (0.0, "µm", None),
+])
+def test_plausibility_names_the_likely_unit_slip(value, unit, slip):
+    problem = plausibility_problem(value, unit, "peak")
+    if slip is None:
+        assert problem is None
+    else:
+        assert problem.startswith(f"peak {value:g} {unit}") and f"given in {slip}" in problem
+
+
+@pytest.mark.parametrize("table, words", [
+    ('reference = { kind = "sine", output = "x", amplitude = 1e38, frequency = 50.0, '
+     'periods = 2 }', "reference peak 1e+38 µm"),
+    ('drive = { kind = "sine", input = "ux", amplitude = 10000, frequency = 50.0, periods = 2 }',
+     "drive peak 10000 V"),
+])
+def test_validate_does_not_pass_absurd_amplitudes_silently(table, words, tmp_path, capsys):
+    path = tmp_path / "absurd.toml"
+    compensator = '[compensator]\nkind = "multivariable"\n' if "reference" in table else ""
+    path.write_text(f'name = "absurd"\n[plant]\npreset = "{PRESET}"\ndynamics = false\n'
+                    f'{compensator}[[cases]]\nname = "c"\n{table}\n')
+    status, out, err, _ = _run(["validate", str(path)], capsys)
+    assert status == 0 and "ok (1 cases)" in out
+    assert len(err) == 1 and err[0].startswith(f"warning: {path}: c: ") and words in err[0], err
+
+
+def test_excitation_warns_of_an_amplitude_no_amplifier_gives(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    status, _, err, _ = _run(["excitation", "--inputs", "ux", "--amplitude", "5000",
+                              "--sampling-period", "5e-4", "--hold", "0.1", "--out", "exc"],
+                             capsys)
+    assert status == 0 and len(err) == 1 and "given in mV" in err[0], err
