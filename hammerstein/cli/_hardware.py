@@ -196,7 +196,12 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--outputs"),
                              plant.sampling_period, "--reference")
     _warn_implausible(sig, text)
-    period_samples = 1 if period is None else max(int(round(period / plant.sampling_period)), 1)
+    T = plant.sampling_period
+    if period is not None and not 2 * T <= period <= sig.shape[1] * T * (1 + 1e-9):
+        raise DataFileError(f"--period: {period:g} s; expected a period of the reference between "
+                            f"two sampling periods ({2 * T:g} s) and its length "
+                            f"({sig.shape[1] * T:g} s)")
+    period_samples = 1 if period is None else max(int(round(period / T)), 1)
     return Reference(t, sig, period_samples, None, None, "file")
 
 

@@ -425,3 +425,41 @@ def test_excitation_warns_of_an_amplitude_no_amplifier_gives(tmp_path, monkeypat
                               "--sampling-period", "5e-4", "--hold", "0.1", "--out", "exc"],
                              capsys)
     assert status == 0 and len(err) == 1 and "given in mV" in err[0], err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["export", PRESET, "--target", "c", "--out", "c", "--sampling-period", "5e-324"], "subnormal"),
+    (["export", PRESET, "--target", "c", "--out", "c", "--cutoff-hz", "nan"], "not finite"),
+    (["export", PRESET, "--target", "c", "--out", "c", "--amplifier-range", "-1e300", "1e300"],
+     "--amplifier-range"),
+    (["identify", "r.csv", "--inputs", "x", "--outputs", "y", "--sampling-period", "5e-324",
+      "--out", "m.toml"], "subnormal"),
+    (["identify", "r.csv", "--inputs", "x", "--outputs", "y", "--time", "t", "--skip", "inf",
+      "--out", "m.toml"], "--skip"),
+    (["check", "s.toml", "--baseline", "b.csv", "--rtol", "nan"], "--rtol"),
+])
+def test_every_command_checks_its_numbers_before_work(argv, words, tmp_path, monkeypatch,
+                                                      capsys):
+    monkeypatch.chdir(tmp_path)
+    status, _, err, took = _run(argv, capsys)
+    line = _one_clean_line(err)
+    assert status == 2 and words in line and took < 1.0, line
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("command", ["compensate", "evaluate"])
+@pytest.mark.parametrize("period", ["1e-300", "1e9"])
+def test_a_period_outside_the_reference_is_refused(command, period, tmp_path, monkeypatch,
+                                                   capsys):
+    # a 1e-300 s period was rounded up to one sample, silently
+    monkeypatch.chdir(tmp_path)
+    t, x, y = _signals()
+    _csv(tmp_path / "ref.csv", t, x, y)
+    args = (["compensate", PRESET, "--reference", "ref.csv", "--out", "d.csv"]
+            if command == "compensate" else
+            ["evaluate", "--reference", "ref.csv", "--measured", "ref.csv", "--out", "ev",
+             "--sampling-period", str(T)])
+    status, _, err, _ = _run(args + ["--period", period], capsys)
+    line = _one_clean_line(err)
+    assert status == 1 and "--period" in line, line
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ref.csv"]
