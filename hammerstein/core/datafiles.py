@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
-from hammerstein.core.numbers import MAX_MAGNITUDE, check_array
+from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
@@ -58,9 +58,6 @@ class Record:
     sampling_period: float
     source: str = ""
 
-    def __post_init__(self):
-        _check_signals(self, 1)
-
     @property
     def n_samples(self) -> int:
         """Number of samples."""
@@ -95,9 +92,6 @@ class MultiRecord:
     sampling_period: float
     source: str = ""
 
-    def __post_init__(self):
-        _check_signals(self, 2)
-
     @property
     def n_samples(self) -> int:
         """Number of samples."""
@@ -108,32 +102,6 @@ class MultiRecord:
         """The (1, n_samples) form of a single-input single-output :class:`Record`."""
         return cls(record.timepts, record.u[None, :], record.y[None, :], (record.input_name,),
                    (record.output_name,), record.sampling_period, record.source)
-
-
-def _check_signals(record, ndim):
-    """Validate a record's arrays in place (float64, finite, real, matching, not empty).
-
-    Raises
-    ------
-    DataFileError
-        Naming the record (its source) and the field.
-    """
-    who = f"record {record.source!r}" if record.source else "record"
-    t = check_array(record.timepts, f"{who}: timepts", DataFileError, ndim=1)
-    u = check_array(record.u, f"{who}: u", DataFileError, ndim=ndim)
-    y = check_array(record.y, f"{who}: y", DataFileError, ndim=ndim)
-    if t.size == 0 or u.shape[-1] == 0:
-        raise DataFileError(f"{who}: empty (0 samples); expected at least {MIN_SAMPLES} samples")
-    if u.shape[-1] != t.size or y.shape[-1] != t.size:
-        raise DataFileError(f"{who}: timepts, u and y have {t.size}, {u.shape[-1]} and "
-                            f"{y.shape[-1]} samples; expected the same number")
-    T = record.sampling_period
-    if isinstance(T, (bool, np.bool_)) or not isinstance(T, (int, float, np.integer, np.floating)) \
-            or not np.isfinite(T) or T <= 0 or T < np.finfo(float).tiny:
-        raise DataFileError(f"{who}: sampling_period: expected a positive time [s], found {T!r}")
-    object.__setattr__(record, "timepts", t)
-    object.__setattr__(record, "u", u)
-    object.__setattr__(record, "y", y)
 
 
 def column_list(text):

@@ -56,7 +56,7 @@ import numpy as np
 import scipy.linalg
 
 from hammerstein.core.numbers import MAX_HYSTERONS, check_array, check_integer, is_number
-from hammerstein.core.datafiles import MultiRecord, Record
+from hammerstein.core.datafiles import MIN_SAMPLES, MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii, play)
 from hammerstein.core import lti
@@ -794,6 +794,9 @@ def _checked_record(rec, i):
     y = check_array(rec.y, f"{where}.y", IdentificationError, ndim=2, length=u.shape[1])
     t = check_array(rec.timepts, f"{where}.timepts", IdentificationError, ndim=1,
                     length=u.shape[1])
+    if u.shape[1] < MIN_SAMPLES:
+        raise IdentificationError(f"{where}: {u.shape[1]} samples; expected a record of at least "
+                                  f"{MIN_SAMPLES} samples")
     T = rec.sampling_period
     if not (is_number(T) and T > 0):
         raise IdentificationError(f"{where}.sampling_period: expected a positive finite time [s], "
