@@ -26,8 +26,7 @@ from hammerstein.core.hysteresis import PrandtlIshlinskii
 from hammerstein.core.numbers import (RECORD_SAMPLES_ENV, check_samples, max_record_samples,
                                       plausibility_problem)
 from hammerstein.core.record_identification import identify_records
-from hammerstein.exceptions import (DataFileError, HysteresisError, IdentificationError,
-                                    SignalError)
+from hammerstein.exceptions import HysteresisError, IdentificationError, SignalError
 
 PRESET = "rakotondrabe-2dof"
 T = 5e-5
