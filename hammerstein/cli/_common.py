@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import argparse
+import math
 import os
+import re
 import sys
 from pathlib import Path
 
 from hammerstein.core.files import escape
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
-           "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject"]
+           "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject",
+           "number_type", "integer_type", "workers_type", "max_workers", "scheduler_type"]
 
 #: What a stray warning (a library's ``warnings.warn`` or log record) is about: the
 #: input file being processed (:func:`set_warning_subject`), else ``hammerstein
@@ -45,20 +49,52 @@ class SafeStream:
     pass (the messages' own line structure); the places that print a user
     string escape its newlines themselves.
 
+    With ``max_line`` (stderr), no line is longer than ``max_line``
+    characters whichever way it is written (one ``print``, several
+    ``write`` calls): the rest of a longer line is replaced by `` ...
+    (cut)``, so a message quoting a 140 000-character CSV cell stays one
+    readable line.
+
     Parameters
     ----------
     stream : io.TextIOBase
         The stream written to.
+    max_line : int, optional
+        Longest line written (characters); default unlimited.
     """
 
-    def __init__(self, stream):
+    _CUT = " ... (cut)"
+
+    def __init__(self, stream, max_line=None):
         self._stream = stream
+        self._max = max_line
+        self._col = 0           # characters of the current line already written
 
     def write(self, text):
         """Write ``text`` with its control characters (but newline and tab) escaped."""
         if not text.isprintable() and not all(c.isprintable() or c in _KEEP for c in text):
             text = "".join(c if c.isprintable() or c in _KEEP else escape(c) for c in text)
+        if self._max is not None:
+            text = self._cap(text)
         return self._stream.write(text)
+
+    def _cap(self, text):
+        """``text`` with every line cut at ``max_line`` characters (counting earlier writes)."""
+        room = self._max - len(self._CUT)
+        parts = text.split("\n")
+        out = []
+        for i, part in enumerate(parts):
+            if i:
+                self._col = 0
+            if self._col > room:              # already cut: drop the rest of the line
+                part = ""
+            elif self._col + len(part) > self._max:
+                part = part[:room - self._col] + self._CUT
+                self._col = room + 1
+            else:
+                self._col += len(part)
+            out.append(part)
+        return "\n".join(out)
 
     def __getattr__(self, name):
         return getattr(self._stream, name)
@@ -166,3 +202,201 @@ def one_line(text, path=None):
     pre = f"{path}: "
     lines = [ln[len(pre):] if ln.startswith(pre) else ln for ln in lines]
     return pre + "; ".join(lines)
+
+
+def _words(low, high, low_open):
+    if low is not None and high is not None:
+        return f"a number in {'(' if low_open else '['}{low:g}, {high:g}]"
+    if low is not None:
+        return f"a number {'>' if low_open else '>='} {low:g}"
+    if high is not None:
+        return f"a number <= {high:g}"
+    return "a finite number"
+
+
+def number_type(low=None, high=None, low_open=False, unit=""):
+    """An argparse ``type``: a real, finite, normal number in a range (the CLI's one checker).
+
+    ``nan``, ``inf``, ``1e999``, a subnormal (``5e-324``, which overflows
+    when divided into), a complex or a boolean spelling are refused, and
+    so is a value outside ``[low, high]`` (``(low, high]`` with
+    ``low_open``). argparse prints the message as one usage line (exit 2),
+    prefixed with the option's name.
+
+    Parameters
+    ----------
+    low, high : float, optional
+        Bounds, inclusive (``low`` exclusive when ``low_open``).
+    low_open : bool
+        Whether ``low`` itself is refused (a positive number: ``low=0,
+        low_open=True``).
+    unit : str
+        Unit named in the message (``"s"``, ``"Hz"``, ``"V"``).
+
+    Returns
+    -------
+    callable
+        ``text -> float``, raising :class:`argparse.ArgumentTypeError`.
+
+    Examples
+    --------
+    >>> number_type(0, low_open=True, unit="s")("5e-5")
+    5e-05
+    >>> number_type(0, low_open=True, unit="s")("5e-324")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: expected a number > 0 [s], found '5e-324' (subnormal)
+    """
+    expected = _words(low, high, low_open) + (f" [{unit}]" if unit else "")
+
+    def parse(text):
+        shown = escape(repr(text), 60)
+        try:
+            v = float(text)
+        except (TypeError, ValueError):
+            raise argparse.ArgumentTypeError(f"expected {expected}, found {shown}") from None
+        # the checker of hammerstein.core.numbers.number_problem for a parsed float (that module
+        # imports numpy, which `hammerstein --help` must not)
+        problem = ("not finite" if not math.isfinite(v) else
+                   "subnormal" if v != 0.0 and abs(v) < sys.float_info.min else None)
+        if problem:
+            raise argparse.ArgumentTypeError(f"expected {expected}, found {shown} ({problem})")
+        if (low is not None and (v < low or (low_open and v == low))) or \
+                (high is not None and v > high):
+            raise argparse.ArgumentTypeError(f"expected {expected}, found {shown}")
+        return v
+    parse.__name__ = "number"
+    return parse
+
+
+def integer_type(low=None, high=None):
+    """An argparse ``type``: an integer (ASCII digits, optional sign) in ``[low, high]``.
+
+    Parameters
+    ----------
+    low, high : int, optional
+        Inclusive bounds.
+
+    Returns
+    -------
+    callable
+        ``text -> int``, raising :class:`argparse.ArgumentTypeError` with
+        the range in the message (``expected an integer 1..100000, found
+        '1000000000'``).
+    """
+    if low is not None and high is not None:
+        expected = f"an integer {low}..{high}"
+    elif low is not None:
+        expected = f"an integer >= {low}"
+    else:
+        expected = "an integer"
+
+    def parse(text):
+        t = str(text).strip()
+        digits = t[1:] if t[:1] in "+-" else t
+        if not (digits.isascii() and digits.isdigit()) or len(digits) > 30:
+            raise argparse.ArgumentTypeError(f"expected {expected}, found {escape(repr(text), 60)}")
+        v = int(t)
+        if (low is not None and v < low) or (high is not None and v > high):
+            raise argparse.ArgumentTypeError(f"expected {expected}, found {escape(repr(text), 60)}")
+        return v
+    parse.__name__ = "integer"
+    return parse
+
+
+def workers_type(text):
+    """An argparse ``type`` for ``--workers``: 1 .. the machine's cores (``os.cpu_count``).
+
+    More local workers than cores only multiply the memory and the load
+    (each is a process with its own copy of the model), so the value is
+    capped by the machine; ``HAMMERSTEIN_MAX_WORKERS`` raises the cap (e.g.
+    for a machine whose ``os.cpu_count`` underestimates what it may use).
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Not an integer >= 1, or more than the cap (the message names it and
+        the override).
+    """
+    n = integer_type(1)(text)
+    cap = max_workers()
+    if n > cap:
+        raise argparse.ArgumentTypeError(
+            f"{n} workers is more than the {cap} this machine has cores for (os.cpu_count); "
+            f"use at most {cap}, or raise the cap with HAMMERSTEIN_MAX_WORKERS=N")
+    return n
+
+
+def max_workers():
+    """Most local dask workers: ``HAMMERSTEIN_MAX_WORKERS`` if a positive integer, else the cores.
+
+    Returns
+    -------
+    int
+        At least 1.
+    """
+    text = os.environ.get("HAMMERSTEIN_MAX_WORKERS", "").strip()
+    if text.isascii() and text.isdigit() and int(text) > 0:
+        return int(text)
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    return max(int(cores), 1)
+
+
+_HOST = re.compile(r"^(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9]([A-Za-z0-9.-]{0,252}[A-Za-z0-9])?)$")
+
+
+def scheduler_type(text):
+    """An argparse ``type`` for ``--scheduler``: ``[tcp://]HOST:PORT``, parsed before connecting.
+
+    Only TCP is accepted: ``tls://`` needs certificates that the command
+    line does not configure, ``inproc://`` names a scheduler inside another
+    process (unreachable from this one), and other schemes are not dask
+    transports. The port must be 1-65535 (``99999`` would make the client
+    wait its whole time-out before failing).
+
+    Parameters
+    ----------
+    text : str
+        ``tcp://127.0.0.1:8786``, ``127.0.0.1:8786``, ``[::1]:8786``.
+
+    Returns
+    -------
+    str
+        The address with its scheme (``tcp://HOST:PORT``).
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        One line saying what is wrong and what is expected.
+    """
+    shown = escape(repr(text), 80)
+    t = str(text).strip()
+    scheme, sep, rest = t.partition("://")
+    if not sep:
+        scheme, rest = "tcp", t
+    scheme = scheme.lower()
+    if scheme != "tcp":
+        why = {"tls": "needs TLS certificates, which the command line does not configure",
+               "inproc": "names a scheduler inside another process, unreachable from this one"}
+        raise argparse.ArgumentTypeError(
+            f"expected tcp://HOST:PORT, found {shown} ({scheme}:// "
+            f"{why.get(scheme, 'is not a transport hammerstein uses')})")
+    host, colon, port = rest.rpartition(":")
+    if not colon or not host or not _HOST.match(host):
+        raise argparse.ArgumentTypeError(f"expected tcp://HOST:PORT (e.g. tcp://127.0.0.1:8786), "
+                                         f"found {shown}")
+    if not (port.isascii() and port.isdigit() and 1 <= int(port) <= 65535):
+        raise argparse.ArgumentTypeError(f"expected a port 1..65535 in tcp://HOST:PORT, found "
+                                         f"{shown}")
+    return f"tcp://{host}:{int(port)}"

@@ -8,18 +8,19 @@ ownership check.
 from __future__ import annotations
 
 import argparse
-import math
 import tomllib
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from hammerstein.cli._common import add_column_options
+from hammerstein.cli._common import add_column_options, number_type
 from hammerstein.core.drive import DRIVE_MARK, read_signals
 from hammerstein.core.amplifier import amplifier_from_table
+from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_dynamics, load_model, load_plant, read_toml
-from hammerstein.exceptions import DataFileError, HammersteinError, PresetError
+from hammerstein.core.presets import load_dynamics, load_model, load_plant, read_toml, resolve_preset
+from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
 from hammerstein.scenario.validate import _signal
 
 __all__ = ["Reference", "load_actuator", "load_reference", "mapping", "owned_problem",
@@ -38,25 +39,17 @@ class Reference:
 
 
 def positive_float(text):
-    """argparse type: a positive finite number."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, found {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number, found {text!r}")
-    return v
+    """argparse type: a positive, finite, normal number (``5e-324`` and ``nan`` refused)."""
+    return _POSITIVE(text)
 
 
 def nonnegative_float(text):
-    """argparse type: a finite number >= 0."""
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, found {text!r}") from None
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, found {text!r}")
-    return v
+    """argparse type: a finite number >= 0 (a subnormal refused)."""
+    return _NONNEGATIVE(text)
+
+
+_POSITIVE = number_type(0, low_open=True)
+_NONNEGATIVE = number_type(0)
 
 
 def fraction(text):
@@ -123,8 +116,8 @@ def load_actuator(path, sampling_period=None):
     if data is None or "preset" in data:
         plant = load_plant(path)
         if sampling_period is not None and not np.isclose(sampling_period, plant.sampling_period):
-            dyn = None if plant.is_static else load_dynamics(path, plant.hysteresis.output_names,
-                                                             sampling_period)
+            dyn = None if plant.is_static else load_dynamics(
+                resolve_preset(path), plant.hysteresis.output_names, sampling_period)
             amp = plant.amplifier
             plant = HammersteinPlant(plant.hysteresis, float(sampling_period), dyn, plant.name)
             plant.amplifier = amp
@@ -193,12 +186,31 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
                             for p in problems) or "--reference: cannot generate the reference"
             raise DataFileError(msg)
         t, sig, period, extras = got
+        problem = magnitude_problem(sig, "µm")
+        if problem:
+            raise DataFileError(f"--reference: {problem} (its squares "
+                                f"would overflow the metrics); expected displacements in µm")
+        _warn_implausible(sig, "--reference")
         return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
                          extras.get("loop_channel"))
     t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--outputs"),
                              plant.sampling_period, "--reference")
-    period_samples = 1 if period is None else max(int(round(period / plant.sampling_period)), 1)
+    _warn_implausible(sig, text)
+    T = plant.sampling_period
+    if period is not None and not 2 * T <= period <= sig.shape[1] * T * (1 + 1e-9):
+        raise DataFileError(f"--period: {period:g} s; expected a period of the reference between "
+                            f"two sampling periods ({2 * T:g} s) and its length "
+                            f"({sig.shape[1] * T:g} s)")
+    period_samples = 1 if period is None else max(int(round(period / T)), 1)
     return Reference(t, sig, period_samples, None, None, "file")
+
+
+def _warn_implausible(signal, what):
+    """A RangeWarning (one ``warning:`` line) when a reference's peak is no actuator's (a unit slip)."""
+    if signal.size:
+        problem = plausibility_problem(float(np.max(np.abs(signal))), "µm", "reference peak")
+        if problem:
+            warnings.warn(f"{what}: {problem}", RangeWarning, stacklevel=2)
 
 
 def owned_problem(out, force):

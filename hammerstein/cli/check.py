@@ -44,7 +44,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from hammerstein.cli._common import out_dir_problem, out_file_problem
+from hammerstein.cli._common import number_type, out_dir_problem, out_file_problem
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.core.files import (FileLimitError, carries_provenance, escape, guard_inputs,
                                     locked, provenance_line, replace_problem, safe_write)
@@ -93,9 +93,9 @@ def add_parser(subparsers):
     p.add_argument("--out", metavar="DIR",
                    help="keep the reports, with their figures, in DIR (default: a "
                         "temporary directory, and no figures are drawn)")
-    p.add_argument("--rtol", type=float, metavar="R",
+    p.add_argument("--rtol", type=number_type(0), metavar="R",
                    help="relative tolerance for every metric (e.g. 0.05 = 5 %%)")
-    p.add_argument("--atol", type=float, metavar="A",
+    p.add_argument("--atol", type=number_type(0), metavar="A",
                    help="absolute tolerance for every metric, in its unit")
     p.add_argument("--tolerances", metavar="TOML",
                    help="per-metric overrides: tables [metric] with rtol, atol, direction")

@@ -101,6 +101,11 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
         spec["inversion"] = inversion
         spec["creep"] = "plant"        # the actuator's creep (e.g. identified) is inverted with G
     comp = build_compensator(spec, plant, Path.cwd())
+    n = reference.signal.shape[1]
+    if fade_in is not None and fade_in / plant.sampling_period > n:
+        raise CompensatorError(
+            f"--fade-in: {fade_in:g} s is longer than the reference ({n} samples, "
+            f"{n * plant.sampling_period:g} s); expected at most {n * plant.sampling_period:g} s")
     fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
     if fade == 0 and not starts_at_rest(reference.signal):
         first = ", ".join(f"{n} = {v:.4g} µm" for n, v in

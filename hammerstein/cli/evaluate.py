@@ -128,6 +128,11 @@ def evaluate(reference, measured, period_samples, sampling_period, output_names,
     measured : numpy.ndarray
         The measurement the metrics used (advanced when ``remove_delay``).
     reference : numpy.ndarray
+
+    Raises
+    ------
+    DataFileError
+        A metric would be infinite (values too large to compute with).
     """
     max_lag = int(min(max(period_samples // 2, 50), reference.shape[1] // 4))
     delay = estimate_delay(reference, measured, max_lag)
@@ -142,6 +147,12 @@ def evaluate(reference, measured, period_samples, sampling_period, output_names,
     allch = "+".join(output_names)
     rows.append({"channel": allch, "metric": "delay_samples", "value": float(delay), "unit": ""})
     rows.append({"channel": allch, "metric": "delay", "value": delay * sampling_period, "unit": "s"})
+    bad = [r for r in rows if isinstance(r["value"], (float, np.floating))
+           and np.isinf(r["value"])]
+    if bad:     # an infinite metric is an error, not a file
+        raise DataFileError(f"{bad[0]['channel']}: {bad[0]['metric']} would be "
+                            f"{bad[0]['value']}; the values are too large to compute with "
+                            f"(check the units: µm expected)")
     return rows, delay, measured, reference
 
 

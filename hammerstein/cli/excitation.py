@@ -27,10 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.cli._common import out_dir_problem
+from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.core.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
-from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, name_problem,
-                                    safe_write)
+from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
+                                    name_problem, safe_write)
+from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
 
 __all__ = ["add_parser", "MANIFEST", "readme_text"]
 
@@ -58,23 +59,27 @@ def add_parser(subparsers):
                    help="input names, comma-separated (the column names), e.g. ux,uy")
     p.add_argument("--amplitude", required=True, metavar="V|V1,V2,...",
                    help="full amplitude [V], one for all inputs or one per input")
-    p.add_argument("--sampling-period", required=True, type=float, metavar="S",
+    p.add_argument("--sampling-period", required=True, type=_SECONDS, metavar="S",
                    help="sampling period of the hardware [s], e.g. 5e-5")
     p.add_argument("--out", required=True, metavar="DIR", help="directory to write")
-    p.add_argument("--sine-frequency", type=float, default=1.0, metavar="HZ",
+    p.add_argument("--sine-frequency", type=_HERTZ, default=1.0, metavar="HZ",
                    help="frequency of the decreasing-amplitude sine (default 1 Hz)")
-    p.add_argument("--f-min", type=float, default=10.0, metavar="HZ",
+    p.add_argument("--f-min", type=_HERTZ, default=10.0, metavar="HZ",
                    help="lowest multisine frequency (default 10 Hz; also its resolution)")
-    p.add_argument("--f-max", type=float, metavar="HZ",
+    p.add_argument("--f-max", type=_HERTZ, metavar="HZ",
                    help="highest multisine frequency (default half the Nyquist frequency)")
-    p.add_argument("--periods", type=int, default=4, metavar="N",
+    p.add_argument("--periods", type=integer_type(1), default=4, metavar="N",
                    help="periods per multisine record (default 4)")
-    p.add_argument("--hold", type=float, default=2.0, metavar="S",
+    p.add_argument("--hold", type=_SECONDS, default=2.0, metavar="S",
                    help="duration of each creep step (default 2 s)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the multisine phases (default 0)")
+    p.add_argument("--seed", type=integer_type(0), default=0, help="seed of the multisine phases (default 0)")
     p.add_argument("--force", action="store_true",
                    help="replace files in DIR that this command did not write")
     p.set_defaults(handler=_handler)
+
+
+_SECONDS = number_type(0, low_open=True, unit="s")
+_HERTZ = number_type(0, low_open=True, unit="Hz")
 
 
 class _Usage(ValueError):
@@ -88,9 +93,31 @@ def _amplitudes(text, m):
         raise _Usage(f"--amplitude: expected a number [V] or one per input, found {text!r}") from None
     if len(values) not in (1, m):
         raise _Usage(f"--amplitude: expected 1 or {m} values (one per input), found {len(values)}")
-    if not all(np.isfinite(v) and v > 0 for v in values):
-        raise _Usage(f"--amplitude: expected positive amplitudes [V], found {text!r}")
+    bad = [v for v in values if number_problem(v) or not 0 < v <= MAX_MAGNITUDE]
+    if bad:
+        raise _Usage(f"--amplitude: expected positive amplitudes [V] up to {MAX_MAGNITUDE:.0e}, "
+                     f"found {escape(repr(text), 60)}")
+    for v in values:        # valid, but said: a unit slip (mV for V) would break the actuator
+        problem = plausibility_problem(v, "V", "--amplitude")
+        if problem:
+            print_err(f"warning: hammerstein excitation: {problem}")
+            break
     return np.broadcast_to(np.array(values), (m,)).copy()
+
+
+#: The parameters of :func:`~hammerstein.core.excitation.excitation_set` and their options.
+_OPTIONS = {"f_min, periods": "--f-min, --periods", "frequency": "--sine-frequency",
+            "sampling_period": "--sampling-period", "f_min, f_max": "--f-min, --f-max",
+            "f_min": "--f-min", "f_max": "--f-max", "hold": "--hold", "periods": "--periods",
+            "amplitude": "--amplitude"}
+
+
+def _option_names(message):
+    """An excitation_set message with its leading parameter named as the command's option."""
+    for name, option in _OPTIONS.items():
+        if message.startswith(name + ":"):
+            return option + message[len(name):]
+    return message
 
 
 def _owned(directory):
@@ -200,7 +227,7 @@ def _handler(args):
                                      multisine_periods=args.periods, hold=args.hold,
                                      seed=args.seed)
         except ValueError as exc:
-            raise _Usage(str(exc)) from None
+            raise _Usage(_option_names(str(exc))) from None
         out = Path(args.out)
         targets = [f"{r.name}.csv" for r in records] + ["README.md"]
         owned = _owned(out)

@@ -21,7 +21,7 @@ import os
 import re
 
 from hammerstein import __version__
-from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import ExportError, FileLimitError, PresetError
@@ -64,18 +64,22 @@ def add_parser(subparsers):
     p.add_argument("--iterations", type=int, default=None, metavar="N",
                    help="fixed-point iterations per sample (default 1; 3 for hammerstein)")
     p.add_argument("--feedback", choices=["delay", "lowpass"], default="delay")
-    p.add_argument("--cutoff-hz", type=float, default=None, metavar="HZ",
+    p.add_argument("--cutoff-hz", type=number_type(0, low_open=True, unit="Hz"),
+                   default=None, metavar="HZ",
                    help="cut-off of the low-pass feedback [Hz]")
     p.add_argument("--check", choices=["error", "warn", "ignore"], default="error",
                    help="convergence check rho(I - K^-1 J) < 1 of the law (default error)")
     p.add_argument("--precision", choices=["double", "float"], default="double",
                    help="arithmetic of the generated code (the interface stays double)")
-    p.add_argument("--sampling-period", type=float, default=None, metavar="S",
+    p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"),
+                   default=None, metavar="S",
                    help="sampling period [s] (required for a model file; default the preset's)")
-    p.add_argument("--amplifier-range", type=float, nargs=2, default=None, metavar=("MIN", "MAX"),
+    p.add_argument("--amplifier-range", type=number_type(-1e6, 1e6, unit="V"), nargs=2,
+                   default=None, metavar=("MIN", "MAX"),
                    help="clamp every voltage to [MIN, MAX] V inside step (overrides the file's "
                         "[amplifier] range)")
-    p.add_argument("--slew-rate", type=float, default=None, metavar="V_PER_S",
+    p.add_argument("--slew-rate", type=number_type(0, low_open=True, unit="V/s"),
+                   default=None, metavar="V_PER_S",
                    help="limit every voltage's rate of change [V/s] (needs a range)")
     p.add_argument("--no-binary", action="store_true",
                    help="--target fmu: sources only, do not compile a binary")

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
-from hammerstein.cli._common import out_file_problem
+from hammerstein.cli._common import number_type, out_file_problem
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.core.hysteresis import MultivariablePI
@@ -72,7 +72,7 @@ def add_parser(subparsers):
     p.add_argument("--output", "--outputs", dest="outputs", required=True, metavar="COLS",
                    help="output column(s), names or 0-based indices separated by commas")
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
-    p.add_argument("--sampling-period", type=float, metavar="S",
+    p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"), metavar="S",
                    help="sampling period [s] when there is no time column")
     p.add_argument("--delay", default=None, metavar="auto|N",
                    help="samples every record's measured outputs lag its inputs (the "
@@ -126,10 +126,10 @@ def add_parser(subparsers):
                         "invertible). auto (default): kept when the loop is not "
                         "point-symmetric and the map lowers the held-out error, or when it "
                         "lowers it by more than 10 %%; deadzone: always; none: classical PI")
-    p.add_argument("--train-fraction", type=float, metavar="F",
+    p.add_argument("--train-fraction", type=number_type(0, 1), metavar="F",
                    help="split instead at the reversal point nearest to this fraction of "
                         "each record")
-    p.add_argument("--skip", type=float, metavar="SECONDS",
+    p.add_argument("--skip", type=number_type(0, unit="s"), metavar="SECONDS",
                    help="burn-in [s] that only warms up the play states (default: up to the "
                         "first complete branch)")
     p.add_argument("--out", required=True, metavar="MODEL.toml", help="model file to write")

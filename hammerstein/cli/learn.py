@@ -358,6 +358,10 @@ def _handle(args):
             raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
                                 f"the drive's {N} (the measurement must cover the whole drive)")
         y = y[:, :N]
+        if args.fade_in is not None and args.fade_in / T > ref.signal.shape[1]:
+            raise DataFileError(f"--fade-in: {args.fade_in:g} s is longer than the reference "
+                                f"({ref.signal.shape[1]} samples, {ref.signal.shape[1] * T:g} s); "
+                                f"expected at most {ref.signal.shape[1] * T:g} s")
         fade = (int(round(args.fade_in / T)) if args.fade_in is not None else _fade_of(args.drive))
         if fade is None:
             fade = default_fade_samples(ref.signal, ref.period_samples)

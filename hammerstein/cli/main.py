@@ -384,7 +384,7 @@ def main(argv=None):
     _fill_standard_fds()
     previous = _install_signal_handlers()
     streams = sys.stdout, sys.stderr
-    sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr)  # no raw control chars
+    sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr, MAX_LINE)  # no raw control chars
     try:
         code = _main(argv)
         return _flush_output(code)

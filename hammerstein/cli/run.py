@@ -17,7 +17,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from hammerstein.cli._common import one_line, out_dir_problem, print_err, set_warning_subject
+from hammerstein.cli._common import (one_line, out_dir_problem, print_err, scheduler_type,
+                                     set_warning_subject, workers_type)
 from hammerstein.core.files import escape, guard_inputs
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.report.render import figure_selection
@@ -55,10 +56,11 @@ def add_parser(subparsers):
                         "'none', or comma-separated file name patterns such as "
                         "'maps-*,trajectory-*'; report.md notes each figure left out "
                         "(the figures take most of a run's CPU time)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
+    p.add_argument("--workers", type=workers_type, default=None, metavar="N",
                    help="run Monte-Carlo studies on N local dask worker processes "
-                        "(default: in this process)")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                        "(default: in this process; at most the machine's cores, "
+                        "HAMMERSTEIN_MAX_WORKERS raises the cap)")
+    p.add_argument("--scheduler", type=scheduler_type, default=None, metavar="ADDRESS",
                    help="run Monte-Carlo studies on a running dask.distributed scheduler, "
                         "e.g. tcp://127.0.0.1:8786 (see `dask scheduler`, `dask worker`)")
     add_verbosity(p)

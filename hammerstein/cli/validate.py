@@ -63,5 +63,11 @@ def handler(args):
             print_err(f"error: {path}: unexpected {type(exc).__name__}: {one_line(exc)}")
             status = 1
             continue
+        said = set()
+        for case in getattr(sc, "cases", []):   # implausible magnitudes: valid, but said
+            for w in getattr(case, "warnings", []):
+                if w not in said:
+                    said.add(w)
+                    print_err(f"warning: {escape(path)}: {case.name}: {w}")
         print(f"{escape(path)}: ok ({len(sc.cases)} cases)")
     return status

@@ -23,7 +23,8 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
 
-__all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data"]
+__all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
+           "decode_table", "signal_table", "numeric_column"]
 
 #: Fewest samples accepted in a record.
 MIN_SAMPLES = 10
@@ -180,6 +181,214 @@ def max_cells():
     return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else 40_000_000
 
 
+#: Longest excerpt of a cell or column name quoted in a message (characters).
+CELL_EXCERPT = 60
+
+
+def _utf16_without_bom(raw):
+    """Whether ``raw`` looks like UTF-16 text without a byte-order mark (every other byte NUL)."""
+    head = raw[:4096]
+    if len(head) < 4:
+        return False
+    even, odd = head[0::2], head[1::2]
+    return even.count(0) > 0.9 * len(even) or odd.count(0) > 0.9 * len(odd)
+
+
+def decode_table(raw, path, what="data file", error=DataFileError):
+    """The text of a delimited table from its bytes, or an error saying what the file is.
+
+    UTF-8 (a byte-order mark dropped) and UTF-16 with a byte-order mark are
+    text; UTF-16 without a mark and binary content (NUL bytes, more than
+    1 % of invalid UTF-8) are refused, naming the file. Line endings are
+    normalised (CR LF and CR alone become LF), so a file saved with
+    classic-Mac line endings reads as its lines.
+
+    Parameters
+    ----------
+    raw : bytes
+        The file's content.
+    path : str or pathlib.Path
+        Named in messages.
+    what : str
+        What the file is (``"--reference"``), named in messages.
+    error : type
+        Exception class raised.
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    error
+        ``"<what>: <path>: UTF-16 text without a byte-order mark; save it as
+        UTF-8"`` or ``"... not a text table (binary content) ..."``.
+    """
+    where = f"{what}: {escape(path)}" if what else escape(path)
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):      # UTF-16 with a byte-order mark
+        text = raw.decode("utf-16", errors="replace")
+    else:
+        if b"\x00" in raw:
+            if _utf16_without_bom(raw):
+                raise error(f"{where}: UTF-16 text without a byte-order mark; save it as UTF-8 "
+                            f"(or UTF-16 with a byte-order mark)")
+            raise error(f"{where}: not a text table (binary content: NUL bytes); expected "
+                        f"delimited text such as CSV")
+        text = raw.decode("utf-8-sig", errors="replace")
+        if text.count("\ufffd") > 0.01 * len(text) + 1:
+            raise error(f"{where}: not a text table (binary content: not UTF-8 text); expected "
+                        f"delimited text such as CSV saved as UTF-8")
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    return text
+
+
+class _Table:
+    """A parsed signal table: the frame (string header) and its cleaned text (for messages)."""
+
+    def __init__(self, frame, text, sep, path, what, error=DataFileError):
+        self.frame, self.text, self.sep, self.path, self.what = frame, text, sep, path, what
+        self.error = error
+
+    def line_fields(self, row):
+        """Number of fields of data row ``row`` (0-based) as written, or None."""
+        lines = self.text.split("\n", row + 2)
+        if len(lines) < row + 2:
+            return None
+        line = lines[row + 1]
+        return len(line.split()) if self.sep == r"\s+" else len(line.split(self.sep))
+
+
+def signal_table(raw, path, what="data file", error=DataFileError, comment=True):
+    """A delimited table with a header row, parsed robustly, or one clear error line.
+
+    The shared reader of the signal CSV files (drive, measured and reference
+    files of ``compensate``, ``evaluate``, ``learn`` and a scenario's
+    ``reference = { kind = "file" }``): encodings and line endings as
+    :func:`decode_table`; ``#`` comment lines and blank lines skipped;
+    separator ``,`` ``;`` tab or whitespace; an empty file, a header
+    without data rows and ragged rows (more fields than the header) are
+    named as such; cells of any length are parsed and quoted in messages
+    at most :data:`CELL_EXCERPT` characters long.
+
+    Parameters
+    ----------
+    raw : bytes
+        The file's content.
+    path : str or pathlib.Path
+        Named in messages.
+    what : str
+        What the file is, named in messages.
+    error : type
+        Exception class raised.
+    comment : bool
+        Whether lines starting with ``#`` are comments.
+
+    Returns
+    -------
+    _Table
+        ``.frame`` (pandas.DataFrame, column names stripped strings, cells
+        as parsed), to be read with :func:`numeric_column`.
+
+    Raises
+    ------
+    error
+    """
+    where = f"{what}: {escape(path)}" if what else escape(path)
+    text = decode_table(raw, path, what, error)
+    if comment and "#" in text:
+        text = re.sub(r"(?m)^[ \t]*#[^\n]*(\n|$)", "", text)
+    if re.search(r"(?m)^[ \t]*\n", text):
+        text = re.sub(r"(?m)^[ \t]*\n", "", text)
+    text = text.lstrip("\n")
+    if not text.strip():
+        raise error(f"{where}: the file is empty; expected a header row (e.g. t,x,y) and data rows")
+    first, _, rest = text.partition("\n")
+    if not rest.strip():
+        raise error(f"{where}: a header row and no data rows; expected at least two rows of "
+                    f"samples under the header")
+    sep = _sniff_separator(first)
+    try:
+        frame = pd.read_csv(io.StringIO(text), sep=sep, engine="c", dtype=str,
+                            skipinitialspace=True, keep_default_na=False)
+    except (pd.errors.ParserError, ValueError, MemoryError) as exc:
+        msg = " ".join(str(exc).split())
+        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", msg)
+        if m:
+            raise error(f"{where}: ragged rows: line {m.group(2)} has {m.group(3)} fields, the "
+                        f"header has {m.group(1)}; expected the same number of fields on every "
+                        f"row") from None
+        raise error(f"{where}: not a readable CSV table ({escape(msg, 200)})") from None
+    frame.columns = [str(c).strip() for c in frame.columns]
+    return _Table(frame, text, sep, path, what, error)
+
+
+_MISSING = ("", "nan", "na", "n/a", "null", "none")
+
+
+def numeric_column(table, col, label=None):
+    """The float values of column ``col`` of a :func:`signal_table`, or one clear error.
+
+    Every cell must be a real, finite number (``True``/``False`` are not
+    numbers, nor are ``nan``, ``inf`` or an empty cell) of magnitude at
+    most :data:`~hammerstein.core.numbers.MAX_MAGNITUDE`; a data row with
+    fewer fields than the header is reported as a ragged row.
+
+    Parameters
+    ----------
+    table : _Table
+    col : str
+        Column name.
+    label : str, optional
+        What the column is for (``"the time [s]"``), named when it is missing.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_rows,)
+
+    Raises
+    ------
+    DataFileError (or the table's error class)
+        Naming the file, the column and the data row.
+    """
+    error = table.error
+    where = f"{table.what}: {escape(table.path)}" if table.what else escape(table.path)
+    frame = table.frame
+    if col not in frame.columns:
+        names = ", ".join(escape(c, CELL_EXCERPT) for c in list(frame.columns)[:20])
+        more = f", ... ({frame.shape[1] - 20} more)" if frame.shape[1] > 20 else ""
+        raise error(f"{where}: no column {escape(repr(col), CELL_EXCERPT)}"
+                            f"{' for ' + label if label else ''} (columns: {names}{more}; map "
+                            f"another name with --inputs/--outputs NAME=COLUMN or --time COLUMN)")
+    cells = frame[col].fillna("").astype(str).str.strip()
+    v = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
+    bad = ~np.isfinite(v)
+    if bad.any():
+        row = int(np.flatnonzero(bad)[0])
+        cell = cells.iloc[row]
+        n = table.line_fields(row) if cell == "" else None
+        if n is not None and n < frame.shape[1]:
+            raise error(f"{where}: ragged rows: data row {row + 1} has {n} fields, the "
+                                f"header has {frame.shape[1]}; expected the same number of "
+                                f"fields on every row")
+        if cell.lower() in ("true", "false"):
+            what = f"a boolean {cell!r}, not a number"
+        elif cell.lower() in _MISSING:
+            what = "an empty or NaN cell"
+        elif np.isinf(v[row]):
+            what = f"an infinite value {escape(repr(cell), CELL_EXCERPT)}"
+        else:
+            what = f"a non-numeric cell {escape(repr(cell), CELL_EXCERPT)}"
+        raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: {what} on data "
+                            f"row {row + 1}; expected finite numbers")
+    big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)
+    if big.size:
+        raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: value "
+                            f"{v[big[0]]:.3g} on data row {int(big[0]) + 1} is beyond the limit "
+                            f"{MAX_MAGNITUDE:.0e}")
+    return v
+
+
 def _read_table(path):
     try:
         raw = bounded_read_bytes(path, "data", "data file")
@@ -193,6 +402,9 @@ def _read_table(path):
     # parsed as bytes: a str of the file (and pandas' StringIO, 4 bytes a character) would
     # multiply the memory of a large record
     bad = len(raw) - len(raw.decode("utf-8", errors="ignore").encode("utf-8"))
+    if b"\x00" in raw and _utf16_without_bom(raw):
+        raise DataFileError(f"{path}: UTF-16 text without a byte-order mark; save it as UTF-8 "
+                            f"(or UTF-16 with a byte-order mark)")
     if b"\x00" in raw or bad > 0.01 * len(raw) + 1:
         raise DataFileError(f"{path}: not a text table (binary content); expected delimited "
                             f"text such as CSV")
@@ -223,6 +435,11 @@ def _read_table(path):
                             encoding_errors="replace")
     except (pd.errors.ParserError, ValueError, MemoryError) as exc:
         reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
+        m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", reason)
+        if m:
+            raise DataFileError(f"{escape(path)}: ragged rows: line {m.group(2)} has {m.group(3)} "
+                                f"fields, the first row has {m.group(1)}; expected the same "
+                                f"number of fields on every row") from None
         raise DataFileError(f"{path}: cannot parse the table ({escape(reason, 200)})") from None
     del raw
     if header:
@@ -259,12 +476,15 @@ def _column(frame, header, key, role, path):
                 f"{available}")
         col = frame[key]
         name = str(key)
+    if pd.api.types.is_bool_dtype(col):
+        raise DataFileError(f"{path}: {role} column {escape(repr(name), CELL_EXCERPT)}: boolean "
+                            f"cells (True/False), not numbers")
     values = pd.to_numeric(col, errors="coerce")
     bad = values.isna()
     if bad.any():
         row = int(np.flatnonzero(bad.to_numpy())[0])
         cell = col.iloc[row]
-        what = (f"non-numeric or empty cell {str(cell).strip()!r}" if isinstance(cell, str) and cell.strip()
+        what = (f"non-numeric or empty cell {escape(repr(str(cell).strip()), CELL_EXCERPT)}" if isinstance(cell, str) and cell.strip()
                 and cell.strip().lower() not in ("nan", "na", "n/a", "null", "none")
                 else "non-numeric or empty cell (empty or NaN)")
         raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}")

@@ -37,12 +37,12 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-import pandas as pd
 
 from hammerstein.core.amplifier import Amplifier, drive_metrics
 from hammerstein.core.hammerstein_compensator import continuation
-from hammerstein.core.files import FileLimitError, bounded_read_text
-from hammerstein.core.numbers import MAX_MAGNITUDE
+from hammerstein.core.datafiles import numeric_column, signal_table
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
+from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import CompensatorError, DataFileError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
@@ -518,36 +518,26 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
         found), non-numeric values, times not increasing or not uniform.
     """
     try:
-        text = bounded_read_text(path, "data", "data file")
+        raw = bounded_read_bytes(path, "data", "data file")
     except (FileLimitError, OSError) as exc:
-        raise DataFileError(f"{what}: {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    try:
-        frame = pd.read_csv(io.StringIO(text), sep=None, engine="python", comment="#")
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, ValueError) as exc:
-        raise DataFileError(f"{what}: {path}: not a readable CSV file "
-                            f"({' '.join(str(exc).split())})") from None
-    frame.columns = [str(c).strip() for c in frame.columns]
+        raise DataFileError(f"{what}: {escape(path)}: "
+                            f"{getattr(exc, 'strerror', None) or exc}") from None
+    table = signal_table(raw, path, what)
+    del raw
     mapping = dict(mapping or {})
 
     def column(col, label):
-        if col not in frame.columns:
-            raise DataFileError(f"{what}: {path}: no column {col!r} for {label} (columns: "
-                                f"{', '.join(frame.columns)}; map another name with --inputs/"
-                                f"--outputs NAME=COLUMN or --time COLUMN)")
-        v = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
-        if v.size < 2 or not np.all(np.isfinite(v)):
-            bad = int(np.flatnonzero(~np.isfinite(v))[0]) + 2 if v.size else 1
-            raise DataFileError(f"{what}: {path}: column {col!r} is not a finite number on "
-                                f"data row {bad - 1}")
-        big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)   # the squares of the metrics overflow
-        if big.size:
-            raise DataFileError(f"{what}: {path}: column {col!r}: value {v[big[0]]:.3g} on data "
-                                f"row {int(big[0]) + 1} is beyond the limit {MAX_MAGNITUDE:.0e}")
-        return v
+        return numeric_column(table, col, label)
 
     t = column(time, "the time [s]")
+    if t.size < 2:
+        raise DataFileError(f"{what}: {escape(path)}: {t.size} data row; expected at least two "
+                            f"samples")
     if np.any(np.diff(t) <= 0):
-        raise DataFileError(f"{what}: {path}: the time column {time!r} is not strictly increasing")
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise DataFileError(f"{what}: {escape(path)}: the time column {escape(repr(time), 60)} "
+                            f"is not strictly increasing at data row {i + 2} ({t[i]:g} s then "
+                            f"{t[i + 1]:g} s)")
     vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
     if sampling_period is None:
         d = np.diff(t)
@@ -559,7 +549,18 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     T = float(sampling_period)
     if t[0] > 1e-9 * max(1.0, abs(t[-1])):
         raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
-    n = int(np.floor(t[-1] / T + 1e-9)) + 1
+    if t[-1] < T:
+        raise DataFileError(f"{what}: {escape(path)}: spans {t[-1]:g} s, less than one sampling "
+                            f"period {T:g} s; is its time column {escape(repr(time), 60)} in "
+                            f"seconds?")
+    n = check_samples(np.floor(t[-1] / T + 1e-9) + 1,
+                      f"{what}: {escape(path)}: {t[-1]:g} s sampled at {T:g} s",
+                      DataFileError, T, len(names) + 1)
+    step = float(np.median(np.diff(t)))
+    if step < 0.5 * T and t.size > 2 * n:
+        warnings.warn(f"{what}: {escape(path)}: sampled every {step:g} s, resampled onto "
+                      f"{T:g} s: {t.size} rows become {n} samples (the reference between "
+                      f"the samples is dropped)", UserWarning, stacklevel=2)
     grid = np.arange(n) * T
     return grid, np.array([np.interp(grid, t, v) for v in vals]).reshape(len(names), n), T
 

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
+
 __all__ = ["LEVELS", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine", "multisine",
            "staircase", "excitation_set"]
 
@@ -44,10 +46,20 @@ STAIRCASE_LEVELS = (0.5, 1.0, 0.5, 0.0, -0.5, -1.0, -0.5, 0.0)
 
 
 def _check_positive(value, name, unit):
+    problem = number_problem(value)
+    if problem or not value > 0:
+        raise ValueError(f"{name}: expected a positive number [{unit}], found {value!r}"
+                         f"{f' ({problem})' if problem else ''}")
     v = float(value)
-    if not (np.isfinite(v) and v > 0):
-        raise ValueError(f"{name}: expected a positive number [{unit}], found {value!r}")
+    if v > MAX_MAGNITUDE:
+        raise ValueError(f"{name}: {v:g} {unit} is beyond the limit {MAX_MAGNITUDE:.0e}")
     return v
+
+
+def _check_count(value, name):
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ValueError(f"{name}: expected an integer >= 1, found {value!r}")
+    return int(value)
 
 
 def decreasing_sine(sampling_period, amplitude, frequency=1.0, levels=LEVELS, periods=2):
@@ -98,12 +110,14 @@ def decreasing_sine(sampling_period, amplitude, frequency=1.0, levels=LEVELS, pe
     a = np.asarray(levels, dtype=float)
     if a.ndim != 1 or a.size == 0 or np.any(a <= 0) or np.any(a > 1) or np.any(np.diff(a) >= 0):
         raise ValueError(f"levels: expected strictly decreasing fractions in (0, 1], found {levels!r}")
-    if int(periods) < 1:
-        raise ValueError(f"periods: expected >= 1, found {periods!r}")
-    n_period = int(round(1.0 / (f * T)))
-    if n_period < 8:
-        raise ValueError(f"frequency: expected at least 8 samples per period, found {n_period}")
-    n_level = n_period * int(periods)
+    periods = _check_count(periods, "periods")
+    per = 1.0 / (f * T)
+    if per < 8:
+        raise ValueError(f"frequency: {f:g} Hz gives {per:.3g} samples per period at T = {T:g} s; "
+                         f"expected at least 8 (f <= {1 / (8 * T):g} Hz)")
+    check_samples(a.size * periods * round(per), "frequency: the decreasing sine", ValueError, T)
+    n_period = int(round(per))
+    n_level = n_period * periods
     phase = np.sin(2 * np.pi * np.arange(n_level) / n_period)
     u = np.concatenate([A * ak * phase for ak in a])
     level = np.repeat(np.arange(a.size), n_level)
@@ -164,18 +178,22 @@ def multisine(sampling_period, amplitude, f_min=10.0, f_max=None, period=None, p
     if f_hi >= 0.5 / T:
         raise ValueError(f"f_max: expected below the Nyquist frequency {0.5 / T:g} Hz, found {f_hi:g}")
     P = 1.0 / f_lo if period is None else _check_positive(period, "period", "s")
-    if int(periods) < 1:
-        raise ValueError(f"periods: expected >= 1, found {periods!r}")
+    periods = _check_count(periods, "periods")
+    if P / T < 8:
+        raise ValueError(f"f_min: a period of {P:g} s is {P / T:.3g} samples at T = {T:g} s; "
+                         f"expected at least 8 (f_min <= {1 / (8 * T):g} Hz)")
+    check_samples(periods * round(P / T), f"f_min, periods: {periods} periods of {P:g} s",
+                  ValueError, T)
     n_period = int(round(P / T))
     df = 1.0 / (n_period * T)
     j = np.arange(max(1, int(np.ceil(f_lo / df - 1e-9))), int(np.floor(f_hi / df + 1e-9)) + 1)
     if j.size == 0:
         raise ValueError(f"f_min, f_max: no multiple of 1/period = {df:g} Hz in [{f_lo:g}, {f_hi:g}] Hz")
     phases = np.random.default_rng(seed).uniform(0.0, 2 * np.pi, j.size)
-    k = np.arange(n_period)
-    one = np.zeros(n_period)
-    for jj, ph in zip(j, phases):      # one line at a time: no (n_lines, n_period) array
-        one += np.cos(2 * np.pi * jj * k / n_period + ph)
+    # sum_j cos(2 pi j k / N + phi_j) as one inverse real FFT: O(N log N), not O(N lines)
+    spectrum = np.zeros(n_period // 2 + 1, dtype=complex)
+    spectrum[j] = 0.5 * n_period * np.exp(1j * phases)
+    one = np.fft.irfft(spectrum, n_period)
     one *= A / np.max(np.abs(one))
     u = np.tile(one, int(periods))
     return np.arange(u.size) * T, u, j * df
@@ -221,6 +239,7 @@ def staircase(sampling_period, amplitude, hold=2.0, levels=STAIRCASE_LEVELS):
     a = np.concatenate([[0.0], np.asarray(levels, dtype=float)])
     if a.ndim != 1 or np.any(np.abs(a) > 1):
         raise ValueError(f"levels: expected fractions in [-1, 1], found {levels!r}")
+    check_samples(a.size * max(1.0, H / T), f"hold: {a.size} steps of {H:g} s", ValueError, T)
     n_hold = max(1, int(round(H / T)))
     step = np.repeat(np.arange(a.size), n_hold)
     return np.arange(step.size) * T, A * a[step], step

@@ -70,7 +70,7 @@ def steady_window(n_samples, period_samples, settle_periods):
     start = int(round(settle_periods * period_samples))
     if start >= n_samples:
         raise ValueError(
-            f"settle_periods: {settle_periods:g} periods ({start} samples) leave nothing of "
+            f"settle_periods: {settle_periods:g} periods ({float(start):.6g} samples) leave nothing of "
             f"the {n_samples}-sample record; lengthen the record or settle less")
     return slice(start, n_samples)
 

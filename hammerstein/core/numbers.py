@@ -10,19 +10,23 @@ same rule to an array of the API (NaN, infinity, complex values and shape
 mismatches refused with a message naming the argument);
 :func:`integer_problem` and :func:`check_integer` are the integer checker of
 both the scenario files and the API (``iterations = 10**9`` refused with the
-maximum named).
+maximum named); :func:`check_samples` is the budget every command and API
+function checks before allocating a record (``HAMMERSTEIN_MAX_RECORD_SAMPLES``).
 """
 
 from __future__ import annotations
 
 import math
 import numbers
+import os
 import sys
 
 import numpy as np
 
 __all__ = ["is_number", "number_problem", "check_array", "integer_problem", "check_integer",
-           "magnitude_problem", "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS", "MAX_MAGNITUDE"]
+           "magnitude_problem", "FLOAT_MAX", "FLOAT_TINY", "MAX_ITERATIONS", "MAX_MAGNITUDE", "MAX_HYSTERONS",
+           "RECORD_SAMPLES_ENV", "DEFAULT_RECORD_SAMPLES", "max_record_samples", "samples_problem",
+           "check_samples", "PLAUSIBLE", "plausibility_problem"]
 
 #: Largest finite float64; a Python int beyond it cannot become a float.
 FLOAT_MAX = sys.float_info.max
@@ -33,6 +37,8 @@ FLOAT_TINY = sys.float_info.min
 #: inf and LAPACK's scaling (DLASCL) fails, so 1e150 leaves room for sums over
 #: 1e8 samples. No actuator moves 1e150 µm.
 MAX_MAGNITUDE = 1e150
+#: Most hysterons per component of an identified model (scenario files, CLI and API alike).
+MAX_HYSTERONS = 100
 #: Most fixed-point (or learning) iterations per sample of a compensator, in a
 #: scenario file, on the command line and through the API alike.
 MAX_ITERATIONS = 100
@@ -250,3 +256,174 @@ def magnitude_problem(a, unit=""):
     where = idx[0] if len(idx) == 1 else idx
     return (f"{arr[idx]:.3g}{' ' + unit if unit else ''} at index {where} is beyond the limit "
             f"{MAX_MAGNITUDE:.0e}")
+
+
+#: Environment variable that raises :func:`max_record_samples` (a positive integer).
+RECORD_SAMPLES_ENV = "HAMMERSTEIN_MAX_RECORD_SAMPLES"
+#: Default largest record a command or API function allocates: 10 million samples
+#: (80 MB per signal row; 500 s at T = 50 µs).
+DEFAULT_RECORD_SAMPLES = 10_000_000
+
+
+def max_record_samples():
+    """Largest number of samples of one record (per signal), before anything is allocated.
+
+    Returns
+    -------
+    int
+        ``HAMMERSTEIN_MAX_RECORD_SAMPLES`` when it is a positive integer
+        (ASCII digits), else :data:`DEFAULT_RECORD_SAMPLES`.
+    """
+    text = os.environ.get(RECORD_SAMPLES_ENV, "").strip()
+    if text.isascii() and text.isdigit() and int(text) > 0:
+        return int(text)
+    return DEFAULT_RECORD_SAMPLES
+
+
+def samples_problem(n, what, sampling_period=None, rows=1):
+    """Why a record of ``n`` samples must not be allocated (one line), or None.
+
+    Parameters
+    ----------
+    n : float or int
+        Samples the record would have, computed from the arguments before
+        any allocation (``duration / T``); may be a float, ``inf`` or NaN.
+    what : str
+        What asks for it, named in the message (``"--hold"``,
+        ``"--reference: ref.csv"``).
+    sampling_period : float, optional
+        T [s], to say how long the largest record is.
+    rows : int
+        Signals of the record (the bytes named are ``8 n rows``).
+
+    Returns
+    -------
+    str or None
+        ``"--hold: the record would have 1.8e+14 samples (2.9 PB); expected
+        at most 1e+07 (500 s at T = 5e-05 s; raise it with
+        HAMMERSTEIN_MAX_RECORD_SAMPLES=N)"``.
+
+    Examples
+    --------
+    >>> samples_problem(1e3, "--hold") is None
+    True
+    >>> samples_problem(float("inf"), "--f-min")
+    '--f-min: the record would have inf samples; expected at most 1e+07 (raise it with HAMMERSTEIN_MAX_RECORD_SAMPLES=N)'
+    """
+    cap = max_record_samples()
+    try:
+        n = float(n)
+    except OverflowError:
+        n = math.inf
+    if n <= cap:                    # False for NaN
+        return None
+    size = ""
+    if math.isfinite(n):
+        b = 8.0 * n * max(int(rows), 1)
+        unit = next(((u, s) for u, s in (("PB", 1e15), ("TB", 1e12), ("GB", 1e9), ("MB", 1e6))
+                     if b >= s), ("bytes", 1))
+        size = f" ({b / unit[1]:.3g} {unit[0]})"
+    span = ""
+    if sampling_period is not None and is_number(sampling_period) and sampling_period > 0:
+        span = f"{cap * float(sampling_period):.3g} s at T = {float(sampling_period):g} s; "
+    text = os.environ.get(RECORD_SAMPLES_ENV)
+    ignored = "" if text is None or max_record_samples() != DEFAULT_RECORD_SAMPLES or \
+        text.strip() == str(DEFAULT_RECORD_SAMPLES) else \
+        f"; its value {text[:40]!r} is not a positive integer, the default applies"
+    return (f"{what}: the record would have {n:.3g} samples{size}; expected at most {cap:.3g} "
+            f"({span}raise it with {RECORD_SAMPLES_ENV}=N{ignored})")
+
+
+def check_samples(n, what, error=ValueError, sampling_period=None, rows=1):
+    """``int(n)`` when a record of ``n`` samples is within the budget, else ``error``.
+
+    The check every command and API function makes from its arguments
+    (duration / sampling period, hold, periods, lowest frequency, file
+    times) *before* allocating: an oversized request is refused at once,
+    naming the limit and its override.
+
+    Parameters
+    ----------
+    n : float or int
+        Samples the record would have (``inf`` and NaN are refused).
+    what : str
+        The argument or file named in the message.
+    error : type
+        Exception class raised.
+    sampling_period : float, optional
+        T [s], for the message.
+    rows : int
+        Signals of the record, for the bytes in the message.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    error
+        Beyond :func:`max_record_samples`, or ``n`` not a number.
+
+    Examples
+    --------
+    >>> check_samples(2000.0, "--periods")
+    2000
+    """
+    problem = samples_problem(n, what, sampling_period, rows)
+    if problem is None and isinstance(n, float) and not math.isfinite(n):
+        problem = f"{what}: the record would have {n} samples"
+    if problem:
+        raise error(problem)
+    return int(n)
+
+
+#: Plausible magnitudes of a piezoelectric actuator's signals, per unit: ``(smallest
+#: non-zero, largest)``. Beyond them a value is computed with but warned about, naming
+#: the likely unit mistake.
+PLAUSIBLE = {"µm": (1e-4, 1e4), "V": (None, 2e3), "Hz": (None, 1e5)}
+
+
+def plausibility_problem(value, unit, what="value"):
+    """Why a magnitude is implausible for a piezoelectric actuator (a warning), or None.
+
+    Ranges (:data:`PLAUSIBLE`): displacements 0.1 nm to 10 mm (``µm``),
+    voltages up to 2 kV (``V``), frequencies up to 100 kHz (``Hz``). The
+    message names the likely unit mistake: metres or millimetres given for
+    µm (too small), nanometres for µm (too large), millivolts for volts,
+    rad/s for Hz.
+
+    Parameters
+    ----------
+    value : float
+        A peak magnitude (its absolute value is judged).
+    unit : {'µm', 'V', 'Hz'}
+    what : str
+        What the value is, at the front of the message (``"reference peak"``).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> plausibility_problem(1e38, "µm", "amplitude")
+    'amplitude 1e+38 µm is beyond 1e+04 µm (10 mm), implausible for a piezoelectric actuator; was it given in nm (1 µm = 1000 nm)?'
+    >>> plausibility_problem(3e-5, "µm", "radius")
+    'radius 3e-05 µm is below 0.0001 µm (0.1 nm), implausible for a piezoelectric actuator; was it given in m or mm (1 mm = 1000 µm)?'
+    >>> plausibility_problem(150.0, "V") is None
+    True
+    """
+    low, high = PLAUSIBLE[unit]
+    v = abs(float(value))
+    if not math.isfinite(v):
+        return None     # the number checkers refuse it
+    if high is not None and v > high:
+        limit, slip = {"µm": ("1e+04 µm (10 mm)", "nm (1 µm = 1000 nm)"),
+                       "V": (f"{high:g} V", "mV (1 V = 1000 mV)"),
+                       "Hz": (f"{high:g} Hz", "rad/s (1 Hz = 2 pi rad/s)")}[unit]
+        return (f"{what} {v:g} {unit} is beyond {limit}, implausible for a piezoelectric "
+                f"actuator; was it given in {slip}?")
+    if low is not None and 0 < v < low:
+        return (f"{what} {v:g} {unit} is below {low:g} µm (0.1 nm), implausible for a "
+                f"piezoelectric actuator; was it given in m or mm (1 mm = 1000 µm)?")
+    return None

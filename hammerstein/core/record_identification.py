@@ -55,8 +55,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import scipy.linalg
 
-from hammerstein.core.numbers import check_array, is_number
-from hammerstein.core.datafiles import MultiRecord, Record
+from hammerstein.core.numbers import MAX_HYSTERONS, check_array, check_integer, is_number
+from hammerstein.core.datafiles import MIN_SAMPLES, MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii, play)
 from hammerstein.core import lti
@@ -794,6 +794,9 @@ def _checked_record(rec, i):
     y = check_array(rec.y, f"{where}.y", IdentificationError, ndim=2, length=u.shape[1])
     t = check_array(rec.timepts, f"{where}.timepts", IdentificationError, ndim=1,
                     length=u.shape[1])
+    if u.shape[1] < MIN_SAMPLES:
+        raise IdentificationError(f"{where}: {u.shape[1]} samples; expected a record of at least "
+                                  f"{MIN_SAMPLES} samples")
     T = rec.sampling_period
     if not (is_number(T) and T > 0):
         raise IdentificationError(f"{where}.sampling_period: expected a positive finite time [s], "
@@ -1060,7 +1063,8 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
         outputs (shape (p, n_samples), output unit).
     method : {"least-squares", "closed-form"}
     n_hysterons : int
-        Hysterons per component.
+        Hysterons per component, 1 to 100 (``MAX_HYSTERONS``, the bound of
+        the command line and of the scenario files).
     thresholds : array_like, shape (n,), optional
         Explicit thresholds (input unit) for every component.
     partition : {"auto", "time", "input"}
@@ -1103,6 +1107,9 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
         the record and the option that helps).
     """
     records = _as_records(records)
+    if thresholds is None:
+        n_hysterons = check_integer(n_hysterons, "n_hysterons", 1, MAX_HYSTERONS,
+                                    IdentificationError)
     if method not in ("least-squares", "closed-form"):
         raise IdentificationError(
             f"method: expected 'least-squares' or 'closed-form', found {method!r}")

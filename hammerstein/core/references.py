@@ -12,16 +12,16 @@ from a CSV file) are the references people scan with.
 
 from __future__ import annotations
 
-import io
 from fractions import Fraction
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-import pandas as pd
 
-from hammerstein.core.files import FileLimitError, check_regular, confined_path
+from hammerstein.core.datafiles import numeric_column, signal_table
+from hammerstein.core.files import FileLimitError, check_regular, confined_path, escape
 from hammerstein.core.metrics import raster_line_metrics
+from hammerstein.core.numbers import check_samples
 from hammerstein.core.schema import Field, Invalid, choice, integer, is_number, name_list, number, string
 from hammerstein.exceptions import SignalError
 
@@ -51,7 +51,9 @@ __all__ = [
 #: Fewest samples per period accepted for any periodic signal.
 MIN_SAMPLES_PER_PERIOD = 8
 
-#: Most samples in one record (80 MB per signal row; 500 s at T = 50 µs).
+#: Default most samples in one record (80 MB per signal row; 500 s at T = 50 µs);
+#: ``HAMMERSTEIN_MAX_RECORD_SAMPLES`` changes the limit checked
+#: (:func:`hammerstein.core.numbers.check_samples`).
 MAX_SAMPLES = 10_000_000
 
 #: Largest trajectory file :func:`from_file` reads [bytes].
@@ -118,10 +120,7 @@ def time_vector(sampling_period, period=None, periods=None, duration=None):
         length = _positive(periods, "periods", "-") * period
     else:
         length = _positive(duration, "duration", "s")
-    if not length / T <= MAX_SAMPLES:
-        raise SignalError(f"{'periods' if periods is not None else 'duration'}: the record would "
-                          f"have {length / T:.3g} samples; expected at most {MAX_SAMPLES:.0e} "
-                          f"({MAX_SAMPLES * T:g} s at T = {T:g} s)")
+    check_samples(length / T, "periods" if periods is not None else "duration", SignalError, T)
     n = max(int(round(length / T)), 1)
     return np.arange(n) * T
 
@@ -722,23 +721,14 @@ def from_file(sampling_period, outputs, file, columns, time="time", duration=Non
         if out not in names:
             raise SignalError(f"columns.{out}: expected one of the plant's outputs {names}")
     data = _read_bounded(path, MAX_FILE_BYTES if max_bytes is None else int(max_bytes))
-    try:
-        frame = pd.read_csv(io.BytesIO(data), sep=None, engine="python")
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, ValueError) as exc:
-        raise SignalError(f"file: {path} is not a readable CSV file "
-                          f"({' '.join(str(exc).split())})") from None
-    header = [str(c).strip() for c in frame.columns]
-    frame.columns = header
+    table = signal_table(data, path, "", lambda m: SignalError(f"file: {m}"))
+    header = list(table.frame.columns)
 
     def numeric(col, key):
         if col not in header:
-            raise SignalError(f"{key}: column {col!r} not in {path} (columns: {', '.join(header)})")
-        v = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
-        if v.size == 0 or not np.all(np.isfinite(v)):
-            bad = int(np.flatnonzero(~np.isfinite(v))[0]) + 2 if v.size else 1
-            raise SignalError(f"{key}: column {col!r} of {path} is not a finite number "
-                              f"on line {bad}")
-        return v
+            raise SignalError(f"{key}: column {escape(repr(col), 60)} not in {escape(path)} "
+                              f"(columns: {', '.join(escape(h, 60) for h in header[:20])})")
+        return numeric_column(table, col)
 
     tf = numeric(time, "time")
     if tf.size < 2 or np.any(np.diff(tf) <= 0):
@@ -755,10 +745,8 @@ def from_file(sampling_period, outputs, file, columns, time="time", duration=Non
             raise SignalError(f"duration: {d:g} s is beyond the last time {end:g} s of {path}; "
                               f"the reference would need extrapolation")
         end = d
-    n = int(np.floor(end / T + 1e-9)) + 1
-    if n > MAX_SAMPLES:
-        raise SignalError(f"file: the record would have {n:.3g} samples at T = {T:g} s; "
-                          f"expected at most {MAX_SAMPLES:.0e}")
+    n = check_samples(np.floor(end / T + 1e-9) + 1, f"file: {escape(path)}: {end:g} s",
+                      SignalError, T)
     t = np.arange(n) * T
     ref = np.zeros((len(names), n))
     for out, col in columns.items():

@@ -90,6 +90,7 @@ import itertools
 import logging
 import math
 import re
+import socket
 import time
 import warnings
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
@@ -953,6 +954,42 @@ class MonteCarloResult:
 _CLIENT = {"client": None}
 
 
+#: Seconds to wait for the scheduler's port to accept a connection before the client starts.
+PROBE_TIMEOUT_S = 3.0
+
+
+def _probe_scheduler(address):
+    """Fail at once (one line) when nothing listens at a ``tcp://HOST:PORT`` scheduler address.
+
+    The dask client retries a refused connection until its time-out
+    (:data:`SCHEDULER_TIMEOUT_S`); a plain connection attempt says in
+    milliseconds that the port is closed or the host unknown. Other
+    schemes are left to the client.
+
+    Raises
+    ------
+    ValueError
+        The address cannot be parsed, the host is unknown, or the port refuses.
+    """
+    m = re.fullmatch(r"(?:tcp://)?\[?([^\[\]]+?)\]?:(\d+)", str(address).strip())
+    if not m:
+        if "://" in str(address) and not str(address).startswith("tcp://"):
+            return
+        raise ValueError(f"scheduler address {address!r}: expected tcp://HOST:PORT")
+    host, port = m.group(1), int(m.group(2))
+    if not 1 <= port <= 65535:
+        raise ValueError(f"scheduler address {address!r}: expected a port 1..65535")
+    try:
+        with socket.create_connection((host, port), timeout=PROBE_TIMEOUT_S):
+            pass
+    except socket.gaierror as exc:
+        raise ValueError(f"cannot reach the dask scheduler {address}: unknown host {host!r} "
+                         f"({exc.strerror})") from None
+    except OSError as exc:
+        raise ValueError(f"cannot reach the dask scheduler {address}: "
+                         f"{exc.strerror or 'no answer'} (is `dask scheduler` running there?)") from None
+
+
 @contextlib.contextmanager
 def execution(workers=None, scheduler=None):
     """Run the Monte-Carlo chunks of this block on dask.distributed (default: this process).
@@ -971,8 +1008,9 @@ def execution(workers=None, scheduler=None):
     Raises
     ------
     ValueError
-        When ``dask.distributed`` is not installed or the scheduler cannot be
-        reached (one line).
+        When ``dask.distributed`` is not installed, ``workers`` is not an
+        integer >= 1, or the scheduler cannot be reached (one line, at once
+        when its port is closed).
     """
     if not workers and not scheduler:
         yield None
@@ -984,6 +1022,8 @@ def execution(workers=None, scheduler=None):
                          "pip install 'dask[distributed]'") from None
     logging.getLogger("distributed").setLevel(logging.ERROR)   # one line per problem on stderr
     cluster = None
+    if scheduler:
+        _probe_scheduler(scheduler)
     try:
         if scheduler:
             client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")

@@ -224,7 +224,7 @@ def resolve_scenario(spec, cache=None):
             except (ValueError, PresetError) as exc:  # one "key: message" per line
                 problems.extend(f"{source}: {case.where}.{line}" for line in str(exc).splitlines())
                 continue
-        comp, caught = None, []
+        comp, caught = None, list(case.warnings)     # the validation's (implausible values)
         if case.mode == "reference":
             # one build (identification, convergence report) per distinct table and plant
             key = (canonical_key(case.compensator_spec), id(case.plant))
@@ -244,7 +244,7 @@ def resolve_scenario(spec, cache=None):
             if error is not None:
                 problems.append(f"{source}: {case.where}.compensator: {error}")
                 continue
-            caught = list(warned[key])
+            caught += list(warned[key])
         extra = dynamics_warning(case, base)
         if extra:
             caught.append(extra)

@@ -28,6 +28,7 @@ import os
 from hammerstein.core.schema import (MAX_NAME, MAX_TEXT, NAME, Field, Invalid, NestedInvalid, boolean,
                                      check_table, choice, integer, kind_problem, name_field,
                                      name_list, number, short_repr, string)
+from hammerstein.core.numbers import MAX_HYSTERONS as _MAX_HYSTERONS
 from hammerstein.core.numbers import MAX_ITERATIONS as _MAX_ITERATIONS
 from hammerstein.exceptions import ScenarioError
 
@@ -66,7 +67,7 @@ MAX_ITERATIONS = _MAX_ITERATIONS
 #: Most cases of a scenario (after expanding the sweeps).
 MAX_CASES = 2000
 #: Most hysterons per component of an identified model.
-MAX_HYSTERONS = 100
+MAX_HYSTERONS = _MAX_HYSTERONS
 #: Most periods of an identification experiment.
 MAX_IDENTIFY_PERIODS = 1000
 #: Most frequencies of one sweep.

@@ -30,6 +30,7 @@ import numpy as np
 
 from hammerstein.core import references as refs
 from hammerstein.core.files import confined_path
+from hammerstein.core.numbers import is_number, plausibility_problem
 from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -324,6 +325,22 @@ def _model_problems(name, identify, plant, base, files):
     return []
 
 
+def _plausibility(mode, signal, spec):
+    """Warnings on a case's signal beyond a piezoelectric actuator's plausible range (a unit slip)."""
+    unit = "µm" if mode == "reference" else "V"
+    found = []
+    if signal.size:
+        problem = plausibility_problem(np.max(np.abs(signal)), unit, f"{mode} peak")
+        if problem:
+            found.append(f"{mode}: {problem}")
+    f = spec.get("frequency") if isinstance(spec, dict) else None
+    for v in (f if isinstance(f, list) else [f]):
+        problem = plausibility_problem(v, "Hz", "frequency") if is_number(v) else None
+        if problem:
+            found.append(f"{mode}.frequency: {problem}")
+    return found
+
+
 def _validate_cases(path, data):
     """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError."""
     source, base, problems = str(path), path.parent, []
@@ -463,6 +480,7 @@ def _validate_cases(path, data):
             compensator_spec=cclean if cclean is not None else cspec,
             plant=plant, compensator=None, time=t, signal=signal, period_samples=P,
             settle_periods=settle, model_spec=cmp_spec, where=where, **extras))
+        cases[-1].warnings.extend(_plausibility(mode, signal, raw[mode]))
     smap, smap_plant = None, None
     if "stability_map" in data and isinstance(plant_top.get("preset"), str):
         try:

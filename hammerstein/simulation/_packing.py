@@ -19,6 +19,10 @@ __all__ = ["finite_array", "state_vector", "LANES", "PackedModel", "pack_model",
            "compensator_law_of", "identity_filter", "linear_arrays", "check_linear", "law_slopes",
            "STATUS_OK", "STATUS_NONFINITE", "STATUS_BOUND", "divergence_error"]
 
+#: Largest magnitude of a model parameter or signal (the value of
+#: ``hammerstein.core.numbers.MAX_MAGNITUDE``, which this lower layer cannot import).
+MAX_MAGNITUDE = 1e150
+
 #: status codes of the chain kernels: ok, non-finite input voltage, beyond the bound
 STATUS_OK = 0
 STATUS_NONFINITE = 1
@@ -73,16 +77,27 @@ def finite_array(value, name, ndim=None):
         If ``value`` is not numeric, has another number of dimensions, or
         holds NaN or inf.
     """
+    if np.iscomplexobj(value):
+        raise HysteresisError(f"{name}: expected real numbers, found complex values")
     try:
         arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise HysteresisError(f"{name}: expected numbers, got {value!r}") from exc
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise HysteresisError(f"{name}: expected numbers, got {_excerpt(value)}") from exc
     if ndim is not None and arr.ndim != ndim:
         raise HysteresisError(
             f"{name}: expected a {ndim}-D array, found shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise HysteresisError(f"{name}: expected finite values, found NaN or inf")
+    if arr.size and np.max(np.abs(arr)) > MAX_MAGNITUDE:
+        raise HysteresisError(f"{name}: {np.max(np.abs(arr)):.3g} is beyond the limit "
+                              f"{MAX_MAGNITUDE:.0e} (its squares and products would overflow)")
     return arr
+
+
+def _excerpt(value, n=80):
+    """``repr(value)`` cut to ``n`` characters (a message stays one short line)."""
+    text = repr(value)
+    return text if len(text) <= n else text[:n] + "..."
 
 
 def state_vector(initial_state, size, name="initial_state"):

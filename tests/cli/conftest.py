@@ -63,6 +63,12 @@ def _jobs(tmp):
         out = tmp / name
         jobs[name] = {"argv": ["run", *map(str, scenarios), "--out", str(out)], "signal": int(sig),
                       "out": str(out), "prefix": TMP_PREFIX, "workers": workers}
+    # started under nohup (SIGHUP ignored): the hang-up does not interrupt the run
+    out = tmp / "sighup-nohup"
+    jobs["sighup-nohup"] = {"argv": ["run", str(GOOD / "good-static.toml"), "--out", str(out),
+                                     "--figures", "none"],
+                            "signal": int(signal.SIGHUP), "ignored": True, "out": str(out),
+                            "prefix": TMP_PREFIX, "workers": False}
     return jobs
 
 

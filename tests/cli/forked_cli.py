@@ -22,7 +22,9 @@ one group run at the same time; groups run one after the other), ``cwd`` and
 ``warnings`` (a :func:`warnings.simplefilter` action, as ``PYTHONWARNINGS``),
 ``signal`` (a signal number sent once the directory ``out`` holds an entry
 whose name starts with ``prefix``, i.e. a report is in progress; with
-``workers``: once the process also has child processes, the figure workers).
+``workers``: once the process also has child processes, the figure workers;
+the child starts with the signal's default disposition, or ignoring it with
+``ignored``, as under ``nohup``).
 A result is a dict ``status`` (exit status, or -signal), ``stdout``,
 ``stderr`` (text captured, else None), for a ``signal`` job ``signalled``
 (False when the command ended before) and ``workers`` (the child processes
@@ -77,6 +79,11 @@ def _child(job, out, err, head):
         os.close(head[1])
     if job.get("warnings"):
         warnings.simplefilter(job["warnings"])
+    if "signal" in job and job["signal"] != signal.SIGKILL:
+        # as started from a terminal: the signal's default disposition, whatever this process
+        # inherited (under `nohup` or a CI runner SIGHUP is ignored, and the command rightly
+        # keeps ignoring it: it would finish with 0 instead of being interrupted)
+        signal.signal(job["signal"], signal.SIG_IGN if job.get("ignored") else signal.SIG_DFL)
     sys.argv = ["hammerstein", *job["argv"]]
     runpy.run_module("hammerstein", run_name="__main__", alter_sys=True)
 

@@ -335,6 +335,14 @@ def test_8_sighup_is_an_interruption(forked_cli):
     assert not [p for p in (tmp / "sighup").iterdir() if p.name.startswith(TMP_PREFIX)]
 
 
+def test_8_sighup_under_nohup_is_ignored(forked_cli):
+    """A run started under ``nohup`` (SIGHUP ignored) keeps ignoring the hang-up and completes."""
+    results, tmp = forked_cli
+    run = results["sighup-nohup"]
+    assert run["status"] == 0 and "interrupted" not in run["stderr"], run["stderr"]
+    assert (tmp / "sighup-nohup" / "good-static" / "report.md").is_file()
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc")
 def test_8_sigkill_of_a_piped_run_ends_its_workers(tmp_path):

@@ -263,9 +263,12 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
     (["identify", CORPUS / "data" / "good.csv", "--input", "u_V", "--output", "y_um", "--out", "m.toml"],
      "hammerstein identify: error: give --time COL or --sampling-period S"),
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--skip", "nan", "--out", "m.toml"],
-     "hammerstein identify: error: --skip: expected a time >= 0 [s], found nan"),
+     "hammerstein identify: error: argument --skip: expected a number >= 0 [s], found 'nan' "
+     "(not finite)"),
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--sampling-period", "-1",
-      "--out", "m.toml"], "hammerstein identify: error: --sampling-period: expected a positive time"),
+      "--out", "m.toml"],
+     "hammerstein identify: error: argument --sampling-period: expected a number > 0 [s], "
+     "found '-1'"),
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", CORPUS / "data"],
      "hammerstein identify: error: --out:"),
     (["identify", CORPUS / "data" / "good.csv", "--time", "0", "--input", "1"],
