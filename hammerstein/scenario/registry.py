@@ -28,7 +28,8 @@ from hammerstein.core.models import kind_problem as class_kind_problem, model_cl
 from hammerstein.exceptions import CompensatorError
 from hammerstein.core.ilc import LearningCompensator
 from hammerstein.core.presets import PresetError, load_creep, load_dynamics
-from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
+from hammerstein.scenario.identification import (ResolveContext, identified_from_records,
+                                                 resolve_dynamics, resolve_model)
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
@@ -212,7 +213,10 @@ def _spec_creep(spec, plant, context):
 
     ``creep = "auto"`` (default): the ``[creep]`` of the dynamics file when
     ``dynamics`` is a file (e.g. a preset written by ``hammerstein identify
-    --creep-records``), none with ``dynamics = "plant"`` or ``"identified"``;
+    --creep-records``) or identified from records with ``identify = {
+    records = "excitation", creep = true }`` (the identified creep, as
+    ``hammerstein compensate`` inverts it), none with ``dynamics = "plant"`` or
+    ``"identified"`` otherwise;
     ``"plant"``: the plant's true creep (an oracle); ``"none"``.
     """
     which = spec.get("creep", "auto")
@@ -221,6 +225,10 @@ def _spec_creep(spec, plant, context):
     if which == "plant":
         return plant.creep
     dyn = dynamics_source(spec)
+    identify = spec.get("identify") or {}
+    if dyn == "identified" and spec.get("model") == "identified" and "records" in identify:
+        cache = context.cache if hasattr(context, "cache") else None
+        return identified_from_records(plant, identify, True, cache).plant.creep
     if dyn in ("plant", "identified"):
         return None
     base = context.base_dir if hasattr(context, "base_dir") else Path(context)
