@@ -180,13 +180,15 @@ class ModelClass:
                                    f"({', '.join(RATE_INDEPENDENT_KINDS)})")
         return self.build(model, kind, **options)
 
-    def exact_inverse(self, model):
+    def exact_inverse(self, model, name=None):
         """The exact per-sample inverse of ``model``, or None when the class has none.
 
         Parameters
         ----------
         model : MultivariableHysteresis
             A model of this class.
+        name : str, optional
+            Label in reports (default the kind's name).
 
         Returns
         -------
@@ -201,7 +203,7 @@ class ModelClass:
         """
         if self.exact_inverse_kind is None:
             return None
-        return PreisachInverseCompensator(model, name=self.exact_inverse_kind)
+        return PreisachInverseCompensator(model, name=name or self.exact_inverse_kind)
 
     @staticmethod
     def to_table(model, input_unit="V", output_unit="µm"):
