@@ -93,3 +93,26 @@ def test_export_default_kind_is_printed(tmp_path, capsys):
     assert code == 0, err
     assert err.startswith("note: kind = hammerstein because")
     assert (tmp_path / "c" / "rakotondrabe_2dof_hammerstein.c").exists()
+
+
+def test_list_shows_which_kind_works_with_which_class(capsys):
+    code, out, _ = _run(capsys, "list")
+    assert code == 0
+    block = out.split("model classes and the compensator kinds")[1].split("reference kinds:")[0]
+    for name in ("classical", "preisach", "generalized"):
+        assert f"  {name}: " in block
+    classical = block.split("  classical: ")[1].split("  preisach: ")[0]
+    assert "preisach-inverse" not in classical.split("kinds: ")[1].split("\n")[0]
+
+
+def test_scenario_validates_a_records_identify_table(tmp_path, capsys, monkeypatch):
+    text = (SCENARIOS / "realistic-b.toml").read_text(encoding="utf-8")
+    good = tmp_path / "good.toml"
+    good.write_text(text.replace('preset = "presets/', f'preset = "{SCENARIOS}/presets/'))
+    bad = tmp_path / "bad.toml"
+    bad.write_text(good.read_text().replace('records = "excitation", creep = true',
+                                            'records = "excitation", creep = true, modle = "auto"', 1))
+    monkeypatch.setenv("HAMMERSTEIN_ALLOW_PATHS", str(SCENARIOS))
+    assert _run(capsys, "validate", str(good))[0] == 0
+    code, out, err = _run(capsys, "validate", str(bad))
+    assert code != 0 and "modle" in out + err and "model" in out + err
