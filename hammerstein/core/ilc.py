@@ -623,7 +623,8 @@ class IterativeLearning:
 
     >>> import numpy as np
     >>> from hammerstein.core.presets import load_plant
-    >>>     >>> plant = load_plant("rakotondrabe-2dof")
+    >>> from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    >>> plant = load_plant("rakotondrabe-2dof")
     >>> ilc = IterativeLearning(plant.hysteresis, plant.dynamics, plant.sampling_period,
     ...                         learning_gain=1.0, q_cutoff_hz=3000.0)
     >>> t = np.arange(2000) * plant.sampling_period
