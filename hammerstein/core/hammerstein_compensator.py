@@ -460,7 +460,8 @@ class HammersteinCompensator:
                 self.hysteresis_compensator = entry.exact_inverse(model, name=name)
             except CompensatorError as exc:
                 raise CompensatorError(
-                    f"kind 'hammerstein' with a {entry.label} model: its static part is "
+                    f"kind 'hammerstein' with a {type(model).__name__} model ({entry.label} "
+                    f"class): its static part is "
                     f"the exact inverse, which refuses this model: {exc}") from None
         else:
             self.hysteresis_compensator = entry.compensator(
