@@ -26,13 +26,20 @@ from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import apply_amplifier, drive_signal, signals_csv, starts_at_rest
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.core.hammerstein_compensator import INVERSIONS
+from hammerstein.core.models import choose_kind, kind_problem
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
 __all__ = ["add_parser", "compensate"]
 
-#: the kinds a drive file can be made with (``none`` drives nothing)
-KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain")
+#: the kinds a drive file can be made with (``none`` drives nothing; ``ilc`` learns on the
+#: hardware: ``hammerstein learn``)
+KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", "preisach-inverse")
+#: the kinds whose static part is the inverse multiplicative law (``--gain``, ``--check``)
+LAW_KINDS = ("hammerstein", "multivariable", "diagonal")
+#: what ``--gain`` and ``--check`` mean, for the messages of a law that may not converge
+LAW_HINT = ("--gain midpoint|secant|identity sets K and --check warn runs a law that may not "
+            "converge; without --kind the default kind chooses a convergent gain")
 
 
 def add_parser(subparsers):
@@ -51,8 +58,17 @@ def add_parser(subparsers):
     add_actuator_arguments(p)
     p.add_argument("--out", required=True, metavar="DRIVE.csv", help="drive file to write")
     p.add_argument("--kind", choices=KINDS, default=None,
-                   help="compensator (default: hammerstein for a preset with dynamics, else "
-                        "multivariable)")
+                   help="compensator (default: the best for the model, printed with why: "
+                        "hammerstein with dynamics, else the exact inverse of a Preisach or "
+                        "generalised-PI model, else multivariable with a convergent gain; "
+                        "docs/models-and-kinds.md)")
+    p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
+                   help="normalisation K of the inverse multiplicative law (kinds hammerstein, "
+                        "multivariable, diagonal; default: the kind's, or the convergent gain the "
+                        "default kind chooses)")
+    p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
+                   help="when rho(I - K^-1 J) >= 1: error (default, nothing written), warn or "
+                        "ignore")
     p.add_argument("--inversion", choices=list(INVERSIONS), default="zpetc",
                    help="inverse of the dynamics (kind hammerstein; default zpetc)")
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
@@ -68,21 +84,28 @@ def add_parser(subparsers):
     p.set_defaults(handler=_handle)
 
 
-def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, limits="error"):
+def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, limits="error",
+               gain=None, check=None):
     """Compensator and drive of a reference on an actuator (what the command writes).
 
     Parameters
     ----------
     plant : HammersteinPlant
-        The actuator (its PI, dynamics and amplifier are the model).
+        The actuator (its hysteresis model of any class, dynamics, creep and
+        amplifier are the model).
     reference : hammerstein.cli._hardware.Reference
         The reference record.
     kind : str, optional
-        Compensator kind (default: ``"hammerstein"`` with dynamics).
+        Compensator kind (default: :func:`hammerstein.core.models.choose_kind`).
     inversion : {'zpetc', 'stable'}
     fade_in : float, optional
         [s]; 0 only for a reference that starts at rest.
     limits : {'error', 'warn', 'clip'}
+    gain : str or array_like, optional
+        K of the inverse multiplicative law (default: the kind's, or the
+        convergent gain of the default kind).
+    check : {'error', 'warn', 'ignore'}, optional
+        The law's convergence check (default the kind's, ``error``).
 
     Returns
     -------
@@ -93,10 +116,11 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     Raises
     ------
     CompensatorError
+        A kind that does not work with the model (naming those that do), or
         ``fade_in = 0`` for a reference that does not start at rest.
     """
-    kind = kind or ("multivariable" if plant.is_static else "hammerstein")
-    spec = {"kind": kind, "model": "plant"}
+    kind, options, _ = _kind_and_options(plant, kind, gain, check)
+    spec = {"kind": kind, "model": "plant", **options}
     if kind == "hammerstein":
         spec["inversion"] = inversion
         spec["creep"] = "plant"        # the actuator's creep (e.g. identified) is inverted with G
@@ -121,6 +145,32 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     return comp, drive
 
 
+def _kind_and_options(plant, kind, gain, check):
+    """(kind, options of the kind, the note of a chosen kind or None).
+
+    A given kind is checked against the model's class (the message names the
+    kinds that work); none given: :func:`hammerstein.core.models.choose_kind`.
+    """
+    note = None
+    if kind is None:
+        choice = choose_kind(plant.hysteresis, not plant.is_static, gain)
+        kind, options, note = choice.kind, dict(choice.options), choice.note()
+    else:
+        problem = kind_problem(plant.hysteresis, kind, not plant.is_static)
+        if problem:
+            raise CompensatorError(problem)
+        options = {}
+    if kind in LAW_KINDS:
+        if gain is not None:
+            options["gain"] = gain
+        if check is not None:
+            options["check"] = check
+    elif gain is not None or check is not None:
+        raise CompensatorError(f"--gain/--check: kind {kind!r} has no inverse multiplicative law "
+                               f"(they apply to {', '.join(LAW_KINDS)})")
+    return kind, options, note
+
+
 def _handle(args):
     problem = out_file_problem(args.out, "drive file")
     if not problem:
@@ -130,14 +180,13 @@ def _handle(args):
     if problem:
         print_err(f"hammerstein compensate: error: {problem}")
         return 2
+    kind = note = None
     try:
         plant = load_actuator(args.actuator, args.sampling_period)
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
-        if args.kind not in (None, "multivariable", "diagonal", "per-axis", "static-gain") \
-                and plant.is_static:
-            raise ValueError(f"--kind {args.kind}: {args.actuator} has no dynamics to invert; "
-                             f"use --kind multivariable")
-        _, drive = compensate(plant, ref, args.kind, args.inversion, args.fade_in, args.limits)
+        kind, options, note = _kind_and_options(plant, args.kind, args.gain, args.check)
+        _, drive = compensate(plant, ref, kind, args.inversion, args.fade_in, args.limits,
+                              options.get("gain"), options.get("check"))
         owned = owned_problem(args.out, args.force)
         if owned:
             print_err(f"hammerstein compensate: error: {owned}")
@@ -153,8 +202,8 @@ def _handle(args):
         peaks = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
                           zip(plant.hysteresis.input_names, drive.peak_input, drive.peak_slew))
         comment = (f"compensate drive: t [s]; {units}\n"
-                   f"actuator {args.actuator}, sampling period {plant.sampling_period:g} s, "
-                   f"fade-in {drive.fade_samples} samples\n"
+                   f"actuator {args.actuator}, kind {kind}, sampling period "
+                   f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples\n"
                    f"peak input and slew: {peaks}"
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else ""))
@@ -163,7 +212,14 @@ def _handle(args):
         print_err(f"hammerstein compensate: error: the compensator diverged: {exc}")
         return 1
     except catch() as exc:
-        print_err(f"hammerstein compensate: error: {' '.join(str(exc).split())}")
+        text = ' '.join(str(exc).split())
+        if "rho(I - K^-1 J)" in text:
+            text += f" ({LAW_HINT})"
+        if note:
+            text += f" (kind {kind}, the default for this model; --kind names another)"
+        print_err(f"hammerstein compensate: error: {text}")
         return 1
+    if note:
+        print_err(note)
     print(f"wrote {args.out} ({ref.t.size} samples, peak {peaks})", file=sys.stdout)
     return 0

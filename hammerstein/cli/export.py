@@ -23,8 +23,9 @@ import re
 from hammerstein import __version__
 from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
+from hammerstein.core.models import choose_kind
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
-from hammerstein.exceptions import ExportError, FileLimitError, PresetError
+from hammerstein.exceptions import CompensatorError, ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c
 from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
                                       limits_from_table, load_source, write_files)
@@ -53,9 +54,12 @@ def add_parser(subparsers):
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--name", metavar="NAME",
                    help="C prefix and file stem (default: <preset>_<kind>, as a C identifier)")
-    p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default="multivariable",
-                   help="compensator kind (default multivariable; "
-                        f"{', '.join(REFUSED_KINDS)} are refused, naming why)")
+    p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default=None,
+                   help="compensator kind (default: the best for the model, printed with why: "
+                        "hammerstein with dynamics, else the exact inverse of a Preisach or "
+                        "generalised-PI model, else multivariable with a convergent gain; "
+                        f"docs/models-and-kinds.md; {', '.join(REFUSED_KINDS)} are refused, "
+                        f"naming why)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default=None,
                    help="inverse of the dynamics for --kind hammerstein (only zpetc runs sample by "
                         "sample)")
@@ -67,7 +71,7 @@ def add_parser(subparsers):
     p.add_argument("--cutoff-hz", type=number_type(0, low_open=True, unit="Hz"),
                    default=None, metavar="HZ",
                    help="cut-off of the low-pass feedback [Hz]")
-    p.add_argument("--check", choices=["error", "warn", "ignore"], default="error",
+    p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
                    help="convergence check rho(I - K^-1 J) < 1 of the law (default error)")
     p.add_argument("--precision", choices=["double", "float"], default="double",
                    help="arithmetic of the generated code (the interface stays double)")
@@ -134,11 +138,25 @@ def handler(args):
     except PresetError as exc:
         print_err(f"error: {' '.join(str(exc).split())}")
         return 1
+    kind, gain, check, note = args.kind, args.gain, args.check, None
+    if kind is None:
+        try:
+            choice = choose_kind(source.model, source.dynamics is not None, gain)
+        except CompensatorError as exc:
+            print_err(f"error: {args.source}: {' '.join(str(exc).split())}")
+            return 1
+        kind = choice.kind
+        gain = choice.options.get("gain", gain)
+        if gain is not None and not isinstance(gain, str):
+            gain = [list(map(float, row)) for row in gain]    # K [µm/V], a scaled midpoint
+        check = check or choice.options.get("check")
+        note = choice.note()
+    args.kind = kind
     try:
-        comp, T = build_compensator(source, args.kind, gain=args.gain, iterations=args.iterations,
+        comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
                                     feedback=args.feedback, cutoff_hz=args.cutoff_hz,
                                     inversion=args.inversion, sampling_period=args.sampling_period,
-                                    check=args.check)
+                                    check=check or "error")
         inputs = list(source.model.input_names)
         if args.amplifier_range is not None:
             table = {"range": list(args.amplifier_range)}
@@ -161,8 +179,11 @@ def handler(args):
                 print_err(f"warning: {written[0]}: no C compiler found ({find_compiler() or 'cc'}): "
                           f"the FMU holds the sources only")
     except (ExportError, FileLimitError) as exc:
-        print_err(f"error: {args.source}: {' '.join(str(exc).split())}")
+        chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
+        print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
         return 1
+    if note:
+        print_err(note)
     for path in written:
         print(f"wrote {path}")
     return 0

@@ -29,14 +29,9 @@ from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import number_type, out_file_problem
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
-from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.presets import PresetError, save_model
-from hammerstein.core.creep import creep_to_table
-from hammerstein.core.creep_identification import remove_creep, step_level_errors
-from hammerstein.core.preisach_identification import identify_preisach_records
-from hammerstein.core.gpi_identification import identify_gpi_records
-from hammerstein.core.record_identification import (DYNAMICS_DEFAULTS, identify_record_creep,
-                                                     identify_record_dynamics, identify_records)
+from hammerstein.core.identification_pipeline import PipelineOptions, identify_pipeline
+from hammerstein.core.record_identification import DYNAMICS_DEFAULTS
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.lti import estimate_measurement_delay
 from hammerstein.report.dynamics_figure import measured_bode_figure
@@ -501,29 +496,22 @@ def _handler(args):
             _estimate_delay(args)
         records = [_read(args, d) for d in args.data]
         names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
-        fit = _identify(args, records, n, thresholds, names)
-        extra = dyn = creep = None
-        if args.dynamics:
-            dyn = _dynamics(args, fit)
-        if args.creep_records:
-            creep = _creep(args, fit, dyn)
-            fit, creep = _refit_without_creep(args, records, n, thresholds, names, fit, creep, dyn)
+        result = identify_pipeline(
+            records, _options(args, n, thresholds), names,
+            [_read(args, d) for d in args.dynamics_records] if args.dynamics else None,
+            _creep_recs(args) if args.creep_records else None)
+        fit, dyn, creep = result.fit, result.dynamics, result.creep
+        extra = result.tables()
         meta = _metadata(args, fit, records)
         rows = metrics_rows(fit, args.output_unit) + level_metrics_rows(fit, args.output_unit)
         if fit.levels:
             meta["levels"] = [{k: (float(v) if isinstance(v, float) else v) for k, v in r.items()}
                               for r in fit.levels]
-        if dyn is not None and creep is None:
-            extra = dyn.tables
+        if dyn is not None:
             meta["dynamics"] = dyn.summary
-        if creep is not None:
-            if dyn is not None:   # G again, on the PI outputs through the creep: G(0) = I for G (I + C)
-                dyn = _dynamics(args, fit, creep.creeps_)
-                extra = dict(dyn.tables)
-                meta["dynamics"] = dyn.summary
+            if creep is not None:    # G on the PI outputs through the creep: G(0) = I for G (I + C)
                 meta["dynamics"]["inputs"] = "hysteresis model outputs through the identified creep"
-            extra = dict(extra or {})
-            extra["creep"] = creep_to_table(creep.creeps_, fit.model.output_names)
+        if creep is not None:
             meta["creep"] = creep.summary()
             rows += creep_metrics_rows(creep, args.output_unit)
         if dyn is not None:
@@ -548,44 +536,15 @@ def _handler(args):
     return 0
 
 
-def _refit_without_creep(args, records, n, thresholds, names, fit, creep, dyn):
-    """Hysteresis refitted on the records with the identified creep removed, then creep again.
-
-    The hysteresis records carry creep (y = (I + C) v, v = H(u)); a first
-    fit takes it for hysteresis. With the creep identified from the
-    staircases, v = (I + C)^-1 y is computed exactly from the records
-    (:func:`hammerstein.core.creep_identification.remove_creep`), the
-    hysteresis is refitted on v, and the creep is fitted again after the new
-    model; ``--creep-refits`` times.
-    """
-    refits = args.creep_refits
-    if refits is None:
-        refits = 0 if isinstance(fit.model, MultivariablePI) else 1
-        if refits == 0:
-            fit.notes.append("creep refit: none for a classical PI (the default; --creep-refits N "
-                             "refits it on the records with the creep removed)")
-    for i in range(refits):
-        before = _fit_rms(fit)
-        clean = remove_creep(records, creep.creeps_, fit.model.output_offset)
-        chosen = [note for note in fit.notes if note.startswith("model auto")]
-        fit = _identify(args, clean, n, thresholds, names, _class_of(fit))   # the class kept
-        fit.notes[:0] = chosen
-        creep = _creep(args, fit, dyn)
-        fit.notes.append(f"creep refit {i + 1}: hysteresis refitted on the records with the "
-                         f"identified creep removed (v = (I + C)^-1 y); held-out RMS "
-                         f"{before:.3g} -> {_fit_rms(fit):.3g} {args.output_unit} (largest output)")
-    return fit, creep
-
-
-def _fit_rms(fit):
-    """Largest held-out RMS error of an output (training when nothing is held out)."""
-    reps = fit.validation or fit.train
-    return max(float(r["rms"]) for r in reps) if reps else float("nan")
-
-
-def _class_of(fit):
-    """The ``--model`` class of a fit (``"classical"``, ``"preisach"`` or ``"generalized"``)."""
-    return {"preisach": "preisach", "generalized-pi": "generalized"}.get(fit.method, "classical")
+def _options(args, n, thresholds):
+    """The pipeline's options of the command line (:class:`PipelineOptions`)."""
+    return PipelineOptions(
+        method=args.method, n=n, thresholds=thresholds, partition=args.partition,
+        bounds=args.bounds, components=args.components, model=args.model,
+        threshold_spacing=args.threshold_spacing, preisach_levels=args.preisach_levels,
+        hold_out=args.hold_out, output_map=args.output_map, train_fraction=args.train_fraction,
+        skip=args.skip, order=args.order, max_order=args.max_order,
+        creep_refits=args.creep_refits, output_unit=args.output_unit, name=Path(args.out).stem)
 
 
 def _read(args, path):
@@ -609,109 +568,6 @@ def _creep_recs(args):
     if getattr(args, "_creep_read", None) is None:
         args._creep_read = [_read(args, d) for d in args.creep_records]
     return args._creep_read
-
-
-def _step_level_error(fit, recs):
-    """Held-out step levels of the staircases for a fit: (RMS [% of range], RMS, largest [unit]).
-
-    The creep is fitted for this model (``identify_record_creep`` without G:
-    the levels are read after the ringing), then the model with its creep
-    predicts every step level of the staircases
-    (:func:`hammerstein.core.creep_identification.step_level_errors`).
-    """
-    creep = identify_record_creep(fit, recs)
-    errs = step_level_errors(fit.model, recs, creep.creeps_)
-    span = np.max([np.ptp(np.asarray(r.y, dtype=float), axis=1) for r in recs], axis=0)
-    rel = np.concatenate([(e / span[:, None]).ravel() for e in errs])
-    ab = np.concatenate([e.ravel() for e in errs])
-    rel, ab = rel[np.isfinite(rel)], ab[np.isfinite(ab)]
-    return (100 * float(np.sqrt(np.mean(rel ** 2))), float(np.sqrt(np.mean(ab ** 2))),
-            float(np.max(np.abs(ab))))
-
-
-def _identify(args, records, n, thresholds, names, model_class=None):
-    """The fit of ``--model``: classical PI, Preisach, or the better on held-out data.
-
-    ``auto`` judges the classes on the held-out minor loops of the
-    multi-amplitude records and, with ``--creep-records``, also on the step
-    levels of the staircases (held out: the hysteresis is not fitted on
-    them); ``model_class`` forces one class (a refit keeps the chosen one).
-    """
-    choice = model_class or args.model
-    fits, errors = {}, {}
-    if choice in ("classical", "auto"):
-        try:
-            fits["classical"] = identify_records(
-                records, args.method, n, thresholds, "time" if thresholds is not None and
-                args.partition == "auto" else args.partition, args.bounds, args.components,
-                args.hold_out, args.train_fraction, args.skip, *names,
-                output_map=args.output_map)
-        except (IdentificationError, HysteresisError):
-            raise                    # a problem of the records: the same for every class
-    levels = any(r["held_out"] for f in fits.values() for r in f.levels)
-    if choice == "preisach" or (choice == "auto" and levels):
-        try:
-            fits["preisach"] = identify_preisach_records(
-                records, args.preisach_levels, "auto", args.components, args.hold_out,
-                args.train_fraction, args.skip, *names)
-        except (IdentificationError, HysteresisError) as exc:
-            if choice == "preisach" or not fits:
-                raise
-            errors["preisach"] = str(exc)
-    _fit_generalized(args, choice, records, names, levels, fits, errors)
-    if len(fits) == 1:
-        fit = next(iter(fits.values()))
-        if choice == "auto":
-            why = ("; ".join(f"{k} failed: {v}" for k, v in errors.items()) if errors else
-                   "no held-out amplitude level (minor loop) to compare the classes on")
-            fit.notes.insert(0, f"model auto: {_CLASS_LABEL.get(next(iter(fits)), next(iter(fits)))} "
-                                f"({why})")
-        return fit
-    loops = {k: f.minor_loop_error for k, f in fits.items()}
-    stairs = {k: _step_level_error(f, _creep_recs(args)) for k, f in fits.items()} \
-        if args.creep_records else {}
-    if stairs:   # both held out; the geometric mean weighs each by its ratio between classes
-        scores = {k: float(np.sqrt(loops[k] * stairs[k][0])) for k in fits}
-        rule = ("lowest geometric mean of the held-out minor-loop RMS error (% of each level's "
-                "output range) and the staircases' step-level RMS error (% of each output's "
-                "range; --creep-records, not used to fit the hysteresis)")
-    else:
-        scores = loops
-        rule = "lowest mean held-out minor-loop RMS error, % of each level's output range"
-    best = min(scores, key=lambda k: scores[k])
-    fit = fits[best]
-    lines = [f"model auto: chose {best} ({rule})"]
-    for k, f in fits.items():
-        worst = max(v["rms_percent"] for v in f.validation) if f.validation else float("nan")
-        text = (f"model auto: {k} {loops[k]:.3g} % mean held-out minor-loop RMS (largest "
-                f"held-out RMS of an output {worst:.3g} % of its range)")
-        if stairs:
-            pct, rms, big = stairs[k]
-            text += (f"; staircase step levels (model + its creep, from rest) RMS "
-                     f"{rms:.3g} {args.output_unit} = {pct:.3g} % of the range, largest "
-                     f"{big:.3g} {args.output_unit}; score {scores[k]:.3g} %")
-        lines.append(text)
-    fit.notes[:0] = lines
-    return fit
-
-
-_CLASS_LABEL = {"classical": "classical PI", "generalized": "generalized PI"}
-#: Play operators per component of `--model generalized` (and of auto's third class).
-GPI_PLAYS = 16
-
-
-def _fit_generalized(args, choice, records, names, levels, fits, errors):
-    """``--model generalized`` (or a refit of that class), or the third class of ``auto``."""
-    if not (choice == "generalized" or (choice == "auto" and levels)):
-        return
-    try:
-        fits["generalized"] = identify_gpi_records(
-            records, GPI_PLAYS, args.components, args.hold_out, args.train_fraction, args.skip,
-            *names, threshold_spacing=args.threshold_spacing)
-    except (IdentificationError, HysteresisError) as exc:
-        if choice == "generalized" or not fits:
-            raise
-        errors["generalized"] = str(exc)
 
 
 def _names(record, in_keys, out_keys):
@@ -973,18 +829,6 @@ def dynamics_metrics_rows(summary, output_names, input_names):
     rows += [(f"dynamics-order-{c['order']}", "G", "held_out_fit_percent",
               c["held_out_fit_percent"], "%") for c in s["candidates"] if "held_out_fit_percent" in c]
     return rows
-
-
-def _dynamics(args, fit, creep=None):
-    """Identified dynamics (:func:`identify_record_dynamics`) of the --dynamics-records."""
-    dyn = [_read(args, d) for d in args.dynamics_records]
-    return identify_record_dynamics(fit, dyn, name=Path(args.out).stem, creep=creep,
-                                    order=args.order, max_order=args.max_order)
-
-
-def _creep(args, fit, dyn):
-    """Identified creep (:func:`identify_record_creep`) of the --creep-records."""
-    return identify_record_creep(fit, _creep_recs(args), None if dyn is None else dyn.identifier.system_)
 
 
 def creep_metrics_rows(creep, output_unit="µm"):

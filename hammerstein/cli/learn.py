@@ -52,6 +52,7 @@ from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
 from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
                                        fraction, load_reference, mapping, nonnegative_float, owned_problem,
                                        positive_float)
+from hammerstein.cli.compensate import LAW_HINT
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
 from hammerstein.core.files import (all_or_nothing, bounded_read_text, guard_inputs, output_problem,
@@ -59,8 +60,9 @@ from hammerstein.core.files import (all_or_nothing, bounded_read_text, guard_inp
 from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
                                   harmonic_base_gains, periodic_average, repeating_from)
+from hammerstein.core.models import convergent_gain, law_radius, model_class
 from hammerstein.core.trial_noise import SEGMENT, compare_trials, trial_error
-from hammerstein.exceptions import DataFileError
+from hammerstein.exceptions import CompensatorError, DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
 
@@ -101,6 +103,14 @@ def add_parser(subparsers):
                    help="in [0, 1]: no local gain of the model below F x its loop's mean slope is "
                         "inverted (a trust region after input reversals; default 0.7 for a Preisach "
                         "or generalised-PI model, 0 for a classical PI)")
+    p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
+                   help="K of the inverse multiplicative law that inverts a classical PI in the "
+                        "learning (default: the convergent gain, printed with why; a Preisach or "
+                        "generalised-PI model is inverted exactly)")
+    p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
+                   help="when that law may not converge, rho(I - K^-1 J) >= 1: error, warn or "
+                        "ignore (default: ignore with a note, as its 50 iterations per sample "
+                        "are checked on the model's own prediction)")
     p.add_argument("--delay", default="auto", metavar="auto|N",
                    help="samples the measurement lags the model (default auto: the model file's "
                         "measurement delay when `identify --delay` wrote one, else "
@@ -114,6 +124,39 @@ def add_parser(subparsers):
     p.add_argument("--force", action="store_true",
                    help="replace an --out file that hammerstein did not write")
     p.set_defaults(handler=_handle)
+
+
+def _inverse_gain(model, gain, check):
+    """(K of the law inverting a classical PI in the learning, the notes to print).
+
+    The notes: one line on the choice (``note: kind = ilc because ...``);
+    ``check`` error/warn reacts to ``rho(I - K^-1 J) >= 1``
+    (:func:`hammerstein.core.models.law_radius`).
+    """
+    entry = model_class(model)
+    notes = []
+    if entry.exact_inverse_kind is not None:
+        if gain is not None or check is not None:
+            raise CompensatorError(f"--gain/--check: the {entry.label} model is inverted exactly "
+                                   f"in the learning (no inverse multiplicative law)")
+        return "secant", [f"note: kind = ilc because learning runs on the hardware; the "
+                          f"{entry.label} model is inverted exactly in L"]   # gain unused
+    if gain is None:
+        gain, radius, _ = convergent_gain(model)
+    else:
+        radius = law_radius(model, gain)
+    name = gain if isinstance(gain, str) else "scaled midpoint K = [" + ", ".join(
+        f"{v:.4g}" for v in np.diag(gain)) + "] µm/V"
+    if radius >= 1.0 and check in ("error", "warn"):
+        text = (f"--gain {name}: rho(I - K^-1 J) reaches {radius:.3g} >= 1, the law inverting "
+                f"the model in the learning may not converge ({LAW_HINT})")
+        if check == "error":
+            raise CompensatorError(text)
+        notes.append(f"warning: {text}")
+    notes.append(f"note: kind = ilc because learning runs on the hardware; the classical PI is "
+                 f"inverted in L by the multivariable law, gain {name}, rho(I - K^-1 J) "
+                 f"{radius:.3g}")
+    return gain, notes
 
 
 def _fade_of(path):
@@ -435,8 +478,10 @@ def _handle(args):
                         f"not learnt from; learning again from trial {state['trial']}'s drive "
                         f"with gain x{0.5 ** halvings:g}")
         gain = args.learning_gain * 0.5 ** halvings
+        law_gain, notes = _inverse_gain(model, args.gain, args.check)
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
-                                inversion=args.inversion, delay=delay, slope_floor=args.slope_floor)
+                                inversion=args.inversion, delay=delay, slope_floor=args.slope_floor,
+                                gain=law_gain)
         cond = ilc.convergence()
         gains = None
         if steady is not None:         # a repeating reference: learnt per harmonic of its period
@@ -505,6 +550,8 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond):
     if note is not None:
         print(note, file=sys.stdout)
     print(cond.summary(list(model.output_names)), file=sys.stdout)
+    for line in notes:
+        print_err(line)
     if not cond.holds:
         print_err("warning: the learning is not guaranteed to converge: lower --learning-gain "
                   "or --q-cutoff-hz")

@@ -10,6 +10,7 @@ from hammerstein.core.lti import dc_gain
 from hammerstein.core.presets import PresetError, bundled_presets, load_model, load_plant, read_toml
 from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import HammersteinError
+from hammerstein.core.models import MODEL_CLASSES
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]
@@ -67,6 +68,14 @@ def handler(args):
     print("compensator kinds:")
     for name, kind in COMPENSATORS.items():
         print(f"  {name}: {kind.description}")
+    print("model classes and the compensator kinds that work with them (default: the "
+          "first rule that applies; docs/models-and-kinds.md):")
+    for name, entry in MODEL_CLASSES.items():
+        print(f"  {name}: {entry.description}")
+        print(f"    kinds: {', '.join(entry.kinds)} (hammerstein and ilc need dynamics)")
+        exact = (f"else {entry.exact_inverse_kind} (exact inverse)" if entry.exact_inverse_kind
+                 else "else multivariable with a convergent gain, per-axis when none converges")
+        print(f"    default: hammerstein with dynamics, {exact}")
     for title, kinds in (("reference kinds", REFERENCE_KINDS), ("drive kinds", DRIVE_KINDS)):
         print(f"{title}:")
         for name, kind in kinds.items():

@@ -42,12 +42,12 @@ import contextlib
 
 import numpy as np
 
-from hammerstein.core.compensators import CompensatorError, InverseMultiplicativeCompensator, _gain_text
+from hammerstein.core.compensators import CompensatorError, _gain_text
 from hammerstein.core.creep import creep_dynamics, creep_matrices, series_matrices
 from hammerstein.core.dynamics import DynamicsError
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, state_vector
+from hammerstein.core.hysteresis import HysteresisError, state_vector
 from hammerstein.core.inversion import ZPETCInverse, preview_inverse
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.core.models import model_class
 from hammerstein.simulation import (ChainResult, LinearArrays, linear_steps, simulate_chain,
                                     simulate_compensator)
 
@@ -452,18 +452,20 @@ class HammersteinCompensator:
         if feedback != "delay":
             options = {"feedback": feedback, "cutoff_hz": cutoff_hz,
                        "sampling_period": sampling_period or dynamics.dt}
-        #: True when the static part is the exact Preisach inverse (a model that is not a PI)
-        self.exact_static = not isinstance(model, MultivariablePI)
+        entry = model_class(model)        # the model's class: its exact inverse, or the law
+        #: True when the static part is the class's exact inverse (Preisach, generalised PI)
+        self.exact_static = entry.exact_inverse_kind is not None
         if self.exact_static:
             try:
-                self.hysteresis_compensator = PreisachInverseCompensator(model, name=name)
+                self.hysteresis_compensator = entry.exact_inverse(model, name=name)
             except CompensatorError as exc:
                 raise CompensatorError(
-                    f"kind 'hammerstein' with a {type(model).__name__} model: its static part is "
-                    f"the exact Preisach inverse, which refuses this model: {exc}") from None
+                    f"kind 'hammerstein' with a {type(model).__name__} model ({entry.label} "
+                    f"class): its static part is "
+                    f"the exact inverse, which refuses this model: {exc}") from None
         else:
-            self.hysteresis_compensator = InverseMultiplicativeCompensator(
-                model, gain=gain, iterations=iterations, check=check, **options)
+            self.hysteresis_compensator = entry.compensator(
+                model, "multivariable", gain=gain, iterations=iterations, check=check, **options)
         with_creep = creep is not None and any(c is not None for c in creep)
         if (inversion != "zpetc" or with_creep) and hasattr(dynamics, "to_control"):
             dynamics = dynamics.to_control()     # 'stable' and the creep cascade use python-control

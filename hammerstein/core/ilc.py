@@ -78,13 +78,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
 from hammerstein.core.drive import apply_amplifier, drive_signal
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.inversion import preview_inverse
-from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.core.models import model_class
 from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 from hammerstein.exceptions import CompensatorError, ConvergenceWarning
 from hammerstein.simulation import ChainResult
 
@@ -664,23 +662,25 @@ class IterativeLearning:
             raise CompensatorError(f"significance: expected a number >= 0 (standard deviations), "
                                    f"found {significance!r}")
         self.significance = float(significance)
+        entry = model_class(model)       # the model's class: its exact inverse, or the law
+        #: True when the class has an exact inverse (Preisach, generalised PI): Gamma^c is it
+        self.exact_static = entry.exact_inverse_kind is not None
         if slope_floor is None:        # the Preisach / generalised-PI inverse: 0.7; a classical PI: 0
-            slope_floor = 0.0 if isinstance(model, MultivariablePI) else 0.7
+            slope_floor = 0.7 if self.exact_static else 0.0
         if not (np.isfinite(slope_floor) and 0 <= slope_floor <= 1):
             raise CompensatorError(f"slope_floor: expected a fraction in [0, 1] of the loop's mean "
                                    f"slope, found {slope_floor!r}")
         self.slope_floor = float(slope_floor)
-        #: True when the hysteresis is not a classical PI: Gamma^c is the exact Preisach inverse
-        self.exact_static = not isinstance(model, MultivariablePI)
         if self.exact_static:
             try:
-                self.hysteresis_compensator = PreisachInverseCompensator(model)   # exact root
+                self.hysteresis_compensator = entry.exact_inverse(model)   # exact root
             except CompensatorError as exc:
                 raise CompensatorError(f"model: the learning inverts the hysteresis exactly, which "
-                                       f"refuses this {type(model).__name__}: {exc}") from None
+                                       f"refuses this {entry.label} model: {exc}") from None
         else:
-            self.hysteresis_compensator = InverseMultiplicativeCompensator(
-                model, gain=gain, iterations=iterations, check="ignore")   # Gamma^c: the exact inverse
+            self.hysteresis_compensator = entry.compensator(
+                model, "multivariable", gain=gain, iterations=iterations,
+                check="ignore")   # Gamma^c: the exact inverse
         self._ba = None
         if q_cutoff_hz is not None:
             self._ba = _scipy_signal().butter(self.q_order, q_cutoff_hz, fs=1.0 / sampling_period)

@@ -25,6 +25,7 @@ quantisation step; the paper does not state the noise) drawn with ``seed``.
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -35,12 +36,14 @@ from hammerstein.exceptions import HysteresisError
 from hammerstein.core.dynamics import DynamicsError
 from hammerstein.core.files import confined_path
 from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine
+from hammerstein.core.excitation import decreasing_sine, excitation_set
 from hammerstein.core.hysteresis import MultivariablePI
 from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lazy import lazy_module
 from hammerstein.core.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
-from hammerstein.core.presets import PresetError, load_dynamics, load_model, model_from_table, model_to_table
+from hammerstein.core.plant import HammersteinPlant
+from hammerstein.core.presets import (PresetError, load_dynamics, load_model, load_plant, model_from_table,
+                                      model_to_table, save_model)
 from hammerstein.core.sensors import Sensor, characterize, identification_metadata
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        round_trip_table, spec_key)
@@ -51,6 +54,7 @@ from hammerstein.scenario.schema import Invalid
 # lazy: scipy.optimize, only for identify.model = "preisach" / "auto"
 preisach_identification = lazy_module("hammerstein.core.preisach_identification")
 record_identification = lazy_module("hammerstein.core.record_identification")
+identification_pipeline = lazy_module("hammerstein.core.identification_pipeline")
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
@@ -62,6 +66,9 @@ __all__ = [
     "IdentifiedDynamics",
     "identified_model",
     "identified_hammerstein",
+    "identified_from_records",
+    "excitation_records",
+    "RecordsIdentification",
     "flat_frequency",
     "resolve_model",
     "resolve_dynamics",
@@ -207,6 +214,9 @@ def identified_model(plant, spec, cache=None):
     except Invalid as exc:
         raise IdentificationError(f"identify: {exc}") from None
     cache = IdentificationCache() if cache is None else cache
+    if "records" in spec:      # the pipeline of `hammerstein identify` on excitation records
+        found = identified_from_records(plant, spec, False, cache)
+        return found.plant.hysteresis, found.metadata
     return cache.get("pi", _pi_key(plant, spec), lambda: _identify_pi(plant, spec),
                      load=lambda v: (model_from_table(v["model"]), v["meta"]),
                      dump=lambda v: _stored(round_trip_table(v[0]), meta=v[1]))
@@ -314,6 +324,159 @@ def _identify_pi(plant, spec):
             "resolution_um": sensor.resolution, "bandwidth_hz": sensor.bandwidth_hz,
             "noise_rms_um": sensor.noise_rms, "seed": spec["seed"]})
     return ident.model_, meta
+
+
+# -- the route of `hammerstein excitation` + `hammerstein identify` -------------------------
+@dataclass
+class RecordsIdentification:
+    """What an ``identify = { records = "excitation", ... }`` table identified.
+
+    Parameters
+    ----------
+    plant : hammerstein.core.plant.HammersteinPlant
+        The identified actuator as ``hammerstein compensate`` loads it: the
+        preset ``hammerstein identify`` writes (hysteresis of the chosen
+        class, dynamics and creep when identified), read back.
+    result : hammerstein.core.identification_pipeline.IdentificationResult
+        The pipeline's fit, dynamics and creep.
+    preset_text : str
+        The preset file's text.
+    metadata : dict
+        The ``[identification]`` table.
+    """
+
+    plant: Any
+    result: Any
+    preset_text: str
+    metadata: dict
+
+
+def excitation_records(plant, spec, sensor=None):
+    """The records of ``hammerstein excitation`` played through ``plant``, by kind.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+    spec : dict
+        Validated ``identify`` table with ``records = "excitation"``
+        (:data:`~hammerstein.scenario.identify_tables.RECORDS_IDENTIFY_FIELDS`).
+    sensor : hammerstein.core.sensors.Sensor, optional
+        Measures the outputs.
+
+    Returns
+    -------
+    dict of str to list of MultiRecord
+        ``hysteresis``, ``dynamics`` (the multisines of every input, then
+        their held-out validation records) and ``creep`` (staircases).
+
+    Raises
+    ------
+    IdentificationError
+        An amplitude that does not fit the plant's inputs.
+    """
+    model = plant.hysteresis
+    amp = spec.get("amplitude")
+    if amp is None:
+        if model.input_amplitude is None:
+            raise IdentificationError("identify.amplitude: missing, and the plant model has no "
+                                      "input_amplitude to default to")
+        amp = np.asarray(model.input_amplitude, dtype=float)
+    T = plant.sampling_period
+    try:
+        recs = excitation_set(list(model.input_names), amp, T, sine_frequency=spec["frequency"],
+                              multisine_periods=spec["multisine_periods"], hold=spec["hold"],
+                              seed=spec["seed"])
+    except ValueError as exc:
+        raise IdentificationError(f"identify: {exc}") from None
+    out = {"hysteresis": [], "multisine": [], "multisine-validation": [], "creep": []}
+    for r in recs:
+        y, _ = plant.simulate(r.u)
+        if sensor is not None:
+            y = sensor.measure(y, T)
+        out[r.kind].append(MultiRecord(r.time, r.u, y, tuple(model.input_names),
+                                       tuple(model.output_names), float(T), r.name))
+    return {"hysteresis": out["hysteresis"], "dynamics": out["multisine"] + out["multisine-validation"],
+            "creep": out["creep"]}
+
+
+def _pipeline_options(spec, name):
+    return identification_pipeline.PipelineOptions(
+        method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
+        bounds=spec["bounds"], components=spec["components"], model=spec["model"],
+        threshold_spacing=spec["threshold_spacing"], preisach_levels=spec["preisach_levels"],
+        output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
+        creep_refits=spec.get("creep_refits"), name=name)
+
+
+def identified_from_records(plant, spec, dynamics, cache=None):
+    """The actuator identified from excitation records, as ``identify`` + ``compensate`` see it.
+
+    The records of :func:`excitation_records` go through
+    :func:`hammerstein.core.identification_pipeline.identify_pipeline` with the
+    table's options (those of ``hammerstein identify``), the dynamics from the
+    multisines when ``dynamics``, the creep from the staircases when
+    ``spec["creep"]``; the preset it writes is read back
+    (:func:`hammerstein.core.presets.load_plant`), so the compensator is built
+    from what ``hammerstein compensate`` would read. Cached in memory per
+    plant, table and ``dynamics``.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        The (simulated) actuator.
+    spec : dict
+        ``identify`` table with ``records = "excitation"``.
+    dynamics : bool
+        Identify G too.
+    cache : IdentificationCache, optional
+
+    Returns
+    -------
+    RecordsIdentification
+
+    Raises
+    ------
+    IdentificationError
+    """
+    try:
+        spec = identify_table(spec)
+    except Invalid as exc:
+        raise IdentificationError(f"identify: {exc}") from None
+    cache = IdentificationCache() if cache is None else cache
+    key = (plant_fingerprint(plant), spec_key(spec), bool(dynamics))
+    return cache.get("records", key, lambda: _identify_from_records(plant, spec, dynamics),
+                     load=None, dump=None)
+
+
+def _identify_from_records(plant, spec, dynamics):
+    sensor = _sensor(spec["sensor"], spec["seed"])
+    recs = excitation_records(plant, spec, sensor)
+    model = plant.hysteresis
+    names = (list(model.input_names), list(model.output_names))
+    try:
+        result = identification_pipeline.identify_pipeline(
+            recs["hysteresis"], _pipeline_options(spec, "identified"), names,
+            recs["dynamics"] if dynamics else None, recs["creep"] if spec["creep"] else None)
+    except (IdentificationError, HysteresisError, DynamicsError) as exc:
+        raise IdentificationError(f"identify (records = 'excitation'): {exc}") from None
+    meta = {"method": result.fit.method, "model": spec["model"], "records":
+            "hammerstein excitation, played through the plant", "notes": list(result.fit.notes),
+            "sampling_period_s": float(plant.sampling_period),
+            "plant": f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})"}
+    if result.dynamics is not None:
+        meta["dynamics"] = result.dynamics.summary
+    if result.creep is not None:
+        meta["creep"] = result.creep.summary()
+    with tempfile.TemporaryDirectory() as tmp:   # what `identify` writes, read as `compensate` does
+        path = Path(tmp) / "identified.toml"
+        save_model(result.model, path, meta, extra=result.tables())
+        text = path.read_text(encoding="utf-8")
+        if "[preset]" in text:
+            identified = load_plant(path)
+        else:
+            identified = HammersteinPlant(load_model(path), float(plant.sampling_period),
+                                          name="identified")
+    return RecordsIdentification(identified, result, text, meta)
 
 
 # -- models of compensators and model-vs-plant comparisons (paper Fig. 6, 7) ---------
@@ -624,6 +787,27 @@ def resolve_dynamics(spec, plant, context, model=None):
     """
     context = _context(context)
     dyn = dynamics_source(spec)
+    if dyn == "identified" and spec.get("model") == "identified" and \
+            "records" in (spec.get("identify") or {}):   # the route of identify + compensate
+        found = identified_from_records(plant, spec["identify"], True, context.cache)
+        if found.plant.is_static:
+            raise IdentificationError("identify (records = 'excitation'): no dynamics identified")
+        ispec = identify_table(spec["identify"])
+        ident = found.result.dynamics.identifier
+        fn, zeta = modal_parameters(ident.system_)
+        dmeta = {"method": "subspace (PO-MOESP), order by held-out fit: the pipeline of "
+                           "hammerstein identify on the multisines of hammerstein excitation",
+                 "order": int(ident.order_),
+                 "validation_fit_percent": [float(v) for v in np.nan_to_num(ident.validation_fit_)],
+                 "fit_percent": [float(v) for v in ident.fit_percent_],
+                 "natural_frequency_hz": [float(v) for v in fn],
+                 "damping_ratio": [float(v) for v in zeta],
+                 "sensor": bool(ispec["sensor"]),
+                 "sampling_period_s": float(plant.sampling_period), "plant": plant.name}
+        context.identified.append(IdentifiedDynamics(
+            plant, found.plant.hysteresis, found.metadata, ident, dmeta,
+            (plant_fingerprint(plant), spec_key(ispec), True)))
+        return found.plant.hysteresis, found.plant.sampled_dynamics
     if dyn == "identified":
         ident_pi = spec.get("model") == "identified"
         identify = spec.get("identify") if ident_pi else None

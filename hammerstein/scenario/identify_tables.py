@@ -26,10 +26,11 @@ from __future__ import annotations
 
 from hammerstein.core.schema import nested_table
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
-                                         choice, integer, number, short_repr)
+                                         choice, integer, number, short_repr, string)
 
 __all__ = [
     "IDENTIFY_FIELDS",
+    "RECORDS_IDENTIFY_FIELDS",
     "identify_table",
     "HAMMERSTEIN_IDENTIFY_DEFAULTS",
     "hammerstein_identify_table",
@@ -89,8 +90,39 @@ IDENTIFY_FIELDS = {
 }
 
 
+#: Schema of an ``identify`` table with ``records = "excitation"``: the records of
+#: ``hammerstein excitation`` played through the plant, identified by the pipeline of
+#: ``hammerstein identify`` (:func:`hammerstein.core.identification_pipeline.identify_pipeline`)
+#: with its options and defaults: every class (``model``), creep staircases (``creep``).
+RECORDS_IDENTIFY_FIELDS = {
+    "records": Field(choice("excitation"), required=True),
+    "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
+    "frequency": Field(number("Hz", 0), default=1.0),     # of the decreasing-amplitude sines
+    "hold": Field(number("s", 0), default=2.0),           # of each staircase step
+    "multisine_periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=4),
+    "model": Field(choice("auto", "classical", "preisach", "generalized"), default="auto"),
+    "method": Field(choice("least-squares", "closed-form"), default="least-squares"),
+    "n_hysterons": Field(integer(1, MAX_HYSTERONS), default=15),
+    "partition": Field(choice("auto", "time", "input"), default="auto"),
+    "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),
+    "components": Field(string(), default="auto"),
+    "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
+    "preisach_levels": Field(integer(2, 60), default=20),
+    "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
+    "creep": Field(boolean(), default=False),              # identify the creep from staircases
+    "creep_refits": Field(integer(0, 5)),                  # default: by class, as identify
+    "order": Field(integer(1, 50)),                        # of G; default chosen on held-out data
+    "max_order": Field(integer(1, 50)),
+    "sensor": Field(boolean(), default=False),
+    "seed": Field(integer(0), default=0),
+}
+
+
 def identify_table(value):
     """Field checker of an ``identify`` table (all problems at once).
+
+    With ``records = "excitation"`` the table is checked against
+    :data:`RECORDS_IDENTIFY_FIELDS` (the options of ``hammerstein identify``).
 
     Parameters
     ----------
@@ -114,6 +146,15 @@ def identify_table(value):
                 and clean.get("model", "classical") == "classical":
             yield "bounds: only used by method = 'least-squares'"
 
+    if isinstance(value, dict) and "records" in value:
+        def cross_records(clean):
+            if clean.get("bounds", "none") != "none" and clean.get("method") == "closed-form":
+                yield "bounds: only used by method = 'least-squares'"
+            if "order" in clean and "max_order" in clean:
+                yield "order: give order or max_order, not both"
+
+        return nested_table(value, RECORDS_IDENTIFY_FIELDS, '{ records = "excitation" }',
+                            cross_records)
     return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
 
 
@@ -217,7 +258,7 @@ def hammerstein_identify_table(value):
     NestedInvalid
         As :func:`identify_table`.
     """
-    if isinstance(value, dict):
+    if isinstance(value, dict) and "records" not in value:   # records: identify's own defaults
         value = {**HAMMERSTEIN_IDENTIFY_DEFAULTS, **value}
     return identify_table(value)
 

@@ -21,20 +21,19 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammerstein.core.compensators import (CompensatorError, InverseMultiplicativeCompensator, PerAxisInverseCompensator,
-                                           StaticGainCompensator, diagonal_compensator)
 from hammerstein.core.amplifier import LIMITS
 from hammerstein.core.files import confined_path
 from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
-from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.core.models import kind_problem as class_kind_problem, model_class
+from hammerstein.exceptions import CompensatorError
 from hammerstein.core.ilc import LearningCompensator
 from hammerstein.core.presets import PresetError, load_creep, load_dynamics
-from hammerstein.scenario.identification import ResolveContext, resolve_dynamics, resolve_model
+from hammerstein.scenario.identification import (ResolveContext, identified_from_records,
+                                                 resolve_dynamics, resolve_model)
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
                                          string)
-from hammerstein.core.mixed_compensators import mixed_compensator
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
@@ -133,12 +132,7 @@ def _build_none(spec, plant, context):
 
 
 def _build_multivariable(spec, plant, context):
-    model = _spec_model(spec, plant, context)
-    if not isinstance(model, MultivariablePI):
-        return _mixed(spec, model, "multivariable")
-    return InverseMultiplicativeCompensator(
-        model, gain=spec.get("gain", "secant"), iterations=spec.get("iterations", 1),
-        check=spec.get("check", "error"), **_feedback_options(spec, plant))
+    return _rate_independent(spec, plant, context, "multivariable")
 
 
 def _spec_model(spec, plant, context):
@@ -146,45 +140,28 @@ def _spec_model(spec, plant, context):
     return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
 
 
-def _mixed(spec, model, kind):
-    """A rate-independent kind over a model that is not a classical PI (a Preisach or mixed
-    model): :func:`hammerstein.core.mixed_compensators.mixed_compensator`."""
-    return mixed_compensator(model, kind, gain=spec.get("gain", "secant"),
-                             iterations=spec.get("iterations", 1),
-                             check=spec.get("check", "error"),
-                             feedback=spec.get("feedback", "delay"))
-
-
-def _feedback_options(spec, plant):
-    """feedback = "lowpass" needs the cut-off [Hz] and the plant's sampling period [s]."""
-    if spec.get("feedback", "delay") == "delay":
-        return {}
-    return {"feedback": spec["feedback"], "cutoff_hz": spec.get("cutoff_hz"),
-            "sampling_period": plant.sampling_period}
+def _rate_independent(spec, plant, context, kind):
+    """A rate-independent kind over the table's model, built by the model's class
+    (:meth:`hammerstein.core.models.ModelClass.compensator`: the law of Theorem 4.1 over a
+    classical PI, or over a Preisach / generalised-PI model's own forward operator)."""
+    model = _spec_model(spec, plant, context)
+    options = {"gain": spec.get("gain", "secant"), "iterations": spec.get("iterations", 1),
+               "check": spec.get("check", "error"), "feedback": spec.get("feedback", "delay")}
+    if options["feedback"] != "delay":
+        options.update(cutoff_hz=spec.get("cutoff_hz"), sampling_period=plant.sampling_period)
+    return model_class(model).compensator(model, kind, **options)
 
 
 def _build_diagonal(spec, plant, context):
-    model = _spec_model(spec, plant, context)
-    if not isinstance(model, MultivariablePI):
-        return _mixed(spec, model, "diagonal")
-    return diagonal_compensator(
-        model, gain=spec.get("gain", "secant"),
-        iterations=spec.get("iterations", 1), check=spec.get("check", "error"),
-        **_feedback_options(spec, plant))
+    return _rate_independent(spec, plant, context, "diagonal")
 
 
 def _build_per_axis(spec, plant, context):
-    model = _spec_model(spec, plant, context)
-    if not isinstance(model, MultivariablePI):
-        return _mixed(spec, model, "per-axis")
-    return PerAxisInverseCompensator(model)
+    return _rate_independent(spec, plant, context, "per-axis")
 
 
 def _build_static_gain(spec, plant, context):
-    model = _spec_model(spec, plant, context)
-    if not isinstance(model, MultivariablePI):
-        return _mixed(spec, model, "static-gain")
-    return StaticGainCompensator(model)
+    return _rate_independent(spec, plant, context, "static-gain")
 
 
 # -- registry of compensator kinds: add entries here ---------------------------------
@@ -236,7 +213,10 @@ def _spec_creep(spec, plant, context):
 
     ``creep = "auto"`` (default): the ``[creep]`` of the dynamics file when
     ``dynamics`` is a file (e.g. a preset written by ``hammerstein identify
-    --creep-records``), none with ``dynamics = "plant"`` or ``"identified"``;
+    --creep-records``) or identified from records with ``identify = {
+    records = "excitation", creep = true }`` (the identified creep, as
+    ``hammerstein compensate`` inverts it), none with ``dynamics = "plant"`` or
+    ``"identified"`` otherwise;
     ``"plant"``: the plant's true creep (an oracle); ``"none"``.
     """
     which = spec.get("creep", "auto")
@@ -245,6 +225,10 @@ def _spec_creep(spec, plant, context):
     if which == "plant":
         return plant.creep
     dyn = dynamics_source(spec)
+    identify = spec.get("identify") or {}
+    if dyn == "identified" and spec.get("model") == "identified" and "records" in identify:
+        cache = context.cache if hasattr(context, "cache") else None
+        return identified_from_records(plant, identify, True, cache).plant.creep
     if dyn in ("plant", "identified"):
         return None
     base = context.base_dir if hasattr(context, "base_dir") else Path(context)
@@ -313,8 +297,11 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
 
 
 def _build_preisach_inverse(spec, plant, context):
-    return PreisachInverseCompensator(_spec_model(spec, plant, context),
-                                      method=spec.get("method", "root"))
+    model = _spec_model(spec, plant, context)
+    problem = class_kind_problem(model, "preisach-inverse")
+    if problem:                  # a classical PI: no exact multivariable inverse
+        raise CompensatorError(problem)
+    return PreisachInverseCompensator(model, method=spec.get("method", "root"))
 
 
 COMPENSATORS["preisach-inverse"] = CompensatorKind(

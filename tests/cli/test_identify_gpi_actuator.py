@@ -137,7 +137,7 @@ def test_a_refit_keeps_the_generalized_class(monkeypatch, asked):
     """
     from types import SimpleNamespace
 
-    import hammerstein.cli.identify as cli
+    import hammerstein.core.identification_pipeline as pipeline
     calls = []
 
     def fake(kind):
@@ -146,14 +146,12 @@ def test_a_refit_keeps_the_generalized_class(monkeypatch, asked):
             return SimpleNamespace(method={"classical": "lsq"}.get(kind, kind), levels=[],
                                    notes=[], validation=[])
         return fit
-    monkeypatch.setattr(cli, "identify_records", fake("classical"))
-    monkeypatch.setattr(cli, "identify_preisach_records", fake("preisach"))
-    monkeypatch.setattr(cli, "identify_gpi_records", fake("generalized-pi"))
-    args = SimpleNamespace(model=asked, method="lsq", partition="auto", bounds="auto",
-                           components="auto", hold_out="auto", train_fraction=None, skip=0,
-                           output_map="auto", preisach_levels=None, threshold_spacing="power",
-                           creep_records=None)
+    monkeypatch.setattr(pipeline, "identify_records", fake("classical"))
+    monkeypatch.setattr(pipeline, "identify_preisach_records", fake("preisach"))
+    monkeypatch.setattr(pipeline, "identify_gpi_records", fake("generalized-pi"))
+    options = pipeline.PipelineOptions(model=asked, method="lsq", bounds="auto", skip=0,
+                                       preisach_levels=None, threshold_spacing="power", n=10)
     first = SimpleNamespace(method="generalized-pi")
-    assert cli._class_of(first) == "generalized"
-    fit = cli._identify(args, [], 10, None, (["u"], ["y"]), cli._class_of(first))
+    assert pipeline.fit_class(first) == "generalized"
+    fit = pipeline.identify_hysteresis([], options, (["u"], ["y"]), pipeline.fit_class(first))
     assert calls == ["generalized-pi"] and fit.method == "generalized-pi"

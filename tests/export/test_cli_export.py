@@ -41,7 +41,7 @@ def test_c_files_written_then_replaced(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, status, needle", [
     (["--kind", "hammerstein", "--inversion", "stable"], 1, "inversion: 'stable'"),
-    (["--gain", "identity"], 1, "rho(I - K^-1 J)"),
+    (["--kind", "multivariable", "--gain", "identity"], 1, "rho(I - K^-1 J)"),
     (["--kind", "per-axis", "--iterations", "3"], 1, "takes no gain"),
     (["--amplifier-range", "5", "-5"], 1, "range: expected [min, max]"),
     (["--slew-rate", "100"], 2, "--slew-rate needs"),
@@ -132,7 +132,7 @@ def test_cli_code_equals_python(tmp_path, capsys):
     """What the command writes is what export_c writes: same voltages as Python."""
     out = tmp_path / "o"
     assert run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name", "mv",
-               "--iterations", "2", "--gain", "midpoint")[0] == 0
+               "--kind", "multivariable", "--iterations", "2", "--gain", "midpoint")[0] == 0
 
     class Code:
         name, n_inputs = "mv", 2

@@ -1,0 +1,118 @@
+"""``compensate`` and ``export`` without ``--kind``: the kind chosen for the model, and why.
+
+The drives are judged through the model they were built from only for the
+exact inverses (its output equals the reference); the end-to-end route on
+actuators outside the classes is tests/cli/test_route_every_class.py.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.main import main
+from hammerstein.core.presets import load_plant, save_model
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+CIRCLE = '{ kind = "circle", radius = 10, frequency = 20, periods = 3 }'
+
+
+def _run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _model_file(tmp_path, preset):
+    path = tmp_path / "model.toml"
+    save_model(load_plant(preset).hysteresis, path, {"note": "test"})
+    return path
+
+
+def _drive(path):
+    lines = [ln for ln in Path(path).read_text().splitlines() if not ln.startswith("#")]
+    return np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+
+
+@pytest.mark.parametrize("preset, kind", [
+    ("rakotondrabe-2dof", "hammerstein"),
+    ("realistic-2dof", "hammerstein"),
+    (str(SCENARIOS / "presets" / "realistic-gpi.toml"), "hammerstein")])
+def test_compensate_default_prints_the_kind_and_why(tmp_path, capsys, preset, kind):
+    code, out, err = _run(capsys, "compensate", preset, "--reference", CIRCLE,
+                          "--out", str(tmp_path / "d.csv"))
+    assert code == 0, err
+    notes = [ln for ln in err.splitlines() if ln.startswith("note: kind = ")]
+    assert len(notes) == 1 and notes[0].startswith(f"note: kind = {kind} because ")
+    assert f"kind {kind}" in (tmp_path / "d.csv").read_text().splitlines()[1]
+
+
+@pytest.mark.parametrize("preset", ["realistic-2dof", str(SCENARIOS / "presets" / "realistic-gpi.toml")])
+def test_static_preisach_and_gpi_default_to_the_exact_inverse(tmp_path, capsys, preset):
+    model = _model_file(tmp_path, preset)
+    code, _, err = _run(capsys, "compensate", str(model), "--sampling-period", "5e-5",
+                        "--reference", CIRCLE, "--out", str(tmp_path / "d.csv"))
+    assert code == 0, err
+    assert "note: kind = preisach-inverse because" in err
+    data = _drive(tmp_path / "d.csv")
+    hyst = load_plant(preset).hysteresis
+    y, _ = hyst.simulate(data[:, 1:3].T)
+    t = data[:, 0]
+    ref = 10 * np.vstack([np.cos(2 * np.pi * 20 * t), np.sin(2 * np.pi * 20 * t)])
+    settled = t >= 1 / 20          # past the one-period fade-in
+    assert np.max(np.abs(y[:, settled] - ref[:, settled])) < 1e-6
+
+
+def test_hammerstein_on_a_static_model_names_the_kinds_that_work(tmp_path, capsys):
+    model = _model_file(tmp_path, str(SCENARIOS / "presets" / "realistic-gpi.toml"))
+    code, _, err = _run(capsys, "compensate", str(model), "--sampling-period", "5e-5",
+                        "--reference", CIRCLE, "--out", str(tmp_path / "d.csv"),
+                        "--kind", "hammerstein")
+    assert code == 1 and len(err.strip().splitlines()) == 1
+    works = err.split("kinds that work with it: ")[1]
+    assert "preisach-inverse" in works and "hammerstein" not in works
+
+
+def test_gain_and_check_are_options_of_compensate(tmp_path, capsys):
+    preset = "realistic-2dof"
+    code, _, err = _run(capsys, "compensate", preset, "--reference", CIRCLE, "--out",
+                        str(tmp_path / "d.csv"), "--kind", "multivariable", "--gain", "identity")
+    assert code == 1 and "rho(I - K^-1 J)" in err and "--check warn" in err
+    code, _, err = _run(capsys, "compensate", preset, "--reference", CIRCLE, "--out",
+                        str(tmp_path / "d.csv"), "--kind", "multivariable", "--gain", "midpoint",
+                        "--check", "warn", "--limits", "warn")
+    assert code == 0, err
+    code, _, err = _run(capsys, "compensate", preset, "--reference", CIRCLE, "--out",
+                        str(tmp_path / "d.csv"), "--kind", "per-axis", "--gain", "midpoint")
+    assert code == 1 and "--gain/--check" in err
+
+
+def test_export_default_kind_is_printed(tmp_path, capsys):
+    code, out, err = _run(capsys, "export", "rakotondrabe-2dof", "--target", "c", "--out",
+                          str(tmp_path / "c"))
+    assert code == 0, err
+    assert err.startswith("note: kind = hammerstein because")
+    assert (tmp_path / "c" / "rakotondrabe_2dof_hammerstein.c").exists()
+
+
+def test_list_shows_which_kind_works_with_which_class(capsys):
+    code, out, _ = _run(capsys, "list")
+    assert code == 0
+    block = out.split("model classes and the compensator kinds")[1].split("reference kinds:")[0]
+    for name in ("classical", "preisach", "generalized"):
+        assert f"  {name}: " in block
+    classical = block.split("  classical: ")[1].split("  preisach: ")[0]
+    assert "preisach-inverse" not in classical.split("kinds: ")[1].split("\n")[0]
+
+
+def test_scenario_validates_a_records_identify_table(tmp_path, capsys, monkeypatch):
+    text = (SCENARIOS / "realistic-b.toml").read_text(encoding="utf-8")
+    good = tmp_path / "good.toml"
+    good.write_text(text.replace('preset = "presets/', f'preset = "{SCENARIOS}/presets/'))
+    bad = tmp_path / "bad.toml"
+    bad.write_text(good.read_text().replace('records = "excitation", creep = true',
+                                            'records = "excitation", creep = true, modle = "auto"', 1))
+    monkeypatch.setenv("HAMMERSTEIN_ALLOW_PATHS", str(SCENARIOS))
+    assert _run(capsys, "validate", str(good))[0] == 0
+    code, out, err = _run(capsys, "validate", str(bad))
+    assert code != 0 and "modle" in out + err and "model" in out + err

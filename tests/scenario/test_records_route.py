@@ -1,0 +1,98 @@
+"""Scenario route = command-line route: ``identify = { records = "excitation", ... }``.
+
+A scenario that identifies from the records of ``hammerstein excitation`` with
+the options of ``hammerstein identify`` must reach what a user reaches with
+the commands: the same preset (model, dynamics and creep tables) and the
+same drive, to 1e-9. The records the scenario plays through its plant are
+written to CSV files at full precision and given to ``identify``; its preset
+goes to ``compensate``; the scenario's compensator computes the drive of the
+same reference.
+"""
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hammerstein.cli._hardware import load_actuator, load_reference
+from hammerstein.cli.main import main
+from hammerstein.core.drive import drive_signal
+from hammerstein.core.presets import load_plant
+from hammerstein.scenario.identification import (ResolveContext, excitation_records,
+                                                 identified_from_records)
+from hammerstein.scenario.identify_tables import identify_table
+from hammerstein.scenario.registry import build_compensator
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+CIRCLE = '{ kind = "circle", radius = 12, frequency = 40, periods = 4 }'
+
+
+def _write(path, rec):
+    cols = ["t", *rec.input_names, *rec.output_names]
+    data = np.column_stack([rec.timepts, rec.u.T, rec.y.T])
+    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+    return str(path)
+
+
+def _numbers(table):
+    """Every number of a (nested) TOML table, in a stable order."""
+    out = []
+    if isinstance(table, dict):
+        for k in sorted(table):
+            out += _numbers(table[k])
+    elif isinstance(table, list):
+        for v in table:
+            out += _numbers(v)
+    elif isinstance(table, (int, float)) and not isinstance(table, bool):
+        out.append(float(table))
+    return out
+
+
+def test_identify_table_with_records_takes_identify_defaults():
+    spec = identify_table({"records": "excitation"})
+    assert spec["model"] == "auto" and spec["method"] == "least-squares"
+    assert spec["n_hysterons"] == 15 and spec["partition"] == "auto" and spec["creep"] is False
+    with pytest.raises(Exception, match="model"):
+        identify_table({"records": "excitation", "model": "chebyshev"})
+
+
+@pytest.mark.slow
+def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys):
+    plant = load_plant(SCENARIOS / "presets" / "realistic-gpi.toml")
+    identify = {"records": "excitation", "model": "generalized", "creep": True,
+                "frequency": 5.0, "hold": 0.25, "multisine_periods": 2}
+    spec = identify_table(identify)
+    recs = excitation_records(plant, spec)
+    files = {kind: [_write(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
+             for kind, rs in recs.items()}
+    preset = tmp_path / "id.toml"
+    T = repr(plant.sampling_period)
+    assert main(["identify", *files["hysteresis"], "--inputs", "ux,uy", "--outputs", "x,y",
+                 "--sampling-period", T, "--model", "generalized", "--dynamics",
+                 "--dynamics-records", *files["dynamics"], "--creep-records", *files["creep"],
+                 "--out", str(preset)]) == 0
+    capsys.readouterr()
+    cli = tomllib.loads(preset.read_text(encoding="utf-8"))
+    assert cli["identification"].get("measurement_delay_samples", 0) == 0   # no acquisition delay
+
+    found = identified_from_records(plant, identify, True)
+    scen = tomllib.loads(found.preset_text)
+    for table in ("model", "dynamics", "creep"):
+        a, b = np.array(_numbers(cli[table])), np.array(_numbers(scen[table]))
+        assert a.shape == b.shape and a.size > 0
+        assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), table
+
+    drive = tmp_path / "d.csv"
+    assert main(["compensate", str(preset), "--reference", CIRCLE, "--kind", "hammerstein",
+                 "--out", str(drive)]) == 0
+    lines = [ln for ln in drive.read_text().splitlines() if not ln.startswith("#")]
+    u_cli = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])[:, 1:3].T
+
+    comp = build_compensator({"kind": "hammerstein", "model": "identified", "identify": identify,
+                              "dynamics": "identified"}, plant, ResolveContext(tmp_path))
+    ref = load_reference(CIRCLE, load_actuator(str(preset)))
+    res = drive_signal(comp, ref.signal, plant.sampling_period, ref.period_samples, None, None,
+                       "error")
+    assert u_cli.shape == res.inputs.shape
+    assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
