@@ -489,7 +489,10 @@ def _handle(args):
             return 2
         comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]\n"
                    f"actuator {args.actuator}, sampling period {T:g} s, fade-in {fade} samples\n"
-                   f"learned from {args.drive} and {args.measured}: delay {delay} samples, "
+                   + (f"learned from {args.drive} and {args.measured}" if note is None else
+                      f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "
+                      f"and {args.measured} were worse)")
+                   + f": delay {delay} samples, "
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
                    + "".join(f"\nshaped: {n}" for n in shaped))
