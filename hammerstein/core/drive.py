@@ -33,6 +33,7 @@ record at once and is only run by :func:`drive_signal`).
 from __future__ import annotations
 
 import io
+import re
 import warnings
 from dataclasses import dataclass, field
 
@@ -970,7 +971,6 @@ def drive_fade_samples(path):
     OSError
         The file cannot be read.
     """
-    import re
     with open(path, encoding="utf-8", errors="replace") as fh:
         for _ in range(20):
             line = fh.readline()
