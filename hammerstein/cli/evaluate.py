@@ -206,6 +206,17 @@ def _handle(args):
     return 0
 
 
+def _drive_notes(args):
+    """The drive file's fade-in and shaping, as report lines (empty without ``--drive``)."""
+    if not args.drive:
+        return ""
+    with open(args.drive, encoding="utf-8", errors="replace") as fh:
+        head = [line[1:].strip() for line in (fh.readline() for _ in range(40))
+                if line.startswith("#")]
+    keep = [h for h in head if h.startswith("shaped:") or "fade-in" in h]
+    return "".join(f"  \ndrive `{args.drive}`: {h}" for h in keep)
+
+
 def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
     out.mkdir(parents=True, exist_ok=True)
     try:
@@ -240,6 +251,7 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
                       for row in rows)
     text = (f"# Measured response\n\nreference: `{args.reference}`  \nmeasured: `{args.measured}`"
             f"  \nsampling period {T:g} s, {n} samples, settling {args.settle_periods:g} period(s)"
+            f"{_drive_notes(args)}"
             f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
             f"samples = {delay * T * 1e6:.4g} µs, "
             f"{'removed before the metrics' if args.remove_delay else 'not removed: the metrics include it'}.\n"
