@@ -164,6 +164,11 @@ def _handle(args):
         return 1
     for note in drive.shaped:
         print(f"shaped: {note}", file=sys.stdout)
+    if any("beyond the range" in n or "faster than" in n for n in drive.shaped) \
+            and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):
+        print("the raster's line steps and turns ask more than the records' limits: spread them "
+              "with smoothing = S in the reference (a fraction of a line, e.g. 0.1)",
+              file=sys.stdout)
     print(f"wrote {args.out} ({ref.t.size} samples, fade-in "
           f"{drive.fade_samples * plant.sampling_period:g} s, peak {peaks})", file=sys.stdout)
     return 0

@@ -123,6 +123,8 @@ def test_a_circle_beyond_the_range_is_shaped_and_says_where(tmp_path):
     assert "beyond the range [-5, 5] V by up to" in text and "shaped:" in printed
     assert re.search(r"\d\.\d{4}-\d\.\d{4} s", text)       # the time intervals
     assert np.isclose(np.max(np.abs(u)), RANGE)
+    printed = _compensate([_preset(tmp_path), "--reference", RASTER, "--out", out])
+    assert "uy: beyond the range [-5, 5] V" in printed and "smoothing = S" in printed
 
 
 def test_records_amplifier_table_is_the_records_range_and_largest_slew():
