@@ -23,7 +23,8 @@ from hammerstein.cli._common import out_file_problem, print_err
 from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.core.amplifier import LIMITS
-from hammerstein.core.drive import apply_amplifier, drive_signal, signals_csv, starts_at_rest
+from hammerstein.core.drive import (MIN_FADE_S, apply_amplifier, hardware_drive, rest_output,
+                                    signals_csv, starts_at_rest)
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.core.hammerstein_compensator import INVERSIONS
 from hammerstein.core.models import choose_kind, kind_problem
@@ -72,8 +73,10 @@ def add_parser(subparsers):
     p.add_argument("--inversion", choices=list(INVERSIONS), default="zpetc",
                    help="inverse of the dynamics (kind hammerstein; default zpetc)")
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
-                   help="fade-in from rest [s] (0 for a reference that starts at rest; default "
-                        "one period for references that do not)")
+                   help="fade-in from rest [s] (0 only for a reference that starts at rest; "
+                        f"default: a duration, at least one period and {MIN_FADE_S:g} s, "
+                        "lengthened until the drive never steps faster while fading in than "
+                        "once settled, nor than the amplifier's slew rate)")
     p.add_argument("--limits", choices=list(LIMITS), default="error",
                    help="beyond the amplifier: error (default, nothing written), warn or clip "
                         "(the drive is clipped and slew-limited)")
@@ -140,8 +143,9 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
             f"cannot follow: give a fade-in > 0 (default: one period, "
             f"{reference.period_samples * plant.sampling_period:g} s) or a reference that starts "
             f"at rest")
-    drive = drive_signal(comp, reference.signal, plant.sampling_period, reference.period_samples,
-                         fade, plant.amplifier, limits)
+    drive = hardware_drive(comp, reference.signal, plant.sampling_period,
+                           reference.period_samples, fade, plant.amplifier, limits,
+                           rest=rest_output(plant.hysteresis))
     return comp, drive
 
 
@@ -203,10 +207,12 @@ def _handle(args):
                           zip(plant.hysteresis.input_names, drive.peak_input, drive.peak_slew))
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
-                   f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples\n"
+                   f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
+                   f"({drive.fade_samples * plant.sampling_period:g} s, excluded from the metrics)\n"
                    f"peak input and slew: {peaks}"
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
-                      if drive.problems else ""))
+                      if drive.problems else "")
+                   + "".join(f"\nshaped: {line}" for line in drive.shaped))
         safe_write(args.out, signals_csv(ref.t, cols, comment), "drive file")
     except CompensatorDivergence as exc:
         print_err(f"hammerstein compensate: error: the compensator diverged: {exc}")
@@ -221,5 +227,13 @@ def _handle(args):
         return 1
     if note:
         print_err(note)
-    print(f"wrote {args.out} ({ref.t.size} samples, peak {peaks})", file=sys.stdout)
+    for line in drive.shaped:
+        print(f"shaped: {line}", file=sys.stdout)
+    if any("beyond the range" in n or "faster than" in n for n in drive.shaped) \
+            and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):
+        print("the raster's line steps and turns ask more than the records' limits: spread them "
+              "with smoothing = S in the reference (a fraction of a line, e.g. 0.1)",
+              file=sys.stdout)
+    print(f"wrote {args.out} ({ref.t.size} samples, fade-in "
+          f"{drive.fade_samples * plant.sampling_period:g} s, peak {peaks})", file=sys.stdout)
     return 0

@@ -36,7 +36,7 @@ from hammerstein.cli._hardware import (catch, load_actuator, load_reference, map
                                        nonnegative_float, positive_float)
 from hammerstein.core import metrics as met
 from hammerstein.core.amplifier import drive_metrics
-from hammerstein.core.drive import read_signals
+from hammerstein.core.drive import drive_fade_samples, read_signals
 from hammerstein.core.files import all_or_nothing, guard_inputs, safe_write
 from hammerstein.core.ilc import estimate_delay
 from hammerstein.core.references import raster_line_index
@@ -78,7 +78,14 @@ def add_parser(subparsers):
     p.add_argument("--period", type=positive_float, metavar="S",
                    help="period of a periodic CSV reference [s] (the settling window)")
     p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
-                   help="periods excluded from the metrics (default 1, as scenarios)")
+                   help="periods excluded from the metrics after the fade-in (default 1, as "
+                        "scenarios)")
+    p.add_argument("--drive", metavar="DRIVE.csv",
+                   help="the drive file that was applied (compensate, learn): its fade-in "
+                        "(header) is left out of the metrics and marked in the figure")
+    p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
+                   help="fade-in to leave out of the metrics [s] (default: the --drive file's, "
+                        "else 0)")
     p.add_argument("--remove-delay", action="store_true",
                    help="advance the measurement by the estimated delay before the metrics")
     p.set_defaults(handler=_handle)
@@ -190,6 +197,10 @@ def _handle(args):
                                 f"the measurement of the whole reference")
         r, y = ref.signal[:, :N], y[:, :N]
         rf = ref.spec.get("frequency") if ref.kind == "raster" and ref.spec else None
+        fade = (int(round(args.fade_in / T)) if args.fade_in is not None
+                else drive_fade_samples(args.drive) or 0 if args.drive else 0)
+        # the fade-in is not tracking: the metrics start after it and --settle-periods
+        args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
                                       ref.scale, ref.loop_channel, args.remove_delay, rf)
         if u is not None:
@@ -215,6 +226,17 @@ def _handle(args):
           f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay else ', not removed'})",
           file=sys.stdout)
     return 0
+
+
+def _drive_notes(args):
+    """The drive file's fade-in and shaping, as report lines (empty without ``--drive``)."""
+    if not args.drive:
+        return ""
+    with open(args.drive, encoding="utf-8", errors="replace") as fh:
+        head = [line[1:].strip() for line in (fh.readline() for _ in range(40))
+                if line.startswith("#")]
+    keep = [h for h in head if h.startswith("shaped:") or "fade-in" in h]
+    return "".join(f"  \ndrive `{args.drive}`: {h}" for h in keep)
 
 
 def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
@@ -250,6 +272,7 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
                       for row in rows)
     text = (f"# Measured response\n\nreference: `{args.reference}`  \nmeasured: `{args.measured}`"
             f"  \nsampling period {T:g} s, {n} samples, settling {args.settle_periods:g} period(s)"
+            f"{_drive_notes(args)}"
             f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
             f"samples = {delay * T * 1e6:.4g} µs, "
             f"{'removed before the metrics' if args.remove_delay else 'not removed: the metrics include it'}.\n"

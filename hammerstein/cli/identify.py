@@ -27,6 +27,7 @@ import numpy as np
 
 from hammerstein.core.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import number_type, out_file_problem
+from hammerstein.core.amplifier import records_amplifier_table
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.core.presets import PresetError, save_model
@@ -517,6 +518,10 @@ def _handler(args):
         if dyn is not None:
             rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
                                           fit.model.input_names)
+        extra = dict(extra or {})     # drives stay within what the records spanned
+        extra["amplifier"] = records_amplifier_table(
+            records + [_read(args, d) for d in args.dynamics_records]
+            + (_creep_recs(args) if args.creep_records else []), list(fit.model.input_names))
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
             if args.plot:

@@ -20,13 +20,26 @@ fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
 ``--history DIR`` the per-harmonic gains carry over from trial to trial in
 ``DIR/harmonics.csv`` (halved where a harmonic's error keeps growing).
 
+Everything is judged on the settled part: the printed max and RMS
+Euclidean errors start after the fade-in and ``--settle-periods`` (the
+start-up no drive removes), and the fade-in itself is not learnt (the next
+drive keeps the base drive's fade-in and blends into the learning over the
+next period, :func:`hammerstein.core.drive.keep_start`), so every drive
+starts at rest as the first one did. An amplifier table measured on the
+identification records (``source = "records"``) shapes the next drive into
+it (:func:`hammerstein.core.drive.shape_drive`).
+
 With ``--history DIR`` the best trial so far is kept in ``DIR/best-trial.csv``
 (its drive and measured response; ``DIR/learning.csv`` its error and the
-gain halvings): a trial whose error is more than 10 % above the best one,
-beyond what the sensor noise can explain, is not learnt from; the next
+gain halvings; ``DIR/settled.csv`` every trial's settled max and RMS
+Euclidean error and judged error): a trial whose error is above the best
+one, beyond what the sensor noise can explain, is not learnt from; the next
 drive is learnt from the best trial's drive and response with half the
 gain (halved again at each such trial), and one line says so, as the
-scenarios' ``kind = "ilc"`` does. The error judged: for a repeating
+scenarios' ``kind = "ilc"`` does. When the judged error rose since the
+previous trial, the printed condition ``||I - gamma Q L G||`` is said to
+hold on the model only, and a line says the learning was not monotonic on
+the actuator. The error judged: for a repeating
 reference, the max Euclidean error averaged over the periods, with a
 margin of 3 standard deviations of the periods' spread
 (:func:`_judged_error`); for one that does not repeat (a raster), the RMS
@@ -42,7 +55,6 @@ with ``--limits error`` (one line, nothing written); 2 a usage error.
 
 from __future__ import annotations
 
-import re
 import sys
 from pathlib import Path
 
@@ -54,10 +66,11 @@ from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actua
                                        positive_float)
 from hammerstein.cli.compensate import LAW_HINT
 from hammerstein.core.amplifier import LIMITS
-from hammerstein.core.drive import default_fade_samples, read_signals, signals_csv
+from hammerstein.core.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade, keep_start,
+                                    limit_start_up, read_signals, rest_output, shape_drive,
+                                    signals_csv)
 from hammerstein.core.files import (all_or_nothing, bounded_read_text, guard_inputs, output_problem,
                                     safe_write)
-from hammerstein.core.hammerstein_compensator import fade_in
 from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
                                   harmonic_base_gains, periodic_average, repeating_from)
 from hammerstein.core.models import convergent_gain, law_radius, model_class
@@ -159,19 +172,6 @@ def _inverse_gain(model, gain, check):
     return gain, notes
 
 
-def _fade_of(path):
-    """The ``fade-in N samples`` recorded in a drive file's header, or None."""
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for _ in range(20):
-            line = fh.readline()
-            if not line.startswith("#"):
-                break
-            m = re.search(r"fade-in (\d+) samples", line)
-            if m:
-                return int(m.group(1))
-    return None
-
-
 def history_rows(history_dir):
     """The rows of ``DIR/history.csv``.
 
@@ -219,6 +219,7 @@ def _write_history(history, names, rec, scale):
 
 
 GAINS_FILE = "harmonics.csv"
+SETTLED_FILE = "settled.csv"
 BEST_FILE = "best-trial.csv"
 STATE_FILE = "learning.csv"
 #: a trial worse than the best one so far by more than this factor is not learnt from
@@ -240,6 +241,31 @@ NOISE_MARGIN = 3.0
 #: realistic-2dof (outside the model's class) +20, +1, -4 samples for the circles and +10, +1
 #: for the rasters (a 3.6 deg phase error at 10 Hz is 20 samples)
 DELAY_PHASE_DEG = 2.0
+
+
+def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin):
+    """Append a trial's settled errors to ``DIR/settled.csv``; the previous trial's if it was lower.
+
+    Returns
+    -------
+    tuple or None
+        ``(trial, judged error [µm])`` of the previous trial when this
+        trial's judged error exceeds it by more than ``margin`` (the noise),
+        else None.
+    """
+    path = Path(history_dir) / SETTLED_FILE
+    head = "trial,settled_max_euclidean_um,settled_rms_euclidean_um,judged_um\n"
+    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() else head
+    rows = [line.split(",") for line in text.splitlines()[1:] if line.strip()]
+    prev = None
+    if rows:
+        try:
+            prev = (int(rows[-1][0]), float(rows[-1][3]))
+        except (IndexError, ValueError):
+            prev = None
+    text = text + f"{trial},{settled_max!r},{settled_rms!r},{float(score)!r}\n"
+    safe_write(path, text, "settled errors file")
+    return prev if prev is not None and score > prev[1] + margin else None
 
 
 def _read_state(history_dir, n_samples):
@@ -405,10 +431,11 @@ def _handle(args):
             raise DataFileError(f"--fade-in: {args.fade_in:g} s is longer than the reference "
                                 f"({ref.signal.shape[1]} samples, {ref.signal.shape[1] * T:g} s); "
                                 f"expected at most {ref.signal.shape[1] * T:g} s")
-        fade = (int(round(args.fade_in / T)) if args.fade_in is not None else _fade_of(args.drive))
-        if fade is None:
-            fade = default_fade_samples(ref.signal, ref.period_samples)
-        target = fade_in(ref.signal, fade)
+        fade = (int(round(args.fade_in / T)) if args.fade_in is not None else drive_fade_samples(args.drive))
+        if fade is None:              # as compensate's shortest default: a duration
+            fade = min(max(ref.period_samples if ref.period_samples > 1 else 0,
+                           int(np.ceil(MIN_FADE_S / T - 1e-9))), N)
+        target = hardware_fade(ref.signal, fade, rest_output(model))   # as compensate faded it
         predicted, _ = plant.simulate(u)
         delay_note = None
         if args.delay == "auto" and plant.measurement_delay is not None:
@@ -433,9 +460,13 @@ def _handle(args):
                 raise DataFileError(f"--delay: expected auto or an integer >= 0, found {delay}")
         if delay >= N - 1:
             raise DataFileError(f"--delay: {delay} samples; expected fewer than the record's {N - 1}")
-        settle = int(args.settle_periods * ref.period_samples)
+        # the settled window: after the fade-in and --settle-periods (the start-up no drive removes)
+        settle = fade + int(args.settle_periods * ref.period_samples)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
-        rec = error_summary(target[:, :N - delay], shifted, slice(min(settle, N - delay - 1), None))
+        window = slice(min(settle, N - delay - 1), None)
+        rec = error_summary(target[:, :N - delay], shifted, window)
+        euclid = np.linalg.norm(target[:, :N - delay][:, window] - shifted[:, window], axis=0)
+        settled_max, settled_rms = float(np.max(euclid)), float(np.sqrt(np.mean(euclid ** 2)))
         P = ref.period_samples if ref.period_samples > 1 else None
         steady = repeating_from(target, P, fade)
         # the best trial so far (--history): a trial more than 10 % worse is not learnt from
@@ -456,12 +487,12 @@ def _handle(args):
             halvings = state["halvings"]
             best_score, what = state["score"], "averaged"
             best = score < best_score
-            worse = score > WORSE * best_score + margin
+            worse = score > best_score + margin
             bu = by = None
             if judged is not None:       # judged against the best trial's record, same statistic
                 bu, by = _read_best(args.history, model, u.shape, y.shape, N)
                 cmp = compare_trials(judged, _window_error(
-                    target, by, delay, judged_start, T, args.q_cutoff_hz), WORSE, NOISE_MARGIN)
+                    target, by, delay, judged_start, T, args.q_cutoff_hz), 1.0, NOISE_MARGIN)
                 score, best_score, margin, worse, best = (cmp.score, cmp.best_score, cmp.margin,
                                                           cmp.worse, cmp.better)
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
@@ -492,28 +523,46 @@ def _handle(args):
                     gains.gains *= 0.5
                     gains.previous = None
         u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
-        problems = []
-        if plant.amplifier is not None:
+        # the fade-in is not learnt (not judged): the base drive's, blended into the learning
+        u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
+        problems, shaped = [], []
+        if plant.amplifier is not None and plant.amplifier.from_records:
+            u_next, shaped = shape_drive(plant.amplifier, u_next, T)
+        elif plant.amplifier is not None:
             problems = plant.amplifier.check(u_next, T, args.limits)
             if problems:
                 u_next, _ = plant.amplifier.limit(u_next, T)
+        # no start-up step beyond the settled drive's largest (as compensate's default)
+        u_next, more = limit_start_up(
+            u_next, fade, ref.period_samples,
+            None if plant.amplifier is None else [c.rest for c in plant.amplifier.channels],
+            list(model.input_names), T)
+        shaped += more
         owned = owned_problem(args.out, args.force)
         if owned:
             print_err(f"hammerstein learn: error: {owned}")
             return 2
         comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]\n"
                    f"actuator {args.actuator}, sampling period {T:g} s, fade-in {fade} samples\n"
-                   f"learned from {args.drive} and {args.measured}: delay {delay} samples, "
+                   + (f"learned from {args.drive} and {args.measured}" if note is None else
+                      f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "
+                      f"and {args.measured} were worse)")
+                   + f": delay {delay} samples, "
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
-                   + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else ""))
+                   + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
+                   + "".join(f"\nshaped: {n}" for n in shaped))
         t = np.arange(N) * T
         with all_or_nothing():    # the drive and the history together, or none (a full disk)
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
                                score, halvings)
+            rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
+                    if args.history else None)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
-    return _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond)
+    return _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond,
+                    settled=(settled_max, settled_rms, window, fade),
+                    rose=(rose, score, margin), notes=notes)
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
@@ -536,20 +585,35 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     return k
 
 
-def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond):
-    """Print the trial's error, notes and convergence condition; exit status 0."""
+def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled, rose, notes):
+    """Print the trial's error, notes and convergence condition; exit status 0.
+
+    ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples);
+    ``rose`` is (the previous trial and its judged error when this one rose, else None,
+    this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines.
+    """
+    settled_max, settled_rms, window, fade = settled
+    rose, score, margin = rose
     scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} µm)" \
         if ref.scale else ""
     axes = ", ".join(f"{n} max {a:.4g} RMS {b:.4g}" for n, a, b in
                      zip(model.output_names, rec.max_error, rec.rms_error))
     trial = f"trial {k}: " if k is not None else ""
-    print(f"{trial}max Euclidean error {rec.max_euclidean_error:.4g} µm{scale}; {axes} µm; "
-          f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
+    rms_scale = f" ({100 * settled_rms / ref.scale:.3g} %)" if ref.scale else ""
+    print(f"{trial}settled (from {window.start * T:.4g} s, after the {fade * T:.4g} s fade-in): "
+          f"max Euclidean error {settled_max:.4g} µm{scale}, RMS {settled_rms:.4g} µm{rms_scale}; "
+          f"{axes} µm; measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
     if delay_note is not None:
         print(delay_note, file=sys.stdout)
     if note is not None:
         print(note, file=sys.stdout)
-    print(cond.summary(list(model.output_names)), file=sys.stdout)
+    summary = cond.summary(list(model.output_names))
+    if rose is not None:            # the model's condition is not what the actuator did
+        summary = summary.replace("<= 1: monotonic", "<= 1 on the model")
+        print(f"the judged settled error rose from {rose[1]:.4g} µm (trial {rose[0]}) to "
+              f"{score:.4g} µm, beyond the {margin:.2g} µm of noise: the learning is not monotonic "
+              f"on this actuator (the next drive is learnt from the best trial)", file=sys.stdout)
+    print(summary, file=sys.stdout)
     for line in notes:
         print_err(line)
     if not cond.holds:

@@ -13,6 +13,13 @@ input::
     [amplifier.uy]              # optional: this input's own values (same keys)
     range = [0.0, 150.0]
 
+``source = "records"`` (written by ``hammerstein identify``, see
+:func:`records_amplifier_table`) marks limits taken from the identification
+records: the range the inputs spanned and their largest slew. They are not
+the amplifier's own limits but the region the model was identified on; the
+hardware commands keep their drives inside them (shaping a drive that would
+leave them) unless the table is widened by hand.
+
 The simulated amplifier applies, per input and in this order (each step
 keeps the signal within the range, so the order is also what reaches the
 actuator):
@@ -50,7 +57,7 @@ from hammerstein.exceptions import AmplifierError, AmplifierWarning
 
 
 __all__ = ["Amplifier", "AmplifierChannel", "LIMITS", "amplifier_from_table", "drive_metrics",
-           "AMPLIFIER_KEYS"]
+           "AMPLIFIER_KEYS", "records_amplifier_table", "RECORDS_SOURCE", "slew_limit"]
 
 #: Reactions to a drive beyond the amplifier: name -> description.
 LIMITS = {
@@ -60,6 +67,8 @@ LIMITS = {
 }
 #: Keys of an ``[amplifier]`` table (and of each ``[amplifier.<input>]`` table).
 AMPLIFIER_KEYS = ("range", "slew_rate", "bandwidth_hz")
+#: ``source`` of an ``[amplifier]`` table whose limits were measured on the identification records
+RECORDS_SOURCE = "records"
 #: relative tolerance of the limit checks (a drive exactly at the limit passes)
 _TOL = 1e-9
 
@@ -155,7 +164,11 @@ def amplifier_from_table(table, inputs, source="preset"):
         return None
     if not isinstance(table, dict):
         raise AmplifierError(f"{source}: amplifier: expected a table, found {table!r}")
-    common = {k: v for k, v in table.items() if not isinstance(v, dict)}
+    source_key = table.get("source")
+    if source_key is not None and not isinstance(source_key, str):
+        raise AmplifierError(f"{source}: amplifier.source: expected a string (e.g. "
+                             f"{RECORDS_SOURCE!r}), found {source_key!r}")
+    common = {k: v for k, v in table.items() if not isinstance(v, dict) and k != "source"}
     per = {k: v for k, v in table.items() if isinstance(v, dict)}
     bad = sorted(set(per) - set(inputs))
     if bad:
@@ -167,7 +180,71 @@ def amplifier_from_table(table, inputs, source="preset"):
                  for name in inputs]
     except AmplifierError as exc:
         raise AmplifierError(f"{source}: {exc}") from None
-    return Amplifier(chans, list(inputs))
+    return Amplifier(chans, list(inputs), source_key)
+
+
+def records_amplifier_table(records, input_names):
+    """The ``[amplifier]`` table of the identification records: their input range and largest slew.
+
+    Per input, the range ``[min u, max u]`` over every record and the largest
+    slew ``max |u[k] - u[k-1]| / T`` [V/s] within a record (no step across
+    records; the first sample is not counted from rest, the records may
+    start anywhere). The table is marked ``source = "records"``: these are
+    the limits of what the model was identified on, not the amplifier's.
+
+    Parameters
+    ----------
+    records : sequence
+        The records, each with ``u`` (m, n_samples) [V] and
+        ``sampling_period`` [s] (e.g.
+        :class:`hammerstein.core.datafiles.MultiRecord`).
+    input_names : list of str
+        The model's input names (m).
+
+    Returns
+    -------
+    dict
+        ``{"source": "records", "<input>": {"range": [lo, hi], "slew_rate": S}}``
+        (a constant input gets a range of +-1e-6 V about its value; an input
+        that never moves no ``slew_rate``).
+
+    Raises
+    ------
+    AmplifierError
+        No record, or records whose number of inputs is not ``len(input_names)``.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> rec = SimpleNamespace(u=np.array([[0.0, 1.0, -2.0]]), sampling_period=1e-3)
+    >>> records_amplifier_table([rec], ["u"])
+    {'source': 'records', 'u': {'range': [-2.0, 1.0], 'slew_rate': 3000.0}}
+    """
+    m = len(input_names)
+    if not records:
+        raise AmplifierError("records_amplifier_table: no record")
+    lo, hi, slew = np.full(m, np.inf), np.full(m, -np.inf), np.zeros(m)
+    for rec in records:
+        u = np.atleast_2d(np.asarray(rec.u, dtype=float))
+        if u.shape[0] != m:
+            raise AmplifierError(f"records_amplifier_table: a record has {u.shape[0]} inputs; "
+                                 f"expected {m} ({', '.join(input_names)})")
+        if u.shape[1] == 0:
+            continue
+        lo, hi = np.minimum(lo, u.min(axis=1)), np.maximum(hi, u.max(axis=1))
+        if u.shape[1] > 1:
+            slew = np.maximum(slew, np.max(np.abs(np.diff(u, axis=1)), axis=1)
+                              / float(rec.sampling_period))
+    table = {"source": RECORDS_SOURCE}
+    for i, name in enumerate(input_names):
+        a, b = float(lo[i]), float(hi[i])
+        if not b > a:
+            a, b = a - 1e-6, b + 1e-6
+        chan = {"range": [a, b]}
+        if slew[i] > 0:
+            chan["slew_rate"] = float(slew[i])
+        table[name] = chan
+    return table
 
 
 def drive_metrics(inputs, sampling_period, rest=None):
@@ -212,6 +289,10 @@ class Amplifier:
         One per input (m).
     inputs : list of str
         Input names, for messages.
+    source : str, optional
+        Where the limits come from: :data:`RECORDS_SOURCE` for limits
+        measured on the identification records (a soft bound: the hardware
+        commands shape a drive into it), None for the amplifier's own.
 
     Notes
     -----
@@ -228,15 +309,21 @@ class Amplifier:
     array([[1., 2., 3.]])
     """
 
-    def __init__(self, channels, inputs):
+    def __init__(self, channels, inputs, source=None):
         self.channels = list(channels)
         self.inputs = list(inputs)
+        self.source = source
         if len(self.channels) != len(self.inputs):
             raise AmplifierError(f"amplifier: expected one channel per input ({len(self.inputs)}), "
                                  f"found {len(self.channels)}")
 
     def __repr__(self):
-        return f"Amplifier({self.channels!r}, {self.inputs!r})"
+        return f"Amplifier({self.channels!r}, {self.inputs!r}, {self.source!r})"
+
+    @property
+    def from_records(self) -> bool:
+        """True when the limits were measured on the identification records."""
+        return self.source == RECORDS_SOURCE
 
     @property
     def n_inputs(self) -> int:
@@ -409,6 +496,30 @@ class Amplifier:
             for p in problems:
                 warnings.warn(pre + p + " (saturated)", AmplifierWarning, stacklevel=2)
         return problems
+
+
+def slew_limit(x, start, step):
+    """A signal slew-limited from ``start``: ``s[k] = s[k-1] + clip(x[k] - s[k-1], -step, step)``.
+
+    Parameters
+    ----------
+    x : array_like, shape (n_samples,)
+        [V].
+    start : float
+        ``s[-1]`` [V].
+    step : float
+        Largest step per sample [V], > 0.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_samples,)
+
+    Examples
+    --------
+    >>> slew_limit([3.0, 3.0, 0.0], 0.0, 1.0).tolist()
+    [1.0, 2.0, 1.0]
+    """
+    return _slew_limit(np.asarray(x, dtype=float), start, step)
 
 
 def _slew_limit(x, prev, step):

@@ -33,12 +33,13 @@ record at once and is only run by :func:`drive_signal`).
 from __future__ import annotations
 
 import io
+import re
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from hammerstein.core.amplifier import Amplifier, drive_metrics
+from hammerstein.core.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.core.hammerstein_compensator import continuation
 from hammerstein.core.datafiles import numeric_column, signal_table
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
@@ -46,7 +47,8 @@ from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import CompensatorError, DataFileError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
-           "starts_at_rest", "apply_amplifier",
+           "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
+           "settled_step", "keep_start", "drive_fade_samples", "limit_start_up", "rest_output", "hardware_fade",
            "read_signals", "signals_csv", "DRIVE_MARK"]
 
 
@@ -181,6 +183,9 @@ class DriveResult:
         The fade-in used [samples].
     problems : list of str
         The limits exceeded (empty without an amplifier).
+    shaped : list of str
+        Where and by how much the drive was shaped into the limits measured
+        on the identification records (:func:`shape_drive`; empty when not).
     """
 
     inputs: np.ndarray
@@ -190,6 +195,7 @@ class DriveResult:
     peak_slew: np.ndarray
     fade_samples: int
     problems: list = field(default_factory=list)
+    shaped: list = field(default_factory=list)
 
 
 def _fade_weights(start, n, fade):
@@ -597,3 +603,417 @@ def signals_csv(t, columns, comment):
     buf = io.StringIO()
     np.savetxt(buf, data, delimiter=",", fmt="%.17g")
     return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
+
+
+#: Shortest default fade-in of the hardware commands [s]: 20 ms, ten periods of a 500 Hz first
+#: mode (a fade is a duration, never a sample: a file reference has no period to fade over)
+MIN_FADE_S = 0.02
+#: relative tolerance of the step comparisons of :func:`hardware_drive`
+_STEP_TOL = 1e-6
+
+
+def settled_step(inputs, start):
+    """The largest sample-to-sample step of a drive from ``start`` on, per input [V].
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    start : int
+        First sample of the settled part.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        ``max_k |u[k] - u[k-1]|`` over ``k > start``; ``inf`` when fewer
+        than two samples remain (nothing to compare with).
+
+    Examples
+    --------
+    >>> settled_step([[0.0, 5.0, 5.5, 6.5]], 1)
+    array([1.])
+    """
+    u = np.atleast_2d(np.asarray(inputs, dtype=float))
+    if u.shape[1] - int(start) < 2:
+        return np.full(u.shape[0], np.inf)
+    return np.max(np.abs(np.diff(u[:, int(start):], axis=1)), axis=1)
+
+
+def _start_steps(u, end, rest):
+    """Largest step per input of samples ``0 .. end - 1``, the first counted from ``rest``."""
+    head = np.concatenate([rest[:, None], u[:, :max(int(end), 1)]], axis=1)
+    return np.max(np.abs(np.diff(head, axis=1)), axis=1)
+
+
+def _intervals(mask, sampling_period, limit=4):
+    """``"0.1200-0.1250 s, ..."``: the runs of True in ``mask`` (at most ``limit``, then a count)."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return ""
+    cuts = np.flatnonzero(np.diff(idx) > 1)
+    starts = np.concatenate([[idx[0]], idx[cuts + 1]])
+    ends = np.concatenate([idx[cuts], [idx[-1]]])
+    text = ", ".join(f"{a * sampling_period:.4f}-{b * sampling_period:.4f} s"
+                     for a, b in zip(starts[:limit], ends[:limit]))
+    more = starts.size - limit
+    return text + (f" and {more} more" if more > 0 else "")
+
+
+def shape_drive(amplifier, inputs, sampling_period):
+    """A drive shaped into the amplifier's range and slew rate, and where and by how much.
+
+    The shaping is the amplifier's own range clip then slew limit
+    (:meth:`~hammerstein.core.amplifier.Amplifier.limit`, from rest): a
+    clipped sample steps less than the commanded one
+    (``|clip(a) - clip(b)| <= |a - b|``) and the slew limit bounds every
+    step by ``S T``, so the shaped drive is within the range, starts from
+    rest and never steps faster than the slew rate.
+
+    Parameters
+    ----------
+    amplifier : Amplifier
+        The limits (e.g. measured on the identification records).
+    inputs : array_like, shape (m, n_samples)
+        The commanded drive [V].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    shaped : numpy.ndarray, shape (m, n_samples)
+        [V].
+    notes : list of str
+        One per input that was changed: the largest change [V], the share
+        of samples changed and the time intervals, e.g. ``"ux: beyond the
+        range [-10, 10] V by up to 1.93 V, 3.1 % of the samples
+        (0.0210-0.0233 s, ...)"``.
+    """
+    u = np.atleast_2d(np.asarray(inputs, dtype=float))
+    out, _ = amplifier.limit(u, sampling_period)
+    notes = []
+    for i, c in enumerate(amplifier.channels):
+        diff = np.abs(out[i] - u[i])
+        changed = diff > 1e-9 * max(1.0, float(np.max(np.abs(u[i]))) if u.shape[1] else 1.0)
+        if not np.any(changed):
+            continue
+        beyond = (u[i] > c.high) | (u[i] < c.low)
+        what = []
+        if np.any(beyond):
+            what.append(f"beyond the range [{c.low:.4g}, {c.high:.4g}] V by up to "
+                        f"{float(np.max(np.maximum(u[i] - c.high, c.low - u[i]))):.3g} V")
+        if np.any(changed & ~beyond):
+            what.append(f"faster than {c.slew_rate:.4g} V/s")
+        notes.append(f"{amplifier.inputs[i]}: {' and '.join(what)}, changed by up to "
+                     f"{float(diff.max()):.3g} V on {100 * np.mean(changed):.3g} % of the samples "
+                     f"({_intervals(changed, sampling_period)})")
+    return out, notes
+
+
+def hardware_fade(reference, fade_samples, rest=None):
+    """The hardware commands' fade-in: a tenth of it at rest, then a raised cosine.
+
+    ``yr_f[k] = rest + w[k] (yr[k] - rest)`` with ``w = 0`` for
+    ``k < L = fade // 10``, ``w = (1 - cos(pi (k - L) / (fade - L))) / 2``
+    up to ``fade``, 1 after: value and slope continuous everywhere, and the
+    first ``L`` samples exactly at rest, so a compensator that reads the
+    reference ahead (the ZPETC preview, shorter than ``L``) also starts
+    exactly at rest.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    fade_samples : int
+        The fade-in, rest lead included [samples] (0: none).
+    rest : array_like, shape (p,), optional
+        The output at rest [µm]; zeros by default.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, n_samples)
+
+    Examples
+    --------
+    >>> np.round(hardware_fade([[2.0] * 12], 10)[0], 3).tolist()
+    [0.0, 0.0, 0.06, 0.234, 0.5, 0.826, 1.174, 1.5, 1.766, 1.94, 2.0, 2.0]
+    """
+    r = np.array(reference, dtype=float, ndmin=2)
+    n = int(min(max(int(fade_samples), 0), r.shape[1]))
+    if n == 0:
+        return r
+    r0 = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    lead = n // 10
+    k = np.arange(n) - lead
+    w = np.where(k < 0, 0.0, 0.5 * (1.0 - np.cos(np.pi * np.maximum(k, 0) / (n - lead))))
+    r[:, :n] = r0[:, None] + w * (r[:, :n] - r0[:, None])
+    return r
+
+
+def rest_output(model):
+    """The static output of a hysteresis model at rest (0 V from its initial state) [µm].
+
+    An identified model carries the records' output offset: 0 µm is not
+    what the actuator shows at 0 V, and a reference faded in from 0 µm
+    would start the drive at the voltage of 0 µm instead of at rest.
+
+    Parameters
+    ----------
+    model : object
+        A hysteresis model with ``n_inputs`` and ``simulate(u)`` returning
+        ``(outputs (p, n), state)``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p,)
+        [µm].
+
+    Examples
+    --------
+    >>> from hammerstein.core.presets import load_plant
+    >>> rest_output(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
+    array([0., 0.])
+    """
+    y, _ = model.simulate(np.zeros((model.n_inputs, 1)))
+    return np.asarray(y, dtype=float)[:, 0]
+
+
+def hardware_drive(compensator, reference, sampling_period, period_samples=None,
+                   fade_samples=None, amplifier=None, limits="error", where="", rest=None):
+    """The drive a hardware command writes: faded in over a duration, shaped into the limits.
+
+    Every compensator kind and every reference (inline or file) gets the
+    same rules, on top of :func:`drive_signal`:
+
+    1. **the fade-in is a duration.** The default starts at
+       ``max(one period, MIN_FADE_S)`` (a file reference without
+       ``--period`` has no period: :data:`MIN_FADE_S` alone), also for a
+       reference that starts at rest (its first velocity is faded in too),
+       and is doubled (up to the record's length) until no step of the
+       drive before the end of the fade plus one period (from rest)
+       exceeds the settled drive's own largest step after it
+       (:func:`settled_step`) nor, with an amplifier, ``slew_rate T``;
+       the reference is faded in from the model's output at rest
+       (``rest``) by :func:`hardware_fade`, whose first tenth is at rest, so
+       the drive starts at rest. The doubling stops at a
+       quarter of the record. After the limits (2.), a start-up that still
+       steps faster than the settled drive is slew-limited to the settled
+       drive's largest step over the whole record (which the settled drive
+       never needs; ``shaped`` says so).
+    2. **the limits.** An amplifier whose limits were measured on the
+       identification records (``source = "records"``) shapes the drive
+       (:func:`shape_drive`: range clip, slew limit, the notes say where
+       and by how much); the amplifier's own limits react as ``limits``
+       says (:meth:`~hammerstein.core.amplifier.Amplifier.check`).
+
+    Parameters
+    ----------
+    compensator : object
+        Any compensator (see :func:`drive_signal`).
+    reference : array_like, shape (p, n_samples)
+        [µm], from t = 0.
+    sampling_period : float
+        T [s].
+    period_samples : int, optional
+        One period of a periodic reference [samples]; None or 1 for none.
+    fade_samples : int, optional
+        A given fade-in [samples] (used as it is); None for the default above.
+    amplifier : Amplifier, optional
+    limits : {'error', 'warn', 'clip'}
+        For an amplifier's own limits.
+    where : str
+        Prefix of the limit messages.
+    rest : array_like, shape (p,), optional
+        The output at rest [µm] (:func:`rest_output`), the fade's start;
+        zeros by default.
+
+    Returns
+    -------
+    DriveResult
+        ``shaped`` lists the shaping notes; ``reference`` the faded reference.
+
+    Raises
+    ------
+    AmplifierError
+        ``limits = "error"``, an amplifier's own limits exceeded.
+    CompensatorDivergence
+        When the compensator diverges.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.core.presets import load_plant
+    >>> from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    >>> plant = load_plant("rakotondrabe-2dof", dynamics=False)
+    >>> comp = InverseMultiplicativeCompensator(plant.hysteresis)
+    >>> t = np.arange(4000) * plant.sampling_period
+    >>> yr = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    >>> d = drive_signal(comp, yr, plant.sampling_period, 200, fade_samples=0)
+    >>> h = hardware_drive(comp, yr, plant.sampling_period, 200)
+    >>> h.fade_samples * plant.sampling_period >= MIN_FADE_S, float(h.inputs[0, 0])
+    (True, 0.0)
+    >>> bool(np.max(np.abs(np.diff(h.inputs))) <= np.max(np.abs(np.diff(d.inputs[:, 400:]))) * 1.001)
+    True
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    N = r.shape[1]
+    T = float(sampling_period)
+    P = int(period_samples) if period_samples and int(period_samples) > 1 else 0
+    slew = np.array([c.slew_rate for c in amplifier.channels]) * T if amplifier is not None else None
+    u_rest = np.array([c.rest for c in amplifier.channels]) if amplifier is not None else None
+    y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+
+    def run(fade):
+        faded = hardware_fade(r, fade, y_rest)
+        u, _ = _compensate(compensator, faded, P or None, 0)
+        return u, faded
+
+    if fade_samples is None:
+        n = int(min(max(P, int(np.ceil(MIN_FADE_S / T - 1e-9)), 1), N))
+        cap = max(n, N // 4)
+        while True:
+            u, faded = run(n)
+            end = min(n + max(P, 1), N)
+            bound = settled_step(u, end)
+            if slew is not None:
+                bound = np.minimum(bound, slew)
+            r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
+            if n >= cap or np.all(_start_steps(u, end, r0) <= bound * (1 + _STEP_TOL)):
+                break
+            n = int(min(2 * n, cap))
+    else:
+        n = int(min(max(int(fade_samples), 0), N))
+        u, faded = run(n)
+    peak, top = drive_metrics(u, T)
+    res = DriveResult(u, u, faded, peak, top, n)
+    r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
+    out = u
+    if amplifier is not None and amplifier.from_records:
+        out, res.shaped = shape_drive(amplifier, u, T)
+    elif amplifier is not None:
+        res.problems = amplifier.check(u, T, limits, where)
+        if res.problems:
+            out, _ = amplifier.limit(u, T)
+    if fade_samples is None:        # a start-up no fade removes: slew-limited to the settled bound
+        out, notes = limit_start_up(out, n, P, r0, amplifier.inputs if amplifier is not None else None,
+                                    T)
+        res.shaped += notes
+    res.inputs = out
+    return res
+
+
+def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
+                   sampling_period=None):
+    """A drive whose start-up never steps faster than its settled part, and what was changed.
+
+    The settled part starts one period (one sample without a period) after
+    the fade-in. Per input whose start-up (the first step counted from
+    ``rest``) has a step larger than the settled part's largest, ``S``, the
+    whole record is slew-limited to ``S`` per sample
+    (:func:`hammerstein.core.amplifier.slew_limit`): the settled part,
+    whose steps are at most ``S``, is changed only while the limiter
+    catches up.
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    fade_samples : int
+    period_samples : int, optional
+    rest : array_like, shape (m,), optional
+        The voltages before the first sample [V]; zeros by default.
+    names : list of str, optional
+        Input names for the notes.
+    sampling_period : float, optional
+        T [s], for the notes.
+
+    Returns
+    -------
+    limited : numpy.ndarray, shape (m, n_samples)
+    notes : list of str
+
+    Examples
+    --------
+    >>> u, notes = limit_start_up([[0.0, 3.0, 3.5, 3.0, 2.5, 3.0]], 1)
+    >>> u.tolist()
+    [[0.0, 0.5, 1.0, 1.5, 2.0, 2.5]]
+    """
+    u = np.array(inputs, dtype=float, ndmin=2)
+    N = u.shape[1]
+    P = int(period_samples) if period_samples and int(period_samples) > 1 else 1
+    r0 = np.zeros(u.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    end = min(int(fade_samples) + P, N)
+    bound = settled_step(u, end)
+    start = _start_steps(u, end, r0)
+    notes = []
+    for i in np.flatnonzero((start > bound * (1 + _STEP_TOL)) & (bound > 0)):
+        u[i] = slew_limit(u[i], r0[i], bound[i])
+        name = names[i] if names is not None else f"input {i + 1}"
+        when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
+        notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
+                     f"drive's largest step, {bound[i]:.3g} V per sample ({start[i]:.3g} V asked)")
+    return u, notes
+
+
+def drive_fade_samples(path):
+    """The ``fade-in N samples`` a drive file's header records, or None.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+
+    Returns
+    -------
+    int or None
+        N [samples]; None when the first 20 comment lines do not state it.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for _ in range(20):
+            line = fh.readline()
+            if not line.startswith("#"):
+                break
+            m = re.search(r"fade-in (\d+) samples", line)
+            if m:
+                return int(m.group(1))
+    return None
+
+
+def keep_start(previous, learnt, fade_samples, period_samples=None):
+    """A learnt drive that keeps the previous drive's fade-in and blends into the learning after it.
+
+    ``u = (1 - b) u_prev + b u_learnt`` with ``b = 0`` during the fade-in
+    and a raised cosine from 0 to 1 over the next period (a tenth of the
+    record for a reference without a period, at least one sample): the fade-in, which no learning should
+    change (it is not judged), stays the drive that was checked when it
+    was written, so a learnt drive starts at rest as the first one did.
+
+    Parameters
+    ----------
+    previous, learnt : array_like, shape (m, n_samples)
+        [V].
+    fade_samples : int
+    period_samples : int, optional
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, n_samples)
+        [V].
+
+    Examples
+    --------
+    >>> np.round(keep_start([[0.0, 1.0, 2.0, 3.0]], [[9.0, 9.0, 9.0, 9.0]], 1, 2)[0], 9).tolist()
+    [0.0, 1.0, 5.5, 9.0]
+    """
+    u0 = np.atleast_2d(np.asarray(previous, dtype=float))
+    u1 = np.atleast_2d(np.asarray(learnt, dtype=float))
+    N = u0.shape[1]
+    blend = int(period_samples) if period_samples and int(period_samples) > 1 else max(N // 10, 1)
+    k = np.arange(N) - int(fade_samples)
+    b = np.clip(k / blend, 0.0, 1.0)
+    b = 0.5 * (1.0 - np.cos(np.pi * b))
+    return (1.0 - b) * u0 + b * u1

@@ -155,7 +155,7 @@ def limits_from_table(table, inputs, where="amplifier"):
                         or not (np.isfinite(value) and value > 0):
                     raise ExportError(f"{at}.slew_rate: expected a positive rate [V/s], found {value!r}")
                 slew[idx] = float(value)
-            elif key != "bandwidth_hz":
+            elif key not in ("bandwidth_hz", "source"):   # source: where the limits come from
                 raise ExportError(f"{at}.{key}: unknown key (expected {', '.join(keys)} or an input "
                                   f"name: {', '.join(inputs)})")
 

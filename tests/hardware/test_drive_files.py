@@ -18,7 +18,8 @@ from hammerstein.core.amplifier import amplifier_from_table
 from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.cli.main import main
-from hammerstein.core.drive import DriveStream, drive_signal, read_signals
+from hammerstein.core.drive import (MIN_FADE_S, DriveStream, drive_fade_samples, drive_signal,
+                                    hardware_fade, read_signals)
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.runner import run_scenario
@@ -163,14 +164,23 @@ def test_compensate_writes_the_drive_and_refuses_what_the_amplifier_cannot(tmp_p
     assert res.returncode == 0, res.stderr
     t, u, T_ = read_signals(tmp_path / "d.csv", ["ux", "uy"])
     comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
-    d = drive_signal(comp, circle(1200), T, 200)
+    # the scenario route's voltages of the reference faded in over the duration the header states
+    # (the default's start-up may be slew-limited to the settled drive's largest step: with that
+    # duration given, the drive is exactly the scenario route's)
+    fade = drive_fade_samples(tmp_path / "d.csv")
+    assert fade * T >= MIN_FADE_S and np.all(u[:, 0] == 0.0)
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "d1.csv",
+               "--fade-in", str(fade * T), cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    u = read_signals(tmp_path / "d1.csv", ["ux", "uy"])[1]
+    d = drive_signal(comp, hardware_fade(circle(1200), fade), T, 200, fade_samples=0)
     np.testing.assert_allclose(u, d.inputs, rtol=0, atol=1e-12)       # full precision
     assert T_ == pytest.approx(T)
     # a CSV reference gives the same drive
     pd.DataFrame({"t": t, "x": circle(1200)[0], "y": circle(1200)[1]}).to_csv(tmp_path / "r.csv",
                                                                               index=False)
     res = _cli("compensate", "rakotondrabe-2dof", "--reference", "r.csv", "--out", "d2.csv",
-               "--fade-in", "0.01", "--period", "0.01", cwd=tmp_path)
+               "--fade-in", str(fade * T), "--period", "0.01", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     np.testing.assert_allclose(read_signals(tmp_path / "d2.csv", ["ux", "uy"])[1], d.inputs,
                                rtol=0, atol=1e-9)

@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.drive import read_signals
+from hammerstein.core.drive import drive_fade_samples, read_signals
 from hammerstein.core.presets import load_plant
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 10 }'
@@ -74,7 +74,7 @@ def test_learn_through_files_reduces_the_error(tmp_path):
     for k in range(11):
         t, _, clean = _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", 3, k)
         r = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
-        w = t >= 0.01 - 1e-12
+        w = t >= drive_fade_samples(tmp_path / f"u{k}.csv") * T + 0.01 - 1e-12   # fade + 1 period
         errors.append(np.linalg.norm(r[:, w] - clean[:, w], axis=0).max())   # the true error
         res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", f"u{k}.csv",
                    "--measured", f"y{k}.csv", "--outputs", "x=x_meas,y=y_meas", "--out",
@@ -102,7 +102,7 @@ def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_pa
     _, _, y1 = _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 0, 0)
     t = np.arange(y0.shape[1]) * T
     r = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
-    w = t >= 0.01
+    w = t >= drive_fade_samples(tmp_path / "u0.csv") * T + 0.01     # settled: fade + 1 period
     e0 = np.abs(r[:, w] - y0[:, w]).max()
     e1 = np.abs(r[:, w] - y1[:, w]).max()
     assert e1 < 0.7 * e0
@@ -164,9 +164,9 @@ def test_delay_auto_says_when_one_sample_is_too_little_phase(tmp_path, frequency
 @pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
 def test_learn_history_does_not_judge_a_trial_worse_on_noise_alone(tmp_path):
     """The same drive measured twice (noise seeds 7 and 0, 40 nm): the averaged measurement of
-    the second is more than 10 % worse (checked here from the two histories' best scores), its
-    true error is the same; the difference is within the noise of the two judgements, so the
-    second is learnt from (before the noise margin it was not)."""
+    the second is worse (checked here from the two histories' best scores; a trial worse than
+    the best is not learnt from), its true error is the same; the difference is within the
+    noise of the two judgements, so the second is learnt from."""
     assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
                 cwd=tmp_path).returncode == 0
     for seed in (7, 0):
@@ -179,7 +179,7 @@ def test_learn_history_does_not_judge_a_trial_worse_on_noise_alone(tmp_path):
                     cwd=tmp_path).returncode == 0
         state = pd.read_csv(tmp_path / f"alone{seed}/learning.csv", index_col="key")["value"]
         scores[seed] = float(state["best_score_um"])
-    assert scores[0] > 1.1 * scores[7]
+    assert scores[0] > scores[7]
     res = _cli("learn", "rakotondrabe-2dof", *common, "--drive", "u0.csv", "--measured", "y0.csv",
                "--out", "u2.csv", "--history", "alone7", cwd=tmp_path)
     assert res.returncode == 0, res.stderr

@@ -1,0 +1,157 @@
+"""Safe drives by default (issue 38, item 4): a duration of fade-in, the records' limits.
+
+Expectations are closed-form properties of the drive file, checked on every
+sample independently of the implementation: the first sample is the
+amplifier's rest (0 V); no sample-to-sample step (the first counted from
+rest) exceeds the slew rate times T, nor the settled drive's own largest
+step (after the fade-in the header states and one period); every sample is
+within the range; the fade-in is at least 20 ms. For every compensator kind
+of ``compensate`` and every kind of reference: an inline circle that starts
+at (r, 0), an inline raster, and the same circle as a CSV file (with and
+without ``--period``), whose default fade was one sampling period before.
+"""
+
+import contextlib
+import io
+import re
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.main import main
+from hammerstein.core.amplifier import amplifier_from_table, records_amplifier_table
+from hammerstein.core.drive import hardware_fade, keep_start, shape_drive
+from hammerstein.core.presets import resolve_preset
+
+T = 5e-5
+RANGE = 5.0          # V: a 30 µm circle on rakotondrabe-2dof needs about 6 V: shaped
+SLEW = 2.0e4         # V/s
+KINDS = ["hammerstein", "multivariable", "diagonal", "per-axis", "static-gain"]
+CIRCLE = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
+RASTER = '{ kind = "raster", size = [40, 40], lines = 4, frequency = 50, outputs = ["x", "y"] }'
+
+
+def _preset(tmp_path, amplifier=True):
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
+    if amplifier:
+        text += (f'\n[amplifier]\nsource = "records"\nrange = [{-RANGE}, {RANGE}]\n'
+                 f'slew_rate = {SLEW}\n')
+    path = tmp_path / ("records.toml" if amplifier else "plain.toml")
+    path.write_text(text)
+    return path
+
+
+def _circle_csv(tmp_path, n=2400, f=100.0, R=30.0):
+    t = np.arange(n) * T
+    path = tmp_path / "circle.csv"
+    np.savetxt(path, np.column_stack([t, R * np.cos(2 * np.pi * f * t), R * np.sin(2 * np.pi * f * t)]),
+               delimiter=",", header="t,x,y", comments="", fmt="%.12g")
+    return path
+
+
+def _compensate(args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["compensate", *map(str, args)])
+    assert code == 0, err.getvalue()
+    return out.getvalue()
+
+
+def _drive(path):
+    text = Path(path).read_text()
+    fade = int(re.search(r"fade-in (\d+) samples", text).group(1))
+    rows = [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+    data = np.array([[float(v) for v in ln.split(",")] for ln in rows[1:]])
+    return data[:, 1:3].T, fade, text
+
+
+def _steps(u):
+    return np.abs(np.diff(np.concatenate([np.zeros((u.shape[0], 1)), u], axis=1), axis=1))
+
+
+def _reference(kind, tmp_path):
+    if kind == "circle":
+        return [CIRCLE], 200
+    if kind == "raster":
+        return [RASTER], 400
+    csv = _circle_csv(tmp_path)
+    if kind == "file":
+        return [csv], 1
+    return [csv, "--period", 0.01], 200
+
+
+@pytest.mark.parametrize("ref", ["circle", "raster", "file", "file-period"])
+@pytest.mark.parametrize("kind", KINDS)
+def test_default_drive_is_safe_for_every_kind_and_reference(tmp_path, kind, ref):
+    preset = _preset(tmp_path)
+    reference, period = _reference(ref, tmp_path)
+    out = tmp_path / "drive.csv"
+    _compensate([preset, "--reference", *reference[:1], *reference[1:], "--kind", kind,
+                 "--out", out])
+    u, fade, text = _drive(out)
+    steps = _steps(u)
+    assert fade * T >= 0.02 - 1e-12                         # a duration, never one sample
+    assert np.all(u[:, 0] == 0.0)                           # the first sample at rest
+    assert np.max(steps) <= SLEW * T * (1 + 1e-9)           # never faster than the slew rate
+    assert np.all(np.abs(u) <= RANGE * (1 + 1e-12))         # within the records' range
+    settled = steps[:, fade + max(period, 1) + 1:].max(axis=1)
+    assert np.all(steps.max(axis=1) <= settled * (1 + 1e-9))  # no step beyond the settled drive's
+    assert "excluded from the metrics" in text
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_file_reference_without_amplifier_fades_over_a_duration(tmp_path, kind):
+    """The issue's case: a file reference starting at (r, 0) stepped rail to rail in one sample."""
+    out = tmp_path / "drive.csv"
+    _compensate([_preset(tmp_path, amplifier=False), "--reference", _circle_csv(tmp_path),
+                 "--kind", kind, "--out", out])
+    u, fade, _ = _drive(out)
+    steps = _steps(u)
+    assert fade * T >= 0.02 - 1e-12 and np.all(u[:, 0] == 0.0)
+    settled = steps[:, fade + 1:].max(axis=1)
+    assert np.all(steps.max(axis=1) <= settled * (1 + 1e-9))
+    assert np.max(steps) < 0.5                              # V per sample (it was 16 V)
+
+
+def test_a_circle_beyond_the_range_is_shaped_and_says_where(tmp_path):
+    out = tmp_path / "drive.csv"
+    printed = _compensate([_preset(tmp_path), "--reference", CIRCLE, "--kind", "multivariable",
+                           "--out", out])
+    u, _, text = _drive(out)
+    assert "beyond the range [-5, 5] V by up to" in text and "shaped:" in printed
+    assert re.search(r"\d\.\d{4}-\d\.\d{4} s", text)       # the time intervals
+    assert np.isclose(np.max(np.abs(u)), RANGE)
+    printed = _compensate([_preset(tmp_path), "--reference", RASTER, "--out", out])
+    assert "uy: beyond the range [-5, 5] V" in printed and "smoothing = S" in printed
+
+
+def test_records_amplifier_table_is_the_records_range_and_largest_slew():
+    recs = [SimpleNamespace(u=np.array([[0.0, 2.0, -3.0], [1.0, 1.0, 1.5]]), sampling_period=1e-3),
+            SimpleNamespace(u=np.array([[4.0, 4.5], [0.0, -1.0]]), sampling_period=2e-3)]
+    table = records_amplifier_table(recs, ["ux", "uy"])
+    assert table["source"] == "records"
+    assert table["ux"] == {"range": [-3.0, 4.5], "slew_rate": 5000.0}   # |-3 - 2| / 1 ms
+    assert table["uy"] == {"range": [-1.0, 1.5], "slew_rate": 500.0}    # 0.5/1 ms, 1/2 ms
+    amp = amplifier_from_table(table, ["ux", "uy"])
+    assert amp.from_records and amp.channels[0].low == -3.0 and amp.channels[1].slew_rate == 500.0
+
+
+def test_shape_drive_closed_form():
+    amp = amplifier_from_table({"source": "records", "range": [-1.0, 1.0], "slew_rate": 100.0}, ["u"])
+    u = np.array([[0.0, 0.5, 3.0, 3.0, 0.9, 0.0]])
+    out, notes = shape_drive(amp, u, 1e-3)                   # 0.1 V per sample
+    np.testing.assert_allclose(out[0], [0.0, 0.1, 0.2, 0.3, 0.4, 0.3])
+    assert len(notes) == 1 and "beyond the range [-1, 1] V by up to 2 V" in notes[0]
+
+
+def test_hardware_fade_rest_lead_and_keep_start():
+    r = np.ones((2, 100)) * 7.0
+    f = hardware_fade(r, 50, rest=[1.0, -1.0])
+    np.testing.assert_array_equal(f[:, :6], [[1.0] * 6, [-1.0] * 6])   # a tenth at rest (5 + w(0))
+    np.testing.assert_array_equal(f[:, 50:], r[:, 50:])
+    assert np.all(np.diff(f[0]) >= 0)
+    u = keep_start(np.zeros((1, 40)), np.ones((1, 40)), 10, 10)
+    np.testing.assert_array_equal(u[0, :11], 0.0)
+    np.testing.assert_array_equal(u[0, 20:], 1.0)
