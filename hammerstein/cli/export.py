@@ -26,7 +26,7 @@ from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c
 from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
-                                      limits_from_table, load_source, write_files)
+                                      default_kind, limits_from_table, load_source, write_files)
 from hammerstein.export.fmu import build_fmu, find_compiler
 
 __all__ = ["add_parser", "handler"]
@@ -52,9 +52,10 @@ def add_parser(subparsers):
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--name", metavar="NAME",
                    help="C prefix and file stem (default: <preset>_<kind>, as a C identifier)")
-    p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default="multivariable",
-                   help="compensator kind (default multivariable; "
-                        f"{', '.join(REFUSED_KINDS)} are refused, naming why)")
+    p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default=None,
+                   help="compensator kind (default multivariable for a classical PI, "
+                        "preisach-inverse for a Preisach or generalised-PI model; "
+                        f"{', '.join(REFUSED_KINDS)} is refused, naming why)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default=None,
                    help="inverse of the dynamics for --kind hammerstein (only zpetc runs sample by "
                         "sample)")
@@ -128,6 +129,10 @@ def handler(args):
     except PresetError as exc:
         print_err(f"error: {' '.join(str(exc).split())}")
         return 1
+    if args.kind is None:
+        args.kind, why = default_kind(source)
+        if args.kind != "multivariable":
+            print_err(f"{prog}: --kind {args.kind} ({why})")
     try:
         comp, T = build_compensator(source, args.kind, gain=args.gain, iterations=args.iterations,
                                     feedback=args.feedback, cutoff_hz=args.cutoff_hz,
