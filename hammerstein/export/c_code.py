@@ -366,7 +366,7 @@ def _law_source(law, model, precision, N, limits, T):
              f"#define {N}_ITERATIONS {int(law.iterations)}",
              f"static const int {N}_play_start[{N}_N_INPUTS + 1] = {_ints(start)};",
              f"static const {N}_real {N}_play_r[{N}_N_PLAYS] = {_vec(r, precision)};  /* thresholds [V] */",
-             f"static const {N}_real {N}_W[{N}_N_OUTPUTS][{N}_N_PLAYS] = {_mat(W, precision)};  /* weights [um/V] */",
+             f"static const {N}_real {N}_WT[{N}_N_PLAYS][{N}_N_OUTPUTS] = {_mat(W.T, precision)};  /* weights [um/V], one row per play */",
              f"static const {N}_real {N}_G[{N}_N_OUTPUTS][{N}_N_INPUTS] = {_mat(G, precision)};  /* linear components [um/V] */",
              f"static const {N}_real {N}_K_inv[{N}_N_INPUTS][{N}_N_OUTPUTS] = {_mat(law.K_inv, precision)};  /* K^-1 [V/um] */",
              f"static const {N}_real {N}_bound = {_lit(law.divergence_bound, precision)};  /* divergence bound [V] */"]
@@ -383,37 +383,45 @@ def _law_source(law, model, precision, N, limits, T):
     one = "1.0" if precision == "double" else "1.0f"
     zero = "0.0" if precision == "double" else "0.0f"
     body = []
-    body.append(_PLAY.format(N=N))
+    # The play loops: W transposed (one row of p weights per play, contiguous), the play
+    # update and the weighted sum fused, the p sums in local accumulators: the same additions
+    # in the same order as the kernels (ascending plays, then G u), so the same result.
+    acc_decl = ", ".join(f"y{l} = {zero}" for l in range(p))
+    acc_add = " ".join(f"y{l} += w[{l}] * v;" for l in range(p))
+    play_loop = f"""    for (k = 0; k < {N}_N_INPUTS; ++k) {{
+        const {N}_real uk = u[k];
+        const int end = {N}_play_start[k + 1];
+        for (j = {N}_play_start[k]; j < end; ++j) {{
+            const {N}_real *w = {N}_WT[j];
+            {N}_real v = s[j];
+            const {N}_real hi = uk + {N}_play_r[j], lo = uk - {N}_play_r[j];
+            v = hi < v ? hi : v;
+            v = lo > v ? lo : v;
+@STORE@            {acc_add}
+        }}
+    }}"""
     if not law.lowpass and int(law.iterations) > 1:
-        body.append(f"""/* Gamma(u; s) with the play states frozen (no commit) */
+        gu = "\n".join(f"    y{l} = {zero};" + "".join(f" y{l} += {N}_G[{l}][{k}] * u[{k}];" for k in range(m))
+                       for l in range(p))
+        body.append(f"""/* Gamma(u; s) with the play states frozen (no commit): G u, then the plays */
 static void {N}_evaluate(const {N}_real u[], const {N}_real s[], {N}_real y[])
 {{
-    int l, k, j;
-    for (l = 0; l < {N}_N_OUTPUTS; ++l) {{
-        {N}_real g = {zero};
-        for (k = 0; k < {N}_N_INPUTS; ++k) g += {N}_G[l][k] * u[k];
-        y[l] = g;
-    }}
-    for (k = 0; k < {N}_N_INPUTS; ++k)
-        for (j = {N}_play_start[k]; j < {N}_play_start[k + 1]; ++j) {{
-            {N}_real v = {N}_play(s[j], u[k], {N}_play_r[j]);
-            for (l = 0; l < {N}_N_OUTPUTS; ++l) y[l] += {N}_W[l][j] * v;
-        }}
+    int k, j;
+    {N}_real {acc_decl};
+{gu}
+{play_loop.replace("@STORE@", "")}
+{chr(10).join(f"    y[{l}] = y{l};" for l in range(p))}
 }}
 """)
+    gu = "\n".join(f"    y[{l}] = y{l};" + "".join(f" y[{l}] += {N}_G[{l}][{k}] * u[{k}];" for k in range(m))
+                   for l in range(p))
     body.append(f"""/* move the plays to u, then y = W s + G u */
 static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
 {{
-    int l, k, j;
-    for (k = 0; k < {N}_N_INPUTS; ++k)
-        for (j = {N}_play_start[k]; j < {N}_play_start[k + 1]; ++j)
-            s[j] = {N}_play(s[j], u[k], {N}_play_r[j]);
-    for (l = 0; l < {N}_N_OUTPUTS; ++l) {{
-        {N}_real a = {zero};
-        for (j = 0; j < {N}_N_PLAYS; ++j) a += {N}_W[l][j] * s[j];
-        for (k = 0; k < {N}_N_INPUTS; ++k) a += {N}_G[l][k] * u[k];
-        y[l] = a;
-    }}
+    int k, j;
+    {N}_real {acc_decl};
+{play_loop.replace("@STORE@", "            s[j] = v;" + chr(10))}
+{gu}
 }}
 """)
     init = [f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = {zero};",
