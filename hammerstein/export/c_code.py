@@ -749,15 +749,34 @@ static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
 
 _ROOT = """#define {N}_ABS(x) ((x) < {zero} ? -(x) : (x))
 
+/* the last two values of each component within one sample (the states do not move until
+   the commit): a repeated input returns the value computed before, bit for bit */
+typedef struct {{
+    {N}_real x[{N}_N_COMPONENTS][2], y[{N}_N_COMPONENTS][2];
+    int n[{N}_N_COMPONENTS], last[{N}_N_COMPONENTS];
+}} {N}_memo;
+
+static {N}_real {N}_eval({N}_memo *mm, int c, {N}_real u, {N}_real *h)
+{{
+    int i;
+    for (i = 0; i < mm->n[c]; ++i)
+        if (mm->x[c][i] == u) return mm->y[c][i];
+    i = mm->n[c] < 2 ? mm->n[c]++ : 1 - mm->last[c];
+    mm->last[c] = i;
+    mm->x[c][i] = u;
+    mm->y[c][i] = {N}_component(c, u, h, 0);
+    return mm->y[c][i];
+}}
+
 /* u in [lo, hi] with component c = target: bracket from the guess by growing steps, then
    Illinois false position (the Python kernel's search, step for step) */
-static {N}_real {N}_root(int c, {N}_real target, {N}_real guess, {N}_real lo, {N}_real hi, {N}_real *h)
+static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {N}_real lo, {N}_real hi, {N}_real *h)
 {{
     {N}_real x = guess, fx, step, a, fa, b, fb;
     int side = 0, it;
     if (x < lo) x = lo;
     if (x > hi) x = hi;
-    fx = {N}_component(c, x, h, 0) - target;
+    fx = {N}_eval(mm, c, x, h) - target;
     if ({N}_ABS(fx) <= {N}_TOLERANCE) return x;
     step = {N}_BRACKET_STEP * (hi - lo);
     if (fx < {zero}) {{
@@ -766,11 +785,11 @@ static {N}_real {N}_root(int c, {N}_real target, {N}_real guess, {N}_real lo, {N
             b = x + step;
             if (b >= hi) {{
                 b = hi;
-                fb = {N}_component(c, hi, h, 0) - target;
+                fb = {N}_eval(mm, c, hi, h) - target;
                 if (fb <= {zero}) return hi;
                 break;
             }}
-            fb = {N}_component(c, b, h, 0) - target;
+            fb = {N}_eval(mm, c, b, h) - target;
             if (fb >= {zero}) break;
             a = b; fa = fb;
             step *= {N}_BRACKET_GROWTH;
@@ -781,11 +800,11 @@ static {N}_real {N}_root(int c, {N}_real target, {N}_real guess, {N}_real lo, {N
             a = x - step;
             if (a <= lo) {{
                 a = lo;
-                fa = {N}_component(c, lo, h, 0) - target;
+                fa = {N}_eval(mm, c, lo, h) - target;
                 if (fa >= {zero}) return lo;
                 break;
             }}
-            fa = {N}_component(c, a, h, 0) - target;
+            fa = {N}_eval(mm, c, a, h) - target;
             if (fa <= {zero}) break;
             b = a; fb = fa;
             step *= {N}_BRACKET_GROWTH;
@@ -796,7 +815,7 @@ static {N}_real {N}_root(int c, {N}_real target, {N}_real guess, {N}_real lo, {N
     for (it = 0; it < 200; ++it) {{
         x = (a * fb - b * fa) / (fb - fa);
         if (!(a < x && x < b)) x = {half} * (a + b);
-        fx = {N}_component(c, x, h, 0) - target;
+        fx = {N}_eval(mm, c, x, h) - target;
         if ({N}_ABS(fx) <= {N}_TOLERANCE || b - a <= {N}_BRACKET_END * ({one} + {N}_ABS(x))) return x;
         if (fx < {zero}) {{
             a = x; fa = fx;
@@ -826,6 +845,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
     nlev = int(max(1, np.max(np.diff(e_off)) - 1))
     h0 = comp.initial_state()[m:]
     decls = [f"#define {N}_N_HYSTERONS {nh}", f"#define {N}_MAX_LEVELS {nlev}",
+             f"#define {N}_N_COMPONENTS {p * m}",
              f"#define {N}_N_POLY {rev.shape[1]}",
              f"#define {N}_TOLERANCE {_lit(comp.tolerance, precision)}",
              f"#define {N}_BRACKET_STEP {_lit(1e-5, precision)}",
@@ -877,6 +897,8 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
            do not settle are repeated under-relaxed (omega 1/2 ... 1/16) */
         int round, sweep, converged = 0;
         {N}_real omega = {lit['one']};
+        {N}_memo mm;
+        for (k = 0; k < {N}_N_COMPONENTS; ++k) mm.n[k] = mm.last[k] = 0;
         for (round = 0; round < 5 && !converged; ++round) {{
             for (sweep = 0; sweep < {N}_MAX_SWEEPS; ++sweep) {{
                 {N}_real delta = {lit['zero']};
@@ -884,8 +906,8 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
                     {N}_real target = r[l], nw, dd;
                     for (k = 0; k < {N}_N_INPUTS; ++k)
                         if (k != l && {N}_present[l * {N}_N_INPUTS + k])
-                            target -= {N}_component(l * {N}_N_INPUTS + k, u[k], s->h, 0);
-                    nw = {N}_root(l * {N}_N_INPUTS + l, target, u[l], {N}_lo[l], {N}_hi[l], s->h);
+                            target -= {N}_eval(&mm, l * {N}_N_INPUTS + k, u[k], s->h);
+                    nw = {N}_root(&mm, l * {N}_N_INPUTS + l, target, u[l], {N}_lo[l], {N}_hi[l], s->h);
                     dd = {N}_ABS(nw - u[l]);
                     if (dd > delta) delta = dd;
                     u[l] = omega == {lit['one']} ? nw : u[l] + omega * (nw - u[l]);
