@@ -28,6 +28,7 @@ from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, Preis
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
 from hammerstein.core.presets import load_plant
 from hammerstein.export import STATUS_DIVERGED, STATUS_RANGE, export_c
+from hammerstein.export.fmu import build_fmu, platform_folder
 
 from conftest import COMPILERS, Harness, needs_cc
 from test_c_equivalence import circle, python_voltages, random_walk, raster, rel_error, sine
@@ -179,3 +180,28 @@ def test_status_flag_on_every_class(tmp_path):
         _, status, _ = h.run(far)
         # every sample from the jump on is flagged: out of range, or the law diverged (latched)
         assert np.all(status[350 + P:] & (STATUS_RANGE | STATUS_DIVERGED)), label
+
+
+@needs_cc
+@pytest.mark.parametrize("label, precision", [("preisach-root", "double"),
+                                              ("gpi-hammerstein-creep", "double"),
+                                              ("gpi-root", "float")])
+def test_fmu_of_every_class(label, precision, tmp_path):
+    """The FMU of the new classes simulates (fmpy) like Python; a float export too (the FMI
+    wrapper converts at its boundary, the compensator stays float)."""
+    pytest.importorskip("fmpy", reason="fmpy (test extra) is needed to simulate the FMU")
+    from fmpy.validation import validate_fmu
+    from test_fmu import simulate
+    if platform_folder() is None:
+        pytest.skip("unknown platform for an FMU binary")
+    comp = build(label)
+    code = export_c(comp, "xfmu", T, precision=precision)
+    data, binary = build_fmu(code, "test")
+    path = tmp_path / "xfmu.fmu"
+    path.write_bytes(data)
+    assert binary is not None and validate_fmu(str(path)) == []
+    yr = 0.6 * circle(1500)
+    u_fmu, status = simulate(path, code, yr)
+    err = rel_error(u_fmu, python_voltages(comp, yr))
+    assert np.all((np.asarray(status) & ~STATUS_RANGE) == 0)
+    assert err <= (1e-12 if precision == "double" else 1e-5), err
