@@ -26,7 +26,8 @@ from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.mixed_compensators import mixed_compensator
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_plant
+from hammerstein.cli.main import main
+from hammerstein.core.presets import load_plant, save_model
 from hammerstein.export import STATUS_DIVERGED, STATUS_RANGE, export_c
 from hammerstein.export.fmu import build_fmu, platform_folder
 
@@ -205,3 +206,24 @@ def test_fmu_of_every_class(label, precision, tmp_path):
     err = rel_error(u_fmu, python_voltages(comp, yr))
     assert np.all((np.asarray(status) & ~STATUS_RANGE) == 0)
     assert err <= (1e-12 if precision == "double" else 1e-5), err
+
+
+@needs_cc
+@pytest.mark.parametrize("factory", [preisach_model, gpi_model])
+def test_cli_exports_a_model_file_of_every_class_with_defaults(factory, tmp_path, capsys):
+    """``hammerstein export MODEL --target c`` without --kind on a Preisach / generalised-PI
+    model file: the exact inverse, said on stderr; the written C equals the Python one."""
+    model = factory()
+    path = tmp_path / "m.toml"
+    save_model(model, path)
+    out = tmp_path / "gen"
+    assert main(["export", str(path), "--target", "c", "--out", str(out), "--name", "m",
+                 "--sampling-period", repr(T)]) == 0
+    err = capsys.readouterr().err
+    assert "--kind preisach-inverse" in err
+    comp = PreisachInverseCompensator(model)
+    h = Harness(export_c(comp, "m", T), tmp_path / "h")
+    assert (out / "m.c").read_text().split("\n", 1)[1] == h.code.source.split("\n", 1)[1]
+    yr = 0.6 * raster(1500)
+    u_c, _, _ = h.run(yr)
+    assert rel_error(u_c, python_voltages(comp, yr)) <= 1e-12
