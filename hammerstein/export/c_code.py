@@ -16,7 +16,19 @@ the order of the compiled simulation kernels (``hammerstein.simulation``):
   ``U <- U + K^-1 (v - Gamma(U; s(t-T)))`` on frozen play states, or the
   low-pass law of its Section 6; then the play operators (eq. (1)) move to U;
 - or the per-axis analytic inverse PI of Kuhnen & Janocha (the shifted
-  inverse PI then the inverse play of threshold r_1), or ``U = K^-1 Yr``.
+  inverse PI then the inverse play of threshold r_1), or ``U = K^-1 Yr``;
+- for a Preisach or generalised-PI model (``MultivariableHysteresis``), the
+  exact per-sample inverse of
+  :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
+  step for step (``hammerstein.simulation._preisach``: the same bracket,
+  Illinois iterations, tolerances, Gauss-Seidel sweeps and order of
+  additions), its multiplicative law, or ``U = K^-1 (Yr - c)``; with a
+  Hammerstein compensator, after the ZPETC inverse and the creep inverse as
+  cascaded linear stages.
+
+``EMITTERS`` is the one dispatch table: compensator class -> planner.
+Every step returns a status: ``STATUS_LIMIT``, ``STATUS_DIVERGED``,
+``STATUS_RANGE`` (NaN, inf or out-of-range references, on every kind).
 
 Optional amplifier limits (range [V], slew rate [V/s]) clamp U inside
 ``NAME_step`` after the law, as hammerstein's amplifier model does
@@ -1150,13 +1162,18 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
     Parameters
     ----------
     compensator : object
-        An :class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`
+        An instance of a class of :data:`EMITTERS`: an
+        :class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`
         (multivariable or diagonal, delay or low-pass feedback), a
-        :class:`~hammerstein.core.compensators.PerAxisInverseCompensator`, a
-        :class:`~hammerstein.core.compensators.StaticGainCompensator` or a
+        :class:`~hammerstein.core.compensators.PerAxisInverseCompensator` or a
+        :class:`~hammerstein.core.compensators.StaticGainCompensator` of a
+        classical PI (linear components, offset and output map included); a
+        :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
+        (exact inverse or its law) or a
+        :class:`~hammerstein.core.mixed_compensators.LinearInverseCompensator`
+        of a Preisach or generalised-PI model; or a
         :class:`~hammerstein.core.hammerstein_compensator.HammersteinCompensator`
-        with ``inversion='zpetc'``; its model a multivariable classical PI
-        (linear components, offset and output map included).
+        with ``inversion='zpetc'`` (with or without creep) over any of them.
     name : str
         C prefix and file stem (:func:`check_name`).
     sampling_period : float
