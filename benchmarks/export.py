@@ -51,19 +51,20 @@ HARNESS = r"""
 #include <math.h>
 #include "@N@.h"
 
-static double ref[@LEN@][@N@_N_OUTPUTS];
+static @N@_real ref[@LEN@][@N@_N_OUTPUTS];
 
 int main(int argc, char **argv)
 {
     long steps = atol(argv[1]), repeat = atol(argv[2]), k, r;
     int i, l, flags = 0;
-    double best_cpu = 1e30, best_wall = 0.0, sink = 0.0, volt[@N@_N_INPUTS];
+    double best_cpu = 1e30, best_wall = 0.0, sink = 0.0;
+    @N@_real volt[@N@_N_INPUTS];
     static @N@_state s;
     for (i = 0; i < @LEN@; ++i) {          /* 150 Hz, 20 um circle from rest, T = 50 us */
         double ph = 2.0 * 3.14159265358979323846 * 150.0 * 5e-5 * i;
         for (l = 0; l < @N@_N_OUTPUTS; ++l) ref[i][l] = 0.0;
-        ref[i][0] = 20.0 * (1.0 - cos(ph));
-        if (@N@_N_OUTPUTS > 1) ref[i][1 % @N@_N_OUTPUTS] = 20.0 * sin(ph);
+        ref[i][0] = (@N@_real)(20.0 * (1.0 - cos(ph)));
+        if (@N@_N_OUTPUTS > 1) ref[i][1 % @N@_N_OUTPUTS] = (@N@_real)(20.0 * sin(ph));
     }
     @N@_init(&s);
     for (k = 0; k < steps / 10; ++k) flags |= @N@_step(&s, ref[k % @LEN@], volt);  /* warm-up */
@@ -75,7 +76,7 @@ int main(int argc, char **argv)
         c0 = clock();
         for (k = 0; k < steps; ++k) {
             flags |= @N@_step(&s, ref[k % @LEN@], volt);
-            sink += volt[0];
+            sink += (double)volt[0];
         }
         c1 = clock();
         clock_gettime(CLOCK_MONOTONIC, &w1);

@@ -9,8 +9,8 @@ This layer imports :mod:`hammerstein.core` only.
 
 from __future__ import annotations
 
-from hammerstein.export.c_code import (MARKER, STATUS_DIVERGED, STATUS_LIMIT, AmplifierLimits,
-                                       CExport, check_name, export_c)
+from hammerstein.export.c_code import (EMITTERS, MARKER, STATUS_DIVERGED, STATUS_LIMIT,
+                                       STATUS_RANGE, AmplifierLimits, CExport, check_name, export_c)
 
 __all__ = ["AmplifierLimits", "CExport", "export_c", "check_name", "MARKER", "STATUS_LIMIT",
-           "STATUS_DIVERGED"]
+           "STATUS_DIVERGED", "STATUS_RANGE", "EMITTERS"]

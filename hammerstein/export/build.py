@@ -22,12 +22,15 @@ from hammerstein.core.compensators import (InverseMultiplicativeCompensator,
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, output_problem, safe_write
 from hammerstein.core.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.hysteresis import MultivariablePI
-from hammerstein.core.presets import load_model, load_plant, read_toml, resolve_preset
+from hammerstein.core.mixed_compensators import MIXED_KINDS, mixed_compensator
+from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.core.presets import load_creep, load_model, load_plant, read_toml, resolve_preset
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
 from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
 
-__all__ = ["KINDS", "REFUSED_KINDS", "ExportSource", "load_source", "build_compensator", "limits_from_table",
+__all__ = ["KINDS", "REFUSED_KINDS", "ExportSource", "load_source", "default_kind",
+           "build_compensator", "limits_from_table",
            "check_owned", "check_fmu_owned", "write_files"]
 
 #: Exportable compensator kinds: name -> description.
@@ -36,14 +39,15 @@ KINDS = {
     "diagonal": "the same law on the direct transfers only",
     "per-axis": "per-axis analytic inverse PI of Kuhnen & Janocha",
     "static-gain": "U = K^-1 Yr, no hysteresis compensation",
-    "hammerstein": "ZPETC inverse of the linear dynamics, then the multivariable law",
+    "hammerstein": "ZPETC inverse of the linear dynamics (and of the creep), then the "
+                   "multivariable law (a classical PI) or the exact inverse (Preisach, "
+                   "generalised PI)",
+    "preisach-inverse": "exact per-sample inverse of a Preisach or generalised-PI model",
 }
 
 
 #: Compensator kinds of the scenario files that cannot be exported: name -> why.
 REFUSED_KINDS = {
-    "preisach-inverse": "it inverts a Preisach or generalised-PI model by a root search per "
-                        "sample and output, and the generator has no C code for those models",
     "none": "there is no compensator to export",
 }
 
@@ -66,6 +70,9 @@ class ExportSource:
         The discretised linear dynamics of a preset (None without).
     amplifier : dict or None
         The file's ``[amplifier]`` table, if any.
+    creep : list or None
+        The file's ``[creep]`` (one entry per output), inverted with the
+        dynamics by kind ``hammerstein``; None without.
     """
 
     path: Path
@@ -74,6 +81,7 @@ class ExportSource:
     sampling_period: float | None
     dynamics: object
     amplifier: dict | None
+    creep: list | None = None
 
 
 def load_source(model_or_preset):
@@ -101,8 +109,10 @@ def load_source(model_or_preset):
     if "preset" in data:
         plant = load_plant(path)
         return ExportSource(path, plant.name, plant.hysteresis, plant.sampling_period,
-                            plant.dynamics, amplifier)
-    return ExportSource(path, path.stem, load_model(path), None, None, amplifier)
+                            plant.dynamics, amplifier, getattr(plant, "creep", None))
+    model = load_model(path)
+    creep = load_creep(path, model.output_names) if "creep" in data else None
+    return ExportSource(path, path.stem, model, None, None, amplifier, creep)
 
 
 def limits_from_table(table, inputs, where="amplifier"):
@@ -170,6 +180,27 @@ def limits_from_table(table, inputs, where="amplifier"):
     return AmplifierLimits(lo, hi, slew)
 
 
+def default_kind(source):
+    """The kind exported without ``--kind``, and why.
+
+    Parameters
+    ----------
+    source : ExportSource
+
+    Returns
+    -------
+    (kind, reason) : (str, str)
+        ``'multivariable'`` for a classical PI (the scenario default);
+        ``'preisach-inverse'`` for a Preisach or generalised-PI model (its
+        exact per-sample inverse: it needs no gain and has no convergence
+        condition).
+    """
+    if isinstance(source.model, MultivariablePI):
+        return "multivariable", "the default kind of a classical PI"
+    return "preisach-inverse", (f"a {type(source.model).__name__} model: its exact per-sample "
+                                f"inverse")
+
+
 def build_compensator(source, kind="multivariable", gain=None, iterations=None, feedback="delay",
                       cutoff_hz=None, inversion="zpetc", sampling_period=None, check="error"):
     """The compensator of ``kind`` built on a source, with the scenario defaults.
@@ -202,20 +233,19 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
     Raises
     ------
     ExportError
-        An unknown or refused kind, a model that is not a multivariable
-        classical PI (Preisach, generalised PI), a model file without ``sampling_period``, a
-        Hammerstein compensator without dynamics, or the compensator's own
-        construction errors (one line).
+        An unknown or refused kind, ``preisach-inverse`` on a classical PI,
+        a model file without ``sampling_period``, a Hammerstein compensator
+        without dynamics, or the compensator's own construction errors (one
+        line). Every model class is accepted: a classical PI gets the PI
+        compensators, a Preisach / generalised-PI model the same kinds over
+        its exact inverse or its forward operator
+        (:func:`hammerstein.core.mixed_compensators.mixed_compensator`).
     """
     if kind in REFUSED_KINDS:
         raise ExportError(f"kind: {kind!r} cannot be exported to C: {REFUSED_KINDS[kind]}")
     if kind not in KINDS:
         raise ExportError(f"kind: expected one of {', '.join(KINDS)}, found {kind!r}")
-    if not isinstance(source.model, MultivariablePI):
-        raise ExportError(f"model: a {type(source.model).__name__} (of {source.path.name}) cannot be "
-                          f"exported to C: only the multivariable classical PI (with its offset, "
-                          f"output map and linear components) can; identify a PI model of the "
-                          f"actuator (hammerstein identify) and export that")
+    classical = isinstance(source.model, MultivariablePI)
     T = sampling_period if sampling_period is not None else source.sampling_period
     if T is None:
         raise ExportError(f"sampling-period: {source.path} is a model file without a sampling "
@@ -228,7 +258,21 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
     elif cutoff_hz is not None:
         raise ExportError("cutoff-hz: only used with --feedback lowpass")
     try:
-        if kind == "multivariable":
+        if kind == "preisach-inverse":
+            if gain is not None or iterations is not None or feedback != "delay":
+                raise ExportError("kind: 'preisach-inverse' takes no gain, iterations or feedback "
+                                  "options")
+            if classical:
+                raise ExportError(f"kind: 'preisach-inverse' inverts a Preisach or generalised-PI "
+                                  f"model; {source.path.name} holds a classical PI (export it with "
+                                  f"--kind multivariable, per-axis or hammerstein)")
+            comp = PreisachInverseCompensator(source.model)
+        elif not classical and kind in MIXED_KINDS:
+            if feedback != "delay":
+                raise ExportError(f"feedback: only 'delay' over a {type(source.model).__name__}")
+            comp = mixed_compensator(source.model, kind, gain=gain or "secant",
+                                     iterations=iterations or 1, check=check)
+        elif kind == "multivariable":
             comp = InverseMultiplicativeCompensator(source.model, gain=gain or "secant",
                                                     iterations=iterations or 1, check=check, **opts)
         elif kind == "diagonal":
@@ -249,7 +293,7 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
             comp = HammersteinCompensator(source.model, G, inversion=inversion or "zpetc",
                                           gain=gain or "midpoint", iterations=iterations or 3,
                                           check=check, feedback=feedback, cutoff_hz=cutoff_hz,
-                                          sampling_period=T)
+                                          sampling_period=T, creep=source.creep)
     except (CompensatorError, DynamicsError) as exc:
         raise ExportError(" ".join(str(exc).split())) from None
     return comp, float(T)

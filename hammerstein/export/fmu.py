@@ -179,8 +179,8 @@ def fmi2_wrapper(code: CExport, guid):
 
 typedef struct {{
     {N}_state state;
-    double reference[NU];
-    double voltage[NY];
+    {N}_real reference[NU];      /* the compensator's own type (double or float) */
+    {N}_real voltage[NY];
     int status;
     double time;
     fmi2CallbackFunctions cb;
@@ -264,8 +264,8 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
     size_t k;
     if (!i) return fmi2Error;
     for (k = 0; k < n; ++k) {{
-        if (vr[k] < NU) v[k] = i->reference[vr[k]];
-        else if (vr[k] < NU + NY) v[k] = i->voltage[vr[k] - NU];
+        if (vr[k] < NU) v[k] = (fmi2Real)i->reference[vr[k]];
+        else if (vr[k] < NU + NY) v[k] = (fmi2Real)i->voltage[vr[k] - NU];
         else {{ say(i, fmi2Error, "fmi2GetReal: unknown value reference"); return fmi2Error; }}
     }}
     return fmi2OK;
@@ -277,7 +277,7 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
     size_t k;
     if (!i) return fmi2Error;
     for (k = 0; k < n; ++k) {{
-        if (vr[k] < NU) i->reference[vr[k]] = v[k];
+        if (vr[k] < NU) i->reference[vr[k]] = ({N}_real)v[k];
         else {{ say(i, fmi2Error, "fmi2SetReal: only the references are inputs"); return fmi2Error; }}
     }}
     return fmi2OK;

@@ -5,7 +5,8 @@ header documents: ``NAME_init``, ``NAME_step``, the ``NAME_N_*`` macros and
 ``NAME_state``. It reads the references as raw doubles (p per sample) from a
 file and writes, per sample, the m voltages and the status (as a double).
 With a split sample it copies the state struct into a fresh one there
-(chunked runs must equal the whole run bit for bit).
+(chunked runs must equal the whole run bit for bit). The interface is
+``NAME_real`` (double or float): the doubles read are converted here.
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ HARNESS = r"""
 int main(int argc, char **argv)
 {
     static double ref[@NAME@_N_OUTPUTS], volt[@NAME@_N_INPUTS + 1];
+    @NAME@_real r[@NAME@_N_OUTPUTS], v[@NAME@_N_INPUTS];
+    int i;
     @NAME@_state a, b, *s = &a;
     long k = 0, split = argc > 3 ? atol(argv[3]) : -1;
     FILE *in = fopen(argv[1], "rb"), *out = fopen(argv[2], "wb");
@@ -39,7 +42,9 @@ int main(int argc, char **argv)
     while (fread(ref, sizeof(double), @NAME@_N_OUTPUTS, in) == @NAME@_N_OUTPUTS) {
         int status;
         if (k == split) { memcpy(&b, &a, sizeof a); memset(&a, 0xff, sizeof a); s = &b; }
-        status = @NAME@_step(s, ref, volt);
+        for (i = 0; i < @NAME@_N_OUTPUTS; ++i) r[i] = (@NAME@_real)ref[i];
+        status = @NAME@_step(s, r, v);
+        for (i = 0; i < @NAME@_N_INPUTS; ++i) volt[i] = (double)v[i];
         volt[@NAME@_N_INPUTS] = (double)status;
         if (fwrite(volt, sizeof(double), @NAME@_N_INPUTS + 1, out) != @NAME@_N_INPUTS + 1) return 4;
         ++k;
