@@ -24,7 +24,7 @@ parameters are given, so the fit is a *variable projection* (Golub and
 Pereyra [3]_): :func:`scipy.optimize.least_squares` adjusts the envelope
 parameters of the components of output l, and for each of its trial values
 the weights are the bounded linear least-squares solution
-(:func:`scipy.optimize.lsq_linear`) on the training samples.
+(:func:`hammerstein.core.lsq.bounded_lstsq`) on the training samples.
 
 Parametrisation of a component from input k (amplitude ``A`` [V], the largest
 measured ``|u_k|``): ``gamma_l = [A, b_l / A, a2_l, 0]`` and ``gamma_r = [rho A,
@@ -103,6 +103,7 @@ import scipy.optimize
 
 from hammerstein.core.generalized_pi import GeneralizedPI, envelope
 from hammerstein.core.identification import IdentificationError
+from hammerstein.core.lsq import bounded_lstsq
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial
 from hammerstein.core.record_identification import (
     RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
@@ -497,9 +498,7 @@ class GeneralizedPIIdentifier:
             R = scipy.linalg.cholesky(gram, lower=False)
         except np.linalg.LinAlgError:
             R = np.linalg.qr(Ay, mode="r")
-        res = scipy.optimize.lsq_linear(R[:-1, :-1], R[:-1, -1],
-                                        bounds=(lb * col, np.full(lb.size, np.inf)), method="bvls")
-        return res.x / col, A, pieces
+        return bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col) / col, A, pieces
 
     def _fit_output(self, l, kinds):
         """Envelopes by least_squares, weights projected out; the output's components."""
