@@ -289,11 +289,11 @@ class GeneralizedPIIdentifier:
         ``"auto"`` drops a cross-coupling whose contribution is below twice
         the noise.
     max_evaluations : int
-        Largest number of envelope trials per output
-        (``max_nfev`` of :func:`scipy.optimize.least_squares`; each of its
-        iterations takes 7 trials per generalised-PI component of the output
-        for the finite-difference Jacobian, so 60 trials are 4 iterations for
-        a 2 x 2 model). On ``scenarios/presets/realistic-gpi.toml`` identified
+        Largest number of steps tried per output (``max_nfev`` of
+        :func:`scipy.optimize.least_squares`). Each finite-difference Jacobian
+        takes 7 more trials per generalised-PI component of the output, which
+        that budget does not count (about 10 Jacobian trials per step on a 2 x
+        2 model); the notes report every trial made. On ``scenarios/presets/realistic-gpi.toml`` identified
         through ``hammerstein identify --model generalized --creep-records``,
         60 trials left the fit short of its minimum (circles 2.3-4.7 % of the
         radius); 300 gave 1.06-2.59 %.
@@ -513,6 +513,7 @@ class GeneralizedPIIdentifier:
             return thetas
 
         def residual(z):
+            self._evaluations += 1            # every trial, the Jacobian's included
             x, A, _ = self._solve(l, kinds, unpack(z))
             return (A @ x - y) / np.sqrt(y.size)
 
@@ -523,7 +524,6 @@ class GeneralizedPIIdentifier:
                 method="trf", x_scale=np.tile(THETA_HI - THETA_LO, len(free)),
                 diff_step=1e-4, max_nfev=self.max_evaluations)
             z = res.x
-            self._evaluations += res.nfev
         else:
             z = np.zeros(0)
         thetas = unpack(z)

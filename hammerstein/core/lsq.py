@@ -121,6 +121,10 @@ def bounded_lstsq(R, c, lower, ridge=0.0):
         Target.
     lower : array_like, shape (n,)
         Lower bounds, ``-inf`` for a free variable.
+    ridge : float
+        ``r`` > 0 adds ``r ||x_s||^2`` (``x_s`` the variables scaled to unit
+        column norms) to the objective: a unique minimiser for a
+        rank-deficient ``R``, close to the one of least scaled norm.
 
     Returns
     -------
