@@ -122,6 +122,7 @@ COMMANDS = {
     "compensate": ("hammerstein.cli.compensate", "write the drive file (input voltages) for a reference"),
     "evaluate": ("hammerstein.cli.evaluate", "metrics and figures of a measured response"),
     "learn": ("hammerstein.cli.learn", "one iterative-learning step from drive and measured files"),
+    "warmup": ("hammerstein.cli.warmup", "compile every simulation kernel once into numba's cache"),
 }
 
 

@@ -24,7 +24,7 @@ parameters are given, so the fit is a *variable projection* (Golub and
 Pereyra [3]_): :func:`scipy.optimize.least_squares` adjusts the envelope
 parameters of the components of output l, and for each of its trial values
 the weights are the bounded linear least-squares solution
-(:func:`scipy.optimize.lsq_linear`) on the training samples.
+(:func:`hammerstein.core.lsq.bounded_lstsq`) on the training samples.
 
 Parametrisation of a component from input k (amplitude ``A`` [V], the largest
 measured ``|u_k|``): ``gamma_l = [A, b_l / A, a2_l, 0]`` and ``gamma_r = [rho A,
@@ -103,6 +103,7 @@ import scipy.optimize
 
 from hammerstein.core.generalized_pi import GeneralizedPI, envelope
 from hammerstein.core.identification import IdentificationError
+from hammerstein.core.lsq import bounded_lstsq
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial
 from hammerstein.core.record_identification import (
     RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
@@ -288,11 +289,11 @@ class GeneralizedPIIdentifier:
         ``"auto"`` drops a cross-coupling whose contribution is below twice
         the noise.
     max_evaluations : int
-        Largest number of envelope trials per output
-        (``max_nfev`` of :func:`scipy.optimize.least_squares`; each of its
-        iterations takes 7 trials per generalised-PI component of the output
-        for the finite-difference Jacobian, so 60 trials are 4 iterations for
-        a 2 x 2 model). On ``scenarios/presets/realistic-gpi.toml`` identified
+        Largest number of steps tried per output (``max_nfev`` of
+        :func:`scipy.optimize.least_squares`). Each finite-difference Jacobian
+        takes 7 more trials per generalised-PI component of the output, which
+        that budget does not count (about 10 Jacobian trials per step on a 2 x
+        2 model); the notes report every trial made. On ``scenarios/presets/realistic-gpi.toml`` identified
         through ``hammerstein identify --model generalized --creep-records``,
         60 trials left the fit short of its minimum (circles 2.3-4.7 % of the
         radius); 300 gave 1.06-2.59 %.
@@ -497,9 +498,7 @@ class GeneralizedPIIdentifier:
             R = scipy.linalg.cholesky(gram, lower=False)
         except np.linalg.LinAlgError:
             R = np.linalg.qr(Ay, mode="r")
-        res = scipy.optimize.lsq_linear(R[:-1, :-1], R[:-1, -1],
-                                        bounds=(lb * col, np.full(lb.size, np.inf)), method="bvls")
-        return res.x / col, A, pieces
+        return bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col) / col, A, pieces
 
     def _fit_output(self, l, kinds):
         """Envelopes by least_squares, weights projected out; the output's components."""
@@ -514,6 +513,7 @@ class GeneralizedPIIdentifier:
             return thetas
 
         def residual(z):
+            self._evaluations += 1            # every trial, the Jacobian's included
             x, A, _ = self._solve(l, kinds, unpack(z))
             return (A @ x - y) / np.sqrt(y.size)
 
@@ -524,7 +524,6 @@ class GeneralizedPIIdentifier:
                 method="trf", x_scale=np.tile(THETA_HI - THETA_LO, len(free)),
                 diff_step=1e-4, max_nfev=self.max_evaluations)
             z = res.x
-            self._evaluations += res.nfev
         else:
             z = np.zeros(0)
         thetas = unpack(z)

@@ -28,6 +28,7 @@ import scipy.linalg
 
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, PrandtlIshlinskii, play,
                                         validate_thresholds)
+from hammerstein.core.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
 from hammerstein.exceptions import IdentificationError
 
 __all__ = [
@@ -330,8 +331,10 @@ class LeastSquaresPI:
     ``y = Phi w + c``, with ``Phi`` (n_samples, n) the play outputs
     (:func:`hammerstein.core.hysteresis.play`) over the whole record and c an
     optional output offset. The solve uses :func:`scipy.linalg.lstsq`
-    (unconstrained) or :func:`scipy.optimize.lsq_linear` (bounded /
-    non-negative weights; the offset is never bounded).
+    (unconstrained) or :func:`hammerstein.core.lsq.bounded_lstsq` on the
+    regression's triangular factor (bounded / non-negative weights; the
+    offset is never bounded; :func:`scipy.optimize.lsq_linear` for bounds on
+    both sides).
 
     ``bounds="monotone"`` constrains the model instead of the weights: the
     unknowns become the cumulative sums ``S_j = sum_{i<=j} w_i`` (the slopes
@@ -472,9 +475,14 @@ class LeastSquaresPI:
         elif isinstance(bounds, str):  # monotone: solve for the cumulative sums S
             coef = self._solve_monotone(X, target, u[skip:], y[skip:], r.size)
         else:
-            from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
+            # the tall problem reduced to its n x n triangular factor before the solve
+            R, c, _ = r_factor(X, target)
+            if np.all(np.isinf(bounds[1])):
+                coef = bounded_lstsq(R, c, bounds[0])
+            else:
+                from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; two-sided bounds
 
-            coef = lsq_linear(X, target, bounds=bounds, method="bvls").x
+                coef = lsq_linear(R, c, bounds=bounds, method="bvls").x
         w = coef[:r.size]
         c = float(coef[-1]) if self.offset else 0.0
         self.thresholds_ = r
@@ -500,18 +508,12 @@ class LeastSquaresPI:
         Xs = X.copy()
         Xs[:, :n] = sign * (X[:, :n] @ M)
         lower = np.full(X.shape[1], s_min)
-        upper = np.full(X.shape[1], np.inf)
         if self.offset:
             lower[-1] = -np.inf
-        from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
-
         # the same problem on the triangular factor of Xs = Q R (||Xs c - t||^2 =
-        # ||R c - Q^T t||^2 + const, same gradient Xs^T (Xs c - t)): every BVLS step then
-        # solves a k x k system instead of an n_samples x k one. R and Q^T t are the
-        # factor of [Xs t] (Q itself is never formed).
-        k = Xs.shape[1]
-        Rt = np.linalg.qr(np.column_stack([Xs, target]), mode="r")
-        sol = lsq_linear(Rt[:k, :k], Rt[:k, k], bounds=(lower, upper), method="bvls").x
+        # ||R c - Q^T t||^2 + const): the bounded solver works on a k x k system
+        # instead of an n_samples x k one (Q itself is never formed)
+        sol = lstsq_bounded_below(Xs, target, lower)
         coef = sol.copy()
         coef[:n] = sign * (M @ sol[:n])
         return coef

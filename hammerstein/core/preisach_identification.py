@@ -22,7 +22,7 @@ demagnetised state), and output l is the linear combination
 ``y_l(t) = sum_k [ sum_{j <= i} mu^{lk}_ij s^k_ij(t) + sum_n c^{lk}_n u_k(t)^n ] + offset_l``
 
 fitted on the training samples by bounded least squares
-(:func:`scipy.optimize.lsq_linear`) with a Tikhonov penalty [3]_ on the
+(:func:`hammerstein.core.lsq.bounded_lstsq`) with a Tikhonov penalty [3]_ on the
 second differences of the density over the Preisach plane (along alpha and
 along beta, strictly below the diagonal; the diagonal, the reversible ramps,
 along itself):
@@ -67,6 +67,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.core.identification import IdentificationError
+from hammerstein.core.lsq import bounded_lstsq, r_factor
 from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.core.record_identification import (
     RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
@@ -257,13 +258,11 @@ class PreisachIdentifier:
         """Bounded least squares on ``[R0; lam D] x ~ [b0; 0]`` (``R0``: R of the data's QR)."""
         if D.shape[0] and lam > 0:
             R0, b0 = np.vstack([R0, lam * D]), np.r_[b0, np.zeros(D.shape[0])]
-        col = np.linalg.norm(R0, axis=0)
-        col = np.where(col > 0, col, 1.0)
+        if np.any(np.isfinite(ub)):
+            raise ValueError("upper bounds: not supported (the weights are bounded below only)")
         # ||A x - y|| = ||R x - Q^T y|| + const: the bounded solver works on the small R
-        Q, R = np.linalg.qr(R0 / col)
-        from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; Preisach fits only
-        res = lsq_linear(R, Q.T @ b0, bounds=(lb * col, ub * col), method="bvls")
-        return res.x / col
+        R, c, _ = r_factor(R0, b0)
+        return bounded_lstsq(R, c, lb, ridge=1e-12)
 
     def _fit_output(self, blocks, ys, l, kinds, lam):
         m = len(blocks)

@@ -26,8 +26,10 @@ What it does, in order:
    (uniform in input, ``r_1 = 0`` a linear term) or ``auto``: both are
    fitted and the one with the smaller held-out error is kept.
 3. **Fit**: least squares of every output on the play outputs of every input
-   plus one output offset (:func:`scipy.linalg.lstsq`, or
-   :func:`scipy.optimize.lsq_linear` with bounds on the direct transfers),
+   plus one output offset, on the triangular factor of the regression
+   (:func:`hammerstein.core.lsq.r_factor`; :func:`scipy.linalg.lstsq`, or
+   :func:`hammerstein.core.lsq.bounded_lstsq` with bounds on the direct
+   transfers),
    or the closed form of the paper's Appendix per component.
 4. **Structure**: each component is a PI, a pure gain or absent. With
    ``components="auto"`` a component is simplified (PI -> absent, else PI ->
@@ -60,6 +62,7 @@ from hammerstein.core.datafiles import MIN_SAMPLES, MultiRecord, Record
 from hammerstein.core.hysteresis import (HysteresisError, MultivariablePI, OutputMap,
                                          PrandtlIshlinskii, play)
 from hammerstein.core import lti
+from hammerstein.core.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
 from hammerstein.core.creep import creep_matrices
 from hammerstein.core.creep_identification import CreepIdentifier, hysteresis_frequency
 from hammerstein.simulation import linear_steps
@@ -639,12 +642,12 @@ class _LeastSquares:
             return [None] * self.m, float(np.mean(target)), float(np.std(target))
         X = np.column_stack(cols)
         lo, hi = np.concatenate(lower), np.concatenate(upper)
-        if np.all(np.isinf(lo)) and np.all(np.isinf(hi)):
-            coef, *_ = scipy.linalg.lstsq(X, target)
+        # hi is +inf throughout; the tall problem reduced to its n x n factor first
+        R, c, _ = r_factor(X, target)
+        if np.all(np.isinf(lo)):
+            coef, *_ = scipy.linalg.lstsq(R, c)
         else:
-            from scipy.optimize import lsq_linear  # lazy: ~0.3 s to import; bounded fits only
-
-            coef = lsq_linear(X, target, bounds=(lo, hi), method="bvls").x
+            coef = bounded_lstsq(R, c, lo)
         rms = float(np.sqrt(np.mean((target - X @ coef) ** 2)))
         comps = [None] * self.m
         i = 0
@@ -1673,7 +1676,7 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
     part of a branch and the map its saturation); (b) given
     ``h = Gamma(u) + d``, the segment slopes of ``S`` (knots at quantiles of
     h, slopes >= 1e-3 of the secant) and ``c`` by bounded least squares
-    (:func:`scipy.optimize.lsq_linear`). Starts from ``S`` = identity; keeps
+    (:func:`hammerstein.core.lsq.lstsq_bounded_below`). Starts from ``S`` = identity; keeps
     the iterate with the smallest training RMS error of ``y``.
 
     Returns
@@ -1714,8 +1717,7 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
             mu = MAP_SMOOTHING * np.sqrt(h.size) * np.ptp(h) / (z.size + 1)
             Xa = np.vstack([X, np.column_stack([mu * D, np.zeros(z.size)])])
             ya = np.concatenate([y, np.zeros(z.size)])
-            coef = scipy.optimize.lsq_linear(Xa, ya, bounds=(lo, np.full(lo.size, np.inf)),
-                                             method="bvls").x
+            coef = lstsq_bounded_below(Xa, ya, lo)
             err = float(np.sqrt(np.mean((y - X @ coef) ** 2)))
             smap = OutputMap(z, coef[:-1])
             c0 = float(coef[-1] + _segment_basis(np.zeros(1), z)[0] @ coef[:-1])   # R(0)

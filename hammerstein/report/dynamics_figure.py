@@ -8,14 +8,10 @@ process as arrays (``control.StateSpace`` objects do not pickle).
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from hammerstein.report.figures import _title_height, fixed_layout, suptitle  # noqa: E402
+from hammerstein.report.figures import _title_height, fixed_layout, suptitle
+from hammerstein.report.figures import pyplot as plt  # matplotlib on first use
 
 __all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "measured_bode_figure",
            "state_space_data"]

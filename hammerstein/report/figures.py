@@ -25,23 +25,78 @@ import math
 import textwrap
 import threading
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.axis import Axis  # noqa: E402
-from matplotlib.font_manager import fontManager, get_font  # noqa: E402
-from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag  # noqa: E402
-from matplotlib.ft2font import RenderMode  # noqa: E402
-from matplotlib.ticker import Locator, LogFormatterSciNotation, NullLocator  # noqa: E402
-from PIL import Image  # noqa: E402
-from PIL.PngImagePlugin import PngInfo  # noqa: E402
+
+# -- matplotlib, loaded when the first figure is drawn --------------------------------------
+# Importing matplotlib (pyplot, the Agg backend, fonts) costs about as much CPU as a warm
+# default run simulates; a run whose figures are all drawn by workers, or none at all, never
+# needs it in its main process. `plt` (also exported as `pyplot`) is a stand-in: its first
+# attribute access imports matplotlib with the Agg backend, defines the classes below that
+# derive from matplotlib's and puts every matplotlib name this module uses in its globals.
+_MPL_LOCK = threading.RLock()
+
+
+def _load_matplotlib():
+    """Import matplotlib (Agg) and define this module's matplotlib-derived classes, once."""
+    g = globals()
+    if "Axis" in g:
+        return
+    with _MPL_LOCK:
+        if "Axis" in g:
+            return
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot
+        from matplotlib.axis import Axis
+        from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
+        from matplotlib.font_manager import fontManager, get_font
+        from matplotlib.ft2font import RenderMode
+        from matplotlib.ticker import Locator, LogFormatterSciNotation, NullLocator
+        from PIL import Image
+        from PIL.PngImagePlugin import PngInfo
+
+        names = dict(matplotlib=matplotlib, fontManager=fontManager, get_font=get_font,
+                     FigureCanvasAgg=FigureCanvasAgg, RendererAgg=RendererAgg,
+                     get_hinting_flag=get_hinting_flag, RenderMode=RenderMode, Locator=Locator,
+                     LogFormatterSciNotation=LogFormatterSciNotation, NullLocator=NullLocator,
+                     Image=Image, PngInfo=PngInfo, _pyplot_module=matplotlib.pyplot)
+        g.update(names)
+        g.update(_define_classes())
+        g["Axis"] = Axis                     # last: marks the module as loaded
+
+
+class _LazyPyplot:
+    """``matplotlib.pyplot``, imported on the first attribute access (:func:`_load_matplotlib`)."""
+
+    def __getattr__(self, name):
+        _load_matplotlib()
+        return getattr(_pyplot_module, name)  # noqa: F821 - defined by _load_matplotlib
+
+    def __repr__(self):
+        return "<matplotlib.pyplot, imported on first use>"
+
+
+plt = pyplot = _LazyPyplot()
+
+#: Names defined by :func:`_load_matplotlib` (module attributes on first access, PEP 562).
+_LAZY_NAMES = ("matplotlib", "Axis", "fontManager", "get_font", "FigureCanvasAgg", "RendererAgg",
+               "get_hinting_flag", "RenderMode", "Locator", "LogFormatterSciNotation",
+               "NullLocator", "Image", "PngInfo", "_PlainLogFormatter", "_TicksInView",
+               "_TextCachingRenderer", "_Canvas")
+
+
+def __getattr__(name):
+    if name in _LAZY_NAMES:
+        _load_matplotlib()
+        return globals()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 __all__ = ["plain_log_labels", "loop_grid", "decorate_grid", "trajectory_figure", "divergence_figure", "xy_overlay",
            "raster_error_map", "save", "scenario_prefix", "grid_figure", "decimate",
            "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
-           "MAX_POINTS", "DPI"]
+           "MAX_POINTS", "DPI", "pyplot"]
 
 #: Largest number of points drawn per line: a 15-inch figure at :data:`DPI` is
 #: 1800 pixels wide, so 2 points (min and max) per pixel column of a panel.
@@ -295,13 +350,6 @@ def scenario_prefix(scenario):
     return head if ":" in title and 0 < len(head) <= 24 else scenario.name
 
 
-class _PlainLogFormatter(LogFormatterSciNotation):
-    """Label the ticks matplotlib's log formatter labels, as plain numbers (``0.3``, ``20``)."""
-
-    def __call__(self, x, pos=None):
-        return f"{x:g}" if super().__call__(x, pos) else ""
-
-
 def plain_log_labels(axis):
     """Label a log-scaled axis with plain numbers instead of powers of ten.
 
@@ -315,6 +363,7 @@ def plain_log_labels(axis):
     axis : matplotlib.axis.Axis
         ``ax.yaxis`` or ``ax.xaxis`` of a log-scaled axes.
     """
+    _load_matplotlib()
     axis.set_major_formatter(_PlainLogFormatter(labelOnlyBase=False))
     axis.set_minor_formatter(_PlainLogFormatter(labelOnlyBase=False))
 
@@ -731,57 +780,10 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
     return fig
 
 
-class _TicksInView(Locator):
-    """A tick locator returning only the ticks of ``base`` that the axis draws.
-
-    Locators return ticks beyond the view limits too (a linear axis one or two
-    per side, a log axis whole decades); matplotlib creates a tick object
-    (lines and labels) for each of them and then draws only those inside the
-    view interval. Dropping them first gives the same picture with fewer tick
-    objects (a third of the ticks of a Bode plot's log axes). The interval
-    test is matplotlib's (``Axis._update_ticks``), with a looser tolerance:
-    every tick it draws is kept.
-
-    Parameters
-    ----------
-    base : matplotlib.ticker.Locator
-        The axis' locator (limits, ``nonsingular`` and ``view_limits`` are its own).
-    """
-
-    def __init__(self, base):
-        self.base = base
-
-    def set_axis(self, axis):
-        super().set_axis(axis)
-        self.base.set_axis(axis)
-
-    def __call__(self):
-        locs = np.asarray(self.base(), dtype=float)
-        if locs.size == 0 or self.axis is None:
-            return locs
-        lo, hi = sorted(self.axis.get_view_interval())
-        transform = self.axis.get_transform()
-        with np.errstate(all="ignore"):
-            a, b = sorted(np.ravel(transform.transform(np.array([lo, hi], dtype=float))))
-            t = np.ravel(transform.transform(locs))
-        tol = 1e-9 * (b - a)
-        if not (np.isfinite(a) and np.isfinite(b)):
-            return locs
-        return locs[~(t < a - tol) & ~(t > b + tol)]          # NaN (masked) kept, as before
-
-    def tick_values(self, vmin, vmax):
-        return self.base.tick_values(vmin, vmax)
-
-    def nonsingular(self, v0, v1):
-        return self.base.nonsingular(v0, v1)
-
-    def view_limits(self, vmin, vmax):
-        return self.base.view_limits(vmin, vmax)
-
-
 def _ticks_in_view(fig):
     """Wrap the tick locators of every axis of ``fig`` in :class:`_TicksInView`
     (not the colorbars', whose locators their colorbar manages)."""
+    _load_matplotlib()
     for ax in fig.axes:
         if getattr(ax, "_colorbar", None) is not None:
             continue
@@ -832,6 +834,7 @@ def _ticks_updated_once():
     so :func:`save` draws one figure at a time in a process
     (:data:`_DRAW_LOCK`; matplotlib is not thread-safe anyway).
     """
+    _load_matplotlib()
     update = getattr(Axis, "_update_ticks", None)
     bboxes = getattr(Axis, "_get_ticklabel_bboxes", None)
     if update is None or bboxes is None:                 # another matplotlib: draw as it does
@@ -883,119 +886,182 @@ def _hashable(value):
     return value
 
 
-class _TextCachingRenderer(RendererAgg):
-    """Matplotlib's Agg renderer, laying out each string and rasterising each glyph once.
+def _define_classes():
+    """The classes deriving from matplotlib's (called once, by :func:`_load_matplotlib`)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg, RendererAgg, get_hinting_flag
+    from matplotlib.font_manager import fontManager, get_font
+    from matplotlib.ft2font import RenderMode
+    from matplotlib.ticker import Locator, LogFormatterSciNotation
 
-    The paper run's figures draw about 1500 strings made of about 13 000
-    glyphs, of which about 270 strings and 2900 glyph images are distinct
-    (the same tick labels, axis labels and legends on every panel and
-    figure). Matplotlib lays out every string (``FT2Font._layout``),
-    measures it (``set_text``) and renders every glyph (FreeType) at each
-    draw; this renderer keeps the results, keyed by everything they depend
-    on: the font object, its size and the resolution, the hinting flags, the
-    string (and its font features and language) or the glyph, its transform
-    and the sub-pixel part of its position (FreeType renders a glyph moved by
-    whole pixels into the same bitmap, moved). The drawing calls are
-    matplotlib's (``RendererAgg._draw_text_glyphs_and_boxes``,
-    ``draw_text``, ``get_text_width_height_descent``) with the cache in
-    front; the pixels are the same (``tests/report/test_text_cache.py``).
-    """
+    class _PlainLogFormatter(LogFormatterSciNotation):
+        """Label the ticks matplotlib's log formatter labels, as plain numbers (``0.3``, ``20``)."""
 
-    def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
-        if ismath:
-            return self.draw_mathtext(gc, x, y, s, prop, angle)
-        font = self._prepare_font(prop)
-        features = mtext.get_fontfeatures() if mtext is not None else None
-        language = mtext.get_language() if mtext is not None else None
-        flags = get_hinting_flag()
-        key = (font, prop.get_size_in_points(), self.dpi, flags, s, _hashable(features),
-               _hashable(language))
-        items = _cached(_layouts, key, lambda: [
-            (item.ft_object, item.glyph_index, item.x, item.y)
-            for item in font._layout(s, flags=flags, features=features, language=language)])
-        size = prop.get_size_in_points()
-        self._draw_text_glyphs_and_boxes(
-            gc, x, y, angle, ((ft, size, index, 0, 1, dx, dy) for ft, index, dx, dy in items), [])
+        def __call__(self, x, pos=None):
+            return f"{x:g}" if super().__call__(x, pos) else ""
 
-    def _get_font_height_metrics(self, prop):
-        """Line metrics of ``prop``'s font, as ``Text._get_layout`` computes them, once per font.
+    class _TicksInView(Locator):
+        """A tick locator returning only the ticks of ``base`` that the axis draws.
 
-        Matplotlib asks a renderer with this method instead of looking up
-        the font and reading its ``OS/2`` or ``hhea`` table for every text
-        it lays out; the values are those of its own code (matplotlib
-        3.10's ``Text._get_layout``), scaled to the font size and this
-        renderer's resolution (the figure's in :func:`save`).
+        Locators return ticks beyond the view limits too (a linear axis one or two
+        per side, a log axis whole decades); matplotlib creates a tick object
+        (lines and labels) for each of them and then draws only those inside the
+        view interval. Dropping them first gives the same picture with fewer tick
+        objects (a third of the ticks of a Bode plot's log axes). The interval
+        test is matplotlib's (``Axis._update_ticks``), with a looser tolerance:
+        every tick it draws is kept.
+
+        Parameters
+        ----------
+        base : matplotlib.ticker.Locator
+            The axis' locator (limits, ``nonsingular`` and ``view_limits`` are its own).
         """
-        def metrics():
-            font = get_font(fontManager._find_fonts_by_props(prop))
-            for table_name, gap, ascent, descent in (
-                    ("OS/2", "sTypoLineGap", "sTypoAscender", "sTypoDescender"),
-                    ("hhea", "lineGap", "ascent", "descent")):
-                table = font.get_sfnt_table(table_name)
-                if table is None:
-                    continue
-                scale = (1 / font.get_sfnt_table("head")["unitsPerEm"]
-                         * prop.get_size_in_points() * self.dpi / 72)
-                return table[ascent] * scale, -table[descent] * scale, table[gap] * scale
-            return None, None, None                     # matplotlib measures "lp" itself
 
-        return _cached(_heights, (_hashable(tuple(vars(prop).values())), self.dpi), metrics)
+        def __init__(self, base):
+            self.base = base
 
-    def get_text_width_height_descent(self, s, prop, ismath):
-        if ismath:
-            return super().get_text_width_height_descent(s, prop, ismath)
-        font = self._prepare_font(prop)
-        flags = get_hinting_flag()
+        def set_axis(self, axis):
+            super().set_axis(axis)
+            self.base.set_axis(axis)
 
-        def measure():
-            font.set_text(s, 0.0, flags=flags)
-            w, h = font.get_width_height()
-            return w / 64.0, h / 64.0, font.get_descent() / 64.0
+        def __call__(self):
+            locs = np.asarray(self.base(), dtype=float)
+            if locs.size == 0 or self.axis is None:
+                return locs
+            lo, hi = sorted(self.axis.get_view_interval())
+            transform = self.axis.get_transform()
+            with np.errstate(all="ignore"):
+                a, b = sorted(np.ravel(transform.transform(np.array([lo, hi], dtype=float))))
+                t = np.ravel(transform.transform(locs))
+            tol = 1e-9 * (b - a)
+            if not (np.isfinite(a) and np.isfinite(b)):
+                return locs
+            return locs[~(t < a - tol) & ~(t > b + tol)]          # NaN (masked) kept, as before
 
-        return _cached(_extents, (font, prop.get_size_in_points(), self.dpi, flags, s), measure)
+        def tick_values(self, vmin, vmax):
+            return self.base.tick_values(vmin, vmax)
 
-    def _draw_text_glyphs_and_boxes(self, gc, x, y, angle, glyphs, boxes):
-        cos, sin = math.cos(math.radians(angle)), math.sin(math.radians(angle))
-        flags = get_hinting_flag()
-        antialiased = bool(gc.get_antialiased())
-        height = self.height
-        for font, size, glyph_index, slant, extend, dx, dy in glyphs:   # dy is upwards
-            matrix = _cached(_rotations, (angle, slant, extend), lambda: (
-                0x10000 * np.array([[cos, -sin], [sin, cos]])
-                @ [[extend, extend * slant], [0, 1]]).round().astype(int))
-            px = round(0x40 * (x + dx * cos - dy * sin))
-            py = round(0x40 * (height - y + dx * sin + dy * cos))   # FreeType's y is upwards
+        def nonsingular(self, v0, v1):
+            return self.base.nonsingular(v0, v1)
 
-            def render(font=font, size=size, glyph_index=glyph_index, matrix=matrix, px=px, py=py):
-                font.set_size(size, self.dpi)
-                font._set_transform(matrix, [px & 0x3F, py & 0x3F])
-                bitmap = font._render_glyph(
-                    glyph_index, flags, RenderMode.NORMAL if antialiased else RenderMode.MONO)
-                buffer = np.array(bitmap.buffer)
-                if not antialiased:
-                    buffer *= 0xff
-                return buffer, bitmap.left, bitmap.top
+        def view_limits(self, vmin, vmax):
+            return self.base.view_limits(vmin, vmax)
 
-            buffer, left, top = _cached(
-                _glyphs, (font, size, self.dpi, glyph_index, matrix.tobytes(), px & 0x3F, py & 0x3F,
-                          flags, antialiased), render)
-            # draw_text_image's y is downwards & the bitmap bottom side.
-            self._renderer.draw_text_image(
-                buffer, left + (px >> 6), int(height) - (top + (py >> 6)) + buffer.shape[0], 0, gc)
-        if boxes:
-            super()._draw_text_glyphs_and_boxes(gc, x, y, angle, (), boxes)
+    class _TextCachingRenderer(RendererAgg):
+        """Matplotlib's Agg renderer, laying out each string and rasterising each glyph once.
+
+        The paper run's figures draw about 1500 strings made of about 13 000
+        glyphs, of which about 270 strings and 2900 glyph images are distinct
+        (the same tick labels, axis labels and legends on every panel and
+        figure). Matplotlib lays out every string (``FT2Font._layout``),
+        measures it (``set_text``) and renders every glyph (FreeType) at each
+        draw; this renderer keeps the results, keyed by everything they depend
+        on: the font object, its size and the resolution, the hinting flags, the
+        string (and its font features and language) or the glyph, its transform
+        and the sub-pixel part of its position (FreeType renders a glyph moved by
+        whole pixels into the same bitmap, moved). The drawing calls are
+        matplotlib's (``RendererAgg._draw_text_glyphs_and_boxes``,
+        ``draw_text``, ``get_text_width_height_descent``) with the cache in
+        front; the pixels are the same (``tests/report/test_text_cache.py``).
+        """
+
+        def draw_text(self, gc, x, y, s, prop, angle, ismath=False, mtext=None):
+            if ismath:
+                return self.draw_mathtext(gc, x, y, s, prop, angle)
+            font = self._prepare_font(prop)
+            features = mtext.get_fontfeatures() if mtext is not None else None
+            language = mtext.get_language() if mtext is not None else None
+            flags = get_hinting_flag()
+            key = (font, prop.get_size_in_points(), self.dpi, flags, s, _hashable(features),
+                   _hashable(language))
+            items = _cached(_layouts, key, lambda: [
+                (item.ft_object, item.glyph_index, item.x, item.y)
+                for item in font._layout(s, flags=flags, features=features, language=language)])
+            size = prop.get_size_in_points()
+            self._draw_text_glyphs_and_boxes(
+                gc, x, y, angle, ((ft, size, index, 0, 1, dx, dy) for ft, index, dx, dy in items), [])
+
+        def _get_font_height_metrics(self, prop):
+            """Line metrics of ``prop``'s font, as ``Text._get_layout`` computes them, once per font.
+
+            Matplotlib asks a renderer with this method instead of looking up
+            the font and reading its ``OS/2`` or ``hhea`` table for every text
+            it lays out; the values are those of its own code (matplotlib
+            3.10's ``Text._get_layout``), scaled to the font size and this
+            renderer's resolution (the figure's in :func:`save`).
+            """
+            def metrics():
+                font = get_font(fontManager._find_fonts_by_props(prop))
+                for table_name, gap, ascent, descent in (
+                        ("OS/2", "sTypoLineGap", "sTypoAscender", "sTypoDescender"),
+                        ("hhea", "lineGap", "ascent", "descent")):
+                    table = font.get_sfnt_table(table_name)
+                    if table is None:
+                        continue
+                    scale = (1 / font.get_sfnt_table("head")["unitsPerEm"]
+                             * prop.get_size_in_points() * self.dpi / 72)
+                    return table[ascent] * scale, -table[descent] * scale, table[gap] * scale
+                return None, None, None                     # matplotlib measures "lp" itself
+
+            return _cached(_heights, (_hashable(tuple(vars(prop).values())), self.dpi), metrics)
+
+        def get_text_width_height_descent(self, s, prop, ismath):
+            if ismath:
+                return super().get_text_width_height_descent(s, prop, ismath)
+            font = self._prepare_font(prop)
+            flags = get_hinting_flag()
+
+            def measure():
+                font.set_text(s, 0.0, flags=flags)
+                w, h = font.get_width_height()
+                return w / 64.0, h / 64.0, font.get_descent() / 64.0
+
+            return _cached(_extents, (font, prop.get_size_in_points(), self.dpi, flags, s), measure)
+
+        def _draw_text_glyphs_and_boxes(self, gc, x, y, angle, glyphs, boxes):
+            cos, sin = math.cos(math.radians(angle)), math.sin(math.radians(angle))
+            flags = get_hinting_flag()
+            antialiased = bool(gc.get_antialiased())
+            height = self.height
+            for font, size, glyph_index, slant, extend, dx, dy in glyphs:   # dy is upwards
+                matrix = _cached(_rotations, (angle, slant, extend), lambda: (
+                    0x10000 * np.array([[cos, -sin], [sin, cos]])
+                    @ [[extend, extend * slant], [0, 1]]).round().astype(int))
+                px = round(0x40 * (x + dx * cos - dy * sin))
+                py = round(0x40 * (height - y + dx * sin + dy * cos))   # FreeType's y is upwards
+
+                def render(font=font, size=size, glyph_index=glyph_index, matrix=matrix, px=px, py=py):
+                    font.set_size(size, self.dpi)
+                    font._set_transform(matrix, [px & 0x3F, py & 0x3F])
+                    bitmap = font._render_glyph(
+                        glyph_index, flags, RenderMode.NORMAL if antialiased else RenderMode.MONO)
+                    buffer = np.array(bitmap.buffer)
+                    if not antialiased:
+                        buffer *= 0xff
+                    return buffer, bitmap.left, bitmap.top
+
+                buffer, left, top = _cached(
+                    _glyphs, (font, size, self.dpi, glyph_index, matrix.tobytes(), px & 0x3F, py & 0x3F,
+                              flags, antialiased), render)
+                # draw_text_image's y is downwards & the bitmap bottom side.
+                self._renderer.draw_text_image(
+                    buffer, left + (px >> 6), int(height) - (top + (py >> 6)) + buffer.shape[0], 0, gc)
+            if boxes:
+                super()._draw_text_glyphs_and_boxes(gc, x, y, angle, (), boxes)
 
 
-class _Canvas(FigureCanvasAgg):
-    """An Agg canvas drawing with :class:`_TextCachingRenderer`."""
+    class _Canvas(FigureCanvasAgg):
+        """An Agg canvas drawing with :class:`_TextCachingRenderer`."""
 
-    def get_renderer(self):
-        w, h = self.get_width_height(physical=True)
-        key = w, h, self.figure.dpi
-        if self._lastKey != key:
-            self.renderer = _TextCachingRenderer(w, h, self.figure.dpi)
-            self._lastKey = key
-        return self.renderer
+        def get_renderer(self):
+            w, h = self.get_width_height(physical=True)
+            key = w, h, self.figure.dpi
+            if self._lastKey != key:
+                self.renderer = _TextCachingRenderer(w, h, self.figure.dpi)
+                self._lastKey = key
+            return self.renderer
+
+    return {"_PlainLogFormatter": _PlainLogFormatter, "_TicksInView": _TicksInView,
+            "_TextCachingRenderer": _TextCachingRenderer, "_Canvas": _Canvas}
 
 
 def save(fig, path):
@@ -1016,6 +1082,7 @@ def save(fig, path):
     path : str, pathlib.Path or binary file object
         Where to write (a file is overwritten).
     """
+    _load_matplotlib()
     _ticks_in_view(fig)
     _unlabelled_axes_not_placed(fig)
     fig.set_dpi(DPI)

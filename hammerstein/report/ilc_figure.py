@@ -6,13 +6,11 @@ compensator of scenarios (:mod:`hammerstein.core.ilc`).
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from hammerstein.report.figures import pyplot as plt  # matplotlib on first use
 
-from hammerstein.report.figures import fixed_layout, legend_on_top  # noqa: E402
+from hammerstein.report.figures import fixed_layout, legend_on_top
 
 __all__ = ["convergence_figure", "iteration_history"]
 

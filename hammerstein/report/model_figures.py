@@ -10,12 +10,10 @@
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from hammerstein.report.figures import (  # noqa: E402
+from hammerstein.report.figures import pyplot as plt  # matplotlib on first use
+from hammerstein.report.figures import (
     _active_columns, _title_height, decimate, decimate_path, decorate_grid, fixed_layout,
     grid_figure, legend_on_top, suptitle)
 

@@ -1,0 +1,197 @@
+"""Linear least squares of the identifications, reduced to their small triangular factor.
+
+Every weight fit of the identifications (classical PI, output map,
+Preisach, generalised PI) is a linear least-squares problem on a tall
+matrix ``A`` (hundreds of thousands of training rows, tens to hundreds of
+columns), some of whose variables are bounded below (non-negative weights,
+a monotone slope). Since
+
+``||A x - b||^2 = ||R x - c||^2 + rho^2``   with ``[A | b] = Q [[R, c], [0, rho]]``
+
+(the QR factorisation of the augmented matrix, Golub & Van Loan [1]_ §5.3),
+the tall matrix is factored once (:func:`r_factor`, LAPACK ``geqrf``,
+without forming Q) and every solve works on the n x n factor.
+
+A problem with lower bounds on some variables and the others free
+(:func:`bounded_lstsq`) is reduced further: the free variables are
+eliminated by a QR factorisation of their columns (the bounded
+variables then minimise the part of the residual orthogonal to the free
+columns), the bounds are shifted to zero, and what is left is a
+non-negative least-squares problem solved by the Lawson-Hanson active set
+method [2]_ (:func:`scipy.optimize.nnls`); the free variables follow by
+back-substitution. The problem is the same as the one
+``scipy.optimize.lsq_linear(..., method="bvls")`` solves (Stark & Parker's
+BVLS [3]_), hence the same minimiser when ``A`` has full column rank;
+Lawson-Hanson is a compiled loop where BVLS is Python calling a full
+least-squares solve per active-set change.
+
+References
+----------
+.. [1] G. H. Golub and C. F. Van Loan, *Matrix Computations*, 4th ed.,
+   Johns Hopkins University Press, 2013.
+.. [2] C. L. Lawson and R. J. Hanson, *Solving Least Squares Problems*,
+   SIAM, 1995, ch. 23.
+.. [3] P. B. Stark and R. L. Parker, "Bounded-variable least-squares: an
+   algorithm and applications", *Computational Statistics* 10, 1995.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+
+__all__ = ["r_factor", "bounded_lstsq", "lstsq_bounded_below"]
+
+#: Rows of [A | b] factored at a time by :func:`r_factor`.
+CHUNK_ROWS = 4096
+
+
+def r_factor(A, b):
+    """Triangular factor of the least-squares problem ``min ||A x - b||``.
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (N, n)
+        Regression matrix.
+    b : numpy.ndarray, shape (N,)
+        Target.
+
+    Returns
+    -------
+    R : numpy.ndarray, shape (k, n)
+        Upper-triangular (trapezoidal when ``N < n``), ``k = min(N, n)``.
+    c : numpy.ndarray, shape (k,)
+        ``Q^T b`` on the range of ``A``'s factor.
+    rho : float
+        Norm of the part of ``b`` orthogonal to the columns of ``A``, so that
+        ``||A x - b||^2 = ||R x - c||^2 + rho^2`` for every x.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> A, b, x = rng.normal(size=(50, 3)), rng.normal(size=50), rng.normal(size=3)
+    >>> R, c, rho = r_factor(A, b)
+    >>> bool(np.isclose(np.sum((A @ x - b) ** 2), np.sum((R @ x - c) ** 2) + rho ** 2))
+    True
+    """
+    A = np.asarray(A, dtype=float)
+    b = np.asarray(b, dtype=float)
+    N, n = A.shape
+    # Householder QR block by block (a block of [A | b] fits in the cache), then of the
+    # stacked factors: the R of the whole matrix up to the signs of its rows, with
+    # Householder's backward stability, about 5x faster than one QR of the tall matrix
+    block = max(CHUNK_ROWS, 2 * (n + 1))
+    parts = []
+    buf = np.empty((min(block, N), n + 1))
+    for i in range(0, N, block):
+        rows = min(block, N - i)
+        B = buf[:rows]
+        B[:, :n] = A[i:i + rows]
+        B[:, n] = b[i:i + rows]
+        parts.append(np.linalg.qr(B, mode="r"))
+    Rb = parts[0] if len(parts) == 1 else np.linalg.qr(np.vstack(parts), mode="r")
+    k = min(Rb.shape[0], n)
+    rho = float(abs(Rb[n, n])) if Rb.shape[0] > n else 0.0
+    return Rb[:k, :n], Rb[:k, n].copy(), rho
+
+
+def _range_basis(M, rtol=1e-12):
+    """Orthonormal bases of the range of ``M`` and of its complement, by pivoted QR."""
+    Q, Rm, _ = scipy.linalg.qr(M, mode="full", pivoting=True)
+    d = np.abs(np.diag(Rm))
+    rank = int(np.sum(d > rtol * d[0])) if d.size and d[0] > 0 else 0
+    return Q[:, :rank], Q[:, rank:]
+
+
+def bounded_lstsq(R, c, lower, ridge=0.0):
+    """``min ||R x - c||`` subject to ``x >= lower`` (entries ``-inf``: free variables).
+
+    Columns are scaled to unit norm, the free variables eliminated by a
+    pivoted QR factorisation of their columns, the bounded ones shifted to
+    ``z = x - lower >= 0`` and solved by :func:`scipy.optimize.nnls` on the
+    part of the problem orthogonal to the free columns; the free variables
+    then by least squares on what is left (see the module notes).
+
+    Parameters
+    ----------
+    R : numpy.ndarray, shape (k, n)
+        Regression matrix, normally the factor of :func:`r_factor`.
+    c : numpy.ndarray, shape (k,)
+        Target.
+    lower : array_like, shape (n,)
+        Lower bounds, ``-inf`` for a free variable.
+    ridge : float
+        ``r`` > 0 adds ``r ||x_s||^2`` (``x_s`` the variables scaled to unit
+        column norms) to the objective: a unique minimiser for a
+        rank-deficient ``R``, close to the one of least scaled norm.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The minimiser (``x >= lower`` exactly).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> R = np.array([[1.0, 0.0], [0.0, 1.0]])
+    >>> bounded_lstsq(R, np.array([-1.0, -2.0]), [0.0, -np.inf]).tolist()
+    [0.0, -2.0]
+    """
+    R = np.asarray(R, dtype=float)
+    c = np.asarray(c, dtype=float)
+    lower = np.asarray(lower, dtype=float)
+    n = R.shape[1]
+    col = np.linalg.norm(R, axis=0)
+    col = np.where(col > 0, col, 1.0)
+    Rs = R / col
+    if ridge > 0:      # rank-deficient problems: the minimiser of least (scaled) norm
+        Rs = np.vstack([Rs, np.sqrt(ridge) * np.eye(n)])
+        c = np.concatenate([c, np.zeros(n)])
+    lo = lower * col
+    bounded = np.isfinite(lo)
+    free = ~bounded
+    x = np.zeros(n)
+    if not bounded.any():
+        x = scipy.linalg.lstsq(Rs, c)[0]
+        return x / col
+    RB = Rs[:, bounded]
+    cb = c - RB @ lo[bounded]
+    if free.any():
+        Q1, Q2 = _range_basis(Rs[:, free])
+        M, d = Q2.T @ RB, Q2.T @ cb
+    else:
+        M, d = RB, cb
+    if M.shape[0] == 0:
+        z = np.zeros(RB.shape[1])
+    else:
+        from scipy.optimize import nnls  # lazy: ~0.3 s to import; bounded fits only
+
+        z, _ = nnls(M, d, maxiter=50 * max(M.shape[1], 1))
+    x[bounded] = lo[bounded] + z
+    if free.any():
+        x[free] = scipy.linalg.lstsq(Rs[:, free], cb - RB @ z)[0]
+    x /= col
+    x[bounded] = np.maximum(x[bounded], lower[bounded])   # the rescaling's last ulp
+    return x
+
+
+def lstsq_bounded_below(A, b, lower):
+    """``min ||A x - b||`` subject to ``x >= lower`` on a tall matrix: the factor, then the solve.
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (N, n)
+        Regression matrix.
+    b : numpy.ndarray, shape (N,)
+        Target.
+    lower : array_like, shape (n,)
+        Lower bounds, ``-inf`` for a free variable.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The minimiser, as :func:`bounded_lstsq` on :func:`r_factor`'s factor.
+    """
+    R, c, _ = r_factor(A, b)
+    return bounded_lstsq(R, c, lower)
