@@ -41,6 +41,7 @@ __all__ = [
     "ExportError",
     "AmplifierError",
     "AmplifierWarning",
+    "FeedbackError",
 ]
 
 
@@ -179,3 +180,8 @@ class AmplifierError(HammersteinError, ValueError):
 
 class AmplifierWarning(HammersteinWarning):
     """A drive beyond the amplifier's range or slew rate (``limits = "warn"``)."""
+
+
+class FeedbackError(HammersteinError, ValueError):
+    """A feedback controller, sensor or loop that cannot be designed, discretised or run
+    (:mod:`hammerstein.core.feedback`; the message names the key and why)."""
