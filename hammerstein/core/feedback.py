@@ -274,6 +274,9 @@ class Controller:
         One line per axis (or one for a MIMO design).
     continuous : control.StateSpace or None
         The continuous design on the error (p -> m), before discretisation.
+    axes : list of control.StateSpace or None
+        A diagonal controller's discrete SISO parts (error l -> voltage l),
+        for the per-axis loops; None for a MIMO design.
     """
 
     A: np.ndarray
@@ -284,6 +287,7 @@ class Controller:
     integrators: np.ndarray
     descriptions: list = field(default_factory=list)
     continuous: control.StateSpace | None = None
+    axes: list | None = None
 
     @property
     def n_states(self) -> int:
@@ -366,7 +370,7 @@ def controller_from_lti(system, sampling_period, method="tustin", integrators=No
     if mask.shape != (n,):
         raise FeedbackError(f"integrators: expected {n} flags, found {mask.shape}")
     return Controller(A, np.hstack([B, -B]), C, np.hstack([D, -D]), float(sampling_period), mask,
-                      [description], cont)
+                      [description], cont, [d] if d.ninputs == 1 and d.noutputs == 1 else None)
 
 
 def diagonal_controller(designs, sampling_period, method="tustin"):
@@ -408,7 +412,7 @@ def diagonal_controller(designs, sampling_period, method="tustin"):
         cont = control.append(*[c.continuous for c in parts])
     return Controller(A, B, C, D, float(sampling_period),
                       np.concatenate([c.integrators for c in parts]) if n else np.zeros(0, bool),
-                      [c.descriptions[0] for c in parts], cont)
+                      [c.descriptions[0] for c in parts], cont, [c.axes[0] for c in parts])
 
 
 def _continuous(system):
@@ -517,9 +521,9 @@ def hysteresis_slopes(model, amplitude=None, n_samples=4000):
         ok = np.abs(du) > 1e-6 * amp[k]
         for l in range(p):
             seg = y[l, major]
-            rising = y[l, n_samples // 8] - y[l, 0]
-            secant[l, k] = np.sign(rising + 1e-300) * (seg.max() - seg.min()) / (2 * amp[k])
             s = np.diff(y[l])[ok] / du[ok]
+            sign = 1.0 if np.median(s) >= 0 else -1.0
+            secant[l, k] = sign * (seg.max() - seg.min()) / (2 * amp[k])
             low[l, k], high[l, k] = s.min(), s.max()
     return secant, low, high
 
@@ -553,8 +557,8 @@ def linearised_plant(plant, gain=None):
 class Sensor:
     """Position sensor: white noise, first-order bandwidth, delay.
 
-    ``m = LP(y(t - d T) + n)`` with ``n`` white, ``noise_rms`` per axis,
-    added before the sensor's low-pass (so the noise reaching the loop is
+    ``m = LP(y(t - d T) + n(t - d T))`` with ``n`` white, ``noise_rms`` per
+    axis, added before the delay and the sensor's low-pass (so the noise reaching the loop is
     band limited by it), and the low-pass ``m_t = a m_{t-1} + (1 - a) z_t``
     with ``a = exp(-2 pi f_b T)``.
 
@@ -980,6 +984,11 @@ class FeedbackLoop:
     def margins(self, gain=None):
         """Gain and phase margins of each axis' loop, the other loops open (python-control).
 
+        The loop of axis l is ``K_l(z) S(z) P_ll(z)`` (a diagonal controller's
+        discrete part, the sensor with its delay, the linearised plant's
+        direct path), the series python-control forms; a MIMO controller's
+        is the (l, l) entry of :meth:`loop_transfer`.
+
         Parameters
         ----------
         gain : array_like, shape (p, m), optional
@@ -992,11 +1001,15 @@ class FeedbackLoop:
             [deg], ``gain_crossover_hz``, ``phase_crossover_hz`` [Hz], from
             :func:`control.stability_margins` of ``L_ll``.
         """
-        L = self.loop_transfer(gain)
         T = self.plant.sampling_period
         out = []
+        axes = self.controller.axes
+        P = self.linear_plant(gain)
+        L = self.loop_transfer(gain) if axes is None else None
+        sensor = self.sensor.to_control(1, T)
         for l in range(min(self.p, self.m)):
-            gm, pm, _, wpc, wgc, _ = control.stability_margins(L[l, l])
+            Ll = L[l, l] if axes is None else axes[l] * sensor * P[l, l]
+            gm, pm, _, wpc, wgc, _ = control.stability_margins(Ll)
             out.append({"gain_margin": float(gm), "phase_margin": float(pm),
                         "gain_crossover_hz": float(wgc) / (2 * np.pi),
                         "phase_crossover_hz": float(wpc) / (2 * np.pi), "sampling_period": T})

@@ -7,8 +7,8 @@ updates every state in place (a chunked run equals one long run).
 At sample t, with the plant strictly proper or the measurement delayed
 (``delay >= 1``):
 
-1. ``z_t = y_{t-d} + n_t`` the sensed position plus the sensor noise
-   (``y_t = C x_t`` when ``d = 0``);
+1. ``z_t = y_{t-d} + n_{t-d}`` the sensed position plus the sensor noise,
+   delayed (``y_t = C x_t`` when ``d = 0``);
 2. ``m_t = Cs xs_t + Ds z_t``, ``xs <- As xs + Bs z_t`` (sensor bandwidth);
 3. ``v_t = Ck xc_t + Dk [r_t; m_t]`` the controller, ``u_t = f_t + v_t`` with
    the feedforward ``f_t``, ``a_t`` = ``u_t`` slew-limited then clipped to the
@@ -109,7 +109,7 @@ class LoopState(NamedTuple):
     """States of a closed-loop run, updated in place by the kernel.
 
     ``s`` hysteresis states; ``x`` plant linear states [µm]; ``xs`` sensor
-    states; ``buf`` (p, max(delay, 1)) the delayed positions, oldest first
+    states; ``buf`` (p, max(delay, 1)) the delayed noisy positions, oldest
     at index ``pos[0]``; ``pos`` (1,) int64; ``xc`` controller states;
     ``a`` (m,) the last applied voltages [V] (slew limit).
     """
@@ -218,7 +218,7 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
                 z[l] = acc + loop.y_off[l] + noise[l, t]
         else:
             for l in range(p):
-                z[l] = st.buf[l, pos] + noise[l, t]
+                z[l] = st.buf[l, pos]
         # 2. the sensor
         for l in range(p):
             acc = 0.0
@@ -302,7 +302,7 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
             st.x[i] = xn[i]
         if d > 0:
             for l in range(p):
-                st.buf[l, pos] = yt[l]
+                st.buf[l, pos] = yt[l] + noise[l, t]
             pos += 1
             if pos == d:
                 pos = 0
