@@ -175,7 +175,7 @@ def _components(u, ca, s, h, rho):
             h[l] += acc + poly + ca.off[c]
 
 
-@njit(cache=True, fastmath=FASTMATH)
+@njit(cache=True, nogil=True, fastmath=FASTMATH)
 def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_out):
     """One closed-loop record (see the module docstring); states in ``st`` in/out.
 
