@@ -1112,8 +1112,17 @@ class FeedbackLoop:
         A, B, C, D = (np.asarray(M) for M in (N.A, N.B, N.C, N.D))
         if np.max(np.abs(np.linalg.eigvals(A)), initial=0.0) >= 1:
             return np.full(self.p, np.inf)
-        # discrete Gramian: W = A W A' + B B';  ||N||_2^2 = diag(C W C' + D D')
-        W = scipy.linalg.solve_discrete_lyapunov(A, B @ B.T) if A.size else np.zeros((0, 0))
+        # discrete Gramian W = A W A' + B B' (doubling, accurate for poles near 1);
+        # ||N||_2^2 = diag(C W C' + D D')
+        W = B @ B.T                      # Smith's doubling: W = sum_k A^k B B' A'^k
+        Ak = A.copy()
+        for _ in range(64):
+            if not W.size:
+                break
+            W = W + Ak @ W @ Ak.T
+            Ak = Ak @ Ak
+            if np.max(np.abs(Ak), initial=0.0) < 1e-300:
+                break
         var = np.diag(C @ W @ C.T + D @ D.T)
         return np.sqrt(np.maximum(var, 0.0)) * self.sensor.noise_rms
 
