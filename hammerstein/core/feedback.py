@@ -1188,8 +1188,9 @@ class FeedbackLoop:
         small = {"value": peak * delta,
                  "passed": bool(peak * delta < 1 and np.all(np.abs(control.poles(M)) < 1))}
         passed = ok_all or small["passed"]
+        names = list(self.plant.hysteresis.output_names)
         summary = "; ".join(
-            f"axis {l}: sector [{a['sector_low']:.3g}, {a['sector_high']:.3g}] µm/V, circle "
+            f"axis {names[l]}: sector [{a['sector_low']:.3g}, {a['sector_high']:.3g}] µm/V, circle "
             f"criterion {'met' if a['passed'] else 'NOT met'} (margin {a['circle_margin']:.3g})"
             for l, a in enumerate(axes))
         summary += (f"; MIMO small gain {small['value']:.3g} "

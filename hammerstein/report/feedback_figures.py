@@ -137,8 +137,7 @@ def loop_figure(analysis, title):
 
 def _side_by_side(table):
     wide = table.pivot_table(index=["sweep", "compensator", "frequency_hz", "case"],
-                             columns="mode", values=["rms_error_um", "max_error_percent"],
-                             dropna=False)
+                             columns="mode", values=["rms_error_um", "max_error_percent"])
     wide.columns = [f"{'RMS µm' if a == 'rms_error_um' else 'max %'} {b}" for a, b in wide.columns]
     order = [c for m in ("feedforward", "feedback", "both") for c in wide.columns
              if c.endswith(" " + m)]

@@ -30,7 +30,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, uint64
 
 from hammerstein.exceptions import HysteresisError
 from hammerstein.simulation._kernels import FASTMATH, _commit, _output
@@ -141,20 +141,24 @@ def _components(u, ca, s, h, rho):
             q0 = ca.q_off[c]
             q1 = ca.q_off[c + 1]
             if q1 > q0:
-                nl = ca.e_off[c + 1] - e0 - 1
+                nl = uint64(ca.e_off[c + 1] - e0 - 1)
+                E = ca.E
                 for i in range(nl):
-                    rho[i] = _ramp(uk, ca.E[e0 + i], ca.E[e0 + i + 1])
-                base = ca.s_off[c] - q0
-                for q in range(q0, q1):
-                    up = rho[ca.row[q]]
-                    down = rho[ca.col[q]]
-                    v = s[base + q]
-                    if v > down:
-                        v = down
-                    if v < up:
-                        v = up
-                    s[base + q] = v
-                    acc += ca.mu[q] * v
+                    i = uint64(i)
+                    rho[i] = _ramp(uk, E[uint64(e0) + i], E[uint64(e0) + i + uint64(1)])
+                row, col, mu = ca.row, ca.col, ca.mu
+                sb = uint64(ca.s_off[c])
+                uq0 = uint64(q0)
+                for q in range(uq0, uint64(q1)):
+                    q = uint64(q)
+                    up = rho[uint64(row[q])]
+                    down = rho[uint64(col[q])]
+                    j = sb + (q - uq0)
+                    v = s[j]
+                    v = down if v > down else v
+                    v = up if v < up else v
+                    s[j] = v
+                    acc += mu[q] * v
             p0 = ca.p_off[c]
             p1 = ca.p_off[c + 1]
             if p1 > p0:
