@@ -135,9 +135,10 @@ def design_axis(kind, gain, crossover_hz, zero_hz=None, notch_hz=None, notch_dam
         linear part's DC gain).
     crossover_hz : float
         Crossover of the integral (tracking) action [Hz].
-    zero_hz, notch_hz, notch_damping, notch_width, mode_hz, ppf_gain, ppf_damping,
-    feedthrough_ratio, damping_hz : float
+    zero_hz, notch_hz, notch_damping, notch_width, mode_hz, ppf_gain, ppf_damping : float
         See above (frequencies in Hz, the rest dimensionless).
+    feedthrough_ratio, damping_hz : float
+        See above (``irc``).
 
     Returns
     -------
@@ -977,6 +978,11 @@ class FeedbackLoop:
             Reference to position ``y`` (p -> p).
         N : control.StateSpace
             Sensor noise to position ``y`` (p -> p).
+
+        Raises
+        ------
+        FeedbackError
+            Without a controller.
         """
         if self.controller is None:
             raise FeedbackError("controller: none (feedforward alone has no loop)")
@@ -1152,6 +1158,11 @@ class FeedbackLoop:
             circle_margin, passed}``; ``small_gain``: ``{value, passed}``;
             ``passed``: every axis and the MIMO test (or the axes when the
             small gain is conservative); ``summary``: one line.
+
+        Raises
+        ------
+        FeedbackError
+            Without a controller.
         """
         if self.controller is None:
             raise FeedbackError("controller: none (feedforward alone has no loop)")

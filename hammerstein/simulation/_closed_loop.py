@@ -50,13 +50,34 @@ AW_CLAMP = 2
 class ComponentArrays(NamedTuple):
     """Component arrays of a multivariable Preisach / generalised-PI / polynomial model.
 
-    ``E`` cell edges (all components), ``e_off`` (p m + 1,), ``row``/``col``
-    alpha/beta cells and ``mu`` weights [µm] of the ramp hysterons,
-    ``q_off`` (p m + 1,); ``pr``/``pw`` thresholds and weights of the
-    generalised plays, ``p_off``; ``env`` (p m, 8) envelopes; ``s_off``
-    (p m,) start of each component's states; ``rev`` (p m, n_c) polynomial
-    coefficients (u, u^2, ...); ``off`` (p m,) offsets [µm]; ``present``
-    (p m,) bool. Component ``c = l m + k`` maps input k to output l.
+    Component ``c = l m + k`` maps input k to output l.
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Cell edges of every component's switching grid [V].
+    e_off : numpy.ndarray, shape (p m + 1,)
+        Component c's edges are ``E[e_off[c]:e_off[c+1]]``.
+    row, col : numpy.ndarray of int64
+        Alpha (rising) and beta (falling) cell of each ramp hysteron.
+    mu : numpy.ndarray
+        Weight of each ramp hysteron [µm].
+    q_off : numpy.ndarray, shape (p m + 1,)
+        Component c's hysterons are ``q_off[c]:q_off[c+1]``.
+    pr, pw : numpy.ndarray
+        Thresholds [V] and weights [µm/V] of the generalised plays.
+    p_off : numpy.ndarray, shape (p m + 1,)
+        Component c's plays are ``p_off[c]:p_off[c+1]``.
+    env : numpy.ndarray, shape (p m, 8)
+        Envelopes ``gamma_l | gamma_r`` of the generalised plays.
+    s_off : numpy.ndarray, shape (p m,)
+        Start of each component's states in the flat state.
+    rev : numpy.ndarray, shape (p m, n_c)
+        Polynomial coefficients (u, u^2, ...) [µm/V^i].
+    off : numpy.ndarray, shape (p m,)
+        Offsets [µm].
+    present : numpy.ndarray of bool, shape (p m,)
+        Whether each component exists.
     """
 
     E: np.ndarray
@@ -78,13 +99,26 @@ class ComponentArrays(NamedTuple):
 class LoopArrays(NamedTuple):
     """The loop's fixed arrays (sensor, controller, amplifier), a kernel argument.
 
-    ``As, Bs, Cs, Ds`` the discrete sensor (p -> p); ``Ak, Bk, Ck, Dk`` the
-    discrete controller, inputs ``[r; m]`` (2 p) -> voltages (m);
-    ``Kaw`` (n_c, m) back-calculation gain; ``clamp`` (n_c,) bool, the
-    states frozen by clamping; ``low``, ``high`` (m,) the amplifier range
-    [V]; ``slew`` (m,) the largest step per sample [V]; ``y_off`` (p,) output
-    offset [µm]; ``delay`` the sensor delay [samples]; ``aw`` the anti-windup
-    code.
+    Parameters
+    ----------
+    As, Bs, Cs, Ds : numpy.ndarray
+        The discrete sensor low-pass (p -> p).
+    Ak, Bk, Ck, Dk : numpy.ndarray
+        The discrete controller, inputs ``[r; m]`` (2 p) -> voltages (m).
+    Kaw : numpy.ndarray, shape (n_c, m)
+        Back-calculation gain.
+    clamp : numpy.ndarray of bool, shape (n_c,)
+        States frozen by clamping while a channel saturates.
+    low, high : numpy.ndarray, shape (m,)
+        Amplifier range [V].
+    slew : numpy.ndarray, shape (m,)
+        Largest voltage step per sample [V].
+    y_off : numpy.ndarray, shape (p,)
+        Output offset [µm].
+    delay : int
+        Sensor delay [samples].
+    aw : int
+        Anti-windup code (``AW_NONE``, ``AW_BACK``, ``AW_CLAMP``).
     """
 
     As: np.ndarray
@@ -108,10 +142,22 @@ class LoopArrays(NamedTuple):
 class LoopState(NamedTuple):
     """States of a closed-loop run, updated in place by the kernel.
 
-    ``s`` hysteresis states; ``x`` plant linear states [µm]; ``xs`` sensor
-    states; ``buf`` (p, max(delay, 1)) the delayed noisy positions, oldest
-    at index ``pos[0]``; ``pos`` (1,) int64; ``xc`` controller states;
-    ``a`` (m,) the last applied voltages [V] (slew limit).
+    Parameters
+    ----------
+    s : numpy.ndarray
+        Hysteresis states (play outputs [V] or hysteron states).
+    x : numpy.ndarray
+        Plant linear states (creep then modes) [µm].
+    xs : numpy.ndarray
+        Sensor low-pass states [µm].
+    buf : numpy.ndarray, shape (p, max(delay, 1))
+        The delayed noisy positions [µm], the oldest at index ``pos[0]``.
+    pos : numpy.ndarray of int64, shape (1,)
+        Ring-buffer position.
+    xc : numpy.ndarray
+        Controller states.
+    a : numpy.ndarray, shape (m,)
+        The last applied voltages [V] (slew limit).
     """
 
     s: np.ndarray
