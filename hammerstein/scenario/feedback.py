@@ -265,7 +265,7 @@ def run_feedback_scenario(scenario: FeedbackScenario, jobs=2):
         When the controller cannot be built, a case is a drive, or the
         linearised loop is unstable (nothing is simulated).
     """
-    resolved = resolve_scenario(scenario.cases)
+    resolved = resolve_scenario(scenario.cases_spec)
     cases = resolved.cases
     where = f"{scenario.path}: feedback"
     drives = [c.name for c in cases if c.mode != "reference"]

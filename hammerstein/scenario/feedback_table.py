@@ -57,7 +57,7 @@ class FeedbackScenario:
     seed : int
         Seed of the sensor noise (case i uses ``seed + i``).
     path : pathlib.Path
-    cases : hammerstein.scenario.validate.ScenarioSpec
+    cases_spec : hammerstein.scenario.validate.ScenarioSpec
         The cases part (plant, feedforward compensator, cases and sweeps).
     table : dict
         The validated ``[feedback]`` table, defaults filled.
@@ -70,9 +70,14 @@ class FeedbackScenario:
     description: str
     seed: int
     path: Path
-    cases: Any
+    cases_spec: Any
     table: dict = field(default_factory=dict)
     kind: str = "feedback"
+
+    @property
+    def cases(self):
+        """The validated cases (list of CaseSpec), as a cases scenario's."""
+        return self.cases_spec.cases
 
 
 def _positive(v):

@@ -77,7 +77,7 @@ def test_feedforward_alone_is_the_open_loop_run(tmp_path):
     results = run_feedback_scenario(spec)
     assert [r.mode for r in results] == ["feedforward", "feedback", "both"]
     ff = results[0]
-    case = resolve_scenario(spec.cases).cases[0]
+    case = resolve_scenario(spec.cases_spec).cases[0]
     ref = run_case(case)
     np.testing.assert_allclose(ff.outputs, ref.outputs, atol=1e-9)
     assert spec.analysis["linear_stable"] and spec.analysis["stability"]["passed"]
@@ -89,7 +89,7 @@ def test_feedforward_alone_is_the_open_loop_run(tmp_path):
 def test_text_lti_matches_the_named_design(tmp_path):
     """An inline transfer function equal to the integral design gives the same loop."""
     spec = validate_scenario(_write(tmp_path, BASE + FEEDBACK))
-    plant = spec.cases.cases[0].plant
+    plant = spec.cases[0].plant
     fb, _ = build_loops(spec.table, plant)
     g = float(np.real(fb.linear_plant()(1.0))[1, 1])
     ki = 2 * np.pi * 20.0 / g
