@@ -75,7 +75,7 @@ class AxisDesign:
     Parameters
     ----------
     system : control.StateSpace
-        Continuous, 1 input, 1 output.
+        Continuous, 1 input (the error) or 3 (``[r, m, f]``), 1 output.
     integrators : numpy.ndarray of bool, shape (n_states,)
         States that integrate the error (clamped, back-calculated).
     description : str
@@ -97,7 +97,7 @@ def _notch(f_hz, zeta_zero, zeta_pole):
 
 def design_axis(kind, gain, crossover_hz, zero_hz=None, notch_hz=None, notch_damping=0.05,
                 notch_width=0.5, mode_hz=None, ppf_gain=0.5, ppf_damping=0.3,
-                feedthrough_ratio=1.5, damping_hz=None):
+                feedthrough_ratio=1.5, damping_hz=None, irc_reference="error"):
     """Design one axis' feedback controller by name, with physical parameters.
 
     Every design acts on the tracking error ``e = r - m`` (so a perfect
@@ -122,10 +122,19 @@ def design_axis(kind, gain, crossover_hz, zero_hz=None, notch_hz=None, notch_dam
         plant (DC gain ``g / (1 - gamma)``).
     ``irc``
         Integral resonant control (Aphale, Fleming and Moheimani, Smart
-        Mater. Struct. 16, 2007): a feedthrough ``D_f = -beta g`` and the
-        integral ``x_i' = k (-e - x_o + D_f x_i)`` with ``k = 2 pi
-        f_d / g`` (``damping_hz``, default ``mode_hz``), plus the outer
-        tracking integral ``x_o' = (1 - beta) w_c e``; ``u = x_i``.
+        Mater. Struct. 16, 2007): the integral of ``y_hat = m + D_f u``
+        with a feedthrough ``D_f = -beta g``, ``k = 2 pi f_d / g``
+        (``damping_hz``, default ``mode_hz``), and an outer tracking
+        integral. ``irc_reference = "error"`` (default): on the error,
+        ``x_i' = k (-e - x_o + D_f x_i)``, ``x_o' = (1 - beta) w_c e``,
+        ``u = x_i``: a perfect feedforward leaves it idle, but alone its
+        reference reaches the error through ``|S| ~ beta / (beta - 1)``
+        between the crossover and the mode. ``"static"``: the feedthrough
+        on the whole voltage ``f + x_i`` and the inner reference
+        ``(1 - beta) r``, ``x_i' = k (m + D_f (f + x_i) - (1 - beta) r -
+        x_o)``, ``x_o' = (1 - beta) w_c (r - m)`` (inputs ``[r, m, f]``):
+        quasi-static gain 1 alone, but a feedforward that is not ``r / g``
+        (a hysteresis inverse) disturbs it.
 
     Parameters
     ----------
@@ -139,11 +148,14 @@ def design_axis(kind, gain, crossover_hz, zero_hz=None, notch_hz=None, notch_dam
         See above (frequencies in Hz, the rest dimensionless).
     feedthrough_ratio, damping_hz : float
         See above (``irc``).
+    irc_reference : {'error', 'static'}
+        See above (``irc``).
 
     Returns
     -------
     AxisDesign
-        Continuous state space and its integrator states.
+        Continuous state space (1 input, the error; ``irc``: 3 inputs
+        ``[r, m, f]``) and its integrator states.
 
     Raises
     ------
@@ -214,13 +226,21 @@ def design_axis(kind, gain, crossover_hz, zero_hz=None, notch_hz=None, notch_dam
     fd = mode_hz if damping_hz is None else _pos(damping_hz, "damping_hz", "Hz")
     k = 2 * np.pi * fd / g
     Df = -beta * g
-    # states x_i (the IRC integrator), x_o (the tracking integrator); u = x_i
+    if irc_reference not in ("error", "static"):
+        raise FeedbackError(f"irc_reference: expected 'error' or 'static', found "
+                            f"{irc_reference!r}")
+    text = (f"IRC ({irc_reference}), D_f = {Df:.4g} µm/V, k = {k:.4g} V/(µm s) ({fd:g} Hz) + "
+            f"tracking integral, crossover {fc:g} Hz")
     A = np.array([[k * Df, -k], [0.0, 0.0]])
-    B = np.array([[-k], [(1 - beta) * wc]])
     C = np.array([[1.0, 0.0]])
-    return AxisDesign(control.ss(A, B, C, [[0.0]]), np.array([True, True]),
-                      f"IRC, D_f = {Df:.4g} µm/V, k = {k:.4g} V/(µm s) ({fd:g} Hz) + tracking "
-                      f"integral, crossover {fc:g} Hz")
+    if irc_reference == "error":
+        # on the error e = r - m: x_i' = k (-e - x_o + D_f x_i), x_o' = (1 - beta) w_c e
+        B = np.array([[-k], [(1 - beta) * wc]])
+        return AxisDesign(control.ss(A, B, C, [[0.0]]), np.array([True, True]), text)
+    # inputs [r, m, f]: x_i' = k (m + D_f (f + x_i) - (1 - beta) r - x_o),
+    # x_o' = (1 - beta) w_c (r - m)
+    B = np.array([[-k * (1 - beta), k, k * Df], [(1 - beta) * wc, -(1 - beta) * wc, 0.0]])
+    return AxisDesign(control.ss(A, B, C, [[0.0, 0.0, 0.0]]), np.array([True, True]), text)
 
 
 def discretise(system, sampling_period, method="tustin"):
@@ -261,16 +281,18 @@ def discretise(system, sampling_period, method="tustin"):
 # -- controllers -------------------------------------------------------------------------
 @dataclass
 class Controller:
-    """A discrete feedback controller, inputs ``[r; m]`` (2 p) [µm] -> voltages (m) [V].
+    """A discrete feedback controller, inputs ``[r; m; f]`` -> voltages (m) [V].
 
-    ``x_c(t+T) = A x_c + B [r; m]``, ``v = C x_c + D [r; m]``. An
-    error-driven controller ``K(z)`` has ``B = [B_e, -B_e]``,
-    ``D = [D_e, -D_e]``.
+    ``x_c(t+T) = A x_c + B [r; m; f]``, ``v = C x_c + D [r; m; f]``, with the
+    reference r and measurement m (p each) [µm] and the feedforward voltages
+    f (m) [V] (read by the IRC design; zero columns otherwise); the voltage
+    applied is ``f + v``. An error-driven controller ``K(z)`` has
+    ``B = [B_e, -B_e, 0]``, ``D = [D_e, -D_e, 0]``.
 
     Parameters
     ----------
     A, B, C, D : numpy.ndarray
-        Shapes (n, n), (n, 2 p), (m, n), (m, 2 p).
+        Shapes (n, n), (n, 2 p + m), (m, n), (m, 2 p + m).
     sampling_period : float
         T [s].
     integrators : numpy.ndarray of bool, shape (n,)
@@ -307,10 +329,10 @@ class Controller:
     @property
     def n_measurements(self) -> int:
         """Number of measured positions p."""
-        return self.B.shape[1] // 2
+        return (self.B.shape[1] - self.C.shape[0]) // 2
 
     def to_control(self):
-        """The discrete controller as a ``control.StateSpace`` with inputs ``[r; m]``.
+        """The discrete controller as a ``control.StateSpace`` with inputs ``[r; m; f]``.
 
         Returns
         -------
@@ -328,7 +350,8 @@ class Controller:
             plant's input is ``L = K_y P``.
         """
         p = self.n_measurements
-        return control.ss(self.A, -self.B[:, p:], self.C, -self.D[:, p:], self.sampling_period)
+        return control.ss(self.A, -self.B[:, p:2 * p], self.C, -self.D[:, p:2 * p],
+                          self.sampling_period)
 
 
 def controller_from_lti(system, sampling_period, method="tustin", integrators=None,
@@ -374,8 +397,22 @@ def controller_from_lti(system, sampling_period, method="tustin", integrators=No
     mask = np.ones(n, bool) if integrators is None else np.asarray(integrators, bool)
     if mask.shape != (n,):
         raise FeedbackError(f"integrators: expected {n} flags, found {mask.shape}")
-    return Controller(A, np.hstack([B, -B]), C, np.hstack([D, -D]), float(sampling_period), mask,
+    m = D.shape[0]
+    return Controller(A, np.hstack([B, -B, np.zeros((n, m))]), C,
+                      np.hstack([D, -D, np.zeros((m, m))]), float(sampling_period), mask,
                       [description], cont, [d] if d.ninputs == 1 and d.noutputs == 1 else None)
+
+
+def _two_dof_axis(design, sampling_period, method):
+    """A one-axis Controller from a design whose system has the inputs ``[r, m, f]``."""
+    d = discretise(design.system, sampling_period, method)
+    A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (d.A, d.B, d.C, d.D))
+    Be = np.asarray(design.system.B)[:, [0]]
+    De = np.zeros((1, 1))
+    cont = control.ss(design.system.A, Be, design.system.C, De)   # its reference path
+    loop = control.ss(A, -B[:, [1]], C, -D[:, [1]], sampling_period)   # u = -K_y m
+    return Controller(A, B, C, D, float(sampling_period), np.asarray(design.integrators, bool),
+                      [design.description], cont, [loop])
 
 
 def diagonal_controller(designs, sampling_period, method="tustin"):
@@ -394,23 +431,24 @@ def diagonal_controller(designs, sampling_period, method="tustin"):
     -------
     Controller
     """
-    parts = [controller_from_lti(d.system, sampling_period, method, d.integrators, d.description)
+    parts = [(_two_dof_axis(d, sampling_period, method) if d.system.ninputs == 3 else
+              controller_from_lti(d.system, sampling_period, method, d.integrators, d.description))
              if isinstance(d, AxisDesign) else controller_from_lti(d, sampling_period, method)
              for d in designs]
     p = len(parts)
     A = scipy.linalg.block_diag(*[c.A for c in parts]) if any(c.n_states for c in parts) \
         else np.zeros((0, 0))
     n = A.shape[0]
-    B = np.zeros((n, 2 * p))
+    B = np.zeros((n, 3 * p))
     C = np.zeros((p, n))
-    D = np.zeros((p, 2 * p))
+    D = np.zeros((p, 3 * p))
     i = 0
     for l, c in enumerate(parts):
         k = c.n_states
-        B[i:i + k, l] = c.B[:, 0]
-        B[i:i + k, p + l] = c.B[:, 1]
+        for j in range(3):               # the axis' r, m and f columns
+            B[i:i + k, j * p + l] = c.B[:, j]
+            D[l, j * p + l] = c.D[0, j]
         C[l, i:i + k] = c.C[0]
-        D[l, l], D[l, p + l] = c.D[0, 0], c.D[0, 1]
         i += k
     cont = None
     if all(c.continuous is not None for c in parts):
@@ -441,14 +479,15 @@ def with_reference_filter(controller, sensor):
         integrators).
     """
     p = controller.n_measurements
+    m = controller.n_outputs
     Af, Bf, Cf, Df = (np.asarray(M, float) for M in (sensor.A, sensor.B, sensor.C, sensor.D))
     nf = Af.shape[0] if Af.size else 0
     Af, Bf, Cf = Af.reshape(nf, nf), Bf.reshape(nf, p), Cf.reshape(p, nf)
     A, B, C, D = controller.A, controller.B, controller.C, controller.D
-    Br, Bm, Dr, Dm = B[:, :p], B[:, p:], D[:, :p], D[:, p:]
+    Br, Bm, Dr, Dm = B[:, :p], B[:, p:], D[:, :p], D[:, p:]     # Bm, Dm: m and f columns
     n = A.shape[0]
     A2 = np.block([[Af, np.zeros((nf, n))], [Br @ Cf, A]])
-    B2 = np.block([[Bf, np.zeros((nf, p))], [Br @ Df, Bm]])
+    B2 = np.block([[Bf, np.zeros((nf, p + m))], [Br @ Df, Bm]])
     C2 = np.hstack([Dr @ Cf, C])
     D2 = np.hstack([Dr @ Df, Dm])
     return Controller(A2, B2, C2, D2, controller.sampling_period,
@@ -816,8 +855,8 @@ class FeedbackLoop:
                                     f"at {T} s")
         As, Bs, Cs, Ds = self.sensor.matrices(p, T)
         if c is None:
-            Ak, Bk, Ck, Dk = np.zeros((0, 0)), np.zeros((0, 2 * p)), np.zeros((m, 0)), \
-                np.zeros((m, 2 * p))
+            Ak, Bk, Ck, Dk = np.zeros((0, 0)), np.zeros((0, 2 * p + m)), np.zeros((m, 0)), \
+                np.zeros((m, 2 * p + m))
             mask = np.zeros(0, bool)
         else:
             Ak, Bk, Ck, Dk, mask = c.A, c.B, c.C, c.D, c.integrators
@@ -1031,7 +1070,8 @@ class FeedbackLoop:
                           ((Sd.A, (Sd.nstates, Sd.nstates)), (Sd.B, (Sd.nstates, p)),
                            (Sd.C, (p, Sd.nstates)), (Sd.D, (p, p))))
         c = self.controller
-        Ak, Br, Bm, Ck, Dr, Dm = c.A, c.B[:, :p], c.B[:, p:], c.C, c.D[:, :p], c.D[:, p:]
+        Ak, Br, Bm, Ck, Dr, Dm = (c.A, c.B[:, :p], c.B[:, p:2 * p], c.C, c.D[:, :p],
+                                  c.D[:, p:2 * p])
         npl, ns, nk = Ap.shape[0], As.shape[0], Ak.shape[0]
         # m = Cs xs + Ds (Cp xp + Dp u + n);  u = Ck xk + Dr r + Dm m
         E = np.eye(m) - Dm @ Ds @ Dp

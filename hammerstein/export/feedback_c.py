@@ -11,8 +11,8 @@ amplifier limits) and, optionally, an exportable feedforward compensator
 
 which computes, for one sample, what the compiled closed-loop kernel
 computes (``hammerstein.simulation``): the feedforward ``f`` from the
-reference, ``u = f + C_k x_c + D_k [r; m]``, the slew limit and range clip
-of the amplifier (``voltage``), then ``x_c <- A_k x_c + B_k [r; m]`` with
+reference, ``u = f + C_k x_c + D_k [r; m; f]``, the slew limit and range clip
+of the amplifier (``voltage``), then ``x_c <- A_k x_c + B_k [r; m; f]`` with
 back-calculation or clamping. A feedforward with ``NAME_ff_PREVIEW = P``
 samples of look-ahead takes the reference P samples ahead: ``NAME_step``
 then gives the controller the reference it received P samples before (kept
@@ -192,9 +192,9 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 #include "{N}.h"
 
 static const double AK[{max(nc, 1)}][{max(nc, 1)}] = {_mat(c.A)};
-static const double BK[{max(nc, 1)}][{2 * p}] = {_mat(c.B) if nc else '{{0.0}}'};
+static const double BK[{max(nc, 1)}][{2 * p + m}] = {_mat(c.B) if nc else '{{0.0}}'};
 static const double CK[{m}][{max(nc, 1)}] = {_mat(c.C) if nc else '{{0.0}}'};
-static const double DK[{m}][{2 * p}] = {_mat(c.D)};
+static const double DK[{m}][{2 * p + m}] = {_mat(c.D)};
 static const double KAW[{max(nc, 1)}][{m}] = {_mat(L.Kaw) if nc else '{{0.0}}'};
 static const int CLAMP[{max(nc, 1)}] = {{{', '.join(str(int(v)) for v in L.clamp) or '0'}}};
 static const double LOW[{m}] = {_vec(L.low)};
@@ -210,14 +210,15 @@ void {N}_init({N}_state *s)
 int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
              const double measurement[{N}_N_OUTPUTS], double voltage[{N}_N_INPUTS])
 {{
-    double f[{m}], u[{m}], a[{m}], e[{2 * p}], rnow[{p}], xn[{max(nc, 1)}];
+    double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
     int status = 0, saturated = 0, i, j, k, l;
     for (k = 0; k < {m}; ++k) f[k] = 0.0;
 {ff_call}{rnow}    for (l = 0; l < {p}; ++l) {{ e[l] = rnow[l]; e[{p} + l] = measurement[l]; }}
+    for (k = 0; k < {m}; ++k) e[{2 * p} + k] = f[k];
     for (k = 0; k < {m}; ++k) {{
         double acc = f[k], v, lo, hi;
         for (i = 0; i < {nc}; ++i) acc += CK[k][i] * s->xc[i];
-        for (j = 0; j < {2 * p}; ++j) acc += DK[k][j] * e[j];
+        for (j = 0; j < {2 * p + m}; ++j) acc += DK[k][j] * e[j];
         u[k] = acc;
         v = acc;
         lo = s->a[k] - SLEW[k];
@@ -233,7 +234,7 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     for (i = 0; i < {nc}; ++i) {{
         double acc = 0.0;
         for (j = 0; j < {nc}; ++j) acc += AK[i][j] * s->xc[j];
-        for (j = 0; j < {2 * p}; ++j) acc += BK[i][j] * e[j];
+        for (j = 0; j < {2 * p + m}; ++j) acc += BK[i][j] * e[j];
         if ({aw} == 1) {{ for (k = 0; k < {m}; ++k) acc += KAW[i][k] * (a[k] - u[k]); }}
         else if ({aw} == 2 && saturated && CLAMP[i]) acc = s->xc[i];
         xn[i] = acc;

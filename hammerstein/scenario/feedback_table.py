@@ -123,7 +123,10 @@ def _check_axis(t, where, problems):
         return
     kind = t.get("kind")
     if kind in AXIS_KINDS:
-        allowed = {"kind"} | set(_AXIS_NUMBERS)
+        allowed = {"kind"} | set(_AXIS_NUMBERS) | ({"irc_reference"} if kind == "irc" else set())
+        if t.get("irc_reference", "error") not in ("error", "static"):
+            problems.append(f"{where}.irc_reference: expected \"error\" or \"static\", found "
+                            f"{t['irc_reference']!r}")
         if "crossover_hz" not in t:
             problems.append(f"{where}.crossover_hz: required (the integral action's crossover "
                             f"[Hz])")

@@ -10,10 +10,10 @@ At sample t, with the plant strictly proper or the measurement delayed
 1. ``z_t = y_{t-d} + n_{t-d}`` the sensed position plus the sensor noise,
    delayed (``y_t = C x_t`` when ``d = 0``);
 2. ``m_t = Cs xs_t + Ds z_t``, ``xs <- As xs + Bs z_t`` (sensor bandwidth);
-3. ``v_t = Ck xc_t + Dk [r_t; m_t]`` the controller, ``u_t = f_t + v_t`` with
-   the feedforward ``f_t``, ``a_t`` = ``u_t`` slew-limited then clipped to the
+3. ``v_t = Ck xc_t + Dk [r_t; m_t; f_t]`` the controller (it may read the
+   feedforward ``f_t``), ``u_t = f_t + v_t``, ``a_t`` = ``u_t`` slew-limited then clipped to the
    amplifier range;
-4. ``xc <- Ak xc + Bk [r_t; m_t]`` plus the anti-windup: back-calculation
+4. ``xc <- Ak xc + Bk [r_t; m_t; f_t]`` plus the anti-windup: back-calculation
    ``+ Kaw (a_t - u_t)``, or clamping (the masked integrator states keep
    their value while a channel is saturated);
 5. ``h_t = Gamma(a_t)`` (the hysteresis, its states committed),
@@ -104,7 +104,7 @@ class LoopArrays(NamedTuple):
     As, Bs, Cs, Ds : numpy.ndarray
         The discrete sensor low-pass (p -> p).
     Ak, Bk, Ck, Dk : numpy.ndarray
-        The discrete controller, inputs ``[r; m]`` (2 p) -> voltages (m).
+        The discrete controller, inputs ``[r; m; f]`` (2 p + m) -> voltages (m).
     Kaw : numpy.ndarray, shape (n_c, m)
         Back-calculation gain.
     clamp : numpy.ndarray of bool, shape (n_c,)
@@ -249,7 +249,8 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
     rho = np.empty(nrho)
     z = np.empty(p)
     meas = np.empty(p)
-    e = np.empty(2 * p)
+    ne = 2 * p + m
+    e = np.empty(ne)
     u = np.empty(m)
     a = np.empty(m)
     h = np.empty(p)
@@ -290,12 +291,14 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
         for l in range(p):
             e[l] = r[l, t]
             e[p + l] = meas[l]
+        for k in range(m):
+            e[2 * p + k] = f[k, t]
         saturated = False
         for k in range(m):
             acc = f[k, t]
             for i in range(nc):
                 acc += loop.Ck[k, i] * st.xc[i]
-            for j in range(2 * p):
+            for j in range(ne):
                 acc += loop.Dk[k, j] * e[j]
             u[k] = acc
             v = acc
@@ -318,7 +321,7 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
             acc = 0.0
             for j in range(nc):
                 acc += loop.Ak[i, j] * st.xc[j]
-            for j in range(2 * p):
+            for j in range(ne):
                 acc += loop.Bk[i, j] * e[j]
             if loop.aw == AW_BACK:
                 for k in range(m):
@@ -459,9 +462,9 @@ def simulate_closed_loop(kind, pi, components, plant, loop, reference, feedforwa
     if loop.delay == 0 and np.any(plant.D != 0):
         raise HysteresisError("sensor delay: the plant has a direct feedthrough (D != 0): the "
                               "loop is algebraic without a delay of at least one sample")
-    if loop.Dk.shape != (m, 2 * p) or loop.Bk.shape[1] != 2 * p:
-        raise HysteresisError(f"controller: expected 2 p = {2 * p} inputs [r; m], found "
-                              f"{loop.Dk.shape[1]}")
+    if loop.Dk.shape != (m, 2 * p + m) or loop.Bk.shape[1] != 2 * p + m:
+        raise HysteresisError(f"controller: expected 2 p + m = {2 * p + m} inputs [r; m; f], "
+                              f"found {loop.Dk.shape[1]}")
     y = np.empty((p, n))
     a = np.empty((m, n))
     meas = np.empty((p, n))

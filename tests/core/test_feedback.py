@@ -30,9 +30,10 @@ def _gain_plant():
     return HammersteinPlant(model, T, _modes())
 
 
-def _controller(method="tustin"):
+def _controller(method="tustin", irc="static"):
     return diagonal_controller([design_axis("pi-notch", gain=5.0, crossover_hz=150, notch_hz=450),
-                                design_axis("irc", gain=4.5, crossover_hz=100, mode_hz=420)],
+                                design_axis("irc", gain=4.5, crossover_hz=100, mode_hz=420,
+                                            irc_reference=irc)],
                                T, method)
 
 
@@ -53,17 +54,18 @@ def test_linear_gain_loop_equals_python_control(method, delay, bandwidth, filter
     t, r = _reference()
     noise = loop.noise(t.size, seed=3)
     res = loop.simulate(r, noise=noise)
-    # the oracle, built independently: error-driven K(z), P = G(z) K_h, sensor S(z) z^-d
+    # the oracle, built independently: the controller K(z) on [r; m] (the PI + notch
+    # error-driven, the IRC two-degree-of-freedom), P = G(z) K_h, sensor S(z) z^-d
     p = 2
-    K = control.ss(ctrl.A, ctrl.B[:, :p], ctrl.C, ctrl.D[:, :p], T)
+    K = control.ss(ctrl.A, ctrl.B[:, :2 * p], ctrl.C, ctrl.D[:, :2 * p], T)
     P = _modes() * control.ss([], [], [], KH, T)
     a = 0.0 if bandwidth is None else math.exp(-2 * math.pi * bandwidth * T)
     s1 = control.tf([1 - a, 0], [1, -a], T) * control.tf([1], [1] + [0] * delay, T)
     S = control.append(control.ss(s1), control.ss(s1))
-    # y = feedback(P K, S) (r - S n), or (S r - S n) with the reference filter
-    mix = control.ss([], [], [], np.hstack([np.eye(p), -np.eye(p)]), T)
+    # u = K [r'; S (y + n)] with r' = r, or S r with the reference filter
+    to_m = control.ss([], [], [], np.vstack([np.zeros((p, p)), np.eye(p)]), T)
     first = S if filtered else control.ss([], [], [], np.eye(p), T)
-    cl = control.feedback(P * K, S) * mix * control.append(first, S)
+    cl = control.feedback(P * K, to_m * S, sign=1) * control.append(first, S)
     u_in = np.vstack([r, noise])
     y = control.forced_response(cl, T=t, U=u_in).outputs
     assert np.max(np.abs(res.outputs - y)) < 1e-9
@@ -97,7 +99,7 @@ def _step_oracle(plant, ctrl, sensor, amp, aw_gain, r, f, noise):
         z = y_now + noise[:, t] if d == 0 else hist[-d]
         meas = a_lp * xs + (1 - a_lp) * z if sensor.bandwidth_hz else z
         xs = meas
-        e = np.concatenate([r[:, t], meas])
+        e = np.concatenate([r[:, t], meas, f[:, t]])
         u = f[:, t] + ctrl.C @ xc + ctrl.D @ e
         a = np.clip(u, amp.low, amp.high)
         xc = ctrl.A @ xc + ctrl.B @ e + aw_gain @ (a - u)
@@ -172,9 +174,12 @@ def test_margins_equal_stability_margins():
     a = math.exp(-2 * math.pi * 5000.0 * T)
     s1 = control.tf([1 - a, 0], [1, -a], T) * control.tf([1], [1, 0], T)
     designs = [design_axis("pi-notch", gain=5.0, crossover_hz=150, notch_hz=450),
-               design_axis("irc", gain=4.5, crossover_hz=100, mode_hz=420)]
+               design_axis("irc", gain=4.5, crossover_hz=100, mode_hz=420,
+                           irc_reference="static")]
     for l in range(2):
         K = control.ss(control.sample_system(designs[l].system, T, "tustin"))
+        if K.ninputs == 3:                 # IRC: [r, m, f]; the loop is u = -K_y m
+            K = control.ss(K.A, -K.B[:, [1]], K.C, -K.D[:, [1]], T)
         L = K * control.ss(s1) * P[l, l]
         gm, pm, _, _, wgc, _ = control.stability_margins(L)
         assert got[l]["gain_margin"] == pytest.approx(gm, rel=1e-6)
@@ -207,17 +212,25 @@ def test_pi_crossover_and_notch_depth():
     assert abs(g * i.system(2j * np.pi * fc)) == pytest.approx(1.0, rel=1e-12)
 
 
-@pytest.mark.parametrize("kind,extra", [("ppf", {"mode_hz": 450.0}), ("irc", {"mode_hz": 450.0})])
+@pytest.mark.parametrize("kind,extra", [("ppf", {}), ("irc", {}),
+                                        ("irc", {"irc_reference": "static"})])
 def test_damping_designs_damp_the_mode(kind, extra):
     """PPF and IRC raise the closed-loop damping of a 2 % mode (continuous, python-control)."""
     g, w = 5.0, 2 * np.pi * 450
     G = control.ss(control.tf([g * w * w], [1, 2 * 0.02 * w, w * w]))
-    d = design_axis(kind, gain=g, crossover_hz=50.0, **extra)
-    poles = control.poles(control.feedback(G * d.system, 1))
+    d = design_axis(kind, gain=g, crossover_hz=50.0, mode_hz=450.0, **extra)
+    if d.system.ninputs == 1:
+        cl = control.feedback(G * d.system, 1)
+    else:                                   # [r, m, f] with f = 0: u = K [r; y]
+        K = control.ss(d.system.A, d.system.B[:, :2], d.system.C, d.system.D[:, :2])
+        cl = control.feedback(G * K, control.ss([], [], [], [[0.0], [1.0]]), sign=1)[0, 0]
+    poles = control.poles(cl)
     assert np.all(poles.real < 0)
     near = poles[np.abs(np.abs(poles) - w) < 0.3 * w]
     assert np.min(-near.real / np.abs(near)) > 0.1
-    assert control.dcgain(control.feedback(G * d.system, 1)) == pytest.approx(1.0, rel=1e-9)
+    assert control.dcgain(cl) == pytest.approx(1.0, rel=1e-9)
+    if extra:                               # the inner reference (1 - beta) r: quasi-static gain 1
+        assert abs(cl(2j * np.pi * 10.0)) == pytest.approx(1.0, abs=0.02)
 
 
 def test_stability_check_sector():
