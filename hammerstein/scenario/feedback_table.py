@@ -98,7 +98,7 @@ def _vector(v):
 
 def _check_lti(t, where, problems):
     kind = t.get("kind")
-    allowed = {"kind", "discrete", "integrators"}
+    allowed = {"kind", "discrete"}
     if kind == "transfer-function":
         allowed |= {"num", "den"}
         for k in ("num", "den"):
