@@ -2,7 +2,8 @@
 
 :func:`write_feedback_report` writes ``metrics.csv`` (case ``<case>.<mode>``),
 ``feedback-errors.csv`` (one row per case and mode, the RMS and settled max
-errors side by side), one figure per reference kind (sweep) with the RMS and
+errors side by side; ``sweep-<sweep>.csv`` the rows of each sweep; the cases
+outside sweeps their ``timeseries-<case>.<mode>.csv``), one figure per reference kind (sweep) with the RMS and
 max error against frequency for feedforward alone, feedback alone and both
 (:func:`error_frequency_figure`), the linearised loop's figure
 (:func:`loop_figure`: ``|S|``, ``|T|`` and noise-to-position per axis) and
@@ -144,8 +145,23 @@ def _side_by_side(table):
     return wide[order].reset_index()
 
 
+def _timeseries(result):
+    case = result.case
+    model = case.plant.hysteresis
+    cols = {"time_s": case.time}
+    for l, name in enumerate(model.output_names):
+        cols[f"{name}_ref_um"] = result.reference[l]
+        cols[f"{name}_um"] = result.outputs[l]
+    for k, name in enumerate(model.input_names):
+        cols[f"{name}_V"] = result.inputs[k]
+    return pd.DataFrame(cols)
+
+
 def write_feedback_report(scenario, results, directory, jobs):
-    """Write metrics.csv, feedback-errors.csv, the figures and report.md.
+    """Write metrics.csv, feedback-errors.csv, sweep-<sweep>.csv, the figures and report.md.
+
+    Cases outside a sweep also get ``timeseries-<case>.<mode>.csv`` (time,
+    reference, position, applied voltages).
 
     Parameters
     ----------
@@ -161,6 +177,12 @@ def write_feedback_report(scenario, results, directory, jobs):
     metrics_frame(results).to_csv(directory / "metrics.csv", index=False)
     table = error_table(results)
     table.to_csv(directory / "feedback-errors.csv", index=False)
+    for sweep in dict.fromkeys(table["sweep"]):
+        if sweep != "cases":
+            table[table["sweep"] == sweep].to_csv(directory / f"sweep-{sweep}.csv", index=False)
+    for r in results:                    # the cases outside sweeps: their time series
+        if r.case.sweep is None:
+            _timeseries(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False)
     a = scenario.analysis
     t = scenario.table
     s = t.get("sensor", {})

@@ -121,3 +121,13 @@ settle_periods = 2
     assert set(table["mode"]) == {"feedforward", "feedback", "both"}
     report = (d / "report.md").read_text(encoding="utf-8")
     assert "Stability check" in report and "circle criterion" in report
+
+
+def test_cases_outside_sweeps_write_their_time_series(tmp_path):
+    out = run_scenario(_write(tmp_path, BASE + FEEDBACK.replace(
+        '[feedback]', '[feedback]\nmodes = ["feedback", "both"]')), tmp_path / "out")
+    assert out.ok, out.error
+    d = tmp_path / "out" / "fb"
+    ts = pd.read_csv(d / "timeseries-circle.both.csv")
+    assert {"time_s", "x_ref_um", "x_um", "ux_V"} <= set(ts.columns)
+    assert not (d / "timeseries-circle.feedforward.csv").exists()
