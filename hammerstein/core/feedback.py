@@ -889,6 +889,16 @@ class FeedbackLoop:
         ctrl = "none" if self.controller is None else "; ".join(self.controller.descriptions)
         return f"FeedbackLoop(plant={self.plant.name!r}, controller={ctrl!r})"
 
+    @property
+    def arrays(self):
+        """The kernel's fixed arrays of the loop (controller, sensor, amplifier, anti-windup).
+
+        Returns
+        -------
+        hammerstein.simulation.LoopArrays
+        """
+        return self._loop
+
     def initial_state(self):
         """The loop at rest: the plant's default state, zero filters and controller.
 

@@ -142,7 +142,7 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
     c = loop.controller
     if c is None:
         raise ExportError("loop: no controller to export")
-    L = loop._loop
+    L = loop.arrays
     T = float(loop.plant.sampling_period)
     m, p = loop.m, loop.p
     nc = c.n_states

@@ -144,7 +144,7 @@ def test_nonlinear_loop_equals_stepped_open_loop_plant(make, anti_windup):
     noise = loop.noise(t.size, seed=1)
     res = loop.simulate(r, feedforward=f, noise=noise)
     assert np.any(np.abs(res.inputs) >= 6.0 - 1e-12)
-    y, a = _step_oracle(plant, ctrl, sensor, amp, loop._loop.Kaw, r, f, noise)
+    y, a = _step_oracle(plant, ctrl, sensor, amp, loop.arrays.Kaw, r, f, noise)
     assert np.max(np.abs(res.inputs - a)) < 1e-9
     assert np.max(np.abs(res.outputs - y)) < 1e-9
 
