@@ -26,7 +26,7 @@ from hammerstein.exceptions import (BaselineError, CompensatorDivergence, Compen
                                     HammersteinError, HammersteinWarning, HysteresisError,
                                     IdentificationError, Invalid, NestedInvalid, PresetError,
                                     RangeWarning, ScenarioError, SignalError)
-from hammerstein.exceptions import AmplifierError, AmplifierWarning
+from hammerstein.exceptions import AmplifierError, AmplifierWarning, FeedbackError
 
 __version__ = "0.1.0"
 
@@ -140,7 +140,8 @@ _EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "Sig
                "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
                "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
                "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid",
-               "FileLimitError", "OutputError", "ExportError", "AmplifierError", "AmplifierWarning"]
+               "FileLimitError", "OutputError", "ExportError", "AmplifierError", "AmplifierWarning",
+               "FeedbackError"]
 
 __all__ = sorted(_EXCEPTIONS + list(_LAZY)) + ["__version__"]
 

@@ -42,6 +42,7 @@ __all__ = [
     "ExportError",
     "AmplifierError",
     "AmplifierWarning",
+    "FeedbackError",
 ]
 
 
@@ -188,3 +189,8 @@ class AmplifierError(HammersteinError, ValueError):
 
 class AmplifierWarning(HammersteinWarning):
     """A drive beyond the amplifier's range or slew rate (``limits = "warn"``)."""
+
+
+class FeedbackError(HammersteinError, ValueError):
+    """A feedback controller, sensor or loop that cannot be designed, discretised or run
+    (:mod:`hammerstein.core.feedback`; the message names the key and why)."""

@@ -55,6 +55,8 @@ from hammerstein.report.replication import foreign_outputs, write_readme
 from hammerstein.report.scenario import metrics_frame, write_report
 from hammerstein.report.montecarlo import write_montecarlo_report
 from hammerstein.scenario.montecarlo import run_montecarlo_scenario
+from hammerstein.scenario.feedback import run_feedback_scenario
+from hammerstein.report.feedback_figures import write_feedback_report
 from hammerstein.scenario.records import run_identification_scenario
 from hammerstein.scenario.resolve import resolve_scenario
 from hammerstein.scenario.schema import ScenarioError
@@ -118,6 +120,7 @@ SCENARIO_KINDS: dict[str, ScenarioKind] = {
     "cases": ScenarioKind(run_scenario_cases, _write_cases),
     "identification": ScenarioKind(run_identification_scenario, write_identification_report),
     "monte-carlo": ScenarioKind(run_montecarlo_scenario, write_montecarlo_report),
+    "feedback": ScenarioKind(run_feedback_scenario, write_feedback_report),
 }
 
 

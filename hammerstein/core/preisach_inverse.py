@@ -37,9 +37,103 @@ from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, Preis
 from hammerstein.exceptions import CompensatorError
 from hammerstein.simulation import preisach_inverse_kernel, state_vector
 
-__all__ = ["PreisachInverseCompensator"]
+__all__ = ["PreisachInverseCompensator", "component_arrays"]
 
 METHODS = ("root", "multiplicative")
+
+
+def component_arrays(model, direct_required=False):
+    """Flat arrays of a multivariable Preisach / generalised-PI / polynomial model for the kernels.
+
+    Parameters
+    ----------
+    model : MultivariableHysteresis
+        Components Preisach, generalised PI, polynomial, gain or None.
+    direct_required : bool
+        Refuse a direct path (l == k) that is not Preisach or generalised PI
+        (the exact inverse needs one).
+
+    Returns
+    -------
+    tuple
+        ``(E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off,
+        present)``, the fields of
+        :class:`hammerstein.simulation.ComponentArrays` (component ``c = l m + k``).
+
+    Raises
+    ------
+    CompensatorError
+        On a component class the kernels cannot step (a classical PI).
+    """
+    p, m = model.n_outputs, model.n_inputs
+    edges, rows, cols, mus, e_off, q_off = [], [], [], [], [0], [0]
+    prs, pws, p_off = [], [], [0]
+    nc = 1
+    comps = []
+    for l in range(p):
+        for k in range(m):
+            c = model.components[l][k]
+            where = f"model.components[{l}][{k}] ({model.output_names[l]} <- {model.input_names[k]})"
+            if direct_required and l == k and not isinstance(c, (PreisachModel, GeneralizedPI)):
+                raise CompensatorError(f"{where}: expected a PreisachModel or GeneralizedPI "
+                                       f"direct path for the exact inverse, found "
+                                       f"{type(c).__name__}")
+            if isinstance(c, (int, float)) and not isinstance(c, bool):
+                c = Polynomial([float(c)])
+            if c is not None and not isinstance(c, (PreisachModel, GeneralizedPI, Polynomial)):
+                raise CompensatorError(f"{where}: the exact inverse handles Preisach, "
+                                       f"generalised-PI, polynomial and gain cross-couplings, "
+                                       f"found {type(c).__name__}")
+            comps.append(c)
+            if isinstance(c, (PreisachModel, GeneralizedPI)):
+                nc = max(nc, c.reversible.size)
+            elif isinstance(c, Polynomial):
+                nc = max(nc, c.coefficients.size)
+    rev = np.zeros((p * m, nc))
+    off = np.zeros(p * m)
+    env = np.zeros((p * m, 8))
+    present = np.zeros(p * m, dtype=np.bool_)
+    s_off = np.zeros(p * m, np.int64)
+    start = 0                                # the model's flat state: components in (l, k) order
+    for idx, c in enumerate(comps):
+        s_off[idx] = start
+        start += 0 if c is None else int(getattr(c, "n_states", 0))
+        if isinstance(c, PreisachModel):
+            r, q, w = c.hysteron_arrays
+            edges.append(c.edges)
+            rows.append(r)
+            cols.append(q)
+            mus.append(w)
+            rev[idx, :c.reversible.size] = c.reversible
+            off[idx] = c.offset
+        else:
+            edges.append(np.array([0.0, 1.0]))
+            rows.append(np.zeros(0, np.int64))
+            cols.append(np.zeros(0, np.int64))
+            mus.append(np.zeros(0))
+        if isinstance(c, GeneralizedPI):
+            prs.append(c.thresholds)
+            pws.append(c.weights)
+            env[idx] = np.r_[c.gamma_l, c.gamma_r]
+            rev[idx, :c.reversible.size] = c.reversible
+            off[idx] = c.offset
+        else:
+            prs.append(np.zeros(0))
+            pws.append(np.zeros(0))
+        if isinstance(c, Polynomial):
+            rev[idx, :c.coefficients.size] = c.coefficients
+            off[idx] = c.offset
+        present[idx] = c is not None
+        e_off.append(e_off[-1] + edges[-1].size)
+        q_off.append(q_off[-1] + mus[-1].size)
+        p_off.append(p_off[-1] + pws[-1].size)
+    if start != model.n_hysterons:
+        raise CompensatorError(f"model: its state has {model.n_hysterons} values, the "
+                               f"kernels count {start} (a component it cannot step)")
+    return (np.concatenate(edges), np.array(e_off, np.int64), np.concatenate(rows),
+            np.concatenate(cols), np.concatenate(mus), np.array(q_off, np.int64),
+            np.concatenate(prs), np.concatenate(pws), np.array(p_off, np.int64), env,
+            s_off, rev, off, present)
 
 
 class PreisachInverseCompensator:
@@ -122,75 +216,8 @@ class PreisachInverseCompensator:
 
     def _pack(self):
         model = self.model
-        p = m = model.n_inputs
-        edges, rows, cols, mus, e_off, q_off = [], [], [], [], [0], [0]
-        prs, pws, p_off = [], [], [0]
-        nc = 1
-        comps = []
-        for l in range(p):
-            for k in range(m):
-                c = model.components[l][k]
-                where = f"model.components[{l}][{k}] ({model.output_names[l]} <- {model.input_names[k]})"
-                if l == k and not isinstance(c, (PreisachModel, GeneralizedPI)):
-                    raise CompensatorError(f"{where}: expected a PreisachModel or GeneralizedPI "
-                                           f"direct path for the exact inverse, found "
-                                           f"{type(c).__name__}")
-                if isinstance(c, (int, float)) and not isinstance(c, bool):
-                    c = Polynomial([float(c)])
-                if c is not None and not isinstance(c, (PreisachModel, GeneralizedPI, Polynomial)):
-                    raise CompensatorError(f"{where}: the exact inverse handles Preisach, "
-                                           f"generalised-PI, polynomial and gain cross-couplings, "
-                                           f"found {type(c).__name__}")
-                comps.append(c)
-                if isinstance(c, (PreisachModel, GeneralizedPI)):
-                    nc = max(nc, c.reversible.size)
-                elif isinstance(c, Polynomial):
-                    nc = max(nc, c.coefficients.size)
-        rev = np.zeros((p * m, nc))
-        off = np.zeros(p * m)
-        env = np.zeros((p * m, 8))
-        present = np.zeros(p * m, dtype=np.bool_)
-        s_off = np.zeros(p * m, np.int64)
-        start = 0                                # the model's flat state: components in (l, k) order
-        for idx, c in enumerate(comps):
-            s_off[idx] = start
-            start += 0 if c is None else int(getattr(c, "n_states", 0))
-            if isinstance(c, PreisachModel):
-                r, q, w = c.hysteron_arrays
-                edges.append(c.edges)
-                rows.append(r)
-                cols.append(q)
-                mus.append(w)
-                rev[idx, :c.reversible.size] = c.reversible
-                off[idx] = c.offset
-            else:
-                edges.append(np.array([0.0, 1.0]))
-                rows.append(np.zeros(0, np.int64))
-                cols.append(np.zeros(0, np.int64))
-                mus.append(np.zeros(0))
-            if isinstance(c, GeneralizedPI):
-                prs.append(c.thresholds)
-                pws.append(c.weights)
-                env[idx] = np.r_[c.gamma_l, c.gamma_r]
-                rev[idx, :c.reversible.size] = c.reversible
-                off[idx] = c.offset
-            else:
-                prs.append(np.zeros(0))
-                pws.append(np.zeros(0))
-            if isinstance(c, Polynomial):
-                rev[idx, :c.coefficients.size] = c.coefficients
-                off[idx] = c.offset
-            present[idx] = c is not None
-            e_off.append(e_off[-1] + edges[-1].size)
-            q_off.append(q_off[-1] + mus[-1].size)
-            p_off.append(p_off[-1] + pws[-1].size)
-        if start != model.n_hysterons:
-            raise CompensatorError(f"model: its state has {model.n_hysterons} values, the exact "
-                                   f"inverse counts {start} (a component it cannot step)")
-        self._arrays = (np.concatenate(edges), np.array(e_off, np.int64), np.concatenate(rows),
-                        np.concatenate(cols), np.concatenate(mus), np.array(q_off, np.int64),
-                        np.concatenate(prs), np.concatenate(pws), np.array(p_off, np.int64), env,
-                        s_off, rev, off, present)
+        p = model.n_inputs
+        self._arrays = component_arrays(model, direct_required=True)
         for l in range(p):                       # the exact root needs increasing direct paths
             d = model.components[l][l]
             grid = np.linspace(self.lo[l], self.hi[l], 201)

@@ -40,6 +40,7 @@ from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_
                                          total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
 from hammerstein.scenario.montecarlo import is_montecarlo, validate_montecarlo
+from hammerstein.scenario.feedback_table import validate_feedback
 
 __all__ = ["CaseSpec", "ScenarioSpec", "VALIDATORS", "read_scenario", "validate_scenario"]
 
@@ -506,6 +507,7 @@ VALIDATORS: dict[str, Callable] = {
     "cases": _validate_cases,
     "identification": load_identification_scenario,
     "monte-carlo": validate_montecarlo,
+    "feedback": lambda path, data: validate_feedback(path, data, _validate_cases),
 }
 
 

@@ -70,6 +70,9 @@ from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, Ch
                                               simulate_chain, simulate_chain_batch,
                                               simulate_compensator, simulate_hysteresis,
                                               simulate_plant, simulate_plays)
+from hammerstein.simulation._closed_loop import (AW_BACK, AW_CLAMP, AW_NONE, ComponentArrays,
+                                                 LoopArrays, LoopState, empty_components, empty_pi,
+                                                 simulate_closed_loop)
 from hammerstein.simulation._preisach import (generalized_play_states, generalized_play_steps,
                                               linear_steps, preisach_inverse_kernel,
                                               preisach_steps)
@@ -107,4 +110,13 @@ __all__ = [
     "generalized_play_steps",
     "generalized_play_states",
     "preisach_inverse_kernel",
+    "simulate_closed_loop",
+    "ComponentArrays",
+    "LoopArrays",
+    "LoopState",
+    "empty_pi",
+    "empty_components",
+    "AW_NONE",
+    "AW_BACK",
+    "AW_CLAMP",
 ]

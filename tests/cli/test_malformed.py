@@ -64,7 +64,7 @@ SCENARIOS = {
     "identify-unknown-key": "compensator.identify.frequncy: unknown key (did you mean 'frequency'?)",
     "inf-frequency": "cases[0].drive.frequency: expected a number > 0 [Hz], found inf",
     "invalid-toml": "invalid TOML: Expected ']'",
-    "kind-unknown": "kind: expected one of 'cases', 'identification', 'monte-carlo', found 'identificaton' "
+    "kind-unknown": "kind: expected one of 'cases', 'identification', 'monte-carlo', 'feedback', found 'identificaton' "
                     "(did you mean 'identification'?)",
     "latin1": "invalid TOML: not UTF-8 text",
     "lissajous-bad-ratio": "cases[0].reference.frequencies: the ratio 50.0/50.0001 is not a simple fraction",

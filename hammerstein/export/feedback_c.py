@@ -1,0 +1,248 @@
+"""C99 code of a feedback loop's controller, with a compensator as feedforward.
+
+:func:`export_feedback_c` turns a :class:`hammerstein.core.feedback.FeedbackLoop`
+(its discrete controller with the reference filter, anti-windup and
+amplifier limits) and, optionally, an exportable feedforward compensator
+(:func:`hammerstein.export.c_code.export_c`, generated as ``NAME_ff.h`` /
+``NAME_ff.c``) into ``NAME.h`` / ``NAME.c`` with one function::
+
+    int NAME_step(NAME_state *s, const double reference[NAME_N_OUTPUTS],
+                  const double measurement[NAME_N_OUTPUTS], double voltage[NAME_N_INPUTS]);
+
+which computes, for one sample, what the compiled closed-loop kernel
+computes (``hammerstein.simulation``): the feedforward ``f`` from the
+reference, ``u = f + C_k x_c + D_k [r; m; f]``, the slew limit and range clip
+of the amplifier (``voltage``), then ``x_c <- A_k x_c + B_k [r; m; f]`` with
+back-calculation or clamping. A feedforward with ``NAME_ff_PREVIEW = P``
+samples of look-ahead takes the reference P samples ahead: ``NAME_step``
+then gives the controller the reference it received P samples before (kept
+in the state), so pass the reference ``P`` samples early, as to the
+compensator alone. The return value has bit 1 set when the amplifier
+limited a voltage, bit 2 when the feedforward diverged.
+
+Standalone: it does not go through ``hammerstein export`` (whose emitters
+are :mod:`hammerstein.export.c_code` and :mod:`hammerstein.export.fmu`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from hammerstein.export.c_code import MARKER, check_name, export_c
+from hammerstein.exceptions import ExportError
+
+__all__ = ["FeedbackCExport", "export_feedback_c"]
+
+
+@dataclass
+class FeedbackCExport:
+    """The generated C code of a feedback controller (and its feedforward).
+
+    Parameters
+    ----------
+    name : str
+        The C prefix ``NAME``.
+    header, source : str
+        Text of ``NAME.h`` and ``NAME.c``.
+    feedforward : hammerstein.export.c_code.CExport or None
+        The feedforward's code (``NAME_ff``), or None.
+    n_inputs, n_outputs : int
+        Voltages m [V]; references and measurements p [µm].
+    preview : int
+        The feedforward's look-ahead [samples].
+    """
+
+    name: str
+    header: str
+    source: str
+    feedforward: object
+    n_inputs: int
+    n_outputs: int
+    preview: int
+
+    def files(self):
+        """File name -> text of every generated file.
+
+        Returns
+        -------
+        dict of str to str
+            ``NAME.h``, ``NAME.c`` and, with a feedforward, ``NAME_ff.h``, ``NAME_ff.c``.
+        """
+        out = {f"{self.name}.h": self.header, f"{self.name}.c": self.source}
+        if self.feedforward is not None:
+            out.update(self.feedforward.files())
+        return out
+
+
+def _lit(x):
+    x = float(x)
+    if math.isinf(x):
+        return "HUGE_VAL" if x > 0 else "-HUGE_VAL"
+    if not math.isfinite(x):
+        raise ExportError(f"a controller coefficient is not finite ({x!r})")
+    return repr(x)
+
+
+def _mat(a):
+    a = np.atleast_2d(a)
+    if a.size == 0:
+        return "{{0.0}}"
+    return "{" + ", ".join("{" + ", ".join(_lit(v) for v in row) + "}" for row in a) + "}"
+
+
+def _vec(a):
+    a = np.ravel(a)
+    return "{" + (", ".join(_lit(v) for v in a) if a.size else "0.0") + "}"
+
+
+def export_feedback_c(loop, name, feedforward=None, version=""):
+    """Generate the C99 code of a loop's controller and, optionally, its feedforward.
+
+    Parameters
+    ----------
+    loop : hammerstein.core.feedback.FeedbackLoop
+        With a controller; its amplifier limits and anti-windup are exported.
+        The sensor itself is not (the measurement comes from the hardware);
+        its replica on the reference is part of the controller.
+    name : str
+        C prefix and file stem (:func:`hammerstein.export.c_code.check_name`).
+    feedforward : object, optional
+        A compensator :func:`hammerstein.export.c_code.export_c` accepts
+        (classical PI models); exported as ``NAME_ff``.
+    version : str
+        Version written in the first line of the files.
+
+    Returns
+    -------
+    FeedbackCExport
+
+    Raises
+    ------
+    ExportError
+        Without a controller, with a bad name, a feedforward the C export
+        cannot take, or non-finite coefficients.
+
+    Examples
+    --------
+    >>> import control
+    >>> from hammerstein.core.feedback import FeedbackLoop, Sensor, controller_from_lti
+    >>> from hammerstein.core.plant import HammersteinPlant
+    >>> from hammerstein.core.preisach import MultivariableHysteresis
+    >>> T = 5e-5
+    >>> plant = HammersteinPlant(MultivariableHysteresis([[2.0]]), T)
+    >>> ctrl = controller_from_lti(control.tf([100.0], [1.0, 0.0]), T)
+    >>> code = export_feedback_c(FeedbackLoop(plant, ctrl, Sensor(delay=1)), "loop")
+    >>> sorted(code.files())
+    ['loop.c', 'loop.h']
+    """
+    N = check_name(name)
+    c = loop.controller
+    if c is None:
+        raise ExportError("loop: no controller to export")
+    L = loop.arrays
+    T = float(loop.plant.sampling_period)
+    m, p = loop.m, loop.p
+    nc = c.n_states
+    ff = None
+    if feedforward is not None:
+        ff = export_c(feedforward, f"{N}_ff", T, version=version)
+        if ff.n_inputs != m or ff.n_outputs != p:
+            raise ExportError(f"feedforward: {ff.n_outputs} references -> {ff.n_inputs} "
+                              f"voltages, the loop has {p} -> {m}")
+    P = 0 if ff is None else int(ff.preview)
+    first = f"{MARKER} {version} (feedback controller) */".replace("  ", " ")
+    header = f"""{first}
+#ifndef {N}_H
+#define {N}_H
+{f'#include "{N}_ff.h"' if ff else ''}
+#define {N}_N_INPUTS {m}
+#define {N}_N_OUTPUTS {p}
+#define {N}_N_STATES {nc}
+#define {N}_PREVIEW {P}
+#define {N}_SAMPLING_PERIOD {_lit(T)}
+
+/* Controller: {'; '.join(c.descriptions)} */
+typedef struct {{
+    double xc[{max(nc, 1)}];             /* controller states */
+    double a[{m}];                        /* last applied voltages [V] */
+    double rbuf[{max(P, 1)}][{p}];        /* references kept for the preview [um] */
+    int rpos;
+{f'    {N}_ff_state ff;' if ff else ''}
+}} {N}_state;
+
+void {N}_init({N}_state *s);
+int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
+             const double measurement[{N}_N_OUTPUTS], double voltage[{N}_N_INPUTS]);
+#endif
+"""
+    aw = int(L.aw)
+    ff_call = (f"    if ({N}_ff_step(&s->ff, reference, f) & 2) status |= 2;\n" if ff else "")
+    if P:
+        rnow = (f"    for (l = 0; l < {p}; ++l) {{ rnow[l] = s->rbuf[s->rpos][l]; "
+                f"s->rbuf[s->rpos][l] = reference[l]; }}\n"
+                f"    s->rpos = (s->rpos + 1) % {P};\n")
+    else:
+        rnow = f"    for (l = 0; l < {p}; ++l) rnow[l] = reference[l];\n"
+    source = f"""{first}
+#include <math.h>
+#include <string.h>
+#include "{N}.h"
+
+static const double AK[{max(nc, 1)}][{max(nc, 1)}] = {_mat(c.A)};
+static const double BK[{max(nc, 1)}][{2 * p + m}] = {_mat(c.B) if nc else '{{0.0}}'};
+static const double CK[{m}][{max(nc, 1)}] = {_mat(c.C) if nc else '{{0.0}}'};
+static const double DK[{m}][{2 * p + m}] = {_mat(c.D)};
+static const double KAW[{max(nc, 1)}][{m}] = {_mat(L.Kaw) if nc else '{{0.0}}'};
+static const int CLAMP[{max(nc, 1)}] = {{{', '.join(str(int(v)) for v in L.clamp) or '0'}}};
+static const double LOW[{m}] = {_vec(L.low)};
+static const double HIGH[{m}] = {_vec(L.high)};
+static const double SLEW[{m}] = {_vec(L.slew)};
+
+void {N}_init({N}_state *s)
+{{
+    memset(s, 0, sizeof *s);
+{f'    {N}_ff_init(&s->ff);' if ff else ''}
+}}
+
+int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
+             const double measurement[{N}_N_OUTPUTS], double voltage[{N}_N_INPUTS])
+{{
+    double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
+    int status = 0, saturated = 0, i, j, k, l;
+    for (k = 0; k < {m}; ++k) f[k] = 0.0;
+{ff_call}{rnow}    for (l = 0; l < {p}; ++l) {{ e[l] = rnow[l]; e[{p} + l] = measurement[l]; }}
+    for (k = 0; k < {m}; ++k) e[{2 * p} + k] = f[k];
+    for (k = 0; k < {m}; ++k) {{
+        double acc = f[k], v, lo, hi;
+        for (i = 0; i < {nc}; ++i) acc += CK[k][i] * s->xc[i];
+        for (j = 0; j < {2 * p + m}; ++j) acc += DK[k][j] * e[j];
+        u[k] = acc;
+        v = acc;
+        lo = s->a[k] - SLEW[k];
+        hi = s->a[k] + SLEW[k];
+        if (v > hi) v = hi;
+        if (v < lo) v = lo;
+        if (v > HIGH[k]) v = HIGH[k];
+        if (v < LOW[k]) v = LOW[k];
+        if (v != acc) saturated = 1;
+        a[k] = v;
+        s->a[k] = v;
+    }}
+    for (i = 0; i < {nc}; ++i) {{
+        double acc = 0.0;
+        for (j = 0; j < {nc}; ++j) acc += AK[i][j] * s->xc[j];
+        for (j = 0; j < {2 * p + m}; ++j) acc += BK[i][j] * e[j];
+        if ({aw} == 1) {{ for (k = 0; k < {m}; ++k) acc += KAW[i][k] * (a[k] - u[k]); }}
+        else if ({aw} == 2 && saturated && CLAMP[i]) acc = s->xc[i];
+        xn[i] = acc;
+    }}
+    for (i = 0; i < {nc}; ++i) s->xc[i] = xn[i];
+    for (k = 0; k < {m}; ++k) voltage[k] = a[k];
+    (void)AK; (void)BK; (void)KAW; (void)CLAMP; (void)xn; (void)j;
+    return status | saturated;
+}}
+"""
+    return FeedbackCExport(N, header, source, ff, m, p, P)

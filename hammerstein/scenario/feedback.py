@@ -1,0 +1,308 @@
+"""Running a ``kind = "feedback"`` scenario: every reference case with feedforward, feedback, both.
+
+:func:`build_controller` turns the validated ``[feedback]`` table
+(:mod:`hammerstein.scenario.feedback_table`) into a discrete controller for
+the scenario's plant (the designs by name take the axis' DC gain from the
+linearised plant unless ``gain`` is given); :func:`run_feedback_scenario`
+resolves the cases part (the feedforward compensators, identified as in a
+cases scenario), checks the loop's stability with the hysteresis' slope
+range as a sector, then runs each case in the compiled closed-loop kernel
+(:class:`hammerstein.core.feedback.FeedbackLoop`) in the modes asked for,
+the cases spread over threads (the kernel releases the GIL).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import control
+import numpy as np
+
+from hammerstein.core import metrics as met
+from hammerstein.core.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
+                                       design_axis, diagonal_controller, linearised_plant,
+                                       mixsyn_controller)
+from hammerstein.core.hammerstein_compensator import fade_in
+from hammerstein.exceptions import CompensatorDivergence, FeedbackError, ScenarioError
+from hammerstein.scenario.execute import fade_samples, signal_kind
+from hammerstein.scenario.feedback_table import MODES, FeedbackScenario
+from hammerstein.scenario.registry import compensator_kind
+from hammerstein.scenario.resolve import resolve_scenario
+
+__all__ = ["FeedbackCaseResult", "build_controller", "build_loops", "run_feedback_scenario",
+           "loop_analysis", "MODE_LABELS"]
+
+#: how the report names the modes
+MODE_LABELS = {"feedforward": "feedforward alone", "feedback": "feedback alone",
+               "both": "feedforward + feedback"}
+
+
+@dataclass
+class FeedbackCaseResult:
+    """One case in one mode.
+
+    Parameters
+    ----------
+    name : str
+        ``<case>.<mode>`` (the ``case`` column of metrics.csv).
+    case : hammerstein.scenario.validate.CaseSpec
+    mode : {'feedforward', 'feedback', 'both'}
+    reference, outputs : numpy.ndarray, shape (p, n_samples)
+        [µm] (outputs NaN when the feedforward diverged).
+    inputs : numpy.ndarray, shape (m, n_samples)
+        Applied voltages [V].
+    metrics : list of dict
+        Rows ``{channel, metric, value, unit}``.
+    warnings : list of str
+    seconds : float
+        Wall time of the loop's simulation [s].
+    """
+
+    name: str
+    case: Any
+    mode: str
+    reference: np.ndarray
+    outputs: np.ndarray
+    inputs: np.ndarray
+    metrics: list
+    warnings: list = field(default_factory=list)
+    seconds: float = 0.0
+
+
+def _lti(t, T):
+    dt = T if t.get("discrete", False) else 0
+    if t["kind"] == "transfer-function":
+        return control.tf(t["num"], t["den"], dt)
+    D = np.atleast_2d(np.asarray(t["D"], float))
+    A = np.array(t.get("A", []), float)
+    n = A.shape[0] if A.size else 0
+    B = np.asarray(t["B"], float).reshape(n, D.shape[1]) if n else np.zeros((0, D.shape[1]))
+    C = np.asarray(t["C"], float).reshape(D.shape[0], n) if n else np.zeros((D.shape[0], 0))
+    return control.ss(A if n else np.zeros((0, 0)), B, C, D, dt)
+
+
+def build_controller(table, plant):
+    """The discrete controller of a validated ``[feedback]`` table for a plant.
+
+    Parameters
+    ----------
+    table : dict
+        Validated (:func:`hammerstein.scenario.feedback_table.check_feedback_table`).
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    hammerstein.core.feedback.Controller
+
+    Raises
+    ------
+    FeedbackError
+        When a design or the discretisation fails (e.g. ``mixsyn`` without slycot).
+    """
+    T = plant.sampling_period
+    method = table.get("method", "tustin")
+    names = list(plant.hysteresis.output_names)
+    P = linearised_plant(plant)
+    dc = np.real(np.atleast_2d(P(1.0)))
+    if table.get("mimo") is not None:
+        t = table["mimo"]
+        if t["kind"] == "mixsyn":
+            return mixsyn_controller(P, T, t["bandwidth_hz"], t.get("max_sensitivity", 2.0),
+                                     t.get("effort", 0.1), method)
+        return controller_from_lti(_lti(t, T), T, method, description="state space (MIMO)")
+    designs = []
+    for l, name in enumerate(names):
+        t = dict(table["axes"][name])
+        kind = t.pop("kind")
+        if kind in ("transfer-function", "state-space"):
+            designs.append(_lti(t | {"kind": kind}, T))
+            continue
+        gain = t.pop("gain", float(dc[l, l]))
+        try:
+            designs.append(design_axis(kind, gain, **t))
+        except TypeError as exc:  # an option another kind takes
+            raise FeedbackError(f"axes.{name}: {exc}") from None
+    return diagonal_controller(designs, T, method)
+
+
+def build_loops(table, plant):
+    """The closed loop and the feedforward-alone loop (no controller) of a table.
+
+    Parameters
+    ----------
+    table : dict
+        Validated ``[feedback]`` table.
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    (FeedbackLoop, FeedbackLoop)
+        With the controller; without (the same amplifier, no sensor in the loop).
+    """
+    s = table.get("sensor", {})
+    sensor = Sensor(s.get("noise_nm", 0.0) * 1e-3, s.get("bandwidth_hz"), s.get("delay", 0))
+    a = table.get("amplifier", {})
+    rng = a.get("range")
+    amp = None if rng is None and "slew_rate" not in a else AmplifierLimits(
+        rng[0] if rng else -np.inf, rng[1] if rng else np.inf, a.get("slew_rate", np.inf))
+    ctrl = build_controller(table, plant)
+    aw, tt = table.get("anti_windup", "back-calculation"), table.get("tracking_time")
+    return (FeedbackLoop(plant, ctrl, sensor, amp, aw, tt),
+            FeedbackLoop(plant, None, Sensor(0.0, None, max(sensor.delay, 1)), amp, "none"))
+
+
+def loop_analysis(loop, n_frequencies=400):
+    """What the report says about a loop: designs, margins, stability, S, T, noise.
+
+    Parameters
+    ----------
+    loop : FeedbackLoop
+    n_frequencies : int
+        Points of the frequency responses (1 Hz to Nyquist, log spaced).
+
+    Returns
+    -------
+    dict
+        ``descriptions``, ``margins`` (per axis), ``stability``
+        (:meth:`FeedbackLoop.stability_check`), ``noise_nm`` (per axis RMS
+        position noise [nm]), ``linear_stable``, ``frequency_hz``, ``S``,
+        ``T``, ``N`` (magnitudes per axis, arrays (p, n)), ``outputs``.
+    """
+    T = loop.plant.sampling_period
+    f = np.logspace(0, np.log10(0.5 / T), n_frequencies)
+    z = np.exp(2j * np.pi * f * T)
+    S, Tc, N = loop.closed_loop()
+    mags = {}
+    for key, sys in (("S", S), ("T", Tc), ("N", N)):
+        resp = sys(z, squeeze=False)
+        mags[key] = np.abs(np.array([resp[l, l] for l in range(loop.p)]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        margins = loop.margins()
+    return {"descriptions": list(loop.controller.descriptions), "margins": margins,
+            "stability": loop.stability_check(),
+            "linear_stable": bool(np.all(np.abs(control.poles(S)) < 1)),
+            "noise_nm": (loop.noise_to_position() * 1e3).tolist(), "frequency_hz": f,
+            "outputs": list(loop.plant.hysteresis.output_names), **mags}
+
+
+def _feedforward(case, r_loop, fade):
+    """The feedforward voltages of a case (zeros without a compensator), or the divergence."""
+    plant = case.plant
+    comp = case.compensator
+    m = plant.hysteresis.n_inputs
+    if comp is None:
+        return np.zeros((m, r_loop.shape[1])), None
+    try:
+        if compensator_kind(case.compensator_spec).look_ahead:
+            res = comp.run_reference(plant, case.signal, case.period_samples, fade)
+            if res.diverged:
+                return None, res.divergence
+            return res.inputs, None
+        u, _ = comp.simulate(r_loop)
+        return u, None
+    except CompensatorDivergence as exc:
+        return None, exc
+
+
+def _metrics(case, y, a):
+    names = list(case.plant.hysteresis.output_names)
+    rows = met.tracking_metrics(case.signal, y, names, case.period_samples, case.settle_periods,
+                                scale=case.scale, loop_channel=case.loop_channel)
+    entry = signal_kind(case)
+    if entry.metrics is not None:
+        rows += entry.metrics(case.time, case.signal_spec, case.signal, y)
+    for k, name in enumerate(case.plant.hysteresis.input_names):
+        rows.append({"channel": name, "metric": "peak_input", "value": float(np.max(np.abs(a[k]))),
+                     "unit": "V"})
+    return rows
+
+
+def _run_one(case, mode, loops, ff, divergence, r_loop, seed):
+    loop_fb, loop_ff = loops
+    p, n = case.signal.shape
+    if mode != "feedback" and ff is None:
+        t = float(divergence.sample * case.plant.sampling_period) if divergence else 0.0
+        nan = np.full((p, n), np.nan)
+        rows = [{"channel": "+".join(case.plant.hysteresis.output_names),
+                 "metric": "diverged_at_time", "value": t, "unit": "s"}]
+        return FeedbackCaseResult(f"{case.name}.{mode}", case, mode, case.signal, nan,
+                                  np.full((case.plant.hysteresis.n_inputs, n), np.nan), rows,
+                                  [f"the feedforward diverged: {divergence}"])
+    f = np.zeros((case.plant.hysteresis.n_inputs, n)) if mode == "feedback" else ff
+    loop = loop_ff if mode == "feedforward" else loop_fb
+    t0 = time.perf_counter()
+    res = loop.simulate(r_loop, feedforward=f, seed=seed)
+    dt = time.perf_counter() - t0
+    return FeedbackCaseResult(f"{case.name}.{mode}", case, mode, case.signal, res.outputs,
+                              res.inputs, _metrics(case, res.outputs, res.inputs), [], dt)
+
+
+def run_feedback_scenario(scenario: FeedbackScenario, jobs=2):
+    """Resolve the cases, check the loop, run every case in every mode (the runner's kind).
+
+    Parameters
+    ----------
+    scenario : FeedbackScenario
+        Validated (:func:`hammerstein.scenario.feedback_table.validate_feedback`).
+    jobs : int
+        Threads running the cases.
+
+    Returns
+    -------
+    list of FeedbackCaseResult
+        Case by case, in the order of :data:`MODES`. The loop analysis
+        (:func:`loop_analysis`) and the timings are stored on the scenario
+        (``scenario.analysis``, ``scenario.timing``).
+
+    Raises
+    ------
+    ScenarioError
+        When the controller cannot be built, a case is a drive, or the
+        linearised loop is unstable (nothing is simulated).
+    """
+    resolved = resolve_scenario(scenario.cases_spec)
+    cases = resolved.cases
+    where = f"{scenario.path}: feedback"
+    drives = [c.name for c in cases if c.mode != "reference"]
+    if drives:
+        raise ScenarioError([f"{scenario.path}: cases: a feedback scenario runs references; "
+                             f"{', '.join(drives)} are drives"])
+    loops = {}
+    for c in cases:
+        if id(c.plant) not in loops:
+            try:
+                loops[id(c.plant)] = build_loops(scenario.table, c.plant)
+            except FeedbackError as exc:
+                raise ScenarioError([f"{where}: {exc}"]) from None
+    first = loops[id(cases[0].plant)][0]
+    analysis = loop_analysis(first)
+    scenario.analysis = analysis
+    if not analysis["linear_stable"]:
+        raise ScenarioError([f"{where}: the linearised loop (hysteresis at its secant gains) is "
+                             f"unstable; {analysis['stability']['summary']}"])
+    modes = [m for m in MODES if m in scenario.table.get("modes", MODES)]
+    tasks = []
+    for i, c in enumerate(cases):
+        fade = fade_samples(c) if c.compensator is not None else 0
+        r_loop = fade_in(c.signal, fade) if fade else c.signal
+        ff, div = _feedforward(c, r_loop, fade) if ("feedforward" in modes or "both" in modes) \
+            else (None, None)
+        for mode in modes:
+            tasks.append((c, mode, loops[id(c.plant)], ff, div, r_loop, scenario.seed + i))
+    t0 = time.perf_counter()
+    with ThreadPoolExecutor(max(1, int(jobs))) as pool:
+        results = list(pool.map(lambda a: _run_one(*a), tasks))
+    wall = time.perf_counter() - t0
+    samples = sum(r.case.signal.shape[1] for r in results)
+    scenario.timing = {"wall_s": wall, "samples": samples,
+                       "kernel_s": sum(r.seconds for r in results)}
+    for c in cases:
+        for r in results:
+            if r.case is c:
+                r.warnings = list(c.warnings) + r.warnings
+    return results

@@ -1,0 +1,133 @@
+"""Scenarios of kind "feedback": validation of the [feedback] table, a run, the report."""
+
+import textwrap
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hammerstein.exceptions import ScenarioError
+from hammerstein.runner import run_scenario
+from hammerstein.scenario.execute import run_case
+from hammerstein.scenario.feedback import build_loops, run_feedback_scenario
+from hammerstein.scenario.resolve import resolve_scenario
+from hammerstein.scenario.validate import validate_scenario
+
+BASE = """
+name = "fb"
+kind = "feedback"
+[plant]
+preset = "realistic-2dof"
+[compensator]
+kind = "preisach-inverse"
+model = "plant"
+[[cases]]
+name = "circle"
+reference = { kind = "circle", radius = 15.0, frequency = 50.0, periods = 4 }
+settle_periods = 2
+"""
+
+FEEDBACK = """
+[feedback]
+sensor = { noise_nm = 40.0, bandwidth_hz = 5000.0, delay = 1 }
+amplifier = { range = [-10.0, 10.0] }
+[feedback.axes.x]
+kind = "pi-notch"
+crossover_hz = 120.0
+notch_hz = 450.0
+[feedback.axes.y]
+kind = "integral"
+crossover_hz = 20.0
+"""
+
+
+def _write(tmp_path, text):
+    path = tmp_path / "fb.toml"
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+def test_every_problem_of_the_table_is_listed(tmp_path):
+    bad = FEEDBACK.replace('kind = "integral"', 'kind = "lqr"').replace(
+        "delay = 1", "delay = -1").replace("[feedback]", "[feedback]\nmethod = \"magic\"\ncolour = 1")
+    with pytest.raises(ScenarioError) as exc:
+        validate_scenario(_write(tmp_path, BASE + bad))
+    text = str(exc.value)
+    for key in ("feedback.method", "feedback.colour", "feedback.sensor.delay",
+                "feedback.axes.y.kind"):
+        assert key in text
+
+
+def test_missing_axis_and_required_keys(tmp_path):
+    text = BASE + """
+[feedback]
+[feedback.axes.x]
+kind = "pi-notch"
+crossover_hz = 100.0
+"""
+    with pytest.raises(ScenarioError) as exc:
+        validate_scenario(_write(tmp_path, text))
+    assert "feedback.axes.x.notch_hz" in str(exc.value)
+    assert "no controller for y" in str(exc.value)
+
+
+def test_feedforward_alone_is_the_open_loop_run(tmp_path):
+    """Mode "feedforward" equals the cases scenario's compensated run (no saturation)."""
+    spec = validate_scenario(_write(tmp_path, BASE + FEEDBACK))
+    results = run_feedback_scenario(spec)
+    assert [r.mode for r in results] == ["feedforward", "feedback", "both"]
+    ff = results[0]
+    case = resolve_scenario(spec.cases_spec).cases[0]
+    ref = run_case(case)
+    np.testing.assert_allclose(ff.outputs, ref.outputs, atol=1e-9)
+    assert spec.analysis["linear_stable"] and spec.analysis["stability"]["passed"]
+    err = {r.mode: next(m["value"] for m in r.metrics if m["metric"] == "rms_euclidean_error")
+           for r in results}
+    assert err["both"] < err["feedback"]
+
+
+def test_text_lti_matches_the_named_design(tmp_path):
+    """An inline transfer function equal to the integral design gives the same loop."""
+    spec = validate_scenario(_write(tmp_path, BASE + FEEDBACK))
+    plant = spec.cases[0].plant
+    fb, _ = build_loops(spec.table, plant)
+    g = float(np.real(fb.linear_plant()(1.0))[1, 1])
+    ki = 2 * np.pi * 20.0 / g
+    text = FEEDBACK.replace('kind = "integral"\ncrossover_hz = 20.0',
+                            f'kind = "transfer-function"\nnum = [{ki!r}]\nden = [1.0, 0.0]')
+    spec2 = validate_scenario(_write(tmp_path, BASE + text))
+    fb2, _ = build_loops(spec2.table, plant)
+    r = np.vstack([np.sin(np.linspace(0, 20, 800)), np.cos(np.linspace(0, 20, 800))])
+    a = fb.simulate(r, seed=1)
+    b = fb2.simulate(r, seed=1)
+    np.testing.assert_allclose(a.outputs, b.outputs, atol=1e-9)
+
+
+def test_report_is_written(tmp_path):
+    text = BASE.replace("[[cases]]", """[[sweeps]]
+name = "circle-sweep"
+frequencies = [20.0, 50.0]
+reference = { kind = "circle", radius = 15.0, periods = 3 }
+settle_periods = 2
+
+[[cases]]""") + FEEDBACK
+    out = run_scenario(_write(tmp_path, text), tmp_path / "out")
+    assert out.ok, out.error
+    d = tmp_path / "out" / "fb"
+    for name in ("report.md", "metrics.csv", "feedback-errors.csv", "feedback-loop.png",
+                 "feedback-circle-sweep.png"):
+        assert (d / name).is_file(), name
+    table = pd.read_csv(d / "feedback-errors.csv")
+    assert set(table["mode"]) == {"feedforward", "feedback", "both"}
+    report = (d / "report.md").read_text(encoding="utf-8")
+    assert "Stability check" in report and "circle criterion" in report
+
+
+def test_cases_outside_sweeps_write_their_time_series(tmp_path):
+    out = run_scenario(_write(tmp_path, BASE + FEEDBACK.replace(
+        '[feedback]', '[feedback]\nmodes = ["feedback", "both"]')), tmp_path / "out")
+    assert out.ok, out.error
+    d = tmp_path / "out" / "fb"
+    ts = pd.read_csv(d / "timeseries-circle.both.csv")
+    assert {"time_s", "x_ref_um", "x_um", "ux_V"} <= set(ts.columns)
+    assert not (d / "timeseries-circle.feedforward.csv").exists()
