@@ -33,6 +33,7 @@ import sys
 import threading
 import warnings
 
+from hammerstein._cache import numba_cache_dir
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt, start_budget
 
@@ -278,15 +279,8 @@ def _prepare_environment():
         notes.append(f"note: MPLBACKEND={escape(backend, 40)} is not a matplotlib backend; "
                      f"ignored (the figures are drawn with Agg)")
     cache = os.environ.get("NUMBA_CACHE_DIR", "").strip()
-    package = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                           "simulation")
-    if cache:
-        ok = _writable_dir(cache)
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
-        user = os.path.join(xdg, "numba") if xdg else os.path.expanduser("~/.cache/numba")
-        ok = _writable_dir(os.path.join(package, "__pycache__")) or (
-            not user.startswith("~") and _writable_dir(user))
+    user = numba_cache_dir()   # the user's cache directory (hammerstein/_cache.py)
+    ok = user is not None and _writable_dir(user)
     if not ok:
         try:
             where = _numba_cache_dir()
