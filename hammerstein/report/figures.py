@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 import textwrap
 import threading
 
@@ -287,12 +288,21 @@ def scenario_prefix(scenario):
     Returns
     -------
     str
-        The part of the title before ':' when it is short (``"Fig. 8"``),
-        else the scenario name.
+        ``"Fig. 8"`` for a title that starts with a paper figure number
+        (``"Fig. 8: ..."``), else the whole title when it is at most
+        :data:`PREFIX_CHARS` characters (a ':' in it kept: ``"Stage B: slow
+        scans"`` stays whole), else the scenario name.
     """
-    title = str(getattr(scenario, "title", "") or "")
-    head = title.split(":", 1)[0].strip()
-    return head if ":" in title and 0 < len(head) <= 24 else scenario.name
+    title = " ".join(str(getattr(scenario, "title", "") or "").split())
+    figure = _FIGURE_NUMBER.match(title)
+    if figure:
+        return figure.group(1)
+    return title if 0 < len(title) <= PREFIX_CHARS else scenario.name
+
+
+#: Longest scenario title used whole as the prefix of its figures' titles.
+PREFIX_CHARS = 60
+_FIGURE_NUMBER = re.compile(r"^((?:Fig\.|Figure)\s*\d+[a-z]?)\s*:")
 
 
 class _PlainLogFormatter(LogFormatterSciNotation):
