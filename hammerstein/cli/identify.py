@@ -2,8 +2,10 @@
 
 Reads one or more delimited text files (:func:`hammerstein.core.datafiles.read_records`),
 each holding the time (or given the sampling period), every input column and
-every output column; identifies a multivariable classical PI model
-(:func:`hammerstein.core.record_identification.identify_records`: split at
+every output column; identifies a multivariable hysteresis model (``--model
+auto``, the default: classical PI, Preisach or generalised PI, whichever
+predicts the held-out minor loops best; a classical PI from records of one
+amplitude) (:func:`hammerstein.core.record_identification.identify_records`: split at
 reversal points, held-out complete branches or periods, partition and
 component structure chosen automatically unless given), reports the fit on
 the training and held-out samples, and writes a model file
@@ -61,10 +63,13 @@ def add_parser(subparsers):
         The ``add_subparsers()`` object of the ``hammerstein`` parser.
     """
     p = subparsers.add_parser(
-        "identify", help="identify a (multivariable) PI model from measured records",
-        description="Identify a multivariable classical Prandtl-Ishlinskii model from CSV/text "
-                    "records (one or more files, each with every input and output column), "
-                    "report the fit on training and held-out periods, and save a model file.")
+        "identify", help="identify a (multivariable) hysteresis model from measured records",
+        description="Identify a multivariable hysteresis model from CSV/text records (one or "
+                    "more files, each with every input and output column): by default (--model "
+                    "auto) the classical Prandtl-Ishlinskii, Preisach or generalised PI model "
+                    "that predicts the held-out minor loops best, the classical PI when the "
+                    "records hold a single amplitude; report the fit on training and held-out "
+                    "periods, and save a model file.")
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="delimited text files (header optional); typically one per excited input")
     p.add_argument("--input", "--inputs", dest="inputs", required=True, metavar="COLS",

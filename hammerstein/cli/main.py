@@ -34,6 +34,7 @@ import threading
 import warnings
 
 from hammerstein._cache import numba_cache_dir
+from hammerstein.cli._examples import add_examples
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt, start_budget
 
@@ -115,7 +116,7 @@ COMMANDS = {
     "run": ("hammerstein.cli.run", "simulate scenarios and write reports"),
     "validate": ("hammerstein.cli.validate", "check scenario files without simulating"),
     "list": ("hammerstein.cli.listing", "list bundled presets, compensator kinds and scenarios"),
-    "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
+    "identify": ("hammerstein.cli.identify", "identify a (multivariable) hysteresis model from measured records"),
     "excitation": ("hammerstein.cli.excitation", "write excitation files to play on an actuator before identifying it"),
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
@@ -162,6 +163,7 @@ def build_parser(command=None):
     for name, (module, help_text) in COMMANDS.items():
         if command is None or name == command:
             importlib.import_module(module).add_parser(sub)
+            add_examples(sub.choices[name], name)   # the examples at the end of --help
         else:
             sub.add_parser(name, help=help_text)
     return parser
