@@ -10,6 +10,10 @@ of ``frequencies`` [Hz] (and optionally several compensators side by side)::
     settle_periods = 4
     compensators = { mv-50Hz = { kind = "multivariable" }, per-axis = { kind = "per-axis" } }
 
+A reference whose kind has two frequencies (``lissajous``: ``frequencies = [f_x,
+f_y]`` in the template) is swept by scaling both: each swept f sets f_x = f and
+keeps the ratio f_y / f_x, so the figure keeps its shape.
+
 It expands (:func:`expand_sweeps`) into ordinary cases named
 ``<sweep>-<label>-<axis>-<f>Hz`` (``-<label>`` only with ``compensators``,
 ``-<axis>`` only when ``output``/``input`` is a list), so ``metrics.csv``
@@ -48,6 +52,7 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.compensators import check_reference_range
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import HammersteinError
 from hammerstein.core.stability import stability_map
 from hammerstein.scenario.execute import chain_result, fade_samples, run_case, runs_alone
@@ -192,10 +197,31 @@ def expand_sweeps(sweeps, source, problems):
             problems.append(f"{source}: {where}: expected frequencies = [...] [Hz], "
                             f"compensators = {{ label = {{...}} }}, or both")
             continue
-        if freqs is not None and ("frequency" in sig or "frequencies" in sig):
-            problems.append(f"{source}: {where}.{mode}.frequency: given by the sweep's "
-                            f"frequencies; remove it from the template")
-            continue
+        scale_pair = False      # a Lissajous-like kind: frequencies = [f_1, f_2] scaled to f_1 = f
+        if freqs is not None:
+            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(sig.get("kind"))
+            keys = kind.fields if kind is not None else {"frequency": None}
+            if "frequency" in keys:
+                if "frequency" in sig:
+                    problems.append(f"{source}: {where}.{mode}.frequency: given by the sweep's "
+                                    f"frequencies; remove it from the template")
+                    continue
+            elif "frequencies" in keys:
+                pair = sig.get("frequencies")
+                if not (isinstance(pair, list) and len(pair) == 2
+                        and all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
+                                for x in pair)):
+                    problems.append(f"{source}: {where}.{mode}.frequencies: expected the figure's "
+                                    f"two frequencies [f_1, f_2] [Hz] in the template; each swept "
+                                    f"frequency f replaces f_1 and scales f_2 with it (the ratio "
+                                    f"f_2/f_1 is kept), found {short_repr(pair)}")
+                    continue
+                scale_pair = True
+            else:
+                problems.append(f"{source}: {where}.frequencies: a {sig.get('kind')} {mode} has no "
+                                f"frequency to sweep; compare compensators on it with "
+                                f"compensators = {{ ... }} and no frequencies")
+                continue
         axis_key = "output" if mode == "reference" else "input"
         axes = sig.get(axis_key)
         axes = axes if isinstance(axes, list) and axes else [axes]
@@ -212,7 +238,13 @@ def expand_sweeps(sweeps, source, problems):
                             ([f"{_fmt(f)}Hz"] if f is not None else [])
                     case = copy.deepcopy(template)
                     case["name"] = "-".join(parts)
-                    case[mode] = dict(sig) if f is None else {**sig, "frequency": f}
+                    if f is None:
+                        case[mode] = dict(sig)
+                    elif scale_pair:
+                        f1, f2 = sig["frequencies"]
+                        case[mode] = {**sig, "frequencies": [f, f * (f2 / f1)]}
+                    else:
+                        case[mode] = {**sig, "frequency": f}
                     if axis is not None:
                         case[mode][axis_key] = axis
                     if label:  # merged into the template's override like any case override
