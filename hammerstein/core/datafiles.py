@@ -2,7 +2,9 @@
 
 Real files come with or without a header, with comma, semicolon, tab or
 space separators, sometimes with an empty leading index column (as the
-shipped ``data/piezo-stack-150V-1Hz.csv``). :func:`read_record` handles these
+shipped ``data/piezo-stack-150V-1Hz.csv``) or a row of units under the
+header (``time,ux,x`` then ``s,V,µm``, as data-acquisition programs write
+them: skipped). :func:`read_record` handles these
 and turns every problem into a one-line :class:`DataFileError` that names the
 file and what is wrong.
 """
@@ -180,6 +182,16 @@ def max_cells():
     return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else 40_000_000
 
 
+def _units_row(line, sep):
+    """Whether the line under a header is a row of units: text cells only, no number."""
+    try:
+        row = next(csv.reader([line], delimiter=sep)) if sep != r"\s+" else line.split()
+    except (csv.Error, StopIteration):
+        return False
+    cells = [c.strip() for c in row if c.strip()]
+    return bool(cells) and not any(_is_number(c) for c in cells)
+
+
 def _read_table(path):
     try:
         raw = bounded_read_bytes(path, "data", "data file")
@@ -211,6 +223,9 @@ def _read_table(path):
         raise DataFileError(f"{path}: cannot parse the first line ({escape(exc, 100)})") from None
     cells = [c.strip() for c in first if c.strip()]
     header = any(not _is_number(c) for c in cells)
+    # a units row under the header, as data-acquisition programs write it
+    # ("s,V,µm", "[s];[V];[um]"): every cell text, none a number; skipped
+    units = header and len(head) > 1 and _units_row(head[1], sep)
     n_rows = raw.count(b"\n") + (not raw.endswith(b"\n"))
     n_cells = n_rows * max(len(first), 1)
     cap = max_cells()
@@ -219,6 +234,7 @@ def _read_table(path):
                             f"than the limit of {cap} cells (raise it with {CELLS_ENV}=N)")
     try:
         frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
+                            skiprows=[1] if units else None,
                             engine="c", skipinitialspace=True, encoding="utf-8",
                             encoding_errors="replace")
     except (pd.errors.ParserError, ValueError, MemoryError) as exc:
