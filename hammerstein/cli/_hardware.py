@@ -166,7 +166,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     time : str
         Time column of a CSV file.
     outputs : str, optional
-        ``--outputs`` mapping of a CSV file.
+        ``--output-columns`` mapping of a CSV file.
     period : float, optional
         Period of a periodic CSV reference [s] (``--period``): the ZPETC
         preview's continuation past the end and the settling window.
@@ -195,7 +195,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
         t, sig, period, extras = got
         return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
                          extras.get("loop_channel"))
-    t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--outputs"),
+    t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--output-columns"),
                              plant.sampling_period, "--reference")
     period_samples = 1 if period is None else max(int(round(period / plant.sampling_period)), 1)
     return Reference(t, sig, period_samples, None, None, "file")

@@ -532,8 +532,8 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     def column(col, label):
         if col not in frame.columns:
             raise DataFileError(f"{what}: {path}: no column {col!r} for {label} (columns: "
-                                f"{', '.join(frame.columns)}; map another name with --inputs/"
-                                f"--outputs NAME=COLUMN or --time COLUMN)")
+                                f"{', '.join(frame.columns)}; map another name with --input-columns/"
+                                f"--output-columns NAME=COLUMN or --time COLUMN)")
         v = pd.to_numeric(frame[col], errors="coerce").to_numpy(dtype=float)
         if v.size < 2 or not np.all(np.isfinite(v)):
             bad = int(np.flatnonzero(~np.isfinite(v))[0]) + 2 if v.size else 1
