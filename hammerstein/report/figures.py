@@ -4,7 +4,7 @@
   of abscissa k against output l, lettered (a), (b), ... row by row as in the
   paper's Fig. 5 and 8 ((a) direct x, (b) cross-coupling on x, (c)
   cross-coupling on y, (d) direct y); columns that no curve drives are left
-  out (the letters keep the paper's numbering).
+  out (the panels drawn are lettered in turn, no letter missing).
 * :func:`trajectory_figure`: XY plot with the reference, time plots of the
   displacements and of the input voltages, tracking errors scaled on the
   settled part (Fig. 10-13).
@@ -397,7 +397,7 @@ def loop_grid(curves, x_labels, y_labels, title, direct_label="direct",
     >>> fig = loop_grid([{"label": "ux 50 Hz", "column": 0, "x": u,
     ...                   "outputs": np.vstack([5.8 * u, 0.2 * u])}],
     ...                 ["ux [V]", "uy [V]"], ["x [µm]", "y [µm]"], "open-loop maps")
-    >>> len(fig.axes)   # (a) and (c): no curve drives uy
+    >>> len(fig.axes)   # (a) and (b): no curve drives uy
     2
     >>> plt.close(fig)
     """
@@ -422,7 +422,8 @@ def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="di
 
     Panel (l, k) is output l against abscissa k, lettered row by row as in the
     paper's Fig. 5/6/8: (a) (u_x, x) direct, (b) (u_y, x) cross-coupling, ...
-    The letters follow the full p x m grid even when columns are left out.
+    With columns left out, the panels drawn are lettered (a), (b), ... in turn,
+    so no letter is missing.
 
     Parameters
     ----------
@@ -451,7 +452,8 @@ def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="di
         for j, k in enumerate(columns):
             ax = axes[l][j]
             kind = direct_label if l == k else cross_label
-            ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {kind}: {y_labels[l].split(' ')[0]} vs "
+            ax.set_title(f"({_LETTERS[(l * len(columns) + j) % 26]}) {kind}: "
+                         f"{y_labels[l].split(' ')[0]} vs "
                          f"{x_labels[k].split(' ')[0]}", fontsize=10, y=1.0)
             ax.set_xlabel(x_labels[k])
             ax.set_ylabel(y_labels[l])
