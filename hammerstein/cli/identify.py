@@ -79,6 +79,9 @@ def add_parser(subparsers):
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
     p.add_argument("--sampling-period", type=float, metavar="S",
                    help="sampling period [s] when there is no time column")
+    p.add_argument("--skip-rows", type=int, default=0, metavar="N",
+                   help="lines before the table to ignore (an instrument's preamble); a row of "
+                        "units under the header is recognised without it")
     p.add_argument("--delay", default=None, metavar="auto|N",
                    help="samples every record's measured outputs lag its inputs (the "
                         "acquisition's delay, not the actuator's): the outputs are advanced by N "
@@ -230,6 +233,8 @@ def _check_usage(args):
         raise _Usage("--train-fraction and --hold-out none: give one of them")
     if args.time is None and args.sampling_period is None:
         raise _Usage("give --time COL or --sampling-period S")
+    if args.skip_rows < 0:
+        raise _Usage(f"--skip-rows: expected a number of lines >= 0, found {args.skip_rows}")
     if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
                                                  and args.sampling_period > 0):
         raise _Usage(f"--sampling-period: expected a positive time [s], found {args.sampling_period}")
@@ -312,7 +317,8 @@ def _estimate_delay(args):
     cannot support is a data error naming --delay when ``auto`` was given,
     else (the default) the delay stays 0 and the report says why.
     """
-    records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
+    records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period,
+                            args.skip_rows)
                for d in args.dynamics_records]
     T = records[0].sampling_period
     if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
@@ -604,7 +610,8 @@ def _read(args, path):
     Sample ``t`` of the outputs becomes sample ``t + N`` of the file: the last
     N inputs, whose response was not measured, are dropped.
     """
-    rec = read_records(path, args.inputs, args.outputs, args.time, args.sampling_period)
+    rec = read_records(path, args.inputs, args.outputs, args.time, args.sampling_period,
+                       args.skip_rows)
     d = args.delay
     if not d:
         return rec

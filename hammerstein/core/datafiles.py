@@ -192,13 +192,15 @@ def _units_row(line, sep):
     return bool(cells) and not any(_is_number(c) for c in cells)
 
 
-def _read_table(path):
+def _read_table(path, skip_rows=0):
     try:
         raw = bounded_read_bytes(path, "data", "data file")
     except FileLimitError as exc:
         raise DataFileError(str(exc)) from None
     except OSError as exc:
         raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if skip_rows:   # a preamble (instrument, date, rate ...) before the table: dropped as lines
+        raw = b"".join(raw.splitlines(keepends=True)[int(skip_rows):])
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
         raw = raw.decode("utf-16", errors="replace").encode("utf-8")
     raw = raw.removeprefix(b"\xef\xbb\xbf")
@@ -295,7 +297,7 @@ def _column(frame, header, key, role, path):
     return arr, name
 
 
-def read_record(path, input, output, time=None, sampling_period=None):
+def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0):
     """Read a single-input single-output record from a delimited text file.
 
     Parameters
@@ -315,6 +317,10 @@ def read_record(path, input, output, time=None, sampling_period=None):
         median step).
     sampling_period : float, optional
         Sampling period [s] when there is no time column.
+    skip_rows : int
+        Lines of a preamble before the table (an instrument's header block),
+        dropped before anything is parsed; a units row under the table's
+        header needs none (it is recognised).
 
     Returns
     -------
@@ -333,7 +339,7 @@ def read_record(path, input, output, time=None, sampling_period=None):
         raise DataFileError(f"{path}: no such file")
     if path.is_dir():
         raise DataFileError(f"{path}: is a directory, expected a data file")
-    frame, header = _read_table(path)
+    frame, header = _read_table(path, skip_rows)
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
@@ -372,7 +378,7 @@ def read_record(path, input, output, time=None, sampling_period=None):
     return Record(t, u, y, uname, yname, T, str(path))
 
 
-def read_records(path, inputs, outputs, time=None, sampling_period=None):
+def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_rows=0):
     """Read a multi-input multi-output record from a delimited text file.
 
     The file format rules are those of :func:`read_record`.
@@ -387,6 +393,10 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
         Time column [s]; increasing and uniform.
     sampling_period : float, optional
         Sampling period [s] when there is no time column.
+    skip_rows : int
+        Lines of a preamble before the table (an instrument's header block),
+        dropped before anything is parsed; a units row under the table's
+        header needs none (it is recognised).
 
     Returns
     -------
@@ -407,7 +417,7 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
         raise DataFileError(f"{path}: no such file")
     if path.is_dir():
         raise DataFileError(f"{path}: is a directory, expected a data file")
-    frame, header = _read_table(path)
+    frame, header = _read_table(path, skip_rows)
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
@@ -423,7 +433,7 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
         raise DataFileError(f"{path}: column {dup[0]!r} named twice among the inputs and outputs; "
                             f"name each column once")
     if time is not None:
-        first = read_record(path, ins[0], outs[0], time, sampling_period)
+        first = read_record(path, ins[0], outs[0], time, sampling_period, skip_rows)
         t, T = first.timepts, first.sampling_period
     else:
         if sampling_period is None:
