@@ -44,6 +44,7 @@ noise = { sd = 0.05 }"""
 #: Why the dask tests skip when the extra is not installed.
 _NO_DASK = "dask.distributed (extra [distributed]) is not installed"
 
+
 def _study(tmp_path, vary=VARY, name="s.toml"):
     f = tmp_path / name
     f.write_text(STUDY.format(vary=vary))
