@@ -227,7 +227,8 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
                         transform=ax.transAxes, ha="center", va="center", fontsize=9)
             panel = _panel_title(spec, out, k, axis, output_names)
             ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {panel}", fontsize=10, y=1.0)
-            ax.set_xlabel("frequency [Hz]")
+            ax.set_xlabel("frequency [Hz]" if getattr(spec, "parameter", "frequency") == "frequency"
+                          else str(spec.parameter))
             ax.set_ylabel(f"{what}, {out} [{unit}]" if unit else f"{what}, {out}")
             ax.grid(True, which="major", alpha=0.3)
             ax.grid(True, which="minor", alpha=0.12)
@@ -325,14 +326,17 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
     for spec in specs:
         table = sweep_table(spec, metrics)
         csv = f"sweep-{spec.name}.csv"
-        table.to_csv(directory / csv, index=False, float_format="%.6g")
+        swept = getattr(spec, "parameter", "frequency")
+        (table if swept == "frequency" else table.rename(columns={"frequency_hz": swept})) \
+            .to_csv(directory / csv, index=False, float_format="%.6g")
         png = None
         if len(spec.frequencies) > 1:
             png = f"sweep-{spec.name}.png"
             several = sum(len(s.frequencies) > 1 for s in specs) > 1
             jobs.add(directory / png, sweep_figure, table, spec, outputs,
                      f"{plots.scenario_prefix(scenario)}: {metric_label(spec.metric)} "
-                     f"vs frequency" + (f" ({spec.name})" if several else ""),
+                     f"vs {getattr(spec, 'parameter', 'frequency')}"
+                     + (f" ({spec.name})" if several else ""),
                      names=compensator_legend(spec, results))
         n_div = int(table["diverged_at_time"].notna().groupby(
             [table["compensator"], table["axis"], table["frequency_hz"]]).any().sum()) \
@@ -343,7 +347,9 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
         what = [f"compensators {', '.join(l or '-' for l in spec.labels)}"]
         if spec.axes != [None]:
             what.append(f"axes {', '.join(str(a) for a in spec.axes)}")
-        if spec.frequencies:
+        if spec.frequencies and getattr(spec, "parameter", "frequency") != "frequency":
+            what.append(f"{spec.parameter} {', '.join(_fmt(f) for f in spec.frequencies)}")
+        elif spec.frequencies:
             what.append(f"frequencies {', '.join(_fmt(f) for f in spec.frequencies)} Hz")
         lines += [f"{len(spec.cases)} cases: {'; '.join(what)}. Table: `{csv}` "
                   f"(long rows also in `metrics.csv`). Diverged cases: {n_div}.", ""]
