@@ -152,22 +152,28 @@ def out_file_problem(out, what="file"):
 def add_column_options(p, inputs_help="input columns named otherwise",
                        outputs_help="output columns named otherwise",
                        time_help="time column of the CSV files (default t)"):
-    """``--time COL`` (default ``t``), ``--inputs NAME=COL,...`` and ``--outputs NAME=COL,...`` on ``p``.
+    """``--time COL`` (default ``t``), ``--input-columns NAME=COL,...`` and ``--output-columns NAME=COL,...`` on ``p``.
 
     The column options of the commands that read signal CSV files
     (``compensate``, ``learn``, ``evaluate``): one definition, so their
     names, metavars and defaults cannot drift apart; each command words
-    its own help.
+    its own help. ``--inputs``/``--outputs``, their former spellings, still
+    work (hidden from ``--help``): those names mean the actuator's inputs and
+    outputs in ``identify`` and ``excitation``.
 
     Parameters
     ----------
     p : argparse.ArgumentParser
         The command's parser.
     inputs_help, outputs_help, time_help : str
-        Help texts of ``--inputs``, ``--outputs`` and ``--time``.
+        Help texts of ``--input-columns``, ``--output-columns`` and ``--time``.
     """
-    p.add_argument("--outputs", metavar="NAME=COL,...", help=outputs_help)
-    p.add_argument("--inputs", metavar="NAME=COL,...", help=inputs_help)
+    p.add_argument("--output-columns", dest="outputs", metavar="NAME=COL,...", help=outputs_help)
+    p.add_argument("--input-columns", dest="inputs", metavar="NAME=COL,...", help=inputs_help)
+    # the old spellings, kept working: --inputs/--outputs name the actuator's inputs and
+    # outputs elsewhere (identify, excitation), not a map of columns
+    p.add_argument("--outputs", dest="outputs", help=argparse.SUPPRESS)
+    p.add_argument("--inputs", dest="inputs", help=argparse.SUPPRESS)
     p.add_argument("--time", default="t", metavar="COL", help=time_help)
 
 

@@ -159,7 +159,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     time : str
         Time column of a CSV file.
     outputs : str, optional
-        ``--outputs`` mapping of a CSV file.
+        ``--output-columns`` mapping of a CSV file.
     period : float, optional
         Period of a periodic CSV reference [s] (``--period``): the ZPETC
         preview's continuation past the end and the settling window.
@@ -193,7 +193,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
         _warn_implausible(sig, "--reference")
         return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
                          extras.get("loop_channel"))
-    t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--outputs"),
+    t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--output-columns"),
                              plant.sampling_period, "--reference")
     _warn_implausible(sig, text)
     T = plant.sampling_period

@@ -180,13 +180,13 @@ def _handle(args):
         else:
             outs, ins = ["x", "y"], []
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
-            (outs, mapping(args.outputs, outs, "--outputs"))
+            (outs, mapping(args.outputs, outs, "--output-columns"))
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,
                                "--measured")
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
-                (ins, mapping(args.inputs, ins, "--inputs"))
+                (ins, mapping(args.inputs, ins, "--input-columns"))
             _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured")
         shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))

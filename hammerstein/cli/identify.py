@@ -2,8 +2,10 @@
 
 Reads one or more delimited text files (:func:`hammerstein.core.datafiles.read_records`),
 each holding the time (or given the sampling period), every input column and
-every output column; identifies a multivariable classical PI model
-(:func:`hammerstein.core.record_identification.identify_records`: split at
+every output column; identifies a multivariable hysteresis model (``--model
+auto``, the default: classical PI, Preisach or generalised PI, whichever
+predicts the held-out minor loops best; a classical PI from records of one
+amplitude) (:func:`hammerstein.core.record_identification.identify_records`: split at
 reversal points, held-out complete branches or periods, partition and
 component structure chosen automatically unless given), reports the fit on
 the training and held-out samples, and writes a model file
@@ -57,10 +59,13 @@ def add_parser(subparsers):
         The ``add_subparsers()`` object of the ``hammerstein`` parser.
     """
     p = subparsers.add_parser(
-        "identify", help="identify a (multivariable) PI model from measured records",
-        description="Identify a multivariable classical Prandtl-Ishlinskii model from CSV/text "
-                    "records (one or more files, each with every input and output column), "
-                    "report the fit on training and held-out periods, and save a model file.")
+        "identify", help="identify a (multivariable) hysteresis model from measured records",
+        description="Identify a multivariable hysteresis model from CSV/text records (one or "
+                    "more files, each with every input and output column): by default (--model "
+                    "auto) the classical Prandtl-Ishlinskii, Preisach or generalised PI model "
+                    "that predicts the held-out minor loops best, the classical PI when the "
+                    "records hold a single amplitude; report the fit on training and held-out "
+                    "periods, and save a model file.")
     p.add_argument("data", nargs="+", metavar="DATA.csv",
                    help="delimited text files (header optional); typically one per excited input")
     p.add_argument("--input", "--inputs", dest="inputs", required=True, metavar="COLS",
@@ -70,6 +75,9 @@ def add_parser(subparsers):
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
     p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"), metavar="S",
                    help="sampling period [s] when there is no time column")
+    p.add_argument("--skip-rows", type=int, default=0, metavar="N",
+                   help="lines before the table to ignore (an instrument's preamble); a row of "
+                        "units under the header is recognised without it")
     p.add_argument("--delay", default=None, metavar="auto|N",
                    help="samples every record's measured outputs lag its inputs (the "
                         "acquisition's delay, not the actuator's): the outputs are advanced by N "
@@ -215,6 +223,8 @@ def _check_usage(args):
         raise _Usage("--train-fraction and --hold-out none: give one of them")
     if args.time is None and args.sampling_period is None:
         raise _Usage("give --time COL or --sampling-period S")
+    if args.skip_rows < 0:
+        raise _Usage(f"--skip-rows: expected a number of lines >= 0, found {args.skip_rows}")
     if args.sampling_period is not None and not (np.isfinite(args.sampling_period)
                                                  and args.sampling_period > 0):
         raise _Usage(f"--sampling-period: expected a positive time [s], found {args.sampling_period}")
@@ -298,7 +308,8 @@ def _estimate_delay(args):
     cannot support is a data error naming --delay when ``auto`` was given,
     else (the default) the delay stays 0 and the report says why.
     """
-    records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period)
+    records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period,
+                            args.skip_rows)
                for d in args.dynamics_records]
     T = records[0].sampling_period
     if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
@@ -558,7 +569,8 @@ def _read(args, path):
     Sample ``t`` of the outputs becomes sample ``t + N`` of the file: the last
     N inputs, whose response was not measured, are dropped.
     """
-    rec = read_records(path, args.inputs, args.outputs, args.time, args.sampling_period)
+    rec = read_records(path, args.inputs, args.outputs, args.time, args.sampling_period,
+                       args.skip_rows)
     d = args.delay
     if not d:
         return rec

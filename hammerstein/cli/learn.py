@@ -412,7 +412,7 @@ def _handle(args):
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         T = plant.sampling_period
         _, u, Tu = read_signals(args.drive, list(model.input_names), args.time,
-                                mapping(args.inputs, list(model.input_names), "--inputs"),
+                                mapping(args.inputs, list(model.input_names), "--input-columns"),
                                 None, "--drive")
         if not np.isclose(Tu, T, rtol=1e-6):
             raise DataFileError(f"--drive: sampled every {Tu:g} s; expected the actuator's {T:g} s "
@@ -421,7 +421,7 @@ def _handle(args):
         if u.shape[1] != N:
             raise DataFileError(f"--drive: {u.shape[1]} samples; expected the reference's {N}")
         _, y, _ = read_signals(args.measured, list(model.output_names), args.time,
-                               mapping(args.outputs, list(model.output_names), "--outputs"), T,
+                               mapping(args.outputs, list(model.output_names), "--output-columns"), T,
                                "--measured")
         if y.shape[1] < N:
             raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "

@@ -33,6 +33,8 @@ import sys
 import threading
 import warnings
 
+from hammerstein._cache import numba_cache_dir
+from hammerstein.cli._examples import add_examples
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt, reset_guard, start_budget
 
@@ -114,7 +116,7 @@ COMMANDS = {
     "run": ("hammerstein.cli.run", "simulate scenarios and write reports"),
     "validate": ("hammerstein.cli.validate", "check scenario files without simulating"),
     "list": ("hammerstein.cli.listing", "list bundled presets, compensator kinds and scenarios"),
-    "identify": ("hammerstein.cli.identify", "identify a (multivariable) PI model from measured records"),
+    "identify": ("hammerstein.cli.identify", "identify a (multivariable) hysteresis model from measured records"),
     "excitation": ("hammerstein.cli.excitation", "write excitation files to play on an actuator before identifying it"),
     "check": ("hammerstein.cli.check", "run scenarios and compare their metrics with a baseline"),
     "replicate": ("hammerstein.cli.replicate", "regenerate the replication report of the paper"),
@@ -162,6 +164,7 @@ def build_parser(command=None):
     for name, (module, help_text) in COMMANDS.items():
         if command is None or name == command:
             importlib.import_module(module).add_parser(sub)
+            add_examples(sub.choices[name], name)   # the examples at the end of --help
         else:
             sub.add_parser(name, help=help_text)
     return parser
@@ -279,15 +282,8 @@ def _prepare_environment():
         notes.append(f"note: MPLBACKEND={escape(backend, 40)} is not a matplotlib backend; "
                      f"ignored (the figures are drawn with Agg)")
     cache = os.environ.get("NUMBA_CACHE_DIR", "").strip()
-    package = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                           "simulation")
-    if cache:
-        ok = _writable_dir(cache)
-    else:
-        xdg = os.environ.get("XDG_CACHE_HOME", "").strip()
-        user = os.path.join(xdg, "numba") if xdg else os.path.expanduser("~/.cache/numba")
-        ok = _writable_dir(os.path.join(package, "__pycache__")) or (
-            not user.startswith("~") and _writable_dir(user))
+    user = numba_cache_dir()   # the user's cache directory (hammerstein/_cache.py)
+    ok = user is not None and _writable_dir(user)
     if not ok:
         try:
             where = _numba_cache_dir()

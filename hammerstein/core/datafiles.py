@@ -2,7 +2,9 @@
 
 Real files come with or without a header, with comma, semicolon, tab or
 space separators, sometimes with an empty leading index column (as the
-shipped ``data/piezo-stack-150V-1Hz.csv``). :func:`read_record` handles these
+shipped ``data/piezo-stack-150V-1Hz.csv``) or a row of units under the
+header (``time,ux,x`` then ``s,V,µm``, as data-acquisition programs write
+them: skipped). :func:`read_record` handles these
 and turns every problem into a one-line :class:`DataFileError` that names the
 file and what is wrong.
 """
@@ -359,7 +361,7 @@ def numeric_column(table, col, label=None):
         more = f", ... ({frame.shape[1] - 20} more)" if frame.shape[1] > 20 else ""
         raise error(f"{where}: no column {escape(repr(col), CELL_EXCERPT)}"
                             f"{' for ' + label if label else ''} (columns: {names}{more}; map "
-                            f"another name with --inputs/--outputs NAME=COLUMN or --time COLUMN)")
+                            f"another name with --input-columns/--output-columns NAME=COLUMN or --time COLUMN)")
     cells = frame[col].fillna("").astype(str).str.strip()
     v = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(v)
@@ -389,13 +391,25 @@ def numeric_column(table, col, label=None):
     return v
 
 
-def _read_table(path):
+def _units_row(line, sep):
+    """Whether the line under a header is a row of units: text cells only, no number."""
+    try:
+        row = next(csv.reader([line], delimiter=sep)) if sep != r"\s+" else line.split()
+    except (csv.Error, StopIteration):
+        return False
+    cells = [c.strip() for c in row if c.strip()]
+    return bool(cells) and not any(_is_number(c) for c in cells)
+
+
+def _read_table(path, skip_rows=0):
     try:
         raw = bounded_read_bytes(path, "data", "data file")
     except FileLimitError as exc:
         raise DataFileError(str(exc)) from None
     except OSError as exc:
         raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    if skip_rows:   # a preamble (instrument, date, rate ...) before the table: dropped as lines
+        raw = b"".join(raw.splitlines(keepends=True)[int(skip_rows):])
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
         raw = raw.decode("utf-16", errors="replace").encode("utf-8")
     raw = raw.removeprefix(b"\xef\xbb\xbf")
@@ -423,6 +437,9 @@ def _read_table(path):
         raise DataFileError(f"{path}: cannot parse the first line ({escape(exc, 100)})") from None
     cells = [c.strip() for c in first if c.strip()]
     header = any(not _is_number(c) for c in cells)
+    # a units row under the header, as data-acquisition programs write it
+    # ("s,V,µm", "[s];[V];[um]"): every cell text, none a number; skipped
+    units = header and len(head) > 1 and _units_row(head[1], sep)
     n_rows = raw.count(b"\n") + (not raw.endswith(b"\n"))
     n_cells = n_rows * max(len(first), 1)
     cap = max_cells()
@@ -431,6 +448,7 @@ def _read_table(path):
                             f"than the limit of {cap} cells (raise it with {CELLS_ENV}=N)")
     try:
         frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
+                            skiprows=[1] if units else None,
                             engine="c", skipinitialspace=True, encoding="utf-8",
                             encoding_errors="replace")
     except (pd.errors.ParserError, ValueError, MemoryError) as exc:
@@ -499,7 +517,7 @@ def _column(frame, header, key, role, path):
     return arr, name
 
 
-def read_record(path, input, output, time=None, sampling_period=None):
+def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0):
     """Read a single-input single-output record from a delimited text file.
 
     Parameters
@@ -519,6 +537,10 @@ def read_record(path, input, output, time=None, sampling_period=None):
         median step).
     sampling_period : float, optional
         Sampling period [s] when there is no time column.
+    skip_rows : int
+        Lines of a preamble before the table (an instrument's header block),
+        dropped before anything is parsed; a units row under the table's
+        header needs none (it is recognised).
 
     Returns
     -------
@@ -537,7 +559,7 @@ def read_record(path, input, output, time=None, sampling_period=None):
         raise DataFileError(f"{path}: no such file")
     if path.is_dir():
         raise DataFileError(f"{path}: is a directory, expected a data file")
-    frame, header = _read_table(path)
+    frame, header = _read_table(path, skip_rows)
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
@@ -576,7 +598,7 @@ def read_record(path, input, output, time=None, sampling_period=None):
     return Record(t, u, y, uname, yname, T, str(path))
 
 
-def read_records(path, inputs, outputs, time=None, sampling_period=None):
+def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_rows=0):
     """Read a multi-input multi-output record from a delimited text file.
 
     The file format rules are those of :func:`read_record`.
@@ -591,6 +613,10 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
         Time column [s]; increasing and uniform.
     sampling_period : float, optional
         Sampling period [s] when there is no time column.
+    skip_rows : int
+        Lines of a preamble before the table (an instrument's header block),
+        dropped before anything is parsed; a units row under the table's
+        header needs none (it is recognised).
 
     Returns
     -------
@@ -611,7 +637,7 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
         raise DataFileError(f"{path}: no such file")
     if path.is_dir():
         raise DataFileError(f"{path}: is a directory, expected a data file")
-    frame, header = _read_table(path)
+    frame, header = _read_table(path, skip_rows)
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
@@ -627,7 +653,7 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None):
         raise DataFileError(f"{path}: column {dup[0]!r} named twice among the inputs and outputs; "
                             f"name each column once")
     if time is not None:
-        first = read_record(path, ins[0], outs[0], time, sampling_period)
+        first = read_record(path, ins[0], outs[0], time, sampling_period, skip_rows)
         t, T = first.timepts, first.sampling_period
     else:
         if sampling_period is None:

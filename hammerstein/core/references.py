@@ -1008,7 +1008,7 @@ _SINE_DRIVE = {"input": Field(string(), required=True),
                "phase": _PHASE, "offset": Field(number("V"), default=0.0), **_LENGTH}
 
 #: Reference kinds (``[[cases]] reference = { kind = ... }``): name -> :class:`ReferenceKind`.
-#: Add a kind by adding an entry (see the README, "Where things go").
+#: Add a kind by adding an entry (see docs/python-api.md, "Where things go").
 REFERENCE_KINDS: dict[str, ReferenceKind] = {
     "sine": ReferenceKind(_SINE_REFERENCE, _single_axis(sine), _single_axis_words("sine"),
                           "sine on one output (paper Fig. 8)"),
@@ -1020,7 +1020,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
          "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
         _circle, lambda s, unit: ["circle", f"radius {words_number(s['radius'], 'µm')}",
                                   words_number(s["frequency"], "Hz")] + _common_words(s, unit),
-        "circle on two outputs (paper Fig. 10-12)"),
+        "circle on two outputs (paper Fig. 10)"),
     "spiral": ReferenceKind(
         {"radius": Field(number("µm", 0), required=True),
          "frequency": Field(number("Hz", 0), required=True),
@@ -1033,12 +1033,12 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
                                   f"decay τ {words_number(s['tau'], 's')} after "
                                   f"{words_number(s.get('circle_periods', 1.0))} circle(s)"]
         + _common_words(s, unit),
-        "circle whose radius decays (paper Fig. 13)"),
+        "circle whose radius decays (paper Fig. 11)"),
     "lissajous": ReferenceKind(
         {"amplitude": Field(_amplitudes, required=True),
          "frequencies": Field(_pair("two positive frequencies [f_x, f_y] [Hz]"), required=True),
          "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
-        _lissajous, _lissajous_words, "Lissajous figure on two outputs",
+        _lissajous, _lissajous_words, "Lissajous figure on two outputs (paper Fig. 12-13)",
         period=_lissajous_period),
     "raster": ReferenceKind(
         {"outputs": Field(name_list(2), required=True),     # [fast, slow]

@@ -126,10 +126,11 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
                      wspace=0.45, hspace=0.35)
         with np.errstate(divide="ignore"):        # exact zeros (decoupled entries): -inf dB
             cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, ax=ax,
-                                     wrap_phase=True, share_magnitude="row",
+                                     wrap_phase=False, share_magnitude="row",
                                      share_phase="row", share_frequency="col")
     suptitle(fig, title)
     fig = cplt.figure
+    _physical_labels(fig, true.input_labels, true.output_labels)
     nyquist = [0.5 / dt for dt in dts]
     for ax in np.ravel(cplt.axes):
         for line in ax.get_lines():
@@ -175,6 +176,37 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
     fig.legend(handles, names, loc="lower center", ncol=len(names), fontsize=8, frameon=False,
                bbox_to_anchor=(0.5, fig.subplotpars.top + 0.3 / H))
     return fig
+
+
+def _physical_labels(fig, inputs, outputs):
+    """Column and row labels in the actuator's words, not python-control's signal names.
+
+    G's inputs are the hysteresis outputs (``x_h``: the displacement the
+    hysteresis alone would give, µm) and its outputs the displacements; its
+    entries are lettered (a), (b), ... row by row.
+    """
+    def words(name):
+        base = name[:-2] if name.endswith("_h") else name
+        return f"hysteresis output {base}_h [µm]" if name.endswith("_h") else f"input {name}"
+
+    cols = {f"From {name}": name for name in inputs}
+    rows = {f"To {name}": name for name in outputs}
+    axes = [ax for ax in fig.axes if ax.get_title() in cols]
+    for ax in axes:
+        ax.set_title(f"from {words(cols[ax.get_title()])}", fontsize=ax.title.get_fontsize())
+    for text in fig.texts:
+        key = text.get_text().strip()
+        if key in rows:
+            text.set_text(f"to displacement {rows[key]} [µm]\n")
+    mags = [ax for ax in fig.axes if ax.get_subplotspec() is not None
+            and ax.get_subplotspec().rowspan.start % 2 == 0]
+    mags.sort(key=lambda a: (a.get_subplotspec().rowspan.start, a.get_subplotspec().colspan.start))
+    m = len(inputs)
+    for k, ax in enumerate(mags):
+        i, j = divmod(k, m)
+        ax.text(0.99, 0.95, f"({chr(ord('a') + k)}) {outputs[i]} from {inputs[j]}",
+                transform=ax.transAxes, fontsize=8, va="top", ha="right",
+                bbox=dict(facecolor="white", edgecolor="none", pad=1.0, alpha=0.85))
 
 
 def measured_bode_figure(identified, frequency_hz, frf, names=None,
@@ -243,6 +275,7 @@ def measured_bode_figure(identified, frequency_hz, frf, names=None,
                                      wrap_phase=True, share_magnitude="row",
                                      share_phase="row", share_frequency="col")
     suptitle(fig, title)
+    _physical_labels(cplt.figure, sys_named.input_labels, sys_named.output_labels)
     for a in np.ravel(cplt.axes):
         for line in a.get_lines():
             if line.get_label() == "measured (H1)":

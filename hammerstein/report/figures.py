@@ -4,7 +4,7 @@
   of abscissa k against output l, lettered (a), (b), ... row by row as in the
   paper's Fig. 5 and 8 ((a) direct x, (b) cross-coupling on x, (c)
   cross-coupling on y, (d) direct y); columns that no curve drives are left
-  out (the letters keep the paper's numbering).
+  out (the panels drawn are lettered in turn, no letter missing).
 * :func:`trajectory_figure`: XY plot with the reference, time plots of the
   displacements and of the input voltages, tracking errors scaled on the
   settled part (Fig. 10-13).
@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 import textwrap
 import threading
 
@@ -342,12 +343,21 @@ def scenario_prefix(scenario):
     Returns
     -------
     str
-        The part of the title before ':' when it is short (``"Fig. 8"``),
-        else the scenario name.
+        ``"Fig. 8"`` for a title that starts with a paper figure number
+        (``"Fig. 8: ..."``), else the whole title when it is at most
+        :data:`PREFIX_CHARS` characters (a ':' in it kept: ``"Stage B: slow
+        scans"`` stays whole), else the scenario name.
     """
-    title = str(getattr(scenario, "title", "") or "")
-    head = title.split(":", 1)[0].strip()
-    return head if ":" in title and 0 < len(head) <= 24 else scenario.name
+    title = " ".join(str(getattr(scenario, "title", "") or "").split())
+    figure = _FIGURE_NUMBER.match(title)
+    if figure:
+        return figure.group(1)
+    return title if 0 < len(title) <= PREFIX_CHARS else scenario.name
+
+
+#: Longest scenario title used whole as the prefix of its figures' titles.
+PREFIX_CHARS = 60
+_FIGURE_NUMBER = re.compile(r"^((?:Fig\.|Figure)\s*\d+[a-z]?)\s*:")
 
 
 def plain_log_labels(axis):
@@ -436,7 +446,7 @@ def loop_grid(curves, x_labels, y_labels, title, direct_label="direct",
     >>> fig = loop_grid([{"label": "ux 50 Hz", "column": 0, "x": u,
     ...                   "outputs": np.vstack([5.8 * u, 0.2 * u])}],
     ...                 ["ux [V]", "uy [V]"], ["x [µm]", "y [µm]"], "open-loop maps")
-    >>> len(fig.axes)   # (a) and (c): no curve drives uy
+    >>> len(fig.axes)   # (a) and (b): no curve drives uy
     2
     >>> plt.close(fig)
     """
@@ -461,7 +471,8 @@ def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="di
 
     Panel (l, k) is output l against abscissa k, lettered row by row as in the
     paper's Fig. 5/6/8: (a) (u_x, x) direct, (b) (u_y, x) cross-coupling, ...
-    The letters follow the full p x m grid even when columns are left out.
+    With columns left out, the panels drawn are lettered (a), (b), ... in turn,
+    so no letter is missing.
 
     Parameters
     ----------
@@ -490,7 +501,8 @@ def decorate_grid(fig, axes, counts, x_labels, y_labels, title, direct_label="di
         for j, k in enumerate(columns):
             ax = axes[l][j]
             kind = direct_label if l == k else cross_label
-            ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {kind}: {y_labels[l].split(' ')[0]} vs "
+            ax.set_title(f"({_LETTERS[(l * len(columns) + j) % 26]}) {kind}: "
+                         f"{y_labels[l].split(' ')[0]} vs "
                          f"{x_labels[k].split(' ')[0]}", fontsize=10, y=1.0)
             ax.set_xlabel(x_labels[k])
             ax.set_ylabel(y_labels[l])

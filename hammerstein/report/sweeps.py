@@ -23,7 +23,8 @@ from hammerstein.report import figures as plots
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
 
-__all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines", "metric_label"]
+__all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines", "metric_label",
+           "compensator_legend"]
 
 
 _LETTERS = "abcdefghijklmnopqrstuvwxyz"
@@ -125,7 +126,48 @@ def _panel_title(spec, channel, k, axis, output_names):
     return f"{'direct' if direct else 'cross-coupling'}: {channel} vs {src}"
 
 
-def sweep_figure(table, spec, output_names, title, metric=None):
+def _compensator_words(c):
+    """A sweep's compensator table in a few words: kind and where its model comes from."""
+    kind = str(c.get("kind", "multivariable"))
+    model = c.get("model", "plant")
+    if model == "identified":
+        f = c.get("identify", {}).get("frequency")
+        where = f"identified at {f:g} Hz" if isinstance(f, (int, float)) else "identified"
+    elif model == "plant":
+        where = "plant's model"
+    else:
+        where = f"model {Path(str(model)).name}"
+    return f"{kind}, {where}"
+
+
+def compensator_legend(spec, results):
+    """Legend words of a sweep's compensator labels (``mv-50Hz`` -> ``multivariable, identified at 50 Hz``).
+
+    Labels whose compensators read the same in words keep their label in
+    brackets, so that the legend tells them apart.
+
+    Parameters
+    ----------
+    spec : hammerstein.scenario.sweeps.SweepSpec
+    results : list of hammerstein.scenario.execute.CaseResult
+
+    Returns
+    -------
+    dict of str to str
+        Label -> words; labels of no case are left out.
+    """
+    label_of = {c["case"]: c["compensator"] for c in spec.cases}
+    words = {}
+    for r in results:
+        label = label_of.get(r.name)
+        if label and label != "-" and label not in words:
+            table = getattr(r.spec, "compensator_spec", None) or {}
+            words[label] = _compensator_words(table)
+    counts = pd.Series(list(words.values())).value_counts() if words else {}
+    return {k: (f"{v} ({k})" if counts[v] > 1 else v) for k, v in words.items()}
+
+
+def sweep_figure(table, spec, output_names, title, metric=None, names=None):
     """Metric against frequency, panel (l, k) = channel l for the excitation on axis k.
 
     The panel rows are the channels holding a value of the metric: the
@@ -143,6 +185,9 @@ def sweep_figure(table, spec, output_names, title, metric=None):
     title : str
     metric : str, optional
         Column to plot (default ``spec.metric``).
+    names : dict of str to str, optional
+        Legend words of the compensator labels (:func:`compensator_legend`);
+        a label without words is shown as written.
 
     Returns
     -------
@@ -183,14 +228,17 @@ def sweep_figure(table, spec, output_names, title, metric=None):
                         transform=ax.transAxes, ha="center", va="center", fontsize=9)
             panel = _panel_title(spec, out, k, axis, output_names)
             ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {panel}", fontsize=10, y=1.0)
-            ax.set_xlabel("frequency [Hz]")
+            ax.set_xlabel("frequency [Hz]" if getattr(spec, "parameter", "frequency") == "frequency"
+                          else str(spec.parameter))
             ax.set_ylabel(f"{what}, {out} [{unit}]" if unit else f"{what}, {out}")
             ax.grid(True, which="major", alpha=0.3)
             ax.grid(True, which="minor", alpha=0.12)
     if named and handles:
         W, H = fig.get_size_inches()
         top = fig.subplotpars.top * H
-        fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=ncol,
+        names = names or {}
+        fig.legend(list(handles.values()), [names.get(k, k) for k in handles],
+                   loc="lower center", ncol=ncol,
                    fontsize=8, frameon=False, bbox_to_anchor=(0.5, (top + 0.3) / H))
     plots.suptitle(fig, title)
     return fig
@@ -279,13 +327,19 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
     for spec in specs:
         table = sweep_table(spec, metrics)
         csv = f"sweep-{spec.name}.csv"
+        swept = getattr(spec, "parameter", "frequency")
+        if swept != "frequency":
+            table = table.rename(columns={"frequency_hz": swept})
         safe_write(directory / csv, table.to_csv(index=False, float_format="%.6g"), "table")
         png = None
         if len(spec.frequencies) > 1:
             png = f"sweep-{spec.name}.png"
+            several = sum(len(s.frequencies) > 1 for s in specs) > 1
             jobs.add(directory / png, sweep_figure, table, spec, outputs,
                      f"{plots.scenario_prefix(scenario)}: {metric_label(spec.metric)} "
-                     f"vs frequency, sweep {spec.name}")
+                     f"vs {getattr(spec, 'parameter', 'frequency')}"
+                     + (f" ({spec.name})" if several else ""),
+                     names=compensator_legend(spec, results))
         n_div = int(table["diverged_at_time"].notna().groupby(
             [table["compensator"], table["axis"], table["frequency_hz"]]).any().sum()) \
             if "diverged_at_time" in table else 0
@@ -295,7 +349,9 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
         what = [f"compensators {', '.join(l or '-' for l in spec.labels)}"]
         if spec.axes != [None]:
             what.append(f"axes {', '.join(str(a) for a in spec.axes)}")
-        if spec.frequencies:
+        if spec.frequencies and getattr(spec, "parameter", "frequency") != "frequency":
+            what.append(f"{spec.parameter} {', '.join(_fmt(f) for f in spec.frequencies)}")
+        elif spec.frequencies:
             what.append(f"frequencies {', '.join(_fmt(f) for f in spec.frequencies)} Hz")
         lines += [f"{len(spec.cases)} cases: {'; '.join(what)}. Table: `{csv}` "
                   f"(long rows also in `metrics.csv`). Diverged cases: {n_div}.", ""]

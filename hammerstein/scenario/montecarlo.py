@@ -1019,7 +1019,7 @@ def execution(workers=None, scheduler=None):
         from distributed import Client, LocalCluster
     except ImportError:
         raise ValueError("--workers/--scheduler need dask.distributed: "
-                         "pip install 'dask[distributed]'") from None
+                         "pip install 'hammerstein-piezo[distributed]'") from None
     logging.getLogger("distributed").setLevel(logging.ERROR)   # one line per problem on stderr
     cluster = None
     if scheduler:

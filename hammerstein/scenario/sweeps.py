@@ -10,6 +10,16 @@ of ``frequencies`` [Hz] (and optionally several compensators side by side)::
     settle_periods = 4
     compensators = { mv-50Hz = { kind = "multivariable" }, per-axis = { kind = "per-axis" } }
 
+``parameter = "<key>"`` with ``values = [...]`` (instead of ``frequencies``)
+sweeps any other numeric key of the template (an amplitude, a radius, a
+Lissajous figure's ``frequencies`` pair, a raster's ``lines``): cases
+``<sweep>-...-<key>-<value>``, the metric drawn against the value (the first
+of a pair).
+
+A reference whose kind has two frequencies (``lissajous``: ``frequencies = [f_x,
+f_y]`` in the template) is swept by scaling both: each swept f sets f_x = f and
+keeps the ratio f_y / f_x, so the figure keeps its shape.
+
 It expands (:func:`expand_sweeps`) into ordinary cases named
 ``<sweep>-<label>-<axis>-<f>Hz`` (``-<label>`` only with ``compensators``,
 ``-<axis>`` only when ``output``/``input`` is a list), so ``metrics.csv``
@@ -48,6 +58,7 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.compensators import check_reference_range
+from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import HammersteinError
 from hammerstein.core.stability import stability_map
 from hammerstein.scenario.execute import chain_result, fade_samples, run_case, runs_alone
@@ -92,7 +103,12 @@ class SweepSpec:
     description : str
         The sweep's ``description`` key (empty when absent).
     cases : list of dict
-        ``{case, compensator, axis, frequency_hz}`` per expanded case.
+        ``{case, compensator, axis, frequency_hz}`` per expanded case
+        (``frequency_hz`` holds the swept value of a ``parameter`` sweep).
+    parameter : str
+        The swept key of the signal template: ``"frequency"`` for a
+        ``frequencies`` sweep, else the sweep's ``parameter``; then
+        ``frequencies`` holds its ``values`` (the first of a pair).
     """
 
     name: str
@@ -103,6 +119,7 @@ class SweepSpec:
     metric: str = "rms_error"
     description: str = ""
     cases: list = field(default_factory=list)
+    parameter: str = "frequency"
 
 
 def _frequencies(v):
@@ -114,6 +131,24 @@ def _frequencies(v):
             raise Invalid(f"expected distinct frequencies [Hz], found duplicates in {v!r}")
         return [float(f) for f in v]
     raise Invalid(f"expected a non-empty list of positive frequencies [Hz], found {short_repr(v)}")
+
+
+def _values(v):
+    def ok(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool) and np.isfinite(x)
+    if (isinstance(v, list) and v and all(ok(x) or (isinstance(x, list) and x and all(map(ok, x)))
+                                          for x in v)):
+        if len(v) > MAX_SWEEP_FREQUENCIES:
+            raise Invalid(f"expected at most {MAX_SWEEP_FREQUENCIES} values, found {len(v)}")
+        if len({repr(x) for x in v}) != len(v):
+            raise Invalid(f"expected distinct values, found duplicates in {short_repr(v)}")
+        return v
+    raise Invalid(f"expected a non-empty list of numbers (or of lists of numbers, for a key "
+                  f"such as frequencies = [f_x, f_y]), found {short_repr(v)}")
+
+
+#: Keys of a signal template that a parameter sweep may not vary (not numbers).
+_NOT_SWEPT = {"kind", "output", "outputs", "input", "file", "columns", "time", "slow"}
 
 
 def _labelled_tables(v):
@@ -132,6 +167,8 @@ _OWN = {
     "name": Field(name_field(), required=True),
     "description": Field(string()),
     "frequencies": Field(_frequencies),
+    "parameter": Field(string()),            # another numeric key of the template ...
+    "values": Field(_values),                # ... and its values
     "compensators": Field(_labelled_tables),
     "metric": Field(choice(*UNITS), default="rms_error"),  # a metric the cases compute
 }
@@ -188,31 +225,89 @@ def expand_sweeps(sweeps, source, problems):
             problems.append(f"{source}: {where}.{mode}: expected a table, found {sig!r}")
             continue
         freqs = clean.get("frequencies")
-        if freqs is None and not clean.get("compensators"):
+        parameter = clean.get("parameter")
+        if (parameter is None) != (clean.get("values") is None):
+            problems.append(f"{source}: {where}: expected parameter = \"<key>\" and values = "
+                            f"[...] together")
+            continue
+        if parameter is not None:
+            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(sig.get("kind"))
+            keys = sorted(k for k in (kind.fields if kind is not None else {})
+                          if k not in _NOT_SWEPT)
+            if freqs is not None:
+                problems.append(f"{source}: {where}: expected frequencies = [...] or parameter "
+                                f"= ... with values = [...], not both")
+                continue
+            if kind is not None and parameter not in keys:
+                problems.append(f"{source}: {where}.parameter: {short_repr(parameter)} is not a "
+                                f"numeric key of a {sig.get('kind')} {mode}; expected one of "
+                                f"{', '.join(keys)}")
+                continue
+            if parameter in sig:
+                problems.append(f"{source}: {where}.{mode}.{parameter}: given by the sweep's "
+                                f"values; remove it from the template")
+                continue
+        if freqs is None and parameter is None and not clean.get("compensators"):
             problems.append(f"{source}: {where}: expected frequencies = [...] [Hz], "
                             f"compensators = {{ label = {{...}} }}, or both")
             continue
-        if freqs is not None and ("frequency" in sig or "frequencies" in sig):
-            problems.append(f"{source}: {where}.{mode}.frequency: given by the sweep's "
-                            f"frequencies; remove it from the template")
-            continue
+        scale_pair = False      # a Lissajous-like kind: frequencies = [f_1, f_2] scaled to f_1 = f
+        if freqs is not None:
+            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(sig.get("kind"))
+            keys = kind.fields if kind is not None else {"frequency": None}
+            if "frequency" in keys:
+                if "frequency" in sig:
+                    problems.append(f"{source}: {where}.{mode}.frequency: given by the sweep's "
+                                    f"frequencies; remove it from the template")
+                    continue
+            elif "frequencies" in keys:
+                pair = sig.get("frequencies")
+                if not (isinstance(pair, list) and len(pair) == 2
+                        and all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
+                                for x in pair)):
+                    problems.append(f"{source}: {where}.{mode}.frequencies: expected the figure's "
+                                    f"two frequencies [f_1, f_2] [Hz] in the template; each swept "
+                                    f"frequency f replaces f_1 and scales f_2 with it (the ratio "
+                                    f"f_2/f_1 is kept), found {short_repr(pair)}")
+                    continue
+                scale_pair = True
+            else:
+                problems.append(f"{source}: {where}.frequencies: a {sig.get('kind')} {mode} has no "
+                                f"frequency to sweep; compare compensators on it with "
+                                f"compensators = {{ ... }} and no frequencies")
+                continue
         axis_key = "output" if mode == "reference" else "input"
         axes = sig.get(axis_key)
         axes = axes if isinstance(axes, list) and axes else [axes]
         comps = clean.get("compensators")
         labels = list(comps) if comps else [None]
         template = {k: copy.deepcopy(raw[k]) for k in case_keys if k in raw}
-        spec = SweepSpec(clean["name"], mode, freqs or [], labels,
-                         axes, clean["metric"], clean.get("description", ""))
+        values = clean.get("values")
+        first = [v[0] if isinstance(v, list) else v for v in values] if values else None
+        spec = SweepSpec(clean["name"], mode, freqs or first or [], labels,
+                         axes, clean["metric"], clean.get("description", ""),
+                         parameter=parameter or "frequency")
         for label in labels:
             for axis in axes:
-                for f in freqs or [None]:
+                for n, f in enumerate(freqs or values or [None]):
+                    if values is not None:
+                        shown = "x".join(_fmt(x) for x in f) if isinstance(f, list) else _fmt(f)
+                        tail = [f"{parameter}-{shown}"]
+                    else:
+                        tail = [f"{_fmt(f)}Hz"] if f is not None else []
                     parts = [clean["name"]] + ([label] if label else []) + \
-                            ([str(axis)] if len(axes) > 1 else []) + \
-                            ([f"{_fmt(f)}Hz"] if f is not None else [])
+                            ([str(axis)] if len(axes) > 1 else []) + tail
                     case = copy.deepcopy(template)
                     case["name"] = "-".join(parts)
-                    case[mode] = dict(sig) if f is None else {**sig, "frequency": f}
+                    if values is not None:
+                        case[mode] = {**sig, parameter: f}
+                    elif f is None:
+                        case[mode] = dict(sig)
+                    elif scale_pair:
+                        f1, f2 = sig["frequencies"]
+                        case[mode] = {**sig, "frequencies": [f, f * (f2 / f1)]}
+                    else:
+                        case[mode] = {**sig, "frequency": f}
                     if axis is not None:
                         case[mode][axis_key] = axis
                     if label:  # merged into the template's override like any case override
@@ -220,10 +315,11 @@ def expand_sweeps(sweeps, source, problems):
                         same = comps[label].get("kind", base.get("kind")) == base.get("kind")
                         case["compensator"] = {**base, **comps[label]} if same else dict(comps[label])
                     entries.append((f"{where}({case['name']})", case))
+                    swept = first[n] if values is not None else f
                     spec.cases.append({"case": case["name"], "compensator": label or "-",
                                        "axis": "-" if axis is None else str(axis),
                                        "frequency_hz": sig.get("frequency", np.nan)
-                                       if f is None else f})
+                                       if swept is None else swept})
         specs.append(spec)
     return entries, specs
 

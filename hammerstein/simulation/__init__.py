@@ -59,6 +59,10 @@ array([[0. , 2. , 1. ],
        [0. , 1.5, 1.5]])
 """
 
+from hammerstein._cache import use_user_numba_cache
+
+use_user_numba_cache()  # before numba loads: compiled kernels go to the user's cache directory
+
 from hammerstein.simulation._packing import (LANES, ChainState, CompensatorLaw, LawArrays,
                                              LinearArrays, PackedModel, PIArrays,
                                              compensator_law_of, finite_array, identity_filter,

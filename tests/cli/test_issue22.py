@@ -1060,10 +1060,10 @@ def test_column_options_are_one_definition():
     def options(command):
         return {a.option_strings[0]: (a.dest, a.metavar, a.default, a.required, a.nargs)
                 for a in sub[command]._actions if a.option_strings
-                and a.option_strings[0] in ("--time", "--inputs", "--outputs")}
+                and a.option_strings[0] in ("--time", "--input-columns", "--output-columns")}
     expected = {"--time": ("time", "COL", "t", False, None),
-                "--inputs": ("inputs", "NAME=COL,...", None, False, None),
-                "--outputs": ("outputs", "NAME=COL,...", None, False, None)}
+                "--input-columns": ("inputs", "NAME=COL,...", None, False, None),
+                "--output-columns": ("outputs", "NAME=COL,...", None, False, None)}
     for command in ("compensate", "learn", "evaluate"):
         assert options(command) == expected, command
 

@@ -43,7 +43,7 @@ def test_simulation_never_imports_core_or_higher_layers():
     for path in _files("simulation"):
         for module, _ in _imports(path):
             if module.startswith("hammerstein"):
-                assert (module == "hammerstein.exceptions"
+                assert (module in ("hammerstein.exceptions", "hammerstein._cache")   # leaves
                         or module.startswith("hammerstein.simulation")), (path.name, module)
 
 

@@ -20,7 +20,7 @@ from hammerstein.export.fmu import build_fmu, find_compiler, platform_folder
 from conftest import needs_cc
 from test_c_equivalence import T, build, circle, python_voltages, raster, rel_error, within
 
-fmpy = pytest.importorskip("fmpy", reason="fmpy (test extra) is needed to simulate the FMU")
+fmpy = pytest.importorskip("fmpy", reason="fmpy (extra [export]) is needed to simulate the FMU")
 validate_fmu = pytest.importorskip("fmpy.validation").validate_fmu
 
 

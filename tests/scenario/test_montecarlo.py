@@ -41,6 +41,10 @@ damping_ratio = { relative_sd = 0.2 }
 noise = { sd = 0.05 }"""
 
 
+#: Why the dask tests skip when the extra is not installed.
+_NO_DASK = "dask.distributed (extra [distributed]) is not installed"
+
+
 def _study(tmp_path, vary=VARY, name="s.toml"):
     f = tmp_path / name
     f.write_text(STUDY.format(vary=vary))
@@ -165,7 +169,7 @@ def local_result(study):
 @pytest.fixture(scope="module")
 def clusters():
     """In-process LocalCluster of n single-threaded workers, created once per n."""
-    distributed = pytest.importorskip("distributed")
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
     made = {}
 
     def get(n):
@@ -181,7 +185,7 @@ def clusters():
 
 @pytest.mark.parametrize("n_workers, chunk", [(1, None), (2, None), (2, 2), (1, 7), (2, 1)])
 def test_dask_in_process_cluster_is_bit_identical(study, local_result, clusters, n_workers, chunk):
-    distributed = pytest.importorskip("distributed")
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
     with distributed.Client(clusters(n_workers)) as client:
         assert len(client.nthreads()) == n_workers
         remote = mc.run_study(study, client=client, chunk=chunk)
@@ -192,7 +196,7 @@ def test_dask_in_process_cluster_is_bit_identical(study, local_result, clusters,
 
 def test_dask_histogram_results_are_compact_and_equal_the_local_histogram(
         study, clusters, monkeypatch):
-    distributed = pytest.importorskip("distributed")
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
     monkeypatch.setattr(mc, "EXACT_VALUES", 0)       # workers return int16 bins, not values
     local = mc.run_study(study, chunk=7)
     start, (bins, mx, div) = mc._remote_chunk(study, 2, 5, False)
@@ -287,7 +291,7 @@ def test_cli_rejects_bad_worker_options(tmp_path, capsys, args):
 
 def test_cli_unreachable_scheduler_is_one_line(tmp_path, capsys, monkeypatch):
     from hammerstein.cli.main import main
-    pytest.importorskip("distributed")
+    pytest.importorskip("distributed", reason=_NO_DASK)
     monkeypatch.setattr(mc, "SCHEDULER_TIMEOUT_S", 1)      # the same failure, 9 s sooner
     f = tmp_path / "s.toml"
     f.write_text(STUDY.format(vary=""))
@@ -337,7 +341,7 @@ def test_cli_on_a_scheduler_and_two_workers_started_by_hand(tmp_path):
     from pathlib import Path
     import hammerstein
     from hammerstein.cli.main import main
-    pytest.importorskip("distributed")
+    pytest.importorskip("distributed", reason=_NO_DASK)
     # this interpreter's dask (python -m, not a `dask` script that may belong to another
     # Python), this checkout's hammerstein, loopback only
     root = str(Path(hammerstein.__file__).resolve().parents[1])

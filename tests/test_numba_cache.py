@@ -1,0 +1,36 @@
+"""numba's compiled kernels go to the user's cache directory, never the source tree."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from hammerstein._cache import numba_cache_dir
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_default_is_the_users_cache_directory(monkeypatch, tmp_path):
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setenv("HOME", str(tmp_path))
+    assert numba_cache_dir() == str(tmp_path / ".cache" / "hammerstein" / "numba")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert numba_cache_dir() == str(tmp_path / "xdg" / "hammerstein" / "numba")
+    monkeypatch.setenv("XDG_CACHE_HOME", "relative/not/allowed")
+    assert numba_cache_dir() == str(tmp_path / ".cache" / "hammerstein" / "numba")
+
+
+def test_the_users_own_setting_wins(monkeypatch, tmp_path):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "mine"))
+    assert numba_cache_dir() == str(tmp_path / "mine")
+
+
+def test_loading_the_kernels_sets_numba_to_the_user_cache(tmp_path):
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME")}
+    env["HOME"] = str(tmp_path)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    code = ("import hammerstein.simulation, numba.core.config as c; print(c.CACHE_DIR)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, timeout=120, check=True).stdout.strip()
+    assert out == str(tmp_path / ".cache" / "hammerstein" / "numba")
