@@ -34,6 +34,7 @@ import pytest  # noqa: E402
 
 from hammerstein import InverseMultiplicativeCompensator, load_plant  # noqa: E402
 from hammerstein import simulation as sim  # noqa: E402
+from hammerstein.cli.warmup import warm_up  # noqa: E402
 
 #: the repository root (scenarios/, baselines/, tests/corpus/ live below it)
 ROOT = Path(__file__).resolve().parents[1]
@@ -89,6 +90,7 @@ def compiled_kernels():
     count stderr lines would otherwise see that line in whichever test happens to
     compile first; compiling here, outside any CLI run, keeps them deterministic.
     """
+    warm_up()      # what `hammerstein warmup` compiles: every kernel the commands reach
     plant = load_plant("rakotondrabe-2dof", dynamics=True)
     static = load_plant("rakotondrabe-2dof", dynamics=False)
     model = plant.hysteresis

@@ -60,6 +60,9 @@ EXAMPLES = {
         "'{ kind = \"circle\", radius = 30, frequency = 100, periods = 20 }' "
         "--drive drive.csv --measured measured.csv --out drive-1.csv --history ilc/",
     ],
+    "warmup": [
+        "hammerstein warmup          # once after installing: the first run then compiles nothing",
+    ],
 }
 
 

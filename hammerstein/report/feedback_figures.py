@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.core.files import safe_write
 from hammerstein.report import figures as plots
 from hammerstein.report.tables import markdown_table, metrics_frame
 from hammerstein.scenario.feedback import MODE_LABELS
@@ -174,15 +175,17 @@ def write_feedback_report(scenario, results, directory, jobs):
         Receives the figures.
     """
     directory = Path(directory)
-    metrics_frame(results).to_csv(directory / "metrics.csv", index=False)
+    safe_write(directory / "metrics.csv", metrics_frame(results).to_csv(index=False), "metrics table")
     table = error_table(results)
-    table.to_csv(directory / "feedback-errors.csv", index=False)
+    safe_write(directory / "feedback-errors.csv", table.to_csv(index=False), "error table")
     for sweep in dict.fromkeys(table["sweep"]):
         if sweep != "cases":
-            table[table["sweep"] == sweep].to_csv(directory / f"sweep-{sweep}.csv", index=False)
+            safe_write(directory / f"sweep-{sweep}.csv",
+                       table[table["sweep"] == sweep].to_csv(index=False), "sweep table")
     for r in results:                    # the cases outside sweeps: their time series
         if r.case.sweep is None:
-            _timeseries(r).to_csv(directory / f"timeseries-{r.name}.csv", index=False)
+            safe_write(directory / f"timeseries-{r.name}.csv", _timeseries(r).to_csv(index=False),
+                       "time series")
     a = scenario.analysis
     t = scenario.table
     s = t.get("sensor", {})
@@ -232,4 +235,4 @@ def write_feedback_report(scenario, results, directory, jobs):
               f"{len(results)} runs, {tm['samples']} samples in {tm['wall_s']:.2f} s of wall "
               f"time ({tm['kernel_s'] / max(tm['samples'], 1) * 1e6:.2f} µs per sample in "
               f"the kernel).", ""]
-    (directory / "report.md").write_text("\n".join(lines), encoding="utf-8")
+    safe_write(directory / "report.md", "\n".join(lines), "report")

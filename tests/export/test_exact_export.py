@@ -220,7 +220,7 @@ def test_cli_exports_a_model_file_of_every_class_with_defaults(factory, tmp_path
     assert main(["export", str(path), "--target", "c", "--out", str(out), "--name", "m",
                  "--sampling-period", repr(T)]) == 0
     err = capsys.readouterr().err
-    assert "--kind preisach-inverse" in err
+    assert "kind = preisach-inverse" in err
     comp = PreisachInverseCompensator(model)
     h = Harness(export_c(comp, "m", T), tmp_path / "h")
     assert (out / "m.c").read_text().split("\n", 1)[1] == h.code.source.split("\n", 1)[1]
