@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.files import (FileLimitError, bounded_read_bytes, bounded_read_text,
-                                    provenance_line, safe_write)
+                                    escape, provenance_line, safe_write)
 from hammerstein.exceptions import BaselineError
 
 __all__ = [
@@ -263,12 +263,19 @@ def _normalise(frame, name):
     out = out[BASELINE_COLUMNS]
     for col in ("scenario", "case", "channel", "metric", "unit"):
         out[col] = out[col].fillna("").astype(str)
+    text = out["value"].astype(str).str.strip().str.lower()
+    if pd.api.types.is_bool_dtype(out["value"]) or text.isin(["true", "false"]).any():
+        i = int(np.flatnonzero(text.isin(["true", "false"]).to_numpy())[0])
+        raise BaselineError(f"{name}: value: expected a number, found the boolean "
+                            f"{str(out['value'].iloc[i])!r} (row {i + 1}, metric "
+                            f"{escape(out['metric'].iloc[i], 60)})")
     values = pd.to_numeric(out["value"], errors="coerce")
-    bad = values.isna() & out["value"].notna() & (out["value"].astype(str).str.lower() != "nan")
+    bad = values.isna() & out["value"].notna() & (text != "nan")
     if bad.any():
         i = int(np.flatnonzero(bad.to_numpy())[0])
-        raise BaselineError(f"{name}: value: expected a number, found {out['value'].iloc[i]!r} "
-                            f"(row {i + 1}, metric {out['metric'].iloc[i]})")
+        raise BaselineError(f"{name}: value: expected a number, found "
+                            f"{escape(repr(out['value'].iloc[i]), 60)} (row {i + 1}, metric "
+                            f"{escape(out['metric'].iloc[i], 60)})")
     out["value"] = values.astype(float)
     dup = out.duplicated(KEY_COLUMNS)
     if dup.any():

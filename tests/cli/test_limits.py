@@ -461,3 +461,17 @@ def test_a_period_outside_the_reference_is_refused(command, period, tmp_path, mo
     line = _one_clean_line(err)
     assert status == 1 and "--period" in line, line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ref.csv"]
+
+
+@pytest.mark.parametrize("value, words", [("True", "the boolean 'True'"),
+                                          ("z" * 150_000, "more characters")])
+def test_check_refuses_a_boolean_or_huge_baseline_value(value, words, tmp_path, capsys):
+    # a True value was read as 1
+    base = tmp_path / "base.csv"
+    base.write_text(f"scenario,case,channel,metric,value,unit\ngood-static,c,x,rms_error,"
+                    f"{value},µm\n")
+    scenario = Path(__file__).parents[1] / "corpus" / "good" / "good-static.toml"
+    status, _, err, _ = _run(["check", str(scenario), "--baseline", str(base), "-q"], capsys)
+    line = _one_clean_line(err)
+    assert status == 2 and "base.csv: value: expected a number" in line and words in line, line
+    assert len(line) < 400
