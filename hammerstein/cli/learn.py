@@ -22,7 +22,8 @@ fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
 
 Everything is judged on the settled part: the printed max and RMS
 Euclidean errors start after the fade-in and ``--settle-periods`` (the
-start-up no drive removes), and the fade-in itself is not learnt (the next
+start-up no drive removes), for a repeating reference not before its
+repeating part (two periods after the fade-in), and the fade-in itself is not learnt (the next
 drive keeps the base drive's fade-in and blends into the learning over the
 next period, :func:`hammerstein.core.drive.keep_start`), so every drive
 starts at rest as the first one did. An amplifier table measured on the
@@ -461,14 +462,16 @@ def _handle(args):
         if delay >= N - 1:
             raise DataFileError(f"--delay: {delay} samples; expected fewer than the record's {N - 1}")
         # the settled window: after the fade-in and --settle-periods (the start-up no drive removes)
+        P = ref.period_samples if ref.period_samples > 1 else None
+        steady = repeating_from(target, P, fade)
         settle = fade + int(args.settle_periods * ref.period_samples)
+        if steady is not None:        # the repeating part the trial is judged on
+            settle = max(settle, steady)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(target[:, :N - delay], shifted, window)
         euclid = np.linalg.norm(target[:, :N - delay][:, window] - shifted[:, window], axis=0)
         settled_max, settled_rms = float(np.max(euclid)), float(np.sqrt(np.mean(euclid ** 2)))
-        P = ref.period_samples if ref.period_samples > 1 else None
-        steady = repeating_from(target, P, fade)
         # the best trial so far (--history): a trial more than 10 % worse is not learnt from
         state = _read_state(args.history, N) if args.history else None
         score, score_noise = _judged_error(target, y, delay, P, steady)

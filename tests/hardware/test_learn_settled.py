@@ -54,7 +54,7 @@ def test_learn_judges_the_settled_part_and_never_says_monotonic_when_it_rose(tmp
     assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
                 cwd=tmp_path).returncode == 0
     fade = drive_fade_samples(tmp_path / "u0.csv")
-    settled = (fade + P) * T                               # s: after the fade-in and one period
+    settled = (fade + 2 * P) * T                           # s: the repeating part, 2 periods on
     # trial 0: plain; trial 1: a 20 µm error during the fade-in only, settled part as learnt
     _measure(tmp_path / "u0.csv", tmp_path / "y0.csv")
     out0 = _learn(0, tmp_path)
