@@ -477,9 +477,14 @@ def _state_regressors(A, C, u):
         for i in range(n):
             for b in range(m):
                 W[i, b] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], u[b].astype(complex))
-        RB = np.einsum("pi,ia,ibk->kpab", CV, Vinv, W).real.reshape(N, p, n * m)
+        # the sums over the modes i as matrix products (BLAS) instead of einsum's loops:
+        # RB[k, p, a, b] = sum_i CV[p, i] Vinv[i, a] W[i, b, k], R0[k, p, a] = sum_i
+        # CV[p, i] Vinv[i, a] lam_i^k
+        M = (CV[:, None, :] * Vinv.T[None, :, :]).reshape(p * n, n)           # (p a, i)
+        RB = (M @ W.reshape(n, m * N)).real.reshape(p, n, m, N)
+        RB = np.ascontiguousarray(RB.transpose(3, 0, 1, 2)).reshape(N, p, n * m)
         powers = lam[:, None] ** np.arange(N)[None, :]
-        R0 = np.einsum("pi,ik,ia->kpa", CV, powers, Vinv).real
+        R0 = np.ascontiguousarray((M @ powers).real.reshape(p, n, N).transpose(2, 0, 1))
         return RB, R0
     RB = np.empty((N, p, n * m))
     R0 = np.empty((N, p, n))

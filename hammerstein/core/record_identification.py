@@ -640,15 +640,15 @@ class _LeastSquares:
             upper.append([np.inf])
         if not cols:
             return [None] * self.m, float(np.mean(target)), float(np.std(target))
-        X = np.column_stack(cols)
         lo, hi = np.concatenate(lower), np.concatenate(upper)
-        # hi is +inf throughout; the tall problem reduced to its n x n factor first
-        R, c, _ = r_factor(X, target)
+        # hi is +inf throughout; the tall problem reduced to its n x n factor first (from the
+        # column blocks: the tall matrix is never stacked), ||X c - t||^2 = ||R c - q||^2 + rho^2
+        R, c, rho = r_factor(cols, target)
         if np.all(np.isinf(lo)):
             coef, *_ = scipy.linalg.lstsq(R, c)
         else:
             coef = bounded_lstsq(R, c, lo)
-        rms = float(np.sqrt(np.mean((target - X @ coef) ** 2)))
+        rms = float(np.sqrt(max(np.sum((R @ coef - c) ** 2) + rho ** 2, 0.0) / target.size))
         comps = [None] * self.m
         i = 0
         for k, kind, n, transform in layout:
