@@ -9,7 +9,7 @@ For the bundled preset (paper's 2x2 model, 15 hysterons per component, T =
    update (p * m * n = 60 hysterons per sample) and samples per second;
 2. the wall time of 1 s of the full compensator -> multivariable PI ->
    linear dynamics chain through the fused kernel, through python-control
-   (``input_output_response`` of :func:`hammerstein.core.interop.chain_system`,
+   (``input_output_response`` of :func:`hammerstein.io.interop.chain_system`,
    run on a shorter record and scaled) and through the per-sample numpy
    loop (``backend='numpy'``), with the ratios;
 3. the kernels' compile time, cold (empty temporary ``NUMBA_CACHE_DIR``) and
@@ -115,7 +115,7 @@ def main(argv=None):
     import numba
     import hammerstein as hs
     from hammerstein import simulation as sim
-    from hammerstein.core.interop import chain_system
+    from hammerstein.io.interop import chain_system
 
     plant = hs.load_plant("rakotondrabe-2dof")
     model = plant.hysteresis

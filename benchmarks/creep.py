@@ -33,9 +33,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_actuators import AMPLITUDE, ROOT, _cli, _play  # noqa: E402
 
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator  # noqa: E402
-from hammerstein.core.presets import load_creep, load_dynamics, load_model, load_plant  # noqa: E402
-from hammerstein.core.references import raster  # noqa: E402
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator  # noqa: E402
+from hammerstein.io.presets import load_creep, load_dynamics, load_model, load_plant  # noqa: E402
+from hammerstein.signals.references import raster  # noqa: E402
 
 HOLD_S, EDGE_S, STEP_UM = 2.0, 0.05, 30.0
 

@@ -39,8 +39,8 @@ sys.path.insert(0, str(ROOT))
 from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,  # noqa: E402
                          PerAxisInverseCompensator, PrandtlIshlinskii, StaticGainCompensator,
                          diagonal_compensator)
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator  # noqa: E402
-from hammerstein.core.presets import load_plant  # noqa: E402
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator  # noqa: E402
+from hammerstein.io.presets import load_plant  # noqa: E402
 from hammerstein.export import export_c  # noqa: E402
 from hammerstein.export.fmu import find_compiler  # noqa: E402
 

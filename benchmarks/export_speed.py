@@ -40,9 +40,9 @@ sys.path.insert(0, str(ROOT / "tests" / "export"))
 
 from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,  # noqa: E402
                          PrandtlIshlinskii)
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator  # noqa: E402
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator  # noqa: E402
-from hammerstein.core.presets import load_plant  # noqa: E402
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator  # noqa: E402
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator  # noqa: E402
+from hammerstein.io.presets import load_plant  # noqa: E402
 from hammerstein.export import export_c  # noqa: E402
 from hammerstein.export.build import build_compensator, default_kind, load_source  # noqa: E402
 from hammerstein.export.fmu import find_compiler  # noqa: E402

@@ -55,8 +55,8 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from hammerstein.core.dynamics import bending_modes, discretize  # noqa: E402
-from hammerstein.core.references import raster_line_index  # noqa: E402
+from hammerstein.models.dynamics import bending_modes, discretize  # noqa: E402
+from hammerstein.signals.references import raster_line_index  # noqa: E402
 from hammerstein.report import figures as plots  # noqa: E402
 from hammerstein.report import model_figures  # noqa: E402
 from hammerstein.report.dynamics_figure import dynamics_bode_figure  # noqa: E402

@@ -29,9 +29,9 @@ import warnings
 
 import numpy as np
 
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.io.presets import load_plant
 from hammerstein.simulation import simulate_chain
 
 

@@ -69,7 +69,7 @@ def run(tree, args, cwd):
 
 def records(work, plant_spec, seed=5):
     """The excitation records through the plant (written once): {kind: [paths]}."""
-    from hammerstein.core.presets import load_plant
+    from hammerstein.io.presets import load_plant
 
     rec = work / "records"
     if not (rec / "creep-uy.csv").exists():

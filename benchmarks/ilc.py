@@ -29,10 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.core import references as refs
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.ilc import LearningCompensator
-from hammerstein.core.presets import load_dynamics, load_plant
+from hammerstein.signals import references as refs
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.ilc import LearningCompensator
+from hammerstein.io.presets import load_dynamics, load_plant
 from hammerstein.scenario.registry import build_compensator
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -110,7 +110,7 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
     import sys
     import tempfile
 
-    from hammerstein.core.presets import load_model
+    from hammerstein.io.presets import load_model
     rng = np.random.default_rng(7)
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp)
@@ -194,9 +194,9 @@ def through_files(args):
     from hammerstein.cli._hardware import load_reference
     from hammerstein.cli.learn import _fade_of
     from hammerstein.cli.main import main as cli
-    from hammerstein.core.drive import read_signals
-    from hammerstein.core.hammerstein_compensator import fade_in
-    from hammerstein.core.presets import dynamics_to_table, read_toml, save_model
+    from hammerstein.compensation.drive import read_signals
+    from hammerstein.compensation.hammerstein_compensator import fade_in
+    from hammerstein.io.presets import dynamics_to_table, read_toml, save_model
     name = args.actuator
     plant = load_plant(name if name == "realistic-2dof" else ROOT / f"scenarios/presets/{name}.toml")
     T = plant.sampling_period

@@ -499,7 +499,7 @@ def bending_modes(rng, p, T=5e-5):
 def zpetc_like_prefilter(rng, p, window=4):
     """A reference pre-filter shaped like a Hammerstein compensator's ZPETC inverse of G.
 
-    :meth:`hammerstein.core.inversion.ZPETCInverse.state_space` of the bundled
+    :meth:`hammerstein.compensation.inversion.ZPETCInverse.state_space` of the bundled
     2x2 plant: a shift register of the ``window - 1`` past reference samples
     (p each) plus one acceptable-mode state per output (a stable pole), taps
     on the window (``Cf``, ``Df``) and on the modes' input; ``p * window``

@@ -39,7 +39,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_actuators import AMPLITUDE, ROOT, _cli, _play  # noqa: E402
 
-from hammerstein.core.presets import load_plant  # noqa: E402
+from hammerstein.io.presets import load_plant  # noqa: E402
 
 KINDS = {
     "multivariable": 'kind = "multivariable", gain = "midpoint", check = "warn"',

@@ -33,7 +33,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from real_actuators import AMPLITUDE, ROOT, _cli, _minor_loops, _play  # noqa: E402
 
-from hammerstein.core.presets import load_model, load_plant, read_toml  # noqa: E402
+from hammerstein.io.presets import load_model, load_plant, read_toml  # noqa: E402
 
 
 def run_plant(spec, work, rng):

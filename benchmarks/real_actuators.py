@@ -45,9 +45,9 @@ import numpy as np
 
 from types import SimpleNamespace
 
-from hammerstein.core.lti import dc_gain, modal_parameters
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_model, load_plant, read_toml
+from hammerstein.models.lti import dc_gain, modal_parameters
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import load_model, load_plant, read_toml
 
 ROOT = Path(__file__).resolve().parents[1]
 NOISE_UM = 0.04

@@ -155,7 +155,7 @@ def drive_checks(u, fade, period, lo, hi):
 
 
 #: the settled part starts this many periods after the fade-in: the repeating part `learn`
-#: judges (two periods after the fade-in, hammerstein.core.ilc.repeating_from); the first period
+#: judges (two periods after the fade-in, hammerstein.compensation.ilc.repeating_from); the first period
 #: after the fade still carries the start-up (hysteresis memory, dynamics, creep)
 START_PERIODS = 2
 
@@ -211,7 +211,7 @@ def one_actuator(name, act, work, quick, log):
     hammerstein("compensate", "preset.toml", "--reference", spec, "--out", out.name, cwd=d)
     t, u, fade = read_drive(out)
     y = act.simulate(u, rng=rng)
-    from hammerstein.core.references import raster      # the reference as the command generates it
+    from hammerstein.signals.references import raster      # the reference as the command generates it
     ref = raster(T, [40, 40], 8, 50.0)[1][:, :u.shape[1]]
     P = int(round(1 / 50 / T))
     mx, rms = settled_error(ref, y, fade, P, 20.0)
@@ -262,7 +262,7 @@ def records_range(d):
 
 def rescore(name, act, work, quick, log):
     """:func:`one_actuator` on the files an earlier run left (no command run again)."""
-    from hammerstein.core.references import raster
+    from hammerstein.signals.references import raster
     d = Path(work) / name
     if not (d / "u9.csv").is_file():
         raise RuntimeError(f"{d}: no complete earlier run")

@@ -24,11 +24,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from hammerstein import load_plant
-from hammerstein.core.feedback import (AmplifierLimits, FeedbackLoop, Sensor, design_axis,
+from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, design_axis,
                                        diagonal_controller, linearised_plant)
-from hammerstein.core.metrics import steady_window
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.references import circle
+from hammerstein.signals.metrics import steady_window
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.signals.references import circle
 
 warnings.simplefilter("ignore")          # python-control's numerical notes on high-order loops
 plant = load_plant("realistic-2dof")

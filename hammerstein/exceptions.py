@@ -193,4 +193,4 @@ class AmplifierWarning(HammersteinWarning):
 
 class FeedbackError(HammersteinError, ValueError):
     """A feedback controller, sensor or loop that cannot be designed, discretised or run
-    (:mod:`hammerstein.core.feedback`; the message names the key and why)."""
+    (:mod:`hammerstein.compensation.feedback`; the message names the key and why)."""

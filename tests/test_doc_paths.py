@@ -44,10 +44,10 @@ def _resolves(dotted):
 
 
 @pytest.mark.parametrize("dotted, expected", [
-    ("hammerstein.core.presets.save_model", True),
+    ("hammerstein.io.presets.save_model", True),
     ("hammerstein.scenario.validate.CaseSpec.identified", True),     # a dataclass field
     ("hammerstein.presets.save_model", False),                       # a module that moved
-    ("hammerstein.core.presets.no_such_function", False),
+    ("hammerstein.io.presets.no_such_function", False),
     ("hammerstein.inverse", False),
 ])
 def test_the_resolver_tells_moved_names_from_real_ones(dotted, expected):

@@ -69,7 +69,7 @@ CALLABLES = list(_public_callables())
 
 def test_the_walk_finds_the_public_api():
     names = {n for n, _ in CALLABLES}
-    for expected in ("hammerstein.core.hysteresis.MultivariablePI",
+    for expected in ("hammerstein.models.hysteresis.MultivariablePI",
                      "hammerstein.simulation.simulate_chain",
                      "hammerstein.runner.run_scenario"):
         assert any(n.endswith("." + expected.rsplit(".", 1)[1]) for n in names), expected

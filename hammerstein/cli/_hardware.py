@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import add_column_options, number_type
-from hammerstein.core.drive import DRIVE_MARK, read_signals
-from hammerstein.core.amplifier import amplifier_from_table
+from hammerstein.compensation.drive import DRIVE_MARK, read_signals
+from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_dynamics, load_model, load_plant, read_toml, resolve_preset
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import load_dynamics, load_model, load_plant, read_toml, resolve_preset
 from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
 from hammerstein.scenario.validate import _signal
 

@@ -3,7 +3,7 @@
 Builds the compensator of ``--kind`` from the actuator file exactly as a
 scenario with ``model = "plant"`` does
 (:func:`hammerstein.scenario.registry.build_compensator`), computes the
-voltages from rest with :func:`hammerstein.core.drive.drive_signal` (fade-in,
+voltages from rest with :func:`hammerstein.compensation.drive.drive_signal` (fade-in,
 ZPETC preview, the amplifier's limits) and writes ``t`` and one column per
 input [V] at full precision, optionally the model-predicted outputs
 (``<output>_predicted`` [µm], the preset's plant driven through its
@@ -22,12 +22,12 @@ from pathlib import Path
 from hammerstein.cli._common import out_file_problem, print_err
 from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
-from hammerstein.core.amplifier import LIMITS
-from hammerstein.core.drive import (MIN_FADE_S, apply_amplifier, hardware_drive, rest_output,
+from hammerstein.models.amplifier import LIMITS
+from hammerstein.compensation.drive import (MIN_FADE_S, apply_amplifier, hardware_drive, rest_output,
                                     signals_csv, starts_at_rest)
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
-from hammerstein.core.hammerstein_compensator import INVERSIONS
-from hammerstein.core.models import choose_kind, kind_problem
+from hammerstein.compensation.hammerstein_compensator import INVERSIONS
+from hammerstein.compensation.model_classes import choose_kind, kind_problem
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -99,7 +99,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     reference : hammerstein.cli._hardware.Reference
         The reference record.
     kind : str, optional
-        Compensator kind (default: :func:`hammerstein.core.models.choose_kind`).
+        Compensator kind (default: :func:`hammerstein.compensation.model_classes.choose_kind`).
     inversion : {'zpetc', 'stable'}
     fade_in : float, optional
         [s]; 0 only for a reference that starts at rest.
@@ -114,7 +114,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     -------
     comp : object
         The compensator.
-    drive : hammerstein.core.drive.DriveResult
+    drive : hammerstein.compensation.drive.DriveResult
 
     Raises
     ------
@@ -153,7 +153,7 @@ def _kind_and_options(plant, kind, gain, check):
     """(kind, options of the kind, the note of a chosen kind or None).
 
     A given kind is checked against the model's class (the message names the
-    kinds that work); none given: :func:`hammerstein.core.models.choose_kind`.
+    kinds that work); none given: :func:`hammerstein.compensation.model_classes.choose_kind`.
     """
     note = None
     if kind is None:

@@ -5,12 +5,12 @@ the applied inputs [V]) and the reference it should have followed (an
 inline TOML table as in scenarios, or a CSV file), and writes into
 ``--out DIR`` what ``hammerstein run`` writes for a compensated case:
 ``metrics.csv`` (the same metrics, over the same steady-state window after
-``--settle-periods``, :func:`hammerstein.core.metrics.tracking_metrics`),
+``--settle-periods``, :func:`hammerstein.signals.metrics.tracking_metrics`),
 ``trajectory-measured.png``, ``timeseries-measured.csv`` and
 ``report.md``.
 
 The delay between the reference and the measurement is estimated by
-cross-correlation (integer samples, :func:`hammerstein.core.ilc.estimate_delay`)
+cross-correlation (integer samples, :func:`hammerstein.compensation.ilc.estimate_delay`)
 and reported (metrics ``delay_samples`` and ``delay``); it is not removed
 unless ``--remove-delay`` is given (then the measurement is advanced by it
 and the last samples, not measured, are dropped).
@@ -34,12 +34,12 @@ import numpy as np
 from hammerstein.cli._common import add_column_options, out_dir_problem, print_err
 from hammerstein.cli._hardware import (catch, load_actuator, load_reference, mapping,
                                        nonnegative_float, positive_float)
-from hammerstein.core import metrics as met
-from hammerstein.core.amplifier import drive_metrics
-from hammerstein.core.drive import drive_fade_samples, read_signals
+from hammerstein.signals import metrics as met
+from hammerstein.models.amplifier import drive_metrics
+from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.core.files import all_or_nothing, guard_inputs, safe_write
-from hammerstein.core.ilc import estimate_delay
-from hammerstein.core.references import raster_line_index
+from hammerstein.compensation.ilc import estimate_delay
+from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save, trajectory_figure
 

@@ -6,7 +6,7 @@ and ``multisine-<input>-validation.csv`` (random-phase multisines, 10 Hz to half
 the Nyquist frequency at 80 % of the amplitude, independent phases; the
 second is held out to choose the order of the dynamics) and ``creep-<input>.csv``
 (a voltage staircase, 2 s per step); each file holds the time column ``t`` [s]
-and every input column [V] (:mod:`hammerstein.core.excitation`). A
+and every input column [V] (:mod:`hammerstein.signals.excitation`). A
 ``README.md`` says what to measure and how to give the records back to
 ``hammerstein identify``.
 
@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
-from hammerstein.core.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
+from hammerstein.signals.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -105,7 +105,7 @@ def _amplitudes(text, m):
     return np.broadcast_to(np.array(values), (m,)).copy()
 
 
-#: The parameters of :func:`~hammerstein.core.excitation.excitation_set` and their options.
+#: The parameters of :func:`~hammerstein.signals.excitation.excitation_set` and their options.
 _OPTIONS = {"f_min, periods": "--f-min, --periods", "frequency": "--sine-frequency",
             "sampling_period": "--sampling-period", "f_min, f_max": "--f-min, --f-max",
             "f_min": "--f-min", "f_max": "--f-max", "hold": "--hold", "periods": "--periods",
@@ -140,7 +140,7 @@ def readme_text(records, names, amplitude, sampling_period):
 
     Parameters
     ----------
-    records : list of hammerstein.core.excitation.ExcitationRecord
+    records : list of hammerstein.signals.excitation.ExcitationRecord
         The records written.
     names : sequence of str
         Input names.

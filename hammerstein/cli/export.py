@@ -23,7 +23,7 @@ import re
 from hammerstein import __version__
 from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
-from hammerstein.core.models import choose_kind
+from hammerstein.compensation.model_classes import choose_kind
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import CompensatorError, ExportError, FileLimitError, PresetError
 from hammerstein.export import MARKER, check_name, export_c

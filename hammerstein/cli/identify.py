@@ -1,15 +1,15 @@
 """``hammerstein identify``: identify a p x m PI model from measured records.
 
-Reads one or more delimited text files (:func:`hammerstein.core.datafiles.read_records`),
+Reads one or more delimited text files (:func:`hammerstein.io.datafiles.read_records`),
 each holding the time (or given the sampling period), every input column and
 every output column; identifies a multivariable hysteresis model (``--model
 auto``, the default: classical PI, Preisach or generalised PI, whichever
 predicts the held-out minor loops best; a classical PI from records of one
-amplitude) (:func:`hammerstein.core.record_identification.identify_records`: split at
+amplitude) (:func:`hammerstein.identification.record_identification.identify_records`: split at
 reversal points, held-out complete branches or periods, partition and
 component structure chosen automatically unless given), reports the fit on
 the training and held-out samples, and writes a model file
-(:func:`hammerstein.core.presets.save_model`) that ``model = "path"`` in a
+(:func:`hammerstein.io.presets.save_model`) that ``model = "path"`` in a
 scenario and the compensators accept. Optional: ``--metrics`` (long CSV),
 ``--plot`` (loops and errors), ``--dynamics`` (a preset with linear dynamics).
 
@@ -27,16 +27,16 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.core.datafiles import DataFileError, column_list, read_records
+from hammerstein.io.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import number_type, out_file_problem
-from hammerstein.core.amplifier import records_amplifier_table
+from hammerstein.models.amplifier import records_amplifier_table
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
-from hammerstein.core.presets import PresetError, save_model
-from hammerstein.core.identification_pipeline import PipelineOptions, identify_pipeline
-from hammerstein.core.record_identification import DYNAMICS_DEFAULTS
-from hammerstein.core.dynamics import DynamicsError
-from hammerstein.core.lti import estimate_measurement_delay
+from hammerstein.io.presets import PresetError, save_model
+from hammerstein.identification.identification_pipeline import PipelineOptions, identify_pipeline
+from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
+from hammerstein.models.dynamics import DynamicsError
+from hammerstein.models.lti import estimate_measurement_delay
 from hammerstein.report.dynamics_figure import measured_bode_figure
 from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.scenario.schema import MAX_HYSTERONS
@@ -304,7 +304,7 @@ def _estimate_delay(args):
     """``--delay auto``: the integer delay of the --dynamics-records (read as they are).
 
     Sets ``args.delay`` (int) and ``args.delay_estimate``
-    (:class:`hammerstein.core.lti.MeasurementDelay`). An estimate the records
+    (:class:`hammerstein.models.lti.MeasurementDelay`). An estimate the records
     cannot support is a data error naming --delay when ``auto`` was given,
     else (the default) the delay stays 0 and the report says why.
     """
@@ -339,7 +339,7 @@ def metrics_rows(fit, output_unit):
     Parameters
     ----------
     fit : RecordFit
-        Result of :func:`hammerstein.core.record_identification.identify_records`.
+        Result of :func:`hammerstein.identification.record_identification.identify_records`.
     output_unit : str
         Unit of the outputs (e.g. ``"µm"``), written in the unit column of the
         absolute errors.
@@ -383,7 +383,7 @@ def fit_figure(fit, input_unit, output_unit):
     Parameters
     ----------
     fit : RecordFit
-        Result of :func:`hammerstein.core.record_identification.identify_records`
+        Result of :func:`hammerstein.identification.record_identification.identify_records`
         for a p x m model.
     input_unit : str
         Unit of the inputs for the axis labels (e.g. ``"V"``).
@@ -665,7 +665,7 @@ def delay_report_lines(delay, estimate, sampling_period, given=True):
     ----------
     delay : int
         The delay used [samples].
-    estimate : hammerstein.core.lti.MeasurementDelay or None
+    estimate : hammerstein.models.lti.MeasurementDelay or None
         The ``--delay auto`` estimate (None when ``--delay N`` was given).
     sampling_period : float
         T [s].
@@ -698,7 +698,7 @@ def level_report_lines(fit, output_unit):
     Parameters
     ----------
     fit : RecordFit
-        With ``levels`` (:func:`hammerstein.core.record_identification.level_errors`).
+        With ``levels`` (:func:`hammerstein.identification.record_identification.level_errors`).
     output_unit : str
         Unit of the outputs.
 
@@ -776,7 +776,7 @@ def dynamics_report_lines(summary, output_names, input_names):
     Parameters
     ----------
     summary : dict
-        ``RecordDynamics.summary`` (:func:`hammerstein.core.record_identification.identify_record_dynamics`).
+        ``RecordDynamics.summary`` (:func:`hammerstein.identification.record_identification.identify_record_dynamics`).
     output_names, input_names : sequence of str
         Names of the p outputs and p inputs of the model.
 
@@ -853,7 +853,7 @@ def creep_metrics_rows(creep, output_unit="µm"):
 
     Parameters
     ----------
-    creep : hammerstein.core.creep_identification.CreepIdentifier
+    creep : hammerstein.identification.creep_identification.CreepIdentifier
         Fitted.
     output_unit : str
         Unit of the outputs.

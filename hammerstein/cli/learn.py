@@ -3,7 +3,7 @@
 Reads the drive ``u_k`` that was applied (a file of ``hammerstein compensate``
 or of an earlier ``learn``), the measured response ``y_k`` and the
 reference; prints the trial's error and, once, the monotonic-convergence
-condition; writes ``u_{k+1}`` (:class:`hammerstein.core.ilc.IterativeLearning`)
+condition; writes ``u_{k+1}`` (:class:`hammerstein.compensation.ilc.IterativeLearning`)
 within the amplifier's limits. ``--history DIR`` appends the trial's error
 to ``DIR/history.csv`` and redraws ``DIR/convergence.png``.
 
@@ -15,7 +15,7 @@ the error is advanced by it before learning; when one sample is less than
 2 degrees of the reference's fundamental, a line says the estimate cannot
 tell the delay from the model's phase error (give ``--delay N``). A reference that repeats after
 its fade-in is learnt per harmonic of its period from two periods after the
-fade-in on (:func:`hammerstein.core.ilc.repeating_from`, gains
+fade-in on (:func:`hammerstein.compensation.ilc.repeating_from`, gains
 ``gamma |Q|^2`` per harmonic, not learnt at the noise floor); with
 ``--history DIR`` the per-harmonic gains carry over from trial to trial in
 ``DIR/harmonics.csv`` (halved where a harmonic's error keeps growing).
@@ -25,10 +25,10 @@ Euclidean errors start after the fade-in and ``--settle-periods`` (the
 start-up no drive removes), for a repeating reference not before its
 repeating part (two periods after the fade-in), and the fade-in itself is not learnt (the next
 drive keeps the base drive's fade-in and blends into the learning over the
-next period, :func:`hammerstein.core.drive.keep_start`), so every drive
+next period, :func:`hammerstein.compensation.drive.keep_start`), so every drive
 starts at rest as the first one did. An amplifier table measured on the
 identification records (``source = "records"``) shapes the next drive into
-it (:func:`hammerstein.core.drive.shape_drive`).
+it (:func:`hammerstein.compensation.drive.shape_drive`).
 
 With ``--history DIR`` the best trial so far is kept in ``DIR/best-trial.csv``
 (its drive and measured response; ``DIR/learning.csv`` its error and the
@@ -48,7 +48,7 @@ Euclidean error less the noise's power, over the window the printed error
 covers (after the fade-in and ``--settle-periods``), the noise estimated
 from each record's content above the learning's band and the margin 3
 standard deviations of the difference
-(:func:`hammerstein.core.trial_noise.compare_trials`).
+(:func:`hammerstein.signals.trial_noise.compare_trials`).
 
 Exit status: 0 written; 1 bad files, shapes or a drive beyond the amplifier
 with ``--limits error`` (one line, nothing written); 2 a usage error.
@@ -66,16 +66,16 @@ from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actua
                                        fraction, load_reference, mapping, nonnegative_float, owned_problem,
                                        positive_float)
 from hammerstein.cli.compensate import LAW_HINT
-from hammerstein.core.amplifier import LIMITS
-from hammerstein.core.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade, keep_start,
+from hammerstein.models.amplifier import LIMITS
+from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade, keep_start,
                                     limit_start_up, read_signals, rest_output, shape_drive,
                                     signals_csv)
 from hammerstein.core.files import (all_or_nothing, bounded_read_text, guard_inputs, output_problem,
                                     safe_write)
-from hammerstein.core.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
+from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
                                   harmonic_base_gains, periodic_average, repeating_from)
-from hammerstein.core.models import convergent_gain, law_radius, model_class
-from hammerstein.core.trial_noise import SEGMENT, compare_trials, trial_error
+from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
+from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -145,7 +145,7 @@ def _inverse_gain(model, gain, check):
 
     The notes: one line on the choice (``note: kind = ilc because ...``);
     ``check`` error/warn reacts to ``rho(I - K^-1 J) >= 1``
-    (:func:`hammerstein.core.models.law_radius`).
+    (:func:`hammerstein.compensation.model_classes.law_radius`).
     """
     entry = model_class(model)
     notes = []
@@ -230,7 +230,7 @@ WORSE = 1.1
 #: 40 nm of noise, trials judged 1.15-1.38 times worse on the averaged measurement (0.05-0.07
 #: µm, averaged noise ~14 nm) were as good or better in truth, and learning again from the
 #: older drive made the next trial 1.29 times worse. A non-repeating reference (a raster) uses
-#: it as the z of :func:`hammerstein.core.trial_noise.compare_trials` (standard deviations of
+#: it as the z of :func:`hammerstein.signals.trial_noise.compare_trials` (standard deviations of
 #: the difference of two mean squares less the noise)
 NOISE_MARGIN = 3.0
 #: below this phase of one sample at the reference's fundamental [deg] (a period longer than
@@ -321,7 +321,7 @@ def _window_error(target, y, delay, start, sampling_period, q_cutoff_hz):
 
     Returns
     -------
-    hammerstein.core.trial_noise.TrialError or None
+    hammerstein.signals.trial_noise.TrialError or None
         None when the window holds fewer than ``2 SEGMENT`` samples (too
         short a record to estimate the noise from).
     """

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.core.lti import dc_gain
-from hammerstein.core.presets import PresetError, bundled_presets, load_model, load_plant, read_toml
-from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.models.lti import dc_gain
+from hammerstein.io.presets import PresetError, bundled_presets, load_model, load_plant, read_toml
+from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import HammersteinError
-from hammerstein.core.models import MODEL_CLASSES
+from hammerstein.compensation.model_classes import MODEL_CLASSES
 from hammerstein.scenario.registry import COMPENSATORS
 
 __all__ = ["add_parser", "handler"]

@@ -28,12 +28,12 @@ import numpy as np
 from numba.core import event
 
 from hammerstein.cli._common import print_err
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
-from hammerstein.core.generalized_pi import GeneralizedPI
-from hammerstein.core.hysteresis import play
-from hammerstein.core.preisach import MultivariableHysteresis, PreisachModel
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.models.hysteresis import play
+from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_plant
 from hammerstein.simulation import (generalized_play_states, simulate_chain, simulate_chain_batch)
 from hammerstein.simulation import _kernels
 from hammerstein.simulation._prefetch import chain_kernel_arguments

@@ -2,8 +2,8 @@
 
 Every table read from a file is checked by the same machinery: scenario files
 (:mod:`hammerstein.scenario.schema` holds their key tables), preset and model
-files and dynamics files (:mod:`hammerstein.core.presets`), and the entries of
-the kind registries (:data:`hammerstein.core.references.REFERENCE_KINDS`,
+files and dynamics files (:mod:`hammerstein.io.presets`), and the entries of
+the kind registries (:data:`hammerstein.signals.references.REFERENCE_KINDS`,
 :data:`hammerstein.scenario.registry.COMPENSATORS`). A checker is a callable
 ``value -> normalised value`` raising :class:`~hammerstein.exceptions.Invalid`
 with what was expected; :func:`check_table` collects EVERY problem of a table

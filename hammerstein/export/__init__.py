@@ -4,7 +4,8 @@
 allocation, only the C standard library); :mod:`hammerstein.export.fmu`
 wraps the same code as an FMI 2.0 co-simulation FMU. ``hammerstein export``
 (:mod:`hammerstein.cli.export`) is the command; docs/real-time.md the guide.
-This layer imports :mod:`hammerstein.core` only.
+This layer imports the models and compensators (:mod:`hammerstein.models`,
+:mod:`hammerstein.compensation` and the layers below them) only.
 """
 
 from __future__ import annotations

@@ -16,15 +16,15 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.core.compensators import (InverseMultiplicativeCompensator,
+from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator,
                                            PerAxisInverseCompensator, StaticGainCompensator,
                                            diagonal_compensator)
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, output_problem, safe_write
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.hysteresis import MultivariablePI
-from hammerstein.core.mixed_compensators import MIXED_KINDS, mixed_compensator
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_creep, load_model, load_plant, read_toml, resolve_preset
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.compensation.mixed_compensators import MIXED_KINDS, mixed_compensator
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_creep, load_model, load_plant, read_toml, resolve_preset
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
 from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
@@ -239,7 +239,7 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
         line). Every model class is accepted: a classical PI gets the PI
         compensators, a Preisach / generalised-PI model the same kinds over
         its exact inverse or its forward operator
-        (:func:`hammerstein.core.mixed_compensators.mixed_compensator`).
+        (:func:`hammerstein.compensation.mixed_compensators.mixed_compensator`).
     """
     if kind in REFUSED_KINDS:
         raise ExportError(f"kind: {kind!r} cannot be exported to C: {REFUSED_KINDS[kind]}")

@@ -19,7 +19,7 @@ the order of the compiled simulation kernels (``hammerstein.simulation``):
   inverse PI then the inverse play of threshold r_1), or ``U = K^-1 Yr``;
 - for a Preisach or generalised-PI model (``MultivariableHysteresis``), the
   exact per-sample inverse of
-  :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
+  :class:`~hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`
   step for step (``hammerstein.simulation._preisach``: the same bracket,
   Illinois iterations, tolerances, Gauss-Seidel sweeps and order of
   additions), its multiplicative law, or ``U = K^-1 (Yr - c)``; with a
@@ -32,7 +32,7 @@ Every step returns a status: ``STATUS_LIMIT``, ``STATUS_DIVERGED``,
 
 Optional amplifier limits (range [V], slew rate [V/s]) clamp U inside
 ``NAME_step`` after the law, as hammerstein's amplifier model does
-(``hammerstein.core.amplifier`` where present: range clip, then
+(``hammerstein.models.amplifier`` where present: range clip, then
 ``amp += clip(x - amp, -S T, S T)``); the law keeps its own voltages, as
 the Python compensator does.
 """
@@ -44,15 +44,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hammerstein.core.compensators import (InverseMultiplicativeCompensator,
+from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator,
                                            PerAxisInverseCompensator, StaticGainCompensator)
 from hammerstein.core.files import c_name_problem
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.inverse import InversePI
-from hammerstein.core.inversion import ZPETCInverse
-from hammerstein.core.mixed_compensators import LinearInverseCompensator
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.compensation.inverse import InversePI
+from hammerstein.compensation.inversion import ZPETCInverse
+from hammerstein.compensation.mixed_compensators import LinearInverseCompensator
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.exceptions import ExportError
 
 __all__ = ["AmplifierLimits", "CExport", "export_c", "check_name", "MARKER", "STATUS_LIMIT",
@@ -1166,16 +1166,16 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
     ----------
     compensator : object
         An instance of a class of :data:`EMITTERS`: an
-        :class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`
+        :class:`~hammerstein.compensation.compensators.InverseMultiplicativeCompensator`
         (multivariable or diagonal, delay or low-pass feedback), a
-        :class:`~hammerstein.core.compensators.PerAxisInverseCompensator` or a
-        :class:`~hammerstein.core.compensators.StaticGainCompensator` of a
+        :class:`~hammerstein.compensation.compensators.PerAxisInverseCompensator` or a
+        :class:`~hammerstein.compensation.compensators.StaticGainCompensator` of a
         classical PI (linear components, offset and output map included); a
-        :class:`~hammerstein.core.preisach_inverse.PreisachInverseCompensator`
+        :class:`~hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`
         (exact inverse or its law) or a
-        :class:`~hammerstein.core.mixed_compensators.LinearInverseCompensator`
+        :class:`~hammerstein.compensation.mixed_compensators.LinearInverseCompensator`
         of a Preisach or generalised-PI model; or a
-        :class:`~hammerstein.core.hammerstein_compensator.HammersteinCompensator`
+        :class:`~hammerstein.compensation.hammerstein_compensator.HammersteinCompensator`
         with ``inversion='zpetc'`` (with or without creep) over any of them.
     name : str
         C prefix and file stem (:func:`check_name`).

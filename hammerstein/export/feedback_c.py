@@ -1,6 +1,6 @@
 """C99 code of a feedback loop's controller, with a compensator as feedforward.
 
-:func:`export_feedback_c` turns a :class:`hammerstein.core.feedback.FeedbackLoop`
+:func:`export_feedback_c` turns a :class:`hammerstein.compensation.feedback.FeedbackLoop`
 (its discrete controller with the reference filter, anti-windup and
 amplifier limits) and, optionally, an exportable feedforward compensator
 (:func:`hammerstein.export.c_code.export_c`, generated as ``NAME_ff.h`` /
@@ -103,7 +103,7 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
 
     Parameters
     ----------
-    loop : hammerstein.core.feedback.FeedbackLoop
+    loop : hammerstein.compensation.feedback.FeedbackLoop
         With a controller; its amplifier limits and anti-windup are exported.
         The sensor itself is not (the measurement comes from the hardware);
         its replica on the reference is part of the controller.
@@ -128,9 +128,9 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
     Examples
     --------
     >>> import control
-    >>> from hammerstein.core.feedback import FeedbackLoop, Sensor, controller_from_lti
-    >>> from hammerstein.core.plant import HammersteinPlant
-    >>> from hammerstein.core.preisach import MultivariableHysteresis
+    >>> from hammerstein.compensation.feedback import FeedbackLoop, Sensor, controller_from_lti
+    >>> from hammerstein.models.plant import HammersteinPlant
+    >>> from hammerstein.models.preisach import MultivariableHysteresis
     >>> T = 5e-5
     >>> plant = HammersteinPlant(MultivariableHysteresis([[2.0]]), T)
     >>> ctrl = controller_from_lti(control.tf([100.0], [1.0, 0.0]), T)

@@ -92,7 +92,7 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
 
     Examples
     --------
-    >>> from hammerstein.core.dynamics import bending_modes, discretize
+    >>> from hammerstein.models.dynamics import bending_modes, discretize
     >>> G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), 5e-5)
     >>> fig = dynamics_bode_figure(G, G)
     >>> len(fig.axes) >= 8
@@ -214,7 +214,7 @@ def measured_bode_figure(identified, frequency_hz, frf, names=None,
     """Bode plot of an identified p x p G over the measured frequency-response estimate.
 
     The measured estimate (e.g. H1 from multisines,
-    :func:`hammerstein.core.lti.frf_h1`) is drawn as grey dots behind the
+    :func:`hammerstein.models.lti.frf_h1`) is drawn as grey dots behind the
     identified model (solid), both by python-control's ``bode_plot`` (the
     estimate as a ``control.FrequencyResponseData``).
 

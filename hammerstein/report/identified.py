@@ -20,7 +20,7 @@ from hammerstein.report.figures import scenario_prefix
 from hammerstein.report.model_figures import model_loop_grid, rms_vs_frequency_figure
 from hammerstein.report.model_files import save_identified_dynamics, save_identified_models
 from hammerstein.report.tables import markdown_table, write_signals_csv
-from hammerstein.core.lti import align_dc_gain, compare_frequency_responses
+from hammerstein.models.lti import align_dc_gain, compare_frequency_responses
 from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
 from hammerstein.report.render import FigureJobs
 

@@ -1,7 +1,7 @@
 """The convergence figure of iterative learning control: error against trial, per axis.
 
 Used by ``hammerstein learn --history DIR`` and the ``kind = "ilc"``
-compensator of scenarios (:mod:`hammerstein.core.ilc`).
+compensator of scenarios (:mod:`hammerstein.compensation.ilc`).
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ def iteration_history(rows, names):
     ----------
     rows : iterable of dict
         Metric rows (``channel``, ``metric``, ``value``), as
-        :meth:`hammerstein.core.ilc.LearningCompensator.history_rows` writes
+        :meth:`hammerstein.compensation.ilc.LearningCompensator.history_rows` writes
         them: channel ``iteration-<k>``, metrics ``max_abs_error_<output>``
         and ``rms_error_<output>`` [µm].
     names : sequence of p str

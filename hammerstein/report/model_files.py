@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from hammerstein.core.presets import save_dynamics, save_model
+from hammerstein.io.presets import save_dynamics, save_model
 
 __all__ = ["model_file_name", "save_identified_models", "save_identified_dynamics"]
 

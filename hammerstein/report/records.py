@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.core.files import safe_write
-from hammerstein.core.presets import save_model
+from hammerstein.io.presets import save_model
 from hammerstein.report.model_figures import record_fit_figure
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame, write_signals_csv

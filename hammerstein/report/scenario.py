@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.core.files import markdown_escape, safe_write
-from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
+from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
 from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
@@ -86,7 +86,7 @@ def signal_summary(mode, s):
     """A drive or reference table in words: ``sine on x, 50 µm, 50 Hz, 5 periods``.
 
     The words are the kind's registry entry's
-    (:attr:`hammerstein.core.references.ReferenceKind.summary`).
+    (:attr:`hammerstein.signals.references.ReferenceKind.summary`).
 
     Parameters
     ----------
@@ -361,7 +361,7 @@ def _scan_figures(scenario, results, directory, jobs):
     """Error maps of the scanned (raster-style) references, one job per case; [(caption, file name)].
 
     A reference kind is scanned when its registry entry has ``scan``
-    (:class:`hammerstein.core.references.ReferenceKind`).
+    (:class:`hammerstein.signals.references.ReferenceKind`).
     """
     figs = []
     for r in results:

@@ -18,7 +18,7 @@ from pathlib import Path
 import pandas as pd
 
 from hammerstein.core.files import safe_write
-from hammerstein.core.metrics import UNITS
+from hammerstein.signals.metrics import UNITS
 from hammerstein.report import figures as plots
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
@@ -74,7 +74,7 @@ def sweep_table(spec, metrics):
     pandas.DataFrame
         One row per (case, channel): ``frequency_hz, compensator, axis,
         channel``, then one column per metric (units in
-        :data:`hammerstein.core.metrics.UNITS`); ordered by compensator, axis,
+        :data:`hammerstein.signals.metrics.UNITS`); ordered by compensator, axis,
         channel, frequency. Diverged cases carry ``diverged_at_time`` [s].
     """
     index = pd.DataFrame(spec.cases)

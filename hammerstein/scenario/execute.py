@@ -3,7 +3,7 @@
 :func:`run_case` simulates a resolved case (an open-loop drive on the plant,
 optionally against a comparison model, or reference -> compensator -> plant
 with :func:`hammerstein.simulation.simulate_chain`) and computes its metrics
-(:mod:`hammerstein.core.metrics`); :func:`chain_result` turns an already
+(:mod:`hammerstein.signals.metrics`); :func:`chain_result` turns an already
 simulated chain (e.g. from the batch kernel,
 :func:`hammerstein.scenario.sweeps.run_cases`) into the same
 :class:`CaseResult`. A compensator divergence is a result, not an exception.
@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from hammerstein.core import metrics as met
-from hammerstein.core.amplifier import drive_metrics
-from hammerstein.core.drive import default_fade_samples
-from hammerstein.core.hammerstein_compensator import fade_in
-from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.signals import metrics as met
+from hammerstein.models.amplifier import drive_metrics
+from hammerstein.compensation.drive import default_fade_samples
+from hammerstein.compensation.hammerstein_compensator import fade_in
+from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.scenario.registry import compensator_kind
 from hammerstein.simulation import ChainResult, simulate_chain
 
@@ -177,9 +177,9 @@ def signal_kind(case):
 
     Returns
     -------
-    hammerstein.core.references.ReferenceKind
-        From :data:`hammerstein.core.references.DRIVE_KINDS` (drives) or
-        :data:`hammerstein.core.references.REFERENCE_KINDS`.
+    hammerstein.signals.references.ReferenceKind
+        From :data:`hammerstein.signals.references.DRIVE_KINDS` (drives) or
+        :data:`hammerstein.signals.references.REFERENCE_KINDS`.
     """
     kinds = DRIVE_KINDS if case.mode == "drive" else REFERENCE_KINDS
     return kinds[case.signal_spec["kind"]]
@@ -193,7 +193,7 @@ def fade_samples(case):
     without the ``fades_in`` capability
     (:class:`hammerstein.scenario.registry.CompensatorKind`) fades in only
     when the reference does not start at rest and the plant's amplifier has
-    a slew rate (:func:`hammerstein.core.drive.default_fade_samples`).
+    a slew rate (:func:`hammerstein.compensation.drive.default_fade_samples`).
 
     Parameters
     ----------
@@ -237,7 +237,7 @@ def chain_result(case, res, caught, commanded=None):
     -------
     CaseResult
         With the tracking metrics
-        (:func:`hammerstein.core.metrics.tracking_metrics`), or the single
+        (:func:`hammerstein.signals.metrics.tracking_metrics`), or the single
         ``diverged_at_time`` [s] row when the compensator diverged.
     """
     plant = case.plant

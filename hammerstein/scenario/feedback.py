@@ -7,7 +7,7 @@ linearised plant unless ``gain`` is given); :func:`run_feedback_scenario`
 resolves the cases part (the feedforward compensators, identified as in a
 cases scenario), checks the loop's stability with the hysteresis' slope
 range as a sector, then runs each case in the compiled closed-loop kernel
-(:class:`hammerstein.core.feedback.FeedbackLoop`) in the modes asked for,
+(:class:`hammerstein.compensation.feedback.FeedbackLoop`) in the modes asked for,
 the cases spread over threads (the kernel releases the GIL).
 """
 
@@ -22,11 +22,11 @@ from typing import Any
 import control
 import numpy as np
 
-from hammerstein.core import metrics as met
-from hammerstein.core.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
+from hammerstein.signals import metrics as met
+from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
                                        design_axis, diagonal_controller, linearised_plant,
                                        mixsyn_controller)
-from hammerstein.core.hammerstein_compensator import fade_in
+from hammerstein.compensation.hammerstein_compensator import fade_in
 from hammerstein.exceptions import CompensatorDivergence, FeedbackError, ScenarioError
 from hammerstein.scenario.execute import fade_samples, signal_kind
 from hammerstein.scenario.feedback_table import MODES, FeedbackScenario
@@ -96,7 +96,7 @@ def build_controller(table, plant):
 
     Returns
     -------
-    hammerstein.core.feedback.Controller
+    hammerstein.compensation.feedback.Controller
 
     Raises
     ------

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from hammerstein.core.feedback import ANTI_WINDUP, AXIS_KINDS, METHODS
+from hammerstein.compensation.feedback import ANTI_WINDUP, AXIS_KINDS, METHODS
 from hammerstein.exceptions import ScenarioError
 
 __all__ = ["FeedbackScenario", "validate_feedback", "MODES", "LTI_KINDS", "MIMO_KINDS"]

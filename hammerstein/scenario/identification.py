@@ -3,8 +3,8 @@
 The model is identified on the case's own plant (same preset and dynamics
 setting) by the characterisation experiment of Section 3.3, Steps 1-4: a
 sine on each input in turn, all outputs recorded
-(:func:`hammerstein.core.sensors.characterize`), then
-:class:`hammerstein.core.identification.MultivariableIdentifier`
+(:func:`hammerstein.identification.sensors.characterize`), then
+:class:`hammerstein.identification.identification.MultivariableIdentifier`
 (:func:`identified_model`). ``kind = "hammerstein"`` identifies the PI and
 the linear dynamics G in two stages (:func:`identified_hammerstein`).
 
@@ -33,18 +33,18 @@ from typing import Any, ClassVar
 import numpy as np
 
 from hammerstein.exceptions import HysteresisError
-from hammerstein.core.dynamics import DynamicsError
+from hammerstein.models.dynamics import DynamicsError
 from hammerstein.core.files import confined_path
-from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine, excitation_set
-from hammerstein.core.hysteresis import MultivariablePI
-from hammerstein.core.identification import IdentificationError, MultivariableIdentifier
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine, excitation_set
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.identification.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lazy import lazy_module
-from hammerstein.core.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import (PresetError, load_dynamics, load_model, load_plant, model_from_table,
+from hammerstein.models.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import (PresetError, load_dynamics, load_model, load_plant, model_from_table,
                                       model_to_table, save_model)
-from hammerstein.core.sensors import Sensor, characterize, identification_metadata
+from hammerstein.identification.sensors import Sensor, characterize, identification_metadata
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        round_trip_table, spec_key)
 from hammerstein.scenario.identify_tables import (comparison_spec, dynamics_source, identify_dynamics_table,
@@ -52,9 +52,9 @@ from hammerstein.scenario.identify_tables import (comparison_spec, dynamics_sour
 from hammerstein.scenario.schema import Invalid
 
 # lazy: scipy.optimize, only for identify.model = "preisach" / "auto"
-preisach_identification = lazy_module("hammerstein.core.preisach_identification")
-record_identification = lazy_module("hammerstein.core.record_identification")
-identification_pipeline = lazy_module("hammerstein.core.identification_pipeline")
+preisach_identification = lazy_module("hammerstein.identification.preisach_identification")
+record_identification = lazy_module("hammerstein.identification.record_identification")
+identification_pipeline = lazy_module("hammerstein.identification.identification_pipeline")
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = [
@@ -90,11 +90,11 @@ class IdentifiedModel:
     ----------
     role : {'compensator', 'comparison'}
         What the case uses it for.
-    plant : hammerstein.core.plant.HammersteinPlant
+    plant : hammerstein.models.plant.HammersteinPlant
         The plant it was identified on.
     identify : dict
         The validated ``identify`` table.
-    model : hammerstein.core.hysteresis.MultivariablePI
+    model : hammerstein.models.hysteresis.MultivariablePI
     metadata : dict
         The ``[identification]`` table saved with the model.
     key : tuple
@@ -118,11 +118,11 @@ class IdentifiedDynamics:
 
     Parameters
     ----------
-    plant : hammerstein.core.plant.HammersteinPlant
-    pi : hammerstein.core.hysteresis.MultivariablePI
+    plant : hammerstein.models.plant.HammersteinPlant
+    pi : hammerstein.models.hysteresis.MultivariablePI
     pi_metadata : dict or None
         None when the PI was given (``model = "plant"`` or a file), not identified.
-    identifier : hammerstein.core.lti.DynamicsIdentifier
+    identifier : hammerstein.models.lti.DynamicsIdentifier
         Fitted (``system_``: discrete p x p G, ``order_``, ``validation_fit_``...).
     metadata : dict
         ``[identification]`` table of the dynamics file.
@@ -333,11 +333,11 @@ class RecordsIdentification:
 
     Parameters
     ----------
-    plant : hammerstein.core.plant.HammersteinPlant
+    plant : hammerstein.models.plant.HammersteinPlant
         The identified actuator as ``hammerstein compensate`` loads it: the
         preset ``hammerstein identify`` writes (hysteresis of the chosen
         class, dynamics and creep when identified), read back.
-    result : hammerstein.core.identification_pipeline.IdentificationResult
+    result : hammerstein.identification.identification_pipeline.IdentificationResult
         The pipeline's fit, dynamics and creep.
     preset_text : str
         The preset file's text.
@@ -360,7 +360,7 @@ def excitation_records(plant, spec, sensor=None):
     spec : dict
         Validated ``identify`` table with ``records = "excitation"``
         (:data:`~hammerstein.scenario.identify_tables.RECORDS_IDENTIFY_FIELDS`).
-    sensor : hammerstein.core.sensors.Sensor, optional
+    sensor : hammerstein.identification.sensors.Sensor, optional
         Measures the outputs.
 
     Returns
@@ -412,11 +412,11 @@ def identified_from_records(plant, spec, dynamics, cache=None):
     """The actuator identified from excitation records, as ``identify`` + ``compensate`` see it.
 
     The records of :func:`excitation_records` go through
-    :func:`hammerstein.core.identification_pipeline.identify_pipeline` with the
+    :func:`hammerstein.identification.identification_pipeline.identify_pipeline` with the
     table's options (those of ``hammerstein identify``), the dynamics from the
     multisines when ``dynamics``, the creep from the staircases when
     ``spec["creep"]``; the preset it writes is read back
-    (:func:`hammerstein.core.presets.load_plant`), so the compensator is built
+    (:func:`hammerstein.io.presets.load_plant`), so the compensator is built
     from what ``hammerstein compensate`` would read. Cached in memory per
     plant, table and ``dynamics``.
 
@@ -661,7 +661,7 @@ def identified_hammerstein(plant, identify, identify_dynamics=None, model=None, 
     1. the PI is identified as for ``kind = "multivariable"``
        (:func:`identified_model`) at ``min(F, 2 Hz)``, F = ``identify.frequency``;
     2. G is identified from broadband multisine records, inputs
-       ``Gamma_PI(U)`` (:class:`hammerstein.core.lti.DynamicsIdentifier`:
+       ``Gamma_PI(U)`` (:class:`hammerstein.models.lti.DynamicsIdentifier`:
        order by held-out fit, the sensor low-pass kept out);
     3. the PI characterisation frequency is ``min(F, f_flat)``, ``f_flat``
        the highest frequency where the identified G is flat
@@ -777,7 +777,7 @@ def resolve_dynamics(spec, plant, context, model=None):
     Returns
     -------
     pi : MultivariablePI
-    G : control.StateSpace or hammerstein.core.dynamics.SampledSystem
+    G : control.StateSpace or hammerstein.models.dynamics.SampledSystem
         Discrete, ``dt`` = the plant's sampling period (the plant's own
         dynamics as a ``SampledSystem``).
 

@@ -38,10 +38,10 @@ import json
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from hammerstein.core.dynamics import DynamicsError
-from hammerstein.core.hysteresis import MultivariablePI
+from hammerstein.models.dynamics import DynamicsError
+from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.core.numbers import MAX_MAGNITUDE
-from hammerstein.core.presets import PresetError, model_from_table, model_to_table
+from hammerstein.io.presets import PresetError, model_from_table, model_to_table
 from hammerstein.scenario import diskcache
 
 __all__ = ["IdentificationCache", "plant_fingerprint", "spec_key", "round_trip_table",
@@ -53,7 +53,7 @@ def plant_fingerprint(plant):
 
     Parameters
     ----------
-    plant : hammerstein.core.plant.HammersteinPlant
+    plant : hammerstein.models.plant.HammersteinPlant
 
     Returns
     -------
@@ -94,7 +94,7 @@ def round_trip_table(model):
 
     Parameters
     ----------
-    model : hammerstein.core.hysteresis.MultivariablePI
+    model : hammerstein.models.hysteresis.MultivariablePI
 
     Returns
     -------
@@ -123,7 +123,7 @@ def _bounds_of(key):
 def cached_model_problem(model, key=()):
     """Why an identified PI model read from the disk cache cannot be used (a phrase), or None.
 
-    The checks of a model file (:func:`hammerstein.core.presets.model_from_table`
+    The checks of a model file (:func:`hammerstein.io.presets.model_from_table`
     already ran), plus what an identification guarantees and the compensators
     need: finite weights and gains within
     :data:`hammerstein.core.numbers.MAX_MAGNITUDE`; for a square model, a
@@ -135,7 +135,7 @@ def cached_model_problem(model, key=()):
 
     Parameters
     ----------
-    model : hammerstein.core.hysteresis.MultivariablePI
+    model : hammerstein.models.hysteresis.MultivariablePI
         The model rebuilt from the entry.
     key : tuple
         The entry's content key (with the validated identify table).

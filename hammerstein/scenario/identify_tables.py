@@ -92,7 +92,7 @@ IDENTIFY_FIELDS = {
 
 #: Schema of an ``identify`` table with ``records = "excitation"``: the records of
 #: ``hammerstein excitation`` played through the plant, identified by the pipeline of
-#: ``hammerstein identify`` (:func:`hammerstein.core.identification_pipeline.identify_pipeline`)
+#: ``hammerstein identify`` (:func:`hammerstein.identification.identification_pipeline.identify_pipeline`)
 #: with its options and defaults: every class (``model``), creep staircases (``creep``).
 RECORDS_IDENTIFY_FIELDS = {
     "records": Field(choice("excitation"), required=True),

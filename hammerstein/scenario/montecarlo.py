@@ -57,7 +57,7 @@ chunk into batch-kernel calls of about :data:`BATCH_SAMPLES` samples (their
 buffers stay a few MB whatever the chunk); only scalar metrics per (case,
 frequency) leave a chunk (never a time series): per output ``rms_error``
 and ``max_abs_error``, for all outputs together ``rms_euclidean_error`` and
-``max_euclidean_error`` (:func:`hammerstein.core.metrics.tracking_metrics`,
+``max_euclidean_error`` (:func:`hammerstein.signals.metrics.tracking_metrics`,
 same steady window). They are reduced by :class:`QuantileAccumulator`: a
 log-spaced histogram (:data:`BINS_PER_DECADE` bins per decade, memory
 independent of the case count) always, plus the exact values while ``cases
@@ -99,13 +99,13 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.core import references as refs
-from hammerstein.core.dynamics import SampledSystem
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.metrics import UNITS, steady_window
-from hammerstein.core.plant import HammersteinPlant
+from hammerstein.signals import references as refs
+from hammerstein.models.dynamics import SampledSystem
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.signals.metrics import UNITS, steady_window
+from hammerstein.models.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
-from hammerstein.core.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
+from hammerstein.io.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
 from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
                                      name_field, number, string)
 from hammerstein.scenario.identification import ResolveContext
@@ -589,7 +589,7 @@ def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):
     """Zero-order hold of decoupled second-order bending modes, in closed form.
 
     The same system as
-    :func:`hammerstein.core.dynamics.sampled_bending_modes` (states: position
+    :func:`hammerstein.models.dynamics.sampled_bending_modes` (states: position
     and velocity / omega_n of each mode, ``dx/dt = A x + B u`` with the block
     ``A = [[0, w], [-w, -2 zeta w]]``, ``B = [0, w]^T``), without a matrix
     exponential: with ``s = zeta w``, ``q = w^2 (1 - zeta^2)``, ``c = cos(sqrt(q) T)``
@@ -624,7 +624,7 @@ def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):
     Examples
     --------
     >>> import numpy as np
-    >>> from hammerstein.core.dynamics import sampled_bending_modes
+    >>> from hammerstein.models.dynamics import sampled_bending_modes
     >>> from hammerstein.scenario.montecarlo import sampled_modes
     >>> ref = sampled_bending_modes([900.0, 1100.0], [0.05, 0.2], ["x", "y"], 1e-4)
     >>> got = sampled_modes(np.array([900.0, 1100.0]), np.array([0.05, 0.2]), 1e-4, ref)

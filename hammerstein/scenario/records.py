@@ -2,7 +2,7 @@
 
 A scenario file of this kind has no plant: it identifies a (multivariable)
 classical PI model from measured records with the options of
-``hammerstein identify`` (:func:`hammerstein.core.record_identification.identify_records`:
+``hammerstein identify`` (:func:`hammerstein.identification.record_identification.identify_records`:
 split at reversal points, the last complete branches or periods held out,
 partition and component structure chosen automatically unless given) and
 writes a report directory like the simulated scenarios::
@@ -41,10 +41,10 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.core.datafiles import DataFileError, bundled_data, read_records
+from hammerstein.io.datafiles import DataFileError, bundled_data, read_records
 from hammerstein.core.files import confined_path, escape
-from hammerstein.core.identification import IdentificationError
-from hammerstein.core.record_identification import identify_records
+from hammerstein.identification.identification import IdentificationError
+from hammerstein.identification.record_identification import identify_records
 from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
                                          choice, integer, name_field,
                                          number, string)
@@ -160,7 +160,7 @@ class RecordScenario:
         Validated ``[data]`` table.
     identification : dict
         Validated ``[identification]`` table (defaults filled).
-    records : list of hammerstein.core.datafiles.MultiRecord
+    records : list of hammerstein.io.datafiles.MultiRecord
     cases : list of str
         ``["train", "validation"]``.
     kind : str
@@ -189,7 +189,7 @@ class RecordResult:
         ``"train"`` or ``"validation"``.
     metrics : list of dict
         Rows ``{channel, metric, value, unit}``, one set per output.
-    fit : hammerstein.core.record_identification.RecordFit
+    fit : hammerstein.identification.record_identification.RecordFit
         The identification (the same object in both results): model,
         splits (training and held-out samples of each record), predictions.
     """

@@ -21,20 +21,20 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammerstein.core.amplifier import LIMITS
+from hammerstein.models.amplifier import LIMITS
 from hammerstein.core.files import confined_path
-from hammerstein.core.hammerstein_compensator import INVERSIONS, HammersteinCompensator
-from hammerstein.core.models import kind_problem as class_kind_problem, model_class
+from hammerstein.compensation.hammerstein_compensator import INVERSIONS, HammersteinCompensator
+from hammerstein.compensation.model_classes import kind_problem as class_kind_problem, model_class
 from hammerstein.exceptions import CompensatorError
-from hammerstein.core.ilc import LearningCompensator
-from hammerstein.core.presets import PresetError, load_creep, load_dynamics
+from hammerstein.compensation.ilc import LearningCompensator
+from hammerstein.io.presets import PresetError, load_creep, load_dynamics
 from hammerstein.scenario.identification import (ResolveContext, identified_from_records,
                                                  resolve_dynamics, resolve_model)
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
                                          string)
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
 
@@ -142,7 +142,7 @@ def _spec_model(spec, plant, context):
 
 def _rate_independent(spec, plant, context, kind):
     """A rate-independent kind over the table's model, built by the model's class
-    (:meth:`hammerstein.core.models.ModelClass.compensator`: the law of Theorem 4.1 over a
+    (:meth:`hammerstein.compensation.model_classes.ModelClass.compensator`: the law of Theorem 4.1 over a
     classical PI, or over a Preisach / generalised-PI model's own forward operator)."""
     model = _spec_model(spec, plant, context)
     options = {"gain": spec.get("gain", "secant"), "iterations": spec.get("iterations", 1),
@@ -313,8 +313,8 @@ COMPENSATORS["preisach-inverse"] = CompensatorKind(
     rate_independent=True)
 
 
-# every kind starts from rest (fade_in [s], hammerstein.core.drive) and reacts to the plant's
-# amplifier limits (limits, hammerstein.core.amplifier; "warn" in scenarios)
+# every kind starts from rest (fade_in [s], hammerstein.compensation.drive) and reacts to the plant's
+# amplifier limits (limits, hammerstein.models.amplifier; "warn" in scenarios)
 for _kind in ("multivariable", "diagonal", "per-axis", "static-gain", "hammerstein", "preisach-inverse"):
     COMPENSATORS[_kind].fields.setdefault("fade_in", Field(number("s", 0, exclusive=False)))
     COMPENSATORS[_kind].fields["limits"] = Field(choice(*LIMITS))   # default "warn"
@@ -345,7 +345,7 @@ def _build_ilc(spec, plant, context):
         seed=spec.get("seed", 0), slope_floor=spec.get("slope_floor"))
 
 
-# kind "ilc" (hammerstein.core.ilc): iterative learning against the simulated plant
+# kind "ilc" (hammerstein.compensation.ilc): iterative learning against the simulated plant
 COMPENSATORS["ilc"] = CompensatorKind(
     _build_ilc,
     {"start": Field(_start_table),            # default { kind = "hammerstein" }
@@ -361,7 +361,7 @@ COMPENSATORS["ilc"] = CompensatorKind(
      "fade_in": Field(number("s", 0, exclusive=False)),
      "limits": Field(choice(*LIMITS))},
     "iterative learning control against the plant from another kind's drive: u_k+1 = "
-    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.core.ilc)",
+    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.compensation.ilc)",
     look_ahead=True, fades_in=True)
 
 

@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from hammerstein.core.lti import modal_parameters
-from hammerstein.core.dynamics import SampledSystem
+from hammerstein.models.lti import modal_parameters
+from hammerstein.models.dynamics import SampledSystem
 from hammerstein.core.files import confined_path
-from hammerstein.core.presets import PresetError, identified_from, load_dynamics, read_toml
+from hammerstein.io.presets import PresetError, identified_from, load_dynamics, read_toml
 from hammerstein.scenario.identification import ResolveContext, resolve_comparison_model
 from hammerstein.scenario.identification_cache import IdentificationCache
 from hammerstein.scenario.registry import build_compensator, compensator_kind

@@ -16,8 +16,8 @@ This module holds the key tables of a scenario file and its bounds; the
 generic machinery (:class:`~hammerstein.core.schema.Field`, the checkers,
 :func:`~hammerstein.core.schema.check_table`) is :mod:`hammerstein.core.schema`,
 the keys of each reference and drive kind are their registry entries
-(:data:`hammerstein.core.references.REFERENCE_KINDS`,
-:data:`hammerstein.core.references.DRIVE_KINDS`), those of each compensator
+(:data:`hammerstein.signals.references.REFERENCE_KINDS`,
+:data:`hammerstein.signals.references.DRIVE_KINDS`), those of each compensator
 kind :data:`hammerstein.scenario.registry.COMPENSATORS`.
 """
 

@@ -42,7 +42,7 @@ A top-level ``[stability_map]`` table (``scales`` = list of gain scalings s,
 or ``{ start, stop, num }`` log-spaced; optional ``compensators`` as above,
 default the scenario's ``[compensator]``) writes ``stability-map.csv`` and
 ``stability-map.png``: the largest ``rho(I - (s K)^-1 J)`` against s
-(:func:`hammerstein.core.stability.stability_map`, docs/compensator.md), with the
+(:func:`hammerstein.compensation.stability.stability_map`, docs/compensator.md), with the
 normalised law (s = 1) and the paper's literal law (K = I) marked.
 """
 
@@ -57,14 +57,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.compensators import check_reference_range
-from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.compensation.compensators import check_reference_range
+from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import HammersteinError
-from hammerstein.core.stability import stability_map
+from hammerstein.compensation.stability import stability_map
 from hammerstein.scenario.execute import chain_result, fade_samples, run_case, runs_alone
 from hammerstein.scenario.progress import progress
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator, compensator_kind
-from hammerstein.core.metrics import UNITS
+from hammerstein.signals.metrics import UNITS
 from hammerstein.scenario.schema import (CASE, MAX_NAME, MAX_SWEEP_FREQUENCIES, NAME, Field, Invalid,
                                          short_repr, check_table, choice, name_field, number, string)
 from hammerstein.simulation import is_fusable, simulate_chain_batch
@@ -603,7 +603,7 @@ def stability_map_frame(clean, plant, compensator_top, context, problems, source
         Columns ``compensator, scale, max_radius, min_radius, converges``
         and ``K_<output>``; ``attrs['laws']`` maps each label to its
         ``literal_scale``, ``literal_max_radius``, ``normalised_max_radius``
-        (:func:`hammerstein.core.stability.stability_map`).
+        (:func:`hammerstein.compensation.stability.stability_map`).
     """
     comps = clean.get("compensators") or {"compensator": compensator_top}
     frames, laws = [], {}

@@ -28,10 +28,10 @@ from typing import Any, Callable
 
 import numpy as np
 
-from hammerstein.core import references as refs
+from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path
 from hammerstein.core.numbers import is_number, plausibility_problem
-from hammerstein.core.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
@@ -171,7 +171,7 @@ def read_scenario(path):
     ------
     ScenarioError
         If the file is missing, unreadable, not UTF-8 or not valid TOML
-        (one problem line, from :func:`hammerstein.core.presets.read_toml`).
+        (one problem line, from :func:`hammerstein.io.presets.read_toml`).
     """
     path = Path(path)
     try:

@@ -20,11 +20,11 @@ a chunked run equals one long run.
 Duck-typed models
 -----------------
 A *hysteresis model* is any object like
-:class:`~hammerstein.core.hysteresis.MultivariablePI`: ``n_inputs``,
+:class:`~hammerstein.models.hysteresis.MultivariablePI`: ``n_inputs``,
 ``n_outputs``, ``n_hysterons``, ``hysterons()`` (flat thresholds, weights,
 input and output indices, linear gains), ``check_inputs(u, name)``,
 ``initial_state(s)`` and ``evaluate(u, s)``. A *plant* is any object like
-:class:`~hammerstein.core.plant.HammersteinPlant`: ``hysteresis`` (a model),
+:class:`~hammerstein.models.plant.HammersteinPlant`: ``hysteresis`` (a model),
 ``initial_state(s)``, ``is_static`` and ``matrices`` (discrete A, B, C, D).
 
 The compensator protocol

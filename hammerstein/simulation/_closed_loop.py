@@ -21,7 +21,7 @@ At sample t, with the plant strictly proper or the measurement delayed
 
 The hysteresis is either a packed multivariable classical PI
 (:class:`~hammerstein.simulation.PIArrays`, ``kind = 0``) or the component
-arrays of a :class:`~hammerstein.core.preisach.MultivariableHysteresis`
+arrays of a :class:`~hammerstein.models.preisach.MultivariableHysteresis`
 (ramp Preisach hysterons, generalised plays, polynomials; ``kind = 1``).
 """
 

@@ -104,7 +104,7 @@ def compensator_step(law, state, reference):
     """One sample of a compensator law (numpy), without divergence checks.
 
     The body of the numpy oracle loop, also the update of the python-control
-    compensator system (:func:`hammerstein.core.interop.compensator_system`).
+    compensator system (:func:`hammerstein.io.interop.compensator_system`).
 
     Parameters
     ----------

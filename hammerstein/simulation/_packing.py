@@ -264,7 +264,7 @@ class CompensatorLaw(NamedTuple):
     ----------
     model : object
         The hysteresis model Gamma, duck-typed like
-        :class:`~hammerstein.core.hysteresis.MultivariablePI`
+        :class:`~hammerstein.models.hysteresis.MultivariablePI`
         (``n_inputs``, ``n_outputs``, ``n_hysterons``, ``hysterons()``,
         ``check_inputs()``, ``evaluate()``).
     K_inv : numpy.ndarray, shape (m, p)
@@ -551,7 +551,7 @@ def pack_model(model, state=None):
     model : MultivariablePI
         Or any object with ``hysterons()`` returning the flat description
         (``input_index``, ``output_index``, ``thresholds``, ``weights``,
-        ``gain``, see :meth:`~hammerstein.core.hysteresis.MultivariablePI.hysterons`).
+        ``gain``, see :meth:`~hammerstein.models.hysteresis.MultivariablePI.hysterons`).
     state : numpy.ndarray, shape (n_hysterons,), optional
         Initial play states [V]; hysterons are merged only when equal here.
 

@@ -1,7 +1,7 @@
 """Compiled (numba) stepping kernels of the plants outside the classical PI class.
 
-Arrays only; the wrappers in :mod:`hammerstein.core.preisach`,
-:mod:`hammerstein.core.generalized_pi` and :mod:`hammerstein.core.creep`
+Arrays only; the wrappers in :mod:`hammerstein.models.preisach`,
+:mod:`hammerstein.models.generalized_pi` and :mod:`hammerstein.models.creep`
 validate the arguments. States are updated in place, so a chunked run equals
 one long run. The numpy oracles of these loops live in the tests
 (``tests/core/test_preisach.py``).

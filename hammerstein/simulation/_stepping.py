@@ -112,7 +112,7 @@ def _check_backend(backend):
 def simulate_plays(u, thresholds, state, backend="numba"):
     """Play operators of one input, eq. (1), on validated arrays.
 
-    Called by :func:`hammerstein.core.hysteresis.play` (which validates).
+    Called by :func:`hammerstein.models.hysteresis.play` (which validates).
 
     Parameters
     ----------
@@ -268,7 +268,7 @@ def compensator_law(compensator):
     Parameters
     ----------
     compensator : object with ``packed_law()``
-        E.g. an :class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`.
+        E.g. an :class:`~hammerstein.compensation.compensators.InverseMultiplicativeCompensator`.
 
     Returns
     -------
@@ -400,7 +400,7 @@ def simulate_compensator(compensator, reference, initial_state=None, backend="nu
     Parameters
     ----------
     compensator : object with ``packed_law()``
-        E.g. an :class:`~hammerstein.core.compensators.InverseMultiplicativeCompensator`.
+        E.g. an :class:`~hammerstein.compensation.compensators.InverseMultiplicativeCompensator`.
     reference : array_like, shape (p, n_samples)
         Reference displacements [µm].
     initial_state : array_like, optional

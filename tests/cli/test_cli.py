@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.presets import read_toml
+from hammerstein.io.presets import read_toml
 
 ROOT = Path(__file__).resolve().parents[2]
 BUNDLED = sorted(p for p in (ROOT / "scenarios").rglob("*.toml")

@@ -21,9 +21,9 @@ import pytest
 
 from outside_actuator import OutsideActuator, write_csv
 from hammerstein.cli.main import main
-from hammerstein.core.drive import drive_signal
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.presets import load_plant, read_toml
+from hammerstein.compensation.drive import drive_signal
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.io.presets import load_plant, read_toml
 
 T = 5e-5
 TIMES = np.array([0.1, 0.3, 1.0, 3.0, 10.0])

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.presets import load_plant, save_model
+from hammerstein.io.presets import load_plant, save_model
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 CIRCLE = '{ kind = "circle", radius = 10, frequency = 20, periods = 3 }'

@@ -198,7 +198,7 @@ def test_identify_huge_skip_is_a_one_line_error(capsys, tmp_path):
 
 def test_deeply_nested_tolerance_and_model_files_are_one_line_errors(tmp_path):
     # the TOML parser recursed into RecursionError ("unexpected RecursionError" in the CLI)
-    from hammerstein.core.presets import PresetError, read_toml
+    from hammerstein.io.presets import PresetError, read_toml
     from hammerstein.scenario.regression import BaselineError, load_tolerances
     nested = tmp_path / "nested.toml"
     nested.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.creep import Creep
-from hammerstein.core.excitation import excitation_set
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_plant, read_toml
+from hammerstein.models.creep import Creep
+from hammerstein.signals.excitation import excitation_set
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import load_plant, read_toml
 
 T = 1e-3
 LAG = Creep([0.5], [0.04])

@@ -26,9 +26,9 @@ import pytest
 
 import hammerstein.cli.identify as identify_cli
 from hammerstein.cli.main import main
-from hammerstein.core.lti import MeasurementDelay
-from hammerstein.core.drive import read_signals
-from hammerstein.core.presets import load_plant, read_toml
+from hammerstein.models.lti import MeasurementDelay
+from hammerstein.compensation.drive import read_signals
+from hammerstein.io.presets import load_plant, read_toml
 
 # Every test here reads presets identified through the CLI (two identify runs with --dynamics,
 # about 3 s of CPU): end-to-end, run by .ci/run with -m slow; the delay estimate itself is

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.lti import modal_parameters
-from hammerstein.core.presets import bundled_presets, load_plant, read_toml
+from hammerstein.models.lti import modal_parameters
+from hammerstein.io.presets import bundled_presets, load_plant, read_toml
 
 OFFSET = np.array([[3.0], [-1.5]])   # sensor offsets [µm]
 

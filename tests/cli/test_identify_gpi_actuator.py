@@ -1,6 +1,6 @@
 """``hammerstein identify --model generalized|auto`` on a generalised-PI actuator (issue 17).
 
-The records are the excitation files of :mod:`hammerstein.core.excitation`
+The records are the excitation files of :mod:`hammerstein.signals.excitation`
 played through ``gpi_actuator.GPIActuator`` (written without the package:
 generalised-PI direct paths with asymmetric saturating envelopes, hysteretic
 and even cross-couplings, three bending modes with dynamic coupling, 40 nm
@@ -14,10 +14,10 @@ import pytest
 from gpi_actuator import T, GPIActuator, _lsim
 from outside_actuator import write_csv
 from hammerstein.cli.main import main
-from hammerstein.core.excitation import decreasing_sine, excitation_set
-from hammerstein.core.generalized_pi import GeneralizedPI
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.presets import load_model, load_plant, read_toml
+from hammerstein.signals.excitation import decreasing_sine, excitation_set
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.io.presets import load_model, load_plant, read_toml
 
 
 def test_model_generalized_on_a_quasi_static_record(tmp_path, capsys):
@@ -137,7 +137,7 @@ def test_a_refit_keeps_the_generalized_class(monkeypatch, asked):
     """
     from types import SimpleNamespace
 
-    import hammerstein.core.identification_pipeline as pipeline
+    import hammerstein.identification.identification_pipeline as pipeline
     calls = []
 
     def fake(kind):

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.excitation import decreasing_sine
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.core.presets import load_model
+from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.io.presets import load_model
 
 T = 1e-3
 
@@ -116,9 +116,9 @@ def test_auto_with_creep_records_judges_the_step_levels_too(files, capsys):
     # a staircase from rest per input (the actuator has no creep: the levels are its hysteresis);
     # both classes are judged on them too, one line each, and the numbers printed are those of
     # the chosen model and its creep on the staircases, recomputed here
-    from hammerstein.core.creep import creep_from_table
-    from hammerstein.core.excitation import staircase
-    from hammerstein.core.presets import read_toml
+    from hammerstein.models.creep import creep_from_table
+    from hammerstein.signals.excitation import staircase
+    from hammerstein.io.presets import read_toml
     act, d, recs = files
     rng = np.random.default_rng(5)
     stairs = []

@@ -1,6 +1,6 @@
 """``hammerstein identify --dynamics`` on an actuator outside the model class (issue 17).
 
-The records are the excitation files of :mod:`hammerstein.core.excitation`
+The records are the excitation files of :mod:`hammerstein.signals.excitation`
 played through ``outside_actuator.OutsideActuator`` (written without the
 package: Preisach hysteresis with asymmetric loops, hysteretic and even
 cross-couplings, three bending modes with dynamic coupling, 40 nm noise).
@@ -13,9 +13,9 @@ import pytest
 
 from outside_actuator import OutsideActuator, write_csv
 from hammerstein.cli.main import main
-from hammerstein.core.excitation import excitation_set
-from hammerstein.core.lti import dc_gain, modal_parameters
-from hammerstein.core.presets import load_plant, read_toml
+from hammerstein.signals.excitation import excitation_set
+from hammerstein.models.lti import dc_gain, modal_parameters
+from hammerstein.io.presets import load_plant, read_toml
 
 
 @pytest.fixture(scope="module")

@@ -594,7 +594,7 @@ def test_13_bad_paths_are_one_line(capsys, outside, value, fragment):
 # -- 15. a numeric header name is a name before an index ----------------------------------
 def test_15_numeric_header_names_are_names(tmp_path):
     import numpy as np
-    from hammerstein.core.datafiles import read_records
+    from hammerstein.io.datafiles import read_records
     t = np.arange(200) * 1e-3
     u = 5 * np.sin(2 * np.pi * 5 * t)
     y = 2 * u + 1
@@ -607,7 +607,7 @@ def test_15_numeric_header_names_are_names(tmp_path):
 
 # -- 9, 18. memory bounded by the limits; limits and their messages -------------------------
 def test_9_cells_are_checked_before_parsing(tmp_path, monkeypatch):
-    from hammerstein.core.datafiles import DataFileError, read_records
+    from hammerstein.io.datafiles import DataFileError, read_records
     monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_CELLS", "100")
     path = tmp_path / "d.csv"
     path.write_text("t,u,y\n" + "".join(f"{i},{i % 7},{i % 5}\n" for i in range(50)))
@@ -672,7 +672,7 @@ def test_13_huge_or_subnormal_frequency_is_one_line(capsys, tmp_path, value):
 
 def _record(**change):
     import numpy as np
-    from hammerstein.core.datafiles import MultiRecord
+    from hammerstein.io.datafiles import MultiRecord
     t = np.arange(2000) * 1e-3
     u = 5 * np.sin(2 * np.pi * 2 * t)[None, :]
     fields = dict(timepts=t, u=u, y=2 * u, input_names=("u",), output_names=("y",),
@@ -686,7 +686,7 @@ def _record(**change):
     ("nan-T", "sampling_period")])
 def test_16_identify_records_checks_its_arrays(change, fragment):
     import numpy as np
-    from hammerstein.core.record_identification import identify_records
+    from hammerstein.identification.record_identification import identify_records
     from hammerstein.exceptions import IdentificationError
     good = _record()
     rec = {"nan": lambda: _record(y=np.where(np.arange(2000) == 77, np.nan, good.y)),
@@ -699,7 +699,7 @@ def test_16_identify_records_checks_its_arrays(change, fragment):
 
 # -- 16. iterations and other integers through the API: the scenario files' bound ---------
 def _static_model():
-    from hammerstein.core.presets import load_plant
+    from hammerstein.io.presets import load_plant
     return load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
 
 
@@ -712,7 +712,7 @@ def _static_model():
     (True, "expected an integer >= 1, found True"),
 ])
 def test_16_api_iterations_are_capped_like_the_scenario_files(value, fragment):
-    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
     from hammerstein.exceptions import CompensatorError
     with pytest.raises(CompensatorError, match="^iterations: ") as info:
         InverseMultiplicativeCompensator(_static_model(), iterations=value)
@@ -720,7 +720,7 @@ def test_16_api_iterations_are_capped_like_the_scenario_files(value, fragment):
 
 
 def test_16_api_bound_equals_the_scenario_bound():
-    from hammerstein.core.compensators import InverseMultiplicativeCompensator
+    from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
     from hammerstein.core.numbers import MAX_ITERATIONS
     from hammerstein.scenario.schema import MAX_ITERATIONS as SCENARIO_MAX
     import numpy as np
@@ -730,8 +730,8 @@ def test_16_api_bound_equals_the_scenario_bound():
 
 
 def test_16_ilc_iterations_are_capped():
-    from hammerstein.core.compensators import InverseMultiplicativeCompensator
-    from hammerstein.core.ilc import LearningCompensator
+    from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+    from hammerstein.compensation.ilc import LearningCompensator
     from hammerstein.exceptions import CompensatorError
     start = InverseMultiplicativeCompensator(_static_model())
     with pytest.raises(CompensatorError, match=r"^iterations: expected an integer 1\.\.100"):
@@ -830,7 +830,7 @@ def test_15_api_arrays_beyond_the_limit():
 def test_15_dynamics_fit_refuses_overflowing_records_before_lapack(capfd):
     # LAPACK printed "** On entry to DLASCL" on stdout and spun for minutes on such records
     import numpy as np
-    from hammerstein.core.lti import DynamicsIdentifier
+    from hammerstein.models.lti import DynamicsIdentifier
     from hammerstein.exceptions import DynamicsError
     rng = np.random.default_rng(1)
     u = rng.standard_normal((1, 400))
@@ -931,8 +931,8 @@ def cache_notes(tmp_path, monkeypatch):
 @pytest.mark.parametrize("damage", ["zero", "negative-first", "negative-later", "all-zero"])
 def test_5_cache_entry_with_bad_weights_is_ignored(cache_notes, static_plant, damage):
     import json
-    from hammerstein.core.compensators import InverseMultiplicativeCompensator
-    from hammerstein.core.presets import model_to_table
+    from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+    from hammerstein.io.presets import model_to_table
     from hammerstein.scenario import diskcache
     from hammerstein.scenario import identification as identified
     model, _ = identified.identified_model(static_plant, CACHE_SPEC)
@@ -959,7 +959,7 @@ def test_5_cache_entry_with_bad_weights_is_ignored(cache_notes, static_plant, da
 
 
 def test_5_cached_model_problem_closed_forms():
-    from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
     from hammerstein.scenario.identification_cache import cached_model_problem
 
     def model(w):

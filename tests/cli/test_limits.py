@@ -19,13 +19,13 @@ import pytest
 from hammerstein.cli._common import (MAX_LINE, SafeStream, integer_type, number_type,
                                      scheduler_type, workers_type)
 from hammerstein.cli.main import main
-from hammerstein.core.datafiles import Record
-from hammerstein.core.drive import read_signals
-from hammerstein.core.excitation import excitation_set, multisine, staircase
-from hammerstein.core.hysteresis import PrandtlIshlinskii
+from hammerstein.io.datafiles import Record
+from hammerstein.compensation.drive import read_signals
+from hammerstein.signals.excitation import excitation_set, multisine, staircase
+from hammerstein.models.hysteresis import PrandtlIshlinskii
 from hammerstein.core.numbers import (RECORD_SAMPLES_ENV, check_samples, max_record_samples,
                                       plausibility_problem)
-from hammerstein.core.record_identification import identify_records
+from hammerstein.identification.record_identification import identify_records
 from hammerstein.exceptions import HysteresisError, IdentificationError, SignalError
 
 PRESET = "rakotondrabe-2dof"

@@ -8,7 +8,7 @@ import re
 import tomllib
 from pathlib import Path
 
-from hammerstein.core.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 
 PAPER = Path(__file__).resolve().parents[2] / "scenarios" / "paper"
 

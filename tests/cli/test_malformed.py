@@ -21,13 +21,13 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli import listing
-from hammerstein.core import references as refs
+from hammerstein.signals import references as refs
 from hammerstein.cli.main import main
-from hammerstein.core.compensators import (CompensatorError, InverseMultiplicativeCompensator,
+from hammerstein.compensation.compensators import (CompensatorError, InverseMultiplicativeCompensator,
                                       PerAxisInverseCompensator, RangeWarning,
                                       check_reference_range)
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.presets import load_plant
+from hammerstein.models.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
+from hammerstein.io.presets import load_plant
 
 CORPUS = Path(__file__).resolve().parents[1] / "corpus"
 GOOD = CORPUS / "good"

@@ -19,8 +19,8 @@ import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, limit, safe_write, umask
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.presets import PresetError, load_model, save_model
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.io.presets import PresetError, load_model, save_model
 from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries
 from snapshots import tree_snapshot
 

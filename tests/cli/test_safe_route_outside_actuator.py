@@ -1,6 +1,6 @@
 """Records to drives with every default on an actuator outside the model classes (issue 38, item 4).
 
-The records are the excitation files (:func:`hammerstein.core.excitation.excitation_set`)
+The records are the excitation files (:func:`hammerstein.signals.excitation.excitation_set`)
 played through ``outside_actuator.OutsideActuator`` (no package code: Preisach
 loops, couplings, three modes, 40 nm noise); ``identify`` is run as the
 excitation README says. Expected, from the records themselves: the preset's
@@ -20,8 +20,8 @@ import pytest
 
 from outside_actuator import OutsideActuator, write_csv
 from hammerstein.cli.main import main
-from hammerstein.core.excitation import excitation_set
-from hammerstein.core.presets import read_toml
+from hammerstein.signals.excitation import excitation_set
+from hammerstein.io.presets import read_toml
 
 T = 5e-5
 

@@ -8,9 +8,9 @@ decreasing-amplitude sine of the excitation module.
 import numpy as np
 import pytest
 
-from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine
-from hammerstein.core.record_identification import (amplitude_levels, identify_records,
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.identification.record_identification import (amplitude_levels, identify_records,
                                                     noise_level, split_record)
 
 T = 1e-3

@@ -5,12 +5,12 @@ import warnings
 import numpy as np
 import pytest
 
-from hammerstein.core.compensators import (CompensatorError, InverseMultiplicativeCompensator,
+from hammerstein.compensation.compensators import (CompensatorError, InverseMultiplicativeCompensator,
                                       PerAxisInverseCompensator, RangeWarning, StaticGainCompensator,
                                       check_reference_range, diagonal_compensator)
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.simulation import simulate_chain
-from hammerstein.core.stability import literal_gain_equivalent_scale, stability_map
+from hammerstein.compensation.stability import literal_gain_equivalent_scale, stability_map
 
 T = 5e-5
 PERIOD = 400  # samples per period at 50 Hz, T = 50 µs

@@ -1,12 +1,12 @@
-"""Independent identifications side by side (core/concurrent_fits.py)."""
+"""Independent identifications side by side (identification/concurrent_fits.py)."""
 
 import numpy as np
 import pytest
 
-from hammerstein.core.concurrent_fits import fit_concurrently, worker_count
-from hammerstein.core.datafiles import bundled_data, read_record
-from hammerstein.core.preisach_identification import identify_preisach_records
-from hammerstein.core.record_identification import identify_records
+from hammerstein.identification.concurrent_fits import fit_concurrently, worker_count
+from hammerstein.io.datafiles import bundled_data, read_record
+from hammerstein.identification.preisach_identification import identify_preisach_records
+from hammerstein.identification.record_identification import identify_records
 
 
 def test_results_and_errors_come_back_by_name():

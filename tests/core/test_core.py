@@ -10,7 +10,7 @@ import pytest
 from hammerstein import (CompensatorError, InverseMultiplicativeCompensator,
                          bandwidths_hz, convergence_report, play,
                          simulate_chain)
-from hammerstein.core.presets import bundled_presets, dynamics_from_table, read_toml
+from hammerstein.io.presets import bundled_presets, dynamics_from_table, read_toml
 
 T = 5e-5
 PERIOD = 400
@@ -117,7 +117,7 @@ def _drive(k, f=50.0, periods=3):
 
 
 def _h_over_H(u, y):
-    from hammerstein.core.metrics import hysteresis_width
+    from hammerstein.signals.metrics import hysteresis_width
     H = np.ptp(y[-PERIOD:])
     return 100 * hysteresis_width(u, y, PERIOD) / H
 

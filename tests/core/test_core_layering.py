@@ -1,6 +1,7 @@
 """Layering and weight of the core: what each layer imports, and when.
 
-Expectations come from the architecture (exceptions < simulation < core):
+Expectations come from the architecture (exceptions < simulation < core < models < io <
+signals < identification < compensation < scenario < report < runner < cli):
 the modules' import statements are read with ``ast`` and fresh interpreters
 show which third-party packages a given use loads.
 """
@@ -35,31 +36,55 @@ def _imports(path):
     return out
 
 
+#: The layers below the scenario engine, lowest first: a module may import its own layer
+#: and the layers before it, never one after it (each sub-package's docstring says so).
+LAYERS = ("exceptions", "simulation", "core", "models", "io", "signals", "identification",
+          "compensation")
+#: leaf modules any layer may import (``_cache`` sets numba's cache before numba loads)
+LEAVES = ("hammerstein.exceptions", "hammerstein._cache")
+
+
 def _files(layer):
     return sorted((PACKAGE / layer).glob("*.py"))
+
+
+def _layer_of(module):
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
 
 
 def test_simulation_never_imports_core_or_higher_layers():
     for path in _files("simulation"):
         for module, _ in _imports(path):
             if module.startswith("hammerstein"):
-                assert (module in ("hammerstein.exceptions", "hammerstein._cache")   # leaves
+                assert (module in LEAVES
                         or module.startswith("hammerstein.simulation")), (path.name, module)
 
 
-def test_core_imports_only_downward():
-    allowed = ("hammerstein.exceptions", "hammerstein.simulation", "hammerstein.core")
-    for path in _files("core"):
+@pytest.mark.parametrize("layer", LAYERS[2:])
+def test_each_layer_imports_only_downward(layer):
+    allowed = LAYERS[:LAYERS.index(layer) + 1]
+    assert _files(layer), layer
+    for path in _files(layer):
         for module, _ in _imports(path):
-            if module.startswith("hammerstein"):
-                assert module.startswith(allowed), (path.name, module)
+            if module.startswith("hammerstein.") and module not in LEAVES:
+                assert _layer_of(module) in allowed, (layer, path.name, module)
 
 
-@pytest.mark.parametrize("layer", ["core", "simulation"])
+@pytest.mark.parametrize("layer", LAYERS[1:])
 def test_no_function_level_imports_of_the_package(layer):
     for path in _files(layer):
         inner = [m for m, in_function in _imports(path) if in_function and m.startswith("hammerstein")]
         assert inner == [], (path.name, inner)
+
+
+def test_no_package_directory_holds_more_than_30_percent_of_the_lines():
+    def lines(d):
+        return sum(len(f.read_text(encoding="utf-8").splitlines()) for f in d.rglob("*.py"))
+    total = lines(PACKAGE)
+    for d in PACKAGE.iterdir():
+        if d.is_dir() and (d / "__init__.py").exists():
+            assert lines(d) <= 0.30 * total, (d.name, lines(d), total)
 
 
 def _fresh(code):
@@ -95,7 +120,7 @@ reference = np.vstack([np.linspace(0, 4, 50), np.linspace(0, -3, 50)])
 result = simulate_chain(InverseMultiplicativeCompensator(model), HammersteinPlant(model, 1e-4),
                         reference)
 snapshots["tracking error"] = float(np.max(np.abs(result.outputs - reference)))
-from hammerstein.core.presets import load_plant
+from hammerstein.io.presets import load_plant
 plant = load_plant("rakotondrabe-2dof", dynamics=True)
 y, _ = plant.simulate(np.zeros((2, 50)))
 snapshots["preset plant simulated"] = [type(sys.modules.get("control")).__name__,

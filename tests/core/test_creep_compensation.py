@@ -12,14 +12,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hammerstein.core.compensators import CompensatorError
-from hammerstein.core.creep import Creep, creep_dynamics, minimum_phase_margin
-from hammerstein.core.creep_identification import CreepIdentifier
-from hammerstein.core.dynamics import bending_modes, discretize
-from hammerstein.core.excitation import excitation_set
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.compensators import CompensatorError
+from hammerstein.models.creep import Creep, creep_dynamics, minimum_phase_margin
+from hammerstein.identification.creep_identification import CreepIdentifier
+from hammerstein.models.dynamics import bending_modes, discretize
+from hammerstein.signals.excitation import excitation_set
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import load_plant
 from hammerstein.simulation import linear_steps
 
 T = 1e-3

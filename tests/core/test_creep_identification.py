@@ -1,4 +1,4 @@
-"""Creep identified from staircases (core/creep_identification.py).
+"""Creep identified from staircases (identification/creep_identification.py).
 
 Expectations are derived independently of the fit: the true creep's closed-form
 step response ``s(t) = d + sum_k w_k (1 - exp(-t / tau_k))`` (lags on another
@@ -11,14 +11,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hammerstein.core.creep import Creep, creep_from_table
-from hammerstein.core.creep_identification import (CreepIdentifier, hysteresis_frequency,
+from hammerstein.models.creep import Creep, creep_from_table
+from hammerstein.identification.creep_identification import (CreepIdentifier, hysteresis_frequency,
                                                    remove_creep, staircase_steps)
-from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine, excitation_set
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.preisach_identification import identify_preisach_records
-from hammerstein.core.presets import load_plant
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine, excitation_set
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.identification.preisach_identification import identify_preisach_records
+from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import IdentificationError
 
 T = 1e-3           # creep is slow: 1 kHz is enough and keeps the tests fast

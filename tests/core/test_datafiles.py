@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hammerstein.core.datafiles import DataFileError, Record, bundled_data, read_record
+from hammerstein.io.datafiles import DataFileError, Record, bundled_data, read_record
 
 N = 20
 T = 1e-3
@@ -124,7 +124,7 @@ def test_directory_is_rejected(tmp_path):
 
 
 def test_read_records_several_columns_by_name_and_index(tmp_path):
-    from hammerstein.core.datafiles import read_records
+    from hammerstein.io.datafiles import read_records
     path = tmp_path / "mimo.csv"
     rows = ["t;ux;uy;x;y"] + [f"{i * 0.5};{i};{-i};{2 * i};{3 * i}" for i in range(12)]
     path.write_text("\n".join(rows) + "\n")

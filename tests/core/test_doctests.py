@@ -9,12 +9,18 @@ import pytest
 
 import hammerstein.cli
 import hammerstein.core
+import hammerstein.compensation
+import hammerstein.identification
+import hammerstein.io
+import hammerstein.models
 import hammerstein.report
+import hammerstein.signals
 import hammerstein.scenario
 import hammerstein.simulation
 
-PACKAGES = (hammerstein.core, hammerstein.simulation, hammerstein.scenario, hammerstein.report,
-            hammerstein.cli)
+PACKAGES = (hammerstein.core, hammerstein.models, hammerstein.io, hammerstein.signals,
+            hammerstein.identification, hammerstein.compensation, hammerstein.simulation,
+            hammerstein.scenario, hammerstein.report, hammerstein.cli)
 MODULES = ["hammerstein.exceptions", "hammerstein.simulation", "hammerstein.runner"] + sorted(
     info.name for pkg in PACKAGES for info in pkgutil.iter_modules(pkg.__path__, pkg.__name__ + "."))
 

@@ -65,8 +65,8 @@ def test_builtin_bases_are_kept(name, builtin):
 
 
 def test_names_stay_importable_from_their_former_modules():
-    from hammerstein.core.compensators import CompensatorDivergence, RangeWarning
-    from hammerstein.core.hysteresis import HysteresisError
+    from hammerstein.compensation.compensators import CompensatorDivergence, RangeWarning
+    from hammerstein.models.hysteresis import HysteresisError
     from hammerstein.scenario.regression import BaselineError
     from hammerstein.scenario.schema import ScenarioError
     assert CompensatorDivergence is exceptions.CompensatorDivergence

@@ -6,12 +6,12 @@ import control
 import numpy as np
 import pytest
 
-from hammerstein.core.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
+from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
                                        design_axis, diagonal_controller, hysteresis_slopes,
                                        mixsyn_controller)
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.preisach import MultivariableHysteresis, PreisachModel
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
 from hammerstein.exceptions import FeedbackError
 
 T = 5e-5

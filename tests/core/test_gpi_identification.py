@@ -11,17 +11,17 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine
-from hammerstein.core.generalized_pi import GeneralizedPI, envelope
-from hammerstein.core.gpi_identification import (
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.models.generalized_pi import GeneralizedPI, envelope
+from hammerstein.identification.gpi_identification import (
     GeneralizedPIIdentifier, envelopes, monotone_quadratic_columns, play_thresholds,
     quadratic_coefficients)
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_model, load_plant, save_model
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.exceptions import HysteresisError, IdentificationError
 
 T = 1e-3          # quasi-static records: the hysteresis is rate independent

@@ -6,12 +6,12 @@ import warnings
 import numpy as np
 import pytest
 
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
-from hammerstein.core.hammerstein_compensator import (HammersteinCompensator, continuation,
+from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.compensation.hammerstein_compensator import (HammersteinCompensator, continuation,
                                                       fade_in)
-from hammerstein.core.presets import PresetError, dynamics_from_table, load_dynamics, load_plant, \
+from hammerstein.io.presets import PresetError, dynamics_from_table, load_dynamics, load_plant, \
     save_dynamics
-from hammerstein.core.lti import dc_gain
+from hammerstein.models.lti import dc_gain
 
 COUPLED = "scenarios/presets/coupled-2dof.toml"
 

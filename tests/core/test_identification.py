@@ -10,11 +10,11 @@ import pytest
 
 from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
                          PrandtlIshlinskii, load_model)
-from hammerstein.core.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
+from hammerstein.identification.identification import (ClosedFormPI, IdentificationError, LeastSquaresPI,
                                         MultivariableIdentifier, ascending_branches, fit_report,
                                         partition_thresholds)
-from hammerstein.core.presets import read_toml
-from hammerstein.core.sensors import Sensor, characterize, identify_plant
+from hammerstein.io.presets import read_toml
+from hammerstein.identification.sensors import Sensor, characterize, identify_plant
 
 EQ12 = np.array([0.07, 0.32, 0.74, 1.3, 2.0, 2.8, 3.67, 4.61, 5.54, 6.5, 7.34, 8.1, 8.8, 9.3, 9.7])
 T = 5e-5

@@ -6,7 +6,7 @@ import pytest
 
 from hammerstein import InverseMultiplicativeCompensator, load_plant
 from hammerstein import simulation as sim
-from hammerstein.core.interop import (chain_system, compensator_system, hammerstein_system,
+from hammerstein.io.interop import (chain_system, compensator_system, hammerstein_system,
                                  pi_system)
 
 ATOL = 1e-9

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from hammerstein.core.hysteresis import HysteresisError, PrandtlIshlinskii, play
-from hammerstein.core.inverse import InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
+from hammerstein.models.hysteresis import HysteresisError, PrandtlIshlinskii, play
+from hammerstein.compensation.inverse import InversePlay, kuhnen_inverse, kuhnen_inverse_parameters
 
 T = 5e-5
 

@@ -1,13 +1,13 @@
-"""hammerstein.core.inversion: round trips G(G^-1 r) = r, ZPETC preview and gain error,
+"""hammerstein.compensation.inversion: round trips G(G^-1 r) = r, ZPETC preview and gain error,
 chunked = whole, coupled non-minimum-phase MIMO, FFT periodic inverse."""
 
 import control
 import numpy as np
 import pytest
 
-from hammerstein.core.inversion import ZPETCInverse, inverse_system, preview_inverse
-from hammerstein.core.lti import state_space_dynamics
-from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.compensation.inversion import ZPETCInverse, inverse_system, preview_inverse
+from hammerstein.models.lti import state_space_dynamics
+from hammerstein.models.dynamics import DynamicsError, bending_modes, discretize
 
 T = 5e-5
 

@@ -1,4 +1,4 @@
-"""Least squares on the triangular factor (core/lsq.py) against scipy's BVLS, the previous solver.
+"""Least squares on the triangular factor (identification/lsq.py) against scipy's BVLS, the previous solver.
 
 The identifications used ``scipy.optimize.lsq_linear(method="bvls")`` on the
 tall regression matrices; they now factor the matrix once and solve the
@@ -28,9 +28,9 @@ import numpy as np
 import pytest
 from scipy.optimize import lsq_linear
 
-from hammerstein.core import gpi_identification, preisach_identification, record_identification
-from hammerstein.core.datafiles import bundled_data, read_record
-from hammerstein.core.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
+from hammerstein.identification import gpi_identification, preisach_identification, record_identification
+from hammerstein.io.datafiles import bundled_data, read_record
+from hammerstein.identification.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
 
 
 def _bvls(A, b, lower, ridge=0.0):

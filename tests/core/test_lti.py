@@ -1,14 +1,14 @@
-"""hammerstein.core.lti: validation, identification of G, sensor handling, figure."""
+"""hammerstein.models.lti: validation, identification of G, sensor handling, figure."""
 
 import control
 import numpy as np
 import pytest
 
-from hammerstein.core.dynamics import DynamicsError, bending_modes, discretize
-from hammerstein.core.lti import (DynamicsIdentifier, align_dc_gain, compare_frequency_responses,
+from hammerstein.models.dynamics import DynamicsError, bending_modes, discretize
+from hammerstein.models.lti import (DynamicsIdentifier, align_dc_gain, compare_frequency_responses,
                                   continuous_system, dc_gain, excitation, modal_parameters,
                                   sensor_filter, state_space_dynamics)
-from hammerstein.core.sensors import Sensor
+from hammerstein.identification.sensors import Sensor
 
 T = 5e-5
 FN, ZETA = np.array([310.0, 290.0]), np.array([0.15, 0.20])
@@ -224,7 +224,7 @@ def _loop_response(A, B, C, D, u, x0):
 def test_simulate_equals_the_state_recursion(kind):
     """_simulate (modal first-order filters; the regressors when A is defective) against
     the plain state recursion, from a non-zero initial state."""
-    from hammerstein.core.lti import _simulate
+    from hammerstein.models.lti import _simulate
     rng = np.random.default_rng(7)
     if kind == "lightly-damped modes":
         G = discretize(bending_modes(FN, [0.02, 0.05], ["x", "y"]), T)

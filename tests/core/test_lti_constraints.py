@@ -4,8 +4,8 @@ import control
 import numpy as np
 import pytest
 
-from hammerstein.core.dynamics import bending_modes, discretize
-from hammerstein.core.lti import DynamicsIdentifier, dc_gain, excitation, modal_parameters
+from hammerstein.models.dynamics import bending_modes, discretize
+from hammerstein.models.lti import DynamicsIdentifier, dc_gain, excitation, modal_parameters
 
 T = 5e-5
 

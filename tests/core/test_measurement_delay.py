@@ -1,6 +1,6 @@
 """``estimate_measurement_delay``: the acquisition's delay from broadband records.
 
-The records are the multisines of :func:`hammerstein.core.excitation.excitation_set`
+The records are the multisines of :func:`hammerstein.signals.excitation.excitation_set`
 (10 Hz - 5 kHz at 20 kHz, the ones ``hammerstein excitation`` writes) played
 from rest through actuators with 40 nm sensor noise; the acquisition's delay
 is inserted by shifting the measured outputs by ``d`` samples (zeros first).
@@ -19,9 +19,9 @@ import pytest
 
 from gpi_actuator import GPIActuator
 from outside_actuator import OutsideActuator
-from hammerstein.core.excitation import excitation_set
-from hammerstein.core.lti import estimate_measurement_delay
-from hammerstein.core.presets import load_plant
+from hammerstein.signals.excitation import excitation_set
+from hammerstein.models.lti import estimate_measurement_delay
+from hammerstein.io.presets import load_plant
 
 T = 5e-5
 ROOT = Path(__file__).resolve().parents[2]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from hammerstein.core import metrics as met
-from hammerstein.core.hysteresis import play
+from hammerstein.signals import metrics as met
+from hammerstein.models.hysteresis import play
 
 P = 400  # samples per period
 

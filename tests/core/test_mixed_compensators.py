@@ -1,4 +1,4 @@
-"""The rate-independent kinds over a Preisach (mixed) model: hammerstein.core.mixed_compensators.
+"""The rate-independent kinds over a Preisach (mixed) model: hammerstein.compensation.mixed_compensators.
 
 Expectations from the laws themselves, not from the code's output:
 
@@ -16,17 +16,17 @@ Expectations from the laws themselves, not from the code's output:
 import numpy as np
 import pytest
 
-from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator)
-from hammerstein.core.mixed_compensators import (LinearInverseCompensator, diagonal_model,
+from hammerstein.compensation.mixed_compensators import (LinearInverseCompensator, diagonal_model,
                                                  mixed_compensator, mixed_gain)
-from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.core.preisach_identification import PreisachIdentifier
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_plant, save_model
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.identification.preisach_identification import PreisachIdentifier
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_plant, save_model
 from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.registry import build_compensator
 

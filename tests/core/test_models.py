@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hammerstein.core.compensators import convergence_report
-from hammerstein.core.models import (MODEL_CLASSES, choose_kind, convergent_gain, kind_problem,
+from hammerstein.compensation.compensators import convergence_report
+from hammerstein.compensation.model_classes import (MODEL_CLASSES, choose_kind, convergent_gain, kind_problem,
                                      law_radius, model_class)
-from hammerstein.core.presets import load_plant
+from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator
 

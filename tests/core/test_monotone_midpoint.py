@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import hammerstein as hs
-from hammerstein.core.identification import LeastSquaresPI
+from hammerstein.identification.identification import LeastSquaresPI
 
 
 def _siso(weights, thresholds):

@@ -14,12 +14,12 @@ import pytest
 
 from hammerstein import (HammersteinPlant, InverseMultiplicativeCompensator, MultivariablePI,
                          PrandtlIshlinskii, simulate_chain, simulate_chain_batch)
-from hammerstein.core.creep import Creep, creep_from_table
-from hammerstein.core.dynamics import sampled_bending_modes
-from hammerstein.core.generalized_pi import GeneralizedPI
-from hammerstein.core.preisach import (MultivariableHysteresis, Polynomial, PreisachModel,
+from hammerstein.models.creep import Creep, creep_from_table
+from hammerstein.models.dynamics import sampled_bending_modes
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.models.preisach import (MultivariableHysteresis, Polynomial, PreisachModel,
                                        component_from_table, hysteresis_from_table)
-from hammerstein.core.presets import model_from_table, model_to_table
+from hammerstein.io.presets import model_from_table, model_to_table
 from hammerstein.exceptions import HysteresisError, PresetError
 
 T = 5e-5

@@ -1,7 +1,7 @@
 """The drive of a compensator over a Preisach model starts from the model's rest (demagnetised) memory.
 
 A Preisach model at rest holds a memory (the demagnetised staircase of its
-hysterons, see :mod:`hammerstein.core.preisach`); its exact inverse must start
+hysterons, see :mod:`hammerstein.models.preisach`); its exact inverse must start
 from the same memory as the model it inverts, or every level it tracks
 afterwards is offset by the hysterons the reference never switches. The
 expectation is independent of the compensator: the model, driven from its own
@@ -13,10 +13,10 @@ import control
 import numpy as np
 import pytest
 
-from hammerstein.core.drive import DriveStream, drive_signal
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.preisach import MultivariableHysteresis, PreisachModel
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.compensation.drive import DriveStream, drive_signal
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 
 T = 1e-4
 

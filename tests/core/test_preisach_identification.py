@@ -7,16 +7,16 @@ fit), from closed forms (an even coupling is the same at +A and -A) and from rou
 import numpy as np
 import pytest
 
-from hammerstein.core.datafiles import MultiRecord
-from hammerstein.core.excitation import decreasing_sine
-from hammerstein.core.generalized_pi import GeneralizedPI
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.core.preisach_identification import PreisachIdentifier, _smoothing_rows
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_model, load_plant, save_model
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.identification.preisach_identification import PreisachIdentifier, _smoothing_rows
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.exceptions import CompensatorError, IdentificationError
 
 T = 1e-3          # quasi-static records: the hysteresis is rate independent

@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from hammerstein import HammersteinPlant, simulate_chain
-from hammerstein.core.generalized_pi import GeneralizedPI
-from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_plant
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.registry import build_compensator
 

@@ -415,7 +415,7 @@ def test_compensator_chunked_equals_whole(preset_plant, kind, amp, freq, phase, 
 
 def _kuhnen_inverse():
     try:
-        module = importlib.import_module("hammerstein.core.inverse")
+        module = importlib.import_module("hammerstein.compensation.inverse")
     except ImportError:
         pytest.skip("hammerstein.inverse is absent: no Kuhnen-Janocha inverse to test yet")
     if not hasattr(module, "kuhnen_inverse"):

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from hammerstein import load_model
-from hammerstein.core.datafiles import bundled_data, read_record
-from hammerstein.core.identification import (ClosedFormPI, LeastSquaresPI, ascending_branches,
+from hammerstein.io.datafiles import bundled_data, read_record
+from hammerstein.identification.identification import (ClosedFormPI, LeastSquaresPI, ascending_branches,
                                         fit_report)
 from hammerstein.cli.identify import add_parser
-from hammerstein.core.presets import read_toml
+from hammerstein.io.presets import read_toml
 
 
 @pytest.fixture(scope="module")

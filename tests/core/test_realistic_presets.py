@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hammerstein.core.hysteresis import MultivariablePI
-from hammerstein.core.preisach import MultivariableHysteresis
-from hammerstein.core.presets import load_plant
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.models.preisach import MultivariableHysteresis
+from hammerstein.io.presets import load_plant
 
 ROOT = Path(__file__).resolve().parents[2]
 PRESETS = {

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import PresetError, load_model, model_from_table, read_toml
-from hammerstein.core.record_identification import reversal_points
+from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import PresetError, load_model, model_from_table, read_toml
+from hammerstein.identification.record_identification import reversal_points
 from hammerstein.simulation import simulate_chain
 
 
@@ -273,7 +273,7 @@ def test_out_refuses_a_file_the_project_did_not_write(tmp_path, capsys):
 # -- Hammerstein presets (PI + state_space dynamics) -----------------------------------------
 def test_state_space_preset_is_accepted_with_its_offset(tmp_path):
     import control
-    from hammerstein.core.presets import load_plant, save_model
+    from hammerstein.io.presets import load_plant, save_model
     model = MultivariablePI([[PrandtlIshlinskii([0, 1], [1.0, 0.5])]], ["u"], ["y"], [2.0],
                             output_offset=[1.0])
     wn = 2 * np.pi * 200
@@ -300,9 +300,9 @@ def test_dynamics_option_writes_a_preset_or_says_why_not(tmp_path, capsys):
                           "--sampling-period", "1e-4", "--out", tmp_path / "p.toml", "--dynamics")
     assert status == 2 and "--dynamics-records" in err
     try:
-        import hammerstein.core.lti  # noqa: F401
+        import hammerstein.models.lti  # noqa: F401
     except ImportError:
         status, _, err = _cli(capsys, "identify", data, "--input", "u", "--output", "y",
                               "--sampling-period", "1e-4", "--out", tmp_path / "p.toml",
                               "--dynamics", "--dynamics-records", data)
-        assert status == 1 and "hammerstein.core.lti" in err and not (tmp_path / "p.toml").exists()
+        assert status == 1 and "hammerstein.models.lti" in err and not (tmp_path / "p.toml").exists()

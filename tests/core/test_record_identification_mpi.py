@@ -14,10 +14,10 @@ import pytest
 import control
 
 from hammerstein.cli.main import main
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
-from hammerstein.core.hysteresis import HysteresisError, MultivariablePI, OutputMap, PrandtlIshlinskii
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_model, model_from_table, model_to_table
+from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.models.hysteresis import HysteresisError, MultivariablePI, OutputMap, PrandtlIshlinskii
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import load_model, model_from_table, model_to_table
 from hammerstein.exceptions import PresetError
 from hammerstein.simulation import simulate_chain, simulate_hysteresis, simulate_plant
 

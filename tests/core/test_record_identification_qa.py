@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.record_identification import (ASYMMETRY_NOTE_PERCENT, loop_asymmetry,
+from hammerstein.identification.record_identification import (ASYMMETRY_NOTE_PERCENT, loop_asymmetry,
                                                     split_record)
-from hammerstein.core.datafiles import MultiRecord
+from hammerstein.io.datafiles import MultiRecord
 
 
 def _loop(distortion, n=1000, noise=0.002, seed=1):

@@ -5,7 +5,7 @@ import re
 import numpy as np
 import pytest
 
-from hammerstein.core import references as refs
+from hammerstein.signals import references as refs
 
 T = 5e-5  # s, the paper's sampling period
 

@@ -4,9 +4,9 @@ import control
 import numpy as np
 import pytest
 
-from hammerstein.core.dynamics import bending_modes, discretize, sampled_bending_modes, zoh
+from hammerstein.models.dynamics import bending_modes, discretize, sampled_bending_modes, zoh
 from hammerstein.exceptions import DynamicsError
-from hammerstein.core.presets import load_plant
+from hammerstein.io.presets import load_plant
 
 
 @pytest.mark.parametrize("T", [1e-5, 5e-5, 1e-3])
@@ -76,7 +76,7 @@ def test_subsystem_indexing_names_what_was_expected(key):
 def test_zpetc_of_a_sampled_system_equals_that_of_its_control_system(coupled):
     # the ZPETC design reads A, B, C, D, dt (and the diagonal subsystems when G is decoupled):
     # from the SampledSystem it must give the filter of the control.StateSpace bit for bit
-    from hammerstein.core.inversion import ZPETCInverse
+    from hammerstein.compensation.inversion import ZPETCInverse
     s = sampled_bending_modes([310.0, 290.0], [0.15, 0.2], ["x", "y"], 5e-5)
     if coupled:
         s.C = s.C + np.array([[0.0, 0.0, 0.05, 0.0], [0.08, 0.0, 0.0, 0.0]])  # modes coupled

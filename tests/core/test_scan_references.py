@@ -14,9 +14,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from hammerstein.core import metrics as met
-from hammerstein.core import references as refs
-from hammerstein.core.hysteresis import PrandtlIshlinskii
+from hammerstein.signals import metrics as met
+from hammerstein.signals import references as refs
+from hammerstein.models.hysteresis import PrandtlIshlinskii
 from hammerstein.scenario.execute import run_case
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError

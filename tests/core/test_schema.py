@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from hypothesis import given, strategies as st
 
-from hammerstein.core.presets import PresetError, load_plant, model_from_table
+from hammerstein.io.presets import PresetError, load_plant, model_from_table
 from hammerstein.core.schema import (Field, Invalid, NestedInvalid, check_table, choice, did_you_mean,
                                      integer, nested_table, number, table_problems)
 

@@ -1,4 +1,4 @@
-"""Judging a trial against the best one from noisy records (``hammerstein.core.trial_noise``).
+"""Judging a trial against the best one from noisy records (``hammerstein.signals.trial_noise``).
 
 Expectations, derived independently of the code:
 
@@ -21,7 +21,7 @@ Expectations, derived independently of the code:
 import numpy as np
 import pytest
 
-from hammerstein.core.trial_noise import compare_trials, trial_error, white_noise_sigma
+from hammerstein.signals.trial_noise import compare_trials, trial_error, white_noise_sigma
 from hammerstein.exceptions import CompensatorError
 
 T = 5e-5          # s, 20 kHz

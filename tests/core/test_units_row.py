@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hammerstein.core.datafiles import read_record, read_records
+from hammerstein.io.datafiles import read_record, read_records
 
 
 def _write(path, header, units, sep=","):

@@ -24,9 +24,9 @@ import pytest
 from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,
                          PerAxisInverseCompensator, PrandtlIshlinskii, StaticGainCompensator,
                          diagonal_compensator)
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.hysteresis import OutputMap
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.hysteresis import OutputMap
+from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import CompensatorDivergence
 from hammerstein.simulation import is_fusable, simulate_compensator
 from hammerstein.export import STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE, AmplifierLimits, export_c

@@ -9,7 +9,7 @@ import pytest
 
 from hammerstein import InverseMultiplicativeCompensator
 from hammerstein.cli.main import main
-from hammerstein.core.presets import load_plant, save_model
+from hammerstein.io.presets import load_plant, save_model
 from hammerstein.export import MARKER
 
 from conftest import Harness, needs_cc

@@ -20,14 +20,14 @@ import pytest
 
 from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,
                          PerAxisInverseCompensator, PrandtlIshlinskii, StaticGainCompensator)
-from hammerstein.core.creep import Creep
-from hammerstein.core.generalized_pi import GeneralizedPI
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.mixed_compensators import mixed_compensator
-from hammerstein.core.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
+from hammerstein.models.creep import Creep
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.mixed_compensators import mixed_compensator
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.cli.main import main
-from hammerstein.core.presets import load_plant, save_model
+from hammerstein.io.presets import load_plant, save_model
 from hammerstein.export import STATUS_DIVERGED, STATUS_RANGE, export_c
 from hammerstein.export.fmu import build_fmu, platform_folder
 

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from conftest import CFLAGS, COMPILERS, needs_cc
 
-from hammerstein.core.compensators import InverseMultiplicativeCompensator
-from hammerstein.core.feedback import (AmplifierLimits, FeedbackLoop, Sensor, design_axis,
+from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, design_axis,
                                        diagonal_controller)
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.plant import HammersteinPlant
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.plant import HammersteinPlant
 from hammerstein.exceptions import ExportError
 from hammerstein.export.feedback_c import export_feedback_c
 

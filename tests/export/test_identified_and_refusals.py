@@ -12,8 +12,8 @@ import pytest
 from hammerstein import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                          StaticGainCompensator)
 from hammerstein.cli.main import main
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.presets import load_model, load_plant
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.io.presets import load_model, load_plant
 from hammerstein.exceptions import ExportError
 from hammerstein.export import STATUS_RANGE, AmplifierLimits, export_c
 from hammerstein.export.build import limits_from_table

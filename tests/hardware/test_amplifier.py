@@ -10,9 +10,9 @@ import warnings
 import numpy as np
 import pytest
 
-from hammerstein.core.amplifier import (Amplifier, AmplifierChannel, amplifier_from_table,
+from hammerstein.models.amplifier import (Amplifier, AmplifierChannel, amplifier_from_table,
                                         drive_metrics)
-from hammerstein.core.presets import load_plant
+from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import AmplifierError, AmplifierWarning, PresetError
 
 

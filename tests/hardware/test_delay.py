@@ -14,8 +14,8 @@ import pytest
 import scipy.signal
 
 from hammerstein.cli.evaluate import evaluate
-from hammerstein.core.ilc import estimate_delay
-from hammerstein.core.references import circle, raster
+from hammerstein.compensation.ilc import estimate_delay
+from hammerstein.signals.references import circle, raster
 
 T = 5e-5
 DELAYS = range(0, 21)

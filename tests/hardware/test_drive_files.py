@@ -14,13 +14,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.core.amplifier import amplifier_from_table
-from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+from hammerstein.models.amplifier import amplifier_from_table
+from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.cli.main import main
-from hammerstein.core.drive import (MIN_FADE_S, DriveStream, drive_fade_samples, drive_signal,
+from hammerstein.compensation.drive import (MIN_FADE_S, DriveStream, drive_fade_samples, drive_signal,
                                     hardware_fade, read_signals)
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.runner import run_scenario
 from hammerstein.scenario.execute import fade_samples, run_case

@@ -15,8 +15,8 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.drive import drive_fade_samples, read_signals
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.drive import drive_fade_samples, read_signals
+from hammerstein.io.presets import load_plant
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 10 }'
 T = 5e-5

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.amplifier import amplifier_from_table
-from hammerstein.core.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+from hammerstein.models.amplifier import amplifier_from_table
+from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
-from hammerstein.core.drive import default_fade_samples, drive_signal
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.drive import default_fade_samples, drive_signal
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 
 T = 5e-5
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from hammerstein import load_plant
-from hammerstein.core.hysteresis import MultivariablePI
-from hammerstein.core.identification import IdentificationError
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.identification.identification import IdentificationError
 from hammerstein.scenario.identification import identified_model
 from hammerstein.scenario.identification_cache import IdentificationCache
 from hammerstein.scenario.resolve import load_scenario

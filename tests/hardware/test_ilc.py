@@ -10,11 +10,11 @@ monotonic-convergence condition at low frequency equals ``|1 - gamma|``
 import numpy as np
 import pytest
 
-from hammerstein.core.drive import drive_signal
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.ilc import IterativeLearning, error_summary, estimate_delay
-from hammerstein.core.plant import HammersteinPlant
-from hammerstein.core.presets import load_dynamics
+from hammerstein.compensation.drive import drive_signal
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.ilc import IterativeLearning, error_summary, estimate_delay
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.io.presets import load_dynamics
 from hammerstein.exceptions import CompensatorError
 
 
@@ -114,8 +114,8 @@ def test_learning_outside_the_model_class_never_grows_by_more_than_10_percent():
     Euclidean error is at most 1.1 times the previous one, and the learning gains a factor 10."""
     import warnings
 
-    from hammerstein.core.ilc import LearningCompensator
-    from hammerstein.core.presets import load_plant
+    from hammerstein.compensation.ilc import LearningCompensator
+    from hammerstein.io.presets import load_plant
     from hammerstein.scenario.registry import build_compensator
     plant = load_plant("realistic-2dof")
     T = plant.sampling_period

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from hammerstein.cli import learn as learn_cli
-from hammerstein.core.ilc import HarmonicGains
+from hammerstein.compensation.ilc import HarmonicGains
 from hammerstein.exceptions import CompensatorError
 
 NOISE = 0.01                       # µm per harmonic per axis

@@ -19,8 +19,8 @@ Expectations, derived independently of the code:
 import numpy as np
 import pytest
 
-from hammerstein.core import references as refs
-from hammerstein.core.ilc import IterativeLearning
+from hammerstein.signals import references as refs
+from hammerstein.compensation.ilc import IterativeLearning
 from hammerstein.exceptions import CompensatorError
 
 NOISE = 0.04      # µm RMS, the sensor noise

@@ -20,11 +20,11 @@ import warnings
 import numpy as np
 import pytest
 
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
-from hammerstein.core.ilc import IterativeLearning, LearningCompensator
-from hammerstein.core.preisach import MultivariableHysteresis, PreisachModel
-from hammerstein.core.preisach_inverse import PreisachInverseCompensator
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.ilc import IterativeLearning, LearningCompensator
+from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import CompensatorError
 
 EDGES = np.linspace(-10.5, 10.5, 11)      # 10 levels: not the plant's 28/14-level grids
@@ -169,7 +169,7 @@ def test_learn_through_files_with_a_preisach_preset(tmp_path, repo_root):
     import pandas as pd
 
     from hammerstein.cli.main import main
-    from hammerstein.core.drive import read_signals
+    from hammerstein.compensation.drive import read_signals
     text = (repo_root / "hammerstein/presets/realistic-2dof.toml").read_text(encoding="utf-8")
     dynamics = text[text.index("[dynamics]"):text.index("[creep")]
     (tmp_path / "p.toml").write_text('[preset]\nname = "preisach-model"\nsampling_period = 5e-5\n'

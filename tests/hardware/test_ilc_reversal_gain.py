@@ -20,8 +20,8 @@ from the per-sample static law alone, without the learning's numbers:
 import numpy as np
 import pytest
 
-from hammerstein.core.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.core.ilc import IterativeLearning
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.compensation.ilc import IterativeLearning
 from hammerstein.exceptions import CompensatorError
 
 THRESHOLDS = np.array([0.0, 0.3, 0.6, 0.9, 1.2, 1.5])

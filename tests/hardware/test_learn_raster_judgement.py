@@ -30,9 +30,9 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core import references as refs
-from hammerstein.core.drive import drive_fade_samples, read_signals
-from hammerstein.core.presets import load_plant
+from hammerstein.signals import references as refs
+from hammerstein.compensation.drive import drive_fade_samples, read_signals
+from hammerstein.io.presets import load_plant
 
 T = 5e-5
 F = 40.0

@@ -17,8 +17,8 @@ import numpy as np
 import pandas as pd
 
 from hammerstein.cli.main import main
-from hammerstein.core.drive import drive_fade_samples, read_signals
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.drive import drive_fade_samples, read_signals
+from hammerstein.io.presets import load_plant
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
 T = 5e-5

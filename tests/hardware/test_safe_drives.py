@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core.amplifier import amplifier_from_table, records_amplifier_table
-from hammerstein.core.drive import hardware_fade, keep_start, shape_drive
-from hammerstein.core.presets import resolve_preset
+from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
+from hammerstein.compensation.drive import hardware_fade, keep_start, shape_drive
+from hammerstein.io.presets import resolve_preset
 
 T = 5e-5
 RANGE = 5.0          # V: a 30 µm circle on rakotondrabe-2dof needs about 6 V: shaped

@@ -175,7 +175,7 @@ def test_divergence_title_cites_only_what_is_drawn(recorded):
 
 
 def test_bode_figure_nyquist_line_is_a_grey_reference_and_the_legend_is_off_the_axes():
-    from hammerstein.core.dynamics import bending_modes, discretize
+    from hammerstein.models.dynamics import bending_modes, discretize
     from hammerstein.report.dynamics_figure import dynamics_bode_figure
     T = 5e-5
     G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), T)

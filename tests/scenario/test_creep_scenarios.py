@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import tomli_w
 
-from hammerstein.core.creep import Creep
-from hammerstein.core.presets import load_creep, load_plant, model_to_table
+from hammerstein.models.creep import Creep
+from hammerstein.io.presets import load_creep, load_plant, model_to_table
 from hammerstein.scenario.resolve import load_scenario
 
 CREEP = Creep([0.05, 0.5, 5.0], [0.01, 0.008, 0.006], instantaneous=0.98)

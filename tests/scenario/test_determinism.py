@@ -16,7 +16,7 @@ import sys
 import numpy as np
 import pytest
 
-from hammerstein.core.inversion import ZPETCInverse
+from hammerstein.compensation.inversion import ZPETCInverse
 from hammerstein.scenario import diskcache
 from hammerstein.scenario import identification as identified
 from hammerstein.scenario.identification_cache import IdentificationCache

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from hammerstein.core.presets import model_to_table
+from hammerstein.io.presets import model_to_table
 from hammerstein.scenario import diskcache
 from hammerstein.scenario import identification as identified
 

@@ -11,7 +11,7 @@ import os
 
 import pytest
 
-from hammerstein.core.presets import model_to_table
+from hammerstein.io.presets import model_to_table
 from hammerstein.scenario import diskcache
 from hammerstein.scenario import identification as identified
 

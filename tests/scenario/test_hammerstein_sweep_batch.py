@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hammerstein.core.hammerstein_compensator import fade_in
+from hammerstein.compensation.hammerstein_compensator import fade_in
 from hammerstein.scenario import sweeps
 from hammerstein.scenario.execute import run_case
 from hammerstein.scenario.resolve import load_scenario
@@ -95,7 +95,7 @@ def test_preisach_plant_and_exact_static_part_equal_one_by_one(tmp_path):
     Preisach model (exact static inverse, no fused law: the case runs alone)."""
     from pathlib import Path
 
-    from hammerstein.core.presets import load_plant, save_model
+    from hammerstein.io.presets import load_plant, save_model
 
     save_model(load_plant("rakotondrabe-2dof").hysteresis, tmp_path / "pi.toml")
     src = Path(__file__).resolve().parents[2] / "scenarios" / "presets" / "realistic-b-nocreep.toml"
@@ -134,7 +134,7 @@ exact = {{ kind = "hammerstein", model = "plant" }}
 
 def _general_start(comp, reference, period_samples, fade):
     """The start-up written with the inverse's public calls (initial_state, then filter)."""
-    from hammerstein.core.hammerstein_compensator import continuation, fade_in
+    from hammerstein.compensation.hammerstein_compensator import continuation, fade_in
     faded = fade_in(reference, fade)
     P = comp.preview_samples
     ext = np.concatenate([faded, continuation(faded, P, period_samples)], axis=1)
@@ -209,7 +209,7 @@ m = { kind = "multivariable" }
 def test_continuation_periodic_tolerance(scale, offset, periodic):
     """The continuation repeats the record one period earlier when its last 8 samples
     repeat those one period earlier to ``1e-9 max(max |r|, 1)``, else extrapolates."""
-    from hammerstein.core.hammerstein_compensator import continuation
+    from hammerstein.compensation.hammerstein_compensator import continuation
     period = 10
     k = np.arange(35)
     r = scale * np.sin(2 * np.pi * k / period)[np.newaxis] * 0.9
@@ -229,7 +229,7 @@ def test_continuations_of_many_records_follow_the_same_rule(scale, offset, perio
     """``continuations`` on records side by side: each one repeated one period earlier
     (to the same tolerance as one record) or extrapolated by the quadratic through its
     last three samples; short records hold their last sample; 0 samples is empty."""
-    from hammerstein.core.hammerstein_compensator import continuations
+    from hammerstein.compensation.hammerstein_compensator import continuations
     period = 10
     k = np.arange(35)
     r = scale * np.sin(2 * np.pi * k / period)[np.newaxis] * 0.9
@@ -302,7 +302,7 @@ def test_a_warning_of_the_joint_start_up_reprepares_the_cases_one_by_one(scenari
     group's cases are prepared again one by one, so each keeps its own warnings."""
     import warnings
 
-    from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+    from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
     real = HammersteinCompensator.fused_runs
     calls = []
 
@@ -326,8 +326,8 @@ def test_the_plants_own_dynamics_are_inverted_as_python_control_would(tmp_path):
     # dynamics = "plant" hands the preset's SampledSystem to the ZPETC design (no
     # python-control); the same compensator built on the plant's control.StateSpace must
     # run every sample of the case to the same bits
-    from hammerstein.core.dynamics import SampledSystem
-    from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+    from hammerstein.models.dynamics import SampledSystem
+    from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
     from hammerstein.scenario.execute import fade_samples
 
     path = tmp_path / "own.toml"

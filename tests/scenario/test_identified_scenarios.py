@@ -10,7 +10,7 @@ import pytest
 
 from hammerstein import PrandtlIshlinskii, load_model, load_plant
 from hammerstein.cli.main import main
-from hammerstein.core.compensators import convergence_report
+from hammerstein.compensation.compensators import convergence_report
 from hammerstein.scenario.identification import identified_model
 from hammerstein.scenario.identification_cache import IdentificationCache
 from hammerstein.scenario.records import resolve_data_path

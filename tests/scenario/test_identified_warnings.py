@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 import tomli_w
 
-from hammerstein.core.compensators import RangeWarning, check_reference_range
-from hammerstein.core.presets import load_model, load_plant, model_to_table
+from hammerstein.compensation.compensators import RangeWarning, check_reference_range
+from hammerstein.io.presets import load_model, load_plant, model_to_table
 from hammerstein.scenario.execute import run_case
 from hammerstein.scenario.resolve import load_scenario
 

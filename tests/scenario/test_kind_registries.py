@@ -11,8 +11,8 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.core import references as refs
-from hammerstein.core.hammerstein_compensator import HammersteinCompensator
+from hammerstein.signals import references as refs
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.core.schema import Field, integer, number, string
 from hammerstein.scenario import registry
 from hammerstein.scenario.schema import ScenarioError
@@ -153,7 +153,7 @@ def test_every_compensator_kind_declares_consistent_capabilities(name, entry):
     ('dynamics = "dyn.toml"', False),             # a dynamics file: what the user measured
 ])
 def test_report_says_when_the_hammerstein_kind_inverts_the_true_dynamics(tmp_path, extra, oracle):
-    from hammerstein.core.presets import load_plant, save_dynamics
+    from hammerstein.io.presets import load_plant, save_dynamics
     from hammerstein.runner import run_scenario
 
     plant = load_plant("rakotondrabe-2dof")

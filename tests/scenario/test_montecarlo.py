@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from hammerstein.core.hysteresis import PrandtlIshlinskii
+from hammerstein.models.hysteresis import PrandtlIshlinskii
 from hammerstein.exceptions import ScenarioError
 from hammerstein.scenario import montecarlo as mc
 from hammerstein.scenario.identification import ResolveContext
@@ -393,7 +393,7 @@ def test_range_warning_is_reported_once_per_study_not_per_case(tmp_path, amplitu
     ([5000.0, 5000.0], [0.3, 1.0], 1e-3)])
 def test_closed_form_zoh_equals_the_matrix_exponential(fn, zeta, T):
     """sampled_modes == expm(T [[A, B], [0, 0]]) of the continuous modes (overdamped too)."""
-    from hammerstein.core.dynamics import sampled_bending_modes, zoh
+    from hammerstein.models.dynamics import sampled_bending_modes, zoh
     fn, zeta = np.array(fn), np.array(zeta)
     p = len(fn)
     A, B = np.zeros((2 * p, 2 * p)), np.zeros((2 * p, p))

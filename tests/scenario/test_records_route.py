@@ -17,8 +17,8 @@ import pytest
 
 from hammerstein.cli._hardware import load_actuator, load_reference
 from hammerstein.cli.main import main
-from hammerstein.core.drive import drive_signal
-from hammerstein.core.presets import load_plant
+from hammerstein.compensation.drive import drive_signal
+from hammerstein.io.presets import load_plant
 from hammerstein.scenario.identification import (ResolveContext, excitation_records,
                                                  identified_from_records)
 from hammerstein.scenario.identify_tables import identify_table

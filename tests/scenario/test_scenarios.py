@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hammerstein import runner
-from hammerstein.core.references import REFERENCE_KINDS
+from hammerstein.signals.references import REFERENCE_KINDS
 from hammerstein.scenario import registry
 from hammerstein.scenario.resolve import load_scenario
 from hammerstein.scenario.schema import ScenarioError

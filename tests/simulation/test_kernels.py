@@ -14,7 +14,7 @@ from hammerstein import (CompensatorDivergence, CompensatorError, HammersteinPla
                          PrandtlIshlinskii, StaticGainCompensator, bending_modes, discretize,
                          load_plant)
 from hammerstein import simulation as sim
-from hammerstein.core.hysteresis import play
+from hammerstein.models.hysteresis import play
 
 # the kernels are checked on random references, which often leave the identified range:
 # its RangeWarning says so at every call and is not what these tests are about

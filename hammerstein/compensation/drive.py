@@ -1,0 +1,1019 @@
+"""Drive signals: the voltages to apply for a reference, within the amplifier's limits.
+
+:func:`drive_signal` is the one call from a reference to the input
+voltages of any compensator (rate-independent kinds and the Hammerstein
+compensator alike), as the scenarios compute them:
+
+1. **fade-in from rest.** The reference is faded in from the rest output
+   (0 µm) by the raised cosine ``w(t) = (1 - cos(pi t / t_f)) / 2`` over
+   ``fade_samples`` samples (:func:`hammerstein.compensation.hammerstein_compensator.fade_in`;
+   value and slope continuous at both ends). ``fade_samples = 0`` keeps a
+   reference that already starts at rest as it is; the default
+   (:func:`default_fade_samples`) is one period of the reference for a
+   reference that does not start at rest (a circle starts at x = R, which
+   a compensator would otherwise ask for in one sample) when the
+   compensator inverts the dynamics or the amplifier has a slew rate.
+2. **the compensator**, from rest. The Hammerstein compensator's ZPETC
+   inverse reads the reference ``preview_samples`` ahead and is continued
+   past the record's end (periodically for a periodic reference,
+   :func:`hammerstein.compensation.hammerstein_compensator.continuation`), exactly
+   as :meth:`HammersteinCompensator.run_reference` does.
+3. **the amplifier's limits**
+   (:class:`hammerstein.models.amplifier.Amplifier`): ``peak_input`` and
+   ``peak_slew`` per input are measured on the commanded voltages; beyond the
+   range or slew rate ``limits = "error"`` refuses, ``"warn"`` warns and
+   ``"clip"`` does not, and both then clip and slew-limit the drive.
+
+:class:`DriveStream` computes the same voltages chunk by chunk (a reference
+read or generated in pieces): every chunk size gives the same numbers as
+the whole record (``'stable'`` inversion excepted: it inverts the whole
+record at once and is only run by :func:`drive_signal`).
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
+from hammerstein.compensation.hammerstein_compensator import continuation
+from hammerstein.io.datafiles import numeric_column, signal_table
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
+from hammerstein.core.numbers import check_samples
+from hammerstein.exceptions import CompensatorError, DataFileError
+
+__all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
+           "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
+           "settled_step", "keep_start", "drive_fade_samples", "limit_start_up", "rest_output", "hardware_fade",
+           "read_signals", "signals_csv", "DRIVE_MARK"]
+
+
+def starts_at_rest(reference, rest=None, atol=1e-9):
+    """True when a reference starts at the rest output (its first sample at rest).
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    rest : array_like, shape (p,), optional
+        Rest output [µm]; zeros by default.
+    atol : float
+        Tolerance [µm].
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> starts_at_rest([[0.0, 1.0], [0.0, 0.5]]), starts_at_rest([[2.0, 1.0]])
+    (True, False)
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    if r.shape[1] == 0:
+        return True
+    r0 = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    return bool(np.all(np.abs(r[:, 0] - r0) <= atol))
+
+
+def default_fade_samples(reference, period_samples, settle_samples=None, compensator=None,
+                         amplifier=None, sampling_period=None):
+    """The default fade-in [samples]: one period for a reference that does not start at rest.
+
+    The rule, for every compensator kind: 0 for a reference that starts at
+    rest (0 µm); otherwise one period (at most ``settle_samples``) for a
+    compensator that inverts the dynamics (the inverse would otherwise ask
+    for a step of velocity, a spike of V) or when the amplifier has a
+    finite slew rate (a rate-independent compensator would otherwise step
+    its input from rest to the first sample's voltage, e.g. 9 V in one
+    sample for a circle). A rate-independent compensator on a plant
+    without a declared slew rate keeps its abrupt start (its ``peak_slew``
+    metric shows the step), so results of existing scenarios do not change.
+    With a slew rate, the ``sampling_period`` and a rate-independent
+    compensator, the fade is doubled (beyond ``settle_samples`` if need
+    be, up to the record's length) until the compensator's voltages during
+    the fade-in never step faster than the slew rate, or than the period
+    after the fade where the reference itself needs more (measured by
+    running the compensator over the fade and one period, from rest).
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    period_samples : int
+        One period of the reference [samples] (1 for a non-periodic record).
+    settle_samples : int, optional
+        At most this many (the samples the metrics skip).
+    compensator : object, optional
+        The compensator (one with ``run_reference`` inverts the dynamics);
+        None: treated as inverting the dynamics.
+    amplifier : hammerstein.models.amplifier.Amplifier, optional
+    sampling_period : float, optional
+        T [s], needed to hold the fade-in within the slew rate.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> circle = np.vstack([np.cos(np.linspace(0, 6.28, 100)), np.sin(np.linspace(0, 6.28, 100))])
+    >>> default_fade_samples(circle, 50), default_fade_samples(np.roll(circle, 25, axis=0), 50)
+    (50, 50)
+    >>> default_fade_samples(circle[::-1] * [[1], [0]], 50)         # starts at 0: no fade
+    0
+    """
+    if starts_at_rest(reference):
+        return 0
+    inverts = compensator is None or hasattr(compensator, "run_reference")
+    slew = amplifier is not None and any(np.isfinite(c.slew_rate) for c in amplifier.channels)
+    if not (inverts or slew):
+        return 0
+    n = int(period_samples)
+    n = n if settle_samples is None else int(min(n, settle_samples))
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    if not (slew and sampling_period and not inverts and hasattr(compensator, "simulate")):
+        return n
+    limit = np.array([c.slew_rate for c in amplifier.channels]) * float(sampling_period)
+    rest = np.array([c.rest for c in amplifier.channels])
+    n = max(n, 1)
+    while n < r.shape[1]:
+        m = min(n + 1 + int(period_samples), r.shape[1])
+        with warnings.catch_warnings():          # a probe: the case's own run warns
+            warnings.simplefilter("ignore")
+            u, _ = compensator.simulate(r[:, :m] * _fade_weights(0, m, n))
+        if _fade_within_slew(u, n, rest, limit):
+            break
+        n = int(min(2 * n, r.shape[1]))
+    return n
+
+
+def _fade_within_slew(u, fade, rest, limit):
+    """True when no step of the first ``fade + 1`` voltages (from rest) exceeds the slew limit
+    [V per sample] or, where the reference itself needs more, the steps after the fade."""
+    steps = np.abs(np.diff(np.concatenate([rest[:, None], u], axis=1), axis=1))
+    after = np.max(steps[:, fade + 1:], axis=1) if steps.shape[1] > fade + 1 else 0.0
+    return bool(np.all(np.max(steps[:, :fade + 1], axis=1) <= np.maximum(limit, after) * (1 + 1e-9)))
+
+
+@dataclass
+class DriveResult:
+    """Voltages for a reference and what they ask of the amplifier.
+
+    Parameters
+    ----------
+    inputs : numpy.ndarray, shape (m, n_samples)
+        The drive [V]: the commanded voltages, range-clipped and
+        slew-limited when an amplifier is given and ``limits`` is not
+        ``"error"``.
+    commanded : numpy.ndarray, shape (m, n_samples)
+        The compensator's voltages before any limit [V].
+    reference : numpy.ndarray, shape (p, n_samples)
+        The faded reference the actuator should follow [µm].
+    peak_input : numpy.ndarray, shape (m,)
+        ``max |u|`` of ``commanded`` [V].
+    peak_slew : numpy.ndarray, shape (m,)
+        ``max |du| / T`` of ``commanded`` from rest [V/s].
+    fade_samples : int
+        The fade-in used [samples].
+    problems : list of str
+        The limits exceeded (empty without an amplifier).
+    shaped : list of str
+        Where and by how much the drive was shaped into the limits measured
+        on the identification records (:func:`shape_drive`; empty when not).
+    """
+
+    inputs: np.ndarray
+    commanded: np.ndarray
+    reference: np.ndarray
+    peak_input: np.ndarray
+    peak_slew: np.ndarray
+    fade_samples: int
+    problems: list = field(default_factory=list)
+    shaped: list = field(default_factory=list)
+
+
+def _fade_weights(start, n, fade):
+    """Raised-cosine weights of samples ``start .. start + n - 1`` for a fade of ``fade`` samples."""
+    k = np.arange(start, start + n)
+    w = np.ones(n)
+    inside = k < fade
+    w[inside] = 0.5 * (1.0 - np.cos(np.pi * k[inside] / fade))
+    return w
+
+
+def _rest_state(compensator):
+    """The compensator's own state at rest (its ``initial_state()``), else zeros.
+
+    Zeros are the rest of a PI compensator, not of every compensator: the
+    exact inverse of a Preisach model starts from the model's demagnetised
+    hysterons (zero hysteron states would put the inverse on another memory
+    than the actuator's and offset every level it tracks afterwards).
+    """
+    if hasattr(compensator, "initial_state"):
+        return np.array(compensator.initial_state(), dtype=float)
+    return np.zeros(compensator.n_states) if hasattr(compensator, "n_states") else None
+
+
+class DriveStream:
+    """A compensator's drive computed chunk by chunk, equal to the whole-record computation.
+
+    Feed the reference with :meth:`push` (any chunk sizes, in order), then
+    call :meth:`finish`; the concatenated returns are the commanded
+    voltages of :func:`drive_signal` (before the amplifier).
+
+    Parameters
+    ----------
+    compensator : object
+        Any compensator (``simulate(reference, initial_state)``); a
+        :class:`~hammerstein.compensation.hammerstein_compensator.HammersteinCompensator`
+        with ``inversion = "zpetc"`` runs its preview (the first
+        ``preview_samples`` voltages come once that much reference has
+        arrived).
+    fade_samples : int
+        Fade-in from rest [samples] (0: none).
+    period_samples : int, optional
+        Period of a periodic reference: the ZPETC inverse's continuation
+        past the end (see :func:`continuation`).
+
+    Raises
+    ------
+    CompensatorError
+        For a Hammerstein compensator with ``inversion = "stable"`` (whole
+        record only: use :func:`drive_signal`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.io.presets import load_plant
+    >>> from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+    >>> plant = load_plant("rakotondrabe-2dof")
+    >>> comp = HammersteinCompensator(plant.hysteresis, plant.dynamics)
+    >>> t = np.arange(2000) * plant.sampling_period
+    >>> yr = 20 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    >>> stream = DriveStream(comp, fade_samples=200, period_samples=200)
+    >>> parts = [stream.push(yr[:, i:i + 700]) for i in range(0, 2000, 700)] + [stream.finish()]
+    >>> whole = drive_signal(comp, yr, plant.sampling_period, 200, fade_samples=200).inputs
+    >>> float(np.max(np.abs(np.concatenate(parts, axis=1) - whole))) < 1e-9
+    True
+    """
+
+    def __init__(self, compensator, fade_samples=0, period_samples=None):
+        self.compensator = compensator
+        self.fade = max(int(fade_samples), 0)
+        self.period_samples = period_samples
+        inv = getattr(compensator, "inverse", None)
+        if hasattr(compensator, "run_reference") and inv is None:
+            raise CompensatorError("inversion = 'stable' inverts the whole record at once: "
+                                   "compute its drive with drive_signal(...), not in chunks")
+        self._zpetc = inv is not None and hasattr(compensator, "run_reference")
+        self.preview = compensator.preview_samples if self._zpetc else 0
+        self._n = 0                       # reference samples received
+        self._head = None                 # ZPETC: first P faded samples until the filter starts
+        self._tail = None                 # last samples, for the continuation
+        self._state = None
+        self._keep = max((period_samples or 0) + 8, 3)
+
+    def _faded(self, chunk):
+        w = _fade_weights(self._n, chunk.shape[1], self.fade) if self._n < self.fade else None
+        return chunk if w is None else chunk * w      # rest output = 0 µm
+
+    def _remember(self, faded):
+        self._tail = faded if self._tail is None else np.concatenate([self._tail, faded], axis=1)
+        self._tail = self._tail[:, -self._keep:]
+
+    def push(self, reference):
+        """Voltages for the next chunk of reference.
+
+        Parameters
+        ----------
+        reference : array_like, shape (p, n)
+            The next n reference samples [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (m, n')
+            Commanded voltages [V]; ``n' = n`` except for the ZPETC inverse,
+            whose first ``preview_samples`` voltages wait for that much reference.
+        """
+        comp = self.compensator
+        r = np.asarray(reference, dtype=float)
+        r = np.atleast_2d(r)
+        faded = self._faded(r)
+        self._n += r.shape[1]
+        self._remember(faded)
+        if not self._zpetc:
+            if self._state is None:
+                self._state = _rest_state(comp)
+            u, self._state = comp.simulate(faded, self._state)
+            return u
+        if self._state is None:                       # the inverse starts on the first P samples
+            self._head = faded if self._head is None else np.concatenate([self._head, faded], 1)
+            P = self.preview
+            if self._head.shape[1] < P or self._head.shape[1] == 0:
+                return np.zeros((comp.model.n_inputs, 0))
+            inv = comp.inverse
+            s0 = inv.initial_state(self._head[:, 0])
+            if P:
+                _, s0 = inv.filter(self._head[:, :P], s0)
+            state = _rest_state(comp)      # e.g. a Preisach model's demagnetised hysterons
+            state[comp.hysteresis_compensator.n_states:] = s0
+            self._state = state
+            faded, self._head = self._head[:, P:], None
+        if faded.shape[1] == 0:
+            return np.zeros((comp.model.n_inputs, 0))
+        u, self._state = comp.simulate(faded, self._state)
+        return u
+
+    def finish(self):
+        """The last voltages (ZPETC: the preview past the end, from the continuation).
+
+        Returns
+        -------
+        numpy.ndarray, shape (m, n'')
+            [V].
+        """
+        comp = self.compensator
+        if not self._zpetc or self._tail is None:
+            return np.zeros((getattr(comp, "model").n_inputs, 0)) if hasattr(comp, "model") \
+                else np.zeros((0, 0))
+        P = self.preview
+        ext = continuation(self._tail, P, self.period_samples)
+        if self._state is None:          # fewer than P samples in all: start on what there is
+            head = np.concatenate([self._head, ext], axis=1)
+            n = self._head.shape[1]
+            stream = DriveStream(comp, 0, None)
+            stream._zpetc, stream.preview = True, P
+            out = stream.push(head)
+            return out[:, :n]
+        u, self._state = comp.simulate(ext, self._state)
+        return u
+
+
+def drive_signal(compensator, reference, sampling_period, period_samples=None, fade_samples=None,
+                 amplifier=None, limits="error", settle_samples=None, where=""):
+    """The input voltages of a compensator for a reference, from rest, within the amplifier's limits.
+
+    The voltages equal those of the scenario route (``hammerstein run``,
+    timeseries ``<input>_V``) for the same compensator, reference and
+    fade-in; the steps are listed in the module docstring.
+
+    Parameters
+    ----------
+    compensator : object
+        Any compensator of :mod:`hammerstein.compensation.compensators` or a
+        :class:`~hammerstein.compensation.hammerstein_compensator.HammersteinCompensator`.
+    reference : array_like, shape (p, n_samples)
+        ``yr(t)`` [µm] at the sampling period, from t = 0.
+    sampling_period : float
+        T [s].
+    period_samples : int, optional
+        One period of a periodic reference [samples] (default fade length,
+        continuation of the ZPETC preview).
+    fade_samples : int, optional
+        Fade-in from rest [samples]; default :func:`default_fade_samples`,
+        doubled (up to the record's length) while the fade-in would step an
+        input faster than the amplifier's slew rate.
+    amplifier : Amplifier, optional
+        The limits (e.g. ``plant.amplifier`` of a preset with an
+        ``[amplifier]`` table); None: none.
+    limits : {'error', 'warn', 'clip'}
+        Reaction to a drive beyond the amplifier
+        (:meth:`~hammerstein.models.amplifier.Amplifier.check`).
+    settle_samples : int, optional
+        Upper bound of the default fade.
+    where : str
+        Prefix of the limit messages (e.g. a case name).
+
+    Returns
+    -------
+    DriveResult
+
+    Raises
+    ------
+    AmplifierError
+        ``limits = "error"`` and the drive exceeds the amplifier.
+    CompensatorDivergence
+        When the compensator diverges.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.io.presets import load_plant
+    >>> from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+    >>> plant = load_plant("rakotondrabe-2dof", dynamics=False)
+    >>> comp = InverseMultiplicativeCompensator(plant.hysteresis)
+    >>> t = np.arange(2000) * plant.sampling_period
+    >>> yr = 30 * np.vstack([np.cos(2 * np.pi * 10 * t), np.sin(2 * np.pi * 10 * t)])
+    >>> d = drive_signal(comp, yr, plant.sampling_period, period_samples=2000, fade_samples=2000)
+    >>> d.inputs.shape, bool(d.peak_slew.max() < 1e3)    # V/s: faded in, no step from rest
+    ((2, 2000), True)
+    >>> abrupt = drive_signal(comp, yr, plant.sampling_period, period_samples=2000, fade_samples=0)
+    >>> bool(abrupt.peak_slew.max() > 1e5)               # V/s: 0 -> 6 V in one 50 µs sample
+    True
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    default = fade_samples is None
+    if default:
+        fade_samples = default_fade_samples(r, period_samples or 1, settle_samples, compensator,
+                                            amplifier, sampling_period)
+    fade_samples = int(min(max(int(fade_samples), 0), r.shape[1]))
+    u, faded = _compensate(compensator, r, period_samples, fade_samples)
+    if default and fade_samples and amplifier is not None:
+        # the default never steps an input faster than the slew limit while fading in (or, where
+        # the reference itself needs more, than after the fade): a fade too short for the first
+        # voltages is doubled until it is not (or covers the record)
+        limit = np.array([c.slew_rate for c in amplifier.channels]) * float(sampling_period)
+        rest = np.array([c.rest for c in amplifier.channels])
+        while fade_samples < r.shape[1]:
+            if _fade_within_slew(u, fade_samples, rest, limit):
+                break
+            fade_samples = int(min(2 * fade_samples, r.shape[1]))
+            u, faded = _compensate(compensator, r, period_samples, fade_samples)
+    peak, slew = drive_metrics(u, sampling_period)
+    problems, out = [], u
+    if amplifier is not None:
+        problems = amplifier.check(u, sampling_period, limits, where)
+        if problems:
+            out, _ = amplifier.limit(u, sampling_period)
+    return DriveResult(out, u, faded, peak, slew, fade_samples, problems)
+
+
+def _compensate(compensator, r, period_samples, fade_samples):
+    """The compensator's voltages (m, N) and the faded reference (p, N) [µm], from rest."""
+    if hasattr(compensator, "run_reference") and getattr(compensator, "inverse", 1) is None:
+        lead, state, faded = compensator.start(r, period_samples, fade_samples)   # 'stable'
+        u, _ = compensator.simulate(lead, state)
+    else:
+        stream = DriveStream(compensator, fade_samples, period_samples)
+        u = np.concatenate([stream.push(r), stream.finish()], axis=1)
+        faded = r * _fade_weights(0, r.shape[1], fade_samples) if fade_samples else r
+    return u, faded
+
+
+def apply_amplifier(amplifier: Amplifier | None, inputs, sampling_period):
+    """What reaches the actuator from a drive: the amplifier's clip, slew limit and bandwidth.
+
+    Parameters
+    ----------
+    amplifier : Amplifier or None
+        None: the drive itself.
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, n_samples)
+        [V].
+    """
+    if amplifier is None:
+        return np.asarray(inputs, dtype=float)
+    return amplifier.apply(inputs, sampling_period)[0]
+
+
+#: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
+DRIVE_MARK = "# hammerstein"
+
+
+def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file"):
+    """Columns of a drive, measured or reference CSV file, on a uniform time grid.
+
+    File conventions: a header row (lines starting with ``#`` are comments);
+    time in column ``time`` [s], strictly increasing; one column per signal
+    named as the model's inputs [V] or outputs [µm] (``mapping`` maps other
+    names); other columns are ignored. With ``sampling_period`` the columns
+    are interpolated linearly onto ``t_k = k T`` from 0 to the file's last
+    time (a file starting after 0 is refused); without it the file's times
+    must be uniform (relative spread below 1e-6) and are kept.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file (read through the 256 MiB data-file limit,
+        ``HAMMERSTEIN_MAX_DATA_BYTES``).
+    names : list of str
+        The signals wanted, in order.
+    time : str
+        Time column [s].
+    mapping : dict of str to str, optional
+        ``{name: column}`` for columns named otherwise.
+    sampling_period : float, optional
+        Resample onto this period [s].
+    what : str
+        What the file is, for messages (e.g. ``"--measured"``).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (n_samples,)
+        [s].
+    values : numpy.ndarray, shape (len(names), n_samples)
+    sampling_period : float
+        [s].
+
+    Raises
+    ------
+    DataFileError
+        Unreadable file, missing column (the message lists the columns
+        found), non-numeric values, times not increasing or not uniform.
+    """
+    try:
+        raw = bounded_read_bytes(path, "data", "data file")
+    except (FileLimitError, OSError) as exc:
+        raise DataFileError(f"{what}: {escape(path)}: "
+                            f"{getattr(exc, 'strerror', None) or exc}") from None
+    table = signal_table(raw, path, what)
+    del raw
+    mapping = dict(mapping or {})
+
+    def column(col, label):
+        return numeric_column(table, col, label)
+
+    t = column(time, "the time [s]")
+    if t.size < 2:
+        raise DataFileError(f"{what}: {escape(path)}: {t.size} data row; expected at least two "
+                            f"samples")
+    if np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise DataFileError(f"{what}: {escape(path)}: the time column {escape(repr(time), 60)} "
+                            f"is not strictly increasing at data row {i + 2} ({t[i]:g} s then "
+                            f"{t[i + 1]:g} s)")
+    vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
+    if sampling_period is None:
+        d = np.diff(t)
+        T = float(np.mean(d))
+        if np.max(np.abs(d - T)) > 1e-6 * T:
+            raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "
+                                f"{d.min():g} to {d.max():g} s); expected one sampling period")
+        return t, vals, T
+    T = float(sampling_period)
+    if t[0] > 1e-9 * max(1.0, abs(t[-1])):
+        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
+    if t[-1] < T:
+        raise DataFileError(f"{what}: {escape(path)}: spans {t[-1]:g} s, less than one sampling "
+                            f"period {T:g} s; is its time column {escape(repr(time), 60)} in "
+                            f"seconds?")
+    n = check_samples(np.floor(t[-1] / T + 1e-9) + 1,
+                      f"{what}: {escape(path)}: {t[-1]:g} s sampled at {T:g} s",
+                      DataFileError, T, len(names) + 1)
+    step = float(np.median(np.diff(t)))
+    if step < 0.5 * T and t.size > 2 * n:
+        warnings.warn(f"{what}: {escape(path)}: sampled every {step:g} s, resampled onto "
+                      f"{T:g} s: {t.size} rows become {n} samples (the reference between "
+                      f"the samples is dropped)", UserWarning, stacklevel=2)
+    grid = np.arange(n) * T
+    return grid, np.array([np.interp(grid, t, v) for v in vals]).reshape(len(names), n), T
+
+
+def signals_csv(t, columns, comment):
+    """CSV text of signals at full precision, headed by a ``# hammerstein`` comment.
+
+    Parameters
+    ----------
+    t : array_like, shape (n_samples,)
+        Time [s] (column ``t``).
+    columns : dict of str to array_like, each shape (n_samples,)
+        Name -> values, in column order.
+    comment : str
+        The comment lines' text (units, what wrote the file); each line is
+        prefixed with ``# hammerstein`` / ``#``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> print(signals_csv([0.0, 0.5], {"ux": [0.1, 1 / 3]}, "drive: t [s], ux [V]"), end="")
+    # hammerstein drive: t [s], ux [V]
+    t,ux
+    0,0.10000000000000001
+    0.5,0.33333333333333331
+    """
+    lines = comment.splitlines() or [""]
+    head = [f"{DRIVE_MARK} {lines[0]}".rstrip()] + [f"# {ln}".rstrip() for ln in lines[1:]]
+    data = np.column_stack([np.asarray(t, dtype=float)]
+                           + [np.asarray(v, dtype=float) for v in columns.values()])
+    buf = io.StringIO()
+    np.savetxt(buf, data, delimiter=",", fmt="%.17g")
+    return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
+
+
+#: Shortest default fade-in of the hardware commands [s]: 20 ms, ten periods of a 500 Hz first
+#: mode (a fade is a duration, never a sample: a file reference has no period to fade over)
+MIN_FADE_S = 0.02
+#: relative tolerance of the step comparisons of :func:`hardware_drive`
+_STEP_TOL = 1e-6
+
+
+def settled_step(inputs, start):
+    """The largest sample-to-sample step of a drive from ``start`` on, per input [V].
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    start : int
+        First sample of the settled part.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        ``max_k |u[k] - u[k-1]|`` over ``k > start``; ``inf`` when fewer
+        than two samples remain (nothing to compare with).
+
+    Examples
+    --------
+    >>> settled_step([[0.0, 5.0, 5.5, 6.5]], 1)
+    array([1.])
+    """
+    u = np.atleast_2d(np.asarray(inputs, dtype=float))
+    if u.shape[1] - int(start) < 2:
+        return np.full(u.shape[0], np.inf)
+    return np.max(np.abs(np.diff(u[:, int(start):], axis=1)), axis=1)
+
+
+def _start_steps(u, end, rest):
+    """Largest step per input of samples ``0 .. end - 1``, the first counted from ``rest``."""
+    head = np.concatenate([rest[:, None], u[:, :max(int(end), 1)]], axis=1)
+    return np.max(np.abs(np.diff(head, axis=1)), axis=1)
+
+
+def _intervals(mask, sampling_period, limit=4):
+    """``"0.1200-0.1250 s, ..."``: the runs of True in ``mask`` (at most ``limit``, then a count)."""
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return ""
+    cuts = np.flatnonzero(np.diff(idx) > 1)
+    starts = np.concatenate([[idx[0]], idx[cuts + 1]])
+    ends = np.concatenate([idx[cuts], [idx[-1]]])
+    text = ", ".join(f"{a * sampling_period:.4f}-{b * sampling_period:.4f} s"
+                     for a, b in zip(starts[:limit], ends[:limit]))
+    more = starts.size - limit
+    return text + (f" and {more} more" if more > 0 else "")
+
+
+def shape_drive(amplifier, inputs, sampling_period):
+    """A drive shaped into the amplifier's range and slew rate, and where and by how much.
+
+    The shaping is the amplifier's own range clip then slew limit
+    (:meth:`~hammerstein.models.amplifier.Amplifier.limit`, from rest): a
+    clipped sample steps less than the commanded one
+    (``|clip(a) - clip(b)| <= |a - b|``) and the slew limit bounds every
+    step by ``S T``, so the shaped drive is within the range, starts from
+    rest and never steps faster than the slew rate.
+
+    Parameters
+    ----------
+    amplifier : Amplifier
+        The limits (e.g. measured on the identification records).
+    inputs : array_like, shape (m, n_samples)
+        The commanded drive [V].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    shaped : numpy.ndarray, shape (m, n_samples)
+        [V].
+    notes : list of str
+        One per input that was changed: the largest change [V], the share
+        of samples changed and the time intervals, e.g. ``"ux: beyond the
+        range [-10, 10] V by up to 1.93 V, 3.1 % of the samples
+        (0.0210-0.0233 s, ...)"``.
+    """
+    u = np.atleast_2d(np.asarray(inputs, dtype=float))
+    out, _ = amplifier.limit(u, sampling_period)
+    notes = []
+    for i, c in enumerate(amplifier.channels):
+        diff = np.abs(out[i] - u[i])
+        changed = diff > 1e-9 * max(1.0, float(np.max(np.abs(u[i]))) if u.shape[1] else 1.0)
+        if not np.any(changed):
+            continue
+        beyond = (u[i] > c.high) | (u[i] < c.low)
+        what = []
+        if np.any(beyond):
+            what.append(f"beyond the range [{c.low:.4g}, {c.high:.4g}] V by up to "
+                        f"{float(np.max(np.maximum(u[i] - c.high, c.low - u[i]))):.3g} V")
+        if np.any(changed & ~beyond):
+            what.append(f"faster than {c.slew_rate:.4g} V/s")
+        notes.append(f"{amplifier.inputs[i]}: {' and '.join(what)}, changed by up to "
+                     f"{float(diff.max()):.3g} V on {100 * np.mean(changed):.3g} % of the samples "
+                     f"({_intervals(changed, sampling_period)})")
+    return out, notes
+
+
+def hardware_fade(reference, fade_samples, rest=None):
+    """The hardware commands' fade-in: a tenth of it at rest, then a raised cosine.
+
+    ``yr_f[k] = rest + w[k] (yr[k] - rest)`` with ``w = 0`` for
+    ``k < L = fade // 10``, ``w = (1 - cos(pi (k - L) / (fade - L))) / 2``
+    up to ``fade``, 1 after: value and slope continuous everywhere, and the
+    first ``L`` samples exactly at rest, so a compensator that reads the
+    reference ahead (the ZPETC preview, shorter than ``L``) also starts
+    exactly at rest.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    fade_samples : int
+        The fade-in, rest lead included [samples] (0: none).
+    rest : array_like, shape (p,), optional
+        The output at rest [µm]; zeros by default.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, n_samples)
+
+    Examples
+    --------
+    >>> np.round(hardware_fade([[2.0] * 12], 10)[0], 3).tolist()
+    [0.0, 0.0, 0.06, 0.234, 0.5, 0.826, 1.174, 1.5, 1.766, 1.94, 2.0, 2.0]
+    """
+    r = np.array(reference, dtype=float, ndmin=2)
+    n = int(min(max(int(fade_samples), 0), r.shape[1]))
+    if n == 0:
+        return r
+    r0 = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    lead = n // 10
+    k = np.arange(n) - lead
+    w = np.where(k < 0, 0.0, 0.5 * (1.0 - np.cos(np.pi * np.maximum(k, 0) / (n - lead))))
+    r[:, :n] = r0[:, None] + w * (r[:, :n] - r0[:, None])
+    return r
+
+
+def rest_output(model):
+    """The static output of a hysteresis model at rest (0 V from its initial state) [µm].
+
+    An identified model carries the records' output offset: 0 µm is not
+    what the actuator shows at 0 V, and a reference faded in from 0 µm
+    would start the drive at the voltage of 0 µm instead of at rest.
+
+    Parameters
+    ----------
+    model : object
+        A hysteresis model with ``n_inputs`` and ``simulate(u)`` returning
+        ``(outputs (p, n), state)``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p,)
+        [µm].
+
+    Examples
+    --------
+    >>> from hammerstein.io.presets import load_plant
+    >>> rest_output(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
+    array([0., 0.])
+    """
+    y, _ = model.simulate(np.zeros((model.n_inputs, 1)))
+    return np.asarray(y, dtype=float)[:, 0]
+
+
+def hardware_drive(compensator, reference, sampling_period, period_samples=None,
+                   fade_samples=None, amplifier=None, limits="error", where="", rest=None):
+    """The drive a hardware command writes: faded in over a duration, shaped into the limits.
+
+    Every compensator kind and every reference (inline or file) gets the
+    same rules, on top of :func:`drive_signal`:
+
+    1. **the fade-in is a duration.** The default starts at
+       ``max(one period, MIN_FADE_S)`` (a file reference without
+       ``--period`` has no period: :data:`MIN_FADE_S` alone), also for a
+       reference that starts at rest (its first velocity is faded in too),
+       and is doubled (up to the record's length) until no step of the
+       drive before the end of the fade plus one period (from rest)
+       exceeds the settled drive's own largest step after it
+       (:func:`settled_step`) nor, with an amplifier, ``slew_rate T``;
+       the reference is faded in from the model's output at rest
+       (``rest``) by :func:`hardware_fade`, whose first tenth is at rest, so
+       the drive starts at rest. The doubling stops at a
+       quarter of the record. After the limits (2.), a start-up that still
+       steps faster than the settled drive is slew-limited to the settled
+       drive's largest step over the whole record (which the settled drive
+       never needs; ``shaped`` says so).
+    2. **the limits.** An amplifier whose limits were measured on the
+       identification records (``source = "records"``) shapes the drive
+       (:func:`shape_drive`: range clip, slew limit, the notes say where
+       and by how much); the amplifier's own limits react as ``limits``
+       says (:meth:`~hammerstein.models.amplifier.Amplifier.check`).
+
+    Parameters
+    ----------
+    compensator : object
+        Any compensator (see :func:`drive_signal`).
+    reference : array_like, shape (p, n_samples)
+        [µm], from t = 0.
+    sampling_period : float
+        T [s].
+    period_samples : int, optional
+        One period of a periodic reference [samples]; None or 1 for none.
+    fade_samples : int, optional
+        A given fade-in [samples] (used as it is); None for the default above.
+    amplifier : Amplifier, optional
+    limits : {'error', 'warn', 'clip'}
+        For an amplifier's own limits.
+    where : str
+        Prefix of the limit messages.
+    rest : array_like, shape (p,), optional
+        The output at rest [µm] (:func:`rest_output`), the fade's start;
+        zeros by default.
+
+    Returns
+    -------
+    DriveResult
+        ``shaped`` lists the shaping notes; ``reference`` the faded reference.
+
+    Raises
+    ------
+    AmplifierError
+        ``limits = "error"``, an amplifier's own limits exceeded.
+    CompensatorDivergence
+        When the compensator diverges.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.io.presets import load_plant
+    >>> from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+    >>> plant = load_plant("rakotondrabe-2dof", dynamics=False)
+    >>> comp = InverseMultiplicativeCompensator(plant.hysteresis)
+    >>> t = np.arange(4000) * plant.sampling_period
+    >>> yr = 30 * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    >>> d = drive_signal(comp, yr, plant.sampling_period, 200, fade_samples=0)
+    >>> h = hardware_drive(comp, yr, plant.sampling_period, 200)
+    >>> h.fade_samples * plant.sampling_period >= MIN_FADE_S, float(h.inputs[0, 0])
+    (True, 0.0)
+    >>> bool(np.max(np.abs(np.diff(h.inputs))) <= np.max(np.abs(np.diff(d.inputs[:, 400:]))) * 1.001)
+    True
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    N = r.shape[1]
+    T = float(sampling_period)
+    P = int(period_samples) if period_samples and int(period_samples) > 1 else 0
+    slew = np.array([c.slew_rate for c in amplifier.channels]) * T if amplifier is not None else None
+    u_rest = np.array([c.rest for c in amplifier.channels]) if amplifier is not None else None
+    y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+
+    def run(fade):
+        faded = hardware_fade(r, fade, y_rest)
+        u, _ = _compensate(compensator, faded, P or None, 0)
+        return u, faded
+
+    if fade_samples is None:
+        n = int(min(max(P, int(np.ceil(MIN_FADE_S / T - 1e-9)), 1), N))
+        cap = max(n, N // 4)
+        while True:
+            u, faded = run(n)
+            end = min(n + max(P, 1), N)
+            bound = settled_step(u, end)
+            if slew is not None:
+                bound = np.minimum(bound, slew)
+            r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
+            if n >= cap or np.all(_start_steps(u, end, r0) <= bound * (1 + _STEP_TOL)):
+                break
+            n = int(min(2 * n, cap))
+    else:
+        n = int(min(max(int(fade_samples), 0), N))
+        u, faded = run(n)
+    peak, top = drive_metrics(u, T)
+    res = DriveResult(u, u, faded, peak, top, n)
+    r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
+    out = u
+    if amplifier is not None and amplifier.from_records:
+        out, res.shaped = shape_drive(amplifier, u, T)
+    elif amplifier is not None:
+        res.problems = amplifier.check(u, T, limits, where)
+        if res.problems:
+            out, _ = amplifier.limit(u, T)
+    if fade_samples is None:        # a start-up no fade removes: slew-limited to the settled bound
+        out, notes = limit_start_up(out, n, P, r0, amplifier.inputs if amplifier is not None else None,
+                                    T)
+        res.shaped += notes
+    res.inputs = out
+    return res
+
+
+def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
+                   sampling_period=None):
+    """A drive whose start-up never steps faster than its settled part, and what was changed.
+
+    The settled part starts one period (one sample without a period) after
+    the fade-in. Per input whose start-up (the first step counted from
+    ``rest``) has a step larger than the settled part's largest, ``S``, the
+    whole record is slew-limited to ``S`` per sample
+    (:func:`hammerstein.models.amplifier.slew_limit`): the settled part,
+    whose steps are at most ``S``, is changed only while the limiter
+    catches up.
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    fade_samples : int
+    period_samples : int, optional
+    rest : array_like, shape (m,), optional
+        The voltages before the first sample [V]; zeros by default.
+    names : list of str, optional
+        Input names for the notes.
+    sampling_period : float, optional
+        T [s], for the notes.
+
+    Returns
+    -------
+    limited : numpy.ndarray, shape (m, n_samples)
+    notes : list of str
+
+    Examples
+    --------
+    >>> u, notes = limit_start_up([[0.0, 3.0, 3.5, 3.0, 2.5, 3.0]], 1)
+    >>> u.tolist()
+    [[0.0, 0.5, 1.0, 1.5, 2.0, 2.5]]
+    """
+    u = np.array(inputs, dtype=float, ndmin=2)
+    N = u.shape[1]
+    P = int(period_samples) if period_samples and int(period_samples) > 1 else 1
+    r0 = np.zeros(u.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    end = min(int(fade_samples) + P, N)
+    bound = settled_step(u, end)
+    start = _start_steps(u, end, r0)
+    notes = []
+    for i in np.flatnonzero((start > bound * (1 + _STEP_TOL)) & (bound > 0)):
+        u[i] = slew_limit(u[i], r0[i], bound[i])
+        name = names[i] if names is not None else f"input {i + 1}"
+        when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
+        notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
+                     f"drive's largest step, {bound[i]:.3g} V per sample ({start[i]:.3g} V asked)")
+    return u, notes
+
+
+def drive_fade_samples(path):
+    """The ``fade-in N samples`` a drive file's header records, or None.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+
+    Returns
+    -------
+    int or None
+        N [samples]; None when the first 20 comment lines do not state it.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for _ in range(20):
+            line = fh.readline()
+            if not line.startswith("#"):
+                break
+            m = re.search(r"fade-in (\d+) samples", line)
+            if m:
+                return int(m.group(1))
+    return None
+
+
+def keep_start(previous, learnt, fade_samples, period_samples=None):
+    """A learnt drive that keeps the previous drive's fade-in and blends into the learning after it.
+
+    ``u = (1 - b) u_prev + b u_learnt`` with ``b = 0`` during the fade-in
+    and a raised cosine from 0 to 1 over the next period (a tenth of the
+    record for a reference without a period, at least one sample): the fade-in, which no learning should
+    change (it is not judged), stays the drive that was checked when it
+    was written, so a learnt drive starts at rest as the first one did.
+
+    Parameters
+    ----------
+    previous, learnt : array_like, shape (m, n_samples)
+        [V].
+    fade_samples : int
+    period_samples : int, optional
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, n_samples)
+        [V].
+
+    Examples
+    --------
+    >>> np.round(keep_start([[0.0, 1.0, 2.0, 3.0]], [[9.0, 9.0, 9.0, 9.0]], 1, 2)[0], 9).tolist()
+    [0.0, 1.0, 5.5, 9.0]
+    """
+    u0 = np.atleast_2d(np.asarray(previous, dtype=float))
+    u1 = np.atleast_2d(np.asarray(learnt, dtype=float))
+    N = u0.shape[1]
+    blend = int(period_samples) if period_samples and int(period_samples) > 1 else max(N // 10, 1)
+    k = np.arange(N) - int(fade_samples)
+    b = np.clip(k / blend, 0.0, 1.0)
+    b = 0.5 * (1.0 - np.cos(np.pi * b))
+    return (1.0 - b) * u0 + b * u1

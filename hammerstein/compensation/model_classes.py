@@ -1,0 +1,502 @@
+"""One actuator model type: the registry of hysteresis model classes and what each supports.
+
+Every hysteresis model the package identifies or reads is one of three
+classes, each with optional creep and linear dynamics around it (a preset's
+``[creep]`` and ``[dynamics]`` tables):
+
+* ``classical``: the multivariable classical Prandtl-Ishlinskii model of the
+  paper, with its output map (:class:`~hammerstein.models.hysteresis.MultivariablePI`);
+* ``preisach``: a multivariable model whose direct paths are discrete Preisach
+  models (:class:`~hammerstein.models.preisach.MultivariableHysteresis` of
+  :class:`~hammerstein.models.preisach.PreisachModel`);
+* ``generalized``: the same with generalised-PI direct paths
+  (:class:`~hammerstein.models.generalized_pi.GeneralizedPI`, Al Janaideh,
+  Rakheja and Su, IEEE/ASME Trans. Mechatronics 16(4), 2011).
+
+Each has the same small interface, reached through its :class:`ModelClass`
+entry of :data:`MODEL_CLASSES` (never by a branch on the model's type):
+forward simulation (the model's own ``simulate(inputs (m, N) [V]) ->
+(outputs (p, N) [µm], state)``), the exact inverse where it exists
+(:meth:`ModelClass.exact_inverse`), the rate-independent compensators of each
+kind (:meth:`ModelClass.compensator`), the preset round trip
+(:meth:`ModelClass.to_table`) and its capabilities: the compensator kinds it
+supports (:attr:`ModelClass.kinds`) and the kind chosen when none is given
+(:func:`choose_kind`). A new class is one module and one entry here.
+
+The default kind (:func:`choose_kind`): the Hammerstein compensator where
+dynamics were identified (G inverted, then the static part); without
+dynamics the exact inverse where the class has one (Preisach, generalised
+PI); otherwise the inverse multiplicative law of Theorem 4.1 with the gain
+whose convergence radius ``rho(I - K^-1 J)`` is smallest among the
+candidates of :data:`GAIN_CANDIDATES` (docs/compensator.md), and the
+per-axis analytic inverse when none of them converges.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
+                                           StaticGainCompensator, convergence_report,
+                                           diagonal_compensator, midpoint_gains)
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.compensation.mixed_compensators import loop_slopes, mixed_compensator, mixed_gain
+from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
+from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.io.presets import model_from_table, model_to_table
+from hammerstein.exceptions import CompensatorError
+
+__all__ = ["ModelClass", "MODEL_CLASSES", "KindChoice", "GAIN_CANDIDATES", "model_class",
+           "kind_problem", "law_radius", "convergent_gain", "choose_kind"]
+
+#: Gains of the inverse multiplicative law tried by :func:`convergent_gain`, in order of
+#: preference at equal radius: the per-axis midpoint of the slopes (the optimal scalar
+#: relaxation), the direct secant gains, then the midpoint scaled up (a smaller step: the
+#: radius of ``I - K^-1 J`` shrinks where coupled slopes push it past 1).
+GAIN_CANDIDATES = ("midpoint", "secant", 1.25, 1.5, 2.0)
+
+#: The rate-independent kinds every class builds (:meth:`ModelClass.compensator`).
+RATE_INDEPENDENT_KINDS = ("multivariable", "diagonal", "per-axis", "static-gain")
+
+
+def _classical_compensator(model, kind, gain="secant", iterations=1, check="error",
+                           feedback="delay", cutoff_hz=None, sampling_period=None):
+    options = {} if feedback == "delay" else {"feedback": feedback, "cutoff_hz": cutoff_hz,
+                                              "sampling_period": sampling_period}
+    if kind == "multivariable":
+        return InverseMultiplicativeCompensator(model, gain=gain, iterations=iterations,
+                                                check=check, **options)
+    if kind == "diagonal":
+        return diagonal_compensator(model, gain=gain, iterations=iterations, check=check, **options)
+    if kind == "per-axis":
+        return PerAxisInverseCompensator(model)
+    if kind == "static-gain":
+        return StaticGainCompensator(model)
+    raise CompensatorError(f"kind: expected one of {', '.join(RATE_INDEPENDENT_KINDS)}, "
+                           f"found {kind!r}")
+
+
+def _mixed_compensator(model, kind, gain="secant", iterations=1, check="error", feedback="delay",
+                       cutoff_hz=None, sampling_period=None):
+    return mixed_compensator(model, kind, gain=gain, iterations=iterations, check=check,
+                             feedback=feedback)
+
+
+def _direct_paths(model):
+    comps = getattr(model, "components", None)
+    if comps is None or model.n_inputs != model.n_outputs:
+        return []
+    return [comps[l][l] for l in range(model.n_outputs)]
+
+
+def _is_preisach(model):
+    paths = _direct_paths(model)
+    return isinstance(model, MultivariableHysteresis) and bool(paths) and \
+        all(isinstance(c, PreisachModel) for c in paths)
+
+
+def _is_generalized(model):
+    paths = _direct_paths(model)
+    return isinstance(model, MultivariableHysteresis) and bool(paths) and \
+        all(isinstance(c, GeneralizedPI) for c in paths) 
+
+
+def _is_mixed(model):
+    return isinstance(model, MultivariableHysteresis)
+
+
+@dataclass(frozen=True)
+class ModelClass:
+    """An entry of the model-class registry :data:`MODEL_CLASSES`.
+
+    Parameters
+    ----------
+    name : str
+        The class's name (``hammerstein identify --model``, scenario
+        ``identify.model``).
+    label : str
+        Words for messages and ``hammerstein list``.
+    matches : callable
+        ``matches(model) -> bool``: the model is of this class.
+    kinds : tuple of str
+        The compensator kinds that work with the class (the names of the
+        scenario registry ``[compensator] kind``; ``ilc`` starts from one of
+        them).
+    exact_inverse_kind : str or None
+        The rate-independent kind that inverts the model exactly per sample,
+        or None when the class has no exact multivariable inverse (the
+        classical PI: only its per-axis analytic inverse).
+    build : callable
+        ``build(model, kind, gain, iterations, check, feedback, cutoff_hz,
+        sampling_period) -> compensator`` for the rate-independent kinds
+        (:data:`RATE_INDEPENDENT_KINDS`).
+    description : str
+        One line for ``hammerstein list`` and docs/models-and-kinds.md.
+    law_options : tuple of str
+        Options of the inverse multiplicative law this class honours.
+    """
+
+    name: str
+    label: str
+    matches: Callable[[Any], bool]
+    kinds: tuple
+    exact_inverse_kind: str | None
+    build: Callable = field(repr=False)
+    description: str = ""
+    law_options: tuple = ("gain", "iterations", "check", "feedback")
+
+    def compensator(self, model, kind, **options):
+        """A rate-independent compensator of ``kind`` over ``model``.
+
+        Parameters
+        ----------
+        model : MultivariablePI or MultivariableHysteresis
+            A model of this class.
+        kind : {'multivariable', 'diagonal', 'per-axis', 'static-gain'}
+        **options
+            ``gain``, ``iterations``, ``check``, ``feedback``, ``cutoff_hz``,
+            ``sampling_period`` of the law (docs/compensator.md).
+
+        Returns
+        -------
+        object
+            ``simulate(reference (m, N) [µm]) -> (inputs (m, N) [V], state)``.
+
+        Raises
+        ------
+        CompensatorError
+            A kind the class does not support (the message names those it
+            does) or the builder's own errors (e.g. a law refused by the
+            convergence check).
+        """
+        if kind not in RATE_INDEPENDENT_KINDS:
+            raise CompensatorError(kind_problem(model, kind) or
+                                   f"kind: {kind!r} is not a rate-independent kind "
+                                   f"({', '.join(RATE_INDEPENDENT_KINDS)})")
+        return self.build(model, kind, **options)
+
+    def exact_inverse(self, model, name=None):
+        """The exact per-sample inverse of ``model``, or None when the class has none.
+
+        Parameters
+        ----------
+        model : MultivariableHysteresis
+            A model of this class.
+        name : str, optional
+            Label in reports (default the kind's name).
+
+        Returns
+        -------
+        PreisachInverseCompensator or None
+            Its output through ``model`` equals a reachable reference to the
+            root tolerance (:mod:`hammerstein.compensation.preisach_inverse`).
+
+        Raises
+        ------
+        CompensatorError
+            A model the root search refuses (e.g. decreasing direct paths).
+        """
+        if self.exact_inverse_kind is None:
+            return None
+        return PreisachInverseCompensator(model, name=name or self.exact_inverse_kind)
+
+    @staticmethod
+    def to_table(model, input_unit="V", output_unit="µm"):
+        """The model's ``[model]`` table of a preset (read back by :meth:`from_table`).
+
+        Parameters
+        ----------
+        model : MultivariablePI or MultivariableHysteresis
+        input_unit, output_unit : str
+
+        Returns
+        -------
+        dict
+            :func:`hammerstein.io.presets.model_to_table`.
+        """
+        return model_to_table(model, input_unit, output_unit)
+
+    @staticmethod
+    def from_table(table, source="model"):
+        """The model of a ``[model]`` table (the preset round trip).
+
+        Parameters
+        ----------
+        table : dict
+        source : str
+            Prefix of messages.
+
+        Returns
+        -------
+        MultivariablePI or MultivariableHysteresis
+            :func:`hammerstein.io.presets.model_from_table`.
+
+        Raises
+        ------
+        HysteresisError
+            On a bad table.
+        """
+        return model_from_table(table, source)
+
+
+_ALL_KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", "ilc")
+
+#: The registry of model classes: name -> :class:`ModelClass` (first match wins).
+MODEL_CLASSES: dict[str, ModelClass] = {
+    "classical": ModelClass(
+        "classical", "classical PI", lambda m: isinstance(m, MultivariablePI), _ALL_KINDS, None,
+        _classical_compensator,
+        "multivariable classical Prandtl-Ishlinskii model with its output map (paper eq. (3))"),
+    "preisach": ModelClass(
+        "preisach", "Preisach", _is_preisach, _ALL_KINDS + ("preisach-inverse",),
+        "preisach-inverse", _mixed_compensator,
+        "discrete Preisach direct paths (relays on a switching grid), any cross-couplings",
+        law_options=("gain", "check")),
+    "generalized": ModelClass(
+        "generalized", "generalized PI", _is_generalized, _ALL_KINDS + ("preisach-inverse",),
+        "preisach-inverse", _mixed_compensator,
+        "generalised-PI direct paths (plays under rising/falling envelopes), any cross-couplings",
+        law_options=("gain", "check")),
+    "mixed": ModelClass(
+        "mixed", "mixed-class", _is_mixed, _ALL_KINDS + ("preisach-inverse",),
+        "preisach-inverse", _mixed_compensator,
+        "direct paths of different classes (e.g. a model file written by hand)",
+        law_options=("gain", "check")),
+}
+
+
+def model_class(model):
+    """The registry entry of a model.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+
+    Returns
+    -------
+    ModelClass
+
+    Raises
+    ------
+    CompensatorError
+        A model of no registered class.
+    """
+    for entry in MODEL_CLASSES.values():
+        if entry.matches(model):
+            return entry
+    raise CompensatorError(f"model: {type(model).__name__} is none of the model classes "
+                           f"({', '.join(MODEL_CLASSES)})")
+
+
+def kind_problem(model, kind, has_dynamics=True):
+    """Why ``kind`` does not work with ``model``, naming the kinds that do (None if it does).
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+    kind : str
+        A compensator kind.
+    has_dynamics : bool
+        The actuator file has linear dynamics (``hammerstein`` and ``ilc``
+        need them).
+
+    Returns
+    -------
+    str or None
+    """
+    entry = model_class(model)
+    works = [k for k in entry.kinds if has_dynamics or k not in ("hammerstein", "ilc")]
+    if kind in works:
+        return None
+    why = ("has no dynamics to invert" if kind in entry.kinds else
+           f"is a {entry.label} model, which kind {kind!r} does not take")
+    return f"kind {kind!r}: the model {why}; the kinds that work with it: {', '.join(works)}"
+
+
+def law_radius(model, gain):
+    """Largest ``rho(I - K^-1 J)`` of the inverse multiplicative law over the model's slopes.
+
+    For a classical PI, over every reachable slope matrix
+    (:func:`hammerstein.compensation.compensators.convergence_report`); for another
+    class, over the corners of the slope intervals along the major loops
+    (:func:`hammerstein.compensation.mixed_compensators.loop_slopes`). The law
+    converges where the radius is below 1 (docs/compensator.md).
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+        Square, with ``input_amplitude``.
+    gain : str, float or array_like
+        ``'secant'``, ``'midpoint'``, ``'identity'``, a matrix [µm/V], or a
+        number c: c times the midpoint gains.
+
+    Returns
+    -------
+    float
+        [-]; ``inf`` when the gain cannot be formed (e.g. a non-positive slope).
+    """
+    try:
+        K = _gain_matrix(model, gain)
+        if isinstance(model, MultivariablePI):
+            return float(convergence_report(model, K).max_radius)
+        lo, hi = loop_slopes(model)
+    except CompensatorError:
+        return float("inf")
+    m = model.n_inputs
+    Kinv = np.linalg.inv(K)
+    worst = 0.0
+    for corner in itertools.product((0, 1), repeat=m * m):
+        J = np.where(np.reshape(corner, (m, m)) == 0, lo, hi)
+        worst = max(worst, float(np.max(np.abs(np.linalg.eigvals(np.eye(m) - Kinv @ J)))))
+    return worst
+
+
+def _gain_matrix(model, gain):
+    """K (m, m) [µm/V] of a gain name, matrix or midpoint scale."""
+    if isinstance(gain, (int, float)) and not isinstance(gain, bool):
+        mid = (np.diag(midpoint_gains(model)) if isinstance(model, MultivariablePI)
+               else mixed_gain(model, "midpoint"))
+        return float(gain) * mid
+    if isinstance(model, MultivariablePI):
+        if isinstance(gain, str):
+            if gain == "secant":
+                return np.diag(np.diag(model.secant_gains()))
+            if gain == "midpoint":
+                return np.diag(midpoint_gains(model))
+            if gain == "identity":
+                return np.eye(model.n_inputs)
+            raise CompensatorError(f"gain: expected 'secant', 'midpoint', 'identity' or a "
+                                   f"matrix, found {gain!r}")
+        return np.asarray(gain, dtype=float)
+    return mixed_gain(model, gain)
+
+
+def convergent_gain(model, candidates=GAIN_CANDIDATES):
+    """The gain of the inverse multiplicative law with the smallest convergence radius.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+        Square, with ``input_amplitude``.
+    candidates : sequence
+        Gains as :func:`law_radius` takes them; a number c stands for c times
+        the midpoint gains. The first candidate whose radius is below 1 and
+        within 5 % of the smallest wins (the named gains before the scaled
+        ones).
+
+    Returns
+    -------
+    gain : str or numpy.ndarray
+        A gain name, or the matrix K (m, m) [µm/V] of a scaled midpoint.
+    radius : float
+        Its ``rho(I - K^-1 J)``; >= 1 when no candidate converges.
+    radii : dict
+        Radius of each candidate (keys as given).
+    """
+    radii = {c: law_radius(model, c) for c in candidates}
+    best = min(radii.values())
+    for c, r in radii.items():
+        if r < 1.0 and r <= best * 1.05:
+            gain = c if isinstance(c, str) else _gain_matrix(model, c)
+            return gain, r, radii
+    c = min(radii, key=radii.get)
+    return (c if isinstance(c, str) else _gain_matrix(model, c)), radii[c], radii
+
+
+@dataclass
+class KindChoice:
+    """The compensator kind chosen for a model, with its options and the reason.
+
+    Parameters
+    ----------
+    kind : str
+        A compensator kind.
+    options : dict
+        Options of the kind (e.g. ``gain``: name or matrix K [µm/V]).
+    reason : str
+        Why, one line (``note: kind = <kind> because <reason>``).
+    """
+
+    kind: str
+    options: dict
+    reason: str
+
+    def note(self):
+        """The one-line note the commands print on stderr.
+
+        Returns
+        -------
+        str
+            ``note: kind = <kind> because <reason>``.
+        """
+        return f"note: kind = {self.kind} because {self.reason}"
+
+
+def _gain_words(gain, radius):
+    name = gain if isinstance(gain, str) else \
+        "K = [" + ", ".join(f"{v:.4g}" for v in np.diag(gain)) + "] µm/V (scaled midpoint)"
+    return f"gain {name}, rho(I - K^-1 J) {radius:.3g} < 1"
+
+
+def choose_kind(model, has_dynamics, gain=None):
+    """The compensator kind that works best for a model when the user names none.
+
+    Rules (module notes): dynamics -> ``hammerstein``; no dynamics and an
+    exact inverse -> that kind (``preisach-inverse``); otherwise the
+    ``multivariable`` law with :func:`convergent_gain` (or ``gain`` when
+    given), and ``per-axis`` when no gain makes it converge. A classical PI
+    in the Hammerstein compensator gets the convergent gain too.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+    has_dynamics : bool
+        The actuator file carries linear dynamics G.
+    gain : str or array_like, optional
+        The user's gain (then only checked, not chosen).
+
+    Returns
+    -------
+    KindChoice
+    """
+    entry = model_class(model)
+    if has_dynamics:
+        if entry.exact_inverse_kind is not None:
+            return KindChoice("hammerstein", {},
+                              f"the model has dynamics (G inverted by ZPETC) and its "
+                              f"{entry.label} static part an exact inverse")
+        g, r = (gain, law_radius(model, gain)) if gain is not None else convergent_gain(model)[:2]
+        if r < 1.0:
+            return KindChoice("hammerstein", {"gain": g},
+                              f"the model has dynamics (G inverted by ZPETC); static part the "
+                              f"multivariable law, {_gain_words(g, r)}")
+        if gain is not None:         # the user's gain: the law's check decides
+            return KindChoice("hammerstein", {"gain": g},
+                              f"the model has dynamics (G inverted by ZPETC); static part the "
+                              f"multivariable law with the gain given")
+        return KindChoice("hammerstein", {"gain": g, "check": "warn"},
+                          f"the model has dynamics (G inverted by ZPETC); no gain makes the "
+                          f"{entry.label} law provably converge (smallest rho(I - K^-1 J) "
+                          f"{r:.3g}): run with check = warn")
+    if entry.exact_inverse_kind is not None:
+        return KindChoice(entry.exact_inverse_kind, {},
+                          f"the model has no dynamics and its {entry.label} hysteresis an exact "
+                          f"per-sample inverse")
+    g, r = (gain, law_radius(model, gain)) if gain is not None else convergent_gain(model)[:2]
+    if r < 1.0:
+        return KindChoice("multivariable", {"gain": g},
+                          f"the model has no dynamics; the multivariable law converges with "
+                          f"{_gain_words(g, r)}")
+    if gain is not None:
+        return KindChoice("multivariable", {"gain": g},
+                          "the model has no dynamics and no exact inverse: the multivariable law "
+                          "with the gain given")
+    return KindChoice("per-axis", {},
+                      f"the model has no dynamics and no gain makes the multivariable law "
+                      f"converge (smallest rho(I - K^-1 J) {r:.3g}): the per-axis analytic "
+                      f"inverse")

@@ -1,0 +1,595 @@
+"""Creep identified from voltage staircases, after an identified hysteresis model.
+
+After a voltage step a piezoelectric actuator jumps (the hysteresis) and then
+drifts slowly (creep, Jung and Gweon [1]_). The creep is modelled per output
+as the linear operator of :mod:`hammerstein.models.creep`,
+
+``y = G (d h + sum_k w_k x_k)``, ``tau_k dx_k/dt = h - x_k``,
+
+with h the output of the hysteresis model [µm], lags of fixed log-spaced
+time constants ``tau_k`` [s] and non-negative weights ``w_k`` [-] (a
+positive sum of decaying exponentials, the creep model of Jung and Gweon and
+of Croft, Shed and Devasia [2]_; a logarithmic law is such a sum with equal
+weights per decade, :meth:`hammerstein.models.creep.Creep.log_law`).
+
+What is fitted (:class:`CreepIdentifier`). The identified hysteresis model
+predicts h on each staircase record; within one step h is constant, and the
+model's error on the level of each step is constant too, so each step of each
+output gets a free offset (a nuisance parameter that absorbs the hysteresis
+model's error on the step's level). The weights are then fitted on the shape
+of the drift inside the steps, including the drift left by earlier steps, by
+non-negative least squares (Lawson-Hanson, :func:`scipy.optimize.nnls`) on
+the regressors ``x_k`` of every lag (passed through the identified dynamics
+G when given, so the ringing after each step is modelled instead of
+skipped), with a small second-difference smoothing of the weights over
+``log tau``. Lags much slower than the records (``tau`` above a few times
+the step duration) change the output inside a step by less than the noise:
+their weights are extrapolated by the smoothing and are reported as such.
+
+Instantaneous part. The hysteresis model is identified on slow sines (1 Hz by
+default): the lags much faster than that sine are complete in its loops, so
+the model already holds them. The identified creep is therefore normalised to
+unit gain (real part) at the frequency ``f_h`` of the hysteresis records,
+``d = 1 - sum_k w_k / (1 + (2 pi f_h tau_k)^2)``, so that the hysteresis
+model followed by the creep reproduces the loops it was identified on and
+adds the drift at lower frequencies. ``d > sum_k w_k (1 - a_k) / (1 + a_k)``
+(``a_k = exp(-T / tau_k)``) makes the discrete creep minimum phase (see
+:func:`hammerstein.models.creep.creep_dynamics`).
+
+References
+----------
+.. [1] H. Jung and D.-G. Gweon, "Creep characteristics of piezoelectric
+   actuators", Rev. Sci. Instrum. 71(4), 1896-1900, 2000.
+.. [2] D. Croft, G. Shed and S. Devasia, "Creep, hysteresis, and vibration
+   compensation for piezoactuators: atomic force microscopy application",
+   J. Dyn. Sys., Meas., Control 123(1), 35-43, 2001.
+.. [3] C. L. Lawson and R. J. Hanson, *Solving Least Squares Problems*,
+   Prentice-Hall, 1974, Chapter 23 (non-negative least squares).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+
+from hammerstein.models.creep import Creep, minimum_phase_margin
+from hammerstein.exceptions import IdentificationError
+from hammerstein.simulation import linear_steps
+
+__all__ = ["CreepIdentifier", "CREEP_DEFAULTS", "staircase_steps", "hysteresis_frequency",
+           "remove_creep", "step_level_errors"]
+
+#: Defaults of :class:`CreepIdentifier`.
+CREEP_DEFAULTS = {"t_min": 0.01, "t_max": 100.0, "per_decade": 2, "smoothing": 1e-3,
+                  "max_rows": 200_000}
+
+#: Minimum samples of a step (shorter steps are not used for the drift).
+_MIN_STEP_SAMPLES = 10
+
+
+def staircase_steps(u, tolerance=None):
+    """Index of the voltage step of every sample of a staircase record.
+
+    A new step starts where any input changes by more than ``tolerance``.
+
+    Parameters
+    ----------
+    u : array_like, shape (m, n_samples)
+        Input voltages [V].
+    tolerance : float, optional
+        [V]; default 1e-6 of the largest |u| (exact staircases).
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (n_samples,)
+        0 for the first step, increasing by one at each change.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> staircase_steps(np.array([[0.0, 0.0, 5.0, 5.0, 5.0, 0.0]])).tolist()
+    [0, 0, 1, 1, 1, 2]
+    """
+    u = np.atleast_2d(np.asarray(u, dtype=float))
+    tol = tolerance if tolerance is not None else 1e-6 * max(float(np.max(np.abs(u))), 1e-300)
+    change = np.any(np.abs(np.diff(u, axis=1)) > tol, axis=0)
+    return np.concatenate([[0], np.cumsum(change)])
+
+
+def hysteresis_frequency(records):
+    """Fundamental frequency [Hz] of slow hysteresis records (largest input DFT bin).
+
+    Parameters
+    ----------
+    records : sequence of MultiRecord
+        Records with ``u`` (m, n_samples) and ``sampling_period`` [s].
+
+    Returns
+    -------
+    float
+        Frequency of the largest spectral line of the excited inputs [Hz],
+        averaged over the records.
+    """
+    freqs = []
+    for rec in records:
+        u = np.asarray(rec.u, dtype=float)
+        k = int(np.argmax(np.ptp(u, axis=1)))
+        spec = np.abs(np.fft.rfft(u[k] - u[k].mean()))
+        f = np.fft.rfftfreq(u.shape[1], rec.sampling_period)
+        freqs.append(float(f[1 + int(np.argmax(spec[1:]))]) if spec.size > 1 else 1.0)
+    return float(np.mean(freqs))
+
+
+def remove_creep(records, creeps, output_offset=None):
+    """Records with the creep removed from the outputs: ``v = (I + C)^-1 y``.
+
+    The creep is a linear operator after the hysteresis, ``y - o = c(v - o)``
+    per output (o the output offset), and the discrete creep
+    ``c(z) = d + sum_k w_k (1 - a_k) / (z - a_k)`` is minimum phase when
+    ``d > sum_k w_k (1 - a_k) / (1 + a_k)``
+    (:func:`hammerstein.models.creep.minimum_phase_margin`), so its inverse is
+    stable and v follows exactly, sample by sample, from the measured y: with
+    the ZOH matrices ``(A, B, c, d)`` of the lags,
+    ``v_n = (y_n - c x_n) / d``, ``x_{n+1} = (A - B c / d) x_n + B y_n / d``
+    (the state-space inverse of a system with an invertible direct term,
+    e.g. Zhou, Doyle and Glover [4]_, Section 3.5). Both start from rest, as
+    the records do. The hysteresis model refitted on ``(u, v)`` no longer
+    takes the creep inside its loops for hysteresis.
+
+    Parameters
+    ----------
+    records : sequence of MultiRecord
+        Records with ``y`` (p, n_samples) [µm] and ``sampling_period`` [s]
+        (other fields are kept).
+    creeps : sequence of (Creep or None), length p
+        Identified creep per output (None: the output is kept).
+    output_offset : array_like, shape (p,), optional
+        Output offset o [µm] of the hysteresis model; zero by default.
+
+    Returns
+    -------
+    list of MultiRecord
+        Copies of the records with ``y`` replaced by v (p, n_samples) [µm].
+
+    Raises
+    ------
+    IdentificationError
+        On a creep count other than p or a creep that is not minimum phase.
+
+    References
+    ----------
+    .. [4] K. Zhou, J. C. Doyle and K. Glover, *Robust and Optimal Control*,
+       Prentice-Hall, 1996.
+
+    Examples
+    --------
+    A known creep applied to a ramp and removed again:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from hammerstein.models.creep import Creep
+    >>> c = Creep([0.1, 1.0], [0.02, 0.03], instantaneous=0.97)
+    >>> v = np.linspace(0.0, 5.0, 2000)[None, :]
+    >>> y, _ = c.simulate(v, 1e-3)
+    >>> rec = SimpleNamespace(y=y, sampling_period=1e-3)
+    >>> back = remove_creep([rec], [c])[0].y
+    >>> bool(np.allclose(back, v, atol=1e-9))
+    True
+    """
+    out = []
+    for rec in records:
+        y = np.asarray(rec.y, dtype=float)
+        p = y.shape[0]
+        creeps = list(creeps)
+        if len(creeps) != p:
+            raise IdentificationError(f"creep: expected {p} entries (one per output), found "
+                                      f"{len(creeps)}")
+        T = float(rec.sampling_period)
+        off = np.zeros(p) if output_offset is None else np.asarray(output_offset, dtype=float)
+        v = y.copy()
+        for l, c in enumerate(creeps):
+            if c is None:
+                continue
+            if minimum_phase_margin(c, T) <= 0:
+                raise IdentificationError(f"creep: output {l} is not minimum phase at T = {T:g} s;"
+                                          f" it cannot be removed from the records")
+            A, B, C, D = c.discrete(T)
+            d = float(D[0, 0])
+            inv = (A - B @ C / d, B / d, -C / d, np.full((1, 1), 1.0 / d))
+            v[l] = linear_steps((y[l] - off[l])[None, :], inv, np.zeros(c.n_states))[0][0] + off[l]
+        if dataclasses.is_dataclass(rec):
+            out.append(dataclasses.replace(rec, y=v))
+        else:
+            new = copy.copy(rec)
+            new.y = v
+            out.append(new)
+    return out
+
+
+def step_level_errors(model, records, creeps=None, settle=0.1):
+    """Measured minus predicted level of every step of staircase records.
+
+    The prediction is the hysteresis model followed by the creep (when
+    given), from rest, as :class:`CreepIdentifier` models it
+    (``o + c(h - o)``, o the model's output offset); the linear dynamics
+    have G(0) = I and have rung out ``settle`` seconds after a step, so they
+    are left out. The level of a step is the mean over the samples from
+    ``settle`` after its start to its end. Staircases are not used to fit
+    the hysteresis, so these are held-out errors of the static model on
+    levels reached from rest (the slow tracking a scan or a positioning
+    task needs).
+
+    Parameters
+    ----------
+    model : object
+        ``simulate(u)`` returning ``(h, state)``, h shape (p, n_samples)
+        [µm]; ``output_offset`` (p,) or None.
+    records : sequence of MultiRecord
+        Staircases (``u`` (m, n_samples) [V], ``y`` (p, n_samples) [µm],
+        ``sampling_period`` [s]), from rest.
+    creeps : sequence of (Creep or None), length p, optional
+        Creep per output; None: the hysteresis model alone.
+    settle : float
+        Samples of each step within this time [s] of its start are skipped.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        Per record, shape (p, n_steps): level errors [µm]; NaN for a step
+        shorter than ``settle``.
+
+    Raises
+    ------
+    IdentificationError
+        On a record that is not a staircase or outputs that do not match.
+
+    Examples
+    --------
+    A linear model h = 2 u off by 10 % on a staircase: each level's error is
+    10 % of the measured level:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> u = np.repeat([0.0, 1.0, 3.0], 400)[None, :]
+    >>> rec = SimpleNamespace(u=u, y=2.2 * u, sampling_period=1e-3)
+    >>> model = SimpleNamespace(output_offset=None, simulate=lambda v: (2.0 * v, None))
+    >>> np.round(step_level_errors(model, [rec])[0], 6).tolist()
+    [[0.0, 0.2, 0.6]]
+    """
+    out = []
+    for rec in records:
+        u = np.asarray(rec.u, dtype=float)
+        y = np.asarray(rec.y, dtype=float)
+        T = float(rec.sampling_period)
+        h = np.asarray(model.simulate(u)[0], dtype=float)
+        if h.shape != y.shape:
+            raise IdentificationError(f"creep records: {getattr(rec, 'source', 'record')}: "
+                                      f"expected {h.shape[0]} output columns, found {y.shape[0]}")
+        p = h.shape[0]
+        off = np.zeros(p) if getattr(model, "output_offset", None) is None \
+            else np.asarray(model.output_offset, dtype=float)
+        if creeps is not None:
+            for l, c in enumerate(creeps):
+                if c is not None:
+                    h[l] = c.simulate((h[l] - off[l])[None, :], T)[0][0] + off[l]
+        steps = staircase_steps(u)
+        n_steps = int(steps[-1]) + 1
+        start = np.searchsorted(steps, np.arange(n_steps))
+        skip = int(round(settle / T))
+        err = np.full((p, n_steps), np.nan)
+        for j in range(n_steps):
+            a, b = start[j] + skip, (start[j + 1] if j + 1 < n_steps else steps.size)
+            if b > a:
+                err[:, j] = np.mean(y[:, a:b] - h[:, a:b], axis=1)
+        out.append(err)
+    return out
+
+
+def _lags(h, tau, T):
+    """Lag states x_k of one output: shape (K, n_samples), from rest."""
+    a = np.exp(-T / tau)
+    K = tau.size
+    x, _ = linear_steps(h[None, :], (np.diag(a), (1 - a)[:, None], np.eye(K), np.zeros((K, 1))),
+                        np.zeros(K))
+    return x
+
+
+class CreepIdentifier:
+    """Creep per output from staircase records and an identified hysteresis model.
+
+    Parameters
+    ----------
+    time_constants : array_like, shape (K,), optional
+        Lag time constants [s]; default log-spaced from ``t_min`` to ``t_max``
+        with ``per_decade`` per decade (0.01-100 s, 2 per decade: 9 lags).
+    t_min, t_max : float
+        Range of the default time constants [s].
+    per_decade : int
+        Default time constants per decade.
+    smoothing : float
+        Weight of the second-difference penalty on the weights over log tau,
+        relative to the mean squared regressor (0: plain NNLS).
+    hysteresis_frequency_hz : float
+        Frequency of the records the hysteresis model was identified on [Hz]
+        (the creep is normalised to unit gain there); default 1 Hz, the
+        ``hammerstein excitation`` sine; ``numpy.inf`` when the model is the
+        instantaneous response itself (d = 1, e.g. a known hysteresis).
+    max_rows : int
+        Samples used per output (the records are sub-sampled evenly above it;
+        creep is slow).
+
+    Attributes
+    ----------
+    time_constants_ : numpy.ndarray, shape (K,)
+        [s].
+    weights_ : numpy.ndarray, shape (p, K)
+        Fitted lag weights [-] (>= 0).
+    instantaneous_ : numpy.ndarray, shape (p,)
+        d per output [-] (unit gain at the hysteresis frequency).
+    creeps_ : list of Creep
+        One per output.
+    offsets_ : list of numpy.ndarray
+        Per record, shape (p, n_steps): fitted level offsets [µm] (the
+        hysteresis model's error on each step).
+    residual_rms_ : numpy.ndarray, shape (p,)
+        RMS of the fit residual [µm] on the samples used.
+    residual_rms_no_creep_ : numpy.ndarray, shape (p,)
+        The same with the offsets alone (no creep) [µm]: what creep explains.
+    drift_ : numpy.ndarray, shape (p,)
+        Identified relative drift from 0.1 s to 10 s after a step [-]
+        (``(s(10) - s(0.1)) / s(0.1)``, s the step response).
+    rate_per_decade_ : numpy.ndarray, shape (p,)
+        ``drift_ / 2``: the equivalent logarithmic rate [-/decade].
+    identifiable_up_to_ : float
+        Longest step of the records [s]; weights of lags much slower are
+        extrapolated.
+
+    Examples
+    --------
+    A known creep on a staircase through a static linear hysteresis (h = u),
+    no noise, identified on its own lags:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from hammerstein.models.creep import Creep, minimum_phase_margin
+    >>> from hammerstein.signals.excitation import staircase
+    >>> T = 1e-3
+    >>> t, u, _ = staircase(T, 10.0, hold=2.0)
+    >>> true = Creep([0.1, 1.0], [0.02, 0.03])
+    >>> y, _ = true.simulate(u[None, :], T)
+    >>> rec = SimpleNamespace(u=u[None, :], y=y, sampling_period=T, source="stairs")
+    >>> model = SimpleNamespace(n_outputs=1, output_names=["x"], output_offset=None,
+    ...                         simulate=lambda v: (np.asarray(v, dtype=float), None))
+    >>> ident = CreepIdentifier([0.1, 1.0], smoothing=0.0).fit(model, [rec])
+    >>> np.round(ident.weights_, 4).tolist()
+    [[0.02, 0.03]]
+    """
+
+    def __init__(self, time_constants=None, t_min=CREEP_DEFAULTS["t_min"],
+                 t_max=CREEP_DEFAULTS["t_max"], per_decade=CREEP_DEFAULTS["per_decade"],
+                 smoothing=CREEP_DEFAULTS["smoothing"], hysteresis_frequency_hz=1.0,
+                 max_rows=CREEP_DEFAULTS["max_rows"]):
+        if time_constants is None:
+            if not (0 < t_min < t_max and np.isfinite(t_max)):
+                raise IdentificationError(f"creep: t_min, t_max: expected 0 < t_min < t_max [s], "
+                                          f"found {t_min!r}, {t_max!r}")
+            n = max(1, int(round(np.log10(t_max / t_min) * per_decade)) + 1)
+            time_constants = np.logspace(np.log10(t_min), np.log10(t_max), n)
+        tau = np.atleast_1d(np.asarray(time_constants, dtype=float))
+        if tau.ndim != 1 or tau.size == 0 or not np.all(np.isfinite(tau)) or np.any(tau <= 0):
+            raise IdentificationError(f"creep: time_constants: expected positive times [s], found "
+                                      f"{tau.tolist()}")
+        if not (np.isfinite(smoothing) and smoothing >= 0):
+            raise IdentificationError(f"creep: smoothing: expected >= 0, found {smoothing!r}")
+        if not (hysteresis_frequency_hz > 0):       # inf: the model is the instantaneous part
+            raise IdentificationError(f"creep: hysteresis_frequency_hz: expected a positive "
+                                      f"frequency [Hz], found {hysteresis_frequency_hz!r}")
+        self.time_constants = np.sort(tau)
+        self.smoothing = float(smoothing)
+        self.hysteresis_frequency_hz = float(hysteresis_frequency_hz)
+        self.max_rows = int(max_rows)
+
+    def fit(self, model, records, dynamics=None):
+        """Fit the creep of every output.
+
+        Parameters
+        ----------
+        model : object
+            The identified hysteresis model: ``simulate(u)`` returns
+            ``(h, state)`` with h (p, n_samples) [µm] including
+            ``output_offset`` (p,) or None; ``n_outputs``, ``output_names``.
+        records : sequence of MultiRecord
+            Staircase records (``u`` (m, n_samples) [V], ``y`` (p, n_samples)
+            [µm], ``sampling_period`` [s], ``source``), from rest.
+        dynamics : control.StateSpace, optional
+            Identified discrete p x p dynamics G after the creep (same
+            sampling period); None: G = I (the ringing is then part of the
+            residual).
+
+        Returns
+        -------
+        CreepIdentifier
+            ``self``, fitted.
+
+        Raises
+        ------
+        IdentificationError
+            On no records, differing sampling periods, records with fewer than
+            two steps, or outputs that do not match the model.
+        """
+        records = list(records)
+        if not records:
+            raise IdentificationError("creep records: expected at least one staircase record")
+        T = float(records[0].sampling_period)
+        p = int(model.n_outputs)
+        for rec in records:
+            if not np.isclose(rec.sampling_period, T, rtol=0.01):
+                raise IdentificationError("creep records: expected one sampling period for all")
+            if np.shape(rec.y)[0] != p:
+                raise IdentificationError(f"creep records: {rec.source}: expected {p} output "
+                                          f"columns, found {np.shape(rec.y)[0]}")
+        mats = None
+        if dynamics is not None:
+            if not np.isclose(float(dynamics.dt), T, rtol=0.01):
+                raise IdentificationError(f"creep records: sampled at {T:g} s, the dynamics at "
+                                          f"{dynamics.dt!r} s")
+            mats = tuple(np.asarray(M, dtype=float) for M in
+                         (dynamics.A, dynamics.B, dynamics.C, dynamics.D))
+        tau = self.time_constants
+        K = tau.size
+        off = np.zeros(p) if model.output_offset is None else np.asarray(model.output_offset, float)
+        total = sum(np.shape(r.y)[1] for r in records)
+        stride = max(1, int(np.ceil(total / self.max_rows)))
+        blocks, targets, seg_counts = [], [], []
+        self.identifiable_up_to_ = 0.0
+        for rec in records:
+            u = np.asarray(rec.u, dtype=float)
+            steps = staircase_steps(u)
+            n_steps = int(steps[-1]) + 1
+            lengths = np.bincount(steps)
+            if n_steps < 2 or np.max(lengths) < _MIN_STEP_SAMPLES:
+                raise IdentificationError(f"creep records: {rec.source}: expected a voltage "
+                                          f"staircase (steps held >= {_MIN_STEP_SAMPLES} samples), "
+                                          f"found {n_steps} step(s)")
+            self.identifiable_up_to_ = max(self.identifiable_up_to_, float(lengths.max() * T))
+            h = model.simulate(u)[0] - off[:, None]
+            pass_g = (lambda s: s) if mats is None else \
+                (lambda s: linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0])
+            N = u.shape[1]
+            rows = np.arange(0, N, stride)
+            cols = []
+            base = pass_g(h)
+            for l in range(p):                       # lag regressors, output l
+                x = _lags(h[l], tau, T)
+                for k in range(K):
+                    s = np.zeros((p, N))
+                    s[l] = x[k]
+                    cols.append(pass_g(s)[:, rows].ravel())
+            for l in range(p):                       # step offsets, output l
+                for j in range(n_steps):
+                    s = np.zeros((p, N))
+                    s[l] = steps == j
+                    cols.append(pass_g(s)[:, rows].ravel())
+            blocks.append(np.column_stack(cols))
+            targets.append((np.asarray(rec.y, dtype=float) - off[:, None] - base)[:, rows].ravel())
+            seg_counts.append(n_steps)
+        # lag columns shared by the records, offset columns per record; the
+        # offsets are free: projected out, NNLS on the lag weights alone
+        n_lag = p * K
+        n_off = p * sum(seg_counts)
+        n_rows = sum(b.shape[0] for b in blocks)
+        L, O = np.zeros((n_rows, n_lag)), np.zeros((n_rows, n_off))
+        r0, c0 = 0, 0
+        for b, n in zip(blocks, seg_counts):
+            L[r0:r0 + b.shape[0]] = b[:, :n_lag]
+            O[r0:r0 + b.shape[0], c0:c0 + p * n] = b[:, n_lag:]
+            r0 += b.shape[0]
+            c0 += p * n
+        y = np.concatenate(targets)
+        # projection on the offsets' complement by the (small) normal equations
+        G_oo = O.T @ O
+        perp = lambda M: M - O @ np.linalg.lstsq(G_oo, O.T @ M, rcond=None)[0]
+        Lp, yp = perp(L), perp(y)
+        H, b = Lp.T @ Lp, Lp.T @ yp
+        if self.smoothing > 0 and K >= 3:
+            lam2 = self.smoothing * n_rows * float(np.mean(Lp ** 2))
+            D2 = np.kron(np.eye(p), np.diff(np.eye(K), 2, axis=0))
+            H = H + lam2 * D2.T @ D2
+        # NNLS on the Cholesky factor: min |R w - R^-T b| = min |A w - y| + const
+        H = H + 1e-12 * np.trace(H) / H.shape[0] * np.eye(H.shape[0])
+        R = scipy.linalg.cholesky(H, lower=False)
+        try:
+            from scipy.optimize import nnls  # lazy: ~0.3 s to import; creep fits only
+            wflat, _ = nnls(R, scipy.linalg.solve_triangular(R, b, trans="T"), maxiter=50 * n_lag)
+        except RuntimeError as exc:
+            raise IdentificationError(f"creep: non-negative least squares failed: {exc}") from None
+        w = wflat.reshape(p, K)
+        offs = np.linalg.lstsq(G_oo, O.T @ (y - L @ wflat), rcond=None)[0]
+        res, res0 = yp - Lp @ wflat, yp
+        res_out, res0_out = [[] for _ in range(p)], [[] for _ in range(p)]
+        r0 = 0
+        for b in blocks:
+            n_r = b.shape[0] // p
+            for l in range(p):
+                res_out[l].append(res[r0 + l * n_r:r0 + (l + 1) * n_r])
+                res0_out[l].append(res0[r0 + l * n_r:r0 + (l + 1) * n_r])
+            r0 += b.shape[0]
+        self.time_constants_ = tau.copy()
+        self.weights_ = w
+        wf = 2 * np.pi * self.hysteresis_frequency_hz
+        absorbed = w @ (1.0 / (1.0 + (wf * tau) ** 2))
+        a = np.exp(-T / tau)
+        floor = w @ ((1 - a) / (1 + a))
+        self.instantaneous_ = np.maximum(1.0 - absorbed, 2.0 * floor + 1e-9)
+        self.creeps_ = [Creep(tau, w[l], float(self.instantaneous_[l])) for l in range(p)]
+        self.offsets_, c0 = [], 0
+        for n in seg_counts:
+            self.offsets_.append(np.vstack([offs[c0 + l * n:c0 + (l + 1) * n] for l in range(p)]))
+            c0 += p * n
+        self.residual_rms_ = np.array([np.sqrt(np.mean(np.concatenate(r) ** 2)) for r in res_out])
+        self.residual_rms_no_creep_ = np.array([np.sqrt(np.mean(np.concatenate(r) ** 2))
+                                                for r in res0_out])
+        s = np.array([c.step_response([0.1, 10.0]) for c in self.creeps_])
+        self.drift_ = (s[:, 1] - s[:, 0]) / s[:, 0]
+        self.rate_per_decade_ = self.drift_ / 2.0
+        self.sampling_period_ = T
+        self.output_names_ = list(model.output_names)
+        self.sources_ = [str(r.source) for r in records]
+        return self
+
+    def summary(self):
+        """Plain data for the ``[identification.creep]`` table of a preset.
+
+        Returns
+        -------
+        dict
+            ``time_constants_s``, per output ``weights``, ``instantaneous``,
+            ``drift_0p1_to_10s_percent``, ``rate_per_decade``,
+            ``residual_rms``, ``residual_rms_without_creep`` [µm]; the
+            ``hysteresis_frequency_hz``, ``identifiable_up_to_s``, ``sources``.
+        """
+        out = {"time_constants_s": [float(v) for v in self.time_constants_],
+               "hysteresis_frequency_hz": self.hysteresis_frequency_hz,
+               "identifiable_up_to_s": float(self.identifiable_up_to_),
+               "smoothing": self.smoothing, "sources": list(self.sources_),
+               "outputs": {}}
+        for l, name in enumerate(self.output_names_):
+            out["outputs"][name] = {
+                "weights": [float(v) for v in self.weights_[l]],
+                "instantaneous": float(self.instantaneous_[l]),
+                "total": float(self.instantaneous_[l] + self.weights_[l].sum()),
+                "drift_0p1_to_10s_percent": float(100 * self.drift_[l]),
+                "rate_per_decade": float(self.rate_per_decade_[l]),
+                "residual_rms": float(self.residual_rms_[l]),
+                "residual_rms_without_creep": float(self.residual_rms_no_creep_[l])}
+        return out
+
+    def report_lines(self, output_unit="µm"):
+        """Printed report: per output, drift, weights, residual with and without creep.
+
+        Parameters
+        ----------
+        output_unit : str
+            Unit of the outputs.
+
+        Returns
+        -------
+        list of str
+        """
+        tau = self.time_constants_
+        lines = [f"creep: {tau.size} lags, time constants {tau[0]:.3g}-{tau[-1]:.3g} s, fitted on "
+                 f"{len(self.sources_)} staircase record(s) (steps up to "
+                 f"{self.identifiable_up_to_:.3g} s; slower lags extrapolated); normalised to unit "
+                 f"gain at {self.hysteresis_frequency_hz:.3g} Hz, the hysteresis records"]
+        for l, name in enumerate(self.output_names_):
+            lines.append(
+                f"  {name}: drift {100 * self.drift_[l]:+.3g} % from 0.1 s to 10 s after a step "
+                f"({100 * self.rate_per_decade_[l]:.3g} %/decade), instantaneous "
+                f"{self.instantaneous_[l]:.4g}, weights "
+                + ", ".join(f"{v:.3g}" for v in self.weights_[l])
+                + f"; residual RMS {self.residual_rms_[l]:.3g} {output_unit} "
+                  f"({self.residual_rms_no_creep_[l]:.3g} without creep)")
+        return lines

@@ -1,0 +1,370 @@
+"""The identification pipeline from records: hysteresis, dynamics, creep, refit, dynamics again.
+
+One function, :func:`identify_pipeline`, runs what ``hammerstein identify``
+runs and what a scenario's ``identify = { records = "excitation", ... }``
+table runs, with the same options (:class:`PipelineOptions`, the defaults of
+``hammerstein identify``):
+
+1. the hysteresis of the class ``model`` (``auto``: the classical PI, the
+   Preisach model and the generalised PI are fitted and the one with the
+   lowest held-out minor-loop error kept, the staircases' step levels joining
+   the score when creep records are given; :func:`identify_hysteresis`);
+2. with dynamics records, the linear dynamics G on the model's outputs
+   (:func:`hammerstein.identification.record_identification.identify_record_dynamics`);
+3. with creep records, the creep after the hysteresis and G
+   (:func:`hammerstein.identification.record_identification.identify_record_creep`),
+   the hysteresis refitted on the records with the creep removed
+   (``v = (I + C)^-1 y``, ``creep_refits`` times) and the creep again;
+4. with creep and dynamics, G again on the model's outputs through the
+   identified creep (``G (I + C)`` has G(0) = I for G).
+
+The result (:class:`IdentificationResult`) carries the fit, G and the creep,
+and the tables a preset stores besides ``[model]`` (:meth:`IdentificationResult.tables`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hammerstein.models.creep import creep_to_table
+from hammerstein.identification.creep_identification import remove_creep, step_level_errors
+from hammerstein.identification.gpi_identification import identify_gpi_records
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.identification.preisach_identification import identify_preisach_records
+from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
+                                                     identify_records)
+from hammerstein.exceptions import HysteresisError, IdentificationError
+
+__all__ = ["PipelineOptions", "IdentificationResult", "identify_hysteresis", "identify_pipeline",
+           "CLASS_LABEL", "GPI_PLAYS", "fit_class"]
+
+#: Words of each class in the notes.
+CLASS_LABEL = {"classical": "classical PI", "generalized": "generalized PI"}
+#: Play operators per component of ``model = "generalized"`` (and of auto's third class).
+GPI_PLAYS = 16
+
+
+@dataclass
+class PipelineOptions:
+    """The options of the pipeline, named and defaulted as ``hammerstein identify``'s.
+
+    Parameters
+    ----------
+    method : {'least-squares', 'closed-form'}
+        Classical PI fit.
+    n : int or None
+        Hysterons per component (None with explicit ``thresholds``).
+    thresholds : list of float or None
+        Explicit thresholds [input unit].
+    partition : {'auto', 'time', 'input'}
+    bounds : {'none', 'nonnegative', 'monotone'}
+    components : str
+        ``auto``, ``all`` or ``OUT:IN=KIND,...``.
+    model : {'auto', 'classical', 'preisach', 'generalized'}
+        The class (``auto``: the best on held-out data).
+    threshold_spacing : {'uniform', 'power', 'auto'}
+        Generalised PI thresholds.
+    preisach_levels : int
+        Levels of each input's Preisach grid.
+    hold_out : {'auto', 'none'}
+    output_map : {'auto', 'none', 'deadzone'}
+    train_fraction, skip : float or None
+        Held-out fraction; burn-in [s].
+    order, max_order : int or None
+        Order of G (None: chosen on held-out records).
+    creep_refits : int or None
+        Refits without the creep (None: 1 for a Preisach or generalised PI, 0
+        for a classical PI).
+    output_unit : str
+        For the notes.
+    name : str
+        Name of the identified dynamics.
+    """
+
+    method: str = "least-squares"
+    n: int | None = 15
+    thresholds: list | None = None
+    partition: str = "auto"
+    bounds: str = "none"
+    components: str = "auto"
+    model: str = "auto"
+    threshold_spacing: str = "uniform"
+    preisach_levels: int = 20
+    hold_out: str = "auto"
+    output_map: str = "auto"
+    train_fraction: float | None = None
+    skip: float | None = None
+    order: int | None = None
+    max_order: int | None = None
+    creep_refits: int | None = None
+    output_unit: str = "µm"
+    name: str = "identified"
+
+
+@dataclass
+class IdentificationResult:
+    """What :func:`identify_pipeline` identified.
+
+    Parameters
+    ----------
+    fit : object
+        The hysteresis fit (``model``, ``notes``, ``validation``, ``levels``,
+        ``method``...) of :func:`identify_hysteresis`.
+    dynamics : object or None
+        The identified G (``identifier.system_``, ``tables``, ``summary``),
+        the last one fitted (through the creep when there is one).
+    creep : hammerstein.identification.creep_identification.CreepIdentifier or None
+        The identified creep (``creeps_`` one per output).
+    first_dynamics : object or None
+        G fitted before the creep (the same as ``dynamics`` without creep).
+
+    Attributes
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+        The identified hysteresis model.
+    """
+
+    fit: object
+    dynamics: object = None
+    creep: object = None
+    first_dynamics: object = field(default=None, repr=False)
+
+    @property
+    def model(self):
+        """The identified hysteresis model (any class of :mod:`hammerstein.compensation.model_classes`)."""
+        return self.fit.model
+
+    def tables(self):
+        """The preset tables besides ``[model]``: ``[dynamics]`` and ``[creep]`` when identified.
+
+        Returns
+        -------
+        dict or None
+            Tables for :func:`hammerstein.io.presets.save_model`'s ``extra``.
+        """
+        if self.dynamics is None and self.creep is None:
+            return None
+        extra = dict(self.dynamics.tables) if self.dynamics is not None else {}
+        if self.creep is not None:
+            extra["creep"] = creep_to_table(self.creep.creeps_, self.model.output_names)
+        return extra
+
+
+def fit_class(fit):
+    """The class name of a fit (``"classical"``, ``"preisach"`` or ``"generalized"``).
+
+    Parameters
+    ----------
+    fit : object
+        A fit of :func:`identify_hysteresis`.
+
+    Returns
+    -------
+    str
+    """
+    return {"preisach": "preisach", "generalized-pi": "generalized"}.get(fit.method, "classical")
+
+
+def _fit_rms(fit):
+    """Largest held-out RMS error of an output (training when nothing is held out)."""
+    reps = fit.validation or fit.train
+    return max(float(r["rms"]) for r in reps) if reps else float("nan")
+
+
+def _step_level_error(fit, recs):
+    """Held-out step levels of the staircases: (RMS [% of range], RMS, largest [unit])."""
+    creep = identify_record_creep(fit, recs)
+    errs = step_level_errors(fit.model, recs, creep.creeps_)
+    span = np.max([np.ptp(np.asarray(r.y, dtype=float), axis=1) for r in recs], axis=0)
+    rel = np.concatenate([(e / span[:, None]).ravel() for e in errs])
+    ab = np.concatenate([e.ravel() for e in errs])
+    rel, ab = rel[np.isfinite(rel)], ab[np.isfinite(ab)]
+    return (100 * float(np.sqrt(np.mean(rel ** 2))), float(np.sqrt(np.mean(ab ** 2))),
+            float(np.max(np.abs(ab))))
+
+
+def _fit_generalized(options, choice, records, names, levels, fits, errors):
+    """``model = "generalized"`` (or a refit of that class), or the third class of ``auto``."""
+    if not (choice == "generalized" or (choice == "auto" and levels)):
+        return
+    try:
+        fits["generalized"] = identify_gpi_records(
+            records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
+            options.skip, *names, threshold_spacing=options.threshold_spacing)
+    except (IdentificationError, HysteresisError) as exc:
+        if choice == "generalized" or not fits:
+            raise
+        errors["generalized"] = str(exc)
+
+
+def identify_hysteresis(records, options, names, model_class=None, creep_records=None):
+    """The hysteresis fit of ``options.model``: one class, or the best on held-out data.
+
+    ``auto`` judges the classes on the held-out minor loops of the
+    multi-amplitude records and, with ``creep_records``, also on the step
+    levels of the staircases (held out: the hysteresis is not fitted on
+    them), by the geometric mean of the two; ``model_class`` forces one class
+    (a refit keeps the chosen one).
+
+    Parameters
+    ----------
+    records : list of hammerstein.io.datafiles.MultiRecord
+        The hysteresis records.
+    options : PipelineOptions
+    names : (list of str, list of str)
+        Input and output names of the model.
+    model_class : str, optional
+        Forces a class.
+    creep_records : list of MultiRecord, optional
+        Staircases (``auto``'s second score).
+
+    Returns
+    -------
+    object
+        The fit (:func:`hammerstein.identification.record_identification.identify_records`,
+        :func:`~hammerstein.identification.preisach_identification.identify_preisach_records`
+        or :func:`~hammerstein.identification.gpi_identification.identify_gpi_records`),
+        its notes starting with the choice of ``auto``.
+
+    Raises
+    ------
+    IdentificationError, HysteresisError
+        Records no class can be fitted on.
+    """
+    choice = model_class or options.model
+    fits, errors = {}, {}
+    if choice in ("classical", "auto"):
+        fits["classical"] = identify_records(
+            records, options.method, options.n, options.thresholds,
+            "time" if options.thresholds is not None and options.partition == "auto"
+            else options.partition, options.bounds, options.components, options.hold_out,
+            options.train_fraction, options.skip, *names, output_map=options.output_map)
+    levels = any(r["held_out"] for f in fits.values() for r in f.levels)
+    if choice == "preisach" or (choice == "auto" and levels):
+        try:
+            fits["preisach"] = identify_preisach_records(
+                records, options.preisach_levels, "auto", options.components, options.hold_out,
+                options.train_fraction, options.skip, *names)
+        except (IdentificationError, HysteresisError) as exc:
+            if choice == "preisach" or not fits:
+                raise
+            errors["preisach"] = str(exc)
+    _fit_generalized(options, choice, records, names, levels, fits, errors)
+    if len(fits) == 1:
+        fit = next(iter(fits.values()))
+        if choice == "auto":
+            why = ("; ".join(f"{k} failed: {v}" for k, v in errors.items()) if errors else
+                   "no held-out amplitude level (minor loop) to compare the classes on")
+            fit.notes.insert(0, f"model auto: {CLASS_LABEL.get(next(iter(fits)), next(iter(fits)))} "
+                                f"({why})")
+        return fit
+    loops = {k: f.minor_loop_error for k, f in fits.items()}
+    stairs = {k: _step_level_error(f, creep_records) for k, f in fits.items()} \
+        if creep_records else {}
+    if stairs:   # both held out; the geometric mean weighs each by its ratio between classes
+        scores = {k: float(np.sqrt(loops[k] * stairs[k][0])) for k in fits}
+        rule = ("lowest geometric mean of the held-out minor-loop RMS error (% of each level's "
+                "output range) and the staircases' step-level RMS error (% of each output's "
+                "range; --creep-records, not used to fit the hysteresis)")
+    else:
+        scores = loops
+        rule = "lowest mean held-out minor-loop RMS error, % of each level's output range"
+    best = min(scores, key=lambda k: scores[k])
+    fit = fits[best]
+    lines = [f"model auto: chose {best} ({rule})"]
+    for k, f in fits.items():
+        worst = max(v["rms_percent"] for v in f.validation) if f.validation else float("nan")
+        text = (f"model auto: {k} {loops[k]:.3g} % mean held-out minor-loop RMS (largest "
+                f"held-out RMS of an output {worst:.3g} % of its range)")
+        if stairs:
+            pct, rms, big = stairs[k]
+            text += (f"; staircase step levels (model + its creep, from rest) RMS "
+                     f"{rms:.3g} {options.output_unit} = {pct:.3g} % of the range, largest "
+                     f"{big:.3g} {options.output_unit}; score {scores[k]:.3g} %")
+        lines.append(text)
+    fit.notes[:0] = lines
+    return fit
+
+
+def _dynamics(options, fit, dynamics_records, creep=None):
+    return identify_record_dynamics(fit, dynamics_records, name=options.name, creep=creep,
+                                    order=options.order, max_order=options.max_order)
+
+
+def _creep(fit, creep_records, dyn):
+    return identify_record_creep(fit, creep_records, None if dyn is None else dyn.identifier.system_)
+
+
+def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records):
+    """Hysteresis refitted on the records with the identified creep removed, then creep again.
+
+    The hysteresis records carry creep (y = (I + C) v, v = H(u)); a first
+    fit takes it for hysteresis. With the creep identified from the
+    staircases, v = (I + C)^-1 y is computed exactly from the records
+    (:func:`hammerstein.identification.creep_identification.remove_creep`), the
+    hysteresis is refitted on v, and the creep is fitted again after the new
+    model; ``creep_refits`` times.
+    """
+    refits = options.creep_refits
+    if refits is None:
+        refits = 0 if isinstance(fit.model, MultivariablePI) else 1
+        if refits == 0:
+            fit.notes.append("creep refit: none for a classical PI (the default; --creep-refits N "
+                             "refits it on the records with the creep removed)")
+    for i in range(refits):
+        before = _fit_rms(fit)
+        clean = remove_creep(records, creep.creeps_, fit.model.output_offset)
+        chosen = [note for note in fit.notes if note.startswith("model auto")]
+        fit = identify_hysteresis(clean, options, names, fit_class(fit), creep_records)
+        fit.notes[:0] = chosen
+        creep = _creep(fit, creep_records, dyn)
+        fit.notes.append(f"creep refit {i + 1}: hysteresis refitted on the records with the "
+                         f"identified creep removed (v = (I + C)^-1 y); held-out RMS "
+                         f"{before:.3g} -> {_fit_rms(fit):.3g} {options.output_unit} (largest output)")
+    return fit, creep
+
+
+def identify_pipeline(records, options=None, names=None, dynamics_records=None, creep_records=None):
+    """Hysteresis, dynamics and creep from records: what ``hammerstein identify`` writes.
+
+    Parameters
+    ----------
+    records : list of hammerstein.io.datafiles.MultiRecord
+        Hysteresis records (e.g. the decreasing-amplitude sines of
+        ``hammerstein excitation``), inputs [V], outputs [µm].
+    options : PipelineOptions, optional
+        Default: ``hammerstein identify``'s defaults.
+    names : (list of str, list of str), optional
+        Input and output names (default the records').
+    dynamics_records : list of MultiRecord, optional
+        Broadband records (multisines, the last ones held out to choose the
+        order): G is identified when given.
+    creep_records : list of MultiRecord, optional
+        Staircases: the creep is identified when given.
+
+    Returns
+    -------
+    IdentificationResult
+
+    Raises
+    ------
+    IdentificationError, HysteresisError, DynamicsError
+        Records that cannot be fitted.
+    """
+    options = PipelineOptions() if options is None else options
+    if names is None:
+        names = (list(records[0].input_names), list(records[0].output_names))
+    creep_records = list(creep_records) if creep_records else None
+    fit = identify_hysteresis(records, options, names, creep_records=creep_records)
+    dyn = creep = None
+    if dynamics_records:
+        dyn = _dynamics(options, fit, dynamics_records)
+    first = dyn
+    if creep_records:
+        creep = _creep(fit, creep_records, dyn)
+        fit, creep = _refit_without_creep(options, records, names, fit, creep, dyn, creep_records)
+        if dyn is not None:   # G again, on the model outputs through the creep: G(0) = I for G (I + C)
+            dyn = _dynamics(options, fit, dynamics_records, creep.creeps_)
+    return IdentificationResult(fit, dyn, creep, first)
