@@ -23,7 +23,8 @@ from hammerstein.io.presets import load_dynamics, load_model, load_plant, read_t
 from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
 from hammerstein.scenario.validate import _signal
 
-__all__ = ["Reference", "load_actuator", "load_reference", "mapping", "owned_problem",
+__all__ = ["Reference", "load_actuator", "load_reference", "check_reference_first", "mapping",
+           "owned_problem",
            "add_actuator_arguments", "positive_float"]
 
 
@@ -144,6 +145,37 @@ def _measurement_delay(data, path):
         raise PresetError(f"{path}: [identification] measurement_delay_samples: expected an "
                           f"integer >= 0 [samples], found {value!r}")
     return value
+
+
+def check_reference_first(path, sampling_period, text, time="t", outputs=None, period=None):
+    """Generate the reference at ``sampling_period`` before the actuator is re-sampled.
+
+    Re-sampling a preset's dynamics at another sampling period loads
+    python-control (seconds); a reference too large for the record budget
+    (:func:`hammerstein.core.numbers.check_samples`) is refused first, at once.
+
+    Parameters
+    ----------
+    path : str
+        Preset name or file, or model file (as :func:`load_actuator`).
+    sampling_period : float or None
+        ``--sampling-period`` [s]; None: nothing to check before loading.
+    text, time, outputs, period
+        As :func:`load_reference`.
+
+    Raises
+    ------
+    DataFileError, PresetError
+        As :func:`load_reference` and :func:`load_actuator`.
+    """
+    if sampling_period is None:
+        return
+    p = Path(path)
+    data = read_toml(p, "model file") if p.suffix == ".toml" or p.exists() else None
+    model = load_plant(path, dynamics=False).hysteresis if data is None or "preset" in data \
+        else load_model(p)
+    shell = argparse.Namespace(sampling_period=float(sampling_period), hysteresis=model)
+    load_reference(text, shell, time, outputs, period)
 
 
 def load_reference(text, plant, time="t", outputs=None, period=None):

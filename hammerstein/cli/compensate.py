@@ -20,7 +20,8 @@ import sys
 from pathlib import Path
 
 from hammerstein.cli._common import out_file_problem, print_err
-from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
+from hammerstein.cli._hardware import (add_actuator_arguments, catch, check_reference_first,
+                                       load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, apply_amplifier, hardware_drive, rest_output,
@@ -186,6 +187,8 @@ def _handle(args):
         return 2
     kind = note = None
     try:
+        check_reference_first(args.actuator, args.sampling_period, args.reference, args.time,
+                              args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         kind, options, note = _kind_and_options(plant, args.kind, args.gain, args.check)

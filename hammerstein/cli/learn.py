@@ -62,7 +62,8 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
-from hammerstein.cli._hardware import (add_actuator_arguments, catch, load_actuator,
+from hammerstein.cli._hardware import (add_actuator_arguments, catch, check_reference_first,
+                                       load_actuator,
                                        fraction, load_reference, mapping, nonnegative_float, owned_problem,
                                        positive_float)
 from hammerstein.cli.compensate import LAW_HINT
@@ -408,6 +409,8 @@ def _handle(args):
         print_err(f"hammerstein learn: error: {problem}")
         return 2
     try:
+        check_reference_first(args.actuator, args.sampling_period, args.reference, args.time,
+                              args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
         model = plant.hysteresis
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)

@@ -35,10 +35,9 @@ import math
 import warnings
 from dataclasses import dataclass, field
 
-import control
 import numpy as np
-import scipy.linalg
 
+from hammerstein.core.lazy import lazy_module
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.models.preisach import MultivariableHysteresis
 from hammerstein.compensation.preisach_inverse import component_arrays
@@ -46,6 +45,9 @@ from hammerstein.exceptions import CompensatorError, FeedbackError
 from hammerstein.simulation import (AW_BACK, AW_CLAMP, AW_NONE, ComponentArrays, LinearArrays,
                                     LoopArrays, LoopState, empty_components, empty_pi, pack_model,
                                     simulate_closed_loop)
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
+scipy_linalg = lazy_module("scipy.linalg")
 
 __all__ = ["AXIS_KINDS", "METHODS", "ANTI_WINDUP", "Controller", "Sensor", "AmplifierLimits",
            "FeedbackLoop", "LoopResult", "design_axis", "discretise", "hysteresis_slopes",
@@ -436,7 +438,7 @@ def diagonal_controller(designs, sampling_period, method="tustin"):
              if isinstance(d, AxisDesign) else controller_from_lti(d, sampling_period, method)
              for d in designs]
     p = len(parts)
-    A = scipy.linalg.block_diag(*[c.A for c in parts]) if any(c.n_states for c in parts) \
+    A = scipy_linalg.block_diag(*[c.A for c in parts]) if any(c.n_states for c in parts) \
         else np.zeros((0, 0))
     n = A.shape[0]
     B = np.zeros((n, 3 * p))
@@ -502,7 +504,7 @@ def _continuous(system):
     n, m = B.shape
     M = np.zeros((n + m, n + m))
     M[:n, :n], M[:n, n:], M[n:, n:] = A, B, np.eye(m)
-    L = scipy.linalg.logm(M).real / T
+    L = scipy_linalg.logm(M).real / T
     return control.ss(L[:n, :n], L[:n, n:], system.C, system.D)
 
 

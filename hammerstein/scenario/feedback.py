@@ -19,9 +19,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
-import control
 import numpy as np
 
+from hammerstein.core.lazy import lazy_module
 from hammerstein.signals import metrics as met
 from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
                                        design_axis, diagonal_controller, linearised_plant,
@@ -32,6 +32,8 @@ from hammerstein.scenario.execute import fade_samples, signal_kind
 from hammerstein.scenario.feedback_table import MODES, FeedbackScenario
 from hammerstein.scenario.registry import compensator_kind
 from hammerstein.scenario.resolve import resolve_scenario
+
+control = lazy_module("control")  # lazy: loaded when a feedback scenario runs
 
 __all__ = ["FeedbackCaseResult", "build_controller", "build_loops", "run_feedback_scenario",
            "loop_analysis", "MODE_LABELS"]

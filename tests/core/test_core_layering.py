@@ -180,3 +180,15 @@ def test_a_zpetc_compensator_of_a_plants_own_dynamics_does_not_import_python_con
     control_type, signal_loaded, error = fresh_steps["zpetc compensator run"]
     assert (control_type, signal_loaded) == ("_LazyModule", False)
     assert error < 0.1
+
+
+def test_the_hardware_commands_and_validation_do_not_load_python_control():
+    # python-control and scipy.signal take ~1 s of CPU to import: commands that do not
+    # re-sample or design a loop (validate, compensate's checks, feedback tables) must not
+    # load them (a feedback controller module imported them at module level)
+    loaded = _fresh("import json, sys\n"
+                    "import hammerstein.cli.compensate, hammerstein.cli.learn\n"
+                    "import hammerstein.scenario.validate, hammerstein.scenario.feedback\n"
+                    "print(json.dumps(['control.statesp' in sys.modules, "
+                    "'scipy.signal' in sys.modules]))")
+    assert loaded == [False, False]
