@@ -200,6 +200,7 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
     channels = _sweep_channels(table, metric, output_names)
     p, m = len(channels), len(axes_names)
     labels = list(dict.fromkeys(table["compensator"]))
+    names = names or {}
     # one legend for the whole figure, under the title; none for a single unnamed series
     named = not (len(labels) == 1 and labels[0] in ("-", "", None))
     ncol = min(len(labels), 3)
@@ -217,7 +218,8 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
                 if metric in r and r[metric].notna().any():
                     style = {**plots._style(j), "marker": _POINTS[j % len(_POINTS)],
                              "markevery": None}           # every swept frequency is a point
-                    line, = ax.plot(r["frequency_hz"], r[metric], label=lab, **style)
+                    line, = ax.plot(r["frequency_hz"], r[metric], label=names.get(lab, lab),
+                                    **style)
                     handles.setdefault(lab, line)
             vals = rows[metric] if metric in rows else pd.Series(dtype=float)
             if vals.notna().any() and (vals.dropna() > 0).all():
@@ -236,8 +238,7 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
     if named and handles:
         W, H = fig.get_size_inches()
         top = fig.subplotpars.top * H
-        names = names or {}
-        fig.legend(list(handles.values()), [names.get(k, k) for k in handles],
+        fig.legend(list(handles.values()), [h.get_label() for h in handles.values()],
                    loc="lower center", ncol=ncol,
                    fontsize=8, frameon=False, bbox_to_anchor=(0.5, (top + 0.3) / H))
     plots.suptitle(fig, title)

@@ -19,7 +19,8 @@ import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.export import STATUS_RANGE, export_c
-from hammerstein.export.build import build_compensator, default_kind, load_source
+from hammerstein.compensation.model_classes import choose_kind
+from hammerstein.export.build import build_compensator, limits_from_table, load_source
 
 from conftest import Harness, needs_cc
 from outside_actuator import OutsideActuator, write_csv
@@ -66,8 +67,15 @@ def check_export(path, kind, workdir):
     source = load_source(path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        comp, Ts = build_compensator(source, kind or default_kind(source)[0], check="warn")
-        code = export_c(comp, "act", Ts)
+        choice = None if kind is not None else choose_kind(
+            source.model, source.dynamics is not None, None)
+        gain = None if choice is None else choice.options.get("gain")
+        if gain is not None and not isinstance(gain, str):
+            gain = [list(map(float, row)) for row in gain]     # K [µm/V], as the CLI passes it
+        comp, Ts = build_compensator(source, kind or choice.kind, gain=gain, check="warn")
+        # the amplifier table identify wrote (the records' range and slew), as the CLI reads it
+        limits = limits_from_table(source.amplifier, list(source.model.input_names), "amplifier")
+        code = export_c(comp, "act", Ts, limits=limits)
     # what the CLI wrote (its first line adds the version)
     assert code.source.split("\n", 1)[1] == (workdir / "act.c").read_text().split("\n", 1)[1]
     h = Harness(code, workdir / "h")

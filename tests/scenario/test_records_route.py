@@ -17,7 +17,7 @@ import pytest
 
 from hammerstein.cli._hardware import load_actuator, load_reference
 from hammerstein.cli.main import main
-from hammerstein.compensation.drive import drive_signal
+from hammerstein.compensation.drive import hardware_drive, rest_output
 from hammerstein.io.presets import load_plant
 from hammerstein.scenario.identification import (ResolveContext, excitation_records,
                                                  identified_from_records)
@@ -91,8 +91,11 @@ def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys)
 
     comp = build_compensator({"kind": "hammerstein", "model": "identified", "identify": identify,
                               "dynamics": "identified"}, plant, ResolveContext(tmp_path))
-    ref = load_reference(CIRCLE, load_actuator(str(preset)))
-    res = drive_signal(comp, ref.signal, plant.sampling_period, ref.period_samples, None, None,
-                       "error")
+    actuator = load_actuator(str(preset))
+    ref = load_reference(CIRCLE, actuator)
+    # the drive the hardware command writes: faded in from rest over a duration and kept in
+    # the records' amplifier range and slew (the preset's [amplifier], source = "records")
+    res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
+                         actuator.amplifier, "error", rest=rest_output(actuator.hysteresis))
     assert u_cli.shape == res.inputs.shape
     assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
