@@ -89,6 +89,7 @@ import functools
 import itertools
 import logging
 import math
+import os
 import re
 import socket
 import time
@@ -164,6 +165,25 @@ EXACT_VALUES = 2_000_000
 MAX_RUNS = 100_000_000
 #: Budget: samples of one run (reference length).
 MAX_RUN_SAMPLES = 200_000
+#: Budget: samples of a whole study (cases x the runs' samples), about 13 min of CPU at the
+#: batch kernel's ~40 ns a sample; raised with the environment variable below.
+DEFAULT_STUDY_SAMPLES = 20_000_000_000
+STUDY_SAMPLES_ENV = "HAMMERSTEIN_MAX_STUDY_SAMPLES"
+
+
+def max_study_samples():
+    """Largest number of samples one Monte-Carlo study may simulate.
+
+    Returns
+    -------
+    int
+        ``HAMMERSTEIN_MAX_STUDY_SAMPLES`` when it is a positive integer (ASCII
+        digits), else :data:`DEFAULT_STUDY_SAMPLES`.
+    """
+    text = os.environ.get(STUDY_SAMPLES_ENV, "").strip()
+    if text.isascii() and text.isdigit() and int(text) > 0:
+        return int(text)
+    return DEFAULT_STUDY_SAMPLES
 #: Histogram resolution (log-spaced bins per decade) and range [10**LO, 10**HI].
 BINS_PER_DECADE = 400
 _LO, _HI = -9, 6
@@ -464,6 +484,14 @@ def validate_montecarlo(path, data):
             references.append(np.ascontiguousarray(r, dtype=float))
             periods.append(P)
         if len(problems) > n0:
+            continue
+        total = c["cases"] * sum(r.shape[1] for r in references)
+        if total > max_study_samples():
+            problems.append(
+                f"{source}: {where}.cases: {c['cases']} cases x {sum(r.shape[1] for r in references)}"
+                f" samples of the {len(references)} frequencies = {total:.3g} samples to simulate "
+                f"(about {total * 40e-9 / 60:.3g} min of CPU at 40 ns a sample); expected at most "
+                f"{max_study_samples():.3g} (raise it with {STUDY_SAMPLES_ENV}=N)")
             continue
         studies.append(MonteCarloStudy(
             name=c["name"], description=c.get("description", ""), cases=c["cases"], seed=seed,

@@ -420,3 +420,23 @@ def test_an_overdamped_drawn_mode_runs(tmp_path):
     assert max(z.max() for z in zetas) > 1.0
     res = mc.run_study(s)
     assert np.all(np.isfinite(res.quantiles))
+
+
+def test_a_study_beyond_the_sample_budget_is_refused_at_validation(tmp_path, repo_root, monkeypatch):
+    # 2e7 cases of the bundled study's four references (8e7 runs, within the run budget):
+    # ~1e12 samples, hours of CPU, refused
+    # while validating, naming the budget and its override; within a raised budget it passes
+    text = (repo_root / "scenarios" / "robustness-monte-carlo.toml").read_text()
+    assert "cases = 40\n" in text
+    big = tmp_path / "big.toml"
+    big.write_text(text.replace("cases = 40\n", "cases = 20000000\n"))
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(big)
+    assert mc.STUDY_SAMPLES_ENV in str(info.value) and "cases" in str(info.value)
+    small = tmp_path / "small.toml"
+    small.write_text(text)
+    monkeypatch.setenv(mc.STUDY_SAMPLES_ENV, "10")
+    with pytest.raises(ScenarioError, match=mc.STUDY_SAMPLES_ENV):
+        validate_scenario(small)
+    monkeypatch.delenv(mc.STUDY_SAMPLES_ENV)
+    validate_scenario(small)
