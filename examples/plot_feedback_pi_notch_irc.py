@@ -24,8 +24,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from hammerstein import load_plant
-from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, design_axis,
-                                       diagonal_controller, linearised_plant)
+from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor,
+                                               design_axis, diagonal_controller,
+                                               linearised_plant)
 from hammerstein.signals.metrics import steady_window
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.signals.references import circle
@@ -36,7 +37,7 @@ T = plant.sampling_period
 
 # %%
 # The linearised plant: hysteresis at its secant gains, then creep and modes
-# -------------------------------------------------------------------------
+# ---------------------------------------------------------------------------
 P = linearised_plant(plant)
 dc = np.real(P(1.0))
 print("DC gains [µm/V]:\n", np.round(dc, 3))
@@ -90,7 +91,6 @@ for ax in axs:
     ax.legend()
 axs[0].set_ylabel("magnitude [dB]")
 fig.tight_layout()
-fig.savefig("feedback_sensitivity.png", dpi=100)
 
 # %%
 # The sweep: feedforward alone, feedback alone, both
@@ -124,20 +124,19 @@ ax.set_title("15 µm circles on realistic-2dof, 40 nm sensor noise, ±10 V")
 ax.grid(True, which="both", alpha=0.3)
 ax.legend(fontsize=7)
 fig.tight_layout()
-fig.savefig("feedback_sweep.png", dpi=100)
 for label, v in errors.items():
     print(f"{label:32s}", " ".join(f"{x:7.3f}" for x in v), "% (10, 20, 50, 100 Hz)")
 
 # %%
 # Reading the figures: the notch lets the PI cross over at 150 Hz with 10 dB
-# of gain margin; |S| is the fraction of the feedforward's error the loop
-# leaves at each frequency (about 0.08 at 10 Hz, 0.55 at 100 Hz), and |T| the
+# of gain margin; ``|S|`` is the fraction of the feedforward's error the loop
+# leaves at each frequency (about 0.08 at 10 Hz, 0.55 at 100 Hz), and ``|T|`` the
 # gain from the sensor noise to the position. The rate-independent inverse
 # leaves the modes' phase lag (errors growing with frequency); the feedback
 # removes most of it at low frequency and adds the sensor noise filtered by
-# |T|. IRC damps the modes, but its tracking integrator crosses over lower
+# ``|T|``. IRC damps the modes, but its tracking integrator crosses over lower
 # (40 Hz here) than the PI + notch. On the error, a perfect feedforward leaves
-# it idle, but alone its mid-band |S| is beta / (beta - 1); with the inner
+# it idle, but alone its mid-band ``|S|`` is beta / (beta - 1); with the inner
 # reference (1 - beta) r it tracks alone, but a hysteresis inverse as
 # feedforward (not the static r / g it expects) disturbs it (docs/feedback.md).
 plt.show()
