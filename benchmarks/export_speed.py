@@ -44,7 +44,8 @@ from hammerstein.compensation.hammerstein_compensator import HammersteinCompensa
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator  # noqa: E402
 from hammerstein.io.presets import load_plant  # noqa: E402
 from hammerstein.export import export_c  # noqa: E402
-from hammerstein.export.build import build_compensator, default_kind, load_source  # noqa: E402
+from hammerstein.compensation.model_classes import choose_kind  # noqa: E402
+from hammerstein.export.build import build_compensator, load_source  # noqa: E402
 from hammerstein.export.fmu import find_compiler  # noqa: E402
 
 HARNESS = r"""
@@ -121,7 +122,7 @@ def cases(files):
         for spec in files:
             path, _, kind = spec.partition(":")
             source = load_source(path)
-            kind = kind or default_kind(source)[0]
+            kind = kind or choose_kind(source.model, source.dynamics is not None).kind
             comp, Tm = build_compensator(source, kind, check="ignore")
             yield f"{Path(path).stem} {kind}", comp, Tm, 12.0
 

@@ -29,7 +29,7 @@ from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError,
 from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
 
-__all__ = ["KINDS", "REFUSED_KINDS", "ExportSource", "load_source", "default_kind",
+__all__ = ["KINDS", "REFUSED_KINDS", "ExportSource", "load_source",
            "build_compensator", "limits_from_table",
            "check_owned", "check_fmu_owned", "write_files"]
 
@@ -178,27 +178,6 @@ def limits_from_table(table, inputs, where="amplifier"):
                 raise ExportError(f"{where}.{name}: not an input of the model ({', '.join(inputs)})")
             apply(sub, inputs.index(name), f"{where}.{name}")
     return AmplifierLimits(lo, hi, slew)
-
-
-def default_kind(source):
-    """The kind exported without ``--kind``, and why.
-
-    Parameters
-    ----------
-    source : ExportSource
-
-    Returns
-    -------
-    (kind, reason) : (str, str)
-        ``'multivariable'`` for a classical PI (the scenario default);
-        ``'preisach-inverse'`` for a Preisach or generalised-PI model (its
-        exact per-sample inverse: it needs no gain and has no convergence
-        condition).
-    """
-    if isinstance(source.model, MultivariablePI):
-        return "multivariable", "the default kind of a classical PI"
-    return "preisach-inverse", (f"a {type(source.model).__name__} model: its exact per-sample "
-                                f"inverse")
 
 
 def build_compensator(source, kind="multivariable", gain=None, iterations=None, feedback="delay",
