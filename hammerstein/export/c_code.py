@@ -54,6 +54,7 @@ from hammerstein.compensation.inversion import ZPETCInverse
 from hammerstein.compensation.mixed_compensators import LinearInverseCompensator
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.exceptions import ExportError
+from hammerstein.simulation._preisach import cell_lists
 
 __all__ = ["AmplifierLimits", "CExport", "export_c", "check_name", "MARKER", "STATUS_LIMIT",
            "STATUS_DIVERGED", "STATUS_RANGE", "EMITTERS"]
@@ -720,7 +721,7 @@ static {N}_real {N}_ramp({N}_real u, {N}_real lo, {N}_real hi)
     return {two} * (u - lo) / (hi - lo) - {one};
 }}
 @>RAMP
-
+@COMPONENT<
 /* output of component c at input u from the states h (moved to u when commit) */
 static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
 {{
@@ -760,16 +761,164 @@ static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
     for (n = {N}_N_POLY - 1; n >= 0; --n) poly = (poly + {N}_rev[c][n]) * u;
     return acc + poly + {N}_off[c];
 }}
+@>COMPONENT
+"""
+
+_MOVE = """
+@HYST<
+/* the switching cell of u on component c's grid: the number of edges <= u, minus one */
+static int {N}_cell_scan(int c, {N}_real u)
+{{
+    const int e0 = {N}_e_off[c], n = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+    int i = -1, j;
+    for (j = 0; j <= n; ++j)
+        if ({N}_E[e0 + j] <= u) i = j;
+    return i;
+}}
+@>HYST
+/* move the states of component c to input u (the commit of _component, without its sum):
+   inside u's switching cell i the ramps of the other cells are exactly -1 (above) or +1
+   (below), so only cell i's ramp is computed */
+static void {N}_move(int c, {N}_real u, {N}_real *h)
+{{
+@HYST<
+    if ({N}_q_off[c + 1] > {N}_q_off[c]) {{
+        const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+        const int base = {N}_s_off[c] - {N}_q_off[c];
+        const int i = {N}_cell_scan(c, u);
+        const {N}_real rho = (0 <= i && i < nlev) ? {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]) : {zero};
+        int q;
+        for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
+            const int a = {N}_row[q], b = {N}_col[q];
+            const {N}_real up = a < i ? {one} : (a == i ? rho : -{one});
+            const {N}_real down = b < i ? {one} : (b == i ? rho : -{one});
+            {N}_real v = h[base + q];
+            if (v > down) v = down;
+            if (v < up) v = up;
+            h[base + q] = v;
+        }}
+    }}
+@>HYST
+@PLAY<
+    if ({N}_p_off[c + 1] > {N}_p_off[c]) {{
+        int j;
+        const int base = {N}_s_off[c] + {N}_q_off[c + 1] - {N}_q_off[c] - {N}_p_off[c];
+        {N}_real lo = {N}_env[c][0] * {tanh}({N}_env[c][1] * u + {N}_env[c][2]) + {N}_env[c][3];
+        {N}_real hi = {N}_env[c][4] * {tanh}({N}_env[c][5] * u + {N}_env[c][6]) + {N}_env[c][7];
+        for (j = {N}_p_off[c]; j < {N}_p_off[c + 1]; ++j) {{
+            {N}_real v = h[base + j];
+            if (v > hi + {N}_pr[j]) v = hi + {N}_pr[j];
+            if (v < lo - {N}_pr[j]) v = lo - {N}_pr[j];
+            h[base + j] = v;
+        }}
+    }}
+@>PLAY
+    (void)c; (void)u; (void)h;
+}}
 """
 
 _ROOT = """#define {N}_ABS(x) ((x) < {zero} ? -(x) : (x))
 
-/* the last two values of each component within one sample (the states do not move until
-   the commit): a repeated input returns the value computed before, bit for bit */
+/* within one sample the states do not move until the commit: the last two values of each
+   component (a repeated input returns the value computed before, bit for bit), and per
+   component the switching cell last summed with the sum of its input-independent hysterons */
 typedef struct {{
-    {N}_real x[{N}_N_COMPONENTS][2], y[{N}_N_COMPONENTS][2];
-    int n[{N}_N_COMPONENTS], last[{N}_N_COMPONENTS];
+    {N}_real x[{N}_N_COMPONENTS][2], y[{N}_N_COMPONENTS][2], cst[{N}_N_COMPONENTS];
+    int n[{N}_N_COMPONENTS], last[{N}_N_COMPONENTS], cell[{N}_N_COMPONENTS];
 }} {N}_memo;
+@HYST<
+/* the cell of u, tried first in the cell summed last (the same answer as the scan) */
+static int {N}_cell({N}_memo *mm, int c, {N}_real u)
+{{
+    const int i = mm->cell[c], e0 = {N}_e_off[c], n = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+    if (0 <= i && i < n && {N}_E[e0 + i] <= u && u < {N}_E[e0 + i + 1]) return i;
+    return {N}_cell_scan(c, u);
+}}
+@>HYST
+
+@HYST<
+/* the term of hysteron q of cell i at the cell's ramp value rho */
+static {N}_real {N}_moving(int q, int i, {N}_real rho, int base, const {N}_real *h)
+{{
+    const {N}_real up = {N}_row[q] == i ? rho : -{one}, down = {N}_col[q] == i ? rho : {one};
+    {N}_real v = h[base + q];
+    if (v > down) v = down;
+    if (v < up) v = up;
+    return {N}_mu[q] * v;
+}}
+
+/* the term of hysteron q that keeps its state in the cell */
+static {N}_real {N}_kept(int q, int base, const {N}_real *h)
+{{
+    {N}_real v = h[base + q];
+    if (v > {one}) v = {one};
+    if (v < -{one}) v = -{one};
+    return {N}_mu[q] * v;
+}}
+@>HYST
+
+/* output of component c at input u, the states frozen (hammerstein.simulation._preisach.
+   _frozen, in its order): in u's switching cell i the ramps of the other cells are exactly
+   +1 (below) or -1 (above), so the hysterons that do not move add a constant per cell
+   (the fixed table plus the kept states, summed once per sample and cell), and only the
+   cell's moving hysterons are evaluated at u; then the plays and the polynomial */
+static {N}_real {N}_frozen({N}_memo *mm, int c, {N}_real u, const {N}_real *h)
+{{
+    {N}_real acc = {zero}, poly = {zero};
+    int n;
+    (void)mm;
+@HYST<
+    if ({N}_q_off[c + 1] > {N}_q_off[c]) {{
+        const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+        const int base = {N}_s_off[c] - {N}_q_off[c];
+        const int i = {N}_cell(mm, c, u), g = e0 + c + i + 1;
+        int k;
+        if (mm->cell[c] != i) {{
+            const int k0 = {N}_kstart[g], k1 = {N}_kstart[g + 1];
+            {N}_real a0 = {zero}, a1 = {zero}, a2 = {zero}, a3 = {zero};  /* four sums */
+            for (k = k0; k + 4 <= k1; k += 4) {{
+                a0 += {N}_kept({N}_kindex[k], base, h);
+                a1 += {N}_kept({N}_kindex[k + 1], base, h);
+                a2 += {N}_kept({N}_kindex[k + 2], base, h);
+                a3 += {N}_kept({N}_kindex[k + 3], base, h);
+            }}
+            if (k < k1) a0 += {N}_kept({N}_kindex[k++], base, h);
+            if (k < k1) a1 += {N}_kept({N}_kindex[k++], base, h);
+            if (k < k1) a2 += {N}_kept({N}_kindex[k++], base, h);
+            mm->cst[c] = {N}_fixed[g] + ((a0 + a1) + (a2 + a3));
+            mm->cell[c] = i;
+        }}
+        acc = mm->cst[c];
+        if (0 <= i && i < nlev) {{
+            const {N}_real rho = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);  /* the one ramp not -1 or +1 */
+            const int k1 = {N}_cstart[g + 1];
+            {N}_real b0 = {zero}, b1 = {zero};    /* two sums (position even, odd) */
+            for (k = {N}_cstart[g]; k + 2 <= k1; k += 2) {{
+                b0 += {N}_moving({N}_cindex[k], i, rho, base, h);
+                b1 += {N}_moving({N}_cindex[k + 1], i, rho, base, h);
+            }}
+            if (k < k1) b0 += {N}_moving({N}_cindex[k], i, rho, base, h);
+            acc += b0 + b1;
+        }}
+    }}
+@>HYST
+@PLAY<
+    if ({N}_p_off[c + 1] > {N}_p_off[c]) {{
+        int j;
+        const int base = {N}_s_off[c] + {N}_q_off[c + 1] - {N}_q_off[c] - {N}_p_off[c];
+        {N}_real lo = {N}_env[c][0] * {tanh}({N}_env[c][1] * u + {N}_env[c][2]) + {N}_env[c][3];
+        {N}_real hi = {N}_env[c][4] * {tanh}({N}_env[c][5] * u + {N}_env[c][6]) + {N}_env[c][7];
+        for (j = {N}_p_off[c]; j < {N}_p_off[c + 1]; ++j) {{
+            {N}_real v = h[base + j];
+            if (v > hi + {N}_pr[j]) v = hi + {N}_pr[j];
+            if (v < lo - {N}_pr[j]) v = lo - {N}_pr[j];
+            acc += {N}_pw[j] * v;
+        }}
+    }}
+@>PLAY
+    for (n = {N}_N_POLY - 1; n >= 0; --n) poly = (poly + {N}_rev[c][n]) * u;
+    return acc + poly + {N}_off[c];
+}}
 
 static {N}_real {N}_eval({N}_memo *mm, int c, {N}_real u, {N}_real *h)
 {{
@@ -779,7 +928,7 @@ static {N}_real {N}_eval({N}_memo *mm, int c, {N}_real u, {N}_real *h)
     i = mm->n[c] < 2 ? mm->n[c]++ : 1 - mm->last[c];
     mm->last[c] = i;
     mm->x[c][i] = u;
-    mm->y[c][i] = {N}_component(c, u, h, 0);
+    mm->y[c][i] = {N}_frozen(mm, c, u, h);
     return mm->y[c][i];
 }}
 
@@ -847,6 +996,16 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
 """
 
 
+def _sections(text, keep):
+    """Keep or drop the ``@KEY< ... @>KEY`` sections of a C template."""
+    for key, on in keep.items():
+        while f"@{key}<\n" in text:
+            a, b = text.index(f"@{key}<\n"), text.index(f"@>{key}\n")
+            text = text[:a] + text[a + len(key) + 3:b] + text[b + len(key) + 3:] if on \
+                else text[:a] + text[b + len(key) + 3:]
+    return text
+
+
 def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
     """The exact inverse (or its multiplicative law) of a PreisachInverseCompensator, after
     optional linear stages (the dynamics inverse, the creep inverse)."""
@@ -900,20 +1059,25 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
         members.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
         init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {lit['zero']};")
         reals += n
-    text = _EXACT.format(**lit)
-    for key, keep in (("HYST", q_off[-1] > 0), ("RAMP", q_off[-1] > 0), ("PLAY", p_off[-1] > 0)):
-        a, b = text.index(f"@{key}<\n"), text.index(f"@>{key}\n")
-        text = text[:a] + text[a + len(key) + 3:b] + text[b + len(key) + 3:] if keep \
-            else text[:a] + text[b + len(key) + 3:]
-    body = [text]
+    keep = {"HYST": q_off[-1] > 0, "RAMP": q_off[-1] > 0, "PLAY": p_off[-1] > 0,
+            "COMPONENT": not exact}
+    body = [_sections(_EXACT.format(**lit) + _MOVE.format(**lit), keep)]
     if exact:
-        body.append(_ROOT.format(**lit))
+        if q_off[-1] > 0:
+            cstart, cindex, kstart, kindex, fixed = cell_lists(e_off, row, col, mu, q_off)
+            decls += [_ints_table("cstart", cstart, N), _ints_table("cindex", cindex, N)
+                      + "  /* hysterons moving inside each switching cell */",
+                      _ints_table("kstart", kstart, N), _ints_table("kindex", kindex, N)
+                      + "  /* hysterons keeping their state inside each cell */",
+                      _reals_table("fixed", fixed, precision, N, "  /* per cell: sum of +1 and "
+                                   "-1 hysteron weights [um] */")]
+        body.append(_sections(_ROOT.format(**lit), keep))
         law = f"""    {{  /* Gauss-Seidel over the outputs, a monotone root per direct path; sweeps that
            do not settle are repeated under-relaxed (omega 1/2 ... 1/16) */
         int round, sweep, converged = 0;
         {N}_real omega = {lit['one']};
         {N}_memo mm;
-        for (k = 0; k < {N}_N_COMPONENTS; ++k) mm.n[k] = mm.last[k] = 0;
+        for (k = 0; k < {N}_N_COMPONENTS; ++k) {{ mm.n[k] = mm.last[k] = 0; mm.cell[k] = -2; }}
         for (round = 0; round < 5 && !converged; ++round) {{
             for (sweep = 0; sweep < {N}_MAX_SWEEPS; ++sweep) {{
                 {N}_real delta = {lit['zero']};
@@ -975,7 +1139,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
         f"    for (k = 0; k < {N}_N_INPUTS; ++k) u[k] = s->u[k];", law,
         f"""    for (l = 0; l < {N}_N_OUTPUTS; ++l)   /* move every state to the solution */
         for (k = 0; k < {N}_N_INPUTS; ++k)
-            if ({N}_present[l * {N}_N_INPUTS + k]) (void){N}_component(l * {N}_N_INPUTS + k, u[k], s->h, 1);"""]
+            if ({N}_present[l * {N}_N_INPUTS + k]) {N}_move(l * {N}_N_INPUTS + k, u[k], s->h);"""]
         + lcode + ["""    return status;
 }
 """]))
