@@ -17,11 +17,14 @@ back-calculation or clamping. A feedforward with ``NAME_ff_PREVIEW = P``
 samples of look-ahead takes the reference P samples ahead: ``NAME_step``
 then gives the controller the reference it received P samples before (kept
 in the state), so pass the reference ``P`` samples early, as to the
-compensator alone. The return value has bit 1 set when the amplifier
-limited a voltage, bit 2 when the feedforward diverged.
+compensator alone. The return value has bit 1 (``NAME_STATUS_LIMIT``) set
+when the amplifier limited a voltage, bit 2 (``NAME_STATUS_DIVERGED``) when
+the feedforward diverged, bit 4 (``NAME_STATUS_RANGE``) on a NaN or infinite
+reference or measurement (the sample is skipped: voltages held, state kept)
+or a reference beyond the feedforward model's range. Double precision.
 
-Standalone: it does not go through ``hammerstein export`` (whose emitters
-are :mod:`hammerstein.export.c_code` and :mod:`hammerstein.export.fmu`).
+``hammerstein export --closed-loop`` (:mod:`hammerstein.cli.export`) builds
+the loop from a ``[feedback]`` table and writes these files.
 """
 
 from __future__ import annotations
@@ -31,7 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammerstein.export.c_code import MARKER, check_name, export_c
+from hammerstein.export.c_code import (MARKER, STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE,
+                                       check_name, export_c)
 from hammerstein.exceptions import ExportError
 
 __all__ = ["FeedbackCExport", "export_feedback_c"]
@@ -96,6 +100,15 @@ def _mat(a):
 def _vec(a):
     a = np.ravel(a)
     return "{" + (", ".join(_lit(v) for v in a) if a.size else "0.0") + "}"
+
+
+def _describe(L):
+    """The amplifier limits in words (range [V], slew [V per sample])."""
+    def one(v):
+        return "none" if not np.isfinite(v) else f"{v:g}"
+    return "; ".join(f"[{one(a)}, {one(b)}] V, " +
+                     ("no slew limit" if not np.isfinite(s) else f"slew {s:g} V per sample")
+                     for a, b, s in zip(np.ravel(L.low), np.ravel(L.high), np.ravel(L.slew)))
 
 
 def export_feedback_c(loop, name, feedforward=None, version=""):
@@ -163,6 +176,23 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
 #define {N}_N_STATES {nc}
 #define {N}_PREVIEW {P}
 #define {N}_SAMPLING_PERIOD {_lit(T)}
+#define {N}_STATUS_LIMIT {STATUS_LIMIT}
+#define {N}_STATUS_DIVERGED {STATUS_DIVERGED}
+#define {N}_STATUS_RANGE {STATUS_RANGE}
+
+/*
+ * {N}_init(&s) once (at rest), then every sampling period {N}_SAMPLING_PERIOD:
+ *     status = {N}_step(&s, reference, measurement, voltage);
+ * reference[{N}_N_OUTPUTS]: the desired displacements [um]{f" of sample k + {N}_PREVIEW (the feedforward's look-ahead; the controller is given the reference of sample k, kept in the state)" if P else ""};
+ * measurement[{N}_N_OUTPUTS]: the sensor's displacements of sample k [um];
+ * voltage[{N}_N_INPUTS]: the amplifier inputs of sample k [V] (feedforward + controller,
+ *   slew-limited and clipped to the amplifier range: {_describe(L)}).
+ * Return value: 0 or the bits {N}_STATUS_LIMIT (the amplifier limits clamped a voltage;
+ *   the anti-windup acts), {N}_STATUS_DIVERGED (the feedforward diverged: it holds its
+ *   voltages until {N}_init), {N}_STATUS_RANGE (a NaN or infinite reference or
+ *   measurement: the sample is skipped, voltages held, state kept; or a reference beyond
+ *   the feedforward model's range).
+ */
 
 /* Controller: {'; '.join(c.descriptions)} */
 typedef struct {{
@@ -179,7 +209,8 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 #endif
 """
     aw = int(L.aw)
-    ff_call = (f"    if ({N}_ff_step(&s->ff, reference, f) & 2) status |= 2;\n" if ff else "")
+    ff_call = (f"    status |= {N}_ff_step(&s->ff, reference, f) & ({STATUS_DIVERGED} | {STATUS_RANGE});\n"
+               if ff else "")
     if P:
         rnow = (f"    for (l = 0; l < {p}; ++l) {{ rnow[l] = s->rbuf[s->rpos][l]; "
                 f"s->rbuf[s->rpos][l] = reference[l]; }}\n"
@@ -212,6 +243,11 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 {{
     double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
     int status = 0, saturated = 0, i, j, k, l;
+    for (l = 0; l < {p}; ++l)  /* a NaN or infinite input: the sample is skipped (voltages held) */
+        if (!isfinite(reference[l]) || !isfinite(measurement[l])) {{
+            for (k = 0; k < {m}; ++k) voltage[k] = s->a[k];
+            return {STATUS_RANGE};
+        }}
     for (k = 0; k < {m}; ++k) f[k] = 0.0;
 {ff_call}{rnow}    for (l = 0; l < {p}; ++l) {{ e[l] = rnow[l]; e[{p} + l] = measurement[l]; }}
     for (k = 0; k < {m}; ++k) e[{2 * p} + k] = f[k];
