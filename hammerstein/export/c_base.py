@@ -13,6 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.linalg
 
 from hammerstein.core.files import c_name_problem
 from hammerstein.exceptions import ExportError
@@ -342,11 +343,53 @@ def _reals_table(name, a, precision, N, note=""):
             f"{_vec(a, precision) if a.size else '{0}'};{note}")
 
 
+def _float_realization(A, B, C, D):
+    """A balanced realization of a stable stage for a float export (the same transfer).
+
+    The ZPETC inverse's state space (a shift register of FIR taps and an IIR part) has
+    entries up to ~1e4 that cancel: in float its output is off by ~1e-2 relative on the
+    coupled preset. The balanced realization (Gramians ``Wc = A Wc A' + B B'``,
+    ``Wo = A' Wo A + C' C``; square-root method, Laub et al., IEEE TAC 32(2), 1987) has
+    entries of order 1 (measured: 3e-6 in float). Directions with Hankel singular values
+    below 1e-13 of the largest are left out (their share of the output is below that).
+    Returns the matrices unchanged when the stage is not stable or the result not finite.
+    """
+    A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
+    n = A.shape[0]
+    if n == 0 or not np.all(np.abs(np.linalg.eigvals(A)) < 1.0 - 1e-9):
+        return A, B, C, D
+    try:
+        Wc = scipy.linalg.solve_discrete_lyapunov(A, B @ B.T)
+        Wo = scipy.linalg.solve_discrete_lyapunov(A.T, C.T @ C)
+
+        def root(W):
+            lam, U = np.linalg.eigh(0.5 * (W + W.T))
+            return U * np.sqrt(np.maximum(lam, 0.0))
+        Lc, Lo = root(Wc), root(Wo)
+        U, s, Vt = np.linalg.svd(Lo.T @ Lc)
+        keep = s > 1e-13 * s[0]
+        S = np.diag(s[keep] ** -0.5)
+        Tr = Lc @ Vt[keep].T @ S
+        Ti = S @ U[:, keep].T @ Lo.T
+        out = (Ti @ A @ Tr, Ti @ B, C @ Tr, D)
+    except (np.linalg.LinAlgError, ValueError):
+        return A, B, C, D
+    return out if all(np.all(np.isfinite(M)) for M in out) else (A, B, C, D)
+
+
 def _stage_code(k, A, B, C, D, precision, N):
     """Declarations and statements of one linear stage ``v = C x + D r``, ``x <- A x + B r`` on
     ``r[]`` (the order of ``linear_kernel``), its state ``s->x{k}``."""
+    if precision == "float":
+        A, B, C, D = _float_realization(A, B, C, D)
     n, p = A.shape[0], D.shape[0]
     zero = "0.0" if precision == "double" else "0.0f"
+    # float: the state update in increment form x <- x + ((A - I) x + B r), A - I rounded from
+    # double: poles near 1 (creep time constants of seconds: 1 - 5e-6) keep their distance
+    # to 1, which a float A would lose to rounding (percent errors of the time constants)
+    delta = precision == "float" and n > 0
+    if delta:
+        A = A - np.eye(n)
     decls = [f"static const {N}_real {N}_A{k}[{max(1, n)}][{max(1, n)}] = {_mat(A, precision) if n else '{{0}}'};",
              f"static const {N}_real {N}_B{k}[{max(1, n)}][{p}] = {_mat(B, precision) if n else '{{0}}'};",
              f"static const {N}_real {N}_C{k}[{p}][{max(1, n)}] = {_mat(C, precision) if n else '{{0}}'};",
@@ -366,10 +409,12 @@ def _stage_code(k, A, B, C, D, precision, N):
             for (j = 0; j < {N}_N_OUTPUTS; ++j) a += {N}_B{k}[i][j] * r[j];
             xn[i] = a;
         }}
-        for (i = 0; i < {n}; ++i) s->x{k}[i] = xn[i];
+        for (i = 0; i < {n}; ++i) s->x{k}[i] = {"s->x" + str(k) + "[i] + " if delta else ""}xn[i];
         for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = v[l];
         (void)xn;
     }}"""
+    if delta:
+        code = code.replace("x <- A x + B r */", "x <- x + (A - I) x + B r */", 1)
     return decls, code, n
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammerstein.export.c_base import (_lit, _vec, _mat, _ints, _check_model, _packed_plays,
+from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
                                        _reference_transform, _limits_code)
 
 
@@ -20,6 +20,8 @@ def _law_source(law, model, precision, N, limits, T):
     m, p = model.n_inputs, model.n_outputs
     nplays = r.size
     prefilter = law.prefilter
+    if precision == "float" and prefilter is not None:     # a realization float can carry
+        prefilter = _float_realization(*prefilter)
     nf = 0 if prefilter is None else int(np.asarray(prefilter[0]).shape[0])
     decls = [f"#define {N}_N_PLAYS {nplays}",
              f"#define {N}_ITERATIONS {int(law.iterations)}",
