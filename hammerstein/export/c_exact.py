@@ -89,15 +89,15 @@ static void {N}_move(int c, {N}_real u, {N}_real *h)
         const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
         const int base = {N}_s_off[c] - {N}_q_off[c];
         const int i = {N}_cell_scan(c, u);
-        const {N}_real rho = (0 <= i && i < nlev) ? {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]) : {zero};
-        int q;
+        {N}_real rhos[{N}_MAX_LEVELS];   /* every cell's ramp: +1 below u's cell, -1 above */
+        int q, j;
+        for (j = 0; j < nlev; ++j) rhos[j] = j < i ? {one} : -{one};
+        if (0 <= i && i < nlev) rhos[i] = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);
         for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
-            const int a = {N}_row[q], b = {N}_col[q];
-            const {N}_real up = a < i ? {one} : (a == i ? rho : -{one});
-            const {N}_real down = b < i ? {one} : (b == i ? rho : -{one});
+            const {N}_real up = rhos[{N}_row[q]], down = rhos[{N}_col[q]];
             {N}_real v = h[base + q];
-            if (v > down) v = down;
-            if (v < up) v = up;
+            v = v > down ? down : v;
+            v = v < up ? up : v;
             h[base + q] = v;
         }}
     }}
@@ -193,9 +193,9 @@ static {N}_real {N}_frozen({N}_memo *mm, int c, {N}_real u, const {N}_real *h)
         }}
         acc = mm->cst[c];
         if (0 <= i && i < nlev) {{
-            const {N}_real rho = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);  /* the one ramp not -1 or +1 */
             const int k1 = {N}_cstart[g + 1];
             {N}_real b0 = {zero}, b1 = {zero};    /* two sums (position even, odd) */
+            const {N}_real rho = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);  /* the one ramp not -1 or +1 */
             for (k = {N}_cstart[g]; k + 2 <= k1; k += 2) {{
                 b0 += {N}_moving({N}_cindex[k], i, rho, base, h);
                 b1 += {N}_moving({N}_cindex[k + 1], i, rho, base, h);
