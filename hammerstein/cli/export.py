@@ -96,7 +96,8 @@ def add_parser(subparsers):
                         "feedback scenario or a preset; without FILE, MODEL_OR_PRESET's) with "
                         "the compensator as feedforward: one NAME_step(state, reference, "
                         "measurement, voltage) with the anti-windup and the [feedback] amplifier "
-                        "limits; --kind none exports the controller alone (--target c)")
+                        "limits; --kind none exports the controller alone; with --target "
+                        "fmu the FMU has measurement inputs too")
     p.add_argument("--no-binary", action="store_true",
                    help="--target fmu: sources only, do not compile a binary")
     p.add_argument("--force", action="store_true",
@@ -109,6 +110,19 @@ def _default_name(stem, kind):
     if not re.match(r"[A-Za-z_]", name):
         name = "c_" + name
     return name[:40]
+
+
+def _write(args, code, name):
+    """Write the C files or the FMU of ``code``; the paths written."""
+    if args.target == "c":
+        return write_files(args.out, code.files(), MARKER.encode(), args.force)
+    check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
+    data, binary = build_fmu(code, __version__, binary=not args.no_binary)
+    written = write_files(args.out, {f"{name}.fmu": data}, {f"{name}.fmu": b"PK"}, True)
+    if binary is None and not args.no_binary:
+        print_err(f"warning: {written[0]}: no C compiler found ({find_compiler() or 'cc'}): "
+                  f"the FMU holds the sources only")
+    return written
 
 
 def _closed_loop_table(args, source):
@@ -202,10 +216,6 @@ def handler(args):
         note = choice.note()
     args.kind = kind
     if args.closed_loop is not None:
-        if args.target != "c":
-            print_err(f"{prog}: error: --closed-loop: only --target c (the FMU takes the "
-                      f"feedforward alone)")
-            return 2
         if args.precision != "double":
             print_err(f"{prog}: error: --closed-loop: the controller is exported in double "
                       f"precision only")
@@ -232,15 +242,7 @@ def handler(args):
         code = export_c(comp, name, T, precision=args.precision, limits=limits,
                         version=__version__, source_note=f"Built from {source.path.name} "
                         f"(kind {args.kind}, {args.precision}).")
-        if args.target == "c":
-            written = write_files(args.out, code.files(), MARKER.encode(), args.force)
-        else:
-            check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
-            data, binary = build_fmu(code, __version__, binary=not args.no_binary)
-            written = write_files(args.out, {f"{name}.fmu": data}, {f"{name}.fmu": b"PK"}, True)
-            if binary is None and not args.no_binary:
-                print_err(f"warning: {written[0]}: no C compiler found ({find_compiler() or 'cc'}): "
-                          f"the FMU holds the sources only")
+        written = _write(args, code, name)
     except (ExportError, FileLimitError) as exc:
         chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
         print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
@@ -268,7 +270,7 @@ def _closed_loop(args, source, kind, gain, check, note):
                                         check=check or "error")
         name = args.name or _default_name(source.name, f"{kind}_loop")
         code = _closed_loop_code(args, source, comp, T, name)
-        written = write_files(args.out, code.files(), MARKER.encode(), args.force)
+        written = _write(args, code, name)
     except (ExportError, FileLimitError) as exc:
         chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
         print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")

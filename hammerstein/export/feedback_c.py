@@ -30,7 +30,7 @@ the loop from a ``[feedback]`` table and writes these files.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -57,6 +57,15 @@ class FeedbackCExport:
         Voltages m [V]; references and measurements p [µm].
     preview : int
         The feedforward's look-ahead [samples].
+    sampling_period : float
+        ``NAME_SAMPLING_PERIOD`` [s].
+    input_names, output_names : list of str
+        Names of the voltages and of the references (and measurements).
+    description : str
+        One line saying what was exported.
+    measured : bool
+        True: ``NAME_step`` takes the measurements too (the FMU wrapper's
+        measurement inputs, :mod:`hammerstein.export.fmu`).
     """
 
     name: str
@@ -66,6 +75,11 @@ class FeedbackCExport:
     n_inputs: int
     n_outputs: int
     preview: int
+    sampling_period: float = 0.0
+    input_names: list = field(default_factory=list)
+    output_names: list = field(default_factory=list)
+    description: str = ""
+    measured: bool = True
 
     def files(self):
         """File name -> text of every generated file.
@@ -195,6 +209,8 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
  */
 
 /* Controller: {'; '.join(c.descriptions)} */
+typedef double {N}_real;
+
 typedef struct {{
     double xc[{max(nc, 1)}];             /* controller states */
     double a[{m}];                        /* last applied voltages [V] */
@@ -281,4 +297,9 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     return status | saturated;
 }}
 """
-    return FeedbackCExport(N, header, source, ff, m, p, P)
+    what = "; ".join(c.descriptions)
+    description = (f"feedback controller ({what}) with "
+                   + (ff.description if ff else "no feedforward"))
+    return FeedbackCExport(N, header, source, ff, m, p, P, T,
+                           list(loop.plant.hysteresis.input_names),
+                           list(loop.plant.hysteresis.output_names), description)

@@ -16,6 +16,7 @@ from test_c_equivalence import python_voltages, rel_error
 from hammerstein.cli.main import main
 from hammerstein.export import export_c
 from hammerstein.export.build import build_compensator, load_source
+from hammerstein.export.fmu import platform_folder
 from hammerstein.io.presets import load_plant, read_toml
 from hammerstein.scenario.feedback import build_loops
 from hammerstein.scenario.feedback_table import check_feedback_table
@@ -145,8 +146,43 @@ def test_closed_loop_without_a_feedback_table_is_one_line(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-def test_closed_loop_fmu_is_a_usage_error(tmp_path, capsys):
-    code = main(["export", "realistic-2dof", "--target", "fmu", "--out", str(tmp_path / "o"),
-                 "--closed-loop", str(SCENARIO)])
+def test_closed_loop_float_is_a_usage_error(tmp_path, capsys):
+    code = main(["export", "realistic-2dof", "--target", "c", "--out", str(tmp_path / "o"),
+                 "--precision", "float", "--closed-loop", str(SCENARIO)])
     _, err = capsys.readouterr()
-    assert code == 2 and "--closed-loop" in err
+    assert code == 2 and "--closed-loop" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+@needs_cc
+def test_closed_loop_fmu_equals_the_python_loop(tmp_path, capsys):
+    """The FMU of the loop: reference and measurement inputs, voltages and status outputs;
+    simulated with fmpy it gives the Python closed loop's voltages."""
+    fmpy = pytest.importorskip("fmpy", reason="fmpy (test extra) is needed to simulate the FMU")
+    from fmpy.validation import validate_fmu
+    if platform_folder() is None:
+        pytest.skip("unknown platform for an FMU binary")
+    out = tmp_path / "gen"
+    assert main(["export", "realistic-2dof", "--target", "fmu", "--out", str(out), "--kind",
+                 "preisach-inverse", "--name", "loop", "--closed-loop", str(SCENARIO)]) == 0
+    capsys.readouterr()
+    path = out / "loop.fmu"
+    assert validate_fmu(str(path)) == []
+    md = fmpy.read_model_description(str(path))
+    names = [v.name for v in md.modelVariables]
+    assert names == ["reference_x", "reference_y", "measurement_x", "measurement_y",
+                     "voltage_ux", "voltage_uy", "status"]
+    yr = _reference(1500)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp, _ = build_compensator(load_source("realistic-2dof"), "preisach-inverse")
+    res = _loop().simulate(yr, feedforward=python_voltages(comp, yr), seed=5)
+    n = yr.shape[1]
+    sig = np.zeros(n, dtype=[("time", float)] + [(nm, float) for nm in names[:4]])
+    sig["time"] = np.arange(n) * 5e-5
+    for nm, row in zip(names[:4], np.vstack([yr, res.measurements])):
+        sig[nm] = row
+    sim = fmpy.simulate_fmu(str(path), start_time=0.0, stop_time=n * 5e-5, step_size=5e-5,
+                            output_interval=5e-5, input=sig, output=names[4:])
+    u = np.vstack([sim[o] for o in names[4:6]])[:, 1:n + 1]
+    assert rel_error(u, res.inputs) <= 1e-12
