@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammerstein.simulation._preisach import cell_lists
+from hammerstein.simulation._preisach import _cell_lists
 from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
                                        _stage_code, _sections, _model_text)
 
@@ -357,7 +357,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
     body = [_sections(_EXACT.format(**lit) + _MOVE.format(**lit), keep)]
     if exact:
         if q_off[-1] > 0:
-            cstart, cindex, kstart, kindex, fixed = cell_lists(e_off, row, col, mu, q_off)
+            cstart, cindex, kstart, kindex, fixed = _cell_lists(e_off, row, col, mu, q_off)
             decls += [_ints_table("cstart", cstart, N), _ints_table("cindex", cindex, N)
                       + "  /* hysterons moving inside each switching cell */",
                       _ints_table("kstart", kstart, N), _ints_table("kindex", kindex, N)

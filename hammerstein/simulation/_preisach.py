@@ -29,7 +29,7 @@ from numba import njit
 
 __all__ = ["ramp_preisach_kernel", "generalized_play_kernel", "linear_kernel", "ramps",
            "preisach_steps", "linear_steps", "generalized_play_steps",
-           "preisach_inverse_kernel", "generalized_play_states", "cell_lists"]
+           "preisach_inverse_kernel", "generalized_play_states"]
 
 
 @njit(cache=True, inline="always")
@@ -310,7 +310,7 @@ def _cell_of(u, E, e0, n):
 
 
 @njit(cache=True)
-def cell_lists(e_off, row, col, mu, q_off):
+def _cell_lists(e_off, row, col, mu, q_off):
     """Which hysterons move, and which keep their state, inside each switching cell.
 
     Cell i of component c (i = -1 below its grid, ``0 .. n-1`` across it, n
@@ -388,7 +388,7 @@ def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
             cell, const, start, index, kstart, kindex, fixed):
     """Output of component c at input u, the states s frozen (one sample's root search).
 
-    In u's switching cell i (``cell_lists``) the hysterons that do not move
+    In u's switching cell i (``_cell_lists``) the hysterons that do not move
     add ``fixed[g]`` plus the kept states ``mu s`` (four sums by position mod
     4, ``(a0 + a1) + (a2 + a3)``), once per sample and cell into
     ``const[c]`` (``cell[c]`` remembers i, -2 for none); the cell's moving
@@ -570,7 +570,7 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
     unconverged = 0
     for k in range(m):
         ut[k] = u_prev[k]
-    start, index, kstart, kindex, fixed = cell_lists(e_off, row, col, mu, q_off)
+    start, index, kstart, kindex, fixed = _cell_lists(e_off, row, col, mu, q_off)
     cell = np.empty(p * m, np.int64)
     const = np.empty(p * m)
     for t in range(N):
