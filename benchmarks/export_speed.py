@@ -5,7 +5,7 @@ Run: ``python benchmarks/export_speed.py [--opt O2] [--steps N] [--repeat R]
 (needs a C compiler, ``$CC`` or cc/gcc/clang).
 
 Not a test. Each compensator is exported (:func:`hammerstein.export.export_c`),
-compiled with ``-std=c99 -O2`` (``--opt``) together with the harness below, and
+compiled with ``-std=c99 -ffp-contract=off -O2`` (``--opt``) together with the harness below, and
 stepped N times on a 150 Hz, 20 µm circle (4000 samples, cycled) after a warm-up.
 Printed per case: the CPU time per step (``clock()``: the process's CPU time,
 not time spent waiting for a core), best of R repeats, the same scaled to the
@@ -140,7 +140,7 @@ def main():
         sys.exit("benchmarks/export_speed.py: no C compiler found (set CC)")
     version = subprocess.run([cc, "--version"], capture_output=True, text=True).stdout.splitlines()[0]
     ref0 = reference_loop()
-    print(f"compiler: {version}; -std=c99 -{args.opt}; {args.precision}; {args.steps} steps, best "
+    print(f"compiler: {version}; -std=c99 -ffp-contract=off -{args.opt}; {args.precision}; {args.steps} steps, best "
           f"of {args.repeat}; load {' '.join(f'{x:.2f}' for x in os.getloadavg())} on "
           f"{os.cpu_count()} cores; reference loop {ref0:.2f} s CPU")
     rows = []
@@ -153,7 +153,7 @@ def main():
                 (tmp / fname).write_text(text)
             (tmp / f"{name}_main.c").write_text(HARNESS.replace("@N@", name).replace("@LEN@", "4000")
                                                 .replace("@SCALE@", repr(scale)))
-            flags = ["-std=c99", f"-{args.opt}", "-I", str(tmp)]
+            flags = ["-std=c99", "-ffp-contract=off", f"-{args.opt}", "-I", str(tmp)]
             subprocess.run([cc, *flags, "-o", str(tmp / name), str(tmp / f"{name}_main.c"),
                             str(tmp / f"{name}.c"), "-lm"], check=True)
             out = subprocess.run([str(tmp / name), str(args.steps), str(args.repeat)],

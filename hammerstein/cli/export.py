@@ -25,11 +25,17 @@ from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
 from hammerstein.compensation.model_classes import choose_kind
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
-from hammerstein.exceptions import CompensatorError, ExportError, FileLimitError, PresetError
+from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError, FileLimitError,
+                                    PresetError)
 from hammerstein.export import MARKER, check_name, export_c
 from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
                                       limits_from_table, load_source, write_files)
+from hammerstein.export.feedback_c import export_feedback_c
 from hammerstein.export.fmu import build_fmu, find_compiler
+from hammerstein.io.presets import load_plant, read_toml, resolve_preset
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.scenario.feedback import build_loops
+from hammerstein.scenario.feedback_table import check_feedback_table
 
 __all__ = ["add_parser", "handler"]
 
@@ -85,6 +91,13 @@ def add_parser(subparsers):
     p.add_argument("--slew-rate", type=number_type(0, low_open=True, unit="V/s"),
                    default=None, metavar="V_PER_S",
                    help="limit every voltage's rate of change [V/s] (needs a range)")
+    p.add_argument("--closed-loop", nargs="?", const="", default=None, metavar="FILE",
+                   help="export the discrete feedback controller of FILE's [feedback] table (a "
+                        "feedback scenario or a preset; without FILE, MODEL_OR_PRESET's) with "
+                        "the compensator as feedforward: one NAME_step(state, reference, "
+                        "measurement, voltage) with the anti-windup and the [feedback] amplifier "
+                        "limits; --kind none exports the controller alone; with --target "
+                        "fmu the FMU has measurement inputs too")
     p.add_argument("--no-binary", action="store_true",
                    help="--target fmu: sources only, do not compile a binary")
     p.add_argument("--force", action="store_true",
@@ -97,6 +110,56 @@ def _default_name(stem, kind):
     if not re.match(r"[A-Za-z_]", name):
         name = "c_" + name
     return name[:40]
+
+
+def _write(args, code, name):
+    """Write the C files or the FMU of ``code``; the paths written."""
+    if args.target == "c":
+        return write_files(args.out, code.files(), MARKER.encode(), args.force)
+    check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
+    data, binary = build_fmu(code, __version__, binary=not args.no_binary)
+    written = write_files(args.out, {f"{name}.fmu": data}, {f"{name}.fmu": b"PK"}, True)
+    if binary is None and not args.no_binary:
+        print_err(f"warning: {written[0]}: no C compiler found ({find_compiler() or 'cc'}): "
+                  f"the FMU holds the sources only")
+    return written
+
+
+def _closed_loop_table(args, source):
+    """The validated ``[feedback]`` table of ``--closed-loop FILE`` (or of the source file)."""
+    path = resolve_preset(args.closed_loop) if args.closed_loop else source.path
+    data = read_toml(path, "feedback scenario or preset")
+    if "feedback" not in data:
+        raise PresetError(f"{path}: --closed-loop needs a [feedback] table (the controller; "
+                          f"docs/feedback.md), found none")
+    problems = []
+    table = check_feedback_table(data["feedback"], f"{path}: feedback", problems)
+    names = list(source.model.output_names)
+    if not problems and table.get("axes") is not None and sorted(table["axes"]) != sorted(names):
+        problems.append(f"{path}: feedback.axes: expected one table per output "
+                        f"({', '.join(names)}), found {', '.join(sorted(table['axes']))}")
+    if problems:
+        raise PresetError(problems[0])
+    return table
+
+
+def _closed_loop_code(args, source, comp, T, name):
+    """The feedback controller (and ``comp`` as feedforward) as C: FeedbackCExport."""
+    table = _closed_loop_table(args, source)
+    if args.amplifier_range is not None:        # the command line overrides the table's range
+        table = {**table, "amplifier": {**table.get("amplifier", {}),
+                                        "range": list(args.amplifier_range),
+                                        **({"slew_rate": args.slew_rate}
+                                           if args.slew_rate is not None else {})}}
+    if source.sampling_period is not None:      # a preset: its actuator (dynamics, creep)
+        plant = load_plant(source.path)
+    else:
+        plant = HammersteinPlant(source.model, T)
+    try:
+        loop = build_loops(table, plant)[0]
+    except FeedbackError as exc:
+        raise ExportError(f"closed loop: {exc}") from None
+    return export_feedback_c(loop, name, feedforward=comp, version=__version__)
 
 
 def handler(args):
@@ -152,6 +215,16 @@ def handler(args):
         check = check or choice.options.get("check")
         note = choice.note()
     args.kind = kind
+    if args.closed_loop is not None:
+        if args.precision != "double":
+            print_err(f"{prog}: error: --closed-loop: the controller is exported in double "
+                      f"precision only")
+            return 2
+        try:
+            return _closed_loop(args, source, kind, gain, check, note)
+        except PresetError as exc:
+            print_err(f"error: {' '.join(str(exc).split())}")
+            return 1
     try:
         comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
                                     feedback=args.feedback, cutoff_hz=args.cutoff_hz,
@@ -169,15 +242,35 @@ def handler(args):
         code = export_c(comp, name, T, precision=args.precision, limits=limits,
                         version=__version__, source_note=f"Built from {source.path.name} "
                         f"(kind {args.kind}, {args.precision}).")
-        if args.target == "c":
-            written = write_files(args.out, code.files(), MARKER.encode(), args.force)
+        written = _write(args, code, name)
+    except (ExportError, FileLimitError) as exc:
+        chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
+        print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
+        return 1
+    if note:
+        print_err(note)
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _closed_loop(args, source, kind, gain, check, note):
+    """``--closed-loop``: the controller with the compensator of ``kind`` as feedforward."""
+    try:
+        if kind == "none":
+            comp = None
+            T = args.sampling_period or source.sampling_period
+            if T is None:
+                raise ExportError("sampling_period: a model file needs --sampling-period S")
         else:
-            check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
-            data, binary = build_fmu(code, __version__, binary=not args.no_binary)
-            written = write_files(args.out, {f"{name}.fmu": data}, {f"{name}.fmu": b"PK"}, True)
-            if binary is None and not args.no_binary:
-                print_err(f"warning: {written[0]}: no C compiler found ({find_compiler() or 'cc'}): "
-                          f"the FMU holds the sources only")
+            comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
+                                        feedback=args.feedback, cutoff_hz=args.cutoff_hz,
+                                        inversion=args.inversion,
+                                        sampling_period=args.sampling_period,
+                                        check=check or "error")
+        name = args.name or _default_name(source.name, f"{kind}_loop")
+        code = _closed_loop_code(args, source, comp, T, name)
+        written = _write(args, code, name)
     except (ExportError, FileLimitError) as exc:
         chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
         print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")

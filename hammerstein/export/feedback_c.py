@@ -17,21 +17,25 @@ back-calculation or clamping. A feedforward with ``NAME_ff_PREVIEW = P``
 samples of look-ahead takes the reference P samples ahead: ``NAME_step``
 then gives the controller the reference it received P samples before (kept
 in the state), so pass the reference ``P`` samples early, as to the
-compensator alone. The return value has bit 1 set when the amplifier
-limited a voltage, bit 2 when the feedforward diverged.
+compensator alone. The return value has bit 1 (``NAME_STATUS_LIMIT``) set
+when the amplifier limited a voltage, bit 2 (``NAME_STATUS_DIVERGED``) when
+the feedforward diverged, bit 4 (``NAME_STATUS_RANGE``) on a NaN or infinite
+reference or measurement (the sample is skipped: voltages held, state kept)
+or a reference beyond the feedforward model's range. Double precision.
 
-Standalone: it does not go through ``hammerstein export`` (whose emitters
-are :mod:`hammerstein.export.c_code` and :mod:`hammerstein.export.fmu`).
+``hammerstein export --closed-loop`` (:mod:`hammerstein.cli.export`) builds
+the loop from a ``[feedback]`` table and writes these files.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from hammerstein.export.c_code import MARKER, check_name, export_c
+from hammerstein.export.c_code import (MARKER, STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE,
+                                       check_name, export_c)
 from hammerstein.exceptions import ExportError
 
 __all__ = ["FeedbackCExport", "export_feedback_c"]
@@ -53,6 +57,15 @@ class FeedbackCExport:
         Voltages m [V]; references and measurements p [µm].
     preview : int
         The feedforward's look-ahead [samples].
+    sampling_period : float
+        ``NAME_SAMPLING_PERIOD`` [s].
+    input_names, output_names : list of str
+        Names of the voltages and of the references (and measurements).
+    description : str
+        One line saying what was exported.
+    measured : bool
+        True: ``NAME_step`` takes the measurements too (the FMU wrapper's
+        measurement inputs, :mod:`hammerstein.export.fmu`).
     """
 
     name: str
@@ -62,6 +75,11 @@ class FeedbackCExport:
     n_inputs: int
     n_outputs: int
     preview: int
+    sampling_period: float = 0.0
+    input_names: list = field(default_factory=list)
+    output_names: list = field(default_factory=list)
+    description: str = ""
+    measured: bool = True
 
     def files(self):
         """File name -> text of every generated file.
@@ -96,6 +114,15 @@ def _mat(a):
 def _vec(a):
     a = np.ravel(a)
     return "{" + (", ".join(_lit(v) for v in a) if a.size else "0.0") + "}"
+
+
+def _describe(L):
+    """The amplifier limits in words (range [V], slew [V per sample])."""
+    def one(v):
+        return "none" if not np.isfinite(v) else f"{v:g}"
+    return "; ".join(f"[{one(a)}, {one(b)}] V, " +
+                     ("no slew limit" if not np.isfinite(s) else f"slew {s:g} V per sample")
+                     for a, b, s in zip(np.ravel(L.low), np.ravel(L.high), np.ravel(L.slew)))
 
 
 def export_feedback_c(loop, name, feedforward=None, version=""):
@@ -163,8 +190,27 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
 #define {N}_N_STATES {nc}
 #define {N}_PREVIEW {P}
 #define {N}_SAMPLING_PERIOD {_lit(T)}
+#define {N}_STATUS_LIMIT {STATUS_LIMIT}
+#define {N}_STATUS_DIVERGED {STATUS_DIVERGED}
+#define {N}_STATUS_RANGE {STATUS_RANGE}
+
+/*
+ * {N}_init(&s) once (at rest), then every sampling period {N}_SAMPLING_PERIOD:
+ *     status = {N}_step(&s, reference, measurement, voltage);
+ * reference[{N}_N_OUTPUTS]: the desired displacements [um]{f" of sample k + {N}_PREVIEW (the feedforward's look-ahead; the controller is given the reference of sample k, kept in the state)" if P else ""};
+ * measurement[{N}_N_OUTPUTS]: the sensor's displacements of sample k [um];
+ * voltage[{N}_N_INPUTS]: the amplifier inputs of sample k [V] (feedforward + controller,
+ *   slew-limited and clipped to the amplifier range: {_describe(L)}).
+ * Return value: 0 or the bits {N}_STATUS_LIMIT (the amplifier limits clamped a voltage;
+ *   the anti-windup acts), {N}_STATUS_DIVERGED (the feedforward diverged: it holds its
+ *   voltages until {N}_init), {N}_STATUS_RANGE (a NaN or infinite reference or
+ *   measurement: the sample is skipped, voltages held, state kept; or a reference beyond
+ *   the feedforward model's range).
+ */
 
 /* Controller: {'; '.join(c.descriptions)} */
+typedef double {N}_real;
+
 typedef struct {{
     double xc[{max(nc, 1)}];             /* controller states */
     double a[{m}];                        /* last applied voltages [V] */
@@ -179,7 +225,8 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 #endif
 """
     aw = int(L.aw)
-    ff_call = (f"    if ({N}_ff_step(&s->ff, reference, f) & 2) status |= 2;\n" if ff else "")
+    ff_call = (f"    status |= {N}_ff_step(&s->ff, reference, f) & ({STATUS_DIVERGED} | {STATUS_RANGE});\n"
+               if ff else "")
     if P:
         rnow = (f"    for (l = 0; l < {p}; ++l) {{ rnow[l] = s->rbuf[s->rpos][l]; "
                 f"s->rbuf[s->rpos][l] = reference[l]; }}\n"
@@ -212,6 +259,11 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 {{
     double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
     int status = 0, saturated = 0, i, j, k, l;
+    for (l = 0; l < {p}; ++l)  /* a NaN or infinite input: the sample is skipped (voltages held) */
+        if (!isfinite(reference[l]) || !isfinite(measurement[l])) {{
+            for (k = 0; k < {m}; ++k) voltage[k] = s->a[k];
+            return {STATUS_RANGE};
+        }}
     for (k = 0; k < {m}; ++k) f[k] = 0.0;
 {ff_call}{rnow}    for (l = 0; l < {p}; ++l) {{ e[l] = rnow[l]; e[{p} + l] = measurement[l]; }}
     for (k = 0; k < {m}; ++k) e[{2 * p} + k] = f[k];
@@ -245,4 +297,9 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     return status | saturated;
 }}
 """
-    return FeedbackCExport(N, header, source, ff, m, p, P)
+    what = "; ".join(c.descriptions)
+    description = (f"feedback controller ({what}) with "
+                   + (ff.description if ff else "no feedforward"))
+    return FeedbackCExport(N, header, source, ff, m, p, P, T,
+                           list(loop.plant.hysteresis.input_names),
+                           list(loop.plant.hysteresis.output_names), description)

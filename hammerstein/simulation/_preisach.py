@@ -298,6 +298,166 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
     return acc + poly + off[c]
 
 
+@njit(cache=True)
+def _cell_of(u, E, e0, n):
+    """Switching cell of ``u`` on a component's grid ``E[e0:e0 + n + 1]``: the number of edges
+    ``<= u`` minus one (-1 below the grid, n above it); one cell for every ``u``."""
+    i = -1
+    for j in range(n + 1):
+        if E[e0 + j] <= u:
+            i = j
+    return i
+
+
+@njit(cache=True)
+def _cell_lists(e_off, row, col, mu, q_off):
+    """Which hysterons move, and which keep their state, inside each switching cell.
+
+    Cell i of component c (i = -1 below its grid, ``0 .. n-1`` across it, n
+    above it) is the global cell ``g = e_off[c] + c + i + 1``. Inside cell i
+    the ramps of the other cells are exactly +1 (below) or -1 (above): a
+    hysteron with ``row < i`` is +1, one with ``col > i`` is -1, one with
+    ``col < i < row`` keeps its state, and only those with ``row == i`` or
+    ``col == i`` move with the input.
+
+    Parameters
+    ----------
+    e_off : numpy.ndarray of int64, shape (n_components + 1,)
+        Offsets of each component's cell edges (``n + 1`` edges each).
+    row, col : numpy.ndarray of int64, shape (n_hysterons,)
+        Rising and falling cell of each hysteron (within its component).
+    mu : numpy.ndarray, shape (n_hysterons,)
+        Hysteron weights [µm].
+    q_off : numpy.ndarray of int64, shape (n_components + 1,)
+        Offsets of each component's hysterons.
+
+    Returns
+    -------
+    start, index : numpy.ndarray of int64
+        The moving hysterons of cell g: ``index[start[g]:start[g + 1]]``
+        (ascending); ``start`` has ``e_off[-1] + n_components + 1`` entries.
+    kstart, kindex : numpy.ndarray of int64
+        The hysterons that keep their state in cell g, likewise.
+    fixed : numpy.ndarray, shape (e_off[-1] + n_components,)
+        ``sum_{row < i} mu - sum_{col > i} mu`` of each cell [µm] (ascending q).
+    """
+    nc = e_off.size - 1
+    ncell = e_off[nc] + nc
+    start = np.zeros(ncell + 1, np.int64)
+    kstart = np.zeros(ncell + 1, np.int64)
+    fixed = np.zeros(ncell)
+    for c in range(nc):
+        n = e_off[c + 1] - e_off[c] - 1
+        for i in range(-1, n + 1):
+            g = e_off[c] + c + i + 1
+            a = 0.0
+            b = 0.0
+            for q in range(q_off[c], q_off[c + 1]):
+                if row[q] == i or col[q] == i:
+                    start[g + 1] += 1
+                elif col[q] < i < row[q]:
+                    kstart[g + 1] += 1
+                elif row[q] < i:
+                    a += mu[q]
+                else:
+                    b += mu[q]
+            fixed[g] = a - b
+    for g in range(ncell):
+        start[g + 1] += start[g]
+        kstart[g + 1] += kstart[g]
+    index = np.empty(start[ncell], np.int64)
+    kindex = np.empty(kstart[ncell], np.int64)
+    for c in range(nc):
+        n = e_off[c + 1] - e_off[c] - 1
+        for i in range(-1, n + 1):
+            g = e_off[c] + c + i + 1
+            k = start[g]
+            j = kstart[g]
+            for q in range(q_off[c], q_off[c + 1]):
+                if row[q] == i or col[q] == i:
+                    index[k] = q
+                    k += 1
+                elif col[q] < i < row[q]:
+                    kindex[j] = q
+                    j += 1
+    return start, index, kstart, kindex, fixed
+
+
+@njit(cache=True)
+def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
+            cell, const, start, index, kstart, kindex, fixed):
+    """Output of component c at input u, the states s frozen (one sample's root search).
+
+    In u's switching cell i (``_cell_lists``) the hysterons that do not move
+    add ``fixed[g]`` plus the kept states ``mu s`` (four sums by position mod
+    4, ``(a0 + a1) + (a2 + a3)``), once per sample and cell into
+    ``const[c]`` (``cell[c]`` remembers i, -2 for none); the cell's moving
+    hysterons are added at u (two sums by position parity), then the plays
+    and the polynomial as in ``_component``. The exported C code sums in this
+    order.
+    """
+    e0 = e_off[c]
+    n = e_off[c + 1] - e0 - 1
+    base = s_off[c] - q_off[c]
+    acc = 0.0
+    if q_off[c + 1] > q_off[c]:
+        i = _cell_of(u, E, e0, n)
+        g = e0 + c + i + 1
+        if cell[c] != i:
+            a0 = a1 = a2 = a3 = 0.0          # four sums: independent additions
+            for k in range(kstart[g], kstart[g + 1]):
+                q = kindex[k]
+                v = s[base + q]
+                if v > 1.0:
+                    v = 1.0
+                if v < -1.0:
+                    v = -1.0
+                j = (k - kstart[g]) & 3
+                if j == 0:
+                    a0 += mu[q] * v
+                elif j == 1:
+                    a1 += mu[q] * v
+                elif j == 2:
+                    a2 += mu[q] * v
+                else:
+                    a3 += mu[q] * v
+            const[c] = fixed[g] + ((a0 + a1) + (a2 + a3))
+            cell[c] = i
+        acc = const[c]
+        if 0 <= i < n:
+            rho = _ramp(u, E[e0 + i], E[e0 + i + 1])     # the one ramp not -1 or +1 here
+            b0 = b1 = 0.0                                # two sums (position even, odd)
+            for k in range(start[g], start[g + 1]):
+                q = index[k]
+                up = rho if row[q] == i else -1.0         # row > i
+                down = rho if col[q] == i else 1.0        # col < i
+                v = s[base + q]
+                if v > down:
+                    v = down
+                if v < up:
+                    v = up
+                if (k - start[g]) & 1:
+                    b1 += mu[q] * v
+                else:
+                    b0 += mu[q] * v
+            acc += b0 + b1
+    if p_off[c + 1] > p_off[c]:
+        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
+        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
+        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        for j in range(p_off[c], p_off[c + 1]):
+            v = s[base + j]
+            if v > hi + pr[j]:
+                v = hi + pr[j]
+            if v < lo - pr[j]:
+                v = lo - pr[j]
+            acc += pw[j] * v
+    poly = 0.0
+    for d in range(rev.shape[1] - 1, -1, -1):
+        poly = (poly + rev[c, d]) * u
+    return acc + poly + off[c]
+
+
 #: First step of the bracket search around the guess, as a fraction of the input range,
 #: and its growth factor: the root moves by ~1e-6-1e-3 of the range between Gauss-Seidel
 #: sweeps and samples, so it is usually bracketed in 1-4 evaluations.
@@ -307,7 +467,7 @@ BRACKET_GROWTH = 16.0
 
 @njit(cache=True)
 def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-          rev, off, s, tol):
+          rev, off, s, tol, cell, const, start, index, kstart, kindex, fixed):
     """u in [lo, hi] with component c = target (Illinois false position; clipped).
 
     The component is non-decreasing in u. The root is bracketed from ``guess``
@@ -319,8 +479,8 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
     relative.
     """
     x = min(max(guess, lo), hi)
-    fx = _component(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                    rev, off, s, False) - target
+    fx = _frozen(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                    rev, off, s, cell, const, start, index, kstart, kindex, fixed) - target
     if abs(fx) <= tol:
         return x
     step = BRACKET_STEP * (hi - lo)
@@ -330,13 +490,14 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
             b = x + step
             if b >= hi:
                 b = hi
-                fb = _component(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env,
-                                s_off, rev, off, s, False) - target
+                fb = _frozen(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env,
+                             s_off, rev, off, s, cell, const, start, index, kstart, kindex,
+                             fixed) - target
                 if fb <= 0.0:
                     return hi
                 break
-            fb = _component(c, b, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                            rev, off, s, False) - target
+            fb = _frozen(c, b, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                            rev, off, s, cell, const, start, index, kstart, kindex, fixed) - target
             if fb >= 0.0:
                 break
             a, fa = b, fb
@@ -347,13 +508,14 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
             a = x - step
             if a <= lo:
                 a = lo
-                fa = _component(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env,
-                                s_off, rev, off, s, False) - target
+                fa = _frozen(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env,
+                             s_off, rev, off, s, cell, const, start, index, kstart, kindex,
+                             fixed) - target
                 if fa >= 0.0:
                     return lo
                 break
-            fa = _component(c, a, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                            rev, off, s, False) - target
+            fa = _frozen(c, a, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                            rev, off, s, cell, const, start, index, kstart, kindex, fixed) - target
             if fa <= 0.0:
                 break
             b, fb = a, fa
@@ -367,8 +529,8 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
-        fx = _component(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
-                        rev, off, s, False) - target
+        fx = _frozen(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                        rev, off, s, cell, const, start, index, kstart, kindex, fixed) - target
         if abs(fx) <= tol or b - a <= 1e-13 * (1.0 + abs(x)):
             return x
         if fx < 0.0:
@@ -394,8 +556,11 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
     then every state committed at the solution; sweeps that do not settle in
     ``max_sweeps`` (a cycle where a direct path is nearly flat against a
     cross-coupling) are repeated under-relaxed, ``u += omega (root - u)`` with
-    omega = 1/2, 1/4, 1/8, 1/16. Otherwise the inverse
-    multiplicative law ``u_t = u_{t-1} + K^-1 (yr_t - Gamma(u_{t-1}))``.
+    omega = 1/2, 1/4, 1/8, 1/16. During the sweeps the states are frozen and
+    each component is evaluated by ``_frozen`` (per switching cell: the
+    hysterons that do not move summed once, then the cell's own; the same
+    function as ``_component``, summed in another order). Otherwise the
+    inverse multiplicative law ``u_t = u_{t-1} + K^-1 (yr_t - Gamma(u_{t-1}))``.
     Returns the number of samples whose sweeps did not converge.
     """
     p, N = yr.shape
@@ -405,8 +570,13 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
     unconverged = 0
     for k in range(m):
         ut[k] = u_prev[k]
+    start, index, kstart, kindex, fixed = _cell_lists(e_off, row, col, mu, q_off)
+    cell = np.empty(p * m, np.int64)
+    const = np.empty(p * m)
     for t in range(N):
         if exact:
+            for c in range(p * m):
+                cell[c] = -2           # the states moved: no cell summed yet
             converged = False
             omega = 1.0
             for _ in range(5):          # plain sweeps; if they cycle, under-relaxed ones
@@ -417,10 +587,12 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
                         for k in range(m):
                             c = l * m + k
                             if k != l and present[c]:
-                                target -= _component(c, ut[k], E, e_off, row, col, mu, q_off, pr,
-                                                     pw, p_off, env, s_off, rev, off, s, False)
+                                target -= _frozen(c, ut[k], E, e_off, row, col, mu, q_off, pr,
+                                                  pw, p_off, env, s_off, rev, off, s, cell, const,
+                                                  start, index, kstart, kindex, fixed)
                         new = _root(l * m + l, target, ut[l], lo[l], hi[l], E, e_off, row, col,
-                                    mu, q_off, pr, pw, p_off, env, s_off, rev, off, s, tol)
+                                    mu, q_off, pr, pw, p_off, env, s_off, rev, off, s, tol, cell,
+                                    const, start, index, kstart, kindex, fixed)
                         if abs(new - ut[l]) > delta:
                             delta = abs(new - ut[l])
                         ut[l] = new if omega == 1.0 else ut[l] + omega * (new - ut[l])

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-O2"]
+CFLAGS = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off", "-O2"]
 
 HARNESS = r"""
 #include <stdio.h>

@@ -6,6 +6,7 @@ from __future__ import annotations
 import warnings
 from pathlib import Path
 
+import control
 import numpy as np
 import pytest
 
@@ -71,6 +72,20 @@ def test_stable_inversion_is_refused():
     comp = HammersteinCompensator(p.hysteresis, p.dynamics, inversion="stable")
     with pytest.raises(ExportError, match="inversion: 'stable'.*zpetc"):
         export_c(comp, "x", p.sampling_period)
+
+
+def test_stable_inversion_of_a_non_minimum_phase_g_says_why_and_how_long():
+    """A zero at z = 1.5: the anti-causal part decays as 1.5^-k, below 1e-12 after
+    ceil(12 ln 10 / ln 1.5) = 69 samples; the refusal says so and offers zpetc."""
+    p = load_plant("rakotondrabe-2dof")
+    T = p.sampling_period
+    g = control.tf([1.0, -1.5], [1.0, -0.5, 0.06], T)
+    g = g / g.dcgain()
+    G = control.append(control.ss(g), control.ss(g))
+    comp = HammersteinCompensator(p.hysteresis, G, inversion="stable")
+    expected = int(np.ceil(12 * np.log(10) / np.log(1.5)))
+    with pytest.raises(ExportError, match=rf"end of the record.*{expected} samples.*'zpetc'"):
+        export_c(comp, "x", T)
 
 
 class _Preisach:                      # a model class the C generator does not know

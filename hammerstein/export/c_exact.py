@@ -1,0 +1,454 @@
+"""C emitter of the exact per-sample inverse of a Preisach or generalised-PI model
+(:class:`~hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`) and of its
+multiplicative law, step for step as :mod:`hammerstein.simulation._preisach`: the same
+bracket, Illinois iterations, tolerances, Gauss-Seidel sweeps, per-cell evaluation and order
+of additions; after optional linear stages (the dynamics and creep inverses of a Hammerstein
+compensator).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hammerstein.simulation._preisach import _cell_lists
+from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
+                                       _stage_code, _sections, _model_text)
+
+
+_EXACT = """@RAMP<
+/* ramp of a switching cell: -1 below lo, +1 above hi, linear across */
+static {N}_real {N}_ramp({N}_real u, {N}_real lo, {N}_real hi)
+{{
+    if (u <= lo) return -{one};
+    if (u >= hi) return {one};
+    return {two} * (u - lo) / (hi - lo) - {one};
+}}
+@>RAMP
+@COMPONENT<
+/* output of component c at input u from the states h (moved to u when commit) */
+static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
+{{
+    {N}_real acc = {zero}, poly = {zero};
+    int n;
+@HYST<
+    if ({N}_q_off[c + 1] > {N}_q_off[c]) {{
+        {N}_real rho[{N}_MAX_LEVELS];
+        const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+        int q;
+        const int base = {N}_s_off[c] - {N}_q_off[c];
+        for (n = 0; n < nlev; ++n) rho[n] = {N}_ramp(u, {N}_E[e0 + n], {N}_E[e0 + n + 1]);
+        for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
+            {N}_real up = rho[{N}_row[q]], down = rho[{N}_col[q]], v = h[base + q];
+            if (v > down) v = down;
+            if (v < up) v = up;
+            if (commit) h[base + q] = v;
+            acc += {N}_mu[q] * v;
+        }}
+    }}
+@>HYST
+@PLAY<
+    if ({N}_p_off[c + 1] > {N}_p_off[c]) {{
+        int j;
+        const int base = {N}_s_off[c] + {N}_q_off[c + 1] - {N}_q_off[c] - {N}_p_off[c];
+        {N}_real lo = {N}_env[c][0] * {tanh}({N}_env[c][1] * u + {N}_env[c][2]) + {N}_env[c][3];
+        {N}_real hi = {N}_env[c][4] * {tanh}({N}_env[c][5] * u + {N}_env[c][6]) + {N}_env[c][7];
+        for (j = {N}_p_off[c]; j < {N}_p_off[c + 1]; ++j) {{
+            {N}_real v = h[base + j];
+            if (v > hi + {N}_pr[j]) v = hi + {N}_pr[j];
+            if (v < lo - {N}_pr[j]) v = lo - {N}_pr[j];
+            if (commit) h[base + j] = v;
+            acc += {N}_pw[j] * v;
+        }}
+    }}
+@>PLAY
+    for (n = {N}_N_POLY - 1; n >= 0; --n) poly = (poly + {N}_rev[c][n]) * u;
+    return acc + poly + {N}_off[c];
+}}
+@>COMPONENT
+"""
+
+_MOVE = """
+@HYST<
+/* the switching cell of u on component c's grid: the number of edges <= u, minus one */
+static int {N}_cell_scan(int c, {N}_real u)
+{{
+    const int e0 = {N}_e_off[c], n = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+    int i = -1, j;
+    for (j = 0; j <= n; ++j)
+        if ({N}_E[e0 + j] <= u) i = j;
+    return i;
+}}
+@>HYST
+/* move the states of component c to input u (the commit of _component, without its sum):
+   inside u's switching cell i the ramps of the other cells are exactly -1 (above) or +1
+   (below), so only cell i's ramp is computed */
+static void {N}_move(int c, {N}_real u, {N}_real *h)
+{{
+@HYST<
+    if ({N}_q_off[c + 1] > {N}_q_off[c]) {{
+        const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+        const int base = {N}_s_off[c] - {N}_q_off[c];
+        const int i = {N}_cell_scan(c, u);
+        {N}_real rhos[{N}_MAX_LEVELS];   /* every cell's ramp: +1 below u's cell, -1 above */
+        int q, j;
+        for (j = 0; j < nlev; ++j) rhos[j] = j < i ? {one} : -{one};
+        if (0 <= i && i < nlev) rhos[i] = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);
+        for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
+            const {N}_real up = rhos[{N}_row[q]], down = rhos[{N}_col[q]];
+            {N}_real v = h[base + q];
+            v = v > down ? down : v;
+            v = v < up ? up : v;
+            h[base + q] = v;
+        }}
+    }}
+@>HYST
+@PLAY<
+    if ({N}_p_off[c + 1] > {N}_p_off[c]) {{
+        int j;
+        const int base = {N}_s_off[c] + {N}_q_off[c + 1] - {N}_q_off[c] - {N}_p_off[c];
+        {N}_real lo = {N}_env[c][0] * {tanh}({N}_env[c][1] * u + {N}_env[c][2]) + {N}_env[c][3];
+        {N}_real hi = {N}_env[c][4] * {tanh}({N}_env[c][5] * u + {N}_env[c][6]) + {N}_env[c][7];
+        for (j = {N}_p_off[c]; j < {N}_p_off[c + 1]; ++j) {{
+            {N}_real v = h[base + j];
+            if (v > hi + {N}_pr[j]) v = hi + {N}_pr[j];
+            if (v < lo - {N}_pr[j]) v = lo - {N}_pr[j];
+            h[base + j] = v;
+        }}
+    }}
+@>PLAY
+    (void)c; (void)u; (void)h;
+}}
+"""
+
+_ROOT = """#define {N}_ABS(x) ((x) < {zero} ? -(x) : (x))
+
+/* within one sample the states do not move until the commit: the last two values of each
+   component (a repeated input returns the value computed before, bit for bit), and per
+   component the switching cell last summed with the sum of its input-independent hysterons */
+typedef struct {{
+    {N}_real x[{N}_N_COMPONENTS][2], y[{N}_N_COMPONENTS][2], cst[{N}_N_COMPONENTS];
+    int n[{N}_N_COMPONENTS], last[{N}_N_COMPONENTS], cell[{N}_N_COMPONENTS];
+}} {N}_memo;
+@HYST<
+/* the cell of u, tried first in the cell summed last (the same answer as the scan) */
+static int {N}_cell({N}_memo *mm, int c, {N}_real u)
+{{
+    const int i = mm->cell[c], e0 = {N}_e_off[c], n = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+    if (0 <= i && i < n && {N}_E[e0 + i] <= u && u < {N}_E[e0 + i + 1]) return i;
+    return {N}_cell_scan(c, u);
+}}
+@>HYST
+
+@HYST<
+/* the term of hysteron q of cell i at the cell's ramp value rho */
+static {N}_real {N}_moving(int q, int i, {N}_real rho, int base, const {N}_real *h)
+{{
+    const {N}_real up = {N}_row[q] == i ? rho : -{one}, down = {N}_col[q] == i ? rho : {one};
+    {N}_real v = h[base + q];
+    if (v > down) v = down;
+    if (v < up) v = up;
+    return {N}_mu[q] * v;
+}}
+
+/* the term of hysteron q that keeps its state in the cell */
+static {N}_real {N}_kept(int q, int base, const {N}_real *h)
+{{
+    {N}_real v = h[base + q];
+    if (v > {one}) v = {one};
+    if (v < -{one}) v = -{one};
+    return {N}_mu[q] * v;
+}}
+@>HYST
+
+/* output of component c at input u, the states frozen (hammerstein.simulation._preisach.
+   _frozen, in its order): in u's switching cell i the ramps of the other cells are exactly
+   +1 (below) or -1 (above), so the hysterons that do not move add a constant per cell
+   (the fixed table plus the kept states, summed once per sample and cell), and only the
+   cell's moving hysterons are evaluated at u; then the plays and the polynomial */
+static {N}_real {N}_frozen({N}_memo *mm, int c, {N}_real u, const {N}_real *h)
+{{
+    {N}_real acc = {zero}, poly = {zero};
+    int n;
+    (void)mm;
+@HYST<
+    if ({N}_q_off[c + 1] > {N}_q_off[c]) {{
+        const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
+        const int base = {N}_s_off[c] - {N}_q_off[c];
+        const int i = {N}_cell(mm, c, u), g = e0 + c + i + 1;
+        int k;
+        if (mm->cell[c] != i) {{
+            const int k0 = {N}_kstart[g], k1 = {N}_kstart[g + 1];
+            {N}_real a0 = {zero}, a1 = {zero}, a2 = {zero}, a3 = {zero};  /* four sums */
+            for (k = k0; k + 4 <= k1; k += 4) {{
+                a0 += {N}_kept({N}_kindex[k], base, h);
+                a1 += {N}_kept({N}_kindex[k + 1], base, h);
+                a2 += {N}_kept({N}_kindex[k + 2], base, h);
+                a3 += {N}_kept({N}_kindex[k + 3], base, h);
+            }}
+            if (k < k1) a0 += {N}_kept({N}_kindex[k++], base, h);
+            if (k < k1) a1 += {N}_kept({N}_kindex[k++], base, h);
+            if (k < k1) a2 += {N}_kept({N}_kindex[k++], base, h);
+            mm->cst[c] = {N}_fixed[g] + ((a0 + a1) + (a2 + a3));
+            mm->cell[c] = i;
+        }}
+        acc = mm->cst[c];
+        if (0 <= i && i < nlev) {{
+            const int k1 = {N}_cstart[g + 1];
+            {N}_real b0 = {zero}, b1 = {zero};    /* two sums (position even, odd) */
+            const {N}_real rho = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);  /* the one ramp not -1 or +1 */
+            for (k = {N}_cstart[g]; k + 2 <= k1; k += 2) {{
+                b0 += {N}_moving({N}_cindex[k], i, rho, base, h);
+                b1 += {N}_moving({N}_cindex[k + 1], i, rho, base, h);
+            }}
+            if (k < k1) b0 += {N}_moving({N}_cindex[k], i, rho, base, h);
+            acc += b0 + b1;
+        }}
+    }}
+@>HYST
+@PLAY<
+    if ({N}_p_off[c + 1] > {N}_p_off[c]) {{
+        int j;
+        const int base = {N}_s_off[c] + {N}_q_off[c + 1] - {N}_q_off[c] - {N}_p_off[c];
+        {N}_real lo = {N}_env[c][0] * {tanh}({N}_env[c][1] * u + {N}_env[c][2]) + {N}_env[c][3];
+        {N}_real hi = {N}_env[c][4] * {tanh}({N}_env[c][5] * u + {N}_env[c][6]) + {N}_env[c][7];
+        for (j = {N}_p_off[c]; j < {N}_p_off[c + 1]; ++j) {{
+            {N}_real v = h[base + j];
+            if (v > hi + {N}_pr[j]) v = hi + {N}_pr[j];
+            if (v < lo - {N}_pr[j]) v = lo - {N}_pr[j];
+            acc += {N}_pw[j] * v;
+        }}
+    }}
+@>PLAY
+    for (n = {N}_N_POLY - 1; n >= 0; --n) poly = (poly + {N}_rev[c][n]) * u;
+    return acc + poly + {N}_off[c];
+}}
+
+static {N}_real {N}_eval({N}_memo *mm, int c, {N}_real u, {N}_real *h)
+{{
+    int i;
+    for (i = 0; i < mm->n[c]; ++i)
+        if (mm->x[c][i] == u) return mm->y[c][i];
+    i = mm->n[c] < 2 ? mm->n[c]++ : 1 - mm->last[c];
+    mm->last[c] = i;
+    mm->x[c][i] = u;
+    mm->y[c][i] = {N}_frozen(mm, c, u, h);
+    return mm->y[c][i];
+}}
+
+/* u in [lo, hi] with component c = target: bracket from the guess by growing steps, then
+   Illinois false position (the Python kernel's search, step for step) */
+static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {N}_real lo, {N}_real hi, {N}_real *h)
+{{
+    {N}_real x = guess, fx, step, a, fa, b, fb;
+    int side = 0, it;
+    if (x < lo) x = lo;
+    if (x > hi) x = hi;
+    fx = {N}_eval(mm, c, x, h) - target;
+    if ({N}_ABS(fx) <= {N}_TOLERANCE) return x;
+    step = {N}_BRACKET_STEP * (hi - lo);
+    if (fx < {zero}) {{
+        a = x; fa = fx;
+        for (;;) {{
+            b = x + step;
+            if (b >= hi) {{
+                b = hi;
+                fb = {N}_eval(mm, c, hi, h) - target;
+                if (fb <= {zero}) return hi;
+                break;
+            }}
+            fb = {N}_eval(mm, c, b, h) - target;
+            if (fb >= {zero}) break;
+            a = b; fa = fb;
+            step *= {N}_BRACKET_GROWTH;
+        }}
+    }} else {{
+        b = x; fb = fx;
+        for (;;) {{
+            a = x - step;
+            if (a <= lo) {{
+                a = lo;
+                fa = {N}_eval(mm, c, lo, h) - target;
+                if (fa >= {zero}) return lo;
+                break;
+            }}
+            fa = {N}_eval(mm, c, a, h) - target;
+            if (fa <= {zero}) break;
+            b = a; fb = fa;
+            step *= {N}_BRACKET_GROWTH;
+        }}
+    }}
+    if ({N}_ABS(fa) <= {N}_TOLERANCE) return a;
+    if ({N}_ABS(fb) <= {N}_TOLERANCE) return b;
+    for (it = 0; it < 200; ++it) {{
+        x = (a * fb - b * fa) / (fb - fa);
+        if (!(a < x && x < b)) x = {half} * (a + b);
+        fx = {N}_eval(mm, c, x, h) - target;
+        if ({N}_ABS(fx) <= {N}_TOLERANCE || b - a <= {N}_BRACKET_END * ({one} + {N}_ABS(x))) return x;
+        if (fx < {zero}) {{
+            a = x; fa = fx;
+            if (side == -1) fb *= {half};
+            side = -1;
+        }} else {{
+            b = x; fb = fx;
+            if (side == 1) fa *= {half};
+            side = 1;
+        }}
+    }}
+    return x;
+}}
+"""
+
+
+def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
+    """The exact inverse (or its multiplicative law) of a PreisachInverseCompensator, after
+    optional linear stages (the dynamics inverse, the creep inverse)."""
+    (E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, present) = comp._arrays
+    m = p = model.n_inputs
+    nh = int(model.n_hysterons)
+    exact = comp.method == "root"
+    f = "f" if precision == "float" else ""
+    lit = {"zero": "0.0" + f, "one": "1.0" + f, "two": "2.0" + f, "half": "0.5" + f,
+           "tanh": "tanh" + f, "N": N}
+    nlev = int(max(1, np.max(np.diff(e_off)) - 1))
+    h0 = comp.initial_state()[m:]
+    decls = [f"#define {N}_N_HYSTERONS {nh}", f"#define {N}_MAX_LEVELS {nlev}",
+             f"#define {N}_N_COMPONENTS {p * m}",
+             f"#define {N}_N_POLY {rev.shape[1]}",
+             f"#define {N}_TOLERANCE {_lit(comp.tolerance, precision)}",
+             f"#define {N}_BRACKET_STEP {_lit(1e-5, precision)}",
+             f"#define {N}_BRACKET_GROWTH {_lit(16.0, precision)}",
+             f"#define {N}_BRACKET_END {_lit(1e-13, precision)}",
+             f"#define {N}_MAX_SWEEPS {int(comp.max_sweeps)}",
+             _ints_table("q_off", q_off, N), _ints_table("s_off", s_off, N)]
+    if q_off[-1] > 0:
+        decls += [_reals_table("E", E, precision, N, "  /* switching-cell edges [V] */"),
+                  _ints_table("e_off", e_off, N), _ints_table("row", row, N),
+                  _ints_table("col", col, N),
+                  _reals_table("mu", mu, precision, N, "  /* hysteron weights [um] */")]
+    if p_off[-1] > 0:
+        decls += [_reals_table("pr", pr, precision, N, "  /* generalised play thresholds */"),
+                  _reals_table("pw", pw, precision, N, "  /* generalised play weights [um] */"),
+                  _ints_table("p_off", p_off, N),
+                  f"static const {N}_real {N}_env[{p * m}][8] = {_mat(env, precision)};  /* envelopes */"]
+    decls += [
+             f"static const {N}_real {N}_rev[{p * m}][{rev.shape[1]}] = {_mat(rev, precision)};"
+             f"  /* reversible polynomials, u^1 first */",
+             _reals_table("off", off, precision, N, "  /* component offsets [um] */"),
+             _ints_table("present", present.astype(int), N),
+             _reals_table("lo", comp.lo, precision, N, "  /* input bounds [V] */"),
+             _reals_table("hi", comp.hi, precision, N),
+             _reals_table("h0", h0, precision, N, "  /* hysteron states at rest */")]
+    if not exact:
+        decls.append(f"static const {N}_real {N}_K_inv[{m}][{m}] = {_mat(comp.K_inv, precision)};")
+    members = [f"    {N}_real u[{N}_N_INPUTS];        /* last voltages [V] */",
+               f"    {N}_real h[{max(1, nh)}];   /* hysteron and play states of the model */"]
+    reals = m + nh
+    scode, init = [], []
+    for k, (A, B, C, D) in enumerate(stages):
+        A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
+        d, c, n = _stage_code(k, A, B, C, D, precision, N)
+        decls += d
+        scode.append(c)
+        members.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
+        init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {lit['zero']};")
+        reals += n
+    keep = {"HYST": q_off[-1] > 0, "RAMP": q_off[-1] > 0, "PLAY": p_off[-1] > 0,
+            "COMPONENT": not exact}
+    body = [_sections(_EXACT.format(**lit) + _MOVE.format(**lit), keep)]
+    if exact:
+        if q_off[-1] > 0:
+            cstart, cindex, kstart, kindex, fixed = _cell_lists(e_off, row, col, mu, q_off)
+            decls += [_ints_table("cstart", cstart, N), _ints_table("cindex", cindex, N)
+                      + "  /* hysterons moving inside each switching cell */",
+                      _ints_table("kstart", kstart, N), _ints_table("kindex", kindex, N)
+                      + "  /* hysterons keeping their state inside each cell */",
+                      _reals_table("fixed", fixed, precision, N, "  /* per cell: sum of +1 and "
+                                   "-1 hysteron weights [um] */")]
+        body.append(_sections(_ROOT.format(**lit), keep))
+        law = f"""    {{  /* Gauss-Seidel over the outputs, a monotone root per direct path; sweeps that
+           do not settle are repeated under-relaxed (omega 1/2 ... 1/16) */
+        int round, sweep, converged = 0;
+        {N}_real omega = {lit['one']};
+        {N}_memo mm;
+        for (k = 0; k < {N}_N_COMPONENTS; ++k) {{ mm.n[k] = mm.last[k] = 0; mm.cell[k] = -2; }}
+        for (round = 0; round < 5 && !converged; ++round) {{
+            for (sweep = 0; sweep < {N}_MAX_SWEEPS; ++sweep) {{
+                {N}_real delta = {lit['zero']};
+                for (l = 0; l < {N}_N_OUTPUTS; ++l) {{
+                    {N}_real target = r[l], nw, dd;
+                    for (k = 0; k < {N}_N_INPUTS; ++k)
+                        if (k != l && {N}_present[l * {N}_N_INPUTS + k])
+                            target -= {N}_eval(&mm, l * {N}_N_INPUTS + k, u[k], s->h);
+                    nw = {N}_root(&mm, l * {N}_N_INPUTS + l, target, u[l], {N}_lo[l], {N}_hi[l], s->h);
+                    dd = {N}_ABS(nw - u[l]);
+                    if (dd > delta) delta = dd;
+                    u[l] = omega == {lit['one']} ? nw : u[l] + omega * (nw - u[l]);
+                }}
+                if (delta <= {_lit(1e-11, precision)}) {{ converged = 1; break; }}
+            }}
+            omega *= {lit['half']};
+        }}
+    }}
+    for (k = 0; k < {N}_N_INPUTS; ++k)   /* the reference is out of reach: the input bound */
+        if (u[k] == {N}_lo[k] || u[k] == {N}_hi[k]) status |= {N}_STATUS_RANGE;"""
+    else:
+        law = f"""    {{  /* inverse multiplicative law: u = clip(u(t-T) + K^-1 (r - Gamma(u(t-T)))) */
+        {N}_real g[{N}_N_OUTPUTS];
+        for (l = 0; l < {N}_N_OUTPUTS; ++l) {{
+            g[l] = {lit['zero']};
+            for (k = 0; k < {N}_N_INPUTS; ++k)
+                if ({N}_present[l * {N}_N_INPUTS + k])
+                    g[l] += {N}_component(l * {N}_N_INPUTS + k, u[k], s->h, 0);
+        }}
+        for (k = 0; k < {N}_N_INPUTS; ++k) {{
+            {N}_real a = u[k];
+            for (l = 0; l < {N}_N_OUTPUTS; ++l) a += {N}_K_inv[k][l] * (r[l] - g[l]);
+            if (a < {N}_lo[k]) {{ a = {N}_lo[k]; status |= {N}_STATUS_RANGE; }}
+            if (a > {N}_hi[k]) {{ a = {N}_hi[k]; status |= {N}_STATUS_RANGE; }}
+            u[k] = a;
+        }}
+    }}"""
+    ldecls, lcode, _ = _limits_code(limits, m, T, precision, N)
+    body.append(f"""void {N}_init({N}_state *s)
+{{
+    int j, k;
+    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = {lit['zero']};
+    for (j = 0; j < {max(1, nh)}; ++j) s->h[j] = {N}_h0[j];
+{chr(10).join(init)}
+    s->diverged = 0;
+}}
+""")
+    body.append("\n".join([f"""int {N}_step({N}_state *s, const {N}_real reference[{N}_N_OUTPUTS], {N}_real voltage[{N}_N_INPUTS])
+{{
+    {N}_real r[{N}_N_OUTPUTS], u[{N}_N_INPUTS];
+    int k, l, status = 0;
+@REFERENCE_CHECK@
+    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = reference[l];"""] + scode + [
+        *([f"""    if (s->received < {N}_PREVIEW) {{  /* filling the preview: the actuator stays at rest */
+        s->received += 1;
+        for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = s->u[k];
+        return status;
+    }}"""] if preview else []),
+        f"    for (k = 0; k < {N}_N_INPUTS; ++k) u[k] = s->u[k];", law,
+        f"""    for (l = 0; l < {N}_N_OUTPUTS; ++l)   /* move every state to the solution */
+        for (k = 0; k < {N}_N_INPUTS; ++k)
+            if ({N}_present[l * {N}_N_INPUTS + k]) {N}_move(l * {N}_N_INPUTS + k, u[k], s->h);"""]
+        + lcode + ["""    return status;
+}
+"""]))
+    if preview:
+        members.append("    int received;                  /* references received, up to PREVIEW */")
+        body = [b.replace("    s->diverged = 0;\n", "    s->received = 0;\n    s->diverged = 0;\n") for b in body]
+    members.append("    int diverged;                  /* latched divergence flag (unused: the root is bounded) */")
+    return decls + ldecls, body, members, [], reals
+
+
+def _plan_preisach_inverse(comp):
+    if comp.method == "root":
+        what = f"exact per-sample inverse of the {_model_text(comp.model)} (monotone root per " \
+               f"direct path, Gauss-Seidel over the cross-couplings)"
+    else:
+        what = f"inverse multiplicative law ({comp.name}) over the {_model_text(comp.model)}"
+    return ("exact", comp.model, 0, what,
+            lambda precision, N, limits, T: _exact_source(comp, [], comp.model, precision, N,
+                                                          limits, T, 0))
