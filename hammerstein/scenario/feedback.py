@@ -36,7 +36,7 @@ from hammerstein.scenario.resolve import resolve_scenario
 control = lazy_module("control")  # lazy: loaded when a feedback scenario runs
 
 __all__ = ["FeedbackCaseResult", "build_controller", "build_loops", "run_feedback_scenario",
-           "loop_analysis", "MODE_LABELS"]
+           "loop_analysis", "MODE_LABELS", "hardware_sensor", "hardware_amplifier"]
 
 #: how the report names the modes
 MODE_LABELS = {"feedforward": "feedforward alone", "feedback": "feedback alone",
@@ -131,6 +131,55 @@ def build_controller(table, plant):
     return diagonal_controller(designs, T, method)
 
 
+def hardware_sensor(table, plant):
+    """The loop's sensor: the preset's ``[sensor]``, each key overridden by ``[feedback] sensor``.
+
+    Parameters
+    ----------
+    table : dict
+        Validated ``[feedback]`` table.
+    plant : HammersteinPlant
+        Its ``sensor`` (:func:`hammerstein.io.presets.load_plant`), when any.
+
+    Returns
+    -------
+    dict
+        ``noise_nm`` [nm RMS], ``bandwidth_hz`` [Hz], ``delay`` [samples], the keys set.
+    """
+    return {**(getattr(plant, "sensor", None) or {}), **table.get("sensor", {})}
+
+
+def hardware_amplifier(table, plant):
+    """The loop's amplifier limits: ``[feedback] amplifier``, else the preset's ``[amplifier]``.
+
+    The preset's limits are taken per input (range and slew rate; its
+    bandwidth is not modelled in the loop) unless they were measured on the
+    identification records (a region, not the amplifier's own limits).
+
+    Parameters
+    ----------
+    table : dict
+        Validated ``[feedback]`` table.
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    hammerstein.compensation.feedback.AmplifierLimits or None
+        None: no limits.
+    """
+    a = table.get("amplifier", {})
+    if a:
+        rng = a.get("range")
+        return AmplifierLimits(rng[0] if rng else -np.inf, rng[1] if rng else np.inf,
+                               a.get("slew_rate", np.inf))
+    hw = getattr(plant, "amplifier", None)
+    if hw is None or hw.from_records:
+        return None
+    ch = hw.channels
+    return AmplifierLimits(np.array([c.low for c in ch]), np.array([c.high for c in ch]),
+                           np.array([c.slew_rate for c in ch]))
+
+
 def build_loops(table, plant):
     """The closed loop and the feedforward-alone loop (no controller) of a table.
 
@@ -145,12 +194,9 @@ def build_loops(table, plant):
     (FeedbackLoop, FeedbackLoop)
         With the controller; without (the same amplifier, no sensor in the loop).
     """
-    s = table.get("sensor", {})
+    s = hardware_sensor(table, plant)
     sensor = Sensor(s.get("noise_nm", 0.0) * 1e-3, s.get("bandwidth_hz"), s.get("delay", 0))
-    a = table.get("amplifier", {})
-    rng = a.get("range")
-    amp = None if rng is None and "slew_rate" not in a else AmplifierLimits(
-        rng[0] if rng else -np.inf, rng[1] if rng else np.inf, a.get("slew_rate", np.inf))
+    amp = hardware_amplifier(table, plant)
     ctrl = build_controller(table, plant)
     aw, tt = table.get("anti_windup", "back-calculation"), table.get("tracking_time")
     return (FeedbackLoop(plant, ctrl, sensor, amp, aw, tt),
@@ -190,6 +236,17 @@ def loop_analysis(loop, n_frequencies=400):
             "linear_stable": bool(np.all(np.abs(control.poles(S)) < 1)),
             "noise_nm": (loop.noise_to_position() * 1e3).tolist(), "frequency_hz": f,
             "outputs": list(loop.plant.hysteresis.output_names), **mags}
+
+
+def _limits(*values):
+    """Amplifier limits for the report: a scalar (or [low, high]) when every input agrees."""
+    arrs = [np.atleast_1d(np.asarray(v, float)) for v in values]
+    if all(np.all(a == a[0]) for a in arrs):
+        out = [float(a[0]) for a in arrs]
+    else:
+        out = [a.tolist() for a in arrs]
+    out = ["unlimited" if isinstance(v, float) and not np.isfinite(v) else v for v in out]
+    return out if len(out) > 1 else out[0]
 
 
 def _feedforward(case, r_loop, fade):
@@ -283,6 +340,11 @@ def run_feedback_scenario(scenario: FeedbackScenario, jobs=2):
                 raise ScenarioError([f"{where}: {exc}"]) from None
     first = loops[id(cases[0].plant)][0]
     analysis = loop_analysis(first)
+    plant0 = cases[0].plant
+    analysis["sensor"] = hardware_sensor(scenario.table, plant0)
+    amp = first.amplifier
+    analysis["amplifier"] = {} if amp is None else {
+        "range": _limits(amp.low, amp.high), "slew_rate": _limits(amp.slew_rate)}
     scenario.analysis = analysis
     if not analysis["linear_stable"]:
         raise ScenarioError([f"{where}: the linearised loop (hysteresis at its secant gains) is "
