@@ -2,7 +2,8 @@
 
 Run (from the repository root)::
 
-    python benchmarks/feedback_options.py [--cases circle-15um-10,...] [--no-noise]
+    python benchmarks/feedback_options.py [--only 10Hz,raster] [--options pi-notch,pi-notch+im3]
+        [--no-noise] [--without-feedforward] [--decay 2] [--max-harmonic 380]
 
 Not a test. The feedforward is the Hammerstein compensator identified on the
 actuator exactly as ``scenarios/realistic-feedback.toml`` (and ``hammerstein
@@ -10,17 +11,21 @@ run``) identifies it; the references are that scenario's (15 and 40 µm
 circles at 10-100 Hz, 40 x 40 µm raster at 20 Hz); the sensor 40 nm RMS at
 5 kHz with one sample of delay, the amplifier +/-10 V with back-calculation.
 Every option runs every case with the feedforward and prints the settled max
-error in % of the radius (x/y worst), so the table of docs/feedback.md can be
+error in % of the radius (the largest ``||r - y||`` over the settled
+window, as the scenario's ``max_euclidean_error_percent``), so the table of docs/feedback.md can be
 re-measured. Options:
 
 * ``pi-notch``: the bundled scenario's loop (PI + notch, 150 Hz crossover);
-* ``+im1``, ``+im3``, ``+im5``: the same with internal-model (resonant)
-  elements at the reference's fundamental and odd harmonics below the first
-  mode, each ``k_h w_h (s cos phi_h + w_h sin phi_h) / (s^2 + w_h^2)`` in
+* ``ppf``, ``irc``: the damping designs (``BASE@FC`` sets the crossover);
+* ``BASE+imN``: BASE with internal-model (resonant) elements at the
+  reference's harmonics 1..N below ``--max-harmonic``, each ``k_h w_h (s cos phi_h + w_h sin phi_h) / (s^2 + w_h^2)`` in
   series with the PI (phase lead ``phi_h = -arg T(j w_h)`` so the loop
   stays stable, gain ``k_h`` so that the harmonic decays in about one period;
   pre-warped so that Tustin puts the pole on the harmonic exactly);
-* ``--no-noise``: the same without sensor noise (what the noise costs).
+* ``--no-noise``: the same without sensor noise (what the noise costs);
+* ``--without-feedforward``: the loop alone (what the feedforward adds);
+* ``--max-harmonic``: internal models only below this frequency;
+  ``--decay``: the periods in which each harmonic's error decays (gain).
 
 Prints the load average before and after and the CPU time of the process.
 """
@@ -100,7 +105,8 @@ def with_internal_model(design, loop_axis, T, harmonics_hz, decay_periods=1.0, z
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--no-noise", action="store_true")
-    ap.add_argument("--options", default="pi-notch,pi-notch+im5,ppf,ppf+im5")
+    ap.add_argument("--without-feedforward", action="store_true")
+    ap.add_argument("--options", default="pi-notch,pi-notch+im1,pi-notch+im3,ppf,irc")
     ap.add_argument("--max-harmonic", type=float, default=380.0,
                     help="internal models only below this frequency [Hz]")
     ap.add_argument("--only", default="", help="comma-separated substrings of case names")
@@ -158,7 +164,8 @@ def main(argv=None):
                 table[(c.name, opt)] = "unstable"
                 continue
             r_loop, ff = ffs[i]
-            both = loop.simulate(r_loop, feedforward=ff, seed=i)
+            both = loop.simulate(r_loop, feedforward=0 * ff if args.without_feedforward else ff,
+                                 seed=i)
             rows = _metrics(c, both.outputs, both.inputs)
             mx = [r["value"] for r in rows if r["metric"] == "max_euclidean_error_percent"]
             table[(c.name, opt)] = f"{max(mx):.3g}" if mx else "?"
