@@ -307,6 +307,7 @@ class FeedbackLoop:
     def __init__(self, plant, controller, sensor=None, amplifier=None,
                  anti_windup="back-calculation", tracking_time=None, reference_filter=True):
         self.plant, self.designed = plant, controller
+        self._rest = None
         self.reference_filter = bool(reference_filter)
         self.sensor = Sensor() if sensor is None else sensor
         self.amplifier = amplifier
@@ -412,12 +413,15 @@ class FeedbackLoop:
         -------
         hammerstein.simulation.LoopState
         """
-        plant_state = self.plant.initial_state()
-        nh = self.plant.hysteresis.n_hysterons
-        s = plant_state[:nh].copy()
-        if self._kind == 0:
-            s = pack_model(self.plant.hysteresis, s).plays(s)
-        return LoopState(s, plant_state[nh:].copy(), np.zeros(self._loop.As.shape[0]),
+        if self._rest is None:          # the plant at rest, packed once per loop
+            plant_state = self.plant.initial_state()
+            nh = self.plant.hysteresis.n_hysterons
+            s = plant_state[:nh].copy()
+            if self._kind == 0:
+                s = pack_model(self.plant.hysteresis, s).plays(s)
+            self._rest = (s, plant_state[nh:].copy())
+        s, lin = self._rest
+        return LoopState(s.copy(), lin.copy(), np.zeros(self._loop.As.shape[0]),
                          np.zeros((self.p, max(self.sensor.delay, 1))), np.zeros(1, np.int64),
                          np.zeros(self._loop.Ak.shape[0]), np.zeros(self.m))
 

@@ -81,6 +81,15 @@ thread in flight, and each returns only what the accumulator needs (the
 values while they are kept, else int16 histogram bins, the maximum and the
 diverged count); merging is order independent.
 
+Feedback
+--------
+With a ``[feedback]`` table (that of a feedback scenario, without
+``modes``; docs/feedback.md) every drawn plant runs in the loop designed on
+the nominal plant, the compensator as feedforward (computed once per
+frequency), in the compiled closed-loop kernel; the sensor noise is the
+loop's (``vary.noise`` is refused), seeded per ``(seed, case, frequency)``.
+The metrics are those of the true position.
+
 Modules
 -------
 This module draws the plants, runs the chunks and distributes them; the
@@ -110,6 +119,10 @@ from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.signals.metrics import steady_window
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
+from hammerstein.compensation.feedback import FeedbackLoop
+from hammerstein.core.lazy import lazy_module
+from hammerstein.exceptions import FeedbackError
+from hammerstein.scenario.feedback_loops import build_loops
 from hammerstein.scenario.identification import ResolveContext
 from hammerstein.scenario.registry import build_compensator
 from hammerstein.scenario.schema import ScenarioError
@@ -121,6 +134,8 @@ from hammerstein.scenario.montecarlo_spec import (DEFAULT_STUDY_SAMPLES, MAX_RUN
                                                   STUDY_SAMPLES_ENV, MonteCarloScenario,
                                                   MonteCarloStudy, is_montecarlo,
                                                   max_study_samples, validate_montecarlo)
+
+control = lazy_module("control")  # lazy: loaded when a study has a [feedback] loop
 
 __all__ = [
     "MonteCarloStudy",
@@ -405,6 +420,8 @@ def run_chunk(study, start, stop, parallel=None):
         In the units of the metrics (µm); ``inf`` for a diverged run.
         Row ``i - start`` depends only on ``(study.seed, i)``.
     """
+    if study.loop is not None:
+        return start, _loop_chunk(study, start, stop)
     F = len(study.frequencies)
     values = np.empty((stop - start, F, len(study.columns)))
     step = _batch_plants(study)
@@ -421,6 +438,42 @@ def run_chunk(study, start, stop, parallel=None):
             with np.errstate(all="ignore"):         # a diverged run: NaN outputs, inf metrics
                 values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
     return start, values
+
+
+def _loop_chunk(study, start, stop):
+    """:func:`run_chunk` with ``[feedback]``: each drawn plant in the nominal loop.
+
+    The controller, sensor and amplifier were designed on the nominal plant
+    (``study.loop``), the feedforward computed once per frequency
+    (``study.feedforward``); case i's sensor noise at frequency j is seeded
+    by ``(seed, i, j + 1)``, so a row depends only on its case.
+    """
+    values = np.empty((stop - start, len(study.frequencies), len(study.columns)))
+    for i in range(start, stop):
+        loop = FeedbackLoop(case_plant(study, i), *study.loop)
+        for j, r in enumerate(study.references):
+            res = loop.simulate(r, feedforward=study.feedforward[j], seed=[study.seed, i, j + 1])
+            with np.errstate(all="ignore"):         # a diverged run: inf metrics
+                values[i - start, j] = _frequency_metrics(study, range(i, i + 1), j,
+                                                          res.outputs[None])[0]
+    return values
+
+
+def _with_loop(study, table, source):
+    """Design the study's loop on its nominal plant and compute the feedforward per frequency."""
+    try:
+        loop, _ = build_loops(table, study.plant)
+        S = loop.closed_loop()[0]
+    except FeedbackError as exc:
+        raise ScenarioError([f"{source}: feedback: {exc}"]) from None
+    if not np.all(np.abs(control.poles(S)) < 1):
+        raise ScenarioError([f"{source}: feedback: the linearised loop on the nominal plant "
+                             f"(hysteresis at its secant gains) is unstable"])
+    # the controller with its reference filter already built (python-control once, not per plant)
+    study.loop = (loop.controller, loop.sensor, loop.amplifier, loop.anti_windup,
+                  loop.tracking_time, False)
+    study.feedforward = [np.ascontiguousarray(study.compensator.simulate(r)[0], dtype=float)
+                         for r in study.references]
 
 
 def _kernel_law(study):
@@ -687,6 +740,8 @@ def run_montecarlo_scenario(scenario):
             check = compensator_law_of(comp).check_reference
             for r in study.references if check is not None else []:
                 check(r)                # range warnings: once per frequency, not per case
+            if scenario.feedback is not None:
+                _with_loop(study, scenario.feedback, source)
         res = run_study(study, _CLIENT["client"])
         res.warnings = list(dict.fromkeys(str(w.message) for w in rec))
         results.append(res)

@@ -24,6 +24,7 @@ from hammerstein.exceptions import PresetError
 from hammerstein.io.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
 from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
                                      name_field, number, string)
+from hammerstein.scenario.feedback_table import check_feedback_table
 from hammerstein.scenario.registry import COMPENSATORS
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
 
@@ -152,6 +153,15 @@ class MonteCarloStudy:
     chunk : int or None
         Plants per chunk (the sweep's ``chunk``; None: :data:`CHUNK_CASES`
         here, :func:`auto_chunk` on dask).
+    loop : tuple or None
+        With ``[feedback]``: the arguments of
+        :class:`hammerstein.compensation.feedback.FeedbackLoop` after the
+        plant (controller with its reference filter, sensor, amplifier,
+        anti-windup, tracking time, ``reference_filter=False``), designed on
+        the nominal plant.
+    feedforward : list of numpy.ndarray or None
+        With ``[feedback]``: the compensator's voltages per frequency, shape
+        (m, n_samples_j) [V] (the same for every drawn plant).
     """
 
     name: str
@@ -167,6 +177,8 @@ class MonteCarloStudy:
     modes: tuple | None
     compensator: object = None
     chunk: int | None = None
+    loop: tuple | None = None
+    feedforward: list | None = None
 
     @property
     def columns(self):
@@ -191,6 +203,9 @@ class MonteCarloScenario:
         The ``[compensator]`` table (built once per study, on the nominal plant).
     kind : str
         ``"monte-carlo"``.
+    feedback : dict or None
+        The checked ``[feedback]`` table: every drawn plant runs in the loop
+        designed on the nominal plant, the compensator as feedforward.
     """
 
     name: str
@@ -201,6 +216,7 @@ class MonteCarloScenario:
     studies: list
     compensator_spec: dict = field(default_factory=dict)
     kind: str = "monte-carlo"
+    feedback: dict | None = None
 
     @property
     def cases(self):
@@ -254,7 +270,7 @@ def validate_montecarlo(path, data):
     own = {**{k: f for k, f in TOP.items() if k in ("name", "title", "description", "seed")},
            "kind": Field(choice("cases", "monte-carlo"))}
     top = check_table({k: v for k, v in data.items() if k not in ("plant", "compensator", "sweeps",
-                                                                 "cases")},
+                                                                 "cases", "feedback")},
                       own, "", problems, source) or {}
     if "cases" in data:
         problems.append(f"{source}: cases: a Monte-Carlo study (sweeps of kind 'monte-carlo') "
@@ -279,6 +295,7 @@ def validate_montecarlo(path, data):
     elif not COMPENSATORS[comp.get("kind", "none")].compensates:
         problems.append(f"{source}: compensator.kind: a Monte-Carlo study needs a compensator, "
                         f"found {comp.get('kind', 'none')!r}")
+    feedback = _check_feedback(data, comp, plant, source, problems)
     studies, seen = [], set()
     seed = top.get("seed", 0)
     for i, raw in enumerate(data.get("sweeps", [])):
@@ -299,6 +316,9 @@ def validate_montecarlo(path, data):
             continue
         modes = _nominal_modes(plant_t["preset"], base, list(plant.hysteresis.output_names)) \
             if plant_t.get("dynamics", True) else None
+        if "feedback" in data and "noise" in vary:
+            problems.append(f"{source}: {where}.vary.noise: with [feedback] the sensor noise is in "
+                            f"the loop; give it as feedback.sensor.noise_nm")
         for q in ("natural_frequency", "damping_ratio"):
             if q in vary and modes is None:
                 problems.append(f"{source}: {where}.vary.{q}: the nominal plant has no bending "
@@ -373,7 +393,33 @@ def validate_montecarlo(path, data):
     return MonteCarloScenario(name=top.get("name", Path(path).stem),
                               title=top.get("title", Path(path).stem),
                               description=top.get("description", ""), seed=seed, path=Path(path),
-                              studies=studies, compensator_spec=dict(comp))
+                              studies=studies, compensator_spec=dict(comp), feedback=feedback)
+
+
+def _check_feedback(data, comp, plant, source, problems):
+    """The study's ``[feedback]`` table (checked, defaults filled), or None without one."""
+    if "feedback" not in data:
+        return None
+    raw = data["feedback"]
+    where = f"{source}: feedback"
+    n0 = len(problems)
+    table = check_feedback_table(raw, where, problems)
+    if isinstance(raw, dict) and "modes" in raw:
+        problems.append(f"{where}.modes: a Monte-Carlo study runs feedforward + feedback on every "
+                        f"drawn plant; remove modes")
+    axes = raw.get("axes") if isinstance(raw, dict) else None
+    if plant is not None and isinstance(axes, dict):
+        names = list(plant.hysteresis.output_names)
+        problems += [f"{where}.axes.{n}: not an output of the plant (expected {', '.join(names)})"
+                     for n in axes if n not in names]
+        missing = [n for n in names if n not in axes]
+        if missing:
+            problems.append(f"{where}.axes: no controller for {', '.join(missing)}")
+    kind = comp.get("kind", "none") if isinstance(comp, dict) else None
+    if kind in COMPENSATORS and COMPENSATORS[kind].look_ahead:
+        problems.append(f"{where}: the feedforward of a Monte-Carlo study with feedback runs "
+                        f"without look-ahead; compensator.kind {kind!r} looks ahead")
+    return table if len(problems) == n0 else None
 
 
 # -- drawing ---------------------------------------------------------------------------------
