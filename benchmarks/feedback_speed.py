@@ -17,7 +17,15 @@ the wall time, the process CPU time (all threads) and their ratio
 closed / open, with the load average before and after: on a shared machine
 the wall time follows the load, the CPU time much less.
 
-Target: closed-loop sweeps <= 1.3x the open-loop ones.
+Part 2 (``--montecarlo N``): a Monte-Carlo study of N drawn plants
+(rakotondrabe-2dof, PI weights 15 %, cross-couplings 30 % lognormal; 5 and
+20 Hz sines of 20 µm, 15 000 samples per plant) without and with a
+``[feedback]`` loop (integral, 60 Hz crossover on both axes, 10 nm sensor
+noise), each run through :func:`hammerstein.scenario.montecarlo.run_study`
+as ``hammerstein run`` does; prints the CPU time per drawn plant both ways
+and their ratio.
+
+Target: closed-loop sweeps and studies <= 1.3x the open-loop ones.
 """
 
 from __future__ import annotations
@@ -62,7 +70,14 @@ def timed(fn):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--montecarlo", type=int, default=0, help="plants of part 2 (0: skip)")
+    ap.add_argument("--only-montecarlo", action="store_true", help="skip part 1")
     args = ap.parse_args(argv)
+    if args.only_montecarlo:
+        print(f"load before {os.getloadavg()}")
+        montecarlo(args.montecarlo or 400, args.repeat)
+        print(f"load after {os.getloadavg()}")
+        return
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "fb.toml"
         path.write_text((ROOT / "scenarios" / "realistic-feedback.toml").read_text("utf-8"),
@@ -81,7 +96,63 @@ def main(argv=None):
               f"µs CPU/sample); closed loop {wc:.2f} s wall, {cc:.2f} s CPU "
               f"({1e6 * cc / samples:.2f} µs CPU/sample); closed/open wall {wc / wo:.2f}x, "
               f"CPU {cc / co:.2f}x")
+    if args.montecarlo:
+        montecarlo(args.montecarlo, args.repeat)
     print(f"load after {os.getloadavg()}")
+
+
+STUDY = """
+name = "mcfb"
+seed = 5
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "multivariable"
+[[sweeps]]
+kind = "monte-carlo"
+name = "mm"
+cases = {cases}
+frequencies = [5.0, 20.0]
+reference = {{ kind = "sine", output = "x", amplitude = 20.0, periods = 3 }}
+settle_periods = 2
+[sweeps.vary]
+weights = {{ relative_sd = 0.15 }}
+cross_coupling = {{ relative_sd = 0.3, distribution = "lognormal" }}
+"""
+
+FEEDBACK = """
+[feedback]
+sensor = { noise_nm = 10.0, delay = 1 }
+amplifier = { range = [-100.0, 100.0] }
+[feedback.axes.x]
+kind = "integral"
+crossover_hz = 60.0
+[feedback.axes.y]
+kind = "integral"
+crossover_hz = 60.0
+"""
+
+
+def montecarlo(cases, repeat):
+    """Part 2: the same study without and with feedback, CPU time per drawn plant."""
+    from hammerstein.scenario.montecarlo import run_montecarlo_scenario
+    with tempfile.TemporaryDirectory() as tmp:
+        specs = {}
+        for label, extra in (("open", ""), ("closed", FEEDBACK)):
+            path = Path(tmp) / f"{label}.toml"
+            path.write_text(STUDY.format(cases=cases) + extra, encoding="utf-8")
+            specs[label] = path
+        for label in specs:                           # warm-up: kernels, python-control
+            run_montecarlo_scenario(validate_scenario(specs[label]))
+        for k in range(repeat):
+            cpu = {}
+            for label in specs:
+                spec = validate_scenario(specs[label])
+                w, c = timed(lambda: run_montecarlo_scenario(spec))
+                cpu[label] = c
+                print(f"study {k} {label}: {w:.2f} s wall, {c:.2f} s CPU, "
+                      f"{1e3 * c / cases:.2f} ms CPU per plant")
+            print(f"study {k}: closed/open CPU {cpu['closed'] / cpu['open']:.2f}x")
 
 
 if __name__ == "__main__":

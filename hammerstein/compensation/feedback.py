@@ -35,6 +35,7 @@ Units: positions µm, voltages V, controller gains V/µm, frequencies Hz.
 
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 from dataclasses import dataclass
@@ -324,32 +325,7 @@ class FeedbackLoop:
         if not isinstance(self.sensor.delay, int) or self.sensor.delay < 0:
             raise FeedbackError(f"sensor.delay: expected a number of samples >= 0, found "
                                 f"{self.sensor.delay!r}")
-        A, B, C, D = (np.ascontiguousarray(M, dtype=float) for M in plant.matrices)
-        if self.sensor.delay == 0 and np.any(D != 0):
-            raise FeedbackError("sensor.delay: the plant passes the hysteresis straight to the "
-                                "position (static plant or D != 0): give a delay >= 1 sample")
-        self._plant_arrays = LinearArrays(A, B, C, D)
-        if isinstance(model, MultivariablePI):
-            if getattr(model, "has_output_map", False):
-                raise FeedbackError("plant: a PI model with an output map is not supported in "
-                                    "the closed loop")
-            self._kind = 0
-            self._pi = pack_model(model).arrays
-            self._components = empty_components(m, p)
-            off = getattr(model, "output_offset", None)
-            self._y_off = np.zeros(p) if off is None else np.asarray(off, float).copy()
-        elif isinstance(model, MultivariableHysteresis):
-            try:
-                arrays = component_arrays(model)
-            except CompensatorError as exc:
-                raise FeedbackError(f"plant: {exc}") from None
-            self._kind = 1
-            self._pi = empty_pi(m, p)
-            self._components = ComponentArrays(*arrays)
-            self._y_off = np.zeros(p)
-        else:
-            raise FeedbackError(f"plant: the closed-loop kernel steps a MultivariablePI or a "
-                                f"MultivariableHysteresis, found {type(model).__name__}")
+        self._pack_plant(plant)
         if controller is not None and self.reference_filter:
             controller = with_reference_filter(controller, self.sensor.to_control(p, T))
         self.controller = c = controller
@@ -390,6 +366,70 @@ class FeedbackLoop:
                                 np.ascontiguousarray(mask, dtype=np.bool_),
                                 low, high, np.ascontiguousarray(slew, dtype=float), self._y_off,
                                 int(self.sensor.delay), aw)
+
+
+    def _pack_plant(self, plant):
+        """The plant's kernel arrays (linear part, hysteresis), its output offset."""
+        model = plant.hysteresis
+        m, p = model.n_inputs, model.n_outputs
+        A, B, C, D = (np.ascontiguousarray(M, dtype=float) for M in plant.matrices)
+        if self.sensor.delay == 0 and np.any(D != 0):
+            raise FeedbackError("sensor.delay: the plant passes the hysteresis straight to the "
+                                "position (static plant or D != 0): give a delay >= 1 sample")
+        self._plant_arrays = LinearArrays(A, B, C, D)
+        if isinstance(model, MultivariablePI):
+            if getattr(model, "has_output_map", False):
+                raise FeedbackError("plant: a PI model with an output map is not supported in "
+                                    "the closed loop")
+            self._kind = 0
+            self._pi = pack_model(model).arrays
+            self._components = empty_components(m, p)
+            off = getattr(model, "output_offset", None)
+            self._y_off = np.zeros(p) if off is None else np.asarray(off, float).copy()
+        elif isinstance(model, MultivariableHysteresis):
+            try:
+                arrays = component_arrays(model)
+            except CompensatorError as exc:
+                raise FeedbackError(f"plant: {exc}") from None
+            self._kind = 1
+            self._pi = empty_pi(m, p)
+            self._components = ComponentArrays(*arrays)
+            self._y_off = np.zeros(p)
+        else:
+            raise FeedbackError(f"plant: the closed-loop kernel steps a MultivariablePI or a "
+                                f"MultivariableHysteresis, found {type(model).__name__}")
+
+    def with_plant(self, plant):
+        """The same loop (controller, sensor, amplifier, anti-windup) around another plant.
+
+        Cheaper than a new :class:`FeedbackLoop` (nothing of the controller
+        is rebuilt): for the drawn plants of a Monte-Carlo study.
+
+        Parameters
+        ----------
+        plant : HammersteinPlant
+            Same inputs, outputs and sampling period as this loop's plant.
+
+        Returns
+        -------
+        FeedbackLoop
+
+        Raises
+        ------
+        FeedbackError
+            When the plant's shape or sampling period differs.
+        """
+        model = plant.hysteresis
+        if (model.n_inputs, model.n_outputs) != (self.m, self.p) or \
+                not np.isclose(plant.sampling_period, self.plant.sampling_period):
+            raise FeedbackError(f"plant: expected {self.m} inputs, {self.p} outputs at "
+                                f"{self.plant.sampling_period} s, found {model.n_inputs}, "
+                                f"{model.n_outputs} at {plant.sampling_period} s")
+        new = copy.copy(self)
+        new.plant, new._rest = plant, None
+        new._pack_plant(plant)
+        new._loop = self._loop._replace(y_off=new._y_off)
+        return new
 
     def __repr__(self):
         """The plant's name and the controller's lines."""

@@ -119,7 +119,7 @@ from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.signals.metrics import steady_window
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
-from hammerstein.compensation.feedback import FeedbackLoop
+from hammerstein.compensation.feedback import Controller, FeedbackLoop
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import FeedbackError
 from hammerstein.scenario.feedback_loops import build_loops
@@ -449,8 +449,9 @@ def _loop_chunk(study, start, stop):
     by ``(seed, i, j + 1)``, so a row depends only on its case.
     """
     values = np.empty((stop - start, len(study.frequencies), len(study.columns)))
+    nominal = FeedbackLoop(study.plant, *study.loop)
     for i in range(start, stop):
-        loop = FeedbackLoop(case_plant(study, i), *study.loop)
+        loop = nominal.with_plant(case_plant(study, i))
         for j, r in enumerate(study.references):
             res = loop.simulate(r, feedforward=study.feedforward[j], seed=[study.seed, i, j + 1])
             with np.errstate(all="ignore"):         # a diverged run: inf metrics
@@ -469,9 +470,13 @@ def _with_loop(study, table, source):
     if not np.all(np.abs(control.poles(S)) < 1):
         raise ScenarioError([f"{source}: feedback: the linearised loop on the nominal plant "
                              f"(hysteresis at its secant gains) is unstable"])
-    # the controller with its reference filter already built (python-control once, not per plant)
-    study.loop = (loop.controller, loop.sensor, loop.amplifier, loop.anti_windup,
-                  loop.tracking_time, False)
+    # the controller with its reference filter already built (python-control once, not per
+    # plant), its matrices only: the study is pickled to dask workers
+    c = loop.controller
+    kernel = Controller(c.A, c.B, c.C, c.D, c.sampling_period, c.integrators,
+                        list(c.descriptions), None, None)
+    study.loop = (kernel, loop.sensor, loop.amplifier, loop.anti_windup, loop.tracking_time,
+                  False)
     study.feedforward = [np.ascontiguousarray(study.compensator.simulate(r)[0], dtype=float)
                          for r in study.references]
 

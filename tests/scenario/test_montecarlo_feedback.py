@@ -6,7 +6,9 @@ import numpy as np
 import pytest
 
 from hammerstein.compensation.feedback import FeedbackLoop
-from hammerstein.exceptions import ScenarioError
+from hammerstein.exceptions import FeedbackError, ScenarioError
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.models.plant import HammersteinPlant
 from hammerstein.scenario.feedback_loops import build_loops
 from hammerstein.scenario import montecarlo as mc
 from hammerstein.scenario.validate import validate_scenario
@@ -103,3 +105,29 @@ def test_problems_are_listed_together(tmp_path):
     text = str(exc.value)
     for key in ("vary.noise", "feedback.modes", "no controller for y", "feedback.sensor.delay"):
         assert key in text, key
+
+
+def test_with_plant_is_a_new_loop_on_that_plant(results):
+    """FeedbackLoop.with_plant gives the loop built afresh on the other plant, sample for sample."""
+    _, _, study = results
+    nominal = FeedbackLoop(study.plant, *study.loop)
+    other = mc.case_plant(study, 2)
+    r, u = study.references[1], study.feedforward[1]
+    a = nominal.with_plant(other).simulate(r, feedforward=u, seed=7)
+    b = FeedbackLoop(other, *study.loop).simulate(r, feedforward=u, seed=7)
+    np.testing.assert_array_equal(a.outputs, b.outputs)
+    np.testing.assert_array_equal(a.inputs, b.inputs)
+    c = nominal.simulate(r, feedforward=u, seed=7)
+    assert not np.array_equal(a.outputs, c.outputs)      # the drawn plant differs
+
+
+def test_with_plant_refuses_another_shape(results):
+    _, _, study = results
+    nominal = FeedbackLoop(study.plant, *study.loop)
+    with pytest.raises(FeedbackError, match="plant: expected 2 inputs"):
+        nominal.with_plant(_one_axis_plant())
+
+
+def _one_axis_plant():
+    pi = PrandtlIshlinskii([0.0, 1.0], [1.0, 0.2])
+    return HammersteinPlant(MultivariablePI([[pi]]), 1e-4, None)
