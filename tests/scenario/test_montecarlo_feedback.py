@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -131,3 +133,18 @@ def test_with_plant_refuses_another_shape(results):
 def _one_axis_plant():
     pi = PrandtlIshlinskii([0.0, 1.0], [1.0, 0.2])
     return HammersteinPlant(MultivariablePI([[pi]]), 1e-4, None)
+
+
+def test_the_study_travels_to_workers(results):
+    """Pickled (as dask sends it to worker processes) the study gives the same rows; an
+    in-process dask cluster the same quantiles."""
+    _, closed, study = results
+    again = pickle.loads(pickle.dumps(study))
+    np.testing.assert_array_equal(mc.run_chunk(again, 1, 3)[1], mc.run_chunk(study, 1, 3)[1])
+    distributed = pytest.importorskip(
+        "distributed", reason="dask.distributed (extra [distributed]) is not installed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=":0") as cluster, \
+            distributed.Client(cluster) as client:
+        remote = mc.run_study(study, client=client, chunk=2)
+    np.testing.assert_array_equal(remote.quantiles, closed.quantiles)
