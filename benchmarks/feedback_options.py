@@ -20,8 +20,10 @@ re-measured. Options:
 * ``BASE+imN``: BASE with internal-model (resonant) elements at the
   reference's harmonics 1..N below ``--max-harmonic``, each ``k_h w_h (s cos phi_h + w_h sin phi_h) / (s^2 + w_h^2)`` in
   series with the PI (phase lead ``phi_h = -arg T(j w_h)`` so the loop
-  stays stable, gain ``k_h`` so that the harmonic decays in about one period;
-  pre-warped so that Tustin puts the pole on the harmonic exactly);
+  stays stable, gain ``k_h`` so that each harmonic's error decays to e^-3
+  in ``--decay`` periods of the fundamental; pre-warped so that Tustin puts
+  the pole on the harmonic exactly:
+  :func:`hammerstein.compensation.feedback.with_internal_model`);
 * ``--no-noise``: the same without sensor noise (what the noise costs);
 * ``--without-feedforward``: the loop alone (what the feedforward adds);
 * ``--max-harmonic``: internal models only below this frequency;
@@ -45,8 +47,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import control  # noqa: E402
 
-from hammerstein.compensation.feedback import (AxisDesign, FeedbackLoop,  # noqa: E402
-                                               diagonal_controller)
+from hammerstein.compensation.feedback import (FeedbackLoop, design_axis,  # noqa: E402
+                                               diagonal_controller, linearised_plant,
+                                               with_internal_model)
 from hammerstein.compensation.hammerstein_compensator import fade_in  # noqa: E402
 from hammerstein.scenario.execute import fade_samples  # noqa: E402
 from hammerstein.scenario.feedback import _feedforward, _metrics, build_loops  # noqa: E402
@@ -62,44 +65,6 @@ def scenario_text(noise_nm):
     text = text.replace('preset-model = { kind = "hammerstein", model = "plant", dynamics = '
                         '"plant", creep = "plant" }\n', "")
     return text.replace("noise_nm = 40.0", f"noise_nm = {noise_nm}")
-
-
-def with_internal_model(design, loop_axis, T, harmonics_hz, decay_periods=1.0, zeta=0.0):
-    """``design`` with resonant elements at the given frequencies in series (on the error)."""
-    A0, B0, C0, D0 = (np.atleast_2d(np.asarray(M, float)) for M in
-                      (design.system.A, design.system.B, design.system.C, design.system.D))
-    blocks = []
-    for f in harmonics_hz:
-        w = 2 * np.pi * f
-        z = np.exp(1j * w * T)
-        L = complex(loop_axis(z))
-        Tc = L / (1 + L)
-        phi = -np.angle(Tc)
-        # the harmonic's error decays as exp(-k |T| w t / 2): about e^-3 after decay_periods
-        k = 3.0 / (abs(Tc) * np.pi * decay_periods)
-        wd = 2 / T * np.tan(w * T / 2)            # pre-warped for Tustin
-        Ar = np.array([[0.0, 1.0], [-wd * wd, -2 * zeta * wd]])
-        Br = np.array([[0.0], [1.0]])
-        Cr = np.array([[k * wd * wd * np.sin(phi), k * wd * np.cos(phi)]])
-        blocks.append((Ar, Br, Cr))
-    if not blocks:
-        return design
-    nr = 2 * len(blocks)
-    Ar = np.zeros((nr, nr))
-    Br = np.zeros((nr, 1))
-    Cr = np.zeros((1, nr))
-    for i, (a, b, c) in enumerate(blocks):
-        Ar[2 * i:2 * i + 2, 2 * i:2 * i + 2] = a
-        Br[2 * i:2 * i + 2] = b
-        Cr[:, 2 * i:2 * i + 2] = c
-    n0 = A0.shape[0]
-    # w = e + Cr x_r feeds the PI + notch
-    A = np.block([[Ar, np.zeros((nr, n0))], [B0 @ Cr, A0]])
-    B = np.vstack([Br, B0])
-    C = np.hstack([D0 @ Cr, C0])
-    sys_ = control.ss(A, B, C, D0)
-    return AxisDesign(sys_, np.concatenate([np.zeros(nr, bool), design.integrators]),
-                      design.description + f" + internal model at {list(harmonics_hz)} Hz")
 
 
 def main(argv=None):
@@ -124,7 +89,6 @@ def main(argv=None):
     plant = cases[0].plant
     T = plant.sampling_period
     base, _ = build_loops(spec.table, plant)
-    from hammerstein.compensation.feedback import design_axis, linearised_plant
     g = np.real(np.atleast_2d(linearised_plant(plant)(1.0)))
     ffs = []
     for c in cases:

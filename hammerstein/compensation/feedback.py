@@ -53,14 +53,15 @@ from hammerstein.simulation import (AW_BACK, AW_CLAMP, AW_NONE, ComponentArrays,
 from hammerstein.compensation.feedback_design import (AXIS_KINDS, METHODS, AxisDesign, Controller,
                                                       _pos, controller_from_lti, design_axis,
                                                       diagonal_controller, discretise,
-                                                      mixsyn_controller, with_reference_filter)
+                                                      mixsyn_controller, with_internal_model,
+                                                      with_reference_filter)
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
 __all__ = ["AXIS_KINDS", "METHODS", "ANTI_WINDUP", "Controller", "Sensor", "AmplifierLimits",
            "FeedbackLoop", "LoopResult", "design_axis", "discretise", "hysteresis_slopes",
            "linearised_plant", "controller_from_lti", "diagonal_controller", "mixsyn_controller",
-           "with_reference_filter", "AxisDesign"]
+           "with_reference_filter", "AxisDesign", "with_internal_model"]
 
 #: anti-windup schemes
 ANTI_WINDUP = ("back-calculation", "clamping", "none")

@@ -29,7 +29,7 @@ scipy_linalg = lazy_module("scipy.linalg")
 
 __all__ = ["AXIS_KINDS", "METHODS", "AxisDesign", "Controller", "design_axis", "discretise",
            "controller_from_lti", "diagonal_controller", "mixsyn_controller",
-           "with_reference_filter"]
+           "with_reference_filter", "with_internal_model"]
 
 #: controllers designed by name, per axis
 AXIS_KINDS = ("integral", "pi", "pi-notch", "ppf", "irc")
@@ -533,3 +533,92 @@ def mixsyn_controller(plant_linear, sampling_period, bandwidth_hz, max_sensitivi
     return controller_from_lti(K, sampling_period, method,
                                description=f"mixsyn, bandwidth {bandwidth_hz:g} Hz, "
                                            f"M = {max_sensitivity:g}, effort {effort:g}")
+
+
+def with_internal_model(design, loop_response, sampling_period, frequencies_hz,
+                        decay_periods=2.0):
+    """A design with internal-model (resonant) elements at given frequencies, in series.
+
+    The internal model principle (Francis and Wonham, Automatica 12(5),
+    1976): a loop whose controller holds a model of a periodic signal's
+    generator (poles at ``±j w_h``) rejects that signal in steady state,
+    ``|S(j w_h)| = 0``. Each element is the phase-compensated resonator
+    ``R_h(s) = k_h w_h (s cos phi_h + w_h sin phi_h) / (s^2 + w_h^2)``,
+    applied to the error before the design (``K' = K (1 + sum_h R_h)``).
+    Closing it around the loop ``L = K S P`` factors the characteristic
+    equation as ``(1 + L)(1 + T sum_h R_h)``, ``T = L / (1 + L)``; for each
+    harmonic the phase lead ``phi_h = -arg T(j w_h)`` makes ``T R_h`` a
+    positive gain near ``w_h``, and the error at ``w_h`` decays as
+    ``exp(-k_h |T(j w_h)| w_h t / 2)``: ``k_h = 3 f_1 / (pi |T| f_h
+    decay_periods)`` makes it ``e^-3`` after ``decay_periods`` periods of the
+    first frequency given, ``f_1``. ``w_h`` is pre-warped,
+    ``(2/T) tan(w_h T / 2)``, so that Tustin puts the poles exactly on the
+    unit circle at ``w_h``. Discretise with ``method = "tustin"``.
+
+    Parameters
+    ----------
+    design : AxisDesign
+        One-input (error) design.
+    loop_response : callable
+        ``z -> L(z)``: the axis' discrete loop without the internal models
+        (:meth:`hammerstein.compensation.feedback.FeedbackLoop.loop_transfer`),
+        for the phase leads and gains.
+    sampling_period : float
+        T [s].
+    frequencies_hz : sequence of float
+        The frequencies to reject [Hz] (a periodic reference's fundamental
+        and harmonics), each below the Nyquist frequency.
+    decay_periods : float
+        Periods of the first frequency for each element's error to decay to e^-3.
+
+    Returns
+    -------
+    AxisDesign
+        States: two per element, then the design's (the elements' are no
+        integrators for the anti-windup).
+
+    Raises
+    ------
+    FeedbackError
+        For a frequency at or above Nyquist, a non-positive decay, a
+        three-input design, or a loop with ``T(j w_h) = 0``.
+    """
+    T = float(sampling_period)
+    if design.system.ninputs != 1:
+        raise FeedbackError("internal_model_hz: needs a design on the error (one input)")
+    decay = _pos(decay_periods, "internal_model_decay", "periods")
+    freqs = [_pos(f, "internal_model_hz", "Hz") for f in frequencies_hz]
+    if not freqs:
+        return design
+    for f in freqs:
+        if f >= 0.5 / T:
+            raise FeedbackError(f"internal_model_hz: {f:g} Hz is not below the Nyquist "
+                                f"frequency {0.5 / T:g} Hz")
+    f1 = freqs[0]
+    n0 = design.system.nstates
+    A0, B0, C0, D0 = (np.atleast_2d(np.asarray(M, float)).reshape(shape) for M, shape in
+                      ((design.system.A, (n0, n0)), (design.system.B, (n0, 1)),
+                       (design.system.C, (1, n0)), (design.system.D, (1, 1))))
+    nr = 2 * len(freqs)
+    Ar, Br, Cr = np.zeros((nr, nr)), np.zeros((nr, 1)), np.zeros((1, nr))
+    for i, f in enumerate(freqs):
+        w = 2 * np.pi * f
+        L = complex(loop_response(np.exp(1j * w * T)))
+        Tc = L / (1 + L)
+        if abs(Tc) == 0:
+            raise FeedbackError(f"internal_model_hz: the loop does not pass {f:g} Hz (T = 0)")
+        phi = -np.angle(Tc)
+        k = 3.0 / (abs(Tc) * np.pi * decay) * (f1 / f)   # e^-3 after decay periods of f1
+        wd = 2 / T * np.tan(w * T / 2)
+        j = 2 * i
+        Ar[j:j + 2, j:j + 2] = [[0.0, 1.0], [-wd * wd, 0.0]]
+        Br[j + 1, 0] = 1.0
+        Cr[0, j:j + 2] = [k * wd * wd * np.sin(phi), k * wd * np.cos(phi)]
+    # w = e + Cr x_r feeds the design
+    A = np.block([[Ar, np.zeros((nr, n0))], [B0 @ Cr, A0]])
+    B = np.vstack([Br, B0])
+    C = np.hstack([D0 @ Cr, C0])
+    text = design.description + ", internal model at " + ", ".join(f"{f:g}" for f in freqs) + " Hz"
+    return AxisDesign(control.ss(A, B, C, D0), np.concatenate([np.zeros(nr, bool),
+                                                              np.asarray(design.integrators, bool)]),
+                      text)

@@ -17,7 +17,7 @@ import numpy as np
 from hammerstein.core.lazy import lazy_module
 from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
                                        design_axis, diagonal_controller, linearised_plant,
-                                       mixsyn_controller)
+                                       mixsyn_controller, with_internal_model)
 from hammerstein.exceptions import FeedbackError
 
 control = lazy_module("control")  # lazy: loaded when a loop is built
@@ -54,6 +54,14 @@ def build_controller(table, plant):
     ------
     FeedbackError
         When a design or the discretisation fails (e.g. ``mixsyn`` without slycot).
+
+    Notes
+    -----
+    An axis designed by name with ``internal_model_hz`` gets resonant
+    elements at those frequencies
+    (:func:`hammerstein.compensation.feedback.with_internal_model`), their
+    phase leads and gains computed on the loop without them, with the
+    table's (or the preset's) sensor.
     """
     T = plant.sampling_period
     method = table.get("method", "tustin")
@@ -66,18 +74,32 @@ def build_controller(table, plant):
             return mixsyn_controller(P, T, t["bandwidth_hz"], t.get("max_sensitivity", 2.0),
                                      t.get("effort", 0.1), method)
         return controller_from_lti(_lti(t, T), T, method, description="state space (MIMO)")
-    designs = []
+    designs, models = [], {}
     for l, name in enumerate(names):
         t = dict(table["axes"][name])
         kind = t.pop("kind")
         if kind in ("transfer-function", "state-space"):
             designs.append(_lti(t | {"kind": kind}, T))
             continue
+        if "internal_model_hz" in t:
+            models[l] = (t.pop("internal_model_hz"), t.pop("internal_model_decay", 2.0))
         gain = t.pop("gain", float(dc[l, l]))
         try:
             designs.append(design_axis(kind, gain, **t))
         except TypeError as exc:  # an option another kind takes
             raise FeedbackError(f"axes.{name}: {exc}") from None
+    if not models:
+        return diagonal_controller(designs, T, method)
+    # internal models: phase leads and gains from the loop without them (its sensor included)
+    s = hardware_sensor(table, plant)
+    L = FeedbackLoop(plant, diagonal_controller(designs, T, method),
+                     Sensor(0.0, s.get("bandwidth_hz"), s.get("delay", 0))).loop_transfer()
+    for l, (freqs, decay) in models.items():
+        try:
+            designs[l] = with_internal_model(designs[l], lambda z, l=l: L(z)[l, l], T, freqs,
+                                             decay)
+        except FeedbackError as exc:
+            raise FeedbackError(f"axes.{names[l]}.{exc}") from None
     return diagonal_controller(designs, T, method)
 
 

@@ -124,7 +124,15 @@ def _check_axis(t, where, problems):
         return
     kind = t.get("kind")
     if kind in AXIS_KINDS:
-        allowed = {"kind"} | set(_AXIS_NUMBERS) | ({"irc_reference"} if kind == "irc" else set())
+        allowed = {"kind", "internal_model_hz", "internal_model_decay"} | set(_AXIS_NUMBERS) | \
+            ({"irc_reference"} if kind == "irc" else set())
+        im = t.get("internal_model_hz", [1.0])
+        if not (_vector(im) and all(f > 0 for f in im)):
+            problems.append(f"{where}.internal_model_hz: expected a list of positive frequencies "
+                            f"[Hz] (the reference's fundamental and harmonics), found {im!r}")
+        if "internal_model_decay" in t and not _positive(t["internal_model_decay"]):
+            problems.append(f"{where}.internal_model_decay: expected a positive number of "
+                            f"periods, found {t['internal_model_decay']!r}")
         if t.get("irc_reference", "error") not in ("error", "static"):
             problems.append(f"{where}.irc_reference: expected \"error\" or \"static\", found "
                             f"{t['irc_reference']!r}")
