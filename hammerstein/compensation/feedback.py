@@ -30,6 +30,10 @@ The designs, the discretisation and the kernel's :class:`Controller` are in
 :mod:`hammerstein.compensation.feedback_design` (re-exported here); this
 module holds the sensor, the amplifier and the loop.
 
+Length: one concept, the loop: its simulation, its linearisation (S, T,
+margins, noise) and its stability check all read the same packed plant,
+controller, sensor and amplifier of :class:`FeedbackLoop`.
+
 Units: positions µm, voltages V, controller gains V/µm, frequencies Hz.
 """
 
