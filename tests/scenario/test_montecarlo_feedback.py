@@ -148,3 +148,13 @@ def test_the_study_travels_to_workers(results):
             distributed.Client(cluster) as client:
         remote = mc.run_study(study, client=client, chunk=2)
     np.testing.assert_array_equal(remote.quantiles, closed.quantiles)
+
+
+def test_the_report_describes_the_loop(tmp_path):
+    from hammerstein.runner import run_scenario
+    path = tmp_path / "mcfb.toml"
+    path.write_text(STUDY.replace("cases = 6", "cases = 3") + FEEDBACK, encoding="utf-8")
+    out = run_scenario(path, tmp_path / "out")
+    assert out.ok, out.error
+    text = (tmp_path / "out" / "mcfb" / "report.md").read_text(encoding="utf-8")
+    assert "runs in closed loop" in text and "crossover 60 Hz" in text and "10 nm RMS" in text
