@@ -6,6 +6,14 @@ and weights (or pure gains). A *preset* is a model file with a ``[preset]``
 table (name, sampling period) and a ``[dynamics]`` table: a complete
 simulated actuator. Identified models are saved in the same format, so the
 compensator and the scenarios accept both. The schema is in the README.
+A preset may also describe the hardware around the actuator: the amplifier
+(``[amplifier]``, :mod:`hammerstein.models.amplifier`) and the position
+sensor (``[sensor]``, :mod:`hammerstein.io.sensor`), both checked when the
+plant is loaded, every problem of the two reported at once.
+
+Length: one concept, the model and preset file formats (read, check, write,
+for the model, the dynamics, the creep and the hardware tables); the tables'
+own equations live in the modules they name.
 """
 
 from __future__ import annotations
@@ -31,6 +39,7 @@ from hammerstein.models.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.exceptions import AmplifierError, PresetError
+from hammerstein.io.sensor import sensor_from_table
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 
@@ -57,7 +66,7 @@ PRESET_DIR = resources.files("hammerstein") / "presets"
 
 #: Keys of a model or preset file, per table (anything else is reported with the closest key;
 #: the ``[model]`` keys are :data:`MODEL_KEYS`, ``kind = "state_space"`` dynamics A, B, C, D).
-FILE_KEYS = ("model", "preset", "dynamics", "identification", "creep", "amplifier")
+FILE_KEYS = ("model", "preset", "dynamics", "identification", "creep", "amplifier", "sensor")
 
 
 def _any(v):
@@ -753,10 +762,15 @@ def load_plant(preset, dynamics=True, base_dir=None):
     Returns
     -------
     HammersteinPlant
+        With ``amplifier`` (:class:`hammerstein.models.amplifier.Amplifier`
+        or None) and ``sensor`` (the checked ``[sensor]`` table, a dict, or
+        None) from the preset's hardware tables.
 
     Raises
     ------
     PresetError
+        A problem of the file; the ``[amplifier]`` and ``[sensor]`` tables'
+        problems are listed together, each naming its key.
     """
     path = resolve_preset(preset, base_dir)
     data = read_toml(path, "preset file")
@@ -786,10 +800,17 @@ def load_plant(preset, dynamics=True, base_dir=None):
     name = meta.get("name", path.stem)
     creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
     plant = HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
-    try:                               # the amplifier: hammerstein.models.amplifier
+    problems = []                      # the hardware: amplifier and sensor, reported together
+    try:                               # hammerstein.models.amplifier
         plant.amplifier = amplifier_from_table(data.get("amplifier"), model.input_names, str(path))
     except AmplifierError as exc:
-        raise PresetError(str(exc)) from None
+        problems.append(str(exc))
+    try:                               # hammerstein.io.sensor
+        plant.sensor = sensor_from_table(data.get("sensor"), str(path))
+    except PresetError as exc:
+        problems.append(str(exc))
+    if problems:
+        raise PresetError("; ".join(problems))
     return plant
 
 

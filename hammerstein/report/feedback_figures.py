@@ -188,8 +188,8 @@ def write_feedback_report(scenario, results, directory, jobs):
                        "time series")
     a = scenario.analysis
     t = scenario.table
-    s = t.get("sensor", {})
-    amp = t.get("amplifier", {})
+    s = a.get("sensor", t.get("sensor", {}))          # the preset's hardware with the table's keys
+    amp = a.get("amplifier", t.get("amplifier", {}))
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description, ""]

@@ -117,6 +117,17 @@ def write_montecarlo_report(scenario, results, directory, jobs):
     lines += [f"Monte-Carlo robustness study: the compensator `{scenario.compensator_spec}` is "
               f"built once from the nominal model and run against plants drawn around it "
               f"(seed {scenario.seed}; case i depends only on the seed and i).", ""]
+    loop = results[0].study.loop if results and getattr(scenario, "feedback", None) else None
+    if loop is not None:                 # [feedback]: hammerstein.scenario.montecarlo
+        ctrl, sensor, amp = loop[0], loop[1], loop[2]
+        lines += ["Every drawn plant runs in closed loop, the compensator as feedforward; the "
+                  "loop is designed on the nominal plant: "
+                  + "; ".join(ctrl.descriptions) + f". Sensor: {1e3 * sensor.noise_rms:g} nm RMS, "
+                  + (f"{sensor.bandwidth_hz:g} Hz low-pass" if sensor.bandwidth_hz else
+                     "no low-pass") + f", delay {sensor.delay} samples; amplifier: "
+                  + ("no limits" if amp is None else
+                     f"range {np.min(amp.low):g} to {np.max(amp.high):g} V") + "; anti-windup "
+                  f"{loop[3]}. Errors are those of the true position.", ""]
     for res in results:
         s = res.study
         table = quantile_table(res)

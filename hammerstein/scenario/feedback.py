@@ -23,12 +23,11 @@ import numpy as np
 
 from hammerstein.core.lazy import lazy_module
 from hammerstein.signals import metrics as met
-from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Sensor, controller_from_lti,
-                                       design_axis, diagonal_controller, linearised_plant,
-                                       mixsyn_controller)
 from hammerstein.compensation.hammerstein_compensator import fade_in
 from hammerstein.exceptions import CompensatorDivergence, FeedbackError, ScenarioError
 from hammerstein.scenario.execute import fade_samples, signal_kind
+from hammerstein.scenario.feedback_loops import (build_controller, build_loops, hardware_amplifier,
+                                                 hardware_sensor)
 from hammerstein.scenario.feedback_table import MODES, FeedbackScenario
 from hammerstein.scenario.registry import compensator_kind
 from hammerstein.scenario.resolve import resolve_scenario
@@ -36,7 +35,7 @@ from hammerstein.scenario.resolve import resolve_scenario
 control = lazy_module("control")  # lazy: loaded when a feedback scenario runs
 
 __all__ = ["FeedbackCaseResult", "build_controller", "build_loops", "run_feedback_scenario",
-           "loop_analysis", "MODE_LABELS"]
+           "loop_analysis", "MODE_LABELS", "hardware_sensor", "hardware_amplifier"]
 
 #: how the report names the modes
 MODE_LABELS = {"feedforward": "feedforward alone", "feedback": "feedback alone",
@@ -75,88 +74,6 @@ class FeedbackCaseResult:
     seconds: float = 0.0
 
 
-def _lti(t, T):
-    dt = T if t.get("discrete", False) else 0
-    if t["kind"] == "transfer-function":
-        return control.tf(t["num"], t["den"], dt)
-    D = np.atleast_2d(np.asarray(t["D"], float))
-    A = np.array(t.get("A", []), float)
-    n = A.shape[0] if A.size else 0
-    B = np.asarray(t["B"], float).reshape(n, D.shape[1]) if n else np.zeros((0, D.shape[1]))
-    C = np.asarray(t["C"], float).reshape(D.shape[0], n) if n else np.zeros((D.shape[0], 0))
-    return control.ss(A if n else np.zeros((0, 0)), B, C, D, dt)
-
-
-def build_controller(table, plant):
-    """The discrete controller of a validated ``[feedback]`` table for a plant.
-
-    Parameters
-    ----------
-    table : dict
-        Validated (:func:`hammerstein.scenario.feedback_table.check_feedback_table`).
-    plant : HammersteinPlant
-
-    Returns
-    -------
-    hammerstein.compensation.feedback.Controller
-
-    Raises
-    ------
-    FeedbackError
-        When a design or the discretisation fails (e.g. ``mixsyn`` without slycot).
-    """
-    T = plant.sampling_period
-    method = table.get("method", "tustin")
-    names = list(plant.hysteresis.output_names)
-    P = linearised_plant(plant)
-    dc = np.real(np.atleast_2d(P(1.0)))
-    if table.get("mimo") is not None:
-        t = table["mimo"]
-        if t["kind"] == "mixsyn":
-            return mixsyn_controller(P, T, t["bandwidth_hz"], t.get("max_sensitivity", 2.0),
-                                     t.get("effort", 0.1), method)
-        return controller_from_lti(_lti(t, T), T, method, description="state space (MIMO)")
-    designs = []
-    for l, name in enumerate(names):
-        t = dict(table["axes"][name])
-        kind = t.pop("kind")
-        if kind in ("transfer-function", "state-space"):
-            designs.append(_lti(t | {"kind": kind}, T))
-            continue
-        gain = t.pop("gain", float(dc[l, l]))
-        try:
-            designs.append(design_axis(kind, gain, **t))
-        except TypeError as exc:  # an option another kind takes
-            raise FeedbackError(f"axes.{name}: {exc}") from None
-    return diagonal_controller(designs, T, method)
-
-
-def build_loops(table, plant):
-    """The closed loop and the feedforward-alone loop (no controller) of a table.
-
-    Parameters
-    ----------
-    table : dict
-        Validated ``[feedback]`` table.
-    plant : HammersteinPlant
-
-    Returns
-    -------
-    (FeedbackLoop, FeedbackLoop)
-        With the controller; without (the same amplifier, no sensor in the loop).
-    """
-    s = table.get("sensor", {})
-    sensor = Sensor(s.get("noise_nm", 0.0) * 1e-3, s.get("bandwidth_hz"), s.get("delay", 0))
-    a = table.get("amplifier", {})
-    rng = a.get("range")
-    amp = None if rng is None and "slew_rate" not in a else AmplifierLimits(
-        rng[0] if rng else -np.inf, rng[1] if rng else np.inf, a.get("slew_rate", np.inf))
-    ctrl = build_controller(table, plant)
-    aw, tt = table.get("anti_windup", "back-calculation"), table.get("tracking_time")
-    return (FeedbackLoop(plant, ctrl, sensor, amp, aw, tt),
-            FeedbackLoop(plant, None, Sensor(0.0, None, max(sensor.delay, 1)), amp, "none"))
-
-
 def loop_analysis(loop, n_frequencies=400):
     """What the report says about a loop: designs, margins, stability, S, T, noise.
 
@@ -190,6 +107,17 @@ def loop_analysis(loop, n_frequencies=400):
             "linear_stable": bool(np.all(np.abs(control.poles(S)) < 1)),
             "noise_nm": (loop.noise_to_position() * 1e3).tolist(), "frequency_hz": f,
             "outputs": list(loop.plant.hysteresis.output_names), **mags}
+
+
+def _limits(*values):
+    """Amplifier limits for the report: a scalar (or [low, high]) when every input agrees."""
+    arrs = [np.atleast_1d(np.asarray(v, float)) for v in values]
+    if all(np.all(a == a[0]) for a in arrs):
+        out = [float(a[0]) for a in arrs]
+    else:
+        out = [a.tolist() for a in arrs]
+    out = ["unlimited" if isinstance(v, float) and not np.isfinite(v) else v for v in out]
+    return out if len(out) > 1 else out[0]
 
 
 def _feedforward(case, r_loop, fade):
@@ -283,6 +211,11 @@ def run_feedback_scenario(scenario: FeedbackScenario, jobs=2):
                 raise ScenarioError([f"{where}: {exc}"]) from None
     first = loops[id(cases[0].plant)][0]
     analysis = loop_analysis(first)
+    plant0 = cases[0].plant
+    analysis["sensor"] = hardware_sensor(scenario.table, plant0)
+    amp = first.amplifier
+    analysis["amplifier"] = {} if amp is None else {
+        "range": _limits(amp.low, amp.high), "slew_rate": _limits(amp.slew_rate)}
     scenario.analysis = analysis
     if not analysis["linear_stable"]:
         raise ScenarioError([f"{where}: the linearised loop (hysteresis at its secant gains) is "

@@ -31,6 +31,7 @@ from typing import Any, Callable
 
 from hammerstein.compensation.feedback import ANTI_WINDUP, AXIS_KINDS, METHODS
 from hammerstein.exceptions import ScenarioError
+from hammerstein.io.sensor import check_sensor_table
 
 __all__ = ["FeedbackScenario", "validate_feedback", "MODES", "LTI_KINDS", "MIMO_KINDS"]
 
@@ -123,7 +124,15 @@ def _check_axis(t, where, problems):
         return
     kind = t.get("kind")
     if kind in AXIS_KINDS:
-        allowed = {"kind"} | set(_AXIS_NUMBERS) | ({"irc_reference"} if kind == "irc" else set())
+        allowed = {"kind", "internal_model_hz", "internal_model_decay"} | set(_AXIS_NUMBERS) | \
+            ({"irc_reference"} if kind == "irc" else set())
+        im = t.get("internal_model_hz", [1.0])
+        if not (_vector(im) and all(f > 0 for f in im)):
+            problems.append(f"{where}.internal_model_hz: expected a list of positive frequencies "
+                            f"[Hz] (the reference's fundamental and harmonics), found {im!r}")
+        if "internal_model_decay" in t and not _positive(t["internal_model_decay"]):
+            problems.append(f"{where}.internal_model_decay: expected a positive number of "
+                            f"periods, found {t['internal_model_decay']!r}")
         if t.get("irc_reference", "error") not in ("error", "static"):
             problems.append(f"{where}.irc_reference: expected \"error\" or \"static\", found "
                             f"{t['irc_reference']!r}")
@@ -209,25 +218,7 @@ def check_feedback_table(table, where, problems):
     modes = out["modes"]
     if not (isinstance(modes, list) and modes and all(m in MODES for m in modes)):
         problems.append(f"{where}.modes: expected a list of {', '.join(MODES)}, found {modes!r}")
-    sensor = out["sensor"]
-    if not isinstance(sensor, dict):
-        problems.append(f"{where}.sensor: expected a table, found {sensor!r}")
-    else:
-        for k in sorted(set(sensor) - {"noise_nm", "bandwidth_hz", "delay"}):
-            problems.append(f"{where}.sensor.{k}: unknown key (expected noise_nm, bandwidth_hz, "
-                            f"delay)")
-        n = sensor.get("noise_nm", 0.0)
-        if not (isinstance(n, (int, float)) and not isinstance(n, bool) and math.isfinite(n)
-                and n >= 0):
-            problems.append(f"{where}.sensor.noise_nm: expected a number >= 0 [nm RMS], found "
-                            f"{n!r}")
-        if "bandwidth_hz" in sensor and not _positive(sensor["bandwidth_hz"]):
-            problems.append(f"{where}.sensor.bandwidth_hz: expected a positive frequency [Hz], "
-                            f"found {sensor['bandwidth_hz']!r}")
-        d = sensor.get("delay", 0)
-        if not (isinstance(d, int) and not isinstance(d, bool) and 0 <= d <= 1000):
-            problems.append(f"{where}.sensor.delay: expected an integer 0..1000 [samples], "
-                            f"found {d!r}")
+    check_sensor_table(out["sensor"], f"{where}.sensor", problems)   # hammerstein.io.sensor
     amp = out["amplifier"]
     if not isinstance(amp, dict):
         problems.append(f"{where}.amplifier: expected a table, found {amp!r}")

@@ -80,6 +80,23 @@ samples, a second or more of work each) are submitted with two per worker
 thread in flight, and each returns only what the accumulator needs (the
 values while they are kept, else int16 histogram bins, the maximum and the
 diverged count); merging is order independent.
+
+Feedback
+--------
+With a ``[feedback]`` table (that of a feedback scenario, without
+``modes``; docs/feedback.md) every drawn plant runs in the loop designed on
+the nominal plant, the compensator as feedforward (computed once per
+frequency), in the compiled closed-loop kernel; the sensor noise is the
+loop's (``vary.noise`` is refused), seeded per ``(seed, case, frequency)``.
+The metrics are those of the true position.
+
+Modules
+-------
+This module draws the plants, runs the chunks and distributes them; the
+tables and their checks are in :mod:`hammerstein.scenario.montecarlo_spec`,
+the reduction to quantiles and the result in
+:mod:`hammerstein.scenario.montecarlo_quantiles`. Every public name of those
+is re-exported here.
 """
 
 from __future__ import annotations
@@ -89,30 +106,36 @@ import functools
 import itertools
 import logging
 import math
-import os
 import re
 import socket
 import time
 import warnings
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
-from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
-from hammerstein.signals import references as refs
 from hammerstein.models.dynamics import SampledSystem
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.signals.metrics import UNITS, steady_window
+from hammerstein.signals.metrics import steady_window
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
-from hammerstein.io.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
-from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
-                                     name_field, number, string)
+from hammerstein.compensation.feedback import Controller, FeedbackLoop
+from hammerstein.core.lazy import lazy_module
+from hammerstein.exceptions import FeedbackError
+from hammerstein.scenario.feedback_loops import build_loops
 from hammerstein.scenario.identification import ResolveContext
-from hammerstein.scenario.registry import COMPENSATORS, build_compensator
-from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
+from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.schema import ScenarioError
 from hammerstein.simulation import compensator_law_of, is_fusable, simulate_chain_batch
+from hammerstein.scenario.montecarlo_quantiles import (BINS_PER_DECADE, EXACT_VALUES, QUANTILES,
+                                                      MonteCarloResult, QuantileAccumulator,
+                                                      _diverged)
+from hammerstein.scenario.montecarlo_spec import (DEFAULT_STUDY_SAMPLES, MAX_RUN_SAMPLES, MAX_RUNS,
+                                                  STUDY_SAMPLES_ENV, MonteCarloScenario,
+                                                  MonteCarloStudy, is_montecarlo,
+                                                  max_study_samples, validate_montecarlo)
+
+control = lazy_module("control")  # lazy: loaded when a study has a [feedback] loop
 
 __all__ = [
     "MonteCarloStudy",
@@ -139,14 +162,15 @@ __all__ = [
     "BINS_PER_DECADE",
     "MIN_FACTOR",
     "SCHEDULER_TIMEOUT_S",
+    "max_study_samples",
+    "STUDY_SAMPLES_ENV",
+    "DEFAULT_STUDY_SAMPLES",
 ]
 
 #: How long [s] ``--scheduler ADDRESS`` tries to reach the scheduler before the run
 #: fails with one line (dask retries a refused connection until then).
 SCHEDULER_TIMEOUT_S = 10
 
-#: Quantiles reported (with the maximum).
-QUANTILES = (0.50, 0.95, 0.99)
 #: Plants per chunk run here (chunks run on numba's threads, one chunk per thread at a time;
 #: dask chunks: :func:`auto_chunk`).
 CHUNK_CASES = 10
@@ -159,360 +183,10 @@ TASK_SAMPLES = 20_000_000
 RUN_COST_SAMPLES = 1_000
 #: Tasks per dask worker thread at least (load balance), when the study is large enough.
 TASKS_PER_WORKER = 4
-#: Exact metric values kept (beyond: histogram quantiles).
-EXACT_VALUES = 2_000_000
-#: Budget: runs (cases x frequencies) per study.
-MAX_RUNS = 100_000_000
-#: Budget: samples of one run (reference length).
-MAX_RUN_SAMPLES = 200_000
-#: Budget: samples of a whole study (cases x the runs' samples), about 13 min of CPU at the
-#: batch kernel's ~40 ns a sample; raised with the environment variable below.
-DEFAULT_STUDY_SAMPLES = 20_000_000_000
-STUDY_SAMPLES_ENV = "HAMMERSTEIN_MAX_STUDY_SAMPLES"
-
-
-def max_study_samples():
-    """Largest number of samples one Monte-Carlo study may simulate.
-
-    Returns
-    -------
-    int
-        ``HAMMERSTEIN_MAX_STUDY_SAMPLES`` when it is a positive integer (ASCII
-        digits), else :data:`DEFAULT_STUDY_SAMPLES`.
-    """
-    text = os.environ.get(STUDY_SAMPLES_ENV, "").strip()
-    if text.isascii() and text.isdigit() and int(text) > 0:
-        return int(text)
-    return DEFAULT_STUDY_SAMPLES
-#: Histogram resolution (log-spaced bins per decade) and range [10**LO, 10**HI].
-BINS_PER_DECADE = 400
-_LO, _HI = -9, 6
 #: Smallest factor of a natural frequency or damping ratio.
 MIN_FACTOR = 0.05
 
-DISTRIBUTIONS = ("normal", "uniform", "lognormal")
-VARIED = ("weights", "cross_coupling", "natural_frequency", "damping_ratio")
 
-
-# -- validation --------------------------------------------------------------------------
-def _distribution(v):
-    problems = []
-    c = check_table(v, {"relative_sd": Field(number("", 0, exclusive=False), required=True),
-                        "distribution": Field(choice(*DISTRIBUTIONS), default="normal")},
-                    "", problems, "")
-    if problems:
-        raise Invalid("; ".join(q.lstrip(": ") for q in problems))
-    return c
-
-
-def _noise(v):
-    problems = []
-    c = check_table(v, {"sd": Field(number("µm", 0, exclusive=False), required=True)}, "", problems, "")
-    if problems:
-        raise Invalid("; ".join(q.lstrip(": ") for q in problems))
-    return c
-
-
-VARY = {**{k: Field(_distribution) for k in VARIED}, "noise": Field(_noise)}
-
-
-def _frequencies(v):
-    if (isinstance(v, list) and v and all(isinstance(f, (int, float)) and not isinstance(f, bool)
-                                          and math.isfinite(f) and f > 0 for f in v)
-            and len(set(v)) == len(v)):
-        return [float(f) for f in v]
-    raise Invalid(f"expected a non-empty list of distinct positive frequencies [Hz], found {v!r}")
-
-
-SWEEP = {
-    "kind": Field(choice("monte-carlo"), required=True),
-    "name": Field(name_field(), required=True),
-    "description": Field(string()),
-    "cases": Field(integer(1, MAX_RUNS), required=True),
-    "frequencies": Field(_frequencies, required=True),
-    "reference": Field(lambda v: v, required=True),
-    "settle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
-    "vary": Field(lambda v: v, default={}),
-    "chunk": Field(integer(1, 100_000)),
-}
-
-
-def is_montecarlo(data):
-    """Whether a parsed scenario file is a Monte-Carlo study.
-
-    Parameters
-    ----------
-    data : dict
-        The parsed TOML file.
-
-    Returns
-    -------
-    bool
-        True when it has ``[[sweeps]]`` tables, one of them with
-        ``kind = "monte-carlo"``.
-    """
-    sweeps = data.get("sweeps")
-    return isinstance(sweeps, list) and any(isinstance(s, dict) and s.get("kind") == "monte-carlo"
-                                            for s in sweeps)
-
-
-@dataclass
-class MonteCarloStudy:
-    """One ``[[sweeps]] kind = "monte-carlo"`` table, ready to run (picklable).
-
-    Parameters
-    ----------
-    name : str
-    description : str
-    cases : int
-        Number of drawn plants.
-    seed : int
-        The scenario's ``seed``.
-    frequencies : list of float
-        [Hz].
-    references : list of numpy.ndarray, each shape (p, n_samples_j)
-        Reference per frequency [µm].
-    period_samples : list of int
-        Samples per period, per frequency.
-    settle_periods : float
-    vary : dict
-        Validated ``[sweeps.vary]``: ``{quantity: {relative_sd,
-        distribution}}`` and optionally ``noise = {sd}``.
-    plant : HammersteinPlant
-        The nominal plant.
-    modes : tuple or None
-        ``(natural_frequency [Hz], damping_ratio)`` arrays of shape (p,) of
-        the nominal bending modes (None for other dynamics).
-    compensator : object or None
-        Built by :func:`run_montecarlo_scenario` from the nominal model.
-    chunk : int or None
-        Plants per chunk (the sweep's ``chunk``; None: :data:`CHUNK_CASES`
-        here, :func:`auto_chunk` on dask).
-    """
-
-    name: str
-    description: str
-    cases: int
-    seed: int
-    frequencies: list
-    references: list
-    period_samples: list
-    settle_periods: float
-    vary: dict
-    plant: object
-    modes: tuple | None
-    compensator: object = None
-    chunk: int | None = None
-
-    @property
-    def columns(self):
-        """``(channel, metric)`` of the metric axis of :func:`run_chunk`'s arrays."""
-        names = list(self.plant.hysteresis.output_names)
-        cols = [(n, m) for n in names for m in ("rms_error", "max_abs_error")]
-        allch = "+".join(names)
-        return cols + [(allch, "rms_euclidean_error"), (allch, "max_euclidean_error")]
-
-
-@dataclass
-class MonteCarloScenario:
-    """A validated Monte-Carlo scenario (top-level ``kind`` ``"monte-carlo"``).
-
-    Parameters
-    ----------
-    name, title, description : str
-    seed : int
-    path : pathlib.Path
-    studies : list of MonteCarloStudy
-    compensator_spec : dict
-        The ``[compensator]`` table (built once per study, on the nominal plant).
-    kind : str
-        ``"monte-carlo"``.
-    """
-
-    name: str
-    title: str
-    description: str
-    seed: int
-    path: Path
-    studies: list
-    compensator_spec: dict = field(default_factory=dict)
-    kind: str = "monte-carlo"
-
-    @property
-    def cases(self):
-        """``range`` over the drawn plants of all studies (``len`` = their number).
-
-        Returns
-        -------
-        range
-        """
-        return range(sum(s.cases for s in self.studies))
-
-
-def _nominal_modes(preset, base, outputs):
-    """``(natural_frequency, damping_ratio)`` of a preset's bending modes, or None."""
-    path = resolve_preset(preset, base)
-    dyn = read_toml(path, "preset file").get("dynamics", {})
-    if not isinstance(dyn, dict) or dyn.get("kind", "bending_modes") != "bending_modes":
-        return None
-    got = dynamics_from_table(dyn, outputs, str(path), build=False)
-    if not isinstance(got, tuple):
-        return None
-    p = len(outputs)
-    fn = np.broadcast_to(np.asarray(got[1], dtype=float), (p,)).copy()
-    zeta = np.broadcast_to(np.asarray(got[2], dtype=float), (p,)).copy()
-    return fn, zeta
-
-
-def validate_montecarlo(path, data):
-    """Validate a Monte-Carlo scenario file (nothing built or simulated).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        Scenario TOML file.
-    data : dict
-        Its parsed content.
-
-    Returns
-    -------
-    MonteCarloScenario
-
-    Raises
-    ------
-    ScenarioError
-        Every problem, one ``file: key: message`` line each (an unknown key,
-        a missing preset, ordinary ``[[cases]]`` mixed with the study, a
-        varied natural frequency of a preset without bending modes, a budget
-        exceeded, ...).
-    """
-    source, base, problems = str(path), Path(path).parent, []
-    own = {**{k: f for k, f in TOP.items() if k in ("name", "title", "description", "seed")},
-           "kind": Field(choice("cases", "monte-carlo"))}
-    top = check_table({k: v for k, v in data.items() if k not in ("plant", "compensator", "sweeps",
-                                                                 "cases")},
-                      own, "", problems, source) or {}
-    if "cases" in data:
-        problems.append(f"{source}: cases: a Monte-Carlo study (sweeps of kind 'monte-carlo') "
-                        f"cannot hold [[cases]]; put them in another scenario file")
-    plant_t = data.get("plant")
-    plant = None
-    if not isinstance(plant_t, dict) or not isinstance(plant_t.get("preset"), str):
-        problems.append(f"{source}: plant.preset: expected the nominal plant's preset name or file")
-    else:
-        unknown = [k for k in plant_t if k not in ("preset", "dynamics")]
-        if unknown:
-            problems.append(f"{source}: plant.{unknown[0]}: unknown key (expected preset, dynamics)")
-        try:
-            plant = load_plant(plant_t["preset"], dynamics=bool(plant_t.get("dynamics", True)),
-                               base_dir=base)
-        except PresetError as exc:
-            problems.append(f"{source}: plant.preset: {exc}")
-    comp = data.get("compensator", {"kind": "multivariable"})
-    if not isinstance(comp, dict) or comp.get("kind", "none") not in COMPENSATORS:
-        kind = comp.get("kind") if isinstance(comp, dict) else comp
-        problems += [f"{source}: compensator.kind: {m}" for m in kind_problem(kind, COMPENSATORS)]
-    elif not COMPENSATORS[comp.get("kind", "none")].compensates:
-        problems.append(f"{source}: compensator.kind: a Monte-Carlo study needs a compensator, "
-                        f"found {comp.get('kind', 'none')!r}")
-    studies, seen = [], set()
-    seed = top.get("seed", 0)
-    for i, raw in enumerate(data.get("sweeps", [])):
-        where = f"sweeps[{i}]"
-        if not isinstance(raw, dict) or raw.get("kind") != "monte-carlo":
-            problems.append(f"{source}: {where}.kind: expected 'monte-carlo' (a study's sweeps are "
-                            f"all Monte-Carlo sweeps; put frequency sweeps in another file)")
-            continue
-        n0 = len(problems)
-        c = check_table(raw, SWEEP, where, problems, source)
-        if c is None or len(problems) > n0:
-            continue
-        if c["name"] in seen:
-            problems.append(f"{source}: {where}.name: duplicate sweep name {c['name']!r}")
-        seen.add(c["name"])
-        vary = check_table(c["vary"], VARY, f"{where}.vary", problems, source)
-        if vary is None or plant is None or len(problems) > n0:
-            continue
-        modes = _nominal_modes(plant_t["preset"], base, list(plant.hysteresis.output_names)) \
-            if plant_t.get("dynamics", True) else None
-        for q in ("natural_frequency", "damping_ratio"):
-            if q in vary and modes is None:
-                problems.append(f"{source}: {where}.vary.{q}: the nominal plant has no bending "
-                                f"modes (preset dynamics of kind 'bending_modes') to vary")
-        if not plant.packable or not isinstance(plant.hysteresis, MultivariablePI):
-            problems.append(f"{source}: plant.preset: expected a classical multivariable PI plant "
-                            f"(Monte-Carlo studies run on the fused batch kernel)")
-            continue
-        if len(c["frequencies"]) * c["cases"] > MAX_RUNS:
-            problems.append(f"{source}: {where}.cases: {c['cases']} cases x "
-                            f"{len(c['frequencies'])} frequencies exceed the budget of "
-                            f"{MAX_RUNS:.3g} runs per study")
-        sig = c["reference"]
-        if not isinstance(sig, dict) or sig.get("kind") not in refs.REFERENCE_KINDS:
-            problems += [f"{source}: {where}.reference.kind: {m}"
-                         for m in kind_problem(sig.get("kind") if isinstance(sig, dict) else sig,
-                                               refs.REFERENCE_KINDS)]
-            continue
-        if "frequency" in sig:
-            problems.append(f"{source}: {where}.reference.frequency: given by the sweep's "
-                            f"frequencies; remove it from the template")
-            continue
-        entry = refs.REFERENCE_KINDS[sig["kind"]]
-        references, periods = [], []
-        T = plant.sampling_period
-        for f in c["frequencies"]:
-            tab = {**sig, "frequency": f}
-            rc = check_table(tab, {"kind": Field(lambda v: v), **entry.fields},
-                             f"{where}.reference", problems, source)
-            if rc is None or len(problems) > n0:
-                break
-            try:
-                _, r, period, _ = entry.generate({k: v for k, v in rc.items() if k != "kind"}, T,
-                                                 list(plant.hysteresis.output_names), base)
-            except refs.SignalError as exc:
-                problems.append(f"{source}: {where}.reference.{exc}")
-                break
-            P = max(int(round(period / T)), 1)
-            if r.shape[1] > MAX_RUN_SAMPLES:
-                problems.append(f"{source}: {where}.reference: {r.shape[1]} samples at {f:g} Hz; "
-                                f"expected at most {MAX_RUN_SAMPLES} per run")
-                break
-            if r.shape[1] < c["settle_periods"] * P + 1:
-                problems.append(f"{source}: {where}.settle_periods: {c['settle_periods']:g} periods "
-                                f"leave no sample of the {r.shape[1]}-sample record at {f:g} Hz")
-                break
-            references.append(np.ascontiguousarray(r, dtype=float))
-            periods.append(P)
-        if len(problems) > n0:
-            continue
-        total = c["cases"] * sum(r.shape[1] for r in references)
-        if total > max_study_samples():
-            problems.append(
-                f"{source}: {where}.cases: {c['cases']} cases x {sum(r.shape[1] for r in references)}"
-                f" samples of the {len(references)} frequencies = {total:.3g} samples to simulate "
-                f"(about {total * 40e-9 / 60:.3g} min of CPU at 40 ns a sample); expected at most "
-                f"{max_study_samples():.3g} (raise it with {STUDY_SAMPLES_ENV}=N)")
-            continue
-        studies.append(MonteCarloStudy(
-            name=c["name"], description=c.get("description", ""), cases=c["cases"], seed=seed,
-            frequencies=c["frequencies"], references=references, period_samples=periods,
-            settle_periods=float(c["settle_periods"]), vary=vary, plant=plant, modes=modes,
-            chunk=c.get("chunk")))
-    if not data.get("sweeps"):
-        problems.append(f"{source}: sweeps: expected one or more [[sweeps]] kind = 'monte-carlo'")
-    if "name" not in data and not (len(Path(path).stem) <= MAX_NAME
-                                   and re.fullmatch(NAME, Path(path).stem)):
-        problems.append(f"{source}: name: missing, and the file name is not usable as a report "
-                        f"directory name; give name = \"...\"")
-    if problems:
-        raise ScenarioError(problems)
-    return MonteCarloScenario(name=top.get("name", Path(path).stem),
-                              title=top.get("title", Path(path).stem),
-                              description=top.get("description", ""), seed=seed, path=Path(path),
-                              studies=studies, compensator_spec=dict(comp))
-
-
-# -- drawing ---------------------------------------------------------------------------------
 def _factor(z, spec, positive=False):
     """Factors of mean 1 and relative sd ``spec['relative_sd']`` from standard normals ``z``."""
     s, dist = spec["relative_sd"], spec.get("distribution", "normal")
@@ -746,6 +420,8 @@ def run_chunk(study, start, stop, parallel=None):
         In the units of the metrics (µm); ``inf`` for a diverged run.
         Row ``i - start`` depends only on ``(study.seed, i)``.
     """
+    if study.loop is not None:
+        return start, _loop_chunk(study, start, stop)
     F = len(study.frequencies)
     values = np.empty((stop - start, F, len(study.columns)))
     step = _batch_plants(study)
@@ -762,6 +438,47 @@ def run_chunk(study, start, stop, parallel=None):
             with np.errstate(all="ignore"):         # a diverged run: NaN outputs, inf metrics
                 values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
     return start, values
+
+
+def _loop_chunk(study, start, stop):
+    """:func:`run_chunk` with ``[feedback]``: each drawn plant in the nominal loop.
+
+    The controller, sensor and amplifier were designed on the nominal plant
+    (``study.loop``), the feedforward computed once per frequency
+    (``study.feedforward``); case i's sensor noise at frequency j is seeded
+    by ``(seed, i, j + 1)``, so a row depends only on its case.
+    """
+    values = np.empty((stop - start, len(study.frequencies), len(study.columns)))
+    nominal = FeedbackLoop(study.plant, *study.loop)
+    for i in range(start, stop):
+        loop = nominal.with_plant(case_plant(study, i))
+        for j, r in enumerate(study.references):
+            res = loop.simulate(r, feedforward=study.feedforward[j], seed=[study.seed, i, j + 1])
+            with np.errstate(all="ignore"):         # a diverged run: inf metrics
+                values[i - start, j] = _frequency_metrics(study, range(i, i + 1), j,
+                                                          res.outputs[None])[0]
+    return values
+
+
+def _with_loop(study, table, source):
+    """Design the study's loop on its nominal plant and compute the feedforward per frequency."""
+    try:
+        loop, _ = build_loops(table, study.plant)
+        S = loop.closed_loop()[0]
+    except FeedbackError as exc:
+        raise ScenarioError([f"{source}: feedback: {exc}"]) from None
+    if not np.all(np.abs(control.poles(S)) < 1):
+        raise ScenarioError([f"{source}: feedback: the linearised loop on the nominal plant "
+                             f"(hysteresis at its secant gains) is unstable"])
+    # the controller with its reference filter already built (python-control once, not per
+    # plant), its matrices only: the study is pickled to dask workers
+    c = loop.controller
+    kernel = Controller(c.A, c.B, c.C, c.D, c.sampling_period, c.integrators,
+                        list(c.descriptions), None, None)
+    study.loop = (kernel, loop.sensor, loop.amplifier, loop.anti_windup, loop.tracking_time,
+                  False)
+    study.feedforward = [np.ascontiguousarray(study.compensator.simulate(r)[0], dtype=float)
+                         for r in study.references]
 
 
 def _kernel_law(study):
@@ -787,196 +504,6 @@ def _remote_chunk(study, start, stop, exact):
     if exact:
         return start, values
     return start, (QuantileAccumulator.bins(values), values.max(axis=0), _diverged(values))
-
-
-def _diverged(values):
-    """Diverged runs per frequency of a chunk's values (any metric not finite)."""
-    return np.sum(~np.isfinite(values).all(axis=2), axis=0)
-
-
-class QuantileAccumulator:
-    """Order-independent reduction of per-case metric values to quantiles.
-
-    Parameters
-    ----------
-    cases : int
-        Number of cases that will be added.
-    shape : tuple of int
-        ``(n_frequencies, n_metrics)`` of one case's values.
-    exact_limit : int, optional
-        Keep the exact values when ``cases * prod(shape)`` is at most this
-        (default :data:`EXACT_VALUES`).
-
-    Notes
-    -----
-    Memory: ``prod(shape) * (n_bins + 1)`` counters (``n_bins`` =
-    ``BINS_PER_DECADE * 15`` log-spaced bins on ``[1e-9, 1e6]``, plus
-    under/overflow), independent of ``cases``, and the exact values when
-    kept. Adding chunks in any order gives identical results (integer counts,
-    maxima, values stored by case index).
-
-    Examples
-    --------
-    The P50 of 1, 2, ..., 100 is 50 (inverted CDF: the smallest value with at
-    least half of the values at or below it); the histogram gives it within
-    its bin width.
-
-    >>> import numpy as np
-    >>> from hammerstein.scenario.montecarlo import QuantileAccumulator
-    >>> v = np.arange(1.0, 101.0).reshape(100, 1, 1)
-    >>> exact, hist = QuantileAccumulator(100, (1, 1)), QuantileAccumulator(100, (1, 1), exact_limit=0)
-    >>> for start in (50, 0):                      # chunks in any order
-    ...     exact.add(start, v[start:start + 50]); hist.add(start, v[start:start + 50])
-    >>> exact.quantiles()[:, 0, 0].tolist()        # P50, P95, P99, max
-    [50.0, 95.0, 99.0, 100.0]
-    >>> bool(abs(hist.quantiles()[0, 0, 0] / 50.0 - 1) < 0.003)
-    True
-    """
-
-    def __init__(self, cases, shape, exact_limit=None):
-        exact_limit = EXACT_VALUES if exact_limit is None else exact_limit
-        self.cases, self.shape = cases, tuple(shape)
-        self.n_bins = BINS_PER_DECADE * (_HI - _LO)
-        self.counts = np.zeros(self.shape + (self.n_bins + 2,), dtype=np.int64)
-        self.maximum = np.full(self.shape, -np.inf)
-        self.count = 0
-        self.values = (np.full((cases,) + self.shape, np.nan)
-                       if cases * int(np.prod(self.shape)) <= exact_limit else None)
-
-    @staticmethod
-    def bins(values):
-        """Histogram bin of every value (0: underflow, ``n_bins + 1``: overflow and inf).
-
-        Parameters
-        ----------
-        values : numpy.ndarray
-            Non-negative metric values (any shape).
-
-        Returns
-        -------
-        numpy.ndarray of int16, same shape
-            Bin ``k`` (1 <= k <= n_bins) holds
-            ``[10**(LO + (k-1)/BPD), 10**(LO + k/BPD))``.
-        """
-        n_bins = BINS_PER_DECADE * (_HI - _LO)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            b = np.floor((np.log10(values) - _LO) * BINS_PER_DECADE)
-        b = np.where(values <= 10.0 ** _LO, -1, b)
-        b = np.where(~np.isfinite(b) & (values > 0), n_bins, b)
-        return (np.clip(b, -1, n_bins) + 1).astype(np.int16)
-
-    def add(self, start, values):
-        """Add the values of cases ``start .. start + len(values) - 1``.
-
-        Parameters
-        ----------
-        start : int
-        values : numpy.ndarray, shape (n_cases, n_frequencies, n_metrics)
-        """
-        self.add_bins(self.bins(values), values.max(axis=0))
-        if self.values is not None:
-            self.values[start:start + values.shape[0]] = values
-
-    def add_bins(self, bins, maximum):
-        """Add cases given by their histogram bins only (exact values not kept).
-
-        Parameters
-        ----------
-        bins : numpy.ndarray of int, shape (n_cases, n_frequencies, n_metrics)
-            From :meth:`bins`.
-        maximum : numpy.ndarray, shape (n_frequencies, n_metrics)
-            Their maximum.
-        """
-        width = self.n_bins + 2
-        flat = np.arange(int(np.prod(self.shape)), dtype=np.int64).reshape(self.shape) * width
-        idx = (flat[None] + bins).ravel()
-        self.counts += np.bincount(idx, minlength=self.counts.size).reshape(self.counts.shape)
-        self.maximum = np.maximum(self.maximum, maximum)
-        self.count += bins.shape[0]
-
-    @property
-    def exact(self):
-        """Whether the quantiles are exact (all values kept)."""
-        return self.values is not None
-
-    def quantiles(self, q=QUANTILES):
-        """Quantiles ``q`` and the maximum of every (frequency, metric).
-
-        Parameters
-        ----------
-        q : sequence of float
-            In [0, 1].
-
-        Returns
-        -------
-        numpy.ndarray, shape (len(q) + 1, n_frequencies, n_metrics)
-            Exact quantiles (inverted CDF: the smallest value with at least
-            ``q n`` values at or below it) when :attr:`exact`, else the
-            geometric centre of the histogram bin holding that value (0 for
-            the underflow bin, inf for the overflow bin); last: the maximum.
-        """
-        out = np.empty((len(q) + 1,) + self.shape)
-        if self.exact:
-            out[:-1] = np.quantile(self.values[:self.count], q, axis=0, method="inverted_cdf")
-        else:
-            cum = np.cumsum(self.counts, axis=-1)
-            edges = _LO + (np.arange(self.n_bins) + 0.5) / BINS_PER_DECADE
-            centres = np.concatenate([[0.0], 10.0 ** edges, [np.inf]])
-            for a, qq in enumerate(q):
-                k = np.maximum(np.ceil(qq * self.count), 1)
-                idx = np.argmax(cum >= k, axis=-1)
-                out[a] = centres[idx]
-        out[-1] = self.maximum
-        return out
-
-
-@dataclass
-class MonteCarloResult:
-    """Quantiles of one study.
-
-    Parameters
-    ----------
-    study : MonteCarloStudy
-    quantiles : numpy.ndarray, shape (4, n_frequencies, n_metrics)
-        P50, P95, P99, max [µm].
-    diverged : numpy.ndarray, shape (n_frequencies,)
-        Cases whose compensator diverged (or whose errors are not finite).
-    exact : bool
-        Exact quantiles (else histogram, relative error <= 0.3 %).
-    values : numpy.ndarray or None, shape (cases, n_frequencies, n_metrics)
-        Every case's metrics when kept (:data:`EXACT_VALUES`).
-    warnings : list of str
-    """
-
-    study: MonteCarloStudy
-    quantiles: np.ndarray
-    diverged: np.ndarray
-    exact: bool
-    values: np.ndarray | None = None
-    warnings: list = field(default_factory=list)
-
-    @property
-    def name(self):
-        """The sweep's name."""
-        return self.study.name
-
-    @property
-    def metrics(self):
-        """Rows ``{channel, metric, value, unit}``: ``<metric>_p50/_p95/_p99/_max@<f>Hz``.
-
-        Returns
-        -------
-        list of dict
-        """
-        rows = []
-        for j, f in enumerate(self.study.frequencies):
-            for c, (ch, met) in enumerate(self.study.columns):
-                for a, tag in enumerate(("p50", "p95", "p99", "max")):
-                    rows.append({"channel": ch, "metric": f"{met}_{tag}_at_{f:g}Hz",
-                                 "value": float(self.quantiles[a, j, c]), "unit": UNITS.get(met, "µm")})
-            rows.append({"channel": "-", "metric": f"diverged_cases_at_{f:g}Hz",
-                         "value": float(self.diverged[j]), "unit": "cases"})
-        return rows
 
 
 _CLIENT = {"client": None}
@@ -1133,7 +660,7 @@ def run_study(study, client=None, chunk=None, timings=None):
     MonteCarloResult
     """
     shape = (len(study.frequencies), len(study.columns))
-    acc = QuantileAccumulator(study.cases, shape)
+    acc = QuantileAccumulator(study.cases, shape, exact_limit=EXACT_VALUES)
     diverged = np.zeros(len(study.frequencies), dtype=np.int64)
     spent = 0.0
     if client is None:
@@ -1218,6 +745,8 @@ def run_montecarlo_scenario(scenario):
             check = compensator_law_of(comp).check_reference
             for r in study.references if check is not None else []:
                 check(r)                # range warnings: once per frequency, not per case
+            if scenario.feedback is not None:
+                _with_loop(study, scenario.feedback, source)
         res = run_study(study, _CLIENT["client"])
         res.warnings = list(dict.fromkeys(str(w.message) for w in rec))
         results.append(res)
