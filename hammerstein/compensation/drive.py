@@ -41,6 +41,7 @@ import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.hammerstein_compensator import continuation
+from hammerstein.compensation.shaping import shape_reference, time_intervals
 from hammerstein.io.datafiles import numeric_column, signal_table
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
@@ -645,20 +646,6 @@ def _start_steps(u, end, rest):
     return np.max(np.abs(np.diff(head, axis=1)), axis=1)
 
 
-def _intervals(mask, sampling_period, limit=4):
-    """``"0.1200-0.1250 s, ..."``: the runs of True in ``mask`` (at most ``limit``, then a count)."""
-    idx = np.flatnonzero(mask)
-    if idx.size == 0:
-        return ""
-    cuts = np.flatnonzero(np.diff(idx) > 1)
-    starts = np.concatenate([[idx[0]], idx[cuts + 1]])
-    ends = np.concatenate([idx[cuts], [idx[-1]]])
-    text = ", ".join(f"{a * sampling_period:.4f}-{b * sampling_period:.4f} s"
-                     for a, b in zip(starts[:limit], ends[:limit]))
-    more = starts.size - limit
-    return text + (f" and {more} more" if more > 0 else "")
-
-
 def shape_drive(amplifier, inputs, sampling_period):
     """A drive shaped into the amplifier's range and slew rate, and where and by how much.
 
@@ -705,7 +692,7 @@ def shape_drive(amplifier, inputs, sampling_period):
             what.append(f"faster than {c.slew_rate:.4g} V/s")
         notes.append(f"{amplifier.inputs[i]}: {' and '.join(what)}, changed by up to "
                      f"{float(diff.max()):.3g} V on {100 * np.mean(changed):.3g} % of the samples "
-                     f"({_intervals(changed, sampling_period)})")
+                     f"({time_intervals(changed, sampling_period)})")
     return out, notes
 
 
@@ -778,7 +765,8 @@ def rest_output(model):
 
 
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
-                   fade_samples=None, amplifier=None, limits="error", where="", rest=None):
+                   fade_samples=None, amplifier=None, limits="error", where="", rest=None,
+                   first_mode=None, predict=None, names=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -800,7 +788,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
        drive's largest step over the whole record (which the settled drive
        never needs; ``shaped`` says so).
     2. **the limits.** An amplifier whose limits were measured on the
-       identification records (``source = "records"``) shapes the drive
+       identification records (``source = "records"``) first shapes the
+       reference where the drive would leave them
+       (:func:`hammerstein.compensation.shaping.shape_reference`; the
+       compensator is run again on the shaped reference), then the drive
        (:func:`shape_drive`: range clip, slew limit, the notes say where
        and by how much); the amplifier's own limits react as ``limits``
        says (:meth:`~hammerstein.models.amplifier.Amplifier.check`).
@@ -825,11 +816,25 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     rest : array_like, shape (p,), optional
         The output at rest [µm] (:func:`rest_output`), the fade's start;
         zeros by default.
+    first_mode : float, optional
+        The identified dynamics' first bending mode [Hz]
+        (:func:`hammerstein.compensation.shaping.first_mode_hz`), for the
+        reference shaping.
+    predict : callable, optional
+        ``predict(inputs) -> outputs (p, n_samples)`` [µm], the model from
+        rest, for the reference shaping's range stage.
+    names : sequence of str, optional
+        Output names for the shaping notes.
 
     Returns
     -------
     DriveResult
-        ``shaped`` lists the shaping notes; ``reference`` the faded reference.
+        ``shaped`` lists the shaping notes; ``reference`` the faded
+        reference the drive was computed for, itself shaped where the
+        drive would leave limits measured on the records
+        (:func:`hammerstein.compensation.shaping.shape_reference`: a
+        raster's line steps and corners smoothed below the first mode, a
+        range the amplifier does not reach limited to what it reaches).
 
     Raises
     ------
@@ -883,12 +888,18 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     else:
         n = int(min(max(int(fade_samples), 0), N))
         u, faded = run(n)
+    notes = []
+    if amplifier is not None and amplifier.from_records:
+        sr = shape_reference(lambda ref: _compensate(compensator, ref, P or None, 0)[0], faded,
+                             amplifier, T, first_mode, predict, P or None, names)
+        u, faded, notes = sr.inputs, sr.reference, sr.notes
     peak, top = drive_metrics(u, T)
-    res = DriveResult(u, u, faded, peak, top, n)
+    res = DriveResult(u, u, faded, peak, top, n, shaped=notes)
     r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
     out = u
     if amplifier is not None and amplifier.from_records:
-        out, res.shaped = shape_drive(amplifier, u, T)
+        out, more = shape_drive(amplifier, u, T)
+        res.shaped += more
     elif amplifier is not None:
         res.problems = amplifier.check(u, T, limits, where)
         if res.problems:

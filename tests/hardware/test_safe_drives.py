@@ -124,7 +124,10 @@ def test_a_circle_beyond_the_range_is_shaped_and_says_where(tmp_path):
     assert re.search(r"\d\.\d{4}-\d\.\d{4} s", text)       # the time intervals
     assert np.isclose(np.max(np.abs(u)), RANGE)
     printed = _compensate([_preset(tmp_path), "--reference", RASTER, "--out", out])
-    assert "uy: beyond the range [-5, 5] V" in printed and "smoothing = S" in printed
+    assert "reference shaped by up to" in printed and "smoothing = S" in printed
+    u, _, text = _drive(out)
+    assert np.max(np.abs(u)) <= RANGE + 1e-9                # the reference shaped, not the drive
+    assert "x_shaped y_shaped [µm]" in text
 
 
 def test_records_amplifier_table_is_the_records_range_and_largest_slew():
