@@ -44,7 +44,7 @@ reference shaping of :func:`hardware_drive` in
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -771,9 +771,15 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         u, faded = run(n)
     notes = []
     if amplifier is not None and amplifier.from_records:
-        sr = shape_reference(lambda ref: _compensate(compensator, ref, P or None, 0)[0], faded,
-                             amplifier, T, first_mode, predict, P or None, names)
+        def drive_for(ref):
+            return _compensate(compensator, ref, P or None, 0)[0]
+
+        sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names)
         u, faded, notes = sr.inputs, sr.reference, sr.notes
+        if fade_samples is None:     # a start-up stepping faster than the settled drive: shaped too
+            u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
+                                             first_mode, predict, names)
+            notes += more
     peak, top = drive_metrics(u, T)
     res = DriveResult(u, u, faded, peak, top, n, shaped=notes)
     r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
@@ -791,6 +797,33 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         res.shaped += notes
     res.inputs = out
     return res
+
+
+def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, names):
+    """Reference shaping against the settled drive's own largest step (the start-up's bound).
+
+    The settled part (one period after the fade on) never steps more than
+    ``S`` per sample, so shaping with the slew rate ``S / T`` changes only
+    what steps more: the start-up (e.g. a raster's first line step, which
+    the default fade-in ends on). Returns ``(u, faded, notes)``, unchanged
+    when the start-up is within the bound.
+    """
+    N = u.shape[1]
+    end = min(fade + max(P, 1), N)
+    bound = settled_step(u, end)
+    rest = np.array([c.rest for c in amplifier.channels])
+    start = _start_steps(u, end, rest)
+    if not np.any(start > bound * (1 + _STEP_TOL)) or not np.all(np.isfinite(bound) & (bound > 0)):
+        return u, faded, []
+    tight = Amplifier([replace(c, slew_rate=min(c.slew_rate, b / T))
+                       for c, b in zip(amplifier.channels, bound)], amplifier.inputs,
+                      amplifier.source)
+    sr = shape_reference(run, faded, tight, T, first_mode, predict, P or None, names)
+    if not sr.changed:
+        return u, faded, []
+    why = "the drive left the limits measured on the records"
+    notes = [n.replace(why, "the start-up stepped faster than the settled drive") for n in sr.notes]
+    return sr.inputs, sr.reference, notes
 
 
 def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,

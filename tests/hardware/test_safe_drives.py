@@ -158,3 +158,19 @@ def test_hardware_fade_rest_lead_and_keep_start():
     u = keep_start(np.zeros((1, 40)), np.ones((1, 40)), 10, 10)
     np.testing.assert_array_equal(u[0, :11], 0.0)
     np.testing.assert_array_equal(u[0, 20:], 1.0)
+
+
+def test_a_raster_start_up_is_shaped_not_slew_limited(tmp_path):
+    """A raster whose line steps were shaped: its first step after the fade, which the settled
+    drive never needs so fast, is shaped as well (not slew-limited afterwards), so the drive
+    still follows a reference (the file's shaped one) everywhere after the fade."""
+    out = tmp_path / "drive.csv"
+    raster = ('{ kind = "raster", size = [20, 20], lines = 6, frequency = 50, '
+              'outputs = ["x", "y"] }')
+    printed = _compensate([_preset(tmp_path), "--reference", raster, "--out", out])
+    u, fade, text = _drive(out)
+    assert "reference shaped by up to" in printed
+    assert "slew-limited to the settled drive's largest step" not in text
+    steps = _steps(u)
+    settled = steps[:, fade + 400 + 1:].max(axis=1)              # one 50 Hz line after the fade
+    assert np.all(steps.max(axis=1) <= settled * (1 + 1e-6))
