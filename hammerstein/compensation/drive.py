@@ -667,7 +667,11 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
        quarter of the record. After the limits (2.), a start-up that still
        steps faster than the settled drive is slew-limited to the settled
        drive's largest step over the whole record (which the settled drive
-       never needs; ``shaped`` says so).
+       never needs; ``shaped`` says so). With limits measured on the
+       records, such a start-up is first shaped in the reference instead
+       (a raster's first line step, which the fade ends on: the settled
+       drive's largest step taken as the slew rate), so the slew limit
+       has nothing left to change.
     2. **the limits.** An amplifier whose limits were measured on the
        identification records (``source = "records"``) first shapes the
        reference where the drive would leave them
