@@ -253,7 +253,7 @@ def _handle(args):
     if any(w in n for n in drive.shaped for w in ("beyond the range", "faster than",
                                                      "reference shaped")) \
             and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):
-        print("the raster's line steps and turns ask more than the records' limits: spread them "
+        print("the raster's line steps and turns were shaped (above): to choose how, spread them "
               "with smoothing = S in the reference (a fraction of a line, e.g. 0.1)",
               file=sys.stdout)
     print(f"wrote {args.out} ({ref.t.size} samples, fade-in "

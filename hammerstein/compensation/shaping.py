@@ -6,9 +6,15 @@ faster than the slew rate, both measured on the identification records
 for an identified model), clipping the *drive* afterwards leaves the
 actuator somewhere the compensator never planned (and, for a hysteresis
 inverse with memory, on another memory branch than the one the inverse
-assumed). :func:`shape_reference` shapes the *reference* instead, in two
-stages, and runs the compensator again on the shaped reference:
+assumed). :func:`shape_reference` shapes the *reference* instead, and runs the
+compensator again on the shaped reference:
 
+0. **band limit**: where the reference accelerates more than a sine at
+   the identified first bending mode would (:func:`faster_than_mode`: a
+   raster's line steps and corners, never a circle below the mode), it is
+   replaced by its zero-phase Hann-window average over one period of the
+   mode: the inverse of the dynamics is then not asked for content at the
+   resonance, which it reproduces only as well as the mode was identified;
 1. **transients** (a raster's line steps and corners, a circle's start):
    around every sample whose drive leaves the limits, the reference is
    replaced by its zero-phase Hann-window average (a band limit below the
@@ -36,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ShapedReference", "first_mode_hz", "limit_excess", "hann_average",
+__all__ = ["ShapedReference", "first_mode_hz", "faster_than_mode", "limit_excess", "hann_average",
            "shape_reference", "shaping_notes", "time_intervals"]
 
 #: the smoothing window grows (doubles) at most this many times
@@ -324,39 +330,51 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     r = np.array(reference, dtype=float, ndmin=2)
     T = float(sampling_period)
     N = r.shape[1]
-    u = np.asarray(run(r), dtype=float)
-    excess = limit_excess(amplifier, u, T)
-    best = ShapedReference(r, u)
-    if not np.any(excess > 0) or N < 3:
-        return best
     L0 = int(np.ceil(1.0 / (first_mode * T))) if first_mode else 8
     cap = N // 2 if not period_samples or period_samples < 2 else max(int(period_samples) // 2, 3)
     L0 = max(min(L0, cap), 3)
-    best_total = float(excess.sum())
-    mask = excess > 0
-    L = L0
     at_rest = np.all(np.abs(r - r[:, :1]) <= 1e-12 * max(1.0, float(np.max(np.abs(r)))), axis=0)
     lead = int(np.argmin(at_rest)) if not np.all(at_rest) else N    # samples at rest first
     guard = _after(lead // 2, lead - lead // 2, N)     # the first half of them stays at rest
+    base, band = r, False
+    if first_mode and N >= 3:                          # stage 0: band limit below the first mode
+        fast = faster_than_mode(r, first_mode, T)
+        if np.any(fast):
+            base = r + _blend_weights(fast, L0) * guard * (hann_average(r, L0) - r)
+            band = True
+    u = np.asarray(run(base), dtype=float)
+    excess = limit_excess(amplifier, u, T) if amplifier is not None else np.zeros(N)
+    best = ShapedReference(base, u, L0 if band else 0)
+    reasons = ([f"it moves faster than the {first_mode:.4g} Hz first mode of the identified "
+                f"dynamics follows: smoothed there over {L0 * T * 1e3:.3g} ms (one period of "
+                f"the mode)"] if band else [])
+    if not np.any(excess > 0) or N < 3:
+        best.notes = shaping_notes(r, best.reference, T, names,
+                                   f": {'; '.join(reasons)}" if reasons else "")
+        return best
+    best_total = float(excess.sum())
+    mask = excess > 0
+    L = L0
+    limited_window = 0
     for _ in range(MAX_DOUBLINGS + 1):
         w = _blend_weights(mask, L) * guard
-        trial = r + w * (hann_average(r, L) - r)
+        trial = base + w * (hann_average(base, L) - base)
         u_t = np.asarray(run(trial), dtype=float)
         e_t = limit_excess(amplifier, u_t, T)
         total = float(e_t.sum())
         if total > (1 - MIN_GAIN) * best_total:
             break
-        best, best_total = ShapedReference(trial, u_t, L), total
+        best, best_total, limited_window = ShapedReference(trial, u_t, L), total, L
         mask = mask | (e_t > 0)
         if total == 0 or 2 * L > cap:
             break
         L *= 2
     notes_why = []
-    if best.window_samples:
-        notes_why.append(f"smoothed over {best.window_samples * T * 1e3:.3g} ms"
+    if limited_window:
+        notes_why.append(f"smoothed over {limited_window * T * 1e3:.3g} ms"
                          + (f" (one period of the {first_mode:.4g} Hz first mode"
-                            f"{', doubled' if best.window_samples > L0 else ''})"
-                            if first_mode and best.window_samples >= L0 else ""))
+                            f"{', doubled' if limited_window > L0 else ''})"
+                            if first_mode and limited_window >= L0 else ""))
     e_now = limit_excess(amplifier, best.inputs, T)
     if predict is not None and np.any(e_now > 0):
         clipped, _ = amplifier.limit(best.inputs, T)
@@ -377,7 +395,54 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
             notes_why.append("limited to the output the range reaches (the model's prediction "
                              "for the clipped drive" + (f", {100 * (1 - f):.3g} % inside it"
                                                         if f < 1 else "") + ")")
-    why = (f": the drive left the limits measured on the records ({'; '.join(notes_why)})"
-           if notes_why else "")
-    best.notes = shaping_notes(r, best.reference, T, names, why)
+    if notes_why:
+        reasons.append(f"the drive left the limits measured on the records "
+                       f"({'; '.join(notes_why)})")
+    best.notes = shaping_notes(r, best.reference, T, names,
+                               f": {'; '.join(reasons)}" if reasons else "")
     return best
+
+
+def faster_than_mode(reference, first_mode, sampling_period):
+    """Samples where a reference accelerates more than a sine at the first mode would.
+
+    A sine of amplitude ``A`` at ``f`` accelerates at most ``(2 pi f)^2 A``;
+    a reference whose acceleration (second difference over ``T^2``)
+    exceeds ``(2 pi f_1)^2 A`` with ``A`` half its range asks for content
+    at or above the first mode ``f_1``, which an inverse of the identified
+    dynamics reproduces only as well as the mode was identified (a
+    raster's line steps and corners; a circle below ``f_1`` never does).
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    first_mode : float
+        [Hz].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (n_samples,)
+        True where any output exceeds the bound (never the first and last
+        sample).
+
+    Examples
+    --------
+    >>> T, f1 = 1e-4, 300.0
+    >>> t = np.arange(400) * T
+    >>> bool(np.any(faster_than_mode([np.sin(2 * np.pi * 250 * t)], f1, T)))
+    False
+    >>> np.flatnonzero(faster_than_mode([np.r_[np.zeros(5), np.ones(5)]], f1, T)).tolist()
+    [4, 5]
+    """
+    r = np.array(reference, dtype=float, ndmin=2)
+    out = np.zeros(r.shape[1], dtype=bool)
+    if r.shape[1] < 3:
+        return out
+    acc = np.abs(r[:, 2:] - 2 * r[:, 1:-1] + r[:, :-2]) / float(sampling_period) ** 2
+    half = 0.5 * (r.max(axis=1) - r.min(axis=1))
+    bound = (2 * np.pi * float(first_mode)) ** 2 * half
+    out[1:-1] = np.any(acc > bound[:, None] * (1 + 1e-9), axis=0)
+    return out

@@ -79,3 +79,19 @@ def test_samples_at_rest_before_the_reference_moves_stay_at_rest():
     r = np.concatenate([np.zeros(10), np.full(50, 4.0)])[None, :]
     s = shape_reference(lambda x: x, r, amp, 1.0)
     assert s.changed and np.all(s.reference[0, :5] == 0.0)
+
+
+def test_a_step_faster_than_the_first_mode_is_band_limited_even_within_the_limits():
+    """Limits far away: a 2 µm step is still smoothed over one period of the 500 Hz mode
+    (20 samples at 10 kHz), a 100 Hz sine (below the mode) is not touched."""
+    T, f1 = 1e-4, 500.0
+    amp = _amp(-100.0, 100.0, slew=1e9)
+    step = np.concatenate([np.zeros(50), np.full(150, 2.0)])[None, :]
+    s = shape_reference(lambda x: x, step, amp, T, first_mode=f1)
+    assert s.changed and s.window_samples == 20 and "first mode" in s.notes[0]
+    assert np.all(np.diff(s.reference[0]) >= -1e-12)            # monotone S-curve
+    assert np.max(np.abs(np.diff(s.reference[0]))) < 2.0 / 5     # spread over many samples
+    assert np.array_equal(s.reference[0, 100:], step[0, 100:])   # unchanged a window away
+    t = np.arange(400) * T
+    sine = (np.sin(2 * np.pi * 100 * t) * np.minimum(t / 0.01, 1.0))[None, :]
+    assert not shape_reference(lambda x: x, sine, amp, T, first_mode=f1).changed
