@@ -7,7 +7,12 @@ voltages from rest with :func:`hammerstein.compensation.drive.drive_signal` (fad
 ZPETC preview, the amplifier's limits) and writes ``t`` and one column per
 input [V] at full precision, optionally the model-predicted outputs
 (``<output>_predicted`` [µm], the preset's plant driven through its
-amplifier).
+amplifier). With limits measured on the identification records, a
+reference the drive would leave them for (a raster's line steps, a range
+beyond the records) is shaped first
+(:func:`hammerstein.compensation.shaping.shape_reference`), printed and
+written in the header, and the shaped reference is written as
+``<output>_shaped`` [µm].
 
 Exit status: 0 written; 1 a bad file or reference, or a drive the
 amplifier cannot deliver with ``--limits error`` (one line, nothing
@@ -29,6 +34,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, apply_amplifier, hardwar
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
+from hammerstein.compensation.shaping import first_mode_hz
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -144,9 +150,15 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
             f"cannot follow: give a fade-in > 0 (default: one period, "
             f"{reference.period_samples * plant.sampling_period:g} s) or a reference that starts "
             f"at rest")
-    drive = hardware_drive(comp, reference.signal, plant.sampling_period,
-                           reference.period_samples, fade, plant.amplifier, limits,
-                           rest=rest_output(plant.hysteresis))
+    T = plant.sampling_period
+
+    def predict(u):
+        return plant.simulate(apply_amplifier(plant.amplifier, u, T))[0]
+
+    drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
+                           plant.amplifier, limits, rest=rest_output(plant.hysteresis),
+                           first_mode=first_mode_hz(plant.matrices[0], T), predict=predict,
+                           names=plant.hysteresis.output_names)
     return comp, drive
 
 
@@ -200,6 +212,12 @@ def _handle(args):
             return 2
         cols = dict(zip(plant.hysteresis.input_names, drive.inputs))
         units = ", ".join(plant.hysteresis.input_names) + " [V]"
+        shaped_cols = ""
+        if any("reference shaped" in line for line in drive.shaped):
+            names = [f"{n}_shaped" for n in plant.hysteresis.output_names]
+            cols.update(zip(names, drive.reference))
+            shaped_cols = (f"\n{' '.join(names)} [µm]: the shaped reference the drive follows "
+                           f"(fade-in included)")
         if args.predicted:
             y, _ = plant.simulate(apply_amplifier(plant.amplifier, drive.inputs,
                                                   plant.sampling_period))
@@ -212,7 +230,7 @@ def _handle(args):
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
                    f"({drive.fade_samples * plant.sampling_period:g} s, excluded from the metrics)\n"
-                   f"peak input and slew: {peaks}"
+                   f"peak input and slew: {peaks}" + shaped_cols
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
                    + "".join(f"\nshaped: {line}" for line in drive.shaped))
@@ -232,9 +250,10 @@ def _handle(args):
         print_err(note)
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
-    if any("beyond the range" in n or "faster than" in n for n in drive.shaped) \
+    if any(w in n for n in drive.shaped for w in ("beyond the range", "faster than",
+                                                     "reference shaped")) \
             and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):
-        print("the raster's line steps and turns ask more than the records' limits: spread them "
+        print("the raster's line steps and turns were shaped (above): to choose how, spread them "
               "with smoothing = S in the reference (a fraction of a line, e.g. 0.1)",
               file=sys.stdout)
     print(f"wrote {args.out} ({ref.t.size} samples, fade-in "

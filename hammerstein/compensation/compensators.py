@@ -1,5 +1,9 @@
 """Feedforward compensators of the multivariable PI hysteresis.
 
+Length: about 950 lines, most of them the numpydoc of four compensators that
+share the convergence analysis above them (midpoint gains, the rho report);
+splitting them would scatter one theorem's law over several modules.
+
 The inverse multiplicative compensator of Theorem 4.1 of the paper,
 ``U(t) = Yr(t) + U(t-T) - Gamma(U(t-T))``, is a fixed-point iteration, one
 step per sample, that converges only when ``rho(I - J) < 1`` for the slope

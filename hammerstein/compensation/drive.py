@@ -1,5 +1,10 @@
 """Drive signals: the voltages to apply for a reference, within the amplifier's limits.
 
+Length: about 880 lines: the drive of the scenarios (:func:`drive_signal`,
+:class:`DriveStream`) and of the hardware commands (:func:`hardware_drive`:
+fade-in, shaping, limits) share the fade and start-up rules, kept in one
+place; the drive files and the reference shaping are modules of their own.
+
 :func:`drive_signal` is the one call from a reference to the input
 voltages of any compensator (rate-independent kinds and the Hammerstein
 compensator alike), as the scenarios compute them:
@@ -28,23 +33,27 @@ compensator alike), as the scenarios compute them:
 read or generated in pieces): every chunk size gives the same numbers as
 the whole record (``'stable'`` inversion excepted: it inverts the whole
 record at once and is only run by :func:`drive_signal`).
+
+The drive files themselves (:func:`read_signals`, :func:`signals_csv`,
+:data:`DRIVE_MARK`, :func:`drive_fade_samples`) live in
+:mod:`hammerstein.compensation.drive_files` and are re-exported here; the
+reference shaping of :func:`hardware_drive` in
+:mod:`hammerstein.compensation.shaping`.
 """
 
 from __future__ import annotations
 
-import io
-import re
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.hammerstein_compensator import continuation
-from hammerstein.io.datafiles import numeric_column, signal_table
-from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
-from hammerstein.core.numbers import check_samples
-from hammerstein.exceptions import CompensatorError, DataFileError
+from hammerstein.compensation.shaping import shape_reference, time_intervals
+from hammerstein.compensation.drive_files import (DRIVE_MARK, drive_fade_samples, read_signals,
+                                                  signals_csv)
+from hammerstein.exceptions import CompensatorError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
@@ -478,133 +487,6 @@ def apply_amplifier(amplifier: Amplifier | None, inputs, sampling_period):
     return amplifier.apply(inputs, sampling_period)[0]
 
 
-#: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
-DRIVE_MARK = "# hammerstein"
-
-
-def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file"):
-    """Columns of a drive, measured or reference CSV file, on a uniform time grid.
-
-    File conventions: a header row (lines starting with ``#`` are comments);
-    time in column ``time`` [s], strictly increasing; one column per signal
-    named as the model's inputs [V] or outputs [µm] (``mapping`` maps other
-    names); other columns are ignored. With ``sampling_period`` the columns
-    are interpolated linearly onto ``t_k = k T`` from 0 to the file's last
-    time (a file starting after 0 is refused); without it the file's times
-    must be uniform (relative spread below 1e-6) and are kept.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        The file (read through the 256 MiB data-file limit,
-        ``HAMMERSTEIN_MAX_DATA_BYTES``).
-    names : list of str
-        The signals wanted, in order.
-    time : str
-        Time column [s].
-    mapping : dict of str to str, optional
-        ``{name: column}`` for columns named otherwise.
-    sampling_period : float, optional
-        Resample onto this period [s].
-    what : str
-        What the file is, for messages (e.g. ``"--measured"``).
-
-    Returns
-    -------
-    t : numpy.ndarray, shape (n_samples,)
-        [s].
-    values : numpy.ndarray, shape (len(names), n_samples)
-    sampling_period : float
-        [s].
-
-    Raises
-    ------
-    DataFileError
-        Unreadable file, missing column (the message lists the columns
-        found), non-numeric values, times not increasing or not uniform.
-    """
-    try:
-        raw = bounded_read_bytes(path, "data", "data file")
-    except (FileLimitError, OSError) as exc:
-        raise DataFileError(f"{what}: {escape(path)}: "
-                            f"{getattr(exc, 'strerror', None) or exc}") from None
-    table = signal_table(raw, path, what)
-    del raw
-    mapping = dict(mapping or {})
-
-    def column(col, label):
-        return numeric_column(table, col, label)
-
-    t = column(time, "the time [s]")
-    if t.size < 2:
-        raise DataFileError(f"{what}: {escape(path)}: {t.size} data row; expected at least two "
-                            f"samples")
-    if np.any(np.diff(t) <= 0):
-        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise DataFileError(f"{what}: {escape(path)}: the time column {escape(repr(time), 60)} "
-                            f"is not strictly increasing at data row {i + 2} ({t[i]:g} s then "
-                            f"{t[i + 1]:g} s)")
-    vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
-    if sampling_period is None:
-        d = np.diff(t)
-        T = float(np.mean(d))
-        if np.max(np.abs(d - T)) > 1e-6 * T:
-            raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "
-                                f"{d.min():g} to {d.max():g} s); expected one sampling period")
-        return t, vals, T
-    T = float(sampling_period)
-    if t[0] > 1e-9 * max(1.0, abs(t[-1])):
-        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
-    if t[-1] < T:
-        raise DataFileError(f"{what}: {escape(path)}: spans {t[-1]:g} s, less than one sampling "
-                            f"period {T:g} s; is its time column {escape(repr(time), 60)} in "
-                            f"seconds?")
-    n = check_samples(np.floor(t[-1] / T + 1e-9) + 1,
-                      f"{what}: {escape(path)}: {t[-1]:g} s sampled at {T:g} s",
-                      DataFileError, T, len(names) + 1)
-    step = float(np.median(np.diff(t)))
-    if step < 0.5 * T and t.size > 2 * n:
-        warnings.warn(f"{what}: {escape(path)}: sampled every {step:g} s, resampled onto "
-                      f"{T:g} s: {t.size} rows become {n} samples (the reference between "
-                      f"the samples is dropped)", UserWarning, stacklevel=2)
-    grid = np.arange(n) * T
-    return grid, np.array([np.interp(grid, t, v) for v in vals]).reshape(len(names), n), T
-
-
-def signals_csv(t, columns, comment):
-    """CSV text of signals at full precision, headed by a ``# hammerstein`` comment.
-
-    Parameters
-    ----------
-    t : array_like, shape (n_samples,)
-        Time [s] (column ``t``).
-    columns : dict of str to array_like, each shape (n_samples,)
-        Name -> values, in column order.
-    comment : str
-        The comment lines' text (units, what wrote the file); each line is
-        prefixed with ``# hammerstein`` / ``#``.
-
-    Returns
-    -------
-    str
-
-    Examples
-    --------
-    >>> print(signals_csv([0.0, 0.5], {"ux": [0.1, 1 / 3]}, "drive: t [s], ux [V]"), end="")
-    # hammerstein drive: t [s], ux [V]
-    t,ux
-    0,0.10000000000000001
-    0.5,0.33333333333333331
-    """
-    lines = comment.splitlines() or [""]
-    head = [f"{DRIVE_MARK} {lines[0]}".rstrip()] + [f"# {ln}".rstrip() for ln in lines[1:]]
-    data = np.column_stack([np.asarray(t, dtype=float)]
-                           + [np.asarray(v, dtype=float) for v in columns.values()])
-    buf = io.StringIO()
-    np.savetxt(buf, data, delimiter=",", fmt="%.17g")
-    return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
-
-
 #: Shortest default fade-in of the hardware commands [s]: 20 ms, ten periods of a 500 Hz first
 #: mode (a fade is a duration, never a sample: a file reference has no period to fade over)
 MIN_FADE_S = 0.02
@@ -643,20 +525,6 @@ def _start_steps(u, end, rest):
     """Largest step per input of samples ``0 .. end - 1``, the first counted from ``rest``."""
     head = np.concatenate([rest[:, None], u[:, :max(int(end), 1)]], axis=1)
     return np.max(np.abs(np.diff(head, axis=1)), axis=1)
-
-
-def _intervals(mask, sampling_period, limit=4):
-    """``"0.1200-0.1250 s, ..."``: the runs of True in ``mask`` (at most ``limit``, then a count)."""
-    idx = np.flatnonzero(mask)
-    if idx.size == 0:
-        return ""
-    cuts = np.flatnonzero(np.diff(idx) > 1)
-    starts = np.concatenate([[idx[0]], idx[cuts + 1]])
-    ends = np.concatenate([idx[cuts], [idx[-1]]])
-    text = ", ".join(f"{a * sampling_period:.4f}-{b * sampling_period:.4f} s"
-                     for a, b in zip(starts[:limit], ends[:limit]))
-    more = starts.size - limit
-    return text + (f" and {more} more" if more > 0 else "")
 
 
 def shape_drive(amplifier, inputs, sampling_period):
@@ -705,7 +573,7 @@ def shape_drive(amplifier, inputs, sampling_period):
             what.append(f"faster than {c.slew_rate:.4g} V/s")
         notes.append(f"{amplifier.inputs[i]}: {' and '.join(what)}, changed by up to "
                      f"{float(diff.max()):.3g} V on {100 * np.mean(changed):.3g} % of the samples "
-                     f"({_intervals(changed, sampling_period)})")
+                     f"({time_intervals(changed, sampling_period)})")
     return out, notes
 
 
@@ -778,7 +646,8 @@ def rest_output(model):
 
 
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
-                   fade_samples=None, amplifier=None, limits="error", where="", rest=None):
+                   fade_samples=None, amplifier=None, limits="error", where="", rest=None,
+                   first_mode=None, predict=None, names=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -798,9 +667,16 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
        quarter of the record. After the limits (2.), a start-up that still
        steps faster than the settled drive is slew-limited to the settled
        drive's largest step over the whole record (which the settled drive
-       never needs; ``shaped`` says so).
+       never needs; ``shaped`` says so). With limits measured on the
+       records, such a start-up is first shaped in the reference instead
+       (a raster's first line step, which the fade ends on: the settled
+       drive's largest step taken as the slew rate), so the slew limit
+       has nothing left to change.
     2. **the limits.** An amplifier whose limits were measured on the
-       identification records (``source = "records"``) shapes the drive
+       identification records (``source = "records"``) first shapes the
+       reference where the drive would leave them
+       (:func:`hammerstein.compensation.shaping.shape_reference`; the
+       compensator is run again on the shaped reference), then the drive
        (:func:`shape_drive`: range clip, slew limit, the notes say where
        and by how much); the amplifier's own limits react as ``limits``
        says (:meth:`~hammerstein.models.amplifier.Amplifier.check`).
@@ -825,11 +701,25 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     rest : array_like, shape (p,), optional
         The output at rest [µm] (:func:`rest_output`), the fade's start;
         zeros by default.
+    first_mode : float, optional
+        The identified dynamics' first bending mode [Hz]
+        (:func:`hammerstein.compensation.shaping.first_mode_hz`), for the
+        reference shaping.
+    predict : callable, optional
+        ``predict(inputs) -> outputs (p, n_samples)`` [µm], the model from
+        rest, for the reference shaping's range stage.
+    names : sequence of str, optional
+        Output names for the shaping notes.
 
     Returns
     -------
     DriveResult
-        ``shaped`` lists the shaping notes; ``reference`` the faded reference.
+        ``shaped`` lists the shaping notes; ``reference`` the faded
+        reference the drive was computed for, itself shaped where the
+        drive would leave limits measured on the records
+        (:func:`hammerstein.compensation.shaping.shape_reference`: a
+        raster's line steps and corners smoothed below the first mode, a
+        range the amplifier does not reach limited to what it reaches).
 
     Raises
     ------
@@ -883,12 +773,24 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     else:
         n = int(min(max(int(fade_samples), 0), N))
         u, faded = run(n)
+    notes = []
+    if amplifier is not None and amplifier.from_records:
+        def drive_for(ref):
+            return _compensate(compensator, ref, P or None, 0)[0]
+
+        sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names)
+        u, faded, notes = sr.inputs, sr.reference, sr.notes
+        if fade_samples is None:     # a start-up stepping faster than the settled drive: shaped too
+            u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
+                                             first_mode, predict, names)
+            notes += more
     peak, top = drive_metrics(u, T)
-    res = DriveResult(u, u, faded, peak, top, n)
+    res = DriveResult(u, u, faded, peak, top, n, shaped=notes)
     r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
     out = u
     if amplifier is not None and amplifier.from_records:
-        out, res.shaped = shape_drive(amplifier, u, T)
+        out, more = shape_drive(amplifier, u, T)
+        res.shaped += more
     elif amplifier is not None:
         res.problems = amplifier.check(u, T, limits, where)
         if res.problems:
@@ -899,6 +801,33 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         res.shaped += notes
     res.inputs = out
     return res
+
+
+def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, names):
+    """Reference shaping against the settled drive's own largest step (the start-up's bound).
+
+    The settled part (one period after the fade on) never steps more than
+    ``S`` per sample, so shaping with the slew rate ``S / T`` changes only
+    what steps more: the start-up (e.g. a raster's first line step, which
+    the default fade-in ends on). Returns ``(u, faded, notes)``, unchanged
+    when the start-up is within the bound.
+    """
+    N = u.shape[1]
+    end = min(fade + max(P, 1), N)
+    bound = settled_step(u, end)
+    rest = np.array([c.rest for c in amplifier.channels])
+    start = _start_steps(u, end, rest)
+    if not np.any(start > bound * (1 + _STEP_TOL)) or not np.all(np.isfinite(bound) & (bound > 0)):
+        return u, faded, []
+    tight = Amplifier([replace(c, slew_rate=min(c.slew_rate, b / T))
+                       for c, b in zip(amplifier.channels, bound)], amplifier.inputs,
+                      amplifier.source)
+    sr = shape_reference(run, faded, tight, T, first_mode, predict, P or None, names)
+    if not sr.changed:
+        return u, faded, []
+    why = "the drive left the limits measured on the records"
+    notes = [n.replace(why, "the start-up stepped faster than the settled drive") for n in sr.notes]
+    return sr.inputs, sr.reference, notes
 
 
 def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
@@ -952,35 +881,6 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
         notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
                      f"drive's largest step, {bound[i]:.3g} V per sample ({start[i]:.3g} V asked)")
     return u, notes
-
-
-def drive_fade_samples(path):
-    """The ``fade-in N samples`` a drive file's header records, or None.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-        A drive file of ``hammerstein compensate`` or ``learn``.
-
-    Returns
-    -------
-    int or None
-        N [samples]; None when the first 20 comment lines do not state it.
-
-    Raises
-    ------
-    OSError
-        The file cannot be read.
-    """
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for _ in range(20):
-            line = fh.readline()
-            if not line.startswith("#"):
-                break
-            m = re.search(r"fade-in (\d+) samples", line)
-            if m:
-                return int(m.group(1))
-    return None
 
 
 def keep_start(previous, learnt, fade_samples, period_samples=None):

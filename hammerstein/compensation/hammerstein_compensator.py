@@ -1,5 +1,9 @@
 """The Hammerstein compensator: inverse of the linear dynamics, then of the hysteresis.
 
+Length: about 900 lines: the compensator, its ZPETC preview and the
+reference continuation it reads ahead are one state machine (the chunked
+stream, the fused kernels and the exported C follow it step by step).
+
 The actuator is the Hammerstein cascade ``U -> Gamma (multivariable PI) -> H
 -> G(z) -> Y``. Its feedforward compensator inverts the two blocks in the
 reverse order (docs/hammerstein-plant.md, "Compensation")::

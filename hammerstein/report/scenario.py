@@ -10,7 +10,9 @@ Layout of ``DIR/<scenario name>/`` (written by
   ``<output>_um``;
 * ``*.png``: input-output maps (open-loop and compensated sines, paper Fig. 5
   and 8), trajectory figures (Fig. 10-13), divergence plots;
-* ``report.md``: the cases, the figures and the metrics table.
+* ``report.md``: the cases, how each compensated case starts (faded in, or
+  with a step at t = 0 and how large: :func:`start_lines`), the figures
+  and the metrics table.
 """
 
 from __future__ import annotations
@@ -27,9 +29,11 @@ from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame, write_signals_csv
+from hammerstein.scenario.execute import fade_samples
 from hammerstein.scenario.registry import COMPENSATORS
 
-__all__ = ["metrics_frame", "timeseries_frame", "timeseries_columns", "write_report", "markdown_table", "COLUMNS"]
+__all__ = ["metrics_frame", "timeseries_frame", "timeseries_columns", "write_report", "markdown_table", "COLUMNS",
+           "start_lines"]
 
 
 def timeseries_columns(result):
@@ -385,6 +389,58 @@ def _scan_figures(scenario, results, directory, jobs):
     return figs
 
 
+def start_lines(results, atol=1e-9):
+    """The report's lines on how each compensated case starts: faded in, or with a step.
+
+    A reference case starts from rest (0 V, 0 µm). Its reference is either
+    faded in (:func:`hammerstein.scenario.execute.fade_samples` > 0) or
+    starts at rest, or it starts with a step: the paper's circles start at
+    (R, 0), which the simulated compensator asks for in one sample. The
+    hardware commands never do (``hammerstein compensate`` fades in over a
+    duration); the report says where and how large the step is.
+
+    Parameters
+    ----------
+    results : list of hammerstein.scenario.execute.CaseResult
+    atol : float
+        A first sample within ``atol`` [µm] of rest is at rest.
+
+    Returns
+    -------
+    list of str
+        Markdown lines (a heading, one bullet per start, cases grouped);
+        empty without a reference case.
+    """
+    groups = {}
+    for r in results:
+        spec = r.spec
+        if r.reference is None or getattr(spec, "signal", None) is None:
+            continue
+        first = np.asarray(spec.signal, dtype=float)[:, 0]
+        step = float(np.linalg.norm(first))
+        fade = fade_samples(spec)
+        T = spec.plant.sampling_period
+        names = list(spec.plant.hysteresis.output_names)
+        if fade > 0:
+            text = f"faded in from rest over {fade * T * 1e3:.4g} ms ({fade} samples)"
+        elif step <= atol:
+            text = "at rest (its first sample is 0 µm): no step"
+        else:
+            at = ", ".join(f"{n} = {v:.4g} µm" for n, v in zip(names, first))
+            text = (f"with a step at t = 0: the reference starts at {at}, {step:.4g} µm from "
+                    f"rest in one sample (the paper's abrupt start; the hardware commands "
+                    f"never do this: `hammerstein compensate` fades in over a duration)")
+        groups.setdefault(text, []).append(r.name)
+    if not groups:
+        return []
+    lines = ["Start of each compensated case (from rest):", ""]
+    for text, cases in groups.items():
+        shown = ", ".join(f"`{c}`" for c in cases[:6]) + (
+            f" and {len(cases) - 6} more" if len(cases) > 6 else "")
+        lines.append(f"- {shown}: {text}")
+    return lines + [""]
+
+
 def write_report(scenario, results, directory, jobs=None):
     """Write metrics.csv, the time series, the figures and report.md.
 
@@ -426,6 +482,7 @@ def write_report(scenario, results, directory, jobs=None):
                    f"(t = {r.diverged_at * 1e3:.3g} ms): {r.divergence.reason}"),
     } for r in results])
     lines += [markdown_table(table), ""] if results else ["(sweep cases only; see below)", ""]
+    lines += start_lines(results)
     notes = [(r.name, w) for r in results for w in dict.fromkeys(r.warnings)]
     if notes:
         lines += ["Warnings:", ""] + [f"- `{n}`: {w}" for n, w in notes] + [""]

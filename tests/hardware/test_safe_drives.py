@@ -124,7 +124,10 @@ def test_a_circle_beyond_the_range_is_shaped_and_says_where(tmp_path):
     assert re.search(r"\d\.\d{4}-\d\.\d{4} s", text)       # the time intervals
     assert np.isclose(np.max(np.abs(u)), RANGE)
     printed = _compensate([_preset(tmp_path), "--reference", RASTER, "--out", out])
-    assert "uy: beyond the range [-5, 5] V" in printed and "smoothing = S" in printed
+    assert "reference shaped by up to" in printed and "smoothing = S" in printed
+    u, _, text = _drive(out)
+    assert np.max(np.abs(u)) <= RANGE + 1e-9                # the reference shaped, not the drive
+    assert "x_shaped y_shaped [µm]" in text
 
 
 def test_records_amplifier_table_is_the_records_range_and_largest_slew():
@@ -155,3 +158,19 @@ def test_hardware_fade_rest_lead_and_keep_start():
     u = keep_start(np.zeros((1, 40)), np.ones((1, 40)), 10, 10)
     np.testing.assert_array_equal(u[0, :11], 0.0)
     np.testing.assert_array_equal(u[0, 20:], 1.0)
+
+
+def test_a_raster_start_up_is_shaped_not_slew_limited(tmp_path):
+    """A raster whose line steps were shaped: its first step after the fade, which the settled
+    drive never needs so fast, is shaped as well (not slew-limited afterwards), so the drive
+    still follows a reference (the file's shaped one) everywhere after the fade."""
+    out = tmp_path / "drive.csv"
+    raster = ('{ kind = "raster", size = [20, 20], lines = 6, frequency = 50, '
+              'outputs = ["x", "y"] }')
+    printed = _compensate([_preset(tmp_path), "--reference", raster, "--out", out])
+    u, fade, text = _drive(out)
+    assert "reference shaped by up to" in printed
+    assert "slew-limited to the settled drive's largest step" not in text
+    steps = _steps(u)
+    settled = steps[:, fade + 400 + 1:].max(axis=1)              # one 50 Hz line after the fade
+    assert np.all(steps.max(axis=1) <= settled * (1 + 1e-6))

@@ -1,0 +1,183 @@
+"""Drive files: the CSV files of the hardware commands, read and written.
+
+``hammerstein compensate`` and ``learn`` write a drive (``t`` and one
+column per input [V], optionally predicted or shaped outputs [µm]) under
+a comment header that starts with :data:`DRIVE_MARK` (the mark by which a
+command knows a file it may replace) and states the fade-in
+(:func:`drive_fade_samples`); :func:`read_signals` reads named columns of
+any such CSV (drive, measured record or reference file) on a uniform time
+grid. Split from :mod:`hammerstein.compensation.drive`, which re-exports
+these names.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import warnings
+
+import numpy as np
+
+from hammerstein.io.datafiles import numeric_column, signal_table
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
+from hammerstein.core.numbers import check_samples
+from hammerstein.exceptions import DataFileError
+
+__all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples"]
+
+
+#: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
+DRIVE_MARK = "# hammerstein"
+
+
+def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file"):
+    """Columns of a drive, measured or reference CSV file, on a uniform time grid.
+
+    File conventions: a header row (lines starting with ``#`` are comments);
+    time in column ``time`` [s], strictly increasing; one column per signal
+    named as the model's inputs [V] or outputs [µm] (``mapping`` maps other
+    names); other columns are ignored. With ``sampling_period`` the columns
+    are interpolated linearly onto ``t_k = k T`` from 0 to the file's last
+    time (a file starting after 0 is refused); without it the file's times
+    must be uniform (relative spread below 1e-6) and are kept.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file (read through the 256 MiB data-file limit,
+        ``HAMMERSTEIN_MAX_DATA_BYTES``).
+    names : list of str
+        The signals wanted, in order.
+    time : str
+        Time column [s].
+    mapping : dict of str to str, optional
+        ``{name: column}`` for columns named otherwise.
+    sampling_period : float, optional
+        Resample onto this period [s].
+    what : str
+        What the file is, for messages (e.g. ``"--measured"``).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (n_samples,)
+        [s].
+    values : numpy.ndarray, shape (len(names), n_samples)
+    sampling_period : float
+        [s].
+
+    Raises
+    ------
+    DataFileError
+        Unreadable file, missing column (the message lists the columns
+        found), non-numeric values, times not increasing or not uniform.
+    """
+    try:
+        raw = bounded_read_bytes(path, "data", "data file")
+    except (FileLimitError, OSError) as exc:
+        raise DataFileError(f"{what}: {escape(path)}: "
+                            f"{getattr(exc, 'strerror', None) or exc}") from None
+    table = signal_table(raw, path, what)
+    del raw
+    mapping = dict(mapping or {})
+
+    def column(col, label):
+        return numeric_column(table, col, label)
+
+    t = column(time, "the time [s]")
+    if t.size < 2:
+        raise DataFileError(f"{what}: {escape(path)}: {t.size} data row; expected at least two "
+                            f"samples")
+    if np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0])
+        raise DataFileError(f"{what}: {escape(path)}: the time column {escape(repr(time), 60)} "
+                            f"is not strictly increasing at data row {i + 2} ({t[i]:g} s then "
+                            f"{t[i + 1]:g} s)")
+    vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
+    if sampling_period is None:
+        d = np.diff(t)
+        T = float(np.mean(d))
+        if np.max(np.abs(d - T)) > 1e-6 * T:
+            raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "
+                                f"{d.min():g} to {d.max():g} s); expected one sampling period")
+        return t, vals, T
+    T = float(sampling_period)
+    if t[0] > 1e-9 * max(1.0, abs(t[-1])):
+        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
+    if t[-1] < T:
+        raise DataFileError(f"{what}: {escape(path)}: spans {t[-1]:g} s, less than one sampling "
+                            f"period {T:g} s; is its time column {escape(repr(time), 60)} in "
+                            f"seconds?")
+    n = check_samples(np.floor(t[-1] / T + 1e-9) + 1,
+                      f"{what}: {escape(path)}: {t[-1]:g} s sampled at {T:g} s",
+                      DataFileError, T, len(names) + 1)
+    step = float(np.median(np.diff(t)))
+    if step < 0.5 * T and t.size > 2 * n:
+        warnings.warn(f"{what}: {escape(path)}: sampled every {step:g} s, resampled onto "
+                      f"{T:g} s: {t.size} rows become {n} samples (the reference between "
+                      f"the samples is dropped)", UserWarning, stacklevel=2)
+    grid = np.arange(n) * T
+    return grid, np.array([np.interp(grid, t, v) for v in vals]).reshape(len(names), n), T
+
+
+def signals_csv(t, columns, comment):
+    """CSV text of signals at full precision, headed by a ``# hammerstein`` comment.
+
+    Parameters
+    ----------
+    t : array_like, shape (n_samples,)
+        Time [s] (column ``t``).
+    columns : dict of str to array_like, each shape (n_samples,)
+        Name -> values, in column order.
+    comment : str
+        The comment lines' text (units, what wrote the file); each line is
+        prefixed with ``# hammerstein`` / ``#``.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> print(signals_csv([0.0, 0.5], {"ux": [0.1, 1 / 3]}, "drive: t [s], ux [V]"), end="")
+    # hammerstein drive: t [s], ux [V]
+    t,ux
+    0,0.10000000000000001
+    0.5,0.33333333333333331
+    """
+    lines = comment.splitlines() or [""]
+    head = [f"{DRIVE_MARK} {lines[0]}".rstrip()] + [f"# {ln}".rstrip() for ln in lines[1:]]
+    data = np.column_stack([np.asarray(t, dtype=float)]
+                           + [np.asarray(v, dtype=float) for v in columns.values()])
+    buf = io.StringIO()
+    np.savetxt(buf, data, delimiter=",", fmt="%.17g")
+    return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
+
+
+
+def drive_fade_samples(path):
+    """The ``fade-in N samples`` a drive file's header records, or None.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+
+    Returns
+    -------
+    int or None
+        N [samples]; None when the first 20 comment lines do not state it.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        for _ in range(20):
+            line = fh.readline()
+            if not line.startswith("#"):
+                break
+            m = re.search(r"fade-in (\d+) samples", line)
+            if m:
+                return int(m.group(1))
+    return None

@@ -1,0 +1,448 @@
+"""Reference shaping: a reference the actuator cannot follow, made one it can.
+
+A hardware drive is computed for the reference the user asked for; where
+that drive leaves what the amplifier allows (beyond the range, or stepping
+faster than the slew rate, both measured on the identification records
+for an identified model), clipping the *drive* afterwards leaves the
+actuator somewhere the compensator never planned (and, for a hysteresis
+inverse with memory, on another memory branch than the one the inverse
+assumed). :func:`shape_reference` shapes the *reference* instead, and runs the
+compensator again on the shaped reference:
+
+0. **band limit**: where the reference accelerates more than a sine at
+   the identified first bending mode would (:func:`faster_than_mode`: a
+   raster's line steps and corners, never a circle below the mode), it is
+   replaced by its zero-phase Hann-window average over one period of the
+   mode: the inverse of the dynamics is then not asked for content at the
+   resonance, which it reproduces only as well as the mode was identified;
+1. **transients** (a raster's line steps and corners, a circle's start):
+   around every sample whose drive leaves the limits, the reference is
+   replaced by its zero-phase Hann-window average (a band limit below the
+   first bending mode of the identified dynamics: the window is one period
+   of that mode, doubled while it helps), blended in and out by a raised
+   cosine; a step becomes an S-curve, a corner a smooth turn-around.
+   The window grows only while the drive's excess over the limits falls
+   by at least a tenth. The first half of the samples at rest before the
+   reference starts moving stays at rest (the drive still starts at rest).
+2. **range**: what still leaves the range (the reference asks for more
+   displacement than the amplifier's range reaches) is replaced, around
+   those samples, by the output the model predicts for the range-clipped
+   drive (scaled towards rest by up to a tenth while the drive for it
+   still leaves the range): the reference becomes what the actuator can
+   reach, and the compensator is run again on it (its memory then
+   follows the drive it actually sends).
+
+Every change is reported (:func:`shaping_notes`): per output, the largest
+change [µm], the share of samples and the time intervals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["ShapedReference", "first_mode_hz", "faster_than_mode", "limit_excess", "hann_average",
+           "shape_reference", "shaping_notes", "time_intervals"]
+
+#: the smoothing window grows (doubles) at most this many times
+MAX_DOUBLINGS = 6
+#: a doubled window is kept only when it lowers the drive's excess by at least this fraction
+MIN_GAIN = 0.1
+#: the range stage's reference: the reachable output scaled towards rest by these factors in turn
+#: (an identified model flattens near the edge of its records, where its inverse asks much more
+#: voltage for a little more displacement) until the drive is within the range
+RANGE_MARGINS = (1.0, 0.995, 0.98, 0.95, 0.9)
+
+
+@dataclass
+class ShapedReference:
+    """A shaped reference, the drive computed for it and what was changed.
+
+    Parameters
+    ----------
+    reference : numpy.ndarray, shape (p, n_samples)
+        The shaped reference [µm] (equal to the given one where nothing
+        was changed).
+    inputs : numpy.ndarray, shape (m, n_samples)
+        The compensator's drive for ``reference`` [V], before any limit.
+    window_samples : int
+        The smoothing window of the transient stage [samples] (0: none).
+    range_limited : bool
+        True when the range stage changed the reference.
+    notes : list of str
+        One line per changed output (:func:`shaping_notes`).
+    """
+
+    reference: np.ndarray
+    inputs: np.ndarray
+    window_samples: int = 0
+    range_limited: bool = False
+    notes: list = field(default_factory=list)
+
+    @property
+    def changed(self) -> bool:
+        """True when the reference was shaped."""
+        return bool(self.notes)
+
+
+def first_mode_hz(A, sampling_period):
+    """Lowest oscillatory mode of a discrete linear part [Hz], or None.
+
+    The frequency of a discrete pole ``z`` is ``|arg z| / (2 pi T)`` (the
+    continuous pole ``s = log(z) / T``); real poles (creep, lags) have none.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        Discrete state matrix (n may be 0).
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    float or None
+        [Hz]; None without an oscillatory pole.
+
+    Examples
+    --------
+    >>> T = 1e-4
+    >>> z = np.exp(T * (-50 + 2j * np.pi * 400))
+    >>> A = [[z.real, -z.imag], [z.imag, z.real]]
+    >>> round(first_mode_hz(A, T), 6)
+    400.0
+    """
+    A = np.atleast_2d(np.asarray(A, dtype=float))
+    if A.size == 0:
+        return None
+    f = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * float(sampling_period))
+    f = f[f > 1e-9]
+    return float(f.min()) if f.size else None
+
+
+def limit_excess(amplifier, inputs, sampling_period):
+    """Per sample, how far a drive leaves the amplifier's range and slew rate [V].
+
+    ``e[k] = sum_i max(u_i[k] - high_i, low_i - u_i[k], 0)
+    + max(|u_i[k] - u_i[k-1]| - S_i T, 0)``, the first step counted from
+    the channel's rest voltage.
+
+    Parameters
+    ----------
+    amplifier : hammerstein.models.amplifier.Amplifier
+    inputs : array_like, shape (m, n_samples)
+        [V].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_samples,)
+        [V]; zero where the drive is within the limits.
+
+    Examples
+    --------
+    >>> from hammerstein.models.amplifier import amplifier_from_table
+    >>> amp = amplifier_from_table({"range": [-1.0, 1.0], "slew_rate": 1.0}, ["u"])
+    >>> limit_excess(amp, [[0.5, 1.5, 1.5]], 1.0).tolist()   # beyond the range by 0.5 V twice
+    [0.0, 0.5, 0.5]
+    """
+    u = np.array(inputs, dtype=float, ndmin=2)
+    e = np.zeros(u.shape[1])
+    T = float(sampling_period)
+    for i, c in enumerate(amplifier.channels):
+        e += np.maximum(np.maximum(u[i] - c.high, c.low - u[i]), 0.0)
+        if np.isfinite(c.slew_rate):
+            steps = np.abs(np.diff(np.concatenate([[c.rest], u[i]])))
+            e += np.maximum(steps - c.slew_rate * T * (1 + 1e-9), 0.0)
+    return e
+
+
+def hann_average(signal, window):
+    """Zero-phase moving average with a Hann window (edges held) per row.
+
+    Parameters
+    ----------
+    signal : array_like, shape (p, n_samples)
+    window : int
+        Window length [samples]; below 3 the signal is returned unchanged.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, n_samples)
+        ``sum_j w_j x[k + j] / sum_j w_j``, ``w`` the Hann window of
+        ``window`` samples centred on ``k`` (a symmetric kernel: no phase
+        lag), the signal continued by its first and last values.
+
+    Examples
+    --------
+    >>> np.round(hann_average([[0.0] * 4 + [1.0] * 4], 5), 3).tolist()  # weights 1, 3, 4, 3, 1 / 12
+    [[0.0, 0.0, 0.083, 0.333, 0.667, 0.917, 1.0, 1.0]]
+    """
+    x = np.array(signal, dtype=float, ndmin=2)
+    L = int(window) | 1                        # odd: centred
+    if L < 3 or x.shape[1] == 0:
+        return x
+    w = np.hanning(L + 2)[1:-1]
+    w = w / w.sum()
+    h = L // 2
+    pad = np.pad(x, ((0, 0), (h, h)), mode="edge")
+    return np.vstack([np.convolve(row, w, mode="valid") for row in pad])
+
+
+def _blend_weights(mask, window):
+    """0..1 weights: 1 within ``window`` samples of a True of ``mask``, raised-cosine edges."""
+    L = max(int(window), 1)
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return np.zeros(mask.size)
+    near = np.zeros(mask.size)
+    for k in idx:                              # dilate by L each side
+        near[max(k - L, 0):k + L + 1] = 1.0
+    return np.clip(hann_average(near[None, :], L)[0] * 1.0000001, 0.0, 1.0)
+
+
+def _after(start, n, size):
+    """0 before ``start``, a raised cosine up to 1 over the next ``n`` samples, 1 after."""
+    k = np.clip((np.arange(size) - start) / max(n, 1), 0.0, 1.0)
+    return 0.5 * (1.0 - np.cos(np.pi * k))
+
+
+def time_intervals(mask, sampling_period, limit=4):
+    """``"0.1200-0.1250 s, ..."``: the runs of True in ``mask`` (at most ``limit``, then a count).
+
+    Parameters
+    ----------
+    mask : array_like of bool, shape (n_samples,)
+    sampling_period : float
+        T [s].
+    limit : int
+        Runs listed before ``and N more``.
+
+    Returns
+    -------
+    str
+        Empty when ``mask`` has no True.
+
+    Examples
+    --------
+    >>> time_intervals([False, True, True, False, True], 0.5)
+    '0.5000-1.0000 s, 2.0000-2.0000 s'
+    """
+    idx = np.flatnonzero(np.asarray(mask, dtype=bool))
+    if idx.size == 0:
+        return ""
+    cuts = np.flatnonzero(np.diff(idx) > 1)
+    starts = np.concatenate([[idx[0]], idx[cuts + 1]])
+    ends = np.concatenate([idx[cuts], [idx[-1]]])
+    T = float(sampling_period)
+    text = ", ".join(f"{a * T:.4f}-{b * T:.4f} s" for a, b in zip(starts[:limit], ends[:limit]))
+    more = starts.size - limit
+    return text + (f" and {more} more" if more > 0 else "")
+
+
+def shaping_notes(raw, shaped, sampling_period, names=None, why=""):
+    """One line per output the shaping changed: by how much, how often, where.
+
+    Parameters
+    ----------
+    raw, shaped : array_like, shape (p, n_samples)
+        The reference before and after [µm].
+    sampling_period : float
+        T [s].
+    names : sequence of str, optional
+        Output names (default ``output 1``, ...).
+    why : str
+        Appended to every line (e.g. the limits the drive left).
+
+    Returns
+    -------
+    list of str
+
+    Examples
+    --------
+    >>> shaping_notes([[0.0, 1.0, 1.0]], [[0.0, 0.5, 1.0]], 0.5, ["x"])
+    ['x: reference shaped by up to 0.5 µm on 33.3 % of the samples (0.5000-0.5000 s)']
+    """
+    r = np.array(raw, dtype=float, ndmin=2)
+    s = np.array(shaped, dtype=float, ndmin=2)
+    notes = []
+    for i in range(r.shape[0]):
+        d = np.abs(s[i] - r[i])
+        scale = max(1.0, float(np.max(np.abs(r[i])))) if r.shape[1] else 1.0
+        changed = d > 1e-9 * scale
+        if not np.any(changed):
+            continue
+        name = names[i] if names is not None else f"output {i + 1}"
+        notes.append(f"{name}: reference shaped by up to {float(d.max()):.3g} µm on "
+                     f"{100 * np.mean(changed):.3g} % of the samples "
+                     f"({time_intervals(changed, sampling_period)}){why}")
+    return notes
+
+
+def shape_reference(run, reference, amplifier, sampling_period, first_mode=None, predict=None,
+                    period_samples=None, names=None):
+    """A reference shaped to what the amplifier and the identified dynamics allow.
+
+    See the module docstring for the two stages. Nothing is changed when
+    the drive ``run(reference)`` is within the limits.
+
+    Parameters
+    ----------
+    run : callable
+        ``run(reference) -> inputs (m, n_samples)``: the compensator's drive
+        from rest for a reference [V].
+    reference : array_like, shape (p, n_samples)
+        The reference, already faded in from rest [µm].
+    amplifier : hammerstein.models.amplifier.Amplifier
+        The limits (e.g. measured on the identification records).
+    sampling_period : float
+        T [s].
+    first_mode : float, optional
+        The identified dynamics' first bending mode [Hz]
+        (:func:`first_mode_hz`): the first smoothing window is one of its
+        periods; without one (a static model) 8 samples.
+    predict : callable, optional
+        ``predict(inputs) -> outputs (p, n_samples)``, the model's output
+        for a drive from rest [µm]; without it there is no range stage.
+    period_samples : int, optional
+        One period of a periodic reference: the window never exceeds half
+        of it.
+    names : sequence of str, optional
+        Output names for the notes.
+
+    Returns
+    -------
+    ShapedReference
+
+    Examples
+    --------
+    A static gain of 1 V/µm behind a slew limit of 1 V per sample: a 4 µm
+    step becomes an S-curve the drive can follow.
+
+    >>> from hammerstein.models.amplifier import amplifier_from_table
+    >>> amp = amplifier_from_table({"range": [-10.0, 10.0], "slew_rate": 1.0}, ["u"])
+    >>> r = np.array([[0.0] * 20 + [4.0] * 20])
+    >>> s = shape_reference(lambda x: x, r, amp, 1.0)
+    >>> float(limit_excess(amp, s.inputs, 1.0).max()), s.window_samples
+    (0.0, 8)
+    """
+    r = np.array(reference, dtype=float, ndmin=2)
+    T = float(sampling_period)
+    N = r.shape[1]
+    L0 = int(np.ceil(1.0 / (first_mode * T))) if first_mode else 8
+    cap = N // 2 if not period_samples or period_samples < 2 else max(int(period_samples) // 2, 3)
+    L0 = max(min(L0, cap), 3)
+    at_rest = np.all(np.abs(r - r[:, :1]) <= 1e-12 * max(1.0, float(np.max(np.abs(r)))), axis=0)
+    lead = int(np.argmin(at_rest)) if not np.all(at_rest) else N    # samples at rest first
+    guard = _after(lead // 2, lead - lead // 2, N)     # the first half of them stays at rest
+    base, band = r, False
+    if first_mode and N >= 3:                          # stage 0: band limit below the first mode
+        fast = faster_than_mode(r, first_mode, T)
+        if np.any(fast):
+            base = r + _blend_weights(fast, L0) * guard * (hann_average(r, L0) - r)
+            band = True
+    u = np.asarray(run(base), dtype=float)
+    excess = limit_excess(amplifier, u, T) if amplifier is not None else np.zeros(N)
+    best = ShapedReference(base, u, L0 if band else 0)
+    reasons = ([f"it moves faster than the {first_mode:.4g} Hz first mode of the identified "
+                f"dynamics follows: smoothed there over {L0 * T * 1e3:.3g} ms (one period of "
+                f"the mode)"] if band else [])
+    if not np.any(excess > 0) or N < 3:
+        best.notes = shaping_notes(r, best.reference, T, names,
+                                   f": {'; '.join(reasons)}" if reasons else "")
+        return best
+    best_total = float(excess.sum())
+    mask = excess > 0
+    L = L0
+    limited_window = 0
+    for _ in range(MAX_DOUBLINGS + 1):
+        w = _blend_weights(mask, L) * guard
+        trial = base + w * (hann_average(base, L) - base)
+        u_t = np.asarray(run(trial), dtype=float)
+        e_t = limit_excess(amplifier, u_t, T)
+        total = float(e_t.sum())
+        if total > (1 - MIN_GAIN) * best_total:
+            break
+        best, best_total, limited_window = ShapedReference(trial, u_t, L), total, L
+        mask = mask | (e_t > 0)
+        if total == 0 or 2 * L > cap:
+            break
+        L *= 2
+    notes_why = []
+    if limited_window:
+        notes_why.append(f"smoothed over {limited_window * T * 1e3:.3g} ms"
+                         + (f" (one period of the {first_mode:.4g} Hz first mode"
+                            f"{', doubled' if limited_window > L0 else ''})"
+                            if first_mode and limited_window >= L0 else ""))
+    e_now = limit_excess(amplifier, best.inputs, T)
+    if predict is not None and np.any(e_now > 0):
+        clipped, _ = amplifier.limit(best.inputs, T)
+        reach = np.asarray(predict(clipped), dtype=float)
+        rest = r[:, :1]                          # the faded reference starts at rest
+        w = _blend_weights(e_now > 0, L0) * guard
+        total, limited = float(e_now.sum()), None
+        for f in RANGE_MARGINS:                  # the range's edge, then a little inside it
+            trial = best.reference + w * (rest + f * (reach - rest) - best.reference)
+            u_t = np.asarray(run(trial), dtype=float)
+            e_t = float(limit_excess(amplifier, u_t, T).sum())
+            if e_t < total:
+                total, limited = e_t, (ShapedReference(trial, u_t, best.window_samples, True), f)
+            if e_t == 0:
+                break
+        if limited is not None:
+            best, f = limited
+            notes_why.append("limited to the output the range reaches (the model's prediction "
+                             "for the clipped drive" + (f", {100 * (1 - f):.3g} % inside it"
+                                                        if f < 1 else "") + ")")
+    if notes_why:
+        reasons.append(f"the drive left the limits measured on the records "
+                       f"({'; '.join(notes_why)})")
+    best.notes = shaping_notes(r, best.reference, T, names,
+                               f": {'; '.join(reasons)}" if reasons else "")
+    return best
+
+
+def faster_than_mode(reference, first_mode, sampling_period):
+    """Samples where a reference accelerates more than a sine at the first mode would.
+
+    A sine of amplitude ``A`` at ``f`` accelerates at most ``(2 pi f)^2 A``;
+    a reference whose acceleration (second difference over ``T^2``)
+    exceeds ``(2 pi f_1)^2 A`` with ``A`` half its range asks for content
+    at or above the first mode ``f_1``, which an inverse of the identified
+    dynamics reproduces only as well as the mode was identified (a
+    raster's line steps and corners; a circle below ``f_1`` never does).
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    first_mode : float
+        [Hz].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (n_samples,)
+        True where any output exceeds the bound (never the first and last
+        sample).
+
+    Examples
+    --------
+    >>> T, f1 = 1e-4, 300.0
+    >>> t = np.arange(400) * T
+    >>> bool(np.any(faster_than_mode([np.sin(2 * np.pi * 250 * t)], f1, T)))
+    False
+    >>> np.flatnonzero(faster_than_mode([np.r_[np.zeros(5), np.ones(5)]], f1, T)).tolist()
+    [4, 5]
+    """
+    r = np.array(reference, dtype=float, ndmin=2)
+    out = np.zeros(r.shape[1], dtype=bool)
+    if r.shape[1] < 3:
+        return out
+    acc = np.abs(r[:, 2:] - 2 * r[:, 1:-1] + r[:, :-2]) / float(sampling_period) ** 2
+    half = 0.5 * (r.max(axis=1) - r.min(axis=1))
+    bound = (2 * np.pi * float(first_mode)) ** 2 * half
+    out[1:-1] = np.any(acc > bound[:, None] * (1 + 1e-9), axis=0)
+    return out

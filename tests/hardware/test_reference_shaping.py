@@ -1,0 +1,97 @@
+"""Reference shaping: a reference the drive cannot follow within the limits is shaped, not clipped."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hammerstein.compensation.shaping import (first_mode_hz, hann_average, limit_excess,
+                                              shape_reference)
+from hammerstein.models.amplifier import amplifier_from_table
+
+
+def _amp(low=-10.0, high=10.0, slew=1.0):
+    return amplifier_from_table({"range": [low, high], "slew_rate": slew}, ["u"])
+
+
+def test_hann_average_keeps_constants_and_ramps():
+    """A symmetric kernel of unit sum: constants and straight lines pass unchanged (no lag)."""
+    k = np.arange(200.0)
+    ramp = np.vstack([3.0 + 0.25 * k, np.full(200, -2.0)])
+    out = hann_average(ramp, 21)
+    assert np.allclose(out[:, 10:-10], ramp[:, 10:-10], atol=1e-12)
+    assert np.allclose(out[1], -2.0)
+
+
+def test_limit_excess_closed_form():
+    amp = _amp(-1.0, 1.0, 2.0)                                   # 2 V/s at T = 0.5 s: 1 V/sample
+    e = limit_excess(amp, [[0.5, 2.5, 1.0, 1.0]], 0.5)
+    # 0: within; 1: 1.5 V beyond the range + a 2 V step (1 V over); 2: a 1.5 V step (0.5 over)
+    assert e.tolist() == pytest.approx([0.0, 2.5, 0.5, 0.0])
+
+
+def test_first_mode_of_two_modes_and_a_lag():
+    T = 1e-4
+    blocks = []
+    for f in (700.0, 300.0):
+        z = np.exp(T * (-30.0 + 2j * np.pi * f))
+        blocks.append([[z.real, -z.imag], [z.imag, z.real]])
+    A = np.zeros((5, 5))
+    A[:2, :2], A[2:4, 2:4], A[4, 4] = blocks[0], blocks[1], np.exp(-T / 0.1)
+    assert first_mode_hz(A, T) == pytest.approx(300.0, rel=1e-12)
+    assert first_mode_hz(np.zeros((0, 0)), T) is None
+    assert first_mode_hz([[0.9]], T) is None
+
+
+def test_a_step_beyond_the_slew_rate_becomes_an_s_curve_within_it():
+    """A unit-gain 'compensator' behind a 1 V/sample slew limit: a 6 V step is spread."""
+    amp = _amp(slew=1.0)
+    r = np.concatenate([np.zeros(40), np.full(60, 6.0)])[None, :]
+    s = shape_reference(lambda x: x, r, amp, 1.0)
+    assert limit_excess(amp, s.inputs, 1.0).max() == 0.0        # the drive within the slew rate
+    assert np.all(np.diff(s.reference[0]) >= -1e-12)             # still monotone: an S-curve
+    assert s.reference[0, 0] == 0.0 and s.reference[0, -1] == 6.0
+    far = np.r_[0:40 - 2 * s.window_samples, 40 + 2 * s.window_samples:100]
+    assert np.array_equal(s.reference[0, far], r[0, far])       # unchanged away from the step
+    assert len(s.notes) == 1 and "reference shaped by up to" in s.notes[0]
+
+
+def test_a_reference_within_the_limits_is_not_touched():
+    amp = _amp(slew=10.0)
+    r = np.sin(np.linspace(0, 6, 300))[None, :]
+    s = shape_reference(lambda x: 2.0 * x, r, amp, 1.0)
+    assert s.reference is not None and np.array_equal(s.reference, r) and not s.changed
+
+
+def test_a_range_the_amplifier_does_not_reach_is_limited_to_what_it_reaches():
+    """Model y = u, range +-1 V: a reference to 1.5 is limited to the reachable 1.0 (or inside)."""
+    amp = _amp(-1.0, 1.0, slew=100.0)
+    t = np.linspace(0, 1, 400)
+    r = (1.5 * np.sin(2 * np.pi * 2 * t) * np.minimum(t / 0.2, 1.0))[None, :]
+    s = shape_reference(lambda x: x, r, amp, 1.0, predict=lambda u: u)
+    assert s.range_limited and limit_excess(amp, s.inputs, 1.0).max() == 0.0
+    assert np.max(np.abs(s.reference)) <= 1.0 + 1e-12
+    assert "the range reaches" in s.notes[0]
+
+
+def test_samples_at_rest_before_the_reference_moves_stay_at_rest():
+    amp = _amp(slew=0.5)
+    r = np.concatenate([np.zeros(10), np.full(50, 4.0)])[None, :]
+    s = shape_reference(lambda x: x, r, amp, 1.0)
+    assert s.changed and np.all(s.reference[0, :5] == 0.0)
+
+
+def test_a_step_faster_than_the_first_mode_is_band_limited_even_within_the_limits():
+    """Limits far away: a 2 µm step is still smoothed over one period of the 500 Hz mode
+    (20 samples at 10 kHz), a 100 Hz sine (below the mode) is not touched."""
+    T, f1 = 1e-4, 500.0
+    amp = _amp(-100.0, 100.0, slew=1e9)
+    step = np.concatenate([np.zeros(50), np.full(150, 2.0)])[None, :]
+    s = shape_reference(lambda x: x, step, amp, T, first_mode=f1)
+    assert s.changed and s.window_samples == 20 and "first mode" in s.notes[0]
+    assert np.all(np.diff(s.reference[0]) >= -1e-12)            # monotone S-curve
+    assert np.max(np.abs(np.diff(s.reference[0]))) < 2.0 / 5     # spread over many samples
+    assert np.array_equal(s.reference[0, 100:], step[0, 100:])   # unchanged a window away
+    t = np.arange(400) * T
+    sine = (np.sin(2 * np.pi * 100 * t) * np.minimum(t / 0.01, 1.0))[None, :]
+    assert not shape_reference(lambda x: x, sine, amp, T, first_mode=f1).changed
