@@ -7,7 +7,11 @@ inline TOML table as in scenarios, or a CSV file), and writes into
 ``metrics.csv`` (the same metrics, over the same steady-state window after
 ``--settle-periods``, :func:`hammerstein.signals.metrics.tracking_metrics`),
 ``trajectory-measured.png``, ``timeseries-measured.csv`` and
-``report.md``.
+``report.md``. With ``--drive`` a drive file whose reference ``compensate``
+shaped to the amplifier and the identified dynamics (columns
+``<output>_shaped`` [µm]) is also judged against that shaped reference:
+the same metrics, ``case`` ``shaped`` in ``metrics.csv`` and a second table
+in the report (the raw reference's metrics stay case ``measured``).
 
 The delay between the reference and the measurement is estimated by
 cross-correlation (integer samples, :func:`hammerstein.compensation.ilc.estimate_delay`)
@@ -82,7 +86,9 @@ def add_parser(subparsers):
                         "scenarios)")
     p.add_argument("--drive", metavar="DRIVE.csv",
                    help="the drive file that was applied (compensate, learn): its fade-in "
-                        "(header) is left out of the metrics and marked in the figure")
+                        "(header) is left out of the metrics and marked in the figure; where compensate "
+                        "shaped the reference (columns <output>_shaped) the metrics against "
+                        "that shaped reference are reported as well (case shaped)")
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
                    help="fade-in to leave out of the metrics [s] (default: the --drive file's, "
                         "else 0)")
@@ -203,6 +209,14 @@ def _handle(args):
         args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
                                       ref.scale, ref.loop_channel, args.remove_delay, rf)
+        shaped = _shaped_reference(args.drive, outs, T) if args.drive else None
+        shaped_rows = []
+        if shaped is not None and shaped.shape[1] >= N:
+            # the reference the drive actually follows (compensate shaped it to the
+            # amplifier and the identified dynamics): judged as well, case "shaped"
+            shaped_rows, _, _, _ = evaluate(shaped[:, :N], y, ref.period_samples, T, outs,
+                                            args.settle_periods, ref.scale, ref.loop_channel,
+                                            args.remove_delay, rf)
         if u is not None:
             peak, slew = drive_metrics(u[:, :N], T)
             for i, n in enumerate(ins):
@@ -211,7 +225,7 @@ def _handle(args):
         created = not os.path.lexists(out)
         try:
             with all_or_nothing():     # a failed write (full disk) leaves none of the files
-                _write(out, args, rows, delay, T, r, ym, outs, u, ins, ref)
+                _write(out, args, rows, delay, T, r, ym, outs, u, ins, ref, shaped_rows)
         except BaseException:
             if created:                # the directory this run made, empty again: removed
                 with contextlib.suppress(OSError):
@@ -239,7 +253,36 @@ def _drive_notes(args):
     return "".join(f"  \ndrive `{args.drive}`: {h}" for h in keep)
 
 
-def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
+def _shaped_reference(path, outs, T):
+    """The drive file's shaped reference ``<output>_shaped`` [µm], shape (p, n), or None.
+
+    ``compensate`` writes these columns when it shaped the reference to the
+    amplifier's range and slew and the identified first mode; a drive without
+    them followed the reference as given.
+    """
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        header = next((line for line in (fh.readline() for _ in range(200))
+                       if line and not line.startswith("#")), "")
+    columns = [c.strip() for c in header.split(",")]
+    names = [f"{o}_shaped" for o in outs]
+    if not all(n in columns for n in names):
+        return None
+    _, shaped, _ = read_signals(path, names, "t", None, T, "--drive")
+    return shaped
+
+
+def _shaped_table(rows):
+    """Report lines for the metrics against the shaped reference (empty without one)."""
+    if not rows:
+        return ""
+    table = "\n".join(f"| {row['channel']} | {row['metric']} | {row['value']:.6g} | {row['unit']} |"
+                      for row in rows)
+    return ("\nAgainst the shaped reference the drive follows (the drive file's "
+            "`<output>_shaped` columns; metrics.csv case `shaped`):\n\n"
+            "| channel | metric | value | unit |\n|---|---|---|---|\n" + table + "\n")
+
+
+def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=()):
     out.mkdir(parents=True, exist_ok=True)
     try:
         version = metadata.version("hammerstein")
@@ -247,7 +290,9 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
         version = "unknown"
     safe_write(out / MARKER, f"{version}\n", "report marker", root=out)
     lines = ["case,channel,metric,value,unit"] + [
-        f"measured,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}" for row in rows]
+        f"measured,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}" for row in rows] + [
+        f"shaped,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}"
+        for row in shaped_rows]
     safe_write(out / "metrics.csv", "\n".join(lines) + "\n", "metrics file", root=out)
     n = y.shape[1]
     t = np.arange(n) * T
@@ -276,5 +321,6 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref):
             f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
             f"samples = {delay * T * 1e6:.4g} µs, "
             f"{'removed before the metrics' if args.remove_delay else 'not removed: the metrics include it'}.\n"
-            f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n")
+            f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n"
+            f"{_shaped_table(shaped_rows)}")
     safe_write(out / "report.md", text, "report", root=out)

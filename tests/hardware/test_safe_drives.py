@@ -18,6 +18,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from hammerstein.cli.main import main
@@ -174,3 +175,43 @@ def test_a_raster_start_up_is_shaped_not_slew_limited(tmp_path):
     steps = _steps(u)
     settled = steps[:, fade + 400 + 1:].max(axis=1)              # one 50 Hz line after the fade
     assert np.all(steps.max(axis=1) <= settled * (1 + 1e-6))
+
+
+def test_evaluate_judges_against_the_shaped_reference_too(tmp_path):
+    """A drive that follows a shaped reference: evaluate reports both references.
+
+    The "measurement" is the drive file's shaped reference itself, so against
+    it every error is 0 (closed form) while against the raw raster the error is
+    the shaping's own deviation (the reference moved by up to several µm).
+    """
+    out = tmp_path / "drive.csv"
+    _compensate([_preset(tmp_path), "--reference", RASTER, "--out", out])
+    drive = pd.read_csv(out, comment="#")
+    measured = tmp_path / "measured.csv"
+    drive[["t", "x_shaped", "y_shaped"]].rename(columns={"x_shaped": "x", "y_shaped": "y"}).to_csv(
+        measured, index=False)
+    ev = tmp_path / "ev"
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(["evaluate", "--reference", RASTER, "--measured", str(measured),
+                     "--drive", str(out), "--out", str(ev)])
+    assert code == 0, err.getvalue()
+    m = pd.read_csv(ev / "metrics.csv").set_index(["case", "channel", "metric"])["value"]
+    assert m[("shaped", "x+y", "max_euclidean_error")] == pytest.approx(0.0, abs=1e-6)
+    assert m[("measured", "x+y", "max_euclidean_error")] > 1.0       # µm: the raster was shaped
+    assert "Against the shaped reference" in (ev / "report.md").read_text()
+
+
+def test_evaluate_without_shaped_columns_reports_the_reference_only(tmp_path):
+    out = tmp_path / "drive.csv"
+    _compensate([_preset(tmp_path, amplifier=False), "--reference", CIRCLE, "--out", out])
+    assert "x_shaped" not in pd.read_csv(out, comment="#").columns
+    measured = tmp_path / "measured.csv"
+    t = np.arange(pd.read_csv(out, comment="#").shape[0]) * T
+    pd.DataFrame({"t": t, "x": 30 * np.cos(2 * np.pi * 100 * t),
+                  "y": 30 * np.sin(2 * np.pi * 100 * t)}).to_csv(measured, index=False)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["evaluate", "--reference", CIRCLE, "--measured", str(measured),
+                     "--drive", str(out), "--out", str(tmp_path / "ev")]) == 0
+    cases = set(pd.read_csv(tmp_path / "ev/metrics.csv")["case"])
+    assert cases == {"measured"}
