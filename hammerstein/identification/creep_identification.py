@@ -297,6 +297,46 @@ def _lags(h, tau, T):
     return x
 
 
+def _through(mats, s):
+    """``s`` (p, N) through G from rest (G = I when ``mats`` is None)."""
+    return s if mats is None else linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0]
+
+
+def _regressors(mats, h, steps, n_steps, tau, T, rows):
+    """Regression columns of one staircase record, rows ``rows`` of each output stacked.
+
+    Columns: lag ``k`` of hysteresis output ``l`` through G (``l``-major),
+    then the indicator of step ``j`` on output ``l`` through G. G and the
+    lags are linear and time-invariant from rest, so they commute: the lags
+    of G's response to ``h_l e_l`` are G's response to the lags of ``h_l e_l``;
+    a step's indicator is the difference of two delayed unit steps, so its
+    response is the difference of G's delayed step responses (one
+    simulation per output instead of one per column, the same numbers to
+    rounding).
+    """
+    p, N = h.shape
+    K = tau.size
+    cols = np.empty((p * rows.size, p * (K + n_steps)))
+    starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1, N]     # step j: samples a_j..a_{j+1}-1
+    for l in range(p):
+        e = np.zeros((p, N))
+        e[l] = h[l]
+        g = _through(mats, e)                    # (p, N): G's response to h_l e_l
+        for i in range(p):                       # its lags, per output of G
+            cols[i * rows.size:(i + 1) * rows.size, l * K:(l + 1) * K] = _lags(g[i], tau, T)[:, rows].T
+        e = np.zeros((p, N))
+        e[l] = 1.0
+        S = _through(mats, e)                    # (p, N): G's unit-step response from input l
+        for j in range(n_steps):
+            a, b = starts[j], starts[j + 1]
+            col = np.zeros((p, N))
+            col[:, a:] = S[:, :N - a]
+            if b < N:
+                col[:, b:] -= S[:, :N - b]
+            cols[:, p * K + l * n_steps + j] = col[:, rows].ravel()
+    return cols
+
+
 class CreepIdentifier:
     """Creep per output from staircase records and an identified hysteresis model.
 
@@ -456,24 +496,10 @@ class CreepIdentifier:
                                           f"found {n_steps} step(s)")
             self.identifiable_up_to_ = max(self.identifiable_up_to_, float(lengths.max() * T))
             h = model.simulate(u)[0] - off[:, None]
-            pass_g = (lambda s: s) if mats is None else \
-                (lambda s: linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0])
             N = u.shape[1]
             rows = np.arange(0, N, stride)
-            cols = []
-            base = pass_g(h)
-            for l in range(p):                       # lag regressors, output l
-                x = _lags(h[l], tau, T)
-                for k in range(K):
-                    s = np.zeros((p, N))
-                    s[l] = x[k]
-                    cols.append(pass_g(s)[:, rows].ravel())
-            for l in range(p):                       # step offsets, output l
-                for j in range(n_steps):
-                    s = np.zeros((p, N))
-                    s[l] = steps == j
-                    cols.append(pass_g(s)[:, rows].ravel())
-            blocks.append(np.column_stack(cols))
+            base = _through(mats, h)
+            blocks.append(_regressors(mats, h, steps, n_steps, tau, T, rows))
             targets.append((np.asarray(rec.y, dtype=float) - off[:, None] - base)[:, rows].ravel())
             seg_counts.append(n_steps)
         # lag columns shared by the records, offset columns per record; the
