@@ -327,13 +327,14 @@ def _regressors(mats, h, steps, n_steps, tau, T, rows):
         e = np.zeros((p, N))
         e[l] = 1.0
         S = _through(mats, e)                    # (p, N): G's unit-step response from input l
-        for j in range(n_steps):
+        for j in range(n_steps):                 # S(t - a_j) - S(t - a_{j+1}) on the kept rows
             a, b = starts[j], starts[j + 1]
-            col = np.zeros((p, N))
-            col[:, a:] = S[:, :N - a]
-            if b < N:
-                col[:, b:] -= S[:, :N - b]
-            cols[:, p * K + l * n_steps + j] = col[:, rows].ravel()
+            col = np.zeros((p, rows.size))
+            on = rows >= a
+            col[:, on] = S[:, rows[on] - a]
+            on = rows >= b
+            col[:, on] -= S[:, rows[on] - b]
+            cols[:, p * K + l * n_steps + j] = col.ravel()
     return cols
 
 

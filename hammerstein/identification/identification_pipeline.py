@@ -288,9 +288,27 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
     return fit
 
 
-def _dynamics(options, fit, dynamics_records, creep=None):
-    return identify_record_dynamics(fit, dynamics_records, name=options.name, creep=creep,
-                                    order=options.order, max_order=options.max_order)
+def _dynamics(options, fit, dynamics_records, creep=None, first=None):
+    """G on the model's outputs (through ``creep`` when given).
+
+    With ``first`` (G fitted before the creep) and no order given, the order
+    searched there is kept: the creep changes G's inputs by a few % at low
+    frequency, below the broadband band the order is chosen on, so the search
+    is not repeated; the summary keeps the first search's candidates.
+    """
+    search = lambda order: identify_record_dynamics(  # noqa: E731
+        fit, dynamics_records, name=options.name, creep=creep, order=order,
+        max_order=options.max_order)
+    if first is None or options.order is not None:
+        return search(options.order)
+    try:
+        dyn = search(int(first.summary["candidate_order"]))
+    except IdentificationError:         # that order rejected through the creep: search again
+        return search(None)
+    dyn.summary["candidates"] = first.summary["candidates"]
+    dyn.summary["chosen_on"] = (f"{first.summary['chosen_on']} (order searched on the model "
+                                f"outputs before the creep was identified, then kept)")
+    return dyn
 
 
 def _creep(fit, creep_records, dyn):
@@ -366,5 +384,5 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
         creep = _creep(fit, creep_records, dyn)
         fit, creep = _refit_without_creep(options, records, names, fit, creep, dyn, creep_records)
         if dyn is not None:   # G again, on the model outputs through the creep: G(0) = I for G (I + C)
-            dyn = _dynamics(options, fit, dynamics_records, creep.creeps_)
+            dyn = _dynamics(options, fit, dynamics_records, creep.creeps_, first)
     return IdentificationResult(fit, dyn, creep, first)
