@@ -484,7 +484,7 @@ def _handler(args):
         names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
         result = identify_pipeline(
             records, _options(args, n, thresholds), names,
-            [_read(args, d) for d in args.dynamics_records] if args.dynamics else None,
+            _dynamics_recs(args) if args.dynamics else None,
             _creep_recs(args) if args.creep_records else None)
         fit, dyn, creep = result.fit, result.dynamics, result.creep
         extra = result.tables()
@@ -505,7 +505,7 @@ def _handler(args):
                                           fit.model.input_names)
         extra = dict(extra or {})     # drives stay within what the records spanned
         extra["amplifier"] = records_amplifier_table(
-            records + [_read(args, d) for d in args.dynamics_records]
+            records + (_dynamics_recs(args) if args.dynamics else [])
             + (_creep_recs(args) if args.creep_records else []), list(fit.model.input_names))
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
@@ -552,6 +552,13 @@ def _read(args, path):
     if n <= 10 * d:
         raise DataFileError(f"{path}: {n} samples; --delay {d} needs more than {10 * d}")
     return replace(rec, timepts=rec.timepts[:n - d], u=rec.u[:, :n - d], y=rec.y[:, d:])
+
+
+def _dynamics_recs(args):
+    """The --dynamics-records, read once per command."""
+    if getattr(args, "_dynamics_read", None) is None:
+        args._dynamics_read = [_read(args, d) for d in args.dynamics_records]
+    return args._dynamics_read
 
 
 def _creep_recs(args):
