@@ -98,30 +98,6 @@ def _hysteron_states(u, edges):
     return out
 
 
-#: Hysterons whose state trajectories are held at once by :func:`_hysteron_states_times`.
-STATE_BLOCK = 32
-
-
-def _hysteron_states_times(u, edges, W):
-    """``S(u)^T W`` (n_samples, n_columns): the grid's hysteron trajectories times weights.
-
-    ``S`` as :func:`_hysteron_states` (demagnetised start), computed in blocks
-    of :data:`STATE_BLOCK` hysterons so that it is never held whole.
-    """
-    proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)))
-    row, col, _ = proto.hysteron_arrays
-    s0 = proto.initial_state()
-    out = np.zeros((u.size, W.shape[1]))
-    block = np.empty((min(STATE_BLOCK, row.size), u.size))
-    one = np.ones(1)
-    for a in range(0, row.size, STATE_BLOCK):
-        b = min(a + STATE_BLOCK, row.size)
-        for q in range(a, b):
-            block[q - a], _ = preisach_steps(u, edges, row[q:q + 1], col[q:q + 1], one, s0[q:q + 1])
-        out += block[:b - a].T @ W[a:b]
-    return out
-
-
 def _smoothing_rows(n):
     """Second differences of a lower-triangular density (state order), rows of D."""
     index = {}
@@ -368,38 +344,6 @@ class PreisachIdentifier:
     def _predict(self, model, records):
         return [model.simulate(r.u)[0] for r in records]
 
-    def _predict_many(self, models, records):
-        """Predictions of models fitted on this grid (the smoothing trials), to rounding.
-
-        A Preisach component's output is ``S(u_k) mu + reversible(u_k)``: the
-        hysteron state trajectories ``S`` of each input depend on the grid
-        alone, so they are computed once per record and input (in blocks of
-        hysterons) and multiply every model's weights at once, instead of each
-        model stepping every hysteron again. The reversible parts and the other
-        components are the models' own simulation.
-        """
-        m = records[0].u.shape[0]
-        preds = []
-        for model in models:                     # everything but the hysterons
-            grid = [[Polynomial(c.reversible if c.reversible.size else [0.0], c.offset)
-                     if isinstance(c, PreisachModel) else c for c in row]
-                    for row in model.components]
-            rest = MultivariableHysteresis(grid, model.input_names, model.output_names,
-                                           model.input_amplitude)
-            preds.append([rest.simulate(r.u)[0] for r in records])
-        for k in range(m):
-            users = [(i, l, c.hysteron_arrays[2]) for i, model in enumerate(models)
-                     for l, row in enumerate(model.components)
-                     if isinstance(c := row[k], PreisachModel)]
-            if not users:
-                continue
-            W = np.column_stack([mu for _, _, mu in users])
-            for j, rec in enumerate(records):
-                acc = _hysteron_states_times(rec.u[k], self._edges[k], W)
-                for col, (i, l, _) in enumerate(users):
-                    preds[i][j][l] += acc[:, col]
-        return preds
-
     # -- public --------------------------------------------------------------------------
     def fit(self, records, splits=None, input_names=None, output_names=None, hold_out="auto",
             train_fraction=None, skip_seconds=None):
@@ -446,24 +390,20 @@ class PreisachIdentifier:
             raise IdentificationError("records: no training samples")
         held = any(s.held_out.any() for s in splits)
         grid_lam = SMOOTHING_GRID if self.smoothing == "auto" else (float(self.smoothing),)
-        notes, scores, best, trials = [], {}, None, []
+        notes, scores, best = [], {}, None
         for lam in grid_lam:
             grid, offs = [], []
             for l in range(p):
                 comps, off = self._fit_output(blocks, ys[l], l, kinds[l], lam)
                 grid.append(comps)
                 offs.append(off)
-            trials.append((lam, grid, offs, self._model(grid, offs, in_names, out_names)))
-        preds = (self._predict_many([t[3] for t in trials], records) if len(trials) > 1
-                 else [self._predict(trials[0][3], records)])
-        for (lam, grid, offs, model), pred in zip(trials, preds):
+            model = self._model(grid, offs, in_names, out_names)
+            pred = self._predict(model, records)
             win = _window_metrics(records, splits, pred, "held_out" if held else "train")
             scores[lam] = float(np.mean([w["rms_percent"] for w in win]))
             if best is None or scores[lam] < scores[best[0]]:
                 best = (lam, grid, offs, model, pred)
         lam, grid, offs, model, pred = best
-        if len(trials) > 1:                       # the kept model's own simulation
-            pred = self._predict(model, records)
         if len(grid_lam) > 1:
             notes.append(f"preisach smoothing auto: lambda {lam:g} (" + ", ".join(
                 f"{k:g}: {v:.3g} %" for k, v in scores.items())
