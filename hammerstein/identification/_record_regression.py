@@ -84,8 +84,13 @@ class _LeastSquares:
                     for k in range(m)]
         self.y = np.concatenate([rec.y[:, s.train] for rec, s in zip(records, splits)], axis=1)
 
-    def fit_output(self, l, kinds):
-        """Components and offset of output l for kinds[k]; returns (comps, offset, rms)."""
+    def fit_output(self, l, kinds, factors=None):
+        """Components and offset of output l for kinds[k]; returns (comps, offset, rms).
+
+        ``factors`` (a dict, optional) keeps the thin QR factors of the
+        regression per ``(l, kinds)`` for fits of other targets on the same
+        columns (the output map's alternation): Q^T y then costs a product.
+        """
         cols, layout = [], []
         lower, upper = [], []
         for k, kind in enumerate(kinds):
@@ -122,7 +127,16 @@ class _LeastSquares:
         lo, hi = np.concatenate(lower), np.concatenate(upper)
         # hi is +inf throughout; the tall problem reduced to its n x n factor first (from the
         # column blocks: the tall matrix is never stacked), ||X c - t||^2 = ||R c - q||^2 + rho^2
-        R, c, rho = r_factor(cols, target)
+        width = sum(np.shape(a)[1] for a in cols)
+        if factors is not None and target.size >= width and all(t is None for *_, t in layout):
+            key = (l, tuple(kinds))
+            if key not in factors:
+                factors[key] = np.linalg.qr(np.column_stack(cols))
+            Q, R = factors[key]
+            c = Q.T @ target
+            rho = float(np.linalg.norm(target - Q @ c))
+        else:
+            R, c, rho = r_factor(cols, target)
         if np.all(np.isinf(lo)):
             coef, *_ = scipy.linalg.lstsq(R, c)
         else:
@@ -263,9 +277,10 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
         y = measured[l]
         target = y
         best = None
+        factors = {}
         for _ in range(iterations + 1):
             engine.y[l] = target
-            comps, d, _ = engine.fit_output(l, kinds)
+            comps, d, _ = engine.fit_output(l, kinds, factors)
             h = np.full(y.size, d)
             for k, c in enumerate(comps):
                 if isinstance(c, PrandtlIshlinskii):
@@ -275,16 +290,16 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
             if not np.ptp(h) > 0:
                 break
             z = np.unique(np.quantile(h, np.arange(1, n_knots + 1) / (n_knots + 1)))
-            X = np.column_stack([_segment_basis(h, z), np.ones(h.size)])
+            # the data rows reduced to their factor first, the penalty rows stacked on it
+            R, q, rho = r_factor([_segment_basis(h, z), np.ones(h.size)], y)
             sec = max(float(np.polyfit(h, y, 1)[0]), 1e-12)
             lo = np.r_[np.full(z.size + 1, 1e-3 * sec), -np.inf]
             # smoothness prior: slope changes cost, so that S bends only where the PI cannot
             D = np.diff(np.eye(z.size + 1), axis=0)
             mu = MAP_SMOOTHING * np.sqrt(h.size) * np.ptp(h) / (z.size + 1)
-            Xa = np.vstack([X, np.column_stack([mu * D, np.zeros(z.size)])])
-            ya = np.concatenate([y, np.zeros(z.size)])
-            coef = lstsq_bounded_below(Xa, ya, lo)
-            err = float(np.sqrt(np.mean((y - X @ coef) ** 2)))
+            Ra = np.vstack([R, np.column_stack([mu * D, np.zeros(z.size)])])
+            coef = lstsq_bounded_below(Ra, np.r_[q, np.zeros(z.size)], lo)
+            err = float(np.sqrt((np.sum((R @ coef - q) ** 2) + rho ** 2) / y.size))
             smap = OutputMap(z, coef[:-1])
             c0 = float(coef[-1] + _segment_basis(np.zeros(1), z)[0] @ coef[:-1])   # R(0)
             if best is None or err < best[0]:
