@@ -297,6 +297,7 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
                                 f"({why})")
         return fit
     loops = {k: f.minor_loop_error for k, f in fits.items()}
+    stairs = {k: v for k, v in stairs.items() if k in fits} if creep_records else {}
     for k in stairs:
         if isinstance(stairs[k], Exception):
             raise stairs[k]
