@@ -39,7 +39,7 @@ from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.identification.preisach_identification import identify_preisach_records
 from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
-                                                     identify_records)
+                                                     identify_records, split_record)
 from hammerstein.exceptions import HysteresisError, IdentificationError
 
 __all__ = ["PipelineOptions", "IdentificationResult", "identify_hysteresis", "identify_pipeline",
@@ -219,21 +219,44 @@ def _class_and_stairs(name, records, options, names, creep_records):
     return fit, stairs
 
 
+def _held_out_levels(records, options):
+    """Whether the classical fit's split of the records holds out amplitude levels."""
+    try:
+        return any(lv["held_out"] for r in records for lv in split_record(
+            r, options.method, options.hold_out, options.train_fraction, options.skip)[1].levels)
+    except (IdentificationError, HysteresisError, ValueError, TypeError, AttributeError):
+        return True           # the fits report what is wrong with the records
+
+
+def _run(tasks):
+    """:func:`fit_concurrently`, here when this process may not start others or a worker died."""
+    # a daemonic process (a multiprocessing.Pool worker) may not start processes
+    out = fit_concurrently(tasks, 1 if multiprocessing.current_process().daemon else None)
+    if any(isinstance(r, BrokenProcessPool) for r in out.values()):
+        out = fit_concurrently(tasks, workers=1)
+    return out
+
+
 def _auto_fits(records, options, names, creep_records):
     """``auto``'s three classes fitted side by side (:func:`fit_concurrently`).
 
     The classes are independent: each worker fits one and scores it on the
-    staircases. As one after the other, the Preisach model and the generalised
-    PI are kept only when the classical fit holds out amplitude levels, and
+    staircases. Records without held-out amplitude levels (one amplitude) fit
+    the classical PI alone, as before. As one after the other, the Preisach
+    model and the generalised PI are kept only when the classical fit holds
+    out amplitude levels, and
     their identification errors are notes, not failures; any other error is
     raised. Returns ``(fits, stairs, errors)``.
     """
     tasks = {k: (_class_and_stairs, (k, records, options, names, creep_records), {})
              for k in ("classical", "preisach", "generalized")}
-    # a daemonic process (a multiprocessing.Pool worker) may not start processes
-    out = fit_concurrently(tasks, 1 if multiprocessing.current_process().daemon else None)
-    if any(isinstance(r, BrokenProcessPool) for r in out.values()):
-        out = fit_concurrently(tasks, workers=1)      # a worker died: here, one after the other
+    if _held_out_levels(records, options):
+        out = _run(tasks)
+    else:         # records of one amplitude: the classical PI alone (the others would be dropped)
+        out = _run({"classical": tasks["classical"]})
+        if not isinstance(out["classical"], Exception) and \
+                any(r["held_out"] for r in out["classical"][0].levels):
+            out.update(_run({k: tasks[k] for k in ("preisach", "generalized")}))
     if isinstance(out["classical"], Exception):
         raise out["classical"]
     fits, stairs, errors = {}, {}, {}
