@@ -14,8 +14,9 @@ sensor noise (``benchmarks/real_actuators.py``'s ``_play``), written once to
 --creep-records creep-* --out preset.toml``
 
 in a fresh process with this checkout on ``PYTHONPATH`` (numba's cache warm:
-one untimed run first). CPU = user + system of the child, from
-``os.times``.
+one untimed run first). CPU = user + system of the child and of the worker
+processes it waited for (``--model auto`` fits its classes side by side;
+``--workers 1`` times them one after the other), from ``os.times``.
 
 This machine's speed drifts with its load, so every timing is bracketed by a
 reference loop (``s += i`` for 20 million ``i``, 1.0 s CPU on the nominal
@@ -55,9 +56,11 @@ def reference_loop():
     return (t1.children_user - t0.children_user) + (t1.children_system - t0.children_system)
 
 
-def run(tree, args, cwd):
+def run(tree, args, cwd, workers=None):
     """``python -m hammerstein *args`` with ``tree`` first on the path: CPU seconds."""
     env = dict(os.environ, PYTHONPATH=str(tree))
+    if workers is not None:
+        env["HAMMERSTEIN_WORKERS"] = str(workers)
     t0 = os.times()
     res = subprocess.run([sys.executable, "-m", "hammerstein", *args], cwd=cwd, env=env,
                          capture_output=True, text=True)
@@ -101,6 +104,9 @@ def main(argv=None):
     ap.add_argument("--work", default=None, help="directory for the records (kept)")
     ap.add_argument("--plant", default="realistic-2dof", help="preset the records come from")
     ap.add_argument("--verbose", action="store_true", help="print identify's output")
+    ap.add_argument("--workers", type=int, default=None,
+                    help="HAMMERSTEIN_WORKERS of the timed commands (auto's classes side by side "
+                         "in that many processes; 1: one after the other)")
     args = ap.parse_args(argv)
     work = Path(args.work or tempfile.mkdtemp(prefix="identify-bench-")).resolve()
     work.mkdir(parents=True, exist_ok=True)
@@ -116,7 +122,8 @@ def main(argv=None):
         for _ in range(args.repeat):
             for name, tree in trees:
                 before = reference_loop()
-                cpu, out = run(tree, identify_args(files, model, work / f"{name}-{model}.toml"), work)
+                cpu, out = run(tree, identify_args(files, model, work / f"{name}-{model}.toml"),
+                               work, args.workers)
                 after = reference_loop()
                 loop = min(before, after)
                 scaled = cpu / loop

@@ -29,6 +29,9 @@ import numpy as np
 
 from hammerstein.io.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import number_type, out_file_problem
+from hammerstein.cli._identify_report import (
+    _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
+    level_metrics_rows, level_report_lines, metrics_rows)
 from hammerstein.models.amplifier import records_amplifier_table
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
@@ -45,6 +48,11 @@ from hammerstein.scenario.schema import MAX_HYSTERONS
 MAX_DELAY = 10000
 
 __all__ = ["add_parser"]
+
+for _f in (creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
+           level_metrics_rows, level_report_lines, metrics_rows):
+    _f.__module__ = __name__          # documented as this command's (defined in _identify_report)
+del _f
 
 #: Header of a metrics file (the project's long format).
 METRICS_HEADER = "case,channel,metric,value,unit"
@@ -327,40 +335,6 @@ def _estimate_delay(args):
     args.delay = est.delay if est.problem is None else 0
 
 
-def _line(label, name, rep, unit):
-    return (f"{label}{name}: RMS {rep['rms']:.4g} {unit} = {rep['rms_percent']:.3g} % of the "
-            f"{rep['range']:.4g} {unit} range, max |error| {rep['max_abs']:.4g} {unit} "
-            f"({rep['n_samples']} samples)")
-
-
-def metrics_rows(fit, output_unit):
-    """Rows ``(case, channel, metric, value, unit)`` of a fit (train, validation).
-
-    Parameters
-    ----------
-    fit : RecordFit
-        Result of :func:`hammerstein.identification.record_identification.identify_records`.
-    output_unit : str
-        Unit of the outputs (e.g. ``"µm"``), written in the unit column of the
-        absolute errors.
-
-    Returns
-    -------
-    list of tuple
-        Per window (``"train"``, then ``"validation"`` when something was
-        held out) and output: ``rms_error`` [output unit],
-        ``rms_error_percent`` [%] of the measured range and ``max_abs_error``
-        [output unit].
-    """
-    rows = []
-    for case, reps in (("train", fit.train), ("validation", fit.validation)):
-        for name, rep in zip(fit.model.output_names, reps or []):
-            rows += [(case, name, "rms_error", rep["rms"], output_unit),
-                     (case, name, "rms_error_percent", rep["rms_percent"], "%"),
-                     (case, name, "max_abs_error", rep["max_abs"], output_unit)]
-    return rows
-
-
 def _write_metrics(path, rows):
     import pandas as pd  # lazy: only for --metrics
     frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
@@ -510,7 +484,7 @@ def _handler(args):
         names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
         result = identify_pipeline(
             records, _options(args, n, thresholds), names,
-            [_read(args, d) for d in args.dynamics_records] if args.dynamics else None,
+            _dynamics_recs(args) if args.dynamics else None,
             _creep_recs(args) if args.creep_records else None)
         fit, dyn, creep = result.fit, result.dynamics, result.creep
         extra = result.tables()
@@ -531,7 +505,7 @@ def _handler(args):
                                           fit.model.input_names)
         extra = dict(extra or {})     # drives stay within what the records spanned
         extra["amplifier"] = records_amplifier_table(
-            records + [_read(args, d) for d in args.dynamics_records]
+            records + (_dynamics_recs(args) if args.dynamics else [])
             + (_creep_recs(args) if args.creep_records else []), list(fit.model.input_names))
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
@@ -578,6 +552,13 @@ def _read(args, path):
     if n <= 10 * d:
         raise DataFileError(f"{path}: {n} samples; --delay {d} needs more than {10 * d}")
     return replace(rec, timepts=rec.timepts[:n - d], u=rec.u[:, :n - d], y=rec.y[:, d:])
+
+
+def _dynamics_recs(args):
+    """The --dynamics-records, read once per command."""
+    if getattr(args, "_dynamics_read", None) is None:
+        args._dynamics_read = [_read(args, d) for d in args.dynamics_records]
+    return args._dynamics_read
 
 
 def _creep_recs(args):
@@ -658,94 +639,6 @@ def _report(args, fit, records, dyn=None, creep=None):
     print(f"wrote {args.out}")
 
 
-def delay_report_lines(delay, estimate, sampling_period, given=True):
-    """Report lines of the measurement delay: its value and how it was chosen.
-
-    Parameters
-    ----------
-    delay : int
-        The delay used [samples].
-    estimate : hammerstein.models.lti.MeasurementDelay or None
-        The ``--delay auto`` estimate (None when ``--delay N`` was given).
-    sampling_period : float
-        T [s].
-    given : bool
-        Whether ``--delay`` was on the command line (else auto was the default).
-
-    Returns
-    -------
-    list of str
-        Empty when no delay was given and none estimated.
-    """
-    T = float(sampling_period)
-    advanced = (f"every record's outputs advanced by it, so G is the actuator's; the model file "
-                f"keeps it for `learn --delay auto`" if delay else
-                f"the records taken as they are; the model file keeps 0 for `learn --delay auto`")
-    if estimate is None:
-        return [f"measurement delay {delay} samples ({delay * T:.4g} s, --delay {delay}): "
-                + advanced] if delay else []
-    how = "--delay auto" if given else "auto, the default with --dynamics"
-    if estimate.problem is not None:
-        return [f"measurement delay not estimated ({how}): {estimate.problem}; taken as 0, "
-                f"not written (learn estimates its own; give --delay N when you know it)"]
-    return [f"measurement delay {delay} samples ({delay * T:.4g} s, {how}): " + advanced,
-            f"  estimated from the {estimate.method}"]
-
-
-def level_report_lines(fit, output_unit):
-    """One line per amplitude level of the multi-amplitude records: errors per output.
-
-    Parameters
-    ----------
-    fit : RecordFit
-        With ``levels`` (:func:`hammerstein.identification.record_identification.level_errors`).
-    output_unit : str
-        Unit of the outputs.
-
-    Returns
-    -------
-    list of str
-        ``<source> level <p> % (held out|trained): <output> RMS ... %, loop amplitude ... %``.
-    """
-    lines, seen = [], {}
-    for row in fit.levels:
-        seen.setdefault((row["source"], row["percent"], row["held_out"]), []).append(row)
-    for (source, pct, held), rows in seen.items():
-        parts = [f"{r['output']} RMS {r['rms_percent']:.3g} %, loop amplitude "
-                 f"{r['amplitude_error_percent']:+.3g} % of {r['measured_peak_to_peak']:.4g} "
-                 f"{output_unit}" for r in rows]
-        lines.append(f"{Path(source).name} level {pct:.0f} % ({'held out' if held else 'trained'}): "
-                     + "; ".join(parts))
-    return lines
-
-
-def level_metrics_rows(fit, output_unit):
-    """Rows ``(case, channel, metric, value, unit)`` per amplitude level.
-
-    Parameters
-    ----------
-    fit : RecordFit
-        With ``levels``.
-    output_unit : str
-        Unit of the outputs.
-
-    Returns
-    -------
-    list of tuple
-        Case ``<file stem>:level-<p>-<held-out|trained>``, channel the output:
-        ``rms_error_percent`` [%], ``loop_amplitude_error_percent`` [%],
-        ``peak_to_peak`` [output unit].
-    """
-    rows = []
-    for r in fit.levels:
-        case = (f"{Path(r['source']).stem}:level-{r['percent']:.0f}-"
-                f"{'held-out' if r['held_out'] else 'trained'}")
-        rows += [(case, r["output"], "rms_error_percent", r["rms_percent"], "%"),
-                 (case, r["output"], "loop_amplitude_error_percent", r["amplitude_error_percent"], "%"),
-                 (case, r["output"], "peak_to_peak", r["measured_peak_to_peak"], output_unit)]
-    return rows
-
-
 def _bode_path(plot):
     """The Bode figure written next to ``--plot FILE.png``: ``FILE-dynamics.png``."""
     path = Path(plot)
@@ -764,115 +657,3 @@ def _write_bode(path, dyn, names):
                                                 metadata=png_provenance("identify")), "figure")
     finally:
         plt.close(fig)
-
-
-def _matrix_text(M):
-    return "[" + ", ".join("[" + ", ".join(f"{v:.4g}" for v in row) + "]" for row in M) + "]"
-
-
-def dynamics_report_lines(summary, output_names, input_names):
-    """Printed report of identified dynamics (order, fits, modes, G(0)).
-
-    Parameters
-    ----------
-    summary : dict
-        ``RecordDynamics.summary`` (:func:`hammerstein.identification.record_identification.identify_record_dynamics`).
-    output_names, input_names : sequence of str
-        Names of the p outputs and p inputs of the model.
-
-    Returns
-    -------
-    list of str
-        One line per item.
-    """
-    s = summary
-    lines = [f"dynamics: order {s['order']} (candidate order {s['candidate_order']}), chosen on "
-             f"{s['chosen_on']}; excited band {s['band_hz'][0]:.3g}-{s['band_hz'][1]:.4g} Hz"]
-    for c in s["candidates"]:
-        if "held_out_fit_percent" in c:
-            text = (f"  order {c['order']}: held-out fit {c['held_out_fit_percent']:.2f} %, modes "
-                    + ", ".join(f"{f:.4g}" for f in c["modes_hz"]) + " Hz")
-        else:
-            text = f"  order {c['order']}: rejected, {c.get('rejected', 'no mode left')}"
-        if c.get("dropped"):
-            text += "; dropped " + "; ".join(c["dropped"])
-        lines.append(text)
-    for i, mode in enumerate(s["modes"], start=1):
-        share = ", ".join(f"{n} {100 * v:.0f} %" for n, v in mode["axis_share"].items())
-        lines.append(f"  mode {i}: {mode['frequency_hz']:.5g} Hz, damping "
-                     f"{mode['damping_ratio']:.4g} ({share})")
-    lines.append(f"  G(0) unconstrained {_matrix_text(s['dc_gain_unconstrained'])} (rows "
-                 f"{','.join(output_names)}, columns {','.join(input_names)}); "
-                 + ("fitted with G(0) = I: the static gain belongs to the hysteresis model, "
-                    "identified quasi-statically" if s["unit_dc_gain"]
-                    else f"kept as identified: {_matrix_text(s['dc_gain'])}"))
-    lines.append(f"  held-out fit {s['held_out_fit_percent']:.2f} %, fit over all broadband "
-                 f"records " + ", ".join(f"{n} {v:.2f} %" for n, v in
-                                         zip(output_names, s["fit_percent"])))
-    return lines
-
-
-def dynamics_metrics_rows(summary, output_names, input_names):
-    """Rows ``(case, channel, metric, value, unit)`` of identified dynamics.
-
-    Parameters
-    ----------
-    summary : dict
-        ``RecordDynamics.summary``.
-    output_names, input_names : sequence of str
-        Names of the p outputs and p inputs.
-
-    Returns
-    -------
-    list of tuple
-        Case ``dynamics``: ``order``, ``held_out_fit_percent`` (channel
-        ``G``), ``fit_percent`` per output, ``dc_gain_unconstrained`` per
-        ``<output>:<input>``, ``frequency`` [Hz], ``damping_ratio`` and
-        ``share_<output>`` per ``mode-<i>``; case ``dynamics-order-<N>``:
-        ``held_out_fit_percent`` per candidate order that gave a model.
-    """
-    s = summary
-    rows = [("dynamics", "G", "order", s["order"], ""),
-            ("dynamics", "G", "held_out_fit_percent", s["held_out_fit_percent"], "%")]
-    rows += [("dynamics", n, "fit_percent", v, "%") for n, v in zip(output_names, s["fit_percent"])]
-    for l, out in enumerate(output_names):
-        for k, inp in enumerate(input_names):
-            rows.append(("dynamics", f"{out}:{inp}", "dc_gain_unconstrained",
-                         s["dc_gain_unconstrained"][l][k], ""))
-    for i, mode in enumerate(s["modes"], start=1):
-        rows += [("dynamics", f"mode-{i}", "frequency", mode["frequency_hz"], "Hz"),
-                 ("dynamics", f"mode-{i}", "damping_ratio", mode["damping_ratio"], "")]
-        rows += [("dynamics", f"mode-{i}", f"share_{n}", v, "") for n, v in mode["axis_share"].items()]
-    rows += [(f"dynamics-order-{c['order']}", "G", "held_out_fit_percent",
-              c["held_out_fit_percent"], "%") for c in s["candidates"] if "held_out_fit_percent" in c]
-    return rows
-
-
-def creep_metrics_rows(creep, output_unit="µm"):
-    """Rows ``(case, channel, metric, value, unit)`` of an identified creep.
-
-    Parameters
-    ----------
-    creep : hammerstein.identification.creep_identification.CreepIdentifier
-        Fitted.
-    output_unit : str
-        Unit of the outputs.
-
-    Returns
-    -------
-    list of tuple
-        Case ``creep``, channel the output: ``drift_0p1_to_10s_percent`` [%],
-        ``instantaneous`` [-], ``residual_rms`` and
-        ``residual_rms_without_creep`` [output unit], and
-        ``weight_tau_<tau>s`` [-] per lag.
-    """
-    rows = []
-    for l, out in enumerate(creep.output_names_):
-        rows += [("creep", out, "drift_0p1_to_10s_percent", 100 * creep.drift_[l], "%"),
-                 ("creep", out, "instantaneous", creep.instantaneous_[l], ""),
-                 ("creep", out, "residual_rms", creep.residual_rms_[l], output_unit),
-                 ("creep", out, "residual_rms_without_creep", creep.residual_rms_no_creep_[l],
-                  output_unit)]
-        rows += [("creep", out, f"weight_tau_{tau:.4g}s", w, "")
-                 for tau, w in zip(creep.time_constants_, creep.weights_[l])]
-    return rows

@@ -297,6 +297,44 @@ def _lags(h, tau, T):
     return x
 
 
+def _through(mats, s):
+    """``s`` (p, N) through G from rest (G = I when ``mats`` is None)."""
+    return s if mats is None else linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0]
+
+
+def _regressors(mats, h, steps, n_steps, tau, T, rows):
+    """Regression columns of one staircase record, rows ``rows`` of each output stacked.
+
+    Columns: lag ``k`` of hysteresis output ``l`` through G (``l``-major),
+    then the indicator of step ``j`` on output ``l`` through G. G and the
+    lags are linear and time-invariant from rest, so they commute: the lags
+    of G's response to ``h_l e_l`` are G's response to the lags of ``h_l e_l``;
+    a step's indicator is the difference of two delayed unit steps, so its
+    response is the difference of G's delayed step responses (one
+    simulation per output instead of one per column, the same numbers to
+    rounding).
+    """
+    p, N = h.shape
+    K = tau.size
+    cols = np.empty((p * rows.size, p * (K + n_steps)))
+    starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1, N]     # step j: samples a_j..a_{j+1}-1
+    for l in range(p):
+        e = np.zeros((p, N))
+        e[l] = h[l]
+        g = _through(mats, e)                    # (p, N): G's response to h_l e_l
+        for i in range(p):                       # its lags, per output of G
+            cols[i * rows.size:(i + 1) * rows.size, l * K:(l + 1) * K] = _lags(g[i], tau, T)[:, rows].T
+        e = np.zeros((p, N))
+        e[l] = 1.0
+        S = _through(mats, e)                    # (p, N): G's unit-step response from input l
+        lag = rows[None, :] - starts[:, None]    # (n_steps + 1, rows): S(t - a_j), 0 before a_j
+        for i in range(p):
+            D = np.where(lag >= 0, S[i][np.maximum(lag, 0)], 0.0)
+            cols[i * rows.size:(i + 1) * rows.size,
+                 p * K + l * n_steps:p * K + (l + 1) * n_steps] = (D[:-1] - D[1:]).T
+    return cols
+
+
 class CreepIdentifier:
     """Creep per output from staircase records and an identified hysteresis model.
 
@@ -456,46 +494,32 @@ class CreepIdentifier:
                                           f"found {n_steps} step(s)")
             self.identifiable_up_to_ = max(self.identifiable_up_to_, float(lengths.max() * T))
             h = model.simulate(u)[0] - off[:, None]
-            pass_g = (lambda s: s) if mats is None else \
-                (lambda s: linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0])
             N = u.shape[1]
             rows = np.arange(0, N, stride)
-            cols = []
-            base = pass_g(h)
-            for l in range(p):                       # lag regressors, output l
-                x = _lags(h[l], tau, T)
-                for k in range(K):
-                    s = np.zeros((p, N))
-                    s[l] = x[k]
-                    cols.append(pass_g(s)[:, rows].ravel())
-            for l in range(p):                       # step offsets, output l
-                for j in range(n_steps):
-                    s = np.zeros((p, N))
-                    s[l] = steps == j
-                    cols.append(pass_g(s)[:, rows].ravel())
-            blocks.append(np.column_stack(cols))
+            base = _through(mats, h)
+            blocks.append(_regressors(mats, h, steps, n_steps, tau, T, rows))
             targets.append((np.asarray(rec.y, dtype=float) - off[:, None] - base)[:, rows].ravel())
             seg_counts.append(n_steps)
         # lag columns shared by the records, offset columns per record; the
-        # offsets are free: projected out, NNLS on the lag weights alone
+        # offsets are free: projected out, NNLS on the lag weights alone. Each
+        # record's offsets touch its own rows only (the offset block is block
+        # diagonal), so the projection is made record by record, by the (small)
+        # normal equations of its offset columns
         n_lag = p * K
-        n_off = p * sum(seg_counts)
         n_rows = sum(b.shape[0] for b in blocks)
-        L, O = np.zeros((n_rows, n_lag)), np.zeros((n_rows, n_off))
-        r0, c0 = 0, 0
-        for b, n in zip(blocks, seg_counts):
-            L[r0:r0 + b.shape[0]] = b[:, :n_lag]
-            O[r0:r0 + b.shape[0], c0:c0 + p * n] = b[:, n_lag:]
-            r0 += b.shape[0]
-            c0 += p * n
-        y = np.concatenate(targets)
-        # projection on the offsets' complement by the (small) normal equations
-        G_oo = O.T @ O
-        perp = lambda M: M - O @ np.linalg.lstsq(G_oo, O.T @ M, rcond=None)[0]
-        Lp, yp = perp(L), perp(y)
-        H, b = Lp.T @ Lp, Lp.T @ yp
+        H, b_vec, sum_sq, projected = np.zeros((n_lag, n_lag)), np.zeros(n_lag), 0.0, []
+        for blk, y_r in zip(blocks, targets):
+            O = blk[:, n_lag:]
+            G_oo = O.T @ O
+            Ly = np.column_stack([blk[:, :n_lag], y_r])
+            P = Ly - O @ np.linalg.lstsq(G_oo, O.T @ Ly, rcond=None)[0]
+            Lp, yp = P[:, :n_lag], P[:, n_lag]
+            H += Lp.T @ Lp
+            b_vec += Lp.T @ yp
+            sum_sq += float(np.sum(Lp ** 2))
+            projected.append((Lp, yp, G_oo))
         if self.smoothing > 0 and K >= 3:
-            lam2 = self.smoothing * n_rows * float(np.mean(Lp ** 2))
+            lam2 = self.smoothing * n_rows * (sum_sq / (n_rows * n_lag))
             D2 = np.kron(np.eye(p), np.diff(np.eye(K), 2, axis=0))
             H = H + lam2 * D2.T @ D2
         # NNLS on the Cholesky factor: min |R w - R^-T b| = min |A w - y| + const
@@ -503,20 +527,21 @@ class CreepIdentifier:
         R = scipy.linalg.cholesky(H, lower=False)
         try:
             from scipy.optimize import nnls  # lazy: ~0.3 s to import; creep fits only
-            wflat, _ = nnls(R, scipy.linalg.solve_triangular(R, b, trans="T"), maxiter=50 * n_lag)
+            wflat, _ = nnls(R, scipy.linalg.solve_triangular(R, b_vec, trans="T"),
+                            maxiter=50 * n_lag)
         except RuntimeError as exc:
             raise IdentificationError(f"creep: non-negative least squares failed: {exc}") from None
         w = wflat.reshape(p, K)
-        offs = np.linalg.lstsq(G_oo, O.T @ (y - L @ wflat), rcond=None)[0]
-        res, res0 = yp - Lp @ wflat, yp
-        res_out, res0_out = [[] for _ in range(p)], [[] for _ in range(p)]
-        r0 = 0
-        for b in blocks:
-            n_r = b.shape[0] // p
+        offs, res_out, res0_out = [], [[] for _ in range(p)], [[] for _ in range(p)]
+        for blk, y_r, (Lp, yp, G_oo) in zip(blocks, targets, projected):
+            O = blk[:, n_lag:]
+            offs.append(np.linalg.lstsq(G_oo, O.T @ (y_r - blk[:, :n_lag] @ wflat), rcond=None)[0])
+            res = yp - Lp @ wflat
+            n_r = blk.shape[0] // p
             for l in range(p):
-                res_out[l].append(res[r0 + l * n_r:r0 + (l + 1) * n_r])
-                res0_out[l].append(res0[r0 + l * n_r:r0 + (l + 1) * n_r])
-            r0 += b.shape[0]
+                res_out[l].append(res[l * n_r:(l + 1) * n_r])
+                res0_out[l].append(yp[l * n_r:(l + 1) * n_r])
+        offs = np.concatenate(offs)
         self.time_constants_ = tau.copy()
         self.weights_ = w
         wf = 2 * np.pi * self.hysteresis_frequency_hz

@@ -458,14 +458,23 @@ class GeneralizedPIIdentifier:
         y = self._y[l]
         widths = [self._component_width(kinds[k], k == l) for k in range(m)]
         shape = (y.size, sum(widths) + 1)
-        A = self._buffers.get(l)
-        if A is None or A.shape != shape:
-            A = self._buffers[l] = np.empty(shape)
+        A, layout, written = self._buffers.get(l, (None, None, None))
+        if A is None or A.shape != shape or layout != tuple(kinds):
+            A, written = np.empty(shape), {}
+            self._buffers[l] = (A, tuple(kinds), written)
         c = 0
         for k in range(m):
             block = A[:, c:c + widths[k]]
             if kinds[k] == "generalized":
-                r, gl, gr = self._component_columns(k, thetas[k], k == l, block)
+                # a component whose envelopes are those its columns hold (the other
+                # component's finite-difference steps) is not stepped again
+                theta = np.asarray(thetas[k], dtype=float).tobytes()
+                if k in written and written[k][0] == theta:
+                    r, gl, gr = written[k][1]
+                else:
+                    written.pop(k, None)
+                    r, gl, gr = self._component_columns(k, thetas[k], k == l, block)
+                    written[k] = (theta, (r, gl, gr))
                 lb = np.full(widths[k], -np.inf)
                 if k == l:
                     lb[:self.n_plays] = 0.0
@@ -654,6 +663,7 @@ class GeneralizedPIIdentifier:
     def _fit_spacing(self, spacing, records, splits, kinds, auto, in_names, out_names, held):
         """The whole fit with one threshold spacing: ((RecordFit, thetas), envelope trials)."""
         self._spacing = spacing
+        self._buffers = {}          # the columns held were for the previous spacing's thresholds
         self._evaluations = 0
         p = len(kinds)
 

@@ -6,7 +6,9 @@ table runs, with the same options (:class:`PipelineOptions`, the defaults of
 ``hammerstein identify``):
 
 1. the hysteresis of the class ``model`` (``auto``: the classical PI, the
-   Preisach model and the generalised PI are fitted and the one with the
+   Preisach model and the generalised PI are fitted, side by side in worker
+   processes (:func:`~hammerstein.identification.concurrent_fits.fit_concurrently`,
+   ``HAMMERSTEIN_WORKERS=1``: one after the other), and the one with the
    lowest held-out minor-loop error kept, the staircases' step levels joining
    the score when creep records are given; :func:`identify_hysteresis`);
 2. with dynamics records, the linear dynamics G on the model's outputs
@@ -24,17 +26,20 @@ and the tables a preset stores besides ``[model]`` (:meth:`IdentificationResult.
 
 from __future__ import annotations
 
+import multiprocessing
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from hammerstein.models.creep import creep_to_table
+from hammerstein.identification.concurrent_fits import fit_concurrently
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
 from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.identification.preisach_identification import identify_preisach_records
 from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
-                                                     identify_records)
+                                                     identify_records, split_record)
 from hammerstein.exceptions import HysteresisError, IdentificationError
 
 __all__ = ["PipelineOptions", "IdentificationResult", "identify_hysteresis", "identify_pipeline",
@@ -185,18 +190,86 @@ def _step_level_error(fit, recs):
             float(np.max(np.abs(ab))))
 
 
-def _fit_generalized(options, choice, records, names, levels, fits, errors):
-    """``model = "generalized"`` (or a refit of that class), or the third class of ``auto``."""
-    if not (choice == "generalized" or (choice == "auto" and levels)):
-        return
+def _fit_one_class(name, records, options, names):
+    """The fit of one class (``"classical"``, ``"preisach"`` or ``"generalized"``)."""
+    if name == "classical":
+        return identify_records(
+            records, options.method, options.n, options.thresholds,
+            "time" if options.thresholds is not None and options.partition == "auto"
+            else options.partition, options.bounds, options.components, options.hold_out,
+            options.train_fraction, options.skip, *names, output_map=options.output_map)
+    if name == "preisach":
+        return identify_preisach_records(
+            records, options.preisach_levels, "auto", options.components, options.hold_out,
+            options.train_fraction, options.skip, *names)
+    return identify_gpi_records(
+        records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
+        options.skip, *names, threshold_spacing=options.threshold_spacing)
+
+
+def _class_and_stairs(name, records, options, names, creep_records):
+    """One class of ``auto`` and its staircase score (or the exception that score raised)."""
+    fit = _fit_one_class(name, records, options, names)
+    stairs = None
+    if creep_records:
+        try:
+            stairs = _step_level_error(fit, creep_records)
+        except Exception as exc:      # noqa: BLE001 - raised by the caller if the score is used
+            stairs = exc
+    return fit, stairs
+
+
+def _held_out_levels(records, options):
+    """Whether the classical fit's split of the records holds out amplitude levels."""
     try:
-        fits["generalized"] = identify_gpi_records(
-            records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
-            options.skip, *names, threshold_spacing=options.threshold_spacing)
-    except (IdentificationError, HysteresisError) as exc:
-        if choice == "generalized" or not fits:
-            raise
-        errors["generalized"] = str(exc)
+        return any(lv["held_out"] for r in records for lv in split_record(
+            r, options.method, options.hold_out, options.train_fraction, options.skip)[1].levels)
+    except (IdentificationError, HysteresisError, ValueError, TypeError, AttributeError):
+        return True           # the fits report what is wrong with the records
+
+
+def _run(tasks):
+    """:func:`fit_concurrently`, here when this process may not start others or a worker died."""
+    # a daemonic process (a multiprocessing.Pool worker) may not start processes
+    out = fit_concurrently(tasks, 1 if multiprocessing.current_process().daemon else None)
+    if any(isinstance(r, BrokenProcessPool) for r in out.values()):
+        out = fit_concurrently(tasks, workers=1)
+    return out
+
+
+def _auto_fits(records, options, names, creep_records):
+    """``auto``'s three classes fitted side by side (:func:`fit_concurrently`).
+
+    The classes are independent: each worker fits one and scores it on the
+    staircases. Records without held-out amplitude levels (one amplitude) fit
+    the classical PI alone, as before. As one after the other, the Preisach
+    model and the generalised PI are kept only when the classical fit holds
+    out amplitude levels, and
+    their identification errors are notes, not failures; any other error is
+    raised. Returns ``(fits, stairs, errors)``.
+    """
+    tasks = {k: (_class_and_stairs, (k, records, options, names, creep_records), {})
+             for k in ("classical", "preisach", "generalized")}
+    if _held_out_levels(records, options):
+        out = _run(tasks)
+    else:         # records of one amplitude: the classical PI alone (the others would be dropped)
+        out = _run({"classical": tasks["classical"]})
+        if not isinstance(out["classical"], Exception) and \
+                any(r["held_out"] for r in out["classical"][0].levels):
+            out.update(_run({k: tasks[k] for k in ("preisach", "generalized")}))
+    if isinstance(out["classical"], Exception):
+        raise out["classical"]
+    fits, stairs, errors = {}, {}, {}
+    fits["classical"], stairs["classical"] = out["classical"]
+    if any(r["held_out"] for r in fits["classical"].levels):
+        for k in ("preisach", "generalized"):
+            if isinstance(out[k], (IdentificationError, HysteresisError)):
+                errors[k] = str(out[k])
+            elif isinstance(out[k], Exception):
+                raise out[k]
+            else:
+                fits[k], stairs[k] = out[k]
+    return fits, stairs, errors
 
 
 def identify_hysteresis(records, options, names, model_class=None, creep_records=None):
@@ -234,24 +307,10 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
         Records no class can be fitted on.
     """
     choice = model_class or options.model
-    fits, errors = {}, {}
-    if choice in ("classical", "auto"):
-        fits["classical"] = identify_records(
-            records, options.method, options.n, options.thresholds,
-            "time" if options.thresholds is not None and options.partition == "auto"
-            else options.partition, options.bounds, options.components, options.hold_out,
-            options.train_fraction, options.skip, *names, output_map=options.output_map)
-    levels = any(r["held_out"] for f in fits.values() for r in f.levels)
-    if choice == "preisach" or (choice == "auto" and levels):
-        try:
-            fits["preisach"] = identify_preisach_records(
-                records, options.preisach_levels, "auto", options.components, options.hold_out,
-                options.train_fraction, options.skip, *names)
-        except (IdentificationError, HysteresisError) as exc:
-            if choice == "preisach" or not fits:
-                raise
-            errors["preisach"] = str(exc)
-    _fit_generalized(options, choice, records, names, levels, fits, errors)
+    if choice == "auto":
+        fits, stairs, errors = _auto_fits(records, options, names, creep_records)
+    else:
+        fits, stairs, errors = {choice: _fit_one_class(choice, records, options, names)}, {}, {}
     if len(fits) == 1:
         fit = next(iter(fits.values()))
         if choice == "auto":
@@ -261,8 +320,10 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
                                 f"({why})")
         return fit
     loops = {k: f.minor_loop_error for k, f in fits.items()}
-    stairs = {k: _step_level_error(f, creep_records) for k, f in fits.items()} \
-        if creep_records else {}
+    stairs = {k: v for k, v in stairs.items() if k in fits} if creep_records else {}
+    for k in stairs:
+        if isinstance(stairs[k], Exception):
+            raise stairs[k]
     if stairs:   # both held out; the geometric mean weighs each by its ratio between classes
         scores = {k: float(np.sqrt(loops[k] * stairs[k][0])) for k in fits}
         rule = ("lowest geometric mean of the held-out minor-loop RMS error (% of each level's "
@@ -288,9 +349,27 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
     return fit
 
 
-def _dynamics(options, fit, dynamics_records, creep=None):
-    return identify_record_dynamics(fit, dynamics_records, name=options.name, creep=creep,
-                                    order=options.order, max_order=options.max_order)
+def _dynamics(options, fit, dynamics_records, creep=None, first=None):
+    """G on the model's outputs (through ``creep`` when given).
+
+    With ``first`` (G fitted before the creep) and no order given, the order
+    searched there is kept: the creep changes G's inputs by a few % at low
+    frequency, below the broadband band the order is chosen on, so the search
+    is not repeated; the summary keeps the first search's candidates.
+    """
+    search = lambda order: identify_record_dynamics(  # noqa: E731
+        fit, dynamics_records, name=options.name, creep=creep, order=order,
+        max_order=options.max_order)
+    if first is None or options.order is not None:
+        return search(options.order)
+    try:
+        dyn = search(int(first.summary["candidate_order"]))
+    except IdentificationError:         # that order rejected through the creep: search again
+        return search(None)
+    dyn.summary["candidates"] = first.summary["candidates"]
+    dyn.summary["chosen_on"] = (f"{first.summary['chosen_on']} (order searched on the model "
+                                f"outputs before the creep was identified, then kept)")
+    return dyn
 
 
 def _creep(fit, creep_records, dyn):
@@ -366,5 +445,5 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
         creep = _creep(fit, creep_records, dyn)
         fit, creep = _refit_without_creep(options, records, names, fit, creep, dyn, creep_records)
         if dyn is not None:   # G again, on the model outputs through the creep: G(0) = I for G (I + C)
-            dyn = _dynamics(options, fit, dynamics_records, creep.creeps_)
+            dyn = _dynamics(options, fit, dynamics_records, creep.creeps_, first)
     return IdentificationResult(fit, dyn, creep, first)

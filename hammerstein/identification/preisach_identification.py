@@ -293,9 +293,9 @@ class PreisachIdentifier:
             D[r:r + d.shape[0], c:c + sz] = d if d.size else 0.0
             r, c = r + d.shape[0], c + sz
         key = (l, tuple(kinds))
-        if key not in self._cache:
-            Q, R0 = np.linalg.qr(A)
-            self._cache[key] = (R0, Q.T @ ys)
+        if key not in self._cache:          # R and Q^T y of the tall matrix, Q never formed
+            R0, b0, _ = r_factor(A, ys)
+            self._cache[key] = (R0, b0)
         R0, b0 = self._cache[key]
         # lambda is per training sample; a smooth density of total T has second
         # differences ~ T / n^4, hence the n^2 (squared: n^4) scale

@@ -28,7 +28,8 @@ import numpy as np
 import pytest
 from scipy.optimize import lsq_linear
 
-from hammerstein.identification import gpi_identification, preisach_identification, record_identification
+from hammerstein.identification import (_record_regression, gpi_identification,
+                                        preisach_identification, record_identification)
 from hammerstein.io.datafiles import bundled_data, read_record
 from hammerstein.identification.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
 
@@ -92,10 +93,10 @@ def test_identifications_on_the_bundled_record_equal_the_bvls_ones(name, monkeyp
     rec = _record()
     new = FITS[name](rec)
     reference = lambda R, c, lower, ridge=0.0: _bvls(R, c, lower, ridge)  # noqa: E731
-    for module in (record_identification, preisach_identification, gpi_identification):
+    for module in (_record_regression, preisach_identification, gpi_identification):
         if hasattr(module, "bounded_lstsq"):
             monkeypatch.setattr(module, "bounded_lstsq", reference)
-    monkeypatch.setattr(record_identification, "lstsq_bounded_below", _bvls)
+    monkeypatch.setattr(_record_regression, "lstsq_bounded_below", _bvls)
     old = FITS[name](rec)
     span = float(np.ptp(rec.y))
     pred_tol, rms_tol = (1e-3, 1e-2) if name == "generalized" else (1e-6, 1e-6)

@@ -1,0 +1,101 @@
+"""The identifications on the bundled record hold the values of the code before the speed-ups.
+
+The reference numbers below were identified on the bundled real record
+(``piezo-stack-150V-1Hz.csv``, input column 2, output column 1) by the code
+of commit 7dbcca6, before the creep regressors, the Preisach smoothing
+trials' predictions and the module split; they are that code's output, kept
+here so that a later change of the numerics shows.
+
+Tolerances:
+
+* the classical PI and the Preisach model are convex least-squares fits: the
+  two versions solve the same problem with the operations in another order,
+  so their minimisers differ by rounding amplified by the problem's
+  conditioning. ``tests/core/test_lsq.py`` bounds the difference of two
+  *different solvers* on this record by 1e-6 of the output range (measured
+  2.6e-9 on the realistic records, 500 below the record's noise of 0.05 % of
+  its range); the same 1e-6 holds here for the RMS errors (relative) and the
+  weights (relative to the largest). The thresholds are computed from the
+  input alone: 1e-12 relative.
+* the generalised PI's envelopes come from a nonlinear search whose
+  finite-difference Jacobian turns rounding into another search path that
+  ends where the search's tolerance stops it: as in ``test_lsq.py``, the RMS
+  errors within 1 % and the structure; the thresholds depend on the envelope
+  ends and are not held.
+"""
+
+import numpy as np
+import pytest
+
+from hammerstein.identification.gpi_identification import identify_gpi_records
+from hammerstein.identification.preisach_identification import identify_preisach_records
+from hammerstein.identification.record_identification import identify_records
+from hammerstein.io.datafiles import bundled_data, read_record
+
+CLASSICAL = {
+    "train_rms": 0.06024151419076468,
+    "held_out_rms": 0.05933302675076693,
+    "thresholds": [1.4411137499999995, 5.709047499999997, 12.63978625, 21.966990000000003,
+                   33.332238625, 46.29874825, 60.368228125, 75.00000000000081, 89.631771875,
+                   103.70125175, 116.667761375, 128.03301, 137.36021374999999, 144.2909525,
+                   148.55888625],
+    "weights": [0.09694357616312475, 0.0003783045326609495, 0.0019013318590221432,
+                0.008872563674367343, 0.010012469598399333, -0.0012660902116283551,
+                0.009914870654813725, 0.0061635730070638516, 0.0051735514193237105,
+                0.001449886212073999, 0.01202896424812606, 0.010859285325778373,
+                -0.0017835894202342887, 0.02037962861590188, 0.06789943722065986],
+    "offset": -0.07177963487937454,
+}
+PREISACH = {
+    "train_rms": 0.10542473814448818,
+    "held_out_rms": 0.10077247625131194,
+    "weights_trace": 12.288058687500117,
+    "weights_sum": 23.125441507745705,
+    "reversible": [0.017217287334889503],
+    "offset": -0.028667124883240015,
+}
+GENERALIZED = {"train_rms": 0.08872749167975039, "held_out_rms": 0.08545307284131176}
+RANGE = 39.451599          # the record's output range [µm]
+SOLVER = 1e-6              # relative, see the module notes
+SEARCH = 1e-2
+
+
+@pytest.fixture(scope="module")
+def record():
+    return read_record(bundled_data(), input=2, output=1, time=0)
+
+
+def test_record_is_the_reference_one(record):
+    assert float(np.ptp(record.y)) == pytest.approx(RANGE, rel=1e-12)
+
+
+def test_classical_pi_holds_the_previous_fit(record):
+    fit = identify_records(record)
+    comp = fit.model.components[0][0]
+    assert fit.structure == [["pi"]] and fit.output_map == "none"
+    assert fit.train[0]["rms"] == pytest.approx(CLASSICAL["train_rms"], rel=SOLVER)
+    assert fit.validation[0]["rms"] == pytest.approx(CLASSICAL["held_out_rms"], rel=SOLVER)
+    assert np.allclose(comp.thresholds, CLASSICAL["thresholds"], rtol=1e-12, atol=0)
+    w_ref = np.array(CLASSICAL["weights"])
+    assert np.max(np.abs(comp.weights - w_ref)) <= SOLVER * np.max(np.abs(w_ref))
+    assert abs(float(fit.model.output_offset[0]) - CLASSICAL["offset"]) <= SOLVER * RANGE
+
+
+def test_preisach_holds_the_previous_fit(record):
+    fit = identify_preisach_records(record, n_levels=12)
+    comp = fit.model.components[0][0]
+    assert fit.structure == [["preisach"]]
+    assert fit.train[0]["rms"] == pytest.approx(PREISACH["train_rms"], rel=SOLVER)
+    assert fit.validation[0]["rms"] == pytest.approx(PREISACH["held_out_rms"], rel=SOLVER)
+    scale = PREISACH["weights_trace"]
+    assert abs(float(np.trace(comp.weights)) - PREISACH["weights_trace"]) <= SOLVER * scale
+    assert abs(float(comp.weights.sum()) - PREISACH["weights_sum"]) <= SOLVER * scale
+    assert np.allclose(comp.reversible, PREISACH["reversible"], rtol=SOLVER, atol=0)
+    assert abs(comp.offset - PREISACH["offset"]) <= SOLVER * RANGE
+
+
+def test_generalized_pi_holds_the_previous_errors(record):
+    fit = identify_gpi_records(record, n_plays=8)
+    assert fit.structure == [["generalized"]]
+    assert fit.train[0]["rms"] == pytest.approx(GENERALIZED["train_rms"], rel=SEARCH)
+    assert fit.validation[0]["rms"] == pytest.approx(GENERALIZED["held_out_rms"], rel=SEARCH)
