@@ -1,0 +1,343 @@
+"""Excited band, H1 frequency response and the measurement delay (behind :mod:`hammerstein.models.lti`).
+
+The delay between the applied inputs and the measured outputs is the
+linear phase of the H1 estimate over the excited band (Pintelon and
+Schoukens 2012, Section 6.3; the references of :mod:`hammerstein.models.lti`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hammerstein.models.dynamics import DynamicsError
+from hammerstein.core.lazy import lazy_module
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
+scipy_linalg = lazy_module("scipy.linalg")  # lazy: ~0.1 s CPU of `from hammerstein import ...`
+
+from hammerstein.models._lti_systems import _records
+
+def excited_band(inputs, sampling_period, threshold=0.01):
+    """Frequency band excited by the input records (Welch power spectral density).
+
+    The band spans the frequencies whose summed input power spectral density
+    is at least ``threshold`` times its largest value (the excited lines of
+    a flat multisine, the passband of a filtered noise).
+
+    Parameters
+    ----------
+    inputs : list of array_like, each shape (m, n_samples)
+        Input records [any unit].
+    sampling_period : float
+        T [s].
+    threshold : float
+        Relative density that counts as excited.
+
+    Returns
+    -------
+    (f_lo, f_hi) : tuple of float
+        Lowest and highest excited frequency [Hz] (above 0).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(20000) * 1e-4
+    >>> u = np.sin(2 * np.pi * 50 * t) + np.sin(2 * np.pi * 700 * t)
+    >>> lo, hi = excited_band([u[None, :]], 1e-4)
+    >>> bool(40 < lo < 55 and 690 < hi < 710)
+    True
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    T = float(sampling_period)
+    total = None
+    for u in inputs:
+        u = np.atleast_2d(np.asarray(u, dtype=float))
+        nper = int(min(u.shape[1], 2 ** 18))     # resolution of the whole record
+        f, pxx = scipy.signal.welch(u - u.mean(axis=1, keepdims=True), fs=1.0 / T,
+                                    nperseg=nper, axis=1)
+        pxx = np.interp(np.linspace(0, 0.5 / T, 2 ** 16 + 1), f, pxx.sum(axis=0))
+        total = pxx if total is None else total + pxx
+    f = np.linspace(0, 0.5 / T, 2 ** 16 + 1)
+    dens = total[1:]
+    excited = np.flatnonzero(dens >= threshold * dens.max())
+    if excited.size == 0:
+        return float(f[1]), float(f[-1])
+    return float(f[1:][excited[0]]), float(f[1:][excited[-1]])
+
+
+def frf_h1(inputs, outputs, sampling_period, nperseg=None):
+    """H1 estimate of a p x m frequency response from several records.
+
+    ``H(f) = S_yu(f) S_uu(f)^-1`` with the cross- and auto-spectral density
+    matrices summed over the records (Welch averages,
+    :func:`scipy.signal.csd`, Hann window), so that records exciting one
+    input each combine into the full matrix (Bendat & Piersol, *Random
+    Data*, 4th ed., Wiley 2010, Section 9.3; Pintelon & Schoukens [4]).
+
+    Parameters
+    ----------
+    inputs : list of array_like, each shape (m, n_samples)
+        Inputs of G [µm] per record.
+    outputs : list of array_like, each shape (p, n_samples)
+        Measured outputs [µm] per record.
+    sampling_period : float
+        T [s].
+    nperseg : int, optional
+        Welch segment length; default the largest power of two up to a
+        quarter of the shortest record (at least 256 samples).
+
+    Returns
+    -------
+    frequency_hz : numpy.ndarray, shape (n_freq,)
+        [Hz], without 0.
+    H : numpy.ndarray, shape (p, m, n_freq)
+        Complex frequency response [µm/µm]; NaN where ``S_uu`` is singular.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((1, 20000))
+    >>> y = scipy.signal.lfilter([0.0, 0.5], [1.0, -0.5], u)
+    >>> f, H = frf_h1([u], [y], 1e-3)
+    >>> bool(abs(abs(H[0, 0, 0]) - 1.0) < 0.02)
+    True
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    ins, outs = _records(inputs, outputs)
+    T = float(sampling_period)
+    if nperseg is None:
+        shortest = min(u.shape[1] for u in ins)
+        nperseg = max(256, 2 ** int(np.floor(np.log2(max(shortest // 4, 2)))))
+        nperseg = min(nperseg, shortest)
+    m, p = ins[0].shape[0], outs[0].shape[0]
+    Suu = Syu = f = None
+    for u, y in zip(ins, outs):
+        uu = np.empty((m, m, nperseg // 2 + 1), complex)
+        yu = np.empty((p, m, nperseg // 2 + 1), complex)
+        for a in range(m):
+            for b in range(m):
+                f, uu[a, b] = scipy.signal.csd(u[b], u[a], fs=1 / T, nperseg=nperseg)
+            for c in range(p):
+                f, yu[c, a] = scipy.signal.csd(u[a], y[c], fs=1 / T, nperseg=nperseg)
+        Suu = uu if Suu is None else Suu + uu
+        Syu = yu if Syu is None else Syu + yu
+    H = np.full((p, m, f.size), np.nan, complex)
+    for k in range(1, f.size):
+        S = Suu[:, :, k]
+        if np.linalg.cond(S) < 1e8:
+            H[:, :, k] = Syu[:, :, k] @ np.linalg.inv(S)
+    return f[1:], H[:, :, 1:]
+
+
+@dataclass(frozen=True)
+class MeasurementDelay:
+    """Acquisition delay estimated from broadband records (:func:`estimate_measurement_delay`).
+
+    Parameters
+    ----------
+    delay : int
+        Estimated delay [samples] (the nearest integer to ``samples``);
+        meaningful only when ``problem`` is None.
+    samples : float
+        Group delay of the measured frequency response over the fit band
+        minus the half sample of the zero-order hold [samples].
+    band_hz : tuple of float
+        Fit band ``(f_lo, f_hi)`` [Hz]: the upper half of the excited band.
+    std : float
+        Standard deviation of ``samples`` [samples] (least squares on the
+        phase, inflated for the correlation of neighbouring Welch lines).
+    halves : tuple of float
+        ``samples`` fitted on the lower and on the upper half of the fit
+        band separately [samples] (a pure delay gives the same on both).
+    residual_deg : float
+        Weighted RMS of the phase left once the delay and one constant phase
+        per transfer are removed [deg].
+    n_lines : int
+        Frequency lines used.
+    problem : str or None
+        Why the estimate is not trusted (phase not a straight line, output
+        ahead of the input, band too narrow), else None.
+    """
+
+    delay: int
+    samples: float
+    band_hz: tuple
+    std: float
+    halves: tuple
+    residual_deg: float
+    n_lines: int
+    problem: str | None = None
+
+    @property
+    def method(self):
+        """One line: how the delay was found [text]."""
+        return (f"phase slope of the measured H1 frequency response over "
+                f"{self.band_hz[0]:.4g}-{self.band_hz[1]:.4g} Hz ({self.n_lines} lines): group "
+                f"delay {self.samples + 0.5:.2f} samples less the zero-order hold's 0.5 = "
+                f"{self.samples:.2f} +- {self.std:.2f} (halves of the band {self.halves[0]:.2f} / "
+                f"{self.halves[1]:.2f}), phase residual {self.residual_deg:.2g} deg")
+
+
+#: Largest spread [samples] between the two half-band estimates of a pure delay, beyond twice
+#: the standard deviation of their difference.
+DELAY_HALVES_TOLERANCE = 0.25
+#: Inflation of a least-squares standard deviation over Hann-windowed, half-overlapping Welch
+#: lines (neighbouring lines share about half their data).
+WELCH_LINE_CORRELATION = 2.0
+#: Fewest frequency lines in the fit band.
+DELAY_MIN_LINES = 8
+
+
+def _phase_slope(H, f, T, tau, weights):
+    """``tau`` [samples] refined by weighted least squares on the wrapped residual phase.
+
+    Model per transfer ``ab``: ``angle(H_ab(f) exp(j 2 pi f tau T)) = c_ab - 2 pi f T s``;
+    returns ``(tau + s, weighted RMS residual [rad], standard deviation of tau [samples])``,
+    the last from the least-squares covariance inflated by
+    :data:`WELCH_LINE_CORRELATION` (neighbouring Welch lines are not independent).
+    """
+    for _ in range(3):
+        R = H * np.exp(2j * np.pi * f * tau * T)
+        rows, rhs, wts, cols = [], [], [], []
+        n_tr = R.shape[0]
+        for k in range(n_tr):
+            ref = np.sum(weights[k] * R[k])
+            ph = np.angle(R[k] * np.conj(ref))
+            a = np.zeros((f.size, n_tr + 1))
+            a[:, k] = 1.0
+            a[:, -1] = -2 * np.pi * f * T
+            rows.append(a)
+            rhs.append(ph)
+            wts.append(weights[k])
+        A, b, w = np.vstack(rows), np.concatenate(rhs), np.sqrt(np.concatenate(wts))
+        Aw = A * w[:, None]
+        sol = np.linalg.lstsq(Aw, b * w, rcond=None)[0]
+        tau = tau + sol[-1]
+        res = (b - A @ sol) * w
+    dof = max(b.size - sol.size, 1)
+    cov = np.linalg.pinv(Aw.T @ Aw) * (np.sum(res ** 2) / dof)
+    std = float(np.sqrt(max(cov[-1, -1], 0.0)) * WELCH_LINE_CORRELATION)
+    return tau, float(np.sqrt(np.sum(res ** 2) / np.sum(w ** 2))), std
+
+
+def estimate_measurement_delay(inputs, outputs, sampling_period, band_hz=None):
+    """Integer acquisition delay of records, from the phase of their frequency response.
+
+    A measured output that lags its input by ``d`` samples multiplies the
+    frequency response by ``exp(-j 2 pi f d T)``: a phase falling linearly
+    with frequency, 360 d f T degrees (540 deg for d = 3 at 10 kHz and
+    20 kHz), while the phase of an actuator's bending modes settles to a
+    constant (a multiple of -90 deg per relative degree) above them [4]. The
+    H1 estimate (:func:`frf_h1`) of every transfer is taken over the upper
+    half of the excited band (:func:`excited_band`), where a piezo
+    actuator's modes are behind (10 Hz - 5 kHz multisines at 20 kHz:
+    2.5-5 kHz); the common group delay ``tau`` of all transfers is the
+    maximum over ``tau`` of ``sum_ab |sum_f H_ab(f) exp(j 2 pi f tau T)|``
+    (a coherent sum, robust to phase wrapping; ``tau`` searched up to a
+    quarter of the Welch segment, both signs), refined by weighted least
+    squares on the residual phase (weights ``|H_ab(f)|^2``; one constant
+    phase per transfer). A sampled actuator with no acquisition delay lags
+    by the half sample of the zero-order hold [5]: the delay is
+    ``round(tau - 0.5)``. The estimate is independent of the hysteresis
+    model and of the model order of G (the records' inputs are taken as
+    they are: a rate-independent hysteresis adds no linear phase).
+
+    The estimate is refused (``problem``) when the fit band holds fewer than
+    8 lines; when the two halves of the band give delays further apart
+    than 0.25 samples plus twice the standard deviation of their difference
+    (the phase is not a delay's straight line: a mode in the band); when
+    the distance of the estimate to the nearest integer plus twice its
+    standard deviation exceeds half a sample (noise, or a filter's fraction
+    of a sample, leaves two integers possible); or when the outputs lead
+    the inputs by a sample or more.
+
+    Parameters
+    ----------
+    inputs : list of array_like, each shape (m, n_samples)
+        Inputs of each record [V, or any unit].
+    outputs : list of array_like, each shape (p, n_samples)
+        Measured outputs of each record [µm, or any unit].
+    sampling_period : float
+        T [s].
+    band_hz : tuple of float, optional
+        Fit band ``(f_lo, f_hi)`` [Hz]; default the upper half of the
+        excited band.
+
+    Returns
+    -------
+    MeasurementDelay
+        ``delay`` [samples], the fractional estimate, the band, the
+        residual and ``problem`` (None when the estimate is trusted).
+
+    Raises
+    ------
+    DynamicsError
+        On malformed records (shapes, non-finite values) or a non-positive
+        sampling period.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((1, 16000))
+    >>> y = scipy.signal.lfilter([0.0, 0.1], [1.0, -0.9], u)    # a lag sampled by a ZOH
+    >>> estimate_measurement_delay([u], [y], 5e-5).delay, estimate_measurement_delay(
+    ...     [u], [np.roll(y, 3)], 5e-5).delay
+    (0, 3)
+    """
+    T = float(sampling_period)
+    if not (np.isfinite(T) and T > 0):
+        raise DynamicsError(f"sampling_period: expected a positive time [s], found "
+                            f"{sampling_period!r}")
+    ins, outs = _records(inputs, outputs)
+    ins = [u - u.mean(axis=1, keepdims=True) for u in ins]
+    outs = [y - y.mean(axis=1, keepdims=True) for y in outs]
+    if band_hz is None:
+        top = excited_band(ins, T)[1]
+        band_hz = (0.5 * top, top)
+    lo, hi = (float(v) for v in band_hz)
+    f, H = frf_h1(ins, outs, T)
+    seg = int(round(1.0 / (T * (f[1] - f[0])))) if f.size > 1 else 0
+    sel = (f >= lo) & (f <= hi) & np.all(np.isfinite(H), axis=(0, 1))
+    f, H = f[sel], H[:, :, sel].reshape(H.shape[0] * H.shape[1], int(sel.sum()))
+    if f.size < DELAY_MIN_LINES:
+        return MeasurementDelay(0, float("nan"), (lo, hi), float("nan"), (float("nan"),) * 2,
+                                float("nan"), int(f.size), f"only {f.size} frequency lines in "
+                                             f"{lo:.4g}-{hi:.4g} Hz (at least "
+                                             f"{DELAY_MIN_LINES}: a longer or broader record)")
+    weights = np.abs(H) ** 2
+    reach = max(seg // 4, 4)
+    grid = np.arange(-reach, reach + 0.125, 0.25)
+    # coherent sum per transfer for every tau of the grid: (n_grid, n_transfers)
+    J = np.abs(np.exp(2j * np.pi * T * grid[:, None] * f[None, :]) @ H.T).sum(axis=1)
+    tau, res, std = _phase_slope(H, f, T, float(grid[np.argmax(J)]), weights)
+    mid = 0.5 * (lo + hi)
+    halves, hstd = [], []
+    for part in (f < mid, f >= mid):
+        t_h, _, s_h = _phase_slope(H[:, part], f[part], T, tau, weights[:, part])
+        halves.append(t_h - 0.5)
+        hstd.append(s_h)
+
+    samples = tau - 0.5
+    delay = int(np.round(samples))
+    problem = None
+    res_deg = float(np.degrees(res))
+    spread = abs(halves[0] - halves[1])
+    if not spread <= DELAY_HALVES_TOLERANCE + 2 * np.hypot(*hstd):
+        problem = (f"the phase over {lo:.4g}-{hi:.4g} Hz is not a delay's straight line (the "
+                   f"band's halves give {halves[0]:.2f} and {halves[1]:.2f} samples, "
+                   f"+-{hstd[0]:.2f} and +-{hstd[1]:.2f}): a mode in the band?")
+    elif not abs(samples - delay) + 2 * std <= 0.5:
+        problem = (f"{samples:.2f} +- {std:.2f} samples does not single out one integer (noise "
+                   f"over {lo:.4g}-{hi:.4g} Hz, phase residual {res_deg:.2g} deg, or a "
+                   f"fraction of a sample from a filter)")
+    elif delay < 0:
+        problem = (f"the outputs lead the inputs by {-samples:.2f} samples (columns swapped, or "
+                   f"clocks not shared?)")
+    return MeasurementDelay(delay, float(samples), (lo, hi), float(std),
+                            tuple(float(h) for h in halves), res_deg, int(f.size), problem)

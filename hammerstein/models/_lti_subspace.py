@@ -1,0 +1,689 @@
+"""Subspace identification of G from records (behind :mod:`hammerstein.models.lti`).
+
+Multi-record PO-MOESP for A and C, least squares for B, D and the initial
+states, the order chosen on held-out records, modal reduction; the
+references are those of :mod:`hammerstein.models.lti` (Verhaegen and
+Verdult 2007; Ljung 1999).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from hammerstein.models.dynamics import DynamicsError
+from hammerstein.core.lazy import lazy_module
+
+control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
+scipy_linalg = lazy_module("scipy.linalg")  # lazy: ~0.1 s CPU of `from hammerstein import ...`
+
+from hammerstein.models._lti_systems import _apply_filter, _records, modal_parameters, sensor_filter
+from hammerstein.models._lti_delay import excited_band
+
+# -- identification ------------------------------------------------------------------
+def _state_regressors(A, C, u):
+    """Regressors of y on B (row-major vec) and on x0 for one record.
+
+    Returns ``RB`` (N, p, n*m) and ``R0`` (N, p, n) with
+    ``y_k = RB_k B.ravel() + R0_k x0 (+ D u_k)``, computed in modal
+    coordinates (``A = V diag(lam) V^-1``, one first-order recursion per mode
+    and input, run by :func:`scipy.signal.lfilter`); a loop is used when A is
+    defective.
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    n, (m, N) = A.shape[0], u.shape
+    p = C.shape[0]
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) < 1e8:
+        Vinv = np.linalg.inv(V)
+        CV = C @ V
+        W = np.empty((n, m, N), dtype=complex)
+        for i in range(n):
+            for b in range(m):
+                W[i, b] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], u[b].astype(complex))
+        # the sums over the modes i as matrix products (BLAS) instead of einsum's loops:
+        # RB[k, p, a, b] = sum_i CV[p, i] Vinv[i, a] W[i, b, k], R0[k, p, a] = sum_i
+        # CV[p, i] Vinv[i, a] lam_i^k
+        M = (CV[:, None, :] * Vinv.T[None, :, :]).reshape(p * n, n)           # (p a, i)
+        RB = (M @ W.reshape(n, m * N)).real.reshape(p, n, m, N)
+        RB = np.ascontiguousarray(RB.transpose(3, 0, 1, 2)).reshape(N, p, n * m)
+        powers = lam[:, None] ** np.arange(N)[None, :]
+        R0 = np.ascontiguousarray((M @ powers).real.reshape(p, n, N).transpose(2, 0, 1))
+        return RB, R0
+    RB = np.empty((N, p, n * m))
+    R0 = np.empty((N, p, n))
+    S = np.zeros((n, n * m))
+    P = np.eye(n)
+    eye_n = np.eye(n)
+    for k in range(N):
+        RB[k] = C @ S
+        R0[k] = C @ P
+        S = A @ S + np.einsum("ab,c->abc", eye_n, u[:, k]).reshape(n, n * m)
+        P = A @ P
+    return RB, R0
+
+
+def _fit_bdx0(A, C, ins, outs, feedthrough, dc=None):
+    """Least-squares B, D and one x0 per record given A, C [2, Section 9.2.4].
+
+    With ``dc`` (p, m), under the linear equality constraint
+    ``G(1) = C (I - A)^-1 B + D = dc`` (null-space method: the particular
+    solution plus a least-squares combination of the null space of the
+    constraint). Returns B, D, x0 and the simulated outputs of each record.
+    """
+    n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
+    R = len(ins)
+    n_shared = n * m + (p * m if feedthrough else 0)
+    rows, rhs = [], []
+    for r, (u, y) in enumerate(zip(ins, outs)):
+        RB, R0 = _state_regressors(A, C, u)
+        N = u.shape[1]
+        blocks = [RB]
+        if feedthrough:
+            blocks.append(np.einsum("il,bk->kilb", np.eye(p), u).reshape(N, p, p * m))
+        X0 = np.zeros((N, p, n * R))
+        X0[:, :, r * n:(r + 1) * n] = R0
+        blocks.append(X0)
+        rows.append(np.concatenate(blocks, axis=2).reshape(N * p, -1))
+        rhs.append(y.T.reshape(-1))
+    X, rhs = np.vstack(rows), np.concatenate(rhs)
+    if dc is None:
+        theta = np.linalg.lstsq(X, rhs, rcond=None)[0]
+    else:
+        E = np.zeros((p * m, X.shape[1]))
+        E[:, :n * m] = np.kron(C @ np.linalg.solve(np.eye(n) - A, np.eye(n)), np.eye(m))
+        if feedthrough:
+            E[:, n * m:n_shared] = np.eye(p * m)
+        theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
+        N = scipy_linalg.null_space(E)
+        theta = theta_p + N @ np.linalg.lstsq(X @ N, rhs - X @ theta_p, rcond=None)[0]
+    B = theta[:n * m].reshape(n, m)
+    D = theta[n * m:n_shared].reshape(p, m) if feedthrough else np.zeros((p, m))
+    x0 = theta[n_shared:].reshape(R, n)
+    yhat = [(X @ theta).reshape(-1, p).T for X in rows]
+    return B, D, x0, yhat
+
+
+def _simulate(A, B, C, D, u, x0):
+    """Response of (A, B, C, D) to u (m, N) from x0 [µm].
+
+    In modal coordinates (``A = V diag(lam) V^-1``): one first-order
+    recursion per mode on ``V^-1 B u`` (:func:`scipy.signal.lfilter`), the
+    same sums as :func:`_state_regressors` without forming its (N, p, n m)
+    regressors; through them when A is defective.
+    """
+    import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
+
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) >= 1e8:
+        RB, R0 = _state_regressors(A, C, u)
+        return (RB @ B.ravel() + R0 @ x0).T + D @ u
+    Vinv = np.linalg.inv(V)
+    z = Vinv @ (B @ u).astype(complex)                      # (n, N) modal inputs
+    W = np.stack([scipy.signal.lfilter([0.0, 1.0], [1.0, -lam_i], z_i) for lam_i, z_i in zip(lam, z)])
+    W += (lam[:, None] ** np.arange(u.shape[1])[None, :]) * (Vinv @ x0)[:, None]
+    return (C @ V @ W).real + D @ u
+
+
+class _MultiRecordMOESP:
+    """PO-MOESP column space of the extended observability matrix, several records.
+
+    Uses nfoursid's :class:`~nfoursid.nfoursid.NFourSID` (block Hankel
+    matrices and the QR/LQ step of PO-MOESP, Verhaegen & Verdult [2], p. 329),
+    with the Hankel columns of every record side by side, so that no column
+    straddles two records. A and C follow from the shift invariance of the
+    estimated extended observability matrix ``Gamma_i = U_n S_n^(1/2)``
+    ([2], Section 9.6): ``C = Gamma_i[:p]``,
+    ``A = pinv(Gamma_i[:-p]) Gamma_i[p:]``. (nfoursid's own
+    ``system_identification`` regresses consecutive columns of a state
+    sequence, which is not valid across record boundaries.)
+    """
+
+    def __init__(self, ins, outs, block_rows):
+        import pandas as pd  # lazy: nfoursid's interface takes DataFrames
+        from nfoursid.nfoursid import NFourSID  # lazy: only when dynamics are identified
+        from nfoursid.utils import Utils
+        m, p = ins[0].shape[0], outs[0].shape[0]
+        cols_u = [f"u{i}" for i in range(m)]
+        cols_y = [f"y{i}" for i in range(p)]
+        frame = pd.DataFrame(np.concatenate([ins[0], outs[0]]).T, columns=cols_u + cols_y)
+        sid = NFourSID(frame, output_columns=cols_y, input_columns=cols_u,
+                       num_block_rows=block_rows)
+        i = block_rows
+        blocks = []
+        for u, y in zip(ins, outs):
+            uh = Utils.block_hankel_matrix(u.T, i)
+            yh = Utils.block_hankel_matrix(y.T, i)
+            blocks.append(np.concatenate([uh[:, i:], uh[:, :-i], yh[:, :-i], yh[:, i:]]))
+        stacked = np.concatenate(blocks, axis=1)
+        r = np.linalg.qr(stacked.T, mode="r").T
+        y_rows, u_rows = p * i, m * i
+        sid.R32 = r[-y_rows:, u_rows:-y_rows]
+        sid.R22 = r[u_rows:-y_rows, u_rows:-y_rows]
+        sid.R32_decomposition = Utils.eigenvalue_decomposition(sid.R32)
+        self.nfoursid = sid
+        self.p = p
+        dec = sid.R32_decomposition
+        self.singular_values = np.diag(dec.eigenvalues)
+        self.left = dec.left_orthogonal
+
+    def system_ac(self, n):
+        """A (n, n) and C (p, n) of an order-n model."""
+        p = self.p
+        gamma = self.left[:, :n] * np.sqrt(self.singular_values[:n])[None, :]
+        C = gamma[:p]
+        A = np.linalg.lstsq(gamma[:-p], gamma[p:], rcond=None)[0]
+        return A, C
+
+
+def _fit_percent(y, yhat):
+    """NRMSE fit per output [%], Ljung [3]: 100 (1 - |y - yhat| / |y - mean y|)."""
+    e = np.linalg.norm(y - yhat, axis=1)
+    d = np.linalg.norm(y - y.mean(axis=1, keepdims=True), axis=1)
+    return 100.0 * (1.0 - e / np.where(d > 0, d, 1.0))
+
+
+@dataclass
+class DynamicsIdentifier:
+    """Subspace identification of the discrete linear part G from records.
+
+    The estimator, in the scikit-learn / pysindy style: parameters in the
+    constructor, :meth:`fit` on records, fitted attributes ending in ``_``.
+
+    **Algorithm.** (1) The input records (PI outputs ``H = Gamma(U)`` [µm])
+    are, when a ``sensor`` with a low-pass is given, filtered by the same
+    discrete low-pass S(z) that the sensor applies to the displacements.
+    S is scalar (the same first-order filter on every channel), so
+    ``S G = G S`` and the measured ``Y_m = S G H + noise`` equals
+    ``G (S H) + noise``: fitting G from ``(S H, Y_m)`` identifies G alone,
+    without the sensor pole (z = 0.52 for 2 kHz at 20 kHz), which therefore
+    never enters the inverse of the actuator. (2) The A and C matrices are
+    estimated by the subspace method of ``nfoursid`` (PO-MOESP with past
+    inputs and outputs as instruments [1, 2]) on the records concatenated
+    in time (the few Hankel columns that straddle a record boundary are a
+    negligible bias for records of thousands of samples). (3) Given A and
+    C, the output is linear in B, D and one initial state per record; they
+    are estimated by linear least squares over all records [2, Section
+    9.2.4], so separate records (one per excited input) are combined
+    exactly and start-up transients are modelled, not discarded. By default
+    ``D = 0``: the ZOH-sampled actuator cannot react within the sample in
+    which the PI output is applied (relative degree >= 1), and a small
+    spurious D estimated from noise would make the inverse ill-conditioned.
+
+    **Order selection.** Each record is split in time: the first
+    ``1 - validation_fraction`` is used for estimation, the rest for
+    validation. For every candidate order 1..``max_order`` that gives a
+    stable model, the model is simulated over the whole record (with the
+    estimated initial state) and the NRMSE fit [%] on the validation part is
+    computed (cross-validation, Ljung [3], Section 16.4). The chosen order
+    is the smallest whose validation fit is within ``order_tolerance``
+    percentage points of the best; the singular values of the subspace step
+    (``singular_values_``, whose gap shows the order as well) and Akaike's
+    criterion on the validation residuals (``aic_``) are reported for
+    inspection. The chosen order is then refitted on the full records (if
+    that refit of A is unstable, A and C of the estimation parts are kept and
+    only B, D and the initial states are refitted).
+
+    Parameters
+    ----------
+    order : int, optional
+        Fixed model order n; chosen from the data when None.
+    max_order : int
+        Largest candidate order.
+    block_rows : int, optional
+        Block rows of the Hankel matrices (``num_block_rows`` of nfoursid);
+        default ``max(10, 2 * max_order // p + 4)``.
+    sensor : Sensor, optional
+        Sensor whose low-pass filtered the outputs (see Algorithm); noise and
+        quantisation are treated as output noise.
+    feedthrough : bool
+        Estimate D (default False: D = 0).
+    validation_fraction : float
+        Fraction of each record kept for validation, in (0, 0.9].
+    order_tolerance : float
+        Percentage points of validation fit traded for a smaller order.
+    unit_dc_gain : bool
+        Fit B (and D) under the linear constraint ``G(z=1) = I`` (the
+        static gain belongs to a quasi-statically identified hysteresis
+        model); the unconstrained ``G(1)`` is kept in
+        ``dc_gain_unconstrained_``. Default False.
+    band_hz : tuple of float, optional
+        Excited band ``(f_lo, f_hi)`` [Hz]; default estimated from the input
+        spectra (:func:`excited_band`).
+    low_pole_fraction : float
+        Poles with a natural frequency below ``low_pole_fraction * f_lo`` are
+        removed from a candidate (the data cannot show them) and B refitted;
+        0 (default) keeps them.
+    cancel_tolerance : float
+        Modes whose largest gain in the band is below this fraction of G's
+        largest gain there (near pole-zero cancellations) are removed and B
+        refitted; 0 (default) keeps them.
+    validation_records : tuple of int, optional
+        Indices of records held out whole to choose the order (their
+        initial states are estimated on them); default: the last
+        ``validation_fraction`` of every record.
+
+    Attributes
+    ----------
+    system_ : control.StateSpace
+        Identified discrete system, ``dt = sampling_period``, p inputs, p outputs.
+    order_ : int
+        Chosen order.
+    singular_values_ : numpy.ndarray
+        Singular values of the subspace (R32) matrix, descending.
+    orders_ : numpy.ndarray
+        Candidate orders examined.
+    validation_fit_ : numpy.ndarray, shape (n_candidates,)
+        Mean validation fit [%] per candidate (NaN when unstable).
+    aic_ : numpy.ndarray, shape (n_candidates,)
+        Akaike's criterion per candidate (NaN when unstable).
+    fit_percent_ : numpy.ndarray, shape (p,)
+        Fit [%] per output of the final model over all records.
+    initial_states_ : numpy.ndarray, shape (n_records, order_)
+        Estimated initial state of each record.
+    dc_gain_unconstrained_ : numpy.ndarray, shape (p, p)
+        ``G(1)`` of the final A, C with B, D fitted without the constraint.
+    candidates_ : list of dict
+        Per candidate order: ``order``, kept ``modes`` ([Hz, damping]),
+        ``dropped`` poles, ``rejected`` reason, ``validation_fit_percent``.
+    candidate_order_ : int
+        The chosen candidate order (``order_`` may be smaller after removals).
+    band_hz_ : tuple of float
+        Excited band used [Hz].
+    validation_ : str
+        What was held out to choose the order.
+    sampling_period_ : float
+        T [s].
+
+    References
+    ----------
+    See the module references [1]-[3].
+
+    Examples
+    --------
+    >>> import numpy as np, control
+    >>> from hammerstein.models.dynamics import bending_modes, discretize
+    >>> G = discretize(bending_modes([300.0], [0.2]), 5e-5)
+    >>> t, (u,) = excitation(5e-5, 1, 1.0, period=0.02, periods=2)
+    >>> y = control.forced_response(G, U=u).outputs.reshape(1, -1)
+    >>> ident = DynamicsIdentifier(max_order=4).fit(u, y, 5e-5)
+    >>> ident.order_, bool(ident.fit_percent_[0] > 99.9)
+    (2, True)
+    """
+
+    order: int | None = None
+    max_order: int = 8
+    block_rows: int | None = None
+    sensor: object = None
+    feedthrough: bool = False
+    validation_fraction: float = 0.3
+    order_tolerance: float = 0.1
+    unit_dc_gain: bool = False
+    band_hz: tuple | None = None
+    low_pole_fraction: float = 0.5
+    cancel_tolerance: float = 0.0
+    validation_records: tuple | None = None
+
+    @staticmethod
+    def _subspace(ins, outs, block_rows):
+        return _MultiRecordMOESP(ins, outs, block_rows)
+
+    _FITTED_ARRAYS = ("singular_values_", "orders_", "validation_fit_", "aic_", "fit_percent_",
+                      "initial_states_", "dc_gain_unconstrained_")
+
+    def to_dict(self):
+        """The parameters (but the sensor) and fitted attributes as plain data (for JSON).
+
+        Returns
+        -------
+        dict
+            ``params`` (order, max_order, block_rows, feedthrough,
+            validation_fraction, order_tolerance) and ``fitted``:
+            ``A``, ``B``, ``C``, ``D`` (nested lists), ``dt`` [s] and
+            ``name`` of ``system_``, ``order_``, ``sampling_period_`` and
+            the arrays (nested lists; NaN where the array has NaN).
+
+        Raises
+        ------
+        DynamicsError
+            If the identifier is not fitted.
+        """
+        if not hasattr(self, "system_"):
+            raise DynamicsError("to_dict: the identifier is not fitted (call fit first)")
+        params = {"order": None if self.order is None else int(self.order),
+                  "max_order": int(self.max_order),
+                  "block_rows": None if self.block_rows is None else int(self.block_rows),
+                  "feedthrough": bool(self.feedthrough),
+                  "validation_fraction": float(self.validation_fraction),
+                  "order_tolerance": float(self.order_tolerance),
+                  "unit_dc_gain": bool(self.unit_dc_gain),
+                  "band_hz": None if self.band_hz is None else [float(v) for v in self.band_hz],
+                  "low_pole_fraction": float(self.low_pole_fraction),
+                  "cancel_tolerance": float(self.cancel_tolerance),
+                  "validation_records": None if self.validation_records is None
+                  else [int(v) for v in self.validation_records]}
+        G = self.system_
+        fitted = {k: np.asarray(getattr(G, k), dtype=float).tolist() for k in "ABCD"}
+        fitted.update({"dt": float(G.dt), "name": str(G.name), "order_": int(self.order_),
+                       "sampling_period_": float(self.sampling_period_)})
+        fitted.update({k: np.asarray(getattr(self, k)).tolist() for k in self._FITTED_ARRAYS})
+        fitted.update({"candidates_": self.candidates_, "validation_": self.validation_,
+                       "candidate_order_": int(self.candidate_order_),
+                       "band_hz_": [float(v) for v in self.band_hz_]})
+        return {"params": params, "fitted": fitted}
+
+    @classmethod
+    def from_dict(cls, data, sensor=None):
+        """A fitted identifier from :meth:`to_dict` (round trip: equal arrays, same system).
+
+        Parameters
+        ----------
+        data : dict
+            From :meth:`to_dict`.
+        sensor : Sensor, optional
+            The sensor parameter (not part of the data).
+
+        Returns
+        -------
+        DynamicsIdentifier
+
+        Raises
+        ------
+        DynamicsError
+            If ``data`` lacks a key or holds matrices of inconsistent shapes.
+        """
+        try:
+            ident = cls(**data["params"], sensor=sensor)
+            f = data["fitted"]
+            mats = [np.array(f[k], dtype=float, ndmin=2) for k in "ABCD"]
+            ident.system_ = control.ss(*mats, dt=f["dt"], name=f["name"])
+            ident.order_ = int(f["order_"])
+            ident.sampling_period_ = float(f["sampling_period_"])
+            for k in cls._FITTED_ARRAYS:
+                setattr(ident, k, np.array(f[k], dtype=int if k == "orders_" else float))
+            ident.candidates_ = list(f["candidates_"])
+            ident.candidate_order_ = int(f["candidate_order_"])
+            ident.validation_ = str(f["validation_"])
+            ident.band_hz_ = tuple(float(v) for v in f["band_hz_"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise DynamicsError(f"from_dict: not a fitted identifier ({exc})") from None
+        return ident
+
+    def fit(self, inputs, outputs, sampling_period):
+        """Identify G from one or several records.
+
+        Parameters
+        ----------
+        inputs : array_like, shape (p, n_samples), or list of them
+            PI outputs ``Gamma(U)`` [µm] of each record.
+        outputs : array_like, shape (p, n_samples), or list of them
+            Measured displacements [µm] of each record.
+        sampling_period : float
+            T [s].
+
+        Returns
+        -------
+        DynamicsIdentifier
+            self, fitted.
+
+        Raises
+        ------
+        DynamicsError
+            On malformed records or parameters, or when no candidate order
+            gives a stable model.
+        """
+        T = float(sampling_period)
+        if not (np.isfinite(T) and T > 0):
+            raise DynamicsError(f"sampling_period: expected a positive time [s], found {sampling_period!r}")
+        if not 0 < self.validation_fraction <= 0.9:
+            raise DynamicsError(f"validation_fraction: expected in (0, 0.9], found {self.validation_fraction!r}")
+        ins, outs = _records(inputs, outputs)
+        ba = sensor_filter(self.sensor, T)
+        if ba is not None:
+            ins = [_apply_filter(ba, u) for u in ins]
+        p = outs[0].shape[0]
+        block_rows = self.block_rows or max(10, 2 * self.max_order // p + 4)
+        if self.order is not None:
+            if not (isinstance(self.order, (int, np.integer)) and 1 <= self.order <= p * block_rows):
+                raise DynamicsError(f"order: expected an integer in [1, {p * block_rows}], found {self.order!r}")
+            candidates = np.array([int(self.order)])
+        else:
+            if not (isinstance(self.max_order, (int, np.integer)) and self.max_order >= 1):
+                raise DynamicsError(f"max_order: expected an integer >= 1, found {self.max_order!r}")
+            candidates = np.arange(1, min(int(self.max_order), p * block_rows) + 1)
+        band = excited_band(ins, T) if self.band_hz is None else tuple(float(v) for v in self.band_hz)
+        held = sorted({int(r) for r in (self.validation_records or ())})
+        if held and (held[0] < 0 or held[-1] >= len(ins) or len(held) == len(ins)):
+            raise DynamicsError(f"validation_records: expected indices of some (not all) of the "
+                                f"{len(ins)} records, found {held}")
+        if held:
+            est_idx = [r for r in range(len(ins)) if r not in held]
+            est_in, est_out = [ins[r] for r in est_idx], [outs[r] for r in est_idx]
+            split = None
+            self.validation_ = ("whole held-out record(s) " + ", ".join(str(r) for r in held)
+                                + " (initial state estimated on each)")
+        else:
+            split = [int(round(u.shape[1] * (1 - self.validation_fraction))) for u in ins]
+            est_in = [u[:, :s] for u, s in zip(ins, split)]
+            est_out = [y[:, :s] for y, s in zip(outs, split)]
+            self.validation_ = f"the last {100 * self.validation_fraction:.0f} % of each record"
+        if min(u.shape[1] for u in est_in) <= 4 * block_rows:
+            raise DynamicsError(f"records: too short for {block_rows} block rows "
+                                f"(estimation parts of {min(u.shape[1] for u in est_in)} samples)")
+        fits = np.full(candidates.size, np.nan)
+        aic = np.full(candidates.size, np.nan)
+        infos, models = [], {}
+        if True:    # every candidate (a fixed order too) is checked and validated
+            sid = self._subspace(est_in, est_out, block_rows)
+            for i, n in enumerate(candidates):
+                model, info = self._candidate(*sid.system_ac(int(n)), est_in, est_out, band, T)
+                info["order"] = int(n)
+                models[int(n)] = model
+                if model is not None:
+                    yv, yh = self._validate(model, ins, outs, held, split)
+                    fits[i] = float(np.mean(_fit_percent(yv, yh)))
+                    info["validation_fit_percent"] = float(fits[i])
+                    E = yv - yh
+                    n_par = model[0].shape[0] * (model[0].shape[0] + 2 * p) + (
+                        p * p if self.feedthrough else 0)
+                    _, logdet = np.linalg.slogdet(E @ E.T / E.shape[1] + 1e-30 * np.eye(p))
+                    aic[i] = E.shape[1] * logdet + 2 * n_par
+                infos.append(info)
+            if np.all(np.isnan(fits)):
+                why = "; ".join(f"order {c['order']}: {c.get('rejected', '')}" for c in infos[:4])
+                raise DynamicsError(f"order: no candidate order gave an acceptable model ({why})")
+            best = np.nanmax(fits)
+            chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
+        sid_all = self._subspace(ins, outs, block_rows)
+        final, info = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
+        ref = models.get(chosen)
+        if final is None or (ref is not None and final[0].shape != ref[0].shape):
+            if ref is None:
+                raise DynamicsError(f"order: the model of order {chosen} is rejected: "
+                                    f"{info.get('rejected', 'no mode left')}")
+            A, C = ref[0], ref[2]   # stable and checked on the estimation records
+            B, D, x0, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+        else:
+            sid = sid_all
+            A, B, C, D, x0 = final
+            _, _, _, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+        B0, D0, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, None)
+        self.dc_gain_unconstrained_ = C @ np.linalg.solve(np.eye(A.shape[0]) - A, B0) + D0
+        fit_all = _fit_percent(np.concatenate(outs, axis=1), np.concatenate(yhat, axis=1))
+        self.system_ = control.ss(A, B, C, D, dt=T, name="identified_dynamics")
+        self.order_ = int(A.shape[0])
+        self.candidate_order_ = chosen
+        self.singular_values_ = sid.singular_values.copy()
+        self.orders_ = candidates
+        self.validation_fit_ = fits
+        self.aic_ = aic
+        self.candidates_ = infos
+        self.band_hz_ = band
+        self.fit_percent_ = np.asarray(fit_all)
+        self.initial_states_ = x0
+        self.sampling_period_ = T
+        return self
+
+    def _dc(self, p):
+        return np.eye(p) if self.unit_dc_gain else None
+
+    def _candidate(self, A, C, ins, outs, band, T):
+        """A candidate model from (A, C): stable, no pole far below the band, no cancelled mode.
+
+        Returns ``((A, B, C, D, x0), info)`` or ``(None, info)``; ``info`` holds
+        the kept ``modes`` ([Hz, damping]) and what was ``dropped`` or ``rejected``.
+        """
+        info = {"dropped": []}
+        z = np.linalg.eigvals(A)
+        if np.max(np.abs(z)) >= 1:
+            info["rejected"] = f"unstable (pole |z| = {np.max(np.abs(z)):.4g})"
+            return None, info
+        p = C.shape[0]
+        prune = self.low_pole_fraction > 0 or self.cancel_tolerance > 0
+        if prune:
+            modal = _real_modal(A, C, T)
+            if modal is not None:
+                A, C, mode_of, freq, zeta = modal
+                low = self.low_pole_fraction * band[0]
+                slow = np.flatnonzero(freq < low)
+                for i in slow:
+                    info["dropped"].append(f"pole at {freq[i]:.3g} Hz (damping {zeta[i]:.2f}) below "
+                                           f"{low:.3g} Hz, far below the excited band from {band[0]:.3g} Hz")
+                A, C, mode_of, freq, zeta = _keep_modes(A, C, mode_of, freq, zeta,
+                                                        np.setdiff1d(np.arange(freq.size), slow))
+                if A.shape[0] == 0:
+                    info["rejected"] = "every pole below the excited band"
+                    return None, info
+                if self.cancel_tolerance > 0:
+                    B, D, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+                    share = _mode_shares(A, B, C, D, mode_of, band, T)
+                    weak = np.flatnonzero(share < self.cancel_tolerance)
+                    if weak.size and weak.size < freq.size:
+                        for i in weak:
+                            info["dropped"].append(
+                                f"near-cancelled mode at {freq[i]:.4g} Hz (its largest gain is "
+                                f"{100 * share[i]:.2g} % of G's in the band)")
+                        A, C, mode_of, freq, zeta = _keep_modes(
+                            A, C, mode_of, freq, zeta, np.setdiff1d(np.arange(freq.size), weak))
+        B, D, x0, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+        sysd = control.ss(A, B, C, D, dt=T)
+        f, zz = modal_parameters(sysd)
+        info["modes"] = [[float(a), float(b)] for a, b in zip(f, zz)]
+        return (A, B, C, D, x0), info
+
+    def _validate(self, model, ins, outs, held, split):
+        """Measured and simulated outputs of the held-out parts, concatenated."""
+        A, B, C, D, x0 = model
+        if split is None:
+            yv, yh = [], []
+            for r in held:
+                u, y = ins[r], outs[r]
+                y_zero = _simulate(A, B, C, D, u, np.zeros(A.shape[0]))
+                _, R0 = _state_regressors(A, C, u)
+                xr = np.linalg.lstsq(R0.reshape(-1, A.shape[0]), (y - y_zero).T.reshape(-1),
+                                     rcond=None)[0]
+                yv.append(y)
+                yh.append(_simulate(A, B, C, D, u, xr))
+            return np.concatenate(yv, axis=1), np.concatenate(yh, axis=1)
+        yv = np.concatenate([y[:, s:] for y, s in zip(outs, split)], axis=1)
+        yh = np.concatenate([_simulate(A, B, C, D, u, x)[:, s:]
+                             for u, s, x in zip(ins, split, x0)], axis=1)
+        return yv, yh
+
+
+
+
+def _real_modal(A, C, T):
+    """Real modal form: ``(A_m, C_m, mode_of_state, frequency_hz, damping)`` or None.
+
+    One 1 x 1 block per real pole, one 2 x 2 block ``[[sigma, omega], [-omega,
+    sigma]]`` per complex pair; None when the eigenvectors are ill-conditioned.
+    Natural frequency ``|s| / 2 pi`` [Hz] and damping ``-Re s / |s|`` of
+    each mode from ``s = ln(z) / T``.
+    """
+    lam, V = np.linalg.eig(A)
+    if np.linalg.cond(V) > 1e8:
+        return None
+    cols, mode_of, poles = [], [], []
+    for i in np.argsort(np.abs(lam)):
+        if lam[i].imag < -1e-12:
+            continue
+        if lam[i].imag > 1e-12:
+            cols += [V[:, i].real, V[:, i].imag]
+            mode_of += [len(poles)] * 2
+        else:
+            cols.append(V[:, i].real)
+            mode_of.append(len(poles))
+        poles.append(lam[i])
+    Tm = np.column_stack(cols)
+    if Tm.shape != A.shape or np.linalg.cond(Tm) > 1e10:
+        return None
+    Am = np.linalg.solve(Tm, A @ Tm)
+    s = np.log(np.asarray(poles, dtype=complex)) / T
+    wn = np.abs(s)
+    zeta = np.where(wn > 0, -s.real / np.where(wn > 0, wn, 1), 1.0)
+    return Am, C @ Tm, np.asarray(mode_of), wn / (2 * np.pi), zeta
+
+
+def _keep_modes(A, C, mode_of, freq, zeta, keep):
+    idx = np.flatnonzero(np.isin(mode_of, keep))
+    renum = {int(old): new for new, old in enumerate(keep)}
+    return (A[np.ix_(idx, idx)], C[:, idx], np.array([renum[int(m)] for m in mode_of[idx]], int),
+            freq[keep], zeta[keep])
+
+
+def _mode_shares(A, B, C, D, mode_of, band, T):
+    """Largest gain of each mode's term in the band over the largest gain of G there."""
+    f = np.logspace(np.log10(max(band[0], 1e-3)), np.log10(min(band[1], 0.49 / T)), 200)
+    z = np.exp(2j * np.pi * f * T)
+    n_modes = int(mode_of.max()) + 1 if mode_of.size else 0
+    total = np.zeros(f.size)
+    share = np.zeros(n_modes)
+    terms = []
+    for i in range(n_modes):
+        idx = np.flatnonzero(mode_of == i)
+        Ai, Bi, Ci = A[np.ix_(idx, idx)], B[idx], C[:, idx]
+        G = np.stack([Ci @ np.linalg.solve(zk * np.eye(idx.size) - Ai, Bi) for zk in z])
+        terms.append(np.linalg.norm(G, 2, axis=(1, 2)))
+    Gall = np.stack([C @ np.linalg.solve(zk * np.eye(A.shape[0]) - A, B) + D for zk in z])
+    total = np.linalg.norm(Gall, 2, axis=(1, 2))
+    for i, g in enumerate(terms):
+        share[i] = g.max() / max(total.max(), 1e-300)
+    return share
+
+
+def identify_dynamics(inputs, outputs, sampling_period, order=None, max_order=8, sensor=None,
+                      **options):
+    """Identify the discrete linear part G from records (see :class:`DynamicsIdentifier`).
+
+    Parameters
+    ----------
+    inputs : array_like, shape (p, n_samples), or list of them
+        PI outputs ``Gamma(U)`` [µm] computed by the identified PI model.
+    outputs : array_like, shape (p, n_samples), or list of them
+        Measured displacements [µm].
+    sampling_period : float
+        T [s].
+    order : int, optional
+        Fixed order; chosen from the data when None.
+    max_order : int
+        Largest candidate order.
+    sensor : Sensor, optional
+        Sensor that measured the outputs; its low-pass is kept out of G.
+    **options
+        Other :class:`DynamicsIdentifier` parameters (``block_rows``,
+        ``feedthrough``, ``validation_fraction``, ``order_tolerance``).
+
+    Returns
+    -------
+    DynamicsIdentifier
+        Fitted; the model is ``.system_``.
+
+    Raises
+    ------
+    DynamicsError
+    """
+    return DynamicsIdentifier(order=order, max_order=max_order, sensor=sensor,
+                              **options).fit(inputs, outputs, sampling_period)
