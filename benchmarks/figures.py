@@ -58,6 +58,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from hammerstein.models.dynamics import bending_modes, discretize  # noqa: E402
 from hammerstein.signals.references import raster_line_index  # noqa: E402
 from hammerstein.report import figures as plots  # noqa: E402
+from hammerstein.report import trajectories  # noqa: E402
 from hammerstein.report import model_figures  # noqa: E402
 from hammerstein.report.dynamics_figure import dynamics_bode_figure  # noqa: E402
 
@@ -104,7 +105,7 @@ def cases():
     for n, what in ((1600, "circle, 80 ms"), (20000, "1 s record, decimated")):
         t, r, y, u = _trajectory(n)
         out.append((f"trajectory_figure ({what}: {n} samples)",
-                    lambda t=t, r=r, y=y, u=u: plots.trajectory_figure(
+                    lambda t=t, r=r, y=y, u=u: trajectories.trajectory_figure(
                         t, r, y, ["x", "y"], "trajectory", settle_time=0.04, inputs=u,
                         input_names=["ux", "uy"])))
     circles = []
@@ -112,12 +113,12 @@ def cases():
         _, r, y, _ = _trajectory(800, radius=R)
         circles.append({"label": f"circle-{i}", "reference": r, "outputs": y})
     out.append(("xy_overlay (4 circles of 800 samples)",
-                lambda: plots.xy_overlay(circles, ["x", "y"], "all trajectories")))
+                lambda: trajectories.xy_overlay(circles, ["x", "y"], "all trajectories")))
     u = np.zeros((2, 9))
     u[0] = 0.8 * 8.0 ** np.arange(9)
     u[1] = 0.1 * 8.0 ** np.arange(9)
     out.append(("divergence_figure (8 samples)",
-                lambda: plots.divergence_figure(u, ["ux", "uy"], 8, "|U| exceeds the bound",
+                lambda: trajectories.divergence_figure(u, ["ux", "uy"], 8, "|U| exceeds the bound",
                                                 "diverged")))
     mcurves = [{"label": c["label"], "column": c["column"], "x": c["x"], "plant": c["outputs"],
                 "model": 0.98 * c["outputs"]} for c in _loop_curves(2)]
@@ -160,7 +161,7 @@ def cases():
     fast = 40.0 * (1 - np.abs(2 * np.mod(cycles, 1.0) - 1))          # triangle, 0..40 µm
     err = np.vstack([0.3 * np.sin(2 * np.pi * 3 * cycles), 0.1 * np.cos(2 * np.pi * cycles)])
     out.append((f"raster_error_map ({lines} lines, {tr.size} samples)",
-                lambda: plots.raster_error_map(fast, err, ["x_r - x (fast)", "y_r - y (slow)"],
+                lambda: trajectories.raster_error_map(fast, err, ["x_r - x (fast)", "y_r - y (slow)"],
                                                raster_line_index(tr, f_fast),
                                                np.mod(cycles, 1.0) < 0.5, 40.0, "x", "raster")))
     G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2], ["x", "y"]), T)

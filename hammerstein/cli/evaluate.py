@@ -45,7 +45,8 @@ from hammerstein.core.files import all_or_nothing, guard_inputs, safe_write
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError
-from hammerstein.report.figures import save, trajectory_figure
+from hammerstein.report.figures import save
+from hammerstein.report.trajectories import trajectory_figure
 
 __all__ = ["add_parser", "evaluate"]
 

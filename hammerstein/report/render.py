@@ -226,7 +226,7 @@ class FigureJobs:
     Examples
     --------
     >>> import numpy as np, tempfile, pathlib
-    >>> from hammerstein.report.figures import divergence_figure
+    >>> from hammerstein.report.trajectories import divergence_figure
     >>> d = pathlib.Path(tempfile.mkdtemp())
     >>> jobs = FigureJobs()
     >>> jobs.add(d / "div.png", divergence_figure, np.zeros((2, 10)), ["u1", "u2"], 5, "test", "t")

@@ -25,6 +25,7 @@ import pandas as pd
 from hammerstein.core.files import markdown_escape, safe_write
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
+from hammerstein.report import trajectories
 from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.sweeps import sweep_report_lines
@@ -321,7 +322,7 @@ def _figures(scenario, results, directory, jobs):
     for r in results:
         if r.divergence is not None:
             fname = f"divergence-{r.name}.png"
-            jobs.add(directory / fname, plots.divergence_figure, r.inputs, in_names,
+            jobs.add(directory / fname, trajectories.divergence_figure, r.inputs, in_names,
                      r.divergence.sample, r.divergence.reason,
                      f"{prefix}: {r.name}, {_compensator_title(r.spec)}: "
                      f"compensator output until divergence")
@@ -333,7 +334,7 @@ def _figures(scenario, results, directory, jobs):
         names = out_names                      # every output (z too); the XY plot: the first two
         settle = r.spec.settle_periods * r.spec.period_samples * r.spec.plant.sampling_period
         fname = f"trajectory-{r.name}.png"
-        jobs.add(directory / fname, plots.trajectory_figure, r.spec.time, r.reference,
+        jobs.add(directory / fname, trajectories.trajectory_figure, r.spec.time, r.reference,
                  r.outputs, names,
                  f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, {_compensator_title(r.spec)}",
                  settle_time=settle, inputs=r.inputs, input_names=in_names)
@@ -355,7 +356,7 @@ def _figures(scenario, results, directory, jobs):
             start = int(round(r.spec.settle_periods * r.spec.period_samples))
             curves.append({"label": r.name, "reference": r.reference[:2, start:],
                            "outputs": r.outputs[:2, start:]})
-        jobs.add(directory / "xy-all.png", plots.xy_overlay, curves, out_names[:2],
+        jobs.add(directory / "xy-all.png", trajectories.xy_overlay, curves, out_names[:2],
                  f"{prefix}: all trajectories after settling")
         figs.append(("All trajectories after settling (dashed: references)", "xy-all.png"))
     return figs
@@ -379,7 +380,7 @@ def _scan_figures(scenario, results, directory, jobs):
         e = r.reference - r.outputs
         fname = f"{s['kind']}-error-{r.name}.png"
         jobs.add(
-            directory / fname, plots.raster_error_map,
+            directory / fname, trajectories.raster_error_map,
             r.reference[fast], e[[fast, slow]],
             [f"{names[fast]}_r - {names[fast]} (fast)", f"{names[slow]}_r - {names[slow]} (slow)"],
             scan["line"], scan["trace"], scan["extent"], names[fast],

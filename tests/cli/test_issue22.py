@@ -373,7 +373,7 @@ def test_8_sigkill_of_a_piped_run_ends_its_workers(tmp_path):
 def test_12_broken_pool_falls_back_to_inline(tmp_path):
     import signal
     import numpy as np
-    from hammerstein.report.figures import divergence_figure
+    from hammerstein.report.trajectories import divergence_figure
     from hammerstein.report.render import FigureJobs, FigureRenderer
     args = (np.zeros((2, 10)), ["u1", "u2"], 5, "test", "t")
     with FigureRenderer() as renderer:

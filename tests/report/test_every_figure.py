@@ -136,7 +136,7 @@ def test_every_figure_of_every_bundled_report_shows_its_data(path, tmp_path):
 
 # -- single figures: what they draw is what they say ---------------------------------------
 def test_trajectory_figure_keeps_every_output_in_time_and_error_panels():
-    from hammerstein.report.figures import trajectory_figure
+    from hammerstein.report.trajectories import trajectory_figure
     t = np.arange(2000) * 5e-5
     th = 2 * np.pi * 50 * t
     ref = np.vstack([10 * np.cos(th), 10 * np.sin(th), 2 * np.sin(2 * th)])
@@ -159,7 +159,7 @@ def test_trajectory_figure_keeps_every_output_in_time_and_error_panels():
 
 @pytest.mark.parametrize("recorded", [True, False])
 def test_divergence_title_cites_only_what_is_drawn(recorded):
-    from hammerstein.report.figures import divergence_figure
+    from hammerstein.report.trajectories import divergence_figure
     u = np.vstack([10.0 ** np.arange(10), 0.5 * 10.0 ** np.arange(10)])
     if not recorded:
         u[:, 8:] = np.nan                        # the runner records nothing from the sample on

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from hammerstein.report import figures as plots
+from hammerstein.report import trajectories
 from hammerstein.report.render import FigureJob, FigureJobs, FigureRenderer, job_key
 from hammerstein.runner import TMP_PREFIX, run_pipelined
 
@@ -53,7 +54,7 @@ def test_worker_error_raised_after_every_job_finished(tmp_path):
 
 @pytest.mark.figure_pool
 def test_failed_figure_is_the_scenarios_one_line_error(tmp_path, monkeypatch):
-    monkeypatch.setattr(plots, "trajectory_figure", _failing_figure)
+    monkeypatch.setattr(trajectories, "trajectory_figure", _failing_figure)
     outcomes = run_pipelined([ROOT / "scenarios" / "default.toml"], tmp_path)
     (o,) = outcomes
     assert not o.ok and "the legend does not fit" in o.error and "\n" not in o.error

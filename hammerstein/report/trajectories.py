@@ -1,0 +1,296 @@
+"""Trajectory, divergence, overlay and raster error-map figures (matplotlib, Agg backend).
+
+* :func:`trajectory_figure`: XY plot with the reference, time plots of the
+  displacements and of the input voltages, tracking errors scaled on the
+  settled part (the paper's Fig. 10-13).
+* :func:`xy_overlay`: several XY trajectories in one plot (Fig. 10-a).
+* :func:`divergence_figure`: the compensator output up to a divergence.
+* :func:`raster_error_map`: a raster's tracking error as an image over the
+  scanned area, line by line.
+
+They are built on the layout helpers of :mod:`hammerstein.report.figures`
+(fixed layouts, decimation, titles) and saved with its :func:`save`.
+"""
+
+from __future__ import annotations
+
+
+import numpy as np
+
+from hammerstein.report.figures import (_settled_ylim, _title_height, decimate, decimate_path,
+                                        fixed_layout, legend_on_top, plt, suptitle)
+
+
+def _mark_transient(ax, t_end):
+    """Shade the start-up transient [0, t_end] (time axis in ms)."""
+    ax.axvspan(ax.get_xlim()[0], t_end, color="0.85", alpha=0.6, zorder=0, linewidth=0)
+
+
+def _peak_off_scale(ax, values):
+    """Largest |value| of ``values`` when some of them lie outside the y-limits."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    lo, hi = ax.get_ylim()
+    return float(np.max(np.abs(v))) if v.size and (v.min() < lo or v.max() > hi) else None
+
+
+def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
+                      inputs=None, input_names=None):
+    """XY plot, time plots (displacements, input voltages) and tracking errors.
+
+    Layout: (a) the XY plot of the reference (dashed) and the output (solid)
+    after settling, over the first two outputs; (b) every output's
+    displacement against time; (c) every output's tracking error y_r - y
+    and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
+    on the settled part (the start-up transient is shaded, and its peak is
+    printed when it is off scale); (d) the input voltages when ``inputs``
+    is given.
+
+    Parameters
+    ----------
+    time : array_like, shape (n,)
+        [s].
+    reference, outputs : array_like, shape (p, n)
+        ``(x_r, y_r[, z_r ...])`` and ``(x, y[, z ...])`` [µm], p >= 2
+        (outputs may hold NaN after a divergence).
+    names : sequence of p str
+        Output names.
+    title : str
+    settle_time : float
+        End of the settling transient [s], excluded from the metrics.
+    inputs : array_like, shape (m, n), optional
+        Input voltages [V] (the compensator output).
+    input_names : sequence of m str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    t = np.asarray(time, dtype=float) * 1e3
+    r = np.asarray(reference, dtype=float)
+    y = np.asarray(outputs, dtype=float)
+    e = r - y
+    eu = np.sqrt(np.sum(e * e, axis=0))             # over all p outputs, as the metrics
+    names = list(names)
+    steady = t >= settle_time * 1e3
+    transient = settle_time > 0 and steady.any() and not steady.all()
+    W = 15.0
+    top = _title_height(title, W) + 0.45
+    H = top + 2 * 2.7 + 0.9 + 0.55
+    fig = plt.figure(figsize=(W, H))
+    gs = fig.add_gridspec(2, 3, width_ratios=[1.15, 1.4, 1.4])
+    fixed_layout(fig, 2, 3, left=0.7, right=0.2, bottom=0.55, top=top, wspace=0.8, hspace=0.9)
+    ax = fig.add_subplot(gs[:, 0])
+    ax.plot(*decimate_path(r[0, steady], r[1, steady]), "--", color="0.35", linewidth=1.2)
+    ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{names[0]} [µm]")
+    ax.set_ylabel(f"{names[1]} [µm]")
+    ax.set_title("(a) spatial domain after settling\n(dashed: reference, solid: output)",
+                 fontsize=10, y=1.0)
+    ax.grid(True, alpha=0.3)
+
+    axt = fig.add_subplot(gs[0, 1])
+    for i, n in enumerate(names):
+        axt.plot(*decimate(t, r[i]), "--", color=f"C{i}", linewidth=1.0, label=f"{n}_r")
+        axt.plot(*decimate(t, y[i]), "-", color=f"C{i}", linewidth=1.0, alpha=0.8, label=n)
+    axt.set_ylabel("displacement [µm]")
+    axt.set_title("(b) time domain", fontsize=10, y=1.0)
+    axu = fig.add_subplot(gs[1, 1], sharex=axt)
+    if inputs is not None:
+        u = np.asarray(inputs, dtype=float)
+        un = list(input_names) if input_names is not None else [f"u{k}" for k in range(len(u))]
+        for k, n in enumerate(un):
+            axu.plot(*decimate(t, u[k]), "-", color=f"C{k + 2}", linewidth=1.0, label=f"{n}")
+        axu.set_title("(d) input voltages (compensator output)", fontsize=10, y=1.0)
+    else:
+        axu.text(0.5, 0.5, "no input voltages given", ha="center", va="center",
+                 transform=axu.transAxes, color="0.5")
+        axu.set_title("(d) input voltages", fontsize=10, y=1.0)
+    axu.set_ylabel("voltage [V]")
+    axu.set_xlabel("time [ms]")
+
+    axe = fig.add_subplot(gs[0, 2], sharex=axt)
+    for i, n in enumerate(names):
+        axe.plot(*decimate(t, e[i]), "-", color=f"C{i}", linewidth=1.0, label=f"{n}_r - {n}")
+    axe.set_ylabel("tracking error [µm]")
+    axn = fig.add_subplot(gs[1, 2], sharex=axt)
+    axn.plot(*decimate(t, eu), "-", color="k", linewidth=0.9)
+    axn.set_ylabel(f"||Y_r - Y|| over {', '.join(names)} [µm]")
+    axn.set_xlabel("time [ms]")
+    for a in (axt, axu, axe, axn):
+        a.grid(True, alpha=0.3)
+        a.set_xlim(t[0], t[-1])
+    for a in (axt, axe):       # x labels under (d) and (e) only; not get_xticklabels (ticks now)
+        a.tick_params(labelbottom=False)
+    notes = {axe: "", axn: ""}
+    if transient:
+        _settled_ylim(axe, [e[:, steady]])
+        _settled_ylim(axn, [np.r_[0.0, eu[steady]]])
+        for a, vals in ((axe, e[:, ~steady]), (axn, eu[~steady])):
+            peak = _peak_off_scale(a, vals)
+            notes[a] = "\nscaled after settling" + (
+                "" if peak is None else f"; start-up (shaded) peaks at {peak:.3g} µm")
+        for a in (axt, axu, axe, axn):
+            _mark_transient(a, settle_time * 1e3)
+    axe.set_title("(c) tracking error per axis" + notes[axe], fontsize=10, y=1.0)
+    axn.set_title("(e) Euclidean error" + notes[axn], fontsize=10, y=1.0)
+    legend_on_top(axt, 2 * len(names), loc="upper right")
+    if inputs is not None:
+        legend_on_top(axu, len(un), loc="upper right")
+    legend_on_top(axe, len(names), loc="upper right")
+    suptitle(fig, title)
+    return fig
+
+
+def divergence_figure(inputs, names, sample, reason, title):
+    """Input voltages of a diverging compensator, |U| on a log scale.
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n)
+        Compensator output [V] (valid before ``sample``); drawn up to and
+        including ``sample`` where finite.
+    names : sequence of str
+        Input names.
+    sample : int
+        First sample where the divergence was detected (marked by a dotted
+        line).
+    reason : str
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    # up to and including the detected sample, whose value the reason cites; the runner
+    # records no output from that sample on (NaN): the title says so then
+    u = np.asarray(inputs, dtype=float)[:, :sample + 1]
+    k = np.arange(u.shape[1])
+    W = 8.0
+    drawn = sample < u.shape[1] and np.isfinite(u[:, sample]).all()
+    full = f"{title}; detected at sample {sample}{'' if drawn else ' (not recorded)'}: {reason}"
+    top = _title_height(full, W, fontsize=10) + 0.1
+    fig, ax = plt.subplots(figsize=(W, top + 3.6 + 0.6))
+    fixed_layout(fig, left=0.85, right=0.25, bottom=0.6, top=top)
+    for i, n in enumerate(names):
+        mag = np.abs(u[i])
+        ax.semilogy(k, np.where((mag > 0) & np.isfinite(mag), mag, np.nan), "o-",
+                    label=f"|{n}| [V]", markersize=4)
+    ax.axvline(sample, color="r", linestyle=":", label=f"divergence detected (sample {sample})")
+    ax.axhline(10.0, color="0.5", linestyle="--", linewidth=0.8, label="10 V drive range")
+    ax.set_xlabel("sample")
+    ax.set_ylabel("|compensator output| [V]")
+    ax.grid(True, which="major", alpha=0.3)
+    legend_on_top(ax, len(names) + 2, ncol=2)
+    suptitle(fig, full, fontsize=10)
+    return fig
+
+
+def xy_overlay(curves, names, title):
+    """Several XY trajectories with their references (paper Fig. 10-a).
+
+    Parameters
+    ----------
+    curves : list of dict
+        Each with ``label``, ``reference`` and ``outputs`` (arrays, shape
+        (2, n)) [µm].
+    names : sequence of 2 str
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The legend is outside the axes, on the right.
+    """
+    W, legend_w = 9.0, 2.4
+    top = _title_height(title, W) + 0.1
+    fig, ax = plt.subplots(figsize=(W, top + 6.0 + 0.6))
+    fixed_layout(fig, left=0.8, right=legend_w, bottom=0.6, top=top)
+    for i, c in enumerate(curves):
+        ax.plot(*decimate_path(*c["reference"][:2]), "--", color="0.4", linewidth=1.0,
+                label="references" if i == 0 else "_reference")   # one entry for all
+        ax.plot(*decimate_path(*c["outputs"][:2]), "-", color=f"C{i}", linewidth=1.1,
+                label=c["label"])
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{names[0]} [µm]")
+    ax.set_ylabel(f"{names[1]} [µm]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.03, 1.0), borderaxespad=0.0)
+    suptitle(fig, title)
+    return fig
+
+
+def _line_image(x, e, line, mask, n_lines, grid):
+    """Rows of ``e`` against ``x`` on ``grid``, one row per line, samples where ``mask``."""
+    img = np.full((n_lines, grid.size), np.nan)
+    for j in range(n_lines):
+        sel = (line == j) & mask
+        if np.count_nonzero(sel) < 2:
+            continue
+        order = np.argsort(x[sel], kind="stable")
+        img[j] = np.interp(grid, x[sel][order], e[sel][order], left=np.nan, right=np.nan)
+    return img
+
+
+def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, fast_name, title,
+                     n_bins=200):
+    """Image-style error map of a raster scan: error against fast-axis position, one row per line.
+
+    One row of panels per error signal (e.g. the fast- and the slow-axis
+    tracking error), the trace (fast axis rising) on the left and the
+    retrace on the right; each image row is a scan line, its colour the
+    error at each fast-axis reference position (linear interpolation onto
+    ``n_bins`` positions). Colours are symmetric about 0 (red: output below
+    the reference), shared by the trace and retrace of a signal.
+
+    Parameters
+    ----------
+    fast_reference : array_like, shape (n,)
+        Fast-axis reference [µm].
+    errors : array_like, shape (k, n)
+        Errors ``y_r - y`` [µm] (NaN after a divergence).
+    labels : sequence of k str
+        Name of each error signal, e.g. ``'x_r - x'``.
+    line_index : array_like of int, shape (n,)
+        Scan line of each sample, 0-based.
+    trace : array_like of bool, shape (n,)
+        True on the trace half of each line.
+    extent : float
+        Fast-axis scan size W [µm] (the abscissa spans [0, W]).
+    fast_name : str
+        Fast-axis output name.
+    title : str
+    n_bins : int
+        Positions per image row.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    x = np.asarray(fast_reference, dtype=float)
+    e = np.atleast_2d(np.asarray(errors, dtype=float))
+    line = np.asarray(line_index, dtype=int)
+    trace = np.asarray(trace, dtype=bool)
+    n_lines = int(line.max()) + 1
+    grid = np.linspace(0.0, float(extent), int(n_bins))
+    k = e.shape[0]
+    fig, axes = plt.subplots(k, 2, figsize=(11, 2.0 + 2.6 * k), squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.1, top=0.86, wspace=0.12, hspace=0.45)
+    for i in range(k):
+        imgs = [_line_image(x, e[i], line, trace, n_lines, grid),
+                _line_image(x, e[i], line, ~trace, n_lines, grid)]
+        finite = np.concatenate([m[np.isfinite(m)] for m in imgs])
+        lim = float(np.max(np.abs(finite))) if finite.size else 1.0
+        lim = lim if lim > 0 else 1.0
+        for d, (img, name) in enumerate(zip(imgs, ("trace", "retrace"))):
+            ax = axes[i][d]
+            im = ax.imshow(img, aspect="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
+                           extent=(0.0, float(extent), n_lines + 0.5, 0.5), interpolation="nearest")
+            ax.set_title(f"({chr(97 + 2 * i + d)}) {labels[i]}, {name}", fontsize=10, y=1.0)
+            ax.set_xlabel(f"{fast_name}_r (fast axis) [µm]")
+            if d == 0:
+                ax.set_ylabel("scan line")
+        fig.colorbar(im, ax=list(axes[i]), fraction=0.03, pad=0.02, label="error [µm]")
+    fig.suptitle(title)
+    return fig
