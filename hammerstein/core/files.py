@@ -59,6 +59,13 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "output_problem", "name_problem", "append_text", "replace_directory", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
            "C_HEADERS"]
 
+for _name in ("c_name_problem", "escape", "markdown_escape", "name_problem", "carries_provenance",
+              "locked", "png_provenance", "provenance_line", "replace_problem", "same_file",
+              "owner_alive", "owner_token", "parse_owner", "release_owner", "confined_path",
+              "path_problem"):
+    globals()[_name].__module__ = __name__      # documented as this module's
+del _name
+
 #: Default size limits [bytes] and the environment variables overriding them.
 LIMITS = {
     "toml": ("HAMMERSTEIN_MAX_TOML_BYTES", 4 * 2**20),
