@@ -1,0 +1,200 @@
+"""Per-harmonic learning gains of a periodic reference (behind :mod:`hammerstein.compensation.ilc`).
+
+A periodic reference's error lives on the harmonics of its fundamental; the
+learning gain of each harmonic is set from the model's frequency response
+there and cut where the model is not trusted.
+"""
+
+from __future__ import annotations
+
+from __future__ import annotations
+
+
+import numpy as np
+
+from hammerstein.exceptions import CompensatorError
+from hammerstein.compensation._ilc_errors import _scipy_signal
+
+
+class HarmonicGains:
+    """Per-harmonic learning gains of a periodic error, adapted from trial to trial.
+
+    Each harmonic h of the trajectory's period learns with its own gain
+    ``g_h`` (a Q given per harmonic instead of a low-pass): ``base`` where
+    the monotonic-convergence condition holds (0 elsewhere), then, from the
+    measured errors of successive trials,
+
+    * a harmonic whose averaged error is within ``threshold`` times its
+      noise amplitude (:func:`periodic_error`) is not learnt in this trial
+      (learning it would only move noise into the drive: the error at the
+      noise floor cannot fall, it can only grow);
+    * a harmonic whose error grew by more than 10 % plus its noise in
+      ``patience`` successive trials has its gain halved for the trials
+      that follow (one growth alone is not enough: the hysteresis moves
+      error between harmonics while the large ones are learnt)
+      (the condition does not hold there for the actual actuator:
+      a gain-scheduling safeguard in the spirit of the model-less,
+      measurement-corrected inversion-based iterative control of Kim and
+      Zou [1]_, which corrects the learning per frequency from the measured
+      response of the previous trial);
+    * once a trial learns no harmonic (every one within its noise floor),
+      the learning has converged and a dead zone widens: from then on a
+      harmonic is learnt only above ``resume`` times its floor. Near the
+      floor a harmonic's measured amplitude is a noisy sample of a small
+      true one; learning it shrinks that amplitude but turns its phase,
+      and the peak of a sum of several such harmonics (the max Euclidean
+      error) can grow: the dead-zone modification of ILC for bounded
+      disturbances of Xu and Viswanathan [2]_ (a disturbance that rises
+      above the wider zone is learnt again).
+
+    Parameters
+    ----------
+    base : array_like, shape (n_h,)
+        Starting gain per harmonic (``gamma`` where the condition holds).
+    threshold : float
+        Noise multiple below which a harmonic is not learnt.
+    patience : int
+        Successive growths that halve a harmonic's gain.
+    resume : float
+        After convergence, the multiple of the floor (``threshold`` times
+        the noise) above which a harmonic is learnt again; 1 turns the dead
+        zone off.
+
+    Attributes
+    ----------
+    converged : bool
+        True once an update learnt no harmonic (sticky).
+
+    Raises
+    ------
+    CompensatorError
+        ``resume`` not a number >= 1.
+
+    References
+    ----------
+    .. [1] K.-S. Kim and Q. Zou, "Model-less inversion-based iterative
+       control for output tracking: piezo actuator example", Proc. American
+       Control Conference, 2710-2715, 2008.
+    .. [2] J.-X. Xu and B. Viswanathan, "Adaptive robust iterative learning
+       control with dead zone scheme", Automatica 36(1), 91-99, 2000.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = HarmonicGains([0.5, 0.5, 0.5])
+    >>> g.update(np.array([[1.0, 1e-3, 2.0]]), 0.01)
+    array([0.5, 0. , 0.5])
+    >>> g.update(np.array([[0.5, 1e-3, 3.0]]), 0.01)      # harmonic 2 grew once
+    array([0.5, 0. , 0.5])
+    >>> g.update(np.array([[0.2, 1e-3, 4.0]]), 0.01)      # twice in a row: halved
+    array([0.5 , 0.  , 0.25])
+
+    Converged (nothing above the floor 0.03), a harmonic just above the
+    floor is not learnt; one above twice the floor is:
+
+    >>> g.update(np.array([[0.02, 1e-3, 0.02]]), 0.01)
+    array([0., 0., 0.])
+    >>> g.update(np.array([[0.04, 1e-3, 0.07]]), 0.01)
+    array([0.  , 0.  , 0.25])
+    """
+
+    def __init__(self, base, threshold=3.0, patience=2, resume=2.0):
+        self.patience = int(patience)
+        self.base = np.array(base, dtype=float)
+        self.gains = self.base.copy()
+        self.threshold = float(threshold)
+        if not resume >= 1:
+            raise CompensatorError(f"resume: expected a multiple of the noise floor >= 1, "
+                                   f"found {resume!r}")
+        self.resume = float(resume)
+        self.previous = None
+        self.converged = False
+
+    def update(self, spectrum, noise):
+        """The gains of the next update from this trial's averaged error.
+
+        Parameters
+        ----------
+        spectrum : numpy.ndarray, shape (p, n_h)
+            Harmonic amplitudes of the averaged error [µm] (:func:`periodic_error`).
+        noise : float
+            Noise amplitude of one harmonic of one axis [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_h,)
+        """
+        amp = np.linalg.norm(np.atleast_2d(spectrum), axis=0)
+        floor = self.threshold * noise * np.sqrt(np.atleast_2d(spectrum).shape[0])
+        if self.previous is not None and self.previous.shape == amp.shape:
+            grew = amp > 1.1 * self.previous + floor
+            self.growths = np.where(grew, self.growths + 1, 0)
+            self.gains[self.growths >= self.patience] *= 0.5
+        else:
+            self.growths = np.zeros(amp.shape, dtype=int)
+        self.previous = amp
+        learnt = amp > (self.resume * floor if self.converged else floor)
+        if not learnt.any():
+            self.converged = True
+        return np.where(learnt, self.gains, 0.0)
+
+
+def _frequency_response(A, B, C, D, z):
+    """G(z) of a discrete state space at points z: shape (n_z, p, p)."""
+    n = A.shape[0]
+    out = np.empty((z.size, C.shape[0], B.shape[1]), dtype=complex)
+    for i, zi in enumerate(z):
+        out[i] = D + (C @ np.linalg.solve(zi * np.eye(n) - A, B) if n else 0)
+    return out
+
+
+
+
+def harmonic_base_gains(learning, period_samples, plant_dynamics=None, band_hz=None):
+    """Starting gain per harmonic of the period: ``gamma |Q(f_h)|^2`` where the condition holds, else 0.
+
+    Harmonic h (``f_h = h / (P T)``) learns with ``gamma |Q(f_h)|^2``, Q
+    the zero-phase Butterworth of cut-off ``band_hz`` (the time-domain
+    law's Q, sampled at the harmonics) and, when the plant's dynamics G
+    are known (a simulated actuator), only where
+    ``||I - gamma |Q|^2 Ghat(z_h)^-1 G(z_h)|| < 1`` at
+    ``z_h = exp(2 pi j h / P)`` (the per-harmonic monotonic-convergence
+    condition of the exact periodic inverse); 0 elsewhere.
+
+    Parameters
+    ----------
+    learning : IterativeLearning
+        Its gain, Q order, model dynamics and sampling period.
+    period_samples : int
+        P.
+    plant_dynamics : control.StateSpace, optional
+        G.
+    band_hz : float, optional
+        Cut-off of Q [Hz] (default: no Q, every harmonic up to Nyquist).
+
+    Returns
+    -------
+    numpy.ndarray, shape (P // 2 + 1,)
+    """
+    P = int(period_samples)
+    T = learning.sampling_period
+    h = np.arange(P // 2 + 1)
+    fh = h / (P * T)
+    gamma = learning.learning_gain
+    if band_hz is None:
+        base = np.full(fh.shape, gamma)
+    else:                                       # |Q|^2 of the time-domain law at f_h
+        b, a = _scipy_signal().butter(learning.q_order, band_hz, fs=1.0 / T)
+        _, q = _scipy_signal().freqz(b, a, worN=fh, fs=1.0 / T)
+        base = gamma * np.abs(q) ** 2
+    if plant_dynamics is not None:
+        z = np.exp(2j * np.pi * h / P)
+        p = learning.model.n_outputs
+        Gt = _frequency_response(*(np.asarray(getattr(plant_dynamics, k), dtype=float)
+                                   for k in "ABCD"), z)
+        Gh = np.broadcast_to(np.eye(p), Gt.shape).astype(complex) if learning.dynamics is None \
+            else _frequency_response(*(np.asarray(getattr(learning.dynamics, k), dtype=float)
+                                       for k in "ABCD"), z)
+        M = np.eye(p) - base[:, None, None] * np.linalg.solve(Gh, Gt)
+        base[np.linalg.svd(M, compute_uv=False)[:, 0] >= 1.0] = 0.0
+    return base
