@@ -192,7 +192,7 @@ def through_files(args):
     import pandas as pd
 
     from hammerstein.cli._hardware import load_reference
-    from hammerstein.cli.learn import _fade_of
+    from hammerstein.compensation.drive import drive_fade_samples
     from hammerstein.cli.main import main as cli
     from hammerstein.compensation.drive import read_signals
     from hammerstein.compensation.hammerstein_compensator import fade_in
@@ -239,7 +239,7 @@ def through_files(args):
                       str(case / "u0.csv")])
             reference = load_reference(ref, plant)
             P = reference.period_samples
-            fade = _fade_of(case / "u0.csv")
+            fade = drive_fade_samples(case / "u0.csv")
             target = fade_in(reference.signal, fade)
             w = slice(fade + 3 * P, None)   # after the fade-in and three periods (4P for circles)
             errors, delays = [], set()
