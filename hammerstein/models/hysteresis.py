@@ -5,6 +5,10 @@ Every operator here has memory. Following the contract of
 initial play states and returns the final ones, so that a record simulated
 in chunks equals the same record simulated at once.
 
+Length: most of it is one class, the multivariable PI (about 480 lines),
+whose methods follow the paper's equations (1)-(4) and Def. 3.2 in order;
+the scalar operator and the output map it composes are kept beside it.
+
 References
 ----------
 .. [1] M. Rakotondrabe, "Multivariable classical Prandtl-Ishlinskii hysteresis

@@ -51,6 +51,12 @@ asymmetry of a real actuator). The weights are given by
   asymmetric; a large ``bias_width`` makes the density depend on c only,
   the Preisach form of a classical PI (PI-like minor loops).
 
+Length: the Preisach operator (its Everett-function weights, density and
+staircase memory), its reversible polynomial and the multivariable container
+of direct transfers and cross-couplings (which holds any component class)
+share one table format and its checks; splitting them would spread one preset
+table's validation over three modules.
+
 References
 ----------
 .. [1] I. D. Mayergoyz, *Mathematical Models of Hysteresis and Their

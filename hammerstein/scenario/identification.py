@@ -21,6 +21,11 @@ which the report saves the model files
 docs/identification.md (IBS ECL202): 40 nm quantisation, first-order 2 kHz
 bandwidth, and white noise of :data:`SENSOR_NOISE_RMS` = 0.02 µm RMS (half a
 quantisation step; the paper does not state the noise) drawn with ``seed``.
+
+Length: the identification of every model class a scenario's table can ask
+for (classical PI, Preisach, generalised PI, dynamics, creep) resolves through
+one cache and one record type; a module per class would duplicate the
+table checks and the cache keys.
 """
 
 from __future__ import annotations

@@ -1,4 +1,10 @@
-"""The public stepping functions: validate, pack, run a kernel or the numpy oracle."""
+"""The public stepping functions: validate, pack, run a kernel or the numpy oracle.
+
+Length: one wrapper per compiled kernel (play, PI, plant, chain, batch), each
+validating and packing its arrays as scipy.signal's public faces do; they
+share the packing and status handling and are read side by side with
+``_kernels``.
+"""
 
 from __future__ import annotations
 
