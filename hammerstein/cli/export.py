@@ -225,24 +225,13 @@ def handler(args):
         except PresetError as exc:
             print_err(f"error: {' '.join(str(exc).split())}")
             return 1
+    return _written(args, kind, note, lambda: _open_loop(args, source, kind, gain, check))
+
+
+def _written(args, kind, note, make):
+    """Run ``make`` (the files it wrote), print them; an export error is one line, exit 1."""
     try:
-        comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
-                                    feedback=args.feedback, cutoff_hz=args.cutoff_hz,
-                                    inversion=args.inversion, sampling_period=args.sampling_period,
-                                    check=check or "error")
-        inputs = list(source.model.input_names)
-        if args.amplifier_range is not None:
-            table = {"range": list(args.amplifier_range)}
-            if args.slew_rate is not None:
-                table["slew_rate"] = args.slew_rate
-            limits = limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
-        else:
-            limits = limits_from_table(source.amplifier, inputs, "amplifier")
-        name = args.name or _default_name(source.name, args.kind)
-        code = export_c(comp, name, T, precision=args.precision, limits=limits,
-                        version=__version__, source_note=f"Built from {source.path.name} "
-                        f"(kind {args.kind}, {args.precision}).")
-        written = _write(args, code, name)
+        written = make()
     except (ExportError, FileLimitError) as exc:
         chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
         print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
@@ -252,31 +241,47 @@ def handler(args):
     for path in written:
         print(f"wrote {path}")
     return 0
+
+
+def _open_loop(args, source, kind, gain, check):
+    """The compensator of ``kind`` alone: its C files, written; the paths."""
+    comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
+                                feedback=args.feedback, cutoff_hz=args.cutoff_hz,
+                                inversion=args.inversion, sampling_period=args.sampling_period,
+                                check=check or "error")
+    inputs = list(source.model.input_names)
+    if args.amplifier_range is not None:
+        table = {"range": list(args.amplifier_range)}
+        if args.slew_rate is not None:
+            table["slew_rate"] = args.slew_rate
+        limits = limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
+    else:
+        limits = limits_from_table(source.amplifier, inputs, "amplifier")
+    name = args.name or _default_name(source.name, args.kind)
+    code = export_c(comp, name, T, precision=args.precision, limits=limits,
+                    version=__version__, source_note=f"Built from {source.path.name} "
+                    f"(kind {args.kind}, {args.precision}).")
+    return _write(args, code, name)
 
 
 def _closed_loop(args, source, kind, gain, check, note):
     """``--closed-loop``: the controller with the compensator of ``kind`` as feedforward."""
-    try:
-        if kind == "none":
-            comp = None
-            T = args.sampling_period or source.sampling_period
-            if T is None:
-                raise ExportError("sampling_period: a model file needs --sampling-period S")
-        else:
-            comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
-                                        feedback=args.feedback, cutoff_hz=args.cutoff_hz,
-                                        inversion=args.inversion,
-                                        sampling_period=args.sampling_period,
-                                        check=check or "error")
-        name = args.name or _default_name(source.name, f"{kind}_loop")
-        code = _closed_loop_code(args, source, comp, T, name)
-        written = _write(args, code, name)
-    except (ExportError, FileLimitError) as exc:
-        chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
-        print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
-        return 1
-    if note:
-        print_err(note)
-    for path in written:
-        print(f"wrote {path}")
-    return 0
+    return _written(args, kind, note, lambda: _closed_loop_files(args, source, kind, gain, check))
+
+
+def _closed_loop_files(args, source, kind, gain, check):
+    """The controller and the feedforward's C files, written; the paths."""
+    if kind == "none":
+        comp = None
+        T = args.sampling_period or source.sampling_period
+        if T is None:
+            raise ExportError("sampling_period: a model file needs --sampling-period S")
+    else:
+        comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
+                                    feedback=args.feedback, cutoff_hz=args.cutoff_hz,
+                                    inversion=args.inversion,
+                                    sampling_period=args.sampling_period,
+                                    check=check or "error")
+    name = args.name or _default_name(source.name, f"{kind}_loop")
+    code = _closed_loop_code(args, source, comp, T, name)
+    return _write(args, code, name)
