@@ -21,8 +21,10 @@ only: a pipe whose reader takes 10 bytes and closes it), ``group`` (jobs of
 one group run at the same time; groups run one after the other), ``cwd`` and
 ``warnings`` (a :func:`warnings.simplefilter` action, as ``PYTHONWARNINGS``),
 ``signal`` (a signal number sent once the directory ``out`` holds an entry
-whose name starts with ``prefix``, i.e. a report is in progress; with
-``workers``: once the process also has child processes, the figure workers;
+whose name starts with ``prefix``, i.e. a report is in progress, while the
+process is held stopped (SIGSTOP, then SIGCONT) so that it cannot finish between
+the look and the signal; with ``workers``: once the process also has child
+processes, the figure workers;
 the child starts with the signal's default disposition, or ignoring it with
 ``ignored``, as under ``nohup``).
 A result is a dict ``status`` (exit status, or -signal), ``stdout``,
@@ -127,6 +129,30 @@ def _running(pid):
         return False
 
 
+def _state(pid):
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "Z"
+
+
+def _frozen_in_progress(pid, out, prefix):
+    """Stop the process (SIGSTOP) and tell whether its report is still in progress.
+
+    While it is stopped it can neither finish nor rename its temporary, so a signal queued
+    now lands in the middle of the report; without /proc the look is taken as it is.
+    """
+    os.kill(pid, signal.SIGSTOP)
+    if os.path.isdir(f"/proc/{pid}"):
+        deadline = time.monotonic() + 10
+        while _state(pid) not in ("T", "t", "Z", "X") and time.monotonic() < deadline:
+            time.sleep(0.001)
+        if _state(pid) in ("Z", "X"):
+            return False
+    return os.path.isdir(out) and any(n.startswith(prefix) for n in os.listdir(out))
+
+
 def _exited(pid):
     done, wait_status = os.waitpid(pid, os.WNOHANG)
     return (done != 0), wait_status
@@ -146,7 +172,15 @@ def _signal(job, pid):
         if busy and (workers or not job.get("workers")):
             break
         time.sleep(0.005)
+    if job["signal"] != signal.SIGKILL and not _frozen_in_progress(pid, out, prefix):
+        # the command ended (or renamed its report) between the look and the signal: on a busy
+        # machine this window is real, and a signal to a finished process proves nothing
+        os.kill(pid, signal.SIGCONT)
+        _, wait_status = os.waitpid(pid, 0)
+        return {"signalled": False, "workers": workers, "workers_alive": []}, wait_status
     os.kill(pid, job["signal"])
+    if job["signal"] != signal.SIGKILL:
+        os.kill(pid, signal.SIGCONT)   # the signal is pending: it is taken on continuing
     _, wait_status = os.waitpid(pid, 0)
     deadline = time.monotonic() + 20
     while time.monotonic() < deadline and any(_running(w) for w in workers):

@@ -20,7 +20,8 @@ Tolerances:
 * the generalised PI's envelopes come from a nonlinear search whose
   finite-difference Jacobian turns rounding into another search path that
   ends where the search's tolerance stops it: as in ``test_lsq.py``, the RMS
-  errors within 1 % and the structure; the thresholds depend on the envelope
+  errors no more than 1 % worse (and no more than 3 % better: another
+  processor's BLAS kernels end 1.1-1.4 % lower) and the structure; the thresholds depend on the envelope
   ends and are not held.
 """
 
@@ -90,12 +91,19 @@ def test_preisach_holds_the_previous_fit(record):
     scale = PREISACH["weights_trace"]
     assert abs(float(np.trace(comp.weights)) - PREISACH["weights_trace"]) <= SOLVER * scale
     assert abs(float(comp.weights.sum()) - PREISACH["weights_sum"]) <= SOLVER * scale
-    assert np.allclose(comp.reversible, PREISACH["reversible"], rtol=SOLVER, atol=0)
+    # the reversible (linear) term is held by what it adds to the output over the record's
+    # input range, like the offset: its coefficient [µm/V] is the least determined of the
+    # rank-deficient problem (measured 1.4e-6 relative between two BLAS builds, 3e-6 µm)
+    u_span = float(np.max(np.abs(record.u)))
+    assert np.all(np.abs(comp.reversible - PREISACH["reversible"]) * u_span <= SOLVER * RANGE)
     assert abs(comp.offset - PREISACH["offset"]) <= SOLVER * RANGE
 
 
 def test_generalized_pi_holds_the_previous_errors(record):
     fit = identify_gpi_records(record, n_plays=8)
     assert fit.structure == [["generalized"]]
-    assert fit.train[0]["rms"] == pytest.approx(GENERALIZED["train_rms"], rel=SEARCH)
-    assert fit.validation[0]["rms"] == pytest.approx(GENERALIZED["held_out_rms"], rel=SEARCH)
+    # a search path that ends elsewhere may end lower: measured 1.1 % (train) and 1.4 %
+    # (held out) lower with another processor's BLAS kernels; it must never end worse
+    for got, ref in ((fit.train[0]["rms"], GENERALIZED["train_rms"]),
+                     (fit.validation[0]["rms"], GENERALIZED["held_out_rms"])):
+        assert ref * (1 - 3 * SEARCH) <= got <= ref * (1 + SEARCH)
