@@ -101,16 +101,23 @@ class SafeStream:
 
 
 
-def out_dir_problem(out):
+def out_dir_problem(out, follow_link=False):
     """Why ``out`` cannot be a reports directory (one line, for a usage error), or None.
 
-    An empty path, a path under an existing file (``f/sub`` with ``f`` a
-    file), an existing non-directory, or a directory that cannot be written.
-    Nothing is created.
+    An empty path, a symbolic link (one planted at the directory's name, e.g.
+    in a shared ``/tmp``, would send the files, ``--force`` replacing what
+    is there, wherever it points), a path under an existing file (``f/sub``
+    with ``f`` a file), an existing non-directory, or a directory that
+    cannot be written. Nothing is created. ``follow_link=True`` takes a
+    symbolic link for its target (the directory of a single output file,
+    such as macOS's ``/tmp``, which a user names but never owns).
     """
     if not str(out).strip():
         return "--out: empty path; expected a directory"
     p = Path(out)
+    if os.path.islink(p) and not follow_link:
+        return (f"--out: {p} is a symbolic link to {os.path.realpath(p)}; an output directory is "
+                f"never followed through a link: give the directory itself")
     while not os.path.lexists(p) and p != p.parent:
         p = p.parent
     if not p.is_dir():
@@ -145,7 +152,7 @@ def out_file_problem(out, what="file"):
         return f"--out: {out} is not a regular file (a device, FIFO or socket); expected a {what} name"
     if p.is_file() and (not p.stat().st_mode & 0o222 or not os.access(p, os.W_OK)):
         return f"--out: {out} is read-only; make it writable (chmod u+w) or choose another name"
-    problem = out_dir_problem(p.resolve().parent if p.is_symlink() else p.parent)
+    problem = out_dir_problem(p.resolve().parent if p.is_symlink() else p.parent, follow_link=True)
     return problem.replace("--out: ", f"--out: {out}: ", 1) if problem else None
 
 

@@ -601,7 +601,10 @@ def output_problem(path, root=None):
     names an input of the running command (:func:`guard_inputs`; resolved
     path or same inode, so also through a symbolic or a hard link); with
     ``root``, a path that resolves (``..``, symbolic links, among them one
-    planted inside ``root``) outside the directory ``root``.
+    planted inside ``root``) outside the directory ``root``, and any path
+    when ``root`` itself is a symbolic link (a link planted at the output
+    directory's name, e.g. in a shared ``/tmp``, would otherwise send the
+    files, ``--force`` replacing what is there, wherever it points).
 
     Parameters
     ----------
@@ -626,6 +629,11 @@ def output_problem(path, root=None):
                 f"an input is never an output: choose another name")
     if root is not None:
         real, root_real = os.path.realpath(p), os.path.realpath(root)
+        if os.path.islink(root):
+            return (f"the output directory {escape(root)} is a symbolic link to "
+                    f"{escape(root_real)}; an output directory is never followed through a link "
+                    f"(one planted there would send the files elsewhere): give "
+                    f"{escape(root_real)} itself")
         if not _inside(real, root_real):
             how = (f"is a symbolic link to {escape(real)}" if os.path.islink(p)
                    else f"resolves to {escape(real)}")

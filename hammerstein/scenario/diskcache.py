@@ -349,7 +349,7 @@ def store(kind, key, value):
     if not same_data(json.loads(text)["value"], value):   # tuples or numpy scalars do not round-trip
         return False
     try:
-        safe_write(path, text, "identification cache entry", root=path.parent)
+        safe_write(path, text, "identification cache entry", root=os.path.realpath(path.parent))
     except (OSError, FileLimitError):
         return False
     return True
