@@ -83,7 +83,10 @@ def test_classical_pi_holds_the_previous_fit(record):
 
 
 def test_preisach_holds_the_previous_fit(record):
-    fit = identify_preisach_records(record, n_levels=12)
+    # the previous code's search chose lambda 0.001 on this record (the smallest of its grid);
+    # the search now goes on below the grid (0.0003 here, held-out 0.2560 against 0.2563 %),
+    # so the numerics are held at the lambda it chose
+    fit = identify_preisach_records(record, n_levels=12, smoothing=0.001)
     comp = fit.model.components[0][0]
     assert fit.structure == [["preisach"]]
     assert fit.train[0]["rms"] == pytest.approx(PREISACH["train_rms"], rel=SOLVER)

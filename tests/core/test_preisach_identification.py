@@ -128,6 +128,29 @@ def test_drops_only_couplings_below_the_noise():
     assert any("x <- uy: absent" in n for n in est.notes_)
 
 
+def test_smoothing_search_goes_below_the_grid_while_its_edge_wins(monkeypatch):
+    """The weights below the grid are tried in turn only while the smallest tried is the best,
+    and the kept lambda is the best of all those tried (scores are held-out RMS errors)."""
+    from hammerstein.identification import preisach_identification as pi_ident
+    monkeypatch.setattr(pi_ident, "SMOOTHING_GRID", (1.0, 3.0))       # a grid far too smooth
+    monkeypatch.setattr(pi_ident, "SMOOTHING_BELOW", (0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3))
+    est = PreisachIdentifier(n_levels=8).fit(records(preisach_actuator(), noise=0.04))
+    tried = list(est.smoothing_scores_)
+    assert tried[:2] == [1.0, 3.0] and len(tried) > 2
+    assert est.smoothing_ == min(est.smoothing_scores_, key=est.smoothing_scores_.get)
+    for k in range(2, len(tried)):      # each step below was taken because its edge was best
+        before = {lam: est.smoothing_scores_[lam] for lam in tried[:k]}
+        assert min(before, key=before.get) == min(before)
+    last = {lam: est.smoothing_scores_[lam] for lam in tried}
+    assert len(tried) == 8 or min(last, key=last.get) != min(last)   # stopped: edge lost or none left
+    assert any("smoothing auto" in n and "0.3:" in n for n in est.notes_)
+
+
+def test_given_smoothing_is_not_searched():
+    est = PreisachIdentifier(n_levels=8, smoothing=0.01).fit(records(preisach_actuator()))
+    assert list(est.smoothing_scores_) == [0.01] and est.smoothing_ == 0.01
+
+
 def test_smoothing_penalty_annihilates_planes():
     n = 6
     D = _smoothing_rows(n)
