@@ -181,16 +181,18 @@ def readme_text(records, names, amplitude, sampling_period):
         "2. Add the displacements as new columns to a copy of the file (keep `t` and the input "
         "columns); a sensor offset is fine (it is identified). Note the sensor's noise and "
         "bandwidth.",
-        "3. Identify (the multisine files are the dynamics records; the validation ones are "
-        "held out to choose the order):", "",
+        "3. Identify (the multisine files are the dynamics records, the validation ones "
+        "held out to choose the order; the staircase files record the creep, the slow drift "
+        "after each step):", "",
         "```",
         f"hammerstein identify {' '.join(by_kind['hysteresis'])} --inputs {','.join(names)} "
         f"--outputs x,y --time t --dynamics --dynamics-records "
         f"{' '.join(by_kind['multisine'] + by_kind['multisine-validation'])} "
+        f"--creep-records {' '.join(by_kind['creep'])} "
         f"--out preset.toml --metrics fit.csv --plot fit.png",
         "```", "",
-        "The staircase files record the creep (the slow drift after each step) for its "
-        "identification.", ""]
+        "Without the creep records the model has no creep: a drive then leaves the slow drift "
+        "of every step (a few % of the displacement within seconds) uncompensated.", ""]
     return "\n".join(lines)
 
 
