@@ -156,7 +156,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
         return plant.simulate(apply_amplifier(plant.amplifier, u, T))[0]
 
     drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
-                           plant.amplifier, limits, rest=rest_output(plant.hysteresis),
+                           plant.amplifier, limits, rest=rest_output(plant.hysteresis, plant.creep),
                            first_mode=first_mode_hz(plant.matrices[0], T), predict=predict,
                            names=plant.hysteresis.output_names)
     return comp, drive

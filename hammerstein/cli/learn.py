@@ -439,7 +439,7 @@ def _handle(args):
         if fade is None:              # as compensate's shortest default: a duration
             fade = min(max(ref.period_samples if ref.period_samples > 1 else 0,
                            int(np.ceil(MIN_FADE_S / T - 1e-9))), N)
-        target = hardware_fade(ref.signal, fade, rest_output(model))   # as compensate faded it
+        target = hardware_fade(ref.signal, fade, rest_output(model, plant.creep))   # as compensate faded it
         predicted, _ = plant.simulate(u)
         delay_note = None
         if args.delay == "auto" and plant.measurement_delay is not None:

@@ -617,18 +617,24 @@ def hardware_fade(reference, fade_samples, rest=None):
     return r
 
 
-def rest_output(model):
+def rest_output(model, creep=None):
     """The static output of a hysteresis model at rest (0 V from its initial state) [µm].
 
     An identified model carries the records' output offset: 0 µm is not
     what the actuator shows at 0 V, and a reference faded in from 0 µm
-    would start the drive at the voltage of 0 µm instead of at rest.
+    would start the drive at the voltage of 0 µm instead of at rest. With
+    ``creep``, the output after the creep has settled at rest (each
+    output times its creep's static gain ``d + sum_k w_k``): the inverse
+    of the dynamics with the creep starts in that steady state, so a
+    reference faded in from it starts the drive at exactly 0 V.
 
     Parameters
     ----------
     model : object
         A hysteresis model with ``n_inputs`` and ``simulate(u)`` returning
         ``(outputs (p, n), state)``.
+    creep : sequence of (Creep or None), length p, optional
+        The plant's creep per output (``HammersteinPlant.creep``).
 
     Returns
     -------
@@ -642,7 +648,11 @@ def rest_output(model):
     array([0., 0.])
     """
     y, _ = model.simulate(np.zeros((model.n_inputs, 1)))
-    return np.asarray(y, dtype=float)[:, 0]
+    y = np.asarray(y, dtype=float)[:, 0]
+    if creep is not None:
+        y = y * np.array([1.0 if c is None else c.instantaneous + float(np.sum(c.weights))
+                          for c in creep])
+    return y
 
 
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
@@ -803,6 +813,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     return res
 
 
+#: Relative change of the reference below which :func:`_shape_start_up` counts a sample as unshaped.
+_SHAPE_TOL = 1e-9
+
+
 def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, names):
     """Reference shaping against the settled drive's own largest step (the start-up's bound).
 
@@ -810,7 +824,12 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     ``S`` per sample, so shaping with the slew rate ``S / T`` changes only
     what steps more: the start-up (e.g. a raster's first line step, which
     the default fade-in ends on). Returns ``(u, faded, notes)``, unchanged
-    when the start-up is within the bound.
+    when the start-up is within the bound, and unchanged as well when the
+    shaping would change the reference after the start-up (the settled
+    part, which is judged): the start-up is then slew-limited by
+    :func:`limit_start_up` instead (measured on an outside
+    generalised-PI actuator: a 15 µm circle at 20 Hz was shaped by up to
+    2.9 µm on 95 % of its samples, 21 % of the radius left).
     """
     N = u.shape[1]
     end = min(fade + max(P, 1), N)
@@ -824,6 +843,12 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
                       amplifier.source)
     sr = shape_reference(run, faded, tight, T, first_mode, predict, P or None, names)
     if not sr.changed:
+        return u, faded, []
+    moved = np.abs(np.asarray(sr.reference) - faded) > _SHAPE_TOL * max(1.0, float(np.max(np.abs(faded))))
+    if np.any(moved[:, end:]):
+        # the shaping reached into the settled part (a drive whose settled steps are small, e.g. a
+        # slow circle, shaped over most of the record): what is judged is not changed for the
+        # start-up's sake; limit_start_up slew-limits the start-up of the drive instead
         return u, faded, []
     why = "the drive left the limits measured on the records"
     notes = [n.replace(why, "the start-up stepped faster than the settled drive") for n in sr.notes]
