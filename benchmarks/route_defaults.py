@@ -56,6 +56,7 @@ import re
 import subprocess
 import sys
 import tempfile
+import zlib
 from pathlib import Path
 
 import numba
@@ -236,7 +237,7 @@ def settled_error(ref, y, fade, period, scale, periods=START_PERIODS):
 def one_actuator(name, act, work, quick, log):
     d = Path(work) / name
     d.mkdir(parents=True, exist_ok=True)
-    rng = np.random.default_rng(abs(hash(name)) % 2 ** 32)
+    rng = np.random.default_rng(zlib.crc32(name.encode()))   # the same draws every run
     hammerstein("excitation", "--inputs", "ux,uy", "--amplitude", "20", "--sampling-period", T,
                 "--out", "exc", cwd=d)
     files = {"hysteresis": [], "multisine": [], "creep": []}
@@ -344,7 +345,7 @@ def rescore(name, act, work, quick, log):
     if not (d / "u9.csv").is_file():
         raise RuntimeError(f"{d}: no complete earlier run")
     lo, hi = records_range(d)
-    rng = np.random.default_rng(abs(hash(name)) % 2 ** 32)
+    rng = np.random.default_rng(zlib.crc32(name.encode()))   # the same draws every run
     rows = []
     for f in sorted(d.glob("circle-*.csv")):
         radius, freq = (int(v) for v in f.stem.split("-")[1:3])
