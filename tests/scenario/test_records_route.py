@@ -96,6 +96,7 @@ def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys)
     # the drive the hardware command writes: faded in from rest over a duration and kept in
     # the records' amplifier range and slew (the preset's [amplifier], source = "records")
     res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
-                         actuator.amplifier, "error", rest=rest_output(actuator.hysteresis))
+                         actuator.amplifier, "error",
+                         rest=rest_output(actuator.hysteresis, actuator.creep))
     assert u_cli.shape == res.inputs.shape
     assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
