@@ -42,7 +42,7 @@ range on the positive side; the actuators' quadratic reversible term
 (``b u^2``) makes the negative side shorter (about -24 µm at -20 V), and a
 50 µm circle is shaped into the records' range (the drive file says where).
 
-Usage (about 10 minutes per actuator on one core)::
+Usage (2-4 minutes per actuator on two cores)::
 
     python benchmarks/route_defaults.py --quick      # 3 actuators, 3 circles, 1 raster
     python benchmarks/route_defaults.py              # 20 actuators, 9 circles, 1 raster

@@ -242,3 +242,17 @@ def test_start_up_shaping_never_changes_the_settled_reference(tmp_path, preset, 
         P = int(round(1 / frequency / T))
         np.testing.assert_allclose(shaped[:, fade + P:], asked[:, fade + P:], atol=1e-6)
     assert np.all(u[:, 0] == 0.0)
+
+
+def test_rest_output_with_creep_is_the_settled_rest():
+    """At rest for long, the creep has added its whole step response to the model's rest
+    output: ``s(inf) = d + sum w`` times it (the step response's limit, per output)."""
+    from hammerstein.compensation.drive import rest_output
+    from hammerstein.io.presets import load_plant
+    plant = load_plant(OUTSIDE_GPI)
+    bare = rest_output(plant.hysteresis)
+    settled = rest_output(plant.hysteresis, plant.creep)
+    assert np.all(bare != 0.0)                       # an identified sensor offset
+    for l, c in enumerate(plant.creep):
+        assert settled[l] == pytest.approx(bare[l] * c.step_response([1e12])[0], rel=1e-12)
+    assert np.array_equal(rest_output(plant.hysteresis, [None] * len(bare)), bare)
