@@ -23,10 +23,11 @@ fade-in on (:func:`hammerstein.compensation.ilc.repeating_from`, gains
 Everything is judged on the settled part: the printed max and RMS
 Euclidean errors start after the fade-in and ``--settle-periods`` (the
 start-up no drive removes), for a repeating reference not before its
-repeating part (two periods after the fade-in), and the fade-in itself is not learnt (the next
-drive keeps the base drive's fade-in and blends into the learning over the
-next period, :func:`hammerstein.compensation.drive.keep_start`), so every drive
-starts at rest as the first one did. An amplifier table measured on the
+repeating part (two periods after the fade-in), and the fade-in itself is not judged (the next
+drive starts as the base drive and is faded into the learning over the
+fade-in and the next period, as the reference is,
+:func:`hammerstein.compensation.drive.keep_start`), so every drive starts at
+rest as the first one did. An amplifier table measured on the
 identification records (``source = "records"``) shapes the next drive into
 it (:func:`hammerstein.compensation.drive.shape_drive`).
 
@@ -529,7 +530,7 @@ def _handle(args):
                     gains.gains *= 0.5
                     gains.previous = None
         u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
-        # the fade-in is not learnt (not judged): the base drive's, blended into the learning
+        # the fade-in is not judged: the base drive's start, faded into the learning as the reference
         u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
         problems, shaped = [], []
         if plant.amplifier is not None and plant.amplifier.from_records:
