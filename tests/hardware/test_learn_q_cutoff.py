@@ -1,0 +1,44 @@
+"""The default cutoff of the learning filter Q (``hammerstein learn`` without ``--q-cutoff-hz``)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.learn import default_q_cutoff
+from hammerstein.io.presets import load_plant
+
+
+def _mode(f, zeta, T):
+    """A discrete second-order mode (2 x 2 state matrix) at f [Hz] of damping zeta."""
+    w = 2 * np.pi * f
+    z = np.exp(T * (-zeta * w + 1j * w * np.sqrt(1 - zeta ** 2)))
+    return np.array([[z.real, -z.imag], [z.imag, z.real]])
+
+
+@pytest.mark.parametrize("f1", [300.0, 400.0, 580.0, 800.0])
+def test_two_and_a_half_times_the_first_mode_at_least_1000_hz(f1):
+    T = 5e-5
+    expected = max(1000.0, 2.5 * f1 * np.sqrt(1 - 0.03 ** 2))   # the damped frequency's
+    A = np.zeros((6, 6))
+    A[:2, :2] = _mode(1.3 * f1, 0.05, T)                  # a higher mode first: the lowest counts
+    A[2:4, 2:4] = _mode(f1, 0.03, T)
+    A[4, 4] = np.exp(-T / 0.5)                            # a creep lag: real, no frequency
+    cutoff, note = default_q_cutoff(SimpleNamespace(matrices=(A,), sampling_period=T))
+    assert cutoff == pytest.approx(expected, rel=1e-9)
+    assert note.startswith(f"note: Q cutoff {expected:.4g} Hz because") and "--q-cutoff-hz" in note
+
+
+def test_without_a_mode_and_below_nyquist():
+    cutoff, note = default_q_cutoff(SimpleNamespace(matrices=(np.zeros((0, 0)),),
+                                                    sampling_period=1e-4))
+    assert cutoff == 1000.0 and "no oscillatory mode" in note
+    T = 1e-3                                              # 1 kHz sampling: at most 450 Hz
+    cutoff, _ = default_q_cutoff(SimpleNamespace(matrices=(_mode(100.0, 0.05, T),), sampling_period=T))
+    assert cutoff == pytest.approx(450.0)
+
+
+def test_a_bundled_preset_uses_its_lowest_mode():
+    plant = load_plant("realistic-2dof")                  # modes 450, 420 and 1300 Hz
+    cutoff, _ = default_q_cutoff(plant)
+    assert cutoff == pytest.approx(2.5 * 420.0, rel=2e-3)
