@@ -10,8 +10,10 @@ amplitude levels of a decreasing-amplitude sine are held out, so the
 validation is on minor loops not trained on).
 
 The model is linear in its weights. For each input k the switching grid is
-``n_levels`` equal cells over the input's measured range widened by 10 % of
-its span on each side (the compensators drive up to 1.2 times the measured
+``n_levels`` cells over the input's measured range widened by 10 % of its
+span on each side, finer at the centre than at the ends (:func:`grid_edges`:
+a drive's small loops lie near the centre; equal cells with ``grid =
+"uniform"``) (the compensators drive up to 1.2 times the measured
 amplitude; the hysterons outside the measured range never switch, their
 weights are set by the smoothing penalty, a linear extrapolation of the
 density); the
@@ -75,7 +77,8 @@ from hammerstein.identification.record_identification import (
     weak_couplings)
 from hammerstein.simulation import preisach_steps
 
-__all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "identify_preisach_records"]
+__all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "GRID_STRETCH", "grid_edges",
+           "identify_preisach_records"]
 
 #: Candidate smoothing weights lambda (chosen on the held-out samples).
 SMOOTHING_GRID = (0.001, 0.003, 0.01, 0.03, 0.1, 0.3)
@@ -129,6 +132,43 @@ def _smoothing_rows(n):
     return np.array(rows).reshape(-1, q)
 
 
+#: Stretch s of the centred grid (:func:`grid_edges`).
+GRID_STRETCH = 2.5
+
+
+def grid_edges(low, high, n_levels, grid="centred"):
+    """Edges of a Preisach switching grid over [low, high] [V].
+
+    Parameters
+    ----------
+    low, high : float
+        The grid's ends [V], ``low < high``.
+    n_levels : int
+        Cells.
+    grid : {"centred", "uniform"}
+        ``"centred"``: ``c + h sinh(s x) / sinh(s)`` with ``x`` equally
+        spaced in [-1, 1], ``c = (low + high) / 2``, ``h = (high - low) / 2``
+        and ``s`` = :data:`GRID_STRETCH` (finer cells at the centre, where a
+        drive's small loops are); ``"uniform"``: equal cells.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_levels + 1,)
+        Increasing edges [V], the first ``low`` and the last ``high``.
+
+    Examples
+    --------
+    >>> e = grid_edges(-10.0, 10.0, 20)
+    >>> round(float(e[11] - e[10]), 4), round(float(e[-1] - e[-2]), 4)   # uniform cells: 1 V
+    (0.4175, 2.2463)
+    """
+    x = np.linspace(-1.0, 1.0, int(n_levels) + 1)
+    shape = x if grid == "uniform" else np.sinh(GRID_STRETCH * x) / np.sinh(GRID_STRETCH)
+    edges = 0.5 * (low + high) + 0.5 * (high - low) * shape
+    edges[0], edges[-1] = low, high
+    return edges
+
+
 class PreisachIdentifier:
     """Fit a multivariable Preisach model to records (see the module notes).
 
@@ -149,6 +189,17 @@ class PreisachIdentifier:
     margin : float
         The grid spans the measured input range widened by this fraction on
         each side.
+    grid : {"centred", "uniform"}
+        ``"centred"`` (default): the edges ``c + h sinh(s x) / sinh(s)``,
+        ``x`` equally spaced in [-1, 1], ``c`` and ``h`` the centre and half
+        span of the grid, ``s`` = :data:`GRID_STRETCH`: cells about 0.42
+        times the uniform ones at the centre, where the small loops of a
+        drive (a 15 µm circle spans a few volts) need the resolution, and
+        about 2.2 times at the ends, which only the largest loops reach.
+        Measured on three outside actuators with 20 levels: 15 µm circles
+        at 20 and 200 Hz 2.4-5.1 -> 1.4-3.5 % of the radius (30 µm at
+        100 Hz 1.6-3.7 -> 1.6-2.6 %). ``"uniform"``: equal cells
+        (``numpy.linspace``).
 
     Attributes
     ----------
@@ -191,7 +242,8 @@ class PreisachIdentifier:
     True
     """
 
-    def __init__(self, n_levels=20, smoothing="auto", components="auto", margin=0.1):
+    def __init__(self, n_levels=20, smoothing="auto", components="auto", margin=0.1,
+                 grid="centred"):
         if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) \
                 or not 2 <= n_levels <= 60:
             raise IdentificationError(f"n_levels: expected an integer from 2 to 60, found {n_levels!r}")
@@ -200,8 +252,11 @@ class PreisachIdentifier:
             raise IdentificationError(f"smoothing: expected 'auto' or a number >= 0, found {smoothing!r}")
         if not (isinstance(margin, (int, float)) and 0 <= margin < 1):
             raise IdentificationError(f"margin: expected a fraction in [0, 1), found {margin!r}")
+        if grid not in ("centred", "uniform"):
+            raise IdentificationError(f"grid: expected 'centred' or 'uniform', found {grid!r}")
         self.n_levels, self.smoothing, self.components, self.margin = (
             int(n_levels), smoothing, components, float(margin))
+        self.grid = grid
 
     def __repr__(self):
         return (f"PreisachIdentifier(n_levels={self.n_levels}, smoothing={self.smoothing!r}, "
@@ -218,8 +273,8 @@ class PreisachIdentifier:
         lo = np.min([r.u.min(axis=1) for r in records], axis=0)
         hi = np.max([r.u.max(axis=1) for r in records], axis=0)
         span = np.where(hi > lo, hi - lo, 1.0)
-        self._edges = [np.linspace(lo[k] - self.margin * span[k], hi[k] + self.margin * span[k],
-                                   self.n_levels + 1) for k in range(m)]
+        self._edges = [grid_edges(lo[k] - self.margin * span[k], hi[k] + self.margin * span[k],
+                                  self.n_levels, self.grid) for k in range(m)]
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
         blocks = [[] for _ in range(m)]            # per input: (states, u) of kept rows
         self._rows = []

@@ -128,6 +128,28 @@ def test_drops_only_couplings_below_the_noise():
     assert any("x <- uy: absent" in n for n in est.notes_)
 
 
+def test_centred_grid_edges_closed_form():
+    """Edges c + h sinh(s x) / sinh(s): symmetric, the ends kept, each cell's width the
+    closed form, finer at the centre than the uniform cells and coarser at the ends."""
+    from hammerstein.identification.preisach_identification import GRID_STRETCH, grid_edges
+    lo, hi, n = -3.0, 17.0, 20
+    e = grid_edges(lo, hi, n)
+    x = np.linspace(-1, 1, n + 1)
+    np.testing.assert_allclose(e, 7.0 + 10.0 * np.sinh(GRID_STRETCH * x) / np.sinh(GRID_STRETCH),
+                               rtol=0, atol=1e-12)
+    assert e[0] == lo and e[-1] == hi and np.all(np.diff(e) > 0)
+    np.testing.assert_allclose(e - 7.0, -(e[::-1] - 7.0), atol=1e-12)      # symmetric
+    w = np.diff(e)
+    assert w[n // 2] < 0.45 * (hi - lo) / n < 2.0 * (hi - lo) / n < w[0]
+    np.testing.assert_allclose(grid_edges(lo, hi, n, "uniform"), np.linspace(lo, hi, n + 1),
+                               rtol=0, atol=1e-12)
+
+
+def test_a_bad_grid_is_named():
+    with pytest.raises(IdentificationError, match="grid"):
+        PreisachIdentifier(grid="log")
+
+
 def test_smoothing_search_goes_below_the_grid_while_its_edge_wins(monkeypatch):
     """The weights below the grid are tried in turn only while the smallest tried is the best,
     and the kept lambda is the best of all those tried (scores are held-out RMS errors)."""
