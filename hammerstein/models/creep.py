@@ -99,6 +99,11 @@ class Creep:
         return (f"Creep(time_constants={self.time_constants.tolist()}, "
                 f"weights={self.weights.tolist()}{d})")
 
+    @property
+    def static_gain(self) -> float:
+        """``d + sum_k w_k`` [-]: the output per unit of a constant h once every lag has settled."""
+        return self.instantaneous + float(np.sum(self.weights))
+
     def step_response(self, t):
         """Output after a unit step of h at t = 0 (continuous time).
 
