@@ -53,6 +53,7 @@ from __future__ import annotations
 import argparse
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -293,6 +294,7 @@ def one_actuator(name, act, work, quick, log):
     # ten learn trials through files on a 30 µm 100 Hz circle starting at (30, 0)
     spec = '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'
     hammerstein("compensate", "preset.toml", "--reference", spec, "--out", "u0.csv", cwd=d)
+    shutil.rmtree(d / "hist", ignore_errors=True)    # a new learning: the history of a new run
     for k in range(TRIALS):
         t, u, fade = read_drive(d / f"u{k}.csv")
         play(act, u, rng, d / f"y{k}.csv", t)

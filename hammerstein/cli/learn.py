@@ -34,7 +34,12 @@ it (:func:`hammerstein.compensation.drive.shape_drive`).
 With ``--history DIR`` the best trial so far is kept in ``DIR/best-trial.csv``
 (its drive and measured response; ``DIR/learning.csv`` its error and the
 gain halvings; ``DIR/settled.csv`` every trial's settled max and RMS
-Euclidean error and judged error): a trial whose error is above the best
+Euclidean error and judged error). A history belongs to one learning: its
+state records a fingerprint of the faded reference and samples of the last
+drive written, and a trial whose reference differs, or whose ``--drive`` is
+neither the last drive written nor the best trial's, is refused (exit 1,
+nothing written: a history left from another reference, actuator or
+identification would otherwise be learnt from). A trial whose error is above the best
 one, beyond what the sensor noise can explain, is not learnt from; the next
 drive is learnt from the best trial's drive and response with half the
 gain (halved again at each such trial), and one line says so, as the
@@ -57,6 +62,7 @@ with ``--limits error`` (one line, nothing written); 2 a usage error.
 
 from __future__ import annotations
 
+import hashlib
 import sys
 from pathlib import Path
 
@@ -228,6 +234,11 @@ GAINS_FILE = "harmonics.csv"
 SETTLED_FILE = "settled.csv"
 BEST_FILE = "best-trial.csv"
 STATE_FILE = "learning.csv"
+#: samples of the last drive kept in the state file, per input (the --drive check)
+DRIVE_SAMPLES = 256
+#: a --drive matches a drive of the history within this fraction of that drive's span per
+#: input (a drive re-written by the acquisition, or quantised by a 16-bit converter, passes)
+DRIVE_TOLERANCE = 1e-3
 #: a trial worse than the best one so far by more than this factor is not learnt from
 WORSE = 1.1
 #: ... and by more than this many standard deviations of the difference of two judged errors
@@ -291,17 +302,69 @@ def _read_state(history_dir, n_samples):
             values[key.strip()] = value.strip()
     try:
         state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
-                 "halvings": int(values["halvings"]), "samples": int(values["samples"])}
+                 "halvings": int(values["halvings"]), "samples": int(values["samples"]),
+                 "reference": values.get("reference_sha256"),
+                 "drive": (None if values.get("last_drive") is None else
+                           np.array(values["last_drive"].split(), float))}
     except (KeyError, ValueError):
         raise DataFileError(f"--history: {path} is not a learning state file written by "
                             f"hammerstein learn; choose a new --history directory") from None
     return state if state["samples"] == n_samples else None
 
 
+def _fingerprint(target):
+    """SHA-256 of the faded reference [µm] (float64, C order): which learning a history is."""
+    return hashlib.sha256(np.ascontiguousarray(target, dtype=np.float64).tobytes()).hexdigest()
+
+
+def _drive_samples(u):
+    """The samples of a drive (m, N) the state keeps: ``DRIVE_SAMPLES`` per input, flat."""
+    idx = np.linspace(0, u.shape[1] - 1, min(DRIVE_SAMPLES, u.shape[1])).round().astype(int)
+    return np.asarray(u, float)[:, idx].ravel(), idx
+
+
+def _same_drive(u, kept):
+    """True when the samples ``kept`` (as :func:`_drive_samples`) are those of the drive u."""
+    mine, _ = _drive_samples(u)
+    if kept is None or kept.size != mine.size:
+        return False
+    m = u.shape[0]
+    a, b = mine.reshape(m, -1), kept.reshape(m, -1)
+    span = np.ptp(b, axis=1) + 1e-9
+    return bool(np.all(np.max(np.abs(a - b), axis=1) <= DRIVE_TOLERANCE * span))
+
+
+def _check_history(history_dir, state, target, u, best_u):
+    """Refuse a trial that does not belong to the history's learning (a DataFileError).
+
+    ``best_u`` is called for the best trial's drive (m, N) [V] when the last drive differs.
+
+    The reference (faded as the drive was) must have the history's fingerprint, and the
+    applied drive must be the last one written or the best trial's (re-measured).
+    """
+    if state is None:
+        return
+    d = Path(history_dir)
+    if state["reference"] is not None and state["reference"] != _fingerprint(target):
+        raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
+                            f"({STATE_FILE}); choose a new --history directory for this one")
+    if state["drive"] is None or _same_drive(u, state["drive"]):
+        return
+    best_u = best_u()
+    if best_u is not None and _same_drive(u, _drive_samples(best_u)[0]):
+        return
+    raise DataFileError(f"--drive: not the drive the last trial of {d} wrote, nor its best "
+                        f"trial's ({BEST_FILE}): this history belongs to another learning (another "
+                        f"actuator, identification or first drive); choose a new --history "
+                        f"directory, or apply the last drive written")
+
+
 def _write_state(history_dir, state):
     text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
         ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
         ("samples", "samples")))
+    text += f"reference_sha256,{state['reference']}\n"
+    text += "last_drive," + " ".join(repr(float(v)) for v in state["drive"]) + "\n"
     safe_write(Path(history_dir) / STATE_FILE, text, "learning state file", root=history_dir)
 
 
@@ -525,6 +588,10 @@ def _handle(args):
         settled_max, settled_rms = float(np.max(euclid)), float(np.sqrt(np.mean(euclid ** 2)))
         # the best trial so far (--history): a trial more than 10 % worse is not learnt from
         state = _read_state(args.history, N) if args.history else None
+        fingerprint = _fingerprint(target)
+        if args.history:
+            _check_history(args.history, state, target, u,
+                           lambda: _read_best(args.history, model, u.shape, y.shape, N)[0])
         score, score_noise = _judged_error(target, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise
@@ -609,7 +676,7 @@ def _handle(args):
         t = np.arange(N) * T
         with all_or_nothing():    # the drive and the history together, or none (a full disk)
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
-                               score, halvings)
+                               score, halvings, fingerprint)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
                     if args.history else None)
     except catch() as exc:
@@ -621,8 +688,12 @@ def _handle(args):
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
-                   halvings):
-    """Write the next drive and, with ``--history``, the trial's history; the trial number or None."""
+                   halvings, fingerprint):
+    """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
+
+    The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
+    next trial must apply, :func:`_check_history`).
+    """
     safe_write(args.out, signals_csv(t, dict(zip(model.input_names, u_next)), comment),
                "drive file")
     if not args.history:
@@ -636,7 +707,8 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
             f"learn best trial {k}: the drive [V] and its measured response [µm]"),
             "best trial file", root=args.history)
         state = {"trial": k, "score": score, "samples": t.size}
-    _write_state(args.history, {**state, "halvings": halvings})
+    _write_state(args.history, {**state, "halvings": halvings, "reference": fingerprint,
+                                "drive": _drive_samples(u_next)[0]})
     return k
 
 

@@ -201,3 +201,48 @@ def test_judged_error_noise_is_the_spread_of_the_periods_over_their_number(perio
     assert noise == pytest.approx(sigma / np.sqrt(periods - 1), rel=0.1)
     assert abs(score - np.max(np.linalg.norm(error, axis=0))) < 5 * np.sqrt(2) * noise
     assert _judged_error(target, y, 0, None, None)[1] == 0.0
+
+
+@pytest.mark.slow  # end-to-end; default pytest stays fast, .ci/run runs -m slow
+def test_learn_history_refuses_the_trials_of_another_learning(tmp_path):
+    """A history belongs to one learning: a drive that is neither the last one written nor the
+    best trial's (a history left from another actuator or first drive), or another reference,
+    is refused with one line and nothing written; the best trial's drive measured again, or
+    the last drive as the acquisition re-wrote it (rounded to 0.1 mV), is accepted."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 3, 0)
+    common = ["--outputs", "x=x_meas,y=y_meas", "--delay", "3", "--history", "hist"]
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "u1.csv", *common, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    # the drive of another first compensation (10 % larger circle), same reference
+    other = REF.replace("radius = 30", "radius = 33")
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", other, "--out", "v0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "v0.csv", tmp_path / "w0.csv", 3, 1)
+    before = sorted(p.name for p in (tmp_path / "hist").iterdir())
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "v0.csv",
+               "--measured", "w0.csv", "--out", "bad.csv", *common, cwd=tmp_path)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1 and "--drive" in res.stderr
+    assert "another learning" in res.stderr and not (tmp_path / "bad.csv").exists()
+    # another reference with its own first drive
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", other, "--drive", "v0.csv",
+               "--measured", "w0.csv", "--out", "bad.csv", *common, cwd=tmp_path)
+    assert res.returncode == 1 and "another reference" in res.stderr, res.stderr
+    assert not (tmp_path / "bad.csv").exists()
+    assert sorted(p.name for p in (tmp_path / "hist").iterdir()) == before
+    assert len(pd.read_csv(tmp_path / "hist/history.csv")) == 2      # trial 0 only
+    # the best trial's drive measured again: accepted
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "u1b.csv", *common, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    # the last drive written, as an acquisition re-wrote it (0.1 mV resolution): accepted
+    t, u, _ = read_signals(tmp_path / "u1b.csv", ["ux", "uy"])
+    pd.DataFrame({"t": t, "ux": np.round(u[0], 4), "uy": np.round(u[1], 4)}).to_csv(
+        tmp_path / "applied.csv", index=False)
+    _hardware(tmp_path / "applied.csv", tmp_path / "y1.csv", 3, 2)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "applied.csv",
+               "--measured", "y1.csv", "--fade-in", str(drive_fade_samples(tmp_path / "u1b.csv") * T),
+               "--out", "u2.csv", *common, cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
