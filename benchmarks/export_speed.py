@@ -14,7 +14,8 @@ range(20_000_000): s += i')"`` takes 1.0 s of CPU; timed before and after, the
 faster used), the state size and the load average.
 
 Cases: the 4x4 classical PI with 100 play operators per input (the issue's
-4x4x100), law with 1 and 3 iterations; the bundled 2x2 Hammerstein compensator;
+4x4x100), law with 1 and 3 iterations, the kinds :func:`choose_kind` picks for
+it without and with (4x4 bending modes) dynamics, and its per-axis inverse; the bundled 2x2 Hammerstein compensator;
 2x2 Preisach and generalised-PI models (exact inverse), and any model or preset
 file given with ``--model FILE[:KIND]`` (e.g. one written by ``hammerstein
 identify``), built as ``hammerstein export`` builds it. Target: <= 2 µs per
@@ -42,6 +43,8 @@ from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,  # n
                          PrandtlIshlinskii)
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator  # noqa: E402
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator  # noqa: E402
+from hammerstein.compensation.compensators import PerAxisInverseCompensator  # noqa: E402
+from hammerstein.models.dynamics import sampled_bending_modes  # noqa: E402
 from hammerstein.io.presets import load_plant  # noqa: E402
 from hammerstein.export import export_c  # noqa: E402
 from hammerstein.compensation.model_classes import choose_kind  # noqa: E402
@@ -106,6 +109,37 @@ def pi_4x4(n=100, iterations=1):
     return InverseMultiplicativeCompensator(model, iterations=iterations, check="ignore")
 
 
+def pi_4x4_model(n=100):
+    """The model of :func:`pi_4x4` (a 4x4 classical PI, ``n`` plays per input)."""
+    return pi_4x4(n).model
+
+
+def default_kind_4x4(n, T, dynamics):
+    """(label, compensator) of the kind :func:`choose_kind` picks for the 4x4 PI, as exported.
+
+    ``dynamics``: with 4x4 bending modes (310-340 Hz, damping 0.15, sampled
+    at ``T``; the kind is then ``hammerstein``), else none.
+    """
+    model = pi_4x4_model(n)
+    G = (sampled_bending_modes([310.0, 320.0, 330.0, 340.0], [0.15] * 4, None, T)
+         if dynamics else None)
+    choice = choose_kind(model, G is not None)
+    gain = choice.options.get("gain")
+    if choice.kind == "hammerstein":
+        comp = HammersteinCompensator(model, G, gain=gain if gain is not None else "midpoint",
+                                      check="ignore")
+        it = comp.hysteresis_compensator.iterations
+    elif choice.kind == "multivariable":
+        comp = InverseMultiplicativeCompensator(model, gain=gain if gain is not None else "secant",
+                                                iterations=1, check="ignore")
+        it = 1
+    else:
+        comp = PerAxisInverseCompensator(model)
+        it = None
+    return (f"4x4x{n} PI default {'+ G ' if dynamics else ''}{choice.kind}"
+            + (f" ({it} it.)" if it else "")), comp
+
+
 def cases(files):
     """(label, compensator, sampling period, reference amplitude [µm]) of every case."""
     with warnings.catch_warnings():
@@ -114,6 +148,10 @@ def cases(files):
         T = bundled.sampling_period
         yield "4x4x100 PI multivariable (1 it.)", pi_4x4(100, 1), T, 20.0
         yield "4x4x100 PI multivariable (3 it.)", pi_4x4(100, 3), T, 20.0
+        for dynamics in (False, True):       # the kinds picked when the user names none
+            label, comp = default_kind_4x4(100, T, dynamics)
+            yield label, comp, T, 20.0
+        yield "4x4x100 PI per-axis", PerAxisInverseCompensator(pi_4x4_model(100)), T, 20.0
         yield "2x2 bundled hammerstein (3 it.)", HammersteinCompensator(bundled.hysteresis,
                                                                         bundled.dynamics), T, 20.0
         from test_exact_export import gpi_model, preisach_model   # the test suite's 2x2 models

@@ -1,7 +1,8 @@
 """The compiled kernels against a plain C reference of the same arithmetic (not a test).
 
 Run: ``python benchmarks/kernels_vs_c.py [--quick] [--samples N] [--iterations I]
-[--prefilter]`` (from the repository root; needs ``gcc``).
+[--prefilter] [--sizes 2x2x5,6x6x50] [--markdown FILE]`` (from the repository root;
+needs ``gcc``; by default the grid of issue 41, :data:`SIZES`).
 
 It writes a plain C implementation of the three hot loops of
 :mod:`hammerstein.simulation._kernels` on the same packed arrays (play
@@ -41,9 +42,11 @@ input; every output weights every play, two bending-mode states per output)
 it prints ns per sample of each, their ratio numba/C (target <= 1.3) and the
 largest difference of the outputs (the two differ only by the order of the
 weighted sums). Times are the best of several alternated calls, in CPU time
-of the process (steadier than wall time on a shared machine; each call runs
+of the calling thread (``time.thread_time``: steadier than wall time on a
+shared machine, and blind to other threads of the process; each call runs
 ``--samples`` samples); the load average is printed, other processes slow
-both sides alike (shared caches).
+both sides alike (shared caches). ``--markdown FILE`` appends the table,
+with the settings, gcc version and load, to FILE.
 """
 
 from __future__ import annotations
@@ -68,8 +71,9 @@ from hammerstein.simulation._packing import (LANES, ChainState, LawArrays,  # no
 TARGET = 1.3
 CFLAGS = ["-O3", "-march=native", "-fassociative-math", "-fno-signed-zeros",
           "-fno-trapping-math", "-ffp-contract=off", "-shared", "-fPIC"]
-SIZES = [(1, 1, 5), (1, 1, 15), (2, 2, 5), (2, 2, 15), (2, 2, 50), (3, 3, 15), (4, 4, 15),
-         (6, 6, 15), (6, 6, 50)]
+#: the grid of issue 41 (1 x 1 x 5 ... 6 x 6 x 50)
+SIZES = [(1, 1, 5), (1, 1, 50), (2, 2, 5), (2, 2, 15), (2, 2, 50), (3, 3, 20), (4, 4, 30),
+         (6, 6, 5), (6, 6, 50)]
 
 C_SOURCE = r"""
 #include <stdint.h>
@@ -534,11 +538,12 @@ def reference(rng, p, N, T=5e-5):
 
 
 def best_time(fn, repeats):
+    """Least CPU time of this thread over ``repeats`` calls of ``fn`` [s]."""
     best = np.inf
     for _ in range(repeats):
-        t0 = time.process_time()
+        t0 = time.thread_time()
         fn()
-        best = min(best, time.process_time() - t0)
+        best = min(best, time.thread_time() - t0)
     return best
 
 
@@ -678,7 +683,7 @@ def main(argv=None):
     ----------
     argv : list of str, optional
         ``--quick``, ``--samples N``, ``--repeat R``, ``--iterations I``, ``--prefilter``,
-        ``--sizes 2x2x5,6x6x50``.
+        ``--sizes 2x2x5,6x6x50``, ``--markdown FILE``.
 
     Returns
     -------
@@ -692,20 +697,27 @@ def main(argv=None):
     ap.add_argument("--iterations", type=int, default=1,
                     help="fixed-point iterations of the compensator (default 1)")
     ap.add_argument("--sizes", default=None,
-                    help="comma-separated m x p x n sizes, e.g. 2x2x5,6x6x50 (default: all)")
+                    help="comma-separated m x p x n sizes, e.g. 2x2x5,6x6x50 (default: the "
+                         "grid of issue 41)")
     ap.add_argument("--prefilter", action="store_true",
                     help="chain and batch with a ZPETC-shaped reference pre-filter (the law of "
                          "a Hammerstein compensator, p * 4 states)")
+    ap.add_argument("--markdown", default=None, metavar="FILE",
+                    help="append the table (markdown) to FILE")
     args = ap.parse_args(argv)
     N = args.samples or (20_000 if args.quick else 100_000)
     repeats = args.repeat or (3 if args.quick else 7)
     import numba
-    print(f"kernels vs C  numba {numba.__version__}, gcc {' '.join(CFLAGS[:6])}, "
-          f"{N} samples a call, best of {repeats}, compensator iterations {args.iterations}, "
-          f"pre-filter {'ZPETC-shaped' if args.prefilter else 'none'}")
+    gcc = subprocess.run(["gcc", "--version"], capture_output=True,
+                         text=True).stdout.splitlines()[0]
+    settings = (f"numba {numba.__version__}, {gcc} {' '.join(CFLAGS[:6])}, {N} samples a "
+                f"call, best of {repeats} alternated, compensator iterations {args.iterations}, "
+                f"pre-filter {'ZPETC-shaped' if args.prefilter else 'none'}")
+    print(f"kernels vs C  {settings}")
     load0 = os.getloadavg()[0]
-    c0 = time.process_time()
+    c0 = time.thread_time()
     worst = 0.0
+    rows = []
     with tempfile.TemporaryDirectory(prefix="hammerstein-c-") as tmp:
         lib = compile_reference(tmp)
         print(f"{'size m x p x n':<15}" + "".join(
@@ -716,16 +728,52 @@ def main(argv=None):
         for m, p, n in sizes:
             res = case(lib, m, p, n, N, repeats, args.iterations, prefilter=args.prefilter)
             worst = max(worst, *(r["ratio"] for r in res.values()))
+            rows.append(((m, p, n), res))
             row = f"{f'{m} x {p} x {n}':<15}"
             for k in ("plant", "chain", "batch"):
                 r = res[k]
                 row += f"{r['numba_ns']:>11.1f} /{r['c_ns']:>8.1f}{r['ratio']:>8.2f}"
             row += f"{max(r['rel_diff'] for r in res.values()):>14.1e}"
             print(row, flush=True)
-    cpu = time.process_time() - c0
-    print(f"worst ratio {worst:.2f} (target <= {TARGET}); process CPU {cpu:.1f} s; "
-          f"load average {load0:.2f} -> {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    cpu = time.thread_time() - c0
+    load1 = os.getloadavg()[0]
+    tail = (f"worst ratio {worst:.2f} (target <= {TARGET}); thread CPU {cpu:.1f} s; "
+            f"load average {load0:.2f} -> {load1:.2f} on {os.cpu_count()} cores")
+    print(tail)
+    if args.markdown:
+        with open(args.markdown, "a", encoding="utf-8") as f:
+            f.write(markdown_table(settings, rows, tail))
     return 0 if worst <= TARGET else 1
+
+
+def markdown_table(settings, rows, tail):
+    """The results of :func:`main` as a markdown table (ns per sample, numba / C, ratio).
+
+    Parameters
+    ----------
+    settings : str
+        The run's settings (one line).
+    rows : list of (tuple, dict)
+        ``((m, p, n), result of case())`` per size.
+    tail : str
+        The closing line (worst ratio, CPU, load).
+
+    Returns
+    -------
+    str
+    """
+    out = [f"{settings}\n", "| size m x p x n | plant nb / C [ns] | ratio | chain nb / C [ns] | "
+           "ratio | batch nb / C [ns] | ratio | max rel \\|dy\\| |",
+           "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for (m, p, n), res in rows:
+        cells = [f"{m} x {p} x {n}"]
+        for k in ("plant", "chain", "batch"):
+            r = res[k]
+            cells += [f"{r['numba_ns']:.1f} / {r['c_ns']:.1f}", f"{r['ratio']:.2f}"]
+        cells.append(f"{max(r['rel_diff'] for r in res.values()):.1e}")
+        out.append("| " + " | ".join(cells) + " |")
+    out.append(f"\n{tail}\n\n")
+    return "\n".join(out)
 
 
 if __name__ == "__main__":

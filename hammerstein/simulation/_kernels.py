@@ -325,17 +325,70 @@ def _linear(h, A, B, C, D, x, xn, y):
         x[i] = xn[i]
 
 
-@njit(cache=True, fastmath=FASTMATH)
-def _linear_step(h, A, B, C, D, x, xn, y):
-    """:func:`_linear` as a compiled function of its own, for :func:`chain_kernel`'s plant.
+@njit(cache=True, inline="always")
+def _stacked_matrix(A, B, C, D):
+    """``M = [[C, D], [A, B]]`` ((q + nx, nx + k)), the state space as one matrix.
 
-    Inlined into the chain loop, the plant's linear step measured ~40 ns a
-    sample more (chain with 1 iteration, 1 x 1 x 5: 76 -> 36 ns, best of 7;
-    2 x 2 x 15: 113 -> 76 ns; C reference 34 and 75 ns) although the same
-    step inlined into :func:`plant_kernel` costs ~5 ns; called, it costs a
-    call. The same loops with the same flags: results unchanged.
+    :func:`_linear_stacked` steps it; the chain kernel builds it once per
+    call, before its time loop.
     """
-    _linear(h, A, B, C, D, x, xn, y)
+    q = D.shape[0]
+    k = D.shape[1]
+    nx = A.shape[0]
+    M = np.empty((q + nx, nx + k))
+    for l in range(q):
+        for i in range(nx):
+            M[l, i] = C[l, i]
+        for i in range(k):
+            M[l, nx + i] = D[l, i]
+    for r in range(nx):
+        for i in range(nx):
+            M[q + r, i] = A[r, i]
+        for i in range(k):
+            M[q + r, nx + i] = B[r, i]
+    return M
+
+
+@njit(cache=True, inline="always")
+def _linear_stacked(h, M, x, w, y):
+    """:func:`_linear` on the stacked matrix ``M`` of :func:`_stacked_matrix`, inlined.
+
+    ``w = M [x; h]``, each row's state terms and input terms in two loops
+    as :func:`_linear` sums them (the same loops on the same values: results
+    bit for bit those of :func:`_linear`, so the chain's plant part stays
+    :func:`plant_kernel`'s), then ``y = w[:q]`` and ``x <- w[q:]`` (``w``
+    scratch, ``M``'s rows). For :func:`chain_kernel`'s plant, which formerly
+    called :func:`_linear` compiled apart, passing eight array structs a
+    call: with the linear step left out the 1 x 1 x 5 chain
+    took 19.4 ns a sample against 34.3 ns with it, and :func:`_linear`
+    inlined into the chain loop measured ~35 ns more (1 x 1 x 5 34 -> 69 ns,
+    2 x 2 x 15 71 -> 101-107, 6 x 6 x 5 200 -> 234; cause not pinned down).
+    One matrix, inlined, on ``benchmarks/kernels_vs_c.py``'s chain, best of
+    15 alternated, outputs unchanged bit for bit: 1 iteration 1 x 1 x 5
+    31.7 -> 22.8 ns, 2 x 2 x 15 69.0 -> 64.0, 3 x 3 x 20 115.0 -> 110.5,
+    4 x 4 x 30 187.1 -> 182.8, 6 x 6 x 50 471.9 -> 466.9, 6 x 6 x 5
+    202.2 -> 208.5; 3 iterations 1 x 1 x 5 66.7 -> 54.2, 2 x 2 x 15
+    95.9 -> 85.8, 6 x 6 x 5 350.0 -> 357.7 (load 5 on 2 cores).
+    """
+    nx = uint64(x.size)
+    k = uint64(M.shape[1]) - nx
+    q = uint64(M.shape[0]) - nx
+    for r in range(uint64(M.shape[0])):
+        r = uint64(r)
+        a = 0.0
+        for j in range(nx):
+            j = uint64(j)
+            a += M[r, j] * x[j]
+        for j in range(k):
+            j = uint64(j)
+            a += M[r, nx + j] * h[j]
+        w[r] = a
+    for l in range(q):
+        l = uint64(l)
+        y[l] = w[l]
+    for i in range(nx):
+        i = uint64(i)
+        x[i] = w[q + i]
 
 
 @njit(cache=True, fastmath=FASTMATH)
@@ -445,7 +498,8 @@ def chain_kernel(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plan
         fX = np.empty((plan[2].size, PREFILTER_BLOCK + 1))
     h = np.empty(pp)
     yt = np.empty(pp)
-    xn = np.empty(x.size)
+    M = _stacked_matrix(A, B, C, D)       # the plant's state space as one matrix
+    wx = np.empty(M.shape[0])
     # the delay law of a 2 x 2 model in scalars: ~13 ns a sample less with 3 iterations
     two = m == 2 and p == 2
     k00 = Kinv[0, 0] if two else 0.0
@@ -523,7 +577,7 @@ def chain_kernel(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plan
             # iterations are a chain of dependent evaluations the plant's work fills
             _commit(cu, pstart, pr, ps)
             _output(cu, pW, pG, ps, h)
-            _linear_step(h, A, B, C, D, x, xn, yt)
+            _linear_stacked(h, M, x, wx, yt)
             for l in range(pp):
                 y_out[l, t - 1] = yt[l]
         if slopes is not None:
@@ -660,7 +714,7 @@ def chain_kernel(yr, n_samples, law, comp, plan, slopes, plant, linear, run_plan
     if run_plant and n_samples > 0:   # the plant's step of the last sample
         _commit(cu, pstart, pr, ps)
         _output(cu, pW, pG, ps, h)
-        _linear_step(h, A, B, C, D, x, xn, yt)
+        _linear_stacked(h, M, x, wx, yt)
         for l in range(pp):
             y_out[l, n_samples - 1] = yt[l]
     for i in range(nf):
