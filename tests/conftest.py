@@ -259,3 +259,164 @@ def pytest_terminal_summary(terminalreporter, config):
             rows = csv.writer(f)
             rows.writerow(["test", "self_s", "children_s"])
             rows.writerows([k, f"{o:.4f}", f"{c:.4f}"] for k, (o, c) in report.items())
+
+
+# ---------------------------------------------------------------------------------------
+# Every bundled scenario, run once per session for the slow tests that read its reports:
+# tests/cli/test_cli.py (the CLI end to end: exit status, every report's files, the
+# paper's numbers) and tests/report/test_every_figure.py (every figure of every report
+# shows its data). Each of them ran all bundled scenarios on its own before, with the
+# same identifications: about 250 s of CPU each, most of it the identifications of the
+# realistic scenarios. One `hammerstein run` of them all (the CLI, figures drawn in the
+# runner's pool of worker processes, as test_cli checks) serves both: every figure job is
+# also drawn here from a pickled copy of the job (what the pool's workers receive) and
+# checked on its Figure and its PNG (tests/report/figure_checks.py), as test_every_figure
+# did with its CheckingRenderer. A session fixture is per xdist worker: the tests using it
+# carry ``xdist_group("bundled-reports")``, and .ci/run runs the slow tests with
+# ``--dist loadgroup`` so that they share one run (see pytest_xdist_make_scheduler below).
+# ---------------------------------------------------------------------------------------
+#: nodeid prefixes of the tests of each xdist group (the ``xdist_group`` marks' tests)
+XDIST_GROUPS = {
+    "bundled-reports": tuple(f"tests/cli/test_cli.py::{name}" for name in (
+        "test_every_bundled_scenario_runs", "test_fig05_numbers_within_10_percent[",
+        "test_fig05_rate_dependency_loops_widen_with_frequency",
+        "test_fig08_static_plant_is_linearised_and_decoupled[",
+        "test_literal_law_reported_as_diverged")) + (
+        "tests/report/test_every_figure.py::"
+        "test_every_figure_of_every_bundled_report_shows_its_data[",),
+}
+
+
+@pytest.hookimpl(optionalhook=True)   # pytest-xdist's hook (the test extra installs it)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup`` that keeps each of :data:`XDIST_GROUPS` on one worker.
+
+    pytest-xdist's own loadgroup finds a test's group in the ``@group`` suffix it appends
+    to the test's ``_nodeid`` on the worker; since pytest 9 a node's id is not read from
+    ``_nodeid`` any more, the suffix never reaches the controller and the group's tests
+    were spread over the workers (measured with pytest 9.2, pytest-xdist 3.8: each worker
+    ran the bundled scenarios' fixture). Here the controller knows the groups by their
+    nodeids. Other ``--dist`` modes are pytest-xdist's own.
+    """
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class GroupScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid):
+            for group, prefixes in XDIST_GROUPS.items():
+                if nodeid.startswith(prefixes):
+                    return group
+            return nodeid            # every other test on its own, as with --dist load
+
+    return GroupScheduling(config, log)
+
+
+BUNDLED = sorted(p for p in (ROOT / "scenarios").rglob("*.toml")
+                 if "presets" not in p.relative_to(ROOT / "scenarios").parts)   # preset files
+
+
+def _figure_checks():
+    """tests/report/figure_checks.py, imported under its own name (as its test files do)."""
+    import importlib.util
+
+    if "figure_checks" not in sys.modules:
+        spec = importlib.util.spec_from_file_location(
+            "figure_checks", ROOT / "tests" / "report" / "figure_checks.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules["figure_checks"] = module
+        spec.loader.exec_module(module)
+    return sys.modules["figure_checks"]
+
+
+class BundledReports:
+    """What :func:`bundled_reports` ran.
+
+    Attributes
+    ----------
+    paths : list of pathlib.Path
+        The scenario files run (``BUNDLED``).
+    out : pathlib.Path
+        The reports directory (``out/<scenario name>/``).
+    status : int
+        The exit status of ``hammerstein run`` (its errors went to the stderr of the
+        first test using the fixture).
+    figures : dict of pathlib.Path to CheckedFigures
+        Per scenario file, the figures its report handed to the renderer.
+    """
+
+    def __init__(self, paths, out, status, figures):
+        self.paths, self.out, self.status, self.figures = paths, out, status, figures
+
+
+class CheckedFigures:
+    """The figure jobs of one scenario: their PNG names and what the checks found."""
+
+    def __init__(self):
+        self.names, self.problems = [], []
+
+
+class _CheckingTee:
+    """A figure renderer that checks every job here, then hands it to the runner's renderer."""
+
+    def __init__(self, inner, current, figures):
+        self._inner, self._current, self._figures = inner, current, figures
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+    def selects(self, path):
+        return getattr(self._inner, "selects", lambda p: True)(path)
+
+    def submit(self, jobs):
+        import io
+        import pickle
+
+        from hammerstein.report.figures import save
+
+        checks = _figure_checks()
+        record = self._figures.setdefault(self._current["path"], CheckedFigures())
+        for job in jobs:
+            copy = pickle.loads(pickle.dumps(job))    # as a pool worker receives it
+            record.names.append(copy.path.name)
+            try:
+                fig = copy.function(*copy.args, **copy.kwargs)
+                buffer = io.BytesIO()
+                save(fig, buffer)                       # drawn: the limits are final
+                record.problems += checks.figure_problems(fig, copy.path.name)
+                buffer.seek(0)
+                record.problems += [f"{copy.path.name}: {p}"
+                                    for p in checks.png_problems(buffer)]
+            except Exception as exc:  # the problem is the message
+                record.problems.append(f"{copy.path.name}: drawing it raised {exc!r}")
+        return self._inner.submit(jobs)
+
+
+@pytest.fixture(scope="session")
+def bundled_reports(tmp_path_factory):
+    """``hammerstein run`` of every bundled scenario into one directory (see above).
+
+    Returns
+    -------
+    BundledReports
+    """
+    import hammerstein.runner as runner
+    from hammerstein.cli.main import main
+
+    out = tmp_path_factory.mktemp("reports")
+    current, figures = {"path": None}, {}
+    made, started = runner.FigureRenderer, runner.start_scenario
+
+    def renderer(*args, **kwargs):
+        return _CheckingTee(made(*args, **kwargs), current, figures)
+
+    def start(path, *args, **kwargs):          # the figure jobs a scenario hands over are
+        current["path"] = Path(path).resolve()  # submitted while it starts
+        return started(path, *args, **kwargs)
+
+    runner.FigureRenderer, runner.start_scenario = renderer, start
+    try:
+        status = main(["run", *map(str, BUNDLED), "--out", str(out)])
+    finally:
+        runner.FigureRenderer, runner.start_scenario = made, started
+    return BundledReports(list(BUNDLED), out, status, figures)

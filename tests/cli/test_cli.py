@@ -14,11 +14,12 @@ BUNDLED = sorted(p for p in (ROOT / "scenarios").rglob("*.toml")
                  if "presets" not in p.relative_to(ROOT / "scenarios").parts)   # preset files
 
 
-@pytest.fixture(scope="module")
-def reports(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reports")
-    status = main(["run", *map(str, BUNDLED), "--out", str(out)])
-    return out, status
+@pytest.fixture
+def reports(bundled_reports):
+    """``hammerstein run`` of every bundled scenario (``BUNDLED``; tests/conftest.py runs the
+    same list once per session, also for tests/report/test_every_figure.py)."""
+    assert bundled_reports.paths == BUNDLED
+    return bundled_reports.out, bundled_reports.status
 
 
 def _metric(out, scenario, case, channel, metric):
@@ -29,6 +30,7 @@ def _metric(out, scenario, case, channel, metric):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("bundled-reports")   # one run of them all (conftest.py)
 def test_every_bundled_scenario_runs(reports):
     out, status = reports
     assert status == 0
@@ -54,6 +56,7 @@ def test_every_bundled_scenario_runs(reports):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("bundled-reports")   # one run of them all (conftest.py)
 @pytest.mark.parametrize("case, channel, metric, paper", [
     ("ux-50Hz-static", "x", "peak_to_peak", 2 * 58.0),
     ("uy-50Hz-static", "y", "peak_to_peak", 2 * 50.5),
@@ -69,6 +72,7 @@ def test_fig05_numbers_within_10_percent(reports, case, channel, metric, paper):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("bundled-reports")   # one run of them all (conftest.py)
 def test_fig05_rate_dependency_loops_widen_with_frequency(reports):
     out, _ = reports
     widths = [_metric(out, "fig05-characterization", f"ux-{f}Hz", "x", "hysteresis_width")
@@ -77,6 +81,7 @@ def test_fig05_rate_dependency_loops_widen_with_frequency(reports):
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("bundled-reports")   # one run of them all (conftest.py)
 @pytest.mark.parametrize("case, direct, cross, cross_limit", [
     ("x-axis-static", "x", "y", 0.5),   # paper: (x_r, y) about ±0.25 µm
     ("y-axis-static", "y", "x", 0.4),   # paper: (y_r, x) about ±0.2 µm
@@ -90,6 +95,7 @@ def test_fig08_static_plant_is_linearised_and_decoupled(reports, case, direct, c
 
 
 @pytest.mark.slow
+@pytest.mark.xdist_group("bundled-reports")   # one run of them all (conftest.py)
 def test_literal_law_reported_as_diverged(reports):
     out, _ = reports
     t = _metric(out, "literal-law-divergence", "literal-K-identity", "x+y", "diverged_at_time")
