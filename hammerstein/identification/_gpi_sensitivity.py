@@ -21,14 +21,23 @@ are equal, have measure zero). With ``gamma_l(u) = A tanh(b_l u / A + a2_l)``,
 
 The play values are computed with the same expressions as
 :func:`hammerstein.simulation.generalized_play_states` (bit for bit).
+:func:`vp_jacobian` turns them into the Jacobian of the variable-projection
+residual (Golub and Pereyra [1]_).
+
+References
+----------
+.. [1] G. H. Golub and V. Pereyra, "Separable nonlinear least squares: the
+   variable projection method and its applications", Inverse Problems 19(2),
+   R1-R26, 2003.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 from numba import njit
 
-__all__ = ["N_PARAMS", "envelope_gradient", "play_sensitivities"]
+__all__ = ["N_PARAMS", "envelope_gradient", "play_sensitivities", "vp_jacobian"]
 
 #: Parameters of a component: (b_l, a2_l, rho, b_r, a2_r, d, q).
 N_PARAMS = 7
@@ -159,3 +168,55 @@ def play_sensitivities(u, thresholds, fractions, theta, amplitude, d_span):
                         q * a, np.ascontiguousarray(d_span, dtype=float), d_lo0[0], d_hi0[0],
                         out, sens)
     return out, sens
+
+
+def vp_jacobian(A, x, r, lower, col, Dx, DTr):
+    """Jacobian of the variable-projection residual ``r = A x(theta) - y``.
+
+    The weights ``x(theta)`` minimise ``||A(theta) x - y||`` subject to
+    ``x >= lower``; those at their bound are held there (the active set), on
+    the others (columns ``A_F``) the normal equations ``A_F^T r = 0`` hold, so
+    ([1]_, eq. (2.4), with the active weights constants)
+
+    ``dr / d theta_i = P (D_i x) - A_F (A_F^T A_F)^-1 D_{i,F}^T r``,
+
+    ``D_i = dA / d theta_i`` and ``P = I - A_F A_F^+``, computed from a thin QR
+    factorisation of the column-scaled ``A_F`` (an SVD on its numerical range
+    when its columns are nearly dependent).
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (N, n)
+        Regression matrix at theta.
+    x : numpy.ndarray, shape (n,)
+        The bounded least-squares weights.
+    r : numpy.ndarray, shape (N,)
+        ``A x - y``.
+    lower : numpy.ndarray, shape (n,)
+        Lower bounds of the weights (``-inf``: free).
+    col : numpy.ndarray, shape (n,)
+        Positive column scales of ``A`` (e.g. the column norms).
+    Dx : numpy.ndarray, shape (N, P)
+        ``D_i x`` per parameter i.
+    DTr : numpy.ndarray, shape (n, P)
+        ``D_i^T r`` per parameter i.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, P)
+        ``dr / d theta``.
+    """
+    at_bound = np.isfinite(lower) & ((x - lower) * col
+                                     <= 1e-12 * max(np.linalg.norm(x * col), 1e-300))
+    F = ~at_bound
+    AF, DF = A[:, F] / col[F], DTr[F] / col[F, None]
+    Q, RF = np.linalg.qr(AF)
+    diag = np.abs(np.diag(RF))
+    if diag.size and diag.min() > 1e-10 * diag.max():
+        back = Q @ scipy.linalg.solve_triangular(RF, DF, trans="T")
+    else:       # (nearly) dependent columns: the pseudo-inverse on their range
+        U, sv, Vt = np.linalg.svd(AF, full_matrices=False)
+        keep = sv > 1e-12 * sv[0] if sv.size else sv > 0
+        Q = U[:, keep]
+        back = Q @ ((Vt[keep] @ DF) / sv[keep, None])
+    return Dx - Q @ (Q.T @ Dx) - back

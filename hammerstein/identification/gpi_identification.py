@@ -25,19 +25,12 @@ Pereyra [3]_): :func:`scipy.optimize.least_squares` adjusts the envelope
 parameters of the components of output l, and for each of its trial values
 the weights are the bounded linear least-squares solution
 (:func:`hammerstein.identification.lsq.bounded_lstsq`) on the training samples.
-Its Jacobian is analytic: the derivatives of the play columns in the
-envelope parameters are carried through the play recursion
-(:func:`hammerstein.identification._gpi_sensitivity.play_sensitivities`) and
-projected as in [3]_ (eq. (2.4); the weights at their bounds held there), one
-pass over the records per Jacobian instead of the 7 residual evaluations per
-component of a finite-difference one. Measured on the realistic 2 x 2
-records of ``benchmarks/identify.py`` (without creep): 82 + 50 residual
-evaluations and 65 + 41 Jacobians for the two outputs, 1.6 s CPU for the
-whole fit, against 131 + 41 steps and 1040 residual evaluations with
-finite differences (about 9 s); the fitted costs differ by 0.35 % and
-0.6 % (the optimum lies on a kink, where a weight's bound becomes active,
-and the two Jacobians stop at different points of it), the held-out RMS
-errors by 0.5 % (x 0.1577 -> 0.1585 µm, y 0.1289 -> 0.1285 µm).
+Its Jacobian is analytic (:mod:`hammerstein.identification._gpi_sensitivity`),
+not 7 residual evaluations per component. On the realistic 2 x 2 records of
+``benchmarks/identify.py`` (no creep): 132 residuals and 106 Jacobians against
+1040 residuals, 1.46 -> 0.95 s CPU; costs +0.35/0.6 % (the optimum lies on a
+kink, where a weight's bound turns active), held-out RMS x 0.1577 -> 0.1585 µm,
+y 0.1289 -> 0.1285 µm.
 
 Parametrisation of a component from input k (amplitude ``A`` [V], the largest
 measured ``|u_k|``): ``gamma_l = [A, b_l / A, a2_l, 0]`` and ``gamma_r = [rho A,
@@ -115,7 +108,8 @@ import scipy.linalg
 import scipy.optimize
 
 from hammerstein.models.generalized_pi import GeneralizedPI, envelope
-from hammerstein.identification._gpi_sensitivity import envelope_gradient, play_sensitivities
+from hammerstein.identification._gpi_sensitivity import (envelope_gradient, play_sensitivities,
+                                                          vp_jacobian)
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.lsq import bounded_lstsq
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial
@@ -201,8 +195,7 @@ def play_thresholds(gamma_l, gamma_r, lo, hi, n, spacing="power"):
     span = max(0.5 * float(mid(hi) - mid(lo)), 1e-9)
     if spacing not in THRESHOLD_SPACINGS:
         raise ValueError(f"spacing: expected one of {THRESHOLD_SPACINGS}, found {spacing!r}")
-    power = THRESHOLD_POWER if spacing == "power" else 1.0
-    return span * (np.arange(n) / n) ** power
+    return span * _threshold_fractions(n, spacing)
 
 
 def _threshold_fractions(n, spacing):
@@ -319,12 +312,10 @@ class GeneralizedPIIdentifier:
         the noise.
     max_evaluations : int
         Largest number of steps tried per output (``max_nfev`` of
-        :func:`scipy.optimize.least_squares`: residual evaluations). The
-        Jacobian is analytic (module notes), at most one per step, each about
-        the CPU of two residual evaluations, so the budget bounds the work;
-        the notes report the residual evaluations and the Jacobians made.
-        With the finite-difference Jacobian this budget was measured with
-        (7 uncounted trials per component and step), on ``scenarios/presets/realistic-gpi.toml`` identified
+        :func:`scipy.optimize.least_squares`), at most one analytic Jacobian
+        per step (about two residuals of CPU; the notes count both). With
+        finite differences (7 uncounted trials per component and step), on
+        ``scenarios/presets/realistic-gpi.toml`` identified
         through ``hammerstein identify --model generalized --creep-records``,
         60 trials left the fit short of its minimum (circles 2.3-4.7 % of the
         radius); 300 gave 1.06-2.59 %.
@@ -538,66 +529,32 @@ class GeneralizedPIIdentifier:
             R = scipy.linalg.cholesky(gram, lower=False)
         except np.linalg.LinAlgError:
             R = np.linalg.qr(Ay, mode="r")
-        x = bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col) / col
         self._bounds = (lb, col)
-        return x, A, pieces
+        return bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col) / col, A, pieces
 
     def _jacobian(self, l, kinds, thetas, free):
-        """Variable-projection Jacobian of output l's residual in the envelope parameters.
-
-        The weights ``x(theta)`` minimise ``||A(theta) x - y||`` with some of them at
-        their lower bounds (the active set, held there); on the others (columns
-        ``A_F``) the normal equations ``A_F^T r = 0`` hold, ``r = A x - y``, so
-        (Golub and Pereyra [3]_, eq. (2.4), with the active weights constants)
-
-        ``dr / d theta_i = P (D_i x) - A_F (A_F^T A_F)^-1 D_{i,F}^T r``,
-
-        ``D_i = dA / d theta_i`` (the play columns' sensitivities,
-        :func:`~hammerstein.identification._gpi_sensitivity.play_sensitivities`)
-        and ``P = I - A_F A_F^+`` the projection off the range of ``A_F``
-        (computed from a thin QR of the column-scaled ``A_F``).
-        """
+        """Jacobian of output l's residual in the envelope parameters (:func:`vp_jacobian`)."""
         x, A, _ = self._solve(l, kinds, thetas)
         lb, col = self._bounds
         y = self._y[l]
         r = A @ x - y
-        at_bound = np.isfinite(lb) & ((x - lb) * col <= 1e-12 * max(np.linalg.norm(x * col), 1e-300))
-        F = ~at_bound
-        n_par = N_THETA * len(free)
-        Dx = np.zeros((y.size, n_par))
-        DTr = np.zeros((A.shape[1], n_par))
-        c = 0
-        starts = {}
-        for k in range(len(kinds)):
-            starts[k] = c
-            c += self._component_width(kinds[k], k == l)
+        Dx = np.zeros((y.size, N_THETA * len(free)))
+        DTr = np.zeros((A.shape[1], Dx.shape[1]))
+        starts = np.cumsum([0] + [self._component_width(kd, k == l) for k, kd in enumerate(kinds)])
         for i, k in enumerate(free):
             theta = np.asarray(thetas[k], dtype=float)
             gl, gr = envelopes(theta, self._amp[k])
             rr = play_thresholds(gl, gr, self._lo[k], self._hi[k], self.n_plays, self._spacing)
             frac = _threshold_fractions(self.n_plays, self._spacing)
             dspan = _span_gradient(theta, self._amp[k], self._lo[k], self._hi[k])
-            w = x[starts[k]:starts[k] + self.n_plays]
-            sl = slice(N_THETA * i, N_THETA * (i + 1))
-            row = 0
+            plays, sl, row = slice(starts[k], starts[k] + self.n_plays), slice(N_THETA * i, N_THETA * (i + 1)), 0
             for u, tr in zip(self._u, self._train):
-                _, sens = play_sensitivities(u[k], rr, frac, theta, self._amp[k], dspan)
-                sens = sens[tr]
+                sens = play_sensitivities(u[k], rr, frac, theta, self._amp[k], dspan)[1][tr]
                 rows = slice(row, row + sens.shape[0])
-                Dx[rows, sl] = np.einsum("tjp,j->tp", sens, w)
-                DTr[starts[k]:starts[k] + self.n_plays, sl] += np.einsum("tjp,t->jp", sens, r[rows])
+                Dx[rows, sl] = np.einsum("tjp,j->tp", sens, x[plays])
+                DTr[plays, sl] += np.einsum("tjp,t->jp", sens, r[rows])
                 row += sens.shape[0]
-        AF, DF = A[:, F] / col[F], DTr[F] / col[F, None]
-        Q, RF = np.linalg.qr(AF)
-        diag = np.abs(np.diag(RF))
-        if diag.size and diag.min() > 1e-10 * diag.max():
-            back = Q @ scipy.linalg.solve_triangular(RF, DF, trans="T")
-        else:       # (nearly) dependent columns: the pseudo-inverse on their range
-            U, sv, Vt = np.linalg.svd(AF, full_matrices=False)
-            keep = sv > 1e-12 * sv[0] if sv.size else sv > 0
-            Q = U[:, keep]
-            back = Q @ ((Vt[keep] @ DF) / sv[keep, None])
-        return (Dx - Q @ (Q.T @ Dx) - back) / np.sqrt(y.size)
+        return vp_jacobian(A, x, r, lb, col, Dx, DTr) / np.sqrt(y.size)
 
     def _fit_output(self, l, kinds):
         """Envelopes by least_squares, weights projected out; the output's components."""
