@@ -37,7 +37,9 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-__all__ = ["N_PARAMS", "envelope_gradient", "play_sensitivities", "vp_jacobian"]
+from hammerstein.models.generalized_pi import envelope
+
+__all__ = ["N_PARAMS", "envelope_gradient", "span_gradient", "play_sensitivities", "vp_jacobian"]
 
 #: Parameters of a component: (b_l, a2_l, rho, b_r, a2_r, d, q).
 N_PARAMS = 7
@@ -72,6 +74,37 @@ def envelope_gradient(theta, amplitude, u):
     dl[:, 0], dl[:, 1] = u * sl, a * sl
     dr[:, 2], dr[:, 3], dr[:, 4], dr[:, 5] = a * tr, rho * u * sr, rho * a * sr, a
     return dl, dr
+
+
+def span_gradient(theta, amplitude, lo, hi):
+    """``dS / d theta`` of the thresholds' scale ``S = max(0.5 (m(hi) - m(lo)), 1e-9)``.
+
+    ``m = (gamma_l + gamma_r) / 2`` is the mean envelope
+    (:func:`hammerstein.identification.gpi_identification.play_thresholds`).
+
+    Parameters
+    ----------
+    theta : array_like, shape (7,)
+        Normalised parameters.
+    amplitude : float
+        Input amplitude A [V].
+    lo, hi : float
+        Measured input range [V].
+
+    Returns
+    -------
+    numpy.ndarray, shape (7,)
+        The gradient; zeros where ``S`` is clamped at its floor.
+    """
+    b_l, a2_l, rho, b_r, a2_r, dd = (float(v) for v in np.asarray(theta, dtype=float)[:6])
+    a = float(amplitude)
+    gl = np.array([a, b_l / a, a2_l, 0.0])
+    gr = np.array([rho * a, b_r / a, a2_r, dd * a])
+    mid = lambda u: 0.5 * (envelope(gl, u) + envelope(gr, u))  # noqa: E731
+    if 0.5 * float(mid(hi) - mid(lo)) <= 1e-9:
+        return np.zeros(N_PARAMS)
+    dl, dr = envelope_gradient(theta, amplitude, [lo, hi])
+    return 0.25 * (dl[1] + dr[1] - dl[0] - dr[0])
 
 
 @njit(cache=True)

@@ -108,7 +108,7 @@ import scipy.linalg
 import scipy.optimize
 
 from hammerstein.models.generalized_pi import GeneralizedPI, envelope
-from hammerstein.identification._gpi_sensitivity import (envelope_gradient, play_sensitivities,
+from hammerstein.identification._gpi_sensitivity import (play_sensitivities, span_gradient,
                                                           vp_jacobian)
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.lsq import bounded_lstsq
@@ -201,16 +201,6 @@ def play_thresholds(gamma_l, gamma_r, lo, hi, n, spacing="power"):
 def _threshold_fractions(n, spacing):
     """``c_j`` of :func:`play_thresholds`' ``r_j = S c_j``."""
     return (np.arange(n) / n) ** (THRESHOLD_POWER if spacing == "power" else 1.0)
-
-
-def _span_gradient(theta, amplitude, lo, hi):
-    """``dS / d theta`` of :func:`play_thresholds`' scale ``S`` (0 where it is clamped)."""
-    gl, gr = envelopes(theta, amplitude)
-    mid = lambda u: 0.5 * (envelope(gl, u) + envelope(gr, u))  # noqa: E731
-    if 0.5 * float(mid(hi) - mid(lo)) <= 1e-9:
-        return np.zeros(len(THETA0))
-    dl, dr = envelope_gradient(theta, amplitude, [lo, hi])
-    return 0.25 * (dl[1] + dr[1] - dl[0] - dr[0])
 
 
 def monotone_quadratic_columns(u, lo, hi):
@@ -532,9 +522,9 @@ class GeneralizedPIIdentifier:
         self._bounds = (lb, col)
         return bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col) / col, A, pieces
 
-    def _jacobian(self, l, kinds, thetas, free):
-        """Jacobian of output l's residual in the envelope parameters (:func:`vp_jacobian`)."""
-        x, A, _ = self._solve(l, kinds, thetas)
+    def _jacobian(self, l, kinds, thetas, free, solved=None):
+        """Output l's residual's Jacobian (:func:`vp_jacobian`); ``solved``: last (x, A) there."""
+        x, A = solved if solved is not None else self._solve(l, kinds, thetas)[:2]
         lb, col = self._bounds
         y = self._y[l]
         r = A @ x - y
@@ -546,8 +536,9 @@ class GeneralizedPIIdentifier:
             gl, gr = envelopes(theta, self._amp[k])
             rr = play_thresholds(gl, gr, self._lo[k], self._hi[k], self.n_plays, self._spacing)
             frac = _threshold_fractions(self.n_plays, self._spacing)
-            dspan = _span_gradient(theta, self._amp[k], self._lo[k], self._hi[k])
-            plays, sl, row = slice(starts[k], starts[k] + self.n_plays), slice(N_THETA * i, N_THETA * (i + 1)), 0
+            dspan = span_gradient(theta, self._amp[k], self._lo[k], self._hi[k])
+            plays, row = slice(starts[k], starts[k] + self.n_plays), 0
+            sl = slice(N_THETA * i, N_THETA * (i + 1))
             for u, tr in zip(self._u, self._train):
                 sens = play_sensitivities(u[k], rr, frac, theta, self._amp[k], dspan)[1][tr]
                 rows = slice(row, row + sens.shape[0])
@@ -568,14 +559,18 @@ class GeneralizedPIIdentifier:
                 thetas[k] = z[N_THETA * i:N_THETA * (i + 1)]
             return thetas
 
+        last = {}
+
         def residual(z):
             self._evaluations += 1
             x, A, _ = self._solve(l, kinds, unpack(z))
+            last.clear()       # A is the buffer, valid until the next solve
+            last[np.asarray(z, dtype=float).tobytes()] = (x, A)
             return (A @ x - y) / np.sqrt(y.size)
 
-        def jacobian(z):
+        def jacobian(z):           # least_squares asks at the step it just evaluated: no re-solve
             self._jacobians += 1
-            return self._jacobian(l, kinds, unpack(z), free)
+            return self._jacobian(l, kinds, unpack(z), free, last.get(np.asarray(z, float).tobytes()))
 
         if free:
             z0 = np.tile(THETA0, len(free))

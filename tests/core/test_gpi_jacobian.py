@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import hammerstein.identification.gpi_identification as gpi
-from hammerstein.identification._gpi_sensitivity import play_sensitivities
+from hammerstein.identification._gpi_sensitivity import play_sensitivities, span_gradient
 from hammerstein.identification.gpi_identification import (
-    THETA_HI, THETA_LO, GeneralizedPIIdentifier, _span_gradient, _threshold_fractions, envelopes,
+    THETA_HI, THETA_LO, GeneralizedPIIdentifier, _threshold_fractions, envelopes,
     play_thresholds)
 from hammerstein.models.generalized_pi import envelope
 from hammerstein.simulation import generalized_play_states
@@ -49,7 +49,7 @@ def test_play_states_are_the_simulation_kernels(spacing):
         gl, gr = envelopes(theta, AMP)
         r = play_thresholds(gl, gr, LO, HI, 8, spacing)
         states, _ = play_sensitivities(u, r, _threshold_fractions(8, spacing), theta, AMP,
-                                       _span_gradient(theta, AMP, LO, HI))
+                                       span_gradient(theta, AMP, LO, HI))
         np.testing.assert_array_equal(states, _states(u, theta, spacing))
 
 
@@ -62,7 +62,7 @@ def test_play_sensitivities_match_central_differences(spacing):
         gl, gr = envelopes(theta, AMP)
         r = play_thresholds(gl, gr, LO, HI, 8, spacing)
         _, sens = play_sensitivities(u, r, _threshold_fractions(8, spacing), theta, AMP,
-                                     _span_gradient(theta, AMP, LO, HI))
+                                     span_gradient(theta, AMP, LO, HI))
         for p in range(theta.size):
             h = 1e-7 * (THETA_HI[p] - THETA_LO[p])
             e = np.eye(theta.size)[p] * h
