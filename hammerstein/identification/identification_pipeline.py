@@ -190,8 +190,12 @@ def _step_level_error(fit, recs):
             float(np.max(np.abs(ab))))
 
 
-def _fit_one_class(name, records, options, names):
-    """The fit of one class (``"classical"``, ``"preisach"`` or ``"generalized"``)."""
+def _fit_one_class(name, records, options, names, previous=None):
+    """The fit of one class (``"classical"``, ``"preisach"`` or ``"generalized"``).
+
+    ``previous``: a fit of the same class on similar records (the refit after the
+    creep is removed); the Preisach smoothing search starts at its lambda.
+    """
     if name == "classical":
         return identify_records(
             records, options.method, options.n, options.thresholds,
@@ -201,7 +205,8 @@ def _fit_one_class(name, records, options, names):
     if name == "preisach":
         return identify_preisach_records(
             records, options.preisach_levels, "auto", options.components, options.hold_out,
-            options.train_fraction, options.skip, *names)
+            options.train_fraction, options.skip, *names,
+            smoothing_start=getattr(previous, "smoothing", None))
     return identify_gpi_records(
         records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
         options.skip, *names, threshold_spacing=options.threshold_spacing)
@@ -272,7 +277,8 @@ def _auto_fits(records, options, names, creep_records):
     return fits, stairs, errors
 
 
-def identify_hysteresis(records, options, names, model_class=None, creep_records=None):
+def identify_hysteresis(records, options, names, model_class=None, creep_records=None,
+                        previous=None):
     """The hysteresis fit of ``options.model``: one class, or the best on held-out data.
 
     ``auto`` judges the classes on the held-out minor loops of the
@@ -292,6 +298,11 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
         Forces a class.
     creep_records : list of MultiRecord, optional
         Staircases (``auto``'s second score).
+    previous : object, optional
+        A fit of ``model_class`` on similar records (the refit after the creep
+        is removed): the Preisach model's smoothing search starts at its lambda
+        (:class:`~hammerstein.identification.preisach_identification.PreisachIdentifier`
+        ``smoothing_start``).
 
     Returns
     -------
@@ -310,7 +321,8 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
     if choice == "auto":
         fits, stairs, errors = _auto_fits(records, options, names, creep_records)
     else:
-        fits, stairs, errors = {choice: _fit_one_class(choice, records, options, names)}, {}, {}
+        fits, stairs, errors = {choice: _fit_one_class(choice, records, options, names,
+                                                        previous)}, {}, {}
     if len(fits) == 1:
         fit = next(iter(fits.values()))
         if choice == "auto":
@@ -396,7 +408,7 @@ def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records
         before = _fit_rms(fit)
         clean = remove_creep(records, creep.creeps_, fit.model.output_offset)
         chosen = [note for note in fit.notes if note.startswith("model auto")]
-        fit = identify_hysteresis(clean, options, names, fit_class(fit), creep_records)
+        fit = identify_hysteresis(clean, options, names, fit_class(fit), creep_records, fit)
         fit.notes[:0] = chosen
         creep = _creep(fit, creep_records, dyn)
         fit.notes.append(f"creep refit {i + 1}: hysteresis refitted on the records with the "

@@ -281,3 +281,38 @@ def test_ilc_over_a_preisach_model_learns_through_its_exact_inverse(tmp_path):
     from hammerstein.scenario.registry import build_compensator
     ilc = build_compensator({"kind": "ilc", "iterations": 2}, load_plant("realistic-2dof"), tmp_path)
     assert ilc.learning.exact_static     # no longer refused (tests/hardware/test_ilc_preisach.py)
+
+
+@pytest.mark.parametrize("start_at", ["choice", "far"])
+def test_smoothing_search_from_a_previous_lambda_keeps_the_grid_search_choice(start_at):
+    """Started at a lambda (the pipeline's refit), the search walks the candidates towards the
+    lower error: every score it computes is the full search's for that lambda, the lambdas it
+    tries are contiguous among the candidates, the best has both neighbours tried (or is at an
+    end) and is the full search's choice, with the same weights."""
+    from hammerstein.identification import preisach_identification as pi_ident
+    rec = records(preisach_actuator(), noise=0.04)
+    full = PreisachIdentifier(n_levels=8).fit(rec)
+    ladder = sorted(set(pi_ident.SMOOTHING_GRID) | set(pi_ident.SMOOTHING_BELOW))
+    start = full.smoothing_ if start_at == "choice" else ladder[-1]
+    est = PreisachIdentifier(n_levels=8, smoothing_start=start).fit(rec)
+    tried = sorted(est.smoothing_scores_)
+    assert est.smoothing_ == full.smoothing_
+    for lam, score in est.smoothing_scores_.items():
+        if lam in full.smoothing_scores_:
+            assert score == pytest.approx(full.smoothing_scores_[lam], rel=1e-12)
+    idx = [ladder.index(lam) for lam in tried]
+    assert idx == list(range(idx[0], idx[-1] + 1))
+    at = ladder.index(est.smoothing_)
+    assert (at == 0 or ladder[at - 1] in tried) and (at == len(ladder) - 1 or ladder[at + 1] in tried)
+    for a, b in zip(est.model_.components, full.model_.components):
+        for ca, cb in zip(a, b):
+            if isinstance(ca, PreisachModel):
+                np.testing.assert_array_equal(ca.weights, cb.weights)
+    if start_at == "choice":
+        assert len(tried) <= 3 < len(full.smoothing_scores_)
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), "0.1"])
+def test_bad_smoothing_start_is_named(bad):
+    with pytest.raises(IdentificationError, match="smoothing_start"):
+        PreisachIdentifier(smoothing_start=bad)
