@@ -49,12 +49,35 @@ def ramps(u, edges, rho):
         rho[i] = _ramp(u, edges[i], edges[i + 1])
 
 
+#: Fewer hysterons than this many per level: every hysteron is stepped every sample
+#: (a regressor's single hysteron, a small cross-coupling), else the cell lists.
+CELL_LISTS_PER_LEVEL = 2
+
+
 @njit(cache=True)
 def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
-    """Ramp-hysteron Preisach model on a record (see the module docstring)."""
+    """Ramp-hysteron Preisach model on a record (see the module docstring).
+
+    Inside switching cell i (``edges[i] <= u < edges[i + 1]``) only the
+    hysterons whose rising or falling cell is i move: the others are +1
+    (``row < i``), -1 (``col > i``) or keep their state (``col < i <
+    row``). So, with at least ``CELL_LISTS_PER_LEVEL`` hysterons per level,
+    a sample that stays in the cell of the previous one steps the ~n_levels
+    moving hysterons only, and their sum is added to the sum of the others,
+    taken once when the input entered the cell; a sample in another cell
+    steps every hysteron, as the plain loop does. The output is the same
+    function of the states; the sums are grouped differently (the
+    non-moving hysterons first, each group in ascending order), so it
+    differs from one sum over every hysteron in the last digits, and a
+    record cut into chunks gives the same numbers bit for bit (the
+    non-moving states do not change inside a cell).
+    """
     n_levels = edges.size - 1
-    rho = np.empty(n_levels)
     nq = s.size
+    if nq >= CELL_LISTS_PER_LEVEL * n_levels and n_levels > 0:
+        _cell_list_steps(u, edges, row, col, mu, s, y)
+        return
+    rho = np.empty(n_levels)
     for t in range(u.size):
         ut = u[t]
         for i in range(n_levels):
@@ -71,6 +94,70 @@ def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
             s[q] = v
             acc += mu[q] * v
         y[t] = acc
+
+
+@njit(cache=True)
+def _cell_list_steps(u, edges, row, col, mu, s, y):
+    """:func:`ramp_preisach_kernel` by switching cells (see there); s, y in/out."""
+    n = edges.size - 1
+    nq = s.size
+    # moving hysterons of cell c (0..n-1): index[start[c]:start[c + 1]], ascending q
+    start = np.zeros(n + 1, np.int64)
+    for q in range(nq):
+        start[row[q] + 1] += 1
+        if col[q] != row[q]:
+            start[col[q] + 1] += 1
+    for c in range(n):
+        start[c + 1] += start[c]
+    index = np.empty(start[n], np.int64)
+    fill = start[:n].copy()
+    for q in range(nq):
+        index[fill[row[q]]] = q
+        fill[row[q]] += 1
+        if col[q] != row[q]:
+            index[fill[col[q]]] = q
+            fill[col[q]] += 1
+    rho = np.empty(n)
+    cell = -2                     # no cell yet: the first sample steps every hysteron
+    const = 0.0
+    for t in range(u.size):
+        ut = u[t]
+        c = -1 if cell == -2 else cell
+        while c + 1 <= n and edges[c + 1] <= ut:
+            c += 1
+        while c >= 0 and edges[c] > ut:
+            c -= 1
+        if c != cell:             # into another cell: every hysteron, then the fixed sum
+            for i in range(n):
+                rho[i] = _ramp(ut, edges[i], edges[i + 1])
+            const = 0.0
+            for q in range(nq):
+                v = s[q]
+                down = rho[col[q]]
+                up = rho[row[q]]
+                if v > down:
+                    v = down
+                if v < up:
+                    v = up
+                s[q] = v
+                if row[q] != c and col[q] != c:
+                    const += mu[q] * v
+            cell = c
+        acc = 0.0
+        if 0 <= c < n:
+            rc = _ramp(ut, edges[c], edges[c + 1])
+            for k in range(start[c], start[c + 1]):
+                q = index[k]
+                up = rc if row[q] == c else -1.0       # row > c
+                down = rc if col[q] == c else 1.0      # col < c
+                v = s[q]
+                if v > down:
+                    v = down
+                if v < up:
+                    v = up
+                s[q] = v
+                acc += mu[q] * v
+        y[t] = const + acc
 
 
 @njit(cache=True, inline="always")
