@@ -42,6 +42,16 @@ def _ramp(u, lo, hi):
     return 2.0 * (u - lo) / (hi - lo) - 1.0
 
 
+@njit(cache=True, inline="always")
+def _clamp(v, up, down):
+    """A hysteron's next state ``max(up, min(down, v))`` (``down`` tested first)."""
+    if v > down:
+        v = down
+    if v < up:
+        v = up
+    return v
+
+
 @njit(cache=True)
 def ramps(u, edges, rho):
     """Ramp value of every grid cell at input ``u`` (``rho`` (n_levels,) out)."""
@@ -84,13 +94,7 @@ def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
             rho[i] = _ramp(ut, edges[i], edges[i + 1])
         acc = 0.0
         for q in range(nq):
-            up = rho[row[q]]
-            down = rho[col[q]]
-            v = s[q]
-            if v > down:
-                v = down
-            if v < up:
-                v = up
+            v = _clamp(s[q], rho[row[q]], rho[col[q]])
             s[q] = v
             acc += mu[q] * v
         y[t] = acc
@@ -101,22 +105,8 @@ def _cell_list_steps(u, edges, row, col, mu, s, y):
     """:func:`ramp_preisach_kernel` by switching cells (see there); s, y in/out."""
     n = edges.size - 1
     nq = s.size
-    # moving hysterons of cell c (0..n-1): index[start[c]:start[c + 1]], ascending q
-    start = np.zeros(n + 1, np.int64)
-    for q in range(nq):
-        start[row[q] + 1] += 1
-        if col[q] != row[q]:
-            start[col[q] + 1] += 1
-    for c in range(n):
-        start[c + 1] += start[c]
-    index = np.empty(start[n], np.int64)
-    fill = start[:n].copy()
-    for q in range(nq):
-        index[fill[row[q]]] = q
-        fill[row[q]] += 1
-        if col[q] != row[q]:
-            index[fill[col[q]]] = q
-            fill[col[q]] += 1
+    # one component: the moving hysterons of cell c (-1..n) are index[start[c + 1]:start[c + 2]]
+    start, index, _, _, _ = _cell_lists(np.array([0, n + 1]), row, col, mu, np.array([0, nq]))
     rho = np.empty(n)
     cell = -2                     # no cell yet: the first sample steps every hysteron
     const = 0.0
@@ -132,13 +122,7 @@ def _cell_list_steps(u, edges, row, col, mu, s, y):
                 rho[i] = _ramp(ut, edges[i], edges[i + 1])
             const = 0.0
             for q in range(nq):
-                v = s[q]
-                down = rho[col[q]]
-                up = rho[row[q]]
-                if v > down:
-                    v = down
-                if v < up:
-                    v = up
+                v = _clamp(s[q], rho[row[q]], rho[col[q]])
                 s[q] = v
                 if row[q] != c and col[q] != c:
                     const += mu[q] * v
@@ -146,15 +130,10 @@ def _cell_list_steps(u, edges, row, col, mu, s, y):
         acc = 0.0
         if 0 <= c < n:
             rc = _ramp(ut, edges[c], edges[c + 1])
-            for k in range(start[c], start[c + 1]):
+            for k in range(start[c + 1], start[c + 2]):
                 q = index[k]
-                up = rc if row[q] == c else -1.0       # row > c
-                down = rc if col[q] == c else 1.0      # col < c
-                v = s[q]
-                if v > down:
-                    v = down
-                if v < up:
-                    v = up
+                v = _clamp(s[q], rc if row[q] == c else -1.0,    # row > c
+                           rc if col[q] == c else 1.0)           # col < c
                 s[q] = v
                 acc += mu[q] * v
         y[t] = const + acc
