@@ -107,6 +107,21 @@ def span_gradient(theta, amplitude, lo, hi):
     return 0.25 * (dl[1] + dr[1] - dl[0] - dr[0])
 
 
+@njit(cache=True, inline="always")
+def _play_step(v, lo, hi, rj, cj, dlo, dhi, ds, d, j):
+    """Play j's next state ``max(lo - r_j, min(hi + r_j, v))``; on a bound, its sensitivities
+    ``d[j]`` become the bound's (the envelope's derivatives plus the threshold's, ``c_j ds``)."""
+    if v > hi + rj:
+        v = hi + rj
+        for p in range(7):
+            d[j, p] = dhi[p] + cj * ds[p]
+    if v < lo - rj:
+        v = lo - rj
+        for p in range(7):
+            d[j, p] = dlo[p] - cj * ds[p]
+    return v
+
+
 @njit(cache=True)
 def _sensitivity_kernel(u, r, c, gl, gr, amp, rho, rest, ds, d_lo0, d_hi0, out, sens):
     n = r.size
@@ -119,15 +134,7 @@ def _sensitivity_kernel(u, r, c, gl, gr, amp, rho, rest, ds, d_lo0, d_hi0, out, 
         for p in range(7):
             d[j, p] = 0.0
         d[j, 6] = amp
-        if v > hi0 + r[j]:
-            v = hi0 + r[j]
-            for p in range(7):
-                d[j, p] = d_hi0[p] + c[j] * ds[p]
-        if v < lo0 - r[j]:
-            v = lo0 - r[j]
-            for p in range(7):
-                d[j, p] = d_lo0[p] - c[j] * ds[p]
-        s[j] = v
+        s[j] = _play_step(v, lo0, hi0, r[j], c[j], d_lo0, d_hi0, ds, d, j)
     dlo = np.zeros(7)
     dhi = np.zeros(7)
     for t in range(u.size):
@@ -145,15 +152,7 @@ def _sensitivity_kernel(u, r, c, gl, gr, amp, rho, rest, ds, d_lo0, d_hi0, out, 
         dhi[4] = rho * amp * sh
         dhi[5] = amp
         for j in range(n):
-            v = s[j]
-            if v > hi + r[j]:
-                v = hi + r[j]
-                for p in range(7):
-                    d[j, p] = dhi[p] + c[j] * ds[p]
-            if v < lo - r[j]:
-                v = lo - r[j]
-                for p in range(7):
-                    d[j, p] = dlo[p] - c[j] * ds[p]
+            v = _play_step(s[j], lo, hi, r[j], c[j], dlo, dhi, ds, d, j)
             s[j] = v
             out[t, j] = v
             for p in range(7):
