@@ -334,10 +334,11 @@ def _same_drive(u, kept):
     return bool(np.all(np.max(np.abs(a - b), axis=1) <= DRIVE_TOLERANCE * span))
 
 
-def _check_history(history_dir, state, target, u, best_u):
+def _check_history(history_dir, state, fingerprint, u, best_u):
     """Refuse a trial that does not belong to the history's learning (a DataFileError).
 
-    ``best_u`` is called for the best trial's drive (m, N) [V] when the last drive differs.
+    ``fingerprint`` is the faded reference's (:func:`_fingerprint`); ``best_u`` is called
+    for the best trial's drive (m, N) [V] when the last drive differs.
 
     The reference (faded as the drive was) must have the history's fingerprint, and the
     applied drive must be the last one written or the best trial's (re-measured).
@@ -345,7 +346,7 @@ def _check_history(history_dir, state, target, u, best_u):
     if state is None:
         return
     d = Path(history_dir)
-    if state["reference"] is not None and state["reference"] != _fingerprint(target):
+    if state["reference"] is not None and state["reference"] != fingerprint:
         raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
                             f"({STATE_FILE}); choose a new --history directory for this one")
     if state["drive"] is None or _same_drive(u, state["drive"]):
@@ -590,7 +591,7 @@ def _handle(args):
         state = _read_state(args.history, N) if args.history else None
         fingerprint = _fingerprint(target)
         if args.history:
-            _check_history(args.history, state, target, u,
+            _check_history(args.history, state, fingerprint, u,
                            lambda: _read_best(args.history, model, u.shape, y.shape, N)[0])
         score, score_noise = _judged_error(target, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
