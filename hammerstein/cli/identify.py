@@ -316,9 +316,7 @@ def _estimate_delay(args):
     cannot support is a data error naming --delay when ``auto`` was given,
     else (the default) the delay stays 0 and the report says why.
     """
-    records = [read_records(d, args.inputs, args.outputs, args.time, args.sampling_period,
-                            args.skip_rows)
-               for d in args.dynamics_records]
+    records = [_read_raw(args, d) for d in args.dynamics_records]
     T = records[0].sampling_period
     if any(not np.isclose(r.sampling_period, T, rtol=0.01) for r in records):
         raise DataFileError("--delay auto: the --dynamics-records have different sampling periods")
@@ -537,14 +535,22 @@ def _options(args, n, thresholds):
         creep_refits=args.creep_refits, output_unit=args.output_unit, name=Path(args.out).stem)
 
 
+def _read_raw(args, path):
+    """The record of ``path`` as it is in the file, read once per command."""
+    cache = args.__dict__.setdefault("_raw_records", {})
+    if path not in cache:
+        cache[path] = read_records(path, args.inputs, args.outputs, args.time,
+                                   args.sampling_period, args.skip_rows)
+    return cache[path]
+
+
 def _read(args, path):
     """One record of ``path`` with its outputs advanced by ``--delay`` samples.
 
     Sample ``t`` of the outputs becomes sample ``t + N`` of the file: the last
     N inputs, whose response was not measured, are dropped.
     """
-    rec = read_records(path, args.inputs, args.outputs, args.time, args.sampling_period,
-                       args.skip_rows)
+    rec = _read_raw(args, path)
     d = args.delay
     if not d:
         return rec

@@ -517,6 +517,43 @@ def _column(frame, header, key, role, path):
     return arr, name
 
 
+def _timepts(frame, header, time, sampling_period, path):
+    """Time points (n_samples,) [s] and sampling period [s] of a parsed table.
+
+    From the ``time`` column (increasing, uniform within 1 % of the median
+    step, agreeing with ``sampling_period`` when both are given) or from
+    ``sampling_period``; :class:`DataFileError` otherwise.
+    """
+    if time is not None:
+        t, tname = _column(frame, header, time, "time", path)
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            i = int(np.flatnonzero(dt <= 0)[0])
+            raise DataFileError(
+                f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
+                f"({t[i]:g} s then {t[i + 1]:g} s)")
+        # 12 significant digits: the step of a printed time column, not its rounding noise
+        T = float(f"{np.median(dt):.12g}")
+        if np.max(np.abs(dt - T)) > 0.01 * T:
+            i = int(np.argmax(np.abs(dt - T)))
+            raise DataFileError(
+                f"{path}: time column {tname!r} is not uniformly sampled: step {dt[i]:g} s at "
+                f"data row {i + 2}, median step {T:g} s (resample the record first)")
+        if sampling_period is not None and not np.isclose(sampling_period, T, rtol=0.01):
+            raise DataFileError(
+                f"{path}: sampling period {sampling_period:g} s disagrees with the time "
+                f"column step {T:g} s")
+    else:
+        if sampling_period is None:
+            raise DataFileError(f"{path}: give a time column or a sampling period [s]")
+        if not (np.isfinite(sampling_period) and sampling_period > 0):
+            raise DataFileError(
+                f"{path}: sampling period: expected a positive time [s], found {sampling_period!r}")
+        T = float(sampling_period)
+        t = np.arange(frame.shape[0]) * T
+    return t, T
+
+
 def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0):
     """Read a single-input single-output record from a delimited text file.
 
@@ -568,33 +605,7 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
     if uname == yname:
         raise DataFileError(
             f"{path}: input and output are the same column {uname!r}; name two different columns")
-    if time is not None:
-        t, tname = _column(frame, header, time, "time", path)
-        dt = np.diff(t)
-        if np.any(dt <= 0):
-            i = int(np.flatnonzero(dt <= 0)[0])
-            raise DataFileError(
-                f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
-                f"({t[i]:g} s then {t[i + 1]:g} s)")
-        # 12 significant digits: the step of a printed time column, not its rounding noise
-        T = float(f"{np.median(dt):.12g}")
-        if np.max(np.abs(dt - T)) > 0.01 * T:
-            i = int(np.argmax(np.abs(dt - T)))
-            raise DataFileError(
-                f"{path}: time column {tname!r} is not uniformly sampled: step {dt[i]:g} s at "
-                f"data row {i + 2}, median step {T:g} s (resample the record first)")
-        if sampling_period is not None and not np.isclose(sampling_period, T, rtol=0.01):
-            raise DataFileError(
-                f"{path}: sampling period {sampling_period:g} s disagrees with the time "
-                f"column step {T:g} s")
-    else:
-        if sampling_period is None:
-            raise DataFileError(f"{path}: give a time column or a sampling period [s]")
-        if not (np.isfinite(sampling_period) and sampling_period > 0):
-            raise DataFileError(
-                f"{path}: sampling period: expected a positive time [s], found {sampling_period!r}")
-        T = float(sampling_period)
-        t = np.arange(u.size) * T
+    t, T = _timepts(frame, header, time, sampling_period, path)
     return Record(t, u, y, uname, yname, T, str(path))
 
 
@@ -652,15 +663,5 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
     if dup:
         raise DataFileError(f"{path}: column {dup[0]!r} named twice among the inputs and outputs; "
                             f"name each column once")
-    if time is not None:
-        first = read_record(path, ins[0], outs[0], time, sampling_period, skip_rows)
-        t, T = first.timepts, first.sampling_period
-    else:
-        if sampling_period is None:
-            raise DataFileError(f"{path}: give a time column or a sampling period [s]")
-        if not (np.isfinite(sampling_period) and sampling_period > 0):
-            raise DataFileError(
-                f"{path}: sampling period: expected a positive time [s], found {sampling_period!r}")
-        T = float(sampling_period)
-        t = np.arange(frame.shape[0]) * T
+    t, T = _timepts(frame, header, time, sampling_period, path)
     return MultiRecord(t, np.array(u), np.array(y), tuple(unames), tuple(ynames), T, str(path))
