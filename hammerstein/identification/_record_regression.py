@@ -19,7 +19,7 @@ import numpy as np
 import scipy.linalg
 
 from hammerstein.models.hysteresis import MultivariablePI, OutputMap, PrandtlIshlinskii, play
-from hammerstein.identification.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
+from hammerstein.identification.lsq import TallQR, bounded_lstsq, lstsq_bounded_below, r_factor
 from hammerstein.identification.identification import (ClosedFormPI, IdentificationError,
                                                        partition_thresholds)
 from hammerstein.identification._record_split import _branches
@@ -87,7 +87,7 @@ class _LeastSquares:
     def fit_output(self, l, kinds, factors=None):
         """Components and offset of output l for kinds[k]; returns (comps, offset, rms).
 
-        ``factors`` (a dict, optional) keeps the thin QR factors of the
+        ``factors`` (a dict, optional) keeps the Householder QR (:class:`TallQR`) of the
         regression per ``(l, kinds)`` for fits of other targets on the same
         columns (the output map's alternation): Q^T y then costs a product.
         """
@@ -131,10 +131,9 @@ class _LeastSquares:
         if factors is not None and target.size >= width and all(t is None for *_, t in layout):
             key = (l, tuple(kinds))
             if key not in factors:
-                factors[key] = np.linalg.qr(np.column_stack(cols))
-            Q, R = factors[key]
-            c = Q.T @ target
-            rho = float(np.linalg.norm(target - Q @ c))
+                factors[key] = TallQR(cols)
+            R = factors[key].R
+            c, rho = factors[key].project(target)
         else:
             R, c, rho = r_factor(cols, target)
         if np.all(np.isinf(lo)):

@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-__all__ = ["r_factor", "bounded_lstsq", "lstsq_bounded_below"]
+__all__ = ["r_factor", "TallQR", "bounded_lstsq", "lstsq_bounded_below"]
 
 #: Rows of [A | b] factored at a time by :func:`r_factor`.
 CHUNK_ROWS = 4096
@@ -201,3 +201,127 @@ def lstsq_bounded_below(A, b, lower):
     """
     R, c, _ = r_factor(A, b)
     return bounded_lstsq(R, c, lower)
+
+
+class TallQR:
+    """Householder QR of a tall matrix kept by row blocks, for many targets.
+
+    ``A`` is factored block by block (LAPACK ``geqrf`` on at most
+    :data:`CHUNK_ROWS` rows at a time, then on the stacked triangular
+    factors: the tall-skinny QR of Demmel et al. [1]_), and the Householder
+    reflectors are kept, never formed into Q. :meth:`project` then applies
+    ``Q^T`` to a new target (LAPACK ``ormqr``, block by block), so that
+    ``||A x - b||^2 = ||R x - c||^2 + rho^2`` for every x, as
+    :func:`r_factor` gives for one target. Q^T b costs one pass over the
+    reflectors (about ``4 N n`` flops) instead of a factorisation.
+
+    Parameters
+    ----------
+    A : numpy.ndarray, shape (N, n), or list of them
+        Regression matrix with ``N >= n``, or its column blocks (arrays of N
+        rows, 1-D for one column) in order.
+
+    Attributes
+    ----------
+    R : numpy.ndarray, shape (n, n)
+        Upper-triangular factor (rows' signs as LAPACK leaves them).
+
+    Raises
+    ------
+    ValueError
+        Fewer rows than columns.
+
+    References
+    ----------
+    .. [1] J. Demmel, L. Grigori, M. Hoemmen and J. Langou,
+       "Communication-optimal parallel and sequential QR and LU
+       factorizations", *SIAM J. Sci. Comput.* 34(1), 2012.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> A, b, x = rng.normal(size=(9000, 3)), rng.normal(size=9000), rng.normal(size=3)
+    >>> qr = TallQR(A)
+    >>> c, rho = qr.project(b)
+    >>> bool(np.isclose(np.sum((A @ x - b) ** 2), np.sum((qr.R @ x - c) ** 2) + rho ** 2))
+    True
+    """
+
+    def __init__(self, A):
+        if isinstance(A, (list, tuple)):
+            blocks = [np.asarray(a, dtype=float).reshape(len(a), -1) for a in A]
+        else:
+            blocks = [np.asarray(A, dtype=float)]
+        N, n = blocks[0].shape[0], sum(a.shape[1] for a in blocks)
+        if N < n:
+            raise ValueError(f"A: expected at least as many rows as columns, found {N} x {n}")
+        edges = np.cumsum([0] + [a.shape[1] for a in blocks])
+        step = max(CHUNK_ROWS, 2 * n)
+        starts = list(range(0, N, step))
+        if len(starts) > 1 and N - starts[-1] < n:       # every block at least n rows
+            starts.pop()
+        self._rows = list(zip(starts, starts[1:] + [N]))
+        self._n = n
+        self._blocks = []
+        tops = []
+        for lo, hi in self._rows:
+            B = np.empty((hi - lo, n), order="F")
+            for a, c0, c1 in zip(blocks, edges[:-1], edges[1:]):
+                B[:, c0:c1] = a[lo:hi]
+            qr, tau, _, info = scipy.linalg.lapack.dgeqrf(B, overwrite_a=True)
+            if info != 0:
+                raise ValueError(f"A: LAPACK geqrf failed (info {info})")
+            self._blocks.append((qr, tau))
+            tops.append(np.triu(qr[:n]))
+        if len(tops) == 1:
+            self._top = None
+            self.R = tops[0]
+        else:
+            qr, tau, _, info = scipy.linalg.lapack.dgeqrf(np.vstack(tops), overwrite_a=True)
+            if info != 0:
+                raise ValueError(f"A: LAPACK geqrf failed (info {info})")
+            self._top = (qr, tau)
+            self.R = np.triu(qr[:n])
+
+    @staticmethod
+    def _apply(qr, tau, b):
+        """``Q^T b`` of one factored block (b: a column vector, not modified)."""
+        cq, _, info = scipy.linalg.lapack.dormqr("L", "T", qr, tau, b.reshape(-1, 1).copy(),
+                                                 max(1, qr.shape[1]))
+        if info != 0:
+            raise ValueError(f"b: LAPACK ormqr failed (info {info})")
+        return cq[:, 0]
+
+    def project(self, b):
+        """``c = Q^T b`` on the range of ``A`` and the norm ``rho`` of the rest.
+
+        Parameters
+        ----------
+        b : numpy.ndarray, shape (N,)
+            Target.
+
+        Returns
+        -------
+        c : numpy.ndarray, shape (n,)
+        rho : float
+            ``||A x - b||^2 = ||R x - c||^2 + rho^2`` for every x.
+
+        Raises
+        ------
+        ValueError
+            A target of another length than A's rows.
+        """
+        b = np.asarray(b, dtype=float)
+        if b.shape != (self._rows[-1][1],):
+            raise ValueError(f"b: expected shape ({self._rows[-1][1]},), found {b.shape}")
+        n, rest, tops = self._n, 0.0, []
+        for (lo, hi), (qr, tau) in zip(self._rows, self._blocks):
+            cq = self._apply(qr, tau, b[lo:hi])
+            tops.append(cq[:n])
+            rest += float(cq[n:] @ cq[n:])
+        if self._top is None:
+            return tops[0].copy(), float(np.sqrt(rest))
+        cq = self._apply(*self._top, np.concatenate(tops))
+        rest += float(cq[n:] @ cq[n:])
+        return cq[:n].copy(), float(np.sqrt(rest))
