@@ -83,19 +83,50 @@ class _LeastSquares:
         self.lin = [np.concatenate([rec.u[k][s.train] for rec, s in zip(records, splits)])
                     for k in range(m)]
         self.y = np.concatenate([rec.y[:, s.train] for rec, s in zip(records, splits)], axis=1)
+        self._qr = None          # TallQR of every column a fit may use, factored once
+        self._projected = {}     # output -> (Q^T y_l, rho) of the current target
 
-    def fit_output(self, l, kinds, factors=None):
+    def set_target(self, l, target):
+        """Fit output l to ``target`` (n_train,) from now on (the output map's alternation)."""
+        self.y[l] = target
+        self._projected.pop(l, None)
+
+    def _reduced(self, l):
+        """R of every column, its column indices, and Q^T y_l, rho (None: too few rows).
+
+        Every candidate structure of an output (which inputs act through a PI,
+        a gain or not at all) uses a subset of the same columns ``A = [plays
+        of input 0, ..., inputs, 1]``: with ``A = Q R`` factored once, the
+        columns S give ``A_S = Q R_S``, so ``||A_S x - y||^2 = ||R_S x -
+        Q^T y||^2 + rho^2`` and each fit is a small problem on ``R_S``.
+        """
+        n_rows = self.y.shape[1]
+        width = sum(p.shape[1] for p in self.phi) + self.m + int(self.offset)
+        if n_rows < width:
+            return None
+        if self._qr is None:
+            ones = [np.ones(n_rows)] if self.offset else []
+            self._qr = TallQR(list(self.phi) + list(self.lin) + ones)
+            edges = np.cumsum([0] + [p.shape[1] for p in self.phi])
+            self._index = {"pi": [np.arange(a, b) for a, b in zip(edges[:-1], edges[1:])],
+                           "gain": [np.array([edges[-1] + k]) for k in range(self.m)],
+                           "offset": np.array([width - 1])}
+        if l not in self._projected:
+            self._projected[l] = self._qr.project(self.y[l])
+        return self._qr.R, self._index, *self._projected[l]
+
+    def fit_output(self, l, kinds):
         """Components and offset of output l for kinds[k]; returns (comps, offset, rms).
 
-        ``factors`` (a dict, optional) keeps the Householder QR (:class:`TallQR`) of the
-        regression per ``(l, kinds)`` for fits of other targets on the same
-        columns (the output map's alternation): Q^T y then costs a product.
+        The tall regression is reduced once per engine (:meth:`_reduced`);
+        every call solves the small problem of its columns.
         """
+        reduced = self._reduced(l)
         cols, layout = [], []
         lower, upper = [], []
         for k, kind in enumerate(kinds):
             if kind == "pi":
-                X = self.phi[k]
+                X = self.phi[k] if reduced is None else reduced[0][:, reduced[1]["pi"][k]]
                 n = X.shape[1]
                 lo, hi = np.full(n, -np.inf), np.full(n, np.inf)
                 transform = None
@@ -113,29 +144,27 @@ class _LeastSquares:
                 lower.append(lo)
                 upper.append(hi)
             elif kind == "gain":
-                cols.append(self.lin[k][:, None])
+                cols.append(self.lin[k][:, None] if reduced is None
+                            else reduced[0][:, reduced[1]["gain"][k]])
                 layout.append((k, "gain", 1, None))
                 lower.append([-np.inf])
                 upper.append([np.inf])
         target = self.y[l]
         if self.offset:
-            cols.append(np.ones((target.size, 1)))
+            cols.append(np.ones((target.size, 1)) if reduced is None
+                        else reduced[0][:, reduced[1]["offset"]])
             lower.append([-np.inf])
             upper.append([np.inf])
         if not cols:
             return [None] * self.m, float(np.mean(target)), float(np.std(target))
         lo, hi = np.concatenate(lower), np.concatenate(upper)
-        # hi is +inf throughout; the tall problem reduced to its n x n factor first (from the
-        # column blocks: the tall matrix is never stacked), ||X c - t||^2 = ||R c - q||^2 + rho^2
-        width = sum(np.shape(a)[1] for a in cols)
-        if factors is not None and target.size >= width and all(t is None for *_, t in layout):
-            key = (l, tuple(kinds))
-            if key not in factors:
-                factors[key] = TallQR(cols)
-            R = factors[key].R
-            c, rho = factors[key].project(target)
-        else:
+        # hi is +inf throughout; the problem reduced to its small triangular factor,
+        # ||X c - t||^2 = ||R c - q||^2 + rho^2 (the tall matrix is never stacked)
+        if reduced is None:
             R, c, rho = r_factor(cols, target)
+        else:
+            R, c, rho_s = r_factor(cols, reduced[2])
+            rho = float(np.hypot(rho_s, reduced[3]))
         if np.all(np.isinf(lo)):
             coef, *_ = scipy.linalg.lstsq(R, c)
         else:
@@ -276,10 +305,9 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
         y = measured[l]
         target = y
         best = None
-        factors = {}
         for _ in range(iterations + 1):
-            engine.y[l] = target
-            comps, d, _ = engine.fit_output(l, kinds, factors)
+            engine.set_target(l, target)
+            comps, d, _ = engine.fit_output(l, kinds)
             h = np.full(y.size, d)
             for k, c in enumerate(comps):
                 if isinstance(c, PrandtlIshlinskii):
@@ -304,7 +332,7 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
             if best is None or err < best[0]:
                 best = (err, comps, d, smap, c0)
             target = smap.inverse(y - c0)
-        engine.y[l] = y
+        engine.set_target(l, y)
         if best is None:
             raise IdentificationError(f"output {model.output_names[l]}: constant PI output, "
                                       f"no output map to fit")
