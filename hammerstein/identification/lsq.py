@@ -10,7 +10,11 @@ a monotone slope). Since
 
 (the QR factorisation of the augmented matrix, Golub & Van Loan [1]_ §5.3),
 the tall matrix is factored once (:func:`r_factor`, LAPACK ``geqrf``,
-without forming Q) and every solve works on the n x n factor.
+without forming Q) and every solve works on the n x n factor. Where many
+targets share one matrix (the classical PI's candidate structures and its
+output-map alternation), :class:`TallQR` keeps the Householder reflectors
+and applies ``Q^T`` to each new target; a fit on a subset S of the
+columns then works on ``R[:, S]``, since ``A_S = Q R_S``.
 
 A problem with lower bounds on some variables and the others free
 (:func:`bounded_lstsq`) is reduced further: the free variables are
