@@ -127,45 +127,50 @@ def _simulate(A, B, C, D, u, x0):
     return (C @ V @ W).real + D @ u
 
 
+def _block_hankel(x, block_rows):
+    """Block Hankel matrix of a record x (channels, N): rows (lag, channel), one column per start.
+
+    ``H[t * channels + c, j] = x[c, j + t]``, the matrix of nfoursid's
+    ``Utils.block_hankel_matrix(x.T, block_rows)``, built from
+    :func:`numpy.lib.stride_tricks.sliding_window_view`.
+    """
+    w = np.lib.stride_tricks.sliding_window_view(x, block_rows, axis=1)   # (c, j, t)
+    return np.ascontiguousarray(w.transpose(2, 0, 1)).reshape(block_rows * x.shape[0], -1)
+
+
 class _MultiRecordMOESP:
     """PO-MOESP column space of the extended observability matrix, several records.
 
-    Uses nfoursid's :class:`~nfoursid.nfoursid.NFourSID` (block Hankel
-    matrices and the QR/LQ step of PO-MOESP, Verhaegen & Verdult [2], p. 329),
-    with the Hankel columns of every record side by side, so that no column
-    straddles two records. A and C follow from the shift invariance of the
-    estimated extended observability matrix ``Gamma_i = U_n S_n^(1/2)``
-    ([2], Section 9.6): ``C = Gamma_i[:p]``,
+    The block Hankel matrices and the QR/LQ step of PO-MOESP (Verhaegen &
+    Verdult [2], p. 329; the construction of nfoursid's
+    :class:`~nfoursid.nfoursid.NFourSID`), with the Hankel columns of every
+    record side by side, so that no column straddles two records. A and C
+    follow from the shift invariance of the estimated extended observability
+    matrix ``Gamma_i = U_n S_n^(1/2)`` ([2], Section 9.6): ``C = Gamma_i[:p]``,
     ``A = pinv(Gamma_i[:-p]) Gamma_i[p:]``. (nfoursid's own
     ``system_identification`` regresses consecutive columns of a state
-    sequence, which is not valid across record boundaries.)
+    sequence, which is not valid across record boundaries.) The Hankel
+    matrices are numpy strided windows (the values of nfoursid's
+    ``Utils.block_hankel_matrix``, without its loop over columns), and only
+    ``nfoursid.utils`` is imported (``nfoursid.nfoursid`` loads
+    matplotlib.pyplot, ~0.3 s).
     """
 
     def __init__(self, ins, outs, block_rows):
-        import pandas as pd  # lazy: nfoursid's interface takes DataFrames
-        from nfoursid.nfoursid import NFourSID  # lazy: only when dynamics are identified
-        from nfoursid.utils import Utils
+        from nfoursid.utils import Utils  # lazy: only when dynamics are identified
         m, p = ins[0].shape[0], outs[0].shape[0]
-        cols_u = [f"u{i}" for i in range(m)]
-        cols_y = [f"y{i}" for i in range(p)]
-        frame = pd.DataFrame(np.concatenate([ins[0], outs[0]]).T, columns=cols_u + cols_y)
-        sid = NFourSID(frame, output_columns=cols_y, input_columns=cols_u,
-                       num_block_rows=block_rows)
         i = block_rows
         blocks = []
         for u, y in zip(ins, outs):
-            uh = Utils.block_hankel_matrix(u.T, i)
-            yh = Utils.block_hankel_matrix(y.T, i)
+            uh, yh = _block_hankel(u, i), _block_hankel(y, i)
             blocks.append(np.concatenate([uh[:, i:], uh[:, :-i], yh[:, :-i], yh[:, i:]]))
         stacked = np.concatenate(blocks, axis=1)
         r = np.linalg.qr(stacked.T, mode="r").T
         y_rows, u_rows = p * i, m * i
-        sid.R32 = r[-y_rows:, u_rows:-y_rows]
-        sid.R22 = r[u_rows:-y_rows, u_rows:-y_rows]
-        sid.R32_decomposition = Utils.eigenvalue_decomposition(sid.R32)
-        self.nfoursid = sid
+        self.R32 = r[-y_rows:, u_rows:-y_rows]
+        self.R22 = r[u_rows:-y_rows, u_rows:-y_rows]
         self.p = p
-        dec = sid.R32_decomposition
+        dec = Utils.eigenvalue_decomposition(self.R32)
         self.singular_values = np.diag(dec.eigenvalues)
         self.left = dec.left_orthogonal
 
