@@ -22,6 +22,14 @@ from hammerstein.models._lti_systems import _apply_filter, _records, modal_param
 from hammerstein.models._lti_delay import excited_band
 
 # -- identification ------------------------------------------------------------------
+def _powers(lam, N):
+    """``lam_i ** k`` for k = 0..N-1, shape (n, N), as cumulative products (one product a sample)."""
+    P = np.empty((lam.size, N), dtype=complex)
+    P[:, :1] = 1.0
+    P[:, 1:] = lam[:, None]
+    return np.cumprod(P, axis=1)
+
+
 def _state_regressors(A, C, u):
     """Regressors of y on B (row-major vec) and on x0 for one record.
 
@@ -40,17 +48,16 @@ def _state_regressors(A, C, u):
         Vinv = np.linalg.inv(V)
         CV = C @ V
         W = np.empty((n, m, N), dtype=complex)
+        uc = u.astype(complex)
         for i in range(n):
-            for b in range(m):
-                W[i, b] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], u[b].astype(complex))
+            W[i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], uc, axis=1)
         # the sums over the modes i as matrix products (BLAS) instead of einsum's loops:
         # RB[k, p, a, b] = sum_i CV[p, i] Vinv[i, a] W[i, b, k], R0[k, p, a] = sum_i
         # CV[p, i] Vinv[i, a] lam_i^k
         M = (CV[:, None, :] * Vinv.T[None, :, :]).reshape(p * n, n)           # (p a, i)
         RB = (M @ W.reshape(n, m * N)).real.reshape(p, n, m, N)
         RB = np.ascontiguousarray(RB.transpose(3, 0, 1, 2)).reshape(N, p, n * m)
-        powers = lam[:, None] ** np.arange(N)[None, :]
-        R0 = np.ascontiguousarray((M @ powers).real.reshape(p, n, N).transpose(2, 0, 1))
+        R0 = np.ascontiguousarray((M @ _powers(lam, N)).real.reshape(p, n, N).transpose(2, 0, 1))
         return RB, R0
     RB = np.empty((N, p, n * m))
     R0 = np.empty((N, p, n))
@@ -65,45 +72,84 @@ def _state_regressors(A, C, u):
     return RB, R0
 
 
+class _BDX0Problem:
+    """The least squares of B, D and one x0 per record given A, C [2, Section 9.2.4].
+
+    The output of record r is linear in the shared ``theta = (vec B, vec D)``
+    and in its own initial state: ``y_r = Phi_r theta + Psi_r x0_r``
+    (:func:`_state_regressors`). Each record's ``[Psi_r, Phi_r, y_r]`` is
+    reduced once to its R factor (QR, :func:`numpy.linalg.qr`)
+    ``[[R11, R12, z1], [0, R22, z2]]``; minimising over ``x0_r`` leaves
+    ``|R22 theta - z2|``, so theta solves the stacked small problems of all
+    records (n m (+ p m) unknowns instead of those plus n per record over
+    every sample) and ``x0_r = R11^+ (z1 - R12 theta)``: the same least
+    squares as over all samples at once, solved for several constraints
+    (:meth:`solve`) from one pass over the records.
+    """
+
+    def __init__(self, A, C, ins, outs, feedthrough):
+        n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
+        self.A, self.C, self.feedthrough = A, C, feedthrough
+        self.n, self.p, self.m = n, p, m
+        self.regressors, self.top, self.rest = [], [], []
+        for u, y in zip(ins, outs):
+            RB, R0 = _state_regressors(A, C, u)
+            N = u.shape[1]
+            blocks = [R0.reshape(N * p, n), RB.reshape(N * p, n * m)]
+            if feedthrough:
+                blocks.append(np.einsum("il,bk->kilb", np.eye(p), u).reshape(N * p, p * m))
+            blocks.append(y.T.reshape(-1, 1))
+            X = np.concatenate(blocks, axis=1)
+            self.regressors.append(X[:, :-1])
+            R = np.linalg.qr(X, mode="r")
+            self.top.append(R[:n])       # (R11, R12, z1)
+            self.rest.append(R[n:, n:])  # (R22, z2)
+
+    def solve(self, dc=None):
+        """B (n, m), D (p, m) and x0 (n_records, n); with ``dc``, under ``G(1) = dc``.
+
+        The constraint ``C (I - A)^-1 B + D = dc`` by the null-space method:
+        the particular solution plus a least-squares combination of the null
+        space of the constraint.
+        """
+        n, p, m = self.n, self.p, self.m
+        rest = np.vstack(self.rest)
+        S, z = rest[:, :-1], rest[:, -1]
+        if dc is None:
+            theta = np.linalg.lstsq(S, z, rcond=None)[0]
+        else:
+            E = np.zeros((p * m, S.shape[1]))
+            E[:, :n * m] = np.kron(self.C @ np.linalg.solve(np.eye(n) - self.A, np.eye(n)), np.eye(m))
+            if self.feedthrough:
+                E[:, n * m:] = np.eye(p * m)
+            theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
+            N = scipy_linalg.null_space(E)
+            theta = theta_p + N @ np.linalg.lstsq(S @ N, z - S @ theta_p, rcond=None)[0]
+        x0 = np.array([np.linalg.lstsq(R[:, :n], R[:, -1] - R[:, n:-1] @ theta, rcond=None)[0]
+                       for R in self.top]).reshape(len(self.top), n)
+        B = theta[:n * m].reshape(n, m)
+        D = theta[n * m:].reshape(p, m) if self.feedthrough else np.zeros((p, m))
+        return B, D, x0
+
+    def outputs(self, B, D, x0):
+        """Fitted outputs of each record, (p, N) each."""
+        theta = np.concatenate([B.ravel()] + ([D.ravel()] if self.feedthrough else []))
+        return [(X @ np.concatenate([x, theta])).reshape(-1, self.p).T
+                for X, x in zip(self.regressors, x0)]
+
+
 def _fit_bdx0(A, C, ins, outs, feedthrough, dc=None):
     """Least-squares B, D and one x0 per record given A, C [2, Section 9.2.4].
 
     With ``dc`` (p, m), under the linear equality constraint
     ``G(1) = C (I - A)^-1 B + D = dc`` (null-space method: the particular
     solution plus a least-squares combination of the null space of the
-    constraint). Returns B, D, x0 and the simulated outputs of each record.
+    constraint). Returns B, D, x0 and the simulated outputs of each record
+    (:class:`_BDX0Problem`).
     """
-    n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
-    R = len(ins)
-    n_shared = n * m + (p * m if feedthrough else 0)
-    rows, rhs = [], []
-    for r, (u, y) in enumerate(zip(ins, outs)):
-        RB, R0 = _state_regressors(A, C, u)
-        N = u.shape[1]
-        blocks = [RB]
-        if feedthrough:
-            blocks.append(np.einsum("il,bk->kilb", np.eye(p), u).reshape(N, p, p * m))
-        X0 = np.zeros((N, p, n * R))
-        X0[:, :, r * n:(r + 1) * n] = R0
-        blocks.append(X0)
-        rows.append(np.concatenate(blocks, axis=2).reshape(N * p, -1))
-        rhs.append(y.T.reshape(-1))
-    X, rhs = np.vstack(rows), np.concatenate(rhs)
-    if dc is None:
-        theta = np.linalg.lstsq(X, rhs, rcond=None)[0]
-    else:
-        E = np.zeros((p * m, X.shape[1]))
-        E[:, :n * m] = np.kron(C @ np.linalg.solve(np.eye(n) - A, np.eye(n)), np.eye(m))
-        if feedthrough:
-            E[:, n * m:n_shared] = np.eye(p * m)
-        theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
-        N = scipy_linalg.null_space(E)
-        theta = theta_p + N @ np.linalg.lstsq(X @ N, rhs - X @ theta_p, rcond=None)[0]
-    B = theta[:n * m].reshape(n, m)
-    D = theta[n * m:n_shared].reshape(p, m) if feedthrough else np.zeros((p, m))
-    x0 = theta[n_shared:].reshape(R, n)
-    yhat = [(X @ theta).reshape(-1, p).T for X in rows]
-    return B, D, x0, yhat
+    problem = _BDX0Problem(A, C, ins, outs, feedthrough)
+    B, D, x0 = problem.solve(dc)
+    return B, D, x0, problem.outputs(B, D, x0)
 
 
 def _simulate(A, B, C, D, u, x0):
@@ -123,7 +169,7 @@ def _simulate(A, B, C, D, u, x0):
     Vinv = np.linalg.inv(V)
     z = Vinv @ (B @ u).astype(complex)                      # (n, N) modal inputs
     W = np.stack([scipy.signal.lfilter([0.0, 1.0], [1.0, -lam_i], z_i) for lam_i, z_i in zip(lam, z)])
-    W += (lam[:, None] ** np.arange(u.shape[1])[None, :]) * (Vinv @ x0)[:, None]
+    W += _powers(lam, u.shape[1]) * (Vinv @ x0)[:, None]
     return (C @ V @ W).real + D @ u
 
 
