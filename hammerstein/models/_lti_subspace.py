@@ -138,20 +138,6 @@ class _BDX0Problem:
                 for X, x in zip(self.regressors, x0)]
 
 
-def _fit_bdx0(A, C, ins, outs, feedthrough, dc=None):
-    """Least-squares B, D and one x0 per record given A, C [2, Section 9.2.4].
-
-    With ``dc`` (p, m), under the linear equality constraint
-    ``G(1) = C (I - A)^-1 B + D = dc`` (null-space method: the particular
-    solution plus a least-squares combination of the null space of the
-    constraint). Returns B, D, x0 and the simulated outputs of each record
-    (:class:`_BDX0Problem`).
-    """
-    problem = _BDX0Problem(A, C, ins, outs, feedthrough)
-    B, D, x0 = problem.solve(dc)
-    return B, D, x0, problem.outputs(B, D, x0)
-
-
 def _simulate(A, B, C, D, u, x0):
     """Response of (A, B, C, D) to u (m, N) from x0 [µm].
 
@@ -529,7 +515,7 @@ class DynamicsIdentifier:
         if True:    # every candidate (a fixed order too) is checked and validated
             sid = self._subspace(est_in, est_out, block_rows)
             for i, n in enumerate(candidates):
-                model, info = self._candidate(*sid.system_ac(int(n)), est_in, est_out, band, T)
+                model, info, _ = self._candidate(*sid.system_ac(int(n)), est_in, est_out, band, T)
                 info["order"] = int(n)
                 models[int(n)] = model
                 if model is not None:
@@ -548,19 +534,20 @@ class DynamicsIdentifier:
             best = np.nanmax(fits)
             chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
         sid_all = self._subspace(ins, outs, block_rows)
-        final, info = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
+        final, info, problem = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
         ref = models.get(chosen)
         if final is None or (ref is not None and final[0].shape != ref[0].shape):
             if ref is None:
                 raise DynamicsError(f"order: the model of order {chosen} is rejected: "
                                     f"{info.get('rejected', 'no mode left')}")
             A, C = ref[0], ref[2]   # stable and checked on the estimation records
-            B, D, x0, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+            problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
+            B, D, x0 = problem.solve(self._dc(p))
         else:
             sid = sid_all
             A, B, C, D, x0 = final
-            _, _, _, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
-        B0, D0, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, None)
+        yhat = problem.outputs(B, D, x0)
+        B0, D0, _ = problem.solve(None)   # the same records' R factors, without the constraint
         self.dc_gain_unconstrained_ = C @ np.linalg.solve(np.eye(A.shape[0]) - A, B0) + D0
         fit_all = _fit_percent(np.concatenate(outs, axis=1), np.concatenate(yhat, axis=1))
         self.system_ = control.ss(A, B, C, D, dt=T, name="identified_dynamics")
@@ -583,14 +570,18 @@ class DynamicsIdentifier:
     def _candidate(self, A, C, ins, outs, band, T):
         """A candidate model from (A, C): stable, no pole far below the band, no cancelled mode.
 
-        Returns ``((A, B, C, D, x0), info)`` or ``(None, info)``; ``info`` holds
-        the kept ``modes`` ([Hz, damping]) and what was ``dropped`` or ``rejected``.
+        Returns ``((A, B, C, D, x0), info, problem)`` or ``(None, info, None)``;
+        ``info`` holds the kept ``modes`` ([Hz, damping]) and what was
+        ``dropped`` or ``rejected``, ``problem`` the :class:`_BDX0Problem` of
+        the returned A, C on the records (for other constraints or the fitted
+        outputs).
         """
         info = {"dropped": []}
+        problem = None
         z = np.linalg.eigvals(A)
         if np.max(np.abs(z)) >= 1:
             info["rejected"] = f"unstable (pole |z| = {np.max(np.abs(z)):.4g})"
-            return None, info
+            return None, info, None
         p = C.shape[0]
         prune = self.low_pole_fraction > 0 or self.cancel_tolerance > 0
         if prune:
@@ -606,9 +597,10 @@ class DynamicsIdentifier:
                                                         np.setdiff1d(np.arange(freq.size), slow))
                 if A.shape[0] == 0:
                     info["rejected"] = "every pole below the excited band"
-                    return None, info
+                    return None, info, None
                 if self.cancel_tolerance > 0:
-                    B, D, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+                    problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
+                    B, D, _ = problem.solve(self._dc(p))
                     share = _mode_shares(A, B, C, D, mode_of, band, T)
                     weak = np.flatnonzero(share < self.cancel_tolerance)
                     if weak.size and weak.size < freq.size:
@@ -618,25 +610,28 @@ class DynamicsIdentifier:
                                 f"{100 * share[i]:.2g} % of G's in the band)")
                         A, C, mode_of, freq, zeta = _keep_modes(
                             A, C, mode_of, freq, zeta, np.setdiff1d(np.arange(freq.size), weak))
-        B, D, x0, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+                        problem = None    # modes removed: B refitted on the new A, C
+        if problem is None:
+            problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
+        B, D, x0 = problem.solve(self._dc(p))
         sysd = control.ss(A, B, C, D, dt=T)
         f, zz = modal_parameters(sysd)
         info["modes"] = [[float(a), float(b)] for a, b in zip(f, zz)]
-        return (A, B, C, D, x0), info
+        return (A, B, C, D, x0), info, problem
 
     def _validate(self, model, ins, outs, held, split):
         """Measured and simulated outputs of the held-out parts, concatenated."""
         A, B, C, D, x0 = model
-        if split is None:
+        if split is None:     # each held-out record from its own least-squares initial state
             yv, yh = [], []
             for r in held:
                 u, y = ins[r], outs[r]
-                y_zero = _simulate(A, B, C, D, u, np.zeros(A.shape[0]))
-                _, R0 = _state_regressors(A, C, u)
-                xr = np.linalg.lstsq(R0.reshape(-1, A.shape[0]), (y - y_zero).T.reshape(-1),
-                                     rcond=None)[0]
+                RB, R0 = _state_regressors(A, C, u)
+                y_zero = (RB @ B.ravel()).T + D @ u
+                R0 = R0.reshape(-1, A.shape[0])
+                xr = np.linalg.lstsq(R0, (y - y_zero).T.reshape(-1), rcond=None)[0]
                 yv.append(y)
-                yh.append(_simulate(A, B, C, D, u, xr))
+                yh.append(y_zero + (R0 @ xr).reshape(-1, y.shape[0]).T)
             return np.concatenate(yv, axis=1), np.concatenate(yh, axis=1)
         yv = np.concatenate([y[:, s:] for y, s in zip(outs, split)], axis=1)
         yh = np.concatenate([_simulate(A, B, C, D, u, x)[:, s:]
@@ -693,12 +688,12 @@ def _mode_shares(A, B, C, D, mode_of, band, T):
     total = np.zeros(f.size)
     share = np.zeros(n_modes)
     terms = []
-    for i in range(n_modes):
+    for i in range(n_modes):      # (z I - A_i)^-1 B_i at every z: one stacked solve
         idx = np.flatnonzero(mode_of == i)
         Ai, Bi, Ci = A[np.ix_(idx, idx)], B[idx], C[:, idx]
-        G = np.stack([Ci @ np.linalg.solve(zk * np.eye(idx.size) - Ai, Bi) for zk in z])
+        G = Ci @ np.linalg.solve(z[:, None, None] * np.eye(idx.size) - Ai, Bi)
         terms.append(np.linalg.norm(G, 2, axis=(1, 2)))
-    Gall = np.stack([C @ np.linalg.solve(zk * np.eye(A.shape[0]) - A, B) + D for zk in z])
+    Gall = C @ np.linalg.solve(z[:, None, None] * np.eye(A.shape[0]) - A, B) + D
     total = np.linalg.norm(Gall, 2, axis=(1, 2))
     for i, g in enumerate(terms):
         share[i] = g.max() / max(total.max(), 1e-300)
