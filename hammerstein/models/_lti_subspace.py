@@ -186,18 +186,31 @@ class _MultiRecordMOESP:
     ``Utils.block_hankel_matrix``, without its loop over columns), and only
     ``nfoursid.utils`` is imported (``nfoursid.nfoursid`` loads
     matplotlib.pyplot, ~0.3 s).
+
+    With ``prior`` (the step on part of the data) and ``known`` (per record,
+    how many of its leading Hankel columns ``prior`` holds), the R factor of
+    ``prior`` stands for those columns: the QR of ``[R_prior; new columns]``
+    has the R factor of all columns up to the signs of its rows, which only
+    change the signs of columns of R32, not its left singular vectors and
+    singular values (all that A and C are taken from).
     """
 
-    def __init__(self, ins, outs, block_rows):
+    def __init__(self, ins, outs, block_rows, prior=None, known=None):
         from nfoursid.utils import Utils  # lazy: only when dynamics are identified
         m, p = ins[0].shape[0], outs[0].shape[0]
         i = block_rows
         blocks = []
-        for u, y in zip(ins, outs):
-            uh, yh = _block_hankel(u, i), _block_hankel(y, i)
+        for r, (u, y) in enumerate(zip(ins, outs)):
+            k0 = 0 if known is None else int(known[r])
+            if k0 >= u.shape[1] - 2 * i + 1:
+                continue
+            uh, yh = _block_hankel(u[:, k0:], i), _block_hankel(y[:, k0:], i)
             blocks.append(np.concatenate([uh[:, i:], uh[:, :-i], yh[:, :-i], yh[:, i:]]))
-        stacked = np.concatenate(blocks, axis=1)
-        r = np.linalg.qr(stacked.T, mode="r").T
+        stacked = np.concatenate(blocks, axis=1).T if blocks else np.zeros((0, 2 * (m + p) * i))
+        if prior is not None:
+            stacked = np.concatenate([prior.R, stacked])
+        self.R = np.linalg.qr(stacked, mode="r")
+        r = self.R.T
         y_rows, u_rows = p * i, m * i
         self.R32 = r[-y_rows:, u_rows:-y_rows]
         self.R22 = r[u_rows:-y_rows, u_rows:-y_rows]
@@ -364,8 +377,8 @@ class DynamicsIdentifier:
     validation_records: tuple | None = None
 
     @staticmethod
-    def _subspace(ins, outs, block_rows):
-        return _MultiRecordMOESP(ins, outs, block_rows)
+    def _subspace(ins, outs, block_rows, prior=None, known=None):
+        return _MultiRecordMOESP(ins, outs, block_rows, prior, known)
 
     _FITTED_ARRAYS = ("singular_values_", "orders_", "validation_fit_", "aic_", "fit_percent_",
                       "initial_states_", "dc_gain_unconstrained_")
@@ -499,12 +512,15 @@ class DynamicsIdentifier:
             est_idx = [r for r in range(len(ins)) if r not in held]
             est_in, est_out = [ins[r] for r in est_idx], [outs[r] for r in est_idx]
             split = None
+            known = [u.shape[1] - 2 * block_rows + 1 if r in est_idx else 0
+                     for r, u in enumerate(ins)]
             self.validation_ = ("whole held-out record(s) " + ", ".join(str(r) for r in held)
                                 + " (initial state estimated on each)")
         else:
             split = [int(round(u.shape[1] * (1 - self.validation_fraction))) for u in ins]
             est_in = [u[:, :s] for u, s in zip(ins, split)]
             est_out = [y[:, :s] for y, s in zip(outs, split)]
+            known = [s - 2 * block_rows + 1 for s in split]
             self.validation_ = f"the last {100 * self.validation_fraction:.0f} % of each record"
         if min(u.shape[1] for u in est_in) <= 4 * block_rows:
             raise DynamicsError(f"records: too short for {block_rows} block rows "
@@ -533,7 +549,8 @@ class DynamicsIdentifier:
                 raise DynamicsError(f"order: no candidate order gave an acceptable model ({why})")
             best = np.nanmax(fits)
             chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
-        sid_all = self._subspace(ins, outs, block_rows)
+        # the estimation parts' Hankel columns enter through their R factor
+        sid_all = self._subspace(ins, outs, block_rows, sid, known)
         final, info, problem = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
         ref = models.get(chosen)
         if final is None or (ref is not None and final[0].shape != ref[0].shape):
