@@ -159,17 +159,6 @@ def _simulate(A, B, C, D, u, x0):
     return (C @ V @ W).real + D @ u
 
 
-def _block_hankel(x, block_rows):
-    """Block Hankel matrix of a record x (channels, N): rows (lag, channel), one column per start.
-
-    ``H[t * channels + c, j] = x[c, j + t]``, the matrix of nfoursid's
-    ``Utils.block_hankel_matrix(x.T, block_rows)``, built from
-    :func:`numpy.lib.stride_tricks.sliding_window_view`.
-    """
-    w = np.lib.stride_tricks.sliding_window_view(x, block_rows, axis=1)   # (c, j, t)
-    return np.ascontiguousarray(w.transpose(2, 0, 1)).reshape(block_rows * x.shape[0], -1)
-
-
 class _MultiRecordMOESP:
     """PO-MOESP column space of the extended observability matrix, several records.
 
@@ -181,11 +170,11 @@ class _MultiRecordMOESP:
     matrix ``Gamma_i = U_n S_n^(1/2)`` ([2], Section 9.6): ``C = Gamma_i[:p]``,
     ``A = pinv(Gamma_i[:-p]) Gamma_i[p:]``. (nfoursid's own
     ``system_identification`` regresses consecutive columns of a state
-    sequence, which is not valid across record boundaries.) The Hankel
-    matrices are numpy strided windows (the values of nfoursid's
-    ``Utils.block_hankel_matrix``, without its loop over columns), and only
-    ``nfoursid.utils`` is imported (``nfoursid.nfoursid`` loads
-    matplotlib.pyplot, ~0.3 s).
+    sequence, which is not valid across record boundaries.) The block
+    Hankel matrices (the values of nfoursid's ``Utils.block_hankel_matrix``)
+    are written straight into one array, one block row (a slice of a record)
+    at a time instead of one column at a time, and only ``nfoursid.utils`` is
+    imported (``nfoursid.nfoursid`` loads matplotlib.pyplot, ~0.3 s).
 
     With ``prior`` (the step on part of the data) and ``known`` (per record,
     how many of its leading Hankel columns ``prior`` holds), the R factor of
@@ -199,17 +188,26 @@ class _MultiRecordMOESP:
         from nfoursid.utils import Utils  # lazy: only when dynamics are identified
         m, p = ins[0].shape[0], outs[0].shape[0]
         i = block_rows
-        blocks = []
-        for r, (u, y) in enumerate(zip(ins, outs)):
-            k0 = 0 if known is None else int(known[r])
-            if k0 >= u.shape[1] - 2 * i + 1:
-                continue
-            uh, yh = _block_hankel(u[:, k0:], i), _block_hankel(y[:, k0:], i)
-            blocks.append(np.concatenate([uh[:, i:], uh[:, :-i], yh[:, :-i], yh[:, i:]]))
-        stacked = np.concatenate(blocks, axis=1).T if blocks else np.zeros((0, 2 * (m + p) * i))
+        # the block rows [future u; past u; past y; future y] of every record side by side,
+        # written straight into one array (rows = Hankel rows, after prior's R factor)
+        starts = [0 if known is None else int(known[r]) for r in range(len(ins))]
+        n_cols = [max(u.shape[1] - k0 - 2 * i + 1, 0) for u, k0 in zip(ins, starts)]
+        head = 0 if prior is None else prior.R.shape[0]
+        X = np.empty((2 * (m + p) * i, head + sum(n_cols)))
         if prior is not None:
-            stacked = np.concatenate([prior.R, stacked])
-        self.R = np.linalg.qr(stacked, mode="r")
+            X[:, :head] = prior.R.T
+        c0 = head
+        for u, y, k0, nc in zip(ins, outs, starts, n_cols):
+            if nc == 0:
+                continue
+            rows = 0
+            for x, lag in ((u, i), (u, 0), (y, 0), (y, i)):
+                c = x.shape[0]
+                for t in range(i):    # X[rows + t c + ch, c0 + j] = x[ch, k0 + lag + t + j]
+                    X[rows + t * c:rows + (t + 1) * c, c0:c0 + nc] = x[:, k0 + lag + t:][:, :nc]
+                rows += i * c
+            c0 += nc
+        self.R = np.linalg.qr(X.T, mode="r")
         r = self.R.T
         y_rows, u_rows = p * i, m * i
         self.R32 = r[-y_rows:, u_rows:-y_rows]
