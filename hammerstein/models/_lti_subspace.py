@@ -36,8 +36,8 @@ def _state_regressors(A, C, u):
     Returns ``RB`` (N, p, n*m) and ``R0`` (N, p, n) with
     ``y_k = RB_k B.ravel() + R0_k x0 (+ D u_k)``, computed in modal
     coordinates (``A = V diag(lam) V^-1``, one first-order recursion per mode
-    and input, run by :func:`scipy.signal.lfilter`); a loop is used when A is
-    defective.
+    and input, run by :func:`scipy.signal.lfilter`, that of a complex pole's
+    conjugate taken as the conjugate); a loop is used when A is defective.
     """
     import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
 
@@ -48,9 +48,11 @@ def _state_regressors(A, C, u):
         Vinv = np.linalg.inv(V)
         CV = C @ V
         W = np.empty((n, m, N), dtype=complex)
-        uc = u.astype(complex)
         for i in range(n):
-            W[i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], uc, axis=1)
+            if i and lam[i].imag != 0 and lam[i] == np.conj(lam[i - 1]):
+                W[i] = np.conj(W[i - 1])    # u is real: the conjugate pole's recursion
+            else:
+                W[i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], u.astype(complex), axis=1)
         # the sums over the modes i as matrix products (BLAS) instead of einsum's loops:
         # RB[k, p, a, b] = sum_i CV[p, i] Vinv[i, a] W[i, b, k], R0[k, p, a] = sum_i
         # CV[p, i] Vinv[i, a] lam_i^k
