@@ -101,7 +101,8 @@ class _BDX0Problem:
             if feedthrough:
                 blocks.append(np.einsum("il,bk->kilb", np.eye(p), u).reshape(N * p, p * m))
             blocks.append(y.T.reshape(-1, 1))
-            X = np.concatenate(blocks, axis=1)
+            X = np.empty((N * p, sum(b.shape[1] for b in blocks)), order="F")  # LAPACK's layout
+            np.concatenate(blocks, axis=1, out=X)
             self.regressors.append(X[:, :-1])
             R = np.linalg.qr(X, mode="r")
             self.top.append(R[:n])       # (R11, R12, z1)
