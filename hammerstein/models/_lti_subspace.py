@@ -86,14 +86,17 @@ class _BDX0Problem:
     records (n m (+ p m) unknowns instead of those plus n per record over
     every sample) and ``x0_r = R11^+ (z1 - R12 theta)``: the same least
     squares as over all samples at once, solved for several constraints
-    (:meth:`solve`) from one pass over the records.
+    (:meth:`solve`) from one pass over the records. For A in real modal form,
+    the problem of a subset of its modes (:meth:`subset`) has the regressor
+    columns of those states, and its R factors are those of the same columns
+    of the R factors (``Q^T X_sub = R_sub``), without another pass.
     """
 
     def __init__(self, A, C, ins, outs, feedthrough):
         n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
         self.A, self.C, self.feedthrough = A, C, feedthrough
         self.n, self.p, self.m = n, p, m
-        self.regressors, self.top, self.rest = [], [], []
+        self.regressors, self.factors = [], []
         for u, y in zip(ins, outs):
             RB, R0 = _state_regressors(A, C, u)
             N = u.shape[1]
@@ -104,9 +107,30 @@ class _BDX0Problem:
             X = np.empty((N * p, sum(b.shape[1] for b in blocks)), order="F")  # LAPACK's layout
             np.concatenate(blocks, axis=1, out=X)
             self.regressors.append(X[:, :-1])
-            R = np.linalg.qr(X, mode="r")
-            self.top.append(R[:n])       # (R11, R12, z1)
-            self.rest.append(R[n:, n:])  # (R22, z2)
+            self.factors.append(np.linalg.qr(X, mode="r"))
+
+    @property
+    def top(self):
+        """Per record ``[R11, R12, z1]`` (the x0 rows of the R factor)."""
+        return [R[:self.n] for R in self.factors]
+
+    @property
+    def rest(self):
+        """Per record ``[R22, z2]`` (what x0 leaves of the R factor)."""
+        return [R[self.n:, self.n:] for R in self.factors]
+
+    def subset(self, states, A, C):
+        """The problem of the states ``states`` only, A, C those states' blocks of a modal A, C."""
+        n, m, p = self.n, self.m, self.p
+        states = np.asarray(states, dtype=int)
+        cols = np.concatenate([states, n + (states[:, None] * m + np.arange(m)).ravel(),
+                               np.arange(n + n * m, self.factors[0].shape[1])])
+        sub = object.__new__(_BDX0Problem)
+        sub.A, sub.C, sub.feedthrough = A, C, self.feedthrough
+        sub.n, sub.p, sub.m = states.size, p, m
+        sub.regressors = [X[:, cols[:-1]] for X in self.regressors]
+        sub.factors = [np.linalg.qr(R[:, cols], mode="r") for R in self.factors]
+        return sub
 
     def solve(self, dc=None):
         """B (n, m), D (p, m) and x0 (n_records, n); with ``dc``, under ``G(1) = dc``.
@@ -626,9 +650,10 @@ class DynamicsIdentifier:
                             info["dropped"].append(
                                 f"near-cancelled mode at {freq[i]:.4g} Hz (its largest gain is "
                                 f"{100 * share[i]:.2g} % of G's in the band)")
-                        A, C, mode_of, freq, zeta = _keep_modes(
-                            A, C, mode_of, freq, zeta, np.setdiff1d(np.arange(freq.size), weak))
-                        problem = None    # modes removed: B refitted on the new A, C
+                        keep = np.setdiff1d(np.arange(freq.size), weak)
+                        states = np.flatnonzero(np.isin(mode_of, keep))
+                        A, C, mode_of, freq, zeta = _keep_modes(A, C, mode_of, freq, zeta, keep)
+                        problem = problem.subset(states, A, C)    # B refitted on the kept modes
         if problem is None:
             problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
         B, D, x0 = problem.solve(self._dc(p))
