@@ -117,20 +117,17 @@ def frf_h1(inputs, outputs, sampling_period, nperseg=None):
     m, p = ins[0].shape[0], outs[0].shape[0]
     Suu = Syu = f = None
     for u, y in zip(ins, outs):
-        uu = np.empty((m, m, nperseg // 2 + 1), complex)
-        yu = np.empty((p, m, nperseg // 2 + 1), complex)
-        for a in range(m):
-            for b in range(m):
-                f, uu[a, b] = scipy.signal.csd(u[b], u[a], fs=1 / T, nperseg=nperseg)
-            for c in range(p):
-                f, yu[c, a] = scipy.signal.csd(u[a], y[c], fs=1 / T, nperseg=nperseg)
-        Suu = uu if Suu is None else Suu + uu
-        Syu = yu if Syu is None else Syu + yu
+        # every pair in one csd call, broadcast over (output or input a, input b): each
+        # channel's Welch segments are transformed once, not once per pair;
+        # S[a, b] = csd(u[b], [u; y][a]), the cross spectra of u[b] with u[a] and y[a]
+        f, S = scipy.signal.csd(u[None, :, :], np.concatenate([u, y])[:, None, :], fs=1 / T,
+                                nperseg=nperseg)
+        Suu = S[:m] if Suu is None else Suu + S[:m]
+        Syu = S[m:] if Syu is None else Syu + S[m:]
     H = np.full((p, m, f.size), np.nan, complex)
-    for k in range(1, f.size):
-        S = Suu[:, :, k]
-        if np.linalg.cond(S) < 1e8:
-            H[:, :, k] = Syu[:, :, k] @ np.linalg.inv(S)
+    S = np.moveaxis(Suu, -1, 0)[1:]                      # (n_freq - 1, m, m)
+    ok = np.flatnonzero(np.linalg.cond(S) < 1e8)         # S_uu not singular
+    H[:, :, 1 + ok] = np.moveaxis(np.moveaxis(Syu, -1, 0)[1 + ok] @ np.linalg.inv(S[ok]), 0, -1)
     return f[1:], H[:, :, 1:]
 
 

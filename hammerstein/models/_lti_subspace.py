@@ -22,14 +22,22 @@ from hammerstein.models._lti_systems import _apply_filter, _records, modal_param
 from hammerstein.models._lti_delay import excited_band
 
 # -- identification ------------------------------------------------------------------
+def _powers(lam, N):
+    """``lam_i ** k`` for k = 0..N-1, shape (n, N), as cumulative products (one product a sample)."""
+    P = np.empty((lam.size, N), dtype=complex)
+    P[:, :1] = 1.0
+    P[:, 1:] = lam[:, None]
+    return np.cumprod(P, axis=1)
+
+
 def _state_regressors(A, C, u):
     """Regressors of y on B (row-major vec) and on x0 for one record.
 
     Returns ``RB`` (N, p, n*m) and ``R0`` (N, p, n) with
     ``y_k = RB_k B.ravel() + R0_k x0 (+ D u_k)``, computed in modal
     coordinates (``A = V diag(lam) V^-1``, one first-order recursion per mode
-    and input, run by :func:`scipy.signal.lfilter`); a loop is used when A is
-    defective.
+    and input, run by :func:`scipy.signal.lfilter`, that of a complex pole's
+    conjugate taken as the conjugate); a loop is used when A is defective.
     """
     import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
 
@@ -41,16 +49,17 @@ def _state_regressors(A, C, u):
         CV = C @ V
         W = np.empty((n, m, N), dtype=complex)
         for i in range(n):
-            for b in range(m):
-                W[i, b] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], u[b].astype(complex))
+            if i and lam[i].imag != 0 and lam[i] == np.conj(lam[i - 1]):
+                W[i] = np.conj(W[i - 1])    # u is real: the conjugate pole's recursion
+            else:
+                W[i] = scipy.signal.lfilter([0.0, 1.0], [1.0, -lam[i]], u.astype(complex), axis=1)
         # the sums over the modes i as matrix products (BLAS) instead of einsum's loops:
         # RB[k, p, a, b] = sum_i CV[p, i] Vinv[i, a] W[i, b, k], R0[k, p, a] = sum_i
         # CV[p, i] Vinv[i, a] lam_i^k
         M = (CV[:, None, :] * Vinv.T[None, :, :]).reshape(p * n, n)           # (p a, i)
         RB = (M @ W.reshape(n, m * N)).real.reshape(p, n, m, N)
         RB = np.ascontiguousarray(RB.transpose(3, 0, 1, 2)).reshape(N, p, n * m)
-        powers = lam[:, None] ** np.arange(N)[None, :]
-        R0 = np.ascontiguousarray((M @ powers).real.reshape(p, n, N).transpose(2, 0, 1))
+        R0 = np.ascontiguousarray((M @ _powers(lam, N)).real.reshape(p, n, N).transpose(2, 0, 1))
         return RB, R0
     RB = np.empty((N, p, n * m))
     R0 = np.empty((N, p, n))
@@ -65,45 +74,95 @@ def _state_regressors(A, C, u):
     return RB, R0
 
 
-def _fit_bdx0(A, C, ins, outs, feedthrough, dc=None):
-    """Least-squares B, D and one x0 per record given A, C [2, Section 9.2.4].
+class _BDX0Problem:
+    """The least squares of B, D and one x0 per record given A, C [2, Section 9.2.4].
 
-    With ``dc`` (p, m), under the linear equality constraint
-    ``G(1) = C (I - A)^-1 B + D = dc`` (null-space method: the particular
-    solution plus a least-squares combination of the null space of the
-    constraint). Returns B, D, x0 and the simulated outputs of each record.
+    The output of record r is linear in the shared ``theta = (vec B, vec D)``
+    and in its own initial state: ``y_r = Phi_r theta + Psi_r x0_r``
+    (:func:`_state_regressors`). Each record's ``[Psi_r, Phi_r, y_r]`` is
+    reduced once to its R factor (QR, :func:`numpy.linalg.qr`)
+    ``[[R11, R12, z1], [0, R22, z2]]``; minimising over ``x0_r`` leaves
+    ``|R22 theta - z2|``, so theta solves the stacked small problems of all
+    records (n m (+ p m) unknowns instead of those plus n per record over
+    every sample) and ``x0_r = R11^+ (z1 - R12 theta)``: the same least
+    squares as over all samples at once, solved for several constraints
+    (:meth:`solve`) from one pass over the records. For A in real modal form,
+    the problem of a subset of its modes (:meth:`subset`) has the regressor
+    columns of those states, and its R factors are those of the same columns
+    of the R factors (``Q^T X_sub = R_sub``), without another pass.
     """
-    n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
-    R = len(ins)
-    n_shared = n * m + (p * m if feedthrough else 0)
-    rows, rhs = [], []
-    for r, (u, y) in enumerate(zip(ins, outs)):
-        RB, R0 = _state_regressors(A, C, u)
-        N = u.shape[1]
-        blocks = [RB]
-        if feedthrough:
-            blocks.append(np.einsum("il,bk->kilb", np.eye(p), u).reshape(N, p, p * m))
-        X0 = np.zeros((N, p, n * R))
-        X0[:, :, r * n:(r + 1) * n] = R0
-        blocks.append(X0)
-        rows.append(np.concatenate(blocks, axis=2).reshape(N * p, -1))
-        rhs.append(y.T.reshape(-1))
-    X, rhs = np.vstack(rows), np.concatenate(rhs)
-    if dc is None:
-        theta = np.linalg.lstsq(X, rhs, rcond=None)[0]
-    else:
-        E = np.zeros((p * m, X.shape[1]))
-        E[:, :n * m] = np.kron(C @ np.linalg.solve(np.eye(n) - A, np.eye(n)), np.eye(m))
-        if feedthrough:
-            E[:, n * m:n_shared] = np.eye(p * m)
-        theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
-        N = scipy_linalg.null_space(E)
-        theta = theta_p + N @ np.linalg.lstsq(X @ N, rhs - X @ theta_p, rcond=None)[0]
-    B = theta[:n * m].reshape(n, m)
-    D = theta[n * m:n_shared].reshape(p, m) if feedthrough else np.zeros((p, m))
-    x0 = theta[n_shared:].reshape(R, n)
-    yhat = [(X @ theta).reshape(-1, p).T for X in rows]
-    return B, D, x0, yhat
+
+    def __init__(self, A, C, ins, outs, feedthrough):
+        n, p, m = A.shape[0], C.shape[0], ins[0].shape[0]
+        self.A, self.C, self.feedthrough = A, C, feedthrough
+        self.n, self.p, self.m = n, p, m
+        self.regressors, self.factors = [], []
+        for u, y in zip(ins, outs):
+            RB, R0 = _state_regressors(A, C, u)
+            N = u.shape[1]
+            blocks = [R0.reshape(N * p, n), RB.reshape(N * p, n * m)]
+            if feedthrough:
+                blocks.append(np.einsum("il,bk->kilb", np.eye(p), u).reshape(N * p, p * m))
+            blocks.append(y.T.reshape(-1, 1))
+            X = np.empty((N * p, sum(b.shape[1] for b in blocks)), order="F")  # LAPACK's layout
+            np.concatenate(blocks, axis=1, out=X)
+            self.regressors.append(X[:, :-1])
+            self.factors.append(np.linalg.qr(X, mode="r"))
+
+    @property
+    def top(self):
+        """Per record ``[R11, R12, z1]`` (the x0 rows of the R factor)."""
+        return [R[:self.n] for R in self.factors]
+
+    @property
+    def rest(self):
+        """Per record ``[R22, z2]`` (what x0 leaves of the R factor)."""
+        return [R[self.n:, self.n:] for R in self.factors]
+
+    def subset(self, states, A, C):
+        """The problem of the states ``states`` only, A, C those states' blocks of a modal A, C."""
+        n, m, p = self.n, self.m, self.p
+        states = np.asarray(states, dtype=int)
+        cols = np.concatenate([states, n + (states[:, None] * m + np.arange(m)).ravel(),
+                               np.arange(n + n * m, self.factors[0].shape[1])])
+        sub = object.__new__(_BDX0Problem)
+        sub.A, sub.C, sub.feedthrough = A, C, self.feedthrough
+        sub.n, sub.p, sub.m = states.size, p, m
+        sub.regressors = [X[:, cols[:-1]] for X in self.regressors]
+        sub.factors = [np.linalg.qr(R[:, cols], mode="r") for R in self.factors]
+        return sub
+
+    def solve(self, dc=None):
+        """B (n, m), D (p, m) and x0 (n_records, n); with ``dc``, under ``G(1) = dc``.
+
+        The constraint ``C (I - A)^-1 B + D = dc`` by the null-space method:
+        the particular solution plus a least-squares combination of the null
+        space of the constraint.
+        """
+        n, p, m = self.n, self.p, self.m
+        rest = np.vstack(self.rest)
+        S, z = rest[:, :-1], rest[:, -1]
+        if dc is None:
+            theta = np.linalg.lstsq(S, z, rcond=None)[0]
+        else:
+            E = np.zeros((p * m, S.shape[1]))
+            E[:, :n * m] = np.kron(self.C @ np.linalg.solve(np.eye(n) - self.A, np.eye(n)), np.eye(m))
+            if self.feedthrough:
+                E[:, n * m:] = np.eye(p * m)
+            theta_p = np.linalg.lstsq(E, np.asarray(dc, dtype=float).reshape(-1), rcond=None)[0]
+            N = scipy_linalg.null_space(E)
+            theta = theta_p + N @ np.linalg.lstsq(S @ N, z - S @ theta_p, rcond=None)[0]
+        x0 = np.array([np.linalg.lstsq(R[:, :n], R[:, -1] - R[:, n:-1] @ theta, rcond=None)[0]
+                       for R in self.top]).reshape(len(self.top), n)
+        B = theta[:n * m].reshape(n, m)
+        D = theta[n * m:].reshape(p, m) if self.feedthrough else np.zeros((p, m))
+        return B, D, x0
+
+    def outputs(self, B, D, x0):
+        """Fitted outputs of each record, (p, N) each."""
+        theta = np.concatenate([B.ravel()] + ([D.ravel()] if self.feedthrough else []))
+        return [(X @ np.concatenate([x, theta])).reshape(-1, self.p).T
+                for X, x in zip(self.regressors, x0)]
 
 
 def _simulate(A, B, C, D, u, x0):
@@ -123,49 +182,65 @@ def _simulate(A, B, C, D, u, x0):
     Vinv = np.linalg.inv(V)
     z = Vinv @ (B @ u).astype(complex)                      # (n, N) modal inputs
     W = np.stack([scipy.signal.lfilter([0.0, 1.0], [1.0, -lam_i], z_i) for lam_i, z_i in zip(lam, z)])
-    W += (lam[:, None] ** np.arange(u.shape[1])[None, :]) * (Vinv @ x0)[:, None]
+    W += _powers(lam, u.shape[1]) * (Vinv @ x0)[:, None]
     return (C @ V @ W).real + D @ u
 
 
 class _MultiRecordMOESP:
     """PO-MOESP column space of the extended observability matrix, several records.
 
-    Uses nfoursid's :class:`~nfoursid.nfoursid.NFourSID` (block Hankel
-    matrices and the QR/LQ step of PO-MOESP, Verhaegen & Verdult [2], p. 329),
-    with the Hankel columns of every record side by side, so that no column
-    straddles two records. A and C follow from the shift invariance of the
-    estimated extended observability matrix ``Gamma_i = U_n S_n^(1/2)``
-    ([2], Section 9.6): ``C = Gamma_i[:p]``,
+    The block Hankel matrices and the QR/LQ step of PO-MOESP (Verhaegen &
+    Verdult [2], p. 329; the construction of nfoursid's
+    :class:`~nfoursid.nfoursid.NFourSID`), with the Hankel columns of every
+    record side by side, so that no column straddles two records. A and C
+    follow from the shift invariance of the estimated extended observability
+    matrix ``Gamma_i = U_n S_n^(1/2)`` ([2], Section 9.6): ``C = Gamma_i[:p]``,
     ``A = pinv(Gamma_i[:-p]) Gamma_i[p:]``. (nfoursid's own
     ``system_identification`` regresses consecutive columns of a state
-    sequence, which is not valid across record boundaries.)
+    sequence, which is not valid across record boundaries.) The block
+    Hankel matrices (the values of nfoursid's ``Utils.block_hankel_matrix``)
+    are written straight into one array, one block row (a slice of a record)
+    at a time instead of one column at a time, and only ``nfoursid.utils`` is
+    imported (``nfoursid.nfoursid`` loads matplotlib.pyplot, ~0.3 s).
+
+    With ``prior`` (the step on part of the data) and ``known`` (per record,
+    how many of its leading Hankel columns ``prior`` holds), the R factor of
+    ``prior`` stands for those columns: the QR of ``[R_prior; new columns]``
+    has the R factor of all columns up to the signs of its rows, which only
+    change the signs of columns of R32, not its left singular vectors and
+    singular values (all that A and C are taken from).
     """
 
-    def __init__(self, ins, outs, block_rows):
-        import pandas as pd  # lazy: nfoursid's interface takes DataFrames
-        from nfoursid.nfoursid import NFourSID  # lazy: only when dynamics are identified
-        from nfoursid.utils import Utils
+    def __init__(self, ins, outs, block_rows, prior=None, known=None):
+        from nfoursid.utils import Utils  # lazy: only when dynamics are identified
         m, p = ins[0].shape[0], outs[0].shape[0]
-        cols_u = [f"u{i}" for i in range(m)]
-        cols_y = [f"y{i}" for i in range(p)]
-        frame = pd.DataFrame(np.concatenate([ins[0], outs[0]]).T, columns=cols_u + cols_y)
-        sid = NFourSID(frame, output_columns=cols_y, input_columns=cols_u,
-                       num_block_rows=block_rows)
         i = block_rows
-        blocks = []
-        for u, y in zip(ins, outs):
-            uh = Utils.block_hankel_matrix(u.T, i)
-            yh = Utils.block_hankel_matrix(y.T, i)
-            blocks.append(np.concatenate([uh[:, i:], uh[:, :-i], yh[:, :-i], yh[:, i:]]))
-        stacked = np.concatenate(blocks, axis=1)
-        r = np.linalg.qr(stacked.T, mode="r").T
+        # the block rows [future u; past u; past y; future y] of every record side by side,
+        # written straight into one array (rows = Hankel rows, after prior's R factor)
+        starts = [0 if known is None else int(known[r]) for r in range(len(ins))]
+        n_cols = [max(u.shape[1] - k0 - 2 * i + 1, 0) for u, k0 in zip(ins, starts)]
+        head = 0 if prior is None else prior.R.shape[0]
+        X = np.empty((2 * (m + p) * i, head + sum(n_cols)))
+        if prior is not None:
+            X[:, :head] = prior.R.T
+        c0 = head
+        for u, y, k0, nc in zip(ins, outs, starts, n_cols):
+            if nc == 0:
+                continue
+            rows = 0
+            for x, lag in ((u, i), (u, 0), (y, 0), (y, i)):
+                c = x.shape[0]
+                for t in range(i):    # X[rows + t c + ch, c0 + j] = x[ch, k0 + lag + t + j]
+                    X[rows + t * c:rows + (t + 1) * c, c0:c0 + nc] = x[:, k0 + lag + t:][:, :nc]
+                rows += i * c
+            c0 += nc
+        self.R = np.linalg.qr(X.T, mode="r")
+        r = self.R.T
         y_rows, u_rows = p * i, m * i
-        sid.R32 = r[-y_rows:, u_rows:-y_rows]
-        sid.R22 = r[u_rows:-y_rows, u_rows:-y_rows]
-        sid.R32_decomposition = Utils.eigenvalue_decomposition(sid.R32)
-        self.nfoursid = sid
+        self.R32 = r[-y_rows:, u_rows:-y_rows]
+        self.R22 = r[u_rows:-y_rows, u_rows:-y_rows]
         self.p = p
-        dec = sid.R32_decomposition
+        dec = Utils.eigenvalue_decomposition(self.R32)
         self.singular_values = np.diag(dec.eigenvalues)
         self.left = dec.left_orthogonal
 
@@ -327,8 +402,8 @@ class DynamicsIdentifier:
     validation_records: tuple | None = None
 
     @staticmethod
-    def _subspace(ins, outs, block_rows):
-        return _MultiRecordMOESP(ins, outs, block_rows)
+    def _subspace(ins, outs, block_rows, prior=None, known=None):
+        return _MultiRecordMOESP(ins, outs, block_rows, prior, known)
 
     _FITTED_ARRAYS = ("singular_values_", "orders_", "validation_fit_", "aic_", "fit_percent_",
                       "initial_states_", "dc_gain_unconstrained_")
@@ -462,12 +537,15 @@ class DynamicsIdentifier:
             est_idx = [r for r in range(len(ins)) if r not in held]
             est_in, est_out = [ins[r] for r in est_idx], [outs[r] for r in est_idx]
             split = None
+            known = [u.shape[1] - 2 * block_rows + 1 if r in est_idx else 0
+                     for r, u in enumerate(ins)]
             self.validation_ = ("whole held-out record(s) " + ", ".join(str(r) for r in held)
                                 + " (initial state estimated on each)")
         else:
             split = [int(round(u.shape[1] * (1 - self.validation_fraction))) for u in ins]
             est_in = [u[:, :s] for u, s in zip(ins, split)]
             est_out = [y[:, :s] for y, s in zip(outs, split)]
+            known = [s - 2 * block_rows + 1 for s in split]
             self.validation_ = f"the last {100 * self.validation_fraction:.0f} % of each record"
         if min(u.shape[1] for u in est_in) <= 4 * block_rows:
             raise DynamicsError(f"records: too short for {block_rows} block rows "
@@ -478,7 +556,7 @@ class DynamicsIdentifier:
         if True:    # every candidate (a fixed order too) is checked and validated
             sid = self._subspace(est_in, est_out, block_rows)
             for i, n in enumerate(candidates):
-                model, info = self._candidate(*sid.system_ac(int(n)), est_in, est_out, band, T)
+                model, info, _ = self._candidate(*sid.system_ac(int(n)), est_in, est_out, band, T)
                 info["order"] = int(n)
                 models[int(n)] = model
                 if model is not None:
@@ -496,20 +574,22 @@ class DynamicsIdentifier:
                 raise DynamicsError(f"order: no candidate order gave an acceptable model ({why})")
             best = np.nanmax(fits)
             chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
-        sid_all = self._subspace(ins, outs, block_rows)
-        final, info = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
+        # the estimation parts' Hankel columns enter through their R factor
+        sid_all = self._subspace(ins, outs, block_rows, sid, known)
+        final, info, problem = self._candidate(*sid_all.system_ac(chosen), ins, outs, band, T)
         ref = models.get(chosen)
         if final is None or (ref is not None and final[0].shape != ref[0].shape):
             if ref is None:
                 raise DynamicsError(f"order: the model of order {chosen} is rejected: "
                                     f"{info.get('rejected', 'no mode left')}")
             A, C = ref[0], ref[2]   # stable and checked on the estimation records
-            B, D, x0, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+            problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
+            B, D, x0 = problem.solve(self._dc(p))
         else:
             sid = sid_all
             A, B, C, D, x0 = final
-            _, _, _, yhat = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
-        B0, D0, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, None)
+        yhat = problem.outputs(B, D, x0)
+        B0, D0, _ = problem.solve(None)   # the same records' R factors, without the constraint
         self.dc_gain_unconstrained_ = C @ np.linalg.solve(np.eye(A.shape[0]) - A, B0) + D0
         fit_all = _fit_percent(np.concatenate(outs, axis=1), np.concatenate(yhat, axis=1))
         self.system_ = control.ss(A, B, C, D, dt=T, name="identified_dynamics")
@@ -532,14 +612,18 @@ class DynamicsIdentifier:
     def _candidate(self, A, C, ins, outs, band, T):
         """A candidate model from (A, C): stable, no pole far below the band, no cancelled mode.
 
-        Returns ``((A, B, C, D, x0), info)`` or ``(None, info)``; ``info`` holds
-        the kept ``modes`` ([Hz, damping]) and what was ``dropped`` or ``rejected``.
+        Returns ``((A, B, C, D, x0), info, problem)`` or ``(None, info, None)``;
+        ``info`` holds the kept ``modes`` ([Hz, damping]) and what was
+        ``dropped`` or ``rejected``, ``problem`` the :class:`_BDX0Problem` of
+        the returned A, C on the records (for other constraints or the fitted
+        outputs).
         """
         info = {"dropped": []}
+        problem = None
         z = np.linalg.eigvals(A)
         if np.max(np.abs(z)) >= 1:
             info["rejected"] = f"unstable (pole |z| = {np.max(np.abs(z)):.4g})"
-            return None, info
+            return None, info, None
         p = C.shape[0]
         prune = self.low_pole_fraction > 0 or self.cancel_tolerance > 0
         if prune:
@@ -555,9 +639,10 @@ class DynamicsIdentifier:
                                                         np.setdiff1d(np.arange(freq.size), slow))
                 if A.shape[0] == 0:
                     info["rejected"] = "every pole below the excited band"
-                    return None, info
+                    return None, info, None
                 if self.cancel_tolerance > 0:
-                    B, D, _, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+                    problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
+                    B, D, _ = problem.solve(self._dc(p))
                     share = _mode_shares(A, B, C, D, mode_of, band, T)
                     weak = np.flatnonzero(share < self.cancel_tolerance)
                     if weak.size and weak.size < freq.size:
@@ -565,27 +650,31 @@ class DynamicsIdentifier:
                             info["dropped"].append(
                                 f"near-cancelled mode at {freq[i]:.4g} Hz (its largest gain is "
                                 f"{100 * share[i]:.2g} % of G's in the band)")
-                        A, C, mode_of, freq, zeta = _keep_modes(
-                            A, C, mode_of, freq, zeta, np.setdiff1d(np.arange(freq.size), weak))
-        B, D, x0, _ = _fit_bdx0(A, C, ins, outs, self.feedthrough, self._dc(p))
+                        keep = np.setdiff1d(np.arange(freq.size), weak)
+                        states = np.flatnonzero(np.isin(mode_of, keep))
+                        A, C, mode_of, freq, zeta = _keep_modes(A, C, mode_of, freq, zeta, keep)
+                        problem = problem.subset(states, A, C)    # B refitted on the kept modes
+        if problem is None:
+            problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
+        B, D, x0 = problem.solve(self._dc(p))
         sysd = control.ss(A, B, C, D, dt=T)
         f, zz = modal_parameters(sysd)
         info["modes"] = [[float(a), float(b)] for a, b in zip(f, zz)]
-        return (A, B, C, D, x0), info
+        return (A, B, C, D, x0), info, problem
 
     def _validate(self, model, ins, outs, held, split):
         """Measured and simulated outputs of the held-out parts, concatenated."""
         A, B, C, D, x0 = model
-        if split is None:
+        if split is None:     # each held-out record from its own least-squares initial state
             yv, yh = [], []
             for r in held:
                 u, y = ins[r], outs[r]
-                y_zero = _simulate(A, B, C, D, u, np.zeros(A.shape[0]))
-                _, R0 = _state_regressors(A, C, u)
-                xr = np.linalg.lstsq(R0.reshape(-1, A.shape[0]), (y - y_zero).T.reshape(-1),
-                                     rcond=None)[0]
+                RB, R0 = _state_regressors(A, C, u)
+                y_zero = (RB @ B.ravel()).T + D @ u
+                R0 = R0.reshape(-1, A.shape[0])
+                xr = np.linalg.lstsq(R0, (y - y_zero).T.reshape(-1), rcond=None)[0]
                 yv.append(y)
-                yh.append(_simulate(A, B, C, D, u, xr))
+                yh.append(y_zero + (R0 @ xr).reshape(-1, y.shape[0]).T)
             return np.concatenate(yv, axis=1), np.concatenate(yh, axis=1)
         yv = np.concatenate([y[:, s:] for y, s in zip(outs, split)], axis=1)
         yh = np.concatenate([_simulate(A, B, C, D, u, x)[:, s:]
@@ -642,12 +731,12 @@ def _mode_shares(A, B, C, D, mode_of, band, T):
     total = np.zeros(f.size)
     share = np.zeros(n_modes)
     terms = []
-    for i in range(n_modes):
+    for i in range(n_modes):      # (z I - A_i)^-1 B_i at every z: one stacked solve
         idx = np.flatnonzero(mode_of == i)
         Ai, Bi, Ci = A[np.ix_(idx, idx)], B[idx], C[:, idx]
-        G = np.stack([Ci @ np.linalg.solve(zk * np.eye(idx.size) - Ai, Bi) for zk in z])
+        G = Ci @ np.linalg.solve(z[:, None, None] * np.eye(idx.size) - Ai, Bi)
         terms.append(np.linalg.norm(G, 2, axis=(1, 2)))
-    Gall = np.stack([C @ np.linalg.solve(zk * np.eye(A.shape[0]) - A, B) + D for zk in z])
+    Gall = C @ np.linalg.solve(z[:, None, None] * np.eye(A.shape[0]) - A, B) + D
     total = np.linalg.norm(Gall, 2, axis=(1, 2))
     for i, g in enumerate(terms):
         share[i] = g.max() / max(total.max(), 1e-300)
