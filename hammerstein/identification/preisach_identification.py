@@ -75,7 +75,7 @@ from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, Pre
 from hammerstein.identification.record_identification import (
     RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
     weak_couplings)
-from hammerstein.simulation import preisach_steps
+from hammerstein.simulation import preisach_states
 
 __all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "GRID_STRETCH", "grid_edges",
            "identify_preisach_records"]
@@ -95,15 +95,16 @@ CROSS_DEGREE = 3
 
 
 def _hysteron_states(u, edges):
-    """State trajectories (n_states, n_samples) of every hysteron of a grid, demagnetised start."""
+    """State trajectories (n_states, n_samples) of every hysteron of a grid, demagnetised start.
+
+    All hysterons in one pass of the compiled kernel
+    (:func:`hammerstein.simulation.preisach_states`: the same states as stepping
+    each hysteron alone through :func:`hammerstein.simulation.preisach_steps`).
+    """
     proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)))
     row, col, _ = proto.hysteron_arrays
-    s0 = proto.initial_state()
-    out = np.empty((row.size, u.size))
-    one = np.ones(1)
-    for q in range(row.size):
-        out[q], _ = preisach_steps(u, edges, row[q:q + 1], col[q:q + 1], one, s0[q:q + 1])
-    return out
+    states, _ = preisach_states(u, edges, row, col, proto.initial_state())
+    return states.T
 
 
 def _smoothing_rows(n):
