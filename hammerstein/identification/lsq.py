@@ -40,7 +40,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-__all__ = ["r_factor", "bounded_lstsq", "lstsq_bounded_below"]
+__all__ = ["r_factor", "bounded_lstsq", "lstsq_bounded_below", "penalized_bounded_lstsq"]
 
 #: Rows of [A | b] factored at a time by :func:`r_factor`.
 CHUNK_ROWS = 4096
@@ -201,3 +201,108 @@ def lstsq_bounded_below(A, b, lower):
     """
     R, c, _ = r_factor(A, b)
     return bounded_lstsq(R, c, lower)
+
+
+def penalized_bounded_lstsq(R, c, D, lam, lower, ridge=0.0):
+    """``min ||R x - c||^2 + lam^2 ||D x||^2`` subject to ``x >= lower``, by one QR factorisation.
+
+    The problem of :func:`bounded_lstsq` on the factor of the stacked matrix
+    ``[R; lam D]`` (target ``[c; 0]``), with the same column scaling and the
+    same ``ridge`` term, solved with one Householder QR instead of three
+    factorisations: the columns (scaled to unit norm) are ordered free
+    variables first, bounded ones last, and ``[[R, c]; [lam D, 0];
+    [sqrt(ridge) I, 0]]`` is reduced to its triangular factor
+    ``[[T11, T12, t1]; [0, T22, t2]]``. The free variables minimise the
+    first block row exactly for any bounded ones (``T11`` is non-singular
+    when ``ridge > 0`` or the free columns have full rank), so the bounded
+    variables solve the non-negative least-squares problem on ``(T22,
+    t2)`` (:func:`scipy.optimize.nnls`, bounds shifted to zero) and the free
+    ones follow by back-substitution. The minimiser is the one of
+    :func:`bounded_lstsq` on ``r_factor([R; lam D], [c; 0])`` (unique when
+    ``ridge > 0``), to rounding.
+
+    Parameters
+    ----------
+    R : numpy.ndarray, shape (k, n)
+        Regression matrix, normally the factor of :func:`r_factor`.
+    c : numpy.ndarray, shape (k,)
+        Target.
+    D : numpy.ndarray, shape (r, n)
+        Penalty rows (``r`` may be 0).
+    lam : float
+        Penalty weight, ``>= 0``.
+    lower : array_like, shape (n,)
+        Lower bounds, ``-inf`` for a free variable.
+    ridge : float
+        ``ridge >= 0`` adds ``ridge ||x_s||^2``, ``x_s`` the variables scaled by
+        the column norms of ``[R; lam D]``, as in :func:`bounded_lstsq`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The minimiser (``x >= lower`` exactly).
+
+    Raises
+    ------
+    ValueError
+        On mismatched shapes, a negative ``lam`` or ``ridge``, or a rank-deficient
+        problem without ridge (fewer rows than free variables).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> R = np.eye(2)
+    >>> x = penalized_bounded_lstsq(R, np.array([-1.0, -2.0]), np.zeros((0, 2)), 0.0,
+    ...                             [0.0, -np.inf])
+    >>> np.round(x, 12).tolist()
+    [0.0, -2.0]
+    """
+    R = np.asarray(R, dtype=float)
+    c = np.asarray(c, dtype=float)
+    D = np.asarray(D, dtype=float).reshape(-1, R.shape[1])
+    lower = np.asarray(lower, dtype=float)
+    k, n = R.shape
+    if c.shape != (k,) or lower.shape != (n,):
+        raise ValueError(f"penalized_bounded_lstsq: expected c ({k},) and lower ({n},), found "
+                         f"{c.shape} and {lower.shape}")
+    if not (lam >= 0 and ridge >= 0):
+        raise ValueError(f"penalized_bounded_lstsq: lam and ridge must be >= 0, found {lam!r}, "
+                         f"{ridge!r}")
+    rows = [R, lam * D] if D.shape[0] and lam > 0 else [R]
+    col = np.sqrt(sum(np.einsum("ij,ij->j", a, a) for a in rows))
+    col = np.where(col > 0, col, 1.0)
+    lo = lower * col
+    bounded = np.isfinite(lo)
+    order = np.r_[np.flatnonzero(~bounded), np.flatnonzero(bounded)]
+    nf = n - int(bounded.sum())
+    m = sum(a.shape[0] for a in rows)
+    S = np.zeros((m + (n if ridge > 0 else 0), n + 1), order="F")
+    r0 = 0
+    for a in rows:
+        S[r0:r0 + a.shape[0], :n] = a[:, order]
+        r0 += a.shape[0]
+    S[:m, :n] /= col[order]
+    S[:k, n] = c
+    if ridge > 0:
+        S[m + np.arange(n), np.arange(n)] = np.sqrt(ridge)
+    if S.shape[0] < n + 1:
+        S = np.vstack([S, np.zeros((n + 1 - S.shape[0], n + 1))])
+    T = scipy.linalg.qr(S, mode="r", overwrite_a=True, check_finite=False)[0][:n + 1]
+    T11, T12, t1 = T[:nf, :nf], T[:nf, nf:n], T[:nf, n]
+    if nf and np.min(np.abs(np.diag(T11))) <= 1e-300:
+        raise ValueError("penalized_bounded_lstsq: the free variables are not determined "
+                         "(rank-deficient; use ridge > 0)")
+    lob = lo[order[nf:]]
+    z = np.empty(n)
+    if n > nf:
+        from scipy.optimize import nnls  # lazy: ~0.3 s to import; bounded fits only
+
+        T22, t2 = T[nf:n, nf:n], T[nf:n, n]
+        w, _ = nnls(T22, t2 - T22 @ lob, maxiter=50 * (n - nf))
+        z[nf:] = lob + w
+    if nf:
+        z[:nf] = scipy.linalg.solve_triangular(T11, t1 - T12 @ z[nf:], check_finite=False)
+    x = np.empty(n)
+    x[order] = z / col[order]
+    x[bounded] = np.maximum(x[bounded], lower[bounded])   # the rescaling's last ulp
+    return x

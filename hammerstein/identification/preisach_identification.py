@@ -70,7 +70,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
-from hammerstein.identification.lsq import bounded_lstsq, r_factor
+from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.identification.record_identification import (
     RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
@@ -334,16 +334,27 @@ class PreisachIdentifier:
 
     @staticmethod
     def _solve(R0, b0, lb, ub, D, lam):
-        """Bounded least squares on ``[R0; lam D] x ~ [b0; 0]`` (``R0``: R of the data's QR)."""
-        if D.shape[0] and lam > 0:
-            R0, b0 = np.vstack([R0, lam * D]), np.r_[b0, np.zeros(D.shape[0])]
+        """Bounded least squares on ``[R0; lam D] x ~ [b0; 0]`` (``R0``: R of the data's QR).
+
+        :func:`~hammerstein.identification.lsq.penalized_bounded_lstsq`: the
+        problem :func:`~hammerstein.identification.lsq.bounded_lstsq` solves on
+        the factor of the stacked matrix (ridge 1e-12), with one QR per lambda.
+        """
         if np.any(np.isfinite(ub)):
             raise ValueError("upper bounds: not supported (the weights are bounded below only)")
-        # ||A x - y|| = ||R x - Q^T y|| + const: the bounded solver works on the small R
-        R, c, _ = r_factor(R0, b0)
-        return bounded_lstsq(R, c, lb, ridge=1e-12)
+        return penalized_bounded_lstsq(R0, b0, D, lam, lb, ridge=1e-12)
 
-    def _fit_output(self, blocks, ys, l, kinds, lam):
+    def _problem(self, blocks, ys, l, kinds):
+        """The lambda-free part of output l's fit, built once per (l, kinds) and cached.
+
+        Returns ``(R0, b0, lb, ub, D, sizes, no, counts)``: R and ``Q^T y`` of the
+        tall regression matrix (Q never formed; the matrix itself is not kept),
+        the bounds, the scaled penalty rows, the column counts per input and the
+        offsets' column count and sample counts.
+        """
+        key = (l, tuple(kinds))
+        if key in self._cache:
+            return self._cache[key]
         m = len(blocks)
         parts, lbs, ubs, Ds, sizes = [], [], [], [], []
         for k in range(m):
@@ -357,31 +368,34 @@ class PreisachIdentifier:
         # leave the offsets free to absorb the rest outputs, and the cross-couplings'
         # held-out minor loops came out worse, 2.5 % vs 1.3 % RMS on realistic-2dof)
         offsets = np.ones((ys.size, 1))
-        A = np.column_stack(parts + [offsets])
         no = offsets.shape[1]
         lb, ub = np.concatenate(lbs + [np.full(no, -np.inf)]), np.concatenate(ubs + [np.full(no, np.inf)])
         # the direct path's linear term: increasing (an exactly invertible model)
         if l < m and kinds[l] == "preisach":
             off = sum(sizes[:l]) + self.n_levels * (self.n_levels + 1) // 2
-            u = A[:, off]
+            u = parts[l][:, self.n_levels * (self.n_levels + 1) // 2]
             secant = np.ptp(ys) / max(np.ptp(u), 1e-300)
             lb[off] = MIN_SLOPE_FRACTION * abs(secant)
-        D = np.zeros((sum(d.shape[0] for d in Ds), A.shape[1]))
+        n = sum(sizes) + no
+        D = np.zeros((sum(d.shape[0] for d in Ds), n))
         r = c = 0
         for d, sz in zip(Ds, sizes):
             D[r:r + d.shape[0], c:c + sz] = d if d.size else 0.0
             r, c = r + d.shape[0], c + sz
-        key = (l, tuple(kinds))
-        if key not in self._cache:          # R and Q^T y of the tall matrix, Q never formed
-            R0, b0, _ = r_factor(A, ys)
-            self._cache[key] = (R0, b0)
-        R0, b0 = self._cache[key]
+        # R and Q^T y of the tall matrix, Q never formed
+        R0, b0, _ = r_factor(parts + [offsets], ys)
         # lambda is per training sample; a smooth density of total T has second
         # differences ~ T / n^4, hence the n^2 (squared: n^4) scale
-        x = self._solve(R0, b0, lb, ub, D * np.sqrt(ys.size) * self.n_levels ** 2, lam)
+        D = D * np.sqrt(ys.size) * self.n_levels ** 2
+        self._cache[key] = (R0, b0, lb, ub, D, sizes, no, offsets.sum(axis=0))
+        return self._cache[key]
+
+    def _fit_output(self, blocks, ys, l, kinds, lam):
+        m = len(blocks)
+        R0, b0, lb, ub, D, sizes, no, counts = self._problem(blocks, ys, l, kinds)
+        x = self._solve(R0, b0, lb, ub, D, lam)
         comps, c = [], 0
         nq = self.n_levels * (self.n_levels + 1) // 2
-        counts = offsets.sum(axis=0)
         offset = float(np.sum(x[-no:] * counts) / counts.sum())
         for k in range(m):
             xk = x[c:c + sizes[k]]
