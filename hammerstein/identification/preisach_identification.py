@@ -67,6 +67,8 @@ References
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
@@ -296,18 +298,21 @@ class PreisachIdentifier:
                                   self.n_levels, self.grid) for k in range(m)]
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
         blocks = [[] for _ in range(m)]            # per input: (states, u) of kept rows
-        self._rows = []
+        self._rows, self._reversals = [], []
         for rec, s in zip(records, splits):
             step = max(1, int(np.ceil(rec.n_samples / MAX_ROWS_PER_RECORD)))
             keep = np.zeros(rec.n_samples, dtype=bool)
             keep[::step] = True
             keep[-1] = True
+            rev = np.zeros(rec.n_samples, dtype=bool)
             for k in range(m):                     # reversal samples of every input
                 d = np.diff(rec.u[k])
                 nz = np.flatnonzero(d)
                 flip = np.flatnonzero(np.diff(np.sign(d[nz])) != 0)
-                keep[nz[flip] + 1] = True
+                rev[nz[flip] + 1] = True
+            keep |= rev
             self._rows.append(keep)
+            self._reversals.append(rev)
             for k in range(m):
                 st = _hysteron_states(rec.u[k, keep], self._edges[k])
                 blocks[k].append((st, rec.u[k, keep]))
@@ -437,6 +442,27 @@ class PreisachIdentifier:
     def _predict(self, model, records):
         return [model.simulate(r.u)[0] for r in records]
 
+    def _scored_samples(self, records, splits, which):
+        """The records cut to the samples a lambda's score needs, with their splits.
+
+        The scored samples (``which``: held-out or training), the first sample
+        and every reversal of any input: between two kept samples each input
+        is monotone, so every hysteron's state at a kept sample, and the
+        model's output there, is the one of the whole record bit for bit
+        (a ramp hysteron's clamp along a monotone input ends at the clamp of
+        the last sample; :meth:`_design` keeps the training rows so too).
+        Returns (records, splits, inputs) of simple namespaces for
+        :func:`_window_metrics`.
+        """
+        recs, sps, inputs = [], [], []
+        for rec, sp, rev in zip(records, splits, self._reversals):
+            sub = getattr(sp, which) | rev
+            sub[0] = True
+            recs.append(SimpleNamespace(y=rec.y[:, sub]))
+            sps.append(SimpleNamespace(**{which: getattr(sp, which)[sub]}))
+            inputs.append(np.ascontiguousarray(rec.u[:, sub]))
+        return recs, sps, inputs
+
     # -- public --------------------------------------------------------------------------
     def fit(self, records, splits=None, input_names=None, output_names=None, hold_out="auto",
             train_fraction=None, skip_seconds=None):
@@ -483,6 +509,8 @@ class PreisachIdentifier:
             raise IdentificationError("records: no training samples")
         held = any(s.held_out.any() for s in splits)
         notes, scores, best = [], {}, None
+        which = "held_out" if held else "train"
+        s_recs, s_splits, s_inputs = self._scored_samples(records, splits, which)
 
         def score(lam):
             nonlocal best
@@ -492,11 +520,12 @@ class PreisachIdentifier:
                 grid.append(comps)
                 offs.append(off)
             model = self._model(grid, offs, in_names, out_names)
-            pred = self._predict(model, records)
-            win = _window_metrics(records, splits, pred, "held_out" if held else "train")
+            # the scored samples' predictions only (the whole record's there, bit for bit)
+            pred = [model.simulate(u)[0] for u in s_inputs]
+            win = _window_metrics(s_recs, s_splits, pred, which)
             scores[lam] = float(np.mean([w["rms_percent"] for w in win]))
             if best is None or scores[lam] < scores[best[0]]:
-                best = (lam, grid, offs, model, pred)
+                best = (lam, grid, offs, model)
 
         if self.smoothing == "auto" and self.smoothing_start is not None:
             # walk the candidates from the previous choice towards the lower error
@@ -524,7 +553,7 @@ class PreisachIdentifier:
                 score(grid_lam.pop(0))
                 if not grid_lam and below and best[0] == min(scores):   # the optimum lies below
                     grid_lam.append(below.pop(0))
-        lam, grid, offs, model, pred = best
+        lam, grid, offs, model = best
         if len(scores) > 1:
             notes.append(f"preisach smoothing auto: lambda {lam:g} (" + ", ".join(
                 f"{k:g}: {v:.3g} %" for k, v in scores.items())
@@ -543,7 +572,7 @@ class PreisachIdentifier:
                 grid.append(comps)
                 offs.append(off)
             model = self._model(grid, offs, in_names, out_names)
-            pred = self._predict(model, records)
+        pred = self._predict(model, records)
         train = _window_metrics(records, splits, pred, "train")
         val = _window_metrics(records, splits, pred, "held_out") if held else None
         structure = [["preisach" if isinstance(c, PreisachModel) else

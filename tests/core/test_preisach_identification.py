@@ -337,3 +337,24 @@ def test_regressor_states_equal_each_hysteron_stepped_alone(n_levels, grid):
     u = u[:4000] + 0.05 * np.random.default_rng(3).standard_normal(4000)
     edges = grid_edges(-11.0, 11.0, n_levels, grid)
     assert np.array_equal(_hysteron_states(u, edges), _hysteron_states_one_by_one(u, edges))
+
+
+def test_lambda_scores_use_the_whole_records_predictions(fitted):
+    """The scored samples, the first one and the reversals, simulated alone, predict exactly what
+    the whole records do there; the chosen lambda's score is the held-out RMS of the whole run."""
+    from hammerstein.identification._record_split import _window_metrics
+
+    _, est = fitted
+    fit = est.fit_
+    recs, sps, inputs = est._scored_samples(fit.records, fit.splits, "held_out")
+    for rec, sp, r, s, u, rev in zip(fit.records, fit.splits, recs, sps, inputs, est._reversals):
+        full, _ = est.model_.simulate(rec.u)
+        part, _ = est.model_.simulate(u)
+        sub = sp.held_out | rev
+        sub[0] = True
+        assert u.shape[1] < rec.n_samples and np.array_equal(u, rec.u[:, sub])
+        assert np.array_equal(part, full[:, sub])          # bit for bit
+        assert np.array_equal(r.y, rec.y[:, sub]) and np.array_equal(s.held_out, sp.held_out[sub])
+    whole = _window_metrics(fit.records, fit.splits, fit.predictions, "held_out")
+    assert est.smoothing_scores_[est.smoothing_] == pytest.approx(
+        np.mean([w["rms_percent"] for w in whole]), rel=1e-12)
