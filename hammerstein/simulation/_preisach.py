@@ -84,7 +84,9 @@ def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
     non-moving hysterons first, each group in ascending order), so it
     differs from one sum over every hysteron in the last digits, and a
     record cut into chunks gives the same numbers bit for bit (the
-    non-moving states do not change inside a cell).
+    non-moving states do not change inside a cell). A sample equal to the
+    previous one repeats its output: the clamps are idempotent (``up <=
+    down``), so no state would move and the sum would be the same one.
     """
     n_levels = edges.size - 1
     nq = s.size
@@ -94,6 +96,9 @@ def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
     rho = np.empty(n_levels)
     for t in range(u.size):
         ut = u[t]
+        if t > 0 and ut == u[t - 1]:     # the same clamps again: no state moves
+            y[t] = y[t - 1]
+            continue
         for i in range(n_levels):
             rho[i] = _ramp(ut, edges[i], edges[i + 1])
         acc = 0.0
@@ -116,6 +121,9 @@ def _cell_list_steps(u, edges, row, col, mu, s, y):
     const = 0.0
     for t in range(u.size):
         ut = u[t]
+        if t > 0 and ut == u[t - 1]:     # the same cell and clamps again: no state moves
+            y[t] = y[t - 1]
+            continue
         c = -1 if cell == -2 else cell
         while c + 1 <= n and edges[c + 1] <= ut:
             c += 1

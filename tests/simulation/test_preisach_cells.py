@@ -60,6 +60,26 @@ def test_chunked_equals_whole_bit_for_bit(cut):
     np.testing.assert_array_equal(s2, s)
 
 
+@pytest.mark.parametrize("n, seed", [(1, 0), (12, 5), (20, 6)])
+def test_held_samples_repeat_the_output_of_the_record_without_them(n, seed):
+    """A sample equal to the previous one moves no state: the output of a record with held
+    (repeated) samples is the output of the record without the repeats, bit for bit, and the
+    states those of the numpy loop."""
+    rng, edges, row, col, mu = _grid(n, seed)
+    base = 9 * np.sin(2 * np.pi * 3 * np.arange(3000) * 5e-5) + 0.3 * rng.standard_normal(3000)
+    base[::211] = edges[rng.integers(0, n + 1, base[::211].size)]
+    reps = rng.integers(1, 4, base.size) * (rng.uniform(size=base.size) < 0.3) + 1
+    u = np.repeat(base, reps)
+    s0 = rng.uniform(-1, 1, row.size)
+    s, y = s0.copy(), np.empty(u.size)
+    ramp_preisach_kernel(u, edges, row, col, mu, s, y)
+    s1, y1 = s0.copy(), np.empty(base.size)
+    ramp_preisach_kernel(base, edges, row, col, mu, s1, y1)
+    np.testing.assert_array_equal(y, np.repeat(y1, reps))
+    np.testing.assert_array_equal(s, s1)
+    np.testing.assert_array_equal(s, _reference(u, edges, row, col, mu, s0)[1])
+
+
 @pytest.mark.parametrize("n, seed", [(1, 0), (5, 1), (20, 2)])
 def test_states_of_all_hysterons_equal_each_hysteron_stepped_alone(n, seed):
     """preisach_states: one pass over the record, the states of stepping hysteron by hysteron."""
