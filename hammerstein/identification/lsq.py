@@ -46,7 +46,7 @@ __all__ = ["r_factor", "bounded_lstsq", "lstsq_bounded_below", "penalized_bounde
 CHUNK_ROWS = 4096
 
 
-def r_factor(A, b):
+def r_factor(A, b, groups=None):
     """Triangular factor of the least-squares problem ``min ||A x - b||``.
 
     Parameters
@@ -56,6 +56,16 @@ def r_factor(A, b):
         one column) in order: the same factor without stacking them.
     b : numpy.ndarray, shape (N,)
         Target.
+    groups : sequence of int, optional
+        Row counts of consecutive groups of rows (e.g. records), summing to
+        N. The row blocks then never straddle two groups, and the columns of
+        ``[A | b]`` constant over a block (an input held still through a
+        record, a hysteron that never switches) are factored as one column
+        of ones: with ``B = [V, 1 c^T]`` (V the varying columns, c the
+        constants), ``[V, 1] = Q [Rv, r1]`` gives ``B = Q [Rv, r1 c^T]``,
+        the same factor (to rounding) with a QR of the varying columns only.
+        By default the rows are cut every :data:`CHUNK_ROWS` and every column
+        factored.
 
     Returns
     -------
@@ -87,16 +97,37 @@ def r_factor(A, b):
     # stacked factors: the R of the whole matrix up to the signs of its rows, with
     # Householder's backward stability, about 5x faster than one QR of the tall matrix
     block = max(CHUNK_ROWS, 2 * (n + 1))
+    if groups is None:
+        cuts = list(range(0, N, block)) + [N]
+    else:
+        groups = [int(g) for g in groups]
+        if any(g < 0 for g in groups) or sum(groups) != N:
+            raise ValueError(f"r_factor: groups {groups} do not split the {N} rows")
+        cuts = [0]
+        for g in groups:
+            k = max(1, int(np.ceil(g / block)))      # equal blocks of at most `block` rows
+            cuts += [cuts[-1] + int(round(j * g / k)) for j in range(1, k + 1)]
+        cuts = sorted(set(cuts))
     parts = []
-    buf = np.empty((min(block, N), n + 1))
-    for i in range(0, N, block):
-        rows = min(block, N - i)
+    buf = np.empty((min(max(np.diff(cuts), default=0), N), n + 1))
+    for i, j in zip(cuts[:-1], cuts[1:]):
+        rows = j - i
         B = buf[:rows]
         for a, lo, hi in zip(blocks, edges[:-1], edges[1:]):
-            B[:, lo:hi] = a[i:i + rows]
-        B[:, n] = b[i:i + rows]
-        parts.append(np.linalg.qr(B, mode="r"))
-    Rb = parts[0] if len(parts) == 1 else np.linalg.qr(np.vstack(parts), mode="r")
+            B[:, lo:hi] = a[i:j]
+        B[:, n] = b[i:j]
+        const = np.all(B == B[0], axis=0) if groups is not None else None
+        if const is not None and np.count_nonzero(const) > 1:
+            var = np.flatnonzero(~const)
+            Rn = np.linalg.qr(np.column_stack([B[:, var], np.ones(rows)]), mode="r")
+            P = np.empty((Rn.shape[0], n + 1))
+            P[:, var] = Rn[:, :var.size]
+            P[:, const] = Rn[:, var.size:] * B[0, const]
+            parts.append(P)
+        else:
+            parts.append(np.linalg.qr(B, mode="r"))
+    Rb = parts[0] if len(parts) == 1 and groups is None \
+        else np.linalg.qr(np.vstack(parts), mode="r")
     k = min(Rb.shape[0], n)
     rho = float(abs(Rb[n, n])) if Rb.shape[0] > n else 0.0
     return Rb[:k, :n], Rb[:k, n].copy(), rho

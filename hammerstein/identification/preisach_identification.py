@@ -388,7 +388,8 @@ class PreisachIdentifier:
             D[r:r + d.shape[0], c:c + sz] = d if d.size else 0.0
             r, c = r + d.shape[0], c + sz
         # R and Q^T y of the tall matrix, Q never formed
-        R0, b0, _ = r_factor(parts + [offsets], ys)
+        # (row blocks within a record: a still input's columns are constant there)
+        R0, b0, _ = r_factor(parts + [offsets], ys, groups=[u.size for _, u in blocks[0]])
         # lambda is per training sample; a smooth density of total T has second
         # differences ~ T / n^4, hence the n^2 (squared: n^4) scale
         D = D * np.sqrt(ys.size) * self.n_levels ** 2

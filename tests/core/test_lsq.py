@@ -86,6 +86,32 @@ def test_penalized_solver_equals_bvls_on_the_stacked_matrix(seed, ridge):
     assert np.linalg.norm(x - x_old) <= np.linalg.cond(stacked) * 1e-13 * np.linalg.norm(x_old)
 
 
+@pytest.mark.parametrize("sizes", [(5000, 3000), (3000, 3000, 3000), (100, 7000, 1)])
+def test_factor_by_groups_with_still_columns_keeps_the_objective(sizes):
+    """Columns constant within a group (another input held still) factored as one column of ones:
+    the same objective for every x, the same least-squares solution, the same factor up to the
+    signs of its rows."""
+    rng = np.random.default_rng(len(sizes))
+    n, N = 30, sum(sizes)
+    A = rng.normal(size=(N, n))
+    r0, cols = 0, rng.permutation(n - 1)
+    for g, size in enumerate(sizes):          # full rank: each column still in one group at most
+        still = cols[9 * g:9 * g + 9]
+        A[r0:r0 + size, still] = rng.choice([-1.0, 1.0, 0.3], still.size)
+        r0 += size
+    A[:, -1] = 1.0
+    b = A @ rng.normal(size=n) + 0.1 * rng.normal(size=N)
+    R, c, rho = r_factor(A, b, groups=sizes)
+    R1, c1, rho1 = r_factor(A, b)
+    assert np.allclose(np.abs(R), np.abs(R1), rtol=1e-10, atol=1e-10 * np.abs(R1).max())
+    assert rho == pytest.approx(rho1, rel=1e-10)
+    for x in (rng.normal(size=n), np.linalg.lstsq(A, b, rcond=None)[0]):
+        full = np.sum((A @ x - b) ** 2)
+        assert np.sum((R @ x - c) ** 2) + rho ** 2 == pytest.approx(full, rel=1e-10)
+    with pytest.raises(ValueError, match="do not split"):
+        r_factor(A, b, groups=[N - 1])
+
+
 def test_penalized_solver_names_bad_arguments():
     with pytest.raises(ValueError, match="lam and ridge"):
         penalized_bounded_lstsq(np.eye(2), np.ones(2), np.zeros((0, 2)), -1.0, [0.0, 0.0])
