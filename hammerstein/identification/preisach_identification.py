@@ -387,9 +387,25 @@ class PreisachIdentifier:
         for d, sz in zip(Ds, sizes):
             D[r:r + d.shape[0], c:c + sz] = d if d.size else 0.0
             r, c = r + d.shape[0], c + sz
-        # R and Q^T y of the tall matrix, Q never formed
-        # (row blocks within a record: a still input's columns are constant there)
-        R0, b0, _ = r_factor(parts + [offsets], ys, groups=[u.size for _, u in blocks[0]])
+        # R and Q^T y of the tall matrix, Q never formed, its columns factored free ones
+        # first (the order of the bounded solver, which then folds the penalty rows into a
+        # triangular factor), row blocks within a record (a still input's columns are
+        # constant there); R0 is kept in the columns' own order
+        free = ~np.isfinite(lb)
+        cols, c0 = [], 0
+        for want in (True, False):
+            c0 = 0
+            for a in parts + [offsets]:
+                sel = free[c0:c0 + a.shape[1]] == want
+                if sel.all():
+                    cols.append(a)
+                elif sel.any():
+                    cols.append(a[:, sel])
+                c0 += a.shape[1]
+        order = np.r_[np.flatnonzero(free), np.flatnonzero(~free)]
+        Rp, b0, _ = r_factor(cols, ys, groups=[u.size for _, u in blocks[0]])
+        R0 = np.empty_like(Rp)
+        R0[:, order] = Rp
         # lambda is per training sample; a smooth density of total T has second
         # differences ~ T / n^4, hence the n^2 (squared: n^4) scale
         D = D * np.sqrt(ys.size) * self.n_levels ** 2

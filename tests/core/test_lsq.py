@@ -84,6 +84,16 @@ def test_penalized_solver_equals_bvls_on_the_stacked_matrix(seed, ridge):
     Rs, cs, _ = r_factor(np.vstack([R, lam * D]), np.r_[c, np.zeros(D.shape[0])])
     x_old = bounded_lstsq(Rs, cs, lower, ridge=ridge)
     assert np.linalg.norm(x - x_old) <= np.linalg.cond(stacked) * 1e-13 * np.linalg.norm(x_old)
+    # the data factored free columns first (R triangular in the solver's order: tpqrt path)
+    free = ~np.isfinite(lower)
+    order = np.r_[np.flatnonzero(free), np.flatnonzero(~free)]
+    Rf, cf, _ = r_factor(A[:, order], b)
+    Rf_orig = np.empty_like(Rf)
+    Rf_orig[:, order] = Rf
+    x_tp = penalized_bounded_lstsq(Rf_orig, cf, D, lam, lower, ridge=ridge)
+    assert np.all(x_tp[~free] >= lower[~free])
+    assert abs(obj(x_tp) - obj(x_ref)) <= 1e-9 * obj(x_ref)
+    assert np.linalg.norm(x_tp - x) <= np.linalg.cond(stacked) * 1e-13 * np.linalg.norm(x)
 
 
 @pytest.mark.parametrize("sizes", [(5000, 3000), (3000, 3000, 3000), (100, 7000, 1)])
