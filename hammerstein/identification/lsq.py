@@ -254,7 +254,9 @@ def penalized_bounded_lstsq(R, c, D, lam, lower, ridge=0.0):
     ``ridge > 0``), to rounding. When ``R`` is square and upper triangular
     with its columns in that order (a data matrix factored free columns
     first), only the rows below it are folded in (LAPACK ``tpqrt``, about
-    half the work).
+    half the work), and a ``D`` square and upper triangular in that order
+    too (the factor of the penalty rows: only ``D^T D`` matters) as a
+    triangular block, a fraction of the work again.
 
     Parameters
     ----------
@@ -312,22 +314,26 @@ def penalized_bounded_lstsq(R, c, D, lam, lower, ridge=0.0):
     nf = n - int(bounded.sum())
     m = sum(a.shape[0] for a in rows)
     Rp = R[:, order]
-    if k == n and not np.any(Rp[np.tril_indices(n, -1)]):
+    if k == n and not np.any(np.tril(Rp, -1)):
         # R triangular in this order (factored free columns first): only the rows below it
-        # are folded in, by the triangular-pentagonal QR (LAPACK tpqrt; the ridge rows, a
-        # diagonal, are its triangular part), about half the work of a QR of the whole stack
+        # are folded in, by the triangular-pentagonal QR (LAPACK tpqrt), about half the work
+        # of a QR of the whole stack; penalty rows that are themselves a square triangular
+        # factor in this order, and the ridge rows (a diagonal), as triangular blocks
         A = np.zeros((n + 1, n + 1), order="F")
         A[:n, :n] = Rp / col[order]
         A[:n, n] = c
-        nr = m - k + (n if ridge > 0 else 0)
-        if nr:
-            B = np.zeros((nr, n + 1), order="F")
-            if m > k:
-                B[:m - k, :n] = rows[1][:, order] / col[order]
-            if ridge > 0:
-                B[m - k + np.arange(n), np.arange(n)] = np.sqrt(ridge)
-            A, _, _, info = scipy.linalg.lapack.dtpqrt(n if ridge > 0 else 0, min(32, n + 1), A,
-                                                       B, overwrite_a=1, overwrite_b=1)
+        folds = []
+        if m > k:
+            Dp = rows[1][:, order]
+            tri = Dp.shape == (n, n) and not np.any(np.tril(Dp, -1))
+            folds.append((Dp / col[order], n if tri else 0))
+        if ridge > 0:
+            folds.append((np.sqrt(ridge) * np.eye(n), n))
+        for Bp, l in folds:
+            B = np.zeros((Bp.shape[0], n + 1), order="F")
+            B[:, :n] = Bp
+            A, _, _, info = scipy.linalg.lapack.dtpqrt(l, min(32, n + 1), A, B, overwrite_a=1,
+                                                       overwrite_b=1)
             if info:
                 raise ValueError(f"penalized_bounded_lstsq: LAPACK tpqrt failed ({info})")
         T = np.triu(A)
