@@ -78,6 +78,11 @@ def r_factor(A, b, groups=None):
         Norm of the part of ``b`` orthogonal to the columns of ``A``, so that
         ``||A x - b||^2 = ||R x - c||^2 + rho^2`` for every x.
 
+    Raises
+    ------
+    ValueError
+        When ``groups`` are not non-negative row counts summing to N.
+
     Examples
     --------
     >>> import numpy as np

@@ -18,8 +18,8 @@ amplitude; the hysterons outside the measured range never switch, their
 weights are set by the smoothing penalty, a linear extrapolation of the
 density); the
 state trajectory ``s_ij(t)`` of every hysteron (i, j), ``j <= i``, is computed
-once from the input (the compiled kernel, one hysteron at a time, from the
-demagnetised state), and output l is the linear combination
+once from the input (one pass of a compiled kernel over the record for all
+hysterons, from the demagnetised state), and output l is the linear combination
 
 ``y_l(t) = sum_k [ sum_{j <= i} mu^{lk}_ij s^k_ij(t) + sum_n c^{lk}_n u_k(t)^n ] + offset_l``
 
@@ -45,7 +45,13 @@ along itself):
 The smoothing ``lambda`` is chosen among :data:`SMOOTHING_GRID` (and, while
 the smallest tried is the best, the smaller :data:`SMOOTHING_BELOW` in turn)
 by the mean held-out RMS error (in % of each output's range) when the records hold
-something out, else the given value (default 0.1) is used. Components may be
+something out, else the given value (default 0.1) is used. The tall regression
+matrix is factored once per output (:func:`~hammerstein.identification.lsq.r_factor`,
+free columns first), and each lambda folds the penalty into that factor
+(:func:`~hammerstein.identification.lsq.penalized_bounded_lstsq`); each lambda's
+model is simulated on the scored samples and the input reversals only (the
+inputs are monotone in between, so the predictions there are the whole
+record's, bit for bit). Components may be
 left out (``components``); a cross-coupling whose whole contribution is
 below twice the noise of its output (estimated from the record by
 :func:`hammerstein.identification.record_identification.noise_level`) is dropped by
