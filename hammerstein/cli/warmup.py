@@ -34,7 +34,8 @@ from hammerstein.models.hysteresis import play
 from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.io.presets import load_plant
-from hammerstein.simulation import (generalized_play_states, simulate_chain, simulate_chain_batch)
+from hammerstein.simulation import (generalized_play_states, preisach_states, simulate_chain,
+                                    simulate_chain_batch)
 from hammerstein.simulation import _kernels
 from hammerstein.simulation._prefetch import chain_kernel_arguments
 
@@ -95,6 +96,7 @@ def _preisach_classes():
                                     [10.0, 10.0])
     u = _sine(2)
     model.simulate(u)
+    preisach_states(u[0], edges, np.array([1, 1]), np.array([0, 1]), np.zeros(2))
     generalized_play_states(u[0], np.array([0.0, 1.0]), np.array([10.0, 0.1, 0.0, 0.0]),
                             np.array([10.0, 0.1, 0.0, 0.0]), np.zeros(2))
     inverse_model = MultivariableHysteresis([[direct, None], [None, direct]], ["u1", "u2"],

@@ -18,8 +18,8 @@ amplitude; the hysterons outside the measured range never switch, their
 weights are set by the smoothing penalty, a linear extrapolation of the
 density); the
 state trajectory ``s_ij(t)`` of every hysteron (i, j), ``j <= i``, is computed
-once from the input (the compiled kernel, one hysteron at a time, from the
-demagnetised state), and output l is the linear combination
+once from the input (one pass of a compiled kernel over the record for all
+hysterons, from the demagnetised state), and output l is the linear combination
 
 ``y_l(t) = sum_k [ sum_{j <= i} mu^{lk}_ij s^k_ij(t) + sum_n c^{lk}_n u_k(t)^n ] + offset_l``
 
@@ -45,7 +45,13 @@ along itself):
 The smoothing ``lambda`` is chosen among :data:`SMOOTHING_GRID` (and, while
 the smallest tried is the best, the smaller :data:`SMOOTHING_BELOW` in turn)
 by the mean held-out RMS error (in % of each output's range) when the records hold
-something out, else the given value (default 0.1) is used. Components may be
+something out, else the given value (default 0.1) is used. The tall regression
+matrix is factored once per output (:func:`~hammerstein.identification.lsq.r_factor`,
+free columns first), and each lambda folds the penalty into that factor
+(:func:`~hammerstein.identification.lsq.penalized_bounded_lstsq`); each lambda's
+model is simulated on the scored samples and the input reversals only (the
+inputs are monotone in between, so the predictions there are the whole
+record's, bit for bit). Components may be
 left out (``components``); a cross-coupling whose whole contribution is
 below twice the noise of its output (estimated from the record by
 :func:`hammerstein.identification.record_identification.noise_level`) is dropped by
@@ -67,15 +73,17 @@ References
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
-from hammerstein.identification.lsq import bounded_lstsq, r_factor
+from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.identification.record_identification import (
     RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
     weak_couplings)
-from hammerstein.simulation import preisach_steps
+from hammerstein.simulation import preisach_states
 
 __all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "GRID_STRETCH", "grid_edges",
            "identify_preisach_records"]
@@ -95,15 +103,16 @@ CROSS_DEGREE = 3
 
 
 def _hysteron_states(u, edges):
-    """State trajectories (n_states, n_samples) of every hysteron of a grid, demagnetised start."""
+    """State trajectories (n_states, n_samples) of every hysteron of a grid, demagnetised start.
+
+    All hysterons in one pass of the compiled kernel
+    (:func:`hammerstein.simulation.preisach_states`: the same states as stepping
+    each hysteron alone through :func:`hammerstein.simulation.preisach_steps`).
+    """
     proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)))
     row, col, _ = proto.hysteron_arrays
-    s0 = proto.initial_state()
-    out = np.empty((row.size, u.size))
-    one = np.ones(1)
-    for q in range(row.size):
-        out[q], _ = preisach_steps(u, edges, row[q:q + 1], col[q:q + 1], one, s0[q:q + 1])
-    return out
+    states, _ = preisach_states(u, edges, row, col, proto.initial_state())
+    return states.T
 
 
 def _smoothing_rows(n):
@@ -295,18 +304,21 @@ class PreisachIdentifier:
                                   self.n_levels, self.grid) for k in range(m)]
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
         blocks = [[] for _ in range(m)]            # per input: (states, u) of kept rows
-        self._rows = []
+        self._rows, self._reversals = [], []
         for rec, s in zip(records, splits):
             step = max(1, int(np.ceil(rec.n_samples / MAX_ROWS_PER_RECORD)))
             keep = np.zeros(rec.n_samples, dtype=bool)
             keep[::step] = True
             keep[-1] = True
+            rev = np.zeros(rec.n_samples, dtype=bool)
             for k in range(m):                     # reversal samples of every input
                 d = np.diff(rec.u[k])
                 nz = np.flatnonzero(d)
                 flip = np.flatnonzero(np.diff(np.sign(d[nz])) != 0)
-                keep[nz[flip] + 1] = True
+                rev[nz[flip] + 1] = True
+            keep |= rev
             self._rows.append(keep)
+            self._reversals.append(rev)
             for k in range(m):
                 st = _hysteron_states(rec.u[k, keep], self._edges[k])
                 blocks[k].append((st, rec.u[k, keep]))
@@ -333,16 +345,27 @@ class PreisachIdentifier:
 
     @staticmethod
     def _solve(R0, b0, lb, ub, D, lam):
-        """Bounded least squares on ``[R0; lam D] x ~ [b0; 0]`` (``R0``: R of the data's QR)."""
-        if D.shape[0] and lam > 0:
-            R0, b0 = np.vstack([R0, lam * D]), np.r_[b0, np.zeros(D.shape[0])]
+        """Bounded least squares on ``[R0; lam D] x ~ [b0; 0]`` (``R0``: R of the data's QR).
+
+        :func:`~hammerstein.identification.lsq.penalized_bounded_lstsq`: the
+        problem :func:`~hammerstein.identification.lsq.bounded_lstsq` solves on
+        the factor of the stacked matrix (ridge 1e-12), with one QR per lambda.
+        """
         if np.any(np.isfinite(ub)):
             raise ValueError("upper bounds: not supported (the weights are bounded below only)")
-        # ||A x - y|| = ||R x - Q^T y|| + const: the bounded solver works on the small R
-        R, c, _ = r_factor(R0, b0)
-        return bounded_lstsq(R, c, lb, ridge=1e-12)
+        return penalized_bounded_lstsq(R0, b0, D, lam, lb, ridge=1e-12)
 
-    def _fit_output(self, blocks, ys, l, kinds, lam):
+    def _problem(self, blocks, ys, l, kinds):
+        """The lambda-free part of output l's fit, built once per (l, kinds) and cached.
+
+        Returns ``(R0, b0, lb, ub, D, sizes, no, counts)``: R and ``Q^T y`` of the
+        tall regression matrix (Q never formed; the matrix itself is not kept),
+        the bounds, the scaled penalty rows, the column counts per input and the
+        offsets' column count and sample counts.
+        """
+        key = (l, tuple(kinds))
+        if key in self._cache:
+            return self._cache[key]
         m = len(blocks)
         parts, lbs, ubs, Ds, sizes = [], [], [], [], []
         for k in range(m):
@@ -356,31 +379,57 @@ class PreisachIdentifier:
         # leave the offsets free to absorb the rest outputs, and the cross-couplings'
         # held-out minor loops came out worse, 2.5 % vs 1.3 % RMS on realistic-2dof)
         offsets = np.ones((ys.size, 1))
-        A = np.column_stack(parts + [offsets])
         no = offsets.shape[1]
         lb, ub = np.concatenate(lbs + [np.full(no, -np.inf)]), np.concatenate(ubs + [np.full(no, np.inf)])
         # the direct path's linear term: increasing (an exactly invertible model)
         if l < m and kinds[l] == "preisach":
             off = sum(sizes[:l]) + self.n_levels * (self.n_levels + 1) // 2
-            u = A[:, off]
+            u = parts[l][:, self.n_levels * (self.n_levels + 1) // 2]
             secant = np.ptp(ys) / max(np.ptp(u), 1e-300)
             lb[off] = MIN_SLOPE_FRACTION * abs(secant)
-        D = np.zeros((sum(d.shape[0] for d in Ds), A.shape[1]))
+        n = sum(sizes) + no
+        D = np.zeros((sum(d.shape[0] for d in Ds), n))
         r = c = 0
         for d, sz in zip(Ds, sizes):
             D[r:r + d.shape[0], c:c + sz] = d if d.size else 0.0
             r, c = r + d.shape[0], c + sz
-        key = (l, tuple(kinds))
-        if key not in self._cache:          # R and Q^T y of the tall matrix, Q never formed
-            R0, b0, _ = r_factor(A, ys)
-            self._cache[key] = (R0, b0)
-        R0, b0 = self._cache[key]
+        # R and Q^T y of the tall matrix, Q never formed, its columns factored free ones
+        # first (the order of the bounded solver, which then folds the penalty rows into a
+        # triangular factor), row blocks within a record (a still input's columns are
+        # constant there); R0 is kept in the columns' own order
+        free = ~np.isfinite(lb)
+        cols, c0 = [], 0
+        for want in (True, False):
+            c0 = 0
+            for a in parts + [offsets]:
+                sel = free[c0:c0 + a.shape[1]] == want
+                if sel.all():
+                    cols.append(a)
+                elif sel.any():
+                    cols.append(a[:, sel])
+                c0 += a.shape[1]
+        order = np.r_[np.flatnonzero(free), np.flatnonzero(~free)]
+        Rp, b0, _ = r_factor(cols, ys, groups=[u.size for _, u in blocks[0]])
+        R0 = np.empty_like(Rp)
+        R0[:, order] = Rp
         # lambda is per training sample; a smooth density of total T has second
         # differences ~ T / n^4, hence the n^2 (squared: n^4) scale
-        x = self._solve(R0, b0, lb, ub, D * np.sqrt(ys.size) * self.n_levels ** 2, lam)
+        D = D * np.sqrt(ys.size) * self.n_levels ** 2
+        if D.shape[0] >= n:
+            # only D^T D enters the fit: D replaced by its triangular factor in the solver's
+            # column order (n rows instead of ~1.5 n, folded in as a triangular block)
+            Dt = np.empty((n, n))
+            Dt[:, order] = np.linalg.qr(D[:, order], mode="r")
+            D = Dt
+        self._cache[key] = (R0, b0, lb, ub, D, sizes, no, offsets.sum(axis=0))
+        return self._cache[key]
+
+    def _fit_output(self, blocks, ys, l, kinds, lam):
+        m = len(blocks)
+        R0, b0, lb, ub, D, sizes, no, counts = self._problem(blocks, ys, l, kinds)
+        x = self._solve(R0, b0, lb, ub, D, lam)
         comps, c = [], 0
         nq = self.n_levels * (self.n_levels + 1) // 2
-        counts = offsets.sum(axis=0)
         offset = float(np.sum(x[-no:] * counts) / counts.sum())
         for k in range(m):
             xk = x[c:c + sizes[k]]
@@ -421,6 +470,27 @@ class PreisachIdentifier:
 
     def _predict(self, model, records):
         return [model.simulate(r.u)[0] for r in records]
+
+    def _scored_samples(self, records, splits, which):
+        """The records cut to the samples a lambda's score needs, with their splits.
+
+        The scored samples (``which``: held-out or training), the first sample
+        and every reversal of any input: between two kept samples each input
+        is monotone, so every hysteron's state at a kept sample, and the
+        model's output there, is the one of the whole record bit for bit
+        (a ramp hysteron's clamp along a monotone input ends at the clamp of
+        the last sample; :meth:`_design` keeps the training rows so too).
+        Returns (records, splits, inputs) of simple namespaces for
+        :func:`_window_metrics`.
+        """
+        recs, sps, inputs = [], [], []
+        for rec, sp, rev in zip(records, splits, self._reversals):
+            sub = getattr(sp, which) | rev
+            sub[0] = True
+            recs.append(SimpleNamespace(y=rec.y[:, sub]))
+            sps.append(SimpleNamespace(**{which: getattr(sp, which)[sub]}))
+            inputs.append(np.ascontiguousarray(rec.u[:, sub]))
+        return recs, sps, inputs
 
     # -- public --------------------------------------------------------------------------
     def fit(self, records, splits=None, input_names=None, output_names=None, hold_out="auto",
@@ -468,6 +538,8 @@ class PreisachIdentifier:
             raise IdentificationError("records: no training samples")
         held = any(s.held_out.any() for s in splits)
         notes, scores, best = [], {}, None
+        which = "held_out" if held else "train"
+        s_recs, s_splits, s_inputs = self._scored_samples(records, splits, which)
 
         def score(lam):
             nonlocal best
@@ -477,11 +549,12 @@ class PreisachIdentifier:
                 grid.append(comps)
                 offs.append(off)
             model = self._model(grid, offs, in_names, out_names)
-            pred = self._predict(model, records)
-            win = _window_metrics(records, splits, pred, "held_out" if held else "train")
+            # the scored samples' predictions only (the whole record's there, bit for bit)
+            pred = [model.simulate(u)[0] for u in s_inputs]
+            win = _window_metrics(s_recs, s_splits, pred, which)
             scores[lam] = float(np.mean([w["rms_percent"] for w in win]))
             if best is None or scores[lam] < scores[best[0]]:
-                best = (lam, grid, offs, model, pred)
+                best = (lam, grid, offs, model)
 
         if self.smoothing == "auto" and self.smoothing_start is not None:
             # walk the candidates from the previous choice towards the lower error
@@ -509,7 +582,7 @@ class PreisachIdentifier:
                 score(grid_lam.pop(0))
                 if not grid_lam and below and best[0] == min(scores):   # the optimum lies below
                     grid_lam.append(below.pop(0))
-        lam, grid, offs, model, pred = best
+        lam, grid, offs, model = best
         if len(scores) > 1:
             notes.append(f"preisach smoothing auto: lambda {lam:g} (" + ", ".join(
                 f"{k:g}: {v:.3g} %" for k, v in scores.items())
@@ -528,7 +601,7 @@ class PreisachIdentifier:
                 grid.append(comps)
                 offs.append(off)
             model = self._model(grid, offs, in_names, out_names)
-            pred = self._predict(model, records)
+        pred = self._predict(model, records)
         train = _window_metrics(records, splits, pred, "train")
         val = _window_metrics(records, splits, pred, "held_out") if held else None
         structure = [["preisach" if isinstance(c, PreisachModel) else

@@ -79,7 +79,7 @@ from hammerstein.simulation._closed_loop import (AW_BACK, AW_CLAMP, AW_NONE, Com
                                                  simulate_closed_loop)
 from hammerstein.simulation._preisach import (generalized_play_states, generalized_play_steps,
                                               linear_steps, preisach_inverse_kernel,
-                                              preisach_steps)
+                                              preisach_states, preisach_steps)
 
 __all__ = [
     "simulate_plays",
@@ -110,6 +110,7 @@ __all__ = [
     "compile_notices",
     "announce_compiles",
     "preisach_steps",
+    "preisach_states",
     "linear_steps",
     "generalized_play_steps",
     "generalized_play_states",

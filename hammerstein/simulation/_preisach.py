@@ -14,6 +14,10 @@ one long run. The numpy oracles of these loops live in the tests
     ``mu[q]`` [µm]: ``s <- max(rho_row(u), min(rho_col(u), s))``, where
     ``rho_i(u)`` is -1 below cell i, +1 above it, linear across it. The
     output (without the reversible part) is ``y[t] = sum_q mu[q] s[q]``.
+``ramp_preisach_states_kernel(u, edges, row, col, s, out)``
+    The same hysterons, every state after every sample: ``out[t, q]`` (the
+    regressors of a Preisach identification, all hysterons in one pass over
+    the record).
 ``generalized_play_kernel(u, r, w, gl, gr, s, y)``
     Generalised PI (Al Janaideh, Rakheja and Su): plays
     ``s_j <- max(gamma_l(u) - r_j, min(gamma_r(u) + r_j, s_j))`` with the
@@ -27,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["ramp_preisach_kernel", "generalized_play_kernel", "linear_kernel", "ramps",
+__all__ = ["ramp_preisach_kernel", "ramp_preisach_states_kernel", "preisach_states", "generalized_play_kernel", "linear_kernel", "ramps",
            "preisach_steps", "linear_steps", "generalized_play_steps",
            "preisach_inverse_kernel", "generalized_play_states"]
 
@@ -80,7 +84,9 @@ def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
     non-moving hysterons first, each group in ascending order), so it
     differs from one sum over every hysteron in the last digits, and a
     record cut into chunks gives the same numbers bit for bit (the
-    non-moving states do not change inside a cell).
+    non-moving states do not change inside a cell). A sample equal to the
+    previous one repeats its output: the clamps are idempotent (``up <=
+    down``), so no state would move and the sum would be the same one.
     """
     n_levels = edges.size - 1
     nq = s.size
@@ -90,6 +96,9 @@ def ramp_preisach_kernel(u, edges, row, col, mu, s, y):
     rho = np.empty(n_levels)
     for t in range(u.size):
         ut = u[t]
+        if t > 0 and ut == u[t - 1]:     # the same clamps again: no state moves
+            y[t] = y[t - 1]
+            continue
         for i in range(n_levels):
             rho[i] = _ramp(ut, edges[i], edges[i + 1])
         acc = 0.0
@@ -112,6 +121,9 @@ def _cell_list_steps(u, edges, row, col, mu, s, y):
     const = 0.0
     for t in range(u.size):
         ut = u[t]
+        if t > 0 and ut == u[t - 1]:     # the same cell and clamps again: no state moves
+            y[t] = y[t - 1]
+            continue
         c = -1 if cell == -2 else cell
         while c + 1 <= n and edges[c + 1] <= ut:
             c += 1
@@ -137,6 +149,27 @@ def _cell_list_steps(u, edges, row, col, mu, s, y):
                 s[q] = v
                 acc += mu[q] * v
         y[t] = const + acc
+
+
+@njit(cache=True)
+def ramp_preisach_states_kernel(u, edges, row, col, s, out):
+    """Every ramp hysteron's state after every sample, ``out`` (n_samples, n_hysterons); s in/out.
+
+    Per sample the ramps of all cells once, then each hysteron's clamp
+    ``max(rho_row, min(rho_col, s))`` as in :func:`ramp_preisach_kernel`'s
+    plain loop: the states are those of stepping each hysteron alone.
+    """
+    n_levels = edges.size - 1
+    nq = s.size
+    rho = np.empty(n_levels)
+    for t in range(u.size):
+        ut = u[t]
+        for i in range(n_levels):
+            rho[i] = _ramp(ut, edges[i], edges[i + 1])
+        for q in range(nq):
+            v = _clamp(s[q], rho[row[q]], rho[col[q]])
+            s[q] = v
+            out[t, q] = v
 
 
 @njit(cache=True, inline="always")
@@ -232,6 +265,63 @@ def preisach_steps(u, edges, row, col, mu, state):
     y = np.empty(u.size)
     ramp_preisach_kernel(np.ascontiguousarray(u, dtype=float), edges, row, col, mu, s, y)
     return y, s
+
+
+def preisach_states(u, edges, row, col, state):
+    """State trajectory of every ramp hysteron of a grid on a record (compiled kernel).
+
+    Parameters
+    ----------
+    u : array_like, shape (n_samples,)
+        Input [V], finite.
+    edges : array_like, shape (n_levels + 1,)
+        Cell edges of the switching grid [V], strictly increasing.
+    row, col : array_like of int, shape (n_hysterons,)
+        Rising (alpha) and falling (beta) cell of each hysteron, ``0 <= col <= row < n_levels``.
+    state : array_like, shape (n_hysterons,)
+        Hysteron states in [-1, 1] before the first sample; not modified.
+
+    Returns
+    -------
+    states : numpy.ndarray, shape (n_samples, n_hysterons)
+        ``states[t, q]``: state of hysteron q after sample t, in [-1, 1] (the
+        same numbers as :func:`preisach_steps` on hysteron q alone).
+    final_state : numpy.ndarray, shape (n_hysterons,)
+        States after the last sample.
+
+    Raises
+    ------
+    ValueError
+        On mismatched shapes, edges not strictly increasing, cells outside the grid,
+        ``col > row`` or a non-finite input.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> st, _ = preisach_states(np.array([0.0, 1.0, 0.5]), np.array([-1.0, 0.0, 1.0]),
+    ...                         np.array([1, 1]), np.array([0, 1]), np.array([-1.0, -1.0]))
+    >>> st.tolist()
+    [[-1.0, -1.0], [1.0, 1.0], [1.0, 0.0]]
+    """
+    u = np.ascontiguousarray(u, dtype=float)
+    edges = np.ascontiguousarray(edges, dtype=float)
+    row = np.ascontiguousarray(row, dtype=np.int64)
+    col = np.ascontiguousarray(col, dtype=np.int64)
+    s = np.array(state, dtype=float)
+    n = edges.size - 1
+    if u.ndim != 1 or edges.ndim != 1 or n < 1 or row.ndim != 1 or row.shape != col.shape \
+            or s.shape != row.shape:
+        raise ValueError("preisach_states: expected u (N,), edges (n + 1,) with n >= 1, and "
+                         "row, col, state of one shape (n_hysterons,)")
+    if not np.all(np.diff(edges) > 0):
+        raise ValueError("preisach_states: edges must be strictly increasing")
+    if row.size and (col.min() < 0 or row.max() >= n or np.any(col > row)):
+        raise ValueError("preisach_states: expected 0 <= col <= row < n_levels")
+    if not np.all(np.isfinite(u)):
+        raise ValueError("preisach_states: the input must be finite")
+    out = np.empty((u.size, s.size))
+    ramp_preisach_states_kernel(u, edges, row, col, s, out)
+    return out, s
 
 
 def linear_steps(h, matrices, state):

@@ -31,7 +31,8 @@ from scipy.optimize import lsq_linear
 from hammerstein.identification import (_record_regression, gpi_identification,
                                         preisach_identification, record_identification)
 from hammerstein.io.datafiles import bundled_data, read_record
-from hammerstein.identification.lsq import bounded_lstsq, lstsq_bounded_below, r_factor
+from hammerstein.identification.lsq import (bounded_lstsq, lstsq_bounded_below,
+                                            penalized_bounded_lstsq, r_factor)
 
 
 def _bvls(A, b, lower, ridge=0.0):
@@ -59,6 +60,82 @@ def test_same_minimiser_as_bvls_on_random_problems(seed):
     assert abs(f - f_ref) <= 1e-9 * f_ref
     cond = np.linalg.cond(A)
     assert np.linalg.norm(x - x_ref) <= cond * 1e-12 * np.linalg.norm(x_ref)
+
+
+@pytest.mark.parametrize("seed, ridge", [(0, 0.0), (1, 0.0), (2, 1e-12), (3, 1e-12), (4, 1e-8)])
+def test_penalized_solver_equals_bvls_on_the_stacked_matrix(seed, ridge):
+    """One QR of [R; lam D; ridge] = BVLS on [A; lam D] (ridge rows scaled by its column norms)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(4, 40))
+    A = rng.normal(size=(2000, n)) @ np.diag(10.0 ** rng.uniform(-1.5, 1.5, n))
+    b = A @ rng.normal(size=n) + rng.normal(size=2000)
+    D = np.vstack([np.diff(np.eye(n), 2, axis=0), np.diff(np.eye(n), 1, axis=0)])
+    D = D[:, rng.permutation(n)]
+    lam = float(10.0 ** rng.uniform(-2, 1))
+    lower = np.where(rng.random(n) < 0.6, rng.normal(size=n), -np.inf)
+    R, c, _ = r_factor(A, b)
+    x = penalized_bounded_lstsq(R, c, D, lam, lower, ridge=ridge)
+    stacked, target = np.vstack([A, lam * D]), np.r_[b, np.zeros(D.shape[0])]
+    x_ref = _bvls(stacked, target, lower, ridge)
+    assert np.all(x[np.isfinite(lower)] >= lower[np.isfinite(lower)])
+    obj = lambda z: np.sum((stacked @ z - target) ** 2)    # noqa: E731
+    assert abs(obj(x) - obj(x_ref)) <= 1e-9 * obj(x_ref)
+    assert np.linalg.norm(x - x_ref) <= np.linalg.cond(stacked) * 1e-12 * np.linalg.norm(x_ref)
+    # and the previous path: bounded_lstsq on the factor of the stacked matrix
+    Rs, cs, _ = r_factor(np.vstack([R, lam * D]), np.r_[c, np.zeros(D.shape[0])])
+    x_old = bounded_lstsq(Rs, cs, lower, ridge=ridge)
+    assert np.linalg.norm(x - x_old) <= np.linalg.cond(stacked) * 1e-13 * np.linalg.norm(x_old)
+    # the data factored free columns first (R triangular in the solver's order: tpqrt path)
+    free = ~np.isfinite(lower)
+    order = np.r_[np.flatnonzero(free), np.flatnonzero(~free)]
+    Rf, cf, _ = r_factor(A[:, order], b)
+    Rf_orig = np.empty_like(Rf)
+    Rf_orig[:, order] = Rf
+    x_tp = penalized_bounded_lstsq(Rf_orig, cf, D, lam, lower, ridge=ridge)
+    # and the penalty rows as their triangular factor in that order (only D^T D matters)
+    Dt = np.empty((n, n))
+    Dt[:, order] = np.linalg.qr(D[:, order], mode="r")
+    x_dt = penalized_bounded_lstsq(Rf_orig, cf, Dt, lam, lower, ridge=ridge)
+    for z in (x_tp, x_dt):
+        assert np.all(z[~free] >= lower[~free])
+        assert abs(obj(z) - obj(x_ref)) <= 1e-9 * obj(x_ref)
+        assert np.linalg.norm(z - x) <= np.linalg.cond(stacked) * 1e-13 * np.linalg.norm(x)
+
+
+@pytest.mark.parametrize("sizes", [(5000, 3000), (3000, 3000, 3000), (100, 7000, 1)])
+def test_factor_by_groups_with_still_columns_keeps_the_objective(sizes):
+    """Columns constant within a group (another input held still) factored as one column of ones:
+    the same objective for every x, the same least-squares solution, the same factor up to the
+    signs of its rows."""
+    rng = np.random.default_rng(len(sizes))
+    n, N = 30, sum(sizes)
+    A = rng.normal(size=(N, n))
+    r0, cols = 0, rng.permutation(n - 1)
+    for g, size in enumerate(sizes):          # full rank: each column still in one group at most
+        still = cols[9 * g:9 * g + 9]
+        A[r0:r0 + size, still] = rng.choice([-1.0, 1.0, 0.3], still.size)
+        r0 += size
+    A[:, -1] = 1.0
+    b = A @ rng.normal(size=n) + 0.1 * rng.normal(size=N)
+    R, c, rho = r_factor(A, b, groups=sizes)
+    R1, c1, rho1 = r_factor(A, b)
+    assert np.allclose(np.abs(R), np.abs(R1), rtol=1e-10, atol=1e-10 * np.abs(R1).max())
+    assert rho == pytest.approx(rho1, rel=1e-10)
+    for x in (rng.normal(size=n), np.linalg.lstsq(A, b, rcond=None)[0]):
+        full = np.sum((A @ x - b) ** 2)
+        assert np.sum((R @ x - c) ** 2) + rho ** 2 == pytest.approx(full, rel=1e-10)
+    with pytest.raises(ValueError, match="do not split"):
+        r_factor(A, b, groups=[N - 1])
+
+
+def test_penalized_solver_names_bad_arguments():
+    with pytest.raises(ValueError, match="lam and ridge"):
+        penalized_bounded_lstsq(np.eye(2), np.ones(2), np.zeros((0, 2)), -1.0, [0.0, 0.0])
+    with pytest.raises(ValueError, match="expected c"):
+        penalized_bounded_lstsq(np.eye(2), np.ones(3), np.zeros((0, 2)), 0.0, [0.0, 0.0])
+    with pytest.raises(ValueError, match="not determined"):
+        penalized_bounded_lstsq(np.zeros((2, 2)), np.ones(2), np.zeros((0, 2)), 0.0,
+                                [-np.inf, -np.inf])
 
 
 def test_factor_keeps_the_objective_and_handles_short_matrices():

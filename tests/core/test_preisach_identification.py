@@ -14,7 +14,9 @@ from hammerstein.compensation.hammerstein_compensator import HammersteinCompensa
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
-from hammerstein.identification.preisach_identification import PreisachIdentifier, _smoothing_rows
+from hammerstein.identification.preisach_identification import (PreisachIdentifier, _hysteron_states,
+                                                                 _smoothing_rows, grid_edges)
+from hammerstein.simulation import preisach_steps
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.exceptions import CompensatorError, IdentificationError
@@ -316,3 +318,43 @@ def test_smoothing_search_from_a_previous_lambda_keeps_the_grid_search_choice(st
 def test_bad_smoothing_start_is_named(bad):
     with pytest.raises(IdentificationError, match="smoothing_start"):
         PreisachIdentifier(smoothing_start=bad)
+
+
+def _hysteron_states_one_by_one(u, edges):
+    """The naive loop: each hysteron of the grid stepped alone from the demagnetised state."""
+    proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)))
+    row, col, _ = proto.hysteron_arrays
+    s0 = proto.initial_state()
+    out = np.empty((row.size, u.size))
+    for q in range(row.size):
+        out[q], _ = preisach_steps(u, edges, row[q:q + 1], col[q:q + 1], np.ones(1), s0[q:q + 1])
+    return out
+
+
+@pytest.mark.parametrize("n_levels, grid", [(3, "uniform"), (20, "centred")])
+def test_regressor_states_equal_each_hysteron_stepped_alone(n_levels, grid):
+    t, u, _ = decreasing_sine(1e-3, 10.0)
+    u = u[:4000] + 0.05 * np.random.default_rng(3).standard_normal(4000)
+    edges = grid_edges(-11.0, 11.0, n_levels, grid)
+    assert np.array_equal(_hysteron_states(u, edges), _hysteron_states_one_by_one(u, edges))
+
+
+def test_lambda_scores_use_the_whole_records_predictions(fitted):
+    """The scored samples, the first one and the reversals, simulated alone, predict exactly what
+    the whole records do there; the chosen lambda's score is the held-out RMS of the whole run."""
+    from hammerstein.identification._record_split import _window_metrics
+
+    _, est = fitted
+    fit = est.fit_
+    recs, sps, inputs = est._scored_samples(fit.records, fit.splits, "held_out")
+    for rec, sp, r, s, u, rev in zip(fit.records, fit.splits, recs, sps, inputs, est._reversals):
+        full, _ = est.model_.simulate(rec.u)
+        part, _ = est.model_.simulate(u)
+        sub = sp.held_out | rev
+        sub[0] = True
+        assert u.shape[1] < rec.n_samples and np.array_equal(u, rec.u[:, sub])
+        assert np.array_equal(part, full[:, sub])          # bit for bit
+        assert np.array_equal(r.y, rec.y[:, sub]) and np.array_equal(s.held_out, sp.held_out[sub])
+    whole = _window_metrics(fit.records, fit.splits, fit.predictions, "held_out")
+    assert est.smoothing_scores_[est.smoothing_] == pytest.approx(
+        np.mean([w["rms_percent"] for w in whole]), rel=1e-12)
