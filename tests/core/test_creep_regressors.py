@@ -5,15 +5,26 @@ each hysteresis output (lagged afterwards: G and the lags are linear and
 time-invariant from rest, so they commute) and from G's delayed step
 responses (a step's indicator is the difference of two delayed unit steps).
 The reference here is the definition: every column's signal simulated
-through G on its own, as the fit did before. The two are equal to rounding:
-1e-12 of the largest column entry.
+through G on its own, each lag filtered on its own at every sample
+(:func:`scipy.signal.lfilter`, as the fit did before its compiled lag kernel)
+and kept at the sampled rows. The two are equal to rounding: 1e-12 of the
+largest column entry.
 """
 
 import numpy as np
 import pytest
 
-from hammerstein.identification.creep_identification import _lags, _regressors, staircase_steps
+from scipy.signal import lfilter
+
+from hammerstein.identification.creep_identification import (_lag_states, _regressors,
+                                                              staircase_steps)
 from hammerstein.simulation import linear_steps
+
+
+def _lags(h, tau, T):
+    """Each lag ``x[t] = a x[t - 1] + (1 - a) h[t - 1]`` from rest, one filter per lag."""
+    a = np.exp(-T / tau)
+    return np.vstack([lfilter([0.0, 1.0 - a_k], [1.0, -a_k], h) for a_k in a])
 
 
 def _stable_g(rng, p=2, n=4):
@@ -52,7 +63,18 @@ def test_columns_equal_the_per_column_simulation(seed, with_g):
     tau = np.array([0.003, 0.03, 0.3])
     rows = np.arange(0, N, 4)
     mats = _stable_g(rng) if with_g else None
-    new = _regressors(mats, h, steps, n_steps, tau, T, rows)
+    new = _regressors(mats, h, steps, n_steps, tau, T, 4)
     ref = _by_definition(mats, h, steps, n_steps, tau, T, rows)
     assert new.shape == ref.shape == (2 * rows.size, 2 * (tau.size + n_steps))
     assert np.max(np.abs(new - ref)) <= 1e-12 * np.max(np.abs(ref))
+
+
+@pytest.mark.parametrize("N,stride", [(900, 1), (901, 4), (7, 3)])
+def test_lag_states_are_the_lags_filtered_one_by_one_at_the_sampled_rows(N, stride):
+    rng = np.random.default_rng(N)
+    h = rng.normal(size=(3, N))
+    tau, T = np.array([0.002, 0.02, 0.2, 2.0]), 1e-3
+    new = _lag_states(h, tau, T, stride)
+    ref = np.stack([_lags(row, tau, T)[:, ::stride].T for row in h])
+    assert new.shape == ref.shape == (3, -(-N // stride), tau.size)
+    assert np.max(np.abs(new - ref)) <= 1e-13 * np.max(np.abs(ref))
