@@ -134,9 +134,11 @@ def remove_creep(records, creeps, output_offset=None):
     (:func:`hammerstein.models.creep.minimum_phase_margin`), so its inverse is
     stable and v follows exactly, sample by sample, from the measured y: with
     the ZOH matrices ``(A, B, c, d)`` of the lags,
-    ``v_n = (y_n - c x_n) / d``, ``x_{n+1} = (A - B c / d) x_n + B y_n / d``
+    ``v_n = (y_n - c x_n) / d``, ``x_{n+1} = A x_n + B v_n``
     (the state-space inverse of a system with an invertible direct term,
-    e.g. Zhou, Doyle and Glover [4]_, Section 3.5). Both start from rest, as
+    ``x_{n+1} = (A - B c / d) x_n + B y_n / d``, e.g. Zhou, Doyle and
+    Glover [4]_, Section 3.5; the lags are diagonal, so a compiled kernel
+    steps them one by one). Both start from rest, as
     the records do. The hysteresis model refitted on ``(u, v)`` no longer
     takes the creep inside its loops for hysteresis.
 
@@ -197,10 +199,7 @@ def remove_creep(records, creeps, output_offset=None):
             if minimum_phase_margin(c, T) <= 0:
                 raise IdentificationError(f"creep: output {l} is not minimum phase at T = {T:g} s;"
                                           f" it cannot be removed from the records")
-            A, B, C, D = c.discrete(T)
-            d = float(D[0, 0])
-            inv = (A - B @ C / d, B / d, -C / d, np.full((1, 1), 1.0 / d))
-            v[l] = linear_steps((y[l] - off[l])[None, :], inv, np.zeros(c.n_states))[0][0] + off[l]
+            v[l] = _creep_output(c, y[l] - off[l], T, inverse=True) + off[l]
         if dataclasses.is_dataclass(rec):
             out.append(dataclasses.replace(rec, y=v))
         else:
@@ -210,7 +209,7 @@ def remove_creep(records, creeps, output_offset=None):
     return out
 
 
-def step_level_errors(model, records, creeps=None, settle=0.1):
+def step_level_errors(model, records, creeps=None, settle=0.1, outputs=None):
     """Measured minus predicted level of every step of staircase records.
 
     The prediction is the hysteresis model followed by the creep (when
@@ -235,6 +234,10 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
         Creep per output; None: the hysteresis model alone.
     settle : float
         Samples of each step within this time [s] of its start are skipped.
+    outputs : sequence of array_like, optional
+        The model's outputs on the records, ``model.simulate(rec.u)[0]``
+        (p, n_samples) each, when already simulated (e.g. by
+        :meth:`CreepIdentifier.fit`); simulated here by default.
 
     Returns
     -------
@@ -261,11 +264,15 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
     [[0.0, 0.2, 0.6]]
     """
     out = []
-    for rec in records:
+    records = list(records)
+    if outputs is not None and len(outputs) != len(records):
+        raise IdentificationError(f"creep records: expected {len(records)} model outputs (one "
+                                  f"per record), found {len(outputs)}")
+    for r_i, rec in enumerate(records):
         u = np.asarray(rec.u, dtype=float)
         y = np.asarray(rec.y, dtype=float)
         T = float(rec.sampling_period)
-        h = np.asarray(model.simulate(u)[0], dtype=float)
+        h = np.array(model.simulate(u)[0] if outputs is None else outputs[r_i], dtype=float)
         if h.shape != y.shape:
             raise IdentificationError(f"creep records: {getattr(rec, 'source', 'record')}: "
                                       f"expected {h.shape[0]} output columns, found {y.shape[0]}")
@@ -275,7 +282,7 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
         if creeps is not None:
             for l, c in enumerate(creeps):
                 if c is not None:
-                    h[l] = c.simulate((h[l] - off[l])[None, :], T)[0][0] + off[l]
+                    h[l] = _creep_output(c, h[l] - off[l], T) + off[l]
         steps = staircase_steps(u)
         n_steps = int(steps[-1]) + 1
         start = np.searchsorted(steps, np.arange(n_steps))
@@ -345,6 +352,21 @@ def _creep_inverse_kernel(y, a, w, d, v):
             s[k] = a[k] * s[k] + b[k] * e
 
 
+def _creep_output(creep, h, T, inverse=False):
+    """One output's creep on ``h`` (n_samples,) from rest: ``c(h)``, or ``c^-1(h)`` when ``inverse``.
+
+    The ZOH lags of :meth:`hammerstein.models.creep.Creep.simulate` (the same
+    numbers to rounding), stepped one by one by a compiled kernel instead of
+    through the dense state space (K instead of K^2 products per sample).
+    """
+    h = np.ascontiguousarray(h, dtype=float)
+    a = np.exp(-float(T) / creep.time_constants)
+    y = np.empty(h.size)
+    kernel = _creep_inverse_kernel if inverse else _creep_kernel
+    kernel(h, a, np.ascontiguousarray(creep.weights, dtype=float), float(creep.instantaneous), y)
+    return y
+
+
 def _lag_states(h, tau, T, stride=1):
     """Lag states x_k of each row of ``h`` at every ``stride``-th sample, from rest.
 
@@ -370,7 +392,19 @@ def _through(mats, s):
     return s if mats is None else linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0]
 
 
-def _regressors(mats, h, steps, n_steps, tau, T, stride):
+def _step_responses(mats, p, N):
+    """G's unit-step responses from rest, (p inputs, p outputs, N); ones on the diagonal without G."""
+    if mats is None:
+        return np.eye(p)[:, :, None] * np.ones(N)
+    S = np.empty((p, p, N))
+    for l in range(p):
+        e = np.zeros((p, N))
+        e[l] = 1.0
+        S[l] = _through(mats, e)
+    return S
+
+
+def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None):
     """Regression columns of one staircase record, every ``stride``-th row of each output stacked.
 
     Columns: lag ``k`` of hysteresis output ``l`` through G (``l``-major),
@@ -382,38 +416,48 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride):
     a step's indicator is the difference of two delayed unit steps, so its
     response is the difference of G's delayed step responses (one
     simulation per output instead of one per column, the same numbers to
-    rounding).
+    rounding), each read off the step response by a strided slice.
+    ``S``: :func:`_step_responses` (at least N samples), ``g``: G's responses
+    to each ``h_l e_l``, (p, p, N), when already simulated.
     """
     p, N = h.shape
     K = tau.size
-    rows = np.arange(0, N, stride)
-    nr = rows.size
+    nr = -(-N // stride)
     cols = np.zeros((p * nr, p * (K + n_steps)))
-    starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1, N]     # step j: samples a_j..a_{j+1}-1
+    starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
     if mats is None:
         X = _lag_states(h, tau, T, stride)
         for l in range(p):
             cols[l * nr:(l + 1) * nr, l * K:(l + 1) * K] = X[l]
     else:
-        g = np.empty((p, p, N))
-        for l in range(p):
-            e = np.zeros((p, N))
-            e[l] = h[l]
-            g[l] = _through(mats, e)             # (p, N): G's response to h_l e_l
+        if g is None:
+            g = _responses(mats, h)
         X = _lag_states(g.reshape(p * p, N), tau, T, stride)     # its lags, per output of G
         for l in range(p):
             for i in range(p):
                 cols[i * nr:(i + 1) * nr, l * K:(l + 1) * K] = X[l * p + i]
+    if S is None:
+        S = _step_responses(mats, p, N)
+    first = -(-starts // stride)                 # first kept row at or after each step's start
+    D = np.zeros((n_steps + 1, nr))              # D[j]: the step response delayed to a_j
     for l in range(p):
-        e = np.zeros((p, N))
-        e[l] = 1.0
-        S = _through(mats, e)                    # (p, N): G's unit-step response from input l
-        lag = rows[None, :] - starts[:, None]    # (n_steps + 1, rows): S(t - a_j), 0 before a_j
         for i in range(p):
-            D = np.where(lag >= 0, S[i][np.maximum(lag, 0)], 0.0)
+            for j in range(n_steps):
+                D[j, first[j]:] = S[l, i, first[j] * stride - starts[j]::stride][:nr - first[j]]
             cols[i * nr:(i + 1) * nr,
                  p * K + l * n_steps:p * K + (l + 1) * n_steps] = (D[:-1] - D[1:]).T
     return cols
+
+
+def _responses(mats, h):
+    """G's responses from rest to each output of ``h`` alone, ``g[l] = G (h_l e_l)``: (p, p, N)."""
+    p, N = h.shape
+    g = np.empty((p, p, N))
+    for l in range(p):
+        e = np.zeros((p, N))
+        e[l] = h[l]
+        g[l] = _through(mats, e)
+    return g
 
 
 def _segment_means(v, bounds):
@@ -596,6 +640,7 @@ class CreepIdentifier:
         H, b_vec, sum_sq, n_rows, fits, seg_counts = (np.zeros((n_lag, n_lag)), np.zeros(n_lag),
                                                        0.0, 0, [], [])
         self.identifiable_up_to_ = 0.0
+        S = None                         # G's step responses, once for all records
         for r_i, rec in enumerate(records):
             u = np.asarray(rec.u, dtype=float)
             steps = staircase_steps(u)
@@ -611,7 +656,11 @@ class CreepIdentifier:
             N = u.shape[1]
             rows = np.arange(0, N, stride)
             nr = rows.size
-            y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - _through(mats, h))[:, rows]
+            if mats is None:
+                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - h)[:, rows]
+            else:                        # G h is the sum of G's responses to each output alone
+                g = _responses(mats, h)
+                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
             if mats is None:
                 X = _lag_states(h, tau, T, stride)                      # (p, nr, K)
                 bounds = np.searchsorted(steps[rows], np.arange(n_steps + 1))
@@ -621,7 +670,9 @@ class CreepIdentifier:
                           for l in range(p)]
                 fits.append((blocks, ("means", X, y_r, bounds)))
             else:
-                blk = _regressors(mats, h, steps, n_steps, tau, T, stride)
+                if S is None or S.shape[2] < N:
+                    S = _step_responses(mats, p, max(np.shape(r.u)[1] for r in records))
+                blk = _regressors(mats, h, steps, n_steps, tau, T, stride, S, g)
                 y_v = y_r.ravel()
                 O = blk[:, n_lag:]
                 G_oo = O.T @ O
