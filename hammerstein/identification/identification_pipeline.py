@@ -179,9 +179,13 @@ def _fit_rms(fit):
 
 
 def _step_level_error(fit, recs):
-    """Held-out step levels of the staircases: (RMS [% of range], RMS, largest [unit])."""
-    creep = identify_record_creep(fit, recs)
-    errs = step_level_errors(fit.model, recs, creep.creeps_)
+    """Held-out step levels of the staircases: (RMS [% of range], RMS, largest [unit]).
+
+    The model is simulated once on the staircases, for its creep and its levels.
+    """
+    outs = [fit.model.simulate(np.asarray(r.u, dtype=float))[0] for r in recs]
+    creep = identify_record_creep(fit, recs, outputs=outs)
+    errs = step_level_errors(fit.model, recs, creep.creeps_, outputs=outs)
     span = np.max([np.ptp(np.asarray(r.y, dtype=float), axis=1) for r in recs], axis=0)
     rel = np.concatenate([(e / span[:, None]).ravel() for e in errs])
     ab = np.concatenate([e.ravel() for e in errs])
