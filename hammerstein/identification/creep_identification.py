@@ -300,7 +300,7 @@ def step_level_errors(model, records, creeps=None, settle=0.1, outputs=None):
 def _lag_kernel(h, a, stride, x):
     """Lag states of every row of ``h`` at the samples 0, stride, 2 stride...; ``x`` out.
 
-    ``h`` (n_series, N), ``a`` (K,), ``x`` (n_series, ceil(N / stride), K): the
+    ``h`` (n_series, N), ``a`` (K,), ``x`` (n_series, K, ceil(N / stride)): the
     state before the sample, from rest, ``s_k <- a_k s_k + (1 - a_k) h``.
     """
     K = a.size
@@ -312,7 +312,7 @@ def _lag_kernel(h, a, stride, x):
         for t in range(h.shape[1]):
             if t == nxt:
                 for k in range(K):
-                    x[i, r, k] = s[k]
+                    x[i, k, r] = s[k]
                 r += 1
                 nxt += stride
             v = h[i, t]
@@ -378,11 +378,11 @@ def _lag_states(h, tau, T, stride=1):
 
     Returns
     -------
-    numpy.ndarray, shape (n_series, ceil(N / stride), K)
+    numpy.ndarray, shape (n_series, K, ceil(N / stride))
     """
     h = np.ascontiguousarray(np.atleast_2d(h), dtype=float)
     a = np.exp(-T / np.asarray(tau, dtype=float))
-    x = np.empty((h.shape[0], -(-h.shape[1] // stride), a.size))
+    x = np.empty((h.shape[0], a.size, -(-h.shape[1] // stride)))
     _lag_kernel(h, a, int(stride), x)
     return x
 
@@ -396,12 +396,7 @@ def _step_responses(mats, p, N):
     """G's unit-step responses from rest, (p inputs, p outputs, N); ones on the diagonal without G."""
     if mats is None:
         return np.eye(p)[:, :, None] * np.ones(N)
-    S = np.empty((p, p, N))
-    for l in range(p):
-        e = np.zeros((p, N))
-        e[l] = 1.0
-        S[l] = _through(mats, e)
-    return S
+    return _responses(mats, np.ones((p, N)))
 
 
 def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None):
@@ -418,57 +413,65 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None):
     simulation per output instead of one per column, the same numbers to
     rounding), each read off the step response by a strided slice.
     ``S``: :func:`_step_responses` (at least N samples), ``g``: G's responses
-    to each ``h_l e_l``, (p, p, N), when already simulated.
+    to each ``h_l e_l``, (p, p, N), when already simulated. The matrix is in
+    Fortran (column) order: every column is written, and later multiplied, in
+    one contiguous run.
     """
     p, N = h.shape
     K = tau.size
     nr = -(-N // stride)
-    cols = np.zeros((p * nr, p * (K + n_steps)))
+    cols = np.zeros((p * nr, p * (K + n_steps)), order="F")
     starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
     if mats is None:
         X = _lag_states(h, tau, T, stride)
         for l in range(p):
-            cols[l * nr:(l + 1) * nr, l * K:(l + 1) * K] = X[l]
+            cols[l * nr:(l + 1) * nr, l * K:(l + 1) * K] = X[l].T
     else:
         if g is None:
             g = _responses(mats, h)
         X = _lag_states(g.reshape(p * p, N), tau, T, stride)     # its lags, per output of G
         for l in range(p):
             for i in range(p):
-                cols[i * nr:(i + 1) * nr, l * K:(l + 1) * K] = X[l * p + i]
+                cols[i * nr:(i + 1) * nr, l * K:(l + 1) * K] = X[l * p + i].T
     if S is None:
         S = _step_responses(mats, p, N)
-    first = -(-starts // stride)                 # first kept row at or after each step's start
-    D = np.zeros((n_steps + 1, nr))              # D[j]: the step response delayed to a_j
+    first = np.r_[-(-starts // stride), nr]      # first kept row at or after each step's start
     for l in range(p):
         for i in range(p):
-            for j in range(n_steps):
-                D[j, first[j]:] = S[l, i, first[j] * stride - starts[j]::stride][:nr - first[j]]
-            cols[i * nr:(i + 1) * nr,
-                 p * K + l * n_steps:p * K + (l + 1) * n_steps] = (D[:-1] - D[1:]).T
+            for j in range(n_steps):             # S delayed to a_j, less S delayed to a_{j + 1}
+                c = cols[i * nr:(i + 1) * nr, p * K + l * n_steps + j]
+                c[first[j]:] = S[l, i, first[j] * stride - starts[j]::stride][:nr - first[j]]
+                if j + 1 < n_steps:
+                    c[first[j + 1]:] -= S[l, i, first[j + 1] * stride - starts[j + 1]::stride][
+                        :nr - first[j + 1]]
     return cols
 
 
 def _responses(mats, h):
-    """G's responses from rest to each output of ``h`` alone, ``g[l] = G (h_l e_l)``: (p, p, N)."""
+    """G's responses from rest to each output of ``h`` alone, ``g[l] = G (h_l e_l)``: (p, p, N).
+
+    Each simulated with G's column ``l`` only (B and D restricted to input
+    ``l``): the other inputs are zero, so the same numbers with p times
+    fewer input products per sample.
+    """
+    A, B, C, D = mats
     p, N = h.shape
     g = np.empty((p, p, N))
     for l in range(p):
-        e = np.zeros((p, N))
-        e[l] = h[l]
-        g[l] = _through(mats, e)
+        g[l] = linear_steps(h[l:l + 1], (A, B[:, l:l + 1], C, D[:, l:l + 1]),
+                            np.zeros(A.shape[0]))[0]
     return g
 
 
 def _segment_means(v, bounds):
-    """Means of ``v`` (..., n, c) over the rows ``bounds[j]:bounds[j + 1]``: (..., n_seg, c).
+    """Means of ``v`` (..., n) over the samples ``bounds[j]:bounds[j + 1]``: (..., n_seg).
 
     0 for an empty segment (the minimum-norm offset of a column of zeros).
     """
-    out = np.zeros(v.shape[:-2] + (bounds.size - 1, v.shape[-1]))
+    out = np.zeros(v.shape[:-1] + (bounds.size - 1,))
     for j in range(bounds.size - 1):
         if bounds[j + 1] > bounds[j]:
-            out[..., j, :] = np.mean(v[..., bounds[j]:bounds[j + 1], :], axis=-2)
+            out[..., j] = np.mean(v[..., bounds[j]:bounds[j + 1]], axis=-1)
     return out
 
 
@@ -662,11 +665,11 @@ class CreepIdentifier:
                 g = _responses(mats, h)
                 y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
             if mats is None:
-                X = _lag_states(h, tau, T, stride)                      # (p, nr, K)
+                X = _lag_states(h, tau, T, stride)                      # (p, K, nr)
                 bounds = np.searchsorted(steps[rows], np.arange(n_steps + 1))
-                Xy = np.concatenate([X, y_r[:, :, None]], axis=2)
-                cen = Xy - np.repeat(_segment_means(Xy, bounds), np.diff(bounds), axis=1)
-                blocks = [(l, slice(l * K, (l + 1) * K), cen[l, :, :K], cen[l, :, K])
+                Xy = np.concatenate([X, y_r[:, None, :]], axis=1)
+                cen = Xy - np.repeat(_segment_means(Xy, bounds), np.diff(bounds), axis=2)
+                blocks = [(l, slice(l * K, (l + 1) * K), cen[l, :K].T, cen[l, K])
                           for l in range(p)]
                 fits.append((blocks, ("means", X, y_r, bounds)))
             else:
@@ -676,7 +679,8 @@ class CreepIdentifier:
                 y_v = y_r.ravel()
                 O = blk[:, n_lag:]
                 G_oo = O.T @ O
-                Ly = np.column_stack([blk[:, :n_lag], y_v])
+                Ly = np.empty((blk.shape[0], n_lag + 1), order="F")
+                Ly[:, :n_lag], Ly[:, n_lag] = blk[:, :n_lag], y_v
                 P = Ly - O @ np.linalg.lstsq(G_oo, O.T @ Ly, rcond=None)[0]
                 blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, :n_lag],
                            P[l * nr:(l + 1) * nr, n_lag]) for l in range(p)]
@@ -705,8 +709,8 @@ class CreepIdentifier:
         for blocks, (kind, *data) in fits:
             if kind == "means":          # each output's step means of its target less its lags
                 X, y_r, bounds = data
-                e = (y_r - np.einsum("lrk,lk->lr", X, w))[:, :, None]
-                offs.append(_segment_means(e, bounds)[:, :, 0].ravel())
+                e = y_r - np.einsum("lkr,lk->lr", X, w)
+                offs.append(_segment_means(e, bounds).ravel())
             else:
                 blk, y_v, G_oo = data
                 O = blk[:, n_lag:]
