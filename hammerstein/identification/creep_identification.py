@@ -399,7 +399,7 @@ def _step_responses(mats, p, N):
     return _responses(mats, np.ones((p, N)))
 
 
-def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None):
+def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=None):
     """Regression columns of one staircase record, every ``stride``-th row of each output stacked.
 
     Columns: lag ``k`` of hysteresis output ``l`` through G (``l``-major),
@@ -415,12 +415,13 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None):
     ``S``: :func:`_step_responses` (at least N samples), ``g``: G's responses
     to each ``h_l e_l``, (p, p, N), when already simulated. The matrix is in
     Fortran (column) order: every column is written, and later multiplied, in
-    one contiguous run.
+    one contiguous run; ``out``: such a matrix to fill (every entry is written).
     """
     p, N = h.shape
     K = tau.size
     nr = -(-N // stride)
-    cols = np.zeros((p * nr, p * (K + n_steps)), order="F")
+    cols = np.empty((p * nr, p * (K + n_steps)), order="F") if out is None else out
+    cols[:, :p * K] = 0.0
     starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
     if mats is None:
         X = _lag_states(h, tau, T, stride)
@@ -440,6 +441,7 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None):
         for i in range(p):
             for j in range(n_steps):             # S delayed to a_j, less S delayed to a_{j + 1}
                 c = cols[i * nr:(i + 1) * nr, p * K + l * n_steps + j]
+                c[:first[j]] = 0.0
                 c[first[j]:] = S[l, i, first[j] * stride - starts[j]::stride][:nr - first[j]]
                 if j + 1 < n_steps:
                     c[first[j + 1]:] -= S[l, i, first[j + 1] * stride - starts[j + 1]::stride][
@@ -664,27 +666,32 @@ class CreepIdentifier:
             else:                        # G h is the sum of G's responses to each output alone
                 g = _responses(mats, h)
                 y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
-            if mats is None:
-                X = _lag_states(h, tau, T, stride)                      # (p, K, nr)
+            if mats is None:         # (p, K + 1, nr): each output's lags, then its target
+                Xy = np.empty((p, K + 1, nr))
+                _lag_kernel(np.ascontiguousarray(h), np.exp(-T / tau), stride, Xy[:, :K])
+                Xy[:, K] = y_r
                 bounds = np.searchsorted(steps[rows], np.arange(n_steps + 1))
-                Xy = np.concatenate([X, y_r[:, None, :]], axis=1)
-                cen = Xy - np.repeat(_segment_means(Xy, bounds), np.diff(bounds), axis=2)
-                blocks = [(l, slice(l * K, (l + 1) * K), cen[l, :K].T, cen[l, K])
+                means = _segment_means(Xy, bounds)                       # (p, K + 1, n_steps)
+                for j in range(n_steps):                                 # centred in place
+                    Xy[:, :, bounds[j]:bounds[j + 1]] -= means[:, :, j:j + 1]
+                blocks = [(l, slice(l * K, (l + 1) * K), Xy[l, :K].T, Xy[l, K])
                           for l in range(p)]
-                fits.append((blocks, ("means", X, y_r, bounds)))
-            else:
+                fits.append((blocks, ("means", means)))
+            else:                    # columns: target, lags, offsets (Fortran order)
                 if S is None or S.shape[2] < N:
                     S = _step_responses(mats, p, max(np.shape(r.u)[1] for r in records))
-                blk = _regressors(mats, h, steps, n_steps, tau, T, stride, S, g)
-                y_v = y_r.ravel()
-                O = blk[:, n_lag:]
+                buf = np.empty((p * nr, 1 + p * (K + n_steps)), order="F")
+                _regressors(mats, h, steps, n_steps, tau, T, stride, S, g, out=buf[:, 1:])
+                buf[:, 0] = y_r.ravel()
+                yL, O = buf[:, :1 + n_lag], buf[:, 1 + n_lag:]
                 G_oo = O.T @ O
-                Ly = np.empty((blk.shape[0], n_lag + 1), order="F")
-                Ly[:, :n_lag], Ly[:, n_lag] = blk[:, :n_lag], y_v
-                P = Ly - O @ np.linalg.lstsq(G_oo, O.T @ Ly, rcond=None)[0]
-                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, :n_lag],
-                           P[l * nr:(l + 1) * nr, n_lag]) for l in range(p)]
-                fits.append((blocks, ("normal", blk, y_v, G_oo)))
+                OtyL = O.T @ yL
+                # the offsets projected out in place: yL <- yL - O G_oo^+ O^T yL
+                P = scipy.linalg.blas.dgemm(-1.0, O, np.linalg.lstsq(G_oo, OtyL, rcond=None)[0],
+                                            1.0, yL, overwrite_c=True)
+                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, 1:], P[l * nr:(l + 1) * nr, 0])
+                          for l in range(p)]
+                fits.append((blocks, ("normal", G_oo, OtyL)))
             for _, c, Lp, yp in blocks:
                 H[c, c] += Lp.T @ Lp
                 b_vec[c] += Lp.T @ yp
@@ -707,14 +714,15 @@ class CreepIdentifier:
         w = wflat.reshape(p, K)
         offs, res_out, res0_out = [], [[] for _ in range(p)], [[] for _ in range(p)]
         for blocks, (kind, *data) in fits:
-            if kind == "means":          # each output's step means of its target less its lags
-                X, y_r, bounds = data
-                e = y_r - np.einsum("lkr,lk->lr", X, w)
-                offs.append(_segment_means(e, bounds).ravel())
+            # the offsets solve the normal equations of their columns on the target
+            # less the lags, O^T (y - L w) = O^T y - (O^T L) w: without G each
+            # output's step means of its target less those of its lags times w
+            if kind == "means":
+                means, = data
+                offs.append((means[:, K] - np.einsum("lkj,lk->lj", means[:, :K], w)).ravel())
             else:
-                blk, y_v, G_oo = data
-                O = blk[:, n_lag:]
-                offs.append(np.linalg.lstsq(G_oo, O.T @ (y_v - blk[:, :n_lag] @ wflat),
+                G_oo, OtyL = data
+                offs.append(np.linalg.lstsq(G_oo, OtyL[:, 0] - OtyL[:, 1:] @ wflat,
                                             rcond=None)[0])
             for l, c, Lp, yp in blocks:
                 res_out[l].append(yp - Lp @ wflat[c])
