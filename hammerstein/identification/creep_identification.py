@@ -353,7 +353,7 @@ def _creep_inverse_kernel(y, a, w, d, v):
 
 
 def _creep_output(creep, h, T, inverse=False):
-    """One output's creep on ``h`` (n_samples,) from rest: ``c(h)``, or ``c^-1(h)`` when ``inverse``.
+    """One output's creep on ``h`` (n_samples,) from rest: ``c(h)``, or ``c^-1(h)`` if ``inverse``.
 
     The ZOH lags of :meth:`hammerstein.models.creep.Creep.simulate` (the same
     numbers to rounding), stepped one by one by a compiled kernel instead of
@@ -387,13 +387,8 @@ def _lag_states(h, tau, T, stride=1):
     return x
 
 
-def _through(mats, s):
-    """``s`` (p, N) through G from rest (G = I when ``mats`` is None)."""
-    return s if mats is None else linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0]
-
-
 def _step_responses(mats, p, N):
-    """G's unit-step responses from rest, (p inputs, p outputs, N); ones on the diagonal without G."""
+    """G's unit-step responses from rest, (p inputs, p outputs, N); identity if no G."""
     if mats is None:
         return np.eye(p)[:, :, None] * np.ones(N)
     return _responses(mats, np.ones((p, N)))
@@ -421,9 +416,9 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=Non
     K = tau.size
     nr = -(-N // stride)
     cols = np.empty((p * nr, p * (K + n_steps)), order="F") if out is None else out
-    cols[:, :p * K] = 0.0
     starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
     if mats is None:
+        cols[:, :p * K] = 0.0
         X = _lag_states(h, tau, T, stride)
         for l in range(p):
             cols[l * nr:(l + 1) * nr, l * K:(l + 1) * K] = X[l].T
@@ -689,8 +684,8 @@ class CreepIdentifier:
                 # the offsets projected out in place: yL <- yL - O G_oo^+ O^T yL
                 P = scipy.linalg.blas.dgemm(-1.0, O, np.linalg.lstsq(G_oo, OtyL, rcond=None)[0],
                                             1.0, yL, overwrite_c=True)
-                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, 1:], P[l * nr:(l + 1) * nr, 0])
-                          for l in range(p)]
+                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, 1:],
+                           P[l * nr:(l + 1) * nr, 0]) for l in range(p)]
                 fits.append((blocks, ("normal", G_oo, OtyL)))
             for _, c, Lp, yp in blocks:
                 H[c, c] += Lp.T @ Lp

@@ -401,12 +401,12 @@ def _dynamics(options, fit, dynamics_records, creep=None, first=None):
 
 
 def _creep(fit, creep_records, dyn):
-    """The creep after ``fit``'s model (and G): its staircase outputs reused when ``auto`` scored it."""
+    """The creep after ``fit``'s model and G, on its staircase outputs if ``auto`` scored it."""
     kept = _STAIRS_OUTPUTS.pop(id(fit.model), None)
     outs = kept[2] if kept is not None and kept[0]() is fit.model and kept[1] is creep_records \
         else None
-    return identify_record_creep(fit, creep_records, None if dyn is None else dyn.identifier.system_,
-                                 outputs=outs)
+    return identify_record_creep(fit, creep_records,
+                                 None if dyn is None else dyn.identifier.system_, outputs=outs)
 
 
 def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records):
