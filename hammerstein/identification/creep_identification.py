@@ -394,7 +394,7 @@ def _step_responses(mats, p, N):
     return _responses(mats, np.ones((p, N)))
 
 
-def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=None):
+def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=None, gap=0):
     """Regression columns of one staircase record, every ``stride``-th row of each output stacked.
 
     Columns: lag ``k`` of hysteresis output ``l`` through G (``l``-major),
@@ -410,12 +410,14 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=Non
     ``S``: :func:`_step_responses` (at least N samples), ``g``: G's responses
     to each ``h_l e_l``, (p, p, N), when already simulated. The matrix is in
     Fortran (column) order: every column is written, and later multiplied, in
-    one contiguous run; ``out``: such a matrix to fill (every entry is written).
+    one contiguous run; ``out``: such a matrix to fill, every entry written
+    except ``gap`` columns left between the lag and the step columns.
     """
     p, N = h.shape
     K = tau.size
     nr = -(-N // stride)
-    cols = np.empty((p * nr, p * (K + n_steps)), order="F") if out is None else out
+    cols = np.empty((p * nr, p * (K + n_steps) + gap), order="F") if out is None else out
+    c0 = p * K + gap                             # the first step column
     starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
     if mats is None:
         cols[:, :p * K] = 0.0
@@ -435,7 +437,7 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=Non
     for l in range(p):
         for i in range(p):
             for j in range(n_steps):             # S delayed to a_j, less S delayed to a_{j + 1}
-                c = cols[i * nr:(i + 1) * nr, p * K + l * n_steps + j]
+                c = cols[i * nr:(i + 1) * nr, c0 + l * n_steps + j]
                 c[:first[j]] = 0.0
                 c[first[j]:] = S[l, i, first[j] * stride - starts[j]::stride][:nr - first[j]]
                 if j + 1 < n_steps:
@@ -672,21 +674,21 @@ class CreepIdentifier:
                 blocks = [(l, slice(l * K, (l + 1) * K), Xy[l, :K].T, Xy[l, K])
                           for l in range(p)]
                 fits.append((blocks, ("means", means)))
-            else:                    # columns: target, lags, offsets (Fortran order)
+            else:                    # columns: lags, target, offsets (Fortran order)
                 if S is None or S.shape[2] < N:
                     S = _step_responses(mats, p, max(np.shape(r.u)[1] for r in records))
                 buf = np.empty((p * nr, 1 + p * (K + n_steps)), order="F")
-                _regressors(mats, h, steps, n_steps, tau, T, stride, S, g, out=buf[:, 1:])
-                buf[:, 0] = y_r.ravel()
-                yL, O = buf[:, :1 + n_lag], buf[:, 1 + n_lag:]
+                _regressors(mats, h, steps, n_steps, tau, T, stride, S, g, out=buf, gap=1)
+                buf[:, n_lag] = y_r.ravel()
+                Ly, O = buf[:, :n_lag + 1], buf[:, n_lag + 1:]
                 G_oo = O.T @ O
-                OtyL = O.T @ yL
-                # the offsets projected out in place: yL <- yL - O G_oo^+ O^T yL
-                P = scipy.linalg.blas.dgemm(-1.0, O, np.linalg.lstsq(G_oo, OtyL, rcond=None)[0],
-                                            1.0, yL, overwrite_c=True)
-                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, 1:],
-                           P[l * nr:(l + 1) * nr, 0]) for l in range(p)]
-                fits.append((blocks, ("normal", G_oo, OtyL)))
+                OtLy = O.T @ Ly
+                # the offsets projected out in place: Ly <- Ly - O G_oo^+ O^T Ly
+                P = scipy.linalg.blas.dgemm(-1.0, O, np.linalg.lstsq(G_oo, OtLy, rcond=None)[0],
+                                            1.0, Ly, overwrite_c=True)
+                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, :n_lag],
+                           P[l * nr:(l + 1) * nr, n_lag]) for l in range(p)]
+                fits.append((blocks, ("normal", G_oo, OtLy)))
             for _, c, Lp, yp in blocks:
                 H[c, c] += Lp.T @ Lp
                 b_vec[c] += Lp.T @ yp
@@ -716,8 +718,8 @@ class CreepIdentifier:
                 means, = data
                 offs.append((means[:, K] - np.einsum("lkj,lk->lj", means[:, :K], w)).ravel())
             else:
-                G_oo, OtyL = data
-                offs.append(np.linalg.lstsq(G_oo, OtyL[:, 0] - OtyL[:, 1:] @ wflat,
+                G_oo, OtLy = data
+                offs.append(np.linalg.lstsq(G_oo, OtLy[:, n_lag] - OtLy[:, :n_lag] @ wflat,
                                             rcond=None)[0])
             for l, c, Lp, yp in blocks:
                 res_out[l].append(yp - Lp @ wflat[c])
