@@ -230,7 +230,7 @@ def dynamics_tables(fit, records, name="identified", **options):
     return identify_record_dynamics(fit, records, name, **options).tables
 
 
-def identify_record_creep(fit, records, dynamics=None, **options):
+def identify_record_creep(fit, records, dynamics=None, outputs=None, **options):
     """Identify the creep after a fitted hysteresis model from staircase records.
 
     :class:`hammerstein.identification.creep_identification.CreepIdentifier` on the
@@ -245,6 +245,9 @@ def identify_record_creep(fit, records, dynamics=None, **options):
         Staircase records with the same columns.
     dynamics : control.StateSpace, optional
         Identified discrete dynamics G (e.g. ``RecordDynamics.identifier.system_``).
+    outputs : sequence of array_like, optional
+        The model's outputs on the records when already simulated
+        (:meth:`~hammerstein.identification.creep_identification.CreepIdentifier.fit`).
     **options
         Options of :class:`~hammerstein.identification.creep_identification.CreepIdentifier`.
 
@@ -260,7 +263,7 @@ def identify_record_creep(fit, records, dynamics=None, **options):
     """
     opts = {"hysteresis_frequency_hz": hysteresis_frequency(fit.records)}
     opts.update({k: v for k, v in options.items() if v is not None})
-    return CreepIdentifier(**opts).fit(fit.model, _as_records(records), dynamics)
+    return CreepIdentifier(**opts).fit(fit.model, _as_records(records), dynamics, outputs)
 
 
 # -- modified PI: static output map ---------------------------------------------------

@@ -58,6 +58,7 @@ import scipy.linalg
 from hammerstein.models.creep import Creep, minimum_phase_margin
 from hammerstein.exceptions import IdentificationError
 from hammerstein.simulation import linear_steps
+from numba import njit      # after hammerstein.simulation: it sets numba's cache directory first
 
 __all__ = ["CreepIdentifier", "CREEP_DEFAULTS", "staircase_steps", "hysteresis_frequency",
            "remove_creep", "step_level_errors"]
@@ -133,9 +134,11 @@ def remove_creep(records, creeps, output_offset=None):
     (:func:`hammerstein.models.creep.minimum_phase_margin`), so its inverse is
     stable and v follows exactly, sample by sample, from the measured y: with
     the ZOH matrices ``(A, B, c, d)`` of the lags,
-    ``v_n = (y_n - c x_n) / d``, ``x_{n+1} = (A - B c / d) x_n + B y_n / d``
+    ``v_n = (y_n - c x_n) / d``, ``x_{n+1} = A x_n + B v_n``
     (the state-space inverse of a system with an invertible direct term,
-    e.g. Zhou, Doyle and Glover [4]_, Section 3.5). Both start from rest, as
+    ``x_{n+1} = (A - B c / d) x_n + B y_n / d``, e.g. Zhou, Doyle and
+    Glover [4]_, Section 3.5; the lags are diagonal, so a compiled kernel
+    steps them one by one). Both start from rest, as
     the records do. The hysteresis model refitted on ``(u, v)`` no longer
     takes the creep inside its loops for hysteresis.
 
@@ -196,10 +199,7 @@ def remove_creep(records, creeps, output_offset=None):
             if minimum_phase_margin(c, T) <= 0:
                 raise IdentificationError(f"creep: output {l} is not minimum phase at T = {T:g} s;"
                                           f" it cannot be removed from the records")
-            A, B, C, D = c.discrete(T)
-            d = float(D[0, 0])
-            inv = (A - B @ C / d, B / d, -C / d, np.full((1, 1), 1.0 / d))
-            v[l] = linear_steps((y[l] - off[l])[None, :], inv, np.zeros(c.n_states))[0][0] + off[l]
+            v[l] = _creep_output(c, y[l] - off[l], T, inverse=True) + off[l]
         if dataclasses.is_dataclass(rec):
             out.append(dataclasses.replace(rec, y=v))
         else:
@@ -209,7 +209,7 @@ def remove_creep(records, creeps, output_offset=None):
     return out
 
 
-def step_level_errors(model, records, creeps=None, settle=0.1):
+def step_level_errors(model, records, creeps=None, settle=0.1, outputs=None):
     """Measured minus predicted level of every step of staircase records.
 
     The prediction is the hysteresis model followed by the creep (when
@@ -234,6 +234,10 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
         Creep per output; None: the hysteresis model alone.
     settle : float
         Samples of each step within this time [s] of its start are skipped.
+    outputs : sequence of array_like, optional
+        The model's outputs on the records, ``model.simulate(rec.u)[0]``
+        (p, n_samples) each, when already simulated (e.g. by
+        :meth:`CreepIdentifier.fit`); simulated here by default.
 
     Returns
     -------
@@ -260,11 +264,15 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
     [[0.0, 0.2, 0.6]]
     """
     out = []
-    for rec in records:
+    records = list(records)
+    if outputs is not None and len(outputs) != len(records):
+        raise IdentificationError(f"creep records: expected {len(records)} model outputs (one "
+                                  f"per record), found {len(outputs)}")
+    for r_i, rec in enumerate(records):
         u = np.asarray(rec.u, dtype=float)
         y = np.asarray(rec.y, dtype=float)
         T = float(rec.sampling_period)
-        h = np.asarray(model.simulate(u)[0], dtype=float)
+        h = np.array(model.simulate(u)[0] if outputs is None else outputs[r_i], dtype=float)
         if h.shape != y.shape:
             raise IdentificationError(f"creep records: {getattr(rec, 'source', 'record')}: "
                                       f"expected {h.shape[0]} output columns, found {y.shape[0]}")
@@ -274,7 +282,7 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
         if creeps is not None:
             for l, c in enumerate(creeps):
                 if c is not None:
-                    h[l] = c.simulate((h[l] - off[l])[None, :], T)[0][0] + off[l]
+                    h[l] = _creep_output(c, h[l] - off[l], T) + off[l]
         steps = staircase_steps(u)
         n_steps = int(steps[-1]) + 1
         start = np.searchsorted(steps, np.arange(n_steps))
@@ -288,61 +296,182 @@ def step_level_errors(model, records, creeps=None, settle=0.1):
     return out
 
 
-def _lags(h, tau, T):
-    """Lag states x_k of one output: shape (K, n_samples), from rest.
+@njit(cache=True)
+def _lag_kernel(h, a, stride, x):
+    """Lag states of every row of ``h`` at the samples 0, stride, 2 stride...; ``x`` out.
+
+    ``h`` (n_series, N), ``a`` (K,), ``x`` (n_series, K, ceil(N / stride)): the
+    state before the sample, from rest, ``s_k <- a_k s_k + (1 - a_k) h``.
+    """
+    K = a.size
+    b = 1.0 - a
+    s = np.empty(K)
+    for i in range(h.shape[0]):
+        s[:] = 0.0
+        r, nxt = 0, 0
+        for t in range(h.shape[1]):
+            if t == nxt:
+                for k in range(K):
+                    x[i, k, r] = s[k]
+                r += 1
+                nxt += stride
+            v = h[i, t]
+            for k in range(K):
+                s[k] = a[k] * s[k] + b[k] * v
+
+
+@njit(cache=True)
+def _creep_kernel(h, a, w, d, y):
+    """One output's creep ``y = d h + sum_k w_k s_k`` (lag states before the sample), from rest."""
+    K = a.size
+    b = 1.0 - a
+    s = np.zeros(K)
+    for t in range(h.size):
+        v = h[t]
+        acc = 0.0
+        for k in range(K):
+            acc += w[k] * s[k]
+        y[t] = acc + d * v
+        for k in range(K):
+            s[k] = a[k] * s[k] + b[k] * v
+
+
+@njit(cache=True)
+def _creep_inverse_kernel(y, a, w, d, v):
+    """One output's creep removed: ``v = (y - sum_k w_k s_k) / d``, lags driven by v, from rest."""
+    K = a.size
+    b = 1.0 - a
+    s = np.zeros(K)
+    for t in range(y.size):
+        acc = 0.0
+        for k in range(K):
+            acc += w[k] * s[k]
+        e = (y[t] - acc) / d
+        v[t] = e
+        for k in range(K):
+            s[k] = a[k] * s[k] + b[k] * e
+
+
+def _creep_output(creep, h, T, inverse=False):
+    """One output's creep on ``h`` (n_samples,) from rest: ``c(h)``, or ``c^-1(h)`` if ``inverse``.
+
+    The ZOH lags of :meth:`hammerstein.models.creep.Creep.simulate` (the same
+    numbers to rounding), stepped one by one by a compiled kernel instead of
+    through the dense state space (K instead of K^2 products per sample).
+    """
+    h = np.ascontiguousarray(h, dtype=float)
+    a = np.exp(-float(T) / creep.time_constants)
+    y = np.empty(h.size)
+    kernel = _creep_inverse_kernel if inverse else _creep_kernel
+    kernel(h, a, np.ascontiguousarray(creep.weights, dtype=float), float(creep.instantaneous), y)
+    return y
+
+
+def _lag_states(h, tau, T, stride=1):
+    """Lag states x_k of each row of ``h`` at every ``stride``-th sample, from rest.
 
     ``x_k[t] = a_k x_k[t - 1] + (1 - a_k) h[t - 1]``, ``a_k = exp(-T / tau_k)``
-    (the lags of :class:`~hammerstein.models.creep.Creep`, the state before the
-    sample), each by :func:`scipy.signal.lfilter` with ``b = [0, 1 - a_k]``,
-    ``a = [1, -a_k]``: the same two products and one sum per sample as the
-    diagonal state space, so the same numbers bit for bit, and about 13
-    times faster than the dense state-space kernel on 9 lags.
-    """
-    from scipy.signal import lfilter   # here: scipy.signal is ~1 s of imports (creep fits only)
+    (the lags of :class:`~hammerstein.models.creep.Creep`, the state before
+    the sample; the same two products and one sum per sample as the diagonal
+    state space), all lags of all rows in one pass of a compiled kernel over
+    the samples, kept only at the samples ``0, stride, 2 stride...``.
 
-    a = np.exp(-T / tau)
-    x = np.empty((tau.size, h.size))
-    for k in range(tau.size):
-        x[k] = lfilter([0.0, 1.0 - a[k]], [1.0, -a[k]], h)
+    Returns
+    -------
+    numpy.ndarray, shape (n_series, K, ceil(N / stride))
+    """
+    h = np.ascontiguousarray(np.atleast_2d(h), dtype=float)
+    a = np.exp(-T / np.asarray(tau, dtype=float))
+    x = np.empty((h.shape[0], a.size, -(-h.shape[1] // stride)))
+    _lag_kernel(h, a, int(stride), x)
     return x
 
 
-def _through(mats, s):
-    """``s`` (p, N) through G from rest (G = I when ``mats`` is None)."""
-    return s if mats is None else linear_steps(s, mats, np.zeros(mats[0].shape[0]))[0]
+def _step_responses(mats, p, N):
+    """G's unit-step responses from rest, (p inputs, p outputs, N); identity if no G."""
+    if mats is None:
+        return np.eye(p)[:, :, None] * np.ones(N)
+    return _responses(mats, np.ones((p, N)))
 
 
-def _regressors(mats, h, steps, n_steps, tau, T, rows):
-    """Regression columns of one staircase record, rows ``rows`` of each output stacked.
+def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=None, gap=0):
+    """Regression columns of one staircase record, every ``stride``-th row of each output stacked.
 
     Columns: lag ``k`` of hysteresis output ``l`` through G (``l``-major),
     then the indicator of step ``j`` on output ``l`` through G. G and the
     lags are linear and time-invariant from rest, so they commute: the lags
-    of G's response to ``h_l e_l`` are G's response to the lags of ``h_l e_l``;
+    of G's response to ``h_l e_l`` are G's response to the lags of ``h_l e_l``
+    (all p x p responses lagged in one kernel pass, :func:`_lag_states`;
+    without G the lags of ``h_l`` alone, the other outputs' rows being zero);
     a step's indicator is the difference of two delayed unit steps, so its
     response is the difference of G's delayed step responses (one
     simulation per output instead of one per column, the same numbers to
-    rounding).
+    rounding), each read off the step response by a strided slice.
+    ``S``: :func:`_step_responses` (at least N samples), ``g``: G's responses
+    to each ``h_l e_l``, (p, p, N), when already simulated. The matrix is in
+    Fortran (column) order: every column is written, and later multiplied, in
+    one contiguous run; ``out``: such a matrix to fill, every entry written
+    except ``gap`` columns left between the lag and the step columns.
     """
     p, N = h.shape
     K = tau.size
-    cols = np.empty((p * rows.size, p * (K + n_steps)))
-    starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1, N]     # step j: samples a_j..a_{j+1}-1
+    nr = -(-N // stride)
+    cols = np.empty((p * nr, p * (K + n_steps) + gap), order="F") if out is None else out
+    c0 = p * K + gap                             # the first step column
+    starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
+    if mats is None:
+        cols[:, :p * K] = 0.0
+        X = _lag_states(h, tau, T, stride)
+        for l in range(p):
+            cols[l * nr:(l + 1) * nr, l * K:(l + 1) * K] = X[l].T
+    else:
+        if g is None:
+            g = _responses(mats, h)
+        X = _lag_states(g.reshape(p * p, N), tau, T, stride)     # its lags, per output of G
+        for l in range(p):
+            for i in range(p):
+                cols[i * nr:(i + 1) * nr, l * K:(l + 1) * K] = X[l * p + i].T
+    if S is None:
+        S = _step_responses(mats, p, N)
+    first = np.r_[-(-starts // stride), nr]      # first kept row at or after each step's start
     for l in range(p):
-        e = np.zeros((p, N))
-        e[l] = h[l]
-        g = _through(mats, e)                    # (p, N): G's response to h_l e_l
-        for i in range(p):                       # its lags, per output of G
-            cols[i * rows.size:(i + 1) * rows.size, l * K:(l + 1) * K] = _lags(g[i], tau, T)[:, rows].T
-        e = np.zeros((p, N))
-        e[l] = 1.0
-        S = _through(mats, e)                    # (p, N): G's unit-step response from input l
-        lag = rows[None, :] - starts[:, None]    # (n_steps + 1, rows): S(t - a_j), 0 before a_j
         for i in range(p):
-            D = np.where(lag >= 0, S[i][np.maximum(lag, 0)], 0.0)
-            cols[i * rows.size:(i + 1) * rows.size,
-                 p * K + l * n_steps:p * K + (l + 1) * n_steps] = (D[:-1] - D[1:]).T
+            for j in range(n_steps):             # S delayed to a_j, less S delayed to a_{j + 1}
+                c = cols[i * nr:(i + 1) * nr, c0 + l * n_steps + j]
+                c[:first[j]] = 0.0
+                c[first[j]:] = S[l, i, first[j] * stride - starts[j]::stride][:nr - first[j]]
+                if j + 1 < n_steps:
+                    c[first[j + 1]:] -= S[l, i, first[j + 1] * stride - starts[j + 1]::stride][
+                        :nr - first[j + 1]]
     return cols
+
+
+def _responses(mats, h):
+    """G's responses from rest to each output of ``h`` alone, ``g[l] = G (h_l e_l)``: (p, p, N).
+
+    Each simulated with G's column ``l`` only (B and D restricted to input
+    ``l``): the other inputs are zero, so the same numbers with p times
+    fewer input products per sample.
+    """
+    A, B, C, D = mats
+    p, N = h.shape
+    g = np.empty((p, p, N))
+    for l in range(p):
+        g[l] = linear_steps(h[l:l + 1], (A, B[:, l:l + 1], C, D[:, l:l + 1]),
+                            np.zeros(A.shape[0]))[0]
+    return g
+
+
+def _segment_means(v, bounds):
+    """Means of ``v`` (..., n) over the samples ``bounds[j]:bounds[j + 1]``: (..., n_seg).
+
+    0 for an empty segment (the minimum-norm offset of a column of zeros).
+    """
+    out = np.zeros(v.shape[:-1] + (bounds.size - 1,))
+    for j in range(bounds.size - 1):
+        if bounds[j + 1] > bounds[j]:
+            out[..., j] = np.mean(v[..., bounds[j]:bounds[j + 1]], axis=-1)
+    return out
 
 
 class CreepIdentifier:
@@ -440,7 +569,7 @@ class CreepIdentifier:
         self.hysteresis_frequency_hz = float(hysteresis_frequency_hz)
         self.max_rows = int(max_rows)
 
-    def fit(self, model, records, dynamics=None):
+    def fit(self, model, records, dynamics=None, outputs=None):
         """Fit the creep of every output.
 
         Parameters
@@ -456,6 +585,11 @@ class CreepIdentifier:
             Identified discrete p x p dynamics G after the creep (same
             sampling period); None: G = I (the ringing is then part of the
             residual).
+        outputs : sequence of array_like, optional
+            The model's outputs on the records, ``model.simulate(rec.u)[0]``
+            (p, n_samples) each, when already simulated (e.g. for
+            :func:`step_level_errors` on the same records); simulated here
+            by default.
 
         Returns
         -------
@@ -479,6 +613,9 @@ class CreepIdentifier:
             if np.shape(rec.y)[0] != p:
                 raise IdentificationError(f"creep records: {rec.source}: expected {p} output "
                                           f"columns, found {np.shape(rec.y)[0]}")
+        if outputs is not None and len(outputs) != len(records):
+            raise IdentificationError(f"creep records: expected {len(records)} model outputs (one "
+                                      f"per record), found {len(outputs)}")
         mats = None
         if dynamics is not None:
             if not np.isclose(float(dynamics.dt), T, rtol=0.01):
@@ -488,12 +625,25 @@ class CreepIdentifier:
                          (dynamics.A, dynamics.B, dynamics.C, dynamics.D))
         tau = self.time_constants
         K = tau.size
+        n_lag = p * K
         off = np.zeros(p) if model.output_offset is None else np.asarray(model.output_offset, float)
         total = sum(np.shape(r.y)[1] for r in records)
         stride = max(1, int(np.ceil(total / self.max_rows)))
-        blocks, targets, seg_counts = [], [], []
+        # lag columns shared by the records, offset columns per record; the
+        # offsets are free: projected out, NNLS on the lag weights alone. Each
+        # record's offsets touch its own rows only (the offset block is block
+        # diagonal), so the projection is made record by record. Without G an
+        # offset column is a step's indicator on one output's rows: projecting
+        # it out subtracts the step's mean (only output l's lags are nonzero on
+        # its rows, so each output is a block of its own); with G the offsets
+        # are projected by the (small) normal equations of their columns.
+        # ``fits``: per record, the row blocks (output, lag columns, projected
+        # lags, projected target) and what the offsets are solved from.
+        H, b_vec, sum_sq, n_rows, fits, seg_counts = (np.zeros((n_lag, n_lag)), np.zeros(n_lag),
+                                                       0.0, 0, [], [])
         self.identifiable_up_to_ = 0.0
-        for rec in records:
+        S = None                         # G's step responses, once for all records
+        for r_i, rec in enumerate(records):
             u = np.asarray(rec.u, dtype=float)
             steps = staircase_steps(u)
             n_steps = int(steps[-1]) + 1
@@ -503,31 +653,48 @@ class CreepIdentifier:
                                           f"staircase (steps held >= {_MIN_STEP_SAMPLES} samples), "
                                           f"found {n_steps} step(s)")
             self.identifiable_up_to_ = max(self.identifiable_up_to_, float(lengths.max() * T))
-            h = model.simulate(u)[0] - off[:, None]
+            h = np.asarray(model.simulate(u)[0] if outputs is None else outputs[r_i], dtype=float)
+            h = h - off[:, None]
             N = u.shape[1]
             rows = np.arange(0, N, stride)
-            base = _through(mats, h)
-            blocks.append(_regressors(mats, h, steps, n_steps, tau, T, rows))
-            targets.append((np.asarray(rec.y, dtype=float) - off[:, None] - base)[:, rows].ravel())
+            nr = rows.size
+            if mats is None:
+                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - h)[:, rows]
+            else:                        # G h is the sum of G's responses to each output alone
+                g = _responses(mats, h)
+                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
+            if mats is None:         # (p, K + 1, nr): each output's lags, then its target
+                Xy = np.empty((p, K + 1, nr))
+                _lag_kernel(np.ascontiguousarray(h), np.exp(-T / tau), stride, Xy[:, :K])
+                Xy[:, K] = y_r
+                bounds = np.searchsorted(steps[rows], np.arange(n_steps + 1))
+                means = _segment_means(Xy, bounds)                       # (p, K + 1, n_steps)
+                for j in range(n_steps):                                 # centred in place
+                    Xy[:, :, bounds[j]:bounds[j + 1]] -= means[:, :, j:j + 1]
+                blocks = [(l, slice(l * K, (l + 1) * K), Xy[l, :K].T, Xy[l, K])
+                          for l in range(p)]
+                fits.append((blocks, ("means", means)))
+            else:                    # columns: lags, target, offsets (Fortran order)
+                if S is None or S.shape[2] < N:
+                    S = _step_responses(mats, p, max(np.shape(r.u)[1] for r in records))
+                buf = np.empty((p * nr, 1 + p * (K + n_steps)), order="F")
+                _regressors(mats, h, steps, n_steps, tau, T, stride, S, g, out=buf, gap=1)
+                buf[:, n_lag] = y_r.ravel()
+                Ly, O = buf[:, :n_lag + 1], buf[:, n_lag + 1:]
+                G_oo = O.T @ O
+                OtLy = O.T @ Ly
+                # the offsets projected out in place: Ly <- Ly - O G_oo^+ O^T Ly
+                P = scipy.linalg.blas.dgemm(-1.0, O, np.linalg.lstsq(G_oo, OtLy, rcond=None)[0],
+                                            1.0, Ly, overwrite_c=True)
+                blocks = [(l, slice(0, n_lag), P[l * nr:(l + 1) * nr, :n_lag],
+                           P[l * nr:(l + 1) * nr, n_lag]) for l in range(p)]
+                fits.append((blocks, ("normal", G_oo, OtLy)))
+            for _, c, Lp, yp in blocks:
+                H[c, c] += Lp.T @ Lp
+                b_vec[c] += Lp.T @ yp
+                sum_sq += float(np.sum(Lp ** 2))
+                n_rows += yp.size
             seg_counts.append(n_steps)
-        # lag columns shared by the records, offset columns per record; the
-        # offsets are free: projected out, NNLS on the lag weights alone. Each
-        # record's offsets touch its own rows only (the offset block is block
-        # diagonal), so the projection is made record by record, by the (small)
-        # normal equations of its offset columns
-        n_lag = p * K
-        n_rows = sum(b.shape[0] for b in blocks)
-        H, b_vec, sum_sq, projected = np.zeros((n_lag, n_lag)), np.zeros(n_lag), 0.0, []
-        for blk, y_r in zip(blocks, targets):
-            O = blk[:, n_lag:]
-            G_oo = O.T @ O
-            Ly = np.column_stack([blk[:, :n_lag], y_r])
-            P = Ly - O @ np.linalg.lstsq(G_oo, O.T @ Ly, rcond=None)[0]
-            Lp, yp = P[:, :n_lag], P[:, n_lag]
-            H += Lp.T @ Lp
-            b_vec += Lp.T @ yp
-            sum_sq += float(np.sum(Lp ** 2))
-            projected.append((Lp, yp, G_oo))
         if self.smoothing > 0 and K >= 3:
             lam2 = self.smoothing * n_rows * (sum_sq / (n_rows * n_lag))
             D2 = np.kron(np.eye(p), np.diff(np.eye(K), 2, axis=0))
@@ -543,14 +710,20 @@ class CreepIdentifier:
             raise IdentificationError(f"creep: non-negative least squares failed: {exc}") from None
         w = wflat.reshape(p, K)
         offs, res_out, res0_out = [], [[] for _ in range(p)], [[] for _ in range(p)]
-        for blk, y_r, (Lp, yp, G_oo) in zip(blocks, targets, projected):
-            O = blk[:, n_lag:]
-            offs.append(np.linalg.lstsq(G_oo, O.T @ (y_r - blk[:, :n_lag] @ wflat), rcond=None)[0])
-            res = yp - Lp @ wflat
-            n_r = blk.shape[0] // p
-            for l in range(p):
-                res_out[l].append(res[l * n_r:(l + 1) * n_r])
-                res0_out[l].append(yp[l * n_r:(l + 1) * n_r])
+        for blocks, (kind, *data) in fits:
+            # the offsets solve the normal equations of their columns on the target
+            # less the lags, O^T (y - L w) = O^T y - (O^T L) w: without G each
+            # output's step means of its target less those of its lags times w
+            if kind == "means":
+                means, = data
+                offs.append((means[:, K] - np.einsum("lkj,lk->lj", means[:, :K], w)).ravel())
+            else:
+                G_oo, OtLy = data
+                offs.append(np.linalg.lstsq(G_oo, OtLy[:, n_lag] - OtLy[:, :n_lag] @ wflat,
+                                            rcond=None)[0])
+            for l, c, Lp, yp in blocks:
+                res_out[l].append(yp - Lp @ wflat[c])
+                res0_out[l].append(yp)
         offs = np.concatenate(offs)
         self.time_constants_ = tau.copy()
         self.weights_ = w
