@@ -12,7 +12,10 @@ reach every kernel with the argument types the commands use:
 * the Hammerstein plant and the multivariable PI of the bundled presets
   (with creep), and the play operators of the PI identification;
 * the Preisach and generalised-PI models, the generalised plays of their
-  identification and the Preisach inverse compensator.
+  identification and the Preisach inverse compensator;
+* a generalised-PI identification (its sensitivity kernel) and creep
+  identifications with and without dynamics (the lag, creep and inverse
+  creep kernels).
 
 It prints each workload with the kernels numba compiled for it and the
 time taken; a kernel already in the cache loads silently (a second
@@ -24,11 +27,17 @@ from __future__ import annotations
 
 import time
 
+import control
 import numpy as np
 from numba.core import event
 
 from hammerstein.cli._common import print_err
 from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
+from hammerstein.identification.creep_identification import remove_creep, step_level_errors
+from hammerstein.identification.gpi_identification import identify_gpi_records
+from hammerstein.identification.record_identification import identify_record_creep
+from hammerstein.io.datafiles import MultiRecord
+from hammerstein.signals.excitation import decreasing_sine
 from hammerstein.models.generalized_pi import GeneralizedPI
 from hammerstein.models.hysteresis import play
 from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
@@ -104,6 +113,24 @@ def _preisach_classes():
     PreisachInverseCompensator(inverse_model).simulate(0.5 * model.simulate(u)[0])
 
 
+def _identification():
+    """The identification kernels: generalised-PI sensitivities, the creep's lags and inverse."""
+    T = 1e-3
+    t, u, _ = decreasing_sine(T, 8.0)
+    y = GeneralizedPI([0.0, 2.0, 4.0], [1.0, 0.4, 0.2], [10.0, 0.1, 0.0, 0.0],
+                      [10.0, 0.1, 0.0, 0.0]).simulate(u)[0]
+    rec = MultiRecord(t, u[None], y[None], ("u",), ("y",), T, "warmup")
+    fit = identify_gpi_records(rec, n_plays=4)
+    steps = np.repeat([0.0, 4.0, -3.0, 1.0, 0.0, 2.0], 400)
+    stairs = [MultiRecord(np.arange(steps.size) * T, steps[None], 1.02 * steps[None], ("u",),
+                          ("y",), T, "warmup-stairs")]
+    G = control.ss([[0.5]], [[0.5]], [[1.0]], [[0.0]], dt=T)
+    for dynamics in (None, G):
+        creep = identify_record_creep(fit, stairs, dynamics)
+        step_level_errors(fit.model, stairs, creep.creeps_)
+        remove_creep([rec], creep.creeps_)
+
+
 #: (label, function) of every workload, in order.
 WORKLOADS = (
     ("chain kernel, default run", lambda: _chain("default")),
@@ -111,6 +138,7 @@ WORKLOADS = (
     ("plants and PI models of the bundled presets", _presets),
     ("compensated chain, single and batched", _compensated),
     ("Preisach and generalised-PI models, their inverse", _preisach_classes),
+    ("identification: generalised-PI sensitivities, creep", _identification),
 )
 
 

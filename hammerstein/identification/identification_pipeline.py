@@ -27,7 +27,6 @@ and the tables a preset stores besides ``[model]`` (:meth:`IdentificationResult.
 from __future__ import annotations
 
 import multiprocessing
-import weakref
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass, field
 
@@ -180,23 +179,16 @@ def _fit_rms(fit):
     return max(float(r["rms"]) for r in reps) if reps else float("nan")
 
 
-#: ``id(model) -> (weak reference to the model, staircase records, its outputs on them)``
-#: while the model lives: what :func:`_step_level_error` simulated, for :func:`_creep`
-#: after ``auto`` chose that model (the class fits run here with one worker; a worker
-#: process keeps its own, unused, entries).
-_STAIRS_OUTPUTS = {}
-
-
 def _step_level_error(fit, recs):
     """Held-out step levels of the staircases: (RMS [% of range], RMS, largest [unit]).
 
-    The model is simulated once on the staircases, for its creep and its levels,
-    and its outputs kept while it lives, for the creep fitted after it if chosen.
+    The model is simulated once on the staircases, for its creep and its levels;
+    its outputs stay with the fit (``fit.staircase_outputs``, with the model they
+    belong to; a worker hands them back with the fit) for the creep fitted after
+    that model if ``auto`` chooses it.
     """
     outs = [fit.model.simulate(np.asarray(r.u, dtype=float))[0] for r in recs]
-    key = id(fit.model)
-    _STAIRS_OUTPUTS[key] = (weakref.ref(fit.model), recs, outs)
-    weakref.finalize(fit.model, _STAIRS_OUTPUTS.pop, key, None)
+    fit.staircase_outputs = (fit.model, outs)
     creep = identify_record_creep(fit, recs, outputs=outs)
     errs = step_level_errors(fit.model, recs, creep.creeps_, outputs=outs)
     span = np.max([np.ptp(np.asarray(r.y, dtype=float), axis=1) for r in recs], axis=0)
@@ -422,9 +414,10 @@ def _dynamics(options, fit, dynamics_records, creep=None, first=None):
 
 def _creep(fit, creep_records, dyn):
     """The creep after ``fit``'s model and G, on its staircase outputs if ``auto`` scored it."""
-    kept = _STAIRS_OUTPUTS.pop(id(fit.model), None)
-    outs = kept[2] if kept is not None and kept[0]() is fit.model and kept[1] is creep_records \
-        else None
+    model, outs = getattr(fit, "staircase_outputs", (None, None))   # auto's score's
+    if model is not fit.model or outs is None or \
+            [np.shape(o) for o in outs] != [np.shape(r.y) for r in creep_records]:
+        outs = None
     return identify_record_creep(fit, creep_records,
                                  None if dyn is None else dyn.identifier.system_, outputs=outs)
 

@@ -3,6 +3,7 @@
 import numba
 
 from hammerstein.cli.main import main
+from hammerstein.identification import _gpi_sensitivity, creep_identification
 from hammerstein.simulation import _kernels, _preisach
 
 
@@ -27,6 +28,14 @@ def test_warmup_reaches_every_entry_kernel(capsys):
     # (_preisach.ramps is only called by other kernels, which link it: never loaded alone)
     missing = [name for name, d in kernels.items() if not d.signatures and not name.endswith(".ramps")]
     assert not missing, missing
+    # the identification's own kernels (private, each called by its module's wrapper; the
+    # helpers they inline, such as _play_step, are never loaded alone)
+    ident = {f"{mod.__name__}.{name}": obj for mod in (_gpi_sensitivity, creep_identification)
+             for name, obj in vars(mod).items()
+             if isinstance(obj, numba.core.registry.CPUDispatcher) and obj.__module__ == mod.__name__
+             and name.endswith("_kernel")}
+    assert len(ident) >= 4
+    assert not [name for name, d in ident.items() if not d.signatures]
 
 
 def test_second_warmup_compiles_nothing(capsys):

@@ -65,7 +65,6 @@ class _CountingModel:
 
 
 def test_auto_scoring_simulates_the_model_once_and_the_chosen_creep_reuses_it():
-    import gc
     from hammerstein.identification import identification_pipeline as pipeline
     from hammerstein.identification.record_identification import identify_record_creep
 
@@ -90,11 +89,13 @@ def test_auto_scoring_simulates_the_model_once_and_the_chosen_creep_reuses_it():
     assert model.calls == len(recs)                  # the scored outputs were reused
     fresh = identify_record_creep(SimpleNamespace(model=_CountingModel(), records=[sine]), recs)
     assert np.array_equal(creep.weights_, fresh.weights_)
-    pipeline._creep(fit, recs, None)                 # used once: simulated again
-    assert model.calls == 2 * len(recs)
-    pipeline._step_level_error(fit, recs)
-    key = id(model)
-    assert key in pipeline._STAIRS_OUTPUTS
-    del fit, model
-    gc.collect()
-    assert key not in pipeline._STAIRS_OUTPUTS       # dropped with the model
+    pipeline._creep(fit, recs, None)                 # still that model's outputs
+    assert model.calls == len(recs)
+    fit.model = _CountingModel()                     # another model: simulated
+    pipeline._creep(fit, recs, None)
+    assert fit.model.calls == len(recs)
+    other = [MultiRecord(r.timepts[:2000], r.u[:, :2000], r.y[:, :2000], r.input_names,
+                         r.output_names, T, r.source) for r in recs]
+    pipeline._step_level_error(fit, recs)            # other records than the scored ones
+    pipeline._creep(fit, other, None)
+    assert fit.model.calls == 2 * len(recs) + len(other)
