@@ -58,7 +58,7 @@ import scipy.linalg
 from hammerstein.models.creep import Creep, minimum_phase_margin
 from hammerstein.exceptions import IdentificationError
 from hammerstein.simulation import linear_steps
-from numba import njit      # after hammerstein.simulation: it sets numba's cache directory first
+from hammerstein.identification._creep_kernels import creep_output, lag_kernel, lag_states
 
 __all__ = ["CreepIdentifier", "CREEP_DEFAULTS", "staircase_steps", "hysteresis_frequency",
            "remove_creep", "step_level_errors"]
@@ -199,7 +199,7 @@ def remove_creep(records, creeps, output_offset=None):
             if minimum_phase_margin(c, T) <= 0:
                 raise IdentificationError(f"creep: output {l} is not minimum phase at T = {T:g} s;"
                                           f" it cannot be removed from the records")
-            v[l] = _creep_output(c, y[l] - off[l], T, inverse=True) + off[l]
+            v[l] = creep_output(c, y[l] - off[l], T, inverse=True) + off[l]
         if dataclasses.is_dataclass(rec):
             out.append(dataclasses.replace(rec, y=v))
         else:
@@ -282,7 +282,7 @@ def step_level_errors(model, records, creeps=None, settle=0.1, outputs=None):
         if creeps is not None:
             for l, c in enumerate(creeps):
                 if c is not None:
-                    h[l] = _creep_output(c, h[l] - off[l], T) + off[l]
+                    h[l] = creep_output(c, h[l] - off[l], T) + off[l]
         steps = staircase_steps(u)
         n_steps = int(steps[-1]) + 1
         start = np.searchsorted(steps, np.arange(n_steps))
@@ -294,97 +294,6 @@ def step_level_errors(model, records, creeps=None, settle=0.1, outputs=None):
                 err[:, j] = np.mean(y[:, a:b] - h[:, a:b], axis=1)
         out.append(err)
     return out
-
-
-@njit(cache=True)
-def _lag_kernel(h, a, stride, x):
-    """Lag states of every row of ``h`` at the samples 0, stride, 2 stride...; ``x`` out.
-
-    ``h`` (n_series, N), ``a`` (K,), ``x`` (n_series, K, ceil(N / stride)): the
-    state before the sample, from rest, ``s_k <- a_k s_k + (1 - a_k) h``.
-    """
-    K = a.size
-    b = 1.0 - a
-    s = np.empty(K)
-    for i in range(h.shape[0]):
-        s[:] = 0.0
-        r, nxt = 0, 0
-        for t in range(h.shape[1]):
-            if t == nxt:
-                for k in range(K):
-                    x[i, k, r] = s[k]
-                r += 1
-                nxt += stride
-            v = h[i, t]
-            for k in range(K):
-                s[k] = a[k] * s[k] + b[k] * v
-
-
-@njit(cache=True)
-def _creep_kernel(h, a, w, d, y):
-    """One output's creep ``y = d h + sum_k w_k s_k`` (lag states before the sample), from rest."""
-    K = a.size
-    b = 1.0 - a
-    s = np.zeros(K)
-    for t in range(h.size):
-        v = h[t]
-        acc = 0.0
-        for k in range(K):
-            acc += w[k] * s[k]
-        y[t] = acc + d * v
-        for k in range(K):
-            s[k] = a[k] * s[k] + b[k] * v
-
-
-@njit(cache=True)
-def _creep_inverse_kernel(y, a, w, d, v):
-    """One output's creep removed: ``v = (y - sum_k w_k s_k) / d``, lags driven by v, from rest."""
-    K = a.size
-    b = 1.0 - a
-    s = np.zeros(K)
-    for t in range(y.size):
-        acc = 0.0
-        for k in range(K):
-            acc += w[k] * s[k]
-        e = (y[t] - acc) / d
-        v[t] = e
-        for k in range(K):
-            s[k] = a[k] * s[k] + b[k] * e
-
-
-def _creep_output(creep, h, T, inverse=False):
-    """One output's creep on ``h`` (n_samples,) from rest: ``c(h)``, or ``c^-1(h)`` if ``inverse``.
-
-    The ZOH lags of :meth:`hammerstein.models.creep.Creep.simulate` (the same
-    numbers to rounding), stepped one by one by a compiled kernel instead of
-    through the dense state space (K instead of K^2 products per sample).
-    """
-    h = np.ascontiguousarray(h, dtype=float)
-    a = np.exp(-float(T) / creep.time_constants)
-    y = np.empty(h.size)
-    kernel = _creep_inverse_kernel if inverse else _creep_kernel
-    kernel(h, a, np.ascontiguousarray(creep.weights, dtype=float), float(creep.instantaneous), y)
-    return y
-
-
-def _lag_states(h, tau, T, stride=1):
-    """Lag states x_k of each row of ``h`` at every ``stride``-th sample, from rest.
-
-    ``x_k[t] = a_k x_k[t - 1] + (1 - a_k) h[t - 1]``, ``a_k = exp(-T / tau_k)``
-    (the lags of :class:`~hammerstein.models.creep.Creep`, the state before
-    the sample; the same two products and one sum per sample as the diagonal
-    state space), all lags of all rows in one pass of a compiled kernel over
-    the samples, kept only at the samples ``0, stride, 2 stride...``.
-
-    Returns
-    -------
-    numpy.ndarray, shape (n_series, K, ceil(N / stride))
-    """
-    h = np.ascontiguousarray(np.atleast_2d(h), dtype=float)
-    a = np.exp(-T / np.asarray(tau, dtype=float))
-    x = np.empty((h.shape[0], a.size, -(-h.shape[1] // stride)))
-    _lag_kernel(h, a, int(stride), x)
-    return x
 
 
 def _step_responses(mats, p, N):
@@ -421,13 +330,13 @@ def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=Non
     starts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]       # step j starts at sample a_j
     if mats is None:
         cols[:, :p * K] = 0.0
-        X = _lag_states(h, tau, T, stride)
+        X = lag_states(h, tau, T, stride)
         for l in range(p):
             cols[l * nr:(l + 1) * nr, l * K:(l + 1) * K] = X[l].T
     else:
         if g is None:
             g = _responses(mats, h)
-        X = _lag_states(g.reshape(p * p, N), tau, T, stride)     # its lags, per output of G
+        X = lag_states(g.reshape(p * p, N), tau, T, stride)     # its lags, per output of G
         for l in range(p):
             for i in range(p):
                 cols[i * nr:(i + 1) * nr, l * K:(l + 1) * K] = X[l * p + i].T
@@ -665,7 +574,7 @@ class CreepIdentifier:
                 y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
             if mats is None:         # (p, K + 1, nr): each output's lags, then its target
                 Xy = np.empty((p, K + 1, nr))
-                _lag_kernel(np.ascontiguousarray(h), np.exp(-T / tau), stride, Xy[:, :K])
+                lag_kernel(np.ascontiguousarray(h), np.exp(-T / tau), stride, Xy[:, :K])
                 Xy[:, K] = y_r
                 bounds = np.searchsorted(steps[rows], np.arange(n_steps + 1))
                 means = _segment_means(Xy, bounds)                       # (p, K + 1, n_steps)

@@ -3,7 +3,7 @@
 import numba
 
 from hammerstein.cli.main import main
-from hammerstein.identification import _gpi_sensitivity, creep_identification
+from hammerstein.identification import _creep_kernels, _gpi_sensitivity
 from hammerstein.simulation import _kernels, _preisach
 
 
@@ -30,7 +30,7 @@ def test_warmup_reaches_every_entry_kernel(capsys):
     assert not missing, missing
     # the identification's own kernels (private, each called by its module's wrapper; the
     # helpers they inline, such as _play_step, are never loaded alone)
-    ident = {f"{mod.__name__}.{name}": obj for mod in (_gpi_sensitivity, creep_identification)
+    ident = {f"{mod.__name__}.{name}": obj for mod in (_gpi_sensitivity, _creep_kernels)
              for name, obj in vars(mod).items()
              if isinstance(obj, numba.core.registry.CPUDispatcher) and obj.__module__ == mod.__name__
              and name.endswith("_kernel")}

@@ -16,7 +16,8 @@ import pytest
 
 from scipy.signal import lfilter
 
-from hammerstein.identification.creep_identification import (_lag_states, _regressors,
+from hammerstein.identification._creep_kernels import lag_states
+from hammerstein.identification.creep_identification import (_regressors,
                                                               staircase_steps)
 from hammerstein.simulation import linear_steps
 
@@ -74,7 +75,7 @@ def test_lag_states_are_the_lags_filtered_one_by_one_at_the_sampled_rows(N, stri
     rng = np.random.default_rng(N)
     h = rng.normal(size=(3, N))
     tau, T = np.array([0.002, 0.02, 0.2, 2.0]), 1e-3
-    new = _lag_states(h, tau, T, stride)
+    new = lag_states(h, tau, T, stride)
     ref = np.stack([_lags(row, tau, T)[:, ::stride] for row in h])
     assert new.shape == ref.shape == (3, tau.size, -(-N // stride))
     assert np.max(np.abs(new - ref)) <= 1e-13 * np.max(np.abs(ref))
