@@ -20,6 +20,7 @@ scipy_linalg = lazy_module("scipy.linalg")  # lazy: ~0.1 s CPU of `from hammerst
 
 from hammerstein.models._lti_systems import _apply_filter, _records, modal_parameters, sensor_filter
 from hammerstein.models._lti_delay import excited_band
+from hammerstein.models._lti_modal import keep_modes, mode_shares, real_modal
 
 # -- identification ------------------------------------------------------------------
 def _powers(lam, N):
@@ -627,7 +628,7 @@ class DynamicsIdentifier:
         p = C.shape[0]
         prune = self.low_pole_fraction > 0 or self.cancel_tolerance > 0
         if prune:
-            modal = _real_modal(A, C, T)
+            modal = real_modal(A, C, T)
             if modal is not None:
                 A, C, mode_of, freq, zeta = modal
                 low = self.low_pole_fraction * band[0]
@@ -635,7 +636,7 @@ class DynamicsIdentifier:
                 for i in slow:
                     info["dropped"].append(f"pole at {freq[i]:.3g} Hz (damping {zeta[i]:.2f}) below "
                                            f"{low:.3g} Hz, far below the excited band from {band[0]:.3g} Hz")
-                A, C, mode_of, freq, zeta = _keep_modes(A, C, mode_of, freq, zeta,
+                A, C, mode_of, freq, zeta = keep_modes(A, C, mode_of, freq, zeta,
                                                         np.setdiff1d(np.arange(freq.size), slow))
                 if A.shape[0] == 0:
                     info["rejected"] = "every pole below the excited band"
@@ -643,7 +644,7 @@ class DynamicsIdentifier:
                 if self.cancel_tolerance > 0:
                     problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
                     B, D, _ = problem.solve(self._dc(p))
-                    share = _mode_shares(A, B, C, D, mode_of, band, T)
+                    share = mode_shares(A, B, C, D, mode_of, band, T)
                     weak = np.flatnonzero(share < self.cancel_tolerance)
                     if weak.size and weak.size < freq.size:
                         for i in weak:
@@ -652,7 +653,7 @@ class DynamicsIdentifier:
                                 f"{100 * share[i]:.2g} % of G's in the band)")
                         keep = np.setdiff1d(np.arange(freq.size), weak)
                         states = np.flatnonzero(np.isin(mode_of, keep))
-                        A, C, mode_of, freq, zeta = _keep_modes(A, C, mode_of, freq, zeta, keep)
+                        A, C, mode_of, freq, zeta = keep_modes(A, C, mode_of, freq, zeta, keep)
                         problem = problem.subset(states, A, C)    # B refitted on the kept modes
         if problem is None:
             problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
@@ -682,65 +683,6 @@ class DynamicsIdentifier:
         return yv, yh
 
 
-
-
-def _real_modal(A, C, T):
-    """Real modal form: ``(A_m, C_m, mode_of_state, frequency_hz, damping)`` or None.
-
-    One 1 x 1 block per real pole, one 2 x 2 block ``[[sigma, omega], [-omega,
-    sigma]]`` per complex pair; None when the eigenvectors are ill-conditioned.
-    Natural frequency ``|s| / 2 pi`` [Hz] and damping ``-Re s / |s|`` of
-    each mode from ``s = ln(z) / T``.
-    """
-    lam, V = np.linalg.eig(A)
-    if np.linalg.cond(V) > 1e8:
-        return None
-    cols, mode_of, poles = [], [], []
-    for i in np.argsort(np.abs(lam)):
-        if lam[i].imag < -1e-12:
-            continue
-        if lam[i].imag > 1e-12:
-            cols += [V[:, i].real, V[:, i].imag]
-            mode_of += [len(poles)] * 2
-        else:
-            cols.append(V[:, i].real)
-            mode_of.append(len(poles))
-        poles.append(lam[i])
-    Tm = np.column_stack(cols)
-    if Tm.shape != A.shape or np.linalg.cond(Tm) > 1e10:
-        return None
-    Am = np.linalg.solve(Tm, A @ Tm)
-    s = np.log(np.asarray(poles, dtype=complex)) / T
-    wn = np.abs(s)
-    zeta = np.where(wn > 0, -s.real / np.where(wn > 0, wn, 1), 1.0)
-    return Am, C @ Tm, np.asarray(mode_of), wn / (2 * np.pi), zeta
-
-
-def _keep_modes(A, C, mode_of, freq, zeta, keep):
-    idx = np.flatnonzero(np.isin(mode_of, keep))
-    renum = {int(old): new for new, old in enumerate(keep)}
-    return (A[np.ix_(idx, idx)], C[:, idx], np.array([renum[int(m)] for m in mode_of[idx]], int),
-            freq[keep], zeta[keep])
-
-
-def _mode_shares(A, B, C, D, mode_of, band, T):
-    """Largest gain of each mode's term in the band over the largest gain of G there."""
-    f = np.logspace(np.log10(max(band[0], 1e-3)), np.log10(min(band[1], 0.49 / T)), 200)
-    z = np.exp(2j * np.pi * f * T)
-    n_modes = int(mode_of.max()) + 1 if mode_of.size else 0
-    total = np.zeros(f.size)
-    share = np.zeros(n_modes)
-    terms = []
-    for i in range(n_modes):      # (z I - A_i)^-1 B_i at every z: one stacked solve
-        idx = np.flatnonzero(mode_of == i)
-        Ai, Bi, Ci = A[np.ix_(idx, idx)], B[idx], C[:, idx]
-        G = Ci @ np.linalg.solve(z[:, None, None] * np.eye(idx.size) - Ai, Bi)
-        terms.append(np.linalg.norm(G, 2, axis=(1, 2)))
-    Gall = C @ np.linalg.solve(z[:, None, None] * np.eye(A.shape[0]) - A, B) + D
-    total = np.linalg.norm(Gall, 2, axis=(1, 2))
-    for i, g in enumerate(terms):
-        share[i] = g.max() / max(total.max(), 1e-300)
-    return share
 
 
 def identify_dynamics(inputs, outputs, sampling_period, order=None, max_order=8, sensor=None,

@@ -12,7 +12,8 @@ import scipy.linalg
 import scipy.signal
 
 from hammerstein.models._lti_delay import frf_h1
-from hammerstein.models._lti_subspace import (_BDX0Problem, _MultiRecordMOESP, _real_modal,
+from hammerstein.models._lti_modal import real_modal as _real_modal
+from hammerstein.models._lti_subspace import (_BDX0Problem, _MultiRecordMOESP,
                                               _state_regressors)
 
 rng = np.random.default_rng(3)
