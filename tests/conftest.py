@@ -284,6 +284,18 @@ XDIST_GROUPS = {
         "test_literal_law_reported_as_diverged")) + (
         "tests/report/test_every_figure.py::"
         "test_every_figure_of_every_bundled_report_shows_its_data[",),
+    # the slow tests reading tests/cli/conftest.py's forked_cli (one interpreter's forked runs)
+    "forked-cli": tuple(f"tests/cli/{name}" for name in (
+        "test_cli.py::test_console_script_keeps_status_and_output",
+        "test_cli.py::test_closed_pipe_is_not_an_error_message",
+        "test_malformed.py::test_real_stderr_through_python_m",
+        "test_reliability.py::test_sigterm_ends_the_run_in_one_line",
+        "test_issue22.py::test_3_concurrent_updates_all_land",
+        "test_issue22.py::test_8_sigkill_of_a_run_ends_its_workers",
+        "test_issue22.py::test_8_sighup_is_an_interruption",
+        "test_issue22.py::test_8_sighup_under_nohup_is_ignored",
+        "test_issue22.py::test_10_closed_stdio_keeps_the_exit_status",
+        "test_issue22.py::test_10_full_stdout_is_an_error")),
 }
 
 

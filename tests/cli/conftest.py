@@ -72,6 +72,17 @@ def _jobs(tmp):
     return jobs
 
 
+@pytest.hookimpl(tryfirst=True)      # before ``-m`` deselects by the marks
+def pytest_collection_modifyitems(config, items):
+    """The tests of real ``python -m hammerstein`` processes (signals, closed and full
+    standard streams, concurrent runs: :func:`forked_cli`) are slow end-to-end runs,
+    about 3 s of CPU per xdist worker for the fixture alone: marked ``slow``, run by
+    ``.ci/run`` on one worker (``tests/conftest.py``'s ``XDIST_GROUPS``)."""
+    for item in items:
+        if "forked_cli" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.slow)
+
+
 @pytest.fixture(scope="session")
 def forked_cli(tmp_path_factory):
     """Results of the jobs of :func:`_jobs`, by name: ``(dict(status, stdout, stderr), tmp)``."""
