@@ -567,12 +567,8 @@ class CreepIdentifier:
             N = u.shape[1]
             rows = np.arange(0, N, stride)
             nr = rows.size
-            if mats is None:
-                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - h)[:, rows]
-            else:                        # G h is the sum of G's responses to each output alone
-                g = _responses(mats, h)
-                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
             if mats is None:         # (p, K + 1, nr): each output's lags, then its target
+                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - h)[:, rows]
                 Xy = np.empty((p, K + 1, nr))
                 lag_kernel(np.ascontiguousarray(h), np.exp(-T / tau), stride, Xy[:, :K])
                 Xy[:, K] = y_r
@@ -584,6 +580,8 @@ class CreepIdentifier:
                           for l in range(p)]
                 fits.append((blocks, ("means", means)))
             else:                    # columns: lags, target, offsets (Fortran order)
+                g = _responses(mats, h)  # G h is the sum of G's responses to each output alone
+                y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
                 if S is None or S.shape[2] < N:
                     S = _step_responses(mats, p, max(np.shape(r.u)[1] for r in records))
                 buf = np.empty((p * nr, 1 + p * (K + n_steps)), order="F")
