@@ -70,6 +70,10 @@ CREEP_DEFAULTS = {"t_min": 0.01, "t_max": 100.0, "per_decade": 2, "smoothing": 1
 #: Minimum samples of a step (shorter steps are not used for the drift).
 _MIN_STEP_SAMPLES = 10
 
+#: More steps shorter than ``_MIN_STEP_SAMPLES`` than this and a creep record is refused: the
+#: creep fit has one offset column per step, so the steps bound its memory.
+_MAX_SHORT_STEPS = 64
+
 
 def staircase_steps(u, tolerance=None):
     """Index of the voltage step of every sample of a staircase record.
@@ -557,10 +561,15 @@ class CreepIdentifier:
             steps = staircase_steps(u)
             n_steps = int(steps[-1]) + 1
             lengths = np.bincount(steps)
-            if n_steps < 2 or np.max(lengths) < _MIN_STEP_SAMPLES:
+            short = int(np.count_nonzero(lengths < _MIN_STEP_SAMPLES))
+            if n_steps < 2 or np.max(lengths) < _MIN_STEP_SAMPLES or short > _MAX_SHORT_STEPS:
+                # a ramp or an oscillation changes the voltage at every sample: one regressor
+                # column per "step" would not fit in memory, and it is no staircase
                 raise IdentificationError(f"creep records: {rec.source}: expected a voltage "
                                           f"staircase (steps held >= {_MIN_STEP_SAMPLES} samples), "
-                                          f"found {n_steps} step(s)")
+                                          f"found {n_steps} step(s)"
+                                          + (f", {short} of them shorter (a ramp or an "
+                                             f"oscillation, not a staircase)" if short else ""))
             self.identifiable_up_to_ = max(self.identifiable_up_to_, float(lengths.max() * T))
             h = np.asarray(model.simulate(u)[0] if outputs is None else outputs[r_i], dtype=float)
             h = h - off[:, None]

@@ -129,6 +129,24 @@ def test_records_that_are_not_staircases_are_refused(hysteresis):
         CreepIdentifier([0.1, -1.0])
 
 
+def test_a_staircase_behind_an_oscillation_is_refused_before_any_allocation(hysteresis):
+    """A staircase whose record starts with an oscillation (a "step" at every sample) used to
+    allocate one regressor column per sample: 413 GiB for an 18 s record at 20 kHz.
+    It is refused, and the message says why."""
+    t = np.arange(3000) * T
+    osc = np.vstack([np.sin(2 * np.pi * 5 * t) * (1 - t / t[-1]), np.zeros_like(t)])
+    stairs = np.repeat(np.array([[0.0, 5.0, 10.0, 5.0, 0.0], [0.0] * 5]), 600, axis=1)
+    u = np.hstack([osc, stairs])
+    rec = SimpleNamespace(u=u, y=hysteresis.simulate(u)[0], sampling_period=T, source="c.csv")
+    assert int(staircase_steps(u)[-1]) + 1 > 2000          # the oscillation's samples
+    with pytest.raises(IdentificationError, match=r"c.csv: expected a voltage staircase .*"
+                                                  r"shorter \(a ramp or an oscillation"):
+        CreepIdentifier().fit(hysteresis, [rec])
+    ok = SimpleNamespace(u=stairs, y=hysteresis.simulate(stairs)[0], sampling_period=T,
+                         source="s.csv")
+    assert CreepIdentifier().fit(hysteresis, [ok]).creeps_      # the staircase alone is fitted
+
+
 @pytest.mark.parametrize("creep, offset", [
     (Creep([0.01, 0.1, 1.0], [0.01, 0.02, 0.03], instantaneous=0.96), 0.0),
     (Creep.log_law(0.015, 0.01, 100.0), -3.5),            # the realistic-2dof creep, offset
