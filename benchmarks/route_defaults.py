@@ -37,10 +37,15 @@ largest sample-to-sample step over the settled drive's own largest. Printed:
 the median and the worst of each over the family, against the targets of
 issue 38.
 
-The excitation amplitude is 20 V, so that the records cover the circles'
-range on the positive side; the actuators' quadratic reversible term
-(``b u^2``) makes the negative side shorter (about -24 µm at -20 V), and a
-50 µm circle is shaped into the records' range (the drive file says where).
+The excitation amplitude is 20 V. Every actuator's reversible part
+``a u + b u^2`` is drawn monotonic up to 40 V, so that the records cover
+at least +-55 µm on each axis: the 50 µm circles are within reach. The
+generalised-PI-type actuators have 24 plays per direct path (12 for the
+coupling) under a drawn smooth density and drawn envelope skews
+(``--few-plays``: the test actuator's 4-5 plays, a kink at each threshold).
+Every file and drive is played from rest in the demagnetised state (what
+the excitation's ``demagnetise.csv`` leaves), the creep and the modes
+settled there.
 
 Usage (2-4 minutes per actuator on two cores)::
 
@@ -66,33 +71,68 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "tests"))
 
-from gpi_actuator import GPIActuator  # noqa: E402
+from gpi_actuator import GPIActuator, _gpi  # noqa: E402
 from outside_actuator import T, OutsideActuator, preisach_grid, write_csv  # noqa: E402
 
 TRIALS = 10
 
 
-class CreepGPI(GPIActuator):
-    """The generalised-PI actuator with the outside actuator's creep (sum of first-order lags)."""
+def _settled(act, h, noise, rng):
+    """Positions (2, N) [µm] of an actuator at rest before ``h`` (2, N) [µm] starts: the creep
+    lags and the modes settled on the rest output ``h[:, 0]`` (a stack at rest for long, not one
+    whose output steps from 0 to its remanence at the first sample and drifts for seconds)."""
+    import scipy.signal
+    from gpi_actuator import _lsim
+    h0 = h[:, :1]
+    if act.creep:
+        w = act.creep_gain / len(act.creep_tau)
+        dh = h - h0
+        lags = sum(scipy.signal.lfilter([0.0, 1 - a], [1.0, -a], dh, axis=1)
+                   for a in np.exp(-T / np.asarray(act.creep_tau)))
+        h = h + w * (lags + len(act.creep_tau) * h0)
+    n = act.Ad.shape[0]
+    dc = act.C @ np.linalg.solve(np.eye(n) - act.Ad, act.Bd)      # the sampled G(1)
+    y = _lsim(*map(np.ascontiguousarray, (act.Ad, act.Bd, act.C)),
+              np.ascontiguousarray((h - h[:, :1]).T)).T + dc @ h[:, :1]
+    if noise:
+        rng = np.random.default_rng(act.seed) if rng is None else rng
+        y = y + act.noise_um * rng.standard_normal(y.shape)
+    return y
 
+
+def _demagnetised(spec):
+    """Play states of a generalised-PI path after a demagnetising cycle (a sine decaying from
+    30 V to 0 over 60 periods, from the rest state): where every file and drive starts."""
+    r, w, gl, gr = (np.asarray(v, dtype=float) for v in spec)
+    up0 = gl[0] * np.tanh(gl[2]) + gl[3]
+    down0 = gr[0] * np.tanh(gr[2]) + gr[3]
+    state = np.clip(np.zeros(r.size), up0 - r, np.maximum(down0 + r, up0 - r))
+    k = np.arange(60 * 400)
+    u = 30.0 * (1.0 - k / k[-1]) * np.sin(2 * np.pi * k / 400)
+    _gpi(np.ascontiguousarray(u), r, w, gl, gr, state)
+    return state
+
+
+class CreepGPI(GPIActuator):
+    """The generalised-PI actuator with the outside actuator's creep (sum of first-order lags),
+    at rest in the demagnetised state (the state a demagnetising cycle leaves, which the
+    Preisach-type actuators also start from) before every file or drive: its plays do not start
+    from the rest state under skewed envelope functions, which no demagnetised model shares."""
+
+    creep = True
     creep_gain = 0.02
     creep_tau = (0.05, 0.5, 5.0)
 
+    def _play(self, u, spec):
+        r, w, gl, gr = (np.asarray(v, dtype=float) for v in spec)
+        key = id(spec)
+        cache = self.__dict__.setdefault("_demag", {})
+        if key not in cache or cache[key][0] is not spec:
+            cache[key] = (spec, _demagnetised(spec))
+        return _gpi(np.ascontiguousarray(u, dtype=float), r, w, gl, gr, cache[key][1].copy())
+
     def simulate(self, u, noise=True, rng=None):
-        import scipy.signal
-        h = self.hysteresis(u)
-        w = self.creep_gain / len(self.creep_tau)
-        for tau in self.creep_tau:
-            a = np.exp(-T / tau)
-            h = h + np.array([w * scipy.signal.lfilter([0.0, 1 - a], [1.0, -a], row) for row in
-                              self.hysteresis(u)])
-        from gpi_actuator import _lsim
-        y = _lsim(*map(np.ascontiguousarray, (self.Ad, self.Bd, self.C)),
-                  np.ascontiguousarray(h.T)).T
-        if noise:
-            rng = np.random.default_rng(self.seed) if rng is None else rng
-            y = y + self.noise_um * rng.standard_normal(y.shape)
-        return y
+        return _settled(self, self.hysteresis(u), noise, rng)
 
 
 @numba.njit(cache=True)
@@ -135,9 +175,48 @@ class DomainPreisach(OutsideActuator):
             h[l] += self.coupling_even[l] * u[1 - l] ** 2
         return h
 
+    def simulate(self, u, noise=True, rng=None):
+        """Positions (2, N) [µm] from rest in the demagnetised state, creep and modes settled."""
+        return _settled(self, self.hysteresis(u), noise, rng)
+
 
 #: with --discrete-relays, the Preisach-type actuators switch a relay row in one sample
 DISCRETE = {"relays": False}
+
+#: with --few-plays, the generalised-PI-type actuators keep the test actuator's 4-5 plays
+FEW_PLAYS = {"on": False}
+
+
+def _density_plays(spec, n, rng):
+    """``n`` plays whose weights follow a drawn smooth density in the threshold, instead of
+    the 3-5 plays of ``spec`` (whose loops have a kink at every threshold: a real stack's
+    domains switch over a spread). The play at threshold 0 keeps a drawn share of the
+    weight; the others share the rest by ``exp(-r / r0)``, ``r0`` drawn (the loop's
+    roundness). The envelope functions are drawn around the test actuator's (gain, slope
+    +-10 %, offsets inside tanh +-0.15: the skew of the rising and falling branches)."""
+    r, w, gl, gr = (np.asarray(v, dtype=float) for v in spec)
+    top = float(r[-1]) * rng.uniform(1.0, 1.4)
+    thresholds = top * (np.arange(n) / (n - 1)) ** 1.3
+    r0 = rng.uniform(0.25, 0.6) * top
+    dens = np.exp(-thresholds[1:] / r0) * np.gradient(thresholds)[1:]
+    total = float(w.sum()) * rng.uniform(0.9, 1.1)
+    w0 = float(w[0]) / float(w.sum()) * total * rng.uniform(0.85, 1.15)
+    weights = np.concatenate([[w0], (total - w0) * dens / dens.sum()])
+
+    def envelope(g):
+        g = g.copy()
+        g[0] *= rng.uniform(0.9, 1.1)
+        g[1] *= rng.uniform(0.9, 1.1)
+        g[2] += rng.uniform(-0.15, 0.15)
+        return g.tolist()
+    return (thresholds.tolist(), weights.tolist(), envelope(gl), envelope(gr))
+
+
+def smooth_plays(act, rng):
+    """Give a generalised-PI-type actuator smooth, drawn loop shapes (24 plays per direct
+    path, 12 for the x <- uy coupling; :func:`_density_plays`)."""
+    act.direct = tuple(_density_plays(spec, 24, rng) for spec in act.direct)
+    act.coupling = _density_plays(act.coupling, 12, rng)
 
 
 def family(n, seed=2026):
@@ -166,12 +245,22 @@ def family(n, seed=2026):
             act.grid_direct = [preisach_grid(n=64, scale=s, skew=sk, spread=sp) for s, sk, sp in
                                zip(act.direct_um, skews, spreads)]
             act.grid_cross = [preisach_grid(n=32, scale=s, skew=0.5) for s in act.coupling_um]
+            # reversible a u + b u^2 drawn per member (its own generator, so that the other
+            # draws stay those of earlier runs), monotonic up to 40 V (|b| <= a / 80): a stack
+            # whose displacement falls while the voltage rises is no piezo (the earlier fixed
+            # (1.8, 0.06), (1.6, -0.05) turned back at -15 and +16 V, inside the records'
+            # +-20 V, and left x no more than -43 µm and y +42 µm: no 50 µm circle)
+            rr = np.random.default_rng([seed, i])
+            act.reversible = tuple((float(a), float(rr.uniform(-1.0, 1.0) * a / 80.0))
+                                   for a in rr.uniform(2.2, 3.0, 2))
             name = f"preisach-{i}"
         else:
             act = CreepGPI(seed=i, modes_hz=modes, damping=damping, c=c, b=b)
             act.creep_gain = float(rng.uniform(0.01, 0.05))
             act.reversible = tuple((float(rng.uniform(2.4, 3.2)), float(rng.uniform(-0.03, 0.03)))
                                    for _ in range(2))
+            if not FEW_PLAYS["on"]:
+                smooth_plays(act, np.random.default_rng([seed, i, 1]))
             name = f"gpi-{i}"
         out.append((name, act))
     return out
@@ -389,8 +478,12 @@ def main(argv=None):
     ap.add_argument("--discrete-relays", action="store_true",
                     help="the Preisach-type actuators' relays switch in one sample (a row of "
                          "relays at once: the staircase the earlier family had)")
+    ap.add_argument("--few-plays", action="store_true",
+                    help="the generalised-PI-type actuators keep 4-5 plays per path (a kink in "
+                         "their loops at every threshold: the earlier family)")
     args = ap.parse_args(argv)
     DISCRETE["relays"] = args.discrete_relays
+    FEW_PLAYS["on"] = args.few_plays
     n = args.actuators or (3 if args.quick else 20)
     work = args.work or tempfile.mkdtemp(prefix="route-defaults-")
     results = []
