@@ -333,6 +333,8 @@ def one_actuator(name, act, work, quick, log):
     files = {"hysteresis": [], "multisine": [], "creep": []}
     lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
     for f in sorted((d / "exc").glob("*.csv")):
+        if f.name == "demagnetise.csv":       # played before each file: the demagnetised start
+            continue
         kind = next(k for k in files if f.name.startswith(k))
         data = np.genfromtxt(f, delimiter=",", names=True, comments="#")
         u = np.vstack([data["ux"], data["uy"]])

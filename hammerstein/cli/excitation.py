@@ -5,10 +5,12 @@ decreasing amplitude, 100/80/60/40/20 %, two periods each), ``multisine-<input>.
 and ``multisine-<input>-validation.csv`` (random-phase multisines, 10 Hz to half
 the Nyquist frequency at 80 % of the amplitude, independent phases; the
 second is held out to choose the order of the dynamics) and ``creep-<input>.csv``
-(a voltage staircase, 2 s per step); each file holds the time column ``t`` [s]
-and every input column [V] (:mod:`hammerstein.signals.excitation`). A
-``README.md`` says what to measure and how to give the records back to
-``hammerstein identify``.
+(a voltage staircase, 2 s per step); ``demagnetise.csv`` (every input at
+once, a sine decaying from the amplitude to 0 V at twice the sine frequency,
+then 1 s at rest), played before each file and before every drive; each file
+holds the time column ``t`` [s] and every input column [V]
+(:mod:`hammerstein.signals.excitation`). A ``README.md`` says what to measure
+and how to give the records back to ``hammerstein identify``.
 
 Files: the directory is created if missing; an existing file is replaced
 only when this command wrote it (listed in the directory's
@@ -28,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
-from hammerstein.signals.excitation import LEVELS, STAIRCASE_LEVELS, excitation_set
+from hammerstein.signals.excitation import (LEVELS, STAIRCASE_LEVELS, ExcitationRecord,
+                                            demagnetising_cycle, excitation_set)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -163,7 +166,8 @@ def readme_text(records, names, amplitude, sampling_period):
         "# Excitation records (written by `hammerstein excitation`)", "",
         f"Inputs {', '.join(names)}, amplitude {', '.join(f'{a:g}' for a in amplitude)} V, "
         f"sampling period {T:g} s ({1 / T:g} Hz). Each file holds the time `t` [s] and every "
-        f"input column [V]; one input is driven, the others stay at 0 V.", "",
+        f"input column [V]; one input is driven, the others stay at 0 V (`demagnetise.csv`: "
+        f"every input).", "",
         "| files | what for | signal | duration |", "|---|---|---|---|",
         f"| {', '.join(by_kind['hysteresis'])} | hysteresis and its minor loops | sine, "
         f"{', '.join(f'{100 * a:.0f}' for a in LEVELS)} % of the amplitude, two periods each | "
@@ -174,7 +178,17 @@ def readme_text(records, names, amplitude, sampling_period):
         f"the order) | the same band, other phases | {dur['multisine-validation']:g} s |",
         f"| {', '.join(by_kind['creep'])} | creep | staircase "
         f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *STAIRCASE_LEVELS))} % | {dur['creep']:g} s |",
+        *([f"| {', '.join(by_kind['demagnetise'])} | the demagnetised state, before every file "
+           f"and every drive | every input at once: a sine decaying from the amplitude to 0 V, "
+           f"then 1 s at 0 V | {dur['demagnetise']:g} s |"] if "demagnetise" in by_kind else []),
         "", "## What to measure", "",
+        *(["0. Before each file below, and later before every drive you play (`hammerstein "
+           "compensate`, `learn`), play `demagnetise.csv` (nothing to record). A model starts "
+           "from the demagnetised state; an input left idle in a record, or a drive, would "
+           "otherwise start from whatever hysteresis memory the previous motion left, an "
+           "offset the model cannot know (measured on a simulated actuator that rested in "
+           "another state: about 1 µm on every later drive that moves both inputs)."]
+          if "demagnetise" in by_kind else []),
         "1. Play each file from rest (all inputs at 0 V for at least a second before) at "
         "exactly this sampling period, and record every displacement (e.g. `x`, `y` in µm) "
         "synchronously, one sample per row.",
@@ -228,6 +242,8 @@ def _handler(args):
                                      f_min=args.f_min, f_max=args.f_max,
                                      multisine_periods=args.periods, hold=args.hold,
                                      seed=args.seed)
+            t, u = demagnetising_cycle(T, amplitude, 2.0 * args.sine_frequency)
+            records.append(ExcitationRecord("demagnetise", "demagnetise", -1, t, u))
         except ValueError as exc:
             raise _Usage(_option_names(str(exc))) from None
         out = Path(args.out)

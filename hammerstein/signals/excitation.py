@@ -16,6 +16,12 @@ sampling period T of the hardware:
 * :func:`staircase` — voltage steps held for seconds each, for creep (the
   slow drift after a step, Jung & Gweon [2]).
 
+:func:`demagnetising_cycle` (every input at once, a sine decaying to 0 V)
+is played before each of them and before every drive: it leaves the
+actuator in the demagnetised state a model starts from, whatever an earlier
+motion left in its hysteresis memory (the AC demagnetisation of
+ferroelectrics and magnets, e.g. Bertotti [3], Section 9.3).
+
 :func:`excitation_set` builds all of them for m inputs. Signals are arrays of
 shape (m, n_samples) [V]; times (n_samples,) [s].
 
@@ -26,6 +32,7 @@ References
    multisines, crest factor, periodic excitation).
 .. [2] H. Jung and D.-G. Gweon, "Creep characteristics of piezoelectric
    actuators", Review of Scientific Instruments 71(4), 1896-1900, 2000.
+.. [3] G. Bertotti, *Hysteresis in Magnetism*, Academic Press, 1998.
 """
 
 from __future__ import annotations
@@ -37,7 +44,7 @@ import numpy as np
 from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
 
 __all__ = ["LEVELS", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine", "multisine",
-           "staircase", "excitation_set"]
+           "staircase", "excitation_set", "demagnetising_cycle"]
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude).
 LEVELS = (1.0, 0.8, 0.6, 0.4, 0.2)
@@ -122,6 +129,80 @@ def decreasing_sine(sampling_period, amplitude, frequency=1.0, levels=LEVELS, pe
     u = np.concatenate([A * ak * phase for ak in a])
     level = np.repeat(np.arange(a.size), n_level)
     return np.arange(u.size) * T, u, level
+
+
+def demagnetising_cycle(sampling_period, amplitude, frequency=2.0, periods=20, rest=1.0):
+    """Every input at once: a sine decaying linearly to 0 V, then a rest at 0 V.
+
+    ``u_k(t) = A_k (1 - t / D) sin(2 pi f t)`` for ``0 <= t < D = periods / f``,
+    then ``u = 0`` for ``rest`` seconds. Each period turns back a little inside
+    the previous one, so the hysteresis memory of every input path is wiped
+    from the full amplitude down to 0 (wiping-out property of Preisach
+    hysteresis; the AC demagnetisation of ferroelectrics and magnets,
+    Bertotti [3], Section 9.3): the state it leaves is the demagnetised state
+    every model of :mod:`hammerstein.models` starts from, whatever the
+    actuator did before. It starts and ends at 0 V; its largest slew is
+    ``2 pi f A_k`` [V/s].
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : array_like, shape (m,)
+        Starting amplitude per input [V] (the records' full amplitude).
+    frequency : float
+        f [Hz] (default 2 Hz).
+    periods : int
+        Periods of the decay (default 20: the amplitude falls by 5 % of A
+        per period).
+    rest : float
+        Seconds at 0 V after the decay (the modes and the fast creep settle;
+        default 1 s).
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s].
+    u : numpy.ndarray, shape (m, n_samples)
+        [V].
+
+    Raises
+    ------
+    ValueError
+        On a non-positive period, amplitude or frequency, fewer than 8
+        samples per period or a negative rest (the message names the
+        parameter).
+
+    Examples
+    --------
+    >>> t, u = demagnetising_cycle(1e-3, [10.0, 5.0], frequency=2.0, periods=4, rest=0.5)
+    >>> u.shape, float(u[:, 0].max()), float(abs(u[:, -500:]).max())
+    ((2, 2500), 0.0, 0.0)
+    >>> round(float(u[0].max()), 2), round(float(u[1].max()), 2)   # the first crest
+    (9.38, 4.69)
+    """
+    T = _check_positive(sampling_period, "sampling_period", "s")
+    amp = np.atleast_1d(np.asarray(amplitude, dtype=float))
+    if amp.ndim != 1 or amp.size == 0:
+        raise ValueError(f"amplitude: expected one amplitude per input [V], found {amplitude!r}")
+    amp = np.array([_check_positive(a, "amplitude", "V") for a in amp])
+    f = _check_positive(frequency, "frequency", "Hz")
+    periods = _check_count(periods, "periods")
+    problem = number_problem(rest)
+    if problem or not rest >= 0:
+        raise ValueError(f"rest: expected a duration >= 0 [s], found {rest!r}")
+    per = 1.0 / (f * T)
+    if per < 8:
+        raise ValueError(f"frequency: {f:g} Hz gives {per:.3g} samples per period at T = {T:g} s; "
+                         f"expected at least 8 (f <= {1 / (8 * T):g} Hz)")
+    n_decay = int(round(periods * per))
+    n_rest = int(round(float(rest) / T))
+    check_samples(n_decay + n_rest, "frequency: the demagnetising cycle", ValueError, T)
+    k = np.arange(n_decay)
+    one = (1.0 - k / n_decay) * np.sin(2 * np.pi * f * T * k)
+    u = np.zeros((amp.size, n_decay + n_rest))
+    u[:, :n_decay] = amp[:, None] * one
+    return np.arange(u.shape[1]) * T, u
 
 
 def multisine(sampling_period, amplitude, f_min=10.0, f_max=None, period=None, periods=4, seed=0):
@@ -254,9 +335,11 @@ class ExcitationRecord:
     name : str
         File stem, e.g. ``"hysteresis-ux"``.
     kind : str
-        ``"hysteresis"``, ``"multisine"``, ``"multisine-validation"`` or ``"creep"``.
+        ``"hysteresis"``, ``"multisine"``, ``"multisine-validation"``, ``"creep"``
+        or ``"demagnetise"`` (:func:`demagnetising_cycle`, every input).
     excited : int
-        Index of the excited input (the others are 0).
+        Index of the excited input (the others are 0); -1 when every input
+        moves.
     time : numpy.ndarray, shape (n_samples,)
         [s].
     u : numpy.ndarray, shape (m, n_samples)

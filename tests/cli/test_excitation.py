@@ -36,7 +36,7 @@ def test_files_columns_and_the_undriven_input(written):
     expected = [".hammerstein-excitation", "README.md"]
     expected += [f"{k}-{i}.csv" for i in ("ux", "uy")
                  for k in ("hysteresis", "multisine", "creep")]
-    expected += [f"multisine-{i}-validation.csv" for i in ("ux", "uy")]
+    expected += [f"multisine-{i}-validation.csv" for i in ("ux", "uy")] + ["demagnetise.csv"]
     assert names == sorted(expected)
     for name in ("hysteresis-uy.csv", "multisine-uy.csv", "creep-uy.csv"):
         header, d = _read(written / name)
@@ -45,6 +45,27 @@ def test_files_columns_and_the_undriven_input(written):
         assert np.all(d[:, 1] == 0) and np.abs(d[:, 2]).max() > 0
     readme = (written / "README.md").read_text()
     assert "hammerstein identify hysteresis-ux.csv hysteresis-uy.csv" in readme
+
+
+def test_demagnetising_cycle_wipes_every_input_from_the_amplitude_to_rest(written):
+    """Every input at once: turning points that shrink by 5 % of the amplitude per period
+    (so that each reversal lies inside the previous one: the hysteresis memory is wiped
+    from the amplitude down), from 0 V and back to 0 V, then 1 s at rest; its slew is
+    that of a 2 Hz sine of the amplitude (2 pi 2 Hz 10 V), the README says to play it."""
+    header, d = _read(written / "demagnetise.csv")
+    assert header == ["t", "ux", "uy"]
+    u = d[:, 1:].T
+    n_rest = int(round(1.0 / T))
+    assert np.all(u[:, -n_rest:] == 0) and np.all(u[:, 0] == 0)
+    decay = u[0, :-n_rest]
+    assert decay.size == int(round(20 / 2.0 / T))       # 20 periods at 2 Hz
+    peaks = np.array([decay[k:k + int(round(0.5 / T))].max()
+                      for k in range(0, decay.size, int(round(0.5 / T)))])
+    assert peaks[0] == pytest.approx(10.0 * (1 - 0.25 / 20), rel=2e-3)
+    assert np.all(np.diff(peaks) < 0) and np.allclose(np.diff(peaks), -0.5, rtol=0.02)
+    np.testing.assert_array_equal(u[0], u[1])             # both inputs (amplitude 10 V each)
+    assert np.abs(np.diff(decay)).max() <= 2 * np.pi * 2.0 * 10.0 * T * (1 + 1e-9)
+    assert "play `demagnetise.csv`" in (written / "README.md").read_text()
 
 
 def test_decreasing_sine_levels(written):
