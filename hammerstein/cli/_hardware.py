@@ -25,7 +25,11 @@ from hammerstein.scenario.validate import _signal
 
 __all__ = ["Reference", "load_actuator", "load_reference", "check_reference_first", "mapping",
            "owned_problem",
-           "add_actuator_arguments", "positive_float"]
+           "add_actuator_arguments", "positive_float", "START_NOTE"]
+
+#: The drive files' header line on the state a drive starts from.
+START_NOTE = ("from rest, demagnetised (the model's initial state): play the excitation's "
+              "demagnetise.csv just before it")
 
 
 class Reference:

@@ -25,8 +25,8 @@ import sys
 from pathlib import Path
 
 from hammerstein.cli._common import out_file_problem, print_err
-from hammerstein.cli._hardware import (add_actuator_arguments, catch, check_reference_first,
-                                       load_actuator,
+from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
+                                       check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, apply_amplifier, hardware_drive, rest_output,
@@ -230,7 +230,8 @@ def _handle(args):
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
                    f"({drive.fade_samples * plant.sampling_period:g} s, excluded from the metrics)\n"
-                   f"peak input and slew: {peaks}" + shaped_cols
+                   f"peak input and slew: {peaks}\n"
+                   f"{START_NOTE}" + shaped_cols
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
                    + "".join(f"\nshaped: {line}" for line in drive.shaped))

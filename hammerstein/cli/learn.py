@@ -69,7 +69,8 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
-from hammerstein.cli._hardware import (add_actuator_arguments, catch, check_reference_first,
+from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
+                                       check_reference_first,
                                        load_actuator,
                                        fraction, load_reference, mapping, nonnegative_float, owned_problem,
                                        positive_float)
@@ -667,6 +668,7 @@ def _handle(args):
             return 2
         comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]\n"
                    f"actuator {args.actuator}, sampling period {T:g} s, fade-in {fade} samples\n"
+                   f"{START_NOTE}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else
                       f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "
                       f"and {args.measured} were worse)")
