@@ -572,7 +572,9 @@ def level_errors(fit):
     list of dict
         ``source``, ``percent`` (level amplitude, % of the largest),
         ``held_out`` (bool), ``output``, ``rms_percent``,
-        ``amplitude_error_percent``, ``measured_peak_to_peak`` [output unit].
+        ``amplitude_error_percent``, ``measured_peak_to_peak``, ``rms`` and
+        ``range`` (the RMS error and the measured range over the level)
+        [output unit].
     """
     rows = []
     for rec, s, pred in zip(fit.records, fit.splits, fit.predictions):
@@ -587,8 +589,40 @@ def level_errors(fit):
                              "held_out": bool(lv["held_out"]), "output": name,
                              "rms_percent": 100 * float(np.sqrt(np.mean((y - yh) ** 2))) / max(rng, 1e-300),
                              "amplitude_error_percent": 100 * (pp_hat - pp) / max(pp, 1e-300),
-                             "measured_peak_to_peak": pp})
+                             "measured_peak_to_peak": pp,
+                             "rms": float(np.sqrt(np.mean((y - yh) ** 2))), "range": rng})
     return rows
+
+
+def held_out_level_error(rows):
+    """Mean RMS Euclidean error of the held-out amplitude levels [% of each level's range].
+
+    Per held-out level (one record's minor loop): the RMS over its samples of
+    the Euclidean norm of the output error (every output together, the error
+    a trajectory in the plane sees), in % of the largest output range over
+    the level (the direct transfer's). A cross-coupling output counts with
+    its error in the output unit, not in % of its own small range, where the
+    sensor's noise alone is several % and would decide between model
+    classes.
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`level_errors`.
+
+    Returns
+    -------
+    float or None
+        The mean over the held-out levels [%]; None without one.
+    """
+    levels = {}
+    for r in rows:
+        if r["held_out"]:
+            levels.setdefault((r["source"], r["percent"]), []).append(r)
+    if not levels:
+        return None
+    return float(np.mean([100 * np.sqrt(sum(r["rms"] ** 2 for r in lv))
+                          / max(max(r["range"] for r in lv), 1e-300) for lv in levels.values()]))
 
 
 #: A measured loop whose point-symmetry defect exceeds this % of its output range gets a note.

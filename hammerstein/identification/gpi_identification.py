@@ -312,8 +312,9 @@ class GeneralizedPIIdentifier:
     threshold_spacing : {"uniform", "power", "auto"}
         Play thresholds ``r_j = S j / n`` (``"uniform"``, the default),
         ``S (j / n)^1.5`` (``"power"``: dense near zero), or both fitted and
-        the one with the lower mean held-out minor-loop RMS error (% of each
-        held-out level's output range; without held-out levels the mean
+        the one with the lower mean held-out minor-loop RMS error (Euclidean,
+        every output, % of each held-out level's range; without held-out
+        levels the mean
         held-out RMS, without any held-out sample the first, ``"power"``)
         kept, like the partition ``"auto"`` of the classical PI (twice the
         CPU). Why 16 uniform plays by default, measured on three
@@ -684,7 +685,7 @@ class GeneralizedPIIdentifier:
         scores = {sp: _spacing_score(f) for sp, f in fits.items()}
         if all(v is not None for v in scores.values()):
             best = min(tried, key=lambda sp: scores[sp])      # ties: the first, power
-            basis = ("mean held-out minor-loop RMS, % of each level's range"
+            basis = ("mean held-out minor-loop RMS (Euclidean), % of each level's range"
                      if any(r["held_out"] for r in fits[best][0].levels)
                      else "mean held-out RMS, % of the output range")
         else:

@@ -69,7 +69,7 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification._record_split import (
     ASYMMETRY_NOTE_PERCENT, COMPLETE_TRAVEL, HOLD_OUT_BLOCKS, NOISE_FACTOR, REVERSAL_BAND, Split,
     _as_records, _asymmetry_notes, _one_branch_held, _window_metrics, amplitude_levels,
-    level_errors, loop_asymmetry, noise_level, reversal_points, simulate_on_record,
+    held_out_level_error, level_errors, loop_asymmetry, noise_level, reversal_points, simulate_on_record,
     split_level_records, split_record)
 from hammerstein.identification._record_regression import (
     MAP_GAIN, MAP_KNOTS, OUTPUT_MAPS, _ClosedForm, _fit_output_maps, _LeastSquares, _thresholds)
@@ -97,6 +97,7 @@ __all__ = [
     "weak_couplings",
     "amplitude_levels",
     "level_errors",
+    "held_out_level_error",
     "NOISE_FACTOR",
     "identify_record_dynamics",
     "RecordDynamics",
@@ -109,7 +110,7 @@ __all__ = [
 
 
 for _name in ("Split", "reversal_points", "split_record", "noise_level", "split_level_records",
-              "amplitude_levels", "level_errors", "loop_asymmetry", "identify_record_dynamics",
+              "amplitude_levels", "level_errors", "held_out_level_error", "loop_asymmetry", "identify_record_dynamics",
               "RecordDynamics", "dynamics_tables", "identify_record_creep"):
     globals()[_name].__module__ = __name__      # documented (and pickled) as this module's
 del _name
@@ -230,14 +231,14 @@ class RecordFit:
 
     @property
     def minor_loop_error(self):
-        """Mean RMS error of the held-out amplitude levels [% of each level's output range].
+        """Mean RMS Euclidean error of the held-out amplitude levels [% of each level's range].
 
-        The minor loops the fit never saw (:func:`level_errors`); what
-        ``identify --model auto`` and the generalised PI's
+        The minor loops the fit never saw (:func:`held_out_level_error`): the
+        error of all outputs together in % of the level's largest output
+        range; what ``identify --model auto`` and the generalised PI's
         ``threshold_spacing="auto"`` compare. None without held-out levels.
         """
-        rows = [r["rms_percent"] for r in self.levels if r["held_out"]]
-        return float(np.mean(rows)) if rows else None
+        return held_out_level_error(self.levels)
 
 
 def _fit_structure(engine, kinds, auto, names_out, names_in, prune):

@@ -269,8 +269,8 @@ def _identify_records(plant, spec, amp, sensor):
         raise IdentificationError(f"identify (model = {spec['model']!r} at {f:g} Hz): {exc}") from None
     scores = {}
     for key, fit in fits.items():
-        rows = [r["rms_percent"] for r in fit.levels if r["held_out"]]
-        scores[key] = float(np.mean(rows)) if rows else float("inf")
+        score = fit.minor_loop_error
+        scores[key] = float("inf") if score is None else score
     chosen = min(fits, key=lambda key: (scores[key], key != "preisach"))
     meta = {"method": chosen, "model": spec["model"], "frequency_hz": float(f),
             "amplitude_V": [float(a) for a in amp], "records": "decreasing-amplitude sines",
