@@ -70,9 +70,9 @@ CREEP_DEFAULTS = {"t_min": 0.01, "t_max": 100.0, "per_decade": 2, "smoothing": 1
 #: Minimum samples of a step (shorter steps are not used for the drift).
 _MIN_STEP_SAMPLES = 10
 
-#: More steps shorter than ``_MIN_STEP_SAMPLES`` than this and a creep record is refused: the
-#: creep fit has one offset column per step, so the steps bound its memory.
-_MAX_SHORT_STEPS = 64
+#: The creep fit with G has one offset column per step of a record: its regressor buffer is
+#: bounded by this (a record whose voltage changes at every sample is refused).
+_MAX_BUFFER_BYTES = 2 ** 30
 
 
 def staircase_steps(u, tolerance=None):
@@ -561,15 +561,10 @@ class CreepIdentifier:
             steps = staircase_steps(u)
             n_steps = int(steps[-1]) + 1
             lengths = np.bincount(steps)
-            short = int(np.count_nonzero(lengths < _MIN_STEP_SAMPLES))
-            if n_steps < 2 or np.max(lengths) < _MIN_STEP_SAMPLES or short > _MAX_SHORT_STEPS:
-                # a ramp or an oscillation changes the voltage at every sample: one regressor
-                # column per "step" would not fit in memory, and it is no staircase
+            if n_steps < 2 or np.max(lengths) < _MIN_STEP_SAMPLES:
                 raise IdentificationError(f"creep records: {rec.source}: expected a voltage "
                                           f"staircase (steps held >= {_MIN_STEP_SAMPLES} samples), "
-                                          f"found {n_steps} step(s)"
-                                          + (f", {short} of them shorter (a ramp or an "
-                                             f"oscillation, not a staircase)" if short else ""))
+                                          f"found {n_steps} step(s)")
             self.identifiable_up_to_ = max(self.identifiable_up_to_, float(lengths.max() * T))
             h = np.asarray(model.simulate(u)[0] if outputs is None else outputs[r_i], dtype=float)
             h = h - off[:, None]
@@ -591,6 +586,18 @@ class CreepIdentifier:
             else:                    # columns: lags, target, offsets (Fortran order)
                 g = _responses(mats, h)  # G h is the sum of G's responses to each output alone
                 y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
+                size = 8.0 * p * nr * (1 + p * (K + n_steps))
+                if size > _MAX_BUFFER_BYTES:
+                    # one offset column per step: a ramp or an oscillation, whose voltage changes
+                    # at every sample, would ask for one column per sample (413 GiB for an 18 s
+                    # record at 20 kHz behind an oscillation); a slew-limited staircase's ramps
+                    # are a few columns each
+                    short = int(np.count_nonzero(lengths < _MIN_STEP_SAMPLES))
+                    raise IdentificationError(
+                        f"creep records: {rec.source}: expected a voltage staircase (steps held "
+                        f">= {_MIN_STEP_SAMPLES} samples), found {n_steps} steps, {short} of them "
+                        f"shorter (a ramp or an oscillation, not a staircase): the fit would "
+                        f"need {size / 2 ** 30:.3g} GiB (at most {_MAX_BUFFER_BYTES / 2 ** 30:g})")
                 if S is None or S.shape[2] < N:
                     S = _step_responses(mats, p, max(np.shape(r.u)[1] for r in records))
                 buf = np.empty((p * nr, 1 + p * (K + n_steps)), order="F")

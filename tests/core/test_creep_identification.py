@@ -129,22 +129,32 @@ def test_records_that_are_not_staircases_are_refused(hysteresis):
         CreepIdentifier([0.1, -1.0])
 
 
-def test_a_staircase_behind_an_oscillation_is_refused_before_any_allocation(hysteresis):
+def test_a_staircase_behind_an_oscillation_is_refused_before_any_allocation(hysteresis,
+                                                                             monkeypatch):
     """A staircase whose record starts with an oscillation (a "step" at every sample) used to
-    allocate one regressor column per sample: 413 GiB for an 18 s record at 20 kHz.
-    It is refused, and the message says why."""
+    allocate one regressor column per sample with G: 413 GiB for an 18 s record at 20 kHz.
+    Beyond the buffer bound it is refused and the message says why; a slew-limited staircase
+    (ramps of a few samples between the steps) is still fitted."""
+    import hammerstein.identification.creep_identification as ci
+    import control
+    G = control.sample_system(control.ss(-2000.0 * np.eye(2), 2000.0 * np.eye(2), np.eye(2),
+                                         0 * np.eye(2)), T)             # a 318 Hz low-pass
     t = np.arange(3000) * T
     osc = np.vstack([np.sin(2 * np.pi * 5 * t) * (1 - t / t[-1]), np.zeros_like(t)])
     stairs = np.repeat(np.array([[0.0, 5.0, 10.0, 5.0, 0.0], [0.0] * 5]), 600, axis=1)
     u = np.hstack([osc, stairs])
     rec = SimpleNamespace(u=u, y=hysteresis.simulate(u)[0], sampling_period=T, source="c.csv")
     assert int(staircase_steps(u)[-1]) + 1 > 2000          # the oscillation's samples
+    monkeypatch.setattr(ci, "_MAX_BUFFER_BYTES", 2 ** 24)  # 16 MiB: this record needs 0.54 GiB
     with pytest.raises(IdentificationError, match=r"c.csv: expected a voltage staircase .*"
-                                                  r"shorter \(a ramp or an oscillation"):
-        CreepIdentifier().fit(hysteresis, [rec])
-    ok = SimpleNamespace(u=stairs, y=hysteresis.simulate(stairs)[0], sampling_period=T,
+                                                  r"shorter \(a ramp or an oscillation.*GiB"):
+        CreepIdentifier().fit(hysteresis, [rec], G)
+    ramps = np.repeat(np.array([[0.0, 5.0, 10.0, 5.0, 0.0], [0.0] * 5]), 600, axis=1)
+    for k in (600, 1200, 1800, 2400):                       # 5-sample ramps between the steps
+        ramps[0, k - 5:k] = np.linspace(ramps[0, k - 6], ramps[0, k], 7)[1:-1]
+    ok = SimpleNamespace(u=ramps, y=hysteresis.simulate(ramps)[0], sampling_period=T,
                          source="s.csv")
-    assert CreepIdentifier().fit(hysteresis, [ok]).creeps_      # the staircase alone is fitted
+    assert CreepIdentifier().fit(hysteresis, [ok], G).creeps_
 
 
 @pytest.mark.parametrize("creep, offset", [
