@@ -378,8 +378,8 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
     lines = [f"model auto: chose {best} ({rule})"]
     for k, f in fits.items():
         worst = max(v["rms_percent"] for v in f.validation) if f.validation else float("nan")
-        text = (f"model auto: {k} {loops[k]:.3g} % mean held-out minor-loop RMS (largest "
-                f"held-out RMS of an output {worst:.3g} % of its range)")
+        text = (f"model auto: {k} {loops[k]:.3g} % mean held-out minor-loop RMS, Euclidean "
+                f"(largest held-out RMS of an output {worst:.3g} % of its range)")
         if stairs:
             pct, rms, big = stairs[k]
             text += (f"; staircase step levels (model + its creep, from rest) RMS "
