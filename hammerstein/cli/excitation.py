@@ -242,7 +242,8 @@ def _handler(args):
                                      f_min=args.f_min, f_max=args.f_max,
                                      multisine_periods=args.periods, hold=args.hold,
                                      seed=args.seed)
-            t, u = demagnetising_cycle(T, amplitude, 2.0 * args.sine_frequency)
+            # twice the sine's frequency, at most the 8 samples per period it needs itself
+            t, u = demagnetising_cycle(T, amplitude, min(2.0 * args.sine_frequency, 1 / (8 * T)))
             records.append(ExcitationRecord("demagnetise", "demagnetise", -1, t, u))
         except ValueError as exc:
             raise _Usage(_option_names(str(exc))) from None

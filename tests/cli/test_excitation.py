@@ -68,6 +68,16 @@ def test_demagnetising_cycle_wipes_every_input_from_the_amplitude_to_rest(writte
     assert "play `demagnetise.csv`" in (written / "README.md").read_text()
 
 
+def test_demagnetising_cycle_at_the_fastest_sine_keeps_eight_samples_a_period(tmp_path):
+    """At the fastest sine the command accepts (8 samples a period), twice its frequency would
+    leave 4: the demagnetising cycle stays at 8 samples a period instead of refusing the
+    command with a --sine-frequency it was given within its limit."""
+    fastest = 1 / (8 * T)
+    assert _run(tmp_path / "fast", "--sine-frequency", str(fastest)) == 0
+    _, d = _read(tmp_path / "fast" / "demagnetise.csv")
+    assert d.shape[0] == 20 * 8 + int(round(1.0 / T))
+
+
 def test_decreasing_sine_levels(written):
     _, d = _read(written / "hysteresis-ux.csv")
     u = d[:, 1]
