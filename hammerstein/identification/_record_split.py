@@ -554,13 +554,27 @@ def split_level_records(records, hold_out="auto", train_fraction=None, skip_seco
     return records, splits
 
 
+def _moving_average(v, w):
+    """Centred moving average of ``v`` over ``w`` samples (the ends repeated)."""
+    v = np.asarray(v, dtype=float)
+    if w <= 1 or v.size == 0:
+        return v
+    pad = np.concatenate([np.full(w // 2, v[0]), v, np.full(w - 1 - w // 2, v[-1])])
+    c = np.concatenate([[0.0], np.cumsum(pad)])
+    return (c[w:] - c[:-w]) / w
+
+
 def level_errors(fit):
     """Errors of a fitted model per amplitude level (minor loop) of its records.
 
     For every level of every multi-amplitude record (``Split.levels``) and
     every output: the RMS error over the level in % of the measured output
     range there, and the error of the loop amplitude (peak to peak over the
-    last half of the level, its steady loop) in % of the measured one.
+    last half of the level, its steady loop) in % of the measured one. Both
+    peak-to-peak values are taken after the same moving average over 1/200
+    of that half (5 ms for a 1 Hz level of two periods): the sensor's noise
+    would otherwise add its own extremes to the measured one, -20 % on a
+    1.3 µm cross-coupling loop with 40 nm of noise.
 
     Parameters
     ----------
@@ -581,10 +595,11 @@ def level_errors(fit):
         for lv in s.levels:
             a, b = lv["start"], lv["stop"] + 1
             h = a + (b - a) // 2
+            w = max(1, (b - h) // 200)
             for l, name in enumerate(fit.model.output_names):
                 y, yh = rec.y[l, a:b], pred[l, a:b]
                 rng = float(np.ptp(y))
-                pp, pp_hat = float(np.ptp(rec.y[l, h:b])), float(np.ptp(pred[l, h:b]))
+                pp, pp_hat = (float(np.ptp(_moving_average(v[l, h:b], w))) for v in (rec.y, pred))
                 rows.append({"source": rec.source, "percent": lv["percent"],
                              "held_out": bool(lv["held_out"]), "output": name,
                              "rms_percent": 100 * float(np.sqrt(np.mean((y - yh) ** 2))) / max(rng, 1e-300),
