@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 
 from hammerstein.core.numbers import check_array, is_number
 from hammerstein.io.datafiles import MIN_SAMPLES, MultiRecord, Record
@@ -554,16 +555,6 @@ def split_level_records(records, hold_out="auto", train_fraction=None, skip_seco
     return records, splits
 
 
-def _moving_average(v, w):
-    """Centred moving average of ``v`` over ``w`` samples (the ends repeated)."""
-    v = np.asarray(v, dtype=float)
-    if w <= 1 or v.size == 0:
-        return v
-    pad = np.concatenate([np.full(w // 2, v[0]), v, np.full(w - 1 - w // 2, v[-1])])
-    c = np.concatenate([[0.0], np.cumsum(pad)])
-    return (c[w:] - c[:-w]) / w
-
-
 def level_errors(fit):
     """Errors of a fitted model per amplitude level (minor loop) of its records.
 
@@ -599,7 +590,9 @@ def level_errors(fit):
             for l, name in enumerate(fit.model.output_names):
                 y, yh = rec.y[l, a:b], pred[l, a:b]
                 rng = float(np.ptp(y))
-                pp, pp_hat = (float(np.ptp(_moving_average(v[l, h:b], w))) for v in (rec.y, pred))
+                pp, pp_hat = (float(np.ptp(uniform_filter1d(np.asarray(v[l, h:b], dtype=float), w,
+                                                            mode="nearest")))
+                              for v in (rec.y, pred))
                 rows.append({"source": rec.source, "percent": lv["percent"],
                              "held_out": bool(lv["held_out"]), "output": name,
                              "rms_percent": 100 * float(np.sqrt(np.mean((y - yh) ** 2))) / max(rng, 1e-300),

@@ -367,8 +367,8 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
     if stairs:   # both held out; the geometric mean weighs each by its ratio between classes
         scores = {k: float(np.sqrt(loops[k] * stairs[k][0])) for k in fits}
         rule = ("lowest geometric mean of the held-out minor-loop RMS error (Euclidean, all "
-                "outputs, % of each level's range) and the staircases' step-level RMS error (% of each output's "
-                "range; --creep-records, not used to fit the hysteresis)")
+                "outputs, % of each level's range) and the staircases' step-level RMS error "
+                "(% of each output's range; --creep-records, not used to fit the hysteresis)")
     else:
         scores = loops
         rule = ("lowest mean held-out minor-loop RMS error (Euclidean, all outputs, % of each "

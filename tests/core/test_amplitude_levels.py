@@ -126,11 +126,3 @@ def test_loop_amplitude_error_is_not_the_sensor_noise():
     assert abs(row["amplitude_error_percent"]) < 3.0
     assert row["rms"] == pytest.approx(0.04, rel=0.05)  # the RMS is the noise, unchanged
 
-
-@pytest.mark.parametrize("w", [1, 2, 5, 100])
-def test_moving_average_equals_scipys_uniform_filter(w):
-    from scipy.ndimage import uniform_filter1d
-    from hammerstein.identification._record_split import _moving_average
-    v = np.random.default_rng(0).standard_normal(1000)
-    np.testing.assert_allclose(_moving_average(v, w), uniform_filter1d(v, w, mode="nearest"),
-                               rtol=0, atol=1e-12)
