@@ -17,6 +17,12 @@ re-measured. Options:
 
 * ``pi-notch``: the bundled scenario's loop (PI + notch, 150 Hz crossover);
 * ``ppf``, ``irc``: the damping designs (``BASE@FC`` sets the crossover);
+* ``vel@FC@KD``: an integral-like PI (zero at 8 times the crossover FC, no
+  notch) in parallel with velocity feedback on the error,
+  ``KD / g * s * w_f^2 / (s^2 + 2 w_f s + w_f^2)`` with ``w_f = 2 pi 4 kHz``
+  (``KD`` [s]; 4e-4 takes the first modes' damping from 0.06-0.08 to
+  0.3-0.5): direct damping of the modes, what it buys and what the sensor's
+  noise costs;
 * ``BASE+imN``: BASE with internal-model (resonant) elements at the
   reference's harmonics 1..N below ``--max-harmonic``, each ``k_h w_h (s cos phi_h + w_h sin phi_h) / (s^2 + w_h^2)`` in
   series with the PI (phase lead ``phi_h = -arg T(j w_h)`` so the loop
@@ -33,7 +39,13 @@ re-measured. Options:
   in the bands 0-1, 1-60, 60-200, 200-600 and 600-10000 Hz [nm] (the
   bending modes are at 420-450 Hz and 1300 Hz);
 * ``--levels N``: the identified Preisach grid's levels (30 as in the
-  scenario).
+  scenario);
+* ``--kinks``: the actuator's own hysteresis (no modes), driven by smooth
+  20 Hz circles of 3 and 8 V: the RMS of its output per band [nm], i.e.
+  what its piecewise-linear loops put near the modes whatever the drive.
+
+Each option also prints its noise floor: the largest Euclidean position
+error [nm] over 0.5 s of the loop at rest with the sensor's noise alone.
 
 Prints the load average before and after and the CPU time of the process.
 """
@@ -53,9 +65,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import control  # noqa: E402
 
-from hammerstein.compensation.feedback import (FeedbackLoop, design_axis,  # noqa: E402
-                                               diagonal_controller, linearised_plant,
-                                               with_internal_model)
+from hammerstein.compensation.feedback import (AxisDesign, FeedbackLoop,  # noqa: E402
+                                               design_axis, diagonal_controller,
+                                               linearised_plant, with_internal_model)
 from hammerstein.compensation.hammerstein_compensator import fade_in  # noqa: E402
 from hammerstein.scenario.execute import fade_samples  # noqa: E402
 from hammerstein.scenario.feedback import _feedforward, _metrics, build_loops  # noqa: E402
@@ -71,6 +83,44 @@ def scenario_text(noise_nm):
     text = text.replace('preset-model = { kind = "hammerstein", model = "plant", dynamics = '
                         '"plant", creep = "plant" }\n', "")
     return text.replace("noise_nm = 40.0", f"noise_nm = {noise_nm}")
+
+
+def velocity_design(gain, crossover_hz, kd, filter_hz=4000.0):
+    """PI (zero at 8 crossovers) in parallel with filtered velocity feedback on the error."""
+    fz = 8.0 * crossover_hz
+    kp = 1.0 / (gain * np.hypot(1.0, fz / crossover_hz))
+    pi = control.ss([[0.0]], [[kp * 2 * np.pi * fz]], [[1.0]], [[kp]])
+    s = control.tf("s")
+    wf = 2 * np.pi * filter_hz
+    system = control.parallel(pi, control.ss(kd / gain * s * wf ** 2 / (s ** 2 + 2 * wf * s
+                                                                          + wf ** 2)))
+    mask = np.zeros(system.nstates, bool)
+    mask[0] = True
+    return AxisDesign(system, mask, f"PI + velocity feedback {kd:g} s")
+
+
+def noise_floor(loop, n=20000, seed=3):
+    """Largest Euclidean position [nm] over the last half of n samples at rest, noise only."""
+    m = loop.controller.n_outputs
+    y = loop.simulate(np.zeros((loop.controller.n_measurements, n)),
+                      feedforward=np.zeros((m, n)), seed=seed).outputs[:, n // 2:]
+    y = y - y.mean(axis=1, keepdims=True)
+    return 1e3 * float(np.max(np.linalg.norm(y, axis=0)))
+
+
+def kinks(plant, T):
+    """RMS [nm] per band of the actuator's hysteresis output on smooth 20 Hz circles."""
+    P = int(round(1 / (20.0 * T)))
+    t = np.arange(6 * P) * T
+    for amp in (3.0, 8.0):
+        u = amp * np.vstack([np.sin(2 * np.pi * 20 * t), np.cos(2 * np.pi * 20 * t)])
+        v = plant.hysteresis.simulate(u)
+        v = np.asarray(v[0] if isinstance(v, tuple) else v)[:, -4 * P:]
+        a = np.abs(np.fft.rfft(v, axis=1)) / v.shape[1] * 2
+        f = np.fft.rfftfreq(v.shape[1], T)
+        print(f"hysteresis alone, {amp:g} V circle at 20 Hz: " + ", ".join(
+            f"{lo:g}-{hi:g} Hz " + "/".join(f"{1e3 * x:.1f}" for x in np.sqrt(np.sum(
+                a[:, (f >= lo) & (f < hi)] ** 2 / 2, axis=1))) for lo, hi in BANDS[1:]))
 
 
 #: frequency bands of --bands [Hz]
@@ -104,6 +154,8 @@ def main(argv=None):
     ap.add_argument("--decay", type=float, default=1.0, help="periods for the harmonics to decay")
     ap.add_argument("--bands", action="store_true", help="the error's RMS per frequency band")
     ap.add_argument("--levels", type=int, default=30, help="levels of the identified Preisach grid")
+    ap.add_argument("--kinks", action="store_true",
+                    help="the actuator's hysteresis alone on smooth circles, per band")
     args = ap.parse_args(argv)
     print(f"load before {os.getloadavg()}")
     cpu0 = time.process_time()
@@ -119,6 +171,8 @@ def main(argv=None):
     T = plant.sampling_period
     base, _ = build_loops(spec.table, plant)
     g = np.real(np.atleast_2d(linearised_plant(plant)(1.0)))
+    if args.kinks:
+        kinks(plant, T)
     ffs = []
     for c in cases:
         fade = fade_samples(c) if c.compensator is not None else 0
@@ -135,12 +189,17 @@ def main(argv=None):
 
     def designs(base_name):
         kind, _, fc = base_name.partition("@")
+        if kind == "vel":
+            fc, _, kd = fc.partition("@")
+            return [velocity_design(g[l, l], float(fc or 100.0), float(kd or 4e-4))
+                    for l in range(2)]
         fc = float(fc or 150.0)
         extra = [{"notch_hz": 450.0}, {"notch_hz": 420.0}] if kind == "pi-notch" else \
             [{"mode_hz": 450.0}, {"mode_hz": 420.0}]
         return [design_axis(kind, g[l, l], crossover_hz=fc, **extra[l]) for l in range(2)]
 
     table = {}
+    floors = {}
     for opt in options:
         for i, c in enumerate(cases):
             if args.only and not any(o in c.name for o in args.only.split(",")):
@@ -162,6 +221,8 @@ def main(argv=None):
             if np.max(poles) >= 1:
                 table[(c.name, opt)] = "unstable"
                 continue
+            if opt not in floors and not harm:
+                floors[opt] = noise_floor(loop)
             r_loop, ff = ffs[i]
             both = loop.simulate(r_loop, feedforward=0 * ff if args.without_feedforward else ff,
                                  seed=i)
@@ -176,6 +237,8 @@ def main(argv=None):
     for c in cases:
         print(c.name.ljust(24) + "".join(str(table.get((c.name, o), "-")).rjust(12)
                                          for o in options))
+    print("noise floor [nm]".ljust(24) + "".join(
+        (f"{floors[o]:.1f}" if o in floors else "-").rjust(12) for o in options))
     print(f"CPU {time.process_time() - cpu0:.1f} s; load after {os.getloadavg()}")
 
 
