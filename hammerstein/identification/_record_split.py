@@ -157,8 +157,12 @@ def _branches(u):
             for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
 
 
-#: Branches whose end amplitudes differ by at most this fraction of the span form one level.
-LEVEL_TOLERANCE = 0.05
+#: Branches whose end amplitudes differ by at most this fraction of the larger one form one
+#: level (10 %: levels 20 % of the amplitude apart stay apart, down to the smallest)...
+LEVEL_TOLERANCE = 0.1
+#: ... or by at most this fraction of the input span (the turning points' jitter of a measured
+#: input).
+LEVEL_FLOOR = 0.01
 
 
 def amplitude_levels(u, branches=None):
@@ -166,8 +170,10 @@ def amplitude_levels(u, branches=None):
 
     A decreasing-amplitude sine (:func:`hammerstein.signals.excitation.decreasing_sine`)
     has one level per amplitude: the branches that end at the same distance
-    from the centre of the input span (within :data:`LEVEL_TOLERANCE` of the
-    span). Runs of fewer than three branches (less than a loop) are not levels.
+    from the centre of the input span, within :data:`LEVEL_TOLERANCE` of the
+    larger of the two amplitudes or :data:`LEVEL_FLOOR` of the span, whichever
+    is larger: a 1.2 V and a 0.6 V level of a 20 V span are two levels. Runs of
+    fewer than three branches (less than a loop) are not levels.
 
     Parameters
     ----------
@@ -201,7 +207,8 @@ def amplitude_levels(u, branches=None):
     runs = []
     for a, b, _ in branches:
         amp = abs(u[b] - centre)
-        if runs and abs(runs[-1]["amplitude"] - amp) <= LEVEL_TOLERANCE * span:
+        if runs and abs(runs[-1]["amplitude"] - amp) <= max(
+                LEVEL_TOLERANCE * max(runs[-1]["amplitude"], amp), LEVEL_FLOOR * span):
             runs[-1]["stop"] = b
             runs[-1]["n"] += 1
             runs[-1]["amplitude"] = max(runs[-1]["amplitude"], amp)
