@@ -7,9 +7,10 @@ decreasing-amplitude sine of the excitation module.
 
 import numpy as np
 import pytest
+from scipy.ndimage import uniform_filter1d
 
 from hammerstein.io.datafiles import MultiRecord
-from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.signals.excitation import LEVELS, decreasing_sine
 from hammerstein.identification.record_identification import (amplitude_levels, identify_records,
                                                     noise_level, split_record)
 
@@ -38,12 +39,22 @@ def _record(rng, coupling=0.0, noise=0.02):
                        T, "sine.csv")
 
 
-def test_levels_of_a_decreasing_sine():
-    _, u, level = decreasing_sine(T, 10.0, frequency=2.0)
+@pytest.mark.parametrize("levels", [LEVELS, (1.0, 0.5, 0.25, 0.12, 0.06)])
+def test_levels_of_a_decreasing_sine(levels):
+    # every level the sine was built with is found, the small ones too (1.2 and 0.6 V of a
+    # 20 V span are two levels, not one within 5 % of the span)
+    _, u, level = decreasing_sine(T, 10.0, frequency=2.0, levels=levels)
     lv = amplitude_levels(u)
-    assert [round(v["percent"]) for v in lv] == [100, 80, 60, 40, 20]
-    for v, k in zip(lv, range(5)):      # each level ends where the sine's level ends
+    np.testing.assert_allclose([v["percent"] for v in lv], [100 * a for a in levels], atol=0.5)
+    for v, k in zip(lv, range(len(levels))):      # each level ends where the sine's level ends
         assert level[v["stop"]] == k
+
+
+def test_noisy_turning_points_stay_one_level(rng=np.random.default_rng(4)):
+    # a measured input: its turning points jitter around each level
+    _, u, _ = decreasing_sine(T, 10.0, frequency=2.0)
+    u = uniform_filter1d(u + 0.05 * rng.standard_normal(u.size), 25)
+    assert [round(v["percent"] / 10) * 10 for v in amplitude_levels(u)] == [100, 80, 60, 40, 20]
 
 
 def test_whole_levels_are_held_out_and_reported(rng=np.random.default_rng(1)):
