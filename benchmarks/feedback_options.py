@@ -87,9 +87,7 @@ def scenario_text(noise_nm):
 
 def velocity_design(gain, crossover_hz, kd, filter_hz=4000.0):
     """PI (zero at 8 crossovers) in parallel with filtered velocity feedback on the error."""
-    fz = 8.0 * crossover_hz
-    kp = 1.0 / (gain * np.hypot(1.0, fz / crossover_hz))
-    pi = control.ss([[0.0]], [[kp * 2 * np.pi * fz]], [[1.0]], [[kp]])
+    pi = design_axis("pi", gain, crossover_hz, zero_hz=8.0 * crossover_hz).system
     s = control.tf("s")
     wf = 2 * np.pi * filter_hz
     system = control.parallel(pi, control.ss(kd / gain * s * wf ** 2 / (s ** 2 + 2 * wf * s

@@ -597,15 +597,16 @@ def level_errors(fit):
             for l, name in enumerate(fit.model.output_names):
                 y, yh = rec.y[l, a:b], pred[l, a:b]
                 rng = float(np.ptp(y))
+                rms = float(np.sqrt(np.mean((y - yh) ** 2)))
                 pp, pp_hat = (float(np.ptp(uniform_filter1d(np.asarray(v[l, h:b], dtype=float), w,
                                                             mode="nearest")))
                               for v in (rec.y, pred))
                 rows.append({"source": rec.source, "percent": lv["percent"],
                              "held_out": bool(lv["held_out"]), "output": name,
-                             "rms_percent": 100 * float(np.sqrt(np.mean((y - yh) ** 2))) / max(rng, 1e-300),
+                             "rms_percent": 100 * rms / max(rng, 1e-300),
                              "amplitude_error_percent": 100 * (pp_hat - pp) / max(pp, 1e-300),
                              "measured_peak_to_peak": pp,
-                             "rms": float(np.sqrt(np.mean((y - yh) ** 2))), "range": rng})
+                             "rms": rms, "range": rng})
     return rows
 
 

@@ -756,8 +756,9 @@ class GeneralizedPIIdentifier:
 def _spacing_score(fit_thetas):
     """Held-out error of one spacing's fit [%]: minor loops, else windows, else None."""
     fit = fit_thetas[0]
-    if fit.minor_loop_error is not None:
-        return fit.minor_loop_error
+    loops = fit.minor_loop_error
+    if loops is not None:
+        return loops
     if fit.validation:
         return float(np.mean([w["rms_percent"] for w in fit.validation]))
     return None
