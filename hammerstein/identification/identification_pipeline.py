@@ -37,7 +37,8 @@ from hammerstein.identification.concurrent_fits import fit_concurrently, worker_
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
 from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI, play
-from hammerstein.identification.preisach_identification import identify_preisach_records
+from hammerstein.identification.preisach_identification import (SMOOTHING_START,
+                                                                identify_preisach_records)
 from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
                                                      identify_records, split_record)
 from hammerstein.exceptions import HysteresisError, IdentificationError
@@ -199,11 +200,15 @@ def _step_level_error(fit, recs):
             float(np.max(np.abs(ab))))
 
 
-def _fit_one_class(name, records, options, names, previous=None):
+def _fit_one_class(name, records, options, names, previous=None, provisional=False):
     """The fit of one class (``"classical"``, ``"preisach"`` or ``"generalized"``).
 
     ``previous``: a fit of the same class on similar records (the refit after the
     creep is removed); the Preisach smoothing search starts at its lambda.
+    ``provisional``: the fit only serves to identify the creep, and the refit
+    on the records with the creep removed replaces it; the Preisach model's
+    lambda is then not searched but :data:`SMOOTHING_START` (the refit
+    searches it from there).
     """
     if name == "classical":
         return identify_records(
@@ -213,7 +218,8 @@ def _fit_one_class(name, records, options, names, previous=None):
             options.train_fraction, options.skip, *names, output_map=options.output_map)
     if name == "preisach":
         return identify_preisach_records(
-            records, options.preisach_levels, "auto", options.components, options.hold_out,
+            records, options.preisach_levels, SMOOTHING_START if provisional else "auto",
+            options.components, options.hold_out,
             options.train_fraction, options.skip, *names,
             smoothing_start=getattr(previous, "smoothing", None))
     return identify_gpi_records(
@@ -306,7 +312,7 @@ def _auto_fits(records, options, names, creep_records):
 
 
 def identify_hysteresis(records, options, names, model_class=None, creep_records=None,
-                        previous=None):
+                        previous=None, provisional=False):
     """The hysteresis fit of ``options.model``: one class, or the best on held-out data.
 
     ``auto`` judges the classes on the held-out minor loops of the
@@ -331,6 +337,10 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
         is removed): the Preisach model's smoothing search starts at its lambda
         (:class:`~hammerstein.identification.preisach_identification.PreisachIdentifier`
         ``smoothing_start``).
+    provisional : bool
+        A fit of one class that the refit after the creep is removed will
+        replace (``auto`` ignores it: it compares the classes on these fits).
+        The Preisach model's lambda is then not searched (:func:`_fit_one_class`).
 
     Returns
     -------
@@ -350,7 +360,7 @@ def identify_hysteresis(records, options, names, model_class=None, creep_records
         fits, stairs, errors = _auto_fits(records, options, names, creep_records)
     else:
         fits, stairs, errors = {choice: _fit_one_class(choice, records, options, names,
-                                                        previous)}, {}, {}
+                                                        previous, provisional)}, {}, {}
     if len(fits) == 1:
         fit = next(iter(fits.values()))
         if choice == "auto":
@@ -483,7 +493,13 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
     if names is None:
         names = (list(records[0].input_names), list(records[0].output_names))
     creep_records = list(creep_records) if creep_records else None
-    fit = identify_hysteresis(records, options, names, creep_records=creep_records)
+    # a single class refitted after the creep: its first fit only serves the creep's
+    refits = options.creep_refits
+    if refits is None:          # the default of _refit_without_creep
+        refits = 0 if options.model == "classical" else 1
+    provisional = bool(creep_records) and options.model != "auto" and refits > 0
+    fit = identify_hysteresis(records, options, names, creep_records=creep_records,
+                              provisional=provisional)
     dyn = creep = None
     if dynamics_records:
         dyn = _dynamics(options, fit, dynamics_records)

@@ -42,10 +42,12 @@ along itself):
   signed (``signed = true`` in the model file) and their reversible part a
   signed polynomial ``c_1 u + c_2 u^2 + c_3 u^3``.
 
-The smoothing ``lambda`` is chosen among :data:`SMOOTHING_GRID` (and, while
-the smallest tried is the best, the smaller :data:`SMOOTHING_BELOW` in turn)
-by the mean held-out RMS error (in % of each output's range) when the records hold
-something out, else the given value (default 0.1) is used. The tall regression
+The smoothing ``lambda`` is chosen among the candidates :data:`SMOOTHING_GRID`
+and :data:`SMOOTHING_BELOW` by the mean held-out RMS error (in % of each
+output's range) when the records hold something out (without, the training
+error): the candidates are walked from :data:`SMOOTHING_START` (or a previous
+choice) towards the lower error, one step at a time, until both neighbours of
+the best are worse. A given value is used as it is. The tall regression
 matrix is factored once per output (:func:`~hammerstein.identification.lsq.r_factor`,
 free columns first), and each lambda folds the penalty into that factor
 (:func:`~hammerstein.identification.lsq.penalized_bounded_lstsq`); each lambda's
@@ -85,15 +87,22 @@ from hammerstein.identification.record_identification import (
     weak_couplings)
 from hammerstein.simulation import preisach_states
 
-__all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "GRID_STRETCH", "grid_edges",
-           "identify_preisach_records"]
+__all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "SMOOTHING_START",
+           "GRID_STRETCH", "grid_edges", "identify_preisach_records"]
 
-#: Candidate smoothing weights lambda (chosen on the held-out samples).
+#: Candidate smoothing weights lambda (chosen on the held-out samples, with
+#: :data:`SMOOTHING_BELOW`).
 SMOOTHING_GRID = (0.001, 0.003, 0.01, 0.03, 0.1, 0.3)
-#: Weights tried below the grid, in turn, while the smallest one tried is the best (a dense
-#: relay population needs less smoothing than a coarse one: the score at the grid's edge
-#: falling steeply, 0.465 -> 0.164 % from 0.003 to 0.001, says the optimum lies below it).
+#: Smaller candidate weights (a dense relay population needs less smoothing than a coarse one:
+#: the score at the edge of the grid above falling steeply, 0.465 -> 0.164 % from 0.003 to
+#: 0.001, said the optimum lies below it).
 SMOOTHING_BELOW = (3e-4, 1e-4, 3e-5, 1e-5)
+#: Where the search for lambda starts without a previous choice: the candidates
+#: (:data:`SMOOTHING_GRID` and :data:`SMOOTHING_BELOW`) are walked from here towards the lower
+#: held-out error. The 30-level fits of the 20 outside actuators of
+#: ``benchmarks/route_defaults.py`` chose 3e-5 to 3e-4 (on every one the score had one minimum
+#: over the candidates); a start at the grid's smallest weight (0.001) took 3 more fits.
+SMOOTHING_START = 1e-4
 #: Rows of the regression kept per record (quasi-static records are decimated to this).
 MAX_ROWS_PER_RECORD = 8000
 #: Lower bound of a direct path's linear reversible term, fraction of its secant slope.
@@ -189,19 +198,17 @@ class PreisachIdentifier:
     smoothing : float or "auto"
         Tikhonov weight lambda of the density's second differences [-]
         (relative: per training sample); ``"auto"`` picks it among
-        :data:`SMOOTHING_GRID` by the held-out error.
+        :data:`SMOOTHING_GRID` and :data:`SMOOTHING_BELOW` by the held-out
+        error, walking them from :data:`SMOOTHING_START`.
     smoothing_start : float, optional
         With ``smoothing="auto"``: a lambda chosen before on similar records
-        (the pipeline's refit after the creep is removed). The search then
-        starts there instead of trying the whole grid: the candidates
+        (the pipeline's refit after the creep is removed), where the search
+        starts instead of :data:`SMOOTHING_START`. The candidates
         (:data:`SMOOTHING_GRID` and :data:`SMOOTHING_BELOW`, in order) are
         walked from the nearest one towards the lower error, one step at a
         time, until both neighbours of the best are worse (or the list
-        ends). On a score with one minimum over the candidates (every
-        search measured) that is the grid search's choice, with fewer fits:
-        on the realistic 2 x 2 records of ``benchmarks/identify.py`` the
-        refit tried 5 lambdas instead of 9 (start 0.001, chose 0.0001, as
-        the full search).
+        ends). On a score with one minimum over the candidates that is the
+        best candidate, found with fewer fits than trying them all.
     components : "auto", "all", str or dict
         As :func:`hammerstein.identification.record_identification.parse_components`;
         ``"gain"`` components are fitted as a linear term, ``"none"`` left out.
@@ -556,10 +563,12 @@ class PreisachIdentifier:
             if best is None or scores[lam] < scores[best[0]]:
                 best = (lam, grid, offs, model)
 
-        if self.smoothing == "auto" and self.smoothing_start is not None:
-            # walk the candidates from the previous choice towards the lower error
+        if self.smoothing == "auto":
+            # walk the candidates from the start (the previous choice, or SMOOTHING_START)
+            # towards the lower error
+            start = SMOOTHING_START if self.smoothing_start is None else self.smoothing_start
             ladder = sorted(set(SMOOTHING_GRID) | set(SMOOTHING_BELOW))
-            i = int(np.argmin([abs(np.log(lam / self.smoothing_start)) for lam in ladder]))
+            i = int(np.argmin([abs(np.log(lam / start)) for lam in ladder]))
             score(ladder[i])
             lo, hi = max(i - 1, 0), min(i + 1, len(ladder) - 1)
             for j in (lo, hi):
@@ -576,12 +585,7 @@ class PreisachIdentifier:
                 else:
                     break
         else:
-            grid_lam = list(SMOOTHING_GRID if self.smoothing == "auto" else (float(self.smoothing),))
-            below = list(SMOOTHING_BELOW) if self.smoothing == "auto" else []
-            while grid_lam:
-                score(grid_lam.pop(0))
-                if not grid_lam and below and best[0] == min(scores):   # the optimum lies below
-                    grid_lam.append(below.pop(0))
+            score(float(self.smoothing))
         lam, grid, offs, model = best
         if len(scores) > 1:
             notes.append(f"preisach smoothing auto: lambda {lam:g} (" + ", ".join(

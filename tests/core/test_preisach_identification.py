@@ -152,22 +152,14 @@ def test_a_bad_grid_is_named():
         PreisachIdentifier(grid="log")
 
 
-def test_smoothing_search_goes_below_the_grid_while_its_edge_wins(monkeypatch):
-    """The weights below the grid are tried in turn only while the smallest tried is the best,
-    and the kept lambda is the best of all those tried (scores are held-out RMS errors)."""
+@pytest.fixture(scope="module")
+def every_candidate():
+    """Records, and the naive search: one fit per candidate lambda, each with that lambda given."""
     from hammerstein.identification import preisach_identification as pi_ident
-    monkeypatch.setattr(pi_ident, "SMOOTHING_GRID", (1.0, 3.0))       # a grid far too smooth
-    monkeypatch.setattr(pi_ident, "SMOOTHING_BELOW", (0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3))
-    est = PreisachIdentifier(n_levels=8).fit(records(preisach_actuator(), noise=0.04))
-    tried = list(est.smoothing_scores_)
-    assert tried[:2] == [1.0, 3.0] and len(tried) > 2
-    assert est.smoothing_ == min(est.smoothing_scores_, key=est.smoothing_scores_.get)
-    for k in range(2, len(tried)):      # each step below was taken because its edge was best
-        before = {lam: est.smoothing_scores_[lam] for lam in tried[:k]}
-        assert min(before, key=before.get) == min(before)
-    last = {lam: est.smoothing_scores_[lam] for lam in tried}
-    assert len(tried) == 8 or min(last, key=last.get) != min(last)   # stopped: edge lost or none left
-    assert any("smoothing auto" in n and "0.3:" in n for n in est.notes_)
+    rec = records(preisach_actuator(), noise=0.04)
+    ladder = sorted(set(pi_ident.SMOOTHING_GRID) | set(pi_ident.SMOOTHING_BELOW))
+    return rec, ladder, {lam: PreisachIdentifier(n_levels=8, smoothing=lam).fit(rec)
+                         for lam in ladder}
 
 
 def test_given_smoothing_is_not_searched():
@@ -285,33 +277,40 @@ def test_ilc_over_a_preisach_model_learns_through_its_exact_inverse(tmp_path):
     assert ilc.learning.exact_static     # no longer refused (tests/hardware/test_ilc_preisach.py)
 
 
-@pytest.mark.parametrize("start_at", ["choice", "far"])
-def test_smoothing_search_from_a_previous_lambda_keeps_the_grid_search_choice(start_at):
-    """Started at a lambda (the pipeline's refit), the search walks the candidates towards the
-    lower error: every score it computes is the full search's for that lambda, the lambdas it
-    tries are contiguous among the candidates, the best has both neighbours tried (or is at an
-    end) and is the full search's choice, with the same weights."""
+@pytest.mark.parametrize("start_at", ["default", "choice", "far", "near-the-top"])
+def test_smoothing_search_walks_to_the_best_candidate(start_at, every_candidate):
+    """The search walks the candidates from its start (SMOOTHING_START, or a lambda chosen
+    before: the pipeline's refit) towards the lower error: every score it computes is that of
+    a fit with that lambda given, the lambdas it tries are contiguous among the candidates, the
+    best has both neighbours tried (or is at an end) and, the scores having one minimum over
+    the candidates, it is the best candidate, with the same weights as the fit given it."""
     from hammerstein.identification import preisach_identification as pi_ident
-    rec = records(preisach_actuator(), noise=0.04)
-    full = PreisachIdentifier(n_levels=8).fit(rec)
-    ladder = sorted(set(pi_ident.SMOOTHING_GRID) | set(pi_ident.SMOOTHING_BELOW))
-    start = full.smoothing_ if start_at == "choice" else ladder[-1]
-    est = PreisachIdentifier(n_levels=8, smoothing_start=start).fit(rec)
+    rec, ladder, every = every_candidate
+    ref = {lam: est.smoothing_scores_[lam] for lam, est in every.items()}
+    best = min(ref, key=ref.get)
+    k = ladder.index(best)        # one minimum: falling to it, rising after it
+    assert all(ref[a] > ref[b] for a, b in zip(ladder[:k], ladder[1:k + 1]))
+    assert all(ref[a] < ref[b] for a, b in zip(ladder[k:-1], ladder[k + 1:]))
+    start = {"default": None, "choice": best, "far": ladder[-1], "near-the-top": ladder[-2]}
+    est = PreisachIdentifier(n_levels=8, smoothing_start=start[start_at]).fit(rec)
     tried = sorted(est.smoothing_scores_)
-    assert est.smoothing_ == full.smoothing_
+    assert est.smoothing_ == best
     for lam, score in est.smoothing_scores_.items():
-        if lam in full.smoothing_scores_:
-            assert score == pytest.approx(full.smoothing_scores_[lam], rel=1e-12)
+        assert score == pytest.approx(ref[lam], rel=1e-12)
     idx = [ladder.index(lam) for lam in tried]
     assert idx == list(range(idx[0], idx[-1] + 1))
     at = ladder.index(est.smoothing_)
     assert (at == 0 or ladder[at - 1] in tried) and (at == len(ladder) - 1 or ladder[at + 1] in tried)
-    for a, b in zip(est.model_.components, full.model_.components):
+    for a, b in zip(est.model_.components, every[best].model_.components):
         for ca, cb in zip(a, b):
             if isinstance(ca, PreisachModel):
                 np.testing.assert_array_equal(ca.weights, cb.weights)
+    first = ladder[int(np.argmin([abs(np.log(lam / (start[start_at] or pi_ident.SMOOTHING_START)))
+                                  for lam in ladder]))]
+    assert first in tried
     if start_at == "choice":
-        assert len(tried) <= 3 < len(full.smoothing_scores_)
+        assert len(tried) == 3
+    assert any("smoothing auto" in n for n in est.notes_)
 
 
 @pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), "0.1"])
