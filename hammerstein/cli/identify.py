@@ -128,7 +128,8 @@ def add_parser(subparsers):
                         "CPU; the held-out levels hardly tell the two apart, see the README)")
     p.add_argument("--preisach-levels", type=int, default=20, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
-                        "(N (N + 1) / 2 hysterons per component; default 20)")
+                        "(N (N + 1) / 2 hysterons per component; default 20). 30: small "
+                        "loops closer (docs/records.md), a slower exported real-time step")
     p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
                    help="auto (default): hold out the last complete branches or periods of "
                         "each record; none: train on everything, no validation")
