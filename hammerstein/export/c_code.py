@@ -20,7 +20,7 @@ the order of the compiled simulation kernels (``hammerstein.simulation``):
 - for a Preisach or generalised-PI model (``MultivariableHysteresis``), the
   exact per-sample inverse of
   :class:`~hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`
-  step for step (``hammerstein.simulation._preisach``: the same bracket,
+  step for step (``hammerstein.simulation._preisach_inverse``: the same bracket,
   Illinois iterations, tolerances, Gauss-Seidel sweeps and order of
   additions), its multiplicative law, or ``U = K^-1 (Yr - c)``; with a
   Hammerstein compensator, after the ZPETC inverse and the creep inverse as

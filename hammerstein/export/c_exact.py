@@ -1,6 +1,6 @@
 """C emitter of the exact per-sample inverse of a Preisach or generalised-PI model
 (:class:`~hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`) and of its
-multiplicative law, step for step as :mod:`hammerstein.simulation._preisach`: the same
+multiplicative law, step for step as :mod:`hammerstein.simulation._preisach_inverse`: the same
 bracket, Illinois iterations, tolerances, Gauss-Seidel sweeps, per-cell evaluation and order
 of additions; after optional linear stages (the dynamics and creep inverses of a Hammerstein
 compensator).
@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.simulation._preisach import _cell_lists
+from hammerstein.simulation._preisach_inverse import AITKEN_SWEEP, BRACKET_GROWTH, SECANT_OVERSHOOT
 from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
                                        _stage_code, _sections, _model_text)
 
@@ -160,7 +161,7 @@ static {N}_real {N}_kept(int q, int base, const {N}_real *h)
 }}
 @>HYST
 
-/* output of component c at input u, the states frozen (hammerstein.simulation._preisach.
+/* output of component c at input u, the states frozen (hammerstein.simulation._preisach_inverse.
    _frozen, in its order): in u's switching cell i the ramps of the other cells are exactly
    +1 (below) or -1 (above), so the hysterons that do not move add a constant per cell
    (the fixed table plus the kept states, summed once per sample and cell), and only the
@@ -235,50 +236,82 @@ static {N}_real {N}_eval({N}_memo *mm, int c, {N}_real u, {N}_real *h)
     return mm->y[c][i];
 }}
 
-/* u in [lo, hi] with component c = target: bracket from the guess by growing steps, then
-   Illinois false position (the Python kernel's search, step for step) */
+/* u in [lo, hi] with component c = target: a Newton probe on the secant of the component's
+   last two values, then a bracket from the guess (or the probe) by steps to the secant root
+   of the last two probes, then Illinois false position (the Python kernel's search, step
+   for step) */
 static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {N}_real lo, {N}_real hi, {N}_real *h)
 {{
-    {N}_real x = guess, fx, step, a, fa, b, fb;
-    int side = 0, it;
+    {N}_real x = guess, fx, step, a = {zero}, fa = {zero}, b = {zero}, fb = {zero};
+    int side = 0, it, bracketed = 0;
     if (x < lo) x = lo;
     if (x > hi) x = hi;
     fx = {N}_eval(mm, c, x, h) - target;
     if ({N}_ABS(fx) <= {N}_TOLERANCE) return x;
-    step = {N}_BRACKET_STEP * (hi - lo);
-    if (fx < {zero}) {{
-        a = x; fa = fx;
-        for (;;) {{
-            b = x + step;
-            if (b >= hi) {{
-                b = hi;
-                fb = {N}_eval(mm, c, hi, h) - target;
-                if (fb <= {zero}) return hi;
-                break;
+    if (mm->n[c] == 2 && mm->x[c][0] != mm->x[c][1]) {{
+        const {N}_real slope = (mm->y[c][1] - mm->y[c][0]) / (mm->x[c][1] - mm->x[c][0]);
+        if (slope > {zero}) {{
+            {N}_real z = x - fx / slope, fz;
+            if (z < lo) z = lo;
+            if (z > hi) z = hi;
+            if (z != x) {{
+                fz = {N}_eval(mm, c, z, h) - target;
+                if ({N}_ABS(fz) <= {N}_TOLERANCE) return z;
+                if ((fz < {zero}) == (fx < {zero})) {{ x = z; fx = fz; }}   /* on the guess's side */
+                else {{
+                    bracketed = 1;
+                    if (z > x) {{ a = x; fa = fx; b = z; fb = fz; }}
+                    else {{ a = z; fa = fz; b = x; fb = fx; }}
+                }}
             }}
-            fb = {N}_eval(mm, c, b, h) - target;
-            if (fb >= {zero}) break;
-            a = b; fa = fb;
-            step *= {N}_BRACKET_GROWTH;
-        }}
-    }} else {{
-        b = x; fb = fx;
-        for (;;) {{
-            a = x - step;
-            if (a <= lo) {{
-                a = lo;
-                fa = {N}_eval(mm, c, lo, h) - target;
-                if (fa >= {zero}) return lo;
-                break;
-            }}
-            fa = {N}_eval(mm, c, a, h) - target;
-            if (fa <= {zero}) break;
-            b = a; fb = fa;
-            step *= {N}_BRACKET_GROWTH;
         }}
     }}
-    if ({N}_ABS(fa) <= {N}_TOLERANCE) return a;
-    if ({N}_ABS(fb) <= {N}_TOLERANCE) return b;
+    if (!bracketed) {{
+        step = {N}_BRACKET_STEP * (hi - lo);
+        if (fx < {zero}) {{
+            a = x; fa = fx;
+            for (;;) {{
+                {N}_real grown, sec;
+                b = x + step;
+                if (b >= hi) {{
+                    b = hi;
+                    fb = {N}_eval(mm, c, hi, h) - target;
+                    if (fb <= {zero}) return hi;
+                    break;
+                }}
+                fb = {N}_eval(mm, c, b, h) - target;
+                if (fb >= {zero}) break;
+                grown = step * {N}_BRACKET_GROWTH;
+                if (fb > fa) {{
+                    sec = (b - x) + (b - a) * (-fb) / (fb - fa) * {N}_SECANT_OVERSHOOT;
+                    step = sec > step ? sec : grown;
+                }} else step = grown;
+                a = b; fa = fb;
+            }}
+        }} else {{
+            b = x; fb = fx;
+            for (;;) {{
+                {N}_real grown, sec;
+                a = x - step;
+                if (a <= lo) {{
+                    a = lo;
+                    fa = {N}_eval(mm, c, lo, h) - target;
+                    if (fa >= {zero}) return lo;
+                    break;
+                }}
+                fa = {N}_eval(mm, c, a, h) - target;
+                if (fa <= {zero}) break;
+                grown = step * {N}_BRACKET_GROWTH;
+                if (fb > fa) {{
+                    sec = (x - a) + (b - a) * fa / (fb - fa) * {N}_SECANT_OVERSHOOT;
+                    step = sec > step ? sec : grown;
+                }} else step = grown;
+                b = a; fb = fa;
+            }}
+        }}
+        if ({N}_ABS(fa) <= {N}_TOLERANCE) return a;
+        if ({N}_ABS(fb) <= {N}_TOLERANCE) return b;
+    }}
     for (it = 0; it < 200; ++it) {{
         x = (a * fb - b * fa) / (fb - fa);
         if (!(a < x && x < b)) x = {half} * (a + b);
@@ -316,7 +349,9 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
              f"#define {N}_N_POLY {rev.shape[1]}",
              f"#define {N}_TOLERANCE {_lit(comp.tolerance, precision)}",
              f"#define {N}_BRACKET_STEP {_lit(1e-5, precision)}",
-             f"#define {N}_BRACKET_GROWTH {_lit(16.0, precision)}",
+             f"#define {N}_BRACKET_GROWTH {_lit(BRACKET_GROWTH, precision)}",
+             f"#define {N}_SECANT_OVERSHOOT {_lit(SECANT_OVERSHOOT, precision)}",
+             f"#define {N}_AITKEN_SWEEP {AITKEN_SWEEP}",
              f"#define {N}_BRACKET_END {_lit(1e-13, precision)}",
              f"#define {N}_MAX_SWEEPS {int(comp.max_sweeps)}",
              _ints_table("q_off", q_off, N), _ints_table("s_off", s_off, N)]
@@ -368,7 +403,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
         law = f"""    {{  /* Gauss-Seidel over the outputs, a monotone root per direct path; sweeps that
            do not settle are repeated under-relaxed (omega 1/2 ... 1/16) */
         int round, sweep, converged = 0;
-        {N}_real omega = {lit['one']};
+        {N}_real omega = {lit['one']}, h0[{N}_N_INPUTS], h1[{N}_N_INPUTS], h2[{N}_N_INPUTS];
         {N}_memo mm;
         for (k = 0; k < {N}_N_COMPONENTS; ++k) {{ mm.n[k] = mm.last[k] = 0; mm.cell[k] = -2; }}
         for (round = 0; round < 5 && !converged; ++round) {{
@@ -385,6 +420,17 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
                     u[l] = omega == {lit['one']} ? nw : u[l] + omega * (nw - u[l]);
                 }}
                 if (delta <= {_lit(1e-11, precision)}) {{ converged = 1; break; }}
+                if (round == 0) {{   /* Aitken's extrapolation, once, from the last three sweeps */
+                    for (k = 0; k < {N}_N_INPUTS; ++k) {{ h2[k] = h1[k]; h1[k] = h0[k]; h0[k] = u[k]; }}
+                    if (sweep == {N}_AITKEN_SWEEP)
+                        for (k = 0; k < {N}_N_INPUTS; ++k) {{
+                            const {N}_real d1 = h0[k] - h1[k], d0 = h1[k] - h2[k];
+                            if (d1 != d0 && {N}_ABS(d1) < {N}_ABS(d0)) {{
+                                const {N}_real ua = h0[k] - d1 * d1 / (d1 - d0);
+                                if ({N}_lo[k] < ua && ua < {N}_hi[k]) u[k] = ua;
+                            }}
+                        }}
+                }}
             }}
             omega *= {lit['half']};
         }}

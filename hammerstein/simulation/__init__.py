@@ -78,8 +78,8 @@ from hammerstein.simulation._closed_loop import (AW_BACK, AW_CLAMP, AW_NONE, Com
                                                  LoopArrays, LoopState, empty_components, empty_pi,
                                                  simulate_closed_loop)
 from hammerstein.simulation._preisach import (generalized_play_states, generalized_play_steps,
-                                              linear_steps, preisach_inverse_kernel,
-                                              preisach_states, preisach_steps)
+                                              linear_steps, preisach_states, preisach_steps)
+from hammerstein.simulation._preisach_inverse import preisach_inverse_kernel
 
 __all__ = [
     "simulate_plays",
