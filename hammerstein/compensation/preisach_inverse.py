@@ -160,7 +160,7 @@ class PreisachInverseCompensator:
         the model's ``input_amplitude``, else the switching grid's extent.
     tolerance : float
         Root tolerance on each direct path's output [µm] (default 1e-12: the
-        exported C then equals this compensator to about 1e-13 relative, the
+        exported C then equals this compensator to a few 1e-13 relative, the
         roots' own spread; at 1e-10 it was 1.8e-12 on the Hammerstein kind).
     max_sweeps : int
         Gauss-Seidel sweeps per sample (the cross-couplings); when they do not
