@@ -21,6 +21,30 @@ __all__ = ["preisach_inverse_kernel", "BRACKET_STEP", "BRACKET_GROWTH", "SECANT_
 
 # -- exact inverse of a multivariable Preisach model -------------------------------
 @njit(cache=True)
+def _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s, commit):
+    """Component c's output at input u from ``acc`` (its hysterons' sum): its weighted
+    generalised plays added one by one in order (the exported C's order; their states moved
+    to u when ``commit``), then its polynomial and offset."""
+    if p_off[c + 1] > p_off[c]:
+        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
+        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
+        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        for j in range(p_off[c], p_off[c + 1]):
+            v = s[base + j]
+            if v > hi + pr[j]:
+                v = hi + pr[j]
+            if v < lo - pr[j]:
+                v = lo - pr[j]
+            if commit:
+                s[base + j] = v
+            acc += pw[j] * v
+    poly = 0.0
+    for n in range(rev.shape[1] - 1, -1, -1):
+        poly = (poly + rev[c, n]) * u
+    return acc + poly + off[c]
+
+
+@njit(cache=True)
 def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
                commit):
     """Output of component c at input u from states s (committed when ``commit``).
@@ -46,23 +70,8 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
         if commit:
             s[base + q] = v
         acc += mu[q] * v
-    if p_off[c + 1] > p_off[c]:
-        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
-        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
-        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
-        for j in range(p_off[c], p_off[c + 1]):
-            v = s[base + j]
-            if v > hi + pr[j]:
-                v = hi + pr[j]
-            if v < lo - pr[j]:
-                v = lo - pr[j]
-            if commit:
-                s[base + j] = v
-            acc += pw[j] * v
-    poly = 0.0
-    for n in range(rev.shape[1] - 1, -1, -1):
-        poly = (poly + rev[c, n]) * u
-    return acc + poly + off[c]
+    return _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s,
+                                 commit)
 
 
 @njit(cache=True)
@@ -134,21 +143,8 @@ def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                 else:
                     b0 += mu[q] * v
             acc += b0 + b1
-    if p_off[c + 1] > p_off[c]:
-        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
-        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
-        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
-        for j in range(p_off[c], p_off[c + 1]):
-            v = s[base + j]
-            if v > hi + pr[j]:
-                v = hi + pr[j]
-            if v < lo - pr[j]:
-                v = lo - pr[j]
-            acc += pw[j] * v
-    poly = 0.0
-    for d in range(rev.shape[1] - 1, -1, -1):
-        poly = (poly + rev[c, d]) * u
-    return acc + poly + off[c]
+    return _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s,
+                                 False)
 
 
 #: First step of the bracket search around the guess, as a fraction of the input range,
