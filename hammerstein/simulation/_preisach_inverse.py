@@ -20,7 +20,7 @@ __all__ = ["preisach_inverse_kernel", "BRACKET_STEP", "BRACKET_GROWTH", "SECANT_
 
 
 # -- exact inverse of a multivariable Preisach model -------------------------------
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s, commit):
     """Component c's output at input u from ``acc`` (its hysterons' sum): its weighted
     generalised plays added one by one in order (the exported C's order; their states moved
@@ -85,7 +85,7 @@ def _cell_of(u, E, e0, n):
     return i
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
             cell, const, start, index, kstart, kindex, fixed):
     """Output of component c at input u, the states s frozen (one sample's root search).
@@ -161,7 +161,7 @@ SECANT_OVERSHOOT = 1.02
 AITKEN_SWEEP = 2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _eval(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s, cell,
           const, start, index, kstart, kindex, fixed, mx, my, mn, mlast):
     """``_frozen`` with the component's last two values of the sample kept (``mx``, ``my``:
