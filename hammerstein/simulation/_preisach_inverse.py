@@ -20,7 +20,7 @@ __all__ = ["preisach_inverse_kernel", "BRACKET_STEP", "BRACKET_GROWTH", "SECANT_
 
 
 # -- exact inverse of a multivariable Preisach model -------------------------------
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s, commit):
     """Component c's output at input u from ``acc`` (its hysterons' sum): its weighted
     generalised plays added one by one in order (the exported C's order; their states moved
@@ -85,9 +85,9 @@ def _cell_of(u, E, e0, n):
     return i
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
-            cell, const, start, index, kstart, kindex, fixed):
+            cell, const, start, index, kstart, kindex, fixed, mx, my, mn, mlast):
     """Output of component c at input u, the states s frozen (one sample's root search).
 
     In u's switching cell i (``_cell_lists``) the hysterons that do not move
@@ -96,8 +96,14 @@ def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
     ``const[c]`` (``cell[c]`` remembers i, -2 for none); the cell's moving
     hysterons are added at u (two sums by position parity), then the plays
     and the polynomial as in ``_component``. The exported C code sums in this
-    order.
+    order. The component's last two values of the sample are kept (``mx``,
+    ``my``: (p m, 2); ``mn`` how many, ``mlast`` the slot written last): a
+    repeated input returns the value computed before, and the two kept are
+    the root's secant (the exported C's memo).
     """
+    for k in range(mn[c]):        # the component's last two values in this sample
+        if mx[c, k] == u:
+            return my[c, k]
     e0 = e_off[c]
     n = e_off[c + 1] - e0 - 1
     base = s_off[c] - q_off[c]
@@ -143,8 +149,33 @@ def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                 else:
                     b0 += mu[q] * v
             acc += b0 + b1
-    return _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s,
-                                 False)
+    # the plays and the polynomial as _plays_and_polynomial adds them, written out here: the
+    # root search's evaluation makes no call (a numba call with this many arrays costs about as
+    # much as a Preisach component's evaluation; inline="always" tripled the compile time)
+    if p_off[c + 1] > p_off[c]:
+        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
+        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
+        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        for j in range(p_off[c], p_off[c + 1]):
+            v = s[base + j]
+            if v > hi + pr[j]:
+                v = hi + pr[j]
+            if v < lo - pr[j]:
+                v = lo - pr[j]
+            acc += pw[j] * v
+    poly = 0.0
+    for d in range(rev.shape[1] - 1, -1, -1):
+        poly = (poly + rev[c, d]) * u
+    y = acc + poly + off[c]
+    if mn[c] < 2:                 # kept: a repeated input, and the root's secant
+        k = mn[c]
+        mn[c] += 1
+    else:
+        k = 1 - mlast[c]
+    mlast[c] = k
+    mx[c, k] = u
+    my[c, k] = y
+    return y
 
 
 #: First step of the bracket search around the guess, as a fraction of the input range,
@@ -161,34 +192,13 @@ SECANT_OVERSHOOT = 1.02
 AITKEN_SWEEP = 2
 
 
-@njit(cache=True, inline="always")
-def _eval(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s, cell,
-          const, start, index, kstart, kindex, fixed, mx, my, mn, mlast):
-    """``_frozen`` with the component's last two values of the sample kept (``mx``, ``my``:
-    (p m, 2); ``mn`` how many, ``mlast`` the slot written last): a repeated input returns the
-    value computed before, and the two kept are the root's secant (the exported C's memo)."""
-    for i in range(mn[c]):
-        if mx[c, i] == u:
-            return my[c, i]
-    if mn[c] < 2:
-        i = mn[c]
-        mn[c] += 1
-    else:
-        i = 1 - mlast[c]
-    mlast[c] = i
-    mx[c, i] = u
-    my[c, i] = _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
-                       off, s, cell, const, start, index, kstart, kindex, fixed)
-    return my[c, i]
-
-
 @njit(cache=True)
 def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
           rev, off, s, tol, cell, const, start, index, kstart, kindex, fixed, mx, my, mn, mlast):
     """u in [lo, hi] with component c = target (Illinois false position; clipped).
 
     The component is non-decreasing in u. First a Newton probe on the secant of
-    the component's last two values in the sample (``_eval``; on one linear
+    the component's last two values in the sample (``_frozen``; on one linear
     piece of the component it is the root); then the root is bracketed from
     ``guess`` (the current estimate: the previous sweep's or sample's input),
     or from the probe when it fell on the guess's side, by steps from
@@ -200,7 +210,7 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
     bracket of 1e-13 relative.
     """
     x = min(max(guess, lo), hi)
-    fx = _eval(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
+    fx = _frozen(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
                cell, const, start, index, kstart, kindex, fixed, mx, my, mn, mlast) - target
     if abs(fx) <= tol:
         return x
@@ -211,7 +221,7 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
         if slope > 0.0:
             z = min(max(x - fx / slope, lo), hi)
             if z != x:
-                fz = _eval(c, z, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
+                fz = _frozen(c, z, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                            off, s, cell, const, start, index, kstart, kindex, fixed, mx, my,
                            mn, mlast) - target
                 if abs(fz) <= tol:
@@ -232,13 +242,13 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
                 b = x + step
                 if b >= hi:
                     b = hi
-                    fb = _eval(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                    fb = _frozen(c, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
                                rev, off, s, cell, const, start, index, kstart, kindex, fixed,
                                mx, my, mn, mlast) - target
                     if fb <= 0.0:
                         return hi
                     break
-                fb = _eval(c, b, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
+                fb = _frozen(c, b, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                            off, s, cell, const, start, index, kstart, kindex, fixed, mx, my,
                            mn, mlast) - target
                 if fb >= 0.0:
@@ -256,13 +266,13 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
                 a = x - step
                 if a <= lo:
                     a = lo
-                    fa = _eval(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
+                    fa = _frozen(c, lo, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off,
                                rev, off, s, cell, const, start, index, kstart, kindex, fixed,
                                mx, my, mn, mlast) - target
                     if fa >= 0.0:
                         return lo
                     break
-                fa = _eval(c, a, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
+                fa = _frozen(c, a, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                            off, s, cell, const, start, index, kstart, kindex, fixed, mx, my,
                            mn, mlast) - target
                 if fa <= 0.0:
@@ -283,7 +293,7 @@ def _root(c, target, guess, lo, hi, E, e_off, row, col, mu, q_off, pr, pw, p_off
         x = (a * fb - b * fa) / (fb - fa)
         if not (a < x < b):
             x = 0.5 * (a + b)
-        fx = _eval(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
+        fx = _frozen(c, x, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
                    cell, const, start, index, kstart, kindex, fixed, mx, my, mn, mlast) - target
         if abs(fx) <= tol or b - a <= 1e-13 * (1.0 + abs(x)):
             return x
@@ -353,7 +363,7 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
                         for k in range(m):
                             c = l * m + k
                             if k != l and present[c]:
-                                target -= _eval(c, ut[k], E, e_off, row, col, mu, q_off, pr,
+                                target -= _frozen(c, ut[k], E, e_off, row, col, mu, q_off, pr,
                                                 pw, p_off, env, s_off, rev, off, s, cell, const,
                                                 start, index, kstart, kindex, fixed, mx, my, mn,
                                                 mlast)
