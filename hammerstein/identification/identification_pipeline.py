@@ -433,6 +433,13 @@ def _creep(fit, creep_records, dyn):
                                  None if dyn is None else dyn.identifier.system_, outputs=outs)
 
 
+def _creep_refits(options, classical):
+    """``options.creep_refits``, or its default: none for a classical PI, one otherwise."""
+    if options.creep_refits is not None:
+        return options.creep_refits
+    return 0 if classical else 1
+
+
 def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records):
     """Hysteresis refitted on the records with the identified creep removed, then creep again.
 
@@ -443,9 +450,8 @@ def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records
     hysteresis is refitted on v, and the creep is fitted again after the new
     model; ``creep_refits`` times.
     """
-    refits = options.creep_refits
-    if refits is None:
-        refits = 0 if isinstance(fit.model, MultivariablePI) else 1
+    refits = _creep_refits(options, isinstance(fit.model, MultivariablePI))
+    if options.creep_refits is None:
         if refits == 0:
             fit.notes.append("creep refit: none for a classical PI (the default; --creep-refits N "
                              "refits it on the records with the creep removed)")
@@ -494,10 +500,8 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
         names = (list(records[0].input_names), list(records[0].output_names))
     creep_records = list(creep_records) if creep_records else None
     # a single class refitted after the creep: its first fit only serves the creep's
-    refits = options.creep_refits
-    if refits is None:          # the default of _refit_without_creep
-        refits = 0 if options.model == "classical" else 1
-    provisional = bool(creep_records) and options.model != "auto" and refits > 0
+    provisional = (bool(creep_records) and options.model != "auto"
+                   and _creep_refits(options, options.model == "classical") > 0)
     fit = identify_hysteresis(records, options, names, creep_records=creep_records,
                               provisional=provisional)
     dyn = creep = None

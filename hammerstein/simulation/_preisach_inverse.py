@@ -21,30 +21,6 @@ __all__ = ["preisach_inverse_kernel", "BRACKET_STEP", "BRACKET_GROWTH", "SECANT_
 
 # -- exact inverse of a multivariable Preisach model -------------------------------
 @njit(cache=True)
-def _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s, commit):
-    """Component c's output at input u from ``acc`` (its hysterons' sum): its weighted
-    generalised plays added one by one in order (the exported C's order; their states moved
-    to u when ``commit``), then its polynomial and offset."""
-    if p_off[c + 1] > p_off[c]:
-        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
-        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
-        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
-        for j in range(p_off[c], p_off[c + 1]):
-            v = s[base + j]
-            if v > hi + pr[j]:
-                v = hi + pr[j]
-            if v < lo - pr[j]:
-                v = lo - pr[j]
-            if commit:
-                s[base + j] = v
-            acc += pw[j] * v
-    poly = 0.0
-    for n in range(rev.shape[1] - 1, -1, -1):
-        poly = (poly + rev[c, n]) * u
-    return acc + poly + off[c]
-
-
-@njit(cache=True)
 def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
                commit):
     """Output of component c at input u from states s (committed when ``commit``).
@@ -70,8 +46,23 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
         if commit:
             s[base + q] = v
         acc += mu[q] * v
-    return _plays_and_polynomial(acc, c, u, pr, pw, p_off, env, s_off, q_off, rev, off, s,
-                                 commit)
+    if p_off[c + 1] > p_off[c]:
+        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
+        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
+        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        for j in range(p_off[c], p_off[c + 1]):
+            v = s[base + j]
+            if v > hi + pr[j]:
+                v = hi + pr[j]
+            if v < lo - pr[j]:
+                v = lo - pr[j]
+            if commit:
+                s[base + j] = v
+            acc += pw[j] * v
+    poly = 0.0
+    for n in range(rev.shape[1] - 1, -1, -1):
+        poly = (poly + rev[c, n]) * u
+    return acc + poly + off[c]
 
 
 @njit(cache=True)
@@ -149,9 +140,10 @@ def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                 else:
                     b0 += mu[q] * v
             acc += b0 + b1
-    # the plays and the polynomial as _plays_and_polynomial adds them, written out here: the
-    # root search's evaluation makes no call (a numba call with this many arrays costs about as
-    # much as a Preisach component's evaluation; inline="always" tripled the compile time)
+    # the plays and the polynomial as _component adds them (without the commit), written out
+    # here too: the root search's evaluation makes no call (a numba call with this many arrays
+    # costs about as much as a Preisach component's evaluation; inline="always" tripled the
+    # compile time)
     if p_off[c + 1] > p_off[c]:
         base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
         lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
