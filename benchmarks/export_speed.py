@@ -1,7 +1,7 @@
 """CPU time per ``NAME_step`` of exported C compensators, with a C timing harness.
 
 Run: ``python benchmarks/export_speed.py [--opt O2] [--steps N] [--repeat R]
-[--precision double|float] [--model FILE[:KIND] ...]`` from the repository root
+[--precision double|float] [--model FILE[:KIND] ...] [--python]`` from the repository root
 (needs a C compiler, ``$CC`` or cc/gcc/clang).
 
 Not a test. Each compensator is exported (:func:`hammerstein.export.export_c`),
@@ -19,7 +19,9 @@ it without and with (4x4 bending modes) dynamics, and its per-axis inverse; the 
 2x2 Preisach and generalised-PI models (exact inverse), and any model or preset
 file given with ``--model FILE[:KIND]`` (e.g. one written by ``hammerstein
 identify``), built as ``hammerstein export`` builds it. Target: <= 2 µs per
-step at -O2 for the 4x4x100 PI and the 2x2 identified models.
+step at -O2 for the 4x4x100 PI and the 2x2 identified models. With
+``--python``, each compensator's Python ``simulate`` (the compiled kernels
+``compensate`` runs) is also timed on the same reference, CPU ns per sample.
 """
 
 from __future__ import annotations
@@ -165,6 +167,22 @@ def cases(files):
             yield f"{Path(path).stem} {kind}", comp, Tm, 12.0
 
 
+def python_ns(comp, T, scale, steps, repeat):
+    """CPU ns per sample of ``comp.simulate`` on the harness's reference (150 Hz circle from
+    rest, ``min(steps, 40000)`` samples), best of ``repeat``, after a short compiling call."""
+    k = np.arange(min(steps, 40_000))
+    ph = 2.0 * np.pi * 150.0 * 5e-5 * k
+    p = comp.model.n_outputs
+    yr = np.array([scale * (np.sin(ph) if l % 2 else 1.0 - np.cos(ph)) for l in range(p)])
+    comp.simulate(yr[:, :10])
+    best = np.inf
+    for _ in range(repeat):
+        t0 = time.process_time()
+        comp.simulate(yr)
+        best = min(best, time.process_time() - t0)
+    return 1e9 * best / yr.shape[1]
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=200_000)
@@ -172,6 +190,9 @@ def main():
     ap.add_argument("--opt", default="O2", help="optimisation level (O2, O3, Os)")
     ap.add_argument("--precision", choices=["double", "float"], default="double")
     ap.add_argument("--model", action="append", default=[], metavar="FILE[:KIND]")
+    ap.add_argument("--python", action="store_true",
+                    help="also time the Python compensator (its compiled kernels, what "
+                         "`compensate` runs) on the same reference, CPU ns per sample")
     args = ap.parse_args()
     cc = find_compiler()
     if cc is None:
@@ -196,13 +217,17 @@ def main():
                             str(tmp / f"{name}.c"), "-lm"], check=True)
             out = subprocess.run([str(tmp / name), str(args.steps), str(args.repeat)],
                                  capture_output=True, text=True, check=True).stdout.split()
-            rows.append((label, float(out[0]), int(out[1]), int(out[2]), code.state_reals))
+            rows.append((label, float(out[0]), int(out[1]), int(out[2]), code.state_reals,
+                         python_ns(comp, T, scale, args.steps, args.repeat) if args.python
+                         else None))
     ref1 = reference_loop()
     scale = 1.0 / min(ref0, ref1)
-    print(f"{'compensator':44s} {'CPU ns/step':>11s} {'scaled ns':>9s} {'state B':>8s} {'reals':>6s}")
-    for label, cpu, size, status, reals in rows:
+    print(f"{'compensator':44s} {'CPU ns/step':>11s} {'scaled ns':>9s} {'state B':>8s} {'reals':>6s}"
+          + (f" {'Python ns':>10s}" if args.python else ""))
+    for label, cpu, size, status, reals, py in rows:
         note = "" if status == 0 else f"  (status bits {status})"
-        print(f"{label:44s} {cpu:11.1f} {cpu * scale:9.1f} {size:8d} {reals:6d}{note}")
+        print(f"{label:44s} {cpu:11.1f} {cpu * scale:9.1f} {size:8d} {reals:6d}"
+              + (f" {py:10.0f}" if py is not None else "") + note)
     print(f"reference loop after: {ref1:.2f} s CPU (scaled = raw / {min(ref0, ref1):.2f}); load "
           f"after {' '.join(f'{x:.2f}' for x in os.getloadavg())}; target 2000 ns per step")
 
