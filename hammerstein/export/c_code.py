@@ -45,6 +45,7 @@ the Python compensator does.
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -171,7 +172,8 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
     m, p = model.n_inputs, model.n_outputs
     first = f"{MARKER} {version}: {description}. Do not edit: regenerate. */".replace("  ", " ")
     limits_text = _describe_limits(limits, m)
-    n_ints = sum(1 for mb in members if mb.lstrip().startswith("int "))
+    n_ints = sum(int(re.match(r"int \w+(?:\[(\d+)\])?", mb.lstrip()).group(1) or 1)
+                 for mb in members if mb.lstrip().startswith("int "))
     ins = ", ".join(f"{i}: {nm} [V]" for i, nm in enumerate(model.input_names))
     outs = ", ".join(f"{i}: {nm} [um]" for i, nm in enumerate(model.output_names))
     guard = f"{N.upper()}_H_INCLUDED"

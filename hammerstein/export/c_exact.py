@@ -26,8 +26,8 @@ static {N}_real {N}_ramp({N}_real u, {N}_real lo, {N}_real hi)
 }}
 @>RAMP
 @COMPONENT<
-/* output of component c at input u from the states h (moved to u when commit) */
-static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
+/* output of component c at input u from the states h (which {N}_move moves) */
+static {N}_real {N}_component(int c, {N}_real u, const {N}_real *h)
 {{
     {N}_real acc = {zero}, poly = {zero};
     int n;
@@ -42,7 +42,6 @@ static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
             {N}_real up = rho[{N}_row[q]], down = rho[{N}_col[q]], v = h[base + q];
             if (v > down) v = down;
             if (v < up) v = up;
-            if (commit) h[base + q] = v;
             acc += {N}_mu[q] * v;
         }}
     }}
@@ -57,7 +56,6 @@ static {N}_real {N}_component(int c, {N}_real u, {N}_real *h, int commit)
             {N}_real v = h[base + j];
             if (v > hi + {N}_pr[j]) v = hi + {N}_pr[j];
             if (v < lo - {N}_pr[j]) v = lo - {N}_pr[j];
-            if (commit) h[base + j] = v;
             acc += {N}_pw[j] * v;
         }}
     }}
@@ -80,27 +78,49 @@ static int {N}_cell_scan(int c, {N}_real u)
     return i;
 }}
 @>HYST
-/* move the states of component c to input u (the commit of _component, without its sum):
+/* move the states of component c to input u (the commit at the sample's solution):
    inside u's switching cell i the ramps of the other cells are exactly -1 (above) or +1
-   (below), so only cell i's ramp is computed */
-static void {N}_move(int c, {N}_real u, {N}_real *h)
+   (below), so only cell i's ramp is computed; and a hysteron whose two cells both lie
+   outside the cells from the last move's (moved[c]) to u's has the same two ramps as at
+   the last move, where it was clamped already (clamping again changes nothing): only the
+   hysterons moving inside those cells are clamped (all of them at the first move) */
+static void {N}_move(int c, {N}_real u, {N}_real *h, int *moved)
 {{
 @HYST<
     if ({N}_q_off[c + 1] > {N}_q_off[c]) {{
         const int e0 = {N}_e_off[c], nlev = {N}_e_off[c + 1] - {N}_e_off[c] - 1;
         const int base = {N}_s_off[c] - {N}_q_off[c];
-        const int i = {N}_cell_scan(c, u);
+        const int i = {N}_cell_scan(c, u), last = moved[c];
         {N}_real rhos[{N}_MAX_LEVELS];   /* every cell's ramp: +1 below u's cell, -1 above */
-        int q, j;
+        int q, j, k, a, b;
         for (j = 0; j < nlev; ++j) rhos[j] = j < i ? {one} : -{one};
         if (0 <= i && i < nlev) rhos[i] = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);
-        for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
-            const {N}_real up = rhos[{N}_row[q]], down = rhos[{N}_col[q]];
-            {N}_real v = h[base + q];
-            v = v > down ? down : v;
-            v = v < up ? up : v;
-            h[base + q] = v;
+        if (last < -1) {{          /* the first move: every hysteron */
+            for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
+                const {N}_real up = rhos[{N}_row[q]], down = rhos[{N}_col[q]];
+                {N}_real v = h[base + q];
+                v = v > down ? down : v;
+                v = v < up ? up : v;
+                h[base + q] = v;
+            }}
+        }} else {{
+            a = last < i ? last : i;
+            b = last < i ? i : last;
+            if (a < 0) a = 0;
+            if (b > nlev - 1) b = nlev - 1;
+            for (j = a; j <= b; ++j)
+                for (k = {N}_cstart[e0 + c + j + 1]; k < {N}_cstart[e0 + c + j + 2]; ++k) {{
+                    {N}_real up, down, v;
+                    q = {N}_cindex[k];
+                    up = rhos[{N}_row[q]];
+                    down = rhos[{N}_col[q]];
+                    v = h[base + q];
+                    v = v > down ? down : v;
+                    v = v < up ? up : v;
+                    h[base + q] = v;
+                }}
         }}
+        moved[c] = i;
     }}
 @>HYST
 @PLAY<
@@ -117,7 +137,7 @@ static void {N}_move(int c, {N}_real u, {N}_real *h)
         }}
     }}
 @>PLAY
-    (void)c; (void)u; (void)h;
+    (void)c; (void)u; (void)h; (void)moved;
 }}
 """
 
@@ -390,12 +410,13 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
     keep = {"HYST": q_off[-1] > 0, "RAMP": q_off[-1] > 0, "PLAY": p_off[-1] > 0,
             "COMPONENT": not exact}
     body = [_sections(_EXACT.format(**lit) + _MOVE.format(**lit), keep)]
+    if q_off[-1] > 0:
+        cstart, cindex, kstart, kindex, fixed = _cell_lists(e_off, row, col, mu, q_off)
+        decls += [_ints_table("cstart", cstart, N), _ints_table("cindex", cindex, N)
+                  + "  /* hysterons moving inside each switching cell */"]
     if exact:
         if q_off[-1] > 0:
-            cstart, cindex, kstart, kindex, fixed = _cell_lists(e_off, row, col, mu, q_off)
-            decls += [_ints_table("cstart", cstart, N), _ints_table("cindex", cindex, N)
-                      + "  /* hysterons moving inside each switching cell */",
-                      _ints_table("kstart", kstart, N), _ints_table("kindex", kindex, N)
+            decls += [_ints_table("kstart", kstart, N), _ints_table("kindex", kindex, N)
                       + "  /* hysterons keeping their state inside each cell */",
                       _reals_table("fixed", fixed, precision, N, "  /* per cell: sum of +1 and "
                                    "-1 hysteron weights [um] */")]
@@ -444,7 +465,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
             g[l] = {lit['zero']};
             for (k = 0; k < {N}_N_INPUTS; ++k)
                 if ({N}_present[l * {N}_N_INPUTS + k])
-                    g[l] += {N}_component(l * {N}_N_INPUTS + k, u[k], s->h, 0);
+                    g[l] += {N}_component(l * {N}_N_INPUTS + k, u[k], s->h);
         }}
         for (k = 0; k < {N}_N_INPUTS; ++k) {{
             {N}_real a = u[k];
@@ -461,6 +482,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
     for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = {lit['zero']};
     for (j = 0; j < {max(1, nh)}; ++j) s->h[j] = {N}_h0[j];
 {chr(10).join(init)}
+    for (j = 0; j < {p * m}; ++j) s->moved[j] = -2;   /* no move yet: the first moves every state */
     s->diverged = 0;
 }}
 """)
@@ -478,13 +500,14 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
         f"    for (k = 0; k < {N}_N_INPUTS; ++k) u[k] = s->u[k];", law,
         f"""    for (l = 0; l < {N}_N_OUTPUTS; ++l)   /* move every state to the solution */
         for (k = 0; k < {N}_N_INPUTS; ++k)
-            if ({N}_present[l * {N}_N_INPUTS + k]) {N}_move(l * {N}_N_INPUTS + k, u[k], s->h);"""]
+            if ({N}_present[l * {N}_N_INPUTS + k]) {N}_move(l * {N}_N_INPUTS + k, u[k], s->h, s->moved);"""]
         + lcode + ["""    return status;
 }
 """]))
     if preview:
         members.append("    int received;                  /* references received, up to PREVIEW */")
         body = [b.replace("    s->diverged = 0;\n", "    s->received = 0;\n    s->diverged = 0;\n") for b in body]
+    members.append(f"    int moved[{p * m}];   /* per component: the switching cell its states were moved to last */")
     members.append("    int diverged;                  /* latched divergence flag (unused: the root is bounded) */")
     return decls + ldecls, body, members, [], reals
 

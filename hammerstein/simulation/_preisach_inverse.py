@@ -21,9 +21,8 @@ __all__ = ["preisach_inverse_kernel", "BRACKET_STEP", "BRACKET_GROWTH", "SECANT_
 
 # -- exact inverse of a multivariable Preisach model -------------------------------
 @njit(cache=True)
-def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s,
-               commit):
-    """Output of component c at input u from states s (committed when ``commit``).
+def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, s):
+    """Output of component c at input u from states s (which do not move: :func:`_move` does).
 
     A component is ramp hysterons ``q_off[c]:q_off[c+1]`` (cells in ``E``) or
     generalised plays ``p_off[c]:p_off[c+1]`` (thresholds ``pr``, weights
@@ -43,8 +42,6 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
             v = down
         if v < up:
             v = up
-        if commit:
-            s[base + q] = v
         acc += mu[q] * v
     if p_off[c + 1] > p_off[c]:
         base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
@@ -56,13 +53,70 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
                 v = hi + pr[j]
             if v < lo - pr[j]:
                 v = lo - pr[j]
-            if commit:
-                s[base + j] = v
             acc += pw[j] * v
     poly = 0.0
     for n in range(rev.shape[1] - 1, -1, -1):
         poly = (poly + rev[c, n]) * u
     return acc + poly + off[c]
+
+
+@njit(cache=True)
+def _move(c, u, E, e_off, row, col, q_off, pr, p_off, env, s_off, s, start, index, moved):
+    """Move the states of component c to input u (the commit at a sample's solution).
+
+    Inside u's switching cell i the ramps of the other cells are exactly +1
+    (below) or -1 (above). A hysteron whose rising and falling cells both lie
+    outside the cells from the last move's (``moved[c]``) to u's has the same
+    two ramps as at the last move, where it was clamped already, and clamping
+    again changes nothing: only the hysterons moving inside those cells
+    (``index[start[g]:start[g + 1]]``, :func:`_cell_lists`) are clamped,
+    every hysteron at the first move (``moved[c] < -1``). The result is that
+    of clamping every hysteron, bit for bit. The plays all move.
+    """
+    if q_off[c + 1] > q_off[c]:
+        e0 = e_off[c]
+        n = e_off[c + 1] - e0 - 1
+        base = s_off[c] - q_off[c]
+        i = _cell_of(u, E, e0, n)
+        rho = _ramp(u, E[e0 + i], E[e0 + i + 1]) if 0 <= i < n else 0.0
+        last = moved[c]
+        if last < -1:
+            a, b = 0, -1
+            for q in range(q_off[c], q_off[c + 1]):
+                s[base + q] = _moved_state(s[base + q], row[q], col[q], i, rho)
+        else:
+            a = max(min(last, i), 0)
+            b = min(max(last, i), n - 1)
+        for j in range(a, b + 1):
+            g = e0 + c + j + 1
+            for k in range(start[g], start[g + 1]):
+                q = index[k]
+                s[base + q] = _moved_state(s[base + q], row[q], col[q], i, rho)
+        moved[c] = i
+    if p_off[c + 1] > p_off[c]:
+        base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
+        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
+        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        for j in range(p_off[c], p_off[c + 1]):
+            v = s[base + j]
+            if v > hi + pr[j]:
+                v = hi + pr[j]
+            if v < lo - pr[j]:
+                v = lo - pr[j]
+            s[base + j] = v
+
+
+@njit(cache=True)
+def _moved_state(v, r, k, i, rho):
+    """A hysteron's state clamped between its rising ramp (cell r) and its falling one (cell k)
+    at an input in cell i, whose own ramp is rho (other cells: +1 below i, -1 above)."""
+    up = rho if r == i else (1.0 if r < i else -1.0)
+    down = rho if k == i else (1.0 if k < i else -1.0)
+    if v > down:
+        v = down
+    if v < up:
+        v = up
+    return v
 
 
 @njit(cache=True)
@@ -140,7 +194,7 @@ def _frozen(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
                 else:
                     b0 += mu[q] * v
             acc += b0 + b1
-    # the plays and the polynomial as _component adds them (without the commit), written out
+    # the plays and the polynomial as _component adds them, written out
     # here too: the root search's evaluation makes no call (a numba call with this many arrays
     # costs about as much as a Preisach component's evaluation; inline="always" tripled the
     # compile time)
@@ -336,6 +390,7 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
     my = np.zeros((p * m, 2))
     mn = np.zeros(p * m, np.int64)
     mlast = np.zeros(p * m, np.int64)
+    moved = np.full(p * m, -2, np.int64)    # no move yet in this call: the first moves every state
     h0 = np.empty(m)
     h1 = np.empty(m)
     h2 = np.empty(m)
@@ -393,7 +448,7 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
                     c = l * m + k
                     if present[c]:
                         g[l] += _component(c, ut[k], E, e_off, row, col, mu, q_off, pr, pw, p_off,
-                                           env, s_off, rev, off, s, False)
+                                           env, s_off, rev, off, s)
             for k in range(m):
                 a = ut[k]
                 for l in range(p):
@@ -403,8 +458,8 @@ def preisach_inverse_kernel(yr, E, e_off, row, col, mu, q_off, pr, pw, p_off, en
             for k in range(m):
                 c = l * m + k
                 if present[c]:
-                    _component(c, ut[k], E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev,
-                               off, s, True)
+                    _move(c, ut[k], E, e_off, row, col, q_off, pr, p_off, env, s_off, s, start,
+                          index, moved)
         for k in range(m):
             u[k, t] = ut[k]
     for k in range(m):
