@@ -98,7 +98,7 @@ def identified_through_files(plant, name, model_class, keep=None, record_delay=0
     ``hammerstein excitation`` (10 V, the plant's sampling period), every
     record played through the plant from rest with 40 nm sensor noise, then
     ``hammerstein identify --model MODEL_CLASS --dynamics`` (the default
-    20-level Preisach grid for ``preisach``; ``auto`` keeps the class that
+    30-level Preisach grid for ``preisach``; ``auto`` keeps the class that
     predicts the held-out minor loops better). No creep identified. With
     ``keep`` (a directory) the identified preset is copied there as
     ``model.toml``. ``record_delay``: samples the recorded outputs lag (the

@@ -36,6 +36,7 @@ from hammerstein.models.amplifier import records_amplifier_table
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.io.presets import PresetError, save_model
+from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification_pipeline import PipelineOptions, identify_pipeline
 from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
 from hammerstein.models.dynamics import DynamicsError
@@ -126,10 +127,11 @@ def add_parser(subparsers):
                         "plays per component), S (j/n)^1.5 (power: dense near zero), or auto: "
                         "both fitted, the lower mean held-out minor-loop error kept (twice the "
                         "CPU; the held-out levels hardly tell the two apart, see the README)")
-    p.add_argument("--preisach-levels", type=int, default=20, metavar="N",
+    p.add_argument("--preisach-levels", type=int, default=PREISACH_LEVELS, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
-                        "(N (N + 1) / 2 hysterons per component; default 20). 30: small "
-                        "loops closer (docs/records.md), a slower exported real-time step")
+                        "(N (N + 1) / 2 hysterons per component; default %(default)s). Fewer: "
+                        "a faster fit and exported real-time step, small loops less close "
+                        "(docs/records.md)")
     p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
                    help="auto (default): hold out the last complete branches or periods of "
                         "each record; none: train on everything, no validation")

@@ -34,6 +34,7 @@ import numpy as np
 
 from hammerstein.models.creep import creep_to_table
 from hammerstein.identification.concurrent_fits import fit_concurrently, worker_count
+from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
 from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI, play
@@ -98,7 +99,7 @@ class PipelineOptions:
     components: str = "auto"
     model: str = "auto"
     threshold_spacing: str = "uniform"
-    preisach_levels: int = 20
+    preisach_levels: int = PREISACH_LEVELS
     hold_out: str = "auto"
     output_map: str = "auto"
     train_fraction: float | None = None

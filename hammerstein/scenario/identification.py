@@ -43,6 +43,7 @@ from hammerstein.core.files import confined_path
 from hammerstein.io.datafiles import MultiRecord
 from hammerstein.signals.excitation import decreasing_sine, excitation_set
 from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lazy import lazy_module
 from hammerstein.models.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
@@ -283,11 +284,6 @@ def _identify_records(plant, spec, amp, sensor):
     if meta["sensor"] is None:
         del meta["sensor"]
     return fits[chosen].model, meta
-
-
-#: Levels of each input's switching grid of a Preisach model identified in a scenario
-#: (``identify.model = "preisach"``; the default of ``hammerstein identify --preisach-levels``).
-PREISACH_LEVELS = 20
 
 
 def _identify_pi(plant, spec):

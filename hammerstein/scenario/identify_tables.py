@@ -10,7 +10,7 @@ the plant) may name the model "identified at f Hz on this plant"::
 
 ``model = "classical" | "preisach" | "auto"`` (default ``"classical"``) is
 the class identified: a classical PI from sine records at ``frequency``
-(the keys above), or a discrete Preisach model (20 levels per input) from
+(the keys above), or a discrete Preisach model (30 levels per input) from
 decreasing-amplitude sine records at that frequency (minor loops, as
 ``hammerstein excitation`` records them), or the one of the two with the
 lower held-out minor-loop error (as ``hammerstein identify --model auto``).
@@ -25,6 +25,7 @@ Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
 from __future__ import annotations
 
 from hammerstein.core.schema import nested_table
+from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
                                          choice, integer, number, short_repr, string)
 
@@ -107,7 +108,7 @@ RECORDS_IDENTIFY_FIELDS = {
     "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),
     "components": Field(string(), default="auto"),
     "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
-    "preisach_levels": Field(integer(2, 60), default=20),
+    "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
     "creep": Field(boolean(), default=False),              # identify the creep from staircases
     "creep_refits": Field(integer(0, 5)),                  # default: by class, as identify
