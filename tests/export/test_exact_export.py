@@ -146,7 +146,9 @@ def test_float_has_no_double(label, tmp_path):
     u_c, status, _ = h.run(yr)
     err = rel_error(u_c, python_voltages(comp, yr))
     print(f"float {label}: relative error {err:.2e}")
-    assert err < 1e-2
+    # the exact inverses' root search ends a few float epsilons from the root (its tolerance
+    # the epsilon times the component's scale): a few 1e-7 per sample, carried by the states
+    assert err < (5e-6 if label.endswith("-root") else 1e-2)
 
 
 def _pi_kind(kind):
