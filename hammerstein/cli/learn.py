@@ -43,7 +43,11 @@ identification would otherwise be learnt from). A trial whose error is above the
 one, beyond what the sensor noise can explain, is not learnt from; the next
 drive is learnt from the best trial's drive and response with half the
 gain (halved again at each such trial), and one line says so, as the
-scenarios' ``kind = "ilc"`` does. When the judged error rose since the
+scenarios' ``kind = "ilc"`` does. A trial of a repeating reference that is
+no better than the best beyond the noise has reached the noise: it is learnt
+from, with the gain halved (again at each such trial), so that the last
+steps stop moving the sensor's noise into the drive; one line says so.
+When the judged error rose since the
 previous trial, the printed condition ``||I - gamma Q L G||`` is said to
 hold on the model only, and a line says the learning was not monotonic on
 the actuator. The error judged: for a repeating
@@ -605,7 +609,7 @@ def _handle(args):
             score = judged.score
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
             if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
-        learn_u, learn_y, note, halvings, best = u, y, None, 0, True
+        learn_u, learn_y, note, halvings, best, stall = u, y, None, 0, True, None
         if state is not None:
             halvings = state["halvings"]
             best_score, what = state["score"], "averaged"
@@ -631,6 +635,17 @@ def _handle(args):
                         f"{margin:.2g} µm of noise margin): "
                         f"not learnt from; learning again from trial {state['trial']}'s drive "
                         f"with gain x{0.5 ** halvings:g}")
+            elif judged is None and score >= best_score:
+                # not better than the best, and not worse beyond the noise: the learning has
+                # reached the noise, and full steps now mostly move noise into the drive (a
+                # decreasing gain, as in
+                # S. S. Saab, "A discrete-time stochastic learning control algorithm", IEEE
+                # Trans. Automatic Control 46(6), 877-887, 2001)
+                halvings += 1
+                stall = (f"trial {k_next}'s judged error {score:.4g} µm is not below the best, "
+                         f"trial {state['trial']}'s {best_score:.4g} µm, and within the "
+                         f"{margin:.2g} µm of noise: the learning has reached the noise; the next "
+                         f"drive is learnt from this trial with gain x{0.5 ** halvings:g}")
         gain = args.learning_gain * 0.5 ** halvings
         law_gain, notes = _inverse_gain(model, args.gain, args.check)
         notes = ([] if q_note is None else [q_note]) + notes
@@ -646,6 +661,8 @@ def _handle(args):
                 if note is not None:   # as the gain: halved, and no growth compared with the worse trial
                     gains.gains *= 0.5
                     gains.previous = None
+                elif stall is not None:
+                    gains.gains *= 0.5
         u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
         # the fade-in is not judged: the base drive's start, faded into the learning as the reference
         u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
@@ -685,7 +702,7 @@ def _handle(args):
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
-    return _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond,
+    return _summary(args, model, rec, ref, k, delay, T, delay_note, note or stall, cond,
                     settled=(settled_max, settled_rms, window, fade),
                     rose=(rose, score, margin), notes=notes)
 
