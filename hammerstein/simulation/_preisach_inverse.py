@@ -45,15 +45,9 @@ def _component(c, u, E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, r
         acc += mu[q] * v
     if p_off[c + 1] > p_off[c]:
         base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
-        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
-        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        lo, hi = _envelopes(env, c, u)
         for j in range(p_off[c], p_off[c + 1]):
-            v = s[base + j]
-            if v > hi + pr[j]:
-                v = hi + pr[j]
-            if v < lo - pr[j]:
-                v = lo - pr[j]
-            acc += pw[j] * v
+            acc += pw[j] * _play_state(s[base + j], lo, hi, pr[j])
     poly = 0.0
     for n in range(rev.shape[1] - 1, -1, -1):
         poly = (poly + rev[c, n]) * u
@@ -95,15 +89,27 @@ def _move(c, u, E, e_off, row, col, q_off, pr, p_off, env, s_off, s, start, inde
         moved[c] = i
     if p_off[c + 1] > p_off[c]:
         base = s_off[c] + q_off[c + 1] - q_off[c] - p_off[c]
-        lo = env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3]
-        hi = env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7]
+        lo, hi = _envelopes(env, c, u)
         for j in range(p_off[c], p_off[c + 1]):
-            v = s[base + j]
-            if v > hi + pr[j]:
-                v = hi + pr[j]
-            if v < lo - pr[j]:
-                v = lo - pr[j]
-            s[base + j] = v
+            s[base + j] = _play_state(s[base + j], lo, hi, pr[j])
+
+
+@njit(cache=True)
+def _envelopes(env, c, u):
+    """The lower and upper envelopes of component c's generalised plays at input u
+    (``env[c] = gamma_l | gamma_r``, each ``a tanh(b u + c) + d``)."""
+    return (env[c, 0] * np.tanh(env[c, 1] * u + env[c, 2]) + env[c, 3],
+            env[c, 4] * np.tanh(env[c, 5] * u + env[c, 6]) + env[c, 7])
+
+
+@njit(cache=True)
+def _play_state(v, lo, hi, r):
+    """A generalised play's state clamped between its envelopes, threshold r apart."""
+    if v > hi + r:
+        v = hi + r
+    if v < lo - r:
+        v = lo - r
+    return v
 
 
 @njit(cache=True)
