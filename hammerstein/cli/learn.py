@@ -43,10 +43,11 @@ identification would otherwise be learnt from). A trial whose error is above the
 one, beyond what the sensor noise can explain, is not learnt from; the next
 drive is learnt from the best trial's drive and response with half the
 gain (halved again at each such trial), and one line says so, as the
-scenarios' ``kind = "ilc"`` does. A trial of a repeating reference that is
-no better than the best beyond the noise has reached the noise: it is learnt
-from, with the gain halved (again at each such trial), so that the last
-steps stop moving the sensor's noise into the drive; one line says so.
+scenarios' ``kind = "ilc"`` does. A trial of a repeating reference judged
+not better than the best, and not worse beyond the noise, has reached the
+noise: it is learnt from, with the gain halved (again at each such trial),
+so that the last steps stop moving the sensor's noise into the drive; one
+line says so.
 When the judged error rose since the
 previous trial, the printed condition ``||I - gamma Q L G||`` is said to
 hold on the model only, and a line says the learning was not monotonic on
