@@ -180,7 +180,10 @@ def test_reversible_polynomial_closed_form():
 
 @pytest.mark.parametrize("kwargs, match", [({"n_plays": 1}, "n_plays"),
                                            ({"max_evaluations": 0}, "max_evaluations"),
-                                           ({"threshold_spacing": "cubic"}, "threshold_spacing")])
+                                           ({"threshold_spacing": "cubic"}, "threshold_spacing"),
+                                           ({"n_starts": 0}, "n_starts"),
+                                           ({"n_starts": 5}, "n_starts"),
+                                           ({"n_starts": True}, "n_starts")])
 def test_bad_parameters_are_named(kwargs, match):
     with pytest.raises(IdentificationError, match=match):
         GeneralizedPIIdentifier(**kwargs)
@@ -357,3 +360,16 @@ def test_direct_path_with_a_quadratic_reversible_term_is_recovered():
         v = frac * 10.0 * np.sin(2 * np.pi * np.arange(4000) / 2000)
         np.testing.assert_allclose(est.model_.simulate(v[None])[0][0, 2000:],
                                    true.simulate(v)[0][2000:], atol=0.01 * np.ptp(y) * frac)
+
+
+def test_more_starts_never_fit_the_training_samples_worse():
+    """The envelope fit is not convex: each added start can only lower the training cost the
+    fit keeps (the lowest over the starts, the default start first). On the Preisach actuator
+    (outside the class) the default start alone stops in a higher minimum: the training RMS
+    of x falls by more than 5 % with four starts."""
+    R = records(preisach_actuator(), noise=0.01, sampling_period=T_FIT)
+    one = GeneralizedPIIdentifier(max_evaluations=BUDGET, n_starts=1).fit(R).fit_.train
+    four = GeneralizedPIIdentifier(max_evaluations=BUDGET, n_starts=4).fit(R).fit_.train
+    for a, b in zip(one, four):
+        assert b["rms_percent"] <= a["rms_percent"] * (1 + 1e-9), (a, b)
+    assert four[0]["rms_percent"] < 0.95 * one[0]["rms_percent"]
