@@ -28,7 +28,7 @@ Tolerances:
 import numpy as np
 import pytest
 
-from hammerstein.identification.gpi_identification import identify_gpi_records
+from hammerstein.identification.gpi_identification import GeneralizedPIIdentifier, identify_gpi_records
 from hammerstein.identification.preisach_identification import PreisachIdentifier
 from hammerstein.identification.record_identification import identify_records
 from hammerstein.io.datafiles import bundled_data, read_record
@@ -103,10 +103,23 @@ def test_preisach_holds_the_previous_fit(record):
 
 
 def test_generalized_pi_holds_the_previous_errors(record):
-    fit = identify_gpi_records(record, n_plays=8)
+    # the default start alone: the search the reference numbers came from
+    fit = GeneralizedPIIdentifier(n_plays=8, n_starts=1).fit(record).fit_
     assert fit.structure == [["generalized"]]
     # a search path that ends elsewhere may end lower: measured 1.1 % (train) and 1.4 %
     # (held out) lower with another processor's BLAS kernels; it must never end worse
     for got, ref in ((fit.train[0]["rms"], GENERALIZED["train_rms"]),
                      (fit.validation[0]["rms"], GENERALIZED["held_out_rms"])):
         assert ref * (1 - 3 * SEARCH) <= got <= ref * (1 + SEARCH)
+
+
+def test_generalized_pi_from_four_starts_ends_lower_on_the_real_record(record):
+    """The default fit (four starts screened) on the bundled record: its training RMS below the
+    single start's reference by more than the 3 % a search path moves it (measured 0.0852 µm
+    against the reference's 0.0887 and 0.0866 from the default start alone today), its
+    held-out RMS no worse than that search's tolerance above the reference (0.0815 µm against
+    0.0833 from the default start alone)."""
+    fit = identify_gpi_records(record, n_plays=8)
+    assert fit.structure == [["generalized"]]
+    assert fit.train[0]["rms"] < GENERALIZED["train_rms"] * (1 - 3 * SEARCH)
+    assert fit.validation[0]["rms"] <= GENERALIZED["held_out_rms"] * (1 + SEARCH)
