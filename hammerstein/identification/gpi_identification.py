@@ -330,13 +330,16 @@ class GeneralizedPIIdentifier:
         default 4): each gets ``START_SCREEN`` steps, and the one with the
         lowest training cost is fitted on with the rest of
         ``max_evaluations``. The variable projection is not convex in the
-        envelopes. On the ten generalised-PI-type
-        actuators of ``benchmarks/route_defaults.py`` (every default), the
-        default start alone stopped in another minimum on several outputs
-        (gpi-11's x: cost 4.9e-3 against 4.0e-3 from the second start);
-        with four starts their worst feedforward circle went from 5.14 to
-        3.88 % of the radius and the raster (against the shaped reference)
-        from a median of 2.64 to 1.68 %, for about 0.3 s more CPU per fit.
+        envelopes. On the ten generalised-PI-type actuators of
+        ``benchmarks/route_defaults.py`` (every default, the same records),
+        the default start alone stopped in another minimum on several
+        outputs (gpi-11's x: cost 4.9e-3 against 4.0e-3 from the second
+        start); with four screened starts their worst feedforward circle
+        went from 5.14 to 4.02 % of the radius (3.88 % with every start
+        fitted to the end, which took ``identify --model generalized`` from
+        3.6 to 8.7-9.1 s of scaled CPU; screened 4.7 s) and the raster
+        against the shaped reference from a median of 2.66 to 1.56 %; one
+        member's worst circle went the other way (gpi-7, 2.06 to 3.63 %).
     threshold_spacing : {"uniform", "power", "auto"}
         Play thresholds ``r_j = S j / n`` (``"uniform"``, the default),
         ``S (j / n)^1.5`` (``"power"``: dense near zero), or both fitted and
