@@ -83,7 +83,8 @@ static int {N}_cell_scan(int c, {N}_real u)
    (below), so only cell i's ramp is computed; and a hysteron whose two cells both lie
    outside the cells from the last move's (moved[c]) to u's has the same two ramps as at
    the last move, where it was clamped already (clamping again changes nothing): only the
-   hysterons moving inside those cells are clamped (all of them at the first move) */
+   hysterons moving inside those cells are clamped (at the first move those of every cell,
+   which are all of them) */
 static void {N}_move(int c, {N}_real u, {N}_real *h, int *moved)
 {{
 @HYST<
@@ -95,31 +96,21 @@ static void {N}_move(int c, {N}_real u, {N}_real *h, int *moved)
         int q, j, k, a, b;
         for (j = 0; j < nlev; ++j) rhos[j] = j < i ? {one} : -{one};
         if (0 <= i && i < nlev) rhos[i] = {N}_ramp(u, {N}_E[e0 + i], {N}_E[e0 + i + 1]);
-        if (last < -1) {{          /* the first move: every hysteron */
-            for (q = {N}_q_off[c]; q < {N}_q_off[c + 1]; ++q) {{
-                const {N}_real up = rhos[{N}_row[q]], down = rhos[{N}_col[q]];
-                {N}_real v = h[base + q];
+        a = last < -1 ? 0 : (last < i ? last : i);           /* the first move: every cell */
+        b = last < -1 ? nlev - 1 : (last < i ? i : last);
+        if (a < 0) a = 0;
+        if (b > nlev - 1) b = nlev - 1;
+        for (j = a; j <= b; ++j)
+            for (k = {N}_cstart[e0 + c + j + 1]; k < {N}_cstart[e0 + c + j + 2]; ++k) {{
+                {N}_real up, down, v;
+                q = {N}_cindex[k];
+                up = rhos[{N}_row[q]];
+                down = rhos[{N}_col[q]];
+                v = h[base + q];
                 v = v > down ? down : v;
                 v = v < up ? up : v;
                 h[base + q] = v;
             }}
-        }} else {{
-            a = last < i ? last : i;
-            b = last < i ? i : last;
-            if (a < 0) a = 0;
-            if (b > nlev - 1) b = nlev - 1;
-            for (j = a; j <= b; ++j)
-                for (k = {N}_cstart[e0 + c + j + 1]; k < {N}_cstart[e0 + c + j + 2]; ++k) {{
-                    {N}_real up, down, v;
-                    q = {N}_cindex[k];
-                    up = rhos[{N}_row[q]];
-                    down = rhos[{N}_col[q]];
-                    v = h[base + q];
-                    v = v > down ? down : v;
-                    v = v < up ? up : v;
-                    h[base + q] = v;
-                }}
-        }}
         moved[c] = i;
     }}
 @>HYST

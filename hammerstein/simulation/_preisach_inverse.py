@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from hammerstein.simulation._preisach import _cell_lists, _ramp
+from hammerstein.simulation._preisach import _cell_lists, _clamp, _ramp
 
 __all__ = ["preisach_inverse_kernel", "BRACKET_STEP", "BRACKET_GROWTH", "SECANT_OVERSHOOT",
            "AITKEN_SWEEP"]
@@ -63,9 +63,11 @@ def _move(c, u, E, e_off, row, col, q_off, pr, p_off, env, s_off, s, start, inde
     outside the cells from the last move's (``moved[c]``) to u's has the same
     two ramps as at the last move, where it was clamped already, and clamping
     again changes nothing: only the hysterons moving inside those cells
-    (``index[start[g]:start[g + 1]]``, :func:`_cell_lists`) are clamped,
-    every hysteron at the first move (``moved[c] < -1``). The result is that
-    of clamping every hysteron, bit for bit. The plays all move.
+    (``index[start[g]:start[g + 1]]``, :func:`_cell_lists`) are clamped;
+    at the first move (``moved[c] < -1``) those of every cell, which are all
+    of them (a hysteron in two cells' lists is clamped twice: the same
+    state). The result is that of clamping every hysteron, bit for bit. The
+    plays all move.
     """
     if q_off[c + 1] > q_off[c]:
         e0 = e_off[c]
@@ -74,10 +76,8 @@ def _move(c, u, E, e_off, row, col, q_off, pr, p_off, env, s_off, s, start, inde
         i = _cell_of(u, E, e0, n)
         rho = _ramp(u, E[e0 + i], E[e0 + i + 1]) if 0 <= i < n else 0.0
         last = moved[c]
-        if last < -1:
-            a, b = 0, -1
-            for q in range(q_off[c], q_off[c + 1]):
-                s[base + q] = _moved_state(s[base + q], row[q], col[q], i, rho)
+        if last < -1:               # the first move: every cell's hysterons, i.e. all of them
+            a, b = 0, n - 1
         else:
             a = max(min(last, i), 0)
             b = min(max(last, i), n - 1)
@@ -116,13 +116,8 @@ def _play_state(v, lo, hi, r):
 def _moved_state(v, r, k, i, rho):
     """A hysteron's state clamped between its rising ramp (cell r) and its falling one (cell k)
     at an input in cell i, whose own ramp is rho (other cells: +1 below i, -1 above)."""
-    up = rho if r == i else (1.0 if r < i else -1.0)
-    down = rho if k == i else (1.0 if k < i else -1.0)
-    if v > down:
-        v = down
-    if v < up:
-        v = up
-    return v
+    return _clamp(v, rho if r == i else (1.0 if r < i else -1.0),
+                  rho if k == i else (1.0 if k < i else -1.0))
 
 
 @njit(cache=True)
