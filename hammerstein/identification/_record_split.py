@@ -19,6 +19,7 @@ from scipy.ndimage import uniform_filter1d
 from hammerstein.core.numbers import check_array, is_number
 from hammerstein.io.datafiles import MIN_SAMPLES, MultiRecord, Record
 from hammerstein.identification.identification import IdentificationError
+from hammerstein.identification._split_kernels import reversal_kernel
 
 #: a single closed loop fitted by least squares: blocks per branch, every third held out
 HOLD_OUT_BLOCKS = 30
@@ -47,44 +48,16 @@ def reversal_points(u, band=REVERSAL_BAND):
     list of int
         Indices of the extrema, increasing; the first and last samples are
         not included.
+
+    Notes
+    -----
+    One pass of a compiled loop (:mod:`hammerstein.identification._split_kernels`).
     """
-    u = np.asarray(u, dtype=float)
+    u = np.ascontiguousarray(u, dtype=float)
     span = float(np.ptp(u)) if u.size else 0.0
     if not span > 0:
         return []
-    tol = band * span
-    rev = []
-    hi = lo = 0
-    direction = 0
-    ext = 0
-    for i in range(1, u.size):
-        v = u[i]
-        if direction == 0:
-            if v > u[hi]:
-                hi = i
-            if v < u[lo]:
-                lo = i
-            if v - u[lo] > tol:
-                direction, ext = 1, i
-                if lo > 0 and u[0] - u[lo] > tol:
-                    rev.append(lo)
-            elif u[hi] - v > tol:
-                direction, ext = -1, i
-                if hi > 0 and u[hi] - u[0] > tol:
-                    rev.append(hi)
-        elif direction > 0:
-            if v >= u[ext]:
-                ext = i
-            elif u[ext] - v > tol:
-                rev.append(ext)
-                direction, ext = -1, i
-        else:
-            if v <= u[ext]:
-                ext = i
-            elif v - u[ext] > tol:
-                rev.append(ext)
-                direction, ext = 1, i
-    return rev
+    return [int(i) for i in reversal_kernel(u, band * span)]
 
 
 @dataclass

@@ -73,6 +73,43 @@ def _cli(capsys, *argv):
 
 
 # -- splitting -----------------------------------------------------------------------------
+def _naive_reversal_points(u, band=0.05):
+    """The dead-band extremum scan, one Python step per sample (the reference)."""
+    tol = band * float(np.ptp(u))
+    rev, hi, lo, direction, ext = [], 0, 0, 0, 0
+    for i in range(1, u.size):
+        v = u[i]
+        if direction == 0:
+            hi = i if v > u[hi] else hi
+            lo = i if v < u[lo] else lo
+            if v - u[lo] > tol:
+                direction, ext = 1, i
+                if lo > 0 and u[0] - u[lo] > tol:
+                    rev.append(lo)
+            elif u[hi] - v > tol:
+                direction, ext = -1, i
+                if hi > 0 and u[hi] - u[0] > tol:
+                    rev.append(hi)
+        elif (v >= u[ext]) if direction > 0 else (v <= u[ext]):
+            ext = i
+        elif abs(v - u[ext]) > tol:
+            rev.append(ext)
+            direction, ext = -direction, i
+    return rev
+
+
+@pytest.mark.parametrize("band", [0.0, 0.01, 0.05, 0.3])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_reversal_points_equal_the_naive_scan(band, seed):
+    """The compiled scan against the per-sample Python reference, on random walks (plateaus
+    included) that start by rising, falling or standing still."""
+    rng = np.random.default_rng(seed)
+    steps = rng.standard_normal(3000) * (rng.uniform(size=3000) > 0.2)
+    u = np.concatenate([[0.0], np.cumsum(steps)])
+    u[:50] = u[0]
+    assert reversal_points(u, band) == _naive_reversal_points(u, band)
+
+
 def test_reversal_points_of_a_triangle_wave_are_its_corners():
     period = 100
     t = np.arange(450)
