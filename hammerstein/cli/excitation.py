@@ -1,7 +1,9 @@
 """``hammerstein excitation``: write the excitation files to play on an actuator.
 
 Per input (the others held at 0): ``hysteresis-<input>.csv`` (a slow sine of
-decreasing amplitude, 100/80/60/40/20 %, two periods each), ``multisine-<input>.csv``
+decreasing amplitude, 100/80/60/40/20 %, two periods each, then first-order
+reversal curves from both ends of the range, turning back at -80 to 80 % in
+steps of 20 %), ``multisine-<input>.csv``
 and ``multisine-<input>-validation.csv`` (random-phase multisines, 10 Hz to half
 the Nyquist frequency at 80 % of the amplitude, independent phases; the
 second is held out to choose the order of the dynamics) and ``creep-<input>.csv``
@@ -30,8 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
-from hammerstein.signals.excitation import (LEVELS, STAIRCASE_LEVELS, ExcitationRecord,
-                                            demagnetising_cycle, excitation_set)
+from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
+                                            ExcitationRecord, demagnetising_cycle, excitation_set)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -54,7 +56,8 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         "excitation", help="write excitation files to play on an actuator before identifying it",
         description="Write, per input, the excitation records that 'hammerstein identify' "
-                    "needs: a decreasing-amplitude sine (hysteresis and minor loops), two "
+                    "needs: a decreasing-amplitude sine then first-order reversal curves "
+                    "(hysteresis, minor loops, off-centre reversals), two "
                     "random-phase multisines (dynamics; the second held out) and a voltage "
                     "staircase (creep), each a CSV file with the time and every input column, "
                     "plus a README of what to measure.")
@@ -76,6 +79,10 @@ def add_parser(subparsers):
     p.add_argument("--hold", type=_SECONDS, default=2.0, metavar="S",
                    help="duration of each creep step (default 2 s)")
     p.add_argument("--seed", type=integer_type(0), default=0, help="seed of the multisine phases (default 0)")
+    p.add_argument("--reversals", default=",".join(f"{b:g}" for b in REVERSALS), metavar="F1,F2,...|none",
+                   help="reversal points of the first-order reversal curves played after the "
+                        "decreasing sine, fractions of the amplitude in (-1, 1) (default "
+                        "%(default)s); none: the decreasing sine alone")
     p.add_argument("--force", action="store_true",
                    help="replace files in DIR that this command did not write")
     p.set_defaults(handler=_handler)
@@ -112,7 +119,21 @@ def _amplitudes(text, m):
 _OPTIONS = {"f_min, periods": "--f-min, --periods", "frequency": "--sine-frequency",
             "sampling_period": "--sampling-period", "f_min, f_max": "--f-min, --f-max",
             "f_min": "--f-min", "f_max": "--f-max", "hold": "--hold", "periods": "--periods",
-            "amplitude": "--amplitude"}
+            "amplitude": "--amplitude", "reversals": "--reversals"}
+
+
+def _reversals(text):
+    if text.strip().lower() == "none":
+        return ()
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise _Usage(f"--reversals: expected fractions in (-1, 1), comma-separated, or none; "
+                     f"found {escape(repr(text), 60)}") from None
+    if any(number_problem(v) or not -1 < v < 1 for v in values) or len(set(values)) != len(values):
+        raise _Usage(f"--reversals: expected distinct fractions in (-1, 1), found "
+                     f"{escape(repr(text), 60)}")
+    return values
 
 
 def _option_names(message):
@@ -138,7 +159,7 @@ def _owned(directory):
     return {ln.strip() for ln in lines[1:] if ln.strip()}
 
 
-def readme_text(records, names, amplitude, sampling_period):
+def readme_text(records, names, amplitude, sampling_period, reversals=REVERSALS):
     """The README written with the excitation files: what to measure, how to identify.
 
     Parameters
@@ -151,6 +172,9 @@ def readme_text(records, names, amplitude, sampling_period):
         Full amplitude per input [V].
     sampling_period : float
         T [s].
+    reversals : sequence of float
+        Reversal points of the first-order reversal curves in the hysteresis
+        records (fractions of the amplitude; empty: none).
 
     Returns
     -------
@@ -169,9 +193,13 @@ def readme_text(records, names, amplitude, sampling_period):
         f"input column [V]; one input is driven, the others stay at 0 V (`demagnetise.csv`: "
         f"every input).", "",
         "| files | what for | signal | duration |", "|---|---|---|---|",
-        f"| {', '.join(by_kind['hysteresis'])} | hysteresis and its minor loops | sine, "
-        f"{', '.join(f'{100 * a:.0f}' for a in LEVELS)} % of the amplitude, two periods each | "
-        f"{dur['hysteresis']:g} s |",
+        f"| {', '.join(by_kind['hysteresis'])} | hysteresis, its minor loops"
+        f"{' and off-centre reversals' if len(reversals) else ''} | sine, "
+        f"{', '.join(f'{100 * a:.0f}' for a in LEVELS)} % of the amplitude, two periods each"
+        + (f"; then first-order reversal curves: from the amplitude down to "
+           f"{', '.join(f'{100 * b:.0f}' for b in reversals)} % and back, then from minus the "
+           f"amplitude up to minus these and back" if len(reversals) else "")
+        + f" | {dur['hysteresis']:g} s |",
         f"| {', '.join(by_kind['multisine'])} | linear dynamics (estimation) | random-phase "
         f"multisine at 80 % of the amplitude | {dur['multisine']:g} s |",
         f"| {', '.join(by_kind['multisine-validation'])} | linear dynamics (held out: chooses "
@@ -231,6 +259,7 @@ def _handler(args):
             if problem:
                 raise _Usage(problem)
         amplitude = _amplitudes(args.amplitude, len(names))
+        reversals = _reversals(args.reversals)
         T = args.sampling_period
         if not (np.isfinite(T) and T > 0):
             raise _Usage(f"--sampling-period: expected a positive time [s], found {T}")
@@ -241,7 +270,7 @@ def _handler(args):
             records = excitation_set(names, amplitude, T, sine_frequency=args.sine_frequency,
                                      f_min=args.f_min, f_max=args.f_max,
                                      multisine_periods=args.periods, hold=args.hold,
-                                     seed=args.seed)
+                                     seed=args.seed, reversals=reversals)
             # twice the sine's frequency, at most the 8 samples per period it needs itself
             t, u = demagnetising_cycle(T, amplitude, min(2.0 * args.sine_frequency, 1 / (8 * T)))
             records.append(ExcitationRecord("demagnetise", "demagnetise", -1, t, u))
@@ -269,7 +298,7 @@ def _handler(args):
             safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
             for r, name in zip(records, targets):
                 safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
-            safe_write(out / "README.md", readme_text(records, names, amplitude, T), "README",
+            safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals), "README",
                        root=out)
     except (FileLimitError, OSError) as exc:
         if created:                  # the directory this run made, empty again: removed

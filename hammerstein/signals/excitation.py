@@ -1,6 +1,6 @@
 """Excitation signals to play on an actuator before identifying it.
 
-Three records per input (the other inputs held at 0), each sampled at the
+Three kinds of record per input (the other inputs held at 0), each sampled at the
 sampling period T of the hardware:
 
 * :func:`decreasing_sine` — a slow sine whose amplitude steps down (100, 80,
@@ -9,6 +9,11 @@ sampling period T of the hardware:
   crossing, so the signal is continuous, and each level lies inside the
   previous one (wiping-out memory of a Preisach model: after its first period
   each level draws its steady minor loop).
+* :func:`reversal_curves` — played right after the decreasing sine, in the
+  same record: first-order reversal curves from both ends of the range, which
+  turn back at nine points across it (the off-centre reversals a raster or a
+  drive with an offset makes, which the centred levels alone leave to the
+  model's interpolation).
 * :func:`multisine` — a random-phase multisine (flat amplitude spectrum on the
   grid ``j / period`` between ``f_min`` and ``f_max``, phases uniform,
   Pintelon & Schoukens [1]) for the linear dynamics; several periods of one
@@ -43,11 +48,21 @@ import numpy as np
 
 from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
 
-__all__ = ["LEVELS", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine", "multisine",
-           "staircase", "excitation_set", "demagnetising_cycle"]
+__all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine",
+           "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set",
+           "demagnetising_cycle"]
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude).
 LEVELS = (1.0, 0.8, 0.6, 0.4, 0.2)
+#: Reversal points of the first-order reversal curves (fractions of the full amplitude): the
+#: descending curves turn back up at these, the ascending ones (mirrored) turn back down at minus
+#: these (:func:`reversal_curves`).
+REVERSALS = (0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8)
+#: Peak slew of the reversal curves' moves, in multiples of the decreasing sine's ``2 pi f A``
+#: (quasi-static still: a full-span move lasts ``1 / (4 f)``, 0.25 s at 1 Hz; the curves then
+#: take 5 s of a 15 s hysteresis record instead of 10 s of 20 s, and ``identify`` reads and
+#: simulates a quarter fewer samples).
+CURVE_SLEW = 2.0
 #: Voltage levels of the creep staircase (fractions of the full amplitude), after 0.
 STAIRCASE_LEVELS = (0.5, 1.0, 0.5, 0.0, -0.5, -1.0, -0.5, 0.0)
 
@@ -129,6 +144,154 @@ def decreasing_sine(sampling_period, amplitude, frequency=1.0, levels=LEVELS, pe
     u = np.concatenate([A * ak * phase for ak in a])
     level = np.repeat(np.arange(a.size), n_level)
     return np.arange(u.size) * T, u, level
+
+
+def _half_cosine(a, b, speed, T):
+    """Samples after ``a`` up to ``b``: a half-cosine of peak slew ``speed`` [V/s]."""
+    n = max(2, int(round(np.pi * abs(b - a) / (2.0 * speed * T))))
+    return a + (b - a) * (0.5 - 0.5 * np.cos(np.pi * np.arange(1, n + 1) / n))
+
+
+def reversal_curves(sampling_period, amplitude, frequency=1.0, reversals=REVERSALS):
+    """First-order reversal curves from both ends of the range, starting and ending at 0 V.
+
+    From 0 up to ``A``; for each reversal point ``b_j A``: down from ``A`` to
+    ``b_j A`` and back up to ``A`` (the ascending first-order reversal curve
+    from ``b_j A``); then down to ``-A`` and, mirrored, for each ``b_j``: up
+    from ``-A`` to ``-b_j A`` and back down; then up to 0. Each move is a
+    half-cosine whose peak slew is :data:`CURVE_SLEW` times the decreasing sine's,
+    ``2 pi f A``.
+
+    A decreasing-amplitude sine (:func:`decreasing_sine`) only turns back at
+    its own centred levels: the Preisach plane is seen along those few lines,
+    and the density between them (an off-centre loop, e.g. a raster between
+    0 and 8 V) is interpolated. The reversal curves see it along a line per
+    reversal point, from either end: the first-order reversal curves from
+    which a Preisach density is identified (Mayergoyz [4], Section 1.3; Hu &
+    Ben Mrad [5]).
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : float
+        Full amplitude A [V].
+    frequency : float
+        f [Hz] of the decreasing sine (the moves' peak slew is :data:`CURVE_SLEW`
+        ``* 2 pi f A`` [V/s]).
+    reversals : sequence of float
+        Reversal points b_j, fractions of A in (-1, 1), distinct.
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s].
+    u : numpy.ndarray, shape (n_samples,)
+        [V]; ``u[0] = 0``, and the next sample after the last would be 0 again
+        (as :func:`decreasing_sine`, so that either can follow the other).
+    curve : numpy.ndarray, shape (n_samples,)
+        Index j of the reversal curve of each sample (the descending family
+        0..n-1, the ascending family n..2n-1), -1 on the moves between them.
+
+    Raises
+    ------
+    ValueError
+        On a non-positive period, amplitude or frequency, or reversal points
+        outside (-1, 1) or repeated.
+
+    References
+    ----------
+    .. [4] I. D. Mayergoyz, *Mathematical Models of Hysteresis and Their
+       Applications*, Elsevier, 2003.
+    .. [5] H. Hu and R. Ben Mrad, "On the classical Preisach model for
+       hysteresis in piezoceramic actuators", Mechatronics 13(2), 85-94, 2003.
+
+    Examples
+    --------
+    >>> t, u, j = reversal_curves(1e-3, 10.0, reversals=(0.5, -0.5))
+    >>> float(u[0]), float(u.max()), float(u.min()), bool(-1e-2 < u[-1] < 0)
+    (0.0, 10.0, -10.0, True)
+    >>> sorted(round(float(u[j == k].min()), 6) for k in (0, 1))   # turning back up
+    [-5.0, 5.0]
+    """
+    T = _check_positive(sampling_period, "sampling_period", "s")
+    A = _check_positive(amplitude, "amplitude", "V")
+    f = _check_positive(frequency, "frequency", "Hz")
+    b = np.asarray(reversals, dtype=float)
+    if b.ndim != 1 or np.any(~np.isfinite(b)) or np.any(np.abs(b) >= 1) \
+            or np.unique(b).size != b.size:
+        raise ValueError(f"reversals: expected distinct fractions in (-1, 1), found {reversals!r}")
+    speed = CURVE_SLEW * 2 * np.pi * f * A
+    travel = A * (2.0 + 4.0 * np.sum(1.0 - b) + 2.0)     # 0 -> A, curves, A -> -A, curves, -> 0
+    check_samples(np.pi * travel / (2.0 * speed * T) + 8 * b.size + 8,
+                  "reversals: the first-order reversal curves", ValueError, T)
+    parts, tags = [np.zeros(1)], [np.full(1, -1)]
+
+    def move(a, c, tag):
+        parts.append(_half_cosine(a, c, speed, T))
+        tags.append(np.full(parts[-1].size, tag))
+    move(0.0, A, -1)
+    for j, bj in enumerate(b):
+        move(A, bj * A, j)
+        move(bj * A, A, j)
+    move(A, -A, -1)
+    for j, bj in enumerate(b):
+        move(-A, -bj * A, b.size + j)
+        move(-bj * A, -A, b.size + j)
+    move(-A, 0.0, -1)
+    u, tag = np.concatenate(parts)[:-1], np.concatenate(tags)[:-1]
+    return np.arange(u.size) * T, u, tag
+
+
+def hysteresis_excitation(sampling_period, amplitude, frequency=1.0, levels=LEVELS,
+                          reversals=REVERSALS, periods=2):
+    """The hysteresis record of one input: the decreasing sine, then the reversal curves.
+
+    :func:`decreasing_sine` followed by :func:`reversal_curves` (none when
+    ``reversals`` is empty), one continuous signal from 0 V: what
+    ``hammerstein excitation`` writes as ``hysteresis-<input>.csv`` and what
+    scenario identification tables play through their plant.
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : float
+        Full amplitude A [V].
+    frequency : float
+        f [Hz] of the sine (the curves' peak slew is :data:`CURVE_SLEW` times its
+        ``2 pi f A``).
+    levels : sequence of float
+        The sine's amplitude levels (fractions of A, strictly decreasing).
+    reversals : sequence of float
+        Reversal points of the curves (fractions of A in (-1, 1)); empty:
+        the sine alone.
+    periods : int
+        Periods per level of the sine.
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s].
+    u : numpy.ndarray, shape (n_samples,)
+        [V].
+
+    Raises
+    ------
+    ValueError
+        As :func:`decreasing_sine` and :func:`reversal_curves`.
+
+    Examples
+    --------
+    >>> t, u = hysteresis_excitation(1e-3, 10.0, levels=(1.0, 0.5), reversals=(0.0,))
+    >>> u.size > 4000, float(u[:4000].max()), float(u[4000:].min())
+    (True, 10.0, -10.0)
+    """
+    _, u, _ = decreasing_sine(sampling_period, amplitude, frequency, levels, periods)
+    if len(reversals):
+        _, curves, _ = reversal_curves(sampling_period, amplitude, frequency, reversals)
+        u = np.concatenate([u, curves])
+    return np.arange(u.size) * float(sampling_period), u
 
 
 def demagnetising_cycle(sampling_period, amplitude, frequency=2.0, periods=20, rest=1.0):
@@ -355,11 +518,12 @@ class ExcitationRecord:
 
 def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, levels=LEVELS,
                    f_min=10.0, f_max=None, multisine_fraction=0.8, multisine_periods=4,
-                   hold=2.0, seed=0):
+                   hold=2.0, seed=0, reversals=REVERSALS):
     """Every excitation record for m inputs, one input at a time.
 
     Per input k (the others at 0): the decreasing-amplitude sine
-    (:func:`decreasing_sine`, record ``hysteresis-<k>``), two multisines of
+    (:func:`decreasing_sine`) followed by the first-order reversal curves
+    (:func:`reversal_curves`) in record ``hysteresis-<k>``, two multisines of
     independent phases at ``multisine_fraction`` of the amplitude
     (:func:`multisine`; ``multisine-<k>`` for estimation and
     ``multisine-<k>-validation``, held out to choose the order of the
@@ -387,6 +551,9 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
         Duration of a creep step [s].
     seed : int
         Seed of the multisine phases (input k, record r uses ``seed + 2 k + r``).
+    reversals : sequence of float
+        Reversal points of the first-order reversal curves (fractions of the
+        amplitude, :func:`reversal_curves`); empty: the decreasing sine alone.
 
     Returns
     -------
@@ -419,7 +586,7 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
             u = np.zeros((m, t.size))
             u[k] = one
             out.append(ExcitationRecord(stem, kind, k, t, u))
-        t, one, _ = decreasing_sine(sampling_period, amp[k], sine_frequency, levels)
+        t, one = hysteresis_excitation(sampling_period, amp[k], sine_frequency, levels, reversals)
         full(t, one, "hysteresis", f"hysteresis-{name}")
         for r, suffix in enumerate(("", "-validation")):
             t, one, _ = multisine(sampling_period, multisine_fraction * amp[k], f_min, f_max,

@@ -82,9 +82,54 @@ def test_decreasing_sine_levels(written):
     _, d = _read(written / "hysteresis-ux.csv")
     u = d[:, 1]
     n = int(round(1 / T))                      # samples per 1 Hz period
-    assert u.size == 5 * 2 * n
     peaks = [np.abs(u[k * 2 * n:(k + 1) * 2 * n]).max() for k in range(5)]
     np.testing.assert_allclose(peaks, [10, 8, 6, 4, 2], rtol=1e-4)
+
+
+def _turning_points(u):
+    """Values of u at its strict local extrema (independent of the package's own splitter)."""
+    du = np.diff(u)
+    k = np.flatnonzero(du[:-1] * du[1:] < 0) + 1
+    return u[k]
+
+
+def test_reversal_curves_follow_the_decreasing_sine(written):
+    """After the 10 s of the sine, the first-order reversal curves: up to the amplitude, then
+    down to each reversal point (80 % to -80 % in steps of 20 %) and back up to it; down to
+    minus the amplitude and, mirrored, up to minus each point and back; then back towards 0 V.
+    Read as turning points of the file's input; every move no faster than twice the 1 Hz
+    sine's largest slew (2 x 2 pi 1 Hz 10 V, 5 s of curves in all), the record continuous
+    where the two parts meet."""
+    _, d = _read(written / "hysteresis-ux.csv")
+    u = d[:, 1]
+    n = int(round(1 / T))
+    curves = u[10 * n - 1:]                   # the sine's last sample, then the curves
+    b = np.arange(8, -9, -2) / 10 * 10.0
+    expected = np.concatenate([[10.0], np.ravel([[v, 10.0] for v in b]),
+                               [-10.0], np.ravel([[-v, -10.0] for v in b])])
+    np.testing.assert_allclose(_turning_points(curves), expected, atol=1e-9)
+    assert np.abs(np.diff(u[:10 * n])).max() <= 2 * np.pi * 1.0 * 10.0 * T * (1 + 1e-6)
+    assert np.abs(np.diff(curves)).max() <= 2 * 2 * np.pi * 1.0 * 10.0 * T * (1 + 1e-6)
+    assert np.abs(np.diff(curves)).max() >= 0.99 * 2 * 2 * np.pi * 1.0 * 10.0 * T
+    assert curves.size - 1 == pytest.approx(5.0 / T, rel=0.01)
+    assert abs(u[-1]) < 2 * 2 * np.pi * 10.0 * T and u[0] == 0
+    readme = (written / "README.md").read_text()
+    assert "first-order reversal curves" in readme
+
+
+def test_reversals_none_writes_the_decreasing_sine_alone(tmp_path):
+    assert _run(tmp_path / "plain", "--reversals", "none") == 0
+    _, d = _read(tmp_path / "plain" / "hysteresis-ux.csv")
+    assert d.shape[0] == 5 * 2 * int(round(1 / T))
+    assert "reversal curves" not in (tmp_path / "plain" / "README.md").read_text()
+
+
+@pytest.mark.parametrize("text", ["1.0", "0.5,0.5", "x", "nan", "-1"])
+def test_bad_reversals_are_a_usage_error(tmp_path, capsys, text):
+    assert _run(tmp_path / "bad", "--reversals", text) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("hammerstein excitation: error: --reversals:") and err.count("\n") == 1
+    assert not (tmp_path / "bad").exists()
 
 
 def test_multisine_band_and_peak(written):
