@@ -535,6 +535,51 @@ def split_level_records(records, hold_out="auto", train_fraction=None, skip_seco
     return records, splits
 
 
+def levels_part(records, splits):
+    """The records and splits cut where a multi-level record leaves its last level.
+
+    A hysteresis record of ``hammerstein excitation`` holds the decreasing sine's
+    amplitude levels, then first-order reversal curves
+    (:func:`hammerstein.signals.excitation.reversal_curves`), which leave the last
+    (smallest) level at once for the full amplitude. A record is cut at the first
+    sample after its last level where the excited input is farther from the centre
+    of its span than ``1.05`` times that level's amplitude; a record without levels,
+    or that never leaves its last one, is kept whole.
+
+    Parameters
+    ----------
+    records : list of MultiRecord
+    splits : list of Split
+        As :func:`split_record` gives them.
+
+    Returns
+    -------
+    records : list of MultiRecord
+    splits : list of Split
+        Cut (samples, masks and branches up to the cut); the others as given.
+    cut : int
+        How many records were cut.
+    """
+    out_r, out_s, cut = [], [], 0
+    for rec, sp in zip(records, splits):
+        u = rec.u[sp.excitation]
+        if not sp.levels:
+            out_r.append(rec), out_s.append(sp)
+            continue
+        last = sp.levels[-1]
+        centre = 0.5 * (u.max() + u.min())
+        after = np.flatnonzero(np.abs(u[last["stop"] + 1:] - centre) > 1.05 * last["amplitude"])
+        if after.size == 0:
+            out_r.append(rec), out_s.append(sp)
+            continue
+        n = last["stop"] + 1 + int(after[0])
+        cut += 1
+        out_r.append(replace(rec, timepts=rec.timepts[:n], u=rec.u[:, :n], y=rec.y[:, :n]))
+        out_s.append(replace(sp, train=sp.train[:n], held_out=sp.held_out[:n],
+                             branches=[(a, min(b, n - 1), ok) for a, b, ok in sp.branches if a < n]))
+    return out_r, out_s, cut
+
+
 def level_errors(fit):
     """Errors of a fitted model per amplitude level (minor loop) of its records.
 

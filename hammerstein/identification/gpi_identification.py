@@ -118,8 +118,8 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.lsq import bounded_lstsq
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial
 from hammerstein.identification.record_identification import (
-    RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
-    weak_couplings)
+    RecordFit, _window_metrics, level_errors, levels_part, parse_components,
+    split_level_records, weak_couplings)
 from hammerstein.simulation import generalized_play_states
 
 __all__ = ["GeneralizedPIIdentifier", "identify_gpi_records"]
@@ -695,6 +695,9 @@ class GeneralizedPIIdentifier:
         """
         records, splits = split_level_records(records, hold_out, train_fraction, skip_seconds,
                                               splits, "a generalised PI model")
+        # the first-order reversal curves after the levels are left to the Preisach class
+        # (module notes, "Reversal curves")
+        records, splits, n_cut = levels_part(records, splits)
         m, p = records[0].u.shape[0], records[0].y.shape[0]
         in_names = list(input_names or records[0].input_names)
         out_names = list(output_names or records[0].output_names)
@@ -741,6 +744,9 @@ class GeneralizedPIIdentifier:
                         f"variable projection ({evaluations[best][0]} residual evaluations, "
                         f"{evaluations[best][1]} analytic Jacobians), thresholds "
                         f"{_SPACING_LABEL[best]}")
+        if n_cut:
+            notes.insert(1, f"generalized PI: fitted on the amplitude levels of {n_cut} record"
+                            f"{'s' if n_cut != 1 else ''}, not the reversal curves after them")
         if len(tried) > 1:
             notes.insert(0, "threshold spacing auto: chose " + best + " (" + ", ".join(
                 f"{sp} {scores[sp]:.3g} %" if scores[sp] is not None else f"{sp} -"

@@ -137,3 +137,31 @@ def test_loop_amplitude_error_is_not_the_sensor_noise():
     assert abs(row["amplitude_error_percent"]) < 3.0
     assert row["rms"] == pytest.approx(0.04, rel=0.05)  # the RMS is the noise, unchanged
 
+
+
+def test_the_reversal_curves_after_the_levels_are_cut_off(rng=np.random.default_rng(7)):
+    """A hysteresis record of ``hammerstein excitation`` (the decreasing sine, then the
+    first-order reversal curves): the held-out levels are the sine's, and ``levels_part`` cuts
+    the record where the curves leave the 20 % level for the full amplitude, the first sample
+    farther than 1.05 x 2 V from 0 after the sine's 10 periods (found here by a scan of the
+    input, independently of the splitter). The sine alone is kept whole."""
+    from hammerstein.identification.record_identification import levels_part
+    from hammerstein.signals.excitation import hysteresis_excitation
+    _, u = hysteresis_excitation(T, 10.0, frequency=2.0)
+    x = _pi(u) + 0.02 * rng.standard_normal(u.size)
+    rec = MultiRecord(np.arange(u.size) * T, u[None, :], x[None, :], ["ux"], ["x"], T, "h.csv")
+    rec, split = split_record(rec)
+    assert [round(v["percent"]) for v in split.levels] == [100, 80, 60, 40, 20]
+    assert [v["held_out"] for v in split.levels] == [False, True, False, True, False]
+    n_sine = 5 * 2 * int(round(0.5 / T))
+    expected = n_sine + int(np.argmax(np.abs(u[n_sine:]) > 1.05 * 2.0))
+    (cut,), (cut_split,), n = levels_part([rec], [split])
+    assert n == 1 and cut.u.shape[1] == expected and cut.y.shape[1] == expected
+    np.testing.assert_array_equal(cut_split.train, split.train[:expected])
+    np.testing.assert_array_equal(cut_split.held_out, split.held_out[:expected])
+    assert split.train[expected:].all()          # the curves train the classes that use them
+    _, v, _ = decreasing_sine(T, 10.0, frequency=2.0)
+    plain, plain_split = split_record(MultiRecord(np.arange(v.size) * T, v[None, :],
+                                                  _pi(v)[None, :], ["ux"], ["x"], T, "s.csv"))
+    (kept,), _, n = levels_part([plain], [plain_split])
+    assert n == 0 and kept is plain
