@@ -41,7 +41,7 @@ from hammerstein.exceptions import HysteresisError
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.core.files import confined_path
 from hammerstein.io.datafiles import MultiRecord
-from hammerstein.signals.excitation import decreasing_sine, excitation_set
+from hammerstein.signals.excitation import excitation_set, hysteresis_excitation
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification import IdentificationError, MultivariableIdentifier
@@ -239,14 +239,15 @@ def _stored(table, **rest):
 
 def _identify_records(plant, spec, amp, sensor):
     """A Preisach model (``model = "preisach"``) or the better class (``"auto"``) from
-    decreasing-amplitude sine records of each input in turn (the hysteresis records of
-    ``hammerstein excitation``, at the identify frequency), as ``hammerstein identify`` does."""
+    the hysteresis records of ``hammerstein excitation`` (decreasing-amplitude sine, then
+    first-order reversal curves) of each input in turn, at the identify frequency, as
+    ``hammerstein identify`` does."""
     model = plant.hysteresis
     T, f = plant.sampling_period, spec["frequency"]
     records = []
     for k in range(model.n_inputs):
         try:
-            t, uk, _ = decreasing_sine(T, float(amp[k]), frequency=f, periods=2)
+            t, uk = hysteresis_excitation(T, float(amp[k]), frequency=f)
         except ValueError as exc:
             raise IdentificationError(f"identify (model = {spec['model']!r} at {f:g} Hz): {exc}") from None
         u = np.zeros((model.n_inputs, t.size))
@@ -255,7 +256,7 @@ def _identify_records(plant, spec, amp, sensor):
         if sensor is not None:
             y = sensor.measure(y, T)
         records.append(MultiRecord(t, u, y, tuple(model.input_names), tuple(model.output_names),
-                                   float(T), f"decreasing sine on {model.input_names[k]}"))
+                                   float(T), f"hysteresis excitation on {model.input_names[k]}"))
     names = (list(model.input_names), list(model.output_names))
     fits = {}
     try:
@@ -386,7 +387,7 @@ def excitation_records(plant, spec, sensor=None):
     try:
         recs = excitation_set(list(model.input_names), amp, T, sine_frequency=spec["frequency"],
                               multisine_periods=spec["multisine_periods"], hold=spec["hold"],
-                              seed=spec["seed"])
+                              seed=spec["seed"], reversals=spec["reversals"])
     except ValueError as exc:
         raise IdentificationError(f"identify: {exc}") from None
     out = {"hysteresis": [], "multisine": [], "multisine-validation": [], "creep": []}

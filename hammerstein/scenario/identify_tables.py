@@ -26,6 +26,7 @@ from __future__ import annotations
 
 from hammerstein.core.schema import nested_table
 from hammerstein.identification.defaults import PREISACH_LEVELS
+from hammerstein.signals.excitation import REVERSALS
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
                                          choice, integer, number, short_repr, string)
 
@@ -69,6 +70,14 @@ def _n_hysterons(v):
                   f"found {short_repr(v)}")
 
 
+def _reversals(v):
+    if (isinstance(v, list) and all(isinstance(a, (int, float)) and not isinstance(a, bool)
+                                    and -1 < a < 1 for a in v) and len(set(v)) == len(v)):
+        return [float(a) for a in v]
+    raise Invalid(f"expected a list of distinct fractions in (-1, 1) (the reversal points of "
+                  f"the first-order reversal curves; [] for none), found {short_repr(v)}")
+
+
 def _amplitude(v):
     if isinstance(v, list):
         return [number("V", 0)(a) for a in v]
@@ -101,6 +110,8 @@ RECORDS_IDENTIFY_FIELDS = {
     "frequency": Field(number("Hz", 0), default=1.0),     # of the decreasing-amplitude sines
     "hold": Field(number("s", 0), default=2.0),           # of each staircase step
     "multisine_periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=4),
+    # the hysteresis records' first-order reversal curves (hammerstein excitation --reversals)
+    "reversals": Field(_reversals, default=list(REVERSALS)),
     "model": Field(choice("auto", "classical", "preisach", "generalized"), default="auto"),
     "method": Field(choice("least-squares", "closed-form"), default="least-squares"),
     "n_hysterons": Field(integer(1, MAX_HYSTERONS), default=15),
