@@ -9,6 +9,13 @@ same records and the same training / held-out split as the classical PI
 amplitude levels of a decreasing-amplitude sine are held out, so the
 validation is on minor loops not trained on).
 
+The hysteresis records of ``hammerstein excitation`` end with first-order
+reversal curves after the sine's levels
+(:func:`hammerstein.signals.excitation.reversal_curves`): every sample of them
+trains (none is held out), and they show the density along a line of the
+plane per reversal point, where the levels alone show it along a few lines
+through the centre (the data of [1]_, ch. 1, and [2]_).
+
 The model is linear in its weights. For each input k the switching grid is
 ``n_levels`` cells over the input's measured range widened by 10 % of its
 span on each side, finer at the centre than at the ends (:func:`grid_edges`:
@@ -83,8 +90,8 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.identification.record_identification import (
-    RecordFit, _window_metrics, level_errors, parse_components, split_level_records,
-    weak_couplings)
+    RecordFit, _window_metrics, level_errors, levels_part, parse_components,
+    split_level_records, weak_couplings)
 from hammerstein.simulation import preisach_states
 
 __all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "SMOOTHING_START",
@@ -106,6 +113,9 @@ SMOOTHING_BELOW = (3e-4, 1e-4, 3e-5, 1e-5)
 SMOOTHING_START = 1e-4
 #: Rows of the regression kept per record (quasi-static records are decimated to this).
 MAX_ROWS_PER_RECORD = 8000
+#: Density of the rows kept on the reversal curves after the amplitude levels, relative to the
+#: levels' own.
+CURVE_ROWS = 0.5
 #: Lower bound of a direct path's linear reversible term, fraction of its secant slope.
 MIN_SLOPE_FRACTION = 1e-3
 #: Degree of the signed reversible polynomial of a cross-coupling.
@@ -313,10 +323,15 @@ class PreisachIdentifier:
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
         blocks = [[] for _ in range(m)]            # per input: (states, u) of kept rows
         self._rows, self._reversals = [], []
-        for rec, s in zip(records, splits):
-            step = max(1, int(np.ceil(rec.n_samples / MAX_ROWS_PER_RECORD)))
+        cut_records = levels_part(records, splits)[0]
+        for rec, s, cut in zip(records, splits, cut_records):
+            # the amplitude levels keep MAX_ROWS_PER_RECORD rows; the reversal curves after
+            # them (a record of hammerstein excitation) are sampled at CURVE_ROWS of that density
+            n_lv = cut.u.shape[1]
+            step = max(1, int(np.ceil(n_lv / MAX_ROWS_PER_RECORD)))
             keep = np.zeros(rec.n_samples, dtype=bool)
-            keep[::step] = True
+            keep[:n_lv:step] = True
+            keep[n_lv::max(1, int(round(step / CURVE_ROWS)))] = True
             keep[-1] = True
             rev = np.zeros(rec.n_samples, dtype=bool)
             for k in range(m):                     # reversal samples of every input
