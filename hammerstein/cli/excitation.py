@@ -196,9 +196,10 @@ def readme_text(records, names, amplitude, sampling_period, reversals=REVERSALS)
         f"| {', '.join(by_kind['hysteresis'])} | hysteresis, its minor loops"
         f"{' and off-centre reversals' if len(reversals) else ''} | sine, "
         f"{', '.join(f'{100 * a:.0f}' for a in LEVELS)} % of the amplitude, two periods each"
-        + (f"; then first-order reversal curves: from the amplitude down to "
-           f"{', '.join(f'{100 * b:.0f}' for b in reversals)} % and back, then from minus the "
-           f"amplitude up to minus these and back" if len(reversals) else "")
+        + (f"; then first-order reversal curves: for each of "
+           f"{', '.join(f'{100 * b:.0f}' for b in reversals)} %, from the amplitude down to it "
+           f"and back, then from minus the amplitude up to minus it and back (half-cosine "
+           f"moves at three times the sine's largest slew)" if len(reversals) else "")
         + f" | {dur['hysteresis']:g} s |",
         f"| {', '.join(by_kind['multisine'])} | linear dynamics (estimation) | random-phase "
         f"multisine at 80 % of the amplitude | {dur['multisine']:g} s |",
