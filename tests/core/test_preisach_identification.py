@@ -357,3 +357,28 @@ def test_lambda_scores_use_the_whole_records_predictions(fitted):
     whole = _window_metrics(fit.records, fit.splits, fit.predictions, "held_out")
     assert est.smoothing_scores_[est.smoothing_] == pytest.approx(
         np.mean([w["rms_percent"] for w in whole]), rel=1e-12)
+
+
+def test_reversal_curves_train_at_half_the_rows_of_the_levels():
+    """Records of ``hammerstein excitation`` (the decreasing sine, then the reversal curves):
+    the regression keeps its rows on the curves at half the levels' density, and the levels
+    keep the density of their whole row budget (the levels' loops do not lose rows to the
+    curves). Counted on the rows the fit kept, away from the reversal samples it adds."""
+    from hammerstein.signals.excitation import hysteresis_excitation
+    from hammerstein.identification.preisach_identification import MAX_ROWS_PER_RECORD
+    true = preisach_actuator()
+    out = []
+    for k in range(2):
+        t, one = hysteresis_excitation(T, 10.0)
+        u = np.zeros((2, t.size))
+        u[k] = one
+        y, _ = true.simulate(u)
+        out.append(MultiRecord(t, u, y, ("ux", "uy"), ("x", "y"), T, f"rec-{k}"))
+    est = PreisachIdentifier(n_levels=8, smoothing=1e-3).fit(out)
+    n_sine = 5 * 2 * int(round(1 / T))
+    step = int(np.ceil(n_sine / MAX_ROWS_PER_RECORD))        # no level is cut off: >= the sine
+    for keep, rev in zip(est._rows, est._reversals):
+        plain = keep & ~rev
+        gaps_levels = np.diff(np.flatnonzero(plain[:n_sine]))
+        gaps_curves = np.diff(np.flatnonzero(plain[n_sine + 100:-1]))
+        assert np.median(gaps_levels) == step and np.median(gaps_curves) == 2 * step
