@@ -1,9 +1,10 @@
 """``hammerstein excitation``: write the excitation files to play on an actuator.
 
 Per input (the others held at 0): ``hysteresis-<input>.csv`` (a slow sine of
-decreasing amplitude, 100/80/60/40/20 %, two periods each, then first-order
-reversal curves from both ends of the range, turning back at -80 to 80 % in
-steps of 20 %), ``multisine-<input>.csv``
+decreasing amplitude, 100/80/60/40/20 %, two periods each; with ``--reversals``,
+then first-order reversal curves from both ends of the range, e.g. turning back
+at -80 to 80 % in steps of 20 % with ``--reversals standard``),
+``multisine-<input>.csv``
 and ``multisine-<input>-validation.csv`` (random-phase multisines, 10 Hz to half
 the Nyquist frequency at 80 % of the amplitude, independent phases; the
 second is held out to choose the order of the dynamics) and ``creep-<input>.csv``
@@ -56,8 +57,8 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         "excitation", help="write excitation files to play on an actuator before identifying it",
         description="Write, per input, the excitation records that 'hammerstein identify' "
-                    "needs: a decreasing-amplitude sine then first-order reversal curves "
-                    "(hysteresis, minor loops, off-centre reversals), two "
+                    "needs: a decreasing-amplitude sine (hysteresis and minor loops; "
+                    "--reversals adds first-order reversal curves), two "
                     "random-phase multisines (dynamics; the second held out) and a voltage "
                     "staircase (creep), each a CSV file with the time and every input column, "
                     "plus a README of what to measure.")
@@ -79,10 +80,12 @@ def add_parser(subparsers):
     p.add_argument("--hold", type=_SECONDS, default=2.0, metavar="S",
                    help="duration of each creep step (default 2 s)")
     p.add_argument("--seed", type=integer_type(0), default=0, help="seed of the multisine phases (default 0)")
-    p.add_argument("--reversals", default=",".join(f"{b:g}" for b in REVERSALS), metavar="F1,F2,...|none",
-                   help="reversal points of the first-order reversal curves played after the "
-                        "decreasing sine, fractions of the amplitude in (-1, 1) (default "
-                        "%(default)s); none: the decreasing sine alone")
+    p.add_argument("--reversals", default="none", metavar="F1,F2,...|standard|none",
+                   help="first-order reversal curves played after the decreasing sine, turning "
+                        "back at these fractions of the amplitude in (-1, 1); standard: "
+                        + ",".join(f"{b:g}" for b in REVERSALS) + " (off-centre loops of a "
+                        "Preisach-like actuator, e.g. rasters; docs/identification.md); "
+                        "default none: the decreasing sine alone")
     p.add_argument("--force", action="store_true",
                    help="replace files in DIR that this command did not write")
     p.set_defaults(handler=_handler)
@@ -125,10 +128,13 @@ _OPTIONS = {"f_min, periods": "--f-min, --periods", "frequency": "--sine-frequen
 def _reversals(text):
     if text.strip().lower() == "none":
         return ()
+    if text.strip().lower() == "standard":
+        return REVERSALS
     try:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
-        raise _Usage(f"--reversals: expected fractions in (-1, 1), comma-separated, or none; "
+        raise _Usage(f"--reversals: expected fractions in (-1, 1), comma-separated, standard "
+                     f"or none; "
                      f"found {escape(repr(text), 60)}") from None
     if any(number_problem(v) or not -1 < v < 1 for v in values) or len(set(values)) != len(values):
         raise _Usage(f"--reversals: expected distinct fractions in (-1, 1), found "
@@ -159,7 +165,7 @@ def _owned(directory):
     return {ln.strip() for ln in lines[1:] if ln.strip()}
 
 
-def readme_text(records, names, amplitude, sampling_period, reversals=REVERSALS):
+def readme_text(records, names, amplitude, sampling_period, reversals=()):
     """The README written with the excitation files: what to measure, how to identify.
 
     Parameters

@@ -239,9 +239,8 @@ def _stored(table, **rest):
 
 def _identify_records(plant, spec, amp, sensor):
     """A Preisach model (``model = "preisach"``) or the better class (``"auto"``) from
-    the hysteresis records of ``hammerstein excitation`` (decreasing-amplitude sine, then
-    first-order reversal curves) of each input in turn, at the identify frequency, as
-    ``hammerstein identify`` does."""
+    the hysteresis records of ``hammerstein excitation`` (decreasing-amplitude sines) of each
+    input in turn, at the identify frequency, as ``hammerstein identify`` does."""
     model = plant.hysteresis
     T, f = plant.sampling_period, spec["frequency"]
     records = []
@@ -256,7 +255,7 @@ def _identify_records(plant, spec, amp, sensor):
         if sensor is not None:
             y = sensor.measure(y, T)
         records.append(MultiRecord(t, u, y, tuple(model.input_names), tuple(model.output_names),
-                                   float(T), f"hysteresis excitation on {model.input_names[k]}"))
+                                   float(T), f"decreasing sine on {model.input_names[k]}"))
     names = (list(model.input_names), list(model.output_names))
     fits = {}
     try:

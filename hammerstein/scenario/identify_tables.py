@@ -71,11 +71,14 @@ def _n_hysterons(v):
 
 
 def _reversals(v):
+    if v == "standard":
+        return [float(a) for a in REVERSALS]
     if (isinstance(v, list) and all(isinstance(a, (int, float)) and not isinstance(a, bool)
                                     and -1 < a < 1 for a in v) and len(set(v)) == len(v)):
         return [float(a) for a in v]
-    raise Invalid(f"expected a list of distinct fractions in (-1, 1) (the reversal points of "
-                  f"the first-order reversal curves; [] for none), found {short_repr(v)}")
+    raise Invalid(f"expected \"standard\" or a list of distinct fractions in (-1, 1) (the "
+                  f"reversal points of the first-order reversal curves; [] for none), found "
+                  f"{short_repr(v)}")
 
 
 def _amplitude(v):
@@ -110,8 +113,9 @@ RECORDS_IDENTIFY_FIELDS = {
     "frequency": Field(number("Hz", 0), default=1.0),     # of the decreasing-amplitude sines
     "hold": Field(number("s", 0), default=2.0),           # of each staircase step
     "multisine_periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=4),
-    # the hysteresis records' first-order reversal curves (hammerstein excitation --reversals)
-    "reversals": Field(_reversals, default=list(REVERSALS)),
+    # the hysteresis records' first-order reversal curves (hammerstein excitation --reversals;
+    # "standard" for its standard points)
+    "reversals": Field(_reversals, default=[]),
     "model": Field(choice("auto", "classical", "preisach", "generalized"), default="auto"),
     "method": Field(choice("least-squares", "closed-form"), default="least-squares"),
     "n_hysterons": Field(integer(1, MAX_HYSTERONS), default=15),

@@ -9,11 +9,11 @@ sampling period T of the hardware:
   crossing, so the signal is continuous, and each level lies inside the
   previous one (wiping-out memory of a Preisach model: after its first period
   each level draws its steady minor loop).
-* :func:`reversal_curves` — played right after the decreasing sine, in the
-  same record: first-order reversal curves from both ends of the range, which
-  turn back at nine points across it (the off-centre reversals a raster or a
-  drive with an offset makes, which the centred levels alone leave to the
-  model's interpolation).
+* :func:`reversal_curves` — on request (``reversals``), played right after
+  the decreasing sine, in the same record: first-order reversal curves from
+  both ends of the range, which turn back at points across it (the off-centre
+  reversals a raster or a drive with an offset makes, which the centred levels
+  alone leave to the model's interpolation).
 * :func:`multisine` — a random-phase multisine (flat amplitude spectrum on the
   grid ``j / period`` between ``f_min`` and ``f_max``, phases uniform,
   Pintelon & Schoukens [1]) for the linear dynamics; several periods of one
@@ -54,9 +54,11 @@ __all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "ExcitationR
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude).
 LEVELS = (1.0, 0.8, 0.6, 0.4, 0.2)
-#: Reversal points of the first-order reversal curves (fractions of the full amplitude): the
-#: descending curves turn back up at these, the ascending ones (mirrored) turn back down at minus
-#: these (:func:`reversal_curves`).
+#: The standard reversal points of the first-order reversal curves (fractions of the full
+#: amplitude; ``hammerstein excitation --reversals standard``): the curves from the amplitude
+#: turn back up at these, their mirrors from minus the amplitude turn back down at minus these
+#: (:func:`reversal_curves`). Not played by default: measured trade-offs in
+#: ``docs/identification.md``.
 REVERSALS = (0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8)
 #: Peak slew of the reversal curves' moves, in multiples of the decreasing sine's ``2 pi f A``
 #: (quasi-static still: a full-span move lasts ``1 / (6 f)``, 0.17 s at 1 Hz, against the
@@ -249,7 +251,7 @@ def reversal_curves(sampling_period, amplitude, frequency=1.0, reversals=REVERSA
 
 
 def hysteresis_excitation(sampling_period, amplitude, frequency=1.0, levels=LEVELS,
-                          reversals=REVERSALS, periods=2):
+                          reversals=(), periods=2):
     """The hysteresis record of one input: the decreasing sine, then the reversal curves.
 
     :func:`decreasing_sine` followed by :func:`reversal_curves` (none when
@@ -269,8 +271,8 @@ def hysteresis_excitation(sampling_period, amplitude, frequency=1.0, levels=LEVE
     levels : sequence of float
         The sine's amplitude levels (fractions of A, strictly decreasing).
     reversals : sequence of float
-        Reversal points of the curves (fractions of A in (-1, 1)); empty:
-        the sine alone.
+        Reversal points of the curves (fractions of A in (-1, 1), e.g.
+        :data:`REVERSALS`); empty (the default): the sine alone.
     periods : int
         Periods per level of the sine.
 
@@ -523,12 +525,13 @@ class ExcitationRecord:
 
 def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, levels=LEVELS,
                    f_min=10.0, f_max=None, multisine_fraction=0.8, multisine_periods=4,
-                   hold=2.0, seed=0, reversals=REVERSALS):
+                   hold=2.0, seed=0, reversals=()):
     """Every excitation record for m inputs, one input at a time.
 
     Per input k (the others at 0): the decreasing-amplitude sine
-    (:func:`decreasing_sine`) followed by the first-order reversal curves
-    (:func:`reversal_curves`) in record ``hysteresis-<k>``, two multisines of
+    (:func:`decreasing_sine`), followed by the first-order reversal curves
+    (:func:`reversal_curves`) when ``reversals`` are given, in record
+    ``hysteresis-<k>``, two multisines of
     independent phases at ``multisine_fraction`` of the amplitude
     (:func:`multisine`; ``multisine-<k>`` for estimation and
     ``multisine-<k>-validation``, held out to choose the order of the
@@ -558,7 +561,8 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
         Seed of the multisine phases (input k, record r uses ``seed + 2 k + r``).
     reversals : sequence of float
         Reversal points of the first-order reversal curves (fractions of the
-        amplitude, :func:`reversal_curves`); empty: the decreasing sine alone.
+        amplitude, :func:`reversal_curves`, e.g. :data:`REVERSALS`); empty
+        (the default): the decreasing sine alone.
 
     Returns
     -------

@@ -93,14 +93,21 @@ def _turning_points(u):
     return u[k]
 
 
-def test_reversal_curves_follow_the_decreasing_sine(written):
+@pytest.fixture(scope="module")
+def with_curves(tmp_path_factory):
+    out = tmp_path_factory.mktemp("exc") / "curves"
+    assert _run(out, "--reversals", "standard") == 0
+    return out
+
+
+def test_reversal_curves_follow_the_decreasing_sine(with_curves):
     """After the 10 s of the sine, the first-order reversal curves: up to the amplitude; then
     for each reversal point (80 % to -80 % in steps of 20 %) down to it and back up, down to
     minus the amplitude, up to minus the point and back down, up to the amplitude again (to
     0 V after the last point). Read as turning points of the file's input; every move no
     faster than three times the 1 Hz sine's largest slew (3 x 2 pi 1 Hz 10 V: 6 s of curves
     in all), the record continuous where the two parts meet, the curves' mean 0 V."""
-    _, d = _read(written / "hysteresis-ux.csv")
+    _, d = _read(with_curves / "hysteresis-ux.csv")
     u = d[:, 1]
     n = int(round(1 / T))
     curves = u[10 * n - 1:]                   # the sine's last sample, then the curves
@@ -115,15 +122,25 @@ def test_reversal_curves_follow_the_decreasing_sine(written):
     assert curves.size - 1 == pytest.approx(6.0 / T, rel=0.01)
     assert abs(curves.mean()) < 1e-3 * 10.0
     assert abs(u[-1]) < 3 * slew and u[0] == 0
-    readme = (written / "README.md").read_text()
+    readme = (with_curves / "README.md").read_text()
     assert "first-order reversal curves" in readme
 
 
-def test_reversals_none_writes_the_decreasing_sine_alone(tmp_path):
+def test_by_default_and_with_none_the_decreasing_sine_alone(written, tmp_path):
     assert _run(tmp_path / "plain", "--reversals", "none") == 0
-    _, d = _read(tmp_path / "plain" / "hysteresis-ux.csv")
-    assert d.shape[0] == 5 * 2 * int(round(1 / T))
-    assert "reversal curves" not in (tmp_path / "plain" / "README.md").read_text()
+    for d in (written, tmp_path / "plain"):
+        _, data = _read(d / "hysteresis-ux.csv")
+        assert data.shape[0] == 5 * 2 * int(round(1 / T))
+        assert "reversal curves" not in (d / "README.md").read_text()
+
+
+def test_explicit_reversal_points(tmp_path):
+    """Two points: two curves from +10 V turning at 5 and -2.5 V, their mirrors from -10 V."""
+    assert _run(tmp_path / "two", "--reversals", "0.5,-0.25") == 0
+    _, d = _read(tmp_path / "two" / "hysteresis-ux.csv")
+    curves = d[10 * int(round(1 / T)) - 1:, 1]
+    np.testing.assert_allclose(_turning_points(curves),
+                               [10, 5, 10, -10, -5, -10, 10, -2.5, 10, -10, 2.5, -10], atol=1e-9)
 
 
 @pytest.mark.parametrize("text", ["1.0", "0.5,0.5", "x", "nan", "-1"])

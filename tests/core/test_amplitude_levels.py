@@ -146,8 +146,8 @@ def test_the_reversal_curves_after_the_levels_are_cut_off(rng=np.random.default_
     farther than 1.05 x 2 V from 0 after the sine's 10 periods (found here by a scan of the
     input, independently of the splitter). The sine alone is kept whole."""
     from hammerstein.identification.record_identification import levels_part
-    from hammerstein.signals.excitation import hysteresis_excitation
-    _, u = hysteresis_excitation(T, 10.0, frequency=2.0)
+    from hammerstein.signals.excitation import REVERSALS, hysteresis_excitation
+    _, u = hysteresis_excitation(T, 10.0, frequency=2.0, reversals=REVERSALS)
     x = _pi(u) + 0.02 * rng.standard_normal(u.size)
     rec = MultiRecord(np.arange(u.size) * T, u[None, :], x[None, :], ["ux"], ["x"], T, "h.csv")
     rec, split = split_record(rec)

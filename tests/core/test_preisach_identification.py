@@ -364,12 +364,12 @@ def test_reversal_curves_train_at_half_the_rows_of_the_levels():
     the regression keeps its rows on the curves at half the levels' density, and the levels
     keep the density of their whole row budget (the levels' loops do not lose rows to the
     curves). Counted on the rows the fit kept, away from the reversal samples it adds."""
-    from hammerstein.signals.excitation import hysteresis_excitation
+    from hammerstein.signals.excitation import REVERSALS, hysteresis_excitation
     from hammerstein.identification.preisach_identification import MAX_ROWS_PER_RECORD
     true = preisach_actuator()
     out = []
     for k in range(2):
-        t, one = hysteresis_excitation(T, 10.0)
+        t, one = hysteresis_excitation(T, 10.0, reversals=REVERSALS)
         u = np.zeros((2, t.size))
         u[k] = one
         y, _ = true.simulate(u)

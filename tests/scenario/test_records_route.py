@@ -57,6 +57,21 @@ def test_identify_table_with_records_takes_identify_defaults():
         identify_table({"records": "excitation", "model": "chebyshev"})
 
 
+@pytest.mark.parametrize("value, expected", [
+    (None, []), ([], []), ("standard", [0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8]),
+    ([0.5, -0.25], [0.5, -0.25])])
+def test_reversals_key_as_the_excitation_option(value, expected):
+    """``reversals`` is ``excitation --reversals``: absent or [] none, "standard" its points."""
+    table = {"records": "excitation"} | ({} if value is None else {"reversals": value})
+    assert identify_table(table)["reversals"] == expected
+
+
+@pytest.mark.parametrize("value", [[1.0], [0.5, 0.5], "all", [True], 0.5])
+def test_bad_reversals_name_the_key(value):
+    with pytest.raises(Exception, match="reversals: expected .*fractions in \\(-1, 1\\)"):
+        identify_table({"records": "excitation", "reversals": value})
+
+
 @pytest.mark.slow
 def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys):
     plant = load_plant(SCENARIOS / "presets" / "realistic-gpi.toml")
