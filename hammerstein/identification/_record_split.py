@@ -538,8 +538,8 @@ def split_level_records(records, hold_out="auto", train_fraction=None, skip_seco
 def levels_part(records, splits):
     """The records and splits cut where a multi-level record leaves its last level.
 
-    A hysteresis record of ``hammerstein excitation`` holds the decreasing sine's
-    amplitude levels, then first-order reversal curves
+    A hysteresis record of ``hammerstein excitation --reversals`` holds the
+    decreasing sine's amplitude levels, then first-order reversal curves
     (:func:`hammerstein.signals.excitation.reversal_curves`), which leave the last
     (smallest) level at once for the full amplitude. A record is cut at the first
     sample after its last level where the excited input is farther from the centre

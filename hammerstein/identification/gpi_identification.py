@@ -81,10 +81,10 @@ before, the 5.2 % a fit whose rest value was wrong).
 * **Cross-couplings** (k != l) may be non-monotone or even: signed weights and
   a signed reversible polynomial ``c_1 u + c_2 u^2 + c_3 u^3``.
 
-**Reversal curves.** The hysteresis records of ``hammerstein excitation``
-end with first-order reversal curves after the decreasing sine's levels
-(:func:`hammerstein.signals.excitation.reversal_curves`); the fit leaves them
-out (:func:`~hammerstein.identification.record_identification.levels_part`
+**Reversal curves.** With ``hammerstein excitation --reversals``, the
+hysteresis records end with first-order reversal curves after the decreasing
+sine's levels (:func:`hammerstein.signals.excitation.reversal_curves`); the fit
+leaves them out (:func:`~hammerstein.identification.record_identification.levels_part`
 cuts each record where it leaves its last level). Fitted on them too, on the
 outside actuators of ``benchmarks/route_defaults.py``, the plays' shared
 envelopes bent to the off-centre curves and the small centred loops paid:

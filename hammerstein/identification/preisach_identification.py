@@ -9,10 +9,11 @@ same records and the same training / held-out split as the classical PI
 amplitude levels of a decreasing-amplitude sine are held out, so the
 validation is on minor loops not trained on).
 
-The hysteresis records of ``hammerstein excitation`` end with first-order
-reversal curves after the sine's levels
+With ``hammerstein excitation --reversals``, the hysteresis records end with
+first-order reversal curves after the sine's levels
 (:func:`hammerstein.signals.excitation.reversal_curves`): every sample of them
-trains (none is held out), and they show the density along a line of the
+trains (none is held out; the regression's rows there at :data:`CURVE_ROWS` of
+the levels' density), and they show the density along a line of the
 plane per reversal point, where the levels alone show it along a few lines
 through the centre (the data of [1]_, ch. 1, and [2]_).
 
@@ -326,7 +327,7 @@ class PreisachIdentifier:
         cut_records = levels_part(records, splits)[0]
         for rec, s, cut in zip(records, splits, cut_records):
             # the amplitude levels keep MAX_ROWS_PER_RECORD rows; the reversal curves after
-            # them (a record of hammerstein excitation) are sampled at CURVE_ROWS of that density
+            # them (excitation --reversals) are sampled at CURVE_ROWS of that density
             n_lv = cut.u.shape[1]
             step = max(1, int(np.ceil(n_lv / MAX_ROWS_PER_RECORD)))
             keep = np.zeros(rec.n_samples, dtype=bool)

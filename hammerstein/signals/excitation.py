@@ -163,19 +163,17 @@ def reversal_curves(sampling_period, amplitude, frequency=1.0, reversals=REVERSA
     (the mirrored curve), and up to ``A`` again (to 0 after the last point).
     Each move is a half-cosine whose peak slew is :data:`CURVE_SLEW` times the
     decreasing sine's, ``2 pi f A``. The two families alternate, so that the
-    input's mean over each pair is 0: played one family after the other (2.5 s
-    near ``+A``, then 2.5 s near ``-A``), the creep drifted by up to 3 % of the
-    stroke within the record, and the identified Preisach models of
-    ``scenarios/realistic-b.toml`` (an actuator with creep) fitted it into
-    their loops (15 um circles 0.93 -> 1.64 % of the radius).
+    input's mean over each pair is 0: the creep is not driven to one side for
+    seconds, as it is by one family after the other (2.5 s near ``+A``, then
+    2.5 s near ``-A`` with the standard points).
 
     A decreasing-amplitude sine (:func:`decreasing_sine`) only turns back at
     its own centred levels: the Preisach plane is seen along those few lines,
     and the density between them (an off-centre loop, e.g. a raster between
     0 and 8 V) is interpolated. The reversal curves see it along a line per
     reversal point, from either end: the first-order reversal curves from
-    which a Preisach density is identified (Mayergoyz [4], Section 1.3; Hu &
-    Ben Mrad [5]).
+    which a Preisach density is identified (Mayergoyz [4], ch. 1; Hu & Ben
+    Mrad [5]).
 
     Parameters
     ----------
