@@ -12,7 +12,7 @@ import pytest
 import scipy.optimize
 
 from hammerstein.io.datafiles import MultiRecord
-from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.signals.excitation import decreasing_sine, hysteresis_excitation
 from hammerstein.models.generalized_pi import GeneralizedPI, envelope
 from hammerstein.identification.gpi_identification import (
     GeneralizedPIIdentifier, envelopes, monotone_quadratic_columns, play_thresholds,
@@ -31,13 +31,14 @@ T_FIT = 2.5e-3    # the fits' records: 400 samples a period draw the same loops,
 BUDGET = 60
 
 
-def records(hysteresis, noise=0.0, seed=0, amplitude=10.0, sampling_period=T):
-    """One decreasing-amplitude sine per input (others at 0), outputs from ``hysteresis``."""
+def records(hysteresis, noise=0.0, seed=0, amplitude=10.0, sampling_period=T, reversals=()):
+    """One decreasing-amplitude sine per input (others at 0; then the reversal curves at
+    ``reversals``), outputs from ``hysteresis``."""
     rng = np.random.default_rng(seed)
     m = hysteresis.n_inputs
     out = []
     for k in range(m):
-        t, one, _ = decreasing_sine(sampling_period, amplitude)
+        t, one = hysteresis_excitation(sampling_period, amplitude, reversals=reversals)
         u = np.zeros((m, t.size))
         u[k] = one
         y, _ = hysteresis.simulate(u)
@@ -381,19 +382,10 @@ def test_the_reversal_curves_after_the_levels_do_not_move_the_fit():
     curves): the generalised PI fits the amplitude levels only, so two record sets whose curves
     differ (other reversal points, then the same first move up to the amplitude) give the same
     model, bit for bit, and its notes say so; the Preisach class is the one that uses them."""
-    from hammerstein.signals.excitation import hysteresis_excitation
     true = gpi_actuator()
-
-    def recs(reversals):
-        out = []
-        for k in range(2):
-            t, one = hysteresis_excitation(T_FIT, 10.0, reversals=reversals)
-            u = np.zeros((2, t.size))
-            u[k] = one
-            y, _ = true.simulate(u)
-            out.append(MultiRecord(t, u, y, ("ux", "uy"), ("x", "y"), T_FIT, f"rec-{k}"))
-        return out
-    a = GeneralizedPIIdentifier(max_evaluations=BUDGET, n_starts=1).fit(recs((0.5, -0.5)))
-    b = GeneralizedPIIdentifier(max_evaluations=BUDGET, n_starts=1).fit(recs((0.8, 0.1, -0.3)))
+    a = GeneralizedPIIdentifier(max_evaluations=BUDGET, n_starts=1).fit(
+        records(true, sampling_period=T_FIT, reversals=(0.5, -0.5)))
+    b = GeneralizedPIIdentifier(max_evaluations=BUDGET, n_starts=1).fit(
+        records(true, sampling_period=T_FIT, reversals=(0.8, 0.1, -0.3)))
     assert a.model_.to_table() == b.model_.to_table()
     assert any("not the reversal curves after them" in n for n in a.notes_)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from hammerstein.io.datafiles import MultiRecord
-from hammerstein.signals.excitation import decreasing_sine
+from hammerstein.signals.excitation import decreasing_sine, hysteresis_excitation
 from hammerstein.models.generalized_pi import GeneralizedPI
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
@@ -24,13 +24,14 @@ from hammerstein.exceptions import CompensatorError, IdentificationError
 T = 1e-3          # quasi-static records: the hysteresis is rate independent
 
 
-def records(hysteresis, noise=0.0, seed=0, amplitude=10.0):
-    """One decreasing-amplitude sine per input (others at 0), outputs from ``hysteresis``."""
+def records(hysteresis, noise=0.0, seed=0, amplitude=10.0, reversals=()):
+    """One decreasing-amplitude sine per input (others at 0; then the reversal curves at
+    ``reversals``), outputs from ``hysteresis``."""
     rng = np.random.default_rng(seed)
     m = hysteresis.n_inputs
     out = []
     for k in range(m):
-        t, one, _ = decreasing_sine(T, amplitude)
+        t, one = hysteresis_excitation(T, amplitude, reversals=reversals)
         u = np.zeros((m, t.size))
         u[k] = one
         y, _ = hysteresis.simulate(u)
@@ -364,17 +365,10 @@ def test_reversal_curves_train_at_half_the_rows_of_the_levels():
     the regression keeps its rows on the curves at half the levels' density, and the levels
     keep the density of their whole row budget (the levels' loops do not lose rows to the
     curves). Counted on the rows the fit kept, away from the reversal samples it adds."""
-    from hammerstein.signals.excitation import REVERSALS, hysteresis_excitation
+    from hammerstein.signals.excitation import REVERSALS
     from hammerstein.identification.preisach_identification import MAX_ROWS_PER_RECORD
-    true = preisach_actuator()
-    out = []
-    for k in range(2):
-        t, one = hysteresis_excitation(T, 10.0, reversals=REVERSALS)
-        u = np.zeros((2, t.size))
-        u[k] = one
-        y, _ = true.simulate(u)
-        out.append(MultiRecord(t, u, y, ("ux", "uy"), ("x", "y"), T, f"rec-{k}"))
-    est = PreisachIdentifier(n_levels=8, smoothing=1e-3).fit(out)
+    est = PreisachIdentifier(n_levels=8, smoothing=1e-3).fit(
+        records(preisach_actuator(), reversals=REVERSALS))
     n_sine = 5 * 2 * int(round(1 / T))
     step = int(np.ceil(n_sine / MAX_ROWS_PER_RECORD))        # no level is cut off: >= the sine
     for keep, rev in zip(est._rows, est._reversals):
