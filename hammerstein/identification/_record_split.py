@@ -535,16 +535,40 @@ def split_level_records(records, hold_out="auto", train_fraction=None, skip_seco
     return records, splits
 
 
+def levels_end(record, split):
+    """Where a record leaves its last amplitude level (the cut of :func:`levels_part`).
+
+    Parameters
+    ----------
+    record : MultiRecord
+    split : Split
+        Its split (:func:`split_record`).
+
+    Returns
+    -------
+    int
+        The first sample after the last level farther from the centre of the
+        excited input's span than ``1.05`` times that level's amplitude; the
+        record's length when it has no levels or never leaves the last one.
+    """
+    u = record.u[split.excitation]
+    if not split.levels:
+        return u.size
+    last = split.levels[-1]
+    centre = 0.5 * (u.max() + u.min())
+    after = np.flatnonzero(np.abs(u[last["stop"] + 1:] - centre) > 1.05 * last["amplitude"])
+    return u.size if after.size == 0 else last["stop"] + 1 + int(after[0])
+
+
 def levels_part(records, splits):
     """The records and splits cut where a multi-level record leaves its last level.
 
     A hysteresis record of ``hammerstein excitation --reversals`` holds the
     decreasing sine's amplitude levels, then first-order reversal curves
     (:func:`hammerstein.signals.excitation.reversal_curves`), which leave the last
-    (smallest) level at once for the full amplitude. A record is cut at the first
-    sample after its last level where the excited input is farther from the centre
-    of its span than ``1.05`` times that level's amplitude; a record without levels,
-    or that never leaves its last one, is kept whole.
+    (smallest) level at once for the full amplitude. A record is cut where it
+    leaves its last level (:func:`levels_end`); a record without levels, or that
+    never leaves its last one, is kept whole.
 
     Parameters
     ----------
@@ -562,17 +586,10 @@ def levels_part(records, splits):
     """
     out_r, out_s, cut = [], [], 0
     for rec, sp in zip(records, splits):
-        u = rec.u[sp.excitation]
-        if not sp.levels:
+        n = levels_end(rec, sp)
+        if n == rec.u.shape[1]:
             out_r.append(rec), out_s.append(sp)
             continue
-        last = sp.levels[-1]
-        centre = 0.5 * (u.max() + u.min())
-        after = np.flatnonzero(np.abs(u[last["stop"] + 1:] - centre) > 1.05 * last["amplitude"])
-        if after.size == 0:
-            out_r.append(rec), out_s.append(sp)
-            continue
-        n = last["stop"] + 1 + int(after[0])
         cut += 1
         out_r.append(replace(rec, timepts=rec.timepts[:n], u=rec.u[:, :n], y=rec.y[:, :n]))
         out_s.append(replace(sp, train=sp.train[:n], held_out=sp.held_out[:n],

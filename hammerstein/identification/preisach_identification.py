@@ -91,7 +91,7 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.identification.record_identification import (
-    RecordFit, _window_metrics, level_errors, levels_part, parse_components,
+    RecordFit, _window_metrics, level_errors, levels_end, parse_components,
     split_level_records, weak_couplings)
 from hammerstein.simulation import preisach_states
 
@@ -324,11 +324,10 @@ class PreisachIdentifier:
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
         blocks = [[] for _ in range(m)]            # per input: (states, u) of kept rows
         self._rows, self._reversals = [], []
-        cut_records = levels_part(records, splits)[0]
-        for rec, s, cut in zip(records, splits, cut_records):
+        for rec, s in zip(records, splits):
             # the amplitude levels keep MAX_ROWS_PER_RECORD rows; the reversal curves after
             # them (excitation --reversals) are sampled at CURVE_ROWS of that density
-            n_lv = cut.u.shape[1]
+            n_lv = levels_end(rec, s)
             step = max(1, int(np.ceil(n_lv / MAX_ROWS_PER_RECORD)))
             keep = np.zeros(rec.n_samples, dtype=bool)
             keep[:n_lv:step] = True

@@ -69,8 +69,8 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification._record_split import (
     ASYMMETRY_NOTE_PERCENT, COMPLETE_TRAVEL, HOLD_OUT_BLOCKS, NOISE_FACTOR, REVERSAL_BAND, Split,
     _as_records, _asymmetry_notes, _one_branch_held, _window_metrics, amplitude_levels,
-    held_out_level_error, level_errors, levels_part, loop_asymmetry, noise_level, reversal_points,
-    simulate_on_record,
+    held_out_level_error, level_errors, levels_end, levels_part, loop_asymmetry, noise_level,
+    reversal_points, simulate_on_record,
     split_level_records, split_record)
 from hammerstein.identification._record_regression import (
     MAP_GAIN, MAP_KNOTS, OUTPUT_MAPS, _ClosedForm, _fit_output_maps, _LeastSquares, _thresholds)
