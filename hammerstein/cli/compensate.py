@@ -34,7 +34,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, apply_amplifier, hardwar
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.shaping import first_mode_hz
+from hammerstein.compensation.shaping import first_mode_hz, mode_note
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -122,6 +122,9 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     comp : object
         The compensator.
     drive : hammerstein.compensation.drive.DriveResult
+        Its ``notes`` name a harmonic of a periodic reference that the
+        identified dynamics amplify at least twice over their static gain
+        (:func:`hammerstein.compensation.shaping.mode_note`).
 
     Raises
     ------
@@ -159,6 +162,9 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
                            plant.amplifier, limits, rest=rest_output(plant.hysteresis, plant.creep),
                            first_mode=first_mode_hz(plant.matrices[0], T), predict=predict,
                            names=plant.hysteresis.output_names)
+    note = mode_note(plant.matrices, T, drive.reference, reference.period_samples)
+    if note:
+        drive.notes.append(note)
     return comp, drive
 
 
@@ -234,7 +240,8 @@ def _handle(args):
                    f"{START_NOTE}" + shaped_cols
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
-                   + "".join(f"\nshaped: {line}" for line in drive.shaped))
+                   + "".join(f"\nshaped: {line}" for line in drive.shaped)
+                   + "".join(f"\nnote: {line}" for line in drive.notes))
         safe_write(args.out, signals_csv(ref.t, cols, comment), "drive file")
     except CompensatorDivergence as exc:
         print_err(f"hammerstein compensate: error: the compensator diverged: {exc}")
@@ -251,6 +258,8 @@ def _handle(args):
         print_err(note)
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
+    for line in drive.notes:
+        print(f"note: {line}", file=sys.stdout)
     if any(w in n for n in drive.shaped for w in ("beyond the range", "faster than",
                                                      "reference shaped")) \
             and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):

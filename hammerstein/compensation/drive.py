@@ -195,6 +195,10 @@ class DriveResult:
     shaped : list of str
         Where and by how much the drive was shaped into the limits measured
         on the identification records (:func:`shape_drive`; empty when not).
+    notes : list of str
+        What the drive cannot do, named for the user (e.g. a harmonic of the
+        reference at a bending mode:
+        :func:`hammerstein.compensation.shaping.mode_note`); empty by default.
     """
 
     inputs: np.ndarray
@@ -205,6 +209,7 @@ class DriveResult:
     fade_samples: int
     problems: list = field(default_factory=list)
     shaped: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
 
 
 def _fade_weights(start, n, fade):

@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["ShapedReference", "first_mode_hz", "faster_than_mode", "limit_excess", "hann_average",
-           "shape_reference", "shaping_notes", "time_intervals"]
+           "mode_amplification", "mode_note", "shape_reference", "shaping_notes", "time_intervals"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
@@ -53,6 +53,12 @@ MIN_GAIN = 0.1
 #: (an identified model flattens near the edge of its records, where its inverse asks much more
 #: voltage for a little more displacement) until the drive is within the range
 RANGE_MARGINS = (1.0, 0.995, 0.98, 0.95, 0.9)
+#: :func:`mode_note` names a harmonic of the reference that the linear part passes at least this
+#: many times its static gain
+MODE_NOTE_GAIN = 2.0
+#: the harmonics of the reference's main frequency :func:`mode_note` looks at (hysteresis makes
+#: harmonics of the frequency it is driven at; the higher ones are small)
+MODE_NOTE_HARMONICS = 5
 
 
 @dataclass
@@ -118,6 +124,144 @@ def first_mode_hz(A, sampling_period):
     f = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * float(sampling_period))
     f = f[f > 1e-9]
     return float(f.min()) if f.size else None
+
+
+def mode_amplification(matrices, sampling_period, frequencies_hz):
+    """How many times its static gain the linear part passes each frequency.
+
+    ``a(f) = || G(z) G(1)^-1 ||_2`` at ``z = exp(j 2 pi f T)``, ``G(z) = C (z I
+    - A)^-1 B + D`` (the largest singular value: the worst direction over the
+    outputs). A hysteresis model's error at ``f`` reaches the position through
+    ``G`` while the compensator, built on the model, cannot see it: where
+    ``a(f)`` is large (a harmonic of the reference at a lightly damped bending
+    mode, ``a = 1 / (2 zeta)`` at resonance for one mode), the error is that
+    many times what it would be on a stage without resonance.
+
+    Parameters
+    ----------
+    matrices : tuple of array_like
+        Discrete ``(A, B, C, D)`` of the linear part, shapes (n, n), (n, m),
+        (p, n), (p, m) (``HammersteinPlant.matrices``); ``G(1)`` invertible.
+    sampling_period : float
+        T [s].
+    frequencies_hz : array_like, shape (n_freq,)
+        [Hz].
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_freq,)
+        Dimensionless; 1 everywhere for a static plant.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        On a static gain ``G(1)`` that is singular.
+
+    Examples
+    --------
+    One mode at 400 Hz with damping 0.05 passes its resonance about
+    ``1 / (2 zeta) = 10`` times its static gain:
+
+    >>> from hammerstein.models.dynamics import sampled_bending_modes
+    >>> G = sampled_bending_modes([400.0], [0.05], ["x"], 5e-5)
+    >>> a = mode_amplification((G.A, G.B, G.C, G.D), 5e-5, [0.0, 100.0, 400.0])
+    >>> [round(float(v), 1) for v in a]
+    [1.0, 1.1, 10.0]
+    """
+    A, B, C, D = (np.atleast_2d(np.asarray(x, dtype=float)) for x in matrices)
+    f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
+    T = float(sampling_period)
+    n = A.shape[0]
+
+    def gain(fk):
+        if n == 0:
+            return D.astype(complex)
+        z = np.exp(2j * np.pi * fk * T)
+        return C @ np.linalg.solve(z * np.eye(n) - A, B) + D
+
+    inv0 = np.linalg.inv(gain(0.0))
+    return np.array([np.linalg.norm(gain(fk) @ inv0, 2) for fk in f])
+
+
+def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_NOTE_GAIN):
+    """A note when a harmonic of a periodic reference lies at a bending mode, or None.
+
+    The reference's main frequency ``f0`` is the largest line of the
+    spectrum of its last period (summed over the outputs, without the mean);
+    its harmonics ``n f0``, ``n = 1 ..`` :data:`MODE_NOTE_HARMONICS` (below
+    the Nyquist frequency), are weighed by :func:`mode_amplification`; the
+    largest, when at least ``limit``, is named, with the oscillatory mode
+    nearest to it. Hysteresis turns a drive at
+    ``f0`` into output harmonics of ``f0``; what the model gets wrong of them
+    reaches the position that many times larger, and feedforward cannot
+    correct it (iterative learning control on the measured response can).
+
+    Parameters
+    ----------
+    matrices : tuple of array_like
+        Discrete ``(A, B, C, D)`` of the linear part (see
+        :func:`mode_amplification`).
+    sampling_period : float
+        T [s].
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    period_samples : int or None
+        One period of the reference [samples]; None or below 2 (not
+        periodic) gives None.
+    limit : float
+        The amplification from which a harmonic is named (default
+        :data:`MODE_NOTE_GAIN`).
+
+    Returns
+    -------
+    str or None
+        One line, or None (a static plant, no period, or no harmonic
+        amplified ``limit`` times).
+
+    Examples
+    --------
+    >>> from hammerstein.models.dynamics import sampled_bending_modes
+    >>> T = 5e-5
+    >>> G = sampled_bending_modes([300.0], [0.04], ["x"], T)
+    >>> t = np.arange(2000) * T
+    >>> ref = 15.0 * np.sin(2 * np.pi * 100.0 * t)[None, :]
+    >>> print(mode_note((G.A, G.B, G.C, G.D), T, ref, 200))   # doctest: +NORMALIZE_WHITESPACE
+    the bending mode at 300 Hz passes the reference's 3rd harmonic (300 Hz, of 100 Hz) 12.5
+    times its static gain: what the hysteresis model gets wrong at 300 Hz reaches the position
+    12.5 times larger, and feedforward cannot see it (`hammerstein learn` corrects it on the
+    measured response)
+    """
+    A = np.atleast_2d(np.asarray(matrices[0], dtype=float))
+    if A.size == 0 or period_samples is None or int(period_samples) < 2:
+        return None
+    T = float(sampling_period)
+    P = int(period_samples)
+    ref = np.atleast_2d(np.asarray(reference, dtype=float))
+    if ref.shape[1] < P:
+        return None
+    spectrum = (np.abs(np.fft.rfft(ref[:, -P:], axis=1)) ** 2).sum(axis=0)
+    if spectrum.size < 2 or not np.any(spectrum[1:] > 0):
+        return None
+    f0 = (1 + int(np.argmax(spectrum[1:]))) / (P * T)
+    order = np.arange(1, MODE_NOTE_HARMONICS + 1)
+    order = order[order * f0 < 0.5 / T]
+    if order.size == 0:
+        return None
+    amp = mode_amplification(matrices, T, order * f0)
+    k = int(np.argmax(amp))
+    if amp[k] < limit:
+        return None
+    n, a = int(order[k]), float(amp[k])
+    modes = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * T)
+    modes = modes[modes > 1e-9]
+    f1 = float(modes[np.argmin(np.abs(modes - n * f0))]) if modes.size else first_mode_hz(A, T)
+    which = ("main frequency" if n == 1 else
+             f"{n}{'nd' if n == 2 else 'rd' if n == 3 else 'th'} harmonic")
+    fn = f"{n * f0:.4g} Hz" + ("" if n == 1 else f", of {f0:.4g} Hz")
+    return (f"the bending mode at {f1:.0f} Hz passes the reference's {which} ({fn}) {a:.3g} "
+            f"times its static gain: what the hysteresis model gets wrong at {n * f0:.4g} Hz "
+            f"reaches the position {a:.3g} times larger, and feedforward cannot see it "
+            f"(`hammerstein learn` corrects it on the measured response)")
 
 
 def limit_excess(amplifier, inputs, sampling_period):
