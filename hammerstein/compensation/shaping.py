@@ -215,8 +215,8 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     Returns
     -------
     str or None
-        One line, or None (a static plant, no period, or no harmonic
-        amplified ``limit`` times).
+        One line, or None (a static plant, a singular static gain, no
+        period, or no harmonic amplified ``limit`` times).
 
     Examples
     --------
@@ -247,7 +247,10 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     order = order[order * f0 < 0.5 / T]
     if order.size == 0:
         return None
-    amp = mode_amplification(matrices, T, order * f0)
+    try:
+        amp = mode_amplification(matrices, T, order * f0)
+    except np.linalg.LinAlgError:        # a singular static gain: no ratio to name
+        return None
     k = int(np.argmax(amp))
     if amp[k] < limit:
         return None

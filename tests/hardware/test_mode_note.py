@@ -90,6 +90,12 @@ def test_no_note_below_the_limit_without_a_period_or_dynamics():
     assert mode_note(_mats([300.0, 300.0], [0.04, 0.04]), T, ref, None) is None
     static = (np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((2, 0)), np.eye(2))
     assert mode_note(static, T, ref, P) is None
+    A, B, C, D = _mats([300.0, 300.0], [0.04, 0.04])
+    C = C.copy()
+    C[1] = C[0]                                                 # G(1) singular: no ratio
+    with pytest.raises(np.linalg.LinAlgError):
+        mode_amplification((A, B, C, D), T, [100.0])
+    assert mode_note((A, B, C, D), T, ref, P) is None
 
 
 def _compensate(tmp_path, frequency):
