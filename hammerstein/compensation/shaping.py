@@ -257,11 +257,12 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     n, a = int(order[k]), float(amp[k])
     modes = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * T)
     modes = modes[modes > 1e-9]
-    f1 = float(modes[np.argmin(np.abs(modes - n * f0))]) if modes.size else first_mode_hz(A, T)
+    where = (f"the bending mode at {modes[np.argmin(np.abs(modes - n * f0))]:.0f} Hz"
+             if modes.size else "the linear part")
     which = ("main frequency" if n == 1 else
              f"{n}{'nd' if n == 2 else 'rd' if n == 3 else 'th'} harmonic")
     fn = f"{n * f0:.4g} Hz" + ("" if n == 1 else f", of {f0:.4g} Hz")
-    return (f"the bending mode at {f1:.0f} Hz passes the reference's {which} ({fn}) {a:.3g} "
+    return (f"{where} passes the reference's {which} ({fn}) {a:.3g} "
             f"times its static gain: what the hysteresis model gets wrong at {n * f0:.4g} Hz "
             f"reaches the position {a:.3g} times larger, and feedforward cannot see it "
             f"(`hammerstein learn` corrects it on the measured response)")

@@ -117,3 +117,14 @@ def test_compensate_names_the_harmonic_in_its_output_and_the_drive_header(tmp_pa
     assert f"# {line}" in text.splitlines()
     out, text = _compensate(tmp_path, 10)                    # 50 Hz at most: 1.03 times
     assert "bending mode" not in out and "bending mode" not in text
+
+
+def test_a_linear_part_without_modes_is_named_as_such():
+    """Real poles only, with a zero: G(z) = 1 - 0.4 / (z - 0.5) rises from 0.2 at z = 1 to
+    1 + 0.4 / 1.5 at z = -1; no oscillatory mode to name."""
+    mats = (np.array([[0.5]]), np.array([[1.0]]), np.array([[-0.4]]), np.array([[1.0]]))
+    z = np.exp(2j * np.pi * 0.3)                                # f = 0.3 / T
+    assert mode_amplification(mats, 1.0, [0.3]) == pytest.approx([abs(1 - 0.4 / (z - 0.5)) / 0.2])
+    t = np.arange(100)
+    note = mode_note(mats, 1.0, np.sin(2 * np.pi * 0.1 * t)[None, :], 10)
+    assert note.startswith("the linear part passes the reference's")
