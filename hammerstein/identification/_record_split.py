@@ -560,6 +560,48 @@ def levels_end(record, split):
     return u.size if after.size == 0 else last["stop"] + 1 + int(after[0])
 
 
+def level_weights(split, n_samples):
+    """Row weights that make a fit's residual relative to each amplitude level.
+
+    ``w_t = 100 / percent`` of the level (:func:`amplitude_levels`) whose
+    samples ``start <= t < stop`` hold ``t`` (``A_max / A_level``: the
+    full-amplitude level 1, a 20 % level 5), and 1 outside every level (the
+    burn-in before the first, the reversal curves after the last, a record
+    without levels); a level below 1 % counts as 1 %. A least-squares fit
+    whose rows are scaled by ``w`` minimises each level's residual in units
+    of its amplitude, the measure by which ``identify --model auto`` judges
+    the held-out levels (% of each level's range). Unweighted, the
+    full-amplitude levels, whose residuals are the largest in µm, decide the
+    fit, and the small loops are what it extrapolates.
+
+    Parameters
+    ----------
+    split : Split
+        The record's split (:func:`split_record`), its ``levels``.
+    n_samples : int
+        The record's length.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_samples,)
+        Dimensionless, >= 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(4000) / 1000
+    >>> u = np.sin(2 * np.pi * t) * np.where(t < 2, 10.0, 4.0)
+    >>> lv = amplitude_levels(u)
+    >>> w = level_weights(Split(u > 9, u > 9, 0, False, 0, [], 0, "", lv), u.size)
+    >>> float(w[lv[0]["start"]]), float(w[lv[1]["start"] + 10])
+    (1.0, 2.5)
+    """
+    w = np.ones(int(n_samples))
+    for lv in split.levels:
+        w[lv["start"]:lv["stop"]] = 100.0 / max(lv["percent"], 1.0)
+    return w
+
+
 def levels_part(records, splits):
     """The records and splits cut where a multi-level record leaves its last level.
 

@@ -69,7 +69,8 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification._record_split import (
     ASYMMETRY_NOTE_PERCENT, COMPLETE_TRAVEL, HOLD_OUT_BLOCKS, NOISE_FACTOR, REVERSAL_BAND, Split,
     _as_records, _asymmetry_notes, _one_branch_held, _window_metrics, amplitude_levels,
-    held_out_level_error, level_errors, levels_end, levels_part, loop_asymmetry, noise_level,
+    held_out_level_error, level_errors, level_weights, levels_end, levels_part, loop_asymmetry,
+    noise_level,
     reversal_points, simulate_on_record,
     split_level_records, split_record)
 from hammerstein.identification._record_regression import (
@@ -98,6 +99,7 @@ __all__ = [
     "weak_couplings",
     "amplitude_levels",
     "level_errors",
+    "level_weights",
     "held_out_level_error",
     "NOISE_FACTOR",
     "identify_record_dynamics",
