@@ -127,6 +127,12 @@ def add_parser(subparsers):
                         "plays per component), S (j/n)^1.5 (power: dense near zero), or auto: "
                         "both fitted, the lower mean held-out minor-loop error kept (twice the "
                         "CPU; the held-out levels hardly tell the two apart, see the README)")
+    p.add_argument("--level-weighting", choices=["amplitude", "none"], default="amplitude",
+                   help="--model generalized/auto: the generalised PI's fit weighs each "
+                        "amplitude level's samples by A_max / A_level, so that each level's "
+                        "error counts relative to its amplitude, as the held-out levels are "
+                        "scored (amplitude, default), or every sample alike (none: the "
+                        "full-amplitude levels decide the small loops)")
     p.add_argument("--preisach-levels", type=int, default=PREISACH_LEVELS, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
                         "(N (N + 1) / 2 hysterons per component; default %(default)s). Fewer: "
@@ -532,8 +538,8 @@ def _options(args, n, thresholds):
     return PipelineOptions(
         method=args.method, n=n, thresholds=thresholds, partition=args.partition,
         bounds=args.bounds, components=args.components, model=args.model,
-        threshold_spacing=args.threshold_spacing, preisach_levels=args.preisach_levels,
-        hold_out=args.hold_out, output_map=args.output_map, train_fraction=args.train_fraction,
+        threshold_spacing=args.threshold_spacing, level_weighting=args.level_weighting,
+        preisach_levels=args.preisach_levels, hold_out=args.hold_out, output_map=args.output_map, train_fraction=args.train_fraction,
         skip=args.skip, order=args.order, max_order=args.max_order,
         creep_refits=args.creep_refits, output_unit=args.output_unit, name=Path(args.out).stem)
 

@@ -870,14 +870,15 @@ def _spacing_score(fit_thetas):
 
 def identify_gpi_records(records, n_plays=16, components="auto", hold_out="auto",
                          train_fraction=None, skip_seconds=None, input_names=None,
-                         output_names=None, threshold_spacing="uniform"):
+                         output_names=None, threshold_spacing="uniform",
+                         level_weighting="amplitude"):
     """Identify a multivariable generalised PI model; a :class:`RecordFit` like the PI's.
 
     Parameters
     ----------
     records : MultiRecord, Record or sequence of them
         Inputs shape (m, n_samples) [V], outputs shape (p, n_samples) [µm].
-    n_plays, components, threshold_spacing
+    n_plays, components, threshold_spacing, level_weighting
         See :class:`GeneralizedPIIdentifier`.
     hold_out, train_fraction, skip_seconds
         See :func:`hammerstein.identification.record_identification.split_record`.
@@ -895,7 +896,7 @@ def identify_gpi_records(records, n_plays=16, components="auto", hold_out="auto"
     IdentificationError
         See :meth:`GeneralizedPIIdentifier.fit`.
     """
-    est = GeneralizedPIIdentifier(n_plays, components,
-                                  threshold_spacing=threshold_spacing).fit(
+    est = GeneralizedPIIdentifier(n_plays, components, threshold_spacing=threshold_spacing,
+                                  level_weighting=level_weighting).fit(
         records, None, input_names, output_names, hold_out, train_fraction, skip_seconds)
     return est.fit_

@@ -74,6 +74,9 @@ class PipelineOptions:
         The class (``auto``: the best on held-out data).
     threshold_spacing : {'uniform', 'power', 'auto'}
         Generalised PI thresholds.
+    level_weighting : {'amplitude', 'none'}
+        Generalised PI fit's rows: each amplitude level's weighted by
+        ``A_max / A_level`` (default), or all alike.
     preisach_levels : int
         Levels of each input's Preisach grid.
     hold_out : {'auto', 'none'}
@@ -99,6 +102,7 @@ class PipelineOptions:
     components: str = "auto"
     model: str = "auto"
     threshold_spacing: str = "uniform"
+    level_weighting: str = "amplitude"
     preisach_levels: int = PREISACH_LEVELS
     hold_out: str = "auto"
     output_map: str = "auto"
@@ -228,7 +232,8 @@ def _fit_one_class(name, records, options, names, previous=None, provisional=Fal
             smoothing_start=getattr(previous, "smoothing", None))
     return identify_gpi_records(
         records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
-        options.skip, *names, threshold_spacing=options.threshold_spacing)
+        options.skip, *names, threshold_spacing=options.threshold_spacing,
+        level_weighting=options.level_weighting)
 
 
 def _levels_records(records, options):

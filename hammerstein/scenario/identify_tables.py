@@ -125,6 +125,7 @@ RECORDS_IDENTIFY_FIELDS = {
     "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
     "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
+    "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
     "creep": Field(boolean(), default=False),              # identify the creep from staircases
     "creep_refits": Field(integer(0, 5)),                  # default: by class, as identify
     "order": Field(integer(1, 50)),                        # of G; default chosen on held-out data

@@ -155,3 +155,34 @@ def test_a_refit_keeps_the_generalized_class(monkeypatch, asked):
     assert pipeline.fit_class(first) == "generalized"
     fit = pipeline.identify_hysteresis([], options, (["u"], ["y"]), pipeline.fit_class(first))
     assert calls == ["generalized-pi"] and fit.method == "generalized-pi"
+
+
+def test_level_weighting_option_is_the_identifiers(tmp_path, capsys):
+    """``--level-weighting none`` writes the model ``GeneralizedPIIdentifier(level_weighting=
+    "none")`` fits on the same record (the same loops to 1e-9 of their range), and the default
+    (each level weighted by its amplitude) another one; a wrong value is a usage error."""
+    from hammerstein.identification.gpi_identification import GeneralizedPIIdentifier
+    from hammerstein.io.datafiles import MultiRecord
+    true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
+                         gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4])
+    t, u, _ = decreasing_sine(2.5e-3, 10.0)
+    y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="",
+               fmt="%.17g")
+    base = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
+            "--model", "generalized"]
+    models = {}
+    for weighting in ("amplitude", "none"):
+        out = tmp_path / f"{weighting}.toml"
+        assert main(base + ["--level-weighting", weighting, "--out", str(out)]) == 0
+        models[weighting] = load_model(str(out))
+    capsys.readouterr()
+    rec = MultiRecord(t, u[None], y[None], ("u",), ("y",), 2.5e-3, "rec")
+    est = GeneralizedPIIdentifier(level_weighting="none").fit(rec)
+    v = 6.0 * np.sin(2 * np.pi * np.arange(2000) / 1000)[None]
+    a, b = models["none"].simulate(v)[0], est.model_.simulate(v)[0]
+    assert np.max(np.abs(a - b)) <= 1e-9 * np.ptp(a)
+    assert np.max(np.abs(models["amplitude"].simulate(v)[0] - a)) > 1e-4 * np.ptp(a)
+    assert main(base + ["--level-weighting", "relative", "--out", str(tmp_path / "x.toml")]) == 2
+    assert "--level-weighting" in capsys.readouterr().err

@@ -57,6 +57,17 @@ def test_identify_table_with_records_takes_identify_defaults():
         identify_table({"records": "excitation", "model": "chebyshev"})
 
 
+def test_level_weighting_key_as_the_identify_option():
+    """``level_weighting`` is ``identify --level-weighting``: the same default, the same
+    choices, and it reaches the pipeline's options."""
+    from hammerstein.scenario.identification import _pipeline_options
+    assert identify_table({"records": "excitation"})["level_weighting"] == "amplitude"
+    spec = identify_table({"records": "excitation", "level_weighting": "none"})
+    assert _pipeline_options(spec, "m").level_weighting == "none"
+    with pytest.raises(Exception, match="level_weighting"):
+        identify_table({"records": "excitation", "level_weighting": "relative"})
+
+
 @pytest.mark.parametrize("value, expected", [
     (None, []), ([], []), ("standard", [0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8]),
     ([0.5, -0.25], [0.5, -0.25])])
