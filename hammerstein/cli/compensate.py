@@ -158,11 +158,12 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     def predict(u):
         return plant.simulate(apply_amplifier(plant.amplifier, u, T))[0]
 
+    linear = plant.matrices              # creep then dynamics, built once
     drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
                            plant.amplifier, limits, rest=rest_output(plant.hysteresis, plant.creep),
-                           first_mode=first_mode_hz(plant.matrices[0], T), predict=predict,
+                           first_mode=first_mode_hz(linear[0], T), predict=predict,
                            names=plant.hysteresis.output_names)
-    note = mode_note(plant.matrices, T, drive.reference, reference.period_samples)
+    note = mode_note(linear, T, drive.reference, reference.period_samples)
     if note:
         drive.notes.append(note)
     return comp, drive

@@ -118,12 +118,17 @@ def first_mode_hz(A, sampling_period):
     >>> round(first_mode_hz(A, T), 6)
     400.0
     """
+    f = _pole_frequencies(A, sampling_period)
+    return float(f.min()) if f.size else None
+
+
+def _pole_frequencies(A, sampling_period):
+    """Frequencies [Hz] (n_modes,) of the oscillatory discrete poles, ``|arg z| / (2 pi T)``."""
     A = np.atleast_2d(np.asarray(A, dtype=float))
     if A.size == 0:
-        return None
+        return np.zeros(0)
     f = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * float(sampling_period))
-    f = f[f > 1e-9]
-    return float(f.min()) if f.size else None
+    return f[f > 1e-9]
 
 
 def mode_amplification(matrices, sampling_period, frequencies_hz):
@@ -255,8 +260,7 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     if amp[k] < limit:
         return None
     n, a = int(order[k]), float(amp[k])
-    modes = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * T)
-    modes = modes[modes > 1e-9]
+    modes = _pole_frequencies(A, T)
     where = (f"the bending mode at {modes[np.argmin(np.abs(modes - n * f0))]:.0f} Hz"
              if modes.size else "the linear part")
     which = ("main frequency" if n == 1 else
