@@ -192,8 +192,10 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     """A note when a harmonic of a periodic reference lies at a bending mode, or None.
 
     The reference's main frequency ``f0`` is the largest line of the
-    spectrum of its last period (summed over the outputs, without the mean);
-    its harmonics ``n f0``, ``n = 1 ..`` :data:`MODE_NOTE_HARMONICS` (below
+    spectrum of its last period (summed over the outputs, without the mean),
+    refined on the Hann-windowed spectrum of its last periods (a period of a
+    whole number of samples only approximates the reference's own); its
+    harmonics ``n f0``, ``n = 1 ..`` :data:`MODE_NOTE_HARMONICS` (below
     the Nyquist frequency), are weighed by :func:`mode_amplification`; the
     largest, when at least ``limit``, is named, with the oscillatory mode
     nearest to it. Hysteresis turns a drive at
@@ -247,7 +249,7 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     spectrum = (np.abs(np.fft.rfft(ref[:, -P:], axis=1)) ** 2).sum(axis=0)
     if spectrum.size < 2 or not np.any(spectrum[1:] > 0):
         return None
-    f0 = (1 + int(np.argmax(spectrum[1:]))) / (P * T)
+    f0 = _refined_frequency(ref, (1 + int(np.argmax(spectrum[1:]))) / (P * T), P, T)
     order = np.arange(1, MODE_NOTE_HARMONICS + 1)
     order = order[order * f0 < 0.5 / T]
     if order.size == 0:
@@ -270,6 +272,24 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
             f"times its static gain: what the hysteresis model gets wrong at {n * f0:.4g} Hz "
             f"reaches the position {a:.3g} times larger, and feedforward cannot see it "
             f"(`hammerstein learn` corrects it on the measured response)")
+
+
+def _refined_frequency(reference, f0, period_samples, sampling_period, periods=16, points=201):
+    """The line near ``f0`` [Hz] where the Hann-windowed spectrum of the reference's tail peaks.
+
+    A period of a whole number of samples only approximates the reference's
+    own (150 Hz at 50 µs is 133.3 samples, read as 150.4 Hz); the tail of at
+    most ``periods`` periods is scanned over ``f0 (1 +- 1 / period_samples)``
+    on ``points`` frequencies, which bounds the work to
+    ``points * periods * period_samples`` products.
+    """
+    T, P = float(sampling_period), int(period_samples)
+    tail = reference[:, -min(reference.shape[1], periods * P):]
+    tail = (tail - tail.mean(axis=1, keepdims=True)) * np.hanning(tail.shape[1])
+    f = f0 * (1.0 + np.linspace(-1.0, 1.0, points) / P)
+    basis = np.exp(-2j * np.pi * np.outer(f, np.arange(tail.shape[1]) * T))
+    power = (np.abs(basis @ tail.T) ** 2).sum(axis=1)
+    return float(f[int(np.argmax(power))])
 
 
 def limit_excess(amplifier, inputs, sampling_period):

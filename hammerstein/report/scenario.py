@@ -487,6 +487,9 @@ def write_report(scenario, results, directory, jobs=None):
     notes = [(r.name, w) for r in results for w in dict.fromkeys(r.warnings)]
     if notes:
         lines += ["Warnings:", ""] + [f"- `{n}`: {w}" for n, w in notes] + [""]
+    modes = [(r.name, n) for r in results for n in r.spec.notes]
+    if modes:
+        lines += ["Notes:", ""] + [f"- `{n}`: {w}" for n, w in modes] + [""]
     lines += ["## Figures", ""]
     for caption, fname in figs:
         lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]

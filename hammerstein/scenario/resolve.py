@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.shaping import mode_note
 from hammerstein.models.lti import modal_parameters
 from hammerstein.models.dynamics import SampledSystem
 from hammerstein.core.files import confined_path
@@ -31,7 +33,7 @@ from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import stability_map_frame
 from hammerstein.scenario.validate import ScenarioSpec, validate_scenario
 
-__all__ = ["Scenario", "resolve_scenario", "load_scenario", "dynamics_warning"]
+__all__ = ["Scenario", "resolve_scenario", "load_scenario", "dynamics_warning", "mode_notes"]
 
 #: a reference reaches the dynamics above this fraction of the first resonance ...
 RESONANCE_FRACTION = 0.1
@@ -152,6 +154,36 @@ def dynamics_warning(case, base=None):
             f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")
 
 
+def mode_notes(case):
+    """The note ``hammerstein compensate`` gives the same reference, for a built case.
+
+    A case whose compensator inverts linear dynamics (kind
+    ``"hammerstein"``: the creep and bending modes it identified or was
+    given) gets :func:`hammerstein.compensation.shaping.mode_note` of that
+    linear part on the case's reference: the harmonic of the reference's main
+    frequency that a bending mode passes at least twice its static gain, where
+    what the hysteresis model gets wrong reaches the position that many times
+    larger. Rate-independent kinds get :func:`dynamics_warning` instead.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+        With its built compensator (None: no note).
+
+    Returns
+    -------
+    list of str
+        Zero or one note.
+    """
+    comp = case.compensator
+    if case.mode != "reference" or not isinstance(comp, HammersteinCompensator):
+        return []
+    lin = comp.dynamics
+    note = mode_note((lin.A, lin.B, lin.C, lin.D), case.plant.sampling_period, case.signal,
+                     case.period_samples)
+    return [note] if note else []
+
+
 def canonical_key(value):
     """A hashable key equal for equal tables (dicts in any key order, arrays by content).
 
@@ -248,8 +280,9 @@ def resolve_scenario(spec, cache=None):
         extra = dynamics_warning(case, base)
         if extra:
             caught.append(extra)
-        cases.append(replace(case, compensator=comp, model=model, warnings=caught,
-                             identified=list(context.identified)))
+        case = replace(case, compensator=comp, model=model, warnings=caught,
+                       identified=list(context.identified))
+        cases.append(replace(case, notes=mode_notes(case)))
     smap = None
     if spec.stability_map is not None and spec.stability_plant is not None:
         smap = stability_map_frame(spec.stability_map, spec.stability_plant, spec.compensator_top,

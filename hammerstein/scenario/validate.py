@@ -94,6 +94,11 @@ class CaseSpec:
         (:class:`hammerstein.scenario.identification.IdentifiedModel`,
         :class:`hammerstein.scenario.identification.IdentifiedDynamics`);
         filled by the resolution.
+    notes : list of str
+        What the report should say about the case that is not a warning
+        (a harmonic of the reference at a bending mode,
+        :func:`hammerstein.scenario.resolve.mode_notes`); filled by the
+        resolution.
     """
 
     name: str
@@ -117,6 +122,7 @@ class CaseSpec:
     sweep: dict | None = None
     where: str = ""
     identified: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
 
 
 @dataclass

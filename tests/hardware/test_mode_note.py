@@ -67,8 +67,18 @@ def test_the_note_names_the_harmonic_at_the_mode_and_its_gain(f0, fn, which, n):
     note = mode_note(mats, T, _circle(f0, n=4 * P), P)
     assert note is not None and which in note
     gain = float(re.search(r"\) ([0-9.]+) times its static gain", note).group(1))
-    assert gain == pytest.approx(_gain(n / (P * T), fn, zeta), rel=2e-3)   # the period's f0
+    assert gain == pytest.approx(_gain(n * f0, fn, zeta), rel=2e-3)   # the reference's own f0
     assert f"bending mode at {fn * np.sqrt(1 - zeta ** 2):.0f} Hz" in note
+
+
+@pytest.mark.parametrize("f0", [150.0, 240.0, 340.0])
+def test_the_main_frequency_is_the_reference_s_not_the_whole_period_s(f0):
+    # 150 Hz at 10 µs is 666.7 samples a period; the period of 667 samples is 149.93 Hz
+    P = int(round(1 / (f0 * T)))
+    assert abs(1 / (P * T) - f0) > 0.05
+    note = mode_note(_mats([3 * f0, 3 * f0], [0.03, 0.03]), T, _circle(f0, n=20 * P), P)
+    named = float(re.search(r"3rd harmonic \(([0-9.]+) Hz, of ([0-9.]+) Hz\)", note).group(2))
+    assert named == pytest.approx(f0, abs=0.02 * f0 / P)
 
 
 def test_the_nearest_of_two_modes_is_named():
