@@ -50,41 +50,28 @@ def actuator_matrices(act):
     return act.Ad, act.Bd, act.C, np.zeros((act.C.shape[0], m))
 
 
-def without_modes(act, e, period, frequency):
-    """The settled error ``e`` (2, k periods) with every harmonic below twice the first mode
-    mapped back through ``G(1) G(f)^-1`` of the actuator's linear part."""
+def without_modes(act, e, length=None):
+    """The error ``e`` (2, k) with its spectrum below twice the first mode mapped back
+    through ``G(1) G(f)^-1`` of the actuator's linear part.
+
+    ``length`` None: ``e`` holds whole periods (a circle's settled part), its DFT lines are
+    the harmonics. ``length`` 2 k: ``e`` is a whole record from rest (a raster, not
+    periodic), zero-padded so that the mapping is a linear, not a circular, filter of it
+    (the last samples see the cut).
+    """
     A, B, C, _ = actuator_matrices(act)
     n, k = A.shape[0], e.shape[1]
-    cycles = k // period
-    E = np.fft.rfft(e, axis=1)
+    N = k if length is None else int(length)
+    E = np.fft.rfft(e, n=N, axis=1)
     eye = np.eye(n)
     G1 = C @ np.linalg.solve(eye - A, B)
     for b in range(1, E.shape[1]):
-        f = b * frequency / cycles
+        f = b / (N * rd.T)
         if f >= 2.0 * act.modes_hz[0]:
             break
         G = C @ np.linalg.solve(np.exp(2j * np.pi * f * rd.T) * eye - A, B)
         E[:, b] = G1 @ np.linalg.solve(G, E[:, b])
-    return np.fft.irfft(E, n=k, axis=1)
-
-
-def without_modes_record(act, e):
-    """The error ``e`` (2, n) of a whole drive from rest (a raster: not periodic) with its
-    spectrum below twice the first mode mapped back through ``G(1) G(f)^-1``; zero-padded
-    to twice its length, so that the mapping is a linear, not a circular, filter of the
-    record (the drive and its error start at rest; the last samples see the cut)."""
-    A, B, C, _ = actuator_matrices(act)
-    n, k = A.shape[0], e.shape[1]
-    E = np.fft.rfft(e, n=2 * k, axis=1)
-    eye = np.eye(n)
-    G1 = C @ np.linalg.solve(eye - A, B)
-    for b in range(1, E.shape[1]):
-        f = b / (2 * k * rd.T)
-        if f >= 2.0 * act.modes_hz[0]:
-            break
-        G = C @ np.linalg.solve(np.exp(2j * np.pi * f * rd.T) * eye - A, B)
-        E[:, b] = G1 @ np.linalg.solve(G, E[:, b])
-    return np.fft.irfft(E, n=2 * k, axis=1)[:, :k]
+    return np.fft.irfft(E, n=N, axis=1)[:, :k]
 
 
 #: samples left out at the end of a raster's record (where the zero-padded mapping sees the cut)
@@ -97,7 +84,7 @@ def raster_row(act, d):
     y = act.simulate(u, noise=False)
     start = fade + rd.START_PERIODS * int(round(1 / 50 / rd.T))     # the route's 50 Hz lines
     e = y - shaped
-    q = without_modes_record(act, e)
+    q = without_modes(act, e, 2 * e.shape[1])
     return (100 * float(np.max(np.hypot(*e[:, start:]))) / 20,
             100 * float(np.max(np.hypot(*q[:, start:-EDGE]))) / 20)
 
@@ -114,7 +101,7 @@ def member(name, act, d):
             measured = rd.settled_error(ref, y, fade, P, r)[0]
             e = (y - ref)[:, fade + rd.START_PERIODS * P:]
             e = e[:, e.shape[1] - (e.shape[1] // P) * P:]
-            q = without_modes(act, e, P, f)
+            q = without_modes(act, e)
             flat = 100 * float(np.max(np.hypot(*q))) / r
             ident = mode_amplification(plant.matrices, rd.T, HARMONICS * f)
             true = mode_amplification(actuator_matrices(act), rd.T, HARMONICS * f)
