@@ -112,6 +112,8 @@ def member(name, act, d):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("work", nargs="+", help="route_defaults --work directories")
+    ap.add_argument("--seed", type=int, default=rd.FAMILY_SEED,
+                    help="the family's seed, as given to route_defaults.py")
     args = ap.parse_args(argv)
     dirs = {p.name: p for w in args.work for p in Path(w).iterdir()
             if (p / "preset.toml").is_file()}
@@ -122,7 +124,7 @@ def main(argv=None):
           "per circle (r µm, f Hz): measured / without the modes; amplification identified "
           "(true) |")
     print("|---|---|---|---|---|")
-    for name, act in rd.family(20):
+    for name, act in rd.family(20, args.seed):
         if name not in dirs:
             continue
         rows = member(name, act, dirs[name])
