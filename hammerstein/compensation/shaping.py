@@ -274,22 +274,30 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
             f"(`hammerstein learn` corrects it on the measured response)")
 
 
-def _refined_frequency(reference, f0, period_samples, sampling_period, periods=16, points=201):
-    """The line near ``f0`` [Hz] where the Hann-windowed spectrum of the reference's tail peaks.
+def _refined_frequency(reference, f0, period_samples, sampling_period, periods=16, points=21):
+    """The frequency near ``f0`` [Hz] where the Hann-windowed spectrum of the reference's tail peaks.
 
     A period of a whole number of samples only approximates the reference's
-    own (150 Hz at 50 µs is 133.3 samples, read as 150.4 Hz); the tail of at
+    own (150 Hz at 50 µs is 133.3 samples, read as 150.4 Hz). The tail of at
     most ``periods`` periods is scanned over ``f0 (1 +- 1 / period_samples)``
-    on ``points`` frequencies, which bounds the work to
-    ``points * periods * period_samples`` products.
+    on ``points`` frequencies, then on ``points`` more between the best one's
+    neighbours: ``2 points`` sums over at most ``periods * period_samples``
+    samples, O(that) memory. A period of 2000 samples or more (rounding off
+    at most 0.025 %) is taken as it is.
     """
     T, P = float(sampling_period), int(period_samples)
+    if P >= 2000:
+        return float(f0)
     tail = reference[:, -min(reference.shape[1], periods * P):]
     tail = (tail - tail.mean(axis=1, keepdims=True)) * np.hanning(tail.shape[1])
-    f = f0 * (1.0 + np.linspace(-1.0, 1.0, points) / P)
-    basis = np.exp(-2j * np.pi * np.outer(f, np.arange(tail.shape[1]) * T))
-    power = (np.abs(basis @ tail.T) ** 2).sum(axis=1)
-    return float(f[int(np.argmax(power))])
+    t = np.arange(tail.shape[1]) * T
+    lo, hi = f0 * (1.0 - 1.0 / P), f0 * (1.0 + 1.0 / P)
+    for _ in range(2):
+        f = np.linspace(lo, hi, points)
+        power = [float((np.abs(tail @ np.exp(-2j * np.pi * x * t)) ** 2).sum()) for x in f]
+        k = int(np.argmax(power))
+        lo, hi = f[max(k - 1, 0)], f[min(k + 1, points - 1)]
+    return float(f[k])
 
 
 def limit_excess(amplifier, inputs, sampling_period):
