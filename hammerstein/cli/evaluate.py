@@ -41,6 +41,7 @@ from hammerstein.cli._hardware import (catch, load_actuator, load_reference, map
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
+from hammerstein.compensation.drive_files import optional_columns
 from hammerstein.core.files import all_or_nothing, guard_inputs, safe_write
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.signals.references import raster_line_index
@@ -261,15 +262,7 @@ def _shaped_reference(path, outs, T):
     amplifier's range and slew and the identified first mode; a drive without
     them followed the reference as given.
     """
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        header = next((line for line in (fh.readline() for _ in range(200))
-                       if line and not line.startswith("#")), "")
-    columns = [c.strip() for c in header.split(",")]
-    names = [f"{o}_shaped" for o in outs]
-    if not all(n in columns for n in names):
-        return None
-    _, shaped, _ = read_signals(path, names, "t", None, T, "--drive")
-    return shaped
+    return optional_columns(path, [f"{o}_shaped" for o in outs], T, "--drive")
 
 
 def _shaped_table(rows):

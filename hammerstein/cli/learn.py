@@ -19,6 +19,15 @@ fade-in on (:func:`hammerstein.compensation.ilc.repeating_from`, gains
 ``gamma |Q|^2`` per harmonic, not learnt at the noise floor); with
 ``--history DIR`` the per-harmonic gains carry over from trial to trial in
 ``DIR/harmonics.csv`` (halved where a harmonic's error keeps growing).
+What is learnt for it is the reference the compensator follows
+(:func:`hammerstein.compensation.ilc.reference_correction`): the next drive
+is ``compensate``'s drive (the same kind, from rest, faded in) for the
+reference plus the learnt periodic correction, and the drive file keeps
+that reference in its ``<output>_learnt`` columns, from which the next
+trial goes on. Every drive's start-up is then the compensator's own,
+consistent with the model's dynamics. A drive that neither ``compensate``
+nor ``learn`` wrote (no compensator reference) is learnt through the drive
+(the time-domain law below).
 
 Everything is judged on the settled part: the printed max and RMS
 Euclidean errors start after the fade-in and ``--settle-periods`` (the
@@ -67,7 +76,6 @@ with ``--limits error`` (one line, nothing written); 2 a usage error.
 
 from __future__ import annotations
 
-import hashlib
 import sys
 from pathlib import Path
 
@@ -79,25 +87,28 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        load_actuator,
                                        fraction, load_reference, mapping, nonnegative_float, owned_problem,
                                        positive_float)
-from hammerstein.cli.compensate import LAW_HINT
+from hammerstein.cli._hardware import Reference
+from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_history, _drive_samples,
+                                            _fingerprint, _read_best, _read_state, _restore_gains,
+                                            _save_gains, _settled_rows, _write_history,
+                                            _write_state, history_rows)
+from hammerstein.cli.compensate import LAW_HINT, compensate
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade, keep_start,
                                     limit_start_up, read_signals, rest_output, shape_drive,
                                     signals_csv)
-from hammerstein.core.files import (all_or_nothing, bounded_read_text, guard_inputs, output_problem,
+from hammerstein.compensation.drive_files import followed_reference, learnt_names
+from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
                                     safe_write)
 from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
-                                  harmonic_base_gains, periodic_average, repeating_from)
+                                  harmonic_base_gains, periodic_average, reference_correction,
+                                  repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
 from hammerstein.compensation.shaping import first_mode_hz
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
-from hammerstein.report.figures import save
-from hammerstein.report.ilc_figure import convergence_figure
 
 __all__ = ["add_parser", "history_rows"]
-
-HISTORY_MARK = ".hammerstein-history"
 
 
 def add_parser(subparsers):
@@ -129,11 +140,13 @@ def add_parser(subparsers):
                         "bending mode of the actuator's dynamics, at least 1000 Hz, printed; "
                         "1000 Hz without an oscillatory mode)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default="zpetc",
-                   help="inverse of the dynamics (default zpetc)")
+                   help="inverse of the dynamics, in the learning and in the compensator that "
+                        "computes a repeating reference's drive (default zpetc)")
     p.add_argument("--slope-floor", type=fraction, metavar="F",
                    help="in [0, 1]: no local gain of the model below F x its loop's mean slope is "
                         "inverted (a trust region after input reversals; default 0.7 for a Preisach "
-                        "or generalised-PI model, 0 for a classical PI)")
+                        "or generalised-PI model, 0 for a classical PI; the learning through the "
+                        "drive: a reference that does not repeat, or a drive no command wrote)")
     p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
                    help="K of the inverse multiplicative law that inverts a classical PI in the "
                         "learning (default: the convergent gain, printed with why; a Preisach or "
@@ -190,61 +203,6 @@ def _inverse_gain(model, gain, check):
     return gain, notes
 
 
-def history_rows(history_dir):
-    """The rows of ``DIR/history.csv``.
-
-    Parameters
-    ----------
-    history_dir : str or pathlib.Path
-        The ``--history`` directory.
-
-    Returns
-    -------
-    list of tuple
-        ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
-        there is no history yet.
-    """
-    path = Path(history_dir) / "history.csv"
-    if not path.is_file():
-        return []
-    rows = []
-    for line in path.read_text(encoding="utf-8").splitlines()[1:]:
-        k, out, mx, rms = line.split(",")[:4]
-        rows.append((int(k), out, float(mx), float(rms)))
-    return rows
-
-
-def _write_history(history, names, rec, scale):
-    d = Path(history)
-    if d.exists() and any(d.iterdir()) and not (d / HISTORY_MARK).exists():
-        raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
-                            f"choose an empty or new directory")
-    d.mkdir(parents=True, exist_ok=True)
-    if not (d / HISTORY_MARK).exists():
-        safe_write(d / HISTORY_MARK, "", "history mark", root=d)
-    rows = history_rows(d)
-    k = 1 + max((r[0] for r in rows), default=-1)
-    rows += [(k, n, float(rec.max_error[i]), float(rec.rms_error[i])) for i, n in enumerate(names)]
-    text = "iteration,output,max_error_um,rms_error_um\n" + "".join(
-        f"{a},{b},{c!r},{e!r}\n" for a, b, c, e in rows)
-    safe_write(d / "history.csv", text, "history file", root=d)
-    its = sorted({r[0] for r in rows})
-    mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
-    rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
-    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale)
-    safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
-    return k
-
-
-GAINS_FILE = "harmonics.csv"
-SETTLED_FILE = "settled.csv"
-BEST_FILE = "best-trial.csv"
-STATE_FILE = "learning.csv"
-#: samples of the last drive kept in the state file, per input (the --drive check)
-DRIVE_SAMPLES = 256
-#: a --drive matches a drive of the history within this fraction of that drive's span per
-#: input (a drive re-written by the acquisition, or quantised by a 16-bit converter, passes)
-DRIVE_TOLERANCE = 1e-3
 #: a trial worse than the best one so far by more than this factor is not learnt from
 WORSE = 1.1
 #: ... and by more than this many standard deviations of the difference of two judged errors
@@ -264,115 +222,6 @@ NOISE_MARGIN = 3.0
 #: realistic-2dof (outside the model's class) +20, +1, -4 samples for the circles and +10, +1
 #: for the rasters (a 3.6 deg phase error at 10 Hz is 20 samples)
 DELAY_PHASE_DEG = 2.0
-
-
-def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin):
-    """Append a trial's settled errors to ``DIR/settled.csv``; the previous trial's if it was lower.
-
-    Returns
-    -------
-    tuple or None
-        ``(trial, judged error [µm])`` of the previous trial when this
-        trial's judged error exceeds it by more than ``margin`` (the noise),
-        else None.
-    """
-    path = Path(history_dir) / SETTLED_FILE
-    head = "trial,settled_max_euclidean_um,settled_rms_euclidean_um,judged_um\n"
-    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() else head
-    rows = [line.split(",") for line in text.splitlines()[1:] if line.strip()]
-    prev = None
-    if rows:
-        try:
-            prev = (int(rows[-1][0]), float(rows[-1][3]))
-        except (IndexError, ValueError):
-            prev = None
-    text = text + f"{trial},{settled_max!r},{settled_rms!r},{float(score)!r}\n"
-    safe_write(path, text, "settled errors file")
-    return prev if prev is not None and score > prev[1] + margin else None
-
-
-def _read_state(history_dir, n_samples):
-    """``{trial, score, halvings}`` of the best trial in ``DIR/learning.csv``, or None.
-
-    None when the directory is not one ``learn`` made, has no state yet, or
-    holds the state of a record of another length (another reference).
-    """
-    d = Path(history_dir)
-    path = d / STATE_FILE
-    if not path.is_file() or not (d / HISTORY_MARK).exists() or not (d / BEST_FILE).is_file():
-        return None
-    values = {}
-    for line in bounded_read_text(path, "data", "learning state file").splitlines()[1:]:
-        if "," in line:
-            key, value = line.split(",", 1)
-            values[key.strip()] = value.strip()
-    try:
-        state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
-                 "halvings": int(values["halvings"]), "samples": int(values["samples"]),
-                 "reference": values.get("reference_sha256"),
-                 "drive": (None if values.get("last_drive") is None else
-                           np.array(values["last_drive"].split(), float))}
-    except (KeyError, ValueError):
-        raise DataFileError(f"--history: {path} is not a learning state file written by "
-                            f"hammerstein learn; choose a new --history directory") from None
-    return state if state["samples"] == n_samples else None
-
-
-def _fingerprint(target):
-    """SHA-256 of the faded reference [µm] (float64, C order): which learning a history is."""
-    return hashlib.sha256(np.ascontiguousarray(target, dtype=np.float64).tobytes()).hexdigest()
-
-
-def _drive_samples(u):
-    """The samples of a drive (m, N) the state keeps: ``DRIVE_SAMPLES`` per input, flat."""
-    idx = np.linspace(0, u.shape[1] - 1, min(DRIVE_SAMPLES, u.shape[1])).round().astype(int)
-    return np.asarray(u, float)[:, idx].ravel(), idx
-
-
-def _same_drive(u, kept):
-    """True when the samples ``kept`` (as :func:`_drive_samples`) are those of the drive u."""
-    mine, _ = _drive_samples(u)
-    if kept is None or kept.size != mine.size:
-        return False
-    m = u.shape[0]
-    a, b = mine.reshape(m, -1), kept.reshape(m, -1)
-    span = np.ptp(b, axis=1) + 1e-9
-    return bool(np.all(np.max(np.abs(a - b), axis=1) <= DRIVE_TOLERANCE * span))
-
-
-def _check_history(history_dir, state, fingerprint, u, best_u):
-    """Refuse a trial that does not belong to the history's learning (a DataFileError).
-
-    ``fingerprint`` is the faded reference's (:func:`_fingerprint`); ``best_u`` is called
-    for the best trial's drive (m, N) [V] when the last drive differs.
-
-    The reference (faded as the drive was) must have the history's fingerprint, and the
-    applied drive must be the last one written or the best trial's (re-measured).
-    """
-    if state is None:
-        return
-    d = Path(history_dir)
-    if state["reference"] is not None and state["reference"] != fingerprint:
-        raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
-                            f"({STATE_FILE}); choose a new --history directory for this one")
-    if state["drive"] is None or _same_drive(u, state["drive"]):
-        return
-    best_u = best_u()
-    if best_u is not None and _same_drive(u, _drive_samples(best_u)[0]):
-        return
-    raise DataFileError(f"--drive: not the drive the last trial of {d} wrote, nor its best "
-                        f"trial's ({BEST_FILE}): this history belongs to another learning (another "
-                        f"actuator, identification or first drive); choose a new --history "
-                        f"directory, or apply the last drive written")
-
-
-def _write_state(history_dir, state):
-    text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
-        ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
-        ("samples", "samples")))
-    text += f"reference_sha256,{state['reference']}\n"
-    text += "last_drive," + " ".join(repr(float(v)) for v in state["drive"]) + "\n"
-    safe_write(Path(history_dir) / STATE_FILE, text, "learning state file", root=history_dir)
 
 
 def _window_error(target, y, delay, start, sampling_period, q_cutoff_hz):
@@ -471,44 +320,6 @@ def _judged_error(target, y, delay, period, steady):
         spread = np.sum((e[:, steady:] - averaged) ** 2, axis=1) / (n - period)
         return float(np.max(np.linalg.norm(averaged, axis=0))), float(np.sqrt(np.max(spread) * period / n))
     return float(np.max(np.linalg.norm(e, axis=0))), 0.0
-
-
-def _read_best(history_dir, model, u_shape, y_shape, n_samples):
-    """The best trial's drive and measured response (``DIR/best-trial.csv``)."""
-    _, bu, _ = read_signals(Path(history_dir) / BEST_FILE, list(model.input_names),
-                            "t", None, None, "--history best trial")
-    _, by, _ = read_signals(Path(history_dir) / BEST_FILE, list(model.output_names),
-                            "t", None, None, "--history best trial")
-    if bu.shape != u_shape or by.shape != y_shape:
-        raise DataFileError(f"--history: {BEST_FILE} does not match the drive's "
-                            f"{n_samples} samples; choose a new --history directory")
-    return bu, by
-
-
-def _restore_gains(history_dir, gains):
-    """The per-harmonic gains of the previous trials (``DIR/harmonics.csv``), when they match."""
-    path = Path(history_dir) / GAINS_FILE
-    if not path.is_file() or not (Path(history_dir) / HISTORY_MARK).exists():
-        return
-    rows = [line.split(",") for line in bounded_read_text(path, "data", "harmonics file").splitlines()[1:]
-            if line.strip()]
-    if len(rows) != gains.base.size:
-        return                          # another reference: start afresh
-    table = np.array([[float(v) for v in r[1:4]] for r in rows])
-    gains.gains = table[:, 0].copy()
-    gains.previous = table[:, 1].copy()
-    gains.growths = table[:, 2].astype(int)
-    gains.converged = any(len(r) > 4 and r[4].strip() == "1" for r in rows)   # older files: 4 columns
-
-
-def _save_gains(history_dir, gains):
-    prev = gains.previous if gains.previous is not None else np.zeros(gains.gains.shape)
-    growths = getattr(gains, "growths", np.zeros(gains.gains.shape, dtype=int))
-    done = int(bool(gains.converged))
-    text = "harmonic,gain,previous_error_um,growths,converged\n" + "".join(
-        f"{h},{float(g)!r},{float(e)!r},{int(n)},{done}\n"
-        for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
-    safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file", root=history_dir)
 
 
 def _handle(args):
@@ -611,14 +422,16 @@ def _handle(args):
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
             if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
         learn_u, learn_y, note, halvings, best, stall = u, y, None, 0, True, None
+        followed, drive_kind_ = followed_reference(args.drive, list(model.output_names), target, T)
+        followed_now = followed          # the reference this trial's drive was computed for
+        bu = by = bf = None
         if state is not None:
             halvings = state["halvings"]
             best_score, what = state["score"], "averaged"
             best = score < best_score
             worse = score > best_score + margin
-            bu = by = None
             if judged is not None:       # judged against the best trial's record, same statistic
-                bu, by = _read_best(args.history, model, u.shape, y.shape, N)
+                bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 cmp = compare_trials(judged, _window_error(
                     target, by, delay, judged_start, T, args.q_cutoff_hz), 1.0, NOISE_MARGIN)
                 score, best_score, margin, worse, best = (cmp.score, cmp.best_score, cmp.margin,
@@ -628,8 +441,8 @@ def _handle(args):
             if worse:
                 halvings += 1
                 if bu is None:
-                    bu, by = _read_best(args.history, model, u.shape, y.shape, N)
-                learn_u, learn_y = bu, by
+                    bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
+                learn_u, learn_y, followed = bu, by, bf
                 ratio = f"{score / best_score:.3g} times" if best_score > 0 else "more than"
                 note = (f"trial {k_next} is {ratio} the error of trial "
                         f"{state['trial']} (the best so far, {best_score:.4g} µm {what}; "
@@ -664,16 +477,33 @@ def _handle(args):
                     gains.previous = None
                 elif stall is not None:
                     gains.gains *= 0.5
-        u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
-        # the fade-in is not judged: the base drive's start, faded into the learning as the reference
-        u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
-        problems, shaped = [], []
-        if plant.amplifier is not None and plant.amplifier.from_records:
-            u_next, shaped = shape_drive(plant.amplifier, u_next, T)
-        elif plant.amplifier is not None:
-            problems = plant.amplifier.check(u_next, T, args.limits)
-            if problems:
-                u_next, _ = plant.amplifier.limit(u_next, T)
+        problems, shaped, learnt = [], [], None
+        if steady is not None and followed is not None and N - delay - steady >= 2 * P:
+            # a repeating reference: the compensator's reference corrected per harmonic, the
+            # drive the compensator's for it (from rest, its start-up consistent with the model)
+            e_al = target[:, :N - delay] - learn_y[:, delay:N]
+            c = reference_correction(target, followed, e_al, P, steady, gains)
+            c_full = c[:, (np.arange(N) - steady) % P]
+            corrected = Reference(ref.t, ref.signal + c_full,
+                                  ref.period_samples, ref.scale, ref.spec, ref.kind)
+            _, drive = compensate(plant, corrected, drive_kind_, args.inversion, fade * T,
+                                  args.limits, args.gain, args.check)
+            u_next, learnt = drive.inputs, drive.reference
+            problems, shaped = list(drive.problems), list(drive.shaped)
+            notes.append(f"note: the reference the compensator follows is learnt per harmonic of "
+                         f"the period (the drive is compensate's for it, from rest; its "
+                         f"{', '.join(learnt_names(model.output_names))} columns)")
+        else:
+            u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
+            # the fade-in is not judged: the base drive's start, faded into the learning as the
+            # reference
+            u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
+            if plant.amplifier is not None and plant.amplifier.from_records:
+                u_next, shaped = shape_drive(plant.amplifier, u_next, T)
+            elif plant.amplifier is not None:
+                problems = plant.amplifier.check(u_next, T, args.limits)
+                if problems:
+                    u_next, _ = plant.amplifier.limit(u_next, T)
         # no start-up step beyond the settled drive's largest (as compensate's default)
         u_next, more = limit_start_up(
             u_next, fade, ref.period_samples,
@@ -684,8 +514,13 @@ def _handle(args):
         if owned:
             print_err(f"hammerstein learn: error: {owned}")
             return 2
-        comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]\n"
-                   f"actuator {args.actuator}, sampling period {T:g} s, fade-in {fade} samples\n"
+        kind_text = "" if learnt is None or drive_kind_ is None else f", kind {drive_kind_}"
+        comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]"
+                   + ("" if learnt is None else
+                      f"; {', '.join(learnt_names(model.output_names))} [µm]: the learnt reference the "
+                      f"drive was computed for (fade-in included)")
+                   + f"\nactuator {args.actuator}{kind_text}, sampling period {T:g} s, "
+                   f"fade-in {fade} samples\n"
                    f"{START_NOTE}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else
                       f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "
@@ -697,7 +532,7 @@ def _handle(args):
         t = np.arange(N) * T
         with all_or_nothing():    # the drive and the history together, or none (a full disk)
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
-                               score, halvings, fingerprint)
+                               score, halvings, fingerprint, learnt, followed_now)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
                     if args.history else None)
     except catch() as exc:
@@ -709,23 +544,30 @@ def _handle(args):
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
-                   halvings, fingerprint):
+                   halvings, fingerprint, learnt=None, followed=None):
     """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
 
     The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
-    next trial must apply, :func:`_check_history`).
+    next trial must apply, :func:`_check_history`). ``learnt``: the reference ``u_next`` was
+    computed for (its ``<output>_learnt`` columns); ``followed``: that of ``u`` (kept with the
+    best trial).
     """
-    safe_write(args.out, signals_csv(t, dict(zip(model.input_names, u_next)), comment),
-               "drive file")
+    columns = dict(zip(model.input_names, u_next))
+    if learnt is not None:
+        columns.update(zip(learnt_names(model.output_names), learnt))
+    safe_write(args.out, signals_csv(t, columns, comment), "drive file")
     if not args.history:
         return None
     k = _write_history(args.history, list(model.output_names), rec, ref.scale)
     if gains is not None:
         _save_gains(args.history, gains)
     if best:
+        columns = {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))}
+        if followed is not None:
+            columns.update(zip(learnt_names(model.output_names), followed))
         safe_write(Path(args.history) / BEST_FILE, signals_csv(
-            t, {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))},
-            f"learn best trial {k}: the drive [V] and its measured response [µm]"),
+            t, columns, f"learn best trial {k}: the drive [V], its measured response [µm]"
+            + ("" if followed is None else " and the reference it was computed for [µm]")),
             "best trial file", root=args.history)
         state = {"trial": k, "score": score, "samples": t.size}
     _write_state(args.history, {**state, "halvings": halvings, "reference": fingerprint,

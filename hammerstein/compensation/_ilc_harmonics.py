@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.exceptions import CompensatorError
-from hammerstein.compensation._ilc_errors import _scipy_signal
+from hammerstein.compensation._ilc_errors import _scipy_signal, periodic_average, periodic_error
 
 
 class HarmonicGains:
@@ -198,3 +198,86 @@ def harmonic_base_gains(learning, period_samples, plant_dynamics=None, band_hz=N
         M = np.eye(p) - base[:, None, None] * np.linalg.solve(Gh, Gt)
         base[np.linalg.svd(M, compute_uv=False)[:, 0] >= 1.0] = 0.0
     return base
+
+
+def reference_correction(target, followed, error, period_samples, steady_from, gains):
+    """One period of the next correction of a repeating reference: learnt per harmonic, in the output.
+
+    The drive of a repeating reference is the compensator's for a corrected
+    reference ``y_r + c_k`` (``c_k`` periodic, faded in from rest with the
+    reference itself), so that every trial's drive starts at rest as the
+    first one and its start-up is the compensator's own, consistent with
+    the model's dynamics: no learnt start-up ends in a step or a burst that
+    rings the bending modes into the periods judged. The correction learns
+    per harmonic h of the period P on the period-averaged error,
+
+        ``C_{k+1,h} = C_{k,h} + g_h E_{k,h}``,
+
+    ``g_h`` from :class:`HarmonicGains` (noise floor, dead zone, halving
+    where an error grows). The compensator inverts the model's hysteresis,
+    creep and dynamics, so a change of its reference moves the model's
+    output by the same change: this is the inversion-based iterative
+    control of [1] with the inverse inside the compensator (the reference
+    of a feedforward compensator learnt, as e.g. in Bristow, Tharayil and
+    Alleyne's survey [2], Sec. "ILC with feedforward"; references in
+    :mod:`hammerstein.compensation.ilc`). It converges where the actuator's
+    response to a change of the reference, relative to the model's, keeps
+    ``|1 - g_h T_h| < 1`` at each harmonic.
+
+    Parameters
+    ----------
+    target : array_like, shape (p, n_samples)
+        The faded reference the trial is judged against [µm].
+    followed : array_like, shape (p, n_samples)
+        The reference the trial's drive was computed for (the faded
+        corrected reference, ``target`` for the first drive) [µm].
+    error : array_like, shape (p, n)
+        ``e = y_r - y`` of the trial, aligned on the drive [µm] (``n`` at
+        most ``n_samples``: the samples a measurement delay leaves).
+    period_samples : int
+        P.
+    steady_from : int
+        First sample of the repeating part (at least two periods before
+        the end of ``error``).
+    gains : HarmonicGains
+        The per-harmonic gains, updated by this trial's error.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, P)
+        ``c_{k+1}`` over one period, sample ``i`` at sample
+        ``steady_from + i`` (mod P) of the record [µm].
+
+    Raises
+    ------
+    CompensatorError
+        Less than two periods from ``steady_from`` on, or shapes that do
+        not match.
+
+    Examples
+    --------
+    A constant error of 1 µm on a reference followed as given, learnt at
+    gain 0.5: the correction is 0.5 µm.
+
+    >>> import numpy as np
+    >>> g = HarmonicGains(np.full(51, 0.5), threshold=0.0)
+    >>> r = np.zeros((1, 1000))
+    >>> c = reference_correction(r, r, np.ones((1, 1000)), 100, 200, g)
+    >>> c.shape, round(float(c.mean()), 6)
+    ((1, 100), 0.5)
+    """
+    r = np.atleast_2d(np.asarray(target, dtype=float))
+    f = np.atleast_2d(np.asarray(followed, dtype=float))
+    e = np.atleast_2d(np.asarray(error, dtype=float))
+    P, s0 = int(period_samples), int(steady_from)
+    if f.shape != r.shape or e.shape[0] != r.shape[0] or e.shape[1] > r.shape[1]:
+        raise CompensatorError(f"reference_correction: expected followed {r.shape} like the "
+                               f"target and an error of {r.shape[0]} rows and at most "
+                               f"{r.shape[1]} samples, found {f.shape} and {e.shape}")
+    if P < 2 or e.shape[1] - s0 < 2 * P:
+        raise CompensatorError(f"reference_correction: expected at least two periods of {P} "
+                               f"samples from sample {s0} on, found {e.shape[1] - s0} samples")
+    c = periodic_average(f - r, P, s0)[:, s0:s0 + P]
+    E, noise = periodic_error(e, P, s0)
+    g = gains.update(E, noise if np.isfinite(noise) else 0.0)
+    return c + np.fft.irfft(E * g * (P / 2.0), n=P, axis=1)

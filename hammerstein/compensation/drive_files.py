@@ -23,11 +23,15 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
-__all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples"]
+__all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_kind",
+           "optional_columns", "learnt_names", "followed_reference"]
 
 
 #: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
 DRIVE_MARK = "# hammerstein"
+
+#: Suffix of a ``learn`` drive's columns of the reference its drive was computed for.
+LEARNT_SUFFIX = "_learnt"
 
 
 def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file"):
@@ -172,12 +176,152 @@ def drive_fade_samples(path):
     OSError
         The file cannot be read.
     """
+    for line in _header(path):
+        m = re.search(r"fade-in (\d+) samples", line)
+        if m:
+            return int(m.group(1))
+    return None
+
+
+def _header(path, lines=20):
+    """The comment lines that open a file (at most ``lines``)."""
+    out = []
     with open(path, encoding="utf-8", errors="replace") as fh:
-        for _ in range(20):
+        for _ in range(lines):
             line = fh.readline()
             if not line.startswith("#"):
                 break
-            m = re.search(r"fade-in (\d+) samples", line)
-            if m:
-                return int(m.group(1))
-    return None
+            out.append(line)
+    return out
+
+
+def drive_kind(path):
+    """The command and the compensator kind a drive file's header records.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+
+    Returns
+    -------
+    command : str or None
+        ``'compensate'`` or ``'learn'`` (the header's first line), else None.
+    kind : str or None
+        The ``kind K`` the header states, else None.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    command = kind = None
+    for i, line in enumerate(_header(path)):
+        if i == 0:
+            m = re.match(re.escape(DRIVE_MARK) + r" (compensate|learn) ", line)
+            command = m.group(1) if m else None
+        m = re.search(r"\bkind ([a-z-]+)", line)
+        if m and kind is None:
+            kind = m.group(1)
+    return command, kind
+
+
+def optional_columns(path, names, sampling_period=None, what="file"):
+    """Named columns of a CSV file, or None when one of them is not there.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    names : list of str
+        Column names.
+    sampling_period : float, optional
+        Expected T [s] (:func:`read_signals`).
+    what : str
+        Name of the file in messages.
+
+    Returns
+    -------
+    numpy.ndarray, shape (len(names), n_samples), or None
+
+    Raises
+    ------
+    DataFileError
+        The columns are there but not readable (:func:`read_signals`).
+    OSError
+        The file cannot be read.
+    """
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        header = next((line for line in (fh.readline() for _ in range(200))
+                       if line and not line.startswith("#")), "")
+    columns = [c.strip() for c in header.split(",")]
+    if not all(n in columns for n in names):
+        return None
+    _, values, _ = read_signals(path, list(names), "t", None, sampling_period, what)
+    return values
+
+
+def learnt_names(outputs):
+    """The columns of a drive file that hold the reference its drive was computed for.
+
+    Parameters
+    ----------
+    outputs : list of str
+        Output names.
+
+    Returns
+    -------
+    list of str
+        ``<output>_learnt``.
+
+    Examples
+    --------
+    >>> learnt_names(["x", "y"])
+    ['x_learnt', 'y_learnt']
+    """
+    return [f"{o}{LEARNT_SUFFIX}" for o in outputs]
+
+
+def followed_reference(path, outputs, target, sampling_period=None):
+    """The reference the drive in a drive file was computed for, and the compensator kind.
+
+    A ``learn`` drive of a repeating reference records it in its
+    ``<output>_learnt`` columns; a ``compensate`` drive followed the faded
+    reference ``target``, or the shaped one it records in its
+    ``<output>_shaped`` columns. Another drive (no such header or columns)
+    has none: its start-up is not a compensator's.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The drive file.
+    outputs : list of str
+        Output names.
+    target : numpy.ndarray, shape (p, n_samples)
+        The faded reference [µm].
+    sampling_period : float, optional
+        Expected T [s].
+
+    Returns
+    -------
+    followed : numpy.ndarray, shape (p, n_samples), or None
+        [µm].
+    kind : str or None
+        The kind the header states (:func:`drive_kind`).
+
+    Raises
+    ------
+    DataFileError
+        Columns that are not readable, or of another length than ``target``.
+    OSError
+        The file cannot be read.
+    """
+    command, kind = drive_kind(path)
+    f = optional_columns(path, learnt_names(outputs), sampling_period, "--drive")
+    if f is None and command == "compensate":
+        f = optional_columns(path, [f"{o}_shaped" for o in outputs], sampling_period, "--drive")
+        if f is None:
+            f = np.asarray(target, dtype=float)
+    if f is not None and f.shape != np.shape(target):
+        raise DataFileError(f"--drive: its learnt reference has {f.shape[1]} samples; expected "
+                            f"the reference's {np.shape(target)[1]}")
+    return f, kind

@@ -55,6 +55,14 @@ where an identified model can be much flatter than the actuator), the
 drive's step is shortened so that no gain below that floor is inverted
 (:meth:`IterativeLearning.limit_update`).
 
+For a periodic reference, ``hammerstein learn`` learns instead the
+reference that the feedforward compensator is given,
+``y_r + c_{k+1}`` with ``C_{k+1,h} = C_{k,h} + g_h E_{k,h}`` per harmonic
+(:func:`reference_correction`). The next drive is that compensator's drive,
+faded in from rest. The compensator holds the same inverse
+``Gamma^c G^-1``, so each drive's start-up is consistent with the model.
+The scenarios' :class:`LearningCompensator` learns the drive as above.
+
 An optional integer ``delay`` [samples] advances the measurement before
 learning (the measured response lags the drive by a transport delay the
 model does not have, e.g. the sensor's or the data acquisition's):
@@ -84,16 +92,17 @@ from hammerstein.simulation import ChainResult
 from hammerstein.compensation._ilc_errors import (EXTENSION, ConvergenceCondition, IterationRecord,  # noqa: F401
                                                   error_summary, estimate_delay, periodic_average,
                                                   periodic_error, periodic_snr, repeating_from)
-from hammerstein.compensation._ilc_harmonics import HarmonicGains, harmonic_base_gains
+from hammerstein.compensation._ilc_harmonics import (HarmonicGains, harmonic_base_gains,
+                                                     reference_correction)
 from hammerstein.compensation._ilc_law import IterativeLearning
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
            "estimate_delay", "error_summary", "periodic_average", "periodic_error", "periodic_snr",
-           "HarmonicGains", "harmonic_base_gains", "repeating_from"]
+           "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from"]
 
 for _name in ("IterativeLearning", "ConvergenceCondition", "IterationRecord", "estimate_delay",
               "error_summary", "periodic_average", "periodic_error", "periodic_snr",
-              "HarmonicGains", "harmonic_base_gains", "repeating_from"):
+              "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from"):
     globals()[_name].__module__ = __name__      # documented (and pickled) as this module's
 del _name
 

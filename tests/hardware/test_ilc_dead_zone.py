@@ -19,7 +19,7 @@ Expectations, derived independently of the code:
 import numpy as np
 import pytest
 
-from hammerstein.cli import learn as learn_cli
+from hammerstein.cli import _learn_history as learn_cli
 from hammerstein.compensation.ilc import HarmonicGains
 from hammerstein.exceptions import CompensatorError
 

@@ -1,0 +1,247 @@
+"""The files of a ``hammerstein learn --history DIR`` (behind :mod:`hammerstein.cli.learn`).
+
+A history belongs to one learning: ``history.csv`` (each trial's max and
+RMS error per output) and ``convergence.png``, ``settled.csv`` (each
+trial's settled errors), ``harmonics.csv`` (the per-harmonic gains),
+``best-trial.csv`` (the best trial's drive, measured response and the
+reference its drive was computed for) and ``learning.csv`` (the state: the
+best trial, the gain halvings, the reference's fingerprint and samples of
+the last drive written). Every file is written through
+:func:`hammerstein.core.files.safe_write` under the directory's mark.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import numpy as np
+
+from hammerstein.compensation.drive import read_signals
+from hammerstein.compensation.drive_files import learnt_names, optional_columns
+from hammerstein.core.files import bounded_read_text, safe_write
+from hammerstein.exceptions import DataFileError
+from hammerstein.report.figures import save
+from hammerstein.report.ilc_figure import convergence_figure
+
+
+HISTORY_MARK = ".hammerstein-history"
+
+
+def history_rows(history_dir):
+    """The rows of ``DIR/history.csv``.
+
+    Parameters
+    ----------
+    history_dir : str or pathlib.Path
+        The ``--history`` directory.
+
+    Returns
+    -------
+    list of tuple
+        ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
+        there is no history yet.
+    """
+    path = Path(history_dir) / "history.csv"
+    if not path.is_file():
+        return []
+    rows = []
+    for line in path.read_text(encoding="utf-8").splitlines()[1:]:
+        k, out, mx, rms = line.split(",")[:4]
+        rows.append((int(k), out, float(mx), float(rms)))
+    return rows
+
+
+def _write_history(history, names, rec, scale):
+    d = Path(history)
+    if d.exists() and any(d.iterdir()) and not (d / HISTORY_MARK).exists():
+        raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
+                            f"choose an empty or new directory")
+    d.mkdir(parents=True, exist_ok=True)
+    if not (d / HISTORY_MARK).exists():
+        safe_write(d / HISTORY_MARK, "", "history mark", root=d)
+    rows = history_rows(d)
+    k = 1 + max((r[0] for r in rows), default=-1)
+    rows += [(k, n, float(rec.max_error[i]), float(rec.rms_error[i])) for i, n in enumerate(names)]
+    text = "iteration,output,max_error_um,rms_error_um\n" + "".join(
+        f"{a},{b},{c!r},{e!r}\n" for a, b, c, e in rows)
+    safe_write(d / "history.csv", text, "history file", root=d)
+    its = sorted({r[0] for r in rows})
+    mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
+    rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
+    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale)
+    safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
+    return k
+
+
+GAINS_FILE = "harmonics.csv"
+
+
+SETTLED_FILE = "settled.csv"
+
+
+BEST_FILE = "best-trial.csv"
+
+
+STATE_FILE = "learning.csv"
+
+
+#: samples of the last drive kept in the state file, per input (the --drive check)
+DRIVE_SAMPLES = 256
+
+
+#: a --drive matches a drive of the history within this fraction of that drive's span per
+#: input (a drive re-written by the acquisition, or quantised by a 16-bit converter, passes)
+DRIVE_TOLERANCE = 1e-3
+
+
+def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin):
+    """Append a trial's settled errors to ``DIR/settled.csv``; the previous trial's if it was lower.
+
+    Returns
+    -------
+    tuple or None
+        ``(trial, judged error [µm])`` of the previous trial when this
+        trial's judged error exceeds it by more than ``margin`` (the noise),
+        else None.
+    """
+    path = Path(history_dir) / SETTLED_FILE
+    head = "trial,settled_max_euclidean_um,settled_rms_euclidean_um,judged_um\n"
+    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() else head
+    rows = [line.split(",") for line in text.splitlines()[1:] if line.strip()]
+    prev = None
+    if rows:
+        try:
+            prev = (int(rows[-1][0]), float(rows[-1][3]))
+        except (IndexError, ValueError):
+            prev = None
+    text = text + f"{trial},{settled_max!r},{settled_rms!r},{float(score)!r}\n"
+    safe_write(path, text, "settled errors file")
+    return prev if prev is not None and score > prev[1] + margin else None
+
+
+def _read_state(history_dir, n_samples):
+    """``{trial, score, halvings}`` of the best trial in ``DIR/learning.csv``, or None.
+
+    None when the directory is not one ``learn`` made, has no state yet, or
+    holds the state of a record of another length (another reference).
+    """
+    d = Path(history_dir)
+    path = d / STATE_FILE
+    if not path.is_file() or not (d / HISTORY_MARK).exists() or not (d / BEST_FILE).is_file():
+        return None
+    values = {}
+    for line in bounded_read_text(path, "data", "learning state file").splitlines()[1:]:
+        if "," in line:
+            key, value = line.split(",", 1)
+            values[key.strip()] = value.strip()
+    try:
+        state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
+                 "halvings": int(values["halvings"]), "samples": int(values["samples"]),
+                 "reference": values.get("reference_sha256"),
+                 "drive": (None if values.get("last_drive") is None else
+                           np.array(values["last_drive"].split(), float))}
+    except (KeyError, ValueError):
+        raise DataFileError(f"--history: {path} is not a learning state file written by "
+                            f"hammerstein learn; choose a new --history directory") from None
+    return state if state["samples"] == n_samples else None
+
+
+def _fingerprint(target):
+    """SHA-256 of the faded reference [µm] (float64, C order): which learning a history is."""
+    return hashlib.sha256(np.ascontiguousarray(target, dtype=np.float64).tobytes()).hexdigest()
+
+
+def _drive_samples(u):
+    """The samples of a drive (m, N) the state keeps: ``DRIVE_SAMPLES`` per input, flat."""
+    idx = np.linspace(0, u.shape[1] - 1, min(DRIVE_SAMPLES, u.shape[1])).round().astype(int)
+    return np.asarray(u, float)[:, idx].ravel(), idx
+
+
+def _same_drive(u, kept):
+    """True when the samples ``kept`` (as :func:`_drive_samples`) are those of the drive u."""
+    mine, _ = _drive_samples(u)
+    if kept is None or kept.size != mine.size:
+        return False
+    m = u.shape[0]
+    a, b = mine.reshape(m, -1), kept.reshape(m, -1)
+    span = np.ptp(b, axis=1) + 1e-9
+    return bool(np.all(np.max(np.abs(a - b), axis=1) <= DRIVE_TOLERANCE * span))
+
+
+def _check_history(history_dir, state, fingerprint, u, best_u):
+    """Refuse a trial that does not belong to the history's learning (a DataFileError).
+
+    ``fingerprint`` is the faded reference's (:func:`_fingerprint`); ``best_u`` is called
+    for the best trial's drive (m, N) [V] when the last drive differs.
+
+    The reference (faded as the drive was) must have the history's fingerprint, and the
+    applied drive must be the last one written or the best trial's (re-measured).
+    """
+    if state is None:
+        return
+    d = Path(history_dir)
+    if state["reference"] is not None and state["reference"] != fingerprint:
+        raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
+                            f"({STATE_FILE}); choose a new --history directory for this one")
+    if state["drive"] is None or _same_drive(u, state["drive"]):
+        return
+    best_u = best_u()
+    if best_u is not None and _same_drive(u, _drive_samples(best_u)[0]):
+        return
+    raise DataFileError(f"--drive: not the drive the last trial of {d} wrote, nor its best "
+                        f"trial's ({BEST_FILE}): this history belongs to another learning (another "
+                        f"actuator, identification or first drive); choose a new --history "
+                        f"directory, or apply the last drive written")
+
+
+def _write_state(history_dir, state):
+    text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
+        ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
+        ("samples", "samples")))
+    text += f"reference_sha256,{state['reference']}\n"
+    text += "last_drive," + " ".join(repr(float(v)) for v in state["drive"]) + "\n"
+    safe_write(Path(history_dir) / STATE_FILE, text, "learning state file", root=history_dir)
+
+
+def _read_best(history_dir, model, u_shape, y_shape, n_samples):
+    """The best trial's drive, measured response and learnt reference (``DIR/best-trial.csv``).
+
+    The learnt reference (``<output>_learnt`` columns, the reference the drive was computed
+    for) is None in a file without them.
+    """
+    path = Path(history_dir) / BEST_FILE
+    _, bu, _ = read_signals(path, list(model.input_names), "t", None, None, "--history best trial")
+    _, by, _ = read_signals(path, list(model.output_names), "t", None, None, "--history best trial")
+    if bu.shape != u_shape or by.shape != y_shape:
+        raise DataFileError(f"--history: {BEST_FILE} does not match the drive's "
+                            f"{n_samples} samples; choose a new --history directory")
+    bf = optional_columns(path, learnt_names(model.output_names), None, "--history best trial")
+    return bu, by, (bf if bf is not None and bf.shape == y_shape else None)
+
+
+def _restore_gains(history_dir, gains):
+    """The per-harmonic gains of the previous trials (``DIR/harmonics.csv``), when they match."""
+    path = Path(history_dir) / GAINS_FILE
+    if not path.is_file() or not (Path(history_dir) / HISTORY_MARK).exists():
+        return
+    rows = [line.split(",") for line in bounded_read_text(path, "data", "harmonics file").splitlines()[1:]
+            if line.strip()]
+    if len(rows) != gains.base.size:
+        return                          # another reference: start afresh
+    table = np.array([[float(v) for v in r[1:4]] for r in rows])
+    gains.gains = table[:, 0].copy()
+    gains.previous = table[:, 1].copy()
+    gains.growths = table[:, 2].astype(int)
+    gains.converged = any(len(r) > 4 and r[4].strip() == "1" for r in rows)   # older files: 4 columns
+
+
+def _save_gains(history_dir, gains):
+    prev = gains.previous if gains.previous is not None else np.zeros(gains.gains.shape)
+    growths = getattr(gains, "growths", np.zeros(gains.gains.shape, dtype=int))
+    done = int(bool(gains.converged))
+    text = "harmonic,gain,previous_error_um,growths,converged\n" + "".join(
+        f"{h},{float(g)!r},{float(e)!r},{int(n)},{done}\n"
+        for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
+    safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file", root=history_dir)
+
