@@ -29,12 +29,12 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
-from hammerstein.compensation.drive import (MIN_FADE_S, apply_amplifier, hardware_drive, rest_output,
-                                    signals_csv, starts_at_rest)
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier, hardware_drive,
+                                            rest_output, signals_csv, starts_at_rest)
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.shaping import first_mode_hz, mode_note
+from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_note
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -81,7 +81,8 @@ def add_parser(subparsers):
                    help="inverse of the dynamics (kind hammerstein; default zpetc)")
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
                    help="fade-in from rest [s] (0 only for a reference that starts at rest; "
-                        f"default: a duration, at least one period and {MIN_FADE_S:g} s, "
+                        f"default: a duration, at least one period, {MIN_FADE_S:g} s and "
+                        f"{FADE_DECAYS:g} decay times of the slowest identified bending mode, "
                         "lengthened until the drive never steps faster while fading in than "
                         "once settled, nor than the amplifier's slew rate)")
     p.add_argument("--limits", choices=list(LIMITS), default="error",
@@ -162,7 +163,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
                            plant.amplifier, limits, rest=rest_output(plant.hysteresis, plant.creep),
                            first_mode=first_mode_hz(linear[0], T), predict=predict,
-                           names=plant.hysteresis.output_names)
+                           names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T))
     note = mode_note(linear, T, drive.reference, reference.period_samples)
     if note:
         drive.notes.append(note)

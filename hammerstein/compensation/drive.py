@@ -57,7 +57,7 @@ from hammerstein.exceptions import CompensatorError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
-           "settled_step", "keep_start", "drive_fade_samples", "limit_start_up", "rest_output", "hardware_fade",
+           "FADE_DECAYS", "settled_step", "keep_start", "drive_fade_samples", "limit_start_up", "rest_output", "hardware_fade",
            "read_signals", "signals_csv", "DRIVE_MARK"]
 
 
@@ -495,6 +495,13 @@ def apply_amplifier(amplifier: Amplifier | None, inputs, sampling_period):
 #: Shortest default fade-in of the hardware commands [s]: 20 ms, ten periods of a 500 Hz first
 #: mode (a fade is a duration, never a sample: a file reference has no period to fade over)
 MIN_FADE_S = 0.02
+#: the default fade-in of the hardware commands lasts at least this many decay times of the slowest
+#: identified bending mode (:func:`hammerstein.compensation.shaping.mode_decay_s`), at most half
+#: the record: the modes then follow the fade's envelope instead of ringing at its end (measured
+#: on outside actuators whose slowest mode decays in 15-19 ms: a 20 ms fade left a start-up at
+#: the mode in the first periods after it, 0.16-0.17 % of a 30 µm circle at 100 Hz once learnt,
+#: three times the settled error)
+FADE_DECAYS = 4.0
 #: relative tolerance of the step comparisons of :func:`hardware_drive`
 _STEP_TOL = 1e-6
 
@@ -661,15 +668,16 @@ def rest_output(model, creep=None):
 
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
-                   first_mode=None, predict=None, names=None):
+                   first_mode=None, predict=None, names=None, mode_decay=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
     same rules, on top of :func:`drive_signal`:
 
     1. **the fade-in is a duration.** The default starts at
-       ``max(one period, MIN_FADE_S)`` (a file reference without
-       ``--period`` has no period: :data:`MIN_FADE_S` alone), also for a
+       ``max(one period, MIN_FADE_S, FADE_DECAYS mode_decay)`` (a file
+       reference without ``--period`` has no period: the other two; the
+       modes' term at most half the record), also for a
        reference that starts at rest (its first velocity is faded in too),
        and is doubled (up to the record's length) until no step of the
        drive before the end of the fade plus one period (from rest)
@@ -724,6 +732,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         rest, for the reference shaping's range stage.
     names : sequence of str, optional
         Output names for the shaping notes.
+    mode_decay : float, optional
+        The identified bending modes' longest decay time [s]
+        (:func:`hammerstein.compensation.shaping.mode_decay_s`), for the
+        default fade-in; None (no modes) leaves it out.
 
     Returns
     -------
@@ -773,6 +785,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
 
     if fade_samples is None:
         n = int(min(max(P, int(np.ceil(MIN_FADE_S / T - 1e-9)), 1), N))
+        if mode_decay is not None:
+            n = max(n, int(min(np.ceil(FADE_DECAYS * mode_decay / T - 1e-9), N // 2)))
         cap = max(n, N // 4)
         while True:
             u, faded = run(n)
