@@ -18,8 +18,8 @@ from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
 from hammerstein.cli.main import main
-from hammerstein.compensation.drive import (MIN_FADE_S, DriveStream, drive_fade_samples, drive_signal,
-                                    hardware_fade, read_signals)
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, DriveStream, drive_fade_samples,
+                                            drive_signal, hardware_drive, hardware_fade, read_signals)
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.runner import run_scenario
@@ -154,6 +154,25 @@ def _cli(*args, cwd):
     with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main(list(args))
     return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
+
+
+@pytest.mark.parametrize("decay, expected", [
+    (None, None),            # no modes: the period / MIN_FADE_S rule alone
+    (0.03, 2400),            # four decay times, 0.12 s at T = 50 µs
+    (0.1, 3000),             # 0.4 s: at most half the 0.3 s record
+])
+def test_default_fade_lasts_four_decay_times_of_the_slowest_mode(preset_plant, decay, expected):
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    ref = circle(6000)
+    base = hardware_drive(comp, ref, T, 200).fade_samples
+    d = hardware_drive(comp, ref, T, 200, mode_decay=decay)
+    assert base * T >= MIN_FADE_S and base < 2400
+    if expected is None:
+        assert d.fade_samples == base
+    else:
+        assert FADE_DECAYS == 4.0 and d.fade_samples == expected
+        assert np.all(d.inputs[:, 0] == 0.0)
+        np.testing.assert_allclose(d.reference, hardware_fade(ref, expected), atol=1e-12)
 
 
 def test_compensate_writes_the_drive_and_refuses_what_the_amplifier_cannot(tmp_path, preset_plant,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hammerstein.compensation.shaping import (first_mode_hz, hann_average, limit_excess,
-                                              shape_reference)
+                                              mode_decay_s, shape_reference)
 from hammerstein.models.amplifier import amplifier_from_table
 
 
@@ -41,6 +41,25 @@ def test_first_mode_of_two_modes_and_a_lag():
     assert first_mode_hz(A, T) == pytest.approx(300.0, rel=1e-12)
     assert first_mode_hz(np.zeros((0, 0)), T) is None
     assert first_mode_hz([[0.9]], T) is None
+
+
+def test_mode_decay_is_one_over_zeta_omega_of_the_slowest_mode_and_ignores_real_poles():
+    """tau = 1 / (zeta omega_n): modes at 700 Hz (zeta 0.05) and 300 Hz (zeta 0.02), a 0.1 s lag."""
+    T = 5e-5
+    blocks, taus = [], []
+    for f, zeta in ((700.0, 0.05), (300.0, 0.02)):
+        w = 2 * np.pi * f
+        s = -zeta * w + 1j * w * np.sqrt(1 - zeta ** 2)
+        z = np.exp(T * s)
+        blocks.append([[z.real, -z.imag], [z.imag, z.real]])
+        taus.append(1.0 / (zeta * w))
+    A = np.zeros((5, 5))
+    A[:2, :2], A[2:4, 2:4], A[4, 4] = blocks[0], blocks[1], np.exp(-T / 0.1)
+    assert mode_decay_s(A, T) == pytest.approx(max(taus), rel=1e-9)      # 26.5 ms, not the lag's
+    assert mode_decay_s(A[:2, :2], T) == pytest.approx(taus[0], rel=1e-9)
+    assert mode_decay_s(np.zeros((0, 0)), T) is None
+    assert mode_decay_s([[0.9]], T) is None                              # a lag is not a mode
+    assert mode_decay_s([[0.0, -1.0], [1.0, 0.0]], T) == np.inf         # undamped
 
 
 def test_a_step_beyond_the_slew_rate_becomes_an_s_curve_within_it():
