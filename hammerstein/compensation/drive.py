@@ -497,10 +497,10 @@ def apply_amplifier(amplifier: Amplifier | None, inputs, sampling_period):
 MIN_FADE_S = 0.02
 #: the default fade-in of the hardware commands lasts at least this many decay times of the slowest
 #: identified bending mode (:func:`hammerstein.compensation.shaping.mode_decay_s`), at most half
-#: the record: the modes then follow the fade's envelope instead of ringing at its end (measured
-#: on outside actuators whose slowest mode decays in 15-19 ms: a 20 ms fade left a start-up at
-#: the mode in the first periods after it, 0.16-0.17 % of a 30 µm circle at 100 Hz once learnt,
-#: three times the settled error)
+#: the record: the modes then follow the fade's envelope more closely and ring less at its end
+#: (measured on outside actuators whose slowest mode decays in 15-19 ms: fades of 20-50 ms left
+#: the mode ringing into the first periods after them, 0.13-0.17 % of a 30 µm circle at 100 Hz
+#: once learnt, three times the settled error; with 59-78 ms, 0.085-0.145 %)
 FADE_DECAYS = 4.0
 #: relative tolerance of the step comparisons of :func:`hardware_drive`
 _STEP_TOL = 1e-6
