@@ -57,8 +57,8 @@ from hammerstein.exceptions import CompensatorError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
-           "FADE_DECAYS", "settled_step", "keep_start", "drive_fade_samples", "limit_start_up", "rest_output", "hardware_fade",
-           "read_signals", "signals_csv", "DRIVE_MARK"]
+           "FADE_DECAYS", "settled_step", "keep_start", "drive_fade_samples", "limit_start_up",
+           "rest_output", "hardware_fade", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 
 def starts_at_rest(reference, rest=None, atol=1e-9):

@@ -42,8 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ShapedReference", "first_mode_hz", "mode_decay_s", "faster_than_mode", "limit_excess", "hann_average",
-           "mode_amplification", "mode_note", "shape_reference", "shaping_notes", "time_intervals"]
+__all__ = ["ShapedReference", "first_mode_hz", "mode_decay_s", "faster_than_mode", "limit_excess",
+           "hann_average", "mode_amplification", "mode_note", "shape_reference", "shaping_notes",
+           "time_intervals"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
