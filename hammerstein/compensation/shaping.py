@@ -151,24 +151,26 @@ def mode_decay_s(A, sampling_period):
     >>> round(mode_decay_s(A, T), 9)
     0.02
     """
-    A = np.atleast_2d(np.asarray(A, dtype=float))
-    if A.size == 0:
-        return None
-    z = np.linalg.eigvals(A)
-    z = z[np.abs(np.angle(z)) > 1e-9 * 2 * np.pi * float(sampling_period)]
+    z = _oscillatory_poles(A, sampling_period)
     if z.size == 0:
         return None
     rate = -np.log(np.abs(z)) / float(sampling_period)        # |Re s| = -ln|z| / T
     return float(np.inf) if np.any(rate <= 0) else float(1.0 / rate.min())
 
 
-def _pole_frequencies(A, sampling_period):
-    """Frequencies [Hz] (n_modes,) of the oscillatory discrete poles, ``|arg z| / (2 pi T)``."""
+def _oscillatory_poles(A, sampling_period):
+    """The discrete poles ``z`` (n_modes,) with a frequency ``|arg z| / (2 pi T)`` above 1e-9 Hz."""
     A = np.atleast_2d(np.asarray(A, dtype=float))
     if A.size == 0:
-        return np.zeros(0)
-    f = np.abs(np.angle(np.linalg.eigvals(A))) / (2 * np.pi * float(sampling_period))
-    return f[f > 1e-9]
+        return np.zeros(0, dtype=complex)
+    z = np.linalg.eigvals(A)
+    return z[np.abs(np.angle(z)) / (2 * np.pi * float(sampling_period)) > 1e-9]
+
+
+def _pole_frequencies(A, sampling_period):
+    """Frequencies [Hz] (n_modes,) of the oscillatory discrete poles, ``|arg z| / (2 pi T)``."""
+    z = _oscillatory_poles(A, sampling_period)
+    return np.abs(np.angle(z)) / (2 * np.pi * float(sampling_period))
 
 
 def mode_amplification(matrices, sampling_period, frequencies_hz):
