@@ -10,6 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from hammerstein.compensation.shaping import RESONANT_DAMPING
+
+
 def _line(label, name, rep, unit):
     return (f"{label}{name}: RMS {rep['rms']:.4g} {unit} = {rep['rms_percent']:.3g} % of the "
             f"{rep['range']:.4g} {unit} range, max |error| {rep['max_abs']:.4g} {unit} "
@@ -165,8 +168,10 @@ def dynamics_report_lines(summary, output_names, input_names):
         lines.append(text)
     for i, mode in enumerate(s["modes"], start=1):
         share = ", ".join(f"{n} {100 * v:.0f} %" for n, v in mode["axis_share"].items())
+        lag = ("; no resonance: a lag, not a bending mode (first mode, fade-in and shaping leave "
+               "it out)" if mode["damping_ratio"] >= RESONANT_DAMPING else "")
         lines.append(f"  mode {i}: {mode['frequency_hz']:.5g} Hz, damping "
-                     f"{mode['damping_ratio']:.4g} ({share})")
+                     f"{mode['damping_ratio']:.4g} ({share}{lag})")
     lines.append(f"  G(0) unconstrained {_matrix_text(s['dc_gain_unconstrained'])} (rows "
                  f"{','.join(output_names)}, columns {','.join(input_names)}); "
                  + ("fitted with G(0) = I: the static gain belongs to the hysteresis model, "

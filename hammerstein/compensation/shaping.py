@@ -42,9 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ShapedReference", "first_mode_hz", "mode_decay_s", "faster_than_mode", "limit_excess",
-           "hann_average", "mode_amplification", "mode_note", "shape_reference", "shaping_notes",
-           "time_intervals"]
+__all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
+           "faster_than_mode", "limit_excess", "hann_average", "mode_amplification", "mode_note",
+           "shape_reference", "shaping_notes", "time_intervals"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
@@ -54,6 +54,12 @@ MIN_GAIN = 0.1
 #: (an identified model flattens near the edge of its records, where its inverse asks much more
 #: voltage for a little more displacement) until the drive is within the range
 RANGE_MARGINS = (1.0, 0.995, 0.98, 0.95, 0.9)
+#: a complex pole pair damped at least this much (``zeta >= 1 / sqrt(2)``) has no resonance: its
+#: gain never exceeds its static gain (a second-order lag's magnitude peaks only for
+#: ``zeta < 1 / sqrt(2)``). An identified pair that damped (e.g. the residual of a hysteresis
+#: model the records do not fit, at 88 Hz and ``zeta = 0.998``, whose damped frequency is 6 Hz)
+#: is a lag, not a bending mode: :func:`first_mode_hz` and :func:`mode_decay_s` leave it out
+RESONANT_DAMPING = float(1.0 / np.sqrt(2.0))
 #: :func:`mode_note` names a harmonic of the reference that the linear part passes at least this
 #: many times its static gain
 MODE_NOTE_GAIN = 2.0
@@ -97,7 +103,9 @@ def first_mode_hz(A, sampling_period):
     """Lowest oscillatory mode of a discrete linear part [Hz], or None.
 
     The frequency of a discrete pole ``z`` is ``|arg z| / (2 pi T)`` (the
-    continuous pole ``s = log(z) / T``); real poles (creep, lags) have none.
+    continuous pole ``s = log(z) / T``); real poles (creep, lags) have none,
+    and a pair damped at ``zeta >= 1 / sqrt(2)`` (:data:`RESONANT_DAMPING`: no
+    resonance) is a lag too.
 
     Parameters
     ----------
@@ -129,7 +137,8 @@ def mode_decay_s(A, sampling_period):
     A mode's free response decays as ``exp(-t / tau)`` with ``tau = 1 /
     |Re s| = 1 / (zeta omega_n)``, ``s = log(z) / T`` its continuous pole
     (e.g. 14.7 ms for a 313 Hz mode damped at 0.035). Real poles (creep,
-    lags) are not modes and are left out.
+    lags) and pairs damped at ``zeta >= 1 / sqrt(2)`` (no resonance) are
+    not modes and are left out.
 
     Parameters
     ----------
@@ -159,12 +168,16 @@ def mode_decay_s(A, sampling_period):
 
 
 def _oscillatory_poles(A, sampling_period):
-    """The discrete poles ``z`` (n_modes,) with a frequency ``|arg z| / (2 pi T)`` above 1e-9 Hz."""
+    """The discrete poles ``z`` (n_modes,) of the bending modes: a frequency ``|arg z| / (2 pi T)``
+    above 1e-9 Hz and a damping ``zeta = -Re s / |s|`` (``s = log(z) / T``) below
+    :data:`RESONANT_DAMPING`."""
     A = np.atleast_2d(np.asarray(A, dtype=float))
     if A.size == 0:
         return np.zeros(0, dtype=complex)
     z = np.linalg.eigvals(A)
-    return z[np.abs(np.angle(z)) / (2 * np.pi * float(sampling_period)) > 1e-9]
+    z = z[np.abs(np.angle(z)) / (2 * np.pi * float(sampling_period)) > 1e-9]
+    s = np.log(z) / float(sampling_period)
+    return z[-s.real < RESONANT_DAMPING * np.abs(s)]
 
 
 def _pole_frequencies(A, sampling_period):

@@ -62,6 +62,32 @@ def test_mode_decay_is_one_over_zeta_omega_of_the_slowest_mode_and_ignores_real_
     assert mode_decay_s([[0.0, -1.0], [1.0, 0.0]], T) == np.inf         # undamped
 
 
+def _pair(f, zeta, T):
+    """The discrete 2 x 2 block of a pole pair at natural frequency f [Hz], damping zeta."""
+    w = 2 * np.pi * f
+    z = np.exp(T * (-zeta * w + 1j * w * np.sqrt(1 - zeta ** 2)))
+    return [[z.real, -z.imag], [z.imag, z.real]]
+
+
+@pytest.mark.parametrize("zeta, is_mode", [(0.05, True), (0.7, True), (0.71, False), (0.998, False)])
+def test_a_pole_pair_without_resonance_is_not_a_bending_mode(zeta, is_mode):
+    """|G| of a second-order pair peaks above its static gain only for zeta < 1 / sqrt(2):
+    a pair at 88 Hz damped at 0.998 (damped frequency 5.6 Hz) is a lag, and the first mode
+    is then the 520 Hz one, as its decay time is."""
+    T = 5e-5
+    w = np.logspace(0, 4, 4001) * 2 * np.pi                     # the closed form's own peak
+    gain = 1.0 / np.abs(1.0 - (w / (2 * np.pi * 88.0)) ** 2 + 2j * zeta * w / (2 * np.pi * 88.0))
+    assert (gain.max() > 1.0 + 1e-9) == is_mode
+    A = np.zeros((4, 4))
+    A[:2, :2], A[2:, 2:] = _pair(88.0, zeta, T), _pair(520.0, 0.05, T)
+    damped = 88.0 * np.sqrt(1 - zeta ** 2)
+    assert first_mode_hz(A, T) == pytest.approx(damped if is_mode else 520.0 * np.sqrt(1 - 0.05 ** 2),
+                                                rel=1e-9)
+    slowest = 1.0 / (zeta * 2 * np.pi * 88.0) if is_mode else 0.0
+    assert mode_decay_s(A, T) == pytest.approx(max(slowest, 1.0 / (0.05 * 2 * np.pi * 520.0)),
+                                               rel=1e-9)
+
+
 def test_a_step_beyond_the_slew_rate_becomes_an_s_curve_within_it():
     """A unit-gain 'compensator' behind a 1 V/sample slew limit: a 6 V step is spread."""
     amp = _amp(slew=1.0)
