@@ -49,10 +49,17 @@ Every file and drive is played from rest in the demagnetised state (what
 the excitation's ``demagnetise.csv`` leaves), the creep and the modes
 settled there.
 
+With ``--bouc-wen`` every member's hysteresis is a Bouc-Wen loop per input
+(:class:`BoucWenActuator`, modes, creep and noise drawn as the others'): a
+class whose memory is neither Preisach's (no wiping out: an off-centre
+cycle's loop relaxes, cycle after cycle, towards one centred on the
+hysteretic variable's zero) nor a play's.
+
 Usage (2-4 minutes per actuator on two cores)::
 
     python benchmarks/route_defaults.py --quick      # 3 actuators, 3 circles, 1 raster
     python benchmarks/route_defaults.py              # 20 actuators, 9 circles, 1 raster
+    python benchmarks/route_defaults.py --bouc-wen --actuators 10
 """
 
 from __future__ import annotations
@@ -182,6 +189,79 @@ class DomainPreisach(OutsideActuator):
         return _settled(self, self.hysteresis(u), noise, rng)
 
 
+@numba.njit(cache=True)
+def _bouc_wen(u, A, beta, gamma, z, step):
+    """The Bouc-Wen hysteretic variable (exponent 1) along ``u`` from ``z``: rate-independent,
+    ``dz = A du - beta |du| z - gamma du |z|``, so along a monotonic piece of sign ``s``
+    ``dz/du = A - beta s z - gamma |z|`` (Ismail, Ikhouane and Rodellar, "The hysteresis
+    Bouc-Wen model, a survey", Arch. Comput. Methods Eng. 16, 161-188, 2009), integrated by
+    classical Runge-Kutta in input steps of at most ``step`` [V]."""
+    out = np.empty(u.size)
+    prev = u[0]
+    for k in range(u.size):
+        du = u[k] - prev
+        m = max(1, int(np.ceil(abs(du) / step)))
+        h = du / m
+        s = 1.0 if du >= 0.0 else -1.0
+        for _ in range(m):
+            k1 = A - beta * s * z - gamma * abs(z)
+            z1 = z + 0.5 * h * k1
+            k2 = A - beta * s * z1 - gamma * abs(z1)
+            z2 = z + 0.5 * h * k2
+            k3 = A - beta * s * z2 - gamma * abs(z2)
+            z3 = z + h * k3
+            k4 = A - beta * s * z3 - gamma * abs(z3)
+            z = z + h * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+        out[k] = z
+        prev = u[k]
+    return out
+
+
+class BoucWenActuator(DomainPreisach):
+    """An actuator whose hysteresis is of neither model class the package identifies: a
+    Bouc-Wen loop per input (no wiping-out memory, no congruent minor loops), each output
+    ``a u_l + b u_l^2 - d z_l`` plus the other input's ``c1 u_k + c2 z_k + c3 u_k^2``; creep,
+    modes and noise as the other members'. ``z`` starts at 0 (the state a demagnetising
+    cycle leaves). Parameters ``bw`` per output: (A, beta, gamma, d, c1, c2, c3)."""
+
+    bw: tuple = ()
+
+    def hysteresis(self, u):
+        u = np.asarray(u, dtype=float)
+        z = np.vstack([_bouc_wen(np.ascontiguousarray(u[k]), *self.bw[k][:3], 0.0, 0.01)
+                       for k in range(2)])
+        h = np.zeros_like(u)
+        for l in range(2):
+            k = 1 - l
+            ra, rb = self.reversible[l]
+            _, _, _, d, c1, c2, c3 = self.bw[l]
+            h[l] = ra * u[l] + rb * u[l] ** 2 - d * z[l] + c1 * u[k] + c2 * z[k] + c3 * u[k] ** 2
+        return h
+
+
+def bouc_wen(act, rng):
+    """Give an actuator drawn Bouc-Wen loops (:class:`BoucWenActuator`): per output A = 1,
+    beta + gamma in 0.1-0.25 /V (the loop saturates at z = A / (beta + gamma), 4-10 V),
+    gamma / beta in -0.5..0.5 (the loop's shape), d 1-2 µm/V (loops 7-20 % of the
+    records' span wide), couplings c1 within 8 % of a, c2 within 10 % of d, c3 within
+    0.02 µm/V^2; a 3.8-4.6 µm/V and |b| <= a / 80, so that +-20 V reach +-55 µm past the
+    loop's d z."""
+    params, reversible = [], []
+    for l in range(2):
+        total, ratio = rng.uniform(0.1, 0.25), rng.uniform(-0.5, 0.5)
+        beta = total / (1.0 + ratio)
+        a = float(rng.uniform(3.8, 4.6))
+        reversible.append((a, float(rng.uniform(-1.0, 1.0) * a / 80.0)))
+        params.append((1.0, float(beta), float(total - beta), float(rng.uniform(1.0, 2.0)),
+                       float(rng.uniform(-0.08, 0.08) * a), float(rng.uniform(-0.1, 0.1)),
+                       float(rng.uniform(-0.02, 0.02))))
+    act.bw, act.reversible = tuple(params), tuple(reversible)
+
+
+#: with --bouc-wen, every member's hysteresis is a Bouc-Wen loop per input
+BOUC_WEN = {"on": False}
+
+
 #: with --discrete-relays, the Preisach-type actuators switch a relay row in one sample
 DISCRETE = {"relays": False}
 
@@ -238,8 +318,9 @@ def family(n, seed=FAMILY_SEED):
         b = np.array([[rng.uniform(0.8, 0.95), rng.uniform(-0.08, 0.08)],
                       [rng.uniform(-0.08, 0.08), rng.uniform(0.8, 0.95)],
                       [rng.uniform(0.3, 0.5), -rng.uniform(0.2, 0.4)]])
-        if i % 2 == 0:
+        if i % 2 == 0 or BOUC_WEN["on"]:
             cls = OutsideActuator if DISCRETE["relays"] else DomainPreisach
+            cls = BoucWenActuator if BOUC_WEN["on"] else cls
             act = cls(seed=i, creep=True, modes_hz=modes, damping=damping, c=c, b=b,
                                   direct_um=tuple(rng.uniform(20.0, 30.0, 2)),
                                   coupling_um=tuple(rng.uniform(0.5, 2.0, 2)),
@@ -260,6 +341,9 @@ def family(n, seed=FAMILY_SEED):
             act.reversible = tuple((float(a), float(rr.uniform(-1.0, 1.0) * a / 80.0))
                                    for a in rr.uniform(2.2, 3.0, 2))
             name = f"preisach-{i}"
+            if BOUC_WEN["on"]:
+                bouc_wen(act, np.random.default_rng([seed, i, 2]))
+                name = f"bouc-wen-{i}"
         else:
             act = CreepGPI(seed=i, modes_hz=modes, damping=damping, c=c, b=b)
             act.creep_gain = float(rng.uniform(0.01, 0.05))
@@ -493,7 +577,12 @@ def main(argv=None):
     ap.add_argument("--few-plays", action="store_true",
                     help="the generalised-PI-type actuators keep 4-5 plays per path (a kink in "
                          "their loops at every threshold: the earlier family)")
+    ap.add_argument("--bouc-wen", action="store_true",
+                    help="every member's hysteresis a Bouc-Wen loop per input (a third class, "
+                         "neither Preisach nor generalised PI), modes, creep and noise drawn "
+                         "as the others'")
     args = ap.parse_args(argv)
+    BOUC_WEN["on"] = args.bouc_wen
     DISCRETE["relays"] = args.discrete_relays
     FEW_PLAYS["on"] = args.few_plays
     n = args.actuators or (3 if args.quick else 20)
