@@ -164,9 +164,12 @@ def _all_kinds():
 
 @needs_cc
 def test_status_flag_on_every_class(tmp_path):
-    """NaN, inf: flagged, sample skipped (voltages held); a reference far beyond the model's
+    """NaN, inf and a glitch beyond ten times the model's output range (1e306 and -1e200 um,
+    which had the exact inverses' root search never return, or their state saturate for
+    good): flagged, sample skipped (voltages held); a reference far beyond the model's
     range (1e5 um): flagged on every sample (range, or the law's latched divergence); the
-    voltages before stay those of the clean reference."""
+    voltages before stay those of the clean reference, and with the bad samples left out
+    the voltages are those of the clean reference without them."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         comps = _all_kinds()
@@ -175,13 +178,18 @@ def test_status_flag_on_every_class(tmp_path):
         yr = 0.5 * circle(400)
         bad = yr.copy()
         bad[0, 300], bad[1, 310], bad[0, 320] = np.nan, np.inf, -np.inf
+        bad[0, 330], bad[1, 340] = 1e306, -1e200
         u_c, status, _ = h.run(bad)
         P = h.code.preview
-        for k in (300, 310, 320):
+        skipped = (300, 310, 320, 330, 340)
+        for k in skipped:
             assert status[k] & STATUS_RANGE, (label, k)
             assert np.array_equal(u_c[:, k], u_c[:, k - 1]), (label, k)
         clean, _, _ = h.run(yr)
         assert np.array_equal(u_c[:, :300], clean[:, :300]), label
+        kept = np.setdiff1d(np.arange(yr.shape[1]), skipped)
+        without, _, _ = h.run(yr[:, kept])
+        assert np.array_equal(u_c[:, kept], without), label
         far = yr.copy()
         far[:, 350:] = 1e5
         _, status, _ = h.run(far)
