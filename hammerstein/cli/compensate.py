@@ -40,6 +40,9 @@ from hammerstein.scenario.registry import build_compensator
 
 __all__ = ["add_parser", "compensate"]
 
+#: ``--fade-in 0`` takes a reference whose first sample is within this of the rest output [µm]
+#: (the model's output at 0 V; the error message prints it to 7 digits)
+REST_TOLERANCE = 1e-3
 #: the kinds a drive file can be made with (``none`` drives nothing; ``ilc`` learns on the
 #: hardware: ``hammerstein learn``)
 KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", "preisach-inverse")
@@ -145,15 +148,18 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
             f"--fade-in: {fade_in:g} s is longer than the reference ({n} samples, "
             f"{n * plant.sampling_period:g} s); expected at most {n * plant.sampling_period:g} s")
     fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
-    if fade == 0 and not starts_at_rest(reference.signal):
-        first = ", ".join(f"{n} = {v:.4g} µm" for n, v in
-                          zip(plant.hysteresis.output_names, reference.signal[:, 0]))
+    rest = rest_output(plant.hysteresis, plant.creep)
+    if fade == 0 and not starts_at_rest(reference.signal, rest, REST_TOLERANCE):
+        names = plant.hysteresis.output_names
+        first = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, reference.signal[:, 0]))
+        at = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, rest))
         raise CompensatorError(
-            f"--fade-in 0: the reference starts at {first}, not at rest (0 µm); the drive would "
-            f"start with a step that the actuator (and the exported C, which starts at rest) "
-            f"cannot follow: give a fade-in > 0 (default: one period, "
-            f"{reference.period_samples * plant.sampling_period:g} s) or a reference that starts "
-            f"at rest")
+            f"--fade-in 0: the reference starts at {first}, not at rest ({at}: the model's "
+            f"output at 0 V, within {REST_TOLERANCE:g} µm); the drive would start with a step "
+            f"that the actuator (and the exported C, which starts there) cannot follow: give a "
+            f"fade-in > 0 (the default: a duration, at least one period, {MIN_FADE_S:g} s and "
+            f"{FADE_DECAYS:g} decay times of the slowest bending mode) or a reference that "
+            f"starts at rest")
     T = plant.sampling_period
 
     def predict(u):
@@ -161,7 +167,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
 
     linear = plant.matrices              # creep then dynamics, built once
     drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
-                           plant.amplifier, limits, rest=rest_output(plant.hysteresis, plant.creep),
+                           plant.amplifier, limits, rest=rest,
                            first_mode=first_mode_hz(linear[0], T), predict=predict,
                            names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T))
     note = mode_note(linear, T, drive.reference, reference.period_samples)

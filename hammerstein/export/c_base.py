@@ -382,6 +382,38 @@ def _float_realization(A, B, C, D):
     return out if all(np.all(np.isfinite(M)) for M in out) else (A, B, C, D)
 
 
+def _stage_rest(stages, rest, precision, states=None):
+    """The states of cascaded linear stages at rest for the constant reference ``rest``.
+
+    Each stage in the DC steady state of the previous one's output (``x = (I - A)^-1 B r``,
+    ``r <- C x + D r``), in the realization :func:`_stage_code` writes (the balanced one in
+    float), so that a step whose reference starts at ``rest`` starts without a transient, as
+    the Python inverse does (``initial_state`` at the first faded sample). None: zeros. In
+    double, ``states`` (the Python inverse's own, stacked) are taken as they are: the same
+    digits, not another solve's.
+    """
+    if states is not None and precision == "double" and rest is not None and np.any(rest):
+        sizes = [np.atleast_2d(np.asarray(A)).shape[0] for A, _, _, _ in stages]
+        flat = np.asarray(states, dtype=float)
+        if flat.shape == (sum(sizes),):
+            return np.split(flat, np.cumsum(sizes)[:-1])
+    out = []
+    r = None if rest is None else np.asarray(rest, dtype=float)
+    for A, B, C, D in stages:
+        A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
+        if precision == "float":
+            A, B, C, D = _float_realization(A, B, C, D)
+        n = A.shape[0]
+        if r is None or n == 0 or not np.any(r):
+            x = np.zeros(n)
+        else:
+            x = np.linalg.solve(np.eye(n) - A, B @ r)
+        out.append(x)
+        if r is not None:
+            r = (C @ x if n else 0.0) + D @ r
+    return out
+
+
 def _stage_code(k, A, B, C, D, precision, N):
     """Declarations and statements of one linear stage ``v = C x + D r``, ``x <- A x + B r`` on
     ``r[]`` (the order of ``linear_kernel``), its state ``s->x{k}``."""

@@ -13,7 +13,7 @@ import numpy as np
 from hammerstein.simulation._preisach import _cell_lists
 from hammerstein.simulation._preisach_inverse import AITKEN_SWEEP, BRACKET_GROWTH, SECANT_OVERSHOOT
 from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
-                                       _stage_code, _sections, _model_text)
+                                       _stage_rest, _stage_code, _sections, _model_text)
 
 
 _EXACT = """@RAMP<
@@ -379,9 +379,12 @@ def _search_ends(comp, precision):
     return max(float(comp.tolerance), t * eps * scale), b * eps, w * eps * bound
 
 
-def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
+def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=None,
+                  rest_states=None):
     """The exact inverse (or its multiplicative law) of a PreisachInverseCompensator, after
-    optional linear stages (the dynamics inverse, the creep inverse)."""
+    optional linear stages (the dynamics inverse, the creep inverse), which ``NAME_init``
+    starts at rest for the constant reference ``rest`` (the model's output at 0 V; None: 0;
+    ``rest_states`` the Python inverse's states there, stacked)."""
     (E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, present) = comp._arrays
     m = p = model.n_inputs
     nh = int(model.n_hysterons)
@@ -428,13 +431,19 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0):
                f"    {N}_real h[{max(1, nh)}];   /* hysteron and play states of the model */"]
     reals = m + nh
     scode, init = [], []
-    for k, (A, B, C, D) in enumerate(stages):
+    for k, ((A, B, C, D), x0) in enumerate(zip(stages, _stage_rest(stages, rest, precision,
+                                                                  rest_states))):
         A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
         d, c, n = _stage_code(k, A, B, C, D, precision, N)
         decls += d
         scode.append(c)
         members.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
-        init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {lit['zero']};")
+        if n and np.any(x0):
+            decls.append(_reals_table(f"x{k}_rest", x0, precision, N,
+                                      f"  /* linear stage {k} at rest at the model's output at 0 V */"))
+            init.append(f"    for (j = 0; j < {n}; ++j) s->x{k}[j] = {N}_x{k}_rest[j];")
+        else:
+            init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {lit['zero']};")
         reals += n
     keep = {"HYST": q_off[-1] > 0, "RAMP": q_off[-1] > 0, "PLAY": p_off[-1] > 0,
             "COMPONENT": not exact}

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from hammerstein.compensation.drive import rest_output
 from hammerstein.compensation.inversion import ZPETCInverse, inverse_system
 from hammerstein.exceptions import ExportError
 from hammerstein.export.c_base import (_check_model, _model_text)
@@ -64,12 +65,14 @@ def _plan_hammerstein(comp):
         inv = comp.inverse
         stages = [inv.bending.state_space(), inv.creep_matrices] if comp.creep is not None \
             else [inv.state_space()]
+        rest = rest_output(hc.model, comp.creep)    # where compensate's faded reference starts
+        rest_states = inv.initial_state(rest)        # the inverse's state there, as start() has it
         return ("exact", hc.model, P,
                 f"Hammerstein compensator U = Gamma^-1(G^-1 Yr): causal MIMO ZPETC inverse ({P} "
                 f"samples of preview){creep} then the exact per-sample inverse of the "
                 f"{_model_text(hc.model)}",
                 lambda precision, N, limits, T: _exact_source(hc, stages, hc.model, precision, N,
-                                                              limits, T, P))
+                                                              limits, T, P, rest, rest_states))
     model = _check_model(comp.model)
     with comp.previewed():      # the C step receives the reference P samples ahead
         law = comp.packed_law()

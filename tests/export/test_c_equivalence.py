@@ -24,6 +24,7 @@ import pytest
 from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,
                          PerAxisInverseCompensator, PrandtlIshlinskii, StaticGainCompensator,
                          diagonal_compensator)
+from hammerstein.compensation.drive import rest_output
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.models.hysteresis import OutputMap
 from hammerstein.io.presets import load_plant
@@ -127,7 +128,11 @@ def python_voltages(comp, yr, chunks=1, backend=None):
         if isinstance(comp, HammersteinCompensator):     # the filter at rest consumes the preview
             state = comp.initial_state()        # at rest (a Preisach model's rest states)
             nc = comp.hysteresis_compensator.n_states
-            _, state[nc:] = comp.inverse.filter(yr[:, :P], np.zeros(comp.inverse.n_states))
+            # the exact inverses' C starts its linear stages at rest at the model's output at
+            # 0 V (where compensate's faded references start); the law's at 0
+            rest = (rest_output(comp.hysteresis_compensator.model, comp.creep)
+                    if comp.exact_static else np.zeros(comp.inverse.p))
+            _, state[nc:] = comp.inverse.filter(yr[:, :P], comp.inverse.initial_state(rest))
         lead = yr[:, P:]
         parts, edges = [], np.linspace(0, lead.shape[1], chunks + 1).astype(int)
         for a, b in zip(edges[:-1], edges[1:]):

@@ -16,10 +16,11 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
+from hammerstein.io.presets import load_plant
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                                            StaticGainCompensator, diagonal_compensator)
-from hammerstein.compensation.drive import default_fade_samples, drive_signal
+from hammerstein.compensation.drive import default_fade_samples, drive_signal, rest_output
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 
 T = 5e-5
@@ -93,3 +94,32 @@ def test_compensate_fade_in_0_refuses_a_reference_not_at_rest(tmp_path):
                "--fade-in", "0", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert "fade-in 0 samples" in (tmp_path / "s.csv").read_text()
+
+
+def test_fade_in_0_needs_the_models_output_at_0_V_not_0_um(tmp_path):
+    """realistic-2dof's asymmetric Preisach loops rest at (-1.754, 0.7235) um at 0 V: with
+    --fade-in 0, a sine from 0 um is refused (its drive would start at the voltage of 0 um,
+    a step from rest), a reference held at the rest output for its first 100 samples is taken
+    and its drive starts at 0 V."""
+    plant = load_plant("realistic-2dof")
+    rest = rest_output(plant.hysteresis, plant.creep)
+    assert np.all(np.abs(rest) > 0.5)
+    sine = '{ kind = "sine", output = "x", amplitude = 5, frequency = 100, periods = 4 }'
+    res = _cli("compensate", "realistic-2dof", "--reference", sine, "--out", "d.csv",
+               "--fade-in", "0", cwd=tmp_path)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1, res.stderr
+    assert "not at rest" in res.stderr and f"x = {rest[0]:.7g} µm" in res.stderr, res.stderr
+    assert not (tmp_path / "d.csv").exists()
+    t = np.arange(800) * plant.sampling_period
+    move = 2.5 * (1 - np.cos(2 * np.pi * 100 * np.maximum(t - 100 * plant.sampling_period, 0)))
+    ref = np.vstack([rest[0] + move, np.full(t.size, rest[1])])
+    np.savetxt(tmp_path / "ref.csv", np.vstack([t, ref]).T, delimiter=",", header="t,x,y",
+               comments="")
+    res = _cli("compensate", "realistic-2dof", "--reference", "ref.csv", "--period", "0.01",
+               "--out", "s.csv", "--fade-in", "0", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    rows = [line for line in (tmp_path / "s.csv").read_text().splitlines()
+            if not line.startswith("#")]
+    assert rows[0] == "t,ux,uy"
+    first = np.array(rows[1].split(","), dtype=float)
+    assert np.all(np.abs(first[1:]) < 1e-9), first           # the root's tolerance, not a step
