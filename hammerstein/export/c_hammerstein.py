@@ -76,10 +76,13 @@ def _plan_hammerstein(comp):
     model = _check_model(comp.model)
     with comp.previewed():      # the C step receives the reference P samples ahead
         law = comp.packed_law()
+    rest = rest_output(comp.model, comp.creep)       # where compensate's faded reference starts
+    rest_states = comp.inverse.initial_state(rest)
     return ("law", model, P,
             f"Hammerstein compensator U = Gamma^c(G^-1 Yr): causal MIMO ZPETC inverse ({P} samples "
             f"of preview){creep} then the inverse multiplicative law",
-            lambda precision, N, limits, T: _law_source(_Law(law, P), model, precision, N, limits, T))
+            lambda precision, N, limits, T: _law_source(_Law(law, P, rest, rest_states), model,
+                                                        precision, N, limits, T))
 
 
 def _preview_text(comp):

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
-                                       _reference_transform, _limits_code)
+                                       _reference_transform, _limits_code, _reals_table, _stage_rest)
 
 
 __all__ = ["law_preview"]
@@ -91,7 +91,14 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
     if law.lowpass:
         init.append(f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->v_f[k] = {zero};")
     if nf:
-        init.append(f"    for (j = 0; j < {N}_N_FILTER; ++j) s->x_f[j] = {zero};")
+        x0 = _stage_rest([prefilter], getattr(law, "rest", None), precision,
+                         getattr(law, "rest_states", None))[0]
+        if np.any(x0):     # in steady state at the model's output at 0 V, as Python's start
+            decls.append(_reals_table("x_f_rest", x0, precision, N,
+                                      "  /* the dynamics inverse at rest at the model's output at 0 V */"))
+            init.append(f"    for (j = 0; j < {N}_N_FILTER; ++j) s->x_f[j] = {N}_x_f_rest[j];")
+        else:
+            init.append(f"    for (j = 0; j < {N}_N_FILTER; ++j) s->x_f[j] = {zero};")
     if nf and law_preview(law):
         init.append("    s->received = 0;")
     init.append("    s->diverged = 0;")
@@ -231,10 +238,11 @@ def law_preview(law):
 class _Law:
     """A CompensatorLaw's fields plus the preview (the law is a NamedTuple)."""
 
-    def __init__(self, law, preview):
+    def __init__(self, law, preview, rest=None, rest_states=None):
         for key in ("model", "K_inv", "iterations", "divergence_bound", "lowpass", "pole", "prefilter"):
             setattr(self, key, getattr(law, key))
         self._preview = preview
+        self.rest, self.rest_states = rest, rest_states     # where NAME_init starts the prefilter
 
 
 def _plan_law(comp):

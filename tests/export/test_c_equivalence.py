@@ -128,10 +128,10 @@ def python_voltages(comp, yr, chunks=1, backend=None):
         if isinstance(comp, HammersteinCompensator):     # the filter at rest consumes the preview
             state = comp.initial_state()        # at rest (a Preisach model's rest states)
             nc = comp.hysteresis_compensator.n_states
-            # the exact inverses' C starts its linear stages at rest at the model's output at
-            # 0 V (where compensate's faded references start); the law's at 0
-            rest = (rest_output(comp.hysteresis_compensator.model, comp.creep)
-                    if comp.exact_static else np.zeros(comp.inverse.p))
+            # the C starts its linear stages at rest at the model's output at 0 V (where
+            # compensate's faded references start)
+            rest = rest_output(comp.hysteresis_compensator.model if comp.exact_static
+                               else comp.model, comp.creep)
             _, state[nc:] = comp.inverse.filter(yr[:, :P], comp.inverse.initial_state(rest))
         lead = yr[:, P:]
         parts, edges = [], np.linspace(0, lead.shape[1], chunks + 1).astype(int)
