@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.io.datafiles import DataFileError, column_list, read_records
-from hammerstein.cli._common import number_type, out_file_problem
+from hammerstein.cli._common import number_type, out_file_problem, print_err
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-    level_metrics_rows, level_report_lines, metrics_rows)
+    level_metrics_rows, level_report_lines, metrics_rows, minor_loop_warning)
 from hammerstein.models.amplifier import records_amplifier_table
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
@@ -51,7 +51,7 @@ MAX_DELAY = 10000
 __all__ = ["add_parser"]
 
 for _f in (creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-           level_metrics_rows, level_report_lines, metrics_rows):
+           level_metrics_rows, level_report_lines, metrics_rows, minor_loop_warning):
     _f.__module__ = __name__          # documented as this command's (defined in _identify_report)
 del _f
 
@@ -640,6 +640,9 @@ def _report(args, fit, records, dyn=None, creep=None):
             print(_line(label, "" if single else f" {name}", rep, ou))
     for line in level_report_lines(fit, ou):
         print(line)
+    loops = minor_loop_warning(fit, list(model.input_names), list(model.output_names))
+    if loops:
+        print_err(f"warning: {loops}")
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
             print(line)
