@@ -923,7 +923,7 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
         when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
         notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
                      f"drive's largest step, {bound[i]:.3g} V per sample ({start[i]:.3g} V asked, "
-                     f"{100 * (start[i] / bound[i] - 1):.2g} % more)")
+                     f"{100 * (start[i] / bound[i] - 1):.3g} % more)")
     return u, notes
 
 
