@@ -297,6 +297,12 @@ def default_q_cutoff(plant):
     return cutoff, f"note: Q cutoff {cutoff:.4g} Hz because {why} (--q-cutoff-hz sets it)"
 
 
+#: what the notes call a trial's judged error, beside the printed max (which carries the noise)
+JUDGED = ("its noise averaged down: the max Euclidean error of the settled periods' average "
+          "for a repeating reference, else the RMS less the noise; the max printed above "
+          "carries the noise")
+
+
 def _judged_error(target, y, delay, period, steady):
     """The error a trial is judged by, and the noise of that judgement [µm].
 
@@ -456,7 +462,8 @@ def _handle(args):
                 # S. S. Saab, "A discrete-time stochastic learning control algorithm", IEEE
                 # Trans. Automatic Control 46(6), 877-887, 2001)
                 halvings += 1
-                stall = (f"trial {k_next}'s judged error {score:.4g} µm is not below the best, "
+                stall = (f"trial {k_next}'s judged error {score:.4g} µm ({JUDGED}) is not below "
+                         f"the best, "
                          f"trial {state['trial']}'s {best_score:.4g} µm, and within the "
                          f"{margin:.2g} µm of noise: the learning has reached the noise; the next "
                          f"drive is learnt from this trial with gain x{0.5 ** halvings:g}")
@@ -600,7 +607,7 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     summary = cond.summary(list(model.output_names))
     if rose is not None:            # the model's condition is not what the actuator did
         summary = summary.replace("<= 1: monotonic", "<= 1 on the model")
-        print(f"the judged settled error rose from {rose[1]:.4g} µm (trial {rose[0]}) to "
+        print(f"the judged settled error ({JUDGED}) rose from {rose[1]:.4g} µm (trial {rose[0]}) to "
               f"{score:.4g} µm, beyond the {margin:.2g} µm of noise: the learning is not monotonic "
               f"on this actuator (the next drive is learnt from the best trial)", file=sys.stdout)
     print(summary, file=sys.stdout)
