@@ -56,7 +56,8 @@ def add_parser(subparsers):
                     "compiler is found). See docs/real-time.md.")
     p.add_argument("source", metavar="MODEL_OR_PRESET",
                    help="bundled preset name, preset file or model file (TOML)")
-    p.add_argument("--target", choices=["c", "fmu"], required=True, help="C sources or an FMU")
+    p.add_argument("--target", choices=["c", "fmu"], default="c",
+                   help="C sources (default) or an FMI 2.0 FMU")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--name", metavar="NAME",
                    help="C prefix and file stem (default: <preset>_<kind>, as a C identifier)")
