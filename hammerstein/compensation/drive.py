@@ -332,9 +332,10 @@ class DriveStream:
             if self._head.shape[1] < P or self._head.shape[1] == 0:
                 return np.zeros((comp.model.n_inputs, 0))
             inv = comp.inverse
-            s0 = inv.initial_state(self._head[:, 0])
+            pre = comp.prefilter_reference      # the frame the inverse filters (start's)
+            s0 = inv.initial_state(pre(self._head[:, :1])[:, 0])
             if P:
-                _, s0 = inv.filter(self._head[:, :P], s0)
+                _, s0 = inv.filter(pre(self._head[:, :P]), s0)
             state = _rest_state(comp)      # e.g. a Preisach model's demagnetised hysterons
             state[comp.hysteresis_compensator.n_states:] = s0
             self._state = state

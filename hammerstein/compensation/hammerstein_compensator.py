@@ -638,17 +638,41 @@ class HammersteinCompensator:
         # initial states: the hysteresis compensator at rest (initial_state()), then the inverse's
         state = np.tile(self.initial_state(), (len(refs), 1))
         fast = np.zeros(len(refs), dtype=bool)
+        pre = self.prefilter_reference
         if P:
-            s0, fast = _zpetc_preview_states(self.inverse, np.stack([e[:, :P] for e in exts]))
+            s0, fast = _zpetc_preview_states(self.inverse, np.stack([pre(e[:, :P]) for e in exts]))
             if fast.any():
                 state[fast, nc:] = s0[fast]
         for b in np.flatnonzero(~fast):
-            s0 = self.inverse.initial_state(exts[b][:, 0])
+            s0 = self.inverse.initial_state(pre(exts[b][:, :1])[:, 0])
             if P:
-                _, s0 = self.inverse.filter(exts[b][:, :P], s0)
+                _, s0 = self.inverse.filter(pre(exts[b][:, :P]), s0)
             state[b, nc:] = s0
         return [(ext[:, P:], state[b], ext[:, :r.shape[-1]])
                 for b, (ext, r) in enumerate(zip(exts, refs))]
+
+    def prefilter_reference(self, reference):
+        """What the inverse of the dynamics filters: the reference as given, or for the
+        inverse multiplicative law over a classical PI with an offset ``c`` or an output map
+        ``S``, ``S^-1(Yr - c)``, as its fused kernel and the exported C transform it first.
+
+        :meth:`start` runs the preview samples and the inverse's state at rest through the
+        same transform, so that the inverse starts in steady state in the frame it then
+        filters (it used to start in the untransformed one: an identified classical PI whose
+        offset is (-0.12, 0.45) um asked for -0.05 and -0.47 V at its drive's first sample).
+
+        Parameters
+        ----------
+        reference : numpy.ndarray, shape (p, n_samples)
+            [µm].
+
+        Returns
+        -------
+        numpy.ndarray, shape (p, n_samples)
+        """
+        if self.exact_static or self.inverse is None or not hasattr(self.model, "gamma_reference"):
+            return reference
+        return self.model.gamma_reference(np.asarray(reference, dtype=float))
 
     # -- the compensator protocol ----------------------------------------------------------
     def simulate(self, reference, initial_state=None):

@@ -116,13 +116,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
 @REFERENCE_CHECK@
     for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = reference[l];"""]
     step += tcode
-    if nf:
-        raw = bool(tcode) and law_preview(law)
-        if raw:   # as HammersteinCompensator.start: the preview samples enter the inverse untransformed
-            step.append(f"""    {{  /* while the preview fills, the inverse takes the reference as given (as Python's
-           start-up, HammersteinCompensator.start), afterwards S^-1(Yr - c) (the kernels) */
-        if (s->received < {N}_PREVIEW) for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = reference[l];
-    }}""")
+    if nf:   # the preview samples too enter the inverse as S^-1(Yr - c), as Python's start-up
         step.append(f"""    {{  /* ZPETC inverse of the linear dynamics: v = Cf x + Df r, x <- Af x + Bf r */
         {N}_real v[{N}_N_OUTPUTS], xn[{N}_N_FILTER];
         int i, j;

@@ -132,7 +132,9 @@ def python_voltages(comp, yr, chunks=1, backend=None):
             # compensate's faded references start)
             rest = rest_output(comp.hysteresis_compensator.model if comp.exact_static
                                else comp.model, comp.creep)
-            _, state[nc:] = comp.inverse.filter(yr[:, :P], comp.inverse.initial_state(rest))
+            pre = comp.prefilter_reference       # the frame the inverse filters (the law's S^-1(. - c))
+            _, state[nc:] = comp.inverse.filter(
+                pre(yr[:, :P]), comp.inverse.initial_state(pre(rest[:, None])[:, 0]))
         lead = yr[:, P:]
         parts, edges = [], np.linspace(0, lead.shape[1], chunks + 1).astype(int)
         for a, b in zip(edges[:-1], edges[1:]):

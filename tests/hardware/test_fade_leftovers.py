@@ -123,3 +123,23 @@ def test_fade_in_0_needs_the_models_output_at_0_V_not_0_um(tmp_path):
     assert rows[0] == "t,ux,uy"
     first = np.array(rows[1].split(","), dtype=float)
     assert np.all(np.abs(first[1:]) < 1e-9), first           # the root's tolerance, not a step
+
+
+def test_the_laws_dynamics_inverse_starts_at_rest_in_the_frame_it_filters():
+    """Over a classical PI with an offset c and an output map S, the law's kernel and its C
+    filter S^-1(Yr - c). A reference held at the model's output at 0 V, Gamma(0), is 0 in that
+    frame, so every voltage is 0: the inverse's preview and state at rest are taken in that frame
+    too (they were taken on Yr itself, and the drive started with +-1 V spikes)."""
+    from hammerstein.models.hysteresis import MultivariablePI, OutputMap, PrandtlIshlinskii
+    model = MultivariablePI(
+        [[PrandtlIshlinskii([0.0, 1.0, 2.0, 4.0], [1.0, 0.5, 0.25, 0.2]), 0.1],
+         [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.1, 1.0, 3.0], [0.8, 0.4, 0.3])]],
+        input_amplitude=[10.0, 10.0], output_offset=[0.5, -1.0],
+        output_map=[OutputMap([5.0, 12.0], [1.0, 0.8, 0.6]), OutputMap([], [1.2])])
+    comp = HammersteinCompensator(model, load_plant("rakotondrabe-2dof").dynamics)
+    assert comp.preview_samples > 0 and not comp.exact_static
+    y0 = rest_output(model)
+    assert np.all(np.abs(y0) > 0.4)
+    ref = np.repeat(y0[:, None], 400, axis=1)
+    u = drive_signal(comp, ref, 5e-5, None, 0).inputs
+    assert np.max(np.abs(u)) < 1e-12, np.max(np.abs(u))
