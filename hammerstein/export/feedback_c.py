@@ -20,8 +20,10 @@ in the state), so pass the reference ``P`` samples early, as to the
 compensator alone. The return value has bit 1 (``NAME_STATUS_LIMIT``) set
 when the amplifier limited a voltage, bit 2 (``NAME_STATUS_DIVERGED``) when
 the feedforward diverged, bit 4 (``NAME_STATUS_RANGE``) on a NaN or infinite
-reference or measurement (the sample is skipped: voltages held, state kept)
-or a reference beyond the feedforward model's range. Double precision.
+reference or measurement, or one beyond ten times the plant model's output range
+(:func:`hammerstein.export.c_base.reference_bound`: a glitch; the sample is skipped:
+voltages held, state kept), or a reference beyond the feedforward model's range. Double
+precision.
 
 ``hammerstein export --closed-loop`` (:mod:`hammerstein.cli.export`) builds
 the loop from a ``[feedback]`` table and writes these files.
@@ -34,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hammerstein.export.c_base import reference_bound
 from hammerstein.export.c_code import (MARKER, STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE,
                                        check_name, export_c)
 from hammerstein.exceptions import ExportError
@@ -171,6 +174,9 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
         raise ExportError("loop: no controller to export")
     L = loop.arrays
     T = float(loop.plant.sampling_period)
+    # beyond ten times the plant model's output range a reference or a measurement is a glitch (a
+    # wrong unit, an overflow): skipped like NaN, so that it winds no integrator up for good
+    bound = _lit(reference_bound(loop.plant.hysteresis))
     m, p = loop.m, loop.p
     nc = c.n_states
     ff = None
@@ -259,8 +265,9 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 {{
     double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
     int status = 0, saturated = 0, i, j, k, l;
-    for (l = 0; l < {p}; ++l)  /* a NaN or infinite input: the sample is skipped (voltages held) */
-        if (!isfinite(reference[l]) || !isfinite(measurement[l])) {{
+    for (l = 0; l < {p}; ++l)  /* a NaN, infinite or glitch input: the sample is skipped (voltages held) */
+        if (!isfinite(reference[l]) || !isfinite(measurement[l]) || fabs(reference[l]) > {bound}
+                || fabs(measurement[l]) > {bound}) {{
             for (k = 0; k < {m}; ++k) voltage[k] = s->a[k];
             return {STATUS_RANGE};
         }}
