@@ -92,7 +92,7 @@ from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_hist
                                             _fingerprint, _read_best, _read_state, _restore_gains,
                                             _save_gains, _settled_rows, _write_history,
                                             _write_state, history_rows)
-from hammerstein.cli.compensate import LAW_HINT, compensate
+from hammerstein.cli.compensate import LAW_HINT, LAW_KINDS, compensate
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade, keep_start,
                                     limit_start_up, read_signals, rest_output, shape_drive,
@@ -493,8 +493,11 @@ def _handle(args):
             c_full = c[:, (np.arange(N) - steady) % P]
             corrected = Reference(ref.t, ref.signal + c_full,
                                   ref.period_samples, ref.scale, ref.spec, ref.kind)
+            # the law over a classical PI runs with the gain compensate chose for the first
+            # drive (convergent_gain, as _inverse_gain's), not with the law's own default
+            law = drive_kind_ in LAW_KINDS and model_class(model).exact_inverse_kind is None
             _, drive = compensate(plant, corrected, drive_kind_, args.inversion, fade * T,
-                                  args.limits, args.gain, args.check)
+                                  args.limits, law_gain if law else args.gain, args.check)
             u_next, learnt = drive.inputs, drive.reference
             problems, shaped = list(drive.problems), list(drive.shaped)
             notes.append(f"note: the reference the compensator follows is learnt per harmonic of "
