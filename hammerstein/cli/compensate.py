@@ -24,17 +24,21 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from hammerstein.cli._common import out_file_problem, print_err
 from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
                                        check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
-from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier, hardware_drive,
-                                            rest_output, signals_csv, starts_at_rest)
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
+                                            hardware_drive, rest_output, signals_csv,
+                                            starts_at_rest)
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_note
+from hammerstein.compensation.shaping import (chatter_warnings, first_mode_hz, mode_decay_s,
+                                              mode_note)
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -176,6 +180,16 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     return comp, drive
 
 
+def _range_widths(plant):
+    """Each input's amplifier range width [V], or None when an input has no finite range."""
+    amp = plant.amplifier
+    if amp is None:
+        return None
+    widths = np.array([c.high - c.low for c in amp.channels], dtype=float)
+    return widths if widths.size == plant.hysteresis.n_inputs and np.all(np.isfinite(widths)) \
+        else None
+
+
 def _kind_and_options(plant, kind, gain, check):
     """(kind, options of the kind, the note of a chosen kind or None).
 
@@ -240,6 +254,8 @@ def _handle(args):
                 + " [µm] (model)"
         peaks = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
                           zip(plant.hysteresis.input_names, drive.peak_input, drive.peak_slew))
+        chatter = chatter_warnings(drive.inputs, plant.sampling_period, _range_widths(plant),
+                                   list(plant.hysteresis.input_names))
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
@@ -249,7 +265,8 @@ def _handle(args):
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
                    + "".join(f"\nshaped: {line}" for line in drive.shaped)
-                   + "".join(f"\nnote: {line}" for line in drive.notes))
+                   + "".join(f"\nnote: {line}" for line in drive.notes)
+                   + "".join(f"\nwarning: {line}" for line in chatter))
         safe_write(args.out, signals_csv(ref.t, cols, comment), "drive file")
     except CompensatorDivergence as exc:
         print_err(f"hammerstein compensate: error: the compensator diverged: {exc}")
@@ -268,6 +285,8 @@ def _handle(args):
         print(f"shaped: {line}", file=sys.stdout)
     for line in drive.notes:
         print(f"note: {line}", file=sys.stdout)
+    for line in chatter:
+        print_err(f"warning: {line}")
     if any(w in n for n in drive.shaped for w in ("beyond the range", "faster than",
                                                      "reference shaped")) \
             and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):

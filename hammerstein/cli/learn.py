@@ -94,9 +94,9 @@ from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_hist
                                             _write_state, history_rows)
 from hammerstein.cli.compensate import LAW_HINT, LAW_KINDS, compensate
 from hammerstein.models.amplifier import LIMITS
-from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade, keep_start,
-                                    limit_start_up, read_signals, rest_output, shape_drive,
-                                    signals_csv)
+from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade,
+                                            keep_start, limit_start_up, read_signals,
+                                            rest_output, shape_drive, signals_csv)
 from hammerstein.compensation.drive_files import followed_reference, learnt_names
 from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
                                     safe_write)
@@ -104,7 +104,7 @@ from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, erro
                                   harmonic_base_gains, periodic_average, reference_correction,
                                   repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
-from hammerstein.compensation.shaping import first_mode_hz
+from hammerstein.compensation.shaping import chatter_warnings, first_mode_hz
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
 
@@ -539,6 +539,11 @@ def _handle(args):
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
                    + "".join(f"\nshaped: {n}" for n in shaped))
+        spans = None if plant.amplifier is None else [c.high - c.low for c in plant.amplifier.channels]
+        chatter = chatter_warnings(u_next, T, spans if spans and np.all(np.isfinite(spans)) else None,
+                                   list(model.input_names))
+        comment += "".join(f"\nwarning: {line}" for line in chatter)
+        notes += [f"warning: {line}" for line in chatter]
         t = np.arange(N) * T
         with all_or_nothing():    # the drive and the history together, or none (a full disk)
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,

@@ -44,7 +44,8 @@ import numpy as np
 
 __all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
            "faster_than_mode", "limit_excess", "hann_average", "mode_amplification", "mode_note",
-           "shape_reference", "shaping_notes", "time_intervals"]
+           "shape_reference", "shaping_notes", "time_intervals", "CHATTER_FRACTION",
+           "chatter_warnings"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
@@ -441,6 +442,66 @@ def _after(start, n, size):
     """0 before ``start``, a raised cosine up to 1 over the next ``n`` samples, 1 after."""
     k = np.clip((np.arange(size) - start) / max(n, 1), 0.0, 1.0)
     return 0.5 * (1.0 - np.cos(np.pi * k))
+
+
+#: :func:`chatter_warnings` names an input that reverses by more than this fraction of its range
+#: (or of its own span without one) on two consecutive samples
+CHATTER_FRACTION = 0.02
+
+
+def chatter_warnings(inputs, sampling_period, span=None, names=None):
+    """Where a drive chatters: steps up and down (or down and up) by a large voltage on
+    consecutive samples.
+
+    A drive that follows a reference through a smooth model reverses only where its voltage
+    turns, with steps near zero there; two consecutive steps of opposite sign, each larger
+    than :data:`CHATTER_FRACTION` of the range, are the exact inverse alternating between two
+    inputs that give the model the same output (a model flat over a few volts near the edge of
+    its records: on an outside actuator, 16.4 / 19.8 V sample to sample). Such a drive excites
+    the actuator at half the sampling rate and is no command for hardware.
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n_samples)
+        The drive [V].
+    sampling_period : float
+        T [s].
+    span : array_like, shape (m,), optional
+        Each input's range width [V] (the amplifier's); its own peak to peak otherwise.
+    names : list of str, optional
+
+    Returns
+    -------
+    list of str
+        One line per input that chatters (count, where, the largest step); empty otherwise.
+
+    Examples
+    --------
+    >>> u = np.array([[0.0, 1.0, 2.0, 3.0, 2.0, 3.2, 2.1, 3.3]])
+    >>> chatter_warnings(u, 0.5, span=[10.0])[0].split(":")[0]
+    'input 1'
+    >>> chatter_warnings(np.sin(np.linspace(0, 6, 400))[None, :], 1e-3)
+    []
+    """
+    u = np.array(inputs, dtype=float, ndmin=2)
+    if u.shape[1] < 3:
+        return []
+    d = np.diff(u, axis=1)
+    width = np.ptp(u, axis=1) if span is None else np.asarray(span, dtype=float)
+    out = []
+    for i in range(u.shape[0]):
+        big = CHATTER_FRACTION * width[i]
+        hit = (d[i, :-1] * d[i, 1:] < 0) & (np.minimum(np.abs(d[i, :-1]), np.abs(d[i, 1:])) > big)
+        if big > 0 and hit.any():
+            name = names[i] if names is not None else f"input {i + 1}"
+            near = np.convolve(hit, np.ones(5), "same") > 0        # one run per episode
+            out.append(f"{name}: the drive reverses by more than {big:.3g} V from one sample to the "
+                       f"next at {int(hit.sum())} samples ({time_intervals(near, sampling_period)}; "
+                       f"steps up to {np.abs(d[i]).max():.3g} V): the inverse alternates between "
+                       f"inputs that give the model the same output (a model flat there, e.g. near "
+                       f"the edge of its records); do not play it as it is: keep the reference "
+                       f"away from there or look at it with --predicted")
+    return out
 
 
 def time_intervals(mask, sampling_period, limit=4):

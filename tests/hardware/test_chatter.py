@@ -1,0 +1,48 @@
+"""A drive that chatters (large steps of opposite sign on consecutive samples) is named.
+
+chatter_warnings: the exact inverse alternating between two inputs that give a flat model the
+same output (16.4 / 19.8 V sample to sample on an outside actuator) against smooth drives,
+whose steps change sign only where they are near zero.
+"""
+
+import numpy as np
+import pytest
+
+from hammerstein.compensation.shaping import CHATTER_FRACTION, chatter_warnings
+
+T = 5e-5
+
+
+def _circle_drive(amplitude, hz, n=8000):
+    t = np.arange(n) * T
+    return np.vstack([amplitude * np.cos(2 * np.pi * hz * t), amplitude * np.sin(2 * np.pi * hz * t)])
+
+
+@pytest.mark.parametrize("amplitude, hz, steep", [(20.0, 200.0, True), (20.0, 10.0, False),
+                                                  (1.0, 400.0, False)])
+def test_smooth_drives_are_not_named(amplitude, hz, steep):
+    """A 20 V drive at 200 Hz steps 1.26 V a sample (3 % of 40 V, beyond the 2 % threshold)
+    but reverses only where its steps are near zero: not named, nor are the gentler ones."""
+    u = _circle_drive(amplitude, hz)
+    assert (np.abs(np.diff(u)).max() > CHATTER_FRACTION * 40.0) == steep
+    assert chatter_warnings(u, T, [40.0, 40.0], ["ux", "uy"]) == []
+
+
+def test_an_alternating_stretch_is_counted_and_placed():
+    u = _circle_drive(10.0, 10.0)
+    k = np.arange(2500, 2560)
+    u[1, k[::2]] += 1.7            # 16.4 / 19.8 V: 3.4 V up and down, sample after sample
+    lines = chatter_warnings(u, T, [40.0, 40.0], ["ux", "uy"])
+    assert len(lines) == 1 and lines[0].startswith("uy: ")
+    assert "at 60 samples" in lines[0] or "at 59 samples" in lines[0], lines[0]
+    assert f"{2498 * T:.4f}" in lines[0]                    # the episode's start, one run
+    # below the threshold: 2 % of 40 V is 0.8 V; a 0.3 V alternation is not named
+    v = _circle_drive(10.0, 10.0)
+    v[1, k[::2]] += 0.3
+    assert chatter_warnings(v, T, [40.0, 40.0]) == []
+
+
+def test_without_a_range_the_drives_own_span_is_the_scale():
+    u = _circle_drive(1.0, 10.0)
+    u[0, 100:140:2] += 0.5          # 25 % of its 2 V span
+    assert len(chatter_warnings(u, T)) == 1
