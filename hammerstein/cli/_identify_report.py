@@ -108,55 +108,6 @@ def level_report_lines(fit, output_unit):
     return lines
 
 
-#: a direct path's loop amplitude missed by more than this [%] on a level of the records (trained
-#: or held out) gets :func:`minor_loop_warning`. Measured (30 level records per family): the
-#: Preisach- and generalised-PI-type actuators' models miss by at most 0.55 %, a Bouc-Wen
-#: family's (a memory no class identify fits) by 2.6-7.0 %, whose feedforward circles then
-#: missed by 2.3-16 % of their radius
-MINOR_LOOP_WARN_PERCENT = 1.5
-
-
-def minor_loop_warning(fit, input_names, output_names):
-    """A warning when the model misses the records' own loops: the actuator's class is none of
-    identify's.
-
-    The worst loop amplitude error (:func:`hammerstein.identification.record_identification.level_errors`)
-    over the direct paths' levels (each output in the record of its own input), when above
-    :data:`MINOR_LOOP_WARN_PERCENT`.
-
-    Parameters
-    ----------
-    fit : RecordFit
-        With ``levels`` and ``splits`` (``excitation``: the input each record moves).
-    input_names, output_names : list of str
-        The model's names, in order; output l is driven by input l.
-
-    Returns
-    -------
-    str or None
-        One line without the ``warning:`` prefix; None when within the threshold or without
-        levels.
-    """
-    source_input = {rec.source: input_names[s.excitation]
-                    for rec, s in zip(fit.records, fit.splits)}
-    worst = None
-    for row in fit.levels:
-        inp = source_input.get(row["source"])
-        if inp is None or output_names.index(row["output"]) != input_names.index(inp):
-            continue
-        if worst is None or abs(row["amplitude_error_percent"]) > abs(worst["amplitude_error_percent"]):
-            worst = row
-    if worst is None or abs(worst["amplitude_error_percent"]) <= MINOR_LOOP_WARN_PERCENT:
-        return None
-    return (f"the model misses the loop amplitude of {Path(worst['source']).name}'s "
-            f"{worst['percent']:.0f} % level by {worst['amplitude_error_percent']:+.3g} % on "
-            f"{worst['output']} (its RMS error {worst['rms_percent']:.3g} % of the level's range; "
-            f"above {MINOR_LOOP_WARN_PERCENT:g} %): the actuator's minor loops are none that the "
-            f"model classes draw, and drives will miss loops of that size by about as much; "
-            f"`hammerstein learn` corrects a repeating reference on the measured response "
-            f"(docs/hardware.md)")
-
-
 def level_metrics_rows(fit, output_unit):
     """Rows ``(case, channel, metric, value, unit)`` per amplitude level.
 

@@ -31,13 +31,14 @@ from hammerstein.io.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import number_type, out_file_problem, print_err
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-    level_metrics_rows, level_report_lines, metrics_rows, minor_loop_warning)
+    level_metrics_rows, level_report_lines, metrics_rows)
 from hammerstein.models.amplifier import records_amplifier_table
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.io.presets import PresetError, save_model
 from hammerstein.identification.defaults import PREISACH_LEVELS
-from hammerstein.identification.identification_pipeline import PipelineOptions, identify_pipeline
+from hammerstein.identification.identification_pipeline import (PipelineOptions, identify_pipeline,
+                                                                 minor_loop_warning)
 from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.lti import estimate_measurement_delay
@@ -51,7 +52,7 @@ MAX_DELAY = 10000
 __all__ = ["add_parser"]
 
 for _f in (creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-           level_metrics_rows, level_report_lines, metrics_rows, minor_loop_warning):
+           level_metrics_rows, level_report_lines, metrics_rows):
     _f.__module__ = __name__          # documented as this command's (defined in _identify_report)
 del _f
 

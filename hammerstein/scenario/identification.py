@@ -31,13 +31,14 @@ table checks and the cache keys.
 from __future__ import annotations
 
 import tempfile
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 
-from hammerstein.exceptions import HysteresisError
+from hammerstein.exceptions import HammersteinWarning, HysteresisError
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.core.files import confined_path
 from hammerstein.io.datafiles import MultiRecord
@@ -461,6 +462,10 @@ def _identify_from_records(plant, spec, dynamics):
             recs["dynamics"] if dynamics else None, recs["creep"] if spec["creep"] else None)
     except (IdentificationError, HysteresisError, DynamicsError) as exc:
         raise IdentificationError(f"identify (records = 'excitation'): {exc}") from None
+    loops = identification_pipeline.minor_loop_warning(result.fit, *names)   # as identify warns
+    if loops:
+        warnings.warn(f"identify (records = 'excitation'): {loops}", HammersteinWarning,
+                      stacklevel=2)
     meta = {"method": result.fit.method, "model": spec["model"], "records":
             "hammerstein excitation, played through the plant", "notes": list(result.fit.notes),
             "sampling_period_s": float(plant.sampling_period),

@@ -1,6 +1,6 @@
 """identify warns when the model misses the records' own loops on a direct path.
 
-The rule (hammerstein.cli._identify_report.minor_loop_warning) on hand-made level rows: only the
+The rule (hammerstein.identification.identification_pipeline.minor_loop_warning) on hand-made level rows: only the
 direct paths count (output l in the record of input l: a cross-coupling's small loop is mostly
 the sensor's noise), the worst loop amplitude error is named, and the threshold is
 MINOR_LOOP_WARN_PERCENT, between what Preisach- and generalised-PI-type actuators leave (at most
@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from hammerstein.cli._identify_report import MINOR_LOOP_WARN_PERCENT, minor_loop_warning
+from hammerstein.identification.identification_pipeline import MINOR_LOOP_WARN_PERCENT, minor_loop_warning
 
 
 def _fit(rows):
