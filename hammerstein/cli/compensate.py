@@ -24,8 +24,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from hammerstein.cli._common import out_file_problem, print_err
 from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
                                        check_reference_first, load_actuator,
@@ -180,16 +178,6 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     return comp, drive
 
 
-def _range_widths(plant):
-    """Each input's amplifier range width [V], or None when an input has no finite range."""
-    amp = plant.amplifier
-    if amp is None:
-        return None
-    widths = np.array([c.high - c.low for c in amp.channels], dtype=float)
-    return widths if widths.size == plant.hysteresis.n_inputs and np.all(np.isfinite(widths)) \
-        else None
-
-
 def _kind_and_options(plant, kind, gain, check):
     """(kind, options of the kind, the note of a chosen kind or None).
 
@@ -254,7 +242,8 @@ def _handle(args):
                 + " [µm] (model)"
         peaks = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
                           zip(plant.hysteresis.input_names, drive.peak_input, drive.peak_slew))
-        chatter = chatter_warnings(drive.inputs, plant.sampling_period, _range_widths(plant),
+        chatter = chatter_warnings(drive.inputs, plant.sampling_period,
+                                   None if plant.amplifier is None else plant.amplifier.range_widths(),
                                    list(plant.hysteresis.input_names))
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "

@@ -539,9 +539,8 @@ def _handle(args):
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
                    + "".join(f"\nshaped: {n}" for n in shaped))
-        spans = None if plant.amplifier is None else [c.high - c.low for c in plant.amplifier.channels]
-        chatter = chatter_warnings(u_next, T, spans if spans and np.all(np.isfinite(spans)) else None,
-                                   list(model.input_names))
+        chatter = chatter_warnings(u_next, T, None if plant.amplifier is None
+                                   else plant.amplifier.range_widths(), list(model.input_names))
         comment += "".join(f"\nwarning: {line}" for line in chatter)
         notes += [f"warning: {line}" for line in chatter]
         t = np.arange(N) * T

@@ -346,6 +346,16 @@ class Amplifier:
         r = np.array([c.rest for c in self.channels])
         return np.concatenate([r, r])
 
+    def range_widths(self):
+        """Each input's range width ``high - low`` [V], or None when one has no finite range.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m,), or None
+        """
+        widths = np.array([c.high - c.low for c in self.channels], dtype=float)
+        return widths if np.all(np.isfinite(widths)) else None
+
     def limit(self, inputs, sampling_period, state=None):
         """Range clip and slew limit (steps 1-2): what a drive file may command.
 
