@@ -331,11 +331,7 @@ class DriveStream:
             P = self.preview
             if self._head.shape[1] < P or self._head.shape[1] == 0:
                 return np.zeros((comp.model.n_inputs, 0))
-            inv = comp.inverse
-            pre = comp.prefilter_reference      # the frame the inverse filters (start's)
-            s0 = inv.initial_state(pre(self._head[:, :1])[:, 0])
-            if P:
-                _, s0 = inv.filter(pre(self._head[:, :P]), s0)
+            s0 = comp.preview_state(self._head, P)          # as start's
             state = _rest_state(comp)      # e.g. a Preisach model's demagnetised hysterons
             state[comp.hysteresis_compensator.n_states:] = s0
             self._state = state

@@ -644,10 +644,7 @@ class HammersteinCompensator:
             if fast.any():
                 state[fast, nc:] = s0[fast]
         for b in np.flatnonzero(~fast):
-            s0 = self.inverse.initial_state(pre(exts[b][:, :1])[:, 0])
-            if P:
-                _, s0 = self.inverse.filter(pre(exts[b][:, :P]), s0)
-            state[b, nc:] = s0
+            state[b, nc:] = self.preview_state(exts[b], P)
         return [(ext[:, P:], state[b], ext[:, :r.shape[-1]])
                 for b, (ext, r) in enumerate(zip(exts, refs))]
 
@@ -673,6 +670,30 @@ class HammersteinCompensator:
         if self.exact_static or self.inverse is None or not hasattr(self.model, "gamma_reference"):
             return reference
         return self.model.gamma_reference(np.asarray(reference, dtype=float))
+
+    def preview_state(self, reference, preview):
+        """The inverse's state after the first ``preview`` samples of a (faded) reference.
+
+        From rest at its first sample (the DC steady state there), the samples taken in the
+        frame the inverse filters (:meth:`prefilter_reference`): :meth:`start`'s start-up, and
+        :class:`hammerstein.compensation.drive.DriveStream`'s.
+
+        Parameters
+        ----------
+        reference : numpy.ndarray, shape (p, n_samples)
+            The faded reference, at least one sample [µm].
+        preview : int
+            P, the samples the inverse consumes before the first voltage.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_filter_states,)
+        """
+        pre = self.prefilter_reference
+        s0 = self.inverse.initial_state(pre(reference[:, :1])[:, 0])
+        if preview:
+            _, s0 = self.inverse.filter(pre(reference[:, :preview]), s0)
+        return s0
 
     # -- the compensator protocol ----------------------------------------------------------
     def simulate(self, reference, initial_state=None):
