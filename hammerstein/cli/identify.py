@@ -127,7 +127,7 @@ def add_parser(subparsers):
                    help="--model generalized/auto: play thresholds S j/n (uniform, default; 16 "
                         "plays per component), S (j/n)^1.5 (power: dense near zero), or auto: "
                         "both fitted, the lower mean held-out minor-loop error kept (twice the "
-                        "CPU; the held-out levels hardly tell the two apart, see the README)")
+                        "CPU; the held-out levels hardly tell the two apart, docs/records.md)")
     p.add_argument("--level-weighting", choices=["amplitude", "none"], default="amplitude",
                    help="--model generalized/auto: the generalised PI's fit weighs each "
                         "amplitude level's samples by A_max / A_level, so that each level's "
