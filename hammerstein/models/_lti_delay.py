@@ -24,7 +24,14 @@ def excited_band(inputs, sampling_period, threshold=0.01):
 
     The band spans the frequencies whose summed input power spectral density
     is at least ``threshold`` times its largest value (the excited lines of
-    a flat multisine, the passband of a filtered noise).
+    a flat multisine, the passband of a filtered noise), over each whole
+    record (one Welch segment: the resolution of the record). A slow
+    transient can hold most of a record's power, e.g. a lead-in ramp from
+    rest to an amplifier's offset before a multisine around it: then the
+    band is also taken from four Welch segments per record, each less its
+    least-squares cubic (the ramp's power mostly goes: measured with ramps
+    of up to 15 times the multisine's amplitude), and where that band
+    reaches more than twice as high it is the one returned.
 
     Parameters
     ----------
@@ -52,16 +59,33 @@ def excited_band(inputs, sampling_period, threshold=0.01):
     import scipy.signal  # lazy: ~0.5 s to import; only sensors and identification need it
 
     T = float(sampling_period)
-    total = None
+    f = np.linspace(0, 0.5 / T, 2 ** 16 + 1)
+    total = np.zeros(f.size)
+    parts = np.zeros(f.size)
     for u in inputs:
         u = np.atleast_2d(np.asarray(u, dtype=float))
         nper = int(min(u.shape[1], 2 ** 18))     # resolution of the whole record
-        f, pxx = scipy.signal.welch(u - u.mean(axis=1, keepdims=True), fs=1.0 / T,
-                                    nperseg=nper, axis=1)
-        pxx = np.interp(np.linspace(0, 0.5 / T, 2 ** 16 + 1), f, pxx.sum(axis=0))
-        total = pxx if total is None else total + pxx
-    f = np.linspace(0, 0.5 / T, 2 ** 16 + 1)
-    dens = total[1:]
+        fw, pxx = scipy.signal.welch(u - u.mean(axis=1, keepdims=True), fs=1.0 / T,
+                                     nperseg=nper, axis=1)
+        total += np.interp(f, fw, pxx.sum(axis=0))
+        fw, pxx = scipy.signal.welch(u, fs=1.0 / T, nperseg=max(min(u.shape[1], 256), nper // 4),
+                                     detrend=_cubic_detrend, axis=1)
+        parts += np.interp(f, fw[1:], pxx[:, 1:].sum(axis=0), left=0.0)   # no DC bin
+    band = _band(f, total, threshold)
+    detrended = _band(f, parts, threshold)
+    return detrended if detrended[1] > 2.0 * band[1] else band
+
+
+def _cubic_detrend(x):
+    """``x`` (..., n) less its least-squares cubic over the last axis (a Welch segment)."""
+    V = np.vander(np.linspace(-1.0, 1.0, x.shape[-1]), 4)
+    flat = x.reshape(-1, x.shape[-1]).T
+    return x - (V @ np.linalg.lstsq(V, flat, rcond=None)[0]).T.reshape(x.shape)
+
+
+def _band(f, density, threshold):
+    """(lowest, highest) frequency above 0 whose density reaches ``threshold`` of its largest."""
+    dens = density[1:]
     excited = np.flatnonzero(dens >= threshold * dens.max())
     if excited.size == 0:
         return float(f[1]), float(f[-1])

@@ -225,7 +225,8 @@ def measured_bode_figure(identified, frequency_hz, frf, names=None,
     frequency_hz : array_like, shape (n_freq,)
         Frequencies of the estimate [Hz], > 0.
     frf : array_like, shape (p, p, n_freq)
-        Complex estimate [µm/µm]; NaN entries are left out.
+        Complex estimate [µm/µm]; NaN entries are left out (with none left,
+        or ``n_freq = 0``, the identified model is drawn alone, from 1 Hz).
     names : sequence of str, optional
         Axis names (p); default those of ``identified``.
     title : str
@@ -256,14 +257,22 @@ def measured_bode_figure(identified, frequency_hz, frf, names=None,
     names = list(identified.output_labels) if names is None else [str(n) for n in names]
     sys_named = control.ss(identified.A, identified.B, identified.C, identified.D, identified.dt,
                            inputs=[f"{n}_h" for n in names[:m]], outputs=names[:p])
-    f_hi = min(f.max(), 0.49 / identified.dt) if identified.isdtime(strict=True) else f.max()
-    w = 2 * np.pi * np.logspace(np.log10(max(f.min(), 1e-2)), np.log10(f_hi), 400)
+    nyquist = 0.49 / identified.dt if identified.isdtime(strict=True) else np.inf
+    if f.size:
+        f_lo, f_hi = max(f.min(), 1e-2), min(f.max(), nyquist)
+    else:       # no finite measured line: the identified model alone, over its own band
+        f_lo, f_hi = 1.0, min(1e4, nyquist)
+        title = f"{title} (no measured line to draw)"
+    w = 2 * np.pi * np.logspace(np.log10(f_lo), np.log10(f_hi), 400)
     model = control.frequency_response(sys_named, w)
     model.sysname = "identified"
-    measured = control.FrequencyResponseData(H, 2 * np.pi * f, inputs=sys_named.input_labels,
-                                             outputs=sys_named.output_labels)
-    meas = control.frequency_response(measured)
-    meas.sysname = "measured (H1)"
+    responses = [model]
+    if f.size:
+        measured = control.FrequencyResponseData(H, 2 * np.pi * f, inputs=sys_named.input_labels,
+                                                 outputs=sys_named.output_labels)
+        meas = control.frequency_response(measured)
+        meas.sysname = "measured (H1)"
+        responses = [meas, model]
     title_h = _title_height(title, 4.0 * m + 1.5)
     with plt.rc_context(control.config.defaults["ctrlplot.rcParams"]):
         fig, ax = plt.subplots(2 * p, m, figsize=(4.0 * m + 1.5, 3.0 * p + 1.0 + title_h),
@@ -271,7 +280,7 @@ def measured_bode_figure(identified, frequency_hz, frf, names=None,
         fixed_layout(fig, 2 * p, m, left=1.35, right=0.25, bottom=0.6, top=title_h + 0.35,
                      wspace=0.45, hspace=0.35)
         with np.errstate(divide="ignore"):
-            cplt = control.bode_plot([meas, model], Hz=True, dB=True, deg=True, ax=ax,
+            cplt = control.bode_plot(responses, Hz=True, dB=True, deg=True, ax=ax,
                                      wrap_phase=True, share_magnitude="row",
                                      share_phase="row", share_frequency="col")
     suptitle(fig, title)

@@ -79,3 +79,37 @@ def test_outputs_leading_their_inputs_are_refused():
     early = [np.concatenate([y[:, 2:], y[:, -2:]], axis=1) for y in _delayed(outs, 0, seed=1)]
     est = estimate_measurement_delay(ins, early, T)
     assert est.delay == -2 and est.problem is not None and "lead" in est.problem
+
+
+def _offset(inputs, offset=75.0, lead=0.5):
+    """The records as a unipolar amplifier plays them: a half-cosine ramp from 0 V to
+    ``offset`` over ``lead`` seconds, then the record around the offset (the excited
+    input only; the other stays at 0 V)."""
+    out = []
+    for u in inputs:
+        n = int(round(lead / T))
+        ramp = offset * 0.5 * (1 - np.cos(np.pi * np.arange(n) / n))
+        v = np.zeros((u.shape[0], n + u.shape[1]))
+        k = int(np.argmax(np.ptp(u, axis=1)))
+        v[k, :n] = ramp
+        v[k, n:] = offset + u[k]
+        out.append(v)
+    return out
+
+
+def test_a_lead_in_ramp_to_an_offset_does_not_hide_the_band():
+    """The ramp holds most of the record's power: taken over the whole record, the band was
+    0.08-3 Hz and no delay could be estimated (a unipolar stack's records); the detrended
+    segments find the multisine's top again, and the inserted delay is recovered."""
+    from hammerstein.models.lti import excited_band
+    act = _actuator("gpi")
+    ins, _ = _multisines(act)
+    plain = excited_band(ins, T)
+    assert plain[0] == pytest.approx(10.0, rel=0.5) and plain[1] == pytest.approx(5000.0, rel=0.01)
+    shifted = _offset(ins)
+    lo, hi = excited_band(shifted, T)
+    assert hi == pytest.approx(5000.0, rel=0.01), (lo, hi)
+    outs = [act(u) for u in shifted]
+    for d in (0, 3):
+        est = estimate_measurement_delay(shifted, _delayed(outs, d, seed=d), T)
+        assert est.problem is None and est.delay == d, (d, est)
