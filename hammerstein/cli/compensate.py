@@ -14,8 +14,10 @@ beyond the records) is shaped first
 written in the header, and the shaped reference is written as
 ``<output>_shaped`` [µm].
 
-Exit status: 0 written; 1 a bad file or reference, or a drive the
-amplifier cannot deliver with ``--limits error`` (one line, nothing
+Exit status: 0 written; 1 a bad file or reference, or, with ``--limits
+error`` (the default), a drive the amplifier cannot deliver or one that
+chatters (:func:`hammerstein.compensation.shaping.chatter_warnings`: large
+steps of alternating sign on consecutive samples) (one line, nothing
 written); 2 a usage error.
 """
 
@@ -23,6 +25,8 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+
+import numpy as np
 
 from hammerstein.cli._common import out_file_problem, print_err
 from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
@@ -91,8 +95,9 @@ def add_parser(subparsers):
                         "lengthened until the drive never steps faster while fading in than "
                         "once settled, nor than the amplifier's slew rate)")
     p.add_argument("--limits", choices=list(LIMITS), default="error",
-                   help="beyond the amplifier: error (default, nothing written), warn or clip "
-                        "(the drive is clipped and slew-limited)")
+                   help="beyond the amplifier, or a drive that chatters: error (default, "
+                        "nothing written), warn or clip (the drive is clipped and slew-limited; "
+                        "a chattering drive is written with a warning)")
     p.add_argument("--predicted", action="store_true",
                    help="add the model-predicted outputs <output>_predicted [µm]")
     p.add_argument("--force", action="store_true",
@@ -204,6 +209,24 @@ def _kind_and_options(plant, kind, gain, check):
     return kind, options, note
 
 
+def _peaks_text(plant, drive):
+    """Each input's peak |u| [V] and slew [V/s] of the drive as written (the first step from
+    rest), and the compensator's own where the limits changed them."""
+    names = plant.hysteresis.input_names
+    rest = (np.zeros(len(names)) if plant.amplifier is None
+            else np.array([c.rest for c in plant.amplifier.channels]))
+    u = np.asarray(drive.inputs, dtype=float)
+    steps = np.abs(np.diff(np.concatenate([rest[:, None], u], axis=1), axis=1))
+    peak, slew = np.max(np.abs(u), axis=1), steps.max(axis=1) / plant.sampling_period
+    text = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in zip(names, peak, slew))
+    if not (np.allclose(peak, drive.peak_input, rtol=1e-9, atol=1e-9)
+            and np.allclose(slew, drive.peak_slew, rtol=1e-9, atol=1e-6)):
+        text += " (the compensator asked for " + ", ".join(
+            f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
+            zip(names, drive.peak_input, drive.peak_slew)) + " before the limits)"
+    return text
+
+
 def _handle(args):
     problem = out_file_problem(args.out, "drive file")
     if not problem:
@@ -240,11 +263,14 @@ def _handle(args):
             cols.update({f"{n}_predicted": v for n, v in zip(plant.hysteresis.output_names, y)})
             units += "; " + ", ".join(f"{n}_predicted" for n in plant.hysteresis.output_names) \
                 + " [µm] (model)"
-        peaks = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
-                          zip(plant.hysteresis.input_names, drive.peak_input, drive.peak_slew))
+        peaks = _peaks_text(plant, drive)
         chatter = chatter_warnings(drive.inputs, plant.sampling_period,
                                    None if plant.amplifier is None else plant.amplifier.range_widths(),
                                    list(plant.hysteresis.input_names))
+        if chatter and args.limits == "error":
+            print_err(f"hammerstein compensate: error: the drive chatters, nothing written: "
+                      f"{'; '.join(chatter)} (--limits warn writes it with this warning)")
+            return 1
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "

@@ -164,7 +164,9 @@ def add_parser(subparsers):
     p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
                    help="periods excluded from the printed error (default 1)")
     p.add_argument("--limits", choices=list(LIMITS), default="error",
-                   help="beyond the amplifier: error (default), warn or clip")
+                   help="beyond the amplifier, or a next drive that chatters (large steps of "
+                        "alternating sign on consecutive samples): error (default, nothing "
+                        "written), warn or clip (a chattering drive is written with a warning)")
     p.add_argument("--force", action="store_true",
                    help="replace an --out file that hammerstein did not write")
     p.set_defaults(handler=_handle)
@@ -541,6 +543,10 @@ def _handle(args):
                    + "".join(f"\nshaped: {n}" for n in shaped))
         chatter = chatter_warnings(u_next, T, None if plant.amplifier is None
                                    else plant.amplifier.range_widths(), list(model.input_names))
+        if chatter and args.limits == "error":
+            print_err(f"hammerstein learn: error: the next drive chatters, nothing written: "
+                      f"{'; '.join(chatter)} (--limits warn writes it with this warning)")
+            return 1
         comment += "".join(f"\nwarning: {line}" for line in chatter)
         notes += [f"warning: {line}" for line in chatter]
         t = np.arange(N) * T

@@ -46,3 +46,27 @@ def test_without_a_range_the_drives_own_span_is_the_scale():
     u = _circle_drive(1.0, 10.0)
     u[0, 100:140:2] += 0.5          # 25 % of its 2 V span
     assert len(chatter_warnings(u, T)) == 1
+
+
+@pytest.mark.parametrize("limits, status, written", [("error", 1, False), ("warn", 0, True)])
+def test_compensate_refuses_a_chattering_drive_by_default(tmp_path, capsys, monkeypatch, limits,
+                                                          status, written):
+    """With ``--limits error`` (the default) a drive that chatters is no file at all: one line
+    on stderr, exit 1; ``--limits warn`` writes it with the warning in its header. The
+    detector is held to its answer here (its own tests are above); what is checked is the
+    command's contract around it."""
+    import hammerstein.cli.compensate as compensate_cli
+    from hammerstein.cli.main import main
+    line = "ux: the drive reverses by more than 3 V from one sample to the next at 2 samples"
+    monkeypatch.setattr(compensate_cli, "chatter_warnings", lambda *a, **k: [line])
+    out = tmp_path / "drive.csv"
+    argv = ["compensate", "rakotondrabe-2dof", "--reference",
+            '{ kind = "circle", radius = 10, frequency = 20, periods = 2 }', "--out", str(out)]
+    got = main(argv + (["--limits", limits] if limits != "error" else []))
+    err = capsys.readouterr().err.splitlines()
+    assert got == status
+    assert out.exists() == written
+    if written:
+        assert f"# warning: {line}" in out.read_text()
+    else:
+        assert len(err) == 1 and "chatters, nothing written" in err[0] and line in err[0], err
