@@ -34,7 +34,8 @@ import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
-                                            ExcitationRecord, demagnetising_cycle, excitation_set)
+                                            ExcitationRecord, demagnetising_cycle, excitation_set,
+                                            peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -86,6 +87,11 @@ def add_parser(subparsers):
                         + ",".join(f"{b:g}" for b in REVERSALS) + " (off-centre loops of a "
                         "Preisach-like actuator, e.g. rasters; docs/identification.md); "
                         "default none: the decreasing sine alone")
+    p.add_argument("--slew-rate", type=_SLEW, metavar="V/S",
+                   help="the amplifier's slew rate [V/s]: every record then steps no faster "
+                        "(the multisines start at their sample nearest 0 V and are scaled down "
+                        "as far as needed, the staircase's steps become ramps); default none: "
+                        "the README gives each record's largest slew to check against yours")
     p.add_argument("--force", action="store_true",
                    help="replace files in DIR that this command did not write")
     p.set_defaults(handler=_handler)
@@ -93,6 +99,7 @@ def add_parser(subparsers):
 
 _SECONDS = number_type(0, low_open=True, unit="s")
 _HERTZ = number_type(0, low_open=True, unit="Hz")
+_SLEW = number_type(0, low_open=True, unit="V/s")
 
 
 class _Usage(ValueError):
@@ -122,7 +129,7 @@ def _amplitudes(text, m):
 _OPTIONS = {"f_min, periods": "--f-min, --periods", "frequency": "--sine-frequency",
             "sampling_period": "--sampling-period", "f_min, f_max": "--f-min, --f-max",
             "f_min": "--f-min", "f_max": "--f-max", "hold": "--hold", "periods": "--periods",
-            "amplitude": "--amplitude", "reversals": "--reversals"}
+            "amplitude": "--amplitude", "reversals": "--reversals", "slew_rate": "--slew-rate"}
 
 
 def _reversals(text):
@@ -216,7 +223,7 @@ def readme_text(records, names, amplitude, sampling_period, reversals=()):
         *([f"| {', '.join(by_kind['demagnetise'])} | the demagnetised state, before every file "
            f"and every drive | every input at once: a sine decaying from the amplitude to 0 V, "
            f"then 1 s at 0 V | {dur['demagnetise']:g} s |"] if "demagnetise" in by_kind else []),
-        "", "## What to measure", "",
+        "", *_slew_lines(records, names, T), "## What to measure", "",
         *(["0. Before each file below, and later before every drive you play (`hammerstein "
            "compensate`, `learn`), play `demagnetise.csv` (nothing to record). A model starts "
            "from the demagnetised state; an input left idle in a record, or a drive, would "
@@ -235,7 +242,7 @@ def readme_text(records, names, amplitude, sampling_period, reversals=()):
         "after each step):", "",
         "```",
         f"hammerstein identify {' '.join(by_kind['hysteresis'])} --inputs {','.join(names)} "
-        f"--outputs x,y --time t --dynamics --dynamics-records "
+        f"--outputs {','.join(_output_names(len(names)))} --time t --dynamics --dynamics-records "
         f"{' '.join(by_kind['multisine'] + by_kind['multisine-validation'])} "
         f"--creep-records {' '.join(by_kind['creep'])} "
         f"--out preset.toml --metrics fit.csv --plot fit.png",
@@ -243,6 +250,32 @@ def readme_text(records, names, amplitude, sampling_period, reversals=()):
         "Without the creep records the model has no creep: a drive then leaves the slow drift "
         "of every step (a few % of the displacement within seconds) uncompensated.", ""]
     return "\n".join(lines)
+
+
+def _output_names(m):
+    """The example output columns of the README's identify command (x, y, z, then y1...)."""
+    return ["x", "y", "z"][:m] if m <= 3 else [f"y{i + 1}" for i in range(m)]
+
+
+def _slew_lines(records, names, T):
+    """README lines: each kind's largest slew from rest [V/s], and the multisines a slew rate
+    scaled down."""
+    by_kind = {}
+    for r in records:
+        fast = max(peak_slew(row, T) for row in r.u)
+        by_kind[r.kind] = max(by_kind.get(r.kind, 0.0), fast)
+    lines = ["Largest slew of each kind of record, from rest: "
+             + ", ".join(f"{kind} {v:.3g} V/s" for kind, v in by_kind.items())
+             + ". Your amplifier must follow them; the inputs the records hold must be what "
+             "the actuator received (`--slew-rate` keeps every record within yours).", ""]
+    scaled = [r for r in records if r.scale < 1.0]
+    if scaled:
+        lines += ["The multisines were scaled down to stay within the slew rate: "
+                  + ", ".join(f"{r.name} to {100 * r.scale:.3g} %" for r in scaled)
+                  + " of their amplitude. A multisine's slew grows with its band: a lower "
+                  "`--f-max` (above the first bending mode) keeps more of the amplitude, and "
+                  "with it the records' signal to noise.", ""]
+    return lines
 
 
 def _csv_bytes(record, names):
@@ -277,9 +310,15 @@ def _handler(args):
             records = excitation_set(names, amplitude, T, sine_frequency=args.sine_frequency,
                                      f_min=args.f_min, f_max=args.f_max,
                                      multisine_periods=args.periods, hold=args.hold,
-                                     seed=args.seed, reversals=reversals)
+                                     seed=args.seed, reversals=reversals,
+                                     slew_rate=args.slew_rate)
             # twice the sine's frequency, at most the 8 samples per period it needs itself
             t, u = demagnetising_cycle(T, amplitude, min(2.0 * args.sine_frequency, 1 / (8 * T)))
+            fast = max(peak_slew(row, T) for row in u)
+            if args.slew_rate is not None and fast > args.slew_rate:
+                raise ValueError(f"frequency: the demagnetising cycle steps at up to {fast:.4g} "
+                                 f"V/s, beyond the slew rate {args.slew_rate:g} V/s; expected a "
+                                 f"lower sine frequency")
             records.append(ExcitationRecord("demagnetise", "demagnetise", -1, t, u))
         except ValueError as exc:
             raise _Usage(_option_names(str(exc))) from None
@@ -320,6 +359,11 @@ def _handler(args):
     for r, name in zip(records, targets):
         print(f"wrote {out / name}: {r.kind}, {r.time.size} samples ({r.time.size * T:g} s)")
     print(f"wrote {out / 'README.md'}")
+    scales = [r.scale for r in records if r.scale < 1.0]
+    if scales:
+        print(f"note: the multisines were scaled to {100 * min(scales):.3g}-{100 * max(scales):.3g} "
+              f"% of their amplitude to stay within --slew-rate {args.slew_rate:g} V/s; a lower "
+              f"--f-max keeps more of it (README.md)")
     return 0
 
 

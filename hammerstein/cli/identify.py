@@ -38,7 +38,8 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs
 from hammerstein.io.presets import PresetError, save_model
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification_pipeline import (PipelineOptions, identify_pipeline,
-                                                                 minor_loop_warning)
+                                                                 minor_loop_warning,
+                                                                 dynamics_fit_warning)
 from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.lti import estimate_measurement_delay
@@ -647,6 +648,9 @@ def _report(args, fit, records, dyn=None, creep=None):
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
             print(line)
+        poor = dynamics_fit_warning(dyn.summary)
+        if poor:
+            print_err(f"warning: {poor}")
     if creep is not None:
         for line in creep.report_lines(ou):
             print(line)

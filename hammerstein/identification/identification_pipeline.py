@@ -47,7 +47,8 @@ from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.simulation import linear_steps, preisach_steps
 
 __all__ = ["PipelineOptions", "IdentificationResult", "identify_hysteresis", "identify_pipeline",
-           "CLASS_LABEL", "GPI_PLAYS", "fit_class", "MINOR_LOOP_WARN_PERCENT", "minor_loop_warning"]
+           "CLASS_LABEL", "GPI_PLAYS", "fit_class", "MINOR_LOOP_WARN_PERCENT", "minor_loop_warning",
+           "DYNAMICS_FIT_WARN_PERCENT", "dynamics_fit_warning"]
 
 #: Words of each class in the notes.
 CLASS_LABEL = {"classical": "classical PI", "generalized": "generalized PI"}
@@ -171,6 +172,10 @@ class IdentificationResult:
 #: family's (a memory no class identify fits) by 2.6-7.0 %, whose feedforward circles then
 #: missed by 2.3-16 % of their radius
 MINOR_LOOP_WARN_PERCENT = 1.5
+#: ``identify`` warns when the identified dynamics fit the held-out broadband records below
+#: this [%] (:func:`dynamics_fit_warning`; measured fits of records an actuator played as
+#: written: 97-99 %).
+DYNAMICS_FIT_WARN_PERCENT = 90.0
 
 
 def minor_loop_warning(fit, input_names, output_names):
@@ -587,3 +592,43 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
         if dyn is not None:   # G again, on the model outputs through the creep: G(0) = I for G (I + C)
             dyn = _dynamics(options, fit, dynamics_records, creep.creeps_, first)
     return IdentificationResult(fit, dyn, creep, first)
+
+
+def dynamics_fit_warning(summary):
+    """A warning when the identified dynamics do not fit the held-out broadband records.
+
+    The fit is ``100 (1 - ||y - y_model|| / ||y - mean y||)`` on the records held out from
+    the order's choice (``held_out_fit_percent`` of the dynamics' summary, the fit of
+    Ljung, *System Identification*, 2nd ed., 1999, Section 16.4). Below
+    :data:`DYNAMICS_FIT_WARN_PERCENT` the records are most often not what the actuator
+    received: an amplifier slower than the multisines (it slew-limits them), one that clipped
+    them, or outputs recorded on another clock. ``compensate`` would then invert dynamics that
+    are not the actuator's.
+
+    Parameters
+    ----------
+    summary : dict
+        The identified dynamics' summary (``held_out_fit_percent`` [%]).
+
+    Returns
+    -------
+    str or None
+        One line without the ``warning:`` prefix; None when the fit reaches the threshold or
+        was not measured.
+
+    Examples
+    --------
+    >>> dynamics_fit_warning({"held_out_fit_percent": 98.2}) is None
+    True
+    >>> dynamics_fit_warning({"held_out_fit_percent": 16.0})[:40]
+    'the identified dynamics fit the held-out'
+    """
+    fit = summary.get("held_out_fit_percent") if summary else None
+    if fit is None or not np.isfinite(fit) or fit >= DYNAMICS_FIT_WARN_PERCENT:
+        return None
+    return (f"the identified dynamics fit the held-out broadband records at only {fit:.3g} % "
+            f"(below {DYNAMICS_FIT_WARN_PERCENT:g} %): the records may not hold what the actuator "
+            f"received (an amplifier slower than the multisines, or one that clipped them), and "
+            f"compensate would invert dynamics that are not the actuator's; record again within "
+            f"the amplifier's limits (hammerstein excitation --slew-rate, docs/records.md)")
+

@@ -49,7 +49,7 @@ import numpy as np
 from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
 
 __all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine",
-           "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set",
+           "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set", "peak_slew",
            "demagnetising_cycle"]
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude).
@@ -512,6 +512,8 @@ class ExcitationRecord:
         [s].
     u : numpy.ndarray, shape (m, n_samples)
         [V].
+    scale : float
+        What a slew rate scaled the record down by (1: not scaled).
     """
 
     name: str
@@ -519,11 +521,61 @@ class ExcitationRecord:
     excited: int
     time: np.ndarray
     u: np.ndarray
+    scale: float = 1.0
+
+
+def peak_slew(u, sampling_period, periodic=False):
+    """Largest ``|u[k] - u[k-1]| / T`` [V/s] of a record played from rest at 0 V.
+
+    Parameters
+    ----------
+    u : array_like, shape (n_samples,)
+        [V].
+    sampling_period : float
+        T [s].
+    periodic : bool
+        Also count the step from the last sample back to the first (one period of a
+        periodic signal played again).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> peak_slew([0.0, 1.0, 3.0, 2.0], 0.5)
+    4.0
+    """
+    u = np.asarray(u, dtype=float)
+    steps = np.abs(np.diff(np.concatenate([[0.0], u, u[:1] if periodic else []])))
+    return float(steps.max() / sampling_period) if steps.size else 0.0
+
+
+def _slew_limited_multisine(one, n_period, T, slew_rate):
+    """A multisine period started at its sample nearest 0 V (a cyclic shift: the same
+    amplitude spectrum, no step from rest) and scaled down until it steps no faster than
+    ``slew_rate`` [V/s]; (periods, scale)."""
+    period = np.roll(one[:n_period], -int(np.argmin(np.abs(one[:n_period]))))
+    scale = min(1.0, slew_rate / peak_slew(period, T, periodic=True))
+    return np.tile(scale * period, one.size // n_period), scale
+
+
+def _ramped_staircase(u, T, slew_rate):
+    """A staircase whose steps are linear ramps at ``slew_rate`` [V/s] from each step's
+    first sample (the hold shortened by the ramp)."""
+    out = u.copy()
+    edges = np.flatnonzero(np.diff(u)) + 1
+    for e in edges:
+        a, b = out[e - 1], u[e]
+        n = int(np.ceil(abs(b - a) / (slew_rate * T)))
+        end = min(u.size, e + n)
+        out[e:end] = a + (b - a) * np.arange(1, end - e + 1) / n
+    return out
 
 
 def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, levels=LEVELS,
                    f_min=10.0, f_max=None, multisine_fraction=0.8, multisine_periods=4,
-                   hold=2.0, seed=0, reversals=()):
+                   hold=2.0, seed=0, reversals=(), slew_rate=None):
     """Every excitation record for m inputs, one input at a time.
 
     Per input k (the others at 0): the decreasing-amplitude sine
@@ -561,6 +613,14 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
         Reversal points of the first-order reversal curves (fractions of the
         amplitude, :func:`reversal_curves`, e.g. :data:`REVERSALS`); empty
         (the default): the decreasing sine alone.
+    slew_rate : float, optional
+        The amplifier's slew rate [V/s]. Every record then steps no faster,
+        from rest: each multisine period starts at its sample nearest 0 V (a
+        cyclic shift) and is scaled down as far as needed (the record's
+        ``scale`` says by how much); the staircase's steps become ramps at
+        that rate. A hysteresis record that would step faster is refused
+        (lower ``sine_frequency``). Default None: no limit (the multisines
+        start at their first sample and the staircase steps in one sample).
 
     Returns
     -------
@@ -587,18 +647,29 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
     amp = np.broadcast_to(np.asarray(amplitude, dtype=float), (m,))
     if not (0 < float(multisine_fraction) <= 1):
         raise ValueError(f"multisine_fraction: expected in (0, 1], found {multisine_fraction!r}")
+    S = None if slew_rate is None else _check_positive(slew_rate, "slew_rate", "V/s")
     out = []
     for k, name in enumerate(names):
-        def full(t, one, kind, stem, k=k):
+        def full(t, one, kind, stem, k=k, scale=1.0):
             u = np.zeros((m, t.size))
             u[k] = one
-            out.append(ExcitationRecord(stem, kind, k, t, u))
+            out.append(ExcitationRecord(stem, kind, k, t, u, scale))
         t, one = hysteresis_excitation(sampling_period, amp[k], sine_frequency, levels, reversals)
+        if S is not None and peak_slew(one, sampling_period) > S:
+            raise ValueError(f"frequency: the hysteresis record of {name} steps at up to "
+                             f"{peak_slew(one, sampling_period):.4g} V/s, beyond the slew rate "
+                             f"{S:g} V/s; expected a lower sine frequency")
         full(t, one, "hysteresis", f"hysteresis-{name}")
         for r, suffix in enumerate(("", "-validation")):
             t, one, _ = multisine(sampling_period, multisine_fraction * amp[k], f_min, f_max,
                                   periods=multisine_periods, seed=seed + 2 * k + r)
-            full(t, one, "multisine" + suffix, f"multisine-{name}{suffix}")
+            scale = 1.0
+            if S is not None:
+                one, scale = _slew_limited_multisine(one, one.size // int(multisine_periods),
+                                                     float(sampling_period), S)
+            full(t, one, "multisine" + suffix, f"multisine-{name}{suffix}", scale=scale)
         t, one, _ = staircase(sampling_period, amp[k], hold)
+        if S is not None:
+            one = _ramped_staircase(one, float(sampling_period), S)
         full(t, one, "creep", f"creep-{name}")
     return out

@@ -203,3 +203,41 @@ def test_usage_errors(tmp_path, capsys, opts, fragment):
     err = capsys.readouterr().err
     assert status == 2 and fragment in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_a_slew_rate_keeps_every_record_within_it(tmp_path, capsys):
+    """``--slew-rate``: no record steps faster, from rest (the first sample counted from 0 V):
+    the multisines are one period shifted cyclically (the same amplitude spectrum, scaled) and
+    scaled down, the staircase's steps are ramps at the rate; the README names the scale and
+    its identify command the three outputs."""
+    S = 2000.0                              # V/s: 1 V a sample at 2 kHz, 10 V steps ramped
+    out = tmp_path / "slow"
+    assert main(["excitation", "--inputs", "ux,uy,uz", "--amplitude", "10", "--sampling-period",
+                 str(T), "--out", str(out), "--slew-rate", str(S), "--hold", "0.5"]) == 0
+    assert "scaled to" in capsys.readouterr().out
+    reference = tmp_path / "fast"
+    assert main(["excitation", "--inputs", "ux,uy,uz", "--amplitude", "10", "--sampling-period",
+                 str(T), "--out", str(reference), "--hold", "0.5"]) == 0
+    for f in sorted(out.glob("*.csv")):
+        _, data = _read(f)
+        u = data[:, 1:]
+        steps = np.abs(np.diff(np.vstack([np.zeros((1, u.shape[1])), u]), axis=0))
+        assert steps.max() <= S * T * (1 + 1e-9), (f.name, steps.max())
+        if f.name.startswith("multisine"):
+            k = int(np.argmax(np.ptp(u, axis=0)))
+            one, fast = u[:, k], _read(reference / f.name)[1][:, 1 + k]
+            n = one.size // 4                           # four periods
+            a, b = np.abs(np.fft.rfft(one[:n])), np.abs(np.fft.rfft(fast[:n]))
+            scale = a.max() / b.max()
+            assert 0 < scale < 1 and np.allclose(a, scale * b, atol=1e-6 * a.max())
+            assert abs(one[0]) <= S * T
+    readme = (out / "README.md").read_text()
+    assert "scaled down to stay within the slew rate" in readme and "--outputs x,y,z" in readme
+
+
+def test_a_slew_rate_the_slow_sine_exceeds_is_a_usage_error(tmp_path, capsys):
+    assert main(["excitation", "--inputs", "ux", "--amplitude", "10", "--sampling-period",
+                 str(T), "--out", str(tmp_path / "r"), "--slew-rate", "10"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("hammerstein excitation: error: --sine-frequency")
+    assert not (tmp_path / "r").exists()
