@@ -16,9 +16,10 @@ written in the header, and the shaped reference is written as
 
 Exit status: 0 written; 1 a bad file or reference, or, with ``--limits
 error`` (the default), a drive the amplifier cannot deliver or one that
-chatters (:func:`hammerstein.compensation.shaping.chatter_warnings`: large
-steps of alternating sign on consecutive samples) (one line, nothing
-written); 2 a usage error.
+chatters (:func:`hammerstein.compensation.shaping.chatter_warnings`: steps
+of alternating sign on consecutive samples, each beyond
+:data:`~hammerstein.compensation.shaping.CHATTER_REFUSE_FRACTION` of the
+range) (one line, nothing written); 2 a usage error.
 """
 
 from __future__ import annotations
@@ -39,8 +40,8 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.shaping import (chatter_warnings, first_mode_hz, mode_decay_s,
-                                              mode_note)
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
+                                              first_mode_hz, mode_decay_s, mode_note, zpetc_note)
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -180,7 +181,17 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     note = mode_note(linear, T, drive.reference, reference.period_samples)
     if note:
         drive.notes.append(note)
+    zeros = _zpetc_zeros(comp)
+    note = None if zeros is None else zpetc_note(zeros, T, drive.reference,
+                                                 reference.period_samples)
+    if note:
+        drive.notes.append(note)
     return comp, drive
+
+
+def _zpetc_zeros(comp):
+    """The zeros of G a Hammerstein compensator's ZPETC inverse approximates, or None."""
+    return getattr(getattr(comp, "inverse", None), "unacceptable_zeros", None)
 
 
 def _kind_and_options(plant, kind, gain, check):
@@ -264,17 +275,22 @@ def _handle(args):
             units += "; " + ", ".join(f"{n}_predicted" for n in plant.hysteresis.output_names) \
                 + " [µm] (model)"
         peaks = _peaks_text(plant, drive)
-        chatter = chatter_warnings(drive.inputs, plant.sampling_period,
-                                   None if plant.amplifier is None else plant.amplifier.range_widths(),
+        rest_text = ", ".join(f"{n} = {v:.10g} µm" for n, v in zip(
+            plant.hysteresis.output_names, rest_output(plant.hysteresis, plant.creep)))
+        widths = None if plant.amplifier is None else plant.amplifier.range_widths()
+        chatter = chatter_warnings(drive.inputs, plant.sampling_period, widths,
                                    list(plant.hysteresis.input_names))
-        if chatter and args.limits == "error":
+        severe = chatter_warnings(drive.inputs, plant.sampling_period, widths,
+                                  list(plant.hysteresis.input_names), CHATTER_REFUSE_FRACTION)
+        if severe and args.limits == "error":
             print_err(f"hammerstein compensate: error: the drive chatters, nothing written: "
-                      f"{'; '.join(chatter)} (--limits warn writes it with this warning)")
+                      f"{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
-                   f"({drive.fade_samples * plant.sampling_period:g} s, excluded from the metrics)\n"
+                   f"({drive.fade_samples * plant.sampling_period:g} s, excluded from the metrics) "
+                   f"from the rest output {rest_text} (the model's output at 0 V)\n"
                    f"peak input and slew: {peaks}\n"
                    f"{START_NOTE}" + shaped_cols
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"

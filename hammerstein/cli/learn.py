@@ -104,7 +104,8 @@ from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, erro
                                   harmonic_base_gains, periodic_average, reference_correction,
                                   repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
-from hammerstein.compensation.shaping import chatter_warnings, first_mode_hz
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
+                                              first_mode_hz)
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
 
@@ -541,11 +542,13 @@ def _handle(args):
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
                    + "".join(f"\nshaped: {n}" for n in shaped))
-        chatter = chatter_warnings(u_next, T, None if plant.amplifier is None
-                                   else plant.amplifier.range_widths(), list(model.input_names))
-        if chatter and args.limits == "error":
+        widths = None if plant.amplifier is None else plant.amplifier.range_widths()
+        chatter = chatter_warnings(u_next, T, widths, list(model.input_names))
+        severe = chatter_warnings(u_next, T, widths, list(model.input_names),
+                                  CHATTER_REFUSE_FRACTION)
+        if severe and args.limits == "error":
             print_err(f"hammerstein learn: error: the next drive chatters, nothing written: "
-                      f"{'; '.join(chatter)} (--limits warn writes it with this warning)")
+                      f"{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
         comment += "".join(f"\nwarning: {line}" for line in chatter)
         notes += [f"warning: {line}" for line in chatter]

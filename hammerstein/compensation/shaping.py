@@ -33,7 +33,16 @@ compensator again on the shaped reference:
    follows the drive it actually sends).
 
 Every change is reported (:func:`shaping_notes`): per output, the largest
-change [µm], the share of samples and the time intervals.
+change [µm], the share of samples and the time intervals. What shaping
+cannot change is named beside it: a harmonic at a bending mode
+(:func:`mode_note`), the ZPETC inverse's gain error at the reference's
+main frequency (:func:`zpetc_note`), a drive that chatters
+(:func:`chatter_warnings`).
+
+Length: the shaping and the notes of what a drive cannot do read the same
+reference spectra, mode frequencies and amplifier limits, and are what
+``compensate`` and ``learn`` print together; apart, each note would carry
+its own copy of the main-frequency and mode estimates.
 """
 
 from __future__ import annotations
@@ -45,7 +54,7 @@ import numpy as np
 __all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
            "faster_than_mode", "limit_excess", "hann_average", "mode_amplification", "mode_note",
            "shape_reference", "shaping_notes", "time_intervals", "CHATTER_FRACTION",
-           "chatter_warnings"]
+           "chatter_warnings", "CHATTER_REFUSE_FRACTION", "main_frequency", "ZPETC_NOTE_ERROR", "zpetc_gain", "zpetc_note"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
@@ -295,17 +304,12 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     measured response)
     """
     A = np.atleast_2d(np.asarray(matrices[0], dtype=float))
-    if A.size == 0 or period_samples is None or int(period_samples) < 2:
+    if A.size == 0:
         return None
     T = float(sampling_period)
-    P = int(period_samples)
-    ref = np.atleast_2d(np.asarray(reference, dtype=float))
-    if ref.shape[1] < P:
+    f0 = main_frequency(reference, period_samples, T)
+    if f0 is None:
         return None
-    spectrum = (np.abs(np.fft.rfft(ref[:, -P:], axis=1)) ** 2).sum(axis=0)
-    if spectrum.size < 2 or not np.any(spectrum[1:] > 0):
-        return None
-    f0 = _refined_frequency(ref, (1 + int(np.argmax(spectrum[1:]))) / (P * T), P, T)
     order = np.arange(1, MODE_NOTE_HARMONICS + 1)
     order = order[order * f0 < 0.5 / T]
     if order.size == 0:
@@ -328,6 +332,135 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
             f"times its static gain: what the hysteresis model gets wrong at {n * f0:.4g} Hz "
             f"reaches the position {a:.3g} times larger, and feedforward cannot see it "
             f"(`hammerstein learn` corrects it on the measured response)")
+
+
+def main_frequency(reference, period_samples, sampling_period):
+    """A periodic reference's main frequency [Hz], or None.
+
+    The largest line of the spectrum of its last period (summed over the outputs, without the
+    mean), refined on the Hann-windowed spectrum of its last periods.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    period_samples : int or None
+        One period [samples]; None or below 2 (not periodic) gives None.
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    float or None
+
+    Examples
+    --------
+    >>> t = np.arange(4000) * 5e-5
+    >>> round(main_frequency(np.sin(2 * np.pi * 50.0 * t)[None, :], 400, 5e-5), 6)
+    50.0
+    """
+    if period_samples is None or int(period_samples) < 2:
+        return None
+    T, P = float(sampling_period), int(period_samples)
+    ref = np.atleast_2d(np.asarray(reference, dtype=float))
+    if ref.shape[1] < P:
+        return None
+    spectrum = (np.abs(np.fft.rfft(ref[:, -P:], axis=1)) ** 2).sum(axis=0)
+    if spectrum.size < 2 or not np.any(spectrum[1:] > 0):
+        return None
+    return _refined_frequency(ref, (1 + int(np.argmax(spectrum[1:]))) / (P * T), P, T)
+
+
+#: ``compensate`` names the ZPETC inverse's gain error at the reference's main frequency from
+#: this relative deviation (:func:`zpetc_note`).
+ZPETC_NOTE_ERROR = 0.01
+
+
+def zpetc_gain(unacceptable_zeros, sampling_period, frequencies):
+    """The gain ``|b(e^jwT)|^2 / b(1)^2`` the ZPETC inverse leaves at each frequency.
+
+    ZPETC replaces each zero ``beta`` of G it cannot cancel by a zero-phase factor, so that
+    ``G F = |b(e^jwT)|^2 / b(1)^2 I`` with ``b(z) = prod (z - beta)`` (Tomizuka, J. Dyn.
+    Sys., Meas., Control 109(1), 65-68, 1987; :class:`hammerstein.compensation.inversion.ZPETCInverse`).
+
+    Parameters
+    ----------
+    unacceptable_zeros : array_like, complex, shape (n_zeros,)
+        The zeros of G the inverse approximates (``ZPETCInverse.unacceptable_zeros``).
+    sampling_period : float
+        T [s].
+    frequencies : array_like, shape (n_freq,)
+        [Hz].
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_freq,)
+        1 at 0 Hz; 1 everywhere without such zeros.
+
+    Examples
+    --------
+    >>> float(zpetc_gain([-0.97], 5e-5, [0.0])[0])
+    1.0
+    >>> round(float(zpetc_gain([-0.97], 5e-5, [300.0])[0]) - 1, 4)   # 2 beta (1 - cos wT) / (1 - beta)^2
+    -0.0022
+    """
+    beta = np.asarray(unacceptable_zeros, dtype=complex).ravel()
+    z = np.exp(2j * np.pi * np.asarray(frequencies, dtype=float) * float(sampling_period))
+    if beta.size == 0:
+        return np.ones(z.shape)
+    b = np.prod(z[:, None] - beta[None, :], axis=1)
+    return np.abs(b) ** 2 / np.abs(np.prod(1.0 - beta)) ** 2
+
+
+def zpetc_note(unacceptable_zeros, sampling_period, reference, period_samples,
+               limit=ZPETC_NOTE_ERROR):
+    """A note when the ZPETC inverse misses a periodic reference's main frequency, or None.
+
+    Its gain there (:func:`zpetc_gain`) is what the drive draws of the reference's
+    fundamental; beyond ``limit`` from 1 the zero of G nearest that frequency on the unit
+    circle is named, and the stable inversion, which inverts such zeros exactly.
+
+    Parameters
+    ----------
+    unacceptable_zeros : array_like, complex
+        The zeros of G the inverse approximates.
+    sampling_period : float
+        T [s].
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    period_samples : int or None
+        One period [samples]; None: not periodic (None returned).
+    limit : float
+        Relative gain error from which the note is given.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> T = 1e-4
+    >>> t = np.arange(4000) * T
+    >>> ref = np.sin(2 * np.pi * 150.0 * t)[None, :]
+    >>> beta = 1.004 * np.exp(2j * np.pi * 375.0 * T * np.array([1, -1]))
+    >>> zpetc_note(beta, T, ref, 200).split(":")[0]
+    "the ZPETC inverse passes the reference's main frequency (150 Hz) at 0.705 of its gain"
+    """
+    beta = np.asarray(unacceptable_zeros, dtype=complex).ravel()
+    T = float(sampling_period)
+    f0 = None if beta.size == 0 else main_frequency(reference, period_samples, T)
+    if f0 is None:
+        return None
+    g = float(zpetc_gain(beta, T, [f0])[0])
+    if abs(g - 1.0) <= limit:
+        return None
+    hz = np.abs(np.angle(beta)) / (2 * np.pi * T)
+    k = int(np.argmin(np.abs(np.abs(beta) - 1.0) + 1e-6 * np.abs(hz - f0)))
+    return (f"the ZPETC inverse passes the reference's main frequency ({f0:.4g} Hz) at {g:.3g} "
+            f"of its gain: G has a zero it cannot cancel at {hz[k]:.4g} Hz (|z| = "
+            f"{abs(beta[k]):.4g}), and the drive draws about {g:.3g} of the reference there; "
+            f"`--inversion stable` inverts it exactly (drive files; the exported C is the "
+            f"ZPETC's)")
 
 
 def _refined_frequency(reference, f0, period_samples, sampling_period, periods=16, points=21):
@@ -447,9 +580,14 @@ def _after(start, n, size):
 #: :func:`chatter_warnings` names an input that reverses by more than this fraction of its range
 #: (or of its own span without one) on two consecutive samples
 CHATTER_FRACTION = 0.02
+#: ``compensate`` and ``learn`` refuse a drive (under ``--limits error``) that reverses by more
+#: than this fraction of the range on two consecutive samples: 22-50 % on the drives two new
+#: users' checks and a Bouc-Wen actuator met; a 400 Hz circle's one glitch at the end of its
+#: fade on the paper's actuator, 8 %, is only named.
+CHATTER_REFUSE_FRACTION = 0.1
 
 
-def chatter_warnings(inputs, sampling_period, span=None, names=None):
+def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CHATTER_FRACTION):
     """Where a drive chatters: steps up and down (or down and up) by a large voltage on
     consecutive samples.
 
@@ -469,6 +607,9 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None):
     span : array_like, shape (m,), optional
         Each input's range width [V] (the amplifier's); its own peak to peak otherwise.
     names : list of str, optional
+    fraction : float
+        Of the range: the smallest step of a reversal that counts (default
+        :data:`CHATTER_FRACTION`; :data:`CHATTER_REFUSE_FRACTION` for those a command refuses).
 
     Returns
     -------
@@ -490,7 +631,7 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None):
     width = np.ptp(u, axis=1) if span is None else np.asarray(span, dtype=float)
     out = []
     for i in range(u.shape[0]):
-        big = CHATTER_FRACTION * width[i]
+        big = fraction * width[i]
         hit = (d[i, :-1] * d[i, 1:] < 0) & (np.minimum(np.abs(d[i, :-1]), np.abs(d[i, 1:])) > big)
         if big > 0 and hit.any():
             name = names[i] if names is not None else f"input {i + 1}"

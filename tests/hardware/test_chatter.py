@@ -70,3 +70,15 @@ def test_compensate_refuses_a_chattering_drive_by_default(tmp_path, capsys, monk
         assert f"# warning: {line}" in out.read_text()
     else:
         assert len(err) == 1 and "chatters, nothing written" in err[0] and line in err[0], err
+
+
+@pytest.mark.parametrize("glitch, named, refused", [(0.05, True, False), (0.2, True, True),
+                                                    (0.01, False, False)])
+def test_a_glitch_is_named_and_a_chatter_refused(glitch, named, refused):
+    """One reversal of ``glitch`` times the 40 V range on a slow ramp: named from
+    CHATTER_FRACTION (2 %), refused from CHATTER_REFUSE_FRACTION (10 %)."""
+    from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION
+    u = np.vstack([np.linspace(-5.0, 5.0, 400), np.zeros(400)])
+    u[0, 200] += glitch * 40.0
+    assert bool(chatter_warnings(u, T, [40.0, 40.0])) == named
+    assert bool(chatter_warnings(u, T, [40.0, 40.0], fraction=CHATTER_REFUSE_FRACTION)) == refused
