@@ -186,7 +186,32 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
                                                  reference.period_samples)
     if note:
         drive.notes.append(note)
+    note = _first_sample_note(plant, drive, inversion if kind == "hammerstein" else None)
+    if note:
+        drive.notes.append(note)
     return comp, drive
+
+
+#: The first sample's distance from rest [V] from which compensate names it.
+FIRST_SAMPLE_TOLERANCE = 1e-9
+
+
+def _first_sample_note(plant, drive, inversion):
+    """A note when the drive's first sample is not the rest voltage (beyond
+    :data:`FIRST_SAMPLE_TOLERANCE`), or None."""
+    rest = (np.zeros(drive.inputs.shape[0]) if plant.amplifier is None
+            else np.array([c.rest for c in plant.amplifier.channels]))
+    off = np.asarray(drive.inputs, dtype=float)[:, 0] - rest
+    if np.max(np.abs(off)) <= FIRST_SAMPLE_TOLERANCE:
+        return None
+    why = ("the stable inversion's anti-causal part, G's zeros outside the unit circle, starts "
+           "acting before the reference moves and had not decayed over the fade's rest lead (a "
+           "zero near the unit circle decays slowly; a longer --fade-in gives it room)"
+           if inversion == "stable" else
+           "the inverse's start at rest, within its tolerance")
+    return ("the drive's first sample is " + ", ".join(
+        f"{n} {v:+.3g} V" for n, v in zip(plant.hysteresis.input_names, off))
+            + f" from rest: {why}")
 
 
 def _zpetc_zeros(comp):

@@ -82,3 +82,18 @@ def test_a_glitch_is_named_and_a_chatter_refused(glitch, named, refused):
     u[0, 200] += glitch * 40.0
     assert bool(chatter_warnings(u, T, [40.0, 40.0])) == named
     assert bool(chatter_warnings(u, T, [40.0, 40.0], fraction=CHATTER_REFUSE_FRACTION)) == refused
+
+
+@pytest.mark.parametrize("first, inversion, said", [(0.0, "zpetc", None), (5e-10, "stable", None),
+                                                    (0.056, "stable", "anti-causal"),
+                                                    (-3e-6, "zpetc", "tolerance")])
+def test_a_first_sample_off_rest_is_named(first, inversion, said):
+    """compensate names a drive whose first sample is more than 1e-9 V from rest, and why."""
+    from types import SimpleNamespace
+    from hammerstein.cli.compensate import _first_sample_note
+    plant = SimpleNamespace(amplifier=None, hysteresis=SimpleNamespace(input_names=["ux", "uy"]))
+    drive = SimpleNamespace(inputs=np.array([[0.0, 1.0], [first, 1.0]]))
+    note = _first_sample_note(plant, drive, inversion)
+    assert (note is None) == (said is None)
+    if said:
+        assert said in note and f"uy {first:+.3g} V" in note
