@@ -640,8 +640,10 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CH
                        f"next at {int(hit.sum())} samples ({time_intervals(near, sampling_period)}; "
                        f"steps up to {np.abs(d[i]).max():.3g} V): the inverse alternates between "
                        f"inputs that give the model the same output (a model flat there, e.g. near "
-                       f"the edge of its records); do not play it as it is: keep the reference "
-                       f"away from there or look at it with --predicted")
+                       f"the edge of its records), or the inverse of the dynamics rings on a step "
+                       f"of the reference (a raster's line step, without an [amplifier] to shape "
+                       f"it); do not play it as it is: keep the reference away from there, smooth "
+                       f"it, or look at it with --predicted")
     return out
 
 

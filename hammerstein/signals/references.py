@@ -68,6 +68,17 @@ def _pair(what):
     return check
 
 
+def _point(v):
+    if isinstance(v, list) and len(v) == 2 and all(is_number(a) for a in v):
+        return [float(a) for a in v]
+    raise Invalid(f"expected two numbers [x, y] [µm] (the outputs' values at the centre), found {v!r}")
+
+
+def _centred(xy, c):
+    """The two outputs' signal ``xy`` (2, n) moved to the reference's ``center`` [µm]."""
+    return xy + np.asarray(c, dtype=float)[:, None] if c is not None else xy
+
+
 def _amplitudes(v):
     if is_number(v) and v > 0:
         return float(v)
@@ -118,6 +129,8 @@ def _common_words(s, unit):
     parts = [f"phase {words_number(s['phase'], '°')}"] if s.get("phase") else []
     if s.get("offset"):
         parts.append(f"offset {words_number(s['offset'], unit)}")
+    if s.get("center"):
+        parts.append("centre (" + ", ".join(words_number(v) for v in s["center"]) + ") µm")
     return parts + [_length(s)]
 
 
@@ -229,14 +242,16 @@ def _drive(fn):
 
 def _circle(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
+    centre = c.pop("center", None)
     t, xy = circle(T, **c)
-    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
+    return t, _placed(_centred(xy, centre), outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
 
 
 def _spiral(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
+    centre = c.pop("center", None)
     t, xy = spiral(T, **c)
-    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
+    return t, _placed(_centred(xy, centre), outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
 
 
 def _lissajous_period(c):
@@ -248,8 +263,9 @@ def _lissajous_period(c):
 
 def _lissajous(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
+    centre = c.pop("center", None)
     t, xy = lissajous(T, **c)
-    return t, _placed(xy, outs, names), _lissajous_period(c), {"scale": float(np.max(c["amplitude"]))}
+    return t, _placed(_centred(xy, centre), outs, names), _lissajous_period(c), {"scale": float(np.max(c["amplitude"]))}
 
 
 def _lissajous_words(s, unit):
@@ -265,8 +281,11 @@ def _raster(c, T, names, base_dir):
     if len(set(outs)) != 2 or any(o not in names for o in outs):
         raise SignalError(f"outputs: expected two different outputs [fast, slow] of the plant "
                           f"{list(names)}, found {outs}")
+    centre = c.pop("center", None)
     t, xy = raster(T, **c)
-    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": float(max(c["size"]))}
+    if centre is not None:      # [0, W] x [0, H] moved so that its centre is there
+        centre = np.asarray(centre) - 0.5 * np.asarray(c["size"], dtype=float)
+    return t, _placed(_centred(xy, centre), outs, names), 1.0 / c["frequency"], {"scale": float(max(c["size"]))}
 
 
 def _raster_words(s, unit):
@@ -322,7 +341,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
     "circle": ReferenceKind(
         {"radius": Field(number("µm", 0), required=True),
          "frequency": Field(number("Hz", 0), required=True),
-         "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
+         "phase": _PHASE, "outputs": Field(name_list(2)), "center": Field(_point), **_LENGTH},
         _circle, lambda s, unit: ["circle", f"radius {words_number(s['radius'], 'µm')}",
                                   words_number(s["frequency"], "Hz")] + _common_words(s, unit),
         "circle on two outputs (paper Fig. 10)"),
@@ -332,7 +351,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
          "tau": Field(number("s", 0), required=True),
          "duration": Field(number("s", 0), required=True),
          "circle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
-         "phase": _PHASE, "outputs": Field(name_list(2))},
+         "phase": _PHASE, "outputs": Field(name_list(2)), "center": Field(_point)},
         _spiral, lambda s, unit: ["spiral", f"radius {words_number(s['radius'], 'µm')}",
                                   words_number(s["frequency"], "Hz"),
                                   f"decay τ {words_number(s['tau'], 's')} after "
@@ -342,7 +361,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
     "lissajous": ReferenceKind(
         {"amplitude": Field(_amplitudes, required=True),
          "frequencies": Field(_pair("two positive frequencies [f_x, f_y] [Hz]"), required=True),
-         "phase": _PHASE, "outputs": Field(name_list(2)), **_LENGTH},
+         "phase": _PHASE, "outputs": Field(name_list(2)), "center": Field(_point), **_LENGTH},
         _lissajous, _lissajous_words, "Lissajous figure on two outputs (paper Fig. 12-13)",
         period=_lissajous_period),
     "raster": ReferenceKind(
@@ -351,7 +370,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
          "lines": Field(integer(2), required=True),
          "frequency": Field(number("Hz", 0), required=True),  # fast axis (line rate)
          "slow": Field(choice("step", "ramp"), default="step"),
-         "smoothing": Field(_fraction(0.5), default=0.0)},
+         "smoothing": Field(_fraction(0.5), default=0.0), "center": Field(_point)},
         _raster, _raster_words, "AFM-style raster scan (trace and retrace, per-line metrics)",
         metrics=_raster_metrics, scan=_raster_scan),
     "file": ReferenceKind(

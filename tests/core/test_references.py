@@ -85,3 +85,28 @@ def test_errors_name_the_field(call, field):
 def test_eight_samples_per_period_is_accepted():
     t, r = refs.sine(T, ["x"], "x", 1.0, 1.0 / (8 * T), periods=1)
     assert t.size == 8
+
+
+@pytest.mark.parametrize("kind, table", [
+    ("circle", {"radius": 10.0, "frequency": 50.0, "periods": 2}),
+    ("lissajous", {"amplitude": 10.0, "frequencies": [50.0, 100.0], "periods": 1}),
+    ("spiral", {"radius": 10.0, "frequency": 50.0, "tau": 0.01, "duration": 0.05}),
+])
+def test_a_centre_moves_a_planar_reference(kind, table):
+    """``center = [x, y]``: the same signal, moved (a unipolar stage's circle lies around
+    the middle of its travel, not around 0)."""
+    kind_ = refs.REFERENCE_KINDS[kind]
+    base = kind_.generate(dict(table), 1e-4, ["x", "y", "z"], None)[1]
+    moved = kind_.generate({**table, "center": [50.0, 40.0]}, 1e-4, ["x", "y", "z"], None)[1]
+    np.testing.assert_allclose(moved[:2] - base[:2], [[50.0], [40.0]] * np.ones_like(base[:2]),
+                               atol=1e-12)
+    np.testing.assert_array_equal(moved[2], base[2])
+
+
+def test_a_centred_raster_spans_its_size_around_the_centre():
+    table = {"outputs": ["x", "y"], "size": [40.0, 20.0], "lines": 4, "frequency": 20.0,
+             "slow": "step", "smoothing": 0.0}
+    kind = refs.REFERENCE_KINDS["raster"]
+    sig = kind.generate({**table, "center": [50.0, 50.0]}, 1e-4, ["x", "y"], None)[1]
+    assert sig[0].min() == pytest.approx(30.0) and sig[0].max() == pytest.approx(70.0)
+    assert sig[1].min() == pytest.approx(40.0) and sig[1].max() == pytest.approx(60.0)
