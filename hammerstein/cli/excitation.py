@@ -34,8 +34,8 @@ import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
-                                            ExcitationRecord, demagnetising_cycle, excitation_set,
-                                            peak_slew)
+                                            ExcitationRecord, around, demagnetising_cycle,
+                                            excitation_set, peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -65,8 +65,13 @@ def add_parser(subparsers):
                     "plus a README of what to measure.")
     p.add_argument("--inputs", required=True, metavar="NAMES",
                    help="input names, comma-separated (the column names), e.g. ux,uy")
-    p.add_argument("--amplitude", required=True, metavar="V|V1,V2,...",
-                   help="full amplitude [V], one for all inputs or one per input")
+    p.add_argument("--amplitude", metavar="V|V1,V2,...",
+                   help="full amplitude [V], one for all inputs or one per input: the records "
+                        "span [-V, V] (or give --range)")
+    p.add_argument("--range", metavar="LOW,HIGH",
+                   help="the amplifier's range [V] instead of --amplitude, e.g. 0,150 for a "
+                        "unipolar stack: the records are played around its middle, from and "
+                        "back to its value nearest 0 V (the amplifier's rest), and never leave it")
     p.add_argument("--sampling-period", required=True, type=_SECONDS, metavar="S",
                    help="sampling period of the hardware [s], e.g. 5e-5")
     p.add_argument("--out", required=True, metavar="DIR", help="directory to write")
@@ -132,6 +137,26 @@ _OPTIONS = {"f_min, periods": "--f-min, --periods", "frequency": "--sine-frequen
             "amplitude": "--amplitude", "reversals": "--reversals", "slew_rate": "--slew-rate"}
 
 
+def _amplitude_and_centre(args, m):
+    """(amplitude (m,), centre (m,)) [V] from ``--amplitude`` or ``--range``."""
+    if (args.amplitude is None) == (args.range is None):
+        raise _Usage("--amplitude, --range: expected exactly one of them (the records' "
+                     "amplitude around 0 V, or the amplifier's range LOW,HIGH)")
+    if args.amplitude is not None:
+        return _amplitudes(args.amplitude, m), np.zeros(m)
+    try:
+        low, high = (float(v) for v in args.range.split(","))
+    except ValueError:
+        raise _Usage(f"--range: expected two numbers LOW,HIGH [V], found "
+                     f"{escape(repr(args.range), 60)}") from None
+    if number_problem(low) or number_problem(high) or not low < high \
+            or max(abs(low), abs(high)) > MAX_MAGNITUDE:
+        raise _Usage(f"--range: expected finite LOW < HIGH [V] up to {MAX_MAGNITUDE:.0e}, found "
+                     f"{escape(repr(args.range), 60)}")
+    amplitude = _amplitudes(repr(0.5 * (high - low)), m)
+    return amplitude, np.full(m, 0.5 * (low + high))
+
+
 def _reversals(text):
     if text.strip().lower() == "none":
         return ()
@@ -172,7 +197,7 @@ def _owned(directory):
     return {ln.strip() for ln in lines[1:] if ln.strip()}
 
 
-def readme_text(records, names, amplitude, sampling_period, reversals=()):
+def readme_text(records, names, amplitude, sampling_period, reversals=(), centre=None):
     """The README written with the excitation files: what to measure, how to identify.
 
     Parameters
@@ -188,6 +213,8 @@ def readme_text(records, names, amplitude, sampling_period, reversals=()):
     reversals : sequence of float
         Reversal points of the first-order reversal curves in the hysteresis
         records (fractions of the amplitude; empty: none).
+    centre : numpy.ndarray, shape (m,), optional
+        The middle of each input's range [V] (``--range``); None or zeros: ``[-A, A]``.
 
     Returns
     -------
@@ -199,11 +226,23 @@ def readme_text(records, names, amplitude, sampling_period, reversals=()):
     for r in records:
         by_kind.setdefault(r.kind, []).append(f"{r.name}.csv")
     dur = {r.kind: r.time.size * T for r in records}
+    centred = centre is not None and np.any(centre)
+    if centred:
+        rest = np.clip(0.0, centre - amplitude, centre + amplitude)
+        where = (f"range {', '.join(f'[{c - a:g}, {c + a:g}]' for c, a in zip(centre, amplitude))} V: "
+                 f"every record is played around the middle of the range "
+                 f"({', '.join(f'{c:g}' for c in centre)} V), from the amplifier's rest "
+                 f"({', '.join(f'{r:g}' for r in rest)} V, the range's value nearest 0 V) and "
+                 f"back, by half-cosine ramps")
+        idle = "at rest"
+    else:
+        where = f"amplitude {', '.join(f'{a:g}' for a in amplitude)} V"
+        idle = "at 0 V"
     lines = [
         "# Excitation records (written by `hammerstein excitation`)", "",
-        f"Inputs {', '.join(names)}, amplitude {', '.join(f'{a:g}' for a in amplitude)} V, "
+        f"Inputs {', '.join(names)}, {where}, "
         f"sampling period {T:g} s ({1 / T:g} Hz). Each file holds the time `t` [s] and every "
-        f"input column [V]; one input is driven, the others stay at 0 V (`demagnetise.csv`: "
+        f"input column [V]; one input is driven, the others stay {idle} (`demagnetise.csv`: "
         f"every input).", "",
         "| files | what for | signal | duration |", "|---|---|---|---|",
         f"| {', '.join(by_kind['hysteresis'])} | hysteresis, its minor loops"
@@ -221,8 +260,9 @@ def readme_text(records, names, amplitude, sampling_period, reversals=()):
         f"| {', '.join(by_kind['creep'])} | creep | staircase "
         f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *STAIRCASE_LEVELS))} % | {dur['creep']:g} s |",
         *([f"| {', '.join(by_kind['demagnetise'])} | the demagnetised state, before every file "
-           f"and every drive | every input at once: a sine decaying from the amplitude to 0 V, "
-           f"then 1 s at 0 V | {dur['demagnetise']:g} s |"] if "demagnetise" in by_kind else []),
+           f"and every drive | every input at once: a sine decaying from the amplitude to "
+           f"{'the middle of the range, then back to rest and 1 s there' if centred else '0 V, then 1 s at 0 V'}"
+           f" | {dur['demagnetise']:g} s |"] if "demagnetise" in by_kind else []),
         "", *_slew_lines(records, names, T), "## What to measure", "",
         *(["0. Before each file below, and later before every drive you play (`hammerstein "
            "compensate`, `learn`), play `demagnetise.csv` (nothing to record). A model starts "
@@ -298,7 +338,7 @@ def _handler(args):
                  if any(c in n for c in "\",'") else None)
             if problem:
                 raise _Usage(problem)
-        amplitude = _amplitudes(args.amplitude, len(names))
+        amplitude, centre = _amplitude_and_centre(args, len(names))
         reversals = _reversals(args.reversals)
         T = args.sampling_period
         if not (np.isfinite(T) and T > 0):
@@ -311,9 +351,20 @@ def _handler(args):
                                      f_min=args.f_min, f_max=args.f_max,
                                      multisine_periods=args.periods, hold=args.hold,
                                      seed=args.seed, reversals=reversals,
-                                     slew_rate=args.slew_rate)
+                                     slew_rate=args.slew_rate, centre=centre)
             # twice the sine's frequency, at most the 8 samples per period it needs itself
-            t, u = demagnetising_cycle(T, amplitude, min(2.0 * args.sine_frequency, 1 / (8 * T)))
+            f_demag = min(2.0 * args.sine_frequency, 1 / (8 * T))
+            if np.any(centre):      # around the middle of the range, from its rest and back
+                rest = np.clip(0.0, centre - amplitude, centre + amplitude)
+                _, u = demagnetising_cycle(T, amplitude, f_demag, rest=0.0)
+                speed = 2 * np.pi * args.sine_frequency * float(np.max(amplitude))
+                u = around(u, centre, rest, T, speed if args.slew_rate is None
+                           else min(speed, args.slew_rate))
+                u = np.concatenate([u, np.repeat(rest[:, None], int(round(1.0 / T)), axis=1)],
+                                   axis=1)
+                t = np.arange(u.shape[1]) * T
+            else:
+                t, u = demagnetising_cycle(T, amplitude, f_demag)
             fast = max(peak_slew(row, T) for row in u)
             if args.slew_rate is not None and fast > args.slew_rate:
                 raise ValueError(f"frequency: the demagnetising cycle steps at up to {fast:.4g} "
@@ -344,7 +395,8 @@ def _handler(args):
             safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
             for r, name in zip(records, targets):
                 safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
-            safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals), "README",
+            safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals, centre),
+                       "README",
                        root=out)
     except (FileLimitError, OSError) as exc:
         if created:                  # the directory this run made, empty again: removed

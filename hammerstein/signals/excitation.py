@@ -48,8 +48,8 @@ import numpy as np
 
 from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
 
-__all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "ExcitationRecord", "decreasing_sine",
-           "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set", "peak_slew",
+__all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "UNIPOLAR_STAIRCASE", "ExcitationRecord", "decreasing_sine",
+           "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set", "peak_slew", "around",
            "demagnetising_cycle"]
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude).
@@ -67,6 +67,9 @@ REVERSALS = (0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8)
 CURVE_SLEW = 3.0
 #: Voltage levels of the creep staircase (fractions of the full amplitude), after 0.
 STAIRCASE_LEVELS = (0.5, 1.0, 0.5, 0.0, -0.5, -1.0, -0.5, 0.0)
+#: The creep staircase of a range played around its middle (``excitation --range``), after
+#: the amplifier's rest: fractions of the way from the rest to the range's far end.
+UNIPOLAR_STAIRCASE = (0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25, 0.0)
 
 
 def _check_positive(value, name, unit):
@@ -524,6 +527,58 @@ class ExcitationRecord:
     scale: float = 1.0
 
 
+def _ramp(a, b, n):
+    """``n`` samples after ``a`` up to ``b`` (arrays (m,)): a half-cosine, (m, n)."""
+    w = 0.5 - 0.5 * np.cos(np.pi * np.arange(1, n + 1) / n)
+    return np.asarray(a, dtype=float)[:, None] + np.outer(np.asarray(b, dtype=float)
+                                                          - np.asarray(a, dtype=float), w)
+
+
+def around(u, centre, rest, sampling_period, speed):
+    """A record played around ``centre`` by an amplifier that rests at ``rest``.
+
+    ``centre + u``, preceded by a half-cosine from ``rest`` to its first sample and followed
+    by one back to ``rest``, each of peak slew ``speed`` (the ramps of the input with the
+    farthest move; every input ramps over the same samples). With ``centre = rest = 0`` the
+    record is returned as it is.
+
+    Parameters
+    ----------
+    u : array_like, shape (m, n_samples)
+        The record around 0 [V].
+    centre, rest : array_like, shape (m,)
+        The centre of each input's range, and where its amplifier rests [V] (the range's value
+        nearest 0 V).
+    sampling_period : float
+        T [s].
+    speed : float
+        Peak slew of the ramps [V/s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, n_lead + n_samples + n_tail)
+        [V], from ``rest`` (not included) back to ``rest`` (the last sample).
+
+    Examples
+    --------
+    >>> v = around(np.zeros((1, 4)), [75.0], [0.0], 1e-3, 1000.0)
+    >>> float(v[0, 0]) > 0, float(v[0].max()), float(v[0, -1])
+    (True, 75.0, 0.0)
+    """
+    u = np.atleast_2d(np.asarray(u, dtype=float))
+    c = np.broadcast_to(np.asarray(centre, dtype=float), (u.shape[0],))
+    r = np.broadcast_to(np.asarray(rest, dtype=float), (u.shape[0],))
+    if not np.any(c) and not np.any(r):
+        return u
+    first, last = c + u[:, 0], c + u[:, -1]
+    T = float(sampling_period)
+
+    def n_of(a, b):
+        return max(2, int(np.ceil(np.pi * np.max(np.abs(b - a)) / (2.0 * speed * T) - 1e-9)))
+    return np.concatenate([_ramp(r, first, n_of(r, first)), c[:, None] + u,
+                           _ramp(last, r, n_of(last, r))], axis=1)
+
+
 def peak_slew(u, sampling_period, periodic=False):
     """Largest ``|u[k] - u[k-1]| / T`` [V/s] of a record played from rest at 0 V.
 
@@ -575,7 +630,7 @@ def _ramped_staircase(u, T, slew_rate):
 
 def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, levels=LEVELS,
                    f_min=10.0, f_max=None, multisine_fraction=0.8, multisine_periods=4,
-                   hold=2.0, seed=0, reversals=(), slew_rate=None):
+                   hold=2.0, seed=0, reversals=(), slew_rate=None, centre=0.0):
     """Every excitation record for m inputs, one input at a time.
 
     Per input k (the others at 0): the decreasing-amplitude sine
@@ -621,6 +676,12 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
         that rate. A hysteresis record that would step faster is refused
         (lower ``sine_frequency``). Default None: no limit (the multisines
         start at their first sample and the staircase steps in one sample).
+    centre : float or array_like, shape (m,)
+        The middle of each input's range [V] (default 0: ``[-A, A]``); e.g. 75 V for a
+        unipolar 0-150 V amplifier with ``amplitude`` 75. Every record is then played
+        around it (:func:`around`): from the amplifier's rest, the range's value nearest
+        0 V, to the record's first sample and back, at the decreasing sine's largest
+        slew; the idle inputs stay at their rest.
 
     Returns
     -------
@@ -648,11 +709,22 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
     if not (0 < float(multisine_fraction) <= 1):
         raise ValueError(f"multisine_fraction: expected in (0, 1], found {multisine_fraction!r}")
     S = None if slew_rate is None else _check_positive(slew_rate, "slew_rate", "V/s")
+    mid = np.broadcast_to(np.asarray(centre, dtype=float), (m,))
+    if not np.all(np.isfinite(mid)) or np.any(np.abs(mid) > MAX_MAGNITUDE):
+        raise ValueError(f"centre: expected finite voltages [V], found {centre!r}")
+    rest = np.clip(0.0, mid - amp, mid + amp)          # where each amplifier rests
     out = []
     for k, name in enumerate(names):
         def full(t, one, kind, stem, k=k, scale=1.0):
             u = np.zeros((m, t.size))
             u[k] = one
+            if np.any(mid) or np.any(rest):
+                speed = 2 * np.pi * float(sine_frequency) * float(np.max(amp))
+                if S is not None:
+                    speed = min(speed, S)
+                u = around(u, np.where(np.arange(m) == k, mid, rest), rest, sampling_period,
+                           speed)
+                t = np.arange(u.shape[1]) * float(sampling_period)
             out.append(ExcitationRecord(stem, kind, k, t, u, scale))
         t, one = hysteresis_excitation(sampling_period, amp[k], sine_frequency, levels, reversals)
         if S is not None and peak_slew(one, sampling_period) > S:
@@ -668,6 +740,17 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
                 one, scale = _slew_limited_multisine(one, one.size // int(multisine_periods),
                                                      float(sampling_period), S)
             full(t, one, "multisine" + suffix, f"multisine-{name}{suffix}", scale=scale)
+        if np.any(mid) or np.any(rest):
+            # from the amplifier's rest to the range's far end and back, by quarters (steps
+            # from rest, not ramps to the middle: the creep fit reads held steps)
+            far = mid[k] + amp[k] if abs(mid[k] + amp[k] - rest[k]) >= abs(mid[k] - amp[k] - rest[k]) \
+                else mid[k] - amp[k]
+            t, one, _ = staircase(sampling_period, 1.0, hold, UNIPOLAR_STAIRCASE)
+            one = rest[k] + (far - rest[k]) * one
+            u = np.repeat(rest[:, None], t.size, axis=1)      # the idle inputs at rest
+            u[k] = _ramped_staircase(one, float(sampling_period), S) if S is not None else one
+            out.append(ExcitationRecord(f"creep-{name}", "creep", k, t, u))
+            continue
         t, one, _ = staircase(sampling_period, amp[k], hold)
         if S is not None:
             one = _ramped_staircase(one, float(sampling_period), S)

@@ -241,3 +241,40 @@ def test_a_slew_rate_the_slow_sine_exceeds_is_a_usage_error(tmp_path, capsys):
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("hammerstein excitation: error: --sine-frequency")
     assert not (tmp_path / "r").exists()
+
+
+def test_a_unipolar_range_keeps_every_record_within_it(tmp_path, capsys):
+    """``--range 0,150`` (a unipolar stack: below -20 V it depolarises): every file stays in
+    [0, 150] V, starts from the amplifier's rest (0 V) and ends there; the decreasing sine's
+    levels are centred on 75 V (its peaks at 75 +- 75 a_k), the creep staircase climbs from
+    rest by quarters of the range, and the demagnetising cycle ends at rest."""
+    out = tmp_path / "uni"
+    assert main(["excitation", "--inputs", "ux,uy", "--range", "0,150", "--sampling-period",
+                 str(T), "--out", str(out), "--hold", "0.5"]) == 0
+    for f in sorted(out.glob("*.csv")):
+        _, data = _read(f)
+        u = data[:, 1:]
+        assert u.min() >= 0.0 and u.max() <= 150.0 + 1e-9, f.name
+        assert np.abs(u[0]).max() < 0.1 and np.abs(u[-1]).max() == 0.0, f.name   # from/to rest
+    _, h = _read(out / "hysteresis-ux.csv")
+    ux = h[:, 1]
+    assert ux.max() == pytest.approx(150.0) and np.all(h[:, 2] == 0.0)
+    mid = ux[np.abs(ux - 75.0) < 75.0 * 0.2 + 1e-9]          # the 20 % level's loop and crossings
+    assert mid.size and ux[(ux > 30) & (ux < 120)].mean() == pytest.approx(75.0, abs=2.0)
+    _, c = _read(out / "creep-uy.csv")
+    levels = np.unique(np.round(c[:, 2], 6))
+    np.testing.assert_allclose(levels, [0.0, 37.5, 75.0, 112.5, 150.0])
+    _, d = _read(out / "demagnetise.csv")
+    assert np.all(d[-int(0.5 / T):, 1:] == 0.0) and d[:, 1:].max() <= 150.0
+    assert "range [0, 150], [0, 150] V" in (out / "README.md").read_text()
+
+
+@pytest.mark.parametrize("opts, fragment", [(["--range", "150,0"], "--range: expected finite LOW < HIGH"),
+                                            (["--range", "0,150", "--amplitude", "10"], "exactly one"),
+                                            ([], "exactly one")])
+def test_range_and_amplitude_usage(tmp_path, capsys, opts, fragment):
+    argv = ["excitation", "--inputs", "ux", "--sampling-period", str(T), "--out",
+            str(tmp_path / "r"), *opts]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and fragment in err[0] and not (tmp_path / "r").exists()
