@@ -374,10 +374,17 @@ def excitation_records(plant, spec, sensor=None):
     Raises
     ------
     IdentificationError
-        An amplitude that does not fit the plant's inputs.
+        An amplitude that does not fit the plant's inputs, or both ``amplitude`` and
+        ``range``.
     """
     model = plant.hysteresis
-    amp = spec.get("amplitude")
+    amp, centre = spec.get("amplitude"), 0.0
+    if spec.get("range") is not None:          # as excitation --range: around its middle
+        if amp is not None:
+            raise IdentificationError("identify.amplitude, identify.range: expected one of "
+                                      "them, found both")
+        low, high = spec["range"]
+        amp, centre = 0.5 * (high - low), 0.5 * (high + low)
     if amp is None:
         if model.input_amplitude is None:
             raise IdentificationError("identify.amplitude: missing, and the plant model has no "
@@ -387,7 +394,8 @@ def excitation_records(plant, spec, sensor=None):
     try:
         recs = excitation_set(list(model.input_names), amp, T, sine_frequency=spec["frequency"],
                               multisine_periods=spec["multisine_periods"], hold=spec["hold"],
-                              seed=spec["seed"], reversals=spec["reversals"])
+                              seed=spec["seed"], reversals=spec["reversals"],
+                              slew_rate=spec.get("slew_rate"), centre=centre)
     except ValueError as exc:
         raise IdentificationError(f"identify: {exc}") from None
     out = {"hysteresis": [], "multisine": [], "multisine-validation": [], "creep": []}

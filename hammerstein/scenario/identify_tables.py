@@ -24,6 +24,8 @@ Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
 
 from __future__ import annotations
 
+import math
+
 from hammerstein.core.schema import nested_table
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.signals.excitation import REVERSALS
@@ -81,6 +83,15 @@ def _reversals(v):
                   f"{short_repr(v)}")
 
 
+def _range(v):
+    if (isinstance(v, list) and len(v) == 2 and all(isinstance(a, (int, float))
+                                                    and not isinstance(a, bool) for a in v)
+            and all(math.isfinite(a) for a in v) and v[0] < v[1]):
+        return [float(a) for a in v]
+    raise Invalid(f"expected [low, high] [V] with low < high (the amplifier's range, as "
+                  f"excitation --range), found {short_repr(v)}")
+
+
 def _amplitude(v):
     if isinstance(v, list):
         return [number("V", 0)(a) for a in v]
@@ -110,6 +121,8 @@ IDENTIFY_FIELDS = {
 RECORDS_IDENTIFY_FIELDS = {
     "records": Field(choice("excitation"), required=True),
     "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
+    "range": Field(_range),                               # instead: excitation --range
+    "slew_rate": Field(number("V/s", 0)),                 # excitation --slew-rate
     "frequency": Field(number("Hz", 0), default=1.0),     # of the decreasing-amplitude sines
     "hold": Field(number("s", 0), default=2.0),           # of each staircase step
     "multisine_periods": Field(integer(2, MAX_IDENTIFY_PERIODS), default=4),

@@ -83,6 +83,28 @@ def test_bad_reversals_name_the_key(value):
         identify_table({"records": "excitation", "reversals": value})
 
 
+def test_range_and_slew_rate_keys_play_the_commands_records(tmp_path, capsys):
+    """``range`` and ``slew_rate`` are ``excitation --range`` and ``--slew-rate``: the
+    scenario plays the very inputs the command writes (a unipolar 0-20 V amplifier here)."""
+    plant = load_plant("rakotondrabe-2dof")
+    T = plant.sampling_period
+    spec = identify_table({"records": "excitation", "range": [0.0, 20.0], "slew_rate": 2e4,
+                           "frequency": 5.0, "hold": 0.25, "multisine_periods": 2})
+    recs = excitation_records(plant, spec)
+    out = tmp_path / "exc"
+    assert main(["excitation", "--inputs", ",".join(plant.hysteresis.input_names), "--range",
+                 "0,20", "--slew-rate", "2e4", "--sampling-period", repr(T), "--out", str(out),
+                 "--sine-frequency", "5", "--hold", "0.25", "--periods", "2"]) == 0
+    capsys.readouterr()
+    for kind, files in (("hysteresis", ["hysteresis"]), ("creep", ["creep"])):
+        for rec, name in zip(recs[kind], plant.hysteresis.input_names):
+            data = np.loadtxt(out / f"{files[0]}-{name}.csv", delimiter=",", skiprows=1)
+            np.testing.assert_allclose(rec.u, data[:, 1:].T, atol=1e-6, rtol=1e-8)
+            assert rec.u.min() >= 0.0 and rec.u.max() <= 20.0 + 1e-9
+    with pytest.raises(Exception, match="range: expected \\[low, high\\]"):
+        identify_table({"records": "excitation", "range": [20.0, 0.0]})
+
+
 @pytest.mark.slow
 def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys):
     plant = load_plant(SCENARIOS / "presets" / "realistic-gpi.toml")
