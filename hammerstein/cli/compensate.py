@@ -336,7 +336,8 @@ def _handle(args):
         print_err(f"hammerstein compensate: error: {text}")
         return 1
     if note:
-        print_err(note)
+        print_err(note if args.inversion != "stable" else
+                  note.replace("G inverted by ZPETC", "G inverted by the stable inversion"))
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
     for line in drive.notes:

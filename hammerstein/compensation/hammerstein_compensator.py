@@ -43,6 +43,7 @@ taken after ``settle_periods``, which must cover the fade.
 from __future__ import annotations
 
 import contextlib
+import math
 
 import numpy as np
 
@@ -50,13 +51,19 @@ from hammerstein.compensation.compensators import CompensatorError, _gain_text
 from hammerstein.models.creep import creep_dynamics, creep_matrices, series_matrices
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.hysteresis import HysteresisError, state_vector
-from hammerstein.compensation.inversion import ZPETCInverse, preview_inverse
+from hammerstein.compensation.inversion import ZPETCInverse, inverse_system, preview_inverse
 from hammerstein.compensation.model_classes import model_class
 from hammerstein.simulation import (ChainResult, LinearArrays, linear_steps, simulate_chain,
                                     simulate_compensator)
 
 __all__ = ["HammersteinCompensator", "INVERSIONS", "fade_in", "continuation", "continuations",
            "creep_inverse", "CreepCascadeInverse"]
+
+#: What the stable inversion's anti-causal part decays to over the periodic continuation it
+#: reads past a periodic record's end (:meth:`HammersteinCompensator._stable_continuation`).
+STABLE_DECAY = 1e-9
+#: The longest such continuation [samples] (a zero at |z| = 1.004 needs 5200 for 1e-9).
+MAX_STABLE_CONTINUATION = 20000
 
 #: Inverse methods of G: name -> description.
 INVERSIONS = {
@@ -558,8 +565,8 @@ class HammersteinCompensator:
             Desired PI outputs [µm].
         final_state : numpy.ndarray, shape (n_filter_states,)
         """
-        if self.inverse is None:    # a few extrapolated samples avoid a held-end spike
-            ext = np.concatenate([reference, continuation(reference, 8)], axis=1)
+        if self.inverse is None:    # continued past the end: no held-end spike
+            ext = np.concatenate([reference, self._stable_continuation(reference)], axis=1)
             v = preview_inverse(self.bending_dynamics, ext, method="stable")[:, :reference.shape[1]]
             if self.creep is not None:     # (G (I + C))^-1 = (I + C)^-1 G^-1, creep from rest
                 mats = creep_inverse(self.creep, self.dynamics.dt)
@@ -595,9 +602,55 @@ class HammersteinCompensator:
             The faded reference the outputs should follow.
         """
         if self.inverse is None:
+            self._stable_period = period_samples      # the continuation past the record's end
             faded = fade_in(reference, fade_samples)
             return faded, self.initial_state(), faded
         return self._starts([reference], [period_samples], [fade_samples])[0]
+
+    def stable_lookahead(self, decay=1e-12):
+        """Samples over which the stable inversion's anti-causal part decays below ``decay``.
+
+        The slowest unstable pole of G^-1 (a zero of G outside the unit circle, ``|z| > 1``)
+        decays backward in time as ``|z|^-k`` (Devasia, Chen & Paden, IEEE TAC 41(7), 1996).
+
+        Parameters
+        ----------
+        decay : float
+            Relative size left, in (0, 1).
+
+        Returns
+        -------
+        int
+            ``ceil(log(1 / decay) / log |z|_min)``; 0 when G has no zero outside the unit
+            circle.
+        """
+        cached = getattr(self, "_anticausal_radius", None)
+        if cached is None:
+            poles = np.linalg.eigvals(np.atleast_2d(inverse_system(self.bending_dynamics).A))
+            outside = np.abs(poles[np.abs(poles) > 1.0 + 1e-12])
+            cached = self._anticausal_radius = float(np.min(outside)) if outside.size else 0.0
+        if cached == 0.0:
+            return 0
+        return int(math.ceil(math.log(1.0 / decay) / math.log(cached)))
+
+    def _stable_continuation(self, reference):
+        """What the stable inversion reads past a record's end: the record's own periods
+        repeated, when :meth:`start` was given its period and its last 8 samples repeat one
+        period earlier, over :data:`STABLE_DECAY` of the anti-causal part (at most
+        :data:`MAX_STABLE_CONTINUATION` samples); else 8 extrapolated samples.
+
+        A record held at its last value makes a kink there, and the anti-causal modes ring
+        back from it: the sampling zeros near z = -1 outside the unit circle as a Nyquist-rate
+        oscillation over the record's last milliseconds (a new user's stage: reversals of 15-50 V
+        on its last 40 samples, which ``compensate`` refused as chatter).
+        """
+        r = np.asarray(reference, dtype=float)
+        N, period = r.shape[1], getattr(self, "_stable_period", None)
+        if period and N >= period + 8 and np.allclose(r[:, N - 8:], r[:, N - period - 8:N - period],
+                                                      rtol=0, atol=1e-9 * max(1.0, np.abs(r).max())):
+            n = min(max(8, self.stable_lookahead(STABLE_DECAY)), MAX_STABLE_CONTINUATION)
+            return r[:, N - period + np.arange(n) % period]
+        return continuation(r, 8)
 
     def _starts(self, references, period_samples, fade_samples):
         """:meth:`start` of several records (``'zpetc'``), the numpy work done for all at once.

@@ -6,12 +6,8 @@ of a classical PI (:mod:`hammerstein.export.c_law`).
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
 from hammerstein.compensation.drive import rest_output
-from hammerstein.compensation.inversion import ZPETCInverse, inverse_system
+from hammerstein.compensation.inversion import ZPETCInverse
 from hammerstein.exceptions import ExportError
 from hammerstein.export.c_base import (_check_model, _model_text)
 from hammerstein.export.c_exact import _exact_source
@@ -20,15 +16,12 @@ from hammerstein.export.c_law import _Law, _law_source
 
 def _stable_lookahead(comp):
     """Look-ahead [samples] after which the anti-causal part of the stable inverse has decayed
-    below 1e-12 (the slowest unstable pole of G^-1, |z| > 1: |z|^-P <= 1e-12); None without."""
+    below 1e-12 (:meth:`HammersteinCompensator.stable_lookahead`); None when it cannot be
+    computed."""
     try:
-        poles = np.linalg.eigvals(np.atleast_2d(inverse_system(comp.bending_dynamics).A))
+        return comp.stable_lookahead(1e-12)
     except Exception:        # noqa: BLE001 - only a figure in a message
         return None
-    outside = np.abs(poles[np.abs(poles) > 1.0 + 1e-12])
-    if not outside.size:
-        return 0
-    return int(math.ceil(12.0 * math.log(10.0) / math.log(float(np.min(outside)))))
 
 
 def _refuse_stable(comp):

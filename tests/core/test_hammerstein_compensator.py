@@ -228,3 +228,33 @@ def test_non_square_state_matrix_is_named_as_such(A, match):
              "C": [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]}
     with pytest.raises(PresetError, match=match):
         dynamics_from_table(table, ["x", "y"])
+
+
+def test_the_stable_inversion_reads_the_periods_past_the_record_end():
+    """A zero of G outside the unit circle near z = -1 (a sampling zero of an identified G)
+    is an anti-causal Nyquist-rate mode of the stable inverse. Held at its last value, a
+    circle's record kinks at its end and that mode rings back over its last samples (the drive
+    reverses every sample: a new user's stage, 15-50 V); read on over its own periods, the
+    record's end is like any other period: the drive's last period equals the one before."""
+    import control
+    pl = load_plant("rakotondrabe-2dof")
+    T = pl.sampling_period
+    zero = control.ss(control.tf([1.0, 1.15], [2.15, 0.0], T))   # unit DC gain, zero at -1.15
+    G = control.ss(pl.dynamics) * control.append(zero, zero)
+    comp = HammersteinCompensator(pl.hysteresis, G, inversion="stable")
+    assert comp.stable_lookahead(1e-9) == int(np.ceil(np.log(1e9) / np.log(1.15)))
+    f, R = 100.0, 20.0
+    per = int(round(1 / (f * T)))
+    yr = circle(T, 12 * per, f, R)
+    lead, s0, _ = comp.start(yr, per, 2 * per)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                      # within the model's range
+        u, _ = comp.simulate(lead, s0)
+    last, before = u[:, -per:], u[:, -2 * per:-per]
+    np.testing.assert_allclose(last, before, atol=1e-6 * np.abs(u).max())
+    comp._stable_period = None                              # held at its last value, as before
+    with pytest.warns(Warning, match="beyond the range"):  # the ring leaves the model's range
+        u_held, _ = comp.simulate(lead, s0)
+    d = np.diff(u_held[:, -20:], axis=1)
+    assert np.any(d[:, :-1] * d[:, 1:] < 0) and np.abs(u_held[:, -per:] - last).max() > \
+        100 * np.abs(last - before).max()
