@@ -311,10 +311,12 @@ def _slew_lines(records, names, T):
     scaled = [r for r in records if r.scale < 1.0]
     if scaled:
         lines += ["The multisines were scaled down to stay within the slew rate: "
-                  + ", ".join(f"{r.name} to {100 * r.scale:.3g} %" for r in scaled)
-                  + " of their amplitude. A multisine's slew grows with its band: a lower "
-                  "`--f-max` (above the first bending mode) keeps more of the amplitude, and "
-                  "with it the records' signal to noise.", ""]
+                  + ", ".join(f"{r.name} to {100 * r.scale:.3g} % (band to {r.f_max:g} Hz)"
+                              for r in scaled)
+                  + " of their amplitude. A multisine's slew grows with its band: without "
+                  "`--f-max` the band is narrowed first, until a quarter of the amplitude is "
+                  "kept. Check that it still holds your first bending modes (`--f-max` sets "
+                  "it; the amplitude then pays).", ""]
     return lines
 
 
@@ -411,11 +413,13 @@ def _handler(args):
     for r, name in zip(records, targets):
         print(f"wrote {out / name}: {r.kind}, {r.time.size} samples ({r.time.size * T:g} s)")
     print(f"wrote {out / 'README.md'}")
-    scales = [r.scale for r in records if r.scale < 1.0]
-    if scales:
+    scaled = [r for r in records if r.scale < 1.0]
+    if scaled:
+        scales = [r.scale for r in scaled]
         print(f"note: the multisines were scaled to {100 * min(scales):.3g}-{100 * max(scales):.3g} "
-              f"% of their amplitude to stay within --slew-rate {args.slew_rate:g} V/s; a lower "
-              f"--f-max keeps more of it (README.md)")
+              f"% of their amplitude, up to {max(r.f_max for r in scaled):g} Hz, to stay within "
+              f"--slew-rate {args.slew_rate:g} V/s: check that the band holds your first "
+              f"bending modes (README.md)")
     return 0
 
 

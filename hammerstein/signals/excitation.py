@@ -48,7 +48,7 @@ import numpy as np
 
 from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
 
-__all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "UNIPOLAR_STAIRCASE", "ExcitationRecord", "decreasing_sine",
+__all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "UNIPOLAR_STAIRCASE", "MIN_MULTISINE_SCALE", "ExcitationRecord", "decreasing_sine",
            "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set", "peak_slew", "around",
            "demagnetising_cycle"]
 
@@ -67,6 +67,10 @@ REVERSALS = (0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8)
 CURVE_SLEW = 3.0
 #: Voltage levels of the creep staircase (fractions of the full amplitude), after 0.
 STAIRCASE_LEVELS = (0.5, 1.0, 0.5, 0.0, -0.5, -1.0, -0.5, 0.0)
+#: With a slew rate, the default multisine band is narrowed rather than its amplitude scaled
+#: below this fraction (:func:`excitation_set`): a multisine scaled to 3 % of 4 V left an
+#: identified G with two poles the actuator does not have and a 7.7 % circle.
+MIN_MULTISINE_SCALE = 0.25
 #: The creep staircase of a range played around its middle (``excitation --range``), after
 #: the amplifier's rest: fractions of the way from the rest to the range's far end.
 UNIPOLAR_STAIRCASE = (0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25, 0.0)
@@ -517,6 +521,8 @@ class ExcitationRecord:
         [V].
     scale : float
         What a slew rate scaled the record down by (1: not scaled).
+    f_max : float or None
+        A multisine's highest line [Hz] (None for the other kinds).
     """
 
     name: str
@@ -525,6 +531,7 @@ class ExcitationRecord:
     time: np.ndarray
     u: np.ndarray
     scale: float = 1.0
+    f_max: float | None = None
 
 
 def _ramp(a, b, n):
@@ -672,7 +679,10 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
         The amplifier's slew rate [V/s]. Every record then steps no faster,
         from rest: each multisine period starts at its sample nearest 0 V (a
         cyclic shift) and is scaled down as far as needed (the record's
-        ``scale`` says by how much); the staircase's steps become ramps at
+        ``scale`` says by how much); with the default ``f_max`` the band is
+        first narrowed, down to 4 ``f_min``, until the scale reaches
+        :data:`MIN_MULTISINE_SCALE` (each multisine record's ``f_max``
+        gives the band kept); the staircase's steps become ramps at
         that rate. A hysteresis record that would step faster is refused
         (lower ``sine_frequency``). Default None: no limit (the multisines
         start at their first sample and the staircase steps in one sample).
@@ -715,7 +725,7 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
     rest = np.clip(0.0, mid - amp, mid + amp)          # where each amplifier rests
     out = []
     for k, name in enumerate(names):
-        def full(t, one, kind, stem, k=k, scale=1.0):
+        def full(t, one, kind, stem, k=k, scale=1.0, f_max=None):
             u = np.zeros((m, t.size))
             u[k] = one
             if np.any(mid) or np.any(rest):
@@ -725,21 +735,31 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
                 u = around(u, np.where(np.arange(m) == k, mid, rest), rest, sampling_period,
                            speed)
                 t = np.arange(u.shape[1]) * float(sampling_period)
-            out.append(ExcitationRecord(stem, kind, k, t, u, scale))
+            out.append(ExcitationRecord(stem, kind, k, t, u, scale, f_max))
         t, one = hysteresis_excitation(sampling_period, amp[k], sine_frequency, levels, reversals)
         if S is not None and peak_slew(one, sampling_period) > S:
             raise ValueError(f"frequency: the hysteresis record of {name} steps at up to "
                              f"{peak_slew(one, sampling_period):.4g} V/s, beyond the slew rate "
                              f"{S:g} V/s; expected a lower sine frequency")
         full(t, one, "hysteresis", f"hysteresis-{name}")
+        band = f_max
         for r, suffix in enumerate(("", "-validation")):
-            t, one, _ = multisine(sampling_period, multisine_fraction * amp[k], f_min, f_max,
-                                  periods=multisine_periods, seed=seed + 2 * k + r)
-            scale = 1.0
-            if S is not None:
+            while True:
+                t, one, lines = multisine(sampling_period, multisine_fraction * amp[k], f_min,
+                                          band, periods=multisine_periods, seed=seed + 2 * k + r)
+                scale = 1.0
+                if S is None:
+                    break
                 one, scale = _slew_limited_multisine(one, one.size // int(multisine_periods),
                                                      float(sampling_period), S)
-            full(t, one, "multisine" + suffix, f"multisine-{name}{suffix}", scale=scale)
+                top = float(lines[-1])
+                # the default band narrowed (its slew falls with it) rather than the amplitude
+                # below MIN_MULTISINE_SCALE, down to 4 f_min at most; a given f_max is kept
+                if f_max is not None or r or scale >= MIN_MULTISINE_SCALE or top <= 4 * f_min:
+                    break
+                band = max(4.0 * f_min, top * max(0.5, scale / MIN_MULTISINE_SCALE))
+            full(t, one, "multisine" + suffix, f"multisine-{name}{suffix}", scale=scale,
+                 f_max=float(lines[-1]))
         if np.any(mid) or np.any(rest):
             # from the amplifier's rest to the range's far end and back, by quarters (steps
             # from rest, not ramps to the middle: the creep fit reads held steps)

@@ -212,12 +212,13 @@ def test_a_slew_rate_keeps_every_record_within_it(tmp_path, capsys):
     its identify command the three outputs."""
     S = 2000.0                              # V/s: 1 V a sample at 2 kHz, 10 V steps ramped
     out = tmp_path / "slow"
+    band = ["--f-max", "400"]               # given: kept, the amplitude scaled
     assert main(["excitation", "--inputs", "ux,uy,uz", "--amplitude", "10", "--sampling-period",
-                 str(T), "--out", str(out), "--slew-rate", str(S), "--hold", "0.5"]) == 0
+                 str(T), "--out", str(out), "--slew-rate", str(S), "--hold", "0.5", *band]) == 0
     assert "scaled to" in capsys.readouterr().out
     reference = tmp_path / "fast"
     assert main(["excitation", "--inputs", "ux,uy,uz", "--amplitude", "10", "--sampling-period",
-                 str(T), "--out", str(reference), "--hold", "0.5"]) == 0
+                 str(T), "--out", str(reference), "--hold", "0.5", *band]) == 0
     for f in sorted(out.glob("*.csv")):
         _, data = _read(f)
         u = data[:, 1:]
@@ -233,6 +234,18 @@ def test_a_slew_rate_keeps_every_record_within_it(tmp_path, capsys):
             assert abs(one[0]) <= S * T
     readme = (out / "README.md").read_text()
     assert "scaled down to stay within the slew rate" in readme and "--outputs x,y,z" in readme
+
+
+def test_a_slew_rate_narrows_the_default_band_before_the_amplitude():
+    """Without f_max, a slew rate narrows the multisines' band (down to 4 f_min) until a
+    quarter of their amplitude is kept: scaled to 3 %, a multisine of 4 V left a scenario's
+    identified G with two poles the actuator does not have."""
+    from hammerstein.signals.excitation import MIN_MULTISINE_SCALE, excitation_set, peak_slew
+    for S in (2000.0, 500.0):
+        for rec in excitation_set(["ux"], 5.0, 5e-5, hold=0.1, slew_rate=S):
+            if rec.kind == "multisine":
+                assert rec.scale >= MIN_MULTISINE_SCALE or rec.f_max <= 4 * 10.0 + 1e-9
+                assert rec.f_max < 5000.0 and peak_slew(rec.u[0], 5e-5) <= S * (1 + 1e-9)
 
 
 def test_a_slew_rate_the_slow_sine_exceeds_is_a_usage_error(tmp_path, capsys):
