@@ -300,7 +300,7 @@ def _handle(args):
             units += "; " + ", ".join(f"{n}_predicted" for n in plant.hysteresis.output_names) \
                 + " [µm] (model)"
         peaks = _peaks_text(plant, drive)
-        rest_text = ", ".join(f"{n} = {v:.10g} µm" for n, v in zip(
+        rest_text = ", ".join(f"{n} = {float(v)!r} µm" for n, v in zip(
             plant.hysteresis.output_names, rest_output(plant.hysteresis, plant.creep)))
         widths = None if plant.amplifier is None else plant.amplifier.range_widths()
         chatter = chatter_warnings(drive.inputs, plant.sampling_period, widths,

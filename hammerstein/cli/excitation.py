@@ -34,8 +34,8 @@ import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
-                                            ExcitationRecord, around, demagnetising_cycle,
-                                            excitation_set, peak_slew)
+                                            UNIPOLAR_STAIRCASE, ExcitationRecord, around,
+                                            demagnetising_cycle, excitation_set, peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -258,7 +258,11 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
         f"| {', '.join(by_kind['multisine-validation'])} | linear dynamics (held out: chooses "
         f"the order) | the same band, other phases | {dur['multisine-validation']:g} s |",
         f"| {', '.join(by_kind['creep'])} | creep | staircase "
-        f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *STAIRCASE_LEVELS))} % | {dur['creep']:g} s |",
+        + (f"from the amplifier's rest to the range's far end and back, "
+           f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *UNIPOLAR_STAIRCASE))} % of the way"
+           if centred else
+           f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *STAIRCASE_LEVELS))} % of the amplitude")
+        + f" | {dur['creep']:g} s |",
         *([f"| {', '.join(by_kind['demagnetise'])} | the demagnetised state, before every file "
            f"and every drive | every input at once: a sine decaying from the amplitude to "
            f"{'the middle of the range, then back to rest and 1 s there' if centred else '0 V, then 1 s at 0 V'}"

@@ -158,6 +158,10 @@ class CExport:
     state_reals : int
         Number of reals in ``NAME_state`` (its size is this times
         ``sizeof(NAME_real)`` plus two ints).
+    rest_reference : list of float
+        The model's output at rest, 0 V [µm], where ``NAME_init`` leaves the compensator
+        and a reference should start (the FMU's reference inputs start there); empty when
+        not computed (zeros).
     description : str
         One line saying what was exported.
     """
@@ -175,6 +179,7 @@ class CExport:
     output_names: list = field(default_factory=list)
     state_reals: int = 0
     description: str = ""
+    rest_reference: list = field(default_factory=list)
 
     def files(self):
         """File name -> text of the two files.

@@ -102,3 +102,35 @@ def test_source_fmu_contents(tmp_path):
 def test_find_compiler_is_on_path_or_none():
     cc = find_compiler()
     assert cc is None or shutil.which(cc)
+
+
+@needs_cc
+@pytest.mark.skipif(platform_folder() is None, reason="unknown platform for an FMU binary")
+def test_the_references_start_at_rest(tmp_path):
+    """A model that rests away from 0 µm (an identified one carries the records' offset): the
+    FMU's reference inputs start at its output at 0 V, so an importer that leaves them at their
+    start values gets 0 V, not the step to 0 µm (14.65 V on a new user's stack)."""
+    from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+    from hammerstein.compensation.drive import rest_output
+    from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
+    edges = np.linspace(-11.0, 11.0, 13)
+    comps = [[PreisachModel.from_density(edges, total=8.0, tilt=0.3) if k == l else None
+              for k in range(2)] for l in range(2)]
+    comps[0][0] = PreisachModel(comps[0][0].edges, comps[0][0].weights, (1.5,), offset=2.0898)
+    comps[1][1] = PreisachModel(comps[1][1].edges, comps[1][1].weights, (1.2,), offset=-0.75)
+    model = MultivariableHysteresis(comps)
+    rest = rest_output(model)
+    assert np.abs(rest).min() > 0.1
+    code = export_c(PreisachInverseCompensator(model), "rest_fmu", T)
+    np.testing.assert_allclose(code.rest_reference, rest, rtol=0, atol=0)
+    data, _ = build_fmu(code, "test")
+    path = tmp_path / "rest_fmu.fmu"
+    path.write_bytes(data)
+    md = fmpy.read_model_description(str(path))
+    starts = [float(v.start) for v in md.modelVariables if v.name.startswith("reference_")]
+    np.testing.assert_array_equal(starts, rest)
+    outs = [f"voltage_{nm}" for nm in code.input_names]
+    res = fmpy.simulate_fmu(str(path), start_time=0.0, stop_time=50 * T, step_size=T,
+                            output_interval=T, output=outs + ["status"])
+    assert np.abs(np.vstack([res[o] for o in outs])).max() < 1e-9
+    assert np.all(res["status"] == 0)
