@@ -14,7 +14,9 @@ the same metrics, ``case`` ``shaped`` in ``metrics.csv`` and a second table
 in the report (the raw reference's metrics stay case ``measured``).
 
 The delay between the reference and the measurement is estimated by
-cross-correlation (integer samples, :func:`hammerstein.compensation.ilc.estimate_delay`)
+cross-correlation over the settled part (after the fade-in and ``--settle-periods``),
+within half a period of a periodic reference (integer samples,
+:func:`hammerstein.compensation.ilc.estimate_delay`)
 and reported (metrics ``delay_samples`` and ``delay``); it is not removed
 unless ``--remove-delay`` is given (then the measurement is advanced by it
 and the last samples, not measured, are dropped).
@@ -149,8 +151,13 @@ def evaluate(reference, measured, period_samples, sampling_period, output_names,
     DataFileError
         A metric would be infinite (values too large to compute with).
     """
-    max_lag = int(min(max(period_samples // 2, 50), reference.shape[1] // 4))
-    delay = estimate_delay(reference, measured, max_lag)
+    # on the settled part (the fade-in's start-up is no delay), within half a period of a
+    # periodic reference (a whole period is no delay either: a 1 kHz sine read 50 samples)
+    start = min(int(settle_periods * max(period_samples, 1)), max(reference.shape[1] - 8, 0))
+    r_s, y_s = reference[:, start:], measured[:, start:]
+    max_lag = (period_samples - 1) // 2 if period_samples and period_samples > 2 else 50
+    max_lag = int(max(1, min(max_lag, r_s.shape[1] // 4)))
+    delay = estimate_delay(r_s, y_s, max_lag)
     if remove_delay and delay > 0:
         measured = measured[:, delay:]
         reference = reference[:, :measured.shape[1]]

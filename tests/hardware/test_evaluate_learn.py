@@ -246,3 +246,18 @@ def test_learn_history_refuses_the_trials_of_another_learning(tmp_path):
                "--measured", "y1.csv", "--fade-in", str(drive_fade_samples(tmp_path / "u1b.csv") * T),
                "--out", "u2.csv", *common, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
+
+
+@pytest.mark.parametrize("period, delay", [(500, 0), (500, 3), (50, 0), (50, 2)])
+def test_evaluate_reads_the_delay_on_the_settled_part(period, delay):
+    """The delay is read after the fade-in and the settling periods, within half a period: a
+    response in phase with its reference but off during its fade-in's start-up read 2 samples
+    at 100 Hz, and a 1 kHz sine (50 samples a period) read a whole period, 50 samples."""
+    from hammerstein.cli.evaluate import evaluate
+    n, fade = 40 * period, 4 * period
+    t = np.arange(n)
+    ref = 20.0 + 10.0 * np.sin(2 * np.pi * t / period)[None, :]
+    meas = np.roll(ref, delay, axis=1)
+    meas[:, :fade] = 20.0 + 3.0 * np.sin(2 * np.pi * t[:fade] / (0.7 * period))   # a start-up
+    rows, got, _, _ = evaluate(ref, meas, period, 2e-5, ["x"], settle_periods=fade / period + 1)
+    assert got == delay
