@@ -311,6 +311,7 @@ def _handle(args):
             print_err(f"hammerstein compensate: error: the drive chatters, nothing written: "
                       f"{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
+        chatter = severe or chatter       # written anyway (--limits warn): the stronger words
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "

@@ -550,6 +550,7 @@ def _handle(args):
             print_err(f"hammerstein learn: error: the next drive chatters, nothing written: "
                       f"{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
+        chatter = severe or chatter       # written anyway (--limits warn): the stronger words
         comment += "".join(f"\nwarning: {line}" for line in chatter)
         notes += [f"warning: {line}" for line in chatter]
         t = np.arange(N) * T

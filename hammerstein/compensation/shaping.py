@@ -638,12 +638,16 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CH
             near = np.convolve(hit, np.ones(5), "same") > 0        # one run per episode
             out.append(f"{name}: the drive reverses by more than {big:.3g} V from one sample to the "
                        f"next at {int(hit.sum())} samples ({time_intervals(near, sampling_period)}; "
-                       f"steps up to {np.abs(d[i]).max():.3g} V): the inverse alternates between "
-                       f"inputs that give the model the same output (a model flat there, e.g. near "
-                       f"the edge of its records), or the inverse of the dynamics rings on a step "
-                       f"of the reference (a raster's line step, without an [amplifier] to shape "
-                       f"it); do not play it as it is: keep the reference away from there, smooth "
-                       f"it, or look at it with --predicted")
+                       f"steps up to {np.abs(d[i]).max():.3g} V): " + (
+                           "the inverse alternates between inputs that give the model the same "
+                           "output (a model flat there, e.g. near the edge of its records), or the "
+                           "inverse of the dynamics rings on a step of the reference (a raster's "
+                           "line step, without an [amplifier] to shape it); do not play it as it "
+                           "is: keep the reference away from there, smooth it, or look at it with "
+                           "--predicted" if fraction >= CHATTER_REFUSE_FRACTION else
+                           "a corner of the reference through the inverse of the dynamics, or the "
+                           "start of an inverse alternating between inputs; look at it with "
+                           "--predicted before playing it"))
     return out
 
 
