@@ -107,6 +107,11 @@ def _merge(messages):
             out.append(values[0])
         elif values[0].startswith("'"):
             out.append("/".join(values))
+        elif re.search(r"(?:^|[\s(=,:])-$", out[-1]):     # a minus sign: negative numbers
+            out[-1] = out[-1][:-1]
+            lo = max(values, key=float)                   # the most negative first
+            hi = min(values, key=float)
+            out.append(f"-{lo} to -{hi}")
         else:
             lo = min(values, key=float)
             hi = max(values, key=float)

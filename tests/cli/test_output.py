@@ -171,3 +171,18 @@ def test_group_warnings_folds_quoted_names_into_a_list():
     # the digits of a quoted name stay in the name; names and numbers never mix
     assert message_template("kind = 'mv-50Hz' at 50 Hz") == "kind = '?' at # Hz"
     assert len(group_warnings([("a", "x 'one' 2"), ("b", "x 3 'two'")])) == 2
+
+
+@pytest.mark.parametrize("values, merged", [
+    (("-0.7448", "-0.7531"), "ux needs -0.7531 to -0.7448 V"),
+    (("0.5", "0.7"), "ux needs 0.5\u20130.7 V"),
+])
+def test_merged_negative_numbers_keep_their_signs(values, merged):
+    """Folded warnings show a range of negative numbers with both signs, lowest first (it
+    read "-0.7448–0.7531", as if from -0.74 to +0.75); K^-1's minus stays text."""
+    from hammerstein.report.messages import group_warnings
+    groups = group_warnings([(f"c{i}", f"ux needs {v} V") for i, v in enumerate(values)])
+    assert [g.message for g in groups] == [merged]
+    groups = group_warnings([("a", "rho(I - K^-1 J) reaches 1.02"),
+                             ("b", "rho(I - K^-1 J) reaches 1.03")])
+    assert groups[0].message == "rho(I - K^-1 J) reaches 1.02\u20131.03"
