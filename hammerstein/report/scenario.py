@@ -384,7 +384,8 @@ def _scan_figures(scenario, results, directory, jobs):
             r.reference[fast], e[[fast, slow]],
             [f"{names[fast]}_r - {names[fast]} (fast)", f"{names[slow]}_r - {names[slow]} (slow)"],
             scan["line"], scan["trace"], scan["extent"], names[fast],
-            f"{scenario.title}: {r.name}, tracking error per scan line")
+            f"{scenario.title}: {r.name}, tracking error per scan line", 200,
+            scan.get("start", 0.0))
         figs.append((f"Case {r.name}: tracking error per scan line against the fast-axis "
                      f"position (trace and retrace)", fname))
     return figs

@@ -234,7 +234,7 @@ def _line_image(x, e, line, mask, n_lines, grid):
 
 
 def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, fast_name, title,
-                     n_bins=200):
+                     n_bins=200, start=0.0):
     """Image-style error map of a raster scan: error against fast-axis position, one row per line.
 
     One row of panels per error signal (e.g. the fast- and the slow-axis
@@ -242,7 +242,9 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
     retrace on the right; each image row is a scan line, its colour the
     error at each fast-axis reference position (linear interpolation onto
     ``n_bins`` positions). Colours are symmetric about 0 (red: output below
-    the reference), shared by the trace and retrace of a signal.
+    the reference), shared by the trace and retrace of a signal, and scaled
+    on the lines after the first (which holds the fade-in's start-up) when
+    there are three or more: the first saturates, and the colour bar says so.
 
     Parameters
     ----------
@@ -257,12 +259,14 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
     trace : array_like of bool, shape (n,)
         True on the trace half of each line.
     extent : float
-        Fast-axis scan size W [µm] (the abscissa spans [0, W]).
+        Fast-axis scan size W [µm] (the abscissa spans [start, start + W]).
     fast_name : str
         Fast-axis output name.
     title : str
     n_bins : int
         Positions per image row.
+    start : float
+        Where the fast axis starts [µm] (0; ``center - W / 2`` for a centred raster).
 
     Returns
     -------
@@ -273,24 +277,33 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
     line = np.asarray(line_index, dtype=int)
     trace = np.asarray(trace, dtype=bool)
     n_lines = int(line.max()) + 1
-    grid = np.linspace(0.0, float(extent), int(n_bins))
+    grid = np.linspace(float(start), float(start) + float(extent), int(n_bins))
     k = e.shape[0]
     fig, axes = plt.subplots(k, 2, figsize=(11, 2.0 + 2.6 * k), squeeze=False)
     fig.subplots_adjust(left=0.08, right=0.9, bottom=0.1, top=0.86, wspace=0.12, hspace=0.45)
     for i in range(k):
         imgs = [_line_image(x, e[i], line, trace, n_lines, grid),
                 _line_image(x, e[i], line, ~trace, n_lines, grid)]
-        finite = np.concatenate([m[np.isfinite(m)] for m in imgs])
-        lim = float(np.max(np.abs(finite))) if finite.size else 1.0
+        finite = np.abs(np.concatenate([m[np.isfinite(m)] for m in imgs]))
+        # from the second line on when there are three or more: the first holds the fade-in's
+        # start-up (16 µm against +-0.1 µm on the others), which would leave every other line
+        # white; its colours saturate, and the colour bar says so
+        later = np.abs(np.concatenate([m[1:][np.isfinite(m[1:])] for m in imgs])) \
+            if n_lines >= 3 else finite
+        lim = float(later.max()) if later.size else (float(finite.max()) if finite.size else 1.0)
         lim = lim if lim > 0 else 1.0
+        saturated = bool(finite.size and finite.max() > lim * (1 + 1e-9))
         for d, (img, name) in enumerate(zip(imgs, ("trace", "retrace"))):
             ax = axes[i][d]
             im = ax.imshow(img, aspect="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
-                           extent=(0.0, float(extent), n_lines + 0.5, 0.5), interpolation="nearest")
+                           extent=(float(start), float(start) + float(extent), n_lines + 0.5, 0.5),
+                           interpolation="nearest")
             ax.set_title(f"({chr(97 + 2 * i + d)}) {labels[i]}, {name}", fontsize=10, y=1.0)
             ax.set_xlabel(f"{fast_name}_r (fast axis) [µm]")
             if d == 0:
                 ax.set_ylabel("scan line")
-        fig.colorbar(im, ax=list(axes[i]), fraction=0.03, pad=0.02, label="error [µm]")
+        fig.colorbar(im, ax=list(axes[i]), fraction=0.03, pad=0.02,
+                     label="error [µm]" + (f", capped (max {float(finite.max()):.3g})"
+                                           if saturated else ""))
     fig.suptitle(title)
     return fig

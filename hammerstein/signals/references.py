@@ -172,7 +172,8 @@ class ReferenceKind:
         ``scan(time, table, names) -> dict`` of a scanned (raster-style)
         reference: ``line`` (scan line per sample), ``trace`` (bool per
         sample), ``fast``, ``slow`` (output names), ``extent`` (fast-axis
-        length [µm]); the report draws the error per scan line from it.
+        length [µm]) and ``start`` (where the fast axis starts [µm]); the
+        report draws the error per scan line from it.
     """
 
     fields: dict
@@ -306,7 +307,9 @@ def _raster_metrics(time, s, reference, outputs):
 def _raster_scan(time, s, names):
     return {"line": raster_line_index(time, s["frequency"]),
             "trace": np.mod(np.asarray(time) * float(s["frequency"]), 1.0) < 0.5,
-            "fast": s["outputs"][0], "slow": s["outputs"][1], "extent": float(s["size"][0])}
+            "fast": s["outputs"][0], "slow": s["outputs"][1], "extent": float(s["size"][0]),
+            "start": (float(s["center"][0]) - 0.5 * float(s["size"][0])
+                      if s.get("center") is not None else 0.0)}
 
 
 def _file(c, T, names, base_dir):
