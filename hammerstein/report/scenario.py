@@ -115,9 +115,27 @@ def _signal_summary(spec):
     return f"{what}: {signal_summary(spec.mode, spec.signal_spec)}"
 
 
+def _records_summary(ident):
+    """An ``identify = { records = "excitation", ... }`` table in words: what it asked for
+    (the class ``auto`` keeps is chosen when the scenario runs)."""
+    bits = [f"model {ident.get('model', 'auto')}"]
+    if ident.get("creep"):
+        bits.append("with creep")
+    if ident.get("range") is not None:
+        bits.append(f"range [{ident['range'][0]:g}, {ident['range'][1]:g}] V")
+    elif ident.get("amplitude") is not None:
+        amp = ident["amplitude"]
+        bits.append(f"{', '.join(f'{a:g}' for a in amp) if isinstance(amp, list) else f'{amp:g}'} V")
+    if ident.get("slew_rate") is not None:
+        bits.append(f"slew rate {ident['slew_rate']:g} V/s")
+    return "model identified from the excitation records (" + ", ".join(bits) + ")"
+
+
 def _identify_summary(ident):
     if not ident:
         return "model identified on the plant"
+    if ident.get("records") == "excitation":
+        return _records_summary(ident)
     at = _num(ident["frequency"], "Hz")
     if "amplitude" in ident:
         at += f", {_num(ident['amplitude'], 'V')}"
@@ -219,6 +237,8 @@ def _model_summary(c):
     model = c.get("model", "plant")
     if model == "identified":
         i = c.get("identify", {})
+        if i.get("records") == "excitation":
+            return _records_summary(i)
         extra = ", ".join(str(i[k]) for k in ("method", "bounds") if k in i)
         return f"model identified at {i.get('frequency', 0):g} Hz" + (f" ({extra})" if extra else "")
     if model == "plant":

@@ -474,6 +474,11 @@ def _identify_from_records(plant, spec, dynamics):
     if loops:
         warnings.warn(f"identify (records = 'excitation'): {loops}", HammersteinWarning,
                       stacklevel=2)
+    poor = (None if result.dynamics is None
+            else identification_pipeline.dynamics_fit_warning(result.dynamics.summary))
+    if poor:
+        warnings.warn(f"identify (records = 'excitation'): {poor}", HammersteinWarning,
+                      stacklevel=2)
     meta = {"method": result.fit.method, "model": spec["model"], "records":
             "hammerstein excitation, played through the plant", "notes": list(result.fit.notes),
             "sampling_period_s": float(plant.sampling_period),

@@ -148,3 +148,16 @@ def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys)
                          rest=rest_output(actuator.hysteresis, actuator.creep))
     assert u_cli.shape == res.inputs.shape
     assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
+
+
+def test_the_report_says_what_a_records_table_asked_for():
+    """report.md and the figure titles named a records route "model identified at 1 Hz (15
+    hysterons, least-squares)", the words of the classical route, while auto kept another
+    class from the excitation records."""
+    from hammerstein.report.scenario import compensator_summary, _model_summary
+    spec = identify_table({"records": "excitation", "creep": True, "range": [0.0, 10.0],
+                           "slew_rate": 2000.0})
+    table = {"kind": "hammerstein", "model": "identified", "identify": spec}
+    for text in (compensator_summary(table), _model_summary(table)):
+        assert "identified from the excitation records (model auto, with creep, range [0, 10] V, " \
+               "slew rate 2000 V/s)" in text and "least-squares" not in text and "hysterons" not in text
