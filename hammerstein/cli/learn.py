@@ -163,7 +163,9 @@ def add_parser(subparsers):
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
                    help="fade-in of the reference [s] (default: the drive file's)")
     p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
-                   help="periods excluded from the printed error (default 1)")
+                   help="periods excluded from the printed error after the fade-in (default "
+                        "1; a repeating reference is judged from its repeating part on, two "
+                        "periods after the fade-in, when that is later)")
     p.add_argument("--limits", choices=list(LIMITS), default="error",
                    help="beyond the amplifier, or a next drive that chatters (large steps of "
                         "alternating sign on consecutive samples): error (default, nothing "
