@@ -140,7 +140,8 @@ def resolve_preset(name_or_path, base_dir=None):
     if path.exists():  # read_toml refuses a directory or special file, naming it
         return path
     raise PresetError(
-        f"{name_or_path}: not a bundled preset ({', '.join(sorted(presets))}) nor an existing file")
+        f"{name_or_path}: not a bundled preset ({', '.join(sorted(presets))}) nor an existing "
+        f"file{did_you_mean(name_or_path, presets)}")
 
 
 def read_toml(path, what="TOML file"):

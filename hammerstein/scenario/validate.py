@@ -381,6 +381,12 @@ def _validate_cases(path, data):
                         f"most {MAX_CASES}")
         entries = []
     budget = {"limit": total_samples_budget(), "used": 0, "over": False}
+    if not entries and isinstance(plant_top.get("preset"), str):
+        try:        # no case loads it below: its problems are still reported with the others
+            load_plant(plant_top["preset"], dynamics=bool(plant_top.get("dynamics", True)),
+                       base_dir=base)
+        except PresetError as exc:
+            problems.append(f"{source}: plant.preset: {exc}")
 
     def once(line):  # a problem of a top-level table, found per case, is listed once
         if line not in problems:

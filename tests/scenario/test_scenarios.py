@@ -236,3 +236,15 @@ name = "c"
     else:
         assert message.startswith(expected) and "first resonance 290 Hz" in message
         assert "docs/hammerstein-plant.md" in message and len(message) < 240
+
+
+def test_a_bad_preset_is_reported_with_missing_cases(tmp_path):
+    """A file without cases and with a misspelled preset: both problems at once (the preset,
+    loaded per case, went unreported), and the preset's name suggested."""
+    path = tmp_path / "broken.toml"
+    path.write_text('[plant]\npreset = "rakotondrabe-2dfo"\n')
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    text = str(err.value)
+    assert "cases: missing" in text and "plant.preset" in text
+    assert "did you mean 'rakotondrabe-2dof'" in text
