@@ -199,9 +199,7 @@ FIRST_SAMPLE_TOLERANCE = 1e-9
 def _first_sample_note(plant, drive, inversion):
     """A note when the drive's first sample is not the rest voltage (beyond
     :data:`FIRST_SAMPLE_TOLERANCE`), or None."""
-    rest = (np.zeros(drive.inputs.shape[0]) if plant.amplifier is None
-            else np.array([c.rest for c in plant.amplifier.channels]))
-    off = np.asarray(drive.inputs, dtype=float)[:, 0] - rest
+    off = np.asarray(drive.inputs, dtype=float)[:, 0] - _rest_voltages(plant)
     if np.max(np.abs(off)) <= FIRST_SAMPLE_TOLERANCE:
         return None
     why = ("the stable inversion's anti-causal part, G's zeros outside the unit circle, starts "
@@ -212,6 +210,12 @@ def _first_sample_note(plant, drive, inversion):
     return ("the drive's first sample is " + ", ".join(
         f"{n} {v:+.3g} V" for n, v in zip(plant.hysteresis.input_names, off))
             + f" from rest: {why}")
+
+
+def _rest_voltages(plant):
+    """Each input's rest voltage [V]: the amplifier's, 0 without one."""
+    return (np.zeros(plant.hysteresis.n_inputs) if plant.amplifier is None
+            else plant.amplifier.rest_voltages())
 
 
 def _zpetc_zeros(comp):
@@ -249,10 +253,8 @@ def _peaks_text(plant, drive):
     """Each input's peak |u| [V] and slew [V/s] of the drive as written (the first step from
     rest), and the compensator's own where the limits changed them."""
     names = plant.hysteresis.input_names
-    rest = (np.zeros(len(names)) if plant.amplifier is None
-            else np.array([c.rest for c in plant.amplifier.channels]))
     u = np.asarray(drive.inputs, dtype=float)
-    steps = np.abs(np.diff(np.concatenate([rest[:, None], u], axis=1), axis=1))
+    steps = np.abs(np.diff(np.concatenate([_rest_voltages(plant)[:, None], u], axis=1), axis=1))
     peak, slew = np.max(np.abs(u), axis=1), steps.max(axis=1) / plant.sampling_period
     text = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in zip(names, peak, slew))
     if not (np.allclose(peak, drive.peak_input, rtol=1e-9, atol=1e-9)

@@ -522,7 +522,7 @@ def _handle(args):
         # no start-up step beyond the settled drive's largest (as compensate's default)
         u_next, more = limit_start_up(
             u_next, fade, ref.period_samples,
-            None if plant.amplifier is None else [c.rest for c in plant.amplifier.channels],
+            None if plant.amplifier is None else plant.amplifier.rest_voltages(),
             list(model.input_names), T)
         shaped += more
         owned = owned_problem(args.out, args.force)

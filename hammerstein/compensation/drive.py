@@ -149,7 +149,7 @@ def default_fade_samples(reference, period_samples, settle_samples=None, compens
     if not (slew and sampling_period and not inverts and hasattr(compensator, "simulate")):
         return n
     limit = np.array([c.slew_rate for c in amplifier.channels]) * float(sampling_period)
-    rest = np.array([c.rest for c in amplifier.channels])
+    rest = amplifier.rest_voltages()
     n = max(n, 1)
     while n < r.shape[1]:
         m = min(n + 1 + int(period_samples), r.shape[1])
@@ -440,7 +440,7 @@ def drive_signal(compensator, reference, sampling_period, period_samples=None, f
         # the reference itself needs more, than after the fade): a fade too short for the first
         # voltages is doubled until it is not (or covers the record)
         limit = np.array([c.slew_rate for c in amplifier.channels]) * float(sampling_period)
-        rest = np.array([c.rest for c in amplifier.channels])
+        rest = amplifier.rest_voltages()
         while fade_samples < r.shape[1]:
             if _fade_within_slew(u, fade_samples, rest, limit):
                 break
@@ -772,7 +772,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     T = float(sampling_period)
     P = int(period_samples) if period_samples and int(period_samples) > 1 else 0
     slew = np.array([c.slew_rate for c in amplifier.channels]) * T if amplifier is not None else None
-    u_rest = np.array([c.rest for c in amplifier.channels]) if amplifier is not None else None
+    u_rest = amplifier.rest_voltages() if amplifier is not None else None
     y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
 
     def run(fade):
@@ -849,7 +849,7 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     N = u.shape[1]
     end = min(fade + max(P, 1), N)
     bound = settled_step(u, end)
-    rest = np.array([c.rest for c in amplifier.channels])
+    rest = amplifier.rest_voltages()
     start = _start_steps(u, end, rest)
     if not np.any(start > bound * (1 + _STEP_TOL)) or not np.all(np.isfinite(bound) & (bound > 0)):
         return u, faded, []

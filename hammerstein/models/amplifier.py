@@ -335,6 +335,16 @@ class Amplifier:
         """True when some channel has a finite bandwidth."""
         return any(c.bandwidth_hz is not None for c in self.channels)
 
+    def rest_voltages(self):
+        """Each input's rest voltage: 0, or its range's value nearest 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m,)
+            [V].
+        """
+        return np.array([c.rest for c in self.channels], dtype=float)
+
     def rest_state(self):
         """The state at rest: every channel at its rest voltage.
 
@@ -343,7 +353,7 @@ class Amplifier:
         numpy.ndarray, shape (2 m,)
             [V].
         """
-        r = np.array([c.rest for c in self.channels])
+        r = self.rest_voltages()
         return np.concatenate([r, r])
 
     def range_widths(self):

@@ -91,7 +91,8 @@ def test_a_first_sample_off_rest_is_named(first, inversion, said):
     """compensate names a drive whose first sample is more than 1e-9 V from rest, and why."""
     from types import SimpleNamespace
     from hammerstein.cli.compensate import _first_sample_note
-    plant = SimpleNamespace(amplifier=None, hysteresis=SimpleNamespace(input_names=["ux", "uy"]))
+    plant = SimpleNamespace(amplifier=None,
+                            hysteresis=SimpleNamespace(input_names=["ux", "uy"], n_inputs=2))
     drive = SimpleNamespace(inputs=np.array([[0.0, 1.0], [first, 1.0]]))
     note = _first_sample_note(plant, drive, inversion)
     assert (note is None) == (said is None)
