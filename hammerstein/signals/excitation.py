@@ -155,10 +155,20 @@ def decreasing_sine(sampling_period, amplitude, frequency=1.0, levels=LEVELS, pe
     return np.arange(u.size) * T, u, level
 
 
+def _half_cosine_samples(distance, speed, T):
+    """Samples of a half-cosine move over ``distance`` [V] whose peak slew is at most
+    ``speed`` [V/s] (at least 2)."""
+    return max(2, int(np.ceil(np.pi * distance / (2.0 * speed * T) - 1e-9)))    # never faster
+
+
+def _half_cosine_weights(n):
+    """The ``n`` weights of a half-cosine move after its start, up to 1."""
+    return 0.5 - 0.5 * np.cos(np.pi * np.arange(1, n + 1) / n)
+
+
 def _half_cosine(a, b, speed, T):
     """Samples after ``a`` up to ``b``: a half-cosine of peak slew at most ``speed`` [V/s]."""
-    n = max(2, int(np.ceil(np.pi * abs(b - a) / (2.0 * speed * T) - 1e-9)))    # never faster
-    return a + (b - a) * (0.5 - 0.5 * np.cos(np.pi * np.arange(1, n + 1) / n))
+    return a + (b - a) * _half_cosine_weights(_half_cosine_samples(abs(b - a), speed, T))
 
 
 def reversal_curves(sampling_period, amplitude, frequency=1.0, reversals=REVERSALS):
@@ -534,11 +544,12 @@ class ExcitationRecord:
     f_max: float | None = None
 
 
-def _ramp(a, b, n):
-    """``n`` samples after ``a`` up to ``b`` (arrays (m,)): a half-cosine, (m, n)."""
-    w = 0.5 - 0.5 * np.cos(np.pi * np.arange(1, n + 1) / n)
-    return np.asarray(a, dtype=float)[:, None] + np.outer(np.asarray(b, dtype=float)
-                                                          - np.asarray(a, dtype=float), w)
+def _ramp(a, b, speed, T):
+    """Every input from ``a`` to ``b`` (arrays (m,)) by half-cosines over the same samples,
+    the farthest move's peak slew ``speed`` [V/s]: (m, n), ``a`` not included."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    w = _half_cosine_weights(_half_cosine_samples(float(np.max(np.abs(b - a))), speed, T))
+    return a[:, None] + np.outer(b - a, w)
 
 
 def around(u, centre, rest, sampling_period, speed):
@@ -580,10 +591,8 @@ def around(u, centre, rest, sampling_period, speed):
     first, last = c + u[:, 0], c + u[:, -1]
     T = float(sampling_period)
 
-    def n_of(a, b):
-        return max(2, int(np.ceil(np.pi * np.max(np.abs(b - a)) / (2.0 * speed * T) - 1e-9)))
-    return np.concatenate([_ramp(r, first, n_of(r, first)), c[:, None] + u,
-                           _ramp(last, r, n_of(last, r))], axis=1)
+    return np.concatenate([_ramp(r, first, speed, T), c[:, None] + u,
+                           _ramp(last, r, speed, T)], axis=1)
 
 
 def peak_slew(u, sampling_period, periodic=False):
