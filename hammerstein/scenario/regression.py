@@ -16,8 +16,9 @@ Tolerances (issue 6, item 5): a metric ``moved`` when
 ``|current - baseline| > atol + rtol * |baseline|`` (the convention of
 :func:`numpy.isclose`). Its direction decides whether the move is a
 regression: for errors, cross-couplings and hysteresis widths larger is
-worse (``"lower"`` is better); for neutral metrics (``peak_to_peak``,
-unknown metrics) any move beyond tolerance is a regression.
+worse (``"lower"`` is better), and so for a drive's ``peak_slew``; for
+neutral metrics (``peak_to_peak``, ``peak_input``, unknown metrics) any move
+beyond tolerance is a regression.
 """
 
 from __future__ import annotations
@@ -115,6 +116,9 @@ DEFAULT_TOLERANCES = {
     "max_euclidean_error_percent": _RATIO,
     "hysteresis_ratio": _RATIO,
     "peak_to_peak": Tolerance(rtol=0.01, atol=0.01, direction="neutral"),
+    # a drive's fastest step [V/s]: slower is gentler on the amplifier, never a regression
+    # by itself (a drive that stopped following shows in the errors); faster beyond 5 % is
+    "peak_slew": Tolerance(rtol=0.05, atol=1e-9, direction="lower"),
     # a divergence that moves by more than two 50 µs samples
     DIVERGENCE_METRIC: Tolerance(rtol=0.0, atol=1e-4, direction="neutral"),
     "*": Tolerance(rtol=0.05, atol=1e-9, direction="neutral"),

@@ -29,6 +29,7 @@ BASE = [
     ("sine", "x", "hysteresis_ratio", 10.0, "%"),
     ("sine", "y", "cross_coupling_peak_to_peak", 0.50, "µm"),
     ("open", "x", "peak_to_peak", 120.0, "µm"),
+    ("sine", "ux", "peak_slew", 2.0e4, "V/s"),
 ]
 
 
@@ -60,6 +61,10 @@ def _status(result, metric):
     ("peak_to_peak", 121.22, "regressed"),
     ("peak_to_peak", 118.78, "regressed"),
     ("rms_error", float("nan"), "regressed"),
+    # a drive's fastest step: 5 % of 2e4 V/s, only a rise regresses
+    ("peak_slew", 2.0999e4, "ok"),
+    ("peak_slew", 2.1001e4, "regressed"),
+    ("peak_slew", 1.5e4, "improved"),
 ])
 def test_compare_status_by_tolerance_and_direction(metric, value, expected):
     result = compare_metrics(table(_with(BASE, metric, value)), table(BASE))
@@ -74,7 +79,7 @@ def test_compare_unchanged_is_all_ok_with_zero_delta():
     assert list(result["status"]) == ["ok"] * len(BASE)
     np.testing.assert_array_equal(result["delta"], 0.0)
     assert list(result["metric"]) == [r[2] for r in BASE]
-    assert "4 ok, 0 regressed" in summary_line(result) and summary_line(result).endswith("PASS")
+    assert f"{len(BASE)} ok, 0 regressed" in summary_line(result) and summary_line(result).endswith("PASS")
 
 
 def test_compare_reports_delta_and_relative_delta():
@@ -154,6 +159,8 @@ def test_tolerance_overrides(overrides, rtol, status):
     ("max_abs_error_percent", 0.05, 0.2, "lower"),
     ("cross_coupling_rms", 0.05, 0.01, "lower"),
     ("spectral_radius", 0.05, 1e-9, "neutral"),           # unknown: neutral
+    ("peak_slew", 0.05, 1e-9, "lower"),                   # a slower drive is no regression
+    ("peak_input", 0.05, 1e-9, "neutral"),
 ])
 def test_default_tolerances_by_metric_name(metric, rtol, atol, direction):
     tol = resolve_tolerances()(metric)
