@@ -52,6 +52,7 @@ from hammerstein.models.creep import creep_dynamics, creep_matrices, series_matr
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.hysteresis import HysteresisError, state_vector
 from hammerstein.compensation.inversion import ZPETCInverse, inverse_system, preview_inverse
+from hammerstein.compensation.lookahead import creep_rest_state, lookahead_inverse
 from hammerstein.compensation.model_classes import model_class
 from hammerstein.simulation import (ChainResult, LinearArrays, linear_steps, simulate_chain,
                                     simulate_compensator)
@@ -567,10 +568,17 @@ class HammersteinCompensator:
         """
         if self.inverse is None:    # continued past the end: no held-end spike
             ext = np.concatenate([reference, self._stable_continuation(reference)], axis=1)
-            v = preview_inverse(self.bending_dynamics, ext, method="stable")[:, :reference.shape[1]]
-            if self.creep is not None:     # (G (I + C))^-1 = (I + C)^-1 G^-1, creep from rest
+            N, la = reference.shape[1], self.lookahead_inverse
+            if la is None:          # a look-ahead too long to build: the whole-record recursion
+                v = preview_inverse(self.bending_dynamics, ext, method="stable")[:, :N]
+            else:                   # what the exported C computes, term for term
+                ext = np.concatenate([ext, np.repeat(ext[:, -1:], max(0, N + la.preview_samples
+                                                                      - ext.shape[1]), axis=1)], 1)
+                v = la.filter(ext[:, :N + la.preview_samples], la.initial_state(reference[:, 0]))[0]
+            if self.creep is not None:     # (G (I + C))^-1 = (I + C)^-1 G^-1, creep at rest
                 mats = creep_inverse(self.creep, self.dynamics.dt)
-                v = linear_steps(v, mats, np.zeros(mats[0].shape[0]))[0]
+                v = linear_steps(v, mats, creep_rest_state(mats, self.bending_dynamics,
+                                                           reference[:, 0]))[0]
             return v, filter_state
         return self.inverse.filter(reference, filter_state)
 
@@ -633,22 +641,30 @@ class HammersteinCompensator:
             return 0
         return int(math.ceil(math.log(1.0 / decay) / math.log(cached)))
 
+    @property
+    def lookahead_inverse(self):
+        """``'stable'``: G's stable inversion as a filter of the reference ahead
+        (:class:`~hammerstein.compensation.lookahead.LookaheadInverse`, what the export runs),
+        None for ``'zpetc'`` or a look-ahead beyond ``MAX_LOOKAHEAD`` samples."""
+        if self.inverse is None and not hasattr(self, "_lookahead"):
+            self._lookahead = lookahead_inverse(self.bending_dynamics)
+        return getattr(self, "_lookahead", None)
+
     def _stable_continuation(self, reference):
         """What the stable inversion reads past a record's end: the record's own periods
         repeated, when :meth:`start` was given its period and its last 8 samples repeat one
-        period earlier, over :data:`STABLE_DECAY` of the anti-causal part (at most
-        :data:`MAX_STABLE_CONTINUATION` samples); else 8 extrapolated samples.
-
-        A record held at its last value makes a kink there, and the anti-causal modes ring
-        back from it: the sampling zeros near z = -1 outside the unit circle as a Nyquist-rate
-        oscillation over the record's last milliseconds (a new user's stage: reversals of 15-50 V
-        on its last 40 samples, which ``compensate`` refused as chatter).
+        period earlier, over :data:`STABLE_DECAY` of the anti-causal part and the look-ahead
+        (at most :data:`MAX_STABLE_CONTINUATION` samples); else 8 extrapolated samples. (Held,
+        the end is a kink the anti-causal modes ring back from: a zero near -1 as 15-50 V
+        reversals over a new user's stage's last 40 samples, refused as chatter.)
         """
         r = np.asarray(reference, dtype=float)
         N, period = r.shape[1], getattr(self, "_stable_period", None)
         if period and N >= period + 8 and np.allclose(r[:, N - 8:], r[:, N - period - 8:N - period],
                                                       rtol=0, atol=1e-9 * max(1.0, np.abs(r).max())):
-            n = min(max(8, self.stable_lookahead(STABLE_DECAY)), MAX_STABLE_CONTINUATION)
+            la = self.lookahead_inverse
+            n = min(max(8, self.stable_lookahead(STABLE_DECAY),
+                        0 if la is None else la.preview_samples), MAX_STABLE_CONTINUATION)
             return r[:, N - period + np.arange(n) % period]
         return continuation(r, 8)
 
