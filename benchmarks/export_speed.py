@@ -1,7 +1,7 @@
 """CPU time per ``NAME_step`` of exported C compensators, with a C timing harness.
 
 Run: ``python benchmarks/export_speed.py [--opt O2] [--steps N] [--repeat R]
-[--precision double|float] [--model FILE[:KIND] ...] [--python]`` from the repository root
+[--precision double|float] [--model FILE[:KIND[/INVERSION]] ...] [--python]`` from the repository root
 (needs a C compiler, ``$CC`` or cc/gcc/clang).
 
 Not a test. Each compensator is exported (:func:`hammerstein.export.export_c`),
@@ -17,8 +17,9 @@ Cases: the 4x4 classical PI with 100 play operators per input (the issue's
 4x4x100), law with 1 and 3 iterations, the kinds :func:`choose_kind` picks for
 it without and with (4x4 bending modes) dynamics, and its per-axis inverse; the bundled 2x2 Hammerstein compensator;
 2x2 Preisach and generalised-PI models (exact inverse), and any model or preset
-file given with ``--model FILE[:KIND]`` (e.g. one written by ``hammerstein
-identify``), built as ``hammerstein export`` builds it. Target: <= 2 µs per
+file given with ``--model FILE[:KIND[/INVERSION]]`` (e.g. one written by ``hammerstein
+identify``; ``:hammerstein/stable`` for the stable inversion's look-ahead filter), built as
+``hammerstein export`` builds it. Target: <= 2 µs per
 step at -O2 for the 4x4x100 PI and the 2x2 identified models. With
 ``--python``, each compensator's Python ``simulate`` (the compiled kernels
 ``compensate`` runs) is also timed on the same reference, CPU ns per sample.
@@ -161,10 +162,12 @@ def cases(files):
         yield "2x2 generalised PI exact inverse", PreisachInverseCompensator(gpi_model()), T, 12.0
         for spec in files:
             path, _, kind = spec.partition(":")
+            kind, _, inversion = kind.partition("/")
             source = load_source(path)
             kind = kind or choose_kind(source.model, source.dynamics is not None).kind
-            comp, Tm = build_compensator(source, kind, check="ignore")
-            yield f"{Path(path).stem} {kind}", comp, Tm, 12.0
+            comp, Tm = build_compensator(source, kind, check="ignore", inversion=inversion or None)
+            yield (f"{Path(path).parent.name}/{Path(path).stem} {kind}"
+                   + (f" {inversion}" if inversion else "")), comp, Tm, 12.0
 
 
 def python_ns(comp, T, scale, steps, repeat):

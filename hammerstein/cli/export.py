@@ -68,8 +68,8 @@ def add_parser(subparsers):
                         f"docs/models-and-kinds.md; {', '.join(REFUSED_KINDS)} are refused, "
                         f"naming why)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default=None,
-                   help="inverse of the dynamics for --kind hammerstein (only zpetc runs sample by "
-                        "sample)")
+                   help="inverse of the dynamics for --kind hammerstein (default zpetc; stable: "
+                        "a filter of the reference PREVIEW samples ahead, docs/real-time.md)")
     p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
                    help="normalisation K of the law (default secant; midpoint for hammerstein)")
     p.add_argument("--iterations", type=int, default=None, metavar="N",

@@ -14,6 +14,7 @@ from hammerstein.simulation._preisach import _cell_lists
 from hammerstein.simulation._preisach_inverse import AITKEN_SWEEP, BRACKET_GROWTH, SECANT_OVERSHOOT
 from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
                                        _stage_rest, _stage_code, _sections, _model_text)
+from hammerstein.export.c_lookahead import _lookahead_code
 
 
 _EXACT = """@RAMP<
@@ -380,11 +381,13 @@ def _search_ends(comp, precision):
 
 
 def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=None,
-                  rest_states=None):
+                  rest_states=None, lookahead=None):
     """The exact inverse (or its multiplicative law) of a PreisachInverseCompensator, after
     optional linear stages (the dynamics inverse, the creep inverse), which ``NAME_init``
     starts at rest for the constant reference ``rest`` (the model's output at 0 V; None: 0;
-    ``rest_states`` the Python inverse's states there, stacked)."""
+    ``rest_states`` the Python inverse's states there, stacked). ``lookahead``: ``(la,
+    state)``, the stable inversion of G as a look-ahead filter ahead of the stages
+    (:func:`hammerstein.export.c_lookahead._lookahead_code`; ``preview`` its samples)."""
     (E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, present) = comp._arrays
     m = p = model.n_inputs
     nh = int(model.n_hysterons)
@@ -444,6 +447,13 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
             init.append(f"    for (j = 0; j < {n}; ++j) s->x{k}[j] = {N}_x{k}_rest[j];")
         else:
             init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {lit['zero']};")
+        reals += n
+    if lookahead is not None:      # the stages start with the first voltage, after the buffer
+        d, c, more, first, n = _lookahead_code(lookahead[0], lookahead[1], precision, N)
+        decls += d
+        scode = [c] + scode + ["    }"]
+        members += more
+        init = first + init
         reals += n
     keep = {"HYST": q_off[-1] > 0, "RAMP": q_off[-1] > 0, "PLAY": p_off[-1] > 0,
             "COMPONENT": not exact}

@@ -6,51 +6,76 @@ of a classical PI (:mod:`hammerstein.export.c_law`).
 
 from __future__ import annotations
 
+import numpy as np
+
 from hammerstein.compensation.drive import rest_output
 from hammerstein.compensation.inversion import ZPETCInverse
+from hammerstein.compensation.hammerstein_compensator import creep_inverse
+from hammerstein.compensation.lookahead import EXPORT_DECAY, MAX_LOOKAHEAD, creep_rest_state
 from hammerstein.exceptions import ExportError
 from hammerstein.export.c_base import (_check_model, _model_text)
 from hammerstein.export.c_exact import _exact_source
 from hammerstein.export.c_law import _Law, _law_source
-
-
-def _stable_lookahead(comp):
-    """Look-ahead [samples] after which the anti-causal part of the stable inverse has decayed
-    below 1e-12 (:meth:`HammersteinCompensator.stable_lookahead`); None when it cannot be
-    computed."""
-    try:
-        return comp.stable_lookahead(1e-12)
-    except Exception:        # noqa: BLE001 - only a figure in a message
-        return None
+from hammerstein.export.c_lookahead import lookahead_cost
 
 
 def _refuse_stable(comp):
-    """The reason the whole-record stable inversion has no C step function."""
-    P = _stable_lookahead(comp)
-    if P == 0:
-        why = ("G has no zero outside the unit circle here, yet the stable inversion works on "
-               "the record as a whole (it starts at the DC equilibrium of the first reference "
-               "sample and extrapolates the record past its end), which a step function "
-               "cannot know; 'zpetc' inverts such zeros exactly (it approximates only zeros "
-               "outside the unit circle or near -1)")
+    """Why this stable inversion has no C step function: a look-ahead too long, or a law."""
+    if comp.lookahead_inverse is None:
+        P = comp.stable_lookahead(EXPORT_DECAY)
+        why = (f"its anti-causal part (G's zeros outside the unit circle, the slowest at |z| = "
+               f"{comp._anticausal_radius:.6g}) decays below {EXPORT_DECAY:g} only after {P} "
+               f"samples, and a look-ahead of more than {MAX_LOOKAHEAD} samples is not built "
+               f"(its buffer, its terms and the time of a step grow with it)")
     else:
-        why = ("its anti-causal part (the zeros of G outside the unit circle) runs backward "
-               "from the end of the record, started at the DC equilibrium of the last "
-               "reference sample; a step function never knows where the record ends, so no "
-               "finite look-ahead gives the same voltages" +
-               ("" if P is None else f" (a look-ahead truncated after {P} samples, where "
-                                     f"|z|^-P of the slowest such zero falls below 1e-12, would "
-                                     f"match it except near the record's end)"))
-    return (f"inversion: {comp.inversion!r} inverts the whole record at once and cannot be "
-            f"one causal step function: {why}; export the Hammerstein compensator with "
-            f"inversion 'zpetc' (the causal zero-phase-error inverse with "
-            f"{_preview_text(comp)}, the closest exportable kind), or run 'hammerstein "
-            f"compensate' with the stable inversion and play its drive file")
+        why = ("the look-ahead filter is exported ahead of the exact inverse of a Preisach or "
+               "generalised-PI model, not ahead of the classical PI's multiplicative law")
+    return (f"inversion: {comp.inversion!r} cannot be exported here: {why}; export the "
+            f"Hammerstein compensator with inversion 'zpetc' (the causal zero-phase-error "
+            f"inverse with {_preview_text(comp)}), or run 'hammerstein compensate' with the "
+            f"stable inversion and play its drive file")
+
+
+def _plan_stable(comp):
+    """The stable inversion of G as a look-ahead filter (:class:`LookaheadInverse`), then the
+    creep inverse, then the exact inverse of a Preisach or generalised-PI model."""
+    la = comp.lookahead_inverse
+    if la is None or not comp.exact_static:
+        raise ExportError(_refuse_stable(comp))
+    hc, L = comp.hysteresis_compensator, la.preview_samples
+    rest = rest_output(hc.model, comp.creep)       # where compensate's faded reference starts
+    stages, states = [], None
+    if comp.creep is not None:
+        mats = creep_inverse(comp.creep, comp.dynamics.dt)
+        stages, states = [mats], creep_rest_state(mats, comp.bending_dynamics, rest)
+    creep = "" if comp.creep is None else ", the exact creep inverse"
+    state = la.initial_state(rest)
+
+    def build(precision, N, limits, T):
+        if precision == "float":
+            raise ExportError(_float_refusal(la))
+        return _exact_source(hc, stages, hc.model, precision, N, limits, T, L, rest, states,
+                             lookahead=(la, state))
+    return ("exact", hc.model, L,
+            f"Hammerstein compensator U = Gamma^-1(G^-1 Yr): stable inversion of G over a "
+            f"look-ahead of {L} samples ({lookahead_cost(la)} multiply-adds a step; the "
+            f"anti-causal part truncated where |z|^-k of G's slowest zero outside the unit "
+            f"circle, |z| = {la.anticausal_radius:.6g}, falls below {EXPORT_DECAY:g}){creep}, "
+            f"then the exact per-sample inverse of the {_model_text(hc.model)}", build)
+
+
+def _float_refusal(la):
+    """Why the look-ahead filter is not exported in float: its terms cancel."""
+    terms = float(np.max(np.sum(np.abs(la.taps), axis=(0, 2))))
+    return (f"precision: 'float': the stable inversion's look-ahead sums {la.preview_samples + 1} "
+            f"terms that cancel (their absolute sum is {terms:.3g} times the reference); float's "
+            f"rounding, 6e-8 of that sum, would leave about {terms * 6e-8:.2g} of the reference "
+            f"in error; export it in double, or with inversion 'zpetc'")
 
 
 def _plan_hammerstein(comp):
     if comp.inverse is None:
-        raise ExportError(_refuse_stable(comp))
+        return _plan_stable(comp)
     P = int(comp.preview_samples)
     creep = "" if comp.creep is None else " and the exact creep inverse"
     if comp.exact_static:
