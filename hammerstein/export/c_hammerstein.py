@@ -20,48 +20,52 @@ from hammerstein.export.c_lookahead import lookahead_cost
 
 
 def _refuse_stable(comp):
-    """Why this stable inversion has no C step function: a look-ahead too long, or a law."""
-    if comp.lookahead_inverse is None:
-        P = comp.stable_lookahead(EXPORT_DECAY)
-        why = (f"its anti-causal part (G's zeros outside the unit circle, the slowest at |z| = "
-               f"{comp._anticausal_radius:.6g}) decays below {EXPORT_DECAY:g} only after {P} "
-               f"samples, and a look-ahead of more than {MAX_LOOKAHEAD} samples is not built "
-               f"(its buffer, its terms and the time of a step grow with it)")
-    else:
-        why = ("the look-ahead filter is exported ahead of the exact inverse of a Preisach or "
-               "generalised-PI model, not ahead of the classical PI's multiplicative law")
-    return (f"inversion: {comp.inversion!r} cannot be exported here: {why}; export the "
-            f"Hammerstein compensator with inversion 'zpetc' (the causal zero-phase-error "
-            f"inverse with {_preview_text(comp)}), or run 'hammerstein compensate' with the "
-            f"stable inversion and play its drive file")
+    """Why this stable inversion has no C step function: its look-ahead is too long."""
+    P = comp.stable_lookahead(EXPORT_DECAY)
+    return (f"inversion: {comp.inversion!r} cannot be exported here: its anti-causal part (G's "
+            f"zeros outside the unit circle, the slowest at |z| = {comp._anticausal_radius:.6g}) "
+            f"decays below {EXPORT_DECAY:g} only after {P} samples, and a look-ahead of more "
+            f"than {MAX_LOOKAHEAD} samples is not built (its buffer, its terms and the time of a "
+            f"step grow with it); export the Hammerstein compensator with inversion 'zpetc' "
+            f"(the causal zero-phase-error inverse with {_preview_text(comp)}), or run "
+            f"'hammerstein compensate' with the stable inversion and play its drive file")
 
 
 def _plan_stable(comp):
     """The stable inversion of G as a look-ahead filter (:class:`LookaheadInverse`), then the
-    creep inverse, then the exact inverse of a Preisach or generalised-PI model."""
+    creep inverse, then the exact inverse of a Preisach or generalised-PI model or the inverse
+    multiplicative law of a classical PI (on the reference as given: the law's own transform
+    after, as :meth:`HammersteinCompensator.simulate` runs them)."""
     la = comp.lookahead_inverse
-    if la is None or not comp.exact_static:
+    if la is None:
         raise ExportError(_refuse_stable(comp))
     hc, L = comp.hysteresis_compensator, la.preview_samples
-    rest = rest_output(hc.model, comp.creep)       # where compensate's faded reference starts
+    model = hc.model if comp.exact_static else _check_model(comp.model)
+    rest = rest_output(model, comp.creep)          # where compensate's faded reference starts
     stages, states = [], None
     if comp.creep is not None:
         mats = creep_inverse(comp.creep, comp.dynamics.dt)
         stages, states = [mats], creep_rest_state(mats, comp.bending_dynamics, rest)
     creep = "" if comp.creep is None else ", the exact creep inverse"
     state = la.initial_state(rest)
+    what = (f"the exact per-sample inverse of the {_model_text(model)}" if comp.exact_static else
+            f"the inverse multiplicative law ({int(hc.iterations)} iteration(s) per sample)")
 
     def build(precision, N, limits, T):
         if precision == "float":
             raise ExportError(_float_refusal(la))
-        return _exact_source(hc, stages, hc.model, precision, N, limits, T, L, rest, states,
-                             lookahead=(la, state))
-    return ("exact", hc.model, L,
+        if comp.exact_static:
+            return _exact_source(hc, stages, model, precision, N, limits, T, L, rest, states,
+                                 lookahead=(la, state))
+        return _law_source(_Law(hc.packed_law(), L), model, precision, N, limits, T,
+                           lookahead=(la, state), stages=stages,
+                           stage_states=None if states is None else [states])
+    return ("exact" if comp.exact_static else "law", model, L,
             f"Hammerstein compensator U = Gamma^-1(G^-1 Yr): stable inversion of G over a "
-            f"look-ahead of {L} samples ({lookahead_cost(la)} multiply-adds a step; the "
+            f"look-ahead of {L} sample{'s' if L != 1 else ''} ({lookahead_cost(la)} multiply-adds a step; the "
             f"anti-causal part truncated where |z|^-k of G's slowest zero outside the unit "
             f"circle, |z| = {la.anticausal_radius:.6g}, falls below {EXPORT_DECAY:g}){creep}, "
-            f"then the exact per-sample inverse of the {_model_text(hc.model)}", build)
+            f"then {what}", build)
 
 
 def _float_refusal(la):

@@ -9,13 +9,19 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
-                                       _reference_transform, _limits_code, _reals_table, _stage_rest)
+                                       _reference_transform, _limits_code, _reals_table, _stage_code,
+                                       _stage_rest)
+from hammerstein.export.c_lookahead import _lookahead_code
 
 
 __all__ = ["law_preview"]
 
 
-def _law_source(law, model, precision, N, limits, T):
+def _law_source(law, model, precision, N, limits, T, lookahead=None, stages=(), stage_states=None):
+    """The law's C; ``lookahead``: ``(la, state)``, the stable inversion of G ahead of it
+    (:func:`hammerstein.export.c_lookahead._lookahead_code`), then the linear ``stages`` (the
+    creep inverse) started at ``stage_states``, before the law's own reference transform, as
+    :meth:`HammersteinCompensator.simulate` runs them."""
     start, r, W, G = _packed_plays(model)
     m, p = model.n_inputs, model.n_outputs
     nplays = r.size
@@ -102,6 +108,31 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
     if nf and law_preview(law):
         init.append("    s->received = 0;")
     init.append("    s->diverged = 0;")
+    fill = f"""    if (s->received < {N}_PREVIEW) {{  /* filling the preview: the actuator stays at rest */
+        s->received += 1;
+        for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = s->u[k];
+        return 0;
+    }}"""
+    more, extra_reals, la_step = [], 0, []
+    if lookahead is not None:     # G^-1 on the reference as given, then creep, then S^-1(. - c)
+        d, c, more, first, extra_reals = _lookahead_code(lookahead[0], lookahead[1], precision, N)
+        decls += d
+        init = first + init
+        la_step = [c]
+        for k, ((A, B, C, D), x0) in enumerate(zip(stages, stage_states or [None] * len(stages))):
+            A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
+            d, c, n = _stage_code(k, A, B, C, D, precision, N)
+            decls += d
+            la_step.append(c)
+            more.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
+            extra_reals += n
+            if n and x0 is not None and np.any(x0):
+                decls.append(_reals_table(f"x{k}_rest", x0, precision, N))
+                init.append(f"    for (j = 0; j < {n}; ++j) s->x{k}[j] = {N}_x{k}_rest[j];")
+            else:
+                init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {zero};")
+        la_step += ["    }", fill]
+        init.insert(0, "    s->received = 0;")
     body.append(f"""void {N}_init({N}_state *s)
 {{
     int k, j, l;
@@ -115,6 +146,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
     int k, l, status = 0;
 @REFERENCE_CHECK@
     for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = reference[l];"""]
+    step += la_step
     step += tcode
     if nf:   # the preview samples too enter the inverse as S^-1(Yr - c), as Python's start-up
         step.append(f"""    {{  /* ZPETC inverse of the linear dynamics: v = Cf x + Df r, x <- Af x + Bf r */
@@ -136,11 +168,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
         for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = v[l];
     }}""")
         if law_preview(law):
-            step.append(f"""    if (s->received < {N}_PREVIEW) {{  /* filling the preview: the actuator stays at rest */
-        s->received += 1;
-        for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = s->u[k];
-        return 0;
-    }}""")
+            step.append(fill)
     if law.lowpass:
         step.append(f"""    /* low-pass law (Section 6): v_f <- a v_f + (1 - a)(U(t-T) - K^-1 Gamma(U(t-T))), U = K^-1 r + v_f */
     for (k = 0; k < {N}_N_INPUTS; ++k) {{
@@ -205,8 +233,10 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
     if nf:
         members.append(f"    {N}_real x_f[{N}_N_FILTER];      /* ZPETC inverse state [um] */")
         reals += nf
-    if nf and law_preview(law):
+    if (nf and law_preview(law)) or lookahead is not None:
         members.append("    int received;                  /* references received, up to PREVIEW */")
+    members += more
+    reals += extra_reals
     members.append("    int diverged;                  /* latched divergence flag */")
     defines = [f"#define {N}_N_PLAYS {nplays}"] + ([f"#define {N}_N_FILTER {nf}"] if nf else [])
     return decls[1:] + tdecls + ldecls, body, members, defines, reals

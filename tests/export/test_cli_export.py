@@ -39,8 +39,19 @@ def test_c_files_written_then_replaced(tmp_path, capsys):
                "hammerstein")[0] == 0
 
 
+def test_the_stable_inversion_is_exported(tmp_path, capsys):
+    # G of the bundled preset has no zero outside the unit circle: the look-ahead is its
+    # relative degree (1), the stable modes run forward (tests/export/test_stable_export.py)
+    out = tmp_path / "o"
+    code, stdout, _ = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out),
+                          "--kind", "hammerstein", "--inversion", "stable", "--name", "st")
+    assert code == 0 and "#define st_PREVIEW 1" in (out / "st.h").read_text()
+    assert "stable inversion of G over a look-ahead of 1 sample (" in (out / "st.h").read_text()
+
+
 @pytest.mark.parametrize("argv, status, needle", [
-    (["--kind", "hammerstein", "--inversion", "stable"], 1, "inversion: 'stable'"),
+    (["--kind", "hammerstein", "--inversion", "stable", "--precision", "float"], 1,
+     "precision: 'float'"),
     (["--kind", "multivariable", "--gain", "identity"], 1, "rho(I - K^-1 J)"),
     (["--kind", "per-axis", "--iterations", "3"], 1, "takes no gain"),
     (["--amplifier-range", "5", "-5"], 1, "range: expected [min, max]"),

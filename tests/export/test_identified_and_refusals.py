@@ -12,7 +12,6 @@ import pytest
 from hammerstein import (InverseMultiplicativeCompensator, PerAxisInverseCompensator,
                          StaticGainCompensator)
 from hammerstein.cli.main import main
-from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.io.presets import load_model, load_plant
 from hammerstein.exceptions import ExportError
 from hammerstein.export import STATUS_RANGE, AmplifierLimits, export_c
@@ -64,15 +63,6 @@ def test_identified_models_export(label, kind, tmp_path, tmp_path_factory, capsy
     u_c, status, _ = Harness(code, tmp_path / "h").run(yr)
     assert np.all((status & ~STATUS_RANGE) == 0)   # the range bit: voltages beyond 1.2 x amplitude
     assert rel_error(u_c, python_voltages(comp, yr)) <= 1e-12
-
-
-def test_stable_inversion_over_the_classical_pi_law_is_refused():
-    """The look-ahead filter is exported ahead of the exact inverses only
-    (tests/export/test_stable_export.py: exported and refused there)."""
-    p = load_plant("rakotondrabe-2dof")
-    comp = HammersteinCompensator(p.hysteresis, p.dynamics, inversion="stable")
-    with pytest.raises(ExportError, match="inversion: 'stable'.*multiplicative law.*zpetc"):
-        export_c(comp, "x", p.sampling_period)
 
 
 class _Preisach:                      # a model class the C generator does not know
