@@ -164,3 +164,27 @@ def test_the_fmu_plays_the_same_voltages(tmp_path):
     u_fmu, status = simulate(path, code, fed_to_c(comp, faded, period))
     assert np.all((status.astype(int) & ~STATUS_RANGE) == 0)
     assert np.max(np.abs(u_fmu[:, L:] - u_py)) <= 1e-12 * np.max(np.abs(u_py))
+
+
+@needs_cc
+@pytest.mark.parametrize("bad", [np.nan, np.inf, 1e5])
+def test_a_bad_reference_sets_the_status_and_never_enters_the_buffer(bad, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp = CASES["preisach"]()
+        rest = rest_output(comp.hysteresis_compensator.model, comp.creep)
+        faded, period = periodic_circle(comp, rest, n=1200)
+        comp.start(faded, period)
+        code = export_c(comp, "st", T)
+    ahead = fed_to_c(comp, faded, period)
+    L, at = code.preview, code.preview + 500
+    harness = Harness(code, tmp_path / "h")
+    u_ok, status_ok, _ = harness.run(ahead)
+    spoilt = ahead.copy()
+    spoilt[0, at] = bad
+    u, status, _ = harness.run(spoilt)
+    assert status[at] & STATUS_RANGE
+    if not np.isfinite(bad):       # skipped: voltages held, the state kept
+        np.testing.assert_array_equal(u[:, at], u[:, at - 1])
+        assert np.all(status_ok[L:] == 0)
+    assert np.all(np.isfinite(u))
