@@ -44,10 +44,11 @@ from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.compensation.drive_files import optional_columns
-from hammerstein.core.files import all_or_nothing, guard_inputs, safe_write
+from hammerstein.core.files import all_or_nothing, bounded_read_bytes, guard_inputs, safe_write
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.signals.references import raster_line_index
-from hammerstein.exceptions import DataFileError
+from hammerstein.exceptions import DataFileError, FileLimitError
+from hammerstein.io.datafiles import signal_table
 from hammerstein.report.figures import save
 from hammerstein.report.trajectories import trajectory_figure
 
@@ -76,9 +77,10 @@ def add_parser(subparsers):
                         "one per input [V]")
     p.add_argument("--out", required=True, metavar="DIR", help="report directory")
     p.add_argument("--model", metavar="MODEL_OR_PRESET",
-                   help="names the inputs and outputs (default outputs x,y)")
+                   help="names the inputs and outputs (without it: a CSV reference's columns, else x,y)")
     add_column_options(
-        p, outputs_help="output names, or NAME=COLUMN for columns named otherwise (default x,y)",
+        p, outputs_help="output names, or NAME=COLUMN for columns named otherwise (default: "
+                            "--model's outputs, else a CSV reference's columns, else x,y)",
         inputs_help="input columns [V] to report peak_input / peak_slew and plot",
         time_help="time column (default t)")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
@@ -99,6 +101,21 @@ def add_parser(subparsers):
     p.add_argument("--remove-delay", action="store_true",
                    help="advance the measurement by the estimated delay before the metrics")
     p.set_defaults(handler=_handle)
+
+
+def _reference_outputs(args):
+    """The columns of a CSV ``--reference`` but its time, when neither ``--model`` nor
+    ``--output-columns`` names the outputs; None for an inline reference or a file that cannot
+    be read (``read_signals`` then says why)."""
+    if args.outputs or args.reference.lstrip().startswith("{"):
+        return None
+    try:
+        raw = bounded_read_bytes(args.reference, "data", "data file")
+        columns = signal_table(raw, args.reference, "--reference").frame.columns
+    except (DataFileError, FileLimitError, OSError):
+        return None
+    names = [str(c) for c in columns if str(c) != args.time]
+    return names or None
 
 
 def _names(text, default):
@@ -192,8 +209,8 @@ def _handle(args):
         if args.model:
             plant = load_actuator(args.model, args.sampling_period or 1.0)
             outs, ins = list(plant.hysteresis.output_names), list(plant.hysteresis.input_names)
-        else:
-            outs, ins = ["x", "y"], []
+        else:     # the outputs a CSV reference names (a one-axis stage's x), else x, y
+            outs, ins = _reference_outputs(args) or ["x", "y"], []
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,

@@ -261,3 +261,20 @@ def test_evaluate_reads_the_delay_on_the_settled_part(period, delay):
     meas[:, :fade] = 20.0 + 3.0 * np.sin(2 * np.pi * t[:fade] / (0.7 * period))   # a start-up
     rows, got, _, _ = evaluate(ref, meas, period, 2e-5, ["x"], settle_periods=fade / period + 1)
     assert got == delay
+
+
+@pytest.mark.parametrize("names, expected", [(["x"], ["x"]), (["z", "x"], ["z", "x"])])
+def test_evaluate_takes_the_outputs_a_csv_reference_names(tmp_path, names, expected):
+    """A one-axis stage (or any other names): without --model or --output-columns, the
+    outputs are the reference file's columns, not x, y (which it does not have)."""
+    t = np.arange(4000) * T
+    ref = {n: (k + 1) * 10 * np.sin(2 * np.pi * 50 * t) for k, n in enumerate(names)}
+    pd.DataFrame({"t": t, **ref}).to_csv(tmp_path / "ref.csv", index=False)
+    pd.DataFrame({"t": t, **{n: 1.01 * v for n, v in ref.items()}}).to_csv(
+        tmp_path / "meas.csv", index=False)
+    res = _cli("evaluate", "--reference", "ref.csv", "--measured", "meas.csv", "--period",
+               "0.02", "--out", "ev", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    m = pd.read_csv(tmp_path / "ev/metrics.csv").set_index(["channel", "metric"])["value"]
+    for k, n in enumerate(expected):      # the 1 % gain error: 1 % of the amplitude at the peak
+        assert m[(n, "max_abs_error")] == pytest.approx(0.01 * (k + 1) * 10, rel=1e-3)
