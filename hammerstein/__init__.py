@@ -81,6 +81,7 @@ _LAZY = {
     "fade_in": "hammerstein.compensation.hammerstein_compensator",
     "ZPETCInverse": "hammerstein.compensation.inversion",
     "inverse_system": "hammerstein.compensation.inversion",
+    "LookaheadInverse": "hammerstein.compensation.lookahead",
     # identification of the linear dynamics and from measured records
     "DynamicsIdentifier": "hammerstein.models.lti",
     "identify_dynamics": "hammerstein.models.lti",
