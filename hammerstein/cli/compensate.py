@@ -37,8 +37,10 @@ from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
                                             hardware_drive, rest_output, signals_csv,
                                             starts_at_rest)
+from hammerstein.compensation.drive_files import rest_lead_text
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
+from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
                                               first_mode_hz, mode_decay_s, mode_note, zpetc_note)
@@ -107,7 +109,7 @@ def add_parser(subparsers):
 
 
 def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, limits="error",
-               gain=None, check=None):
+               gain=None, check=None, rest_lead=None):
     """Compensator and drive of a reference on an actuator (what the command writes).
 
     Parameters
@@ -128,6 +130,8 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
         convergent gain of the default kind).
     check : {'error', 'warn', 'ignore'}, optional
         The law's convergence check (default the kind's, ``error``).
+    rest_lead : int, optional
+        With ``fade_in``: its first samples at rest [samples] (a drive file's, for ``learn``).
 
     Returns
     -------
@@ -177,7 +181,8 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
                            plant.amplifier, limits, rest=rest,
                            first_mode=first_mode_hz(linear[0], T), predict=predict,
-                           names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T))
+                           names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T),
+                           rest_lead=rest_lead)
     note = mode_note(linear, T, drive.reference, reference.period_samples)
     if note:
         drive.notes.append(note)
@@ -192,10 +197,6 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
     return comp, drive
 
 
-#: The first sample's distance from rest [V] from which compensate names it.
-FIRST_SAMPLE_TOLERANCE = 1e-9
-
-
 def _first_sample_note(plant, drive, inversion):
     """A note when the drive's first sample is not the rest voltage (beyond
     :data:`FIRST_SAMPLE_TOLERANCE`), or None."""
@@ -204,7 +205,8 @@ def _first_sample_note(plant, drive, inversion):
         return None
     why = ("the stable inversion's anti-causal part, G's zeros outside the unit circle, starts "
            "acting before the reference moves and had not decayed over the fade's rest lead (a "
-           "zero near the unit circle decays slowly; a longer --fade-in gives it room)"
+           "zero near the unit circle decays slowly: the default fade-in lengthens its rest "
+           "lead up to half the record; a longer record, or a longer --fade-in, gives it room)"
            if inversion == "stable" else
            "the inverse's start at rest, within its tolerance")
     return ("the drive's first sample is " + ", ".join(
@@ -317,7 +319,8 @@ def _handle(args):
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
-                   f"({drive.fade_samples * plant.sampling_period:g} s, excluded from the metrics) "
+                   f"({drive.fade_samples * plant.sampling_period:g} s, "
+                   f"{rest_lead_text(drive.rest_lead)}excluded from the metrics) "
                    f"from the rest output {rest_text} (the model's output at 0 V)\n"
                    f"peak input and slew: {peaks}\n"
                    f"{START_NOTE}" + shaped_cols

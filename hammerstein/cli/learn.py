@@ -97,7 +97,8 @@ from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade,
                                             keep_start, limit_start_up, read_signals,
                                             rest_output, shape_drive, signals_csv)
-from hammerstein.compensation.drive_files import followed_reference, learnt_names
+from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
+                                                  learnt_names, rest_lead_text)
 from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
                                     safe_write)
 from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
@@ -379,7 +380,9 @@ def _handle(args):
         if fade is None:              # as compensate's shortest default: a duration
             fade = min(max(ref.period_samples if ref.period_samples > 1 else 0,
                            int(np.ceil(MIN_FADE_S / T - 1e-9))), N)
-        target = hardware_fade(ref.signal, fade, rest_output(model, plant.creep))   # as compensate faded it
+        # as compensate faded it: a stable inversion's longer rest lead too (the drive's header)
+        lead = None if args.fade_in is not None else drive_rest_lead(args.drive)
+        target = hardware_fade(ref.signal, fade, rest_output(model, plant.creep), lead)
         predicted, _ = plant.simulate(u)
         delay_note = None
         if args.delay == "auto" and plant.measurement_delay is not None:
@@ -502,7 +505,7 @@ def _handle(args):
             # drive (convergent_gain, as _inverse_gain's), not with the law's own default
             law = drive_kind_ in LAW_KINDS and model_class(model).exact_inverse_kind is None
             _, drive = compensate(plant, corrected, drive_kind_, args.inversion, fade * T,
-                                  args.limits, law_gain if law else args.gain, args.check)
+                                  args.limits, law_gain if law else args.gain, args.check, lead)
             u_next, learnt = drive.inputs, drive.reference
             problems, shaped = list(drive.problems), list(drive.shaped)
             notes.append(f"note: the reference the compensator follows is learnt per harmonic of "
@@ -535,7 +538,7 @@ def _handle(args):
                       f"; {', '.join(learnt_names(model.output_names))} [µm]: the learnt reference the "
                       f"drive was computed for (fade-in included)")
                    + f"\nactuator {args.actuator}{kind_text}, sampling period {T:g} s, "
-                   f"fade-in {fade} samples\n"
+                   f"fade-in {fade} samples ({rest_lead_text(lead)}excluded from the metrics)\n"
                    f"{START_NOTE}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else
                       f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "

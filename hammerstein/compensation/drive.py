@@ -50,6 +50,7 @@ import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.hammerstein_compensator import continuation
+from hammerstein.compensation.lookahead import preactuation_samples
 from hammerstein.compensation.shaping import shape_reference, time_intervals
 from hammerstein.compensation.drive_files import (DRIVE_MARK, drive_fade_samples, read_signals,
                                                   signals_csv)
@@ -199,6 +200,10 @@ class DriveResult:
         What the drive cannot do, named for the user (e.g. a harmonic of the
         reference at a bending mode:
         :func:`hammerstein.compensation.shaping.mode_note`); empty by default.
+    rest_lead : int or None
+        The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``), when
+        :func:`hardware_drive` made them more than a tenth of it (a stable inversion's
+        pre-actuation); None otherwise.
     """
 
     inputs: np.ndarray
@@ -210,6 +215,7 @@ class DriveResult:
     problems: list = field(default_factory=list)
     shaped: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    rest_lead: int = None
 
 
 def _fade_weights(start, n, fade):
@@ -586,7 +592,7 @@ def shape_drive(amplifier, inputs, sampling_period):
     return out, notes
 
 
-def hardware_fade(reference, fade_samples, rest=None):
+def hardware_fade(reference, fade_samples, rest=None, lead=None):
     """The hardware commands' fade-in: a tenth of it at rest, then a raised cosine.
 
     ``yr_f[k] = rest + w[k] (yr[k] - rest)`` with ``w = 0`` for
@@ -604,6 +610,9 @@ def hardware_fade(reference, fade_samples, rest=None):
         The fade-in, rest lead included [samples] (0: none).
     rest : array_like, shape (p,), optional
         The output at rest [µm]; zeros by default.
+    lead : int, optional
+        The samples at rest [samples], less than ``fade_samples``; ``fade_samples // 10``
+        by default (longer for a stable inversion's pre-actuation, :func:`hardware_drive`).
 
     Returns
     -------
@@ -619,7 +628,7 @@ def hardware_fade(reference, fade_samples, rest=None):
     if n == 0:
         return r
     r0 = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
-    lead = n // 10
+    lead = n // 10 if lead is None else int(min(max(int(lead), 0), n - 1))
     k = np.arange(n) - lead
     w = np.where(k < 0, 0.0, 0.5 * (1.0 - np.cos(np.pi * np.maximum(k, 0) / (n - lead))))
     r[:, :n] = r0[:, None] + w * (r[:, :n] - r0[:, None])
@@ -665,7 +674,7 @@ def rest_output(model, creep=None):
 
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
-                   first_mode=None, predict=None, names=None, mode_decay=None):
+                   first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -733,6 +742,11 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         The identified bending modes' longest decay time [s]
         (:func:`hammerstein.compensation.shaping.mode_decay_s`), for the
         default fade-in; None (no modes) leaves it out.
+    rest_lead : int, optional
+        With a given ``fade_samples``: its first samples at rest (a drive file's
+        ``rest_lead``, so that ``learn`` fades as ``compensate`` did); a tenth by default.
+        The default fade-in lengthens its rest lead, by :func:`preactuation_samples`, until
+        a stable inversion's drive starts within ``FIRST_SAMPLE_TOLERANCE`` of rest.
 
     Returns
     -------
@@ -775,8 +789,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     u_rest = amplifier.rest_voltages() if amplifier is not None else None
     y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
 
-    def run(fade):
-        faded = hardware_fade(r, fade, y_rest)
+    def run(fade, lead=None):
+        faded = hardware_fade(r, fade, y_rest, lead)
         u, _ = _compensate(compensator, faded, P or None, 0)
         return u, faded
 
@@ -795,9 +809,13 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             if n >= cap or np.all(_start_steps(u, end, r0) <= bound * (1 + _STEP_TOL)):
                 break
             n = int(min(2 * n, cap))
+        extra = preactuation_samples(compensator, u, u_rest, n, N)
+        if extra:       # a stable inversion acting before the reference moves: a longer rest
+            rest_lead, n = n // 10 + extra, n + extra
+            u, faded = run(n, rest_lead)
     else:
         n = int(min(max(int(fade_samples), 0), N))
-        u, faded = run(n)
+        u, faded = run(n, rest_lead)
     notes = []
     if amplifier is not None and amplifier.from_records:
         def drive_for(ref):
@@ -810,7 +828,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                                              first_mode, predict, names)
             notes += more
     peak, top = drive_metrics(u, T)
-    res = DriveResult(u, u, faded, peak, top, n, shaped=notes)
+    res = DriveResult(u, u, faded, peak, top, n, shaped=notes,
+                      rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead)
     r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
     out = u
     if amplifier is not None and amplifier.from_records:

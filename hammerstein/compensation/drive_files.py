@@ -23,8 +23,9 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
-__all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_kind",
-           "optional_columns", "learnt_names", "followed_reference"]
+__all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_rest_lead",
+           "rest_lead_text",
+           "drive_kind", "optional_columns", "learnt_names", "followed_reference"]
 
 
 #: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
@@ -178,6 +179,48 @@ def drive_fade_samples(path):
     """
     for line in _header(path):
         m = re.search(r"fade-in (\d+) samples", line)
+        if m:
+            return int(m.group(1))
+    return None
+
+
+def rest_lead_text(rest_lead):
+    """The words of a drive file's fade-in phrase that give its rest lead.
+
+    Parameters
+    ----------
+    rest_lead : int or None
+        The fade-in's samples at rest; None for the default tenth.
+
+    Returns
+    -------
+    str
+        ``"its first L at rest, "`` (:func:`drive_rest_lead` reads it back), or ``""``.
+    """
+    return "" if rest_lead is None else f"its first {int(rest_lead)} at rest, "
+
+
+def drive_rest_lead(path):
+    """The fade-in's samples at rest a drive file's header records (``its first L at rest``),
+    or None (then a tenth of the fade-in, :func:`hammerstein.compensation.drive.hardware_fade`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+
+    Returns
+    -------
+    int or None
+        L [samples].
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    for line in _header(path):
+        m = re.search(r"fade-in \d+ samples \([^)]*its first (\d+) at rest", line)
         if m:
             return int(m.group(1))
     return None

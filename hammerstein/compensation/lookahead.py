@@ -33,8 +33,8 @@ from hammerstein.compensation.inversion import (_dc_equilibrium, _discrete_squar
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.simulation import linear_steps
 
-__all__ = ["LookaheadInverse", "lookahead_inverse", "creep_rest_state", "EXPORT_DECAY",
-           "MAX_LOOKAHEAD"]
+__all__ = ["LookaheadInverse", "lookahead_inverse", "creep_rest_state", "preactuation_samples",
+           "EXPORT_DECAY", "MAX_LOOKAHEAD", "FIRST_SAMPLE_TOLERANCE"]
 
 #: What the truncated anti-causal part is left with, relative to its first term: the
 #: exported C then equals the whole-record inversion to about 1e-13 relative.
@@ -239,3 +239,48 @@ def creep_rest_state(matrices, system, reference):
                          np.asarray(reference, dtype=float))
     Ac, Bc = (np.asarray(M, dtype=float) for M in matrices[:2])
     return np.linalg.solve(np.eye(Ac.shape[0]) - Ac, Bc @ v0)
+
+
+#: The first sample's distance from rest [V] a hardware drive keeps below.
+FIRST_SAMPLE_TOLERANCE = 1e-9
+
+
+def preactuation_samples(compensator, inputs, rest, fade, n_samples):
+    """Samples to add to a fade-in's rest lead so that a stable inversion's drive starts at
+    rest, or 0.
+
+    The stable inversion of G acts before the reference moves (its anti-causal part, G's
+    zeros outside the unit circle), decaying backward in time as ``|z|^-k`` for the slowest
+    such zero (Devasia, Chen & Paden, IEEE TAC 41(7), 1996): a first sample ``d`` from rest
+    falls below a tenth of :data:`FIRST_SAMPLE_TOLERANCE` after
+    ``ceil(ln(10 d / tol) / ln |z|)`` more samples at rest. At most up to half the record, fade included.
+
+    Parameters
+    ----------
+    compensator : object
+        The compensator; only a :class:`HammersteinCompensator` with ``'stable'`` counts.
+    inputs : numpy.ndarray, shape (m, n_samples)
+        Its drive with the plain fade-in [V].
+    rest : numpy.ndarray, shape (m,) or None
+        The rest voltages [V] (None: 0 V).
+    fade : int
+        That fade-in [samples].
+    n_samples : int
+        The record's length [samples].
+
+    Returns
+    -------
+    int
+        The samples to add (0 when the drive already starts within the tolerance).
+    """
+    lookahead = getattr(compensator, "stable_lookahead", None)
+    if lookahead is None or getattr(compensator, "inverse", True) is not None:
+        return 0
+    r0 = np.zeros(inputs.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    off = float(np.max(np.abs(np.asarray(inputs, dtype=float)[:, 0] - r0)))
+    if not off > FIRST_SAMPLE_TOLERANCE:
+        return 0
+    # a tenth of the tolerance: the decay is the slowest zero's, the hysteresis inverse's
+    # slope at rest scales it (1.16e-9 V was left aiming at the tolerance itself)
+    return int(max(0, min(lookahead(FIRST_SAMPLE_TOLERANCE / (10.0 * off)) + 1,
+                          n_samples // 2 - fade)))

@@ -1,0 +1,87 @@
+"""A stable inversion's drive starts at rest: the default fade-in's rest lead grows with G's
+zero outside the unit circle, and the drive file says so, so that `learn` fades the same way.
+
+G: the bundled 2x2 modes after ``(z - 1.01) / ((1 - 1.01) z)`` per output (a zero at 1.01,
+whose anti-causal part decays as 1.01^-k, 0.37 per 100 samples).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import control
+import numpy as np
+import pytest
+
+from hammerstein.compensation.drive import hardware_drive, hardware_fade, rest_output
+from hammerstein.compensation.drive_files import drive_rest_lead, rest_lead_text
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
+from hammerstein.io.presets import load_plant
+from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
+
+T = 5e-5
+ZERO = 1.01
+
+
+def _g():
+    G = load_plant("rakotondrabe-2dof").dynamics
+    G = control.ss(G.A, G.B, G.C, G.D, T)
+    f = control.ss(control.tf([1.0, -ZERO], [1.0 - ZERO, 0.0], T))
+    return control.series(G, control.append(f, f))
+
+
+def _model():
+    e = np.linspace(-12.0, 12.0, 13)
+    d = [PreisachModel.from_density(e, total=t, coercivity=1.0, coercivity_width=2.0,
+                                    reversible=[1.0]) for t in (25.0, 20.0)]
+    return MultivariableHysteresis([[d[0], None], [None, d[1]]], input_names=["ux", "uy"],
+                                   output_names=["x", "y"], input_amplitude=[10.0, 10.0])
+
+
+def _circle(n=8000, f=100.0, radius=10.0):
+    t = np.arange(n) * T
+    return radius * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+
+
+def test_the_default_fade_rests_until_the_pre_actuation_has_decayed():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp = HammersteinCompensator(_model(), _g(), inversion="stable")
+        rest = rest_output(comp.hysteresis_compensator.model)
+        res = hardware_drive(comp, _circle(), T, 200, rest=rest)
+        # the same fade with the plain tenth at rest: the pre-actuation is still there
+        plain = hardware_drive(comp, _circle(), T, 200, fade_samples=res.fade_samples, rest=rest)
+    assert res.rest_lead is not None and res.rest_lead > res.fade_samples // 10
+    assert np.max(np.abs(res.inputs[:, 0])) <= FIRST_SAMPLE_TOLERANCE     # rest: 0 V
+    off = float(np.max(np.abs(plain.inputs[:, 0])))
+    assert off > 1e3 * FIRST_SAMPLE_TOLERANCE
+    # the samples added are what the closed form asks of the drive before them (its fade
+    # n0 = fade - added, a tenth of it at rest) for a tenth of the tolerance
+    n0 = next(n for n in range(res.fade_samples) if res.fade_samples - n == res.rest_lead - n // 10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        before = hardware_drive(comp, _circle(), T, 200, fade_samples=n0, rest=rest)
+    d0 = float(np.max(np.abs(before.inputs[:, 0])))
+    need = math.ceil(math.log(10 * d0 / FIRST_SAMPLE_TOLERANCE) / math.log(ZERO))
+    assert abs(res.fade_samples - n0 - (need + 1)) <= 3
+    # the reference the drive follows is hardware_fade's with that lead
+    np.testing.assert_array_equal(res.reference,
+                                  hardware_fade(_circle(), res.fade_samples, rest, res.rest_lead))
+
+
+def test_a_zpetc_drive_keeps_the_tenth():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp = HammersteinCompensator(_model(), _g())
+        res = hardware_drive(comp, _circle(), T, 200)
+    assert res.rest_lead is None
+
+
+@pytest.mark.parametrize("lead", [None, 0, 1234])
+def test_the_header_phrase_reads_back(tmp_path, lead):
+    path = tmp_path / "d.csv"
+    path.write_text(f"# hammerstein compensate drive: t [s]; ux [V]\n# actuator p, fade-in 4000 "
+                    f"samples (0.2 s, {rest_lead_text(lead)}excluded from the metrics)\nt,ux\n0,0\n")
+    assert drive_rest_lead(path) == lead
