@@ -206,7 +206,8 @@ def _first_sample_note(plant, drive, inversion):
     why = ("the stable inversion's anti-causal part, G's zeros outside the unit circle, starts "
            "acting before the reference moves and had not decayed over the fade's rest lead (a "
            "zero near the unit circle decays slowly: the default fade-in lengthens its rest "
-           "lead up to half the record; a longer record, or a longer --fade-in, gives it room)"
+           "lead up to a quarter of the record; a longer record, or a longer --fade-in, gives "
+           "it room)"
            if inversion == "stable" else
            "the inverse's start at rest, within its tolerance")
     return ("the drive's first sample is " + ", ".join(

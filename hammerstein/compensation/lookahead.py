@@ -253,7 +253,8 @@ def preactuation_samples(compensator, inputs, rest, fade, n_samples):
     zeros outside the unit circle), decaying backward in time as ``|z|^-k`` for the slowest
     such zero (Devasia, Chen & Paden, IEEE TAC 41(7), 1996): a first sample ``d`` from rest
     falls below a tenth of :data:`FIRST_SAMPLE_TOLERANCE` after
-    ``ceil(ln(10 d / tol) / ln |z|)`` more samples at rest. At most up to half the record, fade included.
+    ``ceil(ln(10 d / tol) / ln |z|)`` more samples at rest. At most up to a quarter of the
+    record, fade included (the default fade's own cap: the rest is what is judged).
 
     Parameters
     ----------
@@ -283,4 +284,4 @@ def preactuation_samples(compensator, inputs, rest, fade, n_samples):
     # a tenth of the tolerance: the decay is the slowest zero's, the hysteresis inverse's
     # slope at rest scales it (1.16e-9 V was left aiming at the tolerance itself)
     return int(max(0, min(lookahead(FIRST_SAMPLE_TOLERANCE / (10.0 * off)) + 1,
-                          n_samples // 2 - fade)))
+                          n_samples // 4 - fade)))

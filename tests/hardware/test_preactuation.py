@@ -40,7 +40,7 @@ def _model():
                                    output_names=["x", "y"], input_amplitude=[10.0, 10.0])
 
 
-def _circle(n=8000, f=100.0, radius=10.0):
+def _circle(n=16000, f=100.0, radius=10.0):
     t = np.arange(n) * T
     return radius * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
 
@@ -85,3 +85,15 @@ def test_the_header_phrase_reads_back(tmp_path, lead):
     path.write_text(f"# hammerstein compensate drive: t [s]; ux [V]\n# actuator p, fade-in 4000 "
                     f"samples (0.2 s, {rest_lead_text(lead)}excluded from the metrics)\nt,ux\n0,0\n")
     assert drive_rest_lead(path) == lead
+
+
+def test_a_short_record_keeps_three_quarters_to_judge():
+    """The rest lead stops at a quarter of the record, fade included: the first sample is
+    then named (compensate's note), not bought with the part that is judged."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp = HammersteinCompensator(_model(), _g(), inversion="stable")
+        short = _circle(n=4000)
+        res = hardware_drive(comp, short, T, 200)
+    assert res.fade_samples <= short.shape[1] // 4
+    assert np.max(np.abs(res.inputs[:, 0])) > FIRST_SAMPLE_TOLERANCE
