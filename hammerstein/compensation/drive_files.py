@@ -177,11 +177,7 @@ def drive_fade_samples(path):
     OSError
         The file cannot be read.
     """
-    for line in _header(path):
-        m = re.search(r"fade-in (\d+) samples", line)
-        if m:
-            return int(m.group(1))
-    return None
+    return _header_int(path, r"fade-in (\d+) samples")
 
 
 def rest_lead_text(rest_lead):
@@ -219,8 +215,13 @@ def drive_rest_lead(path):
     OSError
         The file cannot be read.
     """
+    return _header_int(path, r"fade-in \d+ samples \([^)]*its first (\d+) at rest")
+
+
+def _header_int(path, pattern):
+    """The integer ``pattern``'s group captures in the first header line it matches, or None."""
     for line in _header(path):
-        m = re.search(r"fade-in \d+ samples \([^)]*its first (\d+) at rest", line)
+        m = re.search(pattern, line)
         if m:
             return int(m.group(1))
     return None
