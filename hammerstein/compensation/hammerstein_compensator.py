@@ -52,7 +52,8 @@ from hammerstein.models.creep import creep_dynamics, creep_matrices, series_matr
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.hysteresis import HysteresisError, state_vector
 from hammerstein.compensation.inversion import ZPETCInverse, inverse_system, preview_inverse
-from hammerstein.compensation.lookahead import creep_rest_state, lookahead_inverse
+from hammerstein.compensation.lookahead import (EXPORT_DECAY, MAX_LOOKAHEAD, LookaheadInverse,
+                                                creep_rest_state)
 from hammerstein.compensation.model_classes import model_class
 from hammerstein.simulation import (ChainResult, LinearArrays, linear_steps, simulate_chain,
                                     simulate_compensator)
@@ -647,7 +648,8 @@ class HammersteinCompensator:
         (:class:`~hammerstein.compensation.lookahead.LookaheadInverse`, what the export runs),
         None for ``'zpetc'`` or a look-ahead beyond ``MAX_LOOKAHEAD`` samples."""
         if self.inverse is None and not hasattr(self, "_lookahead"):
-            self._lookahead = lookahead_inverse(self.bending_dynamics)
+            self._lookahead = (LookaheadInverse(self.bending_dynamics, max_lookahead=None)
+                               if self.stable_lookahead(EXPORT_DECAY) <= MAX_LOOKAHEAD else None)
         return getattr(self, "_lookahead", None)
 
     def _stable_continuation(self, reference):

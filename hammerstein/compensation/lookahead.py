@@ -33,7 +33,7 @@ from hammerstein.compensation.inversion import (_dc_equilibrium, _discrete_squar
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.simulation import linear_steps
 
-__all__ = ["LookaheadInverse", "lookahead_inverse", "creep_rest_state", "preactuation_samples",
+__all__ = ["LookaheadInverse", "creep_rest_state", "preactuation_samples",
            "EXPORT_DECAY", "MAX_LOOKAHEAD", "FIRST_SAMPLE_TOLERANCE"]
 
 #: What the truncated anti-causal part is left with, relative to its first term: the
@@ -53,8 +53,8 @@ class LookaheadInverse:
         Discrete p x p G (PI outputs [µm] -> displacements [µm]).
     decay : float
         Relative size of the first anti-causal term left out, in (0, 1).
-    max_lookahead : int
-        The longest truncation P allowed [samples].
+    max_lookahead : int or None
+        The longest truncation P allowed [samples]; None: no limit.
 
     Attributes
     ----------
@@ -112,7 +112,7 @@ class LookaheadInverse:
         radius = float(np.min(np.abs(np.linalg.eigvals(Au)))) if nu else 0.0
         self.anticausal_radius = radius
         P = 0 if nu == 0 else int(math.ceil(math.log(1.0 / decay) / math.log(radius)))
-        if P > max_lookahead:
+        if max_lookahead is not None and P > max_lookahead:
             raise DynamicsError(
                 f"dynamics: a zero of G at |z| = {radius:.6g}, outside the unit circle, decays "
                 f"below {decay:g} only after {P} samples of look-ahead, beyond {max_lookahead}")
@@ -192,27 +192,6 @@ class LookaheadInverse:
                 for i in range(self.p):
                     v[l] += self.taps[d, l, i] * r[i, d:d + N]
         return v, x
-
-
-def lookahead_inverse(system, decay=EXPORT_DECAY, max_lookahead=MAX_LOOKAHEAD):
-    """:class:`LookaheadInverse` of G, or None when its look-ahead would exceed ``max_lookahead``.
-
-    Parameters
-    ----------
-    system : control.StateSpace or hammerstein.models.dynamics.SampledSystem
-    decay : float
-    max_lookahead : int
-
-    Returns
-    -------
-    LookaheadInverse or None
-    """
-    try:
-        return LookaheadInverse(system, decay, max_lookahead)
-    except DynamicsError as exc:
-        if "look-ahead" in str(exc):
-            return None
-        raise
 
 
 def creep_rest_state(matrices, system, reference):
