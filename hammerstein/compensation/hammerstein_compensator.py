@@ -20,9 +20,12 @@ so that ``G Gamma(U) ~ G V ~ Yr``. ``G^-1`` is one of
   generator runs P samples (100-150 µs) ahead of the actuator. Without that
   preview the inverse is delayed by P samples, a tracking error of
   ``2 sin(pi f P T)`` (12.6 % at 200 Hz).
-* ``inversion = "stable"``: exact stable inversion of the whole record
-  known in advance (:func:`hammerstein.compensation.inversion.preview_inverse`,
-  Devasia-Chen-Paden); not chunkable.
+* ``inversion = "stable"``: stable inversion of a record known in advance
+  (Devasia-Chen-Paden), its anti-causal part summed over the reference ahead
+  down to 1e-14 (:class:`hammerstein.compensation.lookahead.LookaheadInverse`,
+  what the export runs; the whole-record recursion of
+  :func:`hammerstein.compensation.inversion.preview_inverse` beyond 20000
+  samples); not chunkable.
 
 ``Gamma^c`` is the normalised inverse multiplicative law of
 :class:`hammerstein.compensation.compensators.InverseMultiplicativeCompensator`
@@ -70,7 +73,7 @@ MAX_STABLE_CONTINUATION = 20000
 #: Inverse methods of G: name -> description.
 INVERSIONS = {
     "zpetc": "causal MIMO ZPETC, sample by sample, reference needed preview_samples ahead",
-    "stable": "exact stable inversion of the whole record (preview of the whole record)",
+    "stable": "stable inversion of a record known in advance (reference read ahead)",
 }
 
 

@@ -290,7 +290,7 @@ COMPENSATORS["hammerstein"] = CompensatorKind(
      "creep": Field(choice("auto", "plant", "none"), default="auto"),   # inverted with G
      "fade_in": Field(number("s", 0, exclusive=False))},   # default: one period (<= settling)
     "Hammerstein compensator U = Gamma^c(G^-1 Yr): inverse of the linear dynamics (ZPETC, "
-    "reference P samples ahead, or whole-record stable inversion) then the multivariable law "
+    "reference P samples ahead, or stable inversion over a look-ahead) then the multivariable law "
     "(docs/hammerstein-plant.md)",
     batchable=True, look_ahead=True, fades_in=True, summary=_hammerstein_notes,
     check=_dynamics_problems)
