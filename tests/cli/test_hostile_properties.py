@@ -146,7 +146,11 @@ def _check(doc, occupant, command):
         argv = [command, str(path)] + (["--out", str(out)] if command == "run" else [])
         with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
             status = main(argv)
-        lines = err.getvalue().splitlines()
+        # the one informational line a run may print: a kernel numba's cache did not hold
+        # yet (the other xdist worker may be writing the cache at that moment)
+        lines = [ln for ln in err.getvalue().splitlines()
+                 if not ln.startswith(("compiling the simulation kernels once",
+                                       "compiling one more simulation kernel once"))]
         assert status in (0, 1, 2), (status, lines)
         assert "Traceback" not in err.getvalue()
         errors = [ln for ln in lines if ln.startswith("error:")]
