@@ -460,6 +460,33 @@ def _stage_code(k, A, B, C, D, precision, N):
     return decls, code, n
 
 
+def _stages_source(stages, states, precision, N):
+    """Declarations, statements, state members, ``NAME_init`` lines and reals of cascaded
+    linear stages (:func:`_stage_code`), each started at its state in ``states`` (None: 0).
+
+    Returns
+    -------
+    tuple
+        ``(decls, codes, members, init, reals)``.
+    """
+    zero = "0.0f" if precision == "float" else "0.0"
+    decls, codes, members, init, reals = [], [], [], [], 0
+    for k, ((A, B, C, D), x0) in enumerate(zip(stages, states)):
+        A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
+        d, c, n = _stage_code(k, A, B, C, D, precision, N)
+        decls += d
+        codes.append(c)
+        members.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
+        if n and x0 is not None and np.any(x0):
+            decls.append(_reals_table(f"x{k}_rest", x0, precision, N,
+                                      f"  /* linear stage {k} at rest at the model's output at 0 V */"))
+            init.append(f"    for (j = 0; j < {n}; ++j) s->x{k}[j] = {N}_x{k}_rest[j];")
+        else:
+            init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {zero};")
+        reals += n
+    return decls, codes, members, init, reals
+
+
 def _sections(text, keep):
     """Keep or drop the ``@KEY< ... @>KEY`` sections of a C template."""
     for key, on in keep.items():

@@ -13,7 +13,7 @@ import numpy as np
 from hammerstein.simulation._preisach import _cell_lists
 from hammerstein.simulation._preisach_inverse import AITKEN_SWEEP, BRACKET_GROWTH, SECANT_OVERSHOOT
 from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
-                                       _stage_rest, _stage_code, _sections, _model_text)
+                                       _stage_rest, _stages_source, _sections, _model_text)
 from hammerstein.export.c_lookahead import _lookahead_code
 
 
@@ -433,21 +433,11 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
     members = [f"    {N}_real u[{N}_N_INPUTS];        /* last voltages [V] */",
                f"    {N}_real h[{max(1, nh)}];   /* hysteron and play states of the model */"]
     reals = m + nh
-    scode, init = [], []
-    for k, ((A, B, C, D), x0) in enumerate(zip(stages, _stage_rest(stages, rest, precision,
-                                                                  rest_states))):
-        A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
-        d, c, n = _stage_code(k, A, B, C, D, precision, N)
-        decls += d
-        scode.append(c)
-        members.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
-        if n and np.any(x0):
-            decls.append(_reals_table(f"x{k}_rest", x0, precision, N,
-                                      f"  /* linear stage {k} at rest at the model's output at 0 V */"))
-            init.append(f"    for (j = 0; j < {n}; ++j) s->x{k}[j] = {N}_x{k}_rest[j];")
-        else:
-            init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {lit['zero']};")
-        reals += n
+    d, scode, more, init, n = _stages_source(
+        stages, _stage_rest(stages, rest, precision, rest_states), precision, N)
+    decls += d
+    members += more
+    reals += n
     if lookahead is not None:      # the stages start with the first voltage, after the buffer
         d, c, more, first, n = _lookahead_code(lookahead[0], lookahead[1], precision, N)
         decls += d

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
-                                       _reference_transform, _limits_code, _reals_table, _stage_code,
-                                       _stage_rest)
+                                       _reference_transform, _limits_code, _reals_table, _stage_rest,
+                                       _stages_source)
 from hammerstein.export.c_lookahead import _lookahead_code
 
 
@@ -118,19 +118,13 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
         d, c, more, first, extra_reals = _lookahead_code(lookahead[0], lookahead[1], precision, N)
         decls += d
         init = first + init
-        la_step = [c]
-        for k, ((A, B, C, D), x0) in enumerate(zip(stages, stage_states or [None] * len(stages))):
-            A, B, C, D = (np.atleast_2d(np.asarray(M, dtype=float)) for M in (A, B, C, D))
-            d, c, n = _stage_code(k, A, B, C, D, precision, N)
-            decls += d
-            la_step.append(c)
-            more.append(f"    {N}_real x{k}[{max(1, n)}];   /* state of linear stage {k} */")
-            extra_reals += n
-            if n and x0 is not None and np.any(x0):
-                decls.append(_reals_table(f"x{k}_rest", x0, precision, N))
-                init.append(f"    for (j = 0; j < {n}; ++j) s->x{k}[j] = {N}_x{k}_rest[j];")
-            else:
-                init.append(f"    for (j = 0; j < {max(1, n)}; ++j) s->x{k}[j] = {zero};")
+        d, codes, stage_members, stage_init, n = _stages_source(
+            stages, stage_states or [None] * len(stages), precision, N)
+        decls += d
+        la_step = [c] + codes
+        more += stage_members
+        init += stage_init
+        extra_reals += n
         la_step += ["    }", fill]
         init.insert(0, "    s->received = 0;")
     body.append(f"""void {N}_init({N}_state *s)
