@@ -36,7 +36,7 @@ import warnings
 from hammerstein._cache import numba_cache_dir
 from hammerstein.cli._examples import add_examples
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
-from hammerstein.core.files import escape, interrupt, reset_guard, start_budget
+from hammerstein.core.files import escape, interrupt, reset_guard, reset_interrupt, start_budget
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
 # processes (simulation, figure workers) already use the cores; OpenBLAS threads
@@ -379,6 +379,7 @@ def main(argv=None):
     """
     argv = sys.argv[1:] if argv is None else list(argv)
     _fill_standard_fds()
+    reset_interrupt()        # a signal an embedding program received before is not this command's
     previous = _install_signal_handlers()
     streams = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr, MAX_LINE)  # no raw control chars
@@ -397,6 +398,7 @@ def main(argv=None):
         reset_guard()        # an embedding program's later writes are its own
         for sig, handler in previous.items():
             signal.signal(sig, handler)
+        reset_interrupt()    # after the handlers: no signal of this command comes later
         sys.stdout, sys.stderr = streams
 
 

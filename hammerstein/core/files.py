@@ -34,6 +34,7 @@ import errno
 import os
 import secrets
 import stat
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -51,7 +52,7 @@ from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, 
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
-           "interrupt", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
+           "reset_interrupt", "interrupt", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
            "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
            "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
@@ -271,7 +272,7 @@ class _Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
-_CRITICAL = {"depth": 0, "pending": None}
+_CRITICAL = {"depth": 0, "pending": None, "received": None}
 
 
 def interrupt(signum):
@@ -288,11 +289,26 @@ def interrupt(signum):
     ------
     KeyboardInterrupt
         Carrying ``signum``, unless a :func:`deferred_signals` block is open.
+
+    Notes
+    -----
+    The signal is also remembered until :func:`reset_interrupt`: compiled
+    code that calls back into Python may clear the exception raised in a
+    callback (the handler runs wherever the interpreter happens to be), and
+    the command would then go on and finish. The next
+    :func:`deferred_signals` block (every file created or renamed) raises
+    it again, so no report is renamed into place after a signal.
     """
+    _CRITICAL["received"] = signum
     if _CRITICAL["depth"] > 0:
         _CRITICAL["pending"] = signum
         return
     raise _Interrupted(signum)
+
+
+def reset_interrupt():
+    """Forget a signal :func:`interrupt` received (the command that it ended is over)."""
+    _CRITICAL["received"] = _CRITICAL["pending"] = None
 
 
 @contextmanager
@@ -305,6 +321,14 @@ def deferred_signals():
     done. (A signal mask would not do: CPython may take a process signal on
     another thread and still run the handler in the main thread at once.)
     """
+    if threading.current_thread() is not threading.main_thread():
+        # signals are handled in the main thread only, so only its blocks defer them: a
+        # figure thread's write neither holds the main thread's interruption back nor
+        # receives it at the end of its own block
+        yield
+        return
+    if _CRITICAL["depth"] == 0 and _CRITICAL["received"] is not None:
+        raise _Interrupted(_CRITICAL["received"])     # its first raise was swallowed
     _CRITICAL["depth"] += 1
     try:
         yield
@@ -328,7 +352,14 @@ def umask():
     return mask
 
 
-_GROUP = {"open": False, "pending": []}
+class _Group(threading.local):
+    """The open :func:`all_or_nothing` block of one thread (a figure thread's writes are its own)."""
+
+    def __init__(self):
+        self.state = {"open": False, "pending": []}
+
+
+_GROUPS = _Group()
 
 
 @contextmanager
@@ -353,25 +384,26 @@ def all_or_nothing():
     >>> sorted(p.name for p in d.iterdir())
     []
     """
-    if _GROUP["open"]:
+    group = _GROUPS.state
+    if group["open"]:
         yield
         return
-    _GROUP["open"], _GROUP["pending"] = True, []
+    group["open"], group["pending"] = True, []
     try:
         yield
-        _GROUP["open"] = False
+        group["open"] = False
         with deferred_signals():
-            while _GROUP["pending"]:
-                tmp, target = _GROUP["pending"].pop(0)
+            while group["pending"]:
+                tmp, target = group["pending"].pop(0)
                 os.replace(tmp, target)
     finally:
-        _GROUP["open"] = False
-        for tmp, _ in _GROUP["pending"]:
+        group["open"] = False
+        for tmp, _ in group["pending"]:
             try:
                 os.unlink(tmp)
             except OSError:
                 pass
-        _GROUP["pending"] = []
+        group["pending"] = []
 
 
 def safe_write(path, data, what="file", root=None):
@@ -459,8 +491,8 @@ def safe_write(path, data, what="file", root=None):
                 raise
             raise OutputError(f"{escape(path)}: cannot write the {what} ({exc.strerror}); "
                               f"nothing was written") from None
-        if _GROUP["open"]:
-            _GROUP["pending"].append((tmp, target))   # renamed when the group ends
+        if _GROUPS.state["open"]:
+            _GROUPS.state["pending"].append((tmp, target))   # renamed when the group ends
         else:
             os.replace(tmp, target)
     except BaseException:
