@@ -7,7 +7,7 @@ voltages from rest with :func:`hammerstein.compensation.drive.drive_signal` (fad
 ZPETC preview, the amplifier's limits) and writes ``t`` and one column per
 input [V] at full precision, optionally the model-predicted outputs
 (``<output>_predicted`` [µm], the preset's plant driven through its
-amplifier). With limits measured on the identification records, a
+amplifier from its rest state, ``HammersteinPlant.rest_state``). With limits measured on the identification records, a
 reference the drive would leave them for (a raster's line steps, a range
 beyond the records) is shaped first
 (:func:`hammerstein.compensation.shaping.shape_reference`), printed and
@@ -174,8 +174,10 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
             f"starts at rest")
     T = plant.sampling_period
 
+    at_rest = plant.rest_state()         # the actuator before the drive: settled at 0 V
+
     def predict(u):
-        return plant.simulate(apply_amplifier(plant.amplifier, u, T))[0]
+        return plant.simulate(apply_amplifier(plant.amplifier, u, T), at_rest)[0]
 
     linear = plant.matrices              # creep then dynamics, built once
     drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
@@ -300,7 +302,7 @@ def _handle(args):
                            f"(fade-in included)")
         if args.predicted:
             y, _ = plant.simulate(apply_amplifier(plant.amplifier, drive.inputs,
-                                                  plant.sampling_period))
+                                                  plant.sampling_period), plant.rest_state())
             cols.update({f"{n}_predicted": v for n, v in zip(plant.hysteresis.output_names, y)})
             units += "; " + ", ".join(f"{n}_predicted" for n in plant.hysteresis.output_names) \
                 + " [µm] (model)"

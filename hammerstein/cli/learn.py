@@ -383,7 +383,7 @@ def _handle(args):
         # as compensate faded it: a stable inversion's longer rest lead too (the drive's header)
         lead = None if args.fade_in is not None else drive_rest_lead(args.drive)
         target = hardware_fade(ref.signal, fade, rest_output(model, plant.creep), lead)
-        predicted, _ = plant.simulate(u)
+        predicted, _ = plant.simulate(u, plant.rest_state())     # from rest, as the actuator
         delay_note = None
         if args.delay == "auto" and plant.measurement_delay is not None:
             delay = plant.measurement_delay          # identify --delay: the acquisition's

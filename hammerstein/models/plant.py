@@ -195,6 +195,43 @@ class HammersteinPlant:
             self.hysteresis.initial_state(state[:self.hysteresis.n_hysterons])
         return state
 
+    def rest_state(self):
+        """The flat state at rest: 0 V held long enough for the linear part to settle.
+
+        The hysteresis model's default state (:meth:`initial_state`) and the
+        linear part (creep then dynamics) in its DC steady state for the
+        hysteresis output at 0 V, ``x = (I - A)^-1 B h0``: simulated from it,
+        a drive that stays at 0 V keeps the output at the rest value
+        (:func:`hammerstein.compensation.drive.rest_output`), as the actuator
+        it models does, instead of ringing up from 0 µm.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            Hysteresis states then linear states [µm].
+
+        Raises
+        ------
+        numpy.linalg.LinAlgError
+            If the linear part has a pole at z = 1 (no steady state).
+
+        Examples
+        --------
+        >>> from hammerstein.io.presets import load_plant
+        >>> plant = load_plant("rakotondrabe-2dof")
+        >>> y, _ = plant.simulate(np.zeros((2, 5)), plant.rest_state())
+        >>> bool(np.allclose(y, y[:, :1]))
+        True
+        """
+        state = self.initial_state()
+        nh = self.hysteresis.n_hysterons
+        if self.n_linear_states:
+            h0, _ = self.hysteresis.simulate(np.zeros((self.hysteresis.n_inputs, 1)),
+                                             state[:nh].copy())
+            A, B, _, _ = self.matrices
+            state[nh:] = np.linalg.solve(np.eye(A.shape[0]) - A, B @ np.asarray(h0)[:, 0])
+        return state
+
     def simulate(self, inputs, initial_state=None):
         """Displacements for a record of input voltages (open loop).
 
