@@ -70,8 +70,9 @@ def add_parser(subparsers):
                         "span [-V, V] (or give --range)")
     p.add_argument("--range", metavar="LOW,HIGH",
                    help="the amplifier's range [V] instead of --amplitude, e.g. 0,150 for a "
-                        "unipolar stack: the records are played around its middle, from and "
-                        "back to its value nearest 0 V (the amplifier's rest), and never leave it")
+                        "unipolar stack or -20,120: the records are played around its middle, "
+                        "from and back to its value nearest 0 V (the amplifier's rest), and "
+                        "never leave it")
     p.add_argument("--sampling-period", required=True, type=_SECONDS, metavar="S",
                    help="sampling period of the hardware [s], e.g. 5e-5")
     p.add_argument("--out", required=True, metavar="DIR", help="directory to write")

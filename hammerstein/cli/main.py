@@ -48,7 +48,17 @@ __all__ = ["main", "build_parser", "one_line", "COMMANDS"]
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse parser whose usage errors are one line on stderr (exit status 2)."""
+    """argparse parser whose usage errors are one line on stderr (exit status 2).
+
+    A value starting with a minus sign then a digit is a value, not an option:
+    ``--range -20,120`` (an amplifier's negative lower rail) or ``--gain -1e-3``
+    read as ``--range=-20,120``, where argparse alone takes only ``-20`` or
+    ``-0.5`` as numbers (no option of the commands starts with ``-`` and a digit).
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message):
         """Print the usage error as one line on stderr and exit with status 2."""
