@@ -42,8 +42,9 @@ from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
-                                              first_mode_hz, mode_decay_s, mode_note, zpetc_note)
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, REACH_NOTE_START,
+                                              chatter_warnings, first_mode_hz, mode_decay_s,
+                                              mode_note, output_reach, reach_note, zpetc_note)
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
@@ -185,6 +186,10 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
                            first_mode=first_mode_hz(linear[0], T), predict=predict,
                            names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T),
                            rest_lead=rest_lead)
+    note = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
+                      reference.signal, plant.hysteresis.output_names)
+    if note:
+        drive.notes.append(note)
     note = mode_note(linear, T, drive.reference, reference.period_samples)
     if note:
         drive.notes.append(note)
@@ -315,8 +320,9 @@ def _handle(args):
         severe = chatter_warnings(drive.inputs, plant.sampling_period, widths,
                                   list(plant.hysteresis.input_names), CHATTER_REFUSE_FRACTION)
         if severe and args.limits == "error":
+            cause = "".join(f"{n}; " for n in drive.notes if n.startswith(REACH_NOTE_START))
             print_err(f"hammerstein compensate: error: the drive chatters, nothing written: "
-                      f"{'; '.join(severe)} (--limits warn writes it with this warning)")
+                      f"{cause}{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
         chatter = severe or chatter       # written anyway (--limits warn): the stronger words
         comment = (f"compensate drive: t [s]; {units}\n"

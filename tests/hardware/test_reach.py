@@ -1,0 +1,59 @@
+"""A reference beyond what the model reaches over the amplifier's range is named as such.
+
+A new user on a -20..120 V stage left a circle's ``center`` at 0: the reference asked for
+-30 µm where the stage reaches +1.5 µm at -20 V, and ``compensate`` refused a drive that
+chatters, naming a flat model or a raster's step, never the reference's place.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.main import main
+from hammerstein.compensation.shaping import output_reach, reach_note
+from hammerstein.io.presets import load_plant
+
+IDENTIFIED = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
+
+
+def test_the_reach_holds_every_output_a_slow_sweep_of_the_range_gives():
+    plant = load_plant(str(IDENTIFIED))
+    reach = output_reach(plant.hysteresis, plant.amplifier, plant.creep)
+    low = np.array([c.low for c in plant.amplifier.channels])
+    high = np.array([c.high for c in plant.amplifier.channels])
+    t = np.linspace(0.0, 1.0, 4000)
+    # the two inputs swept together and in opposition, from rest, to the rails
+    for sign in (1.0, -1.0):
+        u = np.vstack([np.interp(np.sin(2 * np.pi * 3 * t), [-1, 1], [low[0], high[0]]),
+                       np.interp(sign * np.sin(2 * np.pi * 3 * t), [-1, 1], [low[1], high[1]])])
+        u[:, :200] *= np.linspace(0, 1, 200)          # from rest
+        y, _ = plant.hysteresis.simulate(u)
+        y = y * np.array([c.static_gain for c in plant.creep])[:, None]
+        span = reach[:, 1] - reach[:, 0]
+        assert np.all(y.min(axis=1) >= reach[:, 0] - 0.01 * span)
+        assert np.all(y.max(axis=1) <= reach[:, 1] + 0.01 * span)
+        assert np.all(y.max(axis=1) - y.min(axis=1) >= 0.5 * span)   # and it is not loose
+
+
+def test_reach_note_names_each_output_beyond_and_the_middle():
+    note = reach_note([[1.5, 99.5], [-4.0, 98.0]], [[-30.0, 30.0], [10.0, 20.0]], ["x", "y"])
+    assert "x asks -30..30 µm, the model reaches 1.5..99.5 µm" in note
+    assert "y asks" not in note
+    assert "center = [50.5, 47]" in note
+    assert reach_note(None, [[-30.0, 30.0]]) is None
+
+
+@pytest.mark.parametrize("center, named", [("[0, 0]", False), ("[80, 0]", True)])
+def test_compensate_names_a_circle_beyond_the_reach(tmp_path, capsys, center, named):
+    out = tmp_path / "drive.csv"
+    code = main(["compensate", str(IDENTIFIED), "--reference",
+                 f'{{ kind = "circle", radius = 30, frequency = 50, periods = 10, '
+                 f'center = {center} }}', "--out", str(out)])
+    text = capsys.readouterr()
+    said = text.err + text.out + (out.read_text()[:20000] if out.exists() else "")
+    assert ("the reference leaves what the model reaches" in said) == named
+    if named:
+        assert "x asks 50..110 µm" in said
+    else:
+        assert code == 0
