@@ -42,9 +42,9 @@ from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, REACH_NOTE_START,
-                                              chatter_warnings, first_mode_hz, mode_decay_s,
-                                              mode_note, output_reach, reach_note, zpetc_note)
+from hammerstein.compensation.reach import REACH_NOTE_START, output_reach, reach_note
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
+                                              first_mode_hz, mode_decay_s, mode_note, zpetc_note)
 from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 

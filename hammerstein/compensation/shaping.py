@@ -54,8 +54,7 @@ import numpy as np
 __all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
            "faster_than_mode", "limit_excess", "hann_average", "mode_amplification", "mode_note",
            "shape_reference", "shaping_notes", "time_intervals", "CHATTER_FRACTION",
-           "chatter_warnings", "CHATTER_REFUSE_FRACTION", "main_frequency", "ZPETC_NOTE_ERROR", "zpetc_gain", "zpetc_note",
-           "output_reach", "reach_note", "REACH_NOTE_START"]
+           "chatter_warnings", "CHATTER_REFUSE_FRACTION", "main_frequency", "ZPETC_NOTE_ERROR", "zpetc_gain", "zpetc_note"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
@@ -650,116 +649,6 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CH
                            "start of an inverse alternating between inputs; look at it with "
                            "--predicted before playing it"))
     return out
-
-
-#: Corners of the input box a reach is measured at, at most (2 ** m; beyond: the two diagonals).
-MAX_REACH_CORNERS = 16
-#: Samples of each ramp of :func:`reach_note`'s path (the model is rate-independent).
-REACH_RAMP = 64
-#: Of the reach's span: how far beyond it a reference must go to be named.
-REACH_MARGIN = 0.01
-#: How :func:`reach_note` begins (a command refusing a chattering drive puts it first).
-REACH_NOTE_START = "the reference leaves what the model reaches"
-
-
-def output_reach(model, amplifier, creep=None):
-    """The outputs the model reaches over the amplifier's range, quasi-statically [µm].
-
-    The model is driven from rest along ramps to every corner of the range
-    box and back (at most :data:`MAX_REACH_CORNERS` corners: with more
-    inputs, all-low and all-high), its output scaled by each creep's static
-    gain as :func:`hammerstein.compensation.drive.rest_output` does.
-
-    Parameters
-    ----------
-    model : object
-        A hysteresis model (``n_inputs``, ``simulate(u) -> (outputs (p, n), state)``).
-    amplifier : hammerstein.models.amplifier.Amplifier or None
-    creep : sequence of (Creep or None), length p, optional
-
-    Returns
-    -------
-    numpy.ndarray, shape (p, 2), or None
-        Lowest and highest output [µm]; None without an amplifier or with
-        an input whose range is not finite.
-
-    Examples
-    --------
-    >>> from hammerstein.io.presets import load_plant
-    >>> from hammerstein.models.amplifier import amplifier_from_table
-    >>> plant = load_plant("rakotondrabe-2dof", dynamics=False)
-    >>> amp = amplifier_from_table({"range": [-10.0, 10.0]}, ["ux", "uy"])
-    >>> reach = output_reach(plant.hysteresis, amp)
-    >>> bool(reach[0, 0] < 0 < reach[0, 1])
-    True
-    """
-    if amplifier is None:
-        return None
-    low = np.array([c.low for c in amplifier.channels], dtype=float)
-    high = np.array([c.high for c in amplifier.channels], dtype=float)
-    if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
-        return None
-    m = low.size
-    if 2 ** m <= MAX_REACH_CORNERS:
-        bits = (np.arange(2 ** m)[:, None] >> np.arange(m)[None, :]) & 1
-        corners = np.where(bits == 1, high, low)
-    else:
-        corners = np.array([low, high])
-    rest = amplifier.rest_voltages()
-    ramp = np.linspace(0.0, 1.0, REACH_RAMP)[None, :]
-    legs = [rest[:, None] + ramp * (c - rest)[:, None] for c in corners]
-    path = np.concatenate([np.concatenate([leg, leg[:, ::-1]], axis=1) for leg in legs], axis=1)
-    y, _ = model.simulate(path)
-    y = np.asarray(y, dtype=float)
-    if creep is not None:
-        y = y * np.array([1.0 if c is None else c.static_gain for c in creep])[:, None]
-    return np.column_stack([y.min(axis=1), y.max(axis=1)])
-
-
-def reach_note(reach, reference, names=None):
-    """A note when the reference asks for outputs beyond the model's reach, or None.
-
-    A reference outside what the range reaches (a circle or raster whose
-    ``center`` was left at 0 on a unipolar actuator) makes the exact
-    inverse sit at the edge of its model, or alternate there (a drive that
-    chatters): the note names the cause and where to centre the reference.
-
-    Parameters
-    ----------
-    reach : array_like, shape (p, 2), or None
-        :func:`output_reach` [µm].
-    reference : array_like, shape (p, n_samples)
-        [µm].
-    names : sequence of str, optional
-        Output names.
-
-    Returns
-    -------
-    str or None
-
-    Examples
-    --------
-    >>> reach_note([[1.5, 99.8]], [[-30.0, 30.0]], ["x"])[:46]
-    'the reference leaves what the model reaches ov'
-    >>> reach_note([[1.5, 99.8]], [[20.0, 80.0]], ["x"]) is None
-    True
-    """
-    if reach is None:
-        return None
-    reach = np.asarray(reach, dtype=float)
-    r = np.array(reference, dtype=float, ndmin=2)
-    span = reach[:, 1] - reach[:, 0]
-    lo, hi = r.min(axis=1), r.max(axis=1)
-    out = (lo < reach[:, 0] - REACH_MARGIN * span) | (hi > reach[:, 1] + REACH_MARGIN * span)
-    if not np.any(out):
-        return None
-    names = list(names) if names is not None else [f"output {i + 1}" for i in range(r.shape[0])]
-    asks = "; ".join(f"{names[i]} asks {lo[i]:.4g}..{hi[i]:.4g} µm, the model reaches "
-                     f"{reach[i, 0]:.4g}..{reach[i, 1]:.4g} µm" for i in np.flatnonzero(out))
-    middle = ", ".join(f"{v:.4g}" for v in reach.mean(axis=1))
-    return (f"{REACH_NOTE_START} over the amplifier's range ({asks}): "
-            f"no drive can follow it there; centre it inside the reach (a circle's or a "
-            f"raster's center = [{middle}] is the reach's middle) or make it smaller")
 
 
 def time_intervals(mask, sampling_period, limit=4):

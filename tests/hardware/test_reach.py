@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.compensation.shaping import output_reach, reach_note
+from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.io.presets import load_plant
 
 IDENTIFIED = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
