@@ -109,7 +109,9 @@ def load_actuator(path, sampling_period=None):
         With ``amplifier`` (None when the file has none) and
         ``measurement_delay`` [samples]: the ``[identification]
         measurement_delay_samples`` of a file written by ``identify --delay``,
-        else None.
+        else None; ``delay_problem``: why ``identify --dynamics`` left its
+        own estimate unused (the file's ``measurement_delay_estimate``), else
+        None.
 
     Raises
     ------
@@ -136,7 +138,19 @@ def load_actuator(path, sampling_period=None):
         if "amplifier" in data:
             plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
     plant.measurement_delay = _measurement_delay(data, path)
+    plant.delay_problem = _delay_problem(data)
     return plant
+
+
+def _delay_problem(data):
+    """Why ``identify --dynamics`` did not use its delay estimate (the model file's
+    ``[identification.measurement_delay_estimate] problem``), or None."""
+    ident = (data or {}).get("identification")
+    est = ident.get("measurement_delay_estimate") if isinstance(ident, dict) else None
+    if not isinstance(est, dict) or est.get("used", True) is not False:
+        return None
+    problem = est.get("problem")
+    return " ".join(problem.split())[:400] if isinstance(problem, str) else None
 
 
 def _measurement_delay(data, path):

@@ -392,11 +392,15 @@ def _handle(args):
             delay = max(estimate_delay(predicted, y, max(ref.period_samples // 2, 50)), 0)
             per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
             if per_sample is not None and per_sample < DELAY_PHASE_DEG:
+                advice = ("identify with --dynamics (the delay found from the multisines)"
+                          if getattr(plant, "delay_problem", None) is None else
+                          f"identify --delay N, which fits the dynamics with it (identify's own "
+                          f"estimate was not used: {plant.delay_problem})")
                 delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
                               f"sample is only {per_sample:.2g} deg of the reference's fundamental "
                               f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "
                               f"error: give --delay N when you know your acquisition's delay, or "
-                              f"identify with --dynamics (the delay found from the multisines)")
+                              f"{advice}")
         else:
             try:
                 delay = int(args.delay)

@@ -271,7 +271,10 @@ def estimate_measurement_delay(inputs, outputs, sampling_period, band_hz=None):
     The estimate is refused (``problem``) when the fit band holds fewer than
     8 lines; when the two halves of the band give delays further apart
     than 0.25 samples plus twice the standard deviation of their difference
-    (the phase is not a delay's straight line: a mode in the band); when
+    (the phase is not a delay's straight line: a mode in the band; with the
+    default band, the upper half of that band, from 0.75 of the excited
+    band's top, further above the modes, is then tried alone, and its
+    estimate returned when it passes every test); when
     the distance of the estimate to the nearest integer plus twice its
     standard deviation exceeds half a sample (noise, or a filter's fraction
     of a sample, leaves two integers possible); or when the outputs lead
@@ -318,11 +321,29 @@ def estimate_measurement_delay(inputs, outputs, sampling_period, band_hz=None):
     ins, outs = _records(inputs, outputs)
     ins = [u - u.mean(axis=1, keepdims=True) for u in ins]
     outs = [y - y.mean(axis=1, keepdims=True) for y in outs]
-    if band_hz is None:
-        top = excited_band(ins, T)[1]
-        band_hz = (0.5 * top, top)
-    lo, hi = (float(v) for v in band_hz)
     f, H = frf_h1(ins, outs, T)
+    if band_hz is not None:
+        return _delay_over(f, H, T, band_hz)
+    top = excited_band(ins, T)[1]
+    found = _delay_over(f, H, T, (0.5 * top, top))
+    if found.problem is not None and found.problem.startswith(NOT_STRAIGHT):
+        # a mode in the lower half: its upper half, further above the modes, alone
+        above = _delay_over(f, H, T, (UPPER_BAND * top, top))
+        if above.problem is None:
+            return above
+    return found
+
+
+#: How a refusal for a phase that is not a delay's straight line begins.
+NOT_STRAIGHT = "the phase over"
+#: Start of the band tried, as a fraction of the excited band's top, when the upper half's
+#: phase is not a straight line (a mode in it).
+UPPER_BAND = 0.75
+
+
+def _delay_over(f, H, T, band_hz):
+    """:class:`MeasurementDelay` of the H1 estimate ``H`` (p, m, n_freq) over ``band_hz``."""
+    lo, hi = (float(v) for v in band_hz)
     seg = int(round(1.0 / (T * (f[1] - f[0])))) if f.size > 1 else 0
     sel = (f >= lo) & (f <= hi) & np.all(np.isfinite(H), axis=(0, 1))
     f, H = f[sel], H[:, :, sel].reshape(H.shape[0] * H.shape[1], int(sel.sum()))
@@ -350,7 +371,7 @@ def estimate_measurement_delay(inputs, outputs, sampling_period, band_hz=None):
     res_deg = float(np.degrees(res))
     spread = abs(halves[0] - halves[1])
     if not spread <= DELAY_HALVES_TOLERANCE + 2 * np.hypot(*hstd):
-        problem = (f"the phase over {lo:.4g}-{hi:.4g} Hz is not a delay's straight line (the "
+        problem = (f"{NOT_STRAIGHT} {lo:.4g}-{hi:.4g} Hz is not a delay's straight line (the "
                    f"band's halves give {halves[0]:.2f} and {halves[1]:.2f} samples, "
                    f"+-{hstd[0]:.2f} and +-{hstd[1]:.2f}): a mode in the band?")
     elif not abs(samples - delay) + 2 * std <= 0.5:

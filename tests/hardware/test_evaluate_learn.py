@@ -278,3 +278,29 @@ def test_evaluate_takes_the_outputs_a_csv_reference_names(tmp_path, names, expec
     m = pd.read_csv(tmp_path / "ev/metrics.csv").set_index(["channel", "metric"])["value"]
     for k, n in enumerate(expected):      # the 1 % gain error: 1 % of the amplitude at the peak
         assert m[(n, "max_abs_error")] == pytest.approx(0.01 * (k + 1) * 10, rel=1e-3)
+
+
+def test_learns_delay_advice_does_not_send_back_to_an_identify_that_refused(tmp_path):
+    """A model whose ``identify --dynamics`` refused its delay estimate (a mode in the band):
+    learn's note on a slow reference said "identify with --dynamics (the delay found from
+    the multisines)", which the user had just done; it now names identify's refusal and
+    ``identify --delay N``."""
+    from hammerstein.io.presets import resolve_preset
+    problem = "the phase over 2505-5010 Hz is not a delay's straight line: a mode in the band?"
+    text = open(resolve_preset("rakotondrabe-2dof"), encoding="utf-8").read()
+    (tmp_path / "refused.toml").write_text(
+        text + f'\n[identification.measurement_delay_estimate]\nused = false\nproblem = "{problem}"\n',
+        encoding="utf-8")
+    slow = '{ kind = "circle", radius = 30, frequency = 10, periods = 3 }'
+    for preset, said in (("refused.toml", True), ("rakotondrabe-2dof", False)):
+        assert _cli("compensate", preset, "--reference", slow, "--out", "u0.csv",
+                    "--force", cwd=tmp_path).returncode == 0
+        _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 2, 0)
+        res = _cli("learn", preset, "--reference", slow, "--drive", "u0.csv", "--measured",
+                   "y0.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u1.csv", "--force",
+                   cwd=tmp_path)
+        assert res.returncode == 0, res.stderr
+        words = res.stdout + res.stderr
+        assert "less than a model's phase error" in words
+        assert ("identify's own estimate was not used: " + problem in words) == said
+        assert ("identify with --dynamics (the delay found" in words) == (not said)
