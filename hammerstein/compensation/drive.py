@@ -794,11 +794,12 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         u, _ = _compensate(compensator, faded, P or None, 0)
         return u, faded
 
+    grown = None
     if fade_samples is None:
         n = int(min(max(P, int(np.ceil(MIN_FADE_S / T - 1e-9)), 1), N))
         if mode_decay is not None:
             n = max(n, int(min(np.ceil(FADE_DECAYS * mode_decay / T - 1e-9), N // 2)))
-        cap = max(n, N // 4)
+        cap, n0 = max(n, N // 4), n
         while True:
             u, faded = run(n)
             end = min(n + max(P, 1), N)
@@ -809,6 +810,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             if n >= cap or np.all(_start_steps(u, end, r0) <= bound * (1 + _STEP_TOL)):
                 break
             n = int(min(2 * n, cap))
+        grown = (n0, n, n >= cap) if n > n0 else None
         extra = preactuation_samples(compensator, u, u_rest, n, N)
         if extra:       # a stable inversion acting before the reference moves: a longer rest
             rest_lead, n = n // 10 + extra, n + extra
@@ -830,6 +832,11 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     peak, top = drive_metrics(u, T)
     res = DriveResult(u, u, faded, peak, top, n, shaped=notes,
                       rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead)
+    if fade_samples is None and grown:    # what the metrics leave out, said (a raster's lines)
+        res.notes.append(f"the fade-in was lengthened from {grown[0] * T:.4g} s to "
+                         f"{grown[1] * T:.4g} s, {100 * grown[1] / N:.3g} % of the record, "
+                         f"excluded from the metrics, for a start-up no faster than the settled "
+                         f"drive" + (" (a quarter of the record at most)" if grown[2] else ""))
     r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
     out = u
     if amplifier is not None and amplifier.from_records:

@@ -456,11 +456,12 @@ def zpetc_note(unacceptable_zeros, sampling_period, reference, period_samples,
         return None
     hz = np.abs(np.angle(beta)) / (2 * np.pi * T)
     k = int(np.argmin(np.abs(np.abs(beta) - 1.0) + 1e-6 * np.abs(hz - f0)))
+    where = (f"z = {beta[k].real:.4g}, on the real axis" if abs(beta[k].imag) < 1e-12 else
+             f"|z| = {abs(beta[k]):.4g} at {hz[k]:.4g} Hz")
     return (f"the ZPETC inverse passes the reference's main frequency ({f0:.4g} Hz) at {g:.3g} "
-            f"of its gain: G has a zero it cannot cancel at {hz[k]:.4g} Hz (|z| = "
-            f"{abs(beta[k]):.4g}), and the drive draws about {g:.3g} of the reference there; "
-            f"`--inversion stable` inverts it exactly (drive files; the exported C is the "
-            f"ZPETC's)")
+            f"of its gain: G has a zero it cannot cancel ({where}), "
+            f"and the drive draws about {g:.3g} of the reference there; `--inversion stable` "
+            f"inverts it exactly (`export --inversion stable` deploys it)")
 
 
 def _refined_frequency(reference, f0, period_samples, sampling_period, periods=16, points=21):
