@@ -215,7 +215,8 @@ def minor_loop_warning(fit, input_names, output_names):
             f"{worst['percent']:.0f} % level by {worst['amplitude_error_percent']:+.3g} % on "
             f"{worst['output']} (its RMS error {worst['rms_percent']:.3g} % of the level's range; "
             f"above {MINOR_LOOP_WARN_PERCENT:g} %): the actuator's minor loops are none that the "
-            f"model classes draw, and drives will miss loops of that size by about as much; "
+            f"model classes draw, and drives will miss loops of that size by as much or more "
+            f"(smaller loops, and where a loop sits, are extrapolated); "
             f"`hammerstein learn` corrects a repeating reference on the measured response "
             f"(docs/hardware.md)")
 
