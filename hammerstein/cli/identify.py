@@ -532,6 +532,14 @@ def _handler(args):
               file=sys.stderr)
         return 1
     _report(args, fit, records, dyn, creep)
+    est = args.delay_estimate
+    if est is not None and est.problem is not None:       # the default auto, refused: said loud
+        print(f"warning: the measurement delay could not be estimated from the "
+              f"--dynamics-records ({est.problem}) and was taken as 0: a delay of your "
+              f"acquisition then ends up in G, so that drives lead the position by it, and "
+              f"`learn`, which sees the same measurement, cannot tell; give --delay N when you "
+              f"know it (your sensor's and converters' samples; docs/records.md)",
+              file=sys.stderr)
     return 0
 
 

@@ -167,6 +167,9 @@ def test_default_auto_keeps_zero_when_the_records_cannot_tell(pair, monkeypatch,
     assert "measurement_delay_samples" not in ident
     assert ident["measurement_delay_estimate"]["used"] is False
     assert "measurement delay not estimated" in printed[0] and "refused for the test" in printed[0]
+    assert err.startswith("warning: the measurement delay could not be estimated from the "
+                          "--dynamics-records (refused for the test) and was taken as 0")
+    assert err.count("\n") == 1
     _same_model(out, pair[1])
 
 

@@ -143,3 +143,29 @@ def test_a_mode_in_the_upper_half_leaves_the_band_above_it(name):
             assert est.band_hz[0] == pytest.approx(0.75 * est.band_hz[1])
         else:
             assert est.problem is not None or est.delay == 2, est
+
+
+@pytest.mark.parametrize("d", [0, 1, 2])
+def test_a_mode_near_the_top_of_the_band_leaves_the_band_below_it(d):
+    """A new user's AFM stack at 10 kHz: one mode at 1.8 kHz (damping 0.02), near the top of
+    the 1.25-2.5 kHz fit band and of its upper half, 2 nm of noise. The band a quarter of the
+    excited band's top lower (0.63-1.25 kHz) is below the mode, whose group delay there is
+    0.04-0.2 samples: the inserted delay is found."""
+    import scipy.signal
+    T1 = 1e-4
+    ins = [r.u for r in excitation_set(["u"], 10.0, T1, hold=0.1) if r.kind.startswith("multisine")]
+    w = 2 * np.pi * 1800.0
+    b, a, _ = scipy.signal.cont2discrete(([0.4 * w * w], [1.0, 0.04 * w, w * w]), T1, "zoh")
+    rng = np.random.default_rng(d)
+    outs = []
+    for u in ins:
+        y = scipy.signal.lfilter(np.ravel(b), a, u, axis=1)
+        y = np.concatenate([np.zeros((1, d)), y[:, :y.shape[1] - d]], axis=1) if d else y
+        outs.append(y + 0.002 * rng.standard_normal(y.shape))
+    top = 2500.0
+    for band in ((0.5 * top, top), (0.75 * top, top)):      # the mode in both: refused
+        assert "straight line" in estimate_measurement_delay(ins, outs, T1, band_hz=band).problem
+    est = estimate_measurement_delay(ins, outs, T1)
+    assert est.problem is None and est.delay == d, est
+    assert est.band_hz[1] == pytest.approx(2 * est.band_hz[0])     # 0.25-0.5 of the top
+    assert est.band_hz[1] < 1300.0                            # below the mode
