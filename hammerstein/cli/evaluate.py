@@ -214,7 +214,7 @@ def _handle(args):
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,
-                               "--measured")
+                               "--measured", upsample=False)
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \

@@ -367,7 +367,7 @@ def _handle(args):
             raise DataFileError(f"--drive: {u.shape[1]} samples; expected the reference's {N}")
         _, y, _ = read_signals(args.measured, list(model.output_names), args.time,
                                mapping(args.outputs, list(model.output_names), "--output-columns"), T,
-                               "--measured")
+                               "--measured", upsample=False)
         if y.shape[1] < N:
             raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
                                 f"the drive's {N} (the measurement must cover the whole drive)")

@@ -35,7 +35,8 @@ DRIVE_MARK = "# hammerstein"
 LEARNT_SUFFIX = "_learnt"
 
 
-def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file"):
+def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file",
+                 upsample=True):
     """Columns of a drive, measured or reference CSV file, on a uniform time grid.
 
     File conventions: a header row (lines starting with ``#`` are comments);
@@ -61,6 +62,12 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
         Resample onto this period [s].
     what : str
         What the file is, for messages (e.g. ``"--measured"``).
+    upsample : bool
+        Whether a file sampled more coarsely than ``sampling_period`` (its
+        median step above 1.5 T) is interpolated onto it (a reference drawn
+        coarsely), or refused (a measured response, recorded at the drive's
+        sampling period: a coarser one is a time column in other units than
+        seconds, or another rate).
 
     Returns
     -------
@@ -116,6 +123,10 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                       f"{what}: {escape(path)}: {t[-1]:g} s sampled at {T:g} s",
                       DataFileError, T, len(names) + 1)
     step = float(np.median(np.diff(t)))
+    if not upsample and step > 1.5 * T:
+        raise DataFileError(f"{what}: {escape(path)}: sampled every {step:g} s, {step / T:.4g} "
+                            f"sampling periods of {T:g} s; expected one sample per period (is its "
+                            f"time column {escape(repr(time), 60)} in seconds?)")
     if step < 0.5 * T and t.size > 2 * n:
         warnings.warn(f"{what}: {escape(path)}: sampled every {step:g} s, resampled onto "
                       f"{T:g} s: {t.size} rows become {n} samples (the reference between "

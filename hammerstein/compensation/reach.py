@@ -120,7 +120,10 @@ def reach_note(reach, reference, names=None):
     names = list(names) if names is not None else [f"output {i + 1}" for i in range(r.shape[0])]
     asks = "; ".join(f"{names[i]} asks {lo[i]:.4g}..{hi[i]:.4g} µm, the model reaches "
                      f"{reach[i, 0]:.4g}..{reach[i, 1]:.4g} µm" for i in np.flatnonzero(out))
-    middle = ", ".join(f"{v:.4g}" for v in reach.mean(axis=1))
+    mid = reach.mean(axis=1)
+    where = (f"a sine's or triangle's offset = {mid[0]:.4g}" if mid.size == 1 else
+             f"a circle's or raster's center = [{', '.join(f'{v:.4g}' for v in mid)}], a sine's "
+             f"or triangle's offset on its output")
     return (f"{REACH_NOTE_START} over the amplifier's range ({asks}): "
-            f"no drive can follow it there; centre it inside the reach (a circle's or a "
-            f"raster's center = [{middle}] is the reach's middle) or make it smaller")
+            f"no drive can follow it there; centre it inside the reach ({where} is the reach's "
+            f"middle) or make it smaller")

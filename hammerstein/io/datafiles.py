@@ -322,7 +322,7 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
         if m:
             raise error(f"{where}: ragged rows: line {m.group(2)} has {m.group(3)} fields, the "
                         f"header has {m.group(1)}; expected the same number of fields on every "
-                        f"row") from None
+                        f"row{_PREAMBLE_HINT if int(m.group(2)) <= PREAMBLE_LINES else ''}") from None
         raise error(f"{where}: not a readable CSV table ({escape(msg, 200)})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
     return _Table(frame, text, sep, path, what, error)
@@ -458,9 +458,12 @@ def _read_table(path, skip_rows=0):
         reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
         m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", reason)
         if m:
-            raise DataFileError(f"{escape(path)}: ragged rows: line {m.group(2)} has {m.group(3)} "
+            line = int(m.group(2))
+            hint = (f" (a preamble before the table? skip its lines with --skip-rows N, "
+                    f"N < {line}, or start them with '#')" if line <= PREAMBLE_LINES else "")
+            raise DataFileError(f"{escape(path)}: ragged rows: line {line} has {m.group(3)} "
                                 f"fields, the first row has {m.group(1)}; expected the same "
-                                f"number of fields on every row") from None
+                                f"number of fields on every row{hint}") from None
         raise DataFileError(f"{path}: cannot parse the table ({escape(reason, 200)})") from None
     del raw
     if header:
@@ -520,6 +523,16 @@ def _column(frame, header, key, role, path):
     return arr, name
 
 
+#: A ragged row within this many lines of the top is named as a possible preamble.
+PREAMBLE_LINES = 20
+_PREAMBLE_HINT = (" (a preamble before the header? start its lines with '#', which are "
+                  "comments)")
+
+#: A time column named in another unit than seconds (``time_ms``, ``t [us]``, ``t(µs)``).
+_TIME_UNIT_NAME = re.compile(r"(^|[_\s(\[/-])(ms|msec|us|usec|µs|μs|ns|min|h)([)\]]?\s*)$",
+                             re.IGNORECASE)
+
+
 def _timepts(frame, header, time, sampling_period, path):
     """Time points (n_samples,) [s] and sampling period [s] of a parsed table.
 
@@ -529,6 +542,12 @@ def _timepts(frame, header, time, sampling_period, path):
     """
     if time is not None:
         t, tname = _column(frame, header, time, "time", path)
+        unit = _TIME_UNIT_NAME.search(str(tname))
+        if unit:
+            raise DataFileError(
+                f"{path}: time column {tname!r} is named in {unit.group(2)}, and times are read "
+                f"in seconds: convert the column to seconds, or give the sampling period [s] "
+                f"instead of a time column (--sampling-period)")
         dt = np.diff(t)
         if np.any(dt <= 0):
             i = int(np.flatnonzero(dt <= 0)[0])

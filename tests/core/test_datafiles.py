@@ -136,3 +136,41 @@ def test_read_records_several_columns_by_name_and_index(tmp_path):
         read_records(path, "ux", "ux,x", time="t")
     with pytest.raises(DataFileError, match="no input column named 'uz'"):
         read_records(path, "ux,uz", "x", sampling_period=1.0)
+
+
+@pytest.mark.parametrize("name, unit", [("time_ms", "ms"), ("t [us]", "us"), ("t(µs)", "µs"),
+                                        ("t_min", "min")])
+def test_a_time_column_named_in_another_unit_is_refused(tmp_path, name, unit):
+    """A data logger's ``time_ms`` read as seconds made a 10 kHz record one at 10 Hz: a mode
+    at "1.8 Hz", creep steps of "2e+03 s", no word. Times are seconds; the name says not."""
+    path = tmp_path / "rec.csv"
+    k = np.arange(40)
+    path.write_text(f"{name},u,y\n" + "".join(f"{0.1 * i:.1f},{np.sin(i)},{np.cos(i)}\n" for i in k),
+                    encoding="utf-8")
+    with pytest.raises(DataFileError) as info:
+        read_record(path, "u", "y", time=name)
+    text = str(info.value)
+    assert f"time column {name!r} is named in {unit}" in text and "seconds" in text
+    assert "\n" not in text
+
+
+@pytest.mark.parametrize("name", ["t", "time", "t_s", "time [s]", "t_hist"])
+def test_a_time_column_in_seconds_is_read(tmp_path, name):
+    path = tmp_path / "rec.csv"
+    path.write_text(f"{name},u,y\n" + "".join(f"{1e-4 * i:.4f},{np.sin(i)},{np.cos(i)}\n"
+                                             for i in range(40)), encoding="utf-8")
+    assert read_record(path, "u", "y", time=name).sampling_period == pytest.approx(1e-4)
+
+
+def test_a_preamble_without_comment_marks_is_named(tmp_path):
+    """A logger's three '%' lines before the header: the ragged-row error says how to skip
+    them (the new user's file was refused with no word of --skip-rows)."""
+    path = tmp_path / "rec.csv"
+    path.write_text("% NanoLab logger v3.2, stage AFM-Z1\n% fs=10 kHz\n% operator\n"
+                    "time,V,z,\n" + "".join(f"{1e-4 * i:.4f},{i},{2 * i},\n" for i in range(40)),
+                    encoding="utf-8")
+    with pytest.raises(DataFileError) as info:
+        read_record(path, "V", "z", time="time")
+    assert "ragged rows" in str(info.value) and "--skip-rows N, N < 4" in str(info.value)
+    rec = read_record(path, "V", "z", time="time", skip_rows=3)   # as the hint says
+    assert rec.sampling_period == pytest.approx(1e-4) and rec.u[-1] == 39

@@ -304,3 +304,21 @@ def test_learns_delay_advice_does_not_send_back_to_an_identify_that_refused(tmp_
         assert "less than a model's phase error" in words
         assert ("identify's own estimate was not used: " + problem in words) == said
         assert ("identify with --dynamics (the delay found" in words) == (not said)
+
+
+def test_a_measured_file_on_another_time_scale_is_refused(tmp_path):
+    """A new user's logger wrote milliseconds in ``t``: learn read 800 s of data against a
+    0.8 s drive, found a 100-sample delay and a 199 % error, exited 0 and wrote a drive
+    35 V away from the last one."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    frame = pd.read_csv(tmp_path / "y0.csv")
+    frame["t"] = frame["t"] * 1e3                                  # milliseconds
+    frame.to_csv(tmp_path / "y0-ms.csv", index=False)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv",
+               "--measured", "y0-ms.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u1.csv",
+               cwd=tmp_path)
+    assert res.returncode == 1 and not (tmp_path / "u1.csv").exists()
+    assert "--measured: y0-ms.csv: sampled every 0.05 s, 1000 sampling periods" in res.stderr
+    assert "in seconds?" in res.stderr and res.stderr.count("\n") == 1

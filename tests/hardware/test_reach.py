@@ -42,6 +42,8 @@ def test_reach_note_names_each_output_beyond_and_the_middle():
     assert "y asks" not in note
     assert "center = [50.5, 47]" in note
     assert reach_note(None, [[-30.0, 30.0]]) is None
+    one = reach_note([[0.9, 20.1]], [[-5.0, 25.0]], ["z"])    # a single axis: a triangle's offset
+    assert "offset = 10.5 is the reach's middle" in one and "center" not in one
 
 
 @pytest.mark.parametrize("center, named", [("[0, 0]", False), ("[80, 0]", True)])
