@@ -7,7 +7,8 @@ voltages from rest with :func:`hammerstein.compensation.drive.drive_signal` (fad
 ZPETC preview, the amplifier's limits) and writes ``t`` and one column per
 input [V] at full precision, optionally the model-predicted outputs
 (``<output>_predicted`` [µm], the preset's plant driven through its
-amplifier from its rest state, ``HammersteinPlant.rest_state``). With limits measured on the identification records, a
+amplifier from its rest state, ``HammersteinPlant.rest_state``). With
+limits measured on the identification records, a
 reference the drive would leave them for (a raster's line steps, a range
 beyond the records) is shaped first
 (:func:`hammerstein.compensation.shaping.shape_reference`), printed and

@@ -201,9 +201,10 @@ class HammersteinPlant:
         The hysteresis model's default state (:meth:`initial_state`) and the
         linear part (creep then dynamics) in its DC steady state for the
         hysteresis output at 0 V, ``x = (I - A)^-1 B h0``: simulated from it,
-        a drive that stays at 0 V keeps the output at the rest value
-        (:func:`hammerstein.compensation.drive.rest_output`), as the actuator
-        it models does, instead of ringing up from 0 µm.
+        a drive that stays at 0 V keeps the output at its rest value (the
+        creep's settled output, :func:`hammerstein.compensation.drive.rest_output`,
+        through the dynamics' DC gain), as the actuator it models does,
+        instead of ringing up from 0 µm.
 
         Returns
         -------
