@@ -387,7 +387,8 @@ def _handle(args):
         delay_note = None
         if args.delay == "auto" and plant.measurement_delay is not None:
             delay = plant.measurement_delay          # identify --delay: the acquisition's
-            print(f"delay {delay} samples: the model file's measurement delay (identify --delay)")
+            print(f"delay {delay} samples: the model file's measurement delay (identify's --delay, "
+                  f"given or estimated)")
         elif args.delay == "auto":
             delay = max(estimate_delay(predicted, y, max(ref.period_samples // 2, 50)), 0)
             per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
