@@ -52,14 +52,14 @@ from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.hammerstein_compensator import continuation
 from hammerstein.compensation.lookahead import preactuation_samples
 from hammerstein.compensation.shaping import shape_reference, time_intervals
-from hammerstein.compensation.drive_files import (DRIVE_MARK, drive_fade_samples, read_signals,
+from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
                                                   signals_csv)
 from hammerstein.exceptions import CompensatorError
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
            "FADE_DECAYS", "settled_step", "keep_start", "drive_fade_samples", "limit_start_up",
-           "rest_output", "hardware_fade", "read_signals", "signals_csv", "DRIVE_MARK"]
+           "rest_output", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 
 def starts_at_rest(reference, rest=None, atol=1e-9):
@@ -593,14 +593,13 @@ def shape_drive(amplifier, inputs, sampling_period):
 
 
 def hardware_fade(reference, fade_samples, rest=None, lead=None):
-    """The hardware commands' fade-in: a tenth of it at rest, then a raised cosine.
+    """The hardware commands' fade-in: a tenth of it at rest, then :func:`fade_weight`.
 
-    ``yr_f[k] = rest + w[k] (yr[k] - rest)`` with ``w = 0`` for
-    ``k < L = fade // 10``, ``w = (1 - cos(pi (k - L) / (fade - L))) / 2``
-    up to ``fade``, 1 after: value and slope continuous everywhere, and the
-    first ``L`` samples exactly at rest, so a compensator that reads the
-    reference ahead (the ZPETC preview, shorter than ``L``) also starts
-    exactly at rest.
+    ``yr_f[k] = rest + w[k] (yr[k] - rest)`` with ``w = 0`` for ``k < L =
+    fade // 10``, ``w = fade_weight((k - L) / (fade - L))`` up to ``fade``,
+    1 after; the first ``L`` samples exactly at rest, so a compensator that
+    reads the reference ahead (the ZPETC preview, shorter than ``L``) also
+    starts exactly at rest.
 
     Parameters
     ----------
@@ -621,7 +620,7 @@ def hardware_fade(reference, fade_samples, rest=None, lead=None):
     Examples
     --------
     >>> np.round(hardware_fade([[2.0] * 12], 10)[0], 3).tolist()
-    [0.0, 0.0, 0.06, 0.234, 0.5, 0.826, 1.174, 1.5, 1.766, 1.94, 2.0, 2.0]
+    [0.0, 0.0, 0.008, 0.095, 0.347, 0.76, 1.24, 1.653, 1.905, 1.992, 2.0, 2.0]
     """
     r = np.array(reference, dtype=float, ndmin=2)
     n = int(min(max(int(fade_samples), 0), r.shape[1]))
@@ -630,7 +629,7 @@ def hardware_fade(reference, fade_samples, rest=None, lead=None):
     r0 = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
     lead = n // 10 if lead is None else int(min(max(int(lead), 0), n - 1))
     k = np.arange(n) - lead
-    w = np.where(k < 0, 0.0, 0.5 * (1.0 - np.cos(np.pi * np.maximum(k, 0) / (n - lead))))
+    w = fade_weight(k / (n - lead))
     r[:, :n] = r0[:, None] + w * (r[:, :n] - r0[:, None])
     return r
 

@@ -24,7 +24,7 @@ from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_rest_lead",
-           "rest_lead_text",
+           "rest_lead_text", "fade_weight",
            "drive_kind", "optional_columns", "learnt_names", "followed_reference"]
 
 
@@ -168,6 +168,35 @@ def signals_csv(t, columns, comment):
     np.savetxt(buf, data, delimiter=",", fmt="%.17g")
     return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
 
+
+
+def fade_weight(s):
+    """The weight of a drive's fade-in at ``s`` in [0, 1]: ``s^4 (35 - 84 s + 70 s^2 - 20 s^3)``.
+
+    From 0 to 1 with value, slope, acceleration and jerk continuous at both
+    ends: a raised cosine's jump in acceleration made the inverse of two
+    bending modes ring at the fade's start and end (steps 9 times the
+    settled drive's largest, on an outside actuator), which this one does
+    not. :func:`hammerstein.compensation.drive.hardware_fade` fades a
+    reference with it; a C caller computes the same weights.
+
+    Parameters
+    ----------
+    s : array_like
+        Position in the fade [1].
+
+    Returns
+    -------
+    numpy.ndarray
+        The weights [1], shape of ``s``.
+
+    Examples
+    --------
+    >>> fade_weight([0.0, 0.25, 0.5, 1.0, 2.0]).tolist()
+    [0.0, 0.070556640625, 0.5, 1.0, 1.0]
+    """
+    s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
+    return s ** 4 * (35.0 - 84.0 * s + 70.0 * s ** 2 - 20.0 * s ** 3)
 
 
 def drive_fade_samples(path):
