@@ -395,8 +395,9 @@ def _handle(args):
             if per_sample is not None and per_sample < DELAY_PHASE_DEG:
                 advice = ("identify with --dynamics (the delay found from the multisines)"
                           if getattr(plant, "delay_problem", None) is None else
-                          f"identify --delay N, which fits the dynamics with it (identify's own "
-                          f"estimate was not used: {plant.delay_problem})")
+                          "identify --delay N, which fits the dynamics with it (identify's own "
+                          "estimate was refused: its model file's measurement_delay_estimate "
+                          "says why)")
                 delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
                               f"sample is only {per_sample:.2g} deg of the reference's fundamental "
                               f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "

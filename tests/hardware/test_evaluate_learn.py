@@ -302,7 +302,8 @@ def test_learns_delay_advice_does_not_send_back_to_an_identify_that_refused(tmp_
         assert res.returncode == 0, res.stderr
         words = res.stdout + res.stderr
         assert "less than a model's phase error" in words
-        assert ("identify's own estimate was not used: " + problem in words) == said
+        assert ("identify's own estimate was refused: its model file's "
+                "measurement_delay_estimate says why" in words) == said
         assert ("identify with --dynamics (the delay found" in words) == (not said)
 
 
