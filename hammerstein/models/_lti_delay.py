@@ -324,20 +324,17 @@ def estimate_measurement_delay(inputs, outputs, sampling_period, band_hz=None):
     outs = [y - y.mean(axis=1, keepdims=True) for y in outs]
     f, H = frf_h1(ins, outs, T)
     if band_hz is not None:
-        return _delay_over(f, H, T, band_hz)
+        return _delay_over(f, H, T, band_hz)[0]
     top = excited_band(ins, T)[1]
-    found = _delay_over(f, H, T, (0.5 * top, top))
-    if found.problem is not None and found.problem.startswith(NOT_STRAIGHT):
-        # a mode in the upper half: the band above it, else the band below it
+    found, curved = _delay_over(f, H, T, (0.5 * top, top))
+    if curved:          # a mode in the upper half: the band above it, else the band below it
         for lo, hi in FALLBACK_BANDS:
-            other = _delay_over(f, H, T, (lo * top, hi * top))
+            other = _delay_over(f, H, T, (lo * top, hi * top))[0]
             if other.problem is None:
                 return other
     return found
 
 
-#: How a refusal for a phase that is not a delay's straight line begins.
-NOT_STRAIGHT = "the phase over"
 #: Bands tried in turn, as fractions of the excited band's top, when the upper half's phase
 #: is not a straight line (a mode in it): its upper half, above a mode there, then the
 #: quarter below the upper half, below it (where a mode's group delay is 2 zeta / omega_n
@@ -346,7 +343,8 @@ FALLBACK_BANDS = ((0.75, 1.0), (0.25, 0.5))
 
 
 def _delay_over(f, H, T, band_hz):
-    """:class:`MeasurementDelay` of the H1 estimate ``H`` (p, m, n_freq) over ``band_hz``."""
+    """``(MeasurementDelay, curved)`` of the H1 estimate ``H`` (p, m, n_freq) over ``band_hz``;
+    ``curved``: refused because the phase is not a delay's straight line (a mode in the band)."""
     lo, hi = (float(v) for v in band_hz)
     seg = int(round(1.0 / (T * (f[1] - f[0])))) if f.size > 1 else 0
     sel = (f >= lo) & (f <= hi) & np.all(np.isfinite(H), axis=(0, 1))
@@ -355,7 +353,8 @@ def _delay_over(f, H, T, band_hz):
         return MeasurementDelay(0, float("nan"), (lo, hi), float("nan"), (float("nan"),) * 2,
                                 float("nan"), int(f.size), f"only {f.size} frequency lines in "
                                              f"{lo:.4g}-{hi:.4g} Hz (at least "
-                                             f"{DELAY_MIN_LINES}: a longer or broader record)")
+                                             f"{DELAY_MIN_LINES}: a longer or broader "
+                                             f"record)"), False
     weights = np.abs(H) ** 2
     reach = max(seg // 4, 4)
     grid = np.arange(-reach, reach + 0.125, 0.25)
@@ -373,9 +372,9 @@ def _delay_over(f, H, T, band_hz):
     delay = int(np.round(samples))
     problem = None
     res_deg = float(np.degrees(res))
-    spread = abs(halves[0] - halves[1])
-    if not spread <= DELAY_HALVES_TOLERANCE + 2 * np.hypot(*hstd):
-        problem = (f"{NOT_STRAIGHT} {lo:.4g}-{hi:.4g} Hz is not a delay's straight line (the "
+    curved = not abs(halves[0] - halves[1]) <= DELAY_HALVES_TOLERANCE + 2 * np.hypot(*hstd)
+    if curved:
+        problem = (f"the phase over {lo:.4g}-{hi:.4g} Hz is not a delay's straight line (the "
                    f"band's halves give {halves[0]:.2f} and {halves[1]:.2f} samples, "
                    f"+-{hstd[0]:.2f} and +-{hstd[1]:.2f}): a mode in the band?")
     elif not abs(samples - delay) + 2 * std <= 0.5:
@@ -386,4 +385,4 @@ def _delay_over(f, H, T, band_hz):
         problem = (f"the outputs lead the inputs by {-samples:.2f} samples (columns swapped, or "
                    f"clocks not shared?)")
     return MeasurementDelay(delay, float(samples), (lo, hi), float(std),
-                            tuple(float(h) for h in halves), res_deg, int(f.size), problem)
+                            tuple(float(h) for h in halves), res_deg, int(f.size), problem), curved
