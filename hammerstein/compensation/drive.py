@@ -49,6 +49,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
+from hammerstein.compensation._repeat import kept_samples
 from hammerstein.compensation.hammerstein_compensator import continuation
 from hammerstein.compensation.lookahead import preactuation_samples
 from hammerstein.compensation.shaping import shape_reference, time_intervals
@@ -295,17 +296,20 @@ class DriveStream:
         self.preview = compensator.preview_samples if self._zpetc else 0
         self._n = 0                       # reference samples received
         self._head = None                 # ZPETC: first P faded samples until the filter starts
-        self._tail = None                 # last samples, for the continuation
+        self._tail, self._held = [], 0    # last chunks, for the continuation
         self._state = None
-        self._keep = max((period_samples or 0) + 8, 3)
+        self._keep = kept_samples(period_samples)
 
     def _faded(self, chunk):
         w = _fade_weights(self._n, chunk.shape[1], self.fade) if self._n < self.fade else None
         return chunk if w is None else chunk * w      # rest output = 0 µm
 
     def _remember(self, faded):
-        self._tail = faded if self._tail is None else np.concatenate([self._tail, faded], axis=1)
-        self._tail = self._tail[:, -self._keep:]
+        self._tail.append(faded)      # trimmed once it holds twice what is kept: linear in all
+        self._held += faded.shape[1]
+        if self._held > 2 * self._keep:
+            self._tail = [np.concatenate(self._tail, axis=1)[:, -self._keep:]]
+            self._held = self._tail[0].shape[1]
 
     def push(self, reference):
         """Voltages for the next chunk of reference.
@@ -356,11 +360,11 @@ class DriveStream:
             [V].
         """
         comp = self.compensator
-        if not self._zpetc or self._tail is None:
+        if not self._zpetc or not self._tail:
             return np.zeros((getattr(comp, "model").n_inputs, 0)) if hasattr(comp, "model") \
                 else np.zeros((0, 0))
         P = self.preview
-        ext = continuation(self._tail, P, self.period_samples)
+        ext = continuation(np.concatenate(self._tail, axis=1), P, self.period_samples)
         if self._state is None:          # fewer than P samples in all: start on what there is
             head = np.concatenate([self._head, ext], axis=1)
             n = self._head.shape[1]

@@ -50,6 +50,7 @@ import math
 
 import numpy as np
 
+from hammerstein.compensation._repeat import repeat_lag
 from hammerstein.compensation.compensators import CompensatorError, _gain_text
 from hammerstein.models.creep import creep_dynamics, creep_matrices, series_matrices
 from hammerstein.models.dynamics import DynamicsError
@@ -116,9 +117,12 @@ def continuation(reference, samples, period_samples=None):
     samples : int
         How many.
     period_samples : int, optional
-        Period of a periodic reference: the continuation is the record one
-        period earlier when the last 8 samples repeat those one period
-        earlier (a spiral does not); otherwise a quadratic extrapolation of
+        Period of a periodic reference, rounded to whole samples: the
+        continuation is the record one period earlier when its last 8
+        samples repeat those one period earlier, or as many periods earlier
+        as a period of a fractional number of samples needs
+        (:func:`~hammerstein.compensation._repeat.repeat_lag`: 3 periods for
+        150 Hz at 50 kHz); otherwise (a spiral) a quadratic extrapolation of
         the last three samples (exact for polynomials of degree 2).
 
     Returns
@@ -129,14 +133,9 @@ def continuation(reference, samples, period_samples=None):
     N = r.shape[1]
     if samples <= 0:
         return np.zeros((r.shape[0], 0))
-    if period_samples and N >= period_samples + 8 and period_samples >= samples:
-        last, before = r[:, N - 8:], r[:, N - period_samples - 8:N - period_samples]
-        # |last - before| <= atol: np.allclose(rtol=0) on finite records, without its
-        # ~40 us of overhead (a start-up of every case of a sweep); atol >= 1e-9, so
-        # the record's maximum (a pass over it) is needed only for larger differences
-        d = np.abs(last - before)
-        if np.all(d <= 1e-9) or np.all(d <= 1e-9 * max(max(r.max(), -r.min()), 1.0)):
-            return r[:, N - period_samples:N - period_samples + samples].copy()
+    lag = repeat_lag(r, period_samples, samples)
+    if lag is not None:
+        return r[:, N - lag:N - lag + samples].copy()
     if N < 3:
         return np.repeat(r[:, -1:], samples, axis=1)
     k = np.arange(1, samples + 1)
@@ -206,20 +205,12 @@ def continuations(records, samples, period_samples=None):
     out = [None] * B
     if samples <= 0:
         return [np.zeros((r.shape[0], 0)) for r in records]
-    # periodic records whose last 8 samples repeat those one period earlier
-    tested = [b for b in range(B) if periods[b] and records[b].shape[1] >= periods[b] + 8
-              and periods[b] >= samples]
-    if tested:
-        d = np.abs(np.stack([records[b][:, -8:] for b in tested])
-                   - np.stack([records[b][:, records[b].shape[1] - periods[b] - 8:
-                                             records[b].shape[1] - periods[b]] for b in tested]))
-        small = np.all(d <= 1e-9, axis=(1, 2))
-        dmax = np.max(d, axis=(1, 2))
-        for i, b in enumerate(tested):
-            r = records[b]
-            if small[i] or dmax[i] <= 1e-9 * max(max(r.max(), -r.min()), 1.0):
-                N = r.shape[1]
-                out[b] = r[:, N - periods[b]:N - periods[b] + samples].copy()
+    # periodic records whose last 8 samples repeat one or more periods earlier
+    for b in range(B):
+        lag = repeat_lag(records[b], periods[b], samples)
+        if lag is not None:
+            N = records[b].shape[1]
+            out[b] = records[b][:, N - lag:N - lag + samples].copy()
     rest = [b for b in range(B) if out[b] is None]
     short = [b for b in rest if records[b].shape[1] < 3]
     for b in short:
@@ -658,19 +649,18 @@ class HammersteinCompensator:
     def _stable_continuation(self, reference):
         """What the stable inversion reads past a record's end: the record's own periods
         repeated, when :meth:`start` was given its period and its last 8 samples repeat one
-        period earlier, over :data:`STABLE_DECAY` of the anti-causal part and the look-ahead
+        or more periods earlier (:func:`~hammerstein.compensation._repeat.repeat_lag`), over :data:`STABLE_DECAY` of the anti-causal part and the look-ahead
         (at most :data:`MAX_STABLE_CONTINUATION` samples); else 8 extrapolated samples. (Held,
         the end is a kink the anti-causal modes ring back from: a zero near -1 as 15-50 V
         reversals over a new user's stage's last 40 samples, refused as chatter.)
         """
         r = np.asarray(reference, dtype=float)
-        N, period = r.shape[1], getattr(self, "_stable_period", None)
-        if period and N >= period + 8 and np.allclose(r[:, N - 8:], r[:, N - period - 8:N - period],
-                                                      rtol=0, atol=1e-9 * max(1.0, np.abs(r).max())):
+        lag = repeat_lag(r, getattr(self, "_stable_period", None), 1)
+        if lag is not None:
             la = self.lookahead_inverse
             n = min(max(8, self.stable_lookahead(STABLE_DECAY),
                         0 if la is None else la.preview_samples), MAX_STABLE_CONTINUATION)
-            return r[:, N - period + np.arange(n) % period]
+            return r[:, r.shape[1] - lag + np.arange(n) % lag]
         return continuation(r, 8)
 
     def _starts(self, references, period_samples, fade_samples):

@@ -1,0 +1,82 @@
+"""The lag at which a periodic record repeats itself, for its continuation past its end.
+
+A reference of period ``T0`` sampled every ``T`` repeats a whole number of
+samples earlier only when ``T0 / T`` is an integer. Otherwise (150 Hz at
+50 kHz: 333.3 samples) it repeats ``m`` periods earlier, with ``m T0 / T``
+the first integer multiple (``m = 3``: 1000 samples), exactly for a sampled
+periodic function. :func:`repeat_lag` finds that lag from the record and the
+rounded period the callers carry, so that the ZPETC preview and the stable
+inversion read the record's own continuation instead of an extrapolation
+whose error the inverse of the dynamics amplifies (±1 V over the last
+samples of a 150 Hz circle at 50 kHz on a stage with modes at 2.1 and
+2.6 kHz).
+"""
+
+import numpy as np
+
+__all__ = ["MAX_PERIODS", "REPEAT_SAMPLES", "repeat_lag", "kept_samples"]
+
+#: The most periods :func:`repeat_lag` looks back (a frequency f at a sampling rate fs, both
+#: whole hertz, repeats after ``f / gcd(f, fs)`` periods: 3 for 150 Hz at 50 kHz).
+MAX_PERIODS = 32
+
+#: The last samples that must repeat one lag earlier.
+REPEAT_SAMPLES = 8
+
+
+def kept_samples(period_samples):
+    """Samples a streaming caller keeps for :func:`repeat_lag`: the longest lag it tests
+    plus :data:`REPEAT_SAMPLES` (3 without a period: the quadratic extrapolation's)."""
+    if not period_samples:
+        return 3
+    return int(MAX_PERIODS * (int(period_samples) + 0.5)) + REPEAT_SAMPLES
+
+
+def repeat_lag(record, period_samples, samples):
+    """The lag [samples] one or more periods back at which a record's end repeats.
+
+    Parameters
+    ----------
+    record : numpy.ndarray, shape (p, n_samples)
+        [µm].
+    period_samples : int or None
+        The reference's period rounded to whole samples ``P``.
+    samples : int
+        How many samples the continuation reads: the lag is at least that.
+
+    Returns
+    -------
+    int or None
+        ``P`` when the last :data:`REPEAT_SAMPLES` samples equal those ``P``
+        samples earlier (to 1e-9 µm, or 1e-9 of the record's largest
+        magnitude); else the smallest lag ``L`` within half a sample per
+        period of ``m P`` (``m`` = 2 .. :data:`MAX_PERIODS`, the true period
+        being within half a sample of ``P``) at which they do; None when
+        there is no period, the record is too short or no lag repeats (a
+        spiral, a record cut at an arbitrary sample).
+    """
+    r = record
+    N = r.shape[1]
+    K = REPEAT_SAMPLES
+    if not period_samples or period_samples < samples or N < period_samples + K:
+        return None
+    P = int(period_samples)
+    last = r[:, N - K:]
+    d = np.abs(last - r[:, N - P - K:N - P])
+    # |d| <= atol without np.allclose's overhead; the record's maximum (a pass over it) is
+    # needed only when the differences are above 1e-9
+    if np.all(d <= 1e-9):
+        return P
+    scale = max(max(r.max(), -r.min()), 1.0)
+    if np.all(d <= 1e-9 * scale):
+        return P
+    m = np.arange(2, MAX_PERIODS + 1)
+    lo, hi = np.ceil(m * (P - 0.5)).astype(int), np.floor(m * (P + 0.5)).astype(int)
+    lags = np.unique(np.concatenate([np.arange(a, b + 1) for a, b in zip(lo, hi)]))
+    lags = lags[(lags >= samples) & (lags + K <= N)]
+    if lags.size == 0:
+        return None
+    idx = (N - K - lags)[:, None] + np.arange(K)                  # (n_lags, K)
+    same = np.all(np.abs(r[:, idx] - last[:, None, :]) <= 1e-9 * scale, axis=(0, 2))
+    hit = np.flatnonzero(same)
+    return int(lags[hit[0]]) if hit.size else None

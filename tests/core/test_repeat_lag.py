@@ -1,0 +1,84 @@
+"""A periodic reference whose period is not a whole number of samples is continued exactly.
+
+150 Hz at 50 kHz is 333.3 samples: the record repeats 3 periods (1000 samples)
+earlier, not 333. The ZPETC preview and the stable inversion read that
+continuation past the record's end; the drive of a record cut at sample N
+must then equal the first N samples of the drive of a longer record (the
+preview sees the true future), where a quadratic extrapolation left the last
+samples chattering.
+"""
+
+import numpy as np
+import pytest
+
+from hammerstein.compensation._repeat import MAX_PERIODS, kept_samples, repeat_lag
+from hammerstein.compensation.drive import DriveStream, drive_signal
+from hammerstein.compensation.hammerstein_compensator import (HammersteinCompensator, continuation,
+                                                              continuations)
+
+T = 5e-5          # 20 kHz: 150 Hz is 133.3 samples, repeating after 3 periods (400 samples)
+
+
+def circle(n, f=150.0, R=25.0, growth=0.0):
+    t = np.arange(n) * T
+    a = R * (1.0 + growth * t)
+    return a * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+
+
+@pytest.mark.parametrize("f, P, lag", [(150.0, 133, 400),       # 400/3 samples
+                                       (100.0, 200, 200),       # a whole number: one period
+                                       (70.0, 286, 2000),       # 2000/7
+                                       (130.0, 154, 2000)])     # 2000/13
+def test_the_lag_is_the_first_whole_multiple_of_the_period(f, P, lag):
+    assert round(1.0 / (f * T)) == P
+    r = circle(6000, f)
+    assert repeat_lag(r, P, 5) == lag
+    # the continuation is the sampled circle itself, past the end
+    np.testing.assert_allclose(continuation(r, 12, P), circle(6012, f)[:, 6000:], rtol=0,
+                               atol=1e-9)
+
+
+def test_no_lag_without_repetition():
+    spiral = circle(6000, growth=5.0)
+    assert repeat_lag(spiral, 133, 5) is None
+    assert repeat_lag(circle(6000), None, 5) is None
+    assert repeat_lag(circle(300), 133, 5) is None        # less than the 3 periods it needs
+    # continued by the quadratic through the last three samples, as before
+    k = np.arange(1, 4)
+    a, b, c = spiral[:, -3], spiral[:, -2], spiral[:, -1]
+    quad = c[:, None] + np.outer(c - b, k) + np.outer((c - 2 * b + a) / 2.0, k * (k + 1))
+    np.testing.assert_allclose(continuation(spiral, 3, 133), quad, rtol=1e-12)
+
+
+def test_several_records_continue_as_each_alone():
+    recs = [circle(6000), circle(5000, 70.0), circle(6000, growth=5.0), circle(300)]
+    periods = [133, 286, 133, 133]
+    for one, many in zip([continuation(r, 7, p) for r, p in zip(recs, periods)],
+                         continuations(recs, 7, periods)):
+        np.testing.assert_array_equal(one, many)
+
+
+def test_a_stream_keeps_enough_for_the_longest_lag():
+    assert kept_samples(133) >= MAX_PERIODS * 133.5
+    assert kept_samples(None) == 3
+
+
+@pytest.mark.parametrize("inversion", ["zpetc", "stable"])
+def test_a_cut_record_drives_as_the_longer_one(preset_plant, inversion):
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics,
+                                  inversion=inversion)
+    n, extra = 4000 + 57, 2400          # cut 57 samples past a whole number of periods
+    cut = drive_signal(comp, circle(n), T, 133, fade_samples=400).inputs
+    longer = drive_signal(comp, circle(n + extra), T, 133, fade_samples=400).inputs
+    scale = np.abs(longer).max()
+    np.testing.assert_allclose(cut, longer[:, :n], rtol=0, atol=1e-9 * scale)
+
+
+def test_a_cut_record_streams_as_the_longer_one(preset_plant):
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    n = 4057
+    stream = DriveStream(comp, 400, 133)
+    parts = [stream.push(circle(n)[:, k:k + 250]) for k in range(0, n, 250)] + [stream.finish()]
+    longer = drive_signal(comp, circle(n + 2400), T, 133, fade_samples=400).inputs
+    np.testing.assert_allclose(np.concatenate(parts, axis=1), longer[:, :n], rtol=0,
+                               atol=1e-9 * np.abs(longer).max())
