@@ -627,14 +627,20 @@ class HammersteinCompensator:
             ``ceil(log(1 / decay) / log |z|_min)``; 0 when G has no zero outside the unit
             circle.
         """
-        cached = getattr(self, "_anticausal_radius", None)
-        if cached is None:
+        radius = self.anticausal_radius
+        if radius == 0.0:
+            return 0
+        return int(math.ceil(math.log(1.0 / decay) / math.log(radius)))
+
+    @property
+    def anticausal_radius(self):
+        """``|z|`` of G's zero outside the unit circle nearest to it (the slowest decaying
+        anti-causal mode of the stable inversion); 0.0 when G has none."""
+        if getattr(self, "_anticausal_radius", None) is None:
             poles = np.linalg.eigvals(np.atleast_2d(inverse_system(self.bending_dynamics).A))
             outside = np.abs(poles[np.abs(poles) > 1.0 + 1e-12])
-            cached = self._anticausal_radius = float(np.min(outside)) if outside.size else 0.0
-        if cached == 0.0:
-            return 0
-        return int(math.ceil(math.log(1.0 / decay) / math.log(cached)))
+            self._anticausal_radius = float(np.min(outside)) if outside.size else 0.0
+        return self._anticausal_radius
 
     @property
     def lookahead_inverse(self):

@@ -23,7 +23,7 @@ def _refuse_stable(comp):
     """Why this stable inversion has no C step function: its look-ahead is too long."""
     P = comp.stable_lookahead(EXPORT_DECAY)
     return (f"inversion: {comp.inversion!r} cannot be exported here: its anti-causal part (G's "
-            f"zeros outside the unit circle, the slowest at |z| = {comp._anticausal_radius:.6g}) "
+            f"zeros outside the unit circle, the slowest at |z| = {comp.anticausal_radius:.6g}) "
             f"decays below {EXPORT_DECAY:g} only after {P} samples, and a look-ahead of more "
             f"than {MAX_LOOKAHEAD} samples is not built (its buffer, its terms and the time of a "
             f"step grow with it); export the Hammerstein compensator with inversion 'zpetc' "
