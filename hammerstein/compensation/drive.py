@@ -51,7 +51,7 @@ import numpy as np
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation._repeat import kept_samples
 from hammerstein.compensation.hammerstein_compensator import continuation
-from hammerstein.compensation.lookahead import preactuation_samples
+from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
 from hammerstein.compensation.shaping import shape_reference, time_intervals
 from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
                                                   signals_csv)
@@ -832,6 +832,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
                                              first_mode, predict, names)
             notes += more
+    u, _ = taper_preactuation(u, u_rest, n // 10 if rest_lead is None else rest_lead)
     peak, top = drive_metrics(u, T)
     res = DriveResult(u, u, faded, peak, top, n, shaped=notes,
                       rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead)

@@ -28,13 +28,14 @@ import math
 
 import numpy as np
 
+from hammerstein.compensation.drive_files import fade_weight
 from hammerstein.compensation.inversion import (_dc_equilibrium, _discrete_square, _split,
                                                 inverse_system)
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.simulation import linear_steps
 
 __all__ = ["LookaheadInverse", "creep_rest_state", "preactuation_samples",
-           "EXPORT_DECAY", "MAX_LOOKAHEAD", "FIRST_SAMPLE_TOLERANCE"]
+           "EXPORT_DECAY", "MAX_LOOKAHEAD", "FIRST_SAMPLE_TOLERANCE", "taper_preactuation"]
 
 #: What the truncated anti-causal part is left with, relative to its first term: the
 #: exported C then equals the whole-record inversion to about 1e-13 relative.
@@ -264,3 +265,53 @@ def preactuation_samples(compensator, inputs, rest, fade, n_samples):
     # slope at rest scales it (1.16e-9 V was left aiming at the tolerance itself)
     return int(max(0, min(lookahead(FIRST_SAMPLE_TOLERANCE / (10.0 * off)) + 1,
                           n_samples // 4 - fade)))
+
+
+def taper_preactuation(inputs, rest, lead):
+    """A drive whose first sample is away from rest, faded in from rest over its rest lead.
+
+    A stable inversion's anti-causal part acts before the reference moves; from a zero
+    of G near the unit circle it decays so slowly backward in time that the rest lead
+    :func:`preactuation_samples` may add (at most up to a quarter of the record) does
+    not hold it: the drive would start with a step (0.13 V on an outside XY stage with a
+    zero at ``|z| = 1.0005``). Over the ``lead`` samples, in which the reference is held at
+    rest, the departure from rest is weighted by
+    :func:`~hammerstein.compensation.drive_files.fade_weight` (value, slope, acceleration
+    and jerk continuous), so that the drive starts at rest and joins the inversion's own
+    drive at the lead's end; what that costs is an output away from rest during the lead,
+    before the reference moves, whose response has the rest of the fade-in to decay.
+
+    Parameters
+    ----------
+    inputs : numpy.ndarray, shape (m, n_samples)
+        The drive [V].
+    rest : numpy.ndarray, shape (m,) or None
+        The rest voltages [V] (None: 0 V).
+    lead : int
+        The rest lead [samples].
+
+    Returns
+    -------
+    inputs : numpy.ndarray, shape (m, n_samples)
+        The drive, unchanged (the same array) when its first sample is within
+        :data:`FIRST_SAMPLE_TOLERANCE` of rest or there is no lead.
+    off : float
+        The first sample's largest distance from rest before the taper [V].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u, off = taper_preactuation(np.full((1, 6), 0.5), None, 4)
+    >>> u.round(4).tolist(), off
+    ([[0.0, 0.0353, 0.25, 0.4647, 0.5, 0.5]], 0.5)
+    """
+    u = np.asarray(inputs, dtype=float)
+    r0 = np.zeros(u.shape[0]) if rest is None else np.asarray(rest, dtype=float)
+    off = float(np.max(np.abs(u[:, 0] - r0))) if u.shape[1] else 0.0
+    lead = int(min(max(int(lead or 0), 0), u.shape[1]))
+    if not off > FIRST_SAMPLE_TOLERANCE or lead == 0:
+        return u, off
+    u = u.copy()
+    w = fade_weight(np.arange(lead) / lead)
+    u[:, :lead] = r0[:, None] + w * (u[:, :lead] - r0[:, None])
+    return u, off
