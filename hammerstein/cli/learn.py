@@ -481,6 +481,17 @@ def _handle(args):
                          f"trial {state['trial']}'s {best_score:.4g} µm, and within the "
                          f"{margin:.2g} µm of noise: the learning has reached the noise; the next "
                          f"drive is learnt from this trial with gain x{0.5 ** halvings:g}")
+            elif judged is None and score <= margin:
+                # better than the best, but within the noise margin of no error at all: the
+                # measurement no longer resolves the peak the trials are judged by, and a full
+                # step on harmonics still above their own noise can raise it unseen (the peak
+                # of what is left is not the sum of the harmonics' sizes); the same decreasing
+                # gain as above bounds what the drive moves from here on
+                halvings += 1
+                stall = (f"trial {k_next}'s judged error {score:.4g} µm ({JUDGED}) is within the "
+                         f"{margin:.2g} µm noise margin of no error: the measurement no longer "
+                         f"resolves the error's peak; the next drive is learnt from this trial "
+                         f"with gain x{0.5 ** halvings:g}")
         gain = args.learning_gain * 0.5 ** halvings
         law_gain, notes = _inverse_gain(model, args.gain, args.check)
         notes = ([] if q_note is None else [q_note]) + notes

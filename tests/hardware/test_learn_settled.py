@@ -123,3 +123,28 @@ def test_learn_halves_its_gain_once_the_error_is_within_the_noise_of_the_best(tm
     assert 0.45 * step0 < step1 < 0.55 * step0
     state = pd.read_csv(tmp_path / "hist/learning.csv").set_index("key")["value"]
     assert int(state["halvings"]) == 1
+
+
+def test_learn_halves_its_gain_once_the_error_is_within_the_noise_of_none(tmp_path):
+    """A trial better than the best but whose judged error is within the noise margin of no
+    error (its measurement the reference plus the sensor's noise alone) no longer resolves the
+    peak it is judged by: it is learnt from with half the gain, each harmonic's halved."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _measure(tmp_path / "u0.csv", tmp_path / "y0.csv")
+    out0 = _learn(0, tmp_path)
+    assert "noise margin of no error" not in out0
+    g0 = pd.read_csv(tmp_path / "hist/harmonics.csv")["gain"].to_numpy()
+    t, _, _ = read_signals(tmp_path / "u1.csv", ["ux", "uy"])
+    fade = drive_fade_samples(tmp_path / "u1.csv")
+    w = np.clip(np.arange(t.size) / fade, 0.0, 1.0)
+    r = 30 * w * np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    y = r + np.random.default_rng(5).normal(0, 0.04, r.shape)      # the noise, no error
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(tmp_path / "y1.csv", index=False)
+    out1 = _learn(1, tmp_path)
+    assert "noise margin of no error" in out1 and "gain x0.5" in out1
+    assert "not learnt from" not in out1 and "reached the noise" not in out1
+    state = pd.read_csv(tmp_path / "hist/learning.csv").set_index("key")["value"]
+    assert int(state["halvings"]) == 1 and int(state["best_trial"]) == 1
+    g1 = pd.read_csv(tmp_path / "hist/harmonics.csv")["gain"].to_numpy()
+    np.testing.assert_allclose(g1, 0.5 * g0, rtol=1e-12)
