@@ -18,7 +18,7 @@ import warnings
 
 import numpy as np
 
-from hammerstein.io.datafiles import numeric_column, signal_table
+from hammerstein.io.datafiles import numeric_column, signal_table, uniform_period
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
@@ -105,14 +105,22 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                             f"is not strictly increasing at data row {i + 2} ({t[i]:g} s then "
                             f"{t[i + 1]:g} s)")
     vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
+    Tf, off, tol = uniform_period(t)
+    uniform = bool(np.max(np.abs(off)) <= tol)
     if sampling_period is None:
-        d = np.diff(t)
-        T = float(np.mean(d))
-        if np.max(np.abs(d - T)) > 1e-6 * T:
+        if not uniform:
+            d = np.diff(t)
             raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "
-                                f"{d.min():g} to {d.max():g} s); expected one sampling period")
-        return t, vals, T
+                                f"{d.min():g} to {d.max():g} s, a time {np.max(np.abs(off)):.3g} s "
+                                f"off the grid of {Tf:g} s, more than its stamps' rounding "
+                                f"{tol:.2g} s); expected one sampling period (give "
+                                f"--sampling-period to resample it)")
+        return t[0] + np.arange(t.size) * Tf, vals, Tf
     T = float(sampling_period)
+    if uniform and abs(Tf - T) <= 1e-6 * T and abs(t[0]) <= tol:
+        # sampled at T, its stamps rounded (a float32 logger's): the samples as they are,
+        # not interpolated between stamps that are off their sampling times
+        return np.arange(t.size) * T, vals, T
     if t[0] > 1e-9 * max(1.0, abs(t[-1])):
         raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
     if t[-1] < T:

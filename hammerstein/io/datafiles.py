@@ -26,7 +26,7 @@ from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
-           "decode_table", "signal_table", "numeric_column"]
+           "decode_table", "signal_table", "numeric_column", "uniform_period"]
 
 #: Fewest samples accepted in a record.
 MIN_SAMPLES = 10
@@ -533,12 +533,62 @@ _TIME_UNIT_NAME = re.compile(r"(^|[_\s(\[/-])(ms|msec|us|usec|µs|μs|ns|min|h)(
                              re.IGNORECASE)
 
 
+def uniform_period(t):
+    """The sampling period of time stamps taken on a uniform grid, and how far they are off it.
+
+    A logger stamps uniform samples with rounded times: printed to a few
+    digits, or single-precision floats (``np.float32(k T)``: half a unit in the
+    last place, 2^-24 of the time, 0.48 µs at 8 s, more than 1 % of a 40 µs
+    period). The step between two stamps then varies by up to twice that
+    rounding, but every stamp stays within it of ``t_0 + k T``. The period
+    is the line through the first and last stamps, ``(t_(n-1) - t_0) / (n - 1)``
+    (the median step is biased by the rounding: 4.005e-5 s for float32
+    stamps of 4e-5 s), written with the fewest significant digits (4 to 12)
+    that keep every stamp within the tolerance of the grid.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (n_samples,)
+        Increasing time stamps [s], at least two.
+
+    Returns
+    -------
+    period : float
+        ``T`` [s].
+    offset : numpy.ndarray, shape (n_samples,)
+        ``t_k - (t_0 + k T)`` [s].
+    tolerance : float
+        What rounded stamps of uniform samples may be off the grid [s]: 1 %
+        of ``T``, or single precision's half unit at the largest time
+        (``2^-24 max |t|``), whichever is larger. A record with a gap, a
+        changing rate or a clock that drifts is off by more.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(250000, dtype=float) * 4e-5
+    >>> T, off, tol = uniform_period(np.float32(t).astype(float))   # a float32 logger's stamps
+    >>> T, bool(np.max(np.abs(off)) <= tol)
+    (4e-05, True)
+    """
+    t = np.asarray(t, dtype=float)
+    k = np.arange(t.size)
+    T = float((t[-1] - t[0]) / (t.size - 1))
+    tol = max(0.01 * T, 2.0 ** -24 * float(np.max(np.abs(t))) * 1.01)
+    for digits in range(4, 13):
+        Ts = float(f"{T:.{digits}g}")
+        off = t - t[0] - k * Ts
+        if np.max(np.abs(off)) <= tol:
+            return Ts, off, tol
+    return T, t - t[0] - k * T, tol
+
+
 def _timepts(frame, header, time, sampling_period, path):
     """Time points (n_samples,) [s] and sampling period [s] of a parsed table.
 
-    From the ``time`` column (increasing, uniform within 1 % of the median
-    step, agreeing with ``sampling_period`` when both are given) or from
-    ``sampling_period``; :class:`DataFileError` otherwise.
+    From the ``time`` column (increasing, on a uniform grid within its stamps'
+    rounding, :func:`uniform_period`; agreeing with ``sampling_period`` when both
+    are given) or from ``sampling_period``; :class:`DataFileError` otherwise.
     """
     if time is not None:
         t, tname = _column(frame, header, time, "time", path)
@@ -554,13 +604,16 @@ def _timepts(frame, header, time, sampling_period, path):
             raise DataFileError(
                 f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
                 f"({t[i]:g} s then {t[i + 1]:g} s)")
-        # 12 significant digits: the step of a printed time column, not its rounding noise
-        T = float(f"{np.median(dt):.12g}")
-        if np.max(np.abs(dt - T)) > 0.01 * T:
+        T, off, tol = uniform_period(t)
+        if np.max(np.abs(off)) > tol:
             i = int(np.argmax(np.abs(dt - T)))
             raise DataFileError(
                 f"{path}: time column {tname!r} is not uniformly sampled: step {dt[i]:g} s at "
-                f"data row {i + 2}, median step {T:g} s (resample the record first)")
+                f"data row {i + 2}, and a time {np.max(np.abs(off)):.3g} s off the grid of "
+                f"{T:g} s, more than its stamps' rounding ({tol:.2g} s): resample a record with "
+                f"a gap or a changing rate (if only its stamps are coarse, give the sampling "
+                f"period instead of the time column)")
+        t = t[0] + np.arange(t.size) * T      # the samples' times, not their rounded stamps
         if sampling_period is not None and not np.isclose(sampling_period, T, rtol=0.01):
             raise DataFileError(
                 f"{path}: sampling period {sampling_period:g} s disagrees with the time "
@@ -593,7 +646,7 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
         (after dropping an empty index column).
     time : str or int, optional
         Time column [s]; must be increasing and uniform (within 1 % of the
-        median step).
+        period, or a float32 stamp's rounding: :func:`uniform_period`).
     sampling_period : float, optional
         Sampling period [s] when there is no time column.
     skip_rows : int

@@ -1,0 +1,73 @@
+"""Time stamps rounded by a logger (float32, or printed to few digits) are a uniform record.
+
+A 25 kHz logger that stamps in single precision writes ``np.float32(k * 4e-5)``:
+past 8 s its steps vary by more than 1 % of the period, but every stamp stays
+within half a float32 unit of ``k T``. Such a record is read at T = 4e-5 s
+exactly, its samples as they are; a record with a missing sample is not.
+"""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hammerstein.compensation.drive_files import read_signals
+from hammerstein.io.datafiles import DataFileError, read_record, uniform_period
+
+T = 4e-5
+N = 250_000                         # 10 s: float32 half-units up to 4.8e-7 s, 1.2 % of T
+
+
+def _stamped(n=N, gap=None, dtype=np.float32):
+    k = np.arange(n, dtype=float)
+    if gap is not None:
+        k[gap:] += 1.0             # one sample lost
+    t = (k * T).astype(dtype).astype(float)
+    u = 10 * np.sin(2 * np.pi * 3.0 * k * T)
+    return t, u, 2.5 * u + 12.5
+
+
+def _csv(path, t, u, z, time="t"):
+    pd.DataFrame({time: t, "u": u, "z": z}).to_csv(path, index=False, float_format="%.9g")
+    return path
+
+
+def test_float32_stamps_are_off_by_more_than_a_percent_of_a_step():
+    t, _, _ = _stamped()
+    d = np.diff(t)
+    assert np.max(np.abs(d - T)) > 0.01 * T                 # the old step test refused them
+    assert np.max(np.abs(t - np.arange(N) * T)) <= 2.0 ** -24 * t[-1]
+
+
+def test_the_period_is_the_grid_not_the_median_step():
+    t, _, _ = _stamped()
+    Tf, off, tol = uniform_period(t)
+    assert Tf == T and np.max(np.abs(off)) <= tol
+    assert abs(np.median(np.diff(t)) - T) > 1e-9          # the median step is biased
+
+
+def test_a_record_with_float32_stamps_is_read_at_its_period(tmp_path):
+    t, u, z = _stamped()
+    rec = read_record(_csv(tmp_path / "r.csv", t, u, z), "u", "z", time="t")
+    assert rec.sampling_period == T
+    np.testing.assert_allclose(rec.u, u, rtol=1e-8, atol=1e-8)
+
+
+@pytest.mark.parametrize("period", [None, T])
+def test_signals_with_float32_stamps_are_taken_as_they_are(tmp_path, period):
+    t, u, z = _stamped()
+    path = _csv(tmp_path / "m.csv", t, u, z)
+    grid, vals, Tf = read_signals(path, ["u", "z"], "t", None, period, "--measured")
+    assert Tf == T and grid.size == N
+    np.testing.assert_array_equal(grid, np.arange(N) * T)
+    # the file's samples, not an interpolation between stamps off their sampling times
+    np.testing.assert_allclose(vals, np.vstack([u, z]), rtol=0, atol=1e-8 * 40)
+
+
+def test_a_lost_sample_is_still_refused(tmp_path):
+    t, u, z = _stamped(20_000, gap=9_000, dtype=float)
+    path = _csv(tmp_path / "g.csv", t, u, z, time="time_s")
+    with pytest.raises(DataFileError, match=r"time column 'time_s' is not uniformly sampled: "
+                                            r"step 8e-05 s at data row 9001"):
+        read_record(path, "u", "z", time="time_s")
+    with pytest.raises(DataFileError, match="the times are not uniform"):
+        read_signals(path, ["u", "z"], "time_s", None, None, "--measured")
