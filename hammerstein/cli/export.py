@@ -81,7 +81,8 @@ def add_parser(subparsers):
     p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
                    help="convergence check rho(I - K^-1 J) < 1 of the law (default error)")
     p.add_argument("--precision", choices=["double", "float"], default="double",
-                   help="arithmetic of the generated code (the interface stays double)")
+                   help="type of the generated code, interface included (float: no double "
+                        "anywhere, for a single-precision FPU)")
     p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"),
                    default=None, metavar="S",
                    help="sampling period [s] (required for a model file; default the preset's)")

@@ -618,6 +618,10 @@ def _report(args, fit, records, dyn=None, creep=None):
         print(f"  {line}")
     for note in fit.notes:
         print(f"  {note}")
+    # what the sensor reads at rest: the offset sits in a Preisach or generalised-PI model's
+    # direct path (its output_offset is None), where "output offset 0" misled a user whose
+    # sensor read 12.5 um at 0 V
+    at_rest = model.simulate(np.zeros((model.n_inputs, 1)))[0][:, 0]
     for l, out in enumerate(model.output_names):
         parts = []
         for k, inp in enumerate(model.input_names):
@@ -638,8 +642,8 @@ def _report(args, fit, records, dyn=None, creep=None):
                 parts.append(f"{inp}: gain {c:.4g} {ou}/{iu}")
             else:
                 parts.append(f"{inp}: absent")
-        off = 0.0 if model.output_offset is None else model.output_offset[l]
-        print(f"  {out} <- " + "; ".join(parts) + f"; output offset {off:.4g} {ou}")
+        print(f"  {out} <- " + "; ".join(parts) + f"; output at 0 V (demagnetised) "
+              f"{at_rest[l]:.4g} {ou}")
         mp = None if getattr(model, "output_map", None) is None else model.output_map[l]
         if mp is not None:
             print(f"  {out}: output map, {mp.knots.size} knots, slopes "
