@@ -691,7 +691,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
        and is doubled (up to the record's length) until no step of the
        drive before the end of the fade plus one period (from rest)
        exceeds the settled drive's own largest step after it
-       (:func:`settled_step`) nor, with an amplifier, ``slew_rate T``;
+       (:func:`settled_step`; steps beyond the slew rate that the settled
+       drive takes too are the reference's, shaped in 2.);
        the reference is faded in from the model's output at rest
        (``rest``) by :func:`hardware_fade`, whose first tenth is at rest, so
        the drive starts at rest. The doubling stops at a
@@ -788,7 +789,6 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     N = r.shape[1]
     T = float(sampling_period)
     P = int(period_samples) if period_samples and int(period_samples) > 1 else 0
-    slew = np.array([c.slew_rate for c in amplifier.channels]) * T if amplifier is not None else None
     u_rest = amplifier.rest_voltages() if amplifier is not None else None
     y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
 
@@ -806,9 +806,9 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         while True:
             u, faded = run(n)
             end = min(n + max(P, 1), N)
+            # not the slew rate: steps beyond it that the settled drive takes too are the reference's
+            # (a raster's corners), shaped in 2.; no fade shortens them (one grew to 25 % of a scan)
             bound = settled_step(u, end)
-            if slew is not None:
-                bound = np.minimum(bound, slew)
             r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
             if n >= cap or np.all(_start_steps(u, end, r0) <= bound * (1 + _STEP_TOL)):
                 break

@@ -14,6 +14,7 @@ without ``--period``), whose default fade was one sampling period before.
 import contextlib
 import io
 import re
+import warnings
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -23,8 +24,10 @@ import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
-from hammerstein.compensation.drive import hardware_fade, keep_start, shape_drive
-from hammerstein.io.presets import resolve_preset
+from hammerstein.compensation.drive import (drive_signal, hardware_drive, hardware_fade, keep_start,
+                                           settled_step, shape_drive)
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.io.presets import load_plant, resolve_preset
 
 T = 5e-5
 RANGE = 5.0          # V: a 30 µm circle on rakotondrabe-2dof needs about 6 V: shaped
@@ -275,3 +278,29 @@ def test_a_lengthened_fade_in_is_said_with_its_share_of_the_record(tmp_path):
     assert line in said and "(a quarter of the record at most)" in said
     circle = _compensate([preset, "--reference", CIRCLE, "--out", tmp_path / "c.csv"])
     assert "fade-in was lengthened" not in circle                     # the default fade sufficed
+
+
+def test_a_raster_faster_than_the_slew_keeps_its_fade():
+    """A new user's 20 Hz triangle raster file (no period): its corners and line steps ask the
+    inverse for steps beyond the records' slew, in the settled part as in the fade, and they are
+    shaped in the reference. The fade was doubled against the slew rate to a quarter of the
+    scan, which no fade can change; it stays at its default (four decay times of the mode
+    here), and the settled drive is within the slew."""
+    plant = load_plant("rakotondrabe-2dof", dynamics=True)
+    comp = HammersteinCompensator(plant.hysteresis, plant.dynamics)
+    n = int(round(32 / 20.0 / T))
+    t = np.arange(n) * T
+    phase = (t * 20.0) % 1.0
+    r = np.vstack([-10.0 + 20.0 * np.where(phase < 0.5, 2 * phase, 2 - 2 * phase),
+                   -10.0 + 20.0 * np.minimum((t * 20.0).astype(int), 31) / 31])
+    slew = 3000.0
+    raw = drive_signal(comp, hardware_fade(r, 2000, np.zeros(2)), T, None, fade_samples=0).inputs
+    assert np.all(settled_step(raw, 2001) > slew * T)          # the reference's own steps
+    amp = amplifier_from_table({"source": "records", "range": [-10.0, 10.0], "slew_rate": slew},
+                               ["ux", "uy"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = hardware_drive(comp, r, T, None, amplifier=amp, mode_decay=0.025)
+    assert res.fade_samples == 2000 and not any("lengthened" in s for s in res.notes)
+    assert any("reference shaped" in s for s in res.shaped)
+    assert np.all(_steps(res.inputs).max(axis=1) <= slew * T * (1 + 1e-9))
