@@ -292,6 +292,8 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
         f"--creep-records {' '.join(by_kind['creep'])} "
         f"--out preset.toml --metrics fit.csv --plot fit.png",
         "```", "",
+        f"`--outputs` names your displacement columns, in the order of the inputs that drive "
+        f"them ({', '.join(_output_names(len(names)))} are the example's names).", "",
         "Without the creep records the model has no creep: a drive then leaves the slow drift "
         "of every step (a few % of the displacement within seconds) uncompensated.", ""]
     return "\n".join(lines)
