@@ -732,6 +732,13 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
     if not np.all(np.isfinite(mid)) or np.any(np.abs(mid) > MAX_MAGNITUDE):
         raise ValueError(f"centre: expected finite voltages [V], found {centre!r}")
     rest = np.clip(0.0, mid - amp, mid + amp)          # where each amplifier rests
+    S_scaled = S
+    if S is not None:
+        # the files print 9 significant digits: two roundings of up to half a unit of the
+        # largest voltage's decade may lengthen a multisine scaled onto the slew rate (its
+        # steps 3.7e-9 V over 1 V per sample at 10 V): it is scaled onto the slew rate less that
+        decade = 10.0 ** np.ceil(np.log10(max(float(np.max(np.abs(mid) + amp)), 1e-300)))
+        S_scaled = max(S - 1e-8 * decade / float(sampling_period), 0.999 * S)
     out = []
     for k, name in enumerate(names):
         def full(t, one, kind, stem, k=k, scale=1.0, f_max=None):
@@ -760,7 +767,7 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
                 if S is None:
                     break
                 one, scale = _slew_limited_multisine(one, one.size // int(multisine_periods),
-                                                     float(sampling_period), S)
+                                                     float(sampling_period), S_scaled)
                 top = float(lines[-1])
                 # the default band narrowed (its slew falls with it) rather than the amplitude
                 # below MIN_MULTISINE_SCALE, down to 4 f_min at most; a given f_max is kept
