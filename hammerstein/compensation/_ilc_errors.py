@@ -40,6 +40,13 @@ class ConvergenceCondition:
     per_axis: np.ndarray
     coupled: np.ndarray
 
+    def __repr__(self):
+        # the arrays hold thousands of frequencies: their maxima, not every value
+        return (f"ConvergenceCondition({self.frequencies.size} frequencies up to "
+                f"{float(np.max(self.frequencies)) if self.frequencies.size else 0.0:g} Hz, "
+                f"max per axis {np.round(self.max_per_axis, 4).tolist()}, "
+                f"max coupled {self.max_coupled:.4g}, holds={self.holds})")
+
     @property
     def max_per_axis(self):
         """numpy.ndarray, shape (p,): the largest value over frequency, per axis."""

@@ -400,8 +400,9 @@ class HammersteinCompensator:
     Raises
     ------
     CompensatorError
-        On an unknown inversion or dynamics not p x p with p the model's
-        outputs; the hysteresis compensator's own errors.
+        On an unknown inversion, a sampling period that is not a positive
+        time, or dynamics not p x p with p the model's outputs; the
+        hysteresis compensator's own errors.
 
     References
     ----------
@@ -439,6 +440,9 @@ class HammersteinCompensator:
         if inversion not in INVERSIONS:
             raise CompensatorError(f"inversion: expected one of {', '.join(map(repr, INVERSIONS))}, "
                                    f"found {inversion!r}")
+        if sampling_period is not None and not (np.isfinite(sampling_period) and sampling_period > 0):
+            raise CompensatorError(f"sampling_period: expected a positive time [s], found "
+                                   f"{sampling_period!r}")
         p = model.n_outputs
         if dynamics is None or dynamics.ninputs != p or dynamics.noutputs != p \
                 or not dynamics.isdtime(strict=True):
@@ -456,8 +460,8 @@ class HammersteinCompensator:
                 self.hysteresis_compensator = entry.exact_inverse(model, name=name)
             except CompensatorError as exc:
                 raise CompensatorError(
-                    f"kind 'hammerstein' with a {type(model).__name__} model ({entry.label} "
-                    f"class): its static part is "
+                    f"kind 'hammerstein' with a {type(model).__name__} model (class "
+                    f"{entry.name!r}): its static part is "
                     f"the exact inverse, which refuses this model: {exc}") from None
         else:
             self.hysteresis_compensator = entry.compensator(
