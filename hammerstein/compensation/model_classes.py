@@ -255,12 +255,14 @@ MODEL_CLASSES: dict[str, ModelClass] = {
     "preisach": ModelClass(
         "preisach", "Preisach", _is_preisach, _ALL_KINDS + ("preisach-inverse",),
         "preisach-inverse", _mixed_compensator,
-        "discrete Preisach direct paths (relays on a switching grid), any cross-couplings",
+        "discrete Preisach direct paths (relays on a switching grid); Preisach, generalised-PI, "
+        "polynomial or gain cross-couplings (a classical-PI one: the multivariable law only)",
         law_options=("gain", "check")),
     "generalized": ModelClass(
         "generalized", "generalized PI", _is_generalized, _ALL_KINDS + ("preisach-inverse",),
         "preisach-inverse", _mixed_compensator,
-        "generalised-PI direct paths (plays under rising/falling envelopes), any cross-couplings",
+        "generalised-PI direct paths (plays under rising/falling envelopes); cross-couplings as "
+        "for preisach",
         law_options=("gain", "check")),
     "mixed": ModelClass(
         "mixed", "mixed-class", _is_mixed, _ALL_KINDS + ("preisach-inverse",),
