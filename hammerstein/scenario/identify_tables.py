@@ -26,7 +26,8 @@ from __future__ import annotations
 
 import math
 
-from hammerstein.core.schema import nested_table
+from hammerstein.core.schema import did_you_mean, nested_table
+from hammerstein.exceptions import NestedInvalid
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.signals.excitation import REVERSALS
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
@@ -185,7 +186,15 @@ def identify_table(value):
 
         return nested_table(value, RECORDS_IDENTIFY_FIELDS, '{ records = "excitation" }',
                             cross_records)
-    return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
+    try:
+        return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
+    except NestedInvalid as exc:
+        # a misspelt `records` selects the sine route, whose keys do not hold it: "recrods"
+        # was met with "did you mean 'periods'?"
+        raise NestedInvalid([(key, f"unknown key{did_you_mean(key, ['records'])} (the route "
+                                   f"of `hammerstein identify` on excitation records)")
+                             if msg.startswith("unknown key") and did_you_mean(key, ["records"])
+                             else (key, msg) for key, msg in exc.problems]) from None
 
 
 def nyquist_problem(spec, plant):

@@ -73,6 +73,10 @@ reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, p
     ('model = "identified"\nidentify = { frequency = 50.0, amplitud = 5.0 }',
      "cases[0].identify.amplitud: unknown key (did you mean 'amplitude'?)"),
     ('model = "identified"\nidentify = { frequency = 15000.0 }', "beyond the Nyquist frequency"),
+    # a misspelt `records` selects the sine route, whose keys were the only ones compared
+    ('model = "identified"\nidentify = { recrods = "excitation" }',
+     "cases[0].identify.recrods: unknown key (did you mean 'records'?) (the route of "
+     "`hammerstein identify` on excitation records)"),
     ('model = "missing.toml"', "cases[0].model"),
 ])
 def test_case_level_model_errors(tmp_path, case_keys, expected):
