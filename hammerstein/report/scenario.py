@@ -443,7 +443,15 @@ def start_lines(results, atol=1e-9):
         fade = fade_samples(spec)
         T = spec.plant.sampling_period
         names = list(spec.plant.hysteresis.output_names)
-        if fade > 0:
+        u0 = np.max(np.abs(np.asarray(r.inputs, dtype=float)[:, 0])) if r.inputs is not None \
+            and np.size(r.inputs) else 0.0
+        if fade > 0 and u0 > 1e-6:
+            # faded from 0 µm, not from the model's output at 0 V: the first voltage is a step
+            text = (f"faded in from 0 µm over {fade * T * 1e3:.4g} ms ({fade} samples), which "
+                    f"is not its compensator's model at rest: the drive starts {u0:.3g} V from "
+                    f"0 V in one sample (`hammerstein compensate` fades in from the model's "
+                    f"output at 0 V)")
+        elif fade > 0:
             text = f"faded in from rest over {fade * T * 1e3:.4g} ms ({fade} samples)"
         elif step <= atol:
             text = "at rest (its first sample is 0 µm): no step"
