@@ -33,3 +33,32 @@ def test_report_states_each_start(tmp_path):
     # 4 ms at the preset's sampling period
     assert "faded in from rest over 4 ms" in lines["- `circle-faded`"]
     assert "at rest (its first sample is 0 µm)" in lines["- `sine-from-rest`"]
+
+
+def test_a_fade_from_0_um_off_the_models_rest_is_said_to_step(tmp_path):
+    """A new user's identified model rests at 1.5 / -0.8 µm at 0 V: faded in from 0 µm, the
+    drive's first voltages are those of 0 µm, a step from 0 V; the report said "faded in from
+    rest". It now names the step, as large as the drive's first sample."""
+    import copy
+
+    import numpy as np
+    import pandas as pd
+
+    from hammerstein.io.presets import load_plant, save_model
+
+    model = copy.deepcopy(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
+    model.output_offset = np.array([1.5, -0.8])
+    save_model(model, tmp_path / "offset.toml")
+    path = tmp_path / "starts.toml"
+    path.write_text(SCENARIO.replace('[compensator]\nkind = "multivariable"',
+                                     '[compensator]\nkind = "multivariable"\nmodel = "offset.toml"')
+                    .replace('compensator = { kind = "multivariable", fade_in = 0.004 }',
+                             'compensator = { kind = "multivariable", fade_in = 0.004, '
+                             'model = "offset.toml" }'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q", "--figures", "none"]) == 0
+    md = (tmp_path / "out" / "starts" / "report.md").read_text()
+    faded = {ln.split(":")[0]: ln for ln in md.splitlines() if ln.startswith("- `")}["- `circle-faded`"]
+    series = pd.read_csv(tmp_path / "out" / "starts" / "timeseries-circle-faded.csv", comment="#")
+    u0 = float(np.max(np.abs(series[["ux_V", "uy_V"]].to_numpy()[0])))
+    assert u0 > 0.1
+    assert "faded in from 0 µm over 4 ms" in faded and f"starts {u0:.3g} V from 0 V" in faded
