@@ -263,7 +263,7 @@ class LearningCompensator:
                                   f"again from it with gain x{0.5 ** halvings:g}")
             if k == self.iterations:
                 break
-            u = self.learning.step(target, u, measured, period_samples, steady, gains)
+            u = self.learning.step(target, u, measured, period_samples, steady, gains, amp)
         self.learning.learning_gain = gamma0
         if best[0].iteration != self.history[-1].iteration:
             self.stopped += f" (kept iteration {best[0].iteration}, the best)"

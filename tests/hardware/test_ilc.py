@@ -154,3 +154,32 @@ reference = { kind = "circle", radius = 20.0, frequency = 200.0, periods = 8 }
     assert out.ok, out.error
     assert (out.out_dir / "convergence-c.png").is_file()
     assert "convergence-c.png" in (out.out_dir / "report.md").read_text(encoding="utf-8")
+
+
+def test_an_amplifier_keeps_the_learnt_drive_within_its_range(preset_plant):
+    """Anti-windup: a circle the amplifier's range cannot reach (20 µm needs about 4 V; the
+    range is -3..3 V). Without the amplifier the learnt drive leaves the range and grows
+    trial after trial, learning what the actuator never receives; with it every drive stays
+    within the range and under the slew rate, and so does what the actuator receives."""
+    from hammerstein.compensation.drive import apply_amplifier
+    from hammerstein.models.amplifier import amplifier_from_table
+
+    T = preset_plant.sampling_period
+    amp = amplifier_from_table({"range": [-3.0, 3.0], "slew_rate": 2.0e4}, ["ux", "uy"])
+    yr = _circle(T, 100.0, 20.0, 6)
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    d = drive_signal(comp, yr, T, 200, fade_samples=200)
+    ilc = IterativeLearning(preset_plant.hysteresis, preset_plant.dynamics, T, learning_gain=0.7,
+                            q_cutoff_hz=1000.0)
+    peaks = {}
+    for with_amp in (False, True):
+        u = d.inputs.copy()
+        for _ in range(5):
+            y, _ = preset_plant.simulate(apply_amplifier(amp, u, T))
+            u = ilc.step(d.reference, u, y, 200, amplifier=amp if with_amp else None)
+        peaks[with_amp] = np.max(np.abs(u))
+        if with_amp:
+            assert np.all(u >= -3.0) and np.all(u <= 3.0)
+            assert np.max(np.abs(np.diff(np.concatenate([np.zeros((2, 1)), u], axis=1)))) \
+                <= 2.0e4 * T * (1 + 1e-9)
+    assert peaks[False] > 3.5 and peaks[True] <= 3.0
