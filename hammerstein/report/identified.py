@@ -237,5 +237,6 @@ def _report_dynamics(results, directory, jobs):
                   "- largest relative error at 10 / 100 / 200 / 300 Hz: "
                   + " / ".join(f"{100 * v:.2f} %" for v in cmp_["relative_error"].max(axis=(0, 1))),
                   f"- files: [`{r['dynamics_file']}`]({r['dynamics_file']})"
-                  + (f", PI [`{r['pi_file']}`]({r['pi_file']})" if r["pi_file"] else ""), ""]
+                  + (f", {r.get('pi_class', 'PI')} [`{r['pi_file']}`]({r['pi_file']})"
+                     if r["pi_file"] else ""), ""]
     append_text(directory / "report.md", "\n".join(lines) + "\n", "report")

@@ -161,3 +161,29 @@ def test_the_report_says_what_a_records_table_asked_for():
     for text in (compensator_summary(table), _model_summary(table)):
         assert "identified from the excitation records (model auto, with creep, range [0, 10] V, " \
                "slew rate 2000 V/s)" in text and "least-squares" not in text and "hysterons" not in text
+
+
+@pytest.mark.slow
+def test_the_report_names_an_identified_preisach_model_by_its_class(tmp_path):
+    """A new user's identified Preisach model was saved as ``hammerstein-1-pi.toml`` and the
+    report called it "PI": the file and the report now carry its class."""
+    path = tmp_path / "classes.toml"
+    path.write_text(f'''
+name = "classes"
+[plant]
+preset = "rakotondrabe-2dof"
+dynamics = true
+[compensator]
+kind = "hammerstein"
+model = "identified"
+dynamics = "identified"
+identify = {{ records = "excitation", model = "preisach" }}
+[[cases]]
+name = "c"
+reference = {CIRCLE}
+''')
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q", "--figures", "none"]) == 0
+    out = tmp_path / "out" / "classes"
+    saved = sorted(p.name for p in (out / "models").glob("hammerstein-1-*.toml"))
+    assert saved == ["hammerstein-1-dynamics.toml", "hammerstein-1-preisach.toml"]
+    assert "Preisach model [`models/hammerstein-1-preisach.toml`]" in (out / "report.md").read_text()
