@@ -5,8 +5,8 @@ The case results carry their identifications (``result.spec.identified``:
 :class:`hammerstein.scenario.identification.IdentifiedDynamics` records), so
 the report saves them without identifying anything again:
 ``models/identified-<f>Hz-<method>.toml`` (:func:`save_identified_models`,
-loadable by ``model = "<file>"``) and ``models/hammerstein-<i>-<class>.toml`` (``pi`` for a classical PI) /
-``models/hammerstein-<i>-dynamics.toml`` (:func:`save_identified_dynamics`,
+loadable by ``model = "<file>"``) and ``models/hammerstein-<i>-<class>.toml``
+(``pi`` for a classical PI) / ``models/hammerstein-<i>-dynamics.toml`` (:func:`save_identified_dynamics`,
 loadable by ``dynamics = "<file>"``).
 """
 
@@ -90,8 +90,9 @@ def save_identified_models(results, directory):
 def save_identified_dynamics(results, directory):
     """Save the PI models and dynamics that ``kind = "hammerstein"`` cases identified.
 
-    Files ``models/hammerstein-<i>-<class>.toml`` (model file, when the hysteresis was
-    identified; ``pi`` for a classical PI, else its class: ``preisach``, ``generalized``) and ``models/hammerstein-<i>-dynamics.toml`` (``[dynamics]
+    Files ``models/hammerstein-<i>-<class>.toml`` (model file, when the
+    hysteresis was identified; ``pi`` for a classical PI, else its class:
+    ``preisach``, ``generalized``) and ``models/hammerstein-<i>-dynamics.toml`` (``[dynamics]
     kind = "state_space"``, continuous ZOH equivalent: loadable by
     ``dynamics = "<file>"``), one pair per distinct identification.
 
@@ -118,9 +119,9 @@ def save_identified_dynamics(results, directory):
                 # named by its class (a Preisach model was saved as -pi.toml); "pi" for the
                 # classical PI, as the files of earlier reports
                 entry = model_class(rec.pi)
-                row["pi_class"] = "PI" if entry.name == "classical" else f"{entry.label} model"
-                row["pi_file"] = (f"models/hammerstein-{i}-"
-                                  f"{'pi' if entry.name == 'classical' else entry.name}.toml")
+                classical = entry.name == "classical"
+                row["pi_class"] = "PI" if classical else f"{entry.label} model"
+                row["pi_file"] = f"models/hammerstein-{i}-{'pi' if classical else entry.name}.toml"
                 save_model(rec.pi, directory / row["pi_file"], rec.pi_metadata)
             save_dynamics(rec.identifier.system_, directory / row["dynamics_file"], rec.metadata)
             index[rec.key] = row

@@ -191,10 +191,12 @@ def identify_table(value):
     except NestedInvalid as exc:
         # a misspelt `records` selects the sine route, whose keys do not hold it: "recrods"
         # was met with "did you mean 'periods'?"
-        raise NestedInvalid([(key, f"unknown key{did_you_mean(key, ['records'])} (the route "
-                                   f"of `hammerstein identify` on excitation records)")
-                             if msg.startswith("unknown key") and did_you_mean(key, ["records"])
-                             else (key, msg) for key, msg in exc.problems]) from None
+        problems = []
+        for key, msg in exc.problems:
+            hint = did_you_mean(key, ["records"]) if msg.startswith("unknown key") else ""
+            problems.append((key, f"unknown key{hint} (the route of `hammerstein identify` on "
+                                  f"excitation records)" if hint else msg))
+        raise NestedInvalid(problems) from None
 
 
 def nyquist_problem(spec, plant):
