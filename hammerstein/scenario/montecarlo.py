@@ -50,8 +50,14 @@ gives bit-identical metrics (:func:`run_chunk`).
 
 Results and memory
 ------------------
-Each case runs at every frequency through
-:func:`hammerstein.simulation.simulate_chain_batch`: the study is cut into
+A classical multivariable PI plant under a rate-independent kind runs each
+case at every frequency through
+:func:`hammerstein.simulation.simulate_chain_batch`. Any other plant
+(Preisach, generalised PI, mixed, a PI with an output map) or kind (the exact
+inverse, the Hammerstein compensator with its preview and fade-in) runs off
+that kernel: the compensator's drive is computed once per frequency from the
+nominal model and every drawn plant steps it (:func:`case_plant` scales each
+class's hysteron weights). Either way the study is cut into
 chunks of plants (:data:`CHUNK_CASES` here, :func:`auto_chunk` on dask), a
 chunk into batch-kernel calls of about :data:`BATCH_SAMPLES` samples (their
 buffers stay a few MB whatever the chunk); only scalar metrics per (case,
@@ -92,8 +98,9 @@ The metrics are those of the true position.
 
 Modules
 -------
-This module draws the plants, runs the chunks and distributes them; the
-tables and their checks are in :mod:`hammerstein.scenario.montecarlo_spec`,
+This module runs the chunks and distributes them; the drawn plants are in
+:mod:`hammerstein.scenario.montecarlo_draw`, the tables and their checks in
+:mod:`hammerstein.scenario.montecarlo_spec`,
 the reduction to quantiles and the result in
 :mod:`hammerstein.scenario.montecarlo_quantiles`. Every public name of those
 is re-exported here.
@@ -114,22 +121,20 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 import numpy as np
 
-from hammerstein.models.dynamics import SampledSystem
-from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.signals.metrics import steady_window
-from hammerstein.models.plant import HammersteinPlant
 from hammerstein.exceptions import PresetError
 from hammerstein.compensation.feedback import Controller, FeedbackLoop
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import FeedbackError
 from hammerstein.scenario.feedback_loops import build_loops
 from hammerstein.scenario.identification import ResolveContext
-from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.simulation import compensator_law_of, is_fusable, simulate_chain_batch
 from hammerstein.scenario.montecarlo_quantiles import (BINS_PER_DECADE, EXACT_VALUES, QUANTILES,
                                                       MonteCarloResult, QuantileAccumulator,
                                                       _diverged)
+from hammerstein.scenario.montecarlo_draw import MIN_FACTOR, case_plant, draw_factors, sampled_modes
 from hammerstein.scenario.montecarlo_spec import (DEFAULT_STUDY_SAMPLES, MAX_RUN_SAMPLES, MAX_RUNS,
                                                   STUDY_SAMPLES_ENV, MonteCarloScenario,
                                                   MonteCarloStudy, is_montecarlo,
@@ -183,181 +188,6 @@ TASK_SAMPLES = 20_000_000
 RUN_COST_SAMPLES = 1_000
 #: Tasks per dask worker thread at least (load balance), when the study is large enough.
 TASKS_PER_WORKER = 4
-#: Smallest factor of a natural frequency or damping ratio.
-MIN_FACTOR = 0.05
-
-
-def _factor(z, spec, positive=False):
-    """Factors of mean 1 and relative sd ``spec['relative_sd']`` from standard normals ``z``."""
-    s, dist = spec["relative_sd"], spec.get("distribution", "normal")
-    if dist == "normal":
-        f = 1.0 + s * z
-    elif dist == "uniform":
-        from scipy.special import ndtr   # scipy is loaded lazily by the project
-        f = 1.0 + s * math.sqrt(3.0) * (2.0 * ndtr(z) - 1.0)
-    else:
-        sigma = math.sqrt(math.log1p(s * s))
-        f = np.exp(sigma * z - 0.5 * sigma * sigma)
-    return np.maximum(f, MIN_FACTOR) if positive else f
-
-
-def draw_factors(study, i):
-    """The multiplicative factors of case ``i`` (depend only on ``(seed, i)`` and the study).
-
-    Parameters
-    ----------
-    study : MonteCarloStudy
-    i : int
-        Case index, ``0 <= i < study.cases``.
-
-    Returns
-    -------
-    dict
-        ``weights`` (one array per component ``(l, k)`` of its hysteron
-        weights' factors), ``cross_coupling`` ((p, m) array, 1 on the
-        diagonal), ``natural_frequency`` and ``damping_ratio`` ((p,) arrays);
-        1 where the quantity is not varied.
-    """
-    model = study.plant.hysteresis
-    p, m = model.n_outputs, model.n_inputs
-    rng = np.random.default_rng([study.seed, i])
-    comps = [(l, k, c) for l, row in enumerate(model.components) for k, c in enumerate(row)]
-    sizes = [len(c.weights) if isinstance(c, PrandtlIshlinskii) else 0 for _, _, c in comps]
-    z_w = rng.standard_normal(sum(sizes))
-    z_c = rng.standard_normal(p * m).reshape(p, m)
-    z_f = rng.standard_normal(p)
-    z_d = rng.standard_normal(p)
-    v = study.vary
-    fw = _factor(z_w, v["weights"]) if "weights" in v else np.ones_like(z_w)
-    cut = np.cumsum([0] + sizes)
-    weights = {(l, k): fw[cut[j]:cut[j + 1]] for j, (l, k, _) in enumerate(comps)}
-    fc = _factor(z_c, v["cross_coupling"]) if "cross_coupling" in v else np.ones((p, m))
-    if p == m:
-        np.fill_diagonal(fc, 1.0)
-    return {"weights": weights, "cross_coupling": fc,
-            "natural_frequency": _factor(z_f, v["natural_frequency"], True)
-            if "natural_frequency" in v else np.ones(p),
-            "damping_ratio": _factor(z_d, v["damping_ratio"], True)
-            if "damping_ratio" in v else np.ones(p)}
-
-
-def case_plant(study, i):
-    """The plant of case ``i``: the nominal plant with the factors of :func:`draw_factors`.
-
-    Parameters
-    ----------
-    study : MonteCarloStudy
-    i : int
-
-    Returns
-    -------
-    HammersteinPlant
-        Weights w of component (l, k) become ``w * f_weights * f_cross[l, k]``
-        (a linear gain component: ``gain * f_cross[l, k]``); the bending
-        modes' natural frequencies and damping ratios are scaled by their
-        factors and re-sampled (zero-order hold, :func:`sampled_modes`;
-        the nominal sampled modes when neither is varied); creep is the
-        nominal one.
-    """
-    nominal = study.plant
-    model = nominal.hysteresis
-    f = draw_factors(study, i)
-    rows = []
-    for l, row in enumerate(model.components):
-        new = []
-        for k, c in enumerate(row):
-            g = f["cross_coupling"][l, k]
-            if isinstance(c, PrandtlIshlinskii):
-                new.append(PrandtlIshlinskii(c.thresholds, np.asarray(c.weights) * f["weights"][(l, k)] * g))
-            elif c is None:
-                new.append(None)
-            else:
-                new.append(float(c) * g)
-        rows.append(new)
-    hyst = MultivariablePI(rows, input_names=model.input_names, output_names=model.output_names,
-                           input_amplitude=model.input_amplitude, output_offset=model.output_offset,
-                           output_map=model.output_map)
-    lin = nominal.sampled_dynamics
-    if (study.modes is not None and nominal.sampled_dynamics is not None
-            and ("natural_frequency" in study.vary or "damping_ratio" in study.vary)):
-        fn, zeta = study.modes
-        lin = sampled_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
-                            nominal.sampling_period, lin)
-    return HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
-                            creep=nominal.creep)
-
-
-def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):
-    """Zero-order hold of decoupled second-order bending modes, in closed form.
-
-    The same system as
-    :func:`hammerstein.models.dynamics.sampled_bending_modes` (states: position
-    and velocity / omega_n of each mode, ``dx/dt = A x + B u`` with the block
-    ``A = [[0, w], [-w, -2 zeta w]]``, ``B = [0, w]^T``), without a matrix
-    exponential: with ``s = zeta w``, ``q = w^2 (1 - zeta^2)``, ``c = cos(sqrt(q) T)``
-    and ``S = sin(sqrt(q) T) / sqrt(q)`` (``cosh``/``sinh`` of ``sqrt(-q) T``
-    for an overdamped mode, ``c = 1``, ``S = T`` for a critically damped one),
-    ``exp(A T) = exp(-s T) (c I + S (A + s I))`` (Cayley-Hamilton: ``(A + s
-    I)^2 = -q I``) and ``B_d = int_0^T exp(A t) dt B = [1 - exp(-s T) (c + s
-    S), w exp(-s T) S]^T`` (the unit-step response; e.g. Franklin, Powell &
-    Workman, *Digital Control of Dynamic Systems*, Sec. 4.3.3). It agrees
-    with the Pade-based ``scipy.linalg.expm`` of the ZOH definition within a
-    few 1e-16 of the matrices' norm, uses no BLAS (no thread pool, whatever
-    ``OPENBLAS_NUM_THREADS``) and takes a few microseconds per mode.
-
-    Parameters
-    ----------
-    natural_frequency : numpy.ndarray, shape (p,)
-        [Hz], > 0.
-    damping_ratio : numpy.ndarray, shape (p,)
-        > 0 (above 1: an overdamped mode).
-    sampling_period : float
-        T [s], > 0.
-    nominal : SampledSystem
-        The nominal sampled modes (gives C, D, the names and the sampling
-        period).
-
-    Returns
-    -------
-    SampledSystem
-        A_d, shape (2p, 2p), block diagonal; B_d, shape (2p, p); C, D of
-        ``nominal``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from hammerstein.models.dynamics import sampled_bending_modes
-    >>> from hammerstein.scenario.montecarlo import sampled_modes
-    >>> ref = sampled_bending_modes([900.0, 1100.0], [0.05, 0.2], ["x", "y"], 1e-4)
-    >>> got = sampled_modes(np.array([900.0, 1100.0]), np.array([0.05, 0.2]), 1e-4, ref)
-    >>> bool(np.abs(got.A - ref.A).max() < 1e-15 and np.abs(got.B - ref.B).max() < 1e-15)
-    True
-    """
-    T = float(sampling_period)
-    p = len(natural_frequency)
-    A, B = np.zeros((2 * p, 2 * p)), np.zeros((2 * p, p))
-    for l in range(p):
-        w = 2.0 * math.pi * float(natural_frequency[l])
-        z = float(damping_ratio[l])
-        sig = z * w
-        q = w * w * (1.0 - z * z)
-        if q > 0.0:
-            wd = math.sqrt(q)
-            c, S = math.cos(wd * T), math.sin(wd * T) / wd
-        elif q < 0.0:
-            g = math.sqrt(-q)
-            c, S = math.cosh(g * T), math.sinh(g * T) / g
-        else:
-            c, S = 1.0, T
-        e = math.exp(-sig * T)
-        i = 2 * l
-        A[i, i], A[i, i + 1] = e * (c + sig * S), e * w * S
-        A[i + 1, i], A[i + 1, i + 1] = -e * w * S, e * (c - sig * S)
-        B[i, l], B[i + 1, l] = 1.0 - e * (c + sig * S), w * e * S
-    return SampledSystem(A, B, nominal.C, nominal.D, nominal.dt, inputs=nominal.inputs,
-                         outputs=nominal.outputs, states=nominal.states, name=nominal.name)
-
-
 # -- running ---------------------------------------------------------------------------------
 def _batch_plants(study):
     """Plants per batch-kernel call inside a chunk (about :data:`BATCH_SAMPLES` samples,
@@ -422,6 +252,8 @@ def run_chunk(study, start, stop, parallel=None):
     """
     if study.loop is not None:
         return start, _loop_chunk(study, start, stop)
+    if study.feedforward is not None:
+        return start, _drive_chunk(study, start, stop)
     F = len(study.frequencies)
     values = np.empty((stop - start, F, len(study.columns)))
     step = _batch_plants(study)
@@ -438,6 +270,26 @@ def run_chunk(study, start, stop, parallel=None):
             with np.errstate(all="ignore"):         # a diverged run: NaN outputs, inf metrics
                 values[a - start:b - start, j] = _frequency_metrics(study, range(a, b), j, y)
     return start, values
+
+
+def _drive_chunk(study, start, stop):
+    """:func:`run_chunk` off the batch kernel: each drawn plant under the nominal drives.
+
+    For a plant the fused kernel cannot step (a Preisach, generalised-PI or
+    mixed model, a PI with an output map) or a compensator it cannot run
+    (the exact inverses, the Hammerstein compensator): the compensator is
+    open loop, so its drive per frequency (``study.feedforward``, computed
+    once from the nominal model) is the same for every plant, and each plant
+    simulates it from its own rest state. Row i depends only on its case.
+    """
+    values = np.empty((stop - start, len(study.frequencies), len(study.columns)))
+    for i in range(start, stop):
+        plant = case_plant(study, i)
+        for j, u in enumerate(study.feedforward):
+            with np.errstate(all="ignore"):         # a diverged run: inf metrics
+                y = plant.simulate(u)[0]
+                values[i - start, j] = _frequency_metrics(study, range(i, i + 1), j, y[None])[0]
+    return values
 
 
 def _loop_chunk(study, start, stop):
@@ -479,6 +331,32 @@ def _with_loop(study, table, source):
                   False)
     study.feedforward = [np.ascontiguousarray(study.compensator.simulate(r)[0], dtype=float)
                          for r in study.references]
+
+
+def _drives(study, spec, source):
+    """The compensator's drive per frequency, shape (m, n_samples_j) [V] each, from rest.
+
+    A look-ahead kind (``"hammerstein"``) gets its preview and its fade-in of
+    one period (at most the settling the metrics skip, or the table's
+    ``fade_in``) as in an ordinary case; the other kinds start abruptly, as
+    on the batch kernel.
+    """
+    comp, drives = study.compensator, []
+    look_ahead = compensator_kind(spec).look_ahead
+    for r, P in zip(study.references, study.period_samples):
+        try:
+            if look_ahead:
+                given = spec.get("fade_in")
+                fade = (int(round(given / study.plant.sampling_period)) if given is not None
+                        else int(min(P, study.settle_periods * P)))
+                lead, state, _ = comp.start(r, P, fade)
+                u = comp.simulate(lead, state)[0]
+            else:
+                u = comp.simulate(r)[0]
+        except ValueError as exc:       # CompensatorError, a range the law refuses
+            raise ScenarioError([f"{source}: compensator: {exc}"]) from None
+        drives.append(np.ascontiguousarray(u, dtype=float))
+    return drives
 
 
 def _kernel_law(study):
@@ -724,7 +602,7 @@ def run_montecarlo_scenario(scenario):
     Raises
     ------
     ScenarioError
-        When the compensator cannot be built or cannot run on the batch kernel.
+        When the compensator cannot be built or refuses a reference.
     """
     source = str(scenario.path)
     context = ResolveContext(scenario.path.parent)
@@ -736,17 +614,16 @@ def run_montecarlo_scenario(scenario):
                 comp = build_compensator(scenario.compensator_spec, study.plant, context)
             except (ValueError, PresetError) as exc:
                 raise ScenarioError([f"{source}: compensator: {exc}"]) from None
-            if not is_fusable(comp):
-                raise ScenarioError([f"{source}: compensator.kind: "
-                                     f"{scenario.compensator_spec.get('kind')!r} cannot run on the "
-                                     f"batch kernel; a Monte-Carlo study needs an inverse "
-                                     f"multiplicative compensator (e.g. 'multivariable')"])
             study.compensator = comp
-            check = compensator_law_of(comp).check_reference
-            for r in study.references if check is not None else []:
-                check(r)                # range warnings: once per frequency, not per case
             if scenario.feedback is not None:
                 _with_loop(study, scenario.feedback, source)
+            elif (not compensator_kind(scenario.compensator_spec).look_ahead
+                  and study.plant.packable and is_fusable(comp)):
+                check = compensator_law_of(comp).check_reference
+                for r in study.references if check is not None else []:
+                    check(r)            # range warnings: once per frequency, not per case
+            else:                       # off the batch kernel: the drives, once (and checked)
+                study.feedforward = _drives(study, scenario.compensator_spec, source)
         res = run_study(study, _CLIENT["client"])
         res.warnings = list(dict.fromkeys(str(w.message) for w in rec))
         results.append(res)

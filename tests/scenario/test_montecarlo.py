@@ -11,6 +11,7 @@ import pytest
 from hammerstein.models.hysteresis import PrandtlIshlinskii
 from hammerstein.exceptions import ScenarioError
 from hammerstein.scenario import montecarlo as mc
+from hammerstein.scenario import montecarlo_draw as draw
 from hammerstein.scenario.identification import ResolveContext
 from hammerstein.scenario.registry import build_compensator
 from hammerstein.scenario.validate import validate_scenario
@@ -114,7 +115,7 @@ def test_factors_of_one_case_are_reproducible_and_diagonal_untouched(study):
 @pytest.mark.parametrize("dist", ["normal", "uniform", "lognormal"])
 def test_distributions_have_mean_one_and_the_stated_relative_sd(dist):
     z = np.random.default_rng(0).standard_normal(400_000)
-    f = mc._factor(z, {"relative_sd": 0.1, "distribution": dist})
+    f = draw._factor(z, {"relative_sd": 0.1, "distribution": dist})
     se = 0.1 / math.sqrt(z.size)
     assert abs(f.mean() - 1.0) < 5 * se
     assert abs(f.std() - 0.1) < 0.002
@@ -126,7 +127,7 @@ def test_distributions_have_mean_one_and_the_stated_relative_sd(dist):
 
 
 def test_positive_quantities_are_clipped():
-    f = mc._factor(np.array([-50.0, 0.0]), {"relative_sd": 0.5}, positive=True)
+    f = draw._factor(np.array([-50.0, 0.0]), {"relative_sd": 0.5}, positive=True)
     assert f[0] == mc.MIN_FACTOR and f[1] == 1.0
 
 

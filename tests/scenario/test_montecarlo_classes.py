@@ -1,0 +1,172 @@
+"""Monte-Carlo studies of every model class and every compensator kind, off the batch kernel.
+
+A Preisach, generalised-PI or mixed plant, or a kind the batch kernel cannot
+run (the exact inverse, the Hammerstein compensator), runs each drawn plant
+under the nominal drive. Checked against the chain run another way (the
+compiled chain, ``run_reference``), against the batch kernel on a classical
+PI plant, and the drawn components against their closed form.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hammerstein.exceptions import ScenarioError
+from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.models.preisach import Polynomial, PreisachModel
+from hammerstein.scenario import montecarlo as mc
+from hammerstein.scenario import montecarlo_draw as draw
+from hammerstein.scenario.identification import ResolveContext
+from hammerstein.scenario.registry import build_compensator
+from hammerstein.scenario.validate import validate_scenario
+from hammerstein.simulation import simulate_chain
+
+STUDY = """
+name = "mcc"
+seed = 5
+[plant]
+preset = "{preset}"
+[compensator]
+kind = "{kind}"
+[[sweeps]]
+kind = "monte-carlo"
+name = "mm"
+cases = {cases}
+frequencies = [20.0, 80.0]
+reference = {{ kind = "circle", radius = 15.0, periods = 2 }}
+settle_periods = 1
+[sweeps.vary]
+weights = {{ relative_sd = 0.05 }}
+cross_coupling = {{ relative_sd = 0.3, distribution = "lognormal" }}
+noise = {{ sd = 0.01 }}
+"""
+
+
+def _built(tmp_path, preset, kind, cases=4):
+    f = tmp_path / f"{kind}.toml"
+    f.write_text(STUDY.format(preset=preset, kind=kind, cases=cases))
+    sc = validate_scenario(f)
+    study = sc.studies[0]
+    study.compensator = build_compensator(sc.compensator_spec, study.plant, ResolveContext(tmp_path))
+    return sc, study
+
+
+def _expected_row(study, j, y, i):
+    """The metrics of one run, reduced by hand (settle_periods = 1)."""
+    y = y + study.vary["noise"]["sd"] * np.random.default_rng([study.seed, i, j + 1]).standard_normal(y.shape)
+    r, P = study.references[j], study.period_samples[j]
+    e = r[:, P:] - y[:, P:]
+    row = []
+    for l in range(e.shape[0]):
+        row += [np.sqrt(np.mean(e[l] ** 2)), np.max(np.abs(e[l]))]
+    ee = np.sqrt(np.sum(e ** 2, axis=0))
+    return row + [np.sqrt(np.mean(ee ** 2)), ee.max()]
+
+
+@pytest.fixture
+def realistic_b(repo_root, tmp_path):
+    """The bundled Preisach / generalised-PI / polynomial preset, copied beside the study."""
+    f = tmp_path / "realistic-b.toml"
+    f.write_text((repo_root / "scenarios" / "presets" / "realistic-b.toml").read_text())
+    return f.name
+
+
+@pytest.mark.parametrize("preset, kind", [
+    ("realistic-2dof", "preisach-inverse"),      # Preisach plant, exact inverse
+    ("realistic-b", "preisach-inverse"),         # Preisach + generalised PI + polynomial
+    ("realistic-2dof", "hammerstein"),           # look-ahead kind: preview and fade-in
+])
+def test_metrics_equal_the_chain_on_the_drawn_plant(tmp_path, realistic_b, preset, kind):
+    sc, study = _built(tmp_path, realistic_b if preset == "realistic-b" else preset, kind)
+    study.feedforward = mc._drives(study, sc.compensator_spec, "s")
+    _, v = mc.run_chunk(study, 1, 3)
+    assert np.all(np.isfinite(v))
+    for i in (1, 2):
+        plant = mc.case_plant(study, i)
+        for j, r in enumerate(study.references):
+            if kind == "hammerstein":       # the fade of one period, as the study's
+                P = study.period_samples[j]
+                y = study.compensator.run_reference(plant, r, P, P).outputs
+            else:
+                y = simulate_chain(study.compensator, plant, r).outputs
+            np.testing.assert_allclose(v[i - 1, j], _expected_row(study, j, y, i), rtol=1e-9)
+
+
+def test_off_kernel_route_equals_the_batch_kernel_on_a_classical_pi(tmp_path):
+    sc, study = _built(tmp_path, "rakotondrabe-2dof", "multivariable")
+    _, fused = mc.run_chunk(study, 0, 4)
+    study.feedforward = mc._drives(study, sc.compensator_spec, "s")
+    _, drive = mc.run_chunk(study, 0, 4)
+    np.testing.assert_allclose(drive, fused, rtol=1e-9)
+    assert not np.array_equal(fused[0], fused[1])            # the cases do differ
+
+
+def test_off_kernel_cases_depend_only_on_seed_and_index(tmp_path):
+    sc, study = _built(tmp_path, "realistic-2dof", "preisach-inverse", cases=5)
+    study.feedforward = mc._drives(study, sc.compensator_spec, "s")
+    _, whole = mc.run_chunk(study, 0, 5)
+    again = np.concatenate([mc.run_chunk(study, a, b)[1] for a, b in [(0, 2), (2, 5)]])
+    assert np.array_equal(whole, again)
+    res = mc.run_study(study, chunk=2)
+    assert np.array_equal(res.values, whole) and res.diverged.sum() == 0
+
+
+def test_run_scenario_picks_the_drive_route_for_a_preisach_plant(tmp_path):
+    f = tmp_path / "p.toml"
+    f.write_text(STUDY.format(preset="realistic-2dof", kind="preisach-inverse", cases=3))
+    sc = validate_scenario(f)
+    res = mc.run_montecarlo_scenario(sc)[0]
+    assert sc.studies[0].feedforward is not None and res.values.shape == (3, 2, 6)
+    assert np.all(np.isfinite(res.quantiles))
+
+
+def _hysteretic(c, y, u):
+    """A component's output minus its reversible part and offset."""
+    rev = c.reversible if not isinstance(c, Polynomial) else c.coefficients
+    return y - sum(a * u ** (n + 1) for n, a in enumerate(rev)) - c.offset
+
+
+@pytest.mark.parametrize("component", [
+    PreisachModel.from_density(np.linspace(-10, 10, 9), total=20.0, coercivity=2.0,
+                               coercivity_width=2.0, reversible=[0.5, 0.02], offset=1.5),
+    GeneralizedPI([0.0, 1.0, 2.5], [0.8, 0.3, 0.2], gamma_l=[12.0, 0.1, 0.05, 0.2],
+                  gamma_r=[11.0, 0.1, -0.05, -0.1], offset=-0.7, reversible=[0.0, 0.01]),
+    Polynomial([0.1, 0.03], offset=0.4),
+])
+def test_a_scaled_component_is_its_weights_times_the_factors(component):
+    # the output is linear in the hysteron weights and in the reversible coefficients: weight
+    # factors f and a cross-coupling factor g scale the hysteretic part by f * g and the
+    # reversible part by g; the offset stays
+    u = 9.0 * np.sin(np.linspace(0, 5 * np.pi, 400)) * np.linspace(1, 0.4, 400)
+    f, g = 1.3, 0.6
+    n = draw._n_weights(component)
+    scaled = draw._scaled(component, np.full(n, f), g)
+    y0, y1 = component.simulate(u)[0], scaled.simulate(u)[0]
+    h0, h1 = _hysteretic(component, y0, u), _hysteretic(scaled, y1, u)
+    np.testing.assert_allclose(h1, (f * g if n else g) * h0, rtol=1e-12, atol=1e-12)
+    if isinstance(component, PreisachModel):
+        assert n == component.n_states
+        w = draw._scaled(component, np.full(n, -2.0), 1.0).weights   # unsigned: clipped at 0
+        assert np.all(w == 0.0)
+
+
+def test_ilc_is_refused_naming_the_field(tmp_path):
+    f = tmp_path / "ilc.toml"
+    f.write_text(STUDY.format(preset="realistic-2dof", kind="ilc", cases=2))
+    with pytest.raises(ScenarioError, match=r"compensator\.kind: .*'ilc' learns on a plant"):
+        validate_scenario(f)
+
+
+def test_the_budget_counts_the_cost_of_a_sample_off_the_kernel(tmp_path, monkeypatch):
+    # a budget that lets the classical PI study run refuses the same study on a Preisach plant,
+    # whose samples cost about 25 times as much CPU
+    samples = 4 * sum(int(round(2 / fr / 5e-5)) for fr in (20.0, 80.0))
+    monkeypatch.setenv(mc.STUDY_SAMPLES_ENV, str(2 * samples))
+    ok = tmp_path / "pi.toml"
+    ok.write_text(STUDY.format(preset="rakotondrabe-2dof", kind="multivariable", cases=4))
+    validate_scenario(ok)
+    bad = tmp_path / "preisach.toml"
+    bad.write_text(STUDY.format(preset="realistic-2dof", kind="preisach-inverse", cases=4))
+    with pytest.raises(ScenarioError, match=r"sweeps\[0\]\.cases: .* ns a sample"):
+        validate_scenario(bad)
