@@ -20,10 +20,13 @@ from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 
-__all__ = ["draw_factors", "case_plant", "sampled_modes", "MIN_FACTOR"]
+__all__ = ["draw_factors", "case_plant", "sampled_modes", "oscillating_modes", "scaled_modes",
+           "MIN_FACTOR", "MAX_MODAL_DAMPING"]
 
 #: Smallest factor of a natural frequency or damping ratio.
 MIN_FACTOR = 0.05
+#: Largest damping ratio a varied mode of state-space dynamics takes (it stays a complex pair).
+MAX_MODAL_DAMPING = 0.99
 
 
 def _factor(z, spec, positive=False):
@@ -57,7 +60,9 @@ def draw_factors(study, i):
         weights, a Preisach model's hysteron weights mu_ij in the order of
         its state; empty for a gain or a polynomial), ``cross_coupling``
         ((p, m) array, 1 on the diagonal), ``natural_frequency`` and
-        ``damping_ratio`` ((p,) arrays); 1 where the quantity is not varied.
+        ``damping_ratio`` (one per mode of ``study.modes``: p bending modes,
+        or the oscillating modes of state-space dynamics); 1 where the
+        quantity is not varied.
     """
     model = study.plant.hysteresis
     p, m = model.n_outputs, model.n_inputs
@@ -66,8 +71,9 @@ def draw_factors(study, i):
     sizes = [_n_weights(c) for _, _, c in comps]
     z_w = rng.standard_normal(sum(sizes))
     z_c = rng.standard_normal(p * m).reshape(p, m)
-    z_f = rng.standard_normal(p)
-    z_d = rng.standard_normal(p)
+    n_modes = p if study.modes is None else len(study.modes[0])
+    z_f = rng.standard_normal(n_modes)
+    z_d = rng.standard_normal(n_modes)
     v = study.vary
     fw = _factor(z_w, v["weights"]) if "weights" in v else np.ones_like(z_w)
     cut = np.cumsum([0] + sizes)
@@ -102,7 +108,8 @@ def case_plant(study, i):
         is kept. The bending modes' natural frequencies and damping ratios
         are scaled by their factors and re-sampled (zero-order hold,
         :func:`sampled_modes`; the nominal sampled modes when neither is
-        varied); creep is the nominal one.
+        varied); state-space dynamics get the factors mode by mode
+        (:func:`scaled_modes`); creep is the nominal one.
     """
     nominal = study.plant
     model = nominal.hysteresis
@@ -122,8 +129,11 @@ def case_plant(study, i):
     if (study.modes is not None and nominal.sampled_dynamics is not None
             and ("natural_frequency" in study.vary or "damping_ratio" in study.vary)):
         fn, zeta = study.modes
-        lin = sampled_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
-                            nominal.sampling_period, lin)
+        if study.modal:        # state-space dynamics: mode by mode
+            lin = scaled_modes(lin, f["natural_frequency"], f["damping_ratio"])
+        else:
+            lin = sampled_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
+                                nominal.sampling_period, lin)
     return HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
                             creep=nominal.creep)
 
@@ -227,3 +237,100 @@ def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):
         B[i, l], B[i + 1, l] = 1.0 - e * (c + sig * S), w * e * S
     return SampledSystem(A, B, nominal.C, nominal.D, nominal.dt, inputs=nominal.inputs,
                          outputs=nominal.outputs, states=nominal.states, name=nominal.name)
+
+
+def _modal_split(system):
+    """Eigenvalues, eigenvectors and their inverse of ``system.A``, and the continuous poles."""
+    z, V = np.linalg.eig(np.asarray(system.A, dtype=float))
+    lam = np.log(z.astype(complex)) / float(system.dt)
+    return z, V, np.linalg.inv(V), lam
+
+
+def _pairs(z, lam):
+    """Indices of the oscillating poles (Im z > 0), by natural frequency."""
+    idx = [i for i in range(len(z)) if z[i].imag > 1e-12 * max(abs(z[i]), 1e-300)]
+    return sorted(idx, key=lambda i: abs(lam[i]))
+
+
+def oscillating_modes(system):
+    """Natural frequencies and damping ratios of a sampled system's oscillating modes.
+
+    Parameters
+    ----------
+    system : hammerstein.models.dynamics.SampledSystem
+        Sampled linear dynamics (sampling period ``dt`` [s]).
+
+    Returns
+    -------
+    natural_frequency : numpy.ndarray, shape (n_modes,)
+        [Hz], increasing; from each complex pole pair z of ``A``,
+        ``lambda = ln(z) / dt``, ``f = |lambda| / (2 pi)``.
+    damping_ratio : numpy.ndarray, shape (n_modes,)
+        ``-Re(lambda) / |lambda|``.
+    """
+    z, _, _, lam = _modal_split(system)
+    idx = _pairs(z, lam)
+    return (np.array([abs(lam[i]) / (2 * math.pi) for i in idx]),
+            np.array([-lam[i].real / abs(lam[i]) for i in idx]))
+
+
+def scaled_modes(system, frequency_factors, damping_factors):
+    """Sampled dynamics whose oscillating modes have scaled frequencies and damping ratios.
+
+    Each complex pole pair z of ``A`` (mode ``n`` in the order of
+    :func:`oscillating_modes`) moves to ``exp(lambda' dt)`` with
+    ``|lambda'| = f_n |lambda|`` and damping ratio ``min(d_n zeta,``
+    :data:`MAX_MODAL_DAMPING` ``)``, in the eigenbasis of ``A``
+    (``A' = V diag(z') V^-1``). Its input direction is that of the
+    continuous mode (``b_c = b lambda / (z - 1)``, the inverse of the
+    zero-order hold) times ``kappa = |lambda'|^2 Im(lambda) / (|lambda|^2
+    Im(lambda'))``, held again: ``b' = kappa b (lambda / (z - 1)) ((z' - 1) /
+    lambda')``. A mode whose continuous numerator is constant (a bending
+    mode, ``omega^2 / (s^2 + 2 zeta omega s + omega^2)``) becomes exactly
+    the zero-order hold of the mode with the new frequency and damping, its
+    static gain kept (as :func:`sampled_modes`); a mode with an ``s`` term
+    in its numerator keeps its static gain when only its frequency is
+    scaled. Real poles (creep, sensor lags) are kept.
+
+    Parameters
+    ----------
+    system : hammerstein.models.dynamics.SampledSystem
+        With ``A`` diagonalisable (distinct poles).
+    frequency_factors, damping_factors : array_like, shape (n_modes,)
+        Positive factors per oscillating mode.
+
+    Returns
+    -------
+    hammerstein.models.dynamics.SampledSystem
+        Same C, D, names and sampling period.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from hammerstein.models.dynamics import sampled_bending_modes
+    >>> from hammerstein.scenario.montecarlo_draw import oscillating_modes, scaled_modes
+    >>> sys = sampled_bending_modes([900.0, 1100.0], [0.05, 0.2], ["x", "y"], 1e-4)
+    >>> fn, zeta = oscillating_modes(scaled_modes(sys, [1.1, 1.0], [1.0, 2.0]))
+    >>> np.round(fn, 6), np.round(zeta, 6)
+    (array([ 990., 1100.]), array([0.05, 0.4 ]))
+    """
+    z, V, W, lam = _modal_split(system)
+    idx = _pairs(z, lam)
+    ff = np.asarray(frequency_factors, dtype=float)
+    fd = np.asarray(damping_factors, dtype=float)
+    z_new, gain = z.astype(complex).copy(), np.ones(len(z), dtype=complex)
+    for n, i in enumerate(idx):
+        w = abs(lam[i]) * ff[n]
+        zeta = min(-lam[i].real / abs(lam[i]) * fd[n], MAX_MODAL_DAMPING)
+        new = complex(-zeta * w, w * math.sqrt(1.0 - zeta * zeta))
+        j = int(np.argmin(np.abs(z - np.conj(z[i]))))      # its conjugate
+        kappa = abs(new) ** 2 / abs(lam[i]) ** 2 * lam[i].imag / new.imag
+        for k, pole in ((i, new), (j, new.conjugate())):
+            z_new[k] = np.exp(pole * float(system.dt))
+            # continuous residue times kappa, between the zero-order holds of the old and new pole
+            gain[k] = kappa * lam[k] / (z[k] - 1.0) * (z_new[k] - 1.0) / pole
+    A = (V * z_new) @ W
+    B = (V * gain) @ (W @ np.asarray(system.B, dtype=float))
+    return SampledSystem(np.ascontiguousarray(A.real), np.ascontiguousarray(B.real), system.C,
+                         system.D, system.dt, inputs=system.inputs, outputs=system.outputs,
+                         states=system.states, name=system.name)

@@ -25,6 +25,7 @@ from hammerstein.io.presets import dynamics_from_table, load_plant, read_toml, r
 from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
                                      name_field, number, string)
 from hammerstein.scenario.feedback_table import check_feedback_table
+from hammerstein.scenario.montecarlo_draw import oscillating_modes
 from hammerstein.scenario.registry import COMPENSATORS
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
 
@@ -183,8 +184,14 @@ class MonteCarloStudy:
     plant : HammersteinPlant
         The nominal plant.
     modes : tuple or None
-        ``(natural_frequency [Hz], damping_ratio)`` arrays of shape (p,) of
-        the nominal bending modes (None for other dynamics).
+        ``(natural_frequency [Hz], damping_ratio)`` arrays of shape (n_modes,) of
+        the nominal bending modes, or the oscillating modes of state-space
+        dynamics (:func:`~hammerstein.scenario.montecarlo_draw.oscillating_modes`);
+        None for a static plant.
+    modal : bool
+        True when ``modes`` are those of state-space dynamics (varied mode
+        by mode in their eigenbasis,
+        :func:`~hammerstein.scenario.montecarlo_draw.scaled_modes`).
     compensator : object or None
         Built by :func:`run_montecarlo_scenario` from the nominal model.
     chunk : int or None
@@ -212,6 +219,7 @@ class MonteCarloStudy:
     vary: dict
     plant: object
     modes: tuple | None
+    modal: bool = False
     compensator: object = None
     chunk: int | None = None
     loop: tuple | None = None
@@ -357,13 +365,19 @@ def validate_montecarlo(path, data):
             continue
         modes = _nominal_modes(plant_t["preset"], base, list(plant.hysteresis.output_names)) \
             if plant_t.get("dynamics", True) else None
+        modal = modes is None and plant.sampled_dynamics is not None
+        if modal:                       # state-space dynamics: their oscillating modes
+            modes = oscillating_modes(plant.sampled_dynamics)
+            if not len(modes[0]):
+                modes, modal = None, False
         if "feedback" in data and "noise" in vary:
             problems.append(f"{source}: {where}.vary.noise: with [feedback] the sensor noise is in "
                             f"the loop; give it as feedback.sensor.noise_nm")
         for q in ("natural_frequency", "damping_ratio"):
             if q in vary and modes is None:
                 problems.append(f"{source}: {where}.vary.{q}: the nominal plant has no bending "
-                                f"modes (preset dynamics of kind 'bending_modes') to vary")
+                                f"or oscillating modes (a static plant, or dynamics = false) to "
+                                f"vary")
         if len(c["frequencies"]) * c["cases"] > MAX_RUNS:
             problems.append(f"{source}: {where}.cases: {c['cases']} cases x "
                             f"{len(c['frequencies'])} frequencies exceed the budget of "
@@ -420,6 +434,7 @@ def validate_montecarlo(path, data):
             name=c["name"], description=c.get("description", ""), cases=c["cases"], seed=seed,
             frequencies=c["frequencies"], references=references, period_samples=periods,
             settle_periods=float(c["settle_periods"]), vary=vary, plant=plant, modes=modes,
+            modal=modal,
             chunk=c.get("chunk")))
     if not data.get("sweeps"):
         problems.append(f"{source}: sweeps: expected one or more [[sweeps]] kind = 'monte-carlo'")

@@ -170,3 +170,40 @@ def test_the_budget_counts_the_cost_of_a_sample_off_the_kernel(tmp_path, monkeyp
     bad.write_text(STUDY.format(preset="realistic-2dof", kind="preisach-inverse", cases=4))
     with pytest.raises(ScenarioError, match=r"sweeps\[0\]\.cases: .* ns a sample"):
         validate_scenario(bad)
+
+
+@pytest.mark.parametrize("ff, fd", [([1.1, 0.9], [1.0, 1.0]), ([1.0, 1.0], [1.5, 0.7]),
+                                    ([0.8, 1.2], [2.0, 0.5])])
+def test_scaled_modes_are_the_held_bending_modes_of_the_new_parameters(ff, fd):
+    # a bending mode's numerator is constant: its modal scaling equals the zero-order hold of
+    # the mode with the new frequency and damping (sampled_modes, a closed form)
+    from hammerstein.models.dynamics import sampled_bending_modes
+    fn, zeta, T = np.array([450.0, 600.0]), np.array([0.03, 0.05]), 5e-5
+    nominal = sampled_bending_modes(fn, zeta, ["x", "y"], T)
+    got = draw.scaled_modes(nominal, ff, fd)
+    expect = draw.sampled_modes(fn * ff, zeta * fd, T, nominal)
+    for f in (0.0, 10.0, 100.0, 500.0, 2000.0):
+        h, g = got.frequency_response_hz([f]), expect.frequency_response_hz([f])
+        assert np.abs(h - g).max() <= 1e-12 * np.abs(g).max()
+    np.testing.assert_allclose(draw.oscillating_modes(got)[0], np.sort(fn * ff), rtol=1e-9)
+
+
+def test_state_space_modes_are_varied_mode_by_mode(tmp_path):
+    # realistic-2dof: three coupled modes in a continuous state space, G(0) = I
+    text = STUDY.format(preset="realistic-2dof", kind="preisach-inverse", cases=3).replace(
+        "noise = { sd = 0.01 }",
+        "natural_frequency = { relative_sd = 0.05 }\ndamping_ratio = { relative_sd = 0.2 }")
+    f = tmp_path / "modes.toml"
+    f.write_text(text)
+    study = validate_scenario(f).studies[0]
+    fn, zeta = study.modes
+    assert "natural_frequency" in study.vary and "damping_ratio" in study.vary
+    assert study.modal and np.allclose(fn, [420.0, 450.0, 1300.0]) and np.allclose(zeta, [0.06, 0.08, 0.03])
+    for i in range(3):
+        fac = draw.draw_factors(study, i)
+        lin = draw.case_plant(study, i).sampled_dynamics
+        got_f, got_z = draw.oscillating_modes(lin)
+        order = np.argsort(fn * fac["natural_frequency"])
+        np.testing.assert_allclose(got_f, (fn * fac["natural_frequency"])[order], rtol=1e-9)
+        np.testing.assert_allclose(got_z, (zeta * fac["damping_ratio"])[order], rtol=1e-9)
+        np.testing.assert_allclose(lin.frequency_response_hz([0.0])[:, :, 0], np.eye(2), atol=1e-9)
