@@ -44,6 +44,16 @@ def _finite(value, name, unit):
     return float(value)
 
 
+
+def _at_center(xy, center, name="center"):
+    """The planar signal ``xy`` (2, n) [µm] moved by ``center`` (two finite numbers [µm])."""
+    if center is None:
+        return xy
+    c = np.asarray(center, dtype=float) if np.ndim(center) == 1 else None
+    if c is None or c.shape != (2,) or not np.all(np.isfinite(c)):
+        raise SignalError(f"{name}: expected two finite numbers [x, y] [µm], found {center!r}")
+    return xy + c[:, None]
+
 def _check_frequency(frequency, sampling_period, name="frequency"):
     sampling_period = _positive(sampling_period, "sampling_period", "s")
     f = _positive(frequency, name, "Hz")
@@ -199,10 +209,11 @@ def sine_drive(sampling_period, inputs, input, amplitude, frequency, phase=0.0, 
                     periods, duration, "input", "V")
 
 
-def circle(sampling_period, radius, frequency, phase=0.0, periods=None, duration=None):
+def circle(sampling_period, radius, frequency, phase=0.0, periods=None, duration=None,
+           center=None):
     """Circular trajectory (paper Fig. 10).
 
-    ``x_r = R cos(2 pi f t + phase)``, ``y_r = R sin(2 pi f t + phase)``.
+    ``x_r = c_x + R cos(2 pi f t + phase)``, ``y_r = c_y + R sin(2 pi f t + phase)``.
 
     Parameters
     ----------
@@ -216,6 +227,8 @@ def circle(sampling_period, radius, frequency, phase=0.0, periods=None, duration
         [deg].
     periods, duration : float
         Length in turns or seconds (exactly one).
+    center : sequence of 2 floats, optional
+        ``(c_x, c_y)`` [µm]; the origin by default.
 
     Returns
     -------
@@ -233,10 +246,11 @@ def circle(sampling_period, radius, frequency, phase=0.0, periods=None, duration
     phi = np.deg2rad(_finite(phase, "phase", "deg"))
     t = time_vector(sampling_period, 1.0 / f, periods, duration)
     arg = 2 * np.pi * f * t + phi
-    return t, np.vstack([R * np.cos(arg), R * np.sin(arg)])
+    return t, _at_center(np.vstack([R * np.cos(arg), R * np.sin(arg)]), center)
 
 
-def spiral(sampling_period, radius, frequency, tau, duration, circle_periods=1.0, phase=0.0):
+def spiral(sampling_period, radius, frequency, tau, duration, circle_periods=1.0, phase=0.0,
+           center=None):
     """Spiral trajectory (paper Fig. 11): circles, then a decaying radius.
 
     The radius is R for ``circle_periods`` full turns (``t0 = circle_periods
@@ -259,6 +273,8 @@ def spiral(sampling_period, radius, frequency, tau, duration, circle_periods=1.0
         Full circles before the decay starts, >= 0.
     phase : float
         [deg].
+    center : sequence of 2 floats, optional
+        ``(c_x, c_y)`` [µm] added to both outputs; the origin by default.
 
     Returns
     -------
@@ -282,7 +298,7 @@ def spiral(sampling_period, radius, frequency, tau, duration, circle_periods=1.0
     t0 = cp / f
     r = R * np.exp(-np.clip(t - t0, 0.0, None) / tau)
     arg = 2 * np.pi * f * t + phi
-    return t, np.vstack([r * np.cos(arg), r * np.sin(arg)])
+    return t, _at_center(np.vstack([r * np.cos(arg), r * np.sin(arg)]), center)
 
 
 def lissajous_period(frequency_x, frequency_y, max_denominator=100):
@@ -321,7 +337,8 @@ def lissajous_period(frequency_x, frequency_y, max_denominator=100):
     return ratio.numerator / fx
 
 
-def lissajous(sampling_period, amplitude, frequencies, phase=0.0, periods=None, duration=None):
+def lissajous(sampling_period, amplitude, frequencies, phase=0.0, periods=None, duration=None,
+              center=None):
     """Lissajous trajectory (paper Fig. 12 and 13).
 
     ``x_r = A_x cos(2 pi f_x t + phase)``, ``y_r = A_y sin(2 pi f_y t + phase)``;
@@ -341,6 +358,8 @@ def lissajous(sampling_period, amplitude, frequencies, phase=0.0, periods=None, 
         Number of common periods (see :func:`lissajous_period`).
     duration : float, optional
         Record length [s].
+    center : sequence of 2 floats, optional
+        ``(c_x, c_y)`` [µm] added to both outputs; the origin by default.
 
     Returns
     -------
@@ -366,5 +385,5 @@ def lissajous(sampling_period, amplitude, frequencies, phase=0.0, periods=None, 
     phi = np.deg2rad(_finite(phase, "phase", "deg"))
     period = lissajous_period(fx, fy) if periods is not None else None
     t = time_vector(sampling_period, period, periods, duration)
-    return t, np.vstack([ax * np.cos(2 * np.pi * fx * t + phi),
-                         ay * np.sin(2 * np.pi * fy * t + phi)])
+    return t, _at_center(np.vstack([ax * np.cos(2 * np.pi * fx * t + phi),
+                                    ay * np.sin(2 * np.pi * fy * t + phi)]), center)

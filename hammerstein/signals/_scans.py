@@ -17,8 +17,8 @@ from hammerstein.io.datafiles import numeric_column, signal_table
 from hammerstein.core.files import FileLimitError, check_regular, confined_path, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import SignalError
-from hammerstein.signals._periodic import (MAX_FILE_BYTES, _check_frequency, _finite, _positive,
-                                           _sine_on, time_vector)
+from hammerstein.signals._periodic import (MAX_FILE_BYTES, _at_center, _check_frequency, _finite,
+                                           _positive, _sine_on, time_vector)
 
 
 # -- triangles, rasters and trajectory files --------------------------------------------
@@ -176,7 +176,7 @@ def _unit_scan(cycles, smoothing):
     return (v - lo) / (1 - 2 * lo)
 
 
-def raster(sampling_period, size, lines, frequency, slow="step", smoothing=0.0):
+def raster(sampling_period, size, lines, frequency, slow="step", smoothing=0.0, center=None):
     """AFM-style raster scan: triangle on the fast axis, one line per fast period.
 
     The scan starts at rest at the origin and covers ``[0, W] x [0, H]``
@@ -209,6 +209,11 @@ def raster(sampling_period, size, lines, frequency, slow="step", smoothing=0.0):
     slow : {'step', 'ramp'}
     smoothing : float
         Fraction of a period over which turns are rounded, 0 <= s <= 0.5.
+    center : sequence of 2 floats, optional
+        Centre of the scanned rectangle ``(c_fast, c_slow)`` [µm]: the scan
+        covers ``[c_fast - W/2, c_fast + W/2] x [c_slow - H/2, c_slow + H/2]``
+        and starts at its corner ``(c_fast - W/2, c_slow - H/2)``. By default
+        ``[0, W] x [0, H]`` from the origin.
 
     Returns
     -------
@@ -249,7 +254,8 @@ def raster(sampling_period, size, lines, frequency, slow="step", smoothing=0.0):
         dy = H / (lines - 1)
         steps = sum(_rounded_step(c - j, s / 2.0) for j in range(1, int(lines)))
         slow_axis = dy * np.asarray(steps, dtype=float)
-    return t, np.vstack([fast, slow_axis])
+    corner = None if center is None else _at_center(np.array([[-0.5 * W], [-0.5 * H]]), center)[:, 0]
+    return t, _at_center(np.vstack([fast, slow_axis]), corner)
 
 
 def raster_line_index(time, frequency):

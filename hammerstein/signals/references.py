@@ -74,11 +74,6 @@ def _point(v):
     raise Invalid(f"expected two numbers [x, y] [µm] (the outputs' values at the centre), found {v!r}")
 
 
-def _centred(xy, c):
-    """The two outputs' signal ``xy`` (2, n) moved to the reference's ``center`` [µm]."""
-    return xy + np.asarray(c, dtype=float)[:, None] if c is not None else xy
-
-
 def _amplitudes(v):
     if is_number(v) and v > 0:
         return float(v)
@@ -243,16 +238,14 @@ def _drive(fn):
 
 def _circle(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
-    centre = c.pop("center", None)
     t, xy = circle(T, **c)
-    return t, _placed(_centred(xy, centre), outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
+    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
 
 
 def _spiral(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
-    centre = c.pop("center", None)
     t, xy = spiral(T, **c)
-    return t, _placed(_centred(xy, centre), outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
+    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
 
 
 def _lissajous_period(c):
@@ -264,9 +257,8 @@ def _lissajous_period(c):
 
 def _lissajous(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
-    centre = c.pop("center", None)
     t, xy = lissajous(T, **c)
-    return t, _placed(_centred(xy, centre), outs, names), _lissajous_period(c), {"scale": float(np.max(c["amplitude"]))}
+    return t, _placed(xy, outs, names), _lissajous_period(c), {"scale": float(np.max(c["amplitude"]))}
 
 
 def _lissajous_words(s, unit):
@@ -282,11 +274,8 @@ def _raster(c, T, names, base_dir):
     if len(set(outs)) != 2 or any(o not in names for o in outs):
         raise SignalError(f"outputs: expected two different outputs [fast, slow] of the plant "
                           f"{list(names)}, found {outs}")
-    centre = c.pop("center", None)
     t, xy = raster(T, **c)
-    if centre is not None:      # [0, W] x [0, H] moved so that its centre is there
-        centre = np.asarray(centre) - 0.5 * np.asarray(c["size"], dtype=float)
-    return t, _placed(_centred(xy, centre), outs, names), 1.0 / c["frequency"], {"scale": float(max(c["size"]))}
+    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": float(max(c["size"]))}
 
 
 def _raster_words(s, unit):

@@ -110,3 +110,25 @@ def test_a_centred_raster_spans_its_size_around_the_centre():
     sig = kind.generate({**table, "center": [50.0, 50.0]}, 1e-4, ["x", "y"], None)[1]
     assert sig[0].min() == pytest.approx(30.0) and sig[0].max() == pytest.approx(70.0)
     assert sig[1].min() == pytest.approx(40.0) and sig[1].max() == pytest.approx(60.0)
+
+
+@pytest.mark.parametrize("fn, args", [
+    ("circle", (1e-4, 10.0, 50.0, 0.0, 2)),
+    ("spiral", (1e-4, 10.0, 50.0, 0.01, 0.05)),
+    ("lissajous", (1e-4, [10.0, 5.0], [50.0, 100.0], 0.0, 1)),
+    ("raster", (1e-4, [40.0, 20.0], 4, 20.0)),
+])
+def test_the_python_functions_take_a_centre(fn, args):
+    """``center=(x, y)`` in Python as in a table: the same figure, moved; a raster's
+    rectangle is centred there and starts at its corner."""
+    import hammerstein
+    f = getattr(hammerstein, fn)
+    _, base = f(*args)
+    _, moved = f(*args, center=(50.0, -40.0))
+    shift = np.array([[50.0], [-40.0]])
+    if fn == "raster":      # [0, W] x [0, H] moved so that (50, -40) is its centre
+        shift = shift - np.array([[20.0], [10.0]])
+        assert moved[:, 0] == pytest.approx([30.0, -50.0])
+    np.testing.assert_allclose(moved - base, shift * np.ones_like(base), atol=1e-12)
+    with pytest.raises(refs.SignalError, match=r"center: expected two finite numbers"):
+        f(*args, center=(1.0, float("nan")))
