@@ -101,14 +101,17 @@ class HammersteinPlant:
                     f"found dt={d.dt}")
 
     def __repr__(self):
-        """Class, name, hysteresis model and the dynamics' order (no arrays)."""
+        """Class, name, hysteresis model, the dynamics' order and the creep (no arrays)."""
         d = self._dynamics
         if d is None:
             dyn = "static (no dynamics)"
         else:
             n = d.nstates if hasattr(d, "nstates") else d.A.shape[0]
             dyn = f"dynamics order {n}"
-        creep = "" if self.creep is None else f", {self.creep!r}"
+        creep = "" if self.creep is None else ", creep on " + ", ".join(
+            f"{o} ({c.time_constants.size} lags {c.time_constants.min():.3g}.."
+            f"{c.time_constants.max():.3g} s, settled gain {c.static_gain:.4g})"
+            for o, c in zip(self.hysteresis.output_names, self.creep) if c is not None)
         return (f"HammersteinPlant(name={self.name!r}, {self.hysteresis!r}, {dyn}{creep}, "
                 f"sampling_period={self.sampling_period:g} s)")
 

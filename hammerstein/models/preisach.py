@@ -703,8 +703,26 @@ class MultivariableHysteresis:
         return names
 
     def __repr__(self):
-        return (f"MultivariableHysteresis(components={self.components!r}, input_names="
-                f"{self.input_names!r}, output_names={self.output_names!r})")
+        """Sizes, names and one word per component (no arrays), e.g. for ``print(model)``."""
+        def word(c):
+            if c is None:
+                return "-"
+            if isinstance(c, PreisachModel):
+                return f"Preisach({c.n_levels} levels)"
+            if isinstance(c, GeneralizedPI):
+                return f"generalised PI({c.thresholds.size})"
+            if isinstance(c, Polynomial):
+                return f"polynomial({c.coefficients.size})"
+            if isinstance(c, PrandtlIshlinskii):
+                return f"PI({c.n_hysterons})"
+            return f"gain {float(c):.4g}"
+
+        rows = "; ".join(f"{out}: " + ", ".join(f"{inp} {word(c)}" for inp, c in
+                                                zip(self.input_names, row))
+                         for out, row in zip(self.output_names, self.components))
+        return (f"MultivariableHysteresis({self.n_outputs}x{self.n_inputs} "
+                f"({', '.join(self.input_names)} -> {', '.join(self.output_names)}), "
+                f"{self.n_hysterons} states; {rows})")
 
     @property
     def n_inputs(self) -> int:

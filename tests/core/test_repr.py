@@ -49,3 +49,16 @@ def test_repr_of_a_model_with_gains_and_absent_components():
                                output_names=["x", "y"])
     assert repr(model) == ("MultivariablePI(2x2 PI (ux, uy -> x, y), 4 hysterons; "
                            "x: ux PI(2), uy gain 0.25; y: ux -, uy PI(2))")
+
+
+def test_repr_of_a_preisach_plant_with_creep_is_one_short_line():
+    # the realistic preset: Preisach components (hundreds of weights) and nine creep lags
+    # per output; printed as words, the creep by its lags and settled gain
+    plant = hs.load_plant("realistic-2dof")
+    text = repr(plant)
+    assert "\n" not in text and len(text) < 400 and "0.0075" not in text
+    assert "MultivariableHysteresis(2x2 (ux, uy -> x, y), " in text
+    assert f"{plant.hysteresis.n_hysterons} states" in text and "ux Preisach(28 levels)" in text
+    gain = plant.creep[0].static_gain                 # 1 + 9 x 0.0075
+    assert gain == pytest.approx(1.0675) and f"settled gain {gain:.4g}" in text
+    assert "creep on x (9 lags 0.01..100 s" in text
