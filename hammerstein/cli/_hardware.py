@@ -101,7 +101,8 @@ def load_actuator(path, sampling_period=None):
         Preset name or file, or model file.
     sampling_period : float, optional
         T [s]; required for a model file without ``[preset]``; for a preset,
-        its dynamics are sampled again at T when it differs.
+        its dynamics are sampled again at T when it differs (its creep lags
+        and amplifier kept, its measurement delay converted to samples of T).
 
     Returns
     -------
@@ -120,13 +121,16 @@ def load_actuator(path, sampling_period=None):
     """
     p = Path(path)
     data = read_toml(p, "model file") if p.suffix == ".toml" or p.exists() else None
+    scale = 1.0                 # the file's sampling period over the plant's
     if data is None or "preset" in data:
         plant = load_plant(path)
         if sampling_period is not None and not np.isclose(sampling_period, plant.sampling_period):
+            scale = plant.sampling_period / float(sampling_period)
             dyn = None if plant.is_static else load_dynamics(
                 resolve_preset(path), plant.hysteresis.output_names, sampling_period)
             amp = plant.amplifier
-            plant = HammersteinPlant(plant.hysteresis, float(sampling_period), dyn, plant.name)
+            plant = HammersteinPlant(plant.hysteresis, float(sampling_period), dyn, plant.name,
+                                     creep=plant.creep)     # the creep's lags are continuous
             plant.amplifier = amp
     else:
         if sampling_period is None:
@@ -137,7 +141,8 @@ def load_actuator(path, sampling_period=None):
         plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
         if "amplifier" in data:
             plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
-    plant.measurement_delay = _measurement_delay(data, path)
+    delay = _measurement_delay(data, path)
+    plant.measurement_delay = None if delay is None else int(round(delay * scale))
     plant.delay_problem = _delay_problem(data)
     return plant
 

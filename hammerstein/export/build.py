@@ -24,7 +24,8 @@ from hammerstein.compensation.hammerstein_compensator import HammersteinCompensa
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.compensation.mixed_compensators import MIXED_KINDS, mixed_compensator
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
-from hammerstein.io.presets import load_creep, load_model, load_plant, read_toml, resolve_preset
+from hammerstein.io.presets import (load_creep, load_dynamics, load_model, load_plant, read_toml,
+                                    resolve_preset)
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
 from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
@@ -267,8 +268,10 @@ def build_compensator(source, kind="multivariable", gain=None, iterations=None, 
                                   f"[dynamics] (a preset with bending modes or a state space)")
             G = source.dynamics
             if sampling_period is not None and abs(float(G.dt) - float(T)) > 1e-12 * float(T):
-                raise ExportError(f"sampling-period: the dynamics of {source.path} are sampled at "
-                                  f"{G.dt!r} s, found {T!r}")
+                try:        # continuous dynamics sampled again at T, as compensate does
+                    G = load_dynamics(source.path, list(source.model.output_names), float(T))
+                except PresetError as exc:
+                    raise ExportError(f"sampling-period: {exc}") from None
             comp = HammersteinCompensator(source.model, G, inversion=inversion or "zpetc",
                                           gain=gain or "midpoint", iterations=iterations or 3,
                                           check=check, feedback=feedback, cutoff_hz=cutoff_hz,

@@ -1,0 +1,46 @@
+"""``--sampling-period`` other than the preset's: the same actuator sampled again.
+
+A preset's continuous dynamics are discretised again at the new period; its
+creep (continuous lags), amplifier and rest output are the actuator's and
+must not change with it, and ``export`` samples the dynamics the same way as
+``compensate`` (it refused before).
+"""
+
+import control
+import numpy as np
+import pytest
+
+from hammerstein.cli._hardware import load_actuator
+from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.export.build import build_compensator, load_source
+
+
+def test_a_preset_sampled_again_keeps_its_creep_and_amplifier():
+    nominal = load_actuator("realistic-2dof")
+    again = load_actuator("realistic-2dof", 1e-4)
+    assert again.sampling_period == 1e-4 and nominal.sampling_period == 5e-5
+    assert again.creep is not None
+    assert [c.static_gain for c in again.creep] == [c.static_gain for c in nominal.creep]
+    # the same continuous modes: the static gains of the two samplings agree
+    g0 = np.asarray(again.sampled_dynamics.frequency_response_hz([0.0]))
+    g1 = np.asarray(nominal.sampled_dynamics.frequency_response_hz([0.0]))
+    np.testing.assert_allclose(g0, g1, atol=1e-9)
+    # a slow input: the creep's settled gain appears in both (the hysteresis alone lacks it)
+    T0, T1 = 5e-5, 1e-4
+    u0 = np.vstack([np.full(int(2.0 / T0), 5.0), np.zeros(int(2.0 / T0))])
+    u1 = u0[:, ::2]
+    y0, y1 = nominal.simulate(u0)[0], again.simulate(u1)[0]
+    assert y1[0, -1] == pytest.approx(y0[0, -1], rel=1e-3)
+
+
+def test_export_samples_the_dynamics_again_as_compensate_does():
+    source = load_source("realistic-2dof")
+    comp, T = build_compensator(source, "hammerstein", sampling_period=1e-4)
+    assert T == 1e-4 and float(comp.dynamics.dt) == 1e-4
+    plant = load_actuator("realistic-2dof", 1e-4)
+    same = HammersteinCompensator(plant.hysteresis, plant.dynamics, gain="midpoint", iterations=3,
+                                  sampling_period=1e-4, creep=plant.creep)
+    w = 2 * np.pi * np.array([0.1, 10.0, 100.0, 400.0, 1000.0])
+    np.testing.assert_allclose(control.frequency_response(comp.dynamics, w).complex,
+                               control.frequency_response(same.dynamics, w).complex,
+                               rtol=1e-12, atol=1e-15)
