@@ -196,6 +196,25 @@ def _pole_frequencies(A, sampling_period):
     return np.abs(np.angle(z)) / (2 * np.pi * float(sampling_period))
 
 
+def _resonant_mode(A, sampling_period, frequency_hz):
+    """Natural frequency [Hz] of the bending mode that amplifies ``frequency_hz`` the most, or None.
+
+    Each mode's natural frequency ``f_n = |s| / (2 pi)`` and damping ``zeta =
+    -Re s / |s|`` (``s = log(z) / T``, the convention of ``identify``) give
+    its one-mode amplification ``1 / |1 - r^2 + 2 j zeta r|``, ``r = f / f_n``;
+    a heavily damped mode next to ``f`` loses to a lightly damped one a little
+    further away.
+    """
+    z = _oscillatory_poles(A, sampling_period)
+    if z.size == 0:
+        return None
+    s = np.log(z) / float(sampling_period)
+    fn = np.abs(s) / (2 * np.pi)
+    zeta = -s.real / np.abs(s)
+    r = float(frequency_hz) / fn
+    return float(fn[np.argmax(1.0 / np.abs(1.0 - r * r + 2j * zeta * r))])
+
+
 def mode_amplification(matrices, sampling_period, frequencies_hz):
     """How many times its static gain the linear part passes each frequency.
 
@@ -322,9 +341,8 @@ def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_N
     if amp[k] < limit:
         return None
     n, a = int(order[k]), float(amp[k])
-    modes = _pole_frequencies(A, T)
-    where = (f"the bending mode at {modes[np.argmin(np.abs(modes - n * f0))]:.0f} Hz"
-             if modes.size else "the linear part")
+    where = _resonant_mode(A, T, n * f0)
+    where = f"the bending mode at {where:.0f} Hz" if where is not None else "the linear part"
     which = ("main frequency" if n == 1 else
              f"{n}{'nd' if n == 2 else 'rd' if n == 3 else 'th'} harmonic")
     fn = f"{n * f0:.4g} Hz" + ("" if n == 1 else f", of {f0:.4g} Hz")

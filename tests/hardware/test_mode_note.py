@@ -85,8 +85,8 @@ def test_the_nearest_of_two_modes_is_named():
     mats = _mats([300.0, 900.0], [0.04, 0.04])
     P = int(round(1 / (180.0 * T)))                             # 180 Hz: its 5th, 900 Hz
     assert "5th harmonic" in mode_note(mats, T, _circle(180.0, n=4 * P), P)
-    # a pole's frequency is the damped one, fn sqrt(1 - zeta^2) (899.3 Hz)
-    assert "bending mode at 899 Hz" in mode_note(mats, T, _circle(180.0, n=4 * P), P)
+    # a mode is named by its natural frequency, as identify lists it (not the damped 899.3 Hz)
+    assert "bending mode at 900 Hz" in mode_note(mats, T, _circle(180.0, n=4 * P), P)
     P = int(round(1 / (100.0 * T)))
     assert "bending mode at 300 Hz" in mode_note(mats, T, _circle(100.0, n=4 * P), P)
 
@@ -138,3 +138,19 @@ def test_a_linear_part_without_modes_is_named_as_such():
     t = np.arange(100)
     note = mode_note(mats, 1.0, np.sin(2 * np.pi * 0.1 * t)[None, :], 10)
     assert note.startswith("the linear part passes the reference's")
+
+
+def test_the_named_mode_is_the_one_that_amplifies_by_its_natural_frequency():
+    # a user's identified modes: 449.8 Hz damped at 0.18 (at most 1 / (2 zeta) = 2.8 times)
+    # and 470.24 Hz damped at 0.025; a 150 Hz circle's 3rd harmonic (450 Hz) is passed
+    # 1 / |1 - q^2 + 2 j zeta q| = 10.4 times by the second (q = 450 / 470.24), 2.8 times by the
+    # first: the note names 470 Hz (natural frequency, as identify lists it; the first mode's
+    # damped frequency would read 442 Hz)
+    fn, zeta, T2 = [449.8, 470.24], [0.18, 0.025], 5e-5
+    assert _gain(450.0, 470.24, 0.025) == pytest.approx(10.4, abs=0.1)
+    assert _gain(450.0, 449.8, 0.18) == pytest.approx(2.78, abs=0.01)
+    t = np.arange(4000) * T2
+    ref = np.vstack([15.0 * np.sin(2 * np.pi * 150.0 * t), 15.0 * np.cos(2 * np.pi * 150.0 * t)])
+    note = mode_note(_mats(fn, zeta, T=T2), T2, ref, int(round(1 / 150.0 / T2)))
+    assert note is not None and note.startswith("the bending mode at 470 Hz passes the reference's "
+                                                "3rd harmonic (450 Hz, of 150 Hz)")
