@@ -242,7 +242,7 @@ def _kind_and_options(plant, kind, gain, check):
     """
     note = None
     if kind is None:
-        choice = choose_kind(plant.hysteresis, not plant.is_static, gain)
+        choice = choose_kind(plant.hysteresis, not plant.is_static, gain, args.inversion or "zpetc")
         kind, options, note = choice.kind, dict(choice.options), choice.note()
     else:
         problem = kind_problem(plant.hysteresis, kind, not plant.is_static)
@@ -352,8 +352,7 @@ def _handle(args):
         print_err(f"hammerstein compensate: error: {text}")
         return 1
     if note:
-        print_err(note if args.inversion != "stable" else
-                  note.replace("G inverted by ZPETC", "G inverted by the stable inversion"))
+        print_err(note)
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
     for line in drive.notes:

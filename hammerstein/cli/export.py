@@ -206,7 +206,8 @@ def handler(args):
     kind, gain, check, note = args.kind, args.gain, args.check, None
     if kind is None:
         try:
-            choice = choose_kind(source.model, source.dynamics is not None, gain)
+            choice = choose_kind(source.model, source.dynamics is not None, gain,
+                                 args.inversion or "zpetc")
         except CompensatorError as exc:
             print_err(f"error: {args.source}: {' '.join(str(exc).split())}")
             return 1

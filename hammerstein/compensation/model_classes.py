@@ -445,7 +445,7 @@ def _gain_words(gain, radius):
     return f"gain {name}, rho(I - K^-1 J) {radius:.3g} < 1"
 
 
-def choose_kind(model, has_dynamics, gain=None):
+def choose_kind(model, has_dynamics, gain=None, inversion="zpetc"):
     """The compensator kind that works best for a model when the user names none.
 
     Rules (module notes): dynamics -> ``hammerstein``; no dynamics and an
@@ -461,28 +461,31 @@ def choose_kind(model, has_dynamics, gain=None):
         The actuator file carries linear dynamics G.
     gain : str or array_like, optional
         The user's gain (then only checked, not chosen).
+    inversion : {'zpetc', 'stable'}
+        The inverse of G the command builds (named in the reason).
 
     Returns
     -------
     KindChoice
     """
     entry = model_class(model)
+    by = "the stable inversion" if inversion == "stable" else "ZPETC"
     if has_dynamics:
         if entry.exact_inverse_kind is not None:
             return KindChoice("hammerstein", {},
-                              f"the model has dynamics (G inverted by ZPETC) and its "
+                              f"the model has dynamics (G inverted by {by}) and its "
                               f"{entry.label} static part an exact inverse")
         g, r = (gain, law_radius(model, gain)) if gain is not None else convergent_gain(model)[:2]
         if r < 1.0:
             return KindChoice("hammerstein", {"gain": g},
-                              f"the model has dynamics (G inverted by ZPETC); static part the "
+                              f"the model has dynamics (G inverted by {by}); static part the "
                               f"multivariable law, {_gain_words(g, r)}")
         if gain is not None:         # the user's gain: the law's check decides
             return KindChoice("hammerstein", {"gain": g},
-                              f"the model has dynamics (G inverted by ZPETC); static part the "
+                              f"the model has dynamics (G inverted by {by}); static part the "
                               f"multivariable law with the gain given")
         return KindChoice("hammerstein", {"gain": g, "check": "warn"},
-                          f"the model has dynamics (G inverted by ZPETC); no gain makes the "
+                          f"the model has dynamics (G inverted by {by}); no gain makes the "
                           f"{entry.label} law provably converge (smallest rho(I - K^-1 J) "
                           f"{r:.3g}): run with check = warn")
     if entry.exact_inverse_kind is not None:

@@ -115,6 +115,9 @@ def test_default_with_dynamics_is_hammerstein_and_builds(plants, name):
     choice = choose_kind(plant.hysteresis, has_dynamics=True)
     assert choice.kind == "hammerstein"
     assert choice.note().startswith("note: kind = hammerstein because ")
+    assert "(G inverted by ZPETC)" in choice.reason
+    stable = choose_kind(plant.hysteresis, has_dynamics=True, inversion="stable")
+    assert "(G inverted by the stable inversion)" in stable.reason and stable.kind == "hammerstein"
     comp = build_compensator({"kind": "hammerstein", "model": "plant", **choice.options}, plant,
                              Path("."))
     assert comp.preview_samples >= 0
