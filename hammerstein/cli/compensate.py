@@ -150,7 +150,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
         A kind that does not work with the model (naming those that do), or
         ``fade_in = 0`` for a reference that does not start at rest.
     """
-    kind, options, _ = _kind_and_options(plant, kind, gain, check)
+    kind, options, _ = _kind_and_options(plant, kind, gain, check, inversion)
     spec = {"kind": kind, "model": "plant", **options}
     if kind == "hammerstein":
         spec["inversion"] = inversion
@@ -234,7 +234,7 @@ def _zpetc_zeros(comp):
     return getattr(getattr(comp, "inverse", None), "unacceptable_zeros", None)
 
 
-def _kind_and_options(plant, kind, gain, check):
+def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     """(kind, options of the kind, the note of a chosen kind or None).
 
     A given kind is checked against the model's class (the message names the
@@ -242,7 +242,7 @@ def _kind_and_options(plant, kind, gain, check):
     """
     note = None
     if kind is None:
-        choice = choose_kind(plant.hysteresis, not plant.is_static, gain, args.inversion or "zpetc")
+        choice = choose_kind(plant.hysteresis, not plant.is_static, gain, inversion or "zpetc")
         kind, options, note = choice.kind, dict(choice.options), choice.note()
     else:
         problem = kind_problem(plant.hysteresis, kind, not plant.is_static)
@@ -291,7 +291,8 @@ def _handle(args):
                               args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
-        kind, options, note = _kind_and_options(plant, args.kind, args.gain, args.check)
+        kind, options, note = _kind_and_options(plant, args.kind, args.gain, args.check,
+                                                args.inversion)
         _, drive = compensate(plant, ref, kind, args.inversion, args.fade_in, args.limits,
                               options.get("gain"), options.get("check"))
         owned = owned_problem(args.out, args.force)

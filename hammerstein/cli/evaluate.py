@@ -231,6 +231,10 @@ def _handle(args):
         rf = ref.spec.get("frequency") if ref.kind == "raster" and ref.spec else None
         fade = (int(round(args.fade_in / T)) if args.fade_in is not None
                 else drive_fade_samples(args.drive) or 0 if args.drive else 0)
+        if args.drive is None and args.fade_in is None:
+            print_err("note: no --drive: the metrics start after --settle-periods only; a drive "
+                      "of compensate or learn starts with a fade-in that is no tracking, left out "
+                      "when the drive is given (--drive DRIVE.csv)")
         # the fade-in is not tracking: the metrics start after it and --settle-periods
         args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,

@@ -304,3 +304,21 @@ def test_a_raster_faster_than_the_slew_keeps_its_fade():
     assert res.fade_samples == 2000 and not any("lengthened" in s for s in res.notes)
     assert any("reference shaped" in s for s in res.shaped)
     assert np.all(_steps(res.inputs).max(axis=1) <= slew * T * (1 + 1e-9))
+
+
+@pytest.mark.parametrize("with_drive", [True, False])
+def test_evaluate_without_the_drive_says_its_fade_is_counted(tmp_path, with_drive):
+    # compensate's drive fades in; evaluate knows where only from the drive's header, so
+    # without --drive it says that the metrics start after --settle-periods only
+    out = tmp_path / "drive.csv"
+    _compensate([_preset(tmp_path, amplifier=False), "--reference", CIRCLE, "--out", out])
+    t = np.arange(pd.read_csv(out, comment="#").shape[0]) * T
+    measured = tmp_path / "m.csv"
+    pd.DataFrame({"t": t, "x": 30 * np.cos(2 * np.pi * 100 * t),
+                  "y": 30 * np.sin(2 * np.pi * 100 * t)}).to_csv(measured, index=False)
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        assert main(["evaluate", "--reference", CIRCLE, "--measured", str(measured), "--out",
+                     str(tmp_path / "ev"), *(["--drive", str(out)] if with_drive else [])]) == 0
+    notes = [line for line in err.getvalue().splitlines() if line.startswith("note: no --drive")]
+    assert len(notes) == (0 if with_drive else 1)
