@@ -231,10 +231,6 @@ def _handle(args):
         rf = ref.spec.get("frequency") if ref.kind == "raster" and ref.spec else None
         fade = (int(round(args.fade_in / T)) if args.fade_in is not None
                 else drive_fade_samples(args.drive) or 0 if args.drive else 0)
-        if args.drive is None and args.fade_in is None:
-            print_err("note: no --drive: the metrics start after --settle-periods only; a drive "
-                      "of compensate or learn starts with a fade-in that is no tracking, left out "
-                      "when the drive is given (--drive DRIVE.csv)")
         # the fade-in is not tracking: the metrics start after it and --settle-periods
         args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
@@ -264,6 +260,10 @@ def _handle(args):
     except catch() as exc:
         print_err(f"hammerstein evaluate: error: {' '.join(str(exc).split())}")
         return 1
+    if args.drive is None and args.fade_in is None:     # after success: an error is one line
+        print_err("note: no --drive: the metrics start after --settle-periods only; a drive "
+                  "of compensate or learn starts with a fade-in that is no tracking, left out "
+                  "when the drive is given (--drive DRIVE.csv)")
     summary = next((f"{row['value']:.4g} µm" for row in rows
                     if row["metric"] == "max_euclidean_error"), "")
     print(f"wrote {out}/ (max Euclidean error {summary}, delay {delay} samples = "
