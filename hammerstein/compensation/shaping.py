@@ -508,6 +508,19 @@ def _refined_frequency(reference, f0, period_samples, sampling_period, periods=1
     return float(f[k])
 
 
+def _limits_left(amplifier, inputs, sampling_period):
+    """Which limits a drive leaves, in words: 'range', 'slew rate' or 'range and slew rate'."""
+    u = np.array(inputs, dtype=float, ndmin=2)
+    T, which = float(sampling_period), []
+    for i, c in enumerate(amplifier.channels):
+        if np.any(u[i] > c.high) or np.any(u[i] < c.low):
+            which.append("range")
+        steps = np.abs(np.diff(np.concatenate([[c.rest], u[i]])))
+        if np.isfinite(c.slew_rate) and np.any(steps > c.slew_rate * T * (1 + 1e-9)):
+            which.append("slew rate")
+    return " and ".join(w for w in ("range", "slew rate") if w in which) or "range"
+
+
 def limit_excess(amplifier, inputs, sampling_period):
     """Per sample, how far a drive leaves the amplifier's range and slew rate [V].
 
@@ -802,7 +815,8 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     if first_mode and N >= 3:                          # stage 0: band limit below the first mode
         fast = faster_than_mode(r, first_mode, T)
         if np.any(fast):
-            base = r + _blend_weights(fast, L0) * guard * (hann_average(r, L0) - r)
+            base = _periodic_end(r + _blend_weights(fast, L0) * guard * (hann_average(r, L0) - r),
+                                 period_samples, lead)
             band = True
     u = np.asarray(run(base), dtype=float)
     excess = limit_excess(amplifier, u, T) if amplifier is not None else np.zeros(N)
@@ -820,7 +834,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     limited_window = 0
     for _ in range(MAX_DOUBLINGS + 1):
         w = _blend_weights(mask, L) * guard
-        trial = base + w * (hann_average(base, L) - base)
+        trial = _periodic_end(base + w * (hann_average(base, L) - base), period_samples, lead)
         u_t = np.asarray(run(trial), dtype=float)
         e_t = limit_excess(amplifier, u_t, T)
         total = float(e_t.sum())
@@ -839,13 +853,15 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
                             if first_mode and limited_window >= L0 else ""))
     e_now = limit_excess(amplifier, best.inputs, T)
     if predict is not None and np.any(e_now > 0):
+        left = _limits_left(amplifier, best.inputs, T)
         clipped, _ = amplifier.limit(best.inputs, T)
         reach = np.asarray(predict(clipped), dtype=float)
         rest = r[:, :1]                          # the faded reference starts at rest
         w = _blend_weights(e_now > 0, L0) * guard
         total, limited = float(e_now.sum()), None
         for f in RANGE_MARGINS:                  # the range's edge, then a little inside it
-            trial = best.reference + w * (rest + f * (reach - rest) - best.reference)
+            trial = _periodic_end(best.reference + w * (rest + f * (reach - rest) - best.reference),
+                                  period_samples, lead)
             u_t = np.asarray(run(trial), dtype=float)
             e_t = float(limit_excess(amplifier, u_t, T).sum())
             if e_t < total:
@@ -854,15 +870,28 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
                 break
         if limited is not None:
             best, f = limited
-            notes_why.append("limited to the output the range reaches (the model's prediction "
-                             "for the clipped drive" + (f", {100 * (1 - f):.3g} % inside it"
-                                                        if f < 1 else "") + ")")
+            notes_why.append(f"limited to the output the drive reaches within the amplifier's "
+                             f"{left} (the model's prediction for the drive "
+                             f"{'clipped' if left == 'range' else 'limited'} to it"
+                             + (f", {100 * (1 - f):.3g} % inside it" if f < 1 else "") + ")")
     if notes_why:
         reasons.append(f"the drive left the limits measured on the records "
                        f"({'; '.join(notes_why)})")
     best.notes = shaping_notes(r, best.reference, T, names,
                                f": {'; '.join(reasons)}" if reasons else "")
     return best
+
+
+def _periodic_end(x, period_samples, lead):
+    """``x`` with its last period a copy of the one before (a periodic reference's shaping
+    is that of its earlier periods: the record's end neither smoothed against a held edge
+    nor left unshaped), when at least three periods follow the rest ``lead``."""
+    P, n = int(period_samples or 0), x.shape[1]
+    if P < 2 or n - lead < 3 * P:
+        return x
+    x = x.copy()
+    x[:, n - P:] = x[:, n - 2 * P:n - P]
+    return x
 
 
 def faster_than_mode(reference, first_mode, sampling_period):

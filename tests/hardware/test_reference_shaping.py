@@ -116,7 +116,24 @@ def test_a_range_the_amplifier_does_not_reach_is_limited_to_what_it_reaches():
     s = shape_reference(lambda x: x, r, amp, 1.0, predict=lambda u: u)
     assert s.range_limited and limit_excess(amp, s.inputs, 1.0).max() == 0.0
     assert np.max(np.abs(s.reference)) <= 1.0 + 1e-12
-    assert "the range reaches" in s.notes[0]
+    assert "the output the drive reaches within the amplifier's range (" in s.notes[0]
+
+
+def test_a_periodic_reference_beyond_the_slew_rate_is_shaped_alike_in_every_period():
+    """Model y = u (range +-10 V, slew 0.05 V/sample): a sine of 1 V at 40 samples per period
+    slews up to 2 pi / 40 = 0.157 V/sample. Shaped with its period given, the last period is
+    the one before (a drive reads a periodic reference past its end as its earlier periods),
+    its drive is within the slew rate like the others, and the note names the slew rate, not
+    the range, which the drive never left."""
+    amp = _amp(-10.0, 10.0, slew=0.05)
+    P, n = 40, 400
+    k = np.arange(n)
+    r = (np.sin(2 * np.pi * k / P) * np.minimum(k / (2.0 * P), 1.0))[None, :]
+    s = shape_reference(lambda x: x, r, amp, 1.0, predict=lambda u: u, period_samples=P)
+    assert s.changed and limit_excess(amp, s.inputs, 1.0).max() == 0.0
+    np.testing.assert_array_equal(s.reference[:, n - P:], s.reference[:, n - 2 * P:n - P])
+    assert np.abs(s.inputs[:, n - P:]).max() <= np.abs(s.inputs[:, n - 3 * P:n - P]).max() + 1e-12
+    assert "within the amplifier's slew rate" in s.notes[0] and "range" not in s.notes[0]
 
 
 def test_samples_at_rest_before_the_reference_moves_stay_at_rest():
