@@ -60,6 +60,11 @@ def _fmt(f):
     return f"{f:g}"
 
 
+#: Units of the reference keys a sweep may vary, for its figure's axis.
+_PARAMETER_UNITS = {"frequency": "Hz", "amplitude": "µm", "radius": "µm", "offset": "µm",
+                    "phase": "deg", "duration": "s", "tau": "s", "settle": "s"}
+
+
 def sweep_table(spec, metrics):
     """Wide table of one sweep.
 
@@ -209,16 +214,18 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
     unit = UNITS.get(metric, "")
     what = metric_label(metric)
     handles = {}
+    swept = getattr(spec, "parameter", "frequency")
+    x = "frequency_hz" if swept == "frequency" else swept     # the table's column of the values
     for l, out in enumerate(channels):
         for k, axis in enumerate(axes_names):
             ax = axs[l][k]
             rows = table[(table["channel"] == out) & (table["axis"] == axis)]
             for j, lab in enumerate(labels):
-                r = rows[rows["compensator"] == lab].sort_values("frequency_hz")
+                r = rows[rows["compensator"] == lab].sort_values(x)
                 if metric in r and r[metric].notna().any():
                     style = {**plots._style(j), "marker": _POINTS[j % len(_POINTS)],
                              "markevery": None}           # every swept frequency is a point
-                    line, = ax.plot(r["frequency_hz"], r[metric], label=names.get(lab, lab),
+                    line, = ax.plot(r[x], r[metric], label=names.get(lab, lab),
                                     **style)
                     handles.setdefault(lab, line)
             vals = rows[metric] if metric in rows else pd.Series(dtype=float)
@@ -230,8 +237,8 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
                         transform=ax.transAxes, ha="center", va="center", fontsize=9)
             panel = _panel_title(spec, out, k, axis, output_names)
             ax.set_title(f"({_LETTERS[(l * m + k) % 26]}) {panel}", fontsize=10, y=1.0)
-            ax.set_xlabel("frequency [Hz]" if getattr(spec, "parameter", "frequency") == "frequency"
-                          else str(spec.parameter))
+            unit_x = _PARAMETER_UNITS.get(swept)
+            ax.set_xlabel(f"{swept} [{unit_x}]" if unit_x else str(swept))
             ax.set_ylabel(f"{what}, {out} [{unit}]" if unit else f"{what}, {out}")
             ax.grid(True, which="major", alpha=0.3)
             ax.grid(True, which="minor", alpha=0.12)
@@ -342,7 +349,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
                      + (f" ({spec.name})" if several else ""),
                      names=compensator_legend(spec, results))
         n_div = int(table["diverged_at_time"].notna().groupby(
-            [table["compensator"], table["axis"], table["frequency_hz"]]).any().sum()) \
+            [table["compensator"], table["axis"], table[swept if swept != "frequency" else
+                                                        "frequency_hz"]]).any().sum()) \
             if "diverged_at_time" in table else 0
         lines += [f"## Sweep `{spec.name}`", ""]
         if spec.description:

@@ -166,3 +166,34 @@ reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, p
     row = t.set_index("scale")
     assert row.loc[1.0, "max_radius"] < 1 and bool(row.loc[1.0, "converges"])
     assert row.loc[0.1, "max_radius"] > 1  # far under-normalised, like K = I (docs/compensator.md)
+
+
+def test_a_parameter_sweep_draws_its_figure_against_the_values(tmp_path):
+    # the figure was drawn against frequency_hz, a column the table of a parameter sweep
+    # renames to the parameter: every such sweep with figures failed with a KeyError
+    text = HEAD + """
+[[sweeps]]
+name = "amp"
+parameter = "amplitude"
+values = [10.0, 20.0, 40.0]
+reference = { kind = "sine", output = "x", frequency = 20.0, periods = 2 }
+metric = "max_euclidean_error"
+"""
+    out = run_scenario(_write(tmp_path, text), tmp_path / "out")
+    assert out.ok, out.error
+    table = pd.read_csv(out.out_dir / "sweep-amp.csv")
+    assert sorted(set(table["amplitude"])) == [10.0, 20.0, 40.0] and "frequency_hz" not in table
+    assert (out.out_dir / "sweep-amp.png").stat().st_size > 10_000
+    err = table[table["channel"] == "x+y"]["max_euclidean_error"]   # per output: max_abs_error
+    assert len(err) == 3 and err.notna().all() and (err > 0).all()
+
+
+def test_the_axis_of_a_parameter_sweep_names_its_unit():
+    from types import SimpleNamespace
+    from hammerstein.report.sweeps import sweep_figure
+    table = pd.DataFrame({"amplitude": [10.0, 20.0], "compensator": ["-", "-"], "axis": ["x", "x"],
+                          "channel": ["x+y", "x+y"], "max_euclidean_error": [0.5, 1.0]})
+    spec = SimpleNamespace(parameter="amplitude", metric="max_euclidean_error", frequencies=[10.0, 20.0],
+                           name="amp", axes=["x"], mode="reference")
+    fig = sweep_figure(table, spec, ["x", "y"], "t")
+    assert fig.axes[0].get_xlabel() == "amplitude [µm]"
