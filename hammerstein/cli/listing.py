@@ -103,15 +103,16 @@ def handler(args):
 
 
 #: top-level tables a saved file may carry beside its content (``identify --out``, saved models)
-_SIDE_TABLES = {"identification"}
+_SIDE_TABLES = {"identification", "amplifier", "creep"}
 
 
 def _file_kind(path):
     """What a ``*.toml`` file is: ``'preset'``, ``'dynamics'``, ``'model'`` or ``'scenario'``.
 
     A preset has a ``[preset]`` table; a dynamics file only ``[dynamics]``, a
-    model file (``identify --out``, a saved identified model) only
-    ``[model]`` (each maybe with its ``[identification]`` record); anything
+    model file (``identify --out``, a saved identified model) ``[model]``
+    and maybe ``[dynamics]`` (each maybe with its ``[identification]``
+    record, the ``[amplifier]`` limits and the ``[creep]`` identify writes); anything
     else, and a file that does not parse, is a scenario (``validate``
     reports its problem).
     """
@@ -124,7 +125,7 @@ def _file_kind(path):
         return "preset"
     if keys == {"dynamics"}:
         return "dynamics"
-    if keys == {"model"}:
+    if "model" in keys and keys <= {"model", "dynamics"}:
         return "model"
     return "scenario"
 

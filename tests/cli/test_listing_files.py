@@ -20,6 +20,11 @@ def folder(tmp_path):
     model = hs.MultivariablePI([[pi, 0.1], [None, pi]], input_names=["ux", "uy"],
                                output_names=["x", "y"])
     hs.save_model(model, tmp_path / "identified.toml", metadata={"method": "closed-form"})
+    # identify writes the records' limits (and the creep) beside the model
+    (tmp_path / "with-limits.toml").write_text(
+        (tmp_path / "identified.toml").read_text(encoding="utf-8")
+        + '\n[amplifier]\nsource = "records"\nrange = [-10.0, 10.0]\nslew_rate = 2e4\n',
+        encoding="utf-8")
     (tmp_path / "broken.toml").write_text("[model\n", encoding="utf-8")
     return tmp_path
 
@@ -41,7 +46,7 @@ def test_model_files_are_listed_apart_from_scenarios(folder, capsys):
     sections = _sections(capsys.readouterr().out)
     assert sections["scenarios"] == ["a-scenario.toml", "broken.toml"]   # validate says why
     assert sections["preset and dynamics files"] == ["a-preset.toml"]
-    assert sections["model files"] == ["identified.toml"]
+    assert sections["model files"] == ["identified.toml", "with-limits.toml"]
 
 
 def test_a_model_files_line_gives_its_size(folder, capsys):
