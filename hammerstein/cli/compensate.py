@@ -111,7 +111,7 @@ def add_parser(subparsers):
 
 
 def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, limits="error",
-               gain=None, check=None, rest_lead=None):
+               gain=None, check=None, rest_lead=None, shape=True):
     """Compensator and drive of a reference on an actuator (what the command writes).
 
     Parameters
@@ -134,6 +134,9 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
         The law's convergence check (default the kind's, ``error``).
     rest_lead : int, optional
         With ``fade_in``: its first samples at rest [samples] (a drive file's, for ``learn``).
+    shape : bool
+        Shape the reference into the limits measured on the records (default); False
+        shapes only the drive (:func:`hammerstein.compensation.drive.hardware_drive`).
 
     Returns
     -------
@@ -186,7 +189,7 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
                            plant.amplifier, limits, rest=rest,
                            first_mode=first_mode_hz(linear[0], T), predict=predict,
                            names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T),
-                           rest_lead=rest_lead)
+                           rest_lead=rest_lead, shape=shape)
     note = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
                       reference.signal, plant.hysteresis.output_names)
     if note:

@@ -29,6 +29,16 @@ consistent with the model's dynamics. A drive that neither ``compensate``
 nor ``learn`` wrote (no compensator reference) is learnt through the drive
 (the time-domain law below).
 
+Where ``compensate`` shaped the reference to what the amplifier and the
+identified dynamics allow (the drive file's ``<output>_shaped`` columns),
+that shaped reference is what is learnt and judged (the error against the
+reference as asked is printed as well): the reference as asked cannot be
+followed there, and learning towards it winds the correction up against
+the limits. Each learnt drive carries it over in its own ``<output>_shaped``
+columns, and its reference is not shaped again (only the drive is shaped
+into the limits, :func:`hammerstein.compensation.drive.hardware_drive`
+with ``shape=False``).
+
 Everything is judged on the settled part: the printed max and RMS
 Euclidean errors start after the fade-in and ``--settle-periods`` (the
 start-up no drive removes), for a repeating reference not before its
@@ -98,7 +108,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             keep_start, limit_start_up, read_signals,
                                             rest_output, shape_drive, signals_csv)
 from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
-                                                  learnt_names, rest_lead_text)
+                                                  learnt_names, rest_lead_text, shaped_target)
 from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
                                     safe_write)
 from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
@@ -383,6 +393,12 @@ def _handle(args):
         # as compensate faded it: a stable inversion's longer rest lead too (the drive's header)
         lead = None if args.fade_in is not None else drive_rest_lead(args.drive)
         target = hardware_fade(ref.signal, fade, rest_output(model, plant.creep), lead)
+        # where compensate shaped the reference to what the amplifier and the dynamics allow
+        # (its <output>_shaped columns, carried over by learn), that is the position learnt and
+        # judged: the reference as asked cannot be followed there, and learning towards it
+        # winds the correction up against the limits trial after trial
+        shaped_ref = shaped_target(args.drive, list(model.output_names), target, T)
+        aim = target if shaped_ref is None else shaped_ref
         predicted, _ = plant.simulate(u, plant.rest_state())     # from rest, as the actuator
         delay_note = None
         if args.delay == "auto" and plant.measurement_delay is not None:
@@ -421,22 +437,24 @@ def _handle(args):
             settle = max(settle, steady)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
-        rec = error_summary(target[:, :N - delay], shifted, window)
-        euclid = np.linalg.norm(target[:, :N - delay][:, window] - shifted[:, window], axis=0)
+        rec = error_summary(aim[:, :N - delay], shifted, window)
+        euclid = np.linalg.norm(aim[:, :N - delay][:, window] - shifted[:, window], axis=0)
         settled_max, settled_rms = float(np.max(euclid)), float(np.sqrt(np.mean(euclid ** 2)))
+        as_asked = None if shaped_ref is None else float(np.max(np.linalg.norm(
+            target[:, :N - delay][:, window] - shifted[:, window], axis=0)))
         # the best trial so far (--history): a trial more than 10 % worse is not learnt from
         state = _read_state(args.history, N) if args.history else None
         fingerprint = _fingerprint(target)
         if args.history:
             _check_history(args.history, state, fingerprint, u,
                            lambda: _read_best(args.history, model, u.shape, y.shape, N)[0])
-        score, score_noise = _judged_error(target, y, delay, P, steady)
+        score, score_noise = _judged_error(aim, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise
         # a reference that does not repeat: its RMS error less the noise, over the printed window
         judged_start = min(max(fade, settle), N - delay - 1)
         judged = None if steady is not None else _window_error(
-            target, y, delay, judged_start, T, args.q_cutoff_hz)
+            aim, y, delay, judged_start, T, args.q_cutoff_hz)
         if judged is not None:
             score = judged.score
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
@@ -453,7 +471,7 @@ def _handle(args):
             if judged is not None:       # judged against the best trial's record, same statistic
                 bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 cmp = compare_trials(judged, _window_error(
-                    target, by, delay, judged_start, T, args.q_cutoff_hz), 1.0, NOISE_MARGIN)
+                    aim, by, delay, judged_start, T, args.q_cutoff_hz), 1.0, NOISE_MARGIN)
                 score, best_score, margin, worse, best = (cmp.score, cmp.best_score, cmp.margin,
                                                           cmp.worse, cmp.better)
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
@@ -513,7 +531,8 @@ def _handle(args):
         if steady is not None and followed is not None and N - delay - steady >= 2 * P:
             # a repeating reference: the compensator's reference corrected per harmonic, the
             # drive the compensator's for it (from rest, its start-up consistent with the model)
-            e_al = target[:, :N - delay] - learn_y[:, delay:N]
+            e_al = aim[:, :N - delay] - learn_y[:, delay:N]
+            # c: what the drive followed beyond the reference as asked, plus the learnt step
             c = reference_correction(target, followed, e_al, P, steady, gains)
             c_full = c[:, (np.arange(N) - steady) % P]
             corrected = Reference(ref.t, ref.signal + c_full,
@@ -521,15 +540,19 @@ def _handle(args):
             # the law over a classical PI runs with the gain compensate chose for the first
             # drive (convergent_gain, as _inverse_gain's), not with the law's own default
             law = drive_kind_ in LAW_KINDS and model_class(model).exact_inverse_kind is None
+            # the reference is not shaped again: the target was shaped once (compensate's
+            # <output>_shaped), and a learnt correction stepping a little beyond the slew rate
+            # had the whole record smoothed again, a trial 34 times worse; the drive is shaped
             _, drive = compensate(plant, corrected, drive_kind_, args.inversion, fade * T,
-                                  args.limits, law_gain if law else args.gain, args.check, lead)
+                                  args.limits, law_gain if law else args.gain, args.check, lead,
+                                  shape=False)
             u_next, learnt = drive.inputs, drive.reference
             problems, shaped = list(drive.problems), list(drive.shaped)
             notes.append(f"note: the reference the compensator follows is learnt per harmonic of "
                          f"the period (the drive is compensate's for it, from rest; its "
                          f"{', '.join(learnt_names(model.output_names))} columns)")
         else:
-            u_next = ilc.step(target, learn_u, learn_y, P, steady, gains)
+            u_next = ilc.step(aim, learn_u, learn_y, P, steady, gains)
             # the fade-in is not judged: the base drive's start, faded into the learning as the
             # reference
             u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
@@ -578,29 +601,34 @@ def _handle(args):
         t = np.arange(N) * T
         with all_or_nothing():    # the drive and the history together, or none (a full disk)
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
-                               score, halvings, fingerprint, learnt, followed_now)
+                               score, halvings, fingerprint, learnt, followed_now, shaped_ref)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
                     if args.history else None)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
     return _summary(args, model, rec, ref, k, delay, T, delay_note, note or stall, cond,
-                    settled=(settled_max, settled_rms, window, fade),
-                    rose=(rose, score, margin), notes=notes)
+                    settled=(settled_max, settled_rms, window, fade, as_asked),
+                    rose=(rose, score, margin), notes=notes, worse=note is not None)
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
-                   halvings, fingerprint, learnt=None, followed=None):
+                   halvings, fingerprint, learnt=None, followed=None, shaped=None):
     """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
 
     The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
     next trial must apply, :func:`_check_history`). ``learnt``: the reference ``u_next`` was
     computed for (its ``<output>_learnt`` columns); ``followed``: that of ``u`` (kept with the
-    best trial).
+    best trial); ``shaped``: the shaped reference learnt and judged (``<output>_shaped``,
+    carried over from the drive learnt from).
     """
     columns = dict(zip(model.input_names, u_next))
     if learnt is not None:
         columns.update(zip(learnt_names(model.output_names), learnt))
+    if shaped is not None:
+        columns.update(zip([f"{o}_shaped" for o in model.output_names], shaped))
+        comment += (f"\n{' '.join(f'{o}_shaped' for o in model.output_names)} [µm]: the shaped "
+                    f"reference the drive aims at, learnt and judged (fade-in included)")
     safe_write(args.out, signals_csv(t, columns, comment), "drive file")
     if not args.history:
         return None
@@ -621,14 +649,16 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     return k
 
 
-def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled, rose, notes):
+def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled, rose, notes,
+             worse=False):
     """Print the trial's error, notes and convergence condition; exit status 0.
 
     ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples);
     ``rose`` is (the previous trial and its judged error when this one rose, else None,
-    this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines.
+    this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines;
+    ``worse``: the trial was worse than the best beyond the noise (not learnt from).
     """
-    settled_max, settled_rms, window, fade = settled
+    settled_max, settled_rms, window, fade, as_asked = settled
     rose, score, margin = rose
     scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} µm)" \
         if ref.scale else ""
@@ -639,13 +669,21 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     print(f"{trial}settled (from {window.start * T:.4g} s, after the {fade * T:.4g} s fade-in): "
           f"max Euclidean error {settled_max:.4g} µm{scale}, RMS {settled_rms:.4g} µm{rms_scale}; "
           f"{axes} µm; measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
+    if as_asked is not None:
+        pct = f" ({100 * as_asked / ref.scale:.3g} %)" if ref.scale else ""
+        print(f"errors against the shaped reference the drive aims at (its <output>_shaped "
+              f"columns: the reference as asked is beyond the amplifier or the dynamics there; "
+              f"against it the settled max is {as_asked:.4g} µm{pct})", file=sys.stdout)
     if delay_note is not None:
         print(delay_note, file=sys.stdout)
     if note is not None:
         print(note, file=sys.stdout)
     summary = cond.summary(list(model.output_names))
-    if rose is not None:            # the model's condition is not what the actuator did
+    if rose is None and not worse:  # a condition on the model, not a measured fact
+        summary = summary.replace("<= 1: monotonic", "<= 1: monotonic on the model")
+    else:                           # the model's condition is not what the actuator did
         summary = summary.replace("<= 1: monotonic", "<= 1 on the model")
+    if rose is not None:
         print(f"the judged settled error ({JUDGED}) rose from {rose[1]:.4g} µm (trial {rose[0]}) to "
               f"{score:.4g} µm, beyond the {margin:.2g} µm of noise: the learning is not monotonic "
               f"on this actuator (the next drive is learnt from the best trial)", file=sys.stdout)

@@ -539,7 +539,8 @@ def rest_output(model, creep=None):
 
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
-                   first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None):
+                   first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
+                   shape=True):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -613,6 +614,11 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         ``rest_lead``, so that ``learn`` fades as ``compensate`` did); a tenth by default.
         The default fade-in lengthens its rest lead, by :func:`preactuation_samples`, until
         a stable inversion's drive starts within ``FIRST_SAMPLE_TOLERANCE`` of rest.
+    shape : bool
+        Shape the reference into limits measured on the records (stage 2., default);
+        False keeps the reference and only shapes the drive into them
+        (:func:`shape_drive`): ``learn``'s reference, already shaped, plus a learnt
+        correction that may step a little beyond the slew rate.
 
     Returns
     -------
@@ -684,7 +690,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         n = int(min(max(int(fade_samples), 0), N))
         u, faded = run(n, rest_lead)
     notes = []
-    if amplifier is not None and amplifier.from_records:
+    if amplifier is not None and amplifier.from_records and shape:
         def drive_for(ref):
             return _compensate(compensator, ref, P or None, 0)[0]
 

@@ -25,7 +25,7 @@ from hammerstein.exceptions import DataFileError
 
 __all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_rest_lead",
            "rest_lead_text", "fade_weight",
-           "drive_kind", "optional_columns", "learnt_names", "followed_reference"]
+           "drive_kind", "optional_columns", "learnt_names", "followed_reference", "shaped_target"]
 
 
 #: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
@@ -350,6 +350,44 @@ def optional_columns(path, names, sampling_period=None, what="file"):
         return None
     _, values, _ = read_signals(path, list(names), "t", None, sampling_period, what)
     return values
+
+
+def shaped_target(path, outputs, target, sampling_period=None):
+    """The shaped reference a drive file records as its target, or None.
+
+    ``compensate`` writes the reference it shaped to what the amplifier and
+    the identified dynamics allow (``<output>_shaped`` columns, fade-in
+    included) and ``learn`` carries it over to its drives: the position the
+    drive aims at, where the reference as asked cannot be followed.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The drive file.
+    outputs : list of str
+        Output names.
+    target : numpy.ndarray, shape (p, n_samples)
+        The faded reference as asked [µm] (gives the expected shape).
+    sampling_period : float, optional
+        Expected T [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, n_samples), or None
+        [µm]; None without ``<output>_shaped`` columns.
+
+    Raises
+    ------
+    DataFileError
+        Columns that are not readable, or of another length than ``target``.
+    OSError
+        The file cannot be read.
+    """
+    f = optional_columns(path, [f"{o}_shaped" for o in outputs], sampling_period, "--drive")
+    if f is not None and f.shape != np.shape(target):
+        raise DataFileError(f"--drive: its shaped reference has {f.shape[1]} samples; expected "
+                            f"the reference's {np.shape(target)[1]}")
+    return f
 
 
 def learnt_names(outputs):

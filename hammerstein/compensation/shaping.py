@@ -811,12 +811,13 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     at_rest = np.all(np.abs(r - r[:, :1]) <= 1e-12 * max(1.0, float(np.max(np.abs(r)))), axis=0)
     lead = int(np.argmin(at_rest)) if not np.all(at_rest) else N    # samples at rest first
     guard = _after(lead // 2, lead - lead // 2, N)     # the first half of them stays at rest
+    repeat = period_samples if _repeats(r, period_samples, lead) else None
     base, band = r, False
     if first_mode and N >= 3:                          # stage 0: band limit below the first mode
         fast = faster_than_mode(r, first_mode, T)
         if np.any(fast):
             base = _periodic_end(r + _blend_weights(fast, L0) * guard * (hann_average(r, L0) - r),
-                                 period_samples, lead)
+                                 repeat, lead)
             band = True
     u = np.asarray(run(base), dtype=float)
     excess = limit_excess(amplifier, u, T) if amplifier is not None else np.zeros(N)
@@ -834,7 +835,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     limited_window = 0
     for _ in range(MAX_DOUBLINGS + 1):
         w = _blend_weights(mask, L) * guard
-        trial = _periodic_end(base + w * (hann_average(base, L) - base), period_samples, lead)
+        trial = _periodic_end(base + w * (hann_average(base, L) - base), repeat, lead)
         u_t = np.asarray(run(trial), dtype=float)
         e_t = limit_excess(amplifier, u_t, T)
         total = float(e_t.sum())
@@ -861,7 +862,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
         total, limited = float(e_now.sum()), None
         for f in RANGE_MARGINS:                  # the range's edge, then a little inside it
             trial = _periodic_end(best.reference + w * (rest + f * (reach - rest) - best.reference),
-                                  period_samples, lead)
+                                  repeat, lead)
             u_t = np.asarray(run(trial), dtype=float)
             e_t = float(limit_excess(amplifier, u_t, T).sum())
             if e_t < total:
@@ -870,7 +871,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
                 break
         if limited is not None:
             best, f = limited
-            notes_why.append(f"limited to the output the drive reaches within the amplifier's "
+            notes_why.append(f"limited to the output the drive reaches within the "
                              f"{left} (the model's prediction for the drive "
                              f"{'clipped' if left == 'range' else 'limited'} to it"
                              + (f", {100 * (1 - f):.3g} % inside it" if f < 1 else "") + ")")
@@ -882,12 +883,22 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     return best
 
 
+def _repeats(r, period_samples, lead):
+    """True when the reference's last period repeats the one before (a circle; not a raster,
+    whose lines step), with at least three periods after the rest ``lead``."""
+    P, n = int(period_samples or 0), r.shape[1]
+    if P < 2 or n - lead < 3 * P:
+        return False
+    scale = max(float(np.max(np.abs(r))), 1.0)
+    return bool(np.max(np.abs(r[:, n - P:] - r[:, n - 2 * P:n - P])) <= 1e-9 * scale)
+
+
 def _periodic_end(x, period_samples, lead):
     """``x`` with its last period a copy of the one before (a periodic reference's shaping
     is that of its earlier periods: the record's end neither smoothed against a held edge
-    nor left unshaped), when at least three periods follow the rest ``lead``."""
+    nor left unshaped); ``period_samples`` None (not a repeating reference): unchanged."""
     P, n = int(period_samples or 0), x.shape[1]
-    if P < 2 or n - lead < 3 * P:
+    if P < 2:
         return x
     x = x.copy()
     x[:, n - P:] = x[:, n - 2 * P:n - P]
