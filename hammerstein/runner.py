@@ -143,6 +143,9 @@ class ScenarioOutcome:
     warnings : list of (str, str)
         ``(case, message)`` of every distinct warning of the cases (range,
         convergence, ...), also in ``report.md`` and ``warnings.csv``.
+    cases : int or None
+        The scenario's cases as ``validate`` counts them (a Monte-Carlo
+        study's drawn plants); None when it did not run.
     """
 
     name: str
@@ -152,6 +155,7 @@ class ScenarioOutcome:
     out_dir: Path | None
     metrics: pd.DataFrame
     warnings: list = field(default_factory=list)
+    cases: int | None = None
 
 
 def _empty_metrics():
@@ -480,7 +484,8 @@ class PendingScenario:
             self.outcome = ScenarioOutcome(o.name, o.path, False, _message(o.path, exc), None,
                                            _empty_metrics())
         else:
-            self.outcome = ScenarioOutcome(o.name, o.path, True, None, target, o.metrics, o.warnings)
+            self.outcome = ScenarioOutcome(o.name, o.path, True, None, target, o.metrics, o.warnings,
+                                           o.cases)
         return self.outcome
 
     def abandon(self, wait=True):
@@ -564,7 +569,8 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
         return PendingScenario(ScenarioOutcome(name, path, False, _message(path, exc), None,
                                                _empty_metrics()))
     return PendingScenario(ScenarioOutcome(name, path, True, None, Path(out_dir) / name, frame,
-                                           caught), tmp, jobs, force, Path(out_dir))
+                                           caught, len(scenario.cases)), tmp, jobs, force,
+                           Path(out_dir))
 
 
 def run_scenario(path, out_dir, taken=None, force=False, renderer=None):

@@ -14,6 +14,7 @@ prints errors only.
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -92,6 +93,15 @@ def handler(args):
     except ValueError as exc:
         print_err(f"hammerstein run: error: {exc}")
         return 2
+    seen = {"names": [], "drawn": 0}
+    if figures is not None and str(args.figures).strip() != "none":
+        select = figures
+
+        def figures(path):          # counted: patterns that match no figure are said
+            keep = select(path)
+            seen["names"].append(Path(path).name)
+            seen["drawn"] += bool(keep)
+            return keep
     workers, scheduler = getattr(args, "workers", None), getattr(args, "scheduler", None)
     if workers is not None and (workers < 1 or scheduler):
         print_err("hammerstein run: error: --workers: expected a positive number of worker "
@@ -113,7 +123,8 @@ def handler(args):
 
     def on_outcome(path, outcome):
         if outcome.ok:
-            n_cases = outcome.metrics["case"].nunique()
+            n_cases = (outcome.cases if outcome.cases is not None
+                       else outcome.metrics["case"].nunique())
             if verbosity >= 0:
                 took = f" in {time.perf_counter() - started[path]:.1f} s" if verbosity > 0 else ""
                 print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({n_cases} cases){took}")
@@ -131,6 +142,11 @@ def handler(args):
     except ValueError as exc:                 # dask missing or scheduler unreachable
         print_err(f"hammerstein run: error: {one_line(str(exc))}")
         return 1
+    if seen["names"] and not seen["drawn"]:
+        kinds = sorted({re.sub(r"[-_].*", "-*", n) for n in seen["names"]})
+        print_err(f"warning: --figures {args.figures!r} matched none of the "
+                  f"{len(seen['names'])} figures (their names: {', '.join(kinds[:8])}); "
+                  f"report.md names each one left out")
     return 1 if failed else 0
 
 

@@ -60,6 +60,17 @@ def test_selection_draws_exactly_the_selected_figures(scenario, full_run, tmp_pa
         assert (part / name).read_bytes() == (full / name).read_bytes()
 
 
+@pytest.mark.parametrize("spec, warned", [("nonsense", True), ("loops*", True),
+                                           ("trajectory-*", False), ("none", False)])
+def test_a_selection_that_matches_no_figure_is_said(scenario, tmp_path, capsys, spec, warned):
+    # --figures nonsense drew nothing and said nothing (exit 0, a silent empty report)
+    assert main(["run", str(scenario), "--out", str(tmp_path), "--figures", spec]) == 0
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning: --figures")]
+    assert len(err) == (1 if warned else 0)
+    if warned:
+        assert "matched none of the" in err[0] and "trajectory-*" in err[0]
+
+
 @pytest.mark.parametrize("spec", ["", ",", "maps-*,"])
 def test_bad_selection_is_a_usage_error(scenario, tmp_path, capsys, spec):
     assert main(["run", str(scenario), "--out", str(tmp_path), "--figures", spec]) == 2

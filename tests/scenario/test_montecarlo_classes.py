@@ -207,3 +207,14 @@ def test_state_space_modes_are_varied_mode_by_mode(tmp_path):
         np.testing.assert_allclose(got_f, (fn * fac["natural_frequency"])[order], rtol=1e-9)
         np.testing.assert_allclose(got_z, (zeta * fac["damping_ratio"])[order], rtol=1e-9)
         np.testing.assert_allclose(lin.frequency_response_hz([0.0])[:, :, 0], np.eye(2), atol=1e-9)
+
+
+def test_run_counts_the_drawn_plants_as_validate_does(tmp_path, capsys):
+    # run printed "(1 cases)" for a study of many plants (the metrics' one case column)
+    from hammerstein.cli.main import main
+    f = tmp_path / "p.toml"
+    f.write_text(STUDY.format(preset="realistic-2dof", kind="preisach-inverse", cases=3))
+    assert main(["validate", str(f)]) == 0
+    assert main(["run", str(f), "--out", str(tmp_path / "out"), "--figures", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "ok (3 cases)" in out and "wrote" in out and "(3 cases)" in out.split("wrote")[1]
