@@ -74,7 +74,10 @@ def add_parser(subparsers):
                    help="normalisation K of the law (default secant; midpoint for hammerstein)")
     p.add_argument("--iterations", type=int, default=None, metavar="N",
                    help="fixed-point iterations per sample (default 1; 3 for hammerstein)")
-    p.add_argument("--feedback", choices=["delay", "lowpass"], default="delay")
+    p.add_argument("--feedback", choices=["delay", "lowpass"], default="delay",
+                   help="what the multiplicative law feeds back: its own last output U(t-T) "
+                        "(delay, default) or a low-pass of it (lowpass, with --cutoff-hz); "
+                        "docs/compensator.md")
     p.add_argument("--cutoff-hz", type=number_type(0, low_open=True, unit="Hz"),
                    default=None, metavar="HZ",
                    help="cut-off of the low-pass feedback [Hz]")

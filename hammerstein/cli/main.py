@@ -441,6 +441,15 @@ def _silence_stdout():
         pass
 
 
+def _command_parser(parser, command):
+    """The sub-parser of ``command`` (the top-level parser without one)."""
+    for action in parser._actions:
+        choices = getattr(action, "choices", None)
+        if isinstance(choices, dict) and command in choices:
+            return choices[command]
+    return parser
+
+
 def _main(argv):
     """:func:`main` without the signal handling."""
     if not any(a == "--version" for a in argv) or _command(argv) is not None:
@@ -451,7 +460,9 @@ def _main(argv):
     _prefetch_kernels(command, argv)
     parser = build_parser(command) if command is not None else build_parser("")
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:              # named by the command's parser, not the top-level one
+            _command_parser(parser, command).error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:  # argparse: usage error (2) or --help (0)
         return int(exc.code or 0)
     _guard_kernel_cache()

@@ -30,8 +30,11 @@ def add_parser(subparsers):
         description="Run every scenario of DIR (default scenarios/paper) into OUT/<scenario>/ and "
                     "write OUT/README.md: the paper's numbers next to ours with their ratios, the "
                     "trends of Fig. 7 and 9, the compensator family, the figures.")
-    p.add_argument("--scenarios", default="scenarios/paper", metavar="DIR")
-    p.add_argument("--out", default="reports/paper", metavar="OUT")
+    p.add_argument("--scenarios", default="scenarios/paper", metavar="DIR",
+                   help="directory of the paper's scenario files (default scenarios/paper)")
+    p.add_argument("--out", default="reports/paper", metavar="OUT",
+                   help="directory of the replication: OUT/README.md, its tables and one report "
+                        "directory per scenario (default reports/paper)")
     p.add_argument("--force", action="store_true",
                    help="replace OUT/README.md, its tables and report directories even when "
                         "hammerstein did not write them")

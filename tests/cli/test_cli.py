@@ -221,3 +221,15 @@ def test_closed_pipe_is_not_an_error_message(forked_cli):
     res = forked_cli[0]["list-head"]
     assert res["status"] in (0, 1), res             # 1: `list` could not say everything
     assert "Error" not in res["stderr"] and "error" not in res["stderr"], res["stderr"]
+
+
+@pytest.mark.parametrize("argv, command", [
+    (["evaluate", "--reference", "r.csv", "--measured", "m.csv", "--out", "ev", "--force"], "evaluate"),
+    (["list", "--figures"], "list"),
+])
+def test_an_unknown_option_is_the_commands_usage_error(capsys, argv, command):
+    # it read "hammerstein: error: unrecognized arguments ... (see 'hammerstein --help')"
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"hammerstein {command}: error: unrecognized arguments")
+    assert err[0].endswith(f"(see 'hammerstein {command} --help')")
