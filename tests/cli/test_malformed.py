@@ -275,7 +275,7 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
      "hammerstein identify: error: the following arguments are required: --output/--outputs, --out"),
     (["check", GOOD / "good-static.toml"],
      "hammerstein check: error: the following arguments are required: --baseline"),
-    (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein: error: unrecognized arguments: --bogus"),
+    (["validate", GOOD / "good-static.toml", "--bogus"], "hammerstein validate: error: unrecognized arguments: --bogus"),
     # issue 13: every path or option problem is a usage error of its command
     (["run", GOOD / "good-static.toml", "--out", ""], "hammerstein run: error: --out: empty path"),
     (["run", GOOD / "good-static.toml", "--out", GOOD / "good-static.toml" / "sub"],
