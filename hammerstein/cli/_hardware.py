@@ -25,11 +25,48 @@ from hammerstein.scenario.validate import _signal
 
 __all__ = ["Reference", "load_actuator", "load_reference", "check_reference_first", "mapping",
            "owned_problem",
-           "add_actuator_arguments", "positive_float", "START_NOTE"]
+           "add_actuator_arguments", "positive_float", "START_NOTE", "end_note"]
 
 #: The drive files' header line on the state a drive starts from.
 START_NOTE = ("from rest, demagnetised (the model's initial state): play the excitation's "
               "demagnetise.csv just before it")
+
+
+def end_note(inputs, sampling_period, names, amplifier=None):
+    """The drive file's line on how its last sample goes back to rest.
+
+    A drive ends where its reference ends (a circle mid-turn): stopping the
+    DAC there is a step. The line gives the last voltages and the shortest
+    ramp to rest that steps no faster than the drive itself (its largest
+    slew, or the amplifier's slew rate when lower).
+
+    Parameters
+    ----------
+    inputs : numpy.ndarray, shape (m, n_samples)
+        The drive [V].
+    sampling_period : float
+        T [s].
+    names : list of str
+        Input names.
+    amplifier : hammerstein.models.amplifier.Amplifier, optional
+
+    Returns
+    -------
+    str
+    """
+    u = np.asarray(inputs, dtype=float)
+    last = u[:, -1]
+    rest = amplifier.rest_voltages() if amplifier is not None else np.zeros(u.shape[0])
+    slew = np.max(np.abs(np.diff(u, axis=1)), axis=1) / sampling_period if u.shape[1] > 1 \
+        else np.ones(u.shape[0])
+    if amplifier is not None:
+        rates = np.array([c.slew_rate for c in amplifier.channels], dtype=float)
+        slew = np.minimum(slew, np.where(np.isfinite(rates), rates, np.inf))
+    ramp = float(np.max(np.abs(last - rest) / np.maximum(slew, 1e-12)))
+    at = ", ".join(f"{n} {v:.4g} V" for n, v in zip(names, last))
+    return (f"ends at {at} (the reference's last sample, not at rest): hold it, then ramp every "
+            f"input to rest in {max(ramp, sampling_period):.3g} s or more (no faster than the "
+            f"drive's own largest slew), never a step")
 
 
 class Reference:

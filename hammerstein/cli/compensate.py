@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import out_file_problem, print_err
-from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
+from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch, end_note,
                                        check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
@@ -330,6 +330,8 @@ def _handle(args):
                       f"{cause}{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
         chatter = severe or chatter       # written anyway (--limits warn): the stronger words
+        ending = end_note(drive.inputs, plant.sampling_period,
+                          list(plant.hysteresis.input_names), plant.amplifier)
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
@@ -337,7 +339,7 @@ def _handle(args):
                    f"{rest_lead_text(drive.rest_lead)}excluded from the metrics) "
                    f"from the rest output {rest_text} (the model's output at 0 V)\n"
                    f"peak input and slew: {peaks}\n"
-                   f"{START_NOTE}" + shaped_cols
+                   f"{START_NOTE}\n{ending}" + shaped_cols
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
                    + "".join(f"\nshaped: {line}" for line in drive.shaped)

@@ -92,7 +92,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
-from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch,
+from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch, end_note,
                                        check_reference_first,
                                        load_actuator,
                                        fraction, load_reference, mapping, nonnegative_float, owned_problem,
@@ -580,6 +580,7 @@ def _handle(args):
                    + f"\nactuator {args.actuator}{kind_text}, sampling period {T:g} s, "
                    f"fade-in {fade} samples ({rest_lead_text(lead)}excluded from the metrics)\n"
                    f"{START_NOTE}\n"
+                   f"{end_note(u_next, T, list(model.input_names), plant.amplifier)}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else
                       f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "
                       f"and {args.measured} were worse)")

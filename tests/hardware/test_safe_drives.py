@@ -322,3 +322,17 @@ def test_evaluate_without_the_drive_says_its_fade_is_counted(tmp_path, with_driv
                      str(tmp_path / "ev"), *(["--drive", str(out)] if with_drive else [])]) == 0
     notes = [line for line in err.getvalue().splitlines() if line.startswith("note: no --drive")]
     assert len(notes) == (0 if with_drive else 1)
+
+
+def test_the_drive_file_says_how_to_end_at_rest(tmp_path):
+    # a circle's drive ends mid-turn, several volts from rest: its header gives the last
+    # voltages and a ramp to rest no faster than the drive's own largest step
+    out = tmp_path / "drive.csv"
+    _compensate([_preset(tmp_path, amplifier=False), "--reference", CIRCLE, "--out", out])
+    u, _, text = _drive(out)
+    line = next(ln for ln in text.splitlines() if ln.startswith("# ends at "))
+    last = u[:, -1]
+    assert f"ux {last[0]:.4g} V, uy {last[1]:.4g} V" in line
+    slew = np.max(np.abs(np.diff(u, axis=1)), axis=1)          # V per sample
+    ramp = np.max(np.abs(last) / slew) * T
+    assert f"in {ramp:.3g} s or more" in line and ramp > 10 * T
