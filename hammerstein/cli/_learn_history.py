@@ -52,7 +52,7 @@ def history_rows(history_dir):
     return rows
 
 
-def _write_history(history, names, rec, scale):
+def _write_history(history, names, rec, scale, scale_name="radius / amplitude"):
     d = Path(history)
     if d.exists() and any(d.iterdir()) and not (d / HISTORY_MARK).exists():
         raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
@@ -69,7 +69,8 @@ def _write_history(history, names, rec, scale):
     its = sorted({r[0] for r in rows})
     mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
-    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale)
+    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale,
+                             scale_name)
     safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
     return k
 

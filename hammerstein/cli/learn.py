@@ -481,7 +481,7 @@ def _handle(args):
                 if bu is None:
                     bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 learn_u, learn_y, followed = bu, by, bf
-                ratio = f"{score / best_score:.3g} times" if best_score > 0 else "more than"
+                ratio = f"{score / best_score:.4g} times" if best_score > 0 else "more than"
                 note = (f"trial {k_next} is {ratio} the error of trial "
                         f"{state['trial']} (the best so far, {best_score:.4g} µm {what}; "
                         f"{margin:.2g} µm of noise margin): "
@@ -633,7 +633,8 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     safe_write(args.out, signals_csv(t, columns, comment), "drive file")
     if not args.history:
         return None
-    k = _write_history(args.history, list(model.output_names), rec, ref.scale)
+    k = _write_history(args.history, list(model.output_names), rec, ref.scale,
+                       "the raster's size" if ref.kind == "raster" else "radius / amplitude")
     if gains is not None:
         _save_gains(args.history, gains)
     if best:

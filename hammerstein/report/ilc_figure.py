@@ -10,12 +10,13 @@ import numpy as np
 
 from hammerstein.report.figures import pyplot as plt  # matplotlib on first use
 
-from hammerstein.report.figures import fixed_layout, legend_on_top
+from hammerstein.report.figures import fixed_layout, legend_on_top, log_ticks
 
 __all__ = ["convergence_figure", "iteration_history"]
 
 
-def convergence_figure(iterations, max_error, rms_error, names, title, scale=None):
+def convergence_figure(iterations, max_error, rms_error, names, title, scale=None,
+                       scale_name="radius / amplitude"):
     """Max and RMS tracking error against the trial, per axis (log scale).
 
     Parameters
@@ -29,6 +30,8 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     title : str
     scale : float, optional
         Radius or amplitude [µm]: a right axis in % of it.
+    scale_name : str
+        What ``scale`` is, for the right axis' label (a raster's: its size).
 
     Returns
     -------
@@ -46,10 +49,12 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     ax.set_ylabel("tracking error [µm]")
     ax.set_xticks(k)
     ax.grid(True, which="both", alpha=0.3)
+    log_ticks(ax)                       # 0.2, 0.5, 1 µm, not 2 x 10^-1
     if scale:
         sec = ax.secondary_yaxis("right", functions=(lambda v: 100 * v / scale,
                                                      lambda p: p * scale / 100))
-        sec.set_ylabel("% of radius / amplitude")
+        sec.set_ylabel(f"% of {scale_name}")
+        log_ticks(sec)
     legend_on_top(ax, 2 * len(names))
     fig.suptitle(title, fontsize=11)
     return fig
