@@ -7,6 +7,7 @@ Schoukens 2012, Section 6.3; the references of :mod:`hammerstein.models.lti`).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -328,10 +329,15 @@ def estimate_measurement_delay(inputs, outputs, sampling_period, band_hz=None):
     top = excited_band(ins, T)[1]
     found, curved = _delay_over(f, H, T, (0.5 * top, top))
     if curved:          # a mode in the upper half: the band above it, else the band below it
+        tried = []
         for lo, hi in FALLBACK_BANDS:
-            other = _delay_over(f, H, T, (lo * top, hi * top))[0]
+            other, bent = _delay_over(f, H, T, (lo * top, hi * top))
             if other.problem is None:
                 return other
+            tried.append(f"{lo * top:.4g}-{hi * top:.4g} Hz ("
+                         + ("not a straight line either" if bent else other.problem) + ")")
+        found = dataclasses.replace(found, problem=f"{found.problem}; also tried "
+                                                   f"{', '.join(tried)}")
     return found
 
 

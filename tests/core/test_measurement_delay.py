@@ -143,6 +143,22 @@ def test_a_mode_in_the_upper_half_leaves_the_band_above_it(name):
             assert est.band_hz[0] == pytest.approx(0.75 * est.band_hz[1])
         else:
             assert est.problem is not None or est.delay == 2, est
+            if est.problem is not None:     # every band tried is named, not the first alone
+                assert "also tried " in est.problem and est.problem.count(" Hz") >= 3, est
+
+
+def test_a_refusal_names_every_band_it_tried():
+    """Modes in every band (a user's identify named only the first band it refused)."""
+    ins, outs = _multisines(_actuator("realistic-2dof"))
+    for f_n in (1900.0, 3100.0, 4600.0):                # one mode in each band tried
+        outs = _second_mode(outs, f_n=f_n, zeta=0.02)
+    est = estimate_measurement_delay(ins, outs, T)
+    assert est.problem.startswith(f"the phase over {est.band_hz[0]:.4g}-{est.band_hz[1]:.4g} Hz "
+                                  f"is not a delay's straight line"), est.problem
+    top = est.band_hz[1]
+    assert est.problem.endswith(f"; also tried {0.75 * top:.4g}-{top:.4g} Hz (not a straight "
+                                f"line either), {0.25 * top:.4g}-{0.5 * top:.4g} Hz (not a "
+                                f"straight line either)"), est.problem
 
 
 @pytest.mark.parametrize("d", [0, 1, 2])
