@@ -83,9 +83,9 @@ def draw_factors(study, i):
         np.fill_diagonal(fc, 1.0)
     return {"weights": weights, "cross_coupling": fc,
             "natural_frequency": _factor(z_f, v["natural_frequency"], True)
-            if "natural_frequency" in v else np.ones(p),
+            if "natural_frequency" in v else np.ones(n_modes),
             "damping_ratio": _factor(z_d, v["damping_ratio"], True)
-            if "damping_ratio" in v else np.ones(p)}
+            if "damping_ratio" in v else np.ones(n_modes)}
 
 
 def case_plant(study, i):

@@ -218,3 +218,21 @@ def test_run_counts_the_drawn_plants_as_validate_does(tmp_path, capsys):
     assert main(["run", str(f), "--out", str(tmp_path / "out"), "--figures", "none"]) == 0
     out = capsys.readouterr().out
     assert "ok (3 cases)" in out and "wrote" in out and "(3 cases)" in out.split("wrote")[1]
+
+
+@pytest.mark.parametrize("varied", ["natural_frequency", "damping_ratio"])
+def test_one_mode_parameter_varied_alone_on_state_space_modes(tmp_path, varied):
+    # the other one's factors were one per output (2) for three modes: an IndexError
+    text = STUDY.format(preset="realistic-2dof", kind="preisach-inverse", cases=2).replace(
+        "noise = { sd = 0.01 }", f"{varied} = {{ relative_sd = 0.05 }}")
+    f = tmp_path / "one.toml"
+    f.write_text(text)
+    study = validate_scenario(f).studies[0]
+    fac = draw.draw_factors(study, 1)
+    assert fac["natural_frequency"].shape == fac["damping_ratio"].shape == (3,)
+    fn, zeta = draw.oscillating_modes(draw.case_plant(study, 1).sampled_dynamics)
+    other = "damping_ratio" if varied == "natural_frequency" else "natural_frequency"
+    assert np.all(fac[other] == 1.0)
+    np.testing.assert_allclose(sorted(fn if varied == "natural_frequency" else zeta),
+                               sorted(np.asarray(study.modes[0 if varied == "natural_frequency"
+                                                            else 1]) * fac[varied]), rtol=1e-9)
