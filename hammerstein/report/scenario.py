@@ -136,6 +136,13 @@ def _identify_summary(ident):
         return "model identified on the plant"
     if ident.get("records") == "excitation":
         return _records_summary(ident)
+    if ident.get("records") == "files":
+        n = sum(len(ident.get(k) or []) for k in ("hysteresis_records", "dynamics_records",
+                                                   "creep_records"))
+        kinds = ["hysteresis"] + [w for w, k in (("dynamics", "dynamics_records"),
+                                                 ("creep", "creep_records")) if ident.get(k)]
+        return (f"model identified from {n} measured record file(s) ({', '.join(kinds)}; "
+                f"{ident.get('model', 'auto')} class)")
     at = _num(ident["frequency"], "Hz")
     if "amplitude" in ident:
         at += f", {_num(ident['amplitude'], 'V')}"

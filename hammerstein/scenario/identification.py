@@ -30,32 +30,32 @@ table checks and the cache keys.
 
 from __future__ import annotations
 
-import tempfile
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
 
-from hammerstein.exceptions import HammersteinWarning, HysteresisError
+from hammerstein.exceptions import HysteresisError
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.core.files import confined_path
 from hammerstein.io.datafiles import MultiRecord
-from hammerstein.signals.excitation import excitation_set, hysteresis_excitation
+from hammerstein.signals.excitation import hysteresis_excitation
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification import IdentificationError, MultivariableIdentifier
 from hammerstein.core.lazy import lazy_module
 from hammerstein.models.lti import DynamicsIdentifier, excitation, hammerstein_records, modal_parameters
-from hammerstein.models.plant import HammersteinPlant
-from hammerstein.io.presets import (PresetError, load_dynamics, load_model, load_plant, model_from_table,
-                                      model_to_table, save_model)
-from hammerstein.identification.sensors import Sensor, characterize, identification_metadata
+from hammerstein.io.presets import (PresetError, load_dynamics, load_model, model_from_table,
+                                      model_to_table)
+from hammerstein.identification.sensors import characterize, identification_metadata
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        round_trip_table, spec_key)
 from hammerstein.scenario.identify_tables import (comparison_spec, dynamics_source, identify_dynamics_table,
                                                   identify_table, nyquist_problem)
+from hammerstein.scenario.records_route import (SENSOR_NOISE_RMS, RecordsIdentification,
+                                                _sensor, excitation_records, file_records,
+                                                identified_from_records)
 from hammerstein.scenario.schema import Invalid
 
 # lazy: scipy.optimize, only for identify.model = "preisach" / "auto"
@@ -75,6 +75,7 @@ __all__ = [
     "identified_hammerstein",
     "identified_from_records",
     "excitation_records",
+    "file_records",
     "RecordsIdentification",
     "flat_frequency",
     "resolve_model",
@@ -83,8 +84,6 @@ __all__ = [
     "comparison_model",
 ]
 
-#: White-noise RMS [µm] of the ECL202 sensor model used by ``sensor = true``.
-SENSOR_NOISE_RMS = 0.02
 
 
 @dataclass
@@ -182,12 +181,7 @@ def _context(context):
     return ResolveContext(Path(context) if context is not None else Path("."))
 
 
-def _sensor(flag, seed):
-    return Sensor(resolution=0.04, bandwidth_hz=2000.0, noise_rms=SENSOR_NOISE_RMS,
-                  seed=seed) if flag else None
-
-
-def identified_model(plant, spec, cache=None):
+def identified_model(plant, spec, cache=None, base_dir=None):
     """The model identified on ``plant`` by the ``identify`` table ``spec`` (cached).
 
     Parameters
@@ -200,6 +194,8 @@ def identified_model(plant, spec, cache=None):
         it is validated again here).
     cache : IdentificationCache, optional
         The run's cache; default: a new one (only the on-disk cache is shared).
+    base_dir : pathlib.Path, optional
+        The scenario's directory (the files of ``records = "files"``).
 
     Returns
     -------
@@ -222,7 +218,7 @@ def identified_model(plant, spec, cache=None):
         raise IdentificationError(f"identify: {exc}") from None
     cache = IdentificationCache() if cache is None else cache
     if "records" in spec:      # the pipeline of `hammerstein identify` on excitation records
-        found = identified_from_records(plant, spec, False, cache)
+        found = identified_from_records(plant, spec, False, cache, base_dir)
         return found.plant.hysteresis, found.metadata
     return cache.get("pi", _pi_key(plant, spec), lambda: _identify_pi(plant, spec),
                      load=lambda v: (model_from_table(v["model"]), v["meta"]),
@@ -328,178 +324,6 @@ def _identify_pi(plant, spec):
     return ident.model_, meta
 
 
-# -- the route of `hammerstein excitation` + `hammerstein identify` -------------------------
-@dataclass
-class RecordsIdentification:
-    """What an ``identify = { records = "excitation", ... }`` table identified.
-
-    Parameters
-    ----------
-    plant : hammerstein.models.plant.HammersteinPlant
-        The identified actuator as ``hammerstein compensate`` loads it: the
-        preset ``hammerstein identify`` writes (hysteresis of the chosen
-        class, dynamics and creep when identified), read back.
-    result : hammerstein.identification.identification_pipeline.IdentificationResult
-        The pipeline's fit, dynamics and creep.
-    preset_text : str
-        The preset file's text.
-    metadata : dict
-        The ``[identification]`` table.
-    """
-
-    plant: Any
-    result: Any
-    preset_text: str
-    metadata: dict
-
-
-def excitation_records(plant, spec, sensor=None):
-    """The records of ``hammerstein excitation`` played through ``plant``, by kind.
-
-    Parameters
-    ----------
-    plant : HammersteinPlant
-    spec : dict
-        Validated ``identify`` table with ``records = "excitation"``
-        (:data:`~hammerstein.scenario.identify_tables.RECORDS_IDENTIFY_FIELDS`).
-    sensor : hammerstein.identification.sensors.Sensor, optional
-        Measures the outputs.
-
-    Returns
-    -------
-    dict of str to list of MultiRecord
-        ``hysteresis``, ``dynamics`` (the multisines of every input, then
-        their held-out validation records) and ``creep`` (staircases).
-
-    Raises
-    ------
-    IdentificationError
-        An amplitude that does not fit the plant's inputs, or both ``amplitude`` and
-        ``range``.
-    """
-    model = plant.hysteresis
-    amp, centre = spec.get("amplitude"), 0.0
-    if spec.get("range") is not None:          # as excitation --range: around its middle
-        if amp is not None:
-            raise IdentificationError("identify.amplitude, identify.range: expected one of "
-                                      "them, found both")
-        low, high = spec["range"]
-        amp, centre = 0.5 * (high - low), 0.5 * (high + low)
-    if amp is None:
-        if model.input_amplitude is None:
-            raise IdentificationError("identify.amplitude: missing, and the plant model has no "
-                                      "input_amplitude to default to")
-        amp = np.asarray(model.input_amplitude, dtype=float)
-    T = plant.sampling_period
-    try:
-        recs = excitation_set(list(model.input_names), amp, T, sine_frequency=spec["frequency"],
-                              multisine_periods=spec["multisine_periods"], hold=spec["hold"],
-                              seed=spec["seed"], reversals=spec["reversals"],
-                              slew_rate=spec.get("slew_rate"), centre=centre)
-    except ValueError as exc:
-        raise IdentificationError(f"identify: {exc}") from None
-    out = {"hysteresis": [], "multisine": [], "multisine-validation": [], "creep": []}
-    for r in recs:
-        y, _ = plant.simulate(r.u)
-        if sensor is not None:
-            y = sensor.measure(y, T)
-        out[r.kind].append(MultiRecord(r.time, r.u, y, tuple(model.input_names),
-                                       tuple(model.output_names), float(T), r.name))
-    return {"hysteresis": out["hysteresis"], "dynamics": out["multisine"] + out["multisine-validation"],
-            "creep": out["creep"]}
-
-
-def _pipeline_options(spec, name):
-    return identification_pipeline.PipelineOptions(
-        method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
-        bounds=spec["bounds"], components=spec["components"], model=spec["model"],
-        threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
-        preisach_levels=spec["preisach_levels"],
-        output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
-        creep_refits=spec.get("creep_refits"), name=name)
-
-
-def identified_from_records(plant, spec, dynamics, cache=None):
-    """The actuator identified from excitation records, as ``identify`` + ``compensate`` see it.
-
-    The records of :func:`excitation_records` go through
-    :func:`hammerstein.identification.identification_pipeline.identify_pipeline` with the
-    table's options (those of ``hammerstein identify``), the dynamics from the
-    multisines when ``dynamics``, the creep from the staircases when
-    ``spec["creep"]``; the preset it writes is read back
-    (:func:`hammerstein.io.presets.load_plant`), so the compensator is built
-    from what ``hammerstein compensate`` would read. Cached in memory per
-    plant, table and ``dynamics``.
-
-    Parameters
-    ----------
-    plant : HammersteinPlant
-        The (simulated) actuator.
-    spec : dict
-        ``identify`` table with ``records = "excitation"``.
-    dynamics : bool
-        Identify G too.
-    cache : IdentificationCache, optional
-
-    Returns
-    -------
-    RecordsIdentification
-
-    Raises
-    ------
-    IdentificationError
-    """
-    try:
-        spec = identify_table(spec)
-    except Invalid as exc:
-        raise IdentificationError(f"identify: {exc}") from None
-    cache = IdentificationCache() if cache is None else cache
-    key = (plant_fingerprint(plant), spec_key(spec), bool(dynamics))
-    return cache.get("records", key, lambda: _identify_from_records(plant, spec, dynamics),
-                     load=None, dump=None)
-
-
-def _identify_from_records(plant, spec, dynamics):
-    sensor = _sensor(spec["sensor"], spec["seed"])
-    recs = excitation_records(plant, spec, sensor)
-    model = plant.hysteresis
-    names = (list(model.input_names), list(model.output_names))
-    try:
-        result = identification_pipeline.identify_pipeline(
-            recs["hysteresis"], _pipeline_options(spec, "identified"), names,
-            recs["dynamics"] if dynamics else None, recs["creep"] if spec["creep"] else None)
-    except (IdentificationError, HysteresisError, DynamicsError) as exc:
-        raise IdentificationError(f"identify (records = 'excitation'): {exc}") from None
-    loops = identification_pipeline.minor_loop_warning(result.fit, *names)   # as identify warns
-    if loops:
-        warnings.warn(f"identify (records = 'excitation'): {loops}", HammersteinWarning,
-                      stacklevel=2)
-    poor = (None if result.dynamics is None
-            else identification_pipeline.dynamics_fit_warning(result.dynamics.summary))
-    if poor:
-        warnings.warn(f"identify (records = 'excitation'): {poor}", HammersteinWarning,
-                      stacklevel=2)
-    meta = {"method": result.fit.method, "model": spec["model"], "records":
-            "hammerstein excitation, played through the plant", "notes": list(result.fit.notes),
-            "sampling_period_s": float(plant.sampling_period),
-            "plant": f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})"}
-    if result.dynamics is not None:
-        meta["dynamics"] = result.dynamics.summary
-    if result.creep is not None:
-        meta["creep"] = result.creep.summary()
-    with tempfile.TemporaryDirectory() as tmp:   # what `identify` writes, read as `compensate` does
-        path = Path(tmp) / "identified.toml"
-        save_model(result.model, path, meta, extra=result.tables())
-        text = path.read_text(encoding="utf-8")
-        if "[preset]" in text:
-            identified = load_plant(path)
-        else:
-            identified = HammersteinPlant(load_model(path), float(plant.sampling_period),
-                                          name="identified")
-    return RecordsIdentification(identified, result, text, meta)
-
-
-# -- models of compensators and model-vs-plant comparisons (paper Fig. 6, 7) ---------
 def resolve_model(spec_model, plant, context, identify=None, role="compensator"):
     """The multivariable PI model a compensator (or a comparison) is built from.
 
@@ -536,7 +360,7 @@ def resolve_model(spec_model, plant, context, identify=None, role="compensator")
         if identify is None:
             raise IdentificationError("identify: missing (required with model = 'identified'), "
                                       "e.g. identify = { frequency = 50.0 }")
-        model, meta = identified_model(plant, identify, context.cache)
+        model, meta = identified_model(plant, identify, context.cache, context.base_dir)
         spec = identify_table(identify)
         context.identified.append(IdentifiedModel(role, plant, spec, model, meta,
                                                   _pi_key(plant, spec)))
@@ -809,20 +633,27 @@ def resolve_dynamics(spec, plant, context, model=None):
     dyn = dynamics_source(spec)
     if dyn == "identified" and spec.get("model") == "identified" and \
             "records" in (spec.get("identify") or {}):   # the route of identify + compensate
-        found = identified_from_records(plant, spec["identify"], True, context.cache)
+        found = identified_from_records(plant, spec["identify"], True, context.cache,
+                                        context.base_dir)
         if found.plant.is_static:
-            raise IdentificationError("identify (records = 'excitation'): no dynamics identified")
+            raise IdentificationError(
+                f"identify (records = '{spec['identify']['records']}'): no dynamics identified"
+                + ("; give dynamics_records (the broadband records of identify "
+                   "--dynamics-records)" if spec["identify"]["records"] == "files" else ""))
         ispec = identify_table(spec["identify"])
         ident = found.result.dynamics.identifier
         fn, zeta = modal_parameters(ident.system_)
+        files = ispec["records"] == "files"
         dmeta = {"method": "subspace (PO-MOESP), order by held-out fit: the pipeline of "
-                           "hammerstein identify on the multisines of hammerstein excitation",
+                           "hammerstein identify on "
+                           + ("the measured dynamics_records" if files else
+                              "the multisines of hammerstein excitation"),
                  "order": int(ident.order_),
                  "validation_fit_percent": [float(v) for v in np.nan_to_num(ident.validation_fit_)],
                  "fit_percent": [float(v) for v in ident.fit_percent_],
                  "natural_frequency_hz": [float(v) for v in fn],
                  "damping_ratio": [float(v) for v in zeta],
-                 "sensor": bool(ispec["sensor"]),
+                 "sensor": bool(ispec.get("sensor", False)),
                  "sampling_period_s": float(plant.sampling_period), "plant": plant.name}
         context.identified.append(IdentifiedDynamics(
             plant, found.plant.hysteresis, found.metadata, ident, dmeta,

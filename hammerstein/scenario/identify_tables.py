@@ -36,6 +36,7 @@ from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Fi
 __all__ = [
     "IDENTIFY_FIELDS",
     "RECORDS_IDENTIFY_FIELDS",
+    "FILES_IDENTIFY_FIELDS",
     "identify_table",
     "HAMMERSTEIN_IDENTIFY_DEFAULTS",
     "hammerstein_identify_table",
@@ -120,7 +121,7 @@ IDENTIFY_FIELDS = {
 #: ``hammerstein identify`` (:func:`hammerstein.identification.identification_pipeline.identify_pipeline`)
 #: with its options and defaults: every class (``model``), creep staircases (``creep``).
 RECORDS_IDENTIFY_FIELDS = {
-    "records": Field(choice("excitation"), required=True),
+    "records": Field(choice("excitation", "files"), required=True),
     "amplitude": Field(_amplitude),                       # default: plant's input_amplitude
     "range": Field(_range),                               # instead: excitation --range
     "slew_rate": Field(number("V/s", 0)),                 # excitation --slew-rate
@@ -149,11 +150,60 @@ RECORDS_IDENTIFY_FIELDS = {
 }
 
 
+def _file_list(v):
+    if isinstance(v, str):
+        v = [v]
+    if not isinstance(v, list) or not v or not all(isinstance(f, str) and f.strip() for f in v):
+        raise Invalid(f"expected a file name or a non-empty list of file names (relative to "
+                      f"the scenario), found {short_repr(v)}")
+    return [f.strip() for f in v]
+
+
+def _columns(v):
+    if isinstance(v, str):
+        v = [c.strip() for c in v.split(",")]
+    if not isinstance(v, list) or not v or not all(isinstance(c, str) and c for c in v):
+        raise Invalid(f"expected column names (a list or \"a,b\"), found {short_repr(v)}")
+    return list(v)
+
+
+def _delay(v):
+    if v == "auto":
+        return v
+    if isinstance(v, int) and not isinstance(v, bool) and 0 <= v <= 10_000:
+        return v
+    raise Invalid(f"expected \"auto\" or a number of samples >= 0, found {short_repr(v)}")
+
+
+#: Options of the identification pipeline shared by both records routes.
+_PIPELINE_KEYS = ("model", "method", "n_hysterons", "partition", "bounds", "components",
+                  "output_map", "preisach_levels", "threshold_spacing", "level_weighting",
+                  "creep_refits", "order", "max_order")
+
+#: Schema of an ``identify`` table with ``records = "files"``: the user's measured records
+#: (the files ``hammerstein identify`` takes: the hysteresis records, the broadband records of
+#: ``--dynamics-records``, the staircases of ``--creep-records``), identified by the same
+#: pipeline with the same options and defaults.
+FILES_IDENTIFY_FIELDS = {
+    "records": Field(choice("files"), required=True),
+    "hysteresis_records": Field(_file_list, required=True),
+    "dynamics_records": Field(_file_list),       # as --dynamics --dynamics-records
+    "creep_records": Field(_file_list),          # as --creep-records
+    "time": Field(string(), default="t"),        # the time column
+    "inputs": Field(_columns),                   # default: the plant's input names
+    "outputs": Field(_columns),                  # default: the plant's output names
+    "delay": Field(_delay, default="auto"),      # as --delay (auto: from the dynamics records)
+    **{k: RECORDS_IDENTIFY_FIELDS[k] for k in _PIPELINE_KEYS},
+}
+
+
 def identify_table(value):
     """Field checker of an ``identify`` table (all problems at once).
 
     With ``records = "excitation"`` the table is checked against
-    :data:`RECORDS_IDENTIFY_FIELDS` (the options of ``hammerstein identify``).
+    :data:`RECORDS_IDENTIFY_FIELDS` (the options of ``hammerstein identify``),
+    with ``records = "files"`` (measured records) against
+    :data:`FILES_IDENTIFY_FIELDS`.
 
     Parameters
     ----------
@@ -177,6 +227,17 @@ def identify_table(value):
                 and clean.get("model", "classical") == "classical":
             yield "bounds: only used by method = 'least-squares'"
 
+    if isinstance(value, dict) and value.get("records") == "files":
+        def cross_files(clean):
+            if clean.get("bounds", "none") != "none" and clean.get("method") == "closed-form":
+                yield "bounds: only used by method = 'least-squares'"
+            if "order" in clean and "max_order" in clean:
+                yield "order: give order or max_order, not both"
+            if ("order" in clean or "max_order" in clean) and not clean.get("dynamics_records"):
+                yield "order: only used with dynamics_records"
+
+        return nested_table(value, FILES_IDENTIFY_FIELDS,
+                            '{ records = "files", hysteresis_records = [...] }', cross_files)
     if isinstance(value, dict) and "records" in value:
         def cross_records(clean):
             if clean.get("bounds", "none") != "none" and clean.get("method") == "closed-form":

@@ -228,7 +228,8 @@ def _spec_creep(spec, plant, context):
     identify = spec.get("identify") or {}
     if dyn == "identified" and spec.get("model") == "identified" and "records" in identify:
         cache = context.cache if hasattr(context, "cache") else None
-        return identified_from_records(plant, identify, True, cache).plant.creep
+        base = context.base_dir if hasattr(context, "base_dir") else Path(context)
+        return identified_from_records(plant, identify, True, cache, base).plant.creep
     if dyn in ("plant", "identified"):
         return None
     base = context.base_dir if hasattr(context, "base_dir") else Path(context)

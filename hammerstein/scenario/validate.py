@@ -292,6 +292,22 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     return t, sig, max(int(round(period / T)), 1), extras
 
 
+def _record_file_problems(identify, base):
+    """``identify.<key>: ...`` for each file of a ``records = "files"`` table that is not there."""
+    problems = []
+    for key in ("hysteresis_records", "dynamics_records", "creep_records"):
+        for name in identify.get(key) or []:
+            try:
+                path = confined_path(name, base, PresetError)
+            except PresetError as exc:
+                problems.append(f"identify.{key}: {exc}")
+                continue
+            if not Path(path).is_file():
+                problems.append(f"identify.{key}: {name}: no such file (relative to the "
+                                f"scenario's directory)")
+    return problems
+
+
 def _model_problems(name, identify, plant, base, files):
     """Problems of a ``model`` key that need no identification and no compensator.
 
@@ -305,6 +321,8 @@ def _model_problems(name, identify, plant, base, files):
         if identify is None:
             return ["identify: missing (required with model = 'identified'), "
                     "e.g. identify = { frequency = 50.0 }"]
+        if identify.get("records") == "files":      # measured records: the files are there
+            return _record_file_problems(identify, base)
         problem = nyquist_problem(identify, plant)
         if problem is None and plant is not None:
             n = identify.get("periods", 3) / identify["frequency"] / plant.sampling_period

@@ -60,7 +60,7 @@ def test_identify_table_with_records_takes_identify_defaults():
 def test_level_weighting_key_as_the_identify_option():
     """``level_weighting`` is ``identify --level-weighting``: the same default, the same
     choices, and it reaches the pipeline's options."""
-    from hammerstein.scenario.identification import _pipeline_options
+    from hammerstein.scenario.records_route import _pipeline_options
     assert identify_table({"records": "excitation"})["level_weighting"] == "amplitude"
     spec = identify_table({"records": "excitation", "level_weighting": "none"})
     assert _pipeline_options(spec, "m").level_weighting == "none"
@@ -187,3 +187,76 @@ reference = {CIRCLE}
     saved = sorted(p.name for p in (out / "models").glob("hammerstein-1-*.toml"))
     assert saved == ["hammerstein-1-dynamics.toml", "hammerstein-1-preisach.toml"]
     assert "Preisach model [`models/hammerstein-1-preisach.toml`]" in (out / "report.md").read_text()
+
+
+@pytest.mark.slow
+def test_a_scenario_identifies_from_measured_files_as_identify_does(tmp_path, capsys):
+    # the user's own records (here the excitation records of realistic-gpi written to files):
+    # `identify = { records = "files", ... }` must give identify's preset (model, dynamics,
+    # creep, the records' amplifier limits) and compensate's drive; before, a scenario could
+    # only identify from records it played through its own simulated plant
+    plant = load_plant(SCENARIOS / "presets" / "realistic-gpi.toml")
+    spec = identify_table({"records": "excitation", "model": "generalized", "creep": True,
+                           "frequency": 5.0, "hold": 0.25, "multisine_periods": 2})
+    recs = excitation_records(plant, spec)
+    names = {kind: [_write(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
+             for kind, rs in recs.items()}
+    preset = tmp_path / "id.toml"
+    assert main(["identify", *names["hysteresis"], "--inputs", "ux,uy", "--outputs", "x,y",
+                 "--time", "t", "--model", "generalized", "--dynamics", "--dynamics-records",
+                 *names["dynamics"], "--creep-records", *names["creep"], "--out",
+                 str(preset)]) == 0
+    capsys.readouterr()
+    cli = tomllib.loads(preset.read_text(encoding="utf-8"))
+    identify = {"records": "files", "model": "generalized",
+                "hysteresis_records": [Path(f).name for f in names["hysteresis"]],
+                "dynamics_records": [Path(f).name for f in names["dynamics"]],
+                "creep_records": [Path(f).name for f in names["creep"]]}
+    found = identified_from_records(plant, identify, True, base_dir=tmp_path)
+    scen = tomllib.loads(found.preset_text)
+    for table in ("model", "dynamics", "creep", "amplifier"):
+        a, b = np.array(_numbers(cli[table])), np.array(_numbers(scen[table]))
+        assert a.shape == b.shape and a.size > 0, table
+        assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), table
+    assert scen["identification"]["records"].startswith("measured files: ")
+
+    drive = tmp_path / "d.csv"
+    assert main(["compensate", str(preset), "--reference", CIRCLE, "--kind", "hammerstein",
+                 "--out", str(drive)]) == 0
+    lines = [ln for ln in drive.read_text().splitlines() if not ln.startswith("#")]
+    u_cli = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])[:, 1:3].T
+    comp = build_compensator({"kind": "hammerstein", "model": "identified", "identify": identify,
+                              "dynamics": "identified"}, plant, ResolveContext(tmp_path))
+    actuator = load_actuator(str(preset))
+    ref = load_reference(CIRCLE, actuator)
+    res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
+                         actuator.amplifier, "error",
+                         rest=rest_output(actuator.hysteresis, actuator.creep))
+    assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
+
+
+@pytest.mark.parametrize("table, expect", [
+    ({"records": "files"}, "hysteresis_records: missing"),
+    ({"records": "files", "hysteresis_records": []}, "hysteresis_records: expected a file name"),
+    ({"records": "files", "hysteresis_records": ["a.csv"], "frequency": 5.0},
+     "frequency: unknown key"),
+    ({"records": "files", "hysteresis_records": ["a.csv"], "delay": -1}, "delay: expected"),
+    ({"records": "file", "hysteresis_records": ["a.csv"]}, "records: expected"),
+])
+def test_a_files_table_names_what_is_wrong(table, expect):
+    with pytest.raises(Exception, match=expect):
+        identify_table(table)
+
+
+def test_validate_names_a_record_file_that_is_not_there(tmp_path):
+    from hammerstein.scenario.schema import ScenarioError
+    from hammerstein.scenario.validate import validate_scenario
+    (tmp_path / "h.csv").write_text("t,ux,uy,x,y\n")
+    f = tmp_path / "s.toml"
+    f.write_text('[plant]\npreset = "realistic-2dof"\n[compensator]\nkind = "hammerstein"\n'
+                 'model = "identified"\ndynamics = "identified"\nidentify = { records = "files", '
+                 'hysteresis_records = ["h.csv"], dynamics_records = ["nope.csv"] }\n'
+                 '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+                 'frequency = 20.0, periods = 3 }\n')
+    with pytest.raises(ScenarioError, match=r"identify\.dynamics_records: nope\.csv: no such file"):
+        validate_scenario(f)

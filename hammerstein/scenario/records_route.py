@@ -1,0 +1,341 @@
+"""The records route of scenario identification: ``identify = { records = ... }``.
+
+``records = "excitation"`` plays the records of ``hammerstein excitation`` through
+the scenario's plant; ``records = "files"`` reads the user's measured records (the
+files ``hammerstein identify`` takes). Both go through the pipeline of
+``hammerstein identify``
+(:func:`hammerstein.identification.identification_pipeline.identify_pipeline`) with
+its options and defaults, and the preset it writes is read back as ``hammerstein
+compensate`` reads it. Re-exported by :mod:`hammerstein.scenario.identification`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tempfile
+import warnings
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from hammerstein.core.files import FileLimitError, confined_path
+from hammerstein.core.lazy import lazy_module
+from hammerstein.exceptions import HammersteinWarning, HysteresisError
+from hammerstein.identification.identification import IdentificationError
+from hammerstein.identification.sensors import Sensor
+from hammerstein.io.datafiles import DataFileError, MultiRecord, read_records
+from hammerstein.io.presets import load_model, load_plant, save_model
+from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
+from hammerstein.models.dynamics import DynamicsError
+from hammerstein.models.lti import estimate_measurement_delay
+from hammerstein.models.plant import HammersteinPlant
+from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
+                                                       spec_key)
+from hammerstein.scenario.identify_tables import identify_table
+from hammerstein.scenario.schema import Invalid
+from hammerstein.signals.excitation import excitation_set
+
+identification_pipeline = lazy_module("hammerstein.identification.identification_pipeline")
+
+__all__ = ["RecordsIdentification", "excitation_records", "file_records",
+           "identified_from_records", "SENSOR_NOISE_RMS"]
+
+#: RMS white noise of the simulated sensor of ``sensor = true`` [µm].
+SENSOR_NOISE_RMS = 0.02
+
+
+def _sensor(flag, seed):
+    return Sensor(resolution=0.04, bandwidth_hz=2000.0, noise_rms=SENSOR_NOISE_RMS,
+                  seed=seed) if flag else None
+
+
+# -- the route of `hammerstein excitation` + `hammerstein identify` -------------------------
+@dataclass
+class RecordsIdentification:
+    """What an ``identify = { records = "excitation", ... }`` table identified.
+
+    Parameters
+    ----------
+    plant : hammerstein.models.plant.HammersteinPlant
+        The identified actuator as ``hammerstein compensate`` loads it: the
+        preset ``hammerstein identify`` writes (hysteresis of the chosen
+        class, dynamics and creep when identified), read back.
+    result : hammerstein.identification.identification_pipeline.IdentificationResult
+        The pipeline's fit, dynamics and creep.
+    preset_text : str
+        The preset file's text.
+    metadata : dict
+        The ``[identification]`` table.
+    """
+
+    plant: Any
+    result: Any
+    preset_text: str
+    metadata: dict
+
+
+def excitation_records(plant, spec, sensor=None):
+    """The records of ``hammerstein excitation`` played through ``plant``, by kind.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+    spec : dict
+        Validated ``identify`` table with ``records = "excitation"``
+        (:data:`~hammerstein.scenario.identify_tables.RECORDS_IDENTIFY_FIELDS`).
+    sensor : hammerstein.identification.sensors.Sensor, optional
+        Measures the outputs.
+
+    Returns
+    -------
+    dict of str to list of MultiRecord
+        ``hysteresis``, ``dynamics`` (the multisines of every input, then
+        their held-out validation records) and ``creep`` (staircases).
+
+    Raises
+    ------
+    IdentificationError
+        An amplitude that does not fit the plant's inputs, or both ``amplitude`` and
+        ``range``.
+    """
+    model = plant.hysteresis
+    amp, centre = spec.get("amplitude"), 0.0
+    if spec.get("range") is not None:          # as excitation --range: around its middle
+        if amp is not None:
+            raise IdentificationError("identify.amplitude, identify.range: expected one of "
+                                      "them, found both")
+        low, high = spec["range"]
+        amp, centre = 0.5 * (high - low), 0.5 * (high + low)
+    if amp is None:
+        if model.input_amplitude is None:
+            raise IdentificationError("identify.amplitude: missing, and the plant model has no "
+                                      "input_amplitude to default to")
+        amp = np.asarray(model.input_amplitude, dtype=float)
+    T = plant.sampling_period
+    try:
+        recs = excitation_set(list(model.input_names), amp, T, sine_frequency=spec["frequency"],
+                              multisine_periods=spec["multisine_periods"], hold=spec["hold"],
+                              seed=spec["seed"], reversals=spec["reversals"],
+                              slew_rate=spec.get("slew_rate"), centre=centre)
+    except ValueError as exc:
+        raise IdentificationError(f"identify: {exc}") from None
+    out = {"hysteresis": [], "multisine": [], "multisine-validation": [], "creep": []}
+    for r in recs:
+        y, _ = plant.simulate(r.u)
+        if sensor is not None:
+            y = sensor.measure(y, T)
+        out[r.kind].append(MultiRecord(r.time, r.u, y, tuple(model.input_names),
+                                       tuple(model.output_names), float(T), r.name))
+    return {"hysteresis": out["hysteresis"], "dynamics": out["multisine"] + out["multisine-validation"],
+            "creep": out["creep"]}
+
+
+def file_records(plant, spec, base_dir=None):
+    """The measured records an ``identify = { records = "files", ... }`` table names, by kind.
+
+    Read as ``hammerstein identify`` reads its files
+    (:func:`hammerstein.io.datafiles.read_records`: the ``time`` column, the
+    ``inputs`` and ``outputs`` columns, by default the plant's names), each
+    file confined to the scenario's directory; the outputs advanced by
+    ``delay`` samples (``"auto"``: the estimate of ``identify --delay auto``
+    from the dynamics records, 0 when there are none or it is refused, as
+    ``identify`` takes it).
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        Names the inputs and outputs.
+    spec : dict
+        Validated table
+        (:data:`~hammerstein.scenario.identify_tables.FILES_IDENTIFY_FIELDS`).
+    base_dir : pathlib.Path, optional
+        The scenario's directory (relative file names).
+
+    Returns
+    -------
+    records : dict of str to list of MultiRecord
+        ``hysteresis``, ``dynamics``, ``creep``.
+    delay : int
+        The delay applied [samples].
+    note : str or None
+        Why an automatic delay was taken as 0.
+
+    Raises
+    ------
+    IdentificationError
+        A file that cannot be read (naming the key and the file).
+    """
+    model = plant.hysteresis
+    ins = spec.get("inputs") or list(model.input_names)
+    outs = spec.get("outputs") or list(model.output_names)
+    out = {}
+    for kind, key in (("hysteresis", "hysteresis_records"), ("dynamics", "dynamics_records"),
+                      ("creep", "creep_records")):
+        out[kind] = []
+        for name in spec.get(key) or []:
+            try:
+                path = confined_path(name, base_dir, DataFileError)
+                out[kind].append(read_records(path, ins, outs, spec["time"]))
+            except (DataFileError, FileLimitError) as exc:
+                raise IdentificationError(f"identify.{key}: {exc}") from None
+    delay, note = spec["delay"], None
+    if delay == "auto":
+        delay = 0
+        if out["dynamics"]:
+            T = out["dynamics"][0].sampling_period
+            try:
+                est = estimate_measurement_delay([r.u for r in out["dynamics"]],
+                                                 [r.y for r in out["dynamics"]], T)
+            except DynamicsError as exc:
+                raise IdentificationError(f"identify.delay: {exc}") from None
+            if est.problem is None:
+                delay = est.delay
+            else:
+                note = (f"identify (records = 'files'): the measurement delay could not be "
+                        f"estimated ({est.problem}) and was taken as 0, as identify takes it")
+    if delay:
+        for kind in out:
+            for i, r in enumerate(out[kind]):
+                n = r.u.shape[1]
+                if n <= 10 * delay:
+                    raise IdentificationError(f"identify.delay: {r.source}: {n} samples; a delay "
+                                              f"of {delay} needs more than {10 * delay}")
+                out[kind][i] = replace(r, timepts=r.timepts[:n - delay], u=r.u[:, :n - delay],
+                                       y=r.y[:, delay:])
+    return out, int(delay), note
+
+
+def _files_digest(spec, base_dir):
+    """Content hash of the files a ``records = "files"`` table names (its cache key)."""
+    h = hashlib.sha256()
+    for key in ("hysteresis_records", "dynamics_records", "creep_records"):
+        for name in spec.get(key) or []:
+            try:
+                path = confined_path(name, base_dir, DataFileError)
+                h.update(str(path).encode() + b"\0" + Path(path).read_bytes())
+            except (OSError, DataFileError, FileLimitError):
+                h.update(name.encode())          # read_records names the problem
+    return h.hexdigest()
+
+
+def _pipeline_options(spec, name):
+    return identification_pipeline.PipelineOptions(
+        method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
+        bounds=spec["bounds"], components=spec["components"], model=spec["model"],
+        threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
+        preisach_levels=spec["preisach_levels"],
+        output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
+        creep_refits=spec.get("creep_refits"), name=name)
+
+
+def identified_from_records(plant, spec, dynamics, cache=None, base_dir=None):
+    """The actuator identified from excitation records, as ``identify`` + ``compensate`` see it.
+
+    The records of :func:`excitation_records` go through
+    :func:`hammerstein.identification.identification_pipeline.identify_pipeline` with the
+    table's options (those of ``hammerstein identify``), the dynamics from the
+    multisines when ``dynamics``, the creep from the staircases when
+    ``spec["creep"]``; the preset it writes is read back
+    (:func:`hammerstein.io.presets.load_plant`), so the compensator is built
+    from what ``hammerstein compensate`` would read. Cached in memory per
+    plant, table and ``dynamics``.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        The (simulated) actuator.
+    spec : dict
+        ``identify`` table with ``records = "excitation"``.
+    dynamics : bool
+        Identify G too (from the multisines; with ``records = "files"`` from
+        its ``dynamics_records``, when it names some).
+    cache : IdentificationCache, optional
+    base_dir : pathlib.Path, optional
+        The scenario's directory: the files of ``records = "files"``.
+
+    Returns
+    -------
+    RecordsIdentification
+
+    Raises
+    ------
+    IdentificationError
+    """
+    try:
+        spec = identify_table(spec)
+    except Invalid as exc:
+        raise IdentificationError(f"identify: {exc}") from None
+    cache = IdentificationCache() if cache is None else cache
+    files = spec["records"] == "files"
+    key = ((_files_digest(spec, base_dir) if files else plant_fingerprint(plant)),
+           spec_key(spec), bool(dynamics), tuple(plant.hysteresis.input_names),
+           tuple(plant.hysteresis.output_names))
+    return cache.get("records", key,
+                     lambda: _identify_from_records(plant, spec, dynamics, base_dir),
+                     load=None, dump=None)
+
+
+def _identify_from_records(plant, spec, dynamics, base_dir=None):
+    model = plant.hysteresis
+    names = (list(model.input_names), list(model.output_names))
+    files = spec["records"] == "files"
+    where = f"identify (records = '{spec['records']}')"
+    if files:
+        recs, delay, note = file_records(plant, spec, base_dir)
+        if note:
+            warnings.warn(note, HammersteinWarning, stacklevel=2)
+        dynamics = dynamics and bool(recs["dynamics"])
+        creep = bool(recs["creep"])
+    else:
+        recs = excitation_records(plant, spec, _sensor(spec["sensor"], spec["seed"]))
+        creep = spec["creep"]
+    try:
+        result = identification_pipeline.identify_pipeline(
+            recs["hysteresis"], _pipeline_options(spec, "identified"), names,
+            recs["dynamics"] if dynamics else None, recs["creep"] if creep else None)
+    except (IdentificationError, HysteresisError, DynamicsError) as exc:
+        raise IdentificationError(f"{where}: {exc}") from None
+    loops = identification_pipeline.minor_loop_warning(result.fit, *names)   # as identify warns
+    if loops:
+        warnings.warn(f"{where}: {loops}", HammersteinWarning, stacklevel=2)
+    poor = (None if result.dynamics is None
+            else identification_pipeline.dynamics_fit_warning(result.dynamics.summary))
+    if poor:
+        warnings.warn(f"{where}: {poor}", HammersteinWarning, stacklevel=2)
+    meta = {"method": result.fit.method, "model": spec["model"], "records":
+            ("measured files: " + ", ".join(r.source for k in ("hysteresis", "dynamics", "creep")
+                                             for r in recs[k]))
+            if files else "hammerstein excitation, played through the plant",
+            "notes": list(result.fit.notes),
+            "sampling_period_s": float(recs["hysteresis"][0].sampling_period if files
+                                       else plant.sampling_period),
+            "plant": f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})"}
+    if files:
+        meta["measurement_delay_samples"] = delay
+    if result.dynamics is not None:
+        meta["dynamics"] = result.dynamics.summary
+    if result.creep is not None:
+        meta["creep"] = result.creep.summary()
+    extra = dict(result.tables() or {})
+    if files:       # as identify: drives stay within what the records spanned
+        extra["amplifier"] = records_amplifier_table(
+            recs["hysteresis"] + (recs["dynamics"] if dynamics else []) + recs["creep"],
+            list(model.input_names))
+    with tempfile.TemporaryDirectory() as tmp:   # what `identify` writes, read as `compensate` does
+        path = Path(tmp) / "identified.toml"
+        save_model(result.model, path, meta, extra=extra)
+        text = path.read_text(encoding="utf-8")
+        if "[preset]" in text:
+            identified = load_plant(path)
+        else:
+            identified = HammersteinPlant(load_model(path), float(plant.sampling_period),
+                                          name="identified")
+            if files:
+                identified.amplifier = amplifier_from_table(extra["amplifier"],
+                                                            list(model.input_names), str(path))
+    return RecordsIdentification(identified, result, text, meta)
+
+
+# -- models of compensators and model-vs-plant comparisons (paper Fig. 6, 7) ---------
