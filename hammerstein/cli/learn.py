@@ -105,7 +105,8 @@ from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_hist
 from hammerstein.cli.compensate import LAW_HINT, LAW_KINDS, compensate
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade,
-                                            keep_start, limit_start_up, read_signals,
+                                            keep_end, keep_start, limit_start_up,
+                                            read_signals, settled_step,
                                             rest_output, shape_drive, signals_csv)
 from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
                                                   learnt_names, rest_lead_text, shaped_target)
@@ -556,6 +557,8 @@ def _handle(args):
             # the fade-in is not judged: the base drive's start, faded into the learning as the
             # reference
             u_next = keep_start(learn_u, u_next, fade, ref.period_samples)
+            # and ends as the base drive: the update's last samples read past the record
+            u_next = keep_end(learn_u, u_next, settled_step(learn_u, fade))
             if plant.amplifier is not None and plant.amplifier.from_records:
                 u_next, shaped = shape_drive(plant.amplifier, u_next, T)
             elif plant.amplifier is not None:

@@ -24,8 +24,8 @@ import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
-from hammerstein.compensation.drive import (drive_signal, hardware_drive, hardware_fade, keep_start,
-                                           settled_step, shape_drive)
+from hammerstein.compensation.drive import (drive_signal, hardware_drive, hardware_fade, keep_end,
+                                           keep_start, read_signals, settled_step, shape_drive)
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.io.presets import load_plant, resolve_preset
 
@@ -336,3 +336,41 @@ def test_the_drive_file_says_how_to_end_at_rest(tmp_path):
     slew = np.max(np.abs(np.diff(u, axis=1)), axis=1)          # V per sample
     ramp = np.max(np.abs(last) / slew) * T
     assert f"in {ramp:.3g} s or more" in line and ramp > 10 * T
+
+
+@pytest.mark.parametrize("change", [5.0, 0.3, 40.0])
+def test_keep_end_blends_back_within_the_bound(change):
+    # closed form: a constant learnt change c, blended back by a raised cosine over n samples,
+    # steps at most c sin(pi / (2 n)) <= pi c / (2 n) <= the bound; n doubles from 8
+    N, bound = 4000, 1.0
+    prev = np.sin(np.linspace(0, 20, N))[None, :] * 0.001
+    u = keep_end(prev, prev + change, [bound])
+    np.testing.assert_allclose(u[0, -1], prev[0, -1], atol=1e-12)       # ends as the base drive
+    n = 8
+    while n < N // 10 and np.pi * change / (2 * n) > bound:
+        n *= 2
+    np.testing.assert_allclose(u[0, :N - n], prev[0, :N - n] + change)  # untouched before
+    steps = np.abs(np.diff(u[0] - prev[0]))
+    assert steps.max() <= max(np.pi * change / (2 * min(n, N // 10)), 1e-12) + 1e-12
+
+
+def test_a_learnt_raster_drive_ends_without_a_step(tmp_path):
+    # the time-domain learning of a reference that does not repeat read past the record's end:
+    # a user's learnt raster drive ended with 1.03 V steps on an input settled at 0.07 V
+    out = tmp_path / "u0.csv"
+    preset = _preset(tmp_path)          # the records' limits: the line steps are shaped
+    _compensate([preset, "--reference", RASTER, "--out", out])
+    t, u, _ = read_signals(out, ["ux", "uy"])
+    y, _ = load_plant("rakotondrabe-2dof").simulate(1.05 * u)
+    y = y + np.random.default_rng(3).normal(0, 0.02, y.shape)
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(tmp_path / "y0.csv", index=False)
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(["learn", str(preset), "--reference", RASTER,
+                     "--drive", str(out), "--measured", str(tmp_path / "y0.csv"), "--out",
+                     str(tmp_path / "u1.csv"), "--delay", "0"])
+    assert code == 0, err.getvalue()
+    _, u1, _ = read_signals(tmp_path / "u1.csv", ["ux", "uy"])
+    steps = np.abs(np.diff(u1, axis=1))
+    assert np.all(steps[:, -40:].max(axis=1) <= steps[:, :-40].max(axis=1) * (1 + 1e-9))
+    np.testing.assert_allclose(u1[:, -1], u[:, -1], atol=1e-9)       # ends as the base drive
