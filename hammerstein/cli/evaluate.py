@@ -329,7 +329,7 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=()):
     safe_write(out / "timeseries-measured.csv", ",".join(head) + "\n" + body + "\n",
                "time series file", root=out)
     figure = ""
-    if len(outs) == 2:
+    if len(outs) >= 2:             # the XY of the first two outputs, every output against time
         fig = trajectory_figure(t, r, y, outs, "measured response", args.settle_periods *
                                 ref.period_samples * T, inputs=None if u is None else u[:, :n],
                                 input_names=ins if u is not None else None)

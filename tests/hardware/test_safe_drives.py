@@ -374,3 +374,21 @@ def test_a_learnt_raster_drive_ends_without_a_step(tmp_path):
     steps = np.abs(np.diff(u1, axis=1))
     assert np.all(steps[:, -40:].max(axis=1) <= steps[:, :-40].max(axis=1) * (1 + 1e-9))
     np.testing.assert_allclose(u1[:, -1], u[:, -1], atol=1e-9)       # ends as the base drive
+
+
+def test_evaluate_draws_the_trajectory_of_three_outputs(tmp_path):
+    # evaluate drew its figure only for exactly two outputs: a 3-axis stage got none, silently
+    t = np.arange(4000) * T
+    ref = np.vstack([30 * np.cos(2 * np.pi * 50 * t), 30 * np.sin(2 * np.pi * 50 * t),
+                     5 * np.sin(2 * np.pi * 10 * t)])
+    pd.DataFrame({"t": t, "x": ref[0], "y": ref[1], "z": ref[2]}).to_csv(tmp_path / "r.csv",
+                                                                          index=False)
+    y = ref + 0.05
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1], "z": y[2]}).to_csv(tmp_path / "m.csv", index=False)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["evaluate", "--reference", str(tmp_path / "r.csv"), "--period", "0.1",
+                     "--measured", str(tmp_path / "m.csv"), "--out", str(tmp_path / "ev")]) == 0
+    assert (tmp_path / "ev" / "trajectory-measured.png").stat().st_size > 10_000
+    m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
+    row = m[(m["channel"] == "x+y+z") & (m["metric"] == "max_euclidean_error")]
+    assert row["value"].item() == pytest.approx(0.05 * np.sqrt(3), rel=1e-6)
