@@ -69,9 +69,10 @@ def _pair(what):
 
 
 def _point(v):
-    if isinstance(v, list) and len(v) == 2 and all(is_number(a) for a in v):
+    if isinstance(v, list) and len(v) >= 2 and all(is_number(a) for a in v):
         return [float(a) for a in v]
-    raise Invalid(f"expected two numbers [x, y] [µm] (the outputs' values at the centre), found {v!r}")
+    raise Invalid(f"expected two numbers [x, y] [µm] (the figure's outputs at its centre), or "
+                  f"one per output of the plant, found {v!r}")
 
 
 def _amplitudes(v):
@@ -195,12 +196,32 @@ class ReferenceKind:
         return 1.0 / table["frequency"] if "frequency" in table else None
 
 
-def _placed(xy, outs, names):
-    """A (2, N) planar trajectory on outputs ``outs`` of ``names``: (p, N)."""
+def _placed(xy, outs, names, held=None):
+    """A (2, N) planar trajectory on outputs ``outs`` of ``names``: (p, N); the other
+    outputs at ``held`` (p,) [µm] (a full ``center``), else 0."""
     sig = np.zeros((len(names), xy.shape[1]))
+    if held is not None:
+        sig += np.asarray(held, dtype=float)[:, None]
     for row, o in zip(xy, outs):
         sig[list(names).index(o)] = row
     return sig
+
+
+def _centre_split(c, outs, names):
+    """A planar table's ``center`` as the figure's (2 values) and the held outputs' (p values).
+
+    ``center`` gives the two outputs of the figure (``[x, y]``), or every
+    output of the plant in its order (``[x, y, z]`` on a three-axis stage:
+    the outputs outside the figure are held there instead of at 0 µm).
+    """
+    centre = c.get("center")
+    if centre is None or len(centre) == 2:
+        return None
+    if len(centre) != len(names):
+        raise SignalError(f"center: expected two values (the figure's outputs {list(outs)}) or "
+                          f"one per output of the plant {list(names)}, found {len(centre)}")
+    c["center"] = [centre[list(names).index(o)] for o in outs]
+    return centre
 
 
 def _planar_outputs(table, names):
@@ -238,14 +259,16 @@ def _drive(fn):
 
 def _circle(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
+    held = _centre_split(c, outs, names)
     t, xy = circle(T, **c)
-    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
+    return t, _placed(xy, outs, names, held), 1.0 / c["frequency"], {"scale": c["radius"]}
 
 
 def _spiral(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
+    held = _centre_split(c, outs, names)
     t, xy = spiral(T, **c)
-    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": c["radius"]}
+    return t, _placed(xy, outs, names, held), 1.0 / c["frequency"], {"scale": c["radius"]}
 
 
 def _lissajous_period(c):
@@ -257,8 +280,10 @@ def _lissajous_period(c):
 
 def _lissajous(c, T, names, base_dir):
     outs = _planar_outputs(c, names)
+    held = _centre_split(c, outs, names)
     t, xy = lissajous(T, **c)
-    return t, _placed(xy, outs, names), _lissajous_period(c), {"scale": float(np.max(c["amplitude"]))}
+    return (t, _placed(xy, outs, names, held), _lissajous_period(c),
+            {"scale": float(np.max(c["amplitude"]))})
 
 
 def _lissajous_words(s, unit):
@@ -274,8 +299,10 @@ def _raster(c, T, names, base_dir):
     if len(set(outs)) != 2 or any(o not in names for o in outs):
         raise SignalError(f"outputs: expected two different outputs [fast, slow] of the plant "
                           f"{list(names)}, found {outs}")
+    held = _centre_split(c, outs, names)
     t, xy = raster(T, **c)
-    return t, _placed(xy, outs, names), 1.0 / c["frequency"], {"scale": float(max(c["size"]))}
+    return (t, _placed(xy, outs, names, held), 1.0 / c["frequency"],
+            {"scale": float(max(c["size"]))})
 
 
 def _raster_words(s, unit):

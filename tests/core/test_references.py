@@ -132,3 +132,22 @@ def test_the_python_functions_take_a_centre(fn, args):
     np.testing.assert_allclose(moved - base, shift * np.ones_like(base), atol=1e-12)
     with pytest.raises(refs.SignalError, match=r"center: expected two finite numbers"):
         f(*args, center=(1.0, float("nan")))
+
+
+@pytest.mark.parametrize("kind, table", [
+    ("circle", {"radius": 10.0, "frequency": 50.0, "periods": 2}),
+    ("raster", {"outputs": ["x", "y"], "size": [40.0, 20.0], "lines": 4, "frequency": 20.0,
+                "slow": "step", "smoothing": 0.0}),
+])
+def test_a_full_centre_holds_the_outputs_outside_the_figure(kind, table):
+    """A three-axis stage: ``center = [x, y, z]`` places the figure at (x, y) and holds z
+    there; z stayed at 0 µm, below a unipolar stage's rest, and the reach note's advice of a
+    three-value centre was refused."""
+    entry = refs.REFERENCE_KINDS[kind]
+    names = ["x", "y", "z"]
+    two = entry.generate({**table, "center": [50.0, 40.0]}, 1e-4, names, None)[1]
+    full = entry.generate({**table, "center": [50.0, 40.0, 12.5]}, 1e-4, names, None)[1]
+    np.testing.assert_array_equal(full[:2], two[:2])
+    np.testing.assert_array_equal(full[2], np.full(full.shape[1], 12.5))
+    with pytest.raises(refs.SignalError, match="center: expected two values"):
+        entry.generate({**table, "center": [1.0, 2.0, 3.0, 4.0]}, 1e-4, names, None)
