@@ -161,6 +161,17 @@ class IdentificationResult:
         if self.dynamics is None and self.creep is None:
             return None
         extra = dict(self.dynamics.tables) if self.dynamics is not None else {}
+        if "preset" in extra:      # the class identified, not always a PI
+            kinds = {type(c).__name__ for row in getattr(self.model, "components", [])
+                     for c in row if c is not None and not isinstance(c, (int, float))}
+            label = ("Preisach" if "PreisachModel" in kinds and "GeneralizedPI" not in kinds
+                     else "generalised-PI" if "GeneralizedPI" in kinds
+                     and "PreisachModel" not in kinds
+                     else "mixed" if {"PreisachModel", "GeneralizedPI"} <= kinds
+                     else "classical PI")
+            extra["preset"] = {**extra["preset"], "description": (
+                f"{label} hysteresis identified from records + identified linear dynamics"
+                + (" + identified creep" if self.creep is not None else ""))}
         if self.creep is not None:
             extra["creep"] = creep_to_table(self.creep.creeps_, self.model.output_names)
         return extra

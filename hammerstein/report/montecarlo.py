@@ -21,6 +21,7 @@ import pandas as pd
 
 from hammerstein.core.files import safe_write
 from hammerstein.report import figures as plots
+from hammerstein.report.scenario import compensator_summary
 from hammerstein.report.tables import markdown_table, metrics_frame
 
 __all__ = ["quantile_table", "quantile_figure", "write_montecarlo_report"]
@@ -114,7 +115,8 @@ def write_montecarlo_report(scenario, results, directory, jobs):
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description, ""]
-    lines += [f"Monte-Carlo robustness study: the compensator `{scenario.compensator_spec}` is "
+    lines += [f"Monte-Carlo robustness study: the compensator "
+              f"({compensator_summary(scenario.compensator_spec)}) is "
               f"built once from the nominal model and run against plants drawn around it "
               f"(seed {scenario.seed}; case i depends only on the seed and i).", ""]
     loop = results[0].study.loop if results and getattr(scenario, "feedback", None) else None

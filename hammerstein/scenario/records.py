@@ -283,7 +283,8 @@ def load_identification_scenario(path, data):
                     records.append(read_records(resolve_data_path(f, path.parent), ins, outs,
                                                 dat.get("time"), dat.get("sampling_period")))
                 except DataFileError as exc:
-                    problems.append(f"{source}: data.file: {exc}")
+                    problems.append(f"{source}: data.{'files' if 'files' in dat else 'file'}: "
+                                    f"{exc}")
     if problems:
         raise ScenarioError(problems)
     return RecordScenario(name=top.get("name", path.stem), title=top.get("title", path.stem),

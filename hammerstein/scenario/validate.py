@@ -199,6 +199,14 @@ def _check_compensator(spec, where, problems, source, own=None):
     if kind not in COMPENSATORS:
         problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, COMPENSATORS)]
         return None
+    if "kind" not in spec and any(k != "kind" for k in spec):
+        # `model = ...` without a kind read "unknown key (valid keys: kind)": the default kind
+        # "none" takes no option
+        takes = sorted(n for n, e in COMPENSATORS.items() if set(spec) <= set(e.fields))
+        problems.append(f"{source}: {where}.kind: missing: the default 'none' (no compensator) "
+                        f"takes no {', '.join(sorted(spec))}; give a kind"
+                        + (f" ({', '.join(takes)} take them)" if takes else ""))
+        return None
     schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
     clean = check_table(spec, schema, where, problems, source)
     if clean is not None:

@@ -236,3 +236,15 @@ def test_one_mode_parameter_varied_alone_on_state_space_modes(tmp_path, varied):
     np.testing.assert_allclose(sorted(fn if varied == "natural_frequency" else zeta),
                                sorted(np.asarray(study.modes[0 if varied == "natural_frequency"
                                                             else 1]) * fac[varied]), rtol=1e-9)
+
+
+def test_a_compensator_table_without_a_kind_says_so(tmp_path):
+    # `model = ...` alone read "compensator.model: unknown key (valid keys: kind)"
+    f = tmp_path / "nokind.toml"
+    f.write_text('[plant]\npreset = "realistic-2dof"\n[compensator]\nmodel = "plant"\n'
+                 '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+                 'frequency = 20.0, periods = 3 }\n')
+    with pytest.raises(ScenarioError, match=r"compensator\.kind: missing: the default 'none' "
+                                            r"\(no compensator\) takes no model; give a kind "
+                                            r"\(.*hammerstein.*take them\)"):
+        validate_scenario(f)

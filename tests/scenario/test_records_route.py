@@ -219,6 +219,10 @@ def test_a_scenario_identifies_from_measured_files_as_identify_does(tmp_path, ca
         assert a.shape == b.shape and a.size > 0, table
         assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), table
     assert scen["identification"]["records"].startswith("measured files: ")
+    # the class identified, not "PI identified from records" for every class
+    assert cli["preset"]["description"] == scen["preset"]["description"] == (
+        "generalised-PI hysteresis identified from records + identified linear dynamics + "
+        "identified creep")
 
     drive = tmp_path / "d.csv"
     assert main(["compensate", str(preset), "--reference", CIRCLE, "--kind", "hammerstein",
