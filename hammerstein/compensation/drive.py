@@ -719,9 +719,21 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         if res.problems:
             out, _ = amplifier.limit(u, T)
     if fade_samples is None:        # a start-up no fade removes: slew-limited to the settled bound
+        before = out
         out, notes = limit_start_up(out, n, P, r0, amplifier.inputs if amplifier is not None else None,
                                     T)
         res.shaped += notes
+        changed = np.flatnonzero(np.any(np.abs(out - before) > 1e-12, axis=0))
+        if changed.size and changed[-1] + 1 > n:
+            # a large move the settled drive never makes (an axis held away from rest under a
+            # raster): its slew-limited start-up goes on after the fade, into what is judged
+            late = (changed[-1] + 1) * T
+            res.notes.append(
+                f"the slew-limited start-up reaches the drive {late:.4g} s after the start, "
+                f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the "
+                f"fade's end include it; give --fade-in {np.ceil(2.5 * late / 0.01) * 0.01:.2g} "
+                f"or more (a fade whose steepest step, 2.4 times its mean, stays within the "
+                f"settled drive's)")
     res.inputs = out
     return res
 

@@ -392,3 +392,21 @@ def test_evaluate_draws_the_trajectory_of_three_outputs(tmp_path):
     m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
     row = m[(m["channel"] == "x+y+z") & (m["metric"] == "max_euclidean_error")]
     assert row["value"].item() == pytest.approx(0.05 * np.sqrt(3), rel=1e-6)
+
+
+def test_a_held_axis_whose_start_up_outlasts_the_fade_is_named(tmp_path):
+    # x scans a triangle while y is held at 20 µm: the settled drive barely moves uy, so its
+    # slew-limited start-up (no step beyond the settled drive's) reaches 20 µm long after the
+    # fade; the metrics from the fade's end would include it: compensate says so and how long
+    n = 8000
+    t = np.arange(n) * T
+    x = 20 * (2 * np.abs(((t * 25) % 1) - 0.5))            # a 25 Hz triangle, 0..20 µm
+    ref = tmp_path / "held.csv"
+    pd.DataFrame({"t": t, "x": x, "y": np.full(n, 20.0)}).to_csv(ref, index=False)
+    printed = _compensate([_preset(tmp_path, amplifier=False), "--reference", ref, "--period",
+                           "0.04", "--out", tmp_path / "d.csv"])
+    _, fade, text = _drive(tmp_path / "d.csv")
+    m = re.search(r"the slew-limited start-up reaches the drive ([\d.]+) s after the start", text)
+    assert m is not None, text
+    late = float(m.group(1))
+    assert late > fade * T and "give --fade-in" in printed
