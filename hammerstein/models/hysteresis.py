@@ -369,6 +369,24 @@ class OutputMap:
         return {"knots": [float(v) for v in self.knots], "slopes": [float(v) for v in self.slopes]}
 
 
+def component_words(output_names, input_names, components, word):
+    """``x: ux PI(15), uy gain 0.1; y: ...``: a model's components in words (its repr).
+
+    Parameters
+    ----------
+    output_names, input_names : sequence of str
+    components : sequence of sequences, shape (p, m)
+    word : callable
+        ``word(component) -> str``.
+
+    Returns
+    -------
+    str
+    """
+    return "; ".join(f"{out}: " + ", ".join(f"{inp} {word(c)}" for inp, c in zip(input_names, row))
+                     for out, row in zip(output_names, components))
+
+
 @dataclass
 class MultivariablePI:
     """Multivariable classical PI model, eq. (3)/(4) and Def. 3.2 of [1]_.
@@ -633,9 +651,7 @@ class MultivariablePI:
                 return f"PI({comp.n_hysterons})"
             return f"gain {float(comp):.4g}"
 
-        rows = "; ".join(f"{out}: " + ", ".join(f"{inp} {word(c)}" for inp, c in
-                                                zip(self.input_names, row))
-                         for out, row in zip(self.output_names, self.components))
+        rows = component_words(self.output_names, self.input_names, self.components, word)
         extra = ""
         if self.output_offset is not None and np.any(np.asarray(self.output_offset) != 0):
             extra += ", output_offset [" + ", ".join(

@@ -68,7 +68,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.models.generalized_pi import GPI_KEYS, GeneralizedPI
-from hammerstein.models.hysteresis import PrandtlIshlinskii
+from hammerstein.models.hysteresis import PrandtlIshlinskii, component_words
 from hammerstein.exceptions import HysteresisError
 from hammerstein.simulation import preisach_steps, state_vector
 
@@ -717,9 +717,7 @@ class MultivariableHysteresis:
                 return f"PI({c.n_hysterons})"
             return f"gain {float(c):.4g}"
 
-        rows = "; ".join(f"{out}: " + ", ".join(f"{inp} {word(c)}" for inp, c in
-                                                zip(self.input_names, row))
-                         for out, row in zip(self.output_names, self.components))
+        rows = component_words(self.output_names, self.input_names, self.components, word)
         return (f"MultivariableHysteresis({self.n_outputs}x{self.n_inputs} "
                 f"({', '.join(self.input_names)} -> {', '.join(self.output_names)}), "
                 f"{self.n_hysterons} states; {rows})")

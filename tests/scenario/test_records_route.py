@@ -105,6 +105,26 @@ def test_range_and_slew_rate_keys_play_the_commands_records(tmp_path, capsys):
         identify_table({"records": "excitation", "range": [20.0, 0.0]})
 
 
+def _assert_same_drive(tmp_path, preset, plant, identify):
+    """compensate's drive of CIRCLE on ``preset`` equals, to 1e-9, the scenario compensator's
+    hardware drive (faded in from rest over a duration, kept in the records' amplifier range
+    and slew: the preset's [amplifier], source = "records")."""
+    drive = tmp_path / "d.csv"
+    assert main(["compensate", str(preset), "--reference", CIRCLE, "--kind", "hammerstein",
+                 "--out", str(drive)]) == 0
+    lines = [ln for ln in drive.read_text().splitlines() if not ln.startswith("#")]
+    u_cli = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])[:, 1:3].T
+    comp = build_compensator({"kind": "hammerstein", "model": "identified", "identify": identify,
+                              "dynamics": "identified"}, plant, ResolveContext(tmp_path))
+    actuator = load_actuator(str(preset))
+    ref = load_reference(CIRCLE, actuator)
+    res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
+                         actuator.amplifier, "error",
+                         rest=rest_output(actuator.hysteresis, actuator.creep))
+    assert u_cli.shape == res.inputs.shape
+    assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
+
+
 @pytest.mark.slow
 def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys):
     plant = load_plant(SCENARIOS / "presets" / "realistic-gpi.toml")
@@ -131,23 +151,7 @@ def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys)
         assert a.shape == b.shape and a.size > 0
         assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), table
 
-    drive = tmp_path / "d.csv"
-    assert main(["compensate", str(preset), "--reference", CIRCLE, "--kind", "hammerstein",
-                 "--out", str(drive)]) == 0
-    lines = [ln for ln in drive.read_text().splitlines() if not ln.startswith("#")]
-    u_cli = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])[:, 1:3].T
-
-    comp = build_compensator({"kind": "hammerstein", "model": "identified", "identify": identify,
-                              "dynamics": "identified"}, plant, ResolveContext(tmp_path))
-    actuator = load_actuator(str(preset))
-    ref = load_reference(CIRCLE, actuator)
-    # the drive the hardware command writes: faded in from rest over a duration and kept in
-    # the records' amplifier range and slew (the preset's [amplifier], source = "records")
-    res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
-                         actuator.amplifier, "error",
-                         rest=rest_output(actuator.hysteresis, actuator.creep))
-    assert u_cli.shape == res.inputs.shape
-    assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
+    _assert_same_drive(tmp_path, preset, plant, identify)
 
 
 def test_the_report_says_what_a_records_table_asked_for():
@@ -224,19 +228,7 @@ def test_a_scenario_identifies_from_measured_files_as_identify_does(tmp_path, ca
         "generalised-PI hysteresis identified from records + identified linear dynamics + "
         "identified creep")
 
-    drive = tmp_path / "d.csv"
-    assert main(["compensate", str(preset), "--reference", CIRCLE, "--kind", "hammerstein",
-                 "--out", str(drive)]) == 0
-    lines = [ln for ln in drive.read_text().splitlines() if not ln.startswith("#")]
-    u_cli = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])[:, 1:3].T
-    comp = build_compensator({"kind": "hammerstein", "model": "identified", "identify": identify,
-                              "dynamics": "identified"}, plant, ResolveContext(tmp_path))
-    actuator = load_actuator(str(preset))
-    ref = load_reference(CIRCLE, actuator)
-    res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
-                         actuator.amplifier, "error",
-                         rest=rest_output(actuator.hysteresis, actuator.creep))
-    assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
+    _assert_same_drive(tmp_path, preset, plant, identify)
 
 
 @pytest.mark.parametrize("table, expect", [
