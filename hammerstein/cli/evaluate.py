@@ -46,6 +46,7 @@ from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.compensation.drive_files import optional_columns
 from hammerstein.core.files import all_or_nothing, bounded_read_bytes, guard_inputs, safe_write
 from hammerstein.compensation.ilc import estimate_delay
+from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError
 from hammerstein.io.datafiles import signal_table
@@ -172,7 +173,7 @@ def evaluate(reference, measured, period_samples, sampling_period, output_names,
     # periodic reference (a whole period is no delay either: a 1 kHz sine read 50 samples)
     start = min(int(settle_periods * max(period_samples, 1)), max(reference.shape[1] - 8, 0))
     r_s, y_s = reference[:, start:], measured[:, start:]
-    max_lag = (period_samples - 1) // 2 if period_samples and period_samples > 2 else 50
+    max_lag = delay_search_span(reference, period_samples, sampling_period)
     max_lag = int(max(1, min(max_lag, r_s.shape[1] // 4)))
     delay = estimate_delay(r_s, y_s, max_lag)
     if remove_delay and delay > 0:

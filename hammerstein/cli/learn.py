@@ -117,6 +117,7 @@ from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, erro
                                   repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
+                                              delay_search_span,
                                               first_mode_hz)
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
@@ -407,7 +408,8 @@ def _handle(args):
             print(f"delay {delay} samples: the model file's measurement delay (identify's --delay, "
                   f"given or estimated)")
         elif args.delay == "auto":
-            delay = max(estimate_delay(predicted, y, max(ref.period_samples // 2, 50)), 0)
+            delay = max(estimate_delay(predicted, y, delay_search_span(
+                target, ref.period_samples, T)), 0)
             per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
             if per_sample is not None and per_sample < DELAY_PHASE_DEG:
                 advice = ("identify with --dynamics (the delay found from the multisines)"

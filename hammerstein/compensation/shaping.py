@@ -482,6 +482,45 @@ def zpetc_note(unacceptable_zeros, sampling_period, reference, period_samples,
             f"inverts it exactly (`export --inversion stable` deploys it)")
 
 
+def delay_search_span(reference, period_samples, sampling_period, default=50):
+    """The largest delay a cross-correlation may search on a reference [samples].
+
+    Below half a period of the reference and of its main frequency
+    (:func:`main_frequency`): a delay of a whole period is no delay, and a
+    circle at 50 Hz inside a record that repeats at 10 Hz (a third axis's
+    sine) otherwise read its own period, 400 samples, as the delay.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    period_samples : int or None
+        The record's period [samples]; None or below 3: ``default``.
+    sampling_period : float
+        T [s].
+    default : int
+        The span without a period [samples].
+
+    Returns
+    -------
+    int
+        At least 1.
+
+    Examples
+    --------
+    >>> t = np.arange(8000) * 5e-5
+    >>> r = np.vstack([np.cos(2 * np.pi * 50 * t), np.sin(2 * np.pi * 10 * t) / 4])
+    >>> delay_search_span(r, 2000, 5e-5)
+    199
+    """
+    P = int(period_samples) if period_samples else 0
+    span = (P - 1) // 2 if P > 2 else int(default)
+    f0 = main_frequency(reference, P, sampling_period) if P > 2 else None
+    if f0:
+        span = min(span, int((1.0 / (f0 * float(sampling_period)) - 1) // 2))
+    return max(1, span)
+
+
 def _refined_frequency(reference, f0, period_samples, sampling_period, periods=16, points=21):
     """The frequency near ``f0`` [Hz] where the Hann-windowed spectrum of the reference's tail peaks.
 

@@ -410,3 +410,22 @@ def test_a_held_axis_whose_start_up_outlasts_the_fade_is_named(tmp_path):
     assert m is not None, text
     late = float(m.group(1))
     assert late > fade * T and "give --fade-in" in printed
+
+
+@pytest.mark.parametrize("true_delay", [0, 3])
+def test_evaluate_does_not_read_a_circles_period_as_the_delay(tmp_path, true_delay):
+    # a 50 Hz circle evaluated with --period 0.1 (the 10 Hz period of the user's whole
+    # trajectory): the search went to half of 0.1 s and read the circle's own period, 400
+    # samples, as the delay
+    t = np.arange(12000) * T
+    ref = np.vstack([30 * np.cos(2 * np.pi * 50 * t), 30 * np.sin(2 * np.pi * 50 * t)])
+    meas = np.concatenate([np.repeat(ref[:, :1], true_delay, axis=1),
+                           ref[:, :ref.shape[1] - true_delay]], axis=1)
+    meas = meas + np.random.default_rng(1).normal(0, 0.04, meas.shape)
+    for name, sig in (("r.csv", ref), ("m.csv", meas)):
+        pd.DataFrame({"t": t, "x": sig[0], "y": sig[1]}).to_csv(tmp_path / name, index=False)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        assert main(["evaluate", "--reference", str(tmp_path / "r.csv"), "--period", "0.1",
+                     "--measured", str(tmp_path / "m.csv"), "--out", str(tmp_path / "ev")]) == 0
+    m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
+    assert m[m["metric"] == "delay_samples"]["value"].iloc[0] == true_delay
