@@ -244,8 +244,8 @@ def _model_summary(c):
     model = c.get("model", "plant")
     if model == "identified":
         i = c.get("identify", {})
-        if i.get("records") == "excitation":
-            return _records_summary(i)
+        if i.get("records") in ("excitation", "files"):
+            return _identify_summary(i)
         extra = ", ".join(str(i[k]) for k in ("method", "bounds") if k in i)
         return f"model identified at {i.get('frequency', 0):g} Hz" + (f" ({extra})" if extra else "")
     if model == "plant":

@@ -256,3 +256,14 @@ def test_validate_names_a_record_file_that_is_not_there(tmp_path):
                  'frequency = 20.0, periods = 3 }\n')
     with pytest.raises(ScenarioError, match=r"identify\.dynamics_records: nope\.csv: no such file"):
         validate_scenario(f)
+
+
+def test_titles_and_the_report_name_a_files_table_as_such():
+    # the figures' titles read "model identified at 0 Hz (least-squares, none)"
+    from hammerstein.report.scenario import _model_summary, compensator_summary
+    c = {"kind": "hammerstein", "model": "identified",
+         "identify": {"records": "files", "hysteresis_records": ["h1.csv", "h2.csv"],
+                      "creep_records": ["c.csv"], "model": "auto"}}
+    expect = ("model identified from 3 measured record file(s) (hysteresis, creep; auto class)")
+    assert _model_summary(c) == expect
+    assert expect in compensator_summary(c)
