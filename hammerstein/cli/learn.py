@@ -445,7 +445,7 @@ def _handle(args):
         settled_max, settled_rms = float(np.max(euclid)), float(np.sqrt(np.mean(euclid ** 2)))
         as_asked = None if shaped_ref is None else float(np.max(np.linalg.norm(
             target[:, :N - delay][:, window] - shifted[:, window], axis=0)))
-        # the best trial so far (--history): a trial more than 10 % worse is not learnt from
+        # the best trial so far (--history): a trial worse beyond the noise is not learnt from
         state = _read_state(args.history, N) if args.history else None
         fingerprint = _fingerprint(target)
         if args.history:
