@@ -136,6 +136,7 @@ _LAZY = {
     "paper_comparison": "hammerstein.report.replication",
     "replicate": "hammerstein.runner",
     "drive_signal": "hammerstein.compensation.drive",
+    "compensate_reference": "hammerstein.scenario.hardware_route",
     "IterativeLearning": "hammerstein.compensation.ilc",
     "write_readme": "hammerstein.report.replication",
     # export: the compensators as C99 code / FMUs

@@ -26,7 +26,6 @@ range) (one line, nothing written); 2 a usage error.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 
@@ -35,30 +34,22 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
-from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
-                                            hardware_drive, rest_output, signals_csv,
-                                            starts_at_rest)
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier, rest_output,
+                                            signals_csv)
 from hammerstein.compensation.drive_files import rest_lead_text
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
-from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
-from hammerstein.compensation.model_classes import choose_kind, kind_problem
-from hammerstein.compensation.reach import REACH_NOTE_START, output_reach, reach_note
-from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
-                                              first_mode_hz, mode_decay_s, mode_note, zpetc_note)
-from hammerstein.exceptions import CompensatorDivergence, CompensatorError
-from hammerstein.scenario.registry import build_compensator
+from hammerstein.compensation.reach import REACH_NOTE_START
+from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
+from hammerstein.exceptions import CompensatorDivergence
+from hammerstein.scenario.hardware_route import (_kind_and_options, _rest_voltages,
+                                                 compensate_reference)
 
 __all__ = ["add_parser", "compensate"]
 
-#: ``--fade-in 0`` takes a reference whose first sample is within this of the rest output [µm]
-#: (the model's output at 0 V; the error message prints it to 7 digits)
-REST_TOLERANCE = 1e-3
 #: the kinds a drive file can be made with (``none`` drives nothing; ``ilc`` learns on the
 #: hardware: ``hammerstein learn``)
 KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", "preisach-inverse")
-#: the kinds whose static part is the inverse multiplicative law (``--gain``, ``--check``)
-LAW_KINDS = ("hammerstein", "multivariable", "diagonal")
 #: what ``--gain`` and ``--check`` mean, for the messages of a law that may not converge
 LAW_HINT = ("--gain midpoint|secant|identity sets K and --check warn runs a law that may not "
             "converge; without --kind the default kind chooses a convergent gain")
@@ -112,155 +103,23 @@ def add_parser(subparsers):
 
 def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, limits="error",
                gain=None, check=None, rest_lead=None, shape=True):
-    """Compensator and drive of a reference on an actuator (what the command writes).
+    """:func:`hammerstein.scenario.hardware_route.compensate_reference` of a command's reference.
 
     Parameters
     ----------
     plant : HammersteinPlant
-        The actuator (its hysteresis model of any class, dynamics, creep and
-        amplifier are the model).
     reference : hammerstein.cli._hardware.Reference
-        The reference record.
-    kind : str, optional
-        Compensator kind (default: :func:`hammerstein.compensation.model_classes.choose_kind`).
-    inversion : {'zpetc', 'stable'}
-    fade_in : float, optional
-        [s]; 0 only for a reference that starts at rest.
-    limits : {'error', 'warn', 'clip'}
-    gain : str or array_like, optional
-        K of the inverse multiplicative law (default: the kind's, or the
-        convergent gain of the default kind).
-    check : {'error', 'warn', 'ignore'}, optional
-        The law's convergence check (default the kind's, ``error``).
-    rest_lead : int, optional
-        With ``fade_in``: its first samples at rest [samples] (a drive file's, for ``learn``).
-    shape : bool
-        Shape the reference into the limits measured on the records (default); False
-        shapes only the drive (:func:`hammerstein.compensation.drive.hardware_drive`).
+        Its ``signal`` [µm] and ``period_samples``.
+    kind, inversion, fade_in, limits, gain, check, rest_lead, shape
+        As :func:`~hammerstein.scenario.hardware_route.compensate_reference`.
 
     Returns
     -------
     comp : object
-        The compensator.
     drive : hammerstein.compensation.drive.DriveResult
-        Its ``notes`` name a harmonic of a periodic reference that the
-        identified dynamics amplify at least twice over their static gain
-        (:func:`hammerstein.compensation.shaping.mode_note`).
-
-    Raises
-    ------
-    CompensatorError
-        A kind that does not work with the model (naming those that do), or
-        ``fade_in = 0`` for a reference that does not start at rest.
     """
-    kind, options, _ = _kind_and_options(plant, kind, gain, check, inversion)
-    spec = {"kind": kind, "model": "plant", **options}
-    if kind == "hammerstein":
-        spec["inversion"] = inversion
-        spec["creep"] = "plant"        # the actuator's creep (e.g. identified) is inverted with G
-    comp = build_compensator(spec, plant, Path.cwd())
-    n = reference.signal.shape[1]
-    if fade_in is not None and fade_in / plant.sampling_period > n:
-        raise CompensatorError(
-            f"--fade-in: {fade_in:g} s is longer than the reference ({n} samples, "
-            f"{n * plant.sampling_period:g} s); expected at most {n * plant.sampling_period:g} s")
-    fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
-    rest = rest_output(plant.hysteresis, plant.creep)
-    if fade == 0 and not starts_at_rest(reference.signal, rest, REST_TOLERANCE):
-        names = plant.hysteresis.output_names
-        first = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, reference.signal[:, 0]))
-        at = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, rest))
-        raise CompensatorError(
-            f"--fade-in 0: the reference starts at {first}, not at rest ({at}: the model's "
-            f"output at 0 V, within {REST_TOLERANCE:g} µm); the drive would start with a step "
-            f"that the actuator (and the exported C, which starts there) cannot follow: give a "
-            f"fade-in > 0 (the default: a duration, at least one period, {MIN_FADE_S:g} s and "
-            f"{FADE_DECAYS:g} decay times of the slowest bending mode) or a reference that "
-            f"starts at rest")
-    T = plant.sampling_period
-
-    at_rest = plant.rest_state()         # the actuator before the drive: settled at 0 V
-
-    def predict(u):
-        return plant.simulate(apply_amplifier(plant.amplifier, u, T), at_rest)[0]
-
-    linear = plant.matrices              # creep then dynamics, built once
-    drive = hardware_drive(comp, reference.signal, T, reference.period_samples, fade,
-                           plant.amplifier, limits, rest=rest,
-                           first_mode=first_mode_hz(linear[0], T), predict=predict,
-                           names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T),
-                           rest_lead=rest_lead, shape=shape)
-    note = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
-                      reference.signal, plant.hysteresis.output_names)
-    if note:
-        drive.notes.append(note)
-    note = mode_note(linear, T, drive.reference, reference.period_samples)
-    if note:
-        drive.notes.append(note)
-    zeros = _zpetc_zeros(comp)
-    note = None if zeros is None else zpetc_note(zeros, T, drive.reference,
-                                                 reference.period_samples)
-    if note:
-        drive.notes.append(note)
-    note = _first_sample_note(plant, drive, inversion if kind == "hammerstein" else None)
-    if note:
-        drive.notes.append(note)
-    return comp, drive
-
-
-def _first_sample_note(plant, drive, inversion):
-    """A note when the drive's first sample is not the rest voltage (beyond
-    :data:`FIRST_SAMPLE_TOLERANCE`), or None."""
-    off = np.asarray(drive.inputs, dtype=float)[:, 0] - _rest_voltages(plant)
-    if np.max(np.abs(off)) <= FIRST_SAMPLE_TOLERANCE:
-        return None
-    why = ("the stable inversion's anti-causal part, G's zeros outside the unit circle, starts "
-           "acting before the reference moves and had not decayed over the fade's rest lead (a "
-           "zero near the unit circle decays slowly: the default fade-in lengthens its rest "
-           "lead up to a quarter of the record; a longer record, or a longer --fade-in, gives "
-           "it room)"
-           if inversion == "stable" else
-           "the inverse's start at rest, within its tolerance")
-    return ("the drive's first sample is " + ", ".join(
-        f"{n} {v:+.3g} V" for n, v in zip(plant.hysteresis.input_names, off))
-            + f" from rest: {why}")
-
-
-def _rest_voltages(plant):
-    """Each input's rest voltage [V]: the amplifier's, 0 without one."""
-    return (np.zeros(plant.hysteresis.n_inputs) if plant.amplifier is None
-            else plant.amplifier.rest_voltages())
-
-
-def _zpetc_zeros(comp):
-    """The zeros of G a Hammerstein compensator's ZPETC inverse approximates, or None."""
-    return getattr(getattr(comp, "inverse", None), "unacceptable_zeros", None)
-
-
-def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
-    """(kind, options of the kind, the note of a chosen kind or None).
-
-    A given kind is checked against the model's class (the message names the
-    kinds that work); none given: :func:`hammerstein.compensation.model_classes.choose_kind`.
-    """
-    note = None
-    if kind is None:
-        choice = choose_kind(plant.hysteresis, not plant.is_static, gain, inversion or "zpetc")
-        kind, options, note = choice.kind, dict(choice.options), choice.note()
-    else:
-        problem = kind_problem(plant.hysteresis, kind, not plant.is_static)
-        if problem:
-            raise CompensatorError(problem)
-        options = {}
-    if kind in LAW_KINDS:
-        if gain is not None:
-            options["gain"] = gain
-        if check is not None:
-            options["check"] = check
-    elif gain is not None or check is not None:
-        raise CompensatorError(f"--gain/--check: kind {kind!r} has no inverse multiplicative law "
-                               f"(they apply to {', '.join(LAW_KINDS)})")
-    return kind, options, note
+    return compensate_reference(plant, reference.signal, reference.period_samples, kind,
+                                inversion, fade_in, limits, gain, check, rest_lead, shape)
 
 
 def _peaks_text(plant, drive):

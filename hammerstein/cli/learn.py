@@ -102,7 +102,8 @@ from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_hist
                                             _fingerprint, _read_best, _read_state, _restore_gains,
                                             _save_gains, _settled_rows, _write_history,
                                             _write_state, history_rows)
-from hammerstein.cli.compensate import LAW_HINT, LAW_KINDS, compensate
+from hammerstein.cli.compensate import LAW_HINT, compensate
+from hammerstein.scenario.hardware_route import LAW_KINDS
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hardware_fade,
                                             keep_end, keep_start, limit_start_up,

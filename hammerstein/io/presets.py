@@ -496,7 +496,9 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
 
     Parameters
     ----------
-    model : MultivariablePI
+    model : MultivariablePI or MultivariableHysteresis
+        Any model class (classical or modified PI, Preisach, generalised PI,
+        mixed), as ``identify`` writes it.
     path : str or pathlib.Path
         Destination ``.toml``, starting with the project's provenance line
         (:func:`hammerstein.core.files.provenance_line`); written atomically through an exclusive

@@ -90,7 +90,7 @@ def test_a_glitch_is_named_and_a_chatter_refused(glitch, named, refused):
 def test_a_first_sample_off_rest_is_named(first, inversion, said):
     """compensate names a drive whose first sample is more than 1e-9 V from rest, and why."""
     from types import SimpleNamespace
-    from hammerstein.cli.compensate import _first_sample_note
+    from hammerstein.scenario.hardware_route import _first_sample_note
     plant = SimpleNamespace(amplifier=None,
                             hysteresis=SimpleNamespace(input_names=["ux", "uy"], n_inputs=2))
     drive = SimpleNamespace(inputs=np.array([[0.0, 1.0], [first, 1.0]]))

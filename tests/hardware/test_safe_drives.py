@@ -429,3 +429,16 @@ def test_evaluate_does_not_read_a_circles_period_as_the_delay(tmp_path, true_del
                      "--measured", str(tmp_path / "m.csv"), "--out", str(tmp_path / "ev")]) == 0
     m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
     assert m[m["metric"] == "delay_samples"]["value"].iloc[0] == true_delay
+
+
+def test_compensate_reference_is_the_commands_drive(tmp_path):
+    # the command's route from Python: the drive file's voltages, from the library call
+    import hammerstein as hs
+    out = tmp_path / "d.csv"
+    _compensate([_preset(tmp_path), "--reference", CIRCLE, "--out", out])
+    u_cli, fade, _ = _drive(out)
+    plant = hs.load_plant(str(_preset(tmp_path)))
+    _, r = hs.circle(plant.sampling_period, radius=30.0, frequency=100.0, periods=12)
+    _, drive = hs.compensate_reference(plant, r, period_samples=200)
+    assert drive.fade_samples == fade
+    np.testing.assert_allclose(drive.inputs, u_cli, rtol=0, atol=1e-12)
