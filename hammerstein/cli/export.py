@@ -239,7 +239,9 @@ def _written(args, kind, note, make):
     try:
         written = make()
     except (ExportError, FileLimitError) as exc:
-        chosen = f" (kind {kind}, the default for this model; --kind names another)" if note else ""
+        about_plant = "closed loop: plant:" in str(exc)     # the model, whatever the kind
+        chosen = (f" (kind {kind}, the default for this model; --kind names another)"
+                  if note and not about_plant else "")
         print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
         return 1
     if note:

@@ -384,8 +384,10 @@ class FeedbackLoop:
         self._plant_arrays = LinearArrays(A, B, C, D)
         if isinstance(model, MultivariablePI):
             if getattr(model, "has_output_map", False):
-                raise FeedbackError("plant: a PI model with an output map is not supported in "
-                                    "the closed loop")
+                raise FeedbackError("plant: a classical PI with an output map (the modified PI "
+                                    "`identify` may choose) cannot run in the closed-loop "
+                                    "kernel; identify with --output-map none, or --model "
+                                    "preisach or generalized")
             self._kind = 0
             self._pi = pack_model(model).arrays
             self._components = empty_components(m, p)

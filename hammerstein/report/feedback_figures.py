@@ -137,7 +137,17 @@ def loop_figure(analysis, title):
     return fig
 
 
+def _bandwidth_words(b):
+    """``5000 Hz`` (one value per axis or a list), ``no low-pass`` without one."""
+    if b is None or b == "unlimited":
+        return "no low-pass"
+    return f"{b} Hz" if not isinstance(b, list) else f"{b} Hz".replace("'unlimited'", "none")
+
+
 def _side_by_side(table):
+    # a [[cases]] row has no sweep frequency: kept as "-" (a NaN key drops the row from the
+    # pivot, and the cases' table came out empty)
+    table = table.assign(frequency_hz=[("-" if pd.isna(v) else v) for v in table["frequency_hz"]])
     wide = table.pivot_table(index=["sweep", "compensator", "frequency_hz", "case"],
                              columns="mode", values=["rms_error_um", "max_error_percent"])
     wide.columns = [f"{'RMS µm' if a == 'rms_error_um' else 'max %'} {b}" for a, b in wide.columns]
@@ -201,7 +211,7 @@ def write_feedback_report(scenario, results, directory, jobs):
     lines += [f"- discretisation: {t.get('method', 'tustin')}; anti-windup: "
               f"{t.get('anti_windup', 'back-calculation')}",
               f"- sensor: {s.get('noise_nm', 0.0):g} nm RMS white noise, bandwidth "
-              f"{s.get('bandwidth_hz', 'unlimited')} Hz, delay {s.get('delay', 0)} samples; "
+              f"{_bandwidth_words(s.get('bandwidth_hz'))}, delay {s.get('delay', 0)} samples; "
               f"the reference passes through the same filter and delay",
               f"- amplifier: range {amp.get('range', 'unlimited')} V, slew rate "
               f"{amp.get('slew_rate', 'unlimited')} V/s",

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from hammerstein.compensation.feedback import ANTI_WINDUP, AXIS_KINDS, METHODS
+from hammerstein.core.schema import did_you_mean
 from hammerstein.exceptions import ScenarioError
 from hammerstein.io.sensor import check_sensor_table
 
@@ -155,7 +156,7 @@ def _check_axis(t, where, problems):
                         f"found {kind!r}")
         return
     for k in sorted(set(t) - allowed):
-        problems.append(f"{where}.{k}: unknown key")
+        problems.append(f"{where}.{k}: unknown key{did_you_mean(k, allowed)}")
 
 
 def _check_mimo(t, where, problems):
@@ -177,7 +178,7 @@ def _check_mimo(t, where, problems):
         problems.append(f"{where}.kind: expected one of {', '.join(MIMO_KINDS)}, found {kind!r}")
         return
     for k in sorted(set(t) - allowed):
-        problems.append(f"{where}.{k}: unknown key")
+        problems.append(f"{where}.{k}: unknown key{did_you_mean(k, allowed)}")
 
 
 def check_feedback_table(table, where, problems):
@@ -282,6 +283,13 @@ def validate_feedback(path, data, validate_cases: Callable):
         table = {}
     else:
         table = check_feedback_table(data["feedback"], f"{path}: feedback", problems)
+    if spec is not None:
+        for case in spec.cases[:1]:
+            if getattr(case.plant.hysteresis, "has_output_map", False):
+                problems.append(
+                    f"{path}: plant.preset: a classical PI with an output map (the modified PI "
+                    f"`identify` may choose) cannot run in the closed-loop kernel; identify with "
+                    f"--output-map none, or --model preisach or generalized")
     if spec is not None and table.get("axes"):
         names = list(spec.cases[0].plant.hysteresis.output_names) if spec.cases else []
         for name in table["axes"]:

@@ -374,8 +374,12 @@ def _plausibility(mode, signal, spec):
     return found
 
 
-def _validate_cases(path, data):
-    """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError."""
+def _validate_cases(path, data, feedback=False):
+    """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError.
+
+    ``feedback``: the cases of a feedback scenario, where a reference may run
+    without a feedforward (``kind = "none"``: the loop alone).
+    """
     source, base, problems = str(path), path.parent, []
     top = check_table(data, TOP, "", problems, source) or {}
     if "name" not in data and not (re.fullmatch(NAME, path.stem) and len(path.stem) <= MAX_NAME):
@@ -479,7 +483,8 @@ def _validate_cases(path, data):
                 comp_ok = False
         sig = _signal(where, mode, raw[mode], plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
-        if mode == "reference" and kind in COMPENSATORS and not COMPENSATORS[kind].compensates:
+        if (mode == "reference" and kind in COMPENSATORS and not COMPENSATORS[kind].compensates
+                and not feedback):
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
                             f"(compensator.kind is {kind!r}); use drive for an open-loop run")
         if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
@@ -545,7 +550,8 @@ VALIDATORS: dict[str, Callable] = {
     "cases": _validate_cases,
     "identification": load_identification_scenario,
     "monte-carlo": validate_montecarlo,
-    "feedback": lambda path, data: validate_feedback(path, data, _validate_cases),
+    "feedback": lambda path, data: validate_feedback(
+        path, data, lambda p, d: _validate_cases(p, d, feedback=True)),
 }
 
 
