@@ -807,10 +807,18 @@ class FeedbackLoop:
                  "passed": bool(peak * delta < 1 and np.all(np.abs(control.poles(M)) < 1))}
         passed = ok_all or small["passed"]
         names = list(self.plant.hysteresis.output_names)
+        def why(a):
+            if a["passed"]:
+                return f"met (margin {a['circle_margin']:.3g})"
+            if not a["stable_midpoint"]:      # a positive margin then says nothing
+                return "NOT met: the loop is unstable at the sector's midpoint gain"
+            return f"NOT met (margin {a['circle_margin']:.3g} <= 0)"
+
         summary = "; ".join(
             f"axis {names[l]}: sector [{a['sector_low']:.3g}, {a['sector_high']:.3g}] µm/V, circle "
-            f"criterion {'met' if a['passed'] else 'NOT met'} (margin {a['circle_margin']:.3g})"
-            for l, a in enumerate(axes))
+            f"criterion {why(a)}" for l, a in enumerate(axes))
         summary += (f"; MIMO small gain {small['value']:.3g} "
-                    f"({'< 1: met' if small['passed'] else '>= 1: not met (conservative)'})")
+                    + ("(< 1: met)" if small["passed"] else
+                       "(>= 1: not met, conservative)" if small["value"] >= 1 else
+                       "(< 1, but the loop M is unstable: not met)"))
         return {"axes": axes, "small_gain": small, "passed": bool(passed), "summary": summary}

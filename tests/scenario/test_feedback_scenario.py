@@ -169,3 +169,14 @@ def test_an_axis_key_misspelt_gets_the_closest_one(tmp_path):
     with pytest.raises(ScenarioError, match=r"feedback\.axes\.x\.crosover_hz: unknown key "
                                             r"\(did you mean 'crossover_hz'\?\)"):
         validate_scenario(_write(tmp_path, BASE + bad))
+
+
+def test_an_unstable_loop_says_so_not_a_positive_margin(tmp_path):
+    # "circle criterion NOT met (margin 0.254)" read as a pass: the loop at the sector's
+    # midpoint gain was unstable, which the margin (a positive number) does not say
+    fast = FEEDBACK.replace("crossover_hz = 120.0", "crossover_hz = 1500.0").replace(
+        'kind = "integral"\ncrossover_hz = 20.0', 'kind = "integral"\ncrossover_hz = 1500.0')
+    out = run_scenario(_write(tmp_path, BASE + fast), tmp_path / "out")
+    assert not out.ok
+    assert "NOT met: the loop is unstable at the sector's midpoint gain" in out.error
+    assert "NOT met (margin" not in out.error
