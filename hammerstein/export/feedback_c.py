@@ -39,6 +39,7 @@ import numpy as np
 from hammerstein.export.c_base import reference_bound
 from hammerstein.export.c_code import (MARKER, STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE,
                                        check_name, export_c)
+from hammerstein.compensation.drive import rest_output
 from hammerstein.exceptions import ExportError
 
 __all__ = ["FeedbackCExport", "export_feedback_c"]
@@ -69,6 +70,13 @@ class FeedbackCExport:
     measured : bool
         True: ``NAME_step`` takes the measurements too (the FMU wrapper's
         measurement inputs, :mod:`hammerstein.export.fmu`).
+    rest_reference : list of float
+        Where ``NAME_init`` leaves the feedforward [µm] (the model's output at
+        0 V, the creep included where it inverts it), per output: the FMU's
+        reference start values (a reference left there commands no step).
+    rest_measurement : list of float
+        The plant's output at 0 V, creep included [µm]: the FMU's measurement
+        start values (what the sensor reads at rest).
     """
 
     name: str
@@ -83,6 +91,8 @@ class FeedbackCExport:
     output_names: list = field(default_factory=list)
     description: str = ""
     measured: bool = True
+    rest_reference: list = field(default_factory=list)
+    rest_measurement: list = field(default_factory=list)
 
     def files(self):
         """File name -> text of every generated file.
@@ -307,6 +317,10 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     what = "; ".join(c.descriptions)
     description = (f"feedback controller ({what}) with "
                    + (ff.description if ff else "no feedforward"))
+    at_rest = [float(v) for v in rest_output(loop.plant.hysteresis, loop.plant.creep)]
+    rest = (list(ff.rest_reference) if ff is not None and getattr(ff, "rest_reference", None)
+            else at_rest)
     return FeedbackCExport(N, header, source, ff, m, p, P, T,
                            list(loop.plant.hysteresis.input_names),
-                           list(loop.plant.hysteresis.output_names), description)
+                           list(loop.plant.hysteresis.output_names), description,
+                           rest_reference=rest, rest_measurement=at_rest)

@@ -173,6 +173,14 @@ def test_closed_loop_fmu_equals_the_python_loop(tmp_path, capsys):
     names = [v.name for v in md.modelVariables]
     assert names == ["reference_x", "reference_y", "measurement_x", "measurement_y",
                      "voltage_ux", "voltage_uy", "status"]
+    # the reference starts where the feedforward rests (the model's output at 0 V; this kind
+    # does not invert the creep) and the measurement at the plant's rest, creep included: an
+    # input left at its start value commands no step (both started at 0 µm: -3.35 / +2.25 V)
+    from hammerstein.compensation.drive import rest_output
+    plant = load_plant("realistic-2dof")
+    starts = [float(v.start) for v in md.modelVariables[:4]]
+    np.testing.assert_allclose(starts[:2], rest_output(plant.hysteresis), rtol=1e-12)
+    np.testing.assert_allclose(starts[2:], rest_output(plant.hysteresis, plant.creep), rtol=1e-12)
     yr = _reference(1500)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
