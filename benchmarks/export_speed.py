@@ -51,7 +51,7 @@ from hammerstein.models.dynamics import sampled_bending_modes  # noqa: E402
 from hammerstein.io.presets import load_plant  # noqa: E402
 from hammerstein.export import export_c  # noqa: E402
 from hammerstein.compensation.model_classes import choose_kind  # noqa: E402
-from hammerstein.export.build import build_compensator, load_source  # noqa: E402
+from hammerstein.export.build import compensator_from_source, load_source  # noqa: E402
 from hammerstein.export.fmu import find_compiler  # noqa: E402
 
 HARNESS = r"""
@@ -165,7 +165,8 @@ def cases(files):
             kind, _, inversion = kind.partition("/")
             source = load_source(path)
             kind = kind or choose_kind(source.model, source.dynamics is not None).kind
-            comp, Tm = build_compensator(source, kind, check="ignore", inversion=inversion or None)
+            comp, Tm = compensator_from_source(source, kind, check="ignore",
+                                               inversion=inversion or None)
             yield (f"{Path(path).parent.name}/{Path(path).stem} {kind}"
                    + (f" {inversion}" if inversion else "")), comp, Tm, 12.0
 

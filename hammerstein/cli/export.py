@@ -28,7 +28,7 @@ from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError, FileLimitError,
                                     PresetError)
 from hammerstein.export import MARKER, check_name, export_c
-from hammerstein.export.build import (KINDS, REFUSED_KINDS, build_compensator, check_fmu_owned,
+from hammerstein.export.build import (KINDS, REFUSED_KINDS, check_fmu_owned, compensator_from_source,
                                       limits_from_table, load_source, write_files)
 from hammerstein.export.feedback_c import export_feedback_c
 from hammerstein.export.fmu import build_fmu, find_compiler
@@ -253,10 +253,10 @@ def _written(args, kind, note, make):
 
 def _open_loop(args, source, kind, gain, check):
     """The compensator of ``kind`` alone: its C files, written; the paths."""
-    comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
-                                feedback=args.feedback, cutoff_hz=args.cutoff_hz,
-                                inversion=args.inversion, sampling_period=args.sampling_period,
-                                check=check or "error")
+    comp, T = compensator_from_source(source, kind, gain=gain, iterations=args.iterations,
+                                      feedback=args.feedback, cutoff_hz=args.cutoff_hz,
+                                      inversion=args.inversion, sampling_period=args.sampling_period,
+                                      check=check or "error")
     inputs = list(source.model.input_names)
     if args.amplifier_range is not None:
         table = {"range": list(args.amplifier_range)}
@@ -285,11 +285,11 @@ def _closed_loop_files(args, source, kind, gain, check):
         if T is None:
             raise ExportError("sampling_period: a model file needs --sampling-period S")
     else:
-        comp, T = build_compensator(source, kind, gain=gain, iterations=args.iterations,
-                                    feedback=args.feedback, cutoff_hz=args.cutoff_hz,
-                                    inversion=args.inversion,
-                                    sampling_period=args.sampling_period,
-                                    check=check or "error")
+        comp, T = compensator_from_source(source, kind, gain=gain, iterations=args.iterations,
+                                          feedback=args.feedback, cutoff_hz=args.cutoff_hz,
+                                          inversion=args.inversion,
+                                          sampling_period=args.sampling_period,
+                                          check=check or "error")
     name = args.name or _default_name(source.name, f"{kind}_loop")
     code = _closed_loop_code(args, source, comp, T, name)
     return _write(args, code, name)

@@ -31,7 +31,7 @@ from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
 
 __all__ = ["KINDS", "REFUSED_KINDS", "ExportSource", "load_source",
-           "build_compensator", "limits_from_table",
+           "compensator_from_source", "limits_from_table",
            "check_owned", "check_fmu_owned", "write_files"]
 
 #: Exportable compensator kinds: name -> description.
@@ -181,9 +181,15 @@ def limits_from_table(table, inputs, where="amplifier"):
     return AmplifierLimits(lo, hi, slew)
 
 
-def build_compensator(source, kind="multivariable", gain=None, iterations=None, feedback="delay",
-                      cutoff_hz=None, inversion="zpetc", sampling_period=None, check="error"):
-    """The compensator of ``kind`` built on a source, with the scenario defaults.
+def compensator_from_source(source, kind="multivariable", gain=None, iterations=None,
+                            feedback="delay", cutoff_hz=None, inversion="zpetc",
+                            sampling_period=None, check="error"):
+    """The compensator of ``kind`` built on an export source, with the scenario defaults.
+
+    A scenario's compensator table is built by
+    :func:`hammerstein.scenario.registry.build_compensator` instead; this one
+    takes what :func:`load_source` read (a preset or a model file) and the
+    options of ``hammerstein export``.
 
     Parameters
     ----------

@@ -15,7 +15,7 @@ from test_c_equivalence import python_voltages, rel_error
 
 from hammerstein.cli.main import main
 from hammerstein.export import export_c
-from hammerstein.export.build import build_compensator, load_source
+from hammerstein.export.build import compensator_from_source, load_source
 from hammerstein.export.fmu import platform_folder
 from hammerstein.io.presets import load_plant, read_toml
 from hammerstein.scenario.feedback import build_loops
@@ -98,7 +98,7 @@ def test_closed_loop_c_equals_the_python_loop(tmp_path, capsys, kind):
     if kind != "none":
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            comp, T = build_compensator(load_source("realistic-2dof"), kind)
+            comp, T = compensator_from_source(load_source("realistic-2dof"), kind)
         P = int(getattr(comp, "preview_samples", 0))
         f = python_voltages(comp, yr)                # call k gets yr[:, k]
         f_c = Harness(export_c(comp, "ff", T), tmp_path / "ff").run(yr)[0]
@@ -184,7 +184,7 @@ def test_closed_loop_fmu_equals_the_python_loop(tmp_path, capsys):
     yr = _reference(1500)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        comp, _ = build_compensator(load_source("realistic-2dof"), "preisach-inverse")
+        comp, _ = compensator_from_source(load_source("realistic-2dof"), "preisach-inverse")
     res = _loop().simulate(yr, feedforward=python_voltages(comp, yr), seed=5)
     n = yr.shape[1]
     sig = np.zeros(n, dtype=[("time", float)] + [(nm, float) for nm in names[:4]])

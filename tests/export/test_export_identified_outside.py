@@ -6,7 +6,7 @@ loops), made by ``hammerstein excitation``; ``hammerstein identify --dynamics
 --creep-records`` with ``--model preisach``, ``generalized`` and ``classical``. Each model
 file is exported with the defaults (no ``--kind``) and with explicit kinds; the written C,
 compiled against its header (``-Werror -pedantic``), equals the Python compensator that
-``hammerstein export`` builds (:func:`hammerstein.export.build.build_compensator`) to 1e-12
+``hammerstein export`` builds (:func:`hammerstein.export.build.compensator_from_source`) to 1e-12
 relative on a faded-in circle. Slow: the identifications take minutes.
 """
 
@@ -20,7 +20,7 @@ import pytest
 from hammerstein.cli.main import main
 from hammerstein.export import STATUS_RANGE, export_c
 from hammerstein.compensation.model_classes import choose_kind
-from hammerstein.export.build import build_compensator, limits_from_table, load_source
+from hammerstein.export.build import compensator_from_source, limits_from_table, load_source
 
 from conftest import Harness, needs_cc
 from outside_actuator import OutsideActuator, write_csv
@@ -75,7 +75,7 @@ def check_export(path, kind, workdir):
         gain = None if choice is None else choice.options.get("gain")
         if gain is not None and not isinstance(gain, str):
             gain = [list(map(float, row)) for row in gain]     # K [µm/V], as the CLI passes it
-        comp, Ts = build_compensator(source, kind or choice.kind, gain=gain, check="warn")
+        comp, Ts = compensator_from_source(source, kind or choice.kind, gain=gain, check="warn")
         limits = limits_from_table({"range": [-1000.0, 1000.0]}, list(source.model.input_names),
                                    "--amplifier-range/--slew-rate")
         code = export_c(comp, "act", Ts, limits=limits)

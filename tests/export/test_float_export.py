@@ -14,14 +14,14 @@ from test_c_equivalence import circle, python_voltages, random_walk, raster, rel
 from test_exact_export import strict_harness
 
 from hammerstein.export import export_c
-from hammerstein.export.build import build_compensator, load_source
+from hammerstein.export.build import compensator_from_source, load_source
 from hammerstein.export.c_base import _float_realization
 
 
 def _compensator(preset):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return build_compensator(load_source(preset), "hammerstein")
+        return compensator_from_source(load_source(preset), "hammerstein")
 
 
 def test_balanced_realization_has_the_same_transfer():

@@ -124,7 +124,7 @@ def test_amplifier_table(table, expected):
 def test_a_model_of_an_unknown_class_is_refused(tmp_path):
     """A model class that is neither a classical PI nor a MultivariableHysteresis is refused by
     name (Preisach and generalised-PI models are exported: test_exact_export.py)."""
-    from hammerstein.export.build import ExportSource, build_compensator
+    from hammerstein.export.build import ExportSource, compensator_from_source
     source = ExportSource(tmp_path / "preset.toml", "preset", _Preisach(), 5e-5, None, None)
     with pytest.raises(ExportError, match="found _Preisach"):
-        build_compensator(source, "multivariable")
+        compensator_from_source(source, "multivariable")
