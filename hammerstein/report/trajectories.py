@@ -34,6 +34,29 @@ def _peak_off_scale(ax, values):
     return float(np.max(np.abs(v))) if v.size and (v.min() < lo or v.max() > hi) else None
 
 
+def _error_unit(errors):
+    """Scale and unit of an error axis [µm], so that its tick labels stay short.
+
+    Below 0.1 µm the ticks in µm read 0.0004 and the like, wider than the
+    space the fixed layout leaves between the panels: nm down to 1e-4 µm,
+    below that (round-off) a power of ten of µm written in the unit.
+    """
+    e = np.asarray(errors, dtype=float)
+    e = e[np.isfinite(e)]
+    peak = float(np.max(np.abs(e))) if e.size else 0.0
+    if peak >= 0.1 or peak == 0.0:
+        return 1.0, "µm"
+    if peak >= 1e-4:
+        return 1e3, "nm"
+    k = int(np.floor(np.log10(peak)))
+    return 10.0 ** -k, f"1e{k} µm"
+
+
+def _length(value):
+    """A length given in µm, written in nm below 0.1 µm."""
+    return f"{value:.3g} µm" if abs(value) >= 0.1 else f"{value * 1e3:.3g} nm"
+
+
 def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
                       inputs=None, input_names=None):
     """XY plot, time plots (displacements, input voltages) and tracking errors.
@@ -43,7 +66,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     displacement against time; (c) every output's tracking error y_r - y
     and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
     on the settled part (the start-up transient is shaded, and its peak is
-    printed when it is off scale); (d) the input voltages when ``inputs``
+    printed when it is off scale) and in nm when the settled errors stay
+    below 0.1 µm; (d) the input voltages when ``inputs``
     is given.
 
     Parameters
@@ -110,13 +134,15 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     axu.set_ylabel("voltage [V]")
     axu.set_xlabel("time [ms]")
 
+    scale, unit = _error_unit(e[:, steady] if steady.any() else e)
+    e, eu = e * scale, eu * scale
     axe = fig.add_subplot(gs[0, 2], sharex=axt)
     for i, n in enumerate(names):
         axe.plot(*decimate(t, e[i]), "-", color=f"C{i}", linewidth=1.0, label=f"{n}_r - {n}")
-    axe.set_ylabel("tracking error [µm]")
+    axe.set_ylabel(f"tracking error [{unit}]")
     axn = fig.add_subplot(gs[1, 2], sharex=axt)
     axn.plot(*decimate(t, eu), "-", color="k", linewidth=0.9)
-    axn.set_ylabel(f"||Y_r - Y|| over {', '.join(names)} [µm]")
+    axn.set_ylabel(f"||Y_r - Y|| over {', '.join(names)} [{unit}]")
     axn.set_xlabel("time [ms]")
     for a in (axt, axu, axe, axn):
         a.grid(True, alpha=0.3)
@@ -130,7 +156,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         for a, vals in ((axe, e[:, ~steady]), (axn, eu[~steady])):
             peak = _peak_off_scale(a, vals)
             notes[a] = "\nscaled after settling" + (
-                "" if peak is None else f"; start-up (shaded) peaks at {peak:.3g} µm")
+                "" if peak is None else f"; start-up (shaded) peaks at {_length(peak / scale)}")
         for a in (axt, axu, axe, axn):
             _mark_transient(a, settle_time * 1e3)
     axe.set_title("(c) tracking error per axis" + notes[axe], fontsize=10, y=1.0)
