@@ -16,14 +16,20 @@ of the amplifier (``voltage``), then ``x_c <- A_k x_c + B_k [r; m; f]`` with
 back-calculation or clamping. A feedforward with ``NAME_ff_PREVIEW = P``
 samples of look-ahead takes the reference P samples ahead: ``NAME_step``
 then gives the controller the reference it received P samples before (kept
-in the state), so pass the reference ``P`` samples early, as to the
-compensator alone. The return value has bit 1 (``NAME_STATUS_LIMIT``) set
-when the amplifier limited a voltage, bit 2 (``NAME_STATUS_DIVERGED``) when
-the feedforward diverged, bit 4 (``NAME_STATUS_RANGE``) on a NaN or infinite
-reference or measurement, or one beyond ten times the plant model's output range
-(:func:`hammerstein.export.c_base.reference_bound`: a glitch; the sample is skipped:
-voltages held, state kept), or a reference beyond the feedforward model's range. Double
-precision.
+in the state; ``NAME_init`` fills it with the feedforward's rest output, so
+that the first P samples ask the controller for no move), so pass the
+reference ``P`` samples early, as to the compensator alone. The return value
+has bit 1 (``NAME_STATUS_LIMIT``) set when the amplifier limited a voltage,
+bit 2 (``NAME_STATUS_DIVERGED``) when the feedforward diverged, bit 4
+(``NAME_STATUS_RANGE``) on a NaN or infinite reference or measurement, or one
+beyond ten times the plant model's output range
+(:func:`hammerstein.export.c_base.reference_bound`: a glitch), or a reference
+beyond the feedforward model's range. A glitch reference skips the sample
+(voltages held, state kept). A glitch measurement skips only the feedback:
+the feedforward steps on with the reference (a skipped step would shift its
+preview, and a ZPETC inverse would then see a jump of the reference), the
+controller's state is kept and its part of the voltage, the last applied
+voltage less the last feedforward, is held. Double precision.
 
 ``hammerstein export --closed-loop`` (:mod:`hammerstein.cli.export`) builds
 the loop from a ``[feedback]`` table and writes these files.
@@ -196,6 +202,9 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
             raise ExportError(f"feedforward: {ff.n_outputs} references -> {ff.n_inputs} "
                               f"voltages, the loop has {p} -> {m}")
     P = 0 if ff is None else int(ff.preview)
+    at_rest = [float(v) for v in rest_output(loop.plant.hysteresis, loop.plant.creep)]
+    rest = (list(ff.rest_reference) if ff is not None and getattr(ff, "rest_reference", None)
+            else at_rest)
     first = f"{MARKER} {version} (feedback controller) */".replace("  ", " ")
     header = f"""{first}
 #ifndef {N}_H
@@ -219,9 +228,10 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
  *   slew-limited and clipped to the amplifier range: {_describe(L)}).
  * Return value: 0 or the bits {N}_STATUS_LIMIT (the amplifier limits clamped a voltage;
  *   the anti-windup acts), {N}_STATUS_DIVERGED (the feedforward diverged: it holds its
- *   voltages until {N}_init), {N}_STATUS_RANGE (a NaN or infinite reference or
- *   measurement: the sample is skipped, voltages held, state kept; or a reference beyond
- *   the feedforward model's range).
+ *   voltages until {N}_init), {N}_STATUS_RANGE (a NaN, infinite or glitch reference: the
+ *   sample is skipped, voltages held, state kept; a NaN, infinite or glitch measurement:
+ *   the feedforward steps on, the controller's state is kept and its part of the voltage
+ *   held; or a reference beyond the feedforward model's range).
  */
 
 /* Controller: {'; '.join(c.descriptions)} */
@@ -230,6 +240,7 @@ typedef double {N}_real;
 typedef struct {{
     double xc[{max(nc, 1)}];             /* controller states */
     double a[{m}];                        /* last applied voltages [V] */
+    double f[{m}];                        /* last feedforward voltages [V] */
     double rbuf[{max(P, 1)}][{p}];        /* references kept for the preview [um] */
     int rpos;
 {f'    {N}_ff_state ff;' if ff else ''}
@@ -263,10 +274,16 @@ static const int CLAMP[{max(nc, 1)}] = {{{', '.join(str(int(v)) for v in L.clamp
 static const double LOW[{m}] = {_vec(L.low)};
 static const double HIGH[{m}] = {_vec(L.high)};
 static const double SLEW[{m}] = {_vec(L.slew)};
+static const double REST[{p}] = {_vec(rest)};
 
 void {N}_init({N}_state *s)
 {{
+    int i, l;
     memset(s, 0, sizeof *s);
+    /* the controller's reference until the first preview has passed: where the feedforward rests */
+    for (i = 0; i < {max(P, 1)}; ++i)
+        for (l = 0; l < {p}; ++l) s->rbuf[i][l] = REST[l];
+    (void)i; (void)l;
 {f'    {N}_ff_init(&s->ff);' if ff else ''}
 }}
 
@@ -274,15 +291,30 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
              const double measurement[{N}_N_OUTPUTS], double voltage[{N}_N_INPUTS])
 {{
     double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
-    int status = 0, saturated = 0, i, j, k, l;
-    for (l = 0; l < {p}; ++l)  /* a NaN, infinite or glitch input: the sample is skipped (voltages held) */
-        if (!isfinite(reference[l]) || !isfinite(measurement[l]) || fabs(reference[l]) > {bound}
-                || fabs(measurement[l]) > {bound}) {{
+    int status = 0, saturated = 0, blind = 0, i, j, k, l;
+    for (l = 0; l < {p}; ++l)  /* a NaN, infinite or glitch reference: the sample is skipped */
+        if (!isfinite(reference[l]) || fabs(reference[l]) > {bound}) {{
             for (k = 0; k < {m}; ++k) voltage[k] = s->a[k];
             return {STATUS_RANGE};
         }}
+    for (l = 0; l < {p}; ++l)  /* a NaN, infinite or glitch measurement: no feedback this sample */
+        if (!isfinite(measurement[l]) || fabs(measurement[l]) > {bound}) blind = 1;
     for (k = 0; k < {m}; ++k) f[k] = 0.0;
-{ff_call}{rnow}    for (l = 0; l < {p}; ++l) {{ e[l] = rnow[l]; e[{p} + l] = measurement[l]; }}
+{ff_call}{rnow}    if (blind) {{  /* the feedforward keeps time; the controller's part is held, its state kept */
+        for (k = 0; k < {m}; ++k) {{
+            double v = f[k] + (s->a[k] - s->f[k]);
+            if (v > s->a[k] + SLEW[k]) v = s->a[k] + SLEW[k];
+            if (v < s->a[k] - SLEW[k]) v = s->a[k] - SLEW[k];
+            if (v > HIGH[k]) v = HIGH[k];
+            if (v < LOW[k]) v = LOW[k];
+            s->f[k] = f[k];
+            s->a[k] = v;
+            voltage[k] = v;
+        }}
+        return status | {STATUS_RANGE};
+    }}
+    for (k = 0; k < {m}; ++k) s->f[k] = f[k];
+    for (l = 0; l < {p}; ++l) {{ e[l] = rnow[l]; e[{p} + l] = measurement[l]; }}
     for (k = 0; k < {m}; ++k) e[{2 * p} + k] = f[k];
     for (k = 0; k < {m}; ++k) {{
         double acc = f[k], v, lo, hi;
@@ -317,9 +349,6 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     what = "; ".join(c.descriptions)
     description = (f"feedback controller ({what}) with "
                    + (ff.description if ff else "no feedforward"))
-    at_rest = [float(v) for v in rest_output(loop.plant.hysteresis, loop.plant.creep)]
-    rest = (list(ff.rest_reference) if ff is not None and getattr(ff, "rest_reference", None)
-            else at_rest)
     return FeedbackCExport(N, header, source, ff, m, p, P, T,
                            list(loop.plant.hysteresis.input_names),
                            list(loop.plant.hysteresis.output_names), description,

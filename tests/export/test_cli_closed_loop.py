@@ -110,8 +110,11 @@ def test_closed_loop_c_equals_the_python_loop(tmp_path, capsys, kind):
             f = f_c
         else:
             assert rel_error(f_c, f) <= 1e-12
-    # the controller is given the reference P samples after the feedforward (kept in the state)
-    r_loop = np.hstack([np.zeros((2, P)), yr[:, :yr.shape[1] - P]])
+    # the controller is given the reference P samples after the feedforward (kept in the state,
+    # where the feedforward rests until then: the C's NAME_init)
+    rest = np.zeros(2) if f is None else np.asarray(export_c(comp, "ff", T).rest_reference)
+    assert P == 0 or np.all(np.abs(rest) > 0.1)        # a rest away from 0 µm: the test can fail
+    r_loop = np.hstack([np.repeat(rest[:, None], P, axis=1), yr[:, :yr.shape[1] - P]])
     res = loop.simulate(r_loop, feedforward=f, seed=3)
     u_c, status = _run(exe, yr, res.measurements)
     assert rel_error(u_c, res.inputs) <= 1e-12
@@ -119,24 +122,52 @@ def test_closed_loop_c_equals_the_python_loop(tmp_path, capsys, kind):
 
 
 @needs_cc
-def test_closed_loop_flags_and_skips_non_finite_inputs(tmp_path, capsys):
+def test_closed_loop_flags_and_skips_non_finite_references(tmp_path, capsys):
     out, _ = _export(tmp_path, capsys, "preisach-inverse")
     exe = _compile(out)
     yr = _reference(400)
     meas = 0.9 * yr
-    yr_bad, meas_bad = yr.copy(), meas.copy()
+    yr_bad = yr.copy()
     yr_bad[0, 100] = np.nan
-    meas_bad[1, 200] = np.inf
-    yr_bad[1, 250] = 1e306          # glitches beyond ten times the model's range, skipped as NaN
-    meas_bad[0, 300] = -1e200
-    u, status = _run(exe, yr_bad, meas_bad)
-    for k in (100, 200, 250, 300):
+    yr_bad[1, 250] = 1e306          # a glitch beyond ten times the model's range, skipped as NaN
+    yr_bad[0, 300] = -np.inf
+    u, status = _run(exe, yr_bad, meas)
+    for k in (100, 250, 300):
         assert status[k] == 4, k
         np.testing.assert_array_equal(u[:, k], u[:, k - 1])      # held
     # the skipped samples left the state untouched: the rest equals a run without them
-    keep = np.setdiff1d(np.arange(400), [100, 200, 250, 300])
+    keep = np.setdiff1d(np.arange(400), [100, 250, 300])
     u_ref, _ = _run(exe, yr[:, keep], meas[:, keep])
     np.testing.assert_array_equal(u[:, keep], u_ref)
+
+
+@needs_cc
+def test_closed_loop_glitch_measurement_keeps_the_feedforward_in_time(tmp_path, capsys):
+    """A NaN or glitch measurement skips the feedback only: the feedforward (a ZPETC inverse
+    with a preview) steps on, and the voltage is the new feedforward plus the controller's
+    held part. Skipping the feedforward's step too shifted its preview by a sample: the
+    inverse then saw a jump of the reference, volts in one sample."""
+    out, _ = _export(tmp_path, capsys, "hammerstein")
+    exe = _compile(out)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp, T = compensator_from_source(load_source("realistic-2dof"), "hammerstein")
+    yr = _reference(1500)
+    f = Harness(export_c(comp, "ff", T), tmp_path / "ff").run(yr)[0]
+    u_clean, _ = _run(exe, yr, yr)                  # measured as asked: the controller idles
+    meas = yr.copy()
+    meas[1, 700] = np.nan
+    meas[0, 1000] = -1e200                          # beyond ten times the model's range
+    u, status = _run(exe, yr, meas)
+    for k in (700, 1000):
+        assert status[k] & 4, k
+        held = np.clip(f[:, k] + u[:, k - 1] - f[:, k - 1], -10.0, 10.0)
+        np.testing.assert_allclose(u[:, k], held, rtol=0, atol=1e-12)
+    assert np.all(status[:700] & 4 == 0)
+    # no jump: the largest sample-to-sample step stays that of the run without a glitch
+    step_clean = np.max(np.abs(np.diff(u_clean[:, 400:], axis=1)))
+    step = np.max(np.abs(np.diff(u[:, 400:], axis=1)))
+    assert step <= 1.5 * step_clean, (step, step_clean)
 
 
 def test_closed_loop_without_a_feedback_table_is_one_line(tmp_path, capsys):
