@@ -243,6 +243,7 @@ def write_feedback_report(scenario, results, directory, jobs):
     tm = scenario.timing
     lines += ["## Timing", "",
               f"{len(results)} runs, {tm['samples']} samples in {tm['wall_s']:.2f} s of wall "
-              f"time ({tm['kernel_s'] / max(tm['samples'], 1) * 1e6:.2f} µs per sample in "
-              f"the kernel).", ""]
+              f"time; {tm['kernel_s_per_sample'] * 1e6:.2f} µs per sample in the kernel, the "
+              f"median over the runs (a first run also compiles the kernel when numba's "
+              f"cache is cold).", ""]
     safe_write(directory / "report.md", "\n".join(lines), "report")
