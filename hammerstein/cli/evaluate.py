@@ -31,6 +31,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+import tomllib
 from importlib import metadata
 from pathlib import Path
 from types import SimpleNamespace
@@ -106,10 +107,29 @@ def add_parser(subparsers):
 
 def _reference_outputs(args):
     """The columns of a CSV ``--reference`` but its time, when neither ``--model`` nor
-    ``--output-columns`` names the outputs; None for an inline reference or a file that cannot
-    be read (``read_signals`` then says why)."""
-    if args.outputs or args.reference.lstrip().startswith("{"):
+    ``--output-columns`` names the outputs; for an inline reference the outputs it names
+    (``output`` of a one-axis sine or triangle when the measurement has no column for x and y
+    both: a one-axis stage; ``outputs`` of a planar one); None for a file that cannot be read
+    (``read_signals`` then says why)."""
+    if args.outputs:
         return None
+    if args.reference.lstrip().startswith("{"):
+        try:
+            spec = tomllib.loads("reference = " + args.reference)["reference"]
+        except tomllib.TOMLDecodeError:
+            return None                   # load_reference says why
+        named = spec.get("outputs") if isinstance(spec, dict) else None
+        if isinstance(named, list) and named and all(isinstance(n, str) for n in named):
+            return list(named)
+        one = spec.get("output") if isinstance(spec, dict) else None
+        if not isinstance(one, str):
+            return None
+        try:
+            raw = bounded_read_bytes(args.measured, "data", "data file")
+            columns = {str(c) for c in signal_table(raw, args.measured, "--measured").frame.columns}
+        except (DataFileError, FileLimitError, OSError):
+            return None
+        return None if {"x", "y"} <= columns else [one]
     try:
         raw = bounded_read_bytes(args.reference, "data", "data file")
         columns = signal_table(raw, args.reference, "--reference").frame.columns
@@ -330,7 +350,7 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=()):
     safe_write(out / "timeseries-measured.csv", ",".join(head) + "\n" + body + "\n",
                "time series file", root=out)
     figure = ""
-    if len(outs) >= 2:             # the XY of the first two outputs, every output against time
+    if len(outs) >= 1:             # the XY of the first two outputs, every output against time
         fig = trajectory_figure(t, r, y, outs, "measured response", args.settle_periods *
                                 ref.period_samples * T, inputs=None if u is None else u[:, :n],
                                 input_names=ins if u is not None else None)

@@ -62,7 +62,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     """XY plot, time plots (displacements, input voltages) and tracking errors.
 
     Layout: (a) the XY plot of the reference (dashed) and the output (solid)
-    after settling, over the first two outputs; (b) every output's
+    after settling, over the first two outputs (one output: the output
+    against its reference, the diagonal dashed); (b) every output's
     displacement against time; (c) every output's tracking error y_r - y
     and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
     on the settled part (the start-up transient is shaded, and its peak is
@@ -75,7 +76,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     time : array_like, shape (n,)
         [s].
     reference, outputs : array_like, shape (p, n)
-        ``(x_r, y_r[, z_r ...])`` and ``(x, y[, z ...])`` [µm], p >= 2
+        ``(x_r[, y_r, z_r ...])`` and ``(x[, y, z ...])`` [µm], p >= 1
         (outputs may hold NaN after a divergence).
     names : sequence of p str
         Output names.
@@ -105,13 +106,22 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     gs = fig.add_gridspec(2, 3, width_ratios=[1.15, 1.4, 1.4])
     fixed_layout(fig, 2, 3, left=0.7, right=0.2, bottom=0.55, top=top, wspace=0.8, hspace=0.9)
     ax = fig.add_subplot(gs[:, 0])
-    ax.plot(*decimate_path(r[0, steady], r[1, steady]), "--", color="0.35", linewidth=1.2)
-    ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0)
+    if len(names) >= 2:
+        ax.plot(*decimate_path(r[0, steady], r[1, steady]), "--", color="0.35", linewidth=1.2)
+        ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0)
+        ax.set_xlabel(f"{names[0]} [µm]")
+        ax.set_ylabel(f"{names[1]} [µm]")
+        ax.set_title("(a) spatial domain after settling\n(dashed: reference, solid: output)",
+                     fontsize=10, y=1.0)
+    else:                          # one axis: the output against its reference
+        span = [float(np.nanmin(r[0, steady])), float(np.nanmax(r[0, steady]))]
+        ax.plot(span, span, "--", color="0.35", linewidth=1.2)
+        ax.plot(*decimate_path(r[0, steady], y[0, steady]), "-", color="C0", linewidth=1.0)
+        ax.set_xlabel(f"{names[0]}_r [µm]")
+        ax.set_ylabel(f"{names[0]} [µm]")
+        ax.set_title("(a) output against reference after settling\n(dashed: y = reference)",
+                     fontsize=10, y=1.0)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(f"{names[0]} [µm]")
-    ax.set_ylabel(f"{names[1]} [µm]")
-    ax.set_title("(a) spatial domain after settling\n(dashed: reference, solid: output)",
-                 fontsize=10, y=1.0)
     ax.grid(True, alpha=0.3)
 
     axt = fig.add_subplot(gs[0, 1])

@@ -280,6 +280,37 @@ def test_evaluate_takes_the_outputs_a_csv_reference_names(tmp_path, names, expec
         assert m[(n, "max_abs_error")] == pytest.approx(0.01 * (k + 1) * 10, rel=1e-3)
 
 
+def test_evaluate_takes_the_one_output_an_inline_reference_names(tmp_path):
+    """A one-axis stage with an inline sine on x: its measurement has no y, and evaluate
+    asked for one ("no column 'y' for y"); it evaluates x alone and draws its figure (the
+    output against the reference: none was written for one output)."""
+    t = np.arange(4000) * T
+    x = 20 + 10 * np.sin(2 * np.pi * 50 * t)
+    pd.DataFrame({"t": t, "u": x / 3, "x": 20 + 1.01 * (x - 20)}).to_csv(
+        tmp_path / "meas.csv", index=False)
+    ref = '{ kind = "sine", output = "x", amplitude = 10, offset = 20, frequency = 50, periods = 10 }'
+    res = _cli("evaluate", "--reference", ref, "--measured", "meas.csv", "--out", "ev",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    m = pd.read_csv(tmp_path / "ev/metrics.csv").set_index(["channel", "metric"])["value"]
+    assert m[("x", "max_abs_error")] == pytest.approx(0.1, rel=1e-3)    # 1 % of 10 µm
+    assert not any(ch == "y" for ch, _ in m.index)
+    assert (tmp_path / "ev/trajectory-measured.png").stat().st_size > 10_000
+
+
+def test_trajectory_figure_of_one_output_draws_it_against_its_reference():
+    from hammerstein.report.trajectories import trajectory_figure
+    t = np.arange(2000) * T
+    r = np.atleast_2d(20 + 10 * np.sin(2 * np.pi * 50 * t))
+    fig = trajectory_figure(t, r, 0.99 * r, ["x"], "one axis", settle_time=0.02)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "x_r [µm]" and ax.get_ylabel() == "x [µm]"
+    steady = t >= 0.02
+    xy = ax.get_lines()[1].get_xydata()
+    np.testing.assert_allclose(xy[:, 1], 0.99 * xy[:, 0], rtol=1e-12)      # (x_r, x) pairs
+    assert xy[:, 0].min() == pytest.approx(r[0, steady].min(), abs=0.05)
+
+
 def test_learns_delay_advice_does_not_send_back_to_an_identify_that_refused(tmp_path):
     """A model whose ``identify --dynamics`` refused its delay estimate (a mode in the band):
     learn's note on a slow reference said "identify with --dynamics (the delay found from
