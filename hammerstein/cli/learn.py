@@ -113,9 +113,10 @@ from hammerstein.compensation.drive_files import (drive_rest_lead, followed_refe
                                                   learnt_names, rest_lead_text, shaped_target)
 from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
                                     safe_write)
-from hammerstein.compensation.ilc import (HarmonicGains, IterativeLearning, error_summary, estimate_delay,
-                                  harmonic_base_gains, periodic_average, reference_correction,
-                                  repeating_from)
+from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
+                                          error_summary, estimate_delay, harmonic_base_gains,
+                                          inverse_gain_ratio, periodic_average,
+                                          reference_correction, repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
                                               delay_search_span,
@@ -314,6 +315,23 @@ def default_q_cutoff(plant):
            f"the harmonics the modes amplify are learnt up to {Q_CUTOFF_PER_MODE:g} x the first "
            f"bending mode {f1:.4g} Hz, and never below {Q_CUTOFF_MIN_HZ:g} Hz")
     return cutoff, f"note: Q cutoff {cutoff:.4g} Hz because {why} (--q-cutoff-hz sets it)"
+
+
+def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz):
+    """The note naming the harmonics below the Q cutoff left unlearnt at an anti-resonance."""
+    P = int(period_samples)
+    fh = np.arange(1, P // 2 + 1) / (P * sampling_period)
+    fh = fh[fh <= q_cutoff_hz]
+    if not fh.size:
+        return None
+    ratio = inverse_gain_ratio(ilc.dynamics, fh, sampling_period)
+    out = fh[ratio > INVERSE_GAIN_LIMIT]
+    if not out.size:
+        return None
+    return (f"note: {out.size} harmonic(s) at {out.min():.4g}-{out.max():.4g} Hz not learnt: "
+            f"the identified dynamics pass them at less than 1/{INVERSE_GAIN_LIMIT:g} of their "
+            f"static gain (an anti-resonance; up to {ratio.max():.3g} times the drive per µm), "
+            f"where a correction would make the drive chatter")
 
 
 #: what the notes call a trial's judged error, beside the printed max (which carries the noise)
@@ -523,7 +541,11 @@ def _handle(args):
         cond = ilc.convergence()
         gains = None
         if steady is not None:         # a repeating reference: learnt per harmonic of its period
-            gains = HarmonicGains(harmonic_base_gains(ilc, P, None, args.q_cutoff_hz))
+            base = harmonic_base_gains(ilc, P, None, args.q_cutoff_hz, INVERSE_GAIN_LIMIT)
+            gains = HarmonicGains(base)
+            note_ar = _anti_resonance_note(ilc, P, T, args.q_cutoff_hz)
+            if note_ar:
+                notes.append(note_ar)
             if args.history:
                 _restore_gains(args.history, gains)
                 if note is not None:   # as the gain: halved, and no growth compared with the worse trial

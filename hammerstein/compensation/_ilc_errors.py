@@ -9,8 +9,6 @@ periods to separate what repeats (what learning can remove) from the noise
 
 from __future__ import annotations
 
-from __future__ import annotations
-
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,11 +32,17 @@ class ConvergenceCondition:
         ``|I - gamma Q L G|_ll``.
     coupled : numpy.ndarray, shape (n_f,)
         Largest singular value of ``I - gamma Q L G``.
+    passband : numpy.ndarray of bool, shape (n_f,), optional
+        Where Q passes (``|Q|^2 >= 1/2``): the band the summary reports.
+        Above it ``gamma Q`` vanishes and the condition is 1 whatever the
+        learning does, so its maximum over every frequency said nothing
+        (1.000 at Nyquist on every trial). None: every frequency.
     """
 
     frequencies: np.ndarray
     per_axis: np.ndarray
     coupled: np.ndarray
+    passband: np.ndarray | None = None
 
     def __repr__(self):
         # the arrays hold thousands of frequencies: their maxima, not every value
@@ -74,10 +78,25 @@ class ConvergenceCondition:
         -------
         str
         """
-        k = int(np.argmax(self.coupled))
-        axes = ", ".join(f"{n} {v:.3f}" for n, v in zip(outputs, self.max_per_axis))
-        return (f"max over frequency of ||I - gamma Q L G||: {axes}, coupled {self.max_coupled:.3f} "
-                f"at {self.frequencies[k]:.4g} Hz ({'<= 1: monotonic' if self.holds else '> 1: NOT guaranteed'})")
+        band = (np.ones(self.frequencies.shape, dtype=bool) if self.passband is None
+                 else np.asarray(self.passband, dtype=bool))
+        if not band.any():
+            band = np.ones(self.frequencies.shape, dtype=bool)
+        idx = np.flatnonzero(band)
+        k = int(idx[np.argmax(self.coupled[idx])])
+        top = float(self.coupled[k])
+        axes = ", ".join(f"{n} {v:.3f}" for n, v in zip(outputs, np.max(self.per_axis[:, idx],
+                                                                          axis=1)))
+        where = ("over frequency" if band.all() else
+                 f"over the band Q passes (up to {float(self.frequencies[idx].max()):.4g} Hz)")
+        if not self.holds:
+            verdict = "> 1: NOT guaranteed"
+        elif top < 1.0 - 1e-6:
+            verdict = "<= 1: monotonic"
+        else:
+            verdict = "= 1 where Q passes: no contraction there"
+        return (f"max {where} of ||I - gamma Q L G||: {axes}, coupled {top:.3f} "
+                f"at {self.frequencies[k]:.4g} Hz ({verdict})")
 
 
 @dataclass

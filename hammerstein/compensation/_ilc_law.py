@@ -564,7 +564,7 @@ class IterativeLearning:
         M = I - self.learning_gain * q[:, None, None] * LG
         per_axis = np.abs(np.diagonal(M, axis1=1, axis2=2)).T
         coupled = np.linalg.svd(M, compute_uv=False)[:, 0]
-        return ConvergenceCondition(f, per_axis, coupled)
+        return ConvergenceCondition(f, per_axis, coupled, q >= 0.5)
 
     def set_q_cutoff(self, q_cutoff_hz):
         """Change the cut-off of Q [Hz] (None: no Q).

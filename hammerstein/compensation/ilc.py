@@ -92,17 +92,20 @@ from hammerstein.simulation import ChainResult
 from hammerstein.compensation._ilc_errors import (EXTENSION, ConvergenceCondition, IterationRecord,  # noqa: F401
                                                   error_summary, estimate_delay, periodic_average,
                                                   periodic_error, periodic_snr, repeating_from)
-from hammerstein.compensation._ilc_harmonics import (HarmonicGains, harmonic_base_gains,
+from hammerstein.compensation._ilc_harmonics import (INVERSE_GAIN_LIMIT, HarmonicGains,
+                                                     harmonic_base_gains, inverse_gain_ratio,
                                                      reference_correction)
 from hammerstein.compensation._ilc_law import IterativeLearning
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
            "estimate_delay", "error_summary", "periodic_average", "periodic_error", "periodic_snr",
-           "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from"]
+           "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from",
+           "inverse_gain_ratio", "INVERSE_GAIN_LIMIT"]
 
 for _name in ("IterativeLearning", "ConvergenceCondition", "IterationRecord", "estimate_delay",
               "error_summary", "periodic_average", "periodic_error", "periodic_snr",
-              "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from"):
+              "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from",
+              "inverse_gain_ratio"):
     globals()[_name].__module__ = __name__      # documented (and pickled) as this module's
 del _name
 
@@ -269,7 +272,8 @@ class LearningCompensator:
             self.stopped += f" (kept iteration {best[0].iteration}, the best)"
         return ChainResult(best[1], best[2], None, None)
 
-    def harmonic_base_gains(self, period_samples, plant_dynamics=None, band_hz=None):
+    def harmonic_base_gains(self, period_samples, plant_dynamics=None, band_hz=None,
+                            inverse_limit=None):
         """:func:`harmonic_base_gains` of this learning.
 
         Parameters
@@ -280,12 +284,16 @@ class LearningCompensator:
             G.
         band_hz : float, optional
             Cut-off of Q [Hz].
+        inverse_limit : float, optional
+            No learning where the dynamics' inverse gains more than this
+            times its static gain.
 
         Returns
         -------
         numpy.ndarray, shape (P // 2 + 1,)
         """
-        return harmonic_base_gains(self.learning, period_samples, plant_dynamics, band_hz)
+        return harmonic_base_gains(self.learning, period_samples, plant_dynamics, band_hz,
+                                   inverse_limit)
 
     def history_rows(self, names):
         """Metric rows of the trials: channel ``iteration-<k>``, per-axis and Euclidean errors.
