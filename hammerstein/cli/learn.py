@@ -330,7 +330,7 @@ def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz):
         return None
     return (f"note: {out.size} harmonic(s) at {out.min():.4g}-{out.max():.4g} Hz not learnt: "
             f"the identified dynamics pass them at less than 1/{INVERSE_GAIN_LIMIT:g} of their "
-            f"static gain (an anti-resonance; up to {ratio.max():.3g} times the drive per µm), "
+            f"static gain (an anti-resonance: up to {ratio.max():.3g} times the drive per µm), "
             f"where a correction would make the drive chatter")
 
 
