@@ -402,6 +402,13 @@ def settled_step(inputs, start):
     return np.max(np.abs(np.diff(u[:, int(start):], axis=1)), axis=1)
 
 
+def _initial_hold(reference):
+    """The number of first samples at which every output equals its first [samples]."""
+    r = np.atleast_2d(reference)
+    still = np.all(np.abs(r - r[:, :1]) <= 1e-9 * max(1.0, float(np.max(np.abs(r)))), axis=0)
+    return int(np.argmin(still)) if not still.all() else r.shape[1]
+
+
 def _start_steps(u, end, rest):
     """Largest step per input of samples ``0 .. end - 1``, the first counted from ``rest``."""
     head = np.concatenate([rest[:, None], u[:, :max(int(end), 1)]], axis=1)
@@ -670,7 +677,16 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         n = int(min(max(P, int(np.ceil(MIN_FADE_S / T - 1e-9)), 1), N))
         if mode_decay is not None:
             n = max(n, int(min(np.ceil(FADE_DECAYS * mode_decay / T - 1e-9), N // 2)))
-        cap, n0 = max(n, N // 4), n
+        hold = _initial_hold(r)
+        if not P and hold * T >= MIN_FADE_S:
+            # a reference that does not repeat and first holds still (a move, then a hold): the
+            # fade ends with the hold, so that the move is judged and bounds the start-up (faded
+            # over it, the move was slew-limited to the later hold's steps, 17 V/s, and the drive
+            # never reached the target)
+            n = min(n, hold)
+        # grown past the hold, the fade would take the move in again: the start-up is then
+        # slew-limited to the move's steps instead (limit_start_up below)
+        cap, n0 = (n if not P and hold * T >= MIN_FADE_S else max(n, N // 4)), n
         while True:
             u, faded = run(n)
             end = min(n + max(P, 1), N)
@@ -728,12 +744,15 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             # a large move the settled drive never makes (an axis held away from rest under a
             # raster): its slew-limited start-up goes on after the fade, into what is judged
             late = (changed[-1] + 1) * T
+            advice = np.ceil(2.5 * late / 0.01) * 0.01
+            fix = (f"give --fade-in {advice:.2g} or more (a fade whose steepest step, 2.4 times "
+                   f"its mean, stays within the settled drive's)" if advice < N * T else
+                   f"a fade-in that long ({advice:.2g} s) is longer than the {N * T:.4g} s "
+                   f"record: give a reference that starts at rest, or a longer one")
             res.notes.append(
                 f"the slew-limited start-up reaches the drive {late:.4g} s after the start, "
                 f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the "
-                f"fade's end include it; give --fade-in {np.ceil(2.5 * late / 0.01) * 0.01:.2g} "
-                f"or more (a fade whose steepest step, 2.4 times its mean, stays within the "
-                f"settled drive's)")
+                f"fade's end include it; {fix}")
     res.inputs = out
     return res
 

@@ -442,3 +442,29 @@ def test_compensate_reference_is_the_commands_drive(tmp_path):
     _, drive = hs.compensate_reference(plant, r, period_samples=200)
     assert drive.fade_samples == fade
     np.testing.assert_allclose(drive.inputs, u_cli, rtol=0, atol=1e-12)
+
+
+def test_a_move_after_a_hold_is_judged_and_reaches_its_target(tmp_path):
+    """A pick-and-place path: a hold away from rest for 30 ms, a smooth 50 ms move, a hold.
+    On realistic-2dof the default fade covered the move (lengthened to a quarter of the
+    record), so the hold after it bounded the start-up: the move was slew-limited to 8 V/s and
+    the drive ended at 2.33 V of the 3.27 V the compensator asks (an outside user's stage:
+    18 µm of a 18 µm move left). The fade now ends with the first hold; the move is judged,
+    and the drive ends at the compensator's own final voltage."""
+    t = np.arange(6000) * T
+    s = np.clip((t - 0.03) / 0.05, 0.0, 1.0)
+    move = s * s * s * (10 - 15 * s + 6 * s * s)              # a smooth 0 -> 1 (minimum jerk)
+    path = tmp_path / "pnp.csv"
+    np.savetxt(path, np.column_stack([t, 2.0 + 12.0 * move, 1.0 + 8.0 * move]), delimiter=",",
+               header="t,x,y", comments="", fmt="%.12g")
+    given = tmp_path / "given.csv"
+    _compensate(["realistic-2dof", "--reference", path, "--out", given, "--fade-in", 0.025])
+    u_given, _, _ = _drive(given)
+    out = tmp_path / "default.csv"
+    _compensate(["realistic-2dof", "--reference", path, "--out", out])
+    u, fade, _ = _drive(out)
+    assert 0.02 / T <= fade <= 600                              # within the 30 ms hold
+    np.testing.assert_allclose(u[:, -1], u_given[:, -1], rtol=1e-4)  # the target reached
+    steps = _steps(u)
+    settled = steps[:, fade + 2:].max(axis=1)
+    assert np.all(steps.max(axis=1) <= settled * (1 + 1e-9))   # and no step beyond the move's
