@@ -334,6 +334,20 @@ def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz):
             f"where a correction would make the drive chatter")
 
 
+def _period_note(period, period_samples, sampling_period, steady):
+    """The note saying why a --period reference is learnt in the time domain, or None."""
+    if period is None or period_samples is None or steady is not None:
+        return None
+    exact = float(period) / sampling_period
+    why = (f"{period:g} s is {exact:.6g} sampling periods, not a whole number: the file does "
+           f"not repeat every {period_samples} samples" if abs(exact - round(exact)) > 1e-6 else
+           f"the file does not repeat every {period_samples} samples after the fade-in, or holds "
+           f"fewer than five periods after it")
+    return (f"note: learnt sample by sample, not per harmonic of the period: --period {why} "
+            f"(a period of a whole number of samples, e.g. "
+            f"{max(round(exact), 2) * sampling_period:g} s, repeats exactly)")
+
+
 #: what the notes call a trial's judged error, beside the printed max (which carries the noise)
 JUDGED = ("its noise averaged down: the max Euclidean error of the settled periods' average "
           "for a repeating reference, else the RMS less the noise; the max printed above "
@@ -454,6 +468,7 @@ def _handle(args):
         # the settled window: after the fade-in and --settle-periods (the start-up no drive removes)
         P = ref.period_samples if ref.period_samples > 1 else None
         steady = repeating_from(target, P, fade)
+        period_note = _period_note(args.period, P, T, steady)
         settle = fade + int(args.settle_periods * ref.period_samples)
         if steady is not None:        # the repeating part the trial is judged on
             settle = max(settle, steady)
@@ -534,7 +549,7 @@ def _handle(args):
                          f"with gain x{0.5 ** halvings:g}")
         gain = args.learning_gain * 0.5 ** halvings
         law_gain, notes = _inverse_gain(model, args.gain, args.check)
-        notes = ([] if q_note is None else [q_note]) + notes
+        notes = ([] if q_note is None else [q_note]) + notes + ([] if period_note is None else [period_note])
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
                                 inversion=args.inversion, delay=delay, slope_floor=args.slope_floor,
                                 gain=law_gain)

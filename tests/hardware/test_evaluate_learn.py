@@ -354,3 +354,25 @@ def test_a_measured_file_on_another_time_scale_is_refused(tmp_path):
     assert res.returncode == 1 and not (tmp_path / "u1.csv").exists()
     assert "--measured: y0-ms.csv: sampled every 0.05 s, 1000 sampling periods" in res.stderr
     assert "in seconds?" in res.stderr and res.stderr.count("\n") == 1
+
+
+@pytest.mark.parametrize("hz, whole", [(30.0, False), (25.0, True)])
+def test_learn_says_why_a_period_is_not_learnt_per_harmonic(tmp_path, hz, whole):
+    """A file reference whose --period is not a whole number of samples (30 Hz at 20 kHz:
+    666.67) does not repeat every 667 samples: it was learnt sample by sample silently."""
+    t = np.arange(8000) * T
+    pd.DataFrame({"t": t, "x_meas": 20 * np.cos(2 * np.pi * hz * t),
+                  "y_meas": 20 * np.sin(2 * np.pi * hz * t)}).to_csv(tmp_path / "ref.csv",
+                                                                      index=False)
+    period = repr(1.0 / hz)
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", "ref.csv", "--period", period,
+                "--outputs", "x=x_meas,y=y_meas", "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 1)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", "ref.csv", "--period", period,
+               "--drive", "u0.csv", "--measured", "y0.csv", "--outputs", "x=x_meas,y=y_meas",
+               "--out", "u1.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    said = "not per harmonic of the period" in res.stderr
+    assert said != whole and ("666.667 sampling periods" in res.stderr) == (not whole)
+    assert ("learnt per harmonic of the period" in res.stderr) == whole
