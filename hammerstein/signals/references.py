@@ -230,7 +230,10 @@ def _planar_outputs(table, names):
     if not missing and len(set(outs)) < len(outs):
         raise SignalError(f"outputs: expected two different outputs of the plant {list(names)}, "
                           f"found {outs}")
-    if missing or len(names) < 2:
+    if len(names) < 2:
+        raise SignalError(f"outputs: a planar reference needs two outputs; the plant has one "
+                          f"({names[0]}): use a sine, triangle or a file reference on it")
+    if missing:
         raise SignalError(f"outputs: expected two of the plant's outputs {list(names)}, found {outs}")
     return outs
 

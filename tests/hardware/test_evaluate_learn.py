@@ -376,3 +376,13 @@ def test_learn_says_why_a_period_is_not_learnt_per_harmonic(tmp_path, hz, whole)
     said = "not per harmonic of the period" in res.stderr
     assert said != whole and ("666.667 sampling periods" in res.stderr) == (not whole)
     assert ("learnt per harmonic of the period" in res.stderr) == whole
+
+
+def test_a_planar_reference_on_a_one_axis_stage_says_what_to_use():
+    """It answered "expected two of the plant's outputs ['x'], found ['x']"."""
+    from hammerstein.exceptions import SignalError
+    from hammerstein.signals.references import _planar_outputs
+    with pytest.raises(SignalError, match=r"needs two outputs; the plant has one \(x\): use a sine"):
+        _planar_outputs({}, ["x"])
+    with pytest.raises(SignalError, match=r"expected two of the plant's outputs \['x', 'y'\]"):
+        _planar_outputs({"outputs": ["x", "z"]}, ["x", "y"])
