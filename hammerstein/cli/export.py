@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import re
+from pathlib import Path
 
 from hammerstein import __version__
 from hammerstein.cli._common import number_type, out_dir_problem, print_err
@@ -28,7 +29,8 @@ from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError, FileLimitError,
                                     PresetError)
 from hammerstein.export import MARKER, check_name, export_c
-from hammerstein.export.build import (KINDS, REFUSED_KINDS, check_fmu_owned, compensator_from_source,
+from hammerstein.export.build import (KINDS, REFUSED_KINDS, check_fmu_owned, check_owned,
+                                      compensator_from_source,
                                       limits_from_table, load_source, write_files)
 from hammerstein.export.feedback_c import export_feedback_c
 from hammerstein.export.fmu import build_fmu, find_compiler
@@ -115,6 +117,23 @@ def _default_name(stem, kind):
     if not re.match(r"[A-Za-z_]", name):
         name = "c_" + name
     return name[:40]
+
+
+def _owned_problem(args, source, kind):
+    """Why the files the export will write may not be written (one line), or None."""
+    closed = args.closed_loop is not None
+    name = args.name or _default_name(source.name, f"{kind}_loop" if closed else kind)
+    try:
+        if args.target != "c":
+            check_fmu_owned(os.path.join(args.out, f"{name}.fmu"), args.force)
+            return None
+        stems = [name] + ([f"{name}_ff"] if closed and kind != "none" else [])
+        for stem in stems:
+            for ext in (".h", ".c"):
+                check_owned(Path(args.out) / f"{stem}{ext}", MARKER.encode(), args.force)
+    except ExportError as exc:
+        return " ".join(str(exc).split())
+    return None
 
 
 def _write(args, code, name):
@@ -204,7 +223,7 @@ def handler(args):
     try:
         source = load_source(args.source)
     except PresetError as exc:
-        print_err(f"error: {' '.join(str(exc).split())}")
+        print_err(f"{prog}: error: {' '.join(str(exc).split())}")
         return 1
     kind, gain, check, note = args.kind, args.gain, args.check, None
     if kind is None:
@@ -212,7 +231,7 @@ def handler(args):
             choice = choose_kind(source.model, source.dynamics is not None, gain,
                                  args.inversion or "zpetc")
         except CompensatorError as exc:
-            print_err(f"error: {args.source}: {' '.join(str(exc).split())}")
+            print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}")
             return 1
         kind = choice.kind
         gain = choice.options.get("gain", gain)
@@ -221,6 +240,10 @@ def handler(args):
         check = check or choice.options.get("check")
         note = choice.note()
     args.kind = kind
+    problem = _owned_problem(args, source, kind)
+    if problem:         # before building anything: a file of the user's is never replaced
+        print_err(f"{prog}: error: {problem}")
+        return 2
     if args.closed_loop is not None:
         if args.precision != "double":
             print_err(f"{prog}: error: --closed-loop: the controller is exported in double "
@@ -229,20 +252,21 @@ def handler(args):
         try:
             return _closed_loop(args, source, kind, gain, check, note)
         except PresetError as exc:
-            print_err(f"error: {' '.join(str(exc).split())}")
+            print_err(f"{prog}: error: {' '.join(str(exc).split())}")
             return 1
     return _written(args, kind, note, lambda: _open_loop(args, source, kind, gain, check))
 
 
 def _written(args, kind, note, make):
     """Run ``make`` (the files it wrote), print them; an export error is one line, exit 1."""
+    prog = "hammerstein export"
     try:
         written = make()
     except (ExportError, FileLimitError) as exc:
         about_plant = "closed loop: plant:" in str(exc)     # the model, whatever the kind
         chosen = (f" (kind {kind}, the default for this model; --kind names another)"
                   if note and not about_plant else "")
-        print_err(f"error: {args.source}: {' '.join(str(exc).split())}{chosen}")
+        print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}{chosen}")
         return 1
     if note:
         print_err(note)

@@ -88,14 +88,15 @@ def test_never_overwrites_a_file_it_did_not_write(tmp_path, capsys):
     mine = out / "mine.c"
     mine.write_text("int main(void) { return 0; }\n")
     code, _, err = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name", "mine")
-    assert code == 1 and "not written by hammerstein export" in err and "--force" in err
+    assert code == 2 and "not written by hammerstein export" in err and "--force" in err
+    assert err.startswith("hammerstein export: error: ") and len(err.strip().splitlines()) == 1
     assert mine.read_text() == "int main(void) { return 0; }\n"
     assert not (out / "mine.h").exists()                     # nothing written at all
     fmu = out / "mine.fmu"
     fmu.write_bytes(b"not a zip")
     code, _, err = run(capsys, "rakotondrabe-2dof", "--target", "fmu", "--out", str(out),
                        "--name", "mine", "--no-binary")
-    assert code == 1 and fmu.read_bytes() == b"not a zip"
+    assert code == 2 and fmu.read_bytes() == b"not a zip"
     code, _, _ = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out), "--name",
                      "mine", "--force")
     assert code == 0 and mine.read_text().startswith(MARKER)
