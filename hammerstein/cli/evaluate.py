@@ -45,7 +45,8 @@ from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.compensation.drive_files import optional_columns
-from hammerstein.core.files import all_or_nothing, bounded_read_bytes, guard_inputs, safe_write
+from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
+                                    output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
@@ -57,6 +58,9 @@ from hammerstein.report.trajectories import trajectory_figure
 __all__ = ["add_parser", "evaluate"]
 
 MARKER = ".hammerstein-report"
+#: the files ``evaluate --out DIR`` writes into DIR
+OUTPUT_FILES = (MARKER, "metrics.csv", "timeseries-measured.csv", "trajectory-measured.png",
+                "report.md")
 
 
 def add_parser(subparsers):
@@ -226,6 +230,11 @@ def _handle(args):
         print_err(f"hammerstein evaluate: error: {problem}")
         return 2
     guard_inputs(args.model, args.measured, args.reference)   # never an output, even with --force
+    for name in OUTPUT_FILES:            # before any work: an input where an output goes
+        problem = output_problem(out / name, out)
+        if problem:
+            print_err(f"hammerstein evaluate: error: {problem}")
+            return 2
     try:
         if args.model:
             plant = load_actuator(args.model, args.sampling_period or 1.0)

@@ -319,3 +319,20 @@ def test_the_inputs_of_one_command_do_not_outlive_it(tmp_path):
     assert res.returncode == 2
     safe_write(tmp_path / "ref.csv", "t,x,y\n1,1,1\n")
     assert (tmp_path / "ref.csv").read_text() == "t,x,y\n1,1,1\n"
+
+
+def test_evaluate_refuses_a_measurement_where_its_output_goes_before_any_work(tmp_path, monkeypatch):
+    """``evaluate --measured ev/timeseries-measured.csv --out ev`` (ev its own report) was
+    refused with exit 1 after the computation; it is a usage error before any."""
+    import hammerstein.cli.evaluate as ev
+    (tmp_path / "ev").mkdir()
+    (tmp_path / "ev" / ".hammerstein-report").write_text("0\n")
+    measured = tmp_path / "ev" / "timeseries-measured.csv"
+    measured.write_text("t,x,y\n0,0,0\n")
+    monkeypatch.setattr(ev, "read_signals", lambda *a, **k: pytest.fail("computed"))
+    res = _cli("evaluate", "--reference", CIRCLE, "--measured", "ev/timeseries-measured.csv",
+               "--out", "ev", cwd=tmp_path)
+    assert res.returncode == 2
+    assert "timeseries-measured.csv" in _one_line(res) and "input" in _one_line(res)
+    assert measured.read_text() == "t,x,y\n0,0,0\n"
+    assert _tree(tmp_path / "ev") == [".hammerstein-report", "timeseries-measured.csv"]
