@@ -171,6 +171,8 @@ def run_check(args):
     if problem is None and junit is not None:
         problem = replace_problem(junit, inputs + [baseline_path], force, "hammerstein check")
         problem = f"--junit-xml: {problem}" if problem else None
+    if problem is None and junit is not None and args.out is not None:
+        problem = _inside_reports(junit, args.out)
     if problem:
         _usage(problem.replace("--out", "--junit-xml", 1))
         return 2
@@ -196,6 +198,22 @@ class _Stop(Exception):
 
 class _JunitError(Exception):
     """The JUnit XML file could not be written."""
+
+
+def _inside_reports(junit, out):
+    """Why the JUnit file may not go where a scenario's report directory goes, or None.
+
+    Every directory under ``--out`` is a scenario's report, replaced whole
+    when the scenario has run: a file written there first was found only
+    afterwards, and refused with a message that blamed someone else.
+    """
+    parent = os.path.realpath(os.path.dirname(os.path.abspath(junit)))
+    root = os.path.realpath(out)
+    if parent != root and parent.startswith(root.rstrip(os.sep) + os.sep):
+        return (f"--junit-xml: {escape(junit)} is inside a scenario's report directory under "
+                f"--out {escape(out)}, which check replaces whole; write it elsewhere, e.g. "
+                f"{escape(os.path.join(out, 'junit.xml'))}")
+    return None
 
 
 def _baseline_problem(path, inputs, force):

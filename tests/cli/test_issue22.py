@@ -213,6 +213,22 @@ def test_2_junit_is_never_an_input(capsys, tmp_path, baseline, which):
     assert target.read_bytes() == before
 
 
+def test_2_junit_inside_a_report_directory_is_refused_before_running(capsys, tmp_path,
+                                                                     baseline, monkeypatch):
+    """``--junit-xml OUT/<scenario>/report.md``: found only after the report was written, with
+    "was replaced by a file hammerstein did not write" (hammerstein wrote it itself)."""
+    import hammerstein.cli.check as check
+    monkeypatch.setattr(check, "_check", lambda *a, **k: pytest.fail("ran the scenarios"))
+    out = tmp_path / "kout"
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--out", out,
+                           "--junit-xml", out / "good-static" / "report.md")
+    assert status == 2 and len(err) == 1 and "report directory" in err[0]
+    assert not out.exists()
+    monkeypatch.undo()
+    assert _call(capsys, "check", GOOD, "--baseline", baseline, "--out", out,
+                 "--junit-xml", out / "junit.xml", "-q")[0] == 0     # beside the reports: fine
+
+
 def test_2_junit_write_error_names_the_junit_file(capsys, tmp_path, baseline, monkeypatch):
     import hammerstein.cli.check as check
 
