@@ -138,6 +138,43 @@ def _peaks_text(plant, drive):
     return text
 
 
+#: A shaped reference departing from the one asked by more than this share of its half-span
+#: after the fade-in is a warning, not only a ``shaped:`` line.
+SHRINK_WARNING = 0.25
+
+
+def _shrink_warning(plant, ref, drive):
+    """The warning for a reference shaped far from the one asked, or None.
+
+    A model identified on quasi-static records only (1 Hz: 63 V/s) took
+    their slew as the amplifier's, and a 10 µm circle at 20 Hz was shaped
+    to 0.67 µm with one ``shaped:`` line and exit 0.
+    """
+    amp = plant.amplifier
+    if amp is None or not getattr(amp, "from_records", False):
+        return None
+    asked = np.asarray(ref.signal, dtype=float)
+    got = np.asarray(drive.reference, dtype=float)
+    n = min(asked.shape[1], got.shape[1])
+    start = min(int(drive.fade_samples), n)
+    if n - start < 2:
+        return None
+    half = 0.5 * np.ptp(asked[:, start:n], axis=1)
+    dev = np.max(np.abs(got[:, start:n] - asked[:, start:n]), axis=1)
+    share = np.where(half > 0, dev / np.where(half > 0, half, 1.0), 0.0)
+    k = int(np.argmax(share))
+    if share[k] <= SHRINK_WARNING:
+        return None
+    limits = "; ".join(f"{name} [{c.low:g}, {c.high:g}] V, {c.slew_rate:.4g} V/s"
+                       for name, c in zip(amp.inputs, amp.channels))
+    return (f"the reference was shaped by up to {dev[k]:.3g} µm on "
+            f"{plant.hysteresis.output_names[k]}, {100 * share[k]:.3g} % of its half-span, after "
+            f"the fade-in: the limits measured on the records ({limits}) hold it back. Records "
+            f"slower than the reference understate the amplifier (a 1 Hz record's slew is its "
+            f"own): widen the model file's [amplifier] table to your amplifier's limits "
+            f"(docs/drives.md), or identify on faster records")
+
+
 def _handle(args):
     problem = out_file_problem(args.out, "drive file")
     if not problem:
@@ -224,6 +261,9 @@ def _handle(args):
         print(f"note: {line}", file=sys.stdout)
     for line in chatter:
         print_err(f"warning: {line}")
+    shrink = _shrink_warning(plant, ref, drive)
+    if shrink:
+        print_err(f"warning: {shrink}")
     if any(w in n for n in drive.shaped for w in ("beyond the range", "faster than",
                                                      "reference shaped")) \
             and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):

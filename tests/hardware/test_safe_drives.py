@@ -485,3 +485,23 @@ def test_a_move_after_a_hold_is_judged_and_reaches_its_target(tmp_path):
     steps = _steps(u)
     settled = steps[:, fade + 2:].max(axis=1)
     assert np.all(steps.max(axis=1) <= settled * (1 + 1e-9))   # and no step beyond the move's
+
+
+@pytest.mark.parametrize("slew, warned", [(60.0, True), (SLEW, False)])
+def test_a_reference_shaped_far_from_the_one_asked_is_a_warning(tmp_path, slew, warned):
+    """Limits taken from quasi-static records (63 V/s) shaped a 10 µm circle at 20 Hz to
+    0.67 µm, said by one `shaped:` line on stdout and exit 0."""
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
+    text += f'\n[amplifier]\nsource = "records"\nrange = [-10.0, 10.0]\nslew_rate = {slew}\n'
+    preset = tmp_path / "slow.toml"
+    preset.write_text(text)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--reference",
+                     '{ kind = "circle", radius = 10, frequency = 20, periods = 6 }',
+                     "--out", str(tmp_path / "d.csv")])
+    assert code == 0
+    lines = [ln for ln in err.getvalue().splitlines() if "% of its half-span" in ln]
+    assert bool(lines) == warned
+    if warned:
+        assert lines[0].startswith("warning: ") and "60 V/s" in lines[0] and "[amplifier]" in lines[0]
