@@ -48,7 +48,7 @@ from hammerstein.core._provenance import (LOCK_TIMEOUT, PROVENANCE, carries_prov
                                           same_file)
 from hammerstein.core._owners import owner_alive, owner_token, parse_owner, release_owner
 from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, confined_path,
-                                     path_problem)
+                                     path_problem, recorded_paths)
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
@@ -58,12 +58,12 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
            "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
            "output_problem", "name_problem", "append_text", "replace_directory", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
-           "C_HEADERS"]
+           "C_HEADERS", "recorded_paths"]
 
 for _name in ("c_name_problem", "escape", "markdown_escape", "name_problem", "carries_provenance",
               "locked", "png_provenance", "provenance_line", "replace_problem", "same_file",
               "owner_alive", "owner_token", "parse_owner", "release_owner", "confined_path",
-              "path_problem"):
+              "path_problem", "recorded_paths"):
     globals()[_name].__module__ = __name__      # documented as this module's
 del _name
 
