@@ -366,7 +366,7 @@ def _judged_error(target, y, delay, period, steady):
 
 
 def _handle(args):
-    problem = out_file_problem(args.out, "drive file")
+    problem = out_file_problem(args.out, "drive file", args.force)
     if not problem:
         guard_inputs(args.actuator, args.reference, args.drive, args.measured)
         problem = output_problem(args.out)         # an input is never an output, even with --force

@@ -413,7 +413,8 @@ def safe_write(path, data, what="file", root=None):
     ----------
     path : str or pathlib.Path
         Target. Its parent directory is created (umask permissions) if
-        missing. A symlink is followed: its final target is written.
+        missing. A symlink is followed: its final target is written; the
+        directory of that target must exist (never created along a link).
     data : bytes, str or callable
         Content (str is written as UTF-8), or ``writer(fh)`` writing to a
         binary file object.
@@ -464,6 +465,10 @@ def safe_write(path, data, what="file", root=None):
     parent = target.parent
     if parent.exists() and not parent.is_dir():
         raise FileLimitError(f"{path}: {parent} is not a directory")
+    if target is not path and not parent.is_dir():   # never create directories along a link
+        raise FileLimitError(f"{escape(path)}: is a symbolic link to {escape(target)}, whose "
+                             f"directory does not exist; the directories of a link's target are "
+                             f"never created")
     parent.mkdir(parents=True, exist_ok=True)
     if mode is None:
         mode = 0o666 & ~umask()

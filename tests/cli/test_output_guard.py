@@ -319,3 +319,48 @@ def test_the_inputs_of_one_command_do_not_outlive_it(tmp_path):
     assert res.returncode == 2
     safe_write(tmp_path / "ref.csv", "t,x,y\n1,1,1\n")
     assert (tmp_path / "ref.csv").read_text() == "t,x,y\n1,1,1\n"
+
+
+# -- a dangling symbolic link at a single output file (issue 63, item 2) ---------------------
+_GOOD = os.path.join(os.path.dirname(__file__), "..", "corpus", "good", "good-static.toml")
+_BASE = "scenario,case,channel,metric,value,unit\n"
+_DANGLING = {
+    "compensate --out": ["compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "L"],
+    "identify --out": ["identify", "rec.csv", "--input", "ux", "--output", "x", "--time", "t", "--out", "L"],
+    "identify --metrics": ["identify", "rec.csv", "--input", "ux", "--output", "x", "--time", "t", "--out",
+                           "m.toml", "--metrics", "L"],
+    "learn --out": ["learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "d.csv",
+                    "--measured", "m.csv", "--out", "L"],
+    "check --junit-xml": ["check", _GOOD, "--baseline", "base.csv", "--junit-xml", "L"],
+    "check --update --baseline": ["check", _GOOD, "--update", "--baseline", "L"],
+}
+
+
+@pytest.mark.parametrize("force", [False, True])
+@pytest.mark.parametrize("command", sorted(_DANGLING))
+def test_a_dangling_link_at_an_output_file_is_not_followed(tmp_path, command, force):
+    """Without ``--force`` a dangling link is refused (exit 2, one line naming where it points);
+    with it, the link's missing directories are never created. Nothing is written anywhere."""
+    for name in ("rec.csv", "d.csv", "m.csv"):
+        (tmp_path / name).write_text("t,ux,uy,x,y\n0,0,0,0,0\n")
+    (tmp_path / "base.csv").write_text(_BASE)
+    elsewhere = tmp_path / "elsewhere"
+    os.symlink(elsewhere / "sub" / "out.file", tmp_path / "L")
+    before = _tree(tmp_path)
+    args = _DANGLING[command] + (["--force"] if force else [])
+    res = _cli(*[os.path.abspath(a) if a == _GOOD else a for a in args], cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert "L is a symbolic link to" in line and str(elsewhere) in line
+    assert ("never created" in line) if force else ("--force" in line)
+    assert not elsewhere.exists() and _tree(tmp_path) == before
+
+
+def test_safe_write_never_creates_directories_along_a_link(tmp_path):
+    os.symlink(tmp_path / "nowhere" / "x.csv", tmp_path / "link.csv")
+    with pytest.raises(files.FileLimitError, match="never created"):
+        safe_write(tmp_path / "link.csv", "x", "file")
+    assert not (tmp_path / "nowhere").exists()
+    (tmp_path / "nowhere").mkdir()                 # its directory exists: written through the link
+    safe_write(tmp_path / "link.csv", "x", "file")
+    assert (tmp_path / "nowhere" / "x.csv").read_text() == "x"
