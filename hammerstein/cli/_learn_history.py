@@ -13,13 +13,14 @@ the last drive written). Every file is written through
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
 
 import numpy as np
 
 from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.drive_files import learnt_names, optional_columns
-from hammerstein.core.files import bounded_read_text, safe_write
+from hammerstein.core.files import bounded_read_text, escape, safe_write
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -50,6 +51,36 @@ def history_rows(history_dir):
         k, out, mx, rms = line.split(",")[:4]
         rows.append((int(k), out, float(mx), float(rms)))
     return rows
+
+
+def history_file_problem(out, history_dir):
+    """Why the drive ``out`` may not be written with the history ``history_dir`` (one line), or None.
+
+    The drive may not be one of the history's files (by resolved path, or
+    the same file through a hard link): both are written together and one
+    would silently replace the other.
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        ``--out``.
+    history_dir : str or pathlib.Path
+        ``--history``.
+
+    Returns
+    -------
+    str or None
+        ``"--out: <out> is also an output of this command (...)"``.
+    """
+    real = os.path.realpath(out)
+    for name in HISTORY_FILES:
+        path = Path(history_dir) / name
+        if os.path.realpath(path) == real or (os.path.exists(out) and os.path.exists(path)
+                                               and os.path.samefile(out, path)):
+            return (f"--out: {escape(out)} is also an output of this command (the history's "
+                    f"{name} in --history {escape(history_dir)}); choose another name for the "
+                    f"drive")
+    return None
 
 
 def _write_history(history, names, rec, scale, scale_name="radius / amplitude"):
@@ -85,6 +116,11 @@ BEST_FILE = "best-trial.csv"
 
 
 STATE_FILE = "learning.csv"
+
+
+#: Every file a history directory holds (``--out`` may be none of them).
+HISTORY_FILES = (HISTORY_MARK, "history.csv", "convergence.png", SETTLED_FILE, GAINS_FILE,
+                 BEST_FILE, STATE_FILE)
 
 
 #: samples of the last drive kept in the state file, per input (the --drive check)

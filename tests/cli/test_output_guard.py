@@ -364,3 +364,28 @@ def test_safe_write_never_creates_directories_along_a_link(tmp_path):
     (tmp_path / "nowhere").mkdir()                 # its directory exists: written through the link
     safe_write(tmp_path / "link.csv", "x", "file")
     assert (tmp_path / "nowhere" / "x.csv").read_text() == "x"
+
+
+# -- learn: the drive and the history directory (issue 63, items 4 and 5) ---------------------
+_HISTORY = {".hammerstein-history": "", "history.csv": "iteration,output,max_error_um,rms_error_um\n",
+            "learning.csv": "key,value\n", "best-trial.csv": "t,ux\n"}
+
+
+@pytest.mark.parametrize("name", ["history.csv", "learning.csv", "best-trial.csv", "settled.csv"])
+def test_learn_out_is_never_a_file_of_its_history(tmp_path, name):
+    """``--out DIR/history.csv --history DIR --force`` queued two writes to one file and the
+    history won: the drive was lost with exit 0. Refused before any work (exit 2)."""
+    hist = tmp_path / "h"
+    hist.mkdir()
+    for n, text in _HISTORY.items():
+        (hist / n).write_text(text)
+    for n in ("d.csv", "m.csv"):
+        (tmp_path / n).write_text("t,ux\n0,0\n")
+    before = {p.name: p.read_bytes() for p in hist.iterdir()}
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "d.csv",
+               "--measured", "m.csv", "--out", f"./h/../h/{name}", "--history", "h", "--force",
+               cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert "is also an output of this command" in line and name in line
+    assert {p.name: p.read_bytes() for p in hist.iterdir()} == before
