@@ -20,7 +20,7 @@ import numpy as np
 
 from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.drive_files import learnt_names, optional_columns
-from hammerstein.core.files import bounded_read_text, escape, safe_write
+from hammerstein.core.files import TMP_SUFFIX, bounded_read_text, escape, safe_write
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -83,9 +83,12 @@ def history_file_problem(out, history_dir):
     return None
 
 
-def _write_history(history, names, rec, scale, scale_name="radius / amplitude"):
+def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None):
     d = Path(history)
-    if d.exists() and any(d.iterdir()) and not (d / HISTORY_MARK).exists():
+    drive = os.path.realpath(out) if out is not None else None
+    others = [p for p in d.iterdir() if not p.name.endswith(TMP_SUFFIX)   # the drive's, pending
+              and os.path.realpath(p) != drive] if d.is_dir() else []    # the drive: ours
+    if others and not (d / HISTORY_MARK).exists():
         raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
                             f"choose an empty or new directory")
     d.mkdir(parents=True, exist_ok=True)

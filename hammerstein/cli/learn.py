@@ -113,7 +113,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
 from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
                                                   learnt_names, rest_lead_text, shaped_target)
 from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
-                                    safe_write)
+                                    removed_if_failed, safe_write)
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
                                           error_summary, estimate_delay, harmonic_base_gains,
                                           inverse_gain_ratio, periodic_average,
@@ -631,7 +631,9 @@ def _handle(args):
         comment += "".join(f"\nwarning: {line}" for line in chatter)
         notes += [f"warning: {line}" for line in chatter]
         t = np.arange(N) * T
-        with all_or_nothing():    # the drive and the history together, or none (a full disk)
+        # the drive and the history together, or none (a full disk); on a failure no directory
+        # this command created is left behind
+        with removed_if_failed(Path(args.out).parent, args.history), all_or_nothing():
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
                                score, halvings, fingerprint, learnt, followed_now, shaped_ref)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
@@ -665,7 +667,8 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     if not args.history:
         return None
     k = _write_history(args.history, list(model.output_names), rec, ref.scale,
-                       "the raster's size" if ref.kind == "raster" else "radius / amplitude")
+                       "the raster's size" if ref.kind == "raster" else "radius / amplitude",
+                       args.out)
     if gains is not None:
         _save_gains(args.history, gains)
     if best:

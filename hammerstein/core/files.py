@@ -58,7 +58,7 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
            "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
            "output_problem", "name_problem", "append_text", "replace_directory", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
-           "C_HEADERS", "recorded_paths"]
+           "C_HEADERS", "recorded_paths", "removed_if_failed"]
 
 for _name in ("c_name_problem", "escape", "markdown_escape", "name_problem", "carries_provenance",
               "locked", "png_provenance", "provenance_line", "replace_problem", "same_file",
@@ -404,6 +404,40 @@ def all_or_nothing():
             except OSError:
                 pass
         group["pending"] = []
+
+
+@contextmanager
+def removed_if_failed(*directories):
+    """Remove the directories the block creates among ``directories`` (and their parents) if it fails.
+
+    Each directory of ``directories`` that does not exist when the block
+    starts, and each of its missing parents, is removed again (when empty:
+    nothing anyone wrote there is removed) if the block raises, an
+    interruption included; the exception goes on.
+
+    Parameters
+    ----------
+    *directories : str, pathlib.Path or None
+        Output directories the block may create (None is ignored).
+    """
+    missing = []
+    for d in directories:
+        if d is None or not str(d).strip():
+            continue
+        p = Path(os.path.abspath(d))
+        while not os.path.lexists(p) and p != p.parent:
+            if p not in missing:
+                missing.append(p)
+            p = p.parent
+    try:
+        yield
+    except BaseException:
+        for p in sorted(missing, key=lambda q: len(q.parts), reverse=True):   # deepest first
+            try:
+                os.rmdir(p)
+            except OSError:
+                pass
+        raise
 
 
 def safe_write(path, data, what="file", root=None):

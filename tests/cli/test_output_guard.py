@@ -389,3 +389,52 @@ def test_learn_out_is_never_a_file_of_its_history(tmp_path, name):
     line = _one_line(res)
     assert "is also an output of this command" in line and name in line
     assert {p.name: p.read_bytes() for p in hist.iterdir()} == before
+
+
+def _first_trial(tmp_path):
+    """A drive and its simulated response (the bundled preset, 4 % stronger)."""
+    import numpy as np
+    import pandas as pd
+    from hammerstein.compensation.drive import read_signals
+    from hammerstein.io.presets import load_plant
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    t, u, _ = read_signals(tmp_path / "u0.csv", ["ux", "uy"])
+    y, _ = load_plant("rakotondrabe-2dof").simulate(1.04 * u)
+    pd.DataFrame({"t": t, "x": y[0], "y": np.asarray(y[1])}).to_csv(tmp_path / "y0.csv", index=False)
+
+
+def test_learn_out_inside_a_new_history_directory(tmp_path):
+    """``--out h3/next.csv --history h3`` with h3 new failed after the work ("a directory
+    hammerstein did not make": the drive's pending temporary was in it) and left h3 behind."""
+    _first_trial(tmp_path)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "h3/next.csv", "--history", "h3", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    names = sorted(p.name for p in (tmp_path / "h3").iterdir())
+    assert "next.csv" in names and "history.csv" in names and ".hammerstein-history" in names
+    assert not any(n.endswith(files.TMP_SUFFIX) for n in names)
+
+
+def test_learn_that_fails_leaves_no_directory_it_created(tmp_path, monkeypatch):
+    _first_trial(tmp_path)
+    before = _tree(tmp_path)
+    _full_disk(monkeypatch)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "new/h3/next.csv", "--history", "new/h3",
+               cwd=tmp_path)
+    assert res.returncode == 1
+    assert "No space left on device" in _one_line(res)
+    assert _tree(tmp_path) == before            # neither new/ nor new/h3/ is left
+
+
+def test_removed_if_failed_removes_only_what_the_block_created(tmp_path):
+    (tmp_path / "old").mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        with files.removed_if_failed(tmp_path / "a" / "b", tmp_path / "old"):
+            (tmp_path / "a" / "b").mkdir(parents=True)
+            raise KeyboardInterrupt
+    assert _tree(tmp_path) == ["old"]
+    with files.removed_if_failed(tmp_path / "c"):  # no failure: kept
+        (tmp_path / "c").mkdir()
+    assert _tree(tmp_path) == ["c", "old"]
