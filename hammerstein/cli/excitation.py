@@ -335,6 +335,26 @@ def _csv_bytes(record, names):
     return ("\n".join(lines) + "\n").encode()
 
 
+#: The record files of one input ``{n}`` (``excitation_set``), besides ``demagnetise.csv``.
+_STEMS = ("hysteresis-{n}", "multisine-{n}", "multisine-{n}-validation", "creep-{n}")
+
+
+def _collision(names):
+    """Why two inputs of ``names`` would write one file (one line), or None.
+
+    ``ux`` and ``ux-validation`` both write ``multisine-ux-validation.csv``
+    (the held-out multisine of ``ux``, the estimation one of the other).
+    """
+    owner = {}
+    for n in names:
+        for stem in _STEMS:
+            other = owner.setdefault(stem.format(n=n), n)
+            if other != n:
+                return (f"--inputs: '{other}' and '{n}' would both write {stem.format(n=n)}.csv; "
+                        f"rename one of them")
+    return None
+
+
 def _handler(args):
     try:
         names = [n.strip() for n in args.inputs.split(",")]
@@ -347,6 +367,9 @@ def _handler(args):
                  if any(c in n for c in "\",'") else None)
             if problem:
                 raise _Usage(problem)
+        problem = _collision(names)
+        if problem:
+            raise _Usage(problem)
         amplitude, centre = _amplitude_and_centre(args, len(names))
         reversals = _reversals(args.reversals)
         T = args.sampling_period

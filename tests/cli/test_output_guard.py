@@ -257,6 +257,18 @@ def test_n11_excitation_names_are_plain(tmp_path, inputs, says):
     assert _tree(tmp_path) == []                          # nothing anywhere, not even --out
 
 
+@pytest.mark.parametrize("inputs", ["ux,ux-validation", "ux-validation,ux", "a,b,ux,ux-validation"])
+def test_excitation_inputs_whose_files_collide_are_refused(tmp_path, inputs):
+    """``ux`` and ``ux-validation`` both wrote multisine-ux-validation.csv: one record was
+    silently overwritten (exit 0). Refused before anything is created (exit 2)."""
+    res = _cli("excitation", "--inputs", inputs, "--amplitude", "10", "--sampling-period", "1e-3",
+               "--out", "ec", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert "'ux'" in line and "'ux-validation'" in line and "multisine-ux-validation.csv" in line
+    assert _tree(tmp_path) == []
+
+
 def test_name_problem_examples():
     assert name_problem("ux") is None
     assert "at most 10" in name_problem("x" * 11, limit=10)
