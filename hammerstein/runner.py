@@ -50,16 +50,16 @@ from typing import Callable
 
 import pandas as pd
 
-from hammerstein.core.files import (deferred_signals, owner_alive, owner_token, parse_owner,
-                                    recorded_paths, release_owner, replace_directory, safe_write,
-                                    umask)
+from hammerstein.core.files import (deferred_signals, output_problem, owner_alive, owner_token,
+                                    parse_owner, recorded_paths, release_owner, replace_directory,
+                                    safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
 from hammerstein.report._ownership import MARKER as _MARKER
 from hammerstein.report._ownership import input_problem, ownership_problem, write_manifest
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.render import FigureJobs, FigureRenderer
-from hammerstein.report.replication import foreign_outputs, write_readme
+from hammerstein.report.replication import GENERATED, foreign_outputs, write_readme
 from hammerstein.report.scenario import metrics_frame, write_report
 from hammerstein.report.montecarlo import write_montecarlo_report
 from hammerstein.scenario.montecarlo import run_montecarlo_scenario
@@ -746,13 +746,22 @@ def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
     FileExistsError
         A file the README step would replace was not written by ``hammerstein
         replicate`` (:func:`hammerstein.report.replication.foreign_outputs`)
-        and ``force`` is False; nothing has run.
+        and ``force`` is False, or cannot be written at all (a symbolic
+        link out of ``out``, with or without ``force``); nothing has run.
     """
     files = sorted(Path(scenarios).glob("*.toml"))
     if not files:
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
     out = Path(out)
     problems = [] if force else foreign_outputs(out)
+    # a file of the README that cannot be written (a link out of --out, a bad name) is refused
+    # before anything runs, even with force: never a half-written replication
+    for name in GENERATED:
+        p = out / name
+        problem = output_problem(p, out) or (
+            f"{p}: exists and is not a regular file" if force and os.path.lexists(p)
+            and not p.is_file() else None)
+        problems += [problem] if problem and problem not in problems else []
     if problems:
         raise FileExistsError(f"{problems[0]}{f' (and {len(problems) - 1} more)' if len(problems) > 1 else ''}; "
                               f"move it away, choose another --out, or use --force to replace it")

@@ -450,3 +450,42 @@ def test_removed_if_failed_removes_only_what_the_block_created(tmp_path):
     with files.removed_if_failed(tmp_path / "c"):  # no failure: kept
         (tmp_path / "c").mkdir()
     assert _tree(tmp_path) == ["c", "old"]
+
+
+# -- replicate: every file of the README checked before the work (issue 63, item 7) ----------
+@pytest.mark.parametrize("planted", ["link", "directory"])
+def test_replicate_refuses_an_unwritable_readme_before_running(tmp_path, planted):
+    """A link at rp2/README.md to a file outside rp2 (or a directory there) was refused only
+    after every scenario ran, leaving reports and tables of a half-written replication."""
+    scenarios = tmp_path / "sc"
+    scenarios.mkdir()
+    with open(_GOOD) as fh:
+        (scenarios / "s.toml").write_text(fh.read())
+    victim = tmp_path / "victim.txt"
+    victim.write_text("mine\n")
+    out = tmp_path / "rp2"
+    out.mkdir()
+    if planted == "link":
+        os.symlink("../victim.txt", out / "README.md")
+    else:
+        (out / "README.md").mkdir()
+    before = _tree(tmp_path)
+    res = _cli("replicate", "--scenarios", "sc", "--out", "rp2", "--force", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert "README.md" in _one_line(res)
+    assert _tree(tmp_path) == before and victim.read_text() == "mine\n"
+
+
+def test_replication_readme_and_tables_are_written_together(tmp_path, monkeypatch):
+    from hammerstein.report import replication
+    written = []
+
+    def failing(path, data, what="file", root=None):
+        if path.name == "README.md":
+            raise OutputError(f"{path}: cannot write the README (No space left on device)")
+        written.append(path.name)
+        return safe_write(path, data, what, root)
+    monkeypatch.setattr(replication, "safe_write", failing)
+    with pytest.raises(OutputError):
+        replication.write_readme(tmp_path)
+    assert written and _tree(tmp_path) == []     # the tables were written, then removed
