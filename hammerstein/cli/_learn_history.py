@@ -42,14 +42,35 @@ def history_rows(history_dir):
     list of tuple
         ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
         there is no history yet.
+
+    Raises
+    ------
+    DataFileError
+        The file is not text or a line is not ``iteration,output,max,rms``
+        (the message names the file and the line).
+    FileLimitError
+        Larger than the data file limit, or not a regular file.
     """
     path = Path(history_dir) / "history.csv"
     if not path.is_file():
         return []
+    try:
+        text = bounded_read_text(path, "data", "history file")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"{escape(path)}: not UTF-8 text (byte {exc.start}); not a history "
+                            f"written by hammerstein learn: choose a new --history directory") from None
     rows = []
-    for line in path.read_text(encoding="utf-8").splitlines()[1:]:
-        k, out, mx, rms = line.split(",")[:4]
-        rows.append((int(k), out, float(mx), float(rms)))
+    for n, line in enumerate(text.splitlines()[1:], start=2):
+        if not line.strip():
+            continue
+        try:
+            k, out, mx, rms = line.split(",")[:4]
+            rows.append((int(k), out, float(mx), float(rms)))
+        except ValueError:
+            raise DataFileError(
+                f"{escape(path)}: line {n}: '{escape(line, 60)}' is not 'iteration,output,"
+                f"max_error_um,rms_error_um'; not a history written by hammerstein learn: choose "
+                f"a new --history directory") from None
     return rows
 
 

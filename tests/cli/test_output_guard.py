@@ -489,3 +489,32 @@ def test_replication_readme_and_tables_are_written_together(tmp_path, monkeypatc
     with pytest.raises(OutputError):
         replication.write_readme(tmp_path)
     assert written and _tree(tmp_path) == []     # the tables were written, then removed
+
+
+# -- learn --history: history.csv read within the limit, malformed files named (item 8) ------
+@pytest.mark.parametrize("content,says", [
+    (b"iteration,output,max_error_um,rms_error_um\n0,x\n", "line 2: '0,x' is not"),
+    (b"iteration,output,max_error_um,rms_error_um\n0,x,1.0,\xff\n", "not UTF-8 text"),
+    (b"iteration,output,max_error_um,rms_error_um\nzero,x,1,1\n", "line 2: 'zero,x,1,1'")])
+def test_learn_names_a_malformed_history_file(tmp_path, content, says):
+    _first_trial(tmp_path)
+    (tmp_path / "h").mkdir()
+    (tmp_path / "h" / ".hammerstein-history").write_text("")
+    (tmp_path / "h" / "history.csv").write_bytes(content)
+    before = _tree(tmp_path)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "u1.csv", "--history", "h", cwd=tmp_path)
+    assert res.returncode == 1
+    line = _one_line(res)
+    assert "h/history.csv: " in line and says in line, line
+    assert _tree(tmp_path) == before and (tmp_path / "h" / "history.csv").read_bytes() == content
+
+
+def test_history_rows_reads_within_the_data_limit(tmp_path, monkeypatch):
+    from hammerstein.cli._learn_history import history_rows
+    (tmp_path / "history.csv").write_text("iteration,output,max_error_um,rms_error_um\n"
+                                          + "0,x,1.0,1.0\n" * 100)
+    assert len(history_rows(tmp_path)) == 100
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", "1000")
+    with pytest.raises(files.FileLimitError, match="history.csv: .* larger than the limit"):
+        history_rows(tmp_path)
