@@ -518,3 +518,35 @@ def test_history_rows_reads_within_the_data_limit(tmp_path, monkeypatch):
     monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", "1000")
     with pytest.raises(files.FileLimitError, match="history.csv: .* larger than the limit"):
         history_rows(tmp_path)
+
+
+# -- an interrupted excitation leaves no directory it created (item 10) -----------------------
+@pytest.mark.parametrize("out", ["ex", "new/ex"])
+def test_an_interrupted_excitation_removes_the_directory_it_created(tmp_path, monkeypatch, out):
+    from hammerstein.cli import excitation
+    calls = []
+
+    def interrupted(record, names):          # SIGINT while the second file is being formatted
+        calls.append(record.name)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return b"t,ux,uy\n0,0,0\n"
+    monkeypatch.setattr(excitation, "_csv_bytes", interrupted)
+    res = _cli("excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+               "1e-3", "--out", out, cwd=tmp_path)
+    assert res.returncode == 130 and len(calls) == 2
+    assert _tree(tmp_path) == []              # no --out, no temporary, no manifest
+
+
+def test_an_interrupted_excitation_keeps_an_existing_directory(tmp_path, monkeypatch):
+    from hammerstein.cli import excitation
+    (tmp_path / "ex").mkdir()
+    (tmp_path / "ex" / "notes.txt").write_text("mine")
+
+    def interrupted(record, names):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(excitation, "_csv_bytes", interrupted)
+    res = _cli("excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+               "1e-3", "--out", "ex", cwd=tmp_path)
+    assert res.returncode == 130
+    assert _tree(tmp_path) == ["ex", "ex/notes.txt"]
