@@ -12,7 +12,7 @@ import pytest
 
 from hammerstein.cli._hardware import load_actuator
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
-from hammerstein.export.build import build_compensator, load_source
+from hammerstein.export.build import compensator_from_source, load_source
 
 
 def test_a_preset_sampled_again_keeps_its_creep_and_amplifier():
@@ -35,7 +35,7 @@ def test_a_preset_sampled_again_keeps_its_creep_and_amplifier():
 
 def test_export_samples_the_dynamics_again_as_compensate_does():
     source = load_source("realistic-2dof")
-    comp, T = build_compensator(source, "hammerstein", sampling_period=1e-4)
+    comp, T = compensator_from_source(source, "hammerstein", sampling_period=1e-4)
     assert T == 1e-4 and float(comp.dynamics.dt) == 1e-4
     plant = load_actuator("realistic-2dof", 1e-4)
     same = HammersteinCompensator(plant.hysteresis, plant.dynamics, gain="midpoint", iterations=3,
