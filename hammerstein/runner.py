@@ -11,11 +11,16 @@ temporary directory next to the target and renamed over it, so a failing
 scenario leaves nothing behind.
 
 Ownership: every report directory carries a :data:`MARKER` file
-(``.hammerstein-report``, the version that wrote it). An existing
-``out_dir/<name>`` is replaced only when it holds that marker or is an empty
-directory; anything else (a user's directory, a file, a symlink) makes the
-scenario fail with one line naming the path and ``--force`` (``force=True``
-replaces it). Temporary directories are named ``.hammerstein-tmp.<pid>.*``
+(``.hammerstein-report``: the version that wrote it, then ``manifest`` and
+one ``file <relative path>`` line per file the report wrote). An existing
+``out_dir/<name>`` is replaced only when it holds that marker and nothing its
+manifest does not list (a marker without a manifest, from an older version:
+anything), or is an empty directory; anything else (a user's directory, a
+file, a symlink, a note added to a report) makes the scenario fail with one
+line naming the path and ``--force`` (``force=True`` replaces it). A
+directory holding the scenario file or a file it names (by path, or a hard
+link to it) is never replaced, with or without ``force``: the scenario fails
+before simulating. Temporary directories are named ``.hammerstein-tmp.<pid>.*``
 and hold the marker from their creation, so :func:`remove_stale_temporaries`
 can remove those left by a killed run (older than the current run, their
 process gone) and nothing else. Report directories get the user's umask
@@ -45,13 +50,16 @@ from typing import Callable
 
 import pandas as pd
 
-from hammerstein.core.files import (deferred_signals, owner_alive, owner_token, parse_owner,
-                                    release_owner, replace_directory, safe_write, umask)
+from hammerstein.core.files import (deferred_signals, output_problem, owner_alive, owner_token,
+                                    parse_owner, recorded_paths, release_owner, replace_directory,
+                                    safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
+from hammerstein.report._ownership import MARKER as _MARKER
+from hammerstein.report._ownership import input_problem, ownership_problem, write_manifest
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.render import FigureJobs, FigureRenderer
-from hammerstein.report.replication import foreign_outputs, write_readme
+from hammerstein.report.replication import GENERATED, foreign_outputs, write_readme
 from hammerstein.report.scenario import metrics_frame, write_report
 from hammerstein.report.montecarlo import write_montecarlo_report
 from hammerstein.scenario.montecarlo import run_montecarlo_scenario
@@ -81,7 +89,7 @@ __all__ = [
 ]
 
 #: File in every report directory: the project wrote it (``run`` may replace it).
-MARKER = ".hammerstein-report"
+MARKER = _MARKER
 #: Prefix of the temporary directories of a run (``.hammerstein-tmp.<pid>.<random>``).
 TMP_PREFIX = ".hammerstein-tmp."
 
@@ -168,26 +176,6 @@ def _version():
         return version("hammerstein-piezo")   # the distribution name
     except PackageNotFoundError:
         return "unknown"
-
-
-def _is_ours(target):
-    """Whether ``target`` is a report directory the project wrote (marker) or an empty directory."""
-    if target.is_symlink() or not target.is_dir():
-        return False
-    if (target / MARKER).is_file() and not (target / MARKER).is_symlink():
-        return True
-    return not any(target.iterdir())
-
-
-def _ownership_problem(target, force):
-    """Why ``target`` may not be replaced (one line), or None."""
-    if force or not os.path.lexists(target) or _is_ours(target):
-        return None
-    what = ("a symbolic link" if target.is_symlink() else
-            "a directory hammerstein did not write" if target.is_dir() else
-            "a file" if target.is_file() else "not a directory")
-    return (f"{target}: exists and is {what} (no {MARKER} file); move it away, choose another "
-            f"--out, or use --force to replace it")
 
 
 def _make_temporary(out_dir):
@@ -323,10 +311,12 @@ def _start_write(out_dir, writer):
     return tmp
 
 
-def _finish_write(out_dir, name, tmp, force=False, jobs=None):
+def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
     """Wait for the figure ``jobs`` writing into ``tmp``, then rename ``tmp`` to ``out_dir/name``.
 
-    ``tmp`` is removed on any error (after the jobs stopped writing into it).
+    The marker gets the manifest of the files written. ``tmp`` is removed on
+    any error (after the jobs stopped writing into it); ``inputs`` (files
+    the scenario read) are never replaced.
     """
     target = Path(out_dir) / name
     old = None
@@ -337,9 +327,10 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None):
         except BaseException:
             jobs.cancel()
             raise
-        problem = _ownership_problem(target, force)  # again: it may have appeared meanwhile
+        problem = ownership_problem(target, force, inputs)  # again: it may have appeared meanwhile
         if problem:
             raise ScenarioError([problem])
+        write_manifest(tmp, _version(), _TOKENS.get(tmp))
         with deferred_signals():  # the swap is never left half done
             if os.path.lexists(target):
                 old = _make_temporary(out_dir)
@@ -443,11 +434,14 @@ class PendingScenario:
     force : bool
     out_dir : pathlib.Path or None
         The reports directory.
+    inputs : sequence of pathlib.Path
+        The scenario file and the files it names: the report never replaces
+        a directory holding one.
     """
 
-    def __init__(self, outcome, tmp=None, jobs=None, force=False, out_dir=None):
+    def __init__(self, outcome, tmp=None, jobs=None, force=False, out_dir=None, inputs=()):
         self.outcome, self._tmp, self._jobs, self._force = outcome, tmp, jobs, force
-        self._out_dir = out_dir
+        self._out_dir, self._inputs = out_dir, tuple(inputs)
 
     @property
     def name(self):
@@ -477,7 +471,8 @@ class PendingScenario:
             return self.outcome
         o, tmp, self._tmp = self.outcome, self._tmp, None
         try:
-            target = _finish_write(self._out_dir, o.name, tmp, self._force, self._jobs)
+            target = _finish_write(self._out_dir, o.name, tmp, self._force, self._jobs,
+                                   self._inputs)
         except ScenarioError as exc:
             self.outcome = ScenarioOutcome(o.name, o.path, False, str(exc), None, _empty_metrics())
         except Exception as exc:  # a failed figure (in a worker too) is the scenario's error
@@ -539,21 +534,26 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
     """
     path = Path(path)
     name = path.stem
+    inputs = [path]        # the scenario and every file it names: never inside the replaced report
     try:
-        spec = validate_scenario(path)  # dispatches on the top-level kind
-        name = spec.name
-        if taken is not None and name in taken:
-            raise ScenarioError([
-                f"{path}: name: {name!r} is also the name of {taken[name]} in this run; "
-                f"give each scenario its own name (its report directory)"])
-        problem = _ownership_problem(Path(out_dir) / name, force)
-        if problem:  # before simulating: nothing of the user's is replaced
-            raise ScenarioError([f"{path}: {problem}"])
-        scenario = resolve_scenario(spec)
-        kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
-        results = kind.simulate(scenario)
-        problem = overflow_problem(results)
-        if problem:  # an overflowing case: nothing written, one line
+        with recorded_paths() as named:
+            spec = validate_scenario(path)  # dispatches on the top-level kind
+            inputs += named
+            name = spec.name
+            if taken is not None and name in taken:
+                raise ScenarioError([
+                    f"{path}: name: {name!r} is also the name of {taken[name]} in this run; "
+                    f"give each scenario its own name (its report directory)"])
+            target = Path(out_dir) / name
+            problem = ownership_problem(target, force, inputs)
+            if problem:  # before simulating: nothing of the user's is replaced
+                raise ScenarioError([f"{path}: {problem}"])
+            scenario = resolve_scenario(spec)
+            kind = SCENARIO_KINDS[getattr(scenario, "kind", "cases")]
+            results = kind.simulate(scenario)
+            inputs = [path] + named
+        problem = overflow_problem(results) or input_problem(target, inputs)
+        if problem:  # an overflowing case, a file read meanwhile: nothing written, one line
             raise ScenarioError([f"{path}: {problem}"])
         frame = metrics_frame(results)
         caught = _case_warnings(results)
@@ -570,7 +570,7 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
                                                _empty_metrics()))
     return PendingScenario(ScenarioOutcome(name, path, True, None, Path(out_dir) / name, frame,
                                            caught, len(scenario.cases)), tmp, jobs, force,
-                           Path(out_dir))
+                           Path(out_dir), dict.fromkeys(inputs))
 
 
 def run_scenario(path, out_dir, taken=None, force=False, renderer=None):
@@ -746,13 +746,22 @@ def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
     FileExistsError
         A file the README step would replace was not written by ``hammerstein
         replicate`` (:func:`hammerstein.report.replication.foreign_outputs`)
-        and ``force`` is False; nothing has run.
+        and ``force`` is False, or cannot be written at all (a symbolic
+        link out of ``out``, with or without ``force``); nothing has run.
     """
     files = sorted(Path(scenarios).glob("*.toml"))
     if not files:
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
     out = Path(out)
     problems = [] if force else foreign_outputs(out)
+    # a file of the README that cannot be written (a link out of --out, a bad name) is refused
+    # before anything runs, even with force: never a half-written replication
+    for name in GENERATED:
+        p = out / name
+        problem = output_problem(p, out) or (
+            f"{p}: exists and is not a regular file" if force and os.path.lexists(p)
+            and not p.is_file() else None)
+        problems += [problem] if problem and problem not in problems else []
     if problems:
         raise FileExistsError(f"{problems[0]}{f' (and {len(problems) - 1} more)' if len(problems) > 1 else ''}; "
                               f"move it away, choose another --out, or use --force to replace it")

@@ -128,13 +128,16 @@ def out_dir_problem(out, follow_link=False):
     return None
 
 
-def out_file_problem(out, what="file"):
+def out_file_problem(out, what="file", force=False):
     """Why ``out`` cannot be written as a single file (one line), or None.
 
     An empty path, a directory, an existing special file (device, FIFO,
     socket) or read-only file, a path under an existing file, a symbolic
     link that cannot be followed (loop), or a directory that cannot be
-    written. A symlink is judged by its target.
+    written. A symlink is judged by its target. A dangling symbolic link
+    (one planted at the name would write wherever it points) is refused
+    unless ``force``, and even then when its target's directory does not
+    exist: the directories along a link's target are never created.
     """
     if not str(out).strip():
         return f"--out: empty path; expected a {what} name"
@@ -142,8 +145,17 @@ def out_file_problem(out, what="file"):
     if p.is_symlink():
         try:
             os.stat(p)
-        except FileNotFoundError:
-            pass  # a dangling link: its target is created
+        except FileNotFoundError:          # a dangling link
+            real = os.path.realpath(p)
+            if not force:
+                return (f"--out: {escape(out)} is a symbolic link to {escape(real)}, which does "
+                        f"not exist; a dangling link is not followed (one planted there would "
+                        f"write wherever it points): remove it, choose another name, or add "
+                        f"--force to write there")
+            if not os.path.isdir(os.path.dirname(real)):
+                return (f"--out: {escape(out)} is a symbolic link to {escape(real)}, whose "
+                        f"directory does not exist; the directories of a link's target are "
+                        f"never created")
         except OSError as exc:  # a loop of links, a link through a file...
             return f"--out: {out}: cannot follow the symbolic link ({exc.strerror})"
     if p.is_dir():

@@ -13,13 +13,14 @@ the last drive written). Every file is written through
 from __future__ import annotations
 
 import hashlib
+import os
 from pathlib import Path
 
 import numpy as np
 
 from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.drive_files import learnt_names, optional_columns
-from hammerstein.core.files import bounded_read_text, safe_write
+from hammerstein.core.files import TMP_SUFFIX, bounded_read_text, escape, safe_write
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -41,20 +42,74 @@ def history_rows(history_dir):
     list of tuple
         ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
         there is no history yet.
+
+    Raises
+    ------
+    DataFileError
+        The file is not text or a line is not ``iteration,output,max,rms``
+        (the message names the file and the line).
+    FileLimitError
+        Larger than the data file limit, or not a regular file.
     """
     path = Path(history_dir) / "history.csv"
     if not path.is_file():
         return []
+    try:
+        text = bounded_read_text(path, "data", "history file")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"{escape(path)}: not UTF-8 text (byte {exc.start}); not a history "
+                            f"written by hammerstein learn: choose a new --history directory") from None
     rows = []
-    for line in path.read_text(encoding="utf-8").splitlines()[1:]:
-        k, out, mx, rms = line.split(",")[:4]
-        rows.append((int(k), out, float(mx), float(rms)))
+    for n, line in enumerate(text.splitlines()[1:], start=2):
+        if not line.strip():
+            continue
+        try:
+            k, out, mx, rms = line.split(",")[:4]
+            rows.append((int(k), out, float(mx), float(rms)))
+        except ValueError:
+            raise DataFileError(
+                f"{escape(path)}: line {n}: '{escape(line, 60)}' is not 'iteration,output,"
+                f"max_error_um,rms_error_um'; not a history written by hammerstein learn: choose "
+                f"a new --history directory") from None
     return rows
 
 
-def _write_history(history, names, rec, scale, scale_name="radius / amplitude"):
+def history_file_problem(out, history_dir):
+    """Why the drive ``out`` may not be written with the history ``history_dir`` (one line), or None.
+
+    The drive may not be one of the history's files (by resolved path, or
+    the same file through a hard link): both are written together and one
+    would silently replace the other.
+
+    Parameters
+    ----------
+    out : str or pathlib.Path
+        ``--out``.
+    history_dir : str or pathlib.Path
+        ``--history``.
+
+    Returns
+    -------
+    str or None
+        ``"--out: <out> is also an output of this command (...)"``.
+    """
+    real = os.path.realpath(out)
+    for name in HISTORY_FILES:
+        path = Path(history_dir) / name
+        if os.path.realpath(path) == real or (os.path.exists(out) and os.path.exists(path)
+                                               and os.path.samefile(out, path)):
+            return (f"--out: {escape(out)} is also an output of this command (the history's "
+                    f"{name} in --history {escape(history_dir)}); choose another name for the "
+                    f"drive")
+    return None
+
+
+def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None):
     d = Path(history)
-    if d.exists() and any(d.iterdir()) and not (d / HISTORY_MARK).exists():
+    drive = os.path.realpath(out) if out is not None else None
+    others = [p for p in d.iterdir() if not p.name.endswith(TMP_SUFFIX)   # the drive's, pending
+              and os.path.realpath(p) != drive] if d.is_dir() else []    # the drive: ours
+    if others and not (d / HISTORY_MARK).exists():
         raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
                             f"choose an empty or new directory")
     d.mkdir(parents=True, exist_ok=True)
@@ -85,6 +140,11 @@ BEST_FILE = "best-trial.csv"
 
 
 STATE_FILE = "learning.csv"
+
+
+#: Every file a history directory holds (``--out`` may be none of them).
+HISTORY_FILES = (HISTORY_MARK, "history.csv", "convergence.png", SETTLED_FILE, GAINS_FILE,
+                 BEST_FILE, STATE_FILE)
 
 
 #: samples of the last drive kept in the state file, per input (the --drive check)

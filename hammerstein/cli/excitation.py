@@ -25,8 +25,6 @@ usage error.
 
 from __future__ import annotations
 
-import contextlib
-import os
 import sys
 from pathlib import Path
 
@@ -37,7 +35,7 @@ from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
                                             UNIPOLAR_STAIRCASE, ExcitationRecord, around,
                                             demagnetising_cycle, excitation_set, peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
-                                    name_problem, safe_write)
+                                    name_problem, removed_if_failed, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
 
 __all__ = ["add_parser", "MANIFEST", "readme_text"]
@@ -335,6 +333,26 @@ def _csv_bytes(record, names):
     return ("\n".join(lines) + "\n").encode()
 
 
+#: The record files of one input ``{n}`` (``excitation_set``), besides ``demagnetise.csv``.
+_STEMS = ("hysteresis-{n}", "multisine-{n}", "multisine-{n}-validation", "creep-{n}")
+
+
+def _collision(names):
+    """Why two inputs of ``names`` would write one file (one line), or None.
+
+    ``ux`` and ``ux-validation`` both write ``multisine-ux-validation.csv``
+    (the held-out multisine of ``ux``, the estimation one of the other).
+    """
+    owner = {}
+    for n in names:
+        for stem in _STEMS:
+            other = owner.setdefault(stem.format(n=n), n)
+            if other != n:
+                return (f"--inputs: '{other}' and '{n}' would both write {stem.format(n=n)}.csv; "
+                        f"rename one of them")
+    return None
+
+
 def _handler(args):
     try:
         names = [n.strip() for n in args.inputs.split(",")]
@@ -347,6 +365,9 @@ def _handler(args):
                  if any(c in n for c in "\",'") else None)
             if problem:
                 raise _Usage(problem)
+        problem = _collision(names)
+        if problem:
+            raise _Usage(problem)
         amplitude, centre = _amplitude_and_centre(args, len(names))
         reversals = _reversals(args.reversals)
         T = args.sampling_period
@@ -397,10 +418,11 @@ def _handler(args):
     except _Usage as exc:
         print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
         return 2
-    created = not os.path.lexists(out)
     try:
         manifest = "\n".join([_MANIFEST_HEAD, *sorted(owned | set(targets))]) + "\n"
-        with all_or_nothing():       # a failed write (full disk) leaves no file, not even the manifest
+        # a failed write (full disk) or an interruption leaves no file, not even the manifest,
+        # and no directory this run made
+        with removed_if_failed(out), all_or_nothing():
             safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
             for r, name in zip(records, targets):
                 safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
@@ -408,9 +430,6 @@ def _handler(args):
                        "README",
                        root=out)
     except (FileLimitError, OSError) as exc:
-        if created:                  # the directory this run made, empty again: removed
-            with contextlib.suppress(OSError):
-                os.rmdir(out)
         if isinstance(exc, FileLimitError):
             print(f"hammerstein excitation: error: {' '.join(str(exc).split())}", file=sys.stderr)
         else:

@@ -99,6 +99,7 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        positive_float)
 from hammerstein.cli._hardware import Reference
 from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_history, _drive_samples,
+                                            history_file_problem,
                                             _fingerprint, _read_best, _read_state, _restore_gains,
                                             _save_gains, _settled_rows, _write_history,
                                             _write_state, history_rows)
@@ -112,7 +113,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
 from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
                                                   learnt_names, rest_lead_text, shaped_target)
 from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
-                                    safe_write)
+                                    removed_if_failed, safe_write)
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
                                           error_summary, estimate_delay, harmonic_base_gains,
                                           inverse_gain_ratio, periodic_average,
@@ -380,7 +381,7 @@ def _judged_error(target, y, delay, period, steady):
 
 
 def _handle(args):
-    problem = out_file_problem(args.out, "drive file")
+    problem = out_file_problem(args.out, "drive file", args.force)
     if not problem:
         guard_inputs(args.actuator, args.reference, args.drive, args.measured)
         problem = output_problem(args.out)         # an input is never an output, even with --force
@@ -388,6 +389,8 @@ def _handle(args):
     if not problem and args.history:
         problem = out_dir_problem(args.history)
         problem = problem.replace("--out", "--history") if problem else None
+    if not problem and args.history:
+        problem = history_file_problem(args.out, args.history)   # never two writes to one file
     if problem:
         print_err(f"hammerstein learn: error: {problem}")
         return 2
@@ -643,7 +646,9 @@ def _handle(args):
         comment += "".join(f"\nwarning: {line}" for line in chatter)
         notes += [f"warning: {line}" for line in chatter]
         t = np.arange(N) * T
-        with all_or_nothing():    # the drive and the history together, or none (a full disk)
+        # the drive and the history together, or none (a full disk); on a failure no directory
+        # this command created is left behind
+        with removed_if_failed(Path(args.out).parent, args.history), all_or_nothing():
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
                                score, halvings, fingerprint, learnt, followed_now, shaped_ref)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
@@ -677,7 +682,8 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     if not args.history:
         return None
     k = _write_history(args.history, list(model.output_names), rec, ref.scale,
-                       "the raster's size" if ref.kind == "raster" else "radius / amplitude")
+                       "the raster's size" if ref.kind == "raster" else "radius / amplitude",
+                       args.out)
     if gains is not None:
         _save_gains(args.history, gains)
     if best:

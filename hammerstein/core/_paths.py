@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from pathlib import Path
 
 from hammerstein.exceptions import FileLimitError
@@ -77,13 +78,43 @@ def confined_path(text, base_dir, error=FileLimitError):
         raise error(problem)
     path = Path(text)
     if base_dir is None:
-        return path
+        return _named(path)
     path = path if path.is_absolute() else Path(base_dir) / path
     real = Path(os.path.realpath(path))
     roots = [Path(os.path.realpath(base_dir))]
     roots += [Path(os.path.realpath(d)) for d in os.environ.get(ALLOW_ENV, "").split(os.pathsep)
               if d.strip() and "\0" not in d]
     if any(real == r or r in real.parents for r in roots):
-        return path
+        return _named(path)
     raise error(f"{escape(text)}: outside the scenario's directory ({escape(base_dir)}); "
                 f"name a file under it, or allow its directory with {ALLOW_ENV}=DIR")
+
+
+#: The open :func:`recorded_paths` lists (each receives every path :func:`confined_path` returns).
+_RECORDERS = []
+
+
+def _named(path):
+    for names in _RECORDERS:
+        names.append(path)
+    return path
+
+
+@contextmanager
+def recorded_paths():
+    """Collect the files named in scenario files (every :func:`confined_path`) while the block runs.
+
+    The runner uses it to know the files a scenario reads, so that no report
+    directory it replaces holds one of them.
+
+    Yields
+    ------
+    list of pathlib.Path
+        Filled as the paths are named (a path named twice appears twice).
+    """
+    names = []
+    _RECORDERS.append(names)
+    try:
+        yield names
+    finally:
+        _RECORDERS.remove(names)

@@ -48,7 +48,7 @@ from hammerstein.core._provenance import (LOCK_TIMEOUT, PROVENANCE, carries_prov
                                           same_file)
 from hammerstein.core._owners import owner_alive, owner_token, parse_owner, release_owner
 from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, confined_path,
-                                     path_problem)
+                                     path_problem, recorded_paths)
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
@@ -58,12 +58,12 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
            "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
            "output_problem", "name_problem", "append_text", "replace_directory", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
-           "C_HEADERS"]
+           "C_HEADERS", "recorded_paths", "removed_if_failed"]
 
 for _name in ("c_name_problem", "escape", "markdown_escape", "name_problem", "carries_provenance",
               "locked", "png_provenance", "provenance_line", "replace_problem", "same_file",
               "owner_alive", "owner_token", "parse_owner", "release_owner", "confined_path",
-              "path_problem"):
+              "path_problem", "recorded_paths"):
     globals()[_name].__module__ = __name__      # documented as this module's
 del _name
 
@@ -406,6 +406,40 @@ def all_or_nothing():
         group["pending"] = []
 
 
+@contextmanager
+def removed_if_failed(*directories):
+    """Remove the directories the block creates among ``directories`` (and their parents) if it fails.
+
+    Each directory of ``directories`` that does not exist when the block
+    starts, and each of its missing parents, is removed again (when empty:
+    nothing anyone wrote there is removed) if the block raises, an
+    interruption included; the exception goes on.
+
+    Parameters
+    ----------
+    *directories : str, pathlib.Path or None
+        Output directories the block may create (None is ignored).
+    """
+    missing = []
+    for d in directories:
+        if d is None or not str(d).strip():
+            continue
+        p = Path(os.path.abspath(d))
+        while not os.path.lexists(p) and p != p.parent:
+            if p not in missing:
+                missing.append(p)
+            p = p.parent
+    try:
+        yield
+    except BaseException:
+        for p in sorted(missing, key=lambda q: len(q.parts), reverse=True):   # deepest first
+            try:
+                os.rmdir(p)
+            except OSError:
+                pass
+        raise
+
+
 def safe_write(path, data, what="file", root=None):
     """Write ``data`` to ``path`` through an exclusive temporary file and a rename.
 
@@ -413,7 +447,8 @@ def safe_write(path, data, what="file", root=None):
     ----------
     path : str or pathlib.Path
         Target. Its parent directory is created (umask permissions) if
-        missing. A symlink is followed: its final target is written.
+        missing. A symlink is followed: its final target is written; the
+        directory of that target must exist (never created along a link).
     data : bytes, str or callable
         Content (str is written as UTF-8), or ``writer(fh)`` writing to a
         binary file object.
@@ -464,6 +499,10 @@ def safe_write(path, data, what="file", root=None):
     parent = target.parent
     if parent.exists() and not parent.is_dir():
         raise FileLimitError(f"{path}: {parent} is not a directory")
+    if target is not path and not parent.is_dir():   # never create directories along a link
+        raise FileLimitError(f"{escape(path)}: is a symbolic link to {escape(target)}, whose "
+                             f"directory does not exist; the directories of a link's target are "
+                             f"never created")
     parent.mkdir(parents=True, exist_ok=True)
     if mode is None:
         mode = 0o666 & ~umask()

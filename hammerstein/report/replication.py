@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import bounded_read_bytes, safe_write
+from hammerstein.core.files import all_or_nothing, bounded_read_bytes, safe_write
 from hammerstein.report import figures as plots
 from hammerstein.report.tables import markdown_table
 
@@ -447,10 +447,15 @@ def write_readme(root, outcomes=None):
         if len(pngs) > 6:
             L += [f"(and {len(pngs) - 6} more in `{scen}/`)", ""]
     L += _discussion(metrics, comp, fam)
+    with all_or_nothing():      # the README and its tables together, or none of them
+        return _write_files(root, L, comp, fam, t9, t7, png if fig8 else None)
+
+
+def _write_files(root, L, comp, fam, t9, t7, png):
     for name, frame in (("paper-numbers.csv", comp), ("family-comparison.csv", fam),
                         ("fig09-trends.csv", t9), ("fig07-trends.csv", t7)):
         safe_write(root / name, frame.to_csv(index=False, float_format="%.6g"), "CSV file", root=root)
-    if fig8:
+    if png is not None:
         safe_write(root / "fig08-identified-maps.png", png.getvalue(), "figure", root=root)
     return safe_write(root / "README.md", "\n".join(L), "README", root=root)
 

@@ -130,9 +130,9 @@ def test_rerun_replaces_the_report_atomically(tmp_path):
     default = str(ROOT / "scenarios" / "default.toml")
     # the first run only has to leave a report of ours to replace: no figures needed
     assert main(["run", default, "--out", str(out), "--figures", "none"]) == 0
-    (out / "default" / "stale.txt").write_text("old")
+    (out / "default" / "metrics.csv").write_text("old")   # a file the report wrote (its manifest)
     assert main(["run", default, "--out", str(out)]) == 0
-    assert not (out / "default" / "stale.txt").exists()
+    assert (out / "default" / "metrics.csv").read_text() != "old"
     assert sorted(p.name for p in out.iterdir()) == ["default"]
 
 

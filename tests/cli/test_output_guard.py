@@ -257,6 +257,18 @@ def test_n11_excitation_names_are_plain(tmp_path, inputs, says):
     assert _tree(tmp_path) == []                          # nothing anywhere, not even --out
 
 
+@pytest.mark.parametrize("inputs", ["ux,ux-validation", "ux-validation,ux", "a,b,ux,ux-validation"])
+def test_excitation_inputs_whose_files_collide_are_refused(tmp_path, inputs):
+    """``ux`` and ``ux-validation`` both wrote multisine-ux-validation.csv: one record was
+    silently overwritten (exit 0). Refused before anything is created (exit 2)."""
+    res = _cli("excitation", "--inputs", inputs, "--amplitude", "10", "--sampling-period", "1e-3",
+               "--out", "ec", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert "'ux'" in line and "'ux-validation'" in line and "multisine-ux-validation.csv" in line
+    assert _tree(tmp_path) == []
+
+
 def test_name_problem_examples():
     assert name_problem("ux") is None
     assert "at most 10" in name_problem("x" * 11, limit=10)
@@ -336,3 +348,222 @@ def test_evaluate_refuses_a_measurement_where_its_output_goes_before_any_work(tm
     assert "timeseries-measured.csv" in _one_line(res) and "input" in _one_line(res)
     assert measured.read_text() == "t,x,y\n0,0,0\n"
     assert _tree(tmp_path / "ev") == [".hammerstein-report", "timeseries-measured.csv"]
+
+
+# -- a dangling symbolic link at a single output file (issue 63, item 2) ---------------------
+_GOOD = os.path.join(os.path.dirname(__file__), "..", "corpus", "good", "good-static.toml")
+_BASE = "scenario,case,channel,metric,value,unit\n"
+_DANGLING = {
+    "compensate --out": ["compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "L"],
+    "identify --out": ["identify", "rec.csv", "--input", "ux", "--output", "x", "--time", "t", "--out", "L"],
+    "identify --metrics": ["identify", "rec.csv", "--input", "ux", "--output", "x", "--time", "t", "--out",
+                           "m.toml", "--metrics", "L"],
+    "learn --out": ["learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "d.csv",
+                    "--measured", "m.csv", "--out", "L"],
+    "check --junit-xml": ["check", _GOOD, "--baseline", "base.csv", "--junit-xml", "L"],
+    "check --update --baseline": ["check", _GOOD, "--update", "--baseline", "L"],
+}
+
+
+@pytest.mark.parametrize("force", [False, True])
+@pytest.mark.parametrize("command", sorted(_DANGLING))
+def test_a_dangling_link_at_an_output_file_is_not_followed(tmp_path, command, force):
+    """Without ``--force`` a dangling link is refused (exit 2, one line naming where it points);
+    with it, the link's missing directories are never created. Nothing is written anywhere."""
+    for name in ("rec.csv", "d.csv", "m.csv"):
+        (tmp_path / name).write_text("t,ux,uy,x,y\n0,0,0,0,0\n")
+    (tmp_path / "base.csv").write_text(_BASE)
+    elsewhere = tmp_path / "elsewhere"
+    os.symlink(elsewhere / "sub" / "out.file", tmp_path / "L")
+    before = _tree(tmp_path)
+    args = _DANGLING[command] + (["--force"] if force else [])
+    res = _cli(*[os.path.abspath(a) if a == _GOOD else a for a in args], cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert "L is a symbolic link to" in line and str(elsewhere) in line
+    assert ("never created" in line) if force else ("--force" in line)
+    assert not elsewhere.exists() and _tree(tmp_path) == before
+
+
+def test_safe_write_never_creates_directories_along_a_link(tmp_path):
+    os.symlink(tmp_path / "nowhere" / "x.csv", tmp_path / "link.csv")
+    with pytest.raises(files.FileLimitError, match="never created"):
+        safe_write(tmp_path / "link.csv", "x", "file")
+    assert not (tmp_path / "nowhere").exists()
+    (tmp_path / "nowhere").mkdir()                 # its directory exists: written through the link
+    safe_write(tmp_path / "link.csv", "x", "file")
+    assert (tmp_path / "nowhere" / "x.csv").read_text() == "x"
+
+
+# -- learn: the drive and the history directory (issue 63, items 4 and 5) ---------------------
+_HISTORY = {".hammerstein-history": "", "history.csv": "iteration,output,max_error_um,rms_error_um\n",
+            "learning.csv": "key,value\n", "best-trial.csv": "t,ux\n"}
+
+
+@pytest.mark.parametrize("name", ["history.csv", "learning.csv", "best-trial.csv", "settled.csv"])
+def test_learn_out_is_never_a_file_of_its_history(tmp_path, name):
+    """``--out DIR/history.csv --history DIR --force`` queued two writes to one file and the
+    history won: the drive was lost with exit 0. Refused before any work (exit 2)."""
+    hist = tmp_path / "h"
+    hist.mkdir()
+    for n, text in _HISTORY.items():
+        (hist / n).write_text(text)
+    for n in ("d.csv", "m.csv"):
+        (tmp_path / n).write_text("t,ux\n0,0\n")
+    before = {p.name: p.read_bytes() for p in hist.iterdir()}
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "d.csv",
+               "--measured", "m.csv", "--out", f"./h/../h/{name}", "--history", "h", "--force",
+               cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert "is also an output of this command" in line and name in line
+    assert {p.name: p.read_bytes() for p in hist.iterdir()} == before
+
+
+def _first_trial(tmp_path):
+    """A drive and its simulated response (the bundled preset, 4 % stronger)."""
+    import numpy as np
+    import pandas as pd
+    from hammerstein.compensation.drive import read_signals
+    from hammerstein.io.presets import load_plant
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    t, u, _ = read_signals(tmp_path / "u0.csv", ["ux", "uy"])
+    y, _ = load_plant("rakotondrabe-2dof").simulate(1.04 * u)
+    pd.DataFrame({"t": t, "x": y[0], "y": np.asarray(y[1])}).to_csv(tmp_path / "y0.csv", index=False)
+
+
+def test_learn_out_inside_a_new_history_directory(tmp_path):
+    """``--out h3/next.csv --history h3`` with h3 new failed after the work ("a directory
+    hammerstein did not make": the drive's pending temporary was in it) and left h3 behind."""
+    _first_trial(tmp_path)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "h3/next.csv", "--history", "h3", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    names = sorted(p.name for p in (tmp_path / "h3").iterdir())
+    assert "next.csv" in names and "history.csv" in names and ".hammerstein-history" in names
+    assert not any(n.endswith(files.TMP_SUFFIX) for n in names)
+
+
+def test_learn_that_fails_leaves_no_directory_it_created(tmp_path, monkeypatch):
+    _first_trial(tmp_path)
+    before = _tree(tmp_path)
+    _full_disk(monkeypatch)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "new/h3/next.csv", "--history", "new/h3",
+               cwd=tmp_path)
+    assert res.returncode == 1
+    assert "No space left on device" in _one_line(res)
+    assert _tree(tmp_path) == before            # neither new/ nor new/h3/ is left
+
+
+def test_removed_if_failed_removes_only_what_the_block_created(tmp_path):
+    (tmp_path / "old").mkdir()
+    with pytest.raises(KeyboardInterrupt):
+        with files.removed_if_failed(tmp_path / "a" / "b", tmp_path / "old"):
+            (tmp_path / "a" / "b").mkdir(parents=True)
+            raise KeyboardInterrupt
+    assert _tree(tmp_path) == ["old"]
+    with files.removed_if_failed(tmp_path / "c"):  # no failure: kept
+        (tmp_path / "c").mkdir()
+    assert _tree(tmp_path) == ["c", "old"]
+
+
+# -- replicate: every file of the README checked before the work (issue 63, item 7) ----------
+@pytest.mark.parametrize("planted", ["link", "directory"])
+def test_replicate_refuses_an_unwritable_readme_before_running(tmp_path, planted):
+    """A link at rp2/README.md to a file outside rp2 (or a directory there) was refused only
+    after every scenario ran, leaving reports and tables of a half-written replication."""
+    scenarios = tmp_path / "sc"
+    scenarios.mkdir()
+    with open(_GOOD) as fh:
+        (scenarios / "s.toml").write_text(fh.read())
+    victim = tmp_path / "victim.txt"
+    victim.write_text("mine\n")
+    out = tmp_path / "rp2"
+    out.mkdir()
+    if planted == "link":
+        os.symlink("../victim.txt", out / "README.md")
+    else:
+        (out / "README.md").mkdir()
+    before = _tree(tmp_path)
+    res = _cli("replicate", "--scenarios", "sc", "--out", "rp2", "--force", cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert "README.md" in _one_line(res)
+    assert _tree(tmp_path) == before and victim.read_text() == "mine\n"
+
+
+def test_replication_readme_and_tables_are_written_together(tmp_path, monkeypatch):
+    from hammerstein.report import replication
+    written = []
+
+    def failing(path, data, what="file", root=None):
+        if path.name == "README.md":
+            raise OutputError(f"{path}: cannot write the README (No space left on device)")
+        written.append(path.name)
+        return safe_write(path, data, what, root)
+    monkeypatch.setattr(replication, "safe_write", failing)
+    with pytest.raises(OutputError):
+        replication.write_readme(tmp_path)
+    assert written and _tree(tmp_path) == []     # the tables were written, then removed
+
+
+# -- learn --history: history.csv read within the limit, malformed files named (item 8) ------
+@pytest.mark.parametrize("content,says", [
+    (b"iteration,output,max_error_um,rms_error_um\n0,x\n", "line 2: '0,x' is not"),
+    (b"iteration,output,max_error_um,rms_error_um\n0,x,1.0,\xff\n", "not UTF-8 text"),
+    (b"iteration,output,max_error_um,rms_error_um\nzero,x,1,1\n", "line 2: 'zero,x,1,1'")])
+def test_learn_names_a_malformed_history_file(tmp_path, content, says):
+    _first_trial(tmp_path)
+    (tmp_path / "h").mkdir()
+    (tmp_path / "h" / ".hammerstein-history").write_text("")
+    (tmp_path / "h" / "history.csv").write_bytes(content)
+    before = _tree(tmp_path)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "u1.csv", "--history", "h", cwd=tmp_path)
+    assert res.returncode == 1
+    line = _one_line(res)
+    assert "h/history.csv: " in line and says in line, line
+    assert _tree(tmp_path) == before and (tmp_path / "h" / "history.csv").read_bytes() == content
+
+
+def test_history_rows_reads_within_the_data_limit(tmp_path, monkeypatch):
+    from hammerstein.cli._learn_history import history_rows
+    (tmp_path / "history.csv").write_text("iteration,output,max_error_um,rms_error_um\n"
+                                          + "0,x,1.0,1.0\n" * 100)
+    assert len(history_rows(tmp_path)) == 100
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", "1000")
+    with pytest.raises(files.FileLimitError, match="history.csv: .* larger than the limit"):
+        history_rows(tmp_path)
+
+
+# -- an interrupted excitation leaves no directory it created (item 10) -----------------------
+@pytest.mark.parametrize("out", ["ex", "new/ex"])
+def test_an_interrupted_excitation_removes_the_directory_it_created(tmp_path, monkeypatch, out):
+    from hammerstein.cli import excitation
+    calls = []
+
+    def interrupted(record, names):          # SIGINT while the second file is being formatted
+        calls.append(record.name)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return b"t,ux,uy\n0,0,0\n"
+    monkeypatch.setattr(excitation, "_csv_bytes", interrupted)
+    res = _cli("excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+               "1e-3", "--out", out, cwd=tmp_path)
+    assert res.returncode == 130 and len(calls) == 2
+    assert _tree(tmp_path) == []              # no --out, no temporary, no manifest
+
+
+def test_an_interrupted_excitation_keeps_an_existing_directory(tmp_path, monkeypatch):
+    from hammerstein.cli import excitation
+    (tmp_path / "ex").mkdir()
+    (tmp_path / "ex" / "notes.txt").write_text("mine")
+
+    def interrupted(record, names):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(excitation, "_csv_bytes", interrupted)
+    res = _cli("excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+               "1e-3", "--out", "ex", cwd=tmp_path)
+    assert res.returncode == 130
+    assert _tree(tmp_path) == ["ex", "ex/notes.txt"]

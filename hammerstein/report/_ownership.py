@@ -1,0 +1,183 @@
+"""Who owns a report directory: its marker, its manifest, and the inputs it must not hold.
+
+Behind :mod:`hammerstein.runner`. Every report directory carries a
+:data:`MARKER` file: ``hammerstein <version>``, the ``owner`` line of the run
+that wrote it, then ``manifest`` and one ``file <relative path>`` line per
+file of the report. A marked directory holding entries its manifest does not
+list (a user's notes) is replaced only with ``force``; a marker without a
+manifest (an older version) keeps the older rule (replaced). A directory
+holding one of the scenario's inputs is never replaced.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from hammerstein.core.files import bounded_read_text, escape, safe_write
+
+__all__ = ["MARKER", "ownership_problem", "input_problem", "write_manifest"]
+
+#: File in every report directory: the project wrote it (``run`` may replace it).
+MARKER = ".hammerstein-report"
+
+
+def _is_ours(target):
+    """Whether ``target`` is a report directory the project wrote (marker) or an empty directory."""
+    if target.is_symlink() or not target.is_dir():
+        return False
+    if (target / MARKER).is_file() and not (target / MARKER).is_symlink():
+        return True
+    return not any(target.iterdir())
+
+
+def _manifest(target):
+    """The relative paths the marker of ``target`` lists (its manifest), or None (an older report)."""
+    try:
+        text = bounded_read_text(target / MARKER, "toml", "report marker")
+    except (OSError, ValueError):
+        return None
+    lines = text.splitlines()
+    if "manifest" not in lines:
+        return None
+    return {ln[5:] for ln in lines[lines.index("manifest") + 1:] if ln.startswith("file ")}
+
+
+def _unlisted(target):
+    """Entries of the marked ``target`` its manifest does not list (none without a manifest)."""
+    listed = _manifest(target)
+    if listed is None:
+        return []
+    dirs = {p.as_posix() for f in listed for p in Path(f).parents if p != Path(".")}
+    extra = []
+    for d, dirnames, names in os.walk(target):     # links are not followed
+        for n in sorted(dirnames) + sorted(names):
+            full = os.path.join(d, n)
+            rel = Path(os.path.relpath(full, target)).as_posix()
+            is_dir = n in dirnames and not os.path.islink(full)
+            if rel == MARKER or (rel in dirs if is_dir else rel in listed):
+                continue
+            extra.append(rel)
+            if is_dir:
+                dirnames.remove(n)                  # named once, not each file under it
+    return extra
+
+
+def write_manifest(tmp, version, token=None):
+    """Rewrite the marker of the finished report directory ``tmp`` with the files it holds.
+
+    Parameters
+    ----------
+    tmp : str or pathlib.Path
+        The report, complete (in its temporary directory).
+    version : str
+        The version written on the marker's first line.
+    token : str, optional
+        The owner token of the temporary directory (its ``owner`` line).
+    """
+    tmp = Path(tmp)
+    wrote = sorted(Path(os.path.relpath(os.path.join(d, n), tmp)).as_posix()
+                   for d, _, names in os.walk(tmp) for n in names)
+    text = (f"hammerstein {version}\n" + (f"owner {token}\n" if token else "") + "manifest\n"
+            + "".join(f"file {f}\n" for f in wrote if f != MARKER))
+    safe_write(tmp / MARKER, text, "report marker")
+
+
+def _entry(path):
+    """Where the directory entry ``path`` is (its directories resolved, not its last name)."""
+    head, name = os.path.split(os.path.abspath(path))
+    return os.path.join(os.path.realpath(head), name)
+
+
+def input_problem(target, inputs):
+    """One line naming a file of ``inputs`` that replacing ``target`` would delete, or None.
+
+    A file is found by its path (resolved, and the entry named, a link
+    included) under ``target`` or by its inode among the files under it (a
+    hard link), links inside ``target`` not followed (what a replacement
+    removes). A link at ``target`` itself is renamed away, not followed.
+
+    Parameters
+    ----------
+    target : pathlib.Path
+        The report directory to be replaced.
+    inputs : iterable of str or pathlib.Path
+        Files the command reads.
+
+    Returns
+    -------
+    str or None
+    """
+    if not inputs or not os.path.lexists(target) or os.path.islink(target):
+        return None
+    root = os.path.realpath(target)
+    inside = root.rstrip(os.sep) + os.sep
+    wanted = {}
+    for given in inputs:
+        if not os.path.lexists(given):       # a name that is no file: nothing to delete
+            continue
+        try:
+            places = (os.path.realpath(given), _entry(given))
+        except (OSError, ValueError):
+            continue
+        if any(p == root or p.startswith(inside) for p in places):
+            return _input_message(target, given)
+        try:
+            st = os.stat(given)
+            wanted.setdefault((st.st_dev, st.st_ino), given)
+        except (OSError, ValueError):
+            pass
+    found = [target] if not os.path.isdir(target) else \
+        (os.path.join(d, n) for d, _, names in os.walk(target) for n in names)
+    for f in found:
+        try:
+            st = os.lstat(f)
+        except OSError:
+            continue
+        if (st.st_dev, st.st_ino) in wanted:
+            return _input_message(target, f"{f} (a hard link to {wanted[(st.st_dev, st.st_ino)]})")
+    return None
+
+
+def _input_message(target, given):
+    return (f"{escape(target)}: holds {escape(given)}, which this scenario reads; the report "
+            f"would replace {escape(target)} and delete it (an input is never an output): move "
+            f"the file out of {escape(target)} or choose another --out")
+
+
+def ownership_problem(target, force, inputs=()):
+    """Why the report directory ``target`` may not be replaced (one line), or None.
+
+    ``inputs`` (the files the scenario reads) are never replaced, with or
+    without ``force``; a marked directory holding entries its manifest does
+    not list is replaced only with ``force``.
+
+    Parameters
+    ----------
+    target : pathlib.Path
+        ``out_dir/<scenario name>``.
+    force : bool
+        Replace what hammerstein did not write (never an input).
+    inputs : iterable of str or pathlib.Path
+        The scenario file and the files it names.
+
+    Returns
+    -------
+    str or None
+    """
+    problem = input_problem(target, inputs)
+    if problem or force or not os.path.lexists(target):
+        return problem
+    if _is_ours(target):
+        extra = _unlisted(target)
+        if not extra:
+            return None
+        more = f" and {len(extra) - 3} more" if len(extra) > 3 else ""
+        return (f"{escape(target)}: holds {len(extra)} file(s) hammerstein did not write "
+                f"({', '.join(escape(e) for e in extra[:3])}{more}; not in its {MARKER}); move "
+                f"them away, choose another --out, or use --force to replace it")
+    what = ("a symbolic link" if target.is_symlink() else
+            "a directory hammerstein did not write" if target.is_dir() else
+            "a file" if target.is_file() else "not a directory")
+    return (f"{target}: exists and is {what} (no {MARKER} file); move it away, choose another "
+            f"--out, or use --force to replace it")
