@@ -92,10 +92,10 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     del raw
     mapping = dict(mapping or {})
 
-    def column(col, label):
-        return numeric_column(table, col, label)
+    def column(col, label, unit=("V", "µm")):
+        return numeric_column(table, col, label, unit)
 
-    t = column(time, "the time [s]")
+    t = column(time, "the time [s]", "s")
     if t.size < 2:
         raise DataFileError(f"{what}: {escape(path)}: {t.size} data row; expected at least two "
                             f"samples")

@@ -24,6 +24,7 @@ import pandas as pd
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
+from hammerstein.io.table_checks import name_unit, unit_problem
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
            "decode_table", "signal_table", "numeric_column", "uniform_period"]
@@ -251,16 +252,19 @@ def decode_table(raw, path, what="data file", error=DataFileError):
 class _Table:
     """A parsed signal table: the frame (string header) and its cleaned text (for messages)."""
 
-    def __init__(self, frame, text, sep, path, what, error=DataFileError):
+    def __init__(self, frame, text, sep, path, what, error=DataFileError, units=None):
         self.frame, self.text, self.sep, self.path, self.what = frame, text, sep, path, what
         self.error = error
+        #: ``{column: unit}`` of a units row under the header (dropped from the frame), or {}
+        self.units = dict(units or {})
 
     def line_fields(self, row):
         """Number of fields of data row ``row`` (0-based) as written, or None."""
-        lines = self.text.split("\n", row + 2)
-        if len(lines) < row + 2:
+        skip = 2 + bool(self.units)
+        lines = self.text.split("\n", row + skip)
+        if len(lines) < row + skip:
             return None
-        line = lines[row + 1]
+        line = lines[row + skip - 1]
         return len(line.split()) if self.sep == r"\s+" else len(line.split(self.sep))
 
 
@@ -325,19 +329,27 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
                         f"row{_PREAMBLE_HINT if int(m.group(2)) <= PREAMBLE_LINES else ''}") from None
         raise error(f"{where}: not a readable CSV table ({escape(msg, 200)})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
-    return _Table(frame, text, sep, path, what, error)
+    units = {}
+    second = rest.partition("\n")[0]
+    if len(frame) > 1 and _units_row(second, sep):     # a units row (s,V,µm): checked by column
+        row = next(csv.reader([second], delimiter=sep)) if sep != r"\s+" else second.split()
+        units = {c: str(u).strip() for c, u in zip(frame.columns, row)}
+        frame = frame.iloc[1:].reset_index(drop=True)
+    return _Table(frame, text, sep, path, what, error, units)
 
 
 _MISSING = ("", "nan", "na", "n/a", "null", "none")
 
 
-def numeric_column(table, col, label=None):
+def numeric_column(table, col, label=None, unit=("s", "V", "µm")):
     """The float values of column ``col`` of a :func:`signal_table`, or one clear error.
 
     Every cell must be a real, finite number (``True``/``False`` are not
     numbers, nor are ``nan``, ``inf`` or an empty cell) of magnitude at
     most :data:`~hammerstein.core.numbers.MAX_MAGNITUDE`; a data row with
-    fewer fields than the header is reported as a ragged row.
+    fewer fields than the header is reported as a ragged row. A column
+    whose cell of the units row, or (but for a time column) whose name
+    (``x_nm``), gives another unit than ``unit`` is refused.
 
     Parameters
     ----------
@@ -346,6 +358,8 @@ def numeric_column(table, col, label=None):
         Column name.
     label : str, optional
         What the column is for (``"the time [s]"``), named when it is missing.
+    unit : str or tuple of str
+        The unit(s) the column is read in: ``"s"`` for a time column.
 
     Returns
     -------
@@ -365,6 +379,15 @@ def numeric_column(table, col, label=None):
         raise error(f"{where}: no column {escape(repr(col), CELL_EXCERPT)}"
                             f"{' for ' + label if label else ''} (columns: {names}{more}; map "
                             f"another name with --input-columns/--output-columns NAME=COLUMN or --time COLUMN)")
+    time = unit == "s"
+    problem = unit_problem(where, "time" if time else "", col, table.units.get(col, ""), unit)
+    found = None if time else name_unit(col, unit)
+    if problem is None and found:
+        shown = " or ".join((unit,) if isinstance(unit, str) else unit)
+        problem = (f"{where}: column {escape(repr(col), CELL_EXCERPT)} is named in {found}, "
+                   f"and signals are read in {shown}: convert the column to {shown}")
+    if problem:
+        raise error(problem)
     cells = frame[col].fillna("").astype(str).str.strip()
     v = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(v)
@@ -443,6 +466,10 @@ def _read_table(path, skip_rows=0):
     # a units row under the header, as data-acquisition programs write it
     # ("s,V,µm", "[s];[V];[um]"): every cell text, none a number; skipped
     units = header and len(head) > 1 and _units_row(head[1], sep)
+    unit_of = {}
+    if units:   # each column's unit, checked when the column is read (_column)
+        row = next(csv.reader([head[1]], delimiter=sep)) if sep != r"\s+" else head[1].split()
+        unit_of = {c.strip(): u.strip() for c, u in zip(first, row)}
     n_rows = raw.count(b"\n") + (not raw.endswith(b"\n"))
     n_cells = n_rows * max(len(first), 1)
     cap = max_cells()
@@ -475,10 +502,31 @@ def _read_table(path, skip_rows=0):
         frame = frame.iloc[:, 1:]
         if not header:
             frame.columns = list(range(frame.shape[1]))
+    frame.attrs["units"] = unit_of
     return frame, header
 
 
-def _column(frame, header, key, role, path):
+#: The unit each role's columns are read in (``identify --input-unit/--output-unit`` change
+#: the inputs' and outputs').
+UNITS = {"time": "s", "input": "V", "output": "µm"}
+
+
+def _unit_check(frame, name, role, path, units):
+    """Refuse a column whose units row or name gives another unit than its role's."""
+    expected = (units or UNITS)[role]
+    stated = frame.attrs.get("units", {}).get(str(name))
+    problem = unit_problem(path, role, name, stated, expected) if stated is not None else None
+    if problem is None and role != "time":
+        found = name_unit(name, expected)
+        if found:
+            problem = (f"{path}: {role} column {escape(repr(str(name)), 60)} is named in "
+                       f"{found}, and {role}s are read in {expected}: convert the column to "
+                       f"{expected}")
+    if problem:
+        raise DataFileError(problem)
+
+
+def _column(frame, header, key, role, path, units=None):
     names = [str(c) for c in frame.columns]
     shown = [f"{i}:{escape(n, 40)}" if header else str(i) for i, n in enumerate(names[:20])]
     available = ", ".join(shown) + (f", ... ({len(names) - 20} more)" if len(names) > 20 else "")
@@ -500,6 +548,8 @@ def _column(frame, header, key, role, path):
                 f"{available}")
         col = frame[key]
         name = str(key)
+    if header:
+        _unit_check(frame, name, role, path, units)
     if pd.api.types.is_bool_dtype(col):
         raise DataFileError(f"{path}: {role} column {escape(repr(name), CELL_EXCERPT)}: boolean "
                             f"cells (True/False), not numbers")
@@ -629,7 +679,12 @@ def _timepts(frame, header, time, sampling_period, path):
     return t, T
 
 
-def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0):
+def _units(input_unit, output_unit):
+    return {"time": "s", "input": input_unit or "V", "output": output_unit or "µm"}
+
+
+def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0,
+                input_unit="V", output_unit="µm"):
     """Read a single-input single-output record from a delimited text file.
 
     Parameters
@@ -653,6 +708,10 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
         Lines of a preamble before the table (an instrument's header block),
         dropped before anything is parsed; a units row under the table's
         header needs none (it is recognised).
+    input_unit, output_unit : str
+        The units the inputs and outputs are read in. A column whose cell
+        of the units row, or whose name (``x_nm``, ``ux [mV]``), says
+        another unit is refused, naming it: it is not converted.
 
     Returns
     -------
@@ -675,8 +734,9 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
-    u, uname = _column(frame, header, input, "input", path)
-    y, yname = _column(frame, header, output, "output", path)
+    units = _units(input_unit, output_unit)
+    u, uname = _column(frame, header, input, "input", path, units)
+    y, yname = _column(frame, header, output, "output", path, units)
     if uname == yname:
         raise DataFileError(
             f"{path}: input and output are the same column {uname!r}; name two different columns")
@@ -684,7 +744,8 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
     return Record(t, u, y, uname, yname, T, str(path))
 
 
-def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_rows=0):
+def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_rows=0,
+                 input_unit="V", output_unit="µm"):
     """Read a multi-input multi-output record from a delimited text file.
 
     The file format rules are those of :func:`read_record`.
@@ -703,6 +764,8 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
         Lines of a preamble before the table (an instrument's header block),
         dropped before anything is parsed; a units row under the table's
         header needs none (it is recognised).
+    input_unit, output_unit : str
+        The units the inputs and outputs are read in (:func:`read_record`).
 
     Returns
     -------
@@ -727,8 +790,9 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
-    u, unames = zip(*[_column(frame, header, c, "input", path) for c in ins])
-    y, ynames = zip(*[_column(frame, header, c, "output", path) for c in outs])
+    units = _units(input_unit, output_unit)
+    u, unames = zip(*[_column(frame, header, c, "input", path, units) for c in ins])
+    y, ynames = zip(*[_column(frame, header, c, "output", path, units) for c in outs])
     both = [n for n in unames if n in ynames]
     if both:
         raise DataFileError(
