@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import csv
 import io
-import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +23,8 @@ import pandas as pd
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
-from hammerstein.io.table_checks import name_unit, unit_problem
+from hammerstein.io.table_checks import check_size, name_unit, unit_problem
+from hammerstein.io.table_checks import CELLS_ENV, max_cells  # noqa: F401 (their old home)
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
            "decode_table", "signal_table", "numeric_column", "uniform_period"]
@@ -167,26 +167,6 @@ _BLANK = re.compile(rb"(?m)^[ \t\r]*\n")
 #: (a literal prefix the regex engine finds quickly, 7x faster on a 9 MB record).
 _BLANK_AFTER = re.compile(rb"\n[ \t\r]*\n")
 
-#: Environment variable overriding :func:`max_cells`.
-CELLS_ENV = "HAMMERSTEIN_MAX_DATA_CELLS"
-
-
-def max_cells():
-    """Largest number of cells (rows x columns) of a data file, checked before parsing.
-
-    Default 40 million (a 20 kHz, 100 s record of 20 columns), so that the
-    parsed table (8 bytes a cell, twice while converting) stays within
-    about 1 GB whatever the file; ``HAMMERSTEIN_MAX_DATA_CELLS=N`` (a
-    positive integer) overrides it.
-
-    Returns
-    -------
-    int
-    """
-    text = os.environ.get(CELLS_ENV, "").strip()
-    return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else 40_000_000
-
-
 #: Longest excerpt of a cell or column name quoted in a message (characters).
 CELL_EXCERPT = 60
 
@@ -249,6 +229,15 @@ def decode_table(raw, path, what="data file", error=DataFileError):
     return text
 
 
+def _first_line(raw, comment=True):
+    """The first line of a table's bytes that is not blank (nor a ``#`` comment), as text."""
+    head = raw[:1 << 16]
+    text = (head.decode("utf-16", errors="replace") if head.startswith((b"\xff\xfe", b"\xfe\xff"))
+            else head.decode("utf-8", errors="replace"))
+    return next((ln for ln in text.splitlines()
+                 if ln.strip() and not (comment and ln.lstrip().startswith("#"))), "")
+
+
 class _Table:
     """A parsed signal table: the frame (string header) and its cleaned text (for messages)."""
 
@@ -304,6 +293,7 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
     error
     """
     where = f"{what}: {escape(path)}" if what else escape(path)
+    check_size(raw, _sniff_separator(_first_line(raw, comment)), where, error)
     text = decode_table(raw, path, what, error)
     if comment and "#" in text:
         text = re.sub(r"(?m)^[ \t]*#[^\n]*(\n|$)", "", text)
@@ -470,12 +460,7 @@ def _read_table(path, skip_rows=0):
     if units:   # each column's unit, checked when the column is read (_column)
         row = next(csv.reader([head[1]], delimiter=sep)) if sep != r"\s+" else head[1].split()
         unit_of = {c.strip(): u.strip() for c, u in zip(first, row)}
-    n_rows = raw.count(b"\n") + (not raw.endswith(b"\n"))
-    n_cells = n_rows * max(len(first), 1)
-    cap = max_cells()
-    if n_cells > cap:
-        raise DataFileError(f"{path}: {n_rows} rows x {len(first)} columns = {n_cells} cells is more "
-                            f"than the limit of {cap} cells (raise it with {CELLS_ENV}=N)")
+    check_size(raw, sep, path, DataFileError)       # rows x the widest line, before parsing
     try:
         frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
                             skiprows=[1] if units else None,
