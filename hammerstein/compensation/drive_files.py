@@ -19,6 +19,7 @@ import warnings
 import numpy as np
 
 from hammerstein.io.datafiles import numeric_column, signal_table, uniform_period
+from hammerstein.io.time_grid import step_gaps
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
@@ -106,7 +107,7 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                             f"{t[i + 1]:g} s)")
     vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
     Tf, off, tol = uniform_period(t)
-    uniform = bool(np.max(np.abs(off)) <= tol)
+    uniform = bool(np.max(np.abs(off)) <= tol) and not step_gaps(t).size
     if sampling_period is None:
         if not uniform:
             d = np.diff(t)

@@ -24,6 +24,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
 from hammerstein.io.table_checks import check_size, name_unit, unit_problem
+from hammerstein.io.time_grid import step_gaps, uniform_period
 from hammerstein.io.table_checks import CELLS_ENV, max_cells  # noqa: F401 (their old home)
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
@@ -568,56 +569,6 @@ _TIME_UNIT_NAME = re.compile(r"(^|[_\s(\[/-])(ms|msec|us|usec|µs|μs|ns|min|h)(
                              re.IGNORECASE)
 
 
-def uniform_period(t):
-    """The sampling period of time stamps taken on a uniform grid, and how far they are off it.
-
-    A logger stamps uniform samples with rounded times: printed to a few
-    digits, or single-precision floats (``np.float32(k T)``: half a unit in the
-    last place, 2^-24 of the time, 0.48 µs at 8 s, more than 1 % of a 40 µs
-    period). The step between two stamps then varies by up to twice that
-    rounding, but every stamp stays within it of ``t_0 + k T``. The period
-    is the line through the first and last stamps, ``(t_(n-1) - t_0) / (n - 1)``
-    (the median step is biased by the rounding: 4.005e-5 s for float32
-    stamps of 4e-5 s), written with the fewest significant digits (4 to 12)
-    that keep every stamp within the tolerance of the grid.
-
-    Parameters
-    ----------
-    t : numpy.ndarray, shape (n_samples,)
-        Increasing time stamps [s], at least two.
-
-    Returns
-    -------
-    period : float
-        ``T`` [s].
-    offset : numpy.ndarray, shape (n_samples,)
-        ``t_k - (t_0 + k T)`` [s].
-    tolerance : float
-        What rounded stamps of uniform samples may be off the grid [s]: 1 %
-        of ``T``, or single precision's half unit at the largest time
-        (``2^-24 max |t|``), whichever is larger. A record with a gap, a
-        changing rate or a clock that drifts is off by more.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t = np.arange(250000, dtype=float) * 4e-5
-    >>> T, off, tol = uniform_period(np.float32(t).astype(float))   # a float32 logger's stamps
-    >>> T, bool(np.max(np.abs(off)) <= tol)
-    (4e-05, True)
-    """
-    t = np.asarray(t, dtype=float)
-    k = np.arange(t.size)
-    T = float((t[-1] - t[0]) / (t.size - 1))
-    tol = max(0.01 * T, 2.0 ** -24 * float(np.max(np.abs(t))) * 1.01)
-    for digits in range(4, 13):
-        Ts = float(f"{T:.{digits}g}")
-        off = t - t[0] - k * Ts
-        if np.max(np.abs(off)) <= tol:
-            return Ts, off, tol
-    return T, t - t[0] - k * T, tol
-
-
 def _timepts(frame, header, time, sampling_period, path):
     """Time points (n_samples,) [s] and sampling period [s] of a parsed table.
 
@@ -640,8 +591,9 @@ def _timepts(frame, header, time, sampling_period, path):
                 f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
                 f"({t[i]:g} s then {t[i + 1]:g} s)")
         T, off, tol = uniform_period(t)
-        if np.max(np.abs(off)) > tol:
-            i = int(np.argmax(np.abs(dt - T)))
+        gaps = step_gaps(t)
+        if gaps.size or np.max(np.abs(off)) > tol:
+            i = int(gaps[0]) if gaps.size else int(np.argmax(np.abs(dt - T)))
             raise DataFileError(
                 f"{path}: time column {tname!r} is not uniformly sampled: step {dt[i]:g} s at "
                 f"data row {i + 2}, and a time {np.max(np.abs(off)):.3g} s off the grid of "

@@ -71,3 +71,36 @@ def test_a_lost_sample_is_still_refused(tmp_path):
         read_record(path, "u", "z", time="time_s")
     with pytest.raises(DataFileError, match="the times are not uniform"):
         read_signals(path, ["u", "z"], "time_s", None, None, "--measured")
+
+
+# A record starting far from 0 (t0 = 1234.5 s) was allowed single precision's rounding there
+# (74 µs), which hid a dropped sample at 10 kHz; its stamps, written to the µs, show it.
+@pytest.mark.parametrize("period, lost", [(1e-4, 1), (2e-5, 2)])
+def test_a_lost_sample_far_from_zero_is_refused(tmp_path, period, lost):
+    k = np.arange(100_000, dtype=float)
+    k[50_000:] += lost
+    t = 1234.5 + k * period
+    u = np.sin(2 * np.pi * k * period)
+    path = tmp_path / "g.csv"
+    pd.DataFrame({"t": t, "u": u, "z": 2 * u}).to_csv(path, index=False, float_format="%.10g")
+    with pytest.raises(DataFileError, match=r"time column 't' is not uniformly sampled: step "
+                                            rf"{(lost + 1) * period:g} s at data row 50001"):
+        read_record(path, "u", "z", time="t")
+    with pytest.raises(DataFileError, match="the times are not uniform"):
+        read_signals(path, ["u", "z"], "t", None, None, "--measured")
+
+
+def test_uniform_stamps_far_from_zero_are_read(tmp_path):
+    t = 1234.5 + np.arange(100_000) * 1e-4
+    u = np.sin(2 * np.pi * t)
+    path = tmp_path / "r.csv"
+    pd.DataFrame({"t": t, "u": u, "z": 2 * u}).to_csv(path, index=False, float_format="%.10g")
+    rec = read_record(path, "u", "z", time="t")
+    assert rec.sampling_period == 1e-4 and rec.n_samples == 100_000
+
+
+def test_float32_stamps_far_from_zero_keep_their_allowance():
+    # 1 kHz float32 stamps from 1000 s: steps vary by a unit of 6.1e-5 s, 6 % of T
+    t = (1000.0 + np.arange(20_000) * 1e-3).astype(np.float32).astype(float)
+    Tf, off, tol = uniform_period(t)
+    assert Tf == pytest.approx(1e-3) and np.max(np.abs(off)) <= tol
