@@ -19,7 +19,7 @@ import warnings
 import numpy as np
 
 from hammerstein.io.datafiles import numeric_column, signal_table, uniform_period
-from hammerstein.io.time_grid import step_gaps
+from hammerstein.io.time_grid import gap_text, step_gaps
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
@@ -107,8 +107,14 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                             f"{t[i + 1]:g} s)")
     vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
     Tf, off, tol = uniform_period(t)
-    uniform = bool(np.max(np.abs(off)) <= tol) and not step_gaps(t).size
+    gaps = step_gaps(t)
+    uniform = bool(np.max(np.abs(off)) <= tol) and not gaps.size
     if sampling_period is None:
+        if gaps.size:
+            raise DataFileError(f"{what}: {escape(path)}: the time column "
+                                f"{escape(repr(time), 60)} has {gap_text(t, gaps)}; expected "
+                                f"one sampling period (fill or resample the gaps, or give "
+                                f"--sampling-period to interpolate across them)")
         if not uniform:
             d = np.diff(t)
             raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "

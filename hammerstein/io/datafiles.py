@@ -24,7 +24,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
 from hammerstein.io.table_checks import check_size, name_unit, unit_problem
-from hammerstein.io.time_grid import step_gaps, uniform_period
+from hammerstein.io.time_grid import gap_text, step_gaps, uniform_period
 from hammerstein.io.table_checks import CELLS_ENV, max_cells  # noqa: F401 (their old home)
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
@@ -592,8 +592,13 @@ def _timepts(frame, header, time, sampling_period, path):
                 f"({t[i]:g} s then {t[i + 1]:g} s)")
         T, off, tol = uniform_period(t)
         gaps = step_gaps(t)
-        if gaps.size or np.max(np.abs(off)) > tol:
-            i = int(gaps[0]) if gaps.size else int(np.argmax(np.abs(dt - T)))
+        if gaps.size:
+            raise DataFileError(
+                f"{path}: time column {tname!r} has {gap_text(t, gaps)}: fill or resample the "
+                f"gaps (if no sample is missing and only the stamps are wrong, give "
+                f"--sampling-period instead of the time column)")
+        if np.max(np.abs(off)) > tol:
+            i = int(np.argmax(np.abs(dt - T)))
             raise DataFileError(
                 f"{path}: time column {tname!r} is not uniformly sampled: step {dt[i]:g} s at "
                 f"data row {i + 2}, and a time {np.max(np.abs(off)):.3g} s off the grid of "

@@ -133,3 +133,34 @@ def uniform_period(t):
         if np.max(np.abs(off)) <= tol:
             return Ts, off, tol
     return T, t - t[0] - k * T, tol
+
+
+def gap_text(t, gaps):
+    """The gaps of time stamps in words: how many, the samples missing, the first one's row and time.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (n_samples,)
+        Increasing time stamps [s].
+    gaps : numpy.ndarray of int
+        :func:`step_gaps` of ``t`` (not empty).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.delete(np.arange(100) * 1e-4, [50, 70, 71])
+    >>> gap_text(t, step_gaps(t))
+    '2 gaps (3 samples missing), the first at data row 51 (t = 0.0051 s, a step of 0.0002 s, 2 periods of 0.0001 s)'
+    """
+    d = np.diff(t)
+    step = float(np.median(d))
+    missing = int(np.sum(np.maximum(np.rint(d[gaps] / step) - 1, 1)))
+    i = int(gaps[0])
+    return (f"{gaps.size} gap{'s' if gaps.size > 1 else ''} ({missing} sample"
+            f"{'s' if missing > 1 else ''} missing), the first at data row {i + 2} (t = "
+            f"{t[i + 1]:.10g} s, a step of {d[i]:.6g} s, {d[i] / step:.3g} periods of "
+            f"{step:.6g} s)")
