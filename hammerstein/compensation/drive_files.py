@@ -86,9 +86,10 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     """
     try:
         raw = bounded_read_bytes(path, "data", "data file")
-    except (FileLimitError, OSError) as exc:
-        raise DataFileError(f"{what}: {escape(path)}: "
-                            f"{getattr(exc, 'strerror', None) or exc}") from None
+    except FileLimitError as exc:        # its message names the file
+        raise DataFileError(f"{what}: {exc}") from None
+    except OSError as exc:
+        raise DataFileError(f"{what}: {escape(path)}: {exc.strerror or exc}") from None
     table = signal_table(raw, path, what)
     del raw
     mapping = dict(mapping or {})
