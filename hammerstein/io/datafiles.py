@@ -23,7 +23,7 @@ import pandas as pd
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
-from hammerstein.io.table_checks import check_size, name_unit, unit_problem
+from hammerstein.io.table_checks import check_size, decimal_comma_hint, name_unit, unit_problem
 from hammerstein.io.time_grid import gap_text, step_gaps, uniform_period
 from hammerstein.io.table_checks import CELLS_ENV, max_cells  # noqa: F401 (their old home)
 
@@ -399,7 +399,7 @@ def numeric_column(table, col, label=None, unit=("s", "V", "µm")):
         else:
             what = f"a non-numeric cell {escape(repr(cell), CELL_EXCERPT)}"
         raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: {what} on data "
-                            f"row {row + 1}; expected finite numbers")
+                            f"row {row + 1}; expected finite numbers{decimal_comma_hint(cell)}")
     big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)
     if big.size:
         raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: value "
@@ -415,7 +415,7 @@ def _units_row(line, sep):
     except (csv.Error, StopIteration):
         return False
     cells = [c.strip() for c in row if c.strip()]
-    return bool(cells) and not any(_is_number(c) for c in cells)
+    return bool(cells) and not any(_is_number(c) or decimal_comma_hint(c) for c in cells)
 
 
 def _read_table(path, skip_rows=0):
@@ -531,7 +531,7 @@ def _column(frame, header, key, role, path, units=None):
         if key not in names:
             raise DataFileError(
                 f"{path}: no {role} column named {escape(repr(key), 60)}; available columns: "
-                f"{available}")
+                f"{available}{_preamble_hint(frame)}")
         col = frame[key]
         name = str(key)
     if header:
@@ -547,7 +547,8 @@ def _column(frame, header, key, role, path, units=None):
         what = (f"non-numeric or empty cell {escape(repr(str(cell).strip()), CELL_EXCERPT)}" if isinstance(cell, str) and cell.strip()
                 and cell.strip().lower() not in ("nan", "na", "n/a", "null", "none")
                 else "non-numeric or empty cell (empty or NaN)")
-        raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}")
+        raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}"
+                            f"{decimal_comma_hint(cell)}")
     arr = values.to_numpy(dtype=float)
     big = np.flatnonzero(np.abs(arr) > MAX_MAGNITUDE)   # inf (or 1.8e308) included
     if big.size:    # the squares of the fit would overflow (core/numbers.py)
@@ -557,6 +558,15 @@ def _column(frame, header, key, role, path, units=None):
                             f"{'' if np.isinf(v) else f'is beyond the limit {MAX_MAGNITUDE:.0e}'}"
                             .rstrip())
     return arr, name
+
+
+def _preamble_hint(frame):
+    """A hint when the header read looks like a preamble line (``Instrument: Tek MSO``)."""
+    names = [str(c) for c in frame.columns]
+    if any(n.rstrip().endswith(":") for n in names[:3]) or frame.shape[1] < 2:
+        return (" (a preamble before the table? skip its lines with --skip-rows N, or start "
+                "them with '#')")
+    return ""
 
 
 #: A ragged row within this many lines of the top is named as a possible preamble.

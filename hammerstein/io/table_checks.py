@@ -22,7 +22,7 @@ import numpy as np
 
 from hammerstein.core.files import escape
 
-__all__ = ["unit_problem", "name_unit", "max_cells", "max_columns", "wide_line", "check_size",
+__all__ = ["unit_problem", "name_unit", "decimal_comma_hint", "max_cells", "max_columns", "wide_line", "check_size",
            "CELLS_ENV"]
 
 #: Environment variable overriding :func:`max_cells`.
@@ -276,3 +276,29 @@ def name_unit(name, expected):
     unit = m.group(1) or m.group(2)
     wanted = (expected,) if isinstance(expected, str) else tuple(expected)
     return None if any(_is(unit, e) for e in wanted) else unit
+
+
+_DECIMAL_COMMA = re.compile(r"^[+-]?\d*,\d+(?:[eE][+-]?\d+)?$")
+
+
+def decimal_comma_hint(cell):
+    """A hint for a cell written with a decimal comma (``0,00628``), else ``""``.
+
+    Parameters
+    ----------
+    cell : object
+        The cell that is not a number.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> decimal_comma_hint("-0,0258")
+    " (looks like a decimal comma; write '.' decimals)"
+    >>> decimal_comma_hint("abc")
+    ''
+    """
+    return (" (looks like a decimal comma; write '.' decimals)"
+            if isinstance(cell, str) and _DECIMAL_COMMA.match(cell.strip()) else "")

@@ -130,3 +130,33 @@ def test_a_signal_file_with_a_units_row_in_s_v_um_is_read(tmp_path):
     grid, vals, T = read_signals(path, ["ux", "x"], "t", None, None, "--measured")
     assert grid.size == 50 and T == pytest.approx(1e-3)
     np.testing.assert_allclose(vals[1], 2 * u, atol=1e-5)
+
+
+# A decimal comma and a preamble without '#' were refused without a word of their cause.
+def test_a_decimal_comma_is_named_as_such(tmp_path):
+    from hammerstein.compensation.drive_files import read_signals
+    from hammerstein.io.datafiles import DataFileError
+    path = tmp_path / "de.csv"
+    path.write_text("t;ux;x\n" + "".join(f"0,{k:03d};0,5;-1,25\n" for k in range(20)))
+    with pytest.raises(DataFileError) as err:
+        read_record(path, input="ux", output="x", time="t")
+    assert str(err.value) == (f"{path}: input column 'ux': non-numeric or empty cell '0,5' at "
+                              f"data row 1 (looks like a decimal comma; write '.' decimals)")
+    with pytest.raises(DataFileError) as err:
+        read_signals(path, ["ux", "x"], "t", None, None, "--measured")
+    assert str(err.value).endswith("column 't': a non-numeric cell '0,000' on data row 1; "
+                                   "expected finite numbers (looks like a decimal comma; "
+                                   "write '.' decimals)")
+
+
+def test_a_preamble_without_comment_marks_hints_at_skip_rows(tmp_path):
+    from hammerstein.io.datafiles import DataFileError
+    path = tmp_path / "daq.csv"
+    _write(path, ["t", "ux", "x"], ["s", "V", "µm"])
+    path.write_text("Instrument: Tek MSO\nDate: 2026-11-26\nRate: 1000\n"
+                    + path.read_text(encoding="utf-8"), encoding="utf-8")
+    with pytest.raises(DataFileError) as err:
+        read_records(path, inputs=["ux"], outputs=["x"], time="t")
+    assert "no input column named 'ux'" in str(err.value)
+    assert str(err.value).endswith("(a preamble before the table? skip its lines with "
+                                   "--skip-rows N, or start them with '#')")
