@@ -137,7 +137,9 @@ def load_actuator(path, sampling_period=None):
     path : str
         Preset name or file, or model file.
     sampling_period : float, optional
-        T [s]; required for a model file without ``[preset]``; for a preset,
+        T [s]; for a model file without ``[preset]``, the sampling period of
+        the records it was identified from (``[identification]
+        sampling_period_s``) when not given and they all agree; for a preset,
         its dynamics are sampled again at T when it differs (its creep lags
         and amplifier kept, its measurement delay converted to samples of T).
 
@@ -171,8 +173,7 @@ def load_actuator(path, sampling_period=None):
             plant.amplifier = amp
     else:
         if sampling_period is None:
-            raise PresetError(f"{path}: a model file has no sampling period; give "
-                              f"--sampling-period S")
+            sampling_period = _records_period(data, path)
         model = load_model(p)
         dyn = load_dynamics(p, model.output_names, sampling_period) if "dynamics" in data else None
         plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
@@ -182,6 +183,24 @@ def load_actuator(path, sampling_period=None):
     plant.measurement_delay = None if delay is None else int(round(delay * scale))
     plant.delay_problem = _delay_problem(data)
     return plant
+
+
+def _records_period(data, path):
+    """The sampling period [s] of the records a model file was identified from, or why none."""
+    ident = data.get("identification") if isinstance(data, dict) else None
+    periods = ident.get("sampling_period_s") if isinstance(ident, dict) else None
+    periods = periods if isinstance(periods, list) else [periods]
+    values = [float(v) for v in periods if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    if not values or len(values) != len(periods) or not all(np.isfinite(values)) \
+            or min(values) <= 0:
+        raise PresetError(f"{path}: the model file gives no sampling period ([identification] "
+                          f"sampling_period_s, written by identify); give --sampling-period S")
+    if max(values) > min(values) * (1 + 1e-9):
+        shown = ", ".join(f"{v:g}" for v in sorted(set(values)))
+        raise PresetError(f"{path}: the model's records were sampled at different periods "
+                          f"({shown} s, [identification] sampling_period_s); give "
+                          f"--sampling-period S")
+    return values[0]
 
 
 def _delay_problem(data):

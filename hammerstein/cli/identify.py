@@ -560,7 +560,8 @@ def _read_raw(args, path):
     cache = args.__dict__.setdefault("_raw_records", {})
     if path not in cache:
         cache[path] = read_records(path, args.inputs, args.outputs, args.time,
-                                   args.sampling_period, args.skip_rows)
+                                   args.sampling_period, args.skip_rows,
+                                   args.input_unit, args.output_unit)
     return cache[path]
 
 

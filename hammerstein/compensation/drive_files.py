@@ -19,6 +19,7 @@ import warnings
 import numpy as np
 
 from hammerstein.io.datafiles import numeric_column, signal_table, uniform_period
+from hammerstein.io.time_grid import gap_text, step_gaps
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
@@ -85,17 +86,18 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     """
     try:
         raw = bounded_read_bytes(path, "data", "data file")
-    except (FileLimitError, OSError) as exc:
-        raise DataFileError(f"{what}: {escape(path)}: "
-                            f"{getattr(exc, 'strerror', None) or exc}") from None
+    except FileLimitError as exc:        # its message names the file
+        raise DataFileError(f"{what}: {exc}") from None
+    except OSError as exc:
+        raise DataFileError(f"{what}: {escape(path)}: {exc.strerror or exc}") from None
     table = signal_table(raw, path, what)
     del raw
     mapping = dict(mapping or {})
 
-    def column(col, label):
-        return numeric_column(table, col, label)
+    def column(col, label, unit=("V", "µm")):
+        return numeric_column(table, col, label, unit)
 
-    t = column(time, "the time [s]")
+    t = column(time, "the time [s]", "s")
     if t.size < 2:
         raise DataFileError(f"{what}: {escape(path)}: {t.size} data row; expected at least two "
                             f"samples")
@@ -106,8 +108,14 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                             f"{t[i + 1]:g} s)")
     vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
     Tf, off, tol = uniform_period(t)
-    uniform = bool(np.max(np.abs(off)) <= tol)
+    gaps = step_gaps(t)
+    uniform = bool(np.max(np.abs(off)) <= tol) and not gaps.size
     if sampling_period is None:
+        if gaps.size:
+            raise DataFileError(f"{what}: {escape(path)}: the time column "
+                                f"{escape(repr(time), 60)} has {gap_text(t, gaps)}; expected "
+                                f"one sampling period (fill or resample the gaps, or give "
+                                f"--sampling-period to interpolate across them)")
         if not uniform:
             d = np.diff(t)
             raise DataFileError(f"{what}: {path}: the times are not uniform (steps from "

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import csv
 import io
-import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,6 +23,9 @@ import pandas as pd
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import DataFileError
+from hammerstein.io.table_checks import check_size, decimal_comma_hint, name_unit, unit_problem
+from hammerstein.io.time_grid import gap_text, step_gaps, uniform_period
+from hammerstein.io.table_checks import CELLS_ENV, max_cells  # noqa: F401 (their old home)
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
            "decode_table", "signal_table", "numeric_column", "uniform_period"]
@@ -166,26 +168,6 @@ _BLANK = re.compile(rb"(?m)^[ \t\r]*\n")
 #: (a literal prefix the regex engine finds quickly, 7x faster on a 9 MB record).
 _BLANK_AFTER = re.compile(rb"\n[ \t\r]*\n")
 
-#: Environment variable overriding :func:`max_cells`.
-CELLS_ENV = "HAMMERSTEIN_MAX_DATA_CELLS"
-
-
-def max_cells():
-    """Largest number of cells (rows x columns) of a data file, checked before parsing.
-
-    Default 40 million (a 20 kHz, 100 s record of 20 columns), so that the
-    parsed table (8 bytes a cell, twice while converting) stays within
-    about 1 GB whatever the file; ``HAMMERSTEIN_MAX_DATA_CELLS=N`` (a
-    positive integer) overrides it.
-
-    Returns
-    -------
-    int
-    """
-    text = os.environ.get(CELLS_ENV, "").strip()
-    return int(text) if text.isascii() and text.isdigit() and int(text) > 0 else 40_000_000
-
-
 #: Longest excerpt of a cell or column name quoted in a message (characters).
 CELL_EXCERPT = 60
 
@@ -248,19 +230,31 @@ def decode_table(raw, path, what="data file", error=DataFileError):
     return text
 
 
+def _first_line(raw, comment=True):
+    """The first line of a table's bytes that is not blank (nor a ``#`` comment), as text."""
+    head = raw[:1 << 16]
+    text = (head.decode("utf-16", errors="replace") if head.startswith((b"\xff\xfe", b"\xfe\xff"))
+            else head.decode("utf-8", errors="replace"))
+    return next((ln for ln in text.splitlines()
+                 if ln.strip() and not (comment and ln.lstrip().startswith("#"))), "")
+
+
 class _Table:
     """A parsed signal table: the frame (string header) and its cleaned text (for messages)."""
 
-    def __init__(self, frame, text, sep, path, what, error=DataFileError):
+    def __init__(self, frame, text, sep, path, what, error=DataFileError, units=None):
         self.frame, self.text, self.sep, self.path, self.what = frame, text, sep, path, what
         self.error = error
+        #: ``{column: unit}`` of a units row under the header (dropped from the frame), or {}
+        self.units = dict(units or {})
 
     def line_fields(self, row):
         """Number of fields of data row ``row`` (0-based) as written, or None."""
-        lines = self.text.split("\n", row + 2)
-        if len(lines) < row + 2:
+        skip = 2 + bool(self.units)
+        lines = self.text.split("\n", row + skip)
+        if len(lines) < row + skip:
             return None
-        line = lines[row + 1]
+        line = lines[row + skip - 1]
         return len(line.split()) if self.sep == r"\s+" else len(line.split(self.sep))
 
 
@@ -300,6 +294,7 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
     error
     """
     where = f"{what}: {escape(path)}" if what else escape(path)
+    check_size(raw, _sniff_separator(_first_line(raw, comment)), where, error)
     text = decode_table(raw, path, what, error)
     if comment and "#" in text:
         text = re.sub(r"(?m)^[ \t]*#[^\n]*(\n|$)", "", text)
@@ -325,19 +320,27 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
                         f"row{_PREAMBLE_HINT if int(m.group(2)) <= PREAMBLE_LINES else ''}") from None
         raise error(f"{where}: not a readable CSV table ({escape(msg, 200)})") from None
     frame.columns = [str(c).strip() for c in frame.columns]
-    return _Table(frame, text, sep, path, what, error)
+    units = {}
+    second = rest.partition("\n")[0]
+    if len(frame) > 1 and _units_row(second, sep):     # a units row (s,V,µm): checked by column
+        row = next(csv.reader([second], delimiter=sep)) if sep != r"\s+" else second.split()
+        units = {c: str(u).strip() for c, u in zip(frame.columns, row)}
+        frame = frame.iloc[1:].reset_index(drop=True)
+    return _Table(frame, text, sep, path, what, error, units)
 
 
 _MISSING = ("", "nan", "na", "n/a", "null", "none")
 
 
-def numeric_column(table, col, label=None):
+def numeric_column(table, col, label=None, unit=("s", "V", "µm")):
     """The float values of column ``col`` of a :func:`signal_table`, or one clear error.
 
     Every cell must be a real, finite number (``True``/``False`` are not
     numbers, nor are ``nan``, ``inf`` or an empty cell) of magnitude at
     most :data:`~hammerstein.core.numbers.MAX_MAGNITUDE`; a data row with
-    fewer fields than the header is reported as a ragged row.
+    fewer fields than the header is reported as a ragged row. A column
+    whose cell of the units row, or (but for a time column) whose name
+    (``x_nm``), gives another unit than ``unit`` is refused.
 
     Parameters
     ----------
@@ -346,6 +349,8 @@ def numeric_column(table, col, label=None):
         Column name.
     label : str, optional
         What the column is for (``"the time [s]"``), named when it is missing.
+    unit : str or tuple of str
+        The unit(s) the column is read in: ``"s"`` for a time column.
 
     Returns
     -------
@@ -365,6 +370,15 @@ def numeric_column(table, col, label=None):
         raise error(f"{where}: no column {escape(repr(col), CELL_EXCERPT)}"
                             f"{' for ' + label if label else ''} (columns: {names}{more}; map "
                             f"another name with --input-columns/--output-columns NAME=COLUMN or --time COLUMN)")
+    time = unit == "s"
+    problem = unit_problem(where, "time" if time else "", col, table.units.get(col, ""), unit)
+    found = None if time else name_unit(col, unit)
+    if problem is None and found:
+        shown = " or ".join((unit,) if isinstance(unit, str) else unit)
+        problem = (f"{where}: column {escape(repr(col), CELL_EXCERPT)} is named in {found}, "
+                   f"and signals are read in {shown}: convert the column to {shown}")
+    if problem:
+        raise error(problem)
     cells = frame[col].fillna("").astype(str).str.strip()
     v = pd.to_numeric(cells, errors="coerce").to_numpy(dtype=float)
     bad = ~np.isfinite(v)
@@ -385,7 +399,7 @@ def numeric_column(table, col, label=None):
         else:
             what = f"a non-numeric cell {escape(repr(cell), CELL_EXCERPT)}"
         raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: {what} on data "
-                            f"row {row + 1}; expected finite numbers")
+                            f"row {row + 1}; expected finite numbers{decimal_comma_hint(cell)}")
     big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)
     if big.size:
         raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: value "
@@ -401,7 +415,7 @@ def _units_row(line, sep):
     except (csv.Error, StopIteration):
         return False
     cells = [c.strip() for c in row if c.strip()]
-    return bool(cells) and not any(_is_number(c) for c in cells)
+    return bool(cells) and not any(_is_number(c) or decimal_comma_hint(c) for c in cells)
 
 
 def _read_table(path, skip_rows=0):
@@ -443,12 +457,11 @@ def _read_table(path, skip_rows=0):
     # a units row under the header, as data-acquisition programs write it
     # ("s,V,µm", "[s];[V];[um]"): every cell text, none a number; skipped
     units = header and len(head) > 1 and _units_row(head[1], sep)
-    n_rows = raw.count(b"\n") + (not raw.endswith(b"\n"))
-    n_cells = n_rows * max(len(first), 1)
-    cap = max_cells()
-    if n_cells > cap:
-        raise DataFileError(f"{path}: {n_rows} rows x {len(first)} columns = {n_cells} cells is more "
-                            f"than the limit of {cap} cells (raise it with {CELLS_ENV}=N)")
+    unit_of = {}
+    if units:   # each column's unit, checked when the column is read (_column)
+        row = next(csv.reader([head[1]], delimiter=sep)) if sep != r"\s+" else head[1].split()
+        unit_of = {c.strip(): u.strip() for c, u in zip(first, row)}
+    check_size(raw, sep, path, DataFileError)       # rows x the widest line, before parsing
     try:
         frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
                             skiprows=[1] if units else None,
@@ -475,10 +488,31 @@ def _read_table(path, skip_rows=0):
         frame = frame.iloc[:, 1:]
         if not header:
             frame.columns = list(range(frame.shape[1]))
+    frame.attrs["units"] = unit_of
     return frame, header
 
 
-def _column(frame, header, key, role, path):
+#: The unit each role's columns are read in (``identify --input-unit/--output-unit`` change
+#: the inputs' and outputs').
+UNITS = {"time": "s", "input": "V", "output": "µm"}
+
+
+def _unit_check(frame, name, role, path, units):
+    """Refuse a column whose units row or name gives another unit than its role's."""
+    expected = (units or UNITS)[role]
+    stated = frame.attrs.get("units", {}).get(str(name))
+    problem = unit_problem(path, role, name, stated, expected) if stated is not None else None
+    if problem is None and role != "time":
+        found = name_unit(name, expected)
+        if found:
+            problem = (f"{path}: {role} column {escape(repr(str(name)), 60)} is named in "
+                       f"{found}, and {role}s are read in {expected}: convert the column to "
+                       f"{expected}")
+    if problem:
+        raise DataFileError(problem)
+
+
+def _column(frame, header, key, role, path, units=None):
     names = [str(c) for c in frame.columns]
     shown = [f"{i}:{escape(n, 40)}" if header else str(i) for i, n in enumerate(names[:20])]
     available = ", ".join(shown) + (f", ... ({len(names) - 20} more)" if len(names) > 20 else "")
@@ -497,9 +531,11 @@ def _column(frame, header, key, role, path):
         if key not in names:
             raise DataFileError(
                 f"{path}: no {role} column named {escape(repr(key), 60)}; available columns: "
-                f"{available}")
+                f"{available}{_preamble_hint(frame)}")
         col = frame[key]
         name = str(key)
+    if header:
+        _unit_check(frame, name, role, path, units)
     if pd.api.types.is_bool_dtype(col):
         raise DataFileError(f"{path}: {role} column {escape(repr(name), CELL_EXCERPT)}: boolean "
                             f"cells (True/False), not numbers")
@@ -511,7 +547,8 @@ def _column(frame, header, key, role, path):
         what = (f"non-numeric or empty cell {escape(repr(str(cell).strip()), CELL_EXCERPT)}" if isinstance(cell, str) and cell.strip()
                 and cell.strip().lower() not in ("nan", "na", "n/a", "null", "none")
                 else "non-numeric or empty cell (empty or NaN)")
-        raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}")
+        raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}"
+                            f"{decimal_comma_hint(cell)}")
     arr = values.to_numpy(dtype=float)
     big = np.flatnonzero(np.abs(arr) > MAX_MAGNITUDE)   # inf (or 1.8e308) included
     if big.size:    # the squares of the fit would overflow (core/numbers.py)
@@ -523,6 +560,15 @@ def _column(frame, header, key, role, path):
     return arr, name
 
 
+def _preamble_hint(frame):
+    """A hint when the header read looks like a preamble line (``Instrument: Tek MSO``)."""
+    names = [str(c) for c in frame.columns]
+    if any(n.rstrip().endswith(":") for n in names[:3]) or frame.shape[1] < 2:
+        return (" (a preamble before the table? skip its lines with --skip-rows N, or start "
+                "them with '#')")
+    return ""
+
+
 #: A ragged row within this many lines of the top is named as a possible preamble.
 PREAMBLE_LINES = 20
 _PREAMBLE_HINT = (" (a preamble before the header? start its lines with '#', which are "
@@ -531,56 +577,6 @@ _PREAMBLE_HINT = (" (a preamble before the header? start its lines with '#', whi
 #: A time column named in another unit than seconds (``time_ms``, ``t [us]``, ``t(µs)``).
 _TIME_UNIT_NAME = re.compile(r"(^|[_\s(\[/-])(ms|msec|us|usec|µs|μs|ns|min|h)([)\]]?\s*)$",
                              re.IGNORECASE)
-
-
-def uniform_period(t):
-    """The sampling period of time stamps taken on a uniform grid, and how far they are off it.
-
-    A logger stamps uniform samples with rounded times: printed to a few
-    digits, or single-precision floats (``np.float32(k T)``: half a unit in the
-    last place, 2^-24 of the time, 0.48 µs at 8 s, more than 1 % of a 40 µs
-    period). The step between two stamps then varies by up to twice that
-    rounding, but every stamp stays within it of ``t_0 + k T``. The period
-    is the line through the first and last stamps, ``(t_(n-1) - t_0) / (n - 1)``
-    (the median step is biased by the rounding: 4.005e-5 s for float32
-    stamps of 4e-5 s), written with the fewest significant digits (4 to 12)
-    that keep every stamp within the tolerance of the grid.
-
-    Parameters
-    ----------
-    t : numpy.ndarray, shape (n_samples,)
-        Increasing time stamps [s], at least two.
-
-    Returns
-    -------
-    period : float
-        ``T`` [s].
-    offset : numpy.ndarray, shape (n_samples,)
-        ``t_k - (t_0 + k T)`` [s].
-    tolerance : float
-        What rounded stamps of uniform samples may be off the grid [s]: 1 %
-        of ``T``, or single precision's half unit at the largest time
-        (``2^-24 max |t|``), whichever is larger. A record with a gap, a
-        changing rate or a clock that drifts is off by more.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> t = np.arange(250000, dtype=float) * 4e-5
-    >>> T, off, tol = uniform_period(np.float32(t).astype(float))   # a float32 logger's stamps
-    >>> T, bool(np.max(np.abs(off)) <= tol)
-    (4e-05, True)
-    """
-    t = np.asarray(t, dtype=float)
-    k = np.arange(t.size)
-    T = float((t[-1] - t[0]) / (t.size - 1))
-    tol = max(0.01 * T, 2.0 ** -24 * float(np.max(np.abs(t))) * 1.01)
-    for digits in range(4, 13):
-        Ts = float(f"{T:.{digits}g}")
-        off = t - t[0] - k * Ts
-        if np.max(np.abs(off)) <= tol:
-            return Ts, off, tol
-    return T, t - t[0] - k * T, tol
 
 
 def _timepts(frame, header, time, sampling_period, path):
@@ -605,6 +601,12 @@ def _timepts(frame, header, time, sampling_period, path):
                 f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
                 f"({t[i]:g} s then {t[i + 1]:g} s)")
         T, off, tol = uniform_period(t)
+        gaps = step_gaps(t)
+        if gaps.size:
+            raise DataFileError(
+                f"{path}: time column {tname!r} has {gap_text(t, gaps)}: fill or resample the "
+                f"gaps (if no sample is missing and only the stamps are wrong, give "
+                f"--sampling-period instead of the time column)")
         if np.max(np.abs(off)) > tol:
             i = int(np.argmax(np.abs(dt - T)))
             raise DataFileError(
@@ -629,7 +631,12 @@ def _timepts(frame, header, time, sampling_period, path):
     return t, T
 
 
-def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0):
+def _units(input_unit, output_unit):
+    return {"time": "s", "input": input_unit or "V", "output": output_unit or "µm"}
+
+
+def read_record(path, input, output, time=None, sampling_period=None, skip_rows=0,
+                input_unit="V", output_unit="µm"):
     """Read a single-input single-output record from a delimited text file.
 
     Parameters
@@ -653,6 +660,10 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
         Lines of a preamble before the table (an instrument's header block),
         dropped before anything is parsed; a units row under the table's
         header needs none (it is recognised).
+    input_unit, output_unit : str
+        The units the inputs and outputs are read in. A column whose cell
+        of the units row, or whose name (``x_nm``, ``ux [mV]``), says
+        another unit is refused, naming it: it is not converted.
 
     Returns
     -------
@@ -675,8 +686,9 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
-    u, uname = _column(frame, header, input, "input", path)
-    y, yname = _column(frame, header, output, "output", path)
+    units = _units(input_unit, output_unit)
+    u, uname = _column(frame, header, input, "input", path, units)
+    y, yname = _column(frame, header, output, "output", path, units)
     if uname == yname:
         raise DataFileError(
             f"{path}: input and output are the same column {uname!r}; name two different columns")
@@ -684,7 +696,8 @@ def read_record(path, input, output, time=None, sampling_period=None, skip_rows=
     return Record(t, u, y, uname, yname, T, str(path))
 
 
-def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_rows=0):
+def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_rows=0,
+                 input_unit="V", output_unit="µm"):
     """Read a multi-input multi-output record from a delimited text file.
 
     The file format rules are those of :func:`read_record`.
@@ -703,6 +716,8 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
         Lines of a preamble before the table (an instrument's header block),
         dropped before anything is parsed; a units row under the table's
         header needs none (it is recognised).
+    input_unit, output_unit : str
+        The units the inputs and outputs are read in (:func:`read_record`).
 
     Returns
     -------
@@ -727,8 +742,9 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
-    u, unames = zip(*[_column(frame, header, c, "input", path) for c in ins])
-    y, ynames = zip(*[_column(frame, header, c, "output", path) for c in outs])
+    units = _units(input_unit, output_unit)
+    u, unames = zip(*[_column(frame, header, c, "input", path, units) for c in ins])
+    y, ynames = zip(*[_column(frame, header, c, "output", path, units) for c in outs])
     both = [n for n in unames if n in ynames]
     if both:
         raise DataFileError(

@@ -35,6 +35,7 @@ import pandas as pd
 from hammerstein.core.files import (FileLimitError, bounded_read_bytes, bounded_read_text,
                                     escape, provenance_line, safe_write)
 from hammerstein.exceptions import BaselineError
+from hammerstein.io.table_checks import check_size
 
 __all__ = [
     "BaselineError",
@@ -446,6 +447,7 @@ def read_baseline(path):
         raw = bounded_read_bytes(path, "baseline", "baseline CSV file").removeprefix(b"\xef\xbb\xbf")
         while raw.startswith(b"#"):  # the provenance line (and any comment line above the header)
             raw = raw.split(b"\n", 1)[1] if b"\n" in raw else b""
+        check_size(raw, ",", path, BaselineError)      # rows x the widest line, before parsing
         frame = pd.read_csv(io.BytesIO(raw), dtype={c: str for c in KEY_COLUMNS + ["unit"]},
                             keep_default_na=False, na_values={"value": ["nan", "NaN"]})
     except FileLimitError as exc:

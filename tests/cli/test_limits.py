@@ -475,3 +475,65 @@ def test_check_refuses_a_boolean_or_huge_baseline_value(value, words, tmp_path, 
     line = _one_clean_line(err)
     assert status == 2 and "base.csv: value: expected a number" in line and words in line, line
     assert len(line) < 400
+
+
+# -- the cell bound of every reader: rows x the widest line, counted before parsing ---------
+# The signal-table readers (compensate --reference, evaluate --measured, learn, check
+# --baseline) had no cell check: 75 M cells took 2.1 GB and 38 s before failing; identify
+# counted the first 64 KiB of the first line only: one data row of 10^7 fields took 3.4 GB.
+def _wide_row(path, fields):
+    path.write_text("t,x,y\n" + ",".join(["1"] * fields) + "\n")
+    return path
+
+
+def _cell_commands(name):
+    return {"identify": ["identify", name, "--input", "x", "--output", "y", "--time", "t",
+                         "--out", "m.toml"],
+            "compensate": ["compensate", PRESET, "--reference", name, "--out", "d.csv"],
+            "evaluate": ["evaluate", "--reference", '{ kind = "circle", radius = 1, '
+                         'frequency = 100, periods = 2 }', "--measured", name, "--out", "ev",
+                         "--sampling-period", str(T)],
+            "check": ["check", "s.toml", "--baseline", name]}
+
+
+@pytest.mark.parametrize("command", ["identify", "compensate", "evaluate", "check"])
+def test_a_line_wider_than_the_column_limit_is_refused_at_once(command, tmp_path, monkeypatch,
+                                                               capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.toml").write_text("")
+    _wide_row(tmp_path / "wide.csv", 300_000)       # 600 kB: 10 s and 0.4 GB in pandas
+    status, _, err, took = _run(_cell_commands("wide.csv")[command], capsys)
+    line = _one_clean_line(err)
+    assert status in (1, 2) and took < 1.0, (line, took)
+    assert ("wide.csv: line 2 has 300000 fields, more than the limit of 10000 columns (one per "
+            "4000 cells of the limit of 40000000 cells; raise it with "
+            "HAMMERSTEIN_MAX_DATA_CELLS=N)") in line, line
+
+
+@pytest.mark.parametrize("command", ["identify", "compensate", "evaluate", "check"])
+def test_cells_are_counted_by_every_reader(command, tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_CELLS", "30000")
+    (tmp_path / "s.toml").write_text("")
+    t, x, y = _signals(10_000)
+    _csv(tmp_path / "tall.csv", t, x, y)
+    status, _, err, took = _run(_cell_commands("tall.csv")[command], capsys)
+    line = _one_clean_line(err)
+    assert status in (1, 2) and took < 1.0, (line, took)
+    assert ("tall.csv: 10001 rows x 3 columns = 30003 cells is more than the limit of 30000 "
+            "cells (raise it with HAMMERSTEIN_MAX_DATA_CELLS=N)") in line, line
+
+
+def test_the_widest_line_counts_wherever_it_is(tmp_path):
+    from hammerstein.io.datafiles import DataFileError, read_records
+    from hammerstein.io.table_checks import wide_line
+    t, x, y = _signals(20_000)
+    path = _csv(tmp_path / "r.csv", t, x, y)
+    with open(path, "a") as f:                          # past the first 64 KiB
+        f.write(",".join(["0"] * 2500) + "\n")
+    assert wide_line(path.read_bytes(), ",", 3) == (20_002, 2500)
+    with pytest.raises(DataFileError, match=r"20002 rows x 2500 columns \(line 20002\) = "
+                                            r"50005000 cells is more than the limit"):
+        read_records(path, "x", "y", "t")
+    assert wide_line(b"a b\n" + b" 1\t 2 \n" * 1000 + b"1 2 3", r"\s+", 2) == (1002, 3)
+    assert wide_line(b"a;b\r\n1;2\r\n", ";", 2) is None

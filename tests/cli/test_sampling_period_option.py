@@ -44,3 +44,38 @@ def test_export_samples_the_dynamics_again_as_compensate_does():
     np.testing.assert_allclose(control.frequency_response(comp.dynamics, w).complex,
                                control.frequency_response(same.dynamics, w).complex,
                                rtol=1e-12, atol=1e-15)
+
+
+def _hysteresis_model(tmp_path, periods):
+    """The outside actuator's identified model without its [preset] and dynamics."""
+    from pathlib import Path
+    text = (Path(__file__).parents[1] / "hardware" / "data"
+            / "outside-gpi-identified.toml").read_text(encoding="utf-8")
+    head, rest = text.split("\n[preset]", 1)
+    model = "\n[model]" + rest.split("\n[model]", 1)[1]
+    head = head.replace("sampling_period_s = [\n    4.99999999999e-05,\n    4.99999999999e-05,\n]",
+                        f"sampling_period_s = {periods}")
+    path = tmp_path / "m.toml"
+    path.write_text(head + model, encoding="utf-8")
+    return path
+
+
+# A model file identified with --time said "a model file has no sampling period" although
+# its [identification] sampling_period_s held the records' period: it is used.
+def test_a_model_file_is_sampled_at_its_records_period(tmp_path):
+    plant = load_actuator(str(_hysteresis_model(tmp_path, "[1e-4, 1e-4]")))
+    assert plant.sampling_period == 1e-4
+    assert load_actuator(str(tmp_path / "m.toml"), 2e-4).sampling_period == 2e-4
+
+
+@pytest.mark.parametrize("periods, words", [
+    ("[1e-4, 2e-4]", "the model's records were sampled at different periods (0.0001, 0.0002 s, "
+                     "[identification] sampling_period_s); give --sampling-period S"),
+    ("[]", "the model file gives no sampling period ([identification] sampling_period_s, "
+           "written by identify); give --sampling-period S")])
+def test_a_model_file_without_one_period_asks_for_it(tmp_path, periods, words):
+    from hammerstein.exceptions import PresetError
+    path = _hysteresis_model(tmp_path, periods)
+    with pytest.raises(PresetError) as err:
+        load_actuator(str(path))
+    assert str(err.value) == f"{path}: {words}"

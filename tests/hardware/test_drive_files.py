@@ -219,3 +219,17 @@ def test_compensate_writes_the_drive_and_refuses_what_the_amplifier_cannot(tmp_p
                cwd=tmp_path)
     assert res.returncode == 2 and "--force" in res.stderr
     assert (tmp_path / "mine.csv").read_text() == "t,ux\n0,1\n"
+
+
+# The signal files' size and kind errors named the file twice ("--reference: sparse.csv:
+# sparse.csv: 2 GiB ..."): once.
+def test_a_signal_file_too_large_is_named_once(tmp_path, monkeypatch):
+    from hammerstein.compensation.drive_files import read_signals
+    from hammerstein.exceptions import DataFileError
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", "100")
+    (tmp_path / "big.csv").write_text("t,x\n" + "0,0\n" * 100)
+    with pytest.raises(DataFileError) as err:
+        read_signals("big.csv", ["x"], what="--reference")
+    assert str(err.value).startswith("--reference: big.csv: ")
+    assert str(err.value).count("big.csv") == 1, str(err.value)
