@@ -479,6 +479,33 @@ def _metadata(args, fit, records):
     return meta
 
 
+def _falling_direct_paths(records, inputs, outputs, out_unit, in_unit):
+    """Warnings for outputs that fall as their own input rises over the records.
+
+    A piezo's direct path rises with its input; a falling one is a sensor of
+    inverted sign or inputs and outputs paired in the wrong order, and the
+    model written then cannot be inverted (a classical PI's cumulative weight
+    sums <= 0: ``compensate`` refused it with a message about S_i). The
+    slope is the least-squares one of the output on its input (output k on
+    input k), over every hysteresis record.
+    """
+    lines = []
+    for k in range(min(len(inputs), len(outputs))):
+        u = np.concatenate([np.asarray(r.u[k], dtype=float) for r in records])
+        y = np.concatenate([np.asarray(r.y[k], dtype=float) for r in records])
+        du, dy = u - u.mean(), y - y.mean()
+        var = float(np.dot(du, du))
+        if var <= 0:
+            continue
+        slope = float(np.dot(du, dy)) / var
+        if slope < 0:
+            lines.append(f"{outputs[k]} falls as {inputs[k]} rises over the records (slope "
+                         f"{slope:.4g} {out_unit}/{in_unit}): a sensor of inverted sign, or the "
+                         f"inputs and outputs paired in the wrong order? The compensators need a "
+                         f"rising direct path; invert the column or reorder --inputs/--outputs")
+    return lines
+
+
 def _handler(args):
 
     try:
@@ -658,6 +685,9 @@ def _report(args, fit, records, dyn=None, creep=None):
     loops = minor_loop_warning(fit, list(model.input_names), list(model.output_names))
     if loops:
         print_err(f"warning: {loops}")
+    for line in _falling_direct_paths(records, list(model.input_names), list(model.output_names),
+                                      ou, iu):
+        print_err(f"warning: {line}")
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
             print(line)

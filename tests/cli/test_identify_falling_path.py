@@ -1,0 +1,35 @@
+"""identify warns when an output falls as its own input rises (an inverted sensor sign).
+
+The model written then cannot be inverted: a classical PI fitted on it has
+cumulative weight sums S_i <= 0, and ``compensate`` refused it with a message
+about S_i. The slope is the least-squares one of output k on input k over
+every record: closed form here, y = a u + b v + noise-free offsets.
+"""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from hammerstein.cli.identify import _falling_direct_paths
+
+
+def _records(a_x, a_y):
+    t = np.linspace(0, 1, 2001)
+    u = np.vstack([10 * np.sin(2 * np.pi * t), np.zeros_like(t)])
+    v = np.vstack([np.zeros_like(t), 10 * np.sin(2 * np.pi * t)])
+    out = []
+    for w in (u, v):       # x = a_x ux + 0.1 uy + 3, y = a_y uy + 0.2 ux
+        out.append(SimpleNamespace(u=w, y=np.vstack([a_x * w[0] + 0.1 * w[1] + 3.0,
+                                                     a_y * w[1] + 0.2 * w[0]])))
+    return out
+
+
+@pytest.mark.parametrize("a_x, a_y, falling", [(1.5, 2.0, []), (-1.665, 2.0, ["x"]),
+                                              (-1.0, -0.5, ["x", "y"])])
+def test_a_falling_direct_path_is_named_with_its_slope(a_x, a_y, falling):
+    lines = _falling_direct_paths(_records(a_x, a_y), ["ux", "uy"], ["x", "y"], "µm", "V")
+    assert [ln.split()[0] for ln in lines] == falling
+    for ln in lines:
+        slope = a_x if ln.startswith("x") else a_y
+        assert f"slope {slope:.4g} µm/V" in ln and "inverted sign" in ln
