@@ -104,14 +104,40 @@ def history_file_problem(out, history_dir):
     return None
 
 
-def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None):
+def foreign_history_problem(history, out=None):
+    """Why ``--history DIR`` is not a history this command may write (one line), or None.
+
+    A directory holding files (other than the drive ``out`` and its pending
+    temporary) without the history's mark is someone else's. Checked before
+    the learning runs, and again when the history is written.
+
+    Parameters
+    ----------
+    history : str or pathlib.Path
+        ``--history``.
+    out : str or pathlib.Path, optional
+        ``--out`` (the drive may be written into the history directory).
+
+    Returns
+    -------
+    str or None
+        ``"--history: DIR is a directory hammerstein did not make; ..."``.
+    """
     d = Path(history)
     drive = os.path.realpath(out) if out is not None else None
     others = [p for p in d.iterdir() if not p.name.endswith(TMP_SUFFIX)   # the drive's, pending
               and os.path.realpath(p) != drive] if d.is_dir() else []    # the drive: ours
     if others and not (d / HISTORY_MARK).exists():
-        raise DataFileError(f"--history: {d} is a directory hammerstein did not make; "
-                            f"choose an empty or new directory")
+        return (f"--history: {escape(d)} is a directory hammerstein did not make; "
+                f"choose an empty or new directory")
+    return None
+
+
+def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None):
+    d = Path(history)
+    problem = foreign_history_problem(d, out)
+    if problem:
+        raise DataFileError(problem)
     d.mkdir(parents=True, exist_ok=True)
     if not (d / HISTORY_MARK).exists():
         safe_write(d / HISTORY_MARK, "", "history mark", root=d)

@@ -99,7 +99,7 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        positive_float)
 from hammerstein.cli._hardware import Reference
 from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_history, _drive_samples,
-                                            history_file_problem,
+                                            foreign_history_problem, history_file_problem,
                                             _fingerprint, _read_best, _read_state, _restore_gains,
                                             _save_gains, _settled_rows, _write_history,
                                             _write_state, history_rows)
@@ -391,6 +391,8 @@ def _handle(args):
         problem = problem.replace("--out", "--history") if problem else None
     if not problem and args.history:
         problem = history_file_problem(args.out, args.history)   # never two writes to one file
+    if not problem and args.history:
+        problem = foreign_history_problem(args.history, args.out)   # before the learning runs
     if problem:
         print_err(f"hammerstein learn: error: {problem}")
         return 2

@@ -567,3 +567,16 @@ def test_an_interrupted_excitation_keeps_an_existing_directory(tmp_path, monkeyp
                "1e-3", "--out", "ex", cwd=tmp_path)
     assert res.returncode == 130
     assert _tree(tmp_path) == ["ex", "ex/notes.txt"]
+
+
+def test_learn_history_of_someone_else_is_refused_before_the_learning(tmp_path, monkeypatch):
+    """A --history directory hammerstein did not make was refused after the computation,
+    exit 1; now a usage error before it (nothing of it is read or written)."""
+    import hammerstein.cli.learn as learn
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep\n")
+    monkeypatch.setattr(learn, "load_actuator", lambda *a, **k: pytest.fail("computed"))
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", CIRCLE, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "u1.csv", "--history", "mine", cwd=tmp_path)
+    assert res.returncode == 2 and "did not make" in _one_line(res)
+    assert _tree(tmp_path) == ["mine", "mine/notes.txt"]
