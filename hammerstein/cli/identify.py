@@ -506,6 +506,38 @@ def _falling_direct_paths(records, inputs, outputs, out_unit, in_unit):
     return lines
 
 
+#: Share of an output's samples at exactly its largest (or smallest) value above which
+#: ``identify`` says the sensor may have saturated.
+FLAT_SHARE = 0.005
+
+
+def _flat_extremes(records, outputs, out_unit):
+    """Warnings for outputs that sit at exactly their extreme value on many samples.
+
+    A sensor at the end of its range reads one value while the actuator
+    moves on; the model then learns a flat top. A tester's x clipped at
+    12 µm (9.9 % of the samples) was identified without a word, and a 10 µm
+    circle then ended at 6.6 % where the unclipped records gave 3.2 %. A
+    quantised but unclipped peak repeats its extreme on a few samples per
+    peak, far below :data:`FLAT_SHARE`.
+    """
+    lines = []
+    for k, name in enumerate(outputs):
+        y = np.concatenate([np.asarray(r.y[k], dtype=float) for r in records])
+        y = y[np.isfinite(y)]
+        if y.size < 100:
+            continue
+        for which, value in (("largest", float(y.max())), ("smallest", float(y.min()))):
+            n = int(np.count_nonzero(y == value))
+            if n >= 20 and n > FLAT_SHARE * y.size:
+                flat = "top" if which == "largest" else "bottom"
+                lines.append(f"{name} reads exactly {value:.6g} {out_unit}, its {which} value, on "
+                             f"{n} samples ({100 * n / y.size:.3g} % of them): a sensor at the "
+                             f"end of its range? The model learns that flat {flat}; record "
+                             f"within the sensor's range, or leave those samples out")
+    return lines
+
+
 def _handler(args):
 
     try:
@@ -687,6 +719,8 @@ def _report(args, fit, records, dyn=None, creep=None):
         print_err(f"warning: {loops}")
     for line in _falling_direct_paths(records, list(model.input_names), list(model.output_names),
                                       ou, iu):
+        print_err(f"warning: {line}")
+    for line in _flat_extremes(records, list(model.output_names), ou):
         print_err(f"warning: {line}")
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):

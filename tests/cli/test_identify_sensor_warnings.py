@@ -1,4 +1,5 @@
-"""identify warns when an output falls as its own input rises (an inverted sensor sign).
+"""identify warns when an output falls as its own input rises (an inverted sensor sign), or
+sits at its extreme value on many samples (a saturated sensor).
 
 The model written then cannot be inverted: a classical PI fitted on it has
 cumulative weight sums S_i <= 0, and ``compensate`` refused it with a message
@@ -33,3 +34,21 @@ def test_a_falling_direct_path_is_named_with_its_slope(a_x, a_y, falling):
     for ln in lines:
         slope = a_x if ln.startswith("x") else a_y
         assert f"slope {slope:.4g} µm/V" in ln and "inverted sign" in ln
+
+
+@pytest.mark.parametrize("clip, said", [(None, []), (8.0, ["x"])])
+def test_an_output_flat_at_its_extreme_is_named(clip, said):
+    """A sensor clipped at 12 µm on 9.9 % of the samples was identified without a word. A
+    noisy unclipped record repeats its extreme on a sample or two."""
+    from hammerstein.cli.identify import _flat_extremes
+    records = _records(1.5, 2.0)
+    rng = np.random.default_rng(0)
+    for r in records:
+        r.y = r.y + rng.normal(0, 0.03, r.y.shape)
+        if clip is not None:
+            r.y[0] = np.minimum(r.y[0], clip)
+    lines = _flat_extremes(records, ["x", "y"], "µm")
+    assert [ln.split()[0] for ln in lines] == said
+    if said:
+        n = sum(int(np.count_nonzero(r.y[0] == clip)) for r in records)
+        assert f"exactly 8 µm, its largest value, on {n} samples" in lines[0]
