@@ -133,7 +133,34 @@ def foreign_history_problem(history, out=None):
     return None
 
 
-def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None):
+def _settled_series(history_dir, trials, now=None):
+    """Settled max Euclidean and judged errors per trial [µm] from ``settled.csv`` (NaN if none).
+
+    ``now``: ``(trial, settled max, judged)`` of the trial being written (its
+    row is written after the figure).
+    """
+    found = {}
+    path = Path(history_dir) / SETTLED_FILE
+    if path.is_file():
+        try:
+            text = bounded_read_text(path, "data", "settled errors file")
+        except (OSError, ValueError):
+            text = ""
+        for line in text.splitlines()[1:]:
+            cells = line.split(",")
+            try:
+                found[int(cells[0])] = (float(cells[1]), float(cells[3]))
+            except (IndexError, ValueError):
+                continue
+    if now is not None:
+        found[int(now[0])] = (float(now[1]), float(now[2]))
+    euclid = np.array([found.get(t, (np.nan, np.nan))[0] for t in trials])
+    judged = np.array([found.get(t, (np.nan, np.nan))[1] for t in trials])
+    return euclid, judged
+
+
+def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None,
+                   settled=None):
     d = Path(history)
     problem = foreign_history_problem(d, out)
     if problem:
@@ -150,8 +177,9 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     its = sorted({r[0] for r in rows})
     mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
+    euclid, judged = _settled_series(d, its, None if settled is None else (k, *settled))
     fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale,
-                             scale_name)
+                             scale_name, euclid, judged)
     safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
     return k
 

@@ -652,7 +652,8 @@ def _handle(args):
         # this command created is left behind
         with removed_if_failed(Path(args.out).parent, args.history), all_or_nothing():
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
-                               score, halvings, fingerprint, learnt, followed_now, shaped_ref)
+                               score, halvings, fingerprint, learnt, followed_now, shaped_ref,
+                               (settled_max, score))
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
                     if args.history else None)
     except catch() as exc:
@@ -664,14 +665,15 @@ def _handle(args):
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
-                   halvings, fingerprint, learnt=None, followed=None, shaped=None):
+                   halvings, fingerprint, learnt=None, followed=None, shaped=None, settled=None):
     """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
 
     The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
     next trial must apply, :func:`_check_history`). ``learnt``: the reference ``u_next`` was
     computed for (its ``<output>_learnt`` columns); ``followed``: that of ``u`` (kept with the
     best trial); ``shaped``: the shaped reference learnt and judged (``<output>_shaped``,
-    carried over from the drive learnt from).
+    carried over from the drive learnt from); ``settled``: this trial's settled max Euclidean
+    and judged errors [µm], for the convergence figure.
     """
     columns = dict(zip(model.input_names, u_next))
     if learnt is not None:
@@ -685,7 +687,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
         return None
     k = _write_history(args.history, list(model.output_names), rec, ref.scale,
                        "the raster's size" if ref.kind == "raster" else "radius / amplitude",
-                       args.out)
+                       args.out, settled)
     if gains is not None:
         _save_gains(args.history, gains)
     if best:

@@ -16,8 +16,13 @@ __all__ = ["convergence_figure", "iteration_history"]
 
 
 def convergence_figure(iterations, max_error, rms_error, names, title, scale=None,
-                       scale_name="radius / amplitude"):
+                       scale_name="radius / amplitude", euclidean=None, judged=None):
     """Max and RMS tracking error against the trial, per axis (log scale).
+
+    With ``euclidean`` (and ``judged``), the settled max Euclidean error
+    ``learn`` prints (over two outputs or more; one output's is its max) and
+    the error it judges the trials on (the noise averaged down) are drawn
+    too, in black and grey.
 
     Parameters
     ----------
@@ -32,6 +37,9 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
         Radius or amplitude [µm]: a right axis in % of it.
     scale_name : str
         What ``scale`` is, for the right axis' label (a raster's: its size).
+    euclidean, judged : array_like, shape (n,), optional
+        Settled max Euclidean error and judged error per trial [µm] (NaN
+        where a trial has none).
 
     Returns
     -------
@@ -45,6 +53,15 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     for l, name in enumerate(names):
         line, = ax.semilogy(k, mx[l], marker="o", label=f"{name} max")
         ax.semilogy(k, rms[l], marker="s", ls="--", color=line.get_color(), label=f"{name} RMS")
+    entries = 2 * len(names)
+    for values, style in ((euclidean if len(names) > 1 else None,   # one axis: its own max
+                           dict(color="k", marker="D", label="Euclidean max")),
+                          (judged, dict(color="0.5", marker="v", ls=":",
+                                        label="judged (noise removed)"))):
+        v = None if values is None else np.asarray(values, dtype=float)
+        if v is not None and v.shape == k.shape and np.any(np.isfinite(v) & (v > 0)):
+            ax.semilogy(k, np.where(v > 0, v, np.nan), **style)
+            entries += 1
     ax.set_xlabel("trial k")
     ax.set_ylabel("tracking error [µm]")
     ax.set_xticks(k)
@@ -55,7 +72,7 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
                                                      lambda p: p * scale / 100))
         sec.set_ylabel(f"% of {scale_name}")
         log_ticks(sec)
-    legend_on_top(ax, 2 * len(names))
+    legend_on_top(ax, entries)
     fig.suptitle(title, fontsize=11)
     return fig
 
