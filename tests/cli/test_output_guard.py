@@ -350,7 +350,7 @@ def test_evaluate_refuses_a_measurement_where_its_output_goes_before_any_work(tm
     assert _tree(tmp_path / "ev") == [".hammerstein-report", "timeseries-measured.csv"]
 
 
-# -- a dangling symbolic link at a single output file (issue 63, item 2) ---------------------
+# -- a dangling symbolic link at a single output file (file-contract check, item 2) --------------
 _GOOD = os.path.join(os.path.dirname(__file__), "..", "corpus", "good", "good-static.toml")
 _BASE = "scenario,case,channel,metric,value,unit\n"
 _DANGLING = {
@@ -395,7 +395,7 @@ def test_safe_write_never_creates_directories_along_a_link(tmp_path):
     assert (tmp_path / "nowhere" / "x.csv").read_text() == "x"
 
 
-# -- learn: the drive and the history directory (issue 63, items 4 and 5) ---------------------
+# -- learn: the drive and the history directory (file-contract check, items 4, 5) --------------
 _HISTORY = {".hammerstein-history": "", "history.csv": "iteration,output,max_error_um,rms_error_um\n",
             "learning.csv": "key,value\n", "best-trial.csv": "t,ux\n"}
 
@@ -469,7 +469,7 @@ def test_removed_if_failed_removes_only_what_the_block_created(tmp_path):
     assert _tree(tmp_path) == ["c", "old"]
 
 
-# -- replicate: every file of the README checked before the work (issue 63, item 7) ----------
+# -- replicate: every file of the README checked before the work (file-contract check, item 7) ---
 @pytest.mark.parametrize("planted", ["link", "directory"])
 def test_replicate_refuses_an_unwritable_readme_before_running(tmp_path, planted):
     """A link at rp2/README.md to a file outside rp2 (or a directory there) was refused only

@@ -1,6 +1,6 @@
 """A report directory the runner replaces never holds an input, nor a file it did not write.
 
-Regressions of the file-contract report (issue 63, item 1): ``run``, ``check --out`` and
+Regressions of a new user's file-contract check (item 1): ``run``, ``check --out`` and
 ``replicate`` replaced a marked report directory holding the scenario being run (or a data
 file it names, or a user's notes), deleting them. Now a directory holding an input is refused
 before any simulation, with or without ``--force``; the marker lists the files the report
@@ -50,13 +50,24 @@ def _cli(*args):
                                   if not ln.startswith("compiling")]
 
 
+def _marked_report(tmp_path, name="good-static"):
+    """An older report directory ``rep/<name>`` (a marker without a manifest)."""
+    report = tmp_path / "rep" / name
+    report.mkdir(parents=True)
+    (report / MARKER).write_text("hammerstein 0.1.0\n")
+    return report
+
+
+def _scenario_in_report(tmp_path):
+    """The good scenario copied into the report directory its run would replace."""
+    scenario = _marked_report(tmp_path) / "s.toml"
+    shutil.copy(GOOD, scenario)
+    return scenario
+
+
 @pytest.mark.parametrize("force", [False, True])
 def test_the_scenario_inside_the_report_it_replaces_is_refused(tmp_path, force):
-    report = tmp_path / "rep" / "good-static"
-    report.mkdir(parents=True)
-    scenario = report / "s.toml"
-    shutil.copy(GOOD, scenario)
-    (report / MARKER).write_text("hammerstein 0.1.0\n")
+    scenario = _scenario_in_report(tmp_path)
     before = _tree(tmp_path)
     [outcome] = _run([scenario], tmp_path / "rep", force)
     assert not outcome.ok and str(scenario) in outcome.error and len(outcome.error.splitlines()) == 1
@@ -65,11 +76,7 @@ def test_the_scenario_inside_the_report_it_replaces_is_refused(tmp_path, force):
 
 
 def test_run_cli_refuses_its_own_scenario_in_the_report(tmp_path):
-    report = tmp_path / "rep" / "good-static"
-    report.mkdir(parents=True)
-    scenario = report / "s.toml"
-    shutil.copy(GOOD, scenario)
-    (report / MARKER).write_text("hammerstein 0.1.0\n")
+    scenario = _scenario_in_report(tmp_path)
     before = _tree(tmp_path)
     code, out, err = _cli("run", scenario, "--out", tmp_path / "rep", "--figures", "none", "--force")
     assert code == 1 and out == "" and len(err) == 1 and str(scenario) in err[0], err
@@ -80,10 +87,7 @@ def test_run_cli_refuses_its_own_scenario_in_the_report(tmp_path):
 def test_a_hard_link_to_the_scenario_inside_the_report_is_refused(tmp_path):
     scenario = tmp_path / "s.toml"
     shutil.copy(GOOD, scenario)
-    report = tmp_path / "rep" / "good-static"
-    report.mkdir(parents=True)
-    (report / MARKER).write_text("hammerstein 0.1.0\n")
-    os.link(scenario, report / "kept.toml")
+    os.link(scenario, _marked_report(tmp_path) / "kept.toml")
     before = _tree(tmp_path)
     [outcome] = _run([scenario], tmp_path / "rep", force=True)
     assert not outcome.ok and "kept.toml" in outcome.error and "hard link" in outcome.error
@@ -91,9 +95,7 @@ def test_a_hard_link_to_the_scenario_inside_the_report_is_refused(tmp_path):
 
 
 def test_a_data_file_the_scenario_names_inside_the_report_is_refused(tmp_path):
-    report = tmp_path / "rep" / "good-identification"
-    report.mkdir(parents=True)
-    (report / MARKER).write_text("hammerstein 0.1.0\n")
+    report = _marked_report(tmp_path, "good-identification")
     shutil.copy(CORPUS / "data" / "good.csv", report / "good.csv")
     scenario = tmp_path / "s.toml"
     scenario.write_text(IDENT.read_text().replace('"../data/good.csv"',
