@@ -116,7 +116,7 @@ from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem
                                     removed_if_failed, safe_write)
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
                                           error_summary, estimate_delay, harmonic_base_gains,
-                                          inverse_gain_ratio, periodic_average,
+                                          inverse_gain_ratio, period_drift, periodic_average,
                                           reference_correction, repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
@@ -349,6 +349,9 @@ def _period_note(period, period_samples, sampling_period, steady):
             f"{max(round(exact), 2) * sampling_period:g} s, repeats exactly)")
 
 
+#: periods spread by more than this times what a slow trend leaves: the margin's "noise" is drift
+DRIFT_RATIO = 2.0
+
 #: what the notes call a trial's judged error, beside the printed max (which carries the noise)
 JUDGED = ("its noise averaged down: the max Euclidean error of the settled periods' average "
           "for a repeating reference, else the RMS less the noise; the max printed above "
@@ -378,6 +381,24 @@ def _judged_error(target, y, delay, period, steady):
         spread = np.sum((e[:, steady:] - averaged) ** 2, axis=1) / (n - period)
         return float(np.max(np.linalg.norm(averaged, axis=0))), float(np.sqrt(np.max(spread) * period / n))
     return float(np.max(np.linalg.norm(e, axis=0))), 0.0
+
+
+def _drift_note(error, period, steady):
+    """The note when the noise margin is mostly a slow drift over the periods (0 or 1 line).
+
+    ``error`` (p, n) [µm] aligned on the measurement delay; the spread of its
+    periods from ``steady`` on is what the margin takes for noise
+    (:func:`_judged_error`); :func:`hammerstein.compensation.ilc.period_drift`
+    tells a drift (creep, a transient still settling) from noise.
+    """
+    drift = period_drift(error, period, steady)
+    if drift is None or drift[0] <= DRIFT_RATIO * drift[1]:
+        return []
+    return [f"note: the noise margin is mostly drift: the settled periods spread "
+            f"{drift[0]:.2g} µm RMS about their average, {drift[1]:.2g} µm once a slow trend "
+            f"over the periods is taken out; that trend (creep or a transient still settling, "
+            f"the same in every trial) does not repeat from period to period, so learning per "
+            f"period cannot remove it"]
 
 
 def _handle(args):
@@ -555,6 +576,8 @@ def _handle(args):
         gain = args.learning_gain * 0.5 ** halvings
         law_gain, notes = _inverse_gain(model, args.gain, args.check)
         notes = ([] if q_note is None else [q_note]) + notes + ([] if period_note is None else [period_note])
+        if (note or stall) and steady is not None:
+            notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady)
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
                                 inversion=args.inversion, delay=delay, slope_floor=args.slope_floor,
                                 gain=law_gain)

@@ -377,6 +377,58 @@ def periodic_error(error, period_samples, start):
 
 
 
+def period_drift(error, period_samples, start):
+    """How much of the periods' spread about their mean is a slow drift over the periods [µm].
+
+    The whole periods from ``start`` on, ``e_k(i)`` (period k, sample i of
+    the period), spread about their mean by ``s`` (RMS over the samples and
+    periods, the non-periodic part :func:`periodic_error` takes for noise).
+    Fitting each sample's values over the periods with a polynomial in k
+    (degree 2 from six periods on, 1 from four; least squares) leaves ``d``:
+    what changes from one period to the next without a trend. Noise,
+    white or coloured, independent from period to period, gives ``s ~ d``;
+    creep or a transient still settling (the same in every trial, so no
+    noise to learning over trials) gives ``s >> d``.
+
+    Parameters
+    ----------
+    error : array_like, shape (p, n_samples)
+        ``e = y_r - y`` [µm].
+    period_samples : int
+        P.
+    start : int
+        First sample of the periodic part.
+
+    Returns
+    -------
+    tuple of float or None
+        ``(s, d)`` [µm], the largest over the outputs; None with fewer
+        than four whole periods.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> i = np.arange(800)
+    >>> e = [0.5 * np.sin(2 * np.pi * i / 100) + 1e-3 * i]       # a drift of 0.1 um a period
+    >>> s, d = period_drift(e, 100, 0)          # s = 0.1 sqrt(sum (k - 3.5)^2 / 7) = 0.1 sqrt(6)
+    >>> round(s, 4), d < 1e-12
+    (0.2449, True)
+    """
+    e = np.atleast_2d(np.asarray(error, dtype=float))
+    P, s0 = int(period_samples), int(start)
+    n_p = (e.shape[1] - s0) // P if P > 1 else 0
+    if n_p < 4:
+        return None
+    seg = e[:, s0:s0 + n_p * P].reshape(e.shape[0], n_p, P)
+    spread = seg - seg.mean(axis=1, keepdims=True)
+    degree = 2 if n_p >= 6 else 1
+    q, _ = np.linalg.qr(np.vander(np.arange(n_p) - (n_p - 1) / 2.0, degree + 1))
+    left = seg - np.einsum("kj,lj,plq->pkq", q, q, seg)
+    s = np.sqrt(np.sum(spread ** 2, axis=(1, 2)) / (P * (n_p - 1)))
+    d = np.sqrt(np.sum(left ** 2, axis=(1, 2)) / (P * (n_p - degree - 1)))
+    return float(np.max(s)), float(np.max(d))
+
+
 def repeating_from(target, period_samples, fade_samples):
     """First sample of the periodic learning of a reference that repeats after its fade-in, or None.
 

@@ -91,7 +91,8 @@ from hammerstein.simulation import ChainResult
 # this module is their public face and holds the scenario's learning compensator
 from hammerstein.compensation._ilc_errors import (EXTENSION, ConvergenceCondition, IterationRecord,  # noqa: F401
                                                   error_summary, estimate_delay, periodic_average,
-                                                  periodic_error, periodic_snr, repeating_from)
+                                                  period_drift, periodic_error, periodic_snr,
+                                                  repeating_from)
 from hammerstein.compensation._ilc_harmonics import (INVERSE_GAIN_LIMIT, HarmonicGains,
                                                      harmonic_base_gains, inverse_gain_ratio,
                                                      reference_correction)
@@ -99,11 +100,11 @@ from hammerstein.compensation._ilc_law import IterativeLearning
 
 __all__ = ["IterativeLearning", "LearningCompensator", "ConvergenceCondition", "IterationRecord",
            "estimate_delay", "error_summary", "periodic_average", "periodic_error", "periodic_snr",
-           "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from",
+           "period_drift", "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from",
            "inverse_gain_ratio", "INVERSE_GAIN_LIMIT"]
 
 for _name in ("IterativeLearning", "ConvergenceCondition", "IterationRecord", "estimate_delay",
-              "error_summary", "periodic_average", "periodic_error", "periodic_snr",
+              "error_summary", "periodic_average", "periodic_error", "periodic_snr", "period_drift",
               "HarmonicGains", "harmonic_base_gains", "reference_correction", "repeating_from",
               "inverse_gain_ratio"):
     globals()[_name].__module__ = __name__      # documented (and pickled) as this module's

@@ -103,3 +103,49 @@ def test_period_averaged_factor(preset_plant, error_um, expected):
 def test_significance_must_be_a_non_negative_number(preset_plant, bad):
     with pytest.raises(CompensatorError, match="significance"):
         _learning(preset_plant, bad)
+
+
+def _periods(n_p, P, rng, noise, drift):
+    """Error (1, n_p P): a repeating triangle, white noise, and ``drift(k)`` µm in period k."""
+    i = np.arange(n_p * P)
+    k = i // P
+    tri = 0.3 * (2.0 * np.abs(2.0 * ((i % P) / P) - 1.0) - 1.0)
+    return (tri + noise * rng.standard_normal(i.size) + drift(k))[np.newaxis]
+
+
+@pytest.mark.parametrize("n_p", [4, 6, 10])
+def test_period_drift_of_noise_alone_is_noise(n_p):
+    # white noise: both estimates are sigma (unbiased, n_p - 1 and n_p - degree - 1 dof)
+    from hammerstein.compensation.ilc import period_drift
+    e = _periods(n_p, 2000, np.random.default_rng(n_p), 0.04, lambda k: 0.0 * k)
+    s, d = period_drift(e, 2000, 0)
+    assert s == pytest.approx(0.04, rel=0.05) and d == pytest.approx(0.04, rel=0.05)
+
+
+def test_period_drift_tells_a_settling_transient_from_noise():
+    # an exponential settling over the periods (a creep lag of 3 periods): its spread about the
+    # mean is the RMS of exp(-k/3) about its mean, which a quadratic in k nearly takes out
+    from hammerstein.compensation.ilc import period_drift
+    n_p, P = 8, 2000
+    drift = 0.5 * np.exp(-np.arange(n_p) / 3.0)
+    e = _periods(n_p, P, np.random.default_rng(1), 0.02, lambda k: drift[k])
+    s, d = period_drift(e, P, 0)
+    expected = np.sqrt(np.sum((drift - drift.mean()) ** 2) / (n_p - 1) + 0.02 ** 2)
+    assert s == pytest.approx(expected, rel=0.02)
+    assert d < 0.03 and s > 5 * d
+
+
+def test_period_drift_needs_four_periods():
+    from hammerstein.compensation.ilc import period_drift
+    assert period_drift(np.zeros((1, 3 * 100 + 50)), 100, 0) is None
+
+
+def test_learn_names_a_drift_taken_for_noise():
+    # the note learn adds to a stall or a refused trial, from the error it judged
+    from hammerstein.cli.learn import _drift_note
+    n_p, P = 8, 500
+    drifting = _periods(n_p, P, np.random.default_rng(2), 0.02, lambda k: 0.05 * k)
+    noisy = _periods(n_p, P, np.random.default_rng(3), 0.2, lambda k: 0.0 * k)
+    (line,) = _drift_note(drifting, P, 0)
+    assert "mostly drift" in line and "0.12 µm RMS" in line and "0.02 µm" in line
+    assert _drift_note(noisy, P, 0) == []
