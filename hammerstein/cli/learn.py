@@ -314,7 +314,9 @@ def default_q_cutoff(plant):
     cutoff = min(cutoff, 0.45 / T)
     why = ("the actuator has no oscillatory mode" if f1 is None else
            f"the harmonics the modes amplify are learnt up to {Q_CUTOFF_PER_MODE:g} x the first "
-           f"bending mode {f1:.4g} Hz, and never below {Q_CUTOFF_MIN_HZ:g} Hz")
+           f"bending mode's damped frequency {f1:.4g} Hz (natural frequency "
+           f"{first_mode_hz(matrices[0], T, natural=True):.4g} Hz, as identify and compensate "
+           f"name it), and never below {Q_CUTOFF_MIN_HZ:g} Hz")
     return cutoff, f"note: Q cutoff {cutoff:.4g} Hz because {why} (--q-cutoff-hz sets it)"
 
 

@@ -109,13 +109,13 @@ class ShapedReference:
         return bool(self.notes)
 
 
-def first_mode_hz(A, sampling_period):
+def first_mode_hz(A, sampling_period, natural=False):
     """Lowest oscillatory mode of a discrete linear part [Hz], or None.
 
-    The frequency of a discrete pole ``z`` is ``|arg z| / (2 pi T)`` (the
-    continuous pole ``s = log(z) / T``); real poles (creep, lags) have none,
-    and a pair damped at ``zeta >= 1 / sqrt(2)`` (:data:`RESONANT_DAMPING`: no
-    resonance) is a lag too.
+    The (damped) frequency of a discrete pole ``z`` is ``|arg z| / (2 pi T)``
+    (the continuous pole ``s = log(z) / T``); real poles (creep, lags) have
+    none, and a pair damped at ``zeta >= 1 / sqrt(2)``
+    (:data:`RESONANT_DAMPING`: no resonance) is a lag too.
 
     Parameters
     ----------
@@ -123,6 +123,10 @@ def first_mode_hz(A, sampling_period):
         Discrete state matrix (n may be 0).
     sampling_period : float
         T [s].
+    natural : bool
+        Return that mode's natural frequency ``|s| / (2 pi)`` (what
+        ``identify`` reports, ``1 / sqrt(1 - zeta^2)`` times the damped one)
+        instead of its damped frequency.
 
     Returns
     -------
@@ -134,11 +138,16 @@ def first_mode_hz(A, sampling_period):
     >>> T = 1e-4
     >>> z = np.exp(T * (-50 + 2j * np.pi * 400))
     >>> A = [[z.real, -z.imag], [z.imag, z.real]]
-    >>> round(first_mode_hz(A, T), 6)
-    400.0
+    >>> round(first_mode_hz(A, T), 6), round(first_mode_hz(A, T, natural=True), 3)   # sqrt(400^2 + (50 / 2 pi)^2)
+    (400.0, 400.079)
     """
-    f = _pole_frequencies(A, sampling_period)
-    return float(f.min()) if f.size else None
+    z = _oscillatory_poles(A, sampling_period)
+    if not z.size:
+        return None
+    k = int(np.argmin(np.abs(np.angle(z))))
+    if natural:
+        return float(np.abs(np.log(z[k])) / (2 * np.pi * float(sampling_period)))
+    return float(np.abs(np.angle(z[k])) / (2 * np.pi * float(sampling_period)))
 
 
 def mode_decay_s(A, sampling_period):

@@ -27,6 +27,9 @@ def test_two_and_a_half_times_the_first_mode_at_least_1000_hz(f1):
     cutoff, note = default_q_cutoff(SimpleNamespace(matrices=(A,), sampling_period=T))
     assert cutoff == pytest.approx(expected, rel=1e-9)
     assert note.startswith(f"note: Q cutoff {expected:.4g} Hz because") and "--q-cutoff-hz" in note
+    # both frequencies of the mode, the natural one as identify and compensate print it
+    assert f"damped frequency {f1 * np.sqrt(1 - 0.03 ** 2):.4g} Hz" in note
+    assert f"natural frequency {f1:.4g} Hz" in note
 
 
 def test_without_a_mode_and_below_nyquist():
