@@ -351,6 +351,9 @@ def _period_note(period, period_samples, sampling_period, steady):
             f"{max(round(exact), 2) * sampling_period:g} s, repeats exactly)")
 
 
+#: the shaped reference differs from the one asked within the judged window by more than this [µm]
+SHAPED_WITHIN_UM = 1e-6
+
 #: periods spread by more than this times what a slow trend leaves: the margin's "noise" is drift
 DRIFT_RATIO = 2.0
 
@@ -478,7 +481,7 @@ def _handle(args):
                           "identify --delay N, which fits the dynamics with it (identify's own "
                           "estimate was refused: its model file's measurement_delay_estimate "
                           "says why)")
-                delay_note = (f"--delay auto: {delay} samples from the model's prediction, but one "
+                delay_note = (f"note: --delay auto: {delay} samples from the model's prediction, but one "
                               f"sample is only {per_sample:.2g} deg of the reference's fundamental "
                               f"({1 / (ref.period_samples * T):.4g} Hz), less than a model's phase "
                               f"error: give --delay N when you know your acquisition's delay, or "
@@ -505,7 +508,11 @@ def _handle(args):
         rec = error_summary(aim[:, :N - delay], shifted, window)
         euclid = np.linalg.norm(aim[:, :N - delay][:, window] - shifted[:, window], axis=0)
         settled_max, settled_rms = float(np.max(euclid)), float(np.sqrt(np.mean(euclid ** 2)))
-        as_asked = None if shaped_ref is None else float(np.max(np.linalg.norm(
+        # against the reference as asked too, when the shaping reaches the judged window (a
+        # start-up shaped within the fade-in leaves the two equal there: nothing to add)
+        shaped_within = shaped_ref is not None and float(np.max(np.abs(
+            (target - aim)[:, :N - delay][:, window]), initial=0.0)) > SHAPED_WITHIN_UM
+        as_asked = None if not shaped_within else float(np.max(np.linalg.norm(
             target[:, :N - delay][:, window] - shifted[:, window], axis=0)))
         # the best trial so far (--history): a trial worse beyond the noise is not learnt from
         state = _read_state(args.history, N) if args.history else None
@@ -755,7 +762,7 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
               f"columns: the reference as asked is beyond the amplifier or the dynamics there; "
               f"against it the settled max is {as_asked:.4g} µm{pct})", file=sys.stdout)
     if delay_note is not None:
-        print(delay_note, file=sys.stdout)
+        print_err(delay_note)
     if note is not None:
         print(note, file=sys.stdout)
     summary = cond.summary(list(model.output_names))

@@ -75,3 +75,34 @@ def test_learn_follows_the_shaped_reference_and_gets_better(tmp_path):
     # circle as asked the learning chased: the error grew from the first trial on)
     assert errors[-1] < 0.5 * errors[0], errors
     assert all(b <= 1.1 * min(errors[:i + 1]) for i, b in enumerate(errors)), errors
+
+
+def test_a_start_up_shaped_within_the_fade_is_not_called_a_shaped_reference(tmp_path):
+    # the shaped columns equal the circle from the fade's end on (only the start-up was
+    # shaped): the judged window holds the reference as asked, and learn must not say that
+    # the reference is beyond the amplifier there
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    d = pd.read_csv(tmp_path / "u0.csv", comment="#")
+    arg = 2 * np.pi * 100.0 * d["t"].to_numpy()
+    shaped = 30.0 * np.vstack([np.cos(arg), np.sin(arg)])   # the circle, as asked
+    n0 = 400                                    # the start-up: within the 0.02 s fade-in
+    shaped[:, :n0] *= 0.9
+    d["x_shaped"], d["y_shaped"] = shaped
+    head = "".join(ln for ln in open(tmp_path / "u0.csv") if ln.startswith("#"))
+    (tmp_path / "u0b.csv").write_text(head + d.to_csv(index=False))
+    _measure(tmp_path / "u0b.csv", tmp_path / "y0.csv", 0)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0b.csv",
+               "--measured", "y0.csv", "--out", "u1.csv", "--delay", "0", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "errors against the shaped reference" not in res.stdout
+    # moved within the judged window too: then it says so
+    shaped[:, -400:] *= 0.99
+    d["x_shaped"], d["y_shaped"] = shaped
+    (tmp_path / "u0c.csv").write_text(head + d.to_csv(index=False))
+    _measure(tmp_path / "u0c.csv", tmp_path / "y0c.csv", 0)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0c.csv",
+               "--measured", "y0c.csv", "--out", "u1c.csv", "--delay", "0", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "errors against the shaped reference the drive aims at" in res.stdout
