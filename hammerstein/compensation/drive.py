@@ -745,10 +745,12 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             # raster): its slew-limited start-up goes on after the fade, into what is judged
             late = (changed[-1] + 1) * T
             advice = np.ceil(2.5 * late / 0.01) * 0.01
-            fix = (f"give --fade-in {advice:.2g} or more (a fade whose steepest step, 2.4 times "
-                   f"its mean, stays within the settled drive's)" if advice < N * T else
-                   f"a fade-in that long ({advice:.2g} s) is longer than the {N * T:.4g} s "
-                   f"record: give a reference that starts at rest, or a longer one")
+            why = "a fade whose steepest step, 2.4 times its mean, stays within the settled drive's"
+            fix = (f"give --fade-in {advice:.2g} or more ({why})" if advice <= 0.5 * N * T else
+                   f"a fade-in that long ({advice:.2g} s, {why}) would take "
+                   f"{100 * advice / (N * T):.3g} % of the {N * T:.4g} s record: give a longer "
+                   f"record (more periods) with --fade-in {advice:.2g}, or a reference that "
+                   f"starts at rest")
             res.notes.append(
                 f"the slew-limited start-up reaches the drive {late:.4g} s after the start, "
                 f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the "

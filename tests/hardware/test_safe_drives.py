@@ -60,7 +60,7 @@ def _compensate(args):
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main(["compensate", *map(str, args)])
     assert code == 0, err.getvalue()
-    return out.getvalue()
+    return out.getvalue() + err.getvalue()      # shaped: lines on stdout, note: lines on stderr
 
 
 def _drive(path):
@@ -426,7 +426,24 @@ def test_a_held_axis_whose_start_up_outlasts_the_fade_is_named(tmp_path):
     m = re.search(r"the slew-limited start-up reaches the drive ([\d.]+) s after the start", text)
     assert m is not None, text
     late = float(m.group(1))
-    assert late > fade * T and "give --fade-in" in printed
+    assert late > fade * T and "--fade-in" in printed
+
+
+def test_a_start_up_fade_longer_than_half_the_record_asks_for_a_longer_record(tmp_path):
+    # the same held axis on a record of 0.4 s: the fade the start-up needs would take most of it
+    n = 8000
+    t = np.arange(n) * T
+    x = 20 * (2 * np.abs(((t * 25) % 1) - 0.5))
+    ref = tmp_path / "held.csv"
+    pd.DataFrame({"t": t, "x": x, "y": np.full(n, 20.0)}).to_csv(ref, index=False)
+    printed = _compensate([_preset(tmp_path, amplifier=False), "--reference", ref, "--period",
+                           "0.04", "--out", tmp_path / "d.csv"])
+    m = re.search(r"a fade-in that long \(([\d.]+) s, .*\) would take ([\d.]+) % of the "
+                  r"([\d.]+) s record: give a longer record \(more periods\)", printed)
+    assert m is not None, printed
+    advice, share, record = map(float, m.groups())
+    assert record == pytest.approx(n * T) and advice > 0.5 * record
+    assert share == pytest.approx(100 * advice / record, rel=1e-2)
 
 
 @pytest.mark.parametrize("true_delay", [0, 3])
