@@ -44,7 +44,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from hammerstein.cli._common import number_type, out_dir_problem, out_file_problem
+from hammerstein.cli._common import number_type, out_dir_problem, out_file_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.core.files import (FileLimitError, carries_provenance, escape, guard_inputs,
                                     locked, provenance_line, replace_problem, safe_write)
@@ -312,8 +312,8 @@ def _check(args, baseline_path, baseline, tolerance, overrides=None):
     else:
         print("no metric moved")
     if unknown:
-        print(f"note: scenario(s) not in {baseline_path}: {', '.join(unknown)} "
-              f"(their metrics are 'new'; add them with --update)")
+        print_err(f"note: scenario(s) not in {baseline_path}: {', '.join(unknown)} "
+                  f"(their metrics are 'new'; add them with --update)")
     line = summary_line(result, n_scenarios=len(ok))
     if failed:
         line = f"{line.rsplit(' -> ', 1)[0]}; {len(failed)} scenario(s) failed -> FAIL"

@@ -258,7 +258,7 @@ def _handle(args):
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
     for line in drive.notes:
-        print(f"note: {line}", file=sys.stdout)
+        print_err(f"note: {line}")
     for line in chatter:
         print_err(f"warning: {line}")
     shrink = _shrink_warning(plant, ref, drive)

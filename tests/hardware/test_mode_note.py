@@ -116,11 +116,11 @@ def _compensate(tmp_path, frequency):
         code = main(["compensate", str(resolve_preset("rakotondrabe-2dof")), "--reference", ref,
                      "--out", str(path)])
     assert code == 0, err.getvalue()
-    return out.getvalue(), Path(path).read_text()
+    return err.getvalue(), Path(path).read_text()      # note: lines go to stderr
 
 
 def test_compensate_names_the_harmonic_in_its_output_and_the_drive_header(tmp_path):
-    """The preset's modes are at 284 and 307 Hz: a 100 Hz circle's 3rd harmonic meets them."""
+    """The preset's modes are at 290 and 310 Hz: a 100 Hz circle's 3rd harmonic meets them."""
     out, text = _compensate(tmp_path, 100)
     line = next(ln for ln in out.splitlines() if ln.startswith("note: the bending mode"))
     assert "3rd harmonic (300 Hz, of 100 Hz)" in line
