@@ -34,3 +34,20 @@ def test_loading_the_kernels_sets_numba_to_the_user_cache(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, timeout=120, check=True).stdout.strip()
     assert out == str(tmp_path / ".cache" / "hammerstein" / "numba")
+
+
+def test_every_command_sets_numba_to_the_user_cache_before_its_module_loads_numba(tmp_path):
+    # warmup's module imports numba at its top, before hammerstein.simulation: numba read
+    # NUMBA_CACHE_DIR unset and cached the kernels in the package's __pycache__, which later
+    # runs (with the user's cache) never saw
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME")}
+    env["HOME"] = str(tmp_path)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    code = ("import contextlib, io\n"
+            "from hammerstein.cli.main import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    main(['warmup', '--help'])\n"
+            "import numba.core.config as c; print(c.CACHE_DIR)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env=env, timeout=120, check=True).stdout.strip()
+    assert out == str(tmp_path / ".cache" / "hammerstein" / "numba")

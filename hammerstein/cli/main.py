@@ -33,7 +33,7 @@ import sys
 import threading
 import warnings
 
-from hammerstein._cache import numba_cache_dir
+from hammerstein._cache import numba_cache_dir, use_user_numba_cache
 from hammerstein.cli._examples import add_examples
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
 from hammerstein.core.files import escape, interrupt, reset_guard, reset_interrupt, start_budget
@@ -388,6 +388,9 @@ def main(argv=None):
         directory of the report in progress.
     """
     argv = sys.argv[1:] if argv is None else list(argv)
+    # before any command module imports numba (warmup's does, at its top), which reads
+    # NUMBA_CACHE_DIR once: the kernels go to the user's cache, never into the package's sources
+    use_user_numba_cache()
     _fill_standard_fds()
     reset_interrupt()        # a signal an embedding program received before is not this command's
     previous = _install_signal_handlers()
