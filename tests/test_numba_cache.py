@@ -51,3 +51,19 @@ def test_every_command_sets_numba_to_the_user_cache_before_its_module_loads_numb
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          env=env, timeout=120, check=True).stdout.strip()
     assert out == str(tmp_path / ".cache" / "hammerstein" / "numba")
+
+
+def test_commands_other_than_run_and_check_announce_a_compilation():
+    # compensate on a cold cache waited 10 s without a word; run, check and warmup say it
+    # their own way (-q / -v, per workload)
+    import hammerstein.simulation  # noqa: F401  (the kernels loaded, as by any such command)
+    from hammerstein.cli import main as cli_main
+    from hammerstein.simulation import _compile
+    try:
+        for command, announced in (("compensate", True), ("learn", True), ("run", False),
+                                   ("warmup", False)):
+            _compile.announce_compiles(None)
+            cli_main._announce_compiles(command)
+            assert (_compile._PROCESS["listener"] is not None) == announced, command
+    finally:
+        _compile.announce_compiles(None)

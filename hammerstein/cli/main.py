@@ -320,6 +320,21 @@ def _guard_kernel_cache():
         importlib.import_module("hammerstein.simulation._compile").guard_cache_writes(print_err)
 
 
+#: Commands that choose themselves how to announce kernel compilations (``-q``/``-v``; warmup
+#: prints each workload's)
+_OWN_NOTICES = ("run", "check", "warmup")
+
+
+def _announce_compiles(command):
+    """A first run of any other command says, on stderr, that it waits for the compiler.
+
+    ``compensate`` on a cold cache waited 10 s (against 2 s warm) without a word.
+    Only when the command's module has loaded the kernels.
+    """
+    if command not in _OWN_NOTICES and "hammerstein.simulation" in sys.modules:
+        importlib.import_module("hammerstein.simulation._compile").announce_compiles(print_err)
+
+
 #: Commands that run scenarios: on a cold numba cache their chain kernel is compiled in a
 #: helper process while they import, validate and resolve (``prefetch`` in
 #: ``hammerstein/simulation/_compile.py``).
@@ -469,6 +484,7 @@ def _main(argv):
     except SystemExit as exc:  # argparse: usage error (2) or --help (0)
         return int(exc.code or 0)
     _guard_kernel_cache()
+    _announce_compiles(command)
     _WARNING_STATE["subject"] = _warning_subject(args)
     _WARNING_STATE["said"] = set()
     root = logging.getLogger()
