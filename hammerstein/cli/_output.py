@@ -8,14 +8,18 @@ from hammerstein.report.messages import group_warnings
 __all__ = ["add_verbosity", "print_warnings"]
 
 
-def add_verbosity(p):
-    """``-q/--quiet`` (errors only) and ``-v/--verbose`` (per-case warnings, progress) on ``p``."""
+def add_verbosity(p, verbose_help=None):
+    """``-q/--quiet`` (errors only) and ``-v/--verbose`` (per-case warnings, progress) on ``p``.
+
+    ``verbose_help`` replaces the ``-v`` help of ``run`` (a command whose default prints
+    the warnings otherwise, e.g. ``check``).
+    """
     g = p.add_mutually_exclusive_group()
     g.add_argument("-q", "--quiet", action="store_const", const=-1, dest="verbosity", default=0,
                    help="print errors only")
     g.add_argument("-v", "--verbose", action="store_const", const=1, dest="verbosity",
-                   help="print every case's warnings (not one line per distinct warning) "
-                        "and what is being run")
+                   help=verbose_help or "print every case's warnings (not one line per "
+                                        "distinct warning) and what is being run")
 
 
 def print_warnings(path, pairs, verbosity=0):

@@ -6,7 +6,7 @@ import xml.etree.ElementTree as ET
 import pandas as pd
 import pytest
 
-from hammerstein.cli.main import main
+from hammerstein.cli.main import build_parser, main
 from hammerstein.report.messages import group_warnings, message_template
 from hammerstein.report.scenario import compensator_summary, signal_summary
 
@@ -186,3 +186,20 @@ def test_merged_negative_numbers_keep_their_signs(values, merged):
     groups = group_warnings([("a", "rho(I - K^-1 J) reaches 1.02"),
                              ("b", "rho(I - K^-1 J) reaches 1.03")])
     assert groups[0].message == "rho(I - K^-1 J) reaches 1.02\u20131.03"
+
+
+def test_check_prints_warnings_with_v_only_one_line_per_distinct_warning(scenario, tmp_path,
+                                                                         capsys):
+    # the gate's default prints the metrics that moved and the summary; -v adds the warnings,
+    # grouped as run's default groups them (its help said "not one line per distinct warning")
+    base = tmp_path / "b.csv"
+    assert main(["check", str(scenario), "--baseline", str(base), "--update"]) == 0
+    capsys.readouterr()
+    assert main(["check", str(scenario), "--baseline", str(base)]) == 0
+    assert "warning:" not in capsys.readouterr().err
+    assert main(["check", "-v", str(scenario), "--baseline", str(base)]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("warning:")]
+    assert len(lines) == 1 and lines[0].startswith(f"warning: {scenario}: 4 cases: reference: ")
+    p = build_parser("check")
+    text = " ".join(p._subparsers._group_actions[0].choices["check"].format_help().split())
+    assert "one line per distinct warning" in text and "not one line per" not in text
