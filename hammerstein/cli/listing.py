@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from hammerstein.cli._common import print_err
+from hammerstein.core.files import escape
 from hammerstein.models.lti import dc_gain
 from hammerstein.io.presets import PresetError, bundled_presets, load_model, load_plant, read_toml
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
@@ -30,7 +32,7 @@ def add_parser(subparsers):
         "list", help=HELP,
         description="List the bundled actuator presets, the compensator kinds and the "
                     "scenario files under DIR (default ./scenarios).")
-    p.add_argument("--scenarios", default="scenarios", metavar="DIR",
+    p.add_argument("--scenarios", default=None, metavar="DIR",
                    help="directory searched for *.toml scenarios (default: ./scenarios)")
     p.set_defaults(handler=handler)
 
@@ -43,7 +45,7 @@ def _dynamics_summary(path):
         return f"; invalid: {exc}"
     if plant.dynamics is None:
         return "; static (no dynamics)"
-    gain = np.round(dc_gain(plant.dynamics), 4).tolist()
+    gain = (np.round(dc_gain(plant.dynamics), 4) + 0.0).tolist()      # + 0.0: no "-0.0"
     return f"; dynamics: {plant.dynamics.nstates} states, DC gain {gain}"
 
 
@@ -60,8 +62,15 @@ def handler(args):
     Returns
     -------
     int
-        Exit status, always 0.
+        Exit status: 0; 1 when ``--scenarios`` names no directory (printed on
+        stderr before anything else; without it, ``./scenarios`` may be absent).
     """
+    given = args.scenarios is not None
+    root = Path(args.scenarios if given else "scenarios")
+    if given and not root.is_dir():
+        print_err(f"hammerstein list: error: --scenarios: {escape(str(root))}: "
+                  f"{'not a directory' if root.exists() else 'no such directory'}")
+        return 1
     print("presets:")
     for name, path in sorted(bundled_presets().items()):
         print(f"  {name}  ({path}){_dynamics_summary(path)}")
@@ -80,7 +89,6 @@ def handler(args):
         print(f"{title}:")
         for name, kind in kinds.items():
             print(f"  {name}: {kind.description}")
-    root = Path(args.scenarios)
     files = sorted(root.rglob("*.toml")) if root.is_dir() else []
     kinds = {f: _file_kind(f) for f in files}
     presets = [f for f in files if kinds[f] in ("preset", "dynamics")]

@@ -127,7 +127,8 @@ def handler(args):
                        else outcome.metrics["case"].nunique())
             if verbosity >= 0:
                 took = f" in {time.perf_counter() - started[path]:.1f} s" if verbosity > 0 else ""
-                print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({n_cases} cases){took}")
+                cases = f"{n_cases} case{'' if n_cases == 1 else 's'}"
+                print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({cases}){took}")
                 print_warnings(escape(path), outcome.warnings, verbosity)
                 _print_divergences(escape(path), outcome.metrics)
         else:

@@ -69,5 +69,6 @@ def handler(args):
                 if w not in said:
                     said.add(w)
                     print_err(f"warning: {escape(path)}: {case.name}: {w}")
-        print(f"{escape(path)}: ok ({len(sc.cases)} cases)")
+        n = len(sc.cases)
+        print(f"{escape(path)}: ok ({n} case{'' if n == 1 else 's'})")
     return status

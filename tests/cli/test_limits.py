@@ -413,7 +413,7 @@ def test_validate_does_not_pass_absurd_amplitudes_silently(table, words, tmp_pat
     path.write_text(f'name = "absurd"\n[plant]\npreset = "{PRESET}"\ndynamics = false\n'
                     f'{compensator}[[cases]]\nname = "c"\n{table}\n')
     status, out, err, _ = _run(["validate", str(path)], capsys)
-    assert status == 0 and "ok (1 cases)" in out
+    assert status == 0 and "ok (1 case)" in out
     assert len(err) == 1 and err[0].startswith(f"warning: {path}: c: ") and words in err[0], err
 
 

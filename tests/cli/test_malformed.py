@@ -218,7 +218,8 @@ def test_validate_lists_every_problem(capsys, stem):
     path = CORPUS / "scenarios" / f"{stem}.toml"
     status, out, err = _call(capsys, "validate", path)
     if stem in RUN_ONLY:
-        assert (status, err) == (0, []) and f"ok ({RUN_ONLY[stem]} cases)" in out
+        n = RUN_ONLY[stem]
+        assert (status, err) == (0, []) and f"ok ({n} case{'' if n == 1 else 's'})" in out
         return
     assert status == 1 and out == ""
     assert len(err) == SEVERAL.get(stem, 1), err

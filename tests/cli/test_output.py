@@ -203,3 +203,18 @@ def test_check_prints_warnings_with_v_only_one_line_per_distinct_warning(scenari
     p = build_parser("check")
     text = " ".join(p._subparsers._group_actions[0].choices["check"].format_help().split())
     assert "one line per distinct warning" in text and "not one line per" not in text
+
+
+def test_one_case_is_one_case_and_list_checks_its_directory(tmp_path, capsys):
+    one = tmp_path / "one.toml"
+    one.write_text(_SCENARIO.split("[[cases]]")[0] + "[[cases]]" + _SCENARIO.split("[[cases]]")[1])
+    assert main(["validate", str(one)]) == 0
+    assert capsys.readouterr().out.strip().endswith("ok (1 case)")
+    assert main(["run", str(one), "--out", str(tmp_path / "r"), "--figures", "none"]) == 0
+    assert "(1 case)" in capsys.readouterr().out
+    # a --scenarios directory that is not there is named, not listed as "none found"
+    assert main(["list", "--scenarios", str(tmp_path / "missing")]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err.strip() == (f"hammerstein list: error: --scenarios: "
+                                         f"{tmp_path / 'missing'}: no such directory")
+    assert main(["list"]) == 0 and "-0.0" not in capsys.readouterr().out.split("compensator")[0]

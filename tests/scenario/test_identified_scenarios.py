@@ -359,7 +359,7 @@ def test_identification_failure_passes_validate_and_fails_run_in_one_line(tmp_pa
                  "periods = 2 }\n", encoding="utf-8")
     assert main(["validate", str(p)]) == 0
     captured = capsys.readouterr()
-    assert captured.err == "" and "ok (1 cases)" in captured.out
+    assert captured.err == "" and "ok (1 case)" in captured.out
     out = tmp_path / "out"
     assert main(["run", str(p), "--out", str(out)]) == 1
     err = capsys.readouterr().err.splitlines()
