@@ -95,9 +95,11 @@ def add_parser(subparsers):
                    help="keep the reports, with their figures, in DIR (default: a "
                         "temporary directory, and no figures are drawn)")
     p.add_argument("--rtol", type=number_type(0), metavar="R",
-                   help="relative tolerance for every metric (e.g. 0.05 = 5 %%)")
+                   help="relative tolerance for every metric (e.g. 0.05 = 5 %%; default: "
+                        "per metric, 5 %% for most; docs/regression-gate.md lists them)")
     p.add_argument("--atol", type=number_type(0), metavar="A",
-                   help="absolute tolerance for every metric, in its unit")
+                   help="absolute tolerance for every metric, in its unit (default: per "
+                        "metric, e.g. 0.01 µm for the errors, 0.2 for the %% errors)")
     p.add_argument("--tolerances", metavar="TOML",
                    help="per-metric overrides: tables [metric] with rtol, atol, direction")
     p.add_argument("--all", action="store_true", dest="show_all",
