@@ -781,4 +781,8 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
         print_err("warning: the learning is not guaranteed to converge: lower --learning-gain "
                   "or --q-cutoff-hz")
     print(f"wrote {args.out}", file=sys.stdout)
+    if args.history:        # what the history holds now, as it is on disk
+        names = sorted(p.name for p in Path(args.history).iterdir()
+                       if p.is_file() and not p.name.startswith("."))
+        print(f"wrote {args.history.rstrip('/')}/ ({', '.join(names)})", file=sys.stdout)
     return 0

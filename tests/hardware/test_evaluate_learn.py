@@ -85,6 +85,10 @@ def test_learn_through_files_reduces_the_error(tmp_path):
     assert np.all(errors[1:] <= 1.1 * errors[:-1] + 0.01), errors  # no growth beyond noise
     assert len(pd.read_csv(tmp_path / "hist/history.csv")) == 11 * 2
     assert (tmp_path / "hist/convergence.png").is_file()
+    # stdout names every file of the history, as it is on disk
+    on_disk = sorted(p.name for p in (tmp_path / "hist").iterdir() if not p.name.startswith("."))
+    assert f"wrote hist/ ({', '.join(on_disk)})" in res.stdout.splitlines()
+    assert {"history.csv", "convergence.png", "settled.csv"} <= set(on_disk)
 
 
 def test_learn_one_trial_lowers_the_error_and_refuses_a_short_measurement(tmp_path):
