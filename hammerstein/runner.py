@@ -51,7 +51,8 @@ from typing import Callable
 import pandas as pd
 
 from hammerstein.core.files import (deferred_signals, output_problem, owner_alive, owner_token,
-                                    parse_owner, recorded_paths, release_owner, replace_directory,
+                                    parse_owner, raise_if_interrupted, recorded_paths, release_owner,
+                                    replace_directory,
                                     safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
 from hammerstein.report._ownership import MARKER as _MARKER
@@ -476,6 +477,7 @@ class PendingScenario:
         except ScenarioError as exc:
             self.outcome = ScenarioOutcome(o.name, o.path, False, str(exc), None, _empty_metrics())
         except Exception as exc:  # a failed figure (in a worker too) is the scenario's error
+            raise_if_interrupted()
             self.outcome = ScenarioOutcome(o.name, o.path, False, _message(o.path, exc), None,
                                            _empty_metrics())
         else:
@@ -566,6 +568,7 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
     except ScenarioError as exc:
         return PendingScenario(ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics()))
     except Exception as exc:  # a failed scenario must not stop the others
+        raise_if_interrupted()    # unless a signal caused it (a module it imported half done)
         return PendingScenario(ScenarioOutcome(name, path, False, _message(path, exc), None,
                                                _empty_metrics()))
     return PendingScenario(ScenarioOutcome(name, path, True, None, Path(out_dir) / name, frame,

@@ -36,7 +36,8 @@ import warnings
 from hammerstein._cache import numba_cache_dir, use_user_numba_cache
 from hammerstein.cli._examples import add_examples
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
-from hammerstein.core.files import escape, interrupt, reset_guard, reset_interrupt, start_budget
+from hammerstein.core.files import (escape, interrupt, raise_if_interrupted, reset_guard,
+                                    reset_interrupt, start_budget)
 
 # One BLAS thread unless the user set one: the run's matrices are small and its
 # processes (simulation, figure workers) already use the cores; OpenBLAS threads
@@ -178,6 +179,22 @@ def build_parser(command=None):
         else:
             sub.add_parser(name, help=help_text)
     return parser
+
+
+def _quiet_interrupt_hook(previous):
+    """``sys.unraisablehook`` that drops the interruption raised where Python cannot propagate it.
+
+    A signal handled inside a finaliser or a callback printed ``Exception
+    ignored in ... _Interrupted: 2`` and a traceback before ``interrupted``;
+    the signal is still remembered (:func:`hammerstein.core.files.interrupt`)
+    and ends the command at the next check. Any other unraisable error goes
+    to ``previous``.
+    """
+    def hook(unraisable):
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            return
+        previous(unraisable)
+    return hook
 
 
 def _on_signal(signum, frame):
@@ -411,8 +428,14 @@ def main(argv=None):
     previous = _install_signal_handlers()
     streams = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr, MAX_LINE)  # no raw control chars
+    unraisable = sys.unraisablehook
+    sys.unraisablehook = _quiet_interrupt_hook(unraisable)
     try:
-        code = _main(argv)
+        try:
+            code = _main(argv)
+        except Exception:
+            raise_if_interrupted()   # raised outside the handler's try (the imports of the parser)
+            raise
         return _flush_output(code)
     except KeyboardInterrupt as exc:  # SIGINT or SIGTERM: one line, no traceback
         signum = getattr(exc, "signum", signal.SIGINT)
@@ -423,6 +446,7 @@ def main(argv=None):
         print_err("interrupted")
         return 128 + int(signum)
     finally:
+        sys.unraisablehook = unraisable
         reset_guard()        # an embedding program's later writes are its own
         for sig, handler in previous.items():
             signal.signal(sig, handler)
@@ -511,6 +535,7 @@ def _main(argv):
                       f"{escape(one_line(exc))} (HAMMERSTEIN_DEBUG=1 shows the traceback)")
             return 1
         except Exception as exc:  # a bug, not bad input: still one line, no traceback
+            raise_if_interrupted()   # a signal's doing (e.g. a module whose import it cut short)
             if os.environ.get("HAMMERSTEIN_DEBUG"):
                 raise
             print_err(f"hammerstein {args.command}: error: unexpected {type(exc).__name__}: "

@@ -52,7 +52,7 @@ from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, 
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
-           "reset_interrupt", "interrupt", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
+           "reset_interrupt", "interrupt", "raise_if_interrupted", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
            "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
            "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
@@ -304,6 +304,25 @@ def interrupt(signum):
         _CRITICAL["pending"] = signum
         return
     raise _Interrupted(signum)
+
+
+def raise_if_interrupted():
+    """Raise the interruption a signal asked for, if :func:`interrupt` received one.
+
+    A signal that lands while a module is still being imported (the first
+    second of a command) can leave that module half initialised: the error
+    that follows (an ``ImportError``, a missing attribute of ``scipy.linalg``)
+    is the signal's doing, not the input's. Called where such an error would
+    be reported, it reports the interruption instead.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Carrying the signal received (exit status ``128 + signum``); nothing
+        when no signal arrived since :func:`reset_interrupt`.
+    """
+    if _CRITICAL["received"] is not None:
+        raise _Interrupted(_CRITICAL["received"])
 
 
 def reset_interrupt():
