@@ -52,7 +52,8 @@ from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, 
 
 __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
-           "reset_interrupt", "interrupt", "raise_if_interrupted", "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
+           "reset_interrupt", "interrupt", "raise_if_interrupted", "file_limit_problem",
+           "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
            "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
            "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
@@ -165,6 +166,39 @@ def check_regular(path, what="file"):
         raise FileLimitError(f"{path}: not a regular file (a device, FIFO or socket), "
                              f"expected a {what}")
     return st
+
+
+def file_limit_problem(path, kind="data", what="file"):
+    """Why :func:`bounded_read_bytes` would refuse ``path``, told before anything is read, or None.
+
+    For validation that reads nothing (``validate``): the same words as the
+    read's :class:`FileLimitError` for a file that is not a regular file or
+    is larger than the limit; the read itself checks again on its open file.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    kind : {'toml', 'data', 'baseline', 'cache', 'total'}
+        Selects the size limit.
+    what : str
+        What the file should be, for messages.
+
+    Returns
+    -------
+    str or None
+        One line naming ``path``; None for a regular file within the limit
+        (or one that cannot be looked at: the read names that).
+    """
+    try:
+        st = check_regular(path, what)
+    except FileLimitError as exc:
+        return str(exc)
+    except OSError:
+        return None
+    if st.st_size > limit(kind):
+        return (f"{path}: {_size(st.st_size)} is larger than the limit of {_size(limit(kind))} "
+                f"for a {what} ({_hint(kind)})")
+    return None
 
 
 def bounded_read_bytes(path, kind="toml", what="file"):

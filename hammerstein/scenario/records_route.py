@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from hammerstein.core.files import FileLimitError, confined_path
+from hammerstein.core.files import FileLimitError, bounded_read_bytes, confined_path
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import HammersteinWarning, HysteresisError
 from hammerstein.identification.identification import IdentificationError
@@ -214,7 +214,9 @@ def _files_digest(spec, base_dir):
         for name in spec.get(key) or []:
             try:
                 path = confined_path(name, base_dir, DataFileError)
-                h.update(str(path).encode() + b"\0" + Path(path).read_bytes())
+                # bounded as every read: a 3 GiB record was read whole (52 s, 6.5 GB) before
+                # read_records refused it
+                h.update(str(path).encode() + b"\0" + bounded_read_bytes(path, "data", "record"))
             except (OSError, DataFileError, FileLimitError):
                 h.update(name.encode())          # read_records names the problem
     return h.hexdigest()

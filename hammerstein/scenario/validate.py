@@ -29,7 +29,7 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.signals import references as refs
-from hammerstein.core.files import confined_path
+from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import is_number, plausibility_problem
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
@@ -310,9 +310,14 @@ def _record_file_problems(identify, base):
             except PresetError as exc:
                 problems.append(f"identify.{key}: {exc}")
                 continue
-            if not Path(path).is_file():
+            if not Path(path).exists():
                 problems.append(f"identify.{key}: {name}: no such file (relative to the "
                                 f"scenario's directory)")
+                continue
+            # a FIFO, a directory, a record beyond the size limit: named before anything is read
+            problem = file_limit_problem(path, "data", "record")
+            if problem:
+                problems.append(f"identify.{key}: {problem}")
     return problems
 
 

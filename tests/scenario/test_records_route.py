@@ -267,3 +267,35 @@ def test_titles_and_the_report_name_a_files_table_as_such():
     expect = ("model identified from 3 measured record file(s) (hysteresis, creep; auto class)")
     assert _model_summary(c) == expect
     assert expect in compensator_summary(c)
+
+
+def test_a_record_beyond_the_size_limit_or_a_fifo_is_named_before_anything_is_read(
+        tmp_path, monkeypatch):
+    # validate said ok and run read a 3 GiB record whole (52 s, 6.5 GB) for the cache key
+    # before the limit refused it
+    import os
+    from hammerstein.core import files
+    from hammerstein.scenario import records_route
+    from hammerstein.scenario.schema import ScenarioError
+    from hammerstein.scenario.validate import validate_scenario
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", "1000")
+    (tmp_path / "big.csv").write_text("t,ux,uy,x,y\n" + "0,0,0,0,0\n" * 500)   # 5 kB
+    os.mkfifo(tmp_path / "pipe.csv")
+    f = tmp_path / "s.toml"
+    f.write_text('[plant]\npreset = "realistic-2dof"\n[compensator]\nkind = "hammerstein"\n'
+                 'model = "identified"\ndynamics = "identified"\nidentify = { records = "files", '
+                 'hysteresis_records = ["big.csv"], dynamics_records = ["pipe.csv"] }\n'
+                 '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+                 'frequency = 20.0, periods = 3 }\n')
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(f)
+    text = str(err.value)
+    assert "identify.hysteresis_records: " in text and "larger than the limit of 1000 bytes" in text
+    assert "identify.dynamics_records: " in text and "not a regular file" in text
+    # the cache key reads no byte beyond the limit (the read that follows names the problem)
+    reads = []
+    real = files.bounded_read_bytes
+    monkeypatch.setattr(records_route, "bounded_read_bytes",
+                        lambda *a, **k: reads.append(a) or real(*a, **k))
+    records_route._files_digest({"hysteresis_records": ["big.csv"]}, tmp_path)
+    assert reads and reads[0][1] == "data"
