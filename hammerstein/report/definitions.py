@@ -158,7 +158,7 @@ def metric_words(metric, kinds=()):
     return None
 
 
-def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=True):
+def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=None):
     """The "Definitions" section of a ``report.md``.
 
     Parameters
@@ -173,8 +173,9 @@ def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=True):
         convention, ``settle_periods`` periods from t = 0).
     terms : iterable of str
         Keys of :data:`TERM_WORDS` the report uses.
-    paper : bool
-        Cite :data:`PAPER` ("the paper" of the report).
+    paper : bool, optional
+        Cite :data:`PAPER` ("the paper" of the report); by default when a
+        definition written here refers to it.
 
     Returns
     -------
@@ -189,8 +190,7 @@ def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=True):
     """
     kinds = kinds or {}
     lines = ["## Definitions", ""]
-    if paper:
-        lines += [f"\"The paper\" is {PAPER}.", ""]
+    body = []
     if settle is None:
         settle = ("Settled window: the metrics skip the first `settle_periods` periods of each "
                   "record, counted from its first sample (t = 0, at rest), so a fade-in, which "
@@ -201,12 +201,16 @@ def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=True):
                   "is e = y_r − y per output; the Euclidean error ‖Y_r − Y‖ takes all outputs "
                   "together (the paper's ε = sgn(θ)√|θ|, θ = (x_r + y_r)² − (x + y)², is not "
                   "a distance and is not used).")
-    lines += [settle, ""]
+    body += [settle, ""]
     for metric in dict.fromkeys(metrics):
         words = metric_words(metric, kinds.get(metric, ()))
         if words:
-            lines.append(f"- `{metric}`: {words}")
+            body.append(f"- `{metric}`: {words}")
     known = [t for t in dict.fromkeys(terms) if t in TERM_WORDS]
     if known:
-        lines += ["", "Terms:", ""] + [f"- {TERM_WORDS[t]}" for t in known]
-    return lines + [""]
+        body += ["", "Terms:", ""] + [f"- {TERM_WORDS[t]}" for t in known]
+    if paper is None:
+        paper = any("paper" in line for line in body)
+    if paper:
+        lines += [f"\"The paper\" is {PAPER}.", ""]
+    return lines + body + [""]

@@ -624,7 +624,7 @@ def write_report(scenario, results, directory, jobs=None):
     if scenario.description:
         lines += [scenario.description.strip(), ""]
     lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, seed {scenario.seed}).", ""]
-    lines += definitions_lines(shown, kinds, terms=terms)
+    lines += definitions_lines(shown, kinds, terms=terms, paper=True)
     if results:
         table = pd.DataFrame([{
             "case": r.name,
