@@ -2,7 +2,12 @@
 
 A history belongs to one learning: ``history.csv`` (each trial's max and
 RMS error per output) and ``convergence.png``, ``settled.csv`` (each
-trial's settled errors), ``harmonics.csv`` (the per-harmonic gains),
+trial's settled errors); the errors of both files are those of the
+measurement advanced by the delay learn estimated (or was given), over the
+window after the fade-in and the settling, and each row says so (columns
+``delay_removed_samples`` and ``window_from_s``: ``hammerstein evaluate``
+keeps the delay unless given ``--remove-delay``, so its figures are larger
+for the same records), ``harmonics.csv`` (the per-harmonic gains),
 ``best-trial.csv`` (the best trial's drive, measured response and the
 reference its drive was computed for) and ``learning.csv`` (the state: the
 best trial, the gain halvings, the reference's fingerprint and samples of
@@ -159,8 +164,44 @@ def _settled_series(history_dir, trials, now=None):
     return euclid, judged
 
 
+#: Columns of ``history.csv``: the trial's errors per output, then how they were measured
+#: (the measurement advanced by ``delay_removed_samples``, the window from ``window_from_s``).
+HISTORY_HEAD = ("iteration,output,max_error_um,rms_error_um,delay_removed_samples,"
+                "window_from_s\n")
+#: Columns of ``settled.csv`` (the first four as before; readers index them).
+SETTLED_HEAD = ("trial,settled_max_euclidean_um,settled_rms_euclidean_um,judged_um,"
+                "delay_removed_samples,window_from_s\n")
+
+
+def _aligned_cells(aligned):
+    """``delay_removed_samples,window_from_s`` cells of a row (empty when not known)."""
+    if aligned is None:
+        return ","
+    delay, start = aligned
+    return f"{int(delay)},{float(start)!r}"
+
+
+def _history_extras(history_dir):
+    """``iteration -> "delay,window"`` cells of the rows already in ``history.csv``."""
+    path = Path(history_dir) / "history.csv"
+    if not path.is_file():
+        return {}
+    extras = {}
+    for line in bounded_read_text(path, "data", "history file").splitlines()[1:]:
+        cells = line.split(",")
+        if len(cells) >= 6:
+            extras[(cells[0], cells[1])] = ",".join(cells[4:6])
+    return extras
+
+
 def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None,
-                   settled=None):
+                   settled=None, aligned=None):
+    """Append a trial to ``history.csv`` and redraw ``convergence.png``; the trial number.
+
+    ``aligned``: ``(delay [samples], window start [s])``: the trial's errors are those of
+    the measurement advanced by that delay over the window from that time (written in
+    each row and in the figure's title).
+    """
     d = Path(history)
     problem = foreign_history_problem(d, out)
     if problem:
@@ -169,17 +210,22 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     if not (d / HISTORY_MARK).exists():
         safe_write(d / HISTORY_MARK, "", "history mark", root=d)
     rows = history_rows(d)
+    extras = _history_extras(d)
     k = 1 + max((r[0] for r in rows), default=-1)
     rows += [(k, n, float(rec.max_error[i]), float(rec.rms_error[i])) for i, n in enumerate(names)]
-    text = "iteration,output,max_error_um,rms_error_um\n" + "".join(
-        f"{a},{b},{c!r},{e!r}\n" for a, b, c, e in rows)
+    extras.update({(str(k), n): _aligned_cells(aligned) for n in names})
+    text = HISTORY_HEAD + "".join(
+        f"{a},{b},{c!r},{e!r},{extras.get((str(a), b), ',')}\n" for a, b, c, e in rows)
     safe_write(d / "history.csv", text, "history file", root=d)
     its = sorted({r[0] for r in rows})
     mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     euclid, judged = _settled_series(d, its, None if settled is None else (k, *settled))
-    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale,
-                             scale_name, euclid, judged)
+    title = "ILC: tracking error per trial"
+    if aligned is not None:
+        title += (f" (measurement advanced by its delay of {int(aligned[0])} samples; "
+                  f"window from t = {aligned[1]:.4g} s)")
+    fig = convergence_figure(its, mx, rms, names, title, scale, scale_name, euclid, judged)
     safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
     return k
 
@@ -210,8 +256,12 @@ DRIVE_SAMPLES = 256
 DRIVE_TOLERANCE = 1e-3
 
 
-def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin):
+def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin, aligned=None):
     """Append a trial's settled errors to ``DIR/settled.csv``; the previous trial's if it was lower.
+
+    ``aligned``: ``(delay [samples], window start [s])`` of the errors (columns
+    ``delay_removed_samples`` and ``window_from_s``; a file of the four first
+    columns gets them, empty on its rows).
 
     Returns
     -------
@@ -221,8 +271,11 @@ def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin):
         else None.
     """
     path = Path(history_dir) / SETTLED_FILE
-    head = "trial,settled_max_euclidean_um,settled_rms_euclidean_um,judged_um\n"
-    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() else head
+    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() \
+        else SETTLED_HEAD
+    if text.splitlines()[:1] != [SETTLED_HEAD.strip()]:     # an older file: four columns
+        text = SETTLED_HEAD + "".join(f"{line},,\n" for line in text.splitlines()[1:]
+                                      if line.strip())
     rows = [line.split(",") for line in text.splitlines()[1:] if line.strip()]
     prev = None
     if rows:
@@ -230,7 +283,8 @@ def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin):
             prev = (int(rows[-1][0]), float(rows[-1][3]))
         except (IndexError, ValueError):
             prev = None
-    text = text + f"{trial},{settled_max!r},{settled_rms!r},{float(score)!r}\n"
+    text = text + (f"{trial},{settled_max!r},{settled_rms!r},{float(score)!r},"
+                   f"{_aligned_cells(aligned)}\n")
     safe_write(path, text, "settled errors file")
     return prev if prev is not None and score > prev[1] + margin else None
 

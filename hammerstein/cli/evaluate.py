@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import sys
 import tomllib
 from importlib import metadata
@@ -52,7 +53,10 @@ from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError
 from hammerstein.io.datafiles import signal_table
+from hammerstein.core.files import markdown_text
+from hammerstein.report.definitions import definitions_lines
 from hammerstein.report.figures import save
+from hammerstein.report.scenario import signal_summary
 from hammerstein.report.trajectories import trajectory_figure
 
 __all__ = ["add_parser", "evaluate"]
@@ -327,8 +331,8 @@ def _shaped_table(rows):
     """Report lines for the metrics against the shaped reference (empty without one)."""
     if not rows:
         return ""
-    table = "\n".join(f"| {row['channel']} | {row['metric']} | {row['value']:.6g} | {row['unit']} |"
-                      for row in rows)
+    table = "\n".join(f"| {row['channel']} | {row['metric']} | {_value(row['value'])} | "
+                      f"{row['unit']} |" for row in rows)
     return ("\nAgainst the shaped reference the drive follows (the drive file's "
             "`<output>_shaped` columns; metrics.csv case `shaped`):\n\n"
             "| channel | metric | value | unit |\n|---|---|---|---|\n" + table + "\n")
@@ -365,14 +369,59 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=()):
                                 input_names=ins if u is not None else None)
         safe_write(out / "trajectory-measured.png", lambda fh: save(fig, fh), "figure", root=out)
         figure = "\n![trajectory](trajectory-measured.png)\n"
-    table = "\n".join(f"| {row['channel']} | {row['metric']} | {row['value']:.6g} | {row['unit']} |"
-                      for row in rows)
-    text = (f"# Measured response\n\nreference: `{args.reference}`  \nmeasured: `{args.measured}`"
-            f"  \nsampling period {T:g} s, {n} samples, settling {args.settle_periods:g} period(s)"
+    table = "\n".join(f"| {row['channel']} | {row['metric']} | {_value(row['value'])} | "
+                      f"{row['unit']} |" for row in rows)
+    start = int(round(args.settle_periods * ref.period_samples))
+    if args.remove_delay:
+        delay_words = "removed before the metrics"
+    else:
+        delay_words = ("not removed: the metrics include it (`--remove-delay` gives the "
+                       "delay-free figures, as `hammerstein learn` judges its trials)")
+    defs = definitions_lines(
+        [row["metric"] for row in list(rows) + list(shaped_rows)],
+        {m: [str(ref.kind)] for m in ("max_euclidean_error_percent",)},
+        settle=(f"Settled window: the metrics skip the first {args.settle_periods:g} "
+                f"{'period' if args.settle_periods == 1 else 'periods'} of the record (the "
+                f"fade-in of the drive, when known, counted in them), counted from its first "
+                f"sample: from sample {start}, t = {start * T:.4g} s, to the end. The tracking "
+                f"error is e = y_r − y per output; the Euclidean error ‖Y_r − Y‖ takes all "
+                f"outputs together."))
+    text = (f"# {markdown_text(_heading(args, ref))}\n\nreference: `{args.reference}`  \n"
+            f"measured: `{args.measured}`"
+            f"  \nsampling period {T:g} s, {n} samples, settling {args.settle_periods:g} "
+            f"{'period' if args.settle_periods == 1 else 'periods'}"
             f"{_drive_notes(args)}"
             f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
-            f"samples = {delay * T * 1e6:.4g} µs, "
-            f"{'removed before the metrics' if args.remove_delay else 'not removed: the metrics include it'}.\n"
+            f"samples = {delay * T * 1e6:.4g} µs, {delay_words}.\n\n"
+            + "\n".join(defs) +
             f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n"
             f"{_shaped_table(shaped_rows)}")
     safe_write(out / "report.md", text, "report", root=out)
+
+
+def _value(v):
+    """A metric value as ``hammerstein run``'s report writes it (4 significant digits)."""
+    return f"{v:.4g}"
+
+
+def _actuator(args):
+    """The actuator the drive was computed for: ``--model``, else the drive file's header."""
+    if getattr(args, "model", None):
+        return Path(str(args.model)).name
+    if getattr(args, "drive", None):
+        with open(args.drive, encoding="utf-8", errors="replace") as fh:
+            for line in (fh.readline() for _ in range(40)):
+                m = re.match(r"#\s*actuator\s+([^,]+),", line)
+                if m:
+                    return m.group(1).strip()
+    return None
+
+
+def _heading(args, ref):
+    """``Measured response of <actuator> to <the reference in words>``."""
+    spec = getattr(ref, "spec", None)
+    what = (signal_summary("reference", spec) if isinstance(spec, dict)
+            else f"the reference in {Path(str(args.reference)).name}")
+    actuator = _actuator(args)
+    return f"Measured response of {actuator} to: {what}" if actuator else \
+        f"Measured response to: {what}"

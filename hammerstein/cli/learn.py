@@ -685,9 +685,9 @@ def _handle(args):
         with removed_if_failed(Path(args.out).parent, args.history), all_or_nothing():
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
                                score, halvings, fingerprint, learnt, followed_now, shaped_ref,
-                               (settled_max, score))
-            rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin)
-                    if args.history else None)
+                               (settled_max, score), (delay, window.start * T))
+            rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin,
+                                  (delay, window.start * T)) if args.history else None)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
@@ -697,7 +697,8 @@ def _handle(args):
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
-                   halvings, fingerprint, learnt=None, followed=None, shaped=None, settled=None):
+                   halvings, fingerprint, learnt=None, followed=None, shaped=None, settled=None,
+                   aligned=None):
     """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
 
     The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
@@ -705,7 +706,8 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     computed for (its ``<output>_learnt`` columns); ``followed``: that of ``u`` (kept with the
     best trial); ``shaped``: the shaped reference learnt and judged (``<output>_shaped``,
     carried over from the drive learnt from); ``settled``: this trial's settled max Euclidean
-    and judged errors [µm], for the convergence figure.
+    and judged errors [µm], for the convergence figure; ``aligned``: the delay removed
+    [samples] and the window's start [s] of the errors (written in the history).
     """
     columns = dict(zip(model.input_names, u_next))
     if learnt is not None:
@@ -719,7 +721,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
         return None
     k = _write_history(args.history, list(model.output_names), rec, ref.scale,
                        "the raster's size" if ref.kind == "raster" else "radius / amplitude",
-                       args.out, settled)
+                       args.out, settled, aligned)
     if gains is not None:
         _save_gains(args.history, gains)
     if best:

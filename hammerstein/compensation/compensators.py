@@ -135,6 +135,15 @@ def midpoint_gains(model: MultivariablePI):
     return np.asarray(gains)
 
 
+def _is_midpoint(gain):
+    return isinstance(gain, str) and gain == "midpoint"
+
+
+def _gain_words(gain):
+    """A compensator's ``gain`` for its messages: ``gain='midpoint'``, ``an explicit gain``."""
+    return f"gain={gain!r}" if isinstance(gain, str) else "an explicit gain"
+
+
 def _inverse_gain(model, gain):
     m = model.n_inputs
     if model.n_outputs != m:
@@ -342,8 +351,13 @@ class InverseMultiplicativeCompensator:
         self.convergence = convergence_report(self.model, self.K)
         if not self.convergence.converges and self.check != "ignore":
             msg = (f"gain: rho(I - K^-1 J) reaches {self.convergence.max_radius:.3g} >= 1 "
-                   f"over the model's slopes: the iteration may diverge where they persist; "
-                   f"gain='midpoint' minimises the radius (docs/compensator.md)")
+                   f"over the slopes of the model of this {self.name} compensator "
+                   f"({_gain_words(self.gain)}): the iteration may diverge where they persist; "
+                   + ("the midpoint gain makes each direct transfer contract on its own, so "
+                      "the cross-couplings bring rho to 1 or more: an explicit gain matrix K "
+                      "may do better (docs/compensator.md)" if _is_midpoint(self.gain) else
+                      "gain='midpoint' minimises the radius of each direct transfer "
+                      "(docs/compensator.md)"))
             if self.check == "error":
                 raise CompensatorError(msg)
             warnings.warn(msg, ConvergenceWarning, stacklevel=2)

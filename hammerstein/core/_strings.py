@@ -88,6 +88,37 @@ def markdown_escape(text, limit=None):
     return "".join("\\" + ch if ch in "\\`*_{}[]<>()#+-!|~" else ch for ch in s)
 
 
+def markdown_text(text, limit=None):
+    """A user string made safe for a Markdown heading or running text, read as written.
+
+    :func:`escape` first, then only the characters that act inside a line
+    are backslash-escaped (``\\ ` * _ [ ] < > ~ |``): emphasis, code, links,
+    HTML and strikethrough. ``-``, ``+``, ``(``, ``)``, ``#`` and ``!`` are
+    left as they are (they act only at the start of a line, which a heading
+    or a sentence never gives them, or after a ``[`` that is escaped), so a
+    title such as "2-DOF (realistic-2dof)" reads as written in the source.
+
+    Parameters
+    ----------
+    text : object
+    limit : int or None
+        As :func:`escape`.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> markdown_text("Fig. 9: 50-200 Hz (2-DOF)")
+    'Fig. 9: 50-200 Hz (2-DOF)'
+    >>> markdown_text("<b>*x*</b>")
+    '\\\\<b\\\\>\\\\*x\\\\*\\\\</b\\\\>'
+    """
+    s = escape(text, limit)
+    return "".join("\\" + ch if ch in "\\`*_[]<>~|" else ch for ch in s)
+
+
 
 
 #: Longest name of a signal, model or C prefix turned into a file name [characters].

@@ -42,7 +42,8 @@ from hammerstein.exceptions import FileLimitError, OutputError
 # user strings, provenance and locks, owners of temporaries and scenario paths live in
 # private modules; this module is their public face (every name importable from here)
 from hammerstein.core._strings import (C_HEADERS, C_RESERVED, EXCERPT, MAX_NAME_CHARS,
-                                       c_name_problem, escape, markdown_escape, name_problem)
+                                       c_name_problem, escape, markdown_escape, markdown_text,
+                                       name_problem)
 from hammerstein.core._provenance import (LOCK_TIMEOUT, PROVENANCE, carries_provenance, locked,
                                           png_provenance, provenance_line, replace_problem,
                                           same_file)
@@ -55,13 +56,13 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "reset_interrupt", "interrupt", "raise_if_interrupted", "file_limit_problem",
            "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
            "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
-           "escape", "markdown_escape", "EXCERPT", "owner_token", "release_owner",
+           "escape", "markdown_escape", "markdown_text", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
            "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
            "output_problem", "name_problem", "append_text", "replace_directory", "c_name_problem", "MAX_NAME_CHARS", "C_RESERVED",
            "C_HEADERS", "recorded_paths", "removed_if_failed"]
 
-for _name in ("c_name_problem", "escape", "markdown_escape", "name_problem", "carries_provenance",
+for _name in ("c_name_problem", "escape", "markdown_escape", "markdown_text", "name_problem", "carries_provenance",
               "locked", "png_provenance", "provenance_line", "replace_problem", "same_file",
               "owner_alive", "owner_token", "parse_owner", "release_owner", "confined_path",
               "path_problem", "recorded_paths"):

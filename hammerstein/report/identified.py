@@ -22,9 +22,10 @@ from hammerstein.report.model_files import save_identified_dynamics, save_identi
 from hammerstein.report.tables import markdown_table, write_signals_csv
 from hammerstein.models.lti import align_dc_gain, compare_frequency_responses
 from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
+from hammerstein.report.definitions import plural
 from hammerstein.report.render import FigureJobs
 
-__all__ = ["report_identified", "model_rms_table"]
+__all__ = ["report_identified", "model_rms_table", "order_words"]
 
 
 def report_identified(scenario, results, directory, jobs=None):
@@ -209,13 +210,15 @@ def _report_dynamics(results, directory, jobs):
         return
     lines = ["", "## Identified dynamics (Hammerstein compensator)", "",
              "G identified by subspace identification (PO-MOESP) from random-phase multisines on "
-             "each input in turn, with the identified PI's outputs as its inputs; order chosen by "
-             "the fit on held-out data (the last 30 % of each record); the sensor's low-pass is "
+             "each input in turn, with the identified PI's outputs as its inputs; order: the best "
+             "fit on held-out data (the last 30 % of each record) among the candidate orders "
+             "tried (one, when the order is fixed), listed below; the sensor's low-pass is "
              "kept out of G. The PI, characterised quasi-statically, holds the static gain "
              "G(0) of the actuator (cross-coupling included), so the identified G has "
              "G_id(0) ~ I: it is compared with the true G brought to unit DC gain, "
              "G_true G_true(0)^-1 (the product G Gamma is what is identified). "
-             "Relative error: |G_id - that| / largest true gain of the row.", ""]
+             "Relative error: |G_id - G_true G_true(0)^-1| divided by the largest true gain "
+             "of the same row.", ""]
     for i, r in enumerate(rows, start=1):
         ident, plant, meta = r["identifier"], r["plant"], r["metadata"]
         fname = f"dynamics-bode-{i}.png"
@@ -224,12 +227,13 @@ def _report_dynamics(results, directory, jobs):
                  state_space_data(true), labels=("identified", "true G G(0)^-1"),
                  title=f"Identified vs true G ({plant.name}), order {ident.order_}")
         cmp_ = compare_frequency_responses(ident.system_, true, [10.0, 100.0, 200.0, 300.0])
-        val = ", ".join(f"{n}: {v:.2f} %" for n, v in zip(ident.orders_, ident.validation_fit_)
-                        if np.isfinite(v))
-        lines += [f"### Dynamics {i}: cases {', '.join(r['cases'][:4])}"
-                  f"{' ...' if len(r['cases']) > 4 else ''}", "",
+        cases = r["cases"]
+        used = ", ".join(f"`{c}`" for c in cases[:8]) + (
+            f" and {len(cases) - 8} more" if len(cases) > 8 else "")
+        lines += [f"### Dynamics {i}", "",
+                  f"Used by {plural(len(cases), 'case')}: {used}.", "",
                   f"![Identified vs true G]({fname})", "",
-                  f"- order {ident.order_}; held-out (validation) fit by order: {val}",
+                  f"- {order_words(ident)}",
                   f"- fit over all records per output: "
                   f"{', '.join(f'{v:.2f} %' for v in ident.fit_percent_)}",
                   f"- natural frequencies {', '.join(f'{v:.2f}' for v in meta['natural_frequency_hz'])}"
@@ -240,3 +244,40 @@ def _report_dynamics(results, directory, jobs):
                   + (f", {r.get('pi_class', 'PI')} [`{r['pi_file']}`]({r['pi_file']})"
                      if r["pi_file"] else ""), ""]
     append_text(directory / "report.md", "\n".join(lines) + "\n", "report")
+
+
+def order_words(ident):
+    """The order of identified dynamics and every candidate order tried, in words.
+
+    Parameters
+    ----------
+    ident : hammerstein.models.lti.DynamicsIdentifier
+        Fitted (``order_``, ``candidate_order_``, ``orders_``,
+        ``validation_fit_``, ``candidates_``).
+
+    Returns
+    -------
+    str
+        E.g. ``order 6: candidate order 8 (the best held-out fit) with 2
+        states removed (...); held-out fit by candidate order: 1: rejected
+        (unstable ...), ..., 8: 99.76 %``.
+    """
+    chosen = int(getattr(ident, "candidate_order_", ident.order_))
+    infos = {int(c.get("order", -1)): c for c in (getattr(ident, "candidates_", None) or [])}
+    tried = []
+    for n, v in zip(ident.orders_, ident.validation_fit_):
+        n = int(n)
+        if np.isfinite(v):
+            tried.append(f"{n}: {v:.2f} %")
+        else:
+            why = infos.get(n, {}).get("rejected")
+            tried.append(f"{n}: rejected ({why})" if why else f"{n}: rejected")
+    text = f"order {ident.order_}"
+    if ident.order_ != chosen:
+        dropped = infos.get(chosen, {}).get("dropped") or []
+        how = "chosen by its held-out fit" if len(tried) > 1 else "the one order tried"
+        text += (f": candidate order {chosen} ({how}), with "
+                 f"{plural(chosen - ident.order_, 'state')} removed"
+                 + (f" ({'; '.join(dropped)})" if dropped else ""))
+    kind = "candidate order" if len(tried) > 1 else "the one order tried"
+    return f"{text}; held-out (validation) fit by {kind}: {', '.join(tried)}"

@@ -9,8 +9,9 @@ their *template*, the message with every number and every single-quoted name
 replaced by a placeholder (:func:`message_template`), and renders each group
 once, with the numbers that differ between its cases shown as a range
 (``1.02-1.03``) and the names as a list (``'per-axis'/'static-gain'``). The
-command line prints the groups; ``report.md`` and ``warnings.csv`` keep every
-case's own message.
+command line prints the groups, and so do the sweep sections of ``report.md``
+(naming the compensators, axes and frequencies of each group);
+``warnings.csv`` keeps every case's own message.
 """
 
 from __future__ import annotations

@@ -22,12 +22,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from hammerstein.core.files import markdown_escape, safe_write
+from hammerstein.core.files import markdown_text, safe_write
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
 from hammerstein.report import trajectories
 from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
+from hammerstein.report.definitions import definitions_lines, plural
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame, write_signals_csv
 from hammerstein.scenario.execute import fade_samples
@@ -194,11 +195,123 @@ def compensator_summary(c):
     if c.get("check") not in (None, "error"):
         parts.append(f"convergence check: {c['check']}")
     known = {"kind", "model", "identify", "gain", "iterations", "feedback", "cutoff_hz", "check"}
-    parts += [f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
-              for k, v in c.items() if k not in known and isinstance(v, (str, int, float))]
+    parts += [_key_words(c, k, v) for k, v in c.items()
+              if k not in known and isinstance(v, (str, int, float))]
     if entry is not None and entry.summary is not None:
         parts += entry.summary(c)
     return f"{kind}: {', '.join(parts)}"
+
+
+_INVERSION_WORDS = {"zpetc": "G inverted by ZPETC", "stable": "G inverted by stable inversion"}
+
+
+def _creep_words(c, which):
+    """What ``creep = which`` of a Hammerstein compensator inverts, in words
+    (:func:`hammerstein.scenario.registry._spec_creep`'s rule)."""
+    if which == "none":
+        return "creep not inverted"
+    if which == "plant":
+        return "the plant's true creep inverted (an oracle)"
+    dyn = c.get("dynamics", "identified" if c.get("model") == "identified" else "plant")
+    ident = c.get("identify") or {}
+    if dyn == "identified" and c.get("model") == "identified" and "records" in ident:
+        return "the identified creep inverted" if ident.get("creep") else "creep not inverted"
+    if dyn in ("plant", "identified"):
+        return "creep not inverted"
+    return "the creep of the dynamics file inverted, if it has one"
+
+
+def _key_words(c, k, v):
+    """One more setting of a compensator table in words (``inversion``, ``creep``...)."""
+    if k == "dynamics":
+        return {"identified": "dynamics G identified",
+                "plant": "the plant's true dynamics G"}.get(v, f"dynamics G from {v}")
+    if k == "inversion" and v in _INVERSION_WORDS:
+        return _INVERSION_WORDS[v]
+    if k == "creep":
+        return _creep_words(c, v)
+    if k == "fade_in" and isinstance(v, (int, float)):
+        return f"fade-in {_num(v, 's')}"
+    if k == "limits":
+        return f"amplifier limits: {v}"
+    return f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+
+
+def _terms(results):
+    """The :data:`hammerstein.report.definitions.TERM_WORDS` keys the report's words use."""
+    terms = []
+    for r in results:
+        c = getattr(r.spec, "compensator_spec", None) or {}
+        if isinstance(c.get("gain"), str):
+            terms.append(f"{c['gain']} gain")
+        if c.get("kind") == "hammerstein":
+            inv = c.get("inversion", "zpetc")
+            terms.append("ZPETC" if inv == "zpetc" else "stable inversion")
+        if getattr(r.spec, "plant_spec", None) is not None:
+            terms.append("hammerstein plant")
+    return list(dict.fromkeys(terms))
+
+
+def _metric_kinds(results):
+    """Metric -> the reference kinds of the cases holding it (what its percentage divides by)."""
+    kinds = {}
+    for r in results:
+        kind = (getattr(r.spec, "signal_spec", None) or {}).get("kind")
+        if getattr(r.spec, "mode", None) != "reference" or kind is None:
+            continue
+        for row in r.metrics:
+            kinds.setdefault(row["metric"], []).append(str(kind))
+    return kinds
+
+
+def settle_words(spec):
+    """Where a case's metrics start: ``4 periods: t ≥ 80 ms`` (from t = 0, the fade-in counted).
+
+    Parameters
+    ----------
+    spec : hammerstein.scenario.validate.CaseSpec
+        A resolved case.
+
+    Returns
+    -------
+    str
+        The ``settle_periods``, the time of the window's first sample
+        (``round(settle_periods × P) × T``) and, when the case's fade-in
+        ends after that sample, that time.
+    """
+    T = spec.plant.sampling_period
+    start = int(round(spec.settle_periods * spec.period_samples))
+    kind = (getattr(spec, "signal_spec", None) or {}).get("kind")
+    word = "line" if kind == "raster" and spec.mode == "reference" else "period"
+    text = f"{plural_number(spec.settle_periods, word)}: t ≥ {_time(start * T)}"
+    if spec.mode == "reference":
+        try:
+            fade = fade_samples(spec)
+        except Exception:      # noqa: BLE001 - a words helper never fails a report
+            fade = 0
+        if fade > start:
+            text += f" (the fade-in ends later, at t = {_time(fade * T)})"
+    return text
+
+
+def plural_number(x, word):
+    """``"1 period"``, ``"1.5 periods"``, ``"4 periods"``.
+
+    Parameters
+    ----------
+    x : float
+    word : str
+
+    Returns
+    -------
+    str
+    """
+    return f"{x:g} {word if float(x) == 1 else word + 's'}"
+
+
+def _time(t):
+    """A time in s or ms, 4 significant digits."""
+    return f"{t:.4g} s" if t >= 1 else f"{t * 1e3:.4g} ms"
 
 
 def _compensator_summary(spec):
@@ -222,14 +335,18 @@ def _join_numbers(values, unit):
 
 
 def _signal_words(rs, unit, fallback):
-    """'10 V sines at 50, 100 Hz' for the cases of one figure (one signal kind)."""
+    """'10 V sines at 50, 100 Hz' for the cases of one figure (one signal kind);
+    'a 10 V sine at 50 Hz' for one case."""
     kinds = {str(r.spec.signal_spec.get("kind")) for r in rs}
     amps = [r.spec.signal_spec.get("amplitude") for r in rs]
     freqs = [r.spec.signal_spec.get("frequency") for r in rs]
     if len(kinds) != 1 or any(not isinstance(v, (int, float)) or isinstance(v, bool)
                               for v in amps + freqs):
         return fallback
-    return f"{_join_numbers(amps, unit)} {kinds.pop()}s at {_join_numbers(freqs, 'Hz')}"
+    kind = kinds.pop()
+    if len(rs) == 1:
+        return f"a {_join_numbers(amps, unit)} {kind} at {_join_numbers(freqs, 'Hz')}"
+    return f"{_join_numbers(amps, unit)} {kind}s at {_join_numbers(freqs, 'Hz')}"
 
 
 def _drive_summary(rs):
@@ -454,10 +571,10 @@ def start_lines(results, atol=1e-9):
             and np.size(r.inputs) else 0.0
         if fade > 0 and u0 > 1e-6:
             # faded from 0 µm, not from the model's output at 0 V: the first voltage is a step
-            text = (f"faded in from 0 µm over {fade * T * 1e3:.4g} ms ({fade} samples), which "
-                    f"is not its compensator's model at rest: the drive starts {u0:.3g} V from "
-                    f"0 V in one sample (`hammerstein compensate` fades in from the model's "
-                    f"output at 0 V)")
+            text = (f"the reference is faded in from 0 µm over {fade * T * 1e3:.4g} ms "
+                    f"({fade} samples), but the compensator's model does not rest at 0 µm at "
+                    f"0 V, so the drive jumps from 0 V to {u0:.3g} V in the first sample "
+                    f"(`hammerstein compensate` instead fades in from the model's output at 0 V)")
         elif fade > 0:
             text = f"faded in from rest over {fade * T * 1e3:.4g} ms ({fade} samples)"
         elif step <= atol:
@@ -465,7 +582,7 @@ def start_lines(results, atol=1e-9):
         else:
             at = ", ".join(f"{n} = {v:.4g} µm" for n, v in zip(names, first))
             text = (f"with a step at t = 0: the reference starts at {at}, {step:.4g} µm from "
-                    f"rest in one sample (the paper's abrupt start; the hardware commands "
+                    f"rest in one sample (as in the paper's figures; the hardware commands "
                     f"never do this: `hammerstein compensate` fades in over a duration)")
         groups.setdefault(text, []).append(r.name)
     if not groups:
@@ -494,6 +611,8 @@ def write_report(scenario, results, directory, jobs=None):
     jobs = FigureJobs() if jobs is None else jobs
     frame = metrics_frame(results)
     safe_write(directory / "metrics.csv", frame.to_csv(index=False), "metrics file")
+    shown = list(dict.fromkeys(frame["metric"]))         # the sweep tables show them as well
+    kinds, terms = _metric_kinds(results), _terms(results)
     sweep_lines = sweep_report_lines(scenario, results, directory, frame, jobs)
     results = [r for r in results if getattr(r.spec, "sweep", None) is None]
     frame = frame[frame["case"].isin([r.name for r in results])]
@@ -501,37 +620,55 @@ def write_report(scenario, results, directory, jobs=None):
         write_signals_csv(directory / f"timeseries-{r.name}.csv", timeseries_columns(r))
     figs = _figures(scenario, results, directory, jobs) if results else []
     figs += _scan_figures(scenario, results, directory, jobs)
-    lines = [f"# {markdown_escape(scenario.title)}", ""]
+    lines = [f"# {markdown_text(scenario.title)}", ""]
     if scenario.description:
         lines += [scenario.description.strip(), ""]
-    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, seed {scenario.seed}).",
-              "Metrics are computed after `settle_periods` periods; loop metrics over the last "
-              "full period. The Euclidean error is ||Y_r - Y|| per sample (docs/metrics.md; the "
-              "paper's ε is not a distance and is not used).", "", "## Cases", ""]
-    table = pd.DataFrame([{
-        "case": r.name,
-        "signal": _signal_summary(r.spec),
-        "plant": f"{r.spec.plant_spec.get('preset')} ({_plant_label(r.spec)})",
-        "compensator": _compensator_summary(r.spec),
-        "samples": r.spec.time.size,
-        "status": ("ok" if r.divergence is None else
-                   f"DIVERGED at sample {r.divergence.sample} "
-                   f"(t = {r.diverged_at * 1e3:.3g} ms): {r.divergence.reason}"),
-    } for r in results])
-    lines += [markdown_table(table), ""] if results else ["(sweep cases only; see below)", ""]
+    lines += [f"Scenario `{scenario.path}` (name `{scenario.name}`, seed {scenario.seed}).", ""]
+    lines += definitions_lines(shown, kinds, terms=terms, paper=True)
+    if results:
+        table = pd.DataFrame([{
+            "case": r.name,
+            "signal": _signal_summary(r.spec),
+            "plant": f"{r.spec.plant_spec.get('preset')} ({_plant_label(r.spec)})",
+            "compensator": _compensator_summary(r.spec),
+            "samples": r.spec.time.size,
+            "metrics from": settle_words(r.spec),
+            "status": ("ok" if r.divergence is None else
+                       f"DIVERGED at sample {r.divergence.sample} "
+                       f"(t = {r.diverged_at * 1e3:.3g} ms): {r.divergence.reason}"),
+        } for r in results])
+        lines += ["## Cases", "", markdown_table(table), ""]
     lines += start_lines(results)
-    notes = [(r.name, w) for r in results for w in dict.fromkeys(r.warnings)]
-    if notes:
-        lines += ["Warnings:", ""] + [f"- `{n}`: {w}" for n, w in notes] + [""]
-    modes = [(r.name, n) for r in results for n in r.spec.notes]
-    if modes:
-        lines += ["Notes:", ""] + [f"- `{n}`: {w}" for n, w in modes] + [""]
-    lines += ["## Figures", ""]
+    lines += _grouped_lines("Warnings:", [(r.name, w) for r in results
+                                         for w in dict.fromkeys(r.warnings)])
+    lines += _grouped_lines("Notes:", [(r.name, n) for r in results for n in r.spec.notes])
+    if figs:
+        lines += ["## Figures", ""]
     for caption, fname in figs:
         lines += [f"### {caption}", "", f"![{caption}]({fname})", ""]
     lines += sweep_lines
-    lines += ["## Metrics", "", "Long format in `metrics.csv`; time series in "
-              "`timeseries-<case>.csv`.", ""]
+    files = "All metrics in long format: `metrics.csv`"
+    if results:
+        files += (f"; the time series of the {plural(len(results), 'case')} above in "
+                  f"`timeseries-<case>.csv`")
+    elif sweep_lines:
+        files += " (the sweep tables above are wide views of its rows)"
+    lines += ["## Metrics", "", files + ".", ""]
     if not frame.empty:
         lines += [markdown_table(frame), ""]
     safe_write(directory / "report.md", "\n".join(lines), "report")
+
+
+def _grouped_lines(heading, pairs):
+    """``heading`` and one bullet per distinct message, naming the cases that raised it."""
+    groups = {}
+    for case, text in pairs:
+        groups.setdefault(text, []).append(case)
+    if not groups:
+        return []
+    out = [heading, ""]
+    for text, cases in groups.items():
+        names = ", ".join(f"`{c}`" for c in cases[:6]) + (
+            f" and {len(cases) - 6} more" if len(cases) > 6 else "")
+        out.append(f"- {names}: {text}")
+    return out + [""]

@@ -20,6 +20,8 @@ import pandas as pd
 from hammerstein.core.files import safe_write
 from hammerstein.signals.metrics import UNITS
 from hammerstein.report import figures as plots
+from hammerstein.report.definitions import plural
+from hammerstein.report.messages import group_warnings
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
 
@@ -136,8 +138,14 @@ def _compensator_words(c):
     kind = str(c.get("kind", "multivariable"))
     model = c.get("model", "plant")
     if model == "identified":
-        f = c.get("identify", {}).get("frequency")
-        where = f"identified at {f:g} Hz" if isinstance(f, (int, float)) else "identified"
+        ident = c.get("identify") or {}
+        f = ident.get("frequency")
+        if ident.get("records") == "excitation":
+            where = "identified from the excitation records"
+        elif ident.get("records") == "files":
+            where = "identified from measured records"
+        else:
+            where = f"identified at {f:g} Hz" if isinstance(f, (int, float)) else "identified"
     elif model == "plant":
         where = "plant's model"
     else:
@@ -303,6 +311,79 @@ def stability_figure(frame, title):
     return fig
 
 
+def _shown_columns(table):
+    """The sweep table without its empty columns and the rows of no shown metric.
+
+    The channels of the inputs (``ux``, ``uy``) hold only ``peak_input`` and
+    ``peak_slew``, which the report's table does not show; a column without
+    a value, or an ``axis`` column of ``-`` throughout (a reference on two
+    axes), says nothing.
+    """
+    index = [c for c in ("frequency_hz", "compensator", "axis", "channel") if c in table]
+    values = [c for c in table.columns if c not in index]
+    out = table[table[values].notna().any(axis=1)] if values else table
+    drop = [c for c in values if out[c].isna().all()]
+    drop += [c for c in ("axis", "compensator") if c in out and (out[c] == "-").all()]
+    return out.drop(columns=drop).reset_index(drop=True)
+
+
+def _settle_line(results):
+    """Where the metrics of a sweep's cases start (one line), or ''."""
+    if not results:
+        return ""
+    settles = sorted({float(r.spec.settle_periods) for r in results})
+    starts = {}
+    for r in results:
+        T = r.spec.plant.sampling_period
+        f = (r.spec.signal_spec or {}).get("frequency")
+        key = f if isinstance(f, (int, float)) else None
+        starts[key] = int(round(r.spec.settle_periods * r.spec.period_samples)) * T
+    periods = "/".join(f"{v:g}" for v in settles)
+    words = f"Metrics from sample round(settle_periods × P), settle_periods = {periods} " \
+            f"(counted from t = 0, the fade-in included)"
+    known = sorted((f, t) for f, t in starts.items() if f is not None)
+    if known:
+        shown = known if len(known) <= 3 else [known[0], known[-1]]
+        at = ", ".join(f"t ≥ {_time(t)} at {f:g} Hz" for f, t in shown)
+        words += f": {at}" if len(known) <= 3 else f": from t ≥ {_time(shown[0][1])} at " \
+            f"{shown[0][0]:g} Hz to t ≥ {_time(shown[1][1])} at {shown[1][0]:g} Hz"
+    return words + "."
+
+
+def _time(t):
+    return f"{t:.4g} s" if t >= 1 else f"{t * 1e3:.4g} ms"
+
+
+def _warning_lines(spec, results):
+    """The warnings of a sweep's cases, one bullet per message template
+    (:func:`hammerstein.report.messages.group_warnings`) naming the compensators,
+    axes and frequencies of the cases it applies to."""
+    groups = group_warnings((r.name, w) for r in results for w in dict.fromkeys(r.warnings))
+    if not groups:
+        return []
+    by_case = {c["case"]: c for c in spec.cases}
+    lines = ["Warnings:", ""]
+    for g in groups:
+        rows = [by_case[c] for c in g.cases if c in by_case]
+        where = []
+        labels = list(dict.fromkeys(str(r["compensator"]) for r in rows
+                                    if r.get("compensator") not in (None, "-")))
+        if labels:
+            where.append(f"{'compensator' if len(labels) == 1 else 'compensators'} "
+                         f"{', '.join(labels)}")
+        axes = list(dict.fromkeys(str(r["axis"]) for r in rows if r.get("axis") not in (None, "-")))
+        if axes and len(spec.axes) > 1:
+            where.append(f"{'axis' if len(axes) == 1 else 'axes'} {', '.join(axes)}")
+        values = sorted({float(r["frequency_hz"]) for r in rows
+                         if isinstance(r.get("frequency_hz"), (int, float))})
+        if values and len(spec.frequencies) > 1:
+            unit = _PARAMETER_UNITS.get(getattr(spec, "parameter", "frequency"), "")
+            where.append(", ".join(_fmt(v) for v in values) + (f" {unit}" if unit else ""))
+        lines.append(f"- {plural(g.count, 'case')}" + (f" ({'; '.join(where)})" if where else "")
+                     + f": {g.message}")
+    return lines + [""]
+
+
 def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
     """Write the sweep CSVs/figures and the stability map of a scenario.
 
@@ -355,15 +436,24 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
         lines += [f"## Sweep `{spec.name}`", ""]
         if spec.description:
             lines += [spec.description.strip(), ""]
-        what = [f"compensators {', '.join(l or '-' for l in spec.labels)}"]
+        mine = [r for r in results if r.name in {c["case"] for c in spec.cases}]
+        if spec.labels == [None]:      # the scenario's compensator: say which
+            table0 = getattr(mine[0].spec, "compensator_spec", None) if mine else None
+            what = [f"compensator: {_compensator_words(table0)}" if table0
+                    else "no compensator (open-loop drives)"]
+        else:
+            what = [f"compensators {', '.join(spec.labels)}"]
         if spec.axes != [None]:
             what.append(f"axes {', '.join(str(a) for a in spec.axes)}")
         if spec.frequencies and getattr(spec, "parameter", "frequency") != "frequency":
             what.append(f"{spec.parameter} {', '.join(_fmt(f) for f in spec.frequencies)}")
         elif spec.frequencies:
             what.append(f"frequencies {', '.join(_fmt(f) for f in spec.frequencies)} Hz")
-        lines += [f"{len(spec.cases)} cases: {'; '.join(what)}. Table: `{csv}` "
+        lines += [f"{plural(len(spec.cases), 'case')}: {'; '.join(what)}. Table: `{csv}` "
                   f"(long rows also in `metrics.csv`). Diverged cases: {n_div}.", ""]
+        settle = _settle_line(mine)
+        if settle:
+            lines += [settle, ""]
         if png:
             lines += [f"![{spec.metric} vs frequency]({png})", ""]
         else:  # a comparison of compensators: the table itself
@@ -371,15 +461,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
                                 "max_abs_error", "cross_coupling_peak_to_peak", "rms_euclidean_error",
                                 "max_euclidean_error", "max_euclidean_error_percent",
                                 "diverged_at_time") if c in table]
-            lines += [markdown_table(table[keep]), ""]
-        names = [c["case"] for c in spec.cases]
-        warned = {}
-        for r in results:
-            if r.name in names:
-                for w in dict.fromkeys(r.warnings):
-                    warned[w] = warned.get(w, 0) + 1
-        if warned:
-            lines += ["Warnings:", ""] + [f"- {n} case(s): {w}" for w, n in warned.items()] + [""]
+            lines += [markdown_table(_shown_columns(table[keep])), ""]
+        lines += _warning_lines(spec, mine)
     if smap is not None:
         safe_write(directory / "stability-map.csv", smap.to_csv(index=False, float_format="%.6g"),
                    "table")

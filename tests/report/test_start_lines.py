@@ -61,4 +61,5 @@ def test_a_fade_from_0_um_off_the_models_rest_is_said_to_step(tmp_path):
     series = pd.read_csv(tmp_path / "out" / "starts" / "timeseries-circle-faded.csv", comment="#")
     u0 = float(np.max(np.abs(series[["ux_V", "uy_V"]].to_numpy()[0])))
     assert u0 > 0.1
-    assert "faded in from 0 µm over 4 ms" in faded and f"starts {u0:.3g} V from 0 V" in faded
+    assert "faded in from 0 µm over 4 ms" in faded and f"jumps from 0 V to {u0:.3g} V in the first sample" in faded
+    assert "which is not its compensator" not in faded
