@@ -19,7 +19,8 @@ import numpy as np
 from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator,
                                            PerAxisInverseCompensator, StaticGainCompensator,
                                            diagonal_compensator)
-from hammerstein.core.files import FileLimitError, bounded_read_bytes, output_problem, safe_write
+from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_bytes,
+                                    output_problem, safe_write)
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.compensation.mixed_compensators import MIXED_KINDS, mixed_compensator
@@ -350,8 +351,10 @@ def write_files(out_dir, files, marker, force=False):
     """Write generated files into a directory, each only where allowed.
 
     Every target is checked first (:func:`check_owned`), so a refusal writes
-    nothing; each file is then written through an exclusive temporary file
-    and a rename (:func:`hammerstein.core.files.safe_write`).
+    nothing; each file is then written through an exclusive temporary file,
+    and every temporary is renamed over its target only when all are written
+    (:func:`hammerstein.core.files.all_or_nothing`): an error or an
+    interruption leaves the old header and source together.
 
     Parameters
     ----------
@@ -382,11 +385,14 @@ def write_files(out_dir, files, marker, force=False):
             raise ExportError(problem)
         check_owned(out / fname, marks[fname], force)
     written = []
-    for fname, data in files.items():
-        try:
-            written.append(safe_write(out / fname, data, "generated file", root=out))
-        except FileLimitError as exc:
-            raise ExportError(str(exc)) from None
-        except OSError as exc:
-            raise ExportError(f"{out / fname}: cannot write ({exc.strerror or exc})") from None
+    # the header and the source together, or neither: an interruption between the two renames
+    # left a float header beside the double source of the export before, which compiled
+    with all_or_nothing():
+        for fname, data in files.items():
+            try:
+                written.append(safe_write(out / fname, data, "generated file", root=out))
+            except FileLimitError as exc:
+                raise ExportError(str(exc)) from None
+            except OSError as exc:
+                raise ExportError(f"{out / fname}: cannot write ({exc.strerror or exc})") from None
     return written
