@@ -338,14 +338,17 @@ def _same_drive(u, kept):
     return bool(np.all(np.max(np.abs(a - b), axis=1) <= DRIVE_TOLERANCE * span))
 
 
-def _check_history(history_dir, state, fingerprint, u, best_u):
+def _check_history(history_dir, state, fingerprint, u, best_u, y=None):
     """Refuse a trial that does not belong to the history's learning (a DataFileError).
 
     ``fingerprint`` is the faded reference's (:func:`_fingerprint`); ``best_u`` is called
-    for the best trial's drive (m, N) [V] when the last drive differs.
+    for the best trial's drive (m, N) [V] and measured response (p, N) [µm] when the last
+    drive differs.
 
     The reference (faded as the drive was) must have the history's fingerprint, and the
-    applied drive must be the last one written or the best trial's (re-measured).
+    applied drive must be the last one written or the best trial's re-measured: the best
+    trial's own measurement ``y`` again (the same files given twice, e.g. after a run that
+    said ``interrupted`` once everything was written) would be learnt twice.
     """
     if state is None:
         return
@@ -353,10 +356,14 @@ def _check_history(history_dir, state, fingerprint, u, best_u):
     if state["reference"] is not None and state["reference"] != fingerprint:
         raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
                             f"({STATE_FILE}); choose a new --history directory for this one")
-    if state["drive"] is None or _same_drive(u, state["drive"]):
-        return
-    best_u = best_u()
-    if best_u is not None and _same_drive(u, _drive_samples(best_u)[0]):
+    best_u, best_y = best_u()
+    is_best = best_u is not None and _same_drive(u, _drive_samples(best_u)[0])
+    if is_best and y is not None and best_y is not None and np.shape(y) == np.shape(best_y) \
+            and np.allclose(y, best_y, rtol=1e-12, atol=1e-12):
+        raise DataFileError(f"--measured: the best trial of {d} already holds this drive and "
+                            f"this measurement: learnt once, its next drive is the last one {d} "
+                            f"wrote; apply that one (or measure this drive again)")
+    if state["drive"] is None or _same_drive(u, state["drive"]) or is_best:
         return
     raise DataFileError(f"--drive: not the drive the last trial of {d} wrote, nor its best "
                         f"trial's ({BEST_FILE}): this history belongs to another learning (another "

@@ -112,8 +112,8 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             rest_output, shape_drive, signals_csv)
 from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
                                                   learnt_names, rest_lead_text, shaped_target)
-from hammerstein.core.files import (all_or_nothing, guard_inputs, output_problem,
-                                    removed_if_failed, safe_write)
+from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, locked,
+                                    output_problem, removed_if_failed, safe_write)
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
                                           error_summary, estimate_delay, harmonic_base_gains,
                                           inverse_gain_ratio, period_drift, periodic_average,
@@ -407,6 +407,24 @@ def _drift_note(error, period, steady):
 
 
 def _handle(args):
+    """One trial; with ``--history``, under an advisory lock on the history's parent directory.
+
+    Two ``learn --history DIR`` at once both read the same last trial and both appended trial
+    k + 1: one was lost without a word. The second now waits for the first, reads the history
+    it left, and is refused (its drive is no longer the last one written).
+    """
+    parent = Path(args.history).absolute().parent if args.history else None
+    if parent is None or not parent.is_dir():
+        return _learn(args)
+    try:
+        with locked(Path(args.history).absolute()):
+            return _learn(args)
+    except FileLimitError as exc:          # the lock not obtained within its timeout
+        print_err(f"hammerstein learn: error: --history: {exc}")
+        return 1
+
+
+def _learn(args):
     problem = out_file_problem(args.out, "drive file", args.force)
     if not problem:
         guard_inputs(args.actuator, args.reference, args.drive, args.measured)
@@ -519,7 +537,7 @@ def _handle(args):
         fingerprint = _fingerprint(target)
         if args.history:
             _check_history(args.history, state, fingerprint, u,
-                           lambda: _read_best(args.history, model, u.shape, y.shape, N)[0])
+                           lambda: _read_best(args.history, model, u.shape, y.shape, N)[:2], y)
         score, score_noise = _judged_error(aim, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise

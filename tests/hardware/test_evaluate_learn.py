@@ -390,3 +390,50 @@ def test_a_planar_reference_on_a_one_axis_stage_says_what_to_use():
         _planar_outputs({}, ["x"])
     with pytest.raises(SignalError, match=r"expected two of the plant's outputs \['x', 'y'\]"):
         _planar_outputs({"outputs": ["x", "z"]}, ["x", "y"])
+
+
+def test_the_same_trial_given_twice_is_not_learnt_twice(tmp_path):
+    # a learn that said "interrupted" once every file was written was run again on the same
+    # drive and measurement: the history held that trial twice
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    args = ("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv", "--measured",
+            "y0.csv", "--outputs", "x=x_meas,y=y_meas", "--history", "hist")
+    assert _cli(*args, "--out", "u1.csv", cwd=tmp_path).returncode == 0
+    res = _cli(*args, "--out", "u1b.csv", cwd=tmp_path)
+    assert res.returncode == 1 and "already holds this drive and this measurement" in res.stderr
+    assert not (tmp_path / "u1b.csv").exists()
+    assert sorted(pd.read_csv(tmp_path / "hist/history.csv", comment="#")["iteration"]) == [0, 0]
+    # the same drive measured again (new noise) is a new trial of the best drive
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0b.csv", 0, 1)
+    assert _cli(*args[:-4], "--measured", "y0b.csv", "--outputs", "x=x_meas,y=y_meas",
+                "--history", "hist", "--out", "u1c.csv", cwd=tmp_path).returncode == 0
+
+
+@pytest.mark.slow  # two processes at once
+def test_two_learns_into_one_history_at_once_lose_no_trial(tmp_path):
+    # both read trial 0 and both appended trial 1: one was lost without a word
+    import os
+    import sys
+    from pathlib import Path
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    base = ("learn", "rakotondrabe-2dof", "--reference", REF, "--outputs", "x=x_meas,y=y_meas",
+            "--history", "hist")
+    assert _cli(*base, "--drive", "u0.csv", "--measured", "y0.csv", "--out", "u1.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 0, 1)
+    _hardware(tmp_path / "u1.csv", tmp_path / "y1b.csv", 0, 2)     # measured twice
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    procs = [subprocess.Popen([sys.executable, "-m", "hammerstein", *base, "--drive", "u1.csv",
+                               "--measured", m, "--out", o], cwd=tmp_path, env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for m, o in (("y1.csv", "u2a.csv"), ("y1b.csv", "u2b.csv"))]
+    codes = [p.wait(timeout=300) for p in procs]
+    trials = sorted(set(pd.read_csv(tmp_path / "hist/history.csv", comment="#")["iteration"]))
+    # one after the other: the first learns trial 1; the second, whose drive is no longer
+    # the last one written, is refused (or, were it the best, learnt as trial 2): never lost
+    done = sum(c == 0 for c in codes)
+    assert trials == list(range(1 + done)), (codes, trials, [p.stderr.read() for p in procs])
