@@ -22,7 +22,7 @@ from hammerstein.identification._record_split import _as_records, _excitation
 
 #: Defaults of the dynamics identified from records (:func:`identify_record_dynamics`).
 DYNAMICS_DEFAULTS = {"max_order": 10, "unit_dc_gain": True, "low_pole_fraction": 0.5,
-                     "cancel_tolerance": 0.01}
+                     "cancel_tolerance": 0.01, "require_continuous": True}
 
 
 @dataclass
@@ -90,7 +90,9 @@ def identify_record_dynamics(fit, records, name="identified", creep=None, **opti
     * **no pole outside what the data show**: poles below half the lowest
       excited frequency (estimated from the input spectrum) and modes
       whose largest gain in the band is below 1 % of G's (near pole-zero
-      cancellations) are removed and B refitted; unstable orders are rejected.
+      cancellations) are removed and B refitted; unstable orders are rejected,
+      and so are orders with a real pole at z <= 0, which has no continuous
+      ZOH equivalent for the preset (a mode at or beyond Nyquist, or noise).
 
     Parameters
     ----------
