@@ -88,3 +88,60 @@ def test_a_fixed_order_without_a_zoh_equivalent_says_why():
     with pytest.raises(ValueError, match=f"order {bad[0]} is rejected: a real pole at z <= 0"):
         _identify(ins, outs, order=bad[0])
 
+
+def _multi(ins, outs, volts_per_um=0.25):
+    """MultiRecords [V] -> [µm] of the records (the input in volts, as a user's files hold)."""
+    from hammerstein.io.datafiles import MultiRecord
+    return [MultiRecord(np.arange(u.shape[1]) * T, volts_per_um * u, y, ("ux", "uy"), ("x", "y"),
+                        T, f"multisine-{i}.csv") for i, (u, y) in enumerate(zip(ins, outs))]
+
+
+def _hysteresis_record(peak=10.0):
+    from hammerstein.io.datafiles import MultiRecord
+    t = np.arange(5000) * T
+    u = np.vstack([peak * np.sin(2 * np.pi * t), np.zeros(t.size)])
+    return MultiRecord(t, u, 4 * u, ("ux", "uy"), ("x", "y"), T, "hysteresis-ux.csv")
+
+
+def test_the_records_noise_and_the_fit_it_allows_are_measured_on_their_periods():
+    """150 nm of noise is read back from the differences between the multisines' periods,
+    and the held-out fit a perfect model reaches, 100 (1 - noise / output RMS), from it."""
+    from hammerstein.identification._broadband_check import broadband_conditions
+    ins, clean = lowrate_records(noise=0.0)
+    _, noisy = lowrate_records(noise=0.15)
+    c = broadband_conditions(_multi(ins, noisy), [_hysteresis_record()])
+    assert c["noise_rms"] == pytest.approx([0.15, 0.15], rel=0.1)
+    ceiling = np.mean([100 * (1 - 0.15 / np.std(np.concatenate([y[k] for y in noisy])))
+                       for k in range(2)])
+    assert c["fit_ceiling_percent"] == pytest.approx(ceiling, abs=3)
+    assert c["band_hz"][1] == pytest.approx(2400, rel=0.02) and c["nyquist_hz"] == 2500
+    share = 0.25 * 1.2 / 10.0                                   # 0.3 V of 10 V
+    assert c["amplitude_share"][1] == pytest.approx(share, rel=1e-6)
+
+
+def test_a_band_far_below_the_modes_is_named_with_f_max():
+    """Multisines narrowed to 230 Hz (a slew rate): the cause names the band, the Nyquist
+    frequency, the files and --f-max."""
+    from hammerstein.identification._broadband_check import broadband_conditions, records_cause
+    ins, outs = lowrate_records(f_max=230.0, amplitude=12.0)
+    cause = records_cause(broadband_conditions(_multi(ins, outs), [_hysteresis_record()]))
+    assert cause is not None and "--f-max" in cause and "multisine-0.csv" in cause
+    top = float(cause.split("excite up to ")[1].split(" Hz")[0])
+    assert 225 <= top <= 240 and "Nyquist frequency 2500 Hz" in cause
+
+
+def test_a_poor_fit_of_noisy_slew_scaled_records_names_the_noise_and_the_mode_not_the_slew():
+    """The records were scaled down to a slew rate (3 % of the hysteresis records' amplitude):
+    the warning names the noise ceiling and a first mode at 0.66 of Nyquist, and does not
+    advise --slew-rate again."""
+    from hammerstein.identification._broadband_check import broadband_conditions
+    from hammerstein.identification.identification_pipeline import dynamics_fit_warning
+    ins, outs = lowrate_records(noise=0.15)
+    c = broadband_conditions(_multi(ins, outs), [_hysteresis_record()])
+    summary = {"held_out_fit_percent": -13.5,
+               "modes": [{"frequency_hz": 1650.0, "damping_ratio": 0.03},
+                         {"frequency_hz": 1850.0, "damping_ratio": 0.025}]}
+    line = dynamics_fit_warning(summary, c)
+    assert "-13.5 %" in line and "--slew-rate" not in line
+    assert "caps the held-out fit of any model" in line and "--periods" in line
+    assert "1650 Hz, sits at 0.66 of the Nyquist frequency 2500 Hz" in line
