@@ -423,6 +423,8 @@ def _handle(args):
         check_reference_first(args.actuator, args.sampling_period, args.reference, args.time,
                               args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
+        if getattr(plant, "dynamics_problem", None):
+            print_err(f"warning: {plant.dynamics_problem}")
         model = plant.hysteresis
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         T = plant.sampling_period
