@@ -255,6 +255,8 @@ def _handle(args):
         return 1
     if note:
         print_err(note)
+    if kind == "hammerstein" and getattr(plant, "dynamics_problem", None):
+        print_err(f"warning: {plant.dynamics_problem}")
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
     for line in drive.notes:

@@ -33,7 +33,8 @@ import numpy as np
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
                                             UNIPOLAR_STAIRCASE, ExcitationRecord, around,
-                                            demagnetising_cycle, excitation_set, peak_slew)
+                                            _slew_limited_multisine, demagnetising_cycle,
+                                            excitation_set, multisine, peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     name_problem, removed_if_failed, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -196,7 +197,8 @@ def _owned(directory):
     return {ln.strip() for ln in lines[1:] if ln.strip()}
 
 
-def readme_text(records, names, amplitude, sampling_period, reversals=(), centre=None):
+def readme_text(records, names, amplitude, sampling_period, reversals=(), centre=None,
+                band=None):
     """The README written with the excitation files: what to measure, how to identify.
 
     Parameters
@@ -214,6 +216,9 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
         records (fractions of the amplitude; empty: none).
     centre : numpy.ndarray, shape (m,), optional
         The middle of each input's range [V] (``--range``); None or zeros: ``[-A, A]``.
+    band : dict, optional
+        What a slew rate did to the multisines' band (``band_summary``): the README then
+        says how far the band reaches and what ``--f-max`` does.
 
     Returns
     -------
@@ -266,7 +271,7 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
            f"and every drive | every input at once: a sine decaying from the amplitude to "
            f"{'the middle of the range, then back to rest and 1 s there' if centred else '0 V, then 1 s at 0 V'}"
            f" | {dur['demagnetise']:g} s |"] if "demagnetise" in by_kind else []),
-        "", *_slew_lines(records, names, T), "## What to measure", "",
+        "", *_slew_lines(records, names, T, band), "## What to measure", "",
         *(["0. Before each file below, and later before every drive you play (`hammerstein "
            "compensate`, `learn`), play `demagnetise.csv` (nothing to record). A model starts "
            "from the demagnetised state; an input left idle in a record, or a drive, would "
@@ -302,9 +307,102 @@ def _output_names(m):
     return ["x", "y", "z"][:m] if m <= 3 else [f"y{i + 1}" for i in range(m)]
 
 
-def _slew_lines(records, names, T):
+def _multisine_scale(T, amplitude, slew_rate, f_max, f_min, periods, seed):
+    """The scale ``excitation_set`` gives a multisine up to ``f_max`` within ``slew_rate``
+    (its estimation record's phases): a wider band, a lower amplitude."""
+    _, one, _ = multisine(T, amplitude, f_min, f_max, periods=periods, seed=seed)
+    return _slew_limited_multisine(one, one.size // int(periods), T, float(slew_rate))[1]
+
+
+def band_summary(records, amplitude, sampling_period, slew_rate, f_max=None, f_min=10.0,
+                 periods=4, seed=0):
+    """How far a slew rate let the multisines' band reach, and what ``--f-max`` would keep.
+
+    Parameters
+    ----------
+    records : list of hammerstein.signals.excitation.ExcitationRecord
+        The records written (their multisines' ``scale`` and ``f_max``).
+    amplitude : numpy.ndarray, shape (m,)
+        Full amplitude per input [V].
+    sampling_period : float
+        T [s].
+    slew_rate : float or None
+        ``--slew-rate`` [V/s].
+    f_max : float, optional
+        ``--f-max`` [Hz] (None: the default band, narrowed by the slew rate).
+    f_min : float
+        ``--f-min`` [Hz].
+    periods : int
+        ``--periods``.
+    seed : int
+        ``--seed``.
+
+    Returns
+    -------
+    dict or None
+        None when no multisine was scaled down. Else ``top`` (the band's end [Hz]),
+        ``default`` (the default band's end, ``1 / (4 T)``), ``nyquist`` [Hz],
+        ``narrowed`` (the default band was narrowed: no ``--f-max``), ``share`` (smallest
+        and largest multisine peak, fraction of the full amplitude), ``volts`` (the same
+        [V]), ``slew_rate`` and ``options``: ``(f_max, share)`` of wider bands
+        (``1 / (4 T)`` and ``0.45 / T``) when narrowed.
+    """
+    scaled = [r for r in records if r.kind.startswith("multisine") and r.scale < 1.0]
+    if slew_rate is None or not scaled:
+        return None
+    T = float(sampling_period)
+    amp = float(np.max(amplitude))
+    peaks = [float(np.max(np.abs(r.u))) for r in scaled]
+    out = {"top": max(r.f_max for r in scaled), "default": 0.25 / T, "nyquist": 0.5 / T,
+           "narrowed": f_max is None, "share": (min(peaks) / amp, max(peaks) / amp),
+           "volts": (min(peaks), max(peaks)), "slew_rate": float(slew_rate), "options": []}
+    if out["narrowed"] and out["top"] < out["default"]:
+        for f in (0.25 / T, 0.45 / T):
+            try:
+                share = 0.8 * _multisine_scale(T, 0.8 * amp, slew_rate, f, f_min, periods, seed)
+            except ValueError:
+                continue
+            out["options"].append((f, share))
+    return out
+
+
+def _share_text(lo, hi, scale=100, unit=" %"):
+    return (f"{scale * lo:.2g}{unit}" if np.isclose(lo, hi, rtol=0.05)
+            else f"{scale * lo:.2g}-{scale * hi:.2g}{unit}")
+
+
+def _band_sentences(band):
+    """What the slew rate did to the multisines' band, and what --f-max does (README)."""
+    S, top, nyq = band["slew_rate"], band["top"], band["nyquist"]
+    kept = (f"{_share_text(*band['share'])} of the amplitude "
+            f"({_share_text(*band['volts'], 1, ' V')})")
+    if band["narrowed"] and top < band["default"]:
+        options = ", ".join(f"up to {f:.4g} Hz at {100 * s:.2g} %" for f, s in band["options"])
+        return [f"Within the slew rate {S:g} V/s the multisines reach {top:.4g} Hz only (the "
+                f"default band ends at {band['default']:.4g} Hz, half the Nyquist frequency "
+                f"{nyq:.4g} Hz): the band was narrowed to keep {kept}. Bending modes above "
+                f"{top:.4g} Hz are then not in the records, and `identify --dynamics` cannot "
+                f"identify them. `--f-max HZ` keeps the band up to HZ and lowers the "
+                f"multisines' amplitude instead"
+                + (f" ({options} of the amplitude)" if options else "")
+                + ": their response must then stay well above your sensor's noise "
+                "(`identify` measures the noise between the records' periods; `--periods N` "
+                "averages more of them)."]
+    lines = [f"Within the slew rate {S:g} V/s the multisines keep their band up to {top:.4g} "
+             f"Hz at {kept} (80 % without a slew rate): check that their response stays well "
+             f"above your sensor's noise (`identify` measures the noise between the records' "
+             f"periods and says which held-out fit it allows; `--periods N` averages more of "
+             f"them, a lower `--f-max` keeps more amplitude)."]
+    if top > band["default"]:
+        lines.append(f"Modes above the Nyquist frequency ({nyq:.4g} Hz) fold into the band "
+                     f"unless your sensor low-pass filters them (an anti-alias filter), and "
+                     f"bending modes close to it are sampled at few samples per period.")
+    return lines
+
+
+def _slew_lines(records, names, T, band=None):
     """README lines: each kind's largest slew from rest [V/s], and the multisines a slew rate
-    scaled down."""
+    scaled down (with ``band``, :func:`band_summary`: how far their band reaches)."""
     by_kind = {}
     for r in records:
         fast = max(peak_slew(row, T) for row in r.u)
@@ -318,10 +416,12 @@ def _slew_lines(records, names, T):
         lines += ["The multisines were scaled down to stay within the slew rate: "
                   + ", ".join(f"{r.name} to {100 * r.scale:.3g} % (band to {r.f_max:g} Hz)"
                               for r in scaled)
-                  + " of their amplitude. A multisine's slew grows with its band: without "
+                  + " of their amplitude (80 % of the full one). A multisine's slew grows with its band: without "
                   "`--f-max` the band is narrowed first, until a quarter of the amplitude is "
-                  "kept. Check that it still holds your first bending modes (`--f-max` sets "
-                  "it; the amplitude then pays).", ""]
+                  "kept.", ""]
+        if band is not None:
+            for text in _band_sentences(band):
+                lines += [text, ""]
     return lines
 
 
@@ -401,6 +501,8 @@ def _handler(args):
                                  f"V/s, beyond the slew rate {args.slew_rate:g} V/s; expected a "
                                  f"lower sine frequency")
             records.append(ExcitationRecord("demagnetise", "demagnetise", -1, t, u))
+            band = band_summary(records, amplitude, T, args.slew_rate, args.f_max, args.f_min,
+                                args.periods, args.seed)
         except ValueError as exc:
             raise _Usage(_option_names(str(exc))) from None
         out = Path(args.out)
@@ -426,7 +528,8 @@ def _handler(args):
             safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
             for r, name in zip(records, targets):
                 safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
-            safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals, centre),
+            safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals, centre,
+                                                      band),
                        "README",
                        root=out)
     except (FileLimitError, OSError) as exc:
@@ -439,13 +542,18 @@ def _handler(args):
     for r, name in zip(records, targets):
         print(f"wrote {out / name}: {r.kind}, {r.time.size} samples ({r.time.size * T:g} s)")
     print(f"wrote {out / 'README.md'}")
-    scaled = [r for r in records if r.scale < 1.0]
-    if scaled:
-        scales = [r.scale for r in scaled]
-        print(f"note: the multisines were scaled to {100 * min(scales):.3g}-{100 * max(scales):.3g} "
-              f"% of their amplitude, up to {max(r.f_max for r in scaled):g} Hz, to stay within "
-              f"--slew-rate {args.slew_rate:g} V/s: check that the band holds your first "
-              f"bending modes (README.md)")
+    if band is not None and band["narrowed"] and band["top"] < band["default"]:
+        options = ", ".join(f"{f:.4g} Hz: {100 * s:.2g} %" for f, s in band["options"])
+        print(f"note: within --slew-rate {args.slew_rate:g} V/s the multisines' band reaches "
+              f"{band['top']:.4g} Hz only (default {band['default']:.4g} Hz): bending modes "
+              f"above it cannot be identified from these records; --f-max HZ keeps a wider "
+              f"band at a lower amplitude" + (f" ({options} of the amplitude)" if options else "")
+              + " (README.md)")
+    elif band is not None:
+        print(f"note: within --slew-rate {args.slew_rate:g} V/s the multisines up to "
+              f"{band['top']:.4g} Hz were scaled to {_share_text(*band['share'])} of the amplitude "
+              f"({_share_text(*band['volts'], 1, ' V')}): check their response against your "
+              f"sensor's noise (README.md)")
     return 0
 
 

@@ -725,7 +725,7 @@ def _report(args, fit, records, dyn=None, creep=None):
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):
             print(line)
-        poor = dynamics_fit_warning(dyn.summary)
+        poor = dynamics_fit_warning(dyn.summary, dyn.conditions, ou)
         if poor:
             print_err(f"warning: {poor}")
     if creep is not None:

@@ -311,12 +311,16 @@ def default_q_cutoff(plant):
     matrices = getattr(plant, "matrices", None)
     f1 = first_mode_hz(matrices[0], T) if matrices else None
     cutoff = Q_CUTOFF_MIN_HZ if f1 is None else max(Q_CUTOFF_MIN_HZ, Q_CUTOFF_PER_MODE * f1)
+    wanted = cutoff
     cutoff = min(cutoff, 0.45 / T)
     why = ("the actuator has no oscillatory mode" if f1 is None else
            f"the harmonics the modes amplify are learnt up to {Q_CUTOFF_PER_MODE:g} x the first "
            f"bending mode's damped frequency {f1:.4g} Hz (natural frequency "
            f"{first_mode_hz(matrices[0], T, natural=True):.4g} Hz, as identify and compensate "
            f"name it), and never below {Q_CUTOFF_MIN_HZ:g} Hz")
+    if cutoff < wanted:
+        why += (f", capped at 0.45 x the sampling rate {1 / T:.4g} Hz (that rule asked "
+                f"{wanted:.4g} Hz, beyond what the samples hold)")
     return cutoff, f"note: Q cutoff {cutoff:.4g} Hz because {why} (--q-cutoff-hz sets it)"
 
 
@@ -444,6 +448,8 @@ def _learn(args):
         check_reference_first(args.actuator, args.sampling_period, args.reference, args.time,
                               args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
+        if getattr(plant, "dynamics_problem", None):
+            print_err(f"warning: {plant.dynamics_problem}")
         model = plant.hysteresis
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         T = plant.sampling_period

@@ -19,10 +19,11 @@ from hammerstein.identification.creep_identification import CreepIdentifier, hys
 from hammerstein.simulation import linear_steps
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification._record_split import _as_records, _excitation
+from hammerstein.identification._broadband_check import broadband_conditions, records_cause
 
 #: Defaults of the dynamics identified from records (:func:`identify_record_dynamics`).
 DYNAMICS_DEFAULTS = {"max_order": 10, "unit_dc_gain": True, "low_pole_fraction": 0.5,
-                     "cancel_tolerance": 0.01}
+                     "cancel_tolerance": 0.01, "require_continuous": True}
 
 
 @dataclass
@@ -49,6 +50,9 @@ class RecordDynamics:
         Frequencies of the measured H1 estimate [Hz].
     frf : numpy.ndarray, shape (p, p, n_freq)
         Measured H1 frequency-response estimate of G (complex) [µm/µm].
+    conditions : dict, optional
+        Band, amplitude and noise of the broadband records
+        (:func:`hammerstein.identification._broadband_check.broadband_conditions`).
     """
 
     identifier: object
@@ -57,6 +61,7 @@ class RecordDynamics:
     summary: dict
     frf_frequency_hz: np.ndarray = field(repr=False)
     frf: np.ndarray = field(repr=False)
+    conditions: dict = field(default=None, repr=False)
 
 
 def _held_out_records(records):
@@ -90,7 +95,9 @@ def identify_record_dynamics(fit, records, name="identified", creep=None, **opti
     * **no pole outside what the data show**: poles below half the lowest
       excited frequency (estimated from the input spectrum) and modes
       whose largest gain in the band is below 1 % of G's (near pole-zero
-      cancellations) are removed and B refitted; unstable orders are rejected.
+      cancellations) are removed and B refitted; unstable orders are rejected,
+      and so are orders with a real pole at z <= 0, which has no continuous
+      ZOH equivalent for the preset (a mode at or beyond Nyquist, or noise).
 
     Parameters
     ----------
@@ -147,7 +154,8 @@ def identify_record_dynamics(fit, records, name="identified", creep=None, **opti
         in_band = (frf_f >= 0.9 * ident.band_hz_[0]) & (frf_f <= 1.1 * ident.band_hz_[1])
         frf_f, frf = frf_f[in_band], frf[:, :, in_band]
     except (ValueError, np.linalg.LinAlgError) as exc:
-        raise IdentificationError(f"dynamics: {exc}") from None
+        cause = records_cause(broadband_conditions(records, getattr(fit, "records", ())))
+        raise IdentificationError(f"dynamics: {exc}" + (f": {cause}" if cause else "")) from None
     held = opts["validation_records"]
     chosen_on = (("held-out records " + ", ".join(records[i].source for i in held)) if held
                  else ident.validation_)
@@ -157,7 +165,8 @@ def identify_record_dynamics(fit, records, name="identified", creep=None, **opti
                          "description": "PI identified from records + identified linear dynamics"},
               "dynamics": {"kind": "state_space", "A": mat(cont.A), "B": mat(cont.B),
                            "C": mat(cont.C), "D": mat(cont.D)}}
-    return RecordDynamics(ident, cont, tables, summary, frf_f, frf)
+    return RecordDynamics(ident, cont, tables, summary, frf_f, frf,
+                          broadband_conditions(records, getattr(fit, "records", ())))
 
 
 def _dynamics_summary(ident, cont, chosen_on, names):

@@ -41,6 +41,7 @@ from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI, play
 from hammerstein.identification.preisach_identification import (SMOOTHING_START,
                                                                 identify_preisach_records)
+from hammerstein.identification._broadband_check import dynamics_advice
 from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
                                                      identify_records, levels_part, split_record)
 from hammerstein.exceptions import HysteresisError, IdentificationError
@@ -606,21 +607,28 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
     return IdentificationResult(fit, dyn, creep, first)
 
 
-def dynamics_fit_warning(summary):
+def dynamics_fit_warning(summary, conditions=None, unit="µm"):
     """A warning when the identified dynamics do not fit the held-out broadband records.
 
     The fit is ``100 (1 - ||y - y_model|| / ||y - mean y||)`` on the records held out from
     the order's choice (``held_out_fit_percent`` of the dynamics' summary, the fit of
     Ljung, *System Identification*, 2nd ed., 1999, Section 16.4). Below
-    :data:`DYNAMICS_FIT_WARN_PERCENT` the records are most often not what the actuator
-    received: an amplifier slower than the multisines (it slew-limits them), one that clipped
-    them, or outputs recorded on another clock. ``compensate`` would then invert dynamics that
-    are not the actuator's.
+    :data:`DYNAMICS_FIT_WARN_PERCENT` the warning names what the records show
+    (``conditions``, :func:`hammerstein.identification._broadband_check.dynamics_advice`):
+    a noise that caps the fit of any model, a first mode close to the Nyquist frequency,
+    or, when neither shows and the multisines were not scaled down to a slew rate, an
+    amplifier slower than them (it slew-limits them) or one that clipped them.
+    ``compensate`` would then invert dynamics that are not the actuator's.
 
     Parameters
     ----------
     summary : dict
-        The identified dynamics' summary (``held_out_fit_percent`` [%]).
+        The identified dynamics' summary (``held_out_fit_percent`` [%], ``modes``).
+    conditions : dict, optional
+        :func:`hammerstein.identification._broadband_check.broadband_conditions` of the
+        broadband records (without it: the amplifier's limits are the advice).
+    unit : str
+        Output unit.
 
     Returns
     -------
@@ -638,9 +646,13 @@ def dynamics_fit_warning(summary):
     fit = summary.get("held_out_fit_percent") if summary else None
     if fit is None or not np.isfinite(fit) or fit >= DYNAMICS_FIT_WARN_PERCENT:
         return None
-    return (f"the identified dynamics fit the held-out broadband records at only {fit:.3g} % "
-            f"(below {DYNAMICS_FIT_WARN_PERCENT:g} %): the records may not hold what the actuator "
-            f"received (an amplifier slower than the multisines, or one that clipped them), and "
-            f"compensate would invert dynamics that are not the actuator's; record again within "
-            f"the amplifier's limits (hammerstein excitation --slew-rate, docs/records.md)")
-
+    head = (f"the identified dynamics fit the held-out broadband records at only {fit:.3g} % "
+            f"(below {DYNAMICS_FIT_WARN_PERCENT:g} %), and compensate would invert dynamics "
+            f"that are not the actuator's: ")
+    advice = dynamics_advice(summary, conditions, unit) if conditions is not None else []
+    if not advice:
+        return head + ("the records may not hold what the actuator received (an amplifier "
+                       "slower than the multisines, or one that clipped them); record again "
+                       "within the amplifier's limits (hammerstein excitation --slew-rate, "
+                       "docs/records.md)")
+    return head + "; ".join(advice)

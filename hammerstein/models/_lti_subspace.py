@@ -340,6 +340,11 @@ class DynamicsIdentifier:
         Indices of records held out whole to choose the order (their
         initial states are estimated on them); default: the last
         ``validation_fraction`` of every record.
+    require_continuous : bool
+        Reject a candidate order with a real pole at z <= 0 (its reason in
+        ``candidates_``): such a G has no continuous ZOH equivalent
+        (:func:`hammerstein.models.lti.continuous_system`), which a preset
+        stores. Default False: the discrete G is used as it is.
 
     Attributes
     ----------
@@ -401,6 +406,7 @@ class DynamicsIdentifier:
     low_pole_fraction: float = 0.5
     cancel_tolerance: float = 0.0
     validation_records: tuple | None = None
+    require_continuous: bool = False
 
     @staticmethod
     def _subspace(ins, outs, block_rows, prior=None, known=None):
@@ -439,7 +445,8 @@ class DynamicsIdentifier:
                   "low_pole_fraction": float(self.low_pole_fraction),
                   "cancel_tolerance": float(self.cancel_tolerance),
                   "validation_records": None if self.validation_records is None
-                  else [int(v) for v in self.validation_records]}
+                  else [int(v) for v in self.validation_records],
+                  "require_continuous": bool(self.require_continuous)}
         G = self.system_
         fitted = {k: np.asarray(getattr(G, k), dtype=float).tolist() for k in "ABCD"}
         fitted.update({"dt": float(G.dt), "name": str(G.name), "order_": int(self.order_),
@@ -570,9 +577,12 @@ class DynamicsIdentifier:
                     _, logdet = np.linalg.slogdet(E @ E.T / E.shape[1] + 1e-30 * np.eye(p))
                     aic[i] = E.shape[1] * logdet + 2 * n_par
                 infos.append(info)
+            if np.all(np.isnan(fits)) and self.order is not None:
+                raise DynamicsError(f"order: the model of order {self.order} is rejected: "
+                                    f"{infos[0].get('rejected', 'no mode left')}")
             if np.all(np.isnan(fits)):
-                why = "; ".join(f"order {c['order']}: {c.get('rejected', '')}" for c in infos[:4])
-                raise DynamicsError(f"order: no candidate order gave an acceptable model ({why})")
+                raise DynamicsError(f"order: no candidate order gave an acceptable model "
+                                    f"({rejections(infos)})")
             best = np.nanmax(fits)
             chosen = int(candidates[np.flatnonzero(fits >= best - self.order_tolerance)[0]])
         # the estimation parts' Hankel columns enter through their R factor
@@ -655,6 +665,13 @@ class DynamicsIdentifier:
                         states = np.flatnonzero(np.isin(mode_of, keep))
                         A, C, mode_of, freq, zeta = keep_modes(A, C, mode_of, freq, zeta, keep)
                         problem = problem.subset(states, A, C)    # B refitted on the kept modes
+        z = np.linalg.eigvals(A)
+        neg = (np.abs(z.imag) < 1e-12) & (z.real <= 0)
+        if self.require_continuous and np.any(neg):     # no real logm: the preset's continuous G (inverse ZOH) cannot exist
+            info["rejected"] = (f"a real pole at z <= 0, which has no continuous ZOH "
+                                f"equivalent: a mode at or beyond the Nyquist frequency "
+                                f"{0.5 / T:.4g} Hz, aliased, or noise (z = {np.min(z.real[neg]):.3g})")
+            return None, info, None
         if problem is None:
             problem = _BDX0Problem(A, C, ins, outs, self.feedthrough)
         B, D, x0 = problem.solve(self._dc(p))
@@ -683,6 +700,47 @@ class DynamicsIdentifier:
         return yv, yh
 
 
+
+
+def rejections(candidates):
+    """Why each candidate order was rejected, one clause per reason (every order named).
+
+    Parameters
+    ----------
+    candidates : list of dict
+        ``candidates_`` of a :class:`DynamicsIdentifier`: ``order`` and ``rejected``.
+
+    Returns
+    -------
+    str
+        E.g. ``"orders 1, 2: unstable (pole |z| = 1.002, 1.005); order 3: ..."``: the
+        orders whose reasons differ only in their parenthesised numbers share a clause.
+
+    Examples
+    --------
+    >>> rejections([{"order": 1, "rejected": "unstable (pole |z| = 1.002)"},
+    ...             {"order": 2, "rejected": "unstable (pole |z| = 1.005)"},
+    ...             {"order": 3, "rejected": "every pole below the excited band"}])
+    'orders 1, 2: unstable (pole |z| = 1.002, 1.005); order 3: every pole below the excited band'
+    """
+    groups = {}
+    for c in candidates:
+        text = str(c.get("rejected", "") or "not rejected")
+        head, sep, tail = text.partition(" (")
+        key = (head, tail.rsplit("=", 1)[0] if sep and tail.endswith(")") else text)
+        groups.setdefault(key, []).append((int(c["order"]), text, tail[:-1] if sep else ""))
+    parts = []
+    for (head, _), items in groups.items():
+        orders = ", ".join(str(o) for o, _, _ in items)
+        label = f"order{'s' if len(items) > 1 else ''} {orders}: "
+        if len(items) == 1:
+            parts.append(label + items[0][1])
+            continue
+        first = items[0][2]
+        stem = first.rsplit("=", 1)[0] + "= " if "=" in first else ""
+        values = ", ".join(t.rsplit("=", 1)[1].strip() if "=" in t else t for _, _, t in items)
+        parts.append(f"{label}{head} ({stem}{values})" if first else label + head)
+    return "; ".join(parts)
 
 
 def identify_dynamics(inputs, outputs, sampling_period, order=None, max_order=8, sensor=None,

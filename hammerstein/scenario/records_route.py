@@ -303,7 +303,8 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     if loops:
         warnings.warn(f"{where}: {loops}", HammersteinWarning, stacklevel=2)
     poor = (None if result.dynamics is None
-            else identification_pipeline.dynamics_fit_warning(result.dynamics.summary))
+            else identification_pipeline.dynamics_fit_warning(result.dynamics.summary,
+                                                              result.dynamics.conditions))
     if poor:
         warnings.warn(f"{where}: {poor}", HammersteinWarning, stacklevel=2)
     meta = {"method": result.fit.method, "model": spec["model"], "records":

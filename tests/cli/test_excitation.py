@@ -304,3 +304,34 @@ def test_printed_multisines_stay_within_the_slew_rate(tmp_path):
         u = _read(f)[1][:, 1:]
         steps = np.abs(np.diff(np.vstack([np.zeros((1, u.shape[1])), u]), axis=0))
         assert steps.max() <= 2e4 * 5e-5, (f.name, steps.max())
+
+
+def test_a_slew_rate_says_how_far_the_band_reaches_and_what_f_max_does(tmp_path, capsys):
+    """A 5 kHz stage with a 2000 V/s amplifier: the default band is narrowed far below half
+    the Nyquist frequency; the note and the README say where it ends (the highest line of the
+    multisine file's spectrum) and what --f-max keeps, at what amplitude; with --f-max close
+    to Nyquist the README says the multisines' amplitude and that modes above Nyquist fold."""
+    Ts = 2e-4
+    out = tmp_path / "narrow"
+    assert main(["excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+                 str(Ts), "--slew-rate", "2000", "--out", str(out)]) == 0
+    note = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note:")]
+    _, data = _read(out / "multisine-ux.csv")
+    u = data[:, 1]
+    n = u.size // 4
+    spectrum = np.abs(np.fft.rfft(u[:n]))
+    top = np.flatnonzero(spectrum > 1e-3 * spectrum.max())[-1] / (n * Ts)
+    assert top < 0.25 / Ts / 4                                 # far below the default 1250 Hz
+    assert len(note) == 1 and f"band reaches {top:.4g} Hz only" in note[0]
+    assert "--f-max HZ keeps a wider band at a lower amplitude (1250 Hz:" in note[0]
+    readme = (out / "README.md").read_text()
+    assert f"the multisines reach {top:.4g} Hz only" in readme and "`--f-max HZ`" in readme
+    wide = tmp_path / "wide"
+    assert main(["excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
+                 str(Ts), "--slew-rate", "2000", "--f-max", "2400", "--out", str(wide)]) == 0
+    capsys.readouterr()
+    peak = max(np.abs(_read(wide / f)[1][:, 1:]).max()
+               for f in ("multisine-ux.csv", "multisine-uy.csv"))
+    readme = (wide / "README.md").read_text()
+    assert f"up to 2400 Hz at" in readme and f"{peak:.2g} V)" in readme
+    assert "Modes above the Nyquist frequency (2500 Hz) fold into the band" in readme

@@ -45,3 +45,18 @@ def test_a_bundled_preset_uses_its_lowest_mode():
     plant = load_plant("realistic-2dof")                  # modes 450, 420 and 1300 Hz
     cutoff, _ = default_q_cutoff(plant)
     assert cutoff == pytest.approx(2.5 * 420.0, rel=2e-3)
+
+
+def test_a_cap_at_045_of_the_sampling_rate_is_said():
+    """A 5 kHz stage whose first mode is at 1534 Hz: 2.5 x 1534 = 3835 Hz is capped at
+    0.45 x 5000 = 2250 Hz, and the note says so (it named the 2.5 x rule alone)."""
+    T = 2e-4
+    cutoff, note = default_q_cutoff(SimpleNamespace(matrices=(_mode(1534.0, 0.03, T),),
+                                                    sampling_period=T))
+    assert cutoff == pytest.approx(2250.0)
+    assert "capped at 0.45 x the sampling rate 5000 Hz" in note
+    assert f"{2.5 * 1534.0 * np.sqrt(1 - 0.03 ** 2):.4g} Hz" in note     # what the rule asked
+    # uncapped, no such clause
+    _, note = default_q_cutoff(SimpleNamespace(matrices=(_mode(300.0, 0.03, 5e-5),),
+                                               sampling_period=5e-5))
+    assert "capped" not in note
