@@ -20,6 +20,7 @@ from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.io.presets import load_dynamics, load_model, load_plant, read_toml, resolve_preset
+from hammerstein.identification.identification_pipeline import DYNAMICS_FIT_WARN_PERCENT
 from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
 from hammerstein.scenario.validate import _signal
 
@@ -209,8 +210,6 @@ def dynamics_problem(data, path):
     -------
     str or None
     """
-    from hammerstein.identification.identification_pipeline import DYNAMICS_FIT_WARN_PERCENT
-
     ident = (data or {}).get("identification")
     dyn = ident.get("dynamics") if isinstance(ident, dict) else None
     fit = dyn.get("held_out_fit_percent") if isinstance(dyn, dict) else None
