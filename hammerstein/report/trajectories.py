@@ -21,9 +21,13 @@ from hammerstein.report.figures import (_settled_ylim, _title_height, decimate, 
                                         fixed_layout, legend_on_top, plt, suptitle)
 
 
-def _mark_transient(ax, t_end):
-    """Shade the start-up transient [0, t_end] (time axis in ms)."""
-    ax.axvspan(ax.get_xlim()[0], t_end, color="0.85", alpha=0.6, zorder=0, linewidth=0)
+def _mark_transient(ax, t_end, t_fade=0.0):
+    """Shade the start-up transient [0, t_end] (time axis in ms), the fade-in [0, t_fade] darker."""
+    t0 = ax.get_xlim()[0]
+    if t_fade > t0:
+        ax.axvspan(t0, min(t_fade, t_end), color="0.7", alpha=0.6, zorder=0, linewidth=0)
+    if t_end > max(t_fade, t0):
+        ax.axvspan(max(t_fade, t0), t_end, color="0.85", alpha=0.6, zorder=0, linewidth=0)
 
 
 def _peak_off_scale(ax, values):
@@ -58,7 +62,7 @@ def _length(value):
 
 
 def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
-                      inputs=None, input_names=None):
+                      inputs=None, input_names=None, fade_time=0.0):
     """XY plot, time plots (displacements, input voltages) and tracking errors.
 
     Layout: (a) the XY plot of the reference (dashed) and the output (solid)
@@ -66,8 +70,9 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     against its reference, the diagonal dashed); (b) every output's
     displacement against time; (c) every output's tracking error y_r - y
     and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
-    on the settled part (the start-up transient is shaded, and its peak is
-    printed when it is off scale) and in nm when the settled errors stay
+    on the settled part (the start-up transient is shaded, the fade-in
+    darker than the settling after it, and its peak is printed when it is
+    off scale) and in nm when the settled errors stay
     below 0.1 µm; (d) the input voltages when ``inputs``
     is given.
 
@@ -77,7 +82,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         [s].
     reference, outputs : array_like, shape (p, n)
         ``(x_r[, y_r, z_r ...])`` and ``(x[, y, z ...])`` [µm], p >= 1
-        (outputs may hold NaN after a divergence).
+        (outputs may hold NaN after a divergence); the reference the
+        output tracked (faded in from rest where the drive fades in).
     names : sequence of p str
         Output names.
     title : str
@@ -86,6 +92,9 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     inputs : array_like, shape (m, n), optional
         Input voltages [V] (the compensator output).
     input_names : sequence of m str, optional
+    fade_time : float
+        End of the reference's fade-in from rest [s] (0: none), at most
+        ``settle_time``: shaded darker than the settling after it.
 
     Returns
     -------
@@ -168,7 +177,10 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
             notes[a] = "\nscaled after settling" + (
                 "" if peak is None else f"; start-up (shaded) peaks at {_length(peak / scale)}")
         for a in (axt, axu, axe, axn):
-            _mark_transient(a, settle_time * 1e3)
+            _mark_transient(a, settle_time * 1e3, min(fade_time, settle_time) * 1e3)
+    if transient and fade_time > 0:
+        axt.set_title("(b) time domain\nshaded: fade-in from rest (dark), settling (light)",
+                      fontsize=10, y=1.0)
     axe.set_title("(c) tracking error per axis" + notes[axe], fontsize=10, y=1.0)
     axn.set_title("(e) Euclidean error" + notes[axn], fontsize=10, y=1.0)
     legend_on_top(axt, 2 * len(names), loc="upper right")
