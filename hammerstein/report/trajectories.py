@@ -65,9 +65,10 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
                       inputs=None, input_names=None, fade_time=0.0):
     """XY plot, time plots (displacements, input voltages) and tracking errors.
 
-    Layout: (a) the XY plot of the reference (dashed) and the output (solid)
-    after settling, over the first two outputs (one output: the output
-    against its reference, the diagonal dashed); (b) every output's
+    Layout: (a) the XY plot of the reference (a wide grey band, which
+    reads where many periods overlap) and the output (a thin line) after
+    settling, over the first two outputs (one output: the output against
+    its reference, the diagonal dashed); (b) every output's
     displacement against time; (c) every output's tracking error y_r - y
     and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
     on the settled part (the start-up transient is shaded, the fade-in
@@ -115,12 +116,14 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     gs = fig.add_gridspec(2, 3, width_ratios=[1.15, 1.4, 1.4])
     fixed_layout(fig, 2, 3, left=0.7, right=0.2, bottom=0.55, top=top, wspace=0.8, hspace=0.9)
     ax = fig.add_subplot(gs[:, 0])
-    if len(names) >= 2:
-        ax.plot(*decimate_path(r[0, steady], r[1, steady]), "--", color="0.35", linewidth=1.2)
-        ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0)
+    if len(names) >= 2:        # the reference as a band: dashes of overlapping periods fill in
+        ax.plot(*decimate_path(r[0, steady], r[1, steady]), "-", color="0.75", linewidth=5.0,
+                solid_capstyle="round", solid_joinstyle="round", label="reference")
+        ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0,
+                label="output")
         ax.set_xlabel(f"{names[0]} [µm]")
         ax.set_ylabel(f"{names[1]} [µm]")
-        ax.set_title("(a) spatial domain after settling\n(dashed: reference, solid: output)",
+        ax.set_title("(a) spatial domain after settling\n(grey band: reference, blue: output)",
                      fontsize=10, y=1.0)
     else:                          # one axis: the output against its reference
         span = [float(np.nanmin(r[0, steady])), float(np.nanmax(r[0, steady]))]

@@ -81,3 +81,14 @@ def test_trajectory_figure_shades_the_fade_in_apart_from_the_settling():
     assert "fade-in" in ax.get_title()
     plt.close(fig)
 
+
+def test_the_xy_reference_reads_where_its_periods_overlap():
+    t = np.arange(4000) * 5e-5
+    r = 20 * np.vstack([np.cos(2 * np.pi * 50 * t), np.sin(2 * np.pi * 50 * t)])
+    fig = trajectory_figure(t, r, r * 0.99, ["x", "y"], "t", settle_time=0.02)
+    ax = [a for a in fig.axes if a.get_title().startswith("(a)")][0]
+    ref, out = ax.lines[:2]
+    # dashes of many overlapping periods fill in and look solid: the reference is a band
+    assert ref.get_linestyle() == "-" and ref.get_linewidth() >= 3 * out.get_linewidth()
+    assert "band: reference" in ax.get_title()
+    plt.close(fig)
