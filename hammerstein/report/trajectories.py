@@ -330,8 +330,12 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
     n_lines = int(line.max()) + 1
     grid = np.linspace(float(start), float(start) + float(extent), int(n_bins))
     k = e.shape[0]
-    fig, axes = plt.subplots(k, 2, figsize=(11, 2.0 + 2.6 * k), squeeze=False)
-    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.1, top=0.86, wspace=0.12, hspace=0.45)
+    W = 11.0
+    top = _title_height(title, W) + 0.35                # the title wrapped to the width
+    H = top + 2.6 * k + 0.7
+    fig, axes = plt.subplots(k, 2, figsize=(W, H), squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.7 / H, top=1 - top / H, wspace=0.12,
+                        hspace=0.45)
     for i in range(k):
         imgs = [_line_image(x, e[i], line, trace, n_lines, grid),
                 _line_image(x, e[i], line, ~trace, n_lines, grid)]
@@ -356,5 +360,5 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
         fig.colorbar(im, ax=list(axes[i]), fraction=0.03, pad=0.02,
                      label="error [µm]" + (f", capped (max {float(finite.max()):.3g})"
                                            if saturated else ""))
-    fig.suptitle(title)
+    suptitle(fig, title)
     return fig
