@@ -178,7 +178,8 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     euclid, judged = _settled_series(d, its, None if settled is None else (k, *settled))
-    fig = convergence_figure(its, mx, rms, names, "ILC: tracking error per trial", scale,
+    fig = convergence_figure(its, mx, rms, names, "iterative learning control (hammerstein "
+                             "learn): tracking error per trial", scale,
                              scale_name, euclid, judged)
     safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
     return k

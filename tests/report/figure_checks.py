@@ -134,7 +134,8 @@ def title_problems(fig, name="figure"):
     list of str
         One message per title whose window extent leaves the figure.
     """
-    renderer = fig.canvas.get_renderer()
+    get = getattr(fig.canvas, "get_renderer", None)     # after save(): a plain canvas
+    renderer = get() if get is not None else fig._get_renderer()
     box = fig.bbox
     titles = [t for t in fig.texts if t.get_text()]
     sup = getattr(fig, "_suptitle", None)
