@@ -228,3 +228,21 @@ def test_raster_error_map_title_fits_inside_the_figure():
     assert title_problems(fig) == []
     assert figure_problems(fig) == []
     plt.close(fig)
+
+
+def test_bode_figure_draws_no_minor_grid():
+    """Regression: python-control's bode_plot drew a grid line on every minor tick of the
+    log frequency axis, a dense mesh over the curves."""
+    from hammerstein.models.dynamics import bending_modes, discretize
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    T = 5e-5
+    G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), T)
+    fig = dynamics_bode_figure(G, G)
+    fig.canvas.draw()
+    for ax in fig.axes:
+        if not ax.get_visible() or not ax.lines:
+            continue
+        minor = [ln for t in ax.xaxis.get_minor_ticks() for ln in [t.gridline] if ln.get_visible()]
+        assert minor == []
+        assert any(t.gridline.get_visible() for t in ax.xaxis.get_major_ticks())
+    plt.close(fig)
