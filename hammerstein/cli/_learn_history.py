@@ -221,7 +221,7 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     mx = np.array([[next(r[2] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     rms = np.array([[next(r[3] for r in rows if r[0] == i and r[1] == n) for i in its] for n in names])
     euclid, judged = _settled_series(d, its, None if settled is None else (k, *settled))
-    title = "ILC: tracking error per trial"
+    title = "iterative learning control (hammerstein learn): tracking error per trial"
     if aligned is not None:
         title += (f" (measurement advanced by its delay of {int(aligned[0])} samples; "
                   f"window from t = {aligned[1]:.4g} s)")

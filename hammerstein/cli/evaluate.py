@@ -11,7 +11,12 @@ inline TOML table as in scenarios, or a CSV file), and writes into
 shaped to the amplifier and the identified dynamics (columns
 ``<output>_shaped`` [µm]) is also judged against that shaped reference:
 the same metrics, ``case`` ``shaped`` in ``metrics.csv`` and a second table
-in the report (the raw reference's metrics stay case ``measured``).
+in the report (the raw reference's metrics stay case ``measured``). The
+figure and ``timeseries-measured.csv`` show the reference the drive
+followed: with ``--drive``, its shaped reference, else the reference faded
+in from rest as its header records (the metrics, after the fade-in, are
+the same against either); the figure shades the fade-in apart from the
+settling periods after it.
 
 The delay between the reference and the measurement is estimated by
 cross-correlation over the settled part (after the fade-in and ``--settle-periods``),
@@ -44,8 +49,8 @@ from hammerstein.cli._hardware import (catch, load_actuator, load_reference, map
                                        nonnegative_float, positive_float)
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
-from hammerstein.compensation.drive import drive_fade_samples, read_signals
-from hammerstein.compensation.drive_files import optional_columns
+from hammerstein.compensation.drive import drive_fade_samples, hardware_fade, read_signals
+from hammerstein.compensation.drive_files import drive_rest_lead, drive_rest_output, optional_columns
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
@@ -270,6 +275,7 @@ def _handle(args):
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
                                       ref.scale, ref.loop_channel, args.remove_delay, rf)
         shaped = _shaped_reference(args.drive, outs, T) if args.drive else None
+        tracked = _tracked_reference(args.drive, outs, ref.signal[:, :N], fade, shaped)
         shaped_rows = []
         if shaped is not None and shaped.shape[1] >= N:
             # the reference the drive actually follows (compensate shaped it to the
@@ -285,7 +291,8 @@ def _handle(args):
         created = not os.path.lexists(out)
         try:
             with all_or_nothing():     # a failed write (full disk) leaves none of the files
-                _write(out, args, rows, delay, T, r, ym, outs, u, ins, ref, shaped_rows)
+                _write(out, args, rows, delay, T, tracked[:, :r.shape[1]], ym, outs, u, ins, ref,
+                       shaped_rows, fade)
         except BaseException:
             if created:                # the directory this run made, empty again: removed
                 with contextlib.suppress(OSError):
@@ -327,6 +334,48 @@ def _shaped_reference(path, outs, T):
     return optional_columns(path, [f"{o}_shaped" for o in outs], T, "--drive")
 
 
+def _tracked_reference(drive, outs, reference, fade, shaped=None):
+    """The reference the drive followed (p, n) [µm]: what the figure and the time series show.
+
+    A drive file's shaped reference (``<output>_shaped``, fade-in included) when it
+    has one; else, for a drive that faded in (``fade`` > 0), the reference faded in
+    as compensate and learn fade it (:func:`hammerstein.compensation.drive.hardware_fade`,
+    from the rest output and with the rest lead its header records); else the
+    reference as given (no drive: how it was faded in is not known). The metrics
+    use the reference as given, after the fade-in, where the two agree.
+    """
+    n = reference.shape[1]
+    if shaped is not None and shaped.shape[1] >= n:
+        return shaped[:, :n]
+    if not drive or not fade:
+        return reference
+    return hardware_fade(reference, fade, drive_rest_output(drive, outs), drive_rest_lead(drive))
+
+
+def _figure_title(args, outs):
+    """Title of trajectory-measured.png: what was measured against which reference, on what."""
+    actuator = args.model
+    if actuator is None and args.drive:
+        for line in _drive_header(args.drive):
+            words = line.split()
+            if "actuator" in words[:-1]:
+                actuator = words[words.index("actuator") + 1].rstrip(",")
+                break
+    reference = " ".join(args.reference.split()) if args.reference.lstrip().startswith("{") \
+        else Path(args.reference).name
+    drive = f", drive {Path(args.drive).name}" if args.drive else ""
+    return (f"measured response ({', '.join(outs)}) of actuator "
+            f"{actuator if actuator else '(not named: no --model or --drive)'} to the reference "
+            f"{reference}{drive}")
+
+
+def _drive_header(path):
+    """The comment lines that open a drive file, without their '#'."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        return [line[1:].strip() for line in (fh.readline() for _ in range(40))
+                if line.startswith("#")]
+
+
 def _shaped_table(rows):
     """Report lines for the metrics against the shaped reference (empty without one)."""
     if not rows:
@@ -338,7 +387,7 @@ def _shaped_table(rows):
             "| channel | metric | value | unit |\n|---|---|---|---|\n" + table + "\n")
 
 
-def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=()):
+def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), fade=0):
     out.mkdir(parents=True, exist_ok=True)
     try:
         version = metadata.version("hammerstein")
@@ -364,9 +413,9 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=()):
                "time series file", root=out)
     figure = ""
     if len(outs) >= 1:             # the XY of the first two outputs, every output against time
-        fig = trajectory_figure(t, r, y, outs, "measured response", args.settle_periods *
+        fig = trajectory_figure(t, r, y, outs, _figure_title(args, outs), args.settle_periods *
                                 ref.period_samples * T, inputs=None if u is None else u[:, :n],
-                                input_names=ins if u is not None else None)
+                                input_names=ins if u is not None else None, fade_time=fade * T)
         safe_write(out / "trajectory-measured.png", lambda fh: save(fig, fh), "figure", root=out)
         figure = "\n![trajectory](trajectory-measured.png)\n"
     table = "\n".join(f"| {row['channel']} | {row['metric']} | {_value(row['value'])} | "

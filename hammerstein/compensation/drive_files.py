@@ -25,6 +25,7 @@ from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
 __all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_rest_lead",
+           "drive_rest_output",
            "rest_lead_text", "fade_weight",
            "drive_kind", "optional_columns", "learnt_names", "followed_reference", "shaped_target"]
 
@@ -272,6 +273,50 @@ def drive_rest_lead(path):
         The file cannot be read.
     """
     return _header_int(path, r"fade-in \d+ samples \([^)]*its first (\d+) at rest")
+
+
+def drive_rest_output(path, outputs):
+    r"""The rest output a drive file's header records its fade-in started from, or None.
+
+    ``compensate`` writes ``from the rest output x = 0.0 µm, y = 0.0 µm``
+    (the model's output at 0 V, where it faded the reference in from).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+    outputs : list of str
+        Output names.
+
+    Returns
+    -------
+    numpy.ndarray, shape (len(outputs),), or None
+        [µm]; None when the header does not give every output's.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> with tempfile.NamedTemporaryFile("w", suffix=".csv", delete=False) as fh:
+    ...     _ = fh.write("# a drive, fade-in 4 samples from the rest output x = 0.5 µm, "
+    ...                  "y = -1.0 µm (the model's output at 0 V)\nt,ux\n0,0\n")
+    >>> drive_rest_output(fh.name, ["x", "y"]).tolist()
+    [0.5, -1.0]
+    >>> os.remove(fh.name)
+    """
+    for line in _header(path):
+        m = re.search(r"from the rest output (.*?)(?: \(|$)", line)
+        if m:
+            values = dict(re.findall(r"(\S+) = ([-+0-9.eE]+|nan|inf) µm", m.group(1)))
+            try:
+                return np.array([float(values[o]) for o in outputs])
+            except (KeyError, ValueError):
+                return None
+    return None
 
 
 def _header_int(path, pattern):

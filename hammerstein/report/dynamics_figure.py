@@ -17,6 +17,14 @@ __all__ = ["dynamics_bode_figure", "dynamics_bode_figure_from_data", "measured_b
            "state_space_data"]
 
 
+def _major_grid(axes):
+    """A light grid on the major ticks alone: python-control's bode_plot also draws one
+    on every minor tick of its log axes, a dense mesh that clutters the curves."""
+    for a in np.ravel(axes):
+        a.grid(False, which="minor")
+        a.grid(True, which="major", color="0.8", linewidth=0.7, linestyle="-")
+
+
 def state_space_data(system):
     """A ``control.StateSpace`` as a picklable dict (matrices, sampling period, signal names).
 
@@ -130,6 +138,7 @@ def dynamics_bode_figure(identified, true, frequencies_hz=None, labels=("identif
                                      share_phase="row", share_frequency="col")
     suptitle(fig, title)
     fig = cplt.figure
+    _major_grid(cplt.axes)
     _physical_labels(fig, true.input_labels, true.output_labels)
     nyquist = [0.5 / dt for dt in dts]
     for ax in np.ravel(cplt.axes):
@@ -284,6 +293,7 @@ def measured_bode_figure(identified, frequency_hz, frf, names=None,
                                      wrap_phase=True, share_magnitude="row",
                                      share_phase="row", share_frequency="col")
     suptitle(fig, title)
+    _major_grid(cplt.axes)
     _physical_labels(cplt.figure, sys_named.input_labels, sys_named.output_labels)
     for a in np.ravel(cplt.axes):
         for line in a.get_lines():

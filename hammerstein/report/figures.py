@@ -321,6 +321,102 @@ def log_ticks(ax):
     ax.yaxis.set_minor_formatter(NullFormatter())
 
 
+#: Mantissas of the labelled ticks of :func:`readable_log_ticks`, coarsest first.
+LOG_TICK_SETS = ((1.0, 2.0, 5.0), (1.0, 1.5, 2.0, 3.0, 5.0, 7.0),
+                 (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0))
+
+
+def _log_tick_values(lo, hi, subs):
+    """Ticks ``m 10^k`` (m in ``subs``) from the last at or below ``lo`` to the first at or above ``hi``."""
+    k0, k1 = int(np.floor(np.log10(lo))) - 1, int(np.ceil(np.log10(hi))) + 1
+    ticks = np.array(sorted(m * 10.0 ** k for k in range(k0, k1 + 1) for m in subs))
+    ticks = np.array([float(f"{t:.12g}") for t in ticks])
+    below, above = ticks[ticks <= lo * (1 + 1e-12)], ticks[ticks >= hi * (1 - 1e-12)]
+    return ticks[(ticks >= below[-1]) & (ticks <= above[0])]
+
+
+def _positive_span(values):
+    """(lo, hi) of the positive finite ``values`` (widened when equal), or None."""
+    v = np.asarray(values, dtype=float).ravel()
+    v = v[np.isfinite(v) & (v > 0)]
+    if v.size == 0:
+        return None
+    lo, hi = float(v.min()), float(v.max())
+    return (lo / 1.5, hi * 1.5) if hi <= lo * (1 + 1e-9) else (lo, hi)
+
+
+def log_tick_set(values, max_span=1.8):
+    """Index in :data:`LOG_TICK_SETS` of the coarsest mantissas that label ``values`` well.
+
+    Well: three labelled ticks or more between the tick at or below the
+    smallest value and the one at or above the largest, and that range at most
+    ``max_span`` times the values' own (on the log scale); the finest set
+    when none is.
+
+    Parameters
+    ----------
+    values : array_like
+        Positive finite ones are used.
+    max_span : float
+        Largest ratio of the axis' log range to the values'.
+
+    Returns
+    -------
+    int
+    """
+    span = _positive_span(values)
+    if span is None:
+        return 0
+    lo, hi = span
+    own = np.log10(hi / lo)
+    for i, subs in enumerate(LOG_TICK_SETS):
+        t = _log_tick_values(lo, hi, subs)
+        if len(t) >= 3 and np.log10(t[-1] / t[0]) <= max_span * own:
+            return i
+    return len(LOG_TICK_SETS) - 1
+
+
+def readable_log_ticks(ax, values, tick_set=None):
+    """A log y-axis whose data lie between labelled ticks, labelled in plain numbers.
+
+    The y-limits run from the labelled tick at or below the smallest value to
+    the one at or above the largest, so that no point lies beyond the last
+    label; the labels are plain numbers (0.02, 0.05, 0.1) at ``m x 10^k``,
+    ``m`` from ``LOG_TICK_SETS[tick_set]`` (1, 2, 5 when the values span
+    enough for three of them, finer otherwise, :func:`log_tick_set`); the
+    minor ticks are unlabelled. Give the panels of one figure the same
+    ``tick_set`` (the largest of theirs) for the same kind of labels.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        With a log y-scale.
+    values : array_like
+        The values drawn; positive finite ones are used.
+    tick_set : int, optional
+        Index in :data:`LOG_TICK_SETS`; default :func:`log_tick_set` of ``values``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The labelled ticks (empty when no value is positive: then
+        :func:`log_ticks` labels the axis).
+    """
+    from matplotlib.ticker import FixedLocator, FuncFormatter, LogLocator, NullFormatter
+    span = _positive_span(values)
+    if span is None:
+        log_ticks(ax)
+        return np.array([])
+    subs = LOG_TICK_SETS[log_tick_set(values) if tick_set is None else tick_set]
+    ticks = _log_tick_values(*span, subs)
+    ax.set_ylim(ticks[0], ticks[-1])
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda y, _: f"{y:g}"))
+    ax.yaxis.set_minor_locator(LogLocator(base=10.0, subs=np.arange(1.0, 10.0)))
+    ax.yaxis.set_minor_formatter(NullFormatter())
+    return ticks
+
+
 def _settled_ylim(ax, values, pad=0.08):
     """Scale ``ax`` on ``values`` (the settled part of its curves)."""
     v = np.concatenate([np.ravel(a) for a in values])

@@ -10,7 +10,7 @@ import numpy as np
 
 from hammerstein.report.figures import pyplot as plt  # matplotlib on first use
 
-from hammerstein.report.figures import fixed_layout, legend_on_top, log_ticks
+from hammerstein.report.figures import _title_height, fixed_layout, log_ticks, suptitle
 
 __all__ = ["convergence_figure", "iteration_history"]
 
@@ -22,7 +22,9 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     With ``euclidean`` (and ``judged``), the settled max Euclidean error
     ``learn`` prints (over two outputs or more; one output's is its max) and
     the error it judges the trials on (the noise averaged down) are drawn
-    too, in black and grey.
+    too, as open black and grey markers under the per-axis points. Each
+    series sits a little to the side of its trial, so that equal values stay
+    visible; the legend is under the axes.
 
     Parameters
     ----------
@@ -47,33 +49,50 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     """
     k = np.asarray(iterations)
     mx, rms = np.atleast_2d(max_error), np.atleast_2d(rms_error)
-    fig = plt.figure(figsize=(6.4, 4.0))
-    fixed_layout(fig, left=0.9, right=0.9 if scale else 0.25, top=0.55)
-    ax = fig.add_subplot(1, 1, 1)
-    for l, name in enumerate(names):
-        line, = ax.semilogy(k, mx[l], marker="o", label=f"{name} max")
-        ax.semilogy(k, rms[l], marker="s", ls="--", color=line.get_color(), label=f"{name} RMS")
-    entries = 2 * len(names)
+    series = []             # (values, style): the aggregates first, under the per-axis points
     for values, style in ((euclidean if len(names) > 1 else None,   # one axis: its own max
-                           dict(color="k", marker="D", label="Euclidean max")),
-                          (judged, dict(color="0.5", marker="v", ls=":",
-                                        label="judged (noise removed)"))):
+                           dict(color="k", marker="D", ms=9, mfc="none", mew=1.4, ls="-", lw=1.0,
+                                label="max Euclidean error ||Y_r - Y|| (settled)")),
+                          (judged, dict(color="0.45", marker="v", ms=8, mfc="none", mew=1.3,
+                                        ls=":", label="judged error (what learn compares: "
+                                                      "noise averaged out)"))):
         v = None if values is None else np.asarray(values, dtype=float)
         if v is not None and v.shape == k.shape and np.any(np.isfinite(v) & (v > 0)):
-            ax.semilogy(k, np.where(v > 0, v, np.nan), **style)
-            entries += 1
+            series.append((np.where(v > 0, v, np.nan), style))
+    for l, name in enumerate(names):
+        series.append((mx[l], dict(color=f"C{l}", marker="o", ms=6, ls="-",
+                                   label=f"{name}: max |{name}_r - {name}|")))
+        series.append((rms[l], dict(color=f"C{l}", marker="s", ms=6, ls="--",
+                                    label=f"{name}: RMS of {name}_r - {name}")))
+    # each series a little to the side of its trial: equal values stay visible side by side
+    width = 0.5 if k.size < 2 else 0.5 * float(np.min(np.diff(np.sort(k))))
+    dx = (np.arange(len(series)) - (len(series) - 1) / 2) * width / max(len(series), 1)
+    ncol = 2
+    rows = -(-len(series) // ncol)
+    legend_h = 0.22 * rows + 0.15
+    W, axes_h = 7.0, 3.0
+    top = _title_height(title, W, fontsize=11) + 0.1
+    bottom = 0.6 + legend_h
+    fig = plt.figure(figsize=(W, top + axes_h + bottom))
+    fixed_layout(fig, left=0.9, right=0.9 if scale else 0.25, top=top, bottom=bottom)
+    ax = fig.add_subplot(1, 1, 1)
+    for (values, style), d in zip(series, dx):
+        ax.semilogy(k + d, values, **style)
     ax.set_xlabel("trial k")
     ax.set_ylabel("tracking error [µm]")
     ax.set_xticks(k)
-    ax.grid(True, which="both", alpha=0.3)
+    ax.set_xlim(float(k.min()) - 1.2 * width, float(k.max()) + 1.2 * width)
+    ax.grid(True, which="major", alpha=0.3)
     log_ticks(ax)                       # 0.2, 0.5, 1 µm, not 2 x 10^-1
     if scale:
         sec = ax.secondary_yaxis("right", functions=(lambda v: 100 * v / scale,
                                                      lambda p: p * scale / 100))
         sec.set_ylabel(f"% of {scale_name}")
         log_ticks(sec)
-    legend_on_top(ax, entries)
-    fig.suptitle(title, fontsize=11)
+    # the legend under the axes, on no data
+    fig.legend(*ax.get_legend_handles_labels(), loc="lower center", ncol=ncol, fontsize=8,
+               bbox_to_anchor=(0.5, 0.05 / fig.get_size_inches()[1]), frameon=False)
+    suptitle(fig, title, fontsize=11)
     return fig
 
 

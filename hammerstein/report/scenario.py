@@ -6,7 +6,8 @@ Layout of ``DIR/<scenario name>/`` (written by
 * ``metrics.csv``: long format, exactly the columns
   ``case,channel,metric,value,unit``;
 * ``timeseries-<case>.csv``: ``time_s``, the references ``<output>_ref_um``
-  (compensated cases), the inputs ``<input>_V`` and the outputs
+  (compensated cases: the reference tracked, faded in from rest where the
+  case fades in), the inputs ``<input>_V`` and the outputs
   ``<output>_um``;
 * ``*.png``: input-output maps (open-loop and compensated sines, paper Fig. 5
   and 8), trajectory figures (Fig. 10-13), divergence plots;
@@ -481,7 +482,8 @@ def _figures(scenario, results, directory, jobs):
         jobs.add(directory / fname, trajectories.trajectory_figure, r.spec.time, r.reference,
                  r.outputs, names,
                  f"{prefix}: {r.name}, {_plant_label(r.spec)} plant, {_compensator_title(r.spec)}",
-                 settle_time=settle, inputs=r.inputs, input_names=in_names)
+                 settle_time=settle, inputs=r.inputs, input_names=in_names,
+                 fade_time=fade_samples(r.spec) * r.spec.plant.sampling_period)
         figs.append((f"Case {r.name}: spatial domain, time domain (displacements, input "
                      f"voltages), tracking error", fname))
     for r in ok:                       # kind "ilc": error per learning trial

@@ -26,7 +26,7 @@ from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
 
 __all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines", "metric_label",
-           "compensator_legend"]
+           "compensator_legend", "sweep_subject"]
 
 
 _LETTERS = "abcdefghijklmnopqrstuvwxyz"
@@ -153,6 +153,46 @@ def _compensator_words(c):
     return f"{kind}, {where}"
 
 
+def sweep_subject(spec, results):
+    """What a sweep figure's title should name: signal and size, compensator, metric window.
+
+    Parameters
+    ----------
+    spec : hammerstein.scenario.sweeps.SweepSpec
+    results : list of hammerstein.scenario.execute.CaseResult
+
+    Returns
+    -------
+    str
+        E.g. ``"sine, amplitude 30 µm; multivariable, identified at 50 Hz; over
+        the last 2 of 8 periods"`` (several compensators: their number; the
+        legend names them); empty when no case of the sweep ran.
+    """
+    names = {c["case"] for c in spec.cases}
+    first = next((r for r in results if r.name in names), None)
+    if first is None:
+        return ""
+    sig = getattr(first.spec, "signal_spec", None) or {}
+    parts = []
+    size = next(((k, sig[k]) for k in ("amplitude", "radius", "size") if
+                 isinstance(sig.get(k), (int, float)) and not isinstance(sig.get(k), bool)
+                 and k != getattr(spec, "parameter", "frequency")), None)    # not the swept one
+    unit = "V" if spec.mode == "drive" else "µm"
+    what = str(sig.get("kind", "signal")) + (f", {size[0]} {size[1]:g} {unit}" if size else "")
+    parts.append(what)
+    labels = [lab for lab in spec.labels if lab]
+    if len(labels) > 1:
+        parts.append(f"{len(labels)} compensators")
+    elif spec.mode != "drive" and getattr(first.spec, "compensator_spec", None):
+        from hammerstein.report.scenario import _compensator_title   # (imports this module)
+        parts.append(_compensator_title(first.spec))
+    periods = sig.get("periods")
+    settle = getattr(first.spec, "settle_periods", None)
+    if isinstance(periods, (int, float)) and isinstance(settle, (int, float)):
+        parts.append(f"over the last {_fmt(periods - settle)} of {_fmt(periods)} periods")
+    return "; ".join(parts)
+
+
 def compensator_legend(spec, results):
     """Legend words of a sweep's compensator labels (``mv-50Hz`` -> ``multivariable, identified at 50 Hz``).
 
@@ -239,7 +279,7 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
             vals = rows[metric] if metric in rows else pd.Series(dtype=float)
             if vals.notna().any() and (vals.dropna() > 0).all():
                 ax.set_yscale("log")
-                plots.log_ticks(ax)
+                plots.readable_log_ticks(ax, vals)       # the largest point under a label
             elif not vals.notna().any():
                 ax.text(0.5, 0.5, f"no data: no case has a {what}\n(diverged or not computed)",
                         transform=ax.transAxes, ha="center", va="center", fontsize=9)
@@ -427,7 +467,8 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
             jobs.add(directory / png, sweep_figure, table, spec, outputs,
                      f"{plots.scenario_prefix(scenario)}: {metric_label(spec.metric)} "
                      f"vs {getattr(spec, 'parameter', 'frequency')}"
-                     + (f" ({spec.name})" if several else ""),
+                     + (f" ({spec.name})" if several else "")
+                     + (f" ({subject})" if (subject := sweep_subject(spec, results)) else ""),
                      names=compensator_legend(spec, results))
         n_div = int(table["diverged_at_time"].notna().groupby(
             [table["compensator"], table["axis"], table[swept if swept != "frequency" else

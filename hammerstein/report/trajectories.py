@@ -21,9 +21,13 @@ from hammerstein.report.figures import (_settled_ylim, _title_height, decimate, 
                                         fixed_layout, legend_on_top, plt, suptitle)
 
 
-def _mark_transient(ax, t_end):
-    """Shade the start-up transient [0, t_end] (time axis in ms)."""
-    ax.axvspan(ax.get_xlim()[0], t_end, color="0.85", alpha=0.6, zorder=0, linewidth=0)
+def _mark_transient(ax, t_end, t_fade=0.0):
+    """Shade the start-up transient [0, t_end] (time axis in ms), the fade-in [0, t_fade] darker."""
+    t0 = ax.get_xlim()[0]
+    if t_fade > t0:
+        ax.axvspan(t0, min(t_fade, t_end), color="0.7", alpha=0.6, zorder=0, linewidth=0)
+    if t_end > max(t_fade, t0):
+        ax.axvspan(max(t_fade, t0), t_end, color="0.85", alpha=0.6, zorder=0, linewidth=0)
 
 
 def _peak_off_scale(ax, values):
@@ -58,16 +62,18 @@ def _length(value):
 
 
 def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
-                      inputs=None, input_names=None):
+                      inputs=None, input_names=None, fade_time=0.0):
     """XY plot, time plots (displacements, input voltages) and tracking errors.
 
-    Layout: (a) the XY plot of the reference (dashed) and the output (solid)
-    after settling, over the first two outputs (one output: the output
-    against its reference, the diagonal dashed); (b) every output's
+    Layout: (a) the XY plot of the reference (a wide grey band, which
+    reads where many periods overlap) and the output (a thin line) after
+    settling, over the first two outputs (one output: the output against
+    its reference, the diagonal dashed); (b) every output's
     displacement against time; (c) every output's tracking error y_r - y
     and (e) the Euclidean error ||Y_r - Y|| over all outputs, both scaled
-    on the settled part (the start-up transient is shaded, and its peak is
-    printed when it is off scale) and in nm when the settled errors stay
+    on the settled part (the start-up transient is shaded, the fade-in
+    darker than the settling after it, and its peak is printed when it is
+    off scale) and in nm when the settled errors stay
     below 0.1 µm; (d) the input voltages when ``inputs``
     is given.
 
@@ -77,7 +83,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         [s].
     reference, outputs : array_like, shape (p, n)
         ``(x_r[, y_r, z_r ...])`` and ``(x[, y, z ...])`` [µm], p >= 1
-        (outputs may hold NaN after a divergence).
+        (outputs may hold NaN after a divergence); the reference the
+        output tracked (faded in from rest where the drive fades in).
     names : sequence of p str
         Output names.
     title : str
@@ -86,6 +93,9 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     inputs : array_like, shape (m, n), optional
         Input voltages [V] (the compensator output).
     input_names : sequence of m str, optional
+    fade_time : float
+        End of the reference's fade-in from rest [s] (0: none), at most
+        ``settle_time``: shaded darker than the settling after it.
 
     Returns
     -------
@@ -106,12 +116,14 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     gs = fig.add_gridspec(2, 3, width_ratios=[1.15, 1.4, 1.4])
     fixed_layout(fig, 2, 3, left=0.7, right=0.2, bottom=0.55, top=top, wspace=0.8, hspace=0.9)
     ax = fig.add_subplot(gs[:, 0])
-    if len(names) >= 2:
-        ax.plot(*decimate_path(r[0, steady], r[1, steady]), "--", color="0.35", linewidth=1.2)
-        ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0)
+    if len(names) >= 2:        # the reference as a band: dashes of overlapping periods fill in
+        ax.plot(*decimate_path(r[0, steady], r[1, steady]), "-", color="0.75", linewidth=5.0,
+                solid_capstyle="round", solid_joinstyle="round", label="reference")
+        ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0,
+                label="output")
         ax.set_xlabel(f"{names[0]} [µm]")
         ax.set_ylabel(f"{names[1]} [µm]")
-        ax.set_title("(a) spatial domain after settling\n(dashed: reference, solid: output)",
+        ax.set_title("(a) spatial domain after settling\n(grey band: reference, blue: output)",
                      fontsize=10, y=1.0)
     else:                          # one axis: the output against its reference
         span = [float(np.nanmin(r[0, steady])), float(np.nanmax(r[0, steady]))]
@@ -168,7 +180,10 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
             notes[a] = "\nscaled after settling" + (
                 "" if peak is None else f"; start-up (shaded) peaks at {_length(peak / scale)}")
         for a in (axt, axu, axe, axn):
-            _mark_transient(a, settle_time * 1e3)
+            _mark_transient(a, settle_time * 1e3, min(fade_time, settle_time) * 1e3)
+    if transient and fade_time > 0:
+        axt.set_title("(b) time domain\nshaded: fade-in from rest (dark), settling (light)",
+                      fontsize=10, y=1.0)
     axe.set_title("(c) tracking error per axis" + notes[axe], fontsize=10, y=1.0)
     axn.set_title("(e) Euclidean error" + notes[axn], fontsize=10, y=1.0)
     legend_on_top(axt, 2 * len(names), loc="upper right")
@@ -315,8 +330,12 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
     n_lines = int(line.max()) + 1
     grid = np.linspace(float(start), float(start) + float(extent), int(n_bins))
     k = e.shape[0]
-    fig, axes = plt.subplots(k, 2, figsize=(11, 2.0 + 2.6 * k), squeeze=False)
-    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.1, top=0.86, wspace=0.12, hspace=0.45)
+    W = 11.0
+    top = _title_height(title, W) + 0.35                # the title wrapped to the width
+    H = top + 2.6 * k + 0.7
+    fig, axes = plt.subplots(k, 2, figsize=(W, H), squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.7 / H, top=1 - top / H, wspace=0.12,
+                        hspace=0.45)
     for i in range(k):
         imgs = [_line_image(x, e[i], line, trace, n_lines, grid),
                 _line_image(x, e[i], line, ~trace, n_lines, grid)]
@@ -341,5 +360,5 @@ def raster_error_map(fast_reference, errors, labels, line_index, trace, extent, 
         fig.colorbar(im, ax=list(axes[i]), fraction=0.03, pad=0.02,
                      label="error [µm]" + (f", capped (max {float(finite.max()):.3g})"
                                            if saturated else ""))
-    fig.suptitle(title)
+    suptitle(fig, title)
     return fig

@@ -41,7 +41,10 @@ class CaseResult:
     outputs : numpy.ndarray, shape (p, n_samples)
         Displacements [µm] (NaN after a divergence).
     reference : numpy.ndarray or None, shape (p, n_samples)
-        [µm]; None for drives.
+        The reference the compensator tracked [µm]: the case's reference
+        faded in from rest over :func:`fade_samples` where the case fades in
+        (the metrics, on the settled window after the fade, use the case's
+        reference, the same values there); None for drives.
     divergence : CompensatorDivergence or None
     metrics : list of dict
         Rows ``{channel, metric, value, unit}``.
@@ -100,15 +103,15 @@ def run_case(case):
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         fade = fade_samples(case)
-        if compensator_kind(case.compensator_spec).look_ahead:   # e.g. an inverse of G
+        tracked = fade_in(case.signal, fade) if fade else case.signal   # what the chain follows
+        if compensator_kind(case.compensator_spec).look_ahead:   # e.g. an inverse of G: it
             res = case.compensator.run_reference(plant, case.signal, case.period_samples, fade)
-        else:                                                    # from rest: faded in
-            res = simulate_chain(case.compensator, plant,
-                                 fade_in(case.signal, fade) if fade else case.signal)
+        else:                                                    # fades in the same way
+            res = simulate_chain(case.compensator, plant, tracked)
         commanded = res.inputs
         res = _through_amplifier(case, res)
     caught += [str(w.message) for w in rec]
-    result = chain_result(case, res, caught, commanded)
+    result = chain_result(case, res, caught, commanded, tracked)
     if hasattr(case.compensator, "history_rows") and not res.diverged:   # kind "ilc"
         result.metrics += case.compensator.history_rows(list(plant.hysteresis.output_names))
         result.warnings += [f"ILC: {n}" for n in getattr(case.compensator, "notes", [])]
@@ -216,7 +219,7 @@ def fade_samples(case):
     return int(min(case.period_samples, settle))
 
 
-def chain_result(case, res, caught, commanded=None):
+def chain_result(case, res, caught, commanded=None, tracked=None):
     """CaseResult of a compensated case from its simulated chain (ChainResult).
 
     Parameters
@@ -232,6 +235,10 @@ def chain_result(case, res, caught, commanded=None):
     commanded : numpy.ndarray, shape (m, n_samples), optional
         The compensator's voltages before the amplifier [V] (default
         ``res.inputs``): their ``peak_input`` and ``peak_slew`` are reported.
+    tracked : numpy.ndarray, shape (p, n_samples), optional
+        The reference the chain followed [µm], e.g. ``case.signal`` faded in
+        from rest (default ``case.signal``): kept as the result's
+        ``reference`` (figures, time series); the metrics use ``case.signal``.
 
     Returns
     -------
@@ -254,7 +261,8 @@ def chain_result(case, res, caught, commanded=None):
         if entry.metrics is not None:  # e.g. per scan line
             rows += entry.metrics(case.time, case.signal_spec, case.signal, res.outputs)
         rows += drive_rows(case, res.inputs if commanded is None else commanded)
-    return CaseResult(case, res.inputs, res.outputs, case.signal, res.divergence, rows, caught)
+    reference = case.signal if tracked is None else tracked
+    return CaseResult(case, res.inputs, res.outputs, reference, res.divergence, rows, caught)
 
 
 def model_comparison(case, plant_outputs):

@@ -53,7 +53,8 @@ class FeedbackCaseResult:
     case : hammerstein.scenario.validate.CaseSpec
     mode : {'feedforward', 'feedback', 'both'}
     reference, outputs : numpy.ndarray, shape (p, n_samples)
-        [µm] (outputs NaN when the feedforward diverged).
+        [µm] (outputs NaN when the feedforward diverged); the reference the
+        loop tracked (faded in from rest where the case fades in).
     inputs : numpy.ndarray, shape (m, n_samples)
         Applied voltages [V].
     metrics : list of dict
@@ -168,7 +169,7 @@ def _run_one(case, mode, loops, ff, divergence, r_loop, seed):
     t0 = time.perf_counter()
     res = loop.simulate(r_loop, feedforward=f, seed=seed)
     dt = time.perf_counter() - t0
-    return FeedbackCaseResult(f"{case.name}.{mode}", case, mode, case.signal, res.outputs,
+    return FeedbackCaseResult(f"{case.name}.{mode}", case, mode, r_loop, res.outputs,
                               res.inputs, _metrics(case, res.outputs, res.inputs), [], dt)
 
 

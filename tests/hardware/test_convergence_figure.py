@@ -16,6 +16,10 @@ def _lines(fig):
     return {ln.get_label(): ln.get_ydata() for ln in fig.axes[0].get_lines()}
 
 
+JUDGED = "judged error (what learn compares: noise averaged out)"
+EUCLID = "max Euclidean error ||Y_r - Y|| (settled)"
+
+
 @pytest.mark.parametrize("names, drawn", [(["x", "y"], True), (["x"], False)])
 def test_the_euclidean_and_judged_errors_are_drawn(names, drawn):
     k = np.arange(4)
@@ -23,12 +27,13 @@ def test_the_euclidean_and_judged_errors_are_drawn(names, drawn):
     euclid, judged = np.array([2.0, 1.0, 0.5, np.nan]), np.array([1.5, 0.8, 0.3, 0.2])
     fig = convergence_figure(k, mx, 0.5 * mx, names, "t", 30.0, euclidean=euclid, judged=judged)
     lines = _lines(fig)
-    np.testing.assert_array_equal(lines["judged (noise removed)"], judged)
-    assert ("Euclidean max" in lines) == drawn          # one output: its max is the Euclidean
+    np.testing.assert_array_equal(lines[JUDGED], judged)
+    assert (EUCLID in lines) == drawn          # one output: its max is the Euclidean
     if drawn:
-        np.testing.assert_array_equal(lines["Euclidean max"], euclid)
-    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
-    assert labels.count("judged (noise removed)") == 1
+        np.testing.assert_array_equal(lines[EUCLID], euclid)
+    (legend,) = fig.legends
+    labels = [t.get_text() for t in legend.get_texts()]
+    assert labels.count(JUDGED) == 1
 
 
 def test_settled_series_reads_the_file_and_the_trial_being_written(tmp_path):

@@ -2,7 +2,8 @@
 
 ``figure_problems(fig)`` lists, per axes: a panel without any data drawn inside its
 limits (a line, markers, a mesh, an image, bars), a data line drawn entirely outside
-its limits, and a legend entry naming no artist that is drawn. A panel that says
+its limits, and a legend entry naming no artist that is drawn; and a title (the
+figure's or a panel's) cut off at the figure's edges (``title_problems``). A panel that says
 "no data" in words is not empty. ``png_problems(path)`` opens a PNG with
 ``matplotlib.image.imread`` and reports a blank (single-colour) image.
 ``CheckingRenderer`` stands in for the report's figure renderer: it draws each figure
@@ -107,6 +108,7 @@ def figure_problems(fig, name="figure"):
                     problems.append(f"{where}: line {label!r} lies entirely outside the limits")
         if not any(counts) and not _says_no_data(ax):
             problems.append(f"{where}: no data drawn inside the limits")
+    problems += title_problems(fig, name)
     legends = [ax.get_legend() for ax in fig.axes] + list(fig.legends)
     for legend in legends:
         if legend is None:
@@ -114,6 +116,42 @@ def figure_problems(fig, name="figure"):
         for text in legend.get_texts():
             if text.get_text() not in drawn_labels:
                 problems.append(f"{name}: legend entry {text.get_text()!r} names no drawn artist")
+    return problems
+
+
+def title_problems(fig, name="figure"):
+    """Titles (the figure's, every panel's) that do not fit inside the figure.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        Drawn (the layout and the title positions are final).
+    name : str
+        Prefix of each message.
+
+    Returns
+    -------
+    list of str
+        One message per title whose window extent leaves the figure.
+    """
+    get = getattr(fig.canvas, "get_renderer", None)     # after save(): a plain canvas
+    renderer = get() if get is not None else fig._get_renderer()
+    box = fig.bbox
+    titles = [t for t in fig.texts if t.get_text()]
+    sup = getattr(fig, "_suptitle", None)
+    if sup is not None and sup.get_text() and all(t is not sup for t in titles):
+        titles.append(sup)
+    for ax in fig.axes:
+        titles += [t for t in (ax.title, ax._left_title, ax._right_title)
+                   if t.get_visible() and t.get_text()]
+    problems = []
+    for t in titles:
+        e = t.get_window_extent(renderer)
+        if e.x0 < box.x0 - 0.5 or e.x1 > box.x1 + 0.5 or e.y0 < box.y0 - 0.5 \
+                or e.y1 > box.y1 + 0.5:
+            problems.append(f"{name}: title {t.get_text()[:60]!r} leaves the figure "
+                            f"(extent x {e.x0:.0f}..{e.x1:.0f}, y {e.y0:.0f}..{e.y1:.0f} px; "
+                            f"figure {box.x1:.0f} x {box.y1:.0f} px)")
     return problems
 
 

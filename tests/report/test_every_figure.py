@@ -198,3 +198,51 @@ def test_bode_figure_nyquist_line_is_a_grey_reference_and_the_legend_is_off_the_
     box = legend.get_window_extent()                 # above every panel: on no curve
     assert all(box.y0 >= ax.get_window_extent().y1 for ax in fig.axes)
     plt.close(fig)
+
+
+def test_title_checker_finds_a_title_wider_than_the_figure():
+    from figure_checks import title_problems
+    fig = _figure(lambda ax: ax.plot([0, 1], [0, 1]))
+    fig.suptitle("a title " * 40)
+    fig.axes[0].set_title("short")
+    fig.canvas.draw()
+    (problem,) = title_problems(fig)
+    assert "leaves the figure" in problem and "a title" in problem
+    plt.close(fig)
+
+
+def test_raster_error_map_title_fits_inside_the_figure():
+    from figure_checks import title_problems
+    from hammerstein.report.trajectories import raster_error_map
+    n_lines, per = 8, 100
+    x = np.tile(np.r_[np.linspace(0, 40, per // 2), np.linspace(40, 0, per // 2)], n_lines)
+    line = np.repeat(np.arange(n_lines), per)
+    trace = np.tile(np.r_[np.ones(per // 2, bool), np.zeros(per // 2, bool)], n_lines)
+    e = np.vstack([0.1 * np.sin(x), 0.05 * np.cos(x)])
+    title = ("Hammerstein and Preisach-inverse compensators on a Preisach actuator with coupled "
+             "modes and creep (realistic-2dof): raster-40um-64-lines-20Hz, tracking error per "
+             "scan line")
+    fig = raster_error_map(x, e, ["x_r - x (fast)", "y_r - y (slow)"], line, trace, 40.0, "x",
+                           title)
+    fig.canvas.draw()
+    assert title_problems(fig) == []
+    assert figure_problems(fig) == []
+    plt.close(fig)
+
+
+def test_bode_figure_draws_no_minor_grid():
+    """Regression: python-control's bode_plot drew a grid line on every minor tick of the
+    log frequency axis, a dense mesh over the curves."""
+    from hammerstein.models.dynamics import bending_modes, discretize
+    from hammerstein.report.dynamics_figure import dynamics_bode_figure
+    T = 5e-5
+    G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), T)
+    fig = dynamics_bode_figure(G, G)
+    fig.canvas.draw()
+    for ax in fig.axes:
+        if not ax.get_visible() or not ax.lines:
+            continue
+        minor = [ln for t in ax.xaxis.get_minor_ticks() for ln in [t.gridline] if ln.get_visible()]
+        assert minor == []
+        assert any(t.gridline.get_visible() for t in ax.xaxis.get_major_ticks())
+    plt.close(fig)
