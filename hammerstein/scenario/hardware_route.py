@@ -190,11 +190,17 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     kinds that work); none given: :func:`hammerstein.compensation.model_classes.choose_kind`.
     """
     note = None
+    # bending modes G, not only creep: a preset with creep and no [dynamics] made the default
+    # kind hammerstein, which then failed for want of a G ("the plant is static")
+    has_dynamics = getattr(plant, "dynamics", None) is not None
     if kind is None:
-        choice = choose_kind(plant.hysteresis, not plant.is_static, gain, inversion or "zpetc")
+        choice = choose_kind(plant.hysteresis, has_dynamics, gain, inversion or "zpetc")
         kind, options, note = choice.kind, dict(choice.options), choice.note()
+        if not has_dynamics and getattr(plant, "creep", None) is not None:
+            note += ("; its creep is not inverted: the Hammerstein compensator inverts creep "
+                     "with identified dynamics (identify --dynamics)")
     else:
-        problem = kind_problem(plant.hysteresis, kind, not plant.is_static)
+        problem = kind_problem(plant.hysteresis, kind, has_dynamics)
         if problem:
             raise CompensatorError(problem)
         options = {}

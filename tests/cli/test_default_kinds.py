@@ -123,3 +123,26 @@ def test_scenario_validates_a_records_identify_table(tmp_path, capsys, monkeypat
     assert _run(capsys, "validate", str(good))[0] == 0
     code, out, err = _run(capsys, "validate", str(bad))
     assert code != 0 and "modle" in out + err and "model" in out + err
+
+
+def test_a_preset_with_creep_and_no_dynamics_gets_the_exact_inverse_and_is_told(tmp_path,
+                                                                                 capsys):
+    # the preset's creep made the plant "not static", so the default was hammerstein, which
+    # then failed for want of bending modes: "dynamics: the plant is static"
+    src = (SCENARIOS / "presets" / "realistic-gpi.toml").read_text()
+    kept, skip = [], False
+    for line in src.splitlines():
+        if line.startswith("["):
+            skip = line.startswith("[dynamics")
+        if not skip:
+            kept.append(line)
+    path = tmp_path / "creep-only.toml"
+    path.write_text("\n".join(kept) + "\n")
+    plant = load_plant(path)
+    assert plant.dynamics is None and plant.creep is not None
+    code, out, err = _run(capsys, "compensate", str(path), "--reference", CIRCLE,
+                          "--out", str(tmp_path / "d.csv"))
+    assert code == 0, err
+    (note,) = [ln for ln in err.splitlines() if ln.startswith("note: kind = ")]
+    assert note.startswith("note: kind = preisach-inverse because the model has no dynamics")
+    assert "its creep is not inverted" in note
