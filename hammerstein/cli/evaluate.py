@@ -50,7 +50,8 @@ from hammerstein.cli._hardware import (catch, load_actuator, load_reference, map
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import drive_fade_samples, hardware_fade, read_signals
-from hammerstein.compensation.drive_files import drive_rest_lead, drive_rest_output, optional_columns
+from hammerstein.compensation.drive_files import (drive_input_names, drive_rest_lead, drive_rest_output,
+                                                  optional_columns)
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
@@ -259,6 +260,10 @@ def _handle(args):
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
                 (ins, mapping(args.inputs, ins, "--input-columns"))
             _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured")
+        elif args.drive:         # the voltages applied: the drive file's own input columns
+            drive_ins = drive_input_names(args.drive, outs)
+            u = optional_columns(args.drive, drive_ins, T, "--drive") if drive_ins else None
+            ins = drive_ins if u is not None else ins
         shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
         ref = load_reference(args.reference, shell, args.time, None, args.period)

@@ -405,6 +405,38 @@ def optional_columns(path, names, sampling_period=None, what="file"):
     return values
 
 
+def drive_input_names(path, outputs):
+    """The input columns of a drive file: every column but ``t`` and the outputs' own.
+
+    A drive ``compensate`` or ``learn`` wrote holds ``t``, one column per input
+    [V], and columns of the outputs it aims at (``<output>_shaped``,
+    ``<output>_learnt``, ``<output>_pred``).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The drive file.
+    outputs : list of str
+        Output names.
+
+    Returns
+    -------
+    list of str
+        In the file's order; empty when the file names none.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+    """
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        header = next((line for line in (fh.readline() for _ in range(200))
+                       if line and not line.startswith("#")), "")
+    columns = [c.strip() for c in header.split(",") if c.strip()]
+    return [c for c in columns if c != "t" and c not in outputs
+            and not any(c.startswith(f"{o}_") for o in outputs)]
+
+
 def shaped_target(path, outputs, target, sampling_period=None):
     """The shaped reference a drive file records as its target, or None.
 

@@ -437,3 +437,20 @@ def test_two_learns_into_one_history_at_once_lose_no_trial(tmp_path):
     # the last one written, is refused (or, were it the best, learnt as trial 2): never lost
     done = sum(c == 0 for c in codes)
     assert trials == list(range(1 + done)), (codes, trials, [p.stderr.read() for p in procs])
+
+
+def test_evaluate_with_a_drive_reports_and_draws_its_voltages(tmp_path):
+    # with --drive and no --inputs the figure said "no input voltages given" and no peak
+    # metric was written, though the drive file holds every voltage applied
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    res = _cli("evaluate", "--reference", REF, "--drive", "u0.csv", "--measured", "y0.csv",
+               "--outputs", "x=x_meas,y=y_meas", "--out", "ev", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    d = pd.read_csv(tmp_path / "u0.csv", comment="#")
+    m = pd.read_csv(tmp_path / "ev/metrics.csv").set_index(["channel", "metric"])["value"]
+    for name in ("ux", "uy"):
+        assert m[(name, "peak_input")] == pytest.approx(d[name].abs().max(), rel=1e-12)
+        steps = np.abs(np.diff(np.concatenate([[0.0], d[name].to_numpy()])))
+        assert m[(name, "peak_slew")] == pytest.approx(steps.max() / T, rel=1e-9)
