@@ -40,7 +40,8 @@ from hammerstein.compensation.drive_files import rest_lead_text
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.reach import REACH_NOTE_START
-from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, RANGE_MARGINS,
+                                              chatter_warnings)
 from hammerstein.exceptions import CompensatorDivergence
 from hammerstein.scenario.hardware_route import (_kind_and_options, _rest_voltages,
                                                  compensate_reference)
@@ -167,12 +168,24 @@ def _shrink_warning(plant, ref, drive):
         return None
     limits = "; ".join(f"{name} [{c.low:g}, {c.high:g}] V, {c.slew_rate:.4g} V/s"
                        for name, c in zip(amp.inputs, amp.channels))
-    return (f"the reference was shaped by up to {dev[k]:.3g} µm on "
+    u = np.asarray(drive.inputs, dtype=float)[:, start:]
+    # within what the range stage's margins leave inside the range (shaping.RANGE_MARGINS)
+    edge = [(1.0 - min(RANGE_MARGINS)) * 0.5 * (c.high - c.low) for c in amp.channels]
+    at_edge = [name for name, c, row, e in zip(amp.inputs, amp.channels, u, edge)
+               if row.size and (row.max() >= c.high - e or row.min() <= c.low + e)]
+    head = (f"the reference was shaped by up to {dev[k]:.3g} µm on "
             f"{plant.hysteresis.output_names[k]}, {100 * share[k]:.3g} % of its half-span, after "
-            f"the fade-in: the limits measured on the records ({limits}) hold it back. Records "
-            f"slower than the reference understate the amplifier (a 1 Hz record's slew is its "
-            f"own): widen the model file's [amplifier] table to your amplifier's limits "
-            f"(docs/drives.md), or identify on faster records")
+            f"the fade-in: the limits measured on the records ({limits}) hold it back")
+    if at_edge:      # the range, not the slew: faster records would not change it
+        return (f"{head}. The drive sits at the edge of the range on {', '.join(at_edge)}: the "
+                f"reference asks more than the records' range reaches there (with the "
+                f"cross-couplings); make it smaller or move its center, or, if your amplifier "
+                f"goes further than the records did, widen the model file's [amplifier] range "
+                f"(docs/drives.md)")
+    return (f"{head}. If your amplifier slews faster than the records did (a 1 Hz record's "
+            f"slew is its own), widen the model file's [amplifier] table to its limits "
+            f"(docs/drives.md) or identify on faster records; if those are its limits, the "
+            f"reference is faster than it can follow: lower its frequency or its size")
 
 
 def _handle(args):

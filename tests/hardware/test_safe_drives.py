@@ -522,3 +522,26 @@ def test_a_reference_shaped_far_from_the_one_asked_is_a_warning(tmp_path, slew, 
     assert bool(lines) == warned
     if warned:
         assert lines[0].startswith("warning: ") and "60 V/s" in lines[0] and "[amplifier]" in lines[0]
+        assert "lower its frequency or its size" in lines[0]      # the slew, not the range
+        assert "edge of the range" not in lines[0]
+
+
+def test_a_reference_held_back_by_the_range_is_told_so_not_to_record_faster(tmp_path):
+    # a 40 µm circle behind a +-3 V range (the records' slew far above what it needs): the
+    # warning said "records slower than the reference understate the amplifier", which
+    # cannot help; it names the input at the edge of the range and the size or center
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
+    text += '\n[amplifier]\nsource = "records"\nrange = [-3.0, 3.0]\nslew_rate = 1e6\n'
+    preset = tmp_path / "narrow.toml"
+    preset.write_text(text)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--reference",
+                     '{ kind = "circle", radius = 40, frequency = 20, periods = 6 }',
+                     "--out", str(tmp_path / "d.csv")])
+    assert code == 0, err.getvalue()
+    (line,) = [ln for ln in err.getvalue().splitlines() if "% of its half-span" in ln]
+    assert "The drive sits at the edge of the range on ux, uy" in line
+    assert "make it smaller or move its center" in line and "faster records" not in line
+    u, _, _ = _drive(tmp_path / "d.csv")
+    assert 2.9 <= np.abs(u).max() <= 3.0         # within the range, at its edge
