@@ -29,6 +29,7 @@ EXAMPLES = {
         "--time 0 --out model.toml --metrics fit.csv --plot fit.png",
         "hammerstein identify hysteresis-ux.csv hysteresis-uy.csv --inputs ux,uy --outputs x,y "
         "--time t --dynamics --dynamics-records multisine-ux.csv multisine-uy.csv "
+        "multisine-ux-validation.csv multisine-uy-validation.csv "
         "--creep-records creep-ux.csv creep-uy.csv --out preset.toml",
     ],
     "excitation": [
