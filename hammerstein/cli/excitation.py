@@ -25,6 +25,7 @@ usage error.
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from pathlib import Path
 
@@ -36,7 +37,7 @@ from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
                                             _slew_limited_multisine, demagnetising_cycle,
                                             excitation_set, multisine, peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
-                                    name_problem, removed_if_failed, safe_write)
+                                    locked, name_problem, removed_if_failed, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
 
 __all__ = ["add_parser", "MANIFEST", "readme_text"]
@@ -507,31 +508,23 @@ def _handler(args):
             raise _Usage(_option_names(str(exc))) from None
         out = Path(args.out)
         targets = [f"{r.name}.csv" for r in records] + ["README.md"]
-        owned = _owned(out)
-        for name in targets + [MANIFEST]:
-            path = out / name
-            if name == MANIFEST:
-                if path.exists() and not owned and not args.force and not path.is_file():
-                    raise _Usage(f"--out: {path} exists and is not a file")
-                continue
-            if _exists(path) and name not in owned and not args.force:
-                raise _Usage(f"--out: {path} exists and was not written by hammerstein "
-                             f"excitation; choose another directory or add --force")
+        _owned_targets(out, targets, args.force)
     except _Usage as exc:
         print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
         return 2
     try:
-        manifest = "\n".join([_MANIFEST_HEAD, *sorted(owned | set(targets))]) + "\n"
-        # a failed write (full disk) or an interruption leaves no file, not even the manifest,
-        # and no directory this run made
-        with removed_if_failed(out), all_or_nothing():
-            safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
-            for r, name in zip(records, targets):
-                safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
-            safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals, centre,
-                                                      band),
-                       "README",
-                       root=out)
+        # two excitations into one directory at once both read the manifest before either
+        # wrote it: one's entries were lost, and its files later refused as not its own. The
+        # check and the write now run one after the other (a lock on the directory's parent)
+        lock = locked(out.absolute()) if out.absolute().parent.is_dir() else contextlib.nullcontext()
+        with lock:
+            try:
+                owned = _owned_targets(out, targets, args.force)      # as the lock found it
+            except _Usage as exc:
+                print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
+                return 2
+            _write_records(out, owned, targets, records, names, amplitude, T, reversals, centre,
+                           band)
     except (FileLimitError, OSError) as exc:
         if isinstance(exc, FileLimitError):
             print(f"hammerstein excitation: error: {' '.join(str(exc).split())}", file=sys.stderr)
@@ -539,18 +532,53 @@ def _handler(args):
             print(f"hammerstein excitation: error: {exc.filename or args.out}: cannot write "
                   f"({exc.strerror or exc})", file=sys.stderr)
         return 1
+    return _written(out, records, targets, T, band, args)
+
+
+def _owned_targets(out, targets, force):
+    """The files the directory's manifest owns, once every target may be written (else _Usage)."""
+    owned = _owned(out)
+    for name in targets + [MANIFEST]:
+        path = out / name
+        if name == MANIFEST:
+            if path.exists() and not owned and not force and not path.is_file():
+                raise _Usage(f"--out: {path} exists and is not a file")
+            continue
+        if _exists(path) and name not in owned and not force:
+            raise _Usage(f"--out: {path} exists and was not written by hammerstein "
+                         f"excitation; choose another directory or add --force")
+    return owned
+
+
+def _write_records(out, owned, targets, records, names, amplitude, T, reversals, centre, band):
+    """The manifest, the records and README.md: all of them or none."""
+    manifest = "\n".join([_MANIFEST_HEAD, *sorted(owned | set(targets))]) + "\n"
+    # a failed write (full disk) or an interruption leaves no file, not even the manifest,
+    # and no directory this run made
+    with removed_if_failed(out), all_or_nothing():
+        safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
+        for r, name in zip(records, targets):
+            safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
+        safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals, centre,
+                                                  band),
+                   "README",
+                   root=out)
+
+
+def _written(out, records, targets, T, band, args):
+    """Print what was written and the notes on the multisines' band; exit status 0."""
     for r, name in zip(records, targets):
         print(f"wrote {out / name}: {r.kind}, {r.time.size} samples ({r.time.size * T:g} s)")
     print(f"wrote {out / 'README.md'}")
     if band is not None and band["narrowed"] and band["top"] < band["default"]:
         options = ", ".join(f"{f:.4g} Hz: {100 * s:.2g} %" for f, s in band["options"])
-        print(f"note: within --slew-rate {args.slew_rate:g} V/s the multisines' band reaches "
+        print_err(f"note: within --slew-rate {args.slew_rate:g} V/s the multisines' band reaches "
               f"{band['top']:.4g} Hz only (default {band['default']:.4g} Hz): bending modes "
               f"above it cannot be identified from these records; --f-max HZ keeps a wider "
               f"band at a lower amplitude" + (f" ({options} of the amplitude)" if options else "")
               + " (README.md)")
     elif band is not None:
-        print(f"note: within --slew-rate {args.slew_rate:g} V/s the multisines up to "
+        print_err(f"note: within --slew-rate {args.slew_rate:g} V/s the multisines up to "
               f"{band['top']:.4g} Hz were scaled to {_share_text(*band['share'])} of the amplitude "
               f"({_share_text(*band['volts'], 1, ' V')}): check their response against your "
               f"sensor's noise (README.md)")

@@ -215,7 +215,7 @@ def test_a_slew_rate_keeps_every_record_within_it(tmp_path, capsys):
     band = ["--f-max", "400"]               # given: kept, the amplitude scaled
     assert main(["excitation", "--inputs", "ux,uy,uz", "--amplitude", "10", "--sampling-period",
                  str(T), "--out", str(out), "--slew-rate", str(S), "--hold", "0.5", *band]) == 0
-    assert "scaled to" in capsys.readouterr().out
+    assert "scaled to" in capsys.readouterr().err
     reference = tmp_path / "fast"
     assert main(["excitation", "--inputs", "ux,uy,uz", "--amplitude", "10", "--sampling-period",
                  str(T), "--out", str(reference), "--hold", "0.5", *band]) == 0
@@ -315,7 +315,7 @@ def test_a_slew_rate_says_how_far_the_band_reaches_and_what_f_max_does(tmp_path,
     out = tmp_path / "narrow"
     assert main(["excitation", "--inputs", "ux,uy", "--amplitude", "10", "--sampling-period",
                  str(Ts), "--slew-rate", "2000", "--out", str(out)]) == 0
-    note = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note:")]
+    note = [line for line in capsys.readouterr().err.splitlines() if line.startswith("note:")]
     _, data = _read(out / "multisine-ux.csv")
     u = data[:, 1]
     n = u.size // 4
@@ -335,3 +335,26 @@ def test_a_slew_rate_says_how_far_the_band_reaches_and_what_f_max_does(tmp_path,
     readme = (wide / "README.md").read_text()
     assert f"up to 2400 Hz at" in readme and f"{peak:.2g} V)" in readme
     assert "Modes above the Nyquist frequency (2500 Hz) fold into the band" in readme
+
+
+@pytest.mark.slow  # two processes at once
+def test_two_excitations_into_one_directory_at_once_keep_both_in_the_manifest(tmp_path):
+    # both read the manifest before either wrote it: one set of files was left out of it, and
+    # a later run of that set was refused ("was not written by hammerstein excitation")
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    base = [sys.executable, "-m", "hammerstein", "excitation", "--amplitude", "10",
+            "--sampling-period", "5e-5", "--out", str(tmp_path / "cx")]
+    for attempt in range(3):             # the race needs both to start together: try a few
+        procs = [subprocess.Popen(base + ["--inputs", name], stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.PIPE, text=True, env=env)
+                 for name in ("ux", "vx")]
+        assert [p.wait(timeout=300) for p in procs] == [0, 0]
+        manifest = (tmp_path / "cx" / ".hammerstein-excitation").read_text().splitlines()
+        assert {"hysteresis-ux.csv", "hysteresis-vx.csv"} <= set(manifest), manifest
+    for name in ("ux", "vx"):            # and each set may be written again
+        assert subprocess.run(base + ["--inputs", name], capture_output=True, env=env,
+                              timeout=300).returncode == 0
