@@ -76,7 +76,30 @@ class SafeStream:
             text = "".join(c if c.isprintable() or c in _KEEP else escape(c) for c in text)
         if self._max is not None:
             text = self._cap(text)
-        return self._stream.write(text)
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:          # `| head`: the reader has gone, the work goes on
+            self._reader_gone()
+            return len(text)
+
+    def flush(self):
+        """Flush; a reader that has gone is not an error (the stream then writes to /dev/null)."""
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._reader_gone()
+
+    def _reader_gone(self):
+        """Point the stream's descriptor at /dev/null: a command whose stdout reader has gone
+        (``hammerstein run ... | head -1``) finishes its work and exits with its own status
+        (it stopped with exit 1 and no word, its report half done under ``set -o pipefail``)."""
+        try:
+            fd = self._stream.fileno()
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, fd)
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):
+            pass
 
     def _cap(self, text):
         """``text`` with every line cut at ``max_line`` characters (counting earlier writes)."""

@@ -368,3 +368,24 @@ def test_ctrl_c_during_the_start_up_imports_is_one_line(tmp_path):
         p.send_signal(signal.SIGINT)
         _, err = p.communicate(timeout=120)
         assert (p.returncode, err) == (130, "interrupted\n") or p.returncode == 0, (delay, err)
+
+
+@pytest.mark.slow  # a process whose stdout reader goes away
+def test_a_stdout_reader_that_goes_away_does_not_change_the_exit_status(tmp_path):
+    # `hammerstein run ... | head -c 0` under `set -o pipefail`: exit 1 and no word, though the
+    # report was written (and with several scenarios, the later ones were never run)
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    out = tmp_path / "r"
+    second = GOOD.with_name("good-static-2.toml")
+    script = (f'set -o pipefail; "{sys.executable}" -m hammerstein run "{GOOD}" "{second}" '
+              f'--out "{out}" | head -c 0')
+    run = subprocess.run(["bash", "-c", script], capture_output=True, text=True, env=env,
+                         timeout=300)
+    assert run.returncode == 0, run.stderr
+    assert "Traceback" not in run.stderr and "BrokenPipe" not in run.stderr
+    assert (out / "good-static" / "report.md").is_file()
+    assert len([p for p in out.iterdir() if (p / "report.md").is_file()]) == 2   # both ran
+    lst = subprocess.run(["bash", "-c", f'set -o pipefail; "{sys.executable}" -m hammerstein '
+                                        f'list | head -1'],
+                         capture_output=True, text=True, env=env, timeout=300)
+    assert (lst.returncode, lst.stdout, lst.stderr) == (0, "presets:\n", "")
