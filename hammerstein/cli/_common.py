@@ -137,6 +137,8 @@ def out_dir_problem(out, follow_link=False):
     """
     if not str(out).strip():
         return "--out: empty path; expected a directory"
+    if str(out).strip() == "-":      # by convention stdout, never a directory named '-'
+        return "--out: '-' (standard output) is not written to; expected a directory"
     p = Path(out)
     if os.path.islink(p) and not follow_link:
         return (f"--out: {p} is a symbolic link to {os.path.realpath(p)}; an output directory is "
@@ -164,6 +166,9 @@ def out_file_problem(out, what="file", force=False):
     """
     if not str(out).strip():
         return f"--out: empty path; expected a {what} name"
+    if str(out).strip() == "-":      # by convention stdout: a file named '-' was written instead
+        return (f"--out: '-' (standard output) is not written to; expected a {what} name "
+                f"(./- for a file of that name)")
     p = Path(out)
     if p.is_symlink():
         try:

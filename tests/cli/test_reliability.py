@@ -101,6 +101,23 @@ def test_out_dir_problems_are_usage_errors(capsys, tmp_path):
     assert f.read_text() == "x" and sorted(p.name for p in tmp_path.iterdir()) == ["f"]
 
 
+@pytest.mark.parametrize("command", ["compensate", "learn", "identify", "run", "excitation"])
+def test_out_dash_is_not_a_file_named_dash(capsys, tmp_path, monkeypatch, command):
+    # `compensate ... --out -` wrote a file named '-' (by convention, '-' is stdout)
+    monkeypatch.chdir(tmp_path)
+    args = {"compensate": ["rakotondrabe-2dof", "--reference",
+                           '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'],
+            "learn": ["rakotondrabe-2dof", "--reference", "r.csv", "--drive", "d.csv",
+                      "--measured", "m.csv"],
+            "identify": ["r.csv", "--input", "1", "--output", "2", "--time", "0"],
+            "run": [str(GOOD)],
+            "excitation": ["--inputs", "ux", "--amplitude", "10", "--sampling-period", "5e-5"],
+            }[command]
+    status, _, err = _call(capsys, command, *args, "--out", "-")
+    assert status == 2 and len(err) == 1 and "--out: '-' (standard output)" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
 # -- single files: safe_write ---------------------------------------------------------------
 def test_safe_write_writes_a_symlinks_target_and_keeps_permissions(tmp_path):
     real = tmp_path / "real.toml"
