@@ -502,9 +502,11 @@ def _figures(scenario, results, directory, jobs):
             start = int(round(r.spec.settle_periods * r.spec.period_samples))
             curves.append({"label": r.name, "reference": r.reference[:2, start:],
                            "outputs": r.outputs[:2, start:]})
+        drawn = ", ".join(r.name for r in traj)
         jobs.add(directory / "xy-all.png", trajectories.xy_overlay, curves, out_names[:2],
-                 f"{prefix}: all trajectories after settling")
-        figs.append(("All trajectories after settling (dashed: references)", "xy-all.png"))
+                 f"{prefix}: the XY trajectories of {drawn} after settling")
+        figs.append((f"The XY trajectories of {drawn} after settling (dashed: references; a "
+                      f"case that drives one output is drawn on its own only)", "xy-all.png"))
     return figs
 
 

@@ -133,7 +133,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         ax.set_ylabel(f"{names[0]} [µm]")
         ax.set_title("(a) output against reference after settling\n(dashed: y = reference)",
                      fontsize=10, y=1.0)
-    ax.set_aspect("equal", adjustable="datalim")
+    _equal_aspect(ax)
     ax.grid(True, alpha=0.3)
 
     axt = fig.add_subplot(gs[0, 1])
@@ -238,6 +238,27 @@ def divergence_figure(inputs, names, sample, reason, title):
     return fig
 
 
+#: an XY panel shrinks its box to the data's aspect (equal scales) when the data's height over
+#: width lies within these bounds; beyond, the data limits grow instead (a line scan would leave
+#: a sliver of a box)
+BOX_ASPECT_RANGE = (0.4, 2.5)
+
+
+def _equal_aspect(ax):
+    """Equal scales on an XY panel, without a box mostly empty around a square-ish trajectory.
+
+    ``adjustable="datalim"`` kept the box and stretched the limits: a 40 x 30 µm raster in a
+    tall box showed y from -22 to 55 µm. The box follows the data's aspect instead, within
+    :data:`BOX_ASPECT_RANGE`.
+    """
+    ax.relim()
+    ax.autoscale_view()
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    ratio = (y1 - y0) / (x1 - x0) if x1 > x0 else 0.0
+    lo, hi = BOX_ASPECT_RANGE
+    ax.set_aspect("equal", adjustable="box" if lo <= ratio <= hi else "datalim")
+
+
 def xy_overlay(curves, names, title):
     """Several XY trajectories with their references (paper Fig. 10-a).
 
@@ -263,7 +284,7 @@ def xy_overlay(curves, names, title):
                 label="references" if i == 0 else "_reference")   # one entry for all
         ax.plot(*decimate_path(*c["outputs"][:2]), "-", color=f"C{i}", linewidth=1.1,
                 label=c["label"])
-    ax.set_aspect("equal", adjustable="datalim")
+    _equal_aspect(ax)
     ax.set_xlabel(f"{names[0]} [µm]")
     ax.set_ylabel(f"{names[1]} [µm]")
     ax.grid(True, alpha=0.3)
