@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from hammerstein.cli._common import out_dir_problem, print_err
+from hammerstein.report.replication import GENERATED
 from hammerstein.runner import replicate
 
 __all__ = ["add_parser", "handler"]
@@ -78,5 +79,8 @@ def handler(args):
             print(f"{o.path}: wrote {o.out_dir}/")
         else:
             print_err(f"error: {'; '.join(o.error.splitlines())}")
-    print(f"wrote {Path(args.out) / 'README.md'}")
+    written = [name for name in GENERATED if (Path(args.out) / name).is_file()]
+    print(f"wrote {Path(args.out) / 'README.md'}" + (
+        f" and, beside it, {', '.join(n for n in written if n != 'README.md')}"
+        if len(written) > 1 else ""))
     return 0 if all(o.ok for o in outcomes) else 1

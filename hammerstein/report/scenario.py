@@ -30,6 +30,7 @@ from hammerstein.report import trajectories
 from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.definitions import definitions_lines, plural
+from hammerstein.report.compensator_words import _compensator_title, _identify_summary
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame, write_signals_csv
 from hammerstein.scenario.execute import fade_samples
@@ -115,42 +116,6 @@ def signal_summary(mode, s):
 def _signal_summary(spec):
     what = "open-loop drive" if spec.mode == "drive" else "reference"
     return f"{what}: {signal_summary(spec.mode, spec.signal_spec)}"
-
-
-def _records_summary(ident):
-    """An ``identify = { records = "excitation", ... }`` table in words: what it asked for
-    (the class ``auto`` keeps is chosen when the scenario runs)."""
-    bits = [f"model {ident.get('model', 'auto')}"]
-    if ident.get("creep"):
-        bits.append("with creep")
-    if ident.get("range") is not None:
-        bits.append(f"range [{ident['range'][0]:g}, {ident['range'][1]:g}] V")
-    elif ident.get("amplitude") is not None:
-        amp = ident["amplitude"]
-        bits.append(f"{', '.join(f'{a:g}' for a in amp) if isinstance(amp, list) else f'{amp:g}'} V")
-    if ident.get("slew_rate") is not None:
-        bits.append(f"slew rate {ident['slew_rate']:g} V/s")
-    return "model identified from the excitation records (" + ", ".join(bits) + ")"
-
-
-def _identify_summary(ident):
-    if not ident:
-        return "model identified on the plant"
-    if ident.get("records") == "excitation":
-        return _records_summary(ident)
-    if ident.get("records") == "files":
-        n = sum(len(ident.get(k) or []) for k in ("hysteresis_records", "dynamics_records",
-                                                   "creep_records"))
-        kinds = ["hysteresis"] + [w for w, k in (("dynamics", "dynamics_records"),
-                                                 ("creep", "creep_records")) if ident.get(k)]
-        return (f"model identified from {n} measured record file(s) ({', '.join(kinds)}; "
-                f"{ident.get('model', 'auto')} class)")
-    at = _num(ident["frequency"], "Hz")
-    if "amplitude" in ident:
-        at += f", {_num(ident['amplitude'], 'V')}"
-    bits = [f"{ident['n_hysterons']} hysterons"] if "n_hysterons" in ident else []
-    bits += [ident["method"]] if "method" in ident else []
-    return f"model identified at {at}" + (f" ({', '.join(bits)})" if bits else "")
 
 
 def compensator_summary(c):
@@ -356,32 +321,6 @@ def _drive_summary(rs):
 
 def _reference_summary(rs):
     return _signal_words(rs, "µm", "compensated references")
-
-
-def _model_summary(c):
-    model = c.get("model", "plant")
-    if model == "identified":
-        i = c.get("identify", {})
-        if i.get("records") in ("excitation", "files"):
-            return _identify_summary(i)
-        extra = ", ".join(str(i[k]) for k in ("method", "bounds") if k in i)
-        return f"model identified at {i.get('frequency', 0):g} Hz" + (f" ({extra})" if extra else "")
-    if model == "plant":
-        return "the plant's own model"
-    return f"model {model}"
-
-
-def _compensator_title(spec):
-    """A compensator in words, e.g. 'multivariable compensator, model identified
-    at 100 Hz (least-squares, monotone), midpoint gain'."""
-    c = spec.compensator_spec
-    words = f"{c.get('kind', 'multivariable')} compensator, {_model_summary(c)}"
-    gain = c.get("gain")
-    if gain is not None:
-        words += f", {gain if isinstance(gain, str) else 'matrix'} gain"
-    if c.get("iterations", 1) != 1:
-        words += f", {c['iterations']} iterations"
-    return words
 
 
 def _identified_frequency(spec):

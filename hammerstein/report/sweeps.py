@@ -24,6 +24,7 @@ from hammerstein.report.definitions import plural
 from hammerstein.report.messages import group_warnings
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.tables import markdown_table, metrics_frame
+from hammerstein.report.compensator_words import _compensator_title
 
 __all__ = ["sweep_table", "sweep_figure", "stability_figure", "sweep_report_lines", "metric_label",
            "compensator_legend", "sweep_subject"]
@@ -184,7 +185,6 @@ def sweep_subject(spec, results):
     if len(labels) > 1:
         parts.append(f"{len(labels)} compensators")
     elif spec.mode != "drive" and getattr(first.spec, "compensator_spec", None):
-        from hammerstein.report.scenario import _compensator_title   # (imports this module)
         parts.append(_compensator_title(first.spec))
     periods = sig.get("periods")
     settle = getattr(first.spec, "settle_periods", None)

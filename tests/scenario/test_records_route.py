@@ -158,7 +158,8 @@ def test_the_report_says_what_a_records_table_asked_for():
     """report.md and the figure titles named a records route "model identified at 1 Hz (15
     hysterons, least-squares)", the words of the classical route, while auto kept another
     class from the excitation records."""
-    from hammerstein.report.scenario import compensator_summary, _model_summary
+    from hammerstein.report.compensator_words import _model_summary
+    from hammerstein.report.scenario import compensator_summary
     spec = identify_table({"records": "excitation", "creep": True, "range": [0.0, 10.0],
                            "slew_rate": 2000.0})
     table = {"kind": "hammerstein", "model": "identified", "identify": spec}
@@ -260,7 +261,8 @@ def test_validate_names_a_record_file_that_is_not_there(tmp_path):
 
 def test_titles_and_the_report_name_a_files_table_as_such():
     # the figures' titles read "model identified at 0 Hz (least-squares, none)"
-    from hammerstein.report.scenario import _model_summary, compensator_summary
+    from hammerstein.report.compensator_words import _model_summary
+    from hammerstein.report.scenario import compensator_summary
     c = {"kind": "hammerstein", "model": "identified",
          "identify": {"records": "files", "hysteresis_records": ["h1.csv", "h2.csv"],
                       "creep_records": ["c.csv"], "model": "auto"}}
