@@ -15,7 +15,7 @@ import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.core.files import FileLimitError, safe_write
-from hammerstein.report.replication import README_MARK, foreign_outputs
+from hammerstein.report.replication import GENERATED, README_MARK, foreign_outputs
 from hammerstein.runner import MARKER, TMP_PREFIX, remove_stale_temporaries
 from snapshots import tree_snapshot
 
@@ -151,8 +151,12 @@ def test_replicate_replaces_its_own_readme_and_force_replaces_a_users(capsys, tm
     assert _call(capsys, "replicate", "--scenarios", scenarios, "--out", out, "--force")[0] == 0
     text = (out / "README.md").read_text()
     assert README_MARK in text and stat.S_IMODE((out / "README.md").stat().st_mode) == 0o640
-    status, _, err = _call(capsys, "replicate", "--scenarios", scenarios, "--out", out)
+    status, stdout, err = _call(capsys, "replicate", "--scenarios", scenarios, "--out", out)
     assert status == 0, err  # its own README: replaced without --force
+    # stdout names every file written beside the README, as it is on disk
+    beside = [n for n in GENERATED if n != "README.md" and (out / n).is_file()]
+    assert beside and stdout.splitlines()[-1] == (f"wrote {out / 'README.md'} and, beside it, "
+                                                  f"{', '.join(beside)}")
     assert not [p for p in out.iterdir() if p.name.startswith(".") and p.name != "good-static"]
 
 
