@@ -39,6 +39,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from hammerstein.exceptions import FileLimitError, OutputError
+from hammerstein.core import _stale
+from hammerstein.core._stale import STALE_TMP_S, _read_only_mount, _remove_stale_temporaries  # noqa: F401
 # user strings, provenance and locks, owners of temporaries and scenario paths live in
 # private modules; this module is their public face (every name importable from here)
 from hammerstein.core._strings import (C_HEADERS, C_RESERVED, EXCERPT, MAX_NAME_CHARS,
@@ -92,7 +94,7 @@ def start_budget():
     _BUDGET["active"], _BUDGET["used"], _BUDGET["seen"] = True, 0, set()
 
 #: Suffix of the temporary files of :func:`safe_write`.
-TMP_SUFFIX = ".hammerstein-tmp"
+TMP_SUFFIX = _stale.TMP_SUFFIX
 
 
 def _size(n):
@@ -548,6 +550,9 @@ def safe_write(path, data, what="file", root=None):
             raise FileLimitError(f"{path}: exists and is {kind}; expected a {what} to replace")
         mode = stat.S_IMODE(st.st_mode)
         if not mode & 0o222 or not os.access(target, os.W_OK):  # a rename would bypass it
+            if _read_only_mount(target):       # chmod cannot help there
+                raise FileLimitError(f"{path}: is on a read-only file system; choose another "
+                                     f"path")
             raise FileLimitError(f"{path}: is read-only; make it writable (chmod u+w) to have "
                                  f"it replaced, or choose another path")
     parent = target.parent
@@ -560,6 +565,7 @@ def safe_write(path, data, what="file", root=None):
     parent.mkdir(parents=True, exist_ok=True)
     if mode is None:
         mode = 0o666 & ~umask()
+    _remove_stale_temporaries(parent, target.name)
     tmp = None
     try:
         with deferred_signals():

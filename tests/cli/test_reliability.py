@@ -406,3 +406,35 @@ def test_a_stdout_reader_that_goes_away_does_not_change_the_exit_status(tmp_path
                                         f'list | head -1'],
                          capture_output=True, text=True, env=env, timeout=300)
     assert (lst.returncode, lst.stdout, lst.stderr) == (0, "presets:\n", "")
+
+
+def test_a_killed_writers_old_temporaries_are_removed_by_the_next_write(tmp_path):
+    # SIGKILL between the temporary and the rename left megabytes of .NAME.<hex>.hammerstein-tmp
+    # that no later run removed; only this target's, only old ones, only the user's own
+    import time as _time
+    from hammerstein.core.files import STALE_TMP_S, TMP_SUFFIX
+    old = tmp_path / f".drive.csv.0123456789ab{TMP_SUFFIX}"
+    fresh = tmp_path / f".drive.csv.ba9876543210{TMP_SUFFIX}"      # a live writer's
+    other = tmp_path / f".other.csv.0123456789ab{TMP_SUFFIX}"      # another target's
+    mine = tmp_path / ".drive.csv.notatemporary.hammerstein-tmp"   # not our pattern
+    for p in (old, fresh, other, mine):
+        p.write_text("x")
+    then = _time.time() - STALE_TMP_S - 60
+    for p in (old, other, mine):
+        os.utime(p, (then, then))
+    safe_write(tmp_path / "drive.csv", "t,u\n0,0\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["drive.csv", fresh.name, other.name, mine.name])
+
+
+def test_a_read_only_file_system_is_named_not_chmod(tmp_path, monkeypatch):
+    from hammerstein.core import files
+    target = tmp_path / "d.csv"
+    target.write_text("x")
+    monkeypatch.setattr(files.os, "access", lambda *a, **k: False)   # as on a read-only mount
+    monkeypatch.setattr(files, "_read_only_mount", lambda path: True)
+    with pytest.raises(FileLimitError, match="read-only file system; choose another path"):
+        safe_write(target, "y")
+    monkeypatch.setattr(files, "_read_only_mount", lambda path: False)
+    with pytest.raises(FileLimitError, match=r"chmod u\+w"):
+        safe_write(target, "y")
