@@ -19,7 +19,8 @@ from hammerstein.compensation.drive import DRIVE_MARK, read_signals
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.models.plant import HammersteinPlant
-from hammerstein.io.presets import load_dynamics, load_model, load_plant, read_toml, resolve_preset
+from hammerstein.io.presets import (load_dynamics, load_model, load_plant, read_toml,
+                                    records_sampling_period, resolve_preset)
 from hammerstein.identification.identification_pipeline import DYNAMICS_FIT_WARN_PERCENT
 from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
 from hammerstein.scenario.validate import _signal
@@ -174,7 +175,7 @@ def load_actuator(path, sampling_period=None):
             plant.amplifier = amp
     else:
         if sampling_period is None:
-            sampling_period = _records_period(data, path)
+            sampling_period = records_sampling_period(data, path)
         model = load_model(p)
         dyn = load_dynamics(p, model.output_names, sampling_period) if "dynamics" in data else None
         plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
@@ -222,24 +223,6 @@ def dynamics_problem(data, path):
             f"mode this hardly matters; near it the drive follows that G's errors. Identify "
             f"again from better broadband records, or correct on the measured response "
             f"(hammerstein learn)")
-
-
-def _records_period(data, path):
-    """The sampling period [s] of the records a model file was identified from, or why none."""
-    ident = data.get("identification") if isinstance(data, dict) else None
-    periods = ident.get("sampling_period_s") if isinstance(ident, dict) else None
-    periods = periods if isinstance(periods, list) else [periods]
-    values = [float(v) for v in periods if isinstance(v, (int, float)) and not isinstance(v, bool)]
-    if not values or len(values) != len(periods) or not all(np.isfinite(values)) \
-            or min(values) <= 0:
-        raise PresetError(f"{path}: the model file gives no sampling period ([identification] "
-                          f"sampling_period_s, written by identify); give --sampling-period S")
-    if max(values) > min(values) * (1 + 1e-9):
-        shown = ", ".join(f"{v:g}" for v in sorted(set(values)))
-        raise PresetError(f"{path}: the model's records were sampled at different periods "
-                          f"({shown} s, [identification] sampling_period_s); give "
-                          f"--sampling-period S")
-    return values[0]
 
 
 def _delay_problem(data):

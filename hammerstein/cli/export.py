@@ -175,7 +175,7 @@ def _closed_loop_code(args, source, comp, T, name):
                                         "range": list(args.amplifier_range),
                                         **({"slew_rate": args.slew_rate}
                                            if args.slew_rate is not None else {})}}
-    if source.sampling_period is not None:      # a preset: its actuator (dynamics, creep)
+    if source.preset:                           # a preset: its actuator (dynamics, creep)
         plant = load_plant(source.path)
     else:
         plant = HammersteinPlant(source.model, T)

@@ -26,7 +26,7 @@ from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.compensation.mixed_compensators import MIXED_KINDS, mixed_compensator
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.io.presets import (load_creep, load_dynamics, load_model, load_plant, read_toml,
-                                    resolve_preset)
+                                    records_sampling_period, resolve_preset)
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
 from hammerstein.export.c_code import AmplifierLimits
 from hammerstein.export.fmu import fmu_owned
@@ -67,7 +67,9 @@ class ExportSource:
     model : MultivariablePI
         The hysteresis model.
     sampling_period : float or None
-        ``[preset] sampling_period`` [s] (None for a model file).
+        ``[preset] sampling_period`` [s]; for a model file, the period of the
+        records it was identified from (``[identification] sampling_period_s``),
+        None when it gives none.
     dynamics : control.StateSpace or None
         The discretised linear dynamics of a preset (None without).
     amplifier : dict or None
@@ -75,6 +77,8 @@ class ExportSource:
     creep : list or None
         The file's ``[creep]`` (one entry per output), inverted with the
         dynamics by kind ``hammerstein``; None without.
+    preset : bool
+        The file is a preset (``[preset]``: an actuator), not a model file.
     """
 
     path: Path
@@ -84,6 +88,7 @@ class ExportSource:
     dynamics: object
     amplifier: dict | None
     creep: list | None = None
+    preset: bool = False
 
 
 def load_source(model_or_preset):
@@ -111,10 +116,14 @@ def load_source(model_or_preset):
     if "preset" in data:
         plant = load_plant(path)
         return ExportSource(path, plant.name, plant.hysteresis, plant.sampling_period,
-                            plant.dynamics, amplifier, getattr(plant, "creep", None))
+                            plant.dynamics, amplifier, getattr(plant, "creep", None), True)
     model = load_model(path)
     creep = load_creep(path, model.output_names) if "creep" in data else None
-    return ExportSource(path, path.stem, model, None, None, amplifier, creep)
+    try:                 # the records' period, as compensate takes it (--sampling-period wins)
+        period = records_sampling_period(data, path)
+    except PresetError:
+        period = None
+    return ExportSource(path, path.stem, model, period, None, amplifier, creep)
 
 
 def limits_from_table(table, inputs, where="amplifier"):

@@ -49,6 +49,7 @@ __all__ = [
     "resolve_preset",
     "read_toml",
     "load_creep",
+    "records_sampling_period",
     "identified_from",
     "model_from_table",
     "model_to_table",
@@ -646,6 +647,46 @@ def dynamics_to_table(system):
                     **{k: np.asarray(getattr(system, k), dtype=float).tolist() for k in "ABCD"}}
     return {"kind": "state_space",
             **{k: np.asarray(getattr(mats, k), dtype=float).tolist() for k in "ABCD"}}
+
+
+def records_sampling_period(data, path):
+    """The sampling period [s] of the records a model file was identified from.
+
+    ``identify`` writes ``[identification] sampling_period_s``, one entry per
+    record; a model file then needs no ``--sampling-period``.
+
+    Parameters
+    ----------
+    data : dict
+        The model file's TOML data.
+    path : str or pathlib.Path
+        The file, for messages.
+
+    Returns
+    -------
+    float
+        [s].
+
+    Raises
+    ------
+    PresetError
+        No such entry, a value that is not a positive finite number, or records sampled at
+        different periods (the message asks for ``--sampling-period S``).
+    """
+    ident = data.get("identification") if isinstance(data, dict) else None
+    periods = ident.get("sampling_period_s") if isinstance(ident, dict) else None
+    periods = periods if isinstance(periods, list) else [periods]
+    values = [float(v) for v in periods if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    if not values or len(values) != len(periods) or not all(np.isfinite(values)) \
+            or min(values) <= 0:
+        raise PresetError(f"{path}: the model file gives no sampling period ([identification] "
+                          f"sampling_period_s, written by identify); give --sampling-period S")
+    if max(values) > min(values) * (1 + 1e-9):
+        shown = ", ".join(f"{v:g}" for v in sorted(set(values)))
+        raise PresetError(f"{path}: the model's records were sampled at different periods "
+                          f"({shown} s, [identification] sampling_period_s); give "
+                          f"--sampling-period S")
+    return values[0]
 
 
 def load_creep(path, outputs):

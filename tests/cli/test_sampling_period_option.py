@@ -79,3 +79,15 @@ def test_a_model_file_without_one_period_asks_for_it(tmp_path, periods, words):
     with pytest.raises(PresetError) as err:
         load_actuator(str(path))
     assert str(err.value) == f"{path}: {words}"
+
+
+def test_export_takes_a_model_files_records_period_as_compensate_does(tmp_path, capsys):
+    # compensate used [identification] sampling_period_s; export said "a model file without a
+    # sampling period; give --sampling-period SECONDS"
+    import re
+    from hammerstein.cli.main import main
+    path = _hysteresis_model(tmp_path, "[1e-4, 1e-4]")
+    assert main(["export", str(path), "--target", "c", "--name", "m", "--out",
+                 str(tmp_path / "gen")]) == 0, capsys.readouterr().err
+    header = (tmp_path / "gen" / "m.h").read_text()
+    assert re.search(r"#define m_SAMPLING_PERIOD 0\.0001\n", header), header[:2000]
