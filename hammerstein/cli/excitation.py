@@ -68,11 +68,12 @@ def add_parser(subparsers):
     p.add_argument("--amplitude", metavar="V|V1,V2,...",
                    help="full amplitude [V], one for all inputs or one per input: the records "
                         "span [-V, V] (or give --range)")
-    p.add_argument("--range", metavar="LOW,HIGH",
+    p.add_argument("--range", metavar="LOW,HIGH", nargs="+",
                    help="the amplifier's range [V] instead of --amplitude, e.g. 0,150 for a "
-                        "unipolar stack or -20,120: the records are played around its middle, "
-                        "from and back to its value nearest 0 V (the amplifier's rest), and "
-                        "never leave it")
+                        "unipolar stack or -20,120, one for every input or one per input in "
+                        "the order of --inputs (-10,10 0,100 for a bipolar x and a unipolar "
+                        "y): the records are played around its middle, from and back to its "
+                        "value nearest 0 V (the amplifier's rest), and never leave it")
     p.add_argument("--sampling-period", required=True, type=_SECONDS, metavar="S",
                    help="sampling period of the hardware [s], e.g. 5e-5")
     p.add_argument("--out", required=True, metavar="DIR", help="directory to write")
@@ -145,17 +146,28 @@ def _amplitude_and_centre(args, m):
                      "amplitude around 0 V, or the amplifier's range LOW,HIGH)")
     if args.amplitude is not None:
         return _amplitudes(args.amplitude, m), np.zeros(m)
-    try:
-        low, high = (float(v) for v in args.range.split(","))
-    except ValueError:
-        raise _Usage(f"--range: expected two numbers LOW,HIGH [V], found "
-                     f"{escape(repr(args.range), 60)}") from None
-    if number_problem(low) or number_problem(high) or not low < high \
-            or max(abs(low), abs(high)) > MAX_MAGNITUDE:
-        raise _Usage(f"--range: expected finite LOW < HIGH [V] up to {MAX_MAGNITUDE:.0e}, found "
-                     f"{escape(repr(args.range), 60)}")
-    amplitude = _amplitudes(repr(0.5 * (high - low)), m)
-    return amplitude, np.full(m, 0.5 * (low + high))
+    given = args.range if isinstance(args.range, list) else [args.range]
+    items = [t for g in given for t in g.split(";") if t.strip()]
+    if len(items) not in (1, m):
+        raise _Usage(f"--range: expected one LOW,HIGH for every input or one per input ({m}: "
+                     f"{', '.join(args.inputs.split(','))}), found {len(items)}: "
+                     f"{escape(' '.join(given), 60)}")
+    lows, highs = [], []
+    for item in items:
+        try:
+            low, high = (float(v) for v in item.split(","))
+        except ValueError:
+            raise _Usage(f"--range: expected two numbers LOW,HIGH [V], found "
+                         f"{escape(repr(item), 60)}") from None
+        if number_problem(low) or number_problem(high) or not low < high \
+                or max(abs(low), abs(high)) > MAX_MAGNITUDE:
+            raise _Usage(f"--range: expected finite LOW < HIGH [V] up to {MAX_MAGNITUDE:.0e}, "
+                         f"found {escape(repr(item), 60)}")
+        lows.append(low)
+        highs.append(high)
+    lows, highs = np.resize(np.array(lows), m), np.resize(np.array(highs), m)
+    amplitude = _amplitudes(",".join(repr(float(v)) for v in 0.5 * (highs - lows)), m)
+    return amplitude, 0.5 * (lows + highs)
 
 
 def _reversals(text):

@@ -66,6 +66,34 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {' '.join(message.split())} "
                      f"(see '{self.prog} --help')\n")
 
+    def parse_known_args(self, args=None, namespace=None):
+        """argparse's, refusing an option that takes a value given twice.
+
+        argparse keeps the last one: ``excitation --range -10,10 --range 0,100`` drove every
+        input over 0..100 V, ten times an x amplifier's rail, with exit 0.
+        """
+        seen = {}
+        tokens = sys.argv[1:] if args is None else list(args)
+        for i, token in enumerate(tokens):
+            if token == "--":
+                break
+            if not token.startswith("-") or self._negative_number_matcher.match(token):
+                continue
+            key = token.split("=", 1)[0]
+            value = token.split("=", 1)[1] if "=" in token else \
+                (tokens[i + 1] if i + 1 < len(tokens) else "")
+            action = self._option_string_actions.get(key)
+            if action is None and self.allow_abbrev and key.startswith("--"):
+                found = {a for s, a in self._option_string_actions.items() if s.startswith(key)}
+                action = found.pop() if len(found) == 1 else None
+            if action is None or action.nargs == 0 or isinstance(action, argparse._AppendAction):
+                continue
+            if action.dest in seen:
+                self.error(f"{key}: given twice ({seen[action.dest]!r}, then {value!r}, which "
+                           f"would replace it); give it once")
+            seen[action.dest] = value
+        return super().parse_known_args(args, namespace)
+
 
 #: What a stray warning is about (shared with the commands, which name the file they
 #: are processing): the one input file of the command, else ``hammerstein <command>``.

@@ -358,3 +358,37 @@ def test_two_excitations_into_one_directory_at_once_keep_both_in_the_manifest(tm
     for name in ("ux", "vx"):            # and each set may be written again
         assert subprocess.run(base + ["--inputs", name], capture_output=True, env=env,
                               timeout=300).returncode == 0
+
+
+def test_each_input_may_have_its_own_range(tmp_path, capsys):
+    # a bipolar x (+-10 V) and a unipolar y (0..100 V): one --range for both could not say it,
+    # and two directories gave two demagnetising cycles, each wrong for the other amplifier
+    out = tmp_path / "lab"
+    assert main(["excitation", "--inputs", "ux,uy", "--range", "-10,10", "0,100",
+                 "--sampling-period", str(T), "--out", str(out)]) == 0, capsys.readouterr().err
+    limits = {"ux": (-10.0, 10.0), "uy": (0.0, 100.0)}
+    for path in sorted(out.glob("*.csv")):
+        header, data = _read(path)
+        for name, (low, high) in limits.items():
+            u = data[:, header.index(name)]
+            assert low - 1e-9 <= u.min() and u.max() <= high + 1e-9, (path.name, name)
+        if path.name == "demagnetise.csv":          # both amplifiers swept, each within its own
+            for name, (low, high) in limits.items():
+                u = data[:, header.index(name)]
+                assert np.ptp(u) > 0.9 * (high - low)
+                assert abs(u[0]) < 1e-4 * (high - low) and u[-1] == 0.0      # from rest, back
+    assert "range [-10, 10], [0, 100] V" in (out / "README.md").read_text()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--range", "-10,10", "0,100", "0,50"], "--range: expected one LOW,HIGH for every input or "
+                                             "one per input (2: ux, uy), found 3"),
+    (["--range", "-10,10", "--range", "0,100"], "--range: given twice ('-10,10', then '0,100', "
+                                                "which would replace it); give it once"),
+])
+def test_a_range_per_input_that_does_not_fit_is_refused(tmp_path, capsys, argv, words):
+    # a repeated --range was 'last one wins': every input driven over 0..100 V, exit 0
+    status = main(["excitation", "--inputs", "ux,uy", *argv, "--sampling-period", str(T),
+                   "--out", str(tmp_path / "lab")])
+    err = capsys.readouterr().err
+    assert status == 2 and words in err and not (tmp_path / "lab").exists()
