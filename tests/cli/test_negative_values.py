@@ -14,7 +14,7 @@ def test_a_negative_lower_rail_is_read_as_the_ranges_value(value):
     args = build_parser("excitation").parse_args(
         ["excitation", "--inputs", "ux,uy", "--sampling-period", "5e-5", "--range", value,
          "--out", "records"])
-    assert args.range == value
+    assert args.range == [value]         # one range for every input (or one per input)
 
 
 def test_an_unknown_option_is_still_a_usage_error(capsys):
