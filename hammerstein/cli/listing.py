@@ -83,7 +83,8 @@ def handler(args):
         print(f"  {name}: {entry.description}")
         print(f"    kinds: {', '.join(entry.kinds)} (hammerstein and ilc need dynamics)")
         exact = (f"else {entry.exact_inverse_kind} (exact inverse)" if entry.exact_inverse_kind
-                 else "else multivariable with a convergent gain, per-axis when none converges")
+                 else "else per-axis for one transfer, multivariable with a convergent gain, "
+                      "per-axis when none converges")
         print(f"    default: hammerstein with dynamics, {exact}")
     for title, kinds in (("reference kinds", REFERENCE_KINDS), ("drive kinds", DRIVE_KINDS)):
         print(f"{title}:")

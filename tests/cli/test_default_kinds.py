@@ -146,3 +146,27 @@ def test_a_preset_with_creep_and_no_dynamics_gets_the_exact_inverse_and_is_told(
     (note,) = [ln for ln in err.splitlines() if ln.startswith("note: kind = ")]
     assert note.startswith("note: kind = preisach-inverse because the model has no dynamics")
     assert "its creep is not inverted" in note
+
+
+def test_a_one_axis_classical_pi_defaults_to_its_exact_analytic_inverse(tmp_path, capsys):
+    # the multivariable law lagged it by its one-step fixed point: a 20 Hz sine left 0.14 µm on
+    # the model's own prediction; the per-axis analytic inverse of the one transfer is exact
+    from hammerstein import MultivariablePI, PrandtlIshlinskii
+    model = MultivariablePI([[PrandtlIshlinskii([0.0, 2.0, 5.0, 9.0], [1.0, 0.4, 0.2, 0.1])]],
+                            input_amplitude=[20.0], input_names=["u"], output_names=["y"])
+    path = tmp_path / "stack.toml"
+    save_model(model, path, {"note": "test"})
+    code, out, err = _run(capsys, "compensate", str(path), "--sampling-period", "1e-4",
+                          "--reference", '{ kind = "sine", output = "y", amplitude = 8, '
+                                         'offset = 12, frequency = 20, periods = 6 }',
+                          "--out", str(tmp_path / "d.csv"), "--predicted")
+    assert code == 0, err
+    (note,) = [ln for ln in err.splitlines() if ln.startswith("note: kind = ")]
+    assert note.startswith("note: kind = per-axis because the model has no dynamics and one "
+                           "direct transfer")
+    import pandas as pd
+    d = pd.read_csv(tmp_path / "d.csv", comment="#")
+    t = d["t"].to_numpy()
+    settled = t >= 0.1                                       # after the fade-in
+    r = 12 + 8 * np.sin(2 * np.pi * 20 * t)
+    assert np.max(np.abs(d["y_predicted"].to_numpy()[settled] - r[settled])) < 1e-9

@@ -1013,7 +1013,7 @@ def _bom_inputs(d, bom):
     (["run", "s.toml", "--out", "out", "--figures", "none"], "out/s/metrics.csv"),
     (["identify", "data.csv", "--time", "time_s", "--input", "u_V", "--output", "y_um",
       "--thresholds", "5", "--out", "m.toml"], "m.toml"),
-    (["export", "model.toml", "--target", "c", "--out", "exp", "--no-binary"], "exp/static_1x1_multivariable.c"),
+    (["export", "model.toml", "--target", "c", "--out", "exp", "--no-binary"], "exp/static_1x1_per_axis.c"),
     (["compensate", "rakotondrabe-2dof", "--reference", "ref.csv", "--out", "u.csv"], "u.csv"),
     (["evaluate", "--reference", "ref.csv", "--measured", "meas.csv", "--outputs", "x=x,y=y",
       "--out", "ev"], "ev/metrics.csv"),

@@ -407,8 +407,8 @@ def test_the_same_trial_given_twice_is_not_learnt_twice(tmp_path):
     assert sorted(pd.read_csv(tmp_path / "hist/history.csv", comment="#")["iteration"]) == [0, 0]
     # the same drive measured again (new noise) is a new trial of the best drive
     _hardware(tmp_path / "u0.csv", tmp_path / "y0b.csv", 0, 1)
-    assert _cli(*args[:-4], "--measured", "y0b.csv", "--outputs", "x=x_meas,y=y_meas",
-                "--history", "hist", "--out", "u1c.csv", cwd=tmp_path).returncode == 0
+    again = tuple("y0b.csv" if a == "y0.csv" else a for a in args)
+    assert _cli(*again, "--out", "u1c.csv", cwd=tmp_path).returncode == 0
 
 
 @pytest.mark.slow  # two processes at once
