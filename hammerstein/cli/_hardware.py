@@ -312,6 +312,9 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
             spec = tomllib.loads("reference = " + text)["reference"]
         except tomllib.TOMLDecodeError as exc:
             raise DataFileError(f"--reference: not an inline TOML table ({exc})") from None
+        if isinstance(spec, dict) and len(names) == 1 and "output" not in spec \
+                and spec.get("kind") in ("sine", "triangle"):
+            spec = {**spec, "output": names[0]}      # the one output: nothing to choose
         problems = []
         got = _signal("reference", "reference", spec, plant, problems, "--reference", Path.cwd())
         if got is None:

@@ -170,3 +170,19 @@ def test_a_one_axis_classical_pi_defaults_to_its_exact_analytic_inverse(tmp_path
     settled = t >= 0.1                                       # after the fade-in
     r = 12 + 8 * np.sin(2 * np.pi * 20 * t)
     assert np.max(np.abs(d["y_predicted"].to_numpy()[settled] - r[settled])) < 1e-9
+
+
+def test_a_one_output_model_needs_no_output_key(tmp_path, capsys):
+    # '{ kind = "sine", amplitude = 8, ... }' on a one-output stage: "reference.output: missing
+    # (required)", where the model has only one output to choose
+    from hammerstein import MultivariablePI, PrandtlIshlinskii
+    model = MultivariablePI([[PrandtlIshlinskii([0.0, 2.0, 5.0], [1.0, 0.4, 0.2])]],
+                            input_amplitude=[20.0], input_names=["u"], output_names=["z"])
+    path = tmp_path / "stack.toml"
+    save_model(model, path, {"note": "test"})
+    for kind in ("sine", "triangle"):
+        code, _, err = _run(capsys, "compensate", str(path), "--sampling-period", "1e-4",
+                            "--reference", f'{{ kind = "{kind}", amplitude = 5, offset = 8, '
+                                           f'frequency = 20, periods = 4 }}',
+                            "--out", str(tmp_path / f"{kind}.csv"))
+        assert code == 0, err
