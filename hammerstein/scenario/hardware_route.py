@@ -20,7 +20,7 @@ from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
 from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_note, zpetc_note
-from hammerstein.exceptions import CompensatorError
+from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
 __all__ = ["compensate_reference", "LAW_KINDS", "REST_TOLERANCE"]
@@ -131,13 +131,21 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
         return plant.simulate(apply_amplifier(plant.amplifier, u, T), at_rest)[0]
 
     linear = plant.matrices              # creep then dynamics, built once
-    drive = hardware_drive(comp, signal, T, period_samples, fade,
-                           plant.amplifier, limits, rest=rest,
-                           first_mode=first_mode_hz(linear[0], T), predict=predict,
-                           names=plant.hysteresis.output_names, mode_decay=mode_decay_s(linear[0], T),
-                           rest_lead=rest_lead, shape=shape)
-    note = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
-                      signal, plant.hysteresis.output_names)
+    reach = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
+                       signal, plant.hysteresis.output_names)
+    try:
+        drive = hardware_drive(comp, signal, T, period_samples, fade,
+                               plant.amplifier, limits, rest=rest,
+                               first_mode=first_mode_hz(linear[0], T), predict=predict,
+                               names=plant.hysteresis.output_names,
+                               mode_decay=mode_decay_s(linear[0], T),
+                               rest_lead=rest_lead, shape=shape)
+    except AmplifierError as exc:
+        if reach and "beyond the amplifier's range" in str(exc):
+            # "lower the reference" alone: by how much, and where it fits, is the reach's
+            raise AmplifierError(f"{exc}; {reach}") from None
+        raise
+    note = reach
     if note:
         drive.notes.append(note)
     note = mode_note(linear, T, drive.reference, period_samples)

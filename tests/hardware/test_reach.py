@@ -59,3 +59,39 @@ def test_compensate_names_a_circle_beyond_the_reach(tmp_path, capsys, center, na
         assert "x asks 50..110 µm" in said
     else:
         assert code == 0
+
+
+def test_the_reach_is_the_steady_cycles_not_the_virgin_rest():
+    # a unipolar stack (0..150 V): 0 V from the virgin state gives 0 µm, but once risen to
+    # 150 V and back, 0 V leaves sum w_i r_i (the plays' thresholds): the reach said 0 µm and
+    # a reference inside it was then refused as needing a negative voltage
+    from hammerstein import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.models.amplifier import amplifier_from_table
+    r, w = [0.0, 20.0, 50.0, 90.0], [0.1, 0.05, 0.03, 0.02]
+    model = MultivariablePI([[PrandtlIshlinskii(r, w)]], input_amplitude=[150.0])
+    amp = amplifier_from_table({"range": [0.0, 150.0]}, model.input_names)
+    reach = output_reach(model, amp)
+    # 0 V after 150 V: a play of threshold r went to 150 - r, then down to max(0 - r,
+    # min(0 + r, 150 - r)) = min(r, 150 - r)
+    low_steady = float(np.dot(w, [min(ri, 150.0 - ri) for ri in r]))
+    high = float(np.dot(w, [150.0 - ri for ri in r]))    # 150 V: each play at 150 - r
+    assert reach[0, 0] == pytest.approx(low_steady, rel=1e-9) and low_steady > 0.0
+    assert reach[0, 1] == pytest.approx(high, rel=1e-9)
+
+
+def test_a_reference_beyond_the_range_is_refused_with_where_it_fits(tmp_path, capsys):
+    # "lower the reference" alone: the refusal now names the steady reach and its middle
+    from hammerstein import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.io.presets import save_model
+    model = MultivariablePI([[PrandtlIshlinskii([0.0, 20.0, 50.0, 90.0],
+                                                [0.1, 0.05, 0.03, 0.02])]],
+                            input_amplitude=[150.0], input_names=["u"], output_names=["y"])
+    path = tmp_path / "stack.toml"
+    save_model(model, path, {"note": "test"})
+    path.write_text(path.read_text() + '\n[amplifier]\nrange = [0.0, 150.0]\n')
+    ref = '{ kind = "sine", amplitude = 12, offset = 10, frequency = 1, periods = 3 }'
+    status = main(["compensate", str(path), "--sampling-period", "1e-3", "--reference", ref,
+                   "--out", str(tmp_path / "d.csv")])
+    err = capsys.readouterr().err
+    assert status == 1 and "beyond the amplifier's range [0, 150] V" in err
+    assert "the model reaches 3.7..25.7 µm" in err and "offset = 14.7" in err   # 0.1*150+...
