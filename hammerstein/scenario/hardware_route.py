@@ -204,6 +204,11 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     if kind is None:
         choice = choose_kind(plant.hysteresis, has_dynamics, gain, inversion or "zpetc")
         kind, options, note = choice.kind, dict(choice.options), choice.note()
+        if not has_dynamics:
+            # a model from 1 Hz records drove a 20 Hz sine without a word on what it ignores
+            note += ("; without dynamics the drive is right only well below the actuator's "
+                     "first bending mode, which the model does not know (identify --dynamics "
+                     "with the excitation's multisines identifies it)")
         if not has_dynamics and getattr(plant, "creep", None) is not None:
             note += ("; its creep is not inverted: the Hammerstein compensator inverts creep "
                      "with identified dynamics (identify --dynamics)")

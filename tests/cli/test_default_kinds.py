@@ -164,6 +164,7 @@ def test_a_one_axis_classical_pi_defaults_to_its_exact_analytic_inverse(tmp_path
     (note,) = [ln for ln in err.splitlines() if ln.startswith("note: kind = ")]
     assert note.startswith("note: kind = per-axis because the model has no dynamics and one "
                            "direct transfer")
+    assert "the drive is right only well below the actuator's first bending mode" in note
     import pandas as pd
     d = pd.read_csv(tmp_path / "d.csv", comment="#")
     t = d["t"].to_numpy()
