@@ -454,7 +454,8 @@ class Amplifier:
         Returns
         -------
         list of str
-            e.g. ``"input ux needs 19.4 V, beyond the amplifier's range [-10, 10] V"``.
+            e.g. ``"input ux needs 19.4 V at t = 0.0125 s, beyond the amplifier's range
+            [-10, 10] V"`` (the first sample of the peak).
         """
         u = np.atleast_2d(np.asarray(inputs, dtype=float))
         r = self.rest_state()[:self.n_inputs] if rest is None else rest
@@ -468,7 +469,9 @@ class Amplifier:
                              abs(c.high) if math.isfinite(c.high) else 0.0, 1.0)
             if hi > c.high + tol or lo < c.low - tol:
                 peak = hi if hi > c.high + tol else lo
-                out.append(f"input {self.inputs[i]} needs {peak:.4g} V, beyond the amplifier's "
+                k = int(np.argmax(u[i]) if peak == hi else np.argmin(u[i]))
+                out.append(f"input {self.inputs[i]} needs {peak:.4g} V at t = "
+                           f"{k * sampling_period:.4g} s, beyond the amplifier's "
                            f"range [{c.low:g}, {c.high:g}] V")
             if slew[i] > c.slew_rate * (1 + _TOL):
                 out.append(f"input {self.inputs[i]} needs a slew rate of {slew[i]:.4g} V/s, beyond "

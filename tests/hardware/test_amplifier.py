@@ -67,8 +67,9 @@ def test_check_reacts_as_limits_says_and_names_input_peak_and_limit():
     amp = amplifier_from_table({"range": [-10, 10], "slew_rate": 1e5}, ["ux", "uy"])
     T = 5e-5
     u = np.vstack([np.linspace(0, 19.4, 400), np.zeros(400)])
-    with pytest.raises(AmplifierError, match=r"c1: input ux needs 19.4 V, beyond the amplifier's "
-                                             r"range \[-10, 10\] V"):
+    # where: the peak's sample 399 of the ramp, t = 399 T = 0.01995 s
+    with pytest.raises(AmplifierError, match=r"c1: input ux needs 19.4 V at t = 0.01995 s, "
+                                             r"beyond the amplifier's range \[-10, 10\] V"):
         amp.check(u, T, "error", "c1")
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
