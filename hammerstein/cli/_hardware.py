@@ -316,7 +316,10 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
                 and spec.get("kind") in ("sine", "triangle"):
             spec = {**spec, "output": names[0]}      # the one output: nothing to choose
         problems = []
-        got = _signal("reference", "reference", spec, plant, problems, "--reference", Path.cwd())
+        # bounded as a CSV reference is (a record's limit), not by a scenario case's 2e6 samples:
+        # a 60 s circle at 50 kHz was refused inline and accepted as a file
+        got = _signal("reference", "reference", spec, plant, problems, "--reference", Path.cwd(),
+                      case_limit=None)
         if got is None:
             msg = "; ".join(p.replace("--reference: reference.", "--reference: ", 1)
                             for p in problems) or "--reference: cannot generate the reference"

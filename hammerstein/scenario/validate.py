@@ -252,11 +252,14 @@ def _predicted_samples(entry, c, T):
     return c["periods"] * period / T
 
 
-def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=None):
+def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=None,
+            case_limit=MAX_CASE_SAMPLES):
     """Generate the drive/reference; returns (time, signal, period_samples, extras).
 
     ``budget``: ``{"limit", "used", "over"}`` samples per scenario; a signal
     beyond it is reported once (later ones are then not generated).
+    ``case_limit``: samples of a scenario case (None: a hardware command's
+    reference, bounded as any record, ``HAMMERSTEIN_MAX_RECORD_SAMPLES``).
     """
     kinds = refs.DRIVE_KINDS if mode == "drive" else refs.REFERENCE_KINDS
     where = f"{case_where}.{mode}"
@@ -277,9 +280,9 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     names = list(model.input_names if mode == "drive" else model.output_names)
     c = {k: v for k, v in clean.items() if k != "kind"}
     n = _predicted_samples(entry, c, T)
-    if MAX_CASE_SAMPLES < n <= refs.MAX_SAMPLES:  # beyond: the generator's own message
+    if case_limit is not None and case_limit < n <= refs.MAX_SAMPLES:   # beyond: the generator's
         problems.append(f"{source}: {where}: the record would have {n:.3g} samples; expected at "
-                        f"most {MAX_CASE_SAMPLES:.3g} per case ({MAX_CASE_SAMPLES * T:g} s at "
+                        f"most {case_limit:.3g} per case ({case_limit * T:g} s at "
                         f"T = {T:g} s)")
         return None
     if budget is not None and n <= refs.MAX_SAMPLES:
