@@ -559,7 +559,8 @@ def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records
     return fit, creep
 
 
-def identify_pipeline(records, options=None, names=None, dynamics_records=None, creep_records=None):
+def identify_pipeline(records, options=None, names=None, dynamics_records=None, creep_records=None,
+                      progress=None):
     """Hysteresis, dynamics and creep from records: what ``hammerstein identify`` writes.
 
     Parameters
@@ -576,6 +577,9 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
         order): G is identified when given.
     creep_records : list of MultiRecord, optional
         Staircases: the creep is identified when given.
+    progress : callable, optional
+        Called with one line as each phase starts (the fits take from seconds to minutes on
+        long records: the command line says where it is on a terminal).
 
     Returns
     -------
@@ -593,16 +597,24 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
     # a single class refitted after the creep: its first fit only serves the creep's
     provisional = (bool(creep_records) and options.model != "auto"
                    and _creep_refits(options, options.model == "classical") > 0)
+    say = progress or (lambda line: None)
+    n = sum(r.n_samples for r in records)
+    say(f"fitting the hysteresis ({'every model class' if options.model == 'auto' else options.model}"
+        f") on {len(records)} record(s), {n} samples")
     fit = identify_hysteresis(records, options, names, creep_records=creep_records,
                               provisional=provisional)
     dyn = creep = None
     if dynamics_records:
+        say(f"identifying the dynamics G from {len(dynamics_records)} broadband record(s)")
         dyn = _dynamics(options, fit, dynamics_records)
     first = dyn
     if creep_records:
+        say(f"identifying the creep from {len(creep_records)} staircase(s), then the hysteresis "
+            f"again without it")
         creep = _creep(fit, creep_records, dyn)
         fit, creep = _refit_without_creep(options, records, names, fit, creep, dyn, creep_records)
         if dyn is not None:   # G again, on the model outputs through the creep: G(0) = I for G (I + C)
+            say("identifying the dynamics G again, through the creep")
             dyn = _dynamics(options, fit, dynamics_records, creep.creeps_, first)
     return IdentificationResult(fit, dyn, creep, first)
 
