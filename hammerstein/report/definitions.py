@@ -52,6 +52,9 @@ METRIC_WORDS = {
     "rms_error": ("√(mean e²) of the tracking error e = y_r − y of one output over the settled "
                   "window [µm] (the paper's RMS error, Fig. 9)."),
     "max_abs_error": "max |e| of one output over the settled window [µm].",
+    "max_abs_error_percent": ("100 max_abs_error / A_l, A_l half the peak-to-peak of that "
+                              "output's own reference over the settled window (each axis on its "
+                              "own scale: a stage whose axes differ 5x) [%]."),
     "rms_error_percent": ("100 rms_error / A, A the amplitude of the single-axis sine or "
                           "triangle reference (half its peak-to-peak) [%]."),
     "max_euclidean_error": (

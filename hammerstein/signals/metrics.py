@@ -33,6 +33,7 @@ UNITS = {
     "hysteresis_ratio": "%",
     "rms_error": "µm",
     "max_abs_error": "µm",
+    "max_abs_error_percent": "%",      # evaluate: per output, of its own reference's half-span
     "cross_coupling_peak_to_peak": "µm",
     "max_euclidean_error": "µm",
     "rms_euclidean_error": "µm",

@@ -454,3 +454,23 @@ def test_evaluate_with_a_drive_reports_and_draws_its_voltages(tmp_path):
         assert m[(name, "peak_input")] == pytest.approx(d[name].abs().max(), rel=1e-12)
         steps = np.abs(np.diff(np.concatenate([[0.0], d[name].to_numpy()])))
         assert m[(name, "peak_slew")] == pytest.approx(steps.max() / T, rel=1e-9)
+
+
+def test_evaluate_gives_each_axis_error_in_percent_of_its_own_amplitude(tmp_path):
+    # an ellipse of 40 x 8 µm: the Euclidean % of the larger axis said 5.1 % where y's own error
+    # was 8.5 % of its amplitude
+    t = np.arange(8000) * T
+    r = np.vstack([40 * np.cos(2 * np.pi * 50 * t), 8 * np.sin(2 * np.pi * 50 * t)])
+    y = r + np.array([[0.4], [0.4]]) * np.sin(2 * np.pi * 150 * t)       # 0.4 µm on each axis
+    for name, sig in (("r.csv", r), ("m.csv", y)):
+        pd.DataFrame({"t": t, "x": sig[0], "y": sig[1]}).to_csv(tmp_path / name, index=False)
+    res = _cli("evaluate", "--reference", "r.csv", "--period", "0.02", "--measured", "m.csv",
+               "--out", "ev", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    m = pd.read_csv(tmp_path / "ev/metrics.csv").set_index(["channel", "metric"])["value"]
+    w = t >= 0.02 - 1e-12                                          # one settle period
+    for i, name in enumerate("xy"):
+        half = 0.5 * np.ptp(r[i, w])
+        expected = 100 * np.max(np.abs(r[i, w] - y[i, w])) / half
+        assert m[(name, "max_abs_error_percent")] == pytest.approx(expected, rel=1e-9)
+    assert m[("y", "max_abs_error_percent")] == pytest.approx(5.0, rel=1e-3)   # 0.4 of 8 µm
