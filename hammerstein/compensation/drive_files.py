@@ -371,6 +371,14 @@ def drive_kind(path):
     return command, kind
 
 
+def _header_columns(path):
+    """The column names of a CSV file: its first line that is not a ``#`` comment (200 at most)."""
+    with open(path, encoding="utf-8", errors="replace") as fh:
+        header = next((line for line in (fh.readline() for _ in range(200))
+                       if line and not line.startswith("#")), "")
+    return [c.strip() for c in header.split(",")]
+
+
 def optional_columns(path, names, sampling_period=None, what="file"):
     """Named columns of a CSV file, or None when one of them is not there.
 
@@ -395,10 +403,7 @@ def optional_columns(path, names, sampling_period=None, what="file"):
     OSError
         The file cannot be read.
     """
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        header = next((line for line in (fh.readline() for _ in range(200))
-                       if line and not line.startswith("#")), "")
-    columns = [c.strip() for c in header.split(",")]
+    columns = _header_columns(path)
     if not all(n in columns for n in names):
         return None
     _, values, _ = read_signals(path, list(names), "t", None, sampling_period, what)
@@ -429,10 +434,7 @@ def drive_input_names(path, outputs):
     OSError
         The file cannot be read.
     """
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        header = next((line for line in (fh.readline() for _ in range(200))
-                       if line and not line.startswith("#")), "")
-    columns = [c.strip() for c in header.split(",") if c.strip()]
+    columns = [c for c in _header_columns(path) if c]
     return [c for c in columns if c != "t" and c not in outputs
             and not any(c.startswith(f"{o}_") for o in outputs)]
 
