@@ -237,9 +237,11 @@ def test_learn_history_refuses_the_trials_of_another_learning(tmp_path):
     assert not (tmp_path / "bad.csv").exists()
     assert sorted(p.name for p in (tmp_path / "hist").iterdir()) == before
     assert len(pd.read_csv(tmp_path / "hist/history.csv")) == 2      # trial 0 only
-    # the best trial's drive measured again: accepted
+    # the best trial's drive measured again (a new measurement: the same file again is the
+    # same trial, refused): accepted
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0b.csv", 3, 5)
     res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u0.csv",
-               "--measured", "y0.csv", "--out", "u1b.csv", *common, cwd=tmp_path)
+               "--measured", "y0b.csv", "--out", "u1b.csv", *common, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     # the last drive written, as an acquisition re-wrote it (0.1 mV resolution): accepted
     t, u, _ = read_signals(tmp_path / "u1b.csv", ["ux", "uy"])
