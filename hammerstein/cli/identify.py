@@ -32,7 +32,7 @@ from hammerstein.cli._common import number_type, out_file_problem, print_err
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
     level_metrics_rows, level_report_lines, metrics_rows)
-from hammerstein.models.amplifier import records_amplifier_table
+from hammerstein.models.amplifier import records_amplifier_table, records_hold_steps
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
 from hammerstein.io.presets import PresetError, save_model
@@ -586,9 +586,10 @@ def _handler(args):
             rows += dynamics_metrics_rows(dyn.summary, fit.model.output_names,
                                           fit.model.input_names)
         extra = dict(extra or {})     # drives stay within what the records spanned
-        extra["amplifier"] = records_amplifier_table(
-            records + (_dynamics_recs(args) if args.dynamics else [])
-            + (_creep_recs(args) if args.creep_records else []), list(fit.model.input_names))
+        every = (records + (_dynamics_recs(args) if args.dynamics else [])
+                 + (_creep_recs(args) if args.creep_records else []))
+        extra["amplifier"] = records_amplifier_table(every, list(fit.model.input_names))
+        hold_notes = _hold_step_notes(every, extra["amplifier"], args.input_unit)
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
             if args.plot:
@@ -605,6 +606,8 @@ def _handler(args):
               file=sys.stderr)
         return 1
     _report(args, fit, records, dyn, creep)
+    for line in hold_notes:
+        print_err(f"note: {line}")
     est = args.delay_estimate
     if est is not None and est.problem is not None:       # the default auto, refused: said loud
         print(f"warning: the measurement delay could not be estimated from the "
@@ -752,6 +755,26 @@ def _report(args, fit, records, dyn=None, creep=None):
         if dyn is not None:
             print(f"wrote {_bode_path(args.plot)}")
     print(f"wrote {args.out}")
+
+
+def _hold_step_notes(records, table, unit):
+    """Notes for the records' steps out of (or into) a hold that the stored slew leaves out.
+
+    Only those larger than the slew stored: a real record that is 0 V for
+    3 s and then starts a sine at -87 V in one sample would have given every
+    drive 435 kV/s of slew where the sine itself moves at 942 V/s.
+    """
+    lines = []
+    for name, (step, time, rate) in records_hold_steps(records, list(table)[1:]).items():
+        slew = table[name].get("slew_rate", 0.0)
+        if rate > slew * (1 + 1e-9):
+            lines.append(f"{name}: the records' step of {step:.4g} {unit} at {time:.4g} s, out "
+                         f"of a hold or into one (the amplifier switched on or off), is not "
+                         f"counted in the slew rate the model file takes from the records "
+                         f"({slew:.4g} {unit}/s): drives stay within the slew the records "
+                         f"followed; widen the model file's [amplifier] table if your "
+                         f"amplifier is faster (docs/drives.md)")
+    return lines
 
 
 def _bode_path(plot):

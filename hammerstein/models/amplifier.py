@@ -57,7 +57,8 @@ from hammerstein.exceptions import AmplifierError, AmplifierWarning
 
 
 __all__ = ["Amplifier", "AmplifierChannel", "LIMITS", "amplifier_from_table", "drive_metrics",
-           "AMPLIFIER_KEYS", "records_amplifier_table", "RECORDS_SOURCE", "slew_limit"]
+           "AMPLIFIER_KEYS", "records_amplifier_table", "records_hold_steps", "RECORDS_SOURCE",
+           "slew_limit"]
 
 #: Reactions to a drive beyond the amplifier: name -> description.
 LIMITS = {
@@ -189,8 +190,13 @@ def records_amplifier_table(records, input_names):
     Per input, the range ``[min u, max u]`` over every record and the largest
     slew ``max |u[k] - u[k-1]| / T`` [V/s] within a record (no step across
     records; the first sample is not counted from rest, the records may
-    start anywhere). The table is marked ``source = "records"``: these are
-    the limits of what the model was identified on, not the amplifier's.
+    start anywhere). A record's step out of its initial hold, or into its
+    final hold, is not counted when the record moves otherwise
+    (:func:`records_hold_steps`): the amplifier switched on or off abruptly
+    (a real record that is 0 V for 3 s and then starts a 150 V sine at
+    -87 V in one sample), not a slew the records followed. The table is
+    marked ``source = "records"``: these are the limits of what the model
+    was identified on, not the amplifier's.
 
     Parameters
     ----------
@@ -233,8 +239,11 @@ def records_amplifier_table(records, input_names):
             continue
         lo, hi = np.minimum(lo, u.min(axis=1)), np.maximum(hi, u.max(axis=1))
         if u.shape[1] > 1:
-            slew = np.maximum(slew, np.max(np.abs(np.diff(u, axis=1)), axis=1)
-                              / float(rec.sampling_period))
+            steps = np.abs(np.diff(u, axis=1))
+            for i, row in enumerate(u):
+                for k in _hold_steps(row):
+                    steps[i, k - 1] = 0.0
+            slew = np.maximum(slew, steps.max(axis=1) / float(rec.sampling_period))
     table = {"source": RECORDS_SOURCE}
     for i, name in enumerate(input_names):
         a, b = float(lo[i]), float(hi[i])
@@ -245,6 +254,62 @@ def records_amplifier_table(records, input_names):
             chan["slew_rate"] = float(slew[i])
         table[name] = chan
     return table
+
+
+def _hold_steps(row):
+    """Indices k of the steps ``row[k] - row[k-1]`` out of the initial hold and into the final one.
+
+    Only when the row moves otherwise: a step that is all the row does (a
+    step-response record) is its slew.
+    """
+    moves = np.flatnonzero(np.diff(row) != 0.0) + 1
+    if moves.size < 3:
+        return []
+    ends = []
+    if moves[0] > 1:                  # held at least two samples before its first move
+        ends.append(int(moves[0]))
+    if moves[-1] <= row.size - 2:     # held at least two samples after its last move
+        ends.append(int(moves[-1]))
+    return ends
+
+
+def records_hold_steps(records, input_names):
+    """The records' steps out of an initial hold or into a final hold, largest per input.
+
+    These are the steps :func:`records_amplifier_table` does not count in
+    the records' slew; ``hammerstein identify`` names those that would have
+    set it.
+
+    Parameters
+    ----------
+    records : sequence
+        As for :func:`records_amplifier_table`.
+    input_names : list of str
+        The model's input names (m).
+
+    Returns
+    -------
+    dict
+        ``{input: (step, time, rate)}``: the fastest such step [V] (signed),
+        the time of its sample from its record's start [s] and its rate
+        ``|step| / T`` [V/s], for the inputs that have one.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> u = np.r_[np.zeros(4), -87.0, -86.9, -86.7, -86.4]
+    >>> records_hold_steps([SimpleNamespace(u=u[None], sampling_period=0.5)], ["u"])
+    {'u': (-87.0, 2.0, 174.0)}
+    """
+    found = {}
+    for rec in records:
+        u = np.atleast_2d(np.asarray(rec.u, dtype=float))
+        for name, row in zip(input_names, u):
+            for k in _hold_steps(row):
+                step, period = float(row[k] - row[k - 1]), float(rec.sampling_period)
+                if name not in found or abs(step) / period > found[name][2]:
+                    found[name] = (step, k * period, abs(step) / period)
+    return found
 
 
 def drive_metrics(inputs, sampling_period, rest=None):

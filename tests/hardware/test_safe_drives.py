@@ -21,9 +21,11 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 import pytest
+import tomllib
 
 from hammerstein.cli.main import main
-from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
+from hammerstein.models.amplifier import (amplifier_from_table, records_amplifier_table,
+                                         records_hold_steps)
 from hammerstein.compensation.drive import (drive_signal, hardware_drive, hardware_fade, keep_end,
                                            keep_start, read_signals, settled_step, shape_drive)
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
@@ -143,6 +145,34 @@ def test_records_amplifier_table_is_the_records_range_and_largest_slew():
     assert table["uy"] == {"range": [-1.0, 1.5], "slew_rate": 500.0}    # 0.5/1 ms, 1/2 ms
     amp = amplifier_from_table(table, ["ux", "uy"])
     assert amp.from_records and amp.channels[0].low == -3.0 and amp.channels[1].slew_rate == 500.0
+
+
+@pytest.mark.parametrize("u, slew, kept", [
+    # 0 V held, the sine started at -87 V in one sample: the step is not the records' slew
+    ([0.0, 0.0, 0.0, -87.0, -86.0, -84.0, -81.0], 3000.0, True),
+    # the same, switched off again into a final hold of 0 V
+    ([0.0, 0.0, -87.0, -86.0, -84.0, -81.0, 0.0, 0.0], 3000.0, True),
+    # moving from its first sample (no hold): every step counts
+    ([0.0, -87.0, -86.0, -84.0, -81.0], 87000.0, False),
+    # a step response is all the record does: its step is its slew
+    ([0.0, 0.0, 0.0, 5.0, 5.0, 5.0], 5000.0, False),
+])
+def test_records_slew_leaves_out_a_step_out_of_or_into_a_hold(u, slew, kept):
+    rec = SimpleNamespace(u=np.array([u]), sampling_period=1e-3)
+    assert records_amplifier_table([rec], ["u"])["u"]["slew_rate"] == slew
+    held = records_hold_steps([rec], ["u"])
+    assert (held["u"][2] > slew) if kept else ("u" not in held or held["u"][2] <= slew)
+
+
+def test_identify_names_the_bundled_records_start_up_step(tmp_path, capsys):
+    data = Path(__file__).resolve().parents[2] / "hammerstein" / "data" / "piezo-stack-150V-1Hz.csv"
+    out = tmp_path / "stack.toml"
+    assert main(["identify", str(data), "--input", "2", "--output", "1", "--time", "0",
+                 "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "step of -87.1 V at 3.257 s" in err
+    slew = tomllib.loads(out.read_text())["amplifier"]["u"]["slew_rate"]
+    assert 940.0 < slew < 945.0            # 150 V x 2 pi x 1 Hz, sampled at 5 kHz
 
 
 def test_shape_drive_closed_form():
