@@ -365,7 +365,11 @@ def band_summary(records, amplitude, sampling_period, slew_rate, f_max=None, f_m
         return None
     T = float(sampling_period)
     amp = float(np.max(amplitude))
-    peaks = [float(np.max(np.abs(r.u))) for r in scaled]
+    # each multisine's peak about the middle of its input's range: 0.8 of the input's amplitude
+    # (excitation_set's multisine_fraction) times its scale; max |u| counted a --range's
+    # middle (70 V of -10..150 V) as the multisine's
+    peaks = [0.8 * float(r.scale) * float(np.asarray(amplitude, dtype=float)[r.excited])
+             for r in scaled]
     out = {"top": max(r.f_max for r in scaled), "default": 0.25 / T, "nyquist": 0.5 / T,
            "narrowed": f_max is None, "share": (min(peaks) / amp, max(peaks) / amp),
            "volts": (min(peaks), max(peaks)), "slew_rate": float(slew_rate), "options": []}

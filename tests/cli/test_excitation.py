@@ -392,3 +392,22 @@ def test_a_range_per_input_that_does_not_fit_is_refused(tmp_path, capsys, argv, 
                    "--out", str(tmp_path / "lab")])
     err = capsys.readouterr().err
     assert status == 2 and words in err and not (tmp_path / "lab").exists()
+
+
+def test_a_ranges_multisines_are_measured_about_its_middle(tmp_path, capsys):
+    """-10..150 V (amplitude 80 V about 70 V) behind 5e4 V/s: the note gave the multisines'
+    share from max |u|, the middle included (1.1e+02-1.3e+02 % of the amplitude, 92-100 V);
+    it is their excursion about the middle, measured here on the files."""
+    out = tmp_path / "stack"
+    assert main(["excitation", "--inputs", "ux,uy", "--range", "-10,150", "--sampling-period",
+                 "5e-4", "--slew-rate", "5e4", "--out", str(out)]) == 0
+    note = [line for line in capsys.readouterr().err.splitlines() if "multisines up to" in line]
+    swings = []
+    for f in sorted(out.glob("multisine*.csv")):
+        u = _read(f)[1][:, 1:]
+        k = int(np.argmax(np.ptp(u, axis=0)))
+        row = u[:, k]
+        middle = row[row.size // 4: 3 * row.size // 4]       # the periods, not the ramps to them
+        swings.append(np.max(np.abs(middle - 70.0)))
+    low, high = 100 * min(swings) / 80.0, 100 * max(swings) / 80.0
+    assert len(note) == 1 and f"scaled to {low:.2g}-{high:.2g} % of the amplitude" in note[0]
