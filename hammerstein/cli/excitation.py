@@ -39,6 +39,7 @@ from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     locked, name_problem, removed_if_failed, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
+from hammerstein.identification.defaults import CREEP_T_MIN
 
 __all__ = ["add_parser", "MANIFEST", "readme_text"]
 
@@ -490,6 +491,9 @@ def _handler(args):
         T = args.sampling_period
         if not (np.isfinite(T) and T > 0):
             raise _Usage(f"--sampling-period: expected a positive time [s], found {T}")
+        if args.hold < 10 * T:       # 2 samples a level: a staircase that shows no creep
+            raise _Usage(f"--hold: {args.hold:g} s is {args.hold / T:.3g} sampling periods; "
+                         f"expected at least 10 ({10 * T:.4g} s), and seconds to measure creep")
         problem = out_dir_problem(args.out)
         if problem:
             raise _Usage(problem)
@@ -548,7 +552,12 @@ def _handler(args):
             print(f"hammerstein excitation: error: {exc.filename or args.out}: cannot write "
                   f"({exc.strerror or exc})", file=sys.stderr)
         return 1
-    return _written(out, records, targets, T, band, args)
+    status = _written(out, records, targets, T, band, args)
+    if args.hold < 10 * CREEP_T_MIN:      # said once the records are written
+        print_err(f"warning: --hold {args.hold:g} s: the creep staircases hold each level for "
+                  f"less than {10 * CREEP_T_MIN:g} s, and creep acts over seconds (identify "
+                  f"fits lags from {CREEP_T_MIN:g} s): they show almost none of it (default 2 s)")
+    return status
 
 
 def _owned_targets(out, targets, force):

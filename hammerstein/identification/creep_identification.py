@@ -58,13 +58,14 @@ import scipy.linalg
 from hammerstein.models.creep import Creep, minimum_phase_margin
 from hammerstein.exceptions import IdentificationError
 from hammerstein.simulation import linear_steps
+from hammerstein.identification.defaults import CREEP_T_MIN
 from hammerstein.identification._creep_kernels import creep_output, lag_kernel, lag_states
 
 __all__ = ["CreepIdentifier", "CREEP_DEFAULTS", "staircase_steps", "hysteresis_frequency",
            "remove_creep", "step_level_errors"]
 
 #: Defaults of :class:`CreepIdentifier`.
-CREEP_DEFAULTS = {"t_min": 0.01, "t_max": 100.0, "per_decade": 2, "smoothing": 1e-3,
+CREEP_DEFAULTS = {"t_min": CREEP_T_MIN, "t_max": 100.0, "per_decade": 2, "smoothing": 1e-3,
                   "max_rows": 200_000}
 
 #: Minimum samples of a step (shorter steps are not used for the drift).

@@ -411,3 +411,20 @@ def test_a_ranges_multisines_are_measured_about_its_middle(tmp_path, capsys):
         swings.append(np.max(np.abs(middle - 70.0)))
     low, high = 100 * min(swings) / 80.0, 100 * max(swings) / 80.0
     assert len(note) == 1 and f"scaled to {low:.2g}-{high:.2g} % of the amplitude" in note[0]
+
+
+@pytest.mark.parametrize("hold, code, said", [
+    ("0.001", 2, "--hold: 0.001 s is 2 sampling periods; expected at least 10"),   # 2 samples a level
+    ("0.05", 0, "warning: --hold 0.05 s: the creep staircases hold each level for less than 0.1 s"),
+    ("2", 0, None),
+])
+def test_a_hold_too_short_to_show_creep_is_refused_or_warned(tmp_path, capsys, hold, code, said):
+    out = tmp_path / "x"
+    assert main(["excitation", "--inputs", "ux", "--amplitude", "10", "--sampling-period",
+                 "5e-4", "--hold", hold, "--out", str(out)]) == code
+    err = capsys.readouterr().err
+    if said is None:
+        assert "--hold" not in err
+    else:
+        assert said in err and len(err.strip().splitlines()) == 1
+    assert out.exists() == (code == 0)
