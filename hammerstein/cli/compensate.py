@@ -154,6 +154,12 @@ def _shrink_warning(plant, ref, drive):
     amp = plant.amplifier
     if amp is None or not getattr(amp, "from_records", False):
         return None
+    if not drive.limited:
+        # only the band limit below the first mode changed it (a step-and-hold's steps
+        # smoothed over a period of the mode): widening the table changes nothing, and the
+        # shaped: lines say where (a stage whose table was widened to +-1000 V and 1e9 V/s
+        # was told its limits held a 10-step reference back by 69 % of its half-span)
+        return None
     asked = np.asarray(ref.signal, dtype=float)
     got = np.asarray(drive.reference, dtype=float)
     n = min(asked.shape[1], got.shape[1])
@@ -172,7 +178,8 @@ def _shrink_warning(plant, ref, drive):
     # within what the range stage's margins leave inside the range (shaping.RANGE_MARGINS)
     edge = [(1.0 - min(RANGE_MARGINS)) * 0.5 * (c.high - c.low) for c in amp.channels]
     at_edge = [name for name, c, row, e in zip(amp.inputs, amp.channels, u, edge)
-               if row.size and (row.max() >= c.high - e or row.min() <= c.low + e)]
+               if drive.range_limited and row.size
+               and (row.max() >= c.high - e or row.min() <= c.low + e)]
     head = (f"the reference was shaped by up to {dev[k]:.3g} µm on "
             f"{plant.hysteresis.output_names[k]}, {100 * share[k]:.3g} % of its half-span, after "
             f"the fade-in: the limits measured on the records ({limits}) hold it back")

@@ -207,6 +207,12 @@ class DriveResult:
         The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``), when
         :func:`hardware_drive` made them more than a tenth of it (a stable inversion's
         pre-actuation); None otherwise.
+    limited : bool
+        True when the limits measured on the records shaped the reference
+        (:class:`hammerstein.compensation.shaping.ShapedReference`'s
+        ``limited``), not only the band limit below the first mode.
+    range_limited : bool
+        True when the range stage of that shaping changed it.
     """
 
     inputs: np.ndarray
@@ -219,6 +225,8 @@ class DriveResult:
     shaped: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     rest_lead: int = None
+    limited: bool = False
+    range_limited: bool = False
 
 
 def drive_signal(compensator, reference, sampling_period, period_samples=None, fade_samples=None,
@@ -705,13 +713,14 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     else:
         n = int(min(max(int(fade_samples), 0), N))
         u, faded = run(n, rest_lead)
-    notes = []
+    notes, limited, range_limited = [], False, False
     if amplifier is not None and amplifier.from_records and shape:
         def drive_for(ref):
             return _compensate(compensator, ref, P or None, 0)[0]
 
         sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names)
         u, faded, notes = sr.inputs, sr.reference, sr.notes
+        limited, range_limited = sr.limited, sr.range_limited
         if fade_samples is None:     # a start-up stepping faster than the settled drive: shaped too
             u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
                                              first_mode, predict, names)
@@ -719,7 +728,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     u, _ = taper_preactuation(u, u_rest, n // 10 if rest_lead is None else rest_lead)
     peak, top = drive_metrics(u, T)
     res = DriveResult(u, u, faded, peak, top, n, shaped=notes,
-                      rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead)
+                      rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead,
+                      limited=limited, range_limited=range_limited)
     if fade_samples is None and grown:    # what the metrics leave out, said (a raster's lines)
         res.notes.append(f"the fade-in was lengthened from {grown[0] * T:.4g} s to "
                          f"{grown[1] * T:.4g} s, {100 * grown[1] / N:.3g} % of the record, "

@@ -95,6 +95,11 @@ class ShapedReference:
         True when the range stage changed the reference.
     notes : list of str
         One line per changed output (:func:`shaping_notes`).
+    limited : bool
+        True when the limits shaped the reference (its drive left them
+        after the band limit below the first mode), False when only that
+        band limit changed it (a step-and-hold's steps smoothed over a
+        period of the mode, whatever the limits).
     """
 
     reference: np.ndarray
@@ -102,6 +107,7 @@ class ShapedReference:
     window_samples: int = 0
     range_limited: bool = False
     notes: list = field(default_factory=list)
+    limited: bool = False
 
     @property
     def changed(self) -> bool:
@@ -923,6 +929,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
                              f"{left} (the model's prediction for the drive "
                              f"{'clipped' if left == 'range' else 'limited'} to it"
                              + (f", {100 * (1 - f):.3g} % inside it" if f < 1 else "") + ")")
+    best.limited = True
     if notes_why:
         reasons.append(f"the drive left the limits measured on the records "
                        f"({'; '.join(notes_why)})")

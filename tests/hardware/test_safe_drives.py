@@ -575,3 +575,28 @@ def test_a_reference_held_back_by_the_range_is_told_so_not_to_record_faster(tmp_
     assert "make it smaller or move its center" in line and "faster records" not in line
     u, _, _ = _drive(tmp_path / "d.csv")
     assert 2.9 <= np.abs(u).max() <= 3.0         # within the range, at its edge
+
+
+def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_path):
+    # a step-and-hold reference (holds of 0.1 s) behind limits far beyond what it needs
+    # (+-1000 V, 1e9 V/s): its steps are smoothed over a period of the 310 Hz mode whatever
+    # the limits, and the warning said the limits measured on the records held it back and
+    # to widen them
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
+    text += '\n[amplifier]\nsource = "records"\nrange = [-1000.0, 1000.0]\nslew_rate = 1e9\n'
+    preset = tmp_path / "wide.toml"
+    preset.write_text(text)
+    n = 2000                                  # 0.1 s at T = 5e-5 s
+    x = np.repeat([0.0, 10.0, -5.0, 12.0, 3.0], n)
+    t = np.arange(x.size) * T
+    ref = tmp_path / "steps.csv"
+    pd.DataFrame({"t": t, "x": x, "y": 0.5 * x}).to_csv(ref, index=False)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--reference", str(ref),
+                     "--out", str(tmp_path / "d.csv")])
+    assert code == 0, err.getvalue()
+    assert "% of its half-span" not in err.getvalue()
+    shaped = [ln for ln in out.getvalue().splitlines() + err.getvalue().splitlines()
+              if ln.startswith("shaped:")]
+    assert shaped and all("first mode" in ln and "left the limits" not in ln for ln in shaped)
