@@ -39,10 +39,9 @@ cannot change is named beside it: a harmonic at a bending mode
 main frequency (:func:`zpetc_note`), a drive that chatters
 (:func:`chatter_warnings`).
 
-Length: the shaping and the notes of what a drive cannot do read the same
-reference spectra, mode frequencies and amplifier limits, and are what
-``compensate`` and ``learn`` print together; apart, each note would carry
-its own copy of the main-frequency and mode estimates.
+Length: the shaping and the notes of what a drive cannot do read the same reference
+spectra, mode frequencies and amplifier limits, and ``compensate`` and ``learn`` print
+them together; apart, each note would copy the main-frequency and mode estimates.
 """
 
 from __future__ import annotations
@@ -96,10 +95,7 @@ class ShapedReference:
     notes : list of str
         One line per changed output (:func:`shaping_notes`).
     limited : bool
-        True when the limits shaped the reference (its drive left them
-        after the band limit below the first mode), False when only that
-        band limit changed it (a step-and-hold's steps smoothed over a
-        period of the mode, whatever the limits).
+        True when the limits shaped it, not only the band limit below the first mode.
     """
 
     reference: np.ndarray
@@ -929,10 +925,9 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
                              f"{left} (the model's prediction for the drive "
                              f"{'clipped' if left == 'range' else 'limited'} to it"
                              + (f", {100 * (1 - f):.3g} % inside it" if f < 1 else "") + ")")
-    best.limited = True
+    best.limited = True           # the drive left the limits after the band limit
     if notes_why:
-        reasons.append(f"the drive left the limits measured on the records "
-                       f"({'; '.join(notes_why)})")
+        reasons.append(f"the drive left the limits measured on the records ({'; '.join(notes_why)})")
     best.notes = shaping_notes(r, best.reference, T, names,
                                f": {'; '.join(reasons)}" if reasons else "")
     return best
