@@ -88,7 +88,8 @@ class ConvergenceCondition:
         axes = ", ".join(f"{n} {v:.3f}" for n, v in zip(outputs, np.max(self.per_axis[:, idx],
                                                                           axis=1)))
         where = ("over frequency" if band.all() else
-                 f"over the band Q passes (up to {float(self.frequencies[idx].max()):.4g} Hz)")
+                 f"over the harmonics Q passes (the highest at "
+                 f"{float(self.frequencies[idx].max()):.4g} Hz, below Q's cutoff)")
         if not self.holds:
             verdict = "> 1: NOT guaranteed"
         elif top < 1.0 - 1e-6:

@@ -76,7 +76,7 @@ def test_the_summary_reports_the_band_q_passes():
     coupled = np.where(passband, 0.5, 1.0)
     cond = ConvergenceCondition(f, coupled[None, :], coupled, passband)
     text = cond.summary(["x"])
-    assert "over the band Q passes (up to 19" in text and "coupled 0.500" in text
+    assert "over the harmonics Q passes (the highest at 19" in text and "coupled 0.500" in text
     assert "<= 1: monotonic" in text and "9990" not in text
     flat = ConvergenceCondition(f, np.ones((1, f.size)), np.ones(f.size), passband)
     assert "monotonic" not in flat.summary(["x"]) and "no contraction" in flat.summary(["x"])
@@ -87,4 +87,4 @@ def test_the_learning_reports_its_condition_where_q_passes():
     ilc = IterativeLearning(_pi(), G, T, 0.5, 1000.0)
     cond = ilc.convergence()
     text = cond.summary(["x"])
-    assert "up to" in text and float(text.split("coupled ")[1].split()[0]) < 0.9
+    assert "the highest at" in text and float(text.split("coupled ")[1].split()[0]) < 0.9
