@@ -80,15 +80,30 @@ def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz):
             f"where a correction would make the drive chatter")
 
 
-def _period_note(period, period_samples, sampling_period, steady):
-    """The note saying why a --period reference is learnt in the time domain, or None."""
+def _period_note(period, period_samples, sampling_period, steady, n_samples=None, fade=0):
+    """The note saying why a --period reference is learnt in the time domain, or None.
+
+    Which of the reasons :func:`~hammerstein.compensation.ilc.repeating_from`
+    has it is: a period of no whole number of samples, fewer than five
+    periods after the fade-in (``n_samples`` and ``fade`` [samples] given),
+    or a file that does not repeat.
+    """
     if period is None or period_samples is None or steady is not None:
         return None
     exact = float(period) / sampling_period
-    why = (f"{period:g} s is {exact:.6g} sampling periods, not a whole number: the file does "
-           f"not repeat every {period_samples} samples" if abs(exact - round(exact)) > 1e-6 else
-           f"the file does not repeat every {period_samples} samples after the fade-in, or holds "
-           f"fewer than five periods after it")
+    start = max(int(fade), int(period_samples))    # where repeating_from looks from
+    left = None if n_samples is None else (int(n_samples) - start) / period_samples
+    if abs(exact - round(exact)) > 1e-6:
+        why = (f"{period:g} s is {exact:.6g} sampling periods, not a whole number: the file "
+               f"does not repeat every {period_samples} samples")
+    elif left is not None and left < 5:
+        why = (f"the file holds {max(left, 0):.3g} periods after the "
+               f"{start * sampling_period:.4g} s fade-in, fewer than the five the harmonics "
+               f"need (a fade-in compensate lengthened is in the drive file's header): give "
+               f"more periods, or a shorter --fade-in")
+        return (f"note: learnt sample by sample, not per harmonic of the period: {why}")
+    else:
+        why = (f"the file does not repeat every {period_samples} samples after the fade-in")
     return (f"note: learnt sample by sample, not per harmonic of the period: --period {why} "
             f"(a period of a whole number of samples, e.g. "
             f"{max(round(exact), 2) * sampling_period:g} s, repeats exactly)")

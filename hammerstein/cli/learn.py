@@ -424,7 +424,7 @@ def _learn(args):
         # the settled window: after the fade-in and --settle-periods (the start-up no drive removes)
         P = ref.period_samples if ref.period_samples > 1 else None
         steady = repeating_from(target, P, fade)
-        period_note = _period_note(args.period, P, T, steady)
+        period_note = _period_note(args.period, P, T, steady, target.shape[1], fade)
         settle = fade + int(args.settle_periods * ref.period_samples)
         if steady is not None:        # the repeating part the trial is judged on
             settle = max(settle, steady)

@@ -384,6 +384,19 @@ def test_learn_says_why_a_period_is_not_learnt_per_harmonic(tmp_path, hz, whole)
     assert ("learnt per harmonic of the period" in res.stderr) == whole
 
 
+def test_the_period_note_says_which_reason_it_is():
+    """A 2 s pattern repeated 6 times at 2 kHz, whose fade compensate lengthened to 3 s:
+    4.5 periods after it. The note said "does not repeat ..., or holds fewer than five
+    periods": the file repeats exactly, so only the second was true."""
+    from hammerstein.cli._learn_notes import _period_note
+    short = _period_note(2.0, 4000, 5e-4, None, 24000, 6000)
+    assert "holds 4.5 periods after the 3 s fade-in, fewer than the five" in short
+    assert "does not repeat" not in short
+    other = _period_note(2.0, 4000, 5e-4, None, 60000, 6000)
+    assert "does not repeat every 4000 samples" in other and "holds" not in other
+    assert _period_note(2.0, 4000, 5e-4, 14000, 60000, 6000) is None     # learnt per harmonic
+
+
 def test_a_planar_reference_on_a_one_axis_stage_says_what_to_use():
     """It answered "expected two of the plant's outputs ['x'], found ['x']"."""
     from hammerstein.exceptions import SignalError
