@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from hammerstein.compensation.drive import rest_output
 from hammerstein.core.files import markdown_text, safe_write
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS, words_number
 from hammerstein.report import figures as plots
@@ -478,6 +479,17 @@ def _scan_figures(scenario, results, directory, jobs):
     return figs
 
 
+def _model_rest(compensator):
+    """max |output at rest| [µm] of a compensator's hysteresis model, or None without one."""
+    model = getattr(compensator, "model", None)
+    if model is None or not hasattr(model, "simulate"):
+        return None
+    try:
+        return float(np.max(np.abs(rest_output(model))))
+    except (TypeError, ValueError, AttributeError):
+        return None
+
+
 def start_lines(results, atol=1e-9):
     """The report's lines on how each compensated case starts: faded in, or with a step.
 
@@ -512,7 +524,16 @@ def start_lines(results, atol=1e-9):
         names = list(spec.plant.hysteresis.output_names)
         u0 = np.max(np.abs(np.asarray(r.inputs, dtype=float)[:, 0])) if r.inputs is not None \
             and np.size(r.inputs) else 0.0
-        if fade > 0 and u0 > 1e-6:
+        rest = _model_rest(spec.compensator)
+        if fade > 0 and u0 > 1e-6 and rest is not None and rest <= atol:
+            # the model rests at 0 µm: the inverse's preview acts on the fade from its first
+            # sample (the report blamed a rest the model does not have)
+            text = (f"the reference is faded in from 0 µm over {fade * T * 1e3:.4g} ms "
+                    f"({fade} samples) from the first sample, with no sample at rest before "
+                    f"it: the compensator's inverse of the dynamics previews the samples "
+                    f"ahead, so the drive starts at {u0:.3g} V, not 0 V (`hammerstein "
+                    f"compensate` holds the start at rest before its fade)")
+        elif fade > 0 and u0 > 1e-6:
             # faded from 0 µm, not from the model's output at 0 V: the first voltage is a step
             text = (f"the reference is faded in from 0 µm over {fade * T * 1e3:.4g} ms "
                     f"({fade} samples), but the compensator's model does not rest at 0 µm at "

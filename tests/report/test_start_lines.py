@@ -63,3 +63,29 @@ def test_a_fade_from_0_um_off_the_models_rest_is_said_to_step(tmp_path):
     assert u0 > 0.1
     assert "faded in from 0 µm over 4 ms" in faded and f"jumps from 0 V to {u0:.3g} V in the first sample" in faded
     assert "which is not its compensator" not in faded
+
+
+def test_a_preview_at_the_first_sample_is_not_blamed_on_the_models_rest(tmp_path):
+    """The Hammerstein compensator on a model resting at 0 µm: its ZPETC inverse previews the
+    fade from the first sample, so the drive starts off 0 V; the report said the model does
+    not rest at 0 µm."""
+    import numpy as np
+    import pandas as pd
+
+    from hammerstein.compensation.drive import rest_output
+    from hammerstein.io.presets import load_plant
+
+    assert np.max(np.abs(rest_output(load_plant("rakotondrabe-2dof").hysteresis))) <= 1e-9
+    path = tmp_path / "starts.toml"
+    path.write_text(SCENARIO.replace("dynamics = false\n", "")
+                    .replace('[compensator]\nkind = "multivariable"', '[compensator]\nkind = "hammerstein"')
+                    .replace('compensator = { kind = "multivariable", fade_in = 0.004 }',
+                             'compensator = { kind = "hammerstein", fade_in = 0.004 }'))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q", "--figures", "none"]) == 0
+    md = (tmp_path / "out" / "starts" / "report.md").read_text()
+    faded = {ln.split(":")[0]: ln for ln in md.splitlines() if ln.startswith("- `")}["- `circle-faded`"]
+    series = pd.read_csv(tmp_path / "out" / "starts" / "timeseries-circle-faded.csv", comment="#")
+    u0 = float(np.max(np.abs(series[["ux_V", "uy_V"]].to_numpy()[0])))
+    assert u0 > 1e-6
+    assert "does not rest at 0 µm" not in faded
+    assert f"previews the samples ahead, so the drive starts at {u0:.3g} V" in faded
