@@ -92,14 +92,22 @@ def run_case(case):
     names = list(plant.hysteresis.output_names)
     caught = list(case.warnings)
     if case.mode == "drive":
-        y, _ = plant.simulate(case.signal)
-        rows = met.open_loop_metrics(case.signal, y, case.driven_input, names,
+        u = case.signal
+        amp = getattr(plant, "amplifier", None)
+        if amp is not None:     # the drive through the plant's amplifier, as a compensator's
+            with warnings.catch_warnings(record=True) as rec:
+                warnings.simplefilter("always")
+                amp.check(u, plant.sampling_period, "warn", f"{case.where}.drive")
+            caught += [str(w.message) for w in rec]
+            u, _ = amp.apply(u, plant.sampling_period)
+        y, _ = plant.simulate(u)
+        rows = met.open_loop_metrics(u, y, case.driven_input, names,
                                      case.period_samples, case.settle_periods)
         ym = None
         if case.model is not None:  # model vs plant (Fig. 6, 7)
-            ym, more = model_comparison(case, y)
+            ym, more = model_comparison(case, y, u)
             rows += more
-        return CaseResult(case, case.signal, y, None, None, rows, caught, ym)
+        return CaseResult(case, u, y, None, None, rows, caught, ym)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         fade = fade_samples(case)
@@ -265,7 +273,7 @@ def chain_result(case, res, caught, commanded=None, tracked=None):
     return CaseResult(case, res.inputs, res.outputs, reference, res.divergence, rows, caught)
 
 
-def model_comparison(case, plant_outputs):
+def model_comparison(case, plant_outputs, inputs=None):
     """Simulate a drive case's comparison model and compare it with the plant.
 
     The model (rate-independent PI, no dynamics) is driven by the case's
@@ -277,6 +285,9 @@ def model_comparison(case, plant_outputs):
         A drive case with ``case.model``.
     plant_outputs : numpy.ndarray, shape (p, n_samples)
         The plant's displacements [µm].
+    inputs : numpy.ndarray, shape (m, n_samples), optional
+        The voltages that reached the plant [V] (its amplifier applied);
+        default the case's drive.
 
     Returns
     -------
@@ -287,7 +298,7 @@ def model_comparison(case, plant_outputs):
         ``model_rms_error`` (the paper's RMS_error_model, Section 5.3) and
         ``model_max_abs_error`` of plant minus model [µm].
     """
-    ym, _ = case.model.simulate(case.signal)
+    ym, _ = case.model.simulate(case.signal if inputs is None else inputs)
     y = np.asarray(plant_outputs, dtype=float)
     win = met.steady_window(y.shape[1], case.period_samples, case.settle_periods)
     e = y[:, win] - ym[:, win]
