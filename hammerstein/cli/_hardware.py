@@ -18,6 +18,7 @@ from hammerstein.cli._common import add_column_options, number_type
 from hammerstein.compensation.drive import DRIVE_MARK, read_signals
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
+from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.io.presets import (load_dynamics, load_model, load_plant, read_toml,
                                     records_sampling_period, resolve_preset)
@@ -181,11 +182,50 @@ def load_actuator(path, sampling_period=None):
         plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
         if "amplifier" in data:
             plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
+    problem = falling_direct_transfer(plant.hysteresis)
+    if problem:
+        raise PresetError(f"{path}: {problem}")
     delay = _measurement_delay(data, path)
     plant.measurement_delay = None if delay is None else int(round(delay * scale))
     plant.delay_problem = _delay_problem(data)
     plant.dynamics_problem = dynamics_problem(data, path) if not plant.is_static else None
     return plant
+
+
+def falling_direct_transfer(model):
+    """Why a classical PI's direct transfer cannot be inverted by any kind (a phrase), or None.
+
+    A direct transfer (output l from input l of a square model) whose first
+    weight, the initial slope of every loop from a reversal, is ``w_1 <= 0``
+    moves its output the wrong way (or not at all) as its input turns: no
+    compensator inverts it. A hand-written model with ``w_1 = -0.05 µm/V``
+    was told the multivariable gain diverges ("gain = 'secant'", a gain the
+    user never chose) and then that the amplifier was too slow.
+
+    Parameters
+    ----------
+    model : object
+        The plant's hysteresis model; only a classical PI
+        (:class:`~hammerstein.models.hysteresis.MultivariablePI`) is checked.
+
+    Returns
+    -------
+    str or None
+        E.g. ``"model: direct transfer x <- ux: weights: ..."``.
+    """
+    if not isinstance(model, MultivariablePI) or model.n_inputs != model.n_outputs:
+        return None
+    for l in range(model.n_outputs):
+        weights = getattr(model.components[l][l], "weights", None)
+        if weights is None or not np.size(weights):
+            continue
+        w1 = float(np.asarray(weights, dtype=float).ravel()[0])
+        if not w1 > 0:
+            out, inp = model.output_names[l], model.input_names[l]
+            return (f"model: direct transfer {out} <- {inp}: weights: the first weight (the "
+                    f"initial slope of its loops) is {w1:.6g}; expected > 0: {out} would move "
+                    f"the wrong way as {inp} turns, and no compensator inverts that")
+    return None
 
 
 def dynamics_problem(data, path):

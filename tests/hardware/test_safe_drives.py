@@ -600,3 +600,28 @@ def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_pa
     shaped = [ln for ln in out.getvalue().splitlines() + err.getvalue().splitlines()
               if ln.startswith("shaped:")]
     assert shaped and all("first mode" in ln and "left the limits" not in ln for ln in shaped)
+
+
+def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path):
+    # a hand-written model with w_1 = -0.05 um/V on x <- ux: the default kind warned of a
+    # gain the user never chose, then blamed the amplifier's slew rate
+    import copy
+
+    from hammerstein.io.presets import save_model
+    from hammerstein.models.hysteresis import PrandtlIshlinskii
+
+    model = copy.deepcopy(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
+    op = model.components[0][0]
+    weights = np.array(op.weights, dtype=float)
+    weights[0] = -0.05
+    model.components[0][0] = PrandtlIshlinskii(op.thresholds, weights)
+    save_model(model, tmp_path / "falling.toml")
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["compensate", str(tmp_path / "falling.toml"), "--sampling-period", str(T),
+                     "--reference", '{ kind = "circle", radius = 5, frequency = 20, periods = 4 }',
+                     "--out", str(tmp_path / "d.csv")])
+    assert code == 1 and not (tmp_path / "d.csv").exists()
+    lines = err.getvalue().strip().splitlines()
+    assert len(lines) == 1, lines
+    assert "direct transfer x <- ux: weights: the first weight" in lines[0] and "-0.05" in lines[0]
