@@ -92,8 +92,20 @@ def nonnegative_float(text):
     return _NONNEGATIVE(text)
 
 
+def settle_periods(text):
+    """argparse type: periods left out of the metrics, a finite number in [0, MAX_SETTLE].
+
+    ``1e308`` periods, counted in samples, overflowed an integer; no record
+    holds a billion periods.
+    """
+    return _SETTLE(text)
+
+
+#: Largest ``--settle-periods`` accepted.
+MAX_SETTLE = 1e9
 _POSITIVE = number_type(0, low_open=True)
 _NONNEGATIVE = number_type(0)
+_SETTLE = number_type(0, MAX_SETTLE)
 
 
 def fraction(text):
