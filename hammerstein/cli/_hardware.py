@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import add_column_options, number_type
+from hammerstein.core.files import escape
 from hammerstein.compensation.drive import DRIVE_MARK, read_signals
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
@@ -291,6 +292,44 @@ def check_reference_first(path, sampling_period, text, time="t", outputs=None, p
     load_reference(text, shell, time, outputs, period)
 
 
+def inline_table(text, option="--reference"):
+    """The value of an inline TOML table given on the command line (``--reference '{ ... }'``).
+
+    Parsed as the value of one key: nesting too deep for the parser is told as
+    the scenario loader tells it, and anything after the table (a ``[table]``,
+    another key) is refused rather than silently dropped.
+
+    Parameters
+    ----------
+    text : str
+        The option's text, starting with ``{``.
+    option : str
+        The option, for messages.
+
+    Returns
+    -------
+    object
+        The parsed value (a dict for an inline table).
+
+    Raises
+    ------
+    DataFileError
+        Not valid TOML, nested too deeply, or followed by more TOML.
+    """
+    try:
+        doc = tomllib.loads("reference = " + text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DataFileError(f"{option}: not an inline TOML table ({exc})") from None
+    except RecursionError:  # the parser recurses once per level of [ or {
+        raise DataFileError(f"{option}: invalid TOML: arrays or inline tables nested too "
+                            f"deeply") from None
+    extra = [key for key in doc if key != "reference"]
+    if extra:
+        raise DataFileError(f"{option}: {escape(repr(extra[0]), 60)} after the inline table; "
+                            f"expected one inline TOML table and nothing after it")
+    return doc["reference"]
+
+
 def load_reference(text, plant, time="t", outputs=None, period=None):
     """The reference of ``--reference``: an inline TOML table or a CSV file.
 
@@ -320,10 +359,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     """
     names = list(plant.hysteresis.output_names)
     if text.lstrip().startswith("{"):
-        try:
-            spec = tomllib.loads("reference = " + text)["reference"]
-        except tomllib.TOMLDecodeError as exc:
-            raise DataFileError(f"--reference: not an inline TOML table ({exc})") from None
+        spec = inline_table(text)
         if isinstance(spec, dict) and len(names) == 1 and "output" not in spec \
                 and spec.get("kind") in ("sine", "triangle"):
             spec = {**spec, "output": names[0]}      # the one output: nothing to choose

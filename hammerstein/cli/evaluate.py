@@ -37,7 +37,6 @@ import contextlib
 import os
 import re
 import sys
-import tomllib
 from importlib import metadata
 from pathlib import Path
 from types import SimpleNamespace
@@ -45,7 +44,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from hammerstein.cli._common import add_column_options, out_dir_problem, print_err
-from hammerstein.cli._hardware import (catch, load_actuator, load_reference, mapping,
+from hammerstein.cli._hardware import (catch, inline_table, load_actuator, load_reference, mapping,
                                        nonnegative_float, settle_periods, positive_float)
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
@@ -129,8 +128,8 @@ def _reference_outputs(args):
         return None
     if args.reference.lstrip().startswith("{"):
         try:
-            spec = tomllib.loads("reference = " + args.reference)["reference"]
-        except tomllib.TOMLDecodeError:
+            spec = inline_table(args.reference)
+        except DataFileError:
             return None                   # load_reference says why
         named = spec.get("outputs") if isinstance(spec, dict) else None
         if isinstance(named, list) and named and all(isinstance(n, str) for n in named):
