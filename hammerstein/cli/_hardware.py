@@ -8,6 +8,7 @@ ownership check.
 from __future__ import annotations
 
 import argparse
+import re
 import tomllib
 import warnings
 from pathlib import Path
@@ -15,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import add_column_options, number_type
-from hammerstein.core.files import escape
+from hammerstein.core.files import PROVENANCE, carries_provenance, escape
 from hammerstein.compensation.drive import DRIVE_MARK, read_signals
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
@@ -407,11 +408,16 @@ def owned_problem(out, force):
         return None
     try:
         with open(p, encoding="utf-8", errors="replace") as fh:
-            first = fh.read(len(DRIVE_MARK))
+            first = fh.read(200)            # the first line's start, bounded
     except OSError:
         return None
-    if first == DRIVE_MARK:
+    if first.startswith(DRIVE_MARK):
         return None
+    if carries_provenance(p):       # a model, metrics or report file of another command
+        m = re.match(rf"# {PROVENANCE} ([a-z-]+)", first.lstrip("\ufeff"))
+        by = f"hammerstein {m.group(1)}" if m else "another hammerstein command"
+        return (f"--out: {out} exists and was written by {by}: it is not a drive file; choose "
+                f"another name or pass --force to replace it")
     return (f"--out: {out} exists and was not written by hammerstein; choose another name or "
             f"pass --force to replace it")
 
