@@ -271,7 +271,7 @@ def _handle(args):
             (outs, mapping(args.outputs, outs, "--output-columns"))
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,
                                "--measured", upsample=False)
-        n_drive = _drive_length(args.drive, T) if args.drive else None
+        n_drive = _drive_length(args.drive, T, args.sampling_period) if args.drive else None
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
@@ -345,13 +345,17 @@ def _handle(args):
     return 0
 
 
-def _drive_length(path, T):
+def _drive_length(path, T, resampled=None):
     """The samples of the drive file ``path`` (read bounded: a device or FIFO is refused).
 
     The drive is read at its own period, which must be the measurement's ``T`` [s]: a
-    measurement whose time steps are not the drive's is named, not the drive.
+    measurement whose time steps are not the drive's is named, not the drive (or
+    ``--sampling-period``, when the measurement was ``resampled`` onto it).
     """
     t, _, Td = read_signals(path, [], "t", None, None, "--drive")
+    if resampled is not None and not np.isclose(Td, T, rtol=1e-6):
+        raise DataFileError(f"--sampling-period: {T:g} s; expected the drive's {Td:g} s (the "
+                            f"measurement is resampled onto the drive's period)")
     if not np.isclose(Td, T, rtol=1e-6):
         raise DataFileError(f"--measured: sampled every {T:g} s; expected the drive's {Td:g} s "
                             f"(is its time column in seconds? else give --sampling-period)")

@@ -134,3 +134,11 @@ def test_the_report_counts_settling_in_samples_without_a_period(files):
     text = (files / "ev-samples/report.md").read_text()
     assert "settling 1 sample" in text and "skip the first 1 sample of" in text
     assert "period" not in text.split("Settled window:")[1].split(".")[0]
+
+
+def test_a_sampling_period_other_than_the_drives_is_named(files):
+    res = _cli("evaluate", "--reference", REF, "--measured", "y0.csv", "--drive", "u0.csv",
+               "--sampling-period", "1e-4", "--out", "ev-T", cwd=files)
+    assert res.returncode == 1
+    assert res.stderr.startswith("hammerstein evaluate: error: --sampling-period: 0.0001 s; "
+                                 "expected the drive's 5e-05 s")
