@@ -9,7 +9,7 @@ import re
 import sys
 from pathlib import Path
 
-from hammerstein.core.files import escape
+from hammerstein.core.files import escape, path_problem
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
            "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject",
@@ -131,7 +131,8 @@ def out_dir_problem(out, follow_link=False):
     in a shared ``/tmp``, would send the files, ``--force`` replacing what
     is there, wherever it points), a path under an existing file (``f/sub``
     with ``f`` a file), an existing non-directory, or a directory that
-    cannot be written. Nothing is created. ``follow_link=True`` takes a
+    cannot be written, or a path the system refuses to name (a name over
+    255 bytes, :func:`hammerstein.core.files.path_problem`). Nothing is created. ``follow_link=True`` takes a
     symbolic link for its target (the directory of a single output file,
     such as macOS's ``/tmp``, which a user names but never owns).
     """
@@ -139,6 +140,8 @@ def out_dir_problem(out, follow_link=False):
         return "--out: empty path; expected a directory"
     if str(out).strip() == "-":      # by convention stdout, never a directory named '-'
         return "--out: '-' (standard output) is not written to; expected a directory"
+    if path_problem(out):            # a name over 255 bytes: ENAMETOOLONG at the first look
+        return f"--out: {path_problem(out)}"
     p = Path(out)
     if os.path.islink(p) and not follow_link:
         return (f"--out: {p} is a symbolic link to {os.path.realpath(p)}; an output directory is "
@@ -159,7 +162,8 @@ def out_file_problem(out, what="file", force=False):
     An empty path, a directory, an existing special file (device, FIFO,
     socket) or read-only file, a path under an existing file, a symbolic
     link that cannot be followed (loop), or a directory that cannot be
-    written. A symlink is judged by its target. A dangling symbolic link
+    written, or a path the system refuses to name (a name over 255 bytes).
+    A symlink is judged by its target. A dangling symbolic link
     (one planted at the name would write wherever it points) is refused
     unless ``force``, and even then when its target's directory does not
     exist: the directories along a link's target are never created.
@@ -169,6 +173,8 @@ def out_file_problem(out, what="file", force=False):
     if str(out).strip() == "-":      # by convention stdout: a file named '-' was written instead
         return (f"--out: '-' (standard output) is not written to; expected a {what} name "
                 f"(./- for a file of that name)")
+    if path_problem(out):            # a name over 255 bytes: ENAMETOOLONG at the first look
+        return f"--out: {path_problem(out)}"
     p = Path(out)
     if p.is_symlink():
         try:

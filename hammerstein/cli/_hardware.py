@@ -8,6 +8,7 @@ ownership check.
 from __future__ import annotations
 
 import argparse
+import re
 import tomllib
 import warnings
 from pathlib import Path
@@ -15,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.cli._common import add_column_options, number_type
+from hammerstein.core.files import PROVENANCE, carries_provenance, escape
 from hammerstein.compensation.drive import DRIVE_MARK, read_signals
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
@@ -93,8 +95,20 @@ def nonnegative_float(text):
     return _NONNEGATIVE(text)
 
 
+def settle_periods(text):
+    """argparse type: periods left out of the metrics, a finite number in [0, MAX_SETTLE].
+
+    ``1e308`` periods, counted in samples, overflowed an integer; no record
+    holds a billion periods.
+    """
+    return _SETTLE(text)
+
+
+#: Largest ``--settle-periods`` accepted.
+MAX_SETTLE = 1e9
 _POSITIVE = number_type(0, low_open=True)
 _NONNEGATIVE = number_type(0)
+_SETTLE = number_type(0, MAX_SETTLE)
 
 
 def fraction(text):
@@ -319,6 +333,44 @@ def check_reference_first(path, sampling_period, text, time="t", outputs=None, p
     load_reference(text, shell, time, outputs, period)
 
 
+def inline_table(text, option="--reference"):
+    """The value of an inline TOML table given on the command line (``--reference '{ ... }'``).
+
+    Parsed as the value of one key: nesting too deep for the parser is told as
+    the scenario loader tells it, and anything after the table (a ``[table]``,
+    another key) is refused rather than silently dropped.
+
+    Parameters
+    ----------
+    text : str
+        The option's text, starting with ``{``.
+    option : str
+        The option, for messages.
+
+    Returns
+    -------
+    object
+        The parsed value (a dict for an inline table).
+
+    Raises
+    ------
+    DataFileError
+        Not valid TOML, nested too deeply, or followed by more TOML.
+    """
+    try:
+        doc = tomllib.loads("reference = " + text)
+    except tomllib.TOMLDecodeError as exc:
+        raise DataFileError(f"{option}: not an inline TOML table ({exc})") from None
+    except RecursionError:  # the parser recurses once per level of [ or {
+        raise DataFileError(f"{option}: invalid TOML: arrays or inline tables nested too "
+                            f"deeply") from None
+    extra = [key for key in doc if key != "reference"]
+    if extra:
+        raise DataFileError(f"{option}: {escape(repr(extra[0]), 60)} after the inline table; "
+                            f"expected one inline TOML table and nothing after it")
+    return doc["reference"]
+
+
 def load_reference(text, plant, time="t", outputs=None, period=None):
     """The reference of ``--reference``: an inline TOML table or a CSV file.
 
@@ -348,10 +400,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     """
     names = list(plant.hysteresis.output_names)
     if text.lstrip().startswith("{"):
-        try:
-            spec = tomllib.loads("reference = " + text)["reference"]
-        except tomllib.TOMLDecodeError as exc:
-            raise DataFileError(f"--reference: not an inline TOML table ({exc})") from None
+        spec = inline_table(text)
         if isinstance(spec, dict) and len(names) == 1 and "output" not in spec \
                 and spec.get("kind") in ("sine", "triangle"):
             spec = {**spec, "output": names[0]}      # the one output: nothing to choose
@@ -399,11 +448,16 @@ def owned_problem(out, force):
         return None
     try:
         with open(p, encoding="utf-8", errors="replace") as fh:
-            first = fh.read(len(DRIVE_MARK))
+            first = fh.read(200)            # the first line's start, bounded
     except OSError:
         return None
-    if first == DRIVE_MARK:
+    if first.startswith(DRIVE_MARK):
         return None
+    if carries_provenance(p):       # a model, metrics or report file of another command
+        m = re.match(rf"# {PROVENANCE} ([a-z-]+)", first.lstrip("\ufeff"))
+        by = f"hammerstein {m.group(1)}" if m else "another hammerstein command"
+        return (f"--out: {out} exists and was written by {by}: it is not a drive file; choose "
+                f"another name or pass --force to replace it")
     return (f"--out: {out} exists and was not written by hammerstein; choose another name or "
             f"pass --force to replace it")
 

@@ -47,7 +47,8 @@ import pandas as pd
 from hammerstein.cli._common import number_type, out_dir_problem, out_file_problem, print_err
 from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.core.files import (FileLimitError, carries_provenance, escape, guard_inputs,
-                                    locked, provenance_line, replace_problem, safe_write)
+                                    locked, path_problem, provenance_line, replace_problem,
+                                    safe_write)
 from hammerstein.report.render import figure_selection
 from hammerstein.runner import run_pipelined, run_scenarios
 from hammerstein.scenario import diskcache
@@ -145,6 +146,9 @@ def run_check(args):
         scenarios with the same name). Errors go to stderr, one line each.
     """
     baseline_path = Path(args.baseline)
+    if path_problem(args.baseline):     # the system refuses to look the name up (ENAMETOOLONG)
+        _usage(f"--baseline: {path_problem(args.baseline)}")
+        return 2
     try:
         overrides = load_tolerances(args.tolerances) if args.tolerances else None
         tolerance = resolve_tolerances(overrides, rtol=args.rtol, atol=args.atol)

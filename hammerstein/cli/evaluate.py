@@ -37,7 +37,6 @@ import contextlib
 import os
 import re
 import sys
-import tomllib
 from importlib import metadata
 from pathlib import Path
 from types import SimpleNamespace
@@ -45,13 +44,13 @@ from types import SimpleNamespace
 import numpy as np
 
 from hammerstein.cli._common import add_column_options, out_dir_problem, print_err
-from hammerstein.cli._hardware import (catch, load_actuator, load_reference, mapping,
-                                       nonnegative_float, positive_float)
+from hammerstein.cli._hardware import (catch, inline_table, load_actuator, load_reference, mapping,
+                                       nonnegative_float, settle_periods, positive_float)
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import drive_fade_samples, hardware_fade, read_signals
 from hammerstein.compensation.drive_files import (drive_input_names, drive_rest_lead, drive_rest_output,
-                                                  optional_columns)
+                                                  head_lines, optional_columns)
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
@@ -103,7 +102,7 @@ def add_parser(subparsers):
                    help="resample the measurement onto this period [s] (default: its own)")
     p.add_argument("--period", type=positive_float, metavar="S",
                    help="period of a periodic CSV reference [s] (the settling window)")
-    p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
+    p.add_argument("--settle-periods", type=settle_periods, default=1.0, metavar="N",
                    help="periods excluded from the metrics after the fade-in (default 1, as "
                         "scenarios)")
     p.add_argument("--drive", metavar="DRIVE.csv",
@@ -129,8 +128,8 @@ def _reference_outputs(args):
         return None
     if args.reference.lstrip().startswith("{"):
         try:
-            spec = tomllib.loads("reference = " + args.reference)["reference"]
-        except tomllib.TOMLDecodeError:
+            spec = inline_table(args.reference)
+        except DataFileError:
             return None                   # load_reference says why
         named = spec.get("outputs") if isinstance(spec, dict) else None
         if isinstance(named, list) and named and all(isinstance(n, str) for n in named):
@@ -272,6 +271,7 @@ def _handle(args):
             (outs, mapping(args.outputs, outs, "--output-columns"))
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,
                                "--measured", upsample=False)
+        n_drive = _drive_length(args.drive, T, args.sampling_period) if args.drive else None
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
@@ -284,7 +284,17 @@ def _handle(args):
         shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
         ref = load_reference(args.reference, shell, args.time, None, args.period)
+        if n_drive is not None and n_drive != ref.signal.shape[1]:
+            raise DataFileError(f"--drive: {n_drive} samples; expected the reference's "
+                                f"{ref.signal.shape[1]}")
+        if n_drive is not None and y.shape[1] < n_drive:
+            raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
+                                f"the drive's {n_drive} (the measurement must cover the whole "
+                                f"drive)")
         N = min(ref.signal.shape[1], y.shape[1])
+        if args.fade_in is not None and args.fade_in / T > N:
+            raise DataFileError(f"--fade-in: {args.fade_in:g} s is longer than the record ({N} "
+                                f"samples, {N * T:g} s); expected at most {N * T:g} s")
         if N < 8:
             raise DataFileError(f"--measured: {N} samples in common with the reference; expected "
                                 f"the measurement of the whole reference")
@@ -335,13 +345,28 @@ def _handle(args):
     return 0
 
 
+def _drive_length(path, T, resampled=None):
+    """The samples of the drive file ``path`` (read bounded: a device or FIFO is refused).
+
+    The drive is read at its own period, which must be the measurement's ``T`` [s]: a
+    measurement whose time steps are not the drive's is named, not the drive (or
+    ``--sampling-period``, when the measurement was ``resampled`` onto it).
+    """
+    t, _, Td = read_signals(path, [], "t", None, None, "--drive")
+    if resampled is not None and not np.isclose(Td, T, rtol=1e-6):
+        raise DataFileError(f"--sampling-period: {T:g} s; expected the drive's {Td:g} s (the "
+                            f"measurement is resampled onto the drive's period)")
+    if not np.isclose(Td, T, rtol=1e-6):
+        raise DataFileError(f"--measured: sampled every {T:g} s; expected the drive's {Td:g} s "
+                            f"(is its time column in seconds? else give --sampling-period)")
+    return t.size
+
+
 def _drive_notes(args):
     """The drive file's fade-in and shaping, as report lines (empty without ``--drive``)."""
     if not args.drive:
         return ""
-    with open(args.drive, encoding="utf-8", errors="replace") as fh:
-        head = [line[1:].strip() for line in (fh.readline() for _ in range(40))
-                if line.startswith("#")]
+    head = _drive_header(args.drive)
     keep = [h for h in head if h.startswith("shaped:") or "fade-in" in h]
     return "".join(f"  \ndrive `{args.drive}`: {h}" for h in keep)
 
@@ -393,9 +418,7 @@ def _figure_title(args, outs):
 
 def _drive_header(path):
     """The comment lines that open a drive file, without their '#'."""
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        return [line[1:].strip() for line in (fh.readline() for _ in range(40))
-                if line.startswith("#")]
+    return [line[1:].strip() for line in head_lines(path, 40) if line.startswith("#")]
 
 
 def _shaped_table(rows):
@@ -451,16 +474,15 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), f
     defs = definitions_lines(
         [row["metric"] for row in list(rows) + list(shaped_rows)],
         {m: [str(ref.kind)] for m in ("max_euclidean_error_percent",)},
-        settle=(f"Settled window: the metrics skip the first {args.settle_periods:g} "
-                f"{'period' if args.settle_periods == 1 else 'periods'} of the record (the "
+        settle=(f"Settled window: the metrics skip the first {_settling(args, ref)} of the "
+                f"record (the "
                 f"fade-in of the drive, when known, counted in them), counted from its first "
                 f"sample: from sample {start}, t = {start * T:.4g} s, to the end. The tracking "
                 f"error is e = y_r − y per output; the Euclidean error ‖Y_r − Y‖ takes all "
                 f"outputs together."))
     text = (f"# {markdown_text(_heading(args, ref))}\n\nreference: `{args.reference}`  \n"
             f"measured: `{args.measured}`"
-            f"  \nsampling period {T:g} s, {n} samples, settling {args.settle_periods:g} "
-            f"{'period' if args.settle_periods == 1 else 'periods'}"
+            f"  \nsampling period {T:g} s, {n} samples, settling {_settling(args, ref)}"
             f"{_drive_notes(args)}"
             f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
             f"samples = {delay * T * 1e6:.4g} µs, {delay_words}.\n\n"
@@ -468,6 +490,14 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), f
             f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n"
             f"{_shaped_table(shaped_rows)}")
     safe_write(out / "report.md", text, "report", root=out)
+
+
+def _settling(args, ref):
+    """``--settle-periods`` in words: periods of a periodic reference, else samples (a
+    reference without a period settles for ``--settle-periods`` samples)."""
+    n = args.settle_periods
+    unit = "period" if ref.period_samples > 1 else "sample"
+    return f"{n:g} {unit}{'' if n == 1 else 's'}"
 
 
 def _value(v):
@@ -480,11 +510,10 @@ def _actuator(args):
     if getattr(args, "model", None):
         return Path(str(args.model)).name
     if getattr(args, "drive", None):
-        with open(args.drive, encoding="utf-8", errors="replace") as fh:
-            for line in (fh.readline() for _ in range(40)):
-                m = re.match(r"#\s*actuator\s+([^,]+),", line)
-                if m:
-                    return m.group(1).strip()
+        for line in head_lines(args.drive, 40):
+            m = re.match(r"#\s*actuator\s+([^,]+),", line)
+            if m:
+                return m.group(1).strip()
     return None
 
 

@@ -84,7 +84,7 @@ def add_parser(subparsers):
     p.add_argument("--output", "--outputs", dest="outputs", required=True, metavar="COLS",
                    help="output column(s), names or 0-based indices separated by commas")
     p.add_argument("--time", metavar="COL", help="time column [s], name or 0-based index")
-    p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"), metavar="S",
+    p.add_argument("--sampling-period", type=number_type(0, 1e6, low_open=True, unit="s"), metavar="S",
                    help="sampling period [s] when there is no time column")
     p.add_argument("--skip-rows", type=int, default=0, metavar="N",
                    help="lines before the table to ignore (an instrument's preamble); a row of "

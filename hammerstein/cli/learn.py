@@ -95,8 +95,8 @@ from hammerstein.cli._common import out_dir_problem, out_file_problem, print_err
 from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch, end_note,
                                        check_reference_first,
                                        load_actuator,
-                                       fraction, load_reference, mapping, nonnegative_float, owned_problem,
-                                       positive_float)
+                                       fraction, load_reference, mapping, nonnegative_float,
+                                       owned_problem, positive_float, settle_periods)
 from hammerstein.cli._hardware import Reference
 from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_history, _drive_samples,
                                             foreign_history_problem, history_file_problem,
@@ -178,7 +178,7 @@ def add_parser(subparsers):
                         "cross-correlation with the model's prediction)")
     p.add_argument("--fade-in", type=nonnegative_float, metavar="S",
                    help="fade-in of the reference [s] (default: the drive file's)")
-    p.add_argument("--settle-periods", type=nonnegative_float, default=1.0, metavar="N",
+    p.add_argument("--settle-periods", type=settle_periods, default=1.0, metavar="N",
                    help="periods excluded from the printed error after the fade-in (default "
                         "1; a repeating reference is judged from its repeating part on, two "
                         "periods after the fade-in, when that is later)")

@@ -328,15 +328,44 @@ def _header_int(path, pattern):
     return None
 
 
+#: Bytes of a file's opening read for its header lines (never the whole of a device or FIFO).
+HEAD_BYTES = 1 << 16
+
+
+def head_lines(path, lines=20, what="data file"):
+    """The first ``lines`` lines of a regular file, read through a bounded read.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    lines : int
+        Lines wanted at most.
+    what : str
+        What the file should be, for messages.
+
+    Returns
+    -------
+    list of str
+        Each with its end of line; from the first :data:`HEAD_BYTES` bytes only.
+
+    Raises
+    ------
+    FileLimitError
+        A directory, device, FIFO or socket (never read: it may never end).
+    OSError
+        The file cannot be read.
+    """
+    raw = bounded_read_bytes(path, "data", what, head=HEAD_BYTES)
+    return raw.decode("utf-8", errors="replace").splitlines(keepends=True)[:lines]
+
+
 def _header(path, lines=20):
     """The comment lines that open a file (at most ``lines``)."""
     out = []
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        for _ in range(lines):
-            line = fh.readline()
-            if not line.startswith("#"):
-                break
-            out.append(line)
+    for line in head_lines(path, lines):
+        if not line.startswith("#"):
+            break
+        out.append(line)
     return out
 
 
@@ -373,9 +402,8 @@ def drive_kind(path):
 
 def _header_columns(path):
     """The column names of a CSV file: its first line that is not a ``#`` comment (200 at most)."""
-    with open(path, encoding="utf-8", errors="replace") as fh:
-        header = next((line for line in (fh.readline() for _ in range(200))
-                       if line and not line.startswith("#")), "")
+    header = next((line for line in head_lines(path, 200)
+                   if line and not line.startswith("#")), "")
     return [c.strip() for c in header.split(",")]
 
 

@@ -204,7 +204,7 @@ def file_limit_problem(path, kind="data", what="file"):
     return None
 
 
-def bounded_read_bytes(path, kind="toml", what="file"):
+def bounded_read_bytes(path, kind="toml", what="file", head=None):
     """Read a regular file of at most :func:`limit` ``(kind)`` bytes.
 
     Parameters
@@ -214,6 +214,9 @@ def bounded_read_bytes(path, kind="toml", what="file"):
         Selects the size limit.
     what : str
         What the file should be, for messages ("scenario file", ...).
+    head : int, optional
+        Read only the file's first ``head`` bytes (its header lines): a
+        larger file is not refused, and nothing is counted in the budget.
 
     Returns
     -------
@@ -238,6 +241,15 @@ def bounded_read_bytes(path, kind="toml", what="file"):
         if not stat.S_ISREG(st.st_mode):
             raise FileLimitError(f"{path}: not a regular file (a device, FIFO or socket), "
                                  f"expected a {what}")
+        if head is not None:          # the opening lines only: bounded by head, whatever the size
+            chunks, total = [], 0
+            while total < head:
+                chunk = os.read(fd, min(1 << 20, head - total))
+                if not chunk:
+                    break
+                chunks.append(chunk)
+                total += len(chunk)
+            return b"".join(chunks)
         if st.st_size > cap:
             raise FileLimitError(f"{path}: {_size(st.st_size)} is larger than the limit of "
                                  f"{_size(cap)} for a {what} ({_hint(kind)})")

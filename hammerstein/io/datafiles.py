@@ -326,7 +326,48 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
         row = next(csv.reader([second], delimiter=sep)) if sep != r"\s+" else second.split()
         units = {c: str(u).strip() for c, u in zip(frame.columns, row)}
         frame = frame.iloc[1:].reset_index(drop=True)
-    return _Table(frame, text, sep, path, what, error, units)
+    names = next(csv.reader([first], delimiter=sep)) if sep != r"\s+" else first.split()
+    seen, twice = set(), []
+    for name in (str(n).strip() for n in names):
+        if name in seen and name not in twice:
+            twice.append(name)
+        seen.add(name)
+    if twice:       # pandas renames the second 'x' to 'x.1': one column read, the other not
+        shown = ", ".join(escape(repr(n), CELL_EXCERPT) for n in twice[:5])
+        raise error(f"{where}: the column name{'s' if len(twice) > 1 else ''} {shown} "
+                    f"{'appear' if len(twice) > 1 else 'appears'} more than once in the header; "
+                    f"expected each column named once")
+    table = _Table(frame, text, sep, path, what, error, units)
+    short = _short_row(table)
+    if short is not None:      # a short row is read as empty cells, in any column: refused
+        raise error(f"{where}: ragged rows: data row {short[0] + 1} has {short[1]} fields, the "
+                    f"header has {frame.shape[1]}; expected the same number of fields on every "
+                    f"row")
+    return table
+
+
+def _short_row(table):
+    """The first data row with fewer fields than the header, as (row, fields), or None.
+
+    pandas fills a short row's missing cells with empty ones: only the rows whose last
+    cell is empty are looked at, on the text as written.
+    """
+    frame = table.frame
+    if frame.shape[1] < 2:
+        return None
+    empty = np.flatnonzero((frame.iloc[:, -1].astype(str).str.strip() == "").to_numpy())
+    if not empty.size:
+        return None
+    lines = table.text.split("\n")
+    skip = 1 + bool(table.units)
+    for row in empty:
+        if row + skip >= len(lines):
+            break
+        line = lines[row + skip]
+        n = len(line.split()) if table.sep == r"\s+" else len(line.split(table.sep))
+        if n < frame.shape[1]:
+            return int(row), n
+    return None
 
 
 _MISSING = ("", "nan", "na", "n/a", "null", "none")

@@ -268,8 +268,8 @@ def test_identify_accepts_good_records(capsys, tmp_path, name):
      "(not finite)"),
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--sampling-period", "-1",
       "--out", "m.toml"],
-     "hammerstein identify: error: argument --sampling-period: expected a number > 0 [s], "
-     "found '-1'"),
+     "hammerstein identify: error: argument --sampling-period: expected a number in "
+     "(0, 1e+06] [s], found '-1'"),
     (["identify", CORPUS / "data" / "good.csv", *IDENTIFY_COLUMNS, "--out", CORPUS / "data"],
      "hammerstein identify: error: --out:"),
     (["identify", CORPUS / "data" / "good.csv", "--time", "0", "--input", "1"],
