@@ -60,7 +60,7 @@ from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
            "FADE_DECAYS", "settled_step", "keep_start", "keep_end", "drive_fade_samples", "limit_start_up",
-           "rest_output", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
+           "rest_output", "compensator_rest", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 DriveStream.__module__ = __name__       # documented (and pickled) as this module's
 
@@ -181,9 +181,8 @@ class DriveResult:
     Parameters
     ----------
     inputs : numpy.ndarray, shape (m, n_samples)
-        The drive [V]: the commanded voltages, range-clipped and
-        slew-limited when an amplifier is given and ``limits`` is not
-        ``"error"``.
+        The drive [V]: the commanded voltages, range-clipped and slew-limited
+        when an amplifier is given and ``limits`` is not ``"error"``.
     commanded : numpy.ndarray, shape (m, n_samples)
         The compensator's voltages before any limit [V].
     reference : numpy.ndarray, shape (p, n_samples)
@@ -197,16 +196,18 @@ class DriveResult:
     problems : list of str
         The limits exceeded (empty without an amplifier).
     shaped : list of str
-        Where and by how much the drive was shaped into the limits measured
-        on the identification records (:func:`shape_drive`; empty when not).
+        Where and by how much the drive was shaped into the limits measured on
+        the identification records (:func:`shape_drive`; empty when not).
     notes : list of str
-        What the drive cannot do, named for the user (e.g. a harmonic of the
-        reference at a bending mode:
-        :func:`hammerstein.compensation.shaping.mode_note`); empty by default.
+        What the drive cannot do, named for the user (e.g. a harmonic of the reference
+        at a bending mode: :func:`hammerstein.compensation.shaping.mode_note`).
     rest_lead : int or None
         The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``), when
         :func:`hardware_drive` made them more than a tenth of it (a stable inversion's
         pre-actuation); None otherwise.
+    start_offset : numpy.ndarray or None, shape (m,)
+        The compensator's first sample minus the rest voltages [V], when
+        :func:`~hammerstein.compensation.lookahead.taper_preactuation` faded it in.
     """
 
     inputs: np.ndarray
@@ -219,6 +220,7 @@ class DriveResult:
     shaped: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     rest_lead: int = None
+    start_offset: np.ndarray = None
 
 
 def drive_signal(compensator, reference, sampling_period, period_samples=None, fade_samples=None,
@@ -544,6 +546,43 @@ def rest_output(model, creep=None):
     return y
 
 
+def compensator_rest(model, compensator):
+    """The output a compensator maps to 0 V [µm]: where its reference fades in from.
+
+    A compensator that inverts the actuator's creep (the Hammerstein compensator built
+    with it, its ``creep``) starts its creep inverse settled: the hysteresis model's
+    output at 0 V times the creep's static gain (:func:`rest_output`). A static gain
+    ``U = K^-1 (Yr - c)`` (its ``centre``) maps its centre to 0 V. The other kinds invert
+    the hysteresis alone: the hysteresis model's output at 0 V. Faded in from another
+    point (the creep's settled output for a kind that does not invert creep), the drive
+    would start away from 0 V; ``compensate``, the exported C and the FMU start there.
+
+    Parameters
+    ----------
+    model : object
+        The hysteresis model (as :func:`rest_output`).
+    compensator : object
+
+    Returns
+    -------
+    numpy.ndarray, shape (p,)
+        [µm].
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> from hammerstein.io.presets import load_plant
+    >>> model = load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+    >>> compensator_rest(model, SimpleNamespace(centre=np.array([1.0, 2.0]))).tolist()
+    [1.0, 2.0]
+    """
+    creep = getattr(compensator, "creep", None)
+    centre = getattr(compensator, "centre", None)
+    if creep is None and centre is not None:
+        return np.array(centre, dtype=float)
+    return rest_output(model, creep)
+
+
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
                    first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
@@ -716,10 +755,13 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
                                              first_mode, predict, names)
             notes += more
+    untapered = u                # the taper moves the first samples: what they were, kept
     u, _ = taper_preactuation(u, u_rest, n // 10 if rest_lead is None else rest_lead)
     peak, top = drive_metrics(u, T)
     res = DriveResult(u, u, faded, peak, top, n, shaped=notes,
                       rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead)
+    if u is not untapered:
+        res.start_offset = untapered[:, 0] - (np.zeros(u.shape[0]) if u_rest is None else u_rest)
     if fade_samples is None and grown:    # what the metrics leave out, said (a raster's lines)
         res.notes.append(f"the fade-in was lengthened from {grown[0] * T:.4g} s to "
                          f"{grown[1] * T:.4g} s, {100 * grown[1] / N:.3g} % of the record, "

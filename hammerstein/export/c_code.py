@@ -49,7 +49,7 @@ import re
 
 import numpy as np
 
-from hammerstein.compensation.drive import rest_output
+from hammerstein.compensation.drive import compensator_rest
 from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator,
                                                    PerAxisInverseCompensator,
                                                    StaticGainCompensator)
@@ -248,7 +248,7 @@ int {N}_step({N}_state *s, const {N}_real reference[{N}_N_OUTPUTS], {N}_real vol
 
 {chr(10).join(body)}"""
     try:       # where NAME_init leaves the compensator: the model's output at 0 V
-        rest = [float(v) for v in rest_output(model, getattr(compensator, "creep", None))]
+        rest = [float(v) for v in compensator_rest(model, compensator)]
     except Exception:        # noqa: BLE001 - a model without simulate: the zeros of before
         rest = [0.0] * p
     return CExport(name=N, header=header, source=source, n_inputs=m, n_outputs=p, preview=P,
