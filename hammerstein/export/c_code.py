@@ -217,7 +217,7 @@ extern "C" {{
 #define {N}_N_INPUTS {m}
 #define {N}_N_OUTPUTS {p}
 #define {N}_PREVIEW {P}
-#define {N}_SAMPLING_PERIOD {T!r}
+#define {N}_SAMPLING_PERIOD {T!r}{'f' if precision == 'float' else ''}
 #define {N}_STATUS_LIMIT {STATUS_LIMIT}
 #define {N}_STATUS_DIVERGED {STATUS_DIVERGED}
 #define {N}_STATUS_RANGE {STATUS_RANGE}
