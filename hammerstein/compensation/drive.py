@@ -202,9 +202,8 @@ class DriveResult:
         What the drive cannot do, named for the user (e.g. a harmonic of the reference
         at a bending mode: :func:`hammerstein.compensation.shaping.mode_note`).
     rest_lead : int or None
-        The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``), when
-        :func:`hardware_drive` made them more than a tenth of it (a stable inversion's
-        pre-actuation); None otherwise.
+        The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``) when more
+        than a tenth of it (a stable inversion's pre-actuation); None otherwise.
     start_offset : numpy.ndarray or None, shape (m,)
         The compensator's first sample minus the rest voltages [V], when
         :func:`~hammerstein.compensation.lookahead.taper_preactuation` faded it in.
@@ -586,7 +585,7 @@ def compensator_rest(model, compensator):
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
                    first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
-                   shape=True):
+                   shape=True, input_names=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -640,17 +639,17 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     where : str
         Prefix of the limit messages.
     rest : array_like, shape (p,), optional
-        The output at rest [µm] (:func:`rest_output`), the fade's start;
-        zeros by default.
+        The fade's start [µm] (:func:`compensator_rest`); zeros by default.
     first_mode : float, optional
-        The identified dynamics' first bending mode [Hz]
-        (:func:`hammerstein.compensation.shaping.first_mode_hz`), for the
-        reference shaping.
+        The identified dynamics' first bending mode [Hz] (for the reference
+        shaping: :func:`hammerstein.compensation.shaping.first_mode_hz`).
     predict : callable, optional
         ``predict(inputs) -> outputs (p, n_samples)`` [µm], the model from
         rest, for the reference shaping's range stage.
     names : sequence of str, optional
         Output names for the shaping notes.
+    input_names : sequence of str, optional
+        Input names for the start-up notes (default the amplifier's).
     mode_decay : float, optional
         The identified bending modes' longest decay time [s]
         (:func:`hammerstein.compensation.shaping.mode_decay_s`), for the
@@ -778,7 +777,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             out, _ = amplifier.limit(u, T)
     if fade_samples is None:        # a start-up no fade removes: slew-limited to the settled bound
         before = out
-        out, notes = limit_start_up(out, n, P, r0, amplifier.inputs if amplifier is not None else None,
+        out, notes = limit_start_up(out, n, P, r0, input_names or (
+            amplifier.inputs if amplifier is not None else None),
                                     T)
         res.shaped += notes
         changed = np.flatnonzero(np.any(np.abs(out - before) > 1e-12, axis=0))

@@ -140,7 +140,8 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
                                first_mode=first_mode_hz(linear[0], T), predict=predict,
                                names=plant.hysteresis.output_names,
                                mode_decay=mode_decay_s(linear[0], T),
-                               rest_lead=rest_lead, shape=shape)
+                               rest_lead=rest_lead, shape=shape,
+                               input_names=list(plant.hysteresis.input_names))
     except AmplifierError as exc:
         if reach and "beyond the amplifier's range" in str(exc):
             # "lower the reference" alone: by how much, and where it fits, is the reach's
