@@ -34,7 +34,8 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
-from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier, rest_output,
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
+                                            compensator_rest,
                                             signals_csv)
 from hammerstein.compensation.drive_files import rest_lead_text
 from hammerstein.core.files import guard_inputs, output_problem, safe_write
@@ -212,7 +213,7 @@ def _handle(args):
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         kind, options, note = _kind_and_options(plant, args.kind, args.gain, args.check,
                                                 args.inversion)
-        _, drive = compensate(plant, ref, kind, args.inversion, args.fade_in, args.limits,
+        comp, drive = compensate(plant, ref, kind, args.inversion, args.fade_in, args.limits,
                               options.get("gain"), options.get("check"))
         owned = owned_problem(args.out, args.force)
         if owned:
@@ -234,7 +235,7 @@ def _handle(args):
                 + " [µm] (model)"
         peaks = _peaks_text(plant, drive)
         rest_text = ", ".join(f"{n} = {float(v)!r} µm" for n, v in zip(
-            plant.hysteresis.output_names, rest_output(plant.hysteresis, plant.creep)))
+            plant.hysteresis.output_names, compensator_rest(plant.hysteresis, comp)))
         widths = None if plant.amplifier is None else plant.amplifier.range_widths()
         chatter = chatter_warnings(drive.inputs, plant.sampling_period, widths,
                                    list(plant.hysteresis.input_names))

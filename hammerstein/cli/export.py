@@ -97,7 +97,8 @@ def add_parser(subparsers):
                         "[amplifier] range)")
     p.add_argument("--slew-rate", type=number_type(0, low_open=True, unit="V/s"),
                    default=None, metavar="V_PER_S",
-                   help="limit every voltage's rate of change [V/s] (needs a range)")
+                   help="limit every voltage's rate of change [V/s] (with --amplifier-range, else "
+                        "the model's [amplifier] range)")
     p.add_argument("--closed-loop", nargs="?", const="", default=None, metavar="FILE",
                    help="export the discrete feedback controller of FILE's [feedback] table (a "
                         "feedback scenario or a preset; without FILE, MODEL_OR_PRESET's) with "
@@ -175,6 +176,9 @@ def _closed_loop_code(args, source, comp, T, name):
                                         "range": list(args.amplifier_range),
                                         **({"slew_rate": args.slew_rate}
                                            if args.slew_rate is not None else {})}}
+    elif args.slew_rate is not None:            # the table's range, this slew rate
+        table = {**table, "amplifier": _with_slew_rate(
+            table.get("amplifier") or source.amplifier or {}, args.slew_rate)}
     if source.preset:                           # a preset: its actuator (dynamics, creep)
         plant = load_plant(source.path)
     else:
@@ -206,8 +210,13 @@ def handler(args):
     if problem:
         print_err(f"{prog}: error: {problem}")
         return 2
-    if args.slew_rate is not None and args.amplifier_range is None:
-        print_err(f"{prog}: error: --slew-rate needs --amplifier-range MIN MAX")
+    if args.amplifier_range is not None and not args.amplifier_range[0] < args.amplifier_range[1]:
+        lo, hi = args.amplifier_range
+        print_err(f"{prog}: error: --amplifier-range: expected MIN MAX [V] with MIN < MAX, "
+                  f"found {lo:g} {hi:g}")
+        return 2
+    if args.cutoff_hz is not None and args.feedback != "lowpass":
+        print_err(f"{prog}: error: --cutoff-hz: only used with --feedback lowpass")
         return 2
     problem = None if args.iterations is None else integer_problem(args.iterations, 1, MAX_ITERATIONS)
     if problem:
@@ -225,6 +234,11 @@ def handler(args):
     except PresetError as exc:
         print_err(f"{prog}: error: {' '.join(str(exc).split())}")
         return 1
+    if args.slew_rate is not None and args.amplifier_range is None \
+            and not _has_range(source.amplifier, list(source.model.input_names)):
+        print_err(f"{prog}: error: --slew-rate needs a range: {args.source} has no [amplifier] "
+                  f"range for every input; give --amplifier-range MIN MAX")
+        return 2
     kind, gain, check, note = args.kind, args.gain, args.check, None
     if kind is None:
         try:
@@ -287,6 +301,9 @@ def _open_loop(args, source, kind, gain, check):
         if args.slew_rate is not None:
             table["slew_rate"] = args.slew_rate
         limits = limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
+    elif args.slew_rate is not None:     # the preset's [amplifier] range, this slew rate
+        limits = limits_from_table(_with_slew_rate(source.amplifier, args.slew_rate), inputs,
+                                   "amplifier")
     else:
         limits = limits_from_table(source.amplifier, inputs, "amplifier")
     name = args.name or _default_name(source.name, args.kind)
@@ -294,6 +311,23 @@ def _open_loop(args, source, kind, gain, check):
                     version=__version__, source_note=f"Built from {source.path.name} "
                     f"(kind {args.kind}, {args.precision}).")
     return _write(args, code, name)
+
+
+def _has_range(table, inputs):
+    """Whether an ``[amplifier]`` table gives every input a range."""
+    if not isinstance(table, dict):
+        return False
+    if "range" in table:
+        return True
+    return all(isinstance(table.get(n), dict) and "range" in table[n] for n in inputs)
+
+
+def _with_slew_rate(table, slew_rate):
+    """An ``[amplifier]`` table with ``slew_rate`` for every input (``--slew-rate``)."""
+    out = {k: ({kk: vv for kk, vv in v.items() if kk != "slew_rate"} if isinstance(v, dict)
+               else v) for k, v in table.items()}
+    out["slew_rate"] = slew_rate
+    return out
 
 
 def _closed_loop(args, source, kind, gain, check, note):

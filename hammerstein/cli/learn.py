@@ -110,8 +110,9 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             keep_end, keep_start, limit_start_up,
                                             read_signals, settled_step,
                                             rest_output, shape_drive, signals_csv)
-from hammerstein.compensation.drive_files import (drive_rest_lead, followed_reference,
-                                                  learnt_names, rest_lead_text, shaped_target)
+from hammerstein.compensation.drive_files import (drive_rest_lead, drive_rest_output,
+                                                  followed_reference, learnt_names,
+                                                  rest_lead_text, shaped_target)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, locked,
                                     output_problem, removed_if_failed, safe_write)
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
@@ -383,7 +384,11 @@ def _learn(args):
                            int(np.ceil(MIN_FADE_S / T - 1e-9))), N)
         # as compensate faded it: a stable inversion's longer rest lead too (the drive's header)
         lead = None if args.fade_in is not None else drive_rest_lead(args.drive)
-        target = hardware_fade(ref.signal, fade, rest_output(model, plant.creep), lead)
+        # from the rest compensate faded from (its header: a kind that does not invert creep
+        # fades from the hysteresis' output at 0 V), else the settled one
+        rest = drive_rest_output(args.drive, list(model.output_names))
+        rest = rest_output(model, plant.creep) if rest is None else rest
+        target = hardware_fade(ref.signal, fade, rest, lead)
         # where compensate shaped the reference to what the amplifier and the dynamics allow
         # (its <output>_shaped columns, carried over by learn), that is the position learnt and
         # judged: the reference as asked cannot be followed there, and learning towards it

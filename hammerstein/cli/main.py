@@ -115,17 +115,19 @@ def _warning_subject(args):
 
 
 def _one_line_warning(message, category, filename, lineno, file=None, line=None):
-    """warnings.showwarning replacement: one ``warning: <file>: Category: message`` line.
+    """warnings.showwarning replacement: one ``warning: <file>: message`` line.
 
     The file is the command's input (:func:`_warning_subject`); a warning
-    repeated (the same overflow in a loop) is printed once.
+    repeated (the same overflow in a loop) is printed once. The warning's class
+    (``UserWarning``, ``ConvergenceWarning``) is Python's, not the user's: not printed.
     """
-    _print_warning(category.__name__, message, file)
+    _print_warning(None, message, file)
 
 
 def _print_warning(source, message, file=None):
-    """One ``warning: <file>: <source>: <message>`` line, each distinct one once."""
-    text = f"warning: {_WARNING_STATE['subject']}: {source}: {' '.join(str(message).split())}"
+    """One ``warning: <file>: [<source>: ]<message>`` line, each distinct one once."""
+    head = f"{_WARNING_STATE['subject']}: " + ("" if source is None else f"{source}: ")
+    text = f"warning: {head}{' '.join(str(message).split())}"
     if text in _WARNING_STATE["said"]:
         return
     _WARNING_STATE["said"].add(text)

@@ -52,6 +52,7 @@ import numpy as np
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
+from hammerstein.compensation.drive_splice import keep_end, keep_start
 from hammerstein.compensation.shaping import shape_reference, time_intervals
 from hammerstein.exceptions import CompensatorError
 from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
@@ -60,7 +61,7 @@ from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
            "FADE_DECAYS", "settled_step", "keep_start", "keep_end", "drive_fade_samples", "limit_start_up",
-           "rest_output", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
+           "rest_output", "compensator_rest", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 DriveStream.__module__ = __name__       # documented (and pickled) as this module's
 
@@ -181,9 +182,8 @@ class DriveResult:
     Parameters
     ----------
     inputs : numpy.ndarray, shape (m, n_samples)
-        The drive [V]: the commanded voltages, range-clipped and
-        slew-limited when an amplifier is given and ``limits`` is not
-        ``"error"``.
+        The drive [V]: the commanded voltages, range-clipped and slew-limited
+        when an amplifier is given and ``limits`` is not ``"error"``.
     commanded : numpy.ndarray, shape (m, n_samples)
         The compensator's voltages before any limit [V].
     reference : numpy.ndarray, shape (p, n_samples)
@@ -197,22 +197,20 @@ class DriveResult:
     problems : list of str
         The limits exceeded (empty without an amplifier).
     shaped : list of str
-        Where and by how much the drive was shaped into the limits measured
-        on the identification records (:func:`shape_drive`; empty when not).
+        Where and by how much the drive was shaped into the limits measured on
+        the identification records (:func:`shape_drive`; empty when not).
     notes : list of str
-        What the drive cannot do, named for the user (e.g. a harmonic of the
-        reference at a bending mode:
-        :func:`hammerstein.compensation.shaping.mode_note`); empty by default.
+        What the drive cannot do, named for the user (e.g. a harmonic of the reference
+        at a bending mode: :func:`hammerstein.compensation.shaping.mode_note`).
     rest_lead : int or None
-        The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``), when
-        :func:`hardware_drive` made them more than a tenth of it (a stable inversion's
-        pre-actuation); None otherwise.
-    limited : bool
-        True when the limits measured on the records shaped the reference
-        (:class:`hammerstein.compensation.shaping.ShapedReference`'s
-        ``limited``), not only the band limit below the first mode.
-    range_limited : bool
-        True when the range stage of that shaping changed it.
+        The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``) when more
+        than a tenth of it (a stable inversion's pre-actuation); None otherwise.
+    start_offset : numpy.ndarray or None, shape (m,)
+        The compensator's first sample minus the rest voltages [V], when
+        :func:`~hammerstein.compensation.lookahead.taper_preactuation` faded it in.
+    limited, range_limited : bool
+        Whether the limits measured on the records shaped the reference (not only the
+        band limit below the first mode), and whether their range stage did.
     """
 
     inputs: np.ndarray
@@ -225,6 +223,7 @@ class DriveResult:
     shaped: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     rest_lead: int = None
+    start_offset: np.ndarray = None
     limited: bool = False
     range_limited: bool = False
 
@@ -552,10 +551,47 @@ def rest_output(model, creep=None):
     return y
 
 
+def compensator_rest(model, compensator):
+    """The output a compensator maps to 0 V [µm]: where its reference fades in from.
+
+    A compensator that inverts the actuator's creep (the Hammerstein compensator built
+    with it, its ``creep``) starts its creep inverse settled: the hysteresis model's
+    output at 0 V times the creep's static gain (:func:`rest_output`). A static gain
+    ``U = K^-1 (Yr - c)`` (its ``centre``) maps its centre to 0 V. The other kinds invert
+    the hysteresis alone: the hysteresis model's output at 0 V. Faded in from another
+    point (the creep's settled output for a kind that does not invert creep), the drive
+    would start away from 0 V; ``compensate``, the exported C and the FMU start there.
+
+    Parameters
+    ----------
+    model : object
+        The hysteresis model (as :func:`rest_output`).
+    compensator : object
+
+    Returns
+    -------
+    numpy.ndarray, shape (p,)
+        [µm].
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> from hammerstein.io.presets import load_plant
+    >>> model = load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+    >>> compensator_rest(model, SimpleNamespace(centre=np.array([1.0, 2.0]))).tolist()
+    [1.0, 2.0]
+    """
+    creep = getattr(compensator, "creep", None)
+    centre = getattr(compensator, "centre", None)
+    if creep is None and centre is not None:
+        return np.array(centre, dtype=float)
+    return rest_output(model, creep)
+
+
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
                    first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
-                   shape=True):
+                   shape=True, input_names=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -609,17 +645,17 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     where : str
         Prefix of the limit messages.
     rest : array_like, shape (p,), optional
-        The output at rest [µm] (:func:`rest_output`), the fade's start;
-        zeros by default.
+        The fade's start [µm] (:func:`compensator_rest`); zeros by default.
     first_mode : float, optional
-        The identified dynamics' first bending mode [Hz]
-        (:func:`hammerstein.compensation.shaping.first_mode_hz`), for the
-        reference shaping.
+        The identified dynamics' first bending mode [Hz] (for the reference
+        shaping: :func:`hammerstein.compensation.shaping.first_mode_hz`).
     predict : callable, optional
         ``predict(inputs) -> outputs (p, n_samples)`` [µm], the model from
         rest, for the reference shaping's range stage.
     names : sequence of str, optional
         Output names for the shaping notes.
+    input_names : sequence of str, optional
+        Input names for the start-up notes (default the amplifier's).
     mode_decay : float, optional
         The identified bending modes' longest decay time [s]
         (:func:`hammerstein.compensation.shaping.mode_decay_s`), for the
@@ -725,11 +761,14 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
                                              first_mode, predict, names)
             notes += more
+    untapered = u                # the taper moves the first samples: what they were, kept
     u, _ = taper_preactuation(u, u_rest, n // 10 if rest_lead is None else rest_lead)
     peak, top = drive_metrics(u, T)
     res = DriveResult(u, u, faded, peak, top, n, shaped=notes,
                       rest_lead=None if rest_lead is None or rest_lead == n // 10 else rest_lead,
                       limited=limited, range_limited=range_limited)
+    if u is not untapered:
+        res.start_offset = untapered[:, 0] - (np.zeros(u.shape[0]) if u_rest is None else u_rest)
     if fade_samples is None and grown:    # what the metrics leave out, said (a raster's lines)
         res.notes.append(f"the fade-in was lengthened from {grown[0] * T:.4g} s to "
                          f"{grown[1] * T:.4g} s, {100 * grown[1] / N:.3g} % of the record, "
@@ -746,7 +785,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             out, _ = amplifier.limit(u, T)
     if fade_samples is None:        # a start-up no fade removes: slew-limited to the settled bound
         before = out
-        out, notes = limit_start_up(out, n, P, r0, amplifier.inputs if amplifier is not None else None,
+        out, notes = limit_start_up(out, n, P, r0, input_names or (
+            amplifier.inputs if amplifier is not None else None),
                                     T)
         res.shaped += notes
         changed = np.flatnonzero(np.any(np.abs(out - before) > 1e-12, axis=0))
@@ -863,106 +903,3 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
                      f"drive's largest step, {bound[i]:.3g} V per sample ({start[i]:.3g} V asked, "
                      f"{100 * (start[i] / bound[i] - 1):.3g} % more)")
     return u, notes
-
-
-def keep_start(previous, learnt, fade_samples, period_samples=None):
-    """A learnt drive that starts as the previous one and is faded into the learning as the reference is.
-
-    ``u = (1 - b) u_prev + b u_learnt``. For a periodic reference ``b`` is
-    a raised cosine from 0 at the first sample to 1 one period after the
-    fade-in: a learnt drive starts at rest as the first one did, and the
-    learnt correction sets in as gently as the reference itself, over the
-    fade-in that is not judged. Without a period, ``b`` rises from 0 at the
-    end of the fade-in to 1 a tenth of the record (at least one sample)
-    later. Blended in over one period after the fade-in only
-    (10 ms for a 100 Hz circle), the correction's onset rang the lightly
-    damped modes into the judged periods; measured on an outside
-    Preisach-type actuator (first mode 313 Hz, damping 0.035), 10 trials on
-    a 30 µm circle at 100 Hz ended at 1.11 % of the radius, 0.31 of its
-    0.33 µm a start-up transient, against 0.32 % with the correction faded in
-    over the fade-in (generalised-PI actuator: 0.30 -> 0.26 %).
-
-    Parameters
-    ----------
-    previous, learnt : array_like, shape (m, n_samples)
-        [V].
-    fade_samples : int
-    period_samples : int, optional
-
-    Returns
-    -------
-    numpy.ndarray, shape (m, n_samples)
-        [V].
-
-    Examples
-    --------
-    >>> np.round(keep_start([[0.0, 1.0, 2.0, 3.0]], [[9.0, 9.0, 9.0, 9.0]], 1, 2)[0], 9).tolist()
-    [0.0, 3.0, 7.25, 9.0]
-    """
-    u0 = np.atleast_2d(np.asarray(previous, dtype=float))
-    u1 = np.atleast_2d(np.asarray(learnt, dtype=float))
-    N = u0.shape[1]
-    fade = max(int(fade_samples), 0)
-    periodic = bool(period_samples) and int(period_samples) > 1
-    blend = int(period_samples) if periodic else max(N // 10, 1)
-    k = np.arange(N)
-    b = np.clip(k / (fade + blend) if periodic else (k - fade) / blend, 0.0, 1.0)
-    b = 0.5 * (1.0 - np.cos(np.pi * b))
-    return (1.0 - b) * u0 + b * u1
-
-
-def keep_end(previous, learnt, bound):
-    """A learnt drive whose last samples keep the learnt change of the last informed one.
-
-    ``u = prev + d`` (``d = u_learnt - prev``), and over the last ``n``
-    samples ``u = prev + d[N - n - 1]``: the previous drive's own steps
-    with the learnt change held, no step of its own. ``n`` is at least 8
-    samples, doubled (to at most a tenth of the record) while the learnt
-    change steps by more than ``bound`` where it would be held. The last samples of a learnt update are its least
-    informed: the measurement's delay leaves them unmeasured and the
-    update's filters and inverse read past the record's end. Learnt sample
-    by sample, a raster's drive ended with steps of 1.03 V per sample on an
-    input whose settled steps were 0.07 V. Blended back to the previous
-    drive itself (``d_n = 0``), a drive ending in a hold snapped back to the
-    first trial's voltage over its last 40 samples (a pick-and-place move:
-    6.9 -> 4.96 V, 3.7 µm off at the end).
-
-    Parameters
-    ----------
-    previous, learnt : array_like, shape (m, n_samples)
-        [V].
-    bound : array_like, shape (m,)
-        Largest step per input of the learnt change where it is held [V]
-        (the settled drive's).
-
-    Returns
-    -------
-    numpy.ndarray, shape (m, n_samples)
-        [V].
-
-    Examples
-    --------
-    A learnt change of 5 V that falls to 0 V in the last 5 samples (past
-    the record's end): held at the 5 V it had, so a hold keeps its learnt
-    voltage and the drive takes no step.
-
-    >>> u = keep_end([[0.0] * 400], [[5.0] * 395 + [0.0] * 5], [1.0])
-    >>> float(u[0, 383]), float(u[0, -1]), float(np.max(np.abs(np.diff(u[0]))))
-    (5.0, 5.0, 0.0)
-    """
-    u0 = np.atleast_2d(np.asarray(previous, dtype=float))
-    u1 = np.atleast_2d(np.asarray(learnt, dtype=float))
-    N = u0.shape[1]
-    top = max(N // 10, 1)
-    if N < 2:
-        return u1
-    d = u1 - u0
-    s = np.maximum(np.asarray(bound, dtype=float), 1e-12)
-
-    n = min(8, N - 1)
-    # the last informed sample: where the learnt change itself steps within the bound
-    while n < top and np.any(np.abs(d[:, N - n - 1] - d[:, N - n - 2]) > s):
-        n = min(2 * n, top)
-    u = u0 + d
-    u[:, N - n:] = u0[:, N - n:] + d[:, N - n - 1][:, None]
-    return u

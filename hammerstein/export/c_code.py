@@ -45,11 +45,12 @@ the Python compensator does.
 from __future__ import annotations
 
 import math
+import hashlib
 import re
 
 import numpy as np
 
-from hammerstein.compensation.drive import rest_output
+from hammerstein.compensation.drive import compensator_rest
 from hammerstein.compensation.compensators import (InverseMultiplicativeCompensator,
                                                    PerAxisInverseCompensator,
                                                    StaticGainCompensator)
@@ -217,12 +218,13 @@ extern "C" {{
 #define {N}_N_INPUTS {m}
 #define {N}_N_OUTPUTS {p}
 #define {N}_PREVIEW {P}
-#define {N}_SAMPLING_PERIOD {T!r}
+#define {N}_SAMPLING_PERIOD {T!r}{'f' if precision == 'float' else ''}
 #define {N}_STATUS_LIMIT {STATUS_LIMIT}
 #define {N}_STATUS_DIVERGED {STATUS_DIVERGED}
 #define {N}_STATUS_RANGE {STATUS_RANGE}
 #define {N}_STATE_BYTES sizeof({N}_state)
 #define {N}_STATE_REALS {reals}
+#define {N}_BUILD_ID @BUILD_ID@
 {chr(10).join(defines)}
 
 typedef {precision} {N}_real;
@@ -244,11 +246,18 @@ int {N}_step({N}_state *s, const {N}_real reference[{N}_N_OUTPUTS], {N}_real vol
 #include <math.h>
 #include "{N}.h"
 
+#if !defined({N}_BUILD_ID) || {N}_BUILD_ID != @BUILD_ID@
+#error "{N}.h is not the header exported with this {N}.c (export writes the two together: use both of one run)"
+#endif
+
 {chr(10).join(decls)}
 
 {chr(10).join(body)}"""
+    # the fingerprint of this pair: the source refuses to compile with another run's header
+    build_id = "0x" + hashlib.sha256((header + source).encode()).hexdigest()[:8] + "UL"
+    header, source = (t.replace("@BUILD_ID@", build_id) for t in (header, source))
     try:       # where NAME_init leaves the compensator: the model's output at 0 V
-        rest = [float(v) for v in rest_output(model, getattr(compensator, "creep", None))]
+        rest = [float(v) for v in compensator_rest(model, compensator)]
     except Exception:        # noqa: BLE001 - a model without simulate: the zeros of before
         rest = [0.0] * p
     return CExport(name=N, header=header, source=source, n_inputs=m, n_outputs=p, preview=P,

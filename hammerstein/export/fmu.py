@@ -363,7 +363,7 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2B
     long n, k;
     (void)noPrior;
     if (!i) return fmi2Error;
-    ratio = h / {N}_SAMPLING_PERIOD;
+    ratio = h / {float(code.sampling_period)!r};   /* {N}_SAMPLING_PERIOD, in double */
     n = (long)(ratio + 0.5);
     if (n < 1 || (ratio - (double)n) > 1e-6 || ((double)n - ratio) > 1e-6) {{
         say(i, fmi2Error, "fmi2DoStep: the communication step must be a multiple of the sampling period");

@@ -15,7 +15,8 @@ from pathlib import Path
 import numpy as np
 
 from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
-                                            hardware_drive, rest_output, starts_at_rest)
+                                            compensator_rest, hardware_drive,
+                                            starts_at_rest)
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
 from hammerstein.compensation.reach import output_reach, reach_note
@@ -111,7 +112,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
             f"--fade-in: {fade_in:g} s is longer than the reference ({n} samples, "
             f"{n * plant.sampling_period:g} s); expected at most {n * plant.sampling_period:g} s")
     fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
-    rest = rest_output(plant.hysteresis, plant.creep)
+    rest = compensator_rest(plant.hysteresis, comp)
     if fade == 0 and not starts_at_rest(signal, rest, REST_TOLERANCE):
         names = plant.hysteresis.output_names
         first = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, signal[:, 0]))
@@ -139,7 +140,8 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
                                first_mode=first_mode_hz(linear[0], T), predict=predict,
                                names=plant.hysteresis.output_names,
                                mode_decay=mode_decay_s(linear[0], T),
-                               rest_lead=rest_lead, shape=shape)
+                               rest_lead=rest_lead, shape=shape,
+                               input_names=list(plant.hysteresis.input_names))
     except AmplifierError as exc:
         if reach and "beyond the amplifier's range" in str(exc):
             # "lower the reference" alone: by how much, and where it fits, is the reach's
@@ -163,9 +165,12 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
 
 
 def _first_sample_note(plant, drive, inversion):
-    """A note when the drive's first sample is not the rest voltage (beyond
-    :data:`FIRST_SAMPLE_TOLERANCE`), or None."""
-    off = np.asarray(drive.inputs, dtype=float)[:, 0] - _rest_voltages(plant)
+    """A note when the compensator's first sample is not the rest voltage (beyond
+    :data:`FIRST_SAMPLE_TOLERANCE`), before the drive's taper faded it in, or None."""
+    off = getattr(drive, "start_offset", None)
+    tapered = off is not None
+    if off is None:
+        off = np.asarray(drive.inputs, dtype=float)[:, 0] - _rest_voltages(plant)
     if np.max(np.abs(off)) <= FIRST_SAMPLE_TOLERANCE:
         return None
     why = ("the stable inversion's anti-causal part, G's zeros outside the unit circle, starts "
@@ -175,9 +180,12 @@ def _first_sample_note(plant, drive, inversion):
            "it room)"
            if inversion == "stable" else
            "the inverse's start at rest, within its tolerance")
-    return ("the drive's first sample is " + ", ".join(
+    return (("the compensator's first sample was " if tapered else
+             "the drive's first sample is ") + ", ".join(
         f"{n} {v:+.3g} V" for n, v in zip(plant.hysteresis.input_names, off))
-            + f" from rest: {why}")
+            + f" from rest: {why}" + ("; the drive fades it in from rest over the fade's rest "
+                                       "lead, the exported C (which does not) starts there"
+                                       if tapered else ""))
 
 
 def _rest_voltages(plant):

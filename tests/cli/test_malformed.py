@@ -379,7 +379,7 @@ def test_stray_python_warning_and_unexpected_error_are_one_line(capsys, monkeypa
         return 0
     monkeypatch.setattr(listing, "handler", noisy)
     status, out, err = _call(capsys, "list")
-    assert status == 0 and err == ["warning: hammerstein list: RuntimeWarning: first line second line"]
+    assert status == 0 and err == ["warning: hammerstein list: first line second line"]
 
     def broken(args):
         raise TypeError("bug\nwith two lines")

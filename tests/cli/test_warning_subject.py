@@ -41,4 +41,4 @@ def test_stray_warning_names_its_scenario(tmp_path, monkeypatch, capsys, noisy):
     err = capsys.readouterr().err.splitlines()
     assert code == 0
     stray = [line for line in err if "stray library warning" in line]
-    assert stray == [f"warning: {tmp_path / noisy}: RuntimeWarning: stray library warning"]
+    assert stray == [f"warning: {tmp_path / noisy}: stray library warning"]

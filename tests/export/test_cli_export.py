@@ -54,7 +54,7 @@ def test_the_stable_inversion_is_exported(tmp_path, capsys):
      "precision: 'float'"),
     (["--kind", "multivariable", "--gain", "identity"], 1, "rho(I - K^-1 J)"),
     (["--kind", "per-axis", "--iterations", "3"], 1, "takes no gain"),
-    (["--amplifier-range", "5", "-5"], 1, "range: expected [min, max]"),
+    (["--amplifier-range", "5", "-5"], 2, "--amplifier-range: expected MIN MAX"),
     (["--slew-rate", "100"], 2, "--slew-rate needs"),
     (["--name", "int"], 2, "--name"),
     (["--name", "9lives"], 2, "--name"),

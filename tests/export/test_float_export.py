@@ -48,3 +48,24 @@ def test_float_hammerstein_close_to_double_python(preset, bound, tmp_path):
         u_c, _, _ = h.run(yr)
         err = rel_error(u_c, python_voltages(comp, yr))
         assert err <= bound, err
+
+
+@needs_cc
+def test_float_export_has_no_double_even_in_the_sampling_period_macro(tmp_path):
+    """docs/real-time.md: a float export has no double anywhere, its header's macros included:
+    ``(float)k * NAME_SAMPLING_PERIOD`` compiles with -Wdouble-promotion -Wfloat-conversion."""
+    import subprocess
+    from conftest import COMPILERS
+    comp, T = _compensator("rakotondrabe-2dof")
+    code = export_c(comp, "fl", T, precision="float")
+    for fname, text in code.files().items():
+        (tmp_path / fname).write_text(text)
+    (tmp_path / "user.c").write_text(
+        '#include "fl.h"\nfloat elapsed(unsigned k);\n'
+        "float elapsed(unsigned k) { return (float)k * fl_SAMPLING_PERIOD; }\n")
+    for src in ("user.c", "fl.c"):
+        res = subprocess.run([COMPILERS[0], "-std=c99", "-Wall", "-Wextra", "-Wpedantic",
+                              "-Wdouble-promotion", "-Wfloat-conversion", "-Werror", "-O2",
+                              "-I", str(tmp_path), "-c", str(tmp_path / src), "-o",
+                              str(tmp_path / (src + ".o"))], capture_output=True, text=True)
+        assert res.returncode == 0, res.stderr
