@@ -254,7 +254,11 @@ int {N}_step({N}_state *s, const {N}_real reference[{N}_N_OUTPUTS], {N}_real vol
 
 {chr(10).join(body)}"""
     # the fingerprint of this pair: the source refuses to compile with another run's header
-    build_id = "0x" + hashlib.sha256((header + source).encode()).hexdigest()[:8] + "UL"
+    # (over their code, not their comments: the same code written by the library and by the
+    # command line, whose comments name the command and the limits' source, gets one id)
+    code = "\n".join(line for t in (header, source) for line in t.splitlines()
+                     if not line.lstrip().startswith(("/*", "*", "//")))
+    build_id = "0x" + hashlib.sha256(code.encode()).hexdigest()[:8] + "UL"
     header, source = (t.replace("@BUILD_ID@", build_id) for t in (header, source))
     try:       # where NAME_init leaves the compensator: the model's output at 0 V
         rest = [float(v) for v in compensator_rest(model, compensator)]
