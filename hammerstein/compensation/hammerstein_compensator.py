@@ -724,8 +724,12 @@ class HammersteinCompensator:
 
     def prefilter_reference(self, reference):
         """What the inverse of the dynamics filters: the reference as given, or for the
-        inverse multiplicative law over a classical PI with an offset ``c`` or an output map
-        ``S``, ``S^-1(Yr - c)``, as its fused kernel and the exported C transform it first.
+        inverse multiplicative law over a classical PI with an offset ``c``, ``Yr - c``, as
+        its fused kernel and the exported C transform it first. With an output map ``S``
+        the plant is ``y = L(S(Gamma(U))) + c`` (L: creep, then the dynamics), so the inverse
+        filters ``Yr - c`` and ``S^-1`` (nonlinear) comes after it, in the law: ``Gamma(U)``
+        follows ``S^-1(L^-1(Yr - c))``. (``L^-1 S^-1(Yr - c)``, the order used before, left
+        0.11 um on a 50 Hz circle across a knot of S.)
 
         :meth:`start` runs the preview samples and the inverse's state at rest through the
         same transform, so that the inverse starts in steady state in the frame it then
@@ -743,6 +747,10 @@ class HammersteinCompensator:
         """
         if self.exact_static or self.inverse is None or not hasattr(self.model, "gamma_reference"):
             return reference
+        if getattr(self.model, "has_output_map", False):   # S^-1 comes after the inverse
+            off = self.model.output_offset
+            r = np.asarray(reference, dtype=float)
+            return r if off is None else r - off[:, None]
         return self.model.gamma_reference(np.asarray(reference, dtype=float))
 
     def preview_state(self, reference, preview):

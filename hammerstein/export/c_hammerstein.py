@@ -99,7 +99,8 @@ def _plan_hammerstein(comp):
     with comp.previewed():      # the C step receives the reference P samples ahead
         law = comp.packed_law()
     rest = rest_output(comp.model, comp.creep)       # where compensate's faded reference starts
-    # the inverse filters S^-1(Yr - c): its state at rest in that frame, as start() has it
+    # the inverse filters Yr - c (S^-1(Yr - c) without a map): its state at rest in that
+    # frame, as start() has it
     rest = comp.prefilter_reference(rest[:, None])[:, 0]
     rest_states = comp.inverse.initial_state(rest)
     return ("law", model, P,

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
-                                       _reference_transform, _limits_code, _reals_table, _stage_rest,
+                                       _reference_transform, _reference_transform_parts, _limits_code, _reals_table, _stage_rest,
                                        _stages_source)
 from hammerstein.export.c_lookahead import _lookahead_code
 
@@ -45,7 +45,9 @@ def _law_source(law, model, precision, N, limits, T, lookahead=None, stages=(), 
                   f"static const {N}_real {N}_Bf[{N}_N_FILTER][{N}_N_OUTPUTS] = {_mat(Bf, precision)};",
                   f"static const {N}_real {N}_Cf[{N}_N_OUTPUTS][{N}_N_FILTER] = {_mat(Cf, precision)};",
                   f"static const {N}_real {N}_Df[{N}_N_OUTPUTS][{N}_N_OUTPUTS] = {_mat(Df, precision)};"]
-    tdecls, tcode = _reference_transform(model, precision, N)
+    tdecls, tcode, tmap = _reference_transform_parts(model, precision, N)
+    if not nf or lookahead is not None:   # no linear inverse in the law: S^-1(r - c) at once
+        tcode, tmap = tcode + tmap, []      # (ZPETC: r - c, its inverse, then S^-1, nonlinear)
     ldecls, lcode, _ = _limits_code(limits, m, T, precision, N)
     one = "1.0" if precision == "double" else "1.0f"
     zero = "0.0" if precision == "double" else "0.0f"
@@ -142,7 +144,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
     for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = reference[l];"""]
     step += la_step
     step += tcode
-    if nf:   # the preview samples too enter the inverse as S^-1(Yr - c), as Python's start-up
+    if nf:   # the preview samples too enter the inverse as Yr - c, as Python's start-up
         step.append(f"""    {{  /* ZPETC inverse of the linear dynamics: v = Cf x + Df r, x <- Af x + Bf r */
         {N}_real v[{N}_N_OUTPUTS], xn[{N}_N_FILTER];
         int i, j;
@@ -161,6 +163,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
         for (i = 0; i < {N}_N_FILTER; ++i) s->x_f[i] = xn[i];
         for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = v[l];
     }}""")
+        step += tmap      # the output map's inverse on the dynamics inverse's output
         if law_preview(law):
             step.append(fill)
     if law.lowpass:
