@@ -42,6 +42,8 @@ def _plan_stable(comp):
     hc, L = comp.hysteresis_compensator, la.preview_samples
     model = hc.model if comp.exact_static else _check_model(comp.model)
     rest = rest_output(model, comp.creep)          # where compensate's faded reference starts
+    if not comp.exact_static and model.output_offset is not None:
+        rest = rest - model.output_offset          # the inverse of L takes Yr - c (a sensor zero)
     stages, states = [], None
     if comp.creep is not None:
         mats = creep_inverse(comp.creep, comp.dynamics.dt)

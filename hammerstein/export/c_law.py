@@ -116,7 +116,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
         return 0;
     }}"""
     more, extra_reals, la_step = [], 0, []
-    if lookahead is not None:     # G^-1 on the reference as given, then creep, then S^-1(. - c)
+    if lookahead is not None:     # G^-1 on Yr - c, then creep, + c, then S^-1(. - c)
         d, c, more, first, extra_reals = _lookahead_code(lookahead[0], lookahead[1], precision, N)
         decls += d
         init = first + init
@@ -124,6 +124,10 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
             stages, stage_states or [None] * len(stages), precision, N)
         decls += d
         la_step = [c] + codes
+        if model.output_offset is not None:    # L^-1 of Yr - c, c back for S^-1(. - c) below
+            la_step = ([f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = r[l] - {N}_offset[l];"]
+                       + la_step
+                       + [f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = r[l] + {N}_offset[l];"])
         more += stage_members
         init += stage_init
         extra_reals += n

@@ -125,3 +125,49 @@ def test_hold_with_creep(tmp_path):
     assert np.all(mapped <= 1.5 * plain + 1e-6), (mapped, plain)
     assert np.all(mapped <= 1e-5), mapped
     assert np.all(mapped <= 1.5 * stable + 1e-6), (mapped, stable)
+
+
+# -- the output offset c: a sensor zero, added after the linear part ---------------------------
+OFFSET = '\noutput_offset = [2.0, 0.0]\nthresholds ='
+
+
+def _offset_plant(tmp_path, creep):
+    text = (STAGE.replace("\nthresholds =", OFFSET, 1).replace("@MAP@", MAP)
+            .replace("@CREEP@", CREEP if creep else ""))
+    path = tmp_path / f"stage-offset-{int(creep)}.toml"
+    path.write_text(text, encoding="utf-8")
+    return load_plant(path)
+
+
+@pytest.mark.parametrize("creep", [False, True])
+def test_zero_volts_from_rest_state_stays_at_the_rest_output(tmp_path, creep):
+    """rest_state() put c through the linear part and simulate added it again: 0 V held
+    showed 4.09, 0.498, 2.06, 2.02 um instead of 2.0 (the plant's output at 0 V)."""
+    plant = _offset_plant(tmp_path, creep)
+    y, _ = plant.simulate(np.zeros((2, 20000)), plant.rest_state())
+    y_default, _ = plant.simulate(np.zeros((2, 20000)))
+    np.testing.assert_array_equal(y, np.repeat([[2.0], [0.0]], y.shape[1], axis=1))
+    np.testing.assert_array_equal(y, y_default)
+    from hammerstein.compensation.drive import rest_output
+    np.testing.assert_array_equal(rest_output(plant.hysteresis, plant.creep), [2.0, 0.0])
+
+
+@pytest.mark.parametrize("inversion", ["zpetc", "stable"])
+def test_both_inversions_hold_with_an_offset_and_creep(tmp_path, inversion):
+    """A hold at x = 12 um faded in from the rest output (2, 0) um, the drive compensate
+    writes played through the model from rest. Before, the stable inversion passed c
+    through the creep inverse (c times the creep's 4.5 %: 0.056 um here, 0.090 um on the
+    stage without the map) and the zpetc one inverted the map first and started from a
+    rest output with c crept (0.058 um; 0.0024 um at 0.15 s without the map); both now sit
+    at the no-offset stage's residual (1.5e-6 um at 0.1 s; bound 1e-5 um)."""
+    from hammerstein.compensation.drive import hardware_drive, rest_output
+    plant = _offset_plant(tmp_path, True)
+    comp = HammersteinCompensator(plant.hysteresis, plant.dynamics, inversion=inversion,
+                                  creep=plant.creep, sampling_period=T)
+    n = 20000
+    ref = np.vstack([np.full(n, 12.0), np.full(n, 4.0)])
+    rest = rest_output(plant.hysteresis, plant.creep)
+    drive = hardware_drive(comp, ref, T, rest=rest, fade_samples=500)
+    y, _ = plant.simulate(drive.inputs, plant.rest_state())
+    err = np.abs(y - drive.reference)[:, 1000:].max(axis=1)
+    assert np.all(err <= 1e-5), err
