@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
-                                       _reference_transform, _reference_transform_parts, _limits_code, _reals_table, _stage_rest,
+                                       _reference_transform_parts, _limits_code, _reals_table, _stage_rest,
                                        _stages_source)
 from hammerstein.export.c_lookahead import _lookahead_code
 
