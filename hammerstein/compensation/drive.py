@@ -521,7 +521,8 @@ def rest_output(model, creep=None):
     what the actuator shows at 0 V, and a reference faded in from 0 µm
     would start the drive at the voltage of 0 µm instead of at rest. With
     ``creep``, the output after the creep has settled at rest (each
-    output times its creep's static gain, ``Creep.static_gain``): the inverse
+    output times its creep's static gain, ``Creep.static_gain``, the model's
+    ``output_offset`` added after it, as the plant adds it): the inverse
     of the dynamics with the creep starts in that steady state, so a
     reference faded in from it starts the drive at exactly 0 V.
 
@@ -546,8 +547,10 @@ def rest_output(model, creep=None):
     """
     y, _ = model.simulate(np.zeros((model.n_inputs, 1)))
     y = np.asarray(y, dtype=float)[:, 0]
-    if creep is not None:
-        y = y * np.array([1.0 if c is None else c.static_gain for c in creep])
+    if creep is not None:    # the output offset is a sensor zero, after creep (as the plant has it)
+        off = getattr(model, "output_offset", None)
+        off = np.zeros_like(y) if off is None else np.asarray(off, dtype=float)
+        y = (y - off) * np.array([1.0 if c is None else c.static_gain for c in creep]) + off
     return y
 
 

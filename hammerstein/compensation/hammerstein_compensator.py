@@ -566,6 +566,9 @@ class HammersteinCompensator:
         final_state : numpy.ndarray, shape (n_filter_states,)
         """
         if self.inverse is None:    # continued past the end: no held-end spike
+            off = None if self.exact_static else getattr(self.model, "output_offset", None)
+            if off is not None:     # y = L(S(Gamma)) + c: L^-1(Yr - c), + c for the law's S^-1(. - c)
+                reference = reference - off[:, None]
             ext = np.concatenate([reference, self._stable_continuation(reference)], axis=1)
             N, la = reference.shape[1], self.lookahead_inverse
             if la is None:          # a look-ahead too long to build: the whole-record recursion
@@ -578,7 +581,7 @@ class HammersteinCompensator:
                 mats = creep_inverse(self.creep, self.dynamics.dt)
                 v = linear_steps(v, mats, creep_rest_state(mats, self.bending_dynamics,
                                                            reference[:, 0]))[0]
-            return v, filter_state
+            return (v if off is None else v + off[:, None]), filter_state
         return self.inverse.filter(reference, filter_state)
 
     def start(self, reference, period_samples=None, fade_samples=0):
@@ -723,14 +726,11 @@ class HammersteinCompensator:
                 for b, (ext, r) in enumerate(zip(exts, refs))]
 
     def prefilter_reference(self, reference):
-        """What the inverse of the dynamics filters: the reference as given, or for the
-        inverse multiplicative law over a classical PI with an offset ``c`` or an output map
-        ``S``, ``S^-1(Yr - c)``, as its fused kernel and the exported C transform it first.
-
-        :meth:`start` runs the preview samples and the inverse's state at rest through the
-        same transform, so that the inverse starts in steady state in the frame it then
-        filters (it used to start in the untransformed one: an identified classical PI whose
-        offset is (-0.12, 0.45) um asked for -0.05 and -0.47 V at its drive's first sample).
+        """What the inverse of the dynamics filters (its fused kernel and the exported C
+        alike): for the law over a classical PI, ``Yr - c`` (c its offset), then ``S^-1`` of
+        a map after the inverse, the plant being ``y = L(S(Gamma(U))) + c`` (L: creep, G).
+        :meth:`start` starts the inverse at rest in this frame (in ``Yr``, a PI with offset
+        (-0.12, 0.45) um asked for -0.05 and -0.47 V at its drive's first sample).
 
         Parameters
         ----------
@@ -743,7 +743,10 @@ class HammersteinCompensator:
         """
         if self.exact_static or self.inverse is None or not hasattr(self.model, "gamma_reference"):
             return reference
-        return self.model.gamma_reference(np.asarray(reference, dtype=float))
+        r, off = np.asarray(reference, dtype=float), self.model.output_offset
+        if self.model.has_output_map:     # S^-1 comes after the inverse, in the law
+            return r if off is None else r - off[:, None]
+        return self.model.gamma_reference(r)
 
     def preview_state(self, reference, preview):
         """The inverse's state after the first ``preview`` samples of a (faded) reference.

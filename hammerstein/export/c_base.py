@@ -253,11 +253,19 @@ def _packed_plays(model):
 
 def _reference_transform(model, precision, N):
     """C declarations and statements of ``r = S^-1(Yr - c)`` on ``r[]``."""
-    decls, code = [], []
+    decls, offset, smap = _reference_transform_parts(model, precision, N)
+    return decls, offset + smap
+
+
+def _reference_transform_parts(model, precision, N):
+    """``(declarations, r = r - c statements, r = S^-1(r) statements)``: the two halves of
+    :func:`_reference_transform`, for the ZPETC law whose linear inverse runs between them
+    (``S^-1`` is nonlinear: it comes after the inverse of the linear part)."""
+    decls, code, offset = [], [], []
     if model.output_offset is not None:
         decls.append(f"static const {N}_real {N}_offset[{N}_N_OUTPUTS] = "
                      f"{_vec(model.output_offset, precision)};")
-        code.append(f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = r[l] - {N}_offset[l];")
+        offset.append(f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = r[l] - {N}_offset[l];")
     if model.output_map is not None:
         code.append("    /* static output map of the modified PI: h = S^-1(y), exact (piecewise linear) */")
         for l, mp in enumerate(model.output_map):
@@ -276,7 +284,7 @@ def _reference_transform(model, precision, N):
         anchor = seg > 0 ? seg - 1 : 0;
         r[{l}] = {N}_map{l}_knots[anchor] + (r[{l}] - {N}_map{l}_values[anchor]) / {N}_map{l}_slopes[seg];
     }}""")
-    return decls, code
+    return decls, offset, code
 
 
 def _limits_code(limits, m, T, precision, N):

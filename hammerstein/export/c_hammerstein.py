@@ -42,6 +42,8 @@ def _plan_stable(comp):
     hc, L = comp.hysteresis_compensator, la.preview_samples
     model = hc.model if comp.exact_static else _check_model(comp.model)
     rest = rest_output(model, comp.creep)          # where compensate's faded reference starts
+    if not comp.exact_static and model.output_offset is not None:
+        rest = rest - model.output_offset          # the inverse of L takes Yr - c (a sensor zero)
     stages, states = [], None
     if comp.creep is not None:
         mats = creep_inverse(comp.creep, comp.dynamics.dt)
@@ -99,7 +101,8 @@ def _plan_hammerstein(comp):
     with comp.previewed():      # the C step receives the reference P samples ahead
         law = comp.packed_law()
     rest = rest_output(comp.model, comp.creep)       # where compensate's faded reference starts
-    # the inverse filters S^-1(Yr - c): its state at rest in that frame, as start() has it
+    # the inverse filters Yr - c (S^-1(Yr - c) without a map): its state at rest in that
+    # frame, as start() has it
     rest = comp.prefilter_reference(rest[:, None])[:, 0]
     rest_states = comp.inverse.initial_state(rest)
     return ("law", model, P,

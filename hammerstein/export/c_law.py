@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
-                                       _reference_transform, _limits_code, _reals_table, _stage_rest,
+                                       _reference_transform_parts, _limits_code, _reals_table, _stage_rest,
                                        _stages_source)
 from hammerstein.export.c_lookahead import _lookahead_code
 
@@ -45,7 +45,9 @@ def _law_source(law, model, precision, N, limits, T, lookahead=None, stages=(), 
                   f"static const {N}_real {N}_Bf[{N}_N_FILTER][{N}_N_OUTPUTS] = {_mat(Bf, precision)};",
                   f"static const {N}_real {N}_Cf[{N}_N_OUTPUTS][{N}_N_FILTER] = {_mat(Cf, precision)};",
                   f"static const {N}_real {N}_Df[{N}_N_OUTPUTS][{N}_N_OUTPUTS] = {_mat(Df, precision)};"]
-    tdecls, tcode = _reference_transform(model, precision, N)
+    tdecls, tcode, tmap = _reference_transform_parts(model, precision, N)
+    if not nf or lookahead is not None:   # no linear inverse in the law: S^-1(r - c) at once
+        tcode, tmap = tcode + tmap, []      # (ZPETC: r - c, its inverse, then S^-1, nonlinear)
     ldecls, lcode, _ = _limits_code(limits, m, T, precision, N)
     one = "1.0" if precision == "double" else "1.0f"
     zero = "0.0" if precision == "double" else "0.0f"
@@ -114,7 +116,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
         return 0;
     }}"""
     more, extra_reals, la_step = [], 0, []
-    if lookahead is not None:     # G^-1 on the reference as given, then creep, then S^-1(. - c)
+    if lookahead is not None:     # G^-1 on Yr - c, then creep, + c, then S^-1(. - c)
         d, c, more, first, extra_reals = _lookahead_code(lookahead[0], lookahead[1], precision, N)
         decls += d
         init = first + init
@@ -122,6 +124,10 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
             stages, stage_states or [None] * len(stages), precision, N)
         decls += d
         la_step = [c] + codes
+        if model.output_offset is not None:    # L^-1 of Yr - c, c back for S^-1(. - c) below
+            la_step = ([f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = r[l] - {N}_offset[l];"]
+                       + la_step
+                       + [f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = r[l] + {N}_offset[l];"])
         more += stage_members
         init += stage_init
         extra_reals += n
@@ -142,7 +148,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
     for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = reference[l];"""]
     step += la_step
     step += tcode
-    if nf:   # the preview samples too enter the inverse as S^-1(Yr - c), as Python's start-up
+    if nf:   # the preview samples too enter the inverse as Yr - c, as Python's start-up
         step.append(f"""    {{  /* ZPETC inverse of the linear dynamics: v = Cf x + Df r, x <- Af x + Bf r */
         {N}_real v[{N}_N_OUTPUTS], xn[{N}_N_FILTER];
         int i, j;
@@ -161,6 +167,7 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
         for (i = 0; i < {N}_N_FILTER; ++i) s->x_f[i] = xn[i];
         for (l = 0; l < {N}_N_OUTPUTS; ++l) r[l] = v[l];
     }}""")
+        step += tmap      # the output map's inverse on the dynamics inverse's output
         if law_preview(law):
             step.append(fill)
     if law.lowpass:

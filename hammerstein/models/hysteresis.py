@@ -412,8 +412,9 @@ class MultivariablePI:
     output_offset : array_like, shape (p,), optional
         Constant added to every output [µm], ``y_l = sum_k Gamma_lk(u_k) +
         c_l`` (the sensor zero of an identified record). Included by
-        :meth:`simulate` and by the plant; the compensators subtract it from
-        the reference. Not included by :meth:`evaluate` (the operator
+        :meth:`simulate` and by the plant, after its linear part (creep and
+        dynamics); the compensators subtract it from the reference (the
+        Hammerstein compensator before inverting the linear part). Not included by :meth:`evaluate` (the operator
         ``Gamma`` alone). ``None`` means zeros.
     output_map : sequence of (OutputMap, dict or None), length p, optional
         Static output map per output, the modified PI of Kuhnen [3]_:

@@ -203,7 +203,9 @@ class HammersteinPlant:
 
         The hysteresis model's default state (:meth:`initial_state`) and the
         linear part (creep then dynamics) in its DC steady state for the
-        hysteresis output at 0 V, ``x = (I - A)^-1 B h0``: simulated from it,
+        hysteresis output at 0 V, ``x = (I - A)^-1 B h0`` (``h0`` without the model's
+        ``output_offset`` c, which :meth:`simulate` adds after the linear part as a sensor
+        zero; counted in ``h0`` too it showed twice, 4.0 instead of 2.0 um): simulated from it,
         a drive that stays at 0 V keeps the output at its rest value (the
         creep's settled output, :func:`hammerstein.compensation.drive.rest_output`,
         through the dynamics' DC gain), as the actuator it models does,
@@ -232,8 +234,12 @@ class HammersteinPlant:
         if self.n_linear_states:
             h0, _ = self.hysteresis.simulate(np.zeros((self.hysteresis.n_inputs, 1)),
                                              state[:nh].copy())
+            h0 = np.asarray(h0, dtype=float)[:, 0]
+            off = getattr(self.hysteresis, "output_offset", None)
+            if off is not None:     # a sensor zero: simulate adds it after the linear part
+                h0 = h0 - np.asarray(off, dtype=float)
             A, B, _, _ = self.matrices
-            state[nh:] = np.linalg.solve(np.eye(A.shape[0]) - A, B @ np.asarray(h0)[:, 0])
+            state[nh:] = np.linalg.solve(np.eye(A.shape[0]) - A, B @ h0)
         return state
 
     def simulate(self, inputs, initial_state=None):

@@ -26,6 +26,7 @@ from hammerstein import (InverseMultiplicativeCompensator, MultivariablePI,
                          diagonal_compensator)
 from hammerstein.compensation.drive import rest_output
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
+from hammerstein.models.creep import Creep
 from hammerstein.models.hysteresis import OutputMap
 from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import CompensatorDivergence
@@ -91,6 +92,11 @@ def build(kind):
     if kind == "hammerstein-coupled":
         p = _coupled()
         return HammersteinCompensator(p.hysteresis, p.dynamics)
+    if kind == "hammerstein-mapped":    # S^-1 after the inverse of G, in Python and in C
+        return HammersteinCompensator(_mapped_model(), _preset().dynamics)
+    if kind == "hammerstein-mapped-creep":   # the creep inverse too before S^-1
+        return HammersteinCompensator(_mapped_model(), _preset().dynamics,
+                                      creep=[Creep([0.01, 0.1], [0.02, 0.01]), None])
     if kind == "hammerstein-lowpass":
         p = _preset()
         return HammersteinCompensator(p.hysteresis, p.dynamics, feedback="lowpass", cutoff_hz=3000.0,
@@ -109,7 +115,8 @@ def build(kind):
 
 
 KINDS = ["multivariable", "multivariable-3it", "lowpass", "diagonal", "per-axis", "static-gain",
-         "hammerstein", "hammerstein-coupled", "hammerstein-lowpass",
+         "hammerstein", "hammerstein-coupled", "hammerstein-lowpass", "hammerstein-mapped",
+         "hammerstein-mapped-creep",
          "multivariable-mapped", "per-axis-mapped", "static-gain-mapped", "multivariable-3it-mapped"]
 
 
@@ -132,7 +139,7 @@ def python_voltages(comp, yr, chunks=1, backend=None):
             # compensate's faded references start)
             rest = rest_output(comp.hysteresis_compensator.model if comp.exact_static
                                else comp.model, comp.creep)
-            pre = comp.prefilter_reference       # the frame the inverse filters (the law's S^-1(. - c))
+            pre = comp.prefilter_reference       # the frame the inverse filters (Yr - c; S^-1 after it)
             _, state[nc:] = comp.inverse.filter(
                 pre(yr[:, :P]), comp.inverse.initial_state(pre(rest[:, None])[:, 0]))
         lead = yr[:, P:]

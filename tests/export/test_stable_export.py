@@ -99,7 +99,22 @@ CASES = {
     "classical PI law with creep": lambda: HammersteinCompensator(
         load_plant("rakotondrabe-2dof").hysteresis, non_minimum_phase_g(), inversion="stable",
         creep=[Creep([0.01, 0.3], [0.02, 0.03], instantaneous=0.95)] * 2),
+    "classical PI with offset and map, with creep": lambda: HammersteinCompensator(
+        _offset_mapped_model(), non_minimum_phase_g(), inversion="stable",
+        creep=[Creep([0.01, 0.3], [0.02, 0.03], instantaneous=0.95)] * 2),
 }
+
+
+def _offset_mapped_model():
+    """A modified PI with a sensor zero c (the inverse of L takes Yr - c) and an output map
+    (its inverse after L^-1)."""
+    from hammerstein import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.models.hysteresis import OutputMap
+    return MultivariablePI(
+        [[PrandtlIshlinskii([0.0, 1.0, 2.0, 4.0], [1.0, 0.5, 0.25, 0.2]), 0.1],
+         [PrandtlIshlinskii([0.0, 1.5], [0.05, 0.02]), PrandtlIshlinskii([0.1, 1.0, 3.0], [0.8, 0.4, 0.3])]],
+        input_amplitude=[10.0, 10.0], output_offset=[0.5, -1.0],
+        output_map=[OutputMap([5.0, 12.0], [1.0, 0.8, 0.6]), OutputMap([], [1.2])])
 
 
 @needs_cc
