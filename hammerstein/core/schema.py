@@ -42,6 +42,7 @@ __all__ = [
     "nested_table",
     "did_you_mean",
     "kind_problem",
+    "known_kind",
     "short_repr",
     "is_number",
     "number",
@@ -376,6 +377,28 @@ def check_table(table, schema, where, problems, source):
             elif fld.default is not None:
                 out[key] = fld.default
     return out
+
+
+def known_kind(kind, kinds):
+    """True when ``kind`` is one of ``kinds``; a list or a table (unhashable) is not.
+
+    Parameters
+    ----------
+    kind : object
+        The ``kind`` value read from the file.
+    kinds : dict or sequence of str
+        The known kinds.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> known_kind("circle", {"circle": 1}), known_kind(["circle"], {"circle": 1})
+    (True, False)
+    """
+    return isinstance(kind, str) and kind in kinds
 
 
 def kind_problem(kind, kinds):

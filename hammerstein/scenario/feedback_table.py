@@ -124,7 +124,7 @@ def _check_axis(t, where, problems):
         problems.append(f"{where}: expected a table, found {t!r}")
         return
     kind = t.get("kind")
-    if kind in AXIS_KINDS:
+    if isinstance(kind, str) and kind in AXIS_KINDS:
         allowed = {"kind", "internal_model_hz", "internal_model_decay"} | set(_AXIS_NUMBERS) | \
             ({"irc_reference"} if kind == "irc" else set())
         im = t.get("internal_model_hz", [1.0])
@@ -149,7 +149,7 @@ def _check_axis(t, where, problems):
             if k in t and not _positive(t[k]):
                 problems.append(f"{where}.{k}: expected a positive number [{unit}], found "
                                 f"{t[k]!r}")
-    elif kind in LTI_KINDS:
+    elif isinstance(kind, str) and kind in LTI_KINDS:
         allowed = _check_lti(t, where, problems)
     else:
         problems.append(f"{where}.kind: expected one of {', '.join(AXIS_KINDS + LTI_KINDS)}, "

@@ -470,7 +470,7 @@ def _check_feedback(data, comp, plant, source, problems):
         if missing:
             problems.append(f"{where}.axes: no controller for {', '.join(missing)}")
     kind = comp.get("kind", "none") if isinstance(comp, dict) else None
-    if kind in COMPENSATORS and COMPENSATORS[kind].look_ahead:
+    if isinstance(kind, str) and kind in COMPENSATORS and COMPENSATORS[kind].look_ahead:
         problems.append(f"{where}: the feedforward of a Monte-Carlo study with feedback runs "
                         f"without look-ahead; compensator.kind {kind!r} looks ahead")
     return table if len(problems) == n0 else None
