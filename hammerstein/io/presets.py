@@ -97,6 +97,18 @@ DYNAMICS_FIELDS = {
 }
 
 
+def _not_numbers(value):
+    """The first entry of a number or (nested) list that is not a number (a string, a
+    boolean), or None."""
+    if isinstance(value, (list, tuple)):
+        for item in value:
+            bad = _not_numbers(item)
+            if bad is not None:
+                return bad
+        return None
+    return None if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+
+
 def _table_problems(table, fields, where):
     """Problems of a table (:func:`hammerstein.core.schema.table_problems`), unknown keys first."""
     _, problems = table_problems(table, fields, where)
@@ -589,6 +601,9 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
         p = len(outputs)
         shapes = {}
         for key in ("A", "B", "C", "D"):
+            if key in table and _not_numbers(table[key]) is not None:
+                raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix (list of "
+                                  f"rows), found {_not_numbers(table[key])!r}")
             if key in table:
                 try:
                     shapes[key] = np.shape(np.array(table[key], dtype=float))
@@ -611,7 +626,11 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
                                         names=outputs)
         except DynamicsError as exc:
             raise PresetError(f"{source}: {exc}") from None
-    for key in ("natural_frequency", "damping_ratio"):
+    for key, unit in (("natural_frequency", "Hz"), ("damping_ratio", "a ratio, 0.03 for 3 %")):
+        bad = _not_numbers(table[key])
+        if bad is not None:     # '420 Hz' reached float() unnamed; true became a 1 Hz mode
+            raise PresetError(f"{source}: dynamics.{key}: expected numbers [{unit}], one per "
+                              f"output, found {bad!r}")
         if len(np.atleast_1d(table[key])) != len(outputs):
             raise PresetError(f"{source}: dynamics.{key}: expected {len(outputs)} values, one per output")
     if not build:

@@ -43,3 +43,32 @@ def test_a_list_dynamics_kind_in_a_model_file_is_named(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 1 and "dynamics.kind: expected 'bending_modes'" in err and "found []" in err
     assert "unexpected" not in err
+
+
+@pytest.mark.parametrize("old, new, said", [
+    ("natural_frequency = [", 'natural_frequency = ["420 Hz", ',
+     "dynamics.natural_frequency: expected numbers [Hz], one per output, found '420 Hz'"),
+    ("damping_ratio = [", 'damping_ratio = ["3 %", ',
+     "dynamics.damping_ratio: expected numbers [a ratio, 0.03 for 3 %], one per output, found '3 %'"),
+    # a boolean is an int to Python: true became a 1 Hz mode
+    ("natural_frequency = [", "natural_frequency = [true, ",
+     "dynamics.natural_frequency: expected numbers [Hz], one per output, found True"),
+])
+def test_a_dynamics_value_that_is_not_a_number_is_named(tmp_path, capsys, old, new, said):
+    import re
+    from pathlib import Path
+
+    from hammerstein.io.presets import resolve_preset
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
+    # the first value of the list replaced
+    text = re.sub(re.escape(old) + r"\s*[-0-9.e+]+\s*,?", new.rstrip(", ") + ", ", text, count=1)
+    assert new.rstrip(", ") in text
+    (tmp_path / "p.toml").write_text(text)
+    for command in (["compensate", str(tmp_path / "p.toml"), "--reference",
+                     '{ kind = "circle", radius = 10, frequency = 50, periods = 2 }',
+                     "--out", str(tmp_path / "d.csv")],
+                    ["export", str(tmp_path / "p.toml"), "--out", str(tmp_path / "c")]):
+        code = main(command)
+        err = capsys.readouterr().err
+        assert code == 1 and said in err and "unexpected" not in err, err
+        assert len(err.strip().splitlines()) == 1
