@@ -32,7 +32,8 @@ from hammerstein.models.hysteresis import (HysteresisError, MultivariablePI, Out
                                          PrandtlIshlinskii)
 from hammerstein.models.lti import continuous_system, state_space_dynamics
 from hammerstein.models.plant import HammersteinPlant
-from hammerstein.core.schema import Field, Invalid, did_you_mean, is_number, string, table_problems
+from hammerstein.core.schema import (Field, Invalid, did_you_mean, is_number, known_kind, string,
+                                     table_problems)
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.models.creep import creep_from_table
 from hammerstein.models.preisach import hysteresis_from_table, is_mixed_table
@@ -576,7 +577,7 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
     if not isinstance(table, dict):
         raise PresetError(f"{source}: dynamics: expected a table")
     kind = table.get("kind", "none")
-    if kind not in DYNAMICS_FIELDS:
+    if not known_kind(kind, DYNAMICS_FIELDS):
         raise PresetError(f"{source}: dynamics.kind: expected 'bending_modes', 'state_space' or "
                           f"'none', found {kind!r}{did_you_mean(kind, DYNAMICS_FIELDS)}")
     problems = _table_problems(table, DYNAMICS_FIELDS[kind], "dynamics")

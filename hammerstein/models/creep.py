@@ -247,7 +247,7 @@ def creep_from_table(table, where="creep"):
     kind = table.get("kind", "lags")
     need = {"lags": ("time_constants", "weights"), "log": ("rate_per_decade", "t_min", "t_max"),
             "none": ()}
-    if kind not in need:
+    if not isinstance(kind, str) or kind not in need:
         raise HysteresisError(f"{where}.kind: expected 'lags', 'log' or 'none', found {kind!r}")
     allowed = set(need[kind]) | {"kind", "description"} | (
         {"per_decade"} if kind == "log" else {"instantaneous"} if kind == "lags" else set())

@@ -32,8 +32,8 @@ from hammerstein.scenario.identification import (ResolveContext, identified_from
                                                  resolve_dynamics, resolve_model)
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
-from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, number,
-                                         string)
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer,
+                                         kind_problem, known_kind, number, string)
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
@@ -111,7 +111,7 @@ def compensator_kind(spec):
         Unknown kind (``kind: expected one of ...``, with the closest one).
     """
     kind = (spec or {}).get("kind", "none")
-    if kind not in COMPENSATORS:
+    if not known_kind(kind, COMPENSATORS):
         raise ValueError(f"kind: {kind_problem(kind, COMPENSATORS)[0]}")
     return COMPENSATORS[kind]
 
@@ -327,7 +327,7 @@ def _start_table(v):
         raise Invalid(f"expected a compensator table {{ kind = ..., ... }}, found {v!r}")
     kind = v.get("kind", "hammerstein")
     others = [k for k in COMPENSATORS if k not in ("none", "ilc")]
-    if kind not in others:
+    if not known_kind(kind, others):
         raise Invalid(f"kind: expected one of {', '.join(others)}, found {kind!r}")
     problems = []
     clean = check_table({**v, "kind": kind}, {"kind": Field(lambda x: x), **COMPENSATORS[kind].fields},

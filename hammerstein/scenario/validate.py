@@ -36,7 +36,7 @@ from hammerstein.scenario.identify_tables import comparison_spec, nyquist_proble
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.registry import COMPENSATORS
 from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
-                                         TOP, Field, ScenarioError, check_table, kind_problem,
+                                         TOP, Field, ScenarioError, check_table, kind_problem, known_kind,
                                          total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
 from hammerstein.scenario.montecarlo import is_montecarlo, validate_montecarlo
@@ -196,7 +196,7 @@ def _merge_compensator(top, case):
 
 def _check_compensator(spec, where, problems, source, own=None):
     kind = spec.get("kind", "none")
-    if kind not in COMPENSATORS:
+    if not known_kind(kind, COMPENSATORS):
         problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, COMPENSATORS)]
         return None
     if "kind" not in spec and any(k != "kind" for k in spec):
@@ -267,7 +267,7 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
         problems.append(f"{source}: {where}: expected a table, found {spec!r}")
         return None
     kind = spec.get("kind")
-    if kind not in kinds:
+    if not known_kind(kind, kinds):
         problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, kinds)]
         return None
     n_before = len(problems)
@@ -491,7 +491,7 @@ def _validate_cases(path, data, feedback=False):
                 comp_ok = False
         sig = _signal(where, mode, raw[mode], plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
-        if (mode == "reference" and kind in COMPENSATORS and not COMPENSATORS[kind].compensates
+        if (mode == "reference" and known_kind(kind, COMPENSATORS) and not COMPENSATORS[kind].compensates
                 and not feedback):
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
                             f"(compensator.kind is {kind!r}); use drive for an open-loop run")
@@ -594,6 +594,6 @@ def validate_scenario(path):
     kind = data.get("kind", "cases")
     if kind == "cases" and is_montecarlo(data):   # [[sweeps]] kind = "monte-carlo"
         kind = "monte-carlo"
-    if kind not in VALIDATORS:
+    if not known_kind(kind, VALIDATORS):
         raise ScenarioError([f"{path}: kind: {msg}" for msg in kind_problem(kind, VALIDATORS)])
     return VALIDATORS[kind](path, data)
