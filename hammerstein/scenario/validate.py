@@ -382,6 +382,17 @@ def _plausibility(mode, signal, spec):
     return found
 
 
+def _check_map_compensators(smap, plant, base, files, problems, source):
+    """Check the ``[stability_map.compensators]`` tables as a case's compensator is checked."""
+    for label, spec in (smap.get("compensators") or {}).items():
+        where, n_before = f"stability_map.compensators.{label}", len(problems)
+        clean = _check_compensator(spec, where, problems, source)
+        if clean is None or len(problems) > n_before or "model" not in COMPENSATORS[clean.get("kind", "none")].fields:
+            continue
+        more = _model_problems(clean.get("model", "plant"), clean.get("identify"), plant, base, files)
+        problems.extend(f"{source}: {where}: {msg}" for msg in more)
+
+
 def _validate_cases(path, data, feedback=False):
     """Validate a scenario of kind ``"cases"``; ScenarioSpec or ScenarioError.
 
@@ -540,6 +551,8 @@ def _validate_cases(path, data, feedback=False):
         except PresetError:
             smap_plant = None  # reported with the plant table
         smap = check_stability_table(data["stability_map"], problems, source)
+        if smap is not None:
+            _check_map_compensators(smap, smap_plant, base, model_files, problems, source)
     if problems:
         raise ScenarioError(problems)
     info = {c["case"]: {"sweep": sp.name, **c} for sp in sweep_specs for c in sp.cases}
