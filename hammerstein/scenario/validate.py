@@ -30,7 +30,7 @@ import numpy as np
 
 from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path, file_limit_problem
-from hammerstein.core.numbers import is_number, plausibility_problem
+from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -300,7 +300,28 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     except refs.SignalError as exc:
         problems.append(f"{source}: {where}.{exc}")
         return None
+    problem = _magnitude_problem(c, sig, "µm" if mode == "reference" else "V")
+    if problem:     # the simulation refuses it (hammerstein.simulation._packing)
+        problems.append(f"{source}: {where}{problem}")
+        return None
     return t, sig, max(int(round(period / T)), 1), extras
+
+
+def _magnitude_problem(spec, signal, unit):
+    """``".key: ... beyond the limit 1e+150"`` for a signal the simulation would refuse, else ``""``.
+
+    The key is the table's first value beyond :data:`MAX_MAGNITUDE` (e.g.
+    ``radius``); a signal beyond it from values each within (an offset plus
+    an amplitude) is named by its peak.
+    """
+    if not signal.size or np.max(np.abs(signal)) <= MAX_MAGNITUDE:
+        return ""
+    for key, value in spec.items():
+        for v in (value if isinstance(value, list) else [value]):
+            if is_number(v) and abs(v) > MAX_MAGNITUDE:
+                return f".{key}: {v:g} {unit} is beyond the limit {MAX_MAGNITUDE:.0e}"
+    return (f": its peak {np.max(np.abs(signal)):.3g} {unit} is beyond the limit "
+            f"{MAX_MAGNITUDE:.0e}")
 
 
 def _record_file_problems(identify, base):
