@@ -34,7 +34,7 @@ from hammerstein.models.lti import continuous_system, state_space_dynamics
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.core.schema import (Field, Invalid, did_you_mean, is_number, known_kind, string,
                                      table_problems)
-from hammerstein.core.numbers import MAX_MAGNITUDE
+from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem
 from hammerstein.models.creep import creep_from_table
 from hammerstein.models.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
@@ -95,6 +95,37 @@ DYNAMICS_FIELDS = {
     "state_space": {"kind": Field(_any), "description": Field(_any),
                     **{k: Field(_any, required=k != "D") for k in "ABCD"}},
 }
+
+
+#: Unit and hint of each numeric [dynamics] value (a unit written in a value, '420 Hz', is named).
+DYNAMICS_NUMBERS = {"natural_frequency": ("a positive number [Hz] per output", ""),
+                    "damping_ratio": ("a positive number per output",
+                                      " (a ratio: 0.03 for 3 %)"),
+                    **{k: ("a numeric matrix (list of rows)", "") for k in "ABCD"}}
+
+
+def _non_number(value):
+    """The first entry of ``value`` (a number or nested lists) that is not a real number, or None.
+
+    Booleans are refused (``true`` is not 1 Hz), as are strings with a unit.
+    """
+    if isinstance(value, list):
+        for v in value:
+            bad = _non_number(v)
+            if bad is not None:
+                return bad
+        return None
+    return None if number_problem(value) in (None, "subnormal") else (value,)
+
+
+def _dynamics_number_problem(table, source):
+    """``source: dynamics.<key>: expected ..., found '420 Hz'`` for a non-numeric value, or None."""
+    for key, (what, hint) in DYNAMICS_NUMBERS.items():
+        if key in table:
+            bad = _non_number(table[key])
+            if bad is not None:
+                return f"{source}: dynamics.{key}: expected {what}{hint}, found {bad[0]!r}"
+    return None
 
 
 def _table_problems(table, fields, where):
@@ -231,6 +262,29 @@ def _huge_numbers(value, key, limit=MAX_MAGNITUDE):
     return found
 
 
+def _booleans(value, key):
+    """Keys (``model.components.x.ux.weights[0]``) of the booleans in a parsed table, at most 5.
+
+    Python's ``True`` is the integer 1: a ``true`` written where a number is
+    expected would silently be 1 (a weight, a gain, a threshold).
+
+    Examples
+    --------
+    >>> _booleans({"components": {"x": {"ux": {"gain": True}}}}, "model")
+    ['model.components.x.ux.gain']
+    """
+    found, stack = [], [(key, value)]
+    while stack and len(found) < 5:
+        k, v = stack.pop()
+        if isinstance(v, dict):
+            stack.extend((f"{k}.{name}", item) for name, item in reversed(list(v.items())))
+        elif isinstance(v, list):
+            stack.extend((f"{k}[{i}]", item) for i, item in reversed(list(enumerate(v))))
+        elif isinstance(v, bool) and not k.endswith(".signed"):   # a Preisach flag (models/preisach)
+            found.append(k)
+    return found
+
+
 def model_from_table(table, source="model"):
     """Build a :class:`MultivariablePI` from a parsed ``[model]`` table.
 
@@ -262,6 +316,10 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
+    flags = _booleans(table, "model")
+    if flags:       # a boolean where a number is expected would read as 0 or 1
+        raise PresetError(f"{source}: " + "; ".join(f"{key}: expected a number, found a boolean"
+                                                    for key in flags))
     huge = _huge_numbers(table, "model")
     if huge:
         raise PresetError(f"{source}: " + "; ".join(
@@ -585,6 +643,9 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
         raise PresetError(f"{source}: " + "; ".join(problems))
     if kind == "none":
         return None
+    problem = _dynamics_number_problem(table, source)
+    if problem:
+        raise PresetError(problem)
     if kind == "state_space":
         p = len(outputs)
         shapes = {}

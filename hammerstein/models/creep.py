@@ -218,6 +218,11 @@ class Creep:
         return table
 
 
+#: Units of the numeric keys of a ``[creep.<output>]`` table (named when a value is not a number).
+CREEP_UNITS = {"time_constants": " [s]", "t_min": " [s]", "t_max": " [s]",
+               "rate_per_decade": " [fraction of the step per decade]"}
+
+
 def creep_from_table(table, where="creep"):
     """A :class:`Creep` from a ``[creep.<output>]`` table.
 
@@ -259,6 +264,14 @@ def creep_from_table(table, where="creep"):
         if key not in table:
             raise HysteresisError(f"{where}.{key}: missing (kind = {kind!r} needs "
                                   f"{', '.join(need[kind])})")
+    for key in sorted(set(table) - {"kind", "description"}):
+        values = table[key] if isinstance(table[key], list) and key in ("time_constants",
+                                                                         "weights") else [table[key]]
+        for v in values:
+            if not isinstance(v, (int, float)) or isinstance(v, bool):
+                raise HysteresisError(f"{where}.{key}: expected "
+                                      f"{'a list of numbers' if key in need.get('lags') else 'a number'}"
+                                      f"{CREEP_UNITS.get(key, '')}, found {v!r}")
     try:
         if kind == "none":
             return None
