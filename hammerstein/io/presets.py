@@ -19,6 +19,7 @@ own equations live in the modules they name.
 from __future__ import annotations
 
 import tomllib
+import warnings
 from importlib import resources
 from pathlib import Path
 
@@ -39,7 +40,7 @@ from hammerstein.models.creep import creep_from_table
 from hammerstein.models.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
 from hammerstein.models.amplifier import amplifier_from_table
-from hammerstein.exceptions import AmplifierError, PresetError
+from hammerstein.exceptions import AmplifierError, DynamicsWarning, PresetError
 from hammerstein.io.sensor import sensor_from_table
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
@@ -48,6 +49,7 @@ __all__ = [
     "PresetError",
     "bundled_presets",
     "resolve_preset",
+    "aliased_modes_warning",
     "read_toml",
     "load_creep",
     "records_sampling_period",
@@ -776,6 +778,51 @@ def load_creep(path, outputs):
     return creeps if creeps is not None and any(c is not None for c in creeps) else None
 
 
+def aliased_modes_warning(table, sampling_period, source):
+    """Warn (:class:`DynamicsWarning`) of the modes of a ``[dynamics]`` table at or above Nyquist.
+
+    Sampled at ``T``, a mode at or above ``1 / (2 T)`` is aliased to a lower
+    frequency: the simulated plant no longer has it, and a compensator
+    inverting it inverts a mode the samples cannot carry.
+
+    Parameters
+    ----------
+    table : dict
+        A checked ``[dynamics]`` table (``bending_modes``: its
+        ``natural_frequency``; ``state_space``: the oscillating eigenvalues
+        of ``A``, at ``|lambda| / (2 pi)``).
+    sampling_period : float
+        T [s] the dynamics are discretised at.
+    source : str
+        The file, at the front of the message.
+
+    Returns
+    -------
+    str or None
+        The warning's message (also emitted), or None.
+    """
+    nyquist = 0.5 / float(sampling_period)
+    if table.get("kind", "none") == "bending_modes":
+        key, freqs = "natural_frequency", np.atleast_1d(np.asarray(table["natural_frequency"], float))
+    elif table.get("kind") == "state_space":
+        lam = np.linalg.eigvals(np.asarray(table["A"], dtype=float))
+        key, freqs = "A", np.abs(lam[lam.imag > 0]) / (2 * np.pi)
+    else:
+        return None
+    above = freqs[freqs >= nyquist]
+    if not above.size:
+        return None
+    modes = ", ".join(f"{f:g}" for f in above)
+    message = (f"{source}: dynamics.{key}: the mode{'s' if above.size > 1 else ''} at {modes} Hz "
+               f"{'are' if above.size > 1 else 'is'} at or above the Nyquist frequency "
+               f"{nyquist:g} Hz of the sampling period {float(sampling_period):g} s: aliased when "
+               f"sampled (the plant does not have {'them' if above.size > 1 else 'it'} at that "
+               f"frequency, and {'their' if above.size > 1 else 'its'} inverse is meaningless); "
+               f"sample faster or check the value")
+    warnings.warn(message, DynamicsWarning, stacklevel=3)
+    return message
+
+
 def load_dynamics(path, outputs, sampling_period):
     """The discrete linear dynamics G of a dynamics or preset file.
 
@@ -820,6 +867,7 @@ def load_dynamics(path, outputs, sampling_period):
     cont = dynamics_from_table(data["dynamics"], list(outputs), str(path))
     if cont is None:
         raise PresetError(f"{path}: dynamics.kind: 'none' has no dynamics to invert")
+    aliased_modes_warning(data["dynamics"], sampling_period, str(path))
     return discretize(cont, float(sampling_period))
 
 
@@ -903,6 +951,8 @@ def load_plant(preset, dynamics=True, base_dir=None):
                 raise PresetError(f"{path}: dynamics.{exc}") from None
         elif cont is not None:
             lin = discretize(cont, float(T))
+        if cont is not None:
+            aliased_modes_warning(dyn, T, str(path))
     name = meta.get("name", path.stem)
     creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
     plant = HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
