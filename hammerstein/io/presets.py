@@ -109,7 +109,8 @@ DYNAMICS_NUMBERS = {"natural_frequency": ("a positive number [Hz] per output", "
 def _non_number(value):
     """The first entry of ``value`` (a number or nested lists) that is not a real number, or None.
 
-    Booleans are refused (``true`` is not 1 Hz), as are strings with a unit.
+    Booleans are refused (``true`` is not 1 Hz), as are strings with a unit;
+    nan and inf are numbers here (the dynamics' own checks name them).
     """
     if isinstance(value, list):
         for v in value:
@@ -117,7 +118,8 @@ def _non_number(value):
             if bad is not None:
                 return bad
         return None
-    return None if number_problem(value) in (None, "subnormal") else (value,)
+    # nan, inf and the magnitudes: the dynamics' own checks name them
+    return (value,) if number_problem(value) == "not a number" else None
 
 
 def _dynamics_number_problem(table, source):
