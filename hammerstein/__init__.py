@@ -31,7 +31,7 @@ from hammerstein.exceptions import (BaselineError, CompensatorDivergence, Compen
                                     HammersteinError, HammersteinWarning, HysteresisError,
                                     IdentificationError, Invalid, NestedInvalid, PresetError,
                                     RangeWarning, ScenarioError, SignalError)
-from hammerstein.exceptions import AmplifierError, AmplifierWarning, FeedbackError
+from hammerstein.exceptions import AmplifierError, AmplifierWarning, DynamicsWarning, FeedbackError
 
 __version__ = "0.1.0"
 
@@ -145,7 +145,7 @@ _LAZY = {
 
 _EXCEPTIONS = ["HammersteinError", "HammersteinWarning", "HysteresisError", "SignalError",
                "CompensatorError", "CompensatorDivergence", "ConvergenceWarning",
-               "RangeWarning", "DynamicsError", "PresetError", "IdentificationError",
+               "RangeWarning", "DynamicsError", "DynamicsWarning", "PresetError", "IdentificationError",
                "DataFileError", "ScenarioError", "BaselineError", "Invalid", "NestedInvalid",
                "FileLimitError", "OutputError", "ExportError", "AmplifierError", "AmplifierWarning",
                "FeedbackError"]

@@ -31,6 +31,7 @@ __all__ = [
     "ConvergenceWarning",
     "RangeWarning",
     "DynamicsError",
+    "DynamicsWarning",
     "PresetError",
     "IdentificationError",
     "DataFileError",
@@ -101,6 +102,10 @@ class RangeWarning(HammersteinWarning):
 
 class DynamicsError(HammersteinError, ValueError):
     """Invalid linear-dynamics parameters (names the field)."""
+
+
+class DynamicsWarning(HammersteinWarning):
+    """Linear dynamics that their sampling cannot represent (a mode at or above Nyquist)."""
 
 
 class PresetError(HammersteinError, ValueError):

@@ -43,6 +43,9 @@ def _dynamics_summary(path):
         plant = load_plant(path)
     except PresetError as exc:
         return f"; invalid: {exc}"
+    except (HammersteinError, ValueError, TypeError, ArithmeticError) as exc:
+        # one file the loader did not foresee is marked, the listing goes on
+        return f"; invalid: {path}: {exc}"
     if plant.dynamics is None:
         return "; static (no dynamics)"
     gain = (np.round(dc_gain(plant.dynamics), 4) + 0.0).tolist()      # + 0.0: no "-0.0"

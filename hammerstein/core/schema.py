@@ -379,28 +379,6 @@ def check_table(table, schema, where, problems, source):
     return out
 
 
-def known_kind(kind, kinds):
-    """True when ``kind`` is one of ``kinds``; a list or a table (unhashable) is not.
-
-    Parameters
-    ----------
-    kind : object
-        The ``kind`` value read from the file.
-    kinds : dict or sequence of str
-        The known kinds.
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> known_kind("circle", {"circle": 1}), known_kind(["circle"], {"circle": 1})
-    (True, False)
-    """
-    return isinstance(kind, str) and kind in kinds
-
-
 def kind_problem(kind, kinds):
     """The message of an unknown ``kind`` among ``kinds`` (with the closest one), or [].
 
@@ -421,6 +399,32 @@ def kind_problem(kind, kinds):
     except Invalid as exc:
         return [str(exc)]
     return []
+
+
+def known_kind(kind, kinds):
+    """Whether ``kind`` is one of ``kinds`` (False for a list or table: no TypeError).
+
+    ``kind in kinds`` raises ``TypeError: unhashable type`` for a list or a
+    table read from a file when ``kinds`` is a dict or a set; a file's
+    ``kind = []`` is a problem to report with the others, not a crash.
+
+    Parameters
+    ----------
+    kind : object
+        The ``kind`` value read from the file.
+    kinds : dict, set or sequence of str
+        The known kinds.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> known_kind(["sine"], {"sine": 1}), known_kind("sine", {"sine": 1})
+    (False, True)
+    """
+    return isinstance(kind, str) and kind in kinds
 
 
 def table_problems(table, schema, where=""):

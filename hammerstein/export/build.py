@@ -237,9 +237,9 @@ def compensator_from_source(source, kind="multivariable", gain=None, iterations=
         its exact inverse or its forward operator
         (:func:`hammerstein.compensation.mixed_compensators.mixed_compensator`).
     """
-    if kind in REFUSED_KINDS:
+    if isinstance(kind, str) and kind in REFUSED_KINDS:
         raise ExportError(f"kind: {kind!r} cannot be exported to C: {REFUSED_KINDS[kind]}")
-    if kind not in KINDS:
+    if not isinstance(kind, str) or kind not in KINDS:
         raise ExportError(f"kind: expected one of {', '.join(KINDS)}, found {kind!r}")
     classical = isinstance(source.model, MultivariablePI)
     T = sampling_period if sampling_period is not None else source.sampling_period

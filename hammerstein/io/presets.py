@@ -19,6 +19,7 @@ own equations live in the modules they name.
 from __future__ import annotations
 
 import tomllib
+import warnings
 from importlib import resources
 from pathlib import Path
 
@@ -34,12 +35,12 @@ from hammerstein.models.lti import continuous_system, state_space_dynamics
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.core.schema import (Field, Invalid, did_you_mean, is_number, known_kind, string,
                                      table_problems)
-from hammerstein.core.numbers import MAX_MAGNITUDE
+from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem
 from hammerstein.models.creep import creep_from_table
 from hammerstein.models.preisach import hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
 from hammerstein.models.amplifier import amplifier_from_table
-from hammerstein.exceptions import AmplifierError, PresetError
+from hammerstein.exceptions import AmplifierError, DynamicsWarning, PresetError
 from hammerstein.io.sensor import sensor_from_table
 
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
@@ -48,6 +49,7 @@ __all__ = [
     "PresetError",
     "bundled_presets",
     "resolve_preset",
+    "aliased_modes_warning",
     "read_toml",
     "load_creep",
     "records_sampling_period",
@@ -97,16 +99,37 @@ DYNAMICS_FIELDS = {
 }
 
 
-def _not_numbers(value):
-    """The first entry of a number or (nested) list that is not a number (a string, a
-    boolean), or None."""
-    if isinstance(value, (list, tuple)):
-        for item in value:
-            bad = _not_numbers(item)
+#: Unit and hint of each numeric [dynamics] value (a unit written in a value, '420 Hz', is named).
+DYNAMICS_NUMBERS = {"natural_frequency": ("a positive number [Hz] per output", ""),
+                    "damping_ratio": ("a positive number per output",
+                                      " (a ratio: 0.03 for 3 %)"),
+                    **{k: ("a numeric matrix (list of rows)", "") for k in "ABCD"}}
+
+
+def _non_number(value):
+    """The first entry of ``value`` (a number or nested lists) that is not a real number, or None.
+
+    Booleans are refused (``true`` is not 1 Hz), as are strings with a unit;
+    nan and inf are numbers here (the dynamics' own checks name them).
+    """
+    if isinstance(value, list):
+        for v in value:
+            bad = _non_number(v)
             if bad is not None:
                 return bad
         return None
-    return None if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+    # nan, inf and the magnitudes: the dynamics' own checks name them
+    return (value,) if number_problem(value) == "not a number" else None
+
+
+def _dynamics_number_problem(table, source):
+    """``source: dynamics.<key>: expected ..., found '420 Hz'`` for a non-numeric value, or None."""
+    for key, (what, hint) in DYNAMICS_NUMBERS.items():
+        if key in table:
+            bad = _non_number(table[key])
+            if bad is not None:
+                return f"{source}: dynamics.{key}: expected {what}{hint}, found {bad[0]!r}"
+    return None
 
 
 def _table_problems(table, fields, where):
@@ -243,6 +266,29 @@ def _huge_numbers(value, key, limit=MAX_MAGNITUDE):
     return found
 
 
+def _booleans(value, key):
+    """Keys (``model.components.x.ux.weights[0]``) of the booleans in a parsed table, at most 5.
+
+    Python's ``True`` is the integer 1: a ``true`` written where a number is
+    expected would silently be 1 (a weight, a gain, a threshold).
+
+    Examples
+    --------
+    >>> _booleans({"components": {"x": {"ux": {"gain": True}}}}, "model")
+    ['model.components.x.ux.gain']
+    """
+    found, stack = [], [(key, value)]
+    while stack and len(found) < 5:
+        k, v = stack.pop()
+        if isinstance(v, dict):
+            stack.extend((f"{k}.{name}", item) for name, item in reversed(list(v.items())))
+        elif isinstance(v, list):
+            stack.extend((f"{k}[{i}]", item) for i, item in reversed(list(enumerate(v))))
+        elif isinstance(v, bool) and not k.endswith(".signed"):   # a Preisach flag (models/preisach)
+            found.append(k)
+    return found
+
+
 def model_from_table(table, source="model"):
     """Build a :class:`MultivariablePI` from a parsed ``[model]`` table.
 
@@ -274,6 +320,10 @@ def model_from_table(table, source="model"):
     """
     if not isinstance(table, dict):
         raise PresetError(f"{source}: model: expected a table")
+    flags = _booleans(table, "model")
+    if flags:       # a boolean where a number is expected would read as 0 or 1
+        raise PresetError(f"{source}: " + "; ".join(f"{key}: expected a number, found a boolean"
+                                                    for key in flags))
     huge = _huge_numbers(table, "model")
     if huge:
         raise PresetError(f"{source}: " + "; ".join(
@@ -597,13 +647,13 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
         raise PresetError(f"{source}: " + "; ".join(problems))
     if kind == "none":
         return None
+    problem = _dynamics_number_problem(table, source)
+    if problem:
+        raise PresetError(problem)
     if kind == "state_space":
         p = len(outputs)
         shapes = {}
         for key in ("A", "B", "C", "D"):
-            if key in table and _not_numbers(table[key]) is not None:
-                raise PresetError(f"{source}: dynamics.{key}: expected a numeric matrix (list of "
-                                  f"rows), found {_not_numbers(table[key])!r}")
             if key in table:
                 try:
                     shapes[key] = np.shape(np.array(table[key], dtype=float))
@@ -626,11 +676,7 @@ def dynamics_from_table(table, outputs, source="preset", build=True):
                                         names=outputs)
         except DynamicsError as exc:
             raise PresetError(f"{source}: {exc}") from None
-    for key, unit in (("natural_frequency", "Hz"), ("damping_ratio", "a ratio, 0.03 for 3 %")):
-        bad = _not_numbers(table[key])
-        if bad is not None:     # '420 Hz' reached float() unnamed; true became a 1 Hz mode
-            raise PresetError(f"{source}: dynamics.{key}: expected numbers [{unit}], one per "
-                              f"output, found {bad!r}")
+    for key in ("natural_frequency", "damping_ratio"):
         if len(np.atleast_1d(table[key])) != len(outputs):
             raise PresetError(f"{source}: dynamics.{key}: expected {len(outputs)} values, one per output")
     if not build:
@@ -734,6 +780,51 @@ def load_creep(path, outputs):
     return creeps if creeps is not None and any(c is not None for c in creeps) else None
 
 
+def aliased_modes_warning(table, sampling_period, source):
+    """Warn (:class:`DynamicsWarning`) of the modes of a ``[dynamics]`` table at or above Nyquist.
+
+    Sampled at ``T``, a mode at or above ``1 / (2 T)`` is aliased to a lower
+    frequency: the simulated plant no longer has it, and a compensator
+    inverting it inverts a mode the samples cannot carry.
+
+    Parameters
+    ----------
+    table : dict
+        A checked ``[dynamics]`` table (``bending_modes``: its
+        ``natural_frequency``; ``state_space``: the oscillating eigenvalues
+        of ``A``, at ``|lambda| / (2 pi)``).
+    sampling_period : float
+        T [s] the dynamics are discretised at.
+    source : str
+        The file, at the front of the message.
+
+    Returns
+    -------
+    str or None
+        The warning's message (also emitted), or None.
+    """
+    nyquist = 0.5 / float(sampling_period)
+    if table.get("kind", "none") == "bending_modes":
+        key, freqs = "natural_frequency", np.atleast_1d(np.asarray(table["natural_frequency"], float))
+    elif table.get("kind") == "state_space":
+        lam = np.linalg.eigvals(np.asarray(table["A"], dtype=float))
+        key, freqs = "A", np.abs(lam[lam.imag > 0]) / (2 * np.pi)
+    else:
+        return None
+    above = freqs[freqs >= nyquist]
+    if not above.size:
+        return None
+    modes = ", ".join(f"{f:g}" for f in above)
+    message = (f"{source}: dynamics.{key}: the mode{'s' if above.size > 1 else ''} at {modes} Hz "
+               f"{'are' if above.size > 1 else 'is'} at or above the Nyquist frequency "
+               f"{nyquist:g} Hz of the sampling period {float(sampling_period):g} s: aliased when "
+               f"sampled (the plant does not have {'them' if above.size > 1 else 'it'} at that "
+               f"frequency, and {'their' if above.size > 1 else 'its'} inverse is meaningless); "
+               f"sample faster or check the value")
+    warnings.warn(message, DynamicsWarning, stacklevel=3)
+    return message
+
+
 def load_dynamics(path, outputs, sampling_period):
     """The discrete linear dynamics G of a dynamics or preset file.
 
@@ -778,6 +869,7 @@ def load_dynamics(path, outputs, sampling_period):
     cont = dynamics_from_table(data["dynamics"], list(outputs), str(path))
     if cont is None:
         raise PresetError(f"{path}: dynamics.kind: 'none' has no dynamics to invert")
+    aliased_modes_warning(data["dynamics"], sampling_period, str(path))
     return discretize(cont, float(sampling_period))
 
 
@@ -861,6 +953,8 @@ def load_plant(preset, dynamics=True, base_dir=None):
                 raise PresetError(f"{path}: dynamics.{exc}") from None
         elif cont is not None:
             lin = discretize(cont, float(T))
+        if cont is not None:
+            aliased_modes_warning(dyn, T, str(path))
     name = meta.get("name", path.stem)
     creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
     plant = HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)

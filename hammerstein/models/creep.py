@@ -218,6 +218,11 @@ class Creep:
         return table
 
 
+#: Units of the numeric keys of a ``[creep.<output>]`` table (named when a value is not a number).
+CREEP_UNITS = {"time_constants": " [s]", "t_min": " [s]", "t_max": " [s]",
+               "rate_per_decade": " [fraction of the step per decade]"}
+
+
 def creep_from_table(table, where="creep"):
     """A :class:`Creep` from a ``[creep.<output>]`` table.
 
@@ -247,7 +252,7 @@ def creep_from_table(table, where="creep"):
     kind = table.get("kind", "lags")
     need = {"lags": ("time_constants", "weights"), "log": ("rate_per_decade", "t_min", "t_max"),
             "none": ()}
-    if kind not in need:
+    if not isinstance(kind, str) or kind not in need:
         raise HysteresisError(f"{where}.kind: expected 'lags', 'log' or 'none', found {kind!r}")
     allowed = set(need[kind]) | {"kind", "description"} | (
         {"per_decade"} if kind == "log" else {"instantaneous"} if kind == "lags" else set())
@@ -259,6 +264,14 @@ def creep_from_table(table, where="creep"):
         if key not in table:
             raise HysteresisError(f"{where}.{key}: missing (kind = {kind!r} needs "
                                   f"{', '.join(need[kind])})")
+    for key in sorted(set(table) - {"kind", "description"}):
+        values = table[key] if isinstance(table[key], list) and key in ("time_constants",
+                                                                         "weights") else [table[key]]
+        for v in values:
+            if not isinstance(v, (int, float)) or isinstance(v, bool):
+                raise HysteresisError(f"{where}.{key}: expected "
+                                      f"{'a list of numbers' if key in need.get('lags') else 'a number'}"
+                                      f"{CREEP_UNITS.get(key, '')}, found {v!r}")
     try:
         if kind == "none":
             return None

@@ -23,7 +23,7 @@ from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.exceptions import PresetError
 from hammerstein.io.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
 from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
-                                     name_field, number, string)
+                                     known_kind, name_field, number, string)
 from hammerstein.scenario.feedback_table import check_feedback_table
 from hammerstein.scenario.montecarlo_draw import oscillating_modes
 from hammerstein.scenario.registry import COMPENSATORS
@@ -334,7 +334,7 @@ def validate_montecarlo(path, data):
         except PresetError as exc:
             problems.append(f"{source}: plant.preset: {exc}")
     comp = data.get("compensator", {"kind": "multivariable"})
-    if not isinstance(comp, dict) or comp.get("kind", "none") not in COMPENSATORS:
+    if not isinstance(comp, dict) or not known_kind(comp.get("kind", "none"), COMPENSATORS):
         kind = comp.get("kind") if isinstance(comp, dict) else comp
         problems += [f"{source}: compensator.kind: {m}" for m in kind_problem(kind, COMPENSATORS)]
     elif not COMPENSATORS[comp.get("kind", "none")].compensates:
@@ -383,7 +383,7 @@ def validate_montecarlo(path, data):
                             f"{len(c['frequencies'])} frequencies exceed the budget of "
                             f"{MAX_RUNS:.3g} runs per study")
         sig = c["reference"]
-        if not isinstance(sig, dict) or sig.get("kind") not in refs.REFERENCE_KINDS:
+        if not isinstance(sig, dict) or not known_kind(sig.get("kind"), refs.REFERENCE_KINDS):
             problems += [f"{source}: {where}.reference.kind: {m}"
                          for m in kind_problem(sig.get("kind") if isinstance(sig, dict) else sig,
                                                refs.REFERENCE_KINDS)]

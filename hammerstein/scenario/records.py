@@ -44,7 +44,8 @@ import numpy as np
 from hammerstein.io.datafiles import DataFileError, bundled_data, read_records
 from hammerstein.core.files import confined_path, escape
 from hammerstein.identification.identification import IdentificationError
-from hammerstein.identification.record_identification import identify_records
+from hammerstein.identification.record_identification import KINDS as COMPONENT_KINDS
+from hammerstein.identification.record_identification import identify_records, parse_components
 from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
                                          choice, integer, name_field,
                                          number, string)
@@ -102,6 +103,13 @@ def _names_list(v):
 
 def _components(v):
     if isinstance(v, str) and v.strip():
+        if v.strip() in ("auto", "all"):
+            return v
+        for part in (p.strip() for p in v.split(",") if p.strip()):
+            key, sep, kind = part.partition("=")
+            if not sep or len(key.split(":")) != 2 or kind.strip() not in COMPONENT_KINDS:
+                raise Invalid(f"expected 'auto', 'all' or OUTPUT:INPUT=pi|gain|none entries "
+                              f"separated by commas, found {v!r} (entry {part!r})")
         return v
     raise Invalid(f"expected 'auto', 'all' or 'OUT:IN=pi|gain|none,...', found {v!r}")
 
@@ -287,9 +295,16 @@ def load_identification_scenario(path, data):
                                     f"{exc}")
     if problems:
         raise ScenarioError(problems)
-    return RecordScenario(name=top.get("name", path.stem), title=top.get("title", path.stem),
-                          description=top.get("description", ""), seed=top.get("seed", 0),
-                          path=path, data=dat, identification=ident, records=records)
+    scenario = RecordScenario(name=top.get("name", path.stem), title=top.get("title", path.stem),
+                              description=top.get("description", ""), seed=top.get("seed", 0),
+                              path=path, data=dat, identification=ident, records=records)
+    if records and "components" in ident:     # the names it gives are the records' channels
+        ins, outs = _names(scenario)
+        try:
+            parse_components(ident["components"], ins, outs)
+        except IdentificationError as exc:
+            raise ScenarioError([f"{source}: identification.{exc}"]) from None
+    return scenario
 
 
 def _rows(channel, rep, unit):

@@ -32,8 +32,8 @@ from hammerstein.scenario.identification import (ResolveContext, identified_from
                                                  resolve_dynamics, resolve_model)
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
                                                   identify_dynamics_table, identify_table)
-from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer, kind_problem, known_kind, number,
-                                         string)
+from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer,
+                                         kind_problem, known_kind, number, string)
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]

@@ -26,7 +26,8 @@ from __future__ import annotations
 import os
 
 from hammerstein.core.schema import (MAX_NAME, MAX_TEXT, NAME, Field, Invalid, NestedInvalid, boolean,
-                                     check_table, choice, integer, kind_problem, known_kind, name_field,
+                                     check_table, choice, integer, kind_problem, known_kind,
+                                     name_field,
                                      name_list, number, short_repr, string)
 from hammerstein.core.numbers import MAX_HYSTERONS as _MAX_HYSTERONS
 from hammerstein.core.numbers import MAX_ITERATIONS as _MAX_ITERATIONS

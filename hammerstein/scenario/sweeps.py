@@ -231,7 +231,7 @@ def expand_sweeps(sweeps, source, problems):
                             f"[...] together")
             continue
         if parameter is not None:
-            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(sig.get("kind"))
+            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(_kind_key(sig))
             keys = sorted(k for k in (kind.fields if kind is not None else {})
                           if k not in _NOT_SWEPT)
             if freqs is not None:
@@ -253,7 +253,7 @@ def expand_sweeps(sweeps, source, problems):
             continue
         scale_pair = False      # a Lissajous-like kind: frequencies = [f_1, f_2] scaled to f_1 = f
         if freqs is not None:
-            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(sig.get("kind"))
+            kind = (REFERENCE_KINDS if mode == "reference" else DRIVE_KINDS).get(_kind_key(sig))
             keys = kind.fields if kind is not None else {"frequency": None}
             if "frequency" in keys:
                 if "frequency" in sig:
@@ -555,6 +555,12 @@ STABILITY = {
 }
 
 
+def _kind_key(table, default=None):
+    """A table's ``kind`` when it is a string, else None (a list or table would not hash)."""
+    kind = table.get("kind", default) if isinstance(table, dict) else None
+    return kind if isinstance(kind, str) else None
+
+
 def check_stability_table(table, problems, source):
     """Check a ``[stability_map]`` table (nothing is built or computed).
 
@@ -608,7 +614,7 @@ def stability_map_frame(clean, plant, compensator_top, context, problems, source
     comps = clean.get("compensators") or {"compensator": compensator_top}
     frames, laws = [], {}
     for label, spec in comps.items():
-        entry = COMPENSATORS.get(spec.get("kind", "none"))
+        entry = COMPENSATORS.get(_kind_key(spec, "none"))
         if entry is not None and entry.rate_independent and "check" in entry.fields:
             spec = {**spec, "check": "ignore"}   # the map shows where the law converges
         try:

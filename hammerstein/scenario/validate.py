@@ -30,7 +30,7 @@ import numpy as np
 
 from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path, file_limit_problem
-from hammerstein.core.numbers import is_number, plausibility_problem
+from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -300,7 +300,28 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     except refs.SignalError as exc:
         problems.append(f"{source}: {where}.{exc}")
         return None
+    problem = _magnitude_problem(c, sig, "µm" if mode == "reference" else "V")
+    if problem:     # the simulation refuses it (hammerstein.simulation._packing)
+        problems.append(f"{source}: {where}{problem}")
+        return None
     return t, sig, max(int(round(period / T)), 1), extras
+
+
+def _magnitude_problem(spec, signal, unit):
+    """``".key: ... beyond the limit 1e+150"`` for a signal the simulation would refuse, else ``""``.
+
+    The key is the table's first value beyond :data:`MAX_MAGNITUDE` (e.g.
+    ``radius``); a signal beyond it from values each within (an offset plus
+    an amplitude) is named by its peak.
+    """
+    if not signal.size or np.max(np.abs(signal)) <= MAX_MAGNITUDE:
+        return ""
+    for key, value in spec.items():
+        for v in (value if isinstance(value, list) else [value]):
+            if is_number(v) and abs(v) > MAX_MAGNITUDE:
+                return f".{key}: {v:g} {unit} is beyond the limit {MAX_MAGNITUDE:.0e}"
+    return (f": its peak {np.max(np.abs(signal)):.3g} {unit} is beyond the limit "
+            f"{MAX_MAGNITUDE:.0e}")
 
 
 def _record_file_problems(identify, base):
@@ -380,6 +401,17 @@ def _plausibility(mode, signal, spec):
         if problem:
             found.append(f"{mode}.frequency: {problem}")
     return found
+
+
+def _check_map_compensators(smap, plant, base, files, problems, source):
+    """Check the ``[stability_map.compensators]`` tables as a case's compensator is checked."""
+    for label, spec in (smap.get("compensators") or {}).items():
+        where, n_before = f"stability_map.compensators.{label}", len(problems)
+        clean = _check_compensator(spec, where, problems, source)
+        if clean is None or len(problems) > n_before or "model" not in COMPENSATORS[clean.get("kind", "none")].fields:
+            continue
+        more = _model_problems(clean.get("model", "plant"), clean.get("identify"), plant, base, files)
+        problems.extend(f"{source}: {where}: {msg}" for msg in more)
 
 
 def _validate_cases(path, data, feedback=False):
@@ -540,6 +572,8 @@ def _validate_cases(path, data, feedback=False):
         except PresetError:
             smap_plant = None  # reported with the plant table
         smap = check_stability_table(data["stability_map"], problems, source)
+        if smap is not None:
+            _check_map_compensators(smap, smap_plant, base, model_files, problems, source)
     if problems:
         raise ScenarioError(problems)
     info = {c["case"]: {"sweep": sp.name, **c} for sp in sweep_specs for c in sp.cases}
