@@ -126,8 +126,12 @@ def _one_line_warning(message, category, filename, lineno, file=None, line=None)
 
 def _print_warning(source, message, file=None):
     """One ``warning: <file>: [<source>: ]<message>`` line, each distinct one once."""
-    head = f"{_WARNING_STATE['subject']}: " + ("" if source is None else f"{source}: ")
-    text = f"warning: {head}{' '.join(str(message).split())}"
+    body = ' '.join(str(message).split())
+    subject = f"{_WARNING_STATE['subject']}: "
+    # a message that names the file itself (a preset's aliased mode) is not prefixed twice
+    head = ("" if source is None and body.startswith(subject) else subject) + \
+        ("" if source is None else f"{source}: ")
+    text = f"warning: {head}{body}"
     if text in _WARNING_STATE["said"]:
         return
     _WARNING_STATE["said"].add(text)

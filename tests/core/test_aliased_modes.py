@@ -66,6 +66,7 @@ def test_compensate_prints_one_warning_line(tmp_path, capsys, monkeypatch):
           "--out", "d.csv"])
     err = [line for line in capsys.readouterr().err.splitlines() if "Nyquist" in line]
     assert len(err) == 1 and err[0].startswith("warning: ") and "dynamics.natural_frequency" in err[0]
+    assert err[0].count("p.toml") == 1, err[0]          # the file named once, not twice
 
 
 def test_validate_warns_of_the_preset_of_a_scenario(tmp_path, capsys):
