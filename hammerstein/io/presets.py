@@ -248,14 +248,10 @@ def _huge_numbers(value, key, limit=MAX_MAGNITUDE):
     [('model.components.x.ux.weights[1]', 1e+300)]
     """
     found = []
-    stack = [(key, value)]
-    while stack and len(found) < 5:
-        k, v = stack.pop()
-        if isinstance(v, dict):
-            stack.extend((f"{k}.{name}", item) for name, item in reversed(list(v.items())))
-        elif isinstance(v, list):
-            stack.extend((f"{k}[{i}]", item) for i, item in reversed(list(enumerate(v))))
-        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+    for k, v in _leaves(value, key):
+        if len(found) == 5:
+            break
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
             try:
                 x = float(v)
             except OverflowError:     # a TOML integer beyond the float range
@@ -277,16 +273,23 @@ def _booleans(value, key):
     >>> _booleans({"components": {"x": {"ux": {"gain": True}}}}, "model")
     ['model.components.x.ux.gain']
     """
-    found, stack = [], [(key, value)]
-    while stack and len(found) < 5:
+    found = [k for k, v in _leaves(value, key)
+             if isinstance(v, bool) and not k.endswith(".signed")]   # a Preisach flag (models/preisach)
+    return found[:5]
+
+
+def _leaves(value, key):
+    """``(key, value)`` of every value in a parsed table that is neither a table nor an array,
+    in the file's order, named as ``model.components.x.ux.weights[0]``."""
+    stack = [(key, value)]
+    while stack:
         k, v = stack.pop()
         if isinstance(v, dict):
             stack.extend((f"{k}.{name}", item) for name, item in reversed(list(v.items())))
         elif isinstance(v, list):
             stack.extend((f"{k}[{i}]", item) for i, item in reversed(list(enumerate(v))))
-        elif isinstance(v, bool) and not k.endswith(".signed"):   # a Preisach flag (models/preisach)
-            found.append(k)
-    return found
+        else:
+            yield k, v
 
 
 def model_from_table(table, source="model"):
