@@ -2,10 +2,36 @@
 
 from __future__ import annotations
 
+import sys
+
 from hammerstein.cli._common import print_err
 from hammerstein.report.messages import group_warnings
 
-__all__ = ["add_verbosity", "print_warnings"]
+__all__ = ["add_verbosity", "print_warnings", "tty_progress"]
+
+
+def tty_progress(command):
+    """On a terminal, a callable printing ``<command>: <line> ...`` on stderr, else None.
+
+    A long phase's wait is said as it starts (a 2-axis identification at 50 kHz sat
+    silent for 22-88 s until everything printed at once); redirected (a log, a test)
+    the command stays as quiet as before.
+
+    Parameters
+    ----------
+    command : str
+        The command's name, in front of each line.
+
+    Returns
+    -------
+    callable or None
+        ``progress(line)``; None when stderr is not a terminal.
+    """
+    try:
+        tty = sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        tty = False
+    return (lambda line: print_err(f"{command}: {line} ...")) if tty else None
 
 
 def add_verbosity(p, verbose_help=None):

@@ -29,6 +29,7 @@ import numpy as np
 
 from hammerstein.io.datafiles import DataFileError, column_list, read_records
 from hammerstein.cli._common import number_type, out_file_problem, print_err
+from hammerstein.cli._output import tty_progress
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
     level_metrics_rows, level_report_lines, metrics_rows)
@@ -538,19 +539,6 @@ def _flat_extremes(records, outputs, out_unit):
     return lines
 
 
-def _progress():
-    """On a terminal, one ``identify: <phase>`` line on stderr as each phase starts, else None.
-
-    A 2-axis identification at 50 kHz sat silent for 22-88 s until everything printed at
-    once; redirected (a log, a test) it stays as quiet as before.
-    """
-    try:
-        tty = sys.stderr.isatty()
-    except (AttributeError, ValueError):
-        tty = False
-    return (lambda line: print_err(f"identify: {line} ...")) if tty else None
-
-
 def _handler(args):
 
     try:
@@ -567,7 +555,7 @@ def _handler(args):
             records, _options(args, n, thresholds), names,
             _dynamics_recs(args) if args.dynamics else None,
             _creep_recs(args) if args.creep_records else None,
-            progress=_progress())
+            progress=tty_progress("identify"))
         fit, dyn, creep = result.fit, result.dynamics, result.creep
         extra = result.tables()
         meta = _metadata(args, fit, records)

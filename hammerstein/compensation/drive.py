@@ -594,7 +594,7 @@ def compensator_rest(model, compensator):
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
                    first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
-                   shape=True, input_names=None):
+                   shape=True, input_names=None, progress=None):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -673,6 +673,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         False keeps the reference and only shapes the drive into them
         (:func:`shape_drive`): ``learn``'s reference, already shaped, plus a learnt
         correction that may step a little beyond the slew rate.
+    progress : callable, optional
+        ``progress(line)``, called with a short description as each pass of the
+        compensator over the whole reference starts (the fade-in's doubling and the
+        shaping each run it again): a long reference's wait, said.
 
     Returns
     -------
@@ -714,10 +718,17 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     u_rest = amplifier.rest_voltages() if amplifier is not None else None
     y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
 
+    passes = []
+
+    def pass_over(ref, why):
+        passes.append(why)
+        if progress is not None:
+            progress(f"pass {len(passes)} over the {N} samples ({why})")
+        return _compensate(compensator, ref, P or None, 0)[0]
+
     def run(fade, lead=None):
         faded = hardware_fade(r, fade, y_rest, lead)
-        u, _ = _compensate(compensator, faded, P or None, 0)
-        return u, faded
+        return pass_over(faded, f"fade-in {fade * T:.4g} s"), faded
 
     grown = None
     if fade_samples is None:
@@ -755,7 +766,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     notes, limited, range_limited = [], False, False
     if amplifier is not None and amplifier.from_records and shape:
         def drive_for(ref):
-            return _compensate(compensator, ref, P or None, 0)[0]
+            return pass_over(ref, "the reference shaped into the records' limits")
 
         sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names)
         u, faded, notes = sr.inputs, sr.reference, sr.notes

@@ -35,7 +35,7 @@ LAW_KINDS = ("hammerstein", "multivariable", "diagonal")
 
 def compensate_reference(plant, reference, period_samples=None, kind=None, inversion="zpetc",
                          fade_in=None, limits="error", gain=None, check=None, rest_lead=None,
-                         shape=True):
+                         shape=True, progress=None):
     """Compensator and drive of a reference on an actuator: what ``hammerstein compensate`` writes.
 
     The command's route from Python: the kind chosen for the model when
@@ -73,6 +73,9 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     shape : bool
         Shape the reference into the limits measured on the records (default); False
         shapes only the drive (:func:`hammerstein.compensation.drive.hardware_drive`).
+    progress : callable, optional
+        ``progress(line)`` as each pass of the compensator over the reference starts
+        (:func:`hammerstein.compensation.drive.hardware_drive`).
 
     Returns
     -------
@@ -141,7 +144,8 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
                                names=plant.hysteresis.output_names,
                                mode_decay=mode_decay_s(linear[0], T),
                                rest_lead=rest_lead, shape=shape,
-                               input_names=list(plant.hysteresis.input_names))
+                               input_names=list(plant.hysteresis.input_names),
+                               progress=progress)
     except AmplifierError as exc:
         if reach and "beyond the amplifier's range" in str(exc):
             # "lower the reference" alone: by how much, and where it fits, is the reach's
