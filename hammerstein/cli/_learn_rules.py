@@ -130,9 +130,10 @@ def lag_problem(lag, delay, expected_offset, period_samples, source):
         return None
     since = ("" if expected_offset is None or expected_offset == 0 else
              f" (the trials learnt from lagged {int(delay) + int(expected_offset)})")
-    early = "late" if off > 0 else "early"
+    # a record that starts S samples late reads S samples ahead: its lag is S less
+    when = "early" if off > 0 else "late"
     return (f"lags {lag} samples, {source} is {delay}{since}: a trigger or latency change "
-            f"(the record starts {abs(off)} samples {early}, or the acquisition's latency "
+            f"(the record starts {abs(off)} samples {when}, or the acquisition's latency "
             f"changed)")
 
 

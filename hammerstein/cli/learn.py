@@ -369,8 +369,11 @@ def _learn(args):
         # the history's best-trial.csv replayed as --drive (a resumed learning): read whole
         # before anything is written, and the history's own file to replace
         best_file = Path(args.history) / BEST_FILE if args.history else None
-        replay = (best_file is not None and best_file.is_file() and Path(args.drive).is_file()
-                  and os.path.samefile(best_file, args.drive))
+        try:
+            replay = (best_file is not None and best_file.is_file()
+                      and Path(args.drive).is_file() and os.path.samefile(best_file, args.drive))
+        except (OSError, ValueError):      # a name too long: --history's own check says so
+            replay = False
         guard_inputs(args.actuator, args.reference, None if replay else args.drive, args.measured)
         problem = output_problem(args.out)         # an input is never an output, even with --force
         problem = f"--out: {problem}" if problem else None

@@ -109,6 +109,8 @@ def test_a_lag_other_than_the_delay_is_named(lag, delay, offset, period, says):
     if says:
         assert text.startswith(f"lags {lag} samples, the model's delay is {delay}")
         assert "a trigger or latency change" in text
+        assert f"starts {abs(lag - delay - (offset or 0))} samples " \
+            f"{'early' if lag - delay - (offset or 0) > 0 else 'late'}" in text
 
 
 def test_the_convergence_verdict_and_its_number_are_one_quantity():
