@@ -290,7 +290,11 @@ def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin, a
 
 
 def _read_state(history_dir, n_samples):
-    """``{trial, score, halvings}`` of the best trial in ``DIR/learning.csv``, or None.
+    """``{trial, score, halvings, rejections, lag_offset, ...}`` of ``DIR/learning.csv``, or None.
+
+    ``rejections``: the trials not learnt from in a row (0 in an older file);
+    ``lag_offset``: the lag of the last trial learnt from less its delay (None
+    when not known).
 
     None when the directory is not one ``learn`` made, has no state yet, or
     holds the state of a record of another length (another reference).
@@ -308,6 +312,9 @@ def _read_state(history_dir, n_samples):
         state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
                  "halvings": int(values["halvings"]), "samples": int(values["samples"]),
                  "reference": values.get("reference_sha256"),
+                 "rejections": int(values.get("rejections", 0)),
+                 "lag_offset": (None if values.get("lag_offset") is None else
+                                int(values["lag_offset"])),
                  "drive": (None if values.get("last_drive") is None else
                            np.array(values["last_drive"].split(), float))}
     except (KeyError, ValueError):
@@ -338,7 +345,7 @@ def _same_drive(u, kept):
     return bool(np.all(np.max(np.abs(a - b), axis=1) <= DRIVE_TOLERANCE * span))
 
 
-def _check_history(history_dir, state, fingerprint, u, best_u, y=None):
+def _check_history(history_dir, state, fingerprint, u, best_u, y=None, no_fade=False):
     """Refuse a trial that does not belong to the history's learning (a DataFileError).
 
     ``fingerprint`` is the faded reference's (:func:`_fingerprint`); ``best_u`` is called
@@ -348,11 +355,19 @@ def _check_history(history_dir, state, fingerprint, u, best_u, y=None):
     The reference (faded as the drive was) must have the history's fingerprint, and the
     applied drive must be the last one written or the best trial's re-measured: the best
     trial's own measurement ``y`` again (the same files given twice, e.g. after a run that
-    said ``interrupted`` once everything was written) would be learnt twice.
+    said ``interrupted`` once everything was written) would be learnt twice. ``no_fade``: the
+    drive file records no fade-in (the reason a fingerprint differs, named first).
+
+    Returns True when ``u`` is the best trial's drive (a re-measurement of it), ``"replayed"``
+    when it is that drive and not the one written last, else False.
     """
     if state is None:
-        return
+        return False
     d = Path(history_dir)
+    if state["reference"] is not None and state["reference"] != fingerprint and no_fade:
+        raise DataFileError(f"--drive: records no fade-in (its header lacks 'fade-in N "
+                            f"samples', as a {BEST_FILE} older than this version does): give the "
+                            f"drive file compensate or learn wrote, or --fade-in S")
     if state["reference"] is not None and state["reference"] != fingerprint:
         raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
                             f"({STATE_FILE}); choose a new --history directory for this one")
@@ -363,8 +378,9 @@ def _check_history(history_dir, state, fingerprint, u, best_u, y=None):
         raise DataFileError(f"--measured: the best trial of {d} already holds this drive and "
                             f"this measurement: learnt once, its next drive is the last one {d} "
                             f"wrote; apply that one (or measure this drive again)")
-    if state["drive"] is None or _same_drive(u, state["drive"]) or is_best:
-        return
+    last = state["drive"] is None or _same_drive(u, state["drive"])
+    if last or is_best:
+        return "replayed" if is_best and not last else bool(is_best)
     raise DataFileError(f"--drive: not the drive the last trial of {d} wrote, nor its best "
                         f"trial's ({BEST_FILE}): this history belongs to another learning (another "
                         f"actuator, identification or first drive); choose a new --history "
@@ -374,7 +390,9 @@ def _check_history(history_dir, state, fingerprint, u, best_u, y=None):
 def _write_state(history_dir, state):
     text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
         ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
-        ("samples", "samples")))
+        ("samples", "samples"), ("rejections", "rejections")))
+    if state.get("lag_offset") is not None:
+        text += f"lag_offset,{int(state['lag_offset'])}\n"
     text += f"reference_sha256,{state['reference']}\n"
     text += "last_drive," + " ".join(repr(float(v)) for v in state["drive"]) + "\n"
     safe_write(Path(history_dir) / STATE_FILE, text, "learning state file", root=history_dir)

@@ -61,8 +61,15 @@ nothing written: a history left from another reference, actuator or
 identification would otherwise be learnt from). A trial whose error is above the best
 one, beyond what the sensor noise can explain, is not learnt from; the next
 drive is learnt from the best trial's drive and response with half the
-gain (halved again at each such trial), and one line says so, as the
-scenarios' ``kind = "ilc"`` does. A trial of a repeating reference judged
+gain (halved again at each such trial, never below 1/16 of
+``--learning-gain``, restored once a trial is learnt from), and one line
+says so, as the scenarios' ``kind = "ilc"`` does. When that drive (or the
+best drive re-measured, ``best-trial.csv`` replayed as ``--drive`` to
+resume) is itself worse beyond the noise, the best is stale (the actuator
+changed): the trial becomes the best and is learnt from at full gain; a
+trial whose lag behind the model's prediction is not the delay (a trigger
+or latency change) is not learnt from and changes no gain
+(:mod:`hammerstein.cli._learn_rules`). A trial of a repeating reference judged
 not better than the best, and not worse beyond the noise, has reached the
 noise: it is learnt from, with the gain halved (again at each such trial),
 so that the last steps stop moving the sensor's noise into the drive; one
@@ -86,6 +93,7 @@ with ``--limits error`` (one line, nothing written); 2 a usage error.
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -111,16 +119,17 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             read_signals, settled_step,
                                             rest_output, shape_drive, signals_csv)
 from hammerstein.compensation.drive_files import (drive_rest_lead, drive_rest_output,
-                                                  followed_reference, learnt_names,
+                                                  followed_reference, head_lines, learnt_names,
                                                   rest_lead_text, shaped_target)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, locked,
                                     output_problem, removed_if_failed, safe_write)
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
-                                          error_summary, estimate_delay, harmonic_base_gains,
+                                          error_summary, harmonic_base_gains,
                                           periodic_average, reference_correction, repeating_from)
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
-from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
-                                              delay_search_span)
+from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
+from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
+                                          lag_problem, trial_lag)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
@@ -150,7 +159,9 @@ def add_parser(subparsers):
     p.add_argument("--history", metavar="DIR",
                    help="append this trial's error to DIR/history.csv, draw DIR/convergence.png, keep the "
                         "best trial: a trial 10 %% worse than it beyond the sensor noise is not "
-                        "learnt from (the next drive is learnt from the best one with half the gain)")
+                        "learnt from (the next drive is learnt from the best one with half the gain, "
+                        "at least 1/16 of --learning-gain); replay DIR/best-trial.csv as --drive "
+                        "to resume a learning")
     p.add_argument("--learning-gain", type=positive_float, default=0.5, metavar="G",
                    help="gamma in (0, 2) (default 0.5: half the error per trial, half the noise)")
     p.add_argument("--q-cutoff-hz", type=positive_float, default=None, metavar="HZ",
@@ -312,6 +323,28 @@ def _judged_error(target, y, delay, period, steady):
     return float(np.max(np.linalg.norm(e, axis=0))), 0.0
 
 
+def _judged_rms(target, y, delay, period, steady):
+    """RMS Euclidean error of the settled periods' average [µm] (None: nothing is averaged)."""
+    N = target.shape[1]
+    e = target[:, :N - delay] - y[:, delay:N]
+    if steady is None or not period or e.shape[1] - steady < 2 * period:
+        return None
+    averaged = periodic_average(e, period, steady)[:, steady:]
+    return float(np.sqrt(np.mean(np.sum(averaged ** 2, axis=0))))
+
+
+def _judged_line(k, score, judged, rms, scale):
+    """The short line of a trial's judged (noise-averaged) settled errors."""
+    pct = (lambda v: f" ({100 * v / scale:.3g} %)") if scale else (lambda v: "")
+    trial = "" if k is None else f"trial {k} "
+    if judged is not None:
+        return f"{trial}judged (RMS less the sensor noise): RMS {score:.4g} µm{pct(score)}"
+    if rms is None:
+        return f"{trial}judged (nothing to average): max {score:.4g} µm{pct(score)}"
+    return (f"{trial}judged (settled periods averaged, noise averaged down): max "
+            f"{score:.4g} µm{pct(score)}, RMS {rms:.4g} µm{pct(rms)}")
+
+
 def _handle(args):
     """One trial; with ``--history``, under an advisory lock on the history's parent directory.
 
@@ -333,7 +366,15 @@ def _handle(args):
 def _learn(args):
     problem = out_file_problem(args.out, "drive file", args.force)
     if not problem:
-        guard_inputs(args.actuator, args.reference, args.drive, args.measured)
+        # the history's best-trial.csv replayed as --drive (a resumed learning): read whole
+        # before anything is written, and the history's own file to replace
+        best_file = Path(args.history) / BEST_FILE if args.history else None
+        try:
+            replay = (best_file is not None and best_file.is_file()
+                      and Path(args.drive).is_file() and os.path.samefile(best_file, args.drive))
+        except (OSError, ValueError):      # a name too long: --history's own check says so
+            replay = False
+        guard_inputs(args.actuator, args.reference, None if replay else args.drive, args.measured)
         problem = output_problem(args.out)         # an input is never an output, even with --force
         problem = f"--out: {problem}" if problem else None
     if not problem and args.history:
@@ -402,8 +443,7 @@ def _learn(args):
             print(f"delay {delay} samples: the model file's measurement delay (identify's --delay, "
                   f"given or estimated)")
         elif args.delay == "auto":
-            delay = max(estimate_delay(predicted, y, delay_search_span(
-                target, ref.period_samples, T)), 0)
+            delay = max(trial_lag(predicted, y, target, ref.period_samples, T), 0)
             per_sample = 360.0 / ref.period_samples if ref.period_samples > 1 else None
             if per_sample is not None and per_sample < DELAY_PHASE_DEG:
                 advice = ("identify with --dynamics (the delay found from the multisines)"
@@ -426,6 +466,10 @@ def _learn(args):
                 raise DataFileError(f"--delay: expected auto or an integer >= 0, found {delay}")
         if delay >= N - 1:
             raise DataFileError(f"--delay: {delay} samples; expected fewer than the record's {N - 1}")
+        # a delay not measured on this trial (the model file's, or --delay N): the trial's own
+        # lag is, as evaluate measures it; a trigger or latency change shows there
+        lag = None if args.delay == "auto" and plant.measurement_delay is None else \
+            trial_lag(predicted, y, target, ref.period_samples, T)
         # the settled window: after the fade-in and --settle-periods (the start-up no drive removes)
         P = ref.period_samples if ref.period_samples > 1 else None
         steady = repeating_from(target, P, fade)
@@ -447,9 +491,13 @@ def _learn(args):
         # the best trial so far (--history): a trial worse beyond the noise is not learnt from
         state = _read_state(args.history, N) if args.history else None
         fingerprint = _fingerprint(target)
-        if args.history:
-            _check_history(args.history, state, fingerprint, u,
-                           lambda: _read_best(args.history, model, u.shape, y.shape, N)[:2], y)
+        remeasured = bool(args.history) and _check_history(
+            args.history, state, fingerprint, u,
+            lambda: _read_best(args.history, model, u.shape, y.shape, N)[:2], y,
+            args.fade_in is None and drive_fade_samples(args.drive) is None)
+        out_of_step = None if lag is None else lag_problem(
+            lag, delay, None if state is None else state.get("lag_offset"), ref.period_samples,
+            "the model's delay" if args.delay == "auto" else "--delay")
         score, score_noise = _judged_error(aim, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise
@@ -461,58 +509,38 @@ def _learn(args):
             score = judged.score
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
             if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
+        judged_line = _judged_line(k_next if args.history else None, score, judged,
+                                   _judged_rms(aim, y, delay, P, steady), ref.scale)
         learn_u, learn_y, note, halvings, best, stall = u, y, None, 0, True, None
         followed, drive_kind_ = followed_reference(args.drive, list(model.output_names), target, T)
         followed_now = followed          # the reference this trial's drive was computed for
         bu = by = bf = None
+        verdict = Verdict(rejections=0)
+        if out_of_step is not None and state is None:
+            raise DataFileError(f"--measured: this trial {out_of_step}; nothing written: check "
+                                f"the trigger and measure the drive again, or give --delay with "
+                                f"the new latency")
         if state is not None:
-            halvings = state["halvings"]
             best_score, what = state["score"], "averaged"
-            best = score < best_score
+            better = score < best_score
             worse = score > best_score + margin
             if judged is not None:       # judged against the best trial's record, same statistic
                 bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 cmp = compare_trials(judged, _window_error(
                     aim, by, delay, judged_start, T, args.q_cutoff_hz), 1.0, NOISE_MARGIN)
-                score, best_score, margin, worse, best = (cmp.score, cmp.best_score, cmp.margin,
-                                                          cmp.worse, cmp.better)
+                score, best_score, margin, worse, better = (cmp.score, cmp.best_score, cmp.margin,
+                                                            cmp.worse, cmp.better)
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
                         f"estimated from the records")
-            if worse:
-                halvings += 1
+            verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
+                                  remeasured, judged is None, what, JUDGED, out_of_step)
+            halvings, best, note, stall = (verdict.halvings, verdict.best, verdict.note,
+                                           verdict.stall)
+            if verdict.from_best:
                 if bu is None:
                     bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 learn_u, learn_y, followed = bu, by, bf
-                ratio = f"{score / best_score:.4g} times" if best_score > 0 else "more than"
-                note = (f"trial {k_next} is {ratio} the error of trial "
-                        f"{state['trial']} (the best so far, {best_score:.4g} µm {what}; "
-                        f"{margin:.2g} µm of noise margin): "
-                        f"not learnt from; learning again from trial {state['trial']}'s drive "
-                        f"with gain x{0.5 ** halvings:g}")
-            elif judged is None and score >= best_score:
-                # not better than the best, and not worse beyond the noise: the learning has
-                # reached the noise, and full steps now mostly move noise into the drive (a
-                # decreasing gain, as in
-                # S. S. Saab, "A discrete-time stochastic learning control algorithm", IEEE
-                # Trans. Automatic Control 46(6), 877-887, 2001)
-                halvings += 1
-                stall = (f"trial {k_next}'s judged error {score:.4g} µm ({JUDGED}) is not below "
-                         f"the best, "
-                         f"trial {state['trial']}'s {best_score:.4g} µm, and within the "
-                         f"{margin:.2g} µm of noise: the learning has reached the noise; the next "
-                         f"drive is learnt from this trial with gain x{0.5 ** halvings:g}")
-            elif judged is None and score <= margin:
-                # better than the best, but within the noise margin of no error at all: the
-                # measurement no longer resolves the peak the trials are judged by, and a full
-                # step on harmonics still above their own noise can raise it unseen (the peak
-                # of what is left is not the sum of the harmonics' sizes); the same decreasing
-                # gain as above bounds what the drive moves from here on
-                halvings += 1
-                stall = (f"trial {k_next}'s judged error {score:.4g} µm ({JUDGED}) is within the "
-                         f"{margin:.2g} µm noise margin of no error: the measurement no longer "
-                         f"resolves the error's peak; the next drive is learnt from this trial "
-                         f"with gain x{0.5 ** halvings:g}")
-        gain = args.learning_gain * 0.5 ** halvings
+        gain = args.learning_gain * gain_factor(halvings, verdict.rejections)
         law_gain, notes = _inverse_gain(model, args.gain, args.check)
         notes = ([] if q_note is None else [q_note]) + notes + ([] if period_note is None else [period_note])
         if (note or stall) and steady is not None:
@@ -528,13 +556,17 @@ def _learn(args):
             note_ar = _anti_resonance_note(ilc, P, T, args.q_cutoff_hz)
             if note_ar:
                 notes.append(note_ar)
-            if args.history:
+            if args.history and not verdict.reset:     # a stale best: start afresh
                 _restore_gains(args.history, gains)
-                if note is not None:   # as the gain: halved, and no growth compared with the worse trial
-                    gains.gains *= 0.5
+                if verdict.from_best:  # no growth compared with the trial not learnt from
                     gains.previous = None
-                elif stall is not None:
+                if verdict.halve:      # as the gain: halved (a worse trial, the noise reached)
                     gains.gains *= 0.5
+                elif verdict.restored:     # accepted after worse trials: their halvings undone
+                    gains.gains *= 2.0 ** verdict.restored
+                # within the floor and full gain (base is at this trial's gain)
+                full = base * (args.learning_gain / gain)
+                gains.gains = np.clip(gains.gains, full * 0.5 ** MAX_HALVINGS, full)
         problems, shaped, learnt = [], [], None
         if steady is not None and followed is not None and N - delay - steady >= 2 * P:
             # a repeating reference: the compensator's reference corrected per harmonic, the
@@ -615,20 +647,23 @@ def _learn(args):
         with removed_if_failed(Path(args.out).parent, args.history), all_or_nothing():
             k = _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state,
                                score, halvings, fingerprint, learnt, followed_now, shaped_ref,
-                               (settled_max, score), (delay, window.start * T))
+                               (settled_max, score), (delay, window.start * T),
+                               (verdict.rejections, None if lag is None or out_of_step is not None
+                                else lag - delay))
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin,
                                   (delay, window.start * T)) if args.history else None)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1
-    return _summary(args, model, rec, ref, k, delay, T, delay_note, note or stall, cond,
-                    settled=(settled_max, settled_rms, window, fade, as_asked),
+    return _summary(args, model, rec, ref, k, delay, T, delay_note, note or stall or verdict.info,
+                    cond, settled=(settled_max, settled_rms, window, fade, as_asked, lag,
+                                   judged_line),
                     rose=(rose, score, margin), notes=notes, worse=note is not None)
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
                    halvings, fingerprint, learnt=None, followed=None, shaped=None, settled=None,
-                   aligned=None):
+                   aligned=None, rules=(0, None)):
     """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
 
     The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
@@ -637,7 +672,9 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     best trial); ``shaped``: the shaped reference learnt and judged (``<output>_shaped``,
     carried over from the drive learnt from); ``settled``: this trial's settled max Euclidean
     and judged errors [µm], for the convergence figure; ``aligned``: the delay removed
-    [samples] and the window's start [s] of the errors (written in the history).
+    [samples] and the window's start [s] of the errors (written in the history); ``rules``:
+    the trials not learnt from in a row and the lag less the delay of this trial when it is
+    learnt from (else None: the state's is kept).
     """
     columns = dict(zip(model.input_names, u_next))
     if learnt is not None:
@@ -658,13 +695,22 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
         columns = {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))}
         if followed is not None:
             columns.update(zip(learnt_names(model.output_names), followed))
+        if shaped is not None:
+            columns.update(zip([f"{o}_shaped" for o in model.output_names], shaped))
+        # the drive file's own header (fade-in, rest, kind): the file replays as a --drive
+        head = "".join(f"\n{line[1:].strip()}" for line in head_lines(args.drive, 18)[1:]
+                       if line.startswith("#"))
         safe_write(Path(args.history) / BEST_FILE, signals_csv(
             t, columns, f"learn best trial {k}: the drive [V], its measured response [µm]"
-            + ("" if followed is None else " and the reference it was computed for [µm]")),
+            + ("" if followed is None else ", the reference it was computed for [µm]")
+            + ("" if shaped is None else ", the shaped reference it aims at [µm]")
+            + "; replay it as --drive to re-measure the best drive" + head),
             "best trial file", root=args.history)
         state = {"trial": k, "score": score, "samples": t.size}
     _write_state(args.history, {**state, "halvings": halvings, "reference": fingerprint,
-                                "drive": _drive_samples(u_next)[0]})
+                                "drive": _drive_samples(u_next)[0], "rejections": rules[0],
+                                "lag_offset": rules[1] if rules[1] is not None
+                                else state.get("lag_offset")})
     return k
 
 
@@ -672,12 +718,13 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
              worse=False):
     """Print the trial's error, notes and convergence condition; exit status 0.
 
-    ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples);
+    ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples, the
+    error against the reference as asked, the trial's measured lag or None, the judged line);
     ``rose`` is (the previous trial and its judged error when this one rose, else None,
     this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines;
     ``worse``: the trial was worse than the best beyond the noise (not learnt from).
     """
-    settled_max, settled_rms, window, fade, as_asked = settled
+    settled_max, settled_rms, window, fade, as_asked, lag, judged_line = settled
     rose, score, margin = rose
     scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} µm)" \
         if ref.scale else ""
@@ -687,7 +734,11 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     rms_scale = f" ({100 * settled_rms / ref.scale:.3g} %)" if ref.scale else ""
     print(f"{trial}settled (from {window.start * T:.4g} s, after the {fade * T:.4g} s fade-in): "
           f"max Euclidean error {settled_max:.4g} µm{scale}, RMS {settled_rms:.4g} µm{rms_scale}; "
-          f"{axes} µm; measured delay {delay} samples ({delay * T * 1e6:.4g} µs)", file=sys.stdout)
+          f"{axes} µm; " + (f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)"
+                             if lag is None else
+                             f"delay removed {delay} samples ({delay * T * 1e6:.4g} µs), "
+                             f"measured lag {lag} samples"), file=sys.stdout)
+    print(judged_line, file=sys.stdout)
     if as_asked is not None:
         pct = f" ({100 * as_asked / ref.scale:.3g} %)" if ref.scale else ""
         print(f"errors against the shaped reference the drive aims at (its <output>_shaped "
@@ -710,8 +761,10 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     for line in notes:
         print_err(line)
     if not cond.holds:
-        print_err("warning: the learning is not guaranteed to converge: lower --learning-gain "
-                  "or --q-cutoff-hz")
+        lo, hi = cond.exceeds
+        print_err(f"warning: the learning is not guaranteed to converge: ||I - gamma Q L G|| "
+                  f"exceeds 1 from {lo:.4g} to {hi:.4g} Hz: lower --learning-gain or "
+                  f"--q-cutoff-hz")
     print(f"wrote {args.out}", file=sys.stdout)
     if args.history:        # what the history holds now, as it is on disk
         names = sorted(p.name for p in Path(args.history).iterdir()

@@ -66,6 +66,12 @@ class ConvergenceCondition:
         """True when the coupled condition is at most 1 at every frequency (below 1 where Q passes)."""
         return self.max_coupled <= 1.0 + 1e-6
 
+    @property
+    def exceeds(self):
+        """(lowest, highest) frequency [Hz] where the coupled condition exceeds 1, or None."""
+        f = self.frequencies[self.coupled > 1.0 + 1e-6]
+        return (float(f.min()), float(f.max())) if f.size else None
+
     def summary(self, outputs):
         """One line: the maxima per axis and coupled, and where the coupled one is.
 
@@ -90,9 +96,16 @@ class ConvergenceCondition:
         where = ("over frequency" if band.all() else
                  f"over the harmonics Q passes (the highest at "
                  f"{float(self.frequencies[idx].max()):.4g} Hz, below Q's cutoff)")
-        if not self.holds:
-            verdict = "> 1: NOT guaranteed"
-        elif top < 1.0 - 1e-6:
+        if not self.holds:      # the verdict's own quantity: the maximum over every frequency
+            k = int(np.argmax(self.coupled))
+            axes = ", ".join(f"{n} {v:.3f}" for n, v in zip(outputs, self.max_per_axis))
+            lo, hi = self.exceeds
+            outside = ("" if band[k] else
+                       f"; above Q's passband, where |Q|^2 < 1/2; at most {top:.3f} where Q passes")
+            return (f"max over frequency of ||I - gamma Q L G||: {axes}, coupled "
+                    f"{self.max_coupled:.3f} at {self.frequencies[k]:.4g} Hz (> 1: NOT "
+                    f"guaranteed: above 1 from {lo:.4g} to {hi:.4g} Hz{outside})")
+        if top < 1.0 - 1e-6:
             verdict = "<= 1: monotonic"
         else:
             verdict = "= 1 where Q passes: no contraction there"

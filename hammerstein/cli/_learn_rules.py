@@ -1,0 +1,267 @@
+"""How ``hammerstein learn --history`` judges a trial against the best one (behind :mod:`hammerstein.cli.learn`).
+
+One trial is one of:
+
+* **out of step**: its lag behind the model's prediction of the drive
+  (cross-correlation, :func:`trial_lag`, as ``evaluate`` estimates it) is not
+  the delay the errors are aligned on: a trigger that fired early or late,
+  or an acquisition whose latency changed. Its error says nothing about the
+  drive; it is not learnt from, and it does not count as the actuator
+  getting worse (the gain is left as it was);
+* **a re-measurement of the best drive** (``--drive`` the best trial's
+  drive, e.g. ``best-trial.csv`` when learning resumes the next day): its
+  error replaces the best's; when it is worse beyond the noise the best
+  was stale (the actuator changed since: drift, temperature): the trial is
+  learnt from at full gain;
+* **worse than the best** beyond the noise: not learnt from; the next drive
+  is learnt again from the best one with half the gain. When that drive,
+  the best plus a small correction, is itself worse beyond the noise, the
+  best is stale: the newest trial becomes the best and is learnt from at
+  full gain (a drifting actuator otherwise locked the learning on a best
+  it could no longer reach, the error growing trial after trial);
+* **accepted** (learnt from): the halvings of the worse trials before it
+  are undone; a trial of a repeating reference not below the best, within
+  the noise, has reached the noise, and its gain is halved (a decreasing
+  gain at the noise floor).
+
+The gain never falls below ``0.5 ** MAX_HALVINGS`` times ``--learning-gain``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from hammerstein.compensation.ilc import estimate_delay
+from hammerstein.compensation.shaping import delay_search_span
+
+__all__ = ["MAX_HALVINGS", "LAG_TOLERANCE", "LAG_PHASE_DEG", "Verdict", "gain_factor",
+           "trial_lag", "lag_problem", "judge_trial"]
+
+#: the gain is halved at most this many times in all (a floor of 1/16 of --learning-gain)
+MAX_HALVINGS = 4
+#: a trial whose lag differs from the one expected by more than this many samples is out of step
+LAG_TOLERANCE = 1
+#: ... on a first trial (no earlier lag known), a model's phase error at the reference's
+#: fundamental up to this many degrees is no change of lag (realistic-2dof: 3.6 deg at 10 Hz)
+LAG_PHASE_DEG = 4.0
+
+
+def gain_factor(halvings, rejections=0):
+    """The factor of ``--learning-gain`` after ``halvings + rejections`` halvings, floored.
+
+    Parameters
+    ----------
+    halvings : int
+        Halvings at the noise floor.
+    rejections : int
+        Trials rejected in a row since the last one learnt from.
+
+    Returns
+    -------
+    float
+        ``0.5 ** min(halvings + rejections, MAX_HALVINGS)``.
+
+    Examples
+    --------
+    >>> gain_factor(1, 1), gain_factor(9, 3)
+    (0.25, 0.0625)
+    """
+    return 0.5 ** min(int(halvings) + int(rejections), MAX_HALVINGS)
+
+
+def trial_lag(predicted, measured, reference, period_samples, sampling_period):
+    """Samples the measurement lags the model's prediction of the drive (may be negative).
+
+    The cross-correlation of :func:`hammerstein.compensation.ilc.estimate_delay`
+    searched within :func:`hammerstein.compensation.shaping.delay_search_span`
+    of the reference, as ``learn --delay auto`` and ``evaluate`` estimate it.
+
+    Parameters
+    ----------
+    predicted, measured : numpy.ndarray, shape (p, N)
+        The model's response to the drive and the measurement [µm].
+    reference : numpy.ndarray, shape (p, N)
+        The faded reference [µm] (sets the search span).
+    period_samples : int
+        The reference's period [samples] (1 or 0: none).
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    int
+    """
+    return int(estimate_delay(predicted, measured, delay_search_span(
+        reference, period_samples, sampling_period)))
+
+
+def lag_problem(lag, delay, expected_offset, period_samples, source):
+    """The line saying a trial is out of step, or None.
+
+    Parameters
+    ----------
+    lag : int
+        The trial's lag (:func:`trial_lag`) [samples].
+    delay : int
+        The delay the errors are aligned on [samples].
+    expected_offset : int or None
+        ``lag - delay`` of the last trial learnt from (the model's phase
+        error at the reference, the same from trial to trial), None when
+        no earlier trial is known (then a tolerance of ``LAG_PHASE_DEG`` of
+        the reference's fundamental).
+    period_samples : int
+        The reference's period [samples].
+    source : str
+        Where ``delay`` comes from (``"the model's delay"``, ``"--delay"``).
+
+    Returns
+    -------
+    str or None
+    """
+    offset = int(lag) - int(delay)
+    if expected_offset is not None:
+        off, tol = offset - int(expected_offset), LAG_TOLERANCE
+    else:
+        off = offset
+        tol = max(LAG_TOLERANCE, math.ceil(period_samples * LAG_PHASE_DEG / 360.0)
+                  if period_samples and period_samples > 1 else LAG_TOLERANCE)
+    if abs(off) <= tol:
+        return None
+    since = ("" if expected_offset is None or expected_offset == 0 else
+             f" (the trials learnt from lagged {int(delay) + int(expected_offset)})")
+    # a record that starts S samples late reads S samples ahead: its lag is S less
+    when = "early" if off > 0 else "late"
+    return (f"lags {lag} samples, {source} is {delay}{since}: a trigger or latency change "
+            f"(the record starts {abs(off)} samples {when}, or the acquisition's latency "
+            f"changed)")
+
+
+@dataclass
+class Verdict:
+    """What ``learn`` does with a trial (:func:`judge_trial`).
+
+    Attributes
+    ----------
+    from_best : bool
+        The next drive is learnt from the best trial's files, not this trial's.
+    best : bool
+        This trial becomes the best (its files replace ``best-trial.csv``).
+    halvings, rejections : int
+        The state after this trial (noise-floor halvings; worse trials in a row).
+    note : str or None
+        The line when this trial is not learnt from.
+    stall : str or None
+        The line when the gain is halved at the noise floor.
+    info : str or None
+        The line when the best is replaced by a re-measurement or found stale.
+    reset : bool
+        The per-harmonic gains start afresh (the actuator changed).
+    restored : int
+        Halvings of the per-harmonic gains undone (a trial accepted after rejections).
+    halve : bool
+        The per-harmonic gains are halved (a worse trial, or the noise reached).
+    """
+
+    from_best: bool = False
+    best: bool = True
+    halvings: int = 0
+    rejections: int = 0
+    note: str | None = None
+    stall: str | None = None
+    info: str | None = None
+    reset: bool = False
+    restored: int = 0
+    halve: bool = False
+
+
+def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, repeating,
+                what, judged_text, out_of_step=None):
+    """The verdict on trial ``k`` against the history's best (module docstring).
+
+    Parameters
+    ----------
+    state : dict
+        The history's state (``trial``, ``halvings``, ``rejections``).
+    k : int
+        This trial's number.
+    score, best_score, margin : float
+        This trial's and the best's judged errors, the noise margin [µm].
+    worse, better : bool
+        Worse than the best beyond the noise; below the best.
+    remeasured : bool or str
+        ``--drive`` is the best trial's drive (``"replayed"``: and not the
+        drive written last).
+    repeating : bool
+        A repeating reference (judged on its periods' average).
+    what : str
+        How the best's error was judged (in the lines).
+    judged_text : str
+        What the judged error is (in the lines).
+    out_of_step : str or None
+        :func:`lag_problem`'s text.
+
+    Returns
+    -------
+    Verdict
+    """
+    b = state["trial"]
+    halvings = min(int(state["halvings"]), MAX_HALVINGS)
+    rejections = int(state.get("rejections") or 0)
+    ratio = f"{score / best_score:.4g} times" if best_score > 0 else "more than"
+    if out_of_step is not None:
+        return Verdict(from_best=True, best=False, halvings=halvings, rejections=rejections,
+                       note=(f"trial {k} {out_of_step}: not learnt from (its error says nothing "
+                             f"about the drive) and not counted as the actuator getting worse; "
+                             f"learning again from trial {b}'s drive with gain "
+                             f"x{gain_factor(halvings, rejections):g}; check the trigger and "
+                             f"measure again, or give --delay with the new latency"))
+    if remeasured and worse:
+        info = (f"trial {k} re-measures the best trial {b}'s drive: {ratio} its stored "
+                f"error ({score:.4g} against {best_score:.4g} µm {what}): the best was stale "
+                f"(the actuator changed since: drift, temperature); trial {k} replaces it "
+                f"and is learnt from at full gain")
+        return Verdict(info=info, reset=True)
+    if worse and rejections > 0:
+        info = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "
+                f"{best_score:.4g} µm {what}; {margin:.2g} µm of noise margin), and its drive "
+                f"is trial {b}'s learnt again: the best is stale (the actuator changed since "
+                f"trial {b}: drift, temperature); trial {k} becomes the best and is learnt from "
+                f"at full gain")
+        return Verdict(info=info, reset=True)
+    if worse:
+        rejections += 1
+        note = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "
+                f"{best_score:.4g} µm {what}; {margin:.2g} µm of noise margin): not learnt "
+                f"from; learning again from trial {b}'s drive with gain "
+                f"x{gain_factor(halvings, rejections):g} (restored once a trial is learnt from)")
+        return Verdict(from_best=True, best=False, halvings=halvings, rejections=rejections,
+                       note=note, halve=True)
+    stall = None
+    if repeating and score >= best_score:
+        # not better than the best, and not worse beyond the noise: the learning has reached
+        # the noise, and full steps now mostly move noise into the drive (a decreasing gain,
+        # as in S. S. Saab, "A discrete-time stochastic learning control algorithm", IEEE
+        # Trans. Automatic Control 46(6), 877-887, 2001), down to the floor
+        halvings = min(halvings + 1, MAX_HALVINGS)
+        stall = (f"trial {k}'s judged error {score:.4g} µm ({judged_text}) is not below the "
+                 f"best, trial {b}'s {best_score:.4g} µm, and within the {margin:.2g} µm of "
+                 f"noise: the learning has reached the noise; the next drive is learnt from "
+                 f"this trial with gain x{gain_factor(halvings):g}")
+    elif repeating and score <= margin:
+        # better than the best, but within the noise margin of no error at all: the
+        # measurement no longer resolves the peak the trials are judged by, and a full step on
+        # harmonics still above their own noise can raise it unseen; the same decreasing gain
+        halvings = min(halvings + 1, MAX_HALVINGS)
+        stall = (f"trial {k}'s judged error {score:.4g} µm ({judged_text}) is within the "
+                 f"{margin:.2g} µm noise margin of no error: the measurement no longer resolves "
+                 f"the error's peak; the next drive is learnt from this trial with gain "
+                 f"x{gain_factor(halvings):g}")
+    info = None
+    if remeasured == "replayed" and not better:
+        # the best drive played again, not the one written last (a resumed learning): its
+        # error is the best's now
+        info = (f"trial {k} re-measures the best trial {b}'s drive: its judged error "
+                f"{score:.4g} µm replaces the stored {best_score:.4g} µm (within the noise)")
+    return Verdict(best=bool(better) or info is not None, halvings=halvings, stall=stall,
+                   restored=rejections, halve=stall is not None, info=info)
