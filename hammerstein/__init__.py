@@ -33,7 +33,7 @@ from hammerstein.exceptions import (BaselineError, CompensatorDivergence, Compen
                                     RangeWarning, ScenarioError, SignalError)
 from hammerstein.exceptions import AmplifierError, AmplifierWarning, DynamicsWarning, FeedbackError
 
-__version__ = "0.1.0"
+from hammerstein.core._version import VERSION as __version__  # noqa: E402
 
 #: public name -> module that defines it (imported on first access)
 _LAZY = {

@@ -44,7 +44,6 @@ import shutil
 import tempfile
 import time
 from dataclasses import dataclass, field
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Callable
 
@@ -55,6 +54,7 @@ from hammerstein.core.files import (deferred_signals, output_problem, owner_aliv
                                     replace_directory,
                                     safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
+from hammerstein.core._version import VERSION
 from hammerstein.report._ownership import MARKER as _MARKER
 from hammerstein.report._ownership import input_problem, ownership_problem, write_manifest
 from hammerstein.report.identified import report_identified
@@ -173,10 +173,7 @@ def _empty_metrics():
 
 
 def _version():
-    try:
-        return version("hammerstein-piezo")   # the distribution name
-    except PackageNotFoundError:
-        return "unknown"
+    return VERSION
 
 
 def _make_temporary(out_dir):

@@ -26,6 +26,7 @@ import numpy as np
 from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.drive_files import learnt_names, optional_columns
 from hammerstein.core.files import TMP_SUFFIX, bounded_read_text, escape, safe_write
+from hammerstein.core._version import VERSION
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
 from hammerstein.report.ilc_figure import convergence_figure
@@ -312,6 +313,7 @@ def _read_state(history_dir, n_samples):
         state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
                  "halvings": int(values["halvings"]), "samples": int(values["samples"]),
                  "reference": values.get("reference_sha256"),
+                 "written_by": values.get("written_by"),
                  "rejections": int(values.get("rejections", 0)),
                  "lag_offset": (None if values.get("lag_offset") is None else
                                 int(values["lag_offset"])),
@@ -368,6 +370,15 @@ def _check_history(history_dir, state, fingerprint, u, best_u, y=None, no_fade=F
         raise DataFileError(f"--drive: records no fade-in (its header lacks 'fade-in N "
                             f"samples', as a {BEST_FILE} older than this version does): give the "
                             f"drive file compensate or learn wrote, or --fade-in S")
+    if state["reference"] is not None and state["reference"] != fingerprint \
+            and state.get("written_by") != VERSION:
+        by = state.get("written_by")
+        by = f"hammerstein {by}" if by else "an earlier version of hammerstein"
+        raise DataFileError(f"--history: {d} was written by {by}, not {VERSION}: its "
+                            f"reference, faded and shaped as that version did, is not this "
+                            f"version's ({STATE_FILE}); choose a new --history directory (to go "
+                            f"on from its best trial, give that trial's drive file as --drive and "
+                            f"its measurement as --measured)")
     if state["reference"] is not None and state["reference"] != fingerprint:
         raise DataFileError(f"--history: {d} holds the trials of another reference or fade-in "
                             f"({STATE_FILE}); choose a new --history directory for this one")
@@ -394,6 +405,7 @@ def _write_state(history_dir, state):
     if state.get("lag_offset") is not None:
         text += f"lag_offset,{int(state['lag_offset'])}\n"
     text += f"reference_sha256,{state['reference']}\n"
+    text += f"written_by,{VERSION}\n"
     text += "last_drive," + " ".join(repr(float(v)) for v in state["drive"]) + "\n"
     safe_write(Path(history_dir) / STATE_FILE, text, "learning state file", root=history_dir)
 

@@ -37,12 +37,12 @@ import contextlib
 import os
 import re
 import sys
-from importlib import metadata
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
+from hammerstein.core._version import VERSION
 from hammerstein.cli._common import add_column_options, out_dir_problem, print_err
 from hammerstein.cli._hardware import (catch, inline_table, load_actuator, load_reference, mapping,
                                        nonnegative_float, settle_periods, positive_float)
@@ -434,11 +434,7 @@ def _shaped_table(rows):
 
 def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), fade=0):
     out.mkdir(parents=True, exist_ok=True)
-    try:
-        version = metadata.version("hammerstein")
-    except metadata.PackageNotFoundError:
-        version = "unknown"
-    safe_write(out / MARKER, f"{version}\n", "report marker", root=out)
+    safe_write(out / MARKER, f"{VERSION}\n", "report marker", root=out)
     lines = ["case,channel,metric,value,unit"] + [
         f"measured,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}" for row in rows] + [
         f"shaped,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}"

@@ -24,7 +24,6 @@ import argparse
 import atexit
 import errno
 import importlib
-from importlib import metadata
 import logging
 import os
 import re
@@ -33,6 +32,7 @@ import sys
 import threading
 import warnings
 
+from hammerstein.core._version import VERSION
 from hammerstein._cache import numba_cache_dir, use_user_numba_cache
 from hammerstein.cli._examples import add_examples
 from hammerstein.cli._common import MAX_LINE, WARNING_STATE, SafeStream, one_line, print_err
@@ -174,14 +174,8 @@ COMMANDS = {
 
 
 def _version():
-    """The package's ``__version__`` (already imported), else the installed distribution's."""
-    version = getattr(sys.modules.get("hammerstein"), "__version__", None)
-    if version:
-        return version
-    try:
-        return metadata.version("hammerstein-piezo")   # the distribution name
-    except metadata.PackageNotFoundError:
-        return "unknown"
+    """This source tree's version (``hammerstein --version``)."""
+    return VERSION
 
 
 def build_parser(command=None):

@@ -11,11 +11,11 @@ from __future__ import annotations
 import os
 import stat
 from contextlib import contextmanager
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 from hammerstein.exceptions import FileLimitError
 from hammerstein.core._strings import escape
+from hammerstein.core._version import VERSION
 
 
 # -- provenance: the mark of the files the project writes ------------------------------
@@ -28,11 +28,8 @@ DISTRIBUTION = "hammerstein-piezo"
 
 
 def _package_version():
-    """The installed distribution's version, ``"unknown"`` for a source tree on sys.path."""
-    try:
-        return version(DISTRIBUTION)
-    except PackageNotFoundError:
-        return "unknown"
+    """This source tree's version (:data:`hammerstein.core._version.VERSION`)."""
+    return VERSION
 
 
 def provenance_line(command, style="#"):

@@ -213,3 +213,28 @@ def test_a_trigger_glitch_is_named_and_not_learnt_from(tmp_path):
     assert res.returncode == 1 and res.stderr.count("\n") == 1
     assert "--measured: this trial lags 20 samples" in res.stderr
     assert not (tmp_path / "lone.csv").exists()
+
+
+def test_a_history_of_an_earlier_version_is_named_as_such(tmp_path):
+    """A history whose learning.csv another version wrote (its reference faded and shaped as
+    that version did: another fingerprint) is refused naming the version, not 'another
+    reference' (the reference is the same)."""
+    _first(tmp_path)
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv")
+    assert _cli("learn", "rakotondrabe-2dof", *COMMON, "--drive", "u0.csv", "--measured",
+                "y0.csv", "--out", "u1.csv", cwd=tmp_path).returncode == 0
+    state = tmp_path / "hist/learning.csv"
+    lines = state.read_text().splitlines()
+    assert any(ln.startswith("written_by,") for ln in lines)
+    # what an earlier version wrote: no written_by line, its own fingerprint
+    old = [("reference_sha256," + "0" * 64) if ln.startswith("reference_sha256,") else ln
+           for ln in lines if not ln.startswith("written_by,")]
+    state.write_text("\n".join(old) + "\n")
+    kept = {p.name: p.read_bytes() for p in (tmp_path / "hist").iterdir()}
+    _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", seed=1)
+    res = _cli("learn", "rakotondrabe-2dof", *COMMON, "--drive", "u1.csv", "--measured",
+               "y1.csv", "--out", "u2.csv", cwd=tmp_path)
+    assert res.returncode == 1 and res.stderr.count("\n") == 1, res.stderr
+    assert "was written by an earlier version of hammerstein, not" in res.stderr
+    assert "another reference" not in res.stderr and not (tmp_path / "u2.csv").exists()
+    assert {p.name: p.read_bytes() for p in (tmp_path / "hist").iterdir()} == kept
