@@ -30,6 +30,9 @@ ferroelectrics and magnets, e.g. Bertotti [3], Section 9.3).
 :func:`excitation_set` builds all of them for m inputs. Signals are arrays of
 shape (m, n_samples) [V]; times (n_samples,) [s].
 
+Length: every record kind with its own checks, and the set that plays them from the
+amplifier's rest within its slew rate, belong together.
+
 References
 ----------
 .. [1] R. Pintelon and J. Schoukens, *System Identification: A Frequency
@@ -622,11 +625,17 @@ def peak_slew(u, sampling_period, periodic=False):
     return float(steps.max() / sampling_period) if steps.size else 0.0
 
 
+def _from_rest(one, n_period):
+    """The multisine's periods started at its sample nearest 0 V (a cyclic shift: the same
+    spectrum, no step from rest)."""
+    return np.tile(np.roll(one[:n_period], -int(np.argmin(np.abs(one[:n_period])))),
+                   one.size // n_period)
+
+
 def _slew_limited_multisine(one, n_period, T, slew_rate):
-    """A multisine period started at its sample nearest 0 V (a cyclic shift: the same
-    amplitude spectrum, no step from rest) and scaled down until it steps no faster than
-    ``slew_rate`` [V/s]; (periods, scale)."""
-    period = np.roll(one[:n_period], -int(np.argmin(np.abs(one[:n_period]))))
+    """A multisine period started at its sample nearest 0 V (:func:`_from_rest`) and scaled
+    down until it steps no faster than ``slew_rate`` [V/s]; (periods, scale)."""
+    period = _from_rest(one[:n_period], n_period)
     scale = min(1.0, slew_rate / peak_slew(period, T, periodic=True))
     return np.tile(scale * period, one.size // n_period), scale
 
@@ -693,8 +702,9 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
         :data:`MIN_MULTISINE_SCALE` (each multisine record's ``f_max``
         gives the band kept); the staircase's steps become ramps at
         that rate. A hysteresis record that would step faster is refused
-        (lower ``sine_frequency``). Default None: no limit (the multisines
-        start at their first sample and the staircase steps in one sample).
+        (lower ``sine_frequency``). Default None: no limit (the staircase
+        steps in one sample; the multisines still start at their sample
+        nearest 0 V, as every record starts from rest).
     centre : float or array_like, shape (m,)
         The middle of each input's range [V] (default 0: ``[-A, A]``); e.g. 75 V for a
         unipolar 0-150 V amplifier with ``amplitude`` 75. Every record is then played
@@ -764,7 +774,8 @@ def excitation_set(input_names, amplitude, sampling_period, sine_frequency=1.0, 
                 t, one, lines = multisine(sampling_period, multisine_fraction * amp[k], f_min,
                                           band, periods=multisine_periods, seed=seed + 2 * k + r)
                 scale = 1.0
-                if S is None:
+                if S is None:       # from rest: a 3 V step at t = 0 otherwise (80 % of 10 V)
+                    one = _from_rest(one, one.size // int(multisine_periods))
                     break
                 one, scale = _slew_limited_multisine(one, one.size // int(multisine_periods),
                                                      float(sampling_period), S_scaled)

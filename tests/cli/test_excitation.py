@@ -428,3 +428,29 @@ def test_a_hold_too_short_to_show_creep_is_refused_or_warned(tmp_path, capsys, h
     else:
         assert said in err and len(err.strip().splitlines()) == 1
     assert out.exists() == (code == 0)
+
+
+@pytest.mark.parametrize("ranges", [["--amplitude", "10"], ["--range", "-10,10", "0,150"]],
+                         ids=["amplitude", "bipolar-unipolar"])
+@pytest.mark.parametrize("slew", [[], ["--slew-rate", "2e4"]], ids=["no-slew", "slew"])
+def test_every_file_starts_at_rest(tmp_path, ranges, slew):
+    """Every file written starts at the amplifier's rest (0 V, or the range's value nearest
+    0 V): its first sample within 1 % of the input's span of it, and no larger a step than the
+    file's own largest one (a multisine started at its first sample, 3 V of a -10..10 V input:
+    a step out of rest a tester's actuator rang on)."""
+    out = tmp_path / "o"
+    assert main(["excitation", "--inputs", "ux,uy", *ranges, "--sampling-period", str(T),
+                 "--periods", "1", "--hold", "0.2", "--out", str(out), *slew]) == 0
+    spans = {"ux": (-10.0, 10.0), "uy": (-10.0, 10.0) if ranges[0] == "--amplitude" else (0.0, 150.0)}
+    files = sorted(out.glob("*.csv"))
+    assert len(files) == 9
+    for f in files:
+        header, data = _read(f)
+        for j, name in enumerate(header[1:], start=1):
+            low, high = spans[name]
+            rest = min(max(0.0, low), high)
+            u = data[:, j]
+            own = float(np.max(np.abs(np.diff(u)))) if u.size > 1 else 0.0
+            first = abs(u[0] - rest)
+            assert first <= 0.01 * (high - low), (f.name, name, u[0])
+            assert first <= own + 1e-12, (f.name, name, u[0], own)
