@@ -593,9 +593,12 @@ class GeneralizedPIIdentifier:
         # (no Q formed); the bounded solver works on the small R. R is the Cholesky factor of
         # the Gram matrix of [A | y] (a tiny ridge for a record fitted exactly), by far cheaper
         # than a QR of the tall matrix; QR when the Gram matrix is too ill-conditioned.
+        # y to unit RMS: the ridge, relative to the trace, is then the same whatever the
+        # output's unit (with y in nm it was 1e6 times the µm one, 1e-13 |y|^2 on unit columns)
+        ny = max(float(np.sqrt(np.mean(y ** 2))), 1e-300)
         Ay = np.empty((y.size, A.shape[1] + 1))
         np.divide(A, col, out=Ay[:, :-1])
-        Ay[:, -1] = y
+        Ay[:, -1] = y / ny
         gram = Ay.T @ Ay
         gram[np.diag_indices_from(gram)] += 1e-13 * np.trace(gram)
         try:
@@ -603,7 +606,7 @@ class GeneralizedPIIdentifier:
         except np.linalg.LinAlgError:
             R = np.linalg.qr(Ay, mode="r")
         self._bounds = (lb, col)
-        return bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col) / col, A, pieces
+        return bounded_lstsq(R[:-1, :-1], R[:-1, -1], lb * col / ny) * (ny / col), A, pieces
 
     def _jacobian(self, l, kinds, thetas, free, solved=None):
         """Output l's residual's Jacobian (:func:`vp_jacobian`); ``solved``: last (x, A) there."""
@@ -636,6 +639,9 @@ class GeneralizedPIIdentifier:
         m = len(kinds)
         free = [k for k in range(m) if kinds[k] == "generalized"]
         y = self._y[l]
+        # the residual in units of y's RMS: least_squares' gradient tolerance (gtol) is
+        # absolute, and stopped the fit of y in metres after a third of the µm one's steps
+        scale = np.sqrt(y.size) * max(float(np.sqrt(np.mean(y ** 2))), 1e-300)
 
         def unpack(z):
             thetas = [None] * m
@@ -650,11 +656,12 @@ class GeneralizedPIIdentifier:
             x, A, _ = self._solve(l, kinds, unpack(z))
             last.clear()       # A is the buffer, valid until the next solve
             last[np.asarray(z, dtype=float).tobytes()] = (x, A)
-            return (A @ x - y) / np.sqrt(y.size)
+            return (A @ x - y) / scale
 
         def jacobian(z):           # least_squares asks at the step it just evaluated: no re-solve
             self._jacobians += 1
-            return self._jacobian(l, kinds, unpack(z), free, last.get(np.asarray(z, float).tobytes()))
+            return self._jacobian(l, kinds, unpack(z), free,
+                                  last.get(np.asarray(z, float).tobytes())) * (np.sqrt(y.size) / scale)
 
         if free:
             def run(z0, budget):

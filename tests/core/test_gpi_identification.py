@@ -239,7 +239,11 @@ def test_inverse_round_trip_and_chunks(fitted):
     comp = PreisachInverseCompensator(est.model_)
     yr = reference(3000)
     u, _ = comp.simulate(yr)
-    assert np.max(np.abs(est.model_.simulate(u)[0] - yr)) < 1e-9
+    # 1e-6 µm: the fit may leave a play's weight at 0 (its bound), a direct path nearly flat
+    # just after a reversal (slope 1e-3 of the secant), where one sample's inverse settles to
+    # 2e-7 µm; elsewhere to 1e-12
+    err = np.abs(est.model_.simulate(u)[0] - yr)
+    assert np.max(err) < 1e-6 and np.median(err) < 1e-11
     u1, s1 = comp.simulate(yr[:, :1234])
     u2, _ = comp.simulate(yr[:, 1234:], s1)
     np.testing.assert_allclose(np.hstack([u1, u2]), u, atol=1e-12)
@@ -436,3 +440,25 @@ def test_level_weighting_trades_the_full_level_for_the_small_ones():
         a = loop_amplitude(true, k, 0.15)
         err = {lw: abs(loop_amplitude(f.model_, k, 0.15) / a - 1) for lw, f in fits.items()}
         assert err["amplitude"] < err["none"], err
+
+
+def test_the_fit_does_not_depend_on_the_output_unit():
+    """The same records with x in nm (x 1000) and y in metres (x 1e-6) give the same model to
+    the unit: a held-out loop's RMS error in % of its range equal to 1e-4 of itself. Before, a ridge of
+    1e-13 |y|^2 on unit columns and least_squares' absolute gradient tolerance made the score of
+    a bench actuator's records 1.01 % in µm, 11.8 % with x in nm."""
+    true = gpi_actuator()
+    recs = records(true, noise=0.01, sampling_period=T_FIT)
+    n = int(round(1 / T))
+    held = np.zeros((2, 2 * n))
+    held[0] = 5.5 * np.sin(2 * np.pi * np.arange(2 * n) / n)     # 55 %: a level not fitted
+    held[1] = 3.0 * np.sin(2 * np.pi * np.arange(2 * n) / n + 1.0)
+    y_true = true.simulate(held)[0]
+    scores = []
+    for unit in (np.array([1.0, 1.0]), np.array([1e3, 1e-6])):
+        scaled = [MultiRecord(r.timepts, r.u, r.y * unit[:, None], r.input_names, r.output_names,
+                              r.sampling_period, r.source) for r in recs]
+        model = GeneralizedPIIdentifier(max_evaluations=BUDGET).fit(scaled).model_
+        err = model.simulate(held)[0] / unit[:, None] - y_true
+        scores.append(100 * np.sqrt(np.mean(err ** 2, axis=1)) / np.ptp(y_true, axis=1))
+    np.testing.assert_allclose(scores[1], scores[0], rtol=1e-4)
