@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from hammerstein.compensation.shaping import RESONANT_DAMPING
 
 
@@ -247,3 +249,102 @@ def creep_metrics_rows(creep, output_unit="µm"):
         rows += [("creep", out, f"weight_tau_{tau:.4g}s", w, "")
                  for tau, w in zip(creep.time_constants_, creep.weights_[l])]
     return rows
+
+
+def cut_note(n_samples, whole):
+    """The report's clause on a record fitted on fewer samples than were read, or "".
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples the fit used.
+    whole : int
+        Samples read from the file (after the ``--delay`` shift).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> cut_note(103257, 105000)[:10]
+    ' (of 10500'
+    >>> cut_note(100, 100)
+    ''
+    """
+    if n_samples >= whole:
+        return ""
+    return (f" (of {whole}: what follows the last amplitude level, the ramp back to rest or "
+            f"reversal curves, is left out of the fit)")
+
+
+#: An output range [µm] above this is not an actuator's (a column in nm read as µm?).
+PLAUSIBLE_RANGE_MAX_UM = 1000.0
+
+#: ... and below this is not a motion (a column in metres or mm read as µm?).
+PLAUSIBLE_RANGE_MIN_UM = 0.01
+
+#: A sampling period [s] at or above this is not a hysteresis record's (a time in ms?).
+PLAUSIBLE_PERIOD_MAX_S = 0.01
+
+
+def unit_warnings(records, outputs, output_unit, time_column=None):
+    """One-line warnings for records whose numbers look like another unit than declared.
+
+    Nothing is converted on reading (docs/records.md): a column without a unit in its
+    name or a units row is taken in the declared unit. An output in nm read as µm spans
+    thousands of µm (a tester's x: 2.346e+04 µm), one in metres 1e-5 µm; a time column in
+    ms read as s gives a sampling period of 0.1 s. The ranges are checked only for outputs
+    declared in µm (the default); the period always.
+
+    Parameters
+    ----------
+    records : sequence of MultiRecord
+        Every record read (``y`` (p, n) in ``output_unit``, ``sampling_period`` [s]).
+    outputs : sequence of str
+        Output column names, in the order of ``y``'s rows.
+    output_unit : str
+        The declared output unit (``--output-unit``).
+    time_column : str, optional
+        The time column's name (``--time``), None when the period was given.
+
+    Returns
+    -------
+    list of str
+        Without the ``warning:`` prefix, one per output or period that looks wrong.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> rec = SimpleNamespace(y=np.array([[9674.0, 33130.0]]), sampling_period=1e-4)
+    >>> unit_warnings([rec], ["x"], "µm")[0][:40]
+    "output 'x' spans 2.346e+04 µm over the r"
+    """
+    lines = []
+    if output_unit == "µm":
+        for k, name in enumerate(outputs):
+            spans = [float(np.ptp(np.asarray(r.y[k], dtype=float))) for r in records
+                     if np.size(r.y[k])]
+            span = max(spans) if spans else 0.0
+            if not np.isfinite(span) or span <= 0:
+                continue
+            if span > PLAUSIBLE_RANGE_MAX_UM:
+                guess = "in nm"
+            elif span < PLAUSIBLE_RANGE_MIN_UM:
+                guess = "in metres or mm"
+            else:
+                continue
+            lines.append(f"output '{name}' spans {span:.4g} µm over the records, not an "
+                         f"actuator's motion ({PLAUSIBLE_RANGE_MIN_UM:g}-"
+                         f"{PLAUSIBLE_RANGE_MAX_UM:g} µm): a column {guess}? Outputs are read "
+                         f"in µm and nothing is converted: convert the column, or declare its "
+                         f"unit with --output-unit (docs/records.md)")
+    periods = sorted({float(r.sampling_period) for r in records})
+    if periods and periods[-1] >= PLAUSIBLE_PERIOD_MAX_S:
+        col = f"time column '{time_column}'" if time_column is not None else "--sampling-period"
+        lines.append(f"{col}: sampling period {periods[-1]:g} s, at least "
+                     f"{PLAUSIBLE_PERIOD_MAX_S:g} s (a hysteresis record is sampled at kHz): a "
+                     f"time in ms? Times are read in s and nothing is converted: convert the "
+                     f"column to s, or give --sampling-period S (docs/records.md)")
+    return lines

@@ -17,6 +17,9 @@ Exit status: 0 on success, 1 on a data or identification error (one line on
 stderr), 2 on a usage error; nothing is written unless everything succeeded,
 every file is written through a temporary file and a rename, and a file the
 project did not write is never overwritten without ``--force``.
+
+Length: the options, their checks and the report of one command (the report's lines and
+metrics rows are in :mod:`hammerstein.cli._identify_report`).
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from hammerstein.cli._common import number_type, out_file_problem, print_err
 from hammerstein.cli._output import tty_progress
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-    level_metrics_rows, level_report_lines, metrics_rows)
+    cut_note, level_metrics_rows, level_report_lines, metrics_rows, unit_warnings)
 from hammerstein.models.amplifier import records_amplifier_table, records_hold_steps
 from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
                                     provenance_line, replace_problem, safe_write)
@@ -578,6 +581,7 @@ def _handler(args):
                  + (_creep_recs(args) if args.creep_records else []))
         extra["amplifier"] = records_amplifier_table(every, list(fit.model.input_names))
         hold_notes = _hold_step_notes(every, extra["amplifier"], args.input_unit)
+        units = unit_warnings(every, list(fit.model.output_names), args.output_unit, args.time)
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
             if args.plot:
@@ -596,6 +600,8 @@ def _handler(args):
     _report(args, fit, records, dyn, creep)
     for line in hold_notes:
         print_err(f"note: {line}")
+    for line in units:
+        print_err(f"warning: {line}")
     est = args.delay_estimate
     if est is not None and est.problem is not None:       # the default auto, refused: said loud
         print(f"warning: the measurement delay could not be estimated from the "
@@ -673,8 +679,10 @@ def _names(record, in_keys, out_keys):
 def _report(args, fit, records, dyn=None, creep=None):
     iu, ou = args.input_unit, args.output_unit
     model = fit.model
+    read = {r.source: r.n_samples for r in records}
     for rec, s in zip(fit.records, fit.splits):
-        print(f"{rec.source}: {rec.n_samples} samples, T = {rec.sampling_period:.6g} s, "
+        cut = cut_note(rec.n_samples, read.get(rec.source, 0))
+        print(f"{rec.source}: {rec.n_samples} samples{cut}, T = {rec.sampling_period:.6g} s, "
               f"excitation {model.input_names[s.excitation]}; {s.description}")
     print(f"{fit.method}: {model.n_outputs} output(s) x {model.n_inputs} input(s), partition "
           f"{fit.partition}, inputs [{iu}] -> outputs [{ou}]")
