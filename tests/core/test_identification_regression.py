@@ -107,10 +107,13 @@ def test_generalized_pi_holds_the_previous_errors(record):
     fit = GeneralizedPIIdentifier(n_plays=8, n_starts=1).fit(record).fit_
     assert fit.structure == [["generalized"]]
     # a search path that ends elsewhere may end lower: measured 1.1 % (train) and 1.4 %
-    # (held out) lower with another processor's BLAS kernels; it must never end worse
+    # (held out) lower with another processor's BLAS kernels; it must never end worse. Since
+    # the residual is scaled to the output's RMS (a fit that does not depend on the output's
+    # unit) the search ends 4.5 % (train, 0.0847 µm) and 5.2 % (held out, 0.0810 µm) lower,
+    # where the four starts ended before: the lower bound allows 6 %
     for got, ref in ((fit.train[0]["rms"], GENERALIZED["train_rms"]),
                      (fit.validation[0]["rms"], GENERALIZED["held_out_rms"])):
-        assert ref * (1 - 3 * SEARCH) <= got <= ref * (1 + SEARCH)
+        assert ref * (1 - 6 * SEARCH) <= got <= ref * (1 + SEARCH)
 
 
 def test_generalized_pi_from_four_starts_ends_lower_on_the_real_record(record):
