@@ -21,6 +21,7 @@ scipy_linalg = lazy_module("scipy.linalg")  # lazy: ~0.1 s CPU of `from hammerst
 from hammerstein.models._lti_systems import _apply_filter, _records, modal_parameters, sensor_filter
 from hammerstein.models._lti_delay import excited_band
 from hammerstein.models._lti_modal import keep_modes, mode_shares, real_modal
+from hammerstein.models._lti_rate import decimation_factor, fit_decimated
 
 # -- identification ------------------------------------------------------------------
 def _powers(lam, N):
@@ -345,6 +346,12 @@ class DynamicsIdentifier:
         ``candidates_``): such a G has no continuous ZOH equivalent
         (:func:`hammerstein.models.lti.continuous_system`), which a preset
         stores. Default False: the discrete G is used as it is.
+    max_rate_hz : float, optional
+        Records at 2.5 times this rate or more are low-pass filtered and
+        decimated (zero phase, by the largest odd factor that keeps the rate
+        at or above it), the model returned at the records' period through
+        continuous time (:mod:`hammerstein.models._lti_rate`). Default 1e4
+        Hz: records at 20 kHz and below are fitted as they are; None: never.
 
     Attributes
     ----------
@@ -376,7 +383,10 @@ class DynamicsIdentifier:
     validation_ : str
         What was held out to choose the order.
     sampling_period_ : float
-        T [s].
+        T [s] (of ``system_``).
+    decimation_ : int
+        Decimation factor q (1: fitted at T); when q > 1 every other fitted
+        attribute but ``system_`` is that of the fit at ``q T``.
 
     References
     ----------
@@ -407,6 +417,7 @@ class DynamicsIdentifier:
     cancel_tolerance: float = 0.0
     validation_records: tuple | None = None
     require_continuous: bool = False
+    max_rate_hz: float | None = 1e4
 
     @staticmethod
     def _subspace(ins, outs, block_rows, prior=None, known=None):
@@ -446,11 +457,13 @@ class DynamicsIdentifier:
                   "cancel_tolerance": float(self.cancel_tolerance),
                   "validation_records": None if self.validation_records is None
                   else [int(v) for v in self.validation_records],
-                  "require_continuous": bool(self.require_continuous)}
+                  "require_continuous": bool(self.require_continuous),
+                  "max_rate_hz": None if self.max_rate_hz is None else float(self.max_rate_hz)}
         G = self.system_
         fitted = {k: np.asarray(getattr(G, k), dtype=float).tolist() for k in "ABCD"}
         fitted.update({"dt": float(G.dt), "name": str(G.name), "order_": int(self.order_),
-                       "sampling_period_": float(self.sampling_period_)})
+                       "sampling_period_": float(self.sampling_period_),
+                       "decimation_": int(getattr(self, "decimation_", 1))})
         fitted.update({k: np.asarray(getattr(self, k)).tolist() for k in self._FITTED_ARRAYS})
         fitted.update({"candidates_": self.candidates_, "validation_": self.validation_,
                        "candidate_order_": int(self.candidate_order_),
@@ -484,6 +497,7 @@ class DynamicsIdentifier:
             ident.system_ = control.ss(*mats, dt=f["dt"], name=f["name"])
             ident.order_ = int(f["order_"])
             ident.sampling_period_ = float(f["sampling_period_"])
+            ident.decimation_ = int(f.get("decimation_", 1))
             for k in cls._FITTED_ARRAYS:
                 setattr(ident, k, np.array(f[k], dtype=int if k == "orders_" else float))
             ident.candidates_ = list(f["candidates_"])
@@ -526,6 +540,10 @@ class DynamicsIdentifier:
         ba = sensor_filter(self.sensor, T)
         if ba is not None:
             ins = [_apply_filter(ba, u) for u in ins]
+        q = decimation_factor(T, self.max_rate_hz)
+        if q > 1:
+            return fit_decimated(self, ins, outs, T, q)
+        self.decimation_ = 1
         p = outs[0].shape[0]
         block_rows = self.block_rows or max(10, 2 * self.max_order // p + 4)
         if self.order is not None:
