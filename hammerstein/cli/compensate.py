@@ -268,7 +268,7 @@ def _handle(args):
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
                    + "".join(f"\nshaped: {line}" for line in drive.shaped)
-                   + "".join(f"\nnote: {line}" for line in drive.notes)
+                   + "".join(f"\nnote: {line}" for line in ref.notes + list(drive.notes))
                    + "".join(f"\nwarning: {line}" for line in chatter))
         safe_write(args.out, signals_csv(ref.t, cols, comment), "drive file")
     except CompensatorDivergence as exc:
@@ -288,7 +288,7 @@ def _handle(args):
         print_err(f"warning: {plant.dynamics_problem}")
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
-    for line in drive.notes:
+    for line in ref.notes + list(drive.notes):
         print_err(f"note: {line}")
     for line in chatter:
         print_err(f"warning: {line}")
