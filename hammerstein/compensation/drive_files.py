@@ -127,8 +127,6 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     Tf, off, tol = uniform_period(t)
     gaps = step_gaps(t)
     uniform = bool(np.max(np.abs(off)) <= tol) and not gaps.size
-    if t[0] > 1e-9 * max(1.0, abs(t[-1])) and t[0] > tol:
-        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
     if sampling_period is None:
         if gaps.size:
             raise DataFileError(f"{what}: {escape(path)}: the time column "
@@ -142,6 +140,9 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                                 f"off the grid of {Tf:g} s, more than its stamps' rounding "
                                 f"{tol:.2g} s); expected one sampling period (give "
                                 f"--sampling-period to resample it)")
+    if t[0] > 1e-9 * max(1.0, abs(t[-1])) and t[0] > tol:   # after a gap's message: its cause
+        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
+    if sampling_period is None:
         return t[0] + np.arange(t.size) * Tf, vals, Tf
     T = float(sampling_period)
     if uniform and abs(Tf - T) <= 1e-6 * T and abs(t[0]) <= tol:
