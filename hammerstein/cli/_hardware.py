@@ -77,12 +77,14 @@ def end_note(inputs, sampling_period, names, amplifier=None):
 class Reference:
     """A reference record: ``t`` (N,) [s], ``signal`` (p, N) [µm], ``period_samples``,
     ``scale`` (radius / amplitude [µm] or None), ``spec`` (the inline table or None),
-    ``kind`` (e.g. ``"circle"``, ``"file"``)."""
+    ``kind`` (e.g. ``"circle"``, ``"file"``), ``notes`` (lines saying how a CSV file at
+    another rate was resampled)."""
 
     def __init__(self, t, signal, period_samples=1, scale=None, spec=None, kind="file",
-                 loop_channel=None):
+                 loop_channel=None, notes=()):
         self.t, self.signal, self.period_samples = t, signal, int(period_samples)
         self.scale, self.spec, self.kind, self.loop_channel = scale, spec, kind, loop_channel
+        self.notes = list(notes)
 
 
 def positive_float(text):
@@ -379,7 +381,8 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     text : str
         ``'{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'``
         (the keys of a scenario's ``reference``) or a CSV path (``t`` and one
-        column per output [µm]; resampled onto the plant's period).
+        column per output [µm]; resampled onto the plant's period, said in
+        ``Reference.notes`` when the file is at another rate).
     plant : HammersteinPlant
     time : str
         Time column of a CSV file.
@@ -421,8 +424,9 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
         _warn_implausible(sig, "--reference")
         return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
                          extras.get("loop_channel"))
+    notes = []
     t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--output-columns"),
-                             plant.sampling_period, "--reference")
+                             plant.sampling_period, "--reference", notes=notes, period=period)
     _warn_implausible(sig, text)
     T = plant.sampling_period
     if period is not None and not 2 * T <= period <= sig.shape[1] * T * (1 + 1e-9):
@@ -430,7 +434,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
                             f"two sampling periods ({2 * T:g} s) and its length "
                             f"({sig.shape[1] * T:g} s)")
     period_samples = 1 if period is None else max(int(round(period / T)), 1)
-    return Reference(t, sig, period_samples, None, None, "file")
+    return Reference(t, sig, period_samples, None, None, "file", notes=notes)
 
 
 def _warn_implausible(signal, what):

@@ -137,11 +137,10 @@ def _peaks_text(plant, drive):
     steps = np.abs(np.diff(np.concatenate([_rest_voltages(plant)[:, None], u], axis=1), axis=1))
     peak, slew = np.max(np.abs(u), axis=1), steps.max(axis=1) / plant.sampling_period
     text = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in zip(names, peak, slew))
-    if not (np.allclose(peak, drive.peak_input, rtol=1e-9, atol=1e-9)
-            and np.allclose(slew, drive.peak_slew, rtol=1e-9, atol=1e-6)):
-        text += " (the compensator asked for " + ", ".join(
-            f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
-            zip(names, drive.peak_input, drive.peak_slew)) + " before the limits)"
+    asked = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
+                      zip(names, drive.peak_input, drive.peak_slew))
+    if asked != text:       # the same numbers as printed: nothing the limits changed to tell
+        text += f" (the compensator asked for {asked} before the limits)"
     return text
 
 
@@ -269,7 +268,7 @@ def _handle(args):
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"
                       if drive.problems else "")
                    + "".join(f"\nshaped: {line}" for line in drive.shaped)
-                   + "".join(f"\nnote: {line}" for line in drive.notes)
+                   + "".join(f"\nnote: {line}" for line in ref.notes + list(drive.notes))
                    + "".join(f"\nwarning: {line}" for line in chatter))
         safe_write(args.out, signals_csv(ref.t, cols, comment), "drive file")
     except CompensatorDivergence as exc:
@@ -289,7 +288,7 @@ def _handle(args):
         print_err(f"warning: {plant.dynamics_problem}")
     for line in drive.shaped:
         print(f"shaped: {line}", file=sys.stdout)
-    for line in drive.notes:
+    for line in ref.notes + list(drive.notes):
         print_err(f"note: {line}")
     for line in chatter:
         print_err(f"warning: {line}")

@@ -99,7 +99,9 @@ def add_parser(subparsers):
         inputs_help="input columns [V] to report peak_input / peak_slew and plot",
         time_help="time column (default t)")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
-                   help="resample the measurement onto this period [s] (default: its own)")
+                   help="resample the measurement onto this period [s] (default: the "
+                        "--drive's, else its own); a measurement faster by an integer factor is "
+                        "averaged over each period, a slower one refused")
     p.add_argument("--period", type=positive_float, metavar="S",
                    help="period of a periodic CSV reference [s] (the settling window)")
     p.add_argument("--settle-periods", type=settle_periods, default=1.0, metavar="N",
@@ -269,14 +271,18 @@ def _handle(args):
             outs, ins = _reference_outputs(args) or ["x", "y"], []
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
-        t, y, T = read_signals(args.measured, outs, args.time, out_cols, args.sampling_period,
-                               "--measured", upsample=False)
-        n_drive = _drive_length(args.drive, T, args.sampling_period) if args.drive else None
+        n_drive, period = None, args.sampling_period
+        if args.drive:      # the measurement is read at the drive's period, as learn reads it
+            n_drive, period = _drive_length(args.drive, args.sampling_period)
+        rate_notes = []
+        t, y, T = read_signals(args.measured, outs, args.time, out_cols, period,
+                               "--measured", upsample=False, notes=rate_notes)
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
                 (ins, mapping(args.inputs, ins, "--input-columns"))
-            _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured")
+            _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured",
+                                   upsample=False, notes=[])   # the same note: said once
         elif args.drive:         # the voltages applied: the drive file's own input columns
             drive_ins = drive_input_names(args.drive, outs)
             u = optional_columns(args.drive, drive_ins, T, "--drive") if drive_ins else None
@@ -284,6 +290,7 @@ def _handle(args):
         shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
         ref = load_reference(args.reference, shell, args.time, None, args.period)
+        rate_notes += ref.notes
         if n_drive is not None and n_drive != ref.signal.shape[1]:
             raise DataFileError(f"--drive: {n_drive} samples; expected the reference's "
                                 f"{ref.signal.shape[1]}")
@@ -333,6 +340,8 @@ def _handle(args):
     except catch() as exc:
         print_err(f"hammerstein evaluate: error: {' '.join(str(exc).split())}")
         return 1
+    for line in rate_notes:
+        print_err(f"note: {line}")
     if args.drive is None and args.fade_in is None:     # after success: an error is one line
         print_err("note: no --drive: the metrics start after --settle-periods only; a drive "
                   "of compensate or learn starts with a fade-in that is no tracking, left out "
@@ -345,21 +354,34 @@ def _handle(args):
     return 0
 
 
-def _drive_length(path, T, resampled=None):
-    """The samples of the drive file ``path`` (read bounded: a device or FIFO is refused).
+def _drive_length(path, sampling_period=None):
+    """The samples and sampling period of the drive file ``path`` (read bounded).
 
-    The drive is read at its own period, which must be the measurement's ``T`` [s]: a
-    measurement whose time steps are not the drive's is named, not the drive (or
-    ``--sampling-period``, when the measurement was ``resampled`` onto it).
+    Parameters
+    ----------
+    path : str
+        The drive file (compensate, learn), read at its own period.
+    sampling_period : float, optional
+        ``--sampling-period`` [s]: must be the drive's (the measurement is read at it).
+
+    Returns
+    -------
+    n_samples : int
+    period : float
+        The drive's sampling period [s].
+
+    Raises
+    ------
+    DataFileError
+        Unreadable drive, or ``sampling_period`` not the drive's.
     """
     t, _, Td = read_signals(path, [], "t", None, None, "--drive")
-    if resampled is not None and not np.isclose(Td, T, rtol=1e-6):
-        raise DataFileError(f"--sampling-period: {T:g} s; expected the drive's {Td:g} s (the "
-                            f"measurement is resampled onto the drive's period)")
-    if not np.isclose(Td, T, rtol=1e-6):
-        raise DataFileError(f"--measured: sampled every {T:g} s; expected the drive's {Td:g} s "
-                            f"(is its time column in seconds? else give --sampling-period)")
-    return t.size
+    if sampling_period is not None and not np.isclose(Td, sampling_period, rtol=1e-6):
+        raise DataFileError(f"--sampling-period: {sampling_period:g} s; expected the drive's "
+                            f"{Td:g} s (with --drive the measurement is read at the drive's "
+                            f"period, averaged over each period when faster by an integer "
+                            f"factor; leave --sampling-period out)")
+    return t.size, Td
 
 
 def _drive_notes(args):

@@ -408,9 +408,10 @@ def _learn(args):
         N = ref.signal.shape[1]
         if u.shape[1] != N:
             raise DataFileError(f"--drive: {u.shape[1]} samples; expected the reference's {N}")
+        rate_notes = list(ref.notes)   # a reference or measurement at another rate: resampled
         _, y, _ = read_signals(args.measured, list(model.output_names), args.time,
                                mapping(args.outputs, list(model.output_names), "--output-columns"), T,
-                               "--measured", upsample=False)
+                               "--measured", upsample=False, notes=rate_notes)
         if y.shape[1] < N:
             raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
                                 f"the drive's {N} (the measurement must cover the whole drive)")
@@ -542,7 +543,8 @@ def _learn(args):
                 learn_u, learn_y, followed = bu, by, bf
         gain = args.learning_gain * gain_factor(halvings, verdict.rejections)
         law_gain, notes = _inverse_gain(model, args.gain, args.check)
-        notes = ([] if q_note is None else [q_note]) + notes + ([] if period_note is None else [period_note])
+        notes = ([f"note: {line}" for line in rate_notes] + ([] if q_note is None else [q_note])
+                 + notes + ([] if period_note is None else [period_note]))
         if (note or stall) and steady is not None:
             notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady)
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,

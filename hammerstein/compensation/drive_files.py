@@ -24,7 +24,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
-__all__ = ["DRIVE_MARK", "read_signals", "signals_csv", "drive_fade_samples", "drive_rest_lead",
+__all__ = ["DRIVE_MARK", "RATE_TOL", "read_signals", "block_mean", "signals_csv", "drive_fade_samples", "drive_rest_lead",
            "drive_rest_output",
            "rest_lead_text", "fade_weight",
            "drive_kind", "optional_columns", "learnt_names", "followed_reference", "shaped_target"]
@@ -36,18 +36,28 @@ DRIVE_MARK = "# hammerstein"
 #: Suffix of a ``learn`` drive's columns of the reference its drive was computed for.
 LEARNT_SUFFIX = "_learnt"
 
+#: Relative difference of a file's nominal period from the sampling period within which it is
+#: taken as sampled at that period (a jittered logger's), not at another rate.
+RATE_TOL = 1e-3
+
 
 def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file",
-                 upsample=True):
+                 upsample=True, notes=None, period=None):
     """Columns of a drive, measured or reference CSV file, on a uniform time grid.
 
     File conventions: a header row (lines starting with ``#`` are comments);
     time in column ``time`` [s], strictly increasing; one column per signal
     named as the model's inputs [V] or outputs [µm] (``mapping`` maps other
-    names); other columns are ignored. With ``sampling_period`` the columns
-    are interpolated linearly onto ``t_k = k T`` from 0 to the file's last
-    time (a file starting after 0 is refused); without it the file's times
-    must be uniform (relative spread below 1e-6) and are kept.
+    names); other columns are ignored; a file starting after 0 is refused.
+    With ``sampling_period`` the columns are resampled onto ``t_k = k T``
+    over the file's whole duration (its last sample plus one of its own
+    periods): a file at another rate than ``T`` (its nominal period more
+    than :data:`RATE_TOL` off) is interpolated linearly, said in one line
+    (``notes``); a measured response (``upsample`` False) faster by an
+    integer factor ``m`` is averaged over each period instead (the ``m``
+    samples within half a period of ``t_k``: a block mean, which lowers the
+    noise), and one slower than ``T`` is refused. Without it the file's
+    times must be uniform (relative spread below 1e-6) and are kept.
 
     Parameters
     ----------
@@ -65,11 +75,17 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     what : str
         What the file is, for messages (e.g. ``"--measured"``).
     upsample : bool
-        Whether a file sampled more coarsely than ``sampling_period`` (its
-        median step above 1.5 T) is interpolated onto it (a reference drawn
-        coarsely), or refused (a measured response, recorded at the drive's
-        sampling period: a coarser one is a time column in other units than
-        seconds, or another rate).
+        Whether a file sampled more coarsely than ``sampling_period`` is
+        interpolated onto it (a reference drawn coarsely), or refused (a
+        measured response, recorded at the drive's sampling period or faster:
+        a coarser one is a time column in other units than seconds, or another
+        rate); False also averages a file faster by an integer factor.
+    notes : list of str, optional
+        Receives the line saying how a file at another rate was resampled;
+        without it the line is a ``UserWarning``.
+    period : float, optional
+        Period of a periodic file [s]: the samples past its last one continue
+        from one period earlier (else they continue its last step).
 
     Returns
     -------
@@ -124,32 +140,117 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                                 f"off the grid of {Tf:g} s, more than its stamps' rounding "
                                 f"{tol:.2g} s); expected one sampling period (give "
                                 f"--sampling-period to resample it)")
+    if t[0] > 1e-9 * max(1.0, abs(t[-1])) and t[0] > tol:   # after a gap's message: its cause
+        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
+    if sampling_period is None:
         return t[0] + np.arange(t.size) * Tf, vals, Tf
     T = float(sampling_period)
     if uniform and abs(Tf - T) <= 1e-6 * T and abs(t[0]) <= tol:
         # sampled at T, its stamps rounded (a float32 logger's): the samples as they are,
         # not interpolated between stamps that are off their sampling times
         return np.arange(t.size) * T, vals, T
-    if t[0] > 1e-9 * max(1.0, abs(t[-1])):
-        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
     if t[-1] < T:
         raise DataFileError(f"{what}: {escape(path)}: spans {t[-1]:g} s, less than one sampling "
                             f"period {T:g} s; is its time column {escape(repr(time), 60)} in "
                             f"seconds?")
-    n = check_samples(np.floor(t[-1] / T + 1e-9) + 1,
+    # the file's nominal period: the line through its first and last stamps (a jittered
+    # record's median step is off it); its duration includes its last sample's period
+    Tf = (t[-1] - t[0]) / (t.size - 1)
+    n = check_samples(np.ceil((t[-1] + Tf) / T - 1e-6),
                       f"{what}: {escape(path)}: {t[-1]:g} s sampled at {T:g} s",
                       DataFileError, T, len(names) + 1)
-    step = float(np.median(np.diff(t)))
-    if not upsample and step > 1.5 * T:
-        raise DataFileError(f"{what}: {escape(path)}: sampled every {step:g} s, {step / T:.4g} "
-                            f"sampling periods of {T:g} s; expected one sample per period (is its "
-                            f"time column {escape(repr(time), 60)} in seconds?)")
-    if step < 0.5 * T and t.size > 2 * n:
-        warnings.warn(f"{what}: {escape(path)}: sampled every {step:g} s, resampled onto "
-                      f"{T:g} s: {t.size} rows become {n} samples (the reference between "
-                      f"the samples is dropped)", UserWarning, stacklevel=2)
+    ratio = Tf / T
+    where = f"{what}: {escape(path)}: sampled every {Tf:.6g} s"
+    if not upsample and ratio > 1 + RATE_TOL:
+        raise DataFileError(f"{where}, {ratio:.4g} sampling periods of {T:g} s: slower than "
+                            f"the drive; expected a measurement at its period or faster by an "
+                            f"integer factor (is its time column {escape(repr(time), 60)} in "
+                            f"seconds? else record at the drive's rate)")
+    m = int(round(1 / ratio))
+    if not upsample and m >= 2 and abs(m * ratio - 1) <= RATE_TOL:
+        _say(notes, f"{where}, {m} samples per sampling period of {T:g} s: averaged over each "
+                    f"period (a block mean centred on the drive's samples, which lowers the "
+                    f"noise)")
+        return np.arange(n) * T, block_mean(t, vals, T, m, n), T
+    if abs(ratio - 1) > RATE_TOL:
+        if ratio > 1:
+            more = (f" ({ratio:.3g} times coarser: corners at every sample of the file; write it "
+                    f"at the sampling period {T:g} s to follow it smoothly)")
+        else:
+            more = (f"; --sampling-period {Tf:.6g} computes the drive at the file's rate"
+                    if upsample else "")
+        _say(notes, f"{where}, resampled (interpolated linearly) onto the sampling period "
+                    f"{T:g} s{more}")
     grid = np.arange(n) * T
-    return grid, np.array([np.interp(grid, t, v) for v in vals]).reshape(len(names), n), T
+    past = grid > t[-1]
+    if period is not None and 0 < period <= t[-1] + Tf * (1 + 1e-9):
+        after = grid[past] - period     # periodic: past the last sample, one period earlier
+    else:   # the last step continued for one of the file's periods (a stop would be a corner)
+        after = None
+    out = np.empty((len(names), n))
+    for i, v in enumerate(vals):
+        out[i, ~past] = np.interp(grid[~past], t, v)
+        if after is not None:
+            out[i, past] = np.interp(after, t, v)
+        else:
+            out[i, past] = v[-1] + (grid[past] - t[-1]) * (v[-1] - v[-2]) / (t[-1] - t[-2])
+    return grid, out, T
+
+
+def _say(notes, text):
+    """``text`` appended to ``notes``, or a ``UserWarning`` without them."""
+    if notes is None:
+        warnings.warn(text, UserWarning, stacklevel=3)
+    else:
+        notes.append(text)
+
+
+def block_mean(t, values, period, m, n):
+    """Signals sampled ``m`` times per ``period``, averaged onto ``t_k = k period``.
+
+    The columns are first put onto the exact fine grid ``period / m`` (linear
+    interpolation: a jittered logger's stamps), then averaged over the
+    samples within half a period of each ``t_k`` (``m`` of them for odd
+    ``m``; ``m + 1`` with the two ends weighted one half for even ``m``), so
+    the averaged signal is not delayed. The first samples average the half
+    window after ``t = 0`` only.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (n_rows,)
+        Time stamps [s], from 0, increasing.
+    values : numpy.ndarray, shape (n_signals, n_rows)
+        The signals.
+    period : float
+        The coarse sampling period [s].
+    m : int
+        Samples per period, at least 2.
+    n : int
+        Coarse samples wanted.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_signals, n)
+        The block means.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(9) * 0.1
+    >>> block_mean(t, np.arange(9.0)[None, :], 0.3, 3, 3)
+    array([[0.5, 3. , 6. ]])
+    """
+    fine = np.arange(n * m) * (period / m)
+    h = m // 2
+    w = np.ones(2 * h + 1)
+    if m % 2 == 0:
+        w[0] = w[-1] = 0.5
+    count = np.convolve(np.ones(fine.size), w, "same")
+    out = np.empty((values.shape[0], n))
+    for i, v in enumerate(values):
+        mean = np.convolve(np.interp(fine, t, v), w, "same") / count
+        out[i] = mean[::m][:n]
+    return out
 
 
 def signals_csv(t, columns, comment):

@@ -325,7 +325,8 @@ def test_cr_only_line_endings_read_as_lines(tmp_path):
 def test_a_finer_reference_resampled_coarser_is_said(tmp_path):
     t, x, y = _signals(4000, T / 10)
     path = _csv(tmp_path / "fine.csv", t, x, y)
-    with pytest.warns(UserWarning, match="4000 rows become 400 samples"):
+    with pytest.warns(UserWarning, match=r"sampled every 5e-06 s, resampled \(interpolated "
+                                         r"linearly\) onto the sampling period 5e-05 s"):
         grid, values, _ = read_signals(path, ["x", "y"], sampling_period=T)
     assert values.shape == (2, 400)
 

@@ -103,7 +103,9 @@ def test_a_measurement_on_another_time_scale_names_the_measurement(files):
     res = _cli("evaluate", "--reference", REF, "--measured", "ytiny.csv", "--drive", "u0.csv",
                "--out", "ev-tiny", cwd=files)
     assert res.returncode == 1
-    assert res.stderr.startswith("hammerstein evaluate: error: --measured: sampled every 1e-300 s")
+    # read at the drive's period, as learn reads it: its span is less than one of them
+    assert res.stderr.startswith("hammerstein evaluate: error: --measured: ytiny.csv: spans ")
+    assert "less than one sampling period 5e-05 s; is its time column 't' in seconds?" in res.stderr
     assert res.stderr.count("\n") == 1
 
 

@@ -1,0 +1,47 @@
+"""A start-up stepping a hair more than the settled drive is not slew-limited.
+
+At 50 kHz a circle's start-up stepped a relative 3e-6 more than its settled drive (rounding):
+it was slew-limited, its fade-in grown to a quarter of the record, with advice for a record
+three times longer; and the peak line repeated the compensator's own numbers, identical, as
+"asked ... before the limits".
+"""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from hammerstein.cli import compensate as compensate_cli
+from hammerstein.compensation.drive import limit_start_up
+
+
+@pytest.mark.parametrize("asked, limited", [
+    (1.0 + 3e-6, False),        # the 50 kHz circle's start-up: the settled step, rounded
+    (1.0 + 5e-4, False),
+    (1.01, True),               # a start-up stepping 1 % more
+])
+def test_a_start_up_within_the_tolerance_is_not_slew_limited(asked, limited):
+    a = 0.5 * asked           # the first step from rest; the settled steps are 0.5 V
+    u = np.array([[a, a + 0.5, a + 1.0, a + 0.5, a, a + 0.5, a + 1.0]])
+    out, notes = limit_start_up(u, 1)
+    assert bool(notes) == limited
+    assert np.array_equal(out, u) == (not limited)
+
+
+@pytest.mark.parametrize("asked, told", [
+    ((8.899, 1090.0), False),               # the limits changed nothing printed
+    ((8.899, 1090.0004), False),            # nor a digit beyond the printed ones
+    ((8.899, 1200.0), True),
+])
+def test_the_peak_line_names_the_compensators_own_only_when_it_differs(monkeypatch, asked, told):
+    monkeypatch.setattr(compensate_cli, "_rest_voltages", lambda plant: np.zeros(1))
+    Ts = 1e-4
+    u = np.array([[0.0, 0.109, 8.899]])
+    plant = SimpleNamespace(hysteresis=SimpleNamespace(input_names=["ux"]), sampling_period=Ts)
+    drive = SimpleNamespace(inputs=u, peak_input=np.array([asked[0]]),
+                            peak_slew=np.array([asked[1]]))
+    slew = np.max(np.abs(np.diff(u[0]))) / Ts
+    drive.peak_slew = drive.peak_slew * (slew / 1090.0 if not told else 1.0)
+    text = compensate_cli._peaks_text(plant, drive)
+    assert text.startswith(f"ux 8.899 V {slew:.4g} V/s")
+    assert ("the compensator asked for" in text) == told
