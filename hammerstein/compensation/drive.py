@@ -379,9 +379,13 @@ MIN_FADE_S = 0.02
 #: once learnt, three times the settled error; with 59-78 ms, 0.085-0.145 %)
 FADE_DECAYS = 4.0
 #: relative tolerance of the step comparisons of :func:`hardware_drive`: a start-up stepping
-#: faster than the settled drive by less is not slew-limited, nor its fade-in grown (at 50 kHz a
-#: circle's start-up stepped 3e-6 more and was slew-limited, with advice for a longer record)
+#: faster than the settled drive by less does not grow the fade-in and is slew-limited without a
+#: note (at 50 kHz a circle's start-up stepped 3e-6 more: its fade-in grew to a quarter of the
+#: record, with advice for a longer record); no drive steps beyond the settled drive's largest
 _STEP_TOL = 1e-3
+#: ... and the relative excess of a start-up step over the settled drive's largest that is
+#: slew-limited at all (below it, the drive is the compensator's own, bit for bit)
+_LIMIT_TOL = 1e-6
 
 
 def settled_step(inputs, start):
@@ -805,7 +809,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             amplifier.inputs if amplifier is not None else None),
                                     T)
         res.shaped += notes
-        changed = np.flatnonzero(np.any(np.abs(out - before) > 1e-12, axis=0))
+        # moved by more than a rounding's share of the drive (a limited excess within
+        # _STEP_TOL moves it by about as little: no advice)
+        moved = max(1e-12, _STEP_TOL * 1e-3 * float(np.max(np.abs(before), initial=0.0)))
+        changed = np.flatnonzero(np.any(np.abs(out - before) > moved, axis=0))
         if changed.size and changed[-1] + 1 > n:
             # a large move the settled drive never makes (an axis held away from rest under a
             # raster): its slew-limited start-up goes on after the fade, into what is judged
@@ -911,8 +918,12 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
     bound = settled_step(u, end)
     start = _start_steps(u, end, r0)
     notes = []
-    for i in np.flatnonzero((start > bound * (1 + _STEP_TOL)) & (bound > 0)):
+    for i in np.flatnonzero((start > bound * (1 + _LIMIT_TOL)) & (bound > 0)):
+        # an excess is limited (no step of the drive beyond the settled drive's largest); one
+        # within _STEP_TOL (rounding: 3e-6 at 50 kHz) moves the drive by as little, unsaid
         u[i] = slew_limit(u[i], r0[i], bound[i])
+        if start[i] <= bound[i] * (1 + _STEP_TOL):
+            continue
         name = names[i] if names is not None else f"input {i + 1}"
         when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
         notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
