@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.signals.excitation import decreasing_sine
+from hysteresis_records import decreasing_sine_records, write
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.io.presets import load_model
@@ -28,23 +28,11 @@ def actuator():
                                    ["x", "y"], [10.0, 10.0])
 
 
-def write(path, t, u, y):
-    np.savetxt(path, np.column_stack([t, u.T, y.T]), delimiter=",", header="t,ux,uy,x,y",
-               comments="", fmt="%.10g")
-
-
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("model")
-    act, rng, out = actuator(), np.random.default_rng(3), []
-    for k in range(2):
-        t, one, _ = decreasing_sine(T, 10.0)
-        u = np.zeros((2, t.size))
-        u[k] = one
-        y = act.simulate(u)[0] + 0.04 * rng.standard_normal((2, t.size))
-        write(d / f"hyst-{k}.csv", t, u, y)
-        out.append(str(d / f"hyst-{k}.csv"))
-    return act, d, out
+    act = actuator()
+    return act, d, decreasing_sine_records(d, act, 0.04, "hyst", T)
 
 
 def loop_pp(model, k, frac):

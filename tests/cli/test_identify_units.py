@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hammerstein.signals.excitation import decreasing_sine, excitation_set
+from hysteresis_records import decreasing_sine_records, write
+from hammerstein.signals.excitation import excitation_set
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 
 T = 1e-3
@@ -23,22 +24,8 @@ def _actuator():
     return MultivariablePI([[x, None], [None, y]], ["ux", "uy"], ["x", "y"])
 
 
-def _write(path, t, u, y):
-    np.savetxt(path, np.column_stack([t, u.T, y.T]), delimiter=",", header="t,ux,uy,x,y",
-               comments="", fmt="%.10g")
-
-
 def _files(d, x_scale=1.0, y_scale=1.0, t_scale=1.0):
-    act, rng, out = _actuator(), np.random.default_rng(3), []
-    for k in range(2):
-        t, one, _ = decreasing_sine(T, 10.0)
-        u = np.zeros((2, t.size))
-        u[k] = one
-        y = act.simulate(u)[0] + 0.01 * rng.standard_normal((2, t.size))
-        y = y * np.array([[x_scale], [y_scale]])
-        _write(d / f"h-{k}.csv", t * t_scale, u, y)
-        out.append(str(d / f"h-{k}.csv"))
-    return out
+    return decreasing_sine_records(d, _actuator(), 0.01, "h", T, (x_scale, y_scale), t_scale)
 
 
 def _identify(files, tmp_path, capsys):
@@ -86,7 +73,7 @@ def test_a_record_cut_after_its_levels_says_so(tmp_path, capsys):
     for r in recs:
         if r.kind == "hysteresis":
             y = act.simulate(r.u)[0]
-            _write(tmp_path / f"{r.name}.csv", r.time, r.u, y)
+            write(tmp_path / f"{r.name}.csv", r.time, r.u, y)
             files.append(str(tmp_path / f"{r.name}.csv"))
     out = _identify(files, tmp_path, capsys).out
     whole = np.loadtxt(files[1], delimiter=",", skiprows=1).shape[0]
