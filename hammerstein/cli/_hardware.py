@@ -235,12 +235,18 @@ def falling_direct_transfer(model):
         weights = getattr(model.components[l][l], "weights", None)
         if weights is None or not np.size(weights):
             continue
-        w1 = float(np.asarray(weights, dtype=float).ravel()[0])
+        w = np.asarray(weights, dtype=float).ravel()
+        w1 = float(w[0])
         if not w1 > 0:
             out, inp = model.output_names[l], model.input_names[l]
+            # every loop falls (the weights' sum, the slope of the largest loops, < 0 too): the
+            # records' sensor, not the actuator (identify warned of it)
+            sensor = (f" (its loops fall as {inp} rises: a sensor of inverted sign? invert the "
+                      f"{out} column of the records, y -> -y, and identify again)"
+                      if float(np.sum(w)) < 0 else "")
             return (f"model: direct transfer {out} <- {inp}: weights: the first weight (the "
                     f"initial slope of its loops) is {w1:.6g}; expected > 0: {out} would move "
-                    f"the wrong way as {inp} turns, and no compensator inverts that")
+                    f"the wrong way as {inp} turns, and no compensator inverts that{sensor}")
     return None
 
 

@@ -607,9 +607,15 @@ def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_pa
     assert shaped and all("first mode" in ln and "left the limits" not in ln for ln in shaped)
 
 
-def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path):
+@pytest.mark.parametrize("flip, first, sensor", [
+    (False, "-0.05", False),     # one weight written wrong: the actuator's loops still rise
+    (True, "-", True),           # every weight negated: a sensor of inverted sign
+])
+def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path, flip, first, sensor):
     # a hand-written model with w_1 = -0.05 um/V on x <- ux: the default kind warned of a
-    # gain the user never chose, then blamed the amplifier's slew rate
+    # gain the user never chose, then blamed the amplifier's slew rate; a model identified
+    # from a reversed sensor (its loops fall everywhere) was refused in the model's terms only,
+    # where identify had named the sensor
     import copy
 
     from hammerstein.io.presets import save_model
@@ -618,7 +624,10 @@ def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path):
     model = copy.deepcopy(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
     op = model.components[0][0]
     weights = np.array(op.weights, dtype=float)
-    weights[0] = -0.05
+    if flip:
+        weights = -weights
+    else:
+        weights[0] = -0.05
     model.components[0][0] = PrandtlIshlinskii(op.thresholds, weights)
     save_model(model, tmp_path / "falling.toml")
     err = io.StringIO()
@@ -629,4 +638,6 @@ def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path):
     assert code == 1 and not (tmp_path / "d.csv").exists()
     lines = err.getvalue().strip().splitlines()
     assert len(lines) == 1, lines
-    assert "direct transfer x <- ux: weights: the first weight" in lines[0] and "-0.05" in lines[0]
+    assert "direct transfer x <- ux: weights: the first weight" in lines[0]
+    assert f"is {first}" in lines[0]
+    assert ("a sensor of inverted sign? invert the x column" in lines[0]) == sensor
