@@ -6,7 +6,7 @@ then first-order reversal curves from both ends of the range, e.g. turning back
 at -80 to 80 % in steps of 20 % with ``--reversals standard``),
 ``multisine-<input>.csv``
 and ``multisine-<input>-validation.csv`` (random-phase multisines, 10 Hz to half
-the Nyquist frequency at 80 % of the amplitude, independent phases; the
+the Nyquist frequency, about 2.5 kHz above 20 kHz, at 80 % of the amplitude, independent phases; the
 second is held out to choose the order of the dynamics) and ``creep-<input>.csv``
 (a voltage staircase, 2 s per step); ``demagnetise.csv`` (every input at
 once, a sine decaying from the amplitude to 0 V at twice the sine frequency,
@@ -34,8 +34,8 @@ import numpy as np
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
                                             UNIPOLAR_STAIRCASE, ExcitationRecord, around,
-                                            _slew_limited_multisine, demagnetising_cycle,
-                                            excitation_set, multisine, peak_slew)
+                                            _slew_limited_multisine, default_f_max,
+                                            demagnetising_cycle, excitation_set, multisine, peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     locked, name_problem, removed_if_failed, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -83,7 +83,9 @@ def add_parser(subparsers):
     p.add_argument("--f-min", type=_HERTZ, default=10.0, metavar="HZ",
                    help="lowest multisine frequency (default 10 Hz; also its resolution)")
     p.add_argument("--f-max", type=_HERTZ, metavar="HZ",
-                   help="highest multisine frequency (default half the Nyquist frequency)")
+                   help="highest multisine frequency (default half the Nyquist frequency at 20 kHz "
+                        "and below, about 2.5 kHz above: identify fits the bending modes near "
+                        "10 kHz)")
     p.add_argument("--periods", type=integer_type(1), default=4, metavar="N",
                    help="periods per multisine record (default 4)")
     p.add_argument("--hold", type=_SECONDS, default=2.0, metavar="S",
@@ -244,6 +246,9 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
     for r in records:
         by_kind.setdefault(r.kind, []).append(f"{r.name}.csv")
     dur = {r.kind: r.time.size * T for r in records}
+    tops = sorted({r.f_max for r in records if r.kind == "multisine" and r.f_max is not None})
+    reach = (f" up to {tops[-1]:.4g} Hz" if len(tops) == 1
+             else f" up to {tops[0]:.4g}-{tops[-1]:.4g} Hz" if tops else "")
     centred = centre is not None and np.any(centre)
     if centred:
         rest = np.clip(0.0, centre - amplitude, centre + amplitude)
@@ -272,7 +277,7 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
            f"moves at three times the sine's largest slew)" if len(reversals) else "")
         + f" | {dur['hysteresis']:g} s |",
         f"| {', '.join(by_kind['multisine'])} | linear dynamics (estimation) | random-phase "
-        f"multisine at 80 % of the amplitude | {dur['multisine']:g} s |",
+        f"multisine{reach} at 80 % of the amplitude | {dur['multisine']:g} s |",
         f"| {', '.join(by_kind['multisine-validation'])} | linear dynamics (held out: chooses "
         f"the order) | the same band, other phases | {dur['multisine-validation']:g} s |",
         f"| {', '.join(by_kind['creep'])} | creep | staircase "
@@ -371,11 +376,11 @@ def band_summary(records, amplitude, sampling_period, slew_rate, f_max=None, f_m
     # middle (70 V of -10..150 V) as the multisine's
     peaks = [0.8 * float(r.scale) * float(np.asarray(amplitude, dtype=float)[r.excited])
              for r in scaled]
-    out = {"top": max(r.f_max for r in scaled), "default": 0.25 / T, "nyquist": 0.5 / T,
+    out = {"top": max(r.f_max for r in scaled), "default": default_f_max(T), "nyquist": 0.5 / T,
            "narrowed": f_max is None, "share": (min(peaks) / amp, max(peaks) / amp),
            "volts": (min(peaks), max(peaks)), "slew_rate": float(slew_rate), "options": []}
     if out["narrowed"] and out["top"] < out["default"]:
-        for f in (0.25 / T, 0.45 / T):
+        for f in sorted({default_f_max(T), 0.25 / T, 0.45 / T}):
             try:
                 share = 0.8 * _multisine_scale(T, 0.8 * amp, slew_rate, f, f_min, periods, seed)
             except ValueError:
@@ -397,7 +402,7 @@ def _band_sentences(band):
     if band["narrowed"] and top < band["default"]:
         options = ", ".join(f"up to {f:.4g} Hz at {100 * s:.2g} %" for f, s in band["options"])
         return [f"Within the slew rate {S:g} V/s the multisines reach {top:.4g} Hz only (the "
-                f"default band ends at {band['default']:.4g} Hz, half the Nyquist frequency "
+                f"default band ends at {band['default']:.4g} Hz; the Nyquist frequency is "
                 f"{nyq:.4g} Hz): the band was narrowed to keep {kept}. Bending modes above "
                 f"{top:.4g} Hz are then not in the records, and `identify --dynamics` cannot "
                 f"identify them. `--f-max HZ` keeps the band up to HZ and lowers the "

@@ -27,7 +27,8 @@ import numpy as np
 from hammerstein.models import lti
 
 #: A band ending below this fraction of the Nyquist frequency is "narrow": the default
-#: multisine band of ``hammerstein excitation`` is half the Nyquist frequency.
+#: multisine band of ``hammerstein excitation`` is half the Nyquist frequency at 20 kHz and
+#: below (:func:`hammerstein.signals.excitation.default_f_max`).
 NARROW_BAND = 0.25
 #: A first mode above this fraction of the Nyquist frequency is sampled at fewer than five
 #: samples per period; modes above Nyquist fold next to it when nothing filters them.

@@ -30,8 +30,12 @@ from hammerstein.models._lti_systems import continuous_system
 
 control = lazy_module("control")
 
+#: The rate [Hz] the bending modes are identified at, at most (``DynamicsIdentifier``'s
+#: default ``max_rate_hz``): faster records are decimated near it (:func:`decimation_factor`).
+DYNAMICS_RATE_HZ = 1e4
 
-def decimation_factor(sampling_period, max_rate_hz):
+
+def decimation_factor(sampling_period, max_rate_hz=DYNAMICS_RATE_HZ):
     """The odd integer factor that brings records near ``max_rate_hz``, or 1.
 
     Records are decimated only when their rate is at least 2.5 times
@@ -45,7 +49,8 @@ def decimation_factor(sampling_period, max_rate_hz):
     sampling_period : float
         T of the records [s].
     max_rate_hz : float or None
-        Rate the identification needs at most [Hz]; None: never decimate.
+        Rate the identification needs at most [Hz] (default
+        :data:`DYNAMICS_RATE_HZ`); None: never decimate.
 
     Returns
     -------

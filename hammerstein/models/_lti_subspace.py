@@ -21,7 +21,7 @@ scipy_linalg = lazy_module("scipy.linalg")  # lazy: ~0.1 s CPU of `from hammerst
 from hammerstein.models._lti_systems import _apply_filter, _records, modal_parameters, sensor_filter
 from hammerstein.models._lti_delay import excited_band
 from hammerstein.models._lti_modal import keep_modes, mode_shares, real_modal
-from hammerstein.models._lti_rate import decimation_factor, fit_decimated
+from hammerstein.models._lti_rate import DYNAMICS_RATE_HZ, decimation_factor, fit_decimated
 
 # -- identification ------------------------------------------------------------------
 def _powers(lam, N):
@@ -417,7 +417,7 @@ class DynamicsIdentifier:
     cancel_tolerance: float = 0.0
     validation_records: tuple | None = None
     require_continuous: bool = False
-    max_rate_hz: float | None = 1e4
+    max_rate_hz: float | None = DYNAMICS_RATE_HZ
 
     @staticmethod
     def _subspace(ins, outs, block_rows, prior=None, known=None):
