@@ -17,7 +17,8 @@ import pytest
 
 from hammerstein.cli._hardware import load_actuator, load_reference
 from hammerstein.cli.main import main
-from hammerstein.compensation.drive import hardware_drive, rest_output
+from hammerstein.compensation.drive import apply_amplifier, hardware_drive, rest_output
+from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s
 from hammerstein.io.presets import load_plant
 from hammerstein.scenario.identification import (ResolveContext, excitation_records,
                                                  identified_from_records)
@@ -118,9 +119,20 @@ def _assert_same_drive(tmp_path, preset, plant, identify):
                               "dynamics": "identified"}, plant, ResolveContext(tmp_path))
     actuator = load_actuator(str(preset))
     ref = load_reference(CIRCLE, actuator)
-    res = hardware_drive(comp, ref.signal, plant.sampling_period, ref.period_samples, None,
+    T = plant.sampling_period
+    at_rest = actuator.rest_state()
+    linear = actuator.matrices
+    # the drive pipeline compensate runs (hardware_route.compensate_reference): faded in,
+    # shaped into the records' limits, the start-up bounded by the settled drive's steps
+    res = hardware_drive(comp, ref.signal, T, ref.period_samples, None,
                          actuator.amplifier, "error",
-                         rest=rest_output(actuator.hysteresis, actuator.creep))
+                         rest=rest_output(actuator.hysteresis, actuator.creep),
+                         first_mode=first_mode_hz(linear[0], T),
+                         predict=lambda u: actuator.simulate(
+                             apply_amplifier(actuator.amplifier, u, T), at_rest)[0],
+                         names=actuator.hysteresis.output_names,
+                         mode_decay=mode_decay_s(linear[0], T),
+                         input_names=list(actuator.hysteresis.input_names))
     assert u_cli.shape == res.inputs.shape
     assert np.max(np.abs(u_cli - res.inputs)) <= 1e-9 * np.max(np.abs(u_cli))
 
