@@ -97,7 +97,7 @@ def __getattr__(name):
 
 __all__ = ["plain_log_labels", "loop_grid", "decorate_grid", "save", "scenario_prefix", "grid_figure", "decimate",
            "decimate_path", "fixed_layout", "legend_on_top", "headroom", "log_ticks", "suptitle",
-           "MAX_POINTS", "DPI", "pyplot"]
+           "grid_width", "legend_columns", "MAX_LOG_LABELS", "MAX_POINTS", "DPI", "pyplot"]
 
 #: Largest number of points drawn per line: a 15-inch figure at :data:`DPI` is
 #: 1800 pixels wide, so 2 points (min and max) per pixel column of a panel.
@@ -321,6 +321,9 @@ def log_ticks(ax):
     ax.yaxis.set_minor_formatter(NullFormatter())
 
 
+#: Labels at most on a log axis of :func:`readable_log_ticks`: beyond, decades only.
+MAX_LOG_LABELS = 12
+
 #: Mantissas of the labelled ticks of :func:`readable_log_ticks`, coarsest first.
 LOG_TICK_SETS = ((1.0, 2.0, 5.0), (1.0, 1.5, 2.0, 3.0, 5.0, 7.0),
                  (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0))
@@ -410,6 +413,13 @@ def readable_log_ticks(ax, values, tick_set=None):
     subs = LOG_TICK_SETS[log_tick_set(values) if tick_set is None else tick_set]
     ticks = _log_tick_values(*span, subs)
     ax.set_ylim(ticks[0], ticks[-1])
+    if len(ticks) > MAX_LOG_LABELS:
+        # values over many decades (a compensator following its own model to 1e-12 beside
+        # others at 1-20): 1, 2, 5 in every decade overlapped; decades, every k-th
+        decades = _log_tick_values(*span, (1.0,))
+        step = -(-len(decades) // MAX_LOG_LABELS)
+        ticks = decades[::step]
+        ax.set_ylim(decades[0], decades[-1])
     ax.yaxis.set_major_locator(FixedLocator(ticks))
     ax.yaxis.set_major_formatter(FuncFormatter(lambda y, _: f"{y:g}"))
     ax.yaxis.set_minor_locator(LogLocator(base=10.0, subs=np.arange(1.0, 10.0)))
@@ -474,6 +484,47 @@ def plain_log_labels(axis):
     axis.set_minor_formatter(_PlainLogFormatter(labelOnlyBase=False))
 
 
+def grid_width(m, panel_w=5.0):
+    """Width [in] of :func:`grid_figure`'s figure of ``m`` columns of ``panel_w`` [in]."""
+    return 0.85 + 0.25 + m * panel_w + (m - 1) * 0.85
+
+
+def legend_columns(labels, width, fontsize=8, most=3):
+    """Columns of a figure legend whose entries fit side by side within ``width``.
+
+    Each entry is taken as its handle (2.2 font sizes), the gap between
+    columns and its label at 0.6 font sizes per character (DejaVu Sans'
+    mean advance); a legend wider than the figure was cut on both sides
+    (a sweep of eight compensators with names of 60 characters, three
+    columns in a 5.9 in figure).
+
+    Parameters
+    ----------
+    labels : sequence of str
+        The legend's labels.
+    width : float
+        The figure's width [in].
+    fontsize : float
+        The legend's font size [pt].
+    most : int
+        Columns at most.
+
+    Returns
+    -------
+    int
+        At least 1.
+
+    Examples
+    --------
+    >>> legend_columns(["a", "b", "c"], 6.0), legend_columns(["x" * 60] * 8, 5.9)
+    (3, 1)
+    """
+    pt = fontsize / 72.0
+    entry = max((len(str(t)) for t in labels), default=1) * 0.6 * pt + 4.0 * pt
+    fit = int((float(width) - 0.2) // entry)
+    return max(1, min(len(labels), int(most), fit))
+
+
 def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6, extra_top=0.0):
     """A p x m grid of panels with a fixed layout and room for ``title``.
 
@@ -493,7 +544,7 @@ def grid_figure(p, m, title, panel_w=5.0, panel_h=3.6, extra_top=0.0):
     fig : matplotlib.figure.Figure
     axes : numpy.ndarray of Axes, shape (p, m)
     """
-    W = 0.85 + 0.25 + m * panel_w + (m - 1) * 0.85
+    W = grid_width(m, panel_w)
     top = _title_height(title, W) + 0.3 + extra_top
     H = top + 0.6 + p * panel_h + (p - 1) * 0.8
     fig, axes = plt.subplots(p, m, figsize=(W, H), squeeze=False)

@@ -256,7 +256,8 @@ def sweep_figure(table, spec, output_names, title, metric=None, names=None):
     names = names or {}
     # one legend for the whole figure, under the title; none for a single unnamed series
     named = not (len(labels) == 1 and labels[0] in ("-", "", None))
-    ncol = min(len(labels), 3)
+    ncol = plots.legend_columns([names.get(lab, lab) for lab in labels],
+                                plots.grid_width(m, 4.8), fontsize=8, most=3)
     band = (-(-len(labels) // ncol) * 0.2 + 0.15) if named else 0.0
     fig, axs = plots.grid_figure(p, m, title, panel_w=4.8, panel_h=3.3, extra_top=band)
     unit = UNITS.get(metric, "")

@@ -86,3 +86,37 @@ def test_the_title_names_the_signal_size_compensator_and_window():
     several = SweepSpec(name="s", mode="reference", metric="rms_error", frequencies=FREQS,
                         labels=["a", "b", "c"], axes=["x"], cases=spec.cases)
     assert "3 compensators" in sweep_subject(several, results)
+
+
+def test_long_names_over_many_decades_fit_the_figure_and_do_not_overlap():
+    """A tester's sweep: eight compensators named by 50-70 characters, one following its own
+    model to 1e-12 µm beside others at 0.3-20 µm. The legend (three columns) was cut on both
+    sides of the 5.9 in figure, and 1, 2, 5 labelled every one of 13 decades (40 overlapping
+    labels)."""
+    labels = [f"case-{j}" for j in range(8)]
+    names = {lab: f"hammerstein, identified from measured records ({lab}-{'x' * 30})"
+             for lab in labels}
+    rows, cases = [], []
+    for f in FREQS:
+        cases.append({"case": f"x-{f:g}", "frequency_hz": f, "compensator": "-", "axis": "x"})
+        for j, lab in enumerate(labels):
+            v = 2e-12 if j == 5 else 0.3 * (j + 1) * (1 + f / 100)
+            rows.append({"frequency_hz": f, "compensator": lab, "axis": "x", "channel": "x",
+                         "rms_error": v})
+    spec = SweepSpec(name="f", mode="reference", metric="rms_error", frequencies=FREQS,
+                     labels=labels, axes=["x"], cases=cases)
+    fig = sweep_figure(pd.DataFrame(rows), spec, ["x"], "t", names=names)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    width = fig.bbox.width
+    (legend,) = fig.legends
+    box = legend.get_window_extent(renderer)
+    assert box.x0 >= 0 and box.x1 <= width                       # nothing cut
+    (ax,) = fig.axes
+    texts = [t for t in ax.get_yticklabels() if t.get_text()]
+    boxes = sorted((t.get_window_extent(renderer) for t in texts), key=lambda b: b.y0)
+    assert 3 <= len(texts) <= 12
+    assert all(a.y1 <= b.y0 for a, b in zip(boxes, boxes[1:]))   # no two labels overlap
+    lo, hi = ax.get_ylim()
+    assert lo <= 2e-12 and hi >= 0.3 * 8 * 3                      # every point inside
+    plt.close(fig)
