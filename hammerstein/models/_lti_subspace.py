@@ -22,6 +22,7 @@ from hammerstein.models._lti_systems import _apply_filter, _records, modal_param
 from hammerstein.models._lti_delay import excited_band
 from hammerstein.models._lti_modal import keep_modes, mode_shares, real_modal
 from hammerstein.models._lti_rate import DYNAMICS_RATE_HZ, decimation_factor, fit_decimated
+from hammerstein.models._lti_scaling import OUTPUT_SCALE_RATIO, balanced_fit  # noqa: F401
 
 # -- identification ------------------------------------------------------------------
 def _powers(lam, N):
@@ -511,6 +512,10 @@ class DynamicsIdentifier:
     def fit(self, inputs, outputs, sampling_period):
         """Identify G from one or several records.
 
+        Outputs of unequal scales (RMS ratio :data:`OUTPUT_SCALE_RATIO` or
+        more, e.g. µrad beside µm) are balanced first and the model returned
+        in their own units (:func:`hammerstein.models._lti_scaling.balanced_fit`).
+
         Parameters
         ----------
         inputs : array_like, shape (p, n_samples), or list of them
@@ -531,6 +536,11 @@ class DynamicsIdentifier:
             On malformed records or parameters, or when no candidate order
             gives a stable model.
         """
+        ins, outs = _records(inputs, outputs)
+        return balanced_fit(self, ins, outs, sampling_period)
+
+    def _fit(self, inputs, outputs, sampling_period):
+        """:meth:`fit` without the balancing of the outputs (its parameters, result, errors)."""
         T = float(sampling_period)
         if not (np.isfinite(T) and T > 0):
             raise DynamicsError(f"sampling_period: expected a positive time [s], found {sampling_period!r}")

@@ -485,7 +485,20 @@ def plain_log_labels(axis):
 
 
 def grid_width(m, panel_w=5.0):
-    """Width [in] of :func:`grid_figure`'s figure of ``m`` columns of ``panel_w`` [in]."""
+    """Width of :func:`grid_figure`'s figure.
+
+    Parameters
+    ----------
+    m : int
+        Columns of panels.
+    panel_w : float
+        Width of one panel [in].
+
+    Returns
+    -------
+    float
+        [in].
+    """
     return 0.85 + 0.25 + m * panel_w + (m - 1) * 0.85
 
 
