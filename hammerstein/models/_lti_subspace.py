@@ -4,6 +4,10 @@ Multi-record PO-MOESP for A and C, least squares for B, D and the initial
 states, the order chosen on held-out records, modal reduction; the
 references are those of :mod:`hammerstein.models.lti` (Verhaegen and
 Verdult 2007; Ljung 1999).
+
+Length: the identifier's one pass (candidate orders, held-out validation, the final
+fit on every record) shares its records and R factors; the decimation and the
+balancing of the outputs live apart (``_lti_rate``, ``_lti_scaling``).
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from hammerstein.models._lti_systems import _apply_filter, _records, modal_param
 from hammerstein.models._lti_delay import excited_band
 from hammerstein.models._lti_modal import keep_modes, mode_shares, real_modal
 from hammerstein.models._lti_rate import DYNAMICS_RATE_HZ, decimation_factor, fit_decimated
-from hammerstein.models._lti_scaling import OUTPUT_SCALE_RATIO, balanced_fit  # noqa: F401
+from hammerstein.models._lti_scaling import balanced_fit
 
 # -- identification ------------------------------------------------------------------
 def _powers(lam, N):
@@ -512,9 +516,8 @@ class DynamicsIdentifier:
     def fit(self, inputs, outputs, sampling_period):
         """Identify G from one or several records.
 
-        Outputs of unequal scales (RMS ratio :data:`OUTPUT_SCALE_RATIO` or
-        more, e.g. µrad beside µm) are balanced first and the model returned
-        in their own units (:func:`hammerstein.models._lti_scaling.balanced_fit`).
+        Outputs of unequal scales (µrad beside µm) are balanced first
+        (:func:`hammerstein.models._lti_scaling.balanced_fit`).
 
         Parameters
         ----------
