@@ -21,13 +21,19 @@ __all__ = ["model_file_name", "save_identified_models", "save_identified_dynamic
 
 
 def model_file_name(spec):
-    """``identified-<frequency>Hz-<method>.toml`` of an ``identify`` table.
+    """The file name of the model an ``identify`` table identified.
+
+    ``identified-<frequency>Hz-<method>.toml`` for the sine route of the
+    paper; for the route of ``hammerstein identify`` (``records =
+    "excitation"`` or ``"files"``, which may have no ``frequency``)
+    ``identified-<records>-<model>.toml``.
 
     Parameters
     ----------
     spec : dict
         The ``identify`` table: ``frequency`` [Hz] and, optionally,
-        ``method`` (default ``"closed-form"``).
+        ``method`` (default ``"closed-form"``); or ``records`` and ``model``
+        (default ``"auto"``).
 
     Returns
     -------
@@ -38,7 +44,11 @@ def model_file_name(spec):
     --------
     >>> model_file_name({"frequency": 50.0, "method": "least-squares"})
     'identified-50Hz-least-squares.toml'
+    >>> model_file_name({"records": "files", "model": "preisach"})
+    'identified-files-preisach.toml'
     """
+    if "records" in spec:
+        return f"identified-{spec['records']}-{spec.get('model', 'auto')}.toml"
     return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
 
 

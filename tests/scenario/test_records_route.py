@@ -313,3 +313,43 @@ def test_a_record_beyond_the_size_limit_or_a_fifo_is_named_before_anything_is_re
                         lambda *a, **k: reads.append(a) or real(*a, **k))
     records_route._files_digest({"hysteresis_records": ["big.csv"]}, tmp_path)
     assert reads and reads[0][1] == "data"
+
+
+@pytest.fixture(scope="module")
+def hysteresis_files(tmp_path_factory):
+    """The hysteresis records of `hammerstein excitation` on realistic-gpi, written as files."""
+    plant = load_plant(SCENARIOS / "presets" / "realistic-gpi.toml")
+    recs = excitation_records(plant, identify_table({"records": "excitation", "frequency": 5.0,
+                                                     "hold": 0.25, "multisine_periods": 2}))
+    d = tmp_path_factory.mktemp("records")
+    (d / "plant.toml").write_text((SCENARIOS / "presets" / "realistic-gpi.toml").read_text())
+    return d, [Path(_write(d / f"h{i}.csv", r)).name for i, r in enumerate(recs["hysteresis"])]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind, model", [("multivariable", "classical"), ("diagonal", "classical"),
+                                         ("per-axis", "classical"),
+                                         ("static-gain", "classical"),
+                                         ("multivariable", "preisach"),
+                                         ("static-gain", "generalized")])
+def test_every_kind_runs_on_a_model_identified_from_files(hysteresis_files, kind, model,
+                                                          no_figures):
+    """A tester's scenarios: every kind but hammerstein, on a model identified from his
+    measured records, simulated every case and then stopped on "unexpected KeyError:
+    'frequency'" while naming the model file, and wrote no report."""
+    from hammerstein.runner import run_scenario
+    d, files = hysteresis_files
+    extra = 'gain = "midpoint"\ncheck = "warn"\n' if kind == "multivariable" else ""
+    f = d / f"s-{kind}-{model}.toml"
+    f.write_text(f'name = "s"\n[plant]\npreset = "plant.toml"\n'
+                 f'dynamics = false\n[compensator]\nkind = "{kind}"\nmodel = "identified"\n{extra}'
+                 f'[compensator.identify]\nrecords = "files"\nmodel = "{model}"\n'
+                 f'hysteresis_records = {files!r}\n'.replace("'", '"')
+                 + '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+                   'frequency = 5.0, periods = 3 }\n')
+    outcome = run_scenario(f, d / f"out-{kind}-{model}", renderer=no_figures)
+    assert outcome.ok, outcome.error
+    out = outcome.out_dir
+    saved = sorted(p.name for p in (Path(out) / "models").iterdir())
+    assert saved == [f"identified-files-{model}.toml"], saved
+    assert (Path(out) / "report.md").is_file()
