@@ -24,7 +24,14 @@ from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_n
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
-__all__ = ["compensate_reference", "LAW_KINDS", "REST_TOLERANCE"]
+__all__ = ["compensate_reference", "unfollowed_problem", "LAW_KINDS", "REST_TOLERANCE",
+           "UNFOLLOWED_SHARE"]
+
+#: A drive whose compensator asks for voltages beyond the amplifier's range by more than 1 % of
+#: its span on more than this share of the samples after the fade-in is refused:
+#: the limits then write a drive that follows nothing (a tester's tip-tilt platform: the exact
+#: inverse at its -120 V bound on every sample, a drive of zeros written with exit 0)
+UNFOLLOWED_SHARE = 0.5
 
 #: ``--fade-in 0`` takes a reference whose first sample is within this of the rest output [µm]
 #: (the model's output at 0 V; the error message prints it to 7 digits)
@@ -151,6 +158,9 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
             # "lower the reference" alone: by how much, and where it fits, is the reach's
             raise AmplifierError(f"{exc}; {reach}") from None
         raise
+    problem = unfollowed_problem(plant, comp, drive)
+    if problem:
+        raise CompensatorError(problem)
     note = reach
     if note:
         drive.notes.append(note)
@@ -238,3 +248,70 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
         raise CompensatorError(f"--gain/--check: kind {kind!r} has no inverse multiplicative law "
                                f"(they apply to {', '.join(LAW_KINDS)})")
     return kind, options, note
+
+
+def unfollowed_problem(plant, comp, drive):
+    """Why a drive follows nothing of its reference, or None.
+
+    When the compensator's voltages (before any limit) leave the amplifier's
+    range by more than 1 % of its span on more than
+    :data:`UNFOLLOWED_SHARE` of the samples after the fade-in, the limits
+    leave a drive that does not follow the reference: the model cannot give
+    that reference, or the compensator's inverse does not solve it (the
+    exact inverse's Gauss-Seidel over the direct paths needs each direct
+    path to carry more of its output than the cross-couplings; its secant
+    gains say whether they do).
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        The actuator (its ``amplifier``; None: no check).
+    comp : object
+        The compensator (its secant gains ``K`` [µm/V] when it has them).
+    drive : hammerstein.compensation.drive.DriveResult
+        Its ``commanded`` voltages [V] and ``fade_samples``.
+
+    Returns
+    -------
+    str or None
+    """
+    amp = plant.amplifier
+    if amp is None:
+        return None
+    u = np.asarray(drive.commanded, dtype=float)[:, int(drive.fade_samples):]
+    if u.shape[1] == 0:
+        return None
+    names = list(amp.inputs)
+    worst = None
+    for name, c, row in zip(names, amp.channels, u):
+        span = c.high - c.low
+        out = (row > c.high + 0.01 * span) | (row < c.low - 0.01 * span) | ~np.isfinite(row)
+        share = float(np.mean(out))
+        if share > UNFOLLOWED_SHARE and (worst is None or share > worst[1]):
+            far = np.nanmax(np.maximum(row - c.high, c.low - row))
+            worst = (name, share, far, c)
+    if worst is None:
+        return None
+    name, share, far, c = worst
+    text = (f"the compensator asks for {name} beyond the range [{c.low:g}, {c.high:g}] V on "
+            f"{100 * share:.3g} % of the samples after the fade-in (by up to {far:.4g} V): the "
+            f"limits would write a drive that does not follow the reference. The model cannot "
+            f"give this reference within the range, or the compensator cannot solve it")
+    K = getattr(comp, "K", None)
+    if K is None:           # a Hammerstein compensator's static part
+        K = getattr(getattr(comp, "hysteresis_compensator", None), "K", None)
+    if K is not None and np.ndim(K) == 2 and np.shape(K)[0] == np.shape(K)[1] > 1:
+        K = np.abs(np.asarray(K, dtype=float))
+        rows = [(outn, K[l, l], K[l].sum() - K[l, l])
+                for l, outn in enumerate(plant.hysteresis.output_names)]
+        weak = [r for r in rows if r[1] <= r[2]]
+        if weak:
+            text += (": its inverse solves each output on its direct path (Gauss-Seidel), "
+                     "which needs the direct paths to dominate, and they do not ("
+                     + ", ".join(f"{o}: direct {d:.3g} µm/V against {x:.3g} from the others"
+                                 for o, d, x in weak)
+                     + "); measure outputs that each input drives most (e.g. each stack's "
+                     "own displacement) and identify again")
+    else:
+        text += ": make the reference smaller or move its center within what the model reaches"
+    return text
