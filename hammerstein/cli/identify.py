@@ -37,8 +37,9 @@ from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
     cut_note, level_metrics_rows, level_report_lines, metrics_rows, unit_warnings)
 from hammerstein.models.amplifier import records_amplifier_table, records_hold_steps
-from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs, png_provenance,
-                                    provenance_line, replace_problem, safe_write)
+from hammerstein.core.files import (FileLimitError, all_or_nothing, file_limit_problem,
+                                    guard_inputs, png_provenance, provenance_line,
+                                    replace_problem, safe_write)
 from hammerstein.io.presets import PresetError, save_model
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification_pipeline import (PipelineOptions, identify_pipeline,
@@ -550,6 +551,12 @@ def _handler(args):
         print(f"hammerstein identify: error: {exc}", file=sys.stderr)
         return 2
     try:
+        # every record's size before any is read: the delay's estimate read the dynamics
+        # records first, and a hysteresis record over the limit was named after 36 s
+        for path in [*args.data, *args.dynamics_records, *args.creep_records]:
+            problem = file_limit_problem(path, "data", "record file")
+            if problem:
+                raise FileLimitError(problem)
         if args.delay == "auto":
             _estimate_delay(args)
         records = [_read(args, d) for d in args.data]

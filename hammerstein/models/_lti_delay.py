@@ -93,6 +93,12 @@ def _band(f, density, threshold):
     return float(f[1:][excited[0]]), float(f[1:][excited[-1]])
 
 
+#: Longest default Welch segment of :func:`frf_h1` [samples] (1.2 Hz lines at 20 kHz).
+MAX_NPERSEG = 2 ** 14
+#: Bytes the delay search's phase table may take at once (:func:`_delay_over`, in blocks).
+DELAY_BLOCK_BYTES = 2 ** 25
+
+
 def frf_h1(inputs, outputs, sampling_period, nperseg=None):
     """H1 estimate of a p x m frequency response from several records.
 
@@ -112,7 +118,10 @@ def frf_h1(inputs, outputs, sampling_period, nperseg=None):
         T [s].
     nperseg : int, optional
         Welch segment length; default the largest power of two up to a
-        quarter of the shortest record (at least 256 samples).
+        quarter of the shortest record (at least 256 samples), at most
+        :data:`MAX_NPERSEG` (longer records average more segments: a 6 M
+        sample multisine's 2^20-sample segments made the delay search
+        allocate 4 TiB).
 
     Returns
     -------
@@ -138,7 +147,7 @@ def frf_h1(inputs, outputs, sampling_period, nperseg=None):
     if nperseg is None:
         shortest = min(u.shape[1] for u in ins)
         nperseg = max(256, 2 ** int(np.floor(np.log2(max(shortest // 4, 2)))))
-        nperseg = min(nperseg, shortest)
+        nperseg = min(nperseg, shortest, MAX_NPERSEG)
     m, p = ins[0].shape[0], outs[0].shape[0]
     Suu = Syu = f = None
     for u, y in zip(ins, outs):
@@ -364,8 +373,13 @@ def _delay_over(f, H, T, band_hz):
     weights = np.abs(H) ** 2
     reach = max(seg // 4, 4)
     grid = np.arange(-reach, reach + 0.125, 0.25)
-    # coherent sum per transfer for every tau of the grid: (n_grid, n_transfers)
-    J = np.abs(np.exp(2j * np.pi * T * grid[:, None] * f[None, :]) @ H.T).sum(axis=1)
+    # coherent sum per transfer for every tau of the grid: (n_grid, n_transfers), the phase
+    # table built in blocks of DELAY_BLOCK_BYTES (a long record's grid times its lines)
+    J = np.empty(grid.size)
+    step = max(1, DELAY_BLOCK_BYTES // (16 * f.size))
+    for i in range(0, grid.size, step):
+        g = grid[i:i + step]
+        J[i:i + step] = np.abs(np.exp(2j * np.pi * T * g[:, None] * f[None, :]) @ H.T).sum(axis=1)
     tau, res, std = _phase_slope(H, f, T, float(grid[np.argmax(J)]), weights)
     mid = 0.5 * (lo + hi)
     halves, hstd = [], []
