@@ -554,7 +554,7 @@ def _handler(args):
         # every record's size before any is read: the delay's estimate read the dynamics
         # records first, and a hysteresis record over the limit was named after 36 s
         for path in [*args.data, *args.dynamics_records, *args.creep_records]:
-            problem = file_limit_problem(path, "data", "record file")
+            problem = file_limit_problem(path, "data", "data file")
             if problem:
                 raise FileLimitError(problem)
         if args.delay == "auto":
