@@ -56,7 +56,7 @@ from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_in
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
-from hammerstein.exceptions import DataFileError, FileLimitError
+from hammerstein.exceptions import DataFileError, FileLimitError, PresetError
 from hammerstein.io.datafiles import signal_table
 from hammerstein.core.files import markdown_text
 from hammerstein.report.definitions import definitions_lines
@@ -265,7 +265,12 @@ def _handle(args):
             return 2
     try:
         if args.model:
-            plant = load_actuator(args.model, args.sampling_period or 1.0)
+            try:        # its own sampling period: at 1 s its modes read as beyond Nyquist
+                plant = load_actuator(args.model, args.sampling_period)
+            except PresetError:
+                if args.sampling_period is not None:
+                    raise
+                plant = load_actuator(args.model, 1.0)   # the names of a model with no period
             outs, ins = list(plant.hysteresis.output_names), list(plant.hysteresis.input_names)
         else:     # the outputs a CSV reference names (a one-axis stage's x), else x, y
             outs, ins = _reference_outputs(args) or ["x", "y"], []

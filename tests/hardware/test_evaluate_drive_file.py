@@ -144,3 +144,12 @@ def test_a_sampling_period_other_than_the_drives_is_named(files):
     assert res.returncode == 1
     assert res.stderr.startswith("hammerstein evaluate: error: --sampling-period: 0.0001 s; "
                                  "expected the drive's 5e-05 s")
+
+
+def test_a_preset_given_as_the_model_is_read_at_its_own_sampling_period(files):
+    """`evaluate --model preset.toml` read the preset at T = 1 s, and warned that its bending
+    modes (about 2 kHz here) were beyond the Nyquist frequency of 0.5 Hz."""
+    done = _cli("evaluate", "--reference", REF, "--drive", "u0.csv", "--measured", "y0.csv",
+                "--model", "rakotondrabe-2dof", "--out", "ev-model", cwd=files)
+    assert done.returncode == 0, done.stderr
+    assert "Nyquist" not in done.stderr and "warning" not in done.stderr, done.stderr
