@@ -204,11 +204,13 @@ def add_parser(subparsers):
 
 
 def _inverse_gain(model, gain, check):
-    """(K of the law inverting a classical PI in the learning, the notes to print).
+    """(K of the law inverting a classical PI in the learning, the notes to print, the check).
 
     The notes: one line on the choice (``note: kind = ilc because ...``);
     ``check`` error/warn reacts to ``rho(I - K^-1 J) >= 1``
-    (:func:`hammerstein.compensation.model_classes.law_radius`).
+    (:func:`hammerstein.compensation.model_classes.law_radius`); without a
+    gain and a check, when no gain converges provably, the check is
+    ``warn``, as ``compensate``'s default kind runs it.
     """
     entry = model_class(model)
     notes = []
@@ -217,14 +219,22 @@ def _inverse_gain(model, gain, check):
             raise CompensatorError(f"--gain/--check: the {entry.label} model is inverted exactly "
                                    f"in the learning (no inverse multiplicative law)")
         return "secant", [f"note: kind = ilc because learning runs on the hardware; the "
-                          f"{entry.label} model is inverted exactly in L"]   # gain unused
-    if gain is None:
+                          f"{entry.label} model is inverted exactly in L"], check  # gain unused
+    chosen = gain is None
+    if chosen:
         gain, radius, _ = convergent_gain(model)
     else:
         radius = law_radius(model, gain)
     name = gain if isinstance(gain, str) else "scaled midpoint K = [" + ", ".join(
         f"{v:.4g}" for v in np.diag(gain)) + "] µm/V"
-    if radius >= 1.0 and check in ("error", "warn"):
+    if radius >= 1.0 and check is None and chosen:
+        # as compensate's default (model_classes.choose_kind): no gain converges provably, the
+        # law runs with check = warn; learn had refused what compensate ran (rho 1.75)
+        notes.append(f"note: no gain makes the classical PI law provably converge (smallest "
+                     f"rho(I - K^-1 J) {radius:.3g}): the law runs with check = warn, as "
+                     f"compensate's")
+        check = "warn"
+    elif radius >= 1.0 and check in ("error", "warn"):
         text = (f"--gain {name}: rho(I - K^-1 J) reaches {radius:.3g} >= 1, the law inverting "
                 f"the model in the learning may not converge ({LAW_HINT})")
         if check == "error":
@@ -233,7 +243,7 @@ def _inverse_gain(model, gain, check):
     notes.append(f"note: kind = ilc because learning runs on the hardware; the classical PI is "
                  f"inverted in L by the multivariable law, gain {name}, rho(I - K^-1 J) "
                  f"{radius:.3g}")
-    return gain, notes
+    return gain, notes, check
 
 
 #: a trial worse than the best one so far by more than this factor is not learnt from
@@ -542,7 +552,7 @@ def _learn(args):
                     bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 learn_u, learn_y, followed = bu, by, bf
         gain = args.learning_gain * gain_factor(halvings, verdict.rejections)
-        law_gain, notes = _inverse_gain(model, args.gain, args.check)
+        law_gain, notes, law_check = _inverse_gain(model, args.gain, args.check)
         notes = ([f"note: {line}" for line in rate_notes] + ([] if q_note is None else [q_note])
                  + notes + ([] if period_note is None else [period_note]))
         if (note or stall) and steady is not None:
@@ -586,7 +596,8 @@ def _learn(args):
             # <output>_shaped), and a learnt correction stepping a little beyond the slew rate
             # had the whole record smoothed again, a trial 34 times worse; the drive is shaped
             _, drive = compensate(plant, corrected, drive_kind_, args.inversion, fade * T,
-                                  args.limits, law_gain if law else args.gain, args.check, lead,
+                                  args.limits, law_gain if law else args.gain,
+                                  law_check if law else args.check, lead,
                                   shape=False)
             u_next, learnt = drive.inputs, drive.reference
             problems, shaped = list(drive.problems), list(drive.shaped)
