@@ -39,12 +39,12 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
                                             compensator_rest,
                                             signals_csv)
 from hammerstein.compensation.drive_files import rest_lead_text
-from hammerstein.core.files import guard_inputs, output_problem, safe_write
+from hammerstein.core.files import guard_inputs, limit, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.reach import REACH_NOTE_START
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, RANGE_MARGINS,
                                               chatter_warnings)
-from hammerstein.exceptions import CompensatorDivergence
+from hammerstein.exceptions import CompensatorDivergence, FileLimitError
 from hammerstein.scenario.hardware_route import (_kind_and_options, _rest_voltages,
                                                  compensate_reference)
 
@@ -270,7 +270,16 @@ def _handle(args):
                    + "".join(f"\nshaped: {line}" for line in drive.shaped)
                    + "".join(f"\nnote: {line}" for line in ref.notes + list(drive.notes))
                    + "".join(f"\nwarning: {line}" for line in chatter))
-        safe_write(args.out, signals_csv(ref.t, cols, comment), "drive file")
+        text = signals_csv(ref.t, cols, comment)
+        if len(text.encode("utf-8")) > limit("data"):
+            # evaluate and learn read a drive file within the data files' limit: a 10-minute
+            # drive at 20 kHz (640 MiB) was written, then refused by evaluate at once
+            raise FileLimitError(
+                f"--out: the drive file would take {len(text.encode('utf-8')) / 2**20:.4g} MiB, "
+                f"beyond the {limit('data') / 2**20:.4g} MiB that evaluate and learn read "
+                f"(HAMMERSTEIN_MAX_DATA_BYTES raises it for every command); nothing written: "
+                f"a shorter reference (fewer periods), or raise the limit")
+        safe_write(args.out, text, "drive file")
     except CompensatorDivergence as exc:
         print_err(f"hammerstein compensate: error: the compensator diverged: {exc}")
         return 1

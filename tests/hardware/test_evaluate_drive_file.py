@@ -153,3 +153,17 @@ def test_a_preset_given_as_the_model_is_read_at_its_own_sampling_period(files):
                 "--model", "rakotondrabe-2dof", "--out", "ev-model", cwd=files)
     assert done.returncode == 0, done.stderr
     assert "Nyquist" not in done.stderr and "warning" not in done.stderr, done.stderr
+
+
+def test_compensate_writes_no_drive_that_evaluate_would_refuse(tmp_path, monkeypatch, capsys):
+    """A tester's 10-minute drive at 20 kHz (640 MiB) was written, and evaluate refused it at
+    once (256 MiB): compensate now refuses it, with nothing written."""
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", str(50_000))
+    out = tmp_path / "d.csv"
+    code = main(["compensate", "rakotondrabe-2dof", "--reference", REF, "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and not out.exists()
+    assert "beyond the 0.04768 MiB that evaluate and learn read" in err[-1], err[-1]
+    monkeypatch.setenv("HAMMERSTEIN_MAX_DATA_BYTES", str(2_000_000))
+    assert main(["compensate", "rakotondrabe-2dof", "--reference", REF, "--out", str(out)]) == 0
+    assert 50_000 < out.stat().st_size <= 2_000_000
