@@ -22,7 +22,8 @@ from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 
 
 __all__ = ["AmplifierLimits", "CExport", "check_name", "MARKER", "STATUS_LIMIT",
-           "STATUS_DIVERGED", "STATUS_RANGE", "REFERENCE_SPAN", "reference_bound"]
+           "STATUS_DIVERGED", "STATUS_RANGE", "REFERENCE_SPAN", "reference_bound",
+           "model_input_range"]
 
 
 #: First characters of every file :func:`export_c` writes (ownership mark).
@@ -34,8 +35,8 @@ STATUS_LIMIT = 1
 STATUS_DIVERGED = 2
 #: Bit of ``NAME_step``'s return value: the reference was not finite or beyond
 #: ``NAME_reference_bound`` (the sample is skipped: voltages held, state unchanged), or out of
-#: the model's range (it asks for voltages beyond the input bound, 1.2 x the identified input
-#: amplitude; the exact inverses stop there).
+#: the model's range (it asks for voltages beyond its input range, the centre -+ 1.2 x the
+#: identified input amplitude, :func:`model_input_range`; the exact inverses stop at their bound).
 STATUS_RANGE = 4
 #: a reference beyond this many times the model's largest |output| over its input range is a
 #: glitch, skipped like NaN (:func:`reference_bound`)
@@ -549,6 +550,62 @@ def reference_bound(model, limits=None):
     return float(min(REFERENCE_SPAN * max(scale, 1.0), MAX_MAGNITUDE))
 
 
+def model_input_range(model, limits=None):
+    """The input range of a classical-PI model, beyond which ``NAME_step`` sets the range bit.
+
+    Each input's range is ``centre -+ 1.2 x input_amplitude``. The identified
+    amplitude is half the span the records drove, not a bound about 0 V: a
+    unipolar actuator (amplifier range 0..100 V, amplitude 50 V) spans
+    0..100 V. The centre is therefore placed in the amplifier's range, as
+    near 0 V as the span fits there (the compensator rests at the range value
+    nearest 0 V): ``clip(0, min + A, max - A)``, the range's middle when the
+    span ``2 A`` is wider than the range, and 0 V without an amplifier range
+    (a symmetric model). A symmetric amplifier range keeps the centre at 0 V.
+
+    Parameters
+    ----------
+    model : object
+        The compensator's hysteresis model (``n_inputs``, ``input_amplitude``
+        or None).
+    limits : AmplifierLimits, optional
+        The exported amplifier limits (their range places the centre).
+
+    Returns
+    -------
+    (low, high) : tuple of numpy.ndarray, shape (m,) each, or None
+        [V]; None when the model has no finite input amplitude (no range check).
+
+    Raises
+    ------
+    ExportError
+        On invalid ``limits`` (:meth:`AmplifierLimits.arrays`).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> pi = SimpleNamespace(n_inputs=2, input_amplitude=[50.0, 50.0])
+    >>> low, high = model_input_range(pi, AmplifierLimits(0.0, 100.0))
+    >>> low.tolist(), high.tolist()
+    ([-10.0, -10.0], [110.0, 110.0])
+    >>> [a.tolist() for a in model_input_range(pi)]
+    [[-60.0, -60.0], [60.0, 60.0]]
+    """
+    m = int(model.n_inputs)
+    amp = getattr(model, "input_amplitude", None)
+    if amp is None:
+        return None
+    A = np.abs(np.broadcast_to(np.asarray(amp, dtype=float), (m,)))
+    if not np.all(np.isfinite(A)):
+        return None
+    centre = np.zeros(m)
+    if limits is not None:
+        lo, hi, _ = limits.arrays(m)
+        for k in range(m):        # a span wider than the range (both bounds finite): its middle
+            centre[k] = float(np.clip(0.0, lo[k] + A[k], hi[k] - A[k])) if lo[k] + A[k] <= hi[k] - A[k] \
+                else 0.5 * (lo[k] + hi[k])
+    return centre - 1.2 * A, centre + 1.2 * A
+
+
 def _status_checks(body, model, precision, N, limits):
     """Fill the status placeholders of a step: reference check, voltage check, range flag.
 
@@ -575,14 +632,15 @@ def _status_checks(body, model, precision, N, limits):
     decls, rng = [f"static const {N}_real {N}_reference_bound = {_lit(bound, precision)};  "
                   f"/* {REFERENCE_SPAN:g} x the model's largest |output| over its input range: "
                   f"beyond it a reference is skipped like NaN */"], ""
-    amp = getattr(model, "input_amplitude", None)
     uses = any("@VOLTAGE_CHECK@" in b or "@RANGE_CHECK@" in b for b in body)
-    if uses and amp is not None and np.all(np.isfinite(amp)):
-        decls.append(f"static const {N}_real {N}_u_range[{N}_N_INPUTS] = "
-                     f"{_vec(1.2 * np.asarray(amp, dtype=float), precision)};  /* 1.2 x the identified "
-                     f"input amplitude [V] */")
+    span = model_input_range(model, limits) if uses else None
+    if span is not None:
+        decls.append(f"static const {N}_real {N}_u_low[{N}_N_INPUTS] = {_vec(span[0], precision)};  "
+                     f"/* the model's input range: its centre -+ 1.2 x the identified input "
+                     f"amplitude [V] */")
+        decls.append(f"static const {N}_real {N}_u_high[{N}_N_INPUTS] = {_vec(span[1], precision)};")
         rng = f"""    for (k = 0; k < {N}_N_INPUTS; ++k)  /* beyond the model's range: flagged, not changed */
-        if (u[k] > {N}_u_range[k] || u[k] < -{N}_u_range[k]) status |= {N}_STATUS_RANGE;"""
+        if (u[k] > {N}_u_high[k] || u[k] < {N}_u_low[k]) status |= {N}_STATUS_RANGE;"""
     volt = f"""    for (k = 0; k < {N}_N_INPUTS; ++k)
         if (!isfinite(u[k])) {{
             s->diverged = 1;

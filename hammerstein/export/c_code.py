@@ -205,7 +205,8 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
  *       later call returns this bit, until {N}_init.
  *   {N}_STATUS_RANGE    ({STATUS_RANGE}): the reference is not finite (NaN, inf: the sample is
  *       skipped, the voltages held and the state kept) or out of the model's range (it asks
- *       for voltages beyond the input bound; the exact inverses stop at the bound).
+ *       for voltages beyond its input range, {N}_u_low..{N}_u_high where present; the exact
+ *       inverses stop at their bound).
  * Amplifier limits: {limits_text}.
  * One state per actuator; {N}_step is reentrant on distinct states. Copying the struct
  * (memcpy) saves and restores the compensator exactly.
