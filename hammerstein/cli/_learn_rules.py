@@ -36,7 +36,7 @@ from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.compensation.shaping import delay_search_span
 
 __all__ = ["MAX_HALVINGS", "LAG_TOLERANCE", "LAG_PHASE_DEG", "Verdict", "gain_factor",
-           "trial_lag", "lag_problem", "judge_trial"]
+           "trial_lag", "lag_tolerance", "lag_problem", "lag_advice", "judge_trial"]
 
 #: the gain is halved at most this many times in all (a floor of 1/16 of --learning-gain)
 MAX_HALVINGS = 4
@@ -96,7 +96,31 @@ def trial_lag(predicted, measured, reference, period_samples, sampling_period):
         reference, period_samples, sampling_period)))
 
 
-def lag_problem(lag, delay, expected_offset, period_samples, source):
+def lag_tolerance(expected_offset, period_samples):
+    """Samples a trial's lag may differ from the one expected (:func:`lag_problem`).
+
+    Parameters
+    ----------
+    expected_offset : int or None
+        ``lag - delay`` of the last trial learnt from, None on a first trial.
+    period_samples : float
+        The period of the reference's fundamental [samples] (given by
+        ``--period``, or found from the reference itself,
+        :func:`hammerstein.signals.fundamental.reference_fundamental`);
+        0 or 1: none known.
+
+    Returns
+    -------
+    int
+        ``LAG_TOLERANCE`` against an earlier trial; on a first trial
+        ``LAG_PHASE_DEG`` of the fundamental, rounded up, at least that.
+    """
+    if expected_offset is not None or not period_samples or period_samples <= 1:
+        return LAG_TOLERANCE
+    return max(LAG_TOLERANCE, math.ceil(float(period_samples) * LAG_PHASE_DEG / 360.0))
+
+
+def lag_problem(lag, delay, expected_offset, period_samples, source, sampling_period=None):
     """The line saying a trial is out of step, or None.
 
     Parameters
@@ -109,32 +133,81 @@ def lag_problem(lag, delay, expected_offset, period_samples, source):
         ``lag - delay`` of the last trial learnt from (the model's phase
         error at the reference, the same from trial to trial), None when
         no earlier trial is known (then a tolerance of ``LAG_PHASE_DEG`` of
-        the reference's fundamental).
-    period_samples : int
-        The reference's period [samples].
+        the reference's fundamental, :func:`lag_tolerance`).
+    period_samples : float
+        The period of the reference's fundamental [samples] (0 or 1: none).
     source : str
         Where ``delay`` comes from (``"the model's delay"``, ``"--delay"``).
+    sampling_period : float, optional
+        T [s]: the line names the fundamental in Hz.
 
     Returns
     -------
     str or None
+        A measurement that leads the prediction (``lag < 0``) is not called a
+        latency: no acquisition answers before it is driven.
     """
     offset = int(lag) - int(delay)
-    if expected_offset is not None:
-        off, tol = offset - int(expected_offset), LAG_TOLERANCE
-    else:
-        off = offset
-        tol = max(LAG_TOLERANCE, math.ceil(period_samples * LAG_PHASE_DEG / 360.0)
-                  if period_samples and period_samples > 1 else LAG_TOLERANCE)
+    first = expected_offset is None
+    off = offset if first else offset - int(expected_offset)
+    tol = lag_tolerance(expected_offset, period_samples)
     if abs(off) <= tol:
         return None
-    since = ("" if expected_offset is None or expected_offset == 0 else
+    since = ("" if first or expected_offset == 0 else
              f" (the trials learnt from lagged {int(delay) + int(expected_offset)})")
+    if first and period_samples and period_samples > 1:
+        fund = (f"{1.0 / (float(period_samples) * float(sampling_period)):.4g} Hz "
+                if sampling_period else "")
+        within = (f"; a first trial may be off by {tol} samples, {LAG_PHASE_DEG:g} deg of the "
+                  f"reference's {fund}fundamental (a model's phase error)")
+    elif first:
+        within = (f"; a first trial may be off by {tol} sample(s): no period of the reference "
+                  f"is known (--period)")
+    else:
+        within = ""
+    if lag < 0:
+        return (f"leads the model's prediction by {-int(lag)} samples, {source} is {delay}{since}: "
+                f"no latency (an acquisition does not answer before it is driven): a record "
+                f"triggered after the drive started, or a phase lead of the model's error at "
+                f"the reference{within}")
     # a record that starts S samples late reads S samples ahead: its lag is S less
     when = "early" if off > 0 else "late"
     return (f"lags {lag} samples, {source} is {delay}{since}: a trigger or latency change "
             f"(the record starts {abs(off)} samples {when}, or the acquisition's latency "
-            f"changed)")
+            f"changed){within}")
+
+
+def lag_advice(lag, expected_offset, period_given):
+    """What helps a trial :func:`lag_problem` refused (the end of its line).
+
+    Parameters
+    ----------
+    lag : int
+        The trial's lag [samples].
+    expected_offset : int or None
+        As for :func:`lag_problem`.
+    period_given : bool
+        ``--period`` was given.
+
+    Returns
+    -------
+    str
+        ``--delay N`` only with the N that aligns the trial (a latency,
+        ``>= 0``); for a lead on a first trial, ``--period`` (the
+        tolerance is a share of the fundamental) or the dynamics.
+    """
+    new = int(lag) - int(expected_offset or 0)
+    text = "check that the record starts with the drive and measure it again"
+    if new >= 0:
+        return text + f"; when the acquisition's latency really changed, give --delay {new}"
+    text += " (--delay cannot align a lead: it is a latency, an integer >= 0)"
+    if expected_offset is None:
+        text += ("; when the record does start with the drive, the model's phase error at the "
+                 "reference is beyond a first trial's tolerance: "
+                 + ("" if period_given else "give --period S when the reference's period is "
+                    "longer than that of the fundamental above, or ")
+                 + "identify the dynamics again (identify --dynamics)")
+    return text
 
 
 @dataclass
@@ -176,7 +249,7 @@ class Verdict:
 
 
 def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, repeating,
-                what, judged_text, out_of_step=None):
+                what, judged_text, out_of_step=None, advice=None):
     """The verdict on trial ``k`` against the history's best (module docstring).
 
     Parameters
@@ -200,6 +273,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         What the judged error is (in the lines).
     out_of_step : str or None
         :func:`lag_problem`'s text.
+    advice : str, optional
+        :func:`lag_advice`'s text, ending an out-of-step trial's note.
 
     Returns
     -------
@@ -214,8 +289,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
                        note=(f"trial {k} {out_of_step}: not learnt from (its error says nothing "
                              f"about the drive) and not counted as the actuator getting worse; "
                              f"learning again from trial {b}'s drive with gain "
-                             f"x{gain_factor(halvings, rejections):g}; check the trigger and "
-                             f"measure again, or give --delay with the new latency"))
+                             f"x{gain_factor(halvings, rejections):g}; "
+                             + (advice or "check the trigger and measure again")))
     if remeasured and worse:
         info = (f"trial {k} re-measures the best trial {b}'s drive: {ratio} its stored "
                 f"error ({score:.4g} against {best_score:.4g} µm {what}): the best was stale "

@@ -42,7 +42,10 @@ with ``shape=False``).
 Everything is judged on the settled part: the printed max and RMS
 Euclidean errors start after the fade-in and ``--settle-periods`` (the
 start-up no drive removes), for a repeating reference not before its
-repeating part (two periods after the fade-in), and the fade-in itself is not judged (the next
+repeating part (two periods after the fade-in; so too for a CSV reference
+without ``--period`` that repeats, a raster's lines: its period and, for a
+first trial's lag, its fundamental are found from it,
+:mod:`hammerstein.signals.fundamental`), and the fade-in itself is not judged (the next
 drive starts as the base drive and is faded into the learning over the
 fade-in and the next period, as the reference is,
 :func:`hammerstein.compensation.drive.keep_start`), so every drive starts at
@@ -129,9 +132,10 @@ from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, Ite
 from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
 from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
-                                          lag_problem, trial_lag)
+                                          lag_advice, lag_problem, trial_lag)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
+from hammerstein.signals.fundamental import reference_fundamental
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
 
@@ -474,7 +478,9 @@ def _learn(args):
                 raise DataFileError(f"--delay: expected auto or an integer >= 0, found "
                                     f"{args.delay!r}") from None
             if delay < 0:
-                raise DataFileError(f"--delay: expected auto or an integer >= 0, found {delay}")
+                raise DataFileError(f"--delay: expected auto or an integer >= 0 (the "
+                                    f"acquisition's latency; a measurement that leads the drive "
+                                    f"has none), found {delay}")
         if delay >= N - 1:
             raise DataFileError(f"--delay: {delay} samples; expected fewer than the record's {N - 1}")
         # a delay not measured on this trial (the model file's, or --delay N): the trial's own
@@ -488,6 +494,18 @@ def _learn(args):
         settle = fade + int(args.settle_periods * ref.period_samples)
         if steady is not None:        # the repeating part the trial is judged on
             settle = max(settle, steady)
+        # no period given (a CSV file without --period): the reference's own, found from it,
+        # sets a first trial's lag tolerance and, when it repeats (a raster's lines), the window
+        found = reference_fundamental(ref.signal, T) if P is None else None
+        fundamental_samples = P or (found.samples(T) if found is not None else 0)
+        if found is not None and found.period_samples:
+            Pf = found.period_samples
+            settle = max(fade + int(args.settle_periods * Pf), max(fade, Pf) + 2 * Pf)
+        found_note = None if found is None else (
+            f"note: no --period: the reference's fundamental {found.frequency_hz:.4g} Hz "
+            f"({found.how}) sets a first trial's lag tolerance"
+            + (" and the judged window (from two periods after the fade-in)"
+               if found.period_samples else ""))
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(aim[:, :N - delay], shifted, window)
@@ -506,9 +524,12 @@ def _learn(args):
             args.history, state, fingerprint, u,
             lambda: _read_best(args.history, model, u.shape, y.shape, N)[:2], y,
             args.fade_in is None and drive_fade_samples(args.drive) is None)
+        expected_offset = None if state is None else state.get("lag_offset")
         out_of_step = None if lag is None else lag_problem(
-            lag, delay, None if state is None else state.get("lag_offset"), ref.period_samples,
-            "the model's delay" if args.delay == "auto" else "--delay")
+            lag, delay, expected_offset, fundamental_samples,
+            "the model's delay" if args.delay == "auto" else "--delay", T)
+        advice = None if out_of_step is None else lag_advice(lag, expected_offset,
+                                                             args.period is not None)
         score, score_noise = _judged_error(aim, y, delay, P, steady)
         # two noisy maxima of the same error differ by about sqrt(2) times the averaged noise
         margin = NOISE_MARGIN * np.sqrt(2.0) * score_noise
@@ -528,9 +549,7 @@ def _learn(args):
         bu = by = bf = None
         verdict = Verdict(rejections=0)
         if out_of_step is not None and state is None:
-            raise DataFileError(f"--measured: this trial {out_of_step}; nothing written: check "
-                                f"the trigger and measure the drive again, or give --delay with "
-                                f"the new latency")
+            raise DataFileError(f"--measured: this trial {out_of_step}; nothing written: {advice}")
         if state is not None:
             best_score, what = state["score"], "averaged"
             better = score < best_score
@@ -544,7 +563,7 @@ def _learn(args):
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
                         f"estimated from the records")
             verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
-                                  remeasured, judged is None, what, JUDGED, out_of_step)
+                                  remeasured, judged is None, what, JUDGED, out_of_step, advice)
             halvings, best, note, stall = (verdict.halvings, verdict.best, verdict.note,
                                            verdict.stall)
             if verdict.from_best:
@@ -554,7 +573,8 @@ def _learn(args):
         gain = args.learning_gain * gain_factor(halvings, verdict.rejections)
         law_gain, notes, law_check = _inverse_gain(model, args.gain, args.check)
         notes = ([f"note: {line}" for line in rate_notes] + ([] if q_note is None else [q_note])
-                 + notes + ([] if period_note is None else [period_note]))
+                 + notes + ([] if period_note is None else [period_note])
+                 + ([] if found_note is None else [found_note]))
         if (note or stall) and steady is not None:
             notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady)
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,

@@ -106,7 +106,11 @@ def test_the_gain_has_a_floor(halvings, rejections, factor):
 def test_a_lag_other_than_the_delay_is_named(lag, delay, offset, period, says):
     text = lag_problem(lag, delay, offset, period, "the model's delay")
     assert (text is not None) == says
-    if says:
+    if says and lag < 0:      # a measurement that leads: no latency, no "starts late"
+        assert text.startswith(f"leads the model's prediction by {-lag} samples, the model's "
+                               f"delay is {delay}: no latency")
+        assert "samples late" not in text and "latency change" not in text
+    elif says:
         assert text.startswith(f"lags {lag} samples, the model's delay is {delay}")
         assert "a trigger or latency change" in text
         assert f"starts {abs(lag - delay - (offset or 0))} samples " \
