@@ -92,6 +92,10 @@ standard deviations of the difference
 
 Exit status: 0 written; 1 bad files, shapes or a drive beyond the amplifier
 with ``--limits error`` (one line, nothing written); 2 a usage error.
+
+Length: one trial is one pass (read, align, judge against the history, learn,
+write with its header); the rules, the history and the notes live apart
+(``_learn_rules``, ``_learn_history``, ``_learn_notes``).
 """
 
 from __future__ import annotations
