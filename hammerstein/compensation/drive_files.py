@@ -121,8 +121,8 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     if np.any(np.diff(t) <= 0):
         i = int(np.flatnonzero(np.diff(t) <= 0)[0])
         raise DataFileError(f"{what}: {escape(path)}: the time column {escape(repr(time), 60)} "
-                            f"is not strictly increasing at data row {i + 2} ({t[i]:g} s then "
-                            f"{t[i + 1]:g} s)")
+                            f"is not strictly increasing at data row {i + 2} ({float(t[i])!r} s "
+                            f"then {float(t[i + 1])!r} s)")
     vals = np.array([column(mapping.get(n, n), n) for n in names]).reshape(len(names), t.size)
     Tf, off, tol = uniform_period(t)
     gaps = step_gaps(t)

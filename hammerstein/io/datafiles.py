@@ -7,6 +7,11 @@ header (``time,ux,x`` then ``s,V,µm``, as data-acquisition programs write
 them: skipped). :func:`read_record` handles these
 and turns every problem into a one-line :class:`DataFileError` that names the
 file and what is wrong.
+
+Length: the two table readers (records of ``identify``, signal files of the
+other commands) share their checks and messages (encodings, separators,
+units rows, ragged and cut-short rows, compressed files); kept together so
+that both say the same words.
 """
 
 from __future__ import annotations
@@ -212,6 +217,7 @@ def decode_table(raw, path, what="data file", error=DataFileError):
         UTF-8"`` or ``"... not a text table (binary content) ..."``.
     """
     where = f"{what}: {escape(path)}" if what else escape(path)
+    _refuse_compressed(raw, where, error)
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):      # UTF-16 with a byte-order mark
         text = raw.decode("utf-16", errors="replace")
     else:
@@ -228,6 +234,26 @@ def decode_table(raw, path, what="data file", error=DataFileError):
     if "\r" in text:
         text = text.replace("\r\n", "\n").replace("\r", "\n")
     return text
+
+
+#: The first two bytes of a gzip file (RFC 1952).
+GZIP_MAGIC = b"\x1f\x8b"
+#: Said after a bad last row when the file does not end with a line end.
+CUT_NOTE = ("; the file ends in the middle of that line, its last (cut short while being "
+            "written?): remove the incomplete line")
+
+
+def _refuse_compressed(raw, where, error):
+    """Refuse a gzip-compressed file, saying so, before it is read as (binary) text."""
+    if raw.startswith(GZIP_MAGIC):
+        raise error(f"{where}: gzip-compressed (it starts with the gzip bytes 1f 8b); expected a "
+                    f"text table: decompress it first (gunzip FILE) and give the .csv")
+
+
+def _ends_cut(text):
+    """Whether a table's text (or bytes) ends without a line end: its last line cut short."""
+    end = text.rstrip(" \t" if isinstance(text, str) else b" \t")
+    return bool(end) and not end.endswith("\n" if isinstance(text, str) else (b"\n", b"\r"))
 
 
 def _first_line(raw, comment=True):
@@ -247,6 +273,12 @@ class _Table:
         self.error = error
         #: ``{column: unit}`` of a units row under the header (dropped from the frame), or {}
         self.units = dict(units or {})
+        #: whether the text ends in the middle of its last line (no line end)
+        self.cut = _ends_cut(text)
+
+    def cut_note(self, row):
+        """:data:`CUT_NOTE` when data row ``row`` (0-based) is the last and cut short, else ""."""
+        return CUT_NOTE if self.cut and row == len(self.frame) - 1 else ""
 
     def line_fields(self, row):
         """Number of fields of data row ``row`` (0-based) as written, or None."""
@@ -294,6 +326,7 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
     error
     """
     where = f"{what}: {escape(path)}" if what else escape(path)
+    _refuse_compressed(raw, where, error)
     check_size(raw, _sniff_separator(_first_line(raw, comment)), where, error)
     text = decode_table(raw, path, what, error)
     if comment and "#" in text:
@@ -342,7 +375,7 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
     if short is not None:      # a short row is read as empty cells, in any column: refused
         raise error(f"{where}: ragged rows: data row {short[0] + 1} has {short[1]} fields, the "
                     f"header has {frame.shape[1]}; expected the same number of fields on every "
-                    f"row")
+                    f"row{table.cut_note(short[0])}")
     return table
 
 
@@ -430,7 +463,7 @@ def numeric_column(table, col, label=None, unit=("s", "V", "µm")):
         if n is not None and n < frame.shape[1]:
             raise error(f"{where}: ragged rows: data row {row + 1} has {n} fields, the "
                                 f"header has {frame.shape[1]}; expected the same number of "
-                                f"fields on every row")
+                                f"fields on every row{table.cut_note(row)}")
         if cell.lower() in ("true", "false"):
             what = f"a boolean {cell!r}, not a number"
         elif cell.lower() in _MISSING:
@@ -440,7 +473,8 @@ def numeric_column(table, col, label=None, unit=("s", "V", "µm")):
         else:
             what = f"a non-numeric cell {escape(repr(cell), CELL_EXCERPT)}"
         raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: {what} on data "
-                            f"row {row + 1}; expected finite numbers{decimal_comma_hint(cell)}")
+                            f"row {row + 1}; expected finite numbers{decimal_comma_hint(cell)}"
+                            f"{table.cut_note(row)}")
     big = np.flatnonzero(np.abs(v) > MAX_MAGNITUDE)
     if big.size:
         raise error(f"{where}: column {escape(repr(col), CELL_EXCERPT)}: value "
@@ -466,6 +500,7 @@ def _read_table(path, skip_rows=0):
         raise DataFileError(str(exc)) from None
     except OSError as exc:
         raise DataFileError(f"{path}: cannot read the file ({exc.strerror or exc})") from None
+    _refuse_compressed(raw, escape(path), DataFileError)
     if skip_rows:   # a preamble (instrument, date, rate ...) before the table: dropped as lines
         raw = b"".join(raw.splitlines(keepends=True)[int(skip_rows):])
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
@@ -487,6 +522,7 @@ def _read_table(path, skip_rows=0):
     raw = raw.lstrip(b"\r\n")
     if not raw.strip():
         raise DataFileError(f"{path}: the file is empty")
+    cut = _ends_cut(raw)
     head = raw[:1 << 16].decode("utf-8", errors="replace").splitlines()
     sep = _sniff_separator("\n".join(head[:5]))
     try:
@@ -530,6 +566,7 @@ def _read_table(path, skip_rows=0):
         if not header:
             frame.columns = list(range(frame.shape[1]))
     frame.attrs["units"] = unit_of
+    frame.attrs["cut"] = cut
     return frame, header
 
 
@@ -588,8 +625,9 @@ def _column(frame, header, key, role, path, units=None):
         what = (f"non-numeric or empty cell {escape(repr(str(cell).strip()), CELL_EXCERPT)}" if isinstance(cell, str) and cell.strip()
                 and cell.strip().lower() not in ("nan", "na", "n/a", "null", "none")
                 else "non-numeric or empty cell (empty or NaN)")
+        cut = CUT_NOTE if frame.attrs.get("cut") and row == len(frame) - 1 else ""
         raise DataFileError(f"{path}: {role} column {name!r}: {what} at data row {row + 1}"
-                            f"{decimal_comma_hint(cell)}")
+                            f"{decimal_comma_hint(cell)}{cut}")
     arr = values.to_numpy(dtype=float)
     big = np.flatnonzero(np.abs(arr) > MAX_MAGNITUDE)   # inf (or 1.8e308) included
     if big.size:    # the squares of the fit would overflow (core/numbers.py)
@@ -640,7 +678,7 @@ def _timepts(frame, header, time, sampling_period, path):
             i = int(np.flatnonzero(dt <= 0)[0])
             raise DataFileError(
                 f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
-                f"({t[i]:g} s then {t[i + 1]:g} s)")
+                f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
         T, off, tol = uniform_period(t)
         gaps = step_gaps(t)
         if gaps.size:
