@@ -79,3 +79,30 @@ def test_a_gzip_compressed_csv_is_named(reader, tmp_path):
         READERS[reader](path)
     msg = str(info.value)
     assert "gzip-compressed" in msg and "decompress it first" in msg and "binary" not in msg
+
+
+def test_a_large_file_s_time_column_is_checked_before_the_table_is_parsed(tmp_path,
+                                                                          monkeypatch):
+    """A tester's 10-minute measurement was refused for its time column after 75 s and 8 GB
+    (the whole table parsed as text first). Above ``TIME_PRECHECK_BYTES`` the time column is
+    parsed alone first: the table parse (here made to fail loudly) is never reached, and the
+    message is the full reader's. A file the quick parse reads as fine is read as before."""
+    import hammerstein.compensation.drive_files as drive_files
+
+    def no_table(*args, **kwargs):
+        raise AssertionError("the whole table was parsed before the time column was checked")
+    t = np.arange(N) * T
+    t[30] = t[29]
+    path = tmp_path / "rec.csv"
+    path.write_text("# logger 7\n" + _text(t))
+    monkeypatch.setattr(drive_files, "TIME_PRECHECK_BYTES", 0)
+    monkeypatch.setattr(drive_files, "signal_table", no_table)
+    with pytest.raises(DataFileError) as info:
+        _evaluate_read(path)
+    assert (f"the time column 't' is not strictly increasing at data row 31 "
+            f"({float(t[29])!r} s then {float(t[29])!r} s)") in str(info.value)
+    monkeypatch.undo()
+    monkeypatch.setattr(drive_files, "TIME_PRECHECK_BYTES", 0)
+    path.write_text("# logger 7\n" + _text())
+    got = _evaluate_read(path)
+    np.testing.assert_array_equal(got[0], np.arange(N) * T)
