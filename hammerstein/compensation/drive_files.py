@@ -18,7 +18,8 @@ import warnings
 
 import numpy as np
 
-from hammerstein.io.datafiles import numeric_column, signal_table, uniform_period
+from hammerstein.io.datafiles import (_first_line, _sniff_separator, numeric_column, signal_table,
+                                      uniform_period)
 from hammerstein.io.time_grid import gap_text, step_gaps
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
@@ -62,7 +63,6 @@ def _time_precheck(raw, path, time, what):
     non-numeric cell) is left to the full reader, which names its problem.
     """
     import pandas as pd  # lazy: ~0.3 s to import; read_signals' table parse needs it anyway
-    from hammerstein.io.datafiles import _first_line, _sniff_separator
     try:
         sep = _sniff_separator(_first_line(raw))
         t = pd.read_csv(io.BytesIO(raw), sep=sep, usecols=[time], comment="#", dtype=float,
