@@ -27,7 +27,11 @@ makes the model output equal a reference is a scalar root per direct path:
 
 The model's output then equals the reference to the root tolerance whenever
 the reference is reachable (major and minor loops alike); an unreachable
-reference gives the bound. For comparison the same kernel runs the inverse
+reference gives the bound. The sweeps converge only where the linearised
+sweep over the secant gains of every path contracts (:func:`sweep_radius`
+< 1; diagonal dominance suffices): a model whose outputs each mix the inputs
+beyond that (a tip-tilt-piston platform's, 199 undamped and 1.14 at best) is
+refused at construction, where the sweeps ran to the bounds on every sample. For comparison the same kernel runs the inverse
 multiplicative law of the paper (Theorem 4.1, delay form)
 ``u_t = u_{t-1} + K^-1 (y_r(t) - Gamma(u_{t-1}))`` with the secant gain K
 (``method = "multiplicative"``), which lags the reference by one sample.
@@ -42,7 +46,7 @@ from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, Pre
 from hammerstein.exceptions import CompensatorError
 from hammerstein.simulation import preisach_inverse_kernel, state_vector
 
-__all__ = ["PreisachInverseCompensator", "component_arrays"]
+__all__ = ["PreisachInverseCompensator", "component_arrays", "sweep_radius", "RELAXATIONS"]
 
 METHODS = ("root", "multiplicative")
 
@@ -141,6 +145,53 @@ def component_arrays(model, direct_required=False):
             s_off, rev, off, present)
 
 
+#: The relaxation factors the kernel's sweeps use (1, then rounds under-relaxed by 1/2 .. 1/16)
+RELAXATIONS = (1.0, 0.5, 0.25, 0.125, 0.0625)
+
+
+def sweep_radius(K, relaxations=RELAXATIONS):
+    """Smallest spectral radius of the exact inverse's sweep over the gains K [-].
+
+    The exact inverse solves ``Gamma_ll(u_l) = y_r,l - sum_{k != l} Gamma_lk(u_k)``
+    for each l in turn (Gauss-Seidel over the direct paths, under-relaxed by
+    w when the sweeps do not settle). Linearised with slopes K that is SOR
+    over ``K u = y``, whose error contracts by
+    ``M_w = (D / w + L)^-1 ((1 / w - 1) D - U)`` (D, L, U: diagonal, strictly
+    lower and upper parts of K); it converges only where ``rho(M_w) < 1``
+    for some w. Diagonal dominance (each direct path's gain above the sum of
+    its output's cross-couplings) is sufficient.
+
+    Parameters
+    ----------
+    K : array_like, shape (m, m)
+        Gains [µm/V] (the secant gains of every path, signed).
+    relaxations : sequence of float
+        The factors w tried.
+
+    Returns
+    -------
+    float
+        ``min_w rho(M_w)`` [-]; ``inf`` on a zero direct gain.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> bool(sweep_radius(np.array([[2.0, 0.5], [0.5, 2.0]])) < 1)
+    True
+    >>> bool(sweep_radius(np.array([[1.0, 5.0], [-5.0, 1.0]])) < 1)   # skew: damped sweeps
+    True
+    >>> bool(sweep_radius(np.array([[1.0, 5.0], [5.0, 1.0]])) >= 1)
+    True
+    """
+    K = np.asarray(K, dtype=float)
+    D = np.diag(np.diag(K))
+    if np.any(np.diag(K) == 0):
+        return float("inf")
+    L, U = np.tril(K, -1), np.triu(K, 1)
+    return float(min(np.max(np.abs(np.linalg.eigvals(
+        np.linalg.solve(D / w + L, (1.0 / w - 1.0) * D - U)))) for w in relaxations))
+
+
 class PreisachInverseCompensator:
     """Feedforward inverse of a multivariable Preisach model (exact per-sample root).
 
@@ -172,7 +223,10 @@ class PreisachInverseCompensator:
     ------
     CompensatorError
         On a model it cannot invert (not square, a direct path that is not a
-        Preisach model or not increasing, an unsupported cross-coupling).
+        Preisach model or not increasing, an unsupported cross-coupling), or,
+        with ``method = 'root'``, one whose sweeps over the direct paths
+        cannot converge (:func:`sweep_radius` >= 1: outputs that each mix the
+        inputs more than their direct path carries them).
 
     Examples
     --------
@@ -220,6 +274,25 @@ class PreisachInverseCompensator:
         self._pack()
         self.K = self._secant_gain()
         self.K_inv = np.linalg.inv(self.K)
+        self.sweep_radius = sweep_radius(self.K)
+        if method == "root" and self.sweep_radius >= 1.0:
+            raise CompensatorError(self._sweep_problem())
+
+    def _sweep_problem(self):
+        """Why the Gauss-Seidel sweeps over the direct paths cannot solve the model."""
+        K = np.abs(self.K)
+        names = self.model.output_names
+        rows = [(names[l], K[l, l], K[l].sum() - K[l, l]) for l in range(K.shape[0])]
+        weak = [r for r in rows if r[1] <= r[2]] or rows
+        return (f"model: the exact inverse cannot solve it: it solves each output on its own "
+                f"input (Gauss-Seidel over the direct paths, under-relaxed down to 1/16), which "
+                f"converges only where the spectral radius of that sweep over the secant gains "
+                f"is below 1 (direct paths that dominate their outputs make it so); here it is "
+                f"{self.sweep_radius:.3g} at best ({sweep_radius(self.K, (1.0,)):.3g} undamped; "
+                + ", ".join(f"{o}: direct {d:.3g} µm/V against {x:.3g} from the others"
+                            for o, d, x in weak)
+                + "), so its voltages run to the bounds. Measure outputs that each input drives "
+                  "most (each stack's own displacement) and identify again")
 
     def _pack(self):
         model = self.model
@@ -257,7 +330,11 @@ class PreisachInverseCompensator:
             u[k] = a * np.sin(np.linspace(0, 4 * np.pi, 400))
             y, _ = model.simulate(u)
             K[:, k] = (y[:, 250:].max(axis=1) - y[:, 250:].min(axis=1)) / (2 * a)
-            K[:, k] *= np.sign(y[:, 300] - y[:, 200] + 1e-300)   # sign of the slope
+            # sign of the slope: of the outputs' covariance with the input over the last period
+            # (samples 200 and 300 are both at u = 0, where the difference was the loop's width)
+            du = u[k, 200:] - u[k, 200:].mean()
+            K[:, k] *= np.where((y[:, 200:] - y[:, 200:].mean(axis=1, keepdims=True)) @ du < 0,
+                                -1.0, 1.0)
         K[np.diag_indices(p)] = np.abs(np.diag(K))
         return K
 

@@ -8,6 +8,8 @@ cross-couplings (3 µm/V) outweigh its direct paths (0.55 µm/V), against the sa
 the roles swapped.
 """
 
+import re
+
 import numpy as np
 import pytest
 
@@ -43,7 +45,11 @@ def test_cross_couplings_that_outweigh_the_direct_paths_are_named():
     with pytest.raises(CompensatorError) as err:
         compensate_reference(_plant(5.0, 3.0), _circle(), period_samples=500)
     text = str(err.value)
-    assert "beyond the range [-10, 10] V on 100 % of the samples" in text
+    # refused before any drive: the sweeps over the direct paths cannot solve it (their
+    # radius, 2x2 Gauss-Seidel undamped: (3 / 0.55)^2 = 29.75)
+    assert "Gauss-Seidel over the direct paths" in text
+    undamped = float(re.search(r"\(([0-9.]+) undamped;", text).group(1))
+    assert undamped == pytest.approx((3 / 0.55) ** 2, rel=0.01)
     assert "x: direct 0.55 µm/V against 3 from the others" in text
 
 
@@ -67,4 +73,5 @@ def test_compensate_writes_no_drive_and_exits_1(tmp_path, capsys):
                  '{ kind = "circle", radius = 5, frequency = 20, periods = 4 }', "--out", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and not out.exists()
-    assert err[-1].startswith("hammerstein compensate: error: the compensator asks for")
+    assert err[-1].startswith("hammerstein compensate: error: model: the exact inverse cannot "
+                              "solve it")
