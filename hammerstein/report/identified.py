@@ -73,8 +73,8 @@ def report_identified(scenario, results, directory, jobs=None):
         append_text(directory / "report.md", "\n".join(lines) + "\n", "report")
         return
     lines += ["", "## Identified models", "",
-             "Identified on the case's plant by a sine on each input in turn (Section 3.3, "
-             "Steps 1-4); loadable with `model = \"<file>\"`.", "",
+             f"Identified {_how_identified([r['identify'] for r in rows])}; loadable with "
+             "`model = \"<file>\"`.", "",
              "| model file | plant | used as | cases |", "|---|---|---|---|"]
     by_file = {}
     for r in rows:
@@ -89,9 +89,21 @@ def _last_period(x, P):
     return np.concatenate([x[..., -P:], x[..., -P:-P + 1]], axis=-1)
 
 
+def _how_identified(tables):
+    """How the ``identify`` tables of the listed models identified them, in words."""
+    words = {"files": "from the measured record files the case's `identify` table names",
+             "excitation": "from the excitation records (`hammerstein excitation`) recorded on the "
+                           "case's plant"}
+    sine = "on the case's plant by a sine on each input in turn (Section 3.3, Steps 1-4)"
+    found = dict.fromkeys(words.get(t.get("records"), sine) for t in tables)
+    return "; ".join(found)
+
+
 def _model_label(spec):
     if spec.get("model") == "identified":
         i = spec["identify"]
+        if "records" in i:
+            return f"model identified from {i['records']} records ({i.get('model', 'auto')})"
         return f"model identified at {i['frequency']:g} Hz ({i.get('method', 'closed-form')})"
     return f"model {spec.get('model')}"
 

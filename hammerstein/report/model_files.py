@@ -75,7 +75,8 @@ def save_identified_models(results, directory):
     -------
     list of dict
         One row per case and role: ``case``, ``role`` ('compensator' or
-        'comparison'), ``file`` (relative to ``directory``), ``plant``.
+        'comparison'), ``file`` (relative to ``directory``), ``plant``,
+        ``identify`` (the table that identified the model).
     """
     directory = Path(directory)
     files, names, rows = {}, set(), []
@@ -93,7 +94,7 @@ def save_identified_models(results, directory):
             files[rec.key] = f"models/{name}"
             save_model(rec.model, directory / files[rec.key], rec.metadata)
         rows.append({"case": case_name, "role": rec.role, "file": files[rec.key],
-                     "plant": rec.metadata["plant"]})
+                     "plant": rec.metadata["plant"], "identify": rec.identify})
     return rows
 
 

@@ -308,6 +308,7 @@ def _build_preisach_inverse(spec, plant, context):
 COMPENSATORS["preisach-inverse"] = CompensatorKind(
     _build_preisach_inverse,
     {"model": Field(string(), default="plant"),
+     "identify": Field(identify_table),    # model = "identified": as every rate-independent kind
      "method": Field(choice("root", "multiplicative"), default="root")},
     "exact per-sample inverse of a Preisach model (monotone root per direct path), or its "
     "inverse multiplicative law; rate independent (docs/plants.md)",
