@@ -10,6 +10,7 @@ module prefix and getattr reaches the rest (a dataclass field counts).
 import dataclasses
 import importlib
 import re
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -73,3 +74,20 @@ def test_every_dotted_name_in_the_package_resolves():
             if not _resolves(name):
                 stale.setdefault(name, []).append(str(path.relative_to(ROOT)))
     assert stale == {}
+
+
+TOML_BLOCK = re.compile(r"^```toml\n(.*?)^```", re.S | re.M)
+
+
+@pytest.mark.parametrize("doc", DOCS, ids=lambda p: p.name)
+def test_every_toml_example_in_docs_parses(doc):
+    """A user copies these into a scenario: docs/models-and-kinds.md's records example was a
+    multi-line inline table, which TOML 1.0 (tomllib) refuses ("Unclosed inline table")."""
+    text = doc.read_text(encoding="utf-8")
+    bad = []
+    for m in TOML_BLOCK.finditer(text):
+        try:
+            tomllib.loads(m.group(1))
+        except tomllib.TOMLDecodeError as exc:
+            bad.append(f"line {text[:m.start()].count(chr(10)) + 1}: {exc}")
+    assert bad == []
