@@ -119,7 +119,7 @@ def _signal_summary(spec):
     return f"{what}: {signal_summary(spec.mode, spec.signal_spec)}"
 
 
-def compensator_summary(c):
+def compensator_summary(c, compensator=None):
     """A validated ``[compensator]`` table in words, only the settings that apply.
 
     ``identify`` is shown only with ``model = "identified"``; ``cutoff_hz``
@@ -129,6 +129,9 @@ def compensator_summary(c):
     ----------
     c : dict
         The case's compensator table (defaults filled).
+    compensator : object, optional
+        The compensator built from it: its ``creep`` (None: none inverted)
+        makes the creep words exact; without it they follow the table.
 
     Returns
     -------
@@ -162,7 +165,7 @@ def compensator_summary(c):
     if c.get("check") not in (None, "error"):
         parts.append(f"convergence check: {c['check']}")
     known = {"kind", "model", "identify", "gain", "iterations", "feedback", "cutoff_hz", "check"}
-    parts += [_key_words(c, k, v) for k, v in c.items()
+    parts += [_key_words(c, k, v, compensator) for k, v in c.items()
               if k not in known and isinstance(v, (str, int, float))]
     if entry is not None and entry.summary is not None:
         parts += entry.summary(c)
@@ -172,23 +175,30 @@ def compensator_summary(c):
 _INVERSION_WORDS = {"zpetc": "G inverted by ZPETC", "stable": "G inverted by stable inversion"}
 
 
-def _creep_words(c, which):
+def _creep_words(c, which, compensator=None):
     """What ``creep = which`` of a Hammerstein compensator inverts, in words
-    (:func:`hammerstein.scenario.registry._spec_creep`'s rule)."""
-    if which == "none":
+    (:func:`hammerstein.scenario.registry._spec_creep`'s rule; the built
+    ``compensator``, when given, says whether a creep was inverted)."""
+    inverted = None if compensator is None else getattr(compensator, "creep", None) is not None
+    if which == "none" or inverted is False:
         return "creep not inverted"
     if which == "plant":
         return "the plant's true creep inverted (an oracle)"
     dyn = c.get("dynamics", "identified" if c.get("model") == "identified" else "plant")
     ident = c.get("identify") or {}
     if dyn == "identified" and c.get("model") == "identified" and "records" in ident:
-        return "the identified creep inverted" if ident.get("creep") else "creep not inverted"
+        # records = "files" identifies a creep from its creep_records (records_route)
+        asked = ident.get("creep_records") if ident["records"] == "files" else ident.get("creep")
+        return "the identified creep inverted" if inverted or (inverted is None and asked) \
+            else "creep not inverted"
     if dyn in ("plant", "identified"):
         return "creep not inverted"
+    if inverted:
+        return f"the creep of {dyn} inverted"
     return "the creep of the dynamics file inverted, if it has one"
 
 
-def _key_words(c, k, v):
+def _key_words(c, k, v, compensator=None):
     """One more setting of a compensator table in words (``inversion``, ``creep``...)."""
     if k == "dynamics":
         return {"identified": "dynamics G identified",
@@ -196,7 +206,7 @@ def _key_words(c, k, v):
     if k == "inversion" and v in _INVERSION_WORDS:
         return _INVERSION_WORDS[v]
     if k == "creep":
-        return _creep_words(c, v)
+        return _creep_words(c, v, compensator)
     if k == "fade_in" and isinstance(v, (int, float)):
         return f"fade-in {_num(v, 's')}"
     if k == "limits":
@@ -284,7 +294,7 @@ def _time(t):
 def _compensator_summary(spec):
     if spec.mode == "drive":
         return "none (open loop)"
-    return compensator_summary(spec.compensator_spec)
+    return compensator_summary(spec.compensator_spec, getattr(spec, "compensator", None))
 
 
 def _last_period(x, P):

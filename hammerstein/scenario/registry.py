@@ -27,7 +27,7 @@ from hammerstein.compensation.hammerstein_compensator import INVERSIONS, Hammers
 from hammerstein.compensation.model_classes import kind_problem as class_kind_problem, model_class
 from hammerstein.exceptions import CompensatorError
 from hammerstein.compensation.ilc import LearningCompensator
-from hammerstein.io.presets import PresetError, load_creep, load_dynamics
+from hammerstein.io.presets import PresetError, load_creep, load_dynamics, read_toml
 from hammerstein.scenario.identification import (ResolveContext, identified_from_records,
                                                  resolve_dynamics, resolve_model)
 from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_identify_table,
@@ -195,7 +195,41 @@ COMPENSATORS["static-gain"] = CompensatorKind(
     rate_independent=True, batchable=True)
 
 
+def model_file_dynamics(spec, base):
+    """A ``kind = "hammerstein"`` table with its model file's dynamics, as ``compensate`` takes them.
+
+    With ``model = "<file>"`` whose file has a ``[dynamics]`` table (a preset of
+    ``hammerstein identify --dynamics``) and no ``dynamics`` key, ``dynamics``
+    defaults to that file: its G and, with ``creep = "auto"``, its ``[creep]``
+    are inverted, as ``hammerstein compensate`` on the same file inverts them
+    (without it the plant's true G was inverted and the file's creep dropped).
+
+    Parameters
+    ----------
+    spec : dict
+        A validated compensator table.
+    base : pathlib.Path
+        The scenario's directory (relative model paths).
+
+    Returns
+    -------
+    dict
+        ``spec`` itself, or a copy with ``dynamics`` = the model path. A file
+        that cannot be read leaves ``spec`` as is (the model's own check names
+        the problem).
+    """
+    model = spec.get("model", "plant")
+    if spec.get("kind") != "hammerstein" or "dynamics" in spec or model in ("plant", "identified"):
+        return spec
+    try:
+        data = read_toml(confined_path(model, base, PresetError), "model file")
+    except PresetError:
+        return spec
+    return {**spec, "dynamics": model} if isinstance(data.get("dynamics"), dict) else spec
+
+
 def _build_hammerstein(spec, plant, context):
+    spec = model_file_dynamics(spec, context.base_dir)
     model = None
     if spec.get("model", "plant") != "identified":
         model = _spec_model(spec, plant, context)

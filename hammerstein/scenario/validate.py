@@ -34,7 +34,7 @@ from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_prob
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
-from hammerstein.scenario.registry import COMPENSATORS
+from hammerstein.scenario.registry import COMPENSATORS, model_file_dynamics
 from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
                                          TOP, Field, ScenarioError, check_table, kind_problem, known_kind,
                                          total_samples_budget)
@@ -558,6 +558,8 @@ def _validate_cases(path, data, feedback=False):
             problems.extend(f"{source}: {where}.model: {msg}" for msg in more)
         if len(problems) > n_before:
             continue
+        if cclean is not None:      # a model file's dynamics and creep, as compensate takes them
+            cclean = model_file_dynamics(cclean, base)
         cases.append(CaseSpec(
             name=case["name"], description=case.get("description", ""), mode=mode,
             signal_spec=dict(raw[mode]), plant_spec=pspec,
