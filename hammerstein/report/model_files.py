@@ -7,14 +7,22 @@ the report saves them without identifying anything again:
 ``models/identified-<f>Hz-<method>.toml`` (:func:`save_identified_models`,
 loadable by ``model = "<file>"``) and ``models/hammerstein-<i>-<class>.toml``
 (``pi`` for a classical PI) / ``models/hammerstein-<i>-dynamics.toml`` (:func:`save_identified_dynamics`,
-loadable by ``dynamics = "<file>"``).
+loadable by ``dynamics = "<file>"``). A model identified from records
+(``records = "excitation"`` or ``"files"``) is saved as the preset
+``hammerstein identify`` writes, ``[creep]`` and ``[amplifier]`` (and
+``[dynamics]`` for kind hammerstein) included, so that ``model = "<file>"``
+builds the same compensator.
 """
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
+import tomli_w
+
 from hammerstein.compensation.model_classes import model_class
+from hammerstein.core.files import safe_write
 from hammerstein.io.presets import save_dynamics, save_model
 
 __all__ = ["model_file_name", "save_identified_models", "save_identified_dynamics"]
@@ -50,6 +58,21 @@ def model_file_name(spec):
     if "records" in spec:
         return f"identified-{spec['records']}-{spec.get('model', 'auto')}.toml"
     return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
+
+
+def _save(rec, model, path, metadata):
+    """Write the model file of an identification record.
+
+    A ``records`` identification is saved as the preset ``hammerstein
+    identify`` wrote (its ``[creep]``, ``[amplifier]`` and, for kind
+    hammerstein, ``[dynamics]`` with the model): ``model = "<file>"`` then
+    builds the same compensator, as ``compensate`` on it does. Otherwise
+    ``[model]`` and ``[identification]``.
+    """
+    if getattr(rec, "preset_text", None) is None:
+        save_model(model, path, metadata)
+    else:
+        safe_write(path, rec.preset_text, "model file")
 
 
 def _records(results, kind):
@@ -92,7 +115,7 @@ def save_identified_models(results, directory):
                 name = f"{base}-{label}-{i}.toml"
             names.add(name)
             files[rec.key] = f"models/{name}"
-            save_model(rec.model, directory / files[rec.key], rec.metadata)
+            _save(rec, rec.model, directory / files[rec.key], rec.metadata)
         rows.append({"case": case_name, "role": rec.role, "file": files[rec.key],
                      "plant": rec.metadata["plant"], "identify": rec.identify})
     return rows
@@ -133,8 +156,14 @@ def save_identified_dynamics(results, directory):
                 classical = entry.name == "classical"
                 row["pi_class"] = "PI" if classical else f"{entry.label} model"
                 row["pi_file"] = f"models/hammerstein-{i}-{'pi' if classical else entry.name}.toml"
-                save_model(rec.pi, directory / row["pi_file"], rec.pi_metadata)
-            save_dynamics(rec.identifier.system_, directory / row["dynamics_file"], rec.metadata)
+                _save(rec, rec.pi, directory / row["pi_file"], rec.pi_metadata)
+            if rec.preset_text is None:
+                save_dynamics(rec.identifier.system_, directory / row["dynamics_file"], rec.metadata)
+            else:     # the [dynamics] the compensator was read from, and the [creep] it inverts
+                preset = tomllib.loads(rec.preset_text)
+                doc = {"identification": rec.metadata, "dynamics": preset["dynamics"],
+                       **({"creep": preset["creep"]} if "creep" in preset else {})}
+                safe_write(directory / row["dynamics_file"], tomli_w.dumps(doc), "dynamics file")
             index[rec.key] = row
             out.append(row)
         index[rec.key]["cases"].append(name)

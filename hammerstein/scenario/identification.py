@@ -105,6 +105,10 @@ class IdentifiedModel:
         The ``[identification]`` table saved with the model.
     key : tuple
         Content key (plant fingerprint, identify table): equal keys, same model.
+    preset_text : str or None
+        A ``records`` table's identification: the preset ``hammerstein
+        identify`` writes (``[model]``, ``[creep]``, ``[amplifier]``...), saved as
+        the report's model file; None for the sine route (``[model]`` only).
     """
 
     kind: ClassVar[str] = "pi"
@@ -114,6 +118,7 @@ class IdentifiedModel:
     model: Any
     metadata: dict
     key: tuple
+    preset_text: str | None = None
 
 
 @dataclass
@@ -134,6 +139,10 @@ class IdentifiedDynamics:
         ``[identification]`` table of the dynamics file.
     key : tuple
         Content key of the identification.
+    preset_text : str or None
+        A ``records`` table's identification: the preset ``hammerstein
+        identify`` writes (``[model]``, ``[dynamics]``, ``[creep]``,
+        ``[amplifier]``), the one the compensator was read from; None otherwise.
     """
 
     kind: ClassVar[str] = "hammerstein"
@@ -143,6 +152,7 @@ class IdentifiedDynamics:
     identifier: Any
     metadata: dict
     key: tuple
+    preset_text: str | None = None
 
 
 @dataclass
@@ -362,8 +372,12 @@ def resolve_model(spec_model, plant, context, identify=None, role="compensator")
                                       "e.g. identify = { frequency = 50.0 }")
         model, meta = identified_model(plant, identify, context.cache, context.base_dir)
         spec = identify_table(identify)
+        text = None
+        if "records" in spec:    # its file is identify's preset: [creep] and [amplifier] kept
+            text = identified_from_records(plant, spec, False, context.cache,
+                                           context.base_dir).preset_text
         context.identified.append(IdentifiedModel(role, plant, spec, model, meta,
-                                                  _pi_key(plant, spec)))
+                                                  _pi_key(plant, spec), text))
         return model
     return load_model(confined_path(spec_model, context.base_dir, PresetError))
 
@@ -657,7 +671,7 @@ def resolve_dynamics(spec, plant, context, model=None):
                  "sampling_period_s": float(plant.sampling_period), "plant": plant.name}
         context.identified.append(IdentifiedDynamics(
             plant, found.plant.hysteresis, found.metadata, ident, dmeta,
-            (plant_fingerprint(plant), spec_key(ispec), True)))
+            (plant_fingerprint(plant), spec_key(ispec), True), found.preset_text))
         return found.plant.hysteresis, found.plant.sampled_dynamics
     if dyn == "identified":
         ident_pi = spec.get("model") == "identified"

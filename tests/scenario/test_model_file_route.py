@@ -7,9 +7,11 @@ inverted" for a records table whose creep_records it had inverted.
 """
 
 import shutil
+import tomllib
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from hammerstein.io.presets import load_creep, load_plant, save_model
 from hammerstein.report.scenario import compensator_summary
@@ -64,3 +66,72 @@ def test_the_creep_words_follow_the_built_compensator():
     assert "the identified creep inverted" in compensator_summary(files, Built())
     Built.creep = None
     assert "creep not inverted" in compensator_summary(files, Built())
+
+
+def _write(path, rec):
+    cols = ["t", *rec.input_names, *rec.output_names]
+    data = np.column_stack([rec.timepts, rec.u.T, rec.y.T])
+    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+    return path.name
+
+
+def _scenario(path, compensator):
+    path.write_text(f'name = "{path.stem}"\n[plant]\npreset = "plant.toml"\n[compensator]\n'
+                    + compensator + '[[cases]]\nname = "c"\nreference = { kind = "circle", '
+                    'radius = 10.0, frequency = 20.0, periods = 3 }\n', encoding="utf-8")
+    return path
+
+
+def _drive(out):
+    import pandas as pd
+    ts = pd.read_csv(Path(out) / "timeseries-c.csv")
+    return ts[["ux_V", "uy_V"]].to_numpy()
+
+
+@pytest.mark.slow
+def test_a_saved_model_file_reused_as_model_builds_the_same_compensator(tmp_path, no_figures):
+    """The report's model files of a records table lacked [creep] and [amplifier] (and the
+    Hammerstein PI file its [dynamics]): reused as model = "<file>" they built another
+    compensator (a tester's settled drive 76 mV apart). Saved as identify's preset, the
+    reused file gives the same drive; the dynamics file carries the creep too."""
+    from hammerstein.runner import run_scenario
+    from hammerstein.scenario.identification import excitation_records
+    from hammerstein.scenario.identify_tables import identify_table
+    plant = load_plant(PRESET)
+    recs = excitation_records(plant, identify_table({"records": "excitation", "frequency": 5.0,
+                                                     "hold": 0.25, "multisine_periods": 2}))
+    shutil.copy(PRESET, tmp_path / "plant.toml")
+    names = {k: [_write(tmp_path / f"{k}-{i}.csv", r) for i, r in enumerate(rs)]
+             for k, rs in recs.items()}
+    files = (f'records = "files"\nmodel = "generalized"\n'
+             f'hysteresis_records = {names["hysteresis"]}\ndynamics_records = {names["dynamics"]}\n'
+             f'creep_records = {names["creep"]}\n').replace("'", '"')
+    first = run_scenario(_scenario(tmp_path / "ident.toml", 'kind = "hammerstein"\nmodel = '
+                                   '"identified"\n[compensator.identify]\n' + files),
+                         tmp_path / "out", renderer=no_figures)
+    assert first.ok, first.error
+    models = Path(first.out_dir) / "models"
+    pi, dyn = models / "hammerstein-1-generalized.toml", models / "hammerstein-1-dynamics.toml"
+    saved = tomllib.loads(pi.read_text(encoding="utf-8"))
+    assert {"model", "dynamics", "creep", "amplifier"} <= set(saved)
+    assert "creep" in tomllib.loads(dyn.read_text(encoding="utf-8"))
+    rel = lambda p: p.relative_to(tmp_path).as_posix()     # noqa: E731
+    again = run_scenario(_scenario(tmp_path / "reuse.toml", f'kind = "hammerstein"\nmodel = '
+                                   f'"{rel(pi)}"\n'), tmp_path / "out", renderer=no_figures)
+    assert again.ok, again.error
+    both = run_scenario(_scenario(tmp_path / "reuse2.toml", f'kind = "hammerstein"\nmodel = '
+                                  f'"{rel(pi)}"\ndynamics = "{rel(dyn)}"\n'), tmp_path / "out",
+                        renderer=no_figures)
+    assert both.ok, both.error
+    u = _drive(first.out_dir)
+    assert np.max(np.abs(_drive(again.out_dir) - u)) <= 1e-9 * np.max(np.abs(u))
+    assert np.max(np.abs(_drive(both.out_dir) - u)) <= 1e-6 * np.max(np.abs(u))
+
+    # a rate-independent kind's model file is identify's preset too
+    ri = run_scenario(_scenario(tmp_path / "ri.toml", 'kind = "multivariable"\nmodel = "identified"\n'
+                                'gain = "midpoint"\ncheck = "warn"\n[compensator.identify]\n' + files),
+                      tmp_path / "out", renderer=no_figures)
+    assert ri.ok, ri.error
+    saved = tomllib.loads((Path(ri.out_dir) / "models" / "identified-files-generalized.toml")
+                          .read_text(encoding="utf-8"))
+    assert {"model", "creep", "amplifier"} <= set(saved)
