@@ -519,10 +519,12 @@ def start_lines(results, atol=1e-9):
     Returns
     -------
     list of str
-        Markdown lines (a heading, one bullet per start, cases grouped);
-        empty without a reference case.
+        Markdown lines (a heading, one bullet per start, cases grouped, and
+        one naming the cases whose ``peak_slew`` is that first step from 0 V,
+        with the largest slew over the settled window); empty without a
+        reference case.
     """
-    groups = {}
+    groups, slews = {}, []
     for r in results:
         spec = r.spec
         if r.reference is None or getattr(spec, "signal", None) is None:
@@ -559,6 +561,9 @@ def start_lines(results, atol=1e-9):
                     f"rest in one sample (as in the paper's figures; the hardware commands "
                     f"never do this: `hammerstein compensate` fades in over a duration)")
         groups.setdefault(text, []).append(r.name)
+        slew = _start_slew(r)
+        if slew is not None:
+            slews.append((r.name, *slew))
     if not groups:
         return []
     lines = ["Start of each compensated case (from rest):", ""]
@@ -566,7 +571,30 @@ def start_lines(results, atol=1e-9):
         shown = ", ".join(f"`{c}`" for c in cases[:6]) + (
             f" and {len(cases) - 6} more" if len(cases) > 6 else "")
         lines.append(f"- {shown}: {text}")
+    if slews:
+        shown = ", ".join(f"`{c}` ({a:.4g} V/s at t = 0; at most {b:.4g} V/s over the settled "
+                          f"window)" for c, a, b in slews[:6]) + (
+            f" and {len(slews) - 6} more" if len(slews) > 6 else "")
+        lines.append(f"- `peak_slew` is this start's first step from 0 V, larger than any slew "
+                     f"after it, in {shown}")
     return lines + [""]
+
+
+def _start_slew(r):
+    """(peak_slew, settled peak slew) [V/s] of a case whose peak_slew is its first step from
+    0 V (the start-up), else None; both over all inputs."""
+    u = getattr(r, "inputs", None)
+    if u is None or np.size(u) < 2:
+        return None
+    u = np.asarray(u, dtype=float)
+    T = r.spec.plant.sampling_period
+    first = float(np.max(np.abs(u[:, 0]))) / T
+    rest = np.abs(np.diff(u, axis=1)) / T
+    start = int(round(r.spec.settle_periods * r.spec.period_samples))
+    settled = float(np.max(rest[:, max(start - 1, 0):])) if rest[:, max(start - 1, 0):].size else 0.0
+    if not np.isfinite(first) or first <= max(float(np.max(rest)), 0.0) or first <= 1e-12:
+        return None
+    return first, settled
 
 
 def write_report(scenario, results, directory, jobs=None):

@@ -89,3 +89,27 @@ def test_a_preview_at_the_first_sample_is_not_blamed_on_the_models_rest(tmp_path
     assert u0 > 1e-6
     assert "does not rest at 0 µm" not in faded
     assert f"previews the samples ahead, so the drive starts at {u0:.3g} V" in faded
+
+
+def test_a_peak_slew_that_is_the_start_step_is_said_so(tmp_path):
+    """A tester's abrupt circle: peak_slew was the first sample's step from 0 V (3525 V/s,
+    the settled drive 2035 V/s) and the report did not say which. It names the cases whose
+    peak_slew is the start step, with the largest slew over the settled window."""
+    import numpy as np
+    import pandas as pd
+
+    path = tmp_path / "starts.toml"
+    path.write_text(SCENARIO)
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q", "--figures", "none"]) == 0
+    out = tmp_path / "out" / "starts"
+    md = (out / "report.md").read_text()
+    line = next(ln for ln in md.splitlines() if ln.startswith("- `peak_slew` is this start"))
+    ts = pd.read_csv(out / "timeseries-circle-abrupt.csv")
+    u = ts[[c for c in ts.columns if c.endswith("_V")]].to_numpy().T
+    T = float(ts.time_s[1] - ts.time_s[0])
+    steps = np.abs(np.diff(np.column_stack([np.zeros(len(u)), u]), axis=1)) / T
+    settled = steps[:, 1 + 400:].max()     # window from sample round(1 period x 400 samples)
+    assert steps[:, 0].max() > steps[:, 1:].max()        # the start step is the peak
+    assert f"`circle-abrupt` ({steps[:, 0].max():.4g} V/s at t = 0; at most {settled:.4g} V/s" \
+        in line
+    assert "sine-from-rest" not in line and "circle-faded" not in line
