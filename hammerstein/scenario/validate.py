@@ -549,6 +549,8 @@ def _validate_cases(path, data, feedback=False):
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
             problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
+        if cclean is not None:      # a model file's dynamics and creep, as compensate takes them
+            cclean = model_file_dynamics(cclean, base)
         if mode == "reference" and COMPENSATORS[kind].check is not None:   # the kind's own checks
             more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
             problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
@@ -558,8 +560,6 @@ def _validate_cases(path, data, feedback=False):
             problems.extend(f"{source}: {where}.model: {msg}" for msg in more)
         if len(problems) > n_before:
             continue
-        if cclean is not None:      # a model file's dynamics and creep, as compensate takes them
-            cclean = model_file_dynamics(cclean, base)
         cases.append(CaseSpec(
             name=case["name"], description=case.get("description", ""), mode=mode,
             signal_spec=dict(raw[mode]), plant_spec=pspec,
