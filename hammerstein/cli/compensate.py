@@ -285,7 +285,7 @@ def _handle(args):
         return 1
     except catch() as exc:
         text = ' '.join(str(exc).split())
-        if "rho(I - K^-1 J)" in text:
+        if "rho(I - K^-1 J)" in text and "--check warn" not in text:
             text += f" ({LAW_HINT})"
         if note:
             text += f" (kind {kind}, the default for this model; --kind names another)"

@@ -243,7 +243,7 @@ def handler(args):
     if kind is None:
         try:
             choice = choose_kind(source.model, source.dynamics is not None, gain,
-                                 args.inversion or "zpetc")
+                                 args.inversion or "zpetc", check)
         except CompensatorError as exc:
             print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}")
             return 1

@@ -133,7 +133,7 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
                                           error_summary, harmonic_base_gains,
                                           periodic_average, reference_correction, repeating_from)
-from hammerstein.compensation.model_classes import convergent_gain, law_radius, model_class
+from hammerstein.compensation.model_classes import law_check, model_class
 from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
@@ -212,13 +212,14 @@ def add_parser(subparsers):
 
 
 def _inverse_gain(model, gain, check):
-    """(K of the law inverting a classical PI in the learning, the notes to print, the check).
+    """(K of the law inverting a classical PI in the learning, its check, the notes to print).
 
-    The notes: one line on the choice (``note: kind = ilc because ...``);
-    ``check`` error/warn reacts to ``rho(I - K^-1 J) >= 1``
-    (:func:`hammerstein.compensation.model_classes.law_radius`); without a
-    gain and a check, when no gain converges provably, the check is
-    ``warn``, as ``compensate``'s default kind runs it.
+    The gain and check are :func:`hammerstein.compensation.model_classes.law_check`'s,
+    the decision ``compensate`` and ``export`` make with the same options: with
+    neither given, a law no gain makes provably converge runs with ``check =
+    warn`` when it follows the model's own outputs and is refused when not.
+    The notes: one line on the choice (``note: kind = ilc because ...``); a
+    warning when ``rho(I - K^-1 J) >= 1`` and the check is warn.
     """
     entry = model_class(model)
     notes = []
@@ -226,32 +227,22 @@ def _inverse_gain(model, gain, check):
         if gain is not None or check is not None:
             raise CompensatorError(f"--gain/--check: the {entry.label} model is inverted exactly "
                                    f"in the learning (no inverse multiplicative law)")
-        return "secant", [f"note: kind = ilc because learning runs on the hardware; the "
-                          f"{entry.label} model is inverted exactly in L"], check  # gain unused
-    chosen = gain is None
-    if chosen:
-        gain, radius, _ = convergent_gain(model)
-    else:
-        radius = law_radius(model, gain)
+        return "secant", check, [f"note: kind = ilc because learning runs on the hardware; the "
+                                 f"{entry.label} model is inverted exactly in L"]   # gain unused
+    law = law_check(model, gain, check, entry.label)
+    gain, radius = law.gain, law.radius
     name = gain if isinstance(gain, str) else "scaled midpoint K = [" + ", ".join(
         f"{v:.4g}" for v in np.diag(gain)) + "] µm/V"
-    if radius >= 1.0 and check is None and chosen:
-        # as compensate's default (model_classes.choose_kind): no gain converges provably, the
-        # law runs with check = warn; learn had refused what compensate ran (rho 1.75)
-        notes.append(f"note: no gain makes the classical PI law provably converge (smallest "
-                     f"rho(I - K^-1 J) {radius:.3g}): the law runs with check = warn, as "
-                     f"compensate's")
-        check = "warn"
-    elif radius >= 1.0 and check in ("error", "warn"):
-        text = (f"--gain {name}: rho(I - K^-1 J) reaches {radius:.3g} >= 1, the law inverting "
+    if radius >= 1.0 and (law.check or "error") in ("error", "warn"):
+        text = (f"gain {name}: rho(I - K^-1 J) reaches {radius:.3g} >= 1, the law inverting "
                 f"the model in the learning may not converge ({LAW_HINT})")
-        if check == "error":
+        if (law.check or "error") == "error":
             raise CompensatorError(text)
         notes.append(f"warning: {text}")
     notes.append(f"note: kind = ilc because learning runs on the hardware; the classical PI is "
                  f"inverted in L by the multivariable law, gain {name}, rho(I - K^-1 J) "
-                 f"{radius:.3g}")
-    return gain, notes, check
+                 f"{radius:.3g}" + (f"; {law.reason}" if law.reason else ""))
+    return gain, law.check, notes
 
 
 #: a trial worse than the best one so far by more than this factor is not learnt from
@@ -575,7 +566,7 @@ def _learn(args):
                     bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 learn_u, learn_y, followed = bu, by, bf
         gain = args.learning_gain * gain_factor(halvings, verdict.rejections)
-        law_gain, notes, law_check = _inverse_gain(model, args.gain, args.check)
+        law_gain, law_check_, notes = _inverse_gain(model, args.gain, args.check)
         notes = ([f"note: {line}" for line in rate_notes] + ([] if q_note is None else [q_note])
                  + notes + ([] if period_note is None else [period_note])
                  + ([] if found_note is None else [found_note]))
@@ -621,7 +612,7 @@ def _learn(args):
             # had the whole record smoothed again, a trial 34 times worse; the drive is shaped
             _, drive = compensate(plant, corrected, drive_kind_, args.inversion, fade * T,
                                   args.limits, law_gain if law else args.gain,
-                                  law_check if law else args.check, lead,
+                                  law_check_ if law else args.check, lead,
                                   shape=False)
             u_next, learnt = drive.inputs, drive.reference
             problems, shaped = list(drive.problems), list(drive.shaped)

@@ -140,8 +140,14 @@ def _is_midpoint(gain):
 
 
 def _gain_words(gain):
-    """A compensator's ``gain`` for its messages: ``gain='midpoint'``, ``an explicit gain``."""
-    return f"gain={gain!r}" if isinstance(gain, str) else "an explicit gain"
+    """A compensator's ``gain`` for its messages: ``gain='midpoint'``, ``gain K = diag(...) µm/V``
+    (a matrix, given or chosen by default: its values, not who gave it)."""
+    if isinstance(gain, str):
+        return f"gain={gain!r}"
+    K = np.atleast_2d(np.asarray(gain, dtype=float))
+    if K.shape[0] == K.shape[1] and np.array_equal(K, np.diag(np.diag(K))):
+        return "gain K = diag(" + ", ".join(f"{v:.4g}" for v in np.diag(K)) + ") µm/V"
+    return "gain K = [" + "; ".join(", ".join(f"{v:.4g}" for v in row) for row in K) + "] µm/V"
 
 
 def _inverse_gain(model, gain):

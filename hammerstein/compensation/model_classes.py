@@ -35,6 +35,7 @@ per-axis analytic inverse when none of them converges.
 from __future__ import annotations
 
 import itertools
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -49,10 +50,15 @@ from hammerstein.compensation.mixed_compensators import loop_slopes, mixed_compe
 from hammerstein.models.preisach import MultivariableHysteresis, PreisachModel
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.io.presets import model_from_table, model_to_table
-from hammerstein.exceptions import CompensatorError
+from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 
 __all__ = ["ModelClass", "MODEL_CLASSES", "KindChoice", "GAIN_CANDIDATES", "model_class",
-           "kind_problem", "law_radius", "convergent_gain", "choose_kind"]
+           "kind_problem", "law_radius", "convergent_gain", "choose_kind", "LawCheck",
+           "law_check", "law_self_test", "SELF_TEST_SAMPLES"]
+
+#: Samples of the test reference :func:`law_self_test` runs the law over (each input a
+#: raised cosine over [0, A], 2, 3, ... periods: the model's own outputs, reachable)
+SELF_TEST_SAMPLES = 4000
 
 #: Gains of the inverse multiplicative law tried by :func:`convergent_gain`, in order of
 #: preference at equal radius: the per-axis midpoint of the slopes (the optimal scalar
@@ -445,7 +451,145 @@ def _gain_words(gain, radius):
     return f"gain {name}, rho(I - K^-1 J) {radius:.3g} < 1"
 
 
-def choose_kind(model, has_dynamics, gain=None, inversion="zpetc"):
+def law_self_test(model, gain):
+    """Whether the inverse multiplicative law follows the model's own outputs, or why not.
+
+    The radius ``rho(I - K^-1 J)`` over the corners of the slopes is a
+    sufficient condition; a law beyond it may still follow (a 3-input
+    piston stage at 1.75) or run away within a few hundred samples (a
+    tip-tilt-piston platform at 5.5). The test: each input k a raised cosine
+    over ``[0, A_k]`` (``input_amplitude``), k + 2 periods over
+    :data:`SELF_TEST_SAMPLES` samples; the law (``check = 'ignore'``) on the
+    model's outputs for it, a reference the model reaches by construction;
+    the model driven by the law's inputs.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+        Square, with ``input_amplitude``.
+    gain : str or array_like
+        As :func:`law_radius`.
+
+    Returns
+    -------
+    str or None
+        None when the law follows (after the first tenth of the samples, no
+        output off by more than half its peak-to-peak on more than half the
+        samples, the inputs finite and within 10 A); else why, one phrase.
+    """
+    m = model.n_inputs
+    amp = np.asarray(model.input_amplitude, dtype=float)
+    n = SELF_TEST_SAMPLES
+    t = np.arange(n) / n
+    u = np.vstack([0.5 * amp[k] * (1.0 - np.cos(2 * np.pi * (k + 2) * t)) for k in range(m)])
+    with warnings.catch_warnings():      # a test of the law: the range's words are the run's
+        warnings.simplefilter("ignore")
+        return _self_test(model, u, gain)
+
+
+def _self_test(model, u, gain):
+    n = u.shape[1]
+    amp = np.asarray(model.input_amplitude, dtype=float)
+    y, _ = model.simulate(u)
+    try:
+        comp = model_class(model).compensator(model, "multivariable", gain=gain, check="ignore")
+        with np.errstate(all="ignore"):
+            v, _ = comp.simulate(y)
+    except CompensatorDivergence as exc:
+        return f"the law diverges on the model's own outputs ({' '.join(str(exc).split())})"
+    start = n // 10
+    v = v[:, start:]
+    if not np.all(np.isfinite(v)) or np.any(np.abs(v) > 10 * amp[:, None]):
+        far = np.nanmax(np.where(np.isfinite(v), np.abs(v), np.inf) / amp[:, None])
+        return (f"the law diverges on the model's own outputs (its inputs reach {far:.3g} times "
+                f"the input amplitude)")
+    got, _ = model.simulate(np.hstack([u[:, :start], v]))
+    err = np.abs(got[:, start:] - y[:, start:])
+    half = 0.5 * np.ptp(y[:, start:], axis=1)
+    share = np.mean(err > half[:, None], axis=1)
+    l = int(np.argmax(share))
+    if share[l] > 0.5:
+        return (f"the law does not follow the model's own outputs ({model.output_names[l]} off "
+                f"by more than half its span on {100 * share[l]:.3g} % of the samples)")
+    return None
+
+
+@dataclass
+class LawCheck:
+    """The gain and check the inverse multiplicative law runs with (:func:`law_check`).
+
+    Parameters
+    ----------
+    gain : str or numpy.ndarray
+        A gain name or K (m, m) [µm/V].
+    radius : float
+        Its ``rho(I - K^-1 J)`` [-].
+    check : {'error', 'warn', 'ignore'} or None
+        The check to run the law with; None: the compensator's default (error).
+    reason : str
+        Why, one phrase (empty when the law provably converges or the user chose).
+    """
+
+    gain: Any
+    radius: float
+    check: Any
+    reason: str = ""
+
+
+def law_check(model, gain=None, check=None, label=None):
+    """The one decision of the law's gain and convergence check the commands share.
+
+    ``compensate``, ``learn`` and ``export`` (and :func:`choose_kind`) call it
+    with the user's ``--gain`` and ``--check``, so that they agree. With
+    neither given: the gain of :func:`convergent_gain`; when its radius is
+    below 1 the default check (error, never triggered); when it is not, the
+    law is tried on the model's own outputs (:func:`law_self_test`): it runs
+    with ``check = 'warn'`` if it follows them, and is refused if not.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+        Square, with ``input_amplitude``.
+    gain : str or array_like, optional
+        The user's gain (then only its radius is measured).
+    check : {'error', 'warn', 'ignore'}, optional
+        The user's check (then kept).
+    label : str, optional
+        The model class's name in messages (default its registry label).
+
+    Returns
+    -------
+    LawCheck
+
+    Raises
+    ------
+    CompensatorError
+        With neither gain nor check given, when no gain makes the law
+        provably converge and it does not follow the model's own outputs
+        (the message gives the radius and what to try).
+    """
+    label = label or model_class(model).label
+    if gain is None:
+        gain, radius, _ = convergent_gain(model)
+    else:
+        radius = law_radius(model, gain)
+    if check is not None or radius < 1.0:
+        return LawCheck(gain, radius, check)
+    name = gain if isinstance(gain, str) else "a scaled midpoint"
+    problem = law_self_test(model, gain)
+    if problem:
+        raise CompensatorError(
+            f"no gain makes the {label} law converge (smallest rho(I - K^-1 J) {radius:.3g} "
+            f"with gain {name}, where < 1 is needed) and {problem}: its outputs mix the inputs "
+            f"more than the direct paths carry them (a diagonal gain cannot undo that); measure "
+            f"outputs that each input drives most (each stack's own displacement) and identify "
+            f"again, or give --check warn to run the law anyway")
+    return LawCheck(gain, radius, "warn",
+                    f"no gain makes the {label} law provably converge (smallest rho(I - K^-1 J) "
+                    f"{radius:.3g}), and it follows the model's own outputs: run with check = warn")
+
+
+def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
     """The compensator kind that works best for a model when the user names none.
 
     Rules (module notes): dynamics -> ``hammerstein``; no dynamics and an
@@ -463,10 +607,18 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc"):
         The user's gain (then only checked, not chosen).
     inversion : {'zpetc', 'stable'}
         The inverse of G the command builds (named in the reason).
+    check : {'error', 'warn', 'ignore'}, optional
+        The user's check (:func:`law_check` decides the default).
 
     Returns
     -------
     KindChoice
+
+    Raises
+    ------
+    CompensatorError
+        With dynamics, a classical PI static part and neither gain nor check
+        given, when :func:`law_check` refuses the law.
     """
     entry = model_class(model)
     by = "the stable inversion" if inversion == "stable" else "ZPETC"
@@ -475,19 +627,18 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc"):
             return KindChoice("hammerstein", {},
                               f"the model has dynamics (G inverted by {by}) and its "
                               f"{entry.label} static part an exact inverse")
-        g, r = (gain, law_radius(model, gain)) if gain is not None else convergent_gain(model)[:2]
+        law = law_check(model, gain, check, entry.label)
+        g, r = law.gain, law.radius
         if r < 1.0:
             return KindChoice("hammerstein", {"gain": g},
                               f"the model has dynamics (G inverted by {by}); static part the "
                               f"multivariable law, {_gain_words(g, r)}")
-        if gain is not None:         # the user's gain: the law's check decides
+        if gain is not None or check is not None:   # the user's: the law's check decides
             return KindChoice("hammerstein", {"gain": g},
                               f"the model has dynamics (G inverted by {by}); static part the "
                               f"multivariable law with the gain given")
-        return KindChoice("hammerstein", {"gain": g, "check": "warn"},
-                          f"the model has dynamics (G inverted by {by}); no gain makes the "
-                          f"{entry.label} law provably converge (smallest rho(I - K^-1 J) "
-                          f"{r:.3g}): run with check = warn")
+        return KindChoice("hammerstein", {"gain": g, "check": law.check},
+                          f"the model has dynamics (G inverted by {by}); {law.reason}")
     if entry.exact_inverse_kind is not None:
         return KindChoice(entry.exact_inverse_kind, {},
                           f"the model has no dynamics and its {entry.label} hysteresis an exact "

@@ -224,7 +224,7 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     # kind hammerstein, which then failed for want of a G ("the plant is static")
     has_dynamics = getattr(plant, "dynamics", None) is not None
     if kind is None:
-        choice = choose_kind(plant.hysteresis, has_dynamics, gain, inversion or "zpetc")
+        choice = choose_kind(plant.hysteresis, has_dynamics, gain, inversion or "zpetc", check)
         kind, options, note = choice.kind, dict(choice.options), choice.note()
         if not has_dynamics:
             # a model from 1 Hz records drove a 20 Hz sine without a word on what it ignores
