@@ -158,7 +158,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
             # "lower the reference" alone: by how much, and where it fits, is the reach's
             raise AmplifierError(f"{exc}; {reach}") from None
         raise
-    problem = unfollowed_problem(plant, comp, drive)
+    problem = unfollowed_problem(plant, drive)
     if problem:
         raise CompensatorError(problem)
     note = reach
@@ -250,24 +250,19 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     return kind, options, note
 
 
-def unfollowed_problem(plant, comp, drive):
+def unfollowed_problem(plant, drive):
     """Why a drive follows nothing of its reference, or None.
 
     When the compensator's voltages (before any limit) leave the amplifier's
     range by more than 1 % of its span on more than
     :data:`UNFOLLOWED_SHARE` of the samples after the fade-in, the limits
     leave a drive that does not follow the reference: the model cannot give
-    that reference, or the compensator's inverse does not solve it (the
-    exact inverse's Gauss-Seidel over the direct paths needs each direct
-    path to carry more of its output than the cross-couplings; its secant
-    gains say whether they do).
+    that reference, or the compensator's inverse does not solve it.
 
     Parameters
     ----------
     plant : HammersteinPlant
         The actuator (its ``amplifier``; None: no check).
-    comp : object
-        The compensator (its secant gains ``K`` [µm/V] when it has them).
     drive : hammerstein.compensation.drive.DriveResult
         Its ``commanded`` voltages [V] and ``fade_samples``.
 
@@ -297,21 +292,6 @@ def unfollowed_problem(plant, comp, drive):
             f"{100 * share:.3g} % of the samples after the fade-in (by up to {far:.4g} V): the "
             f"limits would write a drive that does not follow the reference. The model cannot "
             f"give this reference within the range, or the compensator cannot solve it")
-    K = getattr(comp, "K", None)
-    if K is None:           # a Hammerstein compensator's static part
-        K = getattr(getattr(comp, "hysteresis_compensator", None), "K", None)
-    if K is not None and np.ndim(K) == 2 and np.shape(K)[0] == np.shape(K)[1] > 1:
-        K = np.abs(np.asarray(K, dtype=float))
-        rows = [(outn, K[l, l], K[l].sum() - K[l, l])
-                for l, outn in enumerate(plant.hysteresis.output_names)]
-        weak = [r for r in rows if r[1] <= r[2]]
-        if weak:
-            text += (": its inverse solves each output on its direct path (Gauss-Seidel), "
-                     "which needs the direct paths to dominate, and they do not ("
-                     + ", ".join(f"{o}: direct {d:.3g} µm/V against {x:.3g} from the others"
-                                 for o, d, x in weak)
-                     + "); measure outputs that each input drives most (e.g. each stack's "
-                     "own displacement) and identify again")
-    else:
-        text += ": make the reference smaller or move its center within what the model reaches"
-    return text
+    # (an exact inverse whose sweeps over the direct paths cannot solve the model is refused
+    # before any drive, naming the direct and cross gains: PreisachInverseCompensator)
+    return text + ": make the reference smaller or move its center within what the model reaches"
