@@ -147,6 +147,10 @@ def _peaks_text(plant, drive):
 #: A shaped reference departing from the one asked by more than this share of its half-span
 #: after the fade-in is a warning, not only a ``shaped:`` line.
 SHRINK_WARNING = 0.25
+#: ... by more than this share, held back by a slew taken from the records (not by their
+#: range), the drive follows less than half of the reference: with ``--limits error`` (the
+#: default) nothing is written
+SHRINK_REFUSE = 0.5
 
 
 def _shrink_warning(plant, ref, drive):
@@ -155,6 +159,13 @@ def _shrink_warning(plant, ref, drive):
     A model identified on quasi-static records only (1 Hz: 63 V/s) took
     their slew as the amplifier's, and a 10 µm circle at 20 Hz was shaped
     to 0.67 µm with one ``shaped:`` line and exit 0.
+
+    Returns
+    -------
+    tuple of (str, bool) or None
+        The warning, and whether the slew taken from the records held the
+        reference back by more than :data:`SHRINK_REFUSE` of its half-span
+        (a refusal under ``--limits error``).
     """
     amp = plant.amplifier
     if amp is None or not getattr(amp, "from_records", False):
@@ -188,16 +199,25 @@ def _shrink_warning(plant, ref, drive):
     head = (f"the reference was shaped by up to {dev[k]:.3g} µm on "
             f"{plant.hysteresis.output_names[k]}, {100 * share[k]:.3g} % of its half-span, after "
             f"the fade-in: the limits measured on the records ({limits}) hold it back")
-    if at_edge:      # the range, not the slew: faster records would not change it
-        return (f"{head}. The drive sits at the edge of the range on {', '.join(at_edge)}: the "
+    # the slew, when the drive moves at the records' slew somewhere after the fade-in (a
+    # 1 Hz record's 63 V/s); else the range (a file circle beyond the reach, smoothed by the
+    # range stage to 21 % of its size, its drive neither at the edge nor at the slew)
+    steps = np.abs(np.diff(u, axis=1)) / plant.sampling_period if u.shape[1] > 1 else u[:, :0]
+    slew_bound = [name for name, c, row in zip(amp.inputs, amp.channels, steps)
+                  if row.size and row.max() >= 0.99 * c.slew_rate]
+    if at_edge or not slew_bound:      # the range, not the slew: faster records would not help
+        where = (f"The drive sits at the edge of the range on {', '.join(at_edge)}" if at_edge
+                 else "The drive stays below the records' slew")
+        return (f"{head}. {where}: the "
                 f"reference asks more than the records' range reaches there (with the "
                 f"cross-couplings); make it smaller or move its center, or, if your amplifier "
                 f"goes further than the records did, widen the model file's [amplifier] range "
-                f"(docs/drives.md)")
+                f"(docs/drives.md)"), False
     return (f"{head}. If your amplifier slews faster than the records did (a 1 Hz record's "
             f"slew is its own), widen the model file's [amplifier] table to its limits "
             f"(docs/drives.md) or identify on faster records; if those are its limits, the "
-            f"reference is faster than it can follow: lower its frequency or its size")
+            f"reference is faster than it can follow: lower its frequency or its size"), \
+        bool(share[k] > SHRINK_REFUSE)
 
 
 def _handle(args):
@@ -255,6 +275,15 @@ def _handle(args):
                       f"{cause}{'; '.join(severe)} (--limits warn writes it with this warning)")
             return 1
         chatter = severe or chatter       # written anyway (--limits warn): the stronger words
+        shrink = _shrink_warning(plant, ref, drive)
+        if shrink and shrink[1] and args.limits == "error":
+            # a student's model from 1 Hz records alone (63 V/s): 20 µm circles at 10-150 Hz
+            # were shaped by 95-117 % of their half-span, written with exit 0, and followed
+            # nothing on his stage
+            print_err(f"hammerstein compensate: error: the drive would follow less than half "
+                      f"of the reference, nothing written: {shrink[0]} (--limits warn writes "
+                      f"it with this warning)")
+            return 1
         ending = end_note(drive.inputs, plant.sampling_period,
                           list(plant.hysteresis.input_names), plant.amplifier)
         comment = (f"compensate drive: t [s]; {units}\n"
@@ -301,9 +330,8 @@ def _handle(args):
         print_err(f"note: {line}")
     for line in chatter:
         print_err(f"warning: {line}")
-    shrink = _shrink_warning(plant, ref, drive)
     if shrink:
-        print_err(f"warning: {shrink}")
+        print_err(f"warning: {shrink[0]}")
     if any(w in n for n in drive.shaped for w in ("beyond the range", "faster than",
                                                      "reference shaped")) \
             and ref.kind == "raster" and not (ref.spec or {}).get("smoothing"):

@@ -542,16 +542,28 @@ def test_a_move_after_a_hold_is_judged_and_reaches_its_target(tmp_path):
 @pytest.mark.parametrize("slew, warned", [(60.0, True), (SLEW, False)])
 def test_a_reference_shaped_far_from_the_one_asked_is_a_warning(tmp_path, slew, warned):
     """Limits taken from quasi-static records (63 V/s) shaped a 10 µm circle at 20 Hz to
-    0.67 µm, said by one `shaped:` line on stdout and exit 0."""
+    0.67 µm, said by one `shaped:` line on stdout and exit 0. Shaped by more than half of
+    its half-span, the drive is refused by default and written with --limits warn."""
     text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
     text += f'\n[amplifier]\nsource = "records"\nrange = [-10.0, 10.0]\nslew_rate = {slew}\n'
     preset = tmp_path / "slow.toml"
     preset.write_text(text)
+    ref = '{ kind = "circle", radius = 10, frequency = 20, periods = 6 }'
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(["compensate", str(preset), "--reference",
-                     '{ kind = "circle", radius = 10, frequency = 20, periods = 6 }',
-                     "--out", str(tmp_path / "d.csv")])
+        code = main(["compensate", str(preset), "--reference", ref,
+                     "--out", str(tmp_path / "default.csv")])
+    assert code == (1 if warned else 0), err.getvalue()
+    assert (tmp_path / "default.csv").exists() == (not warned)       # nothing written
+    if warned:
+        (line,) = err.getvalue().splitlines()
+        assert line.startswith("hammerstein compensate: error: the drive would follow less "
+                               "than half of the reference, nothing written")
+        assert "60 V/s" in line and "--limits warn" in line
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--reference", ref,
+                     "--out", str(tmp_path / "d.csv"), "--limits", "warn"])
     assert code == 0
     lines = [ln for ln in err.getvalue().splitlines() if "% of its half-span" in ln]
     assert bool(lines) == warned
