@@ -50,6 +50,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hammerstein.signals.fundamental import reference_fundamental
+
 __all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
            "faster_than_mode", "limit_excess", "hann_average", "mode_amplification", "mode_note",
            "shape_reference", "shaping_notes", "time_intervals", "CHATTER_FRACTION",
@@ -856,7 +858,15 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     T = float(sampling_period)
     N = r.shape[1]
     L0 = int(np.ceil(1.0 / (first_mode * T))) if first_mode else 8
-    cap = N // 2 if not period_samples or period_samples < 2 else max(int(period_samples) // 2, 3)
+    if not period_samples or period_samples < 2:
+        # a file given without --period: the window stops at half of the fundamental found
+        # from its samples, as for a period given (a 30 µm circle at 100 Hz beyond a 5 V
+        # range's reach was averaged over 14 ms, 1.4 of its periods: shaped to 21 % of its size
+        # where the range allowed 83 %)
+        found = reference_fundamental(r, T)
+        cap = N // 2 if found is None else max(min(int(found.samples(T)) // 2, N // 2), 3)
+    else:
+        cap = max(int(period_samples) // 2, 3)
     L0 = max(min(L0, cap), 3)
     at_rest = np.all(np.abs(r - r[:, :1]) <= 1e-12 * max(1.0, float(np.max(np.abs(r)))), axis=0)
     lead = int(np.argmin(at_rest)) if not np.all(at_rest) else N    # samples at rest first

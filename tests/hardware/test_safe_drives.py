@@ -653,3 +653,20 @@ def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path, flip, f
     assert "direct transfer x <- ux: weights: the first weight" in lines[0]
     assert f"is {first}" in lines[0]
     assert ("a sensor of inverted sign? invert the x column" in lines[0]) == sensor
+
+
+def test_a_file_circle_beyond_the_reach_is_shaped_as_with_its_period(tmp_path):
+    """A 30 µm circle file beyond a 5 V range's reach, given without --period, was averaged
+    over 14 ms (1.4 of its periods) and shaped to 21 % of its size, where with --period it
+    is limited to the reach (83 %). The window now stops at half of the fundamental found
+    from the file: both shaped references reach the same size."""
+    preset, csv = _preset(tmp_path), _circle_csv(tmp_path)
+    sizes = {}
+    for name, extra in (("found", []), ("given", ["--period", 0.01])):
+        out = tmp_path / f"{name}.csv"
+        _compensate([preset, "--reference", csv, *extra, "--out", out, "--limits", "warn"])
+        d = pd.read_csv(out, comment="#")
+        last = d.iloc[-800:]                                  # the last four periods
+        sizes[name] = np.hypot(last["x_shaped"], last["y_shaped"]).mean()
+    assert sizes["given"] > 20.0                              # the reach: 22-25 µm
+    assert abs(sizes["found"] - sizes["given"]) <= 0.05 * sizes["given"]
