@@ -44,7 +44,8 @@ from hammerstein.io.presets import PresetError, save_model
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification_pipeline import (PipelineOptions, identify_pipeline,
                                                                  minor_loop_warning,
-                                                                 dynamics_fit_warning)
+                                                                 dynamics_fit_warning,
+                                                                 static_gain_warning)
 from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.lti import estimate_measurement_delay
@@ -748,6 +749,10 @@ def _report(args, fit, records, dyn=None, creep=None):
         poor = dynamics_fit_warning(dyn.summary, dyn.conditions, ou)
         if poor:
             print_err(f"warning: {poor}")
+        gain = static_gain_warning(dyn.summary, list(model.output_names),
+                                   list(model.input_names))
+        if gain:
+            print_err(f"warning: {gain}")
     if creep is not None:
         for line in creep.report_lines(ou):
             print(line)

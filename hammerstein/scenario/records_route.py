@@ -307,6 +307,10 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
                                                               result.dynamics.conditions))
     if poor:
         warnings.warn(f"{where}: {poor}", HammersteinWarning, stacklevel=2)
+    gain = (None if result.dynamics is None
+            else identification_pipeline.static_gain_warning(result.dynamics.summary, *names[::-1]))
+    if gain:
+        warnings.warn(f"{where}: {gain}", HammersteinWarning, stacklevel=2)
     meta = {"method": result.fit.method, "model": spec["model"], "records":
             ("measured files: " + ", ".join(r.source for k in ("hysteresis", "dynamics", "creep")
                                              for r in recs[k]))
