@@ -137,6 +137,12 @@ def _reference_outputs(args):
         if isinstance(named, list) and named and all(isinstance(n, str) for n in named):
             return list(named)
         one = spec.get("output") if isinstance(spec, dict) else None
+        center = spec.get("center") if isinstance(spec, dict) else None
+        if isinstance(center, list) and len(center) > 2 and not isinstance(one, str):
+            # a circle of a four-axis stage, centred on every output: the measured file's
+            # outputs, in its order (center = [42, 42, 20, 30] was refused as "two values")
+            found = _measured_outputs(args)
+            return found if found is not None and len(found) == len(center) else None
         if not isinstance(one, str):
             return None
         try:
@@ -152,6 +158,23 @@ def _reference_outputs(args):
         return None
     names = [str(c) for c in columns if str(c) != args.time]
     return names or None
+
+
+#: columns of a measured file that are no output of the stage: what a drive file aims at
+_AIMED = ("_shaped", "_learnt", "_pred", "_predicted")
+
+
+def _measured_outputs(args):
+    """The measured file's output columns (all but the time, the drive's inputs and what a
+    drive aims at), or None when it cannot be read."""
+    try:
+        raw = bounded_read_bytes(args.measured, "data", "data file")
+        columns = [str(c) for c in signal_table(raw, args.measured, "--measured").frame.columns]
+        inputs = set(drive_input_names(args.drive, [])) if args.drive else set()
+    except (DataFileError, FileLimitError, OSError):
+        return None
+    return [c for c in columns if c not in (args.time, "t") and c not in inputs
+            and not c.endswith(_AIMED)]
 
 
 def _names(text, default):
@@ -296,6 +319,13 @@ def _handle(args):
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
         ref = load_reference(args.reference, shell, args.time, None, args.period)
         rate_notes += ref.notes
+        if not args.model and not args.outputs:
+            left = [c for c in (_measured_outputs(args) or []) if c not in outs]
+            if left and set(outs) <= set(_measured_outputs(args) or []):
+                rate_notes.append(f"--measured also holds {', '.join(left)}, not judged: the "
+                                  f"reference names {', '.join(outs)} (--model, or "
+                                  f"--output-columns {','.join(outs + left)} with a reference "
+                                  f"for each, judges them too)")
         if n_drive is not None and n_drive != ref.signal.shape[1]:
             raise DataFileError(f"--drive: {n_drive} samples; expected the reference's "
                                 f"{ref.signal.shape[1]}")
