@@ -648,7 +648,7 @@ def _learn(args):
                       f"; {', '.join(learnt_names(model.output_names))} [µm]: the learnt reference the "
                       f"drive was computed for (fade-in included)")
                    + f"\nactuator {args.actuator}{kind_text}, sampling period {T:g} s, "
-                   f"fade-in {fade} samples ({rest_lead_text(lead)}excluded from the metrics)\n"
+                   f"fade-in {fade} samples ({fade * T:g} s, {rest_lead_text(lead)}excluded from the metrics)\n"
                    f"{START_NOTE}\n"
                    f"{end_note(u_next, T, list(model.input_names), plant.amplifier)}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else

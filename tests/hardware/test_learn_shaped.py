@@ -13,6 +13,7 @@ reference again, and say what they judge against.
 
 import contextlib
 import io
+import re
 import subprocess
 from pathlib import Path
 
@@ -71,6 +72,10 @@ def test_learn_follows_the_shaped_reference_and_gets_better(tmp_path):
         np.testing.assert_allclose(_shaped(tmp_path / f"u{k + 1}.csv"), s0, atol=1e-9)
         header = "".join(ln for ln in open(tmp_path / f"u{k + 1}.csv") if ln.startswith("#"))
         assert "reference shaped by up to" not in header          # not shaped again
+        # the fade-in in samples and in seconds, as compensate writes it (a user's parser of
+        # the header broke on learn's samples alone)
+        fade = int(re.search(r"fade-in (\d+) samples", header).group(1))
+        assert f"fade-in {fade} samples ({fade * 5e-5:g} s, " in header
     # the settled error against the shaped reference falls trial after trial (it was the
     # circle as asked the learning chased: the error grew from the first trial on)
     assert errors[-1] < 0.5 * errors[0], errors
