@@ -137,6 +137,7 @@ from hammerstein.compensation.model_classes import law_check, model_class
 from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
+from hammerstein.cli._learn_checks import measurement_problem
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
 from hammerstein.signals.fundamental import reference_fundamental
@@ -501,6 +502,12 @@ def _learn(args):
             f"({found.how}) sets a first trial's lag tolerance"
             + (" and the judged window (from two periods after the fade-in)"
                if found.period_samples else ""))
+        # not the drive's response (channels swapped, another drive's, a saturated sensor):
+        # refused before anything is learnt from it (hammerstein.cli._learn_checks)
+        implausible = measurement_problem(predicted, y, model.output_names, lambda m: trial_lag(
+            predicted, m, target, ref.period_samples, T), fade, fundamental_samples)
+        if implausible:
+            raise DataFileError(implausible)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(aim[:, :N - delay], shifted, window)
