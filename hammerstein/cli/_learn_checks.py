@@ -225,5 +225,7 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
                       "prediction moves)")
     if last:
         causes.append(last)
+    if len(causes) == 1:
+        return f"{head}; likely cause: {causes[0]}"
     return head + "; likely causes, in order: " + "; ".join(
         f"({n}) {c}" for n, c in enumerate(causes, 1))

@@ -72,7 +72,11 @@ resume) is itself worse beyond the noise, the best is stale (the actuator
 changed): the trial becomes the best and is learnt from at full gain; a
 trial whose lag behind the model's prediction is not the delay (a trigger
 or latency change) is not learnt from and changes no gain
-(:mod:`hammerstein.cli._learn_rules`). A trial of a repeating reference judged
+(:mod:`hammerstein.cli._learn_rules`). A measured response that is not the
+drive's (its error against the model's prediction of the drive far beyond a
+model's, or an output flat where the prediction moves: channels swapped,
+another drive's record, a saturated sensor) is refused before anything is
+learnt (:mod:`hammerstein.cli._learn_checks`). A trial of a repeating reference judged
 not better than the best, and not worse beyond the noise, has reached the
 noise: it is learnt from, with the gain halved (again at each such trial),
 so that the last steps stop moving the sensor's noise into the drive; one

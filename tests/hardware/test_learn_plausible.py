@@ -96,8 +96,8 @@ def test_a_saturated_sensor_is_refused_with_its_output_value_and_samples(tmp_pat
         return y
     _measure(tmp_path / "u.csv", tmp_path / "y.csv", extra=held)
     line = _refused(_learn(tmp_path), tmp_path)
-    assert f"the sensor saturated or clipped: x stays at 17.5 µm over samples {i0}..{i0 + 29} " \
-           f"(30 samples)" in line
+    assert (f"; likely cause: the sensor saturated or clipped: x stays at 17.5 µm over samples "
+            f"{i0}..{i0 + 29} (30 samples)") in line
 
 
 def test_a_genuine_trial_far_from_the_model_is_learnt_from(tmp_path):
