@@ -201,11 +201,13 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
                 f"prediction's motion (RMS, means removed; a model's error stays below "
                 f"{100 * MISFIT_LIMIT:.3g} %)")
         if best is not None and best[0] <= MISFIT_LIMIT:
-            held = ", ".join(f"column {names[j]} holds {names[i]}"
+            held = ", ".join(f"the column read as {names[j]} holds {names[i]}"
                              for i, j in enumerate(best[1]) if i != j)
+            read = ",".join(f"{names[i]}={names[j]}" for i, j in enumerate(best[1]))
             causes.append(f"the channels swapped: {held} (so read, the record fits the "
                           f"prediction within {100 * best[0]:.3g} %): put the header in the "
-                          f"acquisition's order, or give --output-columns")
+                          f"acquisition's order, or read it so (--output-columns {read} for "
+                          f"columns named as the outputs)")
         else:
             causes.append("the channels swapped (no other order of the columns fits)")
         causes.append("a measurement of another drive (record --measured while --drive plays, "

@@ -65,10 +65,16 @@ def test_swapped_channels_are_refused_and_named(tmp_path):
     # the same record, the header x,y over the data y,x
     pd.DataFrame({"t": t, "x": y[1], "y": y[0]}).to_csv(tmp_path / "swapped.csv", index=False)
     line = _refused(_learn(tmp_path, "swapped.csv"), tmp_path)
-    assert "(1) the channels swapped: column y holds x, column x holds y" in line
+    assert ("(1) the channels swapped: the column read as y holds x, the column read as x holds "
+            "y") in line and "--output-columns x=y,y=x" in line
     assert line.index("(1) the channels") < line.index("(2) a measurement of another drive") \
         < line.index("(3) the sensor saturated")
-    # the genuine record is learnt from
+    # the genuine record is learnt from, and so is the swapped one read as the line says
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", REF, "--drive", "u.csv", "--measured",
+               "swapped.csv", "--output-columns", "x=y,y=x", "--out", "next.csv", "--delay", "0",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    (tmp_path / "next.csv").unlink()
     assert _learn(tmp_path).returncode == 0 and (tmp_path / "next.csv").exists()
 
 
