@@ -48,12 +48,14 @@ from hammerstein.cli._hardware import (catch, inline_table, load_actuator, load_
                                        nonnegative_float, settle_periods, positive_float)
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
-from hammerstein.compensation.drive import drive_fade_samples, hardware_fade, read_signals
+from hammerstein.compensation.drive import (apply_amplifier, drive_fade_samples, hardware_fade,
+                                           read_signals)
 from hammerstein.compensation.drive_files import (drive_input_names, drive_rest_lead, drive_rest_output,
                                                   head_lines, optional_columns)
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
+from hammerstein.cli._learn_checks import BAND_HARMONICS, model_gain_note, model_gains
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError, PresetError
@@ -357,6 +359,14 @@ def _handle(args):
             shaped_rows, _, _, _ = evaluate(shaped[:, :N], y, ref.period_samples, T, outs,
                                             args.settle_periods, ref.scale, ref.loop_channel,
                                             args.remove_delay, rf)
+        gains = _model_gains(plant, u, y, T, delay, fade, ref.period_samples) if args.model \
+            else None
+        if gains is not None:
+            rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
+                     for n, g in zip(outs, gains)]
+            drift = model_gain_note(gains, outs)
+            if drift:
+                rate_notes.append(drift)
         if u is not None:
             peak, slew = drive_metrics(u[:, :N], T)
             for i, n in enumerate(ins):
@@ -387,6 +397,29 @@ def _handle(args):
           f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay else ', not removed'})",
           file=sys.stdout)
     return 0
+
+
+def _model_gains(plant, u, y, T, delay, fade, period_samples):
+    """Each measured output's gain against ``--model``'s prediction of the drive, or None.
+
+    None without the drive's voltages, or when the model's sampling period is
+    not the measurement's. The prediction is the model from rest (its
+    amplifier's limits applied, as ``compensate --predicted``); the gains are
+    :func:`~hammerstein.cli._learn_checks.model_gains` after the fade-in and
+    one period, below four times the reference's fundamental.
+    """
+    if u is None or plant.hysteresis.n_inputs != u.shape[0] \
+            or not np.isclose(plant.sampling_period, T, rtol=1e-9):
+        return None
+    N = min(u.shape[1], y.shape[1])
+    predicted, _ = plant.simulate(apply_amplifier(plant.amplifier, u[:, :N], T),
+                                  plant.rest_state())
+    P = int(period_samples or 0)
+    band = BAND_HARMONICS / P if P > 2 * BAND_HARMONICS + 1 else None
+    start = int(fade) + P
+    if N - start - abs(int(delay)) < 8:
+        return None
+    return model_gains(predicted, y[:, :N], int(delay), start, band)
 
 
 def _drive_length(path, sampling_period=None):

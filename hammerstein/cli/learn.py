@@ -141,7 +141,8 @@ from hammerstein.compensation.model_classes import law_check, model_class
 from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
-from hammerstein.cli._learn_checks import measurement_problem
+from hammerstein.cli._learn_checks import (BAND_HARMONICS, measurement_problem,
+                                           model_gain_note, model_gains)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
 from hammerstein.signals.fundamental import reference_fundamental
@@ -512,6 +513,12 @@ def _learn(args):
             predicted, m, target, ref.period_samples, T), fade, fundamental_samples)
         if implausible:
             raise DataFileError(implausible)
+        # an actuator that changed since it was identified (warmer, loaded): its gain against
+        # the model's prediction, said once per trial when beyond what a fresh model leaves
+        band = (BAND_HARMONICS / fundamental_samples
+                if fundamental_samples and fundamental_samples > 2 * BAND_HARMONICS + 1 else None)
+        drift_gain = model_gain_note(model_gains(predicted, y, delay, settle, band),
+                                     model.output_names)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(aim[:, :N - delay], shifted, window)
@@ -580,7 +587,8 @@ def _learn(args):
         law_gain, law_check_, notes = _inverse_gain(model, args.gain, args.check)
         notes = ([f"note: {line}" for line in rate_notes] + ([] if q_note is None else [q_note])
                  + notes + ([] if period_note is None else [period_note])
-                 + ([] if found_note is None else [found_note]))
+                 + ([] if found_note is None else [found_note])
+                 + ([] if drift_gain is None else [f"note: {drift_gain}"]))
         if (note or stall) and steady is not None:
             notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady)
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
