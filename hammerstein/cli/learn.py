@@ -705,7 +705,8 @@ def _learn(args):
     return _summary(args, model, rec, ref, k, delay, T, delay_note, note or stall or verdict.info,
                     cond, settled=(settled_max, settled_rms, window, fade, as_asked, lag,
                                    judged_line),
-                    rose=(rose, score, margin), notes=notes, worse=note is not None)
+                    rose=(rose, score, margin), notes=notes, worse=note is not None,
+                    static=plant.dynamics is None)
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
@@ -762,14 +763,15 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
 
 
 def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled, rose, notes,
-             worse=False):
+             worse=False, static=False):
     """Print the trial's error, notes and convergence condition; exit status 0.
 
     ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples, the
     error against the reference as asked, the trial's measured lag or None, the judged line);
     ``rose`` is (the previous trial and its judged error when this one rose, else None,
     this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines;
-    ``worse``: the trial was worse than the best beyond the noise (not learnt from).
+    ``worse``: the trial was worse than the best beyond the noise (not learnt from);
+    ``static``: the model has no identified dynamics (its condition is its static gain's).
     """
     settled_max, settled_rms, window, fade, as_asked, lag, judged_line = settled
     rose, score, margin = rose
@@ -796,7 +798,10 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     if note is not None:
         print(note, file=sys.stdout)
     summary = cond.summary(list(model.output_names))
-    if rose is None and not worse:  # a condition on the model, not a measured fact
+    if static:                      # no dynamics: the model's static gain against itself
+        summary = summary.replace("<= 1: monotonic", "<= 1 on the model's static gain only: it "
+                                  "has no dynamics, the actuator's modes are not in it")
+    elif rose is None and not worse:  # a condition on the model, not a measured fact
         summary = summary.replace("<= 1: monotonic", "<= 1: monotonic on the model")
     else:                           # the model's condition is not what the actuator did
         summary = summary.replace("<= 1: monotonic", "<= 1 on the model")

@@ -60,3 +60,51 @@ def test_a_cap_at_045_of_the_sampling_rate_is_said():
     _, note = default_q_cutoff(SimpleNamespace(matrices=(_mode(300.0, 0.03, 5e-5),),
                                                sampling_period=5e-5))
     assert "capped" not in note
+
+
+@pytest.mark.parametrize("T, expected", [(1e-4, 100.0), (5e-5, 100.0), (1 / 200.0, 90.0)])
+def test_without_identified_dynamics_a_safe_cutoff_and_a_warning(T, expected):
+    """A model identified without --dynamics does not know the modes: 100 Hz (at most 0.45 x
+    the sampling rate), below the 200 Hz under which piezo stages' first modes rarely lie, and
+    a warning naming the remedies (it said 1000 Hz "because the actuator has no oscillatory
+    mode", and a stage with modes at 380/450 Hz diverged to 71 % of the radius)."""
+    plant = SimpleNamespace(dynamics=None, matrices=(np.zeros((0, 0)),), sampling_period=T)
+    cutoff, line = default_q_cutoff(plant)
+    assert cutoff == pytest.approx(expected) and cutoff < 200.0
+    assert line.startswith(f"warning: Q cutoff {expected:g} Hz: the model has no identified "
+                           f"dynamics") and "\n" not in line
+    assert "can diverge" in line and "identify --dynamics" in line
+    assert "--q-cutoff-hz below your actuator's first mode" in line
+    assert "no oscillatory mode" not in line
+
+
+def test_learn_on_a_model_without_dynamics_warns_once_and_claims_no_monotony(tmp_path):
+    """Through the command: one warning line, Q at 100 Hz in the drive's header, and the
+    convergence condition said to be the model's static gain's only."""
+    from hammerstein.cli.main import main
+    from hammerstein.compensation.drive import read_signals
+    from hammerstein.io.presets import save_model
+    import contextlib
+    import io
+    import pandas as pd
+
+    save_model(load_plant("rakotondrabe-2dof").hysteresis, tmp_path / "static.toml")
+    ref = '{ kind = "circle", radius = 20, frequency = 50, periods = 8 }'
+    common = ["static.toml", "--sampling-period", "5e-5", "--reference", ref]
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.chdir(tmp_path), contextlib.redirect_stdout(out), \
+            contextlib.redirect_stderr(err):
+        assert main(["compensate", *common, "--out", "u0.csv"]) == 0
+        t, u, _ = read_signals("u0.csv", ["ux", "uy"])
+        y, _ = load_plant("rakotondrabe-2dof").simulate(u)
+        pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv("y0.csv", index=False)
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            code = main(["learn", *common, "--drive", "u0.csv", "--measured", "y0.csv",
+                         "--out", "u1.csv"])
+    assert code == 0, err.getvalue()
+    warnings = [ln for ln in err.getvalue().splitlines() if "no identified dynamics" in ln]
+    assert len(warnings) == 1 and warnings[0].startswith("warning: Q cutoff 100 Hz")
+    assert "monotonic" not in out.getvalue()
+    assert "on the model's static gain only" in out.getvalue()
+    assert "Q 100 Hz" in (tmp_path / "u1.csv").read_text()[:3000]
