@@ -15,10 +15,18 @@ One trial is one of:
   learnt from at full gain;
 * **worse than the best** beyond the noise: not learnt from; the next drive
   is learnt again from the best one with half the gain. When that drive,
-  the best plus a small correction, is itself worse beyond the noise, the
-  best is stale: the newest trial becomes the best and is learnt from at
-  full gain (a drifting actuator otherwise locked the learning on a best
-  it could no longer reach, the error growing trial after trial);
+  the best plus a small correction, is itself worse beyond the noise,
+  either the best is stale (the actuator drifted since) or the learning
+  diverges at this gain (a mode above Q's reach, a gain too high): only the
+  best drive measured again tells them apart, so the next drive is the best
+  trial's drive itself, unchanged (``remeasure``). Measured again, worse
+  beyond the noise: the best was stale (above: the trial replaces it, full
+  gain; a drifting actuator otherwise locked the learning on a best it
+  could no longer reach). Within the noise: the best stands and the
+  learning diverges at this gain: it goes on from that measurement with
+  the gain halved for good (``diverges``). Declaring the best stale at once
+  locked in a divergence on an unchanged stage whose modes Q passed: 5.3 %
+  of the radius to 71 % in four trials;
 * **accepted** (learnt from): the halvings of the worse trials before it
   are undone; a trial of a repeating reference not below the best, within
   the noise, has reached the noise, and its gain is halved (a decreasing
@@ -35,11 +43,13 @@ from dataclasses import dataclass
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.compensation.shaping import delay_search_span
 
-__all__ = ["MAX_HALVINGS", "LAG_TOLERANCE", "LAG_PHASE_DEG", "Verdict", "gain_factor",
+__all__ = ["MAX_HALVINGS", "REMEASURE_AFTER", "LAG_TOLERANCE", "LAG_PHASE_DEG", "Verdict", "gain_factor",
            "trial_lag", "lag_tolerance", "lag_problem", "lag_advice", "judge_trial"]
 
 #: the gain is halved at most this many times in all (a floor of 1/16 of --learning-gain)
 MAX_HALVINGS = 4
+#: this many worse trials in a row: the next drive is the best's own, to measure it again
+REMEASURE_AFTER = 2
 #: a trial whose lag differs from the one expected by more than this many samples is out of step
 LAG_TOLERANCE = 1
 #: ... on a first trial (no earlier lag known), a model's phase error at the reference's
@@ -234,6 +244,12 @@ class Verdict:
         Halvings of the per-harmonic gains undone (a trial accepted after rejections).
     halve : bool
         The per-harmonic gains are halved (a worse trial, or the noise reached).
+    remeasure : bool
+        The next drive is the best trial's drive itself, unchanged (not
+        learnt): the next trial measures it again.
+    diverges : bool
+        The best drive measured again is within the noise of its stored
+        error: the best stands, and the learning diverges at the gain it had.
     """
 
     from_best: bool = False
@@ -246,10 +262,12 @@ class Verdict:
     reset: bool = False
     restored: int = 0
     halve: bool = False
+    remeasure: bool = False
+    diverges: bool = False
 
 
 def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, repeating,
-                what, judged_text, out_of_step=None, advice=None):
+                what, judged_text, out_of_step=None, advice=None, q_cutoff_hz=None):
     """The verdict on trial ``k`` against the history's best (module docstring).
 
     Parameters
@@ -275,6 +293,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         :func:`lag_problem`'s text.
     advice : str, optional
         :func:`lag_advice`'s text, ending an out-of-step trial's note.
+    q_cutoff_hz : float, optional
+        Q's cutoff [Hz], named when the learning is found to diverge.
 
     Returns
     -------
@@ -297,13 +317,32 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
                 f"(the actuator changed since: drift, temperature); trial {k} replaces it "
                 f"and is learnt from at full gain")
         return Verdict(info=info, reset=True)
+    if remeasured and rejections >= REMEASURE_AFTER:
+        # the best drive measured again after worse trials, within the noise of its error: the
+        # actuator did not change; the learning steps away from the best diverge at this gain
+        halvings = min(halvings + rejections, MAX_HALVINGS)
+        cut = "" if q_cutoff_hz is None else f" {q_cutoff_hz:.4g} Hz"
+        floor = (" (its floor: lower --q-cutoff-hz below the actuator's first bending mode, or "
+                 "stop here)" if halvings == MAX_HALVINGS else "")
+        info = (f"trial {k} measures the best trial {b}'s drive again: its judged error "
+                f"{score:.4g} µm is within the {margin:.2g} µm of noise of the stored "
+                f"{best_score:.4g} µm, so the actuator did not change and trial {b}'s drive stays "
+                f"the best (this measurement of it replaces the stored one): the learning diverges at the gain it had (likely a bending mode at or "
+                f"below Q's cutoff{cut} that the model does not hold: identify "
+                f"--dynamics, or give --q-cutoff-hz below the first mode); the next drive is "
+                f"learnt from this measurement with gain x{gain_factor(halvings):g}{floor}")
+        return Verdict(halvings=halvings, info=info, diverges=True)
     if worse and rejections > 0:
-        info = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "
-                f"{best_score:.4g} µm {what}; {margin:.2g} µm of noise margin), and its drive "
-                f"is trial {b}'s learnt again: the best is stale (the actuator changed since "
-                f"trial {b}: drift, temperature); trial {k} becomes the best and is learnt from "
-                f"at full gain")
-        return Verdict(info=info, reset=True)
+        # the best learnt again at a lower gain is worse too: the best stale (a drift) or the
+        # learning diverging (a mode above Q's reach); measuring the best drive tells them apart
+        rejections += 1
+        note = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "
+                f"{best_score:.4g} µm {what}; {margin:.2g} µm of noise margin) and its drive is "
+                f"trial {b}'s learnt again: either the actuator changed since trial {b} (drift, "
+                f"temperature) or the learning diverges at this gain; to tell them apart the "
+                f"next drive is trial {b}'s own drive, unchanged: measure it again")
+        return Verdict(from_best=True, best=False, halvings=halvings, rejections=rejections,
+                       note=note, halve=True, remeasure=True)
     if worse:
         rejections += 1
         note = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "

@@ -66,10 +66,14 @@ one, beyond what the sensor noise can explain, is not learnt from; the next
 drive is learnt from the best trial's drive and response with half the
 gain (halved again at each such trial, never below 1/16 of
 ``--learning-gain``, restored once a trial is learnt from), and one line
-says so, as the scenarios' ``kind = "ilc"`` does. When that drive (or the
-best drive re-measured, ``best-trial.csv`` replayed as ``--drive`` to
-resume) is itself worse beyond the noise, the best is stale (the actuator
-changed): the trial becomes the best and is learnt from at full gain; a
+says so, as the scenarios' ``kind = "ilc"`` does. When that drive is itself
+worse beyond the noise, the next drive is the best trial's drive itself, to
+measure it again. The best drive measured again (so, or ``best-trial.csv``
+replayed as ``--drive`` to resume) worse beyond the noise: the best is
+stale (the actuator changed), the trial becomes the best and is learnt from
+at full gain; asked for and within the noise: the learning diverges at that
+gain, which is halved for good (the line names Q's cutoff and
+``--dynamics``); a
 trial whose lag behind the model's prediction is not the delay (a trigger
 or latency change) is not learnt from and changes no gain
 (:mod:`hammerstein.cli._learn_rules`). A measured response that is not the
@@ -576,7 +580,8 @@ def _learn(args):
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
                         f"estimated from the records")
             verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
-                                  remeasured, judged is None, what, JUDGED, out_of_step, advice)
+                                  remeasured, judged is None, what, JUDGED, out_of_step, advice,
+                                  args.q_cutoff_hz)
             halvings, best, note, stall = (verdict.halvings, verdict.best, verdict.note,
                                            verdict.stall)
             if verdict.from_best:
@@ -614,7 +619,9 @@ def _learn(args):
                 full = base * (args.learning_gain / gain)
                 gains.gains = np.clip(gains.gains, full * 0.5 ** MAX_HALVINGS, full)
         problems, shaped, learnt = [], [], None
-        if steady is not None and followed is not None and N - delay - steady >= 2 * P:
+        if verdict.remeasure:       # the best drive itself, unchanged: the next trial re-measures it
+            u_next, learnt = bu, followed
+        elif steady is not None and followed is not None and N - delay - steady >= 2 * P:
             # a repeating reference: the compensator's reference corrected per harmonic, the
             # drive the compensator's for it (from rest, its start-up consistent with the model)
             e_al = aim[:, :N - delay] - learn_y[:, delay:N]
@@ -652,7 +659,7 @@ def _learn(args):
                 if problems:
                     u_next, _ = plant.amplifier.limit(u_next, T)
         # no start-up step beyond the settled drive's largest (as compensate's default)
-        u_next, more = limit_start_up(
+        u_next, more = (u_next, []) if verdict.remeasure else limit_start_up(
             u_next, fade, ref.period_samples,
             None if plant.amplifier is None else plant.amplifier.rest_voltages(),
             list(model.input_names), T)
@@ -671,6 +678,9 @@ def _learn(args):
                    f"{START_NOTE}\n"
                    f"{end_note(u_next, T, list(model.input_names), plant.amplifier)}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else
+                      f"not learnt: the best trial {state['trial']}'s drive ({BEST_FILE}), to "
+                      f"measure it again ({args.drive} and {args.measured} were worse)"
+                      if verdict.remeasure else
                       f"learned from the best trial {state['trial']} ({BEST_FILE}; {args.drive} "
                       f"and {args.measured} were worse)")
                    + f": delay {delay} samples, "
@@ -706,7 +716,7 @@ def _learn(args):
                     cond, settled=(settled_max, settled_rms, window, fade, as_asked, lag,
                                    judged_line),
                     rose=(rose, score, margin), notes=notes, worse=note is not None,
-                    static=plant.dynamics is None)
+                    static=plant.dynamics is None, remeasure=verdict.remeasure)
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
@@ -763,7 +773,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
 
 
 def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled, rose, notes,
-             worse=False, static=False):
+             worse=False, static=False, remeasure=False):
     """Print the trial's error, notes and convergence condition; exit status 0.
 
     ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples, the
@@ -771,7 +781,8 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     ``rose`` is (the previous trial and its judged error when this one rose, else None,
     this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines;
     ``worse``: the trial was worse than the best beyond the noise (not learnt from);
-    ``static``: the model has no identified dynamics (its condition is its static gain's).
+    ``static``: the model has no identified dynamics (its condition is its static gain's);
+    ``remeasure``: the next drive is the best trial's own (not learnt).
     """
     settled_max, settled_rms, window, fade, as_asked, lag, judged_line = settled
     rose, score, margin = rose
@@ -808,7 +819,9 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     if rose is not None:
         print(f"the judged settled error ({JUDGED}) rose from {rose[1]:.4g} µm (trial {rose[0]}) to "
               f"{score:.4g} µm, beyond the {margin:.2g} µm of noise: the learning is not monotonic "
-              f"on this actuator (the next drive is learnt from the best trial)", file=sys.stdout)
+              f"on this actuator (the next drive is "
+              + ("the best trial's own, to measure it again" if remeasure else
+                 "learnt from the best trial") + ")", file=sys.stdout)
     print(summary, file=sys.stdout)
     for line in notes:
         print_err(line)

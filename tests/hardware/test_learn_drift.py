@@ -33,10 +33,14 @@ def _cli(*args, cwd):
     return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
-def _hardware(drive, out, gain=1.04, seed=0, shift=0):
-    """Measure ``drive`` [file] on the simulated actuator; its true settled max error [µm]."""
+def _hardware(drive, out, gain=1.04, seed=0, shift=0, bump=0.0):
+    """Measure ``drive`` [file] on the simulated actuator; its true settled max error [µm].
+
+    ``bump`` [µm]: a 300 Hz error added to x (a trial that went wrong on an unchanged stage).
+    """
     t, u, _ = read_signals(drive, ["ux", "uy"])
     clean, _ = load_plant("rakotondrabe-2dof").simulate(gain * u)
+    clean[0] += bump * np.sin(2 * np.pi * 300 * t)
     lag = 3 + shift
     y = np.concatenate([np.repeat(clean[:, :1], lag, axis=1), clean[:, :clean.shape[1] - lag]],
                        axis=1) if lag > 0 else np.concatenate(
@@ -65,9 +69,25 @@ STATE = {"trial": 2, "score": 0.2, "halvings": 1, "rejections": 0}
 @pytest.mark.parametrize("state, score, worse, better, remeasured, expect", [
     # worse: not learnt from, rejections counted, the best kept
     (STATE, 0.3, True, False, False, dict(from_best=True, best=False, rejections=1, reset=False)),
-    # worse again after a rejection (the best learnt again): the best is stale, full gain
+    # worse again after a rejection (the best learnt again): stale or diverging? the next drive
+    # is the best's own, to measure it again; nothing reset yet
     ({**STATE, "rejections": 1}, 0.4, True, False, False,
-     dict(from_best=False, best=True, halvings=0, rejections=0, reset=True)),
+     dict(from_best=True, best=False, halvings=1, rejections=2, reset=False, remeasure=True,
+          halve=True)),
+    # that best drive measured again, worse beyond the noise: the best was stale, full gain
+    ({**STATE, "rejections": 2}, 0.4, True, False, True,
+     dict(from_best=False, best=True, halvings=0, rejections=0, reset=True, remeasure=False,
+          diverges=False)),
+    # ... within the noise: the best stands, the learning diverges: the two halvings kept
+    ({**STATE, "rejections": 2}, 0.21, False, False, True,
+     dict(from_best=False, best=True, halvings=3, rejections=0, reset=False, restored=0,
+          halve=False, diverges=True, remeasure=False)),
+    # ... below it: the same (the same drive; a lower error is the noise)
+    ({**STATE, "rejections": 2}, 0.19, False, True, True,
+     dict(halvings=3, rejections=0, reset=False, restored=0, diverges=True)),
+    # ... at the gain's floor: no further
+    ({**STATE, "halvings": 3, "rejections": 2}, 0.2, False, False, True,
+     dict(halvings=MAX_HALVINGS, diverges=True)),
     # the best drive re-measured, much worse: stale, full gain
     (STATE, 1.0, True, False, True, dict(from_best=False, best=True, halvings=0, reset=True)),
     # accepted after rejections: their halvings undone
@@ -83,6 +103,32 @@ def test_the_rules_of_a_trial(state, score, worse, better, remeasured, expect):
                     "averaged", "judged")
     for key, value in expect.items():
         assert getattr(v, key) == value, (key, v)
+
+
+@pytest.mark.parametrize("state, score, worse, remeasured, says, not_says", [
+    ({**STATE, "rejections": 1}, 0.4, True, False,
+     ["trial 3 is 2 times the error of trial 2", "either the actuator changed since trial 2",
+      "or the learning diverges at this gain", "the next drive is trial 2's own drive, "
+      "unchanged: measure it again"], ["the best is stale"]),
+    ({**STATE, "rejections": 2}, 0.21, False, True,
+     ["trial 3 measures the best trial 2's drive again", "within the 0.05 µm of noise",
+      "trial 2's drive stays the best", "the learning diverges", "Q's cutoff 1000 Hz",
+      "identify --dynamics", "--q-cutoff-hz below the first mode", "with gain x0.125"],
+     ["stale", "its floor"]),
+    ({**STATE, "halvings": 3, "rejections": 2}, 0.2, False, True,
+     ["with gain x0.0625 (its floor: lower --q-cutoff-hz"], ["stale"]),
+])
+def test_each_decision_says_what_it_decided(state, score, worse, remeasured, says, not_says):
+    """One line per decision: the second worse trial asks for the best drive again; that
+    drive's measurement says stale (above) or diverging, naming Q's cutoff and --dynamics."""
+    v = judge_trial(state, 3, score, state["score"], 0.05, worse, False, remeasured, True,
+                    "averaged", "judged", q_cutoff_hz=1000.0)
+    line = v.note or v.info
+    assert "\n" not in line
+    for text in says:
+        assert text in line, (text, line)
+    for text in not_says:
+        assert text not in line, (text, line)
 
 
 def test_an_out_of_step_trial_changes_no_gain():
@@ -242,3 +288,40 @@ def test_a_history_of_an_earlier_version_is_named_as_such(tmp_path):
     assert "was written by an earlier version of hammerstein, not" in res.stderr
     assert "another reference" not in res.stderr and not (tmp_path / "u2.csv").exists()
     assert {p.name: p.read_bytes() for p in (tmp_path / "hist").iterdir()} == kept
+
+
+def _drive_columns(path):
+    return read_signals(path, ["ux", "uy"])[1]
+
+
+def test_two_worse_trials_on_an_unchanged_stage_remeasure_the_best_and_halve_the_gain(tmp_path):
+    """Trials 2 and 3 go wrong (a 300 Hz error of 1 µm, the stage itself unchanged): trial 3
+    is no longer taken for a stale best (it became the best and was learnt from at full gain,
+    locking in a divergence); the next drive is the best's own, unchanged; measured again
+    within the noise, the best stands, the learning goes on from it at a quarter of the gain,
+    and the line names Q's cutoff and --dynamics."""
+    _first(tmp_path)
+    for k in range(4):
+        _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", seed=k,
+                  bump=1.0 if k in (2, 3) else 0.0)
+        res = _cli("learn", "rakotondrabe-2dof", *COMMON, "--drive", f"u{k}.csv", "--measured",
+                   f"y{k}.csv", "--out", f"u{k + 1}.csv", cwd=tmp_path)
+        assert res.returncode == 0, res.stderr
+    assert "the best is stale" not in res.stdout
+    assert "the next drive is trial 1's own drive, unchanged: measure it again" in res.stdout
+    state = _state(tmp_path)
+    assert (int(state["best_trial"]), int(state["rejections"])) == (1, 2)
+    # the drive written is trial 1's drive itself
+    assert np.array_equal(_drive_columns(tmp_path / "u4.csv"), _drive_columns(tmp_path / "u1.csv"))
+    assert "not learnt: the best trial 1's drive" in (tmp_path / "u4.csv").read_text()[:3000]
+    _hardware(tmp_path / "u4.csv", tmp_path / "y4.csv", seed=4)
+    res = _cli("learn", "rakotondrabe-2dof", *COMMON, "--drive", "u4.csv", "--measured",
+               "y4.csv", "--out", "u5.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    lines = [ln for ln in res.stdout.splitlines() if ln.startswith("trial 4 measures")]
+    assert len(lines) == 1 and "trial 1's drive stays the best" in lines[0], res.stdout
+    assert "the learning diverges" in lines[0] and "identify --dynamics" in lines[0]
+    assert "stale" not in res.stdout
+    state = _state(tmp_path)
+    assert (int(state["best_trial"]), int(state["rejections"]), int(state["halvings"])) == (4, 0, 2)
+    assert "gain 0.125," in (tmp_path / "u5.csv").read_text()[:3000]    # 0.5 x 0.25
