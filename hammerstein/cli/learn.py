@@ -178,14 +178,16 @@ def add_parser(subparsers):
                    help="append this trial's error to DIR/history.csv, draw DIR/convergence.png, keep the "
                         "best trial: a trial 10 %% worse than it beyond the sensor noise is not "
                         "learnt from (the next drive is learnt from the best one with half the gain, "
-                        "at least 1/16 of --learning-gain); replay DIR/best-trial.csv as --drive "
+                        "at least 1/16 of --learning-gain; after a second, the best drive itself, "
+                        "to measure it again); replay DIR/best-trial.csv as --drive "
                         "to resume a learning")
     p.add_argument("--learning-gain", type=positive_float, default=0.5, metavar="G",
                    help="gamma in (0, 2) (default 0.5: half the error per trial, half the noise)")
     p.add_argument("--q-cutoff-hz", type=positive_float, default=None, metavar="HZ",
                    help="zero-phase low-pass Q of the update (default: 2.5 times the first "
                         "bending mode of the actuator's dynamics, at least 1000 Hz, printed; "
-                        "1000 Hz without an oscillatory mode)")
+                        "1000 Hz without an oscillatory mode; 100 Hz, with a warning, for a "
+                        "model identified without --dynamics)")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default="zpetc",
                    help="inverse of the dynamics, in the learning and in the compensator that "
                         "computes a repeating reference's drive (default zpetc)")
