@@ -325,3 +325,16 @@ def test_two_worse_trials_on_an_unchanged_stage_remeasure_the_best_and_halve_the
     state = _state(tmp_path)
     assert (int(state["best_trial"]), int(state["rejections"]), int(state["halvings"])) == (4, 0, 2)
     assert "gain 0.125," in (tmp_path / "u5.csv").read_text()[:3000]    # 0.5 x 0.25
+
+
+@pytest.mark.parametrize("best, score, margin, says", [
+    (0.1, 0.12, 0.05, "the learning has reached the noise"),        # 2.4 margins
+    (0.7382, 0.7386, 0.096, "the learning stalls 7.69 times above the noise"),   # a warm stage
+])
+def test_a_stalled_trial_is_at_the_noise_only_within_three_margins(best, score, margin, says):
+    """A warm stage's 20 Hz circle, judged 0.7386 against the best's 0.7382 µm with 0.096 µm of
+    noise, was told 'the learning has reached the noise'; either way the gain is halved."""
+    state = {"trial": 2, "score": best, "halvings": 0, "rejections": 0}
+    v = judge_trial(state, 3, score, best, margin, False, False, False, True, "averaged",
+                    "judged")
+    assert says in v.stall and v.halvings == 1 and v.halve

@@ -114,7 +114,10 @@ def test_learn_halves_its_gain_once_the_error_is_within_the_noise_of_the_best(tm
     assert "reached the noise" not in out0
     (tmp_path / "y1.csv").write_bytes((tmp_path / "y0.csv").read_bytes())   # no progress at all
     out1 = _learn(1, tmp_path)
-    assert "within the" in out1 and "reached the noise" in out1 and "gain x0.5" in out1
+    # the same error as the best, 1.57 µm, far above the noise: it stalls there, not at the
+    # noise floor (a warm stage's learning was told it had reached the noise at 7.7 margins)
+    assert "within the" in out1 and "gain x0.5" in out1
+    assert "the learning stalls" in out1 and "reached the noise" not in out1
     assert "not learnt from" not in out1
     u = {k: read_signals(tmp_path / f"u{k}.csv", ["ux", "uy"])[1] for k in range(3)}
     w = slice(drive_fade_samples(tmp_path / "u0.csv") + 2 * P, None)   # the settled part
