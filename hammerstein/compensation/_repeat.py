@@ -14,7 +14,8 @@ samples of a 150 Hz circle at 50 kHz on a stage with modes at 2.1 and
 
 import numpy as np
 
-__all__ = ["MAX_PERIODS", "REPEAT_SAMPLES", "repeat_lag", "kept_samples"]
+__all__ = ["MAX_PERIODS", "REPEAT_SAMPLES", "repeat_lag", "kept_samples", "continuation",
+           "continuations"]
 
 #: The most periods :func:`repeat_lag` looks back (a frequency f at a sampling rate fs, both
 #: whole hertz, repeats after ``f / gcd(f, fs)`` periods: 3 for 150 Hz at 50 kHz).
@@ -80,3 +81,85 @@ def repeat_lag(record, period_samples, samples):
     same = np.all(np.abs(r[:, idx] - last[:, None, :]) <= 1e-9 * scale, axis=(0, 2))
     hit = np.flatnonzero(same)
     return int(lags[hit[0]]) if hit.size else None
+
+
+def continuation(reference, samples, period_samples=None):
+    """The ``samples`` reference samples that follow a record.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    samples : int
+        How many.
+    period_samples : int, optional
+        Period of a periodic reference, rounded to whole samples: the
+        continuation is the record one period earlier when its last 8
+        samples repeat those one period earlier, or as many periods earlier
+        as a period of a fractional number of samples needs
+        (:func:`~hammerstein.compensation._repeat.repeat_lag`: 3 periods for
+        150 Hz at 50 kHz); otherwise (a spiral) a quadratic extrapolation of
+        the last three samples (exact for polynomials of degree 2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (p, samples)
+    """
+    r = np.asarray(reference, dtype=float)
+    N = r.shape[1]
+    if samples <= 0:
+        return np.zeros((r.shape[0], 0))
+    lag = repeat_lag(r, period_samples, samples)
+    if lag is not None:
+        return r[:, N - lag:N - lag + samples].copy()
+    if N < 3:
+        return np.repeat(r[:, -1:], samples, axis=1)
+    k = np.arange(1, samples + 1)
+    a, b, c = r[:, -3], r[:, -2], r[:, -1]
+    # Newton forward form through (-2, a), (-1, b), (0, c)
+    return (c[:, None] + np.outer(c - b, k)
+            + np.outer((c - 2 * b + a) / 2.0, k * (k + 1)))
+
+
+def continuations(records, samples, period_samples=None):
+    """:func:`continuation` of several records at once (the same values, bit for bit).
+
+    Parameters
+    ----------
+    records : sequence of numpy.ndarray, each shape (p, n_samples_b)
+        [µm]; the same p for all, lengths may differ.
+    samples : int
+        How many samples follow each record.
+    period_samples : sequence of (int or None), optional
+        Period of each record (None: not periodic); None for none of them.
+
+    Returns
+    -------
+    list of numpy.ndarray, each shape (p, samples)
+        In the order of ``records``.
+    """
+    B = len(records)
+    periods = [None] * B if period_samples is None else list(period_samples)
+    out = [None] * B
+    if samples <= 0:
+        return [np.zeros((r.shape[0], 0)) for r in records]
+    # periodic records whose last 8 samples repeat one or more periods earlier
+    for b in range(B):
+        lag = repeat_lag(records[b], periods[b], samples)
+        if lag is not None:
+            N = records[b].shape[1]
+            out[b] = records[b][:, N - lag:N - lag + samples].copy()
+    rest = [b for b in range(B) if out[b] is None]
+    short = [b for b in rest if records[b].shape[1] < 3]
+    for b in short:
+        out[b] = np.repeat(records[b][:, -1:], samples, axis=1)
+    quad = [b for b in rest if records[b].shape[1] >= 3]
+    if quad:
+        last3 = np.stack([records[b][:, -3:] for b in quad])      # (Q, p, 3)
+        a, b_, c = last3[:, :, 0, None], last3[:, :, 1, None], last3[:, :, 2, None]
+        k = np.arange(1, samples + 1)
+        # Newton forward form through (-2, a), (-1, b), (0, c), as continuation()
+        ext = c + (c - b_) * k + ((c - 2 * b_ + a) / 2.0) * (k * (k + 1))
+        for i, b in enumerate(quad):
+            out[b] = ext[i]
+    return out

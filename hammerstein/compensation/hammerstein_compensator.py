@@ -1,6 +1,6 @@
 """The Hammerstein compensator: inverse of the linear dynamics, then of the hysteresis.
 
-Length: about 900 lines: the compensator, its ZPETC preview and the
+Length: about 950 lines: the compensator, its ZPETC preview and the
 reference continuation it reads ahead are one state machine (the chunked
 stream, the fused kernels and the exported C follow it step by step).
 
@@ -50,7 +50,7 @@ import math
 
 import numpy as np
 
-from hammerstein.compensation._repeat import repeat_lag
+from hammerstein.compensation._repeat import continuation, continuations, repeat_lag  # noqa: F401
 from hammerstein.compensation.compensators import CompensatorError, _gain_text
 from hammerstein.models.creep import creep_dynamics, creep_matrices, series_matrices
 from hammerstein.models.dynamics import DynamicsError
@@ -107,45 +107,6 @@ def fade_in(reference, samples, rest=None):
     return r
 
 
-def continuation(reference, samples, period_samples=None):
-    """The ``samples`` reference samples that follow a record.
-
-    Parameters
-    ----------
-    reference : array_like, shape (p, n_samples)
-        [µm].
-    samples : int
-        How many.
-    period_samples : int, optional
-        Period of a periodic reference, rounded to whole samples: the
-        continuation is the record one period earlier when its last 8
-        samples repeat those one period earlier, or as many periods earlier
-        as a period of a fractional number of samples needs
-        (:func:`~hammerstein.compensation._repeat.repeat_lag`: 3 periods for
-        150 Hz at 50 kHz); otherwise (a spiral) a quadratic extrapolation of
-        the last three samples (exact for polynomials of degree 2).
-
-    Returns
-    -------
-    numpy.ndarray, shape (p, samples)
-    """
-    r = np.asarray(reference, dtype=float)
-    N = r.shape[1]
-    if samples <= 0:
-        return np.zeros((r.shape[0], 0))
-    lag = repeat_lag(r, period_samples, samples)
-    if lag is not None:
-        return r[:, N - lag:N - lag + samples].copy()
-    if N < 3:
-        return np.repeat(r[:, -1:], samples, axis=1)
-    k = np.arange(1, samples + 1)
-    a, b, c = r[:, -3], r[:, -2], r[:, -1]
-    # Newton forward form through (-2, a), (-1, b), (0, c)
-    return (c[:, None] + np.outer(c - b, k)
-            + np.outer((c - 2 * b + a) / 2.0, k * (k + 1)))
-
-
-
 def _zpetc_preview_states(inverse, heads):
     """ZPETC states after the preview samples ``heads`` (B, p, P) of faded-in records.
 
@@ -181,50 +142,6 @@ def _fade_weights(lengths):
     starts = np.cumsum(lengths) - lengths
     k = np.arange(total) - np.repeat(starts, lengths)
     return 0.5 * (1.0 - np.cos(np.pi * k / np.repeat(lengths, lengths)))
-
-
-def continuations(records, samples, period_samples=None):
-    """:func:`continuation` of several records at once (the same values, bit for bit).
-
-    Parameters
-    ----------
-    records : sequence of numpy.ndarray, each shape (p, n_samples_b)
-        [µm]; the same p for all, lengths may differ.
-    samples : int
-        How many samples follow each record.
-    period_samples : sequence of (int or None), optional
-        Period of each record (None: not periodic); None for none of them.
-
-    Returns
-    -------
-    list of numpy.ndarray, each shape (p, samples)
-        In the order of ``records``.
-    """
-    B = len(records)
-    periods = [None] * B if period_samples is None else list(period_samples)
-    out = [None] * B
-    if samples <= 0:
-        return [np.zeros((r.shape[0], 0)) for r in records]
-    # periodic records whose last 8 samples repeat one or more periods earlier
-    for b in range(B):
-        lag = repeat_lag(records[b], periods[b], samples)
-        if lag is not None:
-            N = records[b].shape[1]
-            out[b] = records[b][:, N - lag:N - lag + samples].copy()
-    rest = [b for b in range(B) if out[b] is None]
-    short = [b for b in rest if records[b].shape[1] < 3]
-    for b in short:
-        out[b] = np.repeat(records[b][:, -1:], samples, axis=1)
-    quad = [b for b in rest if records[b].shape[1] >= 3]
-    if quad:
-        last3 = np.stack([records[b][:, -3:] for b in quad])      # (Q, p, 3)
-        a, b_, c = last3[:, :, 0, None], last3[:, :, 1, None], last3[:, :, 2, None]
-        k = np.arange(1, samples + 1)
-        # Newton forward form through (-2, a), (-1, b), (0, c), as continuation()
-        ext = c + (c - b_) * k + ((c - 2 * b_ + a) / 2.0) * (k * (k + 1))
-        for i, b in enumerate(quad):
-            out[b] = ext[i]
-    return out
 
 
 def creep_inverse(creeps, sampling_period):
