@@ -39,6 +39,7 @@ import numpy as np
 
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.compensation.inverse import kuhnen_inverse
+from hammerstein.compensation.reference_check import check_reference
 from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
 from hammerstein.exceptions import (CompensatorDivergence, CompensatorError, ConvergenceWarning,
                                     HysteresisError, RangeWarning)
@@ -462,6 +463,12 @@ class InverseMultiplicativeCompensator:
         ------
         CompensatorDivergence
             If U becomes non-finite or exceeds ``divergence_bound``.
+        CompensatorError
+            On a reference sample the exported C skips with status 4, the first one
+            named; nothing is run, the caller's state stays valid
+            (:func:`~hammerstein.compensation.reference_check.check_reference`).
+        HysteresisError
+            On a wrongly shaped reference or a non-finite sample (named).
 
         Warns
         -----
@@ -469,6 +476,7 @@ class InverseMultiplicativeCompensator:
             If the reference leaves the identified output range
             (:func:`check_reference_range`).
         """
+        reference = check_reference(self, reference)
         check_reference_range(self.model, reference)
         return simulate_compensator(self, reference, initial_state)
 
@@ -939,12 +947,21 @@ class PerAxisInverseCompensator:
             Voltages [V].
         final_state : numpy.ndarray, shape (n_states,)
 
+        Raises
+        ------
+        CompensatorError
+            On a reference sample the exported C skips with status 4, the first one
+            named; nothing is run, the caller's state stays valid
+            (:func:`~hammerstein.compensation.reference_check.check_reference`).
+        HysteresisError
+            On a wrongly shaped reference or a non-finite sample (named).
+
         Warns
         -----
         RangeWarning
             If the reference leaves the identified range.
         """
-        yr = self.model.check_inputs(reference, "reference")
+        yr = check_reference(self, reference)
         s = self.initial_state(initial_state)
         check_reference_range(self.model, yr)
         yr = self.model.gamma_reference(yr)        # Gamma(U) = S^-1(Yr - c)

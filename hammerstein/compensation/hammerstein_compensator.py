@@ -59,6 +59,7 @@ from hammerstein.compensation.inversion import ZPETCInverse, inverse_system, pre
 from hammerstein.compensation.lookahead import (EXPORT_DECAY, MAX_LOOKAHEAD, LookaheadInverse,
                                                 creep_rest_state)
 from hammerstein.compensation.model_classes import model_class
+from hammerstein.compensation.reference_check import check_reference, reference_checked
 from hammerstein.simulation import (ChainResult, LinearArrays, linear_steps, simulate_chain,
                                     simulate_compensator)
 
@@ -711,17 +712,26 @@ class HammersteinCompensator:
         ------
         CompensatorDivergence
             When the hysteresis compensator diverges.
+        CompensatorError
+            On a reference sample the exported C skips with status 4 (beyond
+            :func:`~hammerstein.export.c_base.reference_bound`, a glitch): the
+            message names the first one; nothing is run, so the caller's
+            state stays valid (:func:`~hammerstein.compensation.reference_check.check_reference`).
+        HysteresisError
+            On a wrongly shaped reference or a non-finite sample (named).
         """
         if self.inverse is not None and not self.exact_static:   # the declared law, pre-filter included
             self._entered += 1
             try:
+                reference = check_reference(self, reference)
                 return simulate_compensator(self, reference, self.initial_state(initial_state))
             finally:
                 self._entered -= 1
-        r = self.model.check_inputs(reference, "reference")
+        r = check_reference(self, reference)
         cstate, fstate = self._split(self.initial_state(initial_state))
         v, fstate = self.inverse_dynamics(r, fstate)
-        u, cstate = self.hysteresis_compensator.simulate(v, cstate)
+        with reference_checked():       # V is the inverse's, not a reference to check
+            u, cstate = self.hysteresis_compensator.simulate(v, cstate)
         return u, np.concatenate([cstate, fstate])
 
     @contextlib.contextmanager

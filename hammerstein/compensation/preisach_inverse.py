@@ -44,6 +44,7 @@ import numpy as np
 from hammerstein.models.generalized_pi import GeneralizedPI
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.exceptions import CompensatorError
+from hammerstein.compensation.reference_check import check_reference
 from hammerstein.simulation import preisach_inverse_kernel, state_vector
 
 __all__ = ["PreisachInverseCompensator", "component_arrays", "sweep_radius", "RELAXATIONS"]
@@ -389,9 +390,13 @@ class PreisachInverseCompensator:
         Raises
         ------
         HysteresisError
-            On a wrongly shaped or non-finite reference or state.
+            On a wrongly shaped or non-finite reference (the first sample named) or state.
+        CompensatorError
+            On a reference sample the exported C skips with status 4, the first one
+            named; nothing is run, the caller's state stays valid
+            (:func:`~hammerstein.compensation.reference_check.check_reference`).
         """
-        yr = np.ascontiguousarray(self.model.check_inputs(reference, "reference"))
+        yr = np.ascontiguousarray(check_reference(self, reference))
         s = self.initial_state(initial_state)
         m = self.model.n_inputs
         u_prev, hs = s[:m].copy(), s[m:].copy()
