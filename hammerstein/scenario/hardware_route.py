@@ -96,8 +96,9 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     Raises
     ------
     CompensatorError
-        A kind that does not work with the model (naming those that do), or
-        ``fade_in = 0`` for a reference that does not start at rest.
+        A kind that does not work with the model (naming those that do),
+        ``fade_in = 0`` for a reference that does not start at rest, or a
+        reference not of shape (n_outputs, n_samples) (a transposed record).
 
     Examples
     --------
@@ -109,7 +110,14 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     >>> drive.inputs.shape, float(np.abs(drive.inputs[:, 0]).max()) < 1e-9
     ((2, 4000), True)
     """
-    signal = np.atleast_2d(np.asarray(reference, dtype=float))
+    try:
+        signal = np.atleast_2d(np.asarray(reference, dtype=float))
+    except (TypeError, ValueError):
+        raise CompensatorError("reference: expected numbers [µm]") from None
+    p = plant.hysteresis.n_outputs      # the message drive_signal gives (a transposed record)
+    if signal.ndim != 2 or signal.shape[1] < 1 or signal.shape[0] != p:
+        raise CompensatorError(f"reference: expected shape ({p}, n_samples), one row per output "
+                               f"[µm], found {np.shape(reference)}")
     kind, options, _ = _kind_and_options(plant, kind, gain, check, inversion)
     spec = {"kind": kind, "model": "plant", **options}
     if kind == "hammerstein":
