@@ -442,6 +442,13 @@ class HammersteinCompensator:
         """Validated copy of a flat state (zeros by default; the Preisach model's default
         hysteron states when the static part is the exact Preisach inverse).
 
+        The default is not the compensator at rest: its inverse of G sits at 0 µm, where an
+        identified stage rests elsewhere (its model's output at 0 V, e.g. (-0.99, 0.62) µm),
+        and a loop started from it is off ``compensate``'s drive by volts at its first
+        samples (5.15 V on such a stage). A streaming loop starts from :meth:`rest_state`
+        and feeds ``compensate``'s faded reference P samples ahead (docs/python-api.md,
+        "Streaming in your own loop").
+
         Parameters
         ----------
         initial_state : array_like, shape (n_states,), optional
@@ -460,6 +467,30 @@ class HammersteinCompensator:
             return np.concatenate([self.hysteresis_compensator.initial_state(),
                                    np.zeros(self.n_filter_states)])
         return state_vector(initial_state, self.n_states)
+
+    def rest_state(self):
+        """The state of the compensator at rest: where a streaming loop starts.
+
+        The hysteresis compensator's default state (:meth:`initial_state`), and the
+        inverse of G settled at the output ``compensate`` fades its reference in from
+        (:func:`~hammerstein.compensation.drive.compensator_rest`: the model's output at
+        0 V, with creep settled), in the frame the inverse filters
+        (:meth:`prefilter_reference`), as the exported C's ``NAME_init`` sets it. From
+        it, :meth:`simulate` (inside :meth:`previewed`) on ``compensate``'s faded
+        reference P samples ahead gives ``compensate``'s voltages, in any chunks.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            For ``'stable'``, :meth:`initial_state` (the whole-record inverse starts
+            itself at rest).
+        """
+        state = self.initial_state()
+        if self.inverse is not None:
+            from hammerstein.compensation.drive import compensator_rest   # drive imports this
+            rest = compensator_rest(self.model, self)
+            state[self.hysteresis_compensator.n_states:] = self.preview_state(rest[:, None], 0)
+        return state
 
     def _split(self, state):
         nc = self.hysteresis_compensator.n_states
