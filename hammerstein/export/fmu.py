@@ -205,6 +205,7 @@ typedef struct {{
     fmi2CallbackFunctions cb;
     fmi2String name;
     int logging;
+    int told_step;               /* the note on a step longer than T is logged once */
 }} Instance;
 
 /* the model's output at 0 V [um]: where {N}_init leaves the compensator (the references'
@@ -245,6 +246,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2St
     memcpy((void *)&c->cb, cb, sizeof *cb);
     c->name = name;
     c->logging = logging;
+    c->told_step = 0;
     {N}_init(&c->state);
     memcpy(c->reference, rest_reference, sizeof c->reference);   /* the start values: at rest */
     memset(c->measurement, 0, sizeof c->measurement);
@@ -283,6 +285,7 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c)
     {{ int k; for (k = 0; k < NM; ++k) i->measurement[k] = rest_measurement[k]; }}
     memset(i->voltage, 0, sizeof i->voltage);
     i->status = 0;
+    i->told_step = 0;
     return fmi2OK;
 }}
 
@@ -365,9 +368,22 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2B
     if (!i) return fmi2Error;
     ratio = h / {float(code.sampling_period)!r};   /* {N}_SAMPLING_PERIOD, in double */
     n = (long)(ratio + 0.5);
+    if (h == 0.0) {{      /* FMI 2.0: a zero step is allowed; nothing runs, the outputs stay */
+        i->time = t;
+        return fmi2OK;
+    }}
     if (n < 1 || (ratio - (double)n) > 1e-6 || ((double)n - ratio) > 1e-6) {{
-        say(i, fmi2Error, "fmi2DoStep: the communication step must be a multiple of the sampling period");
+        say(i, fmi2Error, "fmi2DoStep: the communication step must be 0 or a multiple of the sampling period");
         return fmi2Error;
+    }}
+    if (n > 1 && !i->told_step) {{
+        i->told_step = 1;
+        if (i->cb.logger)
+            i->cb.logger(i->cb.componentEnvironment, i->name, fmi2Warning, "warning",
+                         "fmi2DoStep: a communication step of several sampling periods holds the "
+                         "references over it and shows the voltages only at its end: the "
+                         "compensator tracks as designed only with a step of one sampling period "
+                         "(stepSize of DefaultExperiment)");
     }}
     i->status = 0;
     for (k = 0; k < n; ++k) i->status |= {call};
