@@ -51,6 +51,7 @@ import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
+from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
 from hammerstein.compensation.drive_splice import keep_end, keep_start
 from hammerstein.compensation.shaping import shape_reference, time_intervals
@@ -518,46 +519,6 @@ def hardware_fade(reference, fade_samples, rest=None, lead=None):
     w = fade_weight(k / (n - lead))
     r[:, :n] = r0[:, None] + w * (r[:, :n] - r0[:, None])
     return r
-
-
-def rest_output(model, creep=None):
-    """The static output of a hysteresis model at rest (0 V from its initial state) [µm].
-
-    An identified model carries the records' output offset: 0 µm is not
-    what the actuator shows at 0 V, and a reference faded in from 0 µm
-    would start the drive at the voltage of 0 µm instead of at rest. With
-    ``creep``, the output after the creep has settled at rest (each
-    output times its creep's static gain, ``Creep.static_gain``, the model's
-    ``output_offset`` added after it, as the plant adds it): the inverse
-    of the dynamics with the creep starts in that steady state, so a
-    reference faded in from it starts the drive at exactly 0 V.
-
-    Parameters
-    ----------
-    model : object
-        A hysteresis model with ``n_inputs`` and ``simulate(u)`` returning
-        ``(outputs (p, n), state)``.
-    creep : sequence of (Creep or None), length p, optional
-        The plant's creep per output (``HammersteinPlant.creep``).
-
-    Returns
-    -------
-    numpy.ndarray, shape (p,)
-        [µm].
-
-    Examples
-    --------
-    >>> from hammerstein.io.presets import load_plant
-    >>> rest_output(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
-    array([0., 0.])
-    """
-    y, _ = model.simulate(np.zeros((model.n_inputs, 1)))
-    y = np.asarray(y, dtype=float)[:, 0]
-    if creep is not None:    # the output offset is a sensor zero, after creep (as the plant has it)
-        off = getattr(model, "output_offset", None)
-        off = np.zeros_like(y) if off is None else np.asarray(off, dtype=float)
-        y = (y - off) * np.array([1.0 if c is None else c.static_gain for c in creep]) + off
-    return y
 
 
 def compensator_rest(model, compensator):

@@ -57,7 +57,7 @@ from hammerstein.models.dynamics import DynamicsError
 from hammerstein.models.hysteresis import HysteresisError, state_vector
 from hammerstein.compensation.inversion import ZPETCInverse, inverse_system, preview_inverse
 from hammerstein.compensation.lookahead import (EXPORT_DECAY, MAX_LOOKAHEAD, LookaheadInverse,
-                                                creep_rest_state)
+                                                creep_rest_state, rest_output)
 from hammerstein.compensation.model_classes import model_class
 from hammerstein.compensation.reference_check import check_reference, reference_checked
 from hammerstein.simulation import (ChainResult, LinearArrays, linear_steps, simulate_chain,
@@ -487,8 +487,7 @@ class HammersteinCompensator:
         """
         state = self.initial_state()
         if self.inverse is not None:
-            from hammerstein.compensation.drive import compensator_rest   # drive imports this
-            rest = compensator_rest(self.model, self)
+            rest = rest_output(self.model, self.creep)
             state[self.hysteresis_compensator.n_states:] = self.preview_state(rest[:, None], 0)
         return state
 

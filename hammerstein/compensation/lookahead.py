@@ -34,7 +34,7 @@ from hammerstein.compensation.inversion import (_dc_equilibrium, _discrete_squar
 from hammerstein.models.dynamics import DynamicsError
 from hammerstein.simulation import linear_steps
 
-__all__ = ["LookaheadInverse", "creep_rest_state", "preactuation_samples",
+__all__ = ["LookaheadInverse", "creep_rest_state", "rest_output", "preactuation_samples",
            "EXPORT_DECAY", "MAX_LOOKAHEAD", "FIRST_SAMPLE_TOLERANCE", "taper_preactuation"]
 
 #: What the truncated anti-causal part is left with, relative to its first term: the
@@ -193,6 +193,47 @@ class LookaheadInverse:
                 for i in range(self.p):
                     v[l] += self.taps[d, l, i] * r[i, d:d + N]
         return v, x
+
+
+def rest_output(model, creep=None):
+    """The static output of a hysteresis model at rest (0 V from its initial state) [µm].
+
+    An identified model carries the records' output offset: 0 µm is not
+    what the actuator shows at 0 V, and a reference faded in from 0 µm
+    would start the drive at the voltage of 0 µm instead of at rest. With
+    ``creep``, the output after the creep has settled at rest (each
+    output times its creep's static gain, ``Creep.static_gain``, the model's
+    ``output_offset`` added after it, as the plant adds it): the inverse
+    of the dynamics with the creep starts in that steady state, so a
+    reference faded in from it starts the drive at exactly 0 V.
+
+    Parameters
+    ----------
+    model : object
+        A hysteresis model with ``n_inputs`` and ``simulate(u)`` returning
+        ``(outputs (p, n), state)``.
+    creep : sequence of (Creep or None), length p, optional
+        The plant's creep per output (``HammersteinPlant.creep``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (p,)
+        [µm].
+
+    Examples
+    --------
+    >>> from hammerstein.io.presets import load_plant
+    >>> rest_output(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
+    array([0., 0.])
+    """
+    y, _ = model.simulate(np.zeros((model.n_inputs, 1)))
+    y = np.asarray(y, dtype=float)[:, 0]
+    if creep is not None:    # the output offset is a sensor zero, after creep (as the plant has it)
+        off = getattr(model, "output_offset", None)
+        off = np.zeros_like(y) if off is None else np.asarray(off, dtype=float)
+        y = (y - off) * np.array([1.0 if c is None else c.static_gain for c in creep]) + off
+    return y
+
 
 
 def creep_rest_state(matrices, system, reference):

@@ -19,6 +19,7 @@ from hammerstein.core.files import c_name_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE
 from hammerstein.exceptions import ExportError
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+from hammerstein.compensation.reference_check import REFERENCE_SPAN, reference_bound  # noqa: F401
 
 
 __all__ = ["AmplifierLimits", "CExport", "check_name", "MARKER", "STATUS_LIMIT",
@@ -38,9 +39,6 @@ STATUS_DIVERGED = 2
 #: the model's range (it asks for voltages beyond its input range, the centre -+ 1.2 x the
 #: identified input amplitude, :func:`model_input_range`; the exact inverses stop at their bound).
 STATUS_RANGE = 4
-#: a reference beyond this many times the model's largest |output| over its input range is a
-#: glitch, skipped like NaN (:func:`reference_bound`)
-REFERENCE_SPAN = 10.0
 
 
 def check_name(name):
@@ -504,50 +502,6 @@ def _sections(text, keep):
             text = text[:a] + text[a + len(key) + 3:b] + text[b + len(key) + 3:] if on \
                 else text[:a] + text[b + len(key) + 3:]
     return text
-
-
-def reference_bound(model, limits=None):
-    """The largest |reference| a step takes: :data:`REFERENCE_SPAN` times the model's output scale.
-
-    The output scale is the largest |output| of the hysteresis model along a
-    path through the corners of its input range (``1.2 x input_amplitude``,
-    widened to the amplifier's range where one is given), at least 1. A
-    reference sample beyond it is no position the actuator can take but a
-    glitch (a wrong unit, an overflow): the generated step skips it as it
-    skips NaN, so that it neither poisons the compensator's state (a 1e200
-    sample had left the inverse's creep lags and dynamics saturating the
-    amplifier for good) nor runs the exact inverses' root search into
-    overflow (a 1e306 sample had it never return).
-
-    Parameters
-    ----------
-    model : object
-        The compensator's hysteresis model (``n_inputs``, ``simulate``,
-        ``input_amplitude`` or None).
-    limits : AmplifierLimits, optional
-
-    Returns
-    -------
-    float
-        [output unit]; :data:`~hammerstein.core.numbers.MAX_MAGNITUDE` without an
-        input range.
-    """
-    m = int(model.n_inputs)
-    amp = getattr(model, "input_amplitude", None)
-    U = None if amp is None else 1.2 * np.abs(np.broadcast_to(np.asarray(amp, dtype=float), (m,)))
-    if limits is not None:
-        lo, hi, _ = limits.arrays(m)
-        wide = np.where(np.isfinite(lo) & np.isfinite(hi), np.maximum(np.abs(lo), np.abs(hi)), 0.0)
-        U = wide if U is None else np.maximum(U, wide)
-    if U is None or not np.all(np.isfinite(U)) or not np.any(U > 0):
-        return MAX_MAGNITUDE
-    corners = np.array([[1, 1], [-1, -1], [1, -1], [-1, 1], [0, 0]] if m == 2 else
-                       [[1] * m, [-1] * m, [0] * m], dtype=float)
-    path = np.vstack([np.zeros(m)] + list(corners))
-    u = np.concatenate([np.linspace(a, b, 200, endpoint=False) for a, b in zip(path[:-1], path[1:])]).T
-    y, _ = model.simulate(U[:, None] * u)
-    scale = float(np.max(np.abs(y))) if np.all(np.isfinite(y)) else MAX_MAGNITUDE
-    return float(min(REFERENCE_SPAN * max(scale, 1.0), MAX_MAGNITUDE))
 
 
 def model_input_range(model, limits=None):
