@@ -32,7 +32,6 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
-from scipy import signal
 
 __all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit",
            "flat_runs", "measurement_problem", "MODEL_GAIN_TOLERANCE", "model_gains",
@@ -97,6 +96,7 @@ def prediction_misfit(predicted, measured, lag=0, start=0, band=None):
     """
     predicted, measured = np.atleast_2d(predicted), np.atleast_2d(measured)
     if band is not None and 0 < band < 0.5 and predicted.shape[1] > 12:
+        from scipy import signal      # ~1 s to import: not before a band is asked for
         b, a = signal.butter(2, 2.0 * band)
         predicted, measured = signal.filtfilt(b, a, predicted), signal.filtfilt(b, a, measured)
     p, m, _ = _aligned(predicted, measured, lag, start)
@@ -273,6 +273,7 @@ def model_gains(predicted, measured, lag=0, start=0, band=None):
     """
     predicted, measured = np.atleast_2d(predicted), np.atleast_2d(measured)
     if band is not None and 0 < band < 0.5 and predicted.shape[1] > 12:
+        from scipy import signal      # ~1 s to import: not before a band is asked for
         b, a = signal.butter(2, 2.0 * band)
         predicted, measured = signal.filtfilt(b, a, predicted), signal.filtfilt(b, a, measured)
     p, m, _ = _aligned(predicted, measured, lag, start)

@@ -20,7 +20,8 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
 from hammerstein.compensation.reach import output_reach, reach_note
-from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_note, zpetc_note
+from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_note
+from hammerstein.compensation.zpetc_notes import zpetc_note
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 

@@ -12,7 +12,7 @@ import pytest
 import control
 
 from hammerstein.compensation.inversion import ZPETCInverse
-from hammerstein.compensation.shaping import ZPETC_NOTE_ERROR, zpetc_gain, zpetc_note
+from hammerstein.compensation.zpetc_notes import ZPETC_NOTE_ERROR, zpetc_gain, zpetc_note
 
 T = 1e-4
 
