@@ -19,14 +19,16 @@ import numpy as np
 
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
-from hammerstein.compensation.drive import default_fade_samples
+from hammerstein.compensation.drive import apply_amplifier, default_fade_samples
 from hammerstein.compensation.hammerstein_compensator import fade_in
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
+from hammerstein.exceptions import CompensatorDivergence
+from hammerstein.scenario.hardware_route import hardware_start, start_drive, unfollowed_problem
 from hammerstein.scenario.registry import compensator_kind
 from hammerstein.simulation import ChainResult, simulate_chain
 
 __all__ = ["CaseResult", "run_case", "chain_result", "model_comparison", "fade_samples", "signal_kind",
-           "runs_alone", "drive_rows"]
+           "runs_alone", "drive_rows", "starts_as_hardware"]
 
 
 @dataclass
@@ -108,6 +110,8 @@ def run_case(case):
             ym, more = model_comparison(case, y, u)
             rows += more
         return CaseResult(case, u, y, None, None, rows, caught, ym)
+    if starts_as_hardware(case):
+        return _hardware_case(case, caught)
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         fade = fade_samples(case)
@@ -124,6 +128,68 @@ def run_case(case):
         result.metrics += case.compensator.history_rows(list(plant.hysteresis.output_names))
         result.warnings += [f"ILC: {n}" for n in getattr(case.compensator, "notes", [])]
     return result
+
+
+def starts_as_hardware(case):
+    """True when a reference case starts as ``hammerstein compensate`` starts its drive.
+
+    A compensated reference case (any kind but ``ilc``) on a plant of
+    :func:`hammerstein.scenario.hardware_route.hardware_start` (an amplifier,
+    or a model whose output at 0 V is not 0 µm): its drive is
+    :func:`hammerstein.scenario.hardware_route.start_drive`'s, faded in from
+    the model's rest output over the hardware commands' duration.
+
+    Parameters
+    ----------
+    case : hammerstein.scenario.validate.CaseSpec
+
+    Returns
+    -------
+    bool
+    """
+    return (case.mode == "reference" and case.compensator is not None
+            and case.compensator_spec.get("kind") != "ilc" and hardware_start(case.plant))
+
+
+def _hardware_case(case, caught):
+    """A case of :func:`starts_as_hardware`: the drive ``compensate`` writes, then the plant.
+
+    The metrics skip the settling periods or the fade-in, whichever is longer
+    (a note says so when it is the fade-in); the drive's shaping notes go to
+    the case's notes.
+    """
+    plant = case.plant
+    T = plant.sampling_period
+    P = case.period_samples if case.period_samples > 1 else None
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        try:
+            drive = start_drive(plant, case.compensator, case.signal, P,
+                                case.compensator_spec.get("fade_in"),
+                                getattr(case.compensator, "limits", None) or "warn",
+                                key="compensator.fade_in")
+        except CompensatorDivergence as exc:
+            nan = np.full((plant.hysteresis.n_inputs, case.signal.shape[1]), np.nan)
+            res = ChainResult(nan, np.full(case.signal.shape, np.nan), None, None, exc)
+            return chain_result(case, res, caught + [str(w.message) for w in rec])
+    caught += [str(w.message) for w in rec]
+    problem = unfollowed_problem(plant, drive)
+    if problem:
+        caught.append(problem)
+    fade = int(drive.fade_samples)
+    case.start_fade = fade
+    y = plant.simulate(apply_amplifier(plant.amplifier, drive.inputs, T), plant.rest_state())[0]
+    res = ChainResult(np.asarray(drive.inputs, dtype=float), y, None, None)
+    settle = case.settle_periods
+    if fade > settle * case.period_samples:
+        settle = fade / case.period_samples
+        case.notes.append(f"the drive fades in over {fade * T:.4g} s, as compensate's (from the "
+                          f"model's rest output): the metrics start at its end, after "
+                          f"{settle:.3g} periods instead of the {case.settle_periods:g} "
+                          f"settling periods")
+    case.notes.extend(n.replace("--fade-in", "compensator.fade_in")
+                      for n in list(drive.shaped) + list(drive.notes))
+    return chain_result(case, res, caught, drive.commanded, drive.reference, settle)
 
 
 def _through_amplifier(case, res):
@@ -152,7 +218,8 @@ def runs_alone(case):
     -------
     bool
     """
-    return getattr(case.plant, "amplifier", None) is not None or fade_samples(case) > 0
+    return (getattr(case.plant, "amplifier", None) is not None or starts_as_hardware(case)
+            or fade_samples(case) > 0)
 
 
 def drive_rows(case, inputs):
@@ -211,11 +278,16 @@ def fade_samples(case):
     case : hammerstein.scenario.validate.CaseSpec
         A resolved reference case.
 
+    A case of :func:`starts_as_hardware` that has run fades in as its drive
+    did (``case.start_fade``).
+
     Returns
     -------
     int
         Fade-in length [samples].
     """
+    if getattr(case, "start_fade", None) is not None:
+        return int(case.start_fade)
     T = case.plant.sampling_period
     given = case.compensator_spec.get("fade_in")
     settle = int(case.settle_periods * case.period_samples)
@@ -227,7 +299,7 @@ def fade_samples(case):
     return int(min(case.period_samples, settle))
 
 
-def chain_result(case, res, caught, commanded=None, tracked=None):
+def chain_result(case, res, caught, commanded=None, tracked=None, settle_periods=None):
     """CaseResult of a compensated case from its simulated chain (ChainResult).
 
     Parameters
@@ -247,6 +319,9 @@ def chain_result(case, res, caught, commanded=None, tracked=None):
         The reference the chain followed [µm], e.g. ``case.signal`` faded in
         from rest (default ``case.signal``): kept as the result's
         ``reference`` (figures, time series); the metrics use ``case.signal``.
+    settle_periods : float, optional
+        The periods the metrics skip (default ``case.settle_periods``; a
+        longer fade-in's, :func:`starts_as_hardware`).
 
     Returns
     -------
@@ -262,8 +337,9 @@ def chain_result(case, res, caught, commanded=None, tracked=None):
         rows = [{"channel": "+".join(names), "metric": "diverged_at_time", "value": t,
                  "unit": met.UNITS["diverged_at_time"]}]
     else:
+        settle = case.settle_periods if settle_periods is None else settle_periods
         rows = met.tracking_metrics(case.signal, res.outputs, names, case.period_samples,
-                                    case.settle_periods, scale=case.scale,
+                                    settle, scale=case.scale,
                                     loop_channel=case.loop_channel)
         entry = signal_kind(case)
         if entry.metrics is not None:  # e.g. per scan line

@@ -25,7 +25,7 @@ from hammerstein.compensation.zpetc_notes import zpetc_note
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.scenario.registry import build_compensator
 
-__all__ = ["compensate_reference", "unfollowed_problem", "LAW_KINDS", "REST_TOLERANCE",
+__all__ = ["compensate_reference", "start_drive", "hardware_start", "unfollowed_problem", "LAW_KINDS", "REST_TOLERANCE",
            "UNFOLLOWED_SHARE"]
 
 #: A drive whose compensator asks for voltages beyond the amplifier's range by more than 1 % of
@@ -125,10 +125,115 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
         spec["inversion"] = inversion
         spec["creep"] = "plant"        # the actuator's creep (e.g. identified) is inverted with G
     comp = build_compensator(spec, plant, Path.cwd())
+    drive = start_drive(plant, comp, signal, period_samples, fade_in, limits, rest_lead, shape,
+                        progress)
+    problem = unfollowed_problem(plant, drive)
+    if problem:
+        raise CompensatorError(problem)
+    T, linear = plant.sampling_period, plant.matrices
+    note = drive.reach
+    if note:
+        drive.notes.append(note)
+    note = mode_note(linear, T, drive.reference, period_samples)
+    if note:
+        drive.notes.append(note)
+    zeros = _zpetc_zeros(comp)
+    note = None if zeros is None else zpetc_note(zeros, T, drive.reference,
+                                                 period_samples)
+    if note:
+        drive.notes.append(note)
+    note = _first_sample_note(plant, drive, inversion if kind == "hammerstein" else None)
+    if note:
+        drive.notes.append(note)
+    return comp, drive
+
+
+def hardware_start(plant):
+    """True when a plant starts as the hardware commands start it: an identified or hardware-like actuator.
+
+    Such a plant has an amplifier (its ``[amplifier]`` table: the range and
+    slew rate the drive must keep; ``hammerstein identify`` writes one) or
+    a hysteresis model with an output offset (an identified model's sensor
+    zero: its output at 0 V is not 0 µm). A scenario case on it computes
+    its drive as ``compensate`` does (:func:`start_drive`: faded in from
+    the model's rest output over a duration). The bundled presets (no
+    amplifier, no offset) keep the scenarios' own start, and their
+    numbers, also those whose Preisach plant is not at 0 µm at 0 V from its
+    initial state (realistic-2dof, -1.6 µm).
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import hammerstein as hs
+    >>> hardware_start(hs.load_plant("rakotondrabe-2dof"))
+    False
+    """
+    if getattr(plant, "amplifier", None) is not None:
+        return True
+    offset = getattr(plant.hysteresis, "output_offset", None)
+    return offset is not None and bool(np.any(np.asarray(offset, dtype=float) != 0.0))
+
+
+def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limits="error",
+                rest_lead=None, shape=True, progress=None, key="--fade-in"):
+    """The drive of a built compensator as ``hammerstein compensate`` writes it (and the scenarios
+    on a :func:`hardware_start` plant run it).
+
+    The reference is faded in from the compensator's rest output
+    (:func:`hammerstein.compensation.drive.compensator_rest`, the model's
+    output at 0 V) over ``fade_in`` or the default duration, and the drive
+    is shaped into the amplifier's limits
+    (:func:`hammerstein.compensation.drive.hardware_drive`); the reach of a
+    reference beyond the amplifier's range is added to its refusal.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        The actuator (hysteresis model, dynamics, creep, amplifier).
+    comp : object
+        The compensator (any kind).
+    reference : array_like, shape (p, n_samples)
+        [µm], sampled at the plant's sampling period.
+    period_samples : int, optional
+        Its period [samples] (None or 1: not periodic).
+    fade_in : float, optional
+        [s]; None: the default duration; 0 only for a reference that starts at rest.
+    limits : {'error', 'warn', 'clip'}
+    rest_lead : int, optional
+        With ``fade_in``: its first samples at rest [samples].
+    shape : bool
+        Shape the reference into limits measured on the records (default).
+    progress : callable, optional
+        ``progress(line)`` as each pass over the reference starts.
+    key : str
+        The fade-in's name in the messages (a scenario's ``compensator.fade_in``).
+
+    Returns
+    -------
+    hammerstein.compensation.drive.DriveResult
+        ``inputs`` the drive [V], shape (m, n_samples), ``fade_samples`` its fade-in [samples].
+
+    Raises
+    ------
+    CompensatorError
+        ``fade_in`` longer than the reference, or 0 for a reference that does not start at rest.
+    AmplifierError
+        ``limits = "error"`` and the amplifier's own limits exceeded.
+    CompensatorDivergence
+        When the compensator diverges.
+    """
+    signal = np.atleast_2d(np.asarray(reference, dtype=float))
     n = signal.shape[1]
     if fade_in is not None and fade_in / plant.sampling_period > n:
         raise CompensatorError(
-            f"--fade-in: {fade_in:g} s is longer than the reference ({n} samples, "
+            f"{key}: {fade_in:g} s is longer than the reference ({n} samples, "
             f"{n * plant.sampling_period:g} s); expected at most {n * plant.sampling_period:g} s")
     fade = None if fade_in is None else int(round(fade_in / plant.sampling_period))
     rest = compensator_rest(plant.hysteresis, comp)
@@ -137,7 +242,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
         first = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, signal[:, 0]))
         at = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, rest))
         raise CompensatorError(
-            f"--fade-in 0: the reference starts at {first}, not at rest ({at}: the model's "
+            f"{key} 0: the reference starts at {first}, not at rest ({at}: the model's "
             f"output at 0 V, within {REST_TOLERANCE:g} µm); the drive would start with a step "
             f"that the actuator (and the exported C, which starts there) cannot follow: give a "
             f"fade-in > 0 (the default: a duration, at least one period, {MIN_FADE_S:g} s and "
@@ -167,24 +272,8 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
             # "lower the reference" alone: by how much, and where it fits, is the reach's
             raise AmplifierError(f"{exc}; {reach}") from None
         raise
-    problem = unfollowed_problem(plant, drive)
-    if problem:
-        raise CompensatorError(problem)
-    note = reach
-    if note:
-        drive.notes.append(note)
-    note = mode_note(linear, T, drive.reference, period_samples)
-    if note:
-        drive.notes.append(note)
-    zeros = _zpetc_zeros(comp)
-    note = None if zeros is None else zpetc_note(zeros, T, drive.reference,
-                                                 period_samples)
-    if note:
-        drive.notes.append(note)
-    note = _first_sample_note(plant, drive, inversion if kind == "hammerstein" else None)
-    if note:
-        drive.notes.append(note)
-    return comp, drive
+    drive.reach = reach            # the reach's note (None: within it), for compensate's notes
+    return drive
 
 
 def _first_sample_note(plant, drive, inversion):

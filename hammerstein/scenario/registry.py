@@ -283,7 +283,8 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
     ``dynamics`` is "plant", "identified" or a readable dynamics/preset file of
     the plant's size; "plant" and "identified" need a plant with dynamics;
     ``identify_dynamics`` goes with "identified" only; ``fade_in`` must end
-    within the settling the metrics skip. Returns ``key: message`` strings.
+    within the settling the metrics skip (not on a plant that starts as
+    ``compensate`` does, whose metrics skip the fade-in). Returns ``key: message`` strings.
     """
     dyn = dynamics_source(spec)
     out = []
@@ -307,7 +308,11 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
         if files[("dynamics", path)]:
             out.append(files[("dynamics", path)])
     fade = spec.get("fade_in")
-    if fade is not None and fade > settle * period_samples * plant.sampling_period + 1e-12:
+    from hammerstein.scenario.hardware_route import hardware_start   # (it imports this module)
+    # a plant that starts as compensate does: its metrics skip the fade-in, however long
+    # (hammerstein.scenario.execute.starts_as_hardware); the record's length is checked with it
+    if (fade is not None and not hardware_start(plant)
+            and fade > settle * period_samples * plant.sampling_period + 1e-12):
         out.append(f"fade_in: {fade:g} s is longer than the {settle:g} settling periods "
                    f"({settle * period_samples * plant.sampling_period:g} s) the metrics skip")
     return out

@@ -34,6 +34,7 @@ from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_prob
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
+from hammerstein.scenario.hardware_route import hardware_start
 from hammerstein.scenario.registry import COMPENSATORS, model_file_dynamics
 from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
                                          TOP, Field, ScenarioError, check_table, kind_problem, known_kind,
@@ -99,6 +100,10 @@ class CaseSpec:
         (a harmonic of the reference at a bending mode,
         :func:`hammerstein.scenario.resolve.mode_notes`); filled by the
         resolution.
+    start_fade : int or None
+        The fade-in of a case that started as ``compensate`` starts its drive
+        [samples] (:func:`hammerstein.scenario.execute.starts_as_hardware`);
+        set when it has run.
     """
 
     name: str
@@ -123,6 +128,7 @@ class CaseSpec:
     where: str = ""
     identified: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    start_fade: int | None = None
 
 
 @dataclass
@@ -554,6 +560,13 @@ def _validate_cases(path, data, feedback=False):
         if mode == "reference" and COMPENSATORS[kind].check is not None:   # the kind's own checks
             more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
             problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
+        fade = (cclean or {}).get("fade_in")
+        if mode == "reference" and fade is not None and hardware_start(plant) \
+                and fade >= t.size * plant.sampling_period - 1e-12:
+            # the metrics skip the fade-in on such a plant: something must remain after it
+            problems.append(f"{source}: {where}.compensator.fade_in: {fade:g} s leaves nothing of "
+                            f"the {t.size * plant.sampling_period:g} s record to measure; "
+                            f"expected less than {t.size * plant.sampling_period:g} s")
         if cmp_spec is not None:
             more = _model_problems(cmp_spec["model"], cmp_spec.get("identify"), plant, base,
                                    model_files)
