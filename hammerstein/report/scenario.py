@@ -254,7 +254,8 @@ def settle_words(spec):
     str
         The ``settle_periods``, the time of the window's first sample
         (``round(settle_periods × P) × T``) and, when the case's fade-in
-        ends after that sample, that time.
+        ends after that sample, that time (where the metrics start for a case
+        that started as ``compensate`` starts).
     """
     T = spec.plant.sampling_period
     start = int(round(spec.settle_periods * spec.period_samples))
@@ -266,7 +267,10 @@ def settle_words(spec):
             fade = fade_samples(spec)
         except Exception:      # noqa: BLE001 - a words helper never fails a report
             fade = 0
-        if fade > start:
+        if fade > start and getattr(spec, "start_fade", None) is not None:
+            # started as compensate starts (scenario.execute.starts_as_hardware): measured after it
+            text += f" (the fade-in ends later, at t = {_time(fade * T)}: the metrics start there)"
+        elif fade > start:
             text += f" (the fade-in ends later, at t = {_time(fade * T)})"
     return text
 

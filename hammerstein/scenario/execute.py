@@ -7,6 +7,10 @@ with :func:`hammerstein.simulation.simulate_chain`) and computes its metrics
 simulated chain (e.g. from the batch kernel,
 :func:`hammerstein.scenario.sweeps.run_cases`) into the same
 :class:`CaseResult`. A compensator divergence is a result, not an exception.
+A reference case on an identified or hardware-like plant
+(:func:`starts_as_hardware`) runs the drive ``hammerstein compensate``
+writes (:func:`hammerstein.scenario.hardware_route.start_drive`: faded in
+from the model's rest output), its metrics after the fade-in.
 """
 
 from __future__ import annotations
@@ -273,13 +277,13 @@ def fade_samples(case):
     when the reference does not start at rest and the plant's amplifier has
     a slew rate (:func:`hammerstein.compensation.drive.default_fade_samples`).
 
+    A case of :func:`starts_as_hardware` that has run fades in as its drive
+    did (``case.start_fade``).
+
     Parameters
     ----------
     case : hammerstein.scenario.validate.CaseSpec
         A resolved reference case.
-
-    A case of :func:`starts_as_hardware` that has run fades in as its drive
-    did (``case.start_fade``).
 
     Returns
     -------

@@ -5,7 +5,10 @@ given), builds the compensator from the actuator as the command does and
 computes the drive the command writes
 (:func:`hammerstein.compensation.drive.hardware_drive`) with its notes. The
 command (:mod:`hammerstein.cli.compensate`) and ``learn`` call it; so can a
-script.
+script. :func:`start_drive` is its drive for a compensator already built: a
+scenario case on a :func:`hardware_start` plant (an amplifier, or an
+identified model's output offset) runs it, so that the case starts as
+``compensate`` starts the drive.
 """
 
 from __future__ import annotations

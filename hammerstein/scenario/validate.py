@@ -561,7 +561,13 @@ def _validate_cases(path, data, feedback=False):
             more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
             problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
         fade = (cclean or {}).get("fade_in")
-        if mode == "reference" and fade is not None and hardware_start(plant) \
+        if feedback and mode == "reference" and fade is not None and hardware_start(plant) \
+                and fade > settle * P * plant.sampling_period + 1e-12:
+            # the feedback route measures from the settling periods on, whatever the plant
+            problems.append(f"{source}: {where}.compensator.fade_in: {fade:g} s is longer than "
+                            f"the {settle:g} settling periods "
+                            f"({settle * P * plant.sampling_period:g} s) the metrics skip")
+        elif mode == "reference" and fade is not None and hardware_start(plant) \
                 and fade >= t.size * plant.sampling_period - 1e-12:
             # the metrics skip the fade-in on such a plant: something must remain after it
             problems.append(f"{source}: {where}.compensator.fade_in: {fade:g} s leaves nothing of "

@@ -82,3 +82,16 @@ def test_a_paper_preset_keeps_the_scenarios_own_start(tmp_path):
     path.write_text(path.read_text().replace('model = "plant"\n', 'model = "plant"\nfade_in = 0.1\n'))
     with pytest.raises(ScenarioError, match="longer than the 1 settling periods"):
         load_scenario(path)
+
+
+def test_a_feedback_scenario_still_refuses_a_fade_in_longer_than_the_settling(tmp_path):
+    # a guard (old code refused it too): the feedback route measures from the settling
+    # periods on, on every plant, so the refusal stays there
+    path = _scenario(tmp_path, "fade_in = 0.1\n")
+    text = path.read_text().replace("[plant]", 'kind = "feedback"\n[plant]')
+    path.write_text(text + '[feedback]\n[feedback.axes.x]\nkind = "pi-notch"\ncrossover_hz = 150.0\n'
+                           'notch_hz = 310.0\n[feedback.axes.y]\nkind = "pi-notch"\n'
+                           'crossover_hz = 150.0\nnotch_hz = 290.0\n')
+    with pytest.raises(ScenarioError, match=r"compensator.fade_in: 0.1 s is longer than the 1 "
+                                            r"settling periods \(0.02 s\)"):
+        load_scenario(path)
