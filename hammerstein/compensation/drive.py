@@ -55,6 +55,7 @@ from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
 from hammerstein.compensation.drive_splice import keep_end, keep_start
 from hammerstein.compensation.shaping import shape_reference, time_intervals
+from hammerstein.compensation.start_up import start_up_in_reference
 from hammerstein.exceptions import CompensatorError
 from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
                                                   signals_csv)
@@ -742,6 +743,16 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
                                              first_mode, predict, names)
             notes += more
+    if fade_samples is None and predict is not None:
+        # a start-up still stepping faster than the settled drive (a held axis's fade to
+        # mid-range): corrected in the reference, so that the drive stays the compensator's for
+        # the reference written (the exported C fed it reproduces it); limit_start_up below
+        # slew-limits only what the correction leaves
+        u, faded, more = _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T,
+                                             names, input_names or (amplifier.inputs if
+                                                                    amplifier is not None
+                                                                    else None))
+        notes += more
     untapered = u                # the taper moves the first samples: what they were, kept
     u, _ = taper_preactuation(u, u_rest, n // 10 if rest_lead is None else rest_lead)
     peak, top = drive_metrics(u, T)
@@ -833,6 +844,35 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     why = "the drive left the limits measured on the records"
     notes = [n.replace(why, "the start-up stepped faster than the settled drive") for n in sr.notes]
     return sr.inputs, sr.reference, notes
+
+
+def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, input_names):
+    """:func:`~hammerstein.compensation.start_up.start_up_in_reference` for :func:`hardware_drive`:
+    ``(u, faded, notes)``, unchanged (no notes) when the start-up keeps within the settled steps."""
+    end = min(n + max(P, 1), u.shape[1])
+    r0 = np.zeros(u.shape[0]) if u_rest is None else np.asarray(u_rest, dtype=float)
+    u2, ref, asked, bound, changed = start_up_in_reference(
+        lambda x: pass_over(x, "the start-up corrected in the reference"), u, faded, end, r0,
+        predict, _LIMIT_TOL)
+    if not changed:
+        return u, faded, []
+    left = np.max(np.abs(np.diff(np.concatenate([r0[:, None], u2[:, :end]], axis=1), axis=1)),
+                  axis=1)
+    by = np.max(np.abs(ref - faded), axis=1)
+    outs = ", ".join(f"{names[j] if names is not None else f'output {j + 1}'} by up to "
+                     f"{by[j]:.3g} µm" for j in range(ref.shape[0]) if by[j] > 0)
+    ins = ", ".join(f"{input_names[i] if input_names is not None else f'input {i + 1}'} "
+                    f"{asked[i]:.3g} V per sample asked, {left[i]:.3g} V left"
+                    for i in range(u.shape[0]) if asked[i] > bound[i] * (1 + _LIMIT_TOL))
+    moved = np.flatnonzero(np.any(ref != faded, axis=0))
+    late = (moved[-1] + 1) * T
+    after = (f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the fade's "
+             f"end include it; " if moved[-1] + 1 > n else "")
+    return u2, ref, [f"the start-up corrected in the reference ({outs}, until {late:.4g} s, "
+                     f"{after}for a drive that steps no faster than the "
+                     f"settled drive ({ins}; the settled drive's largest step "
+                     + ", ".join(f"{b:.3g}" for b in bound) + " V), the drive the compensator's "
+                     f"for the reference written"]
 
 
 def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
