@@ -1,6 +1,6 @@
 """Drive signals: the voltages to apply for a reference, within the amplifier's limits.
 
-Length: about 920 lines: the drive of the scenarios (:func:`drive_signal`;
+Length: about 980 lines: the drive of the scenarios (:func:`drive_signal`;
 :class:`DriveStream` lives in :mod:`hammerstein.compensation.drive_stream`) and
 of the hardware commands (:func:`hardware_drive`: fade-in, shaping, limits)
 share the fade and start-up rules, kept in one place; the drive files and the
@@ -581,10 +581,14 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
        the reference is faded in from the model's output at rest
        (``rest``) by :func:`hardware_fade`, whose first tenth is at rest, so
        the drive starts at rest. The doubling stops at a
-       quarter of the record. After the limits (2.), a start-up that still
-       steps faster than the settled drive is slew-limited to the settled
-       drive's largest step over the whole record (which the settled drive
-       never needs; ``shaped`` says so). With limits measured on the
+       quarter of the record. A start-up that still steps faster than the
+       settled drive (an axis held away from rest beside a moving one) is
+       corrected in the reference when ``predict`` is given
+       (:func:`hammerstein.compensation.start_up.start_up_in_reference`:
+       the drive stays the compensator's for the reference returned, which
+       the exported C reproduces); after the limits (2.), what is left is
+       slew-limited to the settled drive's largest step over the whole
+       record (which the settled drive never needs; ``shaped`` says so). With limits measured on the
        records, such a start-up is first shaped in the reference instead
        (a raster's first line step, which the fade ends on: the settled
        drive's largest step taken as the slew rate), so the slew limit
@@ -851,9 +855,9 @@ def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, in
     ``(u, faded, notes)``, unchanged (no notes) when the start-up keeps within the settled steps."""
     end = min(n + max(P, 1), u.shape[1])
     r0 = np.zeros(u.shape[0]) if u_rest is None else np.asarray(u_rest, dtype=float)
-    u2, ref, asked, bound, changed = start_up_in_reference(
-        lambda x: pass_over(x, "the start-up corrected in the reference"), u, faded, end, r0,
-        predict, _LIMIT_TOL)
+    u2, ref, asked, bound, _, changed = start_up_in_reference(
+        lambda x: pass_over(x, "the start-up corrected in the reference"), u, faded, n, end,
+        r0, predict, _LIMIT_TOL)
     if not changed:
         return u, faded, []
     left = np.max(np.abs(np.diff(np.concatenate([r0[:, None], u2[:, :end]], axis=1), axis=1)),

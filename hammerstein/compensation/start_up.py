@@ -41,19 +41,23 @@ def _start_steps(u, end, rest):
     return np.max(np.abs(np.diff(head, axis=1)), axis=1)
 
 
-def start_up_in_reference(run, inputs, reference, end, rest, predict, tol=1e-6,
+def start_up_in_reference(run, inputs, reference, fade, end, rest, predict, tol=1e-6,
                           passes=START_UP_PASSES):
     """The reference corrected so that the compensator's start-up keeps within the settled steps.
 
-    Per pass, the inputs whose start-up (samples before ``end``, the first
-    step counted from ``rest``) steps more than ``(1 + tol)`` times the
-    settled drive's largest step ``S`` (from ``end`` on) are slew-limited
-    to ``START_UP_AIM * S`` before ``end``; the reference is changed by
-    the model's predicted output change, ``predict(limited) -
-    predict(drive)``, in full up to the sample where the limited drive
-    has caught up, then faded out with a raised cosine by ``end``; and the
-    compensator is run again (``run``). The reference from ``end`` on (the
-    settled part, which is judged) is never changed.
+    Per pass, the inputs whose start-up (samples before ``stop``, at first
+    ``end``; the first step counted from ``rest``) steps more than
+    ``(1 + tol)`` times the settled drive's largest step ``S`` (from
+    ``stop`` on) are slew-limited to ``START_UP_AIM * S`` until they catch
+    up with the drive after its last step beyond that; the reference is changed by the model's predicted
+    output change, ``predict(limited) - predict(drive)``, in full up to
+    that catch-up, then faded out with a raised cosine over
+    ``max(end - fade, fade // 2)`` samples (``stop``: never before
+    ``end``); and the compensator is run again (``run``). The reference
+    from ``stop`` on is never changed: from ``end`` on (the settled part,
+    which is judged) only when the limited drive catches up after it (an
+    axis held far from rest that the settled steps take longer to reach),
+    as a drive slew-limited after the compensator would be changed there.
 
     Parameters
     ----------
@@ -64,6 +68,8 @@ def start_up_in_reference(run, inputs, reference, end, rest, predict, tol=1e-6,
         ``run(reference)`` [V].
     reference : array_like, shape (p, n_samples)
         The faded (and shaped) reference [µm].
+    fade : int
+        The fade-in [samples].
     end : int
         First sample of the settled part (the fade-in's end plus one period).
     rest : array_like, shape (m,)
@@ -86,17 +92,21 @@ def start_up_in_reference(run, inputs, reference, end, rest, predict, tol=1e-6,
         The start-up's largest step before the correction [V].
     bound : numpy.ndarray, shape (m,)
         ``S`` of the returned inputs [V].
+    stop : int
+        The first sample from which the reference is unchanged (and ``S``
+        measured).
     changed : bool
         Whether the reference was changed (the start-up's excess reduced;
-        it may remain beyond ``tol`` after ``passes``, the best pass kept).
+        it may remain beyond ``tol`` after ``passes`` or a pass that does not
+        reduce it, the best pass kept).
 
     Examples
     --------
     A static gain of 2 V/µm; the settled drive steps 0.1 V, the start-up 1 V.
 
     >>> r = np.r_[0.0, np.full(29, 0.5), 0.5 + 0.05 * (np.arange(10) % 2)][None, :]
-    >>> u, ref, asked, S, changed = start_up_in_reference(
-    ...     lambda x: 2 * x, 2 * r, r, 30, np.zeros(1), lambda v: v / 2)
+    >>> u, ref, asked, S, stop, changed = start_up_in_reference(
+    ...     lambda x: 2 * x, 2 * r, r, 20, 30, np.zeros(1), lambda v: v / 2)
     >>> changed, float(asked[0]), bool(np.max(np.abs(np.diff(np.r_[0.0, u[0]]))) <= S[0])
     (True, 1.0, True)
     >>> bool(np.array_equal(u, 2 * ref)), bool(np.array_equal(ref[:, 30:], r[:, 30:]))
@@ -106,36 +116,57 @@ def start_up_in_reference(run, inputs, reference, end, rest, predict, tol=1e-6,
     R = np.array(reference, dtype=float, ndmin=2)
     r0 = np.asarray(rest, dtype=float)
     N, end = u.shape[1], int(end)
-    S = _settled_steps(u, end)
-    asked = _start_steps(u, end, r0)
+    taper = max(end - int(fade), int(fade) // 2, 1)
+    stop = end
+    S = _settled_steps(u, stop)
+    asked = _start_steps(u, stop, r0)
     excess = np.max(asked / S)
     if end >= N - 1 or not np.all(np.isfinite(S) & (S > 0)) or excess <= 1 + tol:
-        return u, R, asked, S, False
-    best = (excess, u, R, S)
+        return u, R, asked, S, stop, False
+    best = (excess, u, R, S, stop)
     changed = False
     k = np.arange(N)
     for _ in range(int(passes)):
-        bad = np.flatnonzero(_start_steps(u, end, r0) > S * (1 + tol))
+        bad = np.flatnonzero(_start_steps(u, stop, r0) > S * (1 + tol))
         if bad.size == 0:
             break
-        aim = u.copy()
+        aim, caught = u.copy(), 0
         for i in bad:
-            aim[i, :end] = slew_limit(u[i, :end], r0[i], START_UP_AIM * S[i])
-        moved = np.flatnonzero(np.any(aim != u, axis=0))
-        caught = int(moved[-1]) + 1
-        if caught >= end:     # the limited drive never catches up within the start-up
+            aim[i], c = _limit_until_caught(u[i], r0[i], S[i] * (1 + tol), START_UP_AIM * S[i],
+                                            stop)
+            caught = max(caught, c)
+        # the correction in full up to the catch-up, faded out over ``taper`` samples after it
+        # and never before ``end``; what the drive then does from ``stop`` on bounds its steps
+        stop = max(stop, caught + taper)
+        if stop >= N - 1:     # the limited drive never catches up within the record
             break
-        w = np.clip((end - k) / (end - caught), 0.0, 1.0)
-        w = 0.5 - 0.5 * np.cos(np.pi * w)          # 1 up to the catch-up, 0 from end on
+        w = np.clip((stop - k) / (stop - caught), 0.0, 1.0)
+        w = 0.5 - 0.5 * np.cos(np.pi * w)          # 1 up to the catch-up, 0 from stop on
         R = R + w * (np.asarray(predict(aim), dtype=float) - np.asarray(predict(u), dtype=float))
         u = np.asarray(run(R), dtype=float)
-        S = _settled_steps(u, end)
+        S = _settled_steps(u, stop)
         if not np.all(np.isfinite(S) & (S > 0)):
             break
-        excess = np.max(_start_steps(u, end, r0) / S)
-        if excess < best[0]:
-            best, changed = (excess, u, R, S), True
+        excess = np.max(_start_steps(u, stop, r0) / S)
+        if excess >= best[0]:     # no better than the best pass: stalled (a pass is a whole run)
+            break
+        best, changed = (excess, u, R, S, stop), True
         if excess <= 1 + tol:
             break
-    _, u, R, S = best
-    return u, R, asked, S, changed
+    _, u, R, S, stop = best
+    return u, R, asked, S, stop, changed
+
+
+def _limit_until_caught(x, rest, bound, step, end):
+    """``x`` slew-limited to ``step`` from ``rest`` until it catches up with ``x`` after its
+    last step beyond ``bound`` before ``end``; ``x`` itself from there on, and that sample."""
+    steps = np.abs(np.diff(np.concatenate([[rest], x])))
+    beyond = np.flatnonzero(steps[:end] > bound)
+    if beyond.size == 0:
+        return x.copy(), 0
+    a = slew_limit(x, rest, step)
+    met = np.flatnonzero(a[beyond[-1]:] == x[beyond[-1]:])
+    c = x.size if met.size == 0 else int(beyond[-1] + met[0])
+    out = x.copy()
+    out[:c] = a[:c]
+    return out, c
