@@ -752,11 +752,12 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         # mid-range): corrected in the reference, so that the drive stays the compensator's for
         # the reference written (the exported C fed it reproduces it); limit_start_up below
         # slew-limits only what the correction leaves
-        u, faded, more = _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T,
-                                             names, input_names or (amplifier.inputs if
-                                                                    amplifier is not None
-                                                                    else None))
+        u, faded, more, corrected = _start_up_reference(
+            pass_over, u, faded, n, P, u_rest, predict, T, names,
+            input_names or (amplifier.inputs if amplifier is not None else None))
         notes += more
+    else:
+        corrected = 0
     untapered = u                # the taper moves the first samples: what they were, kept
     u, _ = taper_preactuation(u, u_rest, n // 10 if rest_lead is None else rest_lead)
     peak, top = drive_metrics(u, T)
@@ -789,10 +790,14 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         # _STEP_TOL moves it by about as little: no advice)
         moved = max(1e-12, _STEP_TOL * 1e-3 * float(np.max(np.abs(before), initial=0.0)))
         changed = np.flatnonzero(np.any(np.abs(out - before) > moved, axis=0))
-        if changed.size and changed[-1] + 1 > n:
+        last = int(changed[-1]) + 1 if changed.size else 0
+        if max(last, corrected) > n:
             # a large move the settled drive never makes (an axis held away from rest under a
-            # raster): its slew-limited start-up goes on after the fade, into what is judged
-            late = (changed[-1] + 1) * T
+            # raster): its start-up, slew-limited or corrected in the reference, goes on after
+            # the fade, into what is judged
+            late = max(last, corrected) * T
+            how = ("slew-limited start-up" if last >= corrected else
+                   "start-up corrected in the reference")
             advice = np.ceil(2.5 * late / 0.01) * 0.01
             why = "a fade whose steepest step, 2.4 times its mean, stays within the settled drive's"
             fix = (f"give --fade-in {advice:.2g} or more ({why})" if advice <= 0.5 * N * T else
@@ -801,7 +806,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    f"record (more periods) with --fade-in {advice:.2g}, or a reference that "
                    f"starts at rest")
             res.notes.append(
-                f"the slew-limited start-up reaches the drive {late:.4g} s after the start, "
+                f"the {how} reaches the drive {late:.4g} s after the start, "
                 f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the "
                 f"fade's end include it; {fix}")
     res.inputs = out
@@ -852,14 +857,15 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
 
 def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, input_names):
     """:func:`~hammerstein.compensation.start_up.start_up_in_reference` for :func:`hardware_drive`:
-    ``(u, faded, notes)``, unchanged (no notes) when the start-up keeps within the settled steps."""
+    ``(u, faded, notes, end)``, ``end`` the first sample of the reference left as it was;
+    unchanged (no notes, ``end`` 0) when the start-up keeps within the settled steps."""
     end = min(n + max(P, 1), u.shape[1])
     r0 = np.zeros(u.shape[0]) if u_rest is None else np.asarray(u_rest, dtype=float)
     u2, ref, asked, bound, _, changed = start_up_in_reference(
         lambda x: pass_over(x, "the start-up corrected in the reference"), u, faded, n, end,
         r0, predict, _LIMIT_TOL)
     if not changed:
-        return u, faded, []
+        return u, faded, [], 0
     left = np.max(np.abs(np.diff(np.concatenate([r0[:, None], u2[:, :end]], axis=1), axis=1)),
                   axis=1)
     by = np.max(np.abs(ref - faded), axis=1)
@@ -869,14 +875,12 @@ def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, in
                     f"{asked[i]:.3g} V per sample asked, {left[i]:.3g} V left"
                     for i in range(u.shape[0]) if asked[i] > bound[i] * (1 + _LIMIT_TOL))
     moved = np.flatnonzero(np.any(ref != faded, axis=0))
-    late = (moved[-1] + 1) * T
-    after = (f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the fade's "
-             f"end include it; " if moved[-1] + 1 > n else "")
-    return u2, ref, [f"the start-up corrected in the reference ({outs}, until {late:.4g} s, "
-                     f"{after}for a drive that steps no faster than the "
+    late = int(moved[-1]) + 1
+    return u2, ref, [f"the start-up corrected in the reference ({outs}, until {late * T:.4g} s) "
+                     f"for a drive that steps no faster than the "
                      f"settled drive ({ins}; the settled drive's largest step "
                      + ", ".join(f"{b:.3g}" for b in bound) + " V), the drive the compensator's "
-                     f"for the reference written"]
+                     f"for the reference written"], late
 
 
 def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
