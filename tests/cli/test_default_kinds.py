@@ -61,10 +61,17 @@ def test_static_preisach_and_gpi_default_to_the_exact_inverse(tmp_path, capsys, 
     y, _ = hyst.simulate(data[:, 1:3].T)
     t = data[:, 0]
     ref = 10 * np.vstack([np.cos(2 * np.pi * 20 * t), np.sin(2 * np.pi * 20 * t)])
-    fade = int(re.search(r"fade-in (\d+) samples", (tmp_path / "d.csv").read_text()).group(1))
+    text = (tmp_path / "d.csv").read_text()
+    head = [ln for ln in text.splitlines() if ln and not ln.startswith("#")][0].split(",")
+    if "x_shaped" in head:      # a start-up corrected in the reference: the drive follows it
+        ref = data[:, [head.index("x_shaped"), head.index("y_shaped")]].T
+    fade = int(re.search(r"fade-in (\d+) samples", text).group(1))
     # past the fade-in the drive's header states, and the few samples after it where the
     # header says the start-up is slew-limited to the settled drive's largest step
     settled = np.arange(t.size) >= fade + 50
+    until = re.search(r"start-up corrected in the reference \(.*?until ([\d.]+) s\)", text)
+    if until:                   # and after a start-up corrected in the reference
+        settled &= t > float(until.group(1))
     # 1e-4 µm: the slew-limited samples after the fade leave the Preisach memory a few
     # 1e-5 µm off what the exact inverse assumed (the drive is limited after the inverse)
     assert np.max(np.abs(y[:, settled] - ref[:, settled])) < 1e-4
