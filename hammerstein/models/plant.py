@@ -24,7 +24,7 @@ from hammerstein.simulation import simulate_plant, state_vector
 if TYPE_CHECKING:                      # the plant only reads A, B, C, D: no python-control needed
     import control
 
-__all__ = ["HammersteinPlant"]
+__all__ = ["HammersteinPlant", "hardware_start"]
 
 
 class HammersteinPlant:
@@ -260,3 +260,36 @@ class HammersteinPlant:
             State after the last sample, for a chunked continuation.
         """
         return simulate_plant(self, inputs, initial_state)
+
+
+def hardware_start(plant):
+    """True when a plant starts as the hardware commands start it: an identified or hardware-like actuator.
+
+    Such a plant has an amplifier (its ``[amplifier]`` table: the range and
+    slew rate the drive must keep; ``hammerstein identify`` writes one) or
+    a hysteresis model with an output offset (an identified model's sensor
+    zero: its output at 0 V is not 0 µm). A scenario case on it computes
+    its drive as ``compensate`` does (:func:`hammerstein.scenario.hardware_route.start_drive`: faded in from
+    the model's rest output over a duration). The bundled presets (no
+    amplifier, no offset) keep the scenarios' own start, and their
+    numbers, also those whose Preisach plant is not at 0 µm at 0 V from its
+    initial state (realistic-2dof, -1.6 µm).
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import hammerstein as hs
+    >>> hardware_start(hs.load_plant("rakotondrabe-2dof"))
+    False
+    """
+    if getattr(plant, "amplifier", None) is not None:
+        return True
+    offset = getattr(plant.hysteresis, "output_offset", None)
+    return offset is not None and bool(np.any(np.asarray(offset, dtype=float) != 0.0))

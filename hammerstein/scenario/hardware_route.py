@@ -26,6 +26,7 @@ from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.compensation.shaping import first_mode_hz, mode_decay_s, mode_note
 from hammerstein.compensation.zpetc_notes import zpetc_note
 from hammerstein.exceptions import AmplifierError, CompensatorError
+from hammerstein.models.plant import hardware_start
 from hammerstein.scenario.registry import build_compensator
 
 __all__ = ["compensate_reference", "start_drive", "hardware_start", "unfollowed_problem", "LAW_KINDS", "REST_TOLERANCE",
@@ -149,39 +150,6 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     if note:
         drive.notes.append(note)
     return comp, drive
-
-
-def hardware_start(plant):
-    """True when a plant starts as the hardware commands start it: an identified or hardware-like actuator.
-
-    Such a plant has an amplifier (its ``[amplifier]`` table: the range and
-    slew rate the drive must keep; ``hammerstein identify`` writes one) or
-    a hysteresis model with an output offset (an identified model's sensor
-    zero: its output at 0 V is not 0 µm). A scenario case on it computes
-    its drive as ``compensate`` does (:func:`start_drive`: faded in from
-    the model's rest output over a duration). The bundled presets (no
-    amplifier, no offset) keep the scenarios' own start, and their
-    numbers, also those whose Preisach plant is not at 0 µm at 0 V from its
-    initial state (realistic-2dof, -1.6 µm).
-
-    Parameters
-    ----------
-    plant : HammersteinPlant
-
-    Returns
-    -------
-    bool
-
-    Examples
-    --------
-    >>> import hammerstein as hs
-    >>> hardware_start(hs.load_plant("rakotondrabe-2dof"))
-    False
-    """
-    if getattr(plant, "amplifier", None) is not None:
-        return True
-    offset = getattr(plant.hysteresis, "output_offset", None)
-    return offset is not None and bool(np.any(np.asarray(offset, dtype=float) != 0.0))
 
 
 def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limits="error",

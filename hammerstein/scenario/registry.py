@@ -27,6 +27,7 @@ from hammerstein.compensation.hammerstein_compensator import INVERSIONS, Hammers
 from hammerstein.compensation.model_classes import kind_problem as class_kind_problem, model_class
 from hammerstein.exceptions import CompensatorError
 from hammerstein.compensation.ilc import LearningCompensator
+from hammerstein.models.plant import hardware_start
 from hammerstein.io.presets import PresetError, load_creep, load_dynamics, read_toml
 from hammerstein.scenario.identification import (ResolveContext, identified_from_records,
                                                  resolve_dynamics, resolve_model)
@@ -308,7 +309,6 @@ def _dynamics_problems(spec, plant, base, files, settle, period_samples):
         if files[("dynamics", path)]:
             out.append(files[("dynamics", path)])
     fade = spec.get("fade_in")
-    from hammerstein.scenario.hardware_route import hardware_start   # (it imports this module)
     # a plant that starts as compensate does: its metrics skip the fade-in, however long
     # (hammerstein.scenario.execute.starts_as_hardware); the record's length is checked with it
     if (fade is not None and not hardware_start(plant)
