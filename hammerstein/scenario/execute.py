@@ -138,7 +138,7 @@ def starts_as_hardware(case):
     """True when a reference case starts as ``hammerstein compensate`` starts its drive.
 
     A compensated reference case (any kind but ``ilc``) on a plant of
-    :func:`hammerstein.scenario.hardware_route.hardware_start` (an amplifier,
+    :func:`hammerstein.models.plant.hardware_start` (an amplifier,
     or a model whose output at 0 V is not 0 µm): its drive is
     :func:`hammerstein.scenario.hardware_route.start_drive`'s, faded in from
     the model's rest output over the hardware commands' duration.

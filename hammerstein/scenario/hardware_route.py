@@ -6,7 +6,7 @@ computes the drive the command writes
 (:func:`hammerstein.compensation.drive.hardware_drive`) with its notes. The
 command (:mod:`hammerstein.cli.compensate`) and ``learn`` call it; so can a
 script. :func:`start_drive` is its drive for a compensator already built: a
-scenario case on a :func:`hardware_start` plant (an amplifier, or an
+scenario case on a :func:`~hammerstein.models.plant.hardware_start` plant (an amplifier, or an
 identified model's output offset) runs it, so that the case starts as
 ``compensate`` starts the drive.
 """
@@ -155,7 +155,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
 def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limits="error",
                 rest_lead=None, shape=True, progress=None, key="--fade-in"):
     """The drive of a built compensator as ``hammerstein compensate`` writes it (and the scenarios
-    on a :func:`hardware_start` plant run it).
+    on a :func:`~hammerstein.models.plant.hardware_start` plant run it).
 
     The reference is faded in from the compensator's rest output
     (:func:`hammerstein.compensation.drive.compensator_rest`, the model's
