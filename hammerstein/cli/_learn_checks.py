@@ -33,7 +33,7 @@ import itertools
 
 import numpy as np
 
-__all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit",
+__all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "band_share", "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit",
            "flat_runs", "measurement_problem", "MODEL_GAIN_TOLERANCE", "model_gains",
            "model_gain_note"]
 
@@ -71,6 +71,36 @@ def _aligned(predicted, measured, lag, start):
     return p[:, start:], m[:, start:], start + max(lag, 0)
 
 
+def band_share(fundamental_samples):
+    """The share of the sampling rate below which a measurement is compared with its
+    prediction: :data:`BAND_HARMONICS` times the fundamental, or None (the whole band) when
+    the fundamental is unknown or too fast for it.
+
+    Parameters
+    ----------
+    fundamental_samples : float
+        The reference's fundamental period [samples]; 0 or None: unknown.
+
+    Returns
+    -------
+    float or None
+        In (0, 0.5) [-].
+    """
+    P = float(fundamental_samples or 0)
+    return BAND_HARMONICS / P if P > 2 * BAND_HARMONICS + 1 else None
+
+
+def _compared(predicted, measured, lag, start, band):
+    """Both low-passed below ``band`` (zero-phase second-order Butterworth), then aligned."""
+    predicted, measured = np.atleast_2d(predicted), np.atleast_2d(measured)
+    if band is not None and 0 < band < 0.5 and predicted.shape[1] > 12:
+        from scipy import signal      # ~1 s to import: not before a band is asked for
+        b, a = signal.butter(2, 2.0 * band)
+        predicted, measured = signal.filtfilt(b, a, predicted), signal.filtfilt(b, a, measured)
+    p, m, _ = _aligned(predicted, measured, lag, start)
+    return p, m
+
+
 def prediction_misfit(predicted, measured, lag=0, start=0, band=None):
     """RMS error of a measurement against the model's prediction, per RMS motion of the prediction.
 
@@ -94,12 +124,7 @@ def prediction_misfit(predicted, measured, lag=0, start=0, band=None):
         the prediction; ``inf`` when the prediction does not move and the
         measurement does, 0 when neither moves.
     """
-    predicted, measured = np.atleast_2d(predicted), np.atleast_2d(measured)
-    if band is not None and 0 < band < 0.5 and predicted.shape[1] > 12:
-        from scipy import signal      # ~1 s to import: not before a band is asked for
-        b, a = signal.butter(2, 2.0 * band)
-        predicted, measured = signal.filtfilt(b, a, predicted), signal.filtfilt(b, a, measured)
-    p, m, _ = _aligned(predicted, measured, lag, start)
+    p, m = _compared(predicted, measured, lag, start, band)
     e = m - p
     err = float(np.linalg.norm(e - e.mean(axis=1, keepdims=True)))
     motion = float(np.linalg.norm(p - p.mean(axis=1, keepdims=True)))
@@ -179,8 +204,7 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
     """
     names = list(names)
     measured = np.atleast_2d(measured)
-    band = (BAND_HARMONICS / float(fundamental_samples)
-            if fundamental_samples and fundamental_samples > 2 * BAND_HARMONICS + 1 else None)
+    band = band_share(fundamental_samples)
     lag = int(lag_of(measured))
     misfit = prediction_misfit(predicted, measured, lag, start, band)
     runs = flat_runs(predicted, measured, lag, start)
@@ -271,12 +295,7 @@ def model_gains(predicted, measured, lag=0, start=0, band=None):
     >>> np.round(model_gains(p, np.array([[1.04], [0.98]]) * p + 0.3), 6).tolist()
     [1.04, 0.98]
     """
-    predicted, measured = np.atleast_2d(predicted), np.atleast_2d(measured)
-    if band is not None and 0 < band < 0.5 and predicted.shape[1] > 12:
-        from scipy import signal      # ~1 s to import: not before a band is asked for
-        b, a = signal.butter(2, 2.0 * band)
-        predicted, measured = signal.filtfilt(b, a, predicted), signal.filtfilt(b, a, measured)
-    p, m, _ = _aligned(predicted, measured, lag, start)
+    p, m = _compared(predicted, measured, lag, start, band)
     p = p - p.mean(axis=1, keepdims=True)
     m = m - m.mean(axis=1, keepdims=True)
     power = np.sum(p * p, axis=1)

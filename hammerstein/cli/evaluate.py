@@ -55,7 +55,7 @@ from hammerstein.compensation.drive_files import (drive_input_names, drive_rest_
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
-from hammerstein.cli._learn_checks import BAND_HARMONICS, model_gain_note, model_gains
+from hammerstein.cli._learn_checks import band_share, model_gain_note, model_gains
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError, PresetError
@@ -415,11 +415,10 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples):
     predicted, _ = plant.simulate(apply_amplifier(plant.amplifier, u[:, :N], T),
                                   plant.rest_state())
     P = int(period_samples or 0)
-    band = BAND_HARMONICS / P if P > 2 * BAND_HARMONICS + 1 else None
     start = int(fade) + P
     if N - start - abs(int(delay)) < 8:
         return None
-    return model_gains(predicted, y[:, :N], int(delay), start, band)
+    return model_gains(predicted, y[:, :N], int(delay), start, band_share(P))
 
 
 def _drive_length(path, sampling_period=None):

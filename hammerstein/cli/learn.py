@@ -145,7 +145,7 @@ from hammerstein.compensation.model_classes import law_check, model_class
 from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
-from hammerstein.cli._learn_checks import (BAND_HARMONICS, measurement_problem,
+from hammerstein.cli._learn_checks import (band_share, measurement_problem,
                                            model_gain_note, model_gains)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
@@ -521,9 +521,8 @@ def _learn(args):
             raise DataFileError(implausible)
         # an actuator that changed since it was identified (warmer, loaded): its gain against
         # the model's prediction, said once per trial when beyond what a fresh model leaves
-        band = (BAND_HARMONICS / fundamental_samples
-                if fundamental_samples and fundamental_samples > 2 * BAND_HARMONICS + 1 else None)
-        drift_gain = model_gain_note(model_gains(predicted, y, delay, settle, band),
+        drift_gain = model_gain_note(model_gains(predicted, y, delay, settle,
+                                                 band_share(fundamental_samples)),
                                      model.output_names)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
