@@ -171,7 +171,9 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
                                 f"{tol:.2g} s); expected one sampling period (give "
                                 f"--sampling-period to resample it)")
     if t[0] > 1e-9 * max(1.0, abs(t[-1])) and t[0] > tol:   # after a gap's message: its cause
-        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first")
+        raise DataFileError(f"{what}: {path}: starts at {t[0]:g} s; expected t = 0 first "
+                            f"(subtract {t[0]:g} s from its time column: a record's time "
+                            f"counts from its first sample)")
     if sampling_period is None:
         return t[0] + np.arange(t.size) * Tf, vals, Tf
     T = float(sampling_period)

@@ -153,7 +153,8 @@ def test_evaluate_and_learn_average_a_faster_measurement_alike(lab):
 @pytest.mark.parametrize("measured, says", [
     ("mslow.csv", "--measured: mslow.csv: sampled every 0.0001 s, 2 sampling periods of 5e-05 s: "
                   "slower than the drive"),
-    ("mlate.csv", "--measured: mlate.csv: starts at 12.3 s; expected t = 0 first"),
+    ("mlate.csv", "--measured: mlate.csv: starts at 12.3 s; expected t = 0 first (subtract "
+                  "12.3 s from its time column"),
 ])
 def test_evaluate_and_learn_refuse_alike(lab, measured, says):
     for command, res in (("evaluate", _evaluate(lab, measured)), ("learn", _learn(lab, measured))):
