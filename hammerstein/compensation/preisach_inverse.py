@@ -208,8 +208,11 @@ class PreisachInverseCompensator:
     method : {'root', 'multiplicative'}
         Exact root per sample, or the inverse multiplicative law (for comparison).
     input_bound : array_like, shape (m,), optional
-        Inputs are kept in ``[-input_bound, input_bound]`` [V]; default 1.2 x
-        the model's ``input_amplitude``, else the switching grid's extent.
+        Inputs are kept in ``[-input_bound, input_bound]`` [V]; default the
+        model's ``input_range`` (the records' range, e.g. 0..100 V for a
+        unipolar stack: below it the identified reversible terms are
+        extrapolated and may turn back), else 1.2 x its
+        ``input_amplitude``, else the switching grid's extent.
     tolerance : float
         Root tolerance on each direct path's output [µm] (default 1e-12: the
         exported C then equals this compensator to a few 1e-13 relative, the
@@ -259,7 +262,10 @@ class PreisachInverseCompensator:
             raise CompensatorError(f"model: expected as many inputs as outputs, found {m} and {p}")
         self.model, self.method, self.name = model, method, name
         self.tolerance, self.max_sweeps = float(tolerance), int(max_sweeps)
-        if input_bound is None:
+        rng = model.input_range if input_bound is None else None
+        if rng is not None:
+            bound = np.asarray(rng, dtype=float)[:, 1].copy()
+        elif input_bound is None:
             if model.input_amplitude is not None:
                 bound = 1.2 * model.input_amplitude
             else:
@@ -268,10 +274,18 @@ class PreisachInverseCompensator:
                                   for l in range(p)])
         else:
             bound = np.broadcast_to(np.asarray(input_bound, dtype=float), (m,)).copy()
-        if not (np.all(np.isfinite(bound)) and np.all(bound > 0)):
+        if rng is not None:
+            self.lo = np.asarray(rng, dtype=float)[:, 0].copy()
+            if not (np.all(np.isfinite(self.lo)) and np.all(self.lo < bound)):
+                raise CompensatorError(f"model.input_range: expected {m} ranges [low, high] V "
+                                       f"with low < high, found {np.asarray(rng).tolist()}")
+        elif not (np.all(np.isfinite(bound)) and np.all(bound > 0)):
             raise CompensatorError(f"input_bound: expected {m} positive voltages [V], found "
                                    f"{np.asarray(bound).tolist()}")
-        self.lo, self.hi = -bound, bound.copy()
+        else:
+            self.lo = -bound
+        self.hi = bound.copy()
+        self._ranged = rng is not None
         self._pack()
         self.K = self._secant_gain()
         self.K_inv = np.linalg.inv(self.K)
@@ -321,14 +335,20 @@ class PreisachInverseCompensator:
                     f"{slope.min():.3g} µm/V): no exact inverse")
 
     def _secant_gain(self):
-        """Secant gains ``(Gamma(+A) - Gamma(-A)) / 2A`` of every component [µm/V] (m x m)."""
+        """Secant gains ``(Gamma(+A) - Gamma(-A)) / 2A`` of every component [µm/V] (m x m).
+
+        A is ``input_amplitude`` about 0 V, or half the records' range about
+        its centre when they were not centred on 0 V (``model.input_range``).
+        """
         model = self.model
         p = m = model.n_inputs
         K = np.zeros((p, m))
-        for k in range(m):
-            a = self.hi[k] / 1.2
-            u = np.zeros((m, 400))
-            u[k] = a * np.sin(np.linspace(0, 4 * np.pi, 400))
+        ranged = self._ranged
+        centre = (self.lo + self.hi) / 2 if ranged else np.zeros(m)
+        for k in range(m):          # +-A about 0, or over the records' range about its centre
+            a = (self.hi[k] - self.lo[k]) / 2 if ranged else self.hi[k] / 1.2
+            u = np.repeat(centre[:, None], 400, axis=1)
+            u[k] += a * np.sin(np.linspace(0, 4 * np.pi, 400))
             y, _ = model.simulate(u)
             K[:, k] = (y[:, 250:].max(axis=1) - y[:, 250:].min(axis=1)) / (2 * a)
             # sign of the slope: of the outputs' covariance with the input over the last period

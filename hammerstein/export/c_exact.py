@@ -251,11 +251,12 @@ static {N}_real {N}_eval({N}_memo *mm, int c, {N}_real u, {N}_real *h)
 /* u in [lo, hi] with component c = target: a Newton probe on the secant of the component's
    last two values, then a bracket from the guess (or the probe) by steps to the secant root
    of the last two probes, then Illinois false position (the Python kernel's search, step
-   for step) */
-static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {N}_real lo, {N}_real hi, {N}_real *h)
+   for step); *beyond = 1 when the target is beyond the bound returned (out of reach) */
+static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {N}_real lo, {N}_real hi, {N}_real *h, int *beyond)
 {{
     {N}_real x = guess, fx, step, a = {zero}, fa = {zero}, b = {zero}, fb = {zero};
     int side = 0, it, bracketed = 0;
+    *beyond = 0;
     if (x < lo) x = lo;
     if (x > hi) x = hi;
     fx = {N}_eval(mm, c, x, h) - target;
@@ -288,7 +289,7 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
                 if (b >= hi) {{
                     b = hi;
                     fb = {N}_eval(mm, c, hi, h) - target;
-                    if (fb <= {zero}) return hi;
+                    if (fb <= {zero}) {{ *beyond = fb < -{N}_TOLERANCE; return hi; }}
                     break;
                 }}
                 fb = {N}_eval(mm, c, b, h) - target;
@@ -308,7 +309,7 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
                 if (a <= lo) {{
                     a = lo;
                     fa = {N}_eval(mm, c, lo, h) - target;
-                    if (fa >= {zero}) return lo;
+                    if (fa >= {zero}) {{ *beyond = fa > {N}_TOLERANCE; return lo; }}
                     break;
                 }}
                 fa = {N}_eval(mm, c, a, h) - target;
@@ -461,7 +462,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
         body.append(_sections(_ROOT.format(**lit), keep))
         law = f"""    {{  /* Gauss-Seidel over the outputs, a monotone root per direct path; sweeps that
            do not settle are repeated under-relaxed (omega 1/2 ... 1/16) */
-        int round, sweep, converged = 0;
+        int round, sweep, converged = 0, beyond[{N}_N_INPUTS] = {{0}};
         {N}_real omega = {lit['one']}, h0[{N}_N_INPUTS], h1[{N}_N_INPUTS], h2[{N}_N_INPUTS];
         {N}_memo mm;
         for (k = 0; k < {N}_N_COMPONENTS; ++k) {{ mm.n[k] = mm.last[k] = 0; mm.cell[k] = -2; }}
@@ -473,7 +474,8 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
                     for (k = 0; k < {N}_N_INPUTS; ++k)
                         if (k != l && {N}_present[l * {N}_N_INPUTS + k])
                             target -= {N}_eval(&mm, l * {N}_N_INPUTS + k, u[k], s->h);
-                    nw = {N}_root(&mm, l * {N}_N_INPUTS + l, target, u[l], {N}_lo[l], {N}_hi[l], s->h);
+                    nw = {N}_root(&mm, l * {N}_N_INPUTS + l, target, u[l], {N}_lo[l], {N}_hi[l], s->h,
+                                  &beyond[l]);
                     dd = {N}_ABS(nw - u[l]);
                     if (dd > delta) delta = dd;
                     u[l] = omega == {lit['one']} ? nw : u[l] + omega * (nw - u[l]);
@@ -493,9 +495,9 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
             }}
             omega *= {lit['half']};
         }}
-    }}
-    for (k = 0; k < {N}_N_INPUTS; ++k)   /* the reference is out of reach: the input bound */
-        if (u[k] == {N}_lo[k] || u[k] == {N}_hi[k]) status |= {N}_STATUS_RANGE;"""
+        for (k = 0; k < {N}_N_INPUTS; ++k)   /* the reference is out of reach: the input bound */
+            if (beyond[k] && (u[k] == {N}_lo[k] || u[k] == {N}_hi[k])) status |= {N}_STATUS_RANGE;
+    }}"""
     else:
         law = f"""    {{  /* inverse multiplicative law: u = clip(u(t-T) + K^-1 (r - Gamma(u(t-T)))) */
         {N}_real g[{N}_N_OUTPUTS];

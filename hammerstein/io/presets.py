@@ -37,9 +37,9 @@ from hammerstein.core.schema import (Field, Invalid, did_you_mean, is_number, kn
                                      table_problems)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem
 from hammerstein.models.creep import creep_from_table
-from hammerstein.models.preisach import hysteresis_from_table, is_mixed_table
+from hammerstein.models.preisach import MultivariableHysteresis, hysteresis_from_table, is_mixed_table
 from hammerstein.core.lazy import lazy_module
-from hammerstein.models.amplifier import amplifier_from_table
+from hammerstein.models.amplifier import amplifier_from_table, records_input_range
 from hammerstein.exceptions import AmplifierError, DynamicsWarning, PresetError
 from hammerstein.io.sensor import sensor_from_table
 
@@ -532,6 +532,8 @@ def load_model(path):
             model.identified_from = origin
         except AttributeError:          # a model class without instance attributes
             pass
+    if isinstance(model, MultivariableHysteresis):   # the inputs it was identified on
+        model.input_range = records_input_range(data.get("amplifier"), model.input_names)
     return model
 
 

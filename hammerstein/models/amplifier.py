@@ -57,7 +57,8 @@ from hammerstein.exceptions import AmplifierError, AmplifierWarning
 
 
 __all__ = ["Amplifier", "AmplifierChannel", "LIMITS", "amplifier_from_table", "drive_metrics",
-           "AMPLIFIER_KEYS", "records_amplifier_table", "records_hold_steps", "RECORDS_SOURCE",
+           "AMPLIFIER_KEYS", "records_amplifier_table", "records_hold_steps", "records_input_range",
+           "RECORDS_SOURCE",
            "slew_limit"]
 
 #: Reactions to a drive beyond the amplifier: name -> description.
@@ -182,6 +183,41 @@ def amplifier_from_table(table, inputs, source="preset"):
     except AmplifierError as exc:
         raise AmplifierError(f"{source}: {exc}") from None
     return Amplifier(chans, list(inputs), source_key)
+
+
+def records_input_range(table, input_names):
+    """The input range of the records a model was identified on, from its ``[amplifier]`` table.
+
+    ``hammerstein identify`` writes the records' range per input in
+    ``[amplifier]`` marked ``source = "records"``
+    (:func:`hammerstein.models.amplifier.records_amplifier_table`). The
+    exact inverse keeps its inputs there
+    (:class:`hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`):
+    outside it the model is extrapolated (a unipolar 0..100 V record's
+    reversible terms below 0 V) and the amplifier clips the drive anyway.
+
+    Parameters
+    ----------
+    table : dict or None
+        The file's ``[amplifier]`` table.
+    input_names : list of str
+        The model's inputs (m).
+
+    Returns
+    -------
+    numpy.ndarray, shape (m, 2), or None
+        ``[low, high]`` per input [V]; None without a table from the records,
+        with a malformed one (:func:`hammerstein.io.presets.load_plant` reports it) or with an
+        input whose range is not finite.
+    """
+    if not isinstance(table, dict) or table.get("source") != RECORDS_SOURCE:
+        return None
+    try:
+        amp = amplifier_from_table(table, list(input_names), "amplifier")
+    except AmplifierError:
+        return None
+    rng = np.array([[c.low, c.high] for c in amp.channels], dtype=float)
+    return rng if np.all(np.isfinite(rng)) else None
 
 
 def records_amplifier_table(records, input_names):

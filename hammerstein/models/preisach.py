@@ -629,6 +629,14 @@ class MultivariableHysteresis:
     input_amplitude : array_like, shape (m,), optional
         Input range per input [V].
 
+    Attributes
+    ----------
+    input_range : numpy.ndarray, shape (m, 2), or None
+        ``[low, high]`` per input [V] of the records the model was
+        identified on (set on reading a file whose ``[amplifier]`` comes
+        from the records); its exact inverse keeps its inputs there. None:
+        ``+-1.2 input_amplitude``.
+
     Notes
     -----
     The flat state is the components' states in order of output l, then
@@ -659,6 +667,7 @@ class MultivariableHysteresis:
     packable = False
     output_offset = None
     has_output_map = False
+    input_range = None
 
     def __init__(self, components, input_names=None, output_names=None, input_amplitude=None):
         rows = [list(r) for r in components]
