@@ -558,10 +558,15 @@ def _handler(args):
             problem = file_limit_problem(path, "data", "data file")
             if problem:
                 raise FileLimitError(problem)
+        given = column_list(args.inputs), column_list(args.outputs)
+        if args.dynamics and all(given):          # before any estimate or fit
+            _square_for_dynamics(*given)
         if args.delay == "auto":
             _estimate_delay(args)
         records = [_read(args, d) for d in args.data]
-        names = _names(records[0], column_list(args.inputs), column_list(args.outputs))
+        names = _names(records[0], *given)
+        if args.dynamics:
+            _square_for_dynamics(*names)
         result = identify_pipeline(
             records, _options(args, n, thresholds), names,
             _dynamics_recs(args) if args.dynamics else None,
@@ -619,6 +624,17 @@ def _handler(args):
               f"know it (your sensor's and converters' samples; docs/records.md)",
               file=sys.stderr)
     return 0
+
+
+def _square_for_dynamics(inputs, outputs):
+    """Refuse ``--dynamics`` on a rectangular actuator before anything is fitted."""
+    if len(inputs) != len(outputs):
+        raise IdentificationError(
+            f"--dynamics: expected as many outputs as inputs (the dynamics act on the hysteresis "
+            f"model's outputs, one per input, and every compensator needs a square model), found "
+            f"{len(inputs)} inputs ({', '.join(inputs)}) and {len(outputs)} outputs "
+            f"({', '.join(outputs)}); identify without --dynamics for the hysteresis and creep "
+            f"alone")
 
 
 def _options(args, n, thresholds):

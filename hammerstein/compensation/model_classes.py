@@ -54,7 +54,7 @@ from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 
 __all__ = ["ModelClass", "MODEL_CLASSES", "KindChoice", "GAIN_CANDIDATES", "model_class",
            "kind_problem", "law_radius", "convergent_gain", "choose_kind", "LawCheck",
-           "law_check", "law_self_test", "SELF_TEST_SAMPLES"]
+           "law_check", "law_self_test", "SELF_TEST_SAMPLES", "square_problem"]
 
 #: Samples of the test reference :func:`law_self_test` runs the law over (each input a
 #: raised cosine over [0, A], 2, 3, ... periods: the model's own outputs, reachable)
@@ -317,6 +317,9 @@ def kind_problem(model, kind, has_dynamics=True):
     -------
     str or None
     """
+    square = square_problem(model)
+    if square:                         # no kind inverts a rectangular model
+        return square
     entry = model_class(model)
     works = [k for k in entry.kinds if has_dynamics or k not in ("hammerstein", "ilc")]
     if kind in works:
@@ -324,6 +327,45 @@ def kind_problem(model, kind, has_dynamics=True):
     why = ("has no dynamics to invert" if kind in entry.kinds else
            f"is a {entry.label} model, which kind {kind!r} does not take")
     return f"kind {kind!r}: the model {why}; the kinds that work with it: {', '.join(works)}"
+
+
+def square_problem(model):
+    """Why no compensator kind takes ``model``: it is not square (None when it is).
+
+    Every compensator inverts the model output by output (the paper's
+    Section 4 law, the exact inverses' Gauss-Seidel over the direct paths,
+    the per-axis inverse), so it needs as many inputs as outputs. An
+    actuator with more channels than measured outputs (a tube's common z,
+    two stacks on one axis) or more outputs than channels (a parasitic tilt)
+    is made square on the hardware side: drive one channel per output, or
+    measure one output per channel.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+
+    Returns
+    -------
+    str or None
+        One line naming the inputs and outputs, or None for a square model.
+
+    Examples
+    --------
+    >>> from hammerstein import MultivariablePI, PrandtlIshlinskii
+    >>> pi = PrandtlIshlinskii([0.0, 1.0], [1.0, 0.2])
+    >>> print(square_problem(MultivariablePI([[pi, 0.1]], input_names=["ux", "uz"],
+    ...                                      output_names=["x"]))[:100])
+    model: every compensator needs as many inputs as outputs (a square model), found 2 inputs (ux, uz) a
+    """
+    m, p = int(model.n_inputs), int(model.n_outputs)
+    if m == p:
+        return None
+    ins, outs = list(model.input_names), list(model.output_names)
+    return (f"model: every compensator needs as many inputs as outputs (a square model), found "
+            f"{m} input{'s' if m != 1 else ''} ({', '.join(ins)}) and {p} output"
+            f"{'s' if p != 1 else ''} ({', '.join(outs)}): drive one channel per measured "
+            f"output (hold the others), or measure one displacement per channel, and identify "
+            f"again")
 
 
 def law_radius(model, gain):
@@ -347,7 +389,15 @@ def law_radius(model, gain):
     -------
     float
         [-]; ``inf`` when the gain cannot be formed (e.g. a non-positive slope).
+
+    Raises
+    ------
+    CompensatorError
+        A model that is not square (:func:`square_problem`).
     """
+    square = square_problem(model)
+    if square:
+        raise CompensatorError(square)
     try:
         K = _gain_matrix(model, gain)
         if isinstance(model, MultivariablePI):
@@ -617,9 +667,13 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
     Raises
     ------
     CompensatorError
-        With dynamics, a classical PI static part and neither gain nor check
-        given, when :func:`law_check` refuses the law.
+        A model that is not square (:func:`square_problem`); with dynamics,
+        a classical PI static part and neither gain nor check given, when
+        :func:`law_check` refuses the law.
     """
+    square = square_problem(model)
+    if square:
+        raise CompensatorError(square)
     entry = model_class(model)
     by = "the stable inversion" if inversion == "stable" else "ZPETC"
     if has_dynamics:
