@@ -878,7 +878,7 @@ def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, in
     late = int(moved[-1]) + 1
     return u2, ref, [f"the start-up corrected in the reference ({outs}, until {late * T:.4g} s) "
                      f"for a drive that steps no faster than the "
-                     f"settled drive ({ins}; the settled drive's largest step "
+                     f"settled drive ({ins + '; ' if ins else ''}the settled drive's largest step "
                      + ", ".join(f"{b:.3g}" for b in bound) + " V), the drive the compensator's "
                      f"for the reference written"], late
 

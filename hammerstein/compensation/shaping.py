@@ -14,7 +14,12 @@ compensator again on the shaped reference:
    raster's line steps and corners, never a circle below the mode), it is
    replaced by its zero-phase Hann-window average over one period of the
    mode: the inverse of the dynamics is then not asked for content at the
-   resonance, which it reproduces only as well as the mode was identified;
+   resonance, which it reproduces only as well as the mode was identified.
+   A reference whose own fundamental is at or above the mode (a circle
+   at the mode) is band-limited only where it accelerates more than a
+   sine at that fundamental would (its corners): averaging its fundamental
+   would shrink it (a 10 µm circle at a 299 Hz mode became an 8.26 µm one,
+   and `learn` converged to that);
 1. **transients** (a raster's line steps and corners, a circle's start):
    around every sample whose drive leaves the limits, the reference is
    replaced by its zero-phase Hann-window average (a band limit below the
@@ -773,7 +778,9 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
         found = reference_fundamental(r, T)
         cap = N // 2 if found is None else max(min(int(found.samples(T)) // 2, N // 2), 3)
     else:
+        found = None
         cap = max(int(period_samples) // 2, 3)
+    one_period = L0                 # one period of the mode [samples], before the cap
     L0 = max(min(L0, cap), 3)
     at_rest = np.all(np.abs(r - r[:, :1]) <= 1e-12 * max(1.0, float(np.max(np.abs(r)))), axis=0)
     lead = int(np.argmin(at_rest)) if not np.all(at_rest) else N    # samples at rest first
@@ -781,7 +788,10 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     repeat = period_samples if _repeats(r, period_samples, lead) else None
     base, band = r, False
     if first_mode and N >= 3:                          # stage 0: band limit below the first mode
-        fast = faster_than_mode(r, first_mode, T)
+        # (or, for a reference whose fundamental is faster, above that fundamental)
+        fundamental = (1.0 / (period_samples * T) if period_samples and period_samples >= 2
+                       else found.frequency_hz if found is not None else 0.0)
+        fast = faster_than_mode(r, max(first_mode, fundamental), T)
         if np.any(fast):
             base = _periodic_end(r + _blend_weights(fast, L0) * guard * (hann_average(r, L0) - r),
                                  repeat, lead)
@@ -790,8 +800,10 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     excess = limit_excess(amplifier, u, T) if amplifier is not None else np.zeros(N)
     best = ShapedReference(base, u, L0 if band else 0)
     reasons = ([f"it moves faster than the {first_mode:.4g} Hz first mode of the identified "
-                f"dynamics follows: smoothed there over {L0 * T * 1e3:.3g} ms (one period of "
-                f"the mode)"] if band else [])
+                f"dynamics follows: smoothed there over {L0 * T * 1e3:.3g} ms ("
+                + ("one period of the mode)" if L0 >= one_period else
+                   "half the reference's period, less than one period of the mode)")]
+               if band else [])
     if not np.any(excess > 0) or N < 3:
         best.notes = shaping_notes(r, best.reference, T, names,
                                    f": {'; '.join(reasons)}" if reasons else "")
@@ -817,8 +829,8 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     if limited_window:
         notes_why.append(f"smoothed over {limited_window * T * 1e3:.3g} ms"
                          + (f" (one period of the {first_mode:.4g} Hz first mode"
-                            f"{', doubled' if limited_window > L0 else ''})"
-                            if first_mode and limited_window >= L0 else ""))
+                            f"{', doubled' if limited_window > one_period else ''})"
+                            if first_mode and limited_window >= one_period else ""))
     e_now = limit_excess(amplifier, best.inputs, T)
     if predict is not None and np.any(e_now > 0):
         left = _limits_left(amplifier, best.inputs, T)
