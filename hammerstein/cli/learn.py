@@ -686,6 +686,9 @@ def _learn(args):
                       f"and {args.measured} were worse)")
                    + f": delay {delay} samples, "
                    f"gain {gain:g}, Q {args.q_cutoff_hz:g} Hz"
+                   + ("\nlearnt on the voltages (the reference does not repeat within the "
+                      "record): no reference fed to the exported compensator reproduces this "
+                      "drive; play it as a file" if learnt is None else "")
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
                    + "".join(f"\nshaped: {n}" for n in shaped))
         widths = None if plant.amplifier is None else plant.amplifier.range_widths()

@@ -144,3 +144,16 @@ def test_a_lag_beyond_it_names_the_delay_that_aligns_it(tmp_path):
     assert res.stderr.rstrip().endswith("give --delay 30")
     res = _learn(tmp_path, "y.csv", "30")        # the advice followed: learnt from
     assert res.returncode == 0 and "measured lag 30 samples" in res.stdout, res.stderr
+
+
+def test_a_drive_learnt_on_the_voltages_says_the_exported_compensator_cannot_give_it(tmp_path):
+    """Without --period the raster is learnt on the voltages: no reference fed to the exported C
+    reproduces that drive (a user's learnt raster differed from the C fed its shaped columns by
+    1.5 V after six trials), and its header says to play it as a file."""
+    _setup(tmp_path)
+    _measure(tmp_path, 0, "y.csv")
+    res = _learn(tmp_path, "y.csv")
+    assert res.returncode == 0, res.stderr
+    header = [ln for ln in (tmp_path / "u1.csv").read_text().splitlines() if ln.startswith("#")]
+    assert any("learnt on the voltages" in ln and "play it as a file" in ln for ln in header)
+    assert "x_learnt" not in (tmp_path / "u1.csv").read_text().splitlines()[len(header)]
