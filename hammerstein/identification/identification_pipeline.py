@@ -39,7 +39,7 @@ from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
 from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI, play
-from hammerstein.identification.preisach_identification import (SMOOTHING_START,
+from hammerstein.identification.preisach_identification import (SMOOTHING_START, refit_on_every_level,
                                                                 identify_preisach_records)
 from hammerstein.identification._broadband_check import dynamics_advice
 from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
@@ -558,6 +558,8 @@ def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records
         chosen = [note for note in fit.notes if note.startswith("model auto")]
         fit = identify_hysteresis(clean, options, names, fit_class(fit), creep_records, fit)
         fit.notes[:0] = chosen
+        if i == refits - 1:          # the model kept: on every level (the creep after it)
+            fit = refit_on_every_level(fit, options.preisach_levels)
         creep = _creep(fit, creep_records, dyn)
         fit.notes.append(f"creep refit {i + 1}: hysteresis refitted on the records with the "
                          f"identified creep removed (v = (I + C)^-1 y); held-out RMS "
@@ -609,6 +611,8 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
         f") on {len(records)} record(s), {n} samples")
     fit = identify_hysteresis(records, options, names, creep_records=creep_records,
                               provisional=provisional)
+    if not (creep_records and _creep_refits(options, isinstance(fit.model, MultivariablePI))):
+        fit = refit_on_every_level(fit, options.preisach_levels)   # the model kept: every level
     dyn = creep = None
     if dynamics_records:
         say(f"identifying the dynamics G from {len(dynamics_records)} broadband record(s)")

