@@ -11,7 +11,9 @@ drive it was given with (the prediction ``learn`` estimates the lag on,
 * the **misfit**: the RMS Euclidean error of the measurement against the
   prediction, each output's mean removed (a sensor's zero or a creep offset
   is no sign of another record), over the samples after the fade-in, both
-  low-passed at :data:`BAND_HARMONICS` times the reference's fundamental (a
+  low-passed at :data:`BAND_HARMONICS` times the reference's fundamental, or
+  its spectral centroid where its motion lies far above the fundamental of
+  its whole pattern (a Lissajous figure, a spiral: :func:`band_share`; a
   mode the model lacks, rung by a learnt drive, answers above it), as a
   share of the prediction's own RMS motion about its mean
   (:func:`prediction_misfit`). Beyond :data:`MISFIT_LIMIT` it is not a
@@ -33,8 +35,8 @@ import itertools
 
 import numpy as np
 
-__all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "band_share", "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit",
-           "flat_runs", "measurement_problem", "MODEL_GAIN_TOLERANCE", "model_gains",
+__all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "band_share", "CENTROID_MARGIN", "spectral_centroid",
+           "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit", "flat_runs", "measurement_problem", "MODEL_GAIN_TOLERANCE", "model_gains",
            "model_gain_note"]
 
 #: above this misfit (RMS error against the model's prediction of the drive, means removed,
@@ -53,8 +55,15 @@ MISFIT_LIMIT = 0.5
 FLAT_SAMPLES = 10
 #: ... while the prediction moves by at least this share of its range there is a flat run
 FLAT_MOTION = 0.05
-#: the misfit is taken below this many times the reference's fundamental (when known)
+#: the misfit is taken below this many times the reference's fundamental (when known; its
+#: spectral centroid instead where that is beyond CENTROID_MARGIN times the fundamental)
 BAND_HARMONICS = 4
+#: a reference's spectral centroid beyond this many times its fundamental sets the band instead
+#: (:func:`band_share`). Measured: a circle 1.000 (one whose period was rounded to whole samples,
+#: 37 Hz given as 541 samples, 1.0009), a triangle 1.037, rasters 0.68-0.81 (the slow axis'
+#: power lies lower); a 37/41 Hz Lissajous figure repeating every second 39, a constant-velocity
+#: spiral of 20 turns out and in every second 27
+CENTROID_MARGIN = 1.05
 #: outputs permuted for the swapped-channels test up to this many outputs (24 orders)
 MAX_PERMUTED = 4
 
@@ -71,15 +80,25 @@ def _aligned(predicted, measured, lag, start):
     return p[:, start:], m[:, start:], start + max(lag, 0)
 
 
-def band_share(fundamental_samples):
+def band_share(fundamental_samples, reference=None):
     """The share of the sampling rate below which a measurement is compared with its
-    prediction: :data:`BAND_HARMONICS` times the fundamental, or None (the whole band) when
-    the fundamental is unknown or too fast for it.
+    prediction: :data:`BAND_HARMONICS` times the reference's frequency, or None (the whole
+    band) when it is unknown or too fast for it.
+
+    The reference's frequency is its fundamental, or its spectral centroid
+    (:func:`spectral_centroid`) where that is above :data:`CENTROID_MARGIN` times the
+    fundamental: a reference whose motion lies far above the fundamental of its whole
+    pattern (a 37/41 Hz Lissajous figure repeating every second: 39 times; a spiral) is
+    compared up to four times where its motion is, not low-passed away. A circle's,
+    a triangle's and a raster's band is their fundamental's, as their centroid is at most
+    1.04 times it (the harmonics it passes are their content).
 
     Parameters
     ----------
     fundamental_samples : float
         The reference's fundamental period [samples]; 0 or None: unknown.
+    reference : array_like, shape (p, n_samples), optional
+        The reference [µm]; None: the fundamental alone.
 
     Returns
     -------
@@ -87,7 +106,44 @@ def band_share(fundamental_samples):
         In (0, 0.5) [-].
     """
     P = float(fundamental_samples or 0)
+    if P > 0 and reference is not None:
+        centroid = spectral_centroid(reference)
+        if centroid * P > CENTROID_MARGIN:
+            P = 1.0 / centroid
     return BAND_HARMONICS / P if P > 2 * BAND_HARMONICS + 1 else None
+
+
+def spectral_centroid(reference):
+    """The power-weighted mean frequency of a reference, each row's mean removed.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+
+    Returns
+    -------
+    float
+        ``sum_k f_k |X_k|^2 / sum_k |X_k|^2`` over the rows' one-sided DFTs
+        (no window) [share of the sampling rate, in [0, 0.5]]; 0 for a
+        reference that does not move. A sine over whole periods: its
+        frequency exactly.
+
+    Examples
+    --------
+    >>> n = np.arange(2000)
+    >>> r = np.vstack([np.sin(2 * np.pi * 37 * n / 2000), np.sin(2 * np.pi * 41 * n / 2000)])
+    >>> round(spectral_centroid(r) * 2000, 9)
+    39.0
+    """
+    r = np.atleast_2d(np.asarray(reference, dtype=float))
+    if r.shape[1] < 2:
+        return 0.0
+    power = (np.abs(np.fft.rfft(r - r.mean(axis=1, keepdims=True), axis=1)) ** 2).sum(axis=0)
+    total = float(power.sum())
+    if not total > 0:
+        return 0.0
+    return float(power @ np.fft.rfftfreq(r.shape[1]) / total)
 
 
 def _compared(predicted, measured, lag, start, band):
@@ -170,7 +226,8 @@ def flat_runs(predicted, measured, lag=0, start=0):
     return runs
 
 
-def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental_samples=0):
+def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental_samples=0,
+                        reference=None):
     """The line refusing a measurement that is not the drive's response, or None.
 
     Parameters
@@ -191,6 +248,9 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
         taken below ``BAND_HARMONICS`` times the fundamental, where a
         measurement that is the drive's follows the model (a mode the model
         lacks, rung by a learnt drive, answers above it).
+    reference : array_like, shape (p, N), optional
+        The reference [µm]: the band is taken at the higher of its
+        fundamental and its spectral centroid (:func:`band_share`).
 
     Returns
     -------
@@ -204,7 +264,7 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
     """
     names = list(names)
     measured = np.atleast_2d(measured)
-    band = band_share(fundamental_samples)
+    band = band_share(fundamental_samples, reference)
     lag = int(lag_of(measured))
     misfit = prediction_misfit(predicted, measured, lag, start, band)
     runs = flat_runs(predicted, measured, lag, start)

@@ -359,8 +359,8 @@ def _handle(args):
             shaped_rows, _, _, _ = evaluate(shaped[:, :N], y, ref.period_samples, T, outs,
                                             args.settle_periods, ref.scale, ref.loop_channel,
                                             args.remove_delay, rf)
-        gains = _model_gains(plant, u, y, T, delay, fade, ref.period_samples) if args.model \
-            else None
+        gains = _model_gains(plant, u, y, T, delay, fade, ref.period_samples,
+                             ref.signal[:, :N]) if args.model else None
         if gains is not None:
             rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
                      for n, g in zip(outs, gains)]
@@ -399,14 +399,15 @@ def _handle(args):
     return 0
 
 
-def _model_gains(plant, u, y, T, delay, fade, period_samples):
+def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
     """Each measured output's gain against ``--model``'s prediction of the drive, or None.
 
     None without the drive's voltages, or when the model's sampling period is
     not the measurement's. The prediction is the model from rest (its
     amplifier's limits applied, as ``compensate --predicted``); the gains are
     :func:`~hammerstein.cli._learn_checks.model_gains` after the fade-in and
-    one period, below four times the reference's fundamental.
+    one period, below four times the higher of the reference's fundamental and its
+    spectral centroid (:func:`~hammerstein.cli._learn_checks.band_share`).
     """
     if u is None or plant.hysteresis.n_inputs != u.shape[0] \
             or not np.isclose(plant.sampling_period, T, rtol=1e-9):
@@ -418,7 +419,7 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples):
     start = int(fade) + P
     if N - start - abs(int(delay)) < 8:
         return None
-    return model_gains(predicted, y[:, :N], int(delay), start, band_share(P))
+    return model_gains(predicted, y[:, :N], int(delay), start, band_share(P, reference))
 
 
 def _drive_length(path, sampling_period=None):

@@ -516,13 +516,13 @@ def _learn(args):
         # not the drive's response (channels swapped, another drive's, a saturated sensor):
         # refused before anything is learnt from it (hammerstein.cli._learn_checks)
         implausible = measurement_problem(predicted, y, model.output_names, lambda m: trial_lag(
-            predicted, m, target, ref.period_samples, T), fade, fundamental_samples)
+            predicted, m, target, ref.period_samples, T), fade, fundamental_samples, ref.signal)
         if implausible:
             raise DataFileError(implausible)
         # an actuator that changed since it was identified (warmer, loaded): its gain against
         # the model's prediction, said once per trial when beyond what a fresh model leaves
         drift_gain = model_gain_note(model_gains(predicted, y, delay, settle,
-                                                 band_share(fundamental_samples)),
+                                                 band_share(fundamental_samples, ref.signal)),
                                      model.output_names)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
