@@ -53,7 +53,7 @@ from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
 from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
-from hammerstein.compensation.drive_splice import keep_end, keep_start
+from hammerstein.compensation.drive_splice import keep_end, keep_start, learning_onset
 from hammerstein.compensation.shaping import shape_reference, time_intervals
 from hammerstein.compensation.start_up import start_up_in_reference
 from hammerstein.exceptions import CompensatorError
@@ -62,7 +62,8 @@ from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive
 
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
-           "FADE_DECAYS", "settled_step", "keep_start", "keep_end", "drive_fade_samples", "limit_start_up",
+           "FADE_DECAYS", "settled_step", "keep_start", "keep_end", "learning_onset",
+           "drive_fade_samples", "limit_start_up",
            "rest_output", "compensator_rest", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 DriveStream.__module__ = __name__       # documented (and pickled) as this module's

@@ -12,7 +12,41 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["keep_start", "keep_end"]
+__all__ = ["keep_start", "keep_end", "learning_onset"]
+
+
+def learning_onset(n_samples, fade_samples, period_samples=None):
+    """The first sample from which :func:`keep_start` passes the learnt drive whole.
+
+    Before it the learnt change is blended in at a share below 1 (not at all
+    at the end of the fade-in without a period): what the start-up's error is
+    there is not what the learning corrects, and ``hammerstein learn`` judges
+    a trial from this sample on at the earliest.
+
+    Parameters
+    ----------
+    n_samples : int
+        The record's length [samples].
+    fade_samples : int
+    period_samples : int, optional
+        As for :func:`keep_start`; 0, 1 or None: no period.
+
+    Returns
+    -------
+    int
+        ``fade + period`` with a period, else ``fade + max(n_samples // 10, 1)``
+        [samples] (beyond the record when the fade-in ends within its last
+        tenth).
+
+    Examples
+    --------
+    >>> learning_onset(80000, 20000), learning_onset(8000, 400, 800)
+    (28000, 1200)
+    """
+    fade = max(int(fade_samples), 0)
+    periodic = bool(period_samples) and int(period_samples) > 1
+    blend = int(period_samples) if periodic else max(int(n_samples) // 10, 1)
+    return fade + blend
 
 
 def keep_start(previous, learnt, fade_samples, period_samples=None):
@@ -24,7 +58,8 @@ def keep_start(previous, learnt, fade_samples, period_samples=None):
     learnt correction sets in as gently as the reference itself, over the
     fade-in that is not judged. Without a period, ``b`` rises from 0 at the
     end of the fade-in to 1 a tenth of the record (at least one sample)
-    later. Blended in over one period after the fade-in only
+    later (:func:`learning_onset`: the error before it is not all learnt, nor
+    judged). Blended in over one period after the fade-in only
     (10 ms for a 100 Hz circle), the correction's onset rang the lightly
     damped modes into the judged periods; measured on an outside
     Preisach-type actuator (first mode 313 Hz, damping 0.035), 10 trials on
@@ -54,7 +89,7 @@ def keep_start(previous, learnt, fade_samples, period_samples=None):
     N = u0.shape[1]
     fade = max(int(fade_samples), 0)
     periodic = bool(period_samples) and int(period_samples) > 1
-    blend = int(period_samples) if periodic else max(N // 10, 1)
+    blend = learning_onset(N, fade, period_samples) - fade   # b reaches 1 at learning_onset
     k = np.arange(N)
     b = np.clip(k / (fade + blend) if periodic else (k - fade) / blend, 0.0, 1.0)
     b = 0.5 * (1.0 - np.cos(np.pi * b))
