@@ -55,7 +55,7 @@ from hammerstein.compensation.drive_files import (drive_input_names, drive_rest_
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
-from hammerstein.cli._learn_checks import band_share, model_gain_note, model_gains
+from hammerstein.cli._learn_checks import gain_band, model_gain_note, model_gains, plant_first_mode
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError, PresetError
@@ -407,7 +407,8 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
     amplifier's limits applied, as ``compensate --predicted``); the gains are
     :func:`~hammerstein.cli._learn_checks.model_gains` after the fade-in and
     one period, below four times the higher of the reference's fundamental and its
-    spectral centroid (:func:`~hammerstein.cli._learn_checks.band_share`).
+    spectral centroid and below 0.6 times the first mode; None when the reference
+    is faster than that (:func:`~hammerstein.cli._learn_checks.gain_band`).
     """
     if u is None or plant.hysteresis.n_inputs != u.shape[0] \
             or not np.isclose(plant.sampling_period, T, rtol=1e-9):
@@ -419,7 +420,8 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
     start = int(fade) + P
     if N - start - abs(int(delay)) < 8:
         return None
-    return model_gains(predicted, y[:, :N], int(delay), start, band_share(P, reference))
+    band = gain_band(P, reference, plant_first_mode(plant))
+    return None if band == 0.0 else model_gains(predicted, y[:, :N], int(delay), start, band)
 
 
 def _drive_length(path, sampling_period=None):

@@ -149,8 +149,8 @@ from hammerstein.compensation.model_classes import law_check, model_class
 from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
-from hammerstein.cli._learn_checks import (band_share, measurement_problem,
-                                           model_gain_note, model_gains)
+from hammerstein.cli._learn_checks import (gain_band, measurement_problem,
+                                           model_gain_note, model_gains, plant_first_mode)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
 from hammerstein.signals.fundamental import reference_fundamental
@@ -538,9 +538,10 @@ def _learn(args):
             raise DataFileError(implausible)
         # an actuator that changed since it was identified (warmer, loaded): its gain against
         # the model's prediction, said once per trial when beyond what a fresh model leaves
-        drift_gain = model_gain_note(model_gains(predicted, y, delay, settle,
-                                                 band_share(fundamental_samples, ref.signal)),
-                                     model.output_names)
+        # (below the first mode: at it the mode's gain is too sensitive to judge the actuator)
+        g_band = gain_band(fundamental_samples, ref.signal, plant_first_mode(plant))
+        drift_gain = None if g_band == 0.0 else model_gain_note(
+            model_gains(predicted, y, delay, settle, g_band), model.output_names)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(aim[:, :N - delay], shifted, window)
