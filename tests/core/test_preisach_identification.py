@@ -376,3 +376,33 @@ def test_reversal_curves_train_at_half_the_rows_of_the_levels():
         gaps_levels = np.diff(np.flatnonzero(plain[:n_sine]))
         gaps_curves = np.diff(np.flatnonzero(plain[n_sine + 100:-1]))
         assert np.median(gaps_levels) == step and np.median(gaps_curves) == 2 * step
+
+
+def test_the_model_kept_is_refitted_on_every_level_at_the_chosen_smoothing():
+    """refit_on_every_level: the held-out levels, which chose lambda, trained on too; the held-out
+    errors reported stay those of the fit without them."""
+    from hammerstein.identification.identification_pipeline import identify_pipeline
+    from hammerstein.identification.preisach_identification import (identify_preisach_records,
+                                                                    refit_on_every_level)
+    recs = records(gpi_actuator(), noise=0.02)       # loops no Preisach grid draws exactly
+    fit = identify_preisach_records(recs, 12)
+    refit = refit_on_every_level(fit, 12)
+    assert refit.model is not fit.model and refit.smoothing == fit.smoothing
+    assert refit.validation == fit.validation and refit.levels == fit.levels
+    assert "refitted on every amplitude level" in refit.notes[-1]
+
+    def held_out_rms(f):
+        e = [(p - r.y)[:, s.held_out] for p, r, s in zip(f.predictions, f.records, f.splits)]
+        return float(np.sqrt(np.mean(np.concatenate(e, axis=1) ** 2)))
+
+    # the levels it now trains on: their error falls below the fit that never saw them (0.283
+    # against 0.308 µm RMS: a 12-level grid does not draw these loops exactly)
+    assert held_out_rms(refit) < 0.95 * held_out_rms(fit), (held_out_rms(refit), held_out_rms(fit))
+    # a fit that held nothing out, and another class, are returned as they are
+    none = identify_preisach_records(recs, 12, hold_out="none")
+    assert refit_on_every_level(none, 12) is none
+    # the pipeline writes the refitted model
+    from hammerstein.identification.identification_pipeline import PipelineOptions
+    res = identify_pipeline(recs, PipelineOptions(model="preisach", preisach_levels=12))
+    assert any("refitted on every amplitude level" in n for n in res.fit.notes)
+    assert np.allclose(res.fit.predictions[0], refit.predictions[0], atol=1e-9)
