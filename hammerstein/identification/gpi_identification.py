@@ -127,8 +127,6 @@ References
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import scipy.linalg
 import scipy.optimize
@@ -144,7 +142,7 @@ from hammerstein.identification.record_identification import (
     split_level_records, weak_couplings)
 from hammerstein.simulation import generalized_play_states
 
-__all__ = ["GeneralizedPIIdentifier", "identify_gpi_records", "refit_gpi_on_every_level"]
+__all__ = ["GeneralizedPIIdentifier", "identify_gpi_records"]
 
 #: Rows of the regression kept per record (quasi-static records are decimated to this).
 MAX_ROWS_PER_RECORD = 3000
@@ -665,10 +663,7 @@ class GeneralizedPIIdentifier:
             return self._jacobian(l, kinds, unpack(z), free,
                                   last.get(np.asarray(z, float).tobytes())) * (np.sqrt(y.size) / scale)
 
-        fixed = getattr(self, "_fixed_thetas", None)
-        if free and fixed is not None:        # the envelopes of an earlier fit, the weights again
-            z = np.concatenate([np.asarray(fixed[l][k], dtype=float) for k in free])
-        elif free:
+        if free:
             def run(z0, budget):
                 return scipy.optimize.least_squares(
                     residual, z0, jac=jacobian,
@@ -911,59 +906,4 @@ def identify_gpi_records(records, n_plays=16, components="auto", hold_out="auto"
     est = GeneralizedPIIdentifier(n_plays, components, threshold_spacing=threshold_spacing,
                                   level_weighting=level_weighting).fit(
         records, None, input_names, output_names, hold_out, train_fraction, skip_seconds)
-    est.fit_.envelope_parameters = est.envelope_parameters_
-    est.fit_.identifier_options = (n_plays, level_weighting)
     return est.fit_
-
-
-def refit_gpi_on_every_level(fit):
-    """A generalised-PI fit's weights refitted on every amplitude level, its envelopes kept.
-
-    The envelopes and thresholds (the variable projection's nonlinear part,
-    chosen with the threshold spacing on the held-out levels) are kept; the
-    play weights, reversible terms and offsets, linear in the records, are
-    solved again with the held-out levels trained on too (a full fit on
-    every level had let the variable projection stop elsewhere: a worst
-    circle 3.3 -> 7.5 % of the radius). The held-out errors reported stay
-    those of the fit without them.
-
-    Parameters
-    ----------
-    fit : RecordFit
-        From :func:`identify_gpi_records` (``envelope_parameters``).
-
-    Returns
-    -------
-    RecordFit
-        The same fit with the refitted model and predictions and a note;
-        ``fit`` itself when it held nothing out or lacks its envelopes.
-
-    Raises
-    ------
-    IdentificationError
-        As :meth:`GeneralizedPIIdentifier.fit`.
-    """
-    thetas = getattr(fit, "envelope_parameters", None)
-    options = getattr(fit, "identifier_options", None)
-    if fit.method != "generalized-pi" or thetas is None or options is None \
-            or not any(s.held_out.any() for s in fit.splits):
-        return fit
-    splits = [replace(s, train=s.train | s.held_out, held_out=np.zeros_like(s.held_out))
-              for s in fit.splits]
-    model = fit.model
-    kinds = {(o, i): ("pi" if kind == "generalized" else kind)
-             for o, row in zip(model.output_names, fit.structure)
-             for i, kind in zip(model.input_names, row)}
-    est = GeneralizedPIIdentifier(options[0], kinds, threshold_spacing=fit.partition,
-                                  level_weighting=options[1])
-    est._fixed_thetas = thetas
-    est.fit(fit.records, splits, model.input_names, model.output_names)
-    out = replace(fit, model=est.model_, predictions=est.fit_.predictions,
-                  notes=list(fit.notes) + [
-                      "generalized PI: the weights refitted on every amplitude level, the "
-                      "envelopes kept (the held-out errors above are those of the fit without "
-                      "them)"])
-    for attr, value in vars(fit).items():
-        if attr not in vars(out) and attr != "staircase_outputs":
-            setattr(out, attr, value)
-    return out

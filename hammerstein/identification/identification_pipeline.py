@@ -37,7 +37,7 @@ from hammerstein.models.creep import creep_to_table
 from hammerstein.identification.concurrent_fits import fit_concurrently, worker_count
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
-from hammerstein.identification.gpi_identification import identify_gpi_records, refit_gpi_on_every_level
+from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI, play
 from hammerstein.identification.preisach_identification import (SMOOTHING_START, refit_on_every_level,
                                                                 identify_preisach_records)
@@ -537,17 +537,6 @@ def _creep_refits(options, classical):
     return 0 if classical else 1
 
 
-def _on_every_level(fit, options):
-    """The model kept, refitted on every amplitude level (the held-out ones chose its smoothing,
-    class and envelopes): a Preisach model at its lambda, a generalised PI's weights with its
-    envelopes kept; a classical PI as it is."""
-    if fit.method == "preisach":
-        return refit_on_every_level(fit, options.preisach_levels)
-    if fit.method == "generalized-pi":
-        return refit_gpi_on_every_level(fit)
-    return fit
-
-
 def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records):
     """Hysteresis refitted on the records with the identified creep removed, then creep again.
 
@@ -570,7 +559,7 @@ def _refit_without_creep(options, records, names, fit, creep, dyn, creep_records
         fit = identify_hysteresis(clean, options, names, fit_class(fit), creep_records, fit)
         fit.notes[:0] = chosen
         if i == refits - 1:          # the model kept: on every level (the creep after it)
-            fit = _on_every_level(fit, options)
+            fit = refit_on_every_level(fit, options.preisach_levels)
         creep = _creep(fit, creep_records, dyn)
         fit.notes.append(f"creep refit {i + 1}: hysteresis refitted on the records with the "
                          f"identified creep removed (v = (I + C)^-1 y); held-out RMS "
@@ -623,7 +612,7 @@ def identify_pipeline(records, options=None, names=None, dynamics_records=None, 
     fit = identify_hysteresis(records, options, names, creep_records=creep_records,
                               provisional=provisional)
     if not (creep_records and _creep_refits(options, isinstance(fit.model, MultivariablePI))):
-        fit = _on_every_level(fit, options)        # the model kept: on every level
+        fit = refit_on_every_level(fit, options.preisach_levels)   # the model kept: every level
     dyn = creep = None
     if dynamics_records:
         say(f"identifying the dynamics G from {len(dynamics_records)} broadband record(s)")

@@ -406,29 +406,3 @@ def test_the_model_kept_is_refitted_on_every_level_at_the_chosen_smoothing():
     res = identify_pipeline(recs, PipelineOptions(model="preisach", preisach_levels=12))
     assert any("refitted on every amplitude level" in n for n in res.fit.notes)
     assert np.allclose(res.fit.predictions[0], refit.predictions[0], atol=1e-9)
-
-
-def test_a_generalised_pi_keeps_its_envelopes_and_refits_its_weights_on_every_level():
-    """refit_gpi_on_every_level: thresholds and envelopes as the held-out levels chose them,
-    the weights (linear) solved again with those levels trained on too."""
-    from hammerstein.identification.gpi_identification import (identify_gpi_records,
-                                                               refit_gpi_on_every_level)
-    recs = records(gpi_actuator(), noise=0.02)
-    fit = identify_gpi_records(recs, 8)
-    refit = refit_gpi_on_every_level(fit)
-    assert "weights refitted on every amplitude level" in refit.notes[-1]
-    assert refit.validation == fit.validation
-    for row_old, row_new in zip(fit.model.components, refit.model.components):
-        for a, b in zip(row_old, row_new):
-            if isinstance(a, GeneralizedPI):
-                assert np.array_equal(a.thresholds, b.thresholds)
-                assert np.array_equal(a.gamma_l, b.gamma_l) and np.array_equal(a.gamma_r, b.gamma_r)
-    # least squares over more rows with the same columns: the rows added (the held-out levels)
-    # fitted at least as well as by the weights that never saw them
-    def rms(f, which):
-        e = [(p - r.y)[:, getattr(s, which)] for p, r, s in zip(f.predictions, f.records, f.splits)]
-        return float(np.sqrt(np.mean(np.concatenate(e, axis=1) ** 2)))
-
-    assert rms(refit, "held_out") <= rms(fit, "held_out")
-    none = identify_gpi_records(recs, 8, hold_out="none")
-    assert refit_gpi_on_every_level(none) is none
