@@ -39,8 +39,9 @@ from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
 from hammerstein.identification.gpi_identification import identify_gpi_records
 from hammerstein.models.hysteresis import MultivariablePI, play
-from hammerstein.identification.preisach_identification import (SMOOTHING_START, refit_on_every_level,
-                                                                identify_preisach_records)
+from hammerstein.identification.preisach_identification import (SMOOTHING_START,
+                                                                identify_preisach_records,
+                                                                refit_on_every_level)
 from hammerstein.identification._broadband_check import dynamics_advice
 from hammerstein.identification.record_identification import (identify_record_creep, identify_record_dynamics,
                                                      identify_records, levels_part, split_record)

@@ -96,8 +96,8 @@ from hammerstein.identification.record_identification import (
     split_level_records, weak_couplings)
 from hammerstein.simulation import preisach_states
 
-__all__ = ["PreisachIdentifier", "refit_on_every_level", "SMOOTHING_GRID", "SMOOTHING_BELOW", "SMOOTHING_START",
-           "GRID_STRETCH", "grid_edges", "identify_preisach_records"]
+__all__ = ["PreisachIdentifier", "refit_on_every_level", "SMOOTHING_GRID", "SMOOTHING_BELOW",
+           "SMOOTHING_START", "GRID_STRETCH", "grid_edges", "identify_preisach_records"]
 
 #: Candidate smoothing weights lambda (chosen on the held-out samples, with
 #: :data:`SMOOTHING_BELOW`).
