@@ -11,27 +11,17 @@ The commands run in this process (``main()``): the refusals happen before any co
 the files the tests pass need not be valid records; what is checked is that they are unchanged.
 """
 
-import contextlib
 import errno
-import io
 import os
-import subprocess
 
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.core import files
 from hammerstein.core.files import (OutputError, c_name_problem, guard_inputs, name_problem,
                                     output_problem, reset_guard, safe_write)
+from cli_run import run_cli as _cli
 
 CIRCLE = '{ kind = "circle", radius = 10, frequency = 100, periods = 2 }'
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _one_line(res):

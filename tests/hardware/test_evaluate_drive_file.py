@@ -5,8 +5,6 @@ until the memory ran out, a FIFO forever); a drive or measurement of another len
 than the reference gave a raw numpy error or was scored on part of the drive.
 """
 
-import contextlib
-import io
 import os
 import resource
 import subprocess
@@ -18,16 +16,10 @@ import pytest
 
 import hammerstein
 from hammerstein.cli.main import main
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 6 }'
 ROOT = Path(hammerstein.__file__).resolve().parents[1]     # the package under test
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 @pytest.fixture(scope="module")

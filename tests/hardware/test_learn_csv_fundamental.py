@@ -11,30 +11,20 @@ actuator is the bundled preset's own prediction of the drive, shifted by a known
 number of samples.
 """
 
-import contextlib
-import io
 import math
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.io.presets import load_plant
 from hammerstein.signals.fundamental import reference_fundamental
+from cli_run import run_cli as _cli
 
 T = 5e-5
 F_LINE, LINES = 25.0, 10            # 800 samples a line, 8000 in all
 P_LINE = int(round(1 / (F_LINE * T)))
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _triangle(phase):

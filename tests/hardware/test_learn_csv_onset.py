@@ -11,30 +11,20 @@ passed whole (:func:`hammerstein.compensation.drive.learning_onset`). The
 measurement is the bundled preset's response to the drive 4 % stronger.
 """
 
-import contextlib
-import io
 import re
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import (drive_fade_samples, keep_start, learning_onset,
                                             read_signals)
 from hammerstein.io.presets import load_plant
 from hammerstein.signals.fundamental import reference_fundamental
+from cli_run import run_cli as _cli
 
 T = 5e-5
 N = 12000                          # 0.6 s: the 1 s pattern does not repeat within it
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _reference():

@@ -7,30 +7,20 @@ noise) is computed here and must stay bounded: a best trial judged on an
 actuator that has since changed may not lock the learning.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, gain_factor, judge_trial, lag_problem)
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.compensation.ilc import ConvergenceCondition
 from hammerstein.io.presets import load_plant
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
 T = 5e-5
 COMMON = ["--reference", REF, "--delay", "3", "--history", "hist"]
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _hardware(drive, out, gain=1.04, seed=0, shift=0, bump=0.0):

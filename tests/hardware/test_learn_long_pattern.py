@@ -17,9 +17,6 @@ bundled preset's own prediction of the drive plus a slow drift on x (0.5 µm at
 over the motion's (the band, 152 Hz, passes both), a closed form.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
@@ -27,23 +24,16 @@ import pytest
 
 from hammerstein.cli._learn_checks import (BAND_HARMONICS, band_share, measurement_problem,
                                            prediction_misfit, spectral_centroid)
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.io.presets import load_plant
 from hammerstein.signals import references as refs
+from cli_run import run_cli as _cli
 
 T = 5e-5
 PATTERN = 0.5                     # s: x 18 turns, y 20 turns
 FX, FY, A = 36.0, 40.0, 15.0
 P = int(round(PATTERN / T))       # 10000 samples
 DRIFT = 0.5                       # µm on x, at 1.5 Hz
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _lissajous(n):

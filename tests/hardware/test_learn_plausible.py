@@ -10,27 +10,17 @@ nothing written. A genuine trial on an actuator far from its model (25 %
 stronger, a 3 µm ringing at 700 Hz) is still learnt from.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 
 from hammerstein.cli._learn_checks import MISFIT_LIMIT, flat_runs, prediction_misfit
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import read_signals
 from hammerstein.io.presets import load_plant
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 15, frequency = 100, periods = 12 }'
 REF2 = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _measure(drive, out, gain=1.04, extra=None):

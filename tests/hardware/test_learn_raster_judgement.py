@@ -21,31 +21,21 @@ true error. Expectations, derived independently of the code:
   period does not make a trial worse.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.signals import references as refs
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.io.presets import load_plant
+from cli_run import run_cli as _cli
 
 T = 5e-5
 F = 40.0
 REF = ('{ kind = "raster", outputs = ["x", "y"], size = [40.0, 40.0], lines = 16, '
        f'frequency = {F:g}, slow = "step", smoothing = 0.1 }}')
 COMMON = ["--reference", REF, "--delay", "0"]
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _write(path, y):

@@ -17,30 +17,20 @@ Expectations, derived independently of the code:
   compensator reference: it is learnt through the drive, as before.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.compensation.ilc import HarmonicGains, reference_correction
 from hammerstein.exceptions import CompensatorError
 from hammerstein.io.presets import load_plant
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
 P = 200
 DELTA = np.array([0.4, -0.2])          # µm: the actuator's output above its model's
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _measure(drive, out):

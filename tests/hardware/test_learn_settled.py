@@ -9,27 +9,17 @@ The expected windows are computed here from the header's fade-in and the
 period (0.01 s).
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import drive_fade_samples, read_signals
 from hammerstein.io.presets import load_plant
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
 T = 5e-5
 P = 200
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _measure(drive, out, extra=None, seed=0):

@@ -11,28 +11,18 @@ get better, carry the shaped reference over unchanged, not shape the
 reference again, and say what they judge against.
 """
 
-import contextlib
-import io
 import re
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import read_signals
 from hammerstein.io.presets import load_plant, resolve_preset
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
 RANGE = 5.0
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(map(str, args)))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def _measure(drive, out, seed):

@@ -10,27 +10,17 @@ response to the drive, scaled per output: the gains are then exactly the
 scale, a closed form.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
 from hammerstein.cli._learn_checks import MODEL_GAIN_TOLERANCE, model_gain_note, model_gains
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive import read_signals
 from hammerstein.io.presets import load_plant
+from cli_run import run_cli as _cli
 
 REF = '{ kind = "circle", radius = 15, frequency = 100, periods = 12 }'
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(list(args))
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 @pytest.fixture(scope="module")

@@ -8,17 +8,14 @@ between dropped) and refused by ``evaluate``; a measurement starting at 12.3 s r
 ``learn`` and accepted by ``evaluate``.
 """
 
-import contextlib
-import io
-import subprocess
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.compensation.drive_files import read_signals
 from hammerstein.exceptions import DataFileError
+from cli_run import run_cli as _cli
 
 T = 1e-4            # the model's (the drive's) sampling period in the file-level tests
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 6 }'
@@ -102,13 +99,6 @@ def test_a_slower_measurement_is_refused(tmp_path, step):
                                             rf"{step / T:.4g} sampling periods of 0\.0001 s: "
                                             rf"slower than the drive"):
         read_signals(path, ["x"], sampling_period=T, what="--measured", upsample=False, notes=[])
-
-
-def _cli(*args, cwd):
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.chdir(cwd), contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main([str(a) for a in args])
-    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 @pytest.fixture(scope="module")
