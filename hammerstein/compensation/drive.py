@@ -50,6 +50,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
+from hammerstein.compensation._repeat import REPEAT_SAMPLES, repeat_lag
 from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
 from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
@@ -697,7 +698,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         passes.append(why)
         if progress is not None:
             progress(f"pass {len(passes)} over the {N} samples ({why})")
-        return _compensate(compensator, ref, P or None, 0)[0]
+        ext = _periodic_tail(ref, r, P, getattr(compensator, "preview_samples", 0) or 1)
+        return _compensate(compensator, ext, P or None, 0)[0][:, :N]
 
     def run(fade, lead=None):
         faded = hardware_fade(r, fade, y_rest, lead)
@@ -812,6 +814,33 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                 f"fade's end include it; {fix}")
     res.inputs = out
     return res
+
+
+def _periodic_tail(ref, original, period_samples, preview):
+    """``ref`` (p, N) followed by the periods of ``original`` (p, N) that follow its end, where
+    a correction of ``ref`` early in the record (a start-up corrected, shaped) hid its repeat.
+
+    The compensator continues a periodic record past its end from the record itself
+    (:func:`~hammerstein.compensation._repeat.repeat_lag`: the last 8 samples one or more
+    periods earlier). When ``ref`` ends as ``original`` does but repeats nowhere
+    (the correction reaches back to every lag tested: a 340 Hz circle at 10 kHz, whose
+    samples repeat every 500, corrected over its first 1305 of 1765), the continuation
+    fell back on a quadratic extrapolation and the drive's last sample stepped 2.43 V where
+    the settled drive steps 0.07 V. Returned as it is otherwise.
+    """
+    if not period_samples or ref is original:
+        return ref
+    K = REPEAT_SAMPLES
+    N = ref.shape[1]
+    if N < K or not np.array_equal(ref[:, N - K:], original[:, N - K:]) \
+            or repeat_lag(ref, period_samples, preview) is not None:
+        return ref
+    lag = repeat_lag(original, period_samples, 1)
+    if lag is None:
+        return ref
+    reps = -(-max(preview, 1) // lag)          # whole repeats covering the look-ahead
+    tail = original[:, N - lag + np.arange(reps * lag) % lag]
+    return np.concatenate([ref, tail], axis=1)
 
 
 #: Relative change of the reference below which :func:`_shape_start_up` counts a sample as unshaped.

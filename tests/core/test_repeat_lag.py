@@ -8,11 +8,13 @@ preview sees the true future), where a quadratic extrapolation left the last
 samples chattering.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 
 from hammerstein.compensation._repeat import MAX_PERIODS, kept_samples, repeat_lag
-from hammerstein.compensation.drive import DriveStream, drive_signal
+from hammerstein.compensation.drive import DriveStream, _compensate, _periodic_tail, drive_signal
 from hammerstein.compensation.hammerstein_compensator import (HammersteinCompensator, continuation,
                                                               continuations)
 
@@ -82,3 +84,31 @@ def test_a_cut_record_streams_as_the_longer_one(preset_plant):
     longer = drive_signal(comp, circle(n + 2400), T, 133, fade_samples=400).inputs
     np.testing.assert_allclose(np.concatenate(parts, axis=1), longer[:, :n], rtol=0,
                                atol=1e-9 * np.abs(longer).max())
+
+
+@pytest.mark.parametrize("inversion", ["zpetc", "stable"])
+def test_a_record_corrected_early_is_continued_by_its_own_periods(preset_plant, inversion):
+    # a start-up corrected (or shaped) over most of the record hides every lag repeat_lag
+    # tests (133..4256 samples here): the record as written no longer repeats, but it ends as
+    # the periodic reference does, whose periods follow its end
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics,
+                                  inversion=inversion)
+    n = 4057
+    r = circle(n)
+    ref = r.copy()
+    ref[:, :3700] *= np.sin(np.pi * np.arange(3700) / 7400) ** 2     # from rest, early
+    assert repeat_lag(ref, 133, 1) is None and repeat_lag(r, 133, 1) == 400
+    longer = _compensate(comp, np.concatenate([ref, circle(n + 2400)[:, n:]], axis=1), 133,
+                         0)[0][:, :n]
+    ext = _periodic_tail(ref, r, 133, comp.preview_samples or 1)
+    got = _compensate(comp, ext, 133, 0)[0][:, :n]
+    scale = np.abs(longer).max()
+    np.testing.assert_allclose(got, longer, rtol=0, atol=1e-9 * scale)
+    # continued by the quadratic extrapolation instead, the last samples were off
+    with warnings.catch_warnings():        # the extrapolation leaves the model's range
+        warnings.simplefilter("ignore")
+        old = _compensate(comp, ref, 133, 0)[0]
+    assert np.abs(old - longer)[:, -20:].max() > 1e-3 * scale
+    # nothing to add where the record repeats, or does not end as the reference does
+    assert _periodic_tail(r, r, 133, 5) is r
+    assert _periodic_tail(0.9 * r, r, 133, 5).shape == r.shape
