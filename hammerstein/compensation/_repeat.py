@@ -15,7 +15,7 @@ samples of a 150 Hz circle at 50 kHz on a stage with modes at 2.1 and
 import numpy as np
 
 __all__ = ["MAX_PERIODS", "REPEAT_SAMPLES", "repeat_lag", "kept_samples", "continuation",
-           "continuations"]
+           "continuations", "record_period"]
 
 #: The most periods :func:`repeat_lag` looks back (a frequency f at a sampling rate fs, both
 #: whole hertz, repeats after ``f / gcd(f, fs)`` periods: 3 for 150 Hz at 50 kHz).
@@ -81,6 +81,65 @@ def repeat_lag(record, period_samples, samples):
     same = np.all(np.abs(r[:, idx] - last[:, None, :]) <= 1e-9 * scale, axis=(0, 2))
     hit = np.flatnonzero(same)
     return int(lags[hit[0]]) if hit.size else None
+
+
+#: The most candidate lags :func:`record_period` checks over the whole record.
+MAX_CANDIDATES = 16
+
+
+def record_period(record, min_repeats=2):
+    """The shortest lag [samples] by which a whole record repeats itself, or None.
+
+    A reference file that holds a pattern several times over (a 1 s spiral
+    played four times) is periodic whether or not its period was given. The
+    lags at which the last :data:`REPEAT_SAMPLES` samples recur earlier are
+    the candidates (one vectorised pass per sample of that window); the
+    shortest of the first :data:`MAX_CANDIDATES` at which every sample
+    equals the one that lag earlier (to 1e-9 of the record's largest
+    magnitude) is returned. Held ends (the window constant: a staircase that
+    ends on a hold would match every earlier hold) are not periodic here.
+
+    Parameters
+    ----------
+    record : numpy.ndarray, shape (p, n_samples)
+        [µm].
+    min_repeats : int
+        The pattern must fill the record at least this many times.
+
+    Returns
+    -------
+    int or None
+        The lag L (``record[:, L:] == record[:, :-L]``), at most
+        ``n_samples / min_repeats``; None when there is none.
+
+    Examples
+    --------
+    >>> t = np.arange(1000) / 250.0
+    >>> record_period(np.vstack([np.sin(2 * np.pi * t), t % 1.0]))
+    250
+    >>> record_period(np.vstack([t, t])) is None
+    True
+    """
+    r = np.asarray(record, dtype=float)
+    N = r.shape[1]
+    K = REPEAT_SAMPLES
+    longest = N // max(int(min_repeats), 1)
+    if N < 2 * K or longest < K:
+        return None
+    tol = 1e-9 * max(float(np.max(np.abs(r))), 1.0)
+    last = r[:, N - K:]
+    if np.all(np.abs(last - last[:, :1]) <= tol):
+        return None
+    # window starts i with r[:, i:i+K] == last, for lags N - K - i from K to `longest`
+    starts = np.arange(N - K - longest, N - 2 * K + 1)
+    starts = starts[starts >= 0]
+    hit = np.ones(starts.size, dtype=bool)
+    for k in range(K):
+        hit &= np.all(np.abs(r[:, starts + k] - last[:, k:k + 1]) <= tol, axis=0)
+    for lag in np.sort(N - K - starts[hit])[:MAX_CANDIDATES]:
+        if np.all(np.abs(r[:, lag:] - r[:, :N - lag]) <= tol):
+            return int(lag)
+    return None
 
 
 def continuation(reference, samples, period_samples=None):

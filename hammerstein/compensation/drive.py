@@ -50,7 +50,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
-from hammerstein.compensation._repeat import REPEAT_SAMPLES, repeat_lag
+from hammerstein.compensation._repeat import REPEAT_SAMPLES, record_period, repeat_lag
 from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
 from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
@@ -693,13 +693,16 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
 
     passes = []
+    # the compensator's look-ahead past the end: the given period, else the record's own
+    # (a file holding a pattern several times over), else an extrapolation
+    repeat = P or record_period(r) or 0
 
     def pass_over(ref, why):
         passes.append(why)
         if progress is not None:
             progress(f"pass {len(passes)} over the {N} samples ({why})")
-        ext = _periodic_tail(ref, r, P, getattr(compensator, "preview_samples", 0) or 1)
-        return _compensate(compensator, ext, P or None, 0)[0][:, :N]
+        ext = _periodic_tail(ref, r, repeat, getattr(compensator, "preview_samples", 0) or 1)
+        return _compensate(compensator, ext, repeat or None, 0)[0][:, :N]
 
     def run(fade, lead=None):
         faded = hardware_fade(r, fade, y_rest, lead)

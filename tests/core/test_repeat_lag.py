@@ -13,8 +13,9 @@ import warnings
 import numpy as np
 import pytest
 
-from hammerstein.compensation._repeat import MAX_PERIODS, kept_samples, repeat_lag
-from hammerstein.compensation.drive import DriveStream, _compensate, _periodic_tail, drive_signal
+from hammerstein.compensation._repeat import MAX_PERIODS, kept_samples, record_period, repeat_lag
+from hammerstein.compensation.drive import (DriveStream, _compensate, _periodic_tail, drive_signal,
+                                            hardware_drive)
 from hammerstein.compensation.hammerstein_compensator import (HammersteinCompensator, continuation,
                                                               continuations)
 
@@ -112,3 +113,42 @@ def test_a_record_corrected_early_is_continued_by_its_own_periods(preset_plant, 
     # nothing to add where the record repeats, or does not end as the reference does
     assert _periodic_tail(r, r, 133, 5) is r
     assert _periodic_tail(0.9 * r, r, 133, 5).shape == r.shape
+
+
+def _spiral(n, turns=8.0, R=20.0):
+    """One constant-velocity spiral from the centre out, ``n`` samples [µm]."""
+    s = np.sqrt(np.arange(n) / n)
+    return R * s * np.vstack([np.cos(2 * np.pi * turns * s), np.sin(2 * np.pi * turns * s)])
+
+
+@pytest.mark.parametrize("record, period", [
+    (circle(6000), 400),                                   # 150 Hz at 20 kHz: 3 periods
+    (np.tile(_spiral(1500), 4), 1500),                     # a pattern held four times
+    (np.tile(_spiral(1500), 4)[:, :5000], 1500),           # cut within its fourth
+    (_spiral(6000), None),                                 # once: no repeat
+    (circle(6000, growth=5.0), None),                      # a growing circle
+    (np.tile(_spiral(4000), 1)[:, :4000], None),
+    (np.hstack([np.tile(_spiral(500), 3), np.full((2, 400), 3.0)]), None),   # ends on a hold
+    (np.hstack([np.full((2, 400), 3.0), np.tile(_spiral(500), 3)]), None),   # repeats at its end only
+])
+def test_the_period_of_a_record_is_where_the_whole_record_repeats(record, period):
+    assert record_period(record) == period
+    if period is not None:       # independently: the record equals itself one lag later
+        np.testing.assert_allclose(record[:, period:], record[:, :-period], rtol=0, atol=1e-9)
+
+
+def test_a_file_pattern_held_several_times_ends_without_a_jump(preset_plant):
+    # a pattern file without --period: its end was continued by a quadratic extrapolation,
+    # which a spiral's fast turns near its centre throw volts off (2 V in one sample, the
+    # settled drive 0.23 V); continued by its own repeat, its last steps are the settled ones
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    pattern = _spiral(1500, turns=6.0, R=20.0)
+    ref = np.tile(pattern, 3)
+    drive = hardware_drive(comp, ref, T).inputs
+    steps = np.abs(np.diff(drive, axis=1))
+    settled = steps[:, 1600:-200].max(axis=1)
+    assert np.all(steps[:, -200:].max(axis=1) <= settled * (1 + 1e-6))
+    # the same drive as for the record continued by a fourth repeat, cut
+    longer = hardware_drive(comp, np.tile(pattern, 4), T).inputs[:, :ref.shape[1]]
+    np.testing.assert_allclose(drive[:, :-1], longer[:, :ref.shape[1] - 1], rtol=0,
+                               atol=1e-9 * np.abs(longer).max())
