@@ -50,7 +50,8 @@ from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import (apply_amplifier, drive_fade_samples, hardware_fade,
                                            read_signals)
-from hammerstein.compensation.drive_files import (drive_input_names, drive_rest_lead, drive_rest_output,
+from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_names, drive_rest_lead,
+                                                  drive_rest_output,
                                                   head_lines, optional_columns)
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
@@ -163,7 +164,7 @@ def _reference_outputs(args):
 
 
 #: columns of a measured file that are no output of the stage: what a drive file aims at
-_AIMED = ("_shaped", "_learnt", "_pred", "_predicted")
+_AIMED = AIMED_SUFFIXES
 
 
 def _measured_outputs(args):

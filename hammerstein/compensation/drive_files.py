@@ -25,7 +25,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
-__all__ = ["DRIVE_MARK", "RATE_TOL", "read_signals", "block_mean", "signals_csv", "drive_fade_samples", "drive_rest_lead",
+__all__ = ["DRIVE_MARK", "AIMED_SUFFIXES", "RATE_TOL", "read_signals", "block_mean", "signals_csv", "drive_fade_samples", "drive_rest_lead",
            "drive_rest_output",
            "rest_lead_text", "fade_weight",
            "drive_kind", "optional_columns", "learnt_names", "followed_reference", "shaped_target"]
@@ -36,6 +36,10 @@ DRIVE_MARK = "# hammerstein"
 
 #: Suffix of a ``learn`` drive's columns of the reference its drive was computed for.
 LEARNT_SUFFIX = "_learnt"
+
+#: Suffixes of a drive file's columns of an output it aims at or predicts (never an input):
+#: ``<output>_shaped``, ``<output>_learnt``, ``<output>_predicted`` (``_pred`` in older files).
+AIMED_SUFFIXES = ("_shaped", LEARNT_SUFFIX, "_pred", "_predicted")
 
 #: Relative difference of a file's nominal period from the sampling period within which it is
 #: taken as sampled at that period (a jittered logger's), not at another rate.
@@ -575,8 +579,9 @@ def drive_input_names(path, outputs):
     """The input columns of a drive file: every column but ``t`` and the outputs' own.
 
     A drive ``compensate`` or ``learn`` wrote holds ``t``, one column per input
-    [V], and columns of the outputs it aims at (``<output>_shaped``,
-    ``<output>_learnt``, ``<output>_pred``).
+    [V], and columns of the outputs it aims at or predicts (``<output>_shaped``,
+    ``<output>_learnt``, ``<output>_predicted``; :data:`AIMED_SUFFIXES`), left
+    out for every output, named in ``outputs`` or not.
 
     Parameters
     ----------
@@ -596,8 +601,11 @@ def drive_input_names(path, outputs):
         The file cannot be read.
     """
     columns = [c for c in _header_columns(path) if c]
+    # an output's aimed or predicted column is none of the inputs, whether or not that output
+    # is among ``outputs`` (a circle judged on x, y of a drive that also predicts a held z)
     return [c for c in columns if c != "t" and c not in outputs
-            and not any(c.startswith(f"{o}_") for o in outputs)]
+            and not any(c.startswith(f"{o}_") for o in outputs)
+            and not c.endswith(AIMED_SUFFIXES)]
 
 
 def shaped_target(path, outputs, target, sampling_period=None):

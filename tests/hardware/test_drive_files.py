@@ -20,6 +20,7 @@ from hammerstein.compensation.compensators import (InverseMultiplicativeCompensa
 from hammerstein.cli.main import main
 from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, DriveStream, drive_fade_samples,
                                             drive_signal, hardware_drive, hardware_fade, read_signals)
+from hammerstein.compensation.drive_files import drive_input_names
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.runner import run_scenario
@@ -233,3 +234,14 @@ def test_a_signal_file_too_large_is_named_once(tmp_path, monkeypatch):
         read_signals("big.csv", ["x"], what="--reference")
     assert str(err.value).startswith("--reference: big.csv: ")
     assert str(err.value).count("big.csv") == 1, str(err.value)
+
+
+@pytest.mark.parametrize("outputs", [["x", "y", "z"], ["x", "y"], []])
+def test_the_inputs_of_a_drive_file_are_never_its_aimed_or_predicted_columns(tmp_path, outputs):
+    # a three-output drive judged on x, y: its z_predicted and z_shaped are no inputs (they
+    # were reported as one, "z_predicted peak_input 0.116 V")
+    path = tmp_path / "drive.csv"
+    path.write_text("# hammerstein compensate drive: t [s]; ux, uy, uz [V]\n"
+                    "t,ux,uy,uz,x_shaped,y_shaped,z_shaped,x_predicted,y_predicted,"
+                    "z_predicted\n0,0,0,0,0,0,0,0,0,0\n")
+    assert drive_input_names(path, outputs) == ["ux", "uy", "uz"]
