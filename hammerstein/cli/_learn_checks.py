@@ -328,6 +328,12 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
 #: day before 0.997-1.004
 MODEL_GAIN_TOLERANCE = 0.03
 
+#: An output whose prediction moves less than this share of the most-moving output's (RMS about
+#: its mean) has no gain to read: an output held while the others move (a tube's z held at 0
+#: under a circle on x, y; predicted to 1e-9 µm, it read -1.348e9 and "the actuator has
+#: changed")
+MOTION_SHARE = 0.01
+
 
 #: the gain against the model is taken below this share of the first bending mode, where
 #: the mode's gain hardly depends on its identified frequency and damping (a 10 um circle at
@@ -403,7 +409,8 @@ def model_gains(predicted, measured, lag=0, start=0, band=None):
     Returns
     -------
     numpy.ndarray, shape (p,)
-        [-]; NaN for an output whose prediction does not move.
+        [-]; NaN for an output whose prediction does not move, or moves less
+        than :data:`MOTION_SHARE` of the most-moving output's (held).
 
     Examples
     --------
@@ -411,14 +418,17 @@ def model_gains(predicted, measured, lag=0, start=0, band=None):
     >>> p = np.vstack([np.sin(2 * np.pi * 5 * t), np.cos(2 * np.pi * 5 * t)])
     >>> np.round(model_gains(p, np.array([[1.04], [0.98]]) * p + 0.3), 6).tolist()
     [1.04, 0.98]
+    >>> held = np.vstack([p[0], 1e-9 * p[1]])         # y held at 0, measured moving
+    >>> np.round(model_gains(held, p), 6).tolist()
+    [1.0, nan]
     """
     p, m = _compared(predicted, measured, lag, start, band)
     p = p - p.mean(axis=1, keepdims=True)
     m = m - m.mean(axis=1, keepdims=True)
     power = np.sum(p * p, axis=1)
+    moving = (power > 0) & (power >= MOTION_SHARE ** 2 * np.max(power, initial=0.0))
     with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(power > 0, np.sum(p * m, axis=1) / np.where(power > 0, power, 1.0),
-                        np.nan)
+        return np.where(moving, np.sum(p * m, axis=1) / np.where(moving, power, 1.0), np.nan)
 
 
 def model_gain_note(gains, names):

@@ -364,7 +364,7 @@ def _handle(args):
                              ref.signal[:, :N]) if args.model else None
         if gains is not None:
             rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
-                     for n, g in zip(outs, gains)]
+                     for n, g in zip(outs, gains) if np.isfinite(g)]     # held outputs: none
             drift = model_gain_note(gains, outs)
             if drift:
                 rate_notes.append(drift)

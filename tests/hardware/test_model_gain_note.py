@@ -73,3 +73,29 @@ def test_the_gain_is_the_slope_about_the_means_and_the_note_its_tolerance():
     np.testing.assert_allclose(model_gains(p, late, lag=3, start=10), [1.1, 0.9], rtol=1e-9)
     assert model_gain_note([1 + MODEL_GAIN_TOLERANCE * 0.99, 1.0], ["x", "y"]) is None
     assert "x 1.031" in model_gain_note([1 + MODEL_GAIN_TOLERANCE * 1.03, 1.0], ["x", "y"])
+
+
+def test_an_output_held_while_the_others_move_has_no_gain(tmp_path):
+    # a line scan on x with y held at 0; the stage's y moves a little with x (a tube's
+    # bowing, unmodelled): y's "gain" was that motion over a prediction of ~1e-9 µm
+    # (-1.3e9 on a user's tube) and the note said the actuator had changed
+    ref = '{ kind = "sine", output = "x", amplitude = 15, frequency = 100, periods = 12 }'
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u.csv",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    t, u, _ = read_signals(tmp_path / "u.csv", ["ux", "uy"])
+    y, _ = load_plant("rakotondrabe-2dof").simulate(u)
+    assert np.std(y[1]) < 2e-3 * np.std(y[0])                  # held by the compensator
+    bow = 0.004 * y[0] ** 2                                      # 0.9 µm at 15 µm
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1] + bow}).to_csv(tmp_path / "m.csv", index=False)
+    res = _cli("evaluate", "--model", "rakotondrabe-2dof", "--reference", ref, "--drive",
+               "u.csv", "--measured", "m.csv", "--out", "ev", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
+    g = m[m.metric == "gain_against_model"].set_index("channel")["value"]
+    assert list(g.index) == ["x"] and abs(g["x"] - 1.0) < 1e-6
+    assert "gain against the model's prediction" not in res.stderr
+    # the slope itself: NaN for the held output, whatever the measurement does there
+    p = np.vstack([y[0], y[1]])
+    gains = model_gains(p, np.vstack([y[0], y[1] + bow]))
+    assert gains[0] == pytest.approx(1.0, abs=1e-9) and np.isnan(gains[1])
