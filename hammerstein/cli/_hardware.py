@@ -43,7 +43,9 @@ def end_note(inputs, sampling_period, names, amplifier=None):
     A drive ends where its reference ends (a circle mid-turn): stopping the
     DAC there is a step. The line gives the last voltages and the shortest
     ramp to rest that steps no faster than the drive itself (its largest
-    slew, or the amplifier's slew rate when lower).
+    slew, or the amplifier's slew rate when lower); a drive whose last
+    voltages are the rest voltages (0 V, or a unipolar range's end) is said
+    to end at rest.
 
     Parameters
     ----------
@@ -69,6 +71,9 @@ def end_note(inputs, sampling_period, names, amplifier=None):
         slew = np.minimum(slew, np.where(np.isfinite(rates), rates, np.inf))
     ramp = float(np.max(np.abs(last - rest) / np.maximum(slew, 1e-12)))
     at = ", ".join(f"{n} {v:.4g} V" for n, v in zip(names, last))
+    if np.all(np.abs(last - rest) <= 1e-9 * np.maximum(1.0, np.abs(rest))):
+        # a unipolar stage's drive ending on 0 V: already where the amplifier rests
+        return f"ends at {at}, every input at rest: nothing to ramp"
     return (f"ends at {at} (the reference's last sample, not at rest): hold it, then ramp every "
             f"input to rest in {max(ramp, sampling_period):.3g} s or more (no faster than the "
             f"drive's own largest slew), never a step")

@@ -23,6 +23,7 @@ import pandas as pd
 import pytest
 import tomllib
 
+from hammerstein.cli._hardware import end_note
 from hammerstein.cli.main import main
 from hammerstein.models.amplifier import (amplifier_from_table, records_amplifier_table,
                                          records_hold_steps)
@@ -672,3 +673,18 @@ def test_a_file_circle_beyond_the_reach_is_shaped_as_with_its_period(tmp_path):
         sizes[name] = np.hypot(last["x_shaped"], last["y_shaped"]).mean()
     assert sizes["given"] > 20.0                              # the reach: 22-25 µm
     assert abs(sizes["found"] - sizes["given"]) <= 0.05 * sizes["given"]
+
+
+@pytest.mark.parametrize("last, low, at_rest", [([0.0], None, True), ([0.0, 150.0], None, False),
+                                                ([5.0], 5.0, True), ([1e-3], None, False),
+                                                ([0.0], 5.0, False)])
+def test_a_drive_that_ends_on_the_rest_voltages_is_said_to_end_at_rest(last, low, at_rest):
+    # a unipolar stack's staircase drive ending on 0 V read "ends at u 0 V (the reference's
+    # last sample, not at rest): hold it, then ramp every input to rest"
+    names = [f"u{i}" for i in range(len(last))]
+    u = np.linspace(np.full(len(last), 40.0), last, 50).T
+    amp = None if low is None else amplifier_from_table(
+        {n: {"range": [low, 150.0]} for n in names}, names)     # rests at 5 V, its range's end
+    line = end_note(u, T, names, amp)
+    assert ("every input at rest" in line) == at_rest
+    assert ("ramp every input to rest" in line) == (not at_rest)
