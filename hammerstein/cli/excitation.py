@@ -277,7 +277,8 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
            f"moves at three times the sine's largest slew)" if len(reversals) else "")
         + f" | {dur['hysteresis']:g} s |",
         f"| {', '.join(by_kind['multisine'])} | linear dynamics (estimation) | random-phase "
-        f"multisine{reach} at 80 % of the amplitude | {dur['multisine']:g} s |",
+        f"multisine{reach} at {_multisine_share(records)} of the amplitude | "
+        f"{dur['multisine']:g} s |",
         f"| {', '.join(by_kind['multisine-validation'])} | linear dynamics (held out: chooses "
         f"the order) | the same band, other phases | {dur['multisine-validation']:g} s |",
         f"| {', '.join(by_kind['creep'])} | creep | staircase "
@@ -421,6 +422,17 @@ def _band_sentences(band):
                      f"unless your sensor low-pass filters them (an anti-alias filter), and "
                      f"bending modes close to it are sampled at few samples per period.")
     return lines
+
+
+def _multisine_share(records):
+    """The multisines' amplitude as the README's table gives it: "80 %", or, scaled down to
+    a slew rate, the shares they were scaled to ("31.8 %", "27.2-31.8 %: scaled down")."""
+    shares = sorted({round(80.0 * r.scale, 1) for r in records
+                     if r.kind.startswith("multisine")})
+    if not shares or shares == [80.0]:
+        return "80 %"
+    text = f"{shares[0]:g}" if len(shares) == 1 else f"{shares[0]:g}-{shares[-1]:g}"
+    return f"{text} % (scaled down to the slew rate, below)"
 
 
 def _slew_lines(records, names, T, band=None):

@@ -5,6 +5,8 @@ two 1 Hz periods each; multisine 10 Hz to half Nyquist at 80 %; 2 s steps),
 checked on the written CSV files by independent means (FFT, run lengths).
 """
 
+import re
+
 import numpy as np
 import pytest
 
@@ -250,6 +252,16 @@ def test_a_slew_rate_keeps_every_record_within_it(tmp_path, capsys):
             assert abs(one[0]) <= S * T
     readme = (out / "README.md").read_text()
     assert "scaled down to stay within the slew rate" in readme and "--outputs x,y,z" in readme
+    # the table gives the amplitude the multisines were played at (80 % of the amplitude times
+    # each one's scale), not the 80 % they had before the slew rate scaled them down
+    scales = {float(m) for m in re.findall(r"multisine-\w+(?:-validation)? to ([\d.]+) %", readme)}
+    row = next(ln for ln in readme.splitlines() if ln.startswith("| multisine-ux.csv"))
+    shares = [float(v) for v in re.findall(r"at ([\d.]+)(?:-([\d.]+))? %", row)[0] if v]
+    assert scales and np.isclose(min(shares), 0.8 * min(scales), atol=0.06)
+    assert np.isclose(max(shares), 0.8 * max(scales), atol=0.06) and "at 80 %" not in row
+    fast_row = next(ln for ln in (reference / "README.md").read_text().splitlines()
+                    if ln.startswith("| multisine-ux.csv"))
+    assert "at 80 % of the amplitude" in fast_row
 
 
 def test_a_slew_rate_narrows_the_default_band_before_the_amplitude():
