@@ -185,6 +185,62 @@ def dynamics_report_lines(summary, output_names, input_names):
     return lines
 
 
+def modes_above_band_warning(summary):
+    """A warning when the identified dynamics put a bending mode above the excited band.
+
+    The multisines measure G over ``band_hz`` only; a resonant mode (damping
+    below :data:`~hammerstein.compensation.shaping.RESONANT_DAMPING`) fitted
+    above the band's top is extrapolated from the band. On a clean linear
+    response that extrapolation finds the modes (1647 and 1864 Hz from a band
+    to 230 Hz, the true 1650 and 1850 Hz); behind a hysteresis model that
+    misses the multisines' small loops it invents them at the band's edge (a
+    stack whose slew rate narrowed the multisines to 242 Hz: a mode at 263 Hz,
+    damping 0.18, where its only mode is at 1.2 kHz, damping 0.05).
+    ``compensate`` inverts them and shapes references below the first.
+
+    Parameters
+    ----------
+    summary : dict
+        ``RecordDynamics.summary``: ``band_hz`` ([low, high] [Hz]) and ``modes``
+        (each ``frequency_hz`` [Hz], ``damping_ratio`` [-]).
+
+    Returns
+    -------
+    str or None
+        One line without the ``warning:`` prefix; None when every resonant mode
+        lies within the band.
+
+    Examples
+    --------
+    >>> s = {"band_hz": [4.5, 242.5], "modes": [{"frequency_hz": 6.9, "damping_ratio": 1.0},
+    ...      {"frequency_hz": 263.0, "damping_ratio": 0.18}]}
+    >>> modes_above_band_warning(s)[:58]
+    'the identified dynamics put a bending mode at 263 Hz (damp'
+    >>> modes_above_band_warning({"band_hz": [5, 5000], "modes": s["modes"]}) is None
+    True
+    """
+    band = summary.get("band_hz") if summary else None
+    if not band or len(band) != 2:
+        return None
+    top = float(band[1])
+    above = [m for m in summary.get("modes", [])
+             if m["damping_ratio"] < RESONANT_DAMPING and m["frequency_hz"] > top]
+    if not above:
+        return None
+    modes = ", ".join(f"{m['frequency_hz']:.4g} Hz (damping {m['damping_ratio']:.2g})"
+                      for m in above)
+    one = len(above) == 1
+    it = "it" if one else "them"
+    return (f"the identified dynamics put {'a bending mode' if one else 'bending modes'} at "
+            f"{modes} above the band the multisines excited (to {top:.4g} Hz): extrapolated "
+            f"from the band, not measured (right for a clean linear response; a hysteresis "
+            f"model that misses the multisines' small loops leaves the fit a residual it puts "
+            f"in modes at the band's edge); compensate inverts {it} and shapes references below "
+            f"the first. To measure {it}, record multisines through the actuator's first mode "
+            f"(hammerstein excitation --f-max, at a lower amplitude where a slew rate narrowed "
+            f"the band), or give --order to keep fewer modes")
+
+
 def dynamics_metrics_rows(summary, output_names, input_names):
     """Rows ``(case, channel, metric, value, unit)`` of identified dynamics.
 

@@ -35,7 +35,8 @@ from hammerstein.cli._common import number_type, out_file_problem, print_err
 from hammerstein.cli._output import tty_progress
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-    cut_note, level_metrics_rows, level_report_lines, metrics_rows, unit_warnings)
+    cut_note, level_metrics_rows, level_report_lines, metrics_rows, modes_above_band_warning,
+    unit_warnings)
 from hammerstein.models.amplifier import records_amplifier_table, records_hold_steps
 from hammerstein.core.files import (FileLimitError, all_or_nothing, file_limit_problem,
                                     guard_inputs, png_provenance, provenance_line,
@@ -765,6 +766,9 @@ def _report(args, fit, records, dyn=None, creep=None):
         poor = dynamics_fit_warning(dyn.summary, dyn.conditions, ou)
         if poor:
             print_err(f"warning: {poor}")
+        above = modes_above_band_warning(dyn.summary)
+        if above:
+            print_err(f"warning: {above}")
         gain = static_gain_warning(dyn.summary, list(model.output_names),
                                    list(model.input_names))
         if gain:

@@ -734,7 +734,10 @@ def static_gain_warning(summary, output_names, input_names):
         what = (f"a static cross-coupling of {dev[l, k]:.3g} from {input_names[k]} to "
                 f"{output_names[l]} that the hysteresis model does not have")
     return (f"the multisines show {what} than the hysteresis records (G(0) unconstrained "
-            f"{G[l, k]:.4g}, more than {100 * STATIC_GAIN_WARN:g} % from the identity): were the "
-            f"records made in one session, on an unchanged actuator (temperature, load)? "
-            f"identify imposes G(0) = I, the hysteresis records' gain; record them all again "
-            f"together (hammerstein excitation) when the actuator has changed")
+            f"{G[l, k]:.4g}, more than {100 * STATIC_GAIN_WARN:g} % from the identity): either "
+            f"the actuator changed between the records (temperature, load, another session: "
+            f"record them all again together, hammerstein excitation), or, on records made "
+            f"together, the hysteresis model draws the multisines' many small reversals with "
+            f"another gain than the actuator's (the level errors above show how it draws small "
+            f"loops); identify imposes G(0) = I, the hysteresis records' gain, and `learn` "
+            f"corrects what that leaves on a repeating reference")

@@ -145,3 +145,23 @@ def test_a_poor_fit_of_noisy_slew_scaled_records_names_the_noise_and_the_mode_no
     assert "-13.5 %" in line and "--slew-rate" not in line
     assert "caps the held-out fit of any model" in line and "--periods" in line
     assert "1650 Hz, sits at 0.66 of the Nyquist frequency 2500 Hz" in line
+
+
+@pytest.mark.parametrize("f_max, warned", [(230.0, True), (2400.0, False)])
+def test_modes_above_the_excited_band_are_named(f_max, warned):
+    """Multisines narrowed to 230 Hz: the modes at 1650 and 1850 Hz are extrapolated from the
+    band (here rightly, the response being linear and clean) and identify says so; over the
+    full band they are measured and nothing is said."""
+    from hammerstein.cli._identify_report import modes_above_band_warning
+    ins, outs = lowrate_records(f_max=f_max, amplitude=12.0)
+    d = _identify(ins, outs)
+    modes = d.candidates_[list(d.orders_).index(d.order_)]["modes"]
+    found = sorted(f for f, z in modes if z < 0.5)
+    np.testing.assert_allclose(found, [1650.0, 1850.0], rtol=0.02)
+    line = modes_above_band_warning({"band_hz": list(d.band_hz_),
+                                     "modes": [{"frequency_hz": f, "damping_ratio": z}
+                                               for f, z in modes]})
+    assert (line is not None) == warned
+    if warned:
+        assert f"modes at {found[0]:.4g} Hz (damping 0.03), {found[1]:.4g} Hz" in line
+        assert f"to {d.band_hz_[1]:.4g} Hz" in line and 225 < d.band_hz_[1] < 240
