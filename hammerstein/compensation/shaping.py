@@ -27,7 +27,10 @@ compensator again on the shaped reference:
    of that mode, doubled while it helps), blended in and out by a raised
    cosine; a step becomes an S-curve, a corner a smooth turn-around.
    The window grows only while the drive's excess over the limits falls
-   by at least a tenth. The first half of the samples at rest before the
+   by at least a tenth; an excess whose peak a doubled window does not
+   halve (a jump of the drive) no longer counts and is left to the slew
+   limit (:mod:`hammerstein.compensation.shaping_holds`, which also names
+   holds shorter than the window). The first half of the samples at rest before the
    reference starts moving stays at rest (the drive still starts at rest).
 2. **range**: what still leaves the range (the reference asks for more
    displacement than the amplifier's range reaches) is replaced, around
@@ -55,6 +58,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hammerstein.compensation.shaping_holds import excess_left_to_limiter, hold_note
 from hammerstein.signals.fundamental import reference_fundamental
 
 __all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
@@ -807,30 +811,38 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     if not np.any(excess > 0) or N < 3:
         best.notes = shaping_notes(r, best.reference, T, names,
                                    f": {'; '.join(reasons)}" if reasons else "")
+        best.notes += hold_note(r, best.reference, best.window_samples, T, names, lead)
         return best
-    best_total = float(excess.sum())
     mask = excess > 0
+    e_best = excess
+    left = np.zeros(N, dtype=bool)      # excess no longer window removes: the slew limit's
     L = L0
-    limited_window = 0
+    limited_window, doublings = 0, 0
     for _ in range(MAX_DOUBLINGS + 1):
         w = _blend_weights(mask, L) * guard
         trial = _periodic_end(base + w * (hann_average(base, L) - base), repeat, lead)
         u_t = np.asarray(run(trial), dtype=float)
         e_t = limit_excess(amplifier, u_t, T)
-        total = float(e_t.sum())
-        if total > (1 - MIN_GAIN) * best_total:
+        if limited_window:              # a doubling: what it does not lower is not its to remove
+            left |= excess_left_to_limiter(e_best, e_t, L)
+        total, best_total = float(e_t[~left].sum()), float(e_best[~left].sum())
+        if total > (1 - MIN_GAIN) * best_total or (limited_window and best_total == 0):
             break
-        best, best_total, limited_window = ShapedReference(trial, u_t, L), total, L
+        best, e_best, limited_window = ShapedReference(trial, u_t, L), e_t, L
+        doublings += L > L0
         mask = mask | (e_t > 0)
         if total == 0 or 2 * L > cap:
             break
         L *= 2
     notes_why = []
     if limited_window:
-        notes_why.append(f"smoothed over {limited_window * T * 1e3:.3g} ms"
-                         + (f" (one period of the {first_mode:.4g} Hz first mode"
-                            f"{', doubled' if limited_window > one_period else ''})"
-                            if first_mode and limited_window >= one_period else ""))
+        notes_why.append(f"smoothed over {limited_window * T * 1e3:.3g} ms" + _window_words(
+            limited_window, one_period, first_mode, doublings))
+        stuck = left & (e_best > 0)
+        if np.any(stuck):
+            notes_why.append(f"{float(e_best[stuck].sum()):.3g} V of it at "
+                             f"{time_intervals(stuck, T)} left to the slew limit (a window "
+                             f"twice as long did not halve it)")
     e_now = limit_excess(amplifier, best.inputs, T)
     if predict is not None and np.any(e_now > 0):
         left = _limits_left(amplifier, best.inputs, T)
@@ -859,7 +871,22 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
         reasons.append(f"the drive left the limits measured on the records ({'; '.join(notes_why)})")
     best.notes = shaping_notes(r, best.reference, T, names,
                                f": {'; '.join(reasons)}" if reasons else "")
+    best.notes += hold_note(r, best.reference, max(best.window_samples, L0 if band else 0), T,
+                            names, lead)
     return best
+
+
+def _window_words(window, one_period, first_mode, doublings):
+    """`` (4 periods of the 258.5 Hz first mode: one period, doubled twice ...)``: how a
+    smoothing window of ``window`` samples came about, or empty without a first mode."""
+    if not first_mode or window < one_period:
+        return ""
+    if not doublings:
+        return f" (one period of the {first_mode:.4g} Hz first mode)"
+    times = {1: "once", 2: "twice"}.get(doublings, f"{doublings} times")
+    return (f" ({window / one_period:.3g} periods of the {first_mode:.4g} Hz first mode: one "
+            f"period, doubled {times} while that lowered the drive's excess over the limits by "
+            f"at least a tenth)")
 
 
 def _repeats(r, period_samples, lead):

@@ -184,3 +184,65 @@ def test_a_circle_at_or_above_the_first_mode_keeps_its_size():
     assert np.min(delta[k == 0]) > 0.5                          # the corners rounded
     assert np.max(delta[k == P // 4]) <= 1e-9                   # a ramp's middle: its own average
     assert "half the reference's period, less than one period of the mode" in s.notes[0]
+
+
+T_STAIR, HOLD, MODE = 1e-4, 500, 258.5          # s, samples (50 ms), Hz: a user's 10 µm staircase
+STAIR = np.r_[0.0, np.arange(10.0, 81.0, 10.0), np.arange(70.0, 9.0, -10.0)]
+
+
+def _stair_amp():
+    return amplifier_from_table({"range": [0.0, 150.0], "slew_rate": 15000.0}, ["u"])
+
+
+def _jumping_drive(x):
+    """A drive that jumps where the reference enters the model's reach (5 µm): 4 V plus a share
+    of the reference's speed there. A wider window lowers the speed's share only, never the
+    4 V: the jump's excess over one sample's 1.5 V slew step never halves."""
+    x = np.asarray(x)[0]
+    u = (1.0 + 0.008 * x) * x + (4.0 + 0.004 * np.abs(np.gradient(x)) / T_STAIR) * (x > 5.0)
+    return u[None, :]
+
+
+def test_a_staircase_is_not_smoothed_longer_than_its_holds_for_a_jump_no_window_removes():
+    """Before, every doubling that lowered the jump's excess by a tenth was kept: the window grew
+    to 1248 samples (125 ms, 32 periods of the mode, named "one period ..., doubled") against
+    50 ms holds, and the shaped reference missed every level by 8.5 µm. A level is reached where
+    the window no longer reaches either move: for a window no longer than half the hold, on at
+    least a quarter of the hold."""
+    r = np.repeat(STAIR, HOLD)[None, :]
+    s = shape_reference(_jumping_drive, r, _stair_amp(), T_STAIR, first_mode=MODE)
+    assert 0 < s.window_samples <= HOLD // 2
+    for k in range(1, STAIR.size):
+        hold = s.reference[0, k * HOLD:(k + 1) * HOLD]
+        assert np.sum(np.abs(hold - STAIR[k]) < 1e-9 * 80) >= HOLD // 4, k
+    text = s.notes[0]
+    assert f"smoothed over {s.window_samples * T_STAIR * 1e3:.3g} ms" in text
+    assert "left to the slew limit" in text and "0.0500-0.0500 s" in text   # the jump, named
+    assert "doubled" not in text
+
+
+def test_a_doubled_window_names_its_periods_of_the_mode():
+    """Steps the slew rate alone limits: a 40 µm step at 3.6 V/µm is 144 V, and a Hann S-curve of
+    L samples steps at most about 2 / L of it per sample, so 1.5 V per sample needs L >= 192:
+    the 39-sample period of the 258.5 Hz mode doubled three times (312 samples, 8 periods)."""
+    r = np.repeat([[0.0, 40.0, 0.0]], 2000, axis=1)
+    s = shape_reference(lambda x: 3.6 * np.asarray(x), r, _stair_amp(), T_STAIR, first_mode=MODE)
+    assert s.window_samples == 312
+    assert float(limit_excess(_stair_amp(), s.inputs, T_STAIR).max()) == 0.0
+    assert ("smoothed over 31.2 ms (8 periods of the 258.5 Hz first mode: one period, doubled 3 "
+            "times") in s.notes[0]
+
+
+def test_holds_shorter_than_the_smoothing_are_named():
+    """3 ms holds under a 3.9 ms window (one period of the 258.5 Hz mode): the shaped reference
+    cannot reach their levels, and the note says so with both durations."""
+    levels = np.r_[0.0, 10.0, 20.0, 30.0, 20.0, 10.0]
+    r = np.r_[np.zeros(200), np.repeat(levels[1:], 30), np.full(200, 10.0)][None, :]
+    s = shape_reference(lambda x: 1.0 * np.asarray(x), r, _stair_amp(), T_STAIR, first_mode=MODE)
+    hold = [n for n in s.notes if "smoothing window" in n]
+    assert len(hold) == 1
+    assert "holds of 3 ms" in hold[0] and "3.9 ms smoothing window" in hold[0]
+    miss = float(hold[0].split("up to ")[1].split(" µm")[0])
+    ends = 200 + 30 * np.arange(1, 5) - 1                          # the last sample of each hold
+    assert miss == pytest.approx(float(np.max(np.abs(s.reference[0, ends] - r[0, ends]))), rel=1e-2)
+    assert miss > 1.0
