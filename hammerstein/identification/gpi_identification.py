@@ -101,8 +101,9 @@ much as the full one. A 15 µm circle on a ±55 µm actuator lives in loops
 about that small. See ``GeneralizedPIIdentifier``'s ``level_weighting`` for
 what it changed on the outside actuators.
 
-A cross-coupling whose whole contribution is below twice the noise of its
-output (:func:`hammerstein.identification.record_identification.noise_level`) is
+A cross-coupling that does not lower the held-out error of its output by
+more than the noise can explain
+(:func:`hammerstein.identification.record_identification.weak_couplings`) is
 dropped by ``components="auto"``; every other one stays.
 
 Length: the identifier's notes keep the measurements behind each default (plays,
@@ -845,9 +846,9 @@ class GeneralizedPIIdentifier:
                                      c.reversible, c.rest).simulate(u)[0]
             return c * u
 
-        # drop cross-couplings below the noise (never one above it)
+        # drop the cross-couplings the held-out samples do not support
         absent, notes = weak_couplings(records, auto, model.components, contribution,
-                                       in_names, out_names)
+                                       in_names, out_names, splits, pred)
         for l, k in absent:
             kinds[l][k] = "none"
         if absent:

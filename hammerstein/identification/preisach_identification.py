@@ -63,9 +63,9 @@ model is simulated on the scored samples and the input reversals only (the
 inputs are monotone in between, so the predictions there are the whole
 record's, bit for bit). Components may be
 left out (``components``); a cross-coupling whose whole contribution is
-below twice the noise of its output (estimated from the record by
-:func:`hammerstein.identification.record_identification.noise_level`) is dropped by
-``components="auto"``; every other one stays.
+that does not lower the held-out error of its output by more than the noise
+can explain (:func:`hammerstein.identification.record_identification.weak_couplings`)
+is dropped by ``components="auto"``; every other one stays.
 
 References
 ----------
@@ -608,9 +608,10 @@ class PreisachIdentifier:
             notes.append(f"preisach smoothing auto: lambda {lam:g} (" + ", ".join(
                 f"{k:g}: {v:.3g} %" for k, v in scores.items())
                 + f" mean {'held-out' if held else 'training'} RMS of the output range)")
-        # drop cross-couplings below the noise (never one above it)
+        # drop the cross-couplings the held-out samples do not support
+        pred = self._predict(model, records)
         absent, more = weak_couplings(records, auto, grid, lambda c, u: c.simulate(u)[0],
-                                      in_names, out_names)
+                                      in_names, out_names, splits, pred)
         notes += more
         for l, k in absent:
             kinds[l][k] = "none"
@@ -622,7 +623,7 @@ class PreisachIdentifier:
                 grid.append(comps)
                 offs.append(off)
             model = self._model(grid, offs, in_names, out_names)
-        pred = self._predict(model, records)
+            pred = self._predict(model, records)
         train = _window_metrics(records, splits, pred, "train")
         val = _window_metrics(records, splits, pred, "held_out") if held else None
         structure = [["preisach" if isinstance(c, PreisachModel) else

@@ -343,3 +343,46 @@ def test_dynamics_option_writes_a_preset_or_says_why_not(tmp_path, capsys):
                               "--sampling-period", "1e-4", "--out", tmp_path / "p.toml",
                               "--dynamics", "--dynamics-records", data)
         assert status == 1 and "hammerstein.models.lti" in err and not (tmp_path / "p.toml").exists()
+
+
+def test_weak_couplings_keeps_by_held_out_error_and_warns_about_a_dropped_loop():
+    """weak_couplings on hand-made records: a 0.05 RMS coupling on 0.03 noise is kept on
+    its held-out samples; with nothing held out it is judged against twice the noise and
+    dropped, with a warning naming the loop it leaves (peak to peak 0.14, 4.7 x the noise)."""
+    from types import SimpleNamespace
+    from hammerstein.identification.record_identification import weak_couplings
+    rng = np.random.default_rng(1)
+    n = 40000
+    t = np.arange(n)
+    u = np.vstack([np.zeros(n), 10 * np.sin(2 * np.pi * t / 2000)])
+    c = u[1] ** 2 * (0.05 / np.std(u[1] ** 2))  # RMS 0.05, peak to peak 0.05 / sqrt(1/8)
+    y = np.vstack([0.5 + c + 0.03 * rng.standard_normal(n), np.zeros(n)])
+    rec = SimpleNamespace(u=u, y=y)
+    held = t >= 3 * n // 4
+    split = SimpleNamespace(train=~held, held_out=held, excitation=1)
+    auto = np.ones((2, 2), dtype=bool)
+    comps = [["direct", "square"], [None, "direct"]]
+
+    def contribution(comp, v):
+        return v ** 2 * (0.05 / np.std(u[1] ** 2))
+
+    pred = np.vstack([0.5 + c, np.zeros(n)])
+    absent, notes = weak_couplings([rec], auto, comps, contribution, ["ux", "uy"], ["x", "y"],
+                                   [split], [pred])
+    assert absent == [] and notes[0].startswith("x <- uy: kept")
+    # the same contribution over pure noise: no better on the held-out samples, dropped
+    y0 = np.vstack([0.5 + 0.03 * rng.standard_normal(n), np.zeros(n)])
+    absent, notes = weak_couplings([SimpleNamespace(u=u, y=y0)], auto, comps, contribution,
+                                   ["ux", "uy"], ["x", "y"], [split], [pred])
+    assert absent == [(0, 1)] and notes[0].startswith("x <- uy: absent")
+    # nothing held out: the noise rule drops it, and says what it leaves
+    absent, notes = weak_couplings([rec], auto, comps, contribution, ["ux", "uy"], ["x", "y"])
+    assert absent == [(0, 1)]
+    warning = [m for m in notes if m.startswith("warning: x <- uy")]
+    assert len(warning) == 1, notes
+    moved = float(warning[0].split("x moves ")[1].split()[0])
+    assert 0.14 <= moved <= 0.17, warning           # 0.141 smoothed, plus what noise is left
+    # pure noise on x: dropped without a warning (no loop left)
+    absent, notes = weak_couplings([SimpleNamespace(u=u, y=y0)], auto, comps, contribution,
+                                   ["ux", "uy"], ["x", "y"])
+    assert absent == [(0, 1)] and not any(m.startswith("warning") for m in notes), notes
