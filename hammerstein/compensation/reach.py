@@ -113,6 +113,9 @@ def reach_note(reach, reference, names=None):
     'the reference leaves what the model reaches ov'
     >>> reach_note([[1.5, 99.8]], [[20.0, 80.0]], ["x"]) is None
     True
+    >>> reach_note([[-30, 30], [-30, 30], [-4.3, 6.8]], [[0, 50], [0, 50], [0, 0]],
+    ...            ["x", "y", "z"]).split("center = ")[1][:9]     # z held at 0: kept there
+    '[0, 0, 0]'
     """
     if reach is None:
         return None
@@ -127,9 +130,14 @@ def reach_note(reach, reference, names=None):
     asks = "; ".join(f"{names[i]} asks {lo[i]:.4g}..{hi[i]:.4g} µm, the model reaches "
                      f"{reach[i, 0]:.4g}..{reach[i, 1]:.4g} µm" for i in np.flatnonzero(out))
     mid = reach.mean(axis=1)
+    # an output the reference holds, inside the reach (a tube's z at 0 under a raster on x, y),
+    # keeps its value: the middle of its reach would move it
+    held = (hi - lo <= 1e-9 * np.maximum(1.0, np.abs(hi))) & ~out
+    mid = np.where(held, lo, mid)
     where = (f"a sine's or triangle's offset = {mid[0]:.4g}" if mid.size == 1 else
              f"a circle's or raster's center = [{', '.join(f'{v:.4g}' for v in mid)}], a sine's "
              f"or triangle's offset on its output")
     return (f"{REACH_NOTE_START} over the amplifier's range ({asks}): "
             f"no drive can follow it there; centre it inside the reach ({where} is the reach's "
-            f"middle) or make it smaller")
+            f"middle{', the held outputs where they are held' if np.any(held) else ''}) or make "
+            f"it smaller")
