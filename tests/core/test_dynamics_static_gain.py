@@ -1,0 +1,66 @@
+"""Dynamics fitted on records whose static gain is not the hysteresis model's.
+
+The multisines' response is built here with python-control (no project code): two modes
+(350 Hz, damping 0.03, on x; 410 Hz, 0.045, on y, 2 % coupling), unit DC gain, driven by
+what the hysteresis model predicts, v, times a static small-signal gain K = diag(0.88,
+0.94) that the model does not draw (a Bouc-Wen stage's many small reversals), 20 nm noise.
+The dynamics G are the actuator's shape: identify must return order 4 and G (G(0) = I),
+the records' gain K only in ``dc_gain_unconstrained_``.
+"""
+
+import control
+import numpy as np
+import pytest
+
+from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
+from hammerstein.models.lti import DynamicsIdentifier
+
+T = 1e-4
+K = np.diag([0.88, 0.94])
+
+
+def _stage():
+    s = control.tf("s")
+    w = [2 * np.pi * 350.0, 2 * np.pi * 410.0]
+    z = [0.03, 0.045]
+    axes = [control.ss(wi * wi / (s * s + 2 * zi * wi * s + wi * wi)) for wi, zi in zip(w, z)]
+    G = control.append(*axes) * control.ss([], [], [], np.array([[1.0, 0.02], [-0.02, 1.0]]))
+    G = G * control.ss([], [], [], np.linalg.inv(np.array([[1.0, 0.02], [-0.02, 1.0]])))
+    return control.c2d(G, T, "zoh")          # G(1) = I
+
+
+def _records(seed=3):
+    G = _stage()
+    rng = np.random.default_rng(seed)
+    ins, outs = [], []
+    n_period = 2000
+    df = 1 / (n_period * T)
+    j = np.arange(1, int(1500 / df) + 1)
+    for r in range(2):
+        for k in range(2):
+            spec = np.zeros(n_period // 2 + 1, complex)
+            spec[j] = np.exp(1j * rng.uniform(0, 2 * np.pi, j.size))
+            one = np.fft.irfft(spec, n_period)
+            v = np.zeros((2, 4 * n_period))
+            v[k] = np.tile(5.0 * one / np.abs(one).max(), 4)
+            y = control.forced_response(G, U=K @ v).outputs
+            ins.append(v)
+            outs.append(y + 0.02 * rng.standard_normal(y.shape))
+    return G, ins, outs
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_the_records_static_gain_is_not_made_into_dynamics(seed):
+    G, ins, outs = _records(seed)
+    opts = dict(DYNAMICS_DEFAULTS, validation_records=(2, 3))
+    d = DynamicsIdentifier(**opts).fit(ins, outs, T)
+    np.testing.assert_allclose(d.dc_gain_unconstrained_, K, atol=0.01)
+    assert d.order_ == 4                        # the two modes, no slow pole pairs
+    s = d.system_
+    np.testing.assert_allclose(s.C @ np.linalg.solve(np.eye(4) - s.A, s.B) + s.D, np.eye(2),
+                               atol=1e-9)
+    for f in (20.0, 200.0, 330.0, 500.0):       # the shape: G itself, not G K
+        z = np.exp(2j * np.pi * f * T)
+        got = s.C @ np.linalg.solve(z * np.eye(4) - s.A, s.B) + s.D
+        true = G.C @ np.linalg.solve(z * np.eye(4) - G.A, G.B) + G.D
+        assert np.abs(got - true).max() <= 0.03 * np.abs(true).max(), (f, got, true)
