@@ -62,9 +62,13 @@ def pi_system(model, sampling_period, outputs=None, name="hysteresis"):
     :meth:`MultivariablePI.hysterons`). Update ``s(t) = max(U - r, min(U + r,
     s(t-T)))``; output ``Y(t) = sum w s(t) + G U(t)`` (direct feedthrough).
 
+    A model of another class (:class:`~hammerstein.models.preisach.MultivariableHysteresis`,
+    Preisach or generalised-PI components, as ``identify`` writes them) steps by its own
+    ``simulate`` one sample at a time, its flat state vector the system's (``s[i]``).
+
     Parameters
     ----------
-    model : MultivariablePI
+    model : MultivariablePI or MultivariableHysteresis
         m inputs [V] -> p outputs [µm].
     sampling_period : float
         T [s], the system's ``dt``.
@@ -87,6 +91,20 @@ def pi_system(model, sampling_period, outputs=None, name="hysteresis"):
     outputs = list(model.output_names if outputs is None else outputs)
     if len(outputs) != model.n_outputs:
         raise HysteresisError(f"outputs: expected {model.n_outputs} names, found {outputs}")
+    if not hasattr(model, "evaluate"):
+        # a Preisach or generalised-PI model (identify's): one sample of its own simulation
+        # from the state, whose flat vector is the system's (hysteron states, then plays)
+        n = int(model.initial_state().size)
+
+        def one(x, u):
+            y, s = model.simulate(np.asarray(u, dtype=float)[:, None],
+                                  np.asarray(x, dtype=float))
+            return y[:, 0], s
+
+        return control.nlsys(lambda t, x, u, params: one(x, u)[1],
+                             lambda t, x, u, params: one(x, u)[0],
+                             inputs=list(model.input_names), outputs=outputs,
+                             states=[f"s[{i}]" for i in range(n)], dt=T, name=name)
 
     def update(t, x, u, params):
         return model.evaluate(np.asarray(u, dtype=float), np.asarray(x, dtype=float))[1]
@@ -128,7 +146,12 @@ def linear_system(plant, name="dynamics"):
 
 
 def hammerstein_system(plant, name="plant"):
-    """Hammerstein plant (multivariable PI then linear dynamics) by ``control.interconnect``.
+    """Hammerstein plant (hysteresis then linear dynamics) by ``control.interconnect``.
+
+    The hysteresis may be of any class :func:`pi_system` takes (a classical
+    PI, or Preisach and generalised-PI components as ``identify`` writes
+    them); start it at ``plant.rest_state()`` (``X0``), the state every drive
+    starts from (a Preisach model's demagnetised hysterons are not zeros).
 
     Parameters
     ----------
