@@ -176,7 +176,10 @@ def dynamics_report_lines(summary, output_names, input_names):
                      f"{mode['damping_ratio']:.4g} ({share}{lag})")
     lines.append(f"  G(0) unconstrained {_matrix_text(s['dc_gain_unconstrained'])} (rows "
                  f"{','.join(output_names)}, columns {','.join(input_names)}); "
-                 + ("fitted with G(0) = I: the static gain belongs to the hysteresis model, "
+                 + ("chosen with that gain (more than 5 % from I: fitted with G(0) = I the "
+                    "order would make the step with slow pole pairs), then scaled to G(0) = I: "
+                    "the static gain belongs to the hysteresis model" if s.get("dc_gain_scaled")
+                    else "fitted with G(0) = I: the static gain belongs to the hysteresis model, "
                     "identified quasi-statically" if s["unit_dc_gain"]
                     else f"kept as identified: {_matrix_text(s['dc_gain'])}"))
     lines.append(f"  held-out fit {s['held_out_fit_percent']:.2f} %, fit over all broadband "
