@@ -559,11 +559,29 @@ class HammersteinCompensator:
         faded : numpy.ndarray, shape (p, n_samples)
             The faded reference the outputs should follow.
         """
+        reference = self._checked_reference(reference)
         if self.inverse is None:
             self._stable_period = period_samples      # the continuation past the record's end
             faded = fade_in(reference, fade_samples)
             return faded, self.initial_state(), faded
         return self._starts([reference], [period_samples], [fade_samples])[0]
+
+    def _checked_reference(self, reference, name="reference"):
+        """The reference as a finite (p, n_samples) float array, or a CompensatorError that
+        names the shape given (not that of an array built from it: a (1600,) record was
+        reported as (1600, 2), the preview-padded one)."""
+        p = self.model.n_outputs
+        try:
+            r = np.asarray(reference, dtype=float)
+        except (TypeError, ValueError):
+            raise CompensatorError(f"{name}: expected a finite ({p}, n_samples) array [µm], "
+                                   f"found {type(reference).__name__}") from None
+        if r.ndim != 2 or r.shape[0] != p or r.shape[1] < 1 or not np.all(np.isfinite(r)):
+            what = f"shape {r.shape}" if r.ndim != 2 or r.shape[0] != p or r.shape[1] < 1 \
+                else f"a non-finite value at sample {int(np.flatnonzero(~np.all(np.isfinite(r), axis=0))[0])}"
+            raise CompensatorError(f"{name}: expected a finite ({p}, n_samples) array [µm], one "
+                                   f"row per output, found {what}")
+        return r
 
     def stable_lookahead(self, decay=1e-12):
         """Samples over which the stable inversion's anti-causal part decays below ``decay``.
@@ -642,7 +660,7 @@ class HammersteinCompensator:
             As :meth:`start` returns them, in the order of ``references``.
         """
         P = self.preview_samples
-        refs = [np.asarray(r, dtype=float) for r in references]
+        refs = [self._checked_reference(r, f"references[{i}]") for i, r in enumerate(references)]
         ns = [int(min(max(f, 0), r.shape[-1])) for f, r in zip(fade_samples, refs)]
         weights = _fade_weights(ns)
         exts, at = [], 0

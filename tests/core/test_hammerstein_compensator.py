@@ -3,9 +3,12 @@ state-space presets, scenario keys and the rate-dependence warning."""
 
 import warnings
 
+import re
+
 import numpy as np
 import pytest
 
+from hammerstein.compensation.compensators import CompensatorError
 from hammerstein.compensation.compensators import InverseMultiplicativeCompensator
 from hammerstein.compensation.hammerstein_compensator import (HammersteinCompensator, continuation,
                                                       fade_in)
@@ -258,3 +261,19 @@ def test_the_stable_inversion_reads_the_periods_past_the_record_end():
     d = np.diff(u_held[:, -20:], axis=1)
     assert np.any(d[:, :-1] * d[:, 1:] < 0) and np.abs(u_held[:, -per:] - last).max() > \
         100 * np.abs(last - before).max()
+
+
+@pytest.mark.parametrize("bad, shape", [(lambda r: r[0], "(1600,)"), (lambda r: r.T, "(1600, 2)"),
+                                        (lambda r: r[:1], "(1, 1600)")])
+def test_a_misshapen_reference_is_named_with_the_shape_given(preset_plant, bad, shape):
+    # a (1600,) record was reported as "found shape (1600, 2)", the preview-padded array's
+    comp = HammersteinCompensator(preset_plant.hysteresis, preset_plant.dynamics)
+    t = np.arange(1600) * preset_plant.sampling_period
+    r = 20 * np.vstack([np.cos(2 * np.pi * 50 * t), np.sin(2 * np.pi * 50 * t)])
+    with pytest.raises(CompensatorError, match=r"reference: expected a finite \(2, n_samples\) "
+                                               r"array \[µm\], one row per output, found shape "
+                                               + re.escape(shape)):
+        comp.run_reference(preset_plant, bad(r), period_samples=400, fade_samples=400)
+    r[1, 700] = np.nan
+    with pytest.raises(CompensatorError, match="non-finite value at sample 700"):
+        comp.start(r, 400, 400)
