@@ -33,7 +33,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from hammerstein.models.amplifier import (amplifier_from_table, records_amplifier_table,
+                                          records_input_range)
 from hammerstein.models.creep import creep_to_table
+from hammerstein.models.dynamics import discretize
+from hammerstein.models.plant import HammersteinPlant
 from hammerstein.identification.concurrent_fits import fit_concurrently, worker_count
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.creep_identification import remove_creep, step_level_errors
@@ -178,6 +182,55 @@ class IdentificationResult:
         if self.creep is not None:
             extra["creep"] = creep_to_table(self.creep.creeps_, self.model.output_names)
         return extra
+
+    def plant(self, sampling_period, records=None, name="identified"):
+        """The identified actuator as a plant, without writing and reading a preset.
+
+        The plant :func:`hammerstein.io.presets.load_plant` builds from the
+        file ``identify`` writes: the model, its creep (one
+        :class:`~hammerstein.models.creep.Creep` per output) and its dynamics
+        (the continuous G sampled at ``sampling_period``, zero-order hold).
+        Given the records, the inputs' range and largest slew over them become
+        the plant's ``amplifier`` (``source = "records"``) and the exact
+        inverse's bound (``model.input_range``), as ``identify`` writes them.
+
+        Parameters
+        ----------
+        sampling_period : float
+            T [s] of the plant.
+        records : sequence of MultiRecord, optional
+            Every record identified on (hysteresis, broadband, staircases).
+        name : str
+            Plant name.
+
+        Returns
+        -------
+        HammersteinPlant
+
+        Raises
+        ------
+        HysteresisError
+            On a sampling period that is not positive.
+
+        Examples
+        --------
+        >>> from types import SimpleNamespace
+        >>> from hammerstein.io.presets import load_plant
+        >>> res = IdentificationResult(SimpleNamespace(model=load_plant("rakotondrabe-2dof",
+        ...                            dynamics=False).hysteresis))
+        >>> res.plant(5e-5).is_static
+        True
+        """
+        T = float(sampling_period)
+        lin = None if self.dynamics is None else discretize(self.dynamics.continuous, T)
+        creep = None if self.creep is None else list(self.creep.creeps_)
+        plant = HammersteinPlant(self.model, T, lin, name=name, creep=creep)
+        if records:
+            names = list(self.model.input_names)
+            table = records_amplifier_table(list(records), names)
+            plant.amplifier = amplifier_from_table(table, names)
+            self.model.input_range = records_input_range(table, names)
+        return plant
 
 
 #: a direct path's loop amplitude missed by more than this [%] on a level of the records (trained
