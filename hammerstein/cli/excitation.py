@@ -26,6 +26,7 @@ usage error.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import sys
 from pathlib import Path
 
@@ -199,18 +200,36 @@ def _option_names(message):
 
 
 def _owned(directory):
-    """Names this command wrote in ``directory`` (from its manifest)."""
+    """Names this command wrote in ``directory`` and the SHA-256 of what it wrote (from its
+    manifest): ``{name: hex digest}``, the digest None in a manifest that did not record it."""
     path = directory / MANIFEST
     if not path.is_file():
-        return set()
+        return {}
     try:
         text = bounded_read_text(path, "toml", "excitation manifest")
     except (OSError, FileLimitError, UnicodeDecodeError):
-        return set()
+        return {}
     lines = text.splitlines()
     if not lines or lines[0] != _MANIFEST_HEAD:
-        return set()
-    return {ln.strip() for ln in lines[1:] if ln.strip()}
+        return {}
+    owned = {}
+    for ln in lines[1:]:
+        name, _, digest = ln.strip().partition("\t")
+        if name:
+            owned[name] = digest.strip() or None
+    return owned
+
+
+def _digest(path):
+    """SHA-256 of a file's bytes, read in blocks (bounded memory), or None when unreadable."""
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    except OSError:
+        return None
+    return h.hexdigest()
 
 
 def readme_text(records, names, amplitude, sampling_period, reversals=(), centre=None,
@@ -545,7 +564,8 @@ def _handler(args):
             raise _Usage(_option_names(str(exc))) from None
         out = Path(args.out)
         targets = [f"{r.name}.csv" for r in records] + ["README.md"]
-        _owned_targets(out, targets, args.force)
+        contents = _contents(targets, records, names, amplitude, T, reversals, centre, band)
+        _owned_targets(out, targets, args.force, contents)
     except _Usage as exc:
         print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
         return 2
@@ -556,12 +576,11 @@ def _handler(args):
         lock = locked(out.absolute()) if out.absolute().parent.is_dir() else contextlib.nullcontext()
         with lock:
             try:
-                owned = _owned_targets(out, targets, args.force)      # as the lock found it
+                owned = _owned_targets(out, targets, args.force, contents)   # as the lock found it
             except _Usage as exc:
                 print(f"hammerstein excitation: error: {exc}", file=sys.stderr)
                 return 2
-            _write_records(out, owned, targets, records, names, amplitude, T, reversals, centre,
-                           band)
+            _write_records(out, owned, contents)
     except (FileLimitError, OSError) as exc:
         if isinstance(exc, FileLimitError):
             print(f"hammerstein excitation: error: {' '.join(str(exc).split())}", file=sys.stderr)
@@ -577,8 +596,14 @@ def _handler(args):
     return status
 
 
-def _owned_targets(out, targets, force):
-    """The files the directory's manifest owns, once every target may be written (else _Usage)."""
+def _owned_targets(out, targets, force, contents):
+    """The files the directory's manifest owns, once every target may be written (else _Usage).
+
+    A file the manifest lists is replaced only while it holds what this command wrote there
+    (its SHA-256 in the manifest; a manifest without digests: what this run writes): the
+    records a user filled with the measured columns, as the README says, are theirs
+    (replaced silently, a user's measurements were lost).
+    """
     owned = _owned(out)
     for name in targets + [MANIFEST]:
         path = out / name
@@ -586,25 +611,41 @@ def _owned_targets(out, targets, force):
             if path.exists() and not owned and not force and not path.is_file():
                 raise _Usage(f"--out: {path} exists and is not a file")
             continue
-        if _exists(path) and name not in owned and not force:
+        if not _exists(path) or force:
+            continue
+        if name not in owned:
             raise _Usage(f"--out: {path} exists and was not written by hammerstein "
                          f"excitation; choose another directory or add --force")
+        now = _digest(path) if path.is_file() and not path.is_symlink() else None
+        was = owned[name] or hashlib.sha256(contents[name]).hexdigest()
+        if now != was:
+            raise _Usage(f"--out: {path} changed since hammerstein excitation wrote it (the "
+                         f"measured columns added?); nothing was written: choose another "
+                         f"directory, move it away, or add --force to replace it")
     return owned
 
 
-def _write_records(out, owned, targets, records, names, amplitude, T, reversals, centre, band):
+def _contents(targets, records, names, amplitude, T, reversals, centre, band):
+    """``{file name: bytes}`` of the records and README.md this run writes."""
+    out = {name: _csv_bytes(r, names) for r, name in zip(records, targets)}
+    out["README.md"] = readme_text(records, names, amplitude, T, reversals, centre,
+                                   band).encode("utf-8")
+    return out
+
+
+def _write_records(out, owned, contents):
     """The manifest, the records and README.md: all of them or none."""
-    manifest = "\n".join([_MANIFEST_HEAD, *sorted(owned | set(targets))]) + "\n"
+    digests = {name: d for name, d in owned.items()}
+    digests.update({name: hashlib.sha256(data).hexdigest() for name, data in contents.items()})
+    manifest = "\n".join([_MANIFEST_HEAD, *(f"{name}\t{d}" if d else name
+                                             for name, d in sorted(digests.items()))]) + "\n"
     # a failed write (full disk) or an interruption leaves no file, not even the manifest,
     # and no directory this run made
     with removed_if_failed(out), all_or_nothing():
         safe_write(out / MANIFEST, manifest, "excitation manifest", root=out)
-        for r, name in zip(records, targets):
-            safe_write(out / name, _csv_bytes(r, names), "excitation file", root=out)
-        safe_write(out / "README.md", readme_text(records, names, amplitude, T, reversals, centre,
-                                                  band),
-                   "README",
-                   root=out)
+        for name, data in contents.items():
+            safe_write(out / name, data, "README" if name == "README.md" else "excitation file",
+                       root=out)
 
 
 def _written(out, records, targets, T, band, args):

@@ -382,7 +382,8 @@ def test_two_excitations_into_one_directory_at_once_keep_both_in_the_manifest(tm
                  for name in ("ux", "vx")]
         assert [p.wait(timeout=300) for p in procs] == [0, 0]
         manifest = (tmp_path / "cx" / ".hammerstein-excitation").read_text().splitlines()
-        assert {"hysteresis-ux.csv", "hysteresis-vx.csv"} <= set(manifest), manifest
+        names = {ln.split("\t")[0] for ln in manifest}
+        assert {"hysteresis-ux.csv", "hysteresis-vx.csv"} <= names, manifest
     for name in ("ux", "vx"):            # and each set may be written again
         assert subprocess.run(base + ["--inputs", name], capture_output=True, env=env,
                               timeout=300).returncode == 0
@@ -482,3 +483,33 @@ def test_every_file_starts_at_rest(tmp_path, ranges, slew):
             first = abs(u[0] - rest)
             assert first <= 0.01 * (high - low), (f.name, name, u[0])
             assert first <= own + 1e-12, (f.name, name, u[0], own)
+
+
+def test_a_record_the_user_filled_is_never_replaced(tmp_path, capsys):
+    """The README says to add the measured columns to the records and give them back: a second
+    ``excitation --out`` into that directory replaced them silently (the measurement lost).
+    A file is replaced only while it holds what excitation wrote there (its SHA-256 in the
+    manifest); with --force it is."""
+    import hashlib
+    argv = ["excitation", "--inputs", "ux,uy", "--amplitude", "8", "--sampling-period", "1e-4",
+            "--out", str(tmp_path / "lab")]
+    assert main(argv) == 0
+    assert main(argv) == 0                          # unchanged files: written again
+    rec = tmp_path / "lab" / "hysteresis-ux.csv"
+    lines = rec.read_text().splitlines()
+    rec.write_text("\n".join([lines[0] + ",x,y"] + [ln + ",0.5,0.25" for ln in lines[1:]]) + "\n")
+    mine = hashlib.sha256(rec.read_bytes()).hexdigest()
+    before = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "lab").iterdir()}
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "hysteresis-ux.csv changed since hammerstein excitation wrote it" \
+        in err[0] and "--force" in err[0]
+    assert hashlib.sha256(rec.read_bytes()).hexdigest() == mine      # nothing written at all
+    assert {p.name: p.stat().st_mtime_ns for p in (tmp_path / "lab").iterdir()} == before
+    # a manifest of the earlier format (names alone): compared with what this run writes
+    man = tmp_path / "lab" / ".hammerstein-excitation"
+    man.write_text("\n".join(ln.split("\t")[0] for ln in man.read_text().splitlines()) + "\n")
+    assert main(argv) == 2
+    assert hashlib.sha256(rec.read_bytes()).hexdigest() == mine
+    assert main(argv + ["--force"]) == 0 and hashlib.sha256(rec.read_bytes()).hexdigest() != mine
