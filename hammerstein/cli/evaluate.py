@@ -64,12 +64,12 @@ from hammerstein.io.datafiles import signal_table
 from hammerstein.core.files import markdown_text
 from hammerstein.report.definitions import definitions_lines
 from hammerstein.report.figures import save
+from hammerstein.report._ownership import MARKER, manifest_text, report_manifest, unlisted_entries
 from hammerstein.report.scenario import signal_summary
 from hammerstein.report.trajectories import trajectory_figure
 
 __all__ = ["add_parser", "evaluate"]
 
-MARKER = ".hammerstein-report"
 #: the files ``evaluate --out DIR`` writes into DIR
 OUTPUT_FILES = (MARKER, "metrics.csv", "timeseries-measured.csv", "trajectory-measured.png",
                 "report.md")
@@ -280,6 +280,8 @@ def _handle(args):
     if not problem and out.is_dir() and any(out.iterdir()) and not (out / MARKER).is_file():
         problem = (f"--out: {out} is a directory hammerstein did not write; choose an empty or "
                    f"new directory")
+    if not problem and out.is_dir() and (out / MARKER).is_file():
+        problem = _report_dir_problem(out)
     if problem:
         print_err(f"hammerstein evaluate: error: {problem}")
         return 2
@@ -533,9 +535,34 @@ def _shaped_table(rows):
             "| channel | metric | value | unit |\n|---|---|---|---|\n" + table + "\n")
 
 
+def _report_dir_problem(out):
+    """Why the marked directory ``out`` is not evaluate's to write into (one line), or None.
+
+    Its marker's manifest must list evaluate's own files only (another command's report,
+    ``run``'s, would have its manifest replaced by evaluate's and its files left unlisted),
+    and the directory must hold nothing its manifest does not list (your notes: a later
+    ``run`` into it deleted them, the bare marker evaluate wrote listing nothing).
+    """
+    listed = report_manifest(out)
+    if listed is not None and not listed <= set(OUTPUT_FILES):
+        other = sorted(listed - set(OUTPUT_FILES))
+        return (f"--out: {out} holds another command's report ({', '.join(other[:3])}"
+                f"{' ...' if len(other) > 3 else ''} in its {MARKER}); choose an empty or new "
+                f"directory")
+    extra = unlisted_entries(out) if listed is not None else \
+        sorted(p.name for p in out.iterdir() if p.name not in OUTPUT_FILES)
+    if extra:
+        return (f"--out: {out} holds {len(extra)} file(s) evaluate did not write "
+                f"({', '.join(extra[:3])}{' ...' if len(extra) > 3 else ''}); move them away "
+                f"or choose an empty or new directory")
+    return None
+
+
 def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), fade=0):
     out.mkdir(parents=True, exist_ok=True)
-    safe_write(out / MARKER, f"{VERSION}\n", "report marker", root=out)
+    # the marker lists evaluate's files (its manifest): a later `run` into this directory then
+    # replaces nothing else (your notes beside the report)
+    safe_write(out / MARKER, manifest_text(VERSION, OUTPUT_FILES), "report marker", root=out)
     lines = ["case,channel,metric,value,unit"] + [
         f"measured,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}" for row in rows] + [
         f"shaped,{row['channel']},{row['metric']},{row['value']!r},{row['unit']}"

@@ -16,7 +16,8 @@ from pathlib import Path
 
 from hammerstein.core.files import bounded_read_text, escape, safe_write
 
-__all__ = ["MARKER", "ownership_problem", "input_problem", "write_manifest"]
+__all__ = ["MARKER", "ownership_problem", "input_problem", "write_manifest", "report_manifest",
+           "unlisted_entries", "manifest_text"]
 
 #: File in every report directory: the project wrote it (``run`` may replace it).
 MARKER = ".hammerstein-report"
@@ -63,6 +64,58 @@ def _unlisted(target):
     return extra
 
 
+def report_manifest(target):
+    """The relative paths the marker of the report directory ``target`` lists, or None.
+
+    Parameters
+    ----------
+    target : pathlib.Path
+        A report directory.
+
+    Returns
+    -------
+    set of str or None
+        None without a marker, or with a marker that lists nothing (an older
+        version's, or ``evaluate``'s before it wrote one).
+    """
+    if not (Path(target) / MARKER).is_file():
+        return None
+    return _manifest(Path(target))
+
+
+def unlisted_entries(target):
+    """Entries of the marked report directory ``target`` its manifest does not list.
+
+    Parameters
+    ----------
+    target : pathlib.Path
+
+    Returns
+    -------
+    list of str
+        Relative paths (a directory named once); empty without a manifest.
+    """
+    return _unlisted(Path(target))
+
+
+def manifest_text(version, files, token=None):
+    """The marker of a report directory listing ``files`` (relative paths).
+
+    Parameters
+    ----------
+    version : str
+    files : iterable of str
+    token : str, optional
+        The ``owner`` line.
+
+    Returns
+    -------
+    str
+    """
+    return (f"hammerstein {version}\n" + (f"owner {token}\n" if token else "") + "manifest\n"
+            + "".join(f"file {f}\n" for f in sorted(files) if f != MARKER))
+
+
 def write_manifest(tmp, version, token=None):
     """Rewrite the marker of the finished report directory ``tmp`` with the files it holds.
 
@@ -78,9 +131,7 @@ def write_manifest(tmp, version, token=None):
     tmp = Path(tmp)
     wrote = sorted(Path(os.path.relpath(os.path.join(d, n), tmp)).as_posix()
                    for d, _, names in os.walk(tmp) for n in names)
-    text = (f"hammerstein {version}\n" + (f"owner {token}\n" if token else "") + "manifest\n"
-            + "".join(f"file {f}\n" for f in wrote if f != MARKER))
-    safe_write(tmp / MARKER, text, "report marker")
+    safe_write(tmp / MARKER, manifest_text(version, wrote, token), "report marker")
 
 
 def _entry(path):

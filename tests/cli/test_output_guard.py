@@ -570,3 +570,37 @@ def test_learn_history_of_someone_else_is_refused_before_the_learning(tmp_path, 
                "--measured", "y0.csv", "--out", "u1.csv", "--history", "mine", cwd=tmp_path)
     assert res.returncode == 2 and "did not make" in _one_line(res)
     assert _tree(tmp_path) == ["mine", "mine/notes.txt"]
+
+
+def test_a_run_never_deletes_files_beside_an_evaluate_report(tmp_path):
+    """``evaluate --out ev`` wrote a bare marker: a later ``run`` of a scenario named ``ev``
+    took the directory for an older report and deleted the notes a user had put beside it.
+    evaluate's marker lists its files now; and evaluate never writes into another command's
+    report (it replaced a run's manifest with its bare marker)."""
+    t = [k * 5e-5 for k in range(400)]
+    (tmp_path / "meas.csv").write_text("t,x,y\n" + "".join(f"{v!r},0.5,0.25\n" for v in t))
+    assert _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "ev",
+                cwd=tmp_path).returncode == 0
+    (tmp_path / "ev" / "notes.txt").write_text("mine\n")
+    scenario = open(_GOOD).read().replace('name = "good-static"', 'name = "ev"')
+    (tmp_path / "ev.toml").write_text(scenario)
+    res = _cli("run", "ev.toml", "--out", ".", "--figures", "none", cwd=tmp_path)
+    assert res.returncode == 1 and "notes.txt" in res.stderr
+    assert (tmp_path / "ev" / "notes.txt").read_text() == "mine\n"
+    # evaluate into a run's report: refused, the run's manifest kept
+    (tmp_path / "r").mkdir()
+    (tmp_path / "g.toml").write_text(open(_GOOD).read())
+    assert _cli("run", "g.toml", "--out", "r", "--figures", "none", cwd=tmp_path).returncode == 0
+    marker = (tmp_path / "r" / "good-static" / ".hammerstein-report").read_text()
+    res = _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out",
+               "r/good-static", cwd=tmp_path)
+    assert res.returncode == 2 and "another command's report" in _one_line(res)
+    assert (tmp_path / "r" / "good-static" / ".hammerstein-report").read_text() == marker
+    # evaluate again into its own report: allowed; beside a file of yours: refused
+    (tmp_path / "ev" / "notes.txt").unlink()
+    assert _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "ev",
+                cwd=tmp_path).returncode == 0
+    (tmp_path / "ev" / "notes.txt").write_text("mine\n")
+    res = _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "ev",
+               cwd=tmp_path)
+    assert res.returncode == 2 and "notes.txt" in _one_line(res)
