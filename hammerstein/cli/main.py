@@ -601,6 +601,12 @@ def run(argv=None):
                 stream.flush()
         except (OSError, ValueError):  # a closed pipe: nothing more can be said
             pass
+    if code >= 128 and threading.current_thread() is threading.main_thread():
+        # interrupted: the same signal sent again to the process group (a terminal's Ctrl-C,
+        # timeout's) would cut the exit handlers short with a KeyboardInterrupt traceback
+        # ("Exception ignored in atexit callback ... _exit_function") after "interrupted"
+        for sig in _SIGNALS:
+            signal.signal(sig, signal.SIG_IGN)
     atexit._run_exitfuncs()
     os._exit(code)
 

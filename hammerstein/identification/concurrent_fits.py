@@ -20,6 +20,7 @@ environment variable is set.
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import os
 from concurrent.futures import ProcessPoolExecutor
 
@@ -95,7 +96,8 @@ def fit_concurrently(tasks, workers=None):
             except Exception as exc:      # noqa: BLE001 - handed back to the caller's rule
                 results[name] = exc
         return results
-    with ProcessPoolExecutor(n, multiprocessing.get_context("fork")) as pool:
+    pool = ProcessPoolExecutor(n, multiprocessing.get_context("fork"), initializer=_quiet_worker)
+    try:
         futures = {name: pool.submit(_call, function, args, kwargs)
                    for name, (function, args, kwargs) in tasks.items()}
         for name, future in futures.items():
@@ -103,4 +105,19 @@ def fit_concurrently(tasks, workers=None):
                 results[name] = future.result()
             except Exception as exc:      # noqa: BLE001 - handed back to the caller's rule
                 results[name] = exc
+    except BaseException:
+        # Ctrl-C (or SIGTERM) in the parent: the workers, which ignore SIGINT, are stopped
+        # now rather than after their fits (a traceback per worker was printed before)
+        for proc in list((getattr(pool, "_processes", None) or {}).values()):
+            proc.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
     return results
+
+
+def _quiet_worker():
+    """A worker ignores SIGINT: a terminal's Ctrl-C reaches the whole process group, and the
+    parent alone handles it (each worker printed 'Process ForkProcess-2: Traceback ...')."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)    # the parent's terminate() ends it at once

@@ -438,3 +438,47 @@ def test_a_read_only_file_system_is_named_not_chmod(tmp_path, monkeypatch):
     monkeypatch.setattr(files, "_read_only_mount", lambda path: False)
     with pytest.raises(FileLimitError, match=r"chmod u\+w"):
         safe_write(target, "y")
+
+
+_POOL_SCRIPT = """
+import sys, time
+import hammerstein.cli.main as m
+from hammerstein.identification.concurrent_fits import fit_concurrently
+
+def slow(k):
+    time.sleep(60 if k == 1 else 0)     # one worker busy, the other idle, waiting for work
+    return k
+
+def fake(argv):
+    print("started", flush=True)
+    fit_concurrently({"a": (slow, (1,), {}), "b": (slow, (2,), {})}, workers=2)
+    return 0
+
+m._main = fake
+m.run([])
+"""
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="process groups")
+def test_ctrl_c_to_the_process_group_during_concurrent_fits_is_one_line(tmp_path):
+    # a terminal's Ctrl-C (and timeout's) reaches every process of the group: each worker of
+    # identify's fits printed 'Process ForkProcess-2: Traceback ... _Interrupted: 2', and the
+    # signal sent again cut the exit handlers short ('Exception ignored in atexit callback')
+    script = tmp_path / "pool.py"
+    script.write_text(_POOL_SCRIPT)
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    proc = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    assert proc.stdout.readline() == "started\n"
+    time.sleep(1.5)                         # the workers are sleeping in their calls
+    os.killpg(proc.pid, signal.SIGINT)      # as a terminal sends it
+    time.sleep(0.05)
+    try:
+        os.killpg(proc.pid, signal.SIGINT)  # and again (timeout signals child, then group)
+    except ProcessLookupError:
+        pass
+    _, stderr = proc.communicate(timeout=30)
+    assert proc.returncode == 130 and stderr == "interrupted\n", stderr
+    time.sleep(0.5)
+    with pytest.raises(ProcessLookupError):  # no worker left behind
+        os.killpg(proc.pid, 0)
