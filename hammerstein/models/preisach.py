@@ -731,6 +731,25 @@ class MultivariableHysteresis:
                 f"({', '.join(self.input_names)} -> {', '.join(self.output_names)}), "
                 f"{self.n_hysterons} states; {rows})")
 
+    def size_text(self):
+        """The model's size in words, e.g. ``'2x2 Preisach (ux, uy -> x, y), 1860 states'``.
+
+        The class word is the components' (``Preisach``, ``generalised PI``, or
+        ``mixed``), as :meth:`~hammerstein.models.hysteresis.MultivariablePI.size_text`
+        says ``PI``.
+
+        Returns
+        -------
+        str
+        """
+        kinds = {type(c).__name__ for row in self.components for c in row
+                 if isinstance(c, (PreisachModel, GeneralizedPI, PrandtlIshlinskii))}
+        word = ("Preisach" if kinds == {"PreisachModel"} else "generalised PI"
+                if kinds == {"GeneralizedPI"} else "PI" if kinds == {"PrandtlIshlinskii"}
+                else "mixed")
+        return (f"{self.n_outputs}x{self.n_inputs} {word} ({', '.join(self.input_names)} -> "
+                f"{', '.join(self.output_names)}), {self.n_hysterons} states")
+
     @property
     def n_inputs(self) -> int:
         """Number of inputs m."""

@@ -53,3 +53,13 @@ def test_a_model_files_line_gives_its_size(folder, capsys):
     assert main(["list", "--scenarios", str(folder)]) == 0
     line = next(ln for ln in capsys.readouterr().out.splitlines() if "identified.toml" in ln)
     assert line.endswith("2x2 PI (ux, uy -> x, y), 6 hysterons")         # 2 PIs of 3 plays
+
+
+def test_a_preisach_or_generalised_pi_model_file_is_listed_with_its_size(tmp_path, capsys):
+    # the classes identify writes by default: listing one raised AttributeError
+    # ('MultivariableHysteresis' object has no attribute 'size_text'), exit 1
+    model = hs.load_plant("realistic-2dof").hysteresis
+    hs.save_model(model, tmp_path / "preisach.toml", metadata={"method": "preisach"})
+    assert main(["list", "--scenarios", str(tmp_path)]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "preisach.toml" in ln)
+    assert line.endswith(f"2x2 Preisach (ux, uy -> x, y), {model.n_hysterons} states")
