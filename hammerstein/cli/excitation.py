@@ -46,6 +46,9 @@ __all__ = ["add_parser", "MANIFEST", "readme_text"]
 
 #: The file listing what this command wrote in a directory (one name per line).
 MANIFEST = ".hammerstein-excitation"
+#: The most inputs one excitation writes records for (the files grow with the square of it:
+#: one set of records per input, each holding every input's column).
+MAX_INPUTS = 16
 _MANIFEST_HEAD = "# written by hammerstein excitation; files it may replace"
 
 
@@ -510,6 +513,10 @@ def _collision(names):
 def _handler(args):
     try:
         names = [n.strip() for n in args.inputs.split(",")]
+        if len(names) > MAX_INPUTS:
+            raise _Usage(f"--inputs: {len(names)} names; expected at most {MAX_INPUTS} (every "
+                         f"file holds every input: {MAX_INPUTS} inputs write about 0.2 GB, 40 "
+                         f"wrote 1.1 GB)")
         if not all(names) or len(set(names)) != len(names) or "t" in names:
             raise _Usage(f"--inputs: expected distinct non-empty names other than t, found "
                          f"{args.inputs!r}")

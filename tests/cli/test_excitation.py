@@ -513,3 +513,14 @@ def test_a_record_the_user_filled_is_never_replaced(tmp_path, capsys):
     assert main(argv) == 2
     assert hashlib.sha256(rec.read_bytes()).hexdigest() == mine
     assert main(argv + ["--force"]) == 0 and hashlib.sha256(rec.read_bytes()).hexdigest() != mine
+
+
+def test_more_inputs_than_it_writes_records_for_are_a_usage_error(tmp_path, capsys):
+    """40 inputs wrote 1.1 GB (every file holds every input); 500 were not refused at all."""
+    from hammerstein.cli.excitation import MAX_INPUTS
+    names = ",".join(f"u{i}" for i in range(MAX_INPUTS + 1))
+    assert main(["excitation", "--inputs", names, "--amplitude", "5", "--sampling-period",
+                 str(T), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{MAX_INPUTS + 1} names; expected at most {MAX_INPUTS}" in err[0]
+    assert not (tmp_path / "o").exists()
