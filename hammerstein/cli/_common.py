@@ -159,7 +159,7 @@ def out_dir_problem(out, follow_link=False):
 def out_file_problem(out, what="file", force=False):
     """Why ``out`` cannot be written as a single file (one line), or None.
 
-    An empty path, a directory, an existing special file (device, FIFO,
+    An empty path, a path ending with a separator, a directory, an existing special file (device, FIFO,
     socket) or read-only file, a path under an existing file, a symbolic
     link that cannot be followed (loop), or a directory that cannot be
     written, or a path the system refuses to name (a name over 255 bytes).
@@ -175,6 +175,9 @@ def out_file_problem(out, what="file", force=False):
                 f"(./- for a file of that name)")
     if path_problem(out):            # a name over 255 bytes: ENAMETOOLONG at the first look
         return f"--out: {path_problem(out)}"
+    if str(out).endswith(("/", os.sep)) or (os.altsep and str(out).endswith(os.altsep)):
+        # 'newdir/' names a directory: a file named newdir was written (and 'wrote newdir/')
+        return f"--out: {out} ends with a separator, a directory's name; expected a {what} name"
     p = Path(out)
     if p.is_symlink():
         try:

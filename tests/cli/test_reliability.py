@@ -118,6 +118,22 @@ def test_out_dash_is_not_a_file_named_dash(capsys, tmp_path, monkeypatch, comman
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command", ["compensate", "learn", "identify"])
+def test_a_single_file_output_named_like_a_directory_is_refused(capsys, tmp_path, monkeypatch,
+                                                                 command):
+    # `compensate ... --out newdir/` wrote a regular file named newdir and said 'wrote newdir/'
+    monkeypatch.chdir(tmp_path)
+    args = {"compensate": ["rakotondrabe-2dof", "--reference",
+                           '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'],
+            "learn": ["rakotondrabe-2dof", "--reference", "r.csv", "--drive", "d.csv",
+                      "--measured", "m.csv"],
+            "identify": ["r.csv", "--input", "1", "--output", "2", "--time", "0"],
+            }[command]
+    status, _, err = _call(capsys, command, *args, "--out", "newdir/")
+    assert status == 2 and len(err) == 1 and "newdir/ ends with a separator" in err[0]
+    assert list(tmp_path.iterdir()) == []
+
+
 # -- single files: safe_write ---------------------------------------------------------------
 def test_safe_write_writes_a_symlinks_target_and_keeps_permissions(tmp_path):
     real = tmp_path / "real.toml"
