@@ -24,6 +24,7 @@ metrics rows are in :mod:`hammerstein.cli._identify_report`).
 
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -241,7 +242,29 @@ def _check_target(path, option, kind, force, inputs):
         raise _Usage(f"{option}: {problem}")
 
 
+def _same_record_twice(paths):
+    """The first record file given twice (by its path resolved, or a hard link to it), as
+    '(a) and (b)', or None: the same record twice made every fit's matrices singular (numpy's
+    overflow warnings, then 'input uy never excited')."""
+    seen = {}
+    for p in paths:
+        try:
+            st = os.stat(p)
+            key = (st.st_dev, st.st_ino)
+        except OSError:
+            key = os.path.realpath(p)
+        if key in seen:
+            return f"{seen[key]} and {p}"
+        seen[key] = p
+    return None
+
+
 def _check_usage(args):
+    for what, paths in (("records", args.data), ("--dynamics-records", args.dynamics_records),
+                        ("--creep-records", args.creep_records)):
+        twice = _same_record_twice(paths or [])
+        if twice:
+            raise _Usage(f"{what}: the same file given twice ({twice}); give each record once")
     n, thresholds = _parse_thresholds(args.thresholds)
     if args.train_fraction is not None and not 0 < args.train_fraction <= 1:
         raise _Usage(f"--train-fraction: expected in (0, 1], found {args.train_fraction}")

@@ -498,3 +498,17 @@ def test_ctrl_c_to_the_process_group_during_concurrent_fits_is_one_line(tmp_path
     time.sleep(0.5)
     with pytest.raises(ProcessLookupError):  # no worker left behind
         os.killpg(proc.pid, 0)
+
+
+@pytest.mark.parametrize("twice", [["r.csv", "r.csv"], ["r.csv", "./sub/../r.csv"],
+                                   ["r.csv", "hard.csv"]])
+def test_identify_refuses_the_same_record_twice(capsys, tmp_path, monkeypatch, twice):
+    # the same record twice: numpy's overflow warnings leaked, then 'input uy never excited'
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "r.csv").write_text("t,ux,uy,x,y\n0,0,0,0,0\n1e-4,1,0,1,0\n")
+    os.link(tmp_path / "r.csv", tmp_path / "hard.csv")
+    status, _, err = _call(capsys, "identify", *twice, "--inputs", "ux,uy", "--outputs", "x,y",
+                           "--time", "t", "--out", "m.toml")
+    assert status == 2 and len(err) == 1 and "the same file given twice" in err[0]
+    assert not (tmp_path / "m.toml").exists()
