@@ -379,6 +379,9 @@ def unit_warnings(records, outputs, output_unit, time_column=None):
     >>> rec = SimpleNamespace(y=np.array([[9674.0, 33130.0]]), sampling_period=1e-4)
     >>> unit_warnings([rec], ["x"], "µm")[0][:40]
     "output 'x' spans 2.346e+04 µm over the r"
+    >>> ms = SimpleNamespace(y=np.array([[1.0, 2.0]]), sampling_period=0.1, source="b.csv")
+    >>> unit_warnings([rec, ms], ["x"], "mm", "t")[0][:52]
+    "time column 't' of b.csv: sampling period 0.1 s, at "
     """
     lines = []
     if output_unit == "µm":
@@ -402,6 +405,11 @@ def unit_warnings(records, outputs, output_unit, time_column=None):
     periods = sorted({float(r.sampling_period) for r in records})
     if periods and periods[-1] >= PLAUSIBLE_PERIOD_MAX_S:
         col = f"time column '{time_column}'" if time_column is not None else "--sampling-period"
+        slow = [getattr(r, "source", "") for r in records
+                if float(r.sampling_period) >= PLAUSIBLE_PERIOD_MAX_S]
+        if time_column is not None and any(slow):      # which file: one of several may be in ms
+            col += (f" of {', '.join(s for s in slow[:3] if s)}"
+                    f"{' and more' if len(slow) > 3 else ''}")
         lines.append(f"{col}: sampling period {periods[-1]:g} s, at least "
                      f"{PLAUSIBLE_PERIOD_MAX_S:g} s (a hysteresis record is sampled at kHz): a "
                      f"time in ms? Times are read in s and nothing is converted: convert the "
