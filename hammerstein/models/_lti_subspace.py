@@ -556,7 +556,13 @@ class DynamicsIdentifier:
         self._free_gain = False
         balanced_fit(self, ins, outs, sampling_period)
         if self.unit_dc_gain:
-            step = np.abs(np.asarray(self.dc_gain_unconstrained_) - np.eye(outs[0].shape[0]))
+            # judged in the balanced units the fit ran in (an output in µrad beside one in
+            # µm would make an off-diagonal entry of 1e-4 one of 1)
+            G1 = np.asarray(self.dc_gain_unconstrained_, dtype=float)
+            scale = getattr(self, "output_scales_", None)
+            if scale is not None:
+                G1 = (G1 / np.asarray(scale)[:, None]) * np.asarray(scale)[None, :]
+            step = np.abs(G1 - np.eye(outs[0].shape[0]))
             if np.all(np.isfinite(step)) and step.max() > STATIC_GAIN_STEP:
                 # the records' gain is not the hysteresis model's (its small loops): chosen
                 # with G(1) = I imposed, the fit made that gain step with slow pole pairs
