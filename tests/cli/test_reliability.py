@@ -101,19 +101,22 @@ def test_out_dir_problems_are_usage_errors(capsys, tmp_path):
     assert f.read_text() == "x" and sorted(p.name for p in tmp_path.iterdir()) == ["f"]
 
 
+#: each command's arguments but --out (its inputs need not exist: --out is checked first)
+_COMMAND_ARGS = {"compensate": ["rakotondrabe-2dof", "--reference",
+                                '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'],
+                 "learn": ["rakotondrabe-2dof", "--reference", "r.csv", "--drive", "d.csv",
+                           "--measured", "m.csv"],
+                 "identify": ["r.csv", "--input", "1", "--output", "2", "--time", "0"],
+                 "run": [str(GOOD)],
+                 "excitation": ["--inputs", "ux", "--amplitude", "10", "--sampling-period",
+                                "5e-5"]}
+
+
 @pytest.mark.parametrize("command", ["compensate", "learn", "identify", "run", "excitation"])
 def test_out_dash_is_not_a_file_named_dash(capsys, tmp_path, monkeypatch, command):
     # `compensate ... --out -` wrote a file named '-' (by convention, '-' is stdout)
     monkeypatch.chdir(tmp_path)
-    args = {"compensate": ["rakotondrabe-2dof", "--reference",
-                           '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'],
-            "learn": ["rakotondrabe-2dof", "--reference", "r.csv", "--drive", "d.csv",
-                      "--measured", "m.csv"],
-            "identify": ["r.csv", "--input", "1", "--output", "2", "--time", "0"],
-            "run": [str(GOOD)],
-            "excitation": ["--inputs", "ux", "--amplitude", "10", "--sampling-period", "5e-5"],
-            }[command]
-    status, _, err = _call(capsys, command, *args, "--out", "-")
+    status, _, err = _call(capsys, command, *_COMMAND_ARGS[command], "--out", "-")
     assert status == 2 and len(err) == 1 and "--out: '-' (standard output)" in err[0]
     assert list(tmp_path.iterdir()) == []
 
@@ -123,13 +126,7 @@ def test_a_single_file_output_named_like_a_directory_is_refused(capsys, tmp_path
                                                                  command):
     # `compensate ... --out newdir/` wrote a regular file named newdir and said 'wrote newdir/'
     monkeypatch.chdir(tmp_path)
-    args = {"compensate": ["rakotondrabe-2dof", "--reference",
-                           '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'],
-            "learn": ["rakotondrabe-2dof", "--reference", "r.csv", "--drive", "d.csv",
-                      "--measured", "m.csv"],
-            "identify": ["r.csv", "--input", "1", "--output", "2", "--time", "0"],
-            }[command]
-    status, _, err = _call(capsys, command, *args, "--out", "newdir/")
+    status, _, err = _call(capsys, command, *_COMMAND_ARGS[command], "--out", "newdir/")
     assert status == 2 and len(err) == 1 and "newdir/ ends with a separator" in err[0]
     assert list(tmp_path.iterdir()) == []
 
