@@ -402,6 +402,14 @@ def _learn(args):
         guard_inputs(args.actuator, args.reference, None if replay else args.drive, args.measured)
         problem = output_problem(args.out)         # an input is never an output, even with --force
         problem = f"--out: {problem}" if problem else None
+    if not problem:
+        try:
+            same = os.path.samefile(args.drive, args.measured)
+        except (OSError, ValueError):      # a missing file: its reading says so
+            same = False
+        if same:          # its <output>_shaped columns read as the measurement: "RMS 0 µm"
+            problem = (f"--measured: {args.measured} is the --drive file itself; expected the "
+                       f"response measured while the drive was played")
     if not problem and args.history:
         problem = out_dir_problem(args.history)
         problem = problem.replace("--out", "--history") if problem else None

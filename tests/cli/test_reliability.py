@@ -509,3 +509,19 @@ def test_identify_refuses_the_same_record_twice(capsys, tmp_path, monkeypatch, t
                            "--time", "t", "--out", "m.toml")
     assert status == 2 and len(err) == 1 and "the same file given twice" in err[0]
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_learn_refuses_its_drive_given_as_the_measurement(capsys, tmp_path, monkeypatch):
+    # --measured drive.csv with --output-columns x=x_shaped: the learning read the drive's own
+    # target as the response ("RMS 0 µm (0 %)") and wrote a new drive, exit 0
+    monkeypatch.chdir(tmp_path)
+    ref = '{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'
+    assert _call(capsys, "compensate", "rakotondrabe-2dof", "--reference", ref, "--out",
+                 "d.csv")[0] == 0
+    os.link(tmp_path / "d.csv", tmp_path / "same.csv")
+    for measured in ("d.csv", "./same.csv"):
+        status, _, err = _call(capsys, "learn", "rakotondrabe-2dof", "--reference", ref,
+                               "--drive", "d.csv", "--measured", measured, "--output-columns",
+                               "x=x_shaped,y=y_shaped", "--out", "next.csv")
+        assert status == 2 and len(err) == 1 and "is the --drive file itself" in err[0]
+    assert not (tmp_path / "next.csv").exists()
