@@ -402,6 +402,13 @@ def _learn(args):
         guard_inputs(args.actuator, args.reference, None if replay else args.drive, args.measured)
         problem = output_problem(args.out)         # an input is never an output, even with --force
         problem = f"--out: {problem}" if problem else None
+    if not problem and args.history:
+        problem = out_dir_problem(args.history)
+        problem = problem.replace("--out", "--history") if problem else None
+    if not problem and args.history:
+        problem = history_file_problem(args.out, args.history)   # never two writes to one file
+    if not problem and args.history:
+        problem = foreign_history_problem(args.history, args.out)   # before the learning runs
     if not problem:
         try:
             same = os.path.samefile(args.drive, args.measured)
@@ -410,13 +417,6 @@ def _learn(args):
         if same:          # its <output>_shaped columns read as the measurement: "RMS 0 µm"
             problem = (f"--measured: {args.measured} is the --drive file itself; expected the "
                        f"response measured while the drive was played")
-    if not problem and args.history:
-        problem = out_dir_problem(args.history)
-        problem = problem.replace("--out", "--history") if problem else None
-    if not problem and args.history:
-        problem = history_file_problem(args.out, args.history)   # never two writes to one file
-    if not problem and args.history:
-        problem = foreign_history_problem(args.history, args.out)   # before the learning runs
     if problem:
         print_err(f"hammerstein learn: error: {problem}")
         return 2
