@@ -79,7 +79,13 @@ class HammersteinPlant:
         self._dynamics = dynamics
         self.creep = None
         if creep is not None:
-            creep = list(creep)
+            try:
+                creep = list(creep)
+            except TypeError:       # a CreepIdentifier: its creeps_, or IdentificationResult.plant
+                raise HysteresisError(
+                    f"creep: expected {hysteresis.n_outputs} entries (a Creep or None per "
+                    f"output), found {type(creep).__name__} (an identification's creep: its "
+                    f"creeps_; IdentificationResult.plant builds the whole plant)") from None
             if len(creep) != hysteresis.n_outputs or not all(
                     c is None or isinstance(c, Creep) for c in creep):
                 raise HysteresisError(f"creep: expected {hysteresis.n_outputs} entries (a Creep "

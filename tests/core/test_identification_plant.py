@@ -35,3 +35,18 @@ def test_the_plant_in_memory_is_the_preset_identify_writes(tmp_path):
     lo = np.min([r.u.min(axis=1) for r in recs], axis=0)
     hi = np.max([r.u.max(axis=1) for r in recs], axis=0)
     np.testing.assert_allclose(np.asarray(plant.hysteresis.input_range), np.vstack([lo, hi]).T)
+
+
+def test_an_identifications_creep_given_to_the_plant_is_named():
+    # HammersteinPlant(model, T, G, creep=result.creep) raised TypeError ('CreepIdentifier'
+    # object is not iterable)
+    import pytest
+    from hammerstein.exceptions import HysteresisError
+    from hammerstein.models.plant import HammersteinPlant
+
+    class CreepIdentifier:
+        creeps_ = [None, None]
+
+    model = load_plant("rakotondrabe-2dof", dynamics=False).hysteresis
+    with pytest.raises(HysteresisError, match="found CreepIdentifier .* IdentificationResult.plant"):
+        HammersteinPlant(model, 5e-5, None, creep=CreepIdentifier())
