@@ -8,10 +8,13 @@ route (:func:`save_model` with the result's tables and the records' ``[amplifier
 """
 
 import numpy as np
+import pytest
 
+from hammerstein.exceptions import HysteresisError
 from hammerstein.identification.identification_pipeline import PipelineOptions, identify_pipeline
 from hammerstein.io.presets import load_plant, save_model
 from hammerstein.models.amplifier import records_amplifier_table
+from hammerstein.models.plant import HammersteinPlant
 
 from test_preisach_identification import T, preisach_actuator, records
 
@@ -40,9 +43,6 @@ def test_the_plant_in_memory_is_the_preset_identify_writes(tmp_path):
 def test_an_identifications_creep_given_to_the_plant_is_named():
     # HammersteinPlant(model, T, G, creep=result.creep) raised TypeError ('CreepIdentifier'
     # object is not iterable)
-    import pytest
-    from hammerstein.exceptions import HysteresisError
-    from hammerstein.models.plant import HammersteinPlant
 
     class CreepIdentifier:
         creeps_ = [None, None]
