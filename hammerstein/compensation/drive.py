@@ -806,7 +806,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    "start-up corrected in the reference")
             advice = np.ceil(2.5 * late / 0.01) * 0.01
             why = "a fade whose steepest step, 2.4 times its mean, stays within the settled drive's"
-            fix = (f"give --fade-in {advice:.2g} or more ({why})" if advice <= 0.5 * N * T else
+            fix = (f"give --fade-in {advice:.2g} or more (fade_in={advice:.2g} from Python; "
+                   f"{why})" if advice <= 0.5 * N * T else
                    f"a fade-in that long ({advice:.2g} s, {why}) would take "
                    f"{100 * advice / (N * T):.3g} % of the {N * T:.4g} s record: give a longer "
                    f"record (more periods) with --fade-in {advice:.2g}, or a reference that "
