@@ -289,7 +289,7 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
                 if (b >= hi) {{
                     b = hi;
                     fb = {N}_eval(mm, c, hi, h) - target;
-                    if (fb <= {zero}) {{ *beyond = fb < -{N}_TOLERANCE; return hi; }}
+                    if (fb <= {zero}) {{ *beyond = fb < -{N}_BEYOND; return hi; }}
                     break;
                 }}
                 fb = {N}_eval(mm, c, b, h) - target;
@@ -309,7 +309,7 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
                 if (a <= lo) {{
                     a = lo;
                     fa = {N}_eval(mm, c, lo, h) - target;
-                    if (fa >= {zero}) {{ *beyond = fa > {N}_TOLERANCE; return lo; }}
+                    if (fa >= {zero}) {{ *beyond = fa > {N}_BEYOND; return lo; }}
                     break;
                 }}
                 fa = {N}_eval(mm, c, a, h) - target;
@@ -354,6 +354,19 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
 #: ends; relative error against the double Python 0.6-0.9e-6 before, 1.1-1.5e-6 with them;
 #: 8 epsilons on the tolerance: 0.5-0.6 us, 0.7-1.3e-5).
 FLOAT_ENDS_EPS = (1.0, 2.0, 1.0)
+
+
+#: How far [µm] a reference must lie beyond what an input's bound reaches for ``STATUS_RANGE``
+#: (double, float): a reference at rest sits on a bound (a unipolar stage's 0 V) to within the
+#: arithmetic's rounding, which the root search's tolerance is finer than (flagged on 299 of
+#: 300 samples at rest: 1.17e-9 V on the other input moved its target by more than 1e-12 µm)
+BEYOND_UM = (1e-6, 1e-3)
+
+
+def _beyond(tol, precision):
+    """``NAME_BEYOND`` [µm]: :data:`BEYOND_UM` for the precision, at least the tolerance (ten
+    times it in float)."""
+    return max(tol, BEYOND_UM[0]) if precision != "float" else max(10.0 * tol, BEYOND_UM[1])
 
 
 def _search_ends(comp, precision):
@@ -403,6 +416,7 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
              f"#define {N}_N_COMPONENTS {p * m}",
              f"#define {N}_N_POLY {rev.shape[1]}",
              f"#define {N}_TOLERANCE {_lit(tol, precision)}",
+             f"#define {N}_BEYOND {_lit(_beyond(tol, precision), precision)}",
              f"#define {N}_BRACKET_STEP {_lit(1e-5, precision)}",
              f"#define {N}_BRACKET_GROWTH {_lit(BRACKET_GROWTH, precision)}",
              f"#define {N}_SECANT_OVERSHOOT {_lit(SECANT_OVERSHOOT, precision)}",
