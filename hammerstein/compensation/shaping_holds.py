@@ -17,7 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["STUCK_FRACTION", "excess_events", "excess_left_to_limiter", "hold_note"]
+__all__ = ["STUCK_FRACTION", "MIN_HOLD_SAMPLES", "excess_events", "excess_left_to_limiter",
+           "hold_note"]
+
+#: The fewest samples a run of equal reference samples needs to be a hold (a scan's ramps move
+#: every sample, and a turn-around may repeat one: no hold)
+MIN_HOLD_SAMPLES = 3
 
 #: an excess whose peak over its event is more than this fraction of what it was with half the
 #: window is not the window's to remove: a slope-driven excess, ``max(k s - S, 0)`` for a drive
@@ -97,8 +102,9 @@ def excess_left_to_limiter(before, after, width):
 def hold_note(raw, shaped, window, sampling_period, names=None, lead=0):
     """A note per output whose holds are shorter than the smoothing window, or none.
 
-    A hold is a run of equal samples of ``raw`` between two moves (after the
-    first ``lead`` samples at rest, before the last move). A zero-phase
+    A hold is a run of at least :data:`MIN_HOLD_SAMPLES` equal samples of
+    ``raw`` between two moves (after the first ``lead`` samples at rest,
+    before the last move). A zero-phase
     window of ``window`` samples reaches a level only where it is at least
     half a window from both moves: a hold shorter than the window is left
     before its level is reached.
@@ -142,7 +148,9 @@ def hold_note(raw, shaped, window, sampling_period, names=None, lead=0):
             continue
         starts, ends = moves[:-1], moves[1:]                  # holds [start, end) between moves
         held = ends - starts
-        short = held < int(window)
+        # a hold stays put for at least MIN_HOLD_SAMPLES samples: a scan's samples between two
+        # moves (1 sample each) are none ("holds of 0.05 ms, and 1208 more" on a raster)
+        short = (held < int(window)) & (held >= MIN_HOLD_SAMPLES)
         miss = np.abs(s[i, ends - 1] - r[i, ends - 1])
         hit = short & (miss > 1e-6 * scale)
         if not np.any(hit):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from hammerstein.compensation.shaping_holds import hold_note
 from hammerstein.compensation.shaping import (first_mode_hz, hann_average, limit_excess,
                                               mode_decay_s, shape_reference)
 from hammerstein.models.amplifier import amplifier_from_table
@@ -246,3 +247,15 @@ def test_holds_shorter_than_the_smoothing_are_named():
     ends = 200 + 30 * np.arange(1, 5) - 1                          # the last sample of each hold
     assert miss == pytest.approx(float(np.max(np.abs(s.reference[0, ends] - r[0, ends]))), rel=1e-2)
     assert miss > 1.0
+
+
+def test_a_scan_that_moves_every_sample_has_no_holds():
+    # a raster's fast axis: every sample moves, one sample between two moves is no hold ("holds
+    # of 0.05 ms (at ..., and 1208 more) are shorter than the 3.5 ms smoothing window")
+    t = np.arange(4000) * 5e-5
+    tri = 20 * (2 * np.abs((20 * t) % 1 - 0.5) * 2 - 1)                # 20 Hz triangle
+    shaped = tri + 0.5 * np.sin(2 * np.pi * 20 * t)                     # turns rounded
+    assert hold_note(tri[None], shaped[None], 70, 5e-5, ["x"]) == []
+    # a staircase's 2 ms holds under a 3.5 ms window are named
+    stair = np.repeat(np.arange(100.0), 40)[None]
+    assert len(hold_note(stair, stair + 0.1, 70, 5e-5, ["x"])) == 1
