@@ -626,8 +626,11 @@ def _owned_targets(out, targets, force, contents):
         now = _digest(path) if path.is_file() and not path.is_symlink() else None
         was = owned[name] or hashlib.sha256(contents[name]).hexdigest()
         if now != was:
-            raise _Usage(f"--out: {path} changed since hammerstein excitation wrote it (the "
-                         f"measured columns added?); nothing was written: choose another "
+            why = ("changed since hammerstein excitation wrote it (the measured columns "
+                   "added?)" if owned[name] else
+                   "differs from what this run writes, and the directory's manifest (an older "
+                   "version's) does not say whether you changed it")
+            raise _Usage(f"--out: {path} {why}; nothing was written: choose another "
                          f"directory, move it away, or add --force to replace it")
     return owned
 

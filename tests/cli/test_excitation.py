@@ -510,7 +510,9 @@ def test_a_record_the_user_filled_is_never_replaced(tmp_path, capsys):
     # a manifest of the earlier format (names alone): compared with what this run writes
     man = tmp_path / "lab" / ".hammerstein-excitation"
     man.write_text("\n".join(ln.split("\t")[0] for ln in man.read_text().splitlines()) + "\n")
+    capsys.readouterr()
     assert main(argv) == 2
+    assert "an older version's" in capsys.readouterr().err
     assert hashlib.sha256(rec.read_bytes()).hexdigest() == mine
     assert main(argv + ["--force"]) == 0 and hashlib.sha256(rec.read_bytes()).hexdigest() != mine
 
