@@ -163,10 +163,6 @@ def _reference_outputs(args):
     return names or None
 
 
-#: columns of a measured file that are no output of the stage: what a drive file aims at
-_AIMED = AIMED_SUFFIXES
-
-
 def _measured_outputs(args):
     """The measured file's output columns (all but the time, the drive's inputs and what a
     drive aims at), or None when it cannot be read."""
@@ -177,7 +173,7 @@ def _measured_outputs(args):
     except (DataFileError, FileLimitError, OSError):
         return None
     return [c for c in columns if c not in (args.time, "t") and c not in inputs
-            and not c.endswith(_AIMED)]
+            and not c.endswith(AIMED_SUFFIXES)]
 
 
 def _names(text, default):

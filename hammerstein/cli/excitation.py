@@ -645,7 +645,7 @@ def _contents(targets, records, names, amplitude, T, reversals, centre, band):
 
 def _write_records(out, owned, contents):
     """The manifest, the records and README.md: all of them or none."""
-    digests = {name: d for name, d in owned.items()}
+    digests = dict(owned)
     digests.update({name: hashlib.sha256(data).hexdigest() for name, data in contents.items()})
     manifest = "\n".join([_MANIFEST_HEAD, *(f"{name}\t{d}" if d else name
                                              for name, d in sorted(digests.items()))]) + "\n"

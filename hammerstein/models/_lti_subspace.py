@@ -555,6 +555,8 @@ class DynamicsIdentifier:
         ins, outs = _records(inputs, outputs)
         self._free_gain = False
         balanced_fit(self, ins, outs, sampling_period)
+        if self.decimation_ > 1:         # the decimated records' own fit() decided and scaled
+            return self
         if self.unit_dc_gain:
             # judged in the balanced units the fit ran in (an output in µrad beside one in
             # µm would make an off-diagonal entry of 1e-4 one of 1)
