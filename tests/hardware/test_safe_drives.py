@@ -568,7 +568,8 @@ def test_a_reference_shaped_far_from_the_one_asked_is_a_warning(tmp_path, slew, 
         code = main(["compensate", str(preset), "--reference", ref,
                      "--out", str(tmp_path / "d.csv"), "--limits", "warn"])
     assert code == 0
-    lines = [ln for ln in err.getvalue().splitlines() if "% of its half-span" in ln]
+    lines = [ln for ln in err.getvalue().splitlines()
+             if ln.startswith("warning: ") and "% of its half-span" in ln]
     assert bool(lines) == warned
     if warned:
         assert lines[0].startswith("warning: ") and "60 V/s" in lines[0] and "[amplifier]" in lines[0]

@@ -75,3 +75,56 @@ def test_compensate_writes_no_drive_and_exits_1(tmp_path, capsys):
     assert code == 1 and not out.exists()
     assert err[-1].startswith("hammerstein compensate: error: model: the exact inverse cannot "
                               "solve it")
+
+
+def _slow_plant():
+    """The dominant-direct plant behind two critically damped 12 Hz lags: a 100 Hz reference
+    needs 1 / |G| = 1 + (100 / 12)^2 = 70 times its static voltages. Its model bounded by the
+    records' range, as ``identify`` writes it: the exact inverse never asks beyond it."""
+    from hammerstein.models.dynamics import sampled_bending_modes
+    plant = _plant(60.0, 0.3)
+    plant.hysteresis.input_range = np.array([[-10.0, 10.0], [-10.0, 10.0]])
+    slow = HammersteinPlant(plant.hysteresis, 1e-4,
+                            sampled_bending_modes([12.0, 12.0], [1.0, 1.0], ["x", "y"], 1e-4),
+                            name="slow")
+    slow.amplifier = plant.amplifier
+    return slow
+
+
+def _fast_circle():
+    return hs.circle(1e-4, radius=5.0, frequency=100.0, periods=20)[1]
+
+
+def test_an_inverse_held_on_its_bounds_by_the_dynamics_is_refused():
+    # the exact inverse answers every sample within its bounds, so the limits see nothing; the
+    # drive jumps between the bounds and misses the circle on the model itself
+    with pytest.raises(CompensatorError) as err:
+        compensate_reference(_slow_plant(), _fast_circle(), period_samples=100)
+    text = str(err.value)
+    assert text.startswith("nothing written: the drive, played through the model it was "
+                           "computed from, misses the reference")
+    gain = float(re.search(r"pass the reference's 100 Hz at ([0-9.e-]+) of", text).group(1))
+    assert gain == pytest.approx(1 / (1 + (100 / 12) ** 2), rel=0.05)
+    assert re.search(r"ux [0-9.]+ %, uy [0-9.]+ % of the samples", text)
+
+
+def test_with_limits_warn_it_is_written_with_the_note():
+    plant = _slow_plant()
+    _, drive = compensate_reference(plant, _fast_circle(), period_samples=100, limits="warn")
+    (note,) = [n for n in drive.notes if "misses the reference" in n]
+    median = float(re.search(r"by ([0-9.]+) µm on half of them", note).group(1))
+    y, _ = plant.simulate(drive.inputs, plant.rest_state())
+    after = slice(drive.fade_samples, None)
+    miss = np.hypot(*(y[:, after] - drive.reference[:, after]))
+    assert median == pytest.approx(np.median(miss), rel=0.01)
+    assert median > 0.5 * 5.0                        # more than half the radius: refused above
+
+
+def test_a_slow_reference_on_the_same_plant_has_no_note():
+    plant = _slow_plant()
+    _, drive = compensate_reference(plant, hs.circle(1e-4, radius=5.0, frequency=2.0,
+                                                     periods=3)[1], period_samples=5000)
+    assert not [n for n in drive.notes if "misses the reference" in n]
+    y, _ = plant.simulate(drive.inputs, plant.rest_state())
+    after = slice(drive.fade_samples, None)
+    assert np.max(np.hypot(*(y[:, after] - drive.reference[:, after]))) < 0.1 * 5.0
