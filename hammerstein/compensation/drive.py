@@ -962,14 +962,23 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
     start = _start_steps(u, end, r0)
     notes = []
     for i in np.flatnonzero((start > bound * (1 + _LIMIT_TOL)) & (bound > 0)):
-        # an excess is limited (no step of the drive beyond the settled drive's largest); one
-        # within _STEP_TOL (rounding: 3e-6 at 50 kHz) moves the drive by as little, unsaid
+        # an excess is limited (no step of the drive beyond the settled drive's largest), and
+        # said even when within _STEP_TOL (rounding: 3e-6 at 50 kHz): the drive then departs
+        # from the compensator's voltages, which an exported compensator fed the reference
+        # gives (a bender's 50 Hz sine: 1.1e-5 V at one sample, 6e-6 over, said nowhere)
+        before = u[i].copy()
         u[i] = slew_limit(u[i], r0[i], bound[i])
-        if start[i] <= bound[i] * (1 + _STEP_TOL):
-            continue
         name = names[i] if names is not None else f"input {i + 1}"
         when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
+        over = start[i] / bound[i] - 1
+        if over > _STEP_TOL:
+            notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the "
+                         f"settled drive's largest step, {bound[i]:.3g} V per sample "
+                         f"({start[i]:.3g} V asked, {100 * over:.3g} % more)")
+            continue
+        moved = np.abs(u[i] - before)
         notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
-                     f"drive's largest step, {bound[i]:.3g} V per sample ({start[i]:.3g} V asked, "
-                     f"{100 * (start[i] / bound[i] - 1):.3g} % more)")
+                     f"drive's largest step, {bound[i]:.6g} V per sample ({over:.2g} of it more "
+                     f"asked, rounding-sized): the drive differs from the compensator's by up to "
+                     f"{moved.max():.2g} V at {int(np.count_nonzero(moved))} sample(s)")
     return u, notes
