@@ -286,7 +286,53 @@ def _written(args, kind, note, make):
         print_err(note)
     for path in written:
         print(f"wrote {path}")
+    for path in written:
+        if str(path).endswith(".h"):
+            line = state_line(Path(path).read_text(encoding="utf-8"))
+            if line:
+                print(line)
     return 0
+
+
+def state_line(header):
+    r"""``"state: ..."``: the compensator state's size and preview read from a written header.
+
+    Parameters
+    ----------
+    header : str
+        The text of an exported ``NAME.h``.
+
+    Returns
+    -------
+    str or None
+        The reals (``NAME_STATE_REALS``), the ints of the state struct, their bytes
+        without the compiler's padding, and ``NAME_PREVIEW``; None when the header
+        holds no state struct.
+
+    Examples
+    --------
+    >>> h = ("#define a_PREVIEW 2\n#define a_STATE_REALS 10\ntypedef double a_real;\n"
+    ...      "typedef struct {\n    a_real u[2];\n    int received;\n    int moved[4];\n"
+    ...      "} a_state;\n")
+    >>> state_line(h).split(";")[0]
+    'state: 10 reals (double) and 5 ints, 100 B before padding (sizeof(a_state))'
+    """
+    reals = re.search(r"#define (\w+)_STATE_REALS (\d+)", header)
+    body = re.search(r"typedef struct \{\n(.*?)\n\} (\w+_state);", header, re.S)
+    kind = re.search(r"typedef (double|float) \w+_real;", header)
+    preview = re.search(r"#define \w+_PREVIEW (\d+)", header)
+    if not (reals and body and kind):
+        return None
+    ints = 0
+    for member in re.findall(r"^\s*int \w+(?:\[(\d+)\])?;", body.group(1), re.M):
+        ints += int(member) if member else 1
+    n = int(reals.group(2))
+    size = 8 if kind.group(1) == "double" else 4
+    text = (f"state: {n} reals ({kind.group(1)}) and {ints} ints, {n * size + 4 * ints} B "
+            f"before padding (sizeof({body.group(2)}))")
+    if preview:
+        text += f"; preview {preview.group(1)} sample(s) (the first calls return the rest voltages)"
+    return text + "; time per step and stack on your target: docs/real-time.md"
 
 
 def _open_loop(args, source, kind, gain, check):

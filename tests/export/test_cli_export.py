@@ -28,7 +28,9 @@ def test_c_files_written_then_replaced(tmp_path, capsys):
                             "--kind", "hammerstein")
     assert code == 0 and err == ""
     h, c = out / "rakotondrabe_2dof_hammerstein.h", out / "rakotondrabe_2dof_hammerstein.c"
-    assert stdout.splitlines() == [f"wrote {h}", f"wrote {c}"]
+    lines = stdout.splitlines()
+    assert lines[:2] == [f"wrote {h}", f"wrote {c}"]
+    assert len(lines) == 3 and lines[2].startswith("state: ")
     for f in (h, c):
         assert f.read_text().startswith(MARKER)
     text = h.read_text()
@@ -156,3 +158,32 @@ def test_cli_code_equals_python(tmp_path, capsys):
     comp = InverseMultiplicativeCompensator(load_plant("rakotondrabe-2dof").hysteresis,
                                             gain="midpoint", iterations=2)
     assert rel_error(u, python_voltages(comp, sine(1500))) <= 1e-12
+
+
+@needs_cc
+@pytest.mark.parametrize("kind, precision", [("hammerstein", "double"), ("per-axis", "float")])
+def test_the_state_line_gives_the_struct_size_before_padding(tmp_path, capsys, kind, precision):
+    """``export`` says the state's size: its reals and ints, within padding of sizeof."""
+    import re
+    import subprocess
+    from conftest import COMPILERS
+    out = tmp_path / "gen"
+    code, stdout, _ = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out),
+                          "--kind", kind, "--precision", precision, "--name", "act")
+    assert code == 0
+    line = stdout.splitlines()[-1]
+    reals, ints, size = map(int, re.search(r"state: (\d+) reals \(\w+\) and (\d+) ints, "
+                                           r"(\d+) B before padding", line).groups())
+    header = (out / "act.h").read_text()
+    assert f"#define act_STATE_REALS {reals}\n" in header
+    assert size == reals * (8 if precision == "double" else 4) + 4 * ints
+    main_c = tmp_path / "size.c"
+    main_c.write_text('#include <stdio.h>\n#include "act.h"\n'
+                      'int main(void) { printf("%u", (unsigned)sizeof(act_state)); return 0; }\n')
+    exe = tmp_path / "size"
+    subprocess.run([COMPILERS[0], "-std=c99", "-I", str(out), "-o", str(exe), str(main_c)],
+                   check=True)
+    sizeof = int(subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout)
+    assert size <= sizeof <= size + 8          # what alignment adds
+    preview = re.search(r"act_PREVIEW (\d+)", header).group(1)
+    assert f"preview {preview} sample(s)" in line
