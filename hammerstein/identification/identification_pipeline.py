@@ -22,6 +22,9 @@ table runs, with the same options (:class:`PipelineOptions`, the defaults of
 
 The result (:class:`IdentificationResult`) carries the fit, G and the creep,
 and the tables a preset stores besides ``[model]`` (:meth:`IdentificationResult.tables`).
+
+Length: the one pipeline both routes call, with the warnings it prints on what it fitted
+(minor loops, dynamics, static gain, auto's ties); splitting it would split the defaults.
 """
 
 from __future__ import annotations
