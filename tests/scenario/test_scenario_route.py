@@ -77,3 +77,20 @@ def test_a_compensator_model_other_than_the_plant_drives_as_compensate_on_it(tmp
     assert case.start_fade == drive.fade_samples
     u = np.asarray(drive.inputs)
     assert np.max(np.abs(result.inputs - u)) <= 1e-9
+
+
+def test_the_report_names_the_exact_static_inverse_not_the_gain_law(tmp_path):
+    from hammerstein.report.compensator_words import _compensator_title
+    from hammerstein.report.scenario import compensator_summary
+    case = load_scenario(_scenario(tmp_path, "")).cases[0]
+    assert case.compensator.exact_static     # generalised PI: the model's exact inverse runs
+    words = compensator_summary(case.compensator_spec, case.compensator)
+    title = _compensator_title(case)
+    for text in (words, title):
+        assert "midpoint gain" not in text and "3 iterations" not in text, text
+    assert "the exact inverse of its model" in words
+    # a classical PI runs the law: its gain and iterations are still named
+    pi = load_scenario(Path(__file__).resolve().parents[2] / "scenarios" / "default.toml").cases
+    comp = next(c for c in pi if c.compensator is not None)
+    assert not getattr(comp.compensator, "exact_static", False)
+    assert "gain" in compensator_summary(comp.compensator_spec, comp.compensator)
