@@ -94,3 +94,13 @@ def test_the_report_names_the_exact_static_inverse_not_the_gain_law(tmp_path):
     comp = next(c for c in pi if c.compensator is not None)
     assert not getattr(comp.compensator, "exact_static", False)
     assert "gain" in compensator_summary(comp.compensator_spec, comp.compensator)
+
+
+def test_a_monte_carlo_study_names_the_plant_creep_it_inverts():
+    # the study's compensator is built from the table the report names: without model = its
+    # G is the nominal plant's, and so is the creep (realistic-2dof creeps)
+    from hammerstein.report.scenario import compensator_summary
+    from hammerstein.scenario.validate import validate_scenario
+    scenario = validate_scenario(PRESET.parents[1] / "robustness-realistic.toml")
+    assert scenario.compensator_spec["creep"] == "plant"
+    assert "the plant's true creep inverted" in compensator_summary(scenario.compensator_spec)
