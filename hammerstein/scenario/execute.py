@@ -27,7 +27,8 @@ from hammerstein.compensation.drive import apply_amplifier, default_fade_samples
 from hammerstein.compensation.hammerstein_compensator import fade_in
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import CompensatorDivergence
-from hammerstein.scenario.hardware_route import hardware_start, start_drive, unfollowed_problem
+from hammerstein.scenario.hardware_route import (compensator_plant, hardware_start, start_drive,
+                                                 unfollowed_problem)
 from hammerstein.scenario.registry import compensator_kind
 from hammerstein.simulation import ChainResult, simulate_chain
 
@@ -168,7 +169,8 @@ def _hardware_case(case, caught):
     with warnings.catch_warnings(record=True) as rec:
         warnings.simplefilter("always")
         try:
-            drive = start_drive(plant, case.compensator, case.signal, P,
+            drive = start_drive(compensator_plant(plant, case.compensator), case.compensator,
+                                case.signal, P,
                                 case.compensator_spec.get("fade_in"),
                                 getattr(case.compensator, "limits", None) or "warn",
                                 key="compensator.fade_in")

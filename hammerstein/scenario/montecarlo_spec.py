@@ -26,7 +26,7 @@ from hammerstein.core.schema import (Field, Invalid, check_table, choice, intege
                                      known_kind, name_field, number, string)
 from hammerstein.scenario.feedback_table import check_feedback_table
 from hammerstein.scenario.montecarlo_draw import oscillating_modes
-from hammerstein.scenario.registry import COMPENSATORS
+from hammerstein.scenario.registry import COMPENSATORS, model_file_dynamics
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
 
 
@@ -447,7 +447,10 @@ def validate_montecarlo(path, data):
     return MonteCarloScenario(name=top.get("name", Path(path).stem),
                               title=top.get("title", Path(path).stem),
                               description=top.get("description", ""), seed=seed, path=Path(path),
-                              studies=studies, compensator_spec=dict(comp), feedback=feedback)
+                              studies=studies,
+                              # the creep and G the compensator takes, named by the report
+                              compensator_spec=model_file_dynamics(dict(comp), Path(path).parent),
+                              feedback=feedback)
 
 
 def _check_feedback(data, comp, plant, source, problems):

@@ -1,7 +1,10 @@
 """Identification scenarios on measured records (``kind = "identification"``).
 
 A scenario file of this kind has no plant: it identifies a (multivariable)
-classical PI model from measured records with the options of
+hysteresis model (``model``: the classical PI by default, or a Preisach,
+generalised-PI or automatically chosen class as ``identify --model`` fits it,
+:func:`hammerstein.identification.identification_pipeline.identify_hysteresis`)
+from measured records with the options of
 ``hammerstein identify`` (:func:`hammerstein.identification.record_identification.identify_records`:
 split at reversal points, the last complete branches or periods held out,
 partition and component structure chosen automatically unless given) and
@@ -24,6 +27,8 @@ writes a report directory like the simulated scenarios::
     components = "auto"        # "all", or "OUT:IN=pi|gain|none,..."
     hold_out = "auto"          # or "none"; train_fraction = 0.6 splits at the nearest reversal
     output_map = "auto"        # "none" (classical PI) or "deadzone" (modified PI, always)
+    model = "classical"        # or "preisach", "generalized", "auto" (preisach_levels,
+                               # threshold_spacing, level_weighting as identify's)
 
 The report holds ``metrics.csv`` (cases ``train`` and ``validation``;
 per output channel ``rms_error``, ``rms_error_percent`` [% of the measured
@@ -43,7 +48,10 @@ import numpy as np
 
 from hammerstein.io.datafiles import DataFileError, bundled_data, read_records
 from hammerstein.core.files import confined_path, escape
+from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification import IdentificationError
+from hammerstein.identification.identification_pipeline import PipelineOptions, identify_hysteresis
+from hammerstein.identification.preisach_identification import refit_on_every_level
 from hammerstein.identification.record_identification import KINDS as COMPONENT_KINDS
 from hammerstein.identification.record_identification import identify_records, parse_components
 from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
@@ -152,6 +160,11 @@ IDENTIFICATION_FIELDS = {
     "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
     "train_fraction": Field(_fraction),
     "skip": Field(number("s", 0, exclusive=False)),
+    # the model class, as identify --model (default: the classical PI this kind always fitted)
+    "model": Field(choice("classical", "auto", "preisach", "generalized"), default="classical"),
+    "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
+    "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
+    "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
 }
 
 
@@ -268,6 +281,13 @@ def load_identification_scenario(path, data):
                         problems, source) or {}
     if ident.get("bounds", "none") != "none" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.bounds: only used by method = 'least-squares'")
+    model = ident.get("model", "classical")
+    if model in ("preisach", "generalized") and ident.get("method") == "closed-form":
+        problems.append(f"{source}: identification.method: model = {model!r} is fitted by "
+                        f"least squares; expected 'least-squares' (the default)")
+    if model != "classical" and "thresholds" in ident:
+        problems.append(f"{source}: identification.thresholds: only used by model = "
+                        f"'classical', found model = {model!r}")
     if ident.get("output_map") == "deadzone" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.output_map: deadzone only with method = "
                         f"'least-squares'")
@@ -355,6 +375,17 @@ def run_identification_scenario(scenario):
         raise IdentificationError(
             f"data.input_names/output_names: expected {rec.u.shape[0]} input and "
             f"{rec.y.shape[0]} output names, found {ins} and {outs}")
+    if spec.get("model", "classical") != "classical":
+        fit = identify_hysteresis(scenario.records, PipelineOptions(
+            method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
+            bounds=spec["bounds"], components=spec["components"], model=spec["model"],
+            threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
+            preisach_levels=spec["preisach_levels"], hold_out=spec["hold_out"],
+            output_map=spec["output_map"], train_fraction=spec.get("train_fraction"),
+            skip=spec.get("skip"), output_unit=scenario.data["output_unit"]), (ins, outs))
+        # as identify writes it: a Preisach model refitted on every level (its held-out
+        # errors stay those of the held-out fit; the fit's notes say so)
+        return _results(refit_on_every_level(fit, spec["preisach_levels"]), scenario)
     thresholds = spec.get("thresholds")
     partition = spec["partition"]
     if thresholds is not None and partition == "auto":
@@ -364,6 +395,11 @@ def run_identification_scenario(scenario):
         None if thresholds is None else np.asarray(thresholds), partition, spec["bounds"],
         spec["components"], spec["hold_out"], spec.get("train_fraction"), spec.get("skip"),
         ins, outs, output_map=spec.get("output_map", "auto"))
+    return _results(fit, scenario)
+
+
+def _results(fit, scenario):
+    """The ``train`` and ``validation`` results of a fit (a validation part required)."""
     if fit.validation is None:
         raise IdentificationError("identification.hold_out: nothing held out; the report "
                                   "needs a validation part (hold_out = 'auto')")

@@ -184,6 +184,43 @@ def mode_notes(case):
     return [note] if note else []
 
 
+#: the options of the inverse multiplicative law, which a compensator whose static part is the
+#: model's exact inverse does not run
+LAW_OPTIONS = ("gain", "iterations", "check", "feedback", "cutoff_hz")
+#: the key naming the exact static part in a shown compensator table (the report prints it)
+EXACT_KEY = "static part:"
+
+
+def shown_spec(spec, comp):
+    """The compensator table as it runs: what the report names.
+
+    A compensator whose static part is its model's exact inverse (``kind =
+    "hammerstein"`` on a Preisach or generalised-PI model: ``exact_static``)
+    runs no gain law; its table's law options (filled with their defaults,
+    ``midpoint`` gain, 3 iterations) are left out and :data:`EXACT_KEY` names
+    the exact inverse instead (a tester's report said "midpoint gain, 3
+    iterations" for the exact Preisach inverse).
+
+    Parameters
+    ----------
+    spec : dict or None
+        The validated compensator table.
+    comp : object or None
+        The compensator built from it.
+
+    Returns
+    -------
+    dict or None
+        ``spec`` itself, or a copy without :data:`LAW_OPTIONS` and with
+        :data:`EXACT_KEY`.
+    """
+    if not spec or not getattr(comp, "exact_static", False):
+        return spec
+    out = {k: v for k, v in spec.items() if k not in LAW_OPTIONS}
+    out[EXACT_KEY] = "the exact inverse of its model (no gain, no iterations)"
+    return out
+
+
 def canonical_key(value):
     """A hashable key equal for equal tables (dicts in any key order, arrays by content).
 
@@ -281,7 +318,8 @@ def resolve_scenario(spec, cache=None):
         if extra:
             caught.append(extra)
         case = replace(case, compensator=comp, model=model, warnings=caught,
-                       identified=list(context.identified))
+                       identified=list(context.identified),
+                       compensator_spec=shown_spec(case.compensator_spec, comp))
         cases.append(replace(case, notes=mode_notes(case)))
     smap = None
     if spec.stability_map is not None and spec.stability_plant is not None:

@@ -50,8 +50,10 @@ def test_a_preset_as_model_inverts_its_dynamics_and_creep_as_compensate_does(tmp
 def test_a_model_file_without_dynamics_keeps_the_plant_g(tmp_path):
     save_model(load_plant(PRESET).hysteresis, tmp_path / "m.toml")     # [model] only
     spec = {"kind": "hammerstein", "model": "m.toml"}
-    assert model_file_dynamics(spec, tmp_path) is spec
+    # the plant's G, and with it the plant's creep (its linear part, as compensate inverts it)
+    assert model_file_dynamics(spec, tmp_path) == {**spec, "creep": "plant"}
     assert model_file_dynamics({**spec, "dynamics": "plant"}, tmp_path)["dynamics"] == "plant"
+    assert model_file_dynamics({**spec, "creep": "none"}, tmp_path) == {**spec, "creep": "none"}
 
 
 def test_the_creep_words_follow_the_built_compensator():

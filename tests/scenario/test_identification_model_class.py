@@ -1,0 +1,79 @@
+"""A ``kind = "identification"`` scenario fits every model class ``hammerstein identify`` writes.
+
+Regression: ``[identification] model = "preisach"`` was refused (``identification.model:
+unknown key``): the scenario fitted only the classical PI. The fixture is a Preisach
+actuator (asymmetric densities, reversible terms, an even cross-coupling) played by one
+decreasing sine per input, as ``tests/cli/test_identify_model.py``'s.
+"""
+
+import numpy as np
+import pytest
+
+from hysteresis_records import decreasing_sine_records
+from cli_run import run_cli
+from hammerstein.io.presets import load_model
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.scenario.records import load_identification_scenario, run_identification_scenario
+from hammerstein.scenario.schema import ScenarioError
+from hammerstein.io.presets import read_toml
+
+T = 1e-3
+
+
+def actuator():
+    e = np.linspace(-10.5, 10.5, 31)
+    x = PreisachModel.from_density(e, total=24.0, bias_width=5.0, tilt=0.6, coercivity_width=3.0,
+                                   reversible=[3.0, 0.035])
+    y = PreisachModel.from_density(e, total=22.0, bias=0.3, bias_width=5.0, tilt=-0.5,
+                                   coercivity_width=2.6, reversible=[2.8, -0.04])
+    return MultivariableHysteresis([[x, None], [Polynomial([0.05, 0.03]), y]], ["ux", "uy"],
+                                   ["x", "y"], [10.0, 10.0])
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ident")
+    decreasing_sine_records(d, actuator(), 0.04, "hyst", T)
+    return d
+
+
+def _scenario(d, extra):
+    path = d / "s.toml"
+    path.write_text('kind = "identification"\n[data]\nfiles = ["hyst-0.csv", "hyst-1.csv"]\n'
+                    'inputs = ["ux", "uy"]\noutputs = ["x", "y"]\ntime = "t"\n'
+                    f'[identification]\n{extra}', encoding="utf-8")
+    return path
+
+
+def _load(path):
+    return load_identification_scenario(path, read_toml(path, "scenario"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model, options", [("preisach", ["--preisach-levels", "12"]),
+                                            ("generalized", [])])
+def test_the_scenario_fits_the_class_identify_fits(records, model, options):
+    extra = f'model = "{model}"\n' + ("preisach_levels = 12\n" if options else "")
+    fit = run_identification_scenario(_load(_scenario(records, extra)))[0].fit
+    assert run_cli("identify", "hyst-0.csv", "hyst-1.csv", "--inputs", "ux,uy", "--outputs",
+                   "x,y", "--time", "t", "--model", model, *options, "--out", "m.toml",
+                   cwd=records).returncode == 0
+    cli = load_model(records / "m.toml")
+    assert type(fit.model.components[0][0]) is type(cli.components[0][0])
+    assert type(cli.components[0][0]).__name__ != "PrandtlIshlinskii"
+    # the same model: the same outputs on a loop neither was fitted on
+    t = np.arange(3000) * T
+    u = np.vstack([7.0 * np.sin(2 * np.pi * t), 4.0 * np.sin(2 * np.pi * 1.7 * t)])
+    y_cli, y = cli.simulate(u)[0], fit.model.simulate(u)[0]
+    assert np.max(np.abs(y - y_cli)) <= 1e-9 * np.max(np.abs(y_cli))
+
+
+def test_closed_form_and_thresholds_are_classical_options(records):
+    with pytest.raises(ScenarioError) as err:
+        _load(_scenario(records, 'model = "preisach"\nmethod = "closed-form"\n'))
+    assert str(err.value).count("\n") == 0
+    assert "identification.method: model = 'preisach' is fitted by least squares" in str(err.value)
+    with pytest.raises(ScenarioError, match="identification.thresholds: only used by model = "
+                                            "'classical'"):
+        _load(_scenario(records, 'model = "generalized"\nthresholds = [0.0, 2.0, 4.0]\n'))
+    assert _load(_scenario(records, "")).identification["model"] == "classical"
