@@ -37,6 +37,7 @@ import contextlib
 import os
 import re
 import sys
+import warnings
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -59,7 +60,7 @@ from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.cli._learn_checks import gain_band, model_gain_note, model_gains, plant_first_mode
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
-from hammerstein.exceptions import DataFileError, FileLimitError, PresetError
+from hammerstein.exceptions import DataFileError, FileLimitError, HammersteinError, PresetError
 from hammerstein.io.datafiles import signal_table
 from hammerstein.core.files import markdown_text
 from hammerstein.report.definitions import definitions_lines
@@ -95,10 +96,12 @@ def add_parser(subparsers):
                         "one per input [V]")
     p.add_argument("--out", required=True, metavar="DIR", help="report directory")
     p.add_argument("--model", metavar="MODEL_OR_PRESET",
-                   help="names the inputs and outputs (without it: a CSV reference's columns, else x,y)")
+                   help="names the inputs and outputs (without it: the reference's, else those "
+                        "of the actuator the --drive file's header names, else x,y)")
     add_column_options(
         p, outputs_help="output names, or NAME=COLUMN for columns named otherwise (default: "
-                            "--model's outputs, else a CSV reference's columns, else x,y)",
+                            "--model's outputs, else a CSV reference's columns, else the --drive "
+                            "header's actuator's, else x,y)",
         inputs_help="input columns [V] to report peak_input / peak_slew and plot",
         time_help="time column (default t)")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
@@ -161,6 +164,39 @@ def _reference_outputs(args):
         return None
     names = [str(c) for c in columns if str(c) != args.time]
     return names or None
+
+
+def _drive_actuator_outputs(args):
+    """The outputs of the actuator the ``--drive`` file's header names, or None.
+
+    Without ``--model`` or ``--output-columns`` the outputs judged default to x, y; a drive
+    written by ``compensate`` or ``learn`` names the actuator it was computed for
+    (``# actuator PATH, kind ...``), a path as given to that command: it is looked up as
+    given and next to the drive file. None when there is no drive, no such line, no such
+    file, or it cannot be read (the default then applies, and the reading says what is
+    missing)."""
+    if args.outputs or not args.drive:
+        return None
+    try:
+        name = next((m.group(1).strip() for m in
+                     (re.match(r"#\s*actuator\s+([^,]+),", ln)
+                      for ln in head_lines(args.drive, 40)) if m), None)
+    except (OSError, ValueError, DataFileError, FileLimitError):
+        return None
+    if not name:
+        return None
+    for path in (Path(name), Path(args.drive).parent / name):
+        if not path.is_file():
+            continue
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")     # its warnings are compensate's, said there
+            for period in (None, 1.0):          # a model file with no period: its names
+                try:
+                    names = list(load_actuator(str(path), period).hysteresis.output_names)
+                except (HammersteinError, OSError, ValueError):
+                    continue
+                return names or None
+    return None
 
 
 def _measured_outputs(args):
@@ -296,8 +332,9 @@ def _handle(args):
                     raise
                 plant = load_actuator(args.model, 1.0)   # the names of a model with no period
             outs, ins = list(plant.hysteresis.output_names), list(plant.hysteresis.input_names)
-        else:     # the outputs a CSV reference names (a one-axis stage's x), else x, y
-            outs, ins = _reference_outputs(args) or ["x", "y"], []
+        else:     # the outputs the reference names (a one-axis stage's x), else the drive's
+            outs, ins = (_reference_outputs(args) or _drive_actuator_outputs(args)  # actuator's
+                         or ["x", "y"]), []
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
         n_drive, period = None, args.sampling_period
