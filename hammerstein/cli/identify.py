@@ -618,7 +618,8 @@ def _handler(args):
                  + (_creep_recs(args) if args.creep_records else []))
         extra["amplifier"] = records_amplifier_table(every, list(fit.model.input_names))
         hold_notes = _hold_step_notes(every, extra["amplifier"], args.input_unit)
-        units = unit_warnings(every, list(fit.model.output_names), args.output_unit, args.time)
+        units = unit_warnings(every, list(fit.model.output_names), args.output_unit, args.time,
+                              list(fit.model.input_names), args.input_unit)
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
             if args.plot:
