@@ -57,7 +57,8 @@ from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_na
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
-from hammerstein.cli._learn_checks import gain_band, model_gain_note, model_gains, plant_first_mode
+from hammerstein.cli._learn_checks import (gain_band, model_gain_note, model_gains,
+                                           plant_first_mode, start_lag, start_lag_text)
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError, HammersteinError, PresetError
@@ -403,13 +404,16 @@ def _handle(args):
             shaped_rows, _, _, _ = evaluate(shaped[:, :N], y, ref.period_samples, T, outs,
                                             args.settle_periods, ref.scale, ref.loop_channel,
                                             args.remove_delay, rf)
-        gains = _model_gains(plant, u, y, T, delay, fade, ref.period_samples,
-                             ref.signal[:, :N]) if args.model else None
+        gains, offset = _model_gains(plant, u, y, T, delay, fade, ref.period_samples,
+                                     ref.signal[:, :N]) if args.model else (None, None)
+        if offset is not None:      # a pre-trigger: the gains and errors are of the offset
+            rate_notes.append(f"{start_lag_text(offset, T)}; the metrics and "
+                              f"gain_against_model are of the record as it is")
         if gains is not None:
             rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
                      for n, g in zip(outs, gains) if np.isfinite(g)]     # held outputs: none
             drift = model_gain_note(gains, outs)
-            if drift:
+            if drift and offset is None:
                 rate_notes.append(drift)
         if u is not None:
             peak, slew = drive_metrics(u[:, :N], T)
@@ -444,7 +448,8 @@ def _handle(args):
 
 
 def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
-    """Each measured output's gain against ``--model``'s prediction of the drive, or None.
+    """Each measured output's gain against ``--model``'s prediction of the drive, or None,
+    and the lag of a measurement started before the drive, or None.
 
     None without the drive's voltages, or when the model's sampling period is
     not the measurement's. The prediction is the model from rest (its
@@ -452,20 +457,25 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
     :func:`~hammerstein.cli._learn_checks.model_gains` after the fade-in and
     one period, below four times the higher of the reference's fundamental and its
     spectral centroid and below 0.6 times the first mode; None when the reference
-    is faster than that (:func:`~hammerstein.cli._learn_checks.gain_band`).
+    is faster than that (:func:`~hammerstein.cli._learn_checks.gain_band`). The lag
+    is :func:`~hammerstein.cli._learn_checks.start_lag`'s beyond the delay search
+    (a pre-trigger: 0.2 s of rest before a drive read as "the actuator has changed").
     """
     if u is None or plant.hysteresis.n_inputs != u.shape[0] \
             or not np.isclose(plant.sampling_period, T, rtol=1e-9):
-        return None
+        return None, None
     N = min(u.shape[1], y.shape[1])
     predicted, _ = plant.simulate(apply_amplifier(plant.amplifier, u[:, :N], T),
                                   plant.rest_state())
     P = int(period_samples or 0)
+    offset = None if reference is None else start_lag(
+        predicted, y[:, :N], delay_search_span(reference, P or None, T))
     start = int(fade) + P
     if N - start - abs(int(delay)) < 8:
-        return None
+        return None, offset
     band = gain_band(P, reference, plant_first_mode(plant))
-    return None if band == 0.0 else model_gains(predicted, y[:, :N], int(delay), start, band)
+    return (None if band == 0.0 else model_gains(predicted, y[:, :N], int(delay), start, band),
+            offset)
 
 
 def _drive_length(path, sampling_period=None):

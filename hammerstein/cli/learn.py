@@ -146,7 +146,8 @@ from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, Ite
                                           error_summary, harmonic_base_gains,
                                           periodic_average, reference_correction, repeating_from)
 from hammerstein.compensation.model_classes import law_check, model_class
-from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
+                                              delay_search_span)
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
 from hammerstein.cli._learn_checks import (gain_band, measurement_problem,
@@ -575,7 +576,8 @@ def _learn(args):
         # not the drive's response (channels swapped, another drive's, a saturated sensor):
         # refused before anything is learnt from it (hammerstein.cli._learn_checks)
         implausible = measurement_problem(predicted, y, model.output_names, lambda m: trial_lag(
-            predicted, m, target, ref.period_samples, T), fade, fundamental_samples, ref.signal)
+            predicted, m, target, ref.period_samples, T), fade, fundamental_samples, ref.signal,
+            delay_search_span(target, ref.period_samples, T), T)
         if implausible:
             raise DataFileError(implausible)
         # an actuator that changed since it was identified (warmer, loaded): its gain against
