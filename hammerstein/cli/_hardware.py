@@ -477,8 +477,16 @@ def owned_problem(out, force):
             f"pass --force to replace it")
 
 
-def add_actuator_arguments(p):
-    """The arguments shared by the hardware commands: actuator, reference, time, mappings."""
+def add_actuator_arguments(p, time_help=None):
+    """The arguments shared by the hardware commands: actuator, reference, time, mappings.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser.
+    time_help : str, optional
+        The command's own help of ``--time`` (default: the shared wording).
+    """
     p.add_argument("actuator", metavar="MODEL_OR_PRESET",
                    help="preset name or file (PI + dynamics + optional [amplifier]), or a model "
                         "file (static PI; needs --sampling-period)")
@@ -491,7 +499,10 @@ def add_actuator_arguments(p):
     p.add_argument("--period", type=positive_float, metavar="S",
                    help="period of a periodic CSV reference [s] (continuation past its end, "
                         "settling window)")
-    add_column_options(p)
+    if time_help is None:
+        add_column_options(p)
+    else:
+        add_column_options(p, time_help=time_help)
 
 
 def catch():

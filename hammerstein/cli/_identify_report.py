@@ -343,18 +343,29 @@ PLAUSIBLE_RANGE_MAX_UM = 1000.0
 #: ... and below this is not a motion (a column in metres or mm read as µm?).
 PLAUSIBLE_RANGE_MIN_UM = 0.01
 
+#: A direct path's gain [µm/V] below this is not a piezo's (an output in mm read as µm?):
+#: piezo stages and stacks move about 0.05-5 µm per volt (a 78 µm stage over 100 V: 0.78
+#: µm/V), 50 times the threshold at the least; the same stage written in mm reads 7.8e-4.
+#: Peak-to-peak of the output over that of the input driving it, in the records that vary it.
+PLAUSIBLE_GAIN_MIN_UM_PER_V = 1e-3
+
 #: A sampling period [s] at or above this is not a hysteresis record's (a time in ms?).
 PLAUSIBLE_PERIOD_MAX_S = 0.01
 
 
-def unit_warnings(records, outputs, output_unit, time_column=None):
+def unit_warnings(records, outputs, output_unit, time_column=None, inputs=None,
+                  input_unit="V"):
     """One-line warnings for records whose numbers look like another unit than declared.
 
     Nothing is converted on reading (docs/records.md): a column without a unit in its
     name or a units row is taken in the declared unit. An output in nm read as µm spans
     thousands of µm (a tester's x: 2.346e+04 µm), one in metres 1e-5 µm; a time column in
-    ms read as s gives a sampling period of 0.1 s. The ranges are checked only for outputs
-    declared in µm (the default); the period always.
+    ms read as s gives a sampling period of 0.1 s. An output in mm may span more than
+    0.01 µm (a 78 µm stage: 0.078), but moves less than
+    :data:`PLAUSIBLE_GAIN_MIN_UM_PER_V` µm per volt of the input that drives it
+    (peak-to-peak over peak-to-peak in each record where an input varies, the largest
+    over the records and inputs). The ranges and gains are checked only for outputs declared in µm (the
+    default), the gains for inputs in V; the period always.
 
     Parameters
     ----------
@@ -366,6 +377,11 @@ def unit_warnings(records, outputs, output_unit, time_column=None):
         The declared output unit (``--output-unit``).
     time_column : str, optional
         The time column's name (``--time``), None when the period was given.
+    inputs : sequence of str, optional
+        Input names, in the order of ``u``'s rows (each record's ``u`` (m, n) in
+        ``input_unit``); without them the gains are not checked.
+    input_unit : str
+        The declared input unit (``--input-unit``).
 
     Returns
     -------
@@ -396,6 +412,15 @@ def unit_warnings(records, outputs, output_unit, time_column=None):
             elif span < PLAUSIBLE_RANGE_MIN_UM:
                 guess = "in metres or mm"
             else:
+                gain = _direct_gain(records, k, inputs, input_unit)
+                if gain is not None and gain[0] < PLAUSIBLE_GAIN_MIN_UM_PER_V:
+                    lines.append(
+                        f"output '{name}' spans {span:.4g} µm over the records, {gain[0]:.3g} "
+                        f"µm/V over {gain[1]}'s {gain[2]:.4g} V, below a piezo's "
+                        f"{PLAUSIBLE_GAIN_MIN_UM_PER_V:g} µm/V (stages move 0.05-5 µm/V): a "
+                        f"column in mm? Outputs are read in µm and nothing is converted: "
+                        f"convert the column, or declare its unit with --output-unit "
+                        f"(docs/records.md)")
                 continue
             lines.append(f"output '{name}' spans {span:.4g} µm over the records, not an "
                          f"actuator's motion ({PLAUSIBLE_RANGE_MIN_UM:g}-"
@@ -415,3 +440,30 @@ def unit_warnings(records, outputs, output_unit, time_column=None):
                      f"time in ms? Times are read in s and nothing is converted: convert the "
                      f"column to s, or give --sampling-period S (docs/records.md)")
     return lines
+
+
+def _direct_gain(records, k, inputs, input_unit):
+    """(gain [µm/V], input name, its span [V]) of output k on the input that moves it most.
+
+    The largest over the records and inputs of the output's peak-to-peak over an input's
+    (a record exciting one input leaves the others still, and they are left out), so
+    that an output paired with another input than its k-th (a rectangular or coupled
+    stage) is judged on the input that drives it; None without inputs, for inputs not in
+    V, or when no record varies an input.
+    """
+    if not inputs or input_unit != "V":
+        return None
+    best = None
+    for r in records:
+        u = np.asarray(getattr(r, "u", ()), dtype=float)
+        y = np.asarray(r.y, dtype=float)
+        if u.ndim != 2 or y.ndim != 2 or k >= y.shape[0] or not u.shape[1] or not y.shape[1]:
+            continue
+        dy = float(np.ptp(y[k]))
+        for j in range(min(u.shape[0], len(inputs))):
+            du = float(np.ptp(u[j]))
+            if not (np.isfinite(du) and np.isfinite(dy)) or du <= 0:
+                continue
+            if best is None or dy / du > best[0]:
+                best = (dy / du, inputs[j], du)
+    return best

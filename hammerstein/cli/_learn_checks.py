@@ -39,7 +39,8 @@ from hammerstein.compensation.shaping import first_mode_hz
 
 __all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "band_share", "CENTROID_MARGIN", "spectral_centroid",
            "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit", "flat_runs", "measurement_problem", "MODEL_GAIN_TOLERANCE", "model_gains",
-           "model_gain_note", "GAIN_MODE_SHARE", "gain_band", "plant_first_mode"]
+           "model_gain_note", "GAIN_MODE_SHARE", "gain_band", "plant_first_mode", "START_LAG_SHARE",
+           "start_lag", "start_lag_text"]
 
 #: above this misfit (RMS error against the model's prediction of the drive, means removed,
 #: below BAND_HARMONICS times the fundamental, over the prediction's RMS motion) a measurement
@@ -68,6 +69,12 @@ BAND_HARMONICS = 4
 CENTROID_MARGIN = 1.05
 #: outputs permuted for the swapped-channels test up to this many outputs (24 orders)
 MAX_PERMUTED = 4
+#: a lag beyond the delay search is named (:func:`start_lag`) when the measurement fits the
+#: prediction there within MISFIT_LIMIT and within this share of its best misfit near lag 0.
+#: Measured: a DAQ record started 0.2 s before a 20 Hz circle's drive (1 s at 10 kHz): 0.033
+#: at 1999 samples, 0.71 at lag 0, 0.26 at the next best lag (2498: the fade-in tells the
+#: periods apart); the same record started with the drive: 0.033 at lag 0
+START_LAG_SHARE = 0.5
 
 
 def _aligned(predicted, measured, lag, start):
@@ -229,7 +236,7 @@ def flat_runs(predicted, measured, lag=0, start=0):
 
 
 def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental_samples=0,
-                        reference=None):
+                        reference=None, within=None, sampling_period=None):
     """The line refusing a measurement that is not the drive's response, or None.
 
     Parameters
@@ -253,12 +260,19 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
     reference : array_like, shape (p, N), optional
         The reference [µm]: the band is taken at the higher of its
         fundamental and its spectral centroid (:func:`band_share`).
+    within : int, optional
+        The delay search span [samples]; with ``sampling_period``, a misfit
+        whose measurement fits the prediction at a lag beyond it names that
+        lag first (:func:`start_lag`: a pre-trigger).
+    sampling_period : float, optional
+        T [s], for the lag in seconds.
 
     Returns
     -------
     str or None
         None when the misfit is within ``MISFIT_LIMIT`` and no output has a
-        flat run; else the causes in the order to check them: the channels
+        flat run; else the causes in the order to check them: a start
+        offset (the lag named), the channels
         swapped (when the outputs permuted fit within ``MISFIT_LIMIT``: the
         order named), another drive's measurement, the sensor saturated or
         clipped (the output, its value and the samples of its flat run), and
@@ -273,6 +287,10 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
     if misfit <= MISFIT_LIMIT and not runs:
         return None
     causes = []
+    offset = (start_lag(predicted, measured, within)
+              if within is not None and sampling_period else None)
+    if offset is not None:     # its rest reads as a flat run, its shift as a misfit
+        causes.append(start_lag_text(offset, sampling_period))
     if misfit > MISFIT_LIMIT:
         best = None
         if 1 < len(names) <= MAX_PERMUTED:
@@ -457,3 +475,91 @@ def model_gain_note(gains, names):
             f"the actuator has changed since it was identified (temperature, load, another "
             f"amplifier gain); learn corrects it trial by trial, and identify on records made "
             f"now (all of them, together) gives a model of the actuator as it is")
+
+
+def start_lag(predicted, measured, within):
+    """The lag of a measurement started before its drive (a pre-trigger), or None.
+
+    The misfit of the measurement shifted by each lag L >= 0 (``measured[:, L:]``
+    against ``predicted[:, :N - L]``, each output's mean over the overlap removed, RMS
+    error over the prediction's RMS motion there; by FFT, every lag up to half the
+    record at once) is smallest at L beyond ``within`` (the delay search), within
+    :data:`MISFIT_LIMIT`, and below :data:`START_LAG_SHARE` times the best misfit up to
+    ``within``: the record started L samples before the drive.
+
+    Parameters
+    ----------
+    predicted, measured : numpy.ndarray, shape (p, N)
+        The model's response to the drive and the measured response [µm].
+    within : int
+        The delay search span [samples]: lags up to it are a delay, not a start offset.
+
+    Returns
+    -------
+    int or None
+        L [samples].
+
+    Examples
+    --------
+    >>> t = np.arange(4000)
+    >>> p = np.sin(2 * np.pi * t / 400) * np.minimum(t / 1000, 1)[None, :]
+    >>> m = np.concatenate([np.zeros((1, 700)), p[:, :-700]], axis=1)
+    >>> start_lag(p, m, 50)
+    700
+    >>> start_lag(p, p, 50) is None
+    True
+    """
+    P = np.atleast_2d(np.asarray(predicted, dtype=float))
+    M = np.atleast_2d(np.asarray(measured, dtype=float))
+    N = min(P.shape[1], M.shape[1])
+    if N < 16 or P.shape[0] != M.shape[0] or not (np.all(np.isfinite(P[:, :N]))
+                                                    and np.all(np.isfinite(M[:, :N]))):
+        return None
+    P, M = P[:, :N] - P[:, :N].mean(axis=1, keepdims=True), M[:, :N] - M[:, :N].mean(
+        axis=1, keepdims=True)           # conditioning only: the overlap's means are removed
+    n = 1 << int(np.ceil(np.log2(2 * N)))
+    lags = np.arange(N // 2 + 1)
+    k = N - lags                                                   # overlap [samples]
+    cross = np.fft.irfft(np.fft.rfft(M, n) * np.conj(np.fft.rfft(P, n)), n)[:, :lags.size]
+    zero = np.zeros((P.shape[0], 1))
+    sp = np.concatenate([zero, np.cumsum(P, axis=1)], axis=1)[:, k]      # over P[:, :k]
+    sp2 = np.concatenate([zero, np.cumsum(P ** 2, axis=1)], axis=1)[:, k]
+    sm = np.concatenate([zero, np.cumsum(M[:, ::-1], axis=1)], axis=1)[:, k]   # M[:, L:]
+    sm2 = np.concatenate([zero, np.cumsum(M[:, ::-1] ** 2, axis=1)], axis=1)[:, k]
+    var_p = (sp2 - sp ** 2 / k).sum(axis=0)
+    sse = ((sm2 - sm ** 2 / k) + (sp2 - sp ** 2 / k) - 2 * (cross - sm * sp / k)).sum(axis=0)
+    if not np.all(var_p > 0):
+        return None
+    misfit = np.sqrt(np.maximum(sse, 0.0) / var_p)
+    within = max(int(within), 0)
+    if within + 1 >= misfit.size:
+        return None
+    best = int(np.argmin(misfit[within + 1:])) + within + 1
+    near = float(np.min(misfit[:within + 1]))
+    if misfit[best] <= MISFIT_LIMIT and misfit[best] < START_LAG_SHARE * near:
+        return best
+    return None
+
+
+def start_lag_text(lag, sampling_period):
+    """The words for a measurement that lags its drive by ``lag`` samples (:func:`start_lag`).
+
+    Parameters
+    ----------
+    lag : int
+        [samples].
+    sampling_period : float
+        T [s].
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> start_lag_text(2000, 1e-4)[:57]
+    'the measured response lags the drive by 2000 samples (0.2'
+    """
+    return (f"the measured response lags the drive by {lag} samples ({lag * sampling_period:.4g} "
+            f"s), far beyond a delay: a pre-trigger? record from the drive's first sample, or "
+            f"cut the record's first {lag} samples (t from 0 at the drive's start)")

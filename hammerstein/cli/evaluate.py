@@ -37,6 +37,7 @@ import contextlib
 import os
 import re
 import sys
+import warnings
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -56,10 +57,11 @@ from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_na
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
-from hammerstein.cli._learn_checks import gain_band, model_gain_note, model_gains, plant_first_mode
+from hammerstein.cli._learn_checks import (gain_band, model_gain_note, model_gains,
+                                           plant_first_mode, start_lag, start_lag_text)
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
-from hammerstein.exceptions import DataFileError, FileLimitError, PresetError
+from hammerstein.exceptions import DataFileError, FileLimitError, HammersteinError, PresetError
 from hammerstein.io.datafiles import signal_table
 from hammerstein.core.files import markdown_text
 from hammerstein.report.definitions import definitions_lines
@@ -95,10 +97,12 @@ def add_parser(subparsers):
                         "one per input [V]")
     p.add_argument("--out", required=True, metavar="DIR", help="report directory")
     p.add_argument("--model", metavar="MODEL_OR_PRESET",
-                   help="names the inputs and outputs (without it: a CSV reference's columns, else x,y)")
+                   help="names the inputs and outputs (without it: the reference's, else those "
+                        "of the actuator the --drive file's header names, else x,y)")
     add_column_options(
         p, outputs_help="output names, or NAME=COLUMN for columns named otherwise (default: "
-                            "--model's outputs, else a CSV reference's columns, else x,y)",
+                            "--model's outputs, else a CSV reference's columns, else the --drive "
+                            "header's actuator's, else x,y)",
         inputs_help="input columns [V] to report peak_input / peak_slew and plot",
         time_help="time column (default t)")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
@@ -161,6 +165,39 @@ def _reference_outputs(args):
         return None
     names = [str(c) for c in columns if str(c) != args.time]
     return names or None
+
+
+def _drive_actuator_outputs(args):
+    """The outputs of the actuator the ``--drive`` file's header names, or None.
+
+    Without ``--model`` or ``--output-columns`` the outputs judged default to x, y; a drive
+    written by ``compensate`` or ``learn`` names the actuator it was computed for
+    (``# actuator PATH, kind ...``), a path as given to that command: it is looked up as
+    given and next to the drive file. None when there is no drive, no such line, no such
+    file, or it cannot be read (the default then applies, and the reading says what is
+    missing)."""
+    if args.outputs or not args.drive:
+        return None
+    try:
+        name = next((m.group(1).strip() for m in
+                     (re.match(r"#\s*actuator\s+([^,]+),", ln)
+                      for ln in head_lines(args.drive, 40)) if m), None)
+    except (OSError, ValueError, DataFileError, FileLimitError):
+        return None
+    if not name:
+        return None
+    for path in (Path(name), Path(args.drive).parent / name):
+        if not path.is_file():
+            continue
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")     # its warnings are compensate's, said there
+            for period in (None, 1.0):          # a model file with no period: its names
+                try:
+                    names = list(load_actuator(str(path), period).hysteresis.output_names)
+                except (HammersteinError, OSError, ValueError):
+                    continue
+                return names or None
+    return None
 
 
 def _measured_outputs(args):
@@ -296,8 +333,9 @@ def _handle(args):
                     raise
                 plant = load_actuator(args.model, 1.0)   # the names of a model with no period
             outs, ins = list(plant.hysteresis.output_names), list(plant.hysteresis.input_names)
-        else:     # the outputs a CSV reference names (a one-axis stage's x), else x, y
-            outs, ins = _reference_outputs(args) or ["x", "y"], []
+        else:     # the outputs the reference names (a one-axis stage's x), else the drive's
+            outs, ins = (_reference_outputs(args) or _drive_actuator_outputs(args)  # actuator's
+                         or ["x", "y"]), []
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
         n_drive, period = None, args.sampling_period
@@ -366,13 +404,16 @@ def _handle(args):
             shaped_rows, _, _, _ = evaluate(shaped[:, :N], y, ref.period_samples, T, outs,
                                             args.settle_periods, ref.scale, ref.loop_channel,
                                             args.remove_delay, rf)
-        gains = _model_gains(plant, u, y, T, delay, fade, ref.period_samples,
-                             ref.signal[:, :N]) if args.model else None
+        gains, offset = _model_gains(plant, u, y, T, delay, fade, ref.period_samples,
+                                     ref.signal[:, :N]) if args.model else (None, None)
+        if offset is not None:      # a pre-trigger: the gains and errors are of the offset
+            rate_notes.append(f"{start_lag_text(offset, T)}; the metrics and "
+                              f"gain_against_model are of the record as it is")
         if gains is not None:
             rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
                      for n, g in zip(outs, gains) if np.isfinite(g)]     # held outputs: none
             drift = model_gain_note(gains, outs)
-            if drift:
+            if drift and offset is None:
                 rate_notes.append(drift)
         if u is not None:
             peak, slew = drive_metrics(u[:, :N], T)
@@ -407,7 +448,8 @@ def _handle(args):
 
 
 def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
-    """Each measured output's gain against ``--model``'s prediction of the drive, or None.
+    """Each measured output's gain against ``--model``'s prediction of the drive, or None,
+    and the lag of a measurement started before the drive, or None.
 
     None without the drive's voltages, or when the model's sampling period is
     not the measurement's. The prediction is the model from rest (its
@@ -415,20 +457,25 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
     :func:`~hammerstein.cli._learn_checks.model_gains` after the fade-in and
     one period, below four times the higher of the reference's fundamental and its
     spectral centroid and below 0.6 times the first mode; None when the reference
-    is faster than that (:func:`~hammerstein.cli._learn_checks.gain_band`).
+    is faster than that (:func:`~hammerstein.cli._learn_checks.gain_band`). The lag
+    is :func:`~hammerstein.cli._learn_checks.start_lag`'s beyond the delay search
+    (a pre-trigger: 0.2 s of rest before a drive read as "the actuator has changed").
     """
     if u is None or plant.hysteresis.n_inputs != u.shape[0] \
             or not np.isclose(plant.sampling_period, T, rtol=1e-9):
-        return None
+        return None, None
     N = min(u.shape[1], y.shape[1])
     predicted, _ = plant.simulate(apply_amplifier(plant.amplifier, u[:, :N], T),
                                   plant.rest_state())
     P = int(period_samples or 0)
+    offset = None if reference is None else start_lag(
+        predicted, y[:, :N], delay_search_span(reference, P or None, T))
     start = int(fade) + P
     if N - start - abs(int(delay)) < 8:
-        return None
+        return None, offset
     band = gain_band(P, reference, plant_first_mode(plant))
-    return None if band == 0.0 else model_gains(predicted, y[:, :N], int(delay), start, band)
+    return (None if band == 0.0 else model_gains(predicted, y[:, :N], int(delay), start, band),
+            offset)
 
 
 def _drive_length(path, sampling_period=None):

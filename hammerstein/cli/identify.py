@@ -589,6 +589,7 @@ def _handler(args):
             _estimate_delay(args)
         records = [_read(args, d) for d in args.data]
         names = _names(records[0], *given)
+        _every_input_excited(records, names[0])
         if args.dynamics:
             _square_for_dynamics(*names)
         result = identify_pipeline(
@@ -618,7 +619,8 @@ def _handler(args):
                  + (_creep_recs(args) if args.creep_records else []))
         extra["amplifier"] = records_amplifier_table(every, list(fit.model.input_names))
         hold_notes = _hold_step_notes(every, extra["amplifier"], args.input_unit)
-        units = unit_warnings(every, list(fit.model.output_names), args.output_unit, args.time)
+        units = unit_warnings(every, list(fit.model.output_names), args.output_unit, args.time,
+                              list(fit.model.input_names), args.input_unit)
         with all_or_nothing():  # a failed write (full disk) leaves none of the outputs
             save_model(fit.model, args.out, meta, args.input_unit, args.output_unit, extra)
             if args.plot:
@@ -711,6 +713,30 @@ def _creep_recs(args):
     if getattr(args, "_creep_read", None) is None:
         args._creep_read = [_read(args, d) for d in args.creep_records]
     return args._creep_read
+
+
+def _every_input_excited(records, inputs):
+    """Refuse, before any fit, an input that no hysteresis record varies.
+
+    One record of a two-input stage (``hysteresis-ux.csv`` alone): every model class
+    was fitted on a still uy, numpy's overflow warnings leaked, then the classical fit
+    said "input 'uy': never excited".
+
+    Raises
+    ------
+    IdentificationError
+        Naming the input, its constant value and what to give.
+    """
+    for k, name in enumerate(inputs):
+        if any(np.ptp(np.asarray(r.u[k], dtype=float)) > 0 for r in records if np.size(r.u[k])):
+            continue
+        value = float(np.asarray(records[0].u[k], dtype=float).flat[0])
+        files = ", ".join(str(getattr(r, "source", "?")) for r in records[:3])
+        raise IdentificationError(
+            f"{files}{' and more' if len(records) > 3 else ''}: input {name!r}: the input is "
+            f"constant ({value:g}) in every record given; expected a record that excites it "
+            f"(`excitation` writes one per input, hysteresis-{name}.csv): add it, or leave "
+            f"{name!r} out of --inputs")
 
 
 def _names(record, in_keys, out_keys):

@@ -146,7 +146,8 @@ from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, Ite
                                           error_summary, harmonic_base_gains,
                                           periodic_average, reference_correction, repeating_from)
 from hammerstein.compensation.model_classes import law_check, model_class
-from hammerstein.compensation.shaping import CHATTER_REFUSE_FRACTION, chatter_warnings
+from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
+                                              delay_search_span)
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
 from hammerstein.cli._learn_checks import (gain_band, measurement_problem,
@@ -158,6 +159,41 @@ from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
 
 __all__ = ["add_parser", "history_rows"]
+
+
+def _read_drive(args, inputs):
+    """The drive file's inputs at its own time column, as ``evaluate`` reads it.
+
+    ``compensate`` and ``learn`` write the drive's time as ``t``; ``--time`` names
+    the measured file's (and a CSV reference's) time column, so the drive is read
+    at ``t``, and at ``--time`` only when the drive has no ``t`` (a drive written
+    by other software with the measured file's column names).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (n,)
+        Drive time [s].
+    u : numpy.ndarray, shape (len(inputs), n)
+        Drive inputs [V].
+    period : float
+        Its sampling period [s].
+
+    Raises
+    ------
+    DataFileError
+        Unreadable drive, or none of its columns named as asked.
+    """
+    columns = mapping(args.inputs, inputs, "--input-columns")
+    try:
+        return read_signals(args.drive, inputs, "t", columns, None, "--drive")
+    except DataFileError:
+        if args.time == "t":
+            raise
+        first = sys.exc_info()[1]
+    try:
+        return read_signals(args.drive, inputs, args.time, columns, None, "--drive")
+    except DataFileError:
+        raise first from None
 
 
 def add_parser(subparsers):
@@ -172,7 +208,8 @@ def add_parser(subparsers):
         "learn", help="one iterative-learning step from drive and measured files",
         description="Iterative learning control, one trial: from the drive applied (u_k), its "
                     "measured response (y_k) and the reference, write the next drive u_k+1.")
-    add_actuator_arguments(p)
+    add_actuator_arguments(p, time_help="time column of --measured and of a CSV reference "
+                                        "(default t); the --drive file's own is t")
     p.add_argument("--drive", required=True, metavar="U_K.csv", help="the drive that was applied")
     p.add_argument("--measured", required=True, metavar="Y_K.csv",
                    help="its measured response: t [s] from the drive's start, one column per "
@@ -432,9 +469,7 @@ def _learn(args):
         q_note = None
         if args.q_cutoff_hz is None:
             args.q_cutoff_hz, q_note = default_q_cutoff(plant)
-        _, u, Tu = read_signals(args.drive, list(model.input_names), args.time,
-                                mapping(args.inputs, list(model.input_names), "--input-columns"),
-                                None, "--drive")
+        _, u, Tu = _read_drive(args, list(model.input_names))
         if not np.isclose(Tu, T, rtol=1e-6):
             raise DataFileError(f"--drive: sampled every {Tu:g} s; expected the actuator's {T:g} s "
                                 f"(give --sampling-period)")
@@ -541,7 +576,8 @@ def _learn(args):
         # not the drive's response (channels swapped, another drive's, a saturated sensor):
         # refused before anything is learnt from it (hammerstein.cli._learn_checks)
         implausible = measurement_problem(predicted, y, model.output_names, lambda m: trial_lag(
-            predicted, m, target, ref.period_samples, T), fade, fundamental_samples, ref.signal)
+            predicted, m, target, ref.period_samples, T), fade, fundamental_samples, ref.signal,
+            delay_search_span(target, ref.period_samples, T), T)
         if implausible:
             raise DataFileError(implausible)
         # an actuator that changed since it was identified (warmer, loaded): its gain against

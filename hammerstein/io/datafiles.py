@@ -503,6 +503,7 @@ def _read_table(path, skip_rows=0):
     _refuse_compressed(raw, escape(path), DataFileError)
     if skip_rows:   # a preamble (instrument, date, rate ...) before the table: dropped as lines
         raw = b"".join(raw.splitlines(keepends=True)[int(skip_rows):])
+    top = raw[:1 << 16]        # the lines as --skip-rows counts them, for a preamble's hint
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
         raw = raw.decode("utf-16", errors="replace").encode("utf-8")
     raw = raw.removeprefix(b"\xef\xbb\xbf")
@@ -549,8 +550,12 @@ def _read_table(path, skip_rows=0):
         m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", reason)
         if m:
             line = int(m.group(2))
-            hint = (f" (a preamble before the table? skip its lines with --skip-rows N, "
-                    f"N < {line}, or start them with '#')" if line <= PREAMBLE_LINES else "")
+            n = _preamble_rows(top) if line <= PREAMBLE_LINES else None
+            hint = ("" if line > PREAMBLE_LINES else
+                    f" (a preamble of {n} line{'s' if n > 1 else ''} before the table? skip "
+                    f"them with --skip-rows {int(skip_rows) + n}, or start them with '#')"
+                    if n else " (a preamble before the table? skip its lines with --skip-rows "
+                              "N, or start them with '#')")
             raise DataFileError(f"{escape(path)}: ragged rows: line {line} has {m.group(3)} "
                                 f"fields, the first row has {m.group(1)}; expected the same "
                                 f"number of fields on every row{hint}") from None
@@ -567,6 +572,9 @@ def _read_table(path, skip_rows=0):
             frame.columns = list(range(frame.shape[1]))
     frame.attrs["units"] = unit_of
     frame.attrs["cut"] = cut
+    if _preamble_hint(frame):   # a header that reads as a preamble line: how many to skip
+        n = _preamble_rows(top)
+        frame.attrs["preamble_rows"] = int(skip_rows) + n if n else None
     return frame, header
 
 
@@ -639,10 +647,51 @@ def _column(frame, header, key, role, path, units=None):
     return arr, name
 
 
+def _preamble_rows(top):
+    """The lines before a table whose rows all have one number of fields, or None.
+
+    The smallest n (1 to :data:`PREAMBLE_LINES`) such that the lines from the n-th on
+    (comments and blank lines aside, as the reader drops them) have one number of fields,
+    at least 2, under the separator sniffed on them: the ``--skip-rows`` that reads the
+    table (a 10-line instrument preamble: 10; a pandas "line 6" is only the first line
+    that differs from the first, no bound on the preamble's length).
+
+    Parameters
+    ----------
+    top : bytes
+        The file's first bytes, after the rows already skipped.
+
+    Returns
+    -------
+    int or None
+    """
+    lines = top.decode("utf-8", errors="replace").splitlines()
+    if _ends_cut(top):
+        lines = lines[:-1]                       # the last line read may be cut short
+    for n in range(1, min(PREAMBLE_LINES, len(lines) - 1) + 1):
+        rest = [ln for ln in lines[n:n + 200] if ln.strip() and not ln.lstrip().startswith("#")]
+        if len(rest) < 2:
+            return None
+        sep = _sniff_separator("\n".join(rest[:5]))
+        try:
+            counts = {len(ln.split()) if sep == r"\s+" else len(next(csv.reader([ln],
+                                                                                delimiter=sep)))
+                      for ln in rest}
+        except csv.Error:
+            continue
+        if len(counts) == 1 and counts.pop() >= 2:
+            return n
+    return None
+
+
 def _preamble_hint(frame):
     """A hint when the header read looks like a preamble line (``Instrument: Tek MSO``)."""
     names = [str(c) for c in frame.columns]
     if any(n.rstrip().endswith(":") for n in names[:3]) or frame.shape[1] < 2:
+        n = frame.attrs.get("preamble_rows")
+        if n:
+            return (f" (a preamble before the table? skip it with --skip-rows {n}, or start "
+                    f"its lines with '#')")
         return (" (a preamble before the table? skip its lines with --skip-rows N, or start "
                 "them with '#')")
     return ""

@@ -51,6 +51,19 @@ def test_outputs_in_nm_and_metres_and_a_time_in_ms_are_warned(tmp_path, capsys):
     assert "sampling period 1 s" in t[0] and "--sampling-period" in t[0]
 
 
+def test_an_output_in_mm_is_warned_by_its_gain_per_volt(tmp_path, capsys):
+    """A stage's x in mm spans more than 0.01 (the range check's floor: 0.078 for a 78 µm
+    stage, exit 0 without a word) but moves less than 1e-3 "µm" per volt of its input."""
+    files = _files(tmp_path, x_scale=0.5e-3)
+    span_x, span_ux = _span(files, 3), _span(files, 1)
+    assert span_x > 0.01 and span_x / span_ux < 1e-3        # what the range check cannot see
+    warn = [ln for ln in _identify(files, tmp_path, capsys).err.splitlines()
+            if ln.startswith("warning:") and "output '" in ln]
+    assert len(warn) == 1 and "output 'x'" in warn[0], warn
+    assert f"spans {span_x:.4g} µm" in warn[0] and f"{span_x / span_ux:.3g} µm/V" in warn[0]
+    assert f"over ux's {span_ux:.4g} V" in warn[0] and "in mm?" in warn[0]
+
+
 def test_records_in_um_and_s_are_not_warned(tmp_path, capsys):
     err = _identify(_files(tmp_path), tmp_path, capsys).err
     assert "spans" not in err and "time column" not in err, err

@@ -511,6 +511,30 @@ def test_identify_refuses_the_same_record_twice(capsys, tmp_path, monkeypatch, t
     assert not (tmp_path / "m.toml").exists()
 
 
+def test_identify_names_an_input_no_record_excites_in_one_line(capfd, tmp_path, monkeypatch):
+    # hysteresis-ux.csv alone for ux, uy: numpy's 'overflow encountered in power' leaked
+    # from the fitting workers (fd 2: capfd) before "input 'uy': never excited"
+    from hammerstein.signals.excitation import excitation_set
+    from hysteresis_records import write
+    monkeypatch.chdir(tmp_path)
+    r = np.linspace(0.0, 90.0, 6)
+    act = MultivariablePI([[PrandtlIshlinskii(r, [0.5, 0.15, 0.1, 0.05, 0.03, 0.01]), None],
+                           [None, PrandtlIshlinskii(r, [0.4, 0.12, 0.08, 0.05, 0.03, 0.01])]],
+                          ["ux", "uy"], ["x", "y"])
+    rec = next(e for e in excitation_set(["ux", "uy"], 100.0, 1e-3, centre=[50.0, 50.0],
+                                         multisine_periods=1) if e.name == "hysteresis-ux")
+    assert np.ptp(rec.u[0]) > 0 and np.ptp(rec.u[1]) == 0       # ux excited, uy still
+    y = act.simulate(rec.u)[0] + 0.01 * np.random.default_rng(1).standard_normal(rec.u.shape)
+    write(tmp_path / "hysteresis-ux.csv", rec.time, rec.u, y)
+    status, _, err = _call(capfd, "identify", "hysteresis-ux.csv", "--inputs", "ux,uy",
+                           "--outputs", "x,y", "--time", "t", "--out", "m.toml")
+    assert status == 1 and len(err) == 1, err
+    value = rec.u[1][0]
+    assert err[0].startswith(f"error: hysteresis-ux.csv: input 'uy': the input is constant "
+                             f"({value:g}) in every record given") and "hysteresis-uy.csv" in err[0]
+    assert not (tmp_path / "m.toml").exists()
+
+
 def test_learn_refuses_its_drive_given_as_the_measurement(capsys, tmp_path, monkeypatch):
     # --measured drive.csv with --output-columns x=x_shaped: the learning read the drive's own
     # target as the response ("RMS 0 µm (0 %)") and wrote a new drive, exit 0

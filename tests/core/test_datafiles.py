@@ -171,6 +171,29 @@ def test_a_preamble_without_comment_marks_is_named(tmp_path):
                     encoding="utf-8")
     with pytest.raises(DataFileError) as info:
         read_record(path, "V", "z", time="time")
-    assert "ragged rows" in str(info.value) and "--skip-rows N, N < 4" in str(info.value)
+    assert "ragged rows" in str(info.value) and "--skip-rows 3," in str(info.value)
     rec = read_record(path, "V", "z", time="time", skip_rows=3)   # as the hint says
     assert rec.sampling_period == pytest.approx(1e-4) and rec.u[-1] == 39
+
+
+def test_a_long_preamble_gets_the_skip_that_reads_the_table(tmp_path):
+    """A DAQ's 10-line preamble: pandas stops at line 6, the first line whose fields differ
+    from the first's, and the hint said "--skip-rows N, N < 6" where 10 is needed."""
+    preamble = ["MyDAQ v3.2 export", "Operator: records", "Date: 2026-11-27 10:20",
+                "Stage: XY-100", "Amplifier: 0..100 V", "Sensor: capacitive, 25 nm",
+                "Rate: 10000 Hz", "Channels: 4", "Comment: excitation from hammerstein",
+                "---------------"]
+    path = tmp_path / "rec.csv"
+    path.write_text("\n".join(preamble) + "\nt,u,y\n"
+                    + "".join(f"{1e-4 * i:.4f},{i},{2 * i}\n" for i in range(40)),
+                    encoding="utf-8")
+    with pytest.raises(DataFileError) as info:
+        read_record(path, "u", "y", time="t")
+    said = str(info.value)
+    assert "ragged rows" in said and "--skip-rows 10," in said and "N <" not in said, said
+    rec = read_record(path, "u", "y", time="t", skip_rows=len(preamble))   # as the hint says
+    assert rec.sampling_period == pytest.approx(1e-4) and rec.u[-1] == 39
+    # after a skip of 4 of them: the 6 lines left, counted on from the skip
+    with pytest.raises(DataFileError) as info:
+        read_record(path, "u", "y", time="t", skip_rows=4)
+    assert "--skip-rows 10," in str(info.value), str(info.value)

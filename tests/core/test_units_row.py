@@ -158,5 +158,6 @@ def test_a_preamble_without_comment_marks_hints_at_skip_rows(tmp_path):
     with pytest.raises(DataFileError) as err:
         read_records(path, inputs=["ux"], outputs=["x"], time="t")
     assert "no input column named 'ux'" in str(err.value)
-    assert str(err.value).endswith("(a preamble before the table? skip its lines with "
-                                   "--skip-rows N, or start them with '#')")
+    assert str(err.value).endswith("(a preamble before the table? skip it with "
+                                   "--skip-rows 3, or start its lines with '#')")   # its 3 lines
+    assert read_records(path, inputs=["ux"], outputs=["x"], time="t", skip_rows=3)
