@@ -342,6 +342,16 @@ def _axis_problems(clean, plant, mode):
     return out
 
 
+def _one_output(spec, plant):
+    """A reference table with ``output`` filled in on a plant with one output (nothing to choose)."""
+    names = list(plant.hysteresis.output_names) if plant is not None else []
+    kind = spec.get("kind") if isinstance(spec, dict) else None
+    entry = refs.REFERENCE_KINDS.get(kind) if isinstance(kind, str) else None
+    if len(names) == 1 and entry is not None and "output" in entry.fields and "output" not in spec:
+        return {**spec, "output": str(names[0])}
+    return spec
+
+
 def _magnitude_problem(spec, signal, unit):
     """``".key: ... beyond the limit 1e+150"`` for a signal the simulation would refuse, else ``""``.
 
@@ -604,7 +614,7 @@ def _validate_cases(path, data, feedback=False):
                 once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
                      f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
                 comp_ok = False
-        sig_spec = raw[mode]
+        sig_spec = _one_output(raw[mode], plant) if mode == "reference" else raw[mode]
         sig = _signal(where, mode, sig_spec, plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
         if (mode == "reference" and known_kind(kind, COMPENSATORS) and not COMPENSATORS[kind].compensates
