@@ -80,3 +80,49 @@ def test_a_bundled_realistic_scenario_is_not_said_to_share_its_model(tmp_path):
     assert out.ok, out.error
     md = (out.out_dir / "report.md").read_text()
     assert "## Identified dynamics" in md and ONE_MODEL not in md
+
+
+@pytest.mark.slow
+def test_a_plant_identified_from_the_compensators_records_is_said_to_share_g(tmp_path, capsys):
+    # the user's route: identify a preset from measured files, then a scenario whose plant is
+    # that preset and whose compensator identifies from the same files: one model, one G
+    import numpy as np
+
+    from hammerstein.cli.main import main
+    from hammerstein.scenario.identification import excitation_records
+    from hammerstein.scenario.identify_tables import identify_table
+
+    plant = load_plant("realistic-2dof")
+    recs = excitation_records(plant, identify_table({
+        "records": "excitation", "model": "classical", "frequency": 5.0, "hold": 0.25,
+        "multisine_periods": 2}))
+    names = {}
+    for kind in ("hysteresis", "dynamics"):
+        for i, rec in enumerate(recs[kind]):
+            path = tmp_path / f"{kind}-{i}.csv"
+            data = np.column_stack([rec.timepts, rec.u.T, rec.y.T])
+            np.savetxt(path, data, delimiter=",", comments="",
+                       header=",".join(["t", *rec.input_names, *rec.output_names]))
+            names.setdefault(kind, []).append(path.name)
+    assert main(["identify", *[str(tmp_path / n) for n in names["hysteresis"]], "--inputs",
+                 "ux,uy", "--outputs", "x,y", "--time", "t", "--model", "classical",
+                 "--dynamics", "--dynamics-records", *[str(tmp_path / n) for n in names["dynamics"]],
+                 "--out", str(tmp_path / "id.toml")]) == 0
+    capsys.readouterr()
+    listed = lambda files: "[" + ", ".join(f'"{n}"' for n in files) + "]"  # noqa: E731
+    path = tmp_path / "stage.toml"
+    path.write_text(
+        'name = "stage"\n[plant]\npreset = "id.toml"\n[compensator]\nkind = "hammerstein"\n'
+        'model = "identified"\ndynamics = "identified"\n[compensator.identify]\n'
+        f'records = "files"\nmodel = "classical"\nhysteresis_records = {listed(names["hysteresis"])}\n'
+        f'dynamics_records = {listed(names["dynamics"])}\n'
+        '[[cases]]\nname = "circle"\nreference = { kind = "circle", radius = 10.0, '
+        'frequency = 20.0, periods = 3 }\n')
+    out = run_scenario(path, tmp_path / "out")
+    assert out.ok, out.error
+    md = (out.out_dir / "report.md").read_text()
+    lines = [ln for ln in md.splitlines() if ln.startswith(ONE_MODEL)]
+    assert len(lines) == 2, md
+    assert "in every compensated case" in lines[0]
+    assert "the figure compares G with itself" in lines[1] and "`circle`" in lines[1]
+    assert md.index("## Identified dynamics") < md.index(lines[1])
