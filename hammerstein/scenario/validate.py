@@ -460,6 +460,9 @@ def _top_model_problems(comp, plant, base, files):
             return _placed_top(_record_file_problems(
                 {k: [v] if isinstance(v, str) else v for k, v in identify.items()
                  if isinstance(v, (str, list))}, base))
+    if plant is None and name == "identified" and isinstance(identify, dict) \
+            and identify.get("records") != "files":
+        return [], []       # its frequency is checked against the plant's Nyquist: none loaded
     return _placed_top(_model_problems(name, identify, plant, base, files))
 
 

@@ -118,3 +118,14 @@ def test_a_case_that_overrides_the_identify_table_names_its_own_file(tmp_path):
     assert [ln.split(": ", 2)[1] for ln in lines] == [
         "compensator.identify.dynamics_records", "cases[1].compensator"], lines
     assert "meas/gone.csv: no such file" in lines[1]
+
+
+def test_a_missing_preset_under_an_identified_model_is_one_line(tmp_path):
+    # the identify frequency is checked against the plant's Nyquist: no plant, no check (and
+    # no crash: "unexpected AttributeError")
+    path = tmp_path / "s.toml"
+    path.write_text('[plant]\npreset = "nope.toml"\n[compensator]\nkind = "multivariable"\n'
+                    'model = "identified"\nidentify = { frequency = 50.0 }\n[[cases]]\nname = "c"\n'
+                    'reference = { kind = "circle", radius = 10.0, frequency = 20.0, periods = 3 }\n')
+    lines = _lines(path)
+    assert len(lines) == 1 and f"{path}: plant.preset: nope.toml" in lines[0], lines
