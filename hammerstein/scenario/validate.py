@@ -9,7 +9,11 @@ at or beyond the Nyquist frequency or too short for ``settle_periods`` is
 reported), duplicate case names, the ``identify`` and ``model`` keys of a
 case (an ``identify`` table present, its frequency below Nyquist), the
 model files named by ``model`` (read and checked), ``[[sweeps]]`` (expanded
-into cases) and the ``[stability_map]`` table. It builds no compensator,
+into cases) and the ``[stability_map]`` table. A problem is named once, where
+it is written (the top-level ``[compensator]``'s ``model`` and ``identify``
+are checked once, not per case), and hides only the checks that depend on it
+(a misspelt compensator kind is checked as the kind it spells; a signal table
+with bad keys still has its outputs named). It builds no compensator,
 identifies no model and simulates nothing: that is step 2,
 :func:`hammerstein.scenario.resolve.resolve_scenario`.
 
