@@ -24,6 +24,7 @@ from hammerstein.models.lti import align_dc_gain, compare_frequency_responses
 from hammerstein.report.dynamics_figure import dynamics_bode_figure_from_data, state_space_data
 from hammerstein.report.definitions import plural
 from hammerstein.report.render import FigureJobs
+from hammerstein.report.shared_model import SHARED_MODEL_WORDS, shared_model_cases
 
 __all__ = ["report_identified", "model_rms_table", "order_words"]
 
@@ -231,19 +232,28 @@ def _report_dynamics(results, directory, jobs):
              "G_true G_true(0)^-1 (the product G Gamma is what is identified). "
              "Relative error: |G_id - G_true G_true(0)^-1| divided by the largest true gain "
              "of the same row.", ""]
+    shared = set(shared_model_cases(results))
     for i, r in enumerate(rows, start=1):
         ident, plant, meta = r["identifier"], r["plant"], r["metadata"]
         fname = f"dynamics-bode-{i}.png"
         true = align_dc_gain(plant.dynamics, np.eye(plant.dynamics.noutputs))
+        cmp_ = compare_frequency_responses(ident.system_, true, [10.0, 100.0, 200.0, 300.0])
+        # the plant is the compensator's model, its G what was identified: G against itself
+        one = (sorted(shared.intersection(r["cases"]))
+               if np.max(cmp_["relative_error"]) < 1e-6 else [])
         jobs.add(directory / fname, dynamics_bode_figure_from_data, state_space_data(ident.system_),
                  state_space_data(true), labels=("identified", "true G G(0)^-1"),
-                 title=f"Identified vs true G ({plant.name}), order {ident.order_}")
-        cmp_ = compare_frequency_responses(ident.system_, true, [10.0, 100.0, 200.0, 300.0])
+                 title=f"Identified vs true G ({plant.name}), order {ident.order_}"
+                       + (" - one model: G compared with itself" if one else ""))
         cases = r["cases"]
         used = ", ".join(f"`{c}`" for c in cases[:8]) + (
             f" and {len(cases) - 8} more" if len(cases) > 8 else "")
         lines += [f"### Dynamics {i}", "",
                   f"Used by {plural(len(cases), 'case')}: {used}.", "",
+                  *([f"**One model:** the true G below is the G identified for "
+                     f"{', '.join(f'`{c}`' for c in one[:8])}{' and more' if len(one) > 8 else ''}"
+                     f" (the figure compares G with itself): {SHARED_MODEL_WORDS}.", ""]
+                    if one else []),
                   f"![Identified vs true G]({fname})", "",
                   f"- {order_words(ident)}",
                   f"- fit over all records per output: "

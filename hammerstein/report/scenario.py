@@ -32,6 +32,7 @@ from hammerstein.report.ilc_figure import convergence_figure, iteration_history
 from hammerstein.report.render import FigureJobs
 from hammerstein.report.definitions import definitions_lines, plural
 from hammerstein.report.compensator_words import _compensator_title, _identify_summary
+from hammerstein.report.shared_model import shared_model_lines
 from hammerstein.report.sweeps import sweep_report_lines
 from hammerstein.report.tables import COLUMNS, markdown_table, metrics_frame, write_signals_csv
 from hammerstein.scenario.execute import fade_samples
@@ -644,6 +645,7 @@ def write_report(scenario, results, directory, jobs=None):
                        f"(t = {r.diverged_at * 1e3:.3g} ms): {r.divergence.reason}"),
         } for r in results])
         lines += ["## Cases", "", markdown_table(table), ""]
+        lines += shared_model_lines(results)
     lines += start_lines(results)
     lines += _grouped_lines("Warnings:", [(r.name, w) for r in results
                                          for w in dict.fromkeys(r.warnings)])

@@ -174,6 +174,10 @@ _OWN = {
 }
 
 
+#: Keys of a sweep whose problems leave its cases to expand (and be checked).
+_NOT_EXPANDED = ("metric", "description")
+
+
 def _fmt(f):
     return f"{f:g}"
 
@@ -212,7 +216,9 @@ def expand_sweeps(sweeps, source, problems):
                 problems.append(f"{source}: {where}.name: duplicate sweep name {clean['name']!r} "
                                 f"(also sweeps[{seen[clean['name']]}]); give each sweep its own name")
             seen.setdefault(clean["name"], i)
-        if clean is None or len(problems) > n0:
+        # a bad metric or description spoils no case: the cases are still expanded and checked
+        own = tuple(f"{source}: {where}.{k}:" for k in _NOT_EXPANDED)
+        if clean is None or any(not q.startswith(own) for q in problems[n0:]):
             continue
         has_ref, has_drive = "reference" in raw, "drive" in raw
         if has_ref == has_drive:
@@ -285,7 +291,7 @@ def expand_sweeps(sweeps, source, problems):
         values = clean.get("values")
         first = [v[0] if isinstance(v, list) else v for v in values] if values else None
         spec = SweepSpec(clean["name"], mode, freqs or first or [], labels,
-                         axes, clean["metric"], clean.get("description", ""),
+                         axes, clean.get("metric", "rms_error"), clean.get("description", ""),
                          parameter=parameter or "frequency")
         for label in labels:
             for axis in axes:

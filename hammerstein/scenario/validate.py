@@ -9,7 +9,11 @@ at or beyond the Nyquist frequency or too short for ``settle_periods`` is
 reported), duplicate case names, the ``identify`` and ``model`` keys of a
 case (an ``identify`` table present, its frequency below Nyquist), the
 model files named by ``model`` (read and checked), ``[[sweeps]]`` (expanded
-into cases) and the ``[stability_map]`` table. It builds no compensator,
+into cases) and the ``[stability_map]`` table. A problem is named once, where
+it is written (the top-level ``[compensator]``'s ``model`` and ``identify``
+are checked once, not per case), and hides only the checks that depend on it
+(a misspelt compensator kind is checked as the kind it spells; a signal table
+with bad keys still has its outputs named). It builds no compensator,
 identifies no model and simulates nothing: that is step 2,
 :func:`hammerstein.scenario.resolve.resolve_scenario`.
 
@@ -20,6 +24,7 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 
 from __future__ import annotations
 
+import difflib
 import os
 import re
 from dataclasses import dataclass, field
@@ -37,8 +42,8 @@ from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.hardware_route import hardware_start
 from hammerstein.scenario.registry import COMPENSATORS, model_file_dynamics
 from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
-                                         TOP, Field, ScenarioError, check_table, kind_problem, known_kind,
-                                         total_samples_budget)
+                                         TOP, Field, Invalid, ScenarioError, check_table, kind_problem,
+                                         known_kind, total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
 from hammerstein.scenario.montecarlo import is_montecarlo, validate_montecarlo
 from hammerstein.scenario.feedback_table import validate_feedback
@@ -204,6 +209,11 @@ def _check_compensator(spec, where, problems, source, own=None):
     kind = spec.get("kind", "none")
     if not known_kind(kind, COMPENSATORS):
         problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, COMPENSATORS)]
+        meant = _meant_kind(kind)
+        if meant is not None:   # the rest of the table is checked as the kind it spells
+            rest = {k: v for k, v in spec.items() if k != "kind"}
+            clean = check_table(rest, COMPENSATORS[meant].fields, where, problems, source)
+            problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean, own))
         return None
     if "kind" not in spec and any(k != "kind" for k in spec):
         # `model = ...` without a kind read "unknown key (valid keys: kind)": the default kind
@@ -218,6 +228,12 @@ def _check_compensator(spec, where, problems, source, own=None):
     if clean is not None:
         problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean, own))
     return clean
+
+
+def _meant_kind(kind):
+    """The compensator kind closest to a misspelt ``kind`` (``"hamerstein"``), or None."""
+    hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
+    return hint[0] if hint else None
 
 
 def _option_problems(spec, own=None):
@@ -279,6 +295,9 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     n_before = len(problems)
     entry = kinds[kind]
     clean = check_table(spec, {"kind": Field(lambda v: v), **entry.fields}, where, problems, source)
+    if clean is not None and len(problems) > n_before and plant is not None:
+        # the signal cannot be generated, but its axes are still named against the plant's
+        problems.extend(f"{source}: {where}.{msg}" for msg in _axis_problems(clean, plant, mode))
     if clean is None or len(problems) > n_before or plant is None:
         return None
     T = plant.sampling_period
@@ -313,6 +332,30 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
     return t, sig, max(int(round(period / T)), 1), extras
 
 
+def _axis_problems(clean, plant, mode):
+    """``key: message`` for each output (input) named in a checked signal table that the plant lacks."""
+    model = plant.hysteresis
+    names = [str(n) for n in (model.input_names if mode == "drive" else model.output_names)]
+    out = []
+    for key in ("output", "input"):
+        if isinstance(clean.get(key), str) and clean[key] not in names:
+            out.append(f"{key}: expected one of {names}, found {clean[key]!r}")
+    outs = clean.get("outputs")
+    if isinstance(outs, list) and any(o not in names for o in outs):
+        out.append(f"outputs: expected outputs of the plant {names}, found {outs}")
+    return out
+
+
+def _one_output(spec, plant):
+    """A reference table with ``output`` filled in on a plant with one output (nothing to choose)."""
+    names = list(plant.hysteresis.output_names) if plant is not None else []
+    kind = spec.get("kind") if isinstance(spec, dict) else None
+    entry = refs.REFERENCE_KINDS.get(kind) if isinstance(kind, str) else None
+    if len(names) == 1 and entry is not None and "output" in entry.fields and "output" not in spec:
+        return {**spec, "output": str(names[0])}
+    return spec
+
+
 def _magnitude_problem(spec, signal, unit):
     """``".key: ... beyond the limit 1e+150"`` for a signal the simulation would refuse, else ``""``.
 
@@ -335,6 +378,8 @@ def _record_file_problems(identify, base):
     problems = []
     for key in ("hysteresis_records", "dynamics_records", "creep_records"):
         for name in identify.get(key) or []:
+            if not isinstance(name, str):
+                continue        # reported by the table's check
             try:
                 path = confined_path(name, base, PresetError)
             except PresetError as exc:
@@ -391,6 +436,44 @@ def _model_problems(name, identify, plant, base, files):
                 f"{model.n_outputs} output(s) {list(model.output_names)}; the plant has "
                 f"{pm.n_inputs} {list(pm.input_names)} and {pm.n_outputs} {list(pm.output_names)}"]
     return []
+
+
+def _top_model_problems(comp, plant, base, files):
+    """Problems of the top-level ``[compensator]``'s ``model`` and ``identify`` keys.
+
+    Checked once, named where they are written (``compensator.identify.<key>``),
+    whatever the cases: a missing record file is not a problem of the first
+    case that reaches it. A misspelt kind is checked as the kind it spells;
+    an ``identify`` table with problems of its own still has its record
+    files looked for. Returns ``(lines, raw)``: the ``compensator...: message``
+    lines and the :func:`_model_problems` messages they came from (a case
+    that inherits the table skips those).
+    """
+    kind = comp.get("kind", "none")
+    kind = kind if known_kind(kind, COMPENSATORS) else _meant_kind(kind)
+    name = comp.get("model", "plant")
+    if kind is None or "model" not in COMPENSATORS[kind].fields or not isinstance(name, str):
+        return [], []
+    identify = comp.get("identify")
+    if name == "identified" and identify is not None:
+        try:
+            identify = COMPENSATORS[kind].fields["identify"].check(identify)
+        except Invalid:     # reported by the table's check; its files are still looked for
+            if not (isinstance(identify, dict) and identify.get("records") == "files"):
+                return [], []
+            return _placed_top(_record_file_problems(
+                {k: [v] if isinstance(v, str) else v for k, v in identify.items()
+                 if isinstance(v, (str, list))}, base))
+    if plant is None and name == "identified" and isinstance(identify, dict) \
+            and identify.get("records") != "files":
+        return [], []       # its frequency is checked against the plant's Nyquist: none loaded
+    return _placed_top(_model_problems(name, identify, plant, base, files))
+
+
+def _placed_top(msgs):
+    lines = [f"compensator.{m}" if m.startswith("identify") else f"compensator.model: {m}"
+             for m in msgs]
+    return lines, msgs
 
 
 def _plausibility(mode, signal, spec):
@@ -474,6 +557,17 @@ def _validate_cases(path, data, feedback=False):
             plants[key] = load_plant(preset, dynamics=bool(dynamics), base_dir=base)
         return plants[key]
 
+    top_model = [], []      # the top-level compensator's model: checked once, named there
+    if isinstance(comp_top, dict) and "model" in comp_top:
+        top_plant = None
+        if isinstance(plant_top.get("preset"), str):
+            try:
+                top_plant = plant_of(plant_top["preset"], plant_top.get("dynamics", True))
+            except PresetError:
+                pass        # reported with the plant table
+        top_model = _top_model_problems(comp_top, top_plant, base, model_files)
+        problems.extend(f"{source}: {line}" for line in top_model[0])
+
     for where, raw in entries:
         n_before = len(problems)
         case = check_table(raw, CASE, where, problems, source)
@@ -527,7 +621,8 @@ def _validate_cases(path, data, feedback=False):
                 once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
                      f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
                 comp_ok = False
-        sig = _signal(where, mode, raw[mode], plant, problems, source, base, budget)
+        sig_spec = _one_output(raw[mode], plant) if mode == "reference" else raw[mode]
+        sig = _signal(where, mode, sig_spec, plant, problems, source, base, budget)
         kind = cspec.get("kind", "none")
         if (mode == "reference" and known_kind(kind, COMPENSATORS) and not COMPENSATORS[kind].compensates
                 and not feedback):
@@ -554,6 +649,9 @@ def _validate_cases(path, data, feedback=False):
         if mode == "reference" and "model" in COMPENSATORS[kind].fields:
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
+            own = cover if isinstance(cover, dict) else {}
+            if not ({"model", "identify"} & set(own)) and cspec.get("kind") == comp_top.get("kind"):
+                more = [m for m in more if m not in top_model[1]]  # reported at the top, once
             problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
         if cclean is not None:      # a model file's dynamics and creep, as compensate takes them
             cclean = model_file_dynamics(cclean, base)
@@ -581,11 +679,11 @@ def _validate_cases(path, data, feedback=False):
             continue
         cases.append(CaseSpec(
             name=case["name"], description=case.get("description", ""), mode=mode,
-            signal_spec=dict(raw[mode]), plant_spec=pspec,
+            signal_spec=dict(sig_spec), plant_spec=pspec,
             compensator_spec=cclean if cclean is not None else cspec,
             plant=plant, compensator=None, time=t, signal=signal, period_samples=P,
             settle_periods=settle, model_spec=cmp_spec, where=where, **extras))
-        cases[-1].warnings.extend(_plausibility(mode, signal, raw[mode]))
+        cases[-1].warnings.extend(_plausibility(mode, signal, sig_spec))
     smap, smap_plant = None, None
     if "stability_map" in data and isinstance(plant_top.get("preset"), str):
         try:

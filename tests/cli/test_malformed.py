@@ -144,7 +144,7 @@ SCENARIOS = {
     "sweep-too-many-frequencies": "sweeps[0].frequencies: expected at most 200 frequencies, found 201",
     "sweep-duplicate-names": "sweeps[1].name: duplicate sweep name 's' (also sweeps[0])",
     "sweep-unknown-metric": "sweeps[0].metric: expected one of 'peak_to_peak'",
-    "model-shape-mismatch": "cases[0].compensator: ../models/one-by-one.toml: the model has 1 input(s) "
+    "model-shape-mismatch": "compensator.model: ../models/one-by-one.toml: the model has 1 input(s) "
                             "['u'] and 1 output(s) ['y']; the plant has 2 ['ux', 'uy'] and 2 ['x', 'y']",
     "drive-model-shape-mismatch": "cases[0].model: ../models/one-by-one.toml: the model has 1 input(s)",
     "dynamics-without-dynamics": "plant.dynamics: true, but the preset '../models/preset-static.toml' "

@@ -1,0 +1,131 @@
+"""`validate` reports every mistake of a scenario file in one run, each once, at its place.
+
+A CI-gate user needed three rounds: a misspelt compensator kind hid the keys of its
+``identify`` table, a misspelt sweep metric hid the sweep's cases (one above Nyquist),
+a raster's bad keys hid its unknown output, and a missing record file of the top-level
+``[compensator.identify]`` was named after the first case that reached it.
+"""
+
+import pytest
+
+from hammerstein.exceptions import ScenarioError
+from hammerstein.scenario.validate import validate_scenario
+
+# realistic-2dof samples at T = 5e-5 s: Nyquist 10 kHz
+ALL_MISTAKES = """
+name = "bad"
+[plant]
+preset = "{preset}"
+dynamic = true
+
+[compensator]
+kind = "hamerstein"
+model = "identified"
+dynamics = "identified"
+
+[compensator.identify]
+records = "files"
+hysteresis_record = ["meas/hysteresis-ux.csv", "meas/hysteresis-uy.csv"]
+dynamics_records = ["meas/multisine-ux.csv", "meas/missing.csv"]
+time = "t"
+
+[[cases]]
+name = "circle-15um-10Hz"
+reference = {{ kind = "circle", radus = 15.0, frequency = "10", periods = 6 }}
+settle_periods = -1
+[[cases]]
+name = "circle-15um-10Hz"
+reference = {{ kind = "circel", radius = 15.0, frequency = 10.0, periods = 6 }}
+[[cases]]
+name = "raster"
+reference = {{ kind = "raster", outputs = ["x", "z"], size = [40.0, 40.0], lines = 1, frequency = 20.0, periods = 3 }}
+
+[[sweeps]]
+name = "freq"
+frequencies = [10.0, 12000.0]
+reference = {{ kind = "circle", radius = 20.0, periods = 10 }}
+metric = "max_euclidian_error"
+"""
+
+# (where the mistake is written, a word of its message), each expected on exactly one line
+EXPECTED = [
+    ("plant.dynamic", "unknown key"),
+    ("compensator.kind", "'hamerstein'"),
+    ("compensator.identify.hysteresis_record", "unknown key"),
+    ("compensator.identify.dynamics_records", "meas/missing.csv: no such file"),
+    ("cases[0].settle_periods", "-1"),
+    ("cases[0].reference.radus", "unknown key"),
+    ("cases[0].reference.frequency", "'10'"),
+    ("cases[1].name", "duplicate"),
+    ("cases[1].reference.kind", "'circel'"),
+    ("cases[2].reference.lines", "found 1"),
+    ("cases[2].reference.periods", "unknown key"),
+    ("cases[2].reference.outputs", "'z'"),
+    ("sweeps[0].metric", "'max_euclidian_error'"),
+    ("sweeps[0](freq-12000Hz).reference.frequency", "Nyquist"),
+]
+
+
+def _scenario(tmp_path, preset="realistic-2dof"):
+    (tmp_path / "meas").mkdir()
+    for name in ("hysteresis-ux.csv", "hysteresis-uy.csv", "multisine-ux.csv"):
+        (tmp_path / "meas" / name).write_text("t,ux,uy,x,y\n0,0,0,0,0\n")
+    path = tmp_path / "bad.toml"
+    path.write_text(ALL_MISTAKES.format(preset=preset))
+    return path
+
+
+def _lines(path):
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(path)
+    return str(err.value).splitlines()
+
+
+def test_every_mistake_is_reported_in_one_run_once_at_its_place(tmp_path):
+    path = _scenario(tmp_path)
+    lines = _lines(path)
+    for key, word in EXPECTED:
+        hits = [ln for ln in lines if f"{path}: {key}: " in ln and word in ln]
+        assert len(hits) == 1, (key, word, lines)
+    # the missing record file is the top-level table's mistake: not a case's, and named once
+    assert sum("missing.csv" in ln for ln in lines) == 1, lines
+
+
+def test_a_missing_plant_preset_stops_only_the_checks_that_need_the_plant(tmp_path):
+    # the outputs and the Nyquist frequency need the plant; nothing else does
+    path = _scenario(tmp_path, preset="realistic-2dof.tml")
+    lines = _lines(path)
+    assert sum(f"{path}: plant.preset: " in ln for ln in lines) == 1, lines
+    for key, word in EXPECTED:
+        if key in ("cases[2].reference.outputs", "sweeps[0](freq-12000Hz).reference.frequency"):
+            continue
+        assert sum(f"{path}: {key}: " in ln and word in ln for ln in lines) == 1, (key, lines)
+
+
+def test_a_case_that_overrides_the_identify_table_names_its_own_file(tmp_path):
+    path = _scenario(tmp_path)
+    text = path.read_text().replace('kind = "hamerstein"', 'kind = "hammerstein"').replace(
+        "hysteresis_record =", "hysteresis_records =").replace("dynamic =", "dynamics =")
+    text = text.split("[[cases]]")[0] + (
+        '[[cases]]\nname = "a"\nreference = { kind = "circle", radius = 15.0, frequency = 10.0, '
+        'periods = 3 }\n'
+        '[[cases]]\nname = "b"\nreference = { kind = "circle", radius = 15.0, frequency = 10.0, '
+        'periods = 3 }\n'
+        'compensator = { identify = { records = "files", hysteresis_records = '
+        '["meas/gone.csv"] } }\n')
+    path.write_text(text)
+    lines = _lines(path)
+    assert [ln.split(": ", 2)[1] for ln in lines] == [
+        "compensator.identify.dynamics_records", "cases[1].compensator"], lines
+    assert "meas/gone.csv: no such file" in lines[1]
+
+
+def test_a_missing_preset_under_an_identified_model_is_one_line(tmp_path):
+    # the identify frequency is checked against the plant's Nyquist: no plant, no check (and
+    # no crash: "unexpected AttributeError")
+    path = tmp_path / "s.toml"
+    path.write_text('[plant]\npreset = "nope.toml"\n[compensator]\nkind = "multivariable"\n'
+                    'model = "identified"\nidentify = { frequency = 50.0 }\n[[cases]]\nname = "c"\n'
+                    'reference = { kind = "circle", radius = 10.0, frequency = 20.0, periods = 3 }\n')
+    lines = _lines(path)
+    assert len(lines) == 1 and f"{path}: plant.preset: nope.toml" in lines[0], lines
