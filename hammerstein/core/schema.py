@@ -34,6 +34,7 @@ from hammerstein.core.numbers import is_number as _finite_number
 from hammerstein.exceptions import Invalid, NestedInvalid
 
 __all__ = [
+    "closest",
     "Field",
     "Invalid",
     "NestedInvalid",
@@ -86,8 +87,30 @@ def did_you_mean(value, options):
     >>> did_you_mean("zzz", ["sine"])
     ''
     """
+    hint = closest(value, options)
+    return f" (did you mean {hint!r}?)" if hint is not None else ""
+
+
+def closest(value, options):
+    """The option closest to ``value`` (difflib's, cut-off 0.6), or None.
+
+    Parameters
+    ----------
+    value : object
+        Compared as ``str(value)``.
+    options : iterable of str
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> closest("hamerstein", ["hammerstein", "multivariable"])
+    'hammerstein'
+    """
     hint = difflib.get_close_matches(str(value), [str(o) for o in options], n=1)
-    return f" (did you mean {hint[0]!r}?)" if hint else ""
+    return hint[0] if hint else None
 
 
 # -- field checkers: value -> normalised value, or raise Invalid -------------------

@@ -24,7 +24,6 @@ of :data:`VALIDATORS` (``"identification"``: measured records,
 
 from __future__ import annotations
 
-import difflib
 import os
 import re
 from dataclasses import dataclass, field
@@ -36,6 +35,7 @@ import numpy as np
 from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
+from hammerstein.core.schema import closest
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -232,8 +232,7 @@ def _check_compensator(spec, where, problems, source, own=None):
 
 def _meant_kind(kind):
     """The compensator kind closest to a misspelt ``kind`` (``"hamerstein"``), or None."""
-    hint = difflib.get_close_matches(str(kind), list(COMPENSATORS), n=1)
-    return hint[0] if hint else None
+    return closest(kind, COMPENSATORS)
 
 
 def _option_problems(spec, own=None):
