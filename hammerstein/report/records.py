@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hammerstein.compensation.model_classes import model_class
 from hammerstein.core.files import safe_write
 from hammerstein.io.presets import save_model
 from hammerstein.report.model_figures import record_fit_figure
@@ -53,7 +54,11 @@ def write_identification_report(scenario, results, directory, jobs=None):
             cols[f"{name}_{ou_tag}"] = rec.y[l][mask]
             cols[f"{name}_model_{ou_tag}"] = pred[l][mask]
         write_signals_csv(directory / f"timeseries-{r}.csv", cols, float_format="%.7g")
-    model_file = f"models/identified-{spec['method']}.toml"
+    # the class fitted: a scenario's model = "preisach" / "generalized" / "auto" is fitted by
+    # least squares whatever its method; named by the class, not by "least-squares" alone
+    cls = model_class(model)
+    fitted = spec["method"] if cls.name == "classical" else cls.name
+    model_file = f"models/identified-{fitted}.toml"
     val = fit.validation
     save_model(model, directory / model_file, {
         "method": spec["method"],
@@ -69,7 +74,7 @@ def write_identification_report(scenario, results, directory, jobs=None):
              rec.u[split.excitation], rec.y[0], pred[0],
              int(train_idx[0]), int(held_idx[0]) if held_idx.size else rec.n_samples,
              f"{model.input_names[split.excitation]} [{iu}]", f"{model.output_names[0]} [{ou}]",
-             f"{scenario.title}: measured vs identified PI model")
+             f"{scenario.title}: measured vs identified {cls.label} model")
     structure = "; ".join(f"{out} <- {inp}: {fit.structure[l][k]}"
                           for l, out in enumerate(model.output_names)
                           for k, inp in enumerate(model.input_names))
@@ -80,7 +85,9 @@ def write_identification_report(scenario, results, directory, jobs=None):
     for r, s in zip(fit.records, fit.splits):
         lines += [f"- Record `{r.source}`: {r.n_samples} samples, T = {r.sampling_period:.6g} s; "
                   f"{s.description}."]
-    lines += ["", f"Identification: {spec['method']}, partition {fit.partition}, bounds "
+    how = (spec["method"] if cls.name == "classical" else
+           f"{cls.label} (least squares{', chosen by auto' if spec.get('model') == 'auto' else ''})")
+    lines += ["", f"Identification: {how}, partition {fit.partition}, bounds "
               f"{spec['bounds']}; components {structure}; output offset "
               f"{[round(float(c), 6) for c in (model.output_offset if model.output_offset is not None else np.zeros(model.n_outputs))]} {ou}."]
     lines += [f"- {note}" for note in fit.notes]
