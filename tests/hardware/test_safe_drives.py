@@ -689,3 +689,35 @@ def test_a_drive_that_ends_on_the_rest_voltages_is_said_to_end_at_rest(last, low
     line = end_note(u, T, names, amp)
     assert ("every input at rest" in line) == at_rest
     assert ("ramp every input to rest" in line) == (not at_rest)
+
+
+@pytest.mark.parametrize("left, slew_words", [("slew rate", True), ("range", False)])
+def test_a_drive_held_inside_the_slew_by_the_margins_is_told_the_slew(left, slew_words):
+    """The range stage scales a reference a few % inside the limit it left, so a slew-bound
+    drive can peak at 0.96 of the slew: a 30 µm circle at 80 Hz behind 2000 V/s (1918-1931
+    V/s, shaped by 75 % of its half-span) was told the range held it back, to widen the
+    range (which changed nothing), and written. The shaping's words say which limit."""
+    from types import SimpleNamespace
+    from hammerstein.cli.compensate import _shrink_warning
+    from hammerstein.models.amplifier import amplifier_from_table
+    T = 5e-5
+    amp = amplifier_from_table({"source": "records", "range": [-10.0, 10.0],
+                                "slew_rate": 2000.0}, ["ux", "uy"])
+    assert amp.from_records
+    t = np.arange(2000) * T
+    asked = 30.0 * np.vstack([np.cos(2 * np.pi * 80 * t), np.sin(2 * np.pi * 80 * t)])
+    got = 0.25 * asked                            # shaped by 75 % of the half-span
+    step = 0.96 * 2000.0 * T                      # 0.96 of the slew per sample, at 5.9 V
+    u = np.vstack([np.clip(np.cumsum(np.where(np.sin(2 * np.pi * 80 * t) > 0, step, -step)),
+                           -5.9, 5.9)] * 2)
+    plant = SimpleNamespace(amplifier=amp, sampling_period=T,
+                            hysteresis=SimpleNamespace(output_names=["x", "y"]))
+    drive = SimpleNamespace(limited=True, range_limited=left != "slew rate", reference=got,
+                            inputs=u, fade_samples=0,
+                            shaped=[f"x: reference shaped by up to 22.5 µm (limited to the "
+                                    f"output the drive reaches within the {left} (the model's "
+                                    f"prediction for the drive limited to it, 5 % inside it))"])
+    text, refuse = _shrink_warning(plant, SimpleNamespace(signal=asked), drive)
+    assert ("slews faster than the records did" in text) == slew_words
+    assert refuse == slew_words                   # 75 % > SHRINK_REFUSE: refused by default
+    assert ("asks more than the records' range reaches" in text) == (not slew_words)
