@@ -62,7 +62,7 @@ from hammerstein.identification.defaults import CREEP_T_MIN
 from hammerstein.identification._creep_kernels import creep_output, lag_kernel, lag_states
 
 __all__ = ["CreepIdentifier", "CREEP_DEFAULTS", "staircase_steps", "hysteresis_frequency",
-           "remove_creep", "step_level_errors"]
+           "remove_creep", "step_level_errors", "ramps_joined"]
 
 #: Defaults of :class:`CreepIdentifier`.
 CREEP_DEFAULTS = {"t_min": CREEP_T_MIN, "t_max": 100.0, "per_decade": 2, "smoothing": 1e-3,
@@ -306,6 +306,63 @@ def _step_responses(mats, p, N):
     if mats is None:
         return np.eye(p)[:, :, None] * np.ones(N)
     return _responses(mats, np.ones((p, N)))
+
+
+def ramps_joined(steps, u, min_samples):
+    """Staircase step labels with each ramp between two holds joined to the hold it leads to.
+
+    A ramp is a run of consecutive steps shorter than ``min_samples`` along which every
+    input moves monotonically from the hold before it to the hold after it (a
+    slew-limited staircase: one step per sample). An oscillation, whose short steps
+    reverse, is left as it is (no staircase: refused by the caller).
+
+    Parameters
+    ----------
+    steps : numpy.ndarray of int, shape (n_samples,)
+        Each sample's step, 0, 1, ... in order (:func:`staircase_steps`).
+    u : numpy.ndarray, shape (m, n_samples)
+        The record's voltages [V].
+    min_samples : int
+        A step this long or longer is a hold.
+
+    Returns
+    -------
+    steps : numpy.ndarray of int, shape (n_samples,)
+    n_steps : int
+
+    Examples
+    --------
+    >>> u = np.r_[np.zeros(12), 1.0, 2.0, np.full(12, 3.0), 2.5][None, :]
+    >>> s, n = ramps_joined(staircase_steps(u), u, 10)
+    >>> n, s[[0, 11, 12, 13, 14, 25, 26]].tolist()
+    (2, [0, 0, 1, 1, 1, 1, 1])
+    >>> w = np.r_[np.zeros(12), 1.0, -1.0, np.full(12, 3.0)][None, :]   # reverses: kept
+    >>> ramps_joined(staircase_steps(w), w, 10)[1]
+    4
+    """
+    steps = np.asarray(steps)
+    lengths = np.bincount(steps)
+    n = lengths.size
+    firsts = np.r_[0, np.flatnonzero(np.diff(steps)) + 1]
+    level = np.asarray(u, dtype=float)[:, firsts]                  # (m, n): each step's voltages
+    short = lengths < min_samples
+    target = np.arange(n)
+    j = 0
+    while j < n:
+        if not short[j]:
+            j += 1
+            continue
+        k = j
+        while k < n and short[k]:
+            k += 1                                                  # short steps j .. k - 1
+        run = level[:, max(j - 1, 0):min(k + 1, n)]
+        d = np.diff(run, axis=1)
+        monotone = bool(np.all((d >= 0).all(axis=1) | (d <= 0).all(axis=1)))
+        if monotone and (k < n or j > 0):
+            target[j:k] = k if k < n else j - 1                   # the next hold (or the last)
+        j = k
+    kept, label = np.unique(target, return_inverse=True)
+    return label[steps], int(kept.size)
 
 
 def _regressors(mats, h, steps, n_steps, tau, T, stride, S=None, g=None, out=None, gap=0):
@@ -585,6 +642,12 @@ class CreepIdentifier:
                           for l in range(p)]
                 fits.append((blocks, ("means", means)))
             else:                    # columns: lags, target, offsets (Fortran order)
+                # a slew-limited staircase (excitation --slew-rate) ramps between its holds:
+                # each ramp sample would be a step of its own, one offset column each (401
+                # columns, 1.1 GiB, for a 2000 V/s amplifier at 20 kHz); a ramp joins the hold
+                # it leads to, whose offset then starts with the ramp
+                steps, n_steps = ramps_joined(steps, u, _MIN_STEP_SAMPLES)
+                lengths = np.bincount(steps)
                 g = _responses(mats, h)  # G h is the sum of G's responses to each output alone
                 y_r = (np.asarray(rec.y, dtype=float) - off[:, None] - g.sum(axis=0))[:, rows]
                 size = 8.0 * p * nr * (1 + p * (K + n_steps))

@@ -234,3 +234,38 @@ def test_hysteresis_refitted_without_creep_is_as_good_as_without_creep(hysteresi
     bound = 1.1 * ref + NOISE_UM
     assert _chain_error(refit, refit_creep, plant) <= bound
     assert _chain_error(first, first_creep, plant) > bound
+
+
+def test_a_slew_limited_staircase_through_g_joins_its_ramps(hysteresis, monkeypatch):
+    """``excitation --slew-rate`` writes staircases whose steps ramp (one step per sample):
+    with dynamics, one offset column per ramp sample asked 1.1 GiB for a 2000 V/s amplifier
+    at 20 kHz, and ``identify --dynamics --creep-records`` refused the very files it was told
+    to take. A ramp now joins the hold it leads to; the creep is recovered as from steps."""
+    import hammerstein.identification.creep_identification as ci
+    import control
+    G = control.sample_system(control.ss(-2000.0 * np.eye(2), 2000.0 * np.eye(2), np.eye(2),
+                                         0 * np.eye(2)), T)             # a 318 Hz low-pass
+    true = Creep([0.05, 0.5, 5.0], [0.01, 0.01, 0.01])
+    plant = HammersteinPlant(hysteresis, T, G, creep=[true, true])
+    rng = np.random.default_rng(5)
+    recs = []
+    for r in excitation_set(["ux", "uy"], 10.0, T, multisine_periods=1, hold=2.0,
+                            slew_rate=1000.0):                          # 1 V per sample
+        if r.kind == "creep":
+            y, _ = plant.simulate(r.u)
+            recs.append(SimpleNamespace(u=r.u, y=y + NOISE_UM * rng.standard_normal(y.shape),
+                                        sampling_period=T, source=r.name))
+    raw = [int(staircase_steps(r.u)[-1]) + 1 for r in recs]
+    joined = [ci.ramps_joined(staircase_steps(r.u), r.u, ci._MIN_STEP_SAMPLES)[1] for r in recs]
+    assert all(j < 0.5 * n for j, n in zip(joined, raw))     # mostly ramp samples
+    N = max(r.u.shape[1] for r in recs)
+
+    def size(n_steps):
+        return 8.0 * 2 * N * (1 + 2 * (9 + n_steps))
+    # a bound between what the joined steps need and what one column per ramp sample asks
+    monkeypatch.setattr(ci, "_MAX_BUFFER_BYTES", 0.5 * (size(max(joined)) + size(min(raw))))
+    ident = CreepIdentifier().fit(hysteresis, recs, G)
+    want = _drift(true)
+    for l in range(2):
+        got = _drift(ident.creeps_[l])
+        assert np.max(np.abs(got - want)) <= 0.10 * want[-1], (l, got, want)
