@@ -59,3 +59,32 @@ def test_learn_names_the_pre_trigger_first(records):
     assert res.returncode == 1 and not (d / "u1.csv").exists()
     assert (f"likely causes, in order: (1) the measured response lags the drive by {PRE} "
             f"samples ({PRE * T:.4g} s)") in res.stderr, res.stderr
+
+
+def test_learn_refuses_a_pre_trigger_of_whole_periods(tmp_path):
+    """A pre-trigger of whole periods aligns the periodic part at the delay: only the fade-in
+    differs, the misfit stays low, and ``learn`` learnt from it (a tube's 30 Hz circle
+    recorded 0.1 s, 3 periods, early: its next drive 20 % off where the right record's gave
+    5.7 %). The lag found beyond the delay search refuses it all the same."""
+    ref = '{ kind = "circle", radius = 30, frequency = 100, periods = 40 }'
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    plant = load_actuator("rakotondrabe-2dof")
+    u = pd.read_csv(tmp_path / "u0.csv", comment="#")
+    y, _ = plant.simulate(u[["ux", "uy"]].to_numpy().T, plant.rest_state())
+    T = float(u.t[1] - u.t[0])
+    pre = 3 * int(round(0.01 / T))                                 # 3 periods of 100 Hz
+    late = np.concatenate([np.repeat(y[:, :1], pre, axis=1), y], axis=1)[:, :y.shape[1]]
+    noise = np.random.default_rng(1)                               # a sensor: no flat run
+    y, late = (v + 0.03 * noise.standard_normal(v.shape) for v in (y, late))
+    pd.DataFrame({"t": u.t, "x": late[0], "y": late[1]}).to_csv(tmp_path / "pre.csv",
+                                                                index=False)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", ref, "--drive", "u0.csv",
+               "--measured", "pre.csv", "--out", "u1.csv", cwd=tmp_path)
+    assert res.returncode == 1 and not (tmp_path / "u1.csv").exists(), res.stderr
+    assert (f"likely cause: the measured response lags the drive by {pre} samples "
+            f"({pre * T:.4g} s)") in res.stderr, res.stderr
+    pd.DataFrame({"t": u.t, "x": y[0], "y": y[1]}).to_csv(tmp_path / "m.csv", index=False)
+    ok = _cli("learn", "rakotondrabe-2dof", "--reference", ref, "--drive", "u0.csv",
+              "--measured", "m.csv", "--out", "u1.csv", cwd=tmp_path)
+    assert ok.returncode == 0, ok.stderr
