@@ -746,7 +746,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         def drive_for(ref):
             return pass_over(ref, "the reference shaped into the records' limits")
 
-        sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names)
+        sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names,
+                             fade_samples=n)
         u, faded, notes = sr.inputs, sr.reference, sr.notes
         limited, range_limited = sr.limited, sr.range_limited
         if fade_samples is None:     # a start-up stepping faster than the settled drive: shaped too
@@ -875,7 +876,8 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     tight = Amplifier([replace(c, slew_rate=min(c.slew_rate, b / T))
                        for c, b in zip(amplifier.channels, bound)], amplifier.inputs,
                       amplifier.source)
-    sr = shape_reference(run, faded, tight, T, first_mode, predict, P or None, names)
+    sr = shape_reference(run, faded, tight, T, first_mode, predict, P or None, names,
+                         fade_samples=fade)
     if not sr.changed:
         return u, faded, []
     moved = np.abs(np.asarray(sr.reference) - faded) > _SHAPE_TOL * max(1.0, float(np.max(np.abs(faded))))

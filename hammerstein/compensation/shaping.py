@@ -724,7 +724,7 @@ def shaping_notes(raw, shaped, sampling_period, names=None, why=""):
 
 
 def shape_reference(run, reference, amplifier, sampling_period, first_mode=None, predict=None,
-                    period_samples=None, names=None):
+                    period_samples=None, names=None, fade_samples=0):
     """A reference shaped to what the amplifier and the identified dynamics allow.
 
     See the module docstring for the two stages. Nothing is changed when
@@ -753,6 +753,10 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
         of it.
     names : sequence of str, optional
         Output names for the notes.
+    fade_samples : int
+        The fade-in's samples: no hold is judged before its end (the fade's flat
+        tail before a step is no hold of the reference: "holds of 0.15 ms" at the
+        end of a staircase's 50 ms fade, every hold 50 ms long).
 
     Returns
     -------
@@ -811,7 +815,8 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     if not np.any(excess > 0) or N < 3:
         best.notes = shaping_notes(r, best.reference, T, names,
                                    f": {'; '.join(reasons)}" if reasons else "")
-        best.notes += hold_note(r, best.reference, best.window_samples, T, names, lead)
+        best.notes += hold_note(r, best.reference, best.window_samples, T, names,
+                                max(lead, int(fade_samples)))
         return best
     mask = excess > 0
     e_best = excess
@@ -872,7 +877,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     best.notes = shaping_notes(r, best.reference, T, names,
                                f": {'; '.join(reasons)}" if reasons else "")
     best.notes += hold_note(r, best.reference, max(best.window_samples, L0 if band else 0), T,
-                            names, lead)
+                            names, max(lead, int(fade_samples)))
     return best
 
 

@@ -259,3 +259,25 @@ def test_a_scan_that_moves_every_sample_has_no_holds():
     # a staircase's 2 ms holds under a 3.5 ms window are named
     stair = np.repeat(np.arange(100.0), 40)[None]
     assert len(hold_note(stair, stair + 0.1, 70, 5e-5, ["x"])) == 1
+
+
+def test_the_fade_ins_flat_tail_is_no_hold():
+    """A staircase held 50 ms per level, faded in over its first 50 ms: the fade's last
+    samples move by less than rounding before the first step, and were named "holds of
+    0.15 ms ... shorter than the smoothing window" although every hold is 50 ms. Holds are
+    judged after the fade-in; the true holds (50 ms, longer than the window) are not named."""
+    from hammerstein.compensation.drive import hardware_fade
+    from hammerstein.compensation.shaping import shape_reference
+    from hammerstein.models.amplifier import amplifier_from_table
+    F = 1000
+    levels = np.repeat([0.0, 10.0, 25.0, 15.0, 5.0], 1000)[None, :]     # 50 ms at 20 kHz
+    faded = hardware_fade(levels, F, rest=np.array([-3.0]))
+    amp = amplifier_from_table({"range": [-10.0, 10.0], "slew_rate": 2000.0}, ["u"])
+
+    def holds(fade_samples):
+        s = shape_reference(lambda x: 0.4 * x, faded, amp, 5e-5, first_mode=420.0,
+                            names=["x"], fade_samples=fade_samples)
+        assert s.changed                   # the steps were shaped (a 2000 V/s slew)
+        return [n for n in s.notes if "holds of" in n]
+    assert holds(0) and "holds of 0.15 ms" in holds(0)[0]     # the fade's tail, as before
+    assert holds(F) == []
