@@ -721,3 +721,31 @@ def test_a_drive_held_inside_the_slew_by_the_margins_is_told_the_slew(left, slew
     assert ("slews faster than the records did" in text) == slew_words
     assert refuse == slew_words                   # 75 % > SHRINK_REFUSE: refused by default
     assert ("asks more than the records' range reaches" in text) == (not slew_words)
+
+
+def test_a_staircase_whose_steps_alone_are_shaped_is_not_told_it_is_held_back(tmp_path):
+    # a slew limit shapes each step of a staircase by its whole height on a few samples, its
+    # levels all reached: a user's 5-level staircase was told it was shaped by 99 % of its
+    # half-span and that the range held it back. Judged on a quarter of the samples, the
+    # steps are not the reference held back; a circle shaped on every sample still is
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
+    text += '\n[amplifier]\nsource = "records"\nrange = [-10.0, 10.0]\nslew_rate = 2000.0\n'
+    preset = tmp_path / "slow.toml"
+    preset.write_text(text)
+    n = 2000                                  # 0.1 s at T = 5e-5 s
+    x = np.repeat([0.0, 10.0, -5.0, 12.0, 3.0], n)
+    t = np.arange(x.size) * T
+    ref = tmp_path / "steps.csv"
+    pd.DataFrame({"t": t, "x": x, "y": 0.5 * x}).to_csv(ref, index=False)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--reference", str(ref),
+                     "--out", str(tmp_path / "d.csv")])
+    assert code == 0, err.getvalue()
+    assert "reference shaped" in out.getvalue()           # the steps were shaped ...
+    assert "% of its half-span" not in err.getvalue()     # ... and that is all
+    u, _, _ = _drive(tmp_path / "d.csv")
+    d = pd.read_csv(tmp_path / "d.csv", comment="#")
+    k = np.arange(len(d))
+    held = (k % n > 0.3 * n) & (k % n < 0.7 * n) & (k >= n)     # mid-hold: levels reached
+    assert np.max(np.abs(d["x_shaped"].to_numpy()[held] - x[: len(d)][held])) < 0.05
