@@ -272,7 +272,8 @@ class Verdict:
 
 
 def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, repeating,
-                what, judged_text, out_of_step=None, advice=None, q_cutoff_hz=None):
+                what, judged_text, out_of_step=None, advice=None, q_cutoff_hz=None,
+                first_mode_hz=None):
     """The verdict on trial ``k`` against the history's best (module docstring).
 
     Parameters
@@ -300,6 +301,9 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         :func:`lag_advice`'s text, ending an out-of-step trial's note.
     q_cutoff_hz : float, optional
         Q's cutoff [Hz], named when the learning is found to diverge.
+    first_mode_hz : float, optional
+        The model's first bending mode [Hz] (identified dynamics): a divergence is then
+        not blamed on a mode the model lacks.
 
     Returns
     -------
@@ -327,15 +331,21 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         # actuator did not change; the learning steps away from the best diverge at this gain
         halvings = min(halvings + rejections, MAX_HALVINGS)
         cut = "" if q_cutoff_hz is None else f" {q_cutoff_hz:.4g} Hz"
+        # with identified modes, none is missing: a stage whose model held its 420 and 610 Hz
+        # modes was told to lower the cutoff below them, and learnt worse (0.94 % against 0.81)
+        why = (f"likely a bending mode at or below Q's cutoff{cut} that the model does not "
+               f"hold: identify --dynamics, or give --q-cutoff-hz below the first mode"
+               if first_mode_hz is None else
+               f"the model holds the bending modes from {first_mode_hz:.4g} Hz: likely what "
+               f"the hysteresis model gets wrong where an input reverses, which a learning step "
+               f"built on it misjudges; the lower gain learns it more slowly")
         floor = (" (its floor: lower --q-cutoff-hz below the actuator's first bending mode, or "
                  "stop here)" if halvings == MAX_HALVINGS else "")
         info = (f"trial {k} measures the best trial {b}'s drive again: its judged error "
                 f"{score:.4g} µm is within the {margin:.2g} µm of noise of the stored "
                 f"{best_score:.4g} µm, so the actuator did not change and trial {b}'s drive stays "
                 f"the best (this measurement of it replaces the stored one): the learning "
-                f"diverges at the gain it had (likely a bending mode at or "
-                f"below Q's cutoff{cut} that the model does not hold: identify "
-                f"--dynamics, or give --q-cutoff-hz below the first mode); the next drive is "
+                f"diverges at the gain it had ({why}); the next drive is "
                 f"learnt from this measurement with gain x{gain_factor(halvings):g}{floor}")
         return Verdict(halvings=halvings, info=info, diverges=True)
     if worse and rejections > 0:

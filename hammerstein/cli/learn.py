@@ -584,6 +584,7 @@ def _learn(args):
         # the model's prediction, said once per trial when beyond what a fresh model leaves
         # (below the first mode: at it the mode's gain is too sensitive to judge the actuator)
         g_band = gain_band(fundamental_samples, ref.signal, plant_first_mode(plant))
+        first_mode_hz = None if plant_first_mode(plant) is None else plant_first_mode(plant) / T
         drift_gain = None if g_band == 0.0 else model_gain_note(
             model_gains(predicted, y, delay, settle, g_band), model.output_names)
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
@@ -644,7 +645,7 @@ def _learn(args):
                         f"estimated from the records")
             verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
                                   remeasured, judged is None, what, JUDGED, out_of_step, advice,
-                                  args.q_cutoff_hz)
+                                  args.q_cutoff_hz, first_mode_hz)
             halvings, best, note, stall = (verdict.halvings, verdict.best, verdict.note,
                                            verdict.stall)
             if verdict.from_best:
