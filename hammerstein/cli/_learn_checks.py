@@ -40,7 +40,7 @@ from hammerstein.compensation.shaping import first_mode_hz
 __all__ = ["MISFIT_LIMIT", "BAND_HARMONICS", "band_share", "CENTROID_MARGIN", "spectral_centroid",
            "FLAT_SAMPLES", "FLAT_MOTION", "prediction_misfit", "flat_runs", "measurement_problem", "MODEL_GAIN_TOLERANCE", "model_gains",
            "model_gain_note", "GAIN_MODE_SHARE", "gain_band", "plant_first_mode", "START_LAG_SHARE",
-           "start_lag", "start_lag_text"]
+           "start_lag", "start_lag_text", "stepping_outputs", "STEPPING_SHARE"]
 
 #: above this misfit (RMS error against the model's prediction of the drive, means removed,
 #: below BAND_HARMONICS times the fundamental, over the prediction's RMS motion) a measurement
@@ -455,7 +455,41 @@ def model_gains(predicted, measured, lag=0, start=0, band=None):
         return np.where(moving, np.sum(p * m, axis=1) / np.where(moving, power, 1.0), np.nan)
 
 
-def model_gain_note(gains, names):
+#: An output of the reference held still on more than this share of its samples moves in steps
+#: (a raster's slow axis): its gain against the model is not the actuator's alone.
+STEPPING_SHARE = 0.5
+
+
+def stepping_outputs(reference):
+    """Per output, whether the reference holds it still on most samples (moves in steps).
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (p,)
+        True where more than :data:`STEPPING_SHARE` of the sample-to-sample steps
+        are zero (to rounding) while the output moves.
+
+    Examples
+    --------
+    >>> r = np.vstack([np.sin(np.linspace(0, 6, 100)), np.repeat(np.arange(4.0), 25)])
+    >>> stepping_outputs(r).tolist()
+    [False, True]
+    """
+    r = np.array(reference, dtype=float, ndmin=2)
+    if r.shape[1] < 3:
+        return np.zeros(r.shape[0], dtype=bool)
+    d = np.abs(np.diff(r, axis=1))
+    scale = np.maximum(np.max(np.abs(r), axis=1, keepdims=True), 1e-12)
+    still = np.mean(d <= 1e-9 * scale, axis=1)
+    return (still > STEPPING_SHARE) & (np.ptp(r, axis=1) > 0)
+
+
+def model_gain_note(gains, names, stepping=None):
     """The note when a measured output's gain departs from its model's, or None.
 
     Parameters
@@ -464,6 +498,11 @@ def model_gain_note(gains, names):
         :func:`model_gains` [-].
     names : sequence of str
         The outputs' names.
+    stepping : array_like of bool, shape (p,), optional
+        :func:`stepping_outputs` of the reference: where an output whose gain is
+        off moves in steps, the hysteresis model's error on small steps is named
+        beside a changed actuator (a raster's slow axis read 1.09 on a stage that
+        had not changed, 1.047 on one whose gain had fallen to 0.96).
 
     Returns
     -------
@@ -476,11 +515,18 @@ def model_gain_note(gains, names):
     if not np.any(off):
         return None
     text = ", ".join(f"{n} {g:.4g}" for n, g in zip(names, gains) if np.isfinite(g))
-    return (f"the measured response's gain against the model's prediction of the drive is "
-            f"{text} (a model fresh from identify: within {100 * MODEL_GAIN_TOLERANCE:g} %): "
-            f"the actuator has changed since it was identified (temperature, load, another "
-            f"amplifier gain); learn corrects it trial by trial, and identify on records made "
-            f"now (all of them, together) gives a model of the actuator as it is")
+    head = (f"the measured response's gain against the model's prediction of the drive is "
+            f"{text} (a model fresh from identify: within {100 * MODEL_GAIN_TOLERANCE:g} %): ")
+    steps = [n for n, o, st in zip(names, off, stepping if stepping is not None else
+                                   [False] * len(names)) if o and st]
+    if steps:
+        return (head + f"on {', '.join(steps)}, which the reference moves in steps, this is "
+                f"the hysteresis model's error on small steps as much as the actuator's "
+                f"(a model fresh from identify reads up to 1.09 there): judge a changed actuator "
+                f"on a circle or a sine; learn corrects either trial by trial")
+    return (head + "the actuator has changed since it was identified (temperature, load, another "
+            "amplifier gain); learn corrects it trial by trial, and identify on records made "
+            "now (all of them, together) gives a model of the actuator as it is")
 
 
 def start_lag(predicted, measured, within):

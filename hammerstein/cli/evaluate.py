@@ -58,7 +58,8 @@ from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_in
                                     output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.cli._learn_checks import (gain_band, model_gain_note, model_gains,
-                                           plant_first_mode, start_lag, start_lag_text)
+                                           plant_first_mode, start_lag, start_lag_text,
+                                           stepping_outputs)
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
 from hammerstein.exceptions import DataFileError, FileLimitError, HammersteinError, PresetError
@@ -412,7 +413,7 @@ def _handle(args):
         if gains is not None:
             rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
                      for n, g in zip(outs, gains) if np.isfinite(g)]     # held outputs: none
-            drift = model_gain_note(gains, outs)
+            drift = model_gain_note(gains, outs, stepping_outputs(ref.signal[:, :N]))
             if drift and offset is None:
                 rate_notes.append(drift)
         if u is not None:

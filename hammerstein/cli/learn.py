@@ -151,7 +151,8 @@ from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_w
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
                                           lag_advice, lag_problem, trial_lag)
 from hammerstein.cli._learn_checks import (gain_band, measurement_problem,
-                                           model_gain_note, model_gains, plant_first_mode)
+                                           model_gain_note, model_gains, plant_first_mode,
+                                           stepping_outputs)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
                                           _period_note, default_q_cutoff)
 from hammerstein.signals.fundamental import reference_fundamental
@@ -586,7 +587,8 @@ def _learn(args):
         g_band = gain_band(fundamental_samples, ref.signal, plant_first_mode(plant))
         first_mode_hz = None if plant_first_mode(plant) is None else plant_first_mode(plant) / T
         drift_gain = None if g_band == 0.0 else model_gain_note(
-            model_gains(predicted, y, delay, settle, g_band), model.output_names)
+            model_gains(predicted, y, delay, settle, g_band), model.output_names,
+            stepping_outputs(ref.signal))
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(aim[:, :N - delay], shifted, window)

@@ -99,3 +99,23 @@ def test_an_output_held_while_the_others_move_has_no_gain(tmp_path):
     p = np.vstack([y[0], y[1]])
     gains = model_gains(p, np.vstack([y[0], y[1] + bow]))
     assert gains[0] == pytest.approx(1.0, abs=1e-9) and np.isnan(gains[1])
+
+
+def test_an_output_moved_in_steps_is_not_called_a_changed_actuator():
+    """A raster's slow axis read a gain of 1.09 on a stage that had not changed (the
+    hysteresis model on its small steps), and the note said the actuator had changed; on a
+    circle's outputs it still does."""
+    from hammerstein.cli._learn_checks import stepping_outputs
+    t = np.arange(4000) * 5e-5
+    line = np.repeat(np.arange(20.0), 200)                 # 20 lines, the slow axis held
+    raster = np.vstack([20 * np.abs(((t * 10) % 2) - 1), line])
+    circle = np.vstack([np.cos(2 * np.pi * 100 * t), np.sin(2 * np.pi * 100 * t)])
+    assert stepping_outputs(raster).tolist() == [False, True]
+    assert stepping_outputs(circle).tolist() == [False, False]
+    gains = np.array([1.002, 1.091])
+    stepped = model_gain_note(gains, ["x", "y"], stepping_outputs(raster))
+    assert "on y, which the reference moves in steps" in stepped
+    assert "the actuator has changed since it was identified" not in stepped
+    plain = model_gain_note(gains, ["x", "y"], stepping_outputs(circle))
+    assert "the actuator has changed since it was identified" in plain
+    assert model_gain_note(np.array([1.002, 1.01]), ["x", "y"], [False, True]) is None
