@@ -174,11 +174,15 @@ def dynamics_report_lines(summary, output_names, input_names):
                "it out)" if mode["damping_ratio"] >= RESONANT_DAMPING else "")
         lines.append(f"  mode {i}: {mode['frequency_hz']:.5g} Hz, damping "
                      f"{mode['damping_ratio']:.4g} ({share}{lag})")
+    step = s.get("dc_gain_step")
+    step_text = ("more than 5 % from I" if step is None else
+                 f"{100 * step:.3g} % from I at most, in the outputs' balanced units, more than 5 %")
     lines.append(f"  G(0) unconstrained {_matrix_text(s['dc_gain_unconstrained'])} (rows "
                  f"{','.join(output_names)}, columns {','.join(input_names)}); "
-                 + ("chosen with that gain (more than 5 % from I: fitted with G(0) = I the "
-                    "order would make the step with slow pole pairs), then scaled to G(0) = I: "
-                    "the static gain belongs to the hysteresis model" if s.get("dc_gain_scaled")
+                 + (f"chosen with the records' gain (the first fit's G(0) {step_text}: "
+                    f"fitted with G(0) = I the order would make the step with slow pole pairs), "
+                    f"then scaled to G(0) = I: the static gain belongs to the hysteresis model"
+                    if s.get("dc_gain_scaled")
                     else "fitted with G(0) = I: the static gain belongs to the hysteresis model, "
                     "identified quasi-statically" if s["unit_dc_gain"]
                     else f"kept as identified: {_matrix_text(s['dc_gain'])}"))

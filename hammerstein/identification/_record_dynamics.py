@@ -205,6 +205,7 @@ def _dynamics_summary(ident, cont, chosen_on, names):
             "dc_gain": [[float(v) for v in row] for row in lti.dc_gain(cont)],
             "unit_dc_gain": bool(ident.unit_dc_gain),
             "dc_gain_scaled": bool(getattr(ident, "dc_gain_scaled_", False)),
+            "dc_gain_step": getattr(ident, "dc_gain_step_", None),
             "held_out_fit_percent": float(held_fit),
             "fit_percent": [float(v) for v in ident.fit_percent_]}
 

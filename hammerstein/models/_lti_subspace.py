@@ -395,6 +395,9 @@ class DynamicsIdentifier:
     dc_gain_scaled_ : bool
         True when the order was chosen with the records' own static gain and
         the model scaled to ``G(1) = I`` (see ``unit_dc_gain``).
+    dc_gain_step_ : float or None
+        The first fit's largest ``|G(1) - I|`` (balanced units) that decided it
+        (``unit_dc_gain`` only).
     candidates_ : list of dict
         Per candidate order: ``order``, kept ``modes`` ([Hz, damping]),
         ``dropped`` poles, ``rejected`` reason, ``validation_fit_percent``.
@@ -558,6 +561,7 @@ class DynamicsIdentifier:
         """
         ins, outs = _records(inputs, outputs)
         self._free_gain = False
+        self.dc_gain_step_ = None
         balanced_fit(self, ins, outs, sampling_period)
         if self.decimation_ > 1:         # the decimated records' own fit() decided and scaled
             return self
@@ -569,6 +573,7 @@ class DynamicsIdentifier:
             if scale is not None:
                 G1 = (G1 / np.asarray(scale)[:, None]) * np.asarray(scale)[None, :]
             step = np.abs(G1 - np.eye(outs[0].shape[0]))
+            self.dc_gain_step_ = float(step.max()) if np.all(np.isfinite(step)) else None
             if np.all(np.isfinite(step)) and step.max() > STATIC_GAIN_STEP:
                 # the records' gain is not the hysteresis model's (its small loops): chosen
                 # with G(1) = I imposed, the fit made that gain step with slow pole pairs

@@ -58,6 +58,8 @@ def test_the_records_static_gain_is_not_made_into_dynamics(seed):
     d = DynamicsIdentifier(**opts).fit(ins, outs, T)
     np.testing.assert_allclose(d.dc_gain_unconstrained_, K, atol=0.01)
     assert d.order_ == 4 and d.dc_gain_scaled_  # the two modes, no slow pole pairs
+    # what decided it, as identify prints it: the first fit's largest |G(1) - I|, K's 0.12
+    assert d.dc_gain_step_ == pytest.approx(np.abs(K - np.eye(2)).max(), abs=0.01)
     s = d.system_
     np.testing.assert_allclose(s.C @ np.linalg.solve(np.eye(4) - s.A, s.B) + s.D, np.eye(2),
                                atol=1e-9)
