@@ -598,17 +598,17 @@ def test_a_reference_held_back_by_the_range_is_told_so_not_to_record_faster(tmp_
     assert 2.9 <= np.abs(u).max() <= 3.0         # within the range, at its edge
 
 
-def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_path):
-    # a step-and-hold reference (holds of 0.1 s) behind limits far beyond what it needs
-    # (+-1000 V, 1e9 V/s): its steps are smoothed over a period of the 310 Hz mode whatever
-    # the limits, and the warning said the limits measured on the records held it back and
-    # to widen them
+STEPS_HOLD = 2000                             # 0.1 s at T = 5e-5 s
+
+
+def _compensate_steps(tmp_path, limits):
+    """``compensate`` of a 5-level step-and-hold reference (x, and y = x / 2) behind an
+    ``[amplifier]`` table from the records (``limits``); (exit code, stdout, stderr, x)."""
     text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
-    text += '\n[amplifier]\nsource = "records"\nrange = [-1000.0, 1000.0]\nslew_rate = 1e9\n'
-    preset = tmp_path / "wide.toml"
+    text += f'\n[amplifier]\nsource = "records"\n{limits}\n'
+    preset = tmp_path / "limits.toml"
     preset.write_text(text)
-    n = 2000                                  # 0.1 s at T = 5e-5 s
-    x = np.repeat([0.0, 10.0, -5.0, 12.0, 3.0], n)
+    x = np.repeat([0.0, 10.0, -5.0, 12.0, 3.0], STEPS_HOLD)
     t = np.arange(x.size) * T
     ref = tmp_path / "steps.csv"
     pd.DataFrame({"t": t, "x": x, "y": 0.5 * x}).to_csv(ref, index=False)
@@ -616,6 +616,15 @@ def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_pa
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main(["compensate", str(preset), "--reference", str(ref),
                      "--out", str(tmp_path / "d.csv")])
+    return code, out, err, x
+
+
+def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_path):
+    # a step-and-hold reference (holds of 0.1 s) behind limits far beyond what it needs
+    # (+-1000 V, 1e9 V/s): its steps are smoothed over a period of the 310 Hz mode whatever
+    # the limits, and the warning said the limits measured on the records held it back and
+    # to widen them
+    code, out, err, _ = _compensate_steps(tmp_path, "range = [-1000.0, 1000.0]\nslew_rate = 1e9")
     assert code == 0, err.getvalue()
     assert "% of its half-span" not in err.getvalue()
     shaped = [ln for ln in out.getvalue().splitlines() + err.getvalue().splitlines()
@@ -728,19 +737,8 @@ def test_a_staircase_whose_steps_alone_are_shaped_is_not_told_it_is_held_back(tm
     # levels all reached: a user's 5-level staircase was told it was shaped by 99 % of its
     # half-span and that the range held it back. Judged on a quarter of the samples, the
     # steps are not the reference held back; a circle shaped on every sample still is
-    text = Path(resolve_preset("rakotondrabe-2dof")).read_text()
-    text += '\n[amplifier]\nsource = "records"\nrange = [-10.0, 10.0]\nslew_rate = 2000.0\n'
-    preset = tmp_path / "slow.toml"
-    preset.write_text(text)
-    n = 2000                                  # 0.1 s at T = 5e-5 s
-    x = np.repeat([0.0, 10.0, -5.0, 12.0, 3.0], n)
-    t = np.arange(x.size) * T
-    ref = tmp_path / "steps.csv"
-    pd.DataFrame({"t": t, "x": x, "y": 0.5 * x}).to_csv(ref, index=False)
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        code = main(["compensate", str(preset), "--reference", str(ref),
-                     "--out", str(tmp_path / "d.csv")])
+    code, out, err, x = _compensate_steps(tmp_path, "range = [-10.0, 10.0]\nslew_rate = 2000.0")
+    n = STEPS_HOLD
     assert code == 0, err.getvalue()
     assert "reference shaped" in out.getvalue()           # the steps were shaped ...
     assert "% of its half-span" not in err.getvalue()     # ... and that is all
