@@ -2,6 +2,7 @@
 
 import numpy as np
 
+from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.signals.excitation import decreasing_sine
 
 
@@ -24,3 +25,14 @@ def decreasing_sine_records(d, act, noise, prefix, T, scale=(1.0, 1.0), t_scale=
         write(d / f"{prefix}-{k}.csv", t * t_scale, u, y * np.asarray(scale, float)[:, None])
         out.append(str(d / f"{prefix}-{k}.csv"))
     return out
+
+
+def preisach_actuator():
+    """A 2x2 Preisach actuator with tilted, biased loops and an even cross-coupling (y <- ux)."""
+    e = np.linspace(-10.5, 10.5, 31)
+    x = PreisachModel.from_density(e, total=24.0, bias_width=5.0, tilt=0.6, coercivity_width=3.0,
+                                   reversible=[3.0, 0.035])
+    y = PreisachModel.from_density(e, total=22.0, bias=0.3, bias_width=5.0, tilt=-0.5,
+                                   coercivity_width=2.6, reversible=[2.8, -0.04])
+    return MultivariableHysteresis([[x, None], [Polynomial([0.05, 0.03]), y]], ["ux", "uy"],
+                                   ["x", "y"], [10.0, 10.0])

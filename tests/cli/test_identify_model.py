@@ -10,22 +10,12 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
-from hysteresis_records import decreasing_sine_records, write
+from hysteresis_records import decreasing_sine_records, preisach_actuator as actuator, write
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
-from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
+from hammerstein.models.preisach import MultivariableHysteresis
 from hammerstein.io.presets import load_model
 
 T = 1e-3
-
-
-def actuator():
-    e = np.linspace(-10.5, 10.5, 31)
-    x = PreisachModel.from_density(e, total=24.0, bias_width=5.0, tilt=0.6, coercivity_width=3.0,
-                                   reversible=[3.0, 0.035])
-    y = PreisachModel.from_density(e, total=22.0, bias=0.3, bias_width=5.0, tilt=-0.5,
-                                   coercivity_width=2.6, reversible=[2.8, -0.04])
-    return MultivariableHysteresis([[x, None], [Polynomial([0.05, 0.03]), y]], ["ux", "uy"],
-                                   ["x", "y"], [10.0, 10.0])
 
 
 @pytest.fixture(scope="module")

@@ -9,25 +9,14 @@ decreasing sine per input, as ``tests/cli/test_identify_model.py``'s.
 import numpy as np
 import pytest
 
-from hysteresis_records import decreasing_sine_records
+from hysteresis_records import decreasing_sine_records, preisach_actuator as actuator
 from cli_run import run_cli
 from hammerstein.io.presets import load_model
-from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.scenario.records import load_identification_scenario, run_identification_scenario
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.io.presets import read_toml
 
 T = 1e-3
-
-
-def actuator():
-    e = np.linspace(-10.5, 10.5, 31)
-    x = PreisachModel.from_density(e, total=24.0, bias_width=5.0, tilt=0.6, coercivity_width=3.0,
-                                   reversible=[3.0, 0.035])
-    y = PreisachModel.from_density(e, total=22.0, bias=0.3, bias_width=5.0, tilt=-0.5,
-                                   coercivity_width=2.6, reversible=[2.8, -0.04])
-    return MultivariableHysteresis([[x, None], [Polynomial([0.05, 0.03]), y]], ["ux", "uy"],
-                                   ["x", "y"], [10.0, 10.0])
 
 
 @pytest.fixture(scope="module")
