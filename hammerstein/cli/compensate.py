@@ -35,9 +35,8 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        check_reference_first, load_actuator,
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
-from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
-                                            compensator_rest,
-                                            signals_csv)
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, ROUNDING_WORDS,
+                                            apply_amplifier, compensator_rest, signals_csv)
 from hammerstein.compensation.drive_files import rest_lead_text
 from hammerstein.core.files import guard_inputs, limit, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
@@ -341,7 +340,8 @@ def _handle(args):
     if kind == "hammerstein" and getattr(plant, "dynamics_problem", None):
         print_err(f"warning: {plant.dynamics_problem}")
     for line in drive.shaped:
-        print(f"shaped: {line}", file=sys.stdout)
+        if ROUNDING_WORDS not in line:          # the header keeps it
+            print(f"shaped: {line}", file=sys.stdout)
     for line in ref.notes + list(drive.notes):
         print_err(f"note: {line}")
     for line in chatter:

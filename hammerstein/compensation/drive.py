@@ -64,7 +64,7 @@ from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive
 __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "starts_at_rest", "apply_amplifier", "hardware_drive", "shape_drive", "MIN_FADE_S",
            "FADE_DECAYS", "settled_step", "keep_start", "keep_end", "learning_onset",
-           "drive_fade_samples", "limit_start_up",
+           "drive_fade_samples", "limit_start_up", "ROUNDING_WORDS",
            "rest_output", "compensator_rest", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 DriveStream.__module__ = __name__       # documented (and pickled) as this module's
@@ -390,6 +390,10 @@ _STEP_TOL = 1e-3
 #: ... and the relative excess of a start-up step over the settled drive's largest that is
 #: slew-limited at all (below it, the drive is the compensator's own, bit for bit)
 _LIMIT_TOL = 1e-6
+#: The words of a start-up limit within :data:`_STEP_TOL` (rounding): said in the drive file's
+#: header, for whoever compares it with an exported compensator, not on the console (half of
+#: the family's 400 drives had one, moving the drive by 4e-8 to 2e-4 V)
+ROUNDING_WORDS = "rounding-sized"
 
 
 def settled_step(inputs, start):
@@ -981,6 +985,6 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
         moved = np.abs(u[i] - before)
         notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
                      f"drive's largest step, {bound[i]:.6g} V per sample ({over:.2g} of it more "
-                     f"asked, rounding-sized): the drive differs from the compensator's by up to "
+                     f"asked, {ROUNDING_WORDS}): the drive differs from the compensator's by up to "
                      f"{moved.max():.2g} V at {int(np.count_nonzero(moved))} sample(s)")
     return u, notes

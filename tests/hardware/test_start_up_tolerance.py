@@ -55,3 +55,24 @@ def test_the_peak_line_names_the_compensators_own_only_when_it_differs(monkeypat
     text = compensate_cli._peaks_text(plant, drive)
     assert text.startswith(f"ux 8.899 V {slew:.4g} V/s")
     assert ("the compensator asked for" in text) == told
+
+
+def test_a_rounding_sized_limit_is_in_the_header_not_on_the_console(tmp_path, capsys):
+    """Half of the family's 400 drives had a rounding-sized start-up limit (4e-8 to 2e-4 V):
+    said on the console for each, it was noise; the header keeps it for whoever compares the
+    drive with an exported compensator."""
+    from hammerstein.cli.main import main
+    from hammerstein.compensation.drive import ROUNDING_WORDS
+    from pathlib import Path
+    model = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
+    found = None
+    for f in (100, 150):
+        out = tmp_path / f"d{f}.csv"
+        assert main(["compensate", str(model), "--reference",
+                     f'{{ kind = "circle", radius = 15, frequency = {f}, periods = 10, '
+                     f'center = [50, 50] }}', "--out", str(out)]) == 0
+        said = capsys.readouterr()
+        assert ROUNDING_WORDS not in said.out + said.err
+        if ROUNDING_WORDS in out.read_text()[:5000]:
+            found = out
+    assert found is not None, "no drive had a rounding-sized limit"
