@@ -526,3 +526,35 @@ def test_more_inputs_than_it_writes_records_for_are_a_usage_error(tmp_path, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{MAX_INPUTS + 1} names; expected at most {MAX_INPUTS}" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.slow  # a subprocess waiting on the lock
+def test_a_second_excitation_checks_the_files_once_the_first_has_written_them(tmp_path):
+    # the race of the test above, made certain: the first run holds the directory's lock
+    # and its manifest already names the shared README.md by what it is about to write, the
+    # file itself not written yet. The second run used to check its files before the lock,
+    # find README.md not what the manifest said, and stop with exit 2; it waits now
+    import hashlib
+    import os
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+    from hammerstein.core._provenance import locked
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])}
+    base = [sys.executable, "-m", "hammerstein", "excitation", "--amplitude", "10",
+            "--sampling-period", "5e-5", "--out", str(tmp_path / "cx")]
+    assert subprocess.run(base + ["--inputs", "ux"], capture_output=True, env=env,
+                          timeout=300).returncode == 0
+    out = tmp_path / "cx"
+    manifest = out / ".hammerstein-excitation"
+    readme = (out / "README.md").read_bytes()
+    with locked(out.absolute()):
+        (out / "README.md").write_bytes(b"the first run's README, half written")
+        second = subprocess.Popen(base + ["--inputs", "ux"], stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.PIPE, text=True, env=env)
+        time.sleep(8.0)                   # the second run reaches the lock and waits
+        assert second.poll() is None, second.stderr.read()
+        (out / "README.md").write_bytes(readme)      # the first run's write ends
+        assert hashlib.sha256(readme).hexdigest() in manifest.read_text()
+    assert second.wait(timeout=300) == 0, second.stderr.read()
