@@ -157,7 +157,14 @@ def dynamics_report_lines(summary, output_names, input_names):
         One line per item.
     """
     s = summary
-    lines = [f"dynamics: order {s['order']} (candidate order {s['candidate_order']}), chosen on "
+    # the order kept is the chosen candidate's, less the states it dropped: a bender's "order 4
+    # (candidate order 5)" above an "order 4" candidate line with other modes read as a
+    # contradiction
+    removed = int(s["candidate_order"]) - int(s["order"])
+    kept = (f"order {s['order']} (the order-{s['candidate_order']} candidate below, {removed} "
+            f"state{'s' if removed > 1 else ''} dropped)" if removed > 0 else
+            f"order {s['order']}")
+    lines = [f"dynamics: {kept}, chosen on "
              f"{s['chosen_on']}; excited band {s['band_hz'][0]:.3g}-{s['band_hz'][1]:.4g} Hz"]
     for c in s["candidates"]:
         if "held_out_fit_percent" in c:
