@@ -64,7 +64,8 @@ from hammerstein.signals.fundamental import reference_fundamental
 __all__ = ["ShapedReference", "RESONANT_DAMPING", "first_mode_hz", "mode_decay_s",
            "faster_than_mode", "limit_excess", "hann_average", "mode_amplification", "mode_note",
            "shape_reference", "shaping_notes", "time_intervals", "CHATTER_FRACTION",
-           "chatter_warnings", "CHATTER_REFUSE_FRACTION", "main_frequency"]
+           "chatter_warnings", "CHATTER_REFUSE_FRACTION", "main_frequency",
+           "relative_response"]
 
 #: the smoothing window grows (doubles) at most this many times
 MAX_DOUBLINGS = 6
@@ -279,6 +280,39 @@ def mode_amplification(matrices, sampling_period, frequencies_hz):
     >>> [round(float(v), 1) for v in a]
     [1.0, 1.1, 10.0]
     """
+    return np.array([np.linalg.norm(g, 2)
+                     for g in relative_response(matrices, sampling_period, frequencies_hz)])
+
+
+def relative_response(matrices, sampling_period, frequencies_hz):
+    """``G(z) G(1)^-1`` at each frequency: the linear part relative to its static gain.
+
+    Parameters
+    ----------
+    matrices : tuple of array_like
+        Discrete ``(A, B, C, D)``, shapes (n, n), (n, m), (p, n), (p, m), ``G(1)``
+        invertible (p = m).
+    sampling_period : float
+        T [s].
+    frequencies_hz : array_like, shape (n_freq,)
+        [Hz].
+
+    Returns
+    -------
+    numpy.ndarray, shape (n_freq, p, p), complex
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        On a static gain ``G(1)`` that is singular.
+
+    Examples
+    --------
+    >>> from hammerstein.models.dynamics import sampled_bending_modes
+    >>> G = sampled_bending_modes([400.0], [0.05], ["x"], 5e-5)
+    >>> round(abs(complex(relative_response((G.A, G.B, G.C, G.D), 5e-5, [400.0])[0, 0, 0])), 1)
+    10.0
+    """
     A, B, C, D = (np.atleast_2d(np.asarray(x, dtype=float)) for x in matrices)
     f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
     T = float(sampling_period)
@@ -291,7 +325,7 @@ def mode_amplification(matrices, sampling_period, frequencies_hz):
         return C @ np.linalg.solve(z * np.eye(n) - A, B) + D
 
     inv0 = np.linalg.inv(gain(0.0))
-    return np.array([np.linalg.norm(gain(fk) @ inv0, 2) for fk in f])
+    return np.array([gain(fk) @ inv0 for fk in f])
 
 
 def mode_note(matrices, sampling_period, reference, period_samples, limit=MODE_NOTE_GAIN):

@@ -891,14 +891,11 @@ def identify_dynamics(inputs, outputs, sampling_period, order=None, max_order=8,
 
 def _band_bottom_gain(system, f_lo, scale=None):
     """Largest entry of ``|Re G(f_lo) - I|`` of a square ``G`` (in balanced units), or None."""
-    A, B, C, D = (np.asarray(x, dtype=float) for x in (system.A, system.B, system.C, system.D))
-    T = float(system.dt)
-    if not (f_lo and np.isfinite(f_lo)) or C.shape[0] != B.shape[1]:
+    if not (f_lo and np.isfinite(f_lo)) or system.noutputs != system.ninputs:
         return None
-    z = np.exp(2j * np.pi * float(f_lo) * T)
-    try:
-        G = C @ np.linalg.solve(z * np.eye(A.shape[0]) - A, B) + D
-    except np.linalg.LinAlgError:
+    try:                                  # python-control evaluates G at a point of z
+        G = np.atleast_2d(np.asarray(system(np.exp(2j * np.pi * float(f_lo) * system.dt))))
+    except (np.linalg.LinAlgError, ValueError):
         return None
     if scale is not None:
         G = (G / np.asarray(scale)[:, None]) * np.asarray(scale)[None, :]

@@ -23,7 +23,8 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import choose_kind, kind_problem
 from hammerstein.compensation.reach import output_reach, reach_note
-from hammerstein.compensation.shaping import first_mode_hz, main_frequency, mode_decay_s, mode_note
+from hammerstein.compensation.shaping import (first_mode_hz, main_frequency, mode_decay_s,
+                                              mode_note, relative_response)
 from hammerstein.compensation.zpetc_notes import zpetc_note
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.models.plant import HammersteinPlant, hardware_start
@@ -514,15 +515,10 @@ def model_miss(plant, drive, period_samples=None):
 
 def _dynamics_gain(matrices, sampling_period, frequency_hz):
     """Smallest singular value of ``G(z) G(1)^-1`` at ``frequency_hz``, or None (static, singular)."""
-    A, B, C, D = (np.atleast_2d(np.asarray(x, dtype=float)) for x in matrices)
-    if A.size == 0 or A.shape[0] == 0:
+    if np.asarray(matrices[0]).size == 0:
         return None
-    z = np.exp(2j * np.pi * frequency_hz * sampling_period)
-    eye = np.eye(A.shape[0])
     try:
-        G1 = C @ np.linalg.solve(eye - A, B) + D
-        Gz = C @ np.linalg.solve(z * eye - A, B) + D
-        ratio = Gz @ np.linalg.inv(G1)
+        ratio = relative_response(matrices, sampling_period, [frequency_hz])[0]
     except np.linalg.LinAlgError:
         return None
     return float(np.linalg.svd(ratio, compute_uv=False).min())
