@@ -54,21 +54,25 @@ def test_noisy_turning_points_stay_one_level(rng=np.random.default_rng(4)):
     # a measured input: its turning points jitter around each level
     _, u, _ = decreasing_sine(T, 10.0, frequency=2.0)
     u = uniform_filter1d(u + 0.05 * rng.standard_normal(u.size), 25)
-    assert [round(v["percent"] / 10) * 10 for v in amplitude_levels(u)] == [100, 80, 60, 40, 20]
+    assert [round(v["percent"] / 10) * 10 for v in amplitude_levels(u)] == [100, 80, 60, 40, 20, 10]
 
 
 def test_whole_levels_are_held_out_and_reported(rng=np.random.default_rng(1)):
     rec = _record(rng)
     _, split = split_record(rec)
     held = [round(v["percent"]) for v in split.levels if v["held_out"]]
-    assert held == [80, 40] and "amplitude levels 80 %, 40 %" in split.description
+    assert held == [80, 40, 10] and "amplitude levels 80 %, 40 %, 10 %" in split.description
     for v in split.levels:
         assert split.held_out[v["start"]:v["stop"] + 1].all() == v["held_out"]
     fit = identify_records([rec], components="all", output_map="none")
     rows = [r for r in fit.levels if r["output"] == "x"]
-    assert [round(r["percent"]) for r in rows] == [100, 80, 60, 40, 20]
-    # a PI actuator: its held-out minor loops are predicted to well within 1 %
-    assert max(abs(r["amplitude_error_percent"]) for r in rows if r["held_out"]) < 1.0
+    assert [round(r["percent"]) for r in rows] == [100, 80, 60, 40, 20, 10]
+    # a PI actuator: its held-out minor loops are predicted to well within 1 %, down to 40 %;
+    # the 10 % loop (1 V, no wider than the actuator's second threshold) depends on where
+    # the fitted thresholds fall below 1 V, and is within 5 %
+    held_rows = {round(r["percent"]): abs(r["amplitude_error_percent"]) for r in rows
+                 if r["held_out"]}
+    assert max(held_rows[80], held_rows[40]) < 1.0 and held_rows[10] < 5.0
 
 
 def test_noise_level_of_white_noise_on_a_slow_signal():
@@ -142,8 +146,8 @@ def test_loop_amplitude_error_is_not_the_sensor_noise():
 def test_the_reversal_curves_after_the_levels_are_cut_off(rng=np.random.default_rng(7)):
     """A hysteresis record of ``hammerstein excitation`` (the decreasing sine, then the
     first-order reversal curves): the held-out levels are the sine's, and ``levels_part`` cuts
-    the record where the curves leave the 20 % level for the full amplitude, the first sample
-    farther than 1.05 x 2 V from 0 after the sine's 10 periods (found here by a scan of the
+    the record where the curves leave the 10 % level for the full amplitude, the first sample
+    farther than 1.05 x 1 V from 0 after the sine's 12 periods (found here by a scan of the
     input, independently of the splitter). The sine alone is kept whole."""
     from hammerstein.identification.record_identification import levels_part
     from hammerstein.signals.excitation import REVERSALS, hysteresis_excitation
@@ -151,10 +155,10 @@ def test_the_reversal_curves_after_the_levels_are_cut_off(rng=np.random.default_
     x = _pi(u) + 0.02 * rng.standard_normal(u.size)
     rec = MultiRecord(np.arange(u.size) * T, u[None, :], x[None, :], ["ux"], ["x"], T, "h.csv")
     rec, split = split_record(rec)
-    assert [round(v["percent"]) for v in split.levels] == [100, 80, 60, 40, 20]
-    assert [v["held_out"] for v in split.levels] == [False, True, False, True, False]
-    n_sine = 5 * 2 * int(round(0.5 / T))
-    expected = n_sine + int(np.argmax(np.abs(u[n_sine:]) > 1.05 * 2.0))
+    assert [round(v["percent"]) for v in split.levels] == [100, 80, 60, 40, 20, 10]
+    assert [v["held_out"] for v in split.levels] == [False, True, False, True, False, True]
+    n_sine = 6 * 2 * int(round(0.5 / T))
+    expected = n_sine + int(np.argmax(np.abs(u[n_sine:]) > 1.05 * 1.0))
     (cut,), (cut_split,), n = levels_part([rec], [split])
     assert n == 1 and cut.u.shape[1] == expected and cut.y.shape[1] == expected
     np.testing.assert_array_equal(cut_split.train, split.train[:expected])
