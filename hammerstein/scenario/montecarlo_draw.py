@@ -154,8 +154,7 @@ def _scaled(c, fw, g):
     if isinstance(c, PrandtlIshlinskii):
         return PrandtlIshlinskii(c.thresholds, np.asarray(c.weights) * fw * g)
     if isinstance(c, GeneralizedPI):
-        return GeneralizedPI(c.thresholds, c.weights * fw * g, c.gamma_l, c.gamma_r,
-                             offset=c.offset, reversible=c.reversible * g, rest=c.rest)
+        return c.replace(weights=c.weights * fw * g, reversible=c.reversible * g)
     if isinstance(c, PreisachModel):
         rows, cols = np.tril_indices(c.n_levels)
         factor = fw * g if c.signed else np.maximum(fw * g, 0.0)

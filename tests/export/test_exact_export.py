@@ -55,9 +55,12 @@ def gpi_model():
     """2x2 generalised PI: asymmetric envelopes, a hysteretic and a gain cross-coupling."""
     r = np.linspace(0.0, 9.0, 10)
     w = np.linspace(0.5, 0.1, 10)
-    dx = GeneralizedPI(r, w, [14.0, 0.08, 0.05, 0.1], [13.0, 0.09, -0.05, -0.1], reversible=[0.8])
+    # x starts after a demagnetising cycle (as identify writes it), y from its plays at rest
+    dx = GeneralizedPI(r, w, [14.0, 0.08, 0.05, 0.1], [13.0, 0.09, -0.05, -0.1], reversible=[0.8],
+                       demagnetised=10.0)
     dy = GeneralizedPI(r, 0.8 * w, [12.0, 0.1, 0.0, 0.0], [12.5, 0.1, 0.1, 0.0], reversible=[0.6, 0.01])
-    cx = GeneralizedPI(r[:4], 0.05 * w[:4], [10.0, 0.1, 0.0, 0.0], [10.0, 0.1, 0.0, 0.0])
+    cx = GeneralizedPI(r[:4], 0.05 * w[:4], [10.0, 0.1, 0.0, 0.0], [10.0, 0.1, 0.0, 0.0],
+                       demagnetised=10.0)
     return MultivariableHysteresis([[dx, cx], [0.05, dy]], input_names=["ux", "uy"],
                                    output_names=["x", "y"], input_amplitude=[10.0, 10.0])
 

@@ -132,6 +132,9 @@ def _hysteretic(c, y, u):
                                coercivity_width=2.0, reversible=[0.5, 0.02], offset=1.5),
     GeneralizedPI([0.0, 1.0, 2.5], [0.8, 0.3, 0.2], gamma_l=[12.0, 0.1, 0.05, 0.2],
                   gamma_r=[11.0, 0.1, -0.05, -0.1], offset=-0.7, reversible=[0.0, 0.01]),
+    # starting demagnetised: the scaled one starts from the same plays
+    GeneralizedPI([0.0, 1.0, 2.5, 6.0], [0.8, 0.3, 0.2, 0.2], gamma_l=[12.0, 0.1, 0.05, 0.2],
+                  gamma_r=[11.0, 0.1, -0.05, 2.0], offset=-0.7, demagnetised=12.0),
     Polynomial([0.1, 0.03], offset=0.4),
 ])
 def test_a_scaled_component_is_its_weights_times_the_factors(component):

@@ -1,0 +1,95 @@
+"""The turning points of the demagnetising cycle the records start after.
+
+``hammerstein excitation`` writes ``demagnetise.csv``: every input at once, a sine
+decaying linearly to its rest, ``u(t) = c + A (1 - t / D) sin(2 pi f t)`` for ``0 <= t <
+D = P / f`` (``P`` periods), then the rest value (0 V, or the range's value nearest
+0 V when the range is centred elsewhere). A rate-independent hysteresis model sees
+only the cycle's turning points: a play operator's output after a monotone piece of
+input depends on the piece's end alone (Brokate and Sprekels [1]_, Section 2.2), so
+the state the cycle leaves is the state after its turning points, whatever the
+sampling period or the frequency ``f``.
+
+The turning points of ``g(s) = (1 - s / P) sin(2 pi s)`` (``s = f t``, periods) are the
+zeros of ``g'(s) = 2 pi (1 - s / P) cos(2 pi s) - sin(2 pi s) / P``, one in each
+``[j / 2, j / 2 + 1 / 4]``, ``j = 0 .. 2 P - 1``: ``g'`` is ``(-1)^j 2 pi (1 - j / (2P))``
+at the left end and ``(-1)^(j + 1) / P`` at the right one.
+
+References
+----------
+.. [1] M. Brokate, J. Sprekels, *Hysteresis and Phase Transitions*, Springer, 1996.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+from scipy.optimize import brentq
+
+__all__ = ["DEMAGNETISING_PERIODS", "demagnetising_turning_points"]
+
+#: Periods of the decay of ``hammerstein excitation``'s ``demagnetise.csv``.
+DEMAGNETISING_PERIODS = 20
+
+
+@functools.lru_cache(maxsize=8)
+def _unit_turning_points(periods):
+    """Turning points of ``(1 - s / P) sin(2 pi s)``, ``s`` in ``[0, P)`` (read-only)."""
+    P = float(periods)
+
+    def slope(s):
+        return 2 * np.pi * (1 - s / P) * np.cos(2 * np.pi * s) - np.sin(2 * np.pi * s) / P
+
+    s = np.array([brentq(slope, j / 2, j / 2 + 0.25, xtol=1e-15) for j in range(2 * periods)])
+    g = (1 - s / P) * np.sin(2 * np.pi * s)
+    g.setflags(write=False)
+    return g
+
+
+def demagnetising_turning_points(amplitude, centre=0.0, periods=DEMAGNETISING_PERIODS):
+    r"""Turning points of a demagnetising cycle, ending at its rest value.
+
+    The crests and troughs of ``c + A (1 - t / D) sin(2 pi f t)`` (module notes; the
+    cycle of :func:`hammerstein.signals.excitation.demagnetising_cycle`), then ``c``
+    (the end of the decay) and the rest value ``clip(0, c - A, c + A)``, the range's
+    value nearest 0 V where the cycle's amplifier rests. A rate-independent model
+    driven through them reaches the state the whole cycle leaves.
+
+    Parameters
+    ----------
+    amplitude : float
+        ``A`` [V], the cycle's first amplitude (the records' full amplitude); > 0.
+    centre : float
+        ``c`` [V], the centre of the input's range (default 0).
+    periods : int
+        ``P``, periods of the decay (default 20, as ``hammerstein excitation``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (2 P + 2,)
+        Input values [V] in the order played.
+
+    Raises
+    ------
+    ValueError
+        On a non-positive or non-finite amplitude, a non-finite centre or fewer than
+        one period (the message names the parameter).
+
+    Examples
+    --------
+    >>> from hammerstein.models.demagnetisation import demagnetising_turning_points
+    >>> u = demagnetising_turning_points(10.0, periods=4)
+    >>> u.round(3)
+    array([ 9.383, -8.135,  6.886, -5.639,  4.393, -3.15 ,  1.916, -0.724,
+            0.   ,  0.   ])
+    """
+    A, c = float(amplitude), float(centre)
+    if not (np.isfinite(A) and A > 0):
+        raise ValueError(f"amplitude: expected a positive voltage [V], found {amplitude!r}")
+    if not np.isfinite(c):
+        raise ValueError(f"centre: expected a finite voltage [V], found {centre!r}")
+    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) \
+            or not 1 <= periods <= 1000:
+        raise ValueError(f"periods: expected an integer from 1 to 1000, found {periods!r}")
+    g = _unit_turning_points(int(periods))
+    return np.concatenate([c + A * g, [c, min(max(0.0, c - A), c + A)]])
