@@ -34,9 +34,10 @@ import numpy as np
 
 from hammerstein.cli._common import integer_type, number_type, out_dir_problem, print_err
 from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
-                                            UNIPOLAR_STAIRCASE, ExcitationRecord, around,
+                                            UNIPOLAR_STAIRCASE, ExcitationRecord,
                                             _slew_limited_multisine, default_f_max,
-                                            demagnetising_cycle, excitation_set, multisine, peak_slew)
+                                            demagnetising_record, excitation_set, multisine,
+                                            peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
                                     locked, name_problem, removed_if_failed, safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
@@ -546,24 +547,8 @@ def _handler(args):
                                      multisine_periods=args.periods, hold=args.hold,
                                      seed=args.seed, reversals=reversals,
                                      slew_rate=args.slew_rate, centre=centre)
-            # twice the sine's frequency, at most the 8 samples per period it needs itself
-            f_demag = min(2.0 * args.sine_frequency, 1 / (8 * T))
-            if np.any(centre):      # around the middle of the range, from its rest and back
-                rest = np.clip(0.0, centre - amplitude, centre + amplitude)
-                _, u = demagnetising_cycle(T, amplitude, f_demag, rest=0.0)
-                speed = 2 * np.pi * args.sine_frequency * float(np.max(amplitude))
-                u = around(u, centre, rest, T, speed if args.slew_rate is None
-                           else min(speed, args.slew_rate))
-                u = np.concatenate([u, np.repeat(rest[:, None], int(round(1.0 / T)), axis=1)],
-                                   axis=1)
-                t = np.arange(u.shape[1]) * T
-            else:
-                t, u = demagnetising_cycle(T, amplitude, f_demag)
-            fast = max(peak_slew(row, T) for row in u)
-            if args.slew_rate is not None and fast > args.slew_rate:
-                raise ValueError(f"frequency: the demagnetising cycle steps at up to {fast:.4g} "
-                                 f"V/s, beyond the slew rate {args.slew_rate:g} V/s; expected a "
-                                 f"lower sine frequency")
+            t, u = demagnetising_record(T, amplitude, args.sine_frequency, centre,
+                                        args.slew_rate)
             records.append(ExcitationRecord("demagnetise", "demagnetise", -1, t, u))
             band = band_summary(records, amplitude, T, args.slew_rate, args.f_max, args.f_min,
                                 args.periods, args.seed)

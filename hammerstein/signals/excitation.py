@@ -51,10 +51,11 @@ import numpy as np
 
 from hammerstein.core.numbers import MAX_MAGNITUDE, check_samples, number_problem
 from hammerstein.models._lti_rate import decimation_factor
+from hammerstein.models.demagnetisation import DEMAGNETISING_PERIODS
 
 __all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "UNIPOLAR_STAIRCASE", "MIN_MULTISINE_SCALE", "ExcitationRecord", "decreasing_sine",
            "reversal_curves", "hysteresis_excitation", "multisine", "staircase", "excitation_set", "peak_slew", "around",
-           "demagnetising_cycle"]
+           "demagnetising_cycle", "demagnetising_record"]
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude). The
 #: 10 % level records the loops of the smallest scans (a 15 µm circle on a stage of
@@ -325,7 +326,8 @@ def hysteresis_excitation(sampling_period, amplitude, frequency=1.0, levels=LEVE
     return np.arange(u.size) * float(sampling_period), u
 
 
-def demagnetising_cycle(sampling_period, amplitude, frequency=2.0, periods=20, rest=1.0):
+def demagnetising_cycle(sampling_period, amplitude, frequency=2.0, periods=DEMAGNETISING_PERIODS,
+                        rest=1.0):
     """Every input at once: a sine decaying linearly to 0 V, then a rest at 0 V.
 
     ``u_k(t) = A_k (1 - t / D) sin(2 pi f t)`` for ``0 <= t < D = periods / f``,
@@ -397,6 +399,71 @@ def demagnetising_cycle(sampling_period, amplitude, frequency=2.0, periods=20, r
     u = np.zeros((amp.size, n_decay + n_rest))
     u[:, :n_decay] = amp[:, None] * one
     return np.arange(u.shape[1]) * T, u
+
+
+def demagnetising_record(sampling_period, amplitude, sine_frequency=1.0, centre=0.0,
+                         slew_rate=None):
+    """The ``demagnetise.csv`` of ``hammerstein excitation``: played before every record.
+
+    :func:`demagnetising_cycle` at twice the decreasing sine's frequency (at most the 8
+    samples per period it needs) from each input's full amplitude, then 1 s at rest. An
+    input range centred elsewhere than 0 V (a unipolar amplifier) is cycled around its
+    centre, reached from and left back to its rest value (the range's value nearest 0 V)
+    by :func:`around`'s half-cosines. The state it leaves is the models' demagnetised
+    initial state
+    (:func:`hammerstein.models.demagnetisation.demagnetising_turning_points`).
+
+    Parameters
+    ----------
+    sampling_period : float
+        T [s].
+    amplitude : array_like, shape (m,)
+        Full amplitude per input [V].
+    sine_frequency : float
+        The decreasing sine's frequency [Hz] (default 1 Hz).
+    centre : float or array_like, shape (m,)
+        Centre of each input's range [V] (default 0).
+    slew_rate : float, optional
+        The amplifier's slew rate [V/s]; None: unlimited.
+
+    Returns
+    -------
+    time : numpy.ndarray, shape (n_samples,)
+        [s].
+    u : numpy.ndarray, shape (m, n_samples)
+        [V], from the rest value back to it.
+
+    Raises
+    ------
+    ValueError
+        As :func:`demagnetising_cycle`, or a cycle steeper than ``slew_rate`` ("frequency:
+        ...").
+
+    Examples
+    --------
+    >>> t, u = demagnetising_record(1e-3, [10.0, 5.0])
+    >>> u.shape, float(abs(u[:, -1000:]).max())          # 20 periods at 2 Hz, 1 s at rest
+    ((2, 11000), 0.0)
+    """
+    T = _check_positive(sampling_period, "sampling_period", "s")
+    amp = np.atleast_1d(np.asarray(amplitude, dtype=float))
+    centre = np.broadcast_to(np.asarray(centre, dtype=float), amp.shape)
+    f_demag = min(2.0 * _check_positive(sine_frequency, "sine_frequency", "Hz"), 1 / (8 * T))
+    if np.any(centre):          # around the middle of the range, from its rest and back
+        rest = np.clip(0.0, centre - amp, centre + amp)
+        _, u = demagnetising_cycle(T, amp, f_demag, rest=0.0)
+        speed = 2 * np.pi * sine_frequency * float(np.max(amp))
+        u = around(u, centre, rest, T, speed if slew_rate is None else min(speed, slew_rate))
+        u = np.concatenate([u, np.repeat(rest[:, None], int(round(1.0 / T)), axis=1)], axis=1)
+        t = np.arange(u.shape[1]) * T
+    else:
+        t, u = demagnetising_cycle(T, amp, f_demag)
+    fast = max(peak_slew(row, T) for row in u)
+    if slew_rate is not None and fast > slew_rate:
+        raise ValueError(f"frequency: the demagnetising cycle steps at up to {fast:.4g} "
+                         f"V/s, beyond the slew rate {slew_rate:g} V/s; expected a "
+                         f"lower sine frequency")
+    return t, u
 
 
 def multisine(sampling_period, amplitude, f_min=10.0, f_max=None, period=None, periods=4, seed=0):
