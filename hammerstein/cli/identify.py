@@ -143,6 +143,11 @@ def add_parser(subparsers):
                         "error counts relative to its amplitude, as the held-out levels are "
                         "scored (amplitude, default), or every sample alike (none: the "
                         "full-amplitude levels decide the small loops)")
+    p.add_argument("--record-start", choices=["demagnetised", "rest"], default="demagnetised",
+                   help="--model generalized/auto: the state every record starts from: after "
+                        "the demagnetising cycle (demagnetise.csv) played before it "
+                        "(demagnetised, default), or the plays at rest (rest: records taken "
+                        "without the cycle)")
     p.add_argument("--preisach-levels", type=int, default=PREISACH_LEVELS, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
                         "(N (N + 1) / 2 hysterons per component; default %(default)s). Fewer: "
@@ -669,7 +674,7 @@ def _options(args, n, thresholds):
         method=args.method, n=n, thresholds=thresholds, partition=args.partition,
         bounds=args.bounds, components=args.components, model=args.model,
         threshold_spacing=args.threshold_spacing, level_weighting=args.level_weighting,
-        preisach_levels=args.preisach_levels, hold_out=args.hold_out, output_map=args.output_map,
+        record_start=args.record_start, preisach_levels=args.preisach_levels, hold_out=args.hold_out, output_map=args.output_map,
         train_fraction=args.train_fraction, skip=args.skip, order=args.order,
         max_order=args.max_order, creep_refits=args.creep_refits, output_unit=args.output_unit,
         name=Path(args.out).stem)

@@ -159,7 +159,7 @@ def _sensitivity_kernel(u, r, c, gl, gr, amp, rho, rest, ds, d_lo0, d_hi0, out, 
                 sens[t, j, p] = d[j, p]
 
 
-def play_sensitivities(u, thresholds, fractions, theta, amplitude, d_span):
+def play_sensitivities(u, thresholds, fractions, theta, amplitude, d_span, prefix=()):
     """Play trajectories from the rest state and their derivatives in the parameters.
 
     Parameters
@@ -176,13 +176,19 @@ def play_sensitivities(u, thresholds, fractions, theta, amplitude, d_span):
         Input amplitude A [V].
     d_span : numpy.ndarray, shape (7,)
         ``dS / d theta``, the derivative of the thresholds' scale.
+    prefix : array_like, shape (n_prefix,)
+        Input [V] played from the rest state before ``u`` (the turning points of
+        the demagnetising cycle,
+        :func:`hammerstein.models.demagnetisation.demagnetising_turning_points`);
+        none by default.
 
     Returns
     -------
     states : numpy.ndarray, shape (n_samples, n)
         Play outputs after each sample (as
         :func:`hammerstein.simulation.generalized_play_states` from the rest
-        state ``max(gamma_l(0) - r, min(gamma_r(0) + r, q A))``).
+        state ``max(gamma_l(0) - r, min(gamma_r(0) + r, q A))`` driven through
+        ``prefix``).
     sens : numpy.ndarray, shape (n_samples, n, 7)
         ``d states / d theta`` (module notes).
     """
@@ -192,14 +198,15 @@ def play_sensitivities(u, thresholds, fractions, theta, amplitude, d_span):
     gl = np.array([a, b_l / a, a2_l, 0.0])
     gr = np.array([rho * a, b_r / a, a2_r, dd * a])
     d_lo0, d_hi0 = envelope_gradient(theta, a, [0.0])
-    u = np.ascontiguousarray(u, dtype=float)
+    pre = np.asarray(prefix, dtype=float).reshape(-1)
+    u = np.ascontiguousarray(np.concatenate([pre, np.asarray(u, dtype=float)]))
     r = np.ascontiguousarray(thresholds, dtype=float)
     out = np.empty((u.size, r.size))
     sens = np.empty((u.size, r.size, N_PARAMS))
     _sensitivity_kernel(u, r, np.ascontiguousarray(fractions, dtype=float), gl, gr, a, rho,
                         q * a, np.ascontiguousarray(d_span, dtype=float), d_lo0[0], d_hi0[0],
                         out, sens)
-    return out, sens
+    return out[pre.size:], sens[pre.size:]
 
 
 def vp_jacobian(A, x, r, lower, col, Dx, DTr):

@@ -89,6 +89,9 @@ class PipelineOptions:
     level_weighting : {'amplitude', 'none'}
         Generalised PI fit's rows: each amplitude level's weighted by
         ``A_max / A_level`` (default), or all alike.
+    record_start : {'demagnetised', 'rest'}
+        Generalised PI: every record starts after the demagnetising cycle
+        (default), or from the plays at rest.
     preisach_levels : int
         Levels of each input's Preisach grid.
     hold_out : {'auto', 'none'}
@@ -115,6 +118,7 @@ class PipelineOptions:
     model: str = "auto"
     threshold_spacing: str = "uniform"
     level_weighting: str = "amplitude"
+    record_start: str = "demagnetised"
     preisach_levels: int = PREISACH_LEVELS
     hold_out: str = "auto"
     output_map: str = "auto"
@@ -369,7 +373,7 @@ def _fit_one_class(name, records, options, names, previous=None, provisional=Fal
     return identify_gpi_records(
         records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
         options.skip, *names, threshold_spacing=options.threshold_spacing,
-        level_weighting=options.level_weighting)
+        level_weighting=options.level_weighting, record_start=options.record_start)
 
 
 def _levels_records(records, options):

@@ -113,9 +113,9 @@ class GeneralizedPI:
     envelopes, not at one rest value, and the first loops from there are
     shifted against the loops from ``clip(sigma, ...)``: on an outside
     actuator of ``benchmarks/route_defaults.py`` (gpi-13), modelled with the
-    plays at rest, the 15 µm circles' mean error was -0.19 / -0.26 µm and the
-    worst 3.33 % of the radius; identified and compensated from the
-    demagnetised state, 1.65 %.
+    plays at rest, the 15 µm circles' mean error was -0.19 / -0.26 µm and
+    their worst 2.76-3.33 % of the radius; identified and compensated from
+    the demagnetised state, 1.38-2.53 %.
 
     Raises
     ------
@@ -176,28 +176,14 @@ class GeneralizedPI:
         Parameters
         ----------
         **changes
-            Any parameter of the constructor (``weights``, ``offset``, ...).
+            Any key of :meth:`to_table` but ``kind`` (``weights``, ``offset``, ...).
 
         Returns
         -------
         GeneralizedPI
-
-        Raises
-        ------
-        HysteresisError
-            On an unknown or wrong parameter.
+            Built by :meth:`from_table`, whose errors it raises.
         """
-        params = {"thresholds": self.thresholds, "weights": self.weights,
-                  "gamma_l": self.gamma_l, "gamma_r": self.gamma_r, "offset": self.offset,
-                  "reversible": self.reversible, "rest": self.rest,
-                  "demagnetised": self.demagnetised,
-                  "demagnetised_centre": self.demagnetised_centre}
-        unknown = sorted(set(changes) - set(params))
-        if unknown:
-            raise HysteresisError(f"{unknown[0]}: not a parameter of GeneralizedPI "
-                                  f"(expected {', '.join(params)})")
-        params.update(changes)
-        return GeneralizedPI(**params)
+        return GeneralizedPI.from_table({**self.to_table(), **changes})
 
     def reversible_part(self, u):
         """The reversible polynomial ``sum_n c_n u^n`` [µm] (zero when none is given).

@@ -141,6 +141,7 @@ RECORDS_IDENTIFY_FIELDS = {
     "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
     "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
+    "record_start": Field(choice("demagnetised", "rest"), default="demagnetised"),
     "creep": Field(boolean(), default=False),              # identify the creep from staircases
     "creep_refits": Field(integer(0, 5)),                  # default: by class, as identify
     "order": Field(integer(1, 50)),                        # of G; default chosen on held-out data
@@ -178,7 +179,7 @@ def _delay(v):
 #: Options of the identification pipeline shared by both records routes.
 _PIPELINE_KEYS = ("model", "method", "n_hysterons", "partition", "bounds", "components",
                   "output_map", "preisach_levels", "threshold_spacing", "level_weighting",
-                  "creep_refits", "order", "max_order")
+                  "record_start", "creep_refits", "order", "max_order")
 
 #: Schema of an ``identify`` table with ``records = "files"``: the user's measured records
 #: (the files ``hammerstein identify`` takes: the hysteresis records, the broadband records of

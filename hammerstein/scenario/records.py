@@ -28,7 +28,7 @@ writes a report directory like the simulated scenarios::
     hold_out = "auto"          # or "none"; train_fraction = 0.6 splits at the nearest reversal
     output_map = "auto"        # "none" (classical PI) or "deadzone" (modified PI, always)
     model = "classical"        # or "preisach", "generalized", "auto" (preisach_levels,
-                               # threshold_spacing, level_weighting as identify's)
+                               # threshold_spacing, level_weighting, record_start as identify's)
 
 The report holds ``metrics.csv`` (cases ``train`` and ``validation``;
 per output channel ``rms_error``, ``rms_error_percent`` [% of the measured
@@ -165,6 +165,7 @@ IDENTIFICATION_FIELDS = {
     "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
     "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
+    "record_start": Field(choice("demagnetised", "rest"), default="demagnetised"),
 }
 
 
@@ -380,7 +381,7 @@ def run_identification_scenario(scenario):
             method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
             bounds=spec["bounds"], components=spec["components"], model=spec["model"],
             threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
-            preisach_levels=spec["preisach_levels"], hold_out=spec["hold_out"],
+            record_start=spec["record_start"], preisach_levels=spec["preisach_levels"], hold_out=spec["hold_out"],
             output_map=spec["output_map"], train_fraction=spec.get("train_fraction"),
             skip=spec.get("skip"), output_unit=scenario.data["output_unit"]), (ins, outs))
         # as identify writes it: a Preisach model refitted on every level (its held-out

@@ -227,7 +227,7 @@ def _pipeline_options(spec, name):
         method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
         bounds=spec["bounds"], components=spec["components"], model=spec["model"],
         threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
-        preisach_levels=spec["preisach_levels"],
+        record_start=spec["record_start"], preisach_levels=spec["preisach_levels"],
         output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
         creep_refits=spec.get("creep_refits"), name=name)
 

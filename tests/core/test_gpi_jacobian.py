@@ -13,60 +13,70 @@ from hammerstein.identification._gpi_sensitivity import play_sensitivities, span
 from hammerstein.identification.gpi_identification import (
     THETA_HI, THETA_LO, GeneralizedPIIdentifier, _threshold_fractions, envelopes,
     play_thresholds)
+from hammerstein.models.demagnetisation import demagnetising_turning_points
 from hammerstein.models.generalized_pi import envelope
 from hammerstein.simulation import generalized_play_states
 
 from test_gpi_identification import T_FIT, gpi_actuator, records
 
 AMP, LO, HI = 10.0, -9.5, 10.0
+#: Played before the record: nothing (the plays at rest), or a demagnetising cycle's turning
+#: points (the records' default start), whose state depends on the envelopes too.
+PREFIXES = {"rest": np.zeros(0), "demagnetised": demagnetising_turning_points(AMP)}
 
 
-def _u(n=1500, seed=0):
+def _u(n=1500, seed=0, peak=AMP):
     """A decaying two-tone input with reversals at many levels [V]."""
     t = np.arange(n) / n
     rng = np.random.default_rng(seed)
-    return AMP * np.exp(-1.5 * t) * (0.8 * np.sin(2 * np.pi * 5 * t + rng.uniform(0, 6))
+    return peak * np.exp(-1.5 * t) * (0.8 * np.sin(2 * np.pi * 5 * t + rng.uniform(0, 6))
                                      + 0.2 * np.sin(2 * np.pi * 23 * t))
 
 
-def _states(u, theta, spacing="uniform", n=8):
+def _states(u, theta, spacing="uniform", n=8, prefix=PREFIXES["rest"]):
     gl, gr = envelopes(theta, AMP)
     r = play_thresholds(gl, gr, LO, HI, n, spacing)
     s0 = np.maximum(envelope(gl, 0.0) - r, np.minimum(envelope(gr, 0.0) + r, theta[6] * AMP))
-    return generalized_play_states(u, r, gl, gr, s0)[0]
+    return generalized_play_states(np.r_[prefix, u], r, gl, gr, s0)[0][prefix.size:]
 
 
 def _random_theta(rng):
     return THETA_LO + (THETA_HI - THETA_LO) * rng.uniform(0.15, 0.85, THETA_LO.size)
 
 
+@pytest.mark.parametrize("start", sorted(PREFIXES))
 @pytest.mark.parametrize("spacing", ["uniform", "power"])
-def test_play_states_are_the_simulation_kernels(spacing):
+def test_play_states_are_the_simulation_kernels(spacing, start):
     rng = np.random.default_rng(3)
-    u = _u()
+    u = _u(peak=AMP if start == "rest" else 0.3 * AMP)   # loops that keep the prefix's state
     for _ in range(5):
         theta = _random_theta(rng)
         gl, gr = envelopes(theta, AMP)
         r = play_thresholds(gl, gr, LO, HI, 8, spacing)
         states, _ = play_sensitivities(u, r, _threshold_fractions(8, spacing), theta, AMP,
-                                       span_gradient(theta, AMP, LO, HI))
-        np.testing.assert_array_equal(states, _states(u, theta, spacing))
+                                       span_gradient(theta, AMP, LO, HI), PREFIXES[start])
+        np.testing.assert_array_equal(states, _states(u, theta, spacing, prefix=PREFIXES[start]))
+        if start == "demagnetised":        # the prefix matters: the larger plays start elsewhere
+            assert np.abs(states - _states(u, theta, spacing)).max() > 0.05
 
 
+@pytest.mark.parametrize("start", sorted(PREFIXES))
 @pytest.mark.parametrize("spacing", ["uniform", "power"])
-def test_play_sensitivities_match_central_differences(spacing):
+def test_play_sensitivities_match_central_differences(spacing, start):
     rng = np.random.default_rng(4)
-    u = _u(seed=1)
+    u = _u(seed=1, peak=AMP if start == "rest" else 0.3 * AMP)
     for _ in range(5):
         theta = _random_theta(rng)
         gl, gr = envelopes(theta, AMP)
         r = play_thresholds(gl, gr, LO, HI, 8, spacing)
         _, sens = play_sensitivities(u, r, _threshold_fractions(8, spacing), theta, AMP,
-                                     span_gradient(theta, AMP, LO, HI))
+                                     span_gradient(theta, AMP, LO, HI), PREFIXES[start])
         for p in range(theta.size):
             h = 1e-7 * (THETA_HI[p] - THETA_LO[p])
             e = np.eye(theta.size)[p] * h
-            fd = (_states(u, theta + e, spacing) - _states(u, theta - e, spacing)) / (2 * h)
+            pre = PREFIXES[start]
+            fd = (_states(u, theta + e, spacing, prefix=pre)
+                  - _states(u, theta - e, spacing, prefix=pre)) / (2 * h)
             # a sample whose branch changes within +-h (a kink) differs; they are a few
             bad = np.abs(sens[..., p] - fd) > 1e-5 * (1 + np.abs(fd).max())
             assert bad.mean() < 0.01, (p, bad.mean())
