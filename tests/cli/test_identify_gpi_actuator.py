@@ -186,3 +186,38 @@ def test_level_weighting_option_is_the_identifiers(tmp_path, capsys):
     assert np.max(np.abs(models["amplitude"].simulate(v)[0] - a)) > 1e-4 * np.ptp(a)
     assert main(base + ["--level-weighting", "relative", "--out", str(tmp_path / "x.toml")]) == 2
     assert "--level-weighting" in capsys.readouterr().err
+
+
+def test_record_start_option_is_the_identifiers(tmp_path, capsys):
+    """``identify`` writes the generalised PI that ``GeneralizedPIIdentifier`` fits (the same
+    loops to 1e-9 of their range), starting after the demagnetising cycle of the record's
+    amplitude by default (``demagnetised = 10`` in the preset) and from the plays at rest
+    with ``--record-start rest``; a wrong value is a usage error."""
+    from hammerstein.identification.gpi_identification import GeneralizedPIIdentifier
+    from hammerstein.io.datafiles import MultiRecord
+    from hammerstein.io.presets import read_toml
+    true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
+                         gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4],
+                         demagnetised=10.0)
+    t, u, _ = decreasing_sine(2.5e-3, 10.0)
+    y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="",
+               fmt="%.17g")
+    base = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
+            "--model", "generalized"]
+    tables = {}
+    for start in ("demagnetised", "rest"):
+        out = tmp_path / f"{start}.toml"
+        assert main(base + ["--record-start", start, "--out", str(out)]) == 0
+        tables[start] = read_toml(out)["model"]["components"]["y"]["u"]
+    capsys.readouterr()
+    assert tables["demagnetised"]["demagnetised"] == 10.0
+    assert "demagnetised" not in tables["rest"]
+    rec = MultiRecord(t, u[None], y[None], ("u",), ("y",), 2.5e-3, "rec")
+    est = GeneralizedPIIdentifier().fit(rec)
+    v = 1.5 * np.sin(2 * np.pi * np.arange(2000) / 1000)[None]      # a 15 % loop from the start
+    a, b = load_model(str(tmp_path / "demagnetised.toml")).simulate(v)[0], est.model_.simulate(v)[0]
+    assert np.max(np.abs(a - b)) <= 1e-9 * np.ptp(a)
+    assert main(base + ["--record-start", "cold", "--out", str(tmp_path / "x.toml")]) == 2
+    assert "--record-start" in capsys.readouterr().err

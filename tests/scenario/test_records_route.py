@@ -70,6 +70,17 @@ def test_level_weighting_key_as_the_identify_option():
         identify_table({"records": "excitation", "level_weighting": "relative"})
 
 
+def test_record_start_key_as_the_identify_option():
+    """``record_start`` is ``identify --record-start``: demagnetised by default, the same
+    choices, and it reaches the pipeline's options."""
+    from hammerstein.scenario.records_route import _pipeline_options
+    assert identify_table({"records": "excitation"})["record_start"] == "demagnetised"
+    spec = identify_table({"records": "excitation", "record_start": "rest"})
+    assert _pipeline_options(spec, "m").record_start == "rest"
+    with pytest.raises(Exception, match="record_start"):
+        identify_table({"records": "excitation", "record_start": "cold"})
+
+
 @pytest.mark.parametrize("value, expected", [
     (None, []), ([], []), ("standard", [0.8, 0.6, 0.4, 0.2, 0.0, -0.2, -0.4, -0.6, -0.8]),
     ([0.5, -0.25], [0.5, -0.25])])
