@@ -157,21 +157,27 @@ def test_a_refit_keeps_the_generalized_class(monkeypatch, asked):
     assert calls == ["generalized-pi"] and fit.method == "generalized-pi"
 
 
+def _one_input_record(tmp_path, **start):
+    """A 1-input generalised-PI record written as identify reads it: (t, u, y, base args)."""
+    true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
+                         gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4],
+                         **start)
+    t, u, _ = decreasing_sine(2.5e-3, 10.0)
+    y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
+    path = tmp_path / "rec.csv"
+    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="",
+               fmt="%.17g")
+    return t, u, y, ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
+                     "--model", "generalized"]
+
+
 def test_level_weighting_option_is_the_identifiers(tmp_path, capsys):
     """``--level-weighting none`` writes the model ``GeneralizedPIIdentifier(level_weighting=
     "none")`` fits on the same record (the same loops to 1e-9 of their range), and the default
     (each level weighted by its amplitude) another one; a wrong value is a usage error."""
     from hammerstein.identification.gpi_identification import GeneralizedPIIdentifier
     from hammerstein.io.datafiles import MultiRecord
-    true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
-                         gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4])
-    t, u, _ = decreasing_sine(2.5e-3, 10.0)
-    y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
-    path = tmp_path / "rec.csv"
-    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="",
-               fmt="%.17g")
-    base = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
-            "--model", "generalized"]
+    t, u, y, base = _one_input_record(tmp_path)
     models = {}
     for weighting in ("amplitude", "none"):
         out = tmp_path / f"{weighting}.toml"
@@ -196,16 +202,7 @@ def test_record_start_option_is_the_identifiers(tmp_path, capsys):
     from hammerstein.identification.gpi_identification import GeneralizedPIIdentifier
     from hammerstein.io.datafiles import MultiRecord
     from hammerstein.io.presets import read_toml
-    true = GeneralizedPI([0.0, 0.7, 1.9, 3.5], [1.2, 0.4, 0.25, 0.2],
-                         gamma_l=[16.0, 0.07, 0.1, 0.0], gamma_r=[14.0, 0.08, -0.05, 0.4],
-                         demagnetised=10.0)
-    t, u, _ = decreasing_sine(2.5e-3, 10.0)
-    y = true.simulate(u)[0] + 0.01 * np.random.default_rng(2).standard_normal(u.size)
-    path = tmp_path / "rec.csv"
-    np.savetxt(path, np.column_stack([t, u, y]), delimiter=",", header="t,u,y", comments="",
-               fmt="%.17g")
-    base = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--time", "t",
-            "--model", "generalized"]
+    t, u, y, base = _one_input_record(tmp_path, demagnetised=10.0)
     tables = {}
     for start in ("demagnetised", "rest"):
         out = tmp_path / f"{start}.toml"

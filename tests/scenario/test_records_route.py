@@ -59,26 +59,19 @@ def test_identify_table_with_records_takes_identify_defaults():
         identify_table({"records": "excitation", "model": "chebyshev"})
 
 
-def test_level_weighting_key_as_the_identify_option():
-    """``level_weighting`` is ``identify --level-weighting``: the same default, the same
-    choices, and it reaches the pipeline's options."""
+@pytest.mark.parametrize("key, default, other, bad", [
+    ("level_weighting", "amplitude", "none", "relative"),
+    ("record_start", "demagnetised", "rest", "cold")])
+def test_pipeline_keys_as_the_identify_options(key, default, other, bad):
+    """``level_weighting`` and ``record_start`` are ``identify --level-weighting`` and
+    ``--record-start``: the same default, the same choices, and they reach the pipeline's
+    options."""
     from hammerstein.scenario.records_route import _pipeline_options
-    assert identify_table({"records": "excitation"})["level_weighting"] == "amplitude"
-    spec = identify_table({"records": "excitation", "level_weighting": "none"})
-    assert _pipeline_options(spec, "m").level_weighting == "none"
-    with pytest.raises(Exception, match="level_weighting"):
-        identify_table({"records": "excitation", "level_weighting": "relative"})
-
-
-def test_record_start_key_as_the_identify_option():
-    """``record_start`` is ``identify --record-start``: demagnetised by default, the same
-    choices, and it reaches the pipeline's options."""
-    from hammerstein.scenario.records_route import _pipeline_options
-    assert identify_table({"records": "excitation"})["record_start"] == "demagnetised"
-    spec = identify_table({"records": "excitation", "record_start": "rest"})
-    assert _pipeline_options(spec, "m").record_start == "rest"
-    with pytest.raises(Exception, match="record_start"):
-        identify_table({"records": "excitation", "record_start": "cold"})
+    assert identify_table({"records": "excitation"})[key] == default
+    spec = identify_table({"records": "excitation", key: other})
+    assert getattr(_pipeline_options(spec, "m"), key) == other
+    with pytest.raises(Exception, match=key):
+        identify_table({"records": "excitation", key: bad})
 
 
 @pytest.mark.parametrize("value, expected", [
