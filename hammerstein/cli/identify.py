@@ -674,7 +674,8 @@ def _options(args, n, thresholds):
         method=args.method, n=n, thresholds=thresholds, partition=args.partition,
         bounds=args.bounds, components=args.components, model=args.model,
         threshold_spacing=args.threshold_spacing, level_weighting=args.level_weighting,
-        record_start=args.record_start, preisach_levels=args.preisach_levels, hold_out=args.hold_out, output_map=args.output_map,
+        record_start=args.record_start, preisach_levels=args.preisach_levels,
+        hold_out=args.hold_out, output_map=args.output_map,
         train_fraction=args.train_fraction, skip=args.skip, order=args.order,
         max_order=args.max_order, creep_refits=args.creep_refits, output_unit=args.output_unit,
         name=Path(args.out).stem)

@@ -549,16 +549,17 @@ class GeneralizedPIIdentifier:
 
     # -- the regression ----------------------------------------------------------------
     def _start(self, k, q):
-        """(rest value [V], input before the records [V]) of input k's plays for a given q.
+        """(rest value, cycle centre, input before the records) [V] of input k's plays at q.
 
         Demagnetised: the plays at rest at 0, then the demagnetising cycle's turning
         points around the centre of the range shifted by ``q A``; at rest: the rest value
-        ``q A``, nothing before.
+        ``q A``, no cycle.
         """
         amp, centre = self._demagnetised[k]
         if not amp:
-            return float(q) * self._amp[k], np.zeros(0)
-        return 0.0, demagnetising_turning_points(amp, centre + float(q) * self._amp[k])
+            return float(q) * self._amp[k], 0.0, np.zeros(0)
+        centre = centre + float(q) * self._amp[k]
+        return 0.0, centre, demagnetising_turning_points(amp, centre)
 
     def _slope_range(self, k):
         """Normalised range on which a direct path's reversible slope is bounded below."""
@@ -596,7 +597,7 @@ class GeneralizedPIIdentifier:
         """
         gl, gr = envelopes(theta, self._amp[k])
         r = play_thresholds(gl, gr, self._lo[k], self._hi[k], self.n_plays, self._spacing)
-        rest, prefix = self._start(k, theta[6])
+        rest, _, prefix = self._start(k, theta[6])
         row = 0
         for u, tr in zip(self._u, self._train):
             states = _play_states(u[k], r, gl, gr, rest, prefix)[tr]
@@ -691,16 +692,18 @@ class GeneralizedPIIdentifier:
             dspan = span_gradient(theta, self._amp[k], self._lo[k], self._hi[k])
             plays, row = slice(starts[k], starts[k] + self.n_plays), 0
             sl = slice(N_THETA * i, N_THETA * (i + 1))
-            rest, prefix = self._start(k, theta[6])
+            rest, _, prefix = self._start(k, theta[6])
             kernel_theta = np.r_[theta[:6], rest / self._amp[k]]
+            # after a cycle, q moves the cycle's inputs: its column by central differences
+            h = 1e-6
+            shifted = ([self._start(k, theta[6] + d)[2] for d in (h, -h)]
+                       if self._demagnetised[k][0] else None)
             for u, tr in zip(self._u, self._train):
                 sens = play_sensitivities(u[k], rr, frac, kernel_theta, self._amp[k], dspan,
                                           prefix)[1][tr]
-                if self._shift:        # q moves the cycle's inputs: central differences
-                    h = 1e-6
-                    hi_, lo_ = (_play_states(u[k], rr, gl, gr, 0.0, self._start(k, q)[1])[tr]
-                                for q in (theta[6] + h, theta[6] - h))
-                    sens[..., 6] = (hi_ - lo_) / (2 * h)
+                if shifted is not None:
+                    up, down = (_play_states(u[k], rr, gl, gr, 0.0, p)[tr] for p in shifted)
+                    sens[..., 6] = (up - down) / (2 * h)
                 rows = slice(row, row + sens.shape[0])
                 sens *= self._w[rows, None, None]
                 Dx[rows, sl] = np.einsum("tjp,j->tp", sens, x[plays])
@@ -773,10 +776,9 @@ class GeneralizedPIIdentifier:
                     w = np.maximum(w, 0.0)
                     poly = quadratic_coefficients(poly, *self._slope_range(k))
                 rev = poly / self._amp[k] ** np.arange(1, xk.size - self.n_plays + 1)
-                amp, centre = self._demagnetised[k]
-                rest = self._start(k, thetas[k][6])[0]
-                comps.append(GeneralizedPI(r, w, gl, gr, 0.0, rev, rest, amp,
-                                           centre + (thetas[k][6] * self._amp[k] if amp else 0.0)))
+                rest, centre, _ = self._start(k, thetas[k][6])
+                comps.append(GeneralizedPI(r, w, gl, gr, 0.0, rev, rest,
+                                           self._demagnetised[k][0], centre))
         return comps, float(x[-1]), thetas
 
     @staticmethod
@@ -843,7 +845,6 @@ class GeneralizedPIIdentifier:
         # after the cycle the plays' rest value is not seen (a play the cycle moves forgets
         # it, one the cycle never moves is constant in the records too): q shifts the
         # cycle's centre instead (_start)
-        self._shift = self.record_start == "demagnetised"
         for k in range(m):                    # an input that never moves: no component
             if hi[k] <= lo[k]:
                 for l in range(p):

@@ -381,7 +381,8 @@ def run_identification_scenario(scenario):
             method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
             bounds=spec["bounds"], components=spec["components"], model=spec["model"],
             threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
-            record_start=spec["record_start"], preisach_levels=spec["preisach_levels"], hold_out=spec["hold_out"],
+            record_start=spec["record_start"], preisach_levels=spec["preisach_levels"],
+            hold_out=spec["hold_out"],
             output_map=spec["output_map"], train_fraction=spec.get("train_fraction"),
             skip=spec.get("skip"), output_unit=scenario.data["output_unit"]), (ins, outs))
         # as identify writes it: a Preisach model refitted on every level (its held-out
