@@ -148,7 +148,8 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from hammerstein.models.demagnetisation import demagnetising_turning_points
+from hammerstein.models.demagnetisation import (RECORD_STARTS, demagnetising_cycle_of_range,
+                                                demagnetising_turning_points)
 from hammerstein.models.generalized_pi import GeneralizedPI, envelope
 from hammerstein.identification._gpi_sensitivity import (play_sensitivities, span_gradient,
                                                           vp_jacobian)
@@ -179,8 +180,6 @@ THRESHOLD_POWER = 1.5
 THRESHOLD_SPACINGS = ("power", "uniform")
 #: Row weightings of the fit (``GeneralizedPIIdentifier``'s ``level_weighting``).
 LEVEL_WEIGHTINGS = ("amplitude", "none")
-#: What each record starts from (``record_start``).
-RECORD_STARTS = ("demagnetised", "rest")
 _SPACING_LABEL = {"power": f"r_j = S (j/n)^{THRESHOLD_POWER:g}", "uniform": "r_j = S j/n"}
 #: Normalised parameters ``(b_l, a2_l, rho, b_r, a2_r, d, q)`` of a component: the envelopes
 #: and the plays' rest value ``sigma = q A``; start, lower and upper bounds.
@@ -336,19 +335,6 @@ def _burn_in(split):
     used = split.train | split.held_out
     first = int(np.argmax(used)) if used.any() else used.size
     return np.arange(used.size) < first
-
-
-def _demagnetising_cycle(lo, hi):
-    """(amplitude, centre) [V] of the demagnetising cycle over an input's range [lo, hi].
-
-    ``hammerstein excitation`` demagnetises every input from its records' full amplitude
-    around the centre of their range; a range symmetric within 1 % is centred at 0 V.
-    (0, 0) for an input that never moves.
-    """
-    amp, centre = 0.5 * (hi - lo), 0.5 * (hi + lo)
-    if not amp > 0:
-        return 0.0, 0.0
-    return float(amp), (0.0 if abs(centre) <= 0.01 * amp else float(centre))
 
 
 def _play_states(u, thresholds, gamma_l, gamma_r, rest, prefix):
@@ -840,7 +826,8 @@ class GeneralizedPIIdentifier:
         self._lo, self._hi = lo, hi
         self._amp = np.maximum(np.maximum(np.abs(lo), np.abs(hi)), 1e-12)
         # each record starts after the demagnetising cycle of its input's range (or at rest)
-        self._demagnetised = [_demagnetising_cycle(a, b) if self.record_start == "demagnetised"
+        self._demagnetised = [demagnetising_cycle_of_range(a, b)
+                              if self.record_start == "demagnetised"
                               else (0.0, 0.0) for a, b in zip(lo, hi)]
         # after the cycle the plays' rest value is not seen (a play the cycle moves forgets
         # it, one the cycle never moves is constant in the records too): q shifts the

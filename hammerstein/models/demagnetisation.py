@@ -26,10 +26,15 @@ import functools
 import numpy as np
 from scipy.optimize import brentq
 
-__all__ = ["DEMAGNETISING_PERIODS", "demagnetising_turning_points"]
+__all__ = ["DEMAGNETISING_PERIODS", "RECORD_STARTS", "demagnetising_cycle_of_range",
+           "demagnetising_turning_points"]
 
 #: Periods of the decay of ``hammerstein excitation``'s ``demagnetise.csv``.
 DEMAGNETISING_PERIODS = 20
+
+#: What an identifier takes each record to start from (its ``record_start``): after the
+#: demagnetising cycle, or at rest (records taken without it).
+RECORD_STARTS = ("demagnetised", "rest")
 
 
 @functools.lru_cache(maxsize=8)
@@ -93,3 +98,34 @@ def demagnetising_turning_points(amplitude, centre=0.0, periods=DEMAGNETISING_PE
         raise ValueError(f"periods: expected an integer from 1 to 1000, found {periods!r}")
     g = _unit_turning_points(int(periods))
     return np.concatenate([c + A * g, [c, min(max(0.0, c - A), c + A)]])
+
+
+def demagnetising_cycle_of_range(low, high):
+    """``(amplitude, centre)`` [V] of the demagnetising cycle over an input's range.
+
+    ``hammerstein excitation`` demagnetises every input from its records' full amplitude
+    around the centre of their range: ``A = (high - low) / 2``, ``c = (high + low) / 2``,
+    and ``c = 0`` for a range symmetric within 1 % of ``A``.
+
+    Parameters
+    ----------
+    low, high : float
+        The input's recorded range [V].
+
+    Returns
+    -------
+    tuple of float
+        ``(A, c)`` [V]; ``(0, 0)`` for an input that never moves (``high <= low``).
+
+    Examples
+    --------
+    >>> from hammerstein.models.demagnetisation import demagnetising_cycle_of_range
+    >>> demagnetising_cycle_of_range(-20.0, 20.1)
+    (20.05, 0.0)
+    >>> demagnetising_cycle_of_range(0.0, 100.0)
+    (50.0, 50.0)
+    """
+    amp, centre = 0.5 * (float(high) - float(low)), 0.5 * (float(high) + float(low))
+    if not amp > 0:
+        return 0.0, 0.0
+    return amp, (0.0 if abs(centre) <= 0.01 * amp else centre)

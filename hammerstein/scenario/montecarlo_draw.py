@@ -160,8 +160,7 @@ def _scaled(c, fw, g):
         factor = fw * g if c.signed else np.maximum(fw * g, 0.0)
         w = np.zeros_like(c.weights)
         w[rows, cols] = c.weights[rows, cols] * factor
-        return PreisachModel(c.edges, w, reversible=c.reversible * g, offset=c.offset,
-                             signed=c.signed)
+        return c.replace(weights=w, reversible=c.reversible * g)
     if isinstance(c, Polynomial):
         return Polynomial(c.coefficients * g, offset=c.offset)
     return float(c) * g
