@@ -90,8 +90,9 @@ class PipelineOptions:
         Generalised PI fit's rows: each amplitude level's weighted by
         ``A_max / A_level`` (default), or all alike.
     record_start : {'demagnetised', 'rest'}
-        Generalised PI: every record starts after the demagnetising cycle
-        (default), or from the plays at rest.
+        Generalised PI and Preisach: every record starts after the
+        demagnetising cycle (default), or at rest (the plays at their rest
+        value; the Preisach model's ideal demagnetised state).
     preisach_levels : int
         Levels of each input's Preisach grid.
     hold_out : {'auto', 'none'}
@@ -369,7 +370,8 @@ def _fit_one_class(name, records, options, names, previous=None, provisional=Fal
             records, options.preisach_levels, SMOOTHING_START if provisional else "auto",
             options.components, options.hold_out,
             options.train_fraction, options.skip, *names,
-            smoothing_start=getattr(previous, "smoothing", None))
+            smoothing_start=getattr(previous, "smoothing", None),
+            record_start=options.record_start)
     return identify_gpi_records(
         records, GPI_PLAYS, options.components, options.hold_out, options.train_fraction,
         options.skip, *names, threshold_spacing=options.threshold_spacing,

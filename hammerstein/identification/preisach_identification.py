@@ -90,6 +90,7 @@ import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
+from hammerstein.models.demagnetisation import RECORD_STARTS, demagnetising_cycle_of_range
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
 from hammerstein.identification.record_identification import (
     RecordFit, _window_metrics, level_errors, levels_end, parse_components,
@@ -124,14 +125,16 @@ MIN_SLOPE_FRACTION = 1e-3
 CROSS_DEGREE = 3
 
 
-def _hysteron_states(u, edges):
-    """State trajectories (n_states, n_samples) of every hysteron of a grid, demagnetised start.
+def _hysteron_states(u, edges, cycle=(0.0, 0.0)):
+    """State trajectories (n_states, n_samples) of every hysteron of a grid.
 
-    All hysterons in one pass of the compiled kernel
-    (:func:`hammerstein.simulation.preisach_states`: the same states as stepping
-    each hysteron alone through :func:`hammerstein.simulation.preisach_steps`).
+    From the default initial state of a model on the grid whose demagnetising cycle is
+    ``cycle = (A, c)`` (:class:`~hammerstein.models.preisach.PreisachModel`), in one pass of
+    the compiled kernel (:func:`hammerstein.simulation.preisach_states`: the same states
+    as stepping each hysteron alone through :func:`hammerstein.simulation.preisach_steps`).
     """
-    proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)))
+    proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)),
+                          demagnetised=cycle[0], demagnetised_centre=cycle[1])
     row, col, _ = proto.hysteron_arrays
     states, _ = preisach_states(u, edges, row, col, proto.initial_state())
     return states.T
@@ -241,6 +244,16 @@ class PreisachIdentifier:
         at 20 and 200 Hz 2.4-5.1 -> 1.4-3.5 % of the radius (30 µm at
         100 Hz 1.6-3.7 -> 1.6-2.6 %). ``"uniform"``: equal cells
         (``numpy.linspace``).
+    record_start : {"demagnetised", "rest"}
+        The state every record starts from: the ideal demagnetised state
+        driven through the turning points of ``excitation``'s
+        ``demagnetise.csv`` over each input's recorded range
+        (``"demagnetised"``, the default;
+        :func:`~hammerstein.models.demagnetisation.demagnetising_cycle_of_range`),
+        or the ideal demagnetised state itself (``"rest"``: records taken
+        without the cycle, from a plant that starts there). The model's
+        components keep that start (``PreisachModel.demagnetised``), so its
+        drives start where the records did.
 
     Attributes
     ----------
@@ -284,7 +297,7 @@ class PreisachIdentifier:
     """
 
     def __init__(self, n_levels=20, smoothing="auto", components="auto", margin=0.1,
-                 grid="centred", smoothing_start=None):
+                 grid="centred", smoothing_start=None, record_start="demagnetised"):
         if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) \
                 or not 2 <= n_levels <= 60:
             raise IdentificationError(f"n_levels: expected an integer from 2 to 60, found {n_levels!r}")
@@ -304,10 +317,14 @@ class PreisachIdentifier:
             raise IdentificationError(f"smoothing_start: expected a number > 0, found "
                                       f"{smoothing_start!r}")
         self.smoothing_start = smoothing_start
+        if record_start not in RECORD_STARTS:
+            raise IdentificationError(f"record_start: expected one of {RECORD_STARTS}, "
+                                      f"found {record_start!r}")
+        self.record_start = record_start
 
     def __repr__(self):
         return (f"PreisachIdentifier(n_levels={self.n_levels}, smoothing={self.smoothing!r}, "
-                f"components={self.components!r})")
+                f"components={self.components!r}, record_start={self.record_start!r})")
 
     # -- the regression ----------------------------------------------------------------
     def _design(self, records, splits, m):
@@ -323,6 +340,9 @@ class PreisachIdentifier:
         self._edges = [grid_edges(lo[k] - self.margin * span[k], hi[k] + self.margin * span[k],
                                   self.n_levels, self.grid) for k in range(m)]
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
+        # each record starts after the demagnetising cycle of its input's range (or at rest)
+        self._cycles = [demagnetising_cycle_of_range(a, b) if self.record_start == "demagnetised"
+                        else (0.0, 0.0) for a, b in zip(lo, hi)]
         blocks = [[] for _ in range(m)]            # per input: (states, u) of kept rows
         self._rows, self._reversals = [], []
         for rec, s in zip(records, splits):
@@ -344,7 +364,7 @@ class PreisachIdentifier:
             self._rows.append(keep)
             self._reversals.append(rev)
             for k in range(m):
-                st = _hysteron_states(rec.u[k, keep], self._edges[k])
+                st = _hysteron_states(rec.u[k, keep], self._edges[k], self._cycles[k])
                 blocks[k].append((st, rec.u[k, keep]))
         return blocks
 
@@ -469,7 +489,9 @@ class PreisachIdentifier:
                 rev = xk[nq:] * scale ** np.arange(1, xk.size - nq + 1)
                 if k == l:
                     w = np.maximum(w, 0.0)
-                comps.append(PreisachModel(self._edges[k], w, rev, signed=k != l))
+                comps.append(PreisachModel(self._edges[k], w, rev, signed=k != l,
+                                           demagnetised=self._cycles[k][0],
+                                           demagnetised_centre=self._cycles[k][1]))
         return comps, offset
 
     def _model(self, grid, offsets, in_names, out_names):
@@ -477,8 +499,7 @@ class PreisachIdentifier:
         for l, off in enumerate(offsets):        # the output offset goes to the direct path
             c = grid[l][l] if l < len(grid[l]) else None
             if isinstance(c, PreisachModel):
-                grid[l][l] = PreisachModel(c.edges, c.weights, c.reversible, c.offset + off,
-                                           signed=c.signed)
+                grid[l][l] = c.replace(offset=c.offset + off)
             else:
                 k = next(k for k, cc in enumerate(grid[l]) if cc is not None) \
                     if any(cc is not None for cc in grid[l]) else None
@@ -486,8 +507,7 @@ class PreisachIdentifier:
                     grid[l][0] = Polynomial([0.0], off)
                 elif isinstance(grid[l][k], PreisachModel):
                     cc = grid[l][k]
-                    grid[l][k] = PreisachModel(cc.edges, cc.weights, cc.reversible, cc.offset + off,
-                                               signed=cc.signed)
+                    grid[l][k] = cc.replace(offset=cc.offset + off)
                 else:
                     grid[l][k] = Polynomial([float(grid[l][k])], off)
         return MultivariableHysteresis(grid, in_names, out_names, self._amp)
@@ -639,14 +659,15 @@ class PreisachIdentifier:
 
 def identify_preisach_records(records, n_levels=20, smoothing="auto", components="auto",
                               hold_out="auto", train_fraction=None, skip_seconds=None,
-                              input_names=None, output_names=None, smoothing_start=None):
+                              input_names=None, output_names=None, smoothing_start=None,
+                              record_start="demagnetised"):
     """Identify a multivariable Preisach model; a :class:`RecordFit` like the PI's.
 
     Parameters
     ----------
     records : MultiRecord, Record or sequence of them
         Inputs shape (m, n_samples) [V], outputs shape (p, n_samples) [µm].
-    n_levels, smoothing, components, smoothing_start
+    n_levels, smoothing, components, smoothing_start, record_start
         See :class:`PreisachIdentifier`.
     hold_out, train_fraction, skip_seconds
         See :func:`hammerstein.identification.record_identification.split_record`.
@@ -664,8 +685,8 @@ def identify_preisach_records(records, n_levels=20, smoothing="auto", components
     IdentificationError
         See :meth:`PreisachIdentifier.fit`.
     """
-    est = PreisachIdentifier(n_levels, smoothing, components,
-                             smoothing_start=smoothing_start).fit(
+    est = PreisachIdentifier(n_levels, smoothing, components, smoothing_start=smoothing_start,
+                             record_start=record_start).fit(
         records, None, input_names, output_names, hold_out, train_fraction, skip_seconds)
     est.fit_.smoothing = est.smoothing_
     return est.fit_
@@ -711,7 +732,10 @@ def refit_on_every_level(fit, n_levels):
     kinds = {(o, i): ("pi" if kind == "preisach" else kind)
              for o, row in zip(model.output_names, fit.structure)
              for i, kind in zip(model.input_names, row)}
-    est = PreisachIdentifier(n_levels, float(fit.smoothing), kinds).fit(
+    # the start the fit assumed: its components' demagnetising cycle
+    start = "demagnetised" if any(getattr(c, "demagnetised", 0.0) for row in model.components
+                                  for c in row) else "rest"
+    est = PreisachIdentifier(n_levels, float(fit.smoothing), kinds, record_start=start).fit(
         fit.records, splits, model.input_names, model.output_names)
     out = replace(fit, model=est.model_, predictions=est.fit_.predictions,
                   notes=list(fit.notes) + [
