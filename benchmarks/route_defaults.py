@@ -45,9 +45,13 @@ at least +-55 µm on each axis: the 50 µm circles are within reach. The
 generalised-PI-type actuators have 24 plays per direct path (12 for the
 coupling) under a drawn smooth density and drawn envelope skews
 (``--few-plays``: the test actuator's 4-5 plays, a kink at each threshold).
-Every file and drive is played from rest in the demagnetised state (what
-the excitation's ``demagnetise.csv`` leaves), the creep and the modes
-settled there.
+Every file and drive is played after the excitation's own
+``demagnetise.csv`` (its turning points, read from the file: every member is
+rate-independent), as its README asks of the bench, from the state the
+previous one left; the creep and the modes settled at the rest that follows.
+(Before 2026-11-27 the generalised-PI-type members started from the state a
+60-period decay from 30 V leaves and the Preisach-type ones from the ideal
+demagnetised state: ``--ideal-start``.)
 
 With ``--bouc-wen`` every member's hysteresis is a Bouc-Wen loop per input
 (:class:`BoucWenActuator`, modes, creep and noise drawn as the others'): a
@@ -109,6 +113,41 @@ def _settled(act, h, noise, rng):
     return y
 
 
+#: with --ideal-start, every member starts each file from its earlier idealised start
+IDEAL_START = {"on": False}
+
+
+def demagnetising_prefix(path):
+    """The turning points (2, n) [V] of a ``demagnetise.csv`` (``ux``, ``uy``): its samples
+    where either input's differences change sign, then its last sample. A rate-independent
+    actuator driven through them is left where the whole file leaves it."""
+    data = np.genfromtxt(path, delimiter=",", names=True, comments="#")
+    u = np.vstack([data["ux"], data["uy"]])
+    keep = np.zeros(u.shape[1], dtype=bool)
+    for k in range(2):
+        d = np.diff(u[k])
+        nz = np.flatnonzero(d)
+        flip = np.flatnonzero(np.sign(d[nz][1:]) != np.sign(d[nz][:-1]))
+        keep[nz[flip + 1]] = True
+    keep[-1] = True
+    return np.ascontiguousarray(u[:, keep])
+
+
+def start_after_cycle(act, directory):
+    """Make ``act`` play ``directory/exc/demagnetise.csv`` before every file and drive."""
+    if not IDEAL_START["on"]:
+        act.demagnetise = demagnetising_prefix(Path(directory) / "exc" / "demagnetise.csv")
+
+
+def _after_cycle(act, u):
+    """The static part (2, N) [µm] of ``u`` played after the actuator's demagnetising prefix
+    (from its rest state: the plays at rest, the relays half up, the Bouc-Wen ``z`` at 0)."""
+    pre = getattr(act, "demagnetise", None)
+    if pre is None:
+        return act.hysteresis(u)
+    return act.hysteresis(np.hstack([pre, np.asarray(u, dtype=float)]))[:, pre.shape[1]:]
+
+
 def _demagnetised(spec):
     """Play states of a generalised-PI path after a demagnetising cycle (a sine decaying from
     30 V to 0 over 60 periods, from the rest state): where every file and drive starts."""
@@ -133,6 +172,8 @@ class CreepGPI(GPIActuator):
     creep_tau = (0.05, 0.5, 5.0)
 
     def _play(self, u, spec):
+        if getattr(self, "demagnetise", None) is not None:     # the file's cycle, from rest
+            return GPIActuator._play(u, spec)
         r, w, gl, gr = (np.asarray(v, dtype=float) for v in spec)
         key = id(spec)
         cache = self.__dict__.setdefault("_demag", {})
@@ -141,7 +182,7 @@ class CreepGPI(GPIActuator):
         return _gpi(np.ascontiguousarray(u, dtype=float), r, w, gl, gr, cache[key][1].copy())
 
     def simulate(self, u, noise=True, rng=None):
-        return _settled(self, self.hysteresis(u), noise, rng)
+        return _settled(self, _after_cycle(self, u), noise, rng)
 
 
 @numba.njit(cache=True)
@@ -186,7 +227,7 @@ class DomainPreisach(OutsideActuator):
 
     def simulate(self, u, noise=True, rng=None):
         """Positions (2, N) [µm] from rest in the demagnetised state, creep and modes settled."""
-        return _settled(self, self.hysteresis(u), noise, rng)
+        return _settled(self, _after_cycle(self, u), noise, rng)
 
 
 @numba.njit(cache=True)
@@ -420,6 +461,7 @@ def one_actuator(name, act, work, quick, log):
     rng = np.random.default_rng(zlib.crc32(name.encode()))   # the same draws every run
     hammerstein("excitation", "--inputs", "ux,uy", "--amplitude", "20", "--sampling-period", T,
                 "--out", "exc", cwd=d)
+    start_after_cycle(act, d)
     files = {"hysteresis": [], "multisine": [], "creep": []}
     lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
     for f in sorted((d / "exc").glob("*.csv")):
@@ -534,6 +576,7 @@ def rescore(name, act, work, quick, log):
     if not (d / "u9.csv").is_file():
         raise RuntimeError(f"{d}: no complete earlier run")
     lo, hi = records_range(d)
+    start_after_cycle(act, d)
     rng = np.random.default_rng(zlib.crc32(name.encode()))   # the same draws every run
     rows = []
     for f in sorted(d.glob("circle-*.csv")):
@@ -587,7 +630,13 @@ def main(argv=None):
                     help="every member's hysteresis a Bouc-Wen loop per input (a third class, "
                          "neither Preisach nor generalised PI), modes, creep and noise drawn "
                          "as the others'")
+    ap.add_argument("--ideal-start", action="store_true",
+                    help="every file and drive from the member's idealised start (the "
+                         "generalised-PI type after a 60-period decay from 30 V, the Preisach "
+                         "type in the ideal demagnetised state) instead of after the "
+                         "excitation's demagnetise.csv: the family before 2026-11-27")
     args = ap.parse_args(argv)
+    IDEAL_START["on"] = args.ideal_start
     BOUC_WEN["on"] = args.bouc_wen
     DISCRETE["relays"] = args.discrete_relays
     FEW_PLAYS["on"] = args.few_plays
