@@ -226,8 +226,9 @@ def test_preisach_fit_starts_where_the_records_did():
     y_true = true.simulate(v, demag)[0]
     err = {}
     for start in ("demagnetised", "rest"):
-        model = PreisachIdentifier(12, smoothing=0.0, record_start=start).fit(rec).model_
-        comp = model.components[0][0]
+        est = PreisachIdentifier(12, smoothing=0.0, record_start=start).fit(rec)
+        model, comp = est.model_, est.model_.components[0][0]
+        assert ("after the demagnetising cycle" in est.notes_[0]) == (start == "demagnetised")
         assert (comp.demagnetised, comp.demagnetised_centre) == (
             demagnetising_cycle_of_range(lo, hi) if start == "demagnetised" else (0.0, 0.0))
         err[start] = np.abs(model.simulate(v[None])[0][0] - y_true).max() / np.ptp(y_true)
