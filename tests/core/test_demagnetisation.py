@@ -15,7 +15,9 @@ from hammerstein.identification.gpi_identification import GeneralizedPIIdentifie
 from hammerstein.io.datafiles import MultiRecord
 from hammerstein.models.demagnetisation import demagnetising_turning_points
 from hammerstein.models.generalized_pi import GeneralizedPI
+from hammerstein.identification.identification_pipeline import classical_start_note
 from hammerstein.identification.preisach_identification import PreisachIdentifier, grid_edges
+from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.models.demagnetisation import demagnetising_cycle_of_range
 from hammerstein.models.preisach import (MultivariableHysteresis, PreisachModel,
                                          component_from_table)
@@ -236,3 +238,24 @@ def test_preisach_fit_starts_where_the_records_did():
     assert err["rest"] > 1e-3, err
     with pytest.raises(IdentificationError, match="record_start"):
         PreisachIdentifier(record_start="cold")
+
+
+def test_the_cycle_leaves_classical_plays_a_quarter_decrement_below_zero_and_the_note_says_so():
+    """A classical play of threshold r driven through the cycle from 0 ends near -A / (4 P)
+    for every r between a crest's decrement and A (independent of the note's formula: the
+    plays are stepped here); identify's note gives that shift for a classical PI fitted on
+    records after the cycle, and nothing for records at rest or another class."""
+    r = np.linspace(1.0, 19.0, 19)
+    s = np.zeros_like(r)
+    for u in demagnetising_turning_points(20.0):
+        s = np.clip(s, u - r, u + r)
+    np.testing.assert_allclose(s, -20.0 / (4 * 20), atol=0.02)       # -0.234 .. -0.249 V
+    model = MultivariablePI([[PrandtlIshlinskii([0.0, 5.0, 10.0], [1.0, 0.3, 0.2])]],
+                            ["u"], ["y"])
+    t = np.arange(1001) * 1e-3                           # one period of a 20 V sine
+    rec = MultiRecord(t, 20.0 * np.sin(2 * np.pi * t)[None], np.zeros((1, t.size)), ("u",),
+                      ("y",), 1e-3, "rec")
+    note = classical_start_note(model, [rec])
+    assert note.startswith("classical PI: its plays start at 0") and "u 0.25 V" in note
+    assert classical_start_note(model, [rec], "rest") is None
+    assert classical_start_note(preisach(), [rec]) is None
