@@ -39,13 +39,16 @@ T = 5e-5
 
 
 def preisach_model():
-    """2x2: asymmetric Preisach direct paths, a Preisach and an even (u^2) cross-coupling."""
+    """2x2: asymmetric Preisach direct paths, a Preisach and an even (u^2) cross-coupling;
+    x's paths start after a demagnetising cycle (as identify writes them: ramp hysterons left
+    part-way on the staircase), y's in the ideal demagnetised state."""
     e = np.linspace(-12.0, 12.0, 17)
     dx = PreisachModel.from_density(e, total=25.0, tilt=0.3, coercivity=1.0, coercivity_width=2.0,
-                                    reversible=[1.2, 0.01])
+                                    reversible=[1.2, 0.01]).replace(demagnetised=10.0)
     dy = PreisachModel.from_density(e, total=20.0, bias=0.5, coercivity=1.5, coercivity_width=2.5,
                                     reversible=[1.0])
-    cxy = PreisachModel.from_density(e, total=2.0, coercivity=1.0, coercivity_width=2.0)
+    cxy = PreisachModel.from_density(e, total=2.0, coercivity=1.0,
+                                     coercivity_width=2.0).replace(demagnetised=10.0)
     return MultivariableHysteresis([[dx, cxy], [Polynomial([0.02, 0.004]), dy]],
                                    input_names=["ux", "uy"], output_names=["x", "y"],
                                    input_amplitude=[10.0, 10.0])
