@@ -26,7 +26,9 @@ import functools
 import numpy as np
 from scipy.optimize import brentq
 
-__all__ = ["DEMAGNETISING_PERIODS", "RECORD_STARTS", "demagnetising_cycle_of_range",
+from hammerstein.exceptions import HysteresisError
+
+__all__ = ["DEMAGNETISING_PERIODS", "RECORD_STARTS", "CycleStart", "demagnetising_cycle_of_range",
            "demagnetising_turning_points"]
 
 #: Periods of the decay of ``hammerstein excitation``'s ``demagnetise.csv``.
@@ -129,3 +131,49 @@ def demagnetising_cycle_of_range(low, high):
     if not amp > 0:
         return 0.0, 0.0
     return amp, (0.0 if abs(centre) <= 0.01 * amp else centre)
+
+
+def _volts(value, name):
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise HysteresisError(f"{name}: expected a finite voltage [V], found {value!r}") from None
+    if not np.isfinite(v):
+        raise HysteresisError(f"{name}: expected a finite voltage [V], found {value!r}")
+    return v
+
+
+class CycleStart:
+    """A hysteresis component whose default initial state may follow a demagnetising cycle.
+
+    Shared by :class:`~hammerstein.models.generalized_pi.GeneralizedPI` and
+    :class:`~hammerstein.models.preisach_operator.PreisachModel`: the cycle's amplitude
+    ``demagnetised`` [V] (0: none) and centre ``demagnetised_centre`` [V], and the turning
+    points the default state is driven through (:func:`demagnetising_turning_points`).
+    The component computes that state once, in ``_start``.
+    """
+
+    demagnetised = 0.0
+    demagnetised_centre = 0.0
+
+    def _set_cycle(self, demagnetised, demagnetised_centre):
+        """Validate and keep the cycle; forget a computed start."""
+        amplitude = _volts(demagnetised, "demagnetised")
+        if amplitude < 0:
+            raise HysteresisError(f"demagnetised: expected the demagnetising cycle's amplitude "
+                                  f">= 0 [V] (0: none), found {amplitude}")
+        self.demagnetised = amplitude
+        self.demagnetised_centre = _volts(demagnetised_centre, "demagnetised_centre")
+        self._start = None              # the default initial state, computed once
+
+    def demagnetising_input(self):
+        """The turning points the default initial state follows (empty without a cycle).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_points,)
+            Input [V] (:func:`demagnetising_turning_points`).
+        """
+        if not self.demagnetised:
+            return np.zeros(0)
+        return demagnetising_turning_points(self.demagnetised, self.demagnetised_centre)

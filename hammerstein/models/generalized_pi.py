@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.exceptions import HysteresisError
-from hammerstein.models.demagnetisation import demagnetising_turning_points
+from hammerstein.models.demagnetisation import CycleStart
 from hammerstein.simulation import generalized_play_steps
 
 __all__ = ["GeneralizedPI", "envelope"]
@@ -62,7 +62,7 @@ def envelope(coefficients, u):
     return a[0] * np.tanh(a[1] * np.asarray(u, dtype=float) + a[2]) + a[3]
 
 
-class GeneralizedPI:
+class GeneralizedPI(CycleStart):
     """Generalised PI operator of one input-output pair (Al Janaideh et al. [1]_).
 
     Parameters
@@ -152,13 +152,7 @@ class GeneralizedPI:
         self.offset = float(_vector(offset, "offset", ndim=0))
         self.reversible = _vector(reversible, "reversible").reshape(-1)
         self.rest = float(_vector(rest, "rest", ndim=0))
-        self.demagnetised = float(_vector(demagnetised, "demagnetised", ndim=0))
-        if self.demagnetised < 0:
-            raise HysteresisError(f"demagnetised: expected the demagnetising cycle's amplitude "
-                                  f">= 0 [V] (0: none), found {self.demagnetised}")
-        self.demagnetised_centre = float(_vector(demagnetised_centre, "demagnetised_centre",
-                                                 ndim=0))
-        self._start = None              # the default initial state, computed once
+        self._set_cycle(demagnetised, demagnetised_centre)
 
     def __repr__(self):
         return (f"GeneralizedPI(thresholds={self.thresholds.tolist()}, weights="
@@ -218,19 +212,6 @@ class GeneralizedPI:
         lo = envelope(self.gamma_l, 0.0) - self.thresholds
         hi = envelope(self.gamma_r, 0.0) + self.thresholds
         return np.maximum(lo, np.minimum(hi, self.rest))
-
-    def demagnetising_input(self):
-        """The turning points the default initial state follows (empty without a cycle).
-
-        Returns
-        -------
-        numpy.ndarray, shape (n_points,)
-            Input [V]
-            (:func:`~hammerstein.models.demagnetisation.demagnetising_turning_points`).
-        """
-        if not self.demagnetised:
-            return np.zeros(0)
-        return demagnetising_turning_points(self.demagnetised, self.demagnetised_centre)
 
     def initial_state(self, initial_state=None):
         """Validated copy of a state, or the default initial state (see Notes).

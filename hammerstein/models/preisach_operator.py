@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.exceptions import HysteresisError
-from hammerstein.models.demagnetisation import demagnetising_turning_points
+from hammerstein.models.demagnetisation import CycleStart
 from hammerstein.simulation import preisach_steps, state_vector
 
 __all__ = ["PreisachModel"]
@@ -45,7 +45,7 @@ def _poly(coefficients, u):
     return acc
 
 
-class PreisachModel:
+class PreisachModel(CycleStart):
     """Discrete Preisach model of one input-output pair (ramp hysterons).
 
     The hysterons, the grid and the three ways to give the weights are described in
@@ -136,12 +136,7 @@ class PreisachModel:
         self.offset = _number(offset, "offset")
         self._row, self._col = (a.astype(np.int64) for a in np.tril_indices(n))
         self._mu = np.ascontiguousarray(w[self._row, self._col])
-        self.demagnetised = _number(demagnetised, "demagnetised")
-        if self.demagnetised < 0:
-            raise HysteresisError(f"demagnetised: expected the demagnetising cycle's amplitude "
-                                  f">= 0 [V] (0: none), found {self.demagnetised}")
-        self.demagnetised_centre = _number(demagnetised_centre, "demagnetised_centre")
-        self._start = None              # the default initial state, computed once
+        self._set_cycle(demagnetised, demagnetised_centre)
 
     def __repr__(self):
         return (f"PreisachModel(n_levels={self.n_levels}, edges=[{self.edges[0]}, ..., "
@@ -299,19 +294,6 @@ class PreisachModel:
         return E
 
     # -- simulation -------------------------------------------------------------
-    def demagnetising_input(self):
-        """The turning points the default initial state follows (empty without a cycle).
-
-        Returns
-        -------
-        numpy.ndarray, shape (n_points,)
-            Input [V]
-            (:func:`~hammerstein.models.demagnetisation.demagnetising_turning_points`).
-        """
-        if not self.demagnetised:
-            return np.zeros(0)
-        return demagnetising_turning_points(self.demagnetised, self.demagnetised_centre)
-
     def initial_state(self, initial_state=None):
         """Validated copy of a state, or the default (demagnetised) state (see Notes).
 
