@@ -266,8 +266,11 @@ def _identify_records(plant, spec, amp, sensor):
     names = (list(model.input_names), list(model.output_names))
     fits = {}
     try:
+        # played from the plant's own initial state, without the demagnetising cycle: the
+        # model starts from the ideal demagnetised state, as the bundled Preisach plants do
         fits["preisach"] = preisach_identification.identify_preisach_records(
-            records, PREISACH_LEVELS, "auto", "auto", "auto", None, None, *names)
+            records, PREISACH_LEVELS, "auto", "auto", "auto", None, None, *names,
+            record_start="rest")
         if spec["model"] == "auto":
             bounds = None if spec["bounds"] == "none" else spec["bounds"]
             fits["classical"] = record_identification.identify_records(
