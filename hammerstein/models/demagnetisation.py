@@ -166,6 +166,12 @@ class CycleStart:
         self.demagnetised_centre = _volts(demagnetised_centre, "demagnetised_centre")
         self._start = None              # the default initial state, computed once
 
+    def _cycle_text(self):
+        """The cycle's keyword arguments for ``repr`` (empty without one)."""
+        return ((f", demagnetised={self.demagnetised}" if self.demagnetised else "")
+                + (f", demagnetised_centre={self.demagnetised_centre}"
+                   if self.demagnetised_centre else ""))
+
     def demagnetising_input(self):
         """The turning points the default initial state follows (empty without a cycle).
 

@@ -160,9 +160,7 @@ class GeneralizedPI(CycleStart):
                 f"gamma_r={self.gamma_r.tolist()}, offset={self.offset}"
                 + (f", reversible={self.reversible.tolist()}" if self.reversible.size else "")
                 + (f", rest={self.rest}" if self.rest else "")
-                + (f", demagnetised={self.demagnetised}" if self.demagnetised else "")
-                + (f", demagnetised_centre={self.demagnetised_centre}"
-                   if self.demagnetised_centre else "") + ")")
+                + self._cycle_text() + ")")
 
     def replace(self, **changes):
         """A copy with some parameters changed.

@@ -142,9 +142,7 @@ class PreisachModel(CycleStart):
         return (f"PreisachModel(n_levels={self.n_levels}, edges=[{self.edges[0]}, ..., "
                 f"{self.edges[-1]}], total={self._mu.sum():.6g}, reversible="
                 f"{self.reversible.tolist()}, offset={self.offset}"
-                + (f", demagnetised={self.demagnetised}" if self.demagnetised else "")
-                + (f", demagnetised_centre={self.demagnetised_centre}"
-                   if self.demagnetised_centre else "") + ")")
+                + self._cycle_text() + ")")
 
     def replace(self, **changes):
         """A copy with some parameters changed.
