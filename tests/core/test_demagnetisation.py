@@ -259,3 +259,18 @@ def test_the_cycle_leaves_classical_plays_a_quarter_decrement_below_zero_and_the
     assert note.startswith("classical PI: its plays start at 0") and "u 0.25 V" in note
     assert classical_start_note(model, [rec], "rest") is None
     assert classical_start_note(preisach(), [rec]) is None
+
+
+def test_identify_pipeline_notes_the_classical_start_after_the_cycle():
+    """The note reaches the pipeline's fit (what ``identify`` prints and stores) for a
+    classical PI from records after the cycle, and not with ``record_start="rest"``."""
+    from hammerstein.identification.identification_pipeline import (PipelineOptions,
+                                                                     identify_pipeline)
+    true = MultivariablePI([[PrandtlIshlinskii([0.0, 2.0, 5.0], [1.0, 0.4, 0.3])]], ["u"], ["y"])
+    t, u = hysteresis_excitation(2.5e-3, 10.0)
+    rec = MultiRecord(t, u[None], true.simulate(u[None])[0], ("u",), ("y",), 2.5e-3, "rec")
+    for start, expected in (("demagnetised", True), ("rest", False)):
+        fit = identify_pipeline([rec], PipelineOptions(model="classical",
+                                                       record_start=start)).fit
+        assert any(n.startswith("classical PI: its plays start at 0") for n in fit.notes) \
+            == expected
