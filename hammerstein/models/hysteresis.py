@@ -20,16 +20,20 @@ References
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
 
 from hammerstein.exceptions import HysteresisError
+from hammerstein.models.demagnetisation import demagnetising_turning_points
+from hammerstein.models.output_map import OutputMap
 from hammerstein.simulation import finite_array, simulate_hysteresis, simulate_plays, state_vector
 
 __all__ = [
     "play",
+    "cycle_play_states",
     "PrandtlIshlinskii",
     "MultivariablePI",
     "OutputMap",
@@ -105,6 +109,53 @@ def play(u, thresholds, initial_state=None):
     r = validate_thresholds(thresholds)
     state = state_vector(initial_state, r.size, "initial_state")
     return simulate_plays(u, r, state)
+
+
+def cycle_play_states(thresholds, amplitude, centre=0.0):
+    """Play outputs after a demagnetising cycle, from 0.
+
+    Each play of eq. (1) of [1]_ driven from 0 through the turning points of the cycle
+    ``c + A (1 - t / D) sin(2 pi f t)`` and its rest
+    (:func:`~hammerstein.models.demagnetisation.demagnetising_turning_points`): a play's
+    output after a monotone piece of input depends on the piece's end alone, so this is
+    the state the sampled cycle leaves, whatever its sampling period.
+
+    Parameters
+    ----------
+    thresholds : array_like, shape (n,)
+        Thresholds r_i [V], >= 0 (any order).
+    amplitude : float
+        ``A`` [V], >= 0 (0: no cycle, zeros returned).
+    centre : float
+        ``c`` [V].
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        Play outputs [V].
+
+    Raises
+    ------
+    ValueError
+        On a negative or non-finite amplitude or a non-finite centre.
+
+    Examples
+    --------
+    A play of threshold 0 follows the input to its rest (0 V); the others stop within
+    about ``A / (4 P)`` of it (0.25 V here, 20 periods):
+
+    >>> import numpy as np
+    >>> from hammerstein.models.hysteresis import cycle_play_states
+    >>> np.round(cycle_play_states([0.0, 2.0, 5.0, 9.9], 20.0), 3)
+    array([ 0.   , -0.243, -0.247, -0.149])
+    """
+    r = np.asarray(thresholds, dtype=float)
+    s = np.zeros(r.shape)
+    if amplitude == 0:
+        return s
+    for u in demagnetising_turning_points(amplitude, centre):
+        s = np.maximum(u - r, np.minimum(u + r, s))
+    return s
 
 
 @dataclass(frozen=True)
@@ -232,143 +283,6 @@ class PrandtlIshlinskii:
 _Component = "PrandtlIshlinskii | float | None"
 
 
-class OutputMap:
-    """Monotone static output map of the modified PI: one-sided dead zones.
-
-    ``S(h) = a_0 h + sum_j (a_j - a_{j-1}) (max(h - z_j, 0) - max(-z_j, 0))``,
-    a continuous piecewise-linear, strictly increasing map with knots
-    ``z_1 < ... < z_K`` and segment slopes ``a_0, ..., a_K > 0``, through
-    the origin (``S(0) = 0``). It is the superposition of one-sided dead-zone
-    operators of the modified Prandtl-Ishlinskii model of Kuhnen [3]_ written
-    with the slope of each segment: ``y = S(Gamma(u))`` draws asymmetric and
-    saturating loops that a classical PI cannot, and stays exactly
-    invertible, ``S^-1`` being again piecewise linear with knots ``S(z_j)``
-    and slopes ``1 / a_j``.
-
-    Parameters
-    ----------
-    knots : array_like, shape (K,)
-        Strictly increasing knots ``z_j`` in the unit of ``h`` (the PI
-        output, e.g. [µm]); may be empty (a pure gain).
-    slopes : array_like, shape (K + 1,)
-        Positive slope of each segment [-]: left of ``z_1``, between the
-        knots, right of ``z_K``.
-
-    Raises
-    ------
-    HysteresisError
-        If the knots are not finite and strictly increasing, or the slopes
-        are not ``K + 1`` finite positive numbers.
-
-    References
-    ----------
-    .. [3] K. Kuhnen, "Modeling, identification and compensation of complex
-       hysteretic nonlinearities: a modified Prandtl-Ishlinskii approach",
-       European Journal of Control 9(4) (2003), the superposition operator S.
-
-    Examples
-    --------
-    A one-sided saturation: slope 1 below 5 µm, 0.7 above; the inverse
-    undoes it exactly.
-
-    >>> import numpy as np
-    >>> from hammerstein.models.hysteresis import OutputMap
-    >>> s = OutputMap([5.0], [1.0, 0.7])
-    >>> s.apply(np.array([-2.0, 5.0, 10.0]))
-    array([-2. ,  5. ,  8.5])
-    >>> s.inverse(s.apply(np.array([-2.0, 5.0, 10.0])))
-    array([-2.,  5., 10.])
-    """
-
-    def __init__(self, knots, slopes):
-        z = np.atleast_1d(_as_finite_array(knots, "knots")).astype(float).ravel() \
-            if np.size(knots) else np.zeros(0)
-        a = np.atleast_1d(_as_finite_array(slopes, "slopes")).astype(float).ravel()
-        if z.size > 1 and np.any(np.diff(z) <= 0):
-            raise HysteresisError(f"knots: expected strictly increasing values, found {z.tolist()}")
-        if a.size != z.size + 1:
-            raise HysteresisError(f"slopes: expected {z.size + 1} values (one per segment around "
-                                  f"{z.size} knots), found {a.size}")
-        if np.any(a <= 0):
-            raise HysteresisError(f"slopes: expected positive values (a strictly increasing, "
-                                  f"invertible map), found {a.tolist()}")
-        self.knots, self.slopes = z, a
-        self.values = self._forward(z)          # S(z_j), the knots of the inverse
-
-    def __repr__(self):
-        return f"OutputMap(knots={self.knots.tolist()}, slopes={self.slopes.tolist()})"
-
-    def __eq__(self, other):
-        return (isinstance(other, OutputMap) and np.array_equal(self.knots, other.knots)
-                and np.array_equal(self.slopes, other.slopes))
-
-    def _forward(self, h):
-        h = np.asarray(h, dtype=float)
-        y = self.slopes[0] * h
-        for z, da in zip(self.knots, np.diff(self.slopes)):
-            y = y + da * (np.maximum(h - z, 0.0) - max(-z, 0.0))
-        return y
-
-    def apply(self, h):
-        """``S(h)``, element-wise.
-
-        Parameters
-        ----------
-        h : array_like, any shape
-            PI outputs (e.g. [µm]).
-
-        Returns
-        -------
-        numpy.ndarray, same shape
-            Mapped outputs (same unit).
-        """
-        return self._forward(h)
-
-    def inverse(self, y):
-        """``S^-1(y)``, element-wise and exact (piecewise linear).
-
-        Parameters
-        ----------
-        y : array_like, any shape
-            Mapped outputs (e.g. [µm]).
-
-        Returns
-        -------
-        numpy.ndarray, same shape
-            ``h`` with ``S(h) = y``.
-        """
-        y = np.asarray(y, dtype=float)
-        if not self.knots.size:
-            return y / self.slopes[0]
-        seg = np.searchsorted(self.values, y, side="right")   # 0 .. K
-        anchor = np.maximum(seg - 1, 0)
-        return self.knots[anchor] + (y - self.values[anchor]) / self.slopes[seg]
-
-    def derivative(self, h):
-        """Slope ``S'(h)`` [-] (the right derivative at a knot).
-
-        Parameters
-        ----------
-        h : array_like, any shape
-            PI outputs.
-
-        Returns
-        -------
-        numpy.ndarray, same shape
-        """
-        return self.slopes[np.searchsorted(self.knots, np.asarray(h, dtype=float), side="right")]
-
-    def to_table(self):
-        """The map as a model-file table.
-
-        Returns
-        -------
-        dict
-            ``{"knots": [...], "slopes": [...]}`` (lists of floats).
-        """
-        return {"knots": [float(v) for v in self.knots], "slopes": [float(v) for v in self.slopes]}
-
-
 def component_words(output_names, input_names, components, word):
     """``x: ux PI(15), uy gain 0.1; y: ...``: a model's components in words (its repr).
 
@@ -423,12 +337,31 @@ class MultivariablePI:
         PI and the linear dynamics); the compensators track
         ``Gamma(U) = S^-1(Yr - c)`` (:meth:`gamma_reference`). ``None`` (or
         all entries None): the classical PI.
+    demagnetised : array_like, shape (m,), optional
+        Amplitude ``A_k`` [V] of the demagnetising cycle each input's records
+        start after (``demagnetise.csv`` of ``hammerstein excitation``; 0: none),
+        which sets the default initial state (Notes). ``None`` (or all zeros):
+        every play starts at 0.
+    demagnetised_centre : array_like, shape (m,), optional
+        Centre ``c_k`` [V] of each input's cycle; zeros by default.
 
     Notes
     -----
     The play states of all hysterons are one flat vector of length
     ``n_hysterons``, ordered by output l, then input k, then threshold, as
     listed by :meth:`hysterons`.
+
+    The default initial state is zeros, the paper's virgin state. With
+    ``demagnetised`` it is the state the demagnetising cycle ``c_k + A_k (1 - t /
+    D) sin(2 pi f t)`` of every input leaves: each play driven from 0 through the
+    cycle's turning points
+    (:func:`~hammerstein.models.demagnetisation.demagnetising_turning_points`),
+    exact for any sampling period since a play's output after a monotone piece of
+    input depends on the piece's end alone. The cycle's crests fall by ``A / P``
+    per period, so it leaves every play of a threshold below ``A`` within about
+    ``A / (4 P)`` of ``c`` (0.25 V at 20 V and 20 periods), above or below it by
+    where the threshold falls between two crests, where the virgin state has 0;
+    the small loops of a drive keep that difference.
 
     Raises
     ------
@@ -463,6 +396,8 @@ class MultivariablePI:
     input_amplitude: np.ndarray | None = None
     output_offset: np.ndarray | None = None
     output_map: Sequence[object] | None = None
+    demagnetised: np.ndarray | None = None
+    demagnetised_centre: np.ndarray | None = None
     _flat: dict = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -519,7 +454,69 @@ class MultivariablePI:
                     raise HysteresisError(f"output_map[{l}]: expected an OutputMap, a dict or "
                                           f"None, found {mp!r}")
             self.output_map = maps if any(mp is not None for mp in maps) else None
+        self._set_cycles(m)
         self._flat = self._flatten()
+        self._start = None              # the default initial state, computed once
+
+    def _set_cycles(self, m):
+        """Validate ``demagnetised`` and ``demagnetised_centre`` (None without a cycle)."""
+        amp, centre = self.demagnetised, self.demagnetised_centre
+        values = {}
+        for name, v in (("demagnetised", amp), ("demagnetised_centre", centre)):
+            if v is None:
+                values[name] = np.zeros(m)
+                continue
+            try:
+                arr = np.asarray(v, dtype=float)
+            except (TypeError, ValueError):
+                arr = None
+            if arr is None or arr.shape != (m,) or not np.all(np.isfinite(arr)):
+                raise HysteresisError(f"{name}: expected {m} finite voltages [V] (one per "
+                                      f"input), found {v!r}")
+            values[name] = arr.copy()
+        if np.any(values["demagnetised"] < 0):
+            raise HysteresisError(f"demagnetised: expected the demagnetising cycles' amplitudes "
+                                  f">= 0 [V] (0: none), found {values['demagnetised'].tolist()}")
+        if not np.any(values["demagnetised"]):
+            self.demagnetised = self.demagnetised_centre = None
+            return
+        values["demagnetised_centre"][values["demagnetised"] == 0] = 0.0
+        self.demagnetised = values["demagnetised"]
+        self.demagnetised_centre = values["demagnetised_centre"]
+
+    def replace(self, **changes):
+        """A copy with some parameters changed (:func:`dataclasses.replace`).
+
+        Parameters
+        ----------
+        **changes
+            Constructor parameters, e.g. ``demagnetised=[20.0, 20.0]``.
+
+        Returns
+        -------
+        MultivariablePI
+
+        Raises
+        ------
+        HysteresisError
+            On an invalid parameter (as the constructor).
+        """
+        return dataclasses.replace(self, **changes)
+
+    def demagnetising_inputs(self):
+        """The turning points the default initial state follows, per input.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            Per input, shape (n_points,) [V]
+            (:func:`~hammerstein.models.demagnetisation.demagnetising_turning_points`;
+            empty for an input without a cycle).
+        """
+        if self.demagnetised is None:
+            return [np.zeros(0) for _ in range(self.n_inputs)]
+        return [demagnetising_turning_points(a, c) if a > 0 else np.zeros(0)
+                for a, c in zip(self.demagnetised, self.demagnetised_centre)]
 
     # -- static output map (modified PI) -----------------------------------------
     @property
@@ -660,6 +657,11 @@ class MultivariablePI:
         if self.output_map is not None:
             extra += ", output map on " + ", ".join(
                 o for o, mp in zip(self.output_names, self.output_map) if mp is not None)
+        if self.demagnetised is not None:
+            extra += ", demagnetised [" + ", ".join(f"{a:.4g}" for a in self.demagnetised) + "] V"
+            if np.any(self.demagnetised_centre):
+                extra += " around [" + ", ".join(
+                    f"{c:.4g}" for c in self.demagnetised_centre) + "] V"
         return f"MultivariablePI({self.size_text()}; {rows}{extra})"
 
     def hysterons(self):
@@ -728,7 +730,7 @@ class MultivariablePI:
         return u
 
     def initial_state(self, initial_state=None):
-        """Return a valid copy of a flat play-state vector (zeros by default).
+        """Return a valid copy of a flat play-state vector (the default start by default).
 
         Parameters
         ----------
@@ -738,14 +740,25 @@ class MultivariablePI:
         Returns
         -------
         numpy.ndarray, shape (n_hysterons,)
-            A new array.
+            A new array; by default zeros, or the state the demagnetising cycles
+            leave (``demagnetised``, Notes).
 
         Raises
         ------
         HysteresisError
             On a wrong shape or non-finite values.
         """
-        return state_vector(initial_state, self.n_hysterons, "initial_state")
+        if initial_state is not None or self.demagnetised is None:
+            return state_vector(initial_state, self.n_hysterons, "initial_state")
+        if self._start is None:
+            f = self._flat
+            s = np.zeros(self.n_hysterons)
+            for k, (a, c) in enumerate(zip(self.demagnetised, self.demagnetised_centre)):
+                on = f["input_index"] == k
+                s[on] = cycle_play_states(f["thresholds"][on], a, c)
+            s.setflags(write=False)
+            self._start = s
+        return self._start.copy()
 
     def simulate(self, inputs, initial_state=None):
         """Outputs of the multivariable PI model for an input record, eq. (4).
@@ -758,7 +771,7 @@ class MultivariablePI:
         inputs : array_like, shape (m, n_samples)
             Input voltages [V].
         initial_state : array_like, shape (n_hysterons,), optional
-            Initial play outputs [V]; zeros by default.
+            Initial play outputs [V]; :meth:`initial_state` by default.
 
         Returns
         -------
