@@ -423,7 +423,7 @@ class InverseMultiplicativeCompensator:
                 f"iterations={self.iterations}, {law})")
 
     def initial_state(self, initial_state=None):
-        """Validated copy of a flat compensator state (zeros by default).
+        """Validated copy of a flat compensator state (the rest state by default).
 
         Parameters
         ----------
@@ -433,13 +433,18 @@ class InverseMultiplicativeCompensator:
         Returns
         -------
         numpy.ndarray, shape (n_states,)
-            A new array.
+            A new array; by default ``U(t-T)`` and ``v_f`` at 0 V and the model's
+            default play states (zeros, or where the demagnetising cycle leaves
+            them: ``MultivariablePI.demagnetised``).
 
         Raises
         ------
         HysteresisError
             On a wrong shape or non-finite values.
         """
+        if initial_state is None:
+            return np.concatenate([np.zeros(self.n_states - self.model.n_hysterons),
+                                   self.model.initial_state()])
         return state_vector(initial_state, self.n_states)
 
     def simulate(self, reference, initial_state=None):
@@ -450,7 +455,8 @@ class InverseMultiplicativeCompensator:
         reference : array_like, shape (m, n_samples)
             Reference displacements Yr [µm].
         initial_state : array_like, shape (n_states,), optional
-            U(t-T) [V] then the model's play states [V]; zeros by default.
+            U(t-T) [V] then the model's play states [V]; :meth:`initial_state` by
+            default.
 
         Returns
         -------
@@ -641,7 +647,9 @@ def diagonal_compensator(model: MultivariablePI, **kwargs):
                 f"model: {_direct_name(model, l)}: the diagonal compensator needs a hysteresis "
                 f"direct transfer, found {comps[l][l]!r}")
     diag = MultivariablePI(comps, list(model.input_names), list(model.output_names),
-                           None if model.input_amplitude is None else model.input_amplitude.copy())
+                           None if model.input_amplitude is None else model.input_amplitude.copy(),
+                           demagnetised=model.demagnetised,
+                           demagnetised_centre=model.demagnetised_centre)
     kwargs.setdefault("name", "diagonal")
     return InverseMultiplicativeCompensator(diag, **kwargs)
 
@@ -801,8 +809,9 @@ class PerAxisInverseCompensator:
 
     Notes
     -----
-    The flat state concatenates the axes' inverse states (zeros: consistent
-    with zero play states of the model). No per-sample loop here: each axis
+    The flat state concatenates the axes' inverse states; by default the state
+    consistent with the model's default play states (:meth:`consistent_state`;
+    zeros for zero play states). No per-sample loop here: each axis
     is a PI operator simulation then a vectorised inverse play.
 
     Raises
@@ -866,7 +875,7 @@ class PerAxisInverseCompensator:
                 f"{axes}; {self.n_states} states)")
 
     def initial_state(self, initial_state=None):
-        """Validated copy of the flat state (zeros by default).
+        """Validated copy of the flat state (consistent with the model's start by default).
 
         Parameters
         ----------
@@ -885,6 +894,9 @@ class PerAxisInverseCompensator:
             On a wrong shape, non-finite values or an inconsistent
             inverse-play state.
         """
+        if initial_state is None:      # the model's default plays, the inputs at rest (0 V)
+            return self.consistent_state(self.model.initial_state(),
+                                         np.zeros(self.model.n_inputs))
         s = state_vector(initial_state, self.n_states)
         for l, inv in enumerate(self.inverses):
             if not isinstance(inv, float):
@@ -939,7 +951,7 @@ class PerAxisInverseCompensator:
         reference : array_like, shape (m, n_samples)
             Reference displacements [µm].
         initial_state : array_like, shape (n_states,), optional
-            Zeros by default.
+            :meth:`initial_state` by default.
 
         Returns
         -------

@@ -439,8 +439,8 @@ class HammersteinCompensator:
         return self.hysteresis_compensator.n_states + self.n_filter_states
 
     def initial_state(self, initial_state=None):
-        """Validated copy of a flat state (zeros by default; the Preisach model's default
-        hysteron states when the static part is the exact Preisach inverse).
+        """Validated copy of a flat state (by default the hysteresis compensator's default
+        state, where its model starts, and the filter at 0).
 
         The default is not the compensator at rest: its inverse of G sits at 0 µm, where an
         identified stage rests elsewhere (its model's output at 0 V, e.g. (-0.99, 0.62) µm),
@@ -463,7 +463,7 @@ class HammersteinCompensator:
         HysteresisError
             If the state has the wrong length or non-finite values.
         """
-        if initial_state is None and self.exact_static:   # the Preisach model's rest state
+        if initial_state is None:   # the hysteresis compensator's default (the model's start)
             return np.concatenate([self.hysteresis_compensator.initial_state(),
                                    np.zeros(self.n_filter_states)])
         return state_vector(initial_state, self.n_states)

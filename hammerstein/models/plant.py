@@ -182,8 +182,9 @@ class HammersteinPlant:
         ----------
         initial_state : array_like, shape (n_states,), optional
             Hysteresis states then linear states [µm]. By default the
-            hysteresis model's default state (zeros for the classical PI:
-            play outputs [V]; the demagnetised state of a Preisach model)
+            hysteresis model's default state (play outputs [V] at 0 for the classical
+            PI, or where its demagnetising cycle leaves them; the demagnetised state of
+            a Preisach model)
             and zero linear states.
 
         Returns
@@ -196,7 +197,7 @@ class HammersteinPlant:
         HysteresisError
             If the state does not have length ``n_states``.
         """
-        if initial_state is None and not self.packable:
+        if initial_state is None:
             return np.concatenate([self.hysteresis.initial_state(),
                                    np.zeros(self.n_linear_states)])
         state = state_vector(initial_state, self.n_states)

@@ -117,10 +117,7 @@ def case_plant(study, i):
     rows = [[_scaled(c, f["weights"][(l, k)], f["cross_coupling"][l, k]) for k, c in enumerate(row)]
             for l, row in enumerate(model.components)]
     if isinstance(model, MultivariablePI):
-        hyst = MultivariablePI(rows, input_names=model.input_names,
-                               output_names=model.output_names,
-                               input_amplitude=model.input_amplitude,
-                               output_offset=model.output_offset, output_map=model.output_map)
+        hyst = model.replace(components=rows)     # its names, range, offset, map and start
     else:
         hyst = MultivariableHysteresis(rows, input_names=model.input_names,
                                        output_names=model.output_names,

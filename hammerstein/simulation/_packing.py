@@ -306,6 +306,44 @@ class CompensatorLaw(NamedTuple):
         m = self.model.n_inputs
         return m * (2 if self.lowpass else 1) + self.model.n_hysterons + self.n_filter_states
 
+    def rest_state(self):
+        """The default flat state: ``U(t-T)`` and ``v_f`` at 0 V, the model's default play
+        states (``model.initial_state()``: zeros, or where a demagnetising cycle leaves
+        them), the pre-filter at 0.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+            A new array.
+        """
+        s = np.zeros(self.n_states)
+        m = self.model.n_inputs
+        off = 2 * m if self.lowpass else m
+        s[off:off + self.model.n_hysterons] = self.model.initial_state()
+        return s
+
+    def state(self, initial_state=None, name="initial_state"):
+        """A validated copy of a flat state, :meth:`rest_state` by default.
+
+        Parameters
+        ----------
+        initial_state : array_like, shape (n_states,), optional
+        name : str
+            Field name for error messages.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_states,)
+
+        Raises
+        ------
+        HysteresisError
+            On a wrong length or non-finite values.
+        """
+        if initial_state is None:
+            return self.rest_state()
+        return state_vector(initial_state, self.n_states, name)
+
     def split_state(self, state):
         """Views ``(U(t-T), v_f or None, play states, pre-filter state)`` of a flat state.
 

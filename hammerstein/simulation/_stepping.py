@@ -321,7 +321,7 @@ def compensator_law(compensator):
 
 
 def compensator_state(compensator, initial_state=None):
-    """Validated flat state of a fusable compensator (zeros by default).
+    """Validated flat state of a fusable compensator (its law's rest state by default).
 
     Parameters
     ----------
@@ -344,7 +344,7 @@ def compensator_state(compensator, initial_state=None):
     CompensatorError
         If the compensator declares no law.
     """
-    return state_vector(initial_state, _law(compensator).n_states)
+    return _law(compensator).state(initial_state)
 
 
 def is_fusable(compensator):
@@ -411,7 +411,7 @@ def _run_chain_kernel(law, yr, cstate, plant=None, pstate=None):
 
 def _simulate_law(law, reference, initial_state, backend):
     yr = _law_reference(law, law.model.check_inputs(reference, "reference"))
-    state = state_vector(initial_state, law.n_states)
+    state = law.state(initial_state)
     if backend == "numpy":
         split = _premapped(law, yr, state)
         if split is not None:
@@ -449,8 +449,8 @@ def simulate_compensator(compensator, reference, initial_state=None, backend="nu
         Reference displacements [µm].
     initial_state : array_like, optional
         ``U(t-T)`` [V] (then ``v_f`` [V] for the low-pass law), play states
-        [V], pre-filter state [µm]; zeros by default (see
-        :func:`compensator_state`).
+        [V], pre-filter state [µm]; by default 0 V, the model's default play states
+        and the pre-filter at 0 (see :func:`compensator_state`).
     backend : {'numba', 'numpy'}
         Compiled kernel or the numpy reference loop.
 
@@ -528,7 +528,8 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     reference : array_like, shape (p, n_samples)
         Reference displacements [µm].
     compensator_state, plant_state : array_like, optional
-        Initial states; zeros by default.
+        Initial states; by default the law's rest state
+        (:meth:`CompensatorLaw.rest_state`) and the plant's default state.
     backend : {'numba', 'numpy'}
         Compiled kernels or the numpy reference loops.
 
@@ -579,7 +580,7 @@ def simulate_chain(compensator, plant, reference, compensator_state=None, plant_
     if (backend == "numba" and law is not None and not _has_map(plant.hysteresis)
             and _packable(plant.hysteresis)):
         yr = _law_reference(law, law.model.check_inputs(reference, "reference"))
-        cstate = state_vector(compensator_state, law.n_states)
+        cstate = law.state(compensator_state)
         pstate = plant.initial_state(plant_state)
         if plant.hysteresis.n_inputs != law.model.n_inputs:
             raise HysteresisError(
@@ -694,7 +695,7 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
     Cases may differ by reference (frequency, amplitude, axis, length), by
     compensator model, gain and law, and by plant, as long as the numbers of
     inputs and outputs agree. Each case starts from zero plant states and
-    from its own compensator state (zeros by default). The
+    from its own compensator state (its law's rest state by default). The
     records are packed end to end (memory in proportion to the samples, not
     to the number of cases times the longest case), and each case's result
     equals :func:`simulate_chain` on it bit for bit.
@@ -763,7 +764,7 @@ def simulate_chain_batch(compensators, plants, references, parallel=None, compen
     if len(states) != B:
         raise HysteresisError(f"compensator_states: expected {B} states (or None), "
                               f"found {len(states)}")
-    states = [state_vector(s, law.n_states, f"compensator_states[{b}]")
+    states = [law.state(s, f"compensator_states[{b}]")
               for b, (s, law) in enumerate(zip(states, laws))]
     if (any(_has_map(pl.hysteresis) or not _packable(pl.hysteresis) for pl in plts)
             or any(law.prefilter is not None and _has_map(law.model) for law in laws)):  # unfused
