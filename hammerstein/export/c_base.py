@@ -250,6 +250,18 @@ def _packed_plays(model):
     return start, uniq[:, 1].copy(), W, np.asarray(f["gain"], dtype=float)
 
 
+def _packed_start(model):
+    """The model's default play states in :func:`_packed_plays`'s order [V]: zeros, or where
+    its demagnetising cycles leave them (one state per input and threshold, as every
+    component of an input starts after the same cycle)."""
+    f = model.hysterons()
+    keys = np.column_stack([f["input_index"].astype(float), f["thresholds"]])
+    uniq, index = np.unique(keys, axis=0, return_inverse=True)
+    start = np.zeros(uniq.shape[0])
+    start[np.asarray(index).ravel()] = model.initial_state()
+    return start
+
+
 def _reference_transform(model, precision, N):
     """C declarations and statements of ``r = S^-1(Yr - c)`` on ``r[]``."""
     decls, offset, smap = _reference_transform_parts(model, precision, N)

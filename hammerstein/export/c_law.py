@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from hammerstein.export.c_base import (_float_realization, _lit, _vec, _mat, _ints, _check_model, _packed_plays,
+                                       _packed_start,
                                        _reference_transform_parts, _limits_code, _reals_table, _stage_rest,
                                        _stages_source)
 from hammerstein.export.c_lookahead import _lookahead_code
@@ -93,9 +94,19 @@ static void {N}_commit(const {N}_real u[], {N}_real s[], {N}_real y[])
 {gu}
 }}
 """)
-    init = [f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = {zero};",
-            f"    for (j = 0; j < {N}_N_PLAYS; ++j) s->plays[j] = {zero};",
-            f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) s->gamma[l] = {zero};"]
+    plays0 = _packed_start(model)
+    if np.any(plays0):   # the plays where the demagnetising cycle leaves them, Gamma(0 V) there
+        decls += [_reals_table("plays_rest", plays0, precision, N,
+                               "  /* play states after the demagnetising cycle [V] */"),
+                  _reals_table("gamma_rest", W @ plays0, precision, N,
+                               "  /* Gamma(0 V) from them [um] */")]
+        init = [f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = {zero};",
+                f"    for (j = 0; j < {N}_N_PLAYS; ++j) s->plays[j] = {N}_plays_rest[j];",
+                f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) s->gamma[l] = {N}_gamma_rest[l];"]
+    else:
+        init = [f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = {zero};",
+                f"    for (j = 0; j < {N}_N_PLAYS; ++j) s->plays[j] = {zero};",
+                f"    for (l = 0; l < {N}_N_OUTPUTS; ++l) s->gamma[l] = {zero};"]
     if law.lowpass:
         init.append(f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->v_f[k] = {zero};")
     if nf:

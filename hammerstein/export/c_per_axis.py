@@ -4,6 +4,8 @@ inverse PI, then the inverse play of threshold r_1) of a classical PI's direct t
 
 from __future__ import annotations
 
+import numpy as np
+
 from hammerstein.compensation.inverse import InversePI
 from hammerstein.export.c_base import (_lit, _vec, _check_model, _reference_transform,
                                        _limits_code, _PLAY)
@@ -15,18 +17,27 @@ def _per_axis_source(comp, model, precision, N, limits, T):
     zero = "0.0" if precision == "double" else "0.0f"
     reals = m
     code = []
+    rest = comp.initial_state()     # each axis's inverse consistent with the model's start
     for l, inv in enumerate(comp.inverses):
         if isinstance(inv, InversePI):
             pi = inv.shifted_inverse
             n = pi.n_hysterons
+            s0 = rest[comp._offsets[l]:comp._offsets[l + 1]]    # q, then [v(-T), u(-T)]
             decls += [f"static const {N}_real {N}_r{l}[{n}] = {_vec(pi.thresholds, precision)};  /* r'_i [um] */",
                       f"static const {N}_real {N}_w{l}[{n}] = {_vec(pi.weights, precision)};  /* w'_i [V/um] */",
                       f"static const {N}_real {N}_r1_{l} = {_lit(inv.play_inverse.threshold, precision)};  /* r_1 [V] */"]
             members += [f"    {N}_real q{l}[{n}];      /* inverse PI plays of axis {l} [um] */",
                         f"    {N}_real v{l}, d{l};    /* last shifted-inverse output [V], inverse-play offset [V] */"]
             reals += n + 2
-            init += [f"    for (j = 0; j < {n}; ++j) s->q{l}[j] = {zero};",
-                     f"    s->v{l} = {zero}; s->d{l} = {zero};"]
+            if np.any(s0):   # after the demagnetising cycle: d = u(-T) - v(-T)
+                decls.append(f"static const {N}_real {N}_q{l}_rest[{n}] = {_vec(s0[:n], precision)};"
+                             f"  /* axis {l}'s inverse plays after the demagnetising cycle [um] */")
+                init += [f"    for (j = 0; j < {n}; ++j) s->q{l}[j] = {N}_q{l}_rest[j];",
+                         f"    s->v{l} = {_lit(s0[n], precision)}; "
+                         f"s->d{l} = {_lit(s0[n + 1] - s0[n], precision)};"]
+            else:
+                init += [f"    for (j = 0; j < {n}; ++j) s->q{l}[j] = {zero};",
+                         f"    s->v{l} = {zero}; s->d{l} = {zero};"]
             code.append(f"""    {{  /* axis {l}: inverse PI (Kuhnen & Janocha) then the inverse play of r_1 */
         {N}_real v = {zero};
         for (j = 0; j < {n}; ++j) s->q{l}[j] = {N}_play(s->q{l}[j], r[{l}], {N}_r{l}[j]);

@@ -68,6 +68,13 @@ def gpi_model():
                                    output_names=["x", "y"], input_amplitude=[10.0, 10.0])
 
 
+def classical_after_cycle():
+    """The bundled 2x2 classical PI, its plays after demagnetising cycles of 10 and 8 V
+    (centred on 1 V for y: the plays end near 1 V, not 0)."""
+    return load_plant("rakotondrabe-2dof", dynamics=False).hysteresis.replace(
+        demagnetised=[10.0, 8.0], demagnetised_centre=[0.0, 1.0])
+
+
 def _dynamics():
     return load_plant("rakotondrabe-2dof").dynamics
 
@@ -88,6 +95,18 @@ CASES = {
     "gpi-hammerstein-creep": lambda: HammersteinCompensator(gpi_model(), _dynamics(), creep=_creep()),
     "pi-hammerstein-creep": lambda: HammersteinCompensator(
         load_plant("rakotondrabe-2dof").hysteresis, _dynamics(), creep=_creep()),
+    # a classical PI whose plays start after the demagnetising cycle (as identify writes it
+    # from records after demagnetise.csv): every kind's C starts where Python's does
+    "pi-demagnetised-multiplicative": lambda: InverseMultiplicativeCompensator(
+        classical_after_cycle(), gain="midpoint", check="ignore"),
+    "pi-demagnetised-iterations": lambda: InverseMultiplicativeCompensator(
+        classical_after_cycle(), gain="midpoint", check="ignore", iterations=3),
+    "pi-demagnetised-lowpass": lambda: InverseMultiplicativeCompensator(
+        classical_after_cycle(), gain="midpoint", check="ignore", feedback="lowpass",
+        cutoff_hz=500.0, sampling_period=T),
+    "pi-demagnetised-per-axis": lambda: PerAxisInverseCompensator(classical_after_cycle()),
+    "pi-demagnetised-hammerstein": lambda: HammersteinCompensator(
+        classical_after_cycle(), _dynamics(), creep=_creep(), check="ignore"),
     # an identified PI's sensor offset and output map: the preview enters the inverse as given
     "pi-mapped-hammerstein-creep": lambda: HammersteinCompensator(
         _mapped_model(), _dynamics(), creep=_creep(), check="ignore"),
