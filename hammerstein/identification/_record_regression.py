@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from hammerstein.models.hysteresis import MultivariablePI, OutputMap, PrandtlIshlinskii, play
+from hammerstein.models.hysteresis import (MultivariablePI, OutputMap, PrandtlIshlinskii,
+                                          cycle_play_states, play)
 from hammerstein.identification.lsq import TallQR, bounded_lstsq, lstsq_bounded_below, r_factor
 from hammerstein.identification.identification import (ClosedFormPI, IdentificationError,
                                                        partition_thresholds)
@@ -60,8 +61,10 @@ def _thresholds(records, splits, k, n, partition, explicit):
     return amplitude * np.arange(n) / n, "input"
 
 
-def _plays(u, r, periodic):
-    phi, final = play(u, r)
+def _plays(u, r, periodic, cycle=(0.0, 0.0)):
+    """Play outputs over a record: from the state ``cycle`` (amplitude, centre [V]) leaves,
+    or on the steady loop of a periodic record."""
+    phi, final = play(u, r, None if periodic else cycle_play_states(r, *cycle))
     if periodic:
         phi, _ = play(u, r, final)
     return phi
@@ -70,14 +73,15 @@ def _plays(u, r, periodic):
 class _LeastSquares:
     """Joint least squares of every output on the play outputs of every input."""
 
-    def __init__(self, records, splits, thresholds, bounds, offset=True):
+    def __init__(self, records, splits, thresholds, bounds, offset=True, cycles=None):
         self.records, self.splits, self.r = records, splits, thresholds
         self.bounds = bounds
         self.offset = offset
         m = records[0].u.shape[0]
         self.m = m
+        cycles = [(0.0, 0.0)] * m if cycles is None else list(zip(*cycles))
         # regressors over the training samples, concatenated over the records
-        self.phi = [np.concatenate([_plays(rec.u[k], thresholds[k], s.periodic)[:, s.train]
+        self.phi = [np.concatenate([_plays(rec.u[k], thresholds[k], s.periodic, cycles[k])[:, s.train]
                                     for rec, s in zip(records, splits)], axis=1).T
                     for k in range(m)]
         self.lin = [np.concatenate([rec.u[k][s.train] for rec, s in zip(records, splits)])
@@ -352,7 +356,8 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
     m, p = model.n_inputs, model.n_outputs
     r = [_component_thresholds(model, k, model.input_amplitude[k] * np.arange(3) / 3)
          for k in range(m)]
-    engine = _LeastSquares(records, splits, r, bounds or "nonnegative")
+    cycles = None if model.demagnetised is None else (model.demagnetised, model.demagnetised_centre)
+    engine = _LeastSquares(records, splits, r, bounds or "nonnegative", cycles=cycles)
     measured = engine.y.copy()
     grid, offsets, maps, rms_out = [], [], [], []
     for l in range(p):
@@ -397,4 +402,6 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
         offsets.append(c0 + float(smap.apply(np.array(d))))
         rms_out.append(err)
     return MultivariablePI(grid, model.input_names, model.output_names, model.input_amplitude,
-                           output_offset=offsets, output_map=maps), rms_out
+                           output_offset=offsets, output_map=maps,
+                           demagnetised=model.demagnetised,
+                           demagnetised_centre=model.demagnetised_centre), rms_out
