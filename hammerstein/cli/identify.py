@@ -144,10 +144,10 @@ def add_parser(subparsers):
                         "scored (amplitude, default), or every sample alike (none: the "
                         "full-amplitude levels decide the small loops)")
     p.add_argument("--record-start", choices=["demagnetised", "rest"], default="demagnetised",
-                   help="the state every record starts from: after the demagnetising cycle "
-                        "(demagnetise.csv) played before it (demagnetised, default), or at "
-                        "rest (rest: records taken without the cycle; the plays at 0, the "
-                        "ideal demagnetised Preisach state). The model starts there too")
+                   help="--model preisach/generalized/auto: the state every record starts "
+                        "from: after the demagnetising cycle (demagnetise.csv) played before "
+                        "it (demagnetised, default), or at rest (rest: records taken without "
+                        "the cycle; the plays at rest, the ideal demagnetised Preisach state)")
     p.add_argument("--preisach-levels", type=int, default=PREISACH_LEVELS, metavar="N",
                    help="--model preisach/auto: cells of each input's switching grid "
                         "(N (N + 1) / 2 hysterons per component; default %(default)s). Fewer: "

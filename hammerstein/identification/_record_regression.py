@@ -18,8 +18,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from hammerstein.models.hysteresis import (MultivariablePI, OutputMap, PrandtlIshlinskii,
-                                          cycle_play_states, play)
+from hammerstein.models.hysteresis import MultivariablePI, OutputMap, PrandtlIshlinskii, play
 from hammerstein.identification.lsq import TallQR, bounded_lstsq, lstsq_bounded_below, r_factor
 from hammerstein.identification.identification import (ClosedFormPI, IdentificationError,
                                                        partition_thresholds)
@@ -61,10 +60,8 @@ def _thresholds(records, splits, k, n, partition, explicit):
     return amplitude * np.arange(n) / n, "input"
 
 
-def _plays(u, r, periodic, cycle=(0.0, 0.0)):
-    """Play outputs over a record: from the state ``cycle`` (amplitude, centre [V]) leaves,
-    or on the steady loop of a periodic record."""
-    phi, final = play(u, r, None if periodic else cycle_play_states(r, *cycle))
+def _plays(u, r, periodic):
+    phi, final = play(u, r)
     if periodic:
         phi, _ = play(u, r, final)
     return phi
@@ -73,15 +70,14 @@ def _plays(u, r, periodic, cycle=(0.0, 0.0)):
 class _LeastSquares:
     """Joint least squares of every output on the play outputs of every input."""
 
-    def __init__(self, records, splits, thresholds, bounds, offset=True, cycles=None):
+    def __init__(self, records, splits, thresholds, bounds, offset=True):
         self.records, self.splits, self.r = records, splits, thresholds
         self.bounds = bounds
         self.offset = offset
         m = records[0].u.shape[0]
         self.m = m
-        cycles = [(0.0, 0.0)] * m if cycles is None else list(zip(*cycles))
         # regressors over the training samples, concatenated over the records
-        self.phi = [np.concatenate([_plays(rec.u[k], thresholds[k], s.periodic, cycles[k])[:, s.train]
+        self.phi = [np.concatenate([_plays(rec.u[k], thresholds[k], s.periodic)[:, s.train]
                                     for rec, s in zip(records, splits)], axis=1).T
                     for k in range(m)]
         self.lin = [np.concatenate([rec.u[k][s.train] for rec, s in zip(records, splits)])
@@ -356,8 +352,7 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
     m, p = model.n_inputs, model.n_outputs
     r = [_component_thresholds(model, k, model.input_amplitude[k] * np.arange(3) / 3)
          for k in range(m)]
-    cycles = None if model.demagnetised is None else (model.demagnetised, model.demagnetised_centre)
-    engine = _LeastSquares(records, splits, r, bounds or "nonnegative", cycles=cycles)
+    engine = _LeastSquares(records, splits, r, bounds or "nonnegative")
     measured = engine.y.copy()
     grid, offsets, maps, rms_out = [], [], [], []
     for l in range(p):

@@ -65,7 +65,6 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 
 from hammerstein.core.numbers import MAX_HYSTERONS, check_integer
-from hammerstein.models.demagnetisation import RECORD_STARTS, demagnetising_cycle_of_range
 from hammerstein.models.hysteresis import HysteresisError, MultivariablePI, PrandtlIshlinskii
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification._record_split import (
@@ -465,7 +464,7 @@ def _contribution(comp, engine, k):
 def identify_records(records, method="least-squares", n_hysterons=15, thresholds=None,
                      partition="auto", bounds=None, components="auto", hold_out="auto",
                      train_fraction=None, skip_seconds=None, input_names=None, output_names=None,
-                     output_map="auto", record_start="rest"):
+                     output_map="auto"):
     """Identify a p x m PI model from records, validated on held-out periods.
 
     Parameters
@@ -507,16 +506,6 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
         (:func:`loop_asymmetry` above ``ASYMMETRY_NOTE_PERCENT``), or when
         it lowers that error by more than 10 %. A note says which was chosen.
         Least squares only.
-    record_start : {"rest", "demagnetised"}
-        Where the records start: ``"rest"`` (default, the paper's virgin state:
-        every play at 0) or ``"demagnetised"``, after the demagnetising cycle
-        ``demagnetise.csv`` of ``hammerstein excitation`` over each input's
-        recorded range
-        (:func:`~hammerstein.models.demagnetisation.demagnetising_cycle_of_range`).
-        The fit itself does not depend on it (the samples before the first
-        complete branch only warm the plays up); the model keeps it as its
-        default initial state (``MultivariablePI.demagnetised``), where a drive's
-        small loops start.
 
     Returns
     -------
@@ -546,9 +535,6 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
     if output_map not in OUTPUT_MAPS:
         raise IdentificationError(f"output_map: expected one of {', '.join(OUTPUT_MAPS)}, "
                                   f"found {output_map!r}")
-    if record_start not in RECORD_STARTS:
-        raise IdentificationError(f"record_start: expected one of {RECORD_STARTS}, "
-                                  f"found {record_start!r}")
     if method == "closed-form":
         if output_map == "deadzone":
             raise IdentificationError("output_map: deadzone needs --method least-squares")
@@ -566,14 +552,13 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
                 f"training samples; expected the response to the excitation: add a record that "
                 f"excites an input it depends on, or leave it out of --outputs")
     m = records[0].u.shape[0]
-    cycles = _record_cycles(records, record_start)
     tried = ["time", "input"] if partition == "auto" and thresholds is None else [partition]
     results, errors = {}, {}
     for part in tried:
         try:
             results[part] = _one_partition(records, splits, method, n_hysterons, thresholds, part,
                                            bounds, [list(r) for r in kinds0], auto,
-                                           in_names, out_names, m, cycles)
+                                           in_names, out_names, m)
         except (IdentificationError, HysteresisError) as exc:
             errors[part] = str(exc)
     if not results:
@@ -587,12 +572,6 @@ def identify_records(records, method="least-squares", n_hysterons=15, thresholds
             f"{p} {scores[p]:.3g} %" if p in scores else f"{p} failed: {errors[p]}"
             for p in tried) + f" mean {basis} RMS of the output range)")
     fit.partition_scores = scores
-    demag = [f"{n} {a:.4g} V" + (f" around {c:.4g} V" if c else "")
-             for n, a, c in zip(in_names, *cycles) if a]
-    if demag:
-        fit.notes.append("classical PI: every record starts after the demagnetising cycle "
-                         f"(demagnetise.csv) from {', '.join(demag)}; the model's plays start "
-                         "there")
     asym = _asymmetry_notes(records, splits, out_names)
     fit.output_map = "none"
     if output_map != "none":
@@ -639,20 +618,8 @@ def _with_output_map(fit, output_map, bounds, classical, asymmetric):
     return fit
 
 
-def _record_cycles(records, record_start):
-    """``(amplitudes, centres)`` [V] of the cycle each input's records start after
-    (zeros for ``record_start="rest"``), over each input's range in the records."""
-    m = records[0].u.shape[0]
-    if record_start != "demagnetised":
-        return np.zeros(m), np.zeros(m)
-    lo = np.min([r.u.min(axis=1) for r in records], axis=0)
-    hi = np.max([r.u.max(axis=1) for r in records], axis=0)
-    amp, centre = zip(*(demagnetising_cycle_of_range(a, b) for a, b in zip(lo, hi)))
-    return np.array(amp), np.array(centre)
-
-
 def _one_partition(records, splits, method, n, thresholds, partition, bounds, kinds, auto,
-                   in_names, out_names, m, cycles=None):
+                   in_names, out_names, m):
     if partition == "auto":
         partition = "time"
     notes = []
@@ -661,7 +628,7 @@ def _one_partition(records, splits, method, n, thresholds, partition, bounds, ki
         if thresholds is None and any(u != partition for u in used):
             notes.append("inputs " + ", ".join(in_names[k] for k in range(m) if used[k] != partition)
                          + ": no complete branch, thresholds uniform in input")
-        engine = _LeastSquares(records, splits, list(r), bounds, cycles=cycles)
+        engine = _LeastSquares(records, splits, list(r), bounds)
     else:
         engine = _ClosedForm(records, splits, n, thresholds if thresholds is not None else partition)
     grid, offsets, prune_notes = _fit_structure(engine, kinds, auto, out_names, in_names,
@@ -671,9 +638,7 @@ def _one_partition(records, splits, method, n, thresholds, partition, bounds, ki
     for rec, s in zip(records, splits):
         amplitude = np.maximum(amplitude, np.ptp(rec.u[:, s.train], axis=1) / 2.0)
     amplitude = np.where(amplitude > 0, amplitude, 1.0)
-    model = MultivariablePI(grid, in_names, out_names, amplitude, output_offset=offsets,
-                            demagnetised=None if cycles is None else cycles[0],
-                            demagnetised_centre=None if cycles is None else cycles[1])
+    model = MultivariablePI(grid, in_names, out_names, amplitude, output_offset=offsets)
     predictions = [simulate_on_record(model, rec, s) for rec, s in zip(records, splits)]
     train = _window_metrics(records, splits, predictions, "train")
     val = _window_metrics(records, splits, predictions, "held_out")

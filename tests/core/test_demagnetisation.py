@@ -16,8 +16,7 @@ from hammerstein.io.datafiles import MultiRecord
 from hammerstein.models.demagnetisation import demagnetising_turning_points
 from hammerstein.models.generalized_pi import GeneralizedPI
 from hammerstein.identification.preisach_identification import PreisachIdentifier, grid_edges
-from hammerstein import InverseMultiplicativeCompensator, PerAxisInverseCompensator
-from hammerstein.identification.record_identification import identify_records
+from hammerstein.identification.identification_pipeline import classical_start_note
 from hammerstein.io.presets import PresetError, model_from_table, model_to_table
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii, cycle_play_states
 from hammerstein.models.demagnetisation import demagnetising_cycle_of_range
@@ -292,58 +291,46 @@ def test_the_cycle_leaves_classical_plays_where_the_sampled_cycle_does():
         model_from_table({**model_to_table(model), "demagnetised": [1.0, "x"]})
 
 
-def test_classical_fit_starts_where_the_records_did():
-    """A classical PI actuator (thresholds on the fit's input grid), recorded after the
-    sampled cycle without noise, identified with ``record_start="demagnetised"``: the model
-    keeps the cycle of each input's range and a 15 % loop from the start follows the truth
-    to 1e-6 of its range; identified as from rest (the paper's virgin state), the same fit
-    is off by the plays the cycle left."""
-    true = MultivariablePI([[PrandtlIshlinskii(10.0 * np.arange(6) / 6,
-                                               [1.0, 0.45, 0.3, 0.2, 0.12, 0.08])]],
-                           ["u"], ["y"])
-    t, one = hysteresis_excitation(2.5e-3, 10.0)
-    _, cycle = demagnetising_cycle(T, [10.0], frequency=2.0, rest=0.0)   # crests within 1e-5 V
-    _, demag = true.simulate(cycle)
-    rec = MultiRecord(t, one[None], true.simulate(one[None], demag)[0], ("u",), ("y",),
-                      2.5e-3, "rec")
-    v = 1.5 * np.sin(2 * np.pi * np.arange(2000) / 1000)[None]
-    y_true = true.simulate(v, demag)[0]
-    err = {}
-    for start in ("demagnetised", "rest"):
-        fit = identify_records([rec], n_hysterons=6, partition="input", record_start=start,
-                               output_map="none")
-        assert (fit.model.demagnetised is not None) == (start == "demagnetised")
-        assert any(n.startswith("classical PI: every record starts after the demagnetising")
-                   for n in fit.notes) == (start == "demagnetised")
-        err[start] = np.abs(fit.model.simulate(v)[0] - y_true).max() / np.ptp(y_true)
-    assert err["demagnetised"] < 1e-6, err     # measured 1.3e-7
-    assert err["rest"] > 1e-3, err             # measured 4.7e-3
-    with pytest.raises(IdentificationError, match="record_start"):
-        identify_records([rec], record_start="cold")
+def test_the_cycle_s_classical_plays_average_to_zero_over_a_threshold_cell_and_the_note_says_so():
+    """Why identify keeps a classical PI's plays at 0: over the threshold, the states the
+    cycle leaves form a sawtooth of period A / P within A / (4 P) of 0 (sampled here on a
+    fine grid of thresholds, stepped by hand), whose mean over any cell 1.3 V wide (15
+    thresholds over 20 V) is within 0.05 V of 0; identify's note says so for a classical
+    PI fitted on records after the cycle, and nothing for records at rest or another class."""
+    A, P = 20.0, 20
+    r = np.linspace(0.0, A, 40_001)[:-1]
+    s = np.zeros_like(r)
+    for u in demagnetising_turning_points(A, periods=P):
+        s = np.clip(s, u - r, u + r)
+    assert np.abs(s).max() <= A / (4 * P) + 1e-9 and np.abs(s).max() > 0.9 * A / (4 * P)
+    flips = r[1:-1][np.diff(np.sign(np.diff(s))) != 0]
+    np.testing.assert_allclose(np.diff(flips)[4:-1], A / (2 * P), atol=0.01)  # half periods
+    width = A / 15
+    means = [s[(r >= a) & (r < a + width)].mean() for a in np.arange(0.0, A - width, 0.05)]
+    assert np.abs(means).max() < 0.05, np.abs(means).max()
+    model = MultivariablePI([[PrandtlIshlinskii([0.0, 5.0, 10.0], [1.0, 0.3, 0.2])]],
+                            ["u"], ["y"])
+    t = np.arange(1001) * 1e-3                           # one period of a 20 V sine
+    rec = MultiRecord(t, 20.0 * np.sin(2 * np.pi * t)[None], np.zeros((1, t.size)), ("u",),
+                      ("y",), 1e-3, "rec")
+    note = classical_start_note(model, [rec])
+    assert note.startswith("classical PI: its plays start at 0") and "u 0.25 V" in note
+    assert classical_start_note(model, [rec], "rest") is None
+    assert classical_start_note(preisach(), [rec]) is None
 
 
-def test_identify_pipeline_gives_the_classical_pi_the_records_start():
-    """The pipeline (what ``identify`` runs) passes ``record_start`` to the classical fit:
-    the kept model starts after the cycle of the records' range, or at rest; its
-    compensators start there too (the multiplicative law's plays, the per-axis inverse
-    consistent with them)."""
+def test_identify_pipeline_notes_the_classical_start_after_the_cycle():
+    """The note reaches the pipeline's fit (what ``identify`` prints and stores) for a
+    classical PI from records after the cycle, and not with ``record_start="rest"``; the
+    model's plays start at 0 either way."""
     from hammerstein.identification.identification_pipeline import (PipelineOptions,
                                                                      identify_pipeline)
     true = MultivariablePI([[PrandtlIshlinskii([0.0, 2.0, 5.0], [1.0, 0.4, 0.3])]], ["u"], ["y"])
     t, u = hysteresis_excitation(2.5e-3, 10.0)
     rec = MultiRecord(t, u[None], true.simulate(u[None])[0], ("u",), ("y",), 2.5e-3, "rec")
-    for start in ("demagnetised", "rest"):
-        model = identify_pipeline([rec], PipelineOptions(model="classical",
-                                                         record_start=start)).fit.model
-        amp = demagnetising_cycle_of_range(u.min(), u.max())[0]
-        if start == "rest":
-            assert model.demagnetised is None and not np.any(model.initial_state())
-            continue
-        assert model.demagnetised.tolist() == [amp]
-        law = InverseMultiplicativeCompensator(model, check="ignore")
-        np.testing.assert_array_equal(law.initial_state()[1:], model.initial_state())
-        per_axis = PerAxisInverseCompensator(model)
-        # the per-axis inverse from its default state undoes the model from its own
-        ref = 2.0 * np.sin(2 * np.pi * np.arange(3000) / 1000)[None]
-        y, _ = model.simulate(per_axis.simulate(ref)[0])
-        np.testing.assert_allclose(y, ref, atol=1e-9)
+    for start, expected in (("demagnetised", True), ("rest", False)):
+        fit = identify_pipeline([rec], PipelineOptions(model="classical",
+                                                       record_start=start)).fit
+        assert any(n.startswith("classical PI: its plays start at 0") for n in fit.notes) \
+            == expected
+        assert fit.model.demagnetised is None and not np.any(fit.model.initial_state())
