@@ -161,7 +161,9 @@ PI_KINDS = ["multivariable", "per-axis", "static-gain", "hammerstein"]
 
 @needs_cc
 @pytest.mark.parametrize("label", PI_KINDS + ["preisach-root", "gpi-root", "pi-hammerstein-creep",
-                                              "gpi-static-gain", "preisach-multiplicative"])
+                                              "gpi-static-gain", "preisach-multiplicative",
+                                              "pi-demagnetised-multiplicative",
+                                              "pi-demagnetised-per-axis"])
 def test_float_has_no_double(label, tmp_path):
     """A float export has no double anywhere: -Wdouble-promotion -Wfloat-conversion -Werror."""
     comp = _pi_kind(label) if label in PI_KINDS else build(label)
