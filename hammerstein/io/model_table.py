@@ -211,6 +211,12 @@ def model_from_table(table, source="model"):
                                           and np.isfinite(x) for x in v)):
             problems.append(f"model.{key}: expected {len(inputs)} finite voltages [V], one per "
                             f"input, found {v!r}")
+        elif key == "demagnetised" and v is not None and min(v) < 0:
+            problems.append(f"model.demagnetised: expected the cycles' amplitudes >= 0 [V] "
+                            f"(0: none), found {v!r}")
+    if table.get("demagnetised_centre") is not None and table.get("demagnetised") is None:
+        problems.append("model.demagnetised_centre: the centre of a demagnetising cycle needs "
+                        "its amplitude, model.demagnetised (one value per input [V])")
     maps = None
     map_table = table.get("output_map")
     if map_table is not None:

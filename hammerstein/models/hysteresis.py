@@ -5,7 +5,7 @@ Every operator here has memory. Following the contract of
 initial play states and returns the final ones, so that a record simulated
 in chunks equals the same record simulated at once.
 
-Length: most of it is one class, the multivariable PI (about 480 lines),
+Length: most of it is one class, the multivariable PI (about 540 lines),
 whose methods follow the paper's equations (1)-(4) and Def. 3.2 in order;
 the scalar operator and the output map it composes are kept beside it.
 
@@ -477,6 +477,9 @@ class MultivariablePI:
                 raise HysteresisError(f"{name}: expected {m} finite voltages [V] (one per "
                                       f"input), found {v!r}")
             values[name] = arr.copy()
+        if not np.any(values["demagnetised"]) and np.any(values["demagnetised_centre"]):
+            raise HysteresisError("demagnetised_centre: the centre of a demagnetising cycle "
+                                  "needs its amplitude, demagnetised (one value per input [V])")
         if np.any(values["demagnetised"] < 0):
             raise HysteresisError(f"demagnetised: expected the demagnetising cycles' amplitudes "
                                   f">= 0 [V] (0: none), found {values['demagnetised'].tolist()}")
@@ -493,7 +496,8 @@ class MultivariablePI:
         Parameters
         ----------
         **changes
-            Constructor parameters, e.g. ``demagnetised=[20.0, 20.0]``.
+            Constructor parameters, e.g. ``demagnetised=[20.0, 20.0]``
+            (``demagnetised=None`` drops the cycle's centre too).
 
         Returns
         -------
@@ -504,6 +508,8 @@ class MultivariablePI:
         HysteresisError
             On an invalid parameter (as the constructor).
         """
+        if changes.get("demagnetised", 1) is None:      # no cycle: no centre either
+            changes.setdefault("demagnetised_centre", None)
         return dataclasses.replace(self, **changes)
 
     def demagnetising_inputs(self):

@@ -289,6 +289,15 @@ def test_the_cycle_leaves_classical_plays_where_the_sampled_cycle_does():
         classical(demagnetised=[1.0, 2.0], demagnetised_centre=[0.0])
     with pytest.raises(PresetError, match="model.demagnetised: expected 2 finite"):
         model_from_table({**model_to_table(model), "demagnetised": [1.0, "x"]})
+    with pytest.raises(PresetError, match=r"model.demagnetised: expected the cycles' amplitudes >= 0"):
+        model_from_table({**model_to_table(model), "demagnetised": [-1.0, 2.0]})
+    # a centre without its cycle is refused, not dropped (file and API)
+    table = model_to_table(model)
+    del table["demagnetised"]
+    with pytest.raises(PresetError, match="model.demagnetised_centre: the centre of a "):
+        model_from_table(table)
+    with pytest.raises(HysteresisError, match="demagnetised_centre: the centre of a "):
+        classical(demagnetised_centre=[0.0, 6.0])
 
 
 def test_the_cycle_s_classical_plays_average_to_zero_over_a_threshold_cell_and_the_note_says_so():
