@@ -489,7 +489,7 @@ def stepping_outputs(reference):
     return (still > STEPPING_SHARE) & (np.ptp(r, axis=1) > 0)
 
 
-def model_gain_note(gains, names, stepping=None):
+def model_gain_note(gains, names, stepping=None, misfit=None):
     """The note when a measured output's gain departs from its model's, or None.
 
     Parameters
@@ -503,6 +503,11 @@ def model_gain_note(gains, names, stepping=None):
         off moves in steps, the hysteresis model's error on small steps is named
         beside a changed actuator (a raster's slow axis read 1.09 on a stage that
         had not changed, 1.047 on one whose gain had fallen to 0.96).
+    misfit : str, optional
+        What the model missed in its own records when identified
+        (:func:`hammerstein.cli._hardware.identify_misfit`): the gain is then that
+        model's error as much as a changed actuator's, and the note says so instead of
+        concluding that the actuator changed.
 
     Returns
     -------
@@ -524,6 +529,11 @@ def model_gain_note(gains, names, stepping=None):
                 f"the hysteresis model's error on small steps as much as the actuator's "
                 f"(a model fresh from identify reads up to 1.09 there): judge a changed actuator "
                 f"on a circle or a sine; learn corrects either trial by trial")
+    if misfit:
+        return (head + f"the model already missed its own records when identified ({misfit}): "
+                f"this is its error at this reference's frequencies as much as a changed "
+                f"actuator; learn corrects either trial by trial, and identify again only if "
+                f"the actuator changed (temperature, load, another amplifier gain)")
     return (head + "the actuator has changed since it was identified (temperature, load, another "
             "amplifier gain); learn corrects it trial by trial, and identify on records made "
             "now (all of them, together) gives a model of the actuator as it is")

@@ -413,7 +413,8 @@ def _handle(args):
         if gains is not None:
             rows += [{"channel": n, "metric": "gain_against_model", "value": float(g), "unit": "-"}
                      for n, g in zip(outs, gains) if np.isfinite(g)]     # held outputs: none
-            drift = model_gain_note(gains, outs, stepping_outputs(ref.signal[:, :N]))
+            drift = model_gain_note(gains, outs, stepping_outputs(ref.signal[:, :N]),
+                                    getattr(plant, "identify_misfit", None))
             if drift and offset is None:
                 rate_notes.append(drift)
         if u is not None:

@@ -588,7 +588,7 @@ def _learn(args):
         first_mode_hz = None if plant_first_mode(plant) is None else plant_first_mode(plant) / T
         drift_gain = None if g_band == 0.0 else model_gain_note(
             model_gains(predicted, y, delay, settle, g_band), model.output_names,
-            stepping_outputs(ref.signal))
+            stepping_outputs(ref.signal), getattr(plant, "identify_misfit", None))
         shifted = y[:, delay:]            # aligned on the drive; the last `delay` samples unmeasured
         window = slice(min(settle, N - delay - 1), None)
         rec = error_summary(aim[:, :N - delay], shifted, window)

@@ -165,3 +165,20 @@ def test_modes_above_the_excited_band_are_named(f_max, warned):
     if warned:
         assert f"modes at {found[0]:.4g} Hz (damping 0.03), {found[1]:.4g} Hz" in line
         assert f"to {d.band_hz_[1]:.4g} Hz" in line and 225 < d.band_hz_[1] < 240
+
+
+@pytest.mark.parametrize("g_yy, model_named", [(0.835, True), (0.97, False)])
+def test_a_poor_fit_with_the_model_s_gain_off_on_the_multisines_names_the_model_not_the_amplifier(
+        g_yy, model_named):
+    """A Bouc-Wen stage outside the model classes, recorded exactly (no slow amplifier):
+    dynamics fitted at 89.6 % and the multisines showed G(0) unconstrained 0.835 on y; the
+    warning told the user to record again within the amplifier's limits. With the model's
+    gain that far off it names the model; within 5 % the amplifier advice stays."""
+    from hammerstein.identification.identification_pipeline import dynamics_fit_warning
+    summary = {"held_out_fit_percent": 89.6, "unit_dc_gain": True,
+               "dc_gain_unconstrained": [[0.96, 0.0], [0.0, g_yy]]}
+    line = dynamics_fit_warning(summary)
+    assert ("the hysteresis model draws the multisines' small reversals" in line) == model_named
+    assert ("--slew-rate" in line) == (not model_named)
+    # the constraint not imposed (G kept as identified): the amplifier advice as before
+    assert "--slew-rate" in dynamics_fit_warning({**summary, "unit_dc_gain": False})
