@@ -42,7 +42,7 @@ _LAZY = {
     "InverseMultiplicativeCompensator": "hammerstein.compensation.compensators",
     "PerAxisInverseCompensator": "hammerstein.compensation.compensators",
     "StaticGainCompensator": "hammerstein.compensation.compensators",
-    "check_reference_range": "hammerstein.compensation.compensators",
+    "check_reference_range": "hammerstein.compensation.reference_range",
     "convergence_report": "hammerstein.compensation.compensators",
     "diagonal_compensator": "hammerstein.compensation.compensators",
     "midpoint_gains": "hammerstein.compensation.compensators",

@@ -39,6 +39,7 @@ import numpy as np
 
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.compensation.inverse import kuhnen_inverse
+from hammerstein.compensation.reference_range import _direct_name, _square, check_reference_range
 from hammerstein.compensation.reference_check import check_reference
 from hammerstein.core.numbers import MAX_ITERATIONS, check_integer
 from hammerstein.exceptions import (CompensatorDivergence, CompensatorError, ConvergenceWarning,
@@ -522,75 +523,6 @@ class InverseMultiplicativeCompensator:
                               check_reference=functools.partial(check_reference_range, self.model))
 
 
-def _square(model, what):
-    if not isinstance(model, MultivariablePI):
-        raise CompensatorError(f"model: expected a MultivariablePI, found {type(model).__name__}")
-    if model.n_outputs != model.n_inputs:
-        raise CompensatorError(
-            f"model: {what} needs a square model, found {model.n_outputs} outputs "
-            f"and {model.n_inputs} inputs")
-
-
-def _direct_name(model, l):
-    return f"Gamma_{model.output_names[l]}{model.input_names[l]}"
-
-
-def check_reference_range(model: MultivariablePI, reference, warn=True):
-    """Compare a reference with the output range the model was identified on.
-
-    The identified range of output l is the peak of its direct transfer at
-    the identification amplitude, ``|Gamma_ll|`` peak ``sum_i w_i (A_l -
-    r_i)`` (docs/multivariable-model.md; a linear direct gain g gives ``|g| A_l``). Beyond it the
-    model (hence every compensator) extrapolates.
-
-    Parameters
-    ----------
-    model : MultivariablePI
-        Square model with ``input_amplitude`` (otherwise nothing is checked).
-    reference : array_like, shape (m, n_samples)
-        Reference displacements [µm].
-    warn : bool
-        Emit a :class:`RangeWarning` when some ratio exceeds 1.
-
-    Returns
-    -------
-    numpy.ndarray, shape (m,) or None
-        ``max |Yr_l| / peak_l`` per output [-]; None when the model has no
-        ``input_amplitude``.
-
-    Raises
-    ------
-    CompensatorError
-        If the model is not square.
-    HysteresisError
-        If the reference is not a finite (m, n_samples) array.
-    """
-    _square(model, "the reference range check")
-    yr = model.check_inputs(reference, "reference")
-    if model.input_amplitude is None:
-        return None
-    peaks = np.zeros(model.n_outputs)
-    for l in range(model.n_outputs):
-        comp, A = model.components[l][l], model.input_amplitude[l]
-        if isinstance(comp, PrandtlIshlinskii):
-            peaks[l] = abs(comp.peak_output(A))
-        elif comp is not None:
-            peaks[l] = abs(comp) * A
-    yr = model.gamma_reference(yr)        # the range is that of Gamma: S^-1(Yr - c)
-    reach = np.max(np.abs(yr), axis=1) if yr.shape[1] else np.zeros(model.n_outputs)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.where(peaks > 0, reach / np.where(peaks > 0, peaks, 1.0), np.where(reach > 0, np.inf, 0.0))
-    if warn and np.any(ratio > 1 + 1e-9):
-        bad = [f"{model.output_names[l]}: {reach[l]:.4g} µm > {peaks[l]:.4g} µm"
-               for l in np.flatnonzero(ratio > 1 + 1e-9)]
-        origin = getattr(model, "identified_from", None)   # core/presets.load_model
-        where = f", identified from {origin}" if origin else ""
-        warnings.warn("reference: beyond the range the model was identified on ("
-                      + "; ".join(bad) + f"{where}); the compensator extrapolates", RangeWarning,
-                      stacklevel=3)
-    return ratio
-
-
 def diagonal_compensator(model: MultivariablePI, **kwargs):
     """The inverse multiplicative compensator restricted to the direct transfers.
 
@@ -649,7 +581,8 @@ def diagonal_compensator(model: MultivariablePI, **kwargs):
     diag = MultivariablePI(comps, list(model.input_names), list(model.output_names),
                            None if model.input_amplitude is None else model.input_amplitude.copy(),
                            demagnetised=model.demagnetised,
-                           demagnetised_centre=model.demagnetised_centre)
+                           demagnetised_centre=model.demagnetised_centre,
+                           input_centre=model.input_centre)
     kwargs.setdefault("name", "diagonal")
     return InverseMultiplicativeCompensator(diag, **kwargs)
 

@@ -399,4 +399,5 @@ def _fit_output_maps(fit, bounds, n_knots=None, iterations=None):
     return MultivariablePI(grid, model.input_names, model.output_names, model.input_amplitude,
                            output_offset=offsets, output_map=maps,
                            demagnetised=model.demagnetised,
-                           demagnetised_centre=model.demagnetised_centre), rms_out
+                           demagnetised_centre=model.demagnetised_centre,
+                           input_centre=model.input_centre), rms_out

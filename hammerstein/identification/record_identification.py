@@ -635,10 +635,19 @@ def _one_partition(records, splits, method, n, thresholds, partition, bounds, ki
                                                 prune=bool(auto.any()))
     notes += prune_notes
     amplitude = np.zeros(m)
+    low, high = np.full(m, np.inf), np.full(m, -np.inf)
     for rec, s in zip(records, splits):
         amplitude = np.maximum(amplitude, np.ptp(rec.u[:, s.train], axis=1) / 2.0)
+        if s.train.any():
+            low = np.minimum(low, rec.u[:, s.train].min(axis=1))
+            high = np.maximum(high, rec.u[:, s.train].max(axis=1))
     amplitude = np.where(amplitude > 0, amplitude, 1.0)
-    model = MultivariablePI(grid, in_names, out_names, amplitude, output_offset=offsets)
+    # the range's centre, where it is off 0 V by more than 1 % of the amplitude (a unipolar
+    # stack's 0..100 V: 50 V), as the demagnetising cycle's (models/demagnetisation.py)
+    centre = np.where(np.isfinite(low) & np.isfinite(high), 0.5 * (low + high), 0.0)
+    centre = np.where(np.abs(centre) > 0.01 * amplitude, centre, 0.0)
+    model = MultivariablePI(grid, in_names, out_names, amplitude, output_offset=offsets,
+                            input_centre=centre)
     predictions = [simulate_on_record(model, rec, s) for rec, s in zip(records, splits)]
     train = _window_metrics(records, splits, predictions, "train")
     val = _window_metrics(records, splits, predictions, "held_out")

@@ -116,7 +116,9 @@ def model_from_table(table, source="model"):
         (:class:`~hammerstein.models.hysteresis.OutputMap`). Optional
         ``demagnetised`` and ``demagnetised_centre`` (one value per input [V]):
         the demagnetising cycle every input's plays start after
-        (``MultivariablePI.demagnetised``).
+        (``MultivariablePI.demagnetised``). Optional ``input_centre`` (one
+        value per input [V]): the identified input range is ``input_centre +-
+        input_amplitude``.
     source : str
         Prefix of error messages (file name).
 
@@ -204,7 +206,7 @@ def model_from_table(table, source="model"):
                                            and np.isfinite(v) for v in offset)):
         problems.append(f"model.output_offset: expected {len(outputs)} finite numbers, one per "
                         f"output, found {offset!r}")
-    for key in ("demagnetised", "demagnetised_centre"):
+    for key in ("demagnetised", "demagnetised_centre", "input_centre"):
         v = table.get(key)
         if v is not None and not (isinstance(v, list) and len(v) == len(inputs)
                                   and all(isinstance(x, (int, float)) and not isinstance(x, bool)
@@ -256,7 +258,8 @@ def model_from_table(table, source="model"):
                                input_amplitude=table.get("input_amplitude"),
                                output_offset=offset, output_map=maps,
                                demagnetised=table.get("demagnetised"),
-                               demagnetised_centre=table.get("demagnetised_centre"))
+                               demagnetised_centre=table.get("demagnetised_centre"),
+                               input_centre=table.get("input_centre"))
     except HysteresisError as exc:
         raise PresetError(f"{source}: model: {exc}") from None
 
@@ -264,7 +267,7 @@ def model_from_table(table, source="model"):
 #: Keys of a ``[model]`` table.
 MODEL_KEYS = ("inputs", "outputs", "input_unit", "output_unit", "input_amplitude",
               "thresholds", "output_offset", "components", "output_map", "demagnetised",
-              "demagnetised_centre")
+              "demagnetised_centre", "input_centre")
 #: Keys of one ``[model.output_map.<output>]`` table.
 OUTPUT_MAP_KEYS = ("knots", "slopes")
 #: Keys of one ``[model.components.<output>.<input>]`` table.
@@ -301,6 +304,8 @@ def model_to_table(model: MultivariablePI, input_unit="V", output_unit="µm"):
              "input_unit": str(input_unit), "output_unit": str(output_unit)}
     if model.input_amplitude is not None:
         table["input_amplitude"] = [float(a) for a in model.input_amplitude]
+    if model.input_centre is not None:     # the identified range: input_centre +- input_amplitude
+        table["input_centre"] = [float(c) for c in model.input_centre]
     if model.output_offset is not None:
         table["output_offset"] = [float(c) for c in model.output_offset]
     if model.demagnetised is not None:      # where the plays start (after demagnetise.csv)

@@ -344,6 +344,11 @@ class MultivariablePI:
         every play starts at 0.
     demagnetised_centre : array_like, shape (m,), optional
         Centre ``c_k`` [V] of each input's cycle; zeros by default.
+    input_centre : array_like, shape (m,), optional
+        Centre of the input range each column was identified on [V]: the range
+        is ``input_centre +- input_amplitude`` (a unipolar stack's 0..100 V is
+        50 +- 50 V); zeros by default (the paper's symmetric ranges). Used by the
+        range warnings (:func:`~hammerstein.compensation.compensators.check_reference_range`).
 
     Notes
     -----
@@ -401,6 +406,7 @@ class MultivariablePI:
     output_map: Sequence[object] | None = None
     demagnetised: np.ndarray | None = None
     demagnetised_centre: np.ndarray | None = None
+    input_centre: np.ndarray | None = None
     _flat: dict = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -432,6 +438,12 @@ class MultivariablePI:
                 raise HysteresisError(
                     f"input_amplitude: expected {m} positive values, found {amp.tolist()}")
             self.input_amplitude = amp
+        if self.input_centre is not None:
+            c = _as_finite_array(self.input_centre, "input_centre", ndim=1)
+            if c.shape != (m,):
+                raise HysteresisError(
+                    f"input_centre: expected {m} voltages [V] (one per input), found {c.tolist()}")
+            self.input_centre = None if not np.any(c) else c
         if self.output_offset is not None:
             off = _as_finite_array(self.output_offset, "output_offset", ndim=1)
             if off.shape != (p,):

@@ -57,7 +57,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from hammerstein.compensation.compensators import check_reference_range
+from hammerstein.compensation.reference_range import check_reference_range
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import HammersteinError
 from hammerstein.compensation.stability import stability_map

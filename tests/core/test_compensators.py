@@ -229,3 +229,36 @@ def test_per_axis_continues_from_any_plant_state(plant, model):
     u0, _ = comp.simulate(ref)
     y0, _ = model.component("x", "ux").simulate(u0[0], z[(h["output_index"] == 0) & (h["input_index"] == 0)])
     assert np.max(np.abs(y0[:100] - ref[0, :100])) > 1.0
+
+
+def test_a_unipolar_model_s_range_is_its_loop_and_its_rest_not_plus_minus_its_peak(tmp_path):
+    """A unipolar stack's classical PI (identified on 0..100 V, a loop from the virgin state):
+    the range warning compared |Gamma^-1(Yr)| with the loop's half-height about 0 and warned
+    on a sine at 30..210 um that the records held. The identified range is now the major
+    loop (its ends simulated here on a steady loop, independent of the check's closed form)
+    widened to the model's output at 0 V from its start, where a drive fades in from:
+    within it no warning, beyond it one naming that interval."""
+    from hammerstein.io.datafiles import MultiRecord
+    from hammerstein.io.presets import model_from_table, model_to_table
+    from hammerstein.identification.record_identification import identify_records
+    r = np.linspace(0.0, 45.0, 12)
+    w = 0.4 * np.exp(-r / 20.0)
+    w[0] *= 3
+    true = MultivariablePI([[PrandtlIshlinskii(r, w)]], ["u"], ["y"])
+    t = np.arange(30_000) * 1e-4
+    u = (50 - 50 * np.cos(2 * np.pi * t))[None]               # 0..100 V, three periods
+    rec = MultiRecord(t, u, true.simulate(u)[0], ("u",), ("y",), 1e-4, "rec")
+    model = identify_records([rec], output_map="none").model
+    assert model.input_centre.tolist() == [50.0] and model.input_amplitude.tolist() == [50.0]
+    assert model_from_table(model_to_table(model)).input_centre.tolist() == [50.0]
+    y_loop = model.simulate(np.tile(u[:, :10_000], 3))[0][0, -10_000:]   # the steady loop
+    lo, hi = min(y_loop.min(), 0.0), y_loop.max()                          # and the rest, 0 um
+    inside = np.vstack([lo + 0.02 * (hi - lo) + 0.96 * (hi - lo) * np.linspace(0, 1, 50)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert check_reference_range(model, inside)[0] <= 1.0
+    with pytest.warns(RangeWarning, match=r"y: .* µm outside 0\.\.2\d\d\.\d µm"):
+        assert check_reference_range(model, inside + 0.05 * (hi - lo))[0] > 1.0
+    # without the centre (a file from before), the same reference was "beyond"
+    with pytest.warns(RangeWarning, match=r"y: .* µm > .* µm"):
+        check_reference_range(model.replace(input_centre=None), inside)
