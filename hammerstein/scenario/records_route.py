@@ -326,10 +326,11 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     if result.creep is not None:
         meta["creep"] = result.creep.summary()
     extra = dict(result.tables() or {})
-    if files:       # as identify: drives stay within what the records spanned
-        extra["amplifier"] = records_amplifier_table(
-            recs["hysteresis"] + (recs["dynamics"] if dynamics else []) + recs["creep"],
-            list(model.input_names))
+    # as identify: drives stay within what the records spanned (the excitation's records
+    # simulated here too: the same preset and drive as identify + compensate on them)
+    extra["amplifier"] = records_amplifier_table(
+        recs["hysteresis"] + (recs["dynamics"] if dynamics else []) + (recs["creep"] if creep else []),
+        list(model.input_names))
     with tempfile.TemporaryDirectory() as tmp:   # what `identify` writes, read as `compensate` does
         path = Path(tmp) / "identified.toml"
         save_model(result.model, path, meta, extra=extra)
@@ -339,9 +340,8 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         else:
             identified = HammersteinPlant(load_model(path), float(plant.sampling_period),
                                           name="identified")
-            if files:
-                identified.amplifier = amplifier_from_table(extra["amplifier"],
-                                                            list(model.input_names), str(path))
+            identified.amplifier = amplifier_from_table(extra["amplifier"],
+                                                        list(model.input_names), str(path))
     return RecordsIdentification(identified, result, text, meta)
 
 
