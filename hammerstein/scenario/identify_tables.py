@@ -94,6 +94,21 @@ def _range(v):
                   f"excitation --range), found {short_repr(v)}")
 
 
+def _components(v):
+    """``"auto"``, ``"all"`` or ``"OUTPUT:INPUT=pi|gain|none,..."`` (the names are checked
+    against the plant's when the scenario is resolved)."""
+    text = string()(v)
+    if text.strip() in ("auto", "all"):
+        return text.strip()
+    for part in text.split(","):
+        name, _, kind = part.partition("=")
+        out, colon, inp = name.partition(":")
+        if not (colon and out.strip() and inp.strip() and kind.strip() in ("pi", "gain", "none")):
+            raise Invalid(f"expected \"auto\", \"all\" or OUTPUT:INPUT=pi|gain|none entries "
+                          f"separated by commas, found {short_repr(part.strip())}")
+    return text
+
+
 def _amplitude(v):
     if isinstance(v, list):
         return [number("V", 0)(a) for a in v]
@@ -136,7 +151,7 @@ RECORDS_IDENTIFY_FIELDS = {
     "n_hysterons": Field(integer(1, MAX_HYSTERONS), default=15),
     "partition": Field(choice("auto", "time", "input"), default="auto"),
     "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),
-    "components": Field(string(), default="auto"),
+    "components": Field(_components, default="auto"),
     "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
     "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
@@ -228,12 +243,24 @@ def identify_table(value):
                 and clean.get("model", "classical") == "classical":
             yield "bounds: only used by method = 'least-squares'"
 
+    def cross_pipeline(clean, creep):
+        """The combinations ``hammerstein identify`` refuses (its usage errors), by key."""
+        if clean.get("bounds", "none") != "none" and clean.get("method") == "closed-form":
+            yield "bounds: only used by method = 'least-squares'"
+        if clean.get("output_map") == "deadzone" and clean.get("method") == "closed-form":
+            yield "output_map: 'deadzone' only used by method = 'least-squares'"
+        if clean.get("model") in ("preisach", "generalized") and clean.get("method") == "closed-form":
+            yield (f"method: model = '{clean['model']}' is fitted by least squares; leave out "
+                   f"method = 'closed-form'")
+        if "order" in clean and "max_order" in clean:
+            yield "order: give order or max_order, not both"
+        if clean.get("creep_refits") is not None and not creep:
+            yield ("creep_refits: only used with creep_records" if clean.get("records") == "files"
+                   else "creep_refits: only used with creep = true")
+
     if isinstance(value, dict) and value.get("records") == "files":
         def cross_files(clean):
-            if clean.get("bounds", "none") != "none" and clean.get("method") == "closed-form":
-                yield "bounds: only used by method = 'least-squares'"
-            if "order" in clean and "max_order" in clean:
-                yield "order: give order or max_order, not both"
+            yield from cross_pipeline(clean, bool(clean.get("creep_records")))
             if ("order" in clean or "max_order" in clean) and not clean.get("dynamics_records"):
                 yield "order: only used with dynamics_records"
 
@@ -241,10 +268,9 @@ def identify_table(value):
                             '{ records = "files", hysteresis_records = [...] }', cross_files)
     if isinstance(value, dict) and "records" in value:
         def cross_records(clean):
-            if clean.get("bounds", "none") != "none" and clean.get("method") == "closed-form":
-                yield "bounds: only used by method = 'least-squares'"
-            if "order" in clean and "max_order" in clean:
-                yield "order: give order or max_order, not both"
+            yield from cross_pipeline(clean, clean.get("creep"))
+            if clean.get("amplitude") is not None and clean.get("range") is not None:
+                yield "amplitude: give amplitude or range (excitation --range), not both"
 
         return nested_table(value, RECORDS_IDENTIFY_FIELDS, '{ records = "excitation" }',
                             cross_records)

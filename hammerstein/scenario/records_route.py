@@ -108,6 +108,9 @@ def excitation_records(plant, spec, sensor=None):
                                       "them, found both")
         low, high = spec["range"]
         amp, centre = 0.5 * (high - low), 0.5 * (high + low)
+    if amp is not None and np.size(amp) not in (1, model.n_inputs):
+        raise IdentificationError(f"identify.amplitude: expected 1 or {model.n_inputs} values "
+                                  f"(one per input of the plant), found {np.size(amp)}")
     if amp is None:
         if model.input_amplitude is None:
             raise IdentificationError("identify.amplitude: missing, and the plant model has no "

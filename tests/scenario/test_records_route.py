@@ -89,6 +89,39 @@ def test_bad_reversals_name_the_key(value):
         identify_table({"records": "excitation", "reversals": value})
 
 
+@pytest.mark.parametrize("table, key, message", [
+    ({"model": "preisach", "method": "closed-form"}, "method", "fitted by least squares"),
+    ({"model": "generalized", "method": "closed-form"}, "method", "fitted by least squares"),
+    ({"output_map": "deadzone", "method": "closed-form"}, "output_map", "only used by method"),
+    ({"creep_refits": 1}, "creep_refits", "only used with creep = true"),
+    ({"components": "bogus"}, "components", "OUTPUT:INPUT=pi|gain|none entries"),
+    ({"components": "x:ux=maybe"}, "components", "OUTPUT:INPUT=pi|gain|none entries"),
+    ({"amplitude": 10.0, "range": [-10.0, 10.0]}, "amplitude", "not both")])
+def test_what_identify_refuses_the_table_refuses_when_validated(table, key, message):
+    """Every combination here is a usage error of ``hammerstein identify`` (exit 2); a
+    scenario's table accepted them, then ignored the first four without a word or failed
+    at run time in the command's words. All are now named by their key when the file is
+    validated, every problem at once."""
+    from hammerstein.exceptions import NestedInvalid
+    with pytest.raises(NestedInvalid) as info:
+        identify_table({"records": "excitation", **table})
+    assert [k for k, _ in info.value.problems] == [key]
+    assert message in info.value.problems[0][1]
+    assert identify_table({"records": "excitation", "creep": True, "creep_refits": 1})
+    assert identify_table({"records": "excitation", "components": "x:uy=none, y:ux=gain"})
+    with pytest.raises(NestedInvalid, match="only used with creep_records"):
+        identify_table({"records": "files", "hysteresis_records": ["a.csv"], "creep_refits": 2})
+
+
+def test_an_amplitude_per_input_of_another_plant_is_named():
+    """Three amplitudes for a 2-input plant gave numpy's broadcasting message."""
+    from hammerstein.exceptions import IdentificationError
+    with pytest.raises(IdentificationError, match=r"identify.amplitude: expected 1 or 2 values "
+                                                  r"\(one per input of the plant\), found 3"):
+        excitation_records(load_plant("rakotondrabe-2dof"),
+                           identify_table({"records": "excitation", "amplitude": [10.0, 8.0, 5.0]}))
+
+
 def test_range_and_slew_rate_keys_play_the_commands_records(tmp_path, capsys):
     """``range`` and ``slew_rate`` are ``excitation --range`` and ``--slew-rate``: the
     scenario plays the very inputs the command writes (a unipolar 0-20 V amplifier here)."""
