@@ -285,6 +285,7 @@ def resolve_scenario(spec, cache=None):
     source, base, problems, cases = str(spec.path), spec.path.parent, [], []
     run = ResolveContext(base, IdentificationCache() if cache is None else cache)
     built, warned = {}, {}   # canonical table and plant -> (compensator, error, identified), warnings
+    failed = {}              # canonical table and plant -> (error, the cases using it): said once
     for case in spec.cases:
         model, context = None, run.for_case()
         if case.model_spec is not None:
@@ -310,8 +311,8 @@ def resolve_scenario(spec, cache=None):
             else:                       # the build's identifications belong to every case using it
                 context.identified.extend(built[key][2])
             comp, error, _ = built[key]
-            if error is not None:
-                problems.append(f"{source}: {case.where}.compensator: {error}")
+            if error is not None:     # one line per table that failed, naming every case using it
+                failed.setdefault(key, (error, []))[1].append(f"{case.where}.compensator")
                 continue
             caught += list(warned[key])
         extra = dynamics_warning(case, base)
@@ -321,6 +322,7 @@ def resolve_scenario(spec, cache=None):
                        identified=list(context.identified),
                        compensator_spec=shown_spec(case.compensator_spec, comp))
         cases.append(replace(case, notes=mode_notes(case)))
+    problems += [f"{source}: {', '.join(wheres)}: {error}" for error, wheres in failed.values()]
     smap = None
     if spec.stability_map is not None and spec.stability_plant is not None:
         smap = stability_map_frame(spec.stability_map, spec.stability_plant, spec.compensator_top,

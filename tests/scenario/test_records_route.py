@@ -397,3 +397,23 @@ def test_every_kind_runs_on_a_model_identified_from_files(hysteresis_files, kind
     report = (Path(out) / "report.md").read_text()
     assert "Identified from the measured record files" in report
     assert "by a sine on each input" not in report
+
+
+def test_a_shared_identify_table_that_fails_is_named_once_with_every_case_using_it(tmp_path):
+    """A top-level [compensator] whose identification fails was reported once per case (three
+    times for three cases); one line now names the table's cases, and the run writes nothing."""
+    from hammerstein.exceptions import ScenarioError
+    from hammerstein.scenario.resolve import load_scenario
+    path = tmp_path / "s.toml"
+    path.write_text(
+        'name = "dup"\n[plant]\npreset = "rakotondrabe-2dof"\n[compensator]\nkind = "hammerstein"\n'
+        'model = "identified"\ndynamics = "identified"\n'
+        'identify = { records = "excitation", amplitude = [10.0, 8.0, 5.0] }\n'
+        + "".join(f'[[cases]]\nname = "c{i}"\nreference = {{ kind = "circle", radius = 5.0, '
+                  f'frequency = 20.0, periods = 3 }}\n' for i in range(3)))
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    lines = str(info.value).splitlines()
+    assert len([ln for ln in lines if "identify.amplitude" in ln]) == 1
+    assert "cases[0].compensator, cases[1].compensator, cases[2].compensator: identify.amplitude" \
+        in str(info.value)
