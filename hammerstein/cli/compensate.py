@@ -265,7 +265,10 @@ def _handle(args):
         cols = dict(zip(plant.hysteresis.input_names, drive.inputs))
         units = ", ".join(plant.hysteresis.input_names) + " [V]"
         shaped_cols = ""
-        if any("reference shaped" in line for line in drive.shaped):
+        # the reference the drive follows differs from the one asked (shaped into the limits,
+        # or its start-up corrected): its columns, which the exported C is fed
+        if any(w in line for line in drive.shaped
+               for w in ("reference shaped", "corrected in the reference")):
             names = [f"{n}_shaped" for n in plant.hysteresis.output_names]
             cols.update(zip(names, drive.reference))
             shaped_cols = (f"\n{' '.join(names)} [µm]: the shaped reference the drive follows "

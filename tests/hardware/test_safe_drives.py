@@ -747,3 +747,31 @@ def test_a_staircase_whose_steps_alone_are_shaped_is_not_told_it_is_held_back(tm
     k = np.arange(len(d))
     held = (k % n > 0.3 * n) & (k % n < 0.7 * n) & (k >= n)     # mid-hold: levels reached
     assert np.max(np.abs(d["x_shaped"].to_numpy()[held] - x[: len(d)][held])) < 0.05
+
+
+def test_a_start_up_corrected_in_the_reference_writes_the_reference_the_drive_follows(tmp_path):
+    """A held axis's start-up corrected in the reference (and nothing else shaped; coupled-2dof,
+    y held at 40 µm beside a 50 Hz x swing): the drive file had no <output>_shaped columns, so
+    the exported C fed the faded reference the docs describe was 7.9 V off on the held input
+    of an outside check's three-axis stage. The columns are now written whenever the
+    reference was changed, and they are the reference the drive is the compensator's for
+    (the Python route's)."""
+    from hammerstein.cli._hardware import load_actuator, load_reference
+    from hammerstein.scenario.hardware_route import compensate_reference
+    preset = Path(__file__).resolve().parents[2] / "scenarios" / "presets" / "coupled-2dof.toml"
+    plant = load_actuator(str(preset))
+    n = int(round(8 / 50 / plant.sampling_period))
+    t = np.arange(n) * plant.sampling_period
+    ref = tmp_path / "held.csv"
+    pd.DataFrame({"t": t, "x": 10 * np.cos(2 * np.pi * 50 * t), "y": np.full(n, 40.0)}).to_csv(
+        ref, index=False)
+    _compensate([preset, "--reference", ref, "--period", "0.02", "--out", tmp_path / "d.csv"])
+    text = (tmp_path / "d.csv").read_text()
+    assert "start-up corrected in the reference" in text and "reference shaped" not in text
+    rows = [ln for ln in text.splitlines() if ln and not ln.startswith("#")]
+    assert rows[0].split(",")[-2:] == ["x_shaped", "y_shaped"]
+    shaped = np.array([[float(v) for v in ln.split(",")[-2:]] for ln in rows[1:]]).T
+    reference = load_reference(str(ref), plant, "t", None, 0.02)
+    _, drive = compensate_reference(plant, reference.signal, reference.period_samples)
+    np.testing.assert_allclose(shaped, drive.reference, rtol=1e-12, atol=1e-9)
+    assert np.abs(shaped - reference.signal).max() > 1.0     # the held y's start-up: 2.47 µm
