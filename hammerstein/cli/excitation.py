@@ -268,7 +268,11 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
     by_kind = {}
     for r in records:
         by_kind.setdefault(r.kind, []).append(f"{r.name}.csv")
-    dur = {r.kind: r.time.size * T for r in records}
+    spans = {}                   # per kind, the files' durations: an input whose range is
+    for r in records:            # off 0 V ramps from rest and back, and its files are longer
+        spans.setdefault(r.kind, []).append(r.time.size * T)
+    dur = {k: (f"{min(v):g} s" if np.isclose(min(v), max(v), rtol=1e-9, atol=0.0)
+               else f"{min(v):g}-{max(v):g} s") for k, v in spans.items()}
     tops = sorted({r.f_max for r in records if r.kind == "multisine" and r.f_max is not None})
     reach = (f" up to {tops[-1]:.4g} Hz" if len(tops) == 1
              else f" up to {tops[0]:.4g}-{tops[-1]:.4g} Hz" if tops else "")
@@ -298,22 +302,22 @@ def readme_text(records, names, amplitude, sampling_period, reversals=(), centre
            f"{', '.join(f'{100 * b:.0f}' for b in reversals)} %, from the amplitude down to it "
            f"and back, then from minus the amplitude up to minus it and back (half-cosine "
            f"moves at three times the sine's largest slew)" if len(reversals) else "")
-        + f" | {dur['hysteresis']:g} s |",
+        + f" | {dur['hysteresis']} |",
         f"| {', '.join(by_kind['multisine'])} | linear dynamics (estimation) | random-phase "
         f"multisine{reach} at {_multisine_share(records)} of the amplitude | "
-        f"{dur['multisine']:g} s |",
+        f"{dur['multisine']} |",
         f"| {', '.join(by_kind['multisine-validation'])} | linear dynamics (held out: chooses "
-        f"the order) | the same band, other phases | {dur['multisine-validation']:g} s |",
+        f"the order) | the same band, other phases | {dur['multisine-validation']} |",
         f"| {', '.join(by_kind['creep'])} | creep | staircase "
         + (f"from the amplifier's rest to the range's far end and back, "
            f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *UNIPOLAR_STAIRCASE))} % of the way"
            if centred else
            f"{', '.join(f'{100 * a:.0f}' for a in (0.0, *STAIRCASE_LEVELS))} % of the amplitude")
-        + f" | {dur['creep']:g} s |",
+        + f" | {dur['creep']} |",
         *([f"| {', '.join(by_kind['demagnetise'])} | the demagnetised state, before every file "
            f"and every drive | every input at once: a sine decaying from the amplitude to "
            f"{'the middle of the range, then back to rest and 1 s there' if centred else '0 V, then 1 s at 0 V'}"
-           f" | {dur['demagnetise']:g} s |"] if "demagnetise" in by_kind else []),
+           f" | {dur['demagnetise']} |"] if "demagnetise" in by_kind else []),
         "", *_slew_lines(records, names, T, band), "## What to measure", "",
         *(["0. Before each file below, and later before every drive you play (`hammerstein "
            "compensate`, `learn`), play `demagnetise.csv` (nothing to record). A model starts "

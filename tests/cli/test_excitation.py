@@ -407,7 +407,14 @@ def test_each_input_may_have_its_own_range(tmp_path, capsys):
                 u = data[:, header.index(name)]
                 assert np.ptp(u) > 0.9 * (high - low)
                 assert abs(u[0]) < 1e-4 * (high - low) and u[-1] == 0.0      # from rest, back
-    assert "range [-10, 10], [0, 100] V" in (out / "README.md").read_text()
+    readme = (out / "README.md").read_text()
+    assert "range [-10, 10], [0, 100] V" in readme
+    # the unipolar input's files ramp from rest and back and are longer: the README's table
+    # gives each kind's shortest to longest file (it gave the last file's alone)
+    for kind in ("hysteresis", "multisine"):
+        sizes = [_read(out / f"{kind}-{n}.csv")[1].shape[0] * T for n in ("ux", "uy")]
+        row = next(ln for ln in readme.splitlines() if ln.startswith(f"| {kind}-ux.csv"))
+        assert row.endswith(f"| {min(sizes):g}-{max(sizes):g} s |"), row
 
 
 @pytest.mark.parametrize("argv, words", [
