@@ -443,9 +443,8 @@ class InverseMultiplicativeCompensator:
         HysteresisError
             On a wrong shape or non-finite values.
         """
-        if initial_state is None:
-            return np.concatenate([np.zeros(self.n_states - self.model.n_hysterons),
-                                   self.model.initial_state()])
+        if initial_state is None:       # the fused law's own rest state
+            return self.packed_law().rest_state()
         return state_vector(initial_state, self.n_states)
 
     def simulate(self, reference, initial_state=None):
