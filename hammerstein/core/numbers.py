@@ -168,20 +168,23 @@ def integer_problem(v, minimum=0, maximum=None):
     Returns
     -------
     str or None
-        ``"expected an integer >= 1, found 0"`` or
-        ``"expected an integer 1..100, found 1000000000"``.
+        ``"expected an integer >= 1, found 0"`` (no maximum) or
+        ``"expected an integer 1..100, found 0"``: the bounds there are, whichever is missed.
 
     Examples
     --------
     >>> integer_problem(10**9, 1, MAX_ITERATIONS)
     'expected an integer 1..100, found 1000000000'
+    >>> integer_problem(0, 1, MAX_ITERATIONS)
+    'expected an integer 1..100, found 0'
     >>> integer_problem(3, 1, 100) is None
     True
     """
-    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Integral) or v < minimum:
-        return f"expected an integer >= {minimum}, found {_short(v)}"
-    if maximum is not None and v > maximum:
-        return f"expected an integer {minimum}..{maximum}, found {_short(int(v))}"
+    bounds = f">= {minimum}" if maximum is None else f"{minimum}..{maximum}"
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Integral):
+        return f"expected an integer {bounds}, found {_short(v)}"
+    if v < minimum or (maximum is not None and v > maximum):   # both bounds, either side
+        return f"expected an integer {bounds}, found {_short(int(v))}"
     return None
 
 

@@ -188,7 +188,8 @@ def integer(minimum=0, maximum=None):
     """
     def check(v):
         if not isinstance(v, int) or isinstance(v, bool):   # a TOML value is a Python int
-            raise Invalid(f"expected an integer >= {minimum}, found {short_repr(v)}")
+            bounds = f">= {minimum}" if maximum is None else f"{minimum}..{maximum}"
+            raise Invalid(f"expected an integer {bounds}, found {short_repr(v)}")
         problem = integer_problem(v, minimum, maximum)   # the API's checker (core/numbers.py)
         if problem:
             raise Invalid(problem)

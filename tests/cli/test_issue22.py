@@ -723,9 +723,9 @@ def _static_model():
     (10 ** 9, "iterations: expected an integer 1..100, found 1000000000"),
     (10 ** 400, "found an integer of 401 digits"),
     (101, "1..100"),
-    (0, "iterations: expected an integer >= 1, found 0"),
-    (2.0, "expected an integer >= 1, found 2.0"),
-    (True, "expected an integer >= 1, found True"),
+    (0, "iterations: expected an integer 1..100, found 0"),
+    (2.0, "expected an integer 1..100, found 2.0"),
+    (True, "expected an integer 1..100, found True"),
 ])
 def test_16_api_iterations_are_capped_like_the_scenario_files(value, fragment):
     from hammerstein.compensation.compensators import InverseMultiplicativeCompensator

@@ -129,7 +129,7 @@ SCENARIOS = {
                               "(did you mean 'sine'?)",
     "unknown-top-key": "nmae: unknown key (did you mean 'name'?)",
     "zero-frequency": "cases[0].drive.frequency: expected a number > 0 [Hz], found 0.0",
-    "zero-iterations": "compensator.iterations: expected an integer >= 1, found 0",
+    "zero-iterations": "compensator.iterations: expected an integer 1..100, found 0",
     "zero-radius": "cases[0].reference.radius: expected a number > 0 [µm], found 0",
     # issue 13: bounds, names, what validate can know
     "..": "name: missing, and the file name '..' is not usable as the report directory name",

@@ -59,7 +59,7 @@ reference = { kind = "sine", output = "x", amplitude = 50.0, frequency = 50.0, p
                      "compensator.identify.sensr: unknown key (did you mean 'sensor'?)",
                      "compensator.identify.method: expected one of 'closed-form', 'least-squares', "
                      "found 'least-square' (did you mean 'least-squares'?)",
-                     "compensator.identify.periods: expected an integer >= 2",
+                     "compensator.identify.periods: expected an integer 2..1000",
                      "compensator.identify.frequency: missing (required)",
                      "compensator.gain: expected 'secant', 'midpoint'"]:
         assert expected in text
