@@ -298,13 +298,22 @@ def _reference_transform_parts(model, precision, N):
     return decls, offset, code
 
 
+#: relative tolerance of ``STATUS_LIMIT`` per precision, times the largest |bound| of the
+#: input's range (at least 1 V): a voltage clamped by less is rounding, not a limit. A
+#: per-axis inverse resting on a unipolar stage's 0 V computes -2e-14 V there; it was
+#: flagged at every return to rest (the clamp itself is kept: the output equals Python's).
+LIMIT_TOLERANCE = {"double": 1e-9, "float": 1e-5}
+
+
 def _limits_code(limits, m, T, precision, N):
     """(declarations, output statements, init statements) of the amplifier limits.
 
     The law's own state keeps the voltages it computed (as in Python); the
     amplifier then clips them to the range and limits their slew from the
     last voltage it delivered (``s->amp``, at rest the range value nearest 0):
-    ``x = clip(u, lo, hi)``, ``amp += clip(x - amp, -S T, S T)``.
+    ``x = clip(u, lo, hi)``, ``amp += clip(x - amp, -S T, S T)``. A clamp is
+    flagged (``STATUS_LIMIT``) when it moved the voltage by more than
+    :data:`LIMIT_TOLERANCE` (rounding), the rule of the Python drive's notes.
     """
     if limits is None:
         return [], [f"""    for (k = 0; k < {N}_N_INPUTS; ++k) {{
@@ -315,23 +324,33 @@ def _limits_code(limits, m, T, precision, N):
     decls, code, init = [], [f"    for (k = 0; k < {N}_N_INPUTS; ++k) s->u[k] = u[k];",
                              "    /* amplifier: range clip, then slew limit from the last delivered voltage */"], []
     zero = "0.0" if precision == "double" else "0.0f"
+    flag = f"status |= {N}_STATUS_LIMIT"
     for k in range(m):
         rest = float(min(max(0.0, lo[k]), hi[k]))
         init.append(f"    s->amp[{k}] = {_lit(rest, precision)};")
         code.append(f"    {{  /* input {k} */")
         code.append(f"        {N}_real x = u[{k}], d;")
+        bounded = [abs(v) for v in (lo[k], hi[k]) if np.isfinite(v)]
+        if bounded or np.isfinite(slew[k]):
+            tol = LIMIT_TOLERANCE[precision] * max([1.0] + bounded)
+            decls.append(f"static const {N}_real {N}_u_tol{k} = {_lit(tol, precision)};"
+                         "  /* a clamp by less is rounding: not flagged [V] */")
         if np.isfinite(lo[k]):
             decls.append(f"static const {N}_real {N}_u_min{k} = {_lit(lo[k], precision)};  /* [V] */")
-            code.append(f"        if (x < {N}_u_min{k}) {{ x = {N}_u_min{k}; status |= {N}_STATUS_LIMIT; }}")
+            code.append(f"        if (x < {N}_u_min{k}) {{ if (x < {N}_u_min{k} - {N}_u_tol{k}) {flag};"
+                        f" x = {N}_u_min{k}; }}")
         if np.isfinite(hi[k]):
             decls.append(f"static const {N}_real {N}_u_max{k} = {_lit(hi[k], precision)};  /* [V] */")
-            code.append(f"        if (x > {N}_u_max{k}) {{ x = {N}_u_max{k}; status |= {N}_STATUS_LIMIT; }}")
+            code.append(f"        if (x > {N}_u_max{k}) {{ if (x > {N}_u_max{k} + {N}_u_tol{k}) {flag};"
+                        f" x = {N}_u_max{k}; }}")
         if np.isfinite(slew[k]):
             decls.append(f"static const {N}_real {N}_u_step{k} = {_lit(slew[k] * T, precision)};"
                          f"  /* slew rate {slew[k]:g} V/s x T [V] */")
             code += [f"        d = x - s->amp[{k}];",
-                     f"        if (d > {N}_u_step{k}) {{ x = s->amp[{k}] + {N}_u_step{k}; status |= {N}_STATUS_LIMIT; }}",
-                     f"        else if (d < -{N}_u_step{k}) {{ x = s->amp[{k}] - {N}_u_step{k}; status |= {N}_STATUS_LIMIT; }}"]
+                     f"        if (d > {N}_u_step{k}) {{ if (d > {N}_u_step{k} + {N}_u_tol{k}) {flag};"
+                     f" x = s->amp[{k}] + {N}_u_step{k}; }}",
+                     f"        else if (d < -{N}_u_step{k}) {{ if (d < -{N}_u_step{k} - {N}_u_tol{k}) {flag};"
+                     f" x = s->amp[{k}] - {N}_u_step{k}; }}"]
         else:
             code.append(f"        d = {zero};")
         code += ["        (void)d;", f"        s->amp[{k}] = x;", f"        voltage[{k}] = x;", "    }"]

@@ -199,7 +199,8 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
  * voltage[{N}_N_INPUTS]: the amplifier inputs [V] of sample k ({ins}).
  * The first {N}_PREVIEW calls return the rest voltages (0 V) while the preview fills.
  * Return value: 0, or the bits
- *   {N}_STATUS_LIMIT    ({STATUS_LIMIT}): an amplifier limit clamped a voltage this sample;
+ *   {N}_STATUS_LIMIT    ({STATUS_LIMIT}): an amplifier limit clamped a voltage this sample (by more
+ *       than rounding, {N}_u_tol* in the .c);
  *   {N}_STATUS_DIVERGED ({STATUS_DIVERGED}): the law diverged (a non-finite voltage or one beyond
  *       the divergence bound): the voltages are held at their last valid values, and every
  *       later call returns this bit, until {N}_init.

@@ -18,6 +18,7 @@ from hammerstein import MultivariablePI, PerAxisInverseCompensator, PrandtlIshli
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import RangeWarning
 from hammerstein.export import STATUS_LIMIT, STATUS_RANGE, AmplifierLimits, export_c
+from hammerstein.export.c_base import LIMIT_TOLERANCE
 
 from conftest import Harness, needs_cc
 
@@ -82,3 +83,35 @@ def test_unipolar_reference_in_range_is_not_flagged(kind, tmp_path):
         assert np.all((status[beyond] & STATUS_LIMIT) != 0)     # clamped to 100 V as well
     else:
         assert np.sum((status & STATUS_RANGE) != 0) > 100
+
+
+@needs_cc
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_limit_bit_ignores_rounding_at_rest_on_zero_volts(precision, tmp_path):
+    """A per-axis inverse after a demagnetising cycle computes -2e-14 V, not 0, each time
+    the reference returns to rest: clamped to 0 V but not flagged (it was, at every
+    return, in double and float). A reference below the rest output asks for really
+    negative voltages: those are flagged, every one of them."""
+    model = unipolar_model().replace(demagnetised=[AMPLITUDE, AMPLITUDE],
+                                     demagnetised_centre=[AMPLITUDE, AMPLITUDE])
+    comp = PerAxisInverseCompensator(model)
+    rest, _ = model.simulate(np.zeros((2, 1)))
+    t = np.arange(3000) * T
+    wave = 1 - np.cos(2 * np.pi * 100 * t)          # back to rest every 200 samples
+    yr = rest + np.vstack([3.0 * wave, 2.0 * wave])
+    yr[0, 2000:] -= 0.5 * wave[2000:]                # x's crest lowered, then below rest
+    yr[0, 2000:] = np.where(wave[2000:] < 0.3, rest[0, 0] - 0.2 * wave[2000:], yr[0, 2000:])
+    u_py, _ = comp.simulate(yr)
+    u_py = np.asarray(u_py)
+    rounding = (u_py < 0) & (u_py > -1e-9)
+    assert np.any(rounding[:, :2000])               # the case: a rounding below 0 V at rest
+    tol = LIMIT_TOLERANCE[precision] * 100.0        # of the range's largest bound
+    beyond = np.any(u_py < -tol, axis=0)
+    assert beyond.sum() > 50
+    clear = ~np.any(np.abs(u_py + tol) < 0.5 * tol, axis=0)    # float rounding near -tol
+    h = Harness(export_c(comp, "unr", T, precision=precision, limits=UNIPOLAR), tmp_path / "h")
+    u_c, status, _ = h.run(yr.astype(np.float32) if precision == "float" else yr)
+    assert u_c.min() >= 0.0
+    limited = (status & STATUS_LIMIT) != 0
+    assert np.array_equal(limited[clear], beyond[clear]), (
+        np.flatnonzero(limited & ~beyond)[:5], np.flatnonzero(beyond & ~limited)[:5])
