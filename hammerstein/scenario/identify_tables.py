@@ -131,6 +131,13 @@ IDENTIFY_FIELDS = {
 }
 
 
+def _train_fraction(v):
+    if isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= 1:
+        return float(v)
+    raise Invalid(f"expected a fraction in (0, 1] (of each record trained on; the rest is held "
+                  f"out), found {short_repr(v)}")
+
+
 #: Schema of an ``identify`` table with ``records = "excitation"``: the records of
 #: ``hammerstein excitation`` played through the plant, identified by the pipeline of
 #: ``hammerstein identify`` (:func:`hammerstein.identification.identification_pipeline.identify_pipeline`)
@@ -157,6 +164,9 @@ RECORDS_IDENTIFY_FIELDS = {
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
     "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
     "record_start": Field(choice("demagnetised", "rest"), default="demagnetised"),
+    "hold_out": Field(choice("auto", "none"), default="auto"),   # as --hold-out
+    "train_fraction": Field(_train_fraction),              # as --train-fraction
+    "skip": Field(number("s", 0, exclusive=False)),        # as --skip (burn-in)
     "creep": Field(boolean(), default=False),              # identify the creep from staircases
     "creep_refits": Field(integer(0, 5)),                  # default: by class, as identify
     "order": Field(integer(1, 50)),                        # of G; default chosen on held-out data
@@ -194,7 +204,8 @@ def _delay(v):
 #: Options of the identification pipeline shared by both records routes.
 _PIPELINE_KEYS = ("model", "method", "n_hysterons", "partition", "bounds", "components",
                   "output_map", "preisach_levels", "threshold_spacing", "level_weighting",
-                  "record_start", "creep_refits", "order", "max_order")
+                  "record_start", "creep_refits", "order", "max_order", "hold_out",
+                  "train_fraction", "skip")
 
 #: Schema of an ``identify`` table with ``records = "files"``: the user's measured records
 #: (the files ``hammerstein identify`` takes: the hysteresis records, the broadband records of
@@ -254,6 +265,8 @@ def identify_table(value):
                    f"method = 'closed-form'")
         if "order" in clean and "max_order" in clean:
             yield "order: give order or max_order, not both"
+        if clean.get("train_fraction") is not None and clean.get("hold_out") == "none":
+            yield "train_fraction: give train_fraction or hold_out = 'none', not both"
         if clean.get("creep_refits") is not None and not creep:
             yield ("creep_refits: only used with creep_records" if clean.get("records") == "files"
                    else "creep_refits: only used with creep = true")

@@ -232,7 +232,8 @@ def _pipeline_options(spec, name):
         threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
         record_start=spec["record_start"], preisach_levels=spec["preisach_levels"],
         output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
-        creep_refits=spec.get("creep_refits"), name=name)
+        creep_refits=spec.get("creep_refits"), hold_out=spec["hold_out"],
+        train_fraction=spec.get("train_fraction"), skip=spec.get("skip"), name=name)
 
 
 def identified_from_records(plant, spec, dynamics, cache=None, base_dir=None):

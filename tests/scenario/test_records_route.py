@@ -417,3 +417,41 @@ def test_a_shared_identify_table_that_fails_is_named_once_with_every_case_using_
     assert len([ln for ln in lines if "identify.amplitude" in ln]) == 1
     assert "cases[0].compensator, cases[1].compensator, cases[2].compensator: identify.amplitude" \
         in str(info.value)
+
+
+@pytest.mark.parametrize("argv, table", [
+    ([], {}),
+    (["--hold-out", "none"], {"hold_out": "none"}),
+    (["--train-fraction", "0.7", "--skip", "0.5"], {"train_fraction": 0.7, "skip": 0.5}),
+    (["--train-fraction", "1"], {"train_fraction": 1}),
+    (["--model", "generalized", "--threshold-spacing", "power", "--max-order", "8"],
+     {"model": "generalized", "threshold_spacing": "power", "max_order": 8}),
+    (["--method", "closed-form", "--partition", "input", "--thresholds", "9"],
+     {"method": "closed-form", "partition": "input", "n_hysterons": 9}),
+])
+@pytest.mark.parametrize("route", ["excitation", "files"])
+def test_a_table_reaches_the_pipeline_with_the_options_identify_gives_it(argv, table, route):
+    """The same option on the command line and in an ``identify`` table gives the pipeline
+    the same options (name and unit aside). ``hold_out``, ``train_fraction`` and ``skip``
+    were options of ``identify`` only: a table could not hold out nothing, split elsewhere,
+    or skip a burn-in."""
+    from dataclasses import replace
+    from hammerstein.cli.identify import _options
+    from hammerstein.cli.main import build_parser
+    from hammerstein.scenario.records_route import _pipeline_options
+    args = build_parser().parse_args([
+        "identify", "r.csv", "--inputs", "ux", "--outputs", "x", "--time", "t", "--out", "m.toml",
+        *argv])
+    n = 9 if "--thresholds" in argv else 15
+    cli = replace(_options(args, n, None), name="m", output_unit="µm")
+    base = {"records": "excitation"} if route == "excitation" else \
+        {"records": "files", "hysteresis_records": ["r.csv"], "dynamics_records": ["d.csv"]}
+    assert _pipeline_options(identify_table({**base, **table}), "m") == cli
+
+
+def test_a_table_refuses_a_training_fraction_with_nothing_held_out():
+    from hammerstein.exceptions import NestedInvalid
+    with pytest.raises(NestedInvalid, match="train_fraction: give train_fraction or hold_out"):
+        identify_table({"records": "excitation", "hold_out": "none", "train_fraction": 0.5})
+    with pytest.raises(NestedInvalid, match=r"train_fraction: expected a fraction in \(0, 1\]"):
+        identify_table({"records": "files", "hysteresis_records": ["a.csv"], "train_fraction": 0})
