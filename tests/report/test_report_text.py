@@ -170,3 +170,30 @@ def test_order_words_list_every_candidate_and_the_reduction():
     words = order_words(tried)
     assert words == ("order 2; held-out (validation) fit by candidate order: 1: 50.00 %, "
                      "2: 99.00 %, 3: rejected (unstable)")
+
+
+LONG_CASE = """
+name = "long"
+[plant]
+preset = "rakotondrabe-2dof"
+dynamics = false
+[[cases]]
+name = "slow-ux"
+drive = { kind = "sine", input = "ux", amplitude = 5.0, frequency = 1.0, periods = 12 }
+"""
+
+
+def test_time_series_keep_every_sample_time_of_a_long_case(tmp_path):
+    """A 12 s case at the preset's sampling period: every time stamp of its time series is
+    its own and equal to the case's time to 1e-9 s, and the drive is the case's to 1e-8
+    of its amplitude (6 significant digits wrote 10.0001 s for two samples)."""
+    import pandas as pd
+    from hammerstein.io.presets import load_plant
+    _run(tmp_path, LONG_CASE, "long")
+    frame = pd.read_csv(tmp_path / "out" / "long" / "timeseries-slow-ux.csv")
+    T = load_plant("rakotondrabe-2dof", dynamics=False).sampling_period
+    t = frame["time_s"].to_numpy()
+    assert t[-1] > 11.0 and np.all(np.diff(t) > 0.5 * T)
+    assert np.max(np.abs(t - T * np.arange(t.size))) < 1e-9
+    ux = frame["ux_V"].to_numpy()
+    assert np.max(np.abs(ux - 5.0 * np.sin(2 * np.pi * t))) < 5e-8 * 5.0
