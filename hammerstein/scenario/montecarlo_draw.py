@@ -104,8 +104,9 @@ def case_plant(study, i):
         generalised PI's play weights, a Preisach model's mu_ij: a factor
         below 0 is taken as 0 for an unsigned Preisach model, whose weights
         must stay non-negative); a component's reversible polynomial and a
-        linear gain component are scaled by ``f_cross[l, k]``, its offset
-        is kept. The bending modes' natural frequencies and damping ratios
+        linear gain component are scaled by ``f_cross[l, k]``; a generalised
+        PI's or Preisach model's offset moves so that the component rests
+        where the nominal one does (its plays and relays rest away from 0). The bending modes' natural frequencies and damping ratios
         are scaled by their factors and re-sampled (zero-order hold,
         :func:`sampled_modes`; the nominal sampled modes when neither is
         varied); state-space dynamics get the factors mode by mode
@@ -151,16 +152,31 @@ def _scaled(c, fw, g):
     if isinstance(c, PrandtlIshlinskii):
         return PrandtlIshlinskii(c.thresholds, np.asarray(c.weights) * fw * g)
     if isinstance(c, GeneralizedPI):
-        return c.replace(weights=c.weights * fw * g, reversible=c.reversible * g)
+        return _same_rest(c, c.replace(weights=c.weights * fw * g, reversible=c.reversible * g))
     if isinstance(c, PreisachModel):
         rows, cols = np.tril_indices(c.n_levels)
         factor = fw * g if c.signed else np.maximum(fw * g, 0.0)
         w = np.zeros_like(c.weights)
         w[rows, cols] = c.weights[rows, cols] * factor
-        return c.replace(weights=w, reversible=c.reversible * g)
+        return _same_rest(c, c.replace(weights=w, reversible=c.reversible * g))
     if isinstance(c, Polynomial):
         return Polynomial(c.coefficients * g, offset=c.offset)
     return float(c) * g
+
+
+def _same_rest(nominal, drawn):
+    """``drawn`` with its offset moved so that it rests where ``nominal`` does.
+
+    A generalised PI's plays rest at their envelopes' values at 0 V (tens of volts), which
+    its offset cancels; a Preisach model's relays rest at +-1. Scaling the weights alone
+    moved the rest output by the factor times that sum (0.5 µm for 1 % on an identified
+    generalised PI, whose offset was 47.65 µm): a gain drawn became a position offset. The
+    weights vary the response about the rest position, as a classical PI's plays, which
+    rest at 0, do.
+    """
+    y0, _ = nominal.simulate(np.zeros(1))
+    y1, _ = drawn.simulate(np.zeros(1))
+    return drawn.replace(offset=drawn.offset + float(y0[0] - y1[0]))
 
 
 def sampled_modes(natural_frequency, damping_ratio, sampling_period, nominal):

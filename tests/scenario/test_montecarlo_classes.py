@@ -139,14 +139,20 @@ def _hysteretic(c, y, u):
 ])
 def test_a_scaled_component_is_its_weights_times_the_factors(component):
     # the output is linear in the hysteron weights and in the reversible coefficients: weight
-    # factors f and a cross-coupling factor g scale the hysteretic part by f * g and the
-    # reversible part by g; the offset stays
+    # factors f and a cross-coupling factor g scale the hysteretic part's move from rest by
+    # f * g and the reversible part by g; the component rests where the nominal one does
+    # (a generalised PI's plays rest at their envelopes' values, a Preisach model's relays
+    # at +-1: scaling their weights alone moved the rest output, a gain drawn became an
+    # offset)
     u = 9.0 * np.sin(np.linspace(0, 5 * np.pi, 400)) * np.linspace(1, 0.4, 400)
     f, g = 1.3, 0.6
     n = draw._n_weights(component)
     scaled = draw._scaled(component, np.full(n, f), g)
     y0, y1 = component.simulate(u)[0], scaled.simulate(u)[0]
-    h0, h1 = _hysteretic(component, y0, u), _hysteretic(scaled, y1, u)
+    rest0, rest1 = component.simulate(np.zeros(1))[0][0], scaled.simulate(np.zeros(1))[0][0]
+    assert abs(rest1 - rest0) <= 1e-12 * max(1.0, abs(rest0))
+    h0 = _hysteretic(component, y0, u) + component.offset - rest0
+    h1 = _hysteretic(scaled, y1, u) + scaled.offset - rest1
     np.testing.assert_allclose(h1, (f * g if n else g) * h0, rtol=1e-12, atol=1e-12)
     if isinstance(component, PreisachModel):
         assert n == component.n_states
