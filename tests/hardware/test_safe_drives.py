@@ -775,3 +775,29 @@ def test_a_start_up_corrected_in_the_reference_writes_the_reference_the_drive_fo
     _, drive = compensate_reference(plant, reference.signal, reference.period_samples)
     np.testing.assert_allclose(shaped, drive.reference, rtol=1e-12, atol=1e-9)
     assert np.abs(shaped - reference.signal).max() > 1.0     # the held y's start-up: 2.47 µm
+
+
+def test_shaping_trials_do_not_repeat_range_warnings_of_values_never_asked(tmp_path):
+    """A classical PI with an output map identified on an outside stage (kept in data/),
+    the multiplicative law on a +-10 µm sine at 400 Hz, which it does not solve: the
+    shaping's trial references, blended towards what a clipped drive reaches, left the
+    model's range, and each printed "beyond the range the model was identified on (x: 84.71
+    µm > 27.63 µm ...)", five lines of values the reference never had, before the one-line
+    error. Only the error is printed now; a reference that is beyond the range is still
+    named once, with its own value."""
+    preset = Path(__file__).parent / "data" / "outside-classical-deadzone.toml"
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--kind", "multivariable", "--reference",
+                     '{ kind = "sine", output = "x", amplitude = 10, frequency = 400, '
+                     'periods = 20 }', "--out", str(tmp_path / "d.csv")])
+    assert code == 1 and "does not solve the model" in err.getvalue()
+    assert "identified on" not in err.getvalue(), err.getvalue()
+    assert not (tmp_path / "d.csv").exists()
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = main(["compensate", str(preset), "--kind", "multivariable", "--reference",
+                     '{ kind = "sine", output = "x", amplitude = 40, frequency = 10, '
+                     'periods = 4 }', "--out", str(tmp_path / "d.csv")])
+    assert code == 0
+    assert err.getvalue().count("beyond the range the model was identified on") == 1
