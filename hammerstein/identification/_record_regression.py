@@ -38,7 +38,15 @@ MAP_GAIN = 0.1
 
 # -- least squares engine ----------------------------------------------------------------
 def _thresholds(records, splits, k, n, partition, explicit):
-    """Thresholds of input k from the record where it travels most."""
+    """Thresholds of input k from the record where it travels most.
+
+    The time partition (the paper's Remark 5.1) starts above 0 (A (1 - cos(pi / (n + 1))) / 2,
+    0.58 V at 60 V and n = 15): a model without a play of threshold 0 holds its output while
+    the input reverses by twice that, a flat step at every reversal and about rest, which
+    its inverse crosses in one jump (a per-axis drive stepped 1.15 V at every reversal and
+    started at -0.58 V from rest). Here its first threshold is 0, a linear term, and the
+    other n - 1 are the time partition of n - 1 (the input partition starts at 0 already).
+    """
     if explicit is not None:
         return np.asarray(explicit, dtype=float), "explicit"
     spans = [np.ptp(r.u[k][s.train]) if s.train.any() else 0.0 for r, s in zip(records, splits)]
@@ -52,7 +60,9 @@ def _thresholds(records, splits, k, n, partition, explicit):
             if ok:
                 sign = 1.0 if uk[b] > uk[a] else -1.0
                 try:
-                    return partition_thresholds(sign * uk, n, "time", (a, b)), "time"
+                    rest = partition_thresholds(sign * uk, n - 1, "time", (a, b)) if n > 1 \
+                        else np.zeros(0)
+                    return np.concatenate([[0.0], rest]), "time"
                 except IdentificationError:
                     break
         # no complete branch of this input (broadband): uniform in input
