@@ -286,3 +286,43 @@ def test_another_model_class_passes_its_own_inverse():
     comp = mixed_compensator(model, "multivariable", inverse=inverse)
     assert calls == ["root", "multiplicative"]
     np.testing.assert_array_equal(comp.K, mixed_gain(model, "secant"))
+
+
+def _naive_radius(lo, hi, K):
+    """max over the 2^(m m) corners of rho(I - K^-1 J), by enumeration."""
+    m = K.shape[0]
+    out = 0.0
+    for bits in range(2 ** (m * m)):
+        J = np.array([[hi[i, j] if bits >> (i * m + j) & 1 else lo[i, j] for j in range(m)]
+                      for i in range(m)])
+        out = max(out, max(abs(np.linalg.eigvals(np.eye(m) - np.linalg.solve(K, J)))))
+    return out
+
+
+@pytest.mark.parametrize("lo, hi, K, says", [
+    # the midpoint gain lowers the radius: named with its value
+    ([[0.5, 0.0], [0.0, 0.5]], [[4.0, 0.0], [0.0, 4.0]], np.eye(2), "lowers it to"),
+    # a strong coupling: the midpoint raises it (1.6 -> 1.74 on an identified generalised PI
+    # was told "gain = 'midpoint' lowers it")
+    ([[1.0, 1.2], [1.2, 1.0]], [[1.4, 1.6], [1.6, 1.4]], np.diag([1.4, 1.4]), "does not lower it"),
+    # the midpoint gain given: not advised again
+    ([[1.0, 1.2], [1.2, 1.0]], [[1.4, 1.6], [1.6, 1.4]], np.diag([1.2, 1.2]), "with gain = 'midpoint'"),
+])
+def test_the_convergence_error_advises_the_midpoint_gain_only_where_it_helps(
+        monkeypatch, lo, hi, K, says):
+    from hammerstein.compensation import mixed_compensators as mc
+    lo, hi = np.array(lo), np.array(hi)
+    monkeypatch.setattr(mc, "loop_slopes", lambda model: (lo, hi))
+    mid = np.diag(0.5 * (np.diag(lo) + np.diag(hi)))
+    r_k, r_mid = _naive_radius(lo, hi, K), _naive_radius(lo, hi, mid)
+    assert r_k >= 1.0
+    with pytest.raises(CompensatorError) as info:
+        mc._check_law(object(), K, "error", "multivariable")
+    text = str(info.value)
+    assert f"reaches {r_k:.3g} >= 1" in text and says in text
+    if says == "lowers it to":
+        assert r_mid < r_k and f"lowers it to {r_mid:.3g}" in text
+    elif says == "does not lower it":
+        assert r_mid >= r_k and f"does not lower it: {r_mid:.3g}" in text
+    if says != "lowers it to":
+        assert "preisach-inverse and per-axis" in text
