@@ -162,6 +162,6 @@ def check_reference(compensator, reference):
         raise CompensatorError(
             f"reference: {_where(model, arr, beyond)[2]} µm, beyond the {bound:.6g} µm a "
             f"compensator takes ({REFERENCE_SPAN:g} x the model's largest |output| over its input range; the "
-            f"exported C skips such a sample with status 4): a glitch, not a position; nothing "
-            f"was run and the state is unchanged, skip the sample and call again")
+            f"exported C skips such a sample with status 4): a glitch or a wrong unit, not a "
+            f"position the actuator reaches; nothing was run (the state is unchanged)")
     return arr
