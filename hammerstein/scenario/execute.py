@@ -23,7 +23,8 @@ import numpy as np
 
 from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
-from hammerstein.compensation.drive import apply_amplifier, default_fade_samples
+from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
+                                           default_fade_samples)
 from hammerstein.compensation.hammerstein_compensator import fade_in
 from hammerstein.signals.references import DRIVE_KINDS, REFERENCE_KINDS
 from hammerstein.exceptions import CompensatorDivergence
@@ -187,6 +188,17 @@ def _hardware_case(case, caught):
     y = plant.simulate(apply_amplifier(plant.amplifier, drive.inputs, T), plant.rest_state())[0]
     res = ChainResult(np.asarray(drive.inputs, dtype=float), y, None, None)
     settle = case.settle_periods
+    if fade >= y.shape[1] - max(case.period_samples, 1) and fade > settle * case.period_samples:
+        P1 = max(case.period_samples, 1)
+        # the metrics start at the fade's end: without a period after it, steady_window told
+        # "settle_periods: 5.97 periods ... leave nothing" of a case whose settle_periods was 3
+        raise ValueError(
+            f"{case.name}: the drive's fade-in, {fade * T:.4g} s ({fade} samples, as compensate "
+            f"fades it: at least one period, {MIN_FADE_S:g} s and {FADE_DECAYS:g} decay times of the "
+            f"slowest bending mode, longer for a start-up the settled drive would not take), leaves less than one period of the "
+            f"{y.shape[1]}-sample reference to judge; give the reference more periods (at least "
+            f"{int(np.ceil((max(fade, MIN_FADE_S / T) + P1) / P1))}) "
+            f"or a shorter compensator.fade_in [s]")
     if fade > settle * case.period_samples:
         settle = fade / case.period_samples
         case.notes.append(f"the drive fades in over {fade * T:.4g} s, as compensate's (from the "

@@ -1,5 +1,7 @@
 """Scenario validation: every problem at once, suggestions, merging, registry."""
 
+import contextlib
+import io
 from pathlib import Path
 
 import numpy as np
@@ -248,3 +250,28 @@ def test_a_bad_preset_is_reported_with_missing_cases(tmp_path):
     text = str(err.value)
     assert "cases: missing" in text and "plant.preset" in text
     assert "did you mean 'rakotondrabe-2dof'" in text
+
+
+def test_a_fade_in_that_leaves_no_period_is_named_with_its_case(tmp_path):
+    """Six periods of a 300 Hz sine are 0.02 s, the shortest fade compensate gives an
+    identified preset (records' amplifier, dynamics): the metrics, which start at the fade's
+    end, had nothing left, and the error blamed settle_periods (5.97 periods where the file
+    said 1) without naming the case. Twelve periods run."""
+    import shutil
+    from hammerstein.cli.main import main
+    shutil.copy(Path(__file__).parents[1] / "hardware" / "data" / "outside-classical-deadzone.toml",
+                tmp_path / "p.toml")
+    text = ('name = "short"\n[plant]\npreset = "p.toml"\n[compensator]\nkind = "hammerstein"\n'
+            'model = "p.toml"\n[[cases]]\nname = "fast-sine"\nreference = { kind = "sine", '
+            'output = "x", amplitude = 10.0, frequency = 300.0, periods = PERIODS }\n'
+            'settle_periods = 1\n')
+    for periods, code_expected in ((6, 1), (3, 1), (12, 0)):
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            code = main(["run", str(_write(tmp_path, text.replace("PERIODS", str(periods)))),
+                         "--out", str(tmp_path / f"o{periods}"), "-q"])
+        assert code == code_expected, err.getvalue()
+        if code:
+            line = err.getvalue().strip()
+            assert "\n" not in line and "fast-sine: the drive's fade-in, " in line
+            assert "more periods (at least 7)" in line and "settle_periods" not in line
