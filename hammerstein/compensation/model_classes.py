@@ -1,8 +1,9 @@
 """One actuator model type: the registry of hysteresis model classes and what each supports.
 
-Every hysteresis model the package identifies or reads is one of three
-classes, each with optional creep and linear dynamics around it (a preset's
-``[creep]`` and ``[dynamics]`` tables):
+Every hysteresis model the package identifies is one of three classes (a
+fourth entry, ``mixed``, takes a hand-written model whose direct paths are of
+different classes), each with optional creep and linear dynamics around it (a
+preset's ``[creep]`` and ``[dynamics]`` tables):
 
 * ``classical``: the multivariable classical Prandtl-Ishlinskii model of the
   paper, with its output map (:class:`~hammerstein.models.hysteresis.MultivariablePI`);
@@ -21,7 +22,11 @@ forward simulation (the model's own ``simulate(inputs (m, N) [V]) ->
 kind (:meth:`ModelClass.compensator`), the preset round trip
 (:meth:`ModelClass.to_table`) and its capabilities: the compensator kinds it
 supports (:attr:`ModelClass.kinds`) and the kind chosen when none is given
-(:func:`choose_kind`). A new class is one module and one entry here.
+(:func:`choose_kind`). A new class is its module, its entry here (with its
+exact inverse's builder, :attr:`ModelClass.inverse`), a branch of
+:func:`hammerstein.io.model_table.model_from_table` to read its ``[model]``
+table, and an example in the registry-wide tests (docs/models-and-kinds.md,
+"A new model class").
 
 The default kind (:func:`choose_kind`): the Hammerstein compensator where
 dynamics were identified (G inverted, then the static part); without
@@ -145,6 +150,12 @@ class ModelClass:
         One line for ``hammerstein list`` and docs/models-and-kinds.md.
     law_options : tuple of str
         Options of the inverse multiplicative law this class honours.
+    inverse : callable, optional
+        ``inverse(model, name=..., **options) -> compensator``: the exact
+        per-sample inverse of kind ``exact_inverse_kind`` (``options`` are that
+        kind's, e.g. ``method``); by default the Preisach root search
+        (:class:`~hammerstein.compensation.preisach_inverse.PreisachInverseCompensator`),
+        which takes any model whose direct paths it can bracket.
     """
 
     name: str
@@ -155,6 +166,7 @@ class ModelClass:
     build: Callable = field(repr=False)
     description: str = ""
     law_options: tuple = ("gain", "iterations", "check", "feedback")
+    inverse: Callable | None = field(default=None, repr=False)
 
     def compensator(self, model, kind, **options):
         """A rate-independent compensator of ``kind`` over ``model``.
@@ -184,9 +196,12 @@ class ModelClass:
             raise CompensatorError(kind_problem(model, kind) or
                                    f"kind: {kind!r} is not a rate-independent kind "
                                    f"({', '.join(RATE_INDEPENDENT_KINDS)})")
+        if kind not in self.kinds:        # the entry's own list, not the builder, decides
+            raise CompensatorError(kind_problem(model, kind) or
+                                   f"kind {kind!r}: not a kind of the {self.label} class")
         return self.build(model, kind, **options)
 
-    def exact_inverse(self, model, name=None):
+    def exact_inverse(self, model, name=None, **options):
         """The exact per-sample inverse of ``model``, or None when the class has none.
 
         Parameters
@@ -195,6 +210,8 @@ class ModelClass:
             A model of this class.
         name : str, optional
             Label in reports (default the kind's name).
+        **options
+            Options of the inverse (``method`` of the Preisach root search).
 
         Returns
         -------
@@ -209,7 +226,8 @@ class ModelClass:
         """
         if self.exact_inverse_kind is None:
             return None
-        return PreisachInverseCompensator(model, name=name or self.exact_inverse_kind)
+        build = self.inverse or PreisachInverseCompensator
+        return build(model, name=name or self.exact_inverse_kind, **options)
 
     @staticmethod
     def to_table(model, input_unit="V", output_unit="µm"):

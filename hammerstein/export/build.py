@@ -24,7 +24,7 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.compensation.mixed_compensators import MIXED_KINDS, mixed_compensator
-from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
+from hammerstein.compensation.model_classes import kind_problem, model_class
 from hammerstein.io.presets import (load_creep, load_dynamics, load_model, load_plant, read_toml,
                                     records_sampling_period, resolve_preset)
 from hammerstein.exceptions import CompensatorError, DynamicsError, ExportError, PresetError
@@ -254,15 +254,20 @@ def compensator_from_source(source, kind="multivariable", gain=None, iterations=
     elif cutoff_hz is not None:
         raise ExportError("cutoff-hz: only used with --feedback lowpass")
     try:
+        problem = kind_problem(source.model, kind, has_dynamics=source.dynamics is not None)
+    except CompensatorError as exc:       # a model of no registered class
+        raise ExportError(str(exc)) from None
+    if problem:                  # the class registry decides, and names the kinds that work
+        head, _, works = problem.partition("; the kinds that work with it: ")
+        exportable = [k for k in works.split(", ") if k in KINDS]
+        raise ExportError(head + (f"; the kinds that export it: {', '.join(exportable)}"
+                                  if exportable else ""))
+    try:
         if kind == "preisach-inverse":
             if gain is not None or iterations is not None or feedback != "delay":
                 raise ExportError("kind: 'preisach-inverse' takes no gain, iterations or feedback "
                                   "options")
-            if classical:
-                raise ExportError(f"kind: 'preisach-inverse' inverts a Preisach or generalised-PI "
-                                  f"model; {source.path.name} holds a classical PI (export it with "
-                                  f"--kind multivariable, per-axis or hammerstein)")
-            comp = PreisachInverseCompensator(source.model)
+            comp = model_class(source.model).exact_inverse(source.model)
         elif not classical and kind in MIXED_KINDS:
             if feedback != "delay":
                 raise ExportError(f"feedback: only 'delay' over a {type(source.model).__name__}")

@@ -58,6 +58,8 @@ from hammerstein.compensation.hammerstein_compensator import HammersteinCompensa
 from hammerstein.compensation.mixed_compensators import LinearInverseCompensator
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 from hammerstein.exceptions import ExportError
+from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.models.preisach import MultivariableHysteresis
 from hammerstein.export.c_base import (MARKER, STATUS_LIMIT, STATUS_DIVERGED, STATUS_RANGE,
                                        check_name, AmplifierLimits, CExport, _limits_code,
                                        _describe_limits, _status_checks)
@@ -85,8 +87,19 @@ EMITTERS = {
 }
 
 
+#: The model types whose components the C emitters know (a model of another registered
+#: class, e.g. a new one, is refused here by name: its compensator raised AttributeError
+#: deep in an emitter).
+C_MODEL_TYPES = (MultivariablePI, MultivariableHysteresis)
+
+
 def _plan(compensator):
     """(kind, model, preview, description, build) of a compensator, or ExportError."""
+    model = getattr(compensator, "model", None)
+    if model is not None and not isinstance(model, C_MODEL_TYPES):
+        raise ExportError(f"model: a {type(model).__name__} cannot be exported to C: the C emitters "
+                          f"know the classical PI, Preisach, generalised-PI and mixed models "
+                          f"(hammerstein/export/c_*.py); a new model class needs its emitter there")
     for cls, planner in EMITTERS.items():
         if isinstance(compensator, cls):
             return planner(compensator)

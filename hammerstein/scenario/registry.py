@@ -35,7 +35,6 @@ from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_i
                                                   identify_dynamics_table, identify_table)
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer,
                                          kind_problem, known_kind, number, string)
-from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator
 
 __all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
 
@@ -356,7 +355,8 @@ def _build_preisach_inverse(spec, plant, context):
     problem = class_kind_problem(model, "preisach-inverse")
     if problem:                  # a classical PI: no exact multivariable inverse
         raise CompensatorError(problem)
-    return PreisachInverseCompensator(model, method=spec.get("method", "root"))
+    # the class's own exact inverse (the registry's hook; the Preisach root search by default)
+    return model_class(model).exact_inverse(model, method=spec.get("method", "root"))
 
 
 COMPENSATORS["preisach-inverse"] = CompensatorKind(

@@ -19,13 +19,28 @@ from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
+#: One example per registered class: a class added to MODEL_CLASSES without one fails
+#: test_every_registered_class_has_an_example, and with one runs every registry-wide test.
 PLANTS = {"classical": "rakotondrabe-2dof", "preisach": "realistic-2dof",
-          "generalized": str(SCENARIOS / "presets" / "realistic-gpi.toml")}
+          "generalized": str(SCENARIOS / "presets" / "realistic-gpi.toml"),
+          "mixed": "realistic-2dof's Preisach x with realistic-gpi's generalised-PI y"}
+
+
+def _mixed_plant():
+    """Direct paths of two classes: realistic-2dof's Preisach x, realistic-gpi's y."""
+    from hammerstein.models.plant import HammersteinPlant
+    from hammerstein.models.preisach import MultivariableHysteresis
+    p, g = load_plant(PLANTS["preisach"]), load_plant(PLANTS["generalized"])
+    a, b = p.hysteresis, g.hysteresis
+    hyst = MultivariableHysteresis([[a.components[0][0], None], [None, b.components[1][1]]],
+                                   a.input_names, a.output_names,
+                                   [a.input_amplitude[0], b.input_amplitude[1]])
+    return HammersteinPlant(hyst, p.sampling_period, p.dynamics, name="mixed")
 
 
 @pytest.fixture(scope="module")
 def plants():
-    return {k: load_plant(v) for k, v in PLANTS.items()}
+    return {k: (_mixed_plant() if k == "mixed" else load_plant(v)) for k, v in PLANTS.items()}
 
 
 def _slow_circle(model, n=4000, fraction=0.5):
@@ -47,12 +62,44 @@ def test_every_bundled_class_is_found(plants):
         assert model_class(plant.hysteresis).name == name
 
 
+def test_every_registered_class_has_an_example():
+    """A new class is one module and one entry; its example here makes the registry-wide
+    tests below run on it (they ran on a fixed list: an incomplete new class passed)."""
+    assert set(PLANTS) == set(MODEL_CLASSES), "add an example preset of the new class to PLANTS"
+
+
+@pytest.mark.parametrize("name", list(MODEL_CLASSES))
+def test_a_class_builds_what_it_lists_and_refuses_the_rest(plants, name):
+    """Through its entry alone: each listed rate-independent kind builds and runs, each other
+    rate-independent kind is refused naming the listed ones (the entry's list, not the
+    builder, decides), and the exact inverse exists exactly where the entry says and
+    inverts the model."""
+    from hammerstein.compensation.model_classes import RATE_INDEPENDENT_KINDS
+    model = plants[name].hysteresis
+    entry = MODEL_CLASSES[name]
+    yr = _slow_circle(model, 400)
+    for kind in RATE_INDEPENDENT_KINDS:
+        if kind in entry.kinds:
+            comp = entry.compensator(model, kind, check="ignore") if kind in ("multivariable", "diagonal") \
+                else entry.compensator(model, kind)
+            assert np.all(np.isfinite(comp.simulate(yr)[0]))
+        else:
+            with pytest.raises(CompensatorError, match="kinds that work with it"):
+                entry.compensator(model, kind)
+    inverse = entry.exact_inverse(model)
+    assert (inverse is None) == (entry.exact_inverse_kind is None)
+    if inverse is not None:
+        assert entry.exact_inverse_kind in entry.kinds
+        y, _ = model.simulate(inverse.simulate(yr)[0])
+        assert np.max(np.abs(y - yr)) < 1e-6 * np.max(np.abs(yr))
+
+
 def test_registry_kinds_are_compensator_kinds():
     for entry in MODEL_CLASSES.values():
         assert set(entry.kinds) <= set(COMPENSATORS)
 
 
-@pytest.mark.parametrize("name", ["classical", "preisach", "generalized"])
+@pytest.mark.parametrize("name", list(MODEL_CLASSES))
 def test_every_listed_rate_independent_kind_builds(plants, name):
     plant = plants[name]
     for kind in model_class(plant.hysteresis).kinds:
@@ -97,7 +144,7 @@ def test_the_convergent_gain_reaches_the_fixed_point(plants):
     assert np.max(np.abs(y[:, 200:] - yr[:, 200:])) < 1e-3 * np.max(np.abs(yr))
 
 
-@pytest.mark.parametrize("name", ["preisach", "generalized"])
+@pytest.mark.parametrize("name", [n for n, e in MODEL_CLASSES.items() if e.exact_inverse_kind])
 def test_default_without_dynamics_is_the_exact_inverse(plants, name):
     model = plants[name].hysteresis
     choice = choose_kind(model, has_dynamics=False)
@@ -109,7 +156,7 @@ def test_default_without_dynamics_is_the_exact_inverse(plants, name):
     assert np.max(np.abs(y - yr)) < 1e-6
 
 
-@pytest.mark.parametrize("name", ["classical", "preisach", "generalized"])
+@pytest.mark.parametrize("name", list(MODEL_CLASSES))
 def test_default_with_dynamics_is_hammerstein_and_builds(plants, name):
     plant = plants[name]
     choice = choose_kind(plant.hysteresis, has_dynamics=True)

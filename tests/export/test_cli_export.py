@@ -61,7 +61,7 @@ def test_the_stable_inversion_is_exported(tmp_path, capsys):
     (["--name", "int"], 2, "--name"),
     (["--name", "9lives"], 2, "--name"),
     (["--iterations", "0"], 2, "--iterations"),
-    (["--kind", "preisach-inverse"], 1, "holds a classical PI"),
+    (["--kind", "preisach-inverse"], 1, "classical PI model, which kind 'preisach-inverse' does not take; the kinds that export it: hammerstein, multivariable"),
 ])
 def test_refusals_are_one_line(tmp_path, capsys, argv, status, needle):
     code, stdout, err = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out",
@@ -78,7 +78,7 @@ def test_model_file_needs_a_sampling_period(tmp_path, capsys):
     assert code == 1 and "--sampling-period" in err
     code, _, err = run(capsys, str(model), "--target", "c", "--out", str(tmp_path / "o"),
                        "--kind", "hammerstein", "--sampling-period", "1e-4")
-    assert code == 1 and "needs linear dynamics" in err
+    assert code == 1 and "no dynamics to invert; the kinds that export it: multivariable" in err
     code, stdout, _ = run(capsys, str(model), "--target", "c", "--out", str(tmp_path / "o"),
                           "--kind", "per-axis", "--sampling-period", "1e-4", "--name", "pa")
     assert code == 0 and "#define pa_SAMPLING_PERIOD 0.0001" in (tmp_path / "o" / "pa.h").read_text()
@@ -187,3 +187,18 @@ def test_the_state_line_gives_the_struct_size_before_padding(tmp_path, capsys, k
     assert size <= sizeof <= size + 8          # what alignment adds
     preview = re.search(r"act_PREVIEW (\d+)", header).group(1)
     assert f"preview {preview} sample(s)" in line
+
+
+def test_a_model_the_c_emitters_do_not_know_is_refused_by_name():
+    """A compensator over a model of a class the C emitters do not know (a new class added
+    to the registry without its emitter) is refused naming the model's type and where its
+    emitter goes; it raised AttributeError inside an emitter."""
+    from types import SimpleNamespace
+    from hammerstein.compensation.compensators import StaticGainCompensator
+    from hammerstein.exceptions import ExportError
+    from hammerstein.export import export_c
+    comp = StaticGainCompensator.__new__(StaticGainCompensator)
+    object.__setattr__(comp, "model", SimpleNamespace(n_inputs=1, n_outputs=1))
+    with pytest.raises(ExportError, match=r"a SimpleNamespace cannot be exported to C: .*"
+                                          r"hammerstein/export/c_\*\.py"):
+        export_c(comp, "x", 5e-5)

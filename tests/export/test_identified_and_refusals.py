@@ -126,7 +126,7 @@ def test_a_model_of_an_unknown_class_is_refused(tmp_path):
     name (Preisach and generalised-PI models are exported: test_exact_export.py)."""
     from hammerstein.export.build import ExportSource, compensator_from_source
     source = ExportSource(tmp_path / "preset.toml", "preset", _Preisach(), 5e-5, None, None)
-    with pytest.raises(ExportError, match="found _Preisach"):
+    with pytest.raises(ExportError, match="_Preisach is none of the model classes"):
         compensator_from_source(source, "multivariable")
 
 
