@@ -577,11 +577,10 @@ def diagonal_compensator(model: MultivariablePI, **kwargs):
             raise CompensatorError(
                 f"model: {_direct_name(model, l)}: the diagonal compensator needs a hysteresis "
                 f"direct transfer, found {comps[l][l]!r}")
-    diag = MultivariablePI(comps, list(model.input_names), list(model.output_names),
-                           None if model.input_amplitude is None else model.input_amplitude.copy(),
-                           demagnetised=model.demagnetised,
-                           demagnetised_centre=model.demagnetised_centre,
-                           input_centre=model.input_centre)
+    # everything but the cross-couplings: the output offset and the output map too (left
+    # out, the law tracked Gamma(U) = Yr with the sensor offset in it: from a reference at
+    # rest, an identified model's voltages crept 0.72 -> 1.64 V)
+    diag = model.replace(components=comps)
     kwargs.setdefault("name", "diagonal")
     return InverseMultiplicativeCompensator(diag, **kwargs)
 

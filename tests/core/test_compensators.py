@@ -262,3 +262,26 @@ def test_a_unipolar_model_s_range_is_its_loop_and_its_rest_not_plus_minus_its_pe
     # without the centre (a file from before), the same reference was "beyond"
     with pytest.warns(RangeWarning, match=r"y: .* µm > .* µm"):
         check_reference_range(model.replace(input_centre=None), inside)
+
+
+def test_the_diagonal_law_keeps_the_output_offset_and_map():
+    """Without cross-couplings the diagonal law is the multivariable law, offset and output
+    map included: the same voltages to the last bit, 0 V at a reference at rest. The
+    diagonal copy dropped the offset and the map, and from an identified model's rest its
+    voltages crept 0.72 -> 1.64 V while the reference stood still."""
+    from hammerstein.compensation.compensators import diagonal_compensator
+    from hammerstein.models.hysteresis import OutputMap
+    pi = [PrandtlIshlinskii([0.0, 1.0, 3.0], [1.0, 0.4, 0.2]),
+          PrandtlIshlinskii([0.0, 2.0], [0.8, 0.3])]
+    model = MultivariablePI([[pi[0], None], [None, pi[1]]], input_amplitude=[8.0, 8.0],
+                            output_offset=[0.3, -0.2],
+                            output_map=[OutputMap([2.0], [1.0, 0.8]),
+                                        OutputMap([-1.0, 4.0], [1.2, 1.0, 0.9])])
+    t = np.arange(1200) / 1200
+    rest = np.array([[0.3], [-0.2]])
+    yr = rest + np.vstack([5 * np.sin(2 * np.pi * 3 * t), 4 * (1 - np.cos(2 * np.pi * 2 * t))])
+    yr[:, :100] = rest
+    u_diag, _ = diagonal_compensator(model, check="ignore").simulate(yr)
+    u_mv, _ = InverseMultiplicativeCompensator(model, check="ignore").simulate(yr)
+    assert np.array_equal(u_diag, u_mv)
+    assert np.all(u_diag[:, :100] == 0.0)
