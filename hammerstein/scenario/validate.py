@@ -37,6 +37,8 @@ from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.core.schema import closest
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
+from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.hardware_route import hardware_start
@@ -395,6 +397,31 @@ def _record_file_problems(identify, base):
     return problems
 
 
+def _class_problems(name, kind, plant, base, files):
+    """A kind that the class of a known model (the plant's, or a file's) does not take.
+
+    Run as the registry would refuse it when the compensator is built (``preisach-inverse``
+    over a classical PI validated "ok", then the run failed). Models still to be identified
+    are judged when they are. Returns ``key: message`` strings.
+    """
+    if name in (None, "plant"):
+        model = getattr(plant, "hysteresis", None)
+    elif name == "identified":
+        return []
+    else:
+        try:
+            model = files.get(confined_path(name, base, PresetError))
+        except PresetError:
+            return []
+    if model is None or isinstance(model, str):
+        return []
+    try:
+        problem = class_kind_problem(model, kind)        # dynamics: the kind's own check
+    except CompensatorError:
+        return []
+    return [f"kind: {problem.split(': ', 1)[-1]}"] if problem else []
+
+
 def _model_problems(name, identify, plant, base, files):
     """Problems of a ``model`` key that need no identification and no compensator.
 
@@ -648,6 +675,8 @@ def _validate_cases(path, data, feedback=False):
         if mode == "reference" and "model" in COMPENSATORS[kind].fields:
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
+            if not more:     # the class registry: a kind the model's class does not take
+                more = _class_problems(cclean.get("model", "plant"), kind, plant, base, model_files)
             own = cover if isinstance(cover, dict) else {}
             if not ({"model", "identify"} & set(own)) and cspec.get("kind") == comp_top.get("kind"):
                 more = [m for m in more if m not in top_model[1]]  # reported at the top, once

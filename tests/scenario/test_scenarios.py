@@ -275,3 +275,25 @@ def test_a_fade_in_that_leaves_no_period_is_named_with_its_case(tmp_path):
             line = err.getvalue().strip()
             assert "\n" not in line and "fast-sine: the drive's fade-in, " in line
             assert "more periods (at least 7)" in line and "settle_periods" not in line
+
+
+@pytest.mark.parametrize("preset, kind, refused", [
+    ("rakotondrabe-2dof", "preisach-inverse", True),    # a classical PI: no exact inverse
+    ("rakotondrabe-2dof", "per-axis", False),
+    ("realistic-2dof", "preisach-inverse", False),
+])
+def test_validate_refuses_a_kind_the_models_class_does_not_take(tmp_path, preset, kind, refused):
+    """``validate`` said "ok" and ``run`` then failed building the compensator; the class
+    registry is asked when the file is validated, and names the kinds that work."""
+    text = (f'name = "k"\n[plant]\npreset = "{preset}"\n[compensator]\nkind = "{kind}"\n'
+            '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+            'frequency = 20.0, periods = 2 }\n')
+    if not refused:
+        validate_scenario(_write(tmp_path, text))
+        return
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(_write(tmp_path, text))
+    assert len(info.value.problems) == 1
+    assert ("cases[0].compensator: kind: the model is a classical PI model, which kind "
+            "'preisach-inverse' does not take; the kinds that work with it: hammerstein, "
+            "multivariable") in info.value.problems[0]
