@@ -84,7 +84,9 @@ def handler(args):
           "first rule that applies; docs/models-and-kinds.md):")
     for name, entry in MODEL_CLASSES.items():
         print(f"  {name}: {entry.description}")
-        print(f"    kinds: {', '.join(entry.kinds)} (hammerstein and ilc need dynamics)")
+        dyn = [k for k in ("hammerstein", "ilc") if k in entry.kinds]
+        need = f" ({' and '.join(dyn)} need{'s' if len(dyn) == 1 else ''} dynamics)" if dyn else ""
+        print(f"    kinds: {', '.join(entry.kinds)}{need}")
         exact = (f"else {entry.exact_inverse_kind} (exact inverse)" if entry.exact_inverse_kind
                  else "else per-axis for one transfer, multivariable with a convergent gain, "
                       "per-axis when none converges")
