@@ -159,7 +159,8 @@ def number(unit, minimum=None, exclusive=True, maximum=None):
         bound += "" if maximum is None else f"{',' if bound else ''} <= {maximum:g}"
         if not is_number(v) or (minimum is not None and (v <= minimum if exclusive else v < minimum)) \
                 or (maximum is not None and v > maximum):
-            raise Invalid(f"expected a number{bound} [{unit}], found {short_repr(v)}")
+            raise Invalid(f"expected a number{bound}{f' [{unit}]' if unit else ''}, "
+                          f"found {short_repr(v)}")
         return float(v)
     return check
 

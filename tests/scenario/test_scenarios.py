@@ -297,3 +297,12 @@ def test_validate_refuses_a_kind_the_models_class_does_not_take(tmp_path, preset
     assert ("cases[0].compensator: kind: the model is a classical PI model, which kind "
             "'preisach-inverse' does not take; the kinds that work with it: hammerstein, "
             "multivariable") in info.value.problems[0]
+
+
+def test_a_dimensionless_bound_is_told_without_an_empty_unit():
+    from hammerstein.core.schema import Invalid, number
+    with pytest.raises(Invalid) as info:
+        number("", 0, exclusive=False)(-0.1)
+    assert str(info.value) == "expected a number >= 0, found -0.1"      # was "... >= 0 [], ..."
+    with pytest.raises(Invalid, match=r"expected a number > 0 \[s\], found -0.1"):
+        number("s", 0)(-0.1)
