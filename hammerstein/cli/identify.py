@@ -668,6 +668,14 @@ def _square_for_dynamics(inputs, outputs):
             f"alone")
 
 
+def _envelope_text(g):
+    """``a0 tanh(a1 u + a2) + a3`` with its signs written once: "+ -0.355" read as a typo, and
+    the rising envelope's a3 was left out."""
+    def signed(x, fmt):
+        return f"{'-' if x < 0 else '+'} {abs(x):{fmt}}"
+    return f"{g[0]:.4g} tanh({g[1]:.4g} u {signed(g[2], '.3g')}) {signed(g[3], '.3g')}"
+
+
 def _options(args, n, thresholds):
     """The pipeline's options of the command line (:class:`PipelineOptions`)."""
     return PipelineOptions(
@@ -788,9 +796,8 @@ def _report(args, fit, records, dyn=None, creep=None):
                              f"{c.edges[0]:.4g}..{c.edges[-1]:.4g} {iu}")
             elif fit.structure[l][k] == "generalized":
                 parts.append(f"{inp}: generalized PI {c.n_states} plays, envelopes "
-                             f"{c.gamma_l[0]:.4g} tanh({c.gamma_l[1]:.4g} u + {c.gamma_l[2]:.3g}) "
-                             f"rising, {c.gamma_r[0]:.4g} tanh({c.gamma_r[1]:.4g} u + "
-                             f"{c.gamma_r[2]:.3g}) + {c.gamma_r[3]:.3g} falling")
+                             f"{_envelope_text(c.gamma_l)} rising, "
+                             f"{_envelope_text(c.gamma_r)} falling")
             elif fit.structure[l][k] == "gain":
                 parts.append(f"{inp}: gain {c:.4g} {ou}/{iu}")
             else:
