@@ -497,7 +497,7 @@ def sweep_report_lines(scenario, results, directory, metrics=None, jobs=None):
         if settle:
             lines += [settle, ""]
         if png:
-            lines += [f"![{spec.metric} vs frequency]({png})", ""]
+            lines += [f"![{spec.metric} vs {getattr(spec, 'parameter', 'frequency')}]({png})", ""]
         else:  # a comparison of compensators: the table itself
             keep = [c for c in ("frequency_hz", "compensator", "axis", "channel", "rms_error",
                                 "max_abs_error", "cross_coupling_peak_to_peak", "rms_euclidean_error",

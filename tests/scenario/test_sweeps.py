@@ -186,6 +186,8 @@ metric = "max_euclidean_error"
     assert (out.out_dir / "sweep-amp.png").stat().st_size > 10_000
     err = table[table["channel"] == "x+y"]["max_euclidean_error"]   # per output: max_abs_error
     assert len(err) == 3 and err.notna().all() and (err > 0).all()
+    report = (out.out_dir / "report.md").read_text(encoding="utf-8")
+    assert "![max_euclidean_error vs amplitude](sweep-amp.png)" in report   # was "vs frequency"
 
 
 def test_the_axis_of_a_parameter_sweep_names_its_unit():
