@@ -29,6 +29,14 @@ __all__ = ["quantile_table", "quantile_figure", "write_montecarlo_report"]
 _TAGS = ("p50", "p95", "p99", "max")
 
 
+def _vary_words(quantity, spec):
+    """``weights: relative sd 1 % (normal)``, ``noise: sd 0.02 µm`` (not the Python dict)."""
+    if "sd" in spec:
+        return f"{quantity}: sd {spec['sd']:g} µm"
+    return (f"{quantity}: relative sd {100 * spec['relative_sd']:g} % "
+            f"({spec.get('distribution', 'normal')})")
+
+
 def quantile_table(result):
     """The quantiles of one study as a table.
 
@@ -145,8 +153,9 @@ def write_montecarlo_report(scenario, results, directory, jobs):
             frame.insert(0, "case", np.repeat(np.arange(n), F))
             safe_write(directory / f"montecarlo-{s.name}-cases.csv", frame.to_csv(index=False),
                        "table")
-        vary = ", ".join(f"{k} {v}" for k, v in s.vary.items()) or "nothing varied"
-        lines += [f"## {s.name}", "", s.description or "", "",
+        vary = ", ".join(_vary_words(k, v) for k, v in s.vary.items()) or \
+            "nothing (every plant the nominal one)"
+        lines += [f"## {s.name}", ""] + ([s.description.strip(), ""] if s.description else []) + [
                   f"{s.cases} plants x {len(s.frequencies)} frequencies; varied: {vary}. "
                   f"Quantiles {'exact' if res.exact else 'from the streaming histogram'}; "
                   f"diverged runs: {int(res.diverged.sum())}.", "",

@@ -313,6 +313,12 @@ def test_cli_two_local_workers_write_the_same_report(tmp_path):
                  "--workers", "2"]) == 0
     for name in ("metrics.csv", "montecarlo-mm.csv", "montecarlo-mm-cases.csv"):
         assert (tmp_path / "a" / "mc" / name).read_bytes() == (tmp_path / "b" / "mc" / name).read_bytes()
+    # the report says what was varied in words, not as Python dicts, with no empty lines
+    report = (tmp_path / "a" / "mc" / "report.md").read_text(encoding="utf-8")
+    assert ("varied: weights: relative sd 5 % (normal), cross_coupling: relative sd 20 % "
+            "(lognormal), natural_frequency: relative sd 5 % (uniform), damping_ratio: relative "
+            "sd 20 % (normal), noise: sd 0.05 µm.") in report
+    assert "{'" not in report and "## mm\n\n\n" not in report
 
 
 def test_memory_of_a_huge_study_does_not_grow_with_the_cases():
@@ -377,6 +383,12 @@ def test_cli_on_a_scheduler_and_two_workers_started_by_hand(tmp_path):
         log.close()
     for name in ("metrics.csv", "montecarlo-mm.csv", "montecarlo-mm-cases.csv"):
         assert (tmp_path / "a" / "mc" / name).read_bytes() == (tmp_path / "b" / "mc" / name).read_bytes()
+    # the report says what was varied in words, not as Python dicts, with no empty lines
+    report = (tmp_path / "a" / "mc" / "report.md").read_text(encoding="utf-8")
+    assert ("varied: weights: relative sd 5 % (normal), cross_coupling: relative sd 20 % "
+            "(lognormal), natural_frequency: relative sd 5 % (uniform), damping_ratio: relative "
+            "sd 20 % (normal), noise: sd 0.05 µm.") in report
+    assert "{'" not in report and "## mm\n\n\n" not in report
 
 
 @pytest.mark.parametrize("amplitude, expect", [(20.0, 0), (500.0, 1)])
