@@ -279,7 +279,7 @@ def test_the_diagonal_law_keeps_the_output_offset_and_map():
                                         OutputMap([-1.0, 4.0], [1.2, 1.0, 0.9])])
     t = np.arange(1200) / 1200
     rest = np.array([[0.3], [-0.2]])
-    yr = rest + np.vstack([5 * np.sin(2 * np.pi * 3 * t), 4 * (1 - np.cos(2 * np.pi * 2 * t))])
+    yr = rest + np.vstack([5 * np.sin(2 * np.pi * 3 * t), 3.5 * (1 - np.cos(2 * np.pi * 2 * t))])
     yr[:, :100] = rest
     u_diag, _ = diagonal_compensator(model, check="ignore").simulate(yr)
     u_mv, _ = InverseMultiplicativeCompensator(model, check="ignore").simulate(yr)
