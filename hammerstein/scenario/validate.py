@@ -37,6 +37,7 @@ from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.core.schema import closest
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
+from hammerstein.compensation.model_classes import MODEL_CLASSES
 from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
 from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
@@ -397,7 +398,7 @@ def _record_file_problems(identify, base):
     return problems
 
 
-def _class_problems(name, kind, plant, base, files):
+def _class_problems(name, kind, plant, base, files, identify=None):
     """A kind that the class of a known model (the plant's, or a file's) does not take.
 
     Run as the registry would refuse it when the compensator is built (``preisach-inverse``
@@ -406,8 +407,15 @@ def _class_problems(name, kind, plant, base, files):
     """
     if name in (None, "plant"):
         model = getattr(plant, "hysteresis", None)
-    elif name == "identified":
-        return []
+    elif name == "identified":       # the class the table names (auto: judged when identified)
+        table = identify if isinstance(identify, dict) else {}
+        cls = table.get("model", "auto" if "records" in table else "classical")
+        entry = MODEL_CLASSES.get(cls)
+        if entry is None or kind in entry.kinds:
+            return []
+        return [f"kind: the model identified is a {entry.label} model (identify.model = "
+                f"{cls!r}), which kind {kind!r} does not take; the kinds that work with it: "
+                f"{', '.join(entry.kinds)}"]
     else:
         try:
             model = files.get(confined_path(name, base, PresetError))
@@ -584,6 +592,7 @@ def _validate_cases(path, data, feedback=False):
         return plants[key]
 
     top_model = [], []      # the top-level compensator's model: checked once, named there
+    class_said = set()      # (kind, model, problem) of _class_problems already reported
     if isinstance(comp_top, dict) and "model" in comp_top:
         top_plant = None
         if isinstance(plant_top.get("preset"), str):
@@ -676,7 +685,13 @@ def _validate_cases(path, data, feedback=False):
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
             if not more:     # the class registry: a kind the model's class does not take
-                more = _class_problems(cclean.get("model", "plant"), kind, plant, base, model_files)
+                cls = _class_problems(cclean.get("model", "plant"), kind, plant, base,
+                                      model_files, cclean.get("identify"))
+                said = (kind, str(cclean.get("model", "plant")), tuple(cls))
+                if cls and said in class_said:
+                    cls = []            # one mistake, said once: where it first appears
+                class_said.add(said)
+                more = cls
             own = cover if isinstance(cover, dict) else {}
             if not ({"model", "identify"} & set(own)) and cspec.get("kind") == comp_top.get("kind"):
                 more = [m for m in more if m not in top_model[1]]  # reported at the top, once

@@ -306,3 +306,26 @@ def test_a_dimensionless_bound_is_told_without_an_empty_unit():
     assert str(info.value) == "expected a number >= 0, found -0.1"      # was "... >= 0 [], ..."
     with pytest.raises(Invalid, match=r"expected a number > 0 \[s\], found -0.1"):
         number("s", 0)(-0.1)
+
+
+@pytest.mark.parametrize("identify, refused", [
+    ('{ frequency = 10.0 }', True),                                   # the classical PI route
+    ('{ records = "excitation", model = "classical" }', True),
+    ('{ records = "excitation" }', False),                            # auto: judged when identified
+    ('{ records = "excitation", model = "preisach" }', False),
+])
+def test_validate_judges_the_class_an_identify_table_names(tmp_path, identify, refused):
+    """The class an identify table asks for is known before anything is identified; one
+    mistake written once is said once, however many cases inherit it (it was said per case)."""
+    text = ('name = "k"\n[plant]\npreset = "realistic-2dof"\n[compensator]\n'
+            f'kind = "preisach-inverse"\nmodel = "identified"\nidentify = {identify}\n'
+            + "".join(f'[[cases]]\nname = "c{i}"\nreference = {{ kind = "circle", radius = 10.0, '
+                      f'frequency = {10 * (i + 1)}.0, periods = 2 }}\n' for i in range(3)))
+    if not refused:
+        validate_scenario(_write(tmp_path, text))
+        return
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(_write(tmp_path, text))
+    assert len(info.value.problems) == 1, info.value.problems
+    assert ("kind: the model identified is a classical PI model (identify.model = 'classical'), "
+            "which kind 'preisach-inverse' does not take") in info.value.problems[0]
