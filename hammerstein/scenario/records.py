@@ -292,6 +292,10 @@ def load_identification_scenario(path, data):
     if ident.get("output_map") == "deadzone" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.output_map: deadzone only with method = "
                         f"'least-squares'")
+    if ident.get("train_fraction") is not None and ident.get("hold_out") == "none":
+        # identify refuses it (exit 2); here the fraction was used and hold_out ignored
+        problems.append(f"{source}: identification.train_fraction: give train_fraction or "
+                        f"hold_out = 'none', not both")
     records = []
     if dat is not None:
         files = dat.get("files", [dat["file"]] if "file" in dat else [])

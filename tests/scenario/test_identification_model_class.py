@@ -66,3 +66,12 @@ def test_closed_form_and_thresholds_are_classical_options(records):
                                             "'classical'"):
         _load(_scenario(records, 'model = "generalized"\nthresholds = [0.0, 2.0, 4.0]\n'))
     assert _load(_scenario(records, "")).identification["model"] == "classical"
+
+
+def test_a_training_fraction_with_nothing_held_out_is_refused_as_identify_refuses_it(records):
+    """identify --hold-out none --train-fraction 0.5 is a usage error; the scenario used the
+    fraction, ignored hold_out and reported a validation case."""
+    with pytest.raises(ScenarioError, match=r"identification\.train_fraction: give train_fraction "
+                                            r"or hold_out = 'none', not both"):
+        _load(_scenario(records, 'hold_out = "none"\ntrain_fraction = 0.5\n'))
+    assert _load(_scenario(records, 'train_fraction = 0.5\n')) is not None
