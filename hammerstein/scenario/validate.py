@@ -35,7 +35,7 @@ import numpy as np
 from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
-from hammerstein.core.schema import closest
+from hammerstein.core.schema import closest, short_repr
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.compensation.model_classes import MODEL_CLASSES
 from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
@@ -554,10 +554,11 @@ def _validate_cases(path, data, feedback=False):
     if "plant" in data:
         check_table(data["plant"], PLANT, "plant", problems, source)
     if "compensator" in data:
-        if isinstance(comp_top, dict):
+        if isinstance(data["compensator"], dict):      # comp_top is {} for anything else
             _check_compensator(comp_top, "compensator", problems, source)
-        else:
-            problems.append(f"{source}: compensator: expected a table")
+        else:    # compensator = "multivariable" ran as kind 'none' without a word
+            problems.append(f"{source}: compensator: expected a table, e.g. [compensator] "
+                            f"kind = \"multivariable\", found {short_repr(data['compensator'])}")
     cases_raw = data.get("cases", [])
     if "cases" in data and (not isinstance(cases_raw, list) or not cases_raw):
         problems.append(f"{source}: cases: expected one or more [[cases]] tables")

@@ -329,3 +329,14 @@ def test_validate_judges_the_class_an_identify_table_names(tmp_path, identify, r
     assert len(info.value.problems) == 1, info.value.problems
     assert ("kind: the model identified is a classical PI model (identify.model = 'classical'), "
             "which kind 'preisach-inverse' does not take") in info.value.problems[0]
+
+
+@pytest.mark.parametrize("value", ['"multivariable"', "[]", "0", "false"])
+def test_a_compensator_that_is_not_a_table_is_named(tmp_path, value):
+    """compensator = "multivariable" ran a drive case as kind 'none' without a word."""
+    text = (f'name = "t"\ncompensator = {value}\n[plant]\npreset = "rakotondrabe-2dof"\n'
+            '[[cases]]\nname = "d"\ndrive = { kind = "sine", input = "ux", amplitude = 5.0, '
+            'frequency = 20.0, periods = 2 }\n')
+    with pytest.raises(ScenarioError, match=r": compensator: expected a table, e\.g\. "
+                                            r"\[compensator\] kind = \"multivariable\""):
+        validate_scenario(_write(tmp_path, text))
