@@ -247,6 +247,8 @@ def _option_problems(spec, own=None):
     own = spec if own is None else own
     out = []
     feedback = spec.get("feedback", "delay")
+    if "cutoff_hz" not in spec:     # not a key of this kind (said so: unknown key)
+        own = {k: v for k, v in own.items() if k != "cutoff_hz"}
     if "cutoff_hz" in own and feedback != "lowpass":
         out.append(f"cutoff_hz: only used with feedback = 'lowpass' (feedback is {feedback!r}); "
                    f"remove it or set feedback = 'lowpass'")

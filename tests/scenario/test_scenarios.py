@@ -340,3 +340,17 @@ def test_a_compensator_that_is_not_a_table_is_named(tmp_path, value):
     with pytest.raises(ScenarioError, match=r": compensator: expected a table, e\.g\. "
                                             r"\[compensator\] kind = \"multivariable\""):
         validate_scenario(_write(tmp_path, text))
+
+
+def test_keys_a_kind_does_not_take_are_not_also_told_to_pair(tmp_path):
+    """feedback and cutoff_hz on a per-axis compensator: both unknown keys, and not also
+    "cutoff_hz: only used with feedback = 'lowpass' (feedback is 'delay')" of a file that
+    set it to 'lowpass'."""
+    text = ('name = "t"\n[plant]\npreset = "rakotondrabe-2dof"\n[[cases]]\nname = "a"\n'
+            'reference = { kind = "sine", output = "x", amplitude = 20.0, frequency = 10.0, '
+            'periods = 3 }\ncompensator = { kind = "per-axis", feedback = "lowpass", '
+            'cutoff_hz = 100.0 }\n')
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(_write(tmp_path, text))
+    keys = [p.split(": ")[1] for p in info.value.problems]
+    assert keys == ["cases[0].compensator.feedback", "cases[0].compensator.cutoff_hz"], keys
