@@ -42,6 +42,9 @@ def _identify_summary(ident):
     at = _num(ident["frequency"], "Hz")
     if "amplitude" in ident:
         at += f", {_num(ident['amplitude'], 'V')}"
+    if ident.get("model", "classical") != "classical":   # not the classical PI's hysterons
+        cls = "the class auto chose" if ident["model"] == "auto" else f"{ident['model']} class"
+        return f"model identified at {at} ({cls})"
     bits = [f"{ident['n_hysterons']} hysterons"] if "n_hysterons" in ident else []
     bits += [ident["method"]] if "method" in ident else []
     return f"model identified at {at}" + (f" ({', '.join(bits)})" if bits else "")

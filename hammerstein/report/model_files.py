@@ -54,9 +54,13 @@ def model_file_name(spec):
     'identified-50Hz-least-squares.toml'
     >>> model_file_name({"records": "files", "model": "preisach"})
     'identified-files-preisach.toml'
+    >>> model_file_name({"frequency": 5.0, "model": "preisach", "method": "closed-form"})
+    'identified-5Hz-preisach.toml'
     """
     if "records" in spec:
         return f"identified-{spec['records']}-{spec.get('model', 'auto')}.toml"
+    if spec.get("model", "classical") != "classical":     # a Preisach or auto fit: its class
+        return f"identified-{spec['frequency']:g}Hz-{spec['model']}.toml"
     return f"identified-{spec['frequency']:g}Hz-{spec.get('method', 'closed-form')}.toml"
 
 

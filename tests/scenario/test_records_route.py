@@ -455,3 +455,19 @@ def test_a_table_refuses_a_training_fraction_with_nothing_held_out():
         identify_table({"records": "excitation", "hold_out": "none", "train_fraction": 0.5})
     with pytest.raises(NestedInvalid, match=r"train_fraction: expected a fraction in \(0, 1\]"):
         identify_table({"records": "files", "hysteresis_records": ["a.csv"], "train_fraction": 0})
+
+
+@pytest.mark.parametrize("ident, words, file", [
+    ({"frequency": 5.0, "model": "preisach", "n_hysterons": 15, "method": "closed-form"},
+     "model identified at 5 Hz (preisach class)", "identified-5Hz-preisach.toml"),
+    ({"frequency": 5.0, "model": "auto", "n_hysterons": 15, "method": "closed-form"},
+     "model identified at 5 Hz (the class auto chose)", "identified-5Hz-auto.toml"),
+    ({"frequency": 50.0, "n_hysterons": 15, "method": "least-squares"},
+     "model identified at 50 Hz (15 hysterons, least-squares)", "identified-50Hz-least-squares.toml"),
+])
+def test_the_sine_route_names_the_class_it_identified(ident, words, file):
+    """A Preisach model identified on the sine route was called "(15 hysterons, closed-form)"
+    and saved as identified-5Hz-closed-form.toml, the words of the classical PI."""
+    from hammerstein.report.compensator_words import _identify_summary
+    from hammerstein.report.model_files import model_file_name
+    assert _identify_summary(ident) == words and model_file_name(ident) == file
