@@ -3,7 +3,7 @@
 At 50 kHz a circle's start-up stepped a relative 3e-6 more than its settled drive (rounding):
 it was slew-limited, its fade-in grown to a quarter of the record, with advice for a record
 three times longer; and the peak line repeated the compensator's own numbers, identical, as
-"asked ... before the limits". The limit is still said, as rounding-sized, with how far the
+"asked ... before the limits". The limit is still said, as within 0.1 % of the settled step, with how far the
 drive departs from the compensator's voltages: an exported compensator fed the reference gives
 those (a bender's 50 Hz sine: 1.1e-5 V at one sample, said nowhere, looked like an export bug).
 """
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from hammerstein.cli import compensate as compensate_cli
-from hammerstein.compensation.drive import limit_start_up
+from hammerstein.compensation.drive import ROUNDING_WORDS, limit_start_up
 
 
 @pytest.mark.parametrize("asked, told", [
@@ -24,12 +24,13 @@ from hammerstein.compensation.drive import limit_start_up
 ])
 def test_a_start_up_within_the_tolerance_is_limited_with_its_size(asked, told):
     """No drive steps beyond the settled drive's largest step; an excess within the tolerance
-    is named rounding-sized, with how much the drive moved (about as little)."""
+    is named as within 0.1 % of the settled step (not "rounding": it reaches 1e-3), with how
+    much the drive moved (about as little)."""
     a = 0.5 * asked           # the first step from rest; the settled steps are 0.5 V
     u = np.array([[a, a + 0.5, a + 1.0, a + 0.5, a, a + 0.5, a + 1.0]])
     out, notes = limit_start_up(u.copy(), 1)
     (note,) = notes
-    assert ("% more" in note) == told and ("rounding-sized" in note) == (not told)
+    assert ("% more" in note) == told and (ROUNDING_WORDS in note) == (not told)
     steps = np.abs(np.diff(np.concatenate([[0.0], out[0]])))
     assert steps.max() <= 0.5 * (1 + 1e-6)
     moved = np.abs(out - u)
@@ -58,7 +59,7 @@ def test_the_peak_line_names_the_compensators_own_only_when_it_differs(monkeypat
 
 
 def test_a_rounding_sized_limit_is_in_the_header_not_on_the_console(tmp_path, capsys):
-    """Half of the family's 400 drives had a rounding-sized start-up limit (4e-8 to 2e-4 V):
+    """Half of the family's 400 drives had a start-up limit within 0.1 % of the step (4e-8 to 2e-4 V):
     said on the console for each, it was noise; the header keeps it for whoever compares the
     drive with an exported compensator."""
     from hammerstein.cli.main import main
@@ -75,4 +76,4 @@ def test_a_rounding_sized_limit_is_in_the_header_not_on_the_console(tmp_path, ca
         assert ROUNDING_WORDS not in said.out + said.err
         if ROUNDING_WORDS in out.read_text()[:5000]:
             found = out
-    assert found is not None, "no drive had a rounding-sized limit"
+    assert found is not None, "no drive had a limit within 0.1 % of the step"
