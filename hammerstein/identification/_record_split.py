@@ -267,7 +267,8 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
         cuts = [a for a, _, _ in branches[1:]]
         if train_fraction < 1:
             if not cuts:
-                raise IdentificationError(f"{name}no reversal point to split at; use --hold-out none")
+                raise IdentificationError(f"{name}no reversal point to split at; use --hold-out "
+                                          f"none (hold_out = \"none\" in a scenario)")
             s = min(cuts, key=lambda c: abs(c - train_fraction * n))
             held[s:] = True
     elif hold_out == "auto" and len(levels := amplitude_levels(u, branches)) >= 3:
@@ -304,7 +305,7 @@ def split_record(record, method="least-squares", hold_out="auto", train_fraction
             raise IdentificationError(
                 f"{name}only one complete branch, nothing to hold out for validation; record "
                 f"at least one full period (or a closed loop), or train on all of it with "
-                f"--hold-out none")
+                f"--hold-out none (hold_out = \"none\" in a scenario)")
     elif hold_out != "none":
         raise IdentificationError(f"hold_out: expected 'auto' or 'none', found {hold_out!r}")
     if method == "closed-form" and hold_out == "auto" and train_fraction is None:
@@ -788,6 +789,7 @@ def _asymmetry_notes(records, splits, out_names):
                     f"point-symmetric ({d:.3g} % of the range between its descending branch "
                     f"and its ascending branch rotated by 180 degrees); a classical PI's loops "
                     f"are, so expect an error of that order on the held-out branch (training "
-                    f"on both branches with --hold-out none reduces but cannot remove it)")
+                    f"on both branches with --hold-out none, hold_out = \"none\" in a scenario, "
+                    f"reduces but cannot remove it)")
                 break
     return notes

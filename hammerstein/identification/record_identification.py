@@ -612,7 +612,8 @@ def _with_output_map(fit, output_map, bounds, classical, asymmetric):
         fit.notes.append("output map: one closed loop trains on its ascending branch only, on "
                          "which the PI and the map can be traded against each other; the "
                          "held-out branch is extrapolated: record two periods or more, or train "
-                         "on both branches with --hold-out none")
+                         "on both branches with --hold-out none (hold_out = \"none\" in a "
+                         "scenario)")
     fit.model, fit.predictions, fit.train, fit.validation = model, predictions, train, val
     fit.output_map = "deadzone"
     return fit
