@@ -877,8 +877,9 @@ class GeneralizedPIIdentifier:
                         f"{_SPACING_LABEL[best]}")
         demag = [f"{a:.4g} V" + (f" around {c:.4g} V" if c else "")
                  for a, c in self._demagnetised if a]
-        notes.insert(1, "generalized PI: every record starts after the demagnetising cycle "
-                        f"(demagnetise.csv) from {', '.join(demag)}; the model starts there"
+        notes.insert(1, "generalized PI: every record taken as starting after the "
+                        f"demagnetising cycle (demagnetise.csv) from {', '.join(demag)} "
+                        f"(--record-start rest: from the plays at rest); the model starts there"
                      if self.record_start == "demagnetised" and demag else
                      "generalized PI: every record starts from the plays at rest")
         if n_cut:

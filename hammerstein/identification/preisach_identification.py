@@ -583,8 +583,9 @@ class PreisachIdentifier:
         held = any(s.held_out.any() for s in splits)
         demag = [f"{a:.4g} V" + (f" around {c:.4g} V" if c else "") for a, c in self._cycles if a]
         notes, scores, best = [
-            "preisach: every record starts after the demagnetising cycle (demagnetise.csv) "
-            f"from {', '.join(demag)}; the model starts there" if demag else
+            "preisach: every record taken as starting after the demagnetising cycle "
+            f"(demagnetise.csv) from {', '.join(demag)} (--record-start rest: from the ideal "
+            f"demagnetised state); the model starts there" if demag else
             "preisach: every record starts from the ideal demagnetised state"], {}, None
         which = "held_out" if held else "train"
         s_recs, s_splits, s_inputs = self._scored_samples(records, splits, which)

@@ -87,7 +87,10 @@ def write_identification_report(scenario, results, directory, jobs=None):
                   f"{s.description}."]
     how = (spec["method"] if cls.name == "classical" else
            f"{cls.label} (least squares{', chosen by auto' if spec.get('model') == 'auto' else ''})")
-    lines += ["", f"Identification: {how}, partition {fit.partition}, bounds "
+    # a generalised PI's fit.partition is its threshold spacing, a Preisach model's its grid
+    part = ("partition" if cls.name == "classical" else
+            "threshold spacing" if cls.name == "generalized" else "grid")
+    lines += ["", f"Identification: {how}, {part} {fit.partition}, bounds "
               f"{spec['bounds']}; components {structure}; output offset "
               f"{[round(float(c), 6) for c in (model.output_offset if model.output_offset is not None else np.zeros(model.n_outputs))]} {ou}."]
     lines += [f"- {note}" for note in fit.notes]
