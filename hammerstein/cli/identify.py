@@ -36,8 +36,8 @@ from hammerstein.cli._common import number_type, out_file_problem, print_err
 from hammerstein.cli._output import tty_progress
 from hammerstein.cli._identify_report import (
     _line, creep_metrics_rows, delay_report_lines, dynamics_metrics_rows, dynamics_report_lines,
-    cut_note, level_metrics_rows, level_report_lines, metrics_rows, modes_above_band_warning,
-    unit_warnings)
+    cut_note, level_metrics_rows, level_report_lines, metrics_rows, modes_above_band_warning)
+from hammerstein.io.unit_checks import unit_warnings
 from hammerstein.models.amplifier import records_amplifier_table, records_hold_steps
 from hammerstein.core.files import (FileLimitError, all_or_nothing, file_limit_problem,
                                     guard_inputs, png_provenance, provenance_line,

@@ -41,12 +41,15 @@ runner dispatches here through :data:`hammerstein.runner.SCENARIO_KINDS`.
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from hammerstein.io.datafiles import DataFileError, bundled_data, read_records
+from hammerstein.io.unit_checks import unit_warnings
+from hammerstein.exceptions import HammersteinWarning
 from hammerstein.core.files import confined_path, escape
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.identification.identification import IdentificationError
@@ -376,6 +379,11 @@ def run_identification_scenario(scenario):
     spec = scenario.identification
     ins, outs = _names(scenario)
     rec = scenario.records[0]
+    # identify's unit checks (a time column in ms read as s, an output in nm read as µm)
+    for line in unit_warnings(scenario.records, outs, scenario.data["output_unit"],
+                              scenario.data.get("time"), ins, scenario.data.get("input_unit", "V")):
+        warnings.warn(f"data: {line}".replace("--sampling-period S", "data.sampling_period"),
+                      HammersteinWarning, stacklevel=2)
     if len(ins) != rec.u.shape[0] or len(outs) != rec.y.shape[0]:
         raise IdentificationError(
             f"data.input_names/output_names: expected {rec.u.shape[0]} input and "

@@ -26,6 +26,7 @@ from hammerstein.exceptions import HammersteinWarning, HysteresisError
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.sensors import Sensor
 from hammerstein.io.datafiles import DataFileError, MultiRecord, read_records
+from hammerstein.io.unit_checks import unit_warnings
 from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
 from hammerstein.models.dynamics import DynamicsError
@@ -292,6 +293,11 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         recs, delay, note = file_records(plant, spec, base_dir)
         if note:
             warnings.warn(note, HammersteinWarning, stacklevel=2)
+        every = [r for kind in ("hysteresis", "dynamics", "creep") for r in recs[kind]]
+        # identify's unit checks (a time column in ms read as s, an output in nm as µm):
+        # the scenario read the same files without a word
+        for line in unit_warnings(every, names[1], "µm", spec["time"], names[0]):
+            warnings.warn(f"{where}: {line}", HammersteinWarning, stacklevel=2)
         dynamics = dynamics and bool(recs["dynamics"])
         creep = bool(recs["creep"])
     else:

@@ -75,3 +75,22 @@ def test_a_training_fraction_with_nothing_held_out_is_refused_as_identify_refuse
                                             r"or hold_out = 'none', not both"):
         _load(_scenario(records, 'hold_out = "none"\ntrain_fraction = 0.5\n'))
     assert _load(_scenario(records, 'train_fraction = 0.5\n')) is not None
+
+
+def test_a_record_in_milliseconds_is_warned_of_as_identify_warns(tmp_path):
+    """A time column in ms read as s: identify warns "a time in ms?"; the scenario read the
+    same file without a word (its sampling period 1000 times too long)."""
+    import warnings as w
+    from hammerstein.io.datafiles import bundled_data, read_record
+    rec = read_record(bundled_data(), input=2, output=1, time=0)
+    t = np.arange(rec.u.shape[-1]) * rec.sampling_period * 1000.0
+    np.savetxt(tmp_path / "ms.csv", np.column_stack([t, np.ravel(rec.u), np.ravel(rec.y)]),
+               delimiter=",", header="t,u,y", comments="", fmt="%.9g")
+    path = tmp_path / "ms.toml"
+    path.write_text('kind = "identification"\n[data]\nfile = "ms.csv"\ninput = "u"\n'
+                    'output = "y"\ntime = "t"\n[identification]\n', encoding="utf-8")
+    with w.catch_warnings(record=True) as caught:
+        w.simplefilter("always")
+        run_identification_scenario(_load(path))
+    said = [str(c.message) for c in caught if "a time in ms?" in str(c.message)]
+    assert len(said) == 1 and "data.sampling_period" in said[0]
