@@ -298,7 +298,12 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
         return None
     n_before = len(problems)
     entry = kinds[kind]
-    clean = check_table(spec, {"kind": Field(lambda v: v), **entry.fields}, where, problems, source)
+    fields = entry.fields
+    if plant is None and "output" in fields and "output" not in spec:
+        # the plant did not load (said with it): a one-output plant needs no output, which
+        # was told "output: missing (required)" of such a file
+        fields = {**fields, "output": Field(fields["output"].check)}
+    clean = check_table(spec, {"kind": Field(lambda v: v), **fields}, where, problems, source)
     if clean is not None and len(problems) > n_before and plant is not None:
         # the signal cannot be generated, but its axes are still named against the plant's
         problems.extend(f"{source}: {where}.{msg}" for msg in _axis_problems(clean, plant, mode))

@@ -354,3 +354,15 @@ def test_keys_a_kind_does_not_take_are_not_also_told_to_pair(tmp_path):
         validate_scenario(_write(tmp_path, text))
     keys = [p.split(": ")[1] for p in info.value.problems]
     assert keys == ["cases[0].compensator.feedback", "cases[0].compensator.cutoff_hz"], keys
+
+
+def test_a_plant_that_does_not_load_is_the_one_problem_of_its_references(tmp_path):
+    """A sine without output is right on a one-output plant; with a preset that did not load
+    it was also told "reference.output: missing (required)"."""
+    (tmp_path / "model.toml").write_text("[model]\n")
+    text = ('name = "t"\n[plant]\npreset = "model.toml"\ndynamics = false\n[compensator]\n'
+            'kind = "multivariable"\n[[cases]]\nname = "c"\nreference = { kind = "sine", '
+            'amplitude = 20.0, frequency = 1.0, periods = 3 }\n')
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(_write(tmp_path, text))
+    assert all("plant.preset" in p for p in info.value.problems), info.value.problems
