@@ -430,8 +430,10 @@ def _class_problems(name, kind, plant, base, files, identify=None):
             return []
     if model is None or isinstance(model, str):
         return []
-    try:
-        problem = class_kind_problem(model, kind)        # dynamics: the kind's own check
+    dynamic = plant is not None and not plant.is_static
+    try:     # a static plant: hammerstein and ilc are not named as kinds that work
+        problem = class_kind_problem(model, kind, has_dynamics=dynamic or kind in ("hammerstein",
+                                                                                   "ilc"))
     except CompensatorError:
         return []
     return [f"kind: {problem.split(': ', 1)[-1]}"] if problem else []

@@ -366,3 +366,14 @@ def test_a_plant_that_does_not_load_is_the_one_problem_of_its_references(tmp_pat
     with pytest.raises(ScenarioError) as info:
         validate_scenario(_write(tmp_path, text))
     assert all("plant.preset" in p for p in info.value.problems), info.value.problems
+
+
+def test_the_kinds_named_for_a_static_plant_leave_out_those_that_need_dynamics(tmp_path):
+    text = ('name = "k"\n[plant]\npreset = "rakotondrabe-2dof"\ndynamics = false\n'
+            '[compensator]\nkind = "preisach-inverse"\n[[cases]]\nname = "c"\nreference = { '
+            'kind = "circle", radius = 10.0, frequency = 20.0, periods = 2 }\n')
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(_write(tmp_path, text))
+    (line,) = info.value.problems
+    assert line.endswith("the kinds that work with it: multivariable, diagonal, per-axis, "
+                         "static-gain"), line
