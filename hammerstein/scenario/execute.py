@@ -195,7 +195,8 @@ def _hardware_case(case, caught):
         raise ValueError(
             f"{case.name}: the drive's fade-in, {fade * T:.4g} s ({fade} samples, as compensate "
             f"fades it: at least one period, {MIN_FADE_S:g} s and {FADE_DECAYS:g} decay times of the "
-            f"slowest bending mode, longer for a start-up the settled drive would not take), leaves less than one period of the "
+            f"slowest bending mode, longer for a start-up the settled drive would not take), "
+            f"leaves less than one period of the "
             f"{y.shape[1]}-sample reference to judge; give the reference more periods (at least "
             f"{int(np.ceil((max(fade, MIN_FADE_S / T) + P1) / P1))}) "
             f"or a shorter compensator.fade_in [s]")

@@ -106,7 +106,8 @@ def case_plant(study, i):
         must stay non-negative); a component's reversible polynomial and a
         linear gain component are scaled by ``f_cross[l, k]``; a generalised
         PI's or Preisach model's offset moves so that the component rests
-        where the nominal one does (its plays and relays rest away from 0). The bending modes' natural frequencies and damping ratios
+        where the nominal one does (its plays and relays rest away from 0).
+        The bending modes' natural frequencies and damping ratios
         are scaled by their factors and re-sampled (zero-order hold,
         :func:`sampled_modes`; the nominal sampled modes when neither is
         varied); state-space dynamics get the factors mode by mode
