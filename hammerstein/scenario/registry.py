@@ -24,7 +24,8 @@ import numpy as np
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.core.files import confined_path
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS, HammersteinCompensator
-from hammerstein.compensation.model_classes import kind_problem as class_kind_problem, model_class
+from hammerstein.compensation.model_classes import MODEL_CLASSES, model_class
+from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
 from hammerstein.exceptions import CompensatorError
 from hammerstein.compensation.ilc import LearningCompensator
 from hammerstein.models.plant import hardware_start
@@ -36,7 +37,7 @@ from hammerstein.scenario.identify_tables import (dynamics_source, hammerstein_i
 from hammerstein.scenario.schema import (MAX_ITERATIONS, Field, Invalid, check_table, choice, integer,
                                          kind_problem, known_kind, number, string)
 
-__all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind"]
+__all__ = ["CompensatorKind", "COMPENSATORS", "build_compensator", "compensator_kind", "class_problems"]
 
 
 @dataclass
@@ -455,3 +456,57 @@ def build_compensator(spec, plant, context):
         comp.fade_in = spec.get("fade_in")
         comp.limits = spec.get("limits", "warn")
     return comp
+
+
+def class_problems(name, kind, plant, base, files, identify=None):
+    """Problems of a kind that the class of a known model does not take.
+
+    Run when a scenario is validated, as :func:`build_compensator` would refuse it
+    (``preisach-inverse`` over a classical PI validated "ok", then the run failed); an
+    ``identify`` table's class is the one it names (``auto``: judged when identified).
+
+    Parameters
+    ----------
+    name : str or None
+        The compensator's ``model`` key (``"plant"``, ``"identified"`` or a file).
+    kind : str
+        The compensator kind.
+    plant : HammersteinPlant or None
+        The case's plant (None when its preset did not load).
+    base : pathlib.Path
+        The scenario's directory.
+    files : dict
+        Path -> model (or message) of the model files already read.
+    identify : dict, optional
+        The compensator's ``identify`` table.
+
+    Returns
+    -------
+    list of str
+        ``"kind: message"``, or empty.
+    """
+    if name in (None, "plant"):
+        model = getattr(plant, "hysteresis", None)
+    elif name == "identified":       # the class the table names (auto: judged when identified)
+        table = identify if isinstance(identify, dict) else {}
+        cls = table.get("model", "auto" if "records" in table else "classical")
+        entry = MODEL_CLASSES.get(cls)
+        if entry is None or kind in entry.kinds:
+            return []
+        return [f"kind: the model identified is a {entry.label} model (identify.model = "
+                f"{cls!r}), which kind {kind!r} does not take; the kinds that work with it: "
+                f"{', '.join(entry.kinds)}"]
+    else:
+        try:
+            model = files.get(confined_path(name, base, PresetError))
+        except PresetError:
+            return []
+    if model is None or isinstance(model, str):
+        return []
+    dynamic = plant is not None and not plant.is_static
+    try:     # a static plant: hammerstein and ilc are not named as kinds that work
+        problem = class_kind_problem(model, kind, has_dynamics=dynamic or kind in ("hammerstein",
+                                                                                   "ilc"))
+    except CompensatorError:
+        return []
+    return [f"kind: {problem.split(': ', 1)[-1]}"] if problem else []

@@ -37,13 +37,10 @@ from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.core.schema import closest, short_repr
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
-from hammerstein.compensation.model_classes import MODEL_CLASSES
-from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
-from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.hardware_route import hardware_start
-from hammerstein.scenario.registry import COMPENSATORS, model_file_dynamics
+from hammerstein.scenario.registry import COMPENSATORS, class_problems, model_file_dynamics
 from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_NAME, NAME, PLANT,
                                          TOP, Field, Invalid, ScenarioError, check_table, kind_problem,
                                          known_kind, total_samples_budget)
@@ -405,40 +402,6 @@ def _record_file_problems(identify, base):
     return problems
 
 
-def _class_problems(name, kind, plant, base, files, identify=None):
-    """A kind that the class of a known model (the plant's, or a file's) does not take.
-
-    Run as the registry would refuse it when the compensator is built (``preisach-inverse``
-    over a classical PI validated "ok", then the run failed). Models still to be identified
-    are judged when they are. Returns ``key: message`` strings.
-    """
-    if name in (None, "plant"):
-        model = getattr(plant, "hysteresis", None)
-    elif name == "identified":       # the class the table names (auto: judged when identified)
-        table = identify if isinstance(identify, dict) else {}
-        cls = table.get("model", "auto" if "records" in table else "classical")
-        entry = MODEL_CLASSES.get(cls)
-        if entry is None or kind in entry.kinds:
-            return []
-        return [f"kind: the model identified is a {entry.label} model (identify.model = "
-                f"{cls!r}), which kind {kind!r} does not take; the kinds that work with it: "
-                f"{', '.join(entry.kinds)}"]
-    else:
-        try:
-            model = files.get(confined_path(name, base, PresetError))
-        except PresetError:
-            return []
-    if model is None or isinstance(model, str):
-        return []
-    dynamic = plant is not None and not plant.is_static
-    try:     # a static plant: hammerstein and ilc are not named as kinds that work
-        problem = class_kind_problem(model, kind, has_dynamics=dynamic or kind in ("hammerstein",
-                                                                                   "ilc"))
-    except CompensatorError:
-        return []
-    return [f"kind: {problem.split(': ', 1)[-1]}"] if problem else []
-
-
 def _model_problems(name, identify, plant, base, files):
     """Problems of a ``model`` key that need no identification and no compensator.
 
@@ -695,7 +658,7 @@ def _validate_cases(path, data, feedback=False):
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
             if not more:     # the class registry: a kind the model's class does not take
-                cls = _class_problems(cclean.get("model", "plant"), kind, plant, base,
+                cls = class_problems(cclean.get("model", "plant"), kind, plant, base,
                                       model_files, cclean.get("identify"))
                 said = (kind, str(cclean.get("model", "plant")), tuple(cls))
                 if cls and said in class_said:
