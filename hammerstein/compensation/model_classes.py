@@ -319,7 +319,7 @@ def model_class(model):
                            f"({', '.join(MODEL_CLASSES)})")
 
 
-def kind_problem(model, kind, has_dynamics=True):
+def kind_problem(model, kind, has_dynamics=True, among=None, verb="work"):
     """Why ``kind`` does not work with ``model``, naming the kinds that do (None if it does).
 
     Parameters
@@ -330,6 +330,12 @@ def kind_problem(model, kind, has_dynamics=True):
     has_dynamics : bool
         The actuator file has linear dynamics (``hammerstein`` and ``ilc``
         need them).
+    among : collection of str, optional
+        The kinds the caller offers (``export``'s: not ``ilc``); the others
+        are not named. All by default.
+    verb : str
+        How the kinds named are said to work with it (``"export"``: "the
+        kinds that export it").
 
     Returns
     -------
@@ -344,7 +350,10 @@ def kind_problem(model, kind, has_dynamics=True):
         return None
     why = ("has no dynamics to invert" if kind in entry.kinds else
            f"is a {entry.label} model, which kind {kind!r} does not take")
-    return f"kind {kind!r}: the model {why}; the kinds that work with it: {', '.join(works)}"
+    named = [k for k in works if among is None or k in among]
+    said = "work with it" if verb == "work" else f"{verb} it"
+    return (f"kind {kind!r}: the model {why}"
+            + (f"; the kinds that {said}: {', '.join(named)}" if named else ""))
 
 
 def square_problem(model):

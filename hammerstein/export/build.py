@@ -254,14 +254,12 @@ def compensator_from_source(source, kind="multivariable", gain=None, iterations=
     elif cutoff_hz is not None:
         raise ExportError("cutoff-hz: only used with --feedback lowpass")
     try:
-        problem = kind_problem(source.model, kind, has_dynamics=source.dynamics is not None)
+        problem = kind_problem(source.model, kind, has_dynamics=source.dynamics is not None,
+                               among=KINDS, verb="export")
     except CompensatorError as exc:       # a model of no registered class
         raise ExportError(str(exc)) from None
-    if problem:                  # the class registry decides, and names the kinds that work
-        head, _, works = problem.partition("; the kinds that work with it: ")
-        exportable = [k for k in works.split(", ") if k in KINDS]
-        raise ExportError(head + (f"; the kinds that export it: {', '.join(exportable)}"
-                                  if exportable else ""))
+    if problem:                  # the class registry decides, and names the kinds that export
+        raise ExportError(problem)
     try:
         if kind == "preisach-inverse":
             if gain is not None or iterations is not None or feedback != "delay":
