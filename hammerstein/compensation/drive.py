@@ -212,6 +212,10 @@ class DriveResult:
     start_offset : numpy.ndarray or None, shape (m,)
         The compensator's first sample minus the rest voltages [V], when
         :func:`~hammerstein.compensation.lookahead.taper_preactuation` faded it in.
+    taper_change : float or None
+        The largest change that fade made to any voltage over the rest lead [V]: what the
+        drive differs there from the compensator's own voltages, which the exported C
+        gives (it does not fade them); None when nothing was faded.
     limited, range_limited : bool
         Whether the limits measured on the records shaped the reference (not only the
         band limit below the first mode), and whether their range stage did.
@@ -228,6 +232,7 @@ class DriveResult:
     notes: list = field(default_factory=list)
     rest_lead: int = None
     start_offset: np.ndarray = None
+    taper_change: float = None
     limited: bool = False
     range_limited: bool = False
 
@@ -784,6 +789,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                       limited=limited, range_limited=range_limited)
     if u is not untapered:
         res.start_offset = untapered[:, 0] - (np.zeros(u.shape[0]) if u_rest is None else u_rest)
+        res.taper_change = float(np.max(np.abs(u - untapered)))
     if fade_samples is None and grown:    # what the metrics leave out, said (a raster's lines)
         res.notes.append(f"the fade-in was lengthened from {grown[0] * T:.4g} s to "
                          f"{grown[1] * T:.4g} s, {100 * grown[1] / N:.3g} % of the record, "

@@ -336,9 +336,21 @@ def _first_sample_note(plant, drive, inversion):
     return (("the compensator's first sample was " if tapered else
              "the drive's first sample is ") + ", ".join(
         f"{n} {v:+.3g} V" for n, v in zip(plant.hysteresis.input_names, off))
-            + f" from rest: {why}" + ("; the drive fades it in from rest over the fade's rest "
-                                       "lead, the exported C (which does not) starts there"
-                                       if tapered else ""))
+            + f" from rest: {why}" + (_taper_words(drive) if tapered else ""))
+
+
+def _taper_words(drive):
+    """What the taper of a stable inversion's pre-actuation changed, for the note: the
+    drive against the compensator's voltages (and the exported C's) over the rest lead."""
+    # the first sample alone understated it: 2e-9 V named where the drive and the C then
+    # differed by 1e-2 V, the pre-actuation growing over the lead towards the motion
+    change = getattr(drive, "taper_change", None)
+    lead = getattr(drive, "rest_lead", None) or getattr(drive, "fade_samples", 0) // 10
+    return ("; the drive fades it in from rest over the fade's rest lead"
+            + (f" ({lead} samples)" if lead else "")
+            + (f", where it differs from the compensator's voltages by up to {change:.3g} V"
+               if change is not None else "")
+            + ": the exported C, which does not fade them, gives the compensator's there")
 
 
 def _rest_voltages(plant):

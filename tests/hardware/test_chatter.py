@@ -98,3 +98,18 @@ def test_a_first_sample_off_rest_is_named(first, inversion, said):
     assert (note is None) == (said is None)
     if said:
         assert said in note and f"uy {first:+.3g} V" in note
+
+
+def test_a_tapered_first_sample_names_the_largest_change_over_the_lead():
+    """A drive whose pre-actuation was faded in names how far it differs from the
+    compensator's voltages (the exported C's) over the lead, not only the first sample."""
+    from types import SimpleNamespace
+    from hammerstein.scenario.hardware_route import _first_sample_note
+    plant = SimpleNamespace(amplifier=None,
+                            hysteresis=SimpleNamespace(input_names=["ux", "uy"], n_inputs=2))
+    drive = SimpleNamespace(inputs=np.zeros((2, 3)), start_offset=np.array([2e-6, -5e-6]),
+                            taper_change=0.0123, rest_lead=None, fade_samples=100)
+    note = _first_sample_note(plant, drive, "stable")
+    assert "ux +2e-06 V, uy -5e-06 V" in note
+    assert "(10 samples), where it differs from the compensator's voltages by up to 0.0123 V" \
+        in note and "exported C" in note

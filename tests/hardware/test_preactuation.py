@@ -132,5 +132,9 @@ def test_a_pre_actuation_the_lead_cannot_hold_is_faded_in_from_rest():
     w = fade_weight(np.arange(lead) / lead)
     np.testing.assert_allclose(res.inputs[:, :lead], w * own[:, :lead], rtol=1e-12, atol=0)
     np.testing.assert_array_equal(res.inputs[:, lead:], own[:, lead:])
+    # what the drive differs from the compensator's own (the exported C's) is said, and it
+    # is the largest over the lead, not the first sample's offset, which understates it
+    assert res.taper_change == np.max(np.abs(res.inputs - own))
+    assert res.taper_change > np.max(np.abs(res.start_offset))
     steps = np.abs(np.diff(np.concatenate([np.zeros((2, 1)), res.inputs], axis=1), axis=1))
     assert np.all(steps.max(axis=1) <= np.abs(np.diff(own, axis=1)).max(axis=1))
