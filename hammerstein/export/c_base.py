@@ -600,19 +600,21 @@ def _status_checks(body, model, precision, N, limits):
     bound = reference_bound(model, limits)
     if precision == "float":        # float's largest is 3.4e38
         bound = min(bound, 1e30)
-    ref = f"""    if (s->diverged) {{  /* latched: hold the last valid voltages until {N}_init */
-        for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = {hold}[k];
-        return {N}_STATUS_DIVERGED;
-    }}
-    {{  /* a NaN or infinite reference, or one beyond {N}_reference_bound (no position: a glitch):
-           the sample is skipped (voltages held, state kept) */
+    # the reference is judged before the latch: after a divergence a NaN returned the
+    # divergence bit alone, and a caller that watches the range bit missed its sensor's fault
+    ref = f"""    {{  /* a NaN or infinite reference, or one beyond {N}_reference_bound (no position: a glitch):
+           the sample is skipped (voltages held, state kept), on a latched divergence too */
         int i;
         for (i = 0; i < {N}_N_OUTPUTS; ++i)
             if (!isfinite(reference[i]) || reference[i] > {N}_reference_bound
                     || reference[i] < -{N}_reference_bound) {{
                 for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = {hold}[k];
-                return {N}_STATUS_RANGE;
+                return s->diverged ? ({N}_STATUS_RANGE | {N}_STATUS_DIVERGED) : {N}_STATUS_RANGE;
             }}
+    }}
+    if (s->diverged) {{  /* latched: hold the last valid voltages until {N}_init */
+        for (k = 0; k < {N}_N_INPUTS; ++k) voltage[k] = {hold}[k];
+        return {N}_STATUS_DIVERGED;
     }}"""
     decls, rng = [f"static const {N}_real {N}_reference_bound = {_lit(bound, precision)};  "
                   f"/* {REFERENCE_SPAN:g} x the model's largest |output| over its input range: "

@@ -275,10 +275,14 @@ def test_divergence_flag_and_hold(harness):
         warnings.simplefilter("ignore")
         comp.simulate(yr)
     k = info.value.sample
+    bad = k + 50                                               # a NaN after the latch
+    yr[0, bad] = np.nan
     u_c, status, _ = harness(export_c(comp, "lit", T)).run(yr)
     first = int(np.flatnonzero(status & STATUS_DIVERGED)[0])
     assert first == k
-    assert np.all(status[k:] == STATUS_DIVERGED)
+    # latched from then on; the NaN sets the range bit too (it returned 2 alone)
+    assert status[bad] == STATUS_DIVERGED | STATUS_RANGE
+    assert np.all(np.delete(status[k:], bad - k) == STATUS_DIVERGED)
     assert np.all(u_c[:, k:] == u_c[:, [k - 1]])               # held at the last valid voltages
     u_py = python_voltages(comp, yr[:, :k])
     assert rel_error(u_c[:, :k], u_py) <= 1e-12
