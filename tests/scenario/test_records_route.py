@@ -11,6 +11,7 @@ same reference.
 
 import itertools
 import tomllib
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -471,3 +472,37 @@ def test_the_sine_route_names_the_class_it_identified(ident, words, file):
     from hammerstein.report.compensator_words import _identify_summary
     from hammerstein.report.model_files import model_file_name
     assert _identify_summary(ident) == words and model_file_name(ident) == file
+
+
+@pytest.mark.parametrize("scale, warned", [(1.0, False), (1000.0, True)])
+def test_a_files_table_warns_of_an_output_in_another_unit_as_identify_does(
+        hysteresis_files, monkeypatch, scale, warned):
+    """`identify = { records = "files" }` reads the user's files as `identify` does, with its
+    unit check: the same records written in nm (1000 times the µm) are named before
+    anything is identified, and the same records in µm are not."""
+    from hammerstein.scenario import records_route
+    d, files = hysteresis_files
+    scaled = []
+    for name in files:
+        rows = np.loadtxt(d / name, delimiter=",", skiprows=1)
+        header = (d / name).read_text().splitlines()[0]
+        rows[:, 3:] *= scale                       # t, ux, uy, then the outputs x, y
+        np.savetxt(d / f"nm{scale:g}-{name}", rows, delimiter=",", header=header, comments="",
+                   fmt="%.17g")
+        scaled.append(f"nm{scale:g}-{name}")
+
+    class Stop(Exception):
+        pass
+
+    def stop(*args, **kwargs):                     # the fit itself is not what is judged here
+        raise Stop
+    monkeypatch.setattr(records_route.identification_pipeline, "identify_pipeline", stop)
+    plant = load_plant(d / "plant.toml")
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(Stop):
+        warnings.simplefilter("always")
+        records_route.identified_from_records(
+            plant, {"records": "files", "hysteresis_records": scaled}, False, base_dir=d)
+    said = [str(w.message) for w in caught if "spans" in str(w.message)]
+    assert bool(said) == warned, said
+    if warned:
+        assert said[0].startswith("identify (records = 'files'): output 'x' spans")
