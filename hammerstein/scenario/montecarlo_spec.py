@@ -119,6 +119,15 @@ def _noise(v):
 VARY = {**{k: Field(_distribution) for k in VARIED}, "noise": Field(_noise)}
 
 
+def _loop_noise(data):
+    """Whether a study's [feedback] table gives its loop a sensor noise, seeded per case
+    (what makes its cases differ with nothing in [sweeps.vary])."""
+    fb = data.get("feedback")
+    sensor = fb.get("sensor") if isinstance(fb, dict) else None
+    noise = sensor.get("noise_nm", 0.0) if isinstance(sensor, dict) else 0.0
+    return isinstance(noise, (int, float)) and not isinstance(noise, bool) and noise > 0
+
+
 def _frequencies(v):
     if (isinstance(v, list) and v and all(isinstance(f, (int, float)) and not isinstance(f, bool)
                                           and math.isfinite(f) and f > 0 for f in v)
@@ -370,6 +379,13 @@ def validate_montecarlo(path, data):
             modes = oscillating_modes(plant.sampled_dynamics)
             if not len(modes[0]):
                 modes, modal = None, False
+        if not vary and not _loop_noise(data):
+            # 200 cases of one plant, each the nominal one, ran without a word: a forgotten
+            # [sweeps.vary] table spent the study's budget on one result
+            problems.append(f"{source}: {where}.vary: nothing varies: each of the {c['cases']} "
+                            f"cases would be the nominal plant; give one or more of "
+                            f"{', '.join(VARY)} in [sweeps.vary] (one nominal run is a "
+                            f"[[cases]] scenario)")
         if "feedback" in data and "noise" in vary:
             problems.append(f"{source}: {where}.vary.noise: with [feedback] the sensor noise is in "
                             f"the loop; give it as feedback.sensor.noise_nm")

@@ -3,6 +3,7 @@ distributions, streaming quantiles against naive references, validation messages
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -93,7 +94,7 @@ def test_metrics_equal_a_naive_simulation_of_the_drawn_plant(study):
 
 
 def test_no_variation_gives_the_nominal_plant(tmp_path):
-    s = _study(tmp_path, vary="")
+    s = dataclasses.replace(_study(tmp_path), vary={})     # what validation now refuses
     plant, nominal = mc.case_plant(s, 4), s.plant
     for row_a, row_b in zip(plant.hysteresis.components, nominal.hysteresis.components):
         for a, b in zip(row_a, row_b):
@@ -263,6 +264,24 @@ def test_bad_vary_tables_name_the_field(tmp_path, vary, expect):
         validate_scenario(f)
 
 
+def test_a_study_that_varies_nothing_is_refused_unless_its_loop_has_noise(tmp_path):
+    """Nothing in [sweeps.vary] (or no table): every case would be the nominal plant, so
+    the study is refused, naming the table and what it takes; with a [feedback] loop whose
+    sensor is noisy (seeded per case) the cases differ and the study stands."""
+    f = tmp_path / "none.toml"
+    for vary in ("", None):
+        text = STUDY.format(vary="")
+        f.write_text(text if vary is not None else text.replace("[sweeps.vary]\n", ""))
+        with pytest.raises(ScenarioError, match=r"sweeps\[0\]\.vary: nothing varies: each of "
+                                                r"the 7 cases would be the nominal plant; give "
+                                                r"one or more of weights, "):
+            validate_scenario(f)
+    loop = ('\n[feedback]\nsensor = { noise_nm = 10.0 }\n[feedback.axes.x]\nkind = "integral"\n'
+            'crossover_hz = 60.0\n[feedback.axes.y]\nkind = "integral"\ncrossover_hz = 60.0\n')
+    f.write_text(STUDY.format(vary="").replace("[sweeps.vary]\n", "") + loop)
+    assert validate_scenario(f).studies[0].vary == {}
+
+
 @pytest.mark.parametrize("edit, expect", [
     (lambda s: s.replace("[plant]", "[[cases]]\nname = \"x\"\ndrive = { kind = \"sine\", input = \"ux\", "
                          "amplitude = 1.0, frequency = 10.0 }\n[plant]"), "cases:"),
@@ -394,7 +413,8 @@ def test_cli_on_a_scheduler_and_two_workers_started_by_hand(tmp_path):
 @pytest.mark.parametrize("amplitude, expect", [(20.0, 0), (500.0, 1)])
 def test_range_warning_is_reported_once_per_study_not_per_case(tmp_path, amplitude, expect):
     f = tmp_path / "s.toml"
-    f.write_text(STUDY.format(vary="").replace("amplitude = 20.0", f"amplitude = {amplitude}"))
+    f.write_text(STUDY.format(vary="noise = { sd = 0.01 }").replace("amplitude = 20.0",
+                                                                  f"amplitude = {amplitude}"))
     res, = mc.run_montecarlo_scenario(validate_scenario(f))
     assert len(res.warnings) == expect                       # 7 cases x 2 frequencies: one line
     assert all("beyond the range" in w for w in res.warnings)
