@@ -132,11 +132,13 @@ class ScenarioError(HammersteinError, ValueError):
     Attributes
     ----------
     problems : list of str
-        One ``file: key: message`` line per problem.
+        One ``file: key: message`` line per problem, each once, in the order first found.
     """
 
     def __init__(self, problems):
-        self.problems = list(problems)
+        # a case that overrides the plant loads its preset again: a missing preset was
+        # named twice, word for word
+        self.problems = list(dict.fromkeys(problems))
         super().__init__("\n".join(self.problems))
 
 

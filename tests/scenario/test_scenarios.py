@@ -252,6 +252,19 @@ def test_a_bad_preset_is_reported_with_missing_cases(tmp_path):
     assert "did you mean 'rakotondrabe-2dof'" in text
 
 
+def test_a_missing_preset_is_named_once_when_a_case_overrides_the_plant(tmp_path, repo_root):
+    """The default scenario with its preset misspelled: its static case (plant = {
+    dynamics = false }) loads the preset again, and the same line was printed twice."""
+    text = (repo_root / "scenarios" / "default.toml").read_text()
+    path = tmp_path / "s.toml"
+    path.write_text(text.replace('preset = "rakotondrabe-2dof"', 'preset = "nope"'))
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    assert len(err.value.problems) == 1 and "plant.preset: nope: not a bundled preset" \
+        in err.value.problems[0], err.value.problems
+    assert ScenarioError(["a", "b", "a"]).problems == ["a", "b"]
+
+
 def test_a_fade_in_that_leaves_no_period_is_named_with_its_case(tmp_path):
     """Six periods of a 300 Hz sine are 0.02 s, the shortest fade compensate gives an
     identified preset (records' amplifier, dynamics): the metrics, which start at the fade's
