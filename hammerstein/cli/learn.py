@@ -16,7 +16,7 @@ the error is advanced by it before learning; when one sample is less than
 tell the delay from the model's phase error (give ``--delay N``). A reference that repeats after
 its fade-in is learnt per harmonic of its period from two periods after the
 fade-in on (:func:`hammerstein.compensation.ilc.repeating_from`, gains
-``gamma |Q|^2`` per harmonic, not learnt at the noise floor); with
+``gamma |Q|`` per harmonic, not learnt at the noise floor); with
 ``--history DIR`` the per-harmonic gains carry over from trial to trial in
 ``DIR/harmonics.csv`` (halved where a harmonic's error keeps growing).
 What is learnt for it is the reference the compensator follows

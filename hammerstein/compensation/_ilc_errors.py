@@ -290,7 +290,7 @@ def periodic_snr(error, period_samples, start, weights=None):
         First sample of the periodic part.
     weights : array_like, shape (P // 2 + 1,), optional
         Weight per harmonic of the period (the learning's band, e.g. its
-        gains ``gamma |Q(f_h)|^2``): ``rho`` is then the weighted energy of
+        gains ``gamma |Q(f_h)|``): ``rho`` is then the weighted energy of
         the averaged error's harmonics over that of the noise
         (:func:`periodic_error`), so that the noise outside the band the
         learning acts on does not hide the error inside it. Default: every

@@ -192,13 +192,14 @@ def inverse_gain_ratio(dynamics, frequencies_hz, sampling_period):
 
 def harmonic_base_gains(learning, period_samples, plant_dynamics=None, band_hz=None,
                         inverse_limit=None):
-    """Starting gain per harmonic of the period: ``gamma |Q(f_h)|^2`` where the condition holds, else 0.
+    """Starting gain per harmonic of the period: ``gamma |Q(f_h)|`` where the condition holds, else 0.
 
-    Harmonic h (``f_h = h / (P T)``) learns with ``gamma |Q(f_h)|^2``, Q
-    the zero-phase Butterworth of cut-off ``band_hz`` (the time-domain
-    law's Q, sampled at the harmonics) and, when the plant's dynamics G
+    Harmonic h (``f_h = h / (P T)``) learns with ``gamma |Q(f_h)| = gamma
+    |B(f_h)|^2``, Q the time-domain law's zero-phase filter (the Butterworth B
+    of cut-off ``band_hz`` run forward and backward, sampled at the harmonics)
+    and, when the plant's dynamics G
     are known (a simulated actuator), only where
-    ``||I - gamma |Q|^2 Ghat(z_h)^-1 G(z_h)|| < 1`` at
+    ``||I - gamma |Q| Ghat(z_h)^-1 G(z_h)|| < 1`` at
     ``z_h = exp(2 pi j h / P)`` (the per-harmonic monotonic-convergence
     condition of the exact periodic inverse); 0 elsewhere.
 
@@ -238,7 +239,7 @@ def harmonic_base_gains(learning, period_samples, plant_dynamics=None, band_hz=N
     gamma = learning.learning_gain
     if band_hz is None:
         base = np.full(fh.shape, gamma)
-    else:                                       # |Q|^2 of the time-domain law at f_h
+    else:           # |Q| = |B|^2 of the time-domain law's forward-backward B at f_h
         b, a = _scipy_signal().butter(learning.q_order, band_hz, fs=1.0 / T)
         _, q = _scipy_signal().freqz(b, a, worN=fh, fs=1.0 / T)
         base = gamma * np.abs(q) ** 2

@@ -24,7 +24,7 @@ from hammerstein.compensation._ilc_harmonics import _frequency_response
 
 
 class IterativeLearning:
-    """The ILC law ``u_{k+1} = Q(u_k + L e_k)`` of a Hammerstein model (see the module docstring).
+    """The ILC law ``u_{k+1} = u_k + Q(L e_k)`` of a Hammerstein model (see the module docstring).
 
     Parameters
     ----------

@@ -13,8 +13,8 @@ dynamics), where the Hammerstein model ``y = G Gamma(u)`` is linear::
 To first order this is ``u_{k+1} = u_k + Q L e_k`` with ``L = J_k^-1
 gamma G^-1``, the inverse of the model linearised along the trajectory
 (``J_k`` the PI's slope matrix along ``u_k``, ascending and descending
-branches each with their own slopes), which is the law
-``u_{k+1} = Q(u_k + L e_k)`` with Q acting on the update only:
+branches each with their own slopes): Q acts on the update only, not on
+the drive as in the textbook law ``u_{k+1} = Q(u_k + L e_k)``:
 
 * ``G^-1`` is the inverse of the model's dynamics over the whole record
   (ZPETC or stable inversion,

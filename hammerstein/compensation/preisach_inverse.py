@@ -208,10 +208,11 @@ class PreisachInverseCompensator:
     method : {'root', 'multiplicative'}
         Exact root per sample, or the inverse multiplicative law (for comparison).
     input_bound : array_like, shape (m,), optional
-        Inputs are kept in ``[-input_bound, input_bound]`` [V]; default the
-        model's ``input_range`` (the records' range, e.g. 0..100 V for a
+        Inputs are kept in ``[-input_bound, input_bound]`` [V] when given.
+        Default: the model's ``input_range`` ``[low, high]`` per input (the
+        records' range, which need not be symmetric, e.g. 0..100 V for a
         unipolar stack: below it the identified reversible terms are
-        extrapolated and may turn back), else 1.2 x its
+        extrapolated and may turn back), else ``[-b, b]`` with b 1.2 x its
         ``input_amplitude``, else the switching grid's extent.
     tolerance : float
         Root tolerance on each direct path's output [µm] (default 1e-12: the

@@ -418,7 +418,7 @@ COMPENSATORS["ilc"] = CompensatorKind(
      "fade_in": Field(number("s", 0, exclusive=False)),
      "limits": Field(choice(*LIMITS))},
     "iterative learning control against the plant from another kind's drive: u_k+1 = "
-    "Q(u_k + L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.compensation.ilc)",
+    "u_k + Q(L e_k), L the inverse Hammerstein model along the trajectory (hammerstein.compensation.ilc)",
     look_ahead=True, fades_in=True)
 
 
