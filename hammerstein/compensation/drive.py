@@ -1,6 +1,6 @@
 """Drive signals: the voltages to apply for a reference, within the amplifier's limits.
 
-Length: about 980 lines: the drive of the scenarios (:func:`drive_signal`;
+Length: about 950 lines: the drive of the scenarios (:func:`drive_signal`;
 :class:`DriveStream` lives in :mod:`hammerstein.compensation.drive_stream`) and
 of the hardware commands (:func:`hardware_drive`: fade-in, shaping, limits)
 share the fade and start-up rules, kept in one place; the drive files and the
@@ -45,12 +45,13 @@ reference shaping of :func:`hardware_drive` in
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from hammerstein.models.amplifier import Amplifier, drive_metrics, slew_limit
 from hammerstein.compensation._repeat import REPEAT_SAMPLES, record_period, repeat_lag
+from hammerstein.compensation.drive_result import DriveResult
 from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
 from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
@@ -68,6 +69,7 @@ __all__ = ["DriveResult", "DriveStream", "drive_signal", "default_fade_samples",
            "rest_output", "compensator_rest", "hardware_fade", "fade_weight", "read_signals", "signals_csv", "DRIVE_MARK"]
 
 DriveStream.__module__ = __name__       # documented (and pickled) as this module's
+DriveResult.__module__ = __name__
 
 
 def starts_at_rest(reference, rest=None, atol=1e-9):
@@ -177,64 +179,6 @@ def _fade_within_slew(u, fade, rest, limit):
     steps = np.abs(np.diff(np.concatenate([rest[:, None], u], axis=1), axis=1))
     after = np.max(steps[:, fade + 1:], axis=1) if steps.shape[1] > fade + 1 else 0.0
     return bool(np.all(np.max(steps[:, :fade + 1], axis=1) <= np.maximum(limit, after) * (1 + 1e-9)))
-
-
-@dataclass
-class DriveResult:
-    """Voltages for a reference and what they ask of the amplifier.
-
-    Parameters
-    ----------
-    inputs : numpy.ndarray, shape (m, n_samples)
-        The drive [V]: the commanded voltages, range-clipped and slew-limited
-        when an amplifier is given and ``limits`` is not ``"error"``.
-    commanded : numpy.ndarray, shape (m, n_samples)
-        The compensator's voltages before any limit [V].
-    reference : numpy.ndarray, shape (p, n_samples)
-        The faded reference the actuator should follow [µm].
-    peak_input : numpy.ndarray, shape (m,)
-        ``max |u|`` of ``commanded`` [V].
-    peak_slew : numpy.ndarray, shape (m,)
-        ``max |du| / T`` of ``commanded`` from rest [V/s].
-    fade_samples : int
-        The fade-in used [samples].
-    problems : list of str
-        The limits exceeded (empty without an amplifier).
-    shaped : list of str
-        Where and by how much the drive was shaped into the limits measured on
-        the identification records (:func:`shape_drive`; empty when not).
-    notes : list of str
-        What the drive cannot do, named for the user (e.g. a harmonic of the reference
-        at a bending mode: :func:`hammerstein.compensation.shaping.mode_note`).
-    rest_lead : int or None
-        The fade-in's first samples at rest (:func:`hardware_fade`'s ``lead``) when more
-        than a tenth of it (a stable inversion's pre-actuation); None otherwise.
-    start_offset : numpy.ndarray or None, shape (m,)
-        The compensator's first sample minus the rest voltages [V], when
-        :func:`~hammerstein.compensation.lookahead.taper_preactuation` faded it in.
-    taper_change : float or None
-        The largest change that fade made to any voltage over the rest lead [V]: what the
-        drive differs there from the compensator's own voltages, which the exported C
-        gives (it does not fade them); None when nothing was faded.
-    limited, range_limited : bool
-        Whether the limits measured on the records shaped the reference (not only the
-        band limit below the first mode), and whether their range stage did.
-    """
-
-    inputs: np.ndarray
-    commanded: np.ndarray
-    reference: np.ndarray
-    peak_input: np.ndarray
-    peak_slew: np.ndarray
-    fade_samples: int
-    problems: list = field(default_factory=list)
-    shaped: list = field(default_factory=list)
-    notes: list = field(default_factory=list)
-    rest_lead: int = None
-    start_offset: np.ndarray = None
-    taper_change: float = None
-    limited: bool = False
-    range_limited: bool = False
 
 
 def drive_signal(compensator, reference, sampling_period, period_samples=None, fade_samples=None,
@@ -933,7 +877,7 @@ def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, in
                      f"for a drive that steps no faster than the "
                      f"settled drive ({ins + '; ' if ins else ''}the settled drive's largest step "
                      + ", ".join(f"{b:.3g}" for b in bound) + " V), the drive the compensator's "
-                     f"for the reference written"], late
+                     "for the reference written"], late
 
 
 def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
