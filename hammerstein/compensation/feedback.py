@@ -282,7 +282,13 @@ class FeedbackLoop:
     anti_windup : {'back-calculation', 'clamping', 'none'}
         Back-calculation ``x_c += K_aw (a - u)`` on the integrator states
         with ``K_aw = T / tracking_time`` per channel (Astrom and Hagglund);
-        clamping freezes them while a channel saturates.
+        clamping (conditional integration) keeps each one while the channel
+        it drives most is limited and its update would push that channel
+        further past the limit: per channel, so that one axis's saturation
+        does not freeze another's controller, and released as soon as the
+        error turns (a transfer-function controller, all of whose states
+        count as integrators, locked up in a limit cycle at 165-212 % of a
+        circle's radius when every state froze on any saturation).
     tracking_time : float, optional
         Back-calculation time constant [s]; default 1 / (2 pi 100 Hz).
     reference_filter : bool
@@ -358,6 +364,10 @@ class FeedbackLoop:
                 Kaw[i, k] = T / self.tracking_time / (Ck[k, i] if Ck[k, i] != 0 else 1.0)
         elif anti_windup == "clamping" and n:
             aw = AW_CLAMP
+        clamp = np.full(n, -1, np.int64)      # the channel whose limit clamps each integrator
+        for i in np.flatnonzero(mask):
+            if np.any(Ck[:, i]):
+                clamp[i] = int(np.argmax(np.abs(Ck[:, i])))
         if amplifier is None:
             low, high, slew = np.full(m, -np.inf), np.full(m, np.inf), np.full(m, np.inf)
         else:
@@ -368,7 +378,7 @@ class FeedbackLoop:
                 raise FeedbackError(f"amplifier: expected low < high, found {low} and {high}")
         self._loop = LoopArrays(*(np.ascontiguousarray(M, dtype=float)
                                   for M in (As, Bs, Cs, Ds, Ak, Bk, Ck, Dk, Kaw)),
-                                np.ascontiguousarray(mask, dtype=np.bool_),
+                                clamp,
                                 low, high, np.ascontiguousarray(slew, dtype=float), self._y_off,
                                 int(self.sensor.delay), aw)
 

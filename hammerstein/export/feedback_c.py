@@ -270,7 +270,7 @@ static const double BK[{max(nc, 1)}][{2 * p + m}] = {_mat(c.B) if nc else '{{0.0
 static const double CK[{m}][{max(nc, 1)}] = {_mat(c.C) if nc else '{{0.0}}'};
 static const double DK[{m}][{2 * p + m}] = {_mat(c.D)};
 static const double KAW[{max(nc, 1)}][{m}] = {_mat(L.Kaw) if nc else '{{0.0}}'};
-static const int CLAMP[{max(nc, 1)}] = {{{', '.join(str(int(v)) for v in L.clamp) or '0'}}};
+static const int CLAMP[{max(nc, 1)}] = {{{', '.join(str(int(v)) for v in L.clamp) or '-1'}}};  /* channel clamping each integrator, -1 none */
 static const double LOW[{m}] = {_vec(L.low)};
 static const double HIGH[{m}] = {_vec(L.high)};
 static const double SLEW[{m}] = {_vec(L.slew)};
@@ -290,7 +290,7 @@ void {N}_init({N}_state *s)
 int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
              const double measurement[{N}_N_OUTPUTS], double voltage[{N}_N_INPUTS])
 {{
-    double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}];
+    double f[{m}], u[{m}], a[{m}], e[{2 * p + m}], rnow[{p}], xn[{max(nc, 1)}], sat[{m}];
     int status = 0, saturated = 0, blind = 0, i, j, k, l;
     for (l = 0; l < {p}; ++l)  /* a NaN, infinite or glitch reference: the sample is skipped */
         if (!isfinite(reference[l]) || fabs(reference[l]) > {bound}) {{
@@ -328,6 +328,7 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
         if (v < lo) v = lo;
         if (v > HIGH[k]) v = HIGH[k];
         if (v < LOW[k]) v = LOW[k];
+        sat[k] = v != acc ? (acc > v ? 1.0 : -1.0) : 0.0;
         if (v != acc) saturated = 1;
         a[k] = v;
         s->a[k] = v;
@@ -337,12 +338,14 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
         for (j = 0; j < {nc}; ++j) acc += AK[i][j] * s->xc[j];
         for (j = 0; j < {2 * p + m}; ++j) acc += BK[i][j] * e[j];
         if ({aw} == 1) {{ for (k = 0; k < {m}; ++k) acc += KAW[i][k] * (a[k] - u[k]); }}
-        else if ({aw} == 2 && saturated && CLAMP[i]) acc = s->xc[i];
+        else if ({aw} == 2 && saturated && CLAMP[i] >= 0 && sat[CLAMP[i]] != 0.0
+                 && CK[CLAMP[i]][i] * (acc - s->xc[i]) * sat[CLAMP[i]] > 0.0)
+            acc = s->xc[i];  /* conditional integration: not pushed further past the limit */
         xn[i] = acc;
     }}
     for (i = 0; i < {nc}; ++i) s->xc[i] = xn[i];
     for (k = 0; k < {m}; ++k) voltage[k] = a[k];
-    (void)AK; (void)BK; (void)KAW; (void)CLAMP; (void)xn; (void)j;
+    (void)AK; (void)BK; (void)KAW; (void)CLAMP; (void)xn; (void)j; (void)sat;
     return status | saturated;
 }}
 """

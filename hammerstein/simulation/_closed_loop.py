@@ -14,8 +14,11 @@ At sample t, with the plant strictly proper or the measurement delayed
    feedforward ``f_t``), ``u_t = f_t + v_t``, ``a_t`` = ``u_t`` slew-limited then clipped to the
    amplifier range;
 4. ``xc <- Ak xc + Bk [r_t; m_t; f_t]`` plus the anti-windup: back-calculation
-   ``+ Kaw (a_t - u_t)``, or clamping (the masked integrator states keep
-   their value while a channel is saturated);
+   ``+ Kaw (a_t - u_t)``, or clamping: conditional integration per channel,
+   an integrator state of the controller that drives channel k keeps its value
+   while k is limited and its update would push k further past the limit
+   (``Ck[k, i] dxc_i`` of the sign of ``u_k - a_k``), and moves otherwise, so
+   that it unwinds as soon as the error turns;
 5. ``h_t = Gamma(a_t)`` (the hysteresis, its states committed),
    ``y_t = C x_t + D h_t (+ offset)``, ``x <- A x + B h_t``.
 
@@ -107,8 +110,9 @@ class LoopArrays(NamedTuple):
         The discrete controller, inputs ``[r; m; f]`` (2 p + m) -> voltages (m).
     Kaw : numpy.ndarray, shape (n_c, m)
         Back-calculation gain.
-    clamp : numpy.ndarray of bool, shape (n_c,)
-        States frozen by clamping while a channel saturates.
+    clamp : numpy.ndarray of int64, shape (n_c,)
+        The channel each integrator state drives most (``argmax_k |Ck[k, i]|``),
+        whose limit clamps it; -1 for a state never clamped.
     low, high : numpy.ndarray, shape (m,)
         Amplifier range [V].
     slew : numpy.ndarray, shape (m,)
@@ -258,6 +262,7 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
     xn = np.empty(nx)
     xsn = np.empty(ns)
     xcn = np.empty(nc)
+    sat = np.zeros(m)
     pos = st.pos[0]
     for t in range(N):
         # 1. the sensed position
@@ -295,6 +300,7 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
             e[2 * p + k] = f[k, t]
         saturated = False
         for k in range(m):
+            sat[k] = 0.0
             acc = f[k, t]
             for i in range(nc):
                 acc += loop.Ck[k, i] * st.xc[i]
@@ -314,6 +320,7 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
                 v = loop.low[k]
             if v != acc:
                 saturated = True
+                sat[k] = 1.0 if acc > v else -1.0
             a[k] = v
             st.a[k] = v
         # 4. the controller's state, with the anti-windup
@@ -326,8 +333,10 @@ def closed_loop_kernel(r, f, noise, kind, pi, ca, plant, loop, st, y, a_out, m_o
             if loop.aw == AW_BACK:
                 for k in range(m):
                     acc += loop.Kaw[i, k] * (a[k] - u[k])
-            elif loop.aw == AW_CLAMP and saturated and loop.clamp[i]:
-                acc = st.xc[i]
+            elif loop.aw == AW_CLAMP and saturated and loop.clamp[i] >= 0:
+                c = loop.clamp[i]      # its channel limited, and the update pushes it further
+                if sat[c] != 0.0 and loop.Ck[c, i] * (acc - st.xc[i]) * sat[c] > 0.0:
+                    acc = st.xc[i]
             xcn[i] = acc
         for i in range(nc):
             st.xc[i] = xcn[i]
