@@ -305,9 +305,10 @@ def state_line(header):
     Returns
     -------
     str or None
-        The reals (``NAME_STATE_REALS``), the ints of the state struct, their bytes
-        without the compiler's padding, and ``NAME_PREVIEW``; None when the header
-        holds no state struct.
+        The reals (``NAME_STATE_REALS``), the ints of the state struct
+        (``NAME_STATE_INTS`` when the header states them: a closed loop's struct holds
+        its feedforward's), their bytes without the compiler's padding, and
+        ``NAME_PREVIEW``; None when the header holds no state struct.
 
     Examples
     --------
@@ -326,6 +327,9 @@ def state_line(header):
     ints = 0
     for member in re.findall(r"^\s*int \w+(?:\[(\d+)\])?;", body.group(1), re.M):
         ints += int(member) if member else 1
+    stated = re.search(r"#define \w+_STATE_INTS (\d+)", header)   # a struct in a struct
+    if stated:
+        ints = int(stated.group(1))
     n = int(reals.group(2))
     size = 8 if kind.group(1) == "double" else 4
     text = (f"state: {n} reals ({kind.group(1)}) and {ints} ints, {n * size + 4 * ints} B "

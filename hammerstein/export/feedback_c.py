@@ -37,7 +37,9 @@ the loop from a ``[feedback]`` table and writes these files.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -112,6 +114,16 @@ class FeedbackCExport:
         if self.feedforward is not None:
             out.update(self.feedforward.files())
         return out
+
+
+def _struct_ints(header):
+    """The ints of the state struct of an exported header (a member ``int name[n];``
+    counts n)."""
+    body = re.search(r"typedef struct \{\n(.*?)\n\} \w+_state;", header, re.S)
+    if body is None:
+        return 0
+    return sum(int(n) if n else 1
+               for n in re.findall(r"^\s*int \w+(?:\[(\d+)\])?;", body.group(1), re.M))
 
 
 def _lit(x):
@@ -206,6 +218,10 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
     rest = (list(ff.rest_reference) if ff is not None and getattr(ff, "rest_reference", None)
             else at_rest)
     first = f"{MARKER} {version} (feedback controller) */".replace("  ", " ")
+    # the struct the caller allocates, the feedforward's inside it: a user read the
+    # feedforward's 824 B where sizeof(NAME_state) is 1024 B
+    reals = max(nc, 1) + 2 * m + max(P, 1) * p + (ff.state_reals if ff else 0)
+    ints = 1 + (_struct_ints(ff.header) if ff else 0)
     header = f"""{first}
 #ifndef {N}_H
 #define {N}_H
@@ -218,6 +234,10 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
 #define {N}_STATUS_LIMIT {STATUS_LIMIT}
 #define {N}_STATUS_DIVERGED {STATUS_DIVERGED}
 #define {N}_STATUS_RANGE {STATUS_RANGE}
+#define {N}_STATE_BYTES sizeof({N}_state)
+#define {N}_STATE_REALS {reals}
+#define {N}_STATE_INTS {ints}
+#define {N}_BUILD_ID @BUILD_ID@
 
 /*
  * {N}_init(&s) once (at rest), then every sampling period {N}_SAMPLING_PERIOD:
@@ -264,6 +284,10 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
 #include <math.h>
 #include <string.h>
 #include "{N}.h"
+
+#if !defined({N}_BUILD_ID) || {N}_BUILD_ID != @BUILD_ID@
+#error "{N}.h is not the header exported with this {N}.c (export writes the two together: use both of one run)"
+#endif
 
 static const double AK[{max(nc, 1)}][{max(nc, 1)}] = {_mat(c.A)};
 static const double BK[{max(nc, 1)}][{2 * p + m}] = {_mat(c.B) if nc else '{{0.0}}'};
@@ -349,6 +373,11 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     return status | saturated;
 }}
 """
+    # the fingerprint of this pair, over its code (not its comments), as the feedforward's
+    code = "\n".join(line for t in (header, source) for line in t.splitlines()
+                     if not line.lstrip().startswith(("/*", "*", "//")))
+    build_id = "0x" + hashlib.sha256(code.encode()).hexdigest()[:8] + "UL"
+    header, source = (t.replace("@BUILD_ID@", build_id) for t in (header, source))
     what = "; ".join(c.descriptions)
     description = (f"feedback controller ({what}) with "
                    + (ff.description if ff else "no feedforward"))

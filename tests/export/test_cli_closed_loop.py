@@ -4,6 +4,7 @@ loop (:class:`hammerstein.compensation.feedback.FeedbackLoop`) sample by sample.
 
 from __future__ import annotations
 
+import re
 import subprocess
 import warnings
 from pathlib import Path
@@ -226,3 +227,31 @@ def test_closed_loop_fmu_equals_the_python_loop(tmp_path, capsys):
                             output_interval=5e-5, input=sig, output=names[4:])
     u = np.vstack([sim[o] for o in names[4:6]])[:, 1:n + 1]
     assert rel_error(u, res.inputs) <= 1e-12
+
+
+@needs_cc
+def test_closed_loop_states_the_size_the_caller_allocates_and_guards_its_pair(tmp_path, capsys):
+    """`export --closed-loop` printed the feedforward's state (sizeof(loop_ff_state)) as
+    the state: the caller allocates loop_state, which holds it. The loop's header states
+    its size as the compensator's does, and its .c refuses another run's header."""
+    out, stdout = _export(tmp_path, capsys, "hammerstein")
+    header = (out / "loop.h").read_text()
+    for macro in ("loop_STATE_BYTES sizeof(loop_state)", "loop_STATE_REALS", "loop_BUILD_ID"):
+        assert f"#define {macro}" in header
+    said = [line for line in stdout.splitlines() if line.startswith("state:")]
+    assert said and "(sizeof(loop_state))" in said[0], stdout
+    before_padding = int(re.search(r", (\d+) B before padding", said[0]).group(1))
+    probe = out / "size.c"
+    probe.write_text('#include <stdio.h>\n#include "loop.h"\nint main(void) { printf("%lu %d\\n", '
+                     '(unsigned long)sizeof(loop_state), loop_STATE_REALS); return 0; }\n')
+    exe = out / "size"
+    subprocess.run([COMPILERS[0], *CFLAGS, "-I", str(out), "-o", str(exe), str(probe)], check=True)
+    size, reals = (int(v) for v in subprocess.run([str(exe)], capture_output=True, text=True,
+                                                   check=True).stdout.split())
+    assert before_padding <= size < before_padding + 64          # the padding only
+    assert reals * 8 < size
+    # the pair's fingerprint: another run's header (here one byte of code changed) is refused
+    (out / "loop.h").write_text(header.replace("#define loop_BUILD_ID 0x", "#define loop_BUILD_ID 0x1"))
+    res = subprocess.run([COMPILERS[0], *CFLAGS, "-c", "-o", str(out / "l.o"), str(out / "loop.c")],
+                         capture_output=True, text=True)
+    assert res.returncode != 0 and "is not the header exported with this loop.c" in res.stderr
