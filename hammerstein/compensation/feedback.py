@@ -70,6 +70,28 @@ __all__ = ["AXIS_KINDS", "METHODS", "ANTI_WINDUP", "Controller", "Sensor", "Ampl
 #: anti-windup schemes
 ANTI_WINDUP = ("back-calculation", "clamping", "none")
 
+#: The widest sector factor :meth:`FeedbackLoop.stability_check` looks for.
+SECTOR_FACTOR_MAX = 1000.0
+
+
+def _sector_factor(H, k1, k2):
+    """The largest s in [1, :data:`SECTOR_FACTOR_MAX`] for which the sector
+    ``[k1 / s, s k2]`` meets the circle criterion's disc condition
+    ``Re[(1 + k1 H)(1 + k2 H)^*] > 0`` on the frequencies of ``H`` (the loop without the
+    hysteresis' gain, one complex value per frequency): how far the slopes may spread
+    beyond those measured before the criterion fails (Khalil, Nonlinear Systems, 3rd ed.,
+    Theorem 7.1). Bisection on log s; the condition is monotone in s (a wider sector's
+    disc contains the narrower one's)."""
+    def holds(s):
+        return bool(np.all(np.real((1 + k1 / s * H) * np.conj(1 + s * k2 * H)) > 0))
+    if holds(SECTOR_FACTOR_MAX):
+        return SECTOR_FACTOR_MAX
+    lo, hi = 0.0, np.log(SECTOR_FACTOR_MAX)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if holds(np.exp(mid)) else (lo, mid)
+    return float(np.exp(lo))
+
 
 def _margins(L, T):
     """``(gm, pm, wpc, wgc)`` of a discrete SISO loop, checked on its frequency response."""
@@ -772,7 +794,12 @@ class FeedbackLoop:
         -------
         dict
             ``axes``: per axis ``{sector_low, sector_high, stable_midpoint,
-            circle_margin, passed}``; ``small_gain``: ``{value, passed}``;
+            circle_margin, passed, sector_factor}``: ``circle_margin`` the smallest
+            ``Re[(1 + k1 H) / (1 + k2 H)]`` on the unit circle (positive: the disc
+            avoided; it tends to ``k1 / k2`` where ``|H|`` is large, an integrator's
+            low frequencies, so it does not rank loops), ``sector_factor`` the
+            robustness of a loop that passes, the largest s for which the sector
+            ``[k1 / s, s k2]`` still meets the disc condition (None when it fails); ``small_gain``: ``{value, passed}``;
             ``passed``: every axis and the MIMO test (or the axes when the
             small gain is conservative); ``summary``: one line.
 
@@ -803,7 +830,8 @@ class FeedbackLoop:
             passed = stable and margin > 0
             ok_all &= passed
             axes.append({"sector_low": float(k1), "sector_high": float(k2),
-                         "stable_midpoint": stable, "circle_margin": margin, "passed": passed})
+                         "stable_midpoint": stable, "circle_margin": margin, "passed": passed,
+                         "sector_factor": _sector_factor(H, k1, k2) if passed else None})
         # small gain around the secant gains: h = K0 u + w, w = Delta u; M: w -> u
         Delta = np.maximum(np.abs(high - K0), np.abs(K0 - low))
         delta = float(np.linalg.norm(Delta, 2))
@@ -819,7 +847,11 @@ class FeedbackLoop:
         names = list(self.plant.hysteresis.output_names)
         def why(a):
             if a["passed"]:
-                return f"met (margin {a['circle_margin']:.3g})"
+                s = a["sector_factor"]
+                if s >= SECTOR_FACTOR_MAX:
+                    return f"met, and on a sector {SECTOR_FACTOR_MAX:g} times wider each way"
+                return (f"met, and up to [{a['sector_low'] / s:.3g}, {a['sector_high'] * s:.3g}] "
+                        f"µm/V ({s:.3g} times wider each way)")
             if not a["stable_midpoint"]:      # a positive margin then says nothing
                 return "NOT met: the loop is unstable at the sector's midpoint gain"
             return f"NOT met (margin {a['circle_margin']:.3g} <= 0)"
