@@ -202,3 +202,26 @@ def test_kernel_time_per_sample_is_the_median_run_not_the_compile(tmp_path, monk
     per = sorted(r.seconds / r.case.signal.shape[1] for r in results)
     assert len(per) == 3 and spec.timing["kernel_s_per_sample"] == pytest.approx(per[1])
     assert spec.timing["kernel_s_per_sample"] < 0.01 * per[-1]
+
+
+def test_a_transfer_function_controller_is_realised_balanced_without_a_warning():
+    """A PI, a notch and a low-pass as one transfer function (an outside user's, at 20
+    kHz): its companion form spans 1e-23..3.6e16 and its discretisation warned four times
+    of an ill-conditioned matrix. Balanced, it discretises silently, to the same
+    frequency response as the transfer function discretised on its own."""
+    import warnings
+    import control
+    from hammerstein.compensation.feedback import controller_from_lti
+    from hammerstein.scenario.feedback_loops import _lti
+    num = [3906500.315544768, 5120142359.33672, 28780993773639.01, 3.5833924607354364e+16]
+    den = [1.0, 8859.291283123215, 43280189.21965704, 97211374748.50284, 141205776908346.4, 0.0]
+    T = 5e-5
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ctrl = controller_from_lti(_lti({"kind": "transfer-function", "num": num, "den": den}, T), T)
+    z = np.exp(2j * np.pi * np.array([1.0, 50.0, 400.0, 2000.0, 9000.0]) * T)
+    got = [complex((ctrl.C @ np.linalg.solve(zk * np.eye(len(ctrl.A)) - ctrl.A, ctrl.B[:, :1])
+                    + ctrl.D[:, :1])[0, 0]) for zk in z]
+    ref = control.sample_system(control.tf(num, den), T, method="tustin")
+    want = [complex(ref(zk)) for zk in z]
+    np.testing.assert_allclose(got, want, rtol=1e-8)
