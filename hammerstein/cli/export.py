@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from pathlib import Path
 
 from hammerstein import __version__
@@ -27,6 +28,7 @@ from hammerstein.core.files import guard_inputs
 from hammerstein.compensation.model_classes import choose_kind
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError, FileLimitError,
+                                    HammersteinWarning,
                                     PresetError)
 from hammerstein.export import MARKER, check_name, export_c
 from hammerstein.export.build import (KINDS, REFUSED_KINDS, check_fmu_owned, check_owned,
@@ -165,7 +167,34 @@ def _closed_loop_table(args, source):
                         f"({', '.join(names)}), found {', '.join(sorted(table['axes']))}")
     if problems:
         raise PresetError(problems[0])
+    other = _scenario_plant(data, path)
+    if args.closed_loop and other is not None and other != _resolved(source.path):
+        # a user exported one model with another stage's scenario: the named designs took
+        # this model's slopes and modes (k_p 0.076 where the scenario's report said 0.196)
+        warnings.warn(f"{path}: feedback: designed here on {args.source} (the model exported), "
+                      f"not on the scenario's [plant] {data['plant']['preset']}: a controller "
+                      f"designed by name takes this model's gains and modes, other than its "
+                      f"report's", HammersteinWarning, stacklevel=2)
     return table
+
+
+def _resolved(path):
+    try:
+        return Path(path).resolve()
+    except (OSError, RuntimeError, TypeError):
+        return None
+
+
+def _scenario_plant(data, path):
+    """The preset file a scenario's ``[plant]`` names, resolved, or None."""
+    plant = data.get("plant")
+    preset = plant.get("preset") if isinstance(plant, dict) else None
+    if not isinstance(preset, str):
+        return None
+    try:
+        return _resolved(resolve_preset(preset, Path(path).parent))
+    except PresetError:
+        return None
 
 
 def _closed_loop_code(args, source, comp, T, name):

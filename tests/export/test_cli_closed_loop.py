@@ -255,3 +255,21 @@ def test_closed_loop_states_the_size_the_caller_allocates_and_guards_its_pair(tm
     res = subprocess.run([COMPILERS[0], *CFLAGS, "-c", "-o", str(out / "l.o"), str(out / "loop.c")],
                          capture_output=True, text=True)
     assert res.returncode != 0 and "is not the header exported with this loop.c" in res.stderr
+
+
+def test_a_scenario_of_another_plant_is_named_when_its_controller_is_designed_here(tmp_path,
+                                                                                    capsys):
+    """The [feedback] table's named designs take the exported model's gains and modes: a
+    scenario whose [plant] is another stage gets one warning line saying so; the
+    scenario's own stage gets none."""
+    text = SCENARIO.read_text()
+    assert 'preset = "realistic-2dof"' in text
+    other = tmp_path / "other.toml"
+    other.write_text(text.replace('preset = "realistic-2dof"', 'preset = "rakotondrabe-2dof"', 1))
+    for scenario, said in ((SCENARIO, False), (other, True)):
+        code = main(["export", "realistic-2dof", "--out", str(tmp_path / scenario.stem),
+                     "--kind", "none", "--no-binary", "--closed-loop", str(scenario)])
+        err = capsys.readouterr().err
+        assert code == 0, err
+        lines = [line for line in err.splitlines() if "designed here on realistic-2dof" in line]
+        assert len(lines) == int(said) and (not said or "rakotondrabe-2dof" in lines[0]), err
