@@ -19,6 +19,7 @@ import pandas as pd
 
 from hammerstein.core.files import safe_write
 from hammerstein.report import figures as plots
+from hammerstein.report.shared_model import SHARED_MODEL_WORDS, shares_model
 from hammerstein.report.tables import markdown_table, metrics_frame
 from hammerstein.scenario.feedback import MODE_LABELS
 
@@ -168,6 +169,24 @@ def _timeseries(result):
     return pd.DataFrame(cols)
 
 
+def _one_model(results):
+    """The **One model:** paragraph of the cases whose plant is their feedforward's model
+    (the cases report has it: a user's report showed the feedforward alone at 0.007 %
+    where the stage it stood for was at 4.3 %), or []."""
+    shared = list(dict.fromkeys(r.case.name for r in results
+                                if r.mode == "feedforward" and r.case.compensator is not None
+                                and shares_model(r.case.plant, r.case.compensator)))
+    cases = list(dict.fromkeys(r.case.name for r in results
+                               if r.mode == "feedforward" and r.case.compensator is not None))
+    if not shared:
+        return []
+    which = ("in every case" if len(shared) == len(cases) else
+             "in " + ", ".join(f"`{c}`" for c in shared[:6])
+             + (f" and {len(shared) - 6} more" if len(shared) > 6 else ""))
+    return [f"**One model:** {which}, {SHARED_MODEL_WORDS}; the feedback's errors are those "
+            f"of the loop around that same model.", ""]
+
+
 def write_feedback_report(scenario, results, directory, jobs):
     """Write metrics.csv, feedback-errors.csv, sweep-<sweep>.csv, the figures and report.md.
 
@@ -203,6 +222,7 @@ def write_feedback_report(scenario, results, directory, jobs):
     lines = [f"# {scenario.title}", ""]
     if scenario.description:
         lines += [scenario.description, ""]
+    lines += _one_model(results)
     lines += ["Each case runs three ways in the compiled closed-loop kernel: the feedforward "
               "alone (open loop through the amplifier), the feedback alone, and both. Errors "
               "are those of the true position (not the measurement) over the settled window.", "",
