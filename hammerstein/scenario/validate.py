@@ -636,16 +636,18 @@ def _validate_cases(path, data, feedback=False):
                 and not feedback):
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
                             f"(compensator.kind is {kind!r}); use drive for an open-loop run")
-        if sig is None or len(problems) > n_before or (mode == "reference" and not comp_ok):
+        if sig is None or len(problems) > n_before:
             continue
         t, signal, P, extras = sig
         budget["used"] += t.size
         settle = case.get("settle_periods", 1.0)
         need = settle * P + (P if (mode == "drive" or "loop_channel" in extras) else 1)
-        if t.size < need:
+        if t.size < need:   # the case's own, said also when the compensator table has a problem
             problems.append(f"{source}: {where}.settle_periods: {settle:g} periods of settling "
                             f"leave less than {'one period' if need - settle * P > 1 else 'one sample'} "
                             f"of the {t.size}-sample record; lengthen it or settle less")
+            continue
+        if mode == "reference" and not comp_ok:
             continue
         cmp_spec = None
         if "model" in raw or "identify" in raw:

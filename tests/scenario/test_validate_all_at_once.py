@@ -129,3 +129,20 @@ def test_a_missing_preset_under_an_identified_model_is_one_line(tmp_path):
                     'reference = { kind = "circle", radius = 10.0, frequency = 20.0, periods = 3 }\n')
     lines = _lines(path)
     assert len(lines) == 1 and f"{path}: plant.preset: nope.toml" in lines[0], lines
+
+
+def test_a_case_settling_past_its_record_is_named_beside_a_compensator_problem(tmp_path):
+    """A compensator table with a bad value (identify.creep = "yes") made every case skip
+    its own checks: a case settling over more periods than its record has went unsaid
+    until the compensator was fixed."""
+    f = tmp_path / "s.toml"
+    f.write_text('name = "s"\n[plant]\npreset = "realistic-2dof"\n[compensator]\n'
+                 'kind = "hammerstein"\nmodel = "identified"\n'
+                 'identify = { records = "excitation", creep = "yes" }\n'
+                 '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+                 'frequency = 50.0, periods = 4 }\nsettle_periods = 40\n')
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(f)
+    text = str(err.value)
+    assert "compensator.identify.creep: expected true or false" in text
+    assert "cases[0].settle_periods: 40 periods of settling leave less than one sample" in text
