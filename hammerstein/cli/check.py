@@ -123,6 +123,10 @@ def _err(msg):
     print(f"error: {msg}", file=sys.stderr)
 
 
+def _command_err(msg):
+    print(f"hammerstein check: error: {msg}", file=sys.stderr)
+
+
 def _usage(msg):
     print(f"hammerstein check: error: {msg}", file=sys.stderr)
 
@@ -189,11 +193,11 @@ def run_check(args):
     except _Stop as exc:
         _usage(str(exc))
         return 2
-    except _JunitError as exc:
-        _err(f"{escape(junit)}: cannot write the JUnit XML file ({exc})")
+    except _JunitError as exc:    # a file the command could not write: docs/cli.md's prefix
+        _command_err(f"{escape(junit)}: cannot write the JUnit XML file ({exc})")
         return 1
-    except BaselineError as exc:  # inconsistent metrics from the runner
-        _err(" ".join(str(exc).split()))
+    except BaselineError as exc:  # inconsistent metrics from the runner, a baseline not written
+        _command_err(" ".join(str(exc).split()))
         return 1
     except OSError as exc:        # baseline not writable
         _usage(f"{escape(baseline_path)}: cannot write the baseline ({exc.strerror or exc})")

@@ -503,3 +503,29 @@ def test_identify_refuses_one_column_as_input_and_output(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "same column" in err[0]
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_check_that_cannot_write_its_baseline_says_so_with_the_command(capsys, tmp_path,
+                                                                       monkeypatch):
+    """A full disk under `check --update` (a file-size limit, measured by an outside user)
+    gave a bare "error: ..." where docs/cli.md gives a command's failure as
+    "hammerstein check: error: ..."; the baseline it had stays as it was."""
+    from hammerstein.core import files
+    from hammerstein.scenario import regression
+    baseline = tmp_path / "baseline.csv"
+    good = GOOD / "good-static-2.toml"
+    assert _call(capsys, "check", good, "--baseline", baseline, "--update")[0] == 0
+    before = baseline.read_bytes()
+    real = files.safe_write
+
+    def full(path, data, what="file", root=None):
+        if str(what) == "baseline CSV file":
+            raise files.OutputError(f"{path}: cannot write the {what} (File too large); "
+                                    f"nothing was written")
+        return real(path, data, what, root)
+    monkeypatch.setattr(regression, "safe_write", full)
+    status, out, err = _call(capsys, "check", good, "--baseline", baseline, "--update",
+                             "--force")
+    assert status == 1 and len(err) == 1, err
+    assert err[0].startswith(f"hammerstein check: error: {baseline}: cannot write the baseline")
+    assert baseline.read_bytes() == before
