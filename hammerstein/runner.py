@@ -52,7 +52,7 @@ import pandas as pd
 from hammerstein.core.files import (deferred_signals, output_problem, owner_alive, owner_token,
                                     parse_owner, raise_if_interrupted, recorded_paths, release_owner,
                                     replace_directory,
-                                    safe_write, umask)
+                                    OutputError, safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
 from hammerstein.core._version import VERSION
 from hammerstein.report._ownership import MARKER as _MARKER
@@ -559,8 +559,11 @@ def start_scenario(path, out_dir, taken=None, force=False, renderer=None):
         jobs = FigureJobs(renderer)
 
         def write(d):
-            kind.write(scenario, results, d, jobs)
-            _write_warnings(caught, d)
+            try:
+                kind.write(scenario, results, d, jobs)
+                _write_warnings(caught, d)
+            except OutputError as exc:   # named where the report goes, not its temporary place
+                raise OutputError(str(exc).replace(str(d), str(Path(out_dir) / name))) from None
         tmp = _start_write(out_dir, write)
     except ScenarioError as exc:
         return PendingScenario(ScenarioOutcome(name, path, False, str(exc), None, _empty_metrics()))

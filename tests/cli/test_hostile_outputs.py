@@ -8,6 +8,8 @@ looping target, and a replication directory holding a README or tables
 
 import os
 import stat
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -210,3 +212,24 @@ def test_deeply_nested_tolerance_and_model_files_are_one_line_errors(tmp_path):
         load_tolerances(nested)
     with pytest.raises(PresetError, match="nested too deeply"):
         read_toml(nested)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_FSIZE as on the lab's Linux hosts")
+def test_a_report_that_cannot_be_written_is_named_where_it_was_to_go(tmp_path):
+    """Under a file-size limit `run` named the report's temporary directory
+    (`.hammerstein-tmp.<pid>...`), a place the user never asked for; it names the report's
+    own place now, and leaves nothing in --out."""
+    import resource
+    default = Path(__file__).resolve().parents[2] / "scenarios" / "default.toml"
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (40 * 1024, 40 * 1024))
+    res = subprocess.run([sys.executable, "-m", "hammerstein", "run", str(default), "--out",
+                          "out", "-q"], cwd=tmp_path, capture_output=True, text=True,
+                         preexec_fn=limited, timeout=600)
+    assert res.returncode == 1, res.stderr
+    lines = res.stderr.splitlines()
+    assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
+    assert "cannot write the report: out/default/" in lines[0], lines[0]
+    assert ".hammerstein-tmp" not in lines[0]
+    assert list((tmp_path / "out").iterdir()) == []
