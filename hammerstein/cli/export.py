@@ -31,6 +31,7 @@ from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError
                                     HammersteinWarning,
                                     PresetError)
 from hammerstein.export import MARKER, check_name, export_c
+from hammerstein.export.c_code import struct_ints
 from hammerstein.export.build import (KINDS, REFUSED_KINDS, check_fmu_owned, check_owned,
                                       compensator_from_source,
                                       limits_from_table, load_source, write_files)
@@ -353,9 +354,7 @@ def state_line(header):
     preview = re.search(r"#define \w+_PREVIEW (\d+)", header)
     if not (reals and body and kind):
         return None
-    ints = 0
-    for member in re.findall(r"^\s*int \w+(?:\[(\d+)\])?;", body.group(1), re.M):
-        ints += int(member) if member else 1
+    ints = struct_ints(header)
     stated = re.search(r"#define \w+_STATE_INTS (\d+)", header)   # a struct in a struct
     if stated:
         ints = int(stated.group(1))

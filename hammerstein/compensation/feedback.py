@@ -379,17 +379,17 @@ class FeedbackLoop:
         n = Ak.shape[0]
         Kaw = np.zeros((n, m))
         aw = AW_NONE
+        drives = np.full(n, -1, np.int64)     # the channel each integrator drives most, -1 none
+        for i in np.flatnonzero(mask):
+            if np.any(Ck[:, i]):
+                drives[i] = int(np.argmax(np.abs(Ck[:, i])))
         if anti_windup == "back-calculation" and n:
             aw = AW_BACK
             for i in np.flatnonzero(mask):   # each integrator tracks the channel it drives most
-                k = int(np.argmax(np.abs(Ck[:, i]))) if np.any(Ck[:, i]) else 0
+                k = max(int(drives[i]), 0)
                 Kaw[i, k] = T / self.tracking_time / (Ck[k, i] if Ck[k, i] != 0 else 1.0)
         elif anti_windup == "clamping" and n:
             aw = AW_CLAMP
-        clamp = np.full(n, -1, np.int64)      # the channel whose limit clamps each integrator
-        for i in np.flatnonzero(mask):
-            if np.any(Ck[:, i]):
-                clamp[i] = int(np.argmax(np.abs(Ck[:, i])))
         if amplifier is None:
             low, high, slew = np.full(m, -np.inf), np.full(m, np.inf), np.full(m, np.inf)
         else:
@@ -400,7 +400,7 @@ class FeedbackLoop:
                 raise FeedbackError(f"amplifier: expected low < high, found {low} and {high}")
         self._loop = LoopArrays(*(np.ascontiguousarray(M, dtype=float)
                                   for M in (As, Bs, Cs, Ds, Ak, Bk, Ck, Dk, Kaw)),
-                                clamp,
+                                drives,                   # whose limit clamps it
                                 low, high, np.ascontiguousarray(slew, dtype=float), self._y_off,
                                 int(self.sensor.delay), aw)
 

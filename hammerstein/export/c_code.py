@@ -70,7 +70,56 @@ from hammerstein.export.c_per_axis import _plan_per_axis
 from hammerstein.export.c_static import _plan_linear_inverse, _plan_static
 
 __all__ = ["AmplifierLimits", "CExport", "export_c", "check_name", "MARKER", "STATUS_LIMIT",
-           "STATUS_DIVERGED", "STATUS_RANGE", "EMITTERS"]
+           "STATUS_DIVERGED", "STATUS_RANGE", "EMITTERS", "with_build_id", "struct_ints"]
+
+
+def with_build_id(header, source):
+    """A header and source pair with its fingerprint in place of ``@BUILD_ID@``.
+
+    The source refuses to compile with another run's header. The fingerprint is over
+    their code, not their comments: the same code written by the library and by the
+    command line, whose comments name the command and the limits' source, gets one id.
+
+    Parameters
+    ----------
+    header, source : str
+        The texts of ``NAME.h`` and ``NAME.c``, each with ``@BUILD_ID@`` placeholders.
+
+    Returns
+    -------
+    header, source : str
+        With ``0x<8 hex digits of SHA-256>UL`` in place of each placeholder.
+    """
+    code = "\n".join(line for t in (header, source) for line in t.splitlines()
+                     if not line.lstrip().startswith(("/*", "*", "//")))
+    build_id = "0x" + hashlib.sha256(code.encode()).hexdigest()[:8] + "UL"
+    return tuple(t.replace("@BUILD_ID@", build_id) for t in (header, source))
+
+
+def struct_ints(header):
+    r"""The ints of the state struct of an exported header.
+
+    Parameters
+    ----------
+    header : str
+        The text of an exported ``NAME.h``.
+
+    Returns
+    -------
+    int
+        The ``int`` members of its ``NAME_state`` struct, ``int name[n];`` counting n
+        (0 without a struct).
+
+    Examples
+    --------
+    >>> struct_ints("typedef struct {\n    double u[2];\n    int k;\n    int m[3];\n} a_state;")
+    4
+    """
+    body = re.search(r"typedef struct \{\n(.*?)\n\} \w+_state;", header, re.S)
+    if body is None:
+        return 0
+    return sum(int(n) if n else 1
+               for n in re.findall(r"^\s*int \w+(?:\[(\d+)\])?;", body.group(1), re.M))
 
 
 #: The dispatch table of the C export: compensator class -> planner. A planner returns
@@ -268,13 +317,7 @@ int {N}_step({N}_state *s, const {N}_real reference[{N}_N_OUTPUTS], {N}_real vol
 {chr(10).join(decls)}
 
 {chr(10).join(body)}"""
-    # the fingerprint of this pair: the source refuses to compile with another run's header
-    # (over their code, not their comments: the same code written by the library and by the
-    # command line, whose comments name the command and the limits' source, gets one id)
-    code = "\n".join(line for t in (header, source) for line in t.splitlines()
-                     if not line.lstrip().startswith(("/*", "*", "//")))
-    build_id = "0x" + hashlib.sha256(code.encode()).hexdigest()[:8] + "UL"
-    header, source = (t.replace("@BUILD_ID@", build_id) for t in (header, source))
+    header, source = with_build_id(header, source)
     try:       # where NAME_init leaves the compensator: the model's output at 0 V
         rest = [float(v) for v in compensator_rest(model, compensator)]
     except Exception:        # noqa: BLE001 - a model without simulate: the zeros of before

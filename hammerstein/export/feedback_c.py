@@ -37,16 +37,14 @@ the loop from a ``[feedback]`` table and writes these files.
 
 from __future__ import annotations
 
-import hashlib
 import math
-import re
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from hammerstein.export.c_base import reference_bound
 from hammerstein.export.c_code import (MARKER, STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE,
-                                       check_name, export_c)
+                                       check_name, export_c, struct_ints, with_build_id)
 from hammerstein.compensation.drive import rest_output
 from hammerstein.exceptions import ExportError
 
@@ -114,16 +112,6 @@ class FeedbackCExport:
         if self.feedforward is not None:
             out.update(self.feedforward.files())
         return out
-
-
-def _struct_ints(header):
-    """The ints of the state struct of an exported header (a member ``int name[n];``
-    counts n)."""
-    body = re.search(r"typedef struct \{\n(.*?)\n\} \w+_state;", header, re.S)
-    if body is None:
-        return 0
-    return sum(int(n) if n else 1
-               for n in re.findall(r"^\s*int \w+(?:\[(\d+)\])?;", body.group(1), re.M))
 
 
 def _lit(x):
@@ -221,7 +209,7 @@ def export_feedback_c(loop, name, feedforward=None, version=""):
     # the struct the caller allocates, the feedforward's inside it: a user read the
     # feedforward's 824 B where sizeof(NAME_state) is 1024 B
     reals = max(nc, 1) + 2 * m + max(P, 1) * p + (ff.state_reals if ff else 0)
-    ints = 1 + (_struct_ints(ff.header) if ff else 0)
+    ints = 1 + (struct_ints(ff.header) if ff else 0)
     header = f"""{first}
 #ifndef {N}_H
 #define {N}_H
@@ -373,11 +361,7 @@ int {N}_step({N}_state *s, const double reference[{N}_N_OUTPUTS],
     return status | saturated;
 }}
 """
-    # the fingerprint of this pair, over its code (not its comments), as the feedforward's
-    code = "\n".join(line for t in (header, source) for line in t.splitlines()
-                     if not line.lstrip().startswith(("/*", "*", "//")))
-    build_id = "0x" + hashlib.sha256(code.encode()).hexdigest()[:8] + "UL"
-    header, source = (t.replace("@BUILD_ID@", build_id) for t in (header, source))
+    header, source = with_build_id(header, source)      # as the feedforward's pair
     what = "; ".join(c.descriptions)
     description = (f"feedback controller ({what}) with "
                    + (ff.description if ff else "no feedforward"))
