@@ -19,7 +19,7 @@ import pandas as pd
 
 from hammerstein.core.files import safe_write
 from hammerstein.report import figures as plots
-from hammerstein.report.shared_model import SHARED_MODEL_WORDS, shares_model
+from hammerstein.report.shared_model import one_model_lines, shares_model
 from hammerstein.report.tables import markdown_table, metrics_frame
 from hammerstein.scenario.feedback import MODE_LABELS
 
@@ -173,18 +173,10 @@ def _one_model(results):
     """The **One model:** paragraph of the cases whose plant is their feedforward's model
     (the cases report has it: a user's report showed the feedforward alone at 0.007 %
     where the stage it stood for was at 4.3 %), or []."""
-    shared = list(dict.fromkeys(r.case.name for r in results
-                                if r.mode == "feedforward" and r.case.compensator is not None
-                                and shares_model(r.case.plant, r.case.compensator)))
-    cases = list(dict.fromkeys(r.case.name for r in results
-                               if r.mode == "feedforward" and r.case.compensator is not None))
-    if not shared:
-        return []
-    which = ("in every case" if len(shared) == len(cases) else
-             "in " + ", ".join(f"`{c}`" for c in shared[:6])
-             + (f" and {len(shared) - 6} more" if len(shared) > 6 else ""))
-    return [f"**One model:** {which}, {SHARED_MODEL_WORDS}; the feedback's errors are those "
-            f"of the loop around that same model.", ""]
+    cases = [r.case for r in results if r.mode == "feedforward" and r.case.compensator is not None]
+    shared = [c.name for c in cases if shares_model(c.plant, c.compensator)]
+    return one_model_lines(shared, len(cases), "; the feedback's errors are those of the loop "
+                                               "around that same model")
 
 
 def write_feedback_report(scenario, results, directory, jobs):

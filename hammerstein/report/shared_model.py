@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["shares_model", "shared_model_cases", "shared_model_lines", "SHARED_MODEL_WORDS"]
+__all__ = ["shares_model", "shared_model_cases", "shared_model_lines", "one_model_lines",
+           "SHARED_MODEL_WORDS"]
 
 #: The report's sentence on a plant that is its compensator's model.
 SHARED_MODEL_WORDS = (
@@ -101,11 +102,31 @@ def shared_model_lines(results):
         ``["One model: ...", ""]`` naming the cases (all, or the first six
         and how many more), or empty when no case shares its model.
     """
-    names = shared_model_cases(results)
+    return one_model_lines(shared_model_cases(results),
+                           sum(r.spec.mode == "reference" for r in results))
+
+
+def one_model_lines(names, n_compensated, more=""):
+    """The **One model:** paragraph naming the cases that share their plant's model, or [].
+
+    Parameters
+    ----------
+    names : list of str
+        The cases whose plant is their compensator's model.
+    n_compensated : int
+        How many compensated cases there are (all named: "every compensated case").
+    more : str
+        Words appended to the paragraph's sentence (e.g. what a feedback report adds).
+
+    Returns
+    -------
+    list of str
+        ``["**One model:** ...", ""]`` naming the cases (all, or the first six and how
+        many more), or empty when ``names`` is.
+    """
     if not names:
         return []
-    n_ref = sum(r.spec.mode == "reference" for r in results)
-    which = ("in every compensated case" if len(names) == n_ref else
+    which = ("in every compensated case" if len(names) == n_compensated else
              "in " + ", ".join(f"`{c}`" for c in names[:6])
              + (f" and {len(names) - 6} more" if len(names) > 6 else ""))
-    return [f"**One model:** {which}, {SHARED_MODEL_WORDS}.", ""]
+    return [f"**One model:** {which}, {SHARED_MODEL_WORDS}{more}.", ""]

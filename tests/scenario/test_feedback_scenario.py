@@ -243,4 +243,4 @@ def test_the_report_says_when_the_feedforward_inverts_the_plant_itself(tmp_path,
     out = run_scenario(_write(tmp_path, text + FEEDBACK), tmp_path / "out", renderer=no_figures)
     assert out.ok, out.error
     report = (out.out_dir / "report.md").read_text(encoding="utf-8")
-    assert ("**One model:** in every case" in report) == said
+    assert ("**One model:** in every compensated case" in report) == said
