@@ -27,7 +27,7 @@ from hammerstein.exceptions import FeedbackError
 control = lazy_module("control")  # lazy: python-control + scipy.signal (~1 s) on first use
 scipy_linalg = lazy_module("scipy.linalg")
 
-__all__ = ["AXIS_KINDS", "METHODS", "AxisDesign", "Controller", "design_axis", "discretise",
+__all__ = ["AXIS_KINDS", "METHODS", "AxisDesign", "balanced", "Controller", "design_axis", "discretise",
            "controller_from_lti", "diagonal_controller", "mixsyn_controller",
            "with_reference_filter", "with_internal_model"]
 
@@ -330,6 +330,34 @@ class Controller:
                           self.sampling_period)
 
 
+def balanced(system):
+    """A state space scaled by a diagonal similarity so that its rows and columns have
+    comparable norms (LAPACK's balancing, :func:`scipy.linalg.matrix_balance` without
+    permutation): the same transfer function, the same states up to scale.
+
+    The companion form python-control gives a transfer function spans many decades (a
+    PI, a notch and a low-pass at 20 kHz: entries from 1e-23 to 3.6e16), and its
+    discretisation warned four times of an ill-conditioned matrix (rcond 1e-19).
+
+    Parameters
+    ----------
+    system : control.StateSpace
+
+    Returns
+    -------
+    control.StateSpace
+        ``A' = S^-1 A S``, ``B' = S^-1 B``, ``C' = C S`` with S diagonal (powers of 2,
+        so that the scaling itself rounds nothing).
+    """
+    A = np.asarray(system.A, float)
+    if A.size == 0:
+        return system
+    _, (scale, _) = scipy_linalg.matrix_balance(A, permute=False, separate=True)
+    return control.ss(A * scale[None, :] / scale[:, None],
+                      np.asarray(system.B, float) / scale[:, None],
+                      np.asarray(system.C, float) * scale[None, :], system.D, system.dt)
+
+
 def controller_from_lti(system, sampling_period, method="tustin", integrators=None,
                         description="LTI"):
     """An error-driven :class:`Controller` from any python-control LTI on the error.
@@ -357,6 +385,8 @@ def controller_from_lti(system, sampling_period, method="tustin", integrators=No
     FeedbackError
         On a discrete system of another sampling period.
     """
+    if isinstance(system, control.TransferFunction):   # its companion form, scaled
+        system = balanced(control.ss(system))
     cont = None
     if system.isctime(strict=True):
         cont = control.ss(system)

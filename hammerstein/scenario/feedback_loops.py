@@ -21,49 +21,20 @@ from hammerstein.compensation.feedback import (AmplifierLimits, FeedbackLoop, Se
 from hammerstein.exceptions import FeedbackError
 
 control = lazy_module("control")  # lazy: loaded when a loop is built
-scipy_linalg = lazy_module("scipy.linalg")
 
-__all__ = ["balanced", "build_controller", "build_loops", "hardware_sensor", "hardware_amplifier"]
+__all__ = ["build_controller", "build_loops", "hardware_sensor", "hardware_amplifier"]
 
 
 def _lti(t, T):
     dt = T if t.get("discrete", False) else 0
     if t["kind"] == "transfer-function":
-        return balanced(control.ss(control.tf(t["num"], t["den"], dt)))
+        return control.tf(t["num"], t["den"], dt)
     D = np.atleast_2d(np.asarray(t["D"], float))
     A = np.array(t.get("A", []), float)
     n = A.shape[0] if A.size else 0
     B = np.asarray(t["B"], float).reshape(n, D.shape[1]) if n else np.zeros((0, D.shape[1]))
     C = np.asarray(t["C"], float).reshape(D.shape[0], n) if n else np.zeros((D.shape[0], 0))
     return control.ss(A if n else np.zeros((0, 0)), B, C, D, dt)
-
-
-def balanced(system):
-    """A state space scaled by a diagonal similarity so that its rows and columns have
-    comparable norms (LAPACK's balancing, :func:`scipy.linalg.matrix_balance` without
-    permutation): the same transfer function, the same states up to scale.
-
-    The companion form python-control gives a transfer function spans many decades (a
-    PI, a notch and a low-pass at 20 kHz: entries from 1e-23 to 3.6e16), and its
-    discretisation warned four times of an ill-conditioned matrix (rcond 1e-19).
-
-    Parameters
-    ----------
-    system : control.StateSpace
-
-    Returns
-    -------
-    control.StateSpace
-        ``A' = S^-1 A S``, ``B' = S^-1 B``, ``C' = C S`` with S diagonal (powers of 2,
-        so that the scaling itself rounds nothing).
-    """
-    A = np.asarray(system.A, float)
-    if A.size == 0:
-        return system
-    _, (scale, _) = scipy_linalg.matrix_balance(A, permute=False, separate=True)
-    return control.ss(A * scale[None, :] / scale[:, None],
-                      np.asarray(system.B, float) / scale[:, None],
-                      np.asarray(system.C, float) * scale[None, :], system.D, system.dt)
 
 
 def build_controller(table, plant):
