@@ -127,8 +127,8 @@ def _command_err(msg):
     print(f"hammerstein check: error: {msg}", file=sys.stderr)
 
 
-def _usage(msg):
-    print(f"hammerstein check: error: {msg}", file=sys.stderr)
+def _usage(msg):      # the same line; the caller exits 2
+    _command_err(msg)
 
 
 def run_check(args):
