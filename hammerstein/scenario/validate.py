@@ -35,7 +35,7 @@ import numpy as np
 from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
-from hammerstein.core.schema import closest, short_repr
+from hammerstein.core.schema import short_repr
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -45,6 +45,8 @@ from hammerstein.scenario.schema import (CASE, MAX_CASE_SAMPLES, MAX_CASES, MAX_
                                          TOP, Field, Invalid, ScenarioError, check_table, kind_problem,
                                          known_kind, total_samples_budget)
 from hammerstein.scenario.sweeps import check_stability_table, expand_sweeps
+from hammerstein.scenario.compensator_table import (check_compensator, clean_keys_problems,
+                                                    meant_kind, merge_compensator)
 from hammerstein.scenario.montecarlo import is_montecarlo, validate_montecarlo
 from hammerstein.scenario.feedback_table import validate_feedback
 
@@ -195,66 +197,6 @@ def read_scenario(path):
         return path, read_toml(path, "scenario file")
     except PresetError as exc:
         raise ScenarioError([str(exc)]) from None
-
-
-def _merge_compensator(top, case):
-    top = dict(top or {})
-    case = dict(case or {})
-    if "kind" in case and case["kind"] != top.get("kind", "none"):
-        return case
-    return {**top, **case}
-
-
-def _check_compensator(spec, where, problems, source, own=None):
-    kind = spec.get("kind", "none")
-    if not known_kind(kind, COMPENSATORS):
-        problems += [f"{source}: {where}.kind: {msg}" for msg in kind_problem(kind, COMPENSATORS)]
-        meant = _meant_kind(kind)
-        if meant is not None:   # the rest of the table is checked as the kind it spells
-            rest = {k: v for k, v in spec.items() if k != "kind"}
-            clean = check_table(rest, COMPENSATORS[meant].fields, where, problems, source)
-            problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean, own))
-        return None
-    if "kind" not in spec and any(k != "kind" for k in spec):
-        # `model = ...` without a kind read "unknown key (valid keys: kind)": the default kind
-        # "none" takes no option
-        takes = sorted(n for n, e in COMPENSATORS.items() if set(spec) <= set(e.fields))
-        problems.append(f"{source}: {where}.kind: missing: the default 'none' (no compensator) "
-                        f"takes no {', '.join(sorted(spec))}; give a kind"
-                        + (f" ({', '.join(takes)} take them)" if takes else ""))
-        return None
-    schema = {"kind": Field(lambda v: v), **COMPENSATORS[kind].fields}
-    clean = check_table(spec, schema, where, problems, source)
-    if clean is not None:
-        problems.extend(f"{source}: {where}.{msg}" for msg in _option_problems(clean, own))
-    return clean
-
-
-def _meant_kind(kind):
-    """The compensator kind closest to a misspelt ``kind`` (``"hamerstein"``), or None."""
-    return closest(kind, COMPENSATORS)
-
-
-def _option_problems(spec, own=None):
-    """Keys given for an option that is not selected (``key: message`` strings).
-
-    ``spec`` is the merged table; ``own`` the keys written in the table being
-    checked (a case that overrides ``model`` may inherit an ``identify``).
-    """
-    own = spec if own is None else own
-    out = []
-    feedback = spec.get("feedback", "delay")
-    if "cutoff_hz" not in spec:     # not a key of this kind (said so: unknown key)
-        own = {k: v for k, v in own.items() if k != "cutoff_hz"}
-    if "cutoff_hz" in own and feedback != "lowpass":
-        out.append(f"cutoff_hz: only used with feedback = 'lowpass' (feedback is {feedback!r}); "
-                   f"remove it or set feedback = 'lowpass'")
-    if feedback == "lowpass" and "cutoff_hz" not in spec:
-        out.append("cutoff_hz: missing (feedback='lowpass' needs a cut-off frequency [Hz])")
-    if "identify" in own and spec.get("model", "plant") != "identified":
-        out.append(f"identify: only used with model = 'identified' (model is "
-                   f"{spec.get('model', 'plant')!r})")
-    return out
 
 
 def _ignored_env(var):
@@ -456,7 +398,7 @@ def _top_model_problems(comp, plant, base, files):
     that inherits the table skips those).
     """
     kind = comp.get("kind", "none")
-    kind = kind if known_kind(kind, COMPENSATORS) else _meant_kind(kind)
+    kind = kind if known_kind(kind, COMPENSATORS) else meant_kind(kind)
     name = comp.get("model", "plant")
     if kind is None or "model" not in COMPENSATORS[kind].fields or not isinstance(name, str):
         return [], []
@@ -502,7 +444,7 @@ def _check_map_compensators(smap, plant, base, files, problems, source):
     """Check the ``[stability_map.compensators]`` tables as a case's compensator is checked."""
     for label, spec in (smap.get("compensators") or {}).items():
         where, n_before = f"stability_map.compensators.{label}", len(problems)
-        clean = _check_compensator(spec, where, problems, source)
+        clean = check_compensator(spec, where, problems, source)
         if clean is None or len(problems) > n_before or "model" not in COMPENSATORS[clean.get("kind", "none")].fields:
             continue
         more = _model_problems(clean.get("model", "plant"), clean.get("identify"), plant, base, files)
@@ -527,7 +469,7 @@ def _validate_cases(path, data, feedback=False):
         check_table(data["plant"], PLANT, "plant", problems, source)
     if "compensator" in data:
         if isinstance(data["compensator"], dict):      # comp_top is {} for anything else
-            _check_compensator(comp_top, "compensator", problems, source)
+            check_compensator(comp_top, "compensator", problems, source)
         else:    # compensator = "multivariable" ran as kind 'none' without a word
             problems.append(f"{source}: compensator: expected a table, e.g. [compensator] "
                             f"kind = \"multivariable\", found {short_repr(data['compensator'])}")
@@ -557,6 +499,17 @@ def _validate_cases(path, data, feedback=False):
     def once(line):  # a problem of a top-level table, found per case, is listed once
         if line not in problems:
             problems.append(line)
+
+    def kind_lines(more, where, own):
+        # a kind's check of a key the case inherits is said once, at the top table; the
+        # fade-in's depends on the case's settling and is said per case
+        own = own if isinstance(own, dict) else {}
+        for msg in more:
+            key = msg.split(":", 1)[0].split(".", 1)[0]
+            if key in own or key == "fade_in" or key not in comp_top:
+                problems.append(f"{source}: {where}.compensator.{msg}")
+            else:
+                once(f"{source}: compensator.{msg}")
 
     def plant_of(preset, dynamics):
         key = (preset, bool(dynamics))
@@ -610,9 +563,9 @@ def _validate_cases(path, data, feedback=False):
                      f"[dynamics] (or kind = 'none'); set dynamics = false for its static plant")
         # compensator: merge and check
         cover = raw.get("compensator", {})
-        cspec = _merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
+        cspec = merge_compensator(comp_top, cover if isinstance(cover, dict) else {})
         scratch = []
-        cclean = _check_compensator(cspec, f"{where}.compensator", scratch, source,
+        cclean = check_compensator(cspec, f"{where}.compensator", scratch, source,
                                     own=cover if isinstance(cover, dict) else {})
         if "compensator" in raw:
             if isinstance(cover, dict):
@@ -636,7 +589,7 @@ def _validate_cases(path, data, feedback=False):
                 and not feedback):
             problems.append(f"{source}: {where}.reference: a reference needs a compensator "
                             f"(compensator.kind is {kind!r}); use drive for an open-loop run")
-        if sig is None or len(problems) > n_before:
+        if sig is None or any(q not in scratch for q in problems[n_before:]):
             continue
         t, signal, P, extras = sig
         budget["used"] += t.size
@@ -648,6 +601,11 @@ def _validate_cases(path, data, feedback=False):
                             f"of the {t.size}-sample record; lengthen it or settle less")
             continue
         if mode == "reference" and not comp_ok:
+            # the kind's own checks of the keys that are right: every problem said at once
+            kind_lines(clean_keys_problems(cspec, cclean, plant, base, model_files, settle, P),
+                       where, cover)
+            continue
+        if len(problems) > n_before:
             continue
         cmp_spec = None
         if "model" in raw or "identify" in raw:
@@ -656,9 +614,11 @@ def _validate_cases(path, data, feedback=False):
             except ValueError as exc:  # one "key: message" per line
                 problems.extend(f"{source}: {where}.{line}" for line in str(exc).splitlines())
                 continue
+        model_wrong = False
         if mode == "reference" and "model" in COMPENSATORS[kind].fields:
             more = _model_problems(cclean.get("model", "plant"), cclean.get("identify"), plant, base,
                                    model_files)
+            model_wrong = bool(more)
             if not more:     # the class registry: a kind the model's class does not take
                 cls = class_problems(cclean.get("model", "plant"), kind, plant, base,
                                       model_files, cclean.get("identify"))
@@ -675,7 +635,9 @@ def _validate_cases(path, data, feedback=False):
             cclean = model_file_dynamics(cclean, base)
         if mode == "reference" and COMPENSATORS[kind].check is not None:   # the kind's own checks
             more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
-            problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
+            if model_wrong and "dynamics" not in cspec:     # its default follows the model
+                more = [m for m in more if not m.startswith(("dynamics", "identify_dynamics"))]
+            kind_lines(more, where, cover)
         fade = (cclean or {}).get("fade_in")
         if feedback and mode == "reference" and fade is not None and hardware_start(plant) \
                 and fade > settle * P * plant.sampling_period + 1e-12:

@@ -390,3 +390,53 @@ def test_the_kinds_named_for_a_static_plant_leave_out_those_that_need_dynamics(t
     (line,) = info.value.problems
     assert line.endswith("the kinds that work with it: multivariable, diagonal, per-axis, "
                          "static-gain"), line
+
+
+HAMMERSTEIN_HEAD = """
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "hammerstein"
+{extra}
+[[cases]]
+name = "a"
+reference = {{ kind = "circle", radius = 10.0, frequency = 50.0, periods = 3 }}
+settle_periods = 1
+[[cases]]
+name = "b"
+reference = {{ kind = "circle", radius = 10.0, frequency = 20.0, periods = 3 }}
+settle_periods = 1
+compensator = {{ dynamics = "own-guess.toml", iterations = 0 }}
+"""
+
+
+def test_a_bad_value_does_not_hide_the_kinds_own_checks_of_the_other_keys(tmp_path):
+    """``iterations = 0`` (a field problem) and ``dynamics = "guessed"`` (found only by the
+    kind's own check, which needs the other keys' values) in one table: both are named, the
+    inherited one once at the top table, the case's own under the case."""
+    p = _write(tmp_path, HAMMERSTEIN_HEAD.format(extra='gain = "secnt"\ndynamics = "guessed"'))
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(p)
+    problems = [line.removeprefix(f"{p}: ") for line in err.value.problems]
+    assert sum(line.startswith("compensator.gain:") for line in problems) == 1
+    assert sum(line.startswith("compensator.dynamics:") and "guessed" in line
+               for line in problems) == 1, problems
+    assert any(line.startswith("cases[1].compensator.iterations:") for line in problems)
+    assert any(line.startswith("cases[1].compensator.dynamics:") and "own-guess.toml" in line
+               for line in problems), problems
+    assert not any("cases[0].compensator.dynamics" in line for line in problems)
+
+
+@pytest.mark.parametrize("model", ['"identifed"', "42"])
+def test_a_bad_model_leaves_the_keys_that_depend_on_it_unjudged(tmp_path, model):
+    """With ``model`` wrong (a misspelt ``"identified"`` read as a file; not a string),
+    ``dynamics``'s default, which follows the model, is not judged: only the model's problem,
+    not "identify_dynamics: only used with dynamics = 'identified', found 'plant'"."""
+    text = HAMMERSTEIN_HEAD.format(extra=f"model = {model}\nidentify_dynamics = {{}}")
+    text = text.replace('compensator = { dynamics = "own-guess.toml", iterations = 0 }', "")
+    p = _write(tmp_path, text)
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(p)
+    problems = [line.removeprefix(f"{p}: ") for line in err.value.problems]
+    assert any(line.startswith("compensator.model:") for line in problems), problems
+    assert not any("identify_dynamics" in line for line in problems), problems
