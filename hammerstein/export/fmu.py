@@ -29,7 +29,6 @@ import zipfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
-from hammerstein.core.files import safe_write
 from hammerstein.exceptions import ExportError
 from hammerstein.export.c_code import CExport
 
@@ -494,12 +493,17 @@ def compile_binary(code: CExport, wrapper, compiler=None):
     ext = {"linux": ".so", "darwin": ".dylib", "win": ".dll"}[folder.rstrip("0123456789")]
     with tempfile.TemporaryDirectory(prefix="hammerstein-fmu-") as tmp:
         tmp = Path(tmp)
-        for fname, text in code.files().items():
-            safe_write(tmp / fname, text, "C source")
-        safe_write(tmp / "fmi2.c", wrapper, "C source")
+        sources = {**code.files(), "fmi2.c": wrapper}
         inc = _fmi_include_dir()
         if inc is None:
-            safe_write(tmp / "fmi2Functions.h", FMI2_MINIMAL_HEADER, "C header")
+            sources["fmi2Functions.h"] = FMI2_MINIMAL_HEADER
+        for fname, text in sources.items():
+            try:        # the build's own directory: no other file to guard, a failure is said
+                (tmp / fname).write_text(text, encoding="utf-8")
+            except OSError as exc:
+                raise ExportError(f"fmu: its binary cannot be built: the sources could not be "
+                                  f"written to a temporary directory ({exc.strerror}); "
+                                  f"--no-binary writes the FMU with its sources only") from None
         lib = tmp / (code.name + ext)
         cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-I", str(tmp)] \
             + (["-I", str(inc)] if inc else []) \
@@ -508,7 +512,10 @@ def compile_binary(code: CExport, wrapper, compiler=None):
         res = subprocess.run(cmd, capture_output=True, text=True)
         if res.returncode:
             first = next((ln for ln in res.stderr.splitlines() if "error" in ln), res.stderr.strip()[:200])
-            raise ExportError(f"fmu: the C compiler {cc} failed on the FMU sources: {first}")
+            if not first:       # killed (e.g. by a file-size limit): no message of its own
+                first = f"exit status {res.returncode}, no message"
+            raise ExportError(f"fmu: the C compiler {cc} failed on the FMU sources: {first}; "
+                              f"--no-binary writes the FMU with its sources only")
         return folder, lib.name, lib.read_bytes()
 
 

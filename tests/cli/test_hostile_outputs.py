@@ -233,3 +233,33 @@ def test_a_report_that_cannot_be_written_is_named_where_it_was_to_go(tmp_path):
     assert "cannot write the report: out/default/" in lines[0], lines[0]
     assert ".hammerstein-tmp" not in lines[0]
     assert list((tmp_path / "out").iterdir()) == []
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_FSIZE as on the lab's Linux hosts")
+@pytest.mark.parametrize("limit_kb", [4, 14])
+def test_an_fmu_that_cannot_be_built_is_named_as_the_users(tmp_path, limit_kb):
+    """Under a file-size limit `export --target fmu` named the temporary build directory
+    (`/tmp/hammerstein-fmu-.../NAME.h: cannot write the C source`), a place the user never
+    asked for; it now says the FMU's binary cannot be built, why, and that --no-binary
+    writes the sources only, and leaves nothing in --out. At 4 KB the sources do not fit;
+    at 14 KB they do and the compiler is killed writing its object (no message of its own)."""
+    import resource
+    from hammerstein.export.fmu import find_compiler
+    if find_compiler() is None:
+        pytest.skip("no C compiler: no binary is built")
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit_kb * 1024, limit_kb * 1024))
+    res = subprocess.run([sys.executable, "-m", "hammerstein", "export", "rakotondrabe-2dof",
+                          "--target", "fmu", "--out", "out"], cwd=tmp_path, capture_output=True,
+                         text=True, preexec_fn=limited, timeout=600)
+    lines = [ln for ln in res.stderr.splitlines() if not ln.startswith("note:")]
+    assert res.returncode == 1, res.stderr
+    assert len(lines) == 1 and "Traceback" not in res.stderr, res.stderr
+    assert "hammerstein-fmu-" not in lines[0], lines[0]
+    if limit_kb == 4:
+        assert "binary cannot be built" in lines[0] and "--no-binary" in lines[0], lines[0]
+    else:   # another compiler's object may fit, and then the archive is what cannot be written
+        assert ("compiler" in lines[0] and "--no-binary" in lines[0]) or "out/" in lines[0], \
+            lines[0]
+    assert not (tmp_path / "out").exists() or list((tmp_path / "out").iterdir()) == []
