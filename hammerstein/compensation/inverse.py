@@ -33,7 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hammerstein.models.hysteresis import HysteresisError, PrandtlIshlinskii, _as_finite_array
+from hammerstein.models.hysteresis import (HysteresisError, PrandtlIshlinskii, _as_finite_array,
+                                           play)
 
 __all__ = ["InversePlay", "InversePI", "kuhnen_inverse", "kuhnen_inverse_parameters"]
 
@@ -308,7 +309,14 @@ class InversePI:
         final_state : numpy.ndarray, shape (n_states,)
         """
         s = self.initial_state(initial_state)
-        v, q = self.shifted_inverse.simulate(y, s[:-2])
+        plays, q = play(y, self.shifted_inverse.thresholds, s[:-2])
+        # v summed term by term in the C's order, the same for every sample: a matrix product
+        # may round two equal columns 1 ulp apart, which the inverse play read as a motion of
+        # a held output and answered by jumping 2 r_1 (2.4 V on a held reference)
+        w = self.shifted_inverse.weights
+        v = np.zeros(plays.shape[1])
+        for j in range(w.size):
+            v += w[j] * plays[j]
         u, p = self.play_inverse.simulate(v, s[-2:])
         return u, np.concatenate([q, p])
 

@@ -160,3 +160,23 @@ def test_inverse_chunked_and_consistent_state(model):
     u2, s2 = inv.simulate(yr[400:], s1)
     np.testing.assert_allclose(np.concatenate([u1, u2]), u, rtol=0, atol=1e-12)
     np.testing.assert_allclose(s2, final, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("value", [-7.928, -3.1, 0.4, 6.37])
+def test_a_held_reference_holds_the_voltage(value):
+    """A reference held at one value gives one voltage, whole or one sample per call, as
+    the exported C does. The shifted inverse's output was a matrix product whose equal
+    columns came out 1 ulp apart, read by the inverse play as motion: the voltage jumped
+    2 r_1 (2.4 V here) while the reference held (the model's output stayed exact, the
+    jump being inside the play's dead band, but an actuator is not its model)."""
+    pi = PrandtlIshlinskii([1.2, 1.5, 2.1, 3.3, 4.9], [2.9, -0.4, -0.45, 1.2, -0.3])
+    inv = kuhnen_inverse(pi)
+    y = np.full(64, value)
+    u, _ = inv.simulate(y)
+    assert np.all(u == u[0]), np.unique(u)
+    s, parts = None, []
+    for k in range(y.size):
+        uk, s = inv.simulate(y[k:k + 1], s)
+        parts.append(uk[0])
+    np.testing.assert_array_equal(np.array(parts), u)
+    np.testing.assert_allclose(pi.simulate(u)[0], y, rtol=0, atol=1e-12 * abs(value))
