@@ -521,7 +521,11 @@ def model_gain_note(gains, names, stepping=None, misfit=None):
         return None
     text = ", ".join(f"{n} {g:.4g}" for n, g in zip(names, gains) if np.isfinite(g))
     head = (f"the measured response's gain against the model's prediction of the drive is "
-            f"{text} (a model fresh from identify: within {100 * MODEL_GAIN_TOLERANCE:g} %): ")
+            f"{text} (on the actuators it was measured on, a model fresh from identify "
+            f"reads within {100 * MODEL_GAIN_TOLERANCE:g} %): ")
+    rate = ("; a gain that falls as the frequency rises, on one size of circle at several "
+            "frequencies, is instead a hysteresis that depends on the rate (loops wider than "
+            "in the slow records), which no model class here holds: learn corrects it")
     steps = [n for n, o, st in zip(names, off, stepping if stepping is not None else
                                    [False] * len(names)) if o and st]
     if steps:
@@ -533,10 +537,10 @@ def model_gain_note(gains, names, stepping=None, misfit=None):
         return (head + f"the model already missed its own records when identified ({misfit}): "
                 f"this is its error at this reference's frequencies as much as a changed "
                 f"actuator; learn corrects either trial by trial, and identify again only if "
-                f"the actuator changed (temperature, load, another amplifier gain)")
+                f"the actuator changed (temperature, load, another amplifier gain)" + rate)
     return (head + "the actuator has changed since it was identified (temperature, load, another "
             "amplifier gain); learn corrects it trial by trial, and identify on records made "
-            "now (all of them, together) gives a model of the actuator as it is")
+            "now (all of them, together) gives a model of the actuator as it is" + rate)
 
 
 def start_lag(predicted, measured, within):

@@ -144,3 +144,16 @@ def test_a_model_that_missed_its_own_records_is_not_called_a_changed_actuator(dr
                 "fitted the held-out broadband records at 89.6 %, and the multisines showed "
                 "0.835 times the hysteresis records' static gain on y" in line) == misfit
         assert ("the actuator has changed since it was identified" in line) == (not misfit)
+
+
+@pytest.mark.parametrize("misfit", [None, "its dynamics fitted the held-out records at 78 %"])
+def test_the_note_names_a_rate_dependent_hysteresis_beside_a_changed_actuator(misfit):
+    """A tester's stage whose loops widen with the rate read 0.953 at 100 Hz against a
+    fresh model, and the note said only that the actuator had changed (or that the model
+    had missed its records): the trend over frequencies that tells a rate-dependent
+    hysteresis is named beside them."""
+    line = model_gain_note(np.array([0.953, 0.958]), ["x", "y"], misfit=misfit)
+    assert "x 0.953, y 0.958" in line
+    assert "falls as the frequency rises" in line and "depends on the rate" in line
+    assert ("missed its own records" in line) == bool(misfit)
+    assert model_gain_note(np.array([1.01, 0.99]), ["x", "y"], misfit=misfit) is None
