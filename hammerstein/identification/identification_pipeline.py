@@ -890,8 +890,11 @@ def static_gain_warning(summary, output_names, input_names):
     ...                      "unit_dc_gain": True}, ["x", "y"], ["ux", "uy"]) is None
     True
     >>> static_gain_warning({"dc_gain_unconstrained": [[1.085, 0.0], [0.0, 1.015]],
-    ...                      "unit_dc_gain": True}, ["x", "y"], ["ux", "uy"])[:52]
-    'the multisines show 8.5 % more static gain on x from'
+    ...                      "unit_dc_gain": True}, ["x", "y"], ["ux", "uy"])[:83]
+    'the multisines show 8.5 % more static gain on x from ux than the hysteresis records'
+    >>> static_gain_warning({"dc_gain_unconstrained": [[1.0, 0.0], [-0.326, 1.0]],
+    ...                      "unit_dc_gain": True}, ["x", "y"], ["ux", "uy"])[47:112]
+    '-0.326 from ux to y that the hysteresis records do not show (G(0)'
     """
     found = _static_gain_departure(summary)
     if found is None:
@@ -899,11 +902,11 @@ def static_gain_warning(summary, output_names, input_names):
     G, dev, l, k = found
     if l == k:
         what = (f"{100 * abs(dev[l, k]):.3g} % {'more' if dev[l, k] > 0 else 'less'} static "
-                f"gain on {output_names[l]} from {input_names[k]}")
+                f"gain on {output_names[l]} from {input_names[k]} than the hysteresis records")
     else:
         what = (f"a static cross-coupling of {dev[l, k]:.3g} from {input_names[k]} to "
-                f"{output_names[l]} that the hysteresis model does not have")
-    return (f"the multisines show {what} than the hysteresis records (G(0) unconstrained "
+                f"{output_names[l]} that the hysteresis records do not show")
+    return (f"the multisines show {what} (G(0) unconstrained "
             f"{G[l, k]:.4g}, more than {100 * STATIC_GAIN_WARN:g} % from the identity): either "
             f"the actuator changed between the records (temperature, load, another session: "
             f"record them all again together, hammerstein excitation), or, on records made "
