@@ -336,9 +336,14 @@ FADE_DECAYS = 4.0
 #: note (at 50 kHz a circle's start-up stepped 3e-6 more: its fade-in grew to a quarter of the
 #: record, with advice for a longer record); no drive steps beyond the settled drive's largest
 _STEP_TOL = 1e-3
+
 #: ... and the relative excess of a start-up step over the settled drive's largest that is
 #: slew-limited at all (below it, the drive is the compensator's own, bit for bit)
 _LIMIT_TOL = 1e-6
+
+#: A slew-limited start-up that moves the drive by more than this share of its peak, after
+#: the fade-in, gets the advice of a longer fade (below it: a few nm, said in the header only).
+START_UP_MOVE = 1e-4
 #: The words of a start-up limit within :data:`_STEP_TOL`: said in the drive file's header,
 #: for whoever compares it with an exported compensator, not on the console (half of the
 #: family's 400 drives had one, moving the drive by 4e-8 to 2e-4 V). Not "rounding": up to
@@ -754,9 +759,11 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             amplifier.inputs if amplifier is not None else None),
                                     T)
         res.shaped += notes
-        # moved by more than a rounding's share of the drive (a limited excess within
-        # _STEP_TOL moves it by about as little: no advice)
-        moved = max(1e-12, _STEP_TOL * 1e-3 * float(np.max(np.abs(before), initial=0.0)))
+        # moved by more than START_UP_MOVE of the drive's peak: the start-ups limited by a
+        # hair (0.1-0.2 % of the settled step asked beyond it) moved circles' drives by
+        # 1e-5 to 4e-4 V of 3.5-6 V, a few nm, and were advised a fade three times as long
+        # or a longer record; a held axis's start-up moves volts
+        moved = max(1e-12, START_UP_MOVE * float(np.max(np.abs(before), initial=0.0)))
         changed = np.flatnonzero(np.any(np.abs(out - before) > moved, axis=0))
         last = int(changed[-1]) + 1 if changed.size else 0
         if max(last, corrected) > n:
