@@ -455,7 +455,36 @@ def _handle(args):
     print(f"wrote {out}/ (max Euclidean error {summary}, delay {delay} samples = "
           f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay else ', not removed'})",
           file=sys.stdout)
+    if delay < 0:
+        print_err(f"note: {leading_words(delay, T)}")
     return 0
+
+
+def leading_words(delay, sampling_period):
+    """What a negative delay (the measurement ahead of its reference) means, in words.
+
+    Parameters
+    ----------
+    delay : int
+        :func:`~hammerstein.compensation.ilc.estimate_delay` [samples], < 0.
+    sampling_period : float
+        [s].
+
+    Returns
+    -------
+    str
+        One line without the ``note:`` prefix.
+
+    Examples
+    --------
+    >>> leading_words(-4, 5e-5)[:64]
+    'the measurement is ahead of its reference by 4 samples (200 µs):'
+    """
+    return (f"the measurement is ahead of its reference by {-delay} samples "
+            f"({-delay * sampling_period * 1e6:.4g} µs): no actuator answers before it is "
+            f"driven, so this is the shape of the error (a drive whose phase leads, as a "
+            f"compensator's model of slower dynamics gives) or a record started after its "
+            f"drive, not a delay; --remove-delay removes only a positive one")
 
 
 def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
@@ -663,7 +692,8 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), f
             f"  \nsampling period {T:g} s, {n} samples, settling {_settling(args, ref)}"
             f"{_drive_notes(args)}"
             f"\n\nDelay of the measurement behind the reference (cross-correlation): {delay} "
-            f"samples = {delay * T * 1e6:.4g} µs, {delay_words}.\n\n"
+            f"samples = {delay * T * 1e6:.4g} µs, {delay_words}"
+            f"{'; ' + leading_words(delay, T) if delay < 0 else ''}.\n\n"
             + "\n".join(defs) +
             f"{figure}\n| channel | metric | value | unit |\n|---|---|---|---|\n{table}\n"
             f"{_shaped_table(shaped_rows)}")

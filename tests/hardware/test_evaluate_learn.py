@@ -510,3 +510,26 @@ def test_an_axis_the_reference_holds_has_no_error_in_percent_of_its_span(tmp_pat
     assert ("z", "max_abs_error_percent") not in m.index
     assert m[("z", "max_abs_error")] == pytest.approx(0.3, rel=1e-3)
     assert m[("x", "max_abs_error_percent")] == pytest.approx(1.0, rel=1e-2)
+
+
+def test_a_measurement_ahead_of_its_reference_is_said_to_be_no_delay(tmp_path):
+    """A tester's raster read "delay -4 samples = -200 µs", a delay no actuator has; the
+    measurement here is the reference 4 samples early (plus an offset): evaluate finds -4,
+    says what a lead means in its output and report, and --remove-delay leaves it."""
+    t = np.arange(8000) * T
+    ref = np.vstack([20 * np.cos(2 * np.pi * 50 * t), 20 * np.sin(2 * np.pi * 50 * t)])
+    early = ref + 0.02
+    early[:, :-4] = ref[:, 4:] + 0.02
+    pd.DataFrame({"t": t, "x": ref[0], "y": ref[1]}).to_csv(tmp_path / "r.csv", index=False)
+    pd.DataFrame({"t": t, "x": early[0], "y": early[1]}).to_csv(tmp_path / "m.csv", index=False)
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        assert main(["evaluate", "--reference", str(tmp_path / "r.csv"), "--period", "0.02",
+                     "--measured", str(tmp_path / "m.csv"), "--out", str(tmp_path / "ev"),
+                     "--remove-delay"]) == 0
+    assert "delay -4 samples = -200 µs" in out.getvalue()
+    assert "ahead of its reference by 4 samples (200 µs)" in err.getvalue()
+    report = (tmp_path / "ev" / "report.md").read_text()
+    assert "ahead of its reference by 4 samples" in report
+    m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
+    assert m.loc[m["metric"] == "delay_samples", "value"].item() == -4
