@@ -191,7 +191,7 @@ def test_closed_loop_float_is_a_usage_error(tmp_path, capsys):
 def test_closed_loop_fmu_equals_the_python_loop(tmp_path, capsys):
     """The FMU of the loop: reference and measurement inputs, voltages and status outputs;
     simulated with fmpy it gives the Python closed loop's voltages."""
-    fmpy = pytest.importorskip("fmpy", reason="fmpy (test extra) is needed to simulate the FMU")
+    fmpy = pytest.importorskip("fmpy", reason="fmpy (extra [export]) is needed to simulate the FMU")
     from fmpy.validation import validate_fmu
     if platform_folder() is None:
         pytest.skip("unknown platform for an FMU binary")

@@ -231,7 +231,7 @@ def test_status_flag_on_every_class(tmp_path):
 def test_fmu_of_every_class(label, precision, tmp_path):
     """The FMU of the new classes simulates (fmpy) like Python; a float export too (the FMI
     wrapper converts at its boundary, the compensator stays float)."""
-    pytest.importorskip("fmpy", reason="fmpy (test extra) is needed to simulate the FMU")
+    pytest.importorskip("fmpy", reason="fmpy (extra [export]) is needed to simulate the FMU")
     from fmpy.validation import validate_fmu
     from test_fmu import simulate
     if platform_folder() is None:
