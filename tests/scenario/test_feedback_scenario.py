@@ -222,7 +222,9 @@ def test_a_transfer_function_controller_is_realised_balanced_without_a_warning()
     z = np.exp(2j * np.pi * np.array([1.0, 50.0, 400.0, 2000.0, 9000.0]) * T)
     got = [complex((ctrl.C @ np.linalg.solve(zk * np.eye(len(ctrl.A)) - ctrl.A, ctrl.B[:, :1])
                     + ctrl.D[:, :1])[0, 0]) for zk in z]
-    ref = control.sample_system(control.tf(num, den), T, method="tustin")
+    with warnings.catch_warnings():     # the oracle is the ill-conditioned companion form
+        warnings.simplefilter("ignore")
+        ref = control.sample_system(control.tf(num, den), T, method="tustin")
     want = [complex(ref(zk)) for zk in z]
     np.testing.assert_allclose(got, want, rtol=1e-8)
 
