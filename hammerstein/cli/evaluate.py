@@ -453,7 +453,7 @@ def _handle(args):
     summary = next((f"{row['value']:.4g} µm" for row in rows
                     if row["metric"] == "max_euclidean_error"), "")
     print(f"wrote {out}/ (max Euclidean error {summary}, delay {delay} samples = "
-          f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay else ', not removed'})",
+          f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay and delay > 0 else ', not removed'})",
           file=sys.stdout)
     if delay < 0:
         print_err(f"note: {leading_words(delay, T)}")
@@ -484,7 +484,7 @@ def leading_words(delay, sampling_period):
             f"({-delay * sampling_period * 1e6:.4g} µs): no actuator answers before it is "
             f"driven, so this is the shape of the error (a drive whose phase leads, as a "
             f"compensator's model of slower dynamics gives) or a record started after its "
-            f"drive, not a delay; --remove-delay removes only a positive one")
+            f"drive, not a delay")
 
 
 def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
@@ -673,8 +673,10 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), f
     table = "\n".join(f"| {row['channel']} | {row['metric']} | {_value(row['value'])} | "
                       f"{row['unit']} |" for row in rows)
     start = int(round(args.settle_periods * ref.period_samples))
-    if args.remove_delay:
+    if args.remove_delay and delay > 0:
         delay_words = "removed before the metrics"
+    elif args.remove_delay:
+        delay_words = "not removed (--remove-delay removes a positive one only)"
     else:
         delay_words = ("not removed: the metrics include it (`--remove-delay` gives the "
                        "delay-free figures, as `hammerstein learn` judges its trials)")

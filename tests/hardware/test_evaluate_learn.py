@@ -527,9 +527,10 @@ def test_a_measurement_ahead_of_its_reference_is_said_to_be_no_delay(tmp_path):
         assert main(["evaluate", "--reference", str(tmp_path / "r.csv"), "--period", "0.02",
                      "--measured", str(tmp_path / "m.csv"), "--out", str(tmp_path / "ev"),
                      "--remove-delay"]) == 0
-    assert "delay -4 samples = -200 µs" in out.getvalue()
+    assert "delay -4 samples = -200 µs, not removed" in out.getvalue()
     assert "ahead of its reference by 4 samples (200 µs)" in err.getvalue()
     report = (tmp_path / "ev" / "report.md").read_text()
     assert "ahead of its reference by 4 samples" in report
+    assert "removed before the metrics" not in report and "positive one only" in report
     m = pd.read_csv(tmp_path / "ev" / "metrics.csv")
     assert m.loc[m["metric"] == "delay_samples", "value"].item() == -4
