@@ -16,6 +16,10 @@ from hammerstein.scenario.schema import Field, check_table, kind_problem, known_
 
 __all__ = ["check_compensator", "clean_keys_problems", "merge_compensator", "option_problems"]
 
+#: Keys whose check reads another key's value (or its default): not judged when that one is
+#: wrong (``identify_dynamics`` goes with ``dynamics = "identified"``).
+DEPENDS_ON = {"identify_dynamics": "dynamics"}
+
 
 def merge_compensator(top, case):
     """A case's compensator table over the top-level one.
@@ -96,7 +100,7 @@ def clean_keys_problems(spec, clean, plant, base, files, settle, period_samples)
     checked, so that one run of ``validate`` names every problem. Nothing is
     checked when ``kind`` or ``model`` is wrong (the other keys' defaults
     depend on them), and only messages about keys written in the table are
-    kept (a default the bad key would have changed is not judged).
+    kept, less those that depend on a wrong key (:data:`DEPENDS_ON`).
 
     Parameters
     ----------
@@ -127,9 +131,10 @@ def clean_keys_problems(spec, clean, plant, base, files, settle, period_samples)
     bad = {k for k in spec if k not in clean}
     if bad & {"kind", "model"}:
         return []
+    judged = set(spec) - bad - {k for k, on in DEPENDS_ON.items() if on in bad}
     more = COMPENSATORS[kind].check(model_file_dynamics(clean, base), plant, base, files,
                                     settle, period_samples)
-    return [m for m in more if m.split(":", 1)[0].split(".", 1)[0] in set(spec) - bad]
+    return [m for m in more if m.split(":", 1)[0].split(".", 1)[0] in judged]
 
 
 def meant_kind(kind):

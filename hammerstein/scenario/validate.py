@@ -500,17 +500,6 @@ def _validate_cases(path, data, feedback=False):
         if line not in problems:
             problems.append(line)
 
-    def kind_lines(more, where, own):
-        # a kind's check of a key the case inherits is said once, at the top table; the
-        # fade-in's depends on the case's settling and is said per case
-        own = own if isinstance(own, dict) else {}
-        for msg in more:
-            key = msg.split(":", 1)[0].split(".", 1)[0]
-            if key in own or key == "fade_in" or key not in comp_top:
-                problems.append(f"{source}: {where}.compensator.{msg}")
-            else:
-                once(f"{source}: compensator.{msg}")
-
     def plant_of(preset, dynamics):
         key = (preset, bool(dynamics))
         if key not in plants:
@@ -601,9 +590,21 @@ def _validate_cases(path, data, feedback=False):
                             f"of the {t.size}-sample record; lengthen it or settle less")
             continue
         if mode == "reference" and not comp_ok:
-            # the kind's own checks of the keys that are right: every problem said at once
-            kind_lines(clean_keys_problems(cspec, cclean, plant, base, model_files, settle, P),
-                       where, cover)
+            # the kind's own checks of the keys that are right: every problem said at once;
+            # a model that cannot be read leaves the keys whose defaults follow it unjudged
+            wrong = []
+            if (cclean is not None and known_kind(kind, COMPENSATORS)
+                    and "model" in COMPENSATORS[kind].fields and "model" in cclean
+                    and not {"model", "identify"} - set(cclean) & set(cspec)):
+                wrong = _model_problems(cclean["model"], cclean.get("identify"), plant, base,
+                                        model_files)
+                if not ({"model", "identify"} & set(cover if isinstance(cover, dict) else {})):
+                    wrong = [m for m in wrong if m not in top_model[1]]   # said at the top
+                problems.extend(f"{source}: {where}.compensator: {msg}" for msg in wrong)
+            if not wrong:
+                problems.extend(f"{source}: {where}.compensator.{msg}" for msg in
+                                clean_keys_problems(cspec, cclean, plant, base, model_files,
+                                                    settle, P))
             continue
         if len(problems) > n_before:
             continue
@@ -637,7 +638,7 @@ def _validate_cases(path, data, feedback=False):
             more = COMPENSATORS[kind].check(cclean, plant, base, model_files, settle, P)
             if model_wrong and "dynamics" not in cspec:     # its default follows the model
                 more = [m for m in more if not m.startswith(("dynamics", "identify_dynamics"))]
-            kind_lines(more, where, cover)
+            problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
         fade = (cclean or {}).get("fade_in")
         if feedback and mode == "reference" and fade is not None and hardware_start(plant) \
                 and fade > settle * P * plant.sampling_period + 1e-12:
