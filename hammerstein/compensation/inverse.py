@@ -35,11 +35,17 @@ import numpy as np
 
 from hammerstein.models.hysteresis import (HysteresisError, PrandtlIshlinskii, _as_finite_array,
                                            play)
+from hammerstein.simulation import simulate_inverse_play
 
 __all__ = ["InversePlay", "InversePI", "kuhnen_inverse", "kuhnen_inverse_parameters"]
 
 #: Slack [V] allowed when checking that an inverse-play state is consistent.
 _STATE_TOL = 1e-9
+
+#: Motion the inverse play of :func:`kuhnen_inverse` ignores, relative to the operator's
+#: voltage scale (its largest threshold, or the shifted inverse's largest output if larger):
+#: 1e-12, some 100 times the rounding of the shifted inverse's weighted sum.
+MOTION_TOLERANCE = 1e-12
 
 
 @dataclass(frozen=True)
@@ -58,28 +64,42 @@ class InversePlay:
     ``(y(-T), u(-T))`` with ``|u(-T) - y(-T)| <= r``. (Check: if
     ``y(t) > y(t-T)``, ``play_r(y + r)`` = ``max(y, min(y + 2r, y(t-T)))`` =
     ``y``; symmetrically when falling; when constant ``|d| <= r`` keeps the
-    play where it was.) Implemented without a per-sample loop: the sign of
-    the last non-zero increment is forward filled.
+    play where it was.) Stepped by a compiled kernel
+    (:func:`~hammerstein.simulation.simulate_inverse_play`).
+
+    Any motion of y, however small, moves u by up to 2r. A y computed as a
+    weighted sum (the shifted inverse's output) can move by a rounding error
+    while the reference holds, and u would then jump. With a tolerance
+    ``e > 0`` the inverse follows ``a`` instead of y: ``a = y`` when y moved by
+    more than e from the last ``a``, else ``a`` holds. The play operator of
+    threshold r then outputs ``a``: y itself while y moves, within e of y
+    while it holds.
 
     Parameters
     ----------
     threshold : float
         Threshold r of the play operator to invert [V], >= 0 (r = 0 gives
         the identity).
+    tolerance : float
+        Motion of y ignored, e [V], >= 0 (0: every motion counts).
+        :func:`kuhnen_inverse` sets :data:`MOTION_TOLERANCE` times the
+        operator's voltage scale when r > 0.
 
     Raises
     ------
     HysteresisError
-        If the threshold is negative or not finite.
+        If the threshold or the tolerance is negative or not finite.
     """
 
     threshold: float
+    tolerance: float = 0.0
 
     def __post_init__(self):
-        r = float(_as_finite_array(self.threshold, "threshold", ndim=0))
-        if r < 0:
-            raise HysteresisError(f"threshold: expected >= 0 [V], found {r:g}")
-        object.__setattr__(self, "threshold", r)
+        for name in ("threshold", "tolerance"):
+            v = float(_as_finite_array(getattr(self, name), name, ndim=0))
+            if v < 0:
+                raise HysteresisError(f"{name}: expected >= 0 [V], found {v:g}")
+            object.__setattr__(self, name, v)
 
     n_states = 2
 
@@ -140,12 +160,9 @@ class InversePlay:
         s = self.initial_state(initial_state)
         if y.size == 0:
             return y.copy(), s
-        step = np.sign(np.diff(y, prepend=s[0]))
-        last = np.where(step != 0, np.arange(y.size), -1)
-        last = np.maximum.accumulate(last)
-        d = np.where(last >= 0, self.threshold * step[np.maximum(last, 0)], s[1] - s[0])
-        u = y + d
-        return u, np.array([y[-1], u[-1]])
+        u, (a, d) = simulate_inverse_play(y, self.threshold, self.tolerance,
+                                          np.array([s[0], s[1] - s[0]]))
+        return u, np.array([a, u[-1]])
 
 
 def kuhnen_inverse_parameters(thresholds, weights, name="component"):
@@ -337,6 +354,15 @@ def kuhnen_inverse(pi: PrandtlIshlinskii, name="component") -> InversePI:
     u - b`` forces ``z = u - b`` and ``y = u - a - b`` (symmetrically above),
     and ``|y - z| <= a`` holds again. Zero states qualify.
 
+    With ``r_1 > 0`` the inverse play ignores motions of the shifted
+    inverse's output up to :data:`MOTION_TOLERANCE` times the operator's
+    voltage scale (``max(r_n, sum_i |w'_i| r'_n)``, e.g. 1e-11 V for 10 V):
+    a held reference then holds the voltage although the weighted sum rounds
+    differently from the state it started from (after a demagnetising cycle
+    the plays sit at their bands' edges, and a 1-ulp difference of the
+    reference moved the voltage by up to r_1). The output stays within that
+    tolerance times ``S_n`` of the reference.
+
     Parameters
     ----------
     pi : PrandtlIshlinskii
@@ -357,4 +383,6 @@ def kuhnen_inverse(pi: PrandtlIshlinskii, name="component") -> InversePI:
         raise HysteresisError(f"{name}: expected a PrandtlIshlinskii operator, found {type(pi).__name__}")
     r1 = float(pi.thresholds[0])
     r_inv, w_inv = kuhnen_inverse_parameters(pi.thresholds - r1, pi.weights, name)
-    return InversePI(PrandtlIshlinskii(r_inv, w_inv), InversePlay(r1), pi)
+    scale = max(float(pi.thresholds[-1]), float(np.sum(np.abs(w_inv)) * r_inv[-1]))
+    tolerance = MOTION_TOLERANCE * scale if r1 > 0 else 0.0
+    return InversePI(PrandtlIshlinskii(r_inv, w_inv), InversePlay(r1, tolerance), pi)

@@ -25,9 +25,11 @@ def _per_axis_source(comp, model, precision, N, limits, T):
             s0 = rest[comp._offsets[l]:comp._offsets[l + 1]]    # q, then [v(-T), u(-T)]
             decls += [f"static const {N}_real {N}_r{l}[{n}] = {_vec(pi.thresholds, precision)};  /* r'_i [um] */",
                       f"static const {N}_real {N}_w{l}[{n}] = {_vec(pi.weights, precision)};  /* w'_i [V/um] */",
-                      f"static const {N}_real {N}_r1_{l} = {_lit(inv.play_inverse.threshold, precision)};  /* r_1 [V] */"]
+                      f"static const {N}_real {N}_r1_{l} = {_lit(inv.play_inverse.threshold, precision)};  /* r_1 [V] */",
+                      f"static const {N}_real {N}_e{l} = {_lit(inv.play_inverse.tolerance, precision)};"
+                      f"  /* motion of v ignored [V] */"]
             members += [f"    {N}_real q{l}[{n}];      /* inverse PI plays of axis {l} [um] */",
-                        f"    {N}_real v{l}, d{l};    /* last shifted-inverse output [V], inverse-play offset [V] */"]
+                        f"    {N}_real v{l}, d{l};    /* last moved shifted-inverse output [V], inverse-play offset [V] */"]
             reals += n + 2
             if np.any(s0):   # after the demagnetising cycle: d = u(-T) - v(-T)
                 decls.append(f"static const {N}_real {N}_q{l}_rest[{n}] = {_vec(s0[:n], precision)};"
@@ -42,10 +44,9 @@ def _per_axis_source(comp, model, precision, N, limits, T):
         {N}_real v = {zero};
         for (j = 0; j < {n}; ++j) s->q{l}[j] = {N}_play(s->q{l}[j], r[{l}], {N}_r{l}[j]);
         for (j = 0; j < {n}; ++j) v += {N}_w{l}[j] * s->q{l}[j];
-        if (v > s->v{l}) s->d{l} = {N}_r1_{l};
-        else if (v < s->v{l}) s->d{l} = -{N}_r1_{l};
-        s->v{l} = v;
-        u[{l}] = v + s->d{l};
+        if (v > s->v{l} + {N}_e{l}) {{ s->v{l} = v; s->d{l} = {N}_r1_{l}; }}   /* within e: rounding, held */
+        else if (v < s->v{l} - {N}_e{l}) {{ s->v{l} = v; s->d{l} = -{N}_r1_{l}; }}
+        u[{l}] = s->v{l} + s->d{l};
     }}""")
         else:
             decls.append(f"static const {N}_real {N}_ginv{l} = {_lit(inv, precision)};  /* 1/g [V/um] */")

@@ -73,7 +73,8 @@ from hammerstein.simulation._stepping import (BACKENDS, PARALLEL_MIN_SAMPLES, Ch
                                               compensator_law, compensator_state, is_fusable,
                                               simulate_chain, simulate_chain_batch,
                                               simulate_compensator, simulate_hysteresis,
-                                              simulate_plant, simulate_plays)
+                                              simulate_inverse_play, simulate_plant,
+                                              simulate_plays)
 from hammerstein.simulation._closed_loop import (AW_BACK, AW_CLAMP, AW_NONE, ComponentArrays,
                                                  LoopArrays, LoopState, empty_components, empty_pi,
                                                  simulate_closed_loop)
@@ -83,6 +84,7 @@ from hammerstein.simulation._preisach_inverse import preisach_inverse_kernel
 
 __all__ = [
     "simulate_plays",
+    "simulate_inverse_play",
     "simulate_hysteresis",
     "simulate_plant",
     "simulate_compensator",

@@ -82,6 +82,29 @@ def play_kernel(u, r, s, y):
         s[i] = v
 
 
+@njit(cache=True)
+def inverse_play_kernel(v, r, e, s, u):
+    """Inverse play of threshold ``r`` ignoring motions of ``v`` up to ``e``.
+
+    ``u`` (N,) out; ``s`` = [y(-T), d(-T)] in/out: the last output that moved (the
+    anchor) and the offset ``u - y``.
+    """
+    a = s[0]
+    d = s[1]
+    for t in range(uint64(v.size)):
+        t = uint64(t)
+        vt = v[t]
+        if vt > a + e:
+            a = vt
+            d = r
+        elif vt < a - e:
+            a = vt
+            d = -r
+        u[t] = a + d
+    s[0] = a
+    s[1] = d
+
+
 # Indices are cast to uint64 in the hot loops: numba then drops its negative
 # index wrap-around, and LLVM vectorises the play updates (vminpd/vmaxpd).
 @njit(cache=True, inline="always")

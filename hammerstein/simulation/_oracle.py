@@ -13,7 +13,42 @@ import numpy as np
 from hammerstein.exceptions import CompensatorDivergence
 from hammerstein.simulation._packing import STATUS_BOUND, divergence_error
 
-__all__ = ["plays", "hysteresis", "plant", "compensator_step", "compensator"]
+__all__ = ["plays", "inverse_play", "hysteresis", "plant", "compensator_step", "compensator"]
+
+
+def inverse_play(v, r, e, s):
+    """Inverse play of threshold ``r``, motions of ``v`` up to ``e`` ignored.
+
+    ``u(t) = a(t) + d(t)``: ``a`` follows ``v`` when ``|v(t) - a(t-T)| > e`` and holds
+    otherwise; ``d = r`` when ``a`` rose, ``-r`` when it fell, else kept.
+
+    Parameters
+    ----------
+    v : numpy.ndarray, shape (n_samples,)
+        Desired play output [V].
+    r : float
+        Threshold [V].
+    e : float
+        Motion ignored [V].
+    s : numpy.ndarray, shape (2,)
+        ``[a(-T), d(-T)]`` [V].
+
+    Returns
+    -------
+    u : numpy.ndarray, shape (n_samples,)
+        Play input [V].
+    final_state : numpy.ndarray, shape (2,)
+        ``[a, d]`` after the last sample [V].
+    """
+    a, d = float(s[0]), float(s[1])
+    u = np.empty(v.size)
+    for t in range(v.size):
+        if v[t] > a + e:
+            a, d = v[t], r
+        elif v[t] < a - e:
+            a, d = v[t], -r
+        u[t] = a + d
+    return u, np.array([a, d])
 
 
 def plays(u, r, s):

@@ -182,6 +182,51 @@ def simulate_plays(u, thresholds, state, backend="numba"):
     return y, s
 
 
+def simulate_inverse_play(v, threshold, tolerance, state, backend="numba"):
+    """Right inverse of a play operator, motions up to a tolerance ignored.
+
+    ``u(t) = a(t) + d(t)``, where ``a`` follows ``v`` when it moves by more than
+    the tolerance e from where it last moved and holds otherwise, and
+    ``d = r sgn(a(t) - a(t-T))`` when ``a`` moves, kept otherwise: the play of
+    threshold r then outputs ``a``, within e of ``v`` (Kuhnen & Janocha's inverse
+    play; :class:`~hammerstein.compensation.inverse.InversePlay` validates).
+
+    Parameters
+    ----------
+    v : numpy.ndarray, shape (n_samples,)
+        Desired play output [V].
+    threshold : float
+        Threshold r [V], >= 0.
+    tolerance : float
+        Motion ignored, e [V], >= 0.
+    state : numpy.ndarray, shape (2,)
+        ``[a(-T), d(-T)]``: the play output and the offset ``u - a`` before the
+        first sample [V].
+    backend : {'numba', 'numpy'}
+        Compiled kernel or the numpy reference loop.
+
+    Returns
+    -------
+    u : numpy.ndarray, shape (n_samples,)
+        Play input [V].
+    final_state : numpy.ndarray, shape (2,)
+        ``[a, d]`` after the last sample [V].
+
+    Raises
+    ------
+    ValueError
+        On an unknown backend.
+    """
+    _check_backend(backend)
+    v = np.ascontiguousarray(v, dtype=float)
+    s = np.array(state, dtype=float)
+    if backend == "numpy":
+        return oracle.inverse_play(v, float(threshold), float(tolerance), s)
+    u = np.empty(v.size)
+    kernels.inverse_play_kernel(v, float(threshold), float(tolerance), s, u)
+    return u, s
+
+
 def simulate_hysteresis(model, inputs, initial_state=None, backend="numba"):
     """Outputs of a multivariable PI model for an input record, eq. (4).
 

@@ -113,6 +113,61 @@ def test_inverse_play_chunked_equals_single_run():
     np.testing.assert_array_equal(s2, f_all)
 
 
+@pytest.mark.parametrize("r, e", [(0.4, 1e-3), (0.0, 1e-3), (1.3, 0.05)])
+def test_inverse_play_with_a_tolerance_stays_within_it(r, e):
+    """Held runs, motions below e (a slow drift of e/7 per sample included) and large
+    motions: the play operator driven by u outputs y within e, y itself (to rounding) on
+    the samples where y moved by more than e, and u never moves while y stays within e of
+    where it stopped. Chunked equals whole."""
+    rng = np.random.default_rng(3)
+    big = rng.normal(size=600) * (rng.random(600) < 0.4)
+    tiny = rng.uniform(-e, e, 600) * (rng.random(600) < 0.5)
+    y = np.cumsum(np.concatenate([big + tiny, np.full(200, e / 7.3)]))
+    inv = InversePlay(r, e)
+    u, final = inv.simulate(y, [y[0], y[0]])
+    back, _ = play(u, [r], [y[0]])
+    assert np.max(np.abs(back[0] - y)) <= e * (1 + 1e-12)
+    anchor, exact, still = y[0], [], []
+    for t in range(y.size):             # the rule written out
+        if abs(y[t] - anchor) > e:
+            anchor = y[t]
+            exact.append(t)
+        elif t:
+            still.append(t)
+    np.testing.assert_allclose(back[0, exact], y[exact], rtol=0, atol=1e-13)
+    still = np.array(still)
+    np.testing.assert_array_equal(u[still], u[still - 1])
+    u1, s1 = inv.simulate(y[:301], [y[0], y[0]])
+    u2, s2 = inv.simulate(y[301:], s1)
+    np.testing.assert_allclose(np.concatenate([u1, u2]), u, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(s2, final, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_a_held_rest_output_after_the_cycle_holds_the_inputs_at_rest(seed):
+    """The per-axis inverse of a classical PI started after a demagnetising cycle, fed a
+    reference held at the model's rest output: the inputs stay at 0 V. The cycle leaves
+    the inverse plays at their bands' edges; the rest output, rounded 1 ulp away, moved
+    them, and the inverse play answered that rounding by jumping up to 2 r_1 (on 11 of
+    these 12 random models before the inverse play ignored motions below 1e-12 of the
+    operator's voltage scale)."""
+    from hammerstein import MultivariablePI, PerAxisInverseCompensator
+    rng = np.random.default_rng(seed)
+    direct = []
+    for _ in range(2):
+        n = int(rng.integers(3, 9))
+        r = np.sort(np.concatenate([[rng.uniform(0.05, 1.5)], rng.uniform(0.1, 9.0, n - 1)]))
+        w = rng.uniform(0.2, 2, n) * np.concatenate([[1.0], rng.choice([-0.3, 0.5, 1.0], n - 1)])
+        direct.append(PrandtlIshlinskii(r, w if np.all(np.cumsum(w) > 0) else np.abs(w)))
+    model = MultivariablePI([[direct[0], None], [None, direct[1]]], input_amplitude=[10.0, 10.0],
+                            demagnetised=[rng.uniform(5, 20)] * 2,
+                            output_offset=rng.uniform(-30, 30, 2))
+    comp = PerAxisInverseCompensator(model)
+    rest = model.simulate(np.zeros((2, 1)))[0]
+    u, _ = comp.simulate(np.repeat(rest, 20, axis=1))
+    assert np.max(np.abs(u)) <= 1e-12, np.max(np.abs(u), axis=1)
+
+
 @pytest.mark.parametrize("state, match", [([0.0, 0.5], "exceeds the threshold"),
                                           ([0.0], "expected \\[y_prev, u_prev\\]")])
 def test_inverse_play_rejects_bad_state(state, match):
