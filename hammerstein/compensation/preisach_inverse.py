@@ -275,7 +275,7 @@ class PreisachInverseCompensator:
             raise CompensatorError(f"model: expected as many inputs as outputs, found {m} and {p}")
         self.model, self.method, self.name = model, method, name
         self.tolerance, self.max_sweeps = float(tolerance), int(max_sweeps)
-        self._unsettled_said = False
+        self._unsettled_said = 0.0       # the largest miss said so far [µm]
         rng = model.input_range if input_bound is None else None
         if rng is not None:
             bound = np.asarray(rng, dtype=float)[:, 1].copy()
@@ -438,17 +438,20 @@ class PreisachInverseCompensator:
         unsettled = preisach_inverse_kernel(yr, *self._arrays, hs, self.lo, self.hi,
                                             self.method == "root", self.K_inv, u_prev, u,
                                             self.tolerance, self.max_sweeps)
-        if unsettled and self.method == "root" and not self._unsettled_said:
-            # judged where no input is at a bound; said once per compensator (compensate runs
-            # it several times, a chunked caller once per chunk: five to twelve lines)
+        if unsettled and self.method == "root":
+            # judged where no input is at a bound; said again only for a miss more than twice
+            # the largest said (compensate runs it several times, a chunked caller once per
+            # chunk: five to twelve lines of one miss; a second reference missed worse is said)
             inside = np.all((u > self.lo[:, None]) & (u < self.hi[:, None]), axis=0)
             miss = np.abs(self.model.simulate(u, s[m:])[0] - yr)[:, inside].max(initial=0.0)
-            if miss > UNSETTLED_MISS:
-                self._unsettled_said = True
+            if miss > max(UNSETTLED_MISS, 2.0 * self._unsettled_said):
+                again = " (said again only for a miss twice as large)" if not self._unsettled_said \
+                    else " (more than twice the miss said before)"
+                self._unsettled_said = miss
                 warnings.warn(f"exact inverse: the Gauss-Seidel sweeps did not settle on {unsettled} "
                               f"of {yr.shape[1]} samples, where a direct path is flat or nearly "
                               f"so (a band between a generalised PI's envelopes, no reversible "
                               f"part) while a cross-coupling still moves its output; the model's "
-                              f"output misses the reference there by up to {miss:.2g} µm "
-                              f"(said once per compensator)", ConvergenceWarning, stacklevel=2)
+                              f"output misses the reference there by up to {miss:.2g} µm"
+                              f"{again}", ConvergenceWarning, stacklevel=2)
         return u, np.concatenate([u_prev, hs])
