@@ -294,6 +294,26 @@ def _axis_problems(clean, plant, mode):
     return out
 
 
+def _fade_problems(fade, feedback, plant, settle, P, n, where):
+    """A case's ``compensator.fade_in`` [s] against its record of ``n`` samples.
+
+    On a plant whose drives start at rest (:func:`hardware_start`) the metrics skip the
+    fade-in, so something must remain after it; the feedback route measures from the
+    ``settle`` settling periods of ``P`` samples on, whatever the plant. Returns the
+    problems, each prefixed by ``where``.
+    """
+    if fade is None or not hardware_start(plant):
+        return []
+    T = plant.sampling_period
+    if feedback and fade > settle * P * T + 1e-12:
+        return [f"{where}.compensator.fade_in: {fade:g} s is longer than the {settle:g} "
+                f"settling periods ({settle * P * T:g} s) the metrics skip"]
+    if not feedback and fade >= n * T - 1e-12:
+        return [f"{where}.compensator.fade_in: {fade:g} s leaves nothing of the {n * T:g} s "
+                f"record to measure; expected less than {n * T:g} s"]
+    return []
+
+
 def _one_output(spec, plant):
     """A reference table with ``output`` filled in on a plant with one output (nothing to choose)."""
     names = list(plant.hysteresis.output_names) if plant is not None else []
@@ -605,6 +625,11 @@ def _validate_cases(path, data, feedback=False):
                 problems.extend(f"{source}: {where}.compensator.{msg}" for msg in
                                 clean_keys_problems(cspec, cclean, plant, base, model_files,
                                                     settle, P))
+            fade = cspec.get("fade_in")     # a right fade_in judged beside the wrong keys
+            if not any(".fade_in:" in q for q in problems) and isinstance(fade, (int, float)) \
+                    and not isinstance(fade, bool) and np.isfinite(fade) and fade >= 0:
+                problems.extend(_fade_problems(float(fade), feedback, plant, settle, P, t.size,
+                                               f"{source}: {where}"))
             continue
         if len(problems) > n_before:
             continue
@@ -639,19 +664,9 @@ def _validate_cases(path, data, feedback=False):
             if model_wrong and "dynamics" not in cspec:     # its default follows the model
                 more = [m for m in more if not m.startswith(("dynamics", "identify_dynamics"))]
             problems.extend(f"{source}: {where}.compensator.{msg}" for msg in more)
-        fade = (cclean or {}).get("fade_in")
-        if feedback and mode == "reference" and fade is not None and hardware_start(plant) \
-                and fade > settle * P * plant.sampling_period + 1e-12:
-            # the feedback route measures from the settling periods on, whatever the plant
-            problems.append(f"{source}: {where}.compensator.fade_in: {fade:g} s is longer than "
-                            f"the {settle:g} settling periods "
-                            f"({settle * P * plant.sampling_period:g} s) the metrics skip")
-        elif mode == "reference" and fade is not None and hardware_start(plant) \
-                and fade >= t.size * plant.sampling_period - 1e-12:
-            # the metrics skip the fade-in on such a plant: something must remain after it
-            problems.append(f"{source}: {where}.compensator.fade_in: {fade:g} s leaves nothing of "
-                            f"the {t.size * plant.sampling_period:g} s record to measure; "
-                            f"expected less than {t.size * plant.sampling_period:g} s")
+        if mode == "reference":
+            problems.extend(_fade_problems((cclean or {}).get("fade_in"), feedback, plant,
+                                           settle, P, t.size, f"{source}: {where}"))
         if cmp_spec is not None:
             more = _model_problems(cmp_spec["model"], cmp_spec.get("identify"), plant, base,
                                    model_files)

@@ -72,6 +72,16 @@ def test_a_fade_in_as_long_as_the_record_is_refused(tmp_path):
     assert "cases[0].compensator.fade_in: 0.2 s leaves nothing of the 0.2 s record" in str(err.value)
 
 
+@pytest.mark.parametrize("other", ['gain = "nope"', "iterations = -3", "cutoff_hz = -1.0"])
+def test_a_fade_in_as_long_as_the_record_is_said_beside_another_bad_value(tmp_path, other):
+    # every problem at once: the too-long fade_in was said only once the other value was right
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(_scenario(tmp_path, f"fade_in = 0.2\n{other}\n"))
+    text = str(err.value)
+    assert f"compensator.{other.split()[0]}: expected" in text
+    assert "cases[0].compensator.fade_in: 0.2 s leaves nothing of the 0.2 s record" in text
+
+
 def test_a_paper_preset_keeps_the_scenarios_own_start(tmp_path):
     # no amplifier, 0 µm at 0 V: the fade-in is the settling period's, from 0 µm, and a longer
     # one is still refused (the metrics would measure it)
