@@ -294,6 +294,16 @@ def _axis_problems(clean, plant, mode):
     return out
 
 
+def _said_at_top(line, own, where, source, problems):
+    """True when ``line`` is about a key the case inherits and was said, in the same
+    words, of the top-level compensator table."""
+    head = f"{source}: {where}.compensator."
+    if not line.startswith(head):
+        return False
+    key = line[len(head):].split(":", 1)[0].split(".", 1)[0]
+    return key not in own and f"{source}: compensator.{line[len(head):]}" in problems
+
+
 def _fade_problems(fade, feedback, plant, settle, P, n, where):
     """A case's ``compensator.fade_in`` [s] against its record of ``n`` samples.
 
@@ -578,7 +588,10 @@ def _validate_cases(path, data, feedback=False):
                                     own=cover if isinstance(cover, dict) else {})
         if "compensator" in raw:
             if isinstance(cover, dict):
-                problems.extend(scratch)  # top-level problems are reported once, above
+                # top-level problems are reported once, above: an inherited key's message
+                # said there word for word is not repeated under every case with a table
+                problems.extend(q for q in scratch if not _said_at_top(q, cover, where, source,
+                                                                        problems))
             else:
                 problems.append(f"{source}: {where}.compensator: expected a table")
         elif scratch and not any("compensator" in q for q in problems[:n_before]):

@@ -265,6 +265,24 @@ def test_a_missing_preset_is_named_once_when_a_case_overrides_the_plant(tmp_path
     assert ScenarioError(["a", "b", "a"]).problems == ["a", "b"]
 
 
+def test_an_inherited_bad_value_is_named_once_at_the_top(tmp_path):
+    """A bad top-level compensator value, inherited by cases with tables of their own: it
+    was named again under every such case, word for word. A case's own bad value is still
+    named under the case."""
+    case = GOOD_CASE.replace('name = "x"', 'name = "NAME"')
+    text = (HEAD + 'gain = "nope"\n' + case.replace("NAME", "a") + "compensator = { iterations = 2 }\n"
+            + case.replace("NAME", "b") + "compensator = { iterations = 3, cutoff_hz = -1.0 }\n"
+            + case.replace("NAME", "c"))
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(_write(tmp_path, text))
+    said = err.value.problems
+    assert sum(".gain: expected" in q for q in said) == 1, said
+    assert any(q.endswith("compensator.gain: expected 'secant', 'midpoint', 'identity' or a "
+                          "square matrix [[..],[..]] of finite numbers [µm/V], found 'nope'")
+               and "cases[" not in q for q in said), said
+    assert any("cases[1].compensator.cutoff_hz" in q for q in said), said
+
+
 def test_a_fade_in_that_leaves_no_period_is_named_with_its_case(tmp_path):
     """Six periods of a 300 Hz sine are 0.02 s, the shortest fade compensate gives an
     identified preset (records' amplifier, dynamics): the metrics, which start at the fade's
