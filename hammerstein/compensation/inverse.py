@@ -37,7 +37,8 @@ from hammerstein.models.hysteresis import (HysteresisError, PrandtlIshlinskii, _
                                            play)
 from hammerstein.simulation import simulate_inverse_play
 
-__all__ = ["InversePlay", "InversePI", "kuhnen_inverse", "kuhnen_inverse_parameters"]
+__all__ = ["InversePlay", "InversePI", "kuhnen_inverse", "kuhnen_inverse_parameters",
+           "MOTION_TOLERANCE", "FLOAT_MOTION_TOLERANCE"]
 
 #: Slack [V] allowed when checking that an inverse-play state is consistent.
 _STATE_TOL = 1e-9
@@ -46,6 +47,12 @@ _STATE_TOL = 1e-9
 #: voltage scale (its largest threshold, or the shifted inverse's largest output if larger):
 #: 1e-12, some 100 times the rounding of the shifted inverse's weighted sum.
 MOTION_TOLERANCE = 1e-12
+
+#: The same for an export in single precision: 2e-7, a few of float's 6e-8 roundings of the
+#: weighted sum (with 1e-6 the exported float inverse lagged a sample at the reversals of a
+#: slow random walk; with 1e-12, below float's resolution, a held rest output jumped 2 r_1 on
+#: 8 of 21 demagnetised starts of the bundled preset).
+FLOAT_MOTION_TOLERANCE = 2e-7
 
 
 @dataclass(frozen=True)

@@ -6,9 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from hammerstein.compensation.inverse import InversePI
+from hammerstein.compensation.inverse import FLOAT_MOTION_TOLERANCE, MOTION_TOLERANCE, InversePI
 from hammerstein.export.c_base import (_lit, _vec, _check_model, _reference_transform,
                                        _limits_code, _PLAY)
+
+
+def _tolerance(inv, precision):
+    """The inverse play's motion tolerance [V]: Python's in double; in float, scaled to float's
+    rounding (the weighted sum rounds 1e8 times coarser: a held reference jumped 2 r_1)."""
+    e = inv.play_inverse.tolerance
+    return e if precision == "double" else e * (FLOAT_MOTION_TOLERANCE / MOTION_TOLERANCE)
 
 
 def _per_axis_source(comp, model, precision, N, limits, T):
@@ -26,7 +33,7 @@ def _per_axis_source(comp, model, precision, N, limits, T):
             decls += [f"static const {N}_real {N}_r{l}[{n}] = {_vec(pi.thresholds, precision)};  /* r'_i [um] */",
                       f"static const {N}_real {N}_w{l}[{n}] = {_vec(pi.weights, precision)};  /* w'_i [V/um] */",
                       f"static const {N}_real {N}_r1_{l} = {_lit(inv.play_inverse.threshold, precision)};  /* r_1 [V] */",
-                      f"static const {N}_real {N}_e{l} = {_lit(inv.play_inverse.tolerance, precision)};"
+                      f"static const {N}_real {N}_e{l} = {_lit(_tolerance(inv, precision), precision)};"
                       f"  /* motion of v ignored [V] */"]
             members += [f"    {N}_real q{l}[{n}];      /* inverse PI plays of axis {l} [um] */",
                         f"    {N}_real v{l}, d{l};    /* last moved shifted-inverse output [V], inverse-play offset [V] */"]
