@@ -80,6 +80,16 @@ def test_a_fade_in_as_long_as_the_record_is_said_beside_another_bad_value(tmp_pa
     text = str(err.value)
     assert f"compensator.{other.split()[0]}: expected" in text
     assert "cases[0].compensator.fade_in: 0.2 s leaves nothing of the 0.2 s record" in text
+    # a second case, its own fade_in too long as well: named although the first case's was
+    path = _scenario(tmp_path, f"{other}\n")
+    path.write_text(path.read_text() + '[[cases]]\nname = "d"\nreference = ' + CIRCLE
+                    + '\ncompensator = { fade_in = 0.2 }\n[[cases]]\nname = "e"\nreference = '
+                    + CIRCLE + '\ncompensator = { fade_in = 0.25 }\n')
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    text = str(err.value)
+    assert "cases[1].compensator.fade_in: 0.2 s leaves nothing" in text, text
+    assert "cases[2].compensator.fade_in: 0.25 s leaves nothing" in text, text
 
 
 def test_a_paper_preset_keeps_the_scenarios_own_start(tmp_path):
