@@ -782,7 +782,8 @@ class PerAxisInverseCompensator:
             comp, label = self.model.components[l][l], _direct_name(self.model, l)
             if isinstance(comp, PrandtlIshlinskii):
                 try:
-                    self.inverses.append(kuhnen_inverse(comp, name=label))
+                    self.inverses.append(kuhnen_inverse(comp, name=label,
+                                                        output_scale=self._output_scale(l)))
                 except HysteresisError as exc:
                     raise CompensatorError(f"model: {exc}") from None
             elif comp is None or comp == 0:
@@ -791,6 +792,17 @@ class PerAxisInverseCompensator:
                 self.inverses.append(1.0 / comp)
         sizes = [inv.n_states if not isinstance(inv, float) else 0 for inv in self.inverses]
         self._offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+
+    def _output_scale(self, l):
+        """The largest magnitude of output l's references [µm]: its offset plus the direct
+        transfer's output over the identified input range (when known)."""
+        m = self.model
+        offset = 0.0 if m.output_offset is None else abs(float(m.output_offset[l]))
+        if m.input_amplitude is None:
+            return offset
+        volts = float(m.input_amplitude[l]) + (0.0 if m.input_centre is None
+                                               else abs(float(m.input_centre[l])))
+        return offset + float(np.sum(np.abs(m.components[l][l].weights))) * volts
 
     @property
     def n_states(self) -> int:

@@ -44,15 +44,16 @@ __all__ = ["InversePlay", "InversePI", "kuhnen_inverse", "kuhnen_inverse_paramet
 _STATE_TOL = 1e-9
 
 #: Motion the inverse play of :func:`kuhnen_inverse` ignores, relative to the operator's
-#: voltage scale (its largest threshold, or the shifted inverse's largest output if larger):
+#: voltage scale (its largest threshold, or what the shifted inverse sums if larger):
 #: 1e-12, some 100 times the rounding of the shifted inverse's weighted sum.
 MOTION_TOLERANCE = 1e-12
 
-#: The same for an export in single precision: 2e-7, a few of float's 6e-8 roundings of the
-#: weighted sum (with 1e-6 the exported float inverse lagged a sample at the reversals of a
-#: slow random walk; with 1e-12, below float's resolution, a held rest output jumped 2 r_1 on
-#: 8 of 21 demagnetised starts of the bundled preset).
-FLOAT_MOTION_TOLERANCE = 2e-7
+#: The same for an export in single precision: 5e-8, about one of float's roundings of the
+#: scale (with 1e-8 random models with 100 µm offsets still jumped 2 r_1 at a held rest
+#: output, 5 of 16; with 2e-7 the float inverse lagged a sample at the reversals of a slow
+#: random walk; with 1e-12, below float's resolution, 8 of 21 demagnetised starts of the
+#: bundled preset jumped).
+FLOAT_MOTION_TOLERANCE = 5e-8
 
 
 @dataclass(frozen=True)
@@ -345,7 +346,7 @@ class InversePI:
         return u, np.concatenate([q, p])
 
 
-def kuhnen_inverse(pi: PrandtlIshlinskii, name="component") -> InversePI:
+def kuhnen_inverse(pi: PrandtlIshlinskii, name="component", output_scale=0.0) -> InversePI:
     """Analytic inverse of a PI operator, exact also when r_1 > 0.
 
     Splits ``Gamma = Gamma~ o play_{r_1}`` (thresholds ``r_i - r_1``), inverts
@@ -363,7 +364,8 @@ def kuhnen_inverse(pi: PrandtlIshlinskii, name="component") -> InversePI:
 
     With ``r_1 > 0`` the inverse play ignores motions of the shifted
     inverse's output up to :data:`MOTION_TOLERANCE` times the operator's
-    voltage scale (``max(r_n, sum_i |w'_i| r'_n)``, e.g. 1e-11 V for 10 V):
+    voltage scale ``max(r_n, sum_i |w'_i| (r'_n + Y))``, Y the ``output_scale``
+    (e.g. 1e-11 V for 10 V):
     a held reference then holds the voltage although the weighted sum rounds
     differently from the state it started from (after a demagnetising cycle
     the plays sit at their bands' edges, and a 1-ulp difference of the
@@ -376,6 +378,12 @@ def kuhnen_inverse(pi: PrandtlIshlinskii, name="component") -> InversePI:
         Operator to invert, thresholds [V], weights [µm/V].
     name : str
         Name used in error messages (e.g. ``"Gamma_xx"``).
+    output_scale : float
+        The largest output magnitude the inverse will be given [µm] (an
+        output offset included), when it exceeds the operator's own range:
+        the weighted sum rounds in proportion to its terms (a 92 µm offset
+        over thresholds of 1.4 V rounded by more than the operator's scale
+        alone allowed, in float).
 
     Returns
     -------
@@ -390,6 +398,7 @@ def kuhnen_inverse(pi: PrandtlIshlinskii, name="component") -> InversePI:
         raise HysteresisError(f"{name}: expected a PrandtlIshlinskii operator, found {type(pi).__name__}")
     r1 = float(pi.thresholds[0])
     r_inv, w_inv = kuhnen_inverse_parameters(pi.thresholds - r1, pi.weights, name)
-    scale = max(float(pi.thresholds[-1]), float(np.sum(np.abs(w_inv)) * r_inv[-1]))
+    scale = max(float(pi.thresholds[-1]),
+                float(np.sum(np.abs(w_inv)) * (r_inv[-1] + abs(float(output_scale)))))
     tolerance = MOTION_TOLERANCE * scale if r1 > 0 else 0.0
     return InversePI(PrandtlIshlinskii(r_inv, w_inv), InversePlay(r1, tolerance), pi)

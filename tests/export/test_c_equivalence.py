@@ -219,8 +219,8 @@ def test_per_axis_holds_the_rest_after_the_cycle(kind, amplitude, offset, precis
     the demagnetising cycle the inverse plays sit at their bands' edges: the rest output
     rounded 1 ulp away moved them, and the inverse play answered the rounding by jumping
     up to 2 r_1 (0.068 V from a 5 V cycle, 0.14 V from a 15 V one with an offset, on the
-    preset's 0.07 V r_1). In float the weighted sum rounds coarser: its tolerance too
-    (0.14 V from the 17.5 V cycle with the tolerance of double)."""
+    preset's 0.07 V r_1). In float the weighted sum rounds coarser: its band too (0.14 V
+    from the 17.5 V cycle with the band of double)."""
     model = build(kind).model
     c = model.components
     model = model.replace(components=[[c[0][0], None], [None, c[1][1]]],
@@ -235,6 +235,43 @@ def test_per_axis_holds_the_rest_after_the_cycle(kind, amplitude, offset, precis
     assert np.max(np.abs(u_py)) <= 1e-12
     assert np.max(np.abs(u_c)) <= (1e-12 if precision == "double" else 1e-6)
     assert np.all(u_py == u_py[:, :1]) and np.all(u_c == u_c[:, :1]) and np.all(status == 0)
+
+
+def _random_direct_model(seed, offset):
+    rng = np.random.default_rng(seed)
+    direct = []
+    for _ in range(2):
+        n = int(rng.integers(3, 9))
+        r = np.sort(np.concatenate([[rng.uniform(0.05, 1.5)], rng.uniform(0.1, 9.0, n - 1)]))
+        w = rng.uniform(0.2, 2, n) * np.concatenate([[1.0], rng.choice([-0.3, 0.5, 1.0], n - 1)])
+        direct.append(PrandtlIshlinskii(r, w if np.all(np.cumsum(w) > 0) else np.abs(w)))
+    return MultivariablePI([[direct[0], None], [None, direct[1]]], input_amplitude=[10.0, 10.0],
+                           demagnetised=[rng.uniform(5, 20)] * 2,
+                           output_offset=rng.uniform(-offset, offset, 2))
+
+
+@needs_cc
+@pytest.mark.parametrize("precision", ["double", "float"])
+@pytest.mark.parametrize("make", [
+    lambda: _random_direct_model(1, 100.0), lambda: _random_direct_model(6, 100.0),
+    lambda: _random_direct_model(12, 100.0),
+    lambda: MultivariablePI([[PrandtlIshlinskii([0.002, 0.004, 0.006, 0.008], [0.1, 0.05, 0.03, 0.02]),
+                              None], [None, PrandtlIshlinskii([0.002, 0.005], [0.1, 0.02])]],
+                            input_amplitude=[10.0, 10.0], demagnetised=[6.0, 6.0],
+                            output_offset=[41.3, -37.9])], ids=["seed1", "seed6", "seed12", "mV"])
+def test_the_motion_band_scales_with_the_offset(make, precision, harness):
+    """The band of the per-axis inverse play was scaled by the operator's thresholds alone;
+    the rounding at a held rest output scales with what is summed, an output offset of
+    ~100 µm included: a reviewer's random models (offsets within +-100 µm) still jumped up
+    to 1.63 V in float, and thresholds of a few mV with a 40 µm offset 2 r_1 in double too."""
+    model = make()
+    comp = PerAxisInverseCompensator(model)
+    rest = model.simulate(np.zeros((2, 1)))[0]
+    yr = np.repeat(rest, 10, axis=1)
+    u_py, _ = comp.simulate(yr)
+    u_c, _, _ = harness(export_c(comp, "comp", T, precision=precision)).run(yr)
+    assert np.max(np.abs(u_py)) <= 1e-12
+    assert np.max(np.abs(u_c)) <= (1e-12 if precision == "double" else 1e-5), np.abs(u_c).max(axis=1)
 
 
 @needs_cc
