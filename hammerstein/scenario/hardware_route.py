@@ -534,7 +534,7 @@ def model_miss(plant, drive, period_samples=None, kind=None):
         # the dynamics and the creep (an identified stage's 30 µm 100 Hz circle, a mode at
         # 311 Hz, missed by 17.6 %, blamed on the couplings alone)
         left = [PARTIAL_KINDS[kind]]
-        if not plant.is_static:
+        if getattr(plant, "sampled_dynamics", None) is not None:   # (is_static counts creep too)
             left.append("the linear dynamics (bending modes)")
         if any(c is not None for c in (getattr(plant, "creep", None) or [])):
             left.append("the creep")

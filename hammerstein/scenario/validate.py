@@ -639,8 +639,9 @@ def _validate_cases(path, data, feedback=False):
                                 clean_keys_problems(cspec, cclean, plant, base, model_files,
                                                     settle, P))
             fade = cspec.get("fade_in")     # a right fade_in judged beside the wrong keys
-            fade_said = any(".fade_in:" in q for q in problems[n_before:]) or \
-                any(q.startswith(f"{source}: compensator.fade_in:") for q in problems)
+            fade_said = any(".fade_in:" in q for q in problems[n_before:]) or (
+                "fade_in" not in (cover if isinstance(cover, dict) else {})
+                and any(q.startswith(f"{source}: compensator.fade_in:") for q in problems))
             if not fade_said and isinstance(fade, (int, float)) \
                     and not isinstance(fade, bool) and np.isfinite(fade) and fade >= 0:
                 problems.extend(_fade_problems(float(fade), feedback, plant, settle, P, t.size,

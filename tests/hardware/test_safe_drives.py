@@ -868,3 +868,23 @@ def test_a_kind_that_leaves_the_dynamics_says_so_too():
             "(bending modes) by design") in text, text
     assert "the default kind (--kind left out) compensates them all" in text
     assert "multivariable law" not in text
+
+
+def test_a_kind_that_leaves_the_creep_of_a_plant_without_modes_names_no_modes():
+    """A reviewer's: a plant with creep and no dynamics (is_static is False for it) was told
+    its bending modes were left out."""
+    from hammerstein.models.creep import Creep
+    from hammerstein.models.plant import HammersteinPlant
+    from hammerstein.io.presets import load_plant
+    from hammerstein.scenario.hardware_route import compensate_reference
+    repo = Path(__file__).resolve().parents[2]
+    base = load_plant(repo / "scenarios" / "presets" / "coupled-2dof.toml", False)
+    plant = HammersteinPlant(base.hysteresis, base.sampling_period, None,
+                             creep=[Creep([0.01, 0.1], [0.3, 0.2]), None])
+    t = np.arange(10000) * plant.sampling_period
+    ref = 30 * np.vstack([np.cos(2 * np.pi * 20 * t), np.sin(2 * np.pi * 20 * t)])
+    _, drive = compensate_reference(plant, ref, int(round(1 / (20 * plant.sampling_period))),
+                                    kind="per-axis", limits="warn")
+    text = " ".join(drive.notes)
+    assert "leaves out the model's cross-couplings and the creep by design" in text, text
+    assert "bending modes" not in text

@@ -92,6 +92,21 @@ def test_a_fade_in_as_long_as_the_record_is_said_beside_another_bad_value(tmp_pa
     assert "cases[2].compensator.fade_in: 0.25 s leaves nothing" in text, text
 
 
+def test_a_cases_own_fade_in_is_named_beside_a_bad_top_level_one(tmp_path):
+    # a reviewer's: the top table's bad fade_in silenced the case's own, too long one
+    path = _scenario(tmp_path, "fade_in = -1.0\n")
+    text = path.read_text().replace('[[cases]]\nname = "c"\nreference = ' + CIRCLE + '\n', "")
+    path.write_text(text + '[[cases]]\nname = "a"\nreference = ' + CIRCLE
+                    + '\ncompensator = { fade_in = 0.25, iterations = -3 }\n[[cases]]\nname = "b"'
+                    '\nreference = ' + CIRCLE + '\ncompensator = { fade_in = 0.25 }\n')
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(path)
+    text = str(err.value)
+    assert "compensator.fade_in: expected" in text, text
+    assert "cases[0].compensator.fade_in: 0.25 s leaves nothing" in text, text
+    assert "cases[1].compensator.fade_in: 0.25 s leaves nothing" in text, text
+
+
 def test_a_paper_preset_keeps_the_scenarios_own_start(tmp_path):
     # no amplifier, 0 µm at 0 V: the fade-in is the settling period's, from 0 µm, and a longer
     # one is still refused (the metrics would measure it)
