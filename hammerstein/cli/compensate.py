@@ -139,7 +139,10 @@ def _peaks_text(plant, drive):
     asked = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
                       zip(names, drive.peak_input, drive.peak_slew))
     if asked != text:       # the same numbers as printed: nothing the limits changed to tell
-        text += f" (the compensator asked for {asked} before the limits)"
+        # the start-up's slew limit changes them too, with no amplifier limit hit (a new user
+        # read "before the limits" as the amplifier's): said as what it is
+        text += (f" (the compensator asked for {asked} before the start-up's slew limit or "
+                 f"the amplifier's; the header's lines say which)")
     return text
 
 
