@@ -879,7 +879,8 @@ class GeneralizedPIIdentifier:
                  for a, c in self._demagnetised if a]
         notes.insert(1, "generalized PI: every record taken as starting after the "
                         f"demagnetising cycle (demagnetise.csv) from {', '.join(demag)} "
-                        f"(--record-start rest: from the plays at rest); the model starts there"
+                        f"; the model starts there (--record-start rest would take the "
+                        f"plays at rest instead)"
                      if self.record_start == "demagnetised" and demag else
                      "generalized PI: every record starts from the plays at rest")
         if n_cut:

@@ -584,8 +584,8 @@ class PreisachIdentifier:
         demag = [f"{a:.4g} V" + (f" around {c:.4g} V" if c else "") for a, c in self._cycles if a]
         notes, scores, best = [
             "preisach: every record taken as starting after the demagnetising cycle "
-            f"(demagnetise.csv) from {', '.join(demag)} (--record-start rest: from the ideal "
-            f"demagnetised state); the model starts there" if demag else
+            f"(demagnetise.csv) from {', '.join(demag)}; the model starts there "
+            f"(--record-start rest would take the ideal demagnetised state instead)" if demag else
             "preisach: every record starts from the ideal demagnetised state"], {}, None
         which = "held_out" if held else "train"
         s_recs, s_splits, s_inputs = self._scored_samples(records, splits, which)
