@@ -309,9 +309,15 @@ def falling_direct_transfer(model):
             sensor = (f" (its loops fall as {inp} rises: a sensor of inverted sign? invert the "
                       f"{out} column of the records, y -> -y, and identify again)"
                       if float(np.sum(w)) < 0 else "")
+            motion = ("would not move while {inp} turns by twice the second threshold (a "
+                      "dead band at every reversal), and no compensator inverts that"
+                      if w1 == 0 else "would move the wrong way as {inp} turns, and no "
+                      "compensator inverts that").format(inp=inp)
             return (f"model: direct transfer {out} <- {inp}: weights: the first weight (the "
-                    f"initial slope of its loops) is {w1:.6g}; expected > 0: {out} would move "
-                    f"the wrong way as {inp} turns, and no compensator inverts that{sensor}")
+                    f"initial slope of its loops) is {w1:.6g}; expected > 0: {out} {motion}"
+                    f"{sensor}; hammerstein identify keeps it above a tenth of the secant "
+                    f"(identify the records again), and --bounds monotone keeps every slope "
+                    f"positive")
     return None
 
 

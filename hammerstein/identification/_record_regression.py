@@ -34,6 +34,10 @@ MAP_ITERATIONS = 8
 MAP_SMOOTHING = 0.05
 #: Relative drop of the score that makes ``output_map="auto"`` keep the map on a symmetric loop.
 MAP_GAIN = 0.1
+#: Least initial slope of a direct transfer's loops, as a fraction of its secant (the
+#: least-squares slope of the output against the input): the first weight with every
+#: ``bounds``, each cumulative sum of the weights with ``bounds="monotone"``.
+MIN_SLOPE_FRACTION = 0.1
 
 
 # -- least squares engine ----------------------------------------------------------------
@@ -125,6 +129,11 @@ class _LeastSquares:
             self._projected[l] = self._qr.project(self.y[l])
         return self._qr.R, self._index, *self._projected[l]
 
+    def _secant(self, l, k):
+        """Least-squares slope of output l against input k over the training samples."""
+        return (float(np.polyfit(self.lin[k], self.y[l], 1)[0]) if np.ptp(self.lin[k]) > 0
+                else 1.0)
+
     def fit_output(self, l, kinds):
         """Components and offset of output l for kinds[k]; returns (comps, offset, rms).
 
@@ -140,15 +149,21 @@ class _LeastSquares:
                 n = X.shape[1]
                 lo, hi = np.full(n, -np.inf), np.full(n, np.inf)
                 transform = None
+                sec = (self._secant(l, k) if l == k else 0.0)
                 if l == k and self.bounds == "nonnegative":
                     lo[:] = 0.0
                 elif l == k and self.bounds == "monotone":
-                    sec = np.polyfit(self.lin[k], self.y[l], 1)[0] if np.ptp(self.lin[k]) > 0 else 1.0
                     sign = 1.0 if sec >= 0 else -1.0
                     M = np.eye(n) - np.eye(n, k=-1)
                     transform = sign * M
                     X = X @ transform
-                    lo[:] = 0.1 * abs(sec)
+                    lo[:] = MIN_SLOPE_FRACTION * abs(sec)
+                if l == k and self.bounds != "monotone" and sec > 0:
+                    # the first play (threshold 0) is the initial slope of every loop: at 0
+                    # the model holds its output while the input turns by 2 r_2 and no
+                    # compensator inverts it (an outside stage's direct transfers came out
+                    # at exactly 0 under the output map's nonnegative bounds)
+                    lo[0] = max(lo[0], MIN_SLOPE_FRACTION * sec)
                 cols.append(X)
                 layout.append((k, "pi", n, transform))
                 lower.append(lo)
@@ -228,6 +243,11 @@ class _ClosedForm:
                                               f"{rec.input_names[k]}): {exc}") from None
                 self.fits[l, k] = ident
         self.thresholds = {k: self.fits[0, k].thresholds_ for k in self.by_input}
+
+    def _secant(self, l, k):
+        """Least-squares slope of output l against input k over the training samples."""
+        return (float(np.polyfit(self.lin[k], self.y[l], 1)[0]) if np.ptp(self.lin[k]) > 0
+                else 1.0)
 
     def fit_output(self, l, kinds):
         comps = [None] * self.m

@@ -148,3 +148,40 @@ def test_a_classical_pi_from_records_has_no_dead_band_at_a_reversal(record, part
     y, _ = comp.simulate(u)
     assert y[1] - y[0] >= 1.5 * comp.weights[0] * (1 - 1e-12)
     assert y[2] - y[3] >= 1.5 * comp.weights[0] * (1 - 1e-12)
+
+
+@pytest.mark.parametrize("bounds", [None, "nonnegative"])
+@pytest.mark.parametrize("output_map", ["none", "deadzone"])
+def test_a_direct_transfer_always_starts_its_loops_with_a_slope(tmp_path, bounds, output_map):
+    """An actuator whose loops start flat (a backlash-like PI: no linear term, the output
+    held while the input turns by 2 x 0.6 V) fitted with the threshold-0 play of the
+    records route: least squares puts that play's weight at 0 (an outside stage's identify
+    --model classical wrote exactly 0 under the output map's nonnegative bounds), a model
+    no compensator inverts and export refused. The weight is bounded below by a tenth of
+    the secant, the least-squares slope of the output against the input (computed here
+    with numpy), as every cumulative sum is with bounds = 'monotone'."""
+    from hammerstein.io.datafiles import read_records
+    from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+    from hammerstein.signals.excitation import decreasing_sine
+
+    r = np.array([0.6, 1.5, 3.0, 5.0, 7.0])
+    w = np.array([1.2, 0.5, 0.4, 0.3, 0.2])
+    act = MultivariablePI([[PrandtlIshlinskii(r, w), None], [None, PrandtlIshlinskii(r, w)]],
+                          input_names=["ux", "uy"], output_names=["x", "y"])
+    paths = []
+    for k in range(2):
+        t, one, _ = decreasing_sine(5e-4, 10.0)
+        u = np.zeros((2, t.size))
+        u[k] = one
+        y = act.simulate(u)[0]
+        paths.append(tmp_path / f"rec-{k}.csv")
+        np.savetxt(paths[-1], np.column_stack([t, u.T, y.T]), delimiter=",",
+                   header="t,ux,uy,x,y", comments="")
+    records = [read_records(p, "ux,uy", "x,y", time="t") for p in paths]
+    fit = identify_records(records, bounds=bounds, output_map=output_map, partition="time")
+    for k in range(2):
+        comp = fit.model.components[k][k]
+        rec = records[k]
+        secant = np.polyfit(rec.u[k], rec.y[k], 1)[0]
+        assert comp.thresholds[0] == 0.0
+        assert comp.weights[0] >= 0.1 * secant * 0.98, (comp.weights[0], secant)

@@ -658,6 +658,7 @@ def test_steps_smoothed_below_the_first_mode_are_not_blamed_on_the_limits(tmp_pa
 @pytest.mark.parametrize("flip, first, sensor", [
     (False, "-0.05", False),     # one weight written wrong: the actuator's loops still rise
     (True, "-", True),           # every weight negated: a sensor of inverted sign
+    ("zero", "0;", False),       # a loop that starts flat (identify wrote it before it bounded w_1)
 ])
 def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path, flip, first, sensor):
     # a hand-written model with w_1 = -0.05 um/V on x <- ux: the default kind warned of a
@@ -672,7 +673,9 @@ def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path, flip, f
     model = copy.deepcopy(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis)
     op = model.components[0][0]
     weights = np.array(op.weights, dtype=float)
-    if flip:
+    if flip == "zero":
+        weights[0] = 0.0
+    elif flip:
         weights = -weights
     else:
         weights[0] = -0.05
@@ -689,6 +692,9 @@ def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path, flip, f
     assert "direct transfer x <- ux: weights: the first weight" in lines[0]
     assert f"is {first}" in lines[0]
     assert ("a sensor of inverted sign? invert the x column" in lines[0]) == sensor
+    assert ("would not move while ux turns" in lines[0]) == (flip == "zero")
+    assert ("would move the wrong way" in lines[0]) == (flip != "zero")
+    assert "--bounds monotone" in lines[0]
 
 
 def test_a_file_circle_beyond_the_reach_is_shaped_as_with_its_period(tmp_path):
