@@ -57,7 +57,7 @@ KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", 
 PROGRESS_SAMPLES = 200_000
 #: what ``--gain`` and ``--check`` mean, for the messages of a law that may not converge
 LAW_HINT = ("--gain midpoint|secant|identity sets K and --check warn runs a law that may not "
-            "converge; without --kind the default kind chooses a convergent gain")
+            "converge; without --gain the convergent gain is chosen")
 
 
 def add_parser(subparsers):

@@ -25,7 +25,7 @@ from pathlib import Path
 from hammerstein import __version__
 from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
-from hammerstein.compensation.model_classes import choose_kind
+from hammerstein.compensation.model_classes import choose_kind, explicit_law, kind_problem
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError, FileLimitError,
                                     HammersteinWarning,
@@ -283,6 +283,16 @@ def handler(args):
             gain = [list(map(float, row)) for row in gain]    # K [µm/V], a scaled midpoint
         check = check or choice.options.get("check")
         note = choice.note()
+    elif not kind_problem(source.model, kind, source.dynamics is not None):
+        try:        # (a kind the class cannot build is refused with its own words later)
+            options, note = explicit_law(source.model, kind, gain, check)
+        except CompensatorError as exc:
+            print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}")
+            return 1
+        gain = options.get("gain", gain)
+        if gain is not None and not isinstance(gain, str):
+            gain = [list(map(float, row)) for row in gain]    # K [µm/V], a scaled midpoint
+        check = check or options.get("check")
     args.kind = kind
     problem = _owned_problem(args, source, kind)
     if problem:         # before building anything: a file of the user's is never replaced

@@ -59,7 +59,8 @@ from hammerstein.exceptions import CompensatorDivergence, CompensatorError
 
 __all__ = ["ModelClass", "MODEL_CLASSES", "KindChoice", "GAIN_CANDIDATES", "model_class",
            "kind_problem", "law_radius", "convergent_gain", "choose_kind", "LawCheck",
-           "law_check", "law_self_test", "SELF_TEST_SAMPLES", "square_problem"]
+           "law_check", "law_self_test", "SELF_TEST_SAMPLES", "square_problem",
+           "explicit_law", "KIND_GAINS"]
 
 #: Samples of the test reference :func:`law_self_test` runs the law over (each input a
 #: raised cosine over [0, A], 2, 3, ... periods: the model's own outputs, reachable)
@@ -70,6 +71,10 @@ SELF_TEST_SAMPLES = 4000
 #: relaxation), the direct secant gains, then the midpoint scaled up (a smaller step: the
 #: radius of ``I - K^-1 J`` shrinks where coupled slopes push it past 1).
 GAIN_CANDIDATES = ("midpoint", "secant", 1.25, 1.5, 2.0)
+
+#: The gain each kind runs the law with when built without one (the scenario tables'
+#: default): what :func:`explicit_law` replaces when it does not converge.
+KIND_GAINS = {"multivariable": "secant", "hammerstein": "midpoint"}
 
 #: The rate-independent kinds every class builds (:meth:`ModelClass.compensator`).
 RATE_INDEPENDENT_KINDS = ("multivariable", "diagonal", "per-axis", "static-gain")
@@ -745,3 +750,57 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
                       f"the model has no dynamics and no gain makes the multivariable law "
                       f"converge (smallest rho(I - K^-1 J) {r:.3g}): the per-axis analytic "
                       f"inverse")
+
+
+def explicit_law(model, kind, gain=None, check=None):
+    """The law's gain and check for a kind the user named, and the note that says so.
+
+    ``--kind hammerstein`` (a classical-PI static part) or ``--kind
+    multivariable`` without ``--gain`` ran the kind's own default gain (the
+    midpoint, or the secant), which need not converge: on an outside stage's
+    identified classical PI the midpoint reached ``rho(I - K^-1 J) = 1.17``
+    and ``--kind hammerstein`` was refused, while the default kind chose the
+    secant gain at 0.904. The gain and check are now :func:`law_check`'s,
+    the decision the default kind makes, whenever the user named the kind
+    but neither ``--gain`` nor ``--check``.
+
+    Parameters
+    ----------
+    model : MultivariablePI or MultivariableHysteresis
+        Square, with ``input_amplitude``.
+    kind : str
+        The kind the user named.
+    gain : str or array_like, optional
+        The user's gain (then kept, no note).
+    check : {'error', 'warn', 'ignore'}, optional
+        The user's check (then kept, no note).
+
+    Returns
+    -------
+    options : dict
+        ``gain`` and ``check`` to build the kind with (empty: the kind's defaults,
+        for a kind without the law or a gain or check the user gave).
+    note : str or None
+        ``note: kind ... runs the multivariable law with gain ...`` when the
+        gain chosen is not the kind's own, or the law runs with ``check = 'warn'``.
+
+    Raises
+    ------
+    CompensatorError
+        As :func:`law_check`, when no gain makes the law converge and it does
+        not follow the model's own outputs.
+    """
+    law_kind = kind == "multivariable" or (
+        kind == "hammerstein" and model_class(model).exact_inverse_kind is None)
+    if not law_kind or gain is not None or check is not None or square_problem(model):
+        return {}, None
+    law = law_check(model, None, None)
+    options = {"gain": law.gain}
+    if law.check is not None:
+        options["check"] = law.check
+    if isinstance(law.gain, str) and law.gain == KIND_GAINS[kind] and law.check is None:
+        return options, None            # the kind's own gain: nothing to say
+    words = (f"{_gain_words(law.gain, law.radius)}, the convergent gain" if law.radius < 1.0
+             else law.reason)
+    return options, (f"note: kind {kind} runs the multivariable law with {words}, not the "
+                     f"kind's {KIND_GAINS[kind]} gain (--gain sets another)")

@@ -21,7 +21,7 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
                                             compensator_rest, hardware_drive,
                                             starts_at_rest)
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
-from hammerstein.compensation.model_classes import choose_kind, kind_problem
+from hammerstein.compensation.model_classes import choose_kind, explicit_law, kind_problem
 from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.compensation.shaping import (first_mode_hz, main_frequency, mode_decay_s,
                                               mode_note, relative_response)
@@ -389,7 +389,7 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
         problem = kind_problem(plant.hysteresis, kind, has_dynamics)
         if problem:
             raise CompensatorError(problem)
-        options = {}
+        options, note = explicit_law(plant.hysteresis, kind, gain, check)
     if kind in LAW_KINDS:
         if gain is not None:
             options["gain"] = gain

@@ -194,3 +194,58 @@ def test_a_one_output_model_needs_no_output_key(tmp_path, capsys):
                                            f'frequency = 20, periods = 4 }}',
                             "--out", str(tmp_path / f"{kind}.csv"))
         assert code == 0, err
+
+
+def _coupled_pi_with_dynamics(tmp_path):
+    """A 2x2 classical PI whose cross-couplings are 0.3 of its direct transfers, with a
+    2 kHz mode on each axis: the law's midpoint gain reaches rho(I - K^-1 J) = 1.3 over its
+    slopes, the secant gain 0.88 (law_radius)."""
+    import control
+
+    from hammerstein.io.presets import dynamics_to_table
+    from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+
+    r = np.array([0.0, 1.0, 2.0, 4.0, 6.0, 8.0])
+    w = np.array([0.3, 1.0, 0.3, 0.3, 0.2, 0.2])
+    pi = MultivariablePI([[PrandtlIshlinskii(r, w), PrandtlIshlinskii(r, 0.3 * w)],
+                          [PrandtlIshlinskii(r, 0.3 * w), PrandtlIshlinskii(r, w)]],
+                         input_names=["ux", "uy"], output_names=["x", "y"],
+                         input_amplitude=[10.0, 10.0])
+    wn = 2 * np.pi * 2000.0
+    mode = control.tf([wn ** 2], [1.0, 2 * 0.05 * wn, wn ** 2])
+    G = control.ss(control.append(control.ss(mode), control.ss(mode)))
+    path = tmp_path / "coupled.toml"
+    save_model(pi, path, {"note": "test"}, extra={
+        "preset": {"name": "coupled", "sampling_period": 5e-5},
+        "dynamics": dynamics_to_table(G)})
+    return pi, path
+
+
+def test_a_named_law_kind_without_gain_runs_the_convergent_gain(tmp_path, capsys):
+    """``--kind hammerstein`` on a classical PI ran the law with its own default gain (the
+    midpoint) and was refused where the midpoint diverges, while the default kind chose a
+    convergent one: an outside stage's identified PI, rho 1.17 against 0.904. The named kind
+    now takes law_check's gain, says so, and writes the drive that the default kind writes;
+    export names the same gain."""
+    from hammerstein.compensation.model_classes import law_radius
+
+    pi, path = _coupled_pi_with_dynamics(tmp_path)
+    assert law_radius(pi, "midpoint") > 1.0 > law_radius(pi, "secant")
+    ref = '{ kind = "circle", radius = 5, frequency = 20, periods = 3 }'
+    base = ["compensate", str(path), "--reference", ref]
+    code, _, err = _run(capsys, *base, "--out", str(tmp_path / "named.csv"),
+                        "--kind", "hammerstein")
+    assert code == 0, err
+    assert "note: kind hammerstein runs the multivariable law with gain secant" in err
+    code, _, err = _run(capsys, *base, "--out", str(tmp_path / "default.csv"))
+    assert code == 0, err
+    assert "note: kind = hammerstein because" in err and "gain secant" in err
+    assert np.array_equal(_drive(tmp_path / "named.csv"), _drive(tmp_path / "default.csv"))
+    # the user's gain is still the user's: the midpoint is refused, naming rho
+    code, _, err = _run(capsys, *base, "--out", str(tmp_path / "mid.csv"), "--kind",
+                        "hammerstein", "--gain", "midpoint")
+    assert code == 1 and "rho(I - K^-1 J) reaches 1.3" in err
+    code, _, err = _run(capsys, "export", str(path), "--kind",
+                        "hammerstein", "--target", "c", "--out", str(tmp_path / "c"))
+    assert code == 0, err
+    assert "note: kind hammerstein runs the multivariable law with gain secant" in err
