@@ -82,8 +82,9 @@ def add_parser(subparsers):
                         "docs/models-and-kinds.md)")
     p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
                    help="normalisation K of the inverse multiplicative law (kinds hammerstein, "
-                        "multivariable, diagonal; default: the kind's, or the convergent gain the "
-                        "default kind chooses)")
+                        "multivariable, diagonal; default: the convergent gain (the kind's own "
+                        "when it converges) for hammerstein and multivariable, secant for "
+                        "diagonal)")
     p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
                    help="when rho(I - K^-1 J) >= 1: error (default, nothing written), warn or "
                         "ignore")
