@@ -130,15 +130,21 @@ def start_up_in_reference(run, inputs, reference, fade, end, rest, predict, tol=
     stop = end
     S = _settled_steps(u, stop)
     asked = _start_steps(u, stop, r0)
-    excess = np.max(asked / S)
-    if end >= N - 1 or not np.all(np.isfinite(S) & (S > 0)) \
-            or excess <= 1 + max(tol, min_excess):
+    # an input held once settled (S = 0: a reference that holds an axis) has no settled
+    # step to keep its start-up within: the fade and the slew limit bound it; the others
+    # are corrected (a held axis stopped every correction, with numpy's divide-by-zero
+    # warning on compensate's stderr)
+    moving = np.isfinite(S) & (S > 0)
+    if end >= N - 1 or not moving.any():
+        return u, R, asked, S, stop, False
+    excess = np.max(asked[moving] / S[moving])
+    if excess <= 1 + max(tol, min_excess):
         return u, R, asked, S, stop, False
     best = (excess, u, R, S, stop)
     changed = False
     k = np.arange(N)
     for _ in range(int(passes)):
-        bad = np.flatnonzero(_start_steps(u, stop, r0) > S * (1 + tol))
+        bad = np.flatnonzero(moving & (_start_steps(u, stop, r0) > S * (1 + tol)))
         if bad.size == 0:
             break
         aim, caught = u.copy(), 0
@@ -156,9 +162,9 @@ def start_up_in_reference(run, inputs, reference, fade, end, rest, predict, tol=
         R = R + w * (np.asarray(predict(aim), dtype=float) - np.asarray(predict(u), dtype=float))
         u = np.asarray(run(R), dtype=float)
         S = _settled_steps(u, stop)
-        if not np.all(np.isfinite(S) & (S > 0)):
+        if not np.all(np.isfinite(S[moving]) & (S[moving] > 0)):
             break
-        excess = np.max(_start_steps(u, stop, r0) / S)
+        excess = np.max(_start_steps(u, stop, r0)[moving] / S[moving])
         if excess >= best[0]:     # no better than the best pass: stalled (a pass is a whole run)
             break
         best, changed = (excess, u, R, S, stop), True
