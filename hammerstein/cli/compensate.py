@@ -57,7 +57,7 @@ KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", 
 PROGRESS_SAMPLES = 200_000
 #: what ``--gain`` and ``--check`` mean, for the messages of a law that may not converge
 LAW_HINT = ("--gain midpoint|secant|identity sets K and --check warn runs a law that may not "
-            "converge; without --gain the convergent gain is chosen")
+            "converge; without --gain, a gain that converges replaces the kind's own")
 
 
 def add_parser(subparsers):
@@ -82,9 +82,9 @@ def add_parser(subparsers):
                         "docs/models-and-kinds.md)")
     p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
                    help="normalisation K of the inverse multiplicative law (kinds hammerstein, "
-                        "multivariable, diagonal; default: the convergent gain (the kind's own "
-                        "when it converges) for hammerstein and multivariable, secant for "
-                        "diagonal)")
+                        "multivariable, diagonal; default: the kind's own, midpoint for "
+                        "hammerstein and secant for the others, or the convergent gain where "
+                        "the kind's own does not converge)")
     p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
                    help="when rho(I - K^-1 J) >= 1: error (default, nothing written), warn or "
                         "ignore")

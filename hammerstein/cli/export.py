@@ -76,8 +76,8 @@ def add_parser(subparsers):
                    help="inverse of the dynamics for --kind hammerstein (default zpetc; stable: "
                         "a filter of the reference PREVIEW samples ahead, docs/real-time.md)")
     p.add_argument("--gain", choices=["secant", "midpoint", "identity"], default=None,
-                   help="normalisation K of the law (default: the convergent gain, the kind's "
-                        "own, secant or midpoint for hammerstein, when it converges)")
+                   help="normalisation K of the law (default secant, midpoint for hammerstein; "
+                        "the convergent gain where that does not converge)")
     p.add_argument("--iterations", type=int, default=None, metavar="N",
                    help="fixed-point iterations per sample (default 1; 3 for hammerstein)")
     p.add_argument("--feedback", choices=["delay", "lowpass"], default="delay",

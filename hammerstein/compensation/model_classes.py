@@ -760,9 +760,9 @@ def explicit_law(model, kind, gain=None, check=None):
     midpoint, or the secant), which need not converge: on an outside stage's
     identified classical PI the midpoint reached ``rho(I - K^-1 J) = 1.17``
     and ``--kind hammerstein`` was refused, while the default kind chose the
-    secant gain at 0.904. The gain and check are now :func:`law_check`'s,
-    the decision the default kind makes, whenever the user named the kind
-    but neither ``--gain`` nor ``--check``.
+    secant gain at 0.904. When the kind's own gain does not converge and
+    the user gave neither ``--gain`` nor ``--check``, the gain and check are
+    :func:`law_check`'s, the decision the default kind makes.
 
     Parameters
     ----------
@@ -779,10 +779,11 @@ def explicit_law(model, kind, gain=None, check=None):
     -------
     options : dict
         ``gain`` and ``check`` to build the kind with (empty: the kind's defaults,
-        for a kind without the law or a gain or check the user gave).
+        for a kind without the law, a gain or check the user gave, or a kind's
+        own gain that converges).
     note : str or None
         ``note: kind ... runs the multivariable law with gain ...`` when the
-        gain chosen is not the kind's own, or the law runs with ``check = 'warn'``.
+        gain was chosen here.
 
     Raises
     ------
@@ -794,13 +795,15 @@ def explicit_law(model, kind, gain=None, check=None):
         kind == "hammerstein" and model_class(model).exact_inverse_kind is None)
     if not law_kind or gain is not None or check is not None or square_problem(model):
         return {}, None
+    own = KIND_GAINS[kind]
+    own_radius = law_radius(model, own)
+    if own_radius < 1.0:
+        return {}, None                 # the kind's own gain converges: nothing to change
     law = law_check(model, None, None)
     options = {"gain": law.gain}
     if law.check is not None:
         options["check"] = law.check
-    if isinstance(law.gain, str) and law.gain == KIND_GAINS[kind] and law.check is None:
-        return options, None            # the kind's own gain: nothing to say
     words = (f"{_gain_words(law.gain, law.radius)}, the convergent gain" if law.radius < 1.0
              else law.reason)
-    return options, (f"note: kind {kind} runs the multivariable law with {words}, not the "
-                     f"kind's {KIND_GAINS[kind]} gain (--gain sets another)")
+    return options, (f"note: kind {kind} runs the multivariable law with {words}: the kind's "
+                     f"{own} gain reaches rho(I - K^-1 J) {own_radius:.3g} (--gain sets another)")

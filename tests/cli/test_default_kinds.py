@@ -236,7 +236,7 @@ def test_a_named_law_kind_without_gain_runs_the_convergent_gain(tmp_path, capsys
     code, _, err = _run(capsys, *base, "--out", str(tmp_path / "named.csv"),
                         "--kind", "hammerstein")
     assert code == 0, err
-    assert "note: kind hammerstein runs the multivariable law with gain secant" in err
+    assert "note: kind hammerstein runs the multivariable law with gain secant, rho(I - K^-1 J) 0.879 < 1, the convergent gain: the kind's midpoint gain reaches rho(I - K^-1 J) 1.3" in err
     code, _, err = _run(capsys, *base, "--out", str(tmp_path / "default.csv"))
     assert code == 0, err
     assert "note: kind = hammerstein because" in err and "gain secant" in err
@@ -248,4 +248,4 @@ def test_a_named_law_kind_without_gain_runs_the_convergent_gain(tmp_path, capsys
     code, _, err = _run(capsys, "export", str(path), "--kind",
                         "hammerstein", "--target", "c", "--out", str(tmp_path / "c"))
     assert code == 0, err
-    assert "note: kind hammerstein runs the multivariable law with gain secant" in err
+    assert "note: kind hammerstein runs the multivariable law with gain secant, rho(I - K^-1 J) 0.879 < 1, the convergent gain: the kind's midpoint gain reaches rho(I - K^-1 J) 1.3" in err
