@@ -57,7 +57,7 @@ from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
 from hammerstein.compensation.drive_splice import keep_end, keep_start, learning_onset
 from hammerstein.compensation.shaping import shape_reference, time_intervals
-from hammerstein.compensation.start_up import start_up_in_reference
+from hammerstein.compensation.start_up import settled_bound, start_up_in_reference
 from hammerstein.exceptions import CompensatorError, RangeWarning
 from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
                                                   signals_csv)
@@ -687,7 +687,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
             end = min(n + max(P, 1), N)
             # not the slew rate: steps beyond it that the settled drive takes too are the reference's
             # (a raster's corners), shaped in 2.; no fade shortens them (one grew to 25 % of a scan)
-            bound = settled_step(u, end)
+            bound = settled_bound(u, end)
             r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
             if n >= cap or np.all(_start_steps(u, end, r0) <= bound * (1 + _STEP_TOL)):
                 break
@@ -836,7 +836,7 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     """
     N = u.shape[1]
     end = min(fade + max(P, 1), N)
-    bound = settled_step(u, end)
+    bound = settled_bound(u, end)
     rest = amplifier.rest_voltages()
     start = _start_steps(u, end, rest)
     if not np.any(start > bound * (1 + _STEP_TOL)) or not np.all(np.isfinite(bound) & (bound > 0)):
@@ -928,7 +928,7 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
     P = int(period_samples) if period_samples and int(period_samples) > 1 else 1
     r0 = np.zeros(u.shape[0]) if rest is None else np.asarray(rest, dtype=float)
     end = min(int(fade_samples) + P, N)
-    bound = settled_step(u, end)
+    bound = settled_bound(u, end)
     start = _start_steps(u, end, r0)
     notes = []
     for i in np.flatnonzero((start > bound * (1 + _LIMIT_TOL)) & (bound > 0)):
