@@ -25,7 +25,8 @@ from pathlib import Path
 from hammerstein import __version__
 from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
-from hammerstein.compensation.model_classes import choose_kind, explicit_law, kind_problem
+from hammerstein.compensation.model_classes import kind_problem
+from hammerstein.compensation.kind_choice import choose_kind, explicit_law
 from hammerstein.core.numbers import MAX_ITERATIONS, integer_problem
 from hammerstein.exceptions import (CompensatorError, ExportError, FeedbackError, FileLimitError,
                                     HammersteinWarning,

@@ -145,7 +145,8 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, guard_inputs
 from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, IterativeLearning,
                                           error_summary, harmonic_base_gains,
                                           periodic_average, reference_correction, repeating_from)
-from hammerstein.compensation.model_classes import law_check, model_class
+from hammerstein.compensation.model_classes import model_class
+from hammerstein.compensation.kind_choice import law_check
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
                                               delay_search_span)
 from hammerstein.cli._learn_rules import (MAX_HALVINGS, Verdict, gain_factor, judge_trial,
@@ -268,7 +269,7 @@ def add_parser(subparsers):
 def _inverse_gain(model, gain, check):
     """(K of the law inverting a classical PI in the learning, its check, the notes to print).
 
-    The gain and check are :func:`hammerstein.compensation.model_classes.law_check`'s,
+    The gain and check are :func:`hammerstein.compensation.kind_choice.law_check`'s,
     the decision ``compensate`` and ``export`` make with the same options: with
     neither given, a law no gain makes provably converge runs with ``check =
     warn`` when it follows the model's own outputs and is refused when not.

@@ -21,7 +21,8 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
                                             compensator_rest, hardware_drive,
                                             starts_at_rest)
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
-from hammerstein.compensation.model_classes import choose_kind, explicit_law, kind_problem
+from hammerstein.compensation.model_classes import kind_problem
+from hammerstein.compensation.kind_choice import choose_kind, explicit_law
 from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.compensation.shaping import (first_mode_hz, main_frequency, mode_decay_s,
                                               mode_note, relative_response)
@@ -69,7 +70,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     """Compensator and drive of a reference on an actuator: what ``hammerstein compensate`` writes.
 
     The command's route from Python: the kind chosen for the model when
-    none is given (:func:`hammerstein.compensation.model_classes.choose_kind`
+    none is given (:func:`hammerstein.compensation.kind_choice.choose_kind`
     says which and why), the compensator built from the actuator
     as the command builds it (its creep inverted with G), and the drive of
     :func:`hammerstein.compensation.drive.hardware_drive`: faded in from the
@@ -88,7 +89,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
         Its period [samples] when it repeats (the continuation past its end,
         the default fade-in).
     kind : str, optional
-        Compensator kind (default: :func:`hammerstein.compensation.model_classes.choose_kind`).
+        Compensator kind (default: :func:`hammerstein.compensation.kind_choice.choose_kind`).
     inversion : {'zpetc', 'stable'}
     fade_in : float, optional
         [s]; 0 only for a reference that starts at rest.
@@ -368,7 +369,7 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     """(kind, options of the kind, the note of a chosen kind or None).
 
     A given kind is checked against the model's class (the message names the
-    kinds that work); none given: :func:`hammerstein.compensation.model_classes.choose_kind`.
+    kinds that work); none given: :func:`hammerstein.compensation.kind_choice.choose_kind`.
     """
     note = None
     # bending modes G, not only creep: a preset with creep and no [dynamics] made the default

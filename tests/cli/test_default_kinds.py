@@ -227,7 +227,7 @@ def test_a_named_law_kind_without_gain_runs_the_convergent_gain(tmp_path, capsys
     convergent one: an outside stage's identified PI, rho 1.17 against 0.904. The named kind
     now takes law_check's gain, says so, and writes the drive that the default kind writes;
     export names the same gain."""
-    from hammerstein.compensation.model_classes import law_radius
+    from hammerstein.compensation.kind_choice import law_radius
 
     pi, path = _coupled_pi_with_dynamics(tmp_path)
     assert law_radius(pi, "midpoint") > 1.0 > law_radius(pi, "secant")

@@ -1,7 +1,7 @@
 """A model whose outputs each mix every input (a tip-tilt-piston platform): the
 compensators that solve each output on its own input cannot invert it, and
 ``compensate``, ``export`` and ``learn`` say so alike (one decision,
-:func:`hammerstein.compensation.model_classes.law_check`), never a useless drive.
+:func:`hammerstein.compensation.kind_choice.law_check`), never a useless drive.
 """
 
 import numpy as np
@@ -9,7 +9,7 @@ import pytest
 
 from hammerstein.cli.learn import _inverse_gain
 from hammerstein.cli.main import main
-from hammerstein.compensation.model_classes import choose_kind, law_check
+from hammerstein.compensation.kind_choice import choose_kind, law_check
 from hammerstein.compensation.preisach_inverse import PreisachInverseCompensator, sweep_radius
 from hammerstein.exceptions import CompensatorError
 from hammerstein.io.presets import dynamics_to_table, load_plant, save_model

@@ -14,7 +14,8 @@ import pytest
 
 from hammerstein import MultivariablePI, PrandtlIshlinskii
 from hammerstein.cli.main import main
-from hammerstein.compensation.model_classes import choose_kind, kind_problem
+from hammerstein.compensation.model_classes import kind_problem
+from hammerstein.compensation.kind_choice import choose_kind
 from hammerstein.exceptions import CompensatorError
 from hammerstein.io.presets import save_model
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from hammerstein.compensation.compensators import convergence_report
-from hammerstein.compensation.model_classes import (MODEL_CLASSES, choose_kind, convergent_gain, kind_problem,
-                                     law_radius, model_class)
+from hammerstein.compensation.model_classes import MODEL_CLASSES, kind_problem, model_class
+from hammerstein.compensation.kind_choice import choose_kind, convergent_gain, law_radius
 from hammerstein.io.presets import load_plant
 from hammerstein.exceptions import CompensatorError
 from hammerstein.scenario.registry import COMPENSATORS, build_compensator

@@ -19,7 +19,7 @@ import pytest
 
 from hammerstein.cli.main import main
 from hammerstein.export import STATUS_RANGE, export_c
-from hammerstein.compensation.model_classes import choose_kind
+from hammerstein.compensation.kind_choice import choose_kind
 from hammerstein.export.build import compensator_from_source, limits_from_table, load_source
 
 from conftest import Harness, needs_cc
