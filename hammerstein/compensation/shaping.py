@@ -841,8 +841,8 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     u = np.asarray(run(base), dtype=float)
     excess = limit_excess(amplifier, u, T) if amplifier is not None else np.zeros(N)
     best = ShapedReference(base, u, L0 if band else 0)
-    reasons = ([f"it moves faster than the {first_mode:.4g} Hz first mode of the identified "
-                f"dynamics follows: smoothed there over {L0 * T * 1e3:.3g} ms ("
+    reasons = ([f"it moves faster than the first mode of the identified dynamics (damped "
+                f"frequency {first_mode:.4g} Hz) follows: smoothed there over {L0 * T * 1e3:.3g} ms ("
                 + ("one period of the mode)" if L0 >= one_period else
                    "half the reference's period, less than one period of the mode)")]
                if band else [])
@@ -916,14 +916,15 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
 
 
 def _window_words(window, one_period, first_mode, doublings):
-    """`` (4 periods of the 258.5 Hz first mode: one period, doubled twice ...)``: how a
+    """`` (4 periods of the first mode, damped frequency 258.5 Hz: one period, ...)``: how a
     smoothing window of ``window`` samples came about, or empty without a first mode."""
     if not first_mode or window < one_period:
         return ""
     if not doublings:
-        return f" (one period of the {first_mode:.4g} Hz first mode)"
+        return f" (one period of the first mode, damped frequency {first_mode:.4g} Hz)"
     times = {1: "once", 2: "twice"}.get(doublings, f"{doublings} times")
-    return (f" ({window / one_period:.3g} periods of the {first_mode:.4g} Hz first mode: one "
+    return (f" ({window / one_period:.3g} periods of the first mode, damped frequency "
+            f"{first_mode:.4g} Hz: one "
             f"period, doubled {times} while that lowered the drive's excess over the limits by "
             f"at least a tenth)")
 

@@ -230,8 +230,8 @@ def test_a_doubled_window_names_its_periods_of_the_mode():
     s = shape_reference(lambda x: 3.6 * np.asarray(x), r, _stair_amp(), T_STAIR, first_mode=MODE)
     assert s.window_samples == 312
     assert float(limit_excess(_stair_amp(), s.inputs, T_STAIR).max()) == 0.0
-    assert ("smoothed over 31.2 ms (8 periods of the 258.5 Hz first mode: one period, doubled 3 "
-            "times") in s.notes[0]
+    assert ("smoothed over 31.2 ms (8 periods of the first mode, damped frequency 258.5 Hz: one "
+            "period, doubled 3 times") in s.notes[0]
 
 
 def test_holds_shorter_than_the_smoothing_are_named():
