@@ -941,12 +941,16 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
         name = names[i] if names is not None else f"input {i + 1}"
         when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
         over = start[i] / bound[i] - 1
+        moved = np.abs(u[i] - before)
         if over > _STEP_TOL:
+            # what the exported C (fed the reference, not limited) differs by: said with the
+            # limit (a user compared them and found 1e-4 V at three samples, said nowhere)
             notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the "
                          f"settled drive's largest step, {bound[i]:.3g} V per sample "
-                         f"({start[i]:.3g} V asked, {100 * over:.3g} % more)")
+                         f"({start[i]:.3g} V asked, {100 * over:.3g} % more): the drive "
+                         f"differs from the compensator's by up to {moved.max():.2g} V at "
+                         f"{int(np.count_nonzero(moved))} sample(s)")
             continue
-        moved = np.abs(u[i] - before)
         notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
                      f"drive's largest step, {bound[i]:.6g} V per sample ({over:.2g} of it more "
                      f"asked, {ROUNDING_WORDS}): the drive differs from the compensator's by up to "
