@@ -857,11 +857,9 @@ def test_a_kind_that_leaves_the_couplings_is_told_so_not_to_slow_down(kind, said
     assert "the multivariable law or the default kind" in text
 
 
-def test_a_kind_that_leaves_the_dynamics_says_so_too():
-    """The per-axis inverse on a preset with bending modes, a 30 µm circle at 400 Hz: the
-    drive misses by the couplings and by the modes it does not invert (a new user's
-    identified stage: 17.6 % at 100 Hz below a 311 Hz mode). The note blamed the couplings
-    alone and pointed to the multivariable law, which inverts no dynamics either."""
+def _fast_circle_notes(kind):
+    """The notes of ``kind``'s drive on the bundled preset (bending modes), a 30 µm circle
+    at 400 Hz, as one line."""
     from hammerstein.io.presets import load_plant
     from hammerstein.scenario.hardware_route import compensate_reference
     plant = load_plant("rakotondrabe-2dof")
@@ -869,8 +867,16 @@ def test_a_kind_that_leaves_the_dynamics_says_so_too():
     f = 400.0
     ref = 30 * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
     _, drive = compensate_reference(plant, ref, int(round(1 / (f * plant.sampling_period))),
-                                    kind="per-axis", limits="warn")
-    text = " ".join(drive.notes)
+                                    kind=kind, limits="warn")
+    return " ".join(drive.notes)
+
+
+def test_a_kind_that_leaves_the_dynamics_says_so_too():
+    """The per-axis inverse on a preset with bending modes, a 30 µm circle at 400 Hz: the
+    drive misses by the couplings and by the modes it does not invert (a new user's
+    identified stage: 17.6 % at 100 Hz below a 311 Hz mode). The note blamed the couplings
+    alone and pointed to the multivariable law, which inverts no dynamics either."""
+    text = _fast_circle_notes("per-axis")
     assert ("kind 'per-axis' leaves out the model's cross-couplings and the identified linear "
             "dynamics (bending modes, lags) by design") in text, text
     assert "the default kind (--kind left out) compensates them all" in text
@@ -885,15 +891,7 @@ def test_the_law_on_a_plant_with_modes_is_told_it_leaves_them_not_that_it_fails(
     the hysteresis model alone, which the law solves."""
     import re
 
-    from hammerstein.io.presets import load_plant
-    from hammerstein.scenario.hardware_route import compensate_reference
-    plant = load_plant("rakotondrabe-2dof")
-    t = np.arange(8000) * plant.sampling_period
-    f = 400.0
-    ref = 30 * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
-    _, drive = compensate_reference(plant, ref, int(round(1 / (f * plant.sampling_period))),
-                                    kind="multivariable", limits="warn")
-    text = " ".join(drive.notes)
+    text = _fast_circle_notes("multivariable")
     assert ("kind 'multivariable' leaves out the identified linear dynamics (bending modes, "
             "lags) by design") in text, text
     assert "smaller or slower" not in text and "does not solve" not in text
