@@ -497,7 +497,9 @@ def _metadata(args, fit, records):
             "train_rms": [r["rms"] for r in fit.train],
             "train_rms_percent_of_range": max(r["rms_percent"] for r in fit.train)}
     est = args.delay_estimate
-    if args.delay or (est is not None and est.problem is None):
+    # a delay given, 0 included (learn --delay auto takes it: not kept, learn estimated one
+    # sample from its model's prediction on an outside stage, and converged to that lag)
+    if args.delay or args.delay_given or (est is not None and est.problem is None):
         meta["measurement_delay_samples"] = int(args.delay)
     if est is not None:
         meta["measurement_delay_estimate"] = {
