@@ -50,7 +50,7 @@ from hammerstein.identification.identification_pipeline import (PipelineOptions,
                                                                  static_gain_warning)
 from hammerstein.identification.record_identification import DYNAMICS_DEFAULTS
 from hammerstein.models.dynamics import DynamicsError
-from hammerstein.models.lti import estimate_measurement_delay
+from hammerstein.models.lti import check_delay_by_fit, estimate_measurement_delay
 from hammerstein.report.dynamics_figure import measured_bode_figure
 from hammerstein.exceptions import HysteresisError, IdentificationError
 from hammerstein.scenario.schema import MAX_HYSTERONS
@@ -371,6 +371,7 @@ def _estimate_delay(args):
         raise DataFileError("--delay auto: the --dynamics-records have different sampling periods")
     try:
         est = estimate_measurement_delay([r.u for r in records], [r.y for r in records], T)
+        est = check_delay_by_fit([r.u for r in records], [r.y for r in records], T, est)
     except DynamicsError as exc:
         raise DataFileError(f"--delay auto: {exc}") from None
     if est.problem is None and est.delay > MAX_DELAY:
@@ -511,6 +512,8 @@ def _metadata(args, fit, records):
             "used": est.problem is None}
         if est.problem is not None:
             meta["measurement_delay_estimate"]["problem"] = str(est.problem)
+        if est.checked is not None:
+            meta["measurement_delay_estimate"]["checked"] = str(est.checked)
     if val is not None:
         meta.update(validation_rms=[r["rms"] for r in val],
                     validation_rms_percent_by_output=[r["rms_percent"] for r in val],

@@ -193,6 +193,9 @@ class MeasurementDelay:
     problem : str or None
         Why the estimate is not trusted (phase not a straight line, output
         ahead of the input, band too narrow), else None.
+    checked : str or None
+        What :func:`hammerstein.models.lti.check_delay_by_fit` found (the
+        held-out fits of G with the delay and with one sample less), or None.
     """
 
     delay: int
@@ -203,6 +206,7 @@ class MeasurementDelay:
     residual_deg: float
     n_lines: int
     problem: str | None = None
+    checked: str | None = None
 
     @property
     def method(self):
@@ -211,7 +215,8 @@ class MeasurementDelay:
                 f"{self.band_hz[0]:.4g}-{self.band_hz[1]:.4g} Hz ({self.n_lines} lines): group "
                 f"delay {self.samples + 0.5:.2f} samples less the zero-order hold's 0.5 = "
                 f"{self.samples:.2f} +- {self.std:.2f} (halves of the band {self.halves[0]:.2f} / "
-                f"{self.halves[1]:.2f}), phase residual {self.residual_deg:.2g} deg")
+                f"{self.halves[1]:.2f}), phase residual {self.residual_deg:.2g} deg"
+                + (f"; {self.checked}" if self.checked else ""))
 
 
 #: Largest spread [samples] between the two half-band estimates of a pure delay, beyond twice

@@ -44,6 +44,7 @@ from hammerstein.models._lti_systems import (align_dc_gain, continuous_system, d
                                             sensor_filter, state_space_dynamics)
 from hammerstein.models._lti_delay import MeasurementDelay, estimate_measurement_delay, excited_band, frf_h1
 from hammerstein.models._lti_subspace import DynamicsIdentifier, _simulate, identify_dynamics  # noqa: F401
+from hammerstein.models._lti_delay_check import check_delay_by_fit
 
 __all__ = [
     "state_space_dynamics",
@@ -60,13 +61,14 @@ __all__ = [
     "frf_h1",
     "MeasurementDelay",
     "estimate_measurement_delay",
+    "check_delay_by_fit",
     "compare_frequency_responses",
 ]
 
 for _name in ("state_space_dynamics", "dc_gain", "align_dc_gain", "modal_parameters",
               "continuous_system", "sensor_filter", "excitation", "hammerstein_records",
               "DynamicsIdentifier", "identify_dynamics", "excited_band", "frf_h1",
-              "MeasurementDelay", "estimate_measurement_delay"):
+              "MeasurementDelay", "estimate_measurement_delay", "check_delay_by_fit"):
     globals()[_name].__module__ = __name__      # documented (and pickled) as this module's
 del _name
 

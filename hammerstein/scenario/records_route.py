@@ -30,7 +30,7 @@ from hammerstein.io.unit_checks import unit_warnings
 from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
 from hammerstein.models.dynamics import DynamicsError
-from hammerstein.models.lti import estimate_measurement_delay
+from hammerstein.models.lti import check_delay_by_fit, estimate_measurement_delay
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        spec_key)
@@ -190,8 +190,10 @@ def file_records(plant, spec, base_dir=None):
         if out["dynamics"]:
             T = out["dynamics"][0].sampling_period
             try:
-                est = estimate_measurement_delay([r.u for r in out["dynamics"]],
-                                                 [r.y for r in out["dynamics"]], T)
+                est = check_delay_by_fit(
+                    [r.u for r in out["dynamics"]], [r.y for r in out["dynamics"]], T,
+                    estimate_measurement_delay([r.u for r in out["dynamics"]],
+                                               [r.y for r in out["dynamics"]], T))
             except DynamicsError as exc:
                 raise IdentificationError(f"identify.delay: {exc}") from None
             if est.problem is None:
