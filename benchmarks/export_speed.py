@@ -50,7 +50,7 @@ from hammerstein.compensation.compensators import PerAxisInverseCompensator  # n
 from hammerstein.models.dynamics import sampled_bending_modes  # noqa: E402
 from hammerstein.io.presets import load_plant  # noqa: E402
 from hammerstein.export import export_c  # noqa: E402
-from hammerstein.compensation.model_classes import choose_kind  # noqa: E402
+from hammerstein.compensation.kind_choice import choose_kind  # noqa: E402
 from hammerstein.export.build import compensator_from_source, load_source  # noqa: E402
 from hammerstein.export.fmu import find_compiler  # noqa: E402
 

@@ -57,7 +57,8 @@ KINDS = ("hammerstein", "multivariable", "diagonal", "per-axis", "static-gain", 
 PROGRESS_SAMPLES = 200_000
 #: what ``--gain`` and ``--check`` mean, for the messages of a law that may not converge
 LAW_HINT = ("--gain midpoint|secant|identity sets K and --check warn runs a law that may not "
-            "converge; without --gain, a gain that converges replaces the kind's own")
+            "converge; without --gain, kinds hammerstein and multivariable take a gain that "
+            "converges where their own does not")
 
 
 def add_parser(subparsers):
@@ -338,8 +339,10 @@ def _handle(args):
         text = ' '.join(str(exc).split())
         if "rho(I - K^-1 J)" in text and "--check warn" not in text:
             text += f" ({LAW_HINT})"
-        if note:
+        if note and args.kind is None:
             text += f" (kind {kind}, the default for this model; --kind names another)"
+        elif note:          # the gain chosen for the kind named: said, as on success
+            text += f" ({note.removeprefix('note: ')})"
         print_err(f"hammerstein compensate: error: {text}")
         return 1
     if note:

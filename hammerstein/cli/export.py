@@ -272,6 +272,7 @@ def handler(args):
                   f"range for every input; give --amplifier-range MIN MAX")
         return 2
     kind, gain, check, note = args.kind, args.gain, args.check, None
+    args.kind_given = args.kind          # (args.kind is set to the chosen kind below)
     if kind is None:
         try:
             choice = choose_kind(source.model, source.dynamics is not None, gain,
@@ -320,8 +321,9 @@ def _written(args, kind, note, make):
         written = make()
     except (ExportError, FileLimitError) as exc:
         about_plant = "closed loop: plant:" in str(exc)     # the model, whatever the kind
-        chosen = (f" (kind {kind}, the default for this model; --kind names another)"
-                  if note and not about_plant else "")
+        chosen = ("" if not note or about_plant else
+                  f" (kind {kind}, the default for this model; --kind names another)"
+                  if getattr(args, "kind_given", None) is None else f" ({note.removeprefix('note: ')})")
         print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}{chosen}")
         return 1
     if note:

@@ -407,9 +407,10 @@ def explicit_law(model, kind, gain=None, check=None):
     midpoint, or the secant), which need not converge: on an outside stage's
     identified classical PI the midpoint reached ``rho(I - K^-1 J) = 1.17``
     and ``--kind hammerstein`` was refused, while the default kind chose the
-    secant gain at 0.904. When the kind's own gain does not converge and
-    the user gave neither ``--gain`` nor ``--check``, the gain and check are
-    :func:`law_check`'s, the decision the default kind makes.
+    secant gain at 0.904. When the kind's own gain (:data:`KIND_GAINS`) does
+    not converge and the user gave no ``--gain``, the gain and check are
+    :func:`law_check`'s with the user's check, the decision the default kind
+    makes.
 
     Parameters
     ----------
@@ -420,14 +421,14 @@ def explicit_law(model, kind, gain=None, check=None):
     gain : str or array_like, optional
         The user's gain (then kept, no note).
     check : {'error', 'warn', 'ignore'}, optional
-        The user's check (then kept, no note).
+        The user's check (kept; the gain is still chosen).
 
     Returns
     -------
     options : dict
         ``gain`` and ``check`` to build the kind with (empty: the kind's defaults,
-        for a kind without the law, a gain or check the user gave, or a kind's
-        own gain that converges).
+        for a kind without the law, a gain the user gave, or a kind's own gain
+        that converges).
     note : str or None
         ``note: kind ... runs the multivariable law with gain ...`` when the
         gain was chosen here.
@@ -440,17 +441,22 @@ def explicit_law(model, kind, gain=None, check=None):
     """
     law_kind = kind == "multivariable" or (
         kind == "hammerstein" and model_class(model).exact_inverse_kind is None)
-    if not law_kind or gain is not None or check is not None or square_problem(model):
+    if not law_kind or gain is not None or square_problem(model):
         return {}, None
     own = KIND_GAINS[kind]
     own_radius = law_radius(model, own)
     if own_radius < 1.0:
         return {}, None                 # the kind's own gain converges: nothing to change
-    law = law_check(model, None, None)
+    law = law_check(model, None, check)
     options = {"gain": law.gain}
     if law.check is not None:
         options["check"] = law.check
-    words = (f"{_gain_words(law.gain, law.radius)}, the convergent gain" if law.radius < 1.0
-             else law.reason)
+    if law.radius < 1.0:
+        words = f"{_gain_words(law.gain, law.radius)}, the convergent gain"
+    else:
+        name = law.gain if isinstance(law.gain, str) else "K = [" + ", ".join(
+            f"{v:.4g}" for v in np.diag(law.gain)) + "] µm/V (scaled midpoint)"
+        words = (f"gain {name}, the smallest rho(I - K^-1 J) of the gains tried, "
+                 f"{law.radius:.3g}" + (f" ({law.reason})" if law.reason else ""))
     return options, (f"note: kind {kind} runs the multivariable law with {words}: the kind's "
                      f"{own} gain reaches rho(I - K^-1 J) {own_radius:.3g} (--gain sets another)")

@@ -196,7 +196,7 @@ def test_a_one_output_model_needs_no_output_key(tmp_path, capsys):
         assert code == 0, err
 
 
-def _coupled_pi_with_dynamics(tmp_path):
+def _coupled_pi_with_dynamics(tmp_path, amplifier=None):
     """A 2x2 classical PI whose cross-couplings are 0.3 of its direct transfers, with a
     2 kHz mode on each axis: the law's midpoint gain reaches rho(I - K^-1 J) = 1.3 over its
     slopes, the secant gain 0.88 (law_radius)."""
@@ -217,7 +217,7 @@ def _coupled_pi_with_dynamics(tmp_path):
     path = tmp_path / "coupled.toml"
     save_model(pi, path, {"note": "test"}, extra={
         "preset": {"name": "coupled", "sampling_period": 5e-5},
-        "dynamics": dynamics_to_table(G)})
+        "dynamics": dynamics_to_table(G), **({"amplifier": amplifier} if amplifier else {})})
     return pi, path
 
 
@@ -249,3 +249,23 @@ def test_a_named_law_kind_without_gain_runs_the_convergent_gain(tmp_path, capsys
                         "hammerstein", "--target", "c", "--out", str(tmp_path / "c"))
     assert code == 0, err
     assert "note: kind hammerstein runs the multivariable law with gain secant, rho(I - K^-1 J) 0.879 < 1, the convergent gain: the kind's midpoint gain reaches rho(I - K^-1 J) 1.3" in err
+
+
+def test_a_named_kind_is_not_called_the_default_and_check_keeps_the_gain_choice(tmp_path,
+                                                                               capsys):
+    """A reviewer's: an error after a gain chosen for a named kind said "(kind hammerstein,
+    the default for this model; --kind names another)"; and --check given with the named
+    kind kept its diverging own gain, where the default kind chooses a convergent one."""
+    _, path = _coupled_pi_with_dynamics(tmp_path, {"range": [-10.0, 10.0]})
+    # beyond the amplifier's range: an error after the law's choice, which names the gain
+    ref = '{ kind = "circle", radius = 18, frequency = 20, periods = 3 }'
+    code, _, err = _run(capsys, "compensate", str(path), "--reference", ref, "--kind",
+                        "hammerstein", "--out", str(tmp_path / "far.csv"))
+    assert code == 1 and len(err.strip().splitlines()) == 1, err
+    assert "the default for this model" not in err
+    assert "(kind hammerstein runs the multivariable law with gain secant" in err
+    ref = '{ kind = "circle", radius = 5, frequency = 20, periods = 3 }'
+    code, _, err = _run(capsys, "compensate", str(path), "--reference", ref, "--kind",
+                        "hammerstein", "--check", "error", "--out", str(tmp_path / "c.csv"))
+    assert code == 0, err
+    assert "runs the multivariable law with gain secant" in err
