@@ -313,11 +313,14 @@ def falling_direct_transfer(model):
                       "dead band at every reversal), and no compensator inverts that"
                       if w1 == 0 else "would move the wrong way as {inp} turns, and no "
                       "compensator inverts that").format(inp=inp)
+            advice = ("" if sensor else
+                      "; identify's least squares (the default method) keep a rising "
+                      "transfer's first weight at a tenth of its secant or more, and "
+                      "--bounds monotone every slope (identify the records again; the closed "
+                      "form is not bounded)")
             return (f"model: direct transfer {out} <- {inp}: weights: the first weight (the "
                     f"initial slope of its loops) is {w1:.6g}; expected > 0: {out} {motion}"
-                    f"{sensor}; hammerstein identify keeps it above a tenth of the secant "
-                    f"(identify the records again), and --bounds monotone keeps every slope "
-                    f"positive")
+                    f"{sensor}{advice}")
     return None
 
 

@@ -118,9 +118,9 @@ def add_parser(subparsers):
                         "held-out error")
     p.add_argument("--bounds", choices=["none", "nonnegative", "monotone"], default="none",
                    help="least squares: constrain the direct transfers' weights (default "
-                        "none); with every choice a direct transfer's first weight, the "
-                        "initial slope of its loops, is at least a tenth of its secant, so "
-                        "that every compensator inverts it")
+                        "none); with every choice a rising direct transfer's first weight, "
+                        "the initial slope of its loops, is at least a tenth of its secant, "
+                        "so that every compensator inverts it")
     p.add_argument("--components", default="auto", metavar="auto|all|OUT:IN=KIND,...",
                    help="auto (default): components whose contribution is below the noise "
                         "become pure gains or absent; all: every component a PI; or explicit "

@@ -158,7 +158,7 @@ class _LeastSquares:
                     transform = sign * M
                     X = X @ transform
                     lo[:] = MIN_SLOPE_FRACTION * abs(sec)
-                if l == k and self.bounds != "monotone" and sec > 0:
+                if l == k and self.bounds != "monotone" and sec > 0 and self.r[k][0] == 0:
                     # the first play (threshold 0) is the initial slope of every loop: at 0
                     # the model holds its output while the input turns by 2 r_2 and no
                     # compensator inverts it (an outside stage's direct transfers came out
@@ -243,11 +243,6 @@ class _ClosedForm:
                                               f"{rec.input_names[k]}): {exc}") from None
                 self.fits[l, k] = ident
         self.thresholds = {k: self.fits[0, k].thresholds_ for k in self.by_input}
-
-    def _secant(self, l, k):
-        """Least-squares slope of output l against input k over the training samples."""
-        return (float(np.polyfit(self.lin[k], self.y[l], 1)[0]) if np.ptp(self.lin[k]) > 0
-                else 1.0)
 
     def fit_output(self, l, kinds):
         comps = [None] * self.m

@@ -539,7 +539,7 @@ def model_miss(plant, drive, period_samples=None, kind=None):
         # was told the law does not solve the model: 0.6 % through its hysteresis alone)
         left = [PARTIAL_KINDS[kind]] if kind in PARTIAL_KINDS else []
         if getattr(plant, "sampled_dynamics", None) is not None:   # (is_static counts creep too)
-            left.append("the identified linear dynamics (bending modes, lags)")
+            left.append("the model's linear dynamics (bending modes, lags)")
         if any(c is not None for c in (getattr(plant, "creep", None) or [])):
             left.append("the creep")
         said = left[0] if len(left) == 1 else ", ".join(left[:-1]) + " and " + left[-1]
@@ -553,9 +553,15 @@ def model_miss(plant, drive, period_samples=None, kind=None):
             text += (f" (through the hysteresis model alone the drive misses by "
                      f"{100 * float(np.quantile(alone, MISS_QUANTILE)) / scale:.3g} % on "
                      f"{100 * (1 - MISS_QUANTILE):.3g} % of the samples)")
-        text += ("; the multivariable law or the default kind (--kind left out) compensate "
-                 "them" if kind in PARTIAL_KINDS and len(left) == 1 else
-                 "; the default kind (--kind left out) compensates them all")
+        if kind in PARTIAL_KINDS and len(left) == 1:
+            text += ("; the multivariable law or the default kind (--kind left out) "
+                     "compensate them")
+        elif getattr(plant, "sampled_dynamics", None) is not None:
+            text += "; the default kind (--kind left out) compensates them all"
+        else:       # creep without dynamics: the default kind is one of these (a reviewer's)
+            text += ("; no kind inverts creep without the dynamics: kind hammerstein inverts "
+                     "it with the G that identify --dynamics identifies from the "
+                     "excitation's multisines")
     else:
         text += "; make the reference smaller or slower, or look at it with --predicted"
     return median, text

@@ -694,7 +694,7 @@ def test_a_direct_transfer_with_a_falling_first_slope_is_named(tmp_path, flip, f
     assert ("a sensor of inverted sign? invert the x column" in lines[0]) == sensor
     assert ("would not move while ux turns" in lines[0]) == (flip == "zero")
     assert ("would move the wrong way" in lines[0]) == (flip != "zero")
-    assert "--bounds monotone" in lines[0]
+    assert ("--bounds monotone" in lines[0]) == (not sensor)   # (monotone keeps a falling one)
 
 
 def test_a_file_circle_beyond_the_reach_is_shaped_as_with_its_period(tmp_path):
@@ -821,7 +821,7 @@ def test_shaping_trials_do_not_repeat_range_warnings_of_values_never_asked(tmp_p
                      '{ kind = "sine", output = "x", amplitude = 10, frequency = 400, '
                      'periods = 20 }', "--out", str(tmp_path / "d.csv")])
     # (the law solves the hysteresis model, 4.7 %; the preset's modes it leaves out do not)
-    assert code == 1 and "leaves out the identified linear dynamics" in err.getvalue()
+    assert code == 1 and "leaves out the model's linear dynamics" in err.getvalue()
     assert "identified on" not in err.getvalue(), err.getvalue()
     assert not (tmp_path / "d.csv").exists()
     err = io.StringIO()
@@ -877,7 +877,7 @@ def test_a_kind_that_leaves_the_dynamics_says_so_too():
     identified stage: 17.6 % at 100 Hz below a 311 Hz mode). The note blamed the couplings
     alone and pointed to the multivariable law, which inverts no dynamics either."""
     text = _fast_circle_notes("per-axis")
-    assert ("kind 'per-axis' leaves out the model's cross-couplings and the identified linear "
+    assert ("kind 'per-axis' leaves out the model's cross-couplings and the model's linear "
             "dynamics (bending modes, lags) by design") in text, text
     assert "the default kind (--kind left out) compensates them all" in text
     assert "multivariable law" not in text
@@ -892,7 +892,7 @@ def test_the_law_on_a_plant_with_modes_is_told_it_leaves_them_not_that_it_fails(
     import re
 
     text = _fast_circle_notes("multivariable")
-    assert ("kind 'multivariable' leaves out the identified linear dynamics (bending modes, "
+    assert ("kind 'multivariable' leaves out the model's linear dynamics (bending modes, "
             "lags) by design") in text, text
     assert "smaller or slower" not in text and "does not solve" not in text
     whole = float(re.search(r"\(([\d.]+) % of its half-span\)", text).group(1))
@@ -919,3 +919,25 @@ def test_a_kind_that_leaves_the_creep_of_a_plant_without_modes_names_no_modes():
     text = " ".join(drive.notes)
     assert "leaves out the model's cross-couplings and the creep by design" in text, text
     assert "bending modes" not in text
+
+
+def test_the_default_kind_on_creep_without_dynamics_is_not_sent_to_the_default_kind():
+    """A reviewer's: the default kind on a plant with creep and no dynamics (the
+    multivariable law) was told it leaves the creep out and that "the default kind
+    compensates them all". It is now told that no kind inverts creep without dynamics."""
+    from hammerstein.models.creep import Creep
+    from hammerstein.models.plant import HammersteinPlant
+    from hammerstein.io.presets import load_plant
+    from hammerstein.scenario.hardware_route import compensate_reference
+    repo = Path(__file__).resolve().parents[2]
+    base = load_plant(repo / "scenarios" / "presets" / "coupled-2dof.toml", False)
+    plant = HammersteinPlant(base.hysteresis, base.sampling_period, None,
+                             creep=[Creep([0.01, 0.1], [0.3, 0.2]), Creep([0.01], [0.3])])
+    t = np.arange(10000) * plant.sampling_period
+    ref = 30 * np.vstack([np.cos(2 * np.pi * 20 * t), np.sin(2 * np.pi * 20 * t)])
+    _, drive = compensate_reference(plant, ref, int(round(1 / (20 * plant.sampling_period))),
+                                    limits="warn")
+    text = " ".join(drive.notes)
+    assert "leaves out the creep by design" in text, text
+    assert "no kind inverts creep without the dynamics" in text
+    assert "compensates them all" not in text
