@@ -151,17 +151,9 @@ def test_a_held_rest_output_after_the_cycle_holds_the_inputs_at_rest(seed):
     them, and the inverse play answered that rounding by jumping up to 2 r_1 (on 11 of
     these 12 random models before the inverse play ignored motions below 1e-12 of the
     operator's voltage scale)."""
-    from hammerstein import MultivariablePI, PerAxisInverseCompensator
-    rng = np.random.default_rng(seed)
-    direct = []
-    for _ in range(2):
-        n = int(rng.integers(3, 9))
-        r = np.sort(np.concatenate([[rng.uniform(0.05, 1.5)], rng.uniform(0.1, 9.0, n - 1)]))
-        w = rng.uniform(0.2, 2, n) * np.concatenate([[1.0], rng.choice([-0.3, 0.5, 1.0], n - 1)])
-        direct.append(PrandtlIshlinskii(r, w if np.all(np.cumsum(w) > 0) else np.abs(w)))
-    model = MultivariablePI([[direct[0], None], [None, direct[1]]], input_amplitude=[10.0, 10.0],
-                            demagnetised=[rng.uniform(5, 20)] * 2,
-                            output_offset=rng.uniform(-30, 30, 2))
+    from hammerstein import PerAxisInverseCompensator
+    from random_models import random_direct_model
+    model = random_direct_model(seed, 30.0)
     comp = PerAxisInverseCompensator(model)
     rest = model.simulate(np.zeros((2, 1)))[0]
     u, _ = comp.simulate(np.repeat(rest, 20, axis=1))

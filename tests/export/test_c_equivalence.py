@@ -34,6 +34,7 @@ from hammerstein.simulation import is_fusable, simulate_compensator
 from hammerstein.export import STATUS_DIVERGED, STATUS_LIMIT, STATUS_RANGE, AmplifierLimits, export_c
 
 from conftest import COMPILERS, needs_cc
+from random_models import random_direct_model
 
 REPO = Path(__file__).resolve().parents[2]
 T = 5e-5
@@ -208,6 +209,16 @@ def test_double_equals_python(kind, harness):
     assert within(u_c, comp, yr, u3)
 
 
+def _held_rest(model, n, precision, harness):
+    """The per-axis inverse's voltages [V] for ``n`` samples of the model's rest output, in
+    Python and in its exported C, and the C's status."""
+    comp = PerAxisInverseCompensator(model)
+    yr = np.repeat(model.simulate(np.zeros((2, 1)))[0], n, axis=1)
+    u_py, _ = comp.simulate(yr)
+    u_c, status, _ = harness(export_c(comp, "comp", T, precision=precision)).run(yr)
+    return u_py, u_c, status
+
+
 @needs_cc
 @pytest.mark.parametrize("precision", ["double", "float"])
 @pytest.mark.parametrize("kind, amplitude, offset", [
@@ -226,35 +237,18 @@ def test_per_axis_holds_the_rest_after_the_cycle(kind, amplitude, offset, precis
     model = model.replace(components=[[c[0][0], None], [None, c[1][1]]],
                           demagnetised=[amplitude] * 2,
                           output_offset=model.output_offset if offset is None else offset)
-    comp = PerAxisInverseCompensator(model)
-    rest = model.simulate(np.zeros((2, 1)))[0]
-    yr = np.repeat(rest, 40, axis=1)
-    u_py, _ = comp.simulate(yr)
-    u_c, status, _ = harness(export_c(comp, "comp", T, precision=precision)).run(yr)
+    u_py, u_c, status = _held_rest(model, 40, precision, harness)
     # (an axis with r_1 = 0 has no inverse play: its voltage is the weighted sum, ~1e-16 V)
     assert np.max(np.abs(u_py)) <= 1e-12
     assert np.max(np.abs(u_c)) <= (1e-12 if precision == "double" else 1e-6)
     assert np.all(u_py == u_py[:, :1]) and np.all(u_c == u_c[:, :1]) and np.all(status == 0)
 
 
-def _random_direct_model(seed, offset):
-    rng = np.random.default_rng(seed)
-    direct = []
-    for _ in range(2):
-        n = int(rng.integers(3, 9))
-        r = np.sort(np.concatenate([[rng.uniform(0.05, 1.5)], rng.uniform(0.1, 9.0, n - 1)]))
-        w = rng.uniform(0.2, 2, n) * np.concatenate([[1.0], rng.choice([-0.3, 0.5, 1.0], n - 1)])
-        direct.append(PrandtlIshlinskii(r, w if np.all(np.cumsum(w) > 0) else np.abs(w)))
-    return MultivariablePI([[direct[0], None], [None, direct[1]]], input_amplitude=[10.0, 10.0],
-                           demagnetised=[rng.uniform(5, 20)] * 2,
-                           output_offset=rng.uniform(-offset, offset, 2))
-
-
 @needs_cc
 @pytest.mark.parametrize("precision", ["double", "float"])
 @pytest.mark.parametrize("make", [
-    lambda: _random_direct_model(1, 100.0), lambda: _random_direct_model(6, 100.0),
-    lambda: _random_direct_model(12, 100.0),
+    lambda: random_direct_model(1, 100.0), lambda: random_direct_model(6, 100.0),
+    lambda: random_direct_model(12, 100.0),
     lambda: MultivariablePI([[PrandtlIshlinskii([0.002, 0.004, 0.006, 0.008], [0.1, 0.05, 0.03, 0.02]),
                               None], [None, PrandtlIshlinskii([0.002, 0.005], [0.1, 0.02])]],
                             input_amplitude=[10.0, 10.0], demagnetised=[6.0, 6.0],
@@ -265,11 +259,7 @@ def test_the_motion_band_scales_with_the_offset(make, precision, harness):
     ~100 µm included: a reviewer's random models (offsets within +-100 µm) still jumped up
     to 1.63 V in float, and thresholds of a few mV with a 40 µm offset 2 r_1 in double too."""
     model = make()
-    comp = PerAxisInverseCompensator(model)
-    rest = model.simulate(np.zeros((2, 1)))[0]
-    yr = np.repeat(rest, 10, axis=1)
-    u_py, _ = comp.simulate(yr)
-    u_c, _, _ = harness(export_c(comp, "comp", T, precision=precision)).run(yr)
+    u_py, u_c, _ = _held_rest(model, 10, precision, harness)
     assert np.max(np.abs(u_py)) <= 1e-12
     assert np.max(np.abs(u_c)) <= (1e-12 if precision == "double" else 1e-5), np.abs(u_c).max(axis=1)
 
