@@ -54,9 +54,10 @@ def settled_bound(inputs, end):
     whose held input moves by rounding only: 2.4e-11 V per sample on a 1.41 V hold) has
     no settled step of its own to reach its hold with; it takes the largest settled step
     of the inputs that move (``inf`` when none moves). Held: its settled steps at most
-    :data:`HELD_STEP` of the drive's largest settled voltage (any input's). Measured: a diagonal law holding y
-    at 5 µm beside a 50 Hz sine on x was slew-limited to its 2.4e-11 V and never left
-    rest (a 53 % miss), and the fade-in was doubled to a quarter of the record for it.
+    :data:`HELD_STEP` of the drive's largest settled voltage (any input's). Measured: a
+    diagonal law holding y at 5 µm beside a 50 Hz sine on x was slew-limited to its
+    2.4e-11 V and never left rest (a 53 % miss), and the fade-in was doubled to a
+    quarter of the record for it.
 
     Parameters
     ----------
