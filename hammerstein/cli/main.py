@@ -225,12 +225,32 @@ def _quiet_interrupt_hook(previous):
     return hook
 
 
+#: Whether a signal ended (or is ending) the current command (:func:`_on_signal`).
+_SIGNALLED = [False]
+
+
+def _quiet_thread_hook(previous):
+    """``threading.excepthook`` that drops a thread's error once a signal ends the command.
+
+    The fits' process pool has a manager thread: when Ctrl-C stops the workers, it can
+    fail on their pipes while the command says ``interrupted`` and exits, and printed
+    ``Exception in thread Thread-1: Traceback ...`` after that line (once in a loaded
+    CI run of the Ctrl-C test). Errors of threads before any signal go to ``previous``.
+    """
+    def hook(args):
+        if _SIGNALLED[0]:
+            return
+        previous(args)
+    return hook
+
+
 def _on_signal(signum, frame):
     # later signals are ignored so that the clean-up in progress (removing a
     # temporary directory) is not interrupted in turn; inside the creation or
     # rename of a temporary the interruption waits for its end
     for sig in _SIGNALS:
         signal.signal(sig, signal.SIG_IGN)
+    _SIGNALLED[0] = True
     interrupt(signum)
 
 
@@ -453,6 +473,9 @@ def main(argv=None):
     use_user_numba_cache()
     _fill_standard_fds()
     reset_interrupt()        # a signal an embedding program received before is not this command's
+    _SIGNALLED[0] = False
+    thread_hook = threading.excepthook
+    threading.excepthook = _quiet_thread_hook(thread_hook)
     previous = _install_signal_handlers()
     streams = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = SafeStream(sys.stdout), SafeStream(sys.stderr, MAX_LINE)  # no raw control chars
@@ -475,6 +498,7 @@ def main(argv=None):
         return 128 + int(signum)
     finally:
         sys.unraisablehook = unraisable
+        threading.excepthook = thread_hook
         reset_guard()        # an embedding program's later writes are its own
         for sig, handler in previous.items():
             signal.signal(sig, handler)
@@ -594,6 +618,9 @@ def run(argv=None):
     NoReturn
         The process exits with :func:`main`'s status.
     """
+    # the console process's threads (the fits' pool manager) may fail on the pipes of the
+    # workers a signal stopped until the process ends, after main has returned
+    threading.excepthook = _quiet_thread_hook(threading.excepthook)
     code = main(argv)
     for stream in (sys.stdout, sys.stderr):
         try:

@@ -549,3 +549,22 @@ def test_learn_refuses_its_drive_given_as_the_measurement(capsys, tmp_path, monk
                                "x=x_shaped,y=y_shaped", "--out", "next.csv")
         assert status == 2 and len(err) == 1 and "is the --drive file itself" in err[0]
     assert not (tmp_path / "next.csv").exists()
+
+
+def test_a_threads_error_after_a_signal_is_dropped_and_before_it_is_not():
+    """The fits' pool manager thread failed on the pipes of the workers Ctrl-C stopped and
+    printed 'Exception in thread Thread-1: Traceback ...' after 'interrupted' (once in a
+    loaded CI run). Once a signal ends the command a thread's error is dropped; before
+    any, it reaches the previous hook."""
+    import hammerstein.cli.main as cli_main
+    seen = []
+    hook = cli_main._quiet_thread_hook(seen.append)
+    flagged = cli_main._SIGNALLED[0]
+    try:
+        cli_main._SIGNALLED[0] = False
+        hook("before")
+        cli_main._SIGNALLED[0] = True
+        hook("after")
+    finally:
+        cli_main._SIGNALLED[0] = flagged
+    assert seen == ["before"]
