@@ -33,7 +33,8 @@ from hammerstein.io.time_grid import gap_text, step_gaps, uniform_period
 from hammerstein.io.table_checks import CELLS_ENV, max_cells  # noqa: F401 (their old home)
 
 __all__ = ["DataFileError", "Record", "MultiRecord", "read_record", "read_records", "bundled_data",
-           "decode_table", "signal_table", "numeric_column", "uniform_period"]
+           "decode_table", "signal_table", "numeric_column", "uniform_period",
+           "record_column_problem"]
 
 #: Fewest samples accepted in a record.
 MIN_SAMPLES = 10
@@ -493,9 +494,20 @@ def _units_row(line, sep):
     return bool(cells) and not any(_is_number(c) or decimal_comma_hint(c) for c in cells)
 
 
-def _read_table(path, skip_rows=0):
+#: Bytes of a record's opening read to check its columns (:func:`record_column_problem`).
+HEAD_BYTES = 1 << 16
+
+
+def _read_table(path, skip_rows=0, head=False):
+    """The parsed table of a data file and whether it has a header row.
+
+    ``head``: only the file's first :data:`HEAD_BYTES` bytes (after the
+    preamble's ``skip_rows`` lines), cut at their last complete line: the
+    header, the units row and the first data rows.
+    """
     try:
-        raw = bounded_read_bytes(path, "data", "data file")
+        raw = bounded_read_bytes(path, "data", "data file",
+                                 head=HEAD_BYTES * 4 if head else None)
     except FileLimitError as exc:
         raise DataFileError(str(exc)) from None
     except OSError as exc:
@@ -503,6 +515,8 @@ def _read_table(path, skip_rows=0):
     _refuse_compressed(raw, escape(path), DataFileError)
     if skip_rows:   # a preamble (instrument, date, rate ...) before the table: dropped as lines
         raw = b"".join(raw.splitlines(keepends=True)[int(skip_rows):])
+    if head and len(raw) > HEAD_BYTES:  # complete lines only: a cut row is not the file's
+        raw = raw[:raw.rfind(b"\n", 0, HEAD_BYTES) + 1] or raw[:HEAD_BYTES]
     top = raw[:1 << 16]        # the lines as --skip-rows counts them, for a preamble's hint
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):  # UTF-16 with a byte-order mark
         raw = raw.decode("utf-16", errors="replace").encode("utf-8")
@@ -523,7 +537,7 @@ def _read_table(path, skip_rows=0):
     raw = raw.lstrip(b"\r\n")
     if not raw.strip():
         raise DataFileError(f"{path}: the file is empty")
-    cut = _ends_cut(raw)
+    cut = _ends_cut(raw) and not head
     head = raw[:1 << 16].decode("utf-8", errors="replace").splitlines()
     sep = _sniff_separator("\n".join(head[:5]))
     try:
@@ -870,7 +884,14 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
     if frame.shape[0] < MIN_SAMPLES:
         raise DataFileError(
             f"{path}: too short, expected at least {MIN_SAMPLES} samples, found {frame.shape[0]}")
-    units = _units(input_unit, output_unit)
+    u, unames, y, ynames = _signal_columns(frame, header, ins, outs, path,
+                                           _units(input_unit, output_unit))
+    t, T = _timepts(frame, header, time, sampling_period, path)
+    return MultiRecord(t, np.array(u), np.array(y), tuple(unames), tuple(ynames), T, str(path))
+
+
+def _signal_columns(frame, header, ins, outs, path, units):
+    """The input and output columns of a parsed table: values and names, or DataFileError."""
     u, unames = zip(*[_column(frame, header, c, "input", path, units) for c in ins])
     y, ynames = zip(*[_column(frame, header, c, "output", path, units) for c in outs])
     both = [n for n in unames if n in ynames]
@@ -882,5 +903,64 @@ def read_records(path, inputs, outputs, time=None, sampling_period=None, skip_ro
     if dup:
         raise DataFileError(f"{path}: column {dup[0]!r} named twice among the inputs and outputs; "
                             f"name each column once")
-    t, T = _timepts(frame, header, time, sampling_period, path)
-    return MultiRecord(t, np.array(u), np.array(y), tuple(unames), tuple(ynames), T, str(path))
+    return u, unames, y, ynames
+
+
+def record_column_problem(path, inputs, outputs, time=None, skip_rows=0, input_unit="V",
+                          output_unit="µm"):
+    """Whether :func:`read_records` would find the columns it is given, from the file's opening only.
+
+    Reads at most the first :data:`HEAD_BYTES` bytes of the table (the
+    header, a units row and the first data rows), so that a file can be
+    checked before it is read whole: a column named that the header does not
+    hold, a column read in another unit, the same column as input and
+    output, a time column named in another unit than seconds, a file of
+    fewer than :data:`MIN_SAMPLES` rows. The data rows beyond the opening
+    are not checked.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    inputs, outputs : str, int or list
+        Input and output columns, as :func:`read_records` takes them.
+    time : str or int, optional
+        Time column [s].
+    skip_rows : int
+        Lines of a preamble before the table.
+    input_unit, output_unit : str
+        The units the inputs and outputs are read in.
+
+    Returns
+    -------
+    str or None
+        The first problem, as :func:`read_records` words it, or None.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "rec.csv"
+    >>> _ = path.write_text("t,ux,x\\n" + "".join(f"{k * 1e-4},{k},{2 * k}\\n" for k in range(10)))
+    >>> record_column_problem(path, "uy", "x", "t").endswith("available columns: 0:t, 1:ux, 2:x")
+    True
+    >>> record_column_problem(path, "ux", "x", "t") is None
+    True
+    """
+    ins, outs = column_list(inputs), column_list(outputs)
+    if not ins or not outs or any(c == "" for c in ins + outs):
+        return (f"{path}: expected at least one input and one output column, found inputs "
+                f"{inputs!r}, outputs {outputs!r}")
+    try:
+        frame, header = _read_table(path, skip_rows, head=True)
+        if frame.shape[0] < MIN_SAMPLES and Path(path).stat().st_size <= HEAD_BYTES:
+            return (f"{path}: too short, expected at least {MIN_SAMPLES} samples, found "
+                    f"{frame.shape[0]}")
+        _signal_columns(frame, header, ins, outs, path, _units(input_unit, output_unit))
+        if time is not None:
+            _, tname = _column(frame, header, time, "time", path)
+            unit = _TIME_UNIT_NAME.search(str(tname))
+            if unit:
+                return (f"{path}: time column {tname!r} is named in {unit.group(2)}, and times "
+                        f"are read in seconds: convert the column to seconds")
+    except DataFileError as exc:
+        return str(exc)
+    return None

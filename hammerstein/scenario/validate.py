@@ -36,6 +36,7 @@ from hammerstein.signals import references as refs
 from hammerstein.core.files import confined_path, file_limit_problem
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.core.schema import short_repr
+from hammerstein.io.datafiles import record_column_problem
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
 from hammerstein.scenario.records import load_identification_scenario
@@ -351,8 +352,16 @@ def _magnitude_problem(spec, signal, unit):
             f"{MAX_MAGNITUDE:.0e}")
 
 
-def _record_file_problems(identify, base):
-    """``identify.<key>: ...`` for each file of a ``records = "files"`` table that is not there."""
+def _record_file_problems(identify, base, plant):
+    """``identify.<key>: ...`` for each file of a ``records = "files"`` table that is not there.
+
+    A file that is there has its opening read for the columns the table names
+    (``time``, ``inputs`` and ``outputs``, by default the plant's names), as
+    :func:`~hammerstein.scenario.records_route.file_records` will read them.
+    """
+    model = getattr(plant, "hysteresis", None)
+    ins = identify.get("inputs") or (list(model.input_names) if model is not None else None)
+    outs = identify.get("outputs") or (list(model.output_names) if model is not None else None)
     problems = []
     for key in ("hysteresis_records", "dynamics_records", "creep_records"):
         for name in identify.get(key) or []:
@@ -369,6 +378,8 @@ def _record_file_problems(identify, base):
                 continue
             # a FIFO, a directory, a record beyond the size limit: named before anything is read
             problem = file_limit_problem(path, "data", "record")
+            if problem is None and ins and outs:
+                problem = record_column_problem(path, ins, outs, identify.get("time", "t"))
             if problem:
                 problems.append(f"identify.{key}: {problem}")
     return problems
@@ -388,7 +399,7 @@ def _model_problems(name, identify, plant, base, files):
             return ["identify: missing (required with model = 'identified'), "
                     "e.g. identify = { frequency = 50.0 }"]
         if identify.get("records") == "files":      # measured records: the files are there
-            return _record_file_problems(identify, base)
+            return _record_file_problems(identify, base, plant)
         problem = nyquist_problem(identify, plant)
         if problem is None and plant is not None:
             n = identify.get("periods", 3) / identify["frequency"] / plant.sampling_period
@@ -439,9 +450,9 @@ def _top_model_problems(comp, plant, base, files):
         except Invalid:     # reported by the table's check; its files are still looked for
             if not (isinstance(identify, dict) and identify.get("records") == "files"):
                 return [], []
-            return _placed_top(_record_file_problems(
+            return _placed_top(_record_file_problems(   # there, not their columns
                 {k: [v] if isinstance(v, str) else v for k, v in identify.items()
-                 if isinstance(v, (str, list))}, base))
+                 if isinstance(v, (str, list)) and k.endswith("_records")}, base, None))
     if plant is None and name == "identified" and isinstance(identify, dict) \
             and identify.get("records") != "files":
         return [], []       # its frequency is checked against the plant's Nyquist: none loaded

@@ -197,3 +197,34 @@ def test_a_long_preamble_gets_the_skip_that_reads_the_table(tmp_path):
     with pytest.raises(DataFileError) as info:
         read_record(path, "u", "y", time="t", skip_rows=4)
     assert "--skip-rows 10," in str(info.value), str(info.value)
+
+
+def test_the_column_check_reads_only_the_opening_and_agrees_with_the_whole_read(tmp_path,
+                                                                                monkeypatch):
+    from hammerstein.core import files
+    from hammerstein.io import datafiles
+    from hammerstein.io.datafiles import HEAD_BYTES, read_records, record_column_problem
+    rows = "".join(f"{k * 1e-4:.4f},{0.001 * k:.6f},{0.002 * k:.6f}\n" for k in range(40_000))
+    path = tmp_path / "long.csv"
+    path.write_text("t,ux,x\ns,V,µm\n" + rows)
+    assert path.stat().st_size > 10 * HEAD_BYTES
+    sizes = []
+    real = files.bounded_read_bytes
+    monkeypatch.setattr(datafiles, "bounded_read_bytes",
+                        lambda *a, **k: sizes.append(k.get("head")) or real(*a, **k))
+    assert record_column_problem(path, "ux", "x", "t") is None
+    assert sizes == [4 * HEAD_BYTES]          # the opening only, whatever the file's size
+    # a wrong name, in the words of the whole read
+    with pytest.raises(DataFileError) as whole:
+        read_records(path, "uy", "x", "t")
+    assert record_column_problem(path, "uy", "x", "t") == str(whole.value)
+    # a column in another unit, input and output the same column, a time in ms
+    path.write_text("t,ux,x\ns,mV,µm\n" + rows[:5000])
+    assert "mV" in record_column_problem(path, "ux", "x", "t")
+    path.write_text("t,ux,x\n" + rows[:5000])
+    assert "the same column 'ux'" in record_column_problem(path, "ux", "ux", "t")
+    path.write_text("t_ms,ux,x\n" + rows[:5000])
+    assert "named in ms" in record_column_problem(path, "ux", "x", "t_ms")
+    # the opening is cut at a complete row: no ragged or cut-short row is made up
+    path.write_text("t,ux,x\n" + rows)
+    assert record_column_problem(path, "ux", "x", "t") is None

@@ -313,6 +313,50 @@ def test_validate_names_a_record_file_that_is_not_there(tmp_path):
         validate_scenario(f)
 
 
+def _rows(header, n=20):
+    return header + "\n" + "".join(f"{k * 1e-4:.4f},{k},{-k},{2 * k},{-2 * k}\n"
+                                   for k in range(n))
+
+
+def test_validate_names_every_column_the_records_do_not_hold(tmp_path):
+    # validate said ok; `run` then stopped on the first file's column, one problem a run
+    from hammerstein.scenario import records_route
+    from hammerstein.scenario.schema import ScenarioError
+    from hammerstein.scenario.validate import validate_scenario
+    (tmp_path / "h.csv").write_text(_rows("t,Vx,uy,x,y"))         # no column ux
+    (tmp_path / "d.csv").write_text(_rows("time,ux,uy,x,y"))      # no column t
+    (tmp_path / "c.csv").write_text(_rows("t,ux,uy,x,y", n=4))    # too short
+    (tmp_path / "ok.csv").write_text(_rows("t,ux,uy,x,y"))
+    scenario = ('[plant]\npreset = "realistic-2dof"\n[compensator]\nkind = "hammerstein"\n'
+                'model = "identified"\ndynamics = "identified"\nidentify = { records = "files", '
+                'hysteresis_records = ["h.csv", "ok.csv"], dynamics_records = ["d.csv"], '
+                'creep_records = ["c.csv"] }\n'
+                '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
+                'frequency = 20.0, periods = 3 }\n')
+    f = tmp_path / "s.toml"
+    f.write_text(scenario)
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(f)
+    lines = [line for line in str(err.value).splitlines() if "identify." in line]
+    assert len(lines) == 3, lines
+    assert "identify.hysteresis_records: " in lines[0] and "no input column named 'ux'" in lines[0]
+    assert "available columns: 0:t, 1:Vx, 2:uy, 3:x, 4:y" in lines[0]
+    assert "identify.dynamics_records: " in lines[1] and "no time column named 't'" in lines[1]
+    assert "identify.creep_records: " in lines[2] and "too short" in lines[2]
+    # the words are those of the run's own read, which stops at the first
+    with pytest.raises(Exception) as first:
+        records_route.file_records(
+            validate_scenario.__globals__["load_plant"]("realistic-2dof"),
+            {"hysteresis_records": ["h.csv"], "time": "t", "delay": 0}, tmp_path)
+    assert lines[0].endswith(str(first.value).split(": ", 1)[1])
+    # the table's own names are the ones checked, and a table that holds them passes
+    f.write_text(scenario.replace('records = "files", ', 'records = "files", time = "time", '
+                                  'inputs = "ux,uy", ')
+                 .replace('"h.csv", "ok.csv"', '"d.csv"').replace('creep_records = ["c.csv"]',
+                                                                 'delay = 0'))
+    validate_scenario(f)
+
+
 def test_titles_and_the_report_name_a_files_table_as_such():
     # the figures' titles read "model identified at 0 Hz (least-squares, none)"
     from hammerstein.report.compensator_words import _model_summary

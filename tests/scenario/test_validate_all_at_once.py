@@ -69,7 +69,8 @@ EXPECTED = [
 def _scenario(tmp_path, preset="realistic-2dof"):
     (tmp_path / "meas").mkdir()
     for name in ("hysteresis-ux.csv", "hysteresis-uy.csv", "multisine-ux.csv"):
-        (tmp_path / "meas" / name).write_text("t,ux,uy,x,y\n0,0,0,0,0\n")
+        (tmp_path / "meas" / name).write_text("t,ux,uy,x,y\n" + "".join(
+            f"{k * 1e-4:.4f},0,0,0,0\n" for k in range(20)))
     path = tmp_path / "bad.toml"
     path.write_text(ALL_MISTAKES.format(preset=preset))
     return path
