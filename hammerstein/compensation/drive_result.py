@@ -54,6 +54,11 @@ class DriveResult:
     limited, range_limited : bool
         Whether the limits measured on the records shaped the reference (not only the
         band limit below the first mode), and whether their range stage did.
+    kind_note : str or None
+        Which compensator kind and gain of the inverse multiplicative law
+        :func:`hammerstein.scenario.hardware_route.compensate_reference` took
+        for the model and why (the line ``compensate`` prints as ``note:``);
+        None when the kind and its gain were the caller's own.
     """
 
     inputs: np.ndarray
@@ -70,3 +75,4 @@ class DriveResult:
     taper_change: float = None
     limited: bool = False
     range_limited: bool = False
+    kind_note: str = None

@@ -115,7 +115,9 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     drive : hammerstein.compensation.drive.DriveResult
         Its ``notes`` name a harmonic of a periodic reference that the
         identified dynamics amplify at least twice over their static gain
-        (:func:`hammerstein.compensation.shaping.mode_note`).
+        (:func:`hammerstein.compensation.shaping.mode_note`); its
+        ``kind_note`` says which kind (and gain of the law) was taken and
+        why, when the caller did not name both.
 
     Raises
     ------
@@ -142,7 +144,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     if signal.ndim != 2 or signal.shape[1] < 1 or signal.shape[0] != p:
         raise CompensatorError(f"reference: expected shape ({p}, n_samples), one row per output "
                                f"[µm], found {np.shape(reference)}")
-    kind, options, _ = _kind_and_options(plant, kind, gain, check, inversion)
+    kind, options, kind_note = _kind_and_options(plant, kind, gain, check, inversion)
     spec = {"kind": kind, "model": "plant", **options}
     if kind == "hammerstein":
         spec["inversion"] = inversion
@@ -150,6 +152,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     comp = build_compensator(spec, plant, Path.cwd())
     drive = start_drive(plant, comp, signal, period_samples, fade_in, limits, rest_lead, shape,
                         progress)
+    drive.kind_note = kind_note.removeprefix("note: ") if kind_note else None
     problem = unfollowed_problem(plant, drive)
     if problem:
         raise CompensatorError(problem)

@@ -269,3 +269,29 @@ def test_a_named_kind_is_not_called_the_default_and_check_keeps_the_gain_choice(
                         "hammerstein", "--check", "error", "--out", str(tmp_path / "c.csv"))
     assert code == 0, err
     assert "runs the multivariable law with gain secant" in err
+
+
+def test_the_python_route_says_which_kind_and_gain_it_took(tmp_path, capsys):
+    """``compensate_reference`` from Python took the kind and the law's gain for the model
+    and dropped the note that ``compensate`` prints: the caller could not tell."""
+    from hammerstein.io.presets import load_plant as load
+    from hammerstein.scenario.hardware_route import compensate_reference
+    from hammerstein.signals.references import circle
+
+    _, path = _coupled_pi_with_dynamics(tmp_path)
+    plant = load(str(path))
+    _, r = circle(plant.sampling_period, radius=5.0, frequency=20.0, periods=3)
+    P = round(1 / 20.0 / plant.sampling_period)
+    code, _, err = _run(capsys, "compensate", str(path), "--reference",
+                        '{ kind = "circle", radius = 5, frequency = 20, periods = 3 }',
+                        "--kind", "hammerstein", "--out", str(tmp_path / "named.csv"))
+    assert code == 0, err
+    printed = [ln.removeprefix("note: ") for ln in err.splitlines()
+               if ln.startswith("note: kind hammerstein runs")]
+    _, drive = compensate_reference(plant, r, P, kind="hammerstein")
+    assert printed == [drive.kind_note]
+    _, drive = compensate_reference(plant, r, P)
+    assert drive.kind_note.startswith("kind = hammerstein because") and "gain secant" in drive.kind_note
+    # the caller's own kind and gain: nothing was chosen for them
+    _, drive = compensate_reference(plant, r, P, kind="hammerstein", gain="secant")
+    assert drive.kind_note is None
