@@ -914,8 +914,8 @@ def record_column_problem(path, inputs, outputs, time=None, skip_rows=0, input_u
     header, a units row and the first data rows), so that a file can be
     checked before it is read whole: a column named that the header does not
     hold, a column read in another unit, the same column as input and
-    output, a time column named in another unit than seconds, a file of
-    fewer than :data:`MIN_SAMPLES` rows. The data rows beyond the opening
+    output, a time column named in another unit than seconds or not
+    increasing, a file of fewer than :data:`MIN_SAMPLES` rows. The data rows beyond the opening
     are not checked.
 
     Parameters
@@ -956,11 +956,16 @@ def record_column_problem(path, inputs, outputs, time=None, skip_rows=0, input_u
                     f"{frame.shape[0]}")
         _signal_columns(frame, header, ins, outs, path, _units(input_unit, output_unit))
         if time is not None:
-            _, tname = _column(frame, header, time, "time", path)
+            t, tname = _column(frame, header, time, "time", path)
             unit = _TIME_UNIT_NAME.search(str(tname))
             if unit:
                 return (f"{path}: time column {tname!r} is named in {unit.group(2)}, and times "
                         f"are read in seconds: convert the column to seconds")
+            dt = np.diff(t)
+            if np.any(dt <= 0):
+                i = int(np.flatnonzero(dt <= 0)[0])
+                return (f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
+                        f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
     except DataFileError as exc:
         return str(exc)
     return None

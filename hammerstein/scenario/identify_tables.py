@@ -15,6 +15,19 @@ decreasing-amplitude sine records at that frequency (minor loops, as
 ``hammerstein excitation`` records them), or the one of the two with the
 lower held-out minor-loop error (as ``hammerstein identify --model auto``).
 
+With ``records = "excitation"`` the table runs ``hammerstein identify``'s
+route on records that ``hammerstein excitation`` writes, played through the
+plant (:data:`RECORDS_IDENTIFY_FIELDS`); with ``records = "files"`` on the
+user's own measured records, named relative to the scenario::
+
+    identify = { records = "files", hysteresis_records = ["meas/hysteresis-ux.csv"],
+                 dynamics_records = ["meas/multisine-ux.csv"], time = "t",
+                 inputs = ["ux"], outputs = ["x"] }
+
+(:data:`FILES_IDENTIFY_FIELDS`: the files ``identify`` takes, with its
+options and defaults; ``inputs`` and ``outputs`` default to the plant's
+names). Both routes call the pipeline ``identify`` calls.
+
 Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
 ``kind = "hammerstein"`` has its own defaults
 (:data:`HAMMERSTEIN_IDENTIFY_DEFAULTS`) and an ``identify_dynamics`` table
@@ -26,7 +39,7 @@ from __future__ import annotations
 
 import math
 
-from hammerstein.core.schema import did_you_mean, nested_table
+from hammerstein.core.schema import closest, did_you_mean, nested_table
 from hammerstein.exceptions import NestedInvalid
 from hammerstein.identification.defaults import PREISACH_LEVELS
 from hammerstein.signals.excitation import REVERSALS
@@ -271,6 +284,19 @@ def identify_table(value):
             yield ("creep_refits: only used with creep_records" if clean.get("records") == "files"
                    else "creep_refits: only used with creep = true")
 
+    if isinstance(value, dict) and value.get("records") not in (None, "files", "excitation") \
+            and (closest(value["records"], ["excitation", "files"]) == "files"
+                 or any(str(k).endswith("_records") for k in value)):
+        # a misspelt "files": the rest checked as a files table, not called unknown key by key
+        try:
+            choice("excitation", "files")(value["records"])
+        except Invalid as exc:
+            problems = [("records", str(exc))]
+        try:
+            identify_table({**value, "records": "files"})
+        except NestedInvalid as exc:
+            problems += exc.problems
+        raise NestedInvalid(problems)
     if isinstance(value, dict) and value.get("records") == "files":
         def cross_files(clean):
             yield from cross_pipeline(clean, bool(clean.get("creep_records")))

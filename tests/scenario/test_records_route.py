@@ -319,42 +319,72 @@ def _rows(header, n=20):
 
 
 def test_validate_names_every_column_the_records_do_not_hold(tmp_path):
-    # validate said ok; `run` then stopped on the first file's column, one problem a run
+    # validate said ok; `run` then stopped on the first file's column, one problem a run,
+    # named at the record's key where the table's `inputs` or `time` sets the column
     from hammerstein.scenario import records_route
     from hammerstein.scenario.schema import ScenarioError
     from hammerstein.scenario.validate import validate_scenario
-    (tmp_path / "h.csv").write_text(_rows("t,Vx,uy,x,y"))         # no column ux
+    for name in ("h1.csv", "h2.csv", "h3.csv", "h4.csv"):
+        (tmp_path / name).write_text(_rows("t,Vx,uy,x,y"))      # no column ux (the plant's)
     (tmp_path / "d.csv").write_text(_rows("time,ux,uy,x,y"))      # no column t
     (tmp_path / "c.csv").write_text(_rows("t,ux,uy,x,y", n=4))    # too short
-    (tmp_path / "ok.csv").write_text(_rows("t,ux,uy,x,y"))
     scenario = ('[plant]\npreset = "realistic-2dof"\n[compensator]\nkind = "hammerstein"\n'
                 'model = "identified"\ndynamics = "identified"\nidentify = { records = "files", '
-                'hysteresis_records = ["h.csv", "ok.csv"], dynamics_records = ["d.csv"], '
-                'creep_records = ["c.csv"] }\n'
+                'hysteresis_records = ["h1.csv", "h2.csv", "h3.csv", "h4.csv"], '
+                'dynamics_records = ["d.csv"], creep_records = ["c.csv"] }\n'
                 '[[cases]]\nname = "c"\nreference = { kind = "circle", radius = 10.0, '
                 'frequency = 20.0, periods = 3 }\n')
     f = tmp_path / "s.toml"
     f.write_text(scenario)
     with pytest.raises(ScenarioError) as err:
         validate_scenario(f)
-    lines = [line for line in str(err.value).splitlines() if "identify." in line]
+    lines = sorted(line.split(": ", 1)[1] for line in str(err.value).splitlines())
     assert len(lines) == 3, lines
-    assert "identify.hysteresis_records: " in lines[0] and "no input column named 'ux'" in lines[0]
-    assert "available columns: 0:t, 1:Vx, 2:uy, 3:x, 4:y" in lines[0]
-    assert "identify.dynamics_records: " in lines[1] and "no time column named 't'" in lines[1]
-    assert "identify.creep_records: " in lines[2] and "too short" in lines[2]
+    assert lines[0].startswith("compensator.identify.creep_records: ") and "too short" in lines[0]
+    # one line for the four files, at the key that sets the column, with what the files hold
+    assert lines[1] == ("compensator.identify.inputs: h1.csv, h2.csv, h3.csv and 1 more records: "
+                        "no input column named 'ux'; available columns: 0:t, 1:Vx, 2:uy, 3:x, "
+                        "4:y (identify.inputs not given: the plant's input names were read)")
+    assert lines[2].startswith("compensator.identify.time: d.csv: no time column named 't'")
     # the words are those of the run's own read, which stops at the first
     with pytest.raises(Exception) as first:
         records_route.file_records(
             validate_scenario.__globals__["load_plant"]("realistic-2dof"),
-            {"hysteresis_records": ["h.csv"], "time": "t", "delay": 0}, tmp_path)
-    assert lines[0].endswith(str(first.value).split(": ", 1)[1])
+            {"hysteresis_records": ["h1.csv"], "time": "t", "delay": 0}, tmp_path)
+    assert "no input column named 'ux'; available columns: 0:t, 1:Vx, 2:uy, 3:x, 4:y" in str(
+        first.value)
+    # as many columns as the plant has inputs and outputs: counted before any file is read
+    f.write_text(scenario.replace('records = "files", ', 'records = "files", inputs = "Vx", '))
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(f)
+    assert "compensator.identify.inputs: 1 column(s) ['Vx'] for the plant's 2 inputs ['ux', 'uy']" \
+        in str(err.value)
+    assert "no input column" not in str(err.value)
+    # a column that is not time
+    f.write_text(scenario.replace('records = "files", ', 'records = "files", time = "uy", ')
+                 .replace('"h1.csv", "h2.csv", "h3.csv", "h4.csv"', '"d.csv"')
+                 .replace('creep_records = ["c.csv"]', 'delay = 0'))
+    with pytest.raises(ScenarioError, match=r"identify\.time: d\.csv: time column 'uy' is not "
+                                            r"increasing at data row 2"):
+        validate_scenario(f)
     # the table's own names are the ones checked, and a table that holds them passes
     f.write_text(scenario.replace('records = "files", ', 'records = "files", time = "time", '
                                   'inputs = "ux,uy", ')
-                 .replace('"h.csv", "ok.csv"', '"d.csv"').replace('creep_records = ["c.csv"]',
-                                                                 'delay = 0'))
+                 .replace('"h1.csv", "h2.csv", "h3.csv", "h4.csv"', '"d.csv"')
+                 .replace('creep_records = ["c.csv"]', 'delay = 0'))
     validate_scenario(f)
+
+
+def test_a_misspelt_files_route_has_the_rest_checked_as_a_files_table():
+    # records = "file" checked the table as an excitation one: six keys called unknown
+    from hammerstein.exceptions import NestedInvalid
+    with pytest.raises(NestedInvalid) as err:
+        identify_table({"records": "file", "time": "t_s", "inputs": ["a", "b"],
+                        "hysteresis_records": ["h.csv"], "creep_records": ["c.csv"],
+                        "ordr": 4})
+    problems = err.value.problems
+    assert [k for k, _ in problems] == ["records", "ordr"], problems
+    assert "did you mean 'files'?" in problems[0][1] and "did you mean 'order'?" in problems[1][1]
 
 
 def test_titles_and_the_report_name_a_files_table_as_such():
