@@ -234,12 +234,6 @@ def announce_compiles(notify):
         listener = _Notices(notify)
         event.register("numba:compile", listener)
         _PROCESS["listener"] = listener
-        if _PREFETCH["process"] is not None and _PREFETCH["process"].poll() is None:
-            # the chain kernel compiles in the helper process: announced here, once
-            seconds = _PREFETCH.get("estimate") or COMPILE_SECONDS["chain_kernel"]
-            listener.tell(f"compiling the simulation kernels once, about {seconds:.0f} s "
-                          f"(numba caches them for later runs)")
-            listener.told = True
 
 
 #: Longest wait [s] of a chain run for the helper process of :func:`prefetch`;
@@ -316,11 +310,21 @@ def await_prefetch():
     """Wait for the helper process of :func:`prefetch`, if one runs (at most :data:`PREFETCH_WAIT_SECONDS`).
 
     Called before the first call of a chain kernel; returns at once when no
-    helper was started or it has finished.
+    helper was started or it has finished. A helper still compiling is
+    announced to the listener of :func:`announce_compiles` as the wait
+    starts.
     """
     process = _PREFETCH["process"]
     if process is None:
         return
+    listener = _PROCESS["listener"]
+    if listener is not None and not listener.told and process.poll() is None:
+        # the run waits for the helper: said now, once (not when the helper started: a run
+        # that stopped on its file's first problem was told of a compilation it never waited for)
+        seconds = _PREFETCH.get("estimate") or COMPILE_SECONDS["chain_kernel"]
+        listener.tell(f"compiling the simulation kernels once, about {seconds:.0f} s "
+                      f"(numba caches them for later runs)")
+        listener.told = True
     try:
         process.wait(timeout=PREFETCH_WAIT_SECONDS)
     except subprocess.TimeoutExpired:

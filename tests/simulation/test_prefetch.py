@@ -235,3 +235,37 @@ def test_a_run_killed_by_sigkill_leaves_no_helper(tmp_path):
         time.sleep(0.05)
     alive = Path(f"/proc/{helper}").exists() and " Z " not in Path(f"/proc/{helper}/stat").read_text()
     assert not alive
+
+
+def test_the_helper_is_announced_when_the_run_waits_for_it(monkeypatch):
+    # announced as the front end started, a run that stopped on its file's first problem
+    # was told "compiling the simulation kernels once, about 8 s" on every try
+    told = []
+    helper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(0.5)"])
+    monkeypatch.setitem(_compile._PREFETCH, "process", helper)
+    monkeypatch.setitem(_compile._PREFETCH, "estimate", 7.6)
+    try:
+        _compile.announce_compiles(told.append)
+        assert told == []
+        _compile.await_prefetch()
+        assert told == ["compiling the simulation kernels once, about 8 s "
+                        "(numba caches them for later runs)"]
+        assert helper.returncode == 0 and _compile._PREFETCH["process"] is None
+        _compile.await_prefetch()             # nothing to wait for: nothing said
+        assert len(told) == 1
+    finally:
+        _compile.announce_compiles(None)
+
+
+def test_a_run_that_stops_on_its_file_says_nothing_of_compiling(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[plant]\npreset = "rakotondrabe-2dof"\n[[cases]]\nname = "c"\n'
+                   'reference = { kind = "circel", radius = 5.0, frequency = 10.0 }\n')
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+               HAMMERSTEIN_CACHE_DIR=str(tmp_path / "h"))
+    proc = subprocess.run([sys.executable, "-m", "hammerstein", "run", str(bad), "--out",
+                           str(tmp_path / "r")], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300, env=env)
+    assert proc.returncode == 1
+    assert proc.stderr.splitlines() == [
+        next(ln for ln in proc.stderr.splitlines() if "reference.kind" in ln)], proc.stderr
