@@ -483,20 +483,18 @@ def _write_plot(path, fit, input_unit, output_unit):
 
 
 def _metadata(args, fit, records):
-    val = fit.validation
-    meta = {"method": fit.method, "sources": [str(d) for d in args.data],
+    rec = fit.record()     # the fit's own record, as a scenario's records route writes it
+    meta = {"method": rec.pop("method"), "sources": [str(d) for d in args.data],
             "input_columns": str(args.inputs), "output_columns": str(args.outputs),
-            "partition": fit.partition,
-            "partition_scores_percent": {k: float(v) for k, v in fit.partition_scores.items()},
-            "components": {out: {inp: fit.structure[l][k]
-                                 for k, inp in enumerate(fit.model.input_names)}
-                           for l, out in enumerate(fit.model.output_names)},
-            "bounds": args.bounds, "output_map": fit.output_map, "sampling_period_s": [r.sampling_period for r in records],
-            "input_unit": args.input_unit, "output_unit": args.output_unit,
-            "held_out": [s.description for s in fit.splits],
-            "notes": list(fit.notes),
-            "train_rms": [r["rms"] for r in fit.train],
-            "train_rms_percent_of_range": max(r["rms_percent"] for r in fit.train)}
+            "partition": rec.pop("partition"),
+            "partition_scores_percent": rec.pop("partition_scores_percent"),
+            "components": rec.pop("components"), "bounds": args.bounds,
+            "output_map": rec.pop("output_map"),
+            "sampling_period_s": [r.sampling_period for r in records],
+            "input_unit": args.input_unit, "output_unit": args.output_unit}
+    validation = {k: rec.pop(k) for k in list(rec) if k.startswith("validation")}
+    levels = rec.pop("levels", None)
+    meta.update(rec)                    # held_out, notes, train_rms ...
     est = args.delay_estimate
     # a delay given, 0 included (learn --delay auto takes it: not kept, learn estimated one
     # sample from its model's prediction on an outside stage, and converged to that lag)
@@ -514,11 +512,9 @@ def _metadata(args, fit, records):
             meta["measurement_delay_estimate"]["problem"] = str(est.problem)
         if est.checked is not None:
             meta["measurement_delay_estimate"]["checked"] = str(est.checked)
-    if val is not None:
-        meta.update(validation_rms=[r["rms"] for r in val],
-                    validation_rms_percent_by_output=[r["rms_percent"] for r in val],
-                    validation_rms_percent_of_range=max(r["rms_percent"] for r in val),
-                    validation_max_abs=[r["max_abs"] for r in val])
+    meta.update(validation)
+    if levels:
+        meta["levels"] = levels
     return meta
 
 
@@ -614,9 +610,6 @@ def _handler(args):
         extra = result.tables()
         meta = _metadata(args, fit, records)
         rows = metrics_rows(fit, args.output_unit) + level_metrics_rows(fit, args.output_unit)
-        if fit.levels:
-            meta["levels"] = [{k: (float(v) if isinstance(v, float) else v) for k, v in r.items()}
-                              for r in fit.levels]
         if dyn is not None:
             meta["dynamics"] = dyn.summary
             if creep is not None:    # G on the PI outputs through the creep: G(0) = I for G (I + C)

@@ -244,6 +244,43 @@ class RecordFit:
     output_map: str = "none"
     levels: list = field(default_factory=list)
 
+    def record(self):
+        """What the fit decided and how well it fits: the ``[identification]`` record of a model file.
+
+        Returns
+        -------
+        dict
+            ``method``, ``partition`` and ``partition_scores_percent``,
+            ``components`` (output -> input -> ``pi``/``gain``/``none``),
+            ``output_map``, ``held_out`` (the windows held out), ``notes``,
+            ``train_rms`` [output unit, per output] and
+            ``train_rms_percent_of_range``, with held-out samples
+            ``validation_rms``, ``validation_rms_percent_by_output``,
+            ``validation_rms_percent_of_range`` and ``validation_max_abs``,
+            with amplitude levels ``levels``: plain numbers and strings, as
+            ``hammerstein identify`` and a scenario's records route write them.
+        """
+        val = self.validation
+        out = {"method": self.method, "partition": self.partition,
+               "partition_scores_percent": {k: float(v) for k, v in self.partition_scores.items()},
+               "components": {o: {i: self.structure[l][k]
+                                  for k, i in enumerate(self.model.input_names)}
+                              for l, o in enumerate(self.model.output_names)},
+               "output_map": self.output_map,
+               "held_out": [s.description for s in self.splits],
+               "notes": list(self.notes),
+               "train_rms": [r["rms"] for r in self.train],
+               "train_rms_percent_of_range": max(r["rms_percent"] for r in self.train)}
+        if val is not None:
+            out.update(validation_rms=[r["rms"] for r in val],
+                       validation_rms_percent_by_output=[r["rms_percent"] for r in val],
+                       validation_rms_percent_of_range=max(r["rms_percent"] for r in val),
+                       validation_max_abs=[r["max_abs"] for r in val])
+        if self.levels:
+            out["levels"] = [{k: (float(v) if isinstance(v, float) else v) for k, v in r.items()}
+                             for r in self.levels]
+        return out
+
     @property
     def minor_loop_error(self):
         """Mean RMS Euclidean error of the held-out amplitude levels [% of each level's range].

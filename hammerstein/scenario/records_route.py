@@ -327,11 +327,13 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
             ("measured files: " + ", ".join(r.source for k in ("hysteresis", "dynamics", "creep")
                                              for r in recs[k]))
             if files else "hammerstein excitation, played through the plant",
-            "notes": list(result.fit.notes),
             "sampling_period_s": float(recs["hysteresis"][0].sampling_period if files
                                        else plant.sampling_period),
-            "plant": f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})"}
+            "plant": f"{plant.name} ({'hammerstein' if not plant.is_static else 'static'})",
+            **result.fit.record()}      # the partition, held-out windows and errors identify writes
     if files:
+        meta["input_columns"] = ",".join(recs["hysteresis"][0].input_names)
+        meta["output_columns"] = ",".join(recs["hysteresis"][0].output_names)
         meta["measurement_delay_samples"] = delay
     if result.dynamics is not None:
         meta["dynamics"] = result.dynamics.summary

@@ -278,6 +278,14 @@ def test_a_scenario_identifies_from_measured_files_as_identify_does(tmp_path, ca
         assert a.shape == b.shape and a.size > 0, table
         assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), table
     assert scen["identification"]["records"].startswith("measured files: ")
+    # the fit's record too: its partition, the windows held out and its errors (the report's
+    # model file held only the method and the notes)
+    keys = ("partition", "partition_scores_percent", "components", "output_map", "held_out",
+            "train_rms", "train_rms_percent_of_range", "validation_rms",
+            "validation_rms_percent_of_range", "validation_max_abs", "levels")
+    for key in keys:
+        assert scen["identification"][key] == cli["identification"][key], key
+    assert scen["identification"]["input_columns"] == cli["identification"]["input_columns"]
     # the class identified, not "PI identified from records" for every class
     assert cli["preset"]["description"] == scen["preset"]["description"] == (
         "generalised-PI hysteresis identified from records + identified linear dynamics + "
