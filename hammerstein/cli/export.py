@@ -22,6 +22,8 @@ import re
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from hammerstein import __version__
 from hammerstein.cli._common import number_type, out_dir_problem, print_err
 from hammerstein.core.files import guard_inputs
@@ -311,10 +313,58 @@ def handler(args):
         except PresetError as exc:
             print_err(f"{prog}: error: {' '.join(str(exc).split())}")
             return 1
-    return _written(args, kind, note, lambda: _open_loop(args, source, kind, gain, check))
+    try:
+        limits = _limits(args, source)
+    except ExportError as exc:
+        print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}")
+        return 1
+    return _written(args, kind, note, lambda: _open_loop(args, source, kind, gain, check, limits),
+                    after=[_limits_line(limits, source, args)])
 
 
-def _written(args, kind, note, make):
+def _limits(args, source):
+    """The amplifier limits built into ``NAME_step``: the command line's, else the file's."""
+    inputs = list(source.model.input_names)
+    if args.amplifier_range is not None:
+        table = {"range": list(args.amplifier_range)}
+        if args.slew_rate is not None:
+            table["slew_rate"] = args.slew_rate
+        return limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
+    if args.slew_rate is not None:     # the preset's [amplifier] range, this slew rate
+        return limits_from_table(_with_slew_rate(source.amplifier, args.slew_rate), inputs,
+                                 "amplifier")
+    return limits_from_table(source.amplifier, inputs, "amplifier")
+
+
+def _limits_line(limits, source, args):
+    """``limits: ...``: the range and slew rate built into the step, and where they come from.
+
+    A slew rate taken from the records (``identify``'s ``[amplifier]``,
+    ``source = "records"``) is the records' own speed, not the amplifier's:
+    from slow hysteresis records alone it bounds the drive far below what the
+    amplifier does, so the fastest sine over the whole range is named with it.
+    """
+    if limits is None:
+        return "limits: none (the voltages are not clamped; --amplifier-range sets a range)"
+    names = list(source.model.input_names)
+    lo, hi, slew = limits.arrays(len(names))
+    parts = [f"{n} [{a:g}, {b:g}] V" + (f", {v:.4g} V/s" if np.isfinite(v) else "")
+             for n, a, b, v in zip(names, lo, hi, slew)]
+    text = "limits: " + "; ".join(parts)
+    table = source.amplifier if isinstance(source.amplifier, dict) else {}
+    if table.get("source") == "records" and args.amplifier_range is None \
+            and args.slew_rate is None:
+        text += " (the range and largest slew of the records identify read, not the amplifier's"
+        rates = [v / (np.pi * (b - a)) for a, b, v in zip(lo, hi, slew)
+                 if np.isfinite(v) and np.isfinite(b - a)]
+        if rates:
+            text += (f": a sine over the whole range is slew-limited above {min(rates):.3g} Hz; "
+                     f"--slew-rate gives your amplifier's")
+        text += ")"
+    return text
+
+
+def _written(args, kind, note, make, after=()):
     """Run ``make`` (the files it wrote), print them; an export error is one line, exit 1."""
     prog = "hammerstein export"
     try:
@@ -335,6 +385,8 @@ def _written(args, kind, note, make):
             line = state_line(Path(path).read_text(encoding="utf-8"))
             if line:
                 print(line)
+    for line in after:
+        print(line)
     return 0
 
 
@@ -381,23 +433,12 @@ def state_line(header):
     return text + "; time per step and stack on your target: docs/real-time.md"
 
 
-def _open_loop(args, source, kind, gain, check):
-    """The compensator of ``kind`` alone: its C files, written; the paths."""
+def _open_loop(args, source, kind, gain, check, limits):
+    """The compensator of ``kind`` alone, ``limits`` in its step: its C files, written; the paths."""
     comp, T = compensator_from_source(source, kind, gain=gain, iterations=args.iterations,
                                       feedback=args.feedback, cutoff_hz=args.cutoff_hz,
                                       inversion=args.inversion, sampling_period=args.sampling_period,
                                       check=check or "error")
-    inputs = list(source.model.input_names)
-    if args.amplifier_range is not None:
-        table = {"range": list(args.amplifier_range)}
-        if args.slew_rate is not None:
-            table["slew_rate"] = args.slew_rate
-        limits = limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
-    elif args.slew_rate is not None:     # the preset's [amplifier] range, this slew rate
-        limits = limits_from_table(_with_slew_rate(source.amplifier, args.slew_rate), inputs,
-                                   "amplifier")
-    else:
-        limits = limits_from_table(source.amplifier, inputs, "amplifier")
     name = args.name or _default_name(source.name, args.kind)
     code = export_c(comp, name, T, precision=args.precision, limits=limits,
                     version=__version__, source_note=f"Built from {source.path.name} "

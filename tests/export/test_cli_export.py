@@ -30,7 +30,8 @@ def test_c_files_written_then_replaced(tmp_path, capsys):
     h, c = out / "rakotondrabe_2dof_hammerstein.h", out / "rakotondrabe_2dof_hammerstein.c"
     lines = stdout.splitlines()
     assert lines[:2] == [f"wrote {h}", f"wrote {c}"]
-    assert len(lines) == 3 and lines[2].startswith("state: ")
+    assert len(lines) == 4 and lines[2].startswith("state: ")
+    assert lines[3].startswith("limits: none (the voltages are not clamped")
     for f in (h, c):
         assert f.read_text().startswith(MARKER)
     text = h.read_text()
@@ -171,7 +172,7 @@ def test_the_state_line_gives_the_struct_size_before_padding(tmp_path, capsys, k
     code, stdout, _ = run(capsys, "rakotondrabe-2dof", "--target", "c", "--out", str(out),
                           "--kind", kind, "--precision", precision, "--name", "act")
     assert code == 0
-    line = stdout.splitlines()[-1]
+    line = next(ln for ln in stdout.splitlines() if ln.startswith("state: "))
     reals, ints, size = map(int, re.search(r"state: (\d+) reals \(\w+\) and (\d+) ints, "
                                            r"(\d+) B before padding", line).groups())
     header = (out / "act.h").read_text()
@@ -202,3 +203,31 @@ def test_a_model_the_c_emitters_do_not_know_is_refused_by_name():
     with pytest.raises(ExportError, match=r"a SimpleNamespace cannot be exported to C: .*"
                                           r"hammerstein/export/c_\*\.py"):
         export_c(comp, "x", 5e-5)
+
+
+def test_the_limits_built_into_the_step_are_said_and_a_records_slew_is_named(tmp_path, capsys):
+    # an outside check: a model identified without dynamics records took the 1 Hz hysteresis
+    # records' slew (1885 V/s over +-100 V) into its step, and nothing said so: a 50 Hz
+    # circle then returned STATUS_LIMIT, the only trace a comment in the header
+    plant = load_plant("rakotondrabe-2dof")
+    path = tmp_path / "m.toml"
+    save_model(plant.hysteresis, path, {"note": "test"}, extra={"amplifier": {
+        "source": "records", "ux": {"range": [-100.0, 100.0], "slew_rate": 1884.956},
+        "uy": {"range": [-50.0, 100.0], "slew_rate": 3000.0}}})
+    base = ["export", str(path), "--sampling-period", "5e-5", "--kind", "multivariable"]
+    assert main([*base, "--out", str(tmp_path / "a")]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("limits: ")]
+    # a sine of amplitude A at f needs 2 pi f A V/s: over the whole range A = span / 2
+    assert lines == ["limits: ux [-100, 100] V, 1885 V/s; uy [-50, 100] V, 3000 V/s (the range "
+                     "and largest slew of the records identify read, not the amplifier's: a sine "
+                     f"over the whole range is slew-limited above {1884.956 / (np.pi * 200):.3g} "
+                     "Hz; --slew-rate gives your amplifier's)"]
+    header = (tmp_path / "a" / "m_multivariable.h").read_text()
+    assert "[-100, 100] V, [-50, 100] V; slew rate 1884.96 V/s, 3000 V/s" in header
+    # the amplifier's own: said as such
+    assert main([*base, "--slew-rate", "2e5", "--out", str(tmp_path / "b")]) == 0
+    out = capsys.readouterr().out
+    assert "limits: ux [-100, 100] V, 2e+05 V/s; uy [-50, 100] V, 2e+05 V/s\n" in out
+    assert main(["export", "rakotondrabe-2dof", "--kind", "multivariable", "--out",
+                 str(tmp_path / "c")]) == 0
+    assert "limits: none (the voltages are not clamped" in capsys.readouterr().out
