@@ -97,7 +97,8 @@ def add_parser(subparsers):
                         "anywhere, for a single-precision FPU)")
     p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"),
                    default=None, metavar="S",
-                   help="sampling period [s] (required for a model file; default the preset's)")
+                   help="sampling period [s] (default the preset's, or a model file's records' "
+                        "when they agree; required for a model file without one)")
     p.add_argument("--amplifier-range", type=number_type(-1e6, 1e6, unit="V"), nargs=2,
                    default=None, metavar=("MIN", "MAX"),
                    help="clamp every voltage to [MIN, MAX] V inside step (overrides the file's "
