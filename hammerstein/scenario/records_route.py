@@ -169,11 +169,19 @@ def file_records(plant, spec, base_dir=None):
     Raises
     ------
     IdentificationError
-        A file that cannot be read (naming the key and the file).
+        A file that cannot be read (naming the key and the file), or
+        ``inputs``/``outputs`` not one column per plant input/output.
     """
     model = plant.hysteresis
     ins = spec.get("inputs") or list(model.input_names)
     outs = spec.get("outputs") or list(model.output_names)
+    for key, given, names in (("inputs", ins, model.input_names),
+                              ("outputs", outs, model.output_names)):
+        if len(given) != len(names):    # (validate says so first; an IndexError came later)
+            raise IdentificationError(
+                f"identify.{key}: {len(given)} column(s) {list(given)} for the plant's "
+                f"{len(names)} {key} {list(names)}; expected one column per {key[:-1]}, in the "
+                f"plant's order")
     out = {}
     for kind, key in (("hysteresis", "hysteresis_records"), ("dynamics", "dynamics_records"),
                       ("creep", "creep_records")):

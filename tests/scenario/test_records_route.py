@@ -368,6 +368,13 @@ def test_validate_names_every_column_the_records_do_not_hold(tmp_path):
     assert "compensator.identify.inputs: 1 column(s) ['Vx'] for the plant's 2 inputs ['ux', 'uy']" \
         in str(err.value)
     assert "no input column" not in str(err.value)
+    # and from Python, where validate did not run (an IndexError in the unit check before)
+    with pytest.raises(Exception, match=r"identify\.outputs: 1 column\(s\) \['x'\] for the "
+                                        r"plant's 2 outputs"):
+        records_route.file_records(
+            validate_scenario.__globals__["load_plant"]("realistic-2dof"),
+            {"hysteresis_records": ["h1.csv"], "time": "t", "delay": 0, "outputs": ["x"]},
+            tmp_path)
     # a column that is not time
     f.write_text(scenario.replace('records = "files", ', 'records = "files", time = "uy", ')
                  .replace('"h1.csv", "h2.csv", "h3.csv", "h4.csv"', '"d.csv"')
