@@ -33,12 +33,12 @@ from typing import Any, Callable
 import numpy as np
 
 from hammerstein.signals import references as refs
-from hammerstein.core.files import confined_path, escape, file_limit_problem
+from hammerstein.core.files import confined_path
 from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_problem
 from hammerstein.core.schema import short_repr
-from hammerstein.io.datafiles import record_column_problem
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
+from hammerstein.scenario.validate_records import record_file_problems
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.hardware_route import hardware_start
 from hammerstein.scenario.registry import COMPENSATORS, class_problems, model_file_dynamics
@@ -352,76 +352,6 @@ def _magnitude_problem(spec, signal, unit):
             f"{MAX_MAGNITUDE:.0e}")
 
 
-#: The key of a files table that sets the column a record's problem names.
-_COLUMN_KEY = re.compile(r"^(?:no (input|output|time) column|(input|output|time) column "
-                         r"|(input) and output are the same column|column .* named twice)")
-
-
-def _files_text(names):
-    shown = ", ".join(names[:3])
-    return shown + (f" and {len(names) - 3} more records" if len(names) > 3 else "")
-
-
-def _record_file_problems(identify, base, plant):
-    """``identify.<key>: ...`` for each file of a ``records = "files"`` table that is not there.
-
-    A file that is there has its opening read for the columns the table names
-    (``time``, ``inputs`` and ``outputs``, by default the plant's names), as
-    :func:`~hammerstein.scenario.records_route.file_records` will read them:
-    a column problem is named at the key that sets the column, once for all
-    the files it holds in (a misspelt output name is one line, not one per
-    record). ``inputs`` and ``outputs`` are counted against the plant's.
-    """
-    model = getattr(plant, "hysteresis", None)
-    plant_names = {} if model is None else {"inputs": list(model.input_names),
-                                            "outputs": list(model.output_names)}
-    problems = []
-    for key, names in plant_names.items():
-        given = identify.get(key)
-        if given and len(given) != len(names):
-            problems.append(f"identify.{key}: {len(given)} column(s) {given} for the plant's "
-                            f"{len(names)} {key} {names}; expected one column per "
-                            f"{key[:-1]}, in the plant's order")
-    ins = identify.get("inputs") or plant_names.get("inputs")
-    outs = identify.get("outputs") or plant_names.get("outputs")
-    check_columns = bool(ins and outs) and not problems
-    columns = {}        # (key, problem without the file) -> the files it holds in
-    for key in ("hysteresis_records", "dynamics_records", "creep_records"):
-        for name in identify.get(key) or []:
-            if not isinstance(name, str):
-                continue        # reported by the table's check
-            try:
-                path = confined_path(name, base, PresetError)
-            except PresetError as exc:
-                problems.append(f"identify.{key}: {exc}")
-                continue
-            if not Path(path).exists():
-                problems.append(f"identify.{key}: {name}: no such file (relative to the "
-                                f"scenario's directory)")
-                continue
-            # a FIFO, a directory, a record beyond the size limit: named before anything is read
-            problem = file_limit_problem(path, "data", "record")
-            if problem is None and check_columns:
-                problem = record_column_problem(path, ins, outs, identify.get("time", "t"))
-                rest = (problem or "").removeprefix(f"{escape(str(path))}: ")
-                role = _COLUMN_KEY.match(rest)
-                if role:
-                    role = next(r for r in role.groups() if r) if any(role.groups()) else "input"
-                    setting = "time" if role == "time" else f"{role}s"
-                    files = columns.setdefault((setting, rest), [])
-                    if name not in files:       # a file given as two kinds of record
-                        files.append(name)
-                    continue
-            if problem:
-                problems.append(f"identify.{key}: {problem}")
-    for (setting, rest), names in columns.items():
-        default = ("" if identify.get(setting) not in (None, "t") else
-                   " (identify.time is 't' unless given)" if setting == "time" else
-                   f" (identify.{setting} not given: the plant's {setting[:-1]} names were read)")
-        problems.append(f"identify.{setting}: {_files_text(names)}: {rest}{default}")
-    return problems
-
-
 def _model_problems(name, identify, plant, base, files):
     """Problems of a ``model`` key that need no identification and no compensator.
 
@@ -436,7 +366,7 @@ def _model_problems(name, identify, plant, base, files):
             return ["identify: missing (required with model = 'identified'), "
                     "e.g. identify = { frequency = 50.0 }"]
         if identify.get("records") == "files":      # measured records: the files are there
-            return _record_file_problems(identify, base, plant)
+            return record_file_problems(identify, base, plant)
         problem = nyquist_problem(identify, plant)
         if problem is None and plant is not None:
             n = identify.get("periods", 3) / identify["frequency"] / plant.sampling_period
@@ -487,7 +417,7 @@ def _top_model_problems(comp, plant, base, files):
         except Invalid:     # reported by the table's check; its files are still looked for
             if not (isinstance(identify, dict) and identify.get("records") == "files"):
                 return [], []
-            return _placed_top(_record_file_problems(   # there, not their columns
+            return _placed_top(record_file_problems(   # there, not their columns
                 {k: [v] if isinstance(v, str) else v for k, v in identify.items()
                  if isinstance(v, (str, list)) and k.endswith("_records")}, base, None))
     if plant is None and name == "identified" and isinstance(identify, dict) \

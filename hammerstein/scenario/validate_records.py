@@ -1,0 +1,114 @@
+"""Record files of a scenario's ``identify = { records = "files", ... }`` table, checked before anything is read whole.
+
+Part of step 1 (:mod:`hammerstein.scenario.validate`): each file named is
+there, a regular file within the size limit, and holds the columns the table
+names (``time``, ``inputs`` and ``outputs``, by default the plant's names)
+at its opening, as :func:`hammerstein.scenario.records_route.file_records`
+will read it.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from hammerstein.core.files import confined_path, escape, file_limit_problem
+from hammerstein.io.datafiles import record_column_problem
+from hammerstein.io.presets import PresetError
+
+__all__ = ["record_file_problems"]
+
+
+#: The key of a files table that sets the column a record's problem names.
+_COLUMN_KEY = re.compile(r"^(?:no (input|output|time) column|(input|output|time) column "
+                         r"|(input) and output are the same column|column .* named twice)")
+
+
+def _files_text(names):
+    shown = ", ".join(names[:3])
+    return shown + (f" and {len(names) - 3} more records" if len(names) > 3 else "")
+
+
+def record_file_problems(identify, base, plant):
+    """``identify.<key>: ...`` for each file of a ``records = "files"`` table that is not there.
+
+    A file that is there has its opening read for the columns the table names
+    (``time``, ``inputs`` and ``outputs``, by default the plant's names), as
+    :func:`~hammerstein.scenario.records_route.file_records` will read them:
+    a column problem is named at the key that sets the column, once for all
+    the files it holds in (a misspelt output name is one line, not one per
+    record). ``inputs`` and ``outputs`` are counted against the plant's.
+
+    Parameters
+    ----------
+    identify : dict
+        The ``identify`` table (checked by
+        :func:`hammerstein.scenario.identify_tables.identify_table`, or the
+        record keys alone of one that failed that check).
+    base : pathlib.Path
+        The scenario's directory (relative file names).
+    plant : HammersteinPlant or None
+        Names the default columns and counts ``inputs`` and ``outputs``;
+        None: only whether each file is there.
+
+    Returns
+    -------
+    list of str
+        ``identify.<key>: message`` per problem, nothing read beyond each
+        file's opening (:func:`hammerstein.io.datafiles.record_column_problem`).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> base = pathlib.Path(tempfile.mkdtemp())
+    >>> record_file_problems({"hysteresis_records": ["gone.csv"]}, base, None)
+    ["identify.hysteresis_records: gone.csv: no such file (relative to the scenario's directory)"]
+    """
+    model = getattr(plant, "hysteresis", None)
+    plant_names = {} if model is None else {"inputs": list(model.input_names),
+                                            "outputs": list(model.output_names)}
+    problems = []
+    for key, names in plant_names.items():
+        given = identify.get(key)
+        if given and len(given) != len(names):
+            problems.append(f"identify.{key}: {len(given)} column(s) {given} for the plant's "
+                            f"{len(names)} {key} {names}; expected one column per "
+                            f"{key[:-1]}, in the plant's order")
+    ins = identify.get("inputs") or plant_names.get("inputs")
+    outs = identify.get("outputs") or plant_names.get("outputs")
+    check_columns = bool(ins and outs) and not problems
+    columns = {}        # (key, problem without the file) -> the files it holds in
+    for key in ("hysteresis_records", "dynamics_records", "creep_records"):
+        for name in identify.get(key) or []:
+            if not isinstance(name, str):
+                continue        # reported by the table's check
+            try:
+                path = confined_path(name, base, PresetError)
+            except PresetError as exc:
+                problems.append(f"identify.{key}: {exc}")
+                continue
+            if not Path(path).exists():
+                problems.append(f"identify.{key}: {name}: no such file (relative to the "
+                                f"scenario's directory)")
+                continue
+            # a FIFO, a directory, a record beyond the size limit: named before anything is read
+            problem = file_limit_problem(path, "data", "record")
+            if problem is None and check_columns:
+                problem = record_column_problem(path, ins, outs, identify.get("time", "t"))
+                rest = (problem or "").removeprefix(f"{escape(str(path))}: ")
+                role = _COLUMN_KEY.match(rest)
+                if role:
+                    role = next(r for r in role.groups() if r) if any(role.groups()) else "input"
+                    setting = "time" if role == "time" else f"{role}s"
+                    files = columns.setdefault((setting, rest), [])
+                    if name not in files:       # a file given as two kinds of record
+                        files.append(name)
+                    continue
+            if problem:
+                problems.append(f"identify.{key}: {problem}")
+    for (setting, rest), names in columns.items():
+        default = ("" if identify.get(setting) not in (None, "t") else
+                   " (identify.time is 't' unless given)" if setting == "time" else
+                   f" (identify.{setting} not given: the plant's {setting[:-1]} names were read)")
+        problems.append(f"identify.{setting}: {_files_text(names)}: {rest}{default}")
+    return problems
