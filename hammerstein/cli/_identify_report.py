@@ -167,7 +167,8 @@ def dynamics_report_lines(summary, output_names, input_names):
     for c in s["candidates"]:
         if "held_out_fit_percent" in c:
             text = (f"  order {c['order']}: held-out fit {c['held_out_fit_percent']:.2f} %, modes "
-                    + ", ".join(f"{f:.4g}" for f in c["modes_hz"]) + " Hz")
+                    + ", ".join(f"{f:.4g}" for f in c["modes_hz"]) + " Hz"
+                    + (f"; not chosen: {c['rejected']}" if c.get("rejected") else ""))
         else:
             text = f"  order {c['order']}: rejected, {c.get('rejected', 'no mode left')}"
         if c.get("dropped"):

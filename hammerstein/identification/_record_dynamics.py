@@ -23,7 +23,8 @@ from hammerstein.identification._broadband_check import broadband_conditions, re
 
 #: Defaults of the dynamics identified from records (:func:`identify_record_dynamics`).
 DYNAMICS_DEFAULTS = {"max_order": 10, "unit_dc_gain": True, "low_pole_fraction": 0.5,
-                     "cancel_tolerance": 0.01, "require_continuous": True}
+                     "cancel_tolerance": 0.01, "require_continuous": True,
+                     "lag_tolerance": 3.0}
 
 
 @dataclass
