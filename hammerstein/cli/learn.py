@@ -155,7 +155,8 @@ from hammerstein.cli._learn_checks import (gain_band, measurement_problem,
                                            model_gain_note, model_gains, plant_first_mode,
                                            stepping_outputs)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
-                                          _period_note, default_q_cutoff)
+                                          _period_note, default_q_cutoff,
+                                          PERIODIC_KINDS)
 from hammerstein.signals.fundamental import reference_fundamental
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
 from hammerstein.exceptions import CompensatorError, DataFileError
@@ -546,7 +547,9 @@ def _learn(args):
         # the settled window: after the fade-in and --settle-periods (the start-up no drive removes)
         P = ref.period_samples if ref.period_samples > 1 else None
         steady = repeating_from(target, P, fade)
-        period_note = _period_note(args.period, P, T, steady, target.shape[1], fade)
+        spec = ref.spec if isinstance(ref.spec, dict) else {}
+        period_note = _period_note(args.period, P, T, steady, target.shape[1], fade,
+                                   spec.get("frequency") if ref.kind in PERIODIC_KINDS else None)
         settle = fade + int(args.settle_periods * ref.period_samples)
         if steady is not None:        # the repeating part the trial is judged on
             settle = max(settle, steady)

@@ -384,6 +384,30 @@ def test_learn_says_why_a_period_is_not_learnt_per_harmonic(tmp_path, hz, whole)
     assert ("learnt per harmonic of the period" in res.stderr) == whole
 
 
+@pytest.mark.parametrize("hz, whole", [(150.0, False), (20000.0 / 133, True)])
+def test_learn_says_why_an_inline_circle_is_not_learnt_per_harmonic(tmp_path, hz, whole):
+    """An outside check: a 150 Hz circle at 20 kHz (133.33 samples a period) was learnt sample
+    by sample with only a line in the drive file's header to say so; its true settled error
+    rose on trials 3, 6 and 10 while each trial printed "monotonic". 150.376 Hz (133 samples)
+    is learnt per harmonic."""
+    ref = f'{{ kind = "circle", radius = 20, frequency = {hz!r}, periods = 40 }}'
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 1)
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", ref, "--drive", "u0.csv",
+               "--measured", "y0.csv", "--out", "u1.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    note = [ln for ln in res.stderr.splitlines() if "not per harmonic of the period" in ln]
+    if whole:
+        assert note == [] and "learnt per harmonic of the period" in res.stderr
+    else:
+        assert note == ["note: learnt sample by sample, not per harmonic of the period: 150 Hz "
+                        "is a period of 133.333 sampling periods, not a whole number: the "
+                        "reference does not repeat every 133 samples (a period of a whole number "
+                        "of samples, e.g. 150.376 Hz (133 samples), repeats exactly); the settled "
+                        "error of such a learning can rise from one trial to the next"]
+
+
 def test_the_period_note_says_which_reason_it_is():
     """A 2 s pattern repeated 6 times at 2 kHz, whose fade compensate lengthened to 3 s:
     4.5 periods after it. The note said "does not repeat ..., or holds fewer than five
