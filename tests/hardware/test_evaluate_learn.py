@@ -395,7 +395,8 @@ def test_learn_says_why_an_inline_circle_is_not_learnt_per_harmonic(tmp_path, hz
                 cwd=tmp_path).returncode == 0
     _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 1)
     res = _cli("learn", "rakotondrabe-2dof", "--reference", ref, "--drive", "u0.csv",
-               "--measured", "y0.csv", "--out", "u1.csv", cwd=tmp_path)
+               "--measured", "y0.csv", "--outputs", "x=x_meas,y=y_meas", "--out", "u1.csv",
+               cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     note = [ln for ln in res.stderr.splitlines() if "not per harmonic of the period" in ln]
     if whole:
