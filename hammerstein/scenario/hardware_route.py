@@ -124,7 +124,9 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     CompensatorError
         A kind that does not work with the model (naming those that do),
         ``fade_in = 0`` for a reference that does not start at rest, or a
-        reference not of shape (n_outputs, n_samples) (a transposed record).
+        reference not of shape (n_outputs, n_samples) (a transposed record);
+        ``period_samples`` not a whole number from 1 to n_samples, ``fade_in``
+        negative or not finite, ``limits`` not one of the three.
 
     Examples
     --------
@@ -144,6 +146,7 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     if signal.ndim != 2 or signal.shape[1] < 1 or signal.shape[0] != p:
         raise CompensatorError(f"reference: expected shape ({p}, n_samples), one row per output "
                                f"[µm], found {np.shape(reference)}")
+    _check_arguments(period_samples, fade_in, limits, signal.shape[1])
     kind, options, kind_note = _kind_and_options(plant, kind, gain, check, inversion)
     spec = {"kind": kind, "model": "plant", **options}
     if kind == "hammerstein":
@@ -179,6 +182,30 @@ def compensate_reference(plant, reference, period_samples=None, kind=None, inver
     if note:
         drive.notes.append(note)
     return comp, drive
+
+
+def _check_arguments(period_samples, fade_in, limits, n):
+    """Refuse what :func:`compensate_reference` cannot take, naming the argument.
+
+    An outside check passed ``period_samples`` of 0, -5, 100.5, True and 1e9
+    (silently taken as none, or a fade-in over the whole record), ``fade_in``
+    of -1 (no fade) and NaN (a bare ``ValueError`` deep inside) and
+    ``limits="bogus"`` (taken as ``"error"``).
+    """
+    if period_samples is not None and (
+            isinstance(period_samples, (bool, np.bool_))
+            or not isinstance(period_samples, (int, np.integer))
+            or not 1 <= period_samples <= n):
+        raise CompensatorError(f"period_samples: expected None or a whole number of samples "
+                               f"from 1 to the reference's {n}, found {period_samples!r}")
+    if fade_in is not None and (isinstance(fade_in, (bool, np.bool_))
+                                or not isinstance(fade_in, (int, float, np.integer, np.floating))
+                                or not np.isfinite(fade_in) or fade_in < 0):
+        raise CompensatorError(f"fade_in: expected None or a duration >= 0 [s], found "
+                               f"{fade_in!r}")
+    if limits not in ("error", "warn", "clip"):
+        raise CompensatorError(f"limits: expected one of 'error', 'warn', 'clip', found "
+                               f"{limits!r}")
 
 
 def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limits="error",

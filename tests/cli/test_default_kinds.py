@@ -295,3 +295,22 @@ def test_the_python_route_says_which_kind_and_gain_it_took(tmp_path, capsys):
     # the caller's own kind and gain: nothing was chosen for them
     _, drive = compensate_reference(plant, r, P, kind="hammerstein", gain="secant")
     assert drive.kind_note is None
+
+
+@pytest.mark.parametrize("kwargs, key", [
+    ({"period_samples": 0}, "period_samples"), ({"period_samples": -5}, "period_samples"),
+    ({"period_samples": 100.5}, "period_samples"), ({"period_samples": True}, "period_samples"),
+    ({"period_samples": 10 ** 9}, "period_samples"), ({"fade_in": -1.0}, "fade_in"),
+    ({"fade_in": float("nan")}, "fade_in"), ({"limits": "bogus"}, "limits"),
+])
+def test_the_python_route_names_an_argument_it_cannot_take(kwargs, key):
+    # an outside check: each was taken silently (as none, as a fade over the whole record, as
+    # "error") or failed deep inside with a bare ValueError
+    from hammerstein.exceptions import CompensatorError
+    from hammerstein.scenario.hardware_route import compensate_reference
+    from hammerstein.signals.references import circle
+
+    plant = load_plant("rakotondrabe-2dof")
+    _, r = circle(plant.sampling_period, radius=5.0, frequency=50.0, periods=4)
+    with pytest.raises(CompensatorError, match=rf"^{key}: expected"):
+        compensate_reference(plant, r, **{"period_samples": 400, **kwargs})
