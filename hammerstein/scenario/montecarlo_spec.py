@@ -20,13 +20,15 @@ import numpy as np
 
 from hammerstein.signals import references as refs
 from hammerstein.models.hysteresis import MultivariablePI
+from hammerstein.core.files import confined_path
 from hammerstein.exceptions import PresetError
-from hammerstein.io.presets import dynamics_from_table, load_plant, read_toml, resolve_preset
+from hammerstein.io.presets import (dynamics_from_table, load_model, load_plant, read_toml,
+                                    resolve_preset)
 from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
                                      known_kind, name_field, number, string)
 from hammerstein.scenario.feedback_table import check_feedback_table
 from hammerstein.scenario.montecarlo_draw import oscillating_modes
-from hammerstein.scenario.registry import COMPENSATORS, model_file_dynamics
+from hammerstein.scenario.registry import COMPENSATORS, class_problems, model_file_dynamics
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
 
 
@@ -298,6 +300,24 @@ def _nominal_modes(preset, base, outputs):
     return fn, zeta
 
 
+def _class_problems(comp, plant, base):
+    """``kind: ...`` when the compensator's model is of a class its kind does not take.
+
+    A Monte-Carlo study of ``preisach-inverse`` over a classical PI model file
+    validated "ok (20 cases)", then the run stopped on it; in ``[[cases]]``
+    validate names it.
+    """
+    name = comp.get("model", "plant")
+    files = {}
+    if isinstance(name, str) and name not in ("plant", "identified"):
+        try:
+            path = confined_path(name, base, PresetError)
+            files[path] = load_model(path)
+        except PresetError:
+            return []           # the model file's own problem is named when it is built
+    return class_problems(name, comp.get("kind"), plant, base, files, comp.get("identify"))
+
+
 def validate_montecarlo(path, data):
     """Validate a Monte-Carlo scenario file (nothing built or simulated).
 
@@ -353,6 +373,8 @@ def validate_montecarlo(path, data):
         problems.append(f"{source}: compensator.kind: a Monte-Carlo study applies one drive per "
                         f"frequency, built from the nominal model, to every drawn plant; kind "
                         f"'ilc' learns on a plant (run it in [[cases]] of another scenario)")
+    elif plant is not None:     # a kind the model's class does not take: as in [[cases]]
+        problems += [f"{source}: compensator.{m}" for m in _class_problems(comp, plant, base)]
     feedback = _check_feedback(data, comp, plant, source, problems)
     studies, seen = [], set()
     seed = top.get("seed", 0)
@@ -365,6 +387,10 @@ def validate_montecarlo(path, data):
         n0 = len(problems)
         c = check_table(raw, SWEEP, where, problems, source)
         if c is None or len(problems) > n0:
+            if isinstance(raw.get("vary"), dict) and not any(
+                    f"{where}.vary" in line for line in problems[n0:]):
+                # its own mistakes too: `cases = 2.5` hid `vary.bogus` until it was fixed
+                check_table(raw["vary"], VARY, f"{where}.vary", problems, source)
             continue
         if c["name"] in seen:
             problems.append(f"{source}: {where}.name: duplicate sweep name {c['name']!r}")

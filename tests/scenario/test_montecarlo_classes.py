@@ -257,3 +257,47 @@ def test_a_compensator_table_without_a_kind_says_so(tmp_path):
                                             r"\(no compensator\) takes no model; give a kind "
                                             r"\(.*hammerstein.*take them\)"):
         validate_scenario(f)
+
+
+_STUDY = """name = "s"
+[plant]
+preset = "rakotondrabe-2dof"
+[compensator]
+kind = "{kind}"
+model = "{model}"
+[[sweeps]]
+kind = "monte-carlo"
+name = "m"
+cases = {cases}
+frequencies = [20.0]
+reference = {{ kind = "circle", radius = 10.0, periods = 3 }}
+settle_periods = 1
+[sweeps.vary]
+weights = {{ relative_sd = 0.05 }}
+{extra}
+"""
+
+
+def test_a_study_names_a_kind_its_model_class_does_not_take(tmp_path):
+    # an outside check: preisach-inverse over a classical PI model file validated "ok (20
+    # cases)" in a study and the run stopped on it; in [[cases]] validate names it
+    from hammerstein.io.presets import load_plant, save_model
+    save_model(load_plant("rakotondrabe-2dof").hysteresis, tmp_path / "pi.toml", {"note": "t"})
+    f = tmp_path / "s.toml"
+    f.write_text(_STUDY.format(kind="preisach-inverse", model="pi.toml", cases=4, extra=""))
+    with pytest.raises(ScenarioError, match=r"compensator\.kind: the model is a classical PI "
+                                            r"model, which kind 'preisach-inverse' does not take"):
+        validate_scenario(f)
+    f.write_text(_STUDY.format(kind="multivariable", model="pi.toml", cases=4, extra=""))
+    assert len(validate_scenario(f).studies) == 1
+
+
+def test_a_study_names_its_sweep_and_vary_mistakes_together(tmp_path):
+    f = tmp_path / "s.toml"
+    f.write_text(_STUDY.format(kind="multivariable", model="plant", cases=2.5,
+                               extra="bogus = { relative_sd = 0.1 }"))
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(f)
+    lines = str(err.value).splitlines()
+    assert any("sweeps[0].cases: expected an integer" in ln for ln in lines), lines
+    assert any("sweeps[0].vary.bogus: unknown key" in ln for ln in lines), lines
