@@ -25,8 +25,10 @@ def _array(value, name, ndim=1):
     except (TypeError, ValueError):
         raise HysteresisError(f"{name}: expected {'a list of numbers' if ndim == 1 else 'a table of numbers (list of rows)'}, "
                               f"found {str(value)[:80]}") from None
-    if arr.ndim != ndim or not np.all(np.isfinite(arr)):
+    if arr.ndim != ndim:
         raise HysteresisError(f"{name}: expected {ndim}-d finite numbers, found shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):    # the shape was right: "found shape (2,)" misled
+        raise HysteresisError(f"{name}: expected finite values, found NaN or inf")
     return arr
 
 

@@ -74,9 +74,15 @@ def finite_array(value, name, ndim=None):
     Raises
     ------
     HysteresisError
-        If ``value`` is not numeric, has another number of dimensions, or
-        holds NaN or inf.
+        If ``value`` is None, not numeric (text or booleans included), has
+        another number of dimensions, or holds NaN or inf.
     """
+    if value is None:       # np.asarray(None, float) is NaN: "found NaN or inf" misled
+        raise HysteresisError(f"{name}: expected an array of numbers, found None")
+    kind = getattr(getattr(value, "dtype", None), "kind", None)
+    if kind in ("U", "S", "b"):     # text or True/False read as numbers: a loading mistake
+        raise HysteresisError(f"{name}: expected numbers, found an array of "
+                              f"{'text' if kind in 'US' else 'booleans'} ({value.dtype})")
     if np.iscomplexobj(value):
         raise HysteresisError(f"{name}: expected real numbers, found complex values")
     try:
