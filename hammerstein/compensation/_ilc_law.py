@@ -92,6 +92,7 @@ class IterativeLearning:
     Two trials on the bundled actuator with its own model: the first error
     (rate-independent drive) falls by two orders of magnitude.
 
+    >>> from hammerstein import IterativeLearning
     >>> import numpy as np
     >>> from hammerstein.io.presets import load_plant
     >>> from hammerstein.compensation.compensators import InverseMultiplicativeCompensator

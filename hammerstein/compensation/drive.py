@@ -232,6 +232,7 @@ def drive_signal(compensator, reference, sampling_period, period_samples=None, f
 
     Examples
     --------
+    >>> from hammerstein import drive_signal
     >>> import numpy as np
     >>> from hammerstein.io.presets import load_plant
     >>> from hammerstein.compensation.compensators import InverseMultiplicativeCompensator

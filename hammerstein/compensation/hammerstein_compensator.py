@@ -333,6 +333,7 @@ class HammersteinCompensator:
 
     Examples
     --------
+    >>> from hammerstein import HammersteinCompensator
     >>> import numpy as np
     >>> from hammerstein.io.presets import load_plant
     >>> plant = load_plant("rakotondrabe-2dof")

@@ -342,6 +342,7 @@ class ZPETCInverse:
 
     Examples
     --------
+    >>> from hammerstein import ZPETCInverse
     >>> import numpy as np, control
     >>> from hammerstein.models.dynamics import bending_modes, discretize
     >>> G = discretize(bending_modes([310.0, 290.0], [0.15, 0.2]), 5e-5)

@@ -83,6 +83,7 @@ class LookaheadInverse:
 
     Examples
     --------
+    >>> from hammerstein import LookaheadInverse
     >>> import numpy as np, control
     >>> from hammerstein.compensation.inversion import preview_inverse
     >>> g = control.tf([1.0, -1.5], [1.0, -0.5, 0.06], 1e-4)

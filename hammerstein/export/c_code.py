@@ -203,6 +203,7 @@ def export_c(compensator, name, sampling_period, precision="double", limits=None
 
     Examples
     --------
+    >>> from hammerstein import export_c
     >>> from hammerstein import MultivariablePI, PrandtlIshlinskii, InverseMultiplicativeCompensator
     >>> model = MultivariablePI([[PrandtlIshlinskii([0.0, 1.0], [1.0, 0.5])]], input_amplitude=[5.0])
     >>> code = export_c(InverseMultiplicativeCompensator(model), "piezo", 5e-5)

@@ -432,6 +432,7 @@ class DynamicsIdentifier:
     --------
     >>> import numpy as np, control
     >>> from hammerstein.models.dynamics import bending_modes, discretize
+    >>> from hammerstein.models.lti import DynamicsIdentifier, excitation
     >>> G = discretize(bending_modes([300.0], [0.2]), 5e-5)
     >>> t, (u,) = excitation(5e-5, 1, 1.0, period=0.02, periods=2)
     >>> y = control.forced_response(G, U=u).outputs.reshape(1, -1)

@@ -230,6 +230,7 @@ class HammersteinPlant:
 
         Examples
         --------
+        >>> import numpy as np
         >>> from hammerstein.io.presets import load_plant
         >>> plant = load_plant("rakotondrabe-2dof")
         >>> y, _ = plant.simulate(np.zeros((2, 5)), plant.rest_state())

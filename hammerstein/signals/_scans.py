@@ -88,6 +88,7 @@ def triangle(sampling_period, outputs, output, amplitude, frequency, phase=0.0, 
 
     Examples
     --------
+    >>> from hammerstein import triangle
     >>> t, r = triangle(1e-3, ["x", "y"], "x", 10.0, 10.0, periods=1)
     >>> float(r[0].max()), float(r[0][25]), float(r[1].max())
     (10.0, 10.0, 0.0)
@@ -229,6 +230,7 @@ def raster(sampling_period, size, lines, frequency, slow="step", smoothing=0.0, 
 
     Examples
     --------
+    >>> from hammerstein import raster
     >>> t, r = raster(1e-4, [20.0, 10.0], 5, 100.0)
     >>> r.shape, float(r[0].max()), sorted(set(r[1].round(6).tolist()))
     ((2, 500), 20.0, [0.0, 2.5, 5.0, 7.5, 10.0])
