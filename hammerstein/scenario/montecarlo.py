@@ -122,12 +122,13 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 import numpy as np
 
 from hammerstein.signals.metrics import steady_window
-from hammerstein.exceptions import PresetError
+from hammerstein.exceptions import HammersteinWarning, PresetError
 from hammerstein.compensation.feedback import Controller, FeedbackLoop
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import FeedbackError
 from hammerstein.scenario.feedback_loops import build_loops
 from hammerstein.scenario.identification import ResolveContext
+from hammerstein.scenario.rate_warning import dynamics_effect
 from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.simulation import compensator_law_of, is_fusable, simulate_chain_batch
@@ -588,6 +589,26 @@ def run_study(study, client=None, chunk=None, timings=None):
     return MonteCarloResult(study, acc.quantiles(), diverged, acc.exact, acc.values)
 
 
+def _rate_warnings(spec, study):
+    """Warn, once per frequency, where a rate-independent kind meets the plant's dynamics.
+
+    A study of ``multivariable`` at 20-100 Hz on a plant whose dynamics
+    changed the response by 18.7-71.8 % gave P50 errors of 8-10 µm on a 20 µm
+    circle and no word, where a frequency sweep of the same kind warned
+    (:func:`hammerstein.scenario.resolve.dynamics_warning`).
+    """
+    kind = (spec or {}).get("kind", "none")
+    lin = study.plant.sampled_dynamics
+    if lin is None or study.plant.is_static or not compensator_kind(spec).rate_independent:
+        return
+    for f in study.frequencies:
+        effect = dynamics_effect(lin, f)
+        if effect:
+            warnings.warn(f"compensator kind = {kind!r} is rate independent: {effect}, which it "
+                          f"does not compensate; kind = \"hammerstein\" does "
+                          f"(docs/hammerstein-plant.md)", HammersteinWarning, stacklevel=2)
+
+
 def run_montecarlo_scenario(scenario):
     """Build the compensator once per study from the nominal model and run every study.
 
@@ -615,6 +636,8 @@ def run_montecarlo_scenario(scenario):
             except (ValueError, PresetError) as exc:
                 raise ScenarioError([f"{source}: compensator: {exc}"]) from None
             study.compensator = comp
+            if scenario.feedback is None:
+                _rate_warnings(scenario.compensator_spec, study)
             if scenario.feedback is not None:
                 _with_loop(study, scenario.feedback, source)
             elif (not compensator_kind(scenario.compensator_spec).look_ahead

@@ -22,12 +22,12 @@ import numpy as np
 
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.compensation.shaping import mode_note
-from hammerstein.models.lti import modal_parameters
 from hammerstein.models.dynamics import SampledSystem
 from hammerstein.core.files import confined_path
 from hammerstein.io.presets import PresetError, load_dynamics, read_toml
 from hammerstein.scenario.identification import ResolveContext, resolve_comparison_model
 from hammerstein.scenario.identification_cache import IdentificationCache
+from hammerstein.scenario.rate_warning import GAIN_DEVIATION, RESONANCE_FRACTION, dynamics_effect  # noqa: F401
 from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import stability_map_frame
@@ -35,10 +35,6 @@ from hammerstein.scenario.validate import ScenarioSpec, validate_scenario
 
 __all__ = ["Scenario", "resolve_scenario", "load_scenario", "dynamics_warning", "mode_notes"]
 
-#: a reference reaches the dynamics above this fraction of the first resonance ...
-RESONANCE_FRACTION = 0.1
-#: ... or where |G(f) G(0)^-1 - I| exceeds this
-GAIN_DEVIATION = 0.02
 
 
 @dataclass
@@ -149,18 +145,12 @@ def dynamics_warning(case, base=None):
     lin, what = found if found else (plant.sampled_dynamics, "the plant's linear dynamics")
     if lin is None:
         return None
-    fn, zeta = modal_parameters(lin)
-    resonant = fn[zeta < 1.0 / np.sqrt(2.0)]
-    f_res = float(resonant.min()) if resonant.size else float(fn.min())
-    c = lin.frequency_response_hz([1e-3, float(f)])
-    change = c[:, :, 1] @ np.linalg.inv(np.real(c[:, :, 0])) - np.eye(c.shape[0])
     # the columns of the outputs (inputs, for a drive) the case moves: a sine on y was given
     # the whole matrix's figure, x's mode at 400 Hz (842 % where y's own was about 100 %)
-    dev = float(np.linalg.norm(change[:, _moved(case, sig, change.shape[1])], 2))
-    if f <= RESONANCE_FRACTION * f_res and dev <= GAIN_DEVIATION:
+    effect = dynamics_effect(lin, f, what, _moved(case, sig, lin.frequency_response_hz(
+        [1.0]).shape[0]))
+    if effect is None:
         return None
-    effect = (f"at {f:g} Hz {what} (first resonance {f_res:.0f} Hz) "
-              f"change the response by {100 * dev:.1f} %")
     if static_model:
         return (f"the comparison model is static (PI only): {effect}, which it does not "
                 f"model (docs/hammerstein-plant.md)")

@@ -416,8 +416,13 @@ def test_range_warning_is_reported_once_per_study_not_per_case(tmp_path, amplitu
     f.write_text(STUDY.format(vary="noise = { sd = 0.01 }").replace("amplitude = 20.0",
                                                                   f"amplitude = {amplitude}"))
     res, = mc.run_montecarlo_scenario(validate_scenario(f))
-    assert len(res.warnings) == expect                       # 7 cases x 2 frequencies: one line
-    assert all("beyond the range" in w for w in res.warnings)
+    beyond = [w for w in res.warnings if "beyond the range" in w]
+    assert len(beyond) == expect                             # 7 cases x 2 frequencies: one line
+    # and the rate-independent kind at 50 and 120 Hz on a plant whose first mode is at 290 Hz:
+    # one line per frequency, as a frequency sweep says it
+    rate = [w for w in res.warnings if "is rate independent" in w]
+    assert [w.split(": ")[1].split(" the plant's")[0] for w in rate] == ["at 50 Hz", "at 120 Hz"]
+    assert len(res.warnings) == len(beyond) + len(rate)
 
 
 @pytest.mark.parametrize("fn, zeta, T", [
