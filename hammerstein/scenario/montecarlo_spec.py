@@ -25,7 +25,7 @@ from hammerstein.exceptions import PresetError
 from hammerstein.io.presets import (dynamics_from_table, load_model, load_plant, read_toml,
                                     resolve_preset)
 from hammerstein.core.schema import (Field, Invalid, check_table, choice, integer, kind_problem,
-                                     known_kind, name_field, number, string)
+                                     known_kind, name_field, number, short_repr, string)
 from hammerstein.scenario.feedback_table import check_feedback_table
 from hammerstein.scenario.montecarlo_draw import oscillating_modes
 from hammerstein.scenario.registry import COMPENSATORS, class_problems, model_file_dynamics
@@ -99,6 +99,23 @@ DISTRIBUTIONS = ("normal", "uniform", "lognormal")
 VARIED = ("weights", "cross_coupling", "natural_frequency", "damping_ratio")
 
 
+#: Largest relative sd of a varied quantity, per distribution: beyond 100 % a normal or
+#: uniform factor is often negative (clipped at the smallest factor); a lognormal one of 10
+#: (sigma 2.15) already spans five decades at three sigma. An outside check's 50 and 1e6 ran,
+#: and the report quoted 5000 % and 1e+08 %.
+MAX_RELATIVE_SD = {"normal": 1.0, "uniform": 1.0, "lognormal": 10.0}
+#: Largest sensor noise sd [µm] of a study (1e9 µm ran, its quantiles about 1e9 µm).
+MAX_NOISE_SD = 1000.0
+
+
+def _noise_sd(v):
+    x = number("µm", 0, exclusive=False)(v)
+    if x > MAX_NOISE_SD:
+        raise Invalid(f"expected a sensor noise sd from 0 to {MAX_NOISE_SD:g} µm, found "
+                      f"{short_repr(v)}")
+    return x
+
+
 # -- validation --------------------------------------------------------------------------
 def _distribution(v):
     problems = []
@@ -107,12 +124,17 @@ def _distribution(v):
                     "", problems, "")
     if problems:
         raise Invalid("; ".join(q.lstrip(": ") for q in problems))
+    cap = MAX_RELATIVE_SD[c["distribution"]]
+    if c["relative_sd"] > cap:
+        raise Invalid(f"relative_sd: expected a relative sd from 0 to {cap:g} for a "
+                      f"{c['distribution']} factor (a fraction: 0.05 is 5 %), found "
+                      f"{short_repr(v['relative_sd'])}")
     return c
 
 
 def _noise(v):
     problems = []
-    c = check_table(v, {"sd": Field(number("µm", 0, exclusive=False), required=True)}, "", problems, "")
+    c = check_table(v, {"sd": Field(_noise_sd, required=True)}, "", problems, "")
     if problems:
         raise Invalid("; ".join(q.lstrip(": ") for q in problems))
     return c

@@ -451,8 +451,11 @@ def test_closed_form_zoh_equals_the_matrix_exponential(fn, zeta, T):
         assert np.abs(got.A - ref.A).max() <= 2e-15 * scale
 
 
-def test_an_overdamped_drawn_mode_runs(tmp_path):
-    """A damping factor taking a mode above zeta = 1 is an overdamped mode, not an error."""
+def test_an_overdamped_drawn_mode_runs(tmp_path, monkeypatch):
+    """A damping factor taking a mode above zeta = 1 is an overdamped mode, not an error (a
+    spread beyond what validate accepts, to reach it with seven cases)."""
+    from hammerstein.scenario import montecarlo_spec
+    monkeypatch.setitem(montecarlo_spec.MAX_RELATIVE_SD, "normal", 100.0)
     s = _study(tmp_path, vary="damping_ratio = { relative_sd = 60.0 }")
     zetas = [s.modes[1] * mc.draw_factors(s, i)["damping_ratio"] for i in range(s.cases)]
     assert max(z.max() for z in zetas) > 1.0
@@ -478,3 +481,15 @@ def test_a_study_beyond_the_sample_budget_is_refused_at_validation(tmp_path, rep
         validate_scenario(small)
     monkeypatch.delenv(mc.STUDY_SAMPLES_ENV)
     validate_scenario(small)
+
+
+@pytest.mark.parametrize("vary, words", [
+    ("weights = { relative_sd = 50.0 }", "from 0 to 1 for a normal factor"),
+    ('cross_coupling = { relative_sd = 1e6, distribution = "lognormal" }',
+     "from 0 to 10 for a lognormal factor"),
+    ("noise = { sd = 1e9 }", "sensor noise sd from 0 to 1000 µm"),
+])
+def test_a_spread_no_actuator_has_is_refused(tmp_path, vary, words):
+    # an outside check: 5000 %, 1e+08 % and 1e9 µm ran, and the report quoted them
+    with pytest.raises(ScenarioError, match=words):
+        _study(tmp_path, vary=vary)
