@@ -75,9 +75,15 @@ def quantile_figure(table, title):
     -------
     matplotlib.figure.Figure
         Log-scaled error axes when all plotted values are positive and finite
-        (infinite values, diverged runs, are not drawn).
+        (infinite values, diverged runs, are not drawn); each y axis names its
+        metric; where P99 is the largest case everywhere (fewer than 100
+        cases) one line is drawn, labelled ``MAX = P99``.
     """
     panels = list(dict.fromkeys(zip(table["channel"], table["metric"])))
+    # with fewer than 100 cases P99 is the largest case: one line, said so in the legend (the
+    # P99 line hid under MAX's)
+    p99, top = table["p99"].to_numpy(dtype=float), table["max"].to_numpy(dtype=float)
+    same = bool(np.all((p99 == top) | ~(np.isfinite(p99) & np.isfinite(top))))
     ncol = 2
     nrow = -(-len(panels) // ncol)
     fig, axs = plots.grid_figure(nrow, ncol, title, panel_w=4.6, panel_h=3.0, extra_top=0.3)
@@ -85,9 +91,12 @@ def quantile_figure(table, title):
         ax = axs[n // ncol][n % ncol]
         rows = table[(table["channel"] == ch) & (table["metric"] == met)].sort_values("frequency_hz")
         for j, tag in enumerate(_TAGS):
+            if same and tag == "p99":
+                continue
             v = rows[tag].to_numpy(dtype=float)
             ok = np.isfinite(v)
-            ax.plot(rows["frequency_hz"].to_numpy()[ok], v[ok], label=tag.upper(),
+            label = "MAX = P99" if same and tag == "max" else tag.upper()
+            ax.plot(rows["frequency_hz"].to_numpy()[ok], v[ok], label=label,
                     **{**plots._style(j), "marker": "os^D"[j], "markevery": None})
         vals = rows[list(_TAGS)].to_numpy(dtype=float)
         vals = vals[np.isfinite(vals)]
@@ -96,7 +105,7 @@ def quantile_figure(table, title):
             plots.plain_log_labels(ax.yaxis)
         ax.set_title(f"{met.replace('_', ' ')}, {ch}", fontsize=10)
         ax.set_xlabel("frequency [Hz]")
-        ax.set_ylabel("[µm]")
+        ax.set_ylabel(f"{met.replace('_', ' ')} [µm]")
         ax.grid(True, alpha=0.3)
         if n == 0:
             ax.legend(fontsize=8, ncol=4)

@@ -104,3 +104,22 @@ def test_quantile_figure_axis_labels_clear_the_tick_labels(lo, hi):
             if other is not ax and other.get_visible():
                 assert not label.overlaps(other.get_window_extent(renderer))
     plt.close(fig)
+
+
+@pytest.mark.parametrize("p99_is_max", [False, True])
+def test_quantile_figure_names_each_metric_and_says_when_p99_is_the_largest_case(p99_is_max):
+    """An outside check: the y axes read only "[µm]" (the metric in the panel title), and with
+    20 cases the P99 line lay hidden under MAX's."""
+    import pandas as pd
+    from hammerstein.report.montecarlo import quantile_figure
+    rows = []
+    for ch, met in [("x", "rms_error"), ("x+y", "max_euclidean_error")]:
+        for f in (20.0, 100.0):
+            rows.append({"frequency_hz": f, "channel": ch, "metric": met, "p50": 1.0,
+                         "p95": 2.0, "p99": 4.0 if p99_is_max else 3.0, "max": 4.0})
+    fig = quantile_figure(pd.DataFrame(rows), "t")
+    axes = [a for a in fig.axes if a.get_visible()]
+    assert [a.get_ylabel() for a in axes] == ["rms error [µm]", "max euclidean error [µm]"]
+    labels = [t.get_text() for t in axes[0].get_legend().get_texts()]
+    assert labels == (["P50", "P95", "MAX = P99"] if p99_is_max else ["P50", "P95", "P99", "MAX"])
+    assert len(axes[0].get_lines()) == len(labels)
