@@ -721,6 +721,24 @@ _TIME_UNIT_NAME = re.compile(r"(^|[_\s(\[/-])(ms|msec|us|usec|µs|μs|ns|min|h)(
                              re.IGNORECASE)
 
 
+def _time_column(frame, header, time, path):
+    """The time column (n_samples,) [s] and its name: read in seconds, increasing; else DataFileError."""
+    t, tname = _column(frame, header, time, "time", path)
+    unit = _TIME_UNIT_NAME.search(str(tname))
+    if unit:
+        raise DataFileError(
+            f"{path}: time column {tname!r} is named in {unit.group(2)}, and times are read "
+            f"in seconds: convert the column to seconds, or give the sampling period [s] "
+            f"instead of a time column (--sampling-period)")
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.flatnonzero(dt <= 0)[0])
+        raise DataFileError(
+            f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
+            f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
+    return t, tname
+
+
 def _timepts(frame, header, time, sampling_period, path):
     """Time points (n_samples,) [s] and sampling period [s] of a parsed table.
 
@@ -729,19 +747,8 @@ def _timepts(frame, header, time, sampling_period, path):
     are given) or from ``sampling_period``; :class:`DataFileError` otherwise.
     """
     if time is not None:
-        t, tname = _column(frame, header, time, "time", path)
-        unit = _TIME_UNIT_NAME.search(str(tname))
-        if unit:
-            raise DataFileError(
-                f"{path}: time column {tname!r} is named in {unit.group(2)}, and times are read "
-                f"in seconds: convert the column to seconds, or give the sampling period [s] "
-                f"instead of a time column (--sampling-period)")
+        t, tname = _time_column(frame, header, time, path)
         dt = np.diff(t)
-        if np.any(dt <= 0):
-            i = int(np.flatnonzero(dt <= 0)[0])
-            raise DataFileError(
-                f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
-                f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
         T, off, tol = uniform_period(t)
         gaps = step_gaps(t)
         if gaps.size:
@@ -956,16 +963,7 @@ def record_column_problem(path, inputs, outputs, time=None, skip_rows=0, input_u
                     f"{frame.shape[0]}")
         _signal_columns(frame, header, ins, outs, path, _units(input_unit, output_unit))
         if time is not None:
-            t, tname = _column(frame, header, time, "time", path)
-            unit = _TIME_UNIT_NAME.search(str(tname))
-            if unit:
-                return (f"{path}: time column {tname!r} is named in {unit.group(2)}, and times "
-                        f"are read in seconds: convert the column to seconds")
-            dt = np.diff(t)
-            if np.any(dt <= 0):
-                i = int(np.flatnonzero(dt <= 0)[0])
-                return (f"{path}: time column {tname!r} is not increasing at data row {i + 2} "
-                        f"({float(t[i])!r} s then {float(t[i + 1])!r} s)")
+            _time_column(frame, header, time, path)
     except DataFileError as exc:
         return str(exc)
     return None
