@@ -128,7 +128,7 @@ from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import FeedbackError
 from hammerstein.scenario.feedback_loops import build_loops
 from hammerstein.scenario.identification import ResolveContext
-from hammerstein.scenario.rate_warning import dynamics_effect
+from hammerstein.scenario.rate_warning import dynamics_effect, rate_independent_warning
 from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.simulation import compensator_law_of, is_fusable, simulate_chain_batch
@@ -604,9 +604,8 @@ def _rate_warnings(spec, study):
     for f in study.frequencies:
         effect = dynamics_effect(lin, f)
         if effect:
-            warnings.warn(f"compensator kind = {kind!r} is rate independent: {effect}, which it "
-                          f"does not compensate; kind = \"hammerstein\" does "
-                          f"(docs/hammerstein-plant.md)", HammersteinWarning, stacklevel=2)
+            warnings.warn(rate_independent_warning(kind, effect), HammersteinWarning,
+                          stacklevel=2)
 
 
 def run_montecarlo_scenario(scenario):

@@ -12,7 +12,7 @@ import numpy as np
 
 from hammerstein.models.lti import modal_parameters
 
-__all__ = ["RESONANCE_FRACTION", "GAIN_DEVIATION", "dynamics_effect"]
+__all__ = ["RESONANCE_FRACTION", "GAIN_DEVIATION", "dynamics_effect", "rate_independent_warning"]
 
 #: a reference reaches the dynamics above this fraction of the first resonance ...
 RESONANCE_FRACTION = 0.1
@@ -59,3 +59,27 @@ def dynamics_effect(lin, frequency, what="the plant's linear dynamics", moved=sl
         return None
     return (f"at {frequency:g} Hz {what} (first resonance {f_res:.0f} Hz) "
             f"change the response by {100 * dev:.1f} %")
+
+
+def rate_independent_warning(kind, effect):
+    """The warning of a rate-independent compensator kind where the dynamics act.
+
+    Parameters
+    ----------
+    kind : str
+        The compensator kind.
+    effect : str
+        :func:`dynamics_effect`'s text.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from hammerstein.scenario.rate_warning import rate_independent_warning
+    >>> rate_independent_warning("diagonal", "at 100 Hz ...")[:47]
+    "compensator kind = 'diagonal' is rate independe"
+    """
+    return (f"compensator kind = {kind!r} is rate independent: {effect}, which it does not "
+            f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")

@@ -27,7 +27,7 @@ from hammerstein.core.files import confined_path
 from hammerstein.io.presets import PresetError, load_dynamics, read_toml
 from hammerstein.scenario.identification import ResolveContext, resolve_comparison_model
 from hammerstein.scenario.identification_cache import IdentificationCache
-from hammerstein.scenario.rate_warning import GAIN_DEVIATION, RESONANCE_FRACTION, dynamics_effect  # noqa: F401
+from hammerstein.scenario.rate_warning import dynamics_effect, rate_independent_warning
 from hammerstein.scenario.registry import build_compensator, compensator_kind
 from hammerstein.scenario.schema import ScenarioError
 from hammerstein.scenario.sweeps import stability_map_frame
@@ -106,8 +106,8 @@ def dynamics_warning(case, base=None):
     """One warning when a rate-independent treatment meets frequencies the dynamics shape.
 
     A case warns when its plant has dynamics and its highest reference (or
-    drive) frequency f is above ``RESONANCE_FRACTION`` of the first
-    resonance, or where ``|G(f) G(0)^-1 - I|_2 > GAIN_DEVIATION``, and it is
+    drive) frequency f is above :data:`~hammerstein.scenario.rate_warning.RESONANCE_FRACTION` of the first
+    resonance, or where ``|G(f) G(0)^-1 - I|_2`` exceeds its ``GAIN_DEVIATION``, and it is
     a reference tracked by a rate-independent compensator kind (capability
     ``rate_independent`` of :class:`hammerstein.scenario.registry.CompensatorKind`) or an open-loop
     drive compared with a static (PI-only) model.
@@ -154,8 +154,7 @@ def dynamics_warning(case, base=None):
     if static_model:
         return (f"the comparison model is static (PI only): {effect}, which it does not "
                 f"model (docs/hammerstein-plant.md)")
-    return (f"compensator kind = {kind!r} is rate independent: {effect}, which it does not "
-            f"compensate; kind = \"hammerstein\" does (docs/hammerstein-plant.md)")
+    return rate_independent_warning(kind, effect)
 
 
 def mode_notes(case):
