@@ -337,7 +337,8 @@ def _class_problems(comp, plant, base):
             files[path] = load_model(path)
         except PresetError:
             return []           # the model file's own problem is named when it is built
-    return class_problems(name, comp.get("kind"), plant, base, files, comp.get("identify"))
+    among = [k for k in COMPENSATORS if k != "ilc"]      # a study refuses ilc (below)
+    return class_problems(name, comp.get("kind"), plant, base, files, comp.get("identify"), among)
 
 
 def validate_montecarlo(path, data):

@@ -458,7 +458,7 @@ def build_compensator(spec, plant, context):
     return comp
 
 
-def class_problems(name, kind, plant, base, files, identify=None):
+def class_problems(name, kind, plant, base, files, identify=None, among=None):
     """Problems of a kind that the class of a known model does not take.
 
     Run when a scenario is validated, as :func:`build_compensator` would refuse it
@@ -479,6 +479,9 @@ def class_problems(name, kind, plant, base, files, identify=None):
         Path -> model (or message) of the model files already read.
     identify : dict, optional
         The compensator's ``identify`` table.
+    among : collection of str, optional
+        The kinds the caller takes (a Monte-Carlo study: not ``ilc``); the others are
+        not named as kinds that work. All by default.
 
     Returns
     -------
@@ -495,7 +498,7 @@ def class_problems(name, kind, plant, base, files, identify=None):
             return []
         return [f"kind: the model identified is a {entry.label} model (identify.model = "
                 f"{cls!r}), which kind {kind!r} does not take; the kinds that work with it: "
-                f"{', '.join(entry.kinds)}"]
+                f"{', '.join(k for k in entry.kinds if among is None or k in among)}"]
     else:
         try:
             model = files.get(confined_path(name, base, PresetError))
@@ -506,7 +509,8 @@ def class_problems(name, kind, plant, base, files, identify=None):
     dynamic = plant is not None and not plant.is_static
     try:     # a static plant: hammerstein and ilc are not named as kinds that work
         problem = class_kind_problem(model, kind, has_dynamics=dynamic or kind in ("hammerstein",
-                                                                                   "ilc"))
+                                                                                   "ilc"),
+                                     among=among)
     except CompensatorError:
         return []
     return [f"kind: {problem.split(': ', 1)[-1]}"] if problem else []

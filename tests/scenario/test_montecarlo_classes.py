@@ -286,8 +286,12 @@ def test_a_study_names_a_kind_its_model_class_does_not_take(tmp_path):
     f = tmp_path / "s.toml"
     f.write_text(_STUDY.format(kind="preisach-inverse", model="pi.toml", cases=4, extra=""))
     with pytest.raises(ScenarioError, match=r"compensator\.kind: the model is a classical PI "
-                                            r"model, which kind 'preisach-inverse' does not take"):
+                                            r"model, which kind 'preisach-inverse' does not take"
+                                            r"; the kinds that work with it: (.*)") as err:
         validate_scenario(f)
+    named = str(err.value).split("the kinds that work with it: ")[1].split("\n")[0].split(", ")
+    # a study refuses ilc (it learns on one plant), so it is not offered as a kind that works
+    assert named == ["hammerstein", "multivariable", "diagonal", "per-axis", "static-gain"]
     f.write_text(_STUDY.format(kind="multivariable", model="pi.toml", cases=4, extra=""))
     assert len(validate_scenario(f).studies) == 1
 
