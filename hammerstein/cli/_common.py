@@ -9,7 +9,7 @@ import re
 import sys
 from pathlib import Path
 
-from hammerstein.core.files import escape, path_problem
+from hammerstein.core.files import carries_provenance, escape, path_problem, same_file
 
 __all__ = ["print_err", "one_line", "out_dir_problem", "out_file_problem", "SafeStream",
            "MAX_LINE", "add_column_options", "WARNING_STATE", "set_warning_subject",
@@ -156,17 +156,46 @@ def out_dir_problem(out, follow_link=False):
     return None
 
 
-def out_file_problem(out, what="file", force=False):
+def written_by_hammerstein(path):
+    """Whether the regular file ``path`` was written by this project (bounded read).
+
+    Its provenance mark (:func:`hammerstein.core.files.carries_provenance`: a
+    model, metrics, baseline, report or PNG file) or a drive file's first line
+    (``# hammerstein <command> drive``).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+
+    Returns
+    -------
+    bool
+        False also when the file cannot be read.
+    """
+    if carries_provenance(path):
+        return True
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(200)
+    except OSError:
+        return False
+    return head.removeprefix(b"\xef\xbb\xbf").startswith(b"# hammerstein ")
+
+
+def out_file_problem(out, what="file", inputs=()):
     """Why ``out`` cannot be written as a single file (one line), or None.
 
     An empty path, a path ending with a separator, a directory, an existing special file (device, FIFO,
     socket) or read-only file, a path under an existing file, a symbolic
     link that cannot be followed (loop), or a directory that cannot be
     written, or a path the system refuses to name (a name over 255 bytes).
-    A symlink is judged by its target. A dangling symbolic link
-    (one planted at the name would write wherever it points) is refused
-    unless ``force``, and even then when its target's directory does not
-    exist: the directories along a link's target are never created.
+    A symlink is judged by its target, and followed only to a file this
+    project wrote (its provenance mark, or a drive file's first line): a
+    link to any other file, or a dangling one, is refused with or without
+    ``--force`` (one planted at the name, e.g. in a shared ``/tmp``, would send
+    the output wherever it points, ``--force`` replacing what is there; an
+    output directory is never followed through a link either). A link to
+    one of ``inputs`` (the files the command reads) is named as such.
     """
     if not str(out).strip():
         return f"--out: empty path; expected a {what} name"
@@ -180,21 +209,27 @@ def out_file_problem(out, what="file", force=False):
         return f"--out: {out} ends with a separator, a directory's name; expected a {what} name"
     p = Path(out)
     if p.is_symlink():
+        real = os.path.realpath(p)
         try:
             os.stat(p)
         except FileNotFoundError:          # a dangling link
-            real = os.path.realpath(p)
-            if not force:
-                return (f"--out: {escape(out)} is a symbolic link to {escape(real)}, which does "
-                        f"not exist; a dangling link is not followed (one planted there would "
-                        f"write wherever it points): remove it, choose another name, or add "
-                        f"--force to write there")
-            if not os.path.isdir(os.path.dirname(real)):
-                return (f"--out: {escape(out)} is a symbolic link to {escape(real)}, whose "
-                        f"directory does not exist; the directories of a link's target are "
-                        f"never created")
+            return (f"--out: {escape(out)} is a symbolic link to {escape(real)}, which does "
+                    f"not exist; a file is never created through a link, with or without "
+                    f"--force (one planted at the name would write wherever it points): remove "
+                    f"the link or choose another name")
         except OSError as exc:  # a loop of links, a link through a file...
             return f"--out: {out}: cannot follow the symbolic link ({exc.strerror})"
+        given = next((i for i in inputs if i is not None and os.path.lexists(i)
+                      and same_file(real, i)), None)
+        if given is not None:       # the more useful message of the two
+            return (f"--out: {escape(out)} is also an input of this command ({escape(given)}); "
+                    f"an input is never an output: choose another name")
+        if os.path.isfile(real) and not written_by_hammerstein(real):
+            return (f"--out: {escape(out)} is a symbolic link to {escape(real)}, which "
+                    f"hammerstein did not write; a file is never replaced through a link, with "
+                    f"or without --force (one planted at the name would send the {what} "
+                    f"there): give {escape(real)} itself, remove the link or choose another "
+                    f"name")
     if p.is_dir():
         return f"--out: {out} is a directory; expected a {what} name"
     if os.path.lexists(p) and p.exists() and not p.is_file():

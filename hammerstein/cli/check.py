@@ -171,7 +171,7 @@ def run_check(args):
     guard_inputs(*inputs)          # never an output (the baseline is read and rewritten: not here)
     problem = out_dir_problem(args.out) if args.out is not None else None
     if problem is None and args.update:
-        problem = out_file_problem(baseline_path, "baseline CSV file", force)
+        problem = out_file_problem(baseline_path, "baseline CSV file", inputs)
         problem = problem.replace("--out", "--baseline", 1) if problem else None
         if problem is None:
             problem = _baseline_problem(baseline_path, inputs, force)
@@ -179,7 +179,7 @@ def run_check(args):
         _usage(problem)
         return 2
     junit = getattr(args, "junit_xml", None)
-    problem = out_file_problem(junit, "JUnit XML file", force) if junit is not None else None
+    problem = out_file_problem(junit, "JUnit XML file", inputs) if junit is not None else None
     if problem is None and junit is not None:
         problem = replace_problem(junit, inputs + [baseline_path], force, "hammerstein check")
         problem = f"--junit-xml: {problem}" if problem else None

@@ -241,7 +241,7 @@ def _shrink_warning(plant, ref, drive):
 
 
 def _handle(args):
-    problem = out_file_problem(args.out, "drive file", args.force)
+    problem = out_file_problem(args.out, "drive file", (args.actuator, args.reference))
     if not problem:
         guard_inputs(args.actuator, args.reference)   # never an output, even with --force
         problem = output_problem(args.out)

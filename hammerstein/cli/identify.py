@@ -241,7 +241,7 @@ def _check_target(path, option, kind, force, inputs):
     :func:`hammerstein.core.files.carries_provenance`) or with ``--force``;
     an input of the command is never an output.
     """
-    problem = out_file_problem(path, f"{kind} file", force)  # empty, directory, special, under a file
+    problem = out_file_problem(path, f"{kind} file", inputs)  # empty, directory, special, under a file
     if problem:
         raise _Usage(problem.replace("--out", option, 1))
     problem = replace_problem(path, inputs, force, "hammerstein identify",

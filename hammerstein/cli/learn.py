@@ -429,7 +429,8 @@ def _handle(args):
 
 
 def _learn(args):
-    problem = out_file_problem(args.out, "drive file", args.force)
+    problem = out_file_problem(args.out, "drive file",
+                               (args.actuator, args.reference, args.drive, args.measured))
     if not problem:
         # the history's best-trial.csv replayed as --drive (a resumed learning): read whole
         # before anything is written, and the history's own file to replace

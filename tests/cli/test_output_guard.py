@@ -375,6 +375,47 @@ def test_a_dangling_link_at_an_output_file_is_not_followed(tmp_path, command, fo
     assert not elsewhere.exists() and _tree(tmp_path) == before
 
 
+@pytest.mark.parametrize("force", [False, True])
+@pytest.mark.parametrize("command", sorted(_DANGLING) + ["identify --plot"])
+def test_a_link_to_a_users_file_is_never_written_through(tmp_path, command, force):
+    """An outside check: ``compensate --out c1.csv --force`` with ``c1.csv`` a link to the
+    user's file replaced that file (and left it marked as the tool's). A link is followed only
+    to a file hammerstein wrote; to any other, or dangling into an existing directory, the
+    command stops (exit 2, one line naming where it points), ``--force`` or not."""
+    for name in ("rec.csv", "d.csv", "m.csv"):
+        (tmp_path / name).write_text("t,ux,uy,x,y\n0,0,0,0,0\n")
+    (tmp_path / "base.csv").write_text(_BASE)
+    victim = tmp_path / "elsewhere" / "victim.txt"
+    victim.parent.mkdir()
+    victim.write_text("precious user data\n")
+    os.symlink(victim, tmp_path / "L")
+    os.symlink(tmp_path / "elsewhere" / "new.txt", tmp_path / "D")   # dangling, directory exists
+    args = (_DANGLING[command] if command in _DANGLING else
+            _DANGLING["identify --out"][:-1] + ["m.toml", "--plot", "L"])
+    before = _tree(tmp_path)
+    for link in ("L", "D"):
+        argv = [link if a == "L" else a for a in args] + (["--force"] if force else [])
+        res = _cli(*[os.path.abspath(a) if a == _GOOD else a for a in argv], cwd=tmp_path)
+        assert res.returncode == 2, res.stderr
+        line = _one_line(res)
+        if command != "check --update --baseline":   # there the baseline is read first: not one
+            assert f"{link} is a symbolic link to" in line and "with or without --force" in line
+        assert _tree(tmp_path) == before and victim.read_text() == "precious user data\n"
+
+
+def test_a_link_to_the_projects_own_file_is_followed(tmp_path):
+    """A link to a drive file compensate wrote is followed (its target replaced, the link kept)."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "real.csv",
+                cwd=tmp_path).returncode == 0
+    os.symlink("real.csv", tmp_path / "latest.csv")
+    first = (tmp_path / "real.csv").read_text()
+    (tmp_path / "real.csv").write_text(first.replace("\n", "\n", 1) + "0,0,0\n")
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "latest.csv",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert (tmp_path / "latest.csv").is_symlink() and (tmp_path / "real.csv").read_text() == first
+
+
 def test_safe_write_never_creates_directories_along_a_link(tmp_path):
     os.symlink(tmp_path / "nowhere" / "x.csv", tmp_path / "link.csv")
     with pytest.raises(files.FileLimitError, match="never created"):
