@@ -155,6 +155,9 @@ class ScenarioOutcome:
     cases : int or None
         The scenario's cases as ``validate`` counts them (a Monte-Carlo
         study's drawn plants); None when it did not run.
+    kept : pathlib.Path or None
+        Where ``--force`` moved an earlier ``DIR/<name>`` that held what
+        hammerstein did not write (nothing of it deleted), else None.
     """
 
     name: str
@@ -165,6 +168,7 @@ class ScenarioOutcome:
     metrics: pd.DataFrame
     warnings: list = field(default_factory=list)
     cases: int | None = None
+    kept: Path | None = None
 
 
 def _empty_metrics():
@@ -309,15 +313,34 @@ def _start_write(out_dir, writer):
     return tmp
 
 
+def _kept_name(target):
+    """A new name beside ``target`` for what ``--force`` moves aside: ``<name>.kept-<time>[-k]``."""
+    stem = f"{target.name[:200]}.kept-{time.strftime('%Y%m%dT%H%M%S')}"
+    k, kept = 1, target.with_name(stem)
+    while os.path.lexists(kept):
+        k += 1
+        kept = target.with_name(f"{stem}-{k}")
+    return kept
+
+
 def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
     """Wait for the figure ``jobs`` writing into ``tmp``, then rename ``tmp`` to ``out_dir/name``.
 
     The marker gets the manifest of the files written. ``tmp`` is removed on
     any error (after the jobs stopped writing into it); ``inputs`` (files
-    the scenario read) are never replaced.
+    the scenario read) are never replaced. An earlier report of the project's
+    own is deleted; with ``force``, a ``out_dir/name`` that holds anything
+    hammerstein did not write (a user's directory, notes in a report) is
+    renamed beside it (:func:`_kept_name`), never deleted.
+
+    Returns
+    -------
+    target : pathlib.Path
+    kept : pathlib.Path or None
+        Where the earlier ``out_dir/name`` was moved, when it was not all ours.
     """
     target = Path(out_dir) / name
-    old = None
+    old = kept = None
     try:
         try:
             if jobs is not None:
@@ -328,9 +351,14 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
         problem = ownership_problem(target, force, inputs)  # again: it may have appeared meanwhile
         if problem:
             raise ScenarioError([problem])
+        foreign = (force and os.path.lexists(target)
+                   and ownership_problem(target, False, inputs) is not None)
         write_manifest(tmp, _version(), _TOKENS.get(tmp))
         with deferred_signals():  # the swap is never left half done
-            if os.path.lexists(target):
+            if foreign:           # what hammerstein did not write is moved aside, never deleted
+                kept = _kept_name(target)
+                os.rename(target, kept)
+            elif os.path.lexists(target):
                 old = _make_temporary(out_dir)
             replace_directory(tmp, target, old)
             _release(tmp)
@@ -341,7 +369,7 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
     finally:
         if old is not None:
             _rmtree(old)
-    return target
+    return target, kept
 
 
 def _case_warnings(results):
@@ -469,8 +497,8 @@ class PendingScenario:
             return self.outcome
         o, tmp, self._tmp = self.outcome, self._tmp, None
         try:
-            target = _finish_write(self._out_dir, o.name, tmp, self._force, self._jobs,
-                                   self._inputs)
+            target, kept = _finish_write(self._out_dir, o.name, tmp, self._force, self._jobs,
+                                         self._inputs)
         except ScenarioError as exc:
             self.outcome = ScenarioOutcome(o.name, o.path, False, str(exc), None, _empty_metrics())
         except Exception as exc:  # a failed figure (in a worker too) is the scenario's error
@@ -479,7 +507,7 @@ class PendingScenario:
                                            _empty_metrics())
         else:
             self.outcome = ScenarioOutcome(o.name, o.path, True, None, target, o.metrics, o.warnings,
-                                           o.cases)
+                                           o.cases, kept)
         return self.outcome
 
     def abandon(self, wait=True):

@@ -49,9 +49,10 @@ def add_parser(subparsers):
     p.add_argument("--out", default="reports", metavar="DIR",
                    help="reports directory (default: reports/)")
     p.add_argument("--force", action="store_true",
-                   help=f"replace DIR/<scenario name> even when hammerstein did not write it "
-                        f"(by default only a report directory with a {MARKER} file, or an empty "
-                        f"directory, is replaced)")
+                   help=f"write DIR/<scenario name> even when it holds what hammerstein did not "
+                        f"write: that is moved aside to DIR/<scenario name>.kept-<time>, never "
+                        f"deleted (by default only a report directory with a {MARKER} file and "
+                        f"nothing else, or an empty directory, is replaced)")
     p.add_argument("--figures", default="all", metavar="WHICH",
                    help="figures to draw: 'all' (default, every figure of the reports), "
                         "'none', or comma-separated file name patterns such as "
@@ -129,6 +130,10 @@ def handler(args):
                 took = f" in {time.perf_counter() - started[path]:.1f} s" if verbosity > 0 else ""
                 cases = f"{n_cases} case{'' if n_cases == 1 else 's'}"
                 print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({cases}){took}")
+                if outcome.kept is not None:
+                    print(f"{escape(path)}: note: the earlier {escape(outcome.out_dir)} held "
+                          f"files hammerstein did not write: --force moved it to "
+                          f"{escape(outcome.kept)}/ (nothing in it deleted)")
                 print_warnings(escape(path), outcome.warnings, verbosity)
                 _print_divergences(escape(path), outcome.metrics)
         else:

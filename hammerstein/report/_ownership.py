@@ -4,7 +4,7 @@ Behind :mod:`hammerstein.runner`. Every report directory carries a
 :data:`MARKER` file: ``hammerstein <version>``, the ``owner`` line of the run
 that wrote it, then ``manifest`` and one ``file <relative path>`` line per
 file of the report. A marked directory holding entries its manifest does not
-list (a user's notes) is replaced only with ``force``; a marker without a
+list (a user's notes) is moved aside (never deleted) only with ``force``; a marker without a
 manifest (an older version) keeps the older rule (replaced). A directory
 holding one of the scenario's inputs is never replaced.
 """
@@ -208,7 +208,8 @@ def ownership_problem(target, force, inputs=()):
     target : pathlib.Path
         ``out_dir/<scenario name>``.
     force : bool
-        Replace what hammerstein did not write (never an input).
+        Write the report although ``target`` holds what hammerstein did not write
+        (the runner moves it aside, never deletes it; never an input).
     inputs : iterable of str or pathlib.Path
         The scenario file and the files it names.
 
@@ -226,9 +227,10 @@ def ownership_problem(target, force, inputs=()):
         more = f" and {len(extra) - 3} more" if len(extra) > 3 else ""
         return (f"{escape(target)}: holds {len(extra)} file(s) hammerstein did not write "
                 f"({', '.join(escape(e) for e in extra[:3])}{more}; not in its {MARKER}); move "
-                f"them away, choose another --out, or use --force to replace it")
+                f"them away, choose another --out, or use --force to move it aside (never deleted) "
+                f"and write the report")
     what = ("a symbolic link" if target.is_symlink() else
             "a directory hammerstein did not write" if target.is_dir() else
             "a file" if target.is_file() else "not a directory")
     return (f"{target}: exists and is {what} (no {MARKER} file); move it away, choose another "
-            f"--out, or use --force to replace it")
+            f"--out, or use --force to move it aside (never deleted) and write the report")

@@ -81,9 +81,34 @@ def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
     assert (out / "good-static" / "metrics.csv").read_text() != "stale"
     marker.unlink()
     assert _call(capsys, "run", GOOD, "--out", out)[0] == 1  # no longer ours
+    before = (out / "good-static" / "metrics.csv").read_bytes()
+    status, text, _ = _call(capsys, "run", GOOD, "--out", out, "--force", "--figures", "none")
+    assert status == 0 and marker.is_file()
+    # --force never deletes what hammerstein did not write: the unmarked directory is moved aside
+    kept = sorted(p.name for p in out.iterdir() if p.name != "good-static")
+    assert len(kept) == 1 and kept[0].startswith("good-static.kept-")
+    assert (out / kept[0] / "metrics.csv").read_bytes() == before
+    assert f"moved it to {out / kept[0]}/" in text
+
+
+def test_run_force_moves_a_users_tree_aside_and_deletes_nothing(capsys, tmp_path):
+    """An outside check: ``run --force`` deleted ``out/<scenario>/sub/thesis.tex``, and a user's
+    ``notes.txt`` in the project's own report. Both are now moved aside whole, byte for byte."""
+    out = tmp_path / "out"
+    (out / "good-static" / "sub").mkdir(parents=True)
+    (out / "good-static" / "sub" / "thesis.tex").write_text("precious")
+    before = {p.relative_to(out / "good-static"): v
+              for p, v in tree_snapshot(out / "good-static").items()}
     assert _call(capsys, "run", GOOD, "--out", out, "--force", "--figures", "none")[0] == 0
-    assert marker.is_file()
-    assert sorted(p.name for p in out.iterdir()) == ["good-static"]
+    kept = [p for p in out.iterdir() if p.name.startswith("good-static.kept-")]
+    assert len(kept) == 1
+    assert {p.relative_to(kept[0]): v for p, v in tree_snapshot(kept[0]).items()} == before
+    (out / "good-static" / "notes.txt").write_text("mine")     # beside the report's own files
+    assert _call(capsys, "run", GOOD, "--out", out, "--figures", "none")[0] == 1
+    assert _call(capsys, "run", GOOD, "--out", out, "--force", "--figures", "none")[0] == 0
+    kept = [p for p in out.iterdir() if p.name.startswith("good-static.kept-")]
+    assert len(kept) == 2 and not (out / "good-static" / "notes.txt").exists()
+    assert sum((k / "notes.txt").is_file() for k in kept) == 1
 
 
 def test_report_directories_get_umask_permissions(capsys, tmp_path):
