@@ -357,10 +357,9 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
         with deferred_signals():  # the swap is never left half done
             if foreign:           # what hammerstein did not write is moved aside, never deleted
                 kept = _kept_name(target)
-                os.rename(target, kept)
             elif os.path.lexists(target):
                 old = _make_temporary(out_dir)
-            replace_directory(tmp, target, old)
+            replace_directory(tmp, target, old, kept)
             _release(tmp)
     except BaseException:
         if tmp is not None:

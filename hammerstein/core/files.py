@@ -645,7 +645,7 @@ def append_text(path, text, what="file", root=None):
     return safe_write(path, old + text, what, root)
 
 
-def replace_directory(new, target, parking=None):
+def replace_directory(new, target, parking=None, kept=None):
     """Rename the finished directory ``new`` to ``target`` (a report's last step).
 
     An existing ``target`` is first moved into ``parking`` (as
@@ -661,13 +661,18 @@ def replace_directory(new, target, parking=None):
         Its final name.
     parking : str or pathlib.Path, optional
         Where an existing ``target`` goes; None: ``target`` must not exist.
+    kept : str or pathlib.Path, optional
+        A new name beside ``target`` to which an existing ``target`` is renamed
+        and left (what the caller must not delete); instead of ``parking``.
 
     Raises
     ------
     OSError
         A rename failed (``new`` is then left for the caller to remove).
     """
-    if parking is not None and os.path.lexists(target):
+    if kept is not None and os.path.lexists(target):
+        os.rename(target, kept)
+    elif parking is not None and os.path.lexists(target):
         os.rename(target, Path(parking) / "previous")
     os.rename(new, target)
 
