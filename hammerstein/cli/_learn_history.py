@@ -25,7 +25,7 @@ import numpy as np
 
 from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.drive_files import learnt_names, optional_columns
-from hammerstein.core.files import TMP_SUFFIX, bounded_read_text, escape, safe_write
+from hammerstein.core.files import TMP_SUFFIX, bounded_read_text, escape, file_digest, safe_write
 from hammerstein.core._version import VERSION
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
@@ -136,7 +136,76 @@ def foreign_history_problem(history, out=None):
     if others and not (d / HISTORY_MARK).exists():
         return (f"--history: {escape(d)} is a directory hammerstein did not make; "
                 f"choose an empty or new directory")
+    changed = changed_history_files(d) if others else []
+    if changed:
+        more = f" and {len(changed) - 3} more" if len(changed) > 3 else ""
+        return (f"--history: {', '.join(escape(d / n) for n in changed[:3])}{more}: changed "
+                f"since hammerstein learn wrote {'it' if len(changed) == 1 else 'them'} (not "
+                f"the SHA-256 its {HISTORY_MARK} keeps); nothing was written: move "
+                f"{'it' if len(changed) == 1 else 'them'} away or restore "
+                f"{'it' if len(changed) == 1 else 'them'}, or start a new history directory")
     return None
+
+
+def _manifest(history_dir):
+    """File name -> SHA-256 the history's mark lists, or None (an older mark: no digests)."""
+    try:
+        text = bounded_read_text(Path(history_dir) / HISTORY_MARK, "toml", "history mark")
+    except (OSError, ValueError):
+        return None
+    listed = {}
+    for line in text.splitlines():
+        parts = line.split(" ", 2)
+        if len(parts) == 3 and parts[0] == "sha256":
+            listed[parts[2]] = parts[1]
+    return listed or None
+
+
+def changed_history_files(history_dir):
+    """The history's files that are not what learn wrote (names, in :data:`HISTORY_FILES` order).
+
+    The mark lists the SHA-256 of each file learn wrote (:func:`write_history_manifest`);
+    a listed file whose bytes differ, or a history file the mark does not list, was changed
+    or put there by someone else. A mark without digests (an older version's) lists nothing:
+    no file is judged.
+
+    Parameters
+    ----------
+    history_dir : str or pathlib.Path
+
+    Returns
+    -------
+    list of str
+    """
+    d = Path(history_dir)
+    listed = _manifest(d)
+    if listed is None:
+        return []
+    changed = []
+    for name in HISTORY_FILES[1:]:
+        p = d / name
+        if not os.path.lexists(p):
+            continue
+        if p.is_symlink() or not p.is_file() or file_digest(p) != listed.get(name):
+            changed.append(name)
+    return changed
+
+
+def write_history_manifest(history_dir):
+    """Rewrite the history's mark with the SHA-256 of each of its files (after a trial's writes).
+
+    Parameters
+    ----------
+    history_dir : str or pathlib.Path
+    """
+    d = Path(history_dir)
+    lines = [f"hammerstein learn {VERSION}: the files of this history and their SHA-256 (a file "
+             f"changed since is never replaced)"]
+    for name in HISTORY_FILES[1:]:
+        p = d / name
+        if p.is_file() and not p.is_symlink():
+            lines.append(f"sha256 {file_digest(p)} {name}")
+    safe_write(d / HISTORY_MARK, "\n".join(lines) + "\n", "history mark", root=d)
 
 
 def _settled_series(history_dir, trials, now=None):

@@ -39,7 +39,8 @@ from hammerstein.signals.excitation import (LEVELS, REVERSALS, STAIRCASE_LEVELS,
                                             demagnetising_record, excitation_set, multisine,
                                             peak_slew)
 from hammerstein.core.files import (FileLimitError, all_or_nothing, bounded_read_text, escape,
-                                    locked, name_problem, removed_if_failed, safe_write)
+                                    file_digest, locked, name_problem, removed_if_failed,
+                                    safe_write)
 from hammerstein.core.numbers import MAX_MAGNITUDE, number_problem, plausibility_problem
 from hammerstein.identification.defaults import CREEP_T_MIN
 
@@ -222,18 +223,6 @@ def _owned(directory):
         if name:
             owned[name] = digest.strip() or None
     return owned
-
-
-def _digest(path):
-    """SHA-256 of a file's bytes, read in blocks (bounded memory), or None when unreadable."""
-    h = hashlib.sha256()
-    try:
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                h.update(block)
-    except OSError:
-        return None
-    return h.hexdigest()
 
 
 def readme_text(records, names, amplitude, sampling_period, reversals=(), centre=None,
@@ -615,7 +604,7 @@ def _owned_targets(out, targets, force, contents):
         if name not in owned:
             raise _Usage(f"--out: {path} exists and was not written by hammerstein "
                          f"excitation; choose another directory or add --force")
-        now = _digest(path) if path.is_file() and not path.is_symlink() else None
+        now = file_digest(path) if path.is_file() and not path.is_symlink() else None
         was = owned[name] or hashlib.sha256(contents[name]).hexdigest()
         if now != was:
             why = ("changed since hammerstein excitation wrote it (the measured columns "

@@ -128,7 +128,8 @@ from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_hist
                                             foreign_history_problem, history_file_problem,
                                             _fingerprint, _read_best, _read_state, _restore_gains,
                                             _save_gains, _settled_rows, _write_history,
-                                            _write_state, history_rows)
+                                            _write_state, history_rows,
+                                            write_history_manifest)
 from hammerstein.cli.compensate import LAW_HINT, compensate
 from hammerstein.scenario.hardware_route import LAW_KINDS
 from hammerstein.models.amplifier import LIMITS
@@ -784,6 +785,8 @@ def _learn(args):
                                 else lag - delay))
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin,
                                   (delay, window.start * T)) if args.history else None)
+        if args.history:        # the digests of what was just written: a later change is seen
+            write_history_manifest(args.history)
     except catch() as exc:
         print_err(f"hammerstein learn: error: {' '.join(str(exc).split())}")
         return 1

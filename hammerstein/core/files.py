@@ -31,6 +31,7 @@ baseline CSV                HAMMERSTEIN_MAX_BASELINE_BYTES  64 MiB
 from __future__ import annotations
 
 import errno
+import hashlib
 import os
 import secrets
 import stat
@@ -53,7 +54,7 @@ from hammerstein.core._owners import owner_alive, owner_token, parse_owner, rele
 from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, confined_path,
                                      path_problem, recorded_paths)
 
-__all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes",
+__all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes", "file_digest",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
            "reset_interrupt", "interrupt", "raise_if_interrupted", "file_limit_problem",
            "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
@@ -506,6 +507,28 @@ def removed_if_failed(*directories):
             except OSError:
                 pass
         raise
+
+
+def file_digest(path):
+    """SHA-256 of a file's bytes, read in 1 MiB blocks (bounded memory), or None when unreadable.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+
+    Returns
+    -------
+    str or None
+        The hexadecimal digest.
+    """
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as f:
+            for block in iter(lambda: f.read(1 << 20), b""):
+                h.update(block)
+    except OSError:
+        return None
+    return h.hexdigest()
 
 
 def safe_write(path, data, what="file", root=None):

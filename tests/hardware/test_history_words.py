@@ -63,3 +63,42 @@ def test_evaluate_report_names_what_it_measured_and_points_to_remove_delay(tmp_p
               if ln.startswith("| ") and not ln.startswith("| channel")]
     assert values and all(len(re.sub(r"[^0-9]", "", v.split("e")[0]).lstrip("0")) <= 4
                           for v in values), values
+
+
+def test_a_history_file_changed_since_learn_wrote_it_is_never_replaced(tmp_path):
+    """An outside check: a user's notes written over ``hist/history.csv`` were replaced, and
+    lines put in ``settled.csv`` were mangled into data rows, without a word. The history's
+    mark keeps each file's SHA-256; a changed file stops the next trial (exit 2, nothing
+    written), an unchanged history goes on."""
+    import hashlib
+
+    from hammerstein.cli._learn_history import HISTORY_MARK
+    from snapshots import tree_snapshot
+
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    learn = ["learn", "rakotondrabe-2dof", "--reference", REF, "--outputs", "x=x_meas,y=y_meas",
+             "--history", "hist"]
+    assert _cli(*learn, "--drive", "u0.csv", "--measured", "y0.csv", "--out", "u1.csv",
+                cwd=tmp_path).returncode == 0
+    mark = (tmp_path / "hist" / HISTORY_MARK).read_text()
+    for name in ("history.csv", "settled.csv", "convergence.png", "best-trial.csv"):
+        digest = hashlib.sha256((tmp_path / "hist" / name).read_bytes()).hexdigest()
+        assert f"sha256 {digest} {name}" in mark         # closed form: the bytes on disk
+    _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", 0, 0)
+    for name, text in (("history.csv", "my lab notes: do not lose\n"),
+                       ("settled.csv", "my notes 1\nmy notes 2\n")):
+        original = (tmp_path / "hist" / name).read_bytes()
+        (tmp_path / "hist" / name).write_text(text)
+        before = tree_snapshot(tmp_path)
+        res = _cli(*learn, "--drive", "u1.csv", "--measured", "y1.csv", "--out", "u2.csv",
+                   cwd=tmp_path)
+        assert res.returncode == 2 and len(res.stderr.splitlines()) == 1, res.stderr
+        assert f"{name}: changed since hammerstein learn wrote it" in res.stderr
+        assert tree_snapshot(tmp_path) == before
+        (tmp_path / "hist" / name).write_bytes(original)       # restored: the learning goes on
+    res = _cli(*learn, "--drive", "u1.csv", "--measured", "y1.csv", "--out", "u2.csv",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert [r[0] for r in history_rows(tmp_path / "hist")] == [0, 0, 1, 1]

@@ -281,6 +281,7 @@ def test_a_history_of_an_earlier_version_is_named_as_such(tmp_path):
     old = [("reference_sha256," + "0" * 64) if ln.startswith("reference_sha256,") else ln
            for ln in lines if not ln.startswith("written_by,")]
     state.write_text("\n".join(old) + "\n")
+    (tmp_path / "hist/.hammerstein-history").write_text("")   # an earlier version's mark
     kept = {p.name: p.read_bytes() for p in (tmp_path / "hist").iterdir()}
     _hardware(tmp_path / "u1.csv", tmp_path / "y1.csv", seed=1)
     res = _cli("learn", "rakotondrabe-2dof", *COMMON, "--drive", "u1.csv", "--measured",
