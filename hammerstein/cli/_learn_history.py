@@ -25,7 +25,8 @@ import numpy as np
 
 from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.drive_files import learnt_names, optional_columns
-from hammerstein.core.files import TMP_SUFFIX, bounded_read_text, escape, file_digest, safe_write
+from hammerstein.core.files import (TMP_SUFFIX, bounded_read_text, escape, file_digest,
+                                    make_directory, safe_write)
 from hammerstein.core._version import VERSION
 from hammerstein.exceptions import DataFileError
 from hammerstein.report.figures import save
@@ -276,7 +277,7 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     problem = foreign_history_problem(d, out)
     if problem:
         raise DataFileError(problem)
-    d.mkdir(parents=True, exist_ok=True)
+    make_directory(d, "--history")
     if not (d / HISTORY_MARK).exists():
         safe_write(d / HISTORY_MARK, "", "history mark", root=d)
     rows = history_rows(d)

@@ -339,7 +339,9 @@ def _handle(args):
         text = ' '.join(str(exc).split())
         if "rho(I - K^-1 J)" in text and "--check warn" not in text:
             text += f" ({LAW_HINT})"
-        if note and args.kind is None:
+        if isinstance(exc, FileLimitError):     # a file's problem: the kind is not its cause
+            pass
+        elif note and args.kind is None:
             text += f" (kind {kind}, the default for this model; --kind names another)"
         elif note:          # the gain chosen for the kind named: said, as on success
             text += f" ({note.removeprefix('note: ')})"

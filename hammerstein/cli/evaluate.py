@@ -55,7 +55,7 @@ from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_na
                                                   drive_rest_output,
                                                   head_lines, optional_columns)
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
-                                    output_problem, safe_write)
+                                    make_directory, output_problem, safe_write)
 from hammerstein.compensation.ilc import estimate_delay
 from hammerstein.cli._learn_checks import (gain_band, model_gain_note, model_gains,
                                            plant_first_mode, start_lag, start_lag_text,
@@ -642,7 +642,7 @@ def _report_dir_problem(out):
 
 
 def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), fade=0):
-    out.mkdir(parents=True, exist_ok=True)
+    make_directory(out, "--out")
     # the marker lists evaluate's files (its manifest): a later `run` into this directory then
     # replaces nothing else (your notes beside the report)
     safe_write(out / MARKER, manifest_text(VERSION, OUTPUT_FILES), "report marker", root=out)

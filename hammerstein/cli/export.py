@@ -372,7 +372,8 @@ def _written(args, kind, note, make, after=()):
         written = make()
     except (ExportError, FileLimitError) as exc:
         about_plant = "closed loop: plant:" in str(exc)     # the model, whatever the kind
-        chosen = ("" if not note or about_plant else
+        a_file = isinstance(exc, FileLimitError) or isinstance(exc.__cause__, OSError)
+        chosen = ("" if not note or about_plant or a_file else
                   f" (kind {kind}, the default for this model; --kind names another)"
                   if getattr(args, "kind_given", None) is None else f" ({note.removeprefix('note: ')})")
         print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}{chosen}")

@@ -54,7 +54,7 @@ from hammerstein.core._owners import owner_alive, owner_token, parse_owner, rele
 from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, confined_path,
                                      path_problem, recorded_paths)
 
-__all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes", "file_digest",
+__all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_bytes", "file_digest", "make_directory",
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
            "reset_interrupt", "interrupt", "raise_if_interrupted", "file_limit_problem",
            "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
@@ -531,6 +531,28 @@ def file_digest(path):
     return h.hexdigest()
 
 
+def make_directory(path, what="--out"):
+    """Create the output directory ``path`` (and its parents; umask permissions) if missing.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    what : str
+        The option or file that names it, for the message.
+
+    Raises
+    ------
+    OutputError
+        The system refuses it (a read-only place such as ``/sys``, a full disk, a file
+        in the way): one line naming ``what``, the directory and the reason.
+    """
+    try:
+        Path(path).mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"{what}: {escape(path)}: cannot create the directory "
+                          f"({exc.strerror or exc}); nothing was written") from None
+
+
 def safe_write(path, data, what="file", root=None):
     """Write ``data`` to ``path`` through an exclusive temporary file and a rename.
 
@@ -560,14 +582,13 @@ def safe_write(path, data, what="file", root=None):
     OutputError
         The target is an input of the running command (:func:`guard_inputs`:
         same resolved path or same inode, through a symbolic or hard link),
-        resolves outside ``root``, or the write failed (a full disk: the
+        resolves outside ``root``, or the write failed (a full disk, a
+        directory the system refuses at the write, such as ``/sys``: the
         message names the file; the temporary is removed, the target is
         untouched).
     FileLimitError
         The target exists and is not a regular file or is read-only, or its
         directory is not a directory.
-    OSError
-        The directory cannot be created.
     """
     path = Path(path)
     problem = output_problem(path, root)
@@ -597,7 +618,11 @@ def safe_write(path, data, what="file", root=None):
         raise FileLimitError(f"{escape(path)}: is a symbolic link to {escape(target)}, whose "
                              f"directory does not exist; the directories of a link's target are "
                              f"never created")
-    parent.mkdir(parents=True, exist_ok=True)
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:      # a directory the system refuses (/sys, a full disk): the file named
+        raise OutputError(f"{escape(path)}: cannot write the {what} (cannot create its directory "
+                          f"{escape(parent)}: {exc.strerror}); nothing was written") from None
     if mode is None:
         mode = 0o666 & ~umask()
     _remove_stale_temporaries(parent, target.name)
@@ -611,6 +636,9 @@ def safe_write(path, data, what="file", root=None):
                     tmp = name
                 except FileExistsError:
                     continue
+                except OSError as exc:   # refused at the write (EPERM, EACCES under /sys)
+                    raise OutputError(f"{escape(path)}: cannot write the {what} "
+                                      f"({exc.strerror}); nothing was written") from None
         try:
             with os.fdopen(fd, "wb") as fh:
                 if callable(data):

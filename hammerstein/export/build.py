@@ -403,8 +403,8 @@ def write_files(out_dir, files, marker, force=False):
         for fname, data in files.items():
             try:
                 written.append(safe_write(out / fname, data, "generated file", root=out))
-            except FileLimitError as exc:
-                raise ExportError(str(exc)) from None
+            except FileLimitError as exc:     # the cause kept: a file's problem, not the kind's
+                raise ExportError(str(exc)) from exc
             except OSError as exc:
-                raise ExportError(f"{out / fname}: cannot write ({exc.strerror or exc})") from None
+                raise ExportError(f"{out / fname}: cannot write ({exc.strerror or exc})") from exc
     return written

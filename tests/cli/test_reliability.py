@@ -7,6 +7,7 @@ bounded reads, stale temporaries, and SIGINT/SIGTERM through a real
 subprocess.
 """
 
+import errno
 import os
 import signal
 import stat
@@ -20,6 +21,7 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
+from hammerstein.core import files
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, limit, safe_write, umask
 from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
 from hammerstein.io.presets import PresetError, load_model, save_model
@@ -593,3 +595,40 @@ def test_a_threads_error_after_a_signal_is_dropped_and_before_it_is_not():
     finally:
         cli_main._SIGNALLED[0] = flagged
     assert seen == ["before"]
+
+
+def test_a_write_the_system_refuses_is_one_line_naming_the_file(capsys, tmp_path, monkeypatch):
+    """An outside check: under /sys (root gets EACCES/EPERM only at the write) ``compensate``
+    printed ``[Errno 13] Permission denied: '/sys/.x.csv.<hex>.hammerstein-tmp' (kind
+    hammerstein, the default for this model; ...)``, ``evaluate`` and ``learn --history`` the
+    bare errno text. The refusal is simulated here at the same two calls."""
+    real_open = os.open
+
+    def refusing_open(name, flags, *args):
+        if str(name).endswith(files.TMP_SUFFIX):
+            raise PermissionError(errno.EACCES, "Permission denied", str(name))
+        return real_open(name, flags, *args)
+
+    monkeypatch.setattr(files.os, "open", refusing_open)
+    status, _, err = _call(capsys, "compensate", "rakotondrabe-2dof", "--reference",
+                           '{ kind = "circle", radius = 10, frequency = 20, periods = 5 }',
+                           "--out", tmp_path / "x.csv")
+    assert status == 1 and err == [f"hammerstein compensate: error: {tmp_path / 'x.csv'}: cannot "
+                                   f"write the drive file (Permission denied); nothing was "
+                                   f"written"]
+    monkeypatch.setattr(files.os, "open", real_open)
+    real_mkdir = Path.mkdir
+
+    def refusing_mkdir(self, *args, **kwargs):
+        if self.name == "refused":
+            raise PermissionError(errno.EPERM, "Operation not permitted", str(self))
+        return real_mkdir(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "mkdir", refusing_mkdir)
+    with pytest.raises(files.OutputError, match=r"^--history: .*refused: cannot create the "
+                                                r"directory \(Operation not permitted\); nothing"):
+        files.make_directory(tmp_path / "refused", "--history")
+    with pytest.raises(files.OutputError, match=r"refused/a\.csv: cannot write the drive file "
+                                                r"\(cannot create its directory"):
+        safe_write(tmp_path / "refused" / "a.csv", "x", "drive file")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
