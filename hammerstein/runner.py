@@ -17,7 +17,7 @@ one ``file <relative path>`` line per file the report wrote). An existing
 manifest does not list (a marker without a manifest, from an older version:
 anything), or is an empty directory; anything else (a user's directory, a
 file, a symlink, a note added to a report) makes the scenario fail with one
-line naming the path and ``--force`` (``force=True`` replaces it). A
+line naming the path and ``--force`` (``force=True`` moves it aside, never deletes it). A
 directory holding the scenario file or a file it names (by path, or a hard
 link to it) is never replaced, with or without ``force``: the scenario fails
 before simulating. Temporary directories are named ``.hammerstein-tmp.<pid>.*``
@@ -56,7 +56,7 @@ from hammerstein.core.files import (deferred_signals, output_problem, owner_aliv
 from hammerstein.core.numbers import magnitude_problem
 from hammerstein.core._version import VERSION
 from hammerstein.report._ownership import MARKER as _MARKER
-from hammerstein.report._ownership import input_problem, ownership_problem, write_manifest
+from hammerstein.report._ownership import input_problem, kept_name, ownership_problem, write_manifest
 from hammerstein.report.identified import report_identified
 from hammerstein.report.records import write_identification_report
 from hammerstein.report.render import FigureJobs, FigureRenderer
@@ -313,16 +313,6 @@ def _start_write(out_dir, writer):
     return tmp
 
 
-def _kept_name(target):
-    """A new name beside ``target`` for what ``--force`` moves aside: ``<name>.kept-<time>[-k]``."""
-    stem = f"{target.name[:200]}.kept-{time.strftime('%Y%m%dT%H%M%S')}"
-    k, kept = 1, target.with_name(stem)
-    while os.path.lexists(kept):
-        k += 1
-        kept = target.with_name(f"{stem}-{k}")
-    return kept
-
-
 def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
     """Wait for the figure ``jobs`` writing into ``tmp``, then rename ``tmp`` to ``out_dir/name``.
 
@@ -331,7 +321,7 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
     the scenario read) are never replaced. An earlier report of the project's
     own is deleted; with ``force``, a ``out_dir/name`` that holds anything
     hammerstein did not write (a user's directory, notes in a report) is
-    renamed beside it (:func:`_kept_name`), never deleted.
+    renamed beside it (:func:`hammerstein.report._ownership.kept_name`), never deleted.
 
     Returns
     -------
@@ -356,7 +346,7 @@ def _finish_write(out_dir, name, tmp, force=False, jobs=None, inputs=()):
         write_manifest(tmp, _version(), _TOKENS.get(tmp))
         with deferred_signals():  # the swap is never left half done
             if foreign:           # what hammerstein did not write is moved aside, never deleted
-                kept = _kept_name(target)
+                kept = kept_name(target)
             elif os.path.lexists(target):
                 old = _make_temporary(out_dir)
             replace_directory(tmp, target, old, kept)

@@ -31,7 +31,6 @@ baseline CSV                HAMMERSTEIN_MAX_BASELINE_BYTES  64 MiB
 from __future__ import annotations
 
 import errno
-import hashlib
 import os
 import secrets
 import stat
@@ -50,6 +49,7 @@ from hammerstein.core._strings import (C_HEADERS, C_RESERVED, EXCERPT, MAX_NAME_
 from hammerstein.core._provenance import (LOCK_TIMEOUT, PROVENANCE, carries_provenance, locked,
                                           png_provenance, provenance_line, replace_problem,
                                           same_file)
+from hammerstein.core._dirs import file_digest, make_directory  # noqa: F401 (public here)
 from hammerstein.core._owners import owner_alive, owner_token, parse_owner, release_owner
 from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, confined_path,
                                      path_problem, recorded_paths)
@@ -507,50 +507,6 @@ def removed_if_failed(*directories):
             except OSError:
                 pass
         raise
-
-
-def file_digest(path):
-    """SHA-256 of a file's bytes, read in 1 MiB blocks (bounded memory), or None when unreadable.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-
-    Returns
-    -------
-    str or None
-        The hexadecimal digest.
-    """
-    h = hashlib.sha256()
-    try:
-        with open(path, "rb") as f:
-            for block in iter(lambda: f.read(1 << 20), b""):
-                h.update(block)
-    except OSError:
-        return None
-    return h.hexdigest()
-
-
-def make_directory(path, what="--out"):
-    """Create the output directory ``path`` (and its parents; umask permissions) if missing.
-
-    Parameters
-    ----------
-    path : str or pathlib.Path
-    what : str
-        The option or file that names it, for the message.
-
-    Raises
-    ------
-    OutputError
-        The system refuses it (a read-only place such as ``/sys``, a full disk, a file
-        in the way): one line naming ``what``, the directory and the reason.
-    """
-    try:
-        Path(path).mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"{what}: {escape(path)}: cannot create the directory "
-                          f"({exc.strerror or exc}); nothing was written") from None
 
 
 def safe_write(path, data, what="file", root=None):

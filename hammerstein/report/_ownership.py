@@ -12,12 +12,13 @@ holding one of the scenario's inputs is never replaced.
 from __future__ import annotations
 
 import os
+import time
 from pathlib import Path
 
 from hammerstein.core.files import bounded_read_text, escape, safe_write
 
 __all__ = ["MARKER", "ownership_problem", "input_problem", "write_manifest", "report_manifest",
-           "unlisted_entries", "manifest_text"]
+           "unlisted_entries", "manifest_text", "kept_name"]
 
 #: File in every report directory: the project wrote it (``run`` may replace it).
 MARKER = ".hammerstein-report"
@@ -234,3 +235,13 @@ def ownership_problem(target, force, inputs=()):
             "a file" if target.is_file() else "not a directory")
     return (f"{target}: exists and is {what} (no {MARKER} file); move it away, choose another "
             f"--out, or use --force to move it aside (never deleted) and write the report")
+
+
+def kept_name(target):
+    """A new name beside ``target`` for what ``--force`` moves aside: ``<name>.kept-<time>[-k]``."""
+    stem = f"{target.name[:200]}.kept-{time.strftime('%Y%m%dT%H%M%S')}"
+    k, kept = 1, target.with_name(stem)
+    while os.path.lexists(kept):
+        k += 1
+        kept = target.with_name(f"{stem}-{k}")
+    return kept
