@@ -651,6 +651,10 @@ def _learn(args):
                                                             cmp.worse, cmp.better)
                 what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
                         f"estimated from the records")
+                # the number printed is the one compared and kept in settled.csv (the noise
+                # estimated from both records: it was the first record's alone, 11 % apart)
+                judged_line = _judged_line(k_next if args.history else None, score, judged,
+                                           None, ref.scale)
             verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
                                   remeasured, judged is None, what, JUDGED, out_of_step, advice,
                                   args.q_cutoff_hz, first_mode_hz)

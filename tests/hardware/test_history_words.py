@@ -102,3 +102,29 @@ def test_a_history_file_changed_since_learn_wrote_it_is_never_replaced(tmp_path)
                cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert [r[0] for r in history_rows(tmp_path / "hist")] == [0, 0, 1, 1]
+
+
+def test_the_judged_error_printed_is_the_one_compared_and_kept(tmp_path):
+    """An outside check: on a 120 Hz circle (166.67 samples a period: judged as the RMS less
+    the noise) trial 8 printed 'RMS 0.0188 µm' where settled.csv kept 0.02091 and the best
+    trial was chosen on the kept one: the printed number was the noise of one record
+    removed, the compared one that of both. Printed now is what is compared and kept."""
+    ref = '{ kind = "circle", radius = 30, frequency = 120, periods = 12 }'
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    learn = ["learn", "rakotondrabe-2dof", "--reference", ref, "--outputs", "x=x_meas,y=y_meas",
+             "--history", "hist"]
+    printed = []
+    for k in range(3):
+        _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", 0, k, gain=1.0)
+        res = _cli(*learn, "--drive", f"u{k}.csv", "--measured", f"y{k}.csv", "--out",
+                   f"u{k + 1}.csv", cwd=tmp_path)
+        assert res.returncode == 0, res.stderr
+        m = re.search(rf"trial {k} judged \(RMS less the sensor noise\): RMS ([0-9.e-]+) µm",
+                      res.stdout)
+        assert m, res.stdout
+        printed.append(float(m.group(1)))
+    kept = pd.read_csv(tmp_path / "hist/settled.csv")["judged_um"].tolist()
+    assert len(kept) == 3
+    for p, v in zip(printed, kept):
+        assert abs(p - v) <= 5e-4 * v        # the 4 significant digits printed
