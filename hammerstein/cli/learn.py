@@ -147,6 +147,7 @@ from hammerstein.compensation.ilc import (INVERSE_GAIN_LIMIT, HarmonicGains, Ite
                                           error_summary, harmonic_base_gains,
                                           periodic_average, reference_correction, repeating_from)
 from hammerstein.compensation.model_classes import model_class
+from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.compensation.kind_choice import law_check
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, chatter_warnings,
                                               delay_search_span)
@@ -673,6 +674,13 @@ def _learn(args):
                  + ([] if drift_gain is None else [f"note: {drift_gain}"]))
         if (note or stall) and steady is not None:
             notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady)
+        if plant.amplifier is not None:     # compensate says it; a trial that stalls or rises
+            # there was blamed on the modes or the gain, ten trials on
+            reach = reach_note(output_reach(model, plant.amplifier, plant.creep), ref.signal,
+                               list(model.output_names))
+            if reach:
+                notes.append(f"note: {reach}; the error there is the reach's, which no trial "
+                             f"removes (what a stalled or worse trial then shows)")
         ilc = IterativeLearning(model, plant.dynamics, T, gain, args.q_cutoff_hz,
                                 inversion=args.inversion, delay=delay, slope_floor=args.slope_floor,
                                 gain=law_gain)

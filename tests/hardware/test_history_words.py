@@ -8,6 +8,9 @@ had 6 significant digits where ``run``'s have 4.
 """
 
 import re
+from pathlib import Path
+
+import numpy as np
 
 import pandas as pd
 
@@ -128,3 +131,31 @@ def test_the_judged_error_printed_is_the_one_compared_and_kept(tmp_path):
     assert len(kept) == 3
     for p, v in zip(printed, kept):
         assert abs(p - v) <= 5e-4 * v        # the 4 significant digits printed
+
+
+def test_learn_names_a_reference_beyond_the_reach(tmp_path):
+    """An outside check: a 30 µm circle on a stage that reaches about 19 µm over its range
+    learnt ten trials, each told 'the learning diverges at the gain it had (the model holds
+    the bending modes...)', never that the reference is out of reach, which compensate said."""
+    from hammerstein.io.presets import load_plant
+
+    preset = tmp_path / "small.toml"
+    text = (Path(__file__).resolve().parents[2] / "hammerstein" / "presets"
+            / "rakotondrabe-2dof.toml").read_text(encoding="utf-8")
+    preset.write_text(text + '\n[amplifier.ux]\nrange = [-6.0, 6.0]\n\n'
+                             '[amplifier.uy]\nrange = [-6.0, 6.0]\n', encoding="utf-8")
+    plant = load_plant(str(preset))
+    y, _ = plant.simulate(np.tile([[6.0], [6.0]], (1, 2000)))  # the reach, from the model
+    assert y[1, -1] < 29.0                                      # a 30 µm circle is beyond it
+    ref = '{ kind = "circle", radius = 30, frequency = 100, periods = 10 }'
+    assert _cli("compensate", str(preset), "--reference", ref, "--out", "u0.csv", "--limits",
+                "clip", cwd=tmp_path).returncode == 0
+    _hardware(tmp_path / "u0.csv", tmp_path / "y0.csv", 0, 0)
+    res = _cli("learn", str(preset), "--reference", ref, "--outputs", "x=x_meas,y=y_meas",
+               "--drive", "u0.csv", "--measured", "y0.csv", "--out", "u1.csv", "--limits",
+               "clip", cwd=tmp_path)
+    assert "the reference leaves what the model reaches over the amplifier's range" in res.stderr
+    assert "the error there is the reach's, which no trial removes" in res.stderr
+    ok = _cli("learn", "rakotondrabe-2dof", "--reference", ref, "--outputs", "x=x_meas,y=y_meas",
+              "--drive", "u0.csv", "--measured", "y0.csv", "--out", "u2.csv", cwd=tmp_path)
+    assert "reach" not in ok.stderr                # no amplifier: nothing said
