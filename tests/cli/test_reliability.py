@@ -632,3 +632,19 @@ def test_a_write_the_system_refuses_is_one_line_naming_the_file(capsys, tmp_path
                                                 r"\(cannot create its directory"):
         safe_write(tmp_path / "refused" / "a.csv", "x", "drive file")
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_check_out_force_moves_a_users_report_directory_aside(capsys, tmp_path):
+    """An outside check: ``check --out kz`` refused kz/<scenario> naming --force, and ``check
+    --force`` did not apply to the reports. It does now, as run's: moved aside, never deleted."""
+    baseline = tmp_path / "base.csv"
+    assert _call(capsys, "check", GOOD, "--update", "--baseline", baseline)[0] == 0
+    (tmp_path / "kz" / "good-static").mkdir(parents=True)
+    (tmp_path / "kz" / "good-static" / "notes.txt").write_text("mine")
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--out", tmp_path / "kz")
+    assert status == 1 and any("--force" in line for line in err)
+    status, _, err = _call(capsys, "check", GOOD, "--baseline", baseline, "--out", tmp_path / "kz",
+                           "--force")
+    kept = [p for p in (tmp_path / "kz").iterdir() if p.name.startswith("good-static.kept-")]
+    assert status == 0 and len(kept) == 1 and (kept[0] / "notes.txt").read_text() == "mine"
+    assert any(line.startswith("note: the earlier") and str(kept[0]) in line for line in err)
