@@ -774,6 +774,7 @@ def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
         raise FileNotFoundError(f"scenarios: no *.toml scenario under {scenarios}")
     out = Path(out)
     problems = [] if force else foreign_outputs(out)
+    forced = []      # refused even with force: --force is no remedy to name for them
     # a file of the README that cannot be written (a link out of --out, a bad name) is refused
     # before anything runs, even with force: never a half-written replication
     for name in GENERATED:
@@ -781,10 +782,13 @@ def replicate(scenarios="scenarios/paper", out="reports/paper", force=False):
         problem = output_problem(p, out) or (
             f"{p}: exists and is not a regular file" if force and os.path.lexists(p)
             and not p.is_file() else None)
-        problems += [problem] if problem and problem not in problems else []
-    if problems:
-        raise FileExistsError(f"{problems[0]}{f' (and {len(problems) - 1} more)' if len(problems) > 1 else ''}; "
-                              f"move it away, choose another --out, or use --force to replace it")
+        forced += [problem] if problem and problem not in forced + problems else []
+    if problems or forced:
+        first = (problems + forced)[0]
+        more = len(problems) + len(forced) - 1
+        fix = ("move it away or choose another --out" if forced and not problems else
+               "move it away, choose another --out, or use --force to replace it")
+        raise FileExistsError(f"{first}{f' (and {more} more)' if more else ''}; {fix}")
     remove_stale_temporaries(out)
     outcomes = run_pipelined(files, out, force)
     write_readme(out, outcomes)

@@ -521,6 +521,7 @@ def test_replicate_refuses_an_unwritable_readme_before_running(tmp_path, planted
     res = _cli("replicate", "--scenarios", "sc", "--out", "rp2", "--force", cwd=tmp_path)
     assert res.returncode == 2, res.stderr
     assert "README.md" in _one_line(res)
+    assert "use --force" not in _one_line(res)    # given already, and no remedy here
     assert _tree(tmp_path) == before and victim.read_text() == "mine\n"
 
 
