@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import io
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -555,10 +556,15 @@ def _read_table(path, skip_rows=0, head=False):
         unit_of = {c.strip(): u.strip() for c, u in zip(first, row)}
     check_size(raw, sep, path, DataFileError)       # rows x the widest line, before parsing
     try:
-        frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
-                            skiprows=[1] if units else None,
-                            engine="c", skipinitialspace=True, encoding="utf-8",
-                            encoding_errors="replace")
+        with warnings.catch_warnings():
+            # a text cell in a long file: pandas' "Columns (1) have mixed types. Specify dtype
+            # option" reached the user, naming options no command has; the cell itself is named
+            # when its column is read (_column)
+            warnings.simplefilter("ignore", pd.errors.DtypeWarning)
+            frame = pd.read_csv(io.BytesIO(raw), sep=sep, header=0 if header else None,
+                                skiprows=[1] if units else None,
+                                engine="c", skipinitialspace=True, encoding="utf-8",
+                                encoding_errors="replace")
     except (pd.errors.ParserError, ValueError, MemoryError) as exc:
         reason = str(exc).strip().splitlines()[-1] if str(exc).strip() else type(exc).__name__
         m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", reason)

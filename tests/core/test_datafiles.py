@@ -228,3 +228,17 @@ def test_the_column_check_reads_only_the_opening_and_agrees_with_the_whole_read(
     # the opening is cut at a complete row: no ragged or cut-short row is made up
     path.write_text("t,ux,x\n" + rows)
     assert record_column_problem(path, "ux", "x", "t") is None
+
+
+def test_a_text_cell_far_down_a_long_file_is_named_without_pandas_words(tmp_path, recwarn):
+    """An outside check: a bad cell in a long file (read in chunks, one numeric and one not)
+    also printed pandas' 'Columns (1: ux) have mixed types. Specify dtype option on import or
+    set low_memory=False', advice no command can take. The cell alone is named."""
+    n = 300_000
+    rows = ["time_s,volts,um"] + [f"{i * 1e-4:.6g},0.5,1.0" for i in range(n)]
+    rows[n - 9] = f"{(n - 10) * 1e-4:.6g},abc,1.0"
+    path = tmp_path / "long.csv"
+    path.write_text("\n".join(rows) + "\n")
+    with pytest.raises(DataFileError, match=rf"non-numeric or empty cell 'abc' at data row {n - 9}"):
+        read_record(path, "volts", "um", time="time_s")
+    assert [str(w.message) for w in recwarn] == []
