@@ -805,7 +805,7 @@ def _learn(args):
     return _summary(args, model, rec, ref, k, delay, T, delay_note, note or stall or verdict.info,
                     cond, settled=(settled_max, settled_rms, window, fade, as_asked, lag,
                                    judged_line),
-                    rose=(rose, score, margin), notes=notes, worse=note is not None,
+                    rose=(rose, score, margin), notes=notes, worse=note is not None or not best,
                     static=plant.dynamics is None, remeasure=verdict.remeasure)
 
 
@@ -870,7 +870,8 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     error against the reference as asked, the trial's measured lag or None, the judged line);
     ``rose`` is (the previous trial and its judged error when this one rose, else None,
     this trial's judged error, the noise margin [µm]); ``notes`` the kind-choice lines;
-    ``worse``: the trial was worse than the best beyond the noise (not learnt from);
+    ``worse``: the trial was worse than the best beyond the noise (not learnt from), or not
+    better than it (within the noise): "monotonic" is then not said;
     ``static``: the model has no identified dynamics (its condition is its static gain's);
     ``remeasure``: the next drive is the best trial's own (not learnt).
     """
@@ -902,7 +903,8 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     if static:                      # no dynamics: the model's static gain against itself
         summary = summary.replace("<= 1: monotonic", "<= 1 on the model's static gain only: it "
                                   "has no dynamics, the actuator's modes are not in it")
-    elif rose is None and not worse:  # a condition on the model, not a measured fact
+    elif rose is None and not worse:  # a new best: a condition on the model, not a measured fact
+        # (a trial not better than the best, even within the noise, hears no "monotonic")
         summary = summary.replace("<= 1: monotonic", "<= 1: monotonic on the model")
     else:                           # the model's condition is not what the actuator did
         summary = summary.replace("<= 1: monotonic", "<= 1 on the model")
