@@ -44,6 +44,7 @@ from hammerstein.compensation.reach import REACH_NOTE_START
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, RANGE_MARGINS,
                                               chatter_warnings)
 from hammerstein.exceptions import CompensatorDivergence, FileLimitError
+from hammerstein.signals.fundamental import reference_fundamental
 from hammerstein.scenario.hardware_route import (_kind_and_options, _rest_voltages,
                                                  compensate_reference)
 
@@ -356,6 +357,14 @@ def _handle(args):
             print(f"shaped: {line}", file=sys.stdout)
     for line in ref.notes + list(drive.notes):
         print_err(f"note: {line}")
+    if ref.kind == "file" and args.period is None:     # a repeating file, its period not given
+        found = reference_fundamental(ref.signal, plant.sampling_period)
+        if found is not None and found.repeat_samples:
+            L = found.repeat_samples
+            print_err(f"note: {args.reference} repeats every {L * plant.sampling_period:.6g} s "
+                      f"({L} samples) and --period was not given: --period "
+                      f"{L * plant.sampling_period:.6g} continues it over whole periods, fades "
+                      f"it in over one, and has learn learn it per harmonic of that period")
     for line in chatter:
         print_err(f"warning: {line}")
     if shrink:

@@ -580,7 +580,10 @@ def _learn(args):
             f"note: no --period: the reference's fundamental {found.frequency_hz:.4g} Hz "
             f"({found.how}) sets a first trial's lag tolerance"
             + (" and the judged window (from two periods after the fade-in)"
-               if found.period_samples else ""))
+               if found.period_samples else "")
+            + (f"; the file repeats every {found.repeat_samples * T:.6g} s "
+               f"({found.repeat_samples} samples): --period {found.repeat_samples * T:.6g} learns "
+               f"it per harmonic of that period" if found.repeat_samples else ""))
         # not the drive's response (channels swapped, another drive's, a saturated sensor):
         # refused before anything is learnt from it (hammerstein.cli._learn_checks)
         implausible = measurement_problem(predicted, y, model.output_names, lambda m: trial_lag(

@@ -49,11 +49,16 @@ class Fundamental:
     how : str
         How it was found, for the notes (``"repeats every 2000 samples"``,
         ``"dominant spectral line"``).
+    repeat_samples : int or None
+        The lag at which the record repeats (a whole number of samples:
+        several periods of a fundamental that is no whole number of them),
+        None when it does not.
     """
 
     frequency_hz: float
     period_samples: int | None
     how: str
+    repeat_samples: int | None = None
 
     def samples(self, sampling_period):
         """The fundamental's period in samples (not rounded).
@@ -122,6 +127,41 @@ def _repeat_fundamental(r, lag):
     return lag / float(np.gcd.reduce(held))
 
 
+#: lags the long-repeat search verifies at most (the nearest-zero differences first)
+_MAX_REPEAT_CHECKS = 20
+
+
+def _long_repeat(r, tol):
+    """The shortest lag ``L <= N / 2`` at which the record repeats up to a constant step per
+    period, found over every lag at once, or None.
+
+    The first differences repeat exactly where the record does: their mean squared
+    difference at every lag, ``E_1(L) + E_2(L) - 2 R(L)`` (the autocorrelation ``R`` by FFT,
+    the energies by cumulative sums), is near 0 only at a repeat; those lags are verified by
+    :func:`_repeats`, those nearest 0 first (near-repeats of a sine whose period is no whole
+    number of samples come close too), the shortest verified kept. A 37/53 Hz Lissajous repeats every second, 37 periods
+    of its dominant line, beyond the few multiples of it :func:`reference_fundamental` tries.
+    """
+    d = np.diff(r, axis=1)
+    n = d.shape[1]
+    if n < 4:
+        return None
+    size = 1 << int(math.ceil(math.log2(2 * n)))
+    spec = np.fft.rfft(d, size, axis=1)
+    corr = np.fft.irfft((spec * spec.conj()).sum(axis=0), size)[:n]
+    sq = (d ** 2).sum(axis=0)
+    c = np.concatenate([[0.0], np.cumsum(sq)])
+    lags = np.arange(1, n // 2 + 1)
+    e_head = c[n - lags]                    # sum over k < n - L of d[k]^2
+    e_tail = c[n] - c[lags]                 # sum over k >= L of d[k]^2
+    diff2 = (e_head + e_tail - 2 * corr[lags]) / (n - lags)
+    floor = (4 * tol) ** 2 * r.shape[0]      # a rounding of each sample by tol at most
+    cand = lags[diff2 <= floor]
+    cand = cand[np.argsort(diff2[cand - 1], kind="stable")][:_MAX_REPEAT_CHECKS]  # nearest 0 first
+    found = [int(L) for L in cand if 2 * L <= r.shape[1] and _repeats(r, int(L), tol)]
+    return min(found) if found else None
+
+
 def reference_fundamental(reference, sampling_period):
     """The fundamental of a reference record whose period is not given, or None.
 
@@ -139,7 +179,10 @@ def reference_fundamental(reference, sampling_period):
         period (tested at the lags within 2 % + 2 samples of one to four
         periods of the dominant line, the first that repeats), the fundamental
         of that repeat: ``L`` over the greatest common divisor of the
-        harmonics one repeat holds, ``period_samples`` its rounded value.
+        harmonics one repeat holds, ``period_samples`` its rounded value;
+        failing those lags, the shortest repeat up to half the record found
+        over every lag at once (a Lissajous figure of two frequencies repeats
+        at their common period, many periods of its dominant line).
         Otherwise the dominant spectral line of the record with each axis'
         least-squares straight line taken out (Hann window, the peak
         interpolated), ``period_samples`` None. None when the record holds
@@ -175,5 +218,10 @@ def reference_fundamental(reference, sampling_period):
             if _repeats(r, L, tol):
                 period = _repeat_fundamental(r, L)
                 return Fundamental(float(1.0 / (period * T)), max(int(round(period)), 2),
-                                   f"repeats every {L} samples")
+                                   f"repeats every {L} samples", L)
+    L = _long_repeat(r, tol)
+    if L is not None:
+        period = _repeat_fundamental(r, L)
+        return Fundamental(float(1.0 / (period * T)), max(int(round(period)), 2),
+                           f"repeats every {L} samples", L)
     return Fundamental(float(k / (N * T)), None, "dominant spectral line")

@@ -147,3 +147,34 @@ def test_a_drive_learnt_on_the_voltages_says_the_exported_compensator_cannot_giv
     header = [ln for ln in (tmp_path / "u1.csv").read_text().splitlines() if ln.startswith("#")]
     assert any("learnt on the voltages" in ln and "play it as a file" in ln for ln in header)
     assert "x_learnt" not in (tmp_path / "u1.csv").read_text().splitlines()[len(header)]
+
+
+def test_a_lissajous_file_repeating_at_its_common_period_is_found_and_named(tmp_path):
+    """An outside check: a 37/53 Hz Lissajous file repeating every second (37 periods of its
+    dominant line, 20 000 samples) was taken for its 37 Hz line, and neither compensate nor
+    learn said it repeats: the user learnt it sample by sample without --period. The repeat is
+    now found over every lag (closed form: the common period 1/gcd(37, 53) = 1 s) and both
+    commands name --period 1."""
+    t = np.arange(3 * 20000) * T
+    r = np.vstack([np.round(8 * np.sin(2 * np.pi * 37 * t + 0.7), 6),
+                   np.round(6 * np.sin(2 * np.pi * 53 * t), 6)])
+    f = reference_fundamental(r, T)
+    assert (f.frequency_hz, f.period_samples, f.repeat_samples) == (pytest.approx(1.0), 20000,
+                                                                     20000)
+    noise = np.random.default_rng(0).standard_normal(r.shape)    # never a repeat
+    assert reference_fundamental(noise, T) is None
+    assert reference_fundamental(r[:, :30000], T).repeat_samples is None   # not twice: no repeat
+    pd.DataFrame({"t": t, "x": r[0], "y": r[1]}).to_csv(tmp_path / "liss.csv", index=False,
+                                                        float_format="%.12g")
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", "liss.csv", "--out", "u0.csv",
+               cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "liss.csv repeats every 1 s (20000 samples) and --period was not given" in res.stderr
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", "liss.csv", "--period", "1",
+               "--out", "u1.csv", cwd=tmp_path)
+    assert res.returncode == 0 and "repeats every" not in res.stderr, res.stderr
+    _measure(tmp_path, 0, "y0.csv")
+    res = _cli("learn", "rakotondrabe-2dof", "--reference", "liss.csv", "--delay", "0",
+               "--drive", "u0.csv", "--measured", "y0.csv", "--out", "u2.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert "the file repeats every 1 s (20000 samples): --period 1 learns it" in res.stderr
