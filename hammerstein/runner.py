@@ -55,6 +55,7 @@ from hammerstein.core.files import (deferred_signals, output_problem, owner_aliv
                                     OutputError, safe_write, umask)
 from hammerstein.core.numbers import magnitude_problem
 from hammerstein.core._version import VERSION
+from hammerstein.exceptions import HammersteinError
 from hammerstein.report._ownership import MARKER as _MARKER
 from hammerstein.report._ownership import input_problem, kept_name, ownership_problem, write_manifest
 from hammerstein.report.identified import report_identified
@@ -183,19 +184,20 @@ def _version():
 def _make_temporary(out_dir):
     """A new ``.hammerstein-tmp.<pid>.<nonce>.*`` directory holding the marker, umask permissions.
 
-    The marker's second line is the owner token
-    (:func:`hammerstein.core.files.owner_token`: host, PID namespace, PID,
-    process start time and a nonce of this call), live until
-    :func:`_release` .
+    The marker's second line is the owner token (:func:`hammerstein.core.files.owner_token`:
+    host, PID namespace, PID, start time, a nonce), live until :func:`_release`.
     """
     token = owner_token()
     nonce = parse_owner(token)["nonce"]
+    tmp = None
     try:
         tmp = Path(tempfile.mkdtemp(prefix=f"{TMP_PREFIX}{os.getpid()}.{nonce}.", dir=out_dir))
         os.chmod(tmp, 0o777 & ~umask())
         safe_write(tmp / MARKER, f"hammerstein {_version()}\nowner {token}\n", "report marker")
     except BaseException:
         release_owner(token)
+        if tmp is not None:       # a full disk: the marker not written, the directory empty
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
     _TOKENS[tmp] = token
     return tmp
@@ -426,8 +428,11 @@ def overflow_problem(results):
 def _message(path, exc):
     """One failure message without exception class names (kept only for an unexpected bug)."""
     if isinstance(exc, OSError):
-        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
-        return f"{path}: cannot write the report: {exc.strerror or exc}{where}"
+        if isinstance(exc, HammersteinError):      # safe_write's line names the file already
+            return f"{path}: cannot write the report: {exc}"
+        where = f" {exc.filename}:" if getattr(exc, "filename", None) else ""
+        return (f"{path}: cannot write the report:{where} {exc.strerror or exc}; nothing was "
+                f"written")
     if isinstance(exc, (ValueError, ArithmeticError)) or type(exc).__module__.startswith("hammerstein"):
         return f"{path}: {exc}"
     return f"{path}: unexpected {type(exc).__name__}: {exc}"

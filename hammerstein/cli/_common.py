@@ -179,7 +179,8 @@ def written_by_hammerstein(path):
             head = fh.read(200)
     except OSError:
         return False
-    return head.removeprefix(b"\xef\xbb\xbf").startswith(b"# hammerstein ")
+    # the drive header itself ("# hammerstein compensate drive: ..."), not any "# hammerstein"
+    return re.match(rb"# hammerstein [a-z-]+ drive\b", head.removeprefix(b"\xef\xbb\xbf")) is not None
 
 
 def out_file_problem(out, what="file", inputs=()):

@@ -140,8 +140,8 @@ def foreign_history_problem(history, out=None):
     changed = changed_history_files(d) if others else []
     if changed:
         more = f" and {len(changed) - 3} more" if len(changed) > 3 else ""
-        return (f"--history: {', '.join(escape(d / n) for n in changed[:3])}{more}: changed "
-                f"since hammerstein learn wrote {'it' if len(changed) == 1 else 'them'} (not "
+        return (f"--history: {', '.join(escape(d / n) for n in changed[:3])}{more}: changed or "
+                f"deleted since hammerstein learn wrote {'it' if len(changed) == 1 else 'them'} (not "
                 f"the SHA-256 its {HISTORY_MARK} keeps); nothing was written: move "
                 f"{'it' if len(changed) == 1 else 'them'} away or restore "
                 f"{'it' if len(changed) == 1 else 'them'}, or start a new history directory")
@@ -167,8 +167,8 @@ def changed_history_files(history_dir):
 
     The mark lists the SHA-256 of each file learn wrote (:func:`write_history_manifest`);
     a listed file whose bytes differ, or a history file the mark does not list, was changed
-    or put there by someone else. A mark without digests (an older version's) lists nothing:
-    no file is judged.
+    or put there by someone else; a listed file deleted too. A mark without digests (an older
+    version's, or one emptied by hand) lists nothing: no file is judged.
 
     Parameters
     ----------
@@ -186,6 +186,8 @@ def changed_history_files(history_dir):
     for name in HISTORY_FILES[1:]:
         p = d / name
         if not os.path.lexists(p):
+            if name in listed:          # deleted: the history would restart half
+                changed.append(name)
             continue
         if p.is_symlink() or not p.is_file() or file_digest(p) != listed.get(name):
             changed.append(name)

@@ -196,7 +196,9 @@ def run_check(args):
         _usage(str(exc))
         return 2
     except _JunitError as exc:    # a file the command could not write: docs/cli.md's prefix
-        _command_err(f"{escape(junit)}: cannot write the JUnit XML file ({exc})")
+        text = str(exc)           # safe_write's own line already names the file
+        _command_err(text if text.startswith(f"{escape(junit)}: ") else
+                     f"{escape(junit)}: cannot write the JUnit XML file ({text})")
         return 1
     except BaselineError as exc:  # inconsistent metrics from the runner, a baseline not written
         _command_err(" ".join(str(exc).split()))

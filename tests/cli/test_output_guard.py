@@ -403,6 +403,17 @@ def test_a_link_to_a_users_file_is_never_written_through(tmp_path, command, forc
         assert _tree(tmp_path) == before and victim.read_text() == "precious user data\n"
 
 
+def test_a_users_file_starting_like_a_mark_is_not_taken_for_a_drive(tmp_path):
+    """An outside check: '# hammerstein notes of mine' passed for a drive file's first line,
+    and compensate replaced it through a link without --force."""
+    (tmp_path / "spoof.txt").write_text("# hammerstein notes of mine\nimportant\n")
+    os.symlink("spoof.txt", tmp_path / "a8")
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "a8",
+               cwd=tmp_path)
+    assert res.returncode == 2 and "hammerstein did not write" in _one_line(res)
+    assert (tmp_path / "spoof.txt").read_text() == "# hammerstein notes of mine\nimportant\n"
+
+
 def test_a_link_to_the_projects_own_file_is_followed(tmp_path):
     """A link to a drive file compensate wrote is followed (its target replaced, the link kept)."""
     assert _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "real.csv",

@@ -648,3 +648,20 @@ def test_check_out_force_moves_a_users_report_directory_aside(capsys, tmp_path):
     kept = [p for p in (tmp_path / "kz").iterdir() if p.name.startswith("good-static.kept-")]
     assert status == 0 and len(kept) == 1 and (kept[0] / "notes.txt").read_text() == "mine"
     assert any(line.startswith("note: the earlier") and str(kept[0]) in line for line in err)
+
+
+def test_a_report_whose_marker_cannot_be_written_leaves_no_temporary(capsys, tmp_path,
+                                                                     monkeypatch):
+    """An outside check: on a full disk `run` left `.hammerstein-tmp.*` behind (its marker
+    not written), which the docs say only a killed run leaves."""
+    import hammerstein.runner as runner
+
+    def full(path, *args, **kwargs):
+        raise files.OutputError(f"{path}: cannot write the report marker (No space left on "
+                                f"device); nothing was written")
+
+    monkeypatch.setattr(runner, "safe_write", full)
+    status, _, err = _call(capsys, "run", GOOD, "--out", tmp_path / "rr", "--figures", "none")
+    assert status == 1 and len(err) == 1 and "No space left on device" in err[0]
+    assert err[0].count("cannot write") == 2 and "nothing was written" in err[0]
+    assert list((tmp_path / "rr").iterdir()) == []

@@ -98,9 +98,18 @@ def test_a_history_file_changed_since_learn_wrote_it_is_never_replaced(tmp_path)
         res = _cli(*learn, "--drive", "u1.csv", "--measured", "y1.csv", "--out", "u2.csv",
                    cwd=tmp_path)
         assert res.returncode == 2 and len(res.stderr.splitlines()) == 1, res.stderr
-        assert f"{name}: changed since hammerstein learn wrote it" in res.stderr
+        assert f"{name}: changed or deleted since hammerstein learn wrote it" in res.stderr
         assert tree_snapshot(tmp_path) == before
         (tmp_path / "hist" / name).write_bytes(original)       # restored: the learning goes on
+    for name in ("history.csv", "learning.csv", "best-trial.csv"):   # deleted: restarted half
+        original = (tmp_path / "hist" / name).read_bytes()
+        (tmp_path / "hist" / name).unlink()
+        before = tree_snapshot(tmp_path)
+        res = _cli(*learn, "--drive", "u1.csv", "--measured", "y1.csv", "--out", "u2.csv",
+                   cwd=tmp_path)
+        assert res.returncode == 2 and f"{name}: changed or deleted" in res.stderr, res.stderr
+        assert tree_snapshot(tmp_path) == before
+        (tmp_path / "hist" / name).write_bytes(original)
     res = _cli(*learn, "--drive", "u1.csv", "--measured", "y1.csv", "--out", "u2.csv",
                cwd=tmp_path)
     assert res.returncode == 0, res.stderr
