@@ -18,6 +18,23 @@ from hammerstein.cli._learn_history import history_rows
 from tests.hardware.test_evaluate_learn import REF, _cli, _hardware
 
 
+def _trials(tmp_path, ref, n):
+    """compensate, then ``n`` learn trials on the preset's own prediction (exact gain, noise
+    seeded per trial) into hist/; each trial's stdout."""
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
+                cwd=tmp_path).returncode == 0
+    learn = ["learn", "rakotondrabe-2dof", "--reference", ref, "--outputs", "x=x_meas,y=y_meas",
+             "--history", "hist"]
+    outs = []
+    for k in range(n):
+        _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", 0, k, gain=1.0)
+        res = _cli(*learn, "--drive", f"u{k}.csv", "--measured", f"y{k}.csv", "--out",
+                   f"u{k + 1}.csv", cwd=tmp_path)
+        assert res.returncode == 0, res.stderr
+        outs.append(res.stdout)
+    return outs
+
+
 def test_history_files_say_the_delay_removed_and_the_window(tmp_path):
     assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
                 cwd=tmp_path).returncode == 0
@@ -122,19 +139,10 @@ def test_the_judged_error_printed_is_the_one_compared_and_kept(tmp_path):
     trial was chosen on the kept one: the printed number was the noise of one record
     removed, the compared one that of both. Printed now is what is compared and kept."""
     ref = '{ kind = "circle", radius = 30, frequency = 120, periods = 12 }'
-    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
-                cwd=tmp_path).returncode == 0
-    learn = ["learn", "rakotondrabe-2dof", "--reference", ref, "--outputs", "x=x_meas,y=y_meas",
-             "--history", "hist"]
     printed = []
-    for k in range(3):
-        _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", 0, k, gain=1.0)
-        res = _cli(*learn, "--drive", f"u{k}.csv", "--measured", f"y{k}.csv", "--out",
-                   f"u{k + 1}.csv", cwd=tmp_path)
-        assert res.returncode == 0, res.stderr
-        m = re.search(rf"trial {k} judged \(RMS less the sensor noise\): RMS ([0-9.e-]+) µm",
-                      res.stdout)
-        assert m, res.stdout
+    for k, out in enumerate(_trials(tmp_path, ref, 3)):
+        m = re.search(rf"trial {k} judged \(RMS less the sensor noise\): RMS ([0-9.e-]+) µm", out)
+        assert m, out
         printed.append(float(m.group(1)))
     kept = pd.read_csv(tmp_path / "hist/settled.csv")["judged_um"].tolist()
     assert len(kept) == 3
@@ -175,17 +183,7 @@ def test_monotonic_is_said_only_of_a_trial_better_than_the_best(tmp_path):
     within the noise. A trial not better than the best says the condition holds on the model
     only."""
     ref = '{ kind = "circle", radius = 30, frequency = 100, periods = 12 }'
-    assert _cli("compensate", "rakotondrabe-2dof", "--reference", ref, "--out", "u0.csv",
-                cwd=tmp_path).returncode == 0
-    learn = ["learn", "rakotondrabe-2dof", "--reference", ref, "--outputs", "x=x_meas,y=y_meas",
-             "--history", "hist"]
-    said = []
-    for k in range(8):
-        _hardware(tmp_path / f"u{k}.csv", tmp_path / f"y{k}.csv", 0, k, gain=1.0)
-        res = _cli(*learn, "--drive", f"u{k}.csv", "--measured", f"y{k}.csv", "--out",
-                   f"u{k + 1}.csv", cwd=tmp_path)
-        assert res.returncode == 0, res.stderr
-        said.append("<= 1: monotonic on the model" in res.stdout)
+    said = ["<= 1: monotonic on the model" in out for out in _trials(tmp_path, ref, 8)]
     state = pd.read_csv(tmp_path / "hist/learning.csv", header=None, index_col=0)[1]
     judged = pd.read_csv(tmp_path / "hist/settled.csv")["judged_um"].tolist()
     best = [k == 0 or judged[k] < min(judged[:k]) for k in range(8)]
