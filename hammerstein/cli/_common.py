@@ -172,14 +172,30 @@ def written_by_hammerstein(path):
     bool
         False also when the file cannot be read.
     """
-    if carries_provenance(path):
-        return True
+    return carries_provenance(path) or is_drive_file(path)
+
+
+def is_drive_file(path):
+    """Whether ``path`` starts with a drive file's header (``# hammerstein <command> drive``).
+
+    The header itself, not any line starting ``# hammerstein`` (a user's
+    ``# hammerstein notes`` was taken for a drive and replaced). At most 200
+    bytes are read.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+
+    Returns
+    -------
+    bool
+        False also when the file cannot be read.
+    """
     try:
         with open(path, "rb") as fh:
             head = fh.read(200)
     except OSError:
         return False
-    # the drive header itself ("# hammerstein compensate drive: ..."), not any "# hammerstein"
     return re.match(rb"# hammerstein [a-z-]+ drive\b", head.removeprefix(b"\xef\xbb\xbf")) is not None
 
 

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hammerstein.cli._common import add_column_options, number_type
+from hammerstein.cli._common import add_column_options, is_drive_file, number_type
 from hammerstein.core.files import PROVENANCE, carries_provenance, escape
-from hammerstein.compensation.drive import DRIVE_MARK, read_signals
+from hammerstein.compensation.drive import read_signals
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.models.hysteresis import MultivariablePI
@@ -535,7 +535,7 @@ def owned_problem(out, force):
             first = fh.read(200)            # the first line's start, bounded
     except OSError:
         return None
-    if first.startswith(DRIVE_MARK):
+    if is_drive_file(p):
         return None
     if carries_provenance(p):       # a model, metrics or report file of another command
         m = re.match(rf"# {PROVENANCE} ([a-z-]+)", first.lstrip("\ufeff"))

@@ -412,6 +412,11 @@ def test_a_users_file_starting_like_a_mark_is_not_taken_for_a_drive(tmp_path):
                cwd=tmp_path)
     assert res.returncode == 2 and "hammerstein did not write" in _one_line(res)
     assert (tmp_path / "spoof.txt").read_text() == "# hammerstein notes of mine\nimportant\n"
+    # named directly too: replaced only with --force
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "spoof.txt",
+               cwd=tmp_path)
+    assert res.returncode == 2 and "was not written by hammerstein" in _one_line(res)
+    assert (tmp_path / "spoof.txt").read_text() == "# hammerstein notes of mine\nimportant\n"
 
 
 def test_a_link_to_the_projects_own_file_is_followed(tmp_path):
