@@ -247,10 +247,12 @@ def out_file_problem(out, what="file", inputs=()):
                     f"or without --force (one planted at the name would send the {what} "
                     f"there): give {escape(real)} itself, remove the link or choose another "
                     f"name")
+    link = (f" (a symbolic link to {escape(os.path.realpath(p))})" if p.is_symlink() else "")
     if p.is_dir():
-        return f"--out: {out} is a directory; expected a {what} name"
+        return f"--out: {out}{link} is a directory; expected a {what} name"
     if os.path.lexists(p) and p.exists() and not p.is_file():
-        return f"--out: {out} is not a regular file (a device, FIFO or socket); expected a {what} name"
+        return (f"--out: {out}{link} is not a regular file (a device, FIFO or socket); expected "
+                f"a {what} name")
     if p.is_file() and (not p.stat().st_mode & 0o222 or not os.access(p, os.W_OK)):
         return f"--out: {out} is read-only; make it writable (chmod u+w) or choose another name"
     problem = out_dir_problem(p.resolve().parent if p.is_symlink() else p.parent, follow_link=True)

@@ -49,6 +49,7 @@ from hammerstein.cli._output import add_verbosity, print_warnings
 from hammerstein.core.files import (FileLimitError, carries_provenance, escape, guard_inputs,
                                     locked, path_problem, provenance_line, replace_problem,
                                     safe_write)
+from hammerstein.report._ownership import kept_note
 from hammerstein.report.render import figure_selection
 from hammerstein.runner import run_pipelined, run_scenarios
 from hammerstein.scenario import diskcache
@@ -251,9 +252,7 @@ def _check(args, baseline_path, baseline, tolerance, overrides=None):
     outcomes = _run(args.scenarios, args.out, getattr(args, "force", False))
     for o in outcomes:
         if getattr(o, "kept", None) is not None:
-            print(f"note: the earlier {escape(o.out_dir)} held files hammerstein did not write: "
-                  f"--force moved it to {escape(o.kept)}/ (nothing in it deleted)",
-                  file=sys.stderr)
+            print(kept_note(o.out_dir, o.kept), file=sys.stderr)
     names = [o.name for o in outcomes]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:

@@ -22,6 +22,7 @@ from hammerstein.cli._common import (one_line, out_dir_problem, print_err, sched
                                      set_warning_subject, workers_type)
 from hammerstein.core.files import escape, guard_inputs
 from hammerstein.cli._output import add_verbosity, print_warnings
+from hammerstein.report._ownership import kept_note
 from hammerstein.report.render import figure_selection
 from hammerstein.scenario import diskcache
 from hammerstein.runner import MARKER, remove_stale_temporaries, run_pipelined
@@ -131,9 +132,7 @@ def handler(args):
                 cases = f"{n_cases} case{'' if n_cases == 1 else 's'}"
                 print(f"{escape(path)}: wrote {escape(outcome.out_dir)}/ ({cases}){took}")
                 if outcome.kept is not None:
-                    print(f"{escape(path)}: note: the earlier {escape(outcome.out_dir)} held "
-                          f"files hammerstein did not write: --force moved it to "
-                          f"{escape(outcome.kept)}/ (nothing in it deleted)")
+                    print(f"{escape(path)}: {kept_note(outcome.out_dir, outcome.kept)}")
                 print_warnings(escape(path), outcome.warnings, verbosity)
                 _print_divergences(escape(path), outcome.metrics)
         else:

@@ -18,7 +18,7 @@ from pathlib import Path
 from hammerstein.core.files import bounded_read_text, escape, safe_write
 
 __all__ = ["MARKER", "ownership_problem", "input_problem", "write_manifest", "report_manifest",
-           "unlisted_entries", "manifest_text", "kept_name"]
+           "unlisted_entries", "manifest_text", "kept_name", "kept_note"]
 
 #: File in every report directory: the project wrote it (``run`` may replace it).
 MARKER = ".hammerstein-report"
@@ -245,3 +245,23 @@ def kept_name(target):
         k += 1
         kept = target.with_name(f"{stem}-{k}")
     return kept
+
+
+def kept_note(out_dir, kept):
+    """The note saying what ``--force`` moved aside from ``out_dir`` to ``kept`` (one line).
+
+    Worded by what ``kept`` is once moved: a directory "held files
+    hammerstein did not write"; a file, a link or anything else stood where
+    the report goes (a plain file at ``DIR/<scenario>`` was said to have
+    "held files").
+    """
+    kept = Path(kept)
+    if kept.is_dir() and not kept.is_symlink():
+        what, where = "held files hammerstein did not write", f"{escape(kept)}/"
+    else:
+        what = ("was a symbolic link" if kept.is_symlink() else
+                "was a file hammerstein did not write" if kept.is_file() else
+                "was not a directory")
+        where = escape(kept)
+    return (f"note: the earlier {escape(out_dir)} {what}: --force moved it to {where} "
+            f"(nothing deleted)")

@@ -403,6 +403,24 @@ def test_a_link_to_a_users_file_is_never_written_through(tmp_path, command, forc
         assert _tree(tmp_path) == before and victim.read_text() == "precious user data\n"
 
 
+@pytest.mark.parametrize("target", ["directory", "fifo"])
+def test_a_link_to_a_directory_or_fifo_says_it_is_a_link(tmp_path, target):
+    """An outside check: ``--out L`` with L a link to a directory (or a FIFO) was refused as
+    "L is a directory", which L, listed with ``ls``, is not: the line says where it points."""
+    where = tmp_path / "elsewhere"
+    if target == "directory":
+        where.mkdir()
+    else:
+        os.mkfifo(where)
+    os.symlink(where, tmp_path / "L")
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "L",
+               cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    line = _one_line(res)
+    assert f"L (a symbolic link to {where})" in line
+    assert ("is a directory" if target == "directory" else "not a regular file") in line
+
+
 def test_a_users_file_starting_like_a_mark_is_not_taken_for_a_drive(tmp_path):
     """An outside check: '# hammerstein notes of mine' passed for a drive file's first line,
     and compensate replaced it through a link without --force."""

@@ -90,7 +90,7 @@ def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
     kept = sorted(p.name for p in out.iterdir() if p.name != "good-static")
     assert len(kept) == 1 and kept[0].startswith("good-static.kept-")
     assert (out / kept[0] / "metrics.csv").read_bytes() == before
-    assert f"moved it to {out / kept[0]}/" in text
+    assert f"held files hammerstein did not write: --force moved it to {out / kept[0]}/" in text
 
 
 def test_run_force_moves_a_users_tree_aside_and_deletes_nothing(capsys, tmp_path):
@@ -111,6 +111,27 @@ def test_run_force_moves_a_users_tree_aside_and_deletes_nothing(capsys, tmp_path
     kept = [p for p in out.iterdir() if p.name.startswith("good-static.kept-")]
     assert len(kept) == 2 and not (out / "good-static" / "notes.txt").exists()
     assert sum((k / "notes.txt").is_file() for k in kept) == 1
+
+
+@pytest.mark.parametrize("kind", ["file", "symlink"])
+def test_run_force_names_what_it_moved_aside(capsys, tmp_path, kind):
+    """An outside check: a plain file at ``out/<scenario>`` moved aside by ``--force`` was said
+    to have "held files hammerstein did not write". The note says what stood there."""
+    out = tmp_path / "out"
+    out.mkdir()
+    target = out / "good-static"
+    if kind == "file":
+        target.write_text("precious")
+    else:
+        target.symlink_to(tmp_path / "nowhere")
+    status, text, _ = _call(capsys, "run", GOOD, "--out", out, "--force", "--figures", "none")
+    assert status == 0
+    kept = [p for p in out.iterdir() if p.name.startswith("good-static.kept-")]
+    assert len(kept) == 1 and (kept[0].is_symlink() if kind == "symlink" else
+                               kept[0].read_text() == "precious")
+    said = "was a symbolic link" if kind == "symlink" else "was a file hammerstein did not write"
+    assert f"{said}: --force moved it to {kept[0]} (nothing deleted)" in text
+    assert "held files" not in text
 
 
 def test_report_directories_get_umask_permissions(capsys, tmp_path):
