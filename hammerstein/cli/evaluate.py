@@ -62,12 +62,14 @@ from hammerstein.cli._learn_checks import (gain_band, model_gain_note, model_gai
                                            stepping_outputs)
 from hammerstein.compensation.shaping import delay_search_span
 from hammerstein.signals.references import raster_line_index
-from hammerstein.exceptions import DataFileError, FileLimitError, HammersteinError, PresetError
+from hammerstein.exceptions import (DataFileError, FileLimitError, HammersteinError, OutputError,
+                                   PresetError)
 from hammerstein.io.datafiles import signal_table
 from hammerstein.core.files import markdown_text
 from hammerstein.report.definitions import definitions_lines
 from hammerstein.report.figures import save
-from hammerstein.report._ownership import MARKER, manifest_text, report_manifest, unlisted_entries
+from hammerstein.report._ownership import (MARKER, digests_of, manifest_text, report_manifest,
+                                           unlisted_entries)
 from hammerstein.report.scenario import signal_summary
 from hammerstein.report.trajectories import trajectory_figure
 
@@ -441,6 +443,12 @@ def _handle(args):
                 with contextlib.suppress(OSError):
                     os.rmdir(out)
             raise
+        # then the digests of what it wrote (once written): a later evaluate or run replaces
+        # no file edited since (report.md annotated by hand was). The report is complete
+        # without them (its marker lists the names): a failure here is no error
+        with contextlib.suppress(OSError, OutputError):
+            safe_write(out / MARKER, manifest_text(VERSION, OUTPUT_FILES, digests=digests_of(
+                out, OUTPUT_FILES[1:])), "report marker", root=out)
     except catch() as exc:
         print_err(f"hammerstein evaluate: error: {' '.join(str(exc).split())}")
         return 1

@@ -15,10 +15,10 @@ import os
 import time
 from pathlib import Path
 
-from hammerstein.core.files import bounded_read_text, escape, safe_write
+from hammerstein.core.files import bounded_read_text, escape, file_digest, safe_write
 
 __all__ = ["MARKER", "ownership_problem", "input_problem", "write_manifest", "report_manifest",
-           "unlisted_entries", "manifest_text", "kept_name", "kept_note"]
+           "unlisted_entries", "manifest_text", "kept_name", "kept_note", "digests_of"]
 
 #: File in every report directory: the project wrote it (``run`` may replace it).
 MARKER = ".hammerstein-report"
@@ -33,8 +33,8 @@ def _is_ours(target):
     return not any(target.iterdir())
 
 
-def _manifest(target):
-    """The relative paths the marker of ``target`` lists (its manifest), or None (an older report)."""
+def _marker_lines(target):
+    """The manifest's lines of the marker of ``target`` (after ``manifest``), or None."""
     try:
         text = bounded_read_text(target / MARKER, "toml", "report marker")
     except (OSError, ValueError):
@@ -42,11 +42,37 @@ def _manifest(target):
     lines = text.splitlines()
     if "manifest" not in lines:
         return None
-    return {ln[5:] for ln in lines[lines.index("manifest") + 1:] if ln.startswith("file ")}
+    return lines[lines.index("manifest") + 1:]
+
+
+def _manifest(target):
+    """The relative paths the marker of ``target`` lists (its manifest), or None (an older report)."""
+    lines = _marker_lines(target)
+    if lines is None:
+        return None
+    return {ln[5:] for ln in lines if ln.startswith("file ")}
+
+
+def _digests(target):
+    """{relative path: SHA-256} the marker of ``target`` keeps (empty for an older marker)."""
+    out = {}
+    for ln in _marker_lines(target) or []:
+        if ln.startswith("sha256 "):
+            digest, _, rel = ln[7:].partition(" ")
+            out[rel] = digest
+    return out
+
+
+def _changed(target):
+    """Listed files of ``target`` whose bytes differ from those the manifest's digests keep."""
+    return sorted(rel for rel, digest in _digests(target).items()
+                  if os.path.isfile(target / rel) and not os.path.islink(target / rel)
+                  and file_digest(target / rel) != digest)
 
 
 def _unlisted(target):
-    """Entries of the marked ``target`` its manifest does not list (none without a manifest)."""
+    """Entries of the marked ``target`` its manifest does not list, then the listed files changed
+    since they were written (``<path> (changed)``); none without a manifest."""
     listed = _manifest(target)
     if listed is None:
         return []
@@ -62,7 +88,7 @@ def _unlisted(target):
             extra.append(rel)
             if is_dir:
                 dirnames.remove(n)                  # named once, not each file under it
-    return extra
+    return extra + [f"{rel} (changed)" for rel in _changed(target)]
 
 
 def report_manifest(target):
@@ -99,7 +125,7 @@ def unlisted_entries(target):
     return _unlisted(Path(target))
 
 
-def manifest_text(version, files, token=None):
+def manifest_text(version, files, token=None, digests=None):
     """The marker of a report directory listing ``files`` (relative paths).
 
     Parameters
@@ -108,13 +134,37 @@ def manifest_text(version, files, token=None):
     files : iterable of str
     token : str, optional
         The ``owner`` line.
+    digests : dict of str to str, optional
+        {relative path: SHA-256} of the files as written: a later ``run``,
+        ``check --out`` or ``evaluate`` into the directory then replaces no
+        file the user has edited since (``report.md`` annotated by hand).
 
     Returns
     -------
     str
     """
+    digests = digests or {}
     return (f"hammerstein {version}\n" + (f"owner {token}\n" if token else "") + "manifest\n"
-            + "".join(f"file {f}\n" for f in sorted(files) if f != MARKER))
+            + "".join(f"file {f}\n" for f in sorted(files) if f != MARKER)
+            + "".join(f"sha256 {digests[f]} {f}\n" for f in sorted(digests)
+                      if f != MARKER and digests[f]))
+
+
+def digests_of(directory, files):
+    """{relative path: SHA-256} of ``files`` (relative to ``directory``) that are regular files.
+
+    Parameters
+    ----------
+    directory : str or pathlib.Path
+    files : iterable of str
+
+    Returns
+    -------
+    dict of str to str
+    """
+    directory = Path(directory)
+    return {f: file_digest(directory / f) for f in files
+            if (directory / f).is_file() and not (directory / f).is_symlink()}
 
 
 def write_manifest(tmp, version, token=None):
@@ -132,7 +182,8 @@ def write_manifest(tmp, version, token=None):
     tmp = Path(tmp)
     wrote = sorted(Path(os.path.relpath(os.path.join(d, n), tmp)).as_posix()
                    for d, _, names in os.walk(tmp) for n in names)
-    safe_write(tmp / MARKER, manifest_text(version, wrote, token), "report marker")
+    safe_write(tmp / MARKER, manifest_text(version, wrote, token, digests_of(tmp, wrote)),
+               "report marker")
 
 
 def _entry(path):
@@ -226,8 +277,13 @@ def ownership_problem(target, force, inputs=()):
         if not extra:
             return None
         more = f" and {len(extra) - 3} more" if len(extra) > 3 else ""
-        return (f"{escape(target)}: holds {len(extra)} file(s) hammerstein did not write "
-                f"({', '.join(escape(e) for e in extra[:3])}{more}; not in its {MARKER}); move "
+        changed = any(e.endswith(" (changed)") for e in extra)
+        what = ("hammerstein did not write or that changed since it wrote them" if changed else
+                "hammerstein did not write")
+        where = (f"not in its {MARKER} or not as it keeps them" if changed else
+                 f"not in its {MARKER}")
+        return (f"{escape(target)}: holds {len(extra)} file(s) {what} "
+                f"({', '.join(escape(e) for e in extra[:3])}{more}; {where}); move "
                 f"them away, choose another --out, or use --force to move it aside (never deleted) "
                 f"and write the report")
     what = ("a symbolic link" if target.is_symlink() else
@@ -257,7 +313,7 @@ def kept_note(out_dir, kept):
     """
     kept = Path(kept)
     if kept.is_dir() and not kept.is_symlink():
-        what, where = "held files hammerstein did not write", f"{escape(kept)}/"
+        what, where = "held files hammerstein did not write or changed", f"{escape(kept)}/"
     else:
         what = ("was a symbolic link" if kept.is_symlink() else
                 "was a file hammerstein did not write" if kept.is_file() else

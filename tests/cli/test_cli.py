@@ -1,6 +1,7 @@
 """The CLI end to end: every bundled scenario into a temporary directory,
 report contents, the paper's numbers, exit codes and atomic output."""
 
+import os
 from pathlib import Path
 
 import pandas as pd
@@ -130,9 +131,10 @@ def test_rerun_replaces_the_report_atomically(tmp_path):
     default = str(ROOT / "scenarios" / "default.toml")
     # the first run only has to leave a report of ours to replace: no figures needed
     assert main(["run", default, "--out", str(out), "--figures", "none"]) == 0
-    (out / "default" / "metrics.csv").write_text("old")   # a file the report wrote (its manifest)
+    first = os.stat(out / "default" / "metrics.csv").st_ino    # a file the report wrote
     assert main(["run", default, "--out", str(out)]) == 0
-    assert (out / "default" / "metrics.csv").read_text() != "old"
+    assert os.stat(out / "default" / "metrics.csv").st_ino != first       # written anew
+    assert (out / "default" / "report.md").read_text().count("![") > 0    # with its figures
     assert sorted(p.name for p in out.iterdir()) == ["default"]
 
 

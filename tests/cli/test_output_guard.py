@@ -680,3 +680,24 @@ def test_a_run_never_deletes_files_beside_an_evaluate_report(tmp_path):
     res = _cli("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "ev",
                cwd=tmp_path)
     assert res.returncode == 2 and "notes.txt" in _one_line(res)
+
+
+# -- a report file edited after it was written (the manifest's digests) ----------------------
+def test_evaluate_replaces_its_own_report_but_not_one_edited_since(tmp_path):
+    """The report's marker listed names only: a ``report.md`` annotated by hand was replaced by
+    the next ``evaluate`` into the same directory. It keeps each file's SHA-256; a changed file
+    stops the command (one line naming it), nothing written."""
+    t = [k * 5e-5 for k in range(400)]
+    (tmp_path / "meas.csv").write_text("t,x,y\n" + "".join(f"{v!r},0.5,0.25\n" for v in t))
+    args = ("evaluate", "--reference", CIRCLE, "--measured", "meas.csv", "--out", "ev")
+    assert _cli(*args, cwd=tmp_path).returncode == 0
+    marker = (tmp_path / "ev" / ".hammerstein-report").read_text()
+    assert "sha256 " in marker and " report.md\n" in marker
+    assert _cli(*args, cwd=tmp_path).returncode == 0          # its own, unchanged: replaced
+    report = tmp_path / "ev" / "report.md"
+    report.write_text(report.read_text() + "\nmy notes on this run\n")
+    before = {p: (tmp_path / "ev" / p).read_bytes() for p in _tree(tmp_path / "ev")}
+    res = _cli(*args, cwd=tmp_path)
+    assert res.returncode == 2, res.stderr
+    assert "report.md (changed)" in _one_line(res)
+    assert {p: (tmp_path / "ev" / p).read_bytes() for p in _tree(tmp_path / "ev")} == before

@@ -77,10 +77,10 @@ def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
     assert _call(capsys, "run", GOOD, "--out", out)[0] == 0
     marker = out / "good-static" / MARKER
     assert marker.read_text().startswith("hammerstein ")
-    (out / "good-static" / "metrics.csv").write_text("stale")
+    first = os.stat(out / "good-static" / "metrics.csv").st_ino
     # ownership, not figures, is under test from here on: skip drawing them
     assert _call(capsys, "run", GOOD, "--out", out, "--figures", "none")[0] == 0  # marked: replaced
-    assert (out / "good-static" / "metrics.csv").read_text() != "stale"
+    assert os.stat(out / "good-static" / "metrics.csv").st_ino != first
     marker.unlink()
     assert _call(capsys, "run", GOOD, "--out", out)[0] == 1  # no longer ours
     before = (out / "good-static" / "metrics.csv").read_bytes()
@@ -90,7 +90,7 @@ def test_run_replaces_its_own_or_empty_directories_and_force(capsys, tmp_path):
     kept = sorted(p.name for p in out.iterdir() if p.name != "good-static")
     assert len(kept) == 1 and kept[0].startswith("good-static.kept-")
     assert (out / kept[0] / "metrics.csv").read_bytes() == before
-    assert f"held files hammerstein did not write: --force moved it to {out / kept[0]}/" in text
+    assert f"held files hammerstein did not write or changed: --force moved it to {out / kept[0]}/" in text
 
 
 def test_run_force_moves_a_users_tree_aside_and_deletes_nothing(capsys, tmp_path):
@@ -132,6 +132,27 @@ def test_run_force_names_what_it_moved_aside(capsys, tmp_path, kind):
     said = "was a symbolic link" if kind == "symlink" else "was a file hammerstein did not write"
     assert f"{said}: --force moved it to {kept[0]} (nothing deleted)" in text
     assert "held files" not in text
+
+
+def test_run_keeps_a_report_file_edited_since_it_was_written(capsys, tmp_path):
+    """The report's marker listed names only: ``report.md`` annotated by hand was replaced by
+    the next ``run``. The marker keeps each file's SHA-256: the edited report stops ``run``
+    (one line naming it); ``--force`` moves the directory aside with the notes in it."""
+    out = tmp_path / "out"
+    assert _call(capsys, "run", GOOD, "--out", out, "--figures", "none")[0] == 0
+    marker = (out / "good-static" / MARKER).read_text()
+    assert "sha256 " in marker and " metrics.csv\n" in marker
+    assert _call(capsys, "run", GOOD, "--out", out, "--figures", "none")[0] == 0   # unchanged
+    report = out / "good-static" / "report.md"
+    report.write_text(report.read_text() + "\nmy notes\n")
+    before = tree_snapshot(tmp_path)
+    status, text, err = _call(capsys, "run", GOOD, "--out", out, "--figures", "none")
+    assert status == 1 and text == "" and len(err) == 1
+    assert "report.md (changed)" in err[0] and "changed since it wrote them" in err[0]
+    assert tree_snapshot(tmp_path) == before
+    assert _call(capsys, "run", GOOD, "--out", out, "--force", "--figures", "none")[0] == 0
+    kept = [p for p in out.iterdir() if p.name.startswith("good-static.kept-")]
+    assert len(kept) == 1 and (kept[0] / "report.md").read_text().endswith("my notes\n")
 
 
 def test_report_directories_get_umask_permissions(capsys, tmp_path):
