@@ -385,7 +385,10 @@ def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", f
     -------
     PreisachInverseCompensator or LinearInverseCompensator
         (or what ``inverse`` returns)
-        ``name`` the kind.
+        ``name`` the kind; ``actuator_model`` the whole ``model`` (its
+        ``model`` is the diagonal one ``per-axis`` and ``diagonal`` invert):
+        the drive's fade-in starts at the whole model's rest output, as
+        ``compensate``'s does.
 
     Raises
     ------
@@ -415,7 +418,9 @@ def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", f
     if kind == "static-gain":
         return LinearInverseCompensator(model, name="static-gain")
     if kind == "per-axis":
-        return inverse(diagonal_model(model), method="root", name="per-axis")
+        comp = inverse(diagonal_model(model), method="root", name="per-axis")
+        comp.actuator_model = model        # the whole model: what the drive's fade starts on
+        return comp
     if iterations != 1:
         raise CompensatorError(f"iterations: the inverse multiplicative law over a "
                                f"{type(model).__name__} runs one step per sample (iterations = 1), "
@@ -428,4 +433,5 @@ def mixed_compensator(model, kind, gain="secant", iterations=1, check="error", f
     comp = inverse(target, method="multiplicative", name=kind)
     comp.K, comp.K_inv = K, np.linalg.inv(K)
     comp.convergence_radius = _check_law(target, K, check, kind)
+    comp.actuator_model = model            # the whole model, where ``model`` may be its diagonal
     return comp

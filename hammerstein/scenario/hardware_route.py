@@ -311,7 +311,8 @@ def compensator_plant(plant, comp):
     drive's fade starts at that model's rest output and lasts for its modes'
     decay, and its shaping predicts that model's outputs, so
     :func:`start_drive` runs on this plant: the compensator's hysteresis model
-    (its ``model``), with, for a Hammerstein compensator, the G and creep it
+    (its ``actuator_model`` where it inverts a part of it, else its ``model``),
+    with, for a Hammerstein compensator, the G and creep it
     inverts, and otherwise the plant's linear part; the plant's amplifier (the
     scenario's hardware). A compensator identified with ``model =
     "generalized"`` on a Preisach plant faded in from the plant's rest output,
@@ -331,7 +332,9 @@ def compensator_plant(plant, comp):
         ``plant`` itself when the compensator's model is the plant's (or it has
         none of the plant's size), else a new plant.
     """
-    model = getattr(comp, "model", None)
+    # the whole model (per-axis and diagonal kinds invert only its diagonal: a fade from the
+    # diagonal's rest output put the drive 0.045 V off compensate's)
+    model = getattr(comp, "actuator_model", None) or getattr(comp, "model", None)
     hyst = plant.hysteresis
     if model is None or list(getattr(model, "input_names", ())) != list(hyst.input_names) \
             or list(getattr(model, "output_names", ())) != list(hyst.output_names):
