@@ -189,8 +189,8 @@ def diagonal_model(model):
     Returns
     -------
     MultivariableHysteresis
-        Same names and amplitude; component (l, k), k != l, None or a
-        constant ``Polynomial([0], offset=c_lk)``.
+        Same names, amplitude and ``input_range``; component (l, k), k != l,
+        None or a constant ``Polynomial([0], offset=c_lk)``.
     """
     m = model.n_inputs
     grid = [[None] * m for _ in range(m)]
@@ -201,8 +201,12 @@ def diagonal_model(model):
                 grid[l][k] = c
             elif _rest_output(c) != 0.0:
                 grid[l][k] = Polynomial([0.0], offset=_rest_output(c))
-    return MultivariableHysteresis(grid, model.input_names, model.output_names,
-                                   model.input_amplitude)
+    out = MultivariableHysteresis(grid, model.input_names, model.output_names,
+                                  model.input_amplitude)
+    # the records' input range: the exact inverse keeps its inputs (and flags its clamp) there,
+    # not at +-1.2 amplitude (per-axis on a 0..40 V stage searched down to -48 V)
+    out.input_range = getattr(model, "input_range", None)
+    return out
 
 
 def _corner_radius(lo, hi, K):

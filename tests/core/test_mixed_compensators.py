@@ -156,6 +156,21 @@ def test_diagonal_model_keeps_the_direct_paths_and_the_couplings_constant_at_res
                                atol=1e-12)     # 3 µm of y at rest stay y's
 
 
+@pytest.mark.parametrize("kind", ["per-axis", "diagonal"])
+def test_the_kinds_over_the_diagonal_keep_the_records_input_range(kind):
+    """An outside check: ``per-axis`` and ``diagonal`` over an identified model searched their
+    root over +-1.2 amplitude (down to -48 V on a 0..40 V stage) instead of the records' range,
+    so a reference beyond reach was clamped where no record went and never flagged as such."""
+    model = _model()
+    model.input_range = np.array([[-2.0, 8.0], [-2.0, 8.0]])
+    assert np.array_equal(diagonal_model(model).input_range, model.input_range)
+    comp = mixed_compensator(model, kind, gain="midpoint", check="warn")
+    ref = np.vstack([np.linspace(0.0, -200.0, 400), np.linspace(0.0, 200.0, 400)])  # beyond reach
+    u, _ = comp.simulate(ref)
+    assert u[0].min() >= -2.0 - 1e-9 and u[1].max() <= 8.0 + 1e-9
+    assert u[0].min() < -2.0 + 1e-3 and u[1].max() > 8.0 - 1e-3      # held at the bounds
+
+
 @pytest.mark.parametrize("kind", ["multivariable", "diagonal", "per-axis", "static-gain"])
 def test_every_rate_independent_kind_over_a_preisach_plant_and_a_classical_one(kind, tmp_path):
     preisach = load_plant("realistic-2dof", dynamics=False)
