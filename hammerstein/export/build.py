@@ -285,6 +285,14 @@ def compensator_from_source(source, kind="multivariable", gain=None, iterations=
             if source.dynamics is None:
                 raise ExportError(f"kind: 'hammerstein' needs linear dynamics; {source.path} has no "
                                   f"[dynamics] (a preset with bending modes or a state space)")
+            if not classical and (gain is not None or iterations is not None
+                                  or feedback != "delay" or cutoff_hz is not None):
+                # its static part is the exact per-sample inverse: the options were ignored
+                label = model_class(source.model).label
+                raise ExportError(f"kind: 'hammerstein' over a {label} model inverts it exactly "
+                                  f"per sample and takes no gain, iterations "
+                                  f"or feedback options (the law's kinds over it: multivariable, "
+                                  f"diagonal)")
             G = source.dynamics
             if sampling_period is not None and abs(float(G.dt) - float(T)) > 1e-12 * float(T):
                 try:        # continuous dynamics sampled again at T, as compensate does

@@ -21,7 +21,7 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
                                             compensator_rest, hardware_drive,
                                             starts_at_rest)
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
-from hammerstein.compensation.model_classes import kind_problem
+from hammerstein.compensation.model_classes import kind_problem, model_class
 from hammerstein.compensation.kind_choice import choose_kind, explicit_law
 from hammerstein.compensation.reach import output_reach, reach_note
 from hammerstein.compensation.shaping import (first_mode_hz, main_frequency, mode_decay_s,
@@ -424,14 +424,21 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
         if problem:
             raise CompensatorError(problem)
         options, note = explicit_law(plant.hysteresis, kind, gain, check)
-    if kind in LAW_KINDS:
+    entry = model_class(plant.hysteresis)
+    # kind hammerstein runs the law over a classical PI only; over a Preisach or generalised-PI
+    # model it inverts exactly per sample, and --gain identity was ignored without a word
+    exact = kind == "hammerstein" and entry.exact_inverse_kind is not None
+    if kind in LAW_KINDS and not exact:
         if gain is not None:
             options["gain"] = gain
         if check is not None:
             options["check"] = check
     elif gain is not None or check is not None:
-        raise CompensatorError(f"--gain/--check: kind {kind!r} has no inverse multiplicative law "
-                               f"(they apply to {', '.join(LAW_KINDS)})")
+        what = (f"kind {kind!r} over a {entry.label} model inverts it exactly per sample, without "
+                f"the inverse multiplicative law" if exact else
+                f"kind {kind!r} has no inverse multiplicative law")
+        among = [k for k in LAW_KINDS if k != "hammerstein" or entry.exact_inverse_kind is None]
+        raise CompensatorError(f"--gain/--check: {what} (they apply to {', '.join(among)})")
     return kind, options, note
 
 

@@ -99,6 +99,15 @@ def test_gain_and_check_are_options_of_compensate(tmp_path, capsys):
     code, _, err = _run(capsys, "compensate", preset, "--reference", CIRCLE, "--out",
                         str(tmp_path / "d.csv"), "--kind", "per-axis", "--gain", "midpoint")
     assert code == 1 and "--gain/--check" in err
+    # an outside check: kind hammerstein over a Preisach model (its exact inverse) ignored
+    # --gain identity without a word, named or as the default kind
+    for kind in (["--kind", "hammerstein"], []):
+        code, _, err = _run(capsys, "compensate", preset, "--reference", CIRCLE, "--out",
+                            str(tmp_path / "h.csv"), *kind, "--gain", "identity")
+        assert code == 1 and len(err.strip().splitlines()) == 1
+        assert ("kind 'hammerstein' over a Preisach model inverts it exactly per sample, without "
+                "the inverse multiplicative law (they apply to multivariable, diagonal)") in err
+    assert not (tmp_path / "h.csv").exists()
 
 
 def test_export_default_kind_is_printed(tmp_path, capsys):

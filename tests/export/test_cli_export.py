@@ -72,6 +72,37 @@ def test_refusals_are_one_line(tmp_path, capsys, argv, status, needle):
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
 
 
+@pytest.mark.parametrize("argv", [["--gain", "identity"], ["--iterations", "9"],
+                                  ["--feedback", "lowpass"], ["--feedback", "lowpass",
+                                                              "--cutoff-hz", "5"]])
+def test_the_exact_hammerstein_kind_refuses_the_laws_options(tmp_path, capsys, argv):
+    """An outside check: over a Preisach model the default kind (hammerstein, its static part
+    the exact per-sample inverse) exported a byte-identical C with --gain, --iterations or
+    --feedback, which it ignored; preisach-inverse refused them."""
+    code, stdout, err = run(capsys, "realistic-2dof", "--target", "c", "--out",
+                            str(tmp_path / "o"), *argv)
+    assert code == 1 and stdout == "" and len(err.strip().splitlines()) == 1
+    assert "over a Preisach model inverts it exactly per sample and takes no gain" in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_default_name_of_a_long_preset_keeps_the_kind(tmp_path, capsys):
+    """An outside check: the default ``<preset>_<kind>`` was cut at 40 characters, which on a
+    long preset name dropped the kind: a second kind's export replaced the first's files."""
+    model = tmp_path / "my-xy-stage-2026-11-identified-classical-model.toml"
+    save_model(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis, model)
+    names = []
+    for kind in ("multivariable", "per-axis"):
+        code, _, err = run(capsys, str(model), "--target", "c", "--out", str(tmp_path / "o"),
+                           "--kind", kind, "--sampling-period", "1e-4")
+        assert code == 0, err
+        names.append(sorted(p.name for p in (tmp_path / "o").glob("*.h")))
+    assert names[0] == ["my_xy_stage_2026_11_identi_multivariable.h"]
+    assert names[1] == ["my_xy_stage_2026_11_identi_multivariable.h",
+                        "my_xy_stage_2026_11_identified_per_axis.h"]
+    assert all(len(n) <= 40 + 2 for n in names[1])
+
+
 def test_model_file_needs_a_sampling_period(tmp_path, capsys):
     model = tmp_path / "model.toml"
     save_model(load_plant("rakotondrabe-2dof", dynamics=False).hysteresis, model)
