@@ -68,7 +68,8 @@ def add_parser(subparsers):
                    help="C sources (default) or an FMI 2.0 FMU")
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")
     p.add_argument("--name", metavar="NAME",
-                   help="C prefix and file stem (default: <preset>_<kind>, as a C identifier)")
+                   help="C prefix and file stem (default: <preset>_<kind>, as a C identifier of at "
+                        "most 40 characters, the preset's name shortened to keep the kind whole)")
     p.add_argument("--kind", choices=list(KINDS) + list(REFUSED_KINDS), default=None,
                    help="compensator kind (default: the best for the model, printed with why: "
                         "hammerstein with dynamics, else the exact inverse of a Preisach or "
@@ -121,11 +122,18 @@ def add_parser(subparsers):
     p.set_defaults(handler=handler)
 
 
-def _default_name(stem, kind):
-    name = re.sub(r"[^A-Za-z0-9_]", "_", f"{stem}_{kind}")
-    if not re.match(r"[A-Za-z_]", name):
-        name = "c_" + name
-    return name[:40]
+def _default_name(stem, kind, limit=40):
+    """``<stem>_<kind>`` as a C identifier of at most ``limit`` characters, the kind kept whole.
+
+    The stem is shortened, never the kind: cut at 40 characters, a long preset name
+    (``my-xy-stage-2026-11-identified-classical-model``) lost the kind, and exporting a
+    second kind replaced the first's files without a word.
+    """
+    tail = re.sub(r"[^A-Za-z0-9_]", "_", f"_{kind}")
+    head = re.sub(r"[^A-Za-z0-9_]", "_", str(stem))
+    if not re.match(r"[A-Za-z_]", head):
+        head = "c_" + head
+    return (head[:max(limit - len(tail), 1)].rstrip("_") or "c") + tail
 
 
 def _owned_problem(args, source, kind):
