@@ -943,17 +943,21 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
         when = f" {int(fade_samples) * sampling_period:g} s" if sampling_period else ""
         over = start[i] / bound[i] - 1
         moved = np.abs(u[i] - before)
+        # the samples that moved beyond rounding (1e-16 V counted: '9 sample(s)' where one moved),
+        # and where: the limit acts over the fade-in and the period after it
+        hit = np.flatnonzero(moved > 1e-12 * max(1.0, float(np.max(np.abs(before)))))
+        at = (f"{hit.size} sample(s)" + (f", from sample {hit[0]}" + (
+            f" (t = {hit[0] * sampling_period:.4g} s)" if sampling_period else "") if hit.size else ""))
         if over > _STEP_TOL:
             # what the exported C (fed the reference, not limited) differs by: said with the
             # limit (a user compared them and found 1e-4 V at three samples, said nowhere)
-            notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the "
+            notes.append(f"{name}: the start-up (the{when} fade-in and one period) slew-limited to the "
                          f"settled drive's largest step, {bound[i]:.3g} V per sample "
                          f"({start[i]:.3g} V asked, {100 * over:.3g} % more): the drive "
-                         f"differs from the compensator's by up to {moved.max():.2g} V at "
-                         f"{int(np.count_nonzero(moved))} sample(s)")
+                         f"differs from the compensator's by up to {moved.max():.2g} V at {at}")
             continue
-        notes.append(f"{name}: the start-up after the{when} fade-in slew-limited to the settled "
+        notes.append(f"{name}: the start-up (the{when} fade-in and one period) slew-limited to the settled "
                      f"drive's largest step, {bound[i]:.6g} V per sample ({over:.2g} of it more "
                      f"asked, {ROUNDING_WORDS}): the drive differs from the compensator's by up to "
-                     f"{moved.max():.2g} V at {int(np.count_nonzero(moved))} sample(s)")
+                     f"{moved.max():.2g} V at {at}")
     return u, notes

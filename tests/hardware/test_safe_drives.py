@@ -28,6 +28,7 @@ from hammerstein.cli.main import main
 from hammerstein.models.amplifier import (amplifier_from_table, records_amplifier_table,
                                          records_hold_steps)
 from hammerstein.compensation.drive import (drive_signal, hardware_drive, hardware_fade, keep_end,
+                                            limit_start_up,
                                            keep_start, read_signals, settled_step, shape_drive)
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.io.presets import load_plant, resolve_preset
@@ -482,7 +483,7 @@ def test_a_start_up_limited_by_a_hair_gets_no_advice(tmp_path, radius, frequency
                            f"periods = 8 }}", "--out", out])
     u, fade, text = _drive(out)
     assert "reaches the drive" not in printed + text
-    assert "the start-up after the" in text           # the limit itself is still said
+    assert "the start-up (the" in text           # the limit itself is still said
     settled = _steps(u[:, fade:]).max()
     assert _steps(u).max() <= settled * (1 + 1e-3)
 
@@ -941,3 +942,20 @@ def test_the_default_kind_on_creep_without_dynamics_is_not_sent_to_the_default_k
     assert "leaves out the creep by design" in text, text
     assert "no kind inverts creep without the dynamics" in text
     assert "compensates them all" not in text
+
+
+def test_the_start_up_note_counts_the_samples_that_moved_and_says_where():
+    """An outside check: the note said 9 samples differ from the compensator's where one did
+    (the limiter's running sum leaves 1e-16 V on the others), "after the fade-in" of a sample
+    inside it. It counts the samples moved beyond rounding and names the first."""
+    k = np.arange(600)
+    u = 3 * np.sin(2 * np.pi * k / 100 + 0.3) * np.minimum(k / 100, 1)
+    u[60] += 0.5                       # one sample, inside the 100-sample fade-in
+    limited, notes = limit_start_up(u[None, :], 100, 100, sampling_period=1e-4)
+    moved = np.abs(limited[0] - u)
+    assert np.count_nonzero(moved) > np.count_nonzero(moved > 1e-9)     # rounding elsewhere
+    assert len(notes) == 1
+    assert (f"at {np.count_nonzero(moved > 1e-9)} sample(s), from sample 60 (t = 0.006 s)"
+            in notes[0])
+    assert "the start-up (the 0.01 s fade-in and one period)" in notes[0]
+
