@@ -89,6 +89,11 @@ def check_compensator(spec, where, problems, source, own=None):
     clean = check_table(spec, schema, where, problems, source)
     if clean is not None:
         problems.extend(f"{source}: {where}.{msg}" for msg in option_problems(clean, own))
+        if "gain" not in spec:
+            # no gain written: the builder takes the kind's own when it converges, else the
+            # convergent one, as `compensate --kind KIND` does (registry._law_options); the
+            # report shows the gain that ran (resolve.shown_spec)
+            clean.pop("gain", None)
     return clean
 
 

@@ -28,6 +28,7 @@ from hammerstein.compensation.model_classes import MODEL_CLASSES, model_class
 from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
 from hammerstein.exceptions import CompensatorError
 from hammerstein.compensation.ilc import LearningCompensator
+from hammerstein.compensation.kind_choice import KIND_GAINS, explicit_law
 from hammerstein.models.plant import hardware_start
 from hammerstein.io.presets import PresetError, load_creep, load_dynamics, read_toml
 from hammerstein.scenario.identification import (ResolveContext, identified_from_records,
@@ -141,16 +142,38 @@ def _spec_model(spec, plant, context):
     return resolve_model(spec.get("model", "plant"), plant, context, spec.get("identify"))
 
 
+def _law_options(model, kind, spec):
+    """(gain, check) of the law: the table's, else what ``compensate --kind KIND`` takes.
+
+    Without a ``gain`` the kind's own (``midpoint`` for ``hammerstein``,
+    ``secant`` for ``multivariable``) when it converges, else the convergent
+    gain :func:`hammerstein.compensation.kind_choice.explicit_law` chooses, as
+    the commands do: a scenario refused ``kind = "hammerstein"`` on an
+    identified classical PI (rho 1.42 with the midpoint) that ``compensate``
+    ran with the secant gain (rho 0.777).
+    """
+    if spec.get("gain") is not None:
+        return spec["gain"], spec.get("check", "error")
+    options, _ = explicit_law(model, kind, None, spec.get("check"))
+    return (options.get("gain", KIND_GAINS.get(kind, "secant")),
+            options.get("check", spec.get("check", "error")))
+
+
 def _rate_independent(spec, plant, context, kind):
     """A rate-independent kind over the table's model, built by the model's class
     (:meth:`hammerstein.compensation.model_classes.ModelClass.compensator`: the law of Theorem 4.1 over a
     classical PI, or over a Preisach / generalised-PI model's own forward operator)."""
     model = _spec_model(spec, plant, context)
-    options = {"gain": spec.get("gain", "secant"), "iterations": spec.get("iterations", 1),
-               "check": spec.get("check", "error"), "feedback": spec.get("feedback", "delay")}
+    gain, check = (_law_options(model, kind, spec) if kind in ("multivariable", "diagonal") else
+                   (spec.get("gain", "secant"), spec.get("check", "error")))
+    options = {"gain": gain, "iterations": spec.get("iterations", 1),
+               "check": check, "feedback": spec.get("feedback", "delay")}
     if options["feedback"] != "delay":
         options.update(cutoff_hz=spec.get("cutoff_hz"), sampling_period=plant.sampling_period)
-    return model_class(model).compensator(model, kind, **options)
+    comp = model_class(model).compensator(model, kind, **options)
+    if kind in ("multivariable", "diagonal"):
+        comp.table_gain = gain             # what the report names (the table may give none)
+    return comp
 
 
 def _build_diagonal(spec, plant, context):
@@ -250,11 +273,13 @@ def _build_hammerstein(spec, plant, context):
     if spec.get("model", "plant") != "identified":
         model = _spec_model(spec, plant, context)
     pi, G = resolve_dynamics(spec, plant, context, model)
+    gain, check = _law_options(pi, "hammerstein", spec)
     comp = HammersteinCompensator(
-        pi, G, inversion=spec.get("inversion", "zpetc"), gain=spec.get("gain", "midpoint"),
-        iterations=spec.get("iterations", 3), check=spec.get("check", "error"),
+        pi, G, inversion=spec.get("inversion", "zpetc"), gain=gain,
+        iterations=spec.get("iterations", 3), check=check,
         feedback=spec.get("feedback", "delay"), cutoff_hz=spec.get("cutoff_hz"),
         sampling_period=plant.sampling_period, creep=_spec_creep(spec, plant, context))
+    comp.table_gain = gain
     return comp
 
 

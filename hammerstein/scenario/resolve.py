@@ -202,7 +202,9 @@ def shown_spec(spec, comp):
     runs no gain law; its table's law options (filled with their defaults,
     ``midpoint`` gain, 3 iterations) are left out and :data:`EXACT_KEY` names
     the exact inverse instead (a tester's report said "midpoint gain, 3
-    iterations" for the exact Preisach inverse).
+    iterations" for the exact Preisach inverse). A table that gives no
+    ``gain`` is shown with the gain its law took (``table_gain``: the kind's
+    own, or the convergent one when that does not converge).
 
     Parameters
     ----------
@@ -214,11 +216,17 @@ def shown_spec(spec, comp):
     Returns
     -------
     dict or None
-        ``spec`` itself, or a copy without :data:`LAW_OPTIONS` and with
-        :data:`EXACT_KEY`.
+        ``spec`` itself, a copy with the gain that ran, or a copy without
+        :data:`LAW_OPTIONS` and with :data:`EXACT_KEY`.
     """
-    if not spec or not getattr(comp, "exact_static", False):
+    if not spec:
         return spec
+    if not getattr(comp, "exact_static", False):
+        gain = getattr(comp, "table_gain", None)
+        if "gain" in spec or gain is None:
+            return spec
+        # a table without a gain: the one the builder took (the kind's own, or the convergent)
+        return {**spec, "gain": gain.tolist() if isinstance(gain, np.ndarray) else gain}
     out = {k: v for k, v in spec.items() if k not in LAW_OPTIONS}
     out[EXACT_KEY] = "the exact inverse of its model (no gain, no iterations)"
     return out

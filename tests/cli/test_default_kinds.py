@@ -323,3 +323,41 @@ def test_the_python_route_names_an_argument_it_cannot_take(kwargs, key):
     _, r = circle(plant.sampling_period, radius=5.0, frequency=50.0, periods=4)
     with pytest.raises(CompensatorError, match=rf"^{key}: expected"):
         compensate_reference(plant, r, **{"period_samples": 400, **kwargs})
+
+
+@pytest.mark.parametrize("kind", ["hammerstein", "multivariable"])
+def test_a_scenario_without_gain_runs_the_gain_compensate_runs(tmp_path, capsys, kind):
+    """An outside check: on a classical PI whose kind's own gain diverges (the midpoint at
+    rho 1.3), ``compensate --kind hammerstein`` took the convergent gain while a scenario with
+    the same kind and no ``gain`` stopped on rho. It takes the same gain and writes the same
+    drive; a gain written in the table is still the table's (refused, naming rho)."""
+    # the records' amplifier, as identify writes it: the scenario's drive starts as compensate's
+    pi, path = _coupled_pi_with_dynamics(tmp_path, amplifier={
+        "source": "records", "ux": {"range": [-10.0, 10.0]}, "uy": {"range": [-10.0, 10.0]}})
+    ref = '{ kind = "circle", radius = 5, frequency = 20, periods = 3 }'
+    code, _, err = _run(capsys, "compensate", str(path), "--reference", ref, "--out",
+                        str(tmp_path / "cli.csv"), "--kind", kind)
+    assert code == 0, err
+    table = (f'name = "same"\n[plant]\npreset = "{path.name}"\n[compensator]\nkind = "{kind}"\n'
+             f'[[cases]]\nname = "circle"\nreference = {ref}\n')
+    (tmp_path / "same.toml").write_text(table)
+    code, _, err = _run(capsys, "run", str(tmp_path / "same.toml"), "--out",
+                        str(tmp_path / "rep"), "--figures", "none")
+    assert code == 0, err
+    lines = [ln for ln in (tmp_path / "rep" / "same" / "timeseries-circle.csv").read_text()
+             .splitlines() if ln and not ln.startswith("#")]
+    head = lines[0].split(",")
+    ran = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    ran = ran[:, [head.index("ux_V"), head.index("uy_V")]]
+    cli = _drive(tmp_path / "cli.csv")[:, 1:3]
+    assert ran.shape == cli.shape
+    # the report's time series holds 9 significant digits: 5e-9 V of a 4.5 V drive
+    assert np.max(np.abs(ran - cli)) <= 1.5e-9 * np.max(np.abs(cli))
+    assert "secant gain" in (tmp_path / "rep" / "same" / "report.md").read_text()
+    (tmp_path / "mid.toml").write_text(table.replace(f'kind = "{kind}"\n',
+                                                     f'kind = "{kind}"\ngain = "midpoint"\n')
+                                       .replace('name = "same"', 'name = "mid"'))
+    code, _, err = _run(capsys, "run", str(tmp_path / "mid.toml"), "--out",
+                        str(tmp_path / "rep"), "--figures", "none")
+    assert code == 1 and "rho(I - K^-1 J) reaches 1.3" in err
+
