@@ -959,3 +959,20 @@ def test_the_start_up_note_counts_the_samples_that_moved_and_says_where():
             in notes[0])
     assert "the start-up (the 0.01 s fade-in and one period)" in notes[0]
 
+
+@pytest.mark.parametrize("radius, said", [(300, True), (30, False)])
+def test_a_drive_beyond_the_models_inputs_is_said(tmp_path, radius, said):
+    """An outside check: on a bundled preset (no amplifier), a 300 µm circle's drive peaked at
+    31 and 39 V for a model identified within +-10 V, and compensate said nothing."""
+    out = tmp_path / "d.csv"
+    printed = _compensate(["rakotondrabe-2dof", "--reference",
+                           f"{{ kind = \"circle\", radius = {radius}, frequency = 100, "
+                           f"periods = 20 }}", "--out", out])
+    u, _, text = _drive(out)
+    beyond = bool(np.any(np.abs(u) > 10.0))
+    assert beyond == said
+    line = "the drive leaves the inputs the model was identified on"
+    assert (line in printed and line in text) == said
+    if said:
+        assert f"ux {u[0].min():.4g}..{u[0].max():.4g} V against -10..10 V" in printed
+
