@@ -261,6 +261,11 @@ def handler(args):
     if args.cutoff_hz is not None and args.feedback != "lowpass":
         print_err(f"{prog}: error: --cutoff-hz: only used with --feedback lowpass")
         return 2
+    if args.feedback == "lowpass" and args.cutoff_hz is None:
+        # the law's own message named its keys 'cutoff_hz, sampling_period' (exit 1)
+        print_err(f"{prog}: error: --feedback lowpass needs --cutoff-hz HZ (the low-pass "
+                  f"feedback's cut-off frequency)")
+        return 2
     problem = None if args.iterations is None else integer_problem(args.iterations, 1, MAX_ITERATIONS)
     if problem:
         print_err(f"{prog}: error: --iterations: {problem}")

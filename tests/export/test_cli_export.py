@@ -62,6 +62,8 @@ def test_the_stable_inversion_is_exported(tmp_path, capsys):
     (["--name", "int"], 2, "--name"),
     (["--name", "9lives"], 2, "--name"),
     (["--iterations", "0"], 2, "--iterations"),
+    (["--kind", "multivariable", "--feedback", "lowpass"], 2,
+     "--feedback lowpass needs --cutoff-hz HZ"),
     (["--kind", "preisach-inverse"], 1, "classical PI model, which kind 'preisach-inverse' does not take; the kinds that export it: hammerstein, multivariable"),
 ])
 def test_refusals_are_one_line(tmp_path, capsys, argv, status, needle):
@@ -73,8 +75,7 @@ def test_refusals_are_one_line(tmp_path, capsys, argv, status, needle):
 
 
 @pytest.mark.parametrize("argv", [["--gain", "identity"], ["--iterations", "9"],
-                                  ["--feedback", "lowpass"], ["--feedback", "lowpass",
-                                                              "--cutoff-hz", "5"]])
+                                  ["--feedback", "lowpass", "--cutoff-hz", "5"]])
 def test_the_exact_hammerstein_kind_refuses_the_laws_options(tmp_path, capsys, argv):
     """An outside check: over a Preisach model the default kind (hammerstein, its static part
     the exact per-sample inverse) exported a byte-identical C with --gain, --iterations or
