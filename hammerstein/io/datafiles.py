@@ -362,6 +362,18 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
         units = {c: str(u).strip() for c, u in zip(frame.columns, row)}
         frame = frame.iloc[1:].reset_index(drop=True)
     names = next(csv.reader([first], delimiter=sep)) if sep != r"\s+" else first.split()
+    _refuse_repeated_names(names, where, error)
+    table = _Table(frame, text, sep, path, what, error, units)
+    short = _short_row(table)
+    if short is not None:      # a short row is read as empty cells, in any column: refused
+        raise error(f"{where}: ragged rows: data row {short[0] + 1} has {short[1]} fields, the "
+                    f"header has {frame.shape[1]}; expected the same number of fields on every "
+                    f"row{table.cut_note(short[0])}")
+    return table
+
+
+def _refuse_repeated_names(names, where, error):
+    """Raise ``error`` when the header names a column twice (pandas would read ``x.1``)."""
     seen, twice = set(), []
     for name in (str(n).strip() for n in names):
         if name in seen and name not in twice:
@@ -372,13 +384,6 @@ def signal_table(raw, path, what="data file", error=DataFileError, comment=True)
         raise error(f"{where}: the column name{'s' if len(twice) > 1 else ''} {shown} "
                     f"{'appear' if len(twice) > 1 else 'appears'} more than once in the header; "
                     f"expected each column named once")
-    table = _Table(frame, text, sep, path, what, error, units)
-    short = _short_row(table)
-    if short is not None:      # a short row is read as empty cells, in any column: refused
-        raise error(f"{where}: ragged rows: data row {short[0] + 1} has {short[1]} fields, the "
-                    f"header has {frame.shape[1]}; expected the same number of fields on every "
-                    f"row{table.cut_note(short[0])}")
-    return table
 
 
 def _short_row(table):
@@ -547,6 +552,8 @@ def _read_table(path, skip_rows=0, head=False):
         raise DataFileError(f"{path}: cannot parse the first line ({escape(exc, 100)})") from None
     cells = [c.strip() for c in first if c.strip()]
     header = any(not _is_number(c) for c in cells)
+    if header:      # identify read the first of two 'ux' columns without a word
+        _refuse_repeated_names(first, escape(path), DataFileError)
     # a units row under the header, as data-acquisition programs write it
     # ("s,V,µm", "[s];[V];[um]"): every cell text, none a number; skipped
     units = header and len(head) > 1 and _units_row(head[1], sep)

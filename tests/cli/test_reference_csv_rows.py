@@ -57,3 +57,18 @@ def test_an_empty_last_cell_written_is_no_ragged_row(tmp_path):
     code, err = _run("compensate", "rakotondrabe-2dof", "--reference", "r.csv", "--out", "u.csv",
                      cwd=tmp_path)
     assert code == 0, err
+
+
+def test_identify_refuses_a_record_naming_a_column_twice(tmp_path):
+    """An outside check: ``identify`` read the first of two ``ux`` columns without a word,
+    where compensate, learn and evaluate refuse such a file. Nothing is written."""
+    t = np.arange(400) * 1e-3
+    u = 5 * np.sin(2 * np.pi * t)
+    rows = [f"{a:.9g},{b:.9g},{b:.9g},{2 * b:.9g}" for a, b in zip(t, u)]
+    (tmp_path / "rec.csv").write_text("t,ux,ux,x\n" + "\n".join(rows) + "\n")
+    code, err = _run("identify", "rec.csv", "--input", "ux", "--output", "x", "--time", "t",
+                     "--out", "m.toml", cwd=tmp_path)
+    assert code == 1 and err.count("\n") == 1, err
+    assert ("rec.csv: the column name 'ux' appears more than once in the header; expected each "
+            "column named once") in err
+    assert not (tmp_path / "m.toml").exists()
