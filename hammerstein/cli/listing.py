@@ -85,7 +85,10 @@ def handler(args):
     for name, entry in MODEL_CLASSES.items():
         print(f"  {name}: {entry.description}")
         dyn = [k for k in ("hammerstein", "ilc") if k in entry.kinds]
-        need = f" ({' and '.join(dyn)} need{'s' if len(dyn) == 1 else ''} dynamics)" if dyn else ""
+        need = f" ({' and '.join(dyn)} need{'s' if len(dyn) == 1 else ''} dynamics" if dyn else ""
+        # a Monte-Carlo study refuses ilc (one drive for every drawn plant): said here too
+        need += ("; ilc learns in [[cases]], not in a Monte-Carlo study)" if "ilc" in entry.kinds
+                 else ")" if dyn else "")
         print(f"    kinds: {', '.join(entry.kinds)}{need}")
         exact = (f"else {entry.exact_inverse_kind} (exact inverse)" if entry.exact_inverse_kind
                  else "else per-axis for one transfer, multivariable with a convergent gain, "

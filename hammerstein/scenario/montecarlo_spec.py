@@ -28,6 +28,7 @@ from hammerstein.core.schema import (Field, Invalid, check_table, choice, intege
                                      known_kind, name_field, number, short_repr, string)
 from hammerstein.scenario.feedback_table import check_feedback_table
 from hammerstein.scenario.montecarlo_draw import oscillating_modes
+from hammerstein.compensation.model_classes import kind_problem as class_kind_problem
 from hammerstein.scenario.registry import COMPENSATORS, class_problems, model_file_dynamics
 from hammerstein.scenario.schema import MAX_NAME, NAME, ScenarioError, TOP
 
@@ -322,6 +323,15 @@ def _nominal_modes(preset, base, outputs):
     return fn, zeta
 
 
+def _study_kinds(plant):
+    """The compensating kinds a study takes (not ``ilc``), those of the plant's model class."""
+    kinds = [k for k, e in COMPENSATORS.items() if e.compensates and k != "ilc"]
+    if plant is None:
+        return kinds
+    dynamics = getattr(plant, "dynamics", None) is not None
+    return [k for k in kinds if not class_kind_problem(plant.hysteresis, k, dynamics)]
+
+
 def _class_problems(comp, plant, base):
     """``kind: ...`` when the compensator's model is of a class its kind does not take.
 
@@ -395,7 +405,9 @@ def validate_montecarlo(path, data):
     elif comp.get("kind") == "ilc":
         problems.append(f"{source}: compensator.kind: a Monte-Carlo study applies one drive per "
                         f"frequency, built from the nominal model, to every drawn plant; kind "
-                        f"'ilc' learns on a plant (run it in [[cases]] of another scenario)")
+                        f"'ilc' learns on a plant (run it in [[cases]] of another scenario); "
+                        f"the kinds a study takes{' for this plant' if plant is not None else ''}: "
+                        f"{', '.join(_study_kinds(plant))}")
     elif plant is not None:     # a kind the model's class does not take: as in [[cases]]
         problems += [f"{source}: compensator.{m}" for m in _class_problems(comp, plant, base)]
     feedback = _check_feedback(data, comp, plant, source, problems)

@@ -160,11 +160,18 @@ def test_a_scaled_component_is_its_weights_times_the_factors(component):
         assert np.all(w == 0.0)
 
 
-def test_ilc_is_refused_naming_the_field(tmp_path):
+@pytest.mark.parametrize("preset, kinds", [
+    ("realistic-2dof", "multivariable, diagonal, per-axis, static-gain, hammerstein, "
+                       "preisach-inverse"),
+    ("rakotondrabe-2dof", "multivariable, diagonal, per-axis, static-gain, hammerstein")])
+def test_ilc_is_refused_naming_the_field_and_the_kinds_that_work(tmp_path, preset, kinds):
+    """An outside check: the refusal named no kind a study takes (the issue: where one does
+    not work, the message names the kinds that do)."""
     f = tmp_path / "ilc.toml"
-    f.write_text(STUDY.format(preset="realistic-2dof", kind="ilc", cases=2))
-    with pytest.raises(ScenarioError, match=r"compensator\.kind: .*'ilc' learns on a plant"):
+    f.write_text(STUDY.format(preset=preset, kind="ilc", cases=2))
+    with pytest.raises(ScenarioError, match=r"compensator\.kind: .*'ilc' learns on a plant") as e:
         validate_scenario(f)
+    assert f"the kinds a study takes for this plant: {kinds}" in str(e.value)
 
 
 def test_the_budget_counts_the_cost_of_a_sample_off_the_kernel(tmp_path, monkeypatch):
