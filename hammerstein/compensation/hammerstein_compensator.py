@@ -383,8 +383,14 @@ class HammersteinCompensator:
                     f"{entry.name!r}): its static part is "
                     f"the exact inverse, which refuses this model: {exc}") from None
         else:
-            self.hysteresis_compensator = entry.compensator(
-                model, "multivariable", gain=gain, iterations=iterations, check=check, **options)
+            try:
+                self.hysteresis_compensator = entry.compensator(
+                    model, "multivariable", gain=gain, iterations=iterations, check=check,
+                    **options)
+            except CompensatorError as exc:     # named as the kind the user chose
+                raise CompensatorError(str(exc).replace(
+                    "of this multivariable compensator",
+                    f"of this {name} compensator's static part (the multivariable law)")) from None
         with_creep = creep is not None and any(c is not None for c in creep)
         if (inversion != "zpetc" or with_creep) and hasattr(dynamics, "to_control"):
             dynamics = dynamics.to_control()     # 'stable' and the creep cascade use python-control

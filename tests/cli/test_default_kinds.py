@@ -360,4 +360,6 @@ def test_a_scenario_without_gain_runs_the_gain_compensate_runs(tmp_path, capsys,
     code, _, err = _run(capsys, "run", str(tmp_path / "mid.toml"), "--out",
                         str(tmp_path / "rep"), "--figures", "none")
     assert code == 1 and "rho(I - K^-1 J) reaches 1.3" in err
+    # named as the kind written (kind hammerstein was called "this multivariable compensator")
+    assert f"of this {kind} compensator" in err
 
