@@ -357,9 +357,11 @@ def _train_mask(record, k, branches, complete, held, periodic, burn_in_seconds):
         ratio = burn_in_seconds / record.sampling_period  # inf for a huge --skip
         burn = int(round(ratio)) if np.isfinite(ratio) and abs(ratio) < n else n
         if not 0 <= burn < n - 1:
+            source = getattr(record, "source", "")
+            where = f"{source}: " if source else ""      # the record, as every other error names it
             raise IdentificationError(
-                f"skip: expected a burn-in shorter than the record ({n * record.sampling_period:g} s), "
-                f"found {burn_in_seconds:g} s")
+                f"{where}skip (identify --skip): expected a burn-in shorter than the record "
+                f"({n * record.sampling_period:g} s), found {burn_in_seconds:g} s")
     else:
         burn = 0 if periodic else branches[complete[0]][0]
     train = ~held

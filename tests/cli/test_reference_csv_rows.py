@@ -72,3 +72,18 @@ def test_identify_refuses_a_record_naming_a_column_twice(tmp_path):
     assert ("rec.csv: the column name 'ux' appears more than once in the header; expected each "
             "column named once") in err
     assert not (tmp_path / "m.toml").exists()
+
+
+def test_identify_names_the_record_and_the_option_of_a_burn_in_too_long(tmp_path):
+    """An outside check: ``identify --skip 1000`` printed "error: skip: expected a burn-in
+    shorter than the record (2 s)", naming neither the file nor the option."""
+    t = np.arange(60000) * 5e-5
+    u = 5 * np.sin(2 * np.pi * 5 * t) * (1 - t / 4)
+    rows = [f"{a:.9g},{b:.9g},{2 * b:.9g}" for a, b in zip(t, u)]
+    (tmp_path / "rec.csv").write_text("t,ux,x\n" + "\n".join(rows) + "\n")
+    code, err = _run("identify", "rec.csv", "--input", "ux", "--output", "x", "--time", "t",
+                     "--out", "m.toml", "--skip", "1000", cwd=tmp_path)
+    assert code == 1 and err.count("\n") == 1, err
+    assert ("rec.csv: skip (identify --skip): expected a burn-in shorter than the record (3 s), "
+            "found 1000 s") in err
+    assert not (tmp_path / "m.toml").exists()
