@@ -266,8 +266,9 @@ def identified_from_records(plant, spec, dynamics, cache=None, base_dir=None):
     spec : dict
         ``identify`` table with ``records = "excitation"``.
     dynamics : bool
-        Identify G too (from the multisines; with ``records = "files"`` from
-        its ``dynamics_records``, when it names some).
+        Identify G too (from the multisines). With ``records = "files"`` G is
+        identified from its ``dynamics_records`` whenever it names some, as
+        ``identify --dynamics`` does, whatever the kind.
     cache : IdentificationCache, optional
     base_dir : pathlib.Path, optional
         The scenario's directory: the files of ``records = "files"``.
@@ -308,7 +309,11 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         # the scenario read the same files without a word
         for line in unit_warnings(every, names[1], "µm", spec["time"], names[0]):
             warnings.warn(f"{where}: {line}", HammersteinWarning, stacklevel=2)
-        dynamics = dynamics and bool(recs["dynamics"])
+        # the files a table names are identified as `identify --dynamics --dynamics-records`
+        # does, whatever kind uses them: for a rate-independent kind the creep was fitted
+        # without G and the amplifier's slew taken from the hysteresis records alone (125.7
+        # V/s against 3.46e5), another preset and drive than identify + compensate
+        dynamics = bool(recs["dynamics"])
         creep = bool(recs["creep"])
     else:
         recs = excitation_records(plant, spec, _sensor(spec["sensor"], spec["seed"]))
