@@ -625,7 +625,9 @@ def load_plant(preset, dynamics=True, base_dir=None):
     Parameters
     ----------
     preset : str or pathlib.Path
-        Bundled preset name or preset file.
+        Bundled preset name or preset file, or a model file ``identify``
+        wrote (no ``[preset]``: its records' sampling period,
+        :func:`records_sampling_period`).
     dynamics : bool
         ``True`` for the Hammerstein plant (hysteresis, creep when the preset
         has a ``[creep]`` table, discretised linear dynamics); ``False`` for
@@ -649,6 +651,15 @@ def load_plant(preset, dynamics=True, base_dir=None):
     path = resolve_preset(preset, base_dir)
     data = read_toml(path, "preset file")
     meta = data.get("preset", {})
+    if "preset" not in data and isinstance(data.get("model"), dict) \
+            and isinstance(data.get("identification"), dict):
+        # the model file identify wrote: the sampling period of its records, as compensate
+        # reads it (a scenario's [plant] refused it: "preset.sampling_period: missing")
+        try:
+            meta = {"sampling_period": records_sampling_period(data, path), "name": path.stem}
+        except PresetError as exc:     # its --sampling-period is the commands' option
+            raise PresetError(f"{path}: preset.sampling_period: missing (required; "
+                              f"{str(exc).removeprefix(f'{path}: ').split('; give')[0]})") from None
     dyn = data.get("dynamics", {})
     if not isinstance(meta, dict) or not isinstance(dyn, dict):
         raise PresetError(f"{path}: {'preset' if not isinstance(meta, dict) else 'dynamics'}: "
