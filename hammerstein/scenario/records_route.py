@@ -347,7 +347,12 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     if files:
         meta["input_columns"] = ",".join(recs["hysteresis"][0].input_names)
         meta["output_columns"] = ",".join(recs["hysteresis"][0].output_names)
-        meta["measurement_delay_samples"] = delay
+        # as identify: a delay given (0 included) or estimated from the dynamics records is
+        # kept; none written otherwise (learn --delay auto then estimates its own: a 0 written
+        # for hysteresis records alone was taken as a known delay)
+        estimated = bool(recs["dynamics"]) and note is None
+        if spec["delay"] != "auto" or estimated:
+            meta["measurement_delay_samples"] = delay
     if result.dynamics is not None:
         meta["dynamics"] = result.dynamics.summary
     if result.creep is not None:

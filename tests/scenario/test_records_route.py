@@ -462,6 +462,21 @@ def hysteresis_files(tmp_path_factory):
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("delay, written", [("auto", None), (0, 0), (2, 2)])
+def test_a_delay_is_written_only_when_given_or_estimated(hysteresis_files, delay, written):
+    """An outside check: a files table without dynamics records wrote
+    ``measurement_delay_samples = 0`` where identify writes nothing, so that ``learn --delay
+    auto`` took 0 as a known delay instead of estimating one."""
+    d, files = hysteresis_files
+    plant = load_plant(d / "plant.toml")
+    found = identified_from_records(plant, {"records": "files", "model": "classical",
+                                            "hysteresis_records": files, "delay": delay},
+                                    False, base_dir=d)
+    ident = tomllib.loads(found.preset_text)["identification"]
+    assert ident.get("measurement_delay_samples") == written
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize("kind, model", [
     *itertools.product(("multivariable", "diagonal", "per-axis", "static-gain"),
                        ("classical", "preisach", "generalized")),
