@@ -38,7 +38,7 @@ from hammerstein.core.numbers import MAX_MAGNITUDE, is_number, plausibility_prob
 from hammerstein.core.schema import short_repr
 from hammerstein.io.presets import PresetError, load_model, load_plant, read_toml
 from hammerstein.scenario.identify_tables import comparison_spec, nyquist_problem
-from hammerstein.scenario.validate_records import record_file_problems
+from hammerstein.scenario.validate_records import record_file_problems, record_keys
 from hammerstein.scenario.records import load_identification_scenario
 from hammerstein.scenario.hardware_route import hardware_start
 from hammerstein.scenario.registry import COMPENSATORS, class_problems, model_file_dynamics
@@ -401,9 +401,10 @@ def _top_model_problems(comp, plant, base, files):
     whatever the cases: a missing record file is not a problem of the first
     case that reaches it. A misspelt kind is checked as the kind it spells;
     an ``identify`` table with problems of its own still has its record
-    files looked for. Returns ``(lines, raw)``: the ``compensator...: message``
-    lines and the :func:`_model_problems` messages they came from (a case
-    that inherits the table skips those).
+    files looked for, and their columns read (:func:`record_keys`). Returns
+    ``(lines, raw)``: the ``compensator...: message`` lines and the
+    :func:`_model_problems` messages they came from (a case that inherits the
+    table skips those).
     """
     kind = comp.get("kind", "none")
     kind = kind if known_kind(kind, COMPENSATORS) else meant_kind(kind)
@@ -417,9 +418,9 @@ def _top_model_problems(comp, plant, base, files):
         except Invalid:     # reported by the table's check; its files are still looked for
             if not (isinstance(identify, dict) and identify.get("records") == "files"):
                 return [], []
-            return _placed_top(record_file_problems(   # there, not their columns
-                {k: [v] if isinstance(v, str) else v for k, v in identify.items()
-                 if isinstance(v, (str, list)) and k.endswith("_records")}, base, None))
+            # and their columns, unless the keys that name them are wrong
+            kept, known = record_keys(identify)
+            return _placed_top(record_file_problems(kept, base, plant if known else None))
     if plant is None and name == "identified" and isinstance(identify, dict) \
             and identify.get("records") != "files":
         return [], []       # its frequency is checked against the plant's Nyquist: none loaded

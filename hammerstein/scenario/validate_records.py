@@ -13,10 +13,15 @@ import re
 from pathlib import Path
 
 from hammerstein.core.files import confined_path, escape, file_limit_problem
-from hammerstein.io.datafiles import record_column_problem
+from hammerstein.io.datafiles import record_column_problems
 from hammerstein.io.presets import PresetError
+from hammerstein.scenario.identify_tables import FILES_IDENTIFY_FIELDS
+from hammerstein.scenario.schema import Invalid
 
-__all__ = ["record_file_problems"]
+__all__ = ["record_file_problems", "record_keys"]
+
+#: The keys of a files table that name the records' columns.
+_COLUMN_KEYS = ("time", "inputs", "outputs")
 
 
 #: The key of a files table that sets the column a record's problem names.
@@ -27,6 +32,49 @@ _COLUMN_KEY = re.compile(r"^(?:no (input|output|time) column|(input|output|time)
 def _files_text(names):
     shown = ", ".join(names[:3])
     return shown + (f" and {len(names) - 3} more records" if len(names) > 3 else "")
+
+
+def record_keys(identify):
+    """The keys of a files ``identify`` table that failed its check which still name its records.
+
+    A mistake elsewhere in the table (a misspelt ``model``, a bad ``n_hysterons``)
+    leaves the records and their columns knowable: the ``*_records`` keys, and
+    ``time``, ``inputs`` and ``outputs`` that pass their own checks, are kept.
+    A ``time`` that fails its check is kept as None (its column is not looked
+    for, nor the default ``'t'``).
+
+    Parameters
+    ----------
+    identify : dict
+        The ``identify`` table as written (``records = "files"``).
+
+    Returns
+    -------
+    (dict, bool)
+        The table for :func:`record_file_problems`, and whether its input and
+        output columns are known (False when ``inputs`` or ``outputs`` is
+        written but wrong: then only whether each file is there is checked).
+
+    Examples
+    --------
+    >>> record_keys({"records": "files", "hysteresis_records": "h.csv", "model": "preisch",
+    ...              "time": 3, "inputs": "ux,uy"})
+    ({'hysteresis_records': ['h.csv'], 'time': None, 'inputs': ['ux', 'uy']}, True)
+    """
+    kept = {k: [v] if isinstance(v, str) else v for k, v in identify.items()
+            if isinstance(v, (str, list)) and str(k).endswith("_records")}
+    known = True
+    for key in _COLUMN_KEYS:
+        if key not in identify:
+            continue
+        try:
+            kept[key] = FILES_IDENTIFY_FIELDS[key].check(identify[key])
+        except Invalid:     # reported by the table's check; its column is not known
+            if key == "time":
+                kept[key] = None
+            else:
+                known = False
+    return kept, known
 
 
 def record_file_problems(identify, base, plant):
@@ -55,7 +103,7 @@ def record_file_problems(identify, base, plant):
     -------
     list of str
         ``identify.<key>: message`` per problem, nothing read beyond each
-        file's opening (:func:`hammerstein.io.datafiles.record_column_problem`).
+        file's opening (:func:`hammerstein.io.datafiles.record_column_problems`).
 
     Examples
     --------
@@ -76,7 +124,8 @@ def record_file_problems(identify, base, plant):
                             f"{key[:-1]}, in the plant's order")
     ins = identify.get("inputs") or plant_names.get("inputs")
     outs = identify.get("outputs") or plant_names.get("outputs")
-    check_columns = bool(ins and outs) and not problems
+    # a column count that differs from the plant's still has its columns looked for
+    check_columns = bool(ins and outs)
     columns = {}        # (key, problem without the file) -> the files it holds in
     for key in ("hysteresis_records", "dynamics_records", "creep_records"):
         for name in identify.get(key) or []:
@@ -93,19 +142,21 @@ def record_file_problems(identify, base, plant):
                 continue
             # a FIFO, a directory, a record beyond the size limit: named before anything is read
             problem = file_limit_problem(path, "data", "record")
-            if problem is None and check_columns:
-                problem = record_column_problem(path, ins, outs, identify.get("time", "t"))
-                rest = (problem or "").removeprefix(f"{escape(str(path))}: ")
+            if problem is not None or not check_columns:
+                problems.extend([f"identify.{key}: {problem}"] if problem else [])
+                continue
+            # every column problem of the file, each named at the key that sets its column
+            for problem in record_column_problems(path, ins, outs, identify.get("time", "t")):
+                rest = problem.removeprefix(f"{escape(str(path))}: ")
                 role = _COLUMN_KEY.match(rest)
-                if role:
-                    role = next(r for r in role.groups() if r) if any(role.groups()) else "input"
-                    setting = "time" if role == "time" else f"{role}s"
-                    files = columns.setdefault((setting, rest), [])
-                    if name not in files:       # a file given as two kinds of record
-                        files.append(name)
+                if not role:
+                    problems.append(f"identify.{key}: {problem}")
                     continue
-            if problem:
-                problems.append(f"identify.{key}: {problem}")
+                role = next(r for r in role.groups() if r) if any(role.groups()) else "input"
+                setting = "time" if role == "time" else f"{role}s"
+                files = columns.setdefault((setting, rest), [])
+                if name not in files:       # a file given as two kinds of record
+                    files.append(name)
     for (setting, rest), names in columns.items():
         default = ("" if identify.get(setting) not in (None, "t") else
                    " (identify.time is 't' unless given)" if setting == "time" else

@@ -371,7 +371,11 @@ def test_validate_names_every_column_the_records_do_not_hold(tmp_path):
         validate_scenario(f)
     assert "compensator.identify.inputs: 1 column(s) ['Vx'] for the plant's 2 inputs ['ux', 'uy']" \
         in str(err.value)
-    assert "no input column" not in str(err.value)
+    # ... and the columns named are still looked for beside it: d.csv holds no Vx, and no t
+    # (a count that differs from the plant's hid them, one more run each)
+    assert sum(": compensator.identify." in ln for ln in str(err.value).splitlines()) == 4
+    assert "compensator.identify.inputs: d.csv: no input column named 'Vx'" in str(err.value)
+    assert "compensator.identify.time: d.csv: no time column named 't'" in str(err.value)
     # and from Python, where validate did not run (an IndexError in the unit check before)
     with pytest.raises(Exception, match=r"identify\.outputs: 1 column\(s\) \['x'\] for the "
                                         r"plant's 2 outputs"):

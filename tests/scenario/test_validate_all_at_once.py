@@ -4,6 +4,10 @@ A CI-gate user needed three rounds: a misspelt compensator kind hid the keys of 
 ``identify`` table, a misspelt sweep metric hid the sweep's cases (one above Nyquist),
 a raster's bad keys hid its unknown output, and a missing record file of the top-level
 ``[compensator.identify]`` was named after the first case that reached it.
+
+An outside tester then found the record files' columns checked one problem at a time: a
+column count that differs from the plant's hid every column check, a file kept only its
+first missing column, and a misspelt identification ``model`` hid the columns altogether.
 """
 
 import pytest
@@ -147,3 +151,64 @@ def test_a_case_settling_past_its_record_is_named_beside_a_compensator_problem(t
     text = str(err.value)
     assert "compensator.identify.creep: expected true or false" in text
     assert "cases[0].settle_periods: 40 periods of settling leave less than one sample" in text
+
+
+IDENTIFY_FILES = """
+name = "cols"
+[plant]
+preset = "realistic-2dof"
+[compensator]
+kind = "hammerstein"
+model = "identified"
+dynamics = "identified"
+[compensator.identify]
+records = "files"
+hysteresis_records = ["h-ux.csv", "h-uy.csv"]
+{keys}
+[[cases]]
+name = "c"
+reference = {{ kind = "circle", radius = 10.0, frequency = 20.0, periods = 3 }}
+"""
+
+_COUNT = "1 column(s) ['x'] for the plant's 2 outputs"
+_NO_UZ = "h-ux.csv, h-uy.csv: no input column named 'uz'"
+_NO_TIME = "h-ux.csv, h-uy.csv: no time column named 'time'"
+
+
+@pytest.mark.parametrize("keys, header, expected", [
+    # a count that differs from the plant's hides no column check
+    ('inputs = ["ux", "uz"]\noutputs = ["x"]\ntime = "time"', "t,ux,uy,x,y",
+     [("outputs", _COUNT), ("inputs", _NO_UZ), ("time", _NO_TIME)]),
+    # every missing column of a file, not only its first
+    ('inputs = ["ux", "uz"]\noutputs = ["x", "y"]\ntime = "time"', "t,ux,uy,x,y",
+     [("inputs", _NO_UZ), ("time", _NO_TIME)]),
+    ('inputs = ["ua", "ub"]', "t,ux,uy,x,y",
+     [("inputs", "no input column named 'ua'"), ("inputs", "no input column named 'ub'")]),
+    ('outputs = ["x_nm", "y_nm"]', "t,ux,uy,x_nm,y_nm",
+     [("outputs", "output column 'x_nm' is named in nm"),
+      ("outputs", "output column 'y_nm' is named in nm")]),
+    # a misspelt identification model leaves the records' columns knowable
+    ('inputs = ["ux", "uz"]\noutputs = ["x"]\ntime = "time"\nmodel = "preisch"', "t,ux,uy,x,y",
+     [("model", "'preisch'"), ("outputs", _COUNT), ("inputs", _NO_UZ), ("time", _NO_TIME)]),
+    ('model = "preisch"', "time,ux,uy,x,y",
+     [("model", "'preisch'"), ("time", "h-ux.csv, h-uy.csv: no time column named 't'")]),
+    # ... but a wrong inputs key leaves them unknown: the files are only looked for
+    ('inputs = 5\nmodel = "preisch"\ndynamics_records = ["gone.csv"]', "time,ux,uy,x,y",
+     [("inputs", "expected column names"), ("model", "'preisch'"),
+      ("dynamics_records", "gone.csv: no such file")]),
+], ids=["count-beside-columns", "input-and-time", "two-inputs", "two-outputs-in-nm",
+        "misspelt-model", "misspelt-model-default-time", "wrong-inputs-key"])
+def test_every_column_problem_of_the_record_files_is_named_at_once(tmp_path, keys, header,
+                                                                     expected):
+    for name in ("h-ux.csv", "h-uy.csv"):
+        (tmp_path / name).write_text(header + "\n" + "".join(
+            f"{k * 5e-5:.5f},{k},{-k},{2 * k},{-2 * k}\n" for k in range(20)))
+    path = tmp_path / "cols.toml"
+    path.write_text(IDENTIFY_FILES.format(keys=keys))
+    lines = _lines(path)
+    assert len(set(lines)) == len(lines), lines     # each problem once
+    for key, word in expected:
+        hits = [ln for ln in lines if ln.startswith(f"{path}: compensator.identify.{key}: ")
+                and word in ln]
+        assert len(hits) == 1, (key, word, lines)
+    assert len(lines) == len(expected), lines       # and nothing else
