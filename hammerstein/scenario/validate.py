@@ -273,12 +273,40 @@ def _signal(case_where, mode, spec, plant, problems, source, base=None, budget=N
         t, sig, period, extras = entry.generate(c, T, names, base)
     except refs.SignalError as exc:
         problems.append(f"{source}: {where}.{exc}")
+        problems.extend(f"{source}: {where}.{msg}" for msg in
+                        _beside_axis(entry, clean, str(exc), T, names, base))
         return None
     problem = _magnitude_problem(c, sig, "µm" if mode == "reference" else "V")
     if problem:     # the simulation refuses it (hammerstein.simulation._packing)
         problems.append(f"{source}: {where}{problem}")
         return None
     return t, sig, max(int(round(period / T)), 1), extras
+
+
+#: Keys of a signal table that name the plant's outputs (inputs) it is on.
+_AXIS_KEYS = ("output", "input", "outputs")
+
+
+def _beside_axis(entry, clean, said, T, names, base):
+    """What a signal whose output (input) the plant lacks would still be told.
+
+    ``said``: the generator's problem. When it names an axis key the plant does
+    not hold (``output: expected one of ['x', 'y'], found 'z'``), the signal is
+    generated again on the plant's first output(s) instead: a frequency at or
+    above Nyquist does not depend on the output. Returns the ``key: message``
+    of that second try, if it names another key; else nothing.
+    """
+    key = said.split(":", 1)[0]
+    if key not in _AXIS_KEYS or key not in clean or not names:
+        return []
+    stand_in = {k: v for k, v in clean.items() if k != "kind"}
+    stand_in[key] = [str(n) for n in names[:2]] if key == "outputs" else str(names[0])
+    try:
+        entry.generate(stand_in, T, names, base)
+    except refs.SignalError as exc:
+        if str(exc).split(":", 1)[0] != key:
+            return [str(exc)]
+    return []
 
 
 def _axis_problems(clean, plant, mode):

@@ -212,3 +212,41 @@ def test_every_column_problem_of_the_record_files_is_named_at_once(tmp_path, key
                 and word in ln]
         assert len(hits) == 1, (key, word, lines)
     assert len(lines) == len(expected), lines       # and nothing else
+
+
+_NYQUIST = "20000 Hz is at or above the Nyquist frequency 10000 Hz"
+
+
+@pytest.mark.parametrize("signal, expected", [
+    ('reference = { kind = "sine", output = "z", amplitude = 10.0, frequency = 20000.0, '
+     'periods = 4 }',
+     [("reference.output", "expected one of ['x', 'y'], found 'z'"),
+      ("reference.frequency", _NYQUIST)]),
+    ('reference = { kind = "triangle", output = "z", amplitude = 10.0, frequency = 5000.0, '
+     'periods = 4 }',
+     [("reference.output", "found 'z'"), ("reference.frequency", "4 samples per period")]),
+    ('drive = { kind = "sine", input = "uz", amplitude = 10.0, frequency = 20000.0, '
+     'periods = 4 }',
+     [("drive.input", "expected one of ['ux', 'uy'], found 'uz'"),
+      ("drive.frequency", _NYQUIST)]),
+    ('reference = { kind = "circle", outputs = ["x", "z"], radius = 10.0, '
+     'frequency = 20000.0, periods = 4 }',
+     [("reference.outputs", "found ['x', 'z']"), ("reference.frequency", _NYQUIST)]),
+    ('reference = { kind = "raster", outputs = ["x", "z"], size = [10.0, 10.0], lines = 4, '
+     'frequency = 20000.0 }',
+     [("reference.outputs", "found ['x', 'z']"), ("reference.frequency", _NYQUIST)]),
+    # a wrong output alone is one line: the signal on the plant's output has no problem
+    ('reference = { kind = "sine", output = "z", amplitude = 10.0, frequency = 20.0, '
+     'periods = 4 }',
+     [("reference.output", "found 'z'")]),
+], ids=["sine", "triangle-samples-per-period", "drive", "circle", "raster", "output-alone"])
+def test_a_wrong_output_leaves_the_frequency_checked_against_nyquist(tmp_path, signal, expected):
+    path = tmp_path / "nyq.toml"
+    path.write_text('name = "nyq"\n[plant]\npreset = "realistic-2dof"\n[compensator]\n'
+                    'kind = "multivariable"\n[[cases]]\nname = "c"\n' + signal + "\n")
+    lines = _lines(path)
+    assert len(set(lines)) == len(lines), lines
+    for key, word in expected:
+        hits = [ln for ln in lines if ln.startswith(f"{path}: cases[0].{key}: ") and word in ln]
+        assert len(hits) == 1, (key, word, lines)
+    assert len(lines) == len(expected), lines
