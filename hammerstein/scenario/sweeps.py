@@ -182,7 +182,7 @@ def _fmt(f):
     return f"{f:g}"
 
 
-def expand_sweeps(sweeps, source, problems):
+def expand_sweeps(sweeps, source, problems, places=None):
     """Expand ``[[sweeps]]`` tables into raw case tables.
 
     Parameters
@@ -193,6 +193,11 @@ def expand_sweeps(sweeps, source, problems):
         File name, for the problem lines.
     problems : list of str
         Receives ``source: sweeps[i].key: message`` lines.
+    places : dict, optional
+        Receives, per expanded case's ``where``, ``{key: where it is written}``
+        for the keys of its compensator table (``sweeps[i].compensators.<label>``
+        or the template's ``sweeps[i].compensator``): a problem of the table is
+        named there once, not once per case.
 
     Returns
     -------
@@ -316,11 +321,17 @@ def expand_sweeps(sweeps, source, problems):
                         case[mode] = {**sig, "frequency": f}
                     if axis is not None:
                         case[mode][axis_key] = axis
+                    base = case.get("compensator", {})
+                    written = ({k: f"{where}.compensator" for k in base}
+                               if isinstance(base, dict) else {})
                     if label:  # merged into the template's override like any case override
-                        base = case.get("compensator", {})
                         same = comps[label].get("kind", base.get("kind")) == base.get("kind")
                         case["compensator"] = {**base, **comps[label]} if same else dict(comps[label])
+                        written = {**(written if same else {}),
+                                   **{k: f"{where}.compensators.{label}" for k in comps[label]}}
                     entries.append((f"{where}({case['name']})", case))
+                    if places is not None and written:
+                        places[entries[-1][0]] = written
                     swept = first[n] if values is not None else f
                     spec.cases.append({"case": case["name"], "compensator": label or "-",
                                        "axis": "-" if axis is None else str(axis),

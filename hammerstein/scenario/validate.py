@@ -323,6 +323,43 @@ def _axis_problems(clean, plant, mode):
     return out
 
 
+def _written_at(line, source, where, places):
+    """``line`` about a key of the compensator table of case ``where`` named where the key is
+    written (``places``: key -> ``sweeps[0].compensators.<label>``; None: a case's own table).
+
+    ``<where>.compensator.<key>...: message`` and ``<where>.compensator: <key>...: message``
+    (a model's problem, :func:`_model_problems`) move to ``<place>.<key>...: message``; a
+    model file's own message to ``<place>.model: message``; any other line is kept.
+    """
+    head = f"{source}: {where}.compensator"
+    if not places or not line.startswith(head):
+        return line
+    rest = line[len(head):]
+    if rest.startswith("."):
+        key = re.split(r"[.:\[]", rest[1:], maxsplit=1)[0]
+        return f"{source}: {places[key]}{rest}" if key in places else line
+    if rest.startswith(": "):
+        msg = rest[2:]
+        key = re.split(r"[.:\[]", msg, maxsplit=1)[0]
+        if key in places:
+            return f"{source}: {places[key]}.{msg}"
+        if "model" in places:
+            return f"{source}: {places['model']}.model: {msg}"
+    return line
+
+
+def _placed(lines, source, where, places, problems):
+    """``lines`` of the compensator table of case ``where`` as :func:`_written_at` names them;
+    a sweep case's (``places`` given) less those already in ``problems`` (said once)."""
+    if not places:
+        return list(lines)
+    out = []
+    for line in (_written_at(q, source, where, places) for q in lines):
+        if line not in problems and line not in out:
+            out.append(line)
+    return out
+
+
 def _said_at_top(line, own, where, source, problems):
     """True when ``line`` is about a key the case inherits and was said, in the same
     words, of the top-level compensator table."""
@@ -517,8 +554,9 @@ def _validate_cases(path, data, feedback=False):
     if "cases" not in data and "sweeps" not in data:
         problems.append(f"{source}: cases: missing (required)")
     entries, sweep_specs = [(f"cases[{i}]", raw) for i, raw in enumerate(cases_raw)], []
+    places = {}             # a sweep case's compensator keys -> where they are written
     if "sweeps" in data:
-        more, sweep_specs = expand_sweeps(data["sweeps"], source, problems)
+        more, sweep_specs = expand_sweeps(data["sweeps"], source, problems, places)
         entries += more
     plants, cases, names, model_files = {}, [], set(), {}
     if len(entries) > MAX_CASES:
@@ -593,12 +631,14 @@ def _validate_cases(path, data, feedback=False):
         scratch = []
         cclean = check_compensator(cspec, f"{where}.compensator", scratch, source,
                                     own=cover if isinstance(cover, dict) else {})
+        spot = places.get(where)        # a sweep case's table: named where written, once
         if "compensator" in raw:
             if isinstance(cover, dict):
                 # top-level problems are reported once, above: an inherited key's message
                 # said there word for word is not repeated under every case with a table
-                problems.extend(q for q in scratch if not _said_at_top(q, cover, where, source,
-                                                                        problems))
+                shown = [q for q in scratch if not _said_at_top(q, cover, where, source, problems)]
+                scratch = [_written_at(q, source, where, spot) for q in scratch]
+                problems.extend(_placed(shown, source, where, spot, problems))
             else:
                 problems.append(f"{source}: {where}.compensator: expected a table")
         elif scratch and not any("compensator" in q for q in problems[:n_before]):
@@ -608,6 +648,7 @@ def _validate_cases(path, data, feedback=False):
             nyquist = 0.5 / plant.sampling_period
             if cclean["cutoff_hz"] >= nyquist:
                 key = f"{where}.compensator" if "cutoff_hz" in cover else "compensator"
+                key = (spot or {}).get("cutoff_hz", key)
                 once(f"{source}: {key}.cutoff_hz: expected 0 < cutoff_hz < {nyquist:g} Hz (the "
                      f"plant's Nyquist frequency), found {cclean['cutoff_hz']:g}")
                 comp_ok = False
@@ -640,7 +681,8 @@ def _validate_cases(path, data, feedback=False):
                                         model_files)
                 if not ({"model", "identify"} & set(cover if isinstance(cover, dict) else {})):
                     wrong = [m for m in wrong if m not in top_model[1]]   # said at the top
-                problems.extend(f"{source}: {where}.compensator: {msg}" for msg in wrong)
+                problems.extend(_placed([f"{source}: {where}.compensator: {msg}" for msg in wrong],
+                                        source, where, spot, problems))
             if not wrong:
                 problems.extend(f"{source}: {where}.compensator.{msg}" for msg in
                                 clean_keys_problems(cspec, cclean, plant, base, model_files,
@@ -679,7 +721,8 @@ def _validate_cases(path, data, feedback=False):
             own = cover if isinstance(cover, dict) else {}
             if not ({"model", "identify"} & set(own)) and cspec.get("kind") == comp_top.get("kind"):
                 more = [m for m in more if m not in top_model[1]]  # reported at the top, once
-            problems.extend(f"{source}: {where}.compensator: {msg}" for msg in more)
+            problems.extend(_placed([f"{source}: {where}.compensator: {msg}" for msg in more],
+                                    source, where, spot, problems))
         if cclean is not None:      # a model file's dynamics and creep, as compensate takes them
             cclean = model_file_dynamics(cclean, base)
         if mode == "reference" and COMPENSATORS[kind].check is not None:   # the kind's own checks

@@ -250,3 +250,43 @@ def test_a_wrong_output_leaves_the_frequency_checked_against_nyquist(tmp_path, s
         hits = [ln for ln in lines if ln.startswith(f"{path}: cases[0].{key}: ") and word in ln]
         assert len(hits) == 1, (key, word, lines)
     assert len(lines) == len(expected), lines
+
+
+SWEEP = """
+name = "sw"
+[plant]
+preset = "realistic-2dof"
+[[sweeps]]
+name = "f"
+frequencies = [10.0, 50.0]
+reference = {{ kind = "sine", output = ["x", "y"], amplitude = 15.0, periods = 4 }}
+{keys}
+"""
+
+
+@pytest.mark.parametrize("keys, expected", [
+    ('[sweeps.compensators]\nmv = { kind = "multivariable", model = "plant" }\n'
+     'il = { kind = "ilc", model = "plant" }',
+     [("sweeps[0].compensators.il.model", "unknown key (valid keys: kind, ")]),
+    ('compensator = { kind = "ilc", model = "plant" }',
+     [("sweeps[0].compensator.model", "unknown key (valid keys: kind, ")]),
+    # a key of the template and one of the label: each named where it is written
+    ('compensator = { kind = "multivariable", gian = "secant" }\n[sweeps.compensators]\n'
+     'mv = { kind = "multivariable", itrations = 2 }\nmv2 = { iterations = 2 }',
+     [("sweeps[0].compensator.gian", "did you mean 'gain'?"),
+      ("sweeps[0].compensators.mv.itrations", "did you mean 'iterations'?")]),
+    ('[sweeps.compensators]\nmv = { kind = "multivariable", model = "gone.toml" }',
+     [("sweeps[0].compensators.mv.model", "gone.toml")]),
+    ('[sweeps.compensators]\nil = { kind = "ilk" }',
+     [("sweeps[0].compensators.il.kind", "'ilk'")]),
+], ids=["label", "template", "template-and-label", "model-file", "kind"])
+def test_a_sweep_compensator_problem_is_named_once_where_it_is_written(tmp_path, keys, expected):
+    # sw-val.toml: the four cases of the sweep each said it, as sweeps[0](f-il-x-10Hz)...
+    path = tmp_path / "sw.toml"
+    path.write_text(SWEEP.format(keys=keys))
+    lines = _lines(path)
+    assert len(set(lines)) == len(lines), lines
+    for key, word in expected:
+        hits = [ln for ln in lines if ln.startswith(f"{path}: {key}: ") and word in ln]
+        assert len(hits) == 1, (key, word, lines)
+    assert len(lines) == len(expected), lines
