@@ -20,6 +20,11 @@ identifies no model and simulates nothing: that is step 2,
 A file whose top-level ``kind`` is not ``"cases"`` is validated by the entry
 of :data:`VALIDATORS` (``"identification"``: measured records,
 :func:`hammerstein.scenario.records.load_identification_scenario`).
+
+Length: one pass over a cases file's tables collects every problem; the
+bookkeeping that names each problem once, where it is written, and hides only
+what depends on it (a sweep's compensator, a wrong output beside its
+frequency) needs every table's state at hand, so it is kept in one module.
 """
 
 from __future__ import annotations

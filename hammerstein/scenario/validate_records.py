@@ -13,7 +13,7 @@ import re
 from pathlib import Path
 
 from hammerstein.core.files import confined_path, escape, file_limit_problem
-from hammerstein.io.datafiles import record_column_problems
+from hammerstein.io.record_columns import record_column_problems
 from hammerstein.io.presets import PresetError
 from hammerstein.scenario.identify_tables import FILES_IDENTIFY_FIELDS
 from hammerstein.scenario.schema import Invalid
@@ -103,7 +103,7 @@ def record_file_problems(identify, base, plant):
     -------
     list of str
         ``identify.<key>: message`` per problem, nothing read beyond each
-        file's opening (:func:`hammerstein.io.datafiles.record_column_problems`).
+        file's opening (:func:`hammerstein.io.record_columns.record_column_problems`).
 
     Examples
     --------

@@ -203,7 +203,8 @@ def test_the_column_check_reads_only_the_opening_and_agrees_with_the_whole_read(
                                                                                 monkeypatch):
     from hammerstein.core import files
     from hammerstein.io import datafiles
-    from hammerstein.io.datafiles import HEAD_BYTES, read_records, record_column_problem
+    from hammerstein.io.datafiles import HEAD_BYTES, read_records
+    from hammerstein.io.record_columns import record_column_problem
     rows = "".join(f"{k * 1e-4:.4f},{0.001 * k:.6f},{0.002 * k:.6f}\n" for k in range(40_000))
     path = tmp_path / "long.csv"
     path.write_text("t,ux,x\ns,V,µm\n" + rows)
