@@ -12,8 +12,9 @@ import numpy as np
 
 from hammerstein.simulation._preisach import _cell_lists
 from hammerstein.simulation._preisach_inverse import AITKEN_SWEEP, BRACKET_GROWTH, SECANT_OVERSHOOT
-from hammerstein.export.c_base import (_lit, _mat, _limits_code, _ints_table, _reals_table,
-                                       _stage_rest, _stages_source, _sections, _model_text)
+from hammerstein.export.c_base import (LIMIT_TOLERANCE, _lit, _mat, _limits_code, _ints_table,
+                                       _reals_table, _stage_rest, _stages_source, _sections,
+                                       _model_text)
 from hammerstein.export.c_lookahead import _lookahead_code
 
 
@@ -369,6 +370,16 @@ def _beyond(tol, precision):
     return max(tol, BEYOND_UM[0]) if precision != "float" else max(10.0 * tol, BEYOND_UM[1])
 
 
+def _bound_tolerance(comp, precision):
+    """Per input [V]: how far the law's voltage must lie beyond an input bound for
+    ``STATUS_RANGE``, the amplifier clamp's rule (:data:`~hammerstein.export.c_base.LIMIT_TOLERANCE`
+    times the bound's largest magnitude, at least 1 V). At rest on a unipolar stage's 0 V the law
+    computes ``u + K^-1 (r - Gamma(u))`` = -1e-14 V or so, clipped to 0 V as in Python: it was
+    flagged on every sample at rest."""
+    scale = np.maximum(1.0, np.maximum(np.abs(comp.lo), np.abs(comp.hi)))
+    return LIMIT_TOLERANCE[precision] * scale
+
+
 def _search_ends(comp, precision):
     """The root search's tolerance [um], bracket end (relative) and sweep end [V]: the Python
     kernel's in double; in float, ``FLOAT_ENDS_EPS`` times the float epsilon of the scale."""
@@ -445,6 +456,8 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
              _reals_table("h0", h0, precision, N, "  /* hysteron states at rest */")]
     if not exact:
         decls.append(f"static const {N}_real {N}_K_inv[{m}][{m}] = {_mat(comp.K_inv, precision)};")
+        decls.append(_reals_table("bound_tol", _bound_tolerance(comp, precision), precision, N,
+                                  "  /* a clip by less is rounding: not flagged [V] */"))
     members = [f"    {N}_real u[{N}_N_INPUTS];        /* last voltages [V] */",
                f"    {N}_real h[{max(1, nh)}];   /* hysteron and play states of the model */"]
     reals = m + nh
@@ -524,8 +537,8 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
         for (k = 0; k < {N}_N_INPUTS; ++k) {{
             {N}_real a = u[k];
             for (l = 0; l < {N}_N_OUTPUTS; ++l) a += {N}_K_inv[k][l] * (r[l] - g[l]);
-            if (a < {N}_lo[k]) {{ a = {N}_lo[k]; status |= {N}_STATUS_RANGE; }}
-            if (a > {N}_hi[k]) {{ a = {N}_hi[k]; status |= {N}_STATUS_RANGE; }}
+            if (a < {N}_lo[k]) {{ if (a < {N}_lo[k] - {N}_bound_tol[k]) status |= {N}_STATUS_RANGE; a = {N}_lo[k]; }}
+            if (a > {N}_hi[k]) {{ if (a > {N}_hi[k] + {N}_bound_tol[k]) status |= {N}_STATUS_RANGE; a = {N}_hi[k]; }}
             u[k] = a;
         }}
     }}"""
