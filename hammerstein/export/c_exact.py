@@ -261,7 +261,7 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
     if (x < lo) x = lo;
     if (x > hi) x = hi;
     fx = {N}_eval(mm, c, x, h) - target;
-    if ({N}_ABS(fx) <= {N}_TOLERANCE) return x;
+    if ({N}_ABS(fx) <= {tol}) return x;
     if (mm->n[c] == 2 && mm->x[c][0] != mm->x[c][1]) {{
         const {N}_real slope = (mm->y[c][1] - mm->y[c][0]) / (mm->x[c][1] - mm->x[c][0]);
         if (slope > {zero}) {{
@@ -270,7 +270,7 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
             if (z > hi) z = hi;
             if (z != x) {{
                 fz = {N}_eval(mm, c, z, h) - target;
-                if ({N}_ABS(fz) <= {N}_TOLERANCE) return z;
+                if ({N}_ABS(fz) <= {tol}) return z;
                 if ((fz < {zero}) == (fx < {zero})) {{ x = z; fx = fz; }}   /* on the guess's side */
                 else {{
                     bracketed = 1;
@@ -323,14 +323,14 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
                 b = a; fb = fa;
             }}
         }}
-        if ({N}_ABS(fa) <= {N}_TOLERANCE) return a;
-        if ({N}_ABS(fb) <= {N}_TOLERANCE) return b;
+        if ({N}_ABS(fa) <= {tol}) return a;
+        if ({N}_ABS(fb) <= {tol}) return b;
     }}
     for (it = 0; it < 200; ++it) {{
         x = (a * fb - b * fa) / (fb - fa);
         if (!(a < x && x < b)) x = {half} * (a + b);
         fx = {N}_eval(mm, c, x, h) - target;
-        if ({N}_ABS(fx) <= {N}_TOLERANCE || b - a <= {N}_BRACKET_END * ({one} + {N}_ABS(x))) return x;
+        if ({N}_ABS(fx) <= {tol} || b - a <= {N}_BRACKET_END * ({one} + {N}_ABS(x))) return x;
         if (fx < {zero}) {{
             a = x; fa = fx;
             if (side == -1) fb *= {half};
@@ -347,8 +347,8 @@ static {N}_real {N}_root({N}_memo *mm, int c, {N}_real target, {N}_real guess, {
 
 
 #: In float, the root search's ends in units of the float epsilon: the root's tolerance on
-#: the component's value (times the largest sum of its terms' magnitudes, the scale of its
-#: rounding), the bracket's relative width and a sweep's largest input change (times the
+#: the component's value (times the largest sum of that component's terms' magnitudes over
+#: the input range, the scale of its rounding: ``NAME_tol[c]``), the bracket's relative width and a sweep's largest input change (times the
 #: largest input bound). Double keeps the Python kernel's ends (1e-12 um, 1e-13, 1e-11 V),
 #: which float cannot resolve: its search then ran to its last bracket step every time
 #: (the test models' exact inverses 2.7-4.2 us per step in float, 0.5-0.8 us with these
@@ -382,12 +382,18 @@ def _bound_tolerance(comp, precision):
 
 def _search_ends(comp, precision):
     """The root search's tolerance [um], bracket end (relative) and sweep end [V]: the Python
-    kernel's in double; in float, ``FLOAT_ENDS_EPS`` times the float epsilon of the scale."""
+    kernel's in double; in float, ``FLOAT_ENDS_EPS`` times the float epsilon of the scale,
+    the tolerance per component (an array of ``p m``: each direct path's root ends at its own
+    rounding). It was one tolerance, from the largest scale of any component: an identified
+    generalised PI's cross-coupling y <- ux (a play weight of -128 µm against a reversible
+    46 µm/V, 3547 µm over +-20 V) set 4.2e-4 µm for the direct path x (104 µm, 1.2e-5 µm), whose
+    root then stalled by up to 1e-4 V near 0 V; through that cross-coupling's 46 µm/V after a
+    reversal of ux, 8 mV on uy (2.3e-3 relative on a 5 Hz circle, 3.5e-5 per component)."""
     if precision != "float":
         return float(comp.tolerance), 1e-13, 1e-11
     (E, e_off, row, col, mu, q_off, pr, pw, p_off, env, s_off, rev, off, present) = comp._arrays
     eps = float(np.finfo(np.float32).eps)
-    scale = 0.0
+    scales = np.zeros(present.size)
     for c in range(present.size):
         if not present[c]:
             continue
@@ -399,10 +405,10 @@ def _search_ends(comp, precision):
         k = c % comp.model.n_inputs
         reach = max(abs(comp.lo[k]), abs(comp.hi[k]))
         terms += float(np.sum(np.abs(rev[c]) * reach ** np.arange(1, rev.shape[1] + 1)))
-        scale = max(scale, terms + abs(float(off[c])))
+        scales[c] = terms + abs(float(off[c]))
     bound = float(max(np.max(np.abs(comp.lo)), np.max(np.abs(comp.hi))))
     t, b, w = FLOAT_ENDS_EPS
-    return max(float(comp.tolerance), t * eps * scale), b * eps, w * eps * bound
+    return np.maximum(float(comp.tolerance), t * eps * scales), b * eps, w * eps * bound
 
 
 def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=None,
@@ -419,15 +425,16 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
     exact = comp.method == "root"
     f = "f" if precision == "float" else ""
     lit = {"zero": "0.0" + f, "one": "1.0" + f, "two": "2.0" + f, "half": "0.5" + f,
-           "tanh": "tanh" + f, "N": N}
+           "tanh": "tanh" + f, "N": N,
+           "tol": f"{N}_TOLERANCE" if precision != "float" else f"{N}_tol[c]"}
     nlev = int(max(1, np.max(np.diff(e_off)) - 1))
     h0 = comp.initial_state()[m:]
     tol, bracket_end, sweep_end = _search_ends(comp, precision)
     decls = [f"#define {N}_N_HYSTERONS {nh}", f"#define {N}_MAX_LEVELS {nlev}",
              f"#define {N}_N_COMPONENTS {p * m}",
              f"#define {N}_N_POLY {rev.shape[1]}",
-             f"#define {N}_TOLERANCE {_lit(tol, precision)}",
-             f"#define {N}_BEYOND {_lit(_beyond(tol, precision), precision)}",
+             *([f"#define {N}_TOLERANCE {_lit(tol, precision)}"] if np.ndim(tol) == 0 else []),
+             f"#define {N}_BEYOND {_lit(_beyond(float(np.max(tol)), precision), precision)}",
              f"#define {N}_BRACKET_STEP {_lit(1e-5, precision)}",
              f"#define {N}_BRACKET_GROWTH {_lit(BRACKET_GROWTH, precision)}",
              f"#define {N}_SECANT_OVERSHOOT {_lit(SECANT_OVERSHOOT, precision)}",
@@ -481,6 +488,9 @@ def _exact_source(comp, stages, model, precision, N, limits, T, preview=0, rest=
         decls += [_ints_table("cstart", cstart, N), _ints_table("cindex", cindex, N)
                   + "  /* hysterons moving inside each switching cell */"]
     if exact:
+        if np.ndim(tol):
+            decls.append(_reals_table("tol", tol, precision, N, "  /* the root's tolerance per "
+                                      "component: its float rounding [um] */"))
         if q_off[-1] > 0:
             decls += [_ints_table("kstart", kstart, N), _ints_table("kindex", kindex, N)
                       + "  /* hysterons keeping their state inside each cell */",
