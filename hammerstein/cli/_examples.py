@@ -54,7 +54,7 @@ EXAMPLES = {
     "evaluate": [
         "hammerstein evaluate --reference "
         "'{ kind = \"circle\", radius = 30, frequency = 100, periods = 20 }' "
-        "--measured measured.csv --out eval/",
+        "--drive drive.csv --measured measured.csv --out eval/",
     ],
     "learn": [
         "hammerstein learn rakotondrabe-2dof --reference "
