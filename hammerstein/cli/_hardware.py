@@ -558,13 +558,15 @@ def add_actuator_arguments(p, time_help=None):
     """
     p.add_argument("actuator", metavar="MODEL_OR_PRESET",
                    help="preset name or file (PI + dynamics + optional [amplifier]), or a model "
-                        "file (static PI; needs --sampling-period)")
+                        "file written by identify (classical PI, Preisach or generalised PI; it "
+                        "carries the records' sampling period, a model file without one needs "
+                        "--sampling-period)")
     p.add_argument("--reference", required=True, metavar="SPEC_OR_CSV",
                    help="inline TOML table as a scenario's reference, e.g. '{ kind = \"circle\", "
                         "radius = 30, frequency = 100, periods = 20 }', or a CSV file with t [s] "
                         "and one column per output [µm]")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
-                   help="sampling period [s] (default: the preset's)")
+                   help="sampling period [s] (default: the preset's, or the model file's)")
     p.add_argument("--period", type=positive_float, metavar="S",
                    help="period of a periodic CSV reference [s] (continuation past its end, "
                         "settling window)")
