@@ -74,8 +74,9 @@ def add_parser(subparsers):
                    help="compensator kind (default: the best for the model, printed with why: "
                         "hammerstein with dynamics, else the exact inverse of a Preisach or "
                         "generalised-PI model, else multivariable with a convergent gain; "
-                        f"docs/models-and-kinds.md; {', '.join(REFUSED_KINDS)} are refused, "
-                        f"naming why)")
+                        "docs/models-and-kinds.md). --kind none (no compensator) is refused "
+                        "on its own, since there is nothing to export; with --closed-loop it "
+                        "exports the controller alone")
     p.add_argument("--inversion", choices=["zpetc", "stable"], default=None,
                    help="inverse of the dynamics for --kind hammerstein (default zpetc; stable: "
                         "a filter of the reference PREVIEW samples ahead, docs/real-time.md)")
@@ -94,8 +95,8 @@ def add_parser(subparsers):
     p.add_argument("--check", choices=["error", "warn", "ignore"], default=None,
                    help="convergence check rho(I - K^-1 J) < 1 of the law (default error)")
     p.add_argument("--precision", choices=["double", "float"], default="double",
-                   help="type of the generated code, interface included (float: no double "
-                        "anywhere, for a single-precision FPU)")
+                   help="type of the generated code, interface included (default double; "
+                        "float: no double anywhere, for a single-precision FPU)")
     p.add_argument("--sampling-period", type=number_type(0, low_open=True, unit="s"),
                    default=None, metavar="S",
                    help="sampling period [s] (default the preset's, or a model file's records' "
