@@ -187,8 +187,9 @@ def add_parser(subparsers):
     p = subparsers.add_parser(
         "warmup", help=HELP,
         description="Compile every simulation kernel once into numba's on-disk cache "
-                    "(NUMBA_CACHE_DIR), so that the first run on this machine does not wait for "
-                    "the compiler. A second warmup compiles nothing.")
+                    "(~/.cache/hammerstein/numba, under $XDG_CACHE_HOME when that is set; "
+                    "NUMBA_CACHE_DIR when you set it), so that the first run on this machine "
+                    "does not wait for the compiler. A second warmup compiles nothing.")
     p.add_argument("-q", "--quiet", action="store_true", help="print only the total")
     p.set_defaults(handler=handler)
 
