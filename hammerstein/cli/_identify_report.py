@@ -81,6 +81,27 @@ def delay_report_lines(delay, estimate, sampling_period, given=True):
             f"  estimated from the {estimate.method}"]
 
 
+def _level_key(row):
+    return row["source"], row.get("level", row["percent"])
+
+
+def _level_names(rows):
+    """``{(source, level): (percent text, repeat text)}``: a record that repeats an amplitude
+    gets ``k of n`` on each of that amplitude's levels, in record order."""
+    levels = {}
+    for r in rows:
+        levels.setdefault(_level_key(r), f"{r['percent']:.0f}")
+    count, names = {}, {}
+    for (source, _), pct in levels.items():
+        count[source, pct] = count.get((source, pct), 0) + 1
+    seen = {}
+    for (source, level), pct in levels.items():
+        seen[source, pct] = seen.get((source, pct), 0) + 1
+        n = count[source, pct]
+        names[source, level] = (pct, f"{seen[source, pct]} of {n}" if n > 1 else "")
+    return names
+
+
 def level_report_lines(fit, output_unit):
     """One line per amplitude level of the multi-amplitude records: errors per output.
 
@@ -94,17 +115,21 @@ def level_report_lines(fit, output_unit):
     Returns
     -------
     list of str
-        ``<source> level <p> % (held out|trained): <output> RMS ... %, loop amplitude ... %``.
+        ``<source> level <p> % (held out|trained): <output> RMS ... %, loop amplitude ... %``;
+        where a record repeats an amplitude, ``level <p> % (k of n, held out|trained)``.
     """
+    names = _level_names(fit.levels)
     lines, seen = [], {}
     for row in fit.levels:
-        seen.setdefault((row["source"], row["percent"], row["held_out"]), []).append(row)
-    for (source, pct, held), rows in seen.items():
+        seen.setdefault((_level_key(row), row["held_out"]), []).append(row)
+    for ((source, level), held), rows in seen.items():
+        pct, repeat = names[source, level]
         parts = [f"{r['output']} RMS {r['rms_percent']:.3g} %, loop amplitude "
                  f"{r['amplitude_error_percent']:+.3g} % of {r['measured_peak_to_peak']:.4g} "
                  f"{output_unit}" for r in rows]
-        lines.append(f"{Path(source).name} level {pct:.0f} % ({'held out' if held else 'trained'}): "
-                     + "; ".join(parts))
+        which = ("held out" if held else "trained") if not repeat else \
+            f"{repeat}, {'held out' if held else 'trained'}"
+        lines.append(f"{Path(source).name} level {pct} % ({which}): " + "; ".join(parts))
     return lines
 
 
@@ -121,14 +146,18 @@ def level_metrics_rows(fit, output_unit):
     Returns
     -------
     list of tuple
-        Case ``<file stem>:level-<p>-<held-out|trained>``, channel the output:
+        Case ``<file stem>:level-<p>-<held-out|trained>`` (``level-<p>-<k>of<n>-...``
+        where a record repeats an amplitude), channel the output:
         ``rms_error_percent`` [%], ``loop_amplitude_error_percent`` [%],
         ``peak_to_peak`` [output unit].
     """
+    names = _level_names(fit.levels)
     rows = []
     for r in fit.levels:
-        case = (f"{Path(r['source']).stem}:level-{r['percent']:.0f}-"
-                f"{'held-out' if r['held_out'] else 'trained'}")
+        pct, repeat = names[_level_key(r)]
+        case = (f"{Path(r['source']).stem}:level-{pct}-"
+                + (repeat.replace(" ", "") + "-" if repeat else "")
+                + ('held-out' if r['held_out'] else 'trained'))
         rows += [(case, r["output"], "rms_error_percent", r["rms_percent"], "%"),
                  (case, r["output"], "loop_amplitude_error_percent", r["amplitude_error_percent"], "%"),
                  (case, r["output"], "peak_to_peak", r["measured_peak_to_peak"], output_unit)]

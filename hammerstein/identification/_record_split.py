@@ -662,15 +662,16 @@ def level_errors(fit):
     Returns
     -------
     list of dict
-        ``source``, ``percent`` (level amplitude, % of the largest),
-        ``held_out`` (bool), ``output``, ``rms_percent``,
+        ``source``, ``level`` (its place among the record's levels, from 1:
+        a record may repeat an amplitude), ``percent`` (level amplitude, % of
+        the largest), ``held_out`` (bool), ``output``, ``rms_percent``,
         ``amplitude_error_percent``, ``measured_peak_to_peak``, ``rms`` and
         ``range`` (the RMS error and the measured range over the level)
         [output unit].
     """
     rows = []
     for rec, s, pred in zip(fit.records, fit.splits, fit.predictions):
-        for lv in s.levels:
+        for index, lv in enumerate(s.levels, start=1):
             a, b = lv["start"], lv["stop"] + 1
             h = a + (b - a) // 2
             w = max(1, (b - h) // 200)
@@ -681,7 +682,7 @@ def level_errors(fit):
                 pp, pp_hat = (float(np.ptp(uniform_filter1d(np.asarray(v[l, h:b], dtype=float), w,
                                                             mode="nearest")))
                               for v in (rec.y, pred))
-                rows.append({"source": rec.source, "percent": lv["percent"],
+                rows.append({"source": rec.source, "level": index, "percent": lv["percent"],
                              "held_out": bool(lv["held_out"]), "output": name,
                              "rms_percent": 100 * rms / max(rng, 1e-300),
                              "amplitude_error_percent": 100 * (pp_hat - pp) / max(pp, 1e-300),
@@ -714,7 +715,7 @@ def held_out_level_error(rows):
     levels = {}
     for r in rows:
         if r["held_out"]:
-            levels.setdefault((r["source"], r["percent"]), []).append(r)
+            levels.setdefault((r["source"], r.get("level", r["percent"])), []).append(r)
     if not levels:
         return None
     return float(np.mean([100 * np.sqrt(sum(r["rms"] ** 2 for r in lv))

@@ -120,6 +120,34 @@ def test_level_errors_carry_the_rms_and_range_in_output_units():
          for p in sorted({r["percent"] for r in held})]), rel=1e-9)
 
 
+def test_a_record_that_repeats_an_amplitude_keeps_its_levels_apart():
+    """Levels of 10, 4, 10 and 4 V: four levels, each its own line, its own metric rows and its
+    own term of the minor-loop error (not two levels of twice the samples)."""
+    from hammerstein.cli._identify_report import level_metrics_rows, level_report_lines
+    amps = (10.0, 4.0, 10.0, 4.0)
+    u = np.concatenate([s * np.sin(2 * np.pi * np.arange(2000) * T) for s in amps])
+    y = _pi(u)
+    rec = MultiRecord(np.arange(u.size) * T, u[None], np.vstack([y, 0.1 * y]), ("u",), ("x", "c"),
+                      T, "rep.csv")
+    fit = identify_records([rec], hold_out="auto")
+    assert sorted({r["level"] for r in fit.levels}) == [1, 2, 3, 4]
+    assert [round(r["percent"]) for r in fit.levels if r["output"] == "x"] == [100, 40, 100, 40]
+    lines = level_report_lines(fit, "um")
+    assert len(lines) == 4 and len(set(lines)) == 4
+    assert [("1 of 2" in line, "2 of 2" in line) for line in lines] == \
+        [(True, False), (True, False), (False, True), (False, True)]
+    keys = [row[:3] for row in level_metrics_rows(fit, "um")]
+    assert len(keys) == len(set(keys)) == 4 * 2 * 3
+    held = [r for r in fit.levels if r["held_out"]]
+    assert held
+    per_level = {}
+    for r in held:
+        per_level.setdefault(r["level"], []).append(r)
+    expected = np.mean([100 * np.sqrt(sum(r["rms"] ** 2 for r in rows)) / max(r["range"] for r in rows)
+                        for rows in per_level.values()])
+    assert fit.minor_loop_error == pytest.approx(expected, rel=1e-12)
+
+
 def test_loop_amplitude_error_is_not_the_sensor_noise():
     """A perfect model of a 1.3 µm loop measured with 40 nm of noise: the measured peak to peak
     used to carry the noise's extremes (about 8 sigma over a level: -20 %); after the same
