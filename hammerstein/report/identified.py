@@ -255,7 +255,7 @@ def _report_dynamics(results, directory, jobs):
                      f" (the figure compares G with itself): {SHARED_MODEL_WORDS}.", ""]
                     if one else []),
                   f"![Identified vs true G]({fname})", "",
-                  f"- {order_words(ident)}",
+                  f"- {order_words(ident, r.get('summary'))}",
                   f"- fit over all records per output: "
                   f"{', '.join(f'{v:.2f} %' for v in ident.fit_percent_)}",
                   f"- natural frequencies {', '.join(f'{v:.2f}' for v in meta['natural_frequency_hz'])}"
@@ -268,7 +268,7 @@ def _report_dynamics(results, directory, jobs):
     append_text(directory / "report.md", "\n".join(lines) + "\n", "report")
 
 
-def order_words(ident):
+def order_words(ident, summary=None):
     """The order of identified dynamics and every candidate order tried, in words.
 
     Parameters
@@ -276,6 +276,12 @@ def order_words(ident):
     ident : hammerstein.models.lti.DynamicsIdentifier
         Fitted (``order_``, ``candidate_order_``, ``orders_``,
         ``validation_fit_``, ``candidates_``).
+    summary : dict, optional
+        The dynamics summary of ``identify``'s pipeline
+        (:func:`hammerstein.identification.identification_pipeline.identify_pipeline`:
+        ``candidate_order``, ``chosen_on``, ``candidates``). Its search, run
+        before the creep was identified, is listed; ``ident`` (fitted again
+        through the creep at the order kept) gives the order and its fit.
 
     Returns
     -------
@@ -284,16 +290,24 @@ def order_words(ident):
         states removed (...); held-out fit by candidate order: 1: rejected
         (unstable ...), ..., 8: 99.76 %``.
     """
-    chosen = int(getattr(ident, "candidate_order_", ident.order_))
-    infos = {int(c.get("order", -1)): c for c in (getattr(ident, "candidates_", None) or [])}
-    tried = []
-    for n, v in zip(ident.orders_, ident.validation_fit_):
-        n = int(n)
-        if np.isfinite(v):
-            tried.append(f"{n}: {v:.2f} %")
-        else:
-            why = infos.get(n, {}).get("rejected")
-            tried.append(f"{n}: rejected ({why})" if why else f"{n}: rejected")
+    if summary and summary.get("candidates"):
+        chosen = int(summary["candidate_order"])
+        infos = {int(c["order"]): c for c in summary["candidates"]}
+        tried = [f"{n}: {c['held_out_fit_percent']:.2f} %" if "held_out_fit_percent" in c
+                 and not c.get("rejected") else
+                 (f"{n}: rejected ({c['rejected']})" if c.get("rejected") else f"{n}: rejected")
+                 for n, c in infos.items()]
+    else:
+        chosen = int(getattr(ident, "candidate_order_", ident.order_))
+        infos = {int(c.get("order", -1)): c for c in (getattr(ident, "candidates_", None) or [])}
+        tried = []
+        for n, v in zip(ident.orders_, ident.validation_fit_):
+            n = int(n)
+            if np.isfinite(v):
+                tried.append(f"{n}: {v:.2f} %")
+            else:
+                why = infos.get(n, {}).get("rejected")
+                tried.append(f"{n}: rejected ({why})" if why else f"{n}: rejected")
     text = f"order {ident.order_}"
     if ident.order_ != chosen:
         dropped = infos.get(chosen, {}).get("dropped") or []
@@ -302,4 +316,7 @@ def order_words(ident):
                  f"{plural(chosen - ident.order_, 'state')} removed"
                  + (f" ({'; '.join(dropped)})" if dropped else ""))
     kind = "candidate order" if len(tried) > 1 else "the one order tried"
-    return f"{text}; held-out (validation) fit by {kind}: {', '.join(tried)}"
+    text = f"{text}; held-out (validation) fit by {kind}: {', '.join(tried)}"
+    if summary and summary.get("candidates") and summary.get("chosen_on"):
+        text += f" (chosen on {summary['chosen_on']})"
+    return text

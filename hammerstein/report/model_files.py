@@ -144,7 +144,8 @@ def save_identified_dynamics(results, directory):
     list of dict
         One per distinct identification: ``cases``, ``pi_file``,
         ``dynamics_file``, ``identifier`` (DynamicsIdentifier), ``plant``
-        (HammersteinPlant), ``metadata`` (of the dynamics).
+        (HammersteinPlant), ``metadata`` (of the dynamics), ``summary`` (the
+        search of a ``records`` table's identification, or None).
     """
     directory = Path(directory)
     out, index = [], {}
@@ -152,7 +153,8 @@ def save_identified_dynamics(results, directory):
         if rec.key not in index:
             i = len(out) + 1
             row = {"cases": [], "pi_file": None, "dynamics_file": f"models/hammerstein-{i}-dynamics.toml",
-                   "identifier": rec.identifier, "plant": rec.plant, "metadata": rec.metadata}
+                   "identifier": rec.identifier, "plant": rec.plant, "metadata": rec.metadata,
+                   "summary": getattr(rec, "summary", None)}
             if rec.pi_metadata is not None:
                 # named by its class (a Preisach model was saved as -pi.toml); "pi" for the
                 # classical PI, as the files of earlier reports

@@ -143,6 +143,11 @@ class IdentifiedDynamics:
         A ``records`` table's identification: the preset ``hammerstein
         identify`` writes (``[model]``, ``[dynamics]``, ``[creep]``,
         ``[amplifier]``), the one the compensator was read from; None otherwise.
+    summary : dict or None
+        A ``records`` table's identification: the dynamics summary of
+        ``identify`` (``candidate_order``, ``chosen_on``, ``candidates``: every
+        order of the search, which the creep's refit does not repeat); None
+        otherwise.
     """
 
     kind: ClassVar[str] = "hammerstein"
@@ -153,6 +158,7 @@ class IdentifiedDynamics:
     metadata: dict
     key: tuple
     preset_text: str | None = None
+    summary: dict | None = None
 
 
 @dataclass
@@ -674,7 +680,8 @@ def resolve_dynamics(spec, plant, context, model=None):
                  "sampling_period_s": float(plant.sampling_period), "plant": plant.name}
         context.identified.append(IdentifiedDynamics(
             plant, found.plant.hysteresis, found.metadata, ident, dmeta,
-            (plant_fingerprint(plant), spec_key(ispec), True), found.preset_text))
+            (plant_fingerprint(plant), spec_key(ispec), True), found.preset_text,
+            found.result.dynamics.summary))
         return found.plant.hysteresis, found.plant.sampled_dynamics
     if dyn == "identified":
         ident_pi = spec.get("model") == "identified"
