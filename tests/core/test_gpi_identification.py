@@ -375,6 +375,7 @@ def test_direct_path_with_a_quadratic_reversible_term_is_recovered():
                                    true.simulate(v)[0][2000:], atol=0.01 * np.ptp(y) * frac)
 
 
+@pytest.mark.slow
 def test_four_starts_fit_the_training_samples_better_outside_the_class():
     """The envelope fit is not convex. On the Preisach actuator (outside the class), its
     rows unweighted, the default start alone stops in a higher minimum: with four starts
@@ -431,6 +432,7 @@ def test_level_weights_closed_form():
     assert set(np.unique(w)) == {1.0, 2.0, 4.0}
 
 
+@pytest.mark.slow
 def test_level_weighting_trades_the_full_level_for_the_small_ones():
     """Weighted least squares: each fit is best on its own measure. On the Preisach actuator
     (outside the class), weighting each level by A_max / A_level lowers the 20 % level's
@@ -453,6 +455,7 @@ def test_level_weighting_trades_the_full_level_for_the_small_ones():
         assert err["amplitude"] < err["none"], err
 
 
+@pytest.mark.slow
 def test_the_fit_does_not_depend_on_the_output_unit():
     """The same records with x in nm (x 1000) and y in metres (x 1e-6) give the same model to
     the unit: a held-out loop's RMS error in % of its range equal to 1e-4 of itself. Before, a ridge of

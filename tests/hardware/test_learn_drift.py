@@ -179,6 +179,7 @@ def test_the_convergence_verdict_and_its_number_are_one_quantity():
 
 # -- through the files ----------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_a_drifting_actuator_keeps_learning(tmp_path):
     """Learnt to 0.16 % of the radius, then the actuator 0.5 % stronger at every trial: the
     learning follows it (it locked on the stale best, the gain 0.5 ** k, the true error
