@@ -26,7 +26,11 @@ user's own measured records, named relative to the scenario::
 
 (:data:`FILES_IDENTIFY_FIELDS`: the files ``identify`` takes, with its
 options and defaults; ``inputs`` and ``outputs`` default to the plant's
-names). Both routes call the pipeline ``identify`` calls.
+names, ``time`` to ``"t"`` unless ``sampling_period`` [s] is given
+(:func:`record_time`); ``skip_rows``, ``input_unit``, ``output_unit`` and
+``thresholds`` are ``identify --skip-rows``, ``--input-unit``,
+``--output-unit`` and ``--thresholds r1,r2,...``). Both routes call the
+pipeline ``identify`` calls.
 
 Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
 ``kind = "hammerstein"`` has its own defaults
@@ -38,6 +42,7 @@ Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
 from __future__ import annotations
 
 import math
+import re
 
 from hammerstein.core.schema import closest, did_you_mean, nested_table
 from hammerstein.exceptions import NestedInvalid
@@ -50,6 +55,8 @@ __all__ = [
     "IDENTIFY_FIELDS",
     "RECORDS_IDENTIFY_FIELDS",
     "FILES_IDENTIFY_FIELDS",
+    "record_time",
+    "files_table_words",
     "identify_table",
     "HAMMERSTEIN_IDENTIFY_DEFAULTS",
     "hammerstein_identify_table",
@@ -206,6 +213,25 @@ def _columns(v):
     return list(v)
 
 
+def _thresholds(v):
+    """Explicit thresholds, as ``identify --thresholds r1,r2,...``: increasing, >= 0, at most
+    :data:`MAX_HYSTERONS` of them [input unit]."""
+    if (isinstance(v, list) and 0 < len(v) <= MAX_HYSTERONS
+            and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
+                    for a in v)
+            and v[0] >= 0 and all(b > a for a, b in zip(v, v[1:]))):
+        return [float(a) for a in v]
+    raise Invalid(f"expected a list of 1 to {MAX_HYSTERONS} increasing thresholds >= 0 [input "
+                  f"unit] (as identify --thresholds r1,r2,...), found {short_repr(v)}")
+
+
+def _unit(v):
+    text = string()(v)
+    if not text.strip():
+        raise Invalid(f"expected a unit name such as 'V', 'mV', 'µm' or 'nm', found {text!r}")
+    return text
+
+
 def _delay(v):
     if v == "auto":
         return v
@@ -229,12 +255,78 @@ FILES_IDENTIFY_FIELDS = {
     "hysteresis_records": Field(_file_list, required=True),
     "dynamics_records": Field(_file_list),       # as --dynamics --dynamics-records
     "creep_records": Field(_file_list),          # as --creep-records
-    "time": Field(string(), default="t"),        # the time column
+    "time": Field(string()),                     # the time column; default "t" (none with
+                                                 # sampling_period): see record_time
+    "sampling_period": Field(number("s", 0, maximum=1e6)),   # as --sampling-period
+    "skip_rows": Field(integer(0), default=0),   # as --skip-rows (a preamble's lines)
+    "input_unit": Field(_unit, default="V"),     # as --input-unit (nothing is converted)
+    "output_unit": Field(_unit, default="µm"),   # as --output-unit
+    "thresholds": Field(_thresholds),            # as --thresholds r1,r2,... (n_hysterons: N)
     "inputs": Field(_columns),                   # default: the plant's input names
     "outputs": Field(_columns),                  # default: the plant's output names
     "delay": Field(_delay, default="auto"),      # as --delay (auto: from the dynamics records)
     **{k: RECORDS_IDENTIFY_FIELDS[k] for k in _PIPELINE_KEYS},
 }
+
+
+def record_time(spec):
+    """The time column a files table reads: ``time``, else ``"t"``, else none.
+
+    As ``identify --time`` and ``--sampling-period``: a table without
+    ``time`` reads the column ``t``, unless it gives ``sampling_period``
+    (records without a time column); with both, the time column is read and
+    its step must agree with ``sampling_period``.
+
+    Parameters
+    ----------
+    spec : dict
+        A files ``identify`` table (checked or as written).
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> record_time({}), record_time({"sampling_period": 1e-4}), record_time({"time": "s"})
+    ('t', None, 's')
+    """
+    if spec.get("time") is not None:
+        return spec["time"]
+    return None if spec.get("sampling_period") is not None else "t"
+
+
+#: ``identify``'s options in the words of reading a record, and the files table's keys.
+_OPTION_KEYS = ((re.compile(r"--skip-rows (\w+)"), r"identify.skip_rows = \1"),
+                (re.compile(r"--sampling-period(?: S\b)?"), "identify.sampling_period"),
+                (re.compile(r"--input-unit\b"), "identify.input_unit"),
+                (re.compile(r"--output-unit\b"), "identify.output_unit"))
+
+
+def files_table_words(text):
+    """A message about reading a record, with ``identify``'s options named as the files table's keys.
+
+    The reading of a record (:func:`hammerstein.io.datafiles.read_records`,
+    :func:`hammerstein.io.unit_checks.unit_warnings`) names the command's
+    options in its hints (``--skip-rows N``, ``--sampling-period``,
+    ``--output-unit``); a scenario's files table sets them with its keys.
+
+    Parameters
+    ----------
+    text : str
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> files_table_words("skip them with --skip-rows 3, or give --sampling-period S")
+    'skip them with identify.skip_rows = 3, or give identify.sampling_period'
+    """
+    for pattern, key in _OPTION_KEYS:
+        text = pattern.sub(key, text)
+    return text
 
 
 def identify_table(value):
@@ -302,6 +394,9 @@ def identify_table(value):
             yield from cross_pipeline(clean, bool(clean.get("creep_records")))
             if ("order" in clean or "max_order" in clean) and not clean.get("dynamics_records"):
                 yield "order: only used with dynamics_records"
+            if "thresholds" in clean and "n_hysterons" in value:
+                yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
+                       "(identify --thresholds takes one of them)")
 
         return nested_table(value, FILES_IDENTIFY_FIELDS,
                             '{ records = "files", hysteresis_records = [...] }', cross_files)

@@ -34,7 +34,7 @@ from hammerstein.models.lti import check_delay_by_fit, estimate_measurement_dela
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        spec_key)
-from hammerstein.scenario.identify_tables import identify_table
+from hammerstein.scenario.identify_tables import files_table_words, identify_table, record_time
 from hammerstein.scenario.schema import Invalid
 from hammerstein.signals.excitation import excitation_set
 
@@ -140,8 +140,11 @@ def file_records(plant, spec, base_dir=None):
     """The measured records an ``identify = { records = "files", ... }`` table names, by kind.
 
     Read as ``hammerstein identify`` reads its files
-    (:func:`hammerstein.io.datafiles.read_records`: the ``time`` column, the
-    ``inputs`` and ``outputs`` columns, by default the plant's names), each
+    (:func:`hammerstein.io.datafiles.read_records`: the ``time`` column, or
+    the ``sampling_period`` [s] without one
+    (:func:`~hammerstein.scenario.identify_tables.record_time`), the
+    ``inputs`` and ``outputs`` columns, by default the plant's names, read in
+    ``input_unit`` and ``output_unit`` after ``skip_rows`` preamble lines), each
     file confined to the scenario's directory; the outputs advanced by
     ``delay`` samples (``"auto"``: the estimate of ``identify --delay auto``
     from the dynamics records, 0 when there are none or it is refused, as
@@ -189,9 +192,12 @@ def file_records(plant, spec, base_dir=None):
         for name in spec.get(key) or []:
             try:
                 path = confined_path(name, base_dir, DataFileError)
-                out[kind].append(read_records(path, ins, outs, spec["time"]))
+                out[kind].append(read_records(
+                    path, ins, outs, record_time(spec), spec.get("sampling_period"),
+                    spec.get("skip_rows", 0), spec.get("input_unit", "V"),
+                    spec.get("output_unit", "µm")))
             except (DataFileError, FileLimitError) as exc:
-                raise IdentificationError(f"identify.{key}: {exc}") from None
+                raise IdentificationError(f"identify.{key}: {files_table_words(str(exc))}") from None
     delay, note = spec["delay"], None
     if delay == "auto":
         delay = 0
@@ -237,14 +243,34 @@ def _files_digest(spec, base_dir):
 
 
 def _pipeline_options(spec, name):
+    """The pipeline's options of a validated records table, as ``identify`` gives them.
+
+    Parameters
+    ----------
+    spec : dict
+        Validated ``identify`` table (either records route).
+    name : str
+        Name of the identified dynamics.
+
+    Returns
+    -------
+    PipelineOptions
+        ``thresholds`` (a files table's explicit list) as ``identify --thresholds
+        r1,r2,...`` passes them: their count as ``n``, an array [input unit].
+    """
+    thresholds = spec.get("thresholds")
+    if thresholds is not None:
+        thresholds = np.asarray(thresholds, dtype=float)
     return identification_pipeline.PipelineOptions(
-        method=spec["method"], n=spec["n_hysterons"], partition=spec["partition"],
+        method=spec["method"], n=spec["n_hysterons"] if thresholds is None else thresholds.size,
+        thresholds=thresholds, partition=spec["partition"],
         bounds=spec["bounds"], components=spec["components"], model=spec["model"],
         threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
         record_start=spec["record_start"], preisach_levels=spec["preisach_levels"],
         output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
         creep_refits=spec.get("creep_refits"), hold_out=spec["hold_out"],
-        train_fraction=spec.get("train_fraction"), skip=spec.get("skip"), name=name)
+        train_fraction=spec.get("train_fraction"), skip=spec.get("skip"),
+        output_unit=spec.get("output_unit", "µm"), name=name)
 
 
 def identified_from_records(plant, spec, dynamics, cache=None, base_dir=None):
@@ -307,8 +333,9 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         every = [r for kind in ("hysteresis", "dynamics", "creep") for r in recs[kind]]
         # identify's unit checks (a time column in ms read as s, an output in nm as µm):
         # the scenario read the same files without a word
-        for line in unit_warnings(every, names[1], "µm", spec["time"], names[0]):
-            warnings.warn(f"{where}: {line}", HammersteinWarning, stacklevel=2)
+        for line in unit_warnings(every, names[1], spec["output_unit"], record_time(spec),
+                                  names[0], spec["input_unit"]):
+            warnings.warn(f"{where}: {files_table_words(line)}", HammersteinWarning, stacklevel=2)
         # the files a table names are identified as `identify --dynamics --dynamics-records`
         # does, whatever kind uses them: for a rate-independent kind the creep was fitted
         # without G and the amplifier's slew taken from the hysteresis records alone (125.7
@@ -347,6 +374,7 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     if files:
         meta["input_columns"] = ",".join(recs["hysteresis"][0].input_names)
         meta["output_columns"] = ",".join(recs["hysteresis"][0].output_names)
+        meta["input_unit"], meta["output_unit"] = spec["input_unit"], spec["output_unit"]
         # as identify: a delay given (0 included) or estimated from the dynamics records is
         # kept; none written otherwise (learn --delay auto then estimates its own: a 0 written
         # for hysteresis records alone was taken as a known delay)
@@ -365,7 +393,9 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         list(model.input_names))
     with tempfile.TemporaryDirectory() as tmp:   # what `identify` writes, read as `compensate` does
         path = Path(tmp) / "identified.toml"
-        save_model(result.model, path, meta, extra=extra)
+        # in the records' units, as identify writes them (nothing is converted)
+        save_model(result.model, path, meta, spec.get("input_unit", "V"),
+                   spec.get("output_unit", "µm"), extra=extra)
         text = path.read_text(encoding="utf-8")
         if "[preset]" in text:
             identified = load_plant(path)

@@ -15,13 +15,23 @@ from pathlib import Path
 from hammerstein.core.files import confined_path, escape, file_limit_problem
 from hammerstein.io.record_columns import record_column_problems
 from hammerstein.io.presets import PresetError
-from hammerstein.scenario.identify_tables import FILES_IDENTIFY_FIELDS
+from hammerstein.scenario.identify_tables import FILES_IDENTIFY_FIELDS, files_table_words, record_time
 from hammerstein.scenario.schema import Invalid
 
 __all__ = ["record_file_problems", "record_keys"]
 
 #: The keys of a files table that name the records' columns.
 _COLUMN_KEYS = ("time", "inputs", "outputs")
+
+#: The keys of a files table that say how its records are read (identify's --sampling-period,
+#: --skip-rows, --input-unit, --output-unit).
+_READING_KEYS = ("sampling_period", "skip_rows", "input_unit", "output_unit")
+
+#: A unit the units row gives a signal column (the column's unit key names it).
+_UNIT_ROW = re.compile(r"^(input|output) column .*: the units row says '([^']*)'")
+
+#: The hint of a header that looks like a preamble's line (the skip_rows key names it).
+_PREAMBLE = "(a preamble before the table?"
 
 
 #: The key of a files table that sets the column a record's problem names.
@@ -64,16 +74,16 @@ def record_keys(identify):
     kept = {k: [v] if isinstance(v, str) else v for k, v in identify.items()
             if isinstance(v, (str, list)) and str(k).endswith("_records")}
     known = True
-    for key in _COLUMN_KEYS:
+    for key in _COLUMN_KEYS + _READING_KEYS:
         if key not in identify:
             continue
         try:
             kept[key] = FILES_IDENTIFY_FIELDS[key].check(identify[key])
         except Invalid:     # reported by the table's check; its column is not known
-            if key == "time":
-                kept[key] = None
+            if key in ("time", "sampling_period"):
+                kept["time"] = None     # a time column meant, or none: not looked for
             else:
-                known = False
+                known = False           # the table is not known where it starts, nor its units
     return kept, known
 
 
@@ -126,6 +136,9 @@ def record_file_problems(identify, base, plant):
     outs = identify.get("outputs") or plant_names.get("outputs")
     # a column count that differs from the plant's still has its columns looked for
     check_columns = bool(ins and outs)
+    # as file_records reads them: "t" unless given, none with a sampling period alone
+    # (None kept: a time key that failed its own check)
+    time = identify["time"] if "time" in identify else record_time(identify)
     columns = {}        # (key, problem without the file) -> the files it holds in
     for key in ("hysteresis_records", "dynamics_records", "creep_records"):
         for name in identify.get(key) or []:
@@ -146,20 +159,34 @@ def record_file_problems(identify, base, plant):
                 problems.extend([f"identify.{key}: {problem}"] if problem else [])
                 continue
             # every column problem of the file, each named at the key that sets its column
-            for problem in record_column_problems(path, ins, outs, identify.get("time", "t")):
-                rest = problem.removeprefix(f"{escape(str(path))}: ")
+            preamble = False
+            for problem in record_column_problems(path, ins, outs, time,
+                                                  identify.get("skip_rows", 0),
+                                                  identify.get("input_unit", "V"),
+                                                  identify.get("output_unit", "µm")):
+                rest = files_table_words(problem.removeprefix(f"{escape(str(path))}: "))
                 role = _COLUMN_KEY.match(rest)
                 if not role:
-                    problems.append(f"identify.{key}: {problem}")
+                    problems.append(f"identify.{key}: {files_table_words(problem)}")
                     continue
                 role = next(r for r in role.groups() if r) if any(role.groups()) else "input"
                 setting = "time" if role == "time" else f"{role}s"
+                unit = _UNIT_ROW.match(rest)
+                if unit:            # read in another unit: declared by the unit's key
+                    setting = f"{unit.group(1)}_unit"
+                    rest += f", or declare it: identify.{setting} = '{unit.group(2)}'"
+                elif _PREAMBLE in rest:   # a preamble read as the header: once per file
+                    if preamble:
+                        continue
+                    setting, preamble = "skip_rows", True
                 files = columns.setdefault((setting, rest), [])
                 if name not in files:       # a file given as two kinds of record
                     files.append(name)
     for (setting, rest), names in columns.items():
-        default = ("" if identify.get(setting) not in (None, "t") else
-                   " (identify.time is 't' unless given)" if setting == "time" else
+        default = ("" if identify.get(setting) not in (None, "t") or setting.endswith(
+                       ("_unit", "_rows")) else
+                   " (identify.time is 't' unless given; records without a time column: "
+                   "identify.sampling_period [s])" if setting == "time" else
                    f" (identify.{setting} not given: the plant's {setting[:-1]} names were read)")
         problems.append(f"identify.{setting}: {_files_text(names)}: {rest}{default}")
     return problems
