@@ -21,24 +21,12 @@ from hammerstein.exceptions import NestedInvalid
 from hammerstein.io.presets import load_plant
 from hammerstein.scenario.identification import excitation_records, identified_from_records
 from hammerstein.scenario.identify_tables import identify_table
+from route_files import toml_numbers
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PREAMBLE = "Instrument: DAQ-9000\nOperator: lab\nRate: 20 kHz\n"
 #: Explicit thresholds [mV] (identify --thresholds in the input unit).
 THRESHOLDS = [0.0, 1000.0, 2500.0, 4000.0, 6000.0, 8000.0, 10000.0]
-
-
-def _numbers(table):
-    out = []
-    if isinstance(table, dict):
-        for k in sorted(table):
-            out += _numbers(table[k])
-    elif isinstance(table, list):
-        for v in table:
-            out += _numbers(v)
-    elif isinstance(table, (int, float)) and not isinstance(table, bool):
-        out.append(float(table))
-    return out
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +62,7 @@ def test_a_scenario_identifies_a_labs_records_as_identify_does(measured, capsys)
              "thresholds": THRESHOLDS}
     found = identified_from_records(plant, table, False, base_dir=d)
     scen = tomllib.loads(found.preset_text)
-    a, b = np.array(_numbers(cli["model"])), np.array(_numbers(scen["model"]))
+    a, b = np.array(toml_numbers(cli["model"])), np.array(toml_numbers(scen["model"]))
     assert a.shape == b.shape and a.size > 0
     assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0)
     # the model file carries the records' units, as identify writes them

@@ -26,30 +26,11 @@ from hammerstein.scenario.identification import (ResolveContext, excitation_reco
                                                  identified_from_records)
 from hammerstein.scenario.identify_tables import identify_table
 from hammerstein.scenario.registry import build_compensator
+from route_files import toml_numbers, write_record
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 CIRCLE = '{ kind = "circle", radius = 12, frequency = 40, periods = 4 }'
 
-
-def _write(path, rec):
-    cols = ["t", *rec.input_names, *rec.output_names]
-    data = np.column_stack([rec.timepts, rec.u.T, rec.y.T])
-    np.savetxt(path, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
-    return str(path)
-
-
-def _numbers(table):
-    """Every number of a (nested) TOML table, in a stable order."""
-    out = []
-    if isinstance(table, dict):
-        for k in sorted(table):
-            out += _numbers(table[k])
-    elif isinstance(table, list):
-        for v in table:
-            out += _numbers(v)
-    elif isinstance(table, (int, float)) and not isinstance(table, bool):
-        out.append(float(table))
-    return out
 
 
 def test_identify_table_with_records_takes_identify_defaults():
@@ -183,7 +164,7 @@ def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys)
                 "frequency": 5.0, "hold": 0.25, "multisine_periods": 2}
     spec = identify_table(identify)
     recs = excitation_records(plant, spec)
-    files = {kind: [_write(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
+    files = {kind: [write_record(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
              for kind, rs in recs.items()}
     preset = tmp_path / "id.toml"
     T = repr(plant.sampling_period)
@@ -201,7 +182,7 @@ def test_scenario_and_commands_write_the_same_preset_and_drive(tmp_path, capsys)
     # compensate's (before, this route wrote none and its drives could leave the range)
     assert scen["amplifier"]["source"] == "records"
     for table in ("model", "dynamics", "creep", "amplifier"):
-        a, b = np.array(_numbers(cli[table])), np.array(_numbers(scen[table]))
+        a, b = np.array(toml_numbers(cli[table])), np.array(toml_numbers(scen[table]))
         assert a.shape == b.shape and a.size > 0
         assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), table
 
@@ -258,7 +239,7 @@ def test_a_scenario_identifies_from_measured_files_as_identify_does(tmp_path, ca
     spec = identify_table({"records": "excitation", "model": "generalized", "creep": True,
                            "frequency": 5.0, "hold": 0.25, "multisine_periods": 2})
     recs = excitation_records(plant, spec)
-    names = {kind: [_write(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
+    names = {kind: [write_record(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
              for kind, rs in recs.items()}
     preset = tmp_path / "id.toml"
     assert main(["identify", *names["hysteresis"], "--inputs", "ux,uy", "--outputs", "x,y",
@@ -278,7 +259,7 @@ def test_a_scenario_identifies_from_measured_files_as_identify_does(tmp_path, ca
         found = identified_from_records(plant, identify, with_g, base_dir=tmp_path)
         scen = tomllib.loads(found.preset_text)
         for table in ("model", "dynamics", "creep", "amplifier"):
-            a, b = np.array(_numbers(cli[table])), np.array(_numbers(scen[table]))
+            a, b = np.array(toml_numbers(cli[table])), np.array(toml_numbers(scen[table]))
             assert a.shape == b.shape and a.size > 0, (with_g, table)
             assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0), (with_g, table)
     assert scen["identification"]["records"].startswith("measured files: ")
@@ -462,7 +443,7 @@ def hysteresis_files(tmp_path_factory):
                                                      "hold": 0.25, "multisine_periods": 2}))
     d = tmp_path_factory.mktemp("records")
     (d / "plant.toml").write_text((SCENARIOS / "presets" / "realistic-gpi.toml").read_text())
-    return d, [Path(_write(d / f"h{i}.csv", r)).name for i, r in enumerate(recs["hysteresis"])]
+    return d, [Path(write_record(d / f"h{i}.csv", r)).name for i, r in enumerate(recs["hysteresis"])]
 
 
 @pytest.mark.slow

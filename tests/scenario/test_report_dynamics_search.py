@@ -17,6 +17,7 @@ from hammerstein.io.presets import load_plant
 from hammerstein.report.identified import order_words
 from hammerstein.scenario.identify_tables import identify_table
 from hammerstein.scenario.identification import excitation_records
+from route_files import write_record
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
@@ -35,12 +36,6 @@ def test_the_words_list_the_summary_search_over_the_one_order_refitted():
         "3: rejected (unstable), 4: 97.50 % (chosen on held-out records m-validation)")
 
 
-def _write(path, rec):
-    names = ["t", *rec.input_names, *rec.output_names]
-    data = np.column_stack([rec.timepts, rec.u.T, rec.y.T])
-    np.savetxt(path, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
-    return path.name
-
 
 @pytest.mark.slow
 def test_a_files_table_with_creep_reports_the_whole_order_search(tmp_path):
@@ -48,7 +43,7 @@ def test_a_files_table_with_creep_reports_the_whole_order_search(tmp_path):
     recs = excitation_records(plant, identify_table({
         "records": "excitation", "model": "generalized", "creep": True, "frequency": 5.0,
         "hold": 0.25, "multisine_periods": 2}))
-    names = {kind: [_write(tmp_path / f"{kind}-{i}.csv", r) for i, r in enumerate(rs)]
+    names = {kind: [Path(write_record(tmp_path / f"{kind}-{i}.csv", r)).name for i, r in enumerate(rs)]
              for kind, rs in recs.items()}
     (tmp_path / "plant.toml").write_text((SCENARIOS / "presets" / "realistic-gpi.toml").read_text())
     (tmp_path / "s.toml").write_text(f'''
