@@ -687,6 +687,8 @@ def load_plant(preset, dynamics=True, base_dir=None):
     name = meta.get("name", path.stem)
     creep = _creep(data.get("creep"), model.output_names, path)   # checked in both cases
     plant = HammersteinPlant(model, float(T), lin, name=name, creep=creep if dynamics else None)
+    plant.units = (str(data["model"].get("input_unit", "V")),
+                   str(data["model"].get("output_unit", "µm")))   # checked by load_model
     problems = []                      # the hardware: amplifier and sensor, reported together
     try:                               # hammerstein.models.amplifier
         plant.amplifier = amplifier_from_table(data.get("amplifier"), model.input_names, str(path))

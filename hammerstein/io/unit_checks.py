@@ -1,4 +1,5 @@
-"""Records whose numbers look like another unit than declared (nothing is converted).
+"""Records whose numbers look like another unit than declared (nothing is converted), and the
+units a scenario converts to its plant's.
 
 Used by ``hammerstein identify`` and by the scenarios that identify from measured records
 (``identify = { records = "files" }``, ``kind = "identification"``), which warn alike.
@@ -9,7 +10,54 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["unit_warnings", "PLAUSIBLE_RANGE_MAX_UM", "PLAUSIBLE_RANGE_MIN_UM",
-           "PLAUSIBLE_GAIN_MIN_UM_PER_V", "PLAUSIBLE_PERIOD_MAX_S"]
+           "PLAUSIBLE_GAIN_MIN_UM_PER_V", "PLAUSIBLE_PERIOD_MAX_S", "INPUT_UNIT_SCALES",
+           "OUTPUT_UNIT_SCALES", "unit_scale"]
+
+#: Input units a scenario converts between (its records' and its plant's): value in V of one
+#: unit. (``identify`` converts nothing.)
+INPUT_UNIT_SCALES = {"V": 1.0, "mV": 1e-3, "kV": 1e3}
+
+#: Output units a scenario converts between: value in µm of one unit.
+OUTPUT_UNIT_SCALES = {"µm": 1.0, "um": 1.0, "nm": 1e-3, "mm": 1e3, "m": 1e6}
+
+
+def unit_scale(unit, to, role):
+    """The factor that takes a value in ``unit`` to ``to``.
+
+    Parameters
+    ----------
+    unit, to : str
+        Unit names (e.g. ``"mV"`` and ``"V"``).
+    role : {"input", "output"}
+        Which table converts them (:data:`INPUT_UNIT_SCALES` or
+        :data:`OUTPUT_UNIT_SCALES`).
+
+    Returns
+    -------
+    float
+        1 for the same name; ``scales[unit] / scales[to]`` otherwise.
+
+    Raises
+    ------
+    ValueError
+        Two different units of which one is not in the table (the message
+        names both and the units that convert to ``to``).
+
+    Examples
+    --------
+    >>> from hammerstein.io.unit_checks import unit_scale
+    >>> unit_scale("nm", "µm", "output"), unit_scale("counts", "counts", "input")
+    (0.001, 1.0)
+    """
+    if unit == to:
+        return 1.0
+    scales = INPUT_UNIT_SCALES if role == "input" else OUTPUT_UNIT_SCALES
+    if unit not in scales or to not in scales:
+        others = ", ".join(repr(u) for u in scales if u != to)
+        raise ValueError(f"{role}s in {unit!r} for a plant whose {role}s are in {to!r}: expected "
+                         f"{to!r}" + (f" or a unit converted to it ({others})" if to in scales
+                                      else " (no other unit converts to it)"))
+    return scales[unit] / scales[to]
 
 
 #: An output range [µm] above this is not an actuator's (a column in nm read as µm?).

@@ -63,6 +63,10 @@ class HammersteinPlant:
     amplifier : hammerstein.models.amplifier.Amplifier or None
         The preset's ``[amplifier]`` (range, slew rate, bandwidth of the
         voltages that reach the actuator); None: unlimited.
+    units : tuple of str
+        ``(input unit, output unit)`` of the preset's ``[model]`` table
+        (``input_unit``, ``output_unit``; default ``("V", "µm")``): what its
+        inputs take and its outputs give, and what references are in.
 
     Raises
     ------
@@ -72,6 +76,7 @@ class HammersteinPlant:
     """
 
     amplifier = None
+    units = ("V", "µm")
 
     def __init__(self, hysteresis: MultivariablePI, sampling_period: float,
                  dynamics: control.StateSpace | None = None, name: str = "plant", creep=None):

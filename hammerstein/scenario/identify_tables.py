@@ -29,7 +29,9 @@ options and defaults; ``inputs`` and ``outputs`` default to the plant's
 names, ``time`` to ``"t"`` unless ``sampling_period`` [s] is given
 (:func:`record_time`); ``skip_rows``, ``input_unit``, ``output_unit`` and
 ``thresholds`` are ``identify --skip-rows``, ``--input-unit``,
-``--output-unit`` and ``--thresholds r1,r2,...``). Both routes call the
+``--output-unit`` and ``--thresholds r1,r2,...``; unlike ``identify``, the
+scenario reads the records and thresholds in its plant's units,
+:func:`hammerstein.io.unit_checks.unit_scale`). Both routes call the
 pipeline ``identify`` calls.
 
 Only ``frequency`` is required (:data:`IDENTIFY_FIELDS` lists the defaults);
@@ -259,8 +261,9 @@ FILES_IDENTIFY_FIELDS = {
                                                  # sampling_period): see record_time
     "sampling_period": Field(number("s", 0, maximum=1e6)),   # as --sampling-period
     "skip_rows": Field(integer(0), default=0),   # as --skip-rows (a preamble's lines)
-    "input_unit": Field(_unit, default="V"),     # as --input-unit (nothing is converted)
-    "output_unit": Field(_unit, default="µm"),   # as --output-unit
+    # as --input-unit/--output-unit; read in the plant's units (records_route.in_plant_units)
+    "input_unit": Field(_unit, default="V"),
+    "output_unit": Field(_unit, default="µm"),
     "thresholds": Field(_thresholds),            # as --thresholds r1,r2,... (n_hysterons: N)
     "inputs": Field(_columns),                   # default: the plant's input names
     "outputs": Field(_columns),                  # default: the plant's output names

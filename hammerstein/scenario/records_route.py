@@ -26,7 +26,7 @@ from hammerstein.exceptions import HammersteinWarning, HysteresisError
 from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.sensors import Sensor
 from hammerstein.io.datafiles import DataFileError, MultiRecord, read_records
-from hammerstein.io.unit_checks import unit_warnings
+from hammerstein.io.unit_checks import unit_scale, unit_warnings
 from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
 from hammerstein.models.dynamics import DynamicsError
@@ -40,7 +40,8 @@ from hammerstein.signals.excitation import excitation_set
 
 identification_pipeline = lazy_module("hammerstein.identification.identification_pipeline")
 
-__all__ = ["RecordsIdentification", "excitation_records", "file_records",
+__all__ = ["RecordsIdentification", "excitation_records", "file_records", "in_plant_units",
+           "plant_unit_scales",
            "identified_from_records", "SENSOR_NOISE_RMS"]
 
 #: RMS white noise of the simulated sensor of ``sensor = true`` [µm].
@@ -227,6 +228,66 @@ def file_records(plant, spec, base_dir=None):
     return out, int(delay), note
 
 
+def plant_unit_scales(plant, spec):
+    """The factors that take a files table's records to its plant's units.
+
+    ``identify`` converts nothing: its model is in the records' units, and
+    ``compensate`` takes references in them. A scenario drives its plant (in
+    ``plant.units``, V and µm for every bundled preset) and compensates
+    references in the plant's output unit, so a model identified in mV and nm
+    was off by a factor of 1000 against a plant in V and µm (a 12 µm circle
+    followed with a 126 000 % error): the records are read in the plant's units.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant
+        The scenario's plant (``units``: input and output unit).
+    spec : dict
+        Validated files table (``input_unit``, ``output_unit``).
+
+    Returns
+    -------
+    tuple of float
+        ``(a, b)``: inputs times ``a`` and outputs times ``b`` are in the plant's units.
+
+    Raises
+    ------
+    IdentificationError
+        Units that differ from the plant's and do not convert
+        (:func:`hammerstein.io.unit_checks.unit_scale`), named at the table's key.
+    """
+    units = getattr(plant, "units", ("V", "µm"))
+    out = []
+    for key, to, role in (("input_unit", units[0], "input"), ("output_unit", units[1], "output")):
+        try:
+            out.append(unit_scale(spec.get(key, to), to, role))
+        except ValueError as exc:
+            raise IdentificationError(f"identify.{key}: {exc}") from None
+    return tuple(out)
+
+
+def in_plant_units(records, scales):
+    """Records multiplied by :func:`plant_unit_scales`' factors.
+
+    Parameters
+    ----------
+    records : dict of str to list of MultiRecord
+        As :func:`file_records` reads them (``u`` (m, n), ``y`` (p, n) in the table's units).
+    scales : tuple of float
+        ``(a, b)`` of :func:`plant_unit_scales`.
+
+    Returns
+    -------
+    dict of str to list of MultiRecord
+        ``u`` times ``a`` and ``y`` times ``b`` (the same objects for ``(1, 1)``).
+    """
+    a, b = scales
+    if a == 1.0 and b == 1.0:
+        return records
+    return {kind: [replace(r, u=a * r.u, y=b * r.y) for r in recs]
+            for kind, recs in records.items()}
+
+
 def _files_digest(spec, base_dir):
     """Content hash of the files a ``records = "files"`` table names (its cache key)."""
     h = hashlib.sha256()
@@ -242,7 +303,7 @@ def _files_digest(spec, base_dir):
     return h.hexdigest()
 
 
-def _pipeline_options(spec, name):
+def _pipeline_options(spec, name, scales=(1.0, 1.0), output_unit="µm"):
     """The pipeline's options of a validated records table, as ``identify`` gives them.
 
     Parameters
@@ -259,8 +320,8 @@ def _pipeline_options(spec, name):
         r1,r2,...`` passes them: their count as ``n``, an array [input unit].
     """
     thresholds = spec.get("thresholds")
-    if thresholds is not None:
-        thresholds = np.asarray(thresholds, dtype=float)
+    if thresholds is not None:     # in the records' input unit, read in the plant's
+        thresholds = np.asarray(thresholds, dtype=float) * scales[0]
     return identification_pipeline.PipelineOptions(
         method=spec["method"], n=spec["n_hysterons"] if thresholds is None else thresholds.size,
         thresholds=thresholds, partition=spec["partition"],
@@ -270,7 +331,7 @@ def _pipeline_options(spec, name):
         output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
         creep_refits=spec.get("creep_refits"), hold_out=spec["hold_out"],
         train_fraction=spec.get("train_fraction"), skip=spec.get("skip"),
-        output_unit=spec.get("output_unit", "µm"), name=name)
+        output_unit=output_unit, name=name)
 
 
 def identified_from_records(plant, spec, dynamics, cache=None, base_dir=None):
@@ -326,7 +387,13 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     names = (list(model.input_names), list(model.output_names))
     files = spec["records"] == "files"
     where = f"identify (records = '{spec['records']}')"
+    units = getattr(plant, "units", ("V", "µm"))
+    scales = (1.0, 1.0)
     if files:
+        try:
+            scales = plant_unit_scales(plant, spec)      # before a file is read
+        except IdentificationError as exc:
+            raise IdentificationError(f"{where}: {exc}") from None
         recs, delay, note = file_records(plant, spec, base_dir)
         if note:
             warnings.warn(note, HammersteinWarning, stacklevel=2)
@@ -336,6 +403,7 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         for line in unit_warnings(every, names[1], spec["output_unit"], record_time(spec),
                                   names[0], spec["input_unit"]):
             warnings.warn(f"{where}: {files_table_words(line)}", HammersteinWarning, stacklevel=2)
+        recs = in_plant_units(recs, scales)
         # the files a table names are identified as `identify --dynamics --dynamics-records`
         # does, whatever kind uses them: for a rate-independent kind the creep was fitted
         # without G and the amplifier's slew taken from the hysteresis records alone (125.7
@@ -347,7 +415,7 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         creep = spec["creep"]
     try:
         result = identification_pipeline.identify_pipeline(
-            recs["hysteresis"], _pipeline_options(spec, "identified"), names,
+            recs["hysteresis"], _pipeline_options(spec, "identified", scales, units[1]), names,
             recs["dynamics"] if dynamics else None, recs["creep"] if creep else None)
     except (IdentificationError, HysteresisError, DynamicsError) as exc:
         raise IdentificationError(f"{where}: {exc}") from None
@@ -374,7 +442,8 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     if files:
         meta["input_columns"] = ",".join(recs["hysteresis"][0].input_names)
         meta["output_columns"] = ",".join(recs["hysteresis"][0].output_names)
-        meta["input_unit"], meta["output_unit"] = spec["input_unit"], spec["output_unit"]
+        if scales != (1.0, 1.0):
+            meta["converted_from_units"] = f"{spec['input_unit']}, {spec['output_unit']}"
         # as identify: a delay given (0 included) or estimated from the dynamics records is
         # kept; none written otherwise (learn --delay auto then estimates its own: a 0 written
         # for hysteresis records alone was taken as a known delay)
@@ -393,9 +462,8 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         list(model.input_names))
     with tempfile.TemporaryDirectory() as tmp:   # what `identify` writes, read as `compensate` does
         path = Path(tmp) / "identified.toml"
-        # in the records' units, as identify writes them (nothing is converted)
-        save_model(result.model, path, meta, spec.get("input_unit", "V"),
-                   spec.get("output_unit", "µm"), extra=extra)
+        # in the plant's units (a files table's records converted on reading)
+        save_model(result.model, path, meta, *units, extra=extra)
         text = path.read_text(encoding="utf-8")
         if "[preset]" in text:
             identified = load_plant(path)

@@ -15,6 +15,7 @@ from pathlib import Path
 from hammerstein.core.files import confined_path, escape, file_limit_problem
 from hammerstein.io.record_columns import record_column_problems
 from hammerstein.io.presets import PresetError
+from hammerstein.io.unit_checks import unit_scale
 from hammerstein.scenario.identify_tables import FILES_IDENTIFY_FIELDS, files_table_words, record_time
 from hammerstein.scenario.schema import Invalid
 
@@ -106,7 +107,9 @@ def record_file_problems(identify, base, plant):
     base : pathlib.Path
         The scenario's directory (relative file names).
     plant : HammersteinPlant or None
-        Names the default columns and counts ``inputs`` and ``outputs``;
+        Names the default columns, counts ``inputs`` and ``outputs`` and has the
+        units the records are read in (``input_unit`` and ``output_unit`` must
+        be those or convert to them, :func:`hammerstein.io.unit_checks.unit_scale`);
         None: only whether each file is there.
 
     Returns
@@ -132,6 +135,16 @@ def record_file_problems(identify, base, plant):
             problems.append(f"identify.{key}: {len(given)} column(s) {given} for the plant's "
                             f"{len(names)} {key} {names}; expected one column per "
                             f"{key[:-1]}, in the plant's order")
+    if plant is not None:              # read in the plant's units: these must convert
+        units = getattr(plant, "units", ("V", "µm"))
+        for key, to, role in (("input_unit", units[0], "input"),
+                              ("output_unit", units[1], "output")):
+            given = identify.get(key, to)
+            if isinstance(given, str):
+                try:
+                    unit_scale(given, to, role)
+                except ValueError as exc:
+                    problems.append(f"identify.{key}: {exc}")
     ins = identify.get("inputs") or plant_names.get("inputs")
     outs = identify.get("outputs") or plant_names.get("outputs")
     # a column count that differs from the plant's still has its columns looked for

@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import hammerstein
 from hammerstein.cli.main import main
 from hammerstein.exceptions import NestedInvalid
-from hammerstein.io.presets import load_plant
+from hammerstein.io.presets import load_model, load_plant
 from hammerstein.scenario.identification import excitation_records, identified_from_records
 from hammerstein.scenario.identify_tables import identify_table
-from route_files import toml_numbers
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PREAMBLE = "Instrument: DAQ-9000\nOperator: lab\nRate: 20 kHz\n"
@@ -62,13 +62,26 @@ def test_a_scenario_identifies_a_labs_records_as_identify_does(measured, capsys)
              "thresholds": THRESHOLDS}
     found = identified_from_records(plant, table, False, base_dir=d)
     scen = tomllib.loads(found.preset_text)
-    a, b = np.array(toml_numbers(cli["model"])), np.array(toml_numbers(scen["model"]))
-    assert a.shape == b.shape and a.size > 0
-    assert np.max(np.abs(a - b)) <= 1e-9 * max(np.max(np.abs(a)), 1.0)
-    # the model file carries the records' units, as identify writes them
-    assert (scen["model"]["input_unit"], scen["model"]["output_unit"]) == ("mV", "nm")
-    for key in ("partition", "held_out", "train_rms", "validation_rms"):
+    # identify's model is in mV and nm; the scenario's in its plant's V and µm (converted on
+    # reading): the same model, its thresholds [mV] a thousand times the scenario's [V] and
+    # every prediction [nm] a thousand times the scenario's [µm]
+    assert (cli["model"]["input_unit"], cli["model"]["output_unit"]) == ("mV", "nm")
+    assert (scen["model"]["input_unit"], scen["model"]["output_unit"]) == ("V", "µm")
+    assert scen["identification"]["converted_from_units"] == "mV, nm"
+    np.testing.assert_allclose(1e3 * np.array(scen["model"]["thresholds"]), THRESHOLDS,
+                               rtol=1e-12, atol=1e-9)
+    mine, theirs = found.plant.hysteresis, load_model(out)
+    u = np.vstack([
+        12 * np.sin(np.linspace(0, 6 * np.pi, 900)) * np.linspace(0.2, 1, 900),
+        9 * np.cos(np.linspace(0, 4 * np.pi, 900))])
+    y_v, y_mv = mine.simulate(u)[0], theirs.simulate(1e3 * u)[0]
+    assert np.ptp(y_v) > 1.0
+    np.testing.assert_allclose(y_v, 1e-3 * y_mv, rtol=0, atol=1e-9 * np.ptp(y_v))
+    for key in ("partition", "held_out"):
         assert scen["identification"][key] == cli["identification"][key], key
+    for key in ("train_rms", "validation_rms"):                  # [µm] and [nm]
+        np.testing.assert_allclose(1e3 * np.array(scen["identification"][key]),
+                                   cli["identification"][key], rtol=1e-9)
 
 
 @pytest.mark.parametrize("argv, table", [
@@ -78,7 +91,7 @@ def test_a_scenario_identifies_a_labs_records_as_identify_does(measured, capsys)
     (["--input-unit", "mV", "--output-unit", "nm", "--thresholds", "7"],
      {"input_unit": "mV", "output_unit": "nm", "n_hysterons": 7}),
 ])
-def test_a_files_table_gives_the_pipeline_identify_s_thresholds_and_units(argv, table):
+def test_a_files_table_gives_the_pipeline_identify_s_thresholds_in_the_plant_s_units(argv, table):
     from hammerstein.cli.identify import _options, _parse_thresholds
     from hammerstein.cli.main import build_parser
     from hammerstein.scenario.records_route import _pipeline_options
@@ -88,11 +101,15 @@ def test_a_files_table_gives_the_pipeline_identify_s_thresholds_and_units(argv, 
     cli = replace(_options(args, n, thresholds), name="m")
     spec = identify_table({"records": "files", "hysteresis_records": ["r.csv"], **table})
     ours = _pipeline_options(spec, "m")
+    # the scenario reads its records in its plant's V and µm: thresholds given in mV are
+    # passed in V, and the outputs the pipeline names are in µm
+    volts = 1e-3 if table.get("input_unit") == "mV" else 1.0
+    assert ours.output_unit == "µm"
     if cli.thresholds is None:
-        assert ours == cli
+        assert ours == replace(cli, output_unit="µm")
     else:
-        np.testing.assert_array_equal(ours.thresholds, cli.thresholds)
-        assert replace(ours, thresholds=None) == replace(cli, thresholds=None)
+        np.testing.assert_allclose(ours.thresholds, volts * cli.thresholds, rtol=1e-15)
+        assert replace(ours, thresholds=None) == replace(cli, thresholds=None, output_unit="µm")
 
 
 def test_the_reading_keys_take_identify_s_defaults():
@@ -117,11 +134,48 @@ def test_bad_reading_keys_are_named_all_at_once():
     assert "expected a number > 0" in found["sampling_period"] and "[s]" in found["sampling_period"]
     assert "expected an integer >= 0" in found["skip_rows"]
     assert "expected a unit name" in found["input_unit"]
+    assert found["output_unit"] == "expected a string, found 3"
     assert "increasing thresholds >= 0" in found["thresholds"]
     # a count and a list: identify's --thresholds takes one of them
     with pytest.raises(NestedInvalid, match="thresholds: give n_hysterons .* or thresholds"):
         identify_table({"records": "files", "hysteresis_records": ["r.csv"],
                         "thresholds": [0.0, 1.0], "n_hysterons": 4})
+
+
+@pytest.mark.parametrize("plant_units, keys, message", [
+    (None, 'output_unit = "counts", ',
+     "outputs in 'counts' for a plant whose outputs are in 'µm': expected 'µm' or a unit "
+     "converted to it ('um', 'nm', 'mm', 'm')"),
+    (("counts", "µm"), 'input_unit = "V", ',
+     "inputs in 'V' for a plant whose inputs are in 'counts': expected 'counts' (no other unit "
+     "converts to it)"),
+    (("counts", "nm"), 'input_unit = "counts", output_unit = "mm", ', None),
+])
+def test_validate_refuses_record_units_that_do_not_convert_to_the_plant_s(
+        tmp_path, plant_units, keys, message):
+    from hammerstein.scenario.schema import ScenarioError
+    from hammerstein.scenario.validate import validate_scenario
+    preset = "realistic-2dof"
+    if plant_units is not None:       # a plant in other units: a model file identify wrote
+        text = (Path(hammerstein.__file__).parent / "presets" / "realistic-2dof.toml").read_text(
+            encoding="utf-8")
+        assert 'input_unit = "V"\n' in text and 'output_unit = "µm"\n' in text
+        (tmp_path / "p.toml").write_text(text.replace(
+            'input_unit = "V"\n', f'input_unit = "{plant_units[0]}"\n', 1).replace(
+            'output_unit = "µm"\n', f'output_unit = "{plant_units[1]}"\n', 1), encoding="utf-8")
+        assert load_plant(tmp_path / "p.toml").units == plant_units
+        preset = "p.toml"
+    (tmp_path / "r.csv").write_text("t,ux,uy,x,y\n" + "".join(
+        f"{k * 1e-4:.4f},{k % 7},{-(k % 5)},{2 * (k % 7)},{-2 * (k % 5)}\n" for k in range(40)))
+    path = _scenario(tmp_path / "s.toml", keys).resolve()
+    path.write_text(path.read_text().replace('"realistic-2dof"', f'"{preset}"'))
+    if message is None:
+        validate_scenario(path)
+        return
+    with pytest.raises(ScenarioError) as err:
+        validate_scenario(path)
+    lines = [ln for ln in str(err.value).splitlines() if "compensator.identify." in ln]
+    assert lines == [f"{path}: compensator.identify.{keys.split(' ')[0]}: {message}"], lines
 
 
 def _scenario(path, keys):
@@ -164,3 +218,48 @@ def test_validate_names_a_reading_problem_at_the_key_that_fixes_it(tmp_path, hea
     fix = {"time": "sampling_period = 1e-4, ", "skip_rows": "skip_rows = 3, ",
            "output_unit": 'output_unit = "nm", ', "input_unit": 'input_unit = "mV", '}[key]
     validate_scenario(_scenario(tmp_path / "s.toml", fix))
+
+
+def test_a_scenario_follows_its_circle_alike_from_records_in_mv_and_nm(measured, tmp_path):
+    """A scenario's plant takes V and gives µm: a model identified from records in mV and nm
+    was used as it was, and a 12 µm circle was followed with a 126 000 % error. Read in the
+    plant's units, the scenario follows it as from the same records written in V and µm."""
+    d, plant, names, T = measured
+    errors = {}
+    for units, scale in (("mV/nm", 1.0), ("V/µm", 1e-3)):
+        here = tmp_path / units.replace("/", "-")
+        here.mkdir()
+        (here / "plant.toml").write_text(
+            (SCENARIOS / "presets" / "realistic-gpi.toml").read_text(encoding="utf-8"),
+            encoding="utf-8")
+        for n in names:
+            rows = (d / n).read_text(encoding="utf-8").splitlines()[5:]
+            (here / n).write_text("ux,uy,x,y\n" + "".join(",".join(
+                repr(scale * float(v)) for v in row.split(",")) + "\n" for row in rows))
+        iu, ou = units.split("/")
+        (here / "s.toml").write_text(f"""
+name = "s"
+[plant]
+preset = "plant.toml"
+dynamics = false
+[compensator]
+kind = "multivariable"
+model = "identified"
+[compensator.identify]
+records = "files"
+model = "classical"
+sampling_period = {T!r}
+input_unit = "{iu}"
+output_unit = "{ou}"
+hysteresis_records = {names}
+[[cases]]
+name = "c"
+reference = {{ kind = "circle", radius = 12, frequency = 10, periods = 4 }}
+""", encoding="utf-8")
+        assert main(["run", str(here / "s.toml"), "--out", str(here / "out"), "-q",
+                     "--figures", "none"]) == 0
+        rows = (here / "out" / "s" / "metrics.csv").read_text(encoding="utf-8").splitlines()
+        errors[units] = next(float(r.split(",")[3]) for r in rows
+                             if r.startswith("c,x+y,max_euclidean_error,"))
+    assert errors["V/µm"] < 0.2 * 12                 # a compensated circle, not a failure
+    assert errors["mV/nm"] == pytest.approx(errors["V/µm"], rel=1e-6)
