@@ -295,6 +295,12 @@ def _check_usage(args):
     if not 2 <= args.preisach_levels <= 60:
         raise _Usage(f"--preisach-levels: expected an integer from 2 to 60, found "
                      f"{args.preisach_levels}")
+    if args.model in ("preisach", "generalized") and args.thresholds != "15":
+        # the classical PI's hysterons: another class has its own grid, and ignored them
+        raise _Usage(f"--thresholds: only used by --model classical or auto (the classical PI's "
+                     f"hysterons); --model {args.model} sets its "
+                     + ("grid with --preisach-levels" if args.model == "preisach"
+                        else "plays with --threshold-spacing"))
     if args.model in ("preisach", "generalized") and args.method == "closed-form":
         raise _Usage(f"--model {args.model}: fitted by least squares; leave out --method "
                      f"closed-form")

@@ -395,17 +395,28 @@ def identify_table(value):
     if isinstance(value, dict) and value.get("records") == "files":
         def cross_files(clean):
             yield from cross_pipeline(clean, bool(clean.get("creep_records")))
-            if ("order" in clean or "max_order" in clean) and not clean.get("dynamics_records"):
-                yield "order: only used with dynamics_records"
+            for key in ("order", "max_order"):
+                if key in clean and not clean.get("dynamics_records"):
+                    yield f"{key}: only used with dynamics_records"
             if "thresholds" in clean and "n_hysterons" in value:
                 yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
                        "(identify --thresholds takes one of them)")
+            for key in ("thresholds", "n_hysterons"):
+                if key in value and clean.get("model") in ("preisach", "generalized"):
+                    # fitted into the classical PI alone: with another class, ignored
+                    yield (f"{key}: only used by model = 'classical' or 'auto' (the classical "
+                           f"PI's hysterons), found model = '{clean['model']}'"
+                           + (" (its grid: preisach_levels)" if clean["model"] == "preisach"
+                              else " (its plays: threshold_spacing)"))
 
         return nested_table(value, FILES_IDENTIFY_FIELDS,
                             '{ records = "files", hysteresis_records = [...] }', cross_files)
     if isinstance(value, dict) and "records" in value:
         def cross_records(clean):
             yield from cross_pipeline(clean, clean.get("creep"))
+            if "n_hysterons" in value and clean.get("model") in ("preisach", "generalized"):
+                yield (f"n_hysterons: only used by model = 'classical' or 'auto' (the classical "
+                       f"PI's hysterons), found model = '{clean['model']}'")
             if clean.get("amplitude") is not None and clean.get("range") is not None:
                 yield "amplitude: give amplitude or range (excitation --range), not both"
 

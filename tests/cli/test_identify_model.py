@@ -89,6 +89,21 @@ def test_preisach_levels_out_of_range_is_a_usage_error(files, capsys):
     assert err.count("\n") == 1 and "--preisach-levels" in err
 
 
+@pytest.mark.parametrize("model, grid", [("preisach", "--preisach-levels"),
+                                         ("generalized", "--threshold-spacing")])
+@pytest.mark.parametrize("thresholds", ["0,1,2.5", "7"])
+def test_thresholds_with_a_class_that_ignores_them_is_a_usage_error(files, capsys, model, grid,
+                                                                    thresholds):
+    """The classical PI's hysterons: a Preisach or generalised-PI fit ignored them silently."""
+    _, d, recs = files
+    out = d / f"ignored-{model}.toml"
+    assert main(["identify", *recs, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t",
+                 "--model", model, "--thresholds", thresholds, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--thresholds: only used by --model classical or auto" in err
+    assert grid in err and not out.exists()
+
+
 @pytest.mark.slow   # three classes fitted and judged on the staircases too: ~4.5 s of CPU
 def test_auto_with_creep_records_judges_the_step_levels_too(files, capsys):
     # a staircase from rest per input (the actuator has no creep: the levels are its hysteresis);

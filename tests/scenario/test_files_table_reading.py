@@ -263,3 +263,32 @@ reference = {{ kind = "circle", radius = 12, frequency = 10, periods = 4 }}
                              if r.startswith("c,x+y,max_euclidean_error,"))
     assert errors["V/µm"] < 0.2 * 12                 # a compensated circle, not a failure
     assert errors["mV/nm"] == pytest.approx(errors["V/µm"], rel=1e-6)
+
+
+@pytest.mark.parametrize("table, key, words", [
+    ({"records": "files", "model": "preisach", "thresholds": [0.0, 1.0]}, "thresholds",
+     "only used by model = 'classical' or 'auto' (the classical PI's hysterons), found model "
+     "= 'preisach' (its grid: preisach_levels)"),
+    ({"records": "files", "model": "generalized", "n_hysterons": 9}, "n_hysterons",
+     "found model = 'generalized' (its plays: threshold_spacing)"),
+    ({"records": "excitation", "model": "preisach", "n_hysterons": 9}, "n_hysterons",
+     "only used by model = 'classical' or 'auto'"),
+    ({"records": "files", "max_order": 6}, "max_order", "only used with dynamics_records"),
+    ({"records": "files", "order": 6}, "order", "only used with dynamics_records"),
+])
+def test_options_the_chosen_fit_would_ignore_are_named_at_their_key(table, key, words):
+    """identify refuses --thresholds with a class that has its own grid, and --order without
+    the broadband records; the tables said nothing, or named max_order's problem at order."""
+    if table["records"] == "files":
+        table = {**table, "hysteresis_records": ["r.csv"]}
+    with pytest.raises(NestedInvalid) as info:
+        identify_table(table)
+    found = dict(info.value.problems)
+    assert list(found) == [key] and words in found[key], found
+
+
+def test_thresholds_stay_allowed_where_the_classical_pi_is_fitted():
+    for model in ("classical", "auto"):
+        spec = identify_table({"records": "files", "hysteresis_records": ["r.csv"],
+                               "model": model, "thresholds": [0.0, 1.0]})
+        assert spec["thresholds"] == [0.0, 1.0]
