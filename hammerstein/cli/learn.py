@@ -292,14 +292,16 @@ def _inverse_gain(model, gain, check):
     name = gain if isinstance(gain, str) else "scaled midpoint K = [" + ", ".join(
         f"{v:.4g}" for v in np.diag(gain)) + "] µm/V"
     if radius >= 1.0 and (law.check or "error") in ("error", "warn"):
+        # where no gain converges the reason says so (the hint's "a gain that converges"
+        # beside it contradicted it)
         text = (f"gain {name}: rho(I - K^-1 J) reaches {radius:.3g} >= 1, the law inverting "
-                f"the model in the learning may not converge ({LAW_HINT})")
+                f"the model in the learning may not converge ({law.reason or LAW_HINT})")
         if (law.check or "error") == "error":
             raise CompensatorError(text)
         notes.append(f"warning: {text}")
     notes.append(f"note: kind = ilc because learning runs on the hardware; the classical PI is "
                  f"inverted in L by the multivariable law, gain {name}, rho(I - K^-1 J) "
-                 f"{radius:.3g}" + (f"; {law.reason}" if law.reason else ""))
+                 f"{radius:.3g}" + (f"; {law.reason}" if law.reason and radius < 1.0 else ""))
     return gain, law.check, notes
 
 
@@ -467,8 +469,6 @@ def _learn(args):
         check_reference_first(args.actuator, args.sampling_period, args.reference, args.time,
                               args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
-        if getattr(plant, "dynamics_problem", None):
-            print_err(f"warning: {plant.dynamics_problem}")
         model = plant.hysteresis
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         T = plant.sampling_period
@@ -490,6 +490,9 @@ def _learn(args):
             raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
                                 f"the drive's {N} (the measurement must cover the whole drive)")
         y = y[:, :N]
+        # after the files are read: a bad input is one line on stderr, not a warning and it
+        if getattr(plant, "dynamics_problem", None):
+            print_err(f"warning: {plant.dynamics_problem}")
         if args.fade_in is not None and args.fade_in / T > ref.signal.shape[1]:
             raise DataFileError(f"--fade-in: {args.fade_in:g} s is longer than the reference "
                                 f"({ref.signal.shape[1]} samples, {ref.signal.shape[1] * T:g} s); "

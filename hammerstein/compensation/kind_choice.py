@@ -315,7 +315,8 @@ def law_check(model, gain=None, check=None, label=None):
             f"again, or give --check warn to run the law anyway")
     return LawCheck(gain, radius, "warn",
                     f"no gain makes the {label} law provably converge (smallest rho(I - K^-1 J) "
-                    f"{radius:.3g}), and it follows the model's own outputs: run with check = warn")
+                    f"{radius:.3g}), but it follows the model's own outputs: it runs without that "
+                    f"guarantee, as with --check warn")
 
 
 def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):

@@ -285,3 +285,43 @@ def test_the_diagonal_law_keeps_the_output_offset_and_map():
     u_mv, _ = InverseMultiplicativeCompensator(model, check="ignore").simulate(yr)
     assert np.array_equal(u_diag, u_mv)
     assert np.all(u_diag[:, :100] == 0.0)
+
+
+# -- the convergence warning's advice ---------------------------------------------------------
+def _law_warning(model, gain):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        InverseMultiplicativeCompensator(model, gain=gain, check="warn")
+    found = [str(w.message) for w in caught if "rho(I - K^-1 J) reaches" in str(w.message)]
+    assert len(found) == 1, [str(w.message) for w in caught]
+    return found[0]
+
+
+def test_the_advice_names_the_midpoint_gain_where_it_lowers_the_radius(model):
+    from hammerstein.compensation.compensators import _inverse_gain, convergence_report
+    mid = convergence_report(model, _inverse_gain(model, "midpoint")[0]).max_radius
+    ident = convergence_report(model, _inverse_gain(model, "identity")[0]).max_radius
+    assert mid < 1.0 <= ident                   # the literal law diverges, the midpoint's not
+    assert f"gain='midpoint' lowers it to {mid:.3g}" in _law_warning(model, "identity")
+
+
+def test_the_advice_does_not_name_a_midpoint_gain_that_does_not_lower_it():
+    """Linear paths, direct 1 µm/V and cross 1.5 µm/V: the secant and the midpoint gains are
+    both the identity, I - K^-1 J = [[0, -1.5], [-1.5, 0]], rho = 1.5 for both; the midpoint
+    gain was named as the remedy all the same."""
+    def lin(w):
+        return PrandtlIshlinskii([0.0], [w])
+    m = MultivariablePI([[lin(1.0), lin(1.5)], [lin(1.5), lin(1.0)]], ["ux", "uy"], ["x", "y"],
+                        [1.0, 1.0])
+    text = _law_warning(m, "secant")
+    assert "reaches 1.5 >= 1" in text
+    assert "gain='midpoint' does not lower it (1.5)" in text and "lowers it to" not in text
+
+
+def test_the_advice_says_why_there_is_no_midpoint_gain():
+    falling = PrandtlIshlinskii([0.0, 0.5], [1.0, -2.5])       # slope 1 - 2.5 < 0 past 0.5 V
+    rising = PrandtlIshlinskii([0.0], [1.0])
+    m = MultivariablePI([[rising, PrandtlIshlinskii([0.0], [1.2])], [None, falling]],
+                        ["ux", "uy"], ["x", "y"], [1.0, 1.0])
+    text = _law_warning(m, "identity")
+    assert "no midpoint gain (the direct transfer of input uy has a reachable slope" in text

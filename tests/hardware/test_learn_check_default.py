@@ -34,6 +34,6 @@ def test_learn_takes_compensates_default_check(tmp_path, capsys):
                  "--measured", str(tmp_path / "m0.csv"), "--out", str(tmp_path / "d1.csv")])
     out = capsys.readouterr()
     assert code == 0, out.err
-    assert "check = warn" in out.out + out.err      # said, as compensate says it
+    assert "as with --check warn" in out.out + out.err      # said, as compensate says it
     u1 = pd.read_csv(tmp_path / "d1.csv", comment="#")[["u1", "u2", "u3"]].to_numpy()
     assert np.all(np.isfinite(u1)) and u1.min() >= 0.0 and u1.max() <= 100.0

@@ -34,3 +34,28 @@ def test_compensate_warns(tmp_path, capsys):
     assert status == 0
     assert "warning: stage.toml: its dynamics fitted the held-out broadband records at only " \
            "-13.5 %" in err
+
+
+@pytest.mark.parametrize("fault", ["nan", "missing", "columns"])
+def test_learn_s_bad_measured_file_is_one_line_even_with_a_poor_fit(tmp_path, capsys, fault):
+    """The warning came before the files were read: a NaN in the measured response gave the
+    warning line and then the error line (two lines on stderr for a bad input)."""
+    path = _preset(tmp_path, -13.5)
+    ref = '{ kind = "circle", radius = 10, frequency = 50, periods = 4 }'
+    drive = tmp_path / "drive.csv"
+    assert main(["compensate", str(path), "--reference", ref, "--out", str(drive)]) == 0
+    rows = [ln for ln in drive.read_text().splitlines() if ln and not ln.startswith("#")]
+    n = len(rows) - 1
+    measured = tmp_path / "measured.csv"
+    head = "t,x,y" if fault != "columns" else "t,x_um,y_um"
+    cells = [f"{k * 5e-5!r},{'nan' if fault == 'nan' and k == n // 2 else 1.0},0.5"
+             for k in range(n)]
+    if fault != "missing":
+        measured.write_text(head + "\n" + "\n".join(cells) + "\n")
+    capsys.readouterr()
+    out = tmp_path / "next.csv"
+    status = main(["learn", str(path), "--reference", ref, "--drive", str(drive),
+                   "--measured", str(measured), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert status == 1 and not out.exists()
+    assert err.count("\n") == 1 and err.startswith("hammerstein learn: error: --measured: "), err
