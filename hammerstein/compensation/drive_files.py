@@ -141,6 +141,8 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
         raw = bounded_read_bytes(path, "data", "data file")
     except FileLimitError as exc:        # its message names the file
         raise DataFileError(f"{what}: {exc}") from None
+    except FileNotFoundError:           # as every other missing file is named
+        raise DataFileError(f"{what}: {escape(path)}: no such file") from None
     except OSError as exc:
         raise DataFileError(f"{what}: {escape(path)}: {exc.strerror or exc}") from None
     if len(raw) > TIME_PRECHECK_BYTES:

@@ -200,8 +200,8 @@ def read_toml(path, what="TOML file"):
         return tomllib.loads(bounded_read_text(path, "toml", what))
     except FileLimitError as exc:
         raise PresetError(str(exc)) from None
-    except FileNotFoundError:
-        raise PresetError(f"{path}: file not found") from None
+    except FileNotFoundError:           # worded as a missing data file is
+        raise PresetError(f"{path}: no such file") from None
     except tomllib.TOMLDecodeError as exc:
         raise PresetError(f"{path}: invalid TOML: {exc}") from None
     except RecursionError:  # the parser recurses once per level of [ or {

@@ -76,7 +76,7 @@ SCENARIOS = {
     "missing-case-name": "cases[0].name: missing (required)",
     "missing-cases": "cases: missing (required)",
     "missing-length": "cases[0].drive.periods/duration: give exactly one of periods or duration",
-    "missing-model-file": "no-such-model.toml: file not found",
+    "missing-model-file": "no-such-model.toml: no such file",
     "missing-plant": "plant: missing (required)",
     "missing-required": "cases[0].drive.amplitude: missing (required)",
     "model-duplicated-thresholds": "model.components.x.ux: thresholds: expected strictly increasing "

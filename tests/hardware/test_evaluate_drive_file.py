@@ -63,7 +63,7 @@ def test_a_device_or_fifo_drive_is_refused_without_reading_it(files, drive):
 
 @pytest.mark.parametrize("drive, says", [("/dev/null", "not a regular file"),
                                          (".", "is a directory"),
-                                         ("missing.csv", "No such file")])
+                                         ("missing.csv", "missing.csv: no such file")])
 def test_a_drive_that_is_no_data_file_is_named(files, drive, says):
     res = _cli("evaluate", "--reference", REF, "--measured", "y0.csv", "--drive", drive,
                "--out", "ev-bad", cwd=files)

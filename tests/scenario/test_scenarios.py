@@ -451,7 +451,7 @@ def test_a_bad_value_does_not_hide_the_kinds_own_checks_of_the_other_keys(tmp_pa
     # a bad value beside a case's own misspelt model: the model is named, and the keys whose
     # defaults follow it are not judged
     ('gain = "secnt"\nidentify_dynamics = {}', 'compensator = { model = "identifed" }',
-     "identifed: file not found", "identify_dynamics"),
+     "identifed: no such file", "identify_dynamics"),
     # a case that overrides dynamics: its conflict is the case's, not the top table's
     ('model = "identified"\ndynamics = "identified"\nidentify_dynamics = {}',
      'compensator = { dynamics = "plant" }',
