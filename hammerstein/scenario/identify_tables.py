@@ -402,7 +402,10 @@ def identify_table(value):
                 yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
                        "(identify --thresholds takes one of them)")
             for key in ("thresholds", "n_hysterons"):
-                if key in value and clean.get("model") in ("preisach", "generalized"):
+                # (a count equal to the default is what a table validated before holds, and
+                # what identify's --thresholds 15 is: not refused)
+                given = key in value and not (key == "n_hysterons" and value[key] == 15)
+                if given and clean.get("model") in ("preisach", "generalized"):
                     # fitted into the classical PI alone: with another class, ignored
                     yield (f"{key}: only used by model = 'classical' or 'auto' (the classical "
                            f"PI's hysterons), found model = '{clean['model']}'"
@@ -414,7 +417,8 @@ def identify_table(value):
     if isinstance(value, dict) and "records" in value:
         def cross_records(clean):
             yield from cross_pipeline(clean, clean.get("creep"))
-            if "n_hysterons" in value and clean.get("model") in ("preisach", "generalized"):
+            if value.get("n_hysterons", 15) != 15 and clean.get("model") in ("preisach",
+                                                                              "generalized"):
                 yield (f"n_hysterons: only used by model = 'classical' or 'auto' (the classical "
                        f"PI's hysterons), found model = '{clean['model']}'")
             if clean.get("amplitude") is not None and clean.get("range") is not None:

@@ -292,3 +292,15 @@ def test_thresholds_stay_allowed_where_the_classical_pi_is_fitted():
         spec = identify_table({"records": "files", "hysteresis_records": ["r.csv"],
                                "model": model, "thresholds": [0.0, 1.0]})
         assert spec["thresholds"] == [0.0, 1.0]
+
+
+@pytest.mark.parametrize("table", [
+    {"records": "excitation", "model": "preisach", "creep": True},
+    {"records": "files", "model": "generalized", "hysteresis_records": ["r.csv"]},
+])
+def test_a_validated_table_validates_again(table):
+    """The route validates a table it was given validated (its n_hysterons default filled in):
+    that default is no count given with a Preisach or generalised-PI model."""
+    once = identify_table(table)
+    assert once["n_hysterons"] == 15
+    assert identify_table(once) == once
