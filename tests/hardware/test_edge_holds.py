@@ -1,0 +1,54 @@
+"""A drive held on its amplifier's range edge is named (it was silent: no limit was exceeded).
+
+Expectations counted on the drive file itself: the samples after the header's fade-in whose
+voltage is the range's edge.
+"""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from hammerstein.cli.main import main
+from hammerstein.compensation.edge_holds import edge_hold_note
+from hammerstein.models.amplifier import Amplifier, AmplifierChannel
+
+OUTSIDE_GPI = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
+
+
+@pytest.mark.parametrize("radius, held", [(60, False), (80, True)])
+def test_compensate_names_the_inputs_held_on_the_records_range(tmp_path, capsys, radius, held):
+    out = tmp_path / "drive.csv"
+    assert main(["compensate", str(OUTSIDE_GPI), "--reference",
+                 f'{{ kind = "circle", radius = {radius}, frequency = 20, periods = 4 }}',
+                 "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    text = out.read_text()
+    fade = int(re.search(r"fade-in (\d+) samples", text).group(1))
+    u = pd.read_csv(out, comment="#")[["ux", "uy"]].to_numpy().T[:, fade:]
+    found = 0
+    for name, row in zip(("ux", "uy"), u):
+        for edge in (-20.0, 20.0):                          # the records' range, +-20 V
+            on = np.abs(row - edge) <= 40.0 * 1e-9
+            found += int(on.sum())
+            said = f"{name} holds the range edge {edge:g} V on {int(on.sum())} of the " \
+                   f"{u.shape[1]} samples after the fade-in"
+            assert (said in err and said in text) == bool(on.any()), err
+    assert (found > 0) == held
+    assert ("# note: ux holds the range edge" in text) == held      # in the drive's header too
+
+
+def test_an_edge_that_is_the_rest_is_no_hold():
+    """A unipolar stage rests at 0 V, its range's low edge: a reference at the rest output is
+    met there exactly."""
+    amp = Amplifier([AmplifierChannel(0.0, 100.0), AmplifierChannel(-10.0, 10.0)], ["ux", "uy"])
+    u = np.array([[0.0, 0.0, 50.0, 100.0, 100.0, 100.0],
+                  [0.0, 0.0, 1.0, 2.0, 3.0, -10.0]])
+    note = edge_hold_note(u, amp, 1, 0.01)
+    assert note.startswith("ux holds the range edge 100 V on 3 of the 5 samples after the "
+                           "fade-in (60 %; 0.0300-0.0500 s); uy holds the range edge -10 V on 1 "
+                           "of the 5 samples after the fade-in (20 %; 0.0500-0.0500 s): ")
+    assert edge_hold_note(u[:, :3], amp, 1, 0.01) is None     # 0 V on ux: its rest
+    assert edge_hold_note(u, None, 1, 0.01) is None
