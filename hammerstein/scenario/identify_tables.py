@@ -160,6 +160,18 @@ def _train_fraction(v):
                   f"out), found {short_repr(v)}")
 
 
+def _thresholds(v):
+    """Explicit thresholds, as ``identify --thresholds r1,r2,...``: increasing, >= 0, at most
+    :data:`MAX_HYSTERONS` of them [input unit]."""
+    if (isinstance(v, list) and 0 < len(v) <= MAX_HYSTERONS
+            and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
+                    for a in v)
+            and v[0] >= 0 and all(b > a for a, b in zip(v, v[1:]))):
+        return [float(a) for a in v]
+    raise Invalid(f"expected a list of 1 to {MAX_HYSTERONS} increasing thresholds >= 0 [input "
+                  f"unit] (as identify --thresholds r1,r2,...), found {short_repr(v)}")
+
+
 #: Schema of an ``identify`` table with ``records = "excitation"``: the records of
 #: ``hammerstein excitation`` played through the plant, identified by the pipeline of
 #: ``hammerstein identify`` (:func:`hammerstein.identification.identification_pipeline.identify_pipeline`)
@@ -178,6 +190,7 @@ RECORDS_IDENTIFY_FIELDS = {
     "model": Field(choice("auto", "classical", "preisach", "generalized"), default="auto"),
     "method": Field(choice("least-squares", "closed-form"), default="least-squares"),
     "n_hysterons": Field(integer(1, MAX_HYSTERONS), default=15),
+    "thresholds": Field(_thresholds),          # as --thresholds r1,r2,... (n_hysterons: N)
     "partition": Field(choice("auto", "time", "input"), default="auto"),
     "bounds": Field(choice("none", "nonnegative", "monotone"), default="none"),
     "components": Field(_components, default="auto"),
@@ -215,18 +228,6 @@ def _columns(v):
     return list(v)
 
 
-def _thresholds(v):
-    """Explicit thresholds, as ``identify --thresholds r1,r2,...``: increasing, >= 0, at most
-    :data:`MAX_HYSTERONS` of them [input unit]."""
-    if (isinstance(v, list) and 0 < len(v) <= MAX_HYSTERONS
-            and all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a)
-                    for a in v)
-            and v[0] >= 0 and all(b > a for a, b in zip(v, v[1:]))):
-        return [float(a) for a in v]
-    raise Invalid(f"expected a list of 1 to {MAX_HYSTERONS} increasing thresholds >= 0 [input "
-                  f"unit] (as identify --thresholds r1,r2,...), found {short_repr(v)}")
-
-
 def _unit(v):
     text = string()(v)
     if not text.strip():
@@ -243,8 +244,9 @@ def _delay(v):
 
 
 #: Options of the identification pipeline shared by both records routes.
-_PIPELINE_KEYS = ("model", "method", "n_hysterons", "partition", "bounds", "components",
-                  "output_map", "preisach_levels", "threshold_spacing", "level_weighting",
+_PIPELINE_KEYS = ("model", "method", "n_hysterons", "thresholds", "partition", "bounds",
+                  "components", "output_map", "preisach_levels", "threshold_spacing",
+                  "level_weighting",
                   "record_start", "creep_refits", "order", "max_order", "hold_out",
                   "train_fraction", "skip")
 
@@ -264,7 +266,6 @@ FILES_IDENTIFY_FIELDS = {
     # as --input-unit/--output-unit; read in the plant's units (records_route.in_plant_units)
     "input_unit": Field(_unit, default="V"),
     "output_unit": Field(_unit, default="µm"),
-    "thresholds": Field(_thresholds),            # as --thresholds r1,r2,... (n_hysterons: N)
     "inputs": Field(_columns),                   # default: the plant's input names
     "outputs": Field(_columns),                  # default: the plant's output names
     "delay": Field(_delay, default="auto"),      # as --delay (auto: from the dynamics records)
@@ -375,6 +376,19 @@ def identify_table(value):
             yield "order: give order or max_order, not both"
         if clean.get("train_fraction") is not None and clean.get("hold_out") == "none":
             yield "train_fraction: give train_fraction or hold_out = 'none', not both"
+        # a count equal to the default (15) is what a table validated before holds (the route
+        # validates it again), and what identify's --thresholds 15 is: not a count given
+        count = isinstance(value, dict) and value.get("n_hysterons", 15) != 15
+        if "thresholds" in clean and count:
+            yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
+                   "(identify --thresholds takes one of them)")
+        for key, given in (("thresholds", "thresholds" in clean), ("n_hysterons", count)):
+            if given and clean.get("model") in ("preisach", "generalized"):
+                # fitted into the classical PI alone: with another class, ignored
+                yield (f"{key}: only used by model = 'classical' or 'auto' (the classical "
+                       f"PI's hysterons), found model = '{clean['model']}'"
+                       + (" (its grid: preisach_levels)" if clean["model"] == "preisach"
+                          else " (its plays: threshold_spacing)"))
         if clean.get("creep_refits") is not None and not creep:
             yield ("creep_refits: only used with creep_records" if clean.get("records") == "files"
                    else "creep_refits: only used with creep = true")
@@ -398,29 +412,12 @@ def identify_table(value):
             for key in ("order", "max_order"):
                 if key in clean and not clean.get("dynamics_records"):
                     yield f"{key}: only used with dynamics_records"
-            if "thresholds" in clean and "n_hysterons" in value:
-                yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
-                       "(identify --thresholds takes one of them)")
-            for key in ("thresholds", "n_hysterons"):
-                # (a count equal to the default is what a table validated before holds, and
-                # what identify's --thresholds 15 is: not refused)
-                given = key in value and not (key == "n_hysterons" and value[key] == 15)
-                if given and clean.get("model") in ("preisach", "generalized"):
-                    # fitted into the classical PI alone: with another class, ignored
-                    yield (f"{key}: only used by model = 'classical' or 'auto' (the classical "
-                           f"PI's hysterons), found model = '{clean['model']}'"
-                           + (" (its grid: preisach_levels)" if clean["model"] == "preisach"
-                              else " (its plays: threshold_spacing)"))
 
         return nested_table(value, FILES_IDENTIFY_FIELDS,
                             '{ records = "files", hysteresis_records = [...] }', cross_files)
     if isinstance(value, dict) and "records" in value:
         def cross_records(clean):
             yield from cross_pipeline(clean, clean.get("creep"))
-            if value.get("n_hysterons", 15) != 15 and clean.get("model") in ("preisach",
-                                                                              "generalized"):
-                yield (f"n_hysterons: only used by model = 'classical' or 'auto' (the classical "
-                       f"PI's hysterons), found model = '{clean['model']}'")
             if clean.get("amplitude") is not None and clean.get("range") is not None:
                 yield "amplitude: give amplitude or range (excitation --range), not both"
 

@@ -223,10 +223,14 @@ def test_validate_names_a_reading_problem_at_the_key_that_fixes_it(tmp_path, hea
 def test_a_scenario_follows_its_circle_alike_from_records_in_mv_and_nm(measured, tmp_path):
     """A scenario's plant takes V and gives µm: a model identified from records in mV and nm
     was used as it was, and a 12 µm circle was followed with a 126 000 % error. Read in the
-    plant's units, the scenario follows it as from the same records written in V and µm."""
+    plant's units, the scenario follows it as from the same records written in V and µm, its
+    thresholds given in each file's unit (a files table with thresholds also failed to run:
+    validated twice, its n_hysterons default was taken for a count given beside them)."""
     d, plant, names, T = measured
     errors = {}
     for units, scale in (("mV/nm", 1.0), ("V/µm", 1e-3)):
+        # thresholds in the records' input unit, as identify takes them (read in the plant's)
+        thresholds = [scale * r for r in THRESHOLDS]
         here = tmp_path / units.replace("/", "-")
         here.mkdir()
         (here / "plant.toml").write_text(
@@ -251,6 +255,7 @@ model = "classical"
 sampling_period = {T!r}
 input_unit = "{iu}"
 output_unit = "{ou}"
+thresholds = {thresholds}
 hysteresis_records = {names}
 [[cases]]
 name = "c"
@@ -297,10 +302,24 @@ def test_thresholds_stay_allowed_where_the_classical_pi_is_fitted():
 @pytest.mark.parametrize("table", [
     {"records": "excitation", "model": "preisach", "creep": True},
     {"records": "files", "model": "generalized", "hysteresis_records": ["r.csv"]},
+    {"records": "files", "thresholds": [0.0, 1.5, 3.0], "hysteresis_records": ["r.csv"]},
+    {"records": "excitation", "thresholds": [0.0, 1.5, 3.0]},
 ])
 def test_a_validated_table_validates_again(table):
     """The route validates a table it was given validated (its n_hysterons default filled in):
-    that default is no count given with a Preisach or generalised-PI model."""
+    that default is no count given with a Preisach or generalised-PI model, nor beside a
+    thresholds list (a files table with thresholds failed every scenario run so)."""
     once = identify_table(table)
     assert once["n_hysterons"] == 15
     assert identify_table(once) == once
+
+
+def test_the_excitation_records_table_takes_thresholds_as_identify_does():
+    from hammerstein.scenario.records_route import _pipeline_options
+    spec = identify_table({"records": "excitation", "model": "classical",
+                           "thresholds": [0.0, 2.0, 5.0]})
+    options = _pipeline_options(spec, "m")
+    np.testing.assert_array_equal(options.thresholds, [0.0, 2.0, 5.0])
+    assert options.n == 3
+    with pytest.raises(NestedInvalid, match="give n_hysterons .* or thresholds"):
+        identify_table({"records": "excitation", "thresholds": [0.0, 1.0], "n_hysterons": 4})
