@@ -11,7 +11,8 @@ compensator again on the shaped reference:
 
 0. **band limit**: where the reference accelerates more than a sine at
    the identified first bending mode would (:func:`faster_than_mode`: a
-   raster's line steps and corners, never a circle below the mode), it is
+   raster's line steps and the turns at both ends of its lines, never a
+   circle below the mode), it is
    replaced by its zero-phase Hann-window average over one period of the
    mode: the inverse of the dynamics is then not asked for content at the
    resonance, which it reproduces only as well as the mode was identified.
