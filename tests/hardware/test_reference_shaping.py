@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from hammerstein.compensation.shaping_holds import hold_note
-from hammerstein.compensation.shaping import (first_mode_hz, hann_average, limit_excess,
-                                              mode_decay_s, shape_reference)
+from hammerstein.compensation.shaping import (faster_than_mode, first_mode_hz, hann_average,
+                                              limit_excess, mode_decay_s, shape_reference)
 from hammerstein.models.amplifier import amplifier_from_table
+from hammerstein.signals.references import raster
 
 
 def _amp(low=-10.0, high=10.0, slew=1.0):
@@ -158,6 +159,61 @@ def test_a_step_faster_than_the_first_mode_is_band_limited_even_within_the_limit
     t = np.arange(400) * T
     sine = (np.sin(2 * np.pi * 100 * t) * np.minimum(t / 0.01, 1.0))[None, :]
     assert not shape_reference(lambda x: x, sine, amp, T, first_mode=f1).changed
+
+
+def _mode_inverse(f1, T):
+    """The drive of an undamped bending mode at ``f1`` of unit static gain, inverted:
+    ``u = x + x'' / (2 pi f1)^2`` (second difference over ``T^2``; the ends held)."""
+    def run(x):
+        x = np.asarray(x, dtype=float)
+        pad = np.pad(x, ((0, 0), (1, 1)), mode="edge")
+        return x + (pad[:, 2:] - 2 * x + pad[:, :-2]) / (2 * np.pi * f1 * T) ** 2
+    return run
+
+
+def test_every_turn_of_a_raster_is_band_limited_not_only_where_the_slow_axis_steps():
+    """A 40 µm raster at 10 Hz reverses its fast axis within a sample at both ends; its sampled
+    acceleration there (2 v / T) is below a sine at the 180 Hz mode of half its range, and only
+    the turns where the slow axis stepped were smoothed: through the mode's inverse each other
+    turn was a drive spike of 12 V against 0.08 V a sample on the lines. Expected from
+    Bernstein's inequality, not from the shaping: a signal without content above f1 accelerates
+    at most 2 pi f1 times its largest speed (sampled: 2 tan(pi f1 T) / T times it), at every turn;
+    and the drive then steps at a far-end turn no more than at a turn where the slow axis steps."""
+    T, f1, W, f, lines = 1e-4, 180.0, 40.0, 10.0, 6
+    _, r = raster(T, [W, W], lines, f)
+    lead = 200                                        # at rest at the origin first
+    r = np.concatenate([np.zeros((2, lead)), r], axis=1)
+    amp = amplifier_from_table({"range": [-1e3, 1e3]}, ["ux", "uy"])   # limits far away
+    run = _mode_inverse(f1, T)
+    s = shape_reference(run, r, amp, T, first_mode=f1)
+    x, P = s.reference[0], int(round(1 / (f * T)))
+    speed = np.max(np.abs(np.diff(r[0])))                          # 2 W f T a sample
+    bound = 2 * np.tan(np.pi * f1 * T) * speed                     # a second difference [µm]
+    acc = np.abs(np.diff(x, 2))                                    # acc[k - 1] at sample k
+    ux = np.abs(np.diff(s.inputs[0]))
+    w = P // 10
+    far = [lead + j * P + P // 2 for j in range(lines)]            # x = W, the slow axis holds
+    near = [lead + j * P for j in range(1, lines)]                 # x = 0, the slow axis steps
+    for k in far + near:
+        assert np.max(acc[k - w - 1:k + w]) <= bound, (k, np.max(acc[k - w - 1:k + w]) / bound)
+    step_far = max(np.max(ux[k - w:k + w]) for k in far)
+    step_near = max(np.max(ux[k - w:k + w]) for k in near)
+    legs = np.max(ux[lead + P // 8:lead + 3 * P // 8])             # a trace's straight middle
+    assert step_far <= 1.05 * step_near, (step_far, step_near)
+    assert step_far <= 2 * legs, (step_far, legs)
+
+
+@pytest.mark.parametrize("f", [10.0, 100.0, 179.0])
+def test_a_circle_below_the_mode_faded_in_over_one_period_is_never_flagged(f):
+    """The speed bound (2 pi f1 times the largest speed) holds for any sine below f1; a fade
+    from an off-centre rest over a single period of the circle adds at most an eighth to its
+    acceleration, within the bound's margin."""
+    T, f1 = 1e-4, 180.0
+    t = np.arange(6 * int(round(1 / (f * T)))) * T
+    w = 0.5 - 0.5 * np.cos(np.pi * np.minimum(t * f, 1.0))
+    rest = np.array([[6.5], [8.7]])
+    c = 50.0 + 15.0 * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+    assert not np.any(faster_than_mode(rest + w * (c - rest), f1, T))
 
 
 def test_a_circle_at_or_above_the_first_mode_keeps_its_size():
