@@ -3,7 +3,11 @@ model files compared number by number."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+
+from hammerstein.cli.main import main
 
 
 def write_record(path, rec):
@@ -52,3 +56,37 @@ def toml_numbers(table):
     elif isinstance(table, (int, float)) and not isinstance(table, bool):
         out.append(float(table))
     return out
+
+
+def run_files_scenario(directory, plant_text, compensator, identify, circle):
+    """Write and run a one-case scenario whose compensator identifies from files.
+
+    Parameters
+    ----------
+    directory : pathlib.Path
+        Holds the records; the plant (``plant.toml``), the scenario (``s.toml``) and its
+        report (``out/s``) are written there.
+    plant_text : str
+        The plant preset's text.
+    compensator : str
+        The ``[compensator]`` table's lines (kind, model, dynamics), TOML.
+    identify : str
+        The ``[compensator.identify]`` table's lines, TOML.
+    circle : str
+        The case's reference circle, an inline TOML table.
+
+    Returns
+    -------
+    pathlib.Path
+        The report's directory ``out/s``; ``hammerstein run`` exited 0 (asserted).
+    """
+    directory = Path(directory)
+    (directory / "plant.toml").write_text(plant_text, encoding="utf-8")
+    dynamics = "true" if "dynamics" in compensator else "false"
+    (directory / "s.toml").write_text(
+        f'name = "s"\n[plant]\npreset = "plant.toml"\ndynamics = {dynamics}\n'
+        f"[compensator]\n{compensator.strip()}\n[compensator.identify]\n{identify.strip()}\n"
+        f'[[cases]]\nname = "c"\nreference = {circle}\n', encoding="utf-8")
+    assert main(["run", str(directory / "s.toml"), "--out", str(directory / "out"), "-q",
+                 "--figures", "none"]) == 0
+    return directory / "out" / "s"

@@ -22,6 +22,7 @@ from hammerstein.exceptions import NestedInvalid
 from hammerstein.io.presets import load_model, load_plant
 from hammerstein.scenario.identification import excitation_records, identified_from_records
 from hammerstein.scenario.identify_tables import identify_table
+from route_files import run_files_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PREAMBLE = "Instrument: DAQ-9000\nOperator: lab\nRate: 20 kHz\n"
@@ -233,37 +234,21 @@ def test_a_scenario_follows_its_circle_alike_from_records_in_mv_and_nm(measured,
         thresholds = [scale * r for r in THRESHOLDS]
         here = tmp_path / units.replace("/", "-")
         here.mkdir()
-        (here / "plant.toml").write_text(
-            (SCENARIOS / "presets" / "realistic-gpi.toml").read_text(encoding="utf-8"),
-            encoding="utf-8")
         for n in names:
             rows = (d / n).read_text(encoding="utf-8").splitlines()[5:]
             (here / n).write_text("ux,uy,x,y\n" + "".join(",".join(
                 repr(scale * float(v)) for v in row.split(",")) + "\n" for row in rows))
         iu, ou = units.split("/")
-        (here / "s.toml").write_text(f"""
-name = "s"
-[plant]
-preset = "plant.toml"
-dynamics = false
-[compensator]
-kind = "multivariable"
-model = "identified"
-[compensator.identify]
-records = "files"
+        report = run_files_scenario(
+            here, (SCENARIOS / "presets" / "realistic-gpi.toml").read_text(encoding="utf-8"),
+            'kind = "multivariable"\nmodel = "identified"', f"""records = "files"
 model = "classical"
 sampling_period = {T!r}
 input_unit = "{iu}"
 output_unit = "{ou}"
 thresholds = {thresholds}
-hysteresis_records = {names}
-[[cases]]
-name = "c"
-reference = {{ kind = "circle", radius = 12, frequency = 10, periods = 4 }}
-""", encoding="utf-8")
-        assert main(["run", str(here / "s.toml"), "--out", str(here / "out"), "-q",
-                     "--figures", "none"]) == 0
-        rows = (here / "out" / "s" / "metrics.csv").read_text(encoding="utf-8").splitlines()
+hysteresis_records = {names}""", "{ kind = \"circle\", radius = 12, frequency = 10, periods = 4 }")
+        rows = (report / "metrics.csv").read_text(encoding="utf-8").splitlines()
         errors[units] = next(float(r.split(",")[3]) for r in rows
                              if r.startswith("c,x+y,max_euclidean_error,"))
     assert errors["V/µm"] < 0.2 * 12                 # a compensated circle, not a failure

@@ -12,12 +12,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from hammerstein.cli.main import main
 from hammerstein.io.presets import load_plant
 from hammerstein.report.identified import order_words
 from hammerstein.scenario.identify_tables import identify_table
 from hammerstein.scenario.identification import excitation_records
-from route_files import write_record
+from route_files import run_files_scenario, write_record
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 
@@ -45,29 +44,15 @@ def test_a_files_table_with_creep_reports_the_whole_order_search(tmp_path):
         "hold": 0.25, "multisine_periods": 2}))
     names = {kind: [Path(write_record(tmp_path / f"{kind}-{i}.csv", r)).name for i, r in enumerate(rs)]
              for kind, rs in recs.items()}
-    (tmp_path / "plant.toml").write_text((SCENARIOS / "presets" / "realistic-gpi.toml").read_text())
-    (tmp_path / "s.toml").write_text(f'''
-name = "s"
-[plant]
-preset = "plant.toml"
-dynamics = true
-[compensator]
-kind = "hammerstein"
-model = "identified"
-dynamics = "identified"
-[compensator.identify]
-records = "files"
+    report = run_files_scenario(
+        tmp_path, (SCENARIOS / "presets" / "realistic-gpi.toml").read_text(),
+        'kind = "hammerstein"\nmodel = "identified"\ndynamics = "identified"',
+        f'''records = "files"
 model = "generalized"
 hysteresis_records = {names["hysteresis"]}
 dynamics_records = {names["dynamics"]}
-creep_records = {names["creep"]}
-[[cases]]
-name = "c"
-reference = {{ kind = "circle", radius = 12, frequency = 40, periods = 4 }}
-''')
-    assert main(["run", str(tmp_path / "s.toml"), "--out", str(tmp_path / "out"), "-q",
-                 "--figures", "none"]) == 0
-    line = next(x for x in (tmp_path / "out" / "s" / "report.md").read_text().splitlines()
+creep_records = {names["creep"]}''', "{ kind = \"circle\", radius = 12, frequency = 40, periods = 4 }")
+    line = next(x for x in (report / "report.md").read_text().splitlines()
                 if "held-out (validation) fit by" in x)
     tried = line.split("fit by candidate order: ")[1]
     assert len(tried.split(", ")) >= 3, line
