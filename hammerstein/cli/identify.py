@@ -44,6 +44,7 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, file_limit_p
                                     replace_problem, safe_write)
 from hammerstein.io.presets import PresetError, save_model
 from hammerstein.identification.defaults import PREISACH_LEVELS
+from hammerstein.identification.loop_orientation import clockwise_loop_warnings
 from hammerstein.identification.identification_pipeline import (PipelineOptions, identify_pipeline,
                                                                  minor_loop_warning,
                                                                  dynamics_fit_warning,
@@ -828,6 +829,9 @@ def _report(args, fit, records, dyn=None, creep=None):
                                       ou, iu):
         print_err(f"warning: {line}")
     for line in _flat_extremes(records, list(model.output_names), ou):
+        print_err(f"warning: {line}")
+    for line in clockwise_loop_warnings(records, list(model.input_names),
+                                        list(model.output_names)):
         print_err(f"warning: {line}")
     if dyn is not None:
         for line in dynamics_report_lines(dyn.summary, model.output_names, model.input_names):

@@ -24,6 +24,7 @@ from hammerstein.core.files import FileLimitError, bounded_read_bytes, confined_
 from hammerstein.core.lazy import lazy_module
 from hammerstein.exceptions import HammersteinWarning, HysteresisError
 from hammerstein.identification.identification import IdentificationError
+from hammerstein.identification.loop_orientation import clockwise_loop_warnings
 from hammerstein.identification.sensors import Sensor
 from hammerstein.io.datafiles import DataFileError, MultiRecord, read_records
 from hammerstein.io.unit_checks import unit_scale, unit_warnings
@@ -404,6 +405,8 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
                                   names[0], spec["input_unit"]):
             warnings.warn(f"{where}: {files_table_words(line)}", HammersteinWarning, stacklevel=2)
         recs = in_plant_units(recs, scales)
+        for line in clockwise_loop_warnings(recs["hysteresis"], *names):   # as identify warns
+            warnings.warn(f"{where}: {line}", HammersteinWarning, stacklevel=2)
         # the files a table names are identified as `identify --dynamics --dynamics-records`
         # does, whatever kind uses them: for a rate-independent kind the creep was fitted
         # without G and the amplifier's slew taken from the hysteresis records alone (125.7
