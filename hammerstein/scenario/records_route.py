@@ -445,6 +445,7 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
     if files:
         meta["input_columns"] = ",".join(recs["hysteresis"][0].input_names)
         meta["output_columns"] = ",".join(recs["hysteresis"][0].output_names)
+        meta["input_unit"], meta["output_unit"] = units      # as identify writes them
         if scales != (1.0, 1.0):
             meta["converted_from_units"] = f"{spec['input_unit']}, {spec['output_unit']}"
         # as identify: a delay given (0 included) or estimated from the dynamics records is

@@ -69,6 +69,8 @@ def test_a_scenario_identifies_a_labs_records_as_identify_does(measured, capsys)
     assert (cli["model"]["input_unit"], cli["model"]["output_unit"]) == ("mV", "nm")
     assert (scen["model"]["input_unit"], scen["model"]["output_unit"]) == ("V", "µm")
     assert scen["identification"]["converted_from_units"] == "mV, nm"
+    assert (scen["identification"]["input_unit"], scen["identification"]["output_unit"]) == (
+        "V", "µm")                       # the model's, as identify writes them
     np.testing.assert_allclose(1e3 * np.array(scen["model"]["thresholds"]), THRESHOLDS,
                                rtol=1e-12, atol=1e-9)
     mine, theirs = found.plant.hysteresis, load_model(out)
