@@ -377,7 +377,8 @@ def identified_from_records(plant, spec, dynamics, cache=None, base_dir=None):
     files = spec["records"] == "files"
     key = ((_files_digest(spec, base_dir) if files else plant_fingerprint(plant)),
            spec_key(spec), bool(dynamics), tuple(plant.hysteresis.input_names),
-           tuple(plant.hysteresis.output_names))
+           tuple(plant.hysteresis.output_names),
+           tuple(getattr(plant, "units", ("V", "µm"))))    # the files are read in them
     return cache.get("records", key,
                      lambda: _identify_from_records(plant, spec, dynamics, base_dir),
                      load=None, dump=None)
