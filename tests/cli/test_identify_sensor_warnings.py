@@ -1,5 +1,6 @@
-"""identify warns when an output falls as its own input rises (an inverted sensor sign), or
-sits at its extreme value on many samples (a saturated sensor).
+"""identify warns when an output falls as its own input rises (an inverted sensor sign),
+sits at its extreme value on many samples (a saturated sensor), or leads its input (loops
+that run clockwise: a time column shifted against the inputs).
 
 The model written then cannot be inverted: a classical PI fitted on it has
 cumulative weight sums S_i <= 0, and ``compensate`` refused it with a message
@@ -9,10 +10,13 @@ every record: closed form here, y = a u + b v + noise-free offsets.
 
 from types import SimpleNamespace
 
+import re
+
 import numpy as np
 import pytest
 
 from hammerstein.cli.identify import _falling_direct_paths
+from hammerstein.cli.main import main
 
 
 def _records(a_x, a_y):
@@ -52,3 +56,34 @@ def test_an_output_flat_at_its_extreme_is_named(clip, said):
     if said:
         n = sum(int(np.count_nonzero(r.y[0] == clip)) for r in records)
         assert f"exactly 8 µm, its largest value, on {n} samples" in lines[0]
+
+
+@pytest.mark.parametrize("shift, said", [(-10, False), (10, True)])
+def test_an_output_shifted_ahead_of_its_input_is_named_with_its_loop_opening(
+        tmp_path, capsys, shift, said):
+    """u = A sin(2 pi i / N), x = B sin(2 pi (i + shift) / N) + c over whole cycles: an ellipse
+    opening by sin(phi) of x's span at u = 0, phi = 2 pi shift / N (shift > 0: x leads, the
+    loops run clockwise). Sampled N times a cycle, the shoelace area of each cycle is the
+    inscribed polygon's, pi A B sin(phi) times sin(2 pi / N) / (2 pi / N); with N a multiple of
+    4 the samples meet both signals' peaks, so the travel is exactly 4 A a cycle and the span
+    2 B. The share printed (3 significant digits) is therefore 100 sin(phi) times that factor,
+    to half a unit of its last digit."""
+    n, cycles, a, b = 500, 8, 10.0, 5.0
+    i = np.arange(n * cycles + 1)
+    u = a * np.sin(2 * np.pi * i / n)
+    x = b * np.sin(2 * np.pi * (i + shift) / n) + 3.0
+    path = tmp_path / "r.csv"
+    np.savetxt(path, np.column_stack([1e-3 * i, u, x]), delimiter=",", header="t,u,x",
+               comments="", fmt="%.17g")
+    assert main(["identify", str(path), "--inputs", "u", "--outputs", "x", "--time", "t",
+                 "--model", "classical", "--out", str(tmp_path / "m.toml"), "--force"]) == 0
+    err = capsys.readouterr().err
+    found = re.findall(r"warning: x's loops over u run clockwise \(the output leads its input: "
+                       r"loops opening by about ([0-9.]+) % of x's span", err)
+    assert len(found) == int(said), err
+    assert (tmp_path / "m.toml").exists()          # a warning: the model is still written
+    if said:
+        # np.sinc(z) = sin(pi z) / (pi z): sinc(2 / n) = sin(2 pi / n) / (2 pi / n)
+        opening = 100 * np.sin(2 * np.pi * shift / n) * np.sinc(2 / n)
+        assert float(found[0]) == pytest.approx(opening, abs=0.05)   # 12.53: "12.5"
+        assert len([ln for ln in err.splitlines() if "run clockwise" in ln]) == 1   # one line
