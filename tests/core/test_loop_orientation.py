@@ -2,8 +2,10 @@
 
 Expectations: the area of an ellipse in closed form, the sign of the loops of a Preisach
 actuator's records (counter-clockwise: it lags), and the same records with their samples in
-reverse order (every loop then clockwise).
+reverse order (every loop then clockwise); a scenario's files table warns as identify does.
 """
+
+import warnings
 
 from types import SimpleNamespace
 
@@ -11,6 +13,9 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
+from hammerstein.exceptions import HammersteinWarning
+from hammerstein.io.presets import load_plant
+from hammerstein.scenario.records_route import identified_from_records
 from hammerstein.identification.loop_orientation import (CLOCKWISE_SHARE,
                                                          clockwise_loop_warnings, loop_area_share)
 from hysteresis_records import decreasing_sine_records, preisach_actuator, write
@@ -58,3 +63,21 @@ def test_identify_warns_of_clockwise_loops(records, capsys, which, warned):
         said = f"warning: {name}'s loops over {inp} run clockwise (the output leads its input"
         assert (said in err) == warned, err
     assert out.exists()                     # a warning: the model is still written
+
+
+@pytest.mark.parametrize("which, warned", [("lag", False), ("lead", True)])
+def test_a_files_table_warns_of_clockwise_loops(records, which, warned):
+    """The scenario route reads the same files as identify and says the same (its unit
+    warnings did, this one too); the model is identified either way."""
+    d, lag, lead = records
+    files = [p.rsplit("/", 1)[-1] for p in (lag if which == "lag" else lead)]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        found = identified_from_records(load_plant("realistic-2dof"),
+                                        {"records": "files", "model": "classical",
+                                         "hysteresis_records": files}, False, base_dir=d)
+    said = [str(w.message) for w in caught
+            if issubclass(w.category, HammersteinWarning) and "run clockwise" in str(w.message)]
+    assert [ln.split(": ", 1)[1].split("'")[0] for ln in said] == (["x", "y"] if warned else [])
+    assert all(ln.startswith("identify (records = 'files'): ") for ln in said)
+    assert found.preset_text
