@@ -8,9 +8,8 @@ about S_i. The slope is the least-squares one of output k on input k over
 every record: closed form here, y = a u + b v + noise-free offsets.
 """
 
-from types import SimpleNamespace
-
 import re
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
