@@ -58,6 +58,7 @@ __all__ = [
     "RECORDS_IDENTIFY_FIELDS",
     "FILES_IDENTIFY_FIELDS",
     "record_time",
+    "record_units",
     "files_table_words",
     "identify_table",
     "HAMMERSTEIN_IDENTIFY_DEFAULTS",
@@ -263,9 +264,10 @@ FILES_IDENTIFY_FIELDS = {
                                                  # sampling_period): see record_time
     "sampling_period": Field(number("s", 0, maximum=1e6)),   # as --sampling-period
     "skip_rows": Field(integer(0), default=0),   # as --skip-rows (a preamble's lines)
-    # as --input-unit/--output-unit; read in the plant's units (records_route.in_plant_units)
-    "input_unit": Field(_unit, default="V"),
-    "output_unit": Field(_unit, default="µm"),
+    # as --input-unit/--output-unit; read in the plant's units (records_route.in_plant_units);
+    # default: the plant's (record_units)
+    "input_unit": Field(_unit),
+    "output_unit": Field(_unit),
     "inputs": Field(_columns),                   # default: the plant's input names
     "outputs": Field(_columns),                  # default: the plant's output names
     "delay": Field(_delay, default="auto"),      # as --delay (auto: from the dynamics records)
@@ -298,6 +300,36 @@ def record_time(spec):
     if spec.get("time") is not None:
         return spec["time"]
     return None if spec.get("sampling_period") is not None else "t"
+
+
+def record_units(spec, plant=None):
+    """The units a files table's records are in: ``input_unit`` and ``output_unit``, else the plant's.
+
+    A table without them reads its records in its plant's units (those of the
+    preset's ``[model]``, V and µm for every bundled preset): records in mV and
+    nm for a plant in mV and nm (a model file ``identify`` wrote from them) are
+    not converted. (A default of V and µm multiplied them by 1000: the model's
+    error was 1000 times its outputs, without a word.)
+
+    Parameters
+    ----------
+    spec : dict
+        A files ``identify`` table (checked or as written).
+    plant : HammersteinPlant or None
+        Its ``units``; None (or none given): V and µm.
+
+    Returns
+    -------
+    tuple of str
+        ``(input unit, output unit)``.
+
+    Examples
+    --------
+    >>> record_units({}), record_units({"output_unit": "nm"})
+    (('V', 'µm'), ('V', 'nm'))
+    """
+    units = getattr(plant, "units", None) or ("V", "µm")
+    return (spec.get("input_unit") or units[0], spec.get("output_unit") or units[1])
 
 
 #: ``identify``'s options in the words of reading a record, and the files table's keys.

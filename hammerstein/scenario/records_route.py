@@ -35,7 +35,8 @@ from hammerstein.models.lti import check_delay_by_fit, estimate_measurement_dela
 from hammerstein.models.plant import HammersteinPlant
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        spec_key)
-from hammerstein.scenario.identify_tables import files_table_words, identify_table, record_time
+from hammerstein.scenario.identify_tables import (files_table_words, identify_table, record_time,
+                                                  record_units)
 from hammerstein.scenario.schema import Invalid
 from hammerstein.signals.excitation import excitation_set
 
@@ -196,8 +197,7 @@ def file_records(plant, spec, base_dir=None):
                 path = confined_path(name, base_dir, DataFileError)
                 out[kind].append(read_records(
                     path, ins, outs, record_time(spec), spec.get("sampling_period"),
-                    spec.get("skip_rows", 0), spec.get("input_unit", "V"),
-                    spec.get("output_unit", "µm")))
+                    spec.get("skip_rows", 0), *record_units(spec, plant)))
             except (DataFileError, FileLimitError) as exc:
                 raise IdentificationError(f"identify.{key}: {files_table_words(str(exc))}") from None
     delay, note = spec["delay"], None
@@ -261,7 +261,7 @@ def plant_unit_scales(plant, spec):
     out = []
     for key, to, role in (("input_unit", units[0], "input"), ("output_unit", units[1], "output")):
         try:
-            out.append(unit_scale(spec.get(key, to), to, role))
+            out.append(unit_scale(spec.get(key) or to, to, role))
         except ValueError as exc:
             raise IdentificationError(f"identify.{key}: {exc}") from None
     return tuple(out)
@@ -402,8 +402,9 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         every = [r for kind in ("hysteresis", "dynamics", "creep") for r in recs[kind]]
         # identify's unit checks (a time column in ms read as s, an output in nm as µm):
         # the scenario read the same files without a word
-        for line in unit_warnings(every, names[1], spec["output_unit"], record_time(spec),
-                                  names[0], spec["input_unit"]):
+        given = record_units(spec, plant)
+        for line in unit_warnings(every, names[1], given[1], record_time(spec),
+                                  names[0], given[0]):
             warnings.warn(f"{where}: {files_table_words(line)}", HammersteinWarning, stacklevel=2)
         recs = in_plant_units(recs, scales)
         for line in clockwise_loop_warnings(recs["hysteresis"], *names):   # as identify warns
@@ -448,7 +449,7 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         meta["output_columns"] = ",".join(recs["hysteresis"][0].output_names)
         meta["input_unit"], meta["output_unit"] = units      # as identify writes them
         if scales != (1.0, 1.0):
-            meta["converted_from_units"] = f"{spec['input_unit']}, {spec['output_unit']}"
+            meta["converted_from_units"] = ", ".join(given)
         # as identify: a delay given (0 included) or estimated from the dynamics records is
         # kept; none written otherwise (learn --delay auto then estimates its own: a 0 written
         # for hysteresis records alone was taken as a known delay)

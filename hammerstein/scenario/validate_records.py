@@ -16,7 +16,8 @@ from hammerstein.core.files import confined_path, escape, file_limit_problem
 from hammerstein.io.record_columns import record_column_problems
 from hammerstein.io.presets import PresetError
 from hammerstein.io.unit_checks import unit_scale
-from hammerstein.scenario.identify_tables import FILES_IDENTIFY_FIELDS, files_table_words, record_time
+from hammerstein.scenario.identify_tables import (FILES_IDENTIFY_FIELDS, files_table_words,
+                                                  record_time, record_units)
 from hammerstein.scenario.schema import Invalid
 
 __all__ = ["record_file_problems", "record_keys"]
@@ -139,7 +140,7 @@ def record_file_problems(identify, base, plant):
         units = getattr(plant, "units", ("V", "µm"))
         for key, to, role in (("input_unit", units[0], "input"),
                               ("output_unit", units[1], "output")):
-            given = identify.get(key, to)
+            given = identify.get(key) or to
             if isinstance(given, str):
                 try:
                     unit_scale(given, to, role)
@@ -175,8 +176,7 @@ def record_file_problems(identify, base, plant):
             preamble = False
             for problem in record_column_problems(path, ins, outs, time,
                                                   identify.get("skip_rows", 0),
-                                                  identify.get("input_unit", "V"),
-                                                  identify.get("output_unit", "µm")):
+                                                  *record_units(identify, plant)):
                 rest = files_table_words(problem.removeprefix(f"{escape(str(path))}: "))
                 role = _COLUMN_KEY.match(rest)
                 if not role:

@@ -22,7 +22,7 @@ from hammerstein.exceptions import NestedInvalid
 from hammerstein.io.presets import load_model, load_plant
 from hammerstein.scenario.identification import excitation_records, identified_from_records
 from hammerstein.scenario.identify_tables import identify_table
-from route_files import run_files_scenario
+from route_files import run_files_scenario, write_record
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PREAMBLE = "Instrument: DAQ-9000\nOperator: lab\nRate: 20 kHz\n"
@@ -117,8 +117,14 @@ def test_a_files_table_gives_the_pipeline_identify_s_thresholds_in_the_plant_s_u
 
 def test_the_reading_keys_take_identify_s_defaults():
     from hammerstein.scenario.identify_tables import record_time
+    from hammerstein.scenario.identify_tables import record_units
     spec = identify_table({"records": "files", "hysteresis_records": ["r.csv"]})
-    assert (spec["skip_rows"], spec["input_unit"], spec["output_unit"]) == (0, "V", "µm")
+    # the units default to the plant's (V and µm without one)
+    assert spec["skip_rows"] == 0 and "input_unit" not in spec and "output_unit" not in spec
+    assert record_units(spec) == ("V", "µm")
+    plant = type("P", (), {"units": ("mV", "nm")})()
+    assert record_units(spec, plant) == ("mV", "nm")
+    assert record_units({**spec, "output_unit": "µm"}, plant) == ("mV", "µm")
     assert "thresholds" not in spec and "sampling_period" not in spec
     assert record_time(spec) == "t"
     # a sampling period alone: no time column; with a time column both (checked together)
@@ -310,3 +316,26 @@ def test_the_excitation_records_table_takes_thresholds_as_identify_does():
     assert options.n == 3
     with pytest.raises(NestedInvalid, match="give n_hysterons .* or thresholds"):
         identify_table({"records": "excitation", "thresholds": [0.0, 1.0], "n_hysterons": 4})
+
+
+def test_records_without_units_are_in_the_plant_s_units(tmp_path):
+    """A plant in mV and nm (a model file identify wrote from such records) and records in
+    them, the table naming no unit: read as they are, not as V and µm multiplied by 1000
+    (the model then erred by 1000 times its outputs, without a word)."""
+    text = (Path(hammerstein.__file__).parent / "presets" / "realistic-2dof.toml").read_text(
+        encoding="utf-8")
+    (tmp_path / "p.toml").write_text(text.replace('input_unit = "V"\n', 'input_unit = "mV"\n', 1)
+                                     .replace('output_unit = "µm"\n', 'output_unit = "nm"\n', 1),
+                                     encoding="utf-8")
+    plant = load_plant(tmp_path / "p.toml", dynamics=False)
+    assert plant.units == ("mV", "nm")
+    recs = excitation_records(plant, identify_table({"records": "excitation", "frequency": 5.0,
+                                                     "hold": 0.25, "multisine_periods": 2}))
+    names = [write_record(tmp_path / f"r-{i}.csv", r) for i, r in enumerate(recs["hysteresis"])]
+    base = {"records": "files", "hysteresis_records": names, "model": "classical"}
+    bare = identified_from_records(plant, identify_table(base), False, base_dir=tmp_path)
+    said = identified_from_records(plant, identify_table({**base, "input_unit": "mV",
+                                                          "output_unit": "nm"}),
+                                   False, base_dir=tmp_path)
+    assert bare.preset_text == said.preset_text
+    assert "converted_from_units" not in tomllib.loads(bare.preset_text)["identification"]
