@@ -74,6 +74,16 @@ def loop_area_share(records, k, l):
     return area / scale if scale > 0 else None
 
 
+def _direct_slope(records, k):
+    """The least-squares slope of output ``k`` on input ``k`` over the records (0 if none)."""
+    u = np.concatenate([np.asarray(r.u[k], dtype=float) for r in records])
+    y = np.concatenate([np.asarray(r.y[k], dtype=float) for r in records])
+    ok = np.isfinite(u) & np.isfinite(y)
+    du, dy = u[ok] - u[ok].mean(), y[ok] - y[ok].mean()
+    var = float(np.dot(du, du))
+    return float(np.dot(du, dy)) / var if var > 0 else 0.0
+
+
 def clockwise_loop_warnings(records, inputs, outputs):
     """One warning line per direct path whose loops run clockwise in the records.
 
@@ -88,7 +98,9 @@ def clockwise_loop_warnings(records, inputs, outputs):
     -------
     list of str
         Per such path: the share (:func:`loop_area_share`) below
-        ``-CLOCKWISE_SHARE``, the loop opening it stands for, what to check.
+        ``-CLOCKWISE_SHARE`` (above ``CLOCKWISE_SHARE`` on a path whose output falls as
+        its input rises: a lagging output's loops run clockwise there), the loop
+        opening it stands for, what to check.
 
     Examples
     --------
@@ -102,10 +114,17 @@ def clockwise_loop_warnings(records, inputs, outputs):
     lines = []
     for k in range(min(len(inputs), len(outputs))):
         share = loop_area_share(records, k, k)
-        if share is None or share >= -CLOCKWISE_SHARE:
+        if share is None:
             continue
-        lines.append(f"{outputs[k]}'s loops over {inputs[k]} run clockwise (the output leads "
-                     f"its input: loops opening by about {100 * 4 * -share / np.pi:.3g} % of "
+        # a lagging output's loops run clockwise on a falling path (a sensor of inverted
+        # sign, which identify names apart): judged against the path's slope, they lead
+        # only where they open the other way
+        falling = _direct_slope(records, k) < 0
+        if (-share if falling else share) >= -CLOCKWISE_SHARE:
+            continue
+        turn = "counter-clockwise on its falling path" if falling else "clockwise"
+        lines.append(f"{outputs[k]}'s loops over {inputs[k]} run {turn} (the output leads "
+                     f"its input: loops opening by about {100 * 4 * abs(share) / np.pi:.3g} % of "
                      f"{outputs[k]}'s span the wrong way, on average over the records); "
                      f"a piezo's output lags its input, and every model class draws its loops "
                      f"so: a time column shifted against the inputs, a delay of the wrong sign, "

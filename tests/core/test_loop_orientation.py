@@ -81,3 +81,17 @@ def test_a_files_table_warns_of_clockwise_loops(records, which, warned):
     assert [ln.split(": ", 1)[1].split("'")[0] for ln in said] == (["x", "y"] if warned else [])
     assert all(ln.startswith("identify (records = 'files'): ") for ln in said)
     assert found.preset_text
+
+
+@pytest.mark.parametrize("phi, warned", [(0.2, False), (-0.2, True)])
+def test_a_falling_path_is_judged_against_its_slope(phi, warned):
+    """A sensor of inverted sign (identify warns of its slope apart): a lagging output's loops
+    run clockwise there, and the output does not lead; a leading one is still named."""
+    t = np.linspace(0.0, 6 * np.pi, 12001)
+    rec = SimpleNamespace(u=(3.0 * np.sin(t))[None], y=(-0.7 * np.sin(t - phi))[None])
+    assert (loop_area_share([rec], 0, 0) < 0) == (phi > 0)       # clockwise when it lags
+    lines = clockwise_loop_warnings([rec], ["u"], ["x"])
+    assert bool(lines) == warned, lines
+    if warned:
+        assert lines[0].startswith("x's loops over u run counter-clockwise on its falling path "
+                                   "(the output leads its input: loops opening by about 19.9 %")
