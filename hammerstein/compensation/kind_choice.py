@@ -298,6 +298,7 @@ def law_check(model, gain=None, check=None, label=None):
         (the message gives the radius and what to try).
     """
     label = label or model_class(model).label
+    user = gain is not None
     if gain is None:
         gain, radius, _ = convergent_gain(model)
     else:
@@ -306,6 +307,17 @@ def law_check(model, gain=None, check=None, label=None):
         return LawCheck(gain, radius, check)
     name = gain if isinstance(gain, str) else "a scaled midpoint"
     problem = law_self_test(model, gain)
+    # the user's gain: another may converge, and "no gain makes it converge" sent the user
+    # to measure and identify again (gain identity at rho 8.96 where midpoint has 0.458)
+    best = convergent_gain(model)[1] if user else radius
+    if best < 1.0:
+        why = (f"gain {name} does not make the {label} law provably converge (rho(I - K^-1 J) "
+               f"{radius:.3g}; without --gain the law takes one with {best:.3g})")
+        if problem:
+            raise CompensatorError(f"{why} and {problem}: leave out --gain, or give --check warn "
+                                   f"to run the law anyway")
+        return LawCheck(gain, radius, "warn", f"{why}, but it follows the model's own outputs: "
+                                              f"it runs without that guarantee, as with --check warn")
     if problem:
         raise CompensatorError(
             f"no gain makes the {label} law converge (smallest rho(I - K^-1 J) {radius:.3g} "

@@ -118,3 +118,29 @@ def test_compensate_learn_and_export_run_a_law_that_follows_with_check_warn(tmp_
     assert choice.note() in err.splitlines()
     # the default chose a scaled-midpoint K: the warning gives it, not "an explicit gain"
     assert "an explicit gain" not in err and "gain K = diag(" in err
+
+
+@pytest.mark.parametrize("preset, refused", [
+    ("hammerstein/presets/rakotondrabe-2dof.toml", True),
+    ("tests/hardware/data/outside-classical-deadzone.toml", False)])
+def test_a_users_gain_that_does_not_converge_is_not_taken_for_every_gain(preset, refused):
+    """--gain identity diverges (rho 8.96 and 2.53) where the midpoint gain converges (0.458 and
+    0.4): the refusal said that no gain makes the law converge and to measure and identify
+    again, and learn's warning that no gain makes it provably converge."""
+    from pathlib import Path
+    model = load_plant(Path(__file__).resolve().parents[2] / preset).hysteresis
+    if refused:
+        with pytest.raises(CompensatorError) as err:
+            law_check(model, "identity")
+        text = str(err.value)
+    else:
+        law = law_check(model, "identity")
+        assert law.check == "warn"
+        text = law.reason
+        notes = _inverse_gain(model, "identity", None)[2]
+        assert notes[0].startswith("warning: gain identity: rho(I - K^-1 J) reaches 2.53 >= 1")
+        assert "no gain" not in notes[0] and "takes one with 0.4)" in notes[0]
+    assert "no gain" not in text
+    assert text.startswith("gain identity does not make the classical PI law provably converge "
+                           "(rho(I - K^-1 J) ")
+    assert "without --gain the law takes one with 0.4" in text
