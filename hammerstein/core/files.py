@@ -205,19 +205,23 @@ def file_limit_problem(path, kind="data", what="file"):
     return None
 
 
-def bounded_read_bytes(path, kind="toml", what="file", head=None):
+def bounded_read_bytes(path, kind="toml", what="file", head=None, cap=None):
     """Read a regular file of at most :func:`limit` ``(kind)`` bytes.
 
     Parameters
     ----------
     path : str or pathlib.Path
     kind : {'toml', 'data', 'baseline', 'cache', 'total'}
-        Selects the size limit.
+        Selects the size limit (and the variable the messages name).
     what : str
         What the file should be, for messages ("scenario file", ...).
     head : int, optional
         Read only the file's first ``head`` bytes (its header lines): a
         larger file is not refused, and nothing is counted in the budget.
+    cap : int, optional
+        The size limit [bytes] instead of :func:`limit` ``(kind)``: that of
+        a file whose size the project knows (a drive file,
+        :func:`hammerstein.compensation.drive_size.drive_file_limit`).
 
     Returns
     -------
@@ -233,7 +237,7 @@ def bounded_read_bytes(path, kind="toml", what="file", head=None):
     OSError
         The file cannot be opened or read (permissions...).
     """
-    cap = limit(kind)
+    cap = limit(kind) if cap is None else int(cap)
     fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))  # a FIFO must not block open()
     try:
         st = os.fstat(fd)
