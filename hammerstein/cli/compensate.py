@@ -36,9 +36,10 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
                                        load_reference, nonnegative_float, owned_problem)
 from hammerstein.models.amplifier import LIMITS
 from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, ROUNDING_WORDS,
-                                            apply_amplifier, compensator_rest, signals_csv)
-from hammerstein.compensation.drive_files import rest_lead_text
-from hammerstein.core.files import guard_inputs, limit, output_problem, safe_write
+                                            apply_amplifier, compensator_rest)
+from hammerstein.compensation.drive_files import rest_lead_text, signals_writer
+from hammerstein.compensation.drive_size import drive_file_limit
+from hammerstein.core.files import guard_inputs, output_problem, safe_write
 from hammerstein.compensation.hammerstein_compensator import INVERSIONS
 from hammerstein.compensation.reach import REACH_NOTE_START
 from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, RANGE_MARGINS,
@@ -323,16 +324,12 @@ def _handle(args):
                    + "".join(f"\nshaped: {line}" for line in drive.shaped)
                    + "".join(f"\nnote: {line}" for line in ref.notes + list(drive.notes))
                    + "".join(f"\nwarning: {line}" for line in chatter))
-        text = signals_csv(ref.t, cols, comment)
-        if len(text.encode("utf-8")) > limit("data"):
-            # evaluate and learn read a drive file within the data files' limit: a 10-minute
-            # drive at 20 kHz (640 MiB) was written, then refused by evaluate at once
-            raise FileLimitError(
-                f"--out: the drive file would take {len(text.encode('utf-8')) / 2**20:.4g} MiB, "
-                f"beyond the {limit('data') / 2**20:.4g} MiB that evaluate and learn read "
-                f"(HAMMERSTEIN_MAX_DATA_BYTES raises it for every command); nothing written: "
-                f"a shorter reference (fewer periods), or raise the limit")
-        safe_write(args.out, text, "drive file")
+        # written by blocks of rows (the whole text had taken 1.8 GB for 3e6 samples), within
+        # the limit evaluate and learn read a drive file of these columns in: the largest
+        # drive of the largest accepted record (a 10-minute drive at 20 kHz, 640 MiB, had
+        # been written, then refused by evaluate at once)
+        safe_write(args.out, signals_writer(ref.t, cols, comment,
+                                            cap=drive_file_limit(len(cols) + 1)), "drive file")
     except CompensatorDivergence as exc:
         print_err(f"hammerstein compensate: error: the compensator diverged: {exc}")
         return 1

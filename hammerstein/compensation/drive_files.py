@@ -21,18 +21,17 @@ import numpy as np
 from hammerstein.io.datafiles import (_first_line, _sniff_separator, numeric_column, signal_table,
                                       uniform_period)
 from hammerstein.io.time_grid import gap_text, step_gaps
+from hammerstein.compensation.drive_size import DRIVE_MARK, file_limit, write_drive_rows
 from hammerstein.core.files import FileLimitError, bounded_read_bytes, escape
 from hammerstein.core.numbers import check_samples
 from hammerstein.exceptions import DataFileError
 
-__all__ = ["DRIVE_MARK", "AIMED_SUFFIXES", "RATE_TOL", "read_signals", "block_mean", "signals_csv", "drive_fade_samples", "drive_rest_lead",
+__all__ = ["DRIVE_MARK", "AIMED_SUFFIXES", "RATE_TOL", "read_signals", "read_table", "block_mean",
+           "signals_csv", "signals_writer", "drive_fade_samples", "drive_rest_lead",
            "drive_rest_output",
            "rest_lead_text", "fade_weight",
            "drive_kind", "optional_columns", "learnt_names", "followed_reference", "shaped_target"]
 
-
-#: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
-DRIVE_MARK = "# hammerstein"
 
 #: Suffix of a ``learn`` drive's columns of the reference its drive was computed for.
 LEARNT_SUFFIX = "_learnt"
@@ -77,8 +76,57 @@ def _time_precheck(raw, path, time, what):
         _check_increasing(t, path, time, what)
 
 
+def read_table(path, what="file", time="t"):
+    """The parsed table of a drive, measured or reference CSV file, read once.
+
+    The file is read through a bounded read: within the data files' limit
+    (``HAMMERSTEIN_MAX_DATA_BYTES``, 256 MiB), or, for a drive file a command
+    wrote (it opens with :data:`DRIVE_MARK`), within the size of the largest
+    drive of the largest accepted record
+    (:func:`hammerstein.compensation.drive_size.drive_file_limit`). A file
+    larger than :data:`TIME_PRECHECK_BYTES` has its time column checked first.
+    The table is what :func:`read_signals` and :func:`optional_columns` take
+    (``table=``), so that a command reading several columns of one file at
+    several steps parses it once.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    what : str
+        What the file is, for messages (e.g. ``"--drive"``).
+    time : str
+        Time column [s] (checked first in a large file).
+
+    Returns
+    -------
+    hammerstein.io.datafiles._Table
+        :func:`hammerstein.io.datafiles.signal_table` of the file (``.frame``:
+        its columns).
+
+    Raises
+    ------
+    DataFileError
+        No such file, not a regular file, larger than its limit (the message
+        names the file, its size, the limit and the variable that raises it),
+        unreadable, not a table, or a time column that does not increase.
+    """
+    try:
+        cap, kind = file_limit(bounded_read_bytes(path, "data", "data file", head=HEAD_BYTES))
+        raw = bounded_read_bytes(path, "data", kind, cap=cap)
+    except FileLimitError as exc:        # its message names the file
+        raise DataFileError(f"{what}: {exc}") from None
+    except FileNotFoundError:           # as every other missing file is named
+        raise DataFileError(f"{what}: {escape(path)}: no such file") from None
+    except OSError as exc:
+        raise DataFileError(f"{what}: {escape(path)}: {exc.strerror or exc}") from None
+    if len(raw) > TIME_PRECHECK_BYTES:
+        _time_precheck(raw, path, time, what)
+    return signal_table(raw, path, what)
+
+
 def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file",
-                 upsample=True, notes=None, period=None):
+                 upsample=True, notes=None, period=None, table=None):
     """Columns of a drive, measured or reference CSV file, on a uniform time grid.
 
     File conventions: a header row (lines starting with ``#`` are comments);
@@ -98,8 +146,8 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     Parameters
     ----------
     path : str or pathlib.Path
-        The file (read through the 256 MiB data-file limit,
-        ``HAMMERSTEIN_MAX_DATA_BYTES``).
+        The file (read as :func:`read_table` reads it: within the 256 MiB
+        data-file limit, ``HAMMERSTEIN_MAX_DATA_BYTES``, or a drive file's).
     names : list of str
         The signals wanted, in order.
     time : str
@@ -122,6 +170,8 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
     period : float, optional
         Period of a periodic file [s]: the samples past its last one continue
         from one period earlier (else they continue its last step).
+    table : hammerstein.io.datafiles._Table, optional
+        The file already parsed (:func:`read_table`): not read again.
 
     Returns
     -------
@@ -137,18 +187,8 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
         Unreadable file, missing column (the message lists the columns
         found), non-numeric values, times not increasing or not uniform.
     """
-    try:
-        raw = bounded_read_bytes(path, "data", "data file")
-    except FileLimitError as exc:        # its message names the file
-        raise DataFileError(f"{what}: {exc}") from None
-    except FileNotFoundError:           # as every other missing file is named
-        raise DataFileError(f"{what}: {escape(path)}: no such file") from None
-    except OSError as exc:
-        raise DataFileError(f"{what}: {escape(path)}: {exc.strerror or exc}") from None
-    if len(raw) > TIME_PRECHECK_BYTES:
-        _time_precheck(raw, path, time, what)
-    table = signal_table(raw, path, what)
-    del raw
+    if table is None:
+        table = read_table(path, what, time)
     mapping = dict(mapping or {})
 
     def column(col, label, unit=("V", "µm")):
@@ -316,13 +356,43 @@ def signals_csv(t, columns, comment):
     0,0.10000000000000001
     0.5,0.33333333333333331
     """
+    buf = io.BytesIO()
+    signals_writer(t, columns, comment)(buf)
+    return buf.getvalue().decode("utf-8")
+
+
+def signals_writer(t, columns, comment, cap=None):
+    """The writer of :func:`signals_csv`'s text, for :func:`hammerstein.core.files.safe_write`.
+
+    The same bytes as ``signals_csv(t, columns, comment).encode()``, written
+    by blocks of rows (:func:`hammerstein.compensation.drive_size.write_drive_rows`):
+    never the whole text at once.
+
+    Parameters
+    ----------
+    t : array_like, shape (n_samples,)
+        Time [s] (column ``t``).
+    columns : dict of str to array_like, each shape (n_samples,)
+        Name -> values (V, µm), in column order.
+    comment : str
+        The comment lines' text, as :func:`signals_csv`.
+    cap : int, optional
+        Most bytes the file may take (e.g.
+        :func:`hammerstein.compensation.drive_size.drive_file_limit`).
+
+    Returns
+    -------
+    callable
+        ``writer(fh)`` writing to a binary file object; it raises
+        :class:`~hammerstein.exceptions.FileLimitError` when the text would
+        take more than ``cap`` bytes.
+    """
     lines = comment.splitlines() or [""]
     head = [f"{DRIVE_MARK} {lines[0]}".rstrip()] + [f"# {ln}".rstrip() for ln in lines[1:]]
+    text = "\n".join(head + [",".join(["t", *columns])]) + "\n"
     data = np.column_stack([np.asarray(t, dtype=float)]
                            + [np.asarray(v, dtype=float) for v in columns.values()])
-    buf = io.StringIO()
-    np.savetxt(buf, data, delimiter=",", fmt="%.17g")
-    return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
+    return lambda fh: write_drive_rows(fh, text, data, cap)
 
 
 
@@ -546,7 +616,7 @@ def _header_columns(path):
     return [c.strip() for c in header.split(",")]
 
 
-def optional_columns(path, names, sampling_period=None, what="file"):
+def optional_columns(path, names, sampling_period=None, what="file", table=None):
     """Named columns of a CSV file, or None when one of them is not there.
 
     Parameters
@@ -558,6 +628,9 @@ def optional_columns(path, names, sampling_period=None, what="file"):
         Expected T [s] (:func:`read_signals`).
     what : str
         Name of the file in messages.
+    table : hammerstein.io.datafiles._Table, optional
+        The file already parsed (:func:`read_table`): its columns are looked
+        up there and the file is not read again.
 
     Returns
     -------
@@ -570,10 +643,10 @@ def optional_columns(path, names, sampling_period=None, what="file"):
     OSError
         The file cannot be read.
     """
-    columns = _header_columns(path)
+    columns = _header_columns(path) if table is None else list(table.frame.columns)
     if not all(n in columns for n in names):
         return None
-    _, values, _ = read_signals(path, list(names), "t", None, sampling_period, what)
+    _, values, _ = read_signals(path, list(names), "t", None, sampling_period, what, table=table)
     return values
 
 
