@@ -51,6 +51,7 @@ from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import (apply_amplifier, drive_fade_samples, hardware_fade,
                                            read_signals)
+from hammerstein.compensation.drive_files import read_table
 from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_names, drive_rest_lead,
                                                   drive_rest_output,
                                                   head_lines, optional_columns)
@@ -131,7 +132,60 @@ def add_parser(subparsers):
     p.set_defaults(handler=_handle)
 
 
-def _reference_outputs(args):
+class _Tables:
+    """The signal files of one ``evaluate``, each read and parsed once.
+
+    The drive file had been parsed three times (its length, its input
+    columns, its shaped reference) and the measured file up to four times
+    (its columns for the default outputs, twice, its outputs, its inputs):
+    :meth:`get` parses a file the first time it is asked for
+    (:func:`hammerstein.compensation.drive_files.read_table`) and hands the
+    same table on; a file that cannot be read raises the same error at each
+    use. :meth:`drop` lets a table go once its columns are taken.
+    """
+
+    def __init__(self):
+        self._got = {}
+
+    def get(self, path, what, time="t"):
+        """The parsed table of ``path``.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file.
+        what : str
+            What it is, for messages (``"--drive"``, ``"--measured"``).
+        time : str
+            Its time column.
+
+        Returns
+        -------
+        hammerstein.io.datafiles._Table
+
+        Raises
+        ------
+        DataFileError
+            The file cannot be read (the same error at each call).
+        """
+        key = (os.fspath(path), what)
+        if key not in self._got:
+            try:
+                self._got[key] = read_table(path, what, time)
+            except DataFileError as exc:
+                self._got[key] = exc
+        got = self._got[key]
+        if isinstance(got, DataFileError):
+            raise got
+        return got
+
+    def drop(self, path, what):
+        """Forget the table of ``path`` (None: no file) read as ``what`` (its memory goes)."""
+        if path is not None:
+            self._got.pop((os.fspath(path), what), None)
+
+
+def _reference_outputs(args, tables):
     """The columns of a CSV ``--reference`` but its time, when neither ``--model`` nor
     ``--output-columns`` names the outputs; for an inline reference the outputs it names
     (``output`` of a one-axis sine or triangle when the measurement has no column for x and y
@@ -152,14 +206,14 @@ def _reference_outputs(args):
         if isinstance(center, list) and len(center) > 2 and not isinstance(one, str):
             # a circle of a four-axis stage, centred on every output: the measured file's
             # outputs, in its order (center = [42, 42, 20, 30] was refused as "two values")
-            found = _measured_outputs(args)
+            found = _measured_outputs(args, tables)
             return found if found is not None and len(found) == len(center) else None
         if not isinstance(one, str):
             return None
         try:
-            raw = bounded_read_bytes(args.measured, "data", "data file")
-            columns = {str(c) for c in signal_table(raw, args.measured, "--measured").frame.columns}
-        except (DataFileError, FileLimitError, OSError):
+            columns = {str(c) for c in
+                       tables.get(args.measured, "--measured", args.time).frame.columns}
+        except DataFileError:
             return None
         return None if {"x", "y"} <= columns else [one]
     try:
@@ -204,12 +258,12 @@ def _drive_actuator_outputs(args):
     return None
 
 
-def _measured_outputs(args):
+def _measured_outputs(args, tables):
     """The measured file's output columns (all but the time, the drive's inputs and what a
-    drive aims at), or None when it cannot be read."""
+    drive aims at), or None when it cannot be read (``tables``: :class:`_Tables`)."""
     try:
-        raw = bounded_read_bytes(args.measured, "data", "data file")
-        columns = [str(c) for c in signal_table(raw, args.measured, "--measured").frame.columns]
+        columns = [str(c) for c in
+                   tables.get(args.measured, "--measured", args.time).frame.columns]
         inputs = set(drive_input_names(args.drive, [])) if args.drive else set()
     except (DataFileError, FileLimitError, OSError):
         return None
@@ -337,6 +391,7 @@ def _handle(args):
         if problem:
             print_err(f"hammerstein evaluate: error: {problem}")
             return 2
+    tables = _Tables()
     try:
         if args.model:
             try:        # its own sampling period: at 1 s its modes read as beyond Nyquist
@@ -347,33 +402,47 @@ def _handle(args):
                 plant = load_actuator(args.model, 1.0)   # the names of a model with no period
             outs, ins = list(plant.hysteresis.output_names), list(plant.hysteresis.input_names)
         else:     # the outputs the reference names (a one-axis stage's x), else the drive's
-            outs, ins = (_reference_outputs(args) or _drive_actuator_outputs(args)  # actuator's
-                         or ["x", "y"]), []
+            outs, ins = (_reference_outputs(args, tables) or _drive_actuator_outputs(args)
+                         or ["x", "y"]), []         # (the drive's actuator's)
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
         n_drive, period = None, args.sampling_period
+        drive_inputs = shaped_reference = None
         if args.drive:      # the measurement is read at the drive's period, as learn reads it
-            n_drive, period = _drive_length(args.drive, args.sampling_period)
+            table = tables.get(args.drive, "--drive")
+            n_drive, period = _drive_length(args.drive, args.sampling_period, table)
+            # its columns taken at once (the measurement is read at its period) and the table
+            # let go before the measured file is parsed; a column's error is raised where it
+            # was when the drive was read again for it
+            if not args.inputs:
+                drive_inputs = _now_or_later(_drive_inputs, args.drive, outs, period, table)
+            shaped_reference = _now_or_later(_shaped_reference, args.drive, outs, period, table)
+            del table
+            tables.drop(args.drive, "--drive")
         rate_notes = []
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, period,
-                               "--measured", upsample=False, notes=rate_notes)
+                               "--measured", upsample=False, notes=rate_notes,
+                               table=tables.get(args.measured, "--measured", args.time))
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
                 (ins, mapping(args.inputs, ins, "--input-columns"))
             _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured",
-                                   upsample=False, notes=[])   # the same note: said once
-        elif args.drive:         # the voltages applied: the drive file's own input columns
-            drive_ins = drive_input_names(args.drive, outs)
-            u = optional_columns(args.drive, drive_ins, T, "--drive") if drive_ins else None
+                                   upsample=False, notes=[],   # the same note: said once
+                                   table=tables.get(args.measured, "--measured", args.time))
+        found = _measured_outputs(args, tables) or [] \
+            if not args.model and not args.outputs else []
+        tables.drop(args.measured, "--measured")     # its columns taken
+        if not args.inputs and args.drive:   # the voltages applied: the drive's own inputs
+            drive_ins, u = drive_inputs()
             ins = drive_ins if u is not None else ins
         shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
         ref = load_reference(args.reference, shell, args.time, None, args.period)
         rate_notes += ref.notes
         if not args.model and not args.outputs:
-            left = [c for c in (_measured_outputs(args) or []) if c not in outs]
-            if left and set(outs) <= set(_measured_outputs(args) or []):
+            left = [c for c in found if c not in outs]
+            if left and set(outs) <= set(found):
                 rate_notes.append(f"--measured also holds {', '.join(left)}, not judged: the "
                                   f"reference names {', '.join(outs)} (--model, or "
                                   f"--output-columns {','.join(outs + left)} with a reference "
@@ -408,7 +477,7 @@ def _handle(args):
         args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
                                       ref.scale, ref.loop_channel, args.remove_delay, rf)
-        shaped = _shaped_reference(args.drive, outs, T) if args.drive else None
+        shaped = shaped_reference() if args.drive else None
         tracked = _tracked_reference(args.drive, outs, ref.signal[:, :N], fade, shaped)
         shaped_rows = []
         if shaped is not None and shaped.shape[1] >= N:
@@ -527,7 +596,7 @@ def _model_gains(plant, u, y, T, delay, fade, period_samples, reference=None):
             offset)
 
 
-def _drive_length(path, sampling_period=None):
+def _drive_length(path, sampling_period=None, table=None):
     """The samples and sampling period of the drive file ``path`` (read bounded).
 
     Parameters
@@ -536,6 +605,9 @@ def _drive_length(path, sampling_period=None):
         The drive file (compensate, learn), read at its own period.
     sampling_period : float, optional
         ``--sampling-period`` [s]: must be the drive's (the measurement is read at it).
+    table : hammerstein.io.datafiles._Table, optional
+        The drive file already parsed
+        (:func:`hammerstein.compensation.drive_files.read_table`): not read again.
 
     Returns
     -------
@@ -548,7 +620,7 @@ def _drive_length(path, sampling_period=None):
     DataFileError
         Unreadable drive, or ``sampling_period`` not the drive's.
     """
-    t, _, Td = read_signals(path, [], "t", None, None, "--drive")
+    t, _, Td = read_signals(path, [], "t", None, None, "--drive", table=table)
     if sampling_period is not None and not np.isclose(Td, sampling_period, rtol=1e-6):
         raise DataFileError(f"--sampling-period: {sampling_period:g} s; expected the drive's "
                             f"{Td:g} s (with --drive the measurement is read at the drive's "
@@ -566,14 +638,69 @@ def _drive_notes(args):
     return "".join(f"  \ndrive `{args.drive}`: {h}" for h in keep)
 
 
-def _shaped_reference(path, outs, T):
+def _now_or_later(function, *args):
+    """``function(*args)`` called now; what it returned, or its error, when asked for.
+
+    Returns
+    -------
+    callable
+        Without arguments: returns the result, or raises the
+        :class:`~hammerstein.exceptions.DataFileError` or ``OSError`` the call
+        raised (a file's columns read early, their error said in its turn).
+    """
+    try:
+        value = function(*args)
+    except (DataFileError, OSError) as exc:
+        error = exc
+
+        def later():
+            raise error
+        return later
+    return lambda: value
+
+
+def _drive_inputs(path, outs, T, table=None):
+    """The drive file's input columns and their voltages.
+
+    Parameters
+    ----------
+    path : str
+        The drive file.
+    outs : list of str
+        Output names (their columns are no inputs).
+    T : float
+        Its sampling period [s].
+    table : hammerstein.io.datafiles._Table, optional
+        The drive file already parsed, or None to read it.
+
+    Returns
+    -------
+    names : list of str
+        Its input columns (:func:`hammerstein.compensation.drive_files.drive_input_names`).
+    u : numpy.ndarray, shape (len(names), n_samples), or None
+        Their voltages [V]; None without input columns.
+
+    Raises
+    ------
+    DataFileError
+        Columns that are not readable.
+    OSError
+        The file cannot be read.
+    """
+    names = drive_input_names(path, outs)
+    return names, (optional_columns(path, names, T, "--drive", table) if names else None)
+
+
+def _shaped_reference(path, outs, T, table=None):
     """The drive file's shaped reference ``<output>_shaped`` [µm], shape (p, n), or None.
 
     ``compensate`` writes these columns when it shaped the reference to the
     amplifier's range and slew and the identified first mode; a drive without
-    them followed the reference as given.
+    them followed the reference as given. ``table``: the drive file already
+    parsed (:func:`hammerstein.compensation.drive_files.read_table`), or None
+    to read it.
     """
-    return optional_columns(path, [f"{o}_shaped" for o in outs], T, "--drive")
+    return optional_columns(path, [f"{o}_shaped" for o in outs], T, "--drive", table)
 
 
 def _tracked_reference(drive, outs, reference, fade, shaped=None):

@@ -17,6 +17,7 @@ import pandas as pd
 import pytest
 
 from hammerstein.cli import compensate as compensate_cli
+from hammerstein.cli import evaluate as evaluate_cli
 from hammerstein.cli.main import main
 from hammerstein.compensation import drive_files, drive_size
 from hammerstein.compensation.drive_files import signals_csv
@@ -37,6 +38,47 @@ def drive(tmp_path_factory):
     pd.DataFrame({"t": u.t, "x": u.x_predicted, "y": u.y_predicted}).to_csv(
         d / "y.csv", index=False, float_format="%.6g")
     return d
+
+
+def _counting(monkeypatch, module):
+    """Count ``module.signal_table``'s parses per file name."""
+    counts = {}
+    parse = module.signal_table
+
+    def counted(raw, path, *args, **kwargs):
+        name = str(path).rsplit("/", 1)[-1]
+        counts[name] = counts.get(name, 0) + 1
+        return parse(raw, path, *args, **kwargs)
+
+    monkeypatch.setattr(module, "signal_table", counted)
+    return counts
+
+
+def test_evaluate_parses_the_drive_and_the_measured_file_once(drive, monkeypatch, capsys):
+    monkeypatch.chdir(drive)
+    counts = _counting(monkeypatch, drive_files)
+    counts_here = _counting(monkeypatch, evaluate_cli)
+    code = main(["evaluate", "--reference", REF, "--drive", "u.csv", "--measured", "y.csv",
+                 "--out", "ev-once"])
+    assert code == 0, capsys.readouterr().err
+    for name, n in counts_here.items():
+        counts[name] = counts.get(name, 0) + n
+    assert counts == {"u.csv": 1, "y.csv": 1}
+    metrics = (drive / "ev-once" / "metrics.csv").read_text()
+    assert "shaped," in metrics or "measured," in metrics
+
+
+def test_evaluate_parses_them_once_with_inputs_named(drive, monkeypatch, capsys):
+    """``--input-columns`` reads the measured file's inputs: from the same table."""
+    monkeypatch.chdir(drive)
+    u = pd.read_csv("u.csv", comment="#")
+    pd.DataFrame({"t": u.t, "x": u.x_predicted, "y": u.y_predicted, "ux": u.ux,
+                  "uy": u.uy}).to_csv("yu.csv", index=False, float_format="%.6g")
+    counts = _counting(monkeypatch, drive_files)
+    code = main(["evaluate", "--reference", REF, "--drive", "u.csv", "--measured", "yu.csv",
+                 "--input-columns", "ux,uy", "--output-columns", "x,y", "--out", "ev-inputs"])
+    assert code == 0, capsys.readouterr().err
+    assert counts == {"u.csv": 1, "yu.csv": 1}
 
 
 def test_a_drive_of_the_largest_accepted_record_is_written_and_evaluated(drive, monkeypatch,
