@@ -51,7 +51,7 @@ from hammerstein.signals import metrics as met
 from hammerstein.models.amplifier import drive_metrics
 from hammerstein.compensation.drive import (apply_amplifier, drive_fade_samples, hardware_fade,
                                            read_signals)
-from hammerstein.compensation.drive_files import read_table
+from hammerstein.cli._evaluate_files import Tables, drive_inputs, now_or_later
 from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_names, drive_rest_lead,
                                                   drive_rest_output,
                                                   head_lines, optional_columns)
@@ -132,59 +132,6 @@ def add_parser(subparsers):
     p.set_defaults(handler=_handle)
 
 
-class _Tables:
-    """The signal files of one ``evaluate``, each read and parsed once.
-
-    The drive file had been parsed three times (its length, its input
-    columns, its shaped reference) and the measured file up to four times
-    (its columns for the default outputs, twice, its outputs, its inputs):
-    :meth:`get` parses a file the first time it is asked for
-    (:func:`hammerstein.compensation.drive_files.read_table`) and hands the
-    same table on; a file that cannot be read raises the same error at each
-    use. :meth:`drop` lets a table go once its columns are taken.
-    """
-
-    def __init__(self):
-        self._got = {}
-
-    def get(self, path, what, time="t"):
-        """The parsed table of ``path``.
-
-        Parameters
-        ----------
-        path : str or pathlib.Path
-            The file.
-        what : str
-            What it is, for messages (``"--drive"``, ``"--measured"``).
-        time : str
-            Its time column.
-
-        Returns
-        -------
-        hammerstein.io.datafiles._Table
-
-        Raises
-        ------
-        DataFileError
-            The file cannot be read (the same error at each call).
-        """
-        key = (os.fspath(path), what)
-        if key not in self._got:
-            try:
-                self._got[key] = read_table(path, what, time)
-            except DataFileError as exc:
-                self._got[key] = exc
-        got = self._got[key]
-        if isinstance(got, DataFileError):
-            raise got
-        return got
-
-    def drop(self, path, what):
-        """Forget the table of ``path`` (None: no file) read as ``what`` (its memory goes)."""
-        if path is not None:
-            self._got.pop((os.fspath(path), what), None)
-
-
 def _reference_outputs(args, tables):
     """The columns of a CSV ``--reference`` but its time, when neither ``--model`` nor
     ``--output-columns`` names the outputs; for an inline reference the outputs it names
@@ -260,7 +207,7 @@ def _drive_actuator_outputs(args):
 
 def _measured_outputs(args, tables):
     """The measured file's output columns (all but the time, the drive's inputs and what a
-    drive aims at), or None when it cannot be read (``tables``: :class:`_Tables`)."""
+    drive aims at), or None when it cannot be read (``tables``: :class:`~hammerstein.cli._evaluate_files.Tables`)."""
     try:
         columns = [str(c) for c in
                    tables.get(args.measured, "--measured", args.time).frame.columns]
@@ -391,7 +338,7 @@ def _handle(args):
         if problem:
             print_err(f"hammerstein evaluate: error: {problem}")
             return 2
-    tables = _Tables()
+    tables = Tables()
     try:
         if args.model:
             try:        # its own sampling period: at 1 s its modes read as beyond Nyquist
@@ -407,7 +354,7 @@ def _handle(args):
         outs, out_cols = _names(args.outputs, outs) if not args.model else \
             (outs, mapping(args.outputs, outs, "--output-columns"))
         n_drive, period = None, args.sampling_period
-        drive_inputs = shaped_reference = None
+        drive_voltages = drive_shaped = None
         if args.drive:      # the measurement is read at the drive's period, as learn reads it
             table = tables.get(args.drive, "--drive")
             n_drive, period = _drive_length(args.drive, args.sampling_period, table)
@@ -415,8 +362,8 @@ def _handle(args):
             # let go before the measured file is parsed; a column's error is raised where it
             # was when the drive was read again for it
             if not args.inputs:
-                drive_inputs = _now_or_later(_drive_inputs, args.drive, outs, period, table)
-            shaped_reference = _now_or_later(_shaped_reference, args.drive, outs, period, table)
+                drive_voltages = now_or_later(drive_inputs, args.drive, outs, period, table)
+            drive_shaped = now_or_later(_shaped_reference, args.drive, outs, period, table)
             del table
             tables.drop(args.drive, "--drive")
         rate_notes = []
@@ -434,7 +381,7 @@ def _handle(args):
             if not args.model and not args.outputs else []
         tables.drop(args.measured, "--measured")     # its columns taken
         if not args.inputs and args.drive:   # the voltages applied: the drive's own inputs
-            drive_ins, u = drive_inputs()
+            drive_ins, u = drive_voltages()
             ins = drive_ins if u is not None else ins
         shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
@@ -477,7 +424,7 @@ def _handle(args):
         args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
                                       ref.scale, ref.loop_channel, args.remove_delay, rf)
-        shaped = shaped_reference() if args.drive else None
+        shaped = drive_shaped() if args.drive else None
         tracked = _tracked_reference(args.drive, outs, ref.signal[:, :N], fade, shaped)
         shaped_rows = []
         if shaped is not None and shaped.shape[1] >= N:
@@ -636,59 +583,6 @@ def _drive_notes(args):
     head = _drive_header(args.drive)
     keep = [h for h in head if h.startswith("shaped:") or "fade-in" in h]
     return "".join(f"  \ndrive `{args.drive}`: {h}" for h in keep)
-
-
-def _now_or_later(function, *args):
-    """``function(*args)`` called now; what it returned, or its error, when asked for.
-
-    Returns
-    -------
-    callable
-        Without arguments: returns the result, or raises the
-        :class:`~hammerstein.exceptions.DataFileError` or ``OSError`` the call
-        raised (a file's columns read early, their error said in its turn).
-    """
-    try:
-        value = function(*args)
-    except (DataFileError, OSError) as exc:
-        error = exc
-
-        def later():
-            raise error
-        return later
-    return lambda: value
-
-
-def _drive_inputs(path, outs, T, table=None):
-    """The drive file's input columns and their voltages.
-
-    Parameters
-    ----------
-    path : str
-        The drive file.
-    outs : list of str
-        Output names (their columns are no inputs).
-    T : float
-        Its sampling period [s].
-    table : hammerstein.io.datafiles._Table, optional
-        The drive file already parsed, or None to read it.
-
-    Returns
-    -------
-    names : list of str
-        Its input columns (:func:`hammerstein.compensation.drive_files.drive_input_names`).
-    u : numpy.ndarray, shape (len(names), n_samples), or None
-        Their voltages [V]; None without input columns.
-
-    Raises
-    ------
-    DataFileError
-        Columns that are not readable.
-    OSError
-        The file cannot be read.
-    """
-    names = drive_input_names(path, outs)
-    return names, (optional_columns(path, names, T, "--drive", table) if names else None)
 
 
 def _shaped_reference(path, outs, T, table=None):

@@ -212,16 +212,15 @@ def bounded_read_bytes(path, kind="toml", what="file", head=None, cap=None):
     ----------
     path : str or pathlib.Path
     kind : {'toml', 'data', 'baseline', 'cache', 'total'}
-        Selects the size limit (and the variable the messages name).
+        Selects the size limit (and the variable named in messages).
     what : str
         What the file should be, for messages ("scenario file", ...).
     head : int, optional
         Read only the file's first ``head`` bytes (its header lines): a
         larger file is not refused, and nothing is counted in the budget.
     cap : int, optional
-        The size limit [bytes] instead of :func:`limit` ``(kind)``: that of
-        a file whose size the project knows (a drive file,
-        :func:`hammerstein.compensation.drive_size.drive_file_limit`).
+        The size limit [bytes] instead of :func:`limit` ``(kind)`` (a drive
+        file's, :func:`hammerstein.compensation.drive_size.drive_file_limit`).
 
     Returns
     -------
