@@ -6,11 +6,11 @@ writes 20 000 rows at a time.
 """
 
 import io
-import tracemalloc
 
 import numpy as np
 
 from hammerstein.cli.evaluate import write_rows
+from memory_trace import traced_write
 
 
 def _whole(head, cols):
@@ -37,19 +37,6 @@ def test_memory_is_a_blocks():
     floats and text; the whole table took over 100 MB)."""
     n = 200_000
     cols = [np.arange(n) * 5e-5] + [np.sin(np.arange(n) * (k + 1) * 1e-3) for k in range(7)]
-
-    class Sink:
-        size = 0
-
-        def write(self, b):
-            self.size += len(b)
-
-    sink = Sink()
-    tracemalloc.start()
-    try:
-        write_rows(sink, [f"c{k}" for k in range(8)], cols)
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    assert sink.size > 10_000_000
+    _, size, peak = traced_write(lambda sink: write_rows(sink, [f"c{k}" for k in range(8)], cols))
+    assert size > 10_000_000
     assert peak < 12_000_000, peak

@@ -10,7 +10,6 @@ whole file's text at once (1.8 GB for 3e6 samples).
 """
 
 import io
-import tracemalloc
 
 import numpy as np
 import pandas as pd
@@ -22,6 +21,7 @@ from hammerstein.cli.main import main
 from hammerstein.compensation import drive_files, drive_size
 from hammerstein.compensation.drive_files import signals_csv
 from hammerstein.compensation.drive_size import drive_file_limit, write_drive_rows
+from memory_trace import traced_write
 
 REF = '{ kind = "circle", radius = 30, frequency = 100, periods = 6 }'
 
@@ -169,19 +169,7 @@ def test_the_drive_rows_take_a_blocks_memory():
     n = 200_000
     data = np.column_stack([np.arange(n) * 5e-5] + [np.sin(np.arange(n) * (k + 1) * 1e-3)
                                                     for k in range(6)])
-
-    class Sink:
-        size = 0
-
-        def write(self, b):
-            self.size += len(b)
-
-    sink = Sink()
-    tracemalloc.start()
-    try:
-        written = write_drive_rows(sink, "t,a,b,c,d,e,f\n", data)
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    assert written == sink.size > 20_000_000
+    written, size, peak = traced_write(lambda sink: write_drive_rows(sink, "t,a,b,c,d,e,f\n",
+                                                                      data))
+    assert written == size > 20_000_000
     assert peak < 12_000_000, peak
