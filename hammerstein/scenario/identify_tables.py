@@ -49,6 +49,7 @@ import re
 from hammerstein.core.schema import closest, did_you_mean, nested_table
 from hammerstein.exceptions import NestedInvalid
 from hammerstein.identification.defaults import PREISACH_LEVELS
+from hammerstein.io.unit_checks import unit_scale
 from hammerstein.signals.excitation import REVERSALS
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
                                          choice, integer, number, short_repr, string)
@@ -59,6 +60,7 @@ __all__ = [
     "FILES_IDENTIFY_FIELDS",
     "record_time",
     "record_units",
+    "record_unit_problems",
     "files_table_words",
     "identify_table",
     "HAMMERSTEIN_IDENTIFY_DEFAULTS",
@@ -330,6 +332,45 @@ def record_units(spec, plant=None):
     """
     units = getattr(plant, "units", None) or ("V", "µm")
     return (spec.get("input_unit") or units[0], spec.get("output_unit") or units[1])
+
+
+def record_unit_problems(spec, plant=None):
+    """``identify.<unit key>: ...`` for each of a files table's units that does not convert to
+    its plant's (:func:`hammerstein.io.unit_checks.unit_scale`), and the factors of those that do.
+
+    Parameters
+    ----------
+    spec : dict
+        A files ``identify`` table (checked or as written: a unit that is no string is
+        left to the table's own check).
+    plant : HammersteinPlant or None
+        Its ``units``; None: V and µm.
+
+    Returns
+    -------
+    scales : list of float or None
+        Per role (input, output): the factor to the plant's unit; None where it does not
+        convert or is no string.
+    problems : list of str
+        One line per unit that does not convert.
+
+    Examples
+    --------
+    >>> record_unit_problems({"output_unit": "nm"})
+    ([1.0, 0.001], [])
+    """
+    units = getattr(plant, "units", None) or ("V", "µm")
+    scales, problems = [], []
+    for key, given, to, role in zip(("input_unit", "output_unit"), record_units(spec, plant),
+                                    units, ("input", "output")):
+        scale = None
+        if isinstance(given, str):
+            try:
+                scale = unit_scale(given, to, role)
+            except ValueError as exc:
+                problems.append(f"identify.{key}: {exc}")
+        scales.append(scale)
+    return scales, problems
 
 
 #: ``identify``'s options in the words of reading a record, and the files table's keys.

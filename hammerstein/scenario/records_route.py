@@ -27,7 +27,7 @@ from hammerstein.identification.identification import IdentificationError
 from hammerstein.identification.loop_orientation import clockwise_loop_warnings
 from hammerstein.identification.sensors import Sensor
 from hammerstein.io.datafiles import DataFileError, MultiRecord, read_records
-from hammerstein.io.unit_checks import unit_scale, unit_warnings
+from hammerstein.io.unit_checks import unit_warnings
 from hammerstein.io.presets import load_model, load_plant, save_model
 from hammerstein.models.amplifier import amplifier_from_table, records_amplifier_table
 from hammerstein.models.dynamics import DynamicsError
@@ -36,7 +36,7 @@ from hammerstein.models.plant import HammersteinPlant
 from hammerstein.scenario.identification_cache import (IdentificationCache, plant_fingerprint,
                                                        spec_key)
 from hammerstein.scenario.identify_tables import (files_table_words, identify_table, record_time,
-                                                  record_units)
+                                                  record_unit_problems, record_units)
 from hammerstein.scenario.schema import Invalid
 from hammerstein.signals.excitation import excitation_set
 
@@ -257,14 +257,10 @@ def plant_unit_scales(plant, spec):
         Units that differ from the plant's and do not convert
         (:func:`hammerstein.io.unit_checks.unit_scale`), named at the table's key.
     """
-    units = getattr(plant, "units", ("V", "µm"))
-    out = []
-    for key, to, role in (("input_unit", units[0], "input"), ("output_unit", units[1], "output")):
-        try:
-            out.append(unit_scale(spec.get(key) or to, to, role))
-        except ValueError as exc:
-            raise IdentificationError(f"identify.{key}: {exc}") from None
-    return tuple(out)
+    scales, problems = record_unit_problems(spec, plant)
+    if problems:
+        raise IdentificationError("; ".join(problems))
+    return tuple(scales)
 
 
 def in_plant_units(records, scales):

@@ -15,9 +15,9 @@ from pathlib import Path
 from hammerstein.core.files import confined_path, escape, file_limit_problem
 from hammerstein.io.record_columns import record_column_problems
 from hammerstein.io.presets import PresetError
-from hammerstein.io.unit_checks import unit_scale
 from hammerstein.scenario.identify_tables import (FILES_IDENTIFY_FIELDS, files_table_words,
-                                                  record_time, record_units)
+                                                  record_time, record_unit_problems,
+                                                  record_units)
 from hammerstein.scenario.schema import Invalid
 
 __all__ = ["record_file_problems", "record_keys"]
@@ -137,15 +137,7 @@ def record_file_problems(identify, base, plant):
                             f"{len(names)} {key} {names}; expected one column per "
                             f"{key[:-1]}, in the plant's order")
     if plant is not None:              # read in the plant's units: these must convert
-        units = getattr(plant, "units", ("V", "µm"))
-        for key, to, role in (("input_unit", units[0], "input"),
-                              ("output_unit", units[1], "output")):
-            given = identify.get(key) or to
-            if isinstance(given, str):
-                try:
-                    unit_scale(given, to, role)
-                except ValueError as exc:
-                    problems.append(f"identify.{key}: {exc}")
+        problems += record_unit_problems(identify, plant)[1]
     ins = identify.get("inputs") or plant_names.get("inputs")
     outs = identify.get("outputs") or plant_names.get("outputs")
     # a column count that differs from the plant's still has its columns looked for
