@@ -138,6 +138,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             limit_start_up,
                                             read_signals, settled_step,
                                             rest_output, shape_drive, signals_csv)
+from hammerstein.compensation.edge_holds import edge_hold_note
 from hammerstein.compensation.drive_files import (drive_rest_lead, drive_rest_output,
                                                   followed_reference, head_lines, learnt_names,
                                                   rest_lead_text, shaped_target)
@@ -755,6 +756,9 @@ def _learn(args):
             None if plant.amplifier is None else plant.amplifier.rest_voltages(),
             list(model.input_names), T)
         shaped += more
+        # an input held on its range's edge after the fade-in, named as compensate names it
+        edge = edge_hold_note(u_next, plant.amplifier, fade, T, None if plant.amplifier is None
+                              else plant.amplifier.rest_voltages())
         owned = owned_problem(args.out, args.force)
         if owned:
             print_err(f"hammerstein learn: error: {owned}")
@@ -780,7 +784,10 @@ def _learn(args):
                       "record): no reference fed to the exported compensator reproduces this "
                       "drive; play it as a file" if learnt is None else "")
                    + (f"\nlimited by the amplifier: {'; '.join(problems)}" if problems else "")
-                   + "".join(f"\nshaped: {n}" for n in shaped))
+                   + "".join(f"\nshaped: {n}" for n in shaped)
+                   + ("" if edge is None else f"\nnote: {edge}"))
+        if edge is not None:
+            notes.append(f"note: {edge}")
         widths = None if plant.amplifier is None else plant.amplifier.range_widths()
         chatter = chatter_warnings(u_next, T, widths, list(model.input_names))
         severe = chatter_warnings(u_next, T, widths, list(model.input_names),

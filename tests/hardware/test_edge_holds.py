@@ -11,8 +11,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from cli_run import run_cli
 from hammerstein.cli.main import main
+from hammerstein.compensation.drive import read_signals
 from hammerstein.compensation.edge_holds import edge_hold_note
+from hammerstein.io.presets import load_plant
 from hammerstein.models.amplifier import Amplifier, AmplifierChannel
 
 OUTSIDE_GPI = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
@@ -52,3 +55,38 @@ def test_an_edge_that_is_the_rest_is_no_hold():
                            "of the 5 samples after the fade-in (20 %; 0.0500-0.0500 s): ")
     assert edge_hold_note(u[:, :3], amp, 1, 0.01) is None     # 0 V on ux: its rest
     assert edge_hold_note(u, None, 1, 0.01) is None
+
+
+def _held_lines(path, names, edges):
+    """The edge-hold sentences counted on a drive file: its samples after the header's fade-in
+    on each edge."""
+    text = path.read_text()
+    fade = int(re.search(r"fade-in (\d+) samples", text).group(1))
+    u = pd.read_csv(path, comment="#")[list(names)].to_numpy().T[:, fade:]
+    lines = {}
+    for name, row in zip(names, u):
+        for edge in edges:
+            on = np.abs(row - edge) <= (edges[1] - edges[0]) * 1e-9
+            lines[f"{name} holds the range edge {edge:g} V on {int(on.sum())} of the "
+                  f"{u.shape[1]} samples after the fade-in"] = int(on.sum())
+    return lines
+
+
+def test_learn_names_the_inputs_its_next_drive_holds_on_the_records_range(tmp_path):
+    """learn's next drive, beyond the records' range as compensate's first was, is named alike:
+    on stderr and in its header (it was silent)."""
+    ref = '{ kind = "circle", radius = 80, frequency = 20, periods = 4 }'
+    assert main(["compensate", str(OUTSIDE_GPI), "--reference", ref,
+                 "--out", str(tmp_path / "u0.csv")]) == 0
+    t, u, _ = read_signals(tmp_path / "u0.csv", ["ux", "uy"])
+    y, _ = load_plant(str(OUTSIDE_GPI)).simulate(u)          # the measurement: the model itself
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(tmp_path / "y0.csv", index=False)
+    res = run_cli("learn", OUTSIDE_GPI, "--reference", ref, "--drive", "u0.csv", "--measured",
+                  "y0.csv", "--out", "u1.csv", "--delay", "0", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    text = (tmp_path / "u1.csv").read_text()
+    lines = _held_lines(tmp_path / "u1.csv", ("ux", "uy"), (-20.0, 20.0))
+    assert sum(lines.values()) > 0                          # the learnt drive holds an edge
+    for said, count in lines.items():       # one note line on stderr, one in the header
+        assert bool(re.search(f"^note: .*{re.escape(said)}", res.stderr, re.M)) == (count > 0)
+        assert bool(re.search(f"^# note: .*{re.escape(said)}", text, re.M)) == (count > 0)
