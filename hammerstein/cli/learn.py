@@ -758,7 +758,7 @@ def _learn(args):
         shaped += more
         # an input held on its range's edge after the fade-in, named as compensate names it
         edge = edge_hold_note(u_next, plant.amplifier, fade, T, None if plant.amplifier is None
-                              else plant.amplifier.rest_voltages())
+                              else plant.amplifier.rest_voltages(), plant.units[0])
         owned = owned_problem(args.out, args.force)
         if owned:
             print_err(f"hammerstein learn: error: {owned}")

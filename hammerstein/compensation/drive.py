@@ -525,7 +525,7 @@ def compensator_rest(model, compensator):
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
                    first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
-                   shape=True, input_names=None, progress=None):
+                   shape=True, input_names=None, progress=None, input_unit="V"):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -612,6 +612,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         ``progress(line)``, called with a short description as each pass of the
         compensator over the whole reference starts (the fade-in's doubling and the
         shaping each run it again): a long reference's wait, said.
+    input_unit : str
+        The drive's unit, the model's (a preset's ``input_unit``), in the note naming the
+        inputs held on their range's edge
+        (:func:`~hammerstein.compensation.edge_holds.edge_hold_note`).
 
     Returns
     -------
@@ -787,7 +791,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                 f"the {how} reaches the drive {late:.4g} s after the start, "
                 f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the "
                 f"fade's end include it; {fix}")
-    edge = edge_hold_note(out, amplifier, n, T, r0)      # no limit left, the output short
+    edge = edge_hold_note(out, amplifier, n, T, r0, input_unit)   # no limit left, output short
     if edge:
         res.notes.append(edge)
     res.inputs = out

@@ -23,22 +23,25 @@ __all__ = ["EDGE_TOLERANCE", "edge_hold_note"]
 EDGE_TOLERANCE = 1e-9
 
 
-def edge_hold_note(inputs, amplifier, start, sampling_period, rest=None):
+def edge_hold_note(inputs, amplifier, start, sampling_period, rest=None, unit="V"):
     """A note naming the inputs that sit on their range's edge after the fade-in, or None.
 
     Parameters
     ----------
     inputs : array_like, shape (m, n_samples)
-        The drive [V].
+        The drive [``unit``].
     amplifier : hammerstein.models.amplifier.Amplifier or None
-        Its ranges (``channels[i].low``, ``.high`` [V]) and input names; None: no note.
+        Its ranges (``channels[i].low``, ``.high`` [``unit``]) and input names; None: no note.
     start : int
         First sample judged (the fade-in's end) [samples].
     sampling_period : float
         T [s].
     rest : array_like, shape (m,), optional
-        The rest voltages [V] (default 0 V): an edge that is an input's rest (a unipolar
+        The rest voltages [``unit``] (default 0): an edge that is an input's rest (a unipolar
         stage's 0 V) is where a reference at the rest output is met exactly, not a hold.
+    unit : str
+        The inputs' unit, the model's (``HammersteinPlant.units[0]``; a preset's
+        ``input_unit``), in which the note gives the edges.
 
     Returns
     -------
@@ -54,6 +57,9 @@ def edge_hold_note(inputs, amplifier, start, sampling_period, rest=None):
     >>> u = np.array([[0.0, 10.0, 20.0, 20.0, 12.0]])
     >>> edge_hold_note(u, amp, 1, 0.001)[:62]
     'ux holds the range edge 20 V on 2 of the 4 samples after the f'
+    >>> mv = Amplifier([AmplifierChannel(-500.0, 500.0)], ["ux"])      # a model in mV
+    >>> edge_hold_note(25 * u, mv, 1, 0.001, unit="mV")[:33]
+    'ux holds the range edge 500 mV on'
     """
     if amplifier is None:
         return None
@@ -71,7 +77,7 @@ def edge_hold_note(inputs, amplifier, start, sampling_period, rest=None):
                 continue
             on = np.abs(u[i] - edge) <= EDGE_TOLERANCE * width
             if np.any(on):
-                held.append(f"{name} holds the range edge {edge:g} V on {int(on.sum())} of the "
+                held.append(f"{name} holds the range edge {edge:g} {unit} on {int(on.sum())} of the "
                             f"{u.shape[1]} samples after the fade-in "
                             f"({100 * on.mean():.3g} %; "
                             f"{time_intervals(np.concatenate([np.zeros(int(start), bool), on]), sampling_period)})")

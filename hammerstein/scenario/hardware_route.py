@@ -344,7 +344,7 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
                                mode_decay=mode_decay_s(linear[0], T),
                                rest_lead=rest_lead, shape=shape,
                                input_names=list(plant.hysteresis.input_names),
-                               progress=progress)
+                               progress=progress, input_unit=plant.units[0])
     except AmplifierError as exc:
         if reach and "beyond the amplifier's range" in str(exc):
             # "lower the reference" alone: by how much, and where it fits, is the reach's

@@ -57,9 +57,9 @@ def test_an_edge_that_is_the_rest_is_no_hold():
     assert edge_hold_note(u, None, 1, 0.01) is None
 
 
-def _held_lines(path, names, edges):
+def _held_lines(path, names, edges, unit="V"):
     """The edge-hold sentences counted on a drive file: its samples after the header's fade-in
-    on each edge."""
+    on each edge (in ``unit``)."""
     text = path.read_text()
     fade = int(re.search(r"fade-in (\d+) samples", text).group(1))
     u = pd.read_csv(path, comment="#")[list(names)].to_numpy().T[:, fade:]
@@ -67,7 +67,7 @@ def _held_lines(path, names, edges):
     for name, row in zip(names, u):
         for edge in edges:
             on = np.abs(row - edge) <= (edges[1] - edges[0]) * 1e-9
-            lines[f"{name} holds the range edge {edge:g} V on {int(on.sum())} of the "
+            lines[f"{name} holds the range edge {edge:g} {unit} on {int(on.sum())} of the "
                   f"{u.shape[1]} samples after the fade-in"] = int(on.sum())
     return lines
 
@@ -90,3 +90,28 @@ def test_learn_names_the_inputs_its_next_drive_holds_on_the_records_range(tmp_pa
     for said, count in lines.items():       # one note line on stderr, one in the header
         assert bool(re.search(f"^note: .*{re.escape(said)}", res.stderr, re.M)) == (count > 0)
         assert bool(re.search(f"^# note: .*{re.escape(said)}", text, re.M)) == (count > 0)
+
+
+def test_the_edges_are_in_the_models_input_unit(tmp_path):
+    """A model whose inputs are in mV (its [model] input_unit, the records' range in mV): the
+    edges are named in mV, by compensate and by learn (they said V)."""
+    text = OUTSIDE_GPI.read_text().replace('\ninput_unit = "V"\n', '\ninput_unit = "mV"\n')
+    assert text.count('input_unit = "mV"') == 2
+    (tmp_path / "mv.toml").write_text(text)
+    ref = '{ kind = "circle", radius = 80, frequency = 20, periods = 4 }'
+    res = run_cli("compensate", "mv.toml", "--reference", ref, "--out", "u0.csv", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    t, u, _ = read_signals(tmp_path / "u0.csv", ["ux", "uy"])
+    y, _ = load_plant(str(tmp_path / "mv.toml")).simulate(u)
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(tmp_path / "y0.csv", index=False)
+    learnt = run_cli("learn", "mv.toml", "--reference", ref, "--drive", "u0.csv", "--measured",
+                     "y0.csv", "--out", "u1.csv", "--delay", "0", cwd=tmp_path)
+    assert learnt.returncode == 0, learnt.stderr
+    for run, drive in ((res, "u0.csv"), (learnt, "u1.csv")):
+        text = (tmp_path / drive).read_text()
+        lines = _held_lines(tmp_path / drive, ("ux", "uy"), (-20.0, 20.0), "mV")
+        assert sum(lines.values()) > 0
+        for said, count in lines.items():
+            assert bool(re.search(f"^note: .*{re.escape(said)}", run.stderr, re.M)) == (count > 0)
+            assert bool(re.search(f"^# note: .*{re.escape(said)}", text, re.M)) == (count > 0)
+        assert "holds the range edge 20 V" not in run.stderr + text
