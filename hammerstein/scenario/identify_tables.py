@@ -423,7 +423,8 @@ def identify_table(value):
     -------
     dict
         The table with defaults filled (``amplitude`` stays absent when not
-        given: the plant model's ``input_amplitude`` is used).
+        given: the plant model's ``input_amplitude`` is used; ``n_hysterons``
+        when ``thresholds`` are given: their length is the count).
 
     Raises
     ------
@@ -449,12 +450,15 @@ def identify_table(value):
             yield "order: give order or max_order, not both"
         if clean.get("train_fraction") is not None and clean.get("hold_out") == "none":
             yield "train_fraction: give train_fraction or hold_out = 'none', not both"
+        # identify's one --thresholds takes a count or a list: any count written beside a list
+        # (15 as well, which was ignored without a word); a validated table with a list holds
+        # no count (_count_or_list), so that validating it again finds none
+        if "thresholds" in clean and isinstance(value, dict) and "n_hysterons" in value:
+            yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
+                   "(identify --thresholds takes one of them)")
         # a count equal to the default (15) is what a table validated before holds (the route
         # validates it again), and what identify's --thresholds 15 is: not a count given
         count = isinstance(value, dict) and value.get("n_hysterons", 15) != 15
-        if "thresholds" in clean and count:
-            yield ("thresholds: give n_hysterons (a count) or thresholds (a list), not both "
-                   "(identify --thresholds takes one of them)")
         for key, given in (("thresholds", "thresholds" in clean), ("n_hysterons", count)):
             if given and clean.get("model") in ("preisach", "generalized"):
                 # fitted into the classical PI alone: with another class, ignored
@@ -486,16 +490,17 @@ def identify_table(value):
                 if key in clean and not clean.get("dynamics_records"):
                     yield f"{key}: only used with dynamics_records"
 
-        return nested_table(value, FILES_IDENTIFY_FIELDS,
-                            '{ records = "files", hysteresis_records = [...] }', cross_files)
+        return _count_or_list(nested_table(value, FILES_IDENTIFY_FIELDS,
+                                           '{ records = "files", hysteresis_records = [...] }',
+                                           cross_files))
     if isinstance(value, dict) and "records" in value:
         def cross_records(clean):
             yield from cross_pipeline(clean, clean.get("creep"))
             if clean.get("amplitude") is not None and clean.get("range") is not None:
                 yield "amplitude: give amplitude or range (excitation --range), not both"
 
-        return nested_table(value, RECORDS_IDENTIFY_FIELDS, '{ records = "excitation" }',
-                            cross_records)
+        return _count_or_list(nested_table(value, RECORDS_IDENTIFY_FIELDS,
+                                           '{ records = "excitation" }', cross_records))
     try:
         return nested_table(value, IDENTIFY_FIELDS, "{ frequency = 50.0 }", cross)
     except NestedInvalid as exc:
@@ -507,6 +512,18 @@ def identify_table(value):
             problems.append((key, f"unknown key{hint} (the route of `hammerstein identify` on "
                                   f"excitation records)" if hint else msg))
         raise NestedInvalid(problems) from None
+
+
+def _count_or_list(clean):
+    """A validated records table without the default count beside a thresholds list.
+
+    The list's length is the count (as identify's ``--thresholds r1,r2,...``); the default
+    ``n_hysterons`` left beside it would be taken, on validating the table again, for a
+    count written beside the list.
+    """
+    if "thresholds" in clean:
+        clean.pop("n_hysterons", None)
+    return clean
 
 
 def nyquist_problem(spec, plant):

@@ -303,7 +303,10 @@ def test_a_validated_table_validates_again(table):
     that default is no count given with a Preisach or generalised-PI model, nor beside a
     thresholds list (a files table with thresholds failed every scenario run so)."""
     once = identify_table(table)
-    assert once["n_hysterons"] == 15
+    if "thresholds" in table:           # the list's length is the count: no count beside it
+        assert "n_hysterons" not in once
+    else:
+        assert once["n_hysterons"] == 15
     assert identify_table(once) == once
 
 
@@ -339,3 +342,38 @@ def test_records_without_units_are_in_the_plant_s_units(tmp_path):
                                    False, base_dir=tmp_path)
     assert bare.preset_text == said.preset_text
     assert "converted_from_units" not in tomllib.loads(bare.preset_text)["identification"]
+
+
+def test_a_count_of_15_beside_thresholds_is_refused_as_any_count(tmp_path, capsys):
+    """``n_hysterons = 15`` (the default's value) written beside ``thresholds``: refused at the
+    key as any other count is, since identify's one ``--thresholds`` takes a count or a list
+    (it was ignored without a word); the list alone runs, its length the model's count."""
+    text = (Path(hammerstein.__file__).parent / "presets" / "realistic-2dof.toml").read_text(
+        encoding="utf-8")
+    plant = load_plant(Path(hammerstein.__file__).parent / "presets" / "realistic-2dof.toml",
+                       dynamics=False)
+    recs = excitation_records(plant, identify_table({"records": "excitation", "frequency": 5.0,
+                                                     "hold": 0.25, "multisine_periods": 2}))
+    names = [Path(write_record(tmp_path / f"r-{i}.csv", r)).name
+             for i, r in enumerate(recs["hysteresis"])]
+    compensator = 'kind = "multivariable"\nmodel = "identified"'
+    identify = (f'records = "files"\nhysteresis_records = {names!r}\nmodel = "classical"\n'
+                f'thresholds = [0.0, 2.0, 5.0]')
+    circle = '{ kind = "circle", radius = 5, frequency = 10, periods = 2 }'
+    out = run_files_scenario(tmp_path, text, compensator, identify, circle)
+    model = tomllib.loads((out / "models" / "identified-files-classical.toml").read_text(
+        encoding="utf-8"))
+    assert model["model"]["thresholds"] == [0.0, 2.0, 5.0]
+    capsys.readouterr()
+    for count in (15, 4):
+        scenario = (tmp_path / "s.toml").read_text(encoding="utf-8").replace(
+            "thresholds = [", f"n_hysterons = {count}\nthresholds = [")
+        (tmp_path / f"s{count}.toml").write_text(scenario, encoding="utf-8")
+        for command in ("validate", "run"):
+            argv = [command, str(tmp_path / f"s{count}.toml")] + (
+                ["--out", str(tmp_path / "out2"), "-q", "--figures", "none"]
+                if command == "run" else [])
+            assert main(argv) != 0
+            err = capsys.readouterr().err
+            assert (f"s{count}.toml: compensator.identify.thresholds: give n_hysterons (a count) "
+                    f"or thresholds (a list), not both") in err, err
