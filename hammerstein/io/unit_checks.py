@@ -1,5 +1,6 @@
-"""Records whose numbers look like another unit than declared (nothing is converted), and the
-units a scenario converts to its plant's.
+"""Records whose numbers look like another unit than declared, and the units a scenario
+converts to its plant's (``identify`` converts nothing; a scenario's files table converts
+records in a declared unit to its plant's).
 
 Used by ``hammerstein identify`` and by the scenarios that identify from measured records
 (``identify = { records = "files" }``, ``kind = "identification"``), which warn alike.
@@ -77,11 +78,12 @@ PLAUSIBLE_PERIOD_MAX_S = 0.01
 
 
 def unit_warnings(records, outputs, output_unit, time_column=None, inputs=None,
-                  input_unit="V"):
+                  input_unit="V", converted=False):
     """One-line warnings for records whose numbers look like another unit than declared.
 
-    Nothing is converted on reading (docs/records.md): a column without a unit in its
-    name or a units row is taken in the declared unit. An output in nm read as µm spans
+    A column without a unit in its name or a units row is taken in the declared unit;
+    ``identify`` converts nothing (docs/records.md), a scenario's files table converts
+    records in a declared unit to its plant's (``converted``), and the hints say which. An output in nm read as µm spans
     thousands of µm (a tester's x: 2.346e+04 µm), one in metres 1e-5 µm; a time column in
     ms read as s gives a sampling period of 0.1 s. An output in mm may span more than
     0.01 µm (a 78 µm stage: 0.078), but moves less than
@@ -105,6 +107,10 @@ def unit_warnings(records, outputs, output_unit, time_column=None, inputs=None,
         ``input_unit``); without them the gains are not checked.
     input_unit : str
         The declared input unit (``--input-unit``).
+    converted : bool
+        Whether declaring the outputs' unit has them converted (a scenario's files table,
+        which converts records to its plant's units), not only named (``identify``, the
+        default: nothing is converted). Times are converted in neither.
 
     Returns
     -------
@@ -123,6 +129,13 @@ def unit_warnings(records, outputs, output_unit, time_column=None, inputs=None,
     "time column 't' of b.csv: sampling period 0.1 s, at "
     """
     lines = []
+    if converted:
+        fix = ("Outputs are read in µm: declare the column's unit with --output-unit (the "
+               "records are then converted to the plant's units), or convert the column "
+               "(docs/records.md)")
+    else:
+        fix = ("Outputs are read in µm and nothing is converted: convert the column, or "
+               "declare its unit with --output-unit (docs/records.md)")
     if output_unit == "µm":
         for k, name in enumerate(outputs):
             spans = [float(np.ptp(np.asarray(r.y[k], dtype=float))) for r in records
@@ -141,15 +154,11 @@ def unit_warnings(records, outputs, output_unit, time_column=None, inputs=None,
                         f"output '{name}' spans {span:.4g} µm over the records, {gain[0]:.3g} "
                         f"µm/V over {gain[1]}'s {gain[2]:.4g} V, below a piezo's "
                         f"{PLAUSIBLE_GAIN_MIN_UM_PER_V:g} µm/V (stages move 0.05-5 µm/V): a "
-                        f"column in mm? Outputs are read in µm and nothing is converted: "
-                        f"convert the column, or declare its unit with --output-unit "
-                        f"(docs/records.md)")
+                        f"column in mm? {fix}")
                 continue
             lines.append(f"output '{name}' spans {span:.4g} µm over the records, not an "
                          f"actuator's motion ({PLAUSIBLE_RANGE_MIN_UM:g}-"
-                         f"{PLAUSIBLE_RANGE_MAX_UM:g} µm): a column {guess}? Outputs are read "
-                         f"in µm and nothing is converted: convert the column, or declare its "
-                         f"unit with --output-unit (docs/records.md)")
+                         f"{PLAUSIBLE_RANGE_MAX_UM:g} µm): a column {guess}? {fix}")
     periods = sorted({float(r.sampling_period) for r in records})
     if periods and periods[-1] >= PLAUSIBLE_PERIOD_MAX_S:
         col = f"time column '{time_column}'" if time_column is not None else "--sampling-period"

@@ -400,7 +400,7 @@ def _identify_from_records(plant, spec, dynamics, base_dir=None):
         # the scenario read the same files without a word
         given = record_units(spec, plant)
         for line in unit_warnings(every, names[1], given[1], record_time(spec),
-                                  names[0], given[0]):
+                                  names[0], given[0], converted=True):
             warnings.warn(f"{where}: {files_table_words(line)}", HammersteinWarning, stacklevel=2)
         recs = in_plant_units(recs, scales)
         for line in clockwise_loop_warnings(recs["hysteresis"], *names):   # as identify warns

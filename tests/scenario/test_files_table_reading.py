@@ -12,6 +12,7 @@ the same options must give the same model as ``identify``, to 1e-9.
 import tomllib
 from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -22,7 +23,7 @@ from hammerstein.exceptions import NestedInvalid
 from hammerstein.io.presets import load_model, load_plant
 from hammerstein.scenario.identification import excitation_records, identified_from_records
 from hammerstein.scenario.identify_tables import identify_table
-from route_files import run_files_scenario, write_record
+from route_files import run_files_scenario, toml_numbers, write_record
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 PREAMBLE = "Instrument: DAQ-9000\nOperator: lab\nRate: 20 kHz\n"
@@ -377,3 +378,39 @@ def test_a_count_of_15_beside_thresholds_is_refused_as_any_count(tmp_path, capsy
             err = capsys.readouterr().err
             assert (f"s{count}.toml: compensator.identify.thresholds: give n_hysterons (a count) "
                     f"or thresholds (a list), not both") in err, err
+
+
+def test_the_unit_warning_of_a_files_table_says_that_a_declared_unit_is_converted(tmp_path):
+    """identify converts nothing and says so; a files table converts records in a declared
+    unit to its plant's: its warning on outputs in nm read as µm said "nothing is converted"
+    too. Followed, its advice (identify.output_unit = "nm") gives the model of the same
+    records in µm."""
+    preset = Path(hammerstein.__file__).parent / "presets" / "realistic-2dof.toml"
+    plant = load_plant(preset, dynamics=False)
+    recs = excitation_records(plant, identify_table({"records": "excitation", "frequency": 5.0,
+                                                     "hold": 0.25, "multisine_periods": 2}))
+    models, said = {}, {}
+    for unit, scale, declared in (("µm", 1.0, ""), ("nm", 1e3, ""),
+                                  ("nm", 1e3, 'output_unit = "nm"\n')):
+        d = tmp_path / f"{unit}-{bool(declared)}"
+        d.mkdir()
+        names = [Path(write_record(d / f"r-{i}.csv", SimpleNamespace(
+            timepts=r.timepts, u=r.u, y=scale * r.y, input_names=r.input_names,
+            output_names=r.output_names))).name for i, r in enumerate(recs["hysteresis"])]
+        out = run_files_scenario(
+            d, preset.read_text(encoding="utf-8"), 'kind = "multivariable"\nmodel = "identified"',
+            f'records = "files"\nhysteresis_records = {names!r}\nmodel = "classical"\n{declared}',
+            '{ kind = "circle", radius = 5, frequency = 10, periods = 2 }')
+        key = (unit, bool(declared))
+        models[key] = tomllib.loads((out / "models" / "identified-files-classical.toml")
+                                    .read_text(encoding="utf-8"))["model"]
+        said[key] = [line for line in (out / "warnings.csv").read_text(encoding="utf-8")
+                     .splitlines() if "a column in nm?" in line]
+    assert not said["µm", False] and not said["nm", True]
+    assert len(said["nm", False]) == 2, said                 # x and y
+    for line in said["nm", False]:
+        assert "nothing is converted" not in line
+        assert ("Outputs are read in µm: declare the column's unit with identify.output_unit "
+                "(the records are then converted to the plant's units)") in line
+    np.testing.assert_allclose(toml_numbers(models["nm", True]), toml_numbers(models["µm", False]),
+                               rtol=1e-9, atol=1e-12)
