@@ -111,7 +111,8 @@ def case_plant(study, i):
         are scaled by their factors and re-sampled (zero-order hold,
         :func:`sampled_modes`; the nominal sampled modes when neither is
         varied); state-space dynamics get the factors mode by mode
-        (:func:`scaled_modes`); creep is the nominal one.
+        (:func:`scaled_modes`); creep and units (``units``, the preset's
+        ``input_unit`` and ``output_unit``) are the nominal ones.
     """
     nominal = study.plant
     model = nominal.hysteresis
@@ -133,8 +134,10 @@ def case_plant(study, i):
         else:
             lin = sampled_modes(fn * f["natural_frequency"], zeta * f["damping_ratio"],
                                 nominal.sampling_period, lin)
-    return HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
-                            creep=nominal.creep)
+    plant = HammersteinPlant(hyst, nominal.sampling_period, lin, name=f"{nominal.name}-case{i}",
+                             creep=nominal.creep)
+    plant.units = nominal.units      # what its inputs take and its outputs give, the nominal's
+    return plant
 
 
 def _n_weights(c):

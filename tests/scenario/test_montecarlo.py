@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from hammerstein.io.presets import resolve_preset
 from hammerstein.models.hysteresis import PrandtlIshlinskii
 from hammerstein.exceptions import ScenarioError
 from hammerstein.scenario import montecarlo as mc
@@ -493,3 +495,19 @@ def test_a_spread_no_actuator_has_is_refused(tmp_path, vary, words):
     # an outside check: 5000 %, 1e+08 % and 1e9 µm ran, and the report quoted them
     with pytest.raises(ScenarioError, match=words):
         _study(tmp_path, vary=vary)
+
+
+def test_a_drawn_plant_keeps_the_nominal_plant_s_units(tmp_path):
+    """A plant preset in mV and nm ([model] input_unit, output_unit): every drawn plant is in
+    them too (they were dropped, the drawn plants said V and µm)."""
+    text = Path(resolve_preset("rakotondrabe-2dof")).read_text(encoding="utf-8")
+    assert text.count('input_unit = "V"\n') == 1 and text.count('output_unit = "µm"\n') == 1
+    (tmp_path / "p.toml").write_text(text.replace('input_unit = "V"\n', 'input_unit = "mV"\n')
+                                     .replace('output_unit = "µm"\n', 'output_unit = "nm"\n'),
+                                     encoding="utf-8")
+    (tmp_path / "s.toml").write_text(STUDY.format(vary=VARY).replace(
+        'preset = "rakotondrabe-2dof"', 'preset = "p.toml"'), encoding="utf-8")
+    study = validate_scenario(tmp_path / "s.toml").studies[0]
+    assert study.plant.units == ("mV", "nm")
+    for i in (0, 3):
+        assert mc.case_plant(study, i).units == ("mV", "nm")
