@@ -38,7 +38,7 @@ START_NOTE = ("from rest, demagnetised (the model's initial state): play the exc
               "demagnetise.csv just before it")
 
 
-def end_note(inputs, sampling_period, names, amplifier=None):
+def end_note(inputs, sampling_period, names, amplifier=None, unit="V"):
     """The drive file's line on how its last sample goes back to rest.
 
     A drive ends where its reference ends (a circle mid-turn): stopping the
@@ -51,12 +51,15 @@ def end_note(inputs, sampling_period, names, amplifier=None):
     Parameters
     ----------
     inputs : numpy.ndarray, shape (m, n_samples)
-        The drive [V].
+        The drive [``unit``].
     sampling_period : float
         T [s].
     names : list of str
         Input names.
     amplifier : hammerstein.models.amplifier.Amplifier, optional
+    unit : str
+        The drive's unit, the model's input unit (``HammersteinPlant.units[0]``), in which
+        the line gives the last sample.
 
     Returns
     -------
@@ -71,7 +74,7 @@ def end_note(inputs, sampling_period, names, amplifier=None):
         rates = np.array([c.slew_rate for c in amplifier.channels], dtype=float)
         slew = np.minimum(slew, np.where(np.isfinite(rates), rates, np.inf))
     ramp = float(np.max(np.abs(last - rest) / np.maximum(slew, 1e-12)))
-    at = ", ".join(f"{n} {v:.4g} V" for n, v in zip(names, last))
+    at = ", ".join(f"{n} {v:.4g} {unit}" for n, v in zip(names, last))
     if np.all(np.abs(last - rest) <= 1e-9 * np.maximum(1.0, np.abs(rest))):
         # a unipolar stage's drive ending on 0 V: already where the amplifier rests
         return f"ends at {at}, every input at rest: nothing to ramp"

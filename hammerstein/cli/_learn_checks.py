@@ -236,7 +236,7 @@ def flat_runs(predicted, measured, lag=0, start=0):
 
 
 def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental_samples=0,
-                        reference=None, within=None, sampling_period=None):
+                        reference=None, within=None, sampling_period=None, unit="µm"):
     """The line refusing a measurement that is not the drive's response, or None.
 
     Parameters
@@ -266,6 +266,9 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
         lag first (:func:`start_lag`: a pre-trigger).
     sampling_period : float, optional
         T [s], for the lag in seconds.
+    unit : str
+        The outputs' unit, the model's (``HammersteinPlant.units[1]``), in which a flat
+        run's value is given.
 
     Returns
     -------
@@ -330,7 +333,7 @@ def measurement_problem(predicted, measured, names, lag_of, start=0, fundamental
         last = None
     if runs:
         i, value, a, b = runs[0]
-        causes.append(f"the sensor saturated or clipped: {names[i]} stays at {value:.6g} µm over "
+        causes.append(f"the sensor saturated or clipped: {names[i]} stays at {value:.6g} {unit} over "
                       f"samples {a}..{b} ({b - a + 1} samples) where the prediction moves"
                       + (f" ({len(runs) - 1} more such runs)" if len(runs) > 1 else ""))
     else:

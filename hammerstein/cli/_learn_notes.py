@@ -92,8 +92,9 @@ def default_q_cutoff(plant):
     return cutoff, f"note: Q cutoff {cutoff:.4g} Hz because {why} (--q-cutoff-hz sets it)"
 
 
-def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz):
-    """The note naming the harmonics below the Q cutoff left unlearnt at an anti-resonance."""
+def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz, unit="µm"):
+    """The note naming the harmonics below the Q cutoff left unlearnt at an anti-resonance;
+    ``unit``: the model's output unit (``HammersteinPlant.units[1]``), the note's."""
     P = int(period_samples)
     fh = np.arange(1, P // 2 + 1) / (P * sampling_period)
     fh = fh[fh <= q_cutoff_hz]
@@ -105,7 +106,7 @@ def _anti_resonance_note(ilc, period_samples, sampling_period, q_cutoff_hz):
         return None
     return (f"note: {out.size} harmonic(s) at {out.min():.4g}-{out.max():.4g} Hz not learnt: "
             f"the identified dynamics pass them at less than 1/{INVERSE_GAIN_LIMIT:g} of their "
-            f"static gain (an anti-resonance: up to {ratio.max():.3g} times the drive per µm), "
+            f"static gain (an anti-resonance: up to {ratio.max():.3g} times the drive per {unit}), "
             f"where a correction would make the drive chatter")
 
 
@@ -158,19 +159,20 @@ def _period_note(period, period_samples, sampling_period, steady, n_samples=None
 DRIFT_RATIO = 2.0
 
 
-def _drift_note(error, period, steady):
+def _drift_note(error, period, steady, unit="µm"):
     """The note when the noise margin is mostly a slow drift over the periods (0 or 1 line).
 
     ``error`` (p, n) [µm] aligned on the measurement delay; the spread of its
     periods from ``steady`` on is what the margin takes for noise
     (:func:`_judged_error`); :func:`hammerstein.compensation.ilc.period_drift`
-    tells a drift (creep, a transient still settling) from noise.
+    tells a drift (creep, a transient still settling) from noise. ``unit``: the model's
+    output unit (``HammersteinPlant.units[1]``), the note's.
     """
     drift = period_drift(error, period, steady)
     if drift is None or drift[0] <= DRIFT_RATIO * drift[1]:
         return []
     return [f"note: the noise margin is mostly drift: the settled periods spread "
-            f"{drift[0]:.2g} µm RMS about their average, {drift[1]:.2g} µm once a slow trend "
+            f"{drift[0]:.2g} {unit} RMS about their average, {drift[1]:.2g} {unit} once a slow trend "
             f"over the periods is taken out; that trend (creep or a transient still settling, "
             f"the same in every trial) does not repeat from period to period, so learning per "
             f"period cannot remove it"]

@@ -273,7 +273,7 @@ class Verdict:
 
 def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, repeating,
                 what, judged_text, out_of_step=None, advice=None, q_cutoff_hz=None,
-                first_mode_hz=None):
+                first_mode_hz=None, unit="µm"):
     """The verdict on trial ``k`` against the history's best (module docstring).
 
     Parameters
@@ -283,7 +283,7 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
     k : int
         This trial's number.
     score, best_score, margin : float
-        This trial's and the best's judged errors, the noise margin [µm].
+        This trial's and the best's judged errors, the noise margin [``unit``].
     worse, better : bool
         Worse than the best beyond the noise; below the best.
     remeasured : bool or str
@@ -304,6 +304,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
     first_mode_hz : float, optional
         The model's first bending mode [Hz] (identified dynamics): a divergence is then
         not blamed on a mode the model lacks.
+    unit : str
+        The model's output unit (``HammersteinPlant.units[1]``), the errors' in the lines.
 
     Returns
     -------
@@ -322,7 +324,7 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
                              + (advice or "check the trigger and measure again")))
     if remeasured and worse:
         info = (f"trial {k} re-measures the best trial {b}'s drive: {ratio} its stored "
-                f"error ({score:.4g} against {best_score:.4g} µm {what}): the best was stale "
+                f"error ({score:.4g} against {best_score:.4g} {unit} {what}): the best was stale "
                 f"(the actuator changed since: drift, temperature); trial {k} replaces it "
                 f"and is learnt from at full gain")
         return Verdict(info=info, reset=True)
@@ -342,8 +344,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         floor = (" (its floor: lower --q-cutoff-hz below the actuator's first bending mode, or "
                  "stop here)" if halvings == MAX_HALVINGS else "")
         info = (f"trial {k} measures the best trial {b}'s drive again: its judged error "
-                f"{score:.4g} µm is within the {margin:.2g} µm of noise of the stored "
-                f"{best_score:.4g} µm, so the actuator did not change and trial {b}'s drive stays "
+                f"{score:.4g} {unit} is within the {margin:.2g} {unit} of noise of the stored "
+                f"{best_score:.4g} {unit}, so the actuator did not change and trial {b}'s drive stays "
                 f"the best (this measurement of it replaces the stored one): the learning "
                 f"diverges at the gain it had ({why}); the next drive is "
                 f"learnt from this measurement with gain x{gain_factor(halvings):g}{floor}")
@@ -353,7 +355,7 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         # learning diverging (a mode above Q's reach); measuring the best drive tells them apart
         rejections += 1
         note = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "
-                f"{best_score:.4g} µm {what}; {margin:.2g} µm of noise margin) and its drive is "
+                f"{best_score:.4g} {unit} {what}; {margin:.2g} {unit} of noise margin) and its drive is "
                 f"trial {b}'s learnt again: either the actuator changed since trial {b} (drift, "
                 f"temperature) or the learning diverges at this gain; to tell them apart the "
                 f"next drive is trial {b}'s own drive, unchanged: measure it again")
@@ -362,7 +364,7 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
     if worse:
         rejections += 1
         note = (f"trial {k} is {ratio} the error of trial {b} (the best so far, "
-                f"{best_score:.4g} µm {what}; {margin:.2g} µm of noise margin): not learnt "
+                f"{best_score:.4g} {unit} {what}; {margin:.2g} {unit} of noise margin): not learnt "
                 f"from; learning again from trial {b}'s drive with gain "
                 f"x{gain_factor(halvings, rejections):g} (restored once a trial is learnt from)")
         return Verdict(from_best=True, best=False, halvings=halvings, rejections=rejections,
@@ -381,8 +383,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
             why = (f"the learning stalls {score / margin:.3g} times above the noise (not the "
                    f"noise floor: the error left is one the learning does not reduce at this "
                    f"gain, or a change the judged average does not show)")
-        stall = (f"trial {k}'s judged error {score:.4g} µm ({judged_text}) is not below the "
-                 f"best, trial {b}'s {best_score:.4g} µm, and within the {margin:.2g} µm of "
+        stall = (f"trial {k}'s judged error {score:.4g} {unit} ({judged_text}) is not below the "
+                 f"best, trial {b}'s {best_score:.4g} {unit}, and within the {margin:.2g} {unit} of "
                  f"noise of it: {why}; the next drive is learnt from this trial with gain "
                  f"x{gain_factor(halvings):g}")
     elif repeating and score <= margin:
@@ -390,8 +392,8 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         # measurement no longer resolves the peak the trials are judged by, and a full step on
         # harmonics still above their own noise can raise it unseen; the same decreasing gain
         halvings = min(halvings + 1, MAX_HALVINGS)
-        stall = (f"trial {k}'s judged error {score:.4g} µm ({judged_text}) is within the "
-                 f"{margin:.2g} µm noise margin of no error: the measurement no longer resolves "
+        stall = (f"trial {k}'s judged error {score:.4g} {unit} ({judged_text}) is within the "
+                 f"{margin:.2g} {unit} noise margin of no error: the measurement no longer resolves "
                  f"the error's peak; the next drive is learnt from this trial with gain "
                  f"x{gain_factor(halvings):g}")
     info = None
@@ -399,6 +401,6 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         # the best drive played again, not the one written last (a resumed learning): its
         # error is the best's now
         info = (f"trial {k} re-measures the best trial {b}'s drive: its judged error "
-                f"{score:.4g} µm replaces the stored {best_score:.4g} µm (within the noise)")
+                f"{score:.4g} {unit} replaces the stored {best_score:.4g} {unit} (within the noise)")
     return Verdict(best=bool(better) or info is not None, halvings=halvings, stall=stall,
                    restored=rejections, halve=stall is not None, info=info)

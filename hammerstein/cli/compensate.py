@@ -47,7 +47,7 @@ from hammerstein.compensation.shaping import (CHATTER_REFUSE_FRACTION, RANGE_MAR
 from hammerstein.exceptions import CompensatorDivergence, FileLimitError
 from hammerstein.signals.fundamental import reference_fundamental
 from hammerstein.scenario.hardware_route import (_kind_and_options, _rest_voltages,
-                                                 compensate_reference)
+                                                 compensate_reference, plant_units)
 
 __all__ = ["add_parser", "compensate"]
 
@@ -133,14 +133,15 @@ def compensate(plant, reference, kind=None, inversion="zpetc", fade_in=None, lim
 
 
 def _peaks_text(plant, drive):
-    """Each input's peak |u| [V] and slew [V/s] of the drive as written (the first step from
-    rest), and the compensator's own where the limits changed them."""
-    names = plant.hysteresis.input_names
+    """Each input's peak |u| and slew of the drive as written (the first step from rest), and
+    the compensator's own where the limits changed them, in the model's input unit."""
+    names, unit = plant.hysteresis.input_names, plant_units(plant)[0]
     u = np.asarray(drive.inputs, dtype=float)
     steps = np.abs(np.diff(np.concatenate([_rest_voltages(plant)[:, None], u], axis=1), axis=1))
     peak, slew = np.max(np.abs(u), axis=1), steps.max(axis=1) / plant.sampling_period
-    text = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in zip(names, peak, slew))
-    asked = ", ".join(f"{n} {pk:.4g} V {sl:.4g} V/s" for n, pk, sl in
+    text = ", ".join(f"{n} {pk:.4g} {unit} {sl:.4g} {unit}/s"
+                     for n, pk, sl in zip(names, peak, slew))
+    asked = ", ".join(f"{n} {pk:.4g} {unit} {sl:.4g} {unit}/s" for n, pk, sl in
                       zip(names, drive.peak_input, drive.peak_slew))
     if asked != text:       # the same numbers as printed: nothing the limits changed to tell
         # the start-up's slew limit changes them too, with no amplifier limit hit (a new user
@@ -203,7 +204,8 @@ def _shrink_warning(plant, ref, drive):
     k = int(np.argmax(share))
     if share[k] <= SHRINK_WARNING:
         return None
-    limits = "; ".join(f"{name} [{c.low:g}, {c.high:g}] V, {c.slew_rate:.4g} V/s"
+    unit_in, unit_out = plant_units(plant)          # the model's
+    limits = "; ".join(f"{name} [{c.low:g}, {c.high:g}] {unit_in}, {c.slew_rate:.4g} {unit_in}/s"
                        for name, c in zip(amp.inputs, amp.channels))
     u = np.asarray(drive.inputs, dtype=float)[:, start:]
     # within what the range stage's margins leave inside the range (shaping.RANGE_MARGINS)
@@ -211,7 +213,7 @@ def _shrink_warning(plant, ref, drive):
     at_edge = [name for name, c, row, e in zip(amp.inputs, amp.channels, u, edge)
                if drive.range_limited and row.size
                and (row.max() >= c.high - e or row.min() <= c.low + e)]
-    head = (f"the reference was shaped by up to {dev[k]:.3g} µm on "
+    head = (f"the reference was shaped by up to {dev[k]:.3g} {unit_out} on "
             f"{plant.hysteresis.output_names[k]}, by {100 * share[k]:.3g} % of its half-span or "
             f"more on a quarter of the samples after the fade-in: the limits measured on the records "
             f"({limits}) hold it back")
@@ -270,7 +272,8 @@ def _handle(args):
             print_err(f"hammerstein compensate: error: {owned}")
             return 2
         cols = dict(zip(plant.hysteresis.input_names, drive.inputs))
-        units = ", ".join(plant.hysteresis.input_names) + " [V]"
+        unit_in, unit_out = plant.units          # the model's: the header's and the notes'
+        units = ", ".join(plant.hysteresis.input_names) + f" [{unit_in}]"
         shaped_cols = ""
         # the reference the drive follows differs from the one asked (shaped into the limits,
         # or its start-up corrected): its columns, which the exported C is fed
@@ -278,22 +281,23 @@ def _handle(args):
                for w in ("reference shaped", "corrected in the reference")):
             names = [f"{n}_shaped" for n in plant.hysteresis.output_names]
             cols.update(zip(names, drive.reference))
-            shaped_cols = (f"\n{' '.join(names)} [µm]: the shaped reference the drive follows "
+            shaped_cols = (f"\n{' '.join(names)} [{unit_out}]: the shaped reference the drive follows "
                            f"(fade-in included)")
         if args.predicted:
             y, _ = plant.simulate(apply_amplifier(plant.amplifier, drive.inputs,
                                                   plant.sampling_period), plant.rest_state())
             cols.update({f"{n}_predicted": v for n, v in zip(plant.hysteresis.output_names, y)})
             units += "; " + ", ".join(f"{n}_predicted" for n in plant.hysteresis.output_names) \
-                + " [µm] (model)"
+                + f" [{unit_out}] (model)"
         peaks = _peaks_text(plant, drive)
-        rest_text = ", ".join(f"{n} = {float(v)!r} µm" for n, v in zip(
+        rest_text = ", ".join(f"{n} = {float(v)!r} {unit_out}" for n, v in zip(
             plant.hysteresis.output_names, compensator_rest(plant.hysteresis, comp)))
         widths = None if plant.amplifier is None else plant.amplifier.range_widths()
         chatter = chatter_warnings(drive.inputs, plant.sampling_period, widths,
-                                   list(plant.hysteresis.input_names))
+                                   list(plant.hysteresis.input_names), unit=unit_in)
         severe = chatter_warnings(drive.inputs, plant.sampling_period, widths,
-                                  list(plant.hysteresis.input_names), CHATTER_REFUSE_FRACTION)
+                                  list(plant.hysteresis.input_names), CHATTER_REFUSE_FRACTION,
+                                  unit_in)
         if severe and args.limits == "error":
             cause = "".join(f"{n}; " for n in drive.notes if n.startswith(REACH_NOTE_START))
             print_err(f"hammerstein compensate: error: the drive chatters, nothing written: "
@@ -310,13 +314,13 @@ def _handle(args):
                       f"it with this warning)")
             return 1
         ending = end_note(drive.inputs, plant.sampling_period,
-                          list(plant.hysteresis.input_names), plant.amplifier)
+                          list(plant.hysteresis.input_names), plant.amplifier, unit_in)
         comment = (f"compensate drive: t [s]; {units}\n"
                    f"actuator {args.actuator}, kind {kind}, sampling period "
                    f"{plant.sampling_period:g} s, fade-in {drive.fade_samples} samples "
                    f"({drive.fade_samples * plant.sampling_period:g} s, "
                    f"{rest_lead_text(drive.rest_lead)}excluded from the metrics) "
-                   f"from the rest output {rest_text} (the model's output at 0 V)\n"
+                   f"from the rest output {rest_text} (the model's output at 0 {unit_in})\n"
                    f"peak input and slew: {peaks}\n"
                    f"{START_NOTE}\n{ending}" + shaped_cols
                    + (f"\nlimited by the amplifier: {'; '.join(drive.problems)}"

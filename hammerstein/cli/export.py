@@ -293,7 +293,7 @@ def handler(args):
     if kind is None:
         try:
             choice = choose_kind(source.model, source.dynamics is not None, gain,
-                                 args.inversion or "zpetc", check)
+                                 args.inversion or "zpetc", check, source.units)
         except CompensatorError as exc:
             print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}")
             return 1
@@ -305,7 +305,7 @@ def handler(args):
         note = choice.note()
     elif not kind_problem(source.model, kind, source.dynamics is not None):
         try:        # (a kind the class cannot build is refused with its own words later)
-            options, note = explicit_law(source.model, kind, gain, check)
+            options, note = explicit_law(source.model, kind, gain, check, source.units)
         except CompensatorError as exc:
             print_err(f"{prog}: error: {args.source}: {' '.join(str(exc).split())}")
             return 1
@@ -363,7 +363,8 @@ def _limits_line(limits, source, args):
         return "limits: none (the voltages are not clamped; --amplifier-range sets a range)"
     names = list(source.model.input_names)
     lo, hi, slew = limits.arrays(len(names))
-    parts = [f"{n} [{a:g}, {b:g}] V" + (f", {v:.4g} V/s" if np.isfinite(v) else "")
+    unit = source.units[0]             # the model's input unit, the drive's
+    parts = [f"{n} [{a:g}, {b:g}] {unit}" + (f", {v:.4g} {unit}/s" if np.isfinite(v) else "")
              for n, a, b, v in zip(names, lo, hi, slew)]
     text = "limits: " + "; ".join(parts)
     table = source.amplifier if isinstance(source.amplifier, dict) else {}

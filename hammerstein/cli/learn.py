@@ -270,7 +270,7 @@ def add_parser(subparsers):
     p.set_defaults(handler=_handle)
 
 
-def _inverse_gain(model, gain, check):
+def _inverse_gain(model, gain, check, units=("V", "µm")):
     """(K of the law inverting a classical PI in the learning, its check, the notes to print).
 
     The gain and check are :func:`hammerstein.compensation.kind_choice.law_check`'s,
@@ -278,7 +278,8 @@ def _inverse_gain(model, gain, check):
     neither given, a law no gain makes provably converge runs with ``check =
     warn`` when it follows the model's own outputs and is refused when not.
     The notes: one line on the choice (``note: kind = ilc because ...``); a
-    warning when ``rho(I - K^-1 J) >= 1`` and the check is warn.
+    warning when ``rho(I - K^-1 J) >= 1`` and the check is warn. ``units``: the model's
+    (input, output) units (``HammersteinPlant.units``), K's in the lines.
     """
     entry = model_class(model)
     notes = []
@@ -291,7 +292,7 @@ def _inverse_gain(model, gain, check):
     law = law_check(model, gain, check, entry.label)
     gain, radius = law.gain, law.radius
     name = gain if isinstance(gain, str) else "scaled midpoint K = [" + ", ".join(
-        f"{v:.4g}" for v in np.diag(gain)) + "] µm/V"
+        f"{v:.4g}" for v in np.diag(gain)) + f"] {units[1]}/{units[0]}"
     if radius >= 1.0 and (law.check or "error") in ("error", "warn"):
         # where no gain converges the reason says so (the hint's "a gain that converges"
         # beside it contradicted it)
@@ -403,16 +404,17 @@ def _judged_rms(target, y, delay, period, steady):
     return float(np.sqrt(np.mean(np.sum(averaged ** 2, axis=0))))
 
 
-def _judged_line(k, score, judged, rms, scale):
-    """The short line of a trial's judged (noise-averaged) settled errors."""
+def _judged_line(k, score, judged, rms, scale, unit="µm"):
+    """The short line of a trial's judged (noise-averaged) settled errors, in ``unit`` (the
+    model's output unit)."""
     pct = (lambda v: f" ({100 * v / scale:.3g} %)") if scale else (lambda v: "")
     trial = "" if k is None else f"trial {k} "
     if judged is not None:
-        return f"{trial}judged (RMS less the sensor noise): RMS {score:.4g} µm{pct(score)}"
+        return f"{trial}judged (RMS less the sensor noise): RMS {score:.4g} {unit}{pct(score)}"
     if rms is None:
-        return f"{trial}judged (nothing to average): max {score:.4g} µm{pct(score)}"
+        return f"{trial}judged (nothing to average): max {score:.4g} {unit}{pct(score)}"
     return (f"{trial}judged (settled periods averaged, noise averaged down): max "
-            f"{score:.4g} µm{pct(score)}, RMS {rms:.4g} µm{pct(rms)}")
+            f"{score:.4g} {unit}{pct(score)}, RMS {rms:.4g} {unit}{pct(rms)}")
 
 
 def _handle(args):
@@ -592,7 +594,7 @@ def _learn(args):
         # refused before anything is learnt from it (hammerstein.cli._learn_checks)
         implausible = measurement_problem(predicted, y, model.output_names, lambda m: trial_lag(
             predicted, m, target, ref.period_samples, T), fade, fundamental_samples, ref.signal,
-            delay_search_span(target, ref.period_samples, T), T)
+            delay_search_span(target, ref.period_samples, T), T, plant.units[1])
         if implausible:
             raise DataFileError(implausible)
         # an actuator that changed since it was identified (warmer, loaded): its gain against
@@ -639,7 +641,7 @@ def _learn(args):
         k_next = 1 + max((r[0] for r in history_rows(args.history)), default=-1) \
             if args.history and (Path(args.history) / HISTORY_MARK).exists() else 0
         judged_line = _judged_line(k_next if args.history else None, score, judged,
-                                   _judged_rms(aim, y, delay, P, steady), ref.scale)
+                                   _judged_rms(aim, y, delay, P, steady), ref.scale, plant.units[1])
         learn_u, learn_y, note, halvings, best, stall = u, y, None, 0, True, None
         followed, drive_kind_ = followed_reference(args.drive, list(model.output_names), target, T)
         followed_now = followed          # the reference this trial's drive was computed for
@@ -657,15 +659,16 @@ def _learn(args):
                     aim, by, delay, judged_start, T, args.q_cutoff_hz), 1.0, NOISE_MARGIN)
                 score, best_score, margin, worse, better = (cmp.score, cmp.best_score, cmp.margin,
                                                             cmp.worse, cmp.better)
-                what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} µm "
+                what = (f"RMS less the noise's {', '.join(f'{v:.2g}' for v in cmp.sigma)} "
+                        f"{plant.units[1]} "
                         f"estimated from the records")
                 # the number printed is the one compared and kept in settled.csv (the noise
                 # estimated from both records: it was the first record's alone, 11 % apart)
                 judged_line = _judged_line(k_next if args.history else None, score, judged,
-                                           None, ref.scale)
+                                           None, ref.scale, plant.units[1])
             verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
                                   remeasured, judged is None, what, JUDGED, out_of_step, advice,
-                                  args.q_cutoff_hz, first_mode_hz)
+                                  args.q_cutoff_hz, first_mode_hz, plant.units[1])
             halvings, best, note, stall = (verdict.halvings, verdict.best, verdict.note,
                                            verdict.stall)
             if verdict.from_best:
@@ -673,18 +676,18 @@ def _learn(args):
                     bu, by, bf = _read_best(args.history, model, u.shape, y.shape, N)
                 learn_u, learn_y, followed = bu, by, bf
         gain = args.learning_gain * gain_factor(halvings, verdict.rejections)
-        law_gain, law_check_, notes = _inverse_gain(model, args.gain, args.check)
+        law_gain, law_check_, notes = _inverse_gain(model, args.gain, args.check, plant.units)
         notes = ([f"note: {line}" for line in rate_notes] + ([] if q_note is None else [q_note])
                  + notes + ([] if period_note is None else [period_note])
                  + ([] if found_note is None else [found_note])
                  + ([] if onset_note is None else [onset_note])
                  + ([] if drift_gain is None else [f"note: {drift_gain}"]))
         if (note or stall) and steady is not None:
-            notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady)
+            notes += _drift_note(aim[:, :N - delay] - y[:, delay:N], P, steady, plant.units[1])
         if plant.amplifier is not None:     # compensate says it; a trial that stalls or rises
             # there was blamed on the modes or the gain, ten trials on
             reach = reach_note(output_reach(model, plant.amplifier, plant.creep), ref.signal,
-                               list(model.output_names))
+                               list(model.output_names), plant.units[1])
             if reach:
                 notes.append(f"note: {reach}; the error there is the reach's, which no trial "
                              f"removes (what a stalled or worse trial then shows)")
@@ -696,7 +699,7 @@ def _learn(args):
         if steady is not None:         # a repeating reference: learnt per harmonic of its period
             base = harmonic_base_gains(ilc, P, None, args.q_cutoff_hz, INVERSE_GAIN_LIMIT)
             gains = HarmonicGains(base)
-            note_ar = _anti_resonance_note(ilc, P, T, args.q_cutoff_hz)
+            note_ar = _anti_resonance_note(ilc, P, T, args.q_cutoff_hz, plant.units[1])
             if note_ar:
                 notes.append(note_ar)
             if args.history and not verdict.reset:     # a stale best: start afresh
@@ -745,16 +748,16 @@ def _learn(args):
             # and ends as the base drive: the update's last samples read past the record
             u_next = keep_end(learn_u, u_next, settled_step(learn_u, fade))
             if plant.amplifier is not None and plant.amplifier.from_records:
-                u_next, shaped = shape_drive(plant.amplifier, u_next, T)
+                u_next, shaped = shape_drive(plant.amplifier, u_next, T, plant.units[0])
             elif plant.amplifier is not None:
-                problems = plant.amplifier.check(u_next, T, args.limits)
+                problems = plant.amplifier.check(u_next, T, args.limits, unit=plant.units[0])
                 if problems:
                     u_next, _ = plant.amplifier.limit(u_next, T)
         # no start-up step beyond the settled drive's largest (as compensate's default)
         u_next, more = (u_next, []) if verdict.remeasure else limit_start_up(
             u_next, fade, ref.period_samples,
             None if plant.amplifier is None else plant.amplifier.rest_voltages(),
-            list(model.input_names), T)
+            list(model.input_names), T, plant.units[0])
         shaped += more
         # an input held on its range's edge after the fade-in, named as compensate names it
         edge = edge_hold_note(u_next, plant.amplifier, fade, T, None if plant.amplifier is None
@@ -764,14 +767,15 @@ def _learn(args):
             print_err(f"hammerstein learn: error: {owned}")
             return 2
         kind_text = "" if learnt is None or drive_kind_ is None else f", kind {drive_kind_}"
-        comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [V]"
+        unit_in, unit_out = plant.units          # the model's: the header's and the notes'
+        comment = (f"learn drive: t [s]; {', '.join(model.input_names)} [{unit_in}]"
                    + ("" if learnt is None else
-                      f"; {', '.join(learnt_names(model.output_names))} [µm]: the learnt reference the "
-                      f"drive was computed for (fade-in included)")
+                      f"; {', '.join(learnt_names(model.output_names))} [{unit_out}]: the learnt "
+                      f"reference the drive was computed for (fade-in included)")
                    + f"\nactuator {args.actuator}{kind_text}, sampling period {T:g} s, "
                    f"fade-in {fade} samples ({fade * T:g} s, {rest_lead_text(lead)}excluded from the metrics)\n"
                    f"{START_NOTE}\n"
-                   f"{end_note(u_next, T, list(model.input_names), plant.amplifier)}\n"
+                   f"{end_note(u_next, T, list(model.input_names), plant.amplifier, unit_in)}\n"
                    + (f"learned from {args.drive} and {args.measured}" if note is None else
                       f"not learnt: the best trial {state['trial']}'s drive ({BEST_FILE}), to "
                       f"measure it again ({args.drive} and {args.measured} were worse)"
@@ -789,9 +793,9 @@ def _learn(args):
         if edge is not None:
             notes.append(f"note: {edge}")
         widths = None if plant.amplifier is None else plant.amplifier.range_widths()
-        chatter = chatter_warnings(u_next, T, widths, list(model.input_names))
+        chatter = chatter_warnings(u_next, T, widths, list(model.input_names), unit=unit_in)
         severe = chatter_warnings(u_next, T, widths, list(model.input_names),
-                                  CHATTER_REFUSE_FRACTION)
+                                  CHATTER_REFUSE_FRACTION, unit_in)
         if severe and args.limits == "error":
             print_err(f"hammerstein learn: error: the next drive chatters, nothing written: "
                       f"{'; '.join(severe)} (--limits warn writes it with this warning)")
@@ -807,7 +811,7 @@ def _learn(args):
                                score, halvings, fingerprint, learnt, followed_now, shaped_ref,
                                (settled_max, score), (delay, window.start * T),
                                (verdict.rejections, None if lag is None or out_of_step is not None
-                                else lag - delay))
+                                else lag - delay), plant.units)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin,
                                   (delay, window.start * T)) if args.history else None)
         if args.history:        # the digests of what was just written: a later change is seen
@@ -819,12 +823,13 @@ def _learn(args):
                     cond, settled=(settled_max, settled_rms, window, fade, as_asked, lag,
                                    judged_line),
                     rose=(rose, score, margin), notes=notes, worse=note is not None or not best,
-                    static=plant.dynamics is None, remeasure=verdict.remeasure)
+                    static=plant.dynamics is None, remeasure=verdict.remeasure,
+                    unit=plant.units[1])
 
 
 def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best, state, score,
                    halvings, fingerprint, learnt=None, followed=None, shaped=None, settled=None,
-                   aligned=None, rules=(0, None)):
+                   aligned=None, rules=(0, None), units=("V", "µm")):
     """Write the next drive and, with ``--history``, the trial's history; the trial number or None.
 
     The state keeps the reference's ``fingerprint`` and samples of ``u_next`` (the drive the
@@ -835,15 +840,17 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     and judged errors [µm], for the convergence figure; ``aligned``: the delay removed
     [samples] and the window's start [s] of the errors (written in the history); ``rules``:
     the trials not learnt from in a row and the lag less the delay of this trial when it is
-    learnt from (else None: the state's is kept).
+    learnt from (else None: the state's is kept); ``units``: the model's (input, output)
+    units, the headers' (``HammersteinPlant.units``).
     """
+    unit_in, unit_out = units
     columns = dict(zip(model.input_names, u_next))
     if learnt is not None:
         columns.update(zip(learnt_names(model.output_names), learnt))
     if shaped is not None:
         columns.update(zip([f"{o}_shaped" for o in model.output_names], shaped))
-        comment += (f"\n{' '.join(f'{o}_shaped' for o in model.output_names)} [µm]: the shaped "
-                    f"reference the drive aims at, learnt and judged (fade-in included)")
+        comment += (f"\n{' '.join(f'{o}_shaped' for o in model.output_names)} [{unit_out}]: "
+                    f"the shaped reference the drive aims at, learnt and judged (fade-in included)")
     safe_write(args.out, signals_csv(t, columns, comment), "drive file")
     if not args.history:
         return None
@@ -862,9 +869,10 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
         head = "".join(f"\n{line[1:].strip()}" for line in head_lines(args.drive, 18)[1:]
                        if line.startswith("#"))
         safe_write(Path(args.history) / BEST_FILE, signals_csv(
-            t, columns, f"learn best trial {k}: the drive [V], its measured response [µm]"
-            + ("" if followed is None else ", the reference it was computed for [µm]")
-            + ("" if shaped is None else ", the shaped reference it aims at [µm]")
+            t, columns, f"learn best trial {k}: the drive [{unit_in}], its measured response "
+            f"[{unit_out}]"
+            + ("" if followed is None else f", the reference it was computed for [{unit_out}]")
+            + ("" if shaped is None else f", the shaped reference it aims at [{unit_out}]")
             + "; replay it as --drive to re-measure the best drive" + head),
             "best trial file", root=args.history)
         state = {"trial": k, "score": score, "samples": t.size}
@@ -876,7 +884,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
 
 
 def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled, rose, notes,
-             worse=False, static=False, remeasure=False):
+             worse=False, static=False, remeasure=False, unit="µm"):
     """Print the trial's error, notes and convergence condition; exit status 0.
 
     ``settled`` is (max, RMS Euclidean error [µm], the judged window, fade-in samples, the
@@ -886,19 +894,20 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     ``worse``: the trial was worse than the best beyond the noise (not learnt from), or not
     better than it (within the noise): "monotonic" is then not said;
     ``static``: the model has no identified dynamics (its condition is its static gain's);
-    ``remeasure``: the next drive is the best trial's own (not learnt).
+    ``remeasure``: the next drive is the best trial's own (not learnt); ``unit``: the
+    model's output unit, the errors'.
     """
     settled_max, settled_rms, window, fade, as_asked, lag, judged_line = settled
     rose, score, margin = rose
-    scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} µm)" \
+    scale = f" ({100 * rec.max_euclidean_error / ref.scale:.3g} % of {ref.scale:g} {unit})" \
         if ref.scale else ""
     axes = ", ".join(f"{n} max {a:.4g} RMS {b:.4g}" for n, a, b in
                      zip(model.output_names, rec.max_error, rec.rms_error))
     trial = f"trial {k}: " if k is not None else ""
     rms_scale = f" ({100 * settled_rms / ref.scale:.3g} %)" if ref.scale else ""
     print(f"{trial}settled (from {window.start * T:.4g} s, after the {fade * T:.4g} s fade-in): "
-          f"max Euclidean error {settled_max:.4g} µm{scale}, RMS {settled_rms:.4g} µm{rms_scale}; "
-          f"{axes} µm; " + (f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)"
+          f"max Euclidean error {settled_max:.4g} {unit}{scale}, RMS {settled_rms:.4g} "
+          f"{unit}{rms_scale}; {axes} {unit}; " + (f"measured delay {delay} samples ({delay * T * 1e6:.4g} µs)"
                              if lag is None else
                              f"delay removed {delay} samples ({delay * T * 1e6:.4g} µs), "
                              f"measured lag {lag} samples"), file=sys.stdout)
@@ -907,7 +916,7 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
         pct = f" ({100 * as_asked / ref.scale:.3g} %)" if ref.scale else ""
         print(f"errors against the shaped reference the drive aims at (its <output>_shaped "
               f"columns: the reference as asked is beyond the amplifier or the dynamics there; "
-              f"against it the settled max is {as_asked:.4g} µm{pct})", file=sys.stdout)
+              f"against it the settled max is {as_asked:.4g} {unit}{pct})", file=sys.stdout)
     if delay_note is not None:
         print_err(delay_note)
     if note is not None:
@@ -922,8 +931,9 @@ def _summary(args, model, rec, ref, k, delay, T, delay_note, note, cond, settled
     else:                           # the model's condition is not what the actuator did
         summary = summary.replace("<= 1: monotonic", "<= 1 on the model")
     if rose is not None:
-        print(f"the judged settled error ({JUDGED}) rose from {rose[1]:.4g} µm (trial {rose[0]}) to "
-              f"{score:.4g} µm, beyond the {margin:.2g} µm of noise: the learning is not monotonic "
+        print(f"the judged settled error ({JUDGED}) rose from {rose[1]:.4g} {unit} (trial "
+              f"{rose[0]}) to {score:.4g} {unit}, beyond the {margin:.2g} {unit} of noise: the "
+              f"learning is not monotonic "
               f"on this actuator (the next drive is "
               + ("the best trial's own, to measure it again" if remeasure else
                  "learnt from the best trial") + ")", file=sys.stdout)

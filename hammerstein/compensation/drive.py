@@ -1,6 +1,6 @@
 """Drive signals: the voltages to apply for a reference, within the amplifier's limits.
 
-Length: about 950 lines: the drive of the scenarios (:func:`drive_signal`;
+Length: about 980 lines: the drive of the scenarios (:func:`drive_signal`;
 :class:`DriveStream` lives in :mod:`hammerstein.compensation.drive_stream`) and
 of the hardware commands (:func:`hardware_drive`: fade-in, shaping, limits)
 share the fade and start-up rules, kept in one place; the drive files and the
@@ -393,7 +393,7 @@ def _start_steps(u, end, rest):
     return np.max(np.abs(np.diff(head, axis=1)), axis=1)
 
 
-def shape_drive(amplifier, inputs, sampling_period):
+def shape_drive(amplifier, inputs, sampling_period, unit="V"):
     """A drive shaped into the amplifier's range and slew rate, and where and by how much.
 
     The shaping is the amplifier's own range clip then slew limit
@@ -411,13 +411,15 @@ def shape_drive(amplifier, inputs, sampling_period):
         The commanded drive [V].
     sampling_period : float
         T [s].
+    unit : str
+        The drive's unit, the model's input unit (``HammersteinPlant.units[0]``): the notes'.
 
     Returns
     -------
     shaped : numpy.ndarray, shape (m, n_samples)
         [V].
     notes : list of str
-        One per input that was changed: the largest change [V], the share
+        One per input that was changed: the largest change [``unit``], the share
         of samples changed and the time intervals, e.g. ``"ux: beyond the
         range [-10, 10] V by up to 1.93 V, 3.1 % of the samples
         (0.0210-0.0233 s, ...)"``.
@@ -433,12 +435,12 @@ def shape_drive(amplifier, inputs, sampling_period):
         beyond = (u[i] > c.high) | (u[i] < c.low)
         what = []
         if np.any(beyond):
-            what.append(f"beyond the range [{c.low:.4g}, {c.high:.4g}] V by up to "
-                        f"{float(np.max(np.maximum(u[i] - c.high, c.low - u[i]))):.3g} V")
+            what.append(f"beyond the range [{c.low:.4g}, {c.high:.4g}] {unit} by up to "
+                        f"{float(np.max(np.maximum(u[i] - c.high, c.low - u[i]))):.3g} {unit}")
         if np.any(changed & ~beyond):
-            what.append(f"faster than {c.slew_rate:.4g} V/s")
+            what.append(f"faster than {c.slew_rate:.4g} {unit}/s")
         notes.append(f"{amplifier.inputs[i]}: {' and '.join(what)}, changed by up to "
-                     f"{float(diff.max()):.3g} V on {100 * np.mean(changed):.3g} % of the samples "
+                     f"{float(diff.max()):.3g} {unit} on {100 * np.mean(changed):.3g} % of the samples "
                      f"({time_intervals(changed, sampling_period)})")
     return out, notes
 
@@ -525,7 +527,8 @@ def compensator_rest(model, compensator):
 def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                    fade_samples=None, amplifier=None, limits="error", where="", rest=None,
                    first_mode=None, predict=None, names=None, mode_decay=None, rest_lead=None,
-                   shape=True, input_names=None, progress=None, input_unit="V"):
+                   shape=True, input_names=None, progress=None, input_unit="V",
+                   output_unit="µm"):
     """The drive a hardware command writes: faded in over a duration, shaped into the limits.
 
     Every compensator kind and every reference (inline or file) gets the
@@ -613,9 +616,11 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         compensator over the whole reference starts (the fade-in's doubling and the
         shaping each run it again): a long reference's wait, said.
     input_unit : str
-        The drive's unit, the model's (a preset's ``input_unit``), in the note naming the
-        inputs held on their range's edge
-        (:func:`~hammerstein.compensation.edge_holds.edge_hold_note`).
+        The drive's unit, the model's (a preset's ``input_unit``), in every note and problem
+        that gives voltages (the edges held, the shaping, the start-up, the limits).
+    output_unit : str
+        The reference's unit, the model's (a preset's ``output_unit``), in the notes that
+        give outputs (the reference shaped or corrected).
 
     Returns
     -------
@@ -718,12 +723,12 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                 return pass_over(ref, "the reference shaped into the records' limits")
 
         sr = shape_reference(drive_for, faded, amplifier, T, first_mode, predict, P or None, names,
-                             fade_samples=n)
+                             fade_samples=n, units=(input_unit, output_unit))
         u, faded, notes = sr.inputs, sr.reference, sr.notes
         limited, range_limited = sr.limited, sr.range_limited
         if fade_samples is None:     # a start-up stepping faster than the settled drive: shaped too
             u, faded, more = _shape_start_up(drive_for, u, faded, amplifier, T, n, P,
-                                             first_mode, predict, names)
+                                             first_mode, predict, names, (input_unit, output_unit))
             notes += more
     if fade_samples is None and predict is not None:
         # a start-up still stepping faster than the settled drive (a held axis's fade to
@@ -732,7 +737,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         # slew-limits only what the correction leaves
         u, faded, more, corrected = _start_up_reference(
             pass_over, u, faded, n, P, u_rest, predict, T, names,
-            input_names or (amplifier.inputs if amplifier is not None else None))
+            input_names or (amplifier.inputs if amplifier is not None else None),
+            (input_unit, output_unit))
         notes += more
     else:
         corrected = 0
@@ -753,17 +759,16 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     r0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
     out = u
     if amplifier is not None and amplifier.from_records:
-        out, more = shape_drive(amplifier, u, T)
+        out, more = shape_drive(amplifier, u, T, input_unit)
         res.shaped += more
     elif amplifier is not None:
-        res.problems = amplifier.check(u, T, limits, where)
+        res.problems = amplifier.check(u, T, limits, where, input_unit)
         if res.problems:
             out, _ = amplifier.limit(u, T)
     if fade_samples is None:        # a start-up no fade removes: slew-limited to the settled bound
         before = out
         out, notes = limit_start_up(out, n, P, r0, input_names or (
-            amplifier.inputs if amplifier is not None else None),
-                                    T)
+            amplifier.inputs if amplifier is not None else None), T, input_unit)
         res.shaped += notes
         # moved by more than START_UP_MOVE of the drive's peak: the start-ups limited by a
         # hair (0.1-0.2 % of the settled step asked beyond it) moved circles' drives by
@@ -829,7 +834,8 @@ def _periodic_tail(ref, original, period_samples, preview):
 _SHAPE_TOL = 1e-9
 
 
-def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, names):
+def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, names,
+                    units=("V", "µm")):
     """Reference shaping against the settled drive's own largest step (the start-up's bound).
 
     The settled part (one period after the fade on) never steps more than
@@ -841,7 +847,8 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     part, which is judged): the start-up is then slew-limited by
     :func:`limit_start_up` instead (measured on an outside
     generalised-PI actuator: a 15 µm circle at 20 Hz was shaped by up to
-    2.9 µm on 95 % of its samples, 21 % of the radius left).
+    2.9 µm on 95 % of its samples, 21 % of the radius left). ``units``: the model's
+    (input, output) units, the notes'.
     """
     N = u.shape[1]
     end = min(fade + max(P, 1), N)
@@ -854,7 +861,7 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
                        for c, b in zip(amplifier.channels, bound)], amplifier.inputs,
                       amplifier.source)
     sr = shape_reference(run, faded, tight, T, first_mode, predict, P or None, names,
-                         fade_samples=fade)
+                         fade_samples=fade, units=units)
     if not sr.changed:
         return u, faded, []
     moved = np.abs(np.asarray(sr.reference) - faded) > _SHAPE_TOL * max(1.0, float(np.max(np.abs(faded))))
@@ -868,10 +875,13 @@ def _shape_start_up(run, u, faded, amplifier, T, fade, P, first_mode, predict, n
     return sr.inputs, sr.reference, notes
 
 
-def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, input_names):
+def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, input_names,
+                        units=("V", "µm")):
     """:func:`~hammerstein.compensation.start_up.start_up_in_reference` for :func:`hardware_drive`:
     ``(u, faded, notes, end)``, ``end`` the first sample of the reference left as it was;
-    unchanged (no notes, ``end`` 0) when the start-up keeps within the settled steps."""
+    unchanged (no notes, ``end`` 0) when the start-up keeps within the settled steps.
+    ``units``: the model's (input, output) units, the note's."""
+    iu, ou = units
     end = min(n + max(P, 1), u.shape[1])
     r0 = np.zeros(u.shape[0]) if u_rest is None else np.asarray(u_rest, dtype=float)
     u2, ref, asked, bound, _, changed = start_up_in_reference(
@@ -883,21 +893,21 @@ def _start_up_reference(pass_over, u, faded, n, P, u_rest, predict, T, names, in
                   axis=1)
     by = np.max(np.abs(ref - faded), axis=1)
     outs = ", ".join(f"{names[j] if names is not None else f'output {j + 1}'} by up to "
-                     f"{by[j]:.3g} µm" for j in range(ref.shape[0]) if by[j] > 0)
+                     f"{by[j]:.3g} {ou}" for j in range(ref.shape[0]) if by[j] > 0)
     ins = ", ".join(f"{input_names[i] if input_names is not None else f'input {i + 1}'} "
-                    f"{asked[i]:.3g} V per sample asked, {left[i]:.3g} V left"
+                    f"{asked[i]:.3g} {iu} per sample asked, {left[i]:.3g} {iu} left"
                     for i in range(u.shape[0]) if asked[i] > bound[i] * (1 + _LIMIT_TOL))
     moved = np.flatnonzero(np.any(ref != faded, axis=0))
     late = int(moved[-1]) + 1
     return u2, ref, [f"the start-up corrected in the reference ({outs}, until {late * T:.4g} s) "
                      f"for a drive that steps no faster than the "
                      f"settled drive ({ins + '; ' if ins else ''}the settled drive's largest step "
-                     + ", ".join(f"{b:.3g}" for b in bound) + " V), the drive the compensator's "
+                     + ", ".join(f"{b:.3g}" for b in bound) + f" {iu}), the drive the compensator's "
                      "for the reference written"], late
 
 
 def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=None,
-                   sampling_period=None):
+                   sampling_period=None, unit="V"):
     """A drive whose start-up never steps faster than its settled part, and what was changed.
 
     The settled part starts one period (one sample without a period) after
@@ -920,6 +930,8 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
         Input names for the notes.
     sampling_period : float, optional
         T [s], for the notes.
+    unit : str
+        The drive's unit, the model's input unit (``HammersteinPlant.units[0]``): the notes'.
 
     Returns
     -------
@@ -960,12 +972,12 @@ def limit_start_up(inputs, fade_samples, period_samples=None, rest=None, names=N
             # what the exported C (fed the reference, not limited) differs by: said with the
             # limit (a user compared them and found 1e-4 V at three samples, said nowhere)
             notes.append(f"{name}: the start-up (the{when} fade-in and one period) slew-limited to the "
-                         f"settled drive's largest step, {bound[i]:.3g} V per sample "
-                         f"({start[i]:.3g} V asked, {100 * over:.3g} % more): the drive "
-                         f"differs from the compensator's by up to {moved.max():.2g} V at {at}")
+                         f"settled drive's largest step, {bound[i]:.3g} {unit} per sample "
+                         f"({start[i]:.3g} {unit} asked, {100 * over:.3g} % more): the drive "
+                         f"differs from the compensator's by up to {moved.max():.2g} {unit} at {at}")
             continue
         notes.append(f"{name}: the start-up (the{when} fade-in and one period) slew-limited to the settled "
-                     f"drive's largest step, {bound[i]:.6g} V per sample ({over:.2g} of it more "
+                     f"drive's largest step, {bound[i]:.6g} {unit} per sample ({over:.2g} of it more "
                      f"asked, {ROUNDING_WORDS}): the drive differs from the compensator's by up to "
-                     f"{moved.max():.2g} V at {at}")
+                     f"{moved.max():.2g} {unit} at {at}")
     return u, notes

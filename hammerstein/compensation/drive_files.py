@@ -488,7 +488,8 @@ def drive_rest_output(path, outputs):
     r"""The rest output a drive file's header records its fade-in started from, or None.
 
     ``compensate`` writes ``from the rest output x = 0.0 µm, y = 0.0 µm``
-    (the model's output at 0 V, where it faded the reference in from).
+    (the model's output at 0 V, where it faded the reference in from), in the
+    model's output unit (``x = 12.5 nm`` for a model in nm): the values are read in it.
 
     Parameters
     ----------
@@ -500,7 +501,8 @@ def drive_rest_output(path, outputs):
     Returns
     -------
     numpy.ndarray, shape (len(outputs),), or None
-        [µm]; None when the header does not give every output's.
+        In the unit the header names (the model's output unit); None when the header does
+        not give every output's.
 
     Raises
     ------
@@ -515,12 +517,18 @@ def drive_rest_output(path, outputs):
     ...                  "y = -1.0 µm (the model's output at 0 V)\nt,ux\n0,0\n")
     >>> drive_rest_output(fh.name, ["x", "y"]).tolist()
     [0.5, -1.0]
+    >>> with open(fh.name, "w") as out:
+    ...     _ = out.write("# fade-in 4 samples from the rest output x = 12.5 nm (the model's "
+    ...                   "output at 0 mV)\nt,ux\n0,0\n")
+    >>> drive_rest_output(fh.name, ["x"]).tolist()
+    [12.5]
     >>> os.remove(fh.name)
     """
     for line in _header(path):
         m = re.search(r"from the rest output (.*?)(?: \(|$)", line)
         if m:
-            values = dict(re.findall(r"(\S+) = ([-+0-9.eE]+|nan|inf) µm", m.group(1)))
+            # in the model's output unit: µm, nm, ... (OUTPUT_UNIT_SCALES), or any the preset names
+            values = dict(re.findall(r"(\S+) = ([-+0-9.eE]+|nan|inf) [^\s,;()]+", m.group(1)))
             try:
                 return np.array([float(values[o]) for o in outputs])
             except (KeyError, ValueError):

@@ -174,9 +174,11 @@ class KindChoice:
         return f"note: kind = {self.kind} because {self.reason}"
 
 
-def _gain_words(gain, radius):
-    name = gain if isinstance(gain, str) else \
-        "K = [" + ", ".join(f"{v:.4g}" for v in np.diag(gain)) + "] µm/V (scaled midpoint)"
+def _gain_words(gain, radius, units=("V", "µm")):
+    """``gain K = [...] µm/V (scaled midpoint), rho(...) 0.9 < 1``: K in the model's
+    (input, output) ``units``."""
+    name = gain if isinstance(gain, str) else "K = [" + ", ".join(
+        f"{v:.4g}" for v in np.diag(gain)) + f"] {units[1]}/{units[0]} (scaled midpoint)"
     return f"gain {name}, rho(I - K^-1 J) {radius:.3g} < 1"
 
 
@@ -331,7 +333,8 @@ def law_check(model, gain=None, check=None, label=None):
                     f"guarantee, as with --check warn")
 
 
-def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
+def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None,
+                units=("V", "µm")):
     """The compensator kind that works best for a model when the user names none.
 
     Rules (module notes): dynamics -> ``hammerstein``; no dynamics and an
@@ -351,6 +354,9 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
         The inverse of G the command builds (named in the reason).
     check : {'error', 'warn', 'ignore'}, optional
         The user's check (:func:`law_check` decides the default).
+    units : tuple of str
+        The model's (input, output) units (``HammersteinPlant.units``), in which the reason
+        gives a gain K.
 
     Returns
     -------
@@ -378,7 +384,7 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
         if r < 1.0:
             return KindChoice("hammerstein", {"gain": g},
                               f"the model has dynamics (G inverted by {by}); static part the "
-                              f"multivariable law, {_gain_words(g, r)}")
+                              f"multivariable law, {_gain_words(g, r, units)}")
         if gain is not None or check is not None:   # the user's: the law's check decides
             return KindChoice("hammerstein", {"gain": g},
                               f"the model has dynamics (G inverted by {by}); static part the "
@@ -401,7 +407,7 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
     if r < 1.0:
         return KindChoice("multivariable", {"gain": g},
                           f"the model has no dynamics; the multivariable law converges with "
-                          f"{_gain_words(g, r)}")
+                          f"{_gain_words(g, r, units)}")
     if gain is not None:
         return KindChoice("multivariable", {"gain": g},
                           "the model has no dynamics and no exact inverse: the multivariable law "
@@ -412,7 +418,7 @@ def choose_kind(model, has_dynamics, gain=None, inversion="zpetc", check=None):
                       f"inverse")
 
 
-def explicit_law(model, kind, gain=None, check=None):
+def explicit_law(model, kind, gain=None, check=None, units=("V", "µm")):
     """The law's gain and check for a kind the user named, and the note that says so.
 
     ``--kind hammerstein`` (a classical-PI static part) or ``--kind
@@ -435,6 +441,9 @@ def explicit_law(model, kind, gain=None, check=None):
         The user's gain (then kept, no note).
     check : {'error', 'warn', 'ignore'}, optional
         The user's check (kept; the gain is still chosen).
+    units : tuple of str
+        The model's (input, output) units (``HammersteinPlant.units``), in which the note
+        gives the gain K.
 
     Returns
     -------
@@ -465,10 +474,10 @@ def explicit_law(model, kind, gain=None, check=None):
     if law.check is not None:
         options["check"] = law.check
     if law.radius < 1.0:
-        words = f"{_gain_words(law.gain, law.radius)}, the convergent gain"
+        words = f"{_gain_words(law.gain, law.radius, units)}, the convergent gain"
     else:
         name = law.gain if isinstance(law.gain, str) else "K = [" + ", ".join(
-            f"{v:.4g}" for v in np.diag(law.gain)) + "] µm/V (scaled midpoint)"
+            f"{v:.4g}" for v in np.diag(law.gain)) + f"] {units[1]}/{units[0]} (scaled midpoint)"
         words = (f"gain {name}, the smallest rho(I - K^-1 J) of the gains tried, "
                  f"{law.radius:.3g}" + (f" ({law.reason})" if law.reason else ""))
     return options, (f"note: kind {kind} runs the multivariable law with {words}: the kind's "

@@ -86,7 +86,7 @@ def output_reach(model, amplifier, creep=None):
     return np.column_stack([y.min(axis=1), y.max(axis=1)])
 
 
-def reach_note(reach, reference, names=None):
+def reach_note(reach, reference, names=None, unit="µm"):
     """A note when the reference asks for outputs beyond the model's reach, or None.
 
     A reference outside what the range reaches (a circle or raster whose
@@ -102,6 +102,8 @@ def reach_note(reach, reference, names=None):
         [µm].
     names : sequence of str, optional
         Output names.
+    unit : str
+        The outputs' unit, the model's (``HammersteinPlant.units[1]``): the note's.
 
     Returns
     -------
@@ -127,8 +129,8 @@ def reach_note(reach, reference, names=None):
     if not np.any(out):
         return None
     names = list(names) if names is not None else [f"output {i + 1}" for i in range(r.shape[0])]
-    asks = "; ".join(f"{names[i]} asks {lo[i]:.4g}..{hi[i]:.4g} µm, the model reaches "
-                     f"{reach[i, 0]:.4g}..{reach[i, 1]:.4g} µm" for i in np.flatnonzero(out))
+    asks = "; ".join(f"{names[i]} asks {lo[i]:.4g}..{hi[i]:.4g} {unit}, the model reaches "
+                     f"{reach[i, 0]:.4g}..{reach[i, 1]:.4g} {unit}" for i in np.flatnonzero(out))
     mid = reach.mean(axis=1)
     # an output the reference holds, inside the reach (a tube's z at 0 under a raster on x, y),
     # keeps its value: the middle of its reach would move it

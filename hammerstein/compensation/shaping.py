@@ -623,7 +623,8 @@ CHATTER_FRACTION = 0.02
 CHATTER_REFUSE_FRACTION = 0.1
 
 
-def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CHATTER_FRACTION):
+def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CHATTER_FRACTION,
+                     unit="V"):
     """Where a drive chatters: steps up and down (or down and up) by a large voltage on
     consecutive samples.
 
@@ -646,6 +647,8 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CH
     fraction : float
         Of the range: the smallest step of a reversal that counts (default
         :data:`CHATTER_FRACTION`; :data:`CHATTER_REFUSE_FRACTION` for those a command refuses).
+    unit : str
+        The drive's unit, the model's input unit (``HammersteinPlant.units[0]``): the lines'.
 
     Returns
     -------
@@ -672,9 +675,9 @@ def chatter_warnings(inputs, sampling_period, span=None, names=None, fraction=CH
         if big > 0 and hit.any():
             name = names[i] if names is not None else f"input {i + 1}"
             near = np.convolve(hit, np.ones(5), "same") > 0        # one run per episode
-            out.append(f"{name}: the drive reverses by more than {big:.3g} V from one sample to the "
+            out.append(f"{name}: the drive reverses by more than {big:.3g} {unit} from one sample to the "
                        f"next at {int(hit.sum())} samples ({time_intervals(near, sampling_period)}; "
-                       f"steps up to {np.abs(d[i]).max():.3g} V): " + (
+                       f"steps up to {np.abs(d[i]).max():.3g} {unit}): " + (
                            "the inverse alternates between inputs that give the model the same "
                            "output (a model flat there, e.g. near the edge of its records), or the "
                            "inverse of the dynamics rings on a step of the reference (a raster's "
@@ -720,7 +723,7 @@ def time_intervals(mask, sampling_period, limit=4):
     return text + (f" and {more} more" if more > 0 else "")
 
 
-def shaping_notes(raw, shaped, sampling_period, names=None, why=""):
+def shaping_notes(raw, shaped, sampling_period, names=None, why="", unit="µm"):
     """One line per output the shaping changed: by how much, how often, where.
 
     Parameters
@@ -733,6 +736,9 @@ def shaping_notes(raw, shaped, sampling_period, names=None, why=""):
         Output names (default ``output 1``, ...).
     why : str
         Appended to every line (e.g. the limits the drive left).
+    unit : str
+        The reference's unit, the model's output unit (``HammersteinPlant.units[1]``): the
+        lines'.
 
     Returns
     -------
@@ -753,14 +759,14 @@ def shaping_notes(raw, shaped, sampling_period, names=None, why=""):
         if not np.any(changed):
             continue
         name = names[i] if names is not None else f"output {i + 1}"
-        notes.append(f"{name}: reference shaped by up to {float(d.max()):.3g} µm on "
+        notes.append(f"{name}: reference shaped by up to {float(d.max()):.3g} {unit} on "
                      f"{100 * np.mean(changed):.3g} % of the samples "
                      f"({time_intervals(changed, sampling_period)}){why}")
     return notes
 
 
 def shape_reference(run, reference, amplifier, sampling_period, first_mode=None, predict=None,
-                    period_samples=None, names=None, fade_samples=0):
+                    period_samples=None, names=None, fade_samples=0, units=("V", "µm")):
     """A reference shaped to what the amplifier and the identified dynamics allow.
 
     See the module docstring for the two stages. Nothing is changed when
@@ -793,6 +799,9 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
         The fade-in's samples: no hold is judged before its end (the fade's flat
         tail before a step is no hold of the reference: "holds of 0.15 ms" at the
         end of a staircase's 50 ms fade, every hold 50 ms long).
+    units : tuple of str
+        The model's (input, output) units (``HammersteinPlant.units``), in which the notes
+        give the drive's excess and the reference's change.
 
     Returns
     -------
@@ -850,9 +859,9 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
                if band else [])
     if not np.any(excess > 0) or N < 3:
         best.notes = shaping_notes(r, best.reference, T, names,
-                                   f": {'; '.join(reasons)}" if reasons else "")
+                                   f": {'; '.join(reasons)}" if reasons else "", units[1])
         best.notes += hold_note(r, best.reference, best.window_samples, T, names,
-                                max(lead, int(fade_samples)))
+                                max(lead, int(fade_samples)), units[1])
         return best
     mask = excess > 0
     e_best = excess
@@ -881,7 +890,7 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
             limited_window, one_period, first_mode, doublings))
         stuck = left & (e_best > 0)
         if np.any(stuck):
-            notes_why.append(f"{float(e_best[stuck].sum()):.3g} V of it at "
+            notes_why.append(f"{float(e_best[stuck].sum()):.3g} {units[0]} of it at "
                              f"{time_intervals(stuck, T)} left to the slew limit (a window "
                              f"twice as long did not halve it)")
     e_now = limit_excess(amplifier, best.inputs, T)
@@ -911,9 +920,9 @@ def shape_reference(run, reference, amplifier, sampling_period, first_mode=None,
     if notes_why:
         reasons.append(f"the drive left the limits measured on the records ({'; '.join(notes_why)})")
     best.notes = shaping_notes(r, best.reference, T, names,
-                               f": {'; '.join(reasons)}" if reasons else "")
+                               f": {'; '.join(reasons)}" if reasons else "", units[1])
     best.notes += hold_note(r, best.reference, max(best.window_samples, L0 if band else 0), T,
-                            names, max(lead, int(fade_samples)))
+                            names, max(lead, int(fade_samples)), units[1])
     return best
 
 

@@ -99,7 +99,7 @@ def excess_left_to_limiter(before, after, width):
     return out
 
 
-def hold_note(raw, shaped, window, sampling_period, names=None, lead=0):
+def hold_note(raw, shaped, window, sampling_period, names=None, lead=0, unit="µm"):
     """A note per output whose holds are shorter than the smoothing window, or none.
 
     A hold is a run of at least :data:`MIN_HOLD_SAMPLES` equal samples of
@@ -121,13 +121,16 @@ def hold_note(raw, shaped, window, sampling_period, names=None, lead=0):
         Output names (default ``output 1``, ...).
     lead : int
         Samples at rest before the reference moves.
+    unit : str
+        The reference's unit, the model's output unit (``HammersteinPlant.units[1]``): the
+        miss's in the note.
 
     Returns
     -------
     list of str
         One line per output with a hold shorter than ``window`` whose end
         the shaped reference misses (the shortest hold, where, the window,
-        and the largest miss at a hold's end [µm]).
+        and the largest miss at a hold's end [``unit``]).
 
     Examples
     --------
@@ -162,5 +165,5 @@ def hold_note(raw, shaped, window, sampling_period, names=None, lead=0):
         out.append(f"{name}: holds of {held[first] * T * 1e3:.3g} ms (at {starts[first] * T:.4g} s"
                    + (f", and {more} more" if more else "") + f") are shorter than the "
                    f"{window * T * 1e3:.3g} ms smoothing window: the shaped reference ends them up to "
-                   f"{float(miss[k].max()):.3g} µm from their levels")
+                   f"{float(miss[k].max()):.3g} {unit} from their levels")
     return out

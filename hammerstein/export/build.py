@@ -79,6 +79,10 @@ class ExportSource:
         dynamics by kind ``hammerstein``; None without.
     preset : bool
         The file is a preset (``[preset]``: an actuator), not a model file.
+    units : tuple of str
+        ``(input unit, output unit)`` of the file's ``[model]`` (``input_unit``,
+        ``output_unit``; default ``("V", "µm")``): the drive's and the reference's, in
+        which the command's lines give limits.
     """
 
     path: Path
@@ -89,6 +93,7 @@ class ExportSource:
     amplifier: dict | None
     creep: list | None = None
     preset: bool = False
+    units: tuple = ("V", "µm")
 
 
 def load_source(model_or_preset):
@@ -116,14 +121,17 @@ def load_source(model_or_preset):
     if "preset" in data:
         plant = load_plant(path)
         return ExportSource(path, plant.name, plant.hysteresis, plant.sampling_period,
-                            plant.dynamics, amplifier, getattr(plant, "creep", None), True)
+                            plant.dynamics, amplifier, getattr(plant, "creep", None), True,
+                            tuple(plant.units))
     model = load_model(path)
     creep = load_creep(path, model.output_names) if "creep" in data else None
     try:                 # the records' period, as compensate takes it (--sampling-period wins)
         period = records_sampling_period(data, path)
     except PresetError:
         period = None
-    return ExportSource(path, path.stem, model, period, None, amplifier, creep)
+    table = data.get("model") if isinstance(data.get("model"), dict) else {}
+    units = (str(table.get("input_unit", "V")), str(table.get("output_unit", "µm")))
+    return ExportSource(path, path.stem, model, period, None, amplifier, creep, units=units)
 
 
 def limits_from_table(table, inputs, where="amplifier"):

@@ -540,7 +540,7 @@ class Amplifier:
             u[i], st[m + i] = _first_order(u[i], st[m + i], beta)
         return u, st
 
-    def violations(self, inputs, sampling_period, rest=None):
+    def violations(self, inputs, sampling_period, rest=None, unit="V"):
         """The limits a commanded drive exceeds, one message per input and limit.
 
         Parameters
@@ -551,6 +551,8 @@ class Amplifier:
             T [s].
         rest : array_like, shape (m,), optional
             Voltage before the first sample; the channels' rest by default.
+        unit : str
+            The inputs' unit, the model's (``HammersteinPlant.units[0]``): the messages'.
 
         Returns
         -------
@@ -571,15 +573,15 @@ class Amplifier:
             if hi > c.high + tol or lo < c.low - tol:
                 peak = hi if hi > c.high + tol else lo
                 k = int(np.argmax(u[i]) if peak == hi else np.argmin(u[i]))
-                out.append(f"input {self.inputs[i]} needs {peak:.4g} V at t = "
+                out.append(f"input {self.inputs[i]} needs {peak:.4g} {unit} at t = "
                            f"{k * sampling_period:.4g} s, beyond the amplifier's "
-                           f"range [{c.low:g}, {c.high:g}] V")
+                           f"range [{c.low:g}, {c.high:g}] {unit}")
             if slew[i] > c.slew_rate * (1 + _TOL):
-                out.append(f"input {self.inputs[i]} needs a slew rate of {slew[i]:.4g} V/s, beyond "
-                           f"the amplifier's {c.slew_rate:.4g} V/s")
+                out.append(f"input {self.inputs[i]} needs a slew rate of {slew[i]:.4g} {unit}/s, "
+                           f"beyond the amplifier's {c.slew_rate:.4g} {unit}/s")
         return out
 
-    def check(self, inputs, sampling_period, limits="error", where=""):
+    def check(self, inputs, sampling_period, limits="error", where="", unit="V"):
         """React to a drive beyond the limits as ``limits`` says.
 
         Parameters
@@ -592,6 +594,8 @@ class Amplifier:
             Raise, warn once per problem, or say nothing.
         where : str
             Prefix of the messages (e.g. the case name).
+        unit : str
+            The inputs' unit, the model's (``HammersteinPlant.units[0]``): the messages'.
 
         Returns
         -------
@@ -611,7 +615,7 @@ class Amplifier:
         if limits not in LIMITS:
             raise AmplifierError(f"limits: expected one of {', '.join(map(repr, LIMITS))}, "
                                  f"found {limits!r}")
-        problems = self.violations(inputs, sampling_period)
+        problems = self.violations(inputs, sampling_period, unit=unit)
         pre = f"{where}: " if where else ""
         if problems and limits == "error":
             raise AmplifierError(pre + "; ".join(problems) + " (limits = 'error'; lower the "

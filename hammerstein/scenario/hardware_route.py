@@ -32,7 +32,7 @@ from hammerstein.models.plant import HammersteinPlant, hardware_start
 from hammerstein.scenario.registry import build_compensator
 
 __all__ = ["compensate_reference", "start_drive", "compensator_plant", "hardware_start",
-           "extrapolation_note",
+           "extrapolation_note", "plant_units",
            "unfollowed_problem",
            "model_miss", "LAW_KINDS", "REST_TOLERANCE", "UNFOLLOWED_SHARE", "MISS_WARNING",
            "MISS_REFUSE"]
@@ -227,8 +227,9 @@ def extrapolation_note(plant, inputs):
     if not beyond:
         return None
     names = list(getattr(model, "input_names", [f"u{k}" for k in range(u.shape[0])]))
-    said = ", ".join(f"{names[k]} {u[k].min():.4g}..{u[k].max():.4g} V against "
-                     f"{lo[k]:.4g}..{hi[k]:.4g} V" for k in beyond)
+    unit = plant_units(plant)[0]          # the model's input unit
+    said = ", ".join(f"{names[k]} {u[k].min():.4g}..{u[k].max():.4g} {unit} against "
+                     f"{lo[k]:.4g}..{hi[k]:.4g} {unit}" for k in beyond)
     return (f"the drive leaves the inputs the model was identified on ({said}): there the model, "
             f"and with it the drive, extrapolates; no amplifier limits it (a preset's [amplifier] "
             f"range, or export's --amplifier-range), so check it against your amplifier, or "
@@ -317,11 +318,13 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
     rest = compensator_rest(plant.hysteresis, comp)
     if fade == 0 and not starts_at_rest(signal, rest, REST_TOLERANCE):
         names = plant.hysteresis.output_names
-        first = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, signal[:, 0]))
-        at = ", ".join(f"{n} = {v:.7g} µm" for n, v in zip(names, rest))
+        unit_in, unit_out = plant.units      # the model's
+        first = ", ".join(f"{n} = {v:.7g} {unit_out}" for n, v in zip(names, signal[:, 0]))
+        at = ", ".join(f"{n} = {v:.7g} {unit_out}" for n, v in zip(names, rest))
         raise CompensatorError(
             f"{key} 0: the reference starts at {first}, not at rest ({at}: the model's "
-            f"output at 0 V, within {REST_TOLERANCE:g} µm); the drive would start with a step "
+            f"output at 0 {unit_in}, within {REST_TOLERANCE:g} {unit_out}); the drive would start "
+            f"with a step "
             f"that the actuator (and the exported C, which starts there) cannot follow: give a "
             f"fade-in > 0 (the default: a duration, at least one period, {MIN_FADE_S:g} s and "
             f"{FADE_DECAYS:g} decay times of the slowest bending mode) or a reference that "
@@ -335,7 +338,7 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
 
     linear = plant.matrices              # creep then dynamics, built once
     reach = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
-                       signal, plant.hysteresis.output_names)
+                       signal, plant.hysteresis.output_names, plant.units[1])
     try:
         drive = hardware_drive(comp, signal, T, period_samples, fade,
                                plant.amplifier, limits, rest=rest,
@@ -344,7 +347,8 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
                                mode_decay=mode_decay_s(linear[0], T),
                                rest_lead=rest_lead, shape=shape,
                                input_names=list(plant.hysteresis.input_names),
-                               progress=progress, input_unit=plant.units[0])
+                               progress=progress, input_unit=plant.units[0],
+                               output_unit=plant.units[1])
     except AmplifierError as exc:
         if reach and "beyond the amplifier's range" in str(exc):
             # "lower the reference" alone: by how much, and where it fits, is the reach's
@@ -398,7 +402,7 @@ def compensator_plant(plant, comp):
         return plant
     out = HammersteinPlant(model, plant.sampling_period, dynamics, name=f"{plant.name} (model)",
                            creep=creep)
-    out.amplifier = plant.amplifier
+    out.amplifier, out.units = plant.amplifier, plant.units    # the scenario's, in its units
     return out
 
 
@@ -418,24 +422,42 @@ def _first_sample_note(plant, drive, inversion):
            "it room)"
            if inversion == "stable" else
            "the inverse's start at rest, within its tolerance")
+    unit = plant_units(plant)[0]          # the model's input unit
     return (("the compensator's first sample was " if tapered else
              "the drive's first sample is ") + ", ".join(
-        f"{n} {v:+.3g} V" for n, v in zip(plant.hysteresis.input_names, off))
-            + f" from rest: {why}" + (_taper_words(drive) if tapered else ""))
+        f"{n} {v:+.3g} {unit}" for n, v in zip(plant.hysteresis.input_names, off))
+            + f" from rest: {why}" + (_taper_words(drive, unit) if tapered else ""))
 
 
-def _taper_words(drive):
+def _taper_words(drive, unit="V"):
     """What the taper of a stable inversion's pre-actuation changed, for the note: the
-    drive against the compensator's voltages (and the exported C's) over the rest lead."""
+    drive against the compensator's voltages (and the exported C's) over the rest lead,
+    in ``unit`` (the model's input unit)."""
     # the first sample alone understated it: 2e-9 V named where the drive and the C then
     # differed by 1e-2 V, the pre-actuation growing over the lead towards the motion
     change = getattr(drive, "taper_change", None)
     lead = getattr(drive, "rest_lead", None) or getattr(drive, "fade_samples", 0) // 10
     return ("; the drive fades it in from rest over the fade's rest lead"
             + (f" ({lead} samples)" if lead else "")
-            + (f", where it differs from the compensator's voltages by up to {change:.3g} V"
+            + (f", where it differs from the compensator's voltages by up to {change:.3g} {unit}"
                if change is not None else "")
             + ": the exported C, which does not fade them, gives the compensator's there")
+
+
+def plant_units(plant):
+    """The units in which the notes and problems give an actuator's voltages and outputs.
+
+    Parameters
+    ----------
+    plant : HammersteinPlant or object
+        The actuator (its ``units``, a preset's ``[model] input_unit`` and ``output_unit``).
+
+    Returns
+    -------
+    tuple of str
+        ``(input unit, output unit)``; ``("V", "µm")`` for an object without ``units``.
+    """
+    return tuple(getattr(plant, "units", ("V", "µm")))
 
 
 def _rest_voltages(plant):
@@ -460,7 +482,8 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
     # kind hammerstein, which then failed for want of a G ("the plant is static")
     has_dynamics = getattr(plant, "dynamics", None) is not None
     if kind is None:
-        choice = choose_kind(plant.hysteresis, has_dynamics, gain, inversion or "zpetc", check)
+        choice = choose_kind(plant.hysteresis, has_dynamics, gain, inversion or "zpetc", check,
+                             plant_units(plant))
         kind, options, note = choice.kind, dict(choice.options), choice.note()
         if not has_dynamics:
             # a model from 1 Hz records drove a 20 Hz sine without a word on what it ignores
@@ -474,7 +497,7 @@ def _kind_and_options(plant, kind, gain, check, inversion="zpetc"):
         problem = kind_problem(plant.hysteresis, kind, has_dynamics)
         if problem:
             raise CompensatorError(problem)
-        options, note = explicit_law(plant.hysteresis, kind, gain, check)
+        options, note = explicit_law(plant.hysteresis, kind, gain, check, plant_units(plant))
     entry = model_class(plant.hysteresis)
     # kind hammerstein runs the law over a classical PI only; over a Preisach or generalised-PI
     # model it inverts exactly per sample, and --gain identity was ignored without a word
@@ -531,8 +554,9 @@ def unfollowed_problem(plant, drive):
     if worst is None:
         return None
     name, share, far, c = worst
-    text = (f"the compensator asks for {name} beyond the range [{c.low:g}, {c.high:g}] V on "
-            f"{100 * share:.3g} % of the samples after the fade-in (by up to {far:.4g} V): the "
+    unit = plant_units(plant)[0]          # the model's input unit
+    text = (f"the compensator asks for {name} beyond the range [{c.low:g}, {c.high:g}] {unit} on "
+            f"{100 * share:.3g} % of the samples after the fade-in (by up to {far:.4g} {unit}): the "
             f"limits would write a drive that does not follow the reference. The model cannot "
             f"give this reference within the range, or the compensator cannot solve it")
     # (an exact inverse whose sweeps over the direct paths cannot solve the model is refused
@@ -597,10 +621,11 @@ def model_miss(plant, drive, period_samples=None, kind=None):
     if not share > MISS_WARNING:        # NaN (a diverged model) is named by the limits
         return None
     median = float(np.median(miss)) / scale
+    unit_in, unit_out = plant_units(plant)          # the model's
     text = (f"the drive, played through the model it was computed from, misses the reference "
-            f"by more than {share * scale:.3g} µm ({100 * share:.3g} % of its half-span) on "
-            f"{100 * (1 - MISS_QUANTILE):.3g} % of the samples after the fade-in and by "
-            f"{median * scale:.3g} µm on half of them: the compensator does not solve the "
+            f"by more than {share * scale:.3g} {unit_out} ({100 * share:.3g} % of its half-span) "
+            f"on {100 * (1 - MISS_QUANTILE):.3g} % of the samples after the fade-in and by "
+            f"{median * scale:.3g} {unit_out} on half of them: the compensator does not solve the "
             f"model there")
     amp = plant.amplifier
     if amp is not None:
@@ -611,7 +636,7 @@ def model_miss(plant, drive, period_samples=None, kind=None):
             if on > 0.05:
                 held.append(f"{name} {100 * on:.3g} %")
         if held:
-            text += (f"; the drive sits on the range's bounds [V] ({', '.join(held)} of the "
+            text += (f"; the drive sits on the range's bounds [{unit_in}] ({', '.join(held)} of the "
                      f"samples): the reference asks more than the range gives")
     f0 = main_frequency(ref[:, F:], period_samples, T)
     gain = _dynamics_gain(plant.matrices, T, f0) if f0 else None

@@ -1,0 +1,122 @@
+"""A drive file's header and the commands' lines give units in the model's units.
+
+A model whose inputs are in mV and outputs in nm (its [model] input_unit, output_unit) was
+written drive files headed ``ux, uy [V]``, ``peak input and slew: ux 20 V 2398 V/s``, ``ends
+at ux 16.9 V``, ``from the rest output x = ... µm`` and told ``y asks -80..80 µm`` on stderr.
+The expected lines are computed from the drive file's own samples; evaluate and learn read
+the drive back (its rest output in nm).
+"""
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cli_run import run_cli
+from hammerstein.compensation.drive import read_signals
+from hammerstein.io.presets import load_plant
+
+OUTSIDE_GPI = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
+REF = '{ kind = "circle", radius = 80, frequency = 20, periods = 4 }'
+
+#: a unit token in V or µm: "V", "V/s", "[V]", "µm" (not mV, kV, nm, µs)
+OTHER_UNIT = re.compile(r"(?<![\w/])V(?:/s)?(?![\w])|µm")
+
+
+def _header(path):
+    return [line for line in path.read_text(encoding="utf-8").splitlines()
+            if line.startswith("#")]
+
+
+def _unit_lines(lines):
+    return [line for line in lines if OTHER_UNIT.search(line)]
+
+
+@pytest.fixture(scope="module")
+def mv_nm(tmp_path_factory):
+    """The outside actuator's model with its inputs in mV and outputs in nm, a compensate
+    drive for it and the model's response to that drive."""
+    d = tmp_path_factory.mktemp("units")
+    text = OUTSIDE_GPI.read_text(encoding="utf-8")
+    text = text.replace('\ninput_unit = "V"\n', '\ninput_unit = "mV"\n').replace(
+        '\noutput_unit = "µm"\n', '\noutput_unit = "nm"\n')
+    assert text.count('input_unit = "mV"') == 2 and text.count('output_unit = "nm"') == 2
+    (d / "mv.toml").write_text(text, encoding="utf-8")
+    assert load_plant(str(d / "mv.toml")).units == ("mV", "nm")
+    res = run_cli("compensate", "mv.toml", "--reference", REF, "--out", "u0.csv", "--predicted",
+                  cwd=d)
+    assert res.returncode == 0, res.stderr
+    t, u, _ = read_signals(d / "u0.csv", ["ux", "uy"])
+    y, _ = load_plant(str(d / "mv.toml")).simulate(u)
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(d / "y0.csv", index=False)
+    return d, res
+
+
+def test_compensate_writes_the_models_units(mv_nm):
+    d, res = mv_nm
+    head = _header(d / "u0.csv")
+    assert _unit_lines(head) == [] and _unit_lines(res.stdout.splitlines()) == []
+    assert _unit_lines(res.stderr.splitlines()) == []
+    assert head[0] == ("# hammerstein compensate drive: t [s]; ux, uy [mV]; x_predicted, "
+                       "y_predicted [nm] (model)")
+    # the numbers from the drive's samples, from rest (0: the range is +-20 mV)
+    table = pd.read_csv(d / "u0.csv", comment="#")
+    u = table[["ux", "uy"]].to_numpy().T
+    T = float(table.t[1] - table.t[0])
+    slew = np.abs(np.diff(u, axis=1, prepend=0.0)).max(axis=1) / T
+    peaks = ", ".join(f"{n} {np.abs(row).max():.4g} mV {s:.4g} mV/s"
+                      for n, row, s in zip(("ux", "uy"), u, slew))
+    assert any(line.startswith(f"# peak input and slew: {peaks}") for line in head), head
+    assert f"peak {peaks}" in res.stdout
+    ends = f"# ends at ux {u[0, -1]:.4g} mV, uy {u[1, -1]:.4g} mV ("
+    assert any(line.startswith(ends) for line in head), head
+    rest = next(line for line in head if "from the rest output" in line)
+    assert re.search(r"from the rest output x = \S+ nm, y = \S+ nm \(the model's output at "
+                     r"0 mV\)$", rest), rest
+    shaped = [line for line in head if line.startswith("# shaped: ")]
+    assert shaped and all(" mV per sample" in line for line in shaped), shaped
+    assert re.search(r"^note: .*y asks -80\.\.80 nm, the model reaches \S+ nm", res.stderr, re.M)
+
+
+def test_evaluate_reads_the_rest_output_of_a_drive_in_nm(mv_nm):
+    """evaluate fades the reference in from the rest output the header gives in nm (it read
+    none there, and faded from 0)."""
+    d, _ = mv_nm
+    rest = next(line for line in _header(d / "u0.csv") if "from the rest output" in line)
+    said = [float(v) for v in re.findall(r"\b[xy] = (\S+) nm", rest)]
+    assert len(said) == 2 and min(abs(v) for v in said) > 0
+    res = run_cli("evaluate", "--reference", REF, "--drive", "u0.csv", "--measured", "y0.csv",
+                  "--model", "mv.toml", "--out", "ev", cwd=d)
+    assert res.returncode == 0, res.stderr
+    ts = pd.read_csv(d / "ev" / "timeseries-measured.csv")
+    assert ts.iloc[0, 1:3].tolist() == pytest.approx(said, rel=1e-8)
+
+
+def test_learn_writes_the_models_units(mv_nm):
+    d, _ = mv_nm
+    res = run_cli("learn", "mv.toml", "--reference", REF, "--drive", "u0.csv", "--measured",
+                  "y0.csv", "--out", "u1.csv", "--delay", "0", "--history", "hist", cwd=d)
+    assert res.returncode == 0, res.stderr
+    head = _header(d / "u1.csv")
+    best = _header(d / "hist" / "best-trial.csv")
+    for lines in (head, best, res.stdout.splitlines(), res.stderr.splitlines()):
+        assert _unit_lines(lines) == [], lines
+    assert head[0] == "# hammerstein learn drive: t [s]; ux, uy [mV]"
+    assert best[0].startswith("# hammerstein learn best trial 0: the drive [mV], its measured "
+                              "response [nm]")
+    u1 = pd.read_csv(d / "u1.csv", comment="#")[["ux", "uy"]].to_numpy().T
+    assert f"# ends at ux {u1[0, -1]:.4g} mV, uy {u1[1, -1]:.4g} mV (" in "\n".join(head)
+    # the settled error, in nm, against the circle's radius 80 nm
+    m = re.search(r"max Euclidean error (\S+) nm \((\S+) % of 80 nm\)", res.stdout)
+    assert m and float(m.group(2)) == pytest.approx(100 * float(m.group(1)) / 80, rel=2e-3)
+    assert re.search(r"^note: .*y asks -80\.\.80 nm", res.stderr, re.M)
+    # learn reads its own drive back: a second trial from u1.csv
+    t, u, _ = read_signals(d / "u1.csv", ["ux", "uy"])
+    y, _ = load_plant(str(d / "mv.toml")).simulate(u)
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(d / "y1.csv", index=False)
+    again = run_cli("learn", "mv.toml", "--reference", REF, "--drive", "u1.csv", "--measured",
+                    "y1.csv", "--out", "u2.csv", "--delay", "0", "--history", "hist", cwd=d)
+    assert again.returncode == 0, again.stderr
+    assert _unit_lines(_header(d / "u2.csv") + again.stderr.splitlines()) == []
