@@ -184,7 +184,8 @@ class RecordScenario:
     data : dict
         Validated ``[data]`` table.
     identification : dict
-        Validated ``[identification]`` table (defaults filled).
+        Validated ``[identification]`` table (defaults filled; no ``n_hysterons`` beside
+        ``thresholds``: the list's length is the count).
     records : list of hammerstein.io.datafiles.MultiRecord
     cases : list of str
         ``["train", "validation"]``.
@@ -292,6 +293,16 @@ def load_identification_scenario(path, data):
     if model != "classical" and "thresholds" in ident:
         problems.append(f"{source}: identification.thresholds: only used by model = "
                         f"'classical', found model = {model!r}")
+    # a count written beside a thresholds list (15 too, the default's value) was ignored
+    # without a word: refused as identify's one --thresholds option and the files tables do
+    # (hammerstein.scenario.identify_tables); a validated table with a list holds no count
+    # (the list's length is it), so that validating it again finds none
+    written = data.get("identification")
+    if "thresholds" in ident and isinstance(written, dict) and "n_hysterons" in written:
+        problems.append(f"{source}: identification.thresholds: give n_hysterons (a count) or "
+                        f"thresholds (a list), not both (identify --thresholds takes one of them)")
+    if "thresholds" in ident:
+        ident.pop("n_hysterons", None)
     if ident.get("output_map") == "deadzone" and ident.get("method") == "closed-form":
         problems.append(f"{source}: identification.output_map: deadzone only with method = "
                         f"'least-squares'")
@@ -404,8 +415,9 @@ def run_identification_scenario(scenario):
     partition = spec["partition"]
     if thresholds is not None and partition == "auto":
         partition = "time"
-    fit = identify_records(
-        scenario.records, spec["method"], spec["n_hysterons"],
+    fit = identify_records(     # a thresholds list is the count (no n_hysterons beside it)
+        scenario.records, spec["method"],
+        spec["n_hysterons"] if thresholds is None else len(thresholds),
         None if thresholds is None else np.asarray(thresholds), partition, spec["bounds"],
         spec["components"], spec["hold_out"], spec.get("train_fraction"), spec.get("skip"),
         ins, outs, output_map=spec.get("output_map", "auto"))

@@ -13,7 +13,8 @@ from hammerstein.cli.main import main
 from hammerstein.compensation.compensators import convergence_report
 from hammerstein.scenario.identification import identified_model
 from hammerstein.scenario.identification_cache import IdentificationCache
-from hammerstein.scenario.records import resolve_data_path
+from hammerstein.io.presets import read_toml
+from hammerstein.scenario.records import load_identification_scenario, resolve_data_path
 from hammerstein.report.render import FigureRenderer
 from hammerstein.runner import run_scenario
 from hammerstein.scenario.resolve import load_scenario
@@ -292,6 +293,52 @@ train_fraction = 0.5
     assert outcome.ok, outcome.error
     assert _metric(outcome.metrics, "validation", "microns", "rms_error") < 1e-9
     assert main(["validate", str(path)]) == 0
+
+
+def test_a_count_beside_thresholds_is_refused_in_an_identification_scenario(tmp_path,
+                                                                           no_figures, capsys):
+    """``n_hysterons`` written beside ``thresholds`` in ``[identification]``: refused at the key
+    by validate and run, 15 (the default's value) as any other count, as identify's one
+    ``--thresholds`` option and the files tables refuse it (the count was ignored without a
+    word); the list alone runs, the model's thresholds the list's, and its validated table
+    validates again."""
+    (tmp_path / "data").mkdir()
+    _synthetic_record(tmp_path / "data" / "rec.csv")
+    text = """
+kind = "identification"
+name = "counted"
+[data]
+file = "data/rec.csv"
+input = "volts"
+output = "microns"
+time = "t"
+[identification]
+method = "least-squares"
+thresholds = [0.0, 1.0, 2.0, 4.0, 6.0]
+train_fraction = 0.5
+"""
+    for count in (15, 4):
+        path = _write(tmp_path, text.replace("thresholds = [", f"n_hysterons = {count}\n"
+                                              f"thresholds = ["), f"s{count}.toml")
+        for argv in (["validate", str(path)],
+                     ["run", str(path), "--out", str(tmp_path / f"out{count}"), "-q",
+                      "--figures", "none"]):
+            assert main(argv) != 0
+            err = capsys.readouterr().err
+            assert (f"s{count}.toml: identification.thresholds: give n_hysterons (a count) or "
+                    f"thresholds (a list), not both") in err, err
+    path = _write(tmp_path, text)
+    assert main(["validate", str(path)]) == 0
+    sc = load_scenario(path)
+    assert "n_hysterons" not in sc.identification      # the list's length is the count
+    again = load_identification_scenario(path, {"kind": "identification",
+                                                "data": read_toml(path, "s")["data"],
+                                                "identification": sc.identification})
+    assert again.identification == sc.identification
+    outcome = run_scenario(path, tmp_path / "r", renderer=no_figures)
+    assert outcome.ok, outcome.error
+    model = load_model(next((tmp_path / "r").rglob("identified-*.toml")))
+    assert np.asarray(model.components[0][0].thresholds).tolist() == [0.0, 1.0, 2.0, 4.0, 6.0]
 
 
 def test_identification_scenario_problems(tmp_path):
