@@ -404,7 +404,9 @@ def fade_weight(s):
     bending modes ring at the fade's start and end (steps 9 times the
     settled drive's largest, on an outside actuator), which this one does
     not. :func:`hammerstein.compensation.drive.hardware_fade` fades a
-    reference with it; a C caller computes the same weights.
+    reference with it; a C caller computes the same weights with the same products,
+    ``s2 = s * s``, ``(s2 * s2) * (35 - 84 * s + 70 * s2 - 20 * (s2 * s))``, in that
+    order (as every C compiler does without contraction, ``-ffp-contract=off``).
 
     Parameters
     ----------
@@ -422,7 +424,8 @@ def fade_weight(s):
     [0.0, 0.070556640625, 0.5, 1.0, 1.0]
     """
     s = np.clip(np.asarray(s, dtype=float), 0.0, 1.0)
-    return s ** 4 * (35.0 - 84.0 * s + 70.0 * s ** 2 - 20.0 * s ** 3)
+    s2 = s * s      # products, in this order: a C caller repeats them bit for bit (not powers)
+    return (s2 * s2) * (35.0 - 84.0 * s + 70.0 * s2 - 20.0 * (s2 * s))
 
 
 def drive_fade_samples(path):

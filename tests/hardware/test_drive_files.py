@@ -20,7 +20,7 @@ from hammerstein.compensation.compensators import (InverseMultiplicativeCompensa
 from hammerstein.cli.main import main
 from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, DriveStream, drive_fade_samples,
                                             drive_signal, hardware_drive, hardware_fade, read_signals)
-from hammerstein.compensation.drive_files import drive_input_names
+from hammerstein.compensation.drive_files import drive_input_names, fade_weight
 from hammerstein.compensation.hammerstein_compensator import HammersteinCompensator
 from hammerstein.exceptions import AmplifierError, CompensatorError
 from hammerstein.runner import run_scenario
@@ -245,3 +245,24 @@ def test_the_inputs_of_a_drive_file_are_never_its_aimed_or_predicted_columns(tmp
                     "t,ux,uy,uz,x_shaped,y_shaped,z_shaped,x_predicted,y_predicted,"
                     "z_predicted\n0,0,0,0,0,0,0,0,0,0\n")
     assert drive_input_names(path, outputs) == ["ux", "uy", "uz"]
+
+
+@pytest.mark.parametrize("fade", [1313, 2000, 4875])
+def test_the_fade_weights_are_the_documented_products_a_c_caller_repeats(fade):
+    # docs/real-time.md: s2 = s * s; w = (s2 * s2) * (35 - 84 s + 70 s2 - 20 (s2 * s)), each
+    # operation one IEEE double rounding as in C without contraction (Python floats are
+    # C doubles), so a caller's weights, and its faded reference, equal hardware_fade's
+    lead = fade // 10
+    s = [(k - lead) / (fade - lead) for k in range(lead, fade)]
+    own = []
+    for x in s:
+        x2 = x * x
+        own.append((x2 * x2) * (35.0 - 84.0 * x + 70.0 * x2 - 20.0 * (x2 * x)))
+    np.testing.assert_array_equal(fade_weight(np.array(s)), np.array(own))
+    yr = np.vstack([np.linspace(3.0, 40.0, fade + 5), np.linspace(-7.0, 1.0, fade + 5)])
+    rest = np.array([0.56, -1.65])
+    faded = hardware_fade(yr, fade, rest)
+    caller = yr.copy()
+    caller[:, :lead] = rest[:, None]
+    caller[:, lead:fade] = rest[:, None] + np.array(own) * (yr[:, lead:fade] - rest[:, None])
+    np.testing.assert_array_equal(faded, caller)
