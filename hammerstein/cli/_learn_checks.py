@@ -542,8 +542,12 @@ def model_gain_note(gains, names, stepping=None, misfit=None):
                 f"actuator; learn corrects either trial by trial, and identify again only if "
                 f"the actuator changed (temperature, load, another amplifier gain)" + rate)
     return (head + "the actuator has changed since it was identified (temperature, load, another "
-            "amplifier gain); learn corrects it trial by trial, and identify on records made "
-            "now (all of them, together) gives a model of the actuator as it is" + rate)
+            "amplifier gain), or at this reference it moves otherwise than in the records the "
+            "model was identified on (a hysteresis no model class here holds: minor loops "
+            "that re-centre cycle after cycle, as a Bouc-Wen stage's); learn corrects either "
+            "trial by trial, and identify on records made now (all of them, together) tells "
+            "which: its model is the actuator as it is, and a gain still off against it is the "
+            "class's" + rate)
 
 
 def start_lag(predicted, measured, within):
