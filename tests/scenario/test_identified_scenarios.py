@@ -271,10 +271,8 @@ def _synthetic_record(path, n_periods=5, T=1e-3, f=2.0, noise=0.0):
     pd.DataFrame({"t": t, "volts": u, "microns": y}).to_csv(path, index=False)
 
 
-def test_identification_scenario_relative_path_and_exact_record(tmp_path, no_figures):
-    (tmp_path / "data").mkdir()
-    _synthetic_record(tmp_path / "data" / "rec.csv")
-    path = _write(tmp_path, '''
+#: an identification scenario on _synthetic_record's file, its thresholds given as a list
+_EXACT_RECORD = """
 kind = "identification"
 name = "synthetic"
 [data]
@@ -286,7 +284,13 @@ time = "t"
 method = "least-squares"
 thresholds = [0.0, 1.0, 2.0, 4.0, 6.0]
 train_fraction = 0.5
-''')
+"""
+
+
+def test_identification_scenario_relative_path_and_exact_record(tmp_path, no_figures):
+    (tmp_path / "data").mkdir()
+    _synthetic_record(tmp_path / "data" / "rec.csv")
+    path = _write(tmp_path, _EXACT_RECORD)
     sc = load_scenario(path)
     assert sc.kind == "identification" and sc.cases == ["train", "validation"]
     outcome = run_scenario(path, tmp_path / "r", renderer=no_figures)
@@ -304,19 +308,7 @@ def test_a_count_beside_thresholds_is_refused_in_an_identification_scenario(tmp_
     validates again."""
     (tmp_path / "data").mkdir()
     _synthetic_record(tmp_path / "data" / "rec.csv")
-    text = """
-kind = "identification"
-name = "counted"
-[data]
-file = "data/rec.csv"
-input = "volts"
-output = "microns"
-time = "t"
-[identification]
-method = "least-squares"
-thresholds = [0.0, 1.0, 2.0, 4.0, 6.0]
-train_fraction = 0.5
-"""
+    text = _EXACT_RECORD.replace('name = "synthetic"', 'name = "counted"')
     for count in (15, 4):
         path = _write(tmp_path, text.replace("thresholds = [", f"n_hysterons = {count}\n"
                                               f"thresholds = ["), f"s{count}.toml")
