@@ -174,12 +174,16 @@ class KindChoice:
         return f"note: kind = {self.kind} because {self.reason}"
 
 
-def _gain_words(gain, radius, units=("V", "µm")):
-    """``gain K = [...] µm/V (scaled midpoint), rho(...) 0.9 < 1``: K in the model's
-    (input, output) ``units``."""
-    name = gain if isinstance(gain, str) else "K = [" + ", ".join(
+def _gain_name(gain, units=("V", "µm")):
+    """A named gain as is, a matrix as ``K = [...] µm/V (scaled midpoint)``: K in the
+    model's (input, output) ``units``."""
+    return gain if isinstance(gain, str) else "K = [" + ", ".join(
         f"{v:.4g}" for v in np.diag(gain)) + f"] {units[1]}/{units[0]} (scaled midpoint)"
-    return f"gain {name}, rho(I - K^-1 J) {radius:.3g} < 1"
+
+
+def _gain_words(gain, radius, units=("V", "µm")):
+    """``gain K = [...] µm/V (scaled midpoint), rho(...) 0.9 < 1``."""
+    return f"gain {_gain_name(gain, units)}, rho(I - K^-1 J) {radius:.3g} < 1"
 
 
 def law_self_test(model, gain):
@@ -476,9 +480,7 @@ def explicit_law(model, kind, gain=None, check=None, units=("V", "µm")):
     if law.radius < 1.0:
         words = f"{_gain_words(law.gain, law.radius, units)}, the convergent gain"
     else:
-        name = law.gain if isinstance(law.gain, str) else "K = [" + ", ".join(
-            f"{v:.4g}" for v in np.diag(law.gain)) + f"] {units[1]}/{units[0]} (scaled midpoint)"
-        words = (f"gain {name}, the smallest rho(I - K^-1 J) of the gains tried, "
+        words = (f"gain {_gain_name(law.gain, units)}, the smallest rho(I - K^-1 J) of the gains tried, "
                  f"{law.radius:.3g}" + (f" ({law.reason})" if law.reason else ""))
     return options, (f"note: kind {kind} runs the multivariable law with {words}: the kind's "
                      f"{own} gain reaches rho(I - K^-1 J) {own_radius:.3g} (--gain sets another)")
