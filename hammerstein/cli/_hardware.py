@@ -18,6 +18,7 @@ import numpy as np
 from hammerstein.cli._common import add_column_options, is_drive_file, number_type
 from hammerstein.core.files import PROVENANCE, carries_provenance, escape
 from hammerstein.compensation.drive import read_signals
+from hammerstein.compensation.drive_size import DRIVE_MARK, drive_changed
 from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.models.hysteresis import MultivariablePI
@@ -529,7 +530,8 @@ def _warn_implausible(signal, what):
 
 
 def owned_problem(out, force):
-    """Why ``out`` must not be replaced (a file this project did not write), or None."""
+    """Why ``out`` must not be replaced (a file this project did not write, or a drive file
+    changed since it was written: its digest line, :func:`drive_changed`), or None."""
     p = Path(out)
     if force or not p.is_file():
         return None
@@ -539,7 +541,13 @@ def owned_problem(out, force):
     except OSError:
         return None
     if is_drive_file(p):
-        return None
+        if not drive_changed(p):            # as written, or an earlier version's (no digest)
+            return None
+        m = re.match(rf"{DRIVE_MARK} ([a-z-]+) drive", first.lstrip("\ufeff"))
+        by = f"hammerstein {m.group(1)}" if m else "hammerstein"
+        return (f"--out: {escape(out)} changed since {by} wrote it (a measured column added?); "
+                f"nothing was written: choose another name, move it away, or pass --force to "
+                f"replace it")
     if carries_provenance(p):       # a model, metrics or report file of another command
         m = re.match(rf"# {PROVENANCE} ([a-z-]+)", first.lstrip("\ufeff"))
         by = f"hammerstein {m.group(1)}" if m else "another hammerstein command"

@@ -342,7 +342,8 @@ def signals_csv(t, columns, comment):
         Name -> values, in column order.
     comment : str
         The comment lines' text (units, what wrote the file); each line is
-        prefixed with ``# hammerstein`` / ``#``.
+        prefixed with ``# hammerstein`` / ``#``; the last is the file's digest
+        (:func:`hammerstein.compensation.drive_size.write_drive_rows`).
 
     Returns
     -------
@@ -352,6 +353,7 @@ def signals_csv(t, columns, comment):
     --------
     >>> print(signals_csv([0.0, 0.5], {"ux": [0.1, 1 / 3]}, "drive: t [s], ux [V]"), end="")
     # hammerstein drive: t [s], ux [V]
+    # sha256 of this file without this line: 12cabb7a697338681a1430a5af08a64b320f0d74e736b317be321463cccf9018 (hammerstein replaces the file only while it matches)
     t,ux
     0,0.10000000000000001
     0.5,0.33333333333333331
@@ -366,7 +368,7 @@ def signals_writer(t, columns, comment, cap=None):
 
     The same bytes as ``signals_csv(t, columns, comment).encode()``, written
     by blocks of rows (:func:`hammerstein.compensation.drive_size.write_drive_rows`):
-    never the whole text at once.
+    never the whole text at once; signed (``fh`` must be seekable).
 
     Parameters
     ----------
@@ -392,7 +394,7 @@ def signals_writer(t, columns, comment, cap=None):
     text = "\n".join(head + [",".join(["t", *columns])]) + "\n"
     data = np.column_stack([np.asarray(t, dtype=float)]
                            + [np.asarray(v, dtype=float) for v in columns.values()])
-    return lambda fh: write_drive_rows(fh, text, data, cap)
+    return lambda fh: write_drive_rows(fh, text, data, cap, signed=True)
 
 
 

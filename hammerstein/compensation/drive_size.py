@@ -11,21 +11,36 @@ limit when that is larger: a drive file a command wrote for a record it
 accepted is read again by ``evaluate`` and ``learn`` (a 150 s drive at 20 kHz
 with its predicted and shaped columns, 270 MiB, was beyond the 256 MiB of every
 data file), while every read stays bounded. :func:`write_drive_rows` writes the
-rows :data:`DRIVE_CHUNK_ROWS` at a time, never the whole table as text.
+rows :data:`DRIVE_CHUNK_ROWS` at a time, never the whole table as text, and can
+sign the file: its last comment line keeps the SHA-256 of its other bytes, which
+:func:`drive_changed` computes again before a command replaces the file (a drive
+a user appended a measured column to is theirs).
 """
 
 from __future__ import annotations
+
+import hashlib
+import os
+import stat
 
 import numpy as np
 
 from hammerstein.core.files import FileLimitError, limit
 from hammerstein.core.numbers import RECORD_SAMPLES_ENV, max_record_samples
 
-__all__ = ["DRIVE_MARK", "VALUE_BYTES", "HEADER_BYTES", "MAX_DRIVE_COLUMNS", "DRIVE_CHUNK_ROWS",
-           "drive_file_limit", "drive_limit_words", "file_limit", "write_drive_rows"]
+__all__ = ["DRIVE_MARK", "DIGEST_START", "VALUE_BYTES", "HEADER_BYTES", "MAX_DRIVE_COLUMNS",
+           "DRIVE_CHUNK_ROWS", "drive_file_limit", "drive_limit_words", "file_limit",
+           "write_drive_rows", "drive_changed"]
 
 #: First characters of every CSV file written by ``hammerstein compensate`` / ``learn`` (ownership).
 DRIVE_MARK = "# hammerstein"
+
+#: Start of a signed drive file's last comment line; 64 hexadecimal digits follow, then
+#: :data:`DIGEST_END`: the SHA-256 of the file's bytes without that line.
+DIGEST_START = "# sha256 of this file without this line: "
+
+#: The rest of the digest line after its 64 digits.
+DIGEST_END = " (hammerstein replaces the file only while it matches)\n"
 
 #: Most bytes of one value of a drive file and its separator: ``%.17g`` of a float64 is at most
 #: 24 characters (``-2.2250738585072014e-308``), then a comma or the end of the line.
@@ -128,7 +143,7 @@ def file_limit(head):
     return drive_file_limit(n_columns), drive_limit_words(n_columns)
 
 
-def write_drive_rows(fh, head, data, cap=None, what="drive file"):
+def write_drive_rows(fh, head, data, cap=None, what="drive file", signed=False):
     """Write a drive file's text: ``head``, then one ``%.17g`` row per sample, by blocks.
 
     The rows are those of ``numpy.savetxt(fh, data, delimiter=",", fmt="%.17g")``
@@ -136,10 +151,17 @@ def write_drive_rows(fh, head, data, cap=None, what="drive file"):
     block's, where the whole table's text (in a ``StringIO``, 4 bytes a
     character, and two copies of it) had taken 1.8 GB for 3e6 samples.
 
+    ``signed``: a line :data:`DIGEST_START` ``<64 hex digits>`` :data:`DIGEST_END`
+    goes before ``head``'s last line (the row of column names), in place of
+    any digest line ``head`` holds (a header copied from another drive); the
+    digits, written as placeholders, are filled once the rows are written
+    (``fh`` is sought back) with the SHA-256 of every other byte written,
+    hashed as it is written. :func:`drive_changed` checks it.
+
     Parameters
     ----------
     fh : binary file object
-        Where the UTF-8 text goes.
+        Where the UTF-8 text goes (seekable when ``signed``).
     head : str
         The comment lines and the row of column names, each ending in ``"\\n"``.
     data : numpy.ndarray, shape (n_samples, n_columns)
@@ -149,6 +171,8 @@ def write_drive_rows(fh, head, data, cap=None, what="drive file"):
         finished.
     what : str
         What the file is, for the message.
+    signed : bool
+        Write the digest line (above).
 
     Returns
     -------
@@ -175,10 +199,13 @@ def write_drive_rows(fh, head, data, cap=None, what="drive file"):
     data = np.asarray(data, dtype=float)
     row = ",".join(["%.17g"] * data.shape[1]) + "\n"
     written = 0
+    sha = hashlib.sha256() if signed else None
 
-    def put(text):
+    def put(text, hashed=True):
         nonlocal written
         chunk = text.encode("utf-8")
+        if sha is not None and hashed:
+            sha.update(chunk)
         written += len(chunk)
         if cap is not None and written > cap:
             raise FileLimitError(
@@ -188,8 +215,95 @@ def write_drive_rows(fh, head, data, cap=None, what="drive file"):
                 f"shorter reference (fewer periods), or raise the limit")
         fh.write(chunk)
 
-    put(head)
+    at = None
+    if signed:
+        head = "".join(ln for ln in head.splitlines(keepends=True)
+                       if not ln.startswith(DIGEST_START))
+        cut = head.rstrip("\n").rfind("\n") + 1        # the row of column names starts there
+        put(head[:cut])
+        at = fh.tell() + len(DIGEST_START)
+        put(DIGEST_START + "0" * 64 + DIGEST_END, hashed=False)
+        put(head[cut:])
+    else:
+        put(head)
     for start in range(0, data.shape[0], DRIVE_CHUNK_ROWS):
         block = data[start:start + DRIVE_CHUNK_ROWS]
         put((row * block.shape[0]) % tuple(block.ravel().tolist()))
+    if at is not None:
+        end = fh.tell()
+        fh.seek(at)
+        fh.write(sha.hexdigest().encode("ascii"))
+        fh.seek(end)
     return written
+
+
+def _digest_line(head):
+    """``(start, end, digest)`` of the digest line among the comment lines opening ``head``, or None."""
+    start, mark = 0, DIGEST_START.encode("ascii")
+    while start < len(head) and head.startswith(b"#", start):
+        end = head.find(b"\n", start)
+        if end < 0:
+            return None
+        if head.startswith(mark, start):
+            digest = head[start + len(mark):start + len(mark) + 64].decode("ascii", "replace")
+            return start, end + 1, digest
+        start = end + 1
+    return None
+
+
+def drive_changed(path):
+    """Whether a signed drive file differs from what was written (its digest line, :func:`write_drive_rows`).
+
+    The SHA-256 of the file's bytes without its digest line is computed
+    again, read in 1 MiB blocks: the memory is a block's, and no more than
+    the largest drive file of its columns (:func:`file_limit`) is read; a
+    larger file was not written so, and counts as changed.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file.
+
+    Returns
+    -------
+    bool or None
+        True when it changed since it was written (a measured column added,
+        rows edited, its digest line altered); False when it holds what was
+        written; None when it has no digest line (written by an earlier
+        version, or the line was removed), is not a regular file, or cannot
+        be read.
+
+    Examples
+    --------
+    >>> import io, tempfile
+    >>> buf = io.BytesIO()
+    >>> _ = write_drive_rows(buf, "# hammerstein compensate drive\\nt,ux\\n",
+    ...                      np.array([[0.0, 0.5]]), signed=True)
+    >>> with tempfile.NamedTemporaryFile(suffix=".csv") as fh:
+    ...     _ = fh.write(buf.getvalue()); fh.flush()
+    ...     before = drive_changed(fh.name)
+    ...     _ = fh.write(b"5e-05,0.25\\n"); fh.flush()
+    ...     before, drive_changed(fh.name)
+    (False, True)
+    """
+    try:
+        with open(path, "rb") as fh:
+            if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+                return None
+            head = fh.read(HEADER_BYTES)
+            found = _digest_line(head)
+            if found is None:
+                return None
+            start, end, digest = found
+            cap = file_limit(head)[0]
+            sha = hashlib.sha256(head[:start])
+            sha.update(head[end:])
+            size = len(head)
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                size += len(block)
+                if size > cap:
+                    return True
+                sha.update(block)
+    except OSError:
+        return None
+    return sha.hexdigest() != digest
