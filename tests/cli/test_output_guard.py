@@ -438,16 +438,26 @@ def test_a_users_file_starting_like_a_mark_is_not_taken_for_a_drive(tmp_path):
 
 
 def test_a_link_to_the_projects_own_file_is_followed(tmp_path):
-    """A link to a drive file compensate wrote is followed (its target replaced, the link kept)."""
+    """A link to a drive file compensate wrote is followed (its target replaced, the link kept);
+    not to one changed since (a measured column added): that file is the user's."""
     assert _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "real.csv",
                 cwd=tmp_path).returncode == 0
-    os.symlink("real.csv", tmp_path / "latest.csv")
     first = (tmp_path / "real.csv").read_text()
-    (tmp_path / "real.csv").write_text(first.replace("\n", "\n", 1) + "0,0,0\n")
+    assert _cli("compensate", "rakotondrabe-2dof", "--reference",
+                CIRCLE.replace("periods = 2", "periods = 3"), "--out", "real.csv",
+                cwd=tmp_path).returncode == 0
+    assert (tmp_path / "real.csv").read_text() != first
+    os.symlink("real.csv", tmp_path / "latest.csv")
     res = _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "latest.csv",
                cwd=tmp_path)
     assert res.returncode == 0, res.stderr
     assert (tmp_path / "latest.csv").is_symlink() and (tmp_path / "real.csv").read_text() == first
+    (tmp_path / "real.csv").write_text(first + "0.5,0,0\n")
+    res = _cli("compensate", "rakotondrabe-2dof", "--reference", CIRCLE, "--out", "latest.csv",
+               cwd=tmp_path)
+    assert res.returncode == 2 and "latest.csv changed since hammerstein compensate wrote it" \
+        in res.stderr, res.stderr
+    assert (tmp_path / "real.csv").read_text() == first + "0.5,0,0\n"
 
 
 def test_safe_write_never_creates_directories_along_a_link(tmp_path):

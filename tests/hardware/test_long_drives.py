@@ -9,6 +9,7 @@ could not be evaluated (and ``compensate`` refused to write it); ``compensate`` 
 whole file's text at once (1.8 GB for 3e6 samples).
 """
 
+import hashlib
 import io
 
 import numpy as np
@@ -144,7 +145,11 @@ def _savetxt_csv(t, columns, comment):
                            + [np.asarray(v, dtype=float) for v in columns.values()])
     buf = io.StringIO()
     np.savetxt(buf, data, delimiter=",", fmt="%.17g")
-    return "\n".join(head + [",".join(["t", *columns])]) + "\n" + buf.getvalue()
+    names = ",".join(["t", *columns]) + "\n"
+    # the last comment line: the SHA-256 of the file's other bytes
+    digest = hashlib.sha256(("\n".join(head) + "\n" + names + buf.getvalue()).encode()).hexdigest()
+    return ("\n".join(head) + f"\n# sha256 of this file without this line: {digest} (hammerstein "
+            f"replaces the file only while it matches)\n" + names + buf.getvalue())
 
 
 def test_the_drive_rows_are_the_same_bytes_across_blocks():
@@ -160,7 +165,7 @@ def test_the_drive_rows_are_the_same_bytes_across_blocks():
     fh = io.BytesIO()
     drive_files.signals_writer(t, cols, comment)(fh)
     assert fh.getvalue() == text.encode("utf-8")
-    longest = max(len(v) for line in text.splitlines()[3:] for v in line.split(","))
+    longest = max(len(v) for line in text.splitlines()[4:] for v in line.split(","))
     assert longest <= drive_size.VALUE_BYTES - 1
 
 
