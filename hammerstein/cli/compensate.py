@@ -106,7 +106,8 @@ def add_parser(subparsers):
     p.add_argument("--predicted", action="store_true",
                    help="add the model-predicted outputs <output>_predicted [µm]")
     p.add_argument("--force", action="store_true",
-                   help="replace an --out file that hammerstein did not write")
+                   help="replace an --out file that hammerstein did not write, or a drive "
+                        "changed since it wrote it (a measured column added)")
     p.set_defaults(handler=_handle)
 
 

@@ -266,7 +266,8 @@ def add_parser(subparsers):
                         "alternating sign on consecutive samples): error (default, nothing "
                         "written), warn or clip (a chattering drive is written with a warning)")
     p.add_argument("--force", action="store_true",
-                   help="replace an --out file that hammerstein did not write")
+                   help="replace an --out file that hammerstein did not write, or a drive "
+                        "changed since it wrote it (a measured column added)")
     p.set_defaults(handler=_handle)
 
 
