@@ -201,7 +201,8 @@ def add_parser(subparsers):
                         "levels the refit made worse on an actuator outside its class; 0: the "
                         "hysteresis keeps the creep of its records)")
     p.add_argument("--force", action="store_true",
-                   help="overwrite --out, --metrics or --plot even if the project did not write it")
+                   help="overwrite --out, --metrics or --plot even if the project did not write it "
+                        "(or --metrics changed since)")
     p.set_defaults(handler=_handler)
 
 
@@ -393,8 +394,9 @@ def _estimate_delay(args):
 def _write_metrics(path, rows):
     import pandas as pd  # lazy: only for --metrics
     frame = pd.DataFrame(rows, columns=METRICS_HEADER.split(","))
-    text = provenance_line("identify") + frame.to_csv(index=False, float_format="%.7g")
-    safe_write(path, text, "metrics file")
+    body = frame.to_csv(index=False, float_format="%.7g")
+    # signed: a metrics file a user added a column or a note to is not replaced
+    safe_write(path, provenance_line("identify", body=body) + body, "metrics file")
 
 
 def fit_figure(fit, input_unit, output_unit):
