@@ -397,7 +397,6 @@ def signals_writer(t, columns, comment, cap=None):
     return lambda fh: write_drive_rows(fh, text, data, cap, signed=True)
 
 
-
 def fade_weight(s):
     """The weight of a drive's fade-in at ``s`` in [0, 1]: ``s^4 (35 - 84 s + 70 s^2 - 20 s^3)``.
 
