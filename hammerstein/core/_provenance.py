@@ -273,7 +273,7 @@ def replace_problem(path, inputs=(), force=False, command="hammerstein",
     if carries_provenance(path):
         if changed_since_written(path):
             return (f"{escape(path)} changed since {command} wrote it (its digest differs: a "
-                    f"column or a note added?); nothing was written: choose another name, move "
+                    f"column, a value or a note changed?); nothing was written: choose another name, move "
                     f"it away, or add --force to replace it")
         return None
     return (f"{escape(path)} exists and was not written by {command} (no '{PROVENANCE}' mark); "

@@ -283,7 +283,9 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
         mixed), as ``identify`` writes it.
     path : str or pathlib.Path
         Destination ``.toml``, starting with the project's provenance line
-        (:func:`hammerstein.core.files.provenance_line`); written atomically through an exclusive
+        (:func:`hammerstein.core.files.provenance_line`, signed with the SHA-256 of the
+        text below it, so that ``identify`` does not replace a model edited since, e.g. its
+        ``[amplifier]`` widened by hand); written atomically through an exclusive
         temporary file and a rename (:func:`hammerstein.core.files.safe_write`:
         a symlink's target is written, a replaced file keeps its permissions,
         a new one gets the umask's).
@@ -309,7 +311,8 @@ def save_model(model, path, metadata=None, input_unit="V", output_unit="µm", ex
     doc.update(extra or {})
     doc["model"] = model_to_table(model, input_unit, output_unit)
     try:
-        safe_write(path, provenance_line("identify") + tomli_w.dumps(doc), "model file")
+        body = tomli_w.dumps(doc)        # signed: a model edited by hand is not replaced
+        safe_write(path, provenance_line("identify", body=body) + body, "model file")
     except FileLimitError as exc:
         raise PresetError(str(exc)) from None
 

@@ -194,3 +194,30 @@ def _add_note_column(text):
     return "".join(ln if ln.startswith("#") else
                    ln.rstrip("\n") + (",remark\n" if ln.startswith("case,") else ",ok\n")
                    for ln in lines)
+
+
+def test_a_model_edited_by_hand_is_kept(tmp_path):
+    """The docs say to widen an identified model's [amplifier] by hand; identify again to the
+    same --out replaced it without a word, the edit lost. The model file's provenance line now
+    signs the text below it."""
+    code, err = _run(*IDENTIFY, cwd=tmp_path)
+    assert code == 0, err
+    model = tmp_path / "m.toml"
+    first, rest = model.read_bytes().split(b"\n", 1)
+    assert first.decode().split(SIGNED)[1] == hashlib.sha256(rest).hexdigest()
+    code, err = _run(*IDENTIFY, cwd=tmp_path)          # as written: replaced
+    assert code == 0, err
+    model.write_text(model.read_text(encoding="utf-8") + "# amplifier widened to 12 V by hand\n",
+                     encoding="utf-8")
+    before = model.read_bytes()
+    code, err = _run(*IDENTIFY, cwd=tmp_path)
+    assert code == 2 and err.count("\n") == 1, err
+    assert err.startswith("hammerstein identify: error: --out: m.toml changed since "
+                          "hammerstein identify wrote it"), err
+    assert "--force" in err and model.read_bytes() == before
+    code, err = _run(*IDENTIFY, "--force", cwd=tmp_path)
+    assert code == 0, err
+    assert b"by hand" not in model.read_bytes()
+    assert main(["compensate", str(model), "--reference",
+                 '{ kind = "sine", amplitude = 10, frequency = 1, periods = 2 }',
+                 "--out", str(tmp_path / "d.csv")]) == 0          # the signed model still loads
