@@ -13,21 +13,22 @@ identified model's output offset) runs it, so that the case starts as
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_amplifier,
-                                            compensator_rest, hardware_drive,
+                                            compensator_rest, drive_signal, hardware_drive,
                                             starts_at_rest)
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import kind_problem, model_class
 from hammerstein.compensation.kind_choice import choose_kind, explicit_law
-from hammerstein.compensation.reach import output_reach, reach_note
+from hammerstein.compensation.reach import fitting_scale, output_reach, reach_centre, reach_note
 from hammerstein.compensation.shaping import (first_mode_hz, main_frequency, mode_decay_s,
                                               mode_note, relative_response)
 from hammerstein.compensation.zpetc_notes import zpetc_note
-from hammerstein.exceptions import AmplifierError, CompensatorError
+from hammerstein.exceptions import AmplifierError, CompensatorDivergence, CompensatorError
 from hammerstein.models.plant import HammersteinPlant, hardware_start
 from hammerstein.scenario.registry import build_compensator
 
@@ -337,8 +338,9 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
         return plant.simulate(apply_amplifier(plant.amplifier, u, T), at_rest)[0]
 
     linear = plant.matrices              # creep then dynamics, built once
-    reach = reach_note(output_reach(plant.hysteresis, plant.amplifier, plant.creep),
-                       signal, plant.hysteresis.output_names, plant.units[1])
+    names, unit_out = plant.hysteresis.output_names, plant.units[1]
+    box = output_reach(plant.hysteresis, plant.amplifier, plant.creep)
+    reach = reach_note(box, signal, names, unit_out)
     try:
         drive = hardware_drive(comp, signal, T, period_samples, fade,
                                plant.amplifier, limits, rest=rest,
@@ -354,6 +356,20 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
             # "lower the reference" alone: by how much, and where it fits, is the reach's
             raise AmplifierError(f"{exc}; {reach}") from None
         raise
+    if reach:
+        # the reach is a box per output; the outputs reached together are fewer (a 50 µm
+        # circle centred in a 100 µm tall box held vy at 100 V on 10 % of its samples): the
+        # size that fits about the centre advised is the compensator's, measured
+        def inputs_of(ref):
+            try:
+                with warnings.catch_warnings():      # a trial's range warnings: not the reference's
+                    warnings.simplefilter("ignore")
+                    return drive_signal(comp, ref, T, period_samples, drive.fade_samples).inputs
+            except (CompensatorError, CompensatorDivergence):
+                return None              # no drive at that size: it does not fit
+        scale = fitting_scale(inputs_of, signal, reach_centre(box, signal), plant.amplifier,
+                              drive.fade_samples)
+        reach = reach_note(box, signal, names, unit_out, scale)
     drive.reach = reach            # the reach's note (None: within it), for compensate's notes
     return drive
 

@@ -5,6 +5,7 @@ A new user on a -20..120 V stage left a circle's ``center`` at 0: the reference 
 chatters, naming a flat model or a raster's step, never the reference's place.
 """
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -95,3 +96,37 @@ def test_a_reference_beyond_the_range_is_refused_with_where_it_fits(tmp_path, ca
     err = capsys.readouterr().err
     assert status == 1 and "beyond the amplifier's range [0, 150] V" in err
     assert "the model reaches 3.7..25.7 µm" in err and "offset = 14.7" in err   # 0.1*150+...
+
+
+def _settled_inputs(path, start_s):
+    """The drive file's inputs after ``start_s`` [V], shape (m, n)."""
+    rows = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+    data = np.array([[float(v) for v in line.split(",")] for line in rows[1:]])
+    return data[data[:, 0] >= start_s, 1:].T
+
+
+def test_the_centre_and_size_advised_fit_when_followed(tmp_path, capsys):
+    # a 160 µm circle: each output's extent is within its reach's span (172.5, 168.1 µm), but
+    # the outputs reached together are fewer; centring it alone, as the note advised, left
+    # uy on -20 V on 17 % of the settled samples
+    ref = '{{ kind = "circle", radius = {r}, frequency = 50, periods = 10, center = [{c}] }}'
+    out = tmp_path / "asked.csv"
+    main(["compensate", str(IDENTIFIED), "--reference", ref.format(r=80, c="20, 0"),
+          "--out", str(out)])
+    err = capsys.readouterr().err
+    note = next(line for line in err.splitlines() if "the reference leaves" in line)
+    centre = note.split("center = [")[1].split("]")[0]
+    found = re.search(r"at most ([0-9.]+) times its size", note)
+    radius = 80 * float(found.group(1)) if found else 80.0
+    followed = tmp_path / "followed.csv"
+    status = main(["compensate", str(IDENTIFIED), "--reference", ref.format(r=radius, c=centre),
+                   "--out", str(followed)])
+    text = capsys.readouterr()
+    err = text.err + text.out
+    assert status == 0
+    assert "the reference leaves" not in err and "holds the range edge" not in err
+    fade = float(re.search(r"fade-in ([0-9.e-]+) s", err).group(1))
+    u = _settled_inputs(followed, fade)
+    # off both edges of the -20..20 V range, by the drive file's own samples
+    assert np.all(np.abs(u) < 20.0 - 1e-6)
+    assert radius < 80.0 * 0.95          # the size had to change, not the centre alone
