@@ -1,20 +1,22 @@
 """The notes ``hammerstein learn`` prints on how it learns (behind :mod:`hammerstein.cli.learn`).
 
 The Q filter's default cut-off and why, the harmonics left unlearnt at an
-anti-resonance, a ``--period`` learnt sample by sample, and a noise margin that
-is mostly a drift over the periods: each one line, from the plant, the
-reference's period and the trial's error.
+anti-resonance, a ``--period`` learnt sample by sample, a noise margin that
+is mostly a drift over the periods, and the inputs a trial's drive holds on
+their range's edge: each one line, from the plant, the reference's period
+and the trial's error.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from hammerstein.compensation.edge_holds import edge_holds, reference_at_rest
 from hammerstein.compensation.ilc import INVERSE_GAIN_LIMIT, inverse_gain_ratio, period_drift
 from hammerstein.compensation.shaping import first_mode_hz
 
 __all__ = ["Q_CUTOFF_MIN_HZ", "Q_CUTOFF_PER_MODE", "Q_CUTOFF_NO_DYNAMICS_HZ", "DRIFT_RATIO",
-           "default_q_cutoff"]
+           "default_q_cutoff", "held_inputs"]
 
 
 #: Lowest default cutoff of the learning's Q [Hz] and its multiple of the first bending mode.
@@ -176,3 +178,48 @@ def _drift_note(error, period, steady, unit="µm"):
             f"over the periods is taken out; that trend (creep or a transient still settling, "
             f"the same in every trial) does not repeat from period to period, so learning per "
             f"period cannot remove it"]
+
+
+def held_inputs(inputs, amplifier, fade, reference, rest_output, names, unit="V"):
+    """The inputs a drive holds on their range's edge after the fade-in, in words, or None.
+
+    A rest edge (a unipolar stage's 0 V) counts where the reference is away from the rest
+    output (:func:`hammerstein.compensation.edge_holds.reference_at_rest`).
+
+    Parameters
+    ----------
+    inputs : array_like, shape (m, n_samples)
+        The drive [``unit``].
+    amplifier : hammerstein.models.amplifier.Amplifier or None
+    fade : int
+        The fade-in [samples].
+    reference : array_like, shape (p, n_samples)
+        The faded reference the drive aims at [µm].
+    rest_output : array_like, shape (p,)
+        [µm].
+    names : sequence of str
+        The input names.
+    unit : str
+
+    Returns
+    -------
+    str or None
+        E.g. ``"vy holds 0 V (its rest) on 8.2 % of the samples after the fade-in"``.
+
+    Examples
+    --------
+    >>> from hammerstein.models.amplifier import Amplifier, AmplifierChannel
+    >>> amp = Amplifier([AmplifierChannel(0.0, 100.0)], ["vy"])
+    >>> held_inputs([[0.0, 0.0, 40.0, 0.0, 0.0]], amp, 1, [[0.0, 5.0, 9.0, 5.0, 0.0]], [0.0],
+    ...             ["vy"])
+    'vy holds 0 V (its rest) on 50 % of the samples after the fade-in'
+    """
+    if amplifier is None:
+        return None
+    n = np.asarray(inputs).shape[1]
+    at_rest = reference_at_rest(np.asarray(reference, dtype=float)[:, :n], rest_output)
+    rest = amplifier.rest_voltages()
+    held = edge_holds(inputs, amplifier, fade, rest, at_rest)
+    return "; ".join(f"{names[i]} holds {edge:g} {unit}"
+                     f"{' (its rest)' if edge == rest[i] else ''} on {100 * on.mean():.3g} % of "
+                     f"the samples after the fade-in" for i, edge, on in held) or None

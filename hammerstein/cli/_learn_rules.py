@@ -273,7 +273,7 @@ class Verdict:
 
 def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, repeating,
                 what, judged_text, out_of_step=None, advice=None, q_cutoff_hz=None,
-                first_mode_hz=None, unit="µm"):
+                first_mode_hz=None, unit="µm", held=None):
     """The verdict on trial ``k`` against the history's best (module docstring).
 
     Parameters
@@ -306,6 +306,10 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         not blamed on a mode the model lacks.
     unit : str
         The model's output unit (``HammersteinPlant.units[1]``), the errors' in the lines.
+    held : str, optional
+        The inputs this trial's drive holds on their range's edge after the fade-in
+        (:func:`hammerstein.cli._learn_notes.held_inputs`): a stall far above the noise
+        names them first.
 
     Returns
     -------
@@ -380,9 +384,12 @@ def judge_trial(state, k, score, best_score, margin, worse, better, remeasured, 
         if score <= NOISE_FLOOR_RATIO * margin:
             why = "the learning has reached the noise"
         else:
+            pinned = ("" if not held else
+                      f"{held}: no drive within the range follows the reference there, and no "
+                      f"gain reduces that error (centre or shrink the reference); else ")
             why = (f"the learning stalls {score / margin:.3g} times above the noise (not the "
-                   f"noise floor: the error left is one the learning does not reduce at this "
-                   f"gain, or a change the judged average does not show)")
+                   f"noise floor: {pinned}the error left is one the learning does not reduce at "
+                   f"this gain, or a change the judged average does not show)")
         stall = (f"trial {k}'s judged error {score:.4g} {unit} ({judged_text}) is not below the "
                  f"best, trial {b}'s {best_score:.4g} {unit}, and within the {margin:.2g} {unit} of "
                  f"noise of it: {why}; the next drive is learnt from this trial with gain "

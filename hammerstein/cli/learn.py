@@ -138,7 +138,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             limit_start_up,
                                             read_signals, settled_step,
                                             rest_output, shape_drive, signals_csv)
-from hammerstein.compensation.edge_holds import edge_hold_note
+from hammerstein.compensation.edge_holds import edge_hold_note, reference_at_rest
 from hammerstein.compensation.drive_files import (drive_rest_lead, drive_rest_output,
                                                   followed_reference, head_lines, learnt_names,
                                                   rest_lead_text, shaped_target)
@@ -158,7 +158,7 @@ from hammerstein.cli._learn_checks import (gain_band, measurement_problem,
                                            model_gain_note, model_gains, plant_first_mode,
                                            stepping_outputs)
 from hammerstein.cli._learn_notes import (_anti_resonance_note, _drift_note,  # noqa: F401
-                                          _period_note, default_q_cutoff,
+                                          _period_note, default_q_cutoff, held_inputs,
                                           PERIODIC_KINDS)
 from hammerstein.signals.fundamental import reference_fundamental
 from hammerstein.signals.trial_noise import SEGMENT, compare_trials, trial_error
@@ -669,7 +669,9 @@ def _learn(args):
                                            None, ref.scale, plant.units[1])
             verdict = judge_trial(state, k_next, score, best_score, margin, worse, better,
                                   remeasured, judged is None, what, JUDGED, out_of_step, advice,
-                                  args.q_cutoff_hz, first_mode_hz, plant.units[1])
+                                  args.q_cutoff_hz, first_mode_hz, plant.units[1],
+                                  held_inputs(u, plant.amplifier, fade, aim, rest,
+                                              list(model.input_names), plant.units[0]))
             halvings, best, note, stall = (verdict.halvings, verdict.best, verdict.note,
                                            verdict.stall)
             if verdict.from_best:
@@ -762,7 +764,8 @@ def _learn(args):
         shaped += more
         # an input held on its range's edge after the fade-in, named as compensate names it
         edge = edge_hold_note(u_next, plant.amplifier, fade, T, None if plant.amplifier is None
-                              else plant.amplifier.rest_voltages(), plant.units[0])
+                              else plant.amplifier.rest_voltages(), plant.units[0],
+                              reference_at_rest(aim[:, :u_next.shape[1]], rest))
         owned = owned_problem(args.out, args.force)
         if owned:
             print_err(f"hammerstein learn: error: {owned}")

@@ -56,7 +56,7 @@ from hammerstein.compensation.drive_stream import DriveStream, _fade_weights
 from hammerstein.compensation.lookahead import rest_output
 from hammerstein.compensation.lookahead import preactuation_samples, taper_preactuation
 from hammerstein.compensation.drive_splice import keep_end, keep_start, learning_onset
-from hammerstein.compensation.edge_holds import edge_hold_note
+from hammerstein.compensation.edge_holds import edge_hold_note, reference_at_rest
 from hammerstein.compensation.shaping import shape_reference, time_intervals
 from hammerstein.compensation.start_up import settled_bound, start_up_in_reference
 from hammerstein.exceptions import CompensatorError, RangeWarning
@@ -796,7 +796,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
                 f"the {how} reaches the drive {late:.4g} s after the start, "
                 f"{late - n * T:.3g} s after the {n * T:.4g} s fade-in: the metrics from the "
                 f"fade's end include it; {fix}")
-    edge = edge_hold_note(out, amplifier, n, T, r0, input_unit)   # no limit left, output short
+    # no limit left, output short; on the rest edge too where the reference is away from rest
+    edge = edge_hold_note(out, amplifier, n, T, r0, input_unit, reference_at_rest(faded, y_rest))
     if edge:
         res.notes.append(edge)
     res.inputs = out

@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hammerstein.compensation.edge_holds import reference_at_rest
+
 __all__ = ["output_reach", "reach_note", "reach_centre", "fitting_scale", "REACH_NOTE_START",
            "MAX_REACH_CORNERS", "REACH_RAMP", "REACH_MARGIN", "SCALE_STEPS", "SCALE_EDGE"]
 
@@ -126,14 +128,16 @@ def reach_centre(reach, reference):
     return np.where(held, lo, reach.mean(axis=1))
 
 
-def fitting_scale(inputs_of, reference, centre, amplifier, start):
+def fitting_scale(inputs_of, reference, centre, amplifier, start, rest_output=None):
     """The largest size of the reference, about ``centre``, whose drive stays off the range's edges.
 
     The reference is moved to ``centre`` (the middle of its extent on each
     output goes there) and scaled about it by s <= 1; s is halved towards
     the largest value at which the compensator's drive, after ``start``,
     keeps :data:`SCALE_EDGE` of each input's range from every edge that is
-    not the input's rest (there a reference at the rest output is met).
+    not the input's rest (there a reference at the rest output is met) and,
+    given ``rest_output``, off the rest edge where the reference is away
+    from the rest output.
 
     Parameters
     ----------
@@ -148,6 +152,8 @@ def fitting_scale(inputs_of, reference, centre, amplifier, start):
         Its ranges and rest voltages.
     start : int
         First sample judged (the fade-in's end) [samples].
+    rest_output : array_like, shape (p,), optional
+        The output at the rest voltages [µm]; None: a rest edge is never a hold.
 
     Returns
     -------
@@ -166,6 +172,11 @@ def fitting_scale(inputs_of, reference, centre, amplifier, start):
     >>> s = fitting_scale(lambda y: np.clip(y, 0, 100), r, [70.0], amp, 1)
     >>> round(float(s), 2)      # 70 + 40 s <= 99.5: 0.7375
     0.74
+    >>> clip = lambda y: np.clip(y, 0, 100)        # about 30, its low at -10: on 0 V, its rest
+    >>> low = np.array([[40.0, 80.0, 0.0, 80.0]])
+    >>> float(fitting_scale(clip, low, [30.0], amp, 1)), round(float(fitting_scale(
+    ...     clip, low, [30.0], amp, 1, rest_output=[0.0])), 2)      # 30 - 40 s >= 0
+    (1.0, 0.75)
     """
     r = np.array(reference, dtype=float, ndmin=2)
     middle = 0.5 * (r.min(axis=1) + r.max(axis=1))
@@ -178,12 +189,19 @@ def fitting_scale(inputs_of, reference, centre, amplifier, start):
     keep = SCALE_EDGE * width
 
     def fits(s):
-        u = inputs_of(centre[:, None] + s * (r - middle[:, None]))
+        ref = centre[:, None] + s * (r - middle[:, None])
+        u = inputs_of(ref)
         if u is None:
             return False
         u = np.asarray(u, dtype=float)[:, int(start):]
-        below = (np.abs(low - rest) > tol)[:, None] & (u < (low + keep)[:, None])
-        above = (np.abs(high - rest) > tol)[:, None] & (u > (high - keep)[:, None])
+        away = (np.zeros(u.shape[1], bool) if rest_output is None else
+                ~reference_at_rest(ref, rest_output)[int(start):])
+        on_low = (np.abs(low - rest) <= tol)[:, None]
+        on_high = (np.abs(high - rest) <= tol)[:, None]
+        below = (u < (low + keep)[:, None]) & (~on_low | (np.abs(u - low[:, None]) <= tol[:, None])
+                                               & away)
+        above = (u > (high - keep)[:, None]) & (~on_high | (np.abs(u - high[:, None])
+                                                             <= tol[:, None]) & away)
         return not (np.any(below) or np.any(above))
 
     if fits(1.0):

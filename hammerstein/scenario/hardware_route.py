@@ -368,7 +368,7 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
             except (CompensatorError, CompensatorDivergence):
                 return None              # no drive at that size: it does not fit
         scale = fitting_scale(inputs_of, signal, reach_centre(box, signal), plant.amplifier,
-                              drive.fade_samples)
+                              drive.fade_samples, rest)
         reach = reach_note(box, signal, names, unit_out, scale)
     drive.reach = reach            # the reach's note (None: within it), for compensate's notes
     return drive
