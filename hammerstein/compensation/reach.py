@@ -20,7 +20,8 @@ import numpy as np
 from hammerstein.compensation.edge_holds import reference_at_rest
 
 __all__ = ["output_reach", "reach_note", "reach_centre", "fitting_scale", "REACH_NOTE_START",
-           "MAX_REACH_CORNERS", "REACH_RAMP", "REACH_MARGIN", "SCALE_STEPS", "SCALE_EDGE"]
+           "MAX_REACH_CORNERS", "REACH_RAMP", "REACH_MARGIN", "SCALE_STEPS", "SCALE_EDGE",
+           "SCALE_MAX_SAMPLES"]
 
 #: Corners of the input box a reach is measured at, at most (2 ** m; beyond: the two diagonals).
 MAX_REACH_CORNERS = 16
@@ -30,6 +31,10 @@ REACH_RAMP = 64
 REACH_MARGIN = 0.01
 #: Halvings of :func:`fitting_scale`'s search (its scale to within 2 ** -SCALE_STEPS).
 SCALE_STEPS = 10
+#: Longest reference [samples] :func:`fitting_scale` is run on: its search runs the
+#: compensator up to SCALE_STEPS + 1 times over the whole reference; a longer one (a
+#: measured scan of minutes) gets the advice from the extents alone.
+SCALE_MAX_SAMPLES = 200_000
 #: Of an input's range: how far from a non-rest edge :func:`fitting_scale` keeps the drive
 #: (the drive written is shaped after the compensator's, by a few thousandths of the range)
 SCALE_EDGE = 0.005

@@ -24,7 +24,8 @@ from hammerstein.compensation.drive import (FADE_DECAYS, MIN_FADE_S, apply_ampli
 from hammerstein.compensation.lookahead import FIRST_SAMPLE_TOLERANCE
 from hammerstein.compensation.model_classes import kind_problem, model_class
 from hammerstein.compensation.kind_choice import choose_kind, explicit_law
-from hammerstein.compensation.reach import fitting_scale, output_reach, reach_centre, reach_note
+from hammerstein.compensation.reach import (SCALE_MAX_SAMPLES, fitting_scale, output_reach,
+                                            reach_centre, reach_note)
 from hammerstein.compensation.shaping import (first_mode_hz, main_frequency, mode_decay_s,
                                               mode_note, relative_response)
 from hammerstein.compensation.zpetc_notes import zpetc_note
@@ -356,7 +357,7 @@ def start_drive(plant, comp, reference, period_samples=None, fade_in=None, limit
             # "lower the reference" alone: by how much, and where it fits, is the reach's
             raise AmplifierError(f"{exc}; {reach}") from None
         raise
-    if reach:
+    if reach and np.shape(signal)[-1] <= SCALE_MAX_SAMPLES:
         # the reach is a box per output; the outputs reached together are fewer (a 50 µm
         # circle centred in a 100 µm tall box held vy at 100 V on 10 % of its samples): the
         # size that fits about the centre advised is the compensator's, measured

@@ -130,3 +130,21 @@ def test_the_centre_and_size_advised_fit_when_followed(tmp_path, capsys):
     # off both edges of the -20..20 V range, by the drive file's own samples
     assert np.all(np.abs(u) < 20.0 - 1e-6)
     assert radius < 80.0 * 0.95          # the size had to change, not the centre alone
+
+
+def test_a_reference_too_long_for_the_size_search_keeps_the_extents_advice(tmp_path, capsys,
+                                                                          monkeypatch):
+    # the size search runs the compensator up to eleven times over the whole reference: on
+    # one longer than SCALE_MAX_SAMPLES (here lowered below the circle's 4000 samples) the
+    # note keeps the advice of the extents alone, each output's extent within its reach
+    from hammerstein.scenario import hardware_route
+    ref = '{ kind = "circle", radius = 80, frequency = 50, periods = 10, center = [20, 0] }'
+    notes = []
+    for cap in (10**6, 100):
+        monkeypatch.setattr(hardware_route, "SCALE_MAX_SAMPLES", cap)
+        main(["compensate", str(IDENTIFIED), "--reference", ref, "--out",
+              str(tmp_path / f"d{cap}.csv")])
+        err = capsys.readouterr().err
+        notes.append(next(line for line in err.splitlines() if "the reference leaves" in line))
+    assert "times its size" in notes[0]
+    assert "times its size" not in notes[1] and "center = [" in notes[1]
