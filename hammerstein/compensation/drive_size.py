@@ -25,7 +25,7 @@ import stat
 
 import numpy as np
 
-from hammerstein.core.files import FileLimitError, limit
+from hammerstein.core.files import FileLimitError, hash_blocks, limit
 from hammerstein.core.numbers import RECORD_SAMPLES_ENV, max_record_samples
 
 __all__ = ["DRIVE_MARK", "DIGEST_START", "VALUE_BYTES", "HEADER_BYTES", "MAX_DRIVE_COLUMNS",
@@ -298,12 +298,8 @@ def drive_changed(path):
             cap = file_limit(head)[0]
             sha = hashlib.sha256(head[:start])
             sha.update(head[end:])
-            size = len(head)
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                size += len(block)
-                if size > cap:
-                    return True
-                sha.update(block)
+            if not hash_blocks(fh, sha, len(head), cap):
+                return True
     except OSError:
         return None
     return sha.hexdigest() != digest

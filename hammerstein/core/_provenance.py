@@ -201,15 +201,39 @@ def changed_since_written(path):
                           + re.escape(SIGNED_WORDS.encode()) + rb"(\S*)\r?\n$", first)
             if m is None:
                 return None
-            sha, size = hashlib.sha256(), len(first)
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                size += len(block)
-                if size > SIGNED_MAX_BYTES:
-                    return True
-                sha.update(block)
+            sha = hashlib.sha256()
+            if not hash_blocks(fh, sha, len(first), SIGNED_MAX_BYTES):
+                return True
     except OSError:
         return None
     return sha.hexdigest().encode("ascii") != m.group(1)
+
+
+def hash_blocks(fh, sha, size, cap):
+    """Feed the rest of an open file to a hash, 1 MiB at a time, within a size.
+
+    Parameters
+    ----------
+    fh : binary file object
+        Read from its position to its end.
+    sha : hashlib hash object
+        Updated with every block read.
+    size : int
+        Bytes of the file before the position [bytes].
+    cap : int
+        Largest size the file may have [bytes].
+
+    Returns
+    -------
+    bool
+        False as soon as the file is larger than ``cap`` (the rest unread), else True.
+    """
+    for block in iter(lambda: fh.read(1 << 20), b""):
+        size += len(block)
+        if size > cap:
+            return False
+        sha.update(block)
+    return True
 
 
 def same_file(a, b):

@@ -48,7 +48,7 @@ from hammerstein.core._strings import (C_HEADERS, C_RESERVED, EXCERPT, MAX_NAME_
                                        name_problem)
 from hammerstein.core._provenance import (LOCK_TIMEOUT, PROVENANCE, carries_provenance, locked,
                                           png_provenance, provenance_line, replace_problem,
-                                          same_file)
+                                          same_file, hash_blocks)
 from hammerstein.core._dirs import file_digest, make_directory  # noqa: F401 (public here)
 from hammerstein.core._owners import owner_alive, owner_token, parse_owner, release_owner
 from hammerstein.core._paths import (ALLOW_ENV, MAX_NAME_BYTES, MAX_PATH_CHARS, confined_path,
@@ -58,7 +58,7 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "bounded_read_text", "safe_write", "start_budget", "umask", "TMP_SUFFIX", "deferred_signals",
            "reset_interrupt", "interrupt", "raise_if_interrupted", "file_limit_problem",
            "all_or_nothing", "PROVENANCE", "provenance_line", "png_provenance",
-           "carries_provenance", "same_file", "replace_problem", "locked", "LOCK_TIMEOUT",
+           "carries_provenance", "same_file", "hash_blocks", "replace_problem", "locked", "LOCK_TIMEOUT",
            "escape", "markdown_escape", "markdown_text", "EXCERPT", "owner_token", "release_owner",
            "parse_owner", "owner_alive", "ALLOW_ENV", "path_problem", "confined_path",
            "MAX_PATH_CHARS", "MAX_NAME_BYTES", "OutputError", "guard_inputs", "reset_guard",
@@ -66,7 +66,7 @@ __all__ = ["FileLimitError", "LIMITS", "limit", "check_regular", "bounded_read_b
            "C_HEADERS", "recorded_paths", "removed_if_failed"]
 
 for _name in ("c_name_problem", "escape", "markdown_escape", "markdown_text", "name_problem", "carries_provenance",
-              "locked", "png_provenance", "provenance_line", "replace_problem", "same_file",
+              "locked", "png_provenance", "provenance_line", "replace_problem", "same_file", "hash_blocks",
               "owner_alive", "owner_token", "parse_owner", "release_owner", "confined_path",
               "path_problem", "recorded_paths"):
     globals()[_name].__module__ = __name__      # documented as this module's
