@@ -105,10 +105,11 @@ def add_parser(subparsers):
                    default=None, metavar=("MIN", "MAX"),
                    help="clamp every voltage to [MIN, MAX] V inside step (overrides the file's "
                         "[amplifier] range)")
-    p.add_argument("--slew-rate", type=number_type(0, low_open=True, unit="V/s"),
-                   default=None, metavar="V_PER_S",
-                   help="limit every voltage's rate of change [V/s] (with --amplifier-range, else "
-                        "the model's [amplifier] range)")
+    p.add_argument("--slew-rate", type=_rates, default=None, metavar="V_PER_S[,V_PER_S...]",
+                   help="limit every voltage's rate of change [V/s], one rate or one per input "
+                        "in the model's order (with --amplifier-range, else the model's "
+                        "[amplifier] range); a drive whose start-up compensate slew-limited names "
+                        "the rates that make the C reproduce it")
     p.add_argument("--closed-loop", nargs="?", const="", default=None, metavar="FILE",
                    help="export the discrete feedback controller of FILE's [feedback] table (a "
                         "feedback scenario or a preset; without FILE, MODEL_OR_PRESET's) with "
@@ -218,11 +219,11 @@ def _closed_loop_code(args, source, comp, T, name):
     if args.amplifier_range is not None:        # the command line overrides the table's range
         table = {**table, "amplifier": {**table.get("amplifier", {}),
                                         "range": list(args.amplifier_range),
-                                        **({"slew_rate": args.slew_rate}
+                                        **({"slew_rate": args.slew_rate[0]}
                                            if args.slew_rate is not None else {})}}
     elif args.slew_rate is not None:            # the table's range, this slew rate
         table = {**table, "amplifier": _with_slew_rate(
-            table.get("amplifier") or source.amplifier or {}, args.slew_rate)}
+            table.get("amplifier") or source.amplifier or {}, args.slew_rate[:1], [])}
     if source.preset:                           # a preset: its actuator (dynamics, creep)
         plant = load_plant(source.path)
     else:
@@ -283,6 +284,11 @@ def handler(args):
     except PresetError as exc:
         print_err(f"{prog}: error: {' '.join(str(exc).split())}")
         return 1
+    m = len(source.model.input_names)
+    if args.slew_rate is not None and len(args.slew_rate) not in (1, m):
+        print_err(f"{prog}: error: --slew-rate: expected 1 or {m} rates [V/s] (one per input: "
+                  f"{', '.join(source.model.input_names)}), found {len(args.slew_rate)}")
+        return 2
     if args.slew_rate is not None and args.amplifier_range is None \
             and not _has_range(source.amplifier, list(source.model.input_names)):
         print_err(f"{prog}: error: --slew-rate needs a range: {args.source} has no [amplifier] "
@@ -323,6 +329,10 @@ def handler(args):
             print_err(f"{prog}: error: --closed-loop: the controller is exported in double "
                       f"precision only")
             return 2
+        if args.slew_rate is not None and len(args.slew_rate) > 1:
+            print_err(f"{prog}: error: --closed-loop: the [feedback] amplifier takes one "
+                      f"--slew-rate for every input, found {len(args.slew_rate)}")
+            return 2
         try:
             return _closed_loop(args, source, kind, gain, check, note)
         except PresetError as exc:
@@ -343,11 +353,11 @@ def _limits(args, source):
     if args.amplifier_range is not None:
         table = {"range": list(args.amplifier_range)}
         if args.slew_rate is not None:
-            table["slew_rate"] = args.slew_rate
+            table = _with_slew_rate(table, args.slew_rate, inputs)
         return limits_from_table(table, inputs, "--amplifier-range/--slew-rate")
-    if args.slew_rate is not None:     # the preset's [amplifier] range, this slew rate
-        return limits_from_table(_with_slew_rate(source.amplifier, args.slew_rate), inputs,
-                                 "amplifier")
+    if args.slew_rate is not None:     # the preset's [amplifier] range, these slew rates
+        return limits_from_table(_with_slew_rate(source.amplifier, args.slew_rate, inputs),
+                                 inputs, "amplifier")
     return limits_from_table(source.amplifier, inputs, "amplifier")
 
 
@@ -472,11 +482,23 @@ def _has_range(table, inputs):
     return all(isinstance(table.get(n), dict) and "range" in table[n] for n in inputs)
 
 
-def _with_slew_rate(table, slew_rate):
-    """An ``[amplifier]`` table with ``slew_rate`` for every input (``--slew-rate``)."""
+def _rates(text):
+    """``--slew-rate``: one rate [V/s] or one per input, comma-separated (each > 0)."""
+    one = number_type(0, low_open=True, unit="V/s")
+    return tuple(one(v.strip()) for v in str(text).split(","))
+
+
+def _with_slew_rate(table, rates, inputs):
+    """An ``[amplifier]`` table with ``--slew-rate``'s rates: one for every input, or one per
+    input (in ``inputs``' order) in its ``[amplifier.<input>]`` sub-table."""
     out = {k: ({kk: vv for kk, vv in v.items() if kk != "slew_rate"} if isinstance(v, dict)
                else v) for k, v in table.items()}
-    out["slew_rate"] = slew_rate
+    if len(rates) == 1:
+        out["slew_rate"] = rates[0]
+        return out
+    out.pop("slew_rate", None)
+    for name, rate in zip(inputs, rates):
+        out[name] = {**(out.get(name) if isinstance(out.get(name), dict) else {}), "slew_rate": rate}
     return out
 
 

@@ -58,7 +58,7 @@ from hammerstein.compensation.lookahead import preactuation_samples, taper_preac
 from hammerstein.compensation.drive_splice import keep_end, keep_start, learning_onset
 from hammerstein.compensation.edge_holds import edge_hold_note, reference_at_rest
 from hammerstein.compensation.shaping import shape_reference, time_intervals
-from hammerstein.compensation.start_up import settled_bound, start_up_in_reference
+from hammerstein.compensation.start_up import export_slew_words, settled_bound, start_up_in_reference
 from hammerstein.exceptions import CompensatorError, RangeWarning
 from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
                                                   signals_csv)
@@ -769,6 +769,8 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         before = out
         out, notes = limit_start_up(out, n, P, r0, input_names or (
             amplifier.inputs if amplifier is not None else None), T, input_unit)
+        if notes:       # the limit the exported C needs to give this drive too
+            notes[-1] += export_slew_words(before, out, min(n + max(P, 1), N), T, amplifier)
         res.shaped += notes
         # moved by more than START_UP_MOVE of the drive's peak: the start-ups limited by a
         # hair (0.1-0.2 % of the settled step asked beyond it) moved circles' drives by

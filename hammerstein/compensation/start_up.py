@@ -231,3 +231,61 @@ def _limit_until_caught(x, rest, bound, step, end):
     out = x.copy()
     out[:c] = a[:c]
     return out, c
+
+
+def export_slew_words(before, after, end, sampling_period, amplifier=None):
+    """What makes the exported C reproduce a start-up slew-limited after the compensator.
+
+    :func:`~hammerstein.compensation.drive.limit_start_up` slew-limits each
+    input whose start-up steps faster than its settled part to ``S``, the
+    settled part's largest step (from ``end`` on); the exported C applies
+    the same limit, ``amp += clip(x - amp, -S, S)`` from the rest voltage
+    (:func:`hammerstein.export.c_base._limits_code`), when exported with the
+    slew rate ``S / T`` on those inputs. The other inputs keep the
+    amplifier's slew rate, or without one a rate above their largest step
+    (the limit never acts there); without an amplifier range, a range
+    holding 0 V and the drive before and after the limit goes with it
+    (``--slew-rate`` needs one).
+
+    Parameters
+    ----------
+    before, after : array_like, shape (m, n_samples)
+        The drive before and after the start-up's limit [V].
+    end : int
+        First sample of the settled part.
+    sampling_period : float
+        T [s].
+    amplifier : hammerstein.models.amplifier.Amplifier, optional
+
+    Returns
+    -------
+    str
+        ``": the exported C gives this drive ... --slew-rate R1,R2"``, or
+        ``""`` when no input was limited.
+
+    Examples
+    --------
+    >>> export_slew_words([[0.0, 3.0, 3.5, 3.0]], [[0.0, 0.5, 1.0, 1.5]], 1, 0.5)
+    '; the exported C gives this drive, fed its reference, when exported with --amplifier-range 0 4 --slew-rate 1.0'
+    """
+    u = np.array(before, dtype=float, ndmin=2)
+    v = np.array(after, dtype=float, ndmin=2)
+    limited = np.any(u != v, axis=1)
+    if not np.any(limited):
+        return ""
+    T = float(sampling_period)
+    bound = settled_bound(u, end)
+    rest = np.zeros(u.shape[0]) if amplifier is None else amplifier.rest_voltages()
+    largest = np.max(np.abs(np.diff(np.concatenate([rest[:, None], v], axis=1), axis=1)), axis=1)
+    rates = []
+    for i in range(u.shape[0]):
+        own = None if amplifier is None else amplifier.channels[i].slew_rate
+        rates.append(bound[i] / T if limited[i] else
+                     own if own is not None and np.isfinite(own) else 2.0 * max(largest[i], 1e-6) / T)
+    ranged = amplifier is not None and all(np.isfinite(c.low) and np.isfinite(c.high)
+                                           for c in amplifier.channels)
+    # the C clips the compensator's voltages to the range before the slew limit: both held
+    span = "" if ranged else (f" --amplifier-range {np.floor(min(0.0, u.min(), v.min())):.0f} "
+                              f"{np.ceil(max(0.0, u.max(), v.max())):.0f}")
+    return ("; the exported C gives this drive, fed its reference, when exported with"
+            f"{span} --slew-rate " + ",".join(repr(float(r)) for r in rates))

@@ -59,6 +59,11 @@ def test_the_stable_inversion_is_exported(tmp_path, capsys):
     (["--kind", "per-axis", "--iterations", "3"], 1, "takes no gain"),
     (["--amplifier-range", "5", "-5"], 2, "--amplifier-range: expected MIN MAX"),
     (["--slew-rate", "100"], 2, "--slew-rate needs"),
+    (["--amplifier-range", "-5", "5", "--slew-rate", "1,2,3"], 2,
+     "--slew-rate: expected 1 or 2 rates [V/s] (one per input: ux, uy), found 3"),
+    (["--amplifier-range", "-5", "5", "--slew-rate", "1,-2"], 2, "--slew-rate: expected a number > 0"),
+    (["--closed-loop", "--amplifier-range", "-5", "5", "--slew-rate", "1,2"], 2,
+     "--closed-loop: the [feedback] amplifier takes one --slew-rate for every input, found 2"),
     (["--name", "int"], 2, "--name"),
     (["--name", "9lives"], 2, "--name"),
     (["--iterations", "0"], 2, "--iterations"),
@@ -260,6 +265,13 @@ def test_the_limits_built_into_the_step_are_said_and_a_records_slew_is_named(tmp
     assert main([*base, "--slew-rate", "2e5", "--out", str(tmp_path / "b")]) == 0
     out = capsys.readouterr().out
     assert "limits: ux [-100, 100] V, 2e+05 V/s; uy [-50, 100] V, 2e+05 V/s\n" in out
+    # one rate per input (the rates a drive's start-up limit names): each built into its input
+    assert main([*base, "--slew-rate", "2e5,123.25", "--out", str(tmp_path / "d")]) == 0
+    assert "limits: ux [-100, 100] V, 2e+05 V/s; uy [-50, 100] V, 123.2 V/s\n" in \
+        capsys.readouterr().out
+    code = (tmp_path / "d" / "m_multivariable.c").read_text()
+    assert f"m_multivariable_u_step0 = {2e5 * 5e-5!r};" in code
+    assert f"m_multivariable_u_step1 = {123.25 * 5e-5!r};" in code
     assert main(["export", "rakotondrabe-2dof", "--kind", "multivariable", "--out",
                  str(tmp_path / "c")]) == 0
     assert "limits: none (the voltages are not clamped" in capsys.readouterr().out

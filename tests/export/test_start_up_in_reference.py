@@ -20,6 +20,7 @@ import numpy as np
 
 import hammerstein as hs
 from hammerstein.export import export_c
+from hammerstein.export.c_base import AmplifierLimits
 from hammerstein.scenario.hardware_route import compensate_reference
 
 from conftest import Harness, needs_cc
@@ -57,3 +58,40 @@ def test_held_axis_start_up_the_c_equals_the_drive_over_the_whole_record(tmp_pat
     text = " ".join(drive.shaped)
     assert "start-up corrected in the reference" in text
     assert "slew-limited" not in text        # nothing changed after the compensator
+
+
+@needs_cc
+def test_start_up_slew_limited_after_the_compensator_the_c_exported_with_the_named_rates_equals_it(
+        tmp_path):
+    """A circle's start-up a hair faster than its settled drive stays slew-limited after the
+    compensator (within 5 % of the settled step): the drive's note names the --slew-rate that
+    builds the same limit into the C; so exported, the C fed the reference gives the drive to
+    1e-12 relative; exported without it, it departs where the limit acted (8e-7 relative)."""
+    plant = hs.load_plant(str(PRESET))
+    T, f, periods = plant.sampling_period, 100.0, 20
+    P = int(round(1 / f / T))
+    n = P * periods
+
+    def reference(count):                   # a 10 µm circle from (10, 0)
+        t = np.arange(count) * T
+        return 10.0 * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp, drive = compensate_reference(plant, reference(n), period_samples=P)
+    u = drive.inputs
+    line = next(s for s in drive.shaped if "when exported with" in s)
+    assert "slew-limited to the settled drive's largest step" in line
+    words = line.split("when exported with ")[1].split()
+    rates = [float(v) for v in words[words.index("--slew-rate") + 1].split(",")]
+    # the preset has no [amplifier]: a range holding the drive and 0 V is named with the rates
+    lo, hi = (float(v) for v in words[words.index("--amplifier-range") + 1:][:2])
+    assert len(rates) == u.shape[0] and lo <= min(0.0, u.min()) and hi >= max(0.0, u.max())
+    fed = None
+    for limits, equal in ((AmplifierLimits(lo, hi, rates), True), (None, False)):
+        code = export_c(comp, "circle", T, limits=limits)
+        if fed is None:
+            fed = np.hstack([np.asarray(drive.reference), reference(n + code.preview)[:, n:]])
+        u_c, status, _ = Harness(code, tmp_path / f"h{equal}").run(fed[:, code.preview:])
+        off = np.max(np.abs(u_c - u)) / np.max(np.abs(u))
+        assert (off <= 1e-12) if equal else (off > 1e-9), off
