@@ -58,7 +58,8 @@ from hammerstein.compensation.lookahead import preactuation_samples, taper_preac
 from hammerstein.compensation.drive_splice import keep_end, keep_start, learning_onset
 from hammerstein.compensation.edge_holds import edge_hold_note, reference_at_rest
 from hammerstein.compensation.shaping import shape_reference, time_intervals
-from hammerstein.compensation.start_up import export_slew_words, settled_bound, start_up_in_reference
+from hammerstein.compensation.start_up import (at_rest_while_previewing, export_slew_words, settled_bound,
+                                               start_up_in_reference)
 from hammerstein.exceptions import CompensatorError, RangeWarning
 from hammerstein.compensation.drive_files import (DRIVE_MARK, fade_weight, drive_fade_samples, read_signals,
                                                   signals_csv)
@@ -663,6 +664,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
     y_rest = np.zeros(r.shape[0]) if rest is None else np.asarray(rest, dtype=float)
 
     passes = []
+    preview = int(getattr(compensator, "preview_samples", 0) or 0)
     # the compensator's look-ahead past the end: the given period, else the record's own
     # (a file holding a pattern several times over), else an extrapolation
     repeat = P or record_period(r) or 0
@@ -672,6 +674,10 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         if progress is not None:
             progress(f"pass {len(passes)} over the {N} samples ({why})")
         ext = _periodic_tail(ref, r, repeat, getattr(compensator, "preview_samples", 0) or 1)
+        if at_rest_while_previewing(ref, preview):   # as the exported C: its law starts there
+            u = _compensate(compensator, ext[:, preview:], repeat or None, 0)[0][:, :N - preview]
+            rest0 = np.zeros(u.shape[0]) if u_rest is None else u_rest
+            return np.concatenate([np.repeat(rest0[:, None], preview, axis=1), u], axis=1)
         return _compensate(compensator, ext, repeat or None, 0)[0][:, :N]
 
     def run(fade, lead=None):

@@ -289,3 +289,40 @@ def export_slew_words(before, after, end, sampling_period, amplifier=None):
                               f"{np.ceil(max(0.0, u.max(), v.max())):.0f}")
     return ("; the exported C gives this drive, fed its reference, when exported with"
             f"{span} --slew-rate " + ",".join(repr(float(r)) for r in rates))
+
+
+
+def at_rest_while_previewing(reference, preview):
+    """Whether the exported C's preview fills at rest: the reference holds its first value over
+    ``preview + 1`` samples (a faded reference's rest lead).
+
+    The exported C returns the rest voltages for its first ``preview`` calls
+    (``NAME_PREVIEW``) and computes its first voltage at sample ``preview``;
+    the compensator in Python, run from sample 0, would first compute the
+    inverse of the rest output, which its root search's tolerance leaves up
+    to about 3e-10 V from rest (a Preisach inverse on a bundled preset), and
+    every later root starts from there: the C and the drive then differed by
+    up to 1e-10 V while the fade-in left rest (4e-11 of the drive's peak).
+    Where this holds, :func:`hammerstein.compensation.drive.hardware_drive`
+    runs the compensator from sample ``preview`` and holds the rest voltages
+    before it, as the C does.
+
+    Parameters
+    ----------
+    reference : array_like, shape (p, n_samples)
+        [µm].
+    preview : int
+        The compensator's ``preview_samples``.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> at_rest_while_previewing(np.zeros((2, 5)), 3), at_rest_while_previewing(np.arange(5.0)[None], 3)
+    (True, False)
+    """
+    r = np.asarray(reference, dtype=float)
+    P = int(preview)
+    return 0 < P < r.shape[1] and bool(np.all(r[:, :P + 1] == r[:, :1]))
