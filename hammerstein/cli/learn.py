@@ -139,6 +139,7 @@ from hammerstein.compensation.drive import (MIN_FADE_S, drive_fade_samples, hard
                                             read_signals, settled_step,
                                             rest_output, shape_drive, signals_csv)
 from hammerstein.compensation.edge_holds import edge_hold_note, reference_at_rest
+from hammerstein.compensation.start_up import export_slew_words
 from hammerstein.compensation.drive_files import (drive_rest_lead, drive_rest_output,
                                                   followed_reference, head_lines, learnt_names,
                                                   rest_lead_text, shaped_target)
@@ -757,10 +758,14 @@ def _learn(args):
                 if problems:
                     u_next, _ = plant.amplifier.limit(u_next, T)
         # no start-up step beyond the settled drive's largest (as compensate's default)
+        before = u_next
         u_next, more = (u_next, []) if verdict.remeasure else limit_start_up(
             u_next, fade, ref.period_samples,
             None if plant.amplifier is None else plant.amplifier.rest_voltages(),
             list(model.input_names), T, plant.units[0])
+        if more:        # the limit the exported C needs to give this drive too
+            more[-1] += export_slew_words(before, u_next, min(fade + max(ref.period_samples or 1, 1),
+                                                              u_next.shape[1]), T, plant.amplifier)
         shaped += more
         # an input held on its range's edge after the fade-in, named as compensate names it
         edge = edge_hold_note(u_next, plant.amplifier, fade, T, None if plant.amplifier is None

@@ -136,3 +136,47 @@ def test_the_drive_holds_rest_while_the_c_fills_its_preview_and_equals_it_after(
     u_c, _, _ = Harness(code, tmp_path / "h").run(fed[:, code.preview:])
     last = n - code.preview          # the preview's end: compensate continues the reference
     assert np.max(np.abs(u_c - u)[:, :last]) <= 1e-12 * np.max(np.abs(u))
+
+
+def _drive_file(path):
+    """(header text, columns dict) of a drive file."""
+    text = Path(path).read_text().splitlines()
+    rows = [ln for ln in text if ln and not ln.startswith("#")]
+    head = rows[0].split(",")
+    vals = np.array([[float(v) for v in ln.split(",")] for ln in rows[1:]])
+    return "\n".join(ln for ln in text if ln.startswith("#")), {h: vals[:, i] for i, h in
+                                                               enumerate(head)}
+
+
+@needs_cc
+def test_a_learnt_drive_slew_limited_at_its_start_up_names_the_rates_too(tmp_path, monkeypatch):
+    """learn slew-limits its drive's start-up as compensate does; its header names the same
+    --slew-rate, and the C so exported, fed the drive's learnt reference, gives the drive."""
+    from hammerstein.cli.main import main
+    monkeypatch.chdir(tmp_path)
+    plant = hs.load_plant(str(PRESET))
+    spec = '{ kind = "circle", radius = 10, frequency = 100, periods = 20 }'
+    assert main(["compensate", str(PRESET), "--reference", spec, "--out", "u0.csv"]) == 0
+    _, cols = _drive_file("u0.csv")
+    u0 = np.vstack([cols["ux"], cols["uy"]])
+    y0 = 1.03 * plant.simulate(u0)[0] + 0.05           # an actuator 3 % stiffer than the model
+    np.savetxt("y0.csv", np.column_stack([cols["t"], y0.T]), delimiter=",", header="t,x,y",
+               comments="")
+    assert main(["learn", str(PRESET), "--reference", spec, "--drive", "u0.csv", "--measured",
+                 "y0.csv", "--out", "u1.csv"]) == 0
+    header, cols = _drive_file("u1.csv")
+    u = np.vstack([cols["ux"], cols["uy"]])
+    words = header.split("when exported with ")[1].split()
+    rates = [float(v) for v in words[words.index("--slew-rate") + 1].split(",")]
+    lo, hi = (float(v) for v in words[words.index("--amplifier-range") + 1:][:2])
+    learnt = np.vstack([cols["x_learnt"], cols["y_learnt"]])
+    T, n = plant.sampling_period, u.shape[1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp, _ = compensate_reference(plant, learnt[:, :400], period_samples=100)
+    for limits, equal in ((AmplifierLimits(lo, hi, rates), True), (None, False)):
+        code = export_c(comp, "learnt", T, limits=limits)
+        fed = np.hstack([learnt, learnt[:, n - 100:n - 100 + code.preview]])   # one period on
+        u_c, _, _ = Harness(code, tmp_path / f"h{equal}").run(fed[:, code.preview:])
+        off = np.max(np.abs(u_c - u)[:, :n - code.preview]) / np.max(np.abs(u))
+        assert (off <= 1e-12) if equal else (off > 1e-9), off
