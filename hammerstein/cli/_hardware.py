@@ -23,7 +23,7 @@ from hammerstein.models.amplifier import amplifier_from_table
 from hammerstein.core.numbers import magnitude_problem, plausibility_problem
 from hammerstein.models.hysteresis import MultivariablePI
 from hammerstein.models.plant import HammersteinPlant
-from hammerstein.io.presets import (load_dynamics, load_model, load_plant, read_toml,
+from hammerstein.io.presets import (load_creep, load_dynamics, load_model, load_plant, read_toml,
                                     records_sampling_period, resolve_preset)
 from hammerstein.identification.identification_pipeline import (DYNAMICS_FIT_WARN_PERCENT,
                                                                  STATIC_GAIN_WARN)
@@ -196,16 +196,22 @@ def load_actuator(path, sampling_period=None):
             scale = plant.sampling_period / float(sampling_period)
             dyn = None if plant.is_static else load_dynamics(
                 resolve_preset(path), plant.hysteresis.output_names, sampling_period)
-            amp = plant.amplifier
+            amp, units = plant.amplifier, plant.units
             plant = HammersteinPlant(plant.hysteresis, float(sampling_period), dyn, plant.name,
                                      creep=plant.creep)     # the creep's lags are continuous
-            plant.amplifier = amp
+            plant.amplifier, plant.units = amp, units
     else:
         if sampling_period is None:
             sampling_period = records_sampling_period(data, path)
         model = load_model(p)
         dyn = load_dynamics(p, model.output_names, sampling_period) if "dynamics" in data else None
-        plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem)
+        # the file's creep and units, as load_plant reads a preset's (a model identified with
+        # --creep-records but no --dynamics lost its creep here, and one in nm or mV had its
+        # drive's header, notes and shaped columns labelled µm and V)
+        plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem,
+                                 creep=load_creep(p, model.output_names) if "creep" in data else None)
+        plant.units = (str(data["model"].get("input_unit", "V")),
+                       str(data["model"].get("output_unit", "µm")))
         if "amplifier" in data:
             plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
     problem = falling_direct_transfer(plant.hysteresis)

@@ -77,6 +77,24 @@ def test_a_declared_unit_is_not_second_guessed(tmp_path, capsys):
     assert "spans" not in capsys.readouterr().err
 
 
+def test_a_model_file_in_nm_gives_drives_in_nm(tmp_path, capsys):
+    """A model file identified in nm (no --dynamics: no [preset] table) is compensated in nm:
+    the drive's header gives its rest output in nm. compensate read such a file without its
+    units and labelled a drive for a model in nm with µm."""
+    files = _files(tmp_path, x_scale=1e3, y_scale=1e3)
+    model = tmp_path / "m.toml"
+    assert main(["identify", *files, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t",
+                 "--model", "classical", "--output-unit", "nm", "--out", str(model)]) == 0
+    drive = tmp_path / "u.csv"
+    assert main(["compensate", str(model), "--reference",
+                 '{ kind = "circle", radius = 2000, frequency = 0.5, periods = 2 }',
+                 "--out", str(drive)]) == 0
+    capsys.readouterr()
+    header = [ln for ln in drive.read_text().splitlines() if ln.startswith("#")]
+    rest = next(ln for ln in header if "from the rest output" in ln)
+    assert rest.count(" nm") >= 2 and "µm" not in rest, rest
+
+
 def test_a_record_cut_after_its_levels_says_so(tmp_path, capsys):
     """A unipolar input's record ramps back to rest after its levels: the classical PI is
     fitted on the levels only (103257 of 105000 samples said without a reason before)."""
@@ -94,3 +112,27 @@ def test_a_record_cut_after_its_levels_says_so(tmp_path, capsys):
     n = int(line[len(files[1]) + 2:].split()[0])
     assert n < whole
     assert f"{n} samples (of {whole}: what follows the last amplitude level" in line
+
+
+def test_a_model_file_with_creep_and_no_dynamics_keeps_its_creep(tmp_path):
+    """A model file with a [creep] table and no [dynamics] (identify --creep-records without
+    --dynamics) is read with its creep by the commands as by a scenario: compensate, learn and
+    evaluate read it without, and their predictions lacked the drift the file holds."""
+    from pathlib import Path
+
+    from hammerstein.cli._hardware import load_actuator
+    preset = Path(__file__).resolve().parents[2] / "scenarios" / "presets" / "realistic-b.toml"
+    kept, skip = [], False
+    for line in preset.read_text().splitlines():      # the model file: no [preset], no [dynamics]
+        if line.startswith("["):
+            skip = line.split("]")[0] in ("[preset", "[dynamics")
+        if not skip:
+            kept.append(line)
+    model = tmp_path / "m.toml"
+    model.write_text("\n".join(kept) + "\n")
+    plant = load_actuator(str(model), 5e-5)
+    assert plant.creep is not None
+    u = np.zeros((2, 40000))
+    u[0, 100:] = 5.0                  # a 5 V step held 2 s: the output creeps on after it
+    y = plant.simulate(u)[0]
+    assert y[0, -1] - y[0, 200] > 0.005 * abs(y[0, 200] - y[0, 0])
