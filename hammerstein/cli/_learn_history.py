@@ -268,12 +268,13 @@ def _history_extras(history_dir):
 
 
 def _write_history(history, names, rec, scale, scale_name="radius / amplitude", out=None,
-                   settled=None, aligned=None):
+                   settled=None, aligned=None, unit="µm"):
     """Append a trial to ``history.csv`` and redraw ``convergence.png``; the trial number.
 
     ``aligned``: ``(delay [samples], window start [s])``: the trial's errors are those of
     the measurement advanced by that delay over the window from that time (written in
-    each row and in the figure's title).
+    each row and in the figure's title); ``unit``: the model's output unit, the figure's
+    axis label's (the columns keep their names, ``max_error_um``, whatever the unit).
     """
     d = Path(history)
     problem = foreign_history_problem(d, out)
@@ -298,7 +299,8 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     if aligned is not None:
         title += (f" (measurement advanced by its delay of {int(aligned[0])} samples; "
                   f"window from t = {aligned[1]:.4g} s)")
-    fig = convergence_figure(its, mx, rms, names, title, scale, scale_name, euclid, judged)
+    fig = convergence_figure(its, mx, rms, names, title, scale, scale_name, euclid, judged,
+                             unit)
     safe_write(d / "convergence.png", lambda fh: save(fig, fh), "convergence figure", root=d)
     return k
 

@@ -865,7 +865,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
         return None
     k = _write_history(args.history, list(model.output_names), rec, ref.scale,
                        "the raster's size" if ref.kind == "raster" else "radius / amplitude",
-                       args.out, settled, aligned)
+                       args.out, settled, aligned, unit_out)
     if gains is not None:
         _save_gains(args.history, gains)
     if best:

@@ -16,7 +16,7 @@ __all__ = ["convergence_figure", "iteration_history"]
 
 
 def convergence_figure(iterations, max_error, rms_error, names, title, scale=None,
-                       scale_name="radius / amplitude", euclidean=None, judged=None):
+                       scale_name="radius / amplitude", euclidean=None, judged=None, unit="µm"):
     """Max and RMS tracking error against the trial, per axis (log scale).
 
     With ``euclidean`` (and ``judged``), the settled max Euclidean error
@@ -42,6 +42,9 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     euclidean, judged : array_like, shape (n,), optional
         Settled max Euclidean error and judged error per trial [µm] (NaN
         where a trial has none).
+    unit : str
+        The errors' unit (the model's output unit, ``HammersteinPlant.units[1]``),
+        the axis label's.
 
     Returns
     -------
@@ -79,7 +82,7 @@ def convergence_figure(iterations, max_error, rms_error, names, title, scale=Non
     for (values, style), d in zip(series, dx):
         ax.semilogy(k + d, values, **style)
     ax.set_xlabel("trial k")
-    ax.set_ylabel("tracking error [µm]")
+    ax.set_ylabel(f"tracking error [{unit}]")
     ax.set_xticks(k)
     ax.set_xlim(float(k.min()) - 1.2 * width, float(k.max()) + 1.2 * width)
     ax.grid(True, which="major", alpha=0.3)
