@@ -16,7 +16,8 @@ figure and ``timeseries-measured.csv`` show the reference the drive
 followed: with ``--drive``, its shaped reference, else the reference faded
 in from rest as its header records (the metrics, after the fade-in, are
 the same against either); the figure shades the fade-in apart from the
-settling periods after it.
+settling periods after it. Units: the ``--drive`` header's, else µm and V (a model's in
+nm and mV: ``x_nm`` columns, nm metrics; :func:`~hammerstein.compensation.drive_files.drive_units`).
 
 The delay between the reference and the measurement is estimated by
 cross-correlation over the settled part (after the fade-in and ``--settle-periods``),
@@ -53,7 +54,7 @@ from hammerstein.compensation.drive import (apply_amplifier, drive_fade_samples,
                                            read_signals)
 from hammerstein.cli._evaluate_files import Tables, drive_inputs, now_or_later
 from hammerstein.compensation.drive_files import (AIMED_SUFFIXES, drive_input_names, drive_rest_lead,
-                                                  drive_rest_output,
+                                                  drive_rest_output, drive_units,
                                                   head_lines, optional_columns)
 from hammerstein.core.files import (all_or_nothing, bounded_read_bytes, guard_inputs,
                                     make_directory, output_problem, safe_write)
@@ -231,7 +232,8 @@ def _names(text, default):
 
 
 def evaluate(reference, measured, period_samples, sampling_period, output_names, settle_periods=1.0,
-             scale=None, loop_channel=None, remove_delay=False, raster_frequency=None):
+             scale=None, loop_channel=None, remove_delay=False, raster_frequency=None,
+             output_unit="µm"):
     """Metrics of a measured response (the rows of ``metrics.csv``).
 
     Parameters
@@ -251,6 +253,8 @@ def evaluate(reference, measured, period_samples, sampling_period, output_names,
         Advance the measurement by the estimated delay first.
     raster_frequency : float, optional
         Raster references: line metrics.
+    output_unit : str
+        The values' unit (the rows stay labelled µm), named in the error.
 
     Returns
     -------
@@ -293,7 +297,7 @@ def evaluate(reference, measured, period_samples, sampling_period, output_names,
     if bad:     # an infinite metric is an error, not a file
         raise DataFileError(f"{bad[0]['channel']}: {bad[0]['metric']} would be "
                             f"{bad[0]['value']}; the values are too large to compute with "
-                            f"(check the units: µm expected)")
+                            f"(check the units: {output_unit} expected)")
     return rows, delay, measured, reference
 
 
@@ -366,6 +370,7 @@ def _handle(args):
             drive_shaped = now_or_later(_shaped_reference, args.drive, outs, period, table)
             del table
             tables.drop(args.drive, "--drive")
+        units = drive_units(args.drive) if args.drive else ("V", "µm")   # (input, output)
         rate_notes = []
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, period,
                                "--measured", upsample=False, notes=rate_notes,
@@ -423,7 +428,7 @@ def _handle(args):
         # the fade-in is not tracking: the metrics start after it and --settle-periods
         args.settle_periods = args.settle_periods + fade / max(ref.period_samples, 1)
         rows, delay, ym, r = evaluate(r, y, ref.period_samples, T, outs, args.settle_periods,
-                                      ref.scale, ref.loop_channel, args.remove_delay, rf)
+                                      ref.scale, ref.loop_channel, args.remove_delay, rf, units[1])
         shaped = drive_shaped() if args.drive else None
         tracked = _tracked_reference(args.drive, outs, ref.signal[:, :N], fade, shaped)
         shaped_rows = []
@@ -432,7 +437,7 @@ def _handle(args):
             # amplifier and the identified dynamics): judged as well, case "shaped"
             shaped_rows, _, _, _ = evaluate(shaped[:, :N], y, ref.period_samples, T, outs,
                                             args.settle_periods, ref.scale, ref.loop_channel,
-                                            args.remove_delay, rf)
+                                            args.remove_delay, rf, units[1])
         gains, offset = _model_gains(plant, u, y, T, delay, fade, ref.period_samples,
                                      ref.signal[:, :N]) if args.model else (None, None)
         if offset is not None:      # a pre-trigger: the gains and errors are of the offset
@@ -450,11 +455,13 @@ def _handle(args):
             for i, n in enumerate(ins):
                 rows += [{"channel": n, "metric": "peak_input", "value": float(peak[i]), "unit": "V"},
                          {"channel": n, "metric": "peak_slew", "value": float(slew[i]), "unit": "V/s"}]
+        rows, shaped_rows = ([{**w, "unit": met.unit_label(w["unit"], units)} for w in ws]
+                             for ws in (rows, shaped_rows))     # the values are in the drive's
         created = not os.path.lexists(out)
         try:
             with all_or_nothing():     # a failed write (full disk) leaves none of the files
                 _write(out, args, rows, delay, T, tracked[:, :r.shape[1]], ym, outs, u, ins, ref,
-                       shaped_rows, fade)
+                       shaped_rows, fade, units)
         except BaseException:
             if created:                # the directory this run made, empty again: removed
                 with contextlib.suppress(OSError):
@@ -475,7 +482,7 @@ def _handle(args):
         print_err("note: no --drive: the metrics start after --settle-periods only; a drive "
                   "of compensate or learn starts with a fade-in that is no tracking, left out "
                   "when the drive is given (--drive DRIVE.csv)")
-    summary = next((f"{row['value']:.4g} µm" for row in rows
+    summary = next((f"{row['value']:.4g} {row['unit']}" for row in rows
                     if row["metric"] == "max_euclidean_error"), "")
     print(f"wrote {out}/ (max Euclidean error {summary}, delay {delay} samples = "
           f"{delay * T * 1e6:.4g} µs{', removed' if args.remove_delay and delay > 0 else ', not removed'})",
@@ -671,7 +678,8 @@ def _report_dir_problem(out):
     return None
 
 
-def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), fade=0):
+def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), fade=0,
+           units=("V", "µm")):
     make_directory(out, "--out")
     # the marker lists evaluate's files (its manifest): a later `run` into this directory then
     # replaces nothing else (your notes beside the report)
@@ -684,17 +692,19 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), f
     n = y.shape[1]
     t = np.arange(n) * T
     cols = [t] + [r[i] for i in range(len(outs))] + [y[i] for i in range(len(outs))]
-    head = ["time_s"] + [f"{o}_ref_um" for o in outs] + [f"{o}_um" for o in outs]
+    tag_in, tag_out = (unit.replace("µ", "u") for unit in units)     # x_um, x_nm, ux_mV
+    head = ["time_s"] + [f"{o}_ref_{tag_out}" for o in outs] + [f"{o}_{tag_out}" for o in outs]
     if u is not None:
         cols += [u[i, :n] for i in range(len(ins))]
-        head += [f"{i}_V" for i in ins]
+        head += [f"{i}_{tag_in}" for i in ins]
     safe_write(out / "timeseries-measured.csv", lambda fh: write_rows(fh, head, cols),
                "time series file", root=out)
     figure = ""
     if len(outs) >= 1:             # the XY of the first two outputs, every output against time
         fig = trajectory_figure(t, r, y, outs, _figure_title(args, outs), args.settle_periods *
                                 ref.period_samples * T, inputs=None if u is None else u[:, :n],
-                                input_names=ins if u is not None else None, fade_time=fade * T)
+                                input_names=ins if u is not None else None, fade_time=fade * T,
+                                units=units)
         safe_write(out / "trajectory-measured.png", lambda fh: save(fig, fh), "figure", root=out)
         figure = "\n![trajectory](trajectory-measured.png)\n"
     table = "\n".join(f"| {row['channel']} | {row['metric']} | {_value(row['value'])} | "
@@ -715,8 +725,8 @@ def _write(out, args, rows, delay, T, r, y, outs, u, ins, ref, shaped_rows=(), f
                 f"fade-in of the drive, when known, counted in them), counted from its first "
                 f"sample: from sample {start}, t = {start * T:.4g} s, to the end. The tracking "
                 f"error is e = y_r − y per output; the Euclidean error ‖Y_r − Y‖ takes all "
-                f"outputs together."))
-    text = (f"# {markdown_text(_heading(args, ref))}\n\nreference: `{args.reference}`  \n"
+                f"outputs together."), units=units)
+    text = (f"# {markdown_text(_heading(args, ref, units[1]))}\n\nreference: `{args.reference}`  \n"
             f"measured: `{args.measured}`"
             f"  \nsampling period {T:g} s, {n} samples, settling {_settling(args, ref)}"
             f"{_drive_notes(args)}"
@@ -779,10 +789,10 @@ def _actuator(args):
     return None
 
 
-def _heading(args, ref):
-    """``Measured response of <actuator> to <the reference in words>``."""
+def _heading(args, ref, unit="µm"):
+    """``Measured response of <actuator> to <the reference in words>`` (its lengths in ``unit``)."""
     spec = getattr(ref, "spec", None)
-    what = (signal_summary("reference", spec) if isinstance(spec, dict)
+    what = (signal_summary("reference", spec, unit) if isinstance(spec, dict)
             else f"the reference in {Path(str(args.reference)).name}")
     actuator = _actuator(args)
     return f"Measured response of {actuator} to: {what}" if actuator else \

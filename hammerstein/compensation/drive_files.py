@@ -8,6 +8,10 @@ command knows a file it may replace) and states the fade-in
 any such CSV (drive, measured record or reference file) on a uniform time
 grid. Split from :mod:`hammerstein.compensation.drive`, which re-exports
 these names.
+
+Length: the readers and the writer of one file format, the drive file: its
+table, and each field of its header the hardware commands read back (fade-in,
+rest lead, rest output, units, kind, input columns, shaped and learnt references).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ from hammerstein.exceptions import DataFileError
 
 __all__ = ["DRIVE_MARK", "AIMED_SUFFIXES", "RATE_TOL", "read_signals", "read_table", "block_mean",
            "signals_csv", "signals_writer", "drive_fade_samples", "drive_rest_lead",
-           "drive_rest_output",
+           "drive_rest_output", "drive_units",
            "rest_lead_text", "fade_weight",
            "drive_kind", "optional_columns", "learnt_names", "followed_reference", "shaped_target"]
 
@@ -538,6 +542,74 @@ def drive_rest_output(path, outputs):
             except (KeyError, ValueError):
                 return None
     return None
+
+
+#: A unit in a drive file's header: ``mV``, ``nm``, ``µm`` (no space, comma or bracket).
+_UNIT = r"([^\s\[\](),;]{1,24})"
+
+#: Where a drive file's header names its input unit: its first line (``compensate drive: t
+#: [s]; ux, uy [mV]``, ``learn drive: ...``) or a best trial's (``... the drive [mV], ...``).
+_INPUT_UNIT = (re.compile(r"\bdrive: t \[s\]; [^\[\];]*\[" + _UNIT + r"\]"),
+               re.compile(r"\bthe drive \[" + _UNIT + r"\]"))
+
+#: Where it names its output unit: the rest output's values (``from the rest output x = 1.2
+#: nm, ...``), else the columns of an output it aims at or predicts (``x_learnt, y_learnt
+#: [nm]``, ``x_shaped y_shaped [nm]``, ``x_predicted [nm]``), else a best trial's response.
+_OUTPUT_UNIT = (re.compile(r"from the rest output \S+ = \S+ " + _UNIT),
+                re.compile(r"\w_(?:shaped|learnt|predicted) \[" + _UNIT + r"\]"),
+                re.compile(r"\bmeasured response \[" + _UNIT + r"\]"))
+
+
+def drive_units(path):
+    r"""The input and output units a drive file's header states, ``("V", "µm")`` where it does not.
+
+    ``compensate`` and ``learn`` write the model's units (``identify --input-unit`` and
+    ``--output-unit``) in the header: the inputs' after their names on the first line
+    (``# hammerstein compensate drive: t [s]; ux, uy [mV]``), the outputs' after the rest
+    output's values (``from the rest output x = 1.2 nm, ...``) or after the names of the
+    output columns the drive holds (``x_learnt, y_learnt [nm]``). A file that is no drive,
+    or a drive of an older header, is in the default units. Only the first 20 comment
+    lines are read.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A drive file of ``hammerstein compensate`` or ``learn``.
+
+    Returns
+    -------
+    input_unit : str
+        The inputs' (the drive's columns) unit, ``"V"`` when not stated.
+    output_unit : str
+        The outputs' unit, ``"µm"`` when not stated.
+
+    Raises
+    ------
+    OSError
+        The file cannot be read.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> with tempfile.NamedTemporaryFile("w", suffix=".csv", delete=False,
+    ...                                  encoding="utf-8") as fh:
+    ...     _ = fh.write("# hammerstein compensate drive: t [s]; ux, uy [mV]\n# actuator m.toml, "
+    ...                  "fade-in 4 samples (0.004 s) from the rest output x = 1.2 nm, "
+    ...                  "y = 1.4 nm (the model's output at 0 mV)\nt,ux,uy\n0,0,0\n")
+    >>> drive_units(fh.name)
+    ('mV', 'nm')
+    >>> with open(fh.name, "w", encoding="utf-8") as out:
+    ...     _ = out.write("t,ux\n0,0\n")
+    >>> drive_units(fh.name)
+    ('V', 'µm')
+    >>> os.remove(fh.name)
+    """
+    lines = _header(path)
+    found = []
+    for patterns, default in ((_INPUT_UNIT, "V"), (_OUTPUT_UNIT, "µm")):
+        found.append(next((m.group(1) for pattern in patterns for line in lines
+                           for m in [pattern.search(line)] if m), default))
+    return found[0], found[1]
 
 
 def _header_int(path, pattern):

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import re
 
+from hammerstein.signals.metrics import unit_label
+
 __all__ = ["PAPER", "METRIC_WORDS", "SCALE_WORDS", "TERM_WORDS", "metric_words",
            "definitions_lines", "plural"]
 
@@ -161,7 +163,8 @@ def metric_words(metric, kinds=()):
     return None
 
 
-def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=None):
+def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=None,
+                      units=("V", "µm")):
     """The "Definitions" section of a ``report.md``.
 
     Parameters
@@ -179,6 +182,10 @@ def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=None):
     paper : bool, optional
         Cite :data:`PAPER` ("the paper" of the report); by default when a
         definition written here refers to it.
+    units : tuple of str
+        ``(input unit, output unit)`` of the values: the definitions' ``[µm]``,
+        ``[V]``, ``[V/s]`` and ``[µm/V]`` name them
+        (:func:`hammerstein.signals.metrics.unit_label`).
 
     Returns
     -------
@@ -207,6 +214,8 @@ def definitions_lines(metrics, kinds=None, settle=None, terms=(), paper=None):
     body += [settle, ""]
     for metric in dict.fromkeys(metrics):
         words = metric_words(metric, kinds.get(metric, ()))
+        if words and tuple(units) != ("V", "µm"):
+            words = re.sub(r"\[([^\]]+)\]", lambda m: f"[{unit_label(m.group(1), units)}]", words)
         if words:
             body.append(f"- `{metric}`: {words}")
     known = [t for t in dict.fromkeys(terms) if t in TERM_WORDS]

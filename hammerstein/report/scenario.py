@@ -92,7 +92,7 @@ def _plant_label(spec):
 _num = words_number
 
 
-def signal_summary(mode, s):
+def signal_summary(mode, s, unit=None):
     """A drive or reference table in words: ``sine on x, 50 µm, 50 Hz, 5 periods``.
 
     The words are the kind's registry entry's
@@ -103,6 +103,8 @@ def signal_summary(mode, s):
     mode : {'drive', 'reference'}
     s : dict
         The case's ``drive`` or ``reference`` table.
+    unit : str, optional
+        Its values' unit (default V for a drive, µm for a reference).
 
     Returns
     -------
@@ -111,7 +113,8 @@ def signal_summary(mode, s):
     """
     kinds = DRIVE_KINDS if mode == "drive" else REFERENCE_KINDS
     entry = kinds.get(s.get("kind"))
-    parts = [str(s.get("kind"))] if entry is None else entry.summary(s, "V" if mode == "drive" else "µm")
+    unit = unit or ("V" if mode == "drive" else "µm")
+    parts = [str(s.get("kind"))] if entry is None else entry.summary(s, unit)
     return ", ".join(p for p in parts if p)
 
 

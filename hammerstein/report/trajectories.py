@@ -56,13 +56,15 @@ def _error_unit(errors):
     return 10.0 ** -k, f"1e{k} µm"
 
 
-def _length(value):
-    """A length given in µm, written in nm below 0.1 µm."""
+def _length(value, unit="µm"):
+    """A length given in ``unit``; one in µm is written in nm below 0.1 µm."""
+    if unit != "µm":
+        return f"{value:.3g} {unit}"
     return f"{value:.3g} µm" if abs(value) >= 0.1 else f"{value * 1e3:.3g} nm"
 
 
 def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
-                      inputs=None, input_names=None, fade_time=0.0):
+                      inputs=None, input_names=None, fade_time=0.0, units=("V", "µm")):
     """XY plot, time plots (displacements, input voltages) and tracking errors.
 
     Layout: (a) the XY plot of the reference (a wide grey band, which
@@ -75,7 +77,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     darker than the settling after it, and its peak is printed when it is
     off scale) and in nm when the settled errors stay
     below 0.1 µm; (d) the input voltages when ``inputs``
-    is given.
+    is given. Every axis is labelled in ``units`` (a model identified in nm
+    and mV); errors in another output unit than µm are not rescaled.
 
     Parameters
     ----------
@@ -96,11 +99,16 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     fade_time : float
         End of the reference's fade-in from rest [s] (0: none), at most
         ``settle_time``: shaded darker than the settling after it.
+    units : tuple of str
+        ``(input unit, output unit)`` of ``inputs`` and of ``reference`` and
+        ``outputs`` (``HammersteinPlant.units``; a drive file's,
+        :func:`hammerstein.compensation.drive_files.drive_units`).
 
     Returns
     -------
     matplotlib.figure.Figure
     """
+    unit_in, unit_out = units
     t = np.asarray(time, dtype=float) * 1e3
     r = np.asarray(reference, dtype=float)
     y = np.asarray(outputs, dtype=float)
@@ -121,16 +129,16 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
                 solid_capstyle="round", solid_joinstyle="round", label="reference")
         ax.plot(*decimate_path(y[0, steady], y[1, steady]), "-", color="C0", linewidth=1.0,
                 label="output")
-        ax.set_xlabel(f"{names[0]} [µm]")
-        ax.set_ylabel(f"{names[1]} [µm]")
+        ax.set_xlabel(f"{names[0]} [{unit_out}]")
+        ax.set_ylabel(f"{names[1]} [{unit_out}]")
         ax.set_title("(a) spatial domain after settling\n(grey band: reference, blue: output)",
                      fontsize=10, y=1.0)
     else:                          # one axis: the output against its reference
         span = [float(np.nanmin(r[0, steady])), float(np.nanmax(r[0, steady]))]
         ax.plot(span, span, "--", color="0.35", linewidth=1.2)
         ax.plot(*decimate_path(r[0, steady], y[0, steady]), "-", color="C0", linewidth=1.0)
-        ax.set_xlabel(f"{names[0]}_r [µm]")
-        ax.set_ylabel(f"{names[0]} [µm]")
+        ax.set_xlabel(f"{names[0]}_r [{unit_out}]")
+        ax.set_ylabel(f"{names[0]} [{unit_out}]")
         ax.set_title("(a) output against reference after settling\n(dashed: y = reference)",
                      fontsize=10, y=1.0)
     _equal_aspect(ax)
@@ -140,7 +148,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     for i, n in enumerate(names):
         axt.plot(*decimate(t, r[i]), "--", color=f"C{i}", linewidth=1.0, label=f"{n}_r")
         axt.plot(*decimate(t, y[i]), "-", color=f"C{i}", linewidth=1.0, alpha=0.8, label=n)
-    axt.set_ylabel("displacement [µm]")
+    axt.set_ylabel(f"displacement [{unit_out}]")
     axt.set_title("(b) time domain", fontsize=10, y=1.0)
     axu = fig.add_subplot(gs[1, 1], sharex=axt)
     if inputs is not None:
@@ -153,10 +161,12 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         axu.text(0.5, 0.5, "no input voltages given", ha="center", va="center",
                  transform=axu.transAxes, color="0.5")
         axu.set_title("(d) input voltages", fontsize=10, y=1.0)
-    axu.set_ylabel("voltage [V]")
+    axu.set_ylabel(f"voltage [{unit_in}]")
     axu.set_xlabel("time [ms]")
 
-    scale, unit = _error_unit(e[:, steady] if steady.any() else e)
+    # in µm, rescaled to nm when small; in a model's own unit as it is
+    scale, unit = _error_unit(e[:, steady] if steady.any() else e) if unit_out == "µm" \
+        else (1.0, unit_out)
     e, eu = e * scale, eu * scale
     axe = fig.add_subplot(gs[0, 2], sharex=axt)
     for i, n in enumerate(names):
@@ -178,7 +188,7 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
         for a, vals in ((axe, e[:, ~steady]), (axn, eu[~steady])):
             peak = _peak_off_scale(a, vals)
             notes[a] = "\nscaled after settling" + (
-                "" if peak is None else f"; start-up (shaded) peaks at {_length(peak / scale)}")
+                "" if peak is None else f"; start-up (shaded) peaks at {_length(peak / scale, unit_out)}")
         for a in (axt, axu, axe, axn):
             _mark_transient(a, settle_time * 1e3, min(fade_time, settle_time) * 1e3)
     if transient and fade_time > 0:

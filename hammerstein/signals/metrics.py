@@ -25,6 +25,7 @@ __all__ = [
     "open_loop_metrics",
     "tracking_metrics",
     "raster_line_metrics",
+    "unit_label",
 ]
 
 UNITS = {
@@ -45,6 +46,36 @@ UNITS = {
     "line_rms_error": "µm",        # raster references: per scan line (channel "line-<j>")
     "line_max_error": "µm",
 }
+
+
+def unit_label(unit, units=("V", "µm")):
+    """A metric's unit (:data:`UNITS`, or ``V``, ``V/s`` of an input) in a model's own units.
+
+    The metrics are computed on the values as they are, in the units of the
+    files they come from: a model identified in nm and mV (``identify
+    --output-unit nm --input-unit mV``) has its errors in nm and its drive's
+    peaks in mV. Only the labels ``µm``, ``V``, ``V/s`` and ``µm/V`` change; ``%``,
+    ``s``, ``-`` and the others stay.
+
+    Parameters
+    ----------
+    unit : str
+        The label in the default units (µm, V).
+    units : tuple of str
+        ``(input unit, output unit)`` (``HammersteinPlant.units``).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> [unit_label(u, ("mV", "nm")) for u in ("µm", "V", "V/s", "µm/V", "%", "s", "")]
+    ['nm', 'mV', 'mV/s', 'nm/mV', '%', 's', '']
+    """
+    unit_in, unit_out = units
+    return {"µm": unit_out, "V": unit_in, "V/s": f"{unit_in}/s",
+            "µm/V": f"{unit_out}/{unit_in}"}.get(unit, unit)
 
 
 def steady_window(n_samples, period_samples, settle_periods):

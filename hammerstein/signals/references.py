@@ -126,7 +126,7 @@ def _common_words(s, unit):
     if s.get("offset"):
         parts.append(f"offset {words_number(s['offset'], unit)}")
     if s.get("center"):
-        parts.append("centre (" + ", ".join(words_number(v) for v in s["center"]) + ") µm")
+        parts.append("centre (" + ", ".join(words_number(v) for v in s["center"]) + f") {unit}")
     return parts + [_length(s)]
 
 
@@ -291,8 +291,8 @@ def _lissajous(c, T, names, base_dir):
 
 def _lissajous_words(s, unit):
     a = s["amplitude"]
-    amp = (" × ".join(words_number(x) for x in a) + " µm") if isinstance(a, list) \
-        else words_number(a, "µm")
+    amp = (" × ".join(words_number(x) for x in a) + f" {unit}") if isinstance(a, list) \
+        else words_number(a, unit)
     return (["Lissajous", amp, " / ".join(words_number(f) for f in s["frequencies"]) + " Hz"]
             + _common_words(s, unit))
 
@@ -312,7 +312,7 @@ def _raster_words(s, unit):
     fast, slow = s["outputs"]
     size = s["size"]
     parts = [f"raster, fast {fast}, slow {slow}",
-             f"{words_number(size[0])} × {words_number(size[1])} µm", f"{s['lines']} lines",
+             f"{words_number(size[0])} × {words_number(size[1])} {unit}", f"{s['lines']} lines",
              f"{words_number(s['frequency'], 'Hz')} line rate", f"slow axis {s.get('slow', 'step')}"]
     if s.get("smoothing"):
         parts.append(f"turns rounded over {words_number(100 * s['smoothing'])} % of a period")
@@ -364,7 +364,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
         {"radius": Field(number("µm", 0), required=True),
          "frequency": Field(number("Hz", 0), required=True),
          "phase": _PHASE, "outputs": Field(name_list(2)), "center": Field(_point), **_LENGTH},
-        _circle, lambda s, unit: ["circle", f"radius {words_number(s['radius'], 'µm')}",
+        _circle, lambda s, unit: ["circle", f"radius {words_number(s['radius'], unit)}",
                                   words_number(s["frequency"], "Hz")] + _common_words(s, unit),
         "circle on two outputs (paper Fig. 10)"),
     "spiral": ReferenceKind(
@@ -374,7 +374,7 @@ REFERENCE_KINDS: dict[str, ReferenceKind] = {
          "duration": Field(number("s", 0), required=True),
          "circle_periods": Field(number("periods", 0, exclusive=False), default=1.0),
          "phase": _PHASE, "outputs": Field(name_list(2)), "center": Field(_point)},
-        _spiral, lambda s, unit: ["spiral", f"radius {words_number(s['radius'], 'µm')}",
+        _spiral, lambda s, unit: ["spiral", f"radius {words_number(s['radius'], unit)}",
                                   words_number(s["frequency"], "Hz"),
                                   f"decay τ {words_number(s['tau'], 's')} after "
                                   f"{words_number(s.get('circle_periods', 1.0))} circle(s)"]
