@@ -370,7 +370,8 @@ def _handle(args):
             drive_shaped = now_or_later(_shaped_reference, args.drive, outs, period, table)
             del table
             tables.drop(args.drive, "--drive")
-        units = drive_units(args.drive) if args.drive else ("V", "µm")   # (input, output)
+        units = (drive_units(args.drive) if args.drive else       # (input, output)
+                 tuple(plant.units) if args.model else ("V", "µm"))
         rate_notes = []
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, period,
                                "--measured", upsample=False, notes=rate_notes,

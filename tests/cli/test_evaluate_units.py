@@ -106,6 +106,14 @@ def test_a_drive_in_nm_and_mV_is_evaluated_and_learnt_in_nm_and_mV(tmp_path, cap
             "tracking error [nm]"} <= set(labels), labels
     assert not any("µm" in label or "[V]" in label for label in labels), labels
 
+    # the model given instead of the drive: its units
+    capsys.readouterr()
+    assert main(["evaluate", "--reference", REFERENCE, "--model", str(model), "--measured",
+                 str(measured), "--out", str(tmp_path / "by-model")]) == 0
+    head = (tmp_path / "by-model" / "timeseries-measured.csv").read_text().splitlines()[0]
+    assert head.startswith("time_s,x_ref_nm,y_ref_nm,x_nm,y_nm"), head
+    assert " nm," in capsys.readouterr().out
+
     assert main(["learn", str(model), "--reference", REFERENCE, "--drive", str(drive),
                  "--measured", str(measured), "--out", str(tmp_path / "next.csv"),
                  "--history", str(tmp_path / "history")]) == 0
