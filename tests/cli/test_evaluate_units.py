@@ -121,30 +121,25 @@ def test_a_drive_in_nm_and_mV_is_evaluated_and_learnt_in_nm_and_mV(tmp_path, cap
     assert "tracking error [nm]" in labels and not any("µm" in lb for lb in labels), labels
 
 
-def test_drive_units_reads_the_header_of_compensate_and_learn(tmp_path):
+@pytest.mark.parametrize("text, expected", [
+    ("# hammerstein compensate drive: t [s]; ux, uy [mV]; x_predicted, y_predicted [nm] "
+     "(model)\n# actuator m.toml, kind multivariable, sampling period 0.001 s, fade-in 500 "
+     "samples (0.5 s, excluded from the metrics) from the rest output x = 1.2005 nm, "
+     "y = 1.4454 nm (the model's output at 0 mV)\nt,ux,uy\n0,0,0\n", ("mV", "nm")),
+    ("# hammerstein learn drive: t [s]; ux, uy [kV]; x_learnt, y_learnt [mm]: the learnt "
+     "reference the drive was computed for (fade-in included)\n# actuator m.toml, kind "
+     "ilc, sampling period 0.001 s, fade-in 500 samples (0.5 s, excluded from the "
+     "metrics)\nt,ux,uy,x_learnt,y_learnt\n0,0,0,0,0\n", ("kV", "mm")),
+    ("t,ux,uy,x,y\n0,0,0,0,0\n", ("V", "µm")),                 # a record: no header
+    ("# hammerstein compensate drive: t [s]\n# actuator realistic-a, fade-in 500 samples\n"
+     "t,ux\n0,0\n", ("V", "µm")),                              # a header that states no unit
+])
+def test_drive_units_reads_the_header_of_compensate_and_learn(tmp_path, text, expected):
     """The inputs' unit after their names on the first line, the outputs' after the rest
     output's values or after a learnt reference's columns; µm and V where none is stated."""
-    compensate = tmp_path / "compensate.csv"
-    compensate.write_text(
-        "# hammerstein compensate drive: t [s]; ux, uy [mV]; x_predicted, y_predicted [nm] "
-        "(model)\n# actuator m.toml, kind multivariable, sampling period 0.001 s, fade-in 500 "
-        "samples (0.5 s, excluded from the metrics) from the rest output x = 1.2005 nm, "
-        "y = 1.4454 nm (the model's output at 0 mV)\nt,ux,uy\n0,0,0\n", encoding="utf-8")
-    assert drive_units(compensate) == ("mV", "nm")
-    learn = tmp_path / "learn.csv"
-    learn.write_text(
-        "# hammerstein learn drive: t [s]; ux, uy [kV]; x_learnt, y_learnt [mm]: the learnt "
-        "reference the drive was computed for (fade-in included)\n# actuator m.toml, kind "
-        "ilc, sampling period 0.001 s, fade-in 500 samples (0.5 s, excluded from the "
-        "metrics)\nt,ux,uy,x_learnt,y_learnt\n0,0,0,0,0\n", encoding="utf-8")
-    assert drive_units(learn) == ("kV", "mm")
-    record = tmp_path / "record.csv"
-    record.write_text("t,ux,uy,x,y\n0,0,0,0,0\n", encoding="utf-8")
-    assert drive_units(record) == ("V", "µm")
-    older = tmp_path / "older.csv"         # a header that states no unit: the defaults
-    older.write_text("# hammerstein compensate drive: t [s]\n# actuator realistic-a, "
-                     "fade-in 500 samples\nt,ux\n0,0\n", encoding="utf-8")
-    assert drive_units(older) == ("V", "µm")
+    path = tmp_path / "drive.csv"
+    path.write_text(text, encoding="utf-8")
+    assert drive_units(path) == expected
 
 
 def test_the_trajectory_figure_is_labelled_in_the_units_it_is_given():

@@ -61,6 +61,33 @@ def test_held_axis_start_up_the_c_equals_the_drive_over_the_whole_record(tmp_pat
     assert "slew-limited" not in text        # nothing changed after the compensator
 
 
+def _circle_drive(plant, radius, f, periods):
+    """compensate's default drive of a circle from (radius, 0): (comp, drive, reference, n),
+    ``reference(count)`` the circle over ``count`` samples (its continuation past n)."""
+    T = plant.sampling_period
+    P = int(round(1 / f / T))
+
+    def reference(count):
+        t = np.arange(count) * T
+        return radius * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        comp, drive = compensate_reference(plant, reference(P * periods), period_samples=P)
+    return comp, drive, reference, P * periods
+
+
+def _named_limits(text, amplifier=None):
+    """The AmplifierLimits a start-up limit's note names (``... when exported with
+    [--amplifier-range MIN MAX] --slew-rate R1,R2``), the amplifier's range without one."""
+    words = text.split("when exported with ")[1].split()
+    rates = [float(v) for v in words[words.index("--slew-rate") + 1].split(",")]
+    if "--amplifier-range" in words:
+        lo, hi = (float(v) for v in words[words.index("--amplifier-range") + 1:][:2])
+    else:
+        lo, hi = ([c.low for c in amplifier.channels], [c.high for c in amplifier.channels])
+    return AmplifierLimits(lo, hi, rates), rates, lo, hi
+
 @needs_cc
 def test_start_up_slew_limited_after_the_compensator_the_c_exported_with_the_named_rates_equals_it(
         tmp_path):
@@ -69,27 +96,16 @@ def test_start_up_slew_limited_after_the_compensator_the_c_exported_with_the_nam
     builds the same limit into the C; so exported, the C fed the reference gives the drive to
     1e-12 relative; exported without it, it departs where the limit acted (8e-7 relative)."""
     plant = hs.load_plant(str(PRESET))
-    T, f, periods = plant.sampling_period, 100.0, 20
-    P = int(round(1 / f / T))
-    n = P * periods
-
-    def reference(count):                   # a 10 µm circle from (10, 0)
-        t = np.arange(count) * T
-        return 10.0 * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        comp, drive = compensate_reference(plant, reference(n), period_samples=P)
+    T = plant.sampling_period
+    comp, drive, reference, n = _circle_drive(plant, 10.0, 100.0, 20)
     u = drive.inputs
     line = next(s for s in drive.shaped if "when exported with" in s)
     assert "slew-limited to the settled drive's largest step" in line
-    words = line.split("when exported with ")[1].split()
-    rates = [float(v) for v in words[words.index("--slew-rate") + 1].split(",")]
     # the preset has no [amplifier]: a range holding the drive and 0 V is named with the rates
-    lo, hi = (float(v) for v in words[words.index("--amplifier-range") + 1:][:2])
+    limits, rates, lo, hi = _named_limits(line)
     assert len(rates) == u.shape[0] and lo <= min(0.0, u.min()) and hi >= max(0.0, u.max())
     fed = None
-    for limits, equal in ((AmplifierLimits(lo, hi, rates), True), (None, False)):
+    for limits, equal in ((limits, True), (None, False)):
         code = export_c(comp, "circle", T, limits=limits)
         if fed is None:
             fed = np.hstack([np.asarray(drive.reference), reference(n + code.preview)[:, n:]])
@@ -108,27 +124,11 @@ def test_the_drive_holds_rest_while_the_c_fills_its_preview_and_equals_it_after(
     the C by up to 9.2e-11 of its peak while the fade left rest. Now the drive is at rest
     there too, and equals the C sample by sample (the preview's end aside)."""
     plant = hs.load_plant(str(PRESET.parent / f"{preset}.toml"))
-    T, f, periods = plant.sampling_period, 50.0, 10
-    P = int(round(1 / f / T))
-    n = P * periods
-
-    def reference(count):
-        t = np.arange(count) * T
-        return 10.0 * np.vstack([np.cos(2 * np.pi * f * t), np.sin(2 * np.pi * f * t)])
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        comp, drive = compensate_reference(plant, reference(n), period_samples=P)
+    T = plant.sampling_period
+    comp, drive, reference, n = _circle_drive(plant, 10.0, 50.0, 10)
     u = drive.inputs
-    limits = None
     line = [s for s in drive.shaped if "when exported with" in s]
-    if line:
-        words = line[0].split("when exported with ")[1].split()
-        rates = [float(v) for v in words[words.index("--slew-rate") + 1].split(",")]
-        ch = plant.amplifier.channels if plant.amplifier is not None else None
-        lo, hi = (([c.low for c in ch], [c.high for c in ch]) if ch else
-                  (float(v) for v in words[words.index("--amplifier-range") + 1:][:2]))
-        limits = AmplifierLimits(lo, hi, rates)
+    limits = _named_limits(line[0], plant.amplifier)[0] if line else None
     code = export_c(comp, "rest", T, limits=limits)
     assert code.preview > 0
     assert np.all(u[:, :code.preview] == 0.0)
@@ -166,15 +166,13 @@ def test_a_learnt_drive_slew_limited_at_its_start_up_names_the_rates_too(tmp_pat
                  "y0.csv", "--out", "u1.csv"]) == 0
     header, cols = _drive_file("u1.csv")
     u = np.vstack([cols["ux"], cols["uy"]])
-    words = header.split("when exported with ")[1].split()
-    rates = [float(v) for v in words[words.index("--slew-rate") + 1].split(",")]
-    lo, hi = (float(v) for v in words[words.index("--amplifier-range") + 1:][:2])
+    limits = _named_limits(header)[0]
     learnt = np.vstack([cols["x_learnt"], cols["y_learnt"]])
     T, n = plant.sampling_period, u.shape[1]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         comp, _ = compensate_reference(plant, learnt[:, :400], period_samples=100)
-    for limits, equal in ((AmplifierLimits(lo, hi, rates), True), (None, False)):
+    for limits, equal in ((limits, True), (None, False)):
         code = export_c(comp, "learnt", T, limits=limits)
         fed = np.hstack([learnt, learnt[:, n - 100:n - 100 + code.preview]])   # one period on
         u_c, _, _ = Harness(code, tmp_path / f"h{equal}").run(fed[:, code.preview:])
