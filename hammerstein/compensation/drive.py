@@ -673,7 +673,7 @@ def hardware_drive(compensator, reference, sampling_period, period_samples=None,
         passes.append(why)
         if progress is not None:
             progress(f"pass {len(passes)} over the {N} samples ({why})")
-        ext = _periodic_tail(ref, r, repeat, getattr(compensator, "preview_samples", 0) or 1)
+        ext = _periodic_tail(ref, r, repeat, preview or 1)
         if at_rest_while_previewing(ref, preview):   # as the exported C: its law starts there
             u = _compensate(compensator, ext[:, preview:], repeat or None, 0)[0][:, :N - preview]
             rest0 = np.zeros(u.shape[0]) if u_rest is None else u_rest

@@ -260,8 +260,9 @@ def export_slew_words(before, after, end, sampling_period, amplifier=None):
     Returns
     -------
     str
-        ``": the exported C gives this drive ... --slew-rate R1,R2"``, or
-        ``""`` when no input was limited.
+        ``"; the exported C gives this drive, fed its reference, when exported
+        with [--amplifier-range MIN MAX] --slew-rate R1,R2"`` (the end of the
+        limit's note), or ``""`` when no input was limited.
 
     Examples
     --------
@@ -289,7 +290,6 @@ def export_slew_words(before, after, end, sampling_period, amplifier=None):
                               f"{np.ceil(max(0.0, u.max(), v.max())):.0f}")
     return ("; the exported C gives this drive, fed its reference, when exported with"
             f"{span} --slew-rate " + ",".join(repr(float(r)) for r in rates))
-
 
 
 def at_rest_while_previewing(reference, preview):

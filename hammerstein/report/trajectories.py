@@ -124,9 +124,8 @@ def trajectory_figure(time, reference, outputs, names, title, settle_time=0.0,
     gs = fig.add_gridspec(2, 3, width_ratios=[1.15, 1.4, 1.4])
     # room for the XY panel's tick labels: '-2000' of a circle in nm is two digits wider than
     # '-20' in µm, and its y label was cut at the figure's edge
-    ylim = float(np.max(np.abs(np.concatenate([r[-1], y[-1]]))[np.isfinite(
-        np.concatenate([r[-1], y[-1]]))], initial=0.0)) if r.size else 0.0
-    wide = max(0, len(f"{ylim:.0f}") - 2)
+    side = np.abs(np.concatenate([r[-1], y[-1]])) if r.size else np.zeros(1)
+    wide = max(0, len(f"{float(np.max(side[np.isfinite(side)], initial=0.0)):.0f}") - 2)
     fixed_layout(fig, 2, 3, left=0.7 + 0.07 * wide, right=0.2, bottom=0.55, top=top, wspace=0.8,
                  hspace=0.9)
     ax = fig.add_subplot(gs[:, 0])
