@@ -516,7 +516,8 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
                          extras.get("loop_channel"))
     notes = []
     t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--output-columns"),
-                             plant.sampling_period, "--reference", notes=notes, period=period)
+                             plant.sampling_period, "--reference", notes=notes, period=period,
+                             units=getattr(plant, "units", None))
     _warn_implausible(sig, text)
     T = plant.sampling_period
     if period is not None and not 2 * T <= period <= sig.shape[1] * T * (1 + 1e-9):

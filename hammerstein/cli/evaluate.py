@@ -370,19 +370,19 @@ def _handle(args):
             drive_shaped = now_or_later(_shaped_reference, args.drive, outs, period, table)
             del table
             tables.drop(args.drive, "--drive")
-        units = (drive_units(args.drive) if args.drive else       # (input, output)
-                 tuple(plant.units) if args.model else ("V", "µm"))
+        units = drive_units(args.drive) if args.drive else tuple(plant.units) if args.model else ("V", "µm")
         rate_notes = []
         t, y, T = read_signals(args.measured, outs, args.time, out_cols, period,
                                "--measured", upsample=False, notes=rate_notes,
-                               table=tables.get(args.measured, "--measured", args.time))
+                               table=tables.get(args.measured, "--measured", args.time), units=units)
         u = None
         if args.inputs:
             ins, in_cols = _names(args.inputs, ins) if not args.model else \
                 (ins, mapping(args.inputs, ins, "--input-columns"))
             _, u, _ = read_signals(args.measured, ins, args.time, in_cols, T, "--measured",
                                    upsample=False, notes=[],   # the same note: said once
-                                   table=tables.get(args.measured, "--measured", args.time))
+                                   table=tables.get(args.measured, "--measured", args.time),
+                                   units=units)
         found = _measured_outputs(args, tables) or [] \
             if not args.model and not args.outputs else []
         tables.drop(args.measured, "--measured")     # its columns taken

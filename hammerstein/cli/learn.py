@@ -490,7 +490,7 @@ def _learn(args):
         rate_notes = list(ref.notes)   # a reference or measurement at another rate: resampled
         _, y, _ = read_signals(args.measured, list(model.output_names), args.time,
                                mapping(args.outputs, list(model.output_names), "--output-columns"), T,
-                               "--measured", upsample=False, notes=rate_notes)
+                               "--measured", upsample=False, notes=rate_notes, units=plant.units)
         if y.shape[1] < N:
             raise DataFileError(f"--measured: {y.shape[1]} samples at {T:g} s; expected at least "
                                 f"the drive's {N} (the measurement must cover the whole drive)")

@@ -130,7 +130,7 @@ def read_table(path, what="file", time="t"):
 
 
 def read_signals(path, names, time="t", mapping=None, sampling_period=None, what="file",
-                 upsample=True, notes=None, period=None, table=None):
+                 upsample=True, notes=None, period=None, table=None, units=None):
     """Columns of a drive, measured or reference CSV file, on a uniform time grid.
 
     File conventions: a header row (lines starting with ``#`` are comments);
@@ -176,6 +176,10 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
         from one period earlier (else they continue its last step).
     table : hammerstein.io.datafiles._Table, optional
         The file already parsed (:func:`read_table`): not read again.
+    units : tuple of str, optional
+        The model's ``(input unit, output unit)`` (``HammersteinPlant.units``):
+        a units row or a column name (``x_nm``) that gives one of them is read
+        as well as V and µm (a model identified in nm).
 
     Returns
     -------
@@ -195,7 +199,9 @@ def read_signals(path, names, time="t", mapping=None, sampling_period=None, what
         table = read_table(path, what, time)
     mapping = dict(mapping or {})
 
-    def column(col, label, unit=("V", "µm")):
+    allowed = tuple(dict.fromkeys(("V", "µm", *(units or ()))))
+
+    def column(col, label, unit=allowed):
         return numeric_column(table, col, label, unit)
 
     t = column(time, "the time [s]", "s")

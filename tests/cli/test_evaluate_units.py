@@ -106,6 +106,18 @@ def test_a_drive_in_nm_and_mV_is_evaluated_and_learnt_in_nm_and_mV(tmp_path, cap
             "tracking error [nm]"} <= set(labels), labels
     assert not any("µm" in label or "[V]" in label for label in labels), labels
 
+    # a measured file with a units row in the model's units is read (it was refused: "expected
+    # V or µm"), by evaluate and by learn
+    rows = measured.read_text().splitlines()
+    header = rows[0].split(",")
+    row = ",".join("s" if c == "t" else "mV" if c.startswith("u") else "nm" for c in header)
+    labelled = tmp_path / "y-units.csv"
+    labelled.write_text("\n".join([rows[0], row] + rows[1:]) + "\n")
+    assert main(["evaluate", "--reference", REFERENCE, "--drive", str(drive), "--measured",
+                 str(labelled), "--out", str(tmp_path / "labelled")]) == 0
+    assert main(["learn", str(model), "--reference", REFERENCE, "--drive", str(drive),
+                 "--measured", str(labelled), "--out", str(tmp_path / "next-labelled.csv")]) == 0
+
     # the model given instead of the drive: its units
     capsys.readouterr()
     assert main(["evaluate", "--reference", REFERENCE, "--model", str(model), "--measured",
