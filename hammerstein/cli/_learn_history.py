@@ -47,7 +47,7 @@ def history_rows(history_dir):
     Returns
     -------
     list of tuple
-        ``(iteration, output, max_error [µm], rms_error [µm])``; empty when
+        ``(iteration, output, max_error, rms_error)``, errors in the model's output unit; empty when
         there is no history yet.
 
     Raises
@@ -237,13 +237,44 @@ def _settled_series(history_dir, trials, now=None):
     return euclid, judged
 
 
-#: Columns of ``history.csv``: the trial's errors per output, then how they were measured
-#: (the measurement advanced by ``delay_removed_samples``, the window from ``window_from_s``).
-HISTORY_HEAD = ("iteration,output,max_error_um,rms_error_um,delay_removed_samples,"
-                "window_from_s\n")
-#: Columns of ``settled.csv`` (the first four as before; readers index them).
-SETTLED_HEAD = ("trial,settled_max_euclidean_um,settled_rms_euclidean_um,judged_um,"
-                "delay_removed_samples,window_from_s\n")
+def unit_suffix(unit):
+    """A column name's suffix for ``unit``: ``"µm"`` -> ``"um"``, ``"nm"`` -> ``"nm"``.
+
+    Parameters
+    ----------
+    unit : str
+        The model's output unit (``HammersteinPlant.units[1]``).
+
+    Returns
+    -------
+    str
+        ``unit`` with the micro sign written ``u`` and every character but an ASCII
+        letter or digit written ``_`` (``"um"`` for an empty unit).
+    """
+    text = str(unit).replace("µ", "u").replace("μ", "u")
+    text = "".join(c if c.isascii() and c.isalnum() else "_" for c in text)
+    return text or "um"
+
+
+def history_head(unit="µm"):
+    """The header of ``history.csv``: the trial's errors per output in ``unit``, then how they
+    were measured (the measurement advanced by ``delay_removed_samples``, the window from
+    ``window_from_s``); ``max_error_um`` for µm, ``max_error_nm`` for nm (readers index the
+    columns)."""
+    u = unit_suffix(unit)
+    return f"iteration,output,max_error_{u},rms_error_{u},delay_removed_samples,window_from_s\n"
+
+
+def settled_head(unit="µm"):
+    """The header of ``settled.csv`` (the first four as in the earliest files; readers index
+    them), its errors in ``unit``."""
+    u = unit_suffix(unit)
+    return (f"trial,settled_max_euclidean_{u},settled_rms_euclidean_{u},judged_{u},"
+            f"delay_removed_samples,window_from_s\n")
+
+
+#: ``settled.csv``'s columns in its earliest files (no ``delay_removed_samples``, ``window_from_s``)
+SETTLED_OLD_COLUMNS = 4
 
 
 def _aligned_cells(aligned):
@@ -274,7 +305,7 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     ``aligned``: ``(delay [samples], window start [s])``: the trial's errors are those of
     the measurement advanced by that delay over the window from that time (written in
     each row and in the figure's title); ``unit``: the model's output unit, the figure's
-    axis label's (the columns keep their names, ``max_error_um``, whatever the unit).
+    axis label's and the columns' (``max_error_um`` for µm, ``max_error_nm`` for nm).
     """
     d = Path(history)
     problem = foreign_history_problem(d, out)
@@ -288,7 +319,7 @@ def _write_history(history, names, rec, scale, scale_name="radius / amplitude", 
     k = 1 + max((r[0] for r in rows), default=-1)
     rows += [(k, n, float(rec.max_error[i]), float(rec.rms_error[i])) for i, n in enumerate(names)]
     extras.update({(str(k), n): _aligned_cells(aligned) for n in names})
-    text = HISTORY_HEAD + "".join(
+    text = history_head(unit) + "".join(
         f"{a},{b},{c!r},{e!r},{extras.get((str(a), b), ',')}\n" for a, b, c, e in rows)
     safe_write(d / "history.csv", text, "history file", root=d)
     its = sorted({r[0] for r in rows})
@@ -331,12 +362,13 @@ DRIVE_SAMPLES = 256
 DRIVE_TOLERANCE = 1e-3
 
 
-def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin, aligned=None):
+def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin, aligned=None,
+                  unit="µm"):
     """Append a trial's settled errors to ``DIR/settled.csv``; the previous trial's if it was lower.
 
     ``aligned``: ``(delay [samples], window start [s])`` of the errors (columns
     ``delay_removed_samples`` and ``window_from_s``; a file of the four first
-    columns gets them, empty on its rows).
+    columns gets them, empty on its rows); ``unit``: the errors' (the columns' names).
 
     Returns
     -------
@@ -346,11 +378,14 @@ def _settled_rows(history_dir, trial, settled_max, settled_rms, score, margin, a
         else None.
     """
     path = Path(history_dir) / SETTLED_FILE
-    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() \
-        else SETTLED_HEAD
-    if text.splitlines()[:1] != [SETTLED_HEAD.strip()]:     # an older file: four columns
-        text = SETTLED_HEAD + "".join(f"{line},,\n" for line in text.splitlines()[1:]
-                                      if line.strip())
+    head = settled_head(unit)
+    text = bounded_read_text(path, "data", "settled errors file") if path.is_file() else head
+    lines = text.splitlines()
+    old = bool(lines) and lines[0].count(",") + 1 == SETTLED_OLD_COLUMNS
+    # the header written again in this unit (the rows' own); an earliest file's rows get
+    # the two last cells, empty
+    text = head + "".join(f"{line},,\n" if old else f"{line}\n" for line in lines[1:]
+                          if line.strip())
     rows = [line.split(",") for line in text.splitlines()[1:] if line.strip()]
     prev = None
     if rows:
@@ -384,7 +419,8 @@ def _read_state(history_dir, n_samples):
             key, value = line.split(",", 1)
             values[key.strip()] = value.strip()
     try:
-        state = {"trial": int(values["best_trial"]), "score": float(values["best_score_um"]),
+        score = next(v for k, v in values.items() if k.startswith("best_score_"))
+        state = {"trial": int(values["best_trial"]), "score": float(score),
                  "halvings": int(values["halvings"]), "samples": int(values["samples"]),
                  "reference": values.get("reference_sha256"),
                  "written_by": values.get("written_by"),
@@ -393,7 +429,7 @@ def _read_state(history_dir, n_samples):
                                 int(values["lag_offset"])),
                  "drive": (None if values.get("last_drive") is None else
                            np.array(values["last_drive"].split(), float))}
-    except (KeyError, ValueError):
+    except (KeyError, ValueError, StopIteration):
         raise DataFileError(f"--history: {path} is not a learning state file written by "
                             f"hammerstein learn; choose a new --history directory") from None
     return state if state["samples"] == n_samples else None
@@ -472,9 +508,10 @@ def _check_history(history_dir, state, fingerprint, u, best_u, y=None, no_fade=F
                         f"directory, or apply the last drive written")
 
 
-def _write_state(history_dir, state):
+def _write_state(history_dir, state, unit="µm"):
+    """Write ``DIR/learning.csv`` (the best trial's score in ``unit``: ``best_score_um``)."""
     text = "key,value\n" + "".join(f"{k},{state[v]!r}\n" for k, v in (
-        ("best_trial", "trial"), ("best_score_um", "score"), ("halvings", "halvings"),
+        ("best_trial", "trial"), (f"best_score_{unit_suffix(unit)}", "score"), ("halvings", "halvings"),
         ("samples", "samples"), ("rejections", "rejections")))
     if state.get("lag_offset") is not None:
         text += f"lag_offset,{int(state['lag_offset'])}\n"
@@ -516,11 +553,12 @@ def _restore_gains(history_dir, gains):
     gains.converged = any(len(r) > 4 and r[4].strip() == "1" for r in rows)   # older files: 4 columns
 
 
-def _save_gains(history_dir, gains):
+def _save_gains(history_dir, gains, unit="µm"):
+    """Write ``DIR/harmonics.csv`` (the previous errors in ``unit``: ``previous_error_um``)."""
     prev = gains.previous if gains.previous is not None else np.zeros(gains.gains.shape)
     growths = getattr(gains, "growths", np.zeros(gains.gains.shape, dtype=int))
     done = int(bool(gains.converged))
-    text = "harmonic,gain,previous_error_um,growths,converged\n" + "".join(
+    text = f"harmonic,gain,previous_error_{unit_suffix(unit)},growths,converged\n" + "".join(
         f"{h},{float(g)!r},{float(e)!r},{int(n)},{done}\n"
         for h, (g, e, n) in enumerate(zip(gains.gains, prev, growths)))
     safe_write(Path(history_dir) / GAINS_FILE, text, "harmonics file", root=history_dir)

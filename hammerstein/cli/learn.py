@@ -822,7 +822,8 @@ def _learn(args):
                                (verdict.rejections, None if lag is None or out_of_step is not None
                                 else lag - delay), plant.units)
             rose = (_settled_rows(args.history, k, settled_max, settled_rms, score, margin,
-                                  (delay, window.start * T)) if args.history else None)
+                                  (delay, window.start * T), plant.units[1])
+                    if args.history else None)
         if args.history:        # the digests of what was just written: a later change is seen
             write_history_manifest(args.history)
     except catch() as exc:
@@ -867,7 +868,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
                        "the raster's size" if ref.kind == "raster" else "radius / amplitude",
                        args.out, settled, aligned, unit_out)
     if gains is not None:
-        _save_gains(args.history, gains)
+        _save_gains(args.history, gains, unit_out)
     if best:
         columns = {**dict(zip(model.input_names, u)), **dict(zip(model.output_names, y))}
         if followed is not None:
@@ -888,7 +889,7 @@ def _write_outputs(args, model, t, u, y, u_next, comment, rec, ref, gains, best,
     _write_state(args.history, {**state, "halvings": halvings, "reference": fingerprint,
                                 "drive": _drive_samples(u_next)[0], "rejections": rules[0],
                                 "lag_offset": rules[1] if rules[1] is not None
-                                else state.get("lag_offset")})
+                                else state.get("lag_offset")}, unit_out)
     return k
 
 

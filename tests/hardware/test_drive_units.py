@@ -120,3 +120,13 @@ def test_learn_writes_the_models_units(mv_nm):
                     "y1.csv", "--out", "u2.csv", "--delay", "0", "--history", "hist", cwd=d)
     assert again.returncode == 0, again.stderr
     assert _unit_lines(_header(d / "u2.csv") + again.stderr.splitlines()) == []
+    # the history's columns are named in nm, and the second trial read them back (its best
+    # score from learning.csv, the rows of the first trial kept)
+    hist = pd.read_csv(d / "hist" / "history.csv")
+    assert hist.columns[2:4].tolist() == ["max_error_nm", "rms_error_nm"]
+    assert hist["iteration"].tolist() == [0, 0, 1, 1]
+    settled = pd.read_csv(d / "hist" / "settled.csv")
+    assert settled.columns[1:4].tolist() == ["settled_max_euclidean_nm", "settled_rms_euclidean_nm",
+                                             "judged_nm"] and settled["trial"].tolist() == [0, 1]
+    state = (d / "hist" / "learning.csv").read_text(encoding="utf-8")
+    assert "\nbest_score_nm," in state and "_um" not in state

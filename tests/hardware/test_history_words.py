@@ -65,6 +65,18 @@ def test_an_older_settled_file_keeps_its_rows(tmp_path):
     assert rows["window_from_s"].iloc[1] == 0.03
 
 
+def test_a_settled_file_is_headed_in_its_unit_and_its_rows_kept(tmp_path):
+    from hammerstein.cli._learn_history import SETTLED_FILE, _settled_rows
+
+    assert _settled_rows(tmp_path, 0, 8.0, 4.0, 7.0, 0.5, (3, 0.03), "nm") is None
+    # the second trial's judged error is above the first's by more than the margin
+    assert _settled_rows(tmp_path, 1, 9.0, 5.0, 8.0, 0.5, (3, 0.03), "nm") == (0, 7.0)
+    rows = pd.read_csv(tmp_path / SETTLED_FILE)
+    assert rows.columns.tolist() == ["trial", "settled_max_euclidean_nm", "settled_rms_euclidean_nm",
+                                     "judged_nm", "delay_removed_samples", "window_from_s"]
+    assert rows["judged_nm"].tolist() == [7.0, 8.0] and rows["delay_removed_samples"].tolist() == [3, 3]
+
+
 def test_evaluate_report_names_what_it_measured_and_points_to_remove_delay(tmp_path):
     assert _cli("compensate", "rakotondrabe-2dof", "--reference", REF, "--out", "u0.csv",
                 cwd=tmp_path).returncode == 0

@@ -89,7 +89,10 @@ def test_the_converged_state_survives_the_history_round_trip(tmp_path, converged
     g.update(_spectrum([10 * FLOOR, 5 * FLOOR, 3 * FLOOR]), NOISE)
     if converged:
         g.update(_spectrum([0.1 * FLOOR] * 3), NOISE)
-    learn_cli._save_gains(tmp_path, g)
+    learn_cli._save_gains(tmp_path, g, "nm")
+    # the previous errors' column is named in the model's unit
+    assert (tmp_path / learn_cli.GAINS_FILE).read_text().startswith(
+        "harmonic,gain,previous_error_nm,growths,converged\n")
     back = HarmonicGains([0.5, 0.4, 0.3])
     learn_cli._restore_gains(tmp_path, back)
     assert back.converged is converged
