@@ -4,7 +4,7 @@ Three kinds of record per input (the other inputs held at 0), each sampled at th
 sampling period T of the hardware:
 
 * :func:`decreasing_sine` — a slow sine whose amplitude steps down (100, 80,
-  60, 40, 20, 10 % of the full amplitude, two periods each): the major loop and
+  60, 40, 30, 20, 15, 10 % of the full amplitude, two periods each): the major loop and
   nested minor loops of the hysteresis. Each level starts and ends at a zero
   crossing, so the signal is continuous, and each level lies inside the
   previous one (wiping-out memory of a Preisach model: after its first period
@@ -59,11 +59,14 @@ __all__ = ["LEVELS", "REVERSALS", "CURVE_SLEW", "STAIRCASE_LEVELS", "UNIPOLAR_ST
 
 #: Amplitude levels of the decreasing-amplitude sine (fractions of the full amplitude). The
 #: 10 % level records the loops of the smallest scans (a 15 µm circle on a stage of
-#: +-90 µm at the full amplitude): without it the model's loops below 20 % were extrapolated
-#: (``docs/identification.md``). Smaller levels turn back within the reversal detection's
-#: dead band (:data:`hammerstein.identification._record_split.REVERSAL_BAND`, 5 % of the
-#: span) and would be no level of their own.
-LEVELS = (1.0, 0.8, 0.6, 0.4, 0.2, 0.1)
+#: +-90 µm at the full amplitude): without it the model's loops below 20 % were extrapolated;
+#: the 30 and 15 % levels record the loops of 15-30 µm scans on a +-55 µm stage, which the
+#: fit otherwise draws between levels twice as far apart (``docs/identification.md``:
+#: measured on two families of outside actuators). Every second level is held out. Smaller
+#: levels turn back within the reversal detection's dead band
+#: (:data:`hammerstein.identification._record_split.REVERSAL_BAND`, 5 % of the span) and
+#: would be no level of their own.
+LEVELS = (1.0, 0.8, 0.6, 0.4, 0.3, 0.2, 0.15, 0.1)
 #: The standard reversal points of the first-order reversal curves (fractions of the full
 #: amplitude; ``hammerstein excitation --reversals standard``): the curves from the amplitude
 #: turn back up at these, their mirrors from minus the amplitude turn back down at minus these

@@ -11,6 +11,10 @@ import numpy as np
 import pytest
 
 from hammerstein.cli.main import main
+from hammerstein.signals.excitation import LEVELS
+
+#: seconds of the 1 Hz decreasing sine: two periods per level
+SINE_S = 2 * len(LEVELS)
 
 T = 5e-4          # 2 kHz keeps the files small; the design scales with T
 
@@ -84,9 +88,9 @@ def test_decreasing_sine_levels(written):
     _, d = _read(written / "hysteresis-ux.csv")
     u = d[:, 1]
     n = int(round(1 / T))                      # samples per 1 Hz period
-    peaks = [np.abs(u[k * 2 * n:(k + 1) * 2 * n]).max() for k in range(6)]
-    np.testing.assert_allclose(peaks, [10, 8, 6, 4, 2, 1], rtol=1e-4)
-    assert u.size == 6 * 2 * n                 # the 10 % level is the last
+    peaks = [np.abs(u[k * 2 * n:(k + 1) * 2 * n]).max() for k in range(len(LEVELS))]
+    np.testing.assert_allclose(peaks, [10 * a for a in LEVELS], rtol=1e-4)
+    assert LEVELS[-1] == 0.1 and u.size == SINE_S * n      # the 10 % level is the last
 
 
 def _turning_points(u):
@@ -104,7 +108,7 @@ def with_curves(tmp_path_factory):
 
 
 def test_reversal_curves_follow_the_decreasing_sine(with_curves):
-    """After the 12 s of the sine, the first-order reversal curves: up to the amplitude; then
+    """After the sine (two periods per level), the first-order reversal curves: up to the amplitude; then
     for each reversal point (80 % to -80 % in steps of 20 %) down to it and back up, down to
     minus the amplitude, up to minus the point and back down, up to the amplitude again (to
     0 V after the last point). Read as turning points of the file's input; every move no
@@ -113,14 +117,14 @@ def test_reversal_curves_follow_the_decreasing_sine(with_curves):
     _, d = _read(with_curves / "hysteresis-ux.csv")
     u = d[:, 1]
     n = int(round(1 / T))
-    curves = u[12 * n - 1:]                   # the sine's last sample, then the curves
+    curves = u[SINE_S * n - 1:]               # the sine's last sample, then the curves
     b = np.arange(8, -9, -2) / 10 * 10.0
     expected = [10.0]
     for v in b:
         expected += [v, 10.0, -10.0, -v, -10.0] + ([10.0] if v != b[-1] else [])
     np.testing.assert_allclose(_turning_points(curves), expected, atol=1e-9)
     slew = 2 * np.pi * 1.0 * 10.0 * T
-    assert np.abs(np.diff(u[:12 * n])).max() <= slew * (1 + 1e-6)
+    assert np.abs(np.diff(u[:SINE_S * n])).max() <= slew * (1 + 1e-6)
     assert 0.99 * 3 * slew <= np.abs(np.diff(curves)).max() <= 3 * slew * (1 + 1e-6)
     assert curves.size - 1 == pytest.approx(6.0 / T, rel=0.01)
     assert abs(curves.mean()) < 1e-3 * 10.0
@@ -133,7 +137,7 @@ def test_by_default_and_with_none_the_decreasing_sine_alone(written, tmp_path):
     assert _run(tmp_path / "plain", "--reversals", "none") == 0
     for d in (written, tmp_path / "plain"):
         _, data = _read(d / "hysteresis-ux.csv")
-        assert data.shape[0] == 6 * 2 * int(round(1 / T))
+        assert data.shape[0] == SINE_S * int(round(1 / T))
         assert "reversal curves" not in (d / "README.md").read_text()
 
 
@@ -141,7 +145,7 @@ def test_explicit_reversal_points(tmp_path):
     """Two points: two curves from +10 V turning at 5 and -2.5 V, their mirrors from -10 V."""
     assert _run(tmp_path / "two", "--reversals", "0.5,-0.25") == 0
     _, d = _read(tmp_path / "two" / "hysteresis-ux.csv")
-    curves = d[12 * int(round(1 / T)) - 1:, 1]
+    curves = d[SINE_S * int(round(1 / T)) - 1:, 1]
     np.testing.assert_allclose(_turning_points(curves),
                                [10, 5, 10, -10, -5, -10, 10, -2.5, 10, -10, 2.5, -10], atol=1e-9)
 

@@ -15,6 +15,9 @@ from hammerstein.identification.record_identification import (amplitude_levels, 
                                                     noise_level, split_record)
 
 T = 1e-3
+#: the default levels in % and every second one (held out), as the splitter should find them
+PERCENT = [round(100 * a) for a in LEVELS]
+HELD = PERCENT[1::2]
 
 
 def _play(u, r):
@@ -54,19 +57,19 @@ def test_noisy_turning_points_stay_one_level(rng=np.random.default_rng(4)):
     # a measured input: its turning points jitter around each level
     _, u, _ = decreasing_sine(T, 10.0, frequency=2.0)
     u = uniform_filter1d(u + 0.05 * rng.standard_normal(u.size), 25)
-    assert [round(v["percent"] / 10) * 10 for v in amplitude_levels(u)] == [100, 80, 60, 40, 20, 10]
+    np.testing.assert_allclose([v["percent"] for v in amplitude_levels(u)], PERCENT, atol=1.5)
 
 
 def test_whole_levels_are_held_out_and_reported(rng=np.random.default_rng(1)):
     rec = _record(rng)
     _, split = split_record(rec)
     held = [round(v["percent"]) for v in split.levels if v["held_out"]]
-    assert held == [80, 40, 10] and "amplitude levels 80 %, 40 %, 10 %" in split.description
+    assert held == HELD and f"amplitude levels {' %, '.join(map(str, HELD))} %" in split.description
     for v in split.levels:
         assert split.held_out[v["start"]:v["stop"] + 1].all() == v["held_out"]
     fit = identify_records([rec], components="all", output_map="none")
     rows = [r for r in fit.levels if r["output"] == "x"]
-    assert [round(r["percent"]) for r in rows] == [100, 80, 60, 40, 20, 10]
+    assert [round(r["percent"]) for r in rows] == PERCENT
     # a PI actuator: its held-out minor loops are predicted to well within 1 %, down to 40 %;
     # the 10 % loop (1 V, no wider than the actuator's second threshold) depends on where
     # the fitted thresholds fall below 1 V, and is within 5 %
@@ -175,7 +178,7 @@ def test_the_reversal_curves_after_the_levels_are_cut_off(rng=np.random.default_
     """A hysteresis record of ``hammerstein excitation`` (the decreasing sine, then the
     first-order reversal curves): the held-out levels are the sine's, and ``levels_part`` cuts
     the record where the curves leave the 10 % level for the full amplitude, the first sample
-    farther than 1.05 x 1 V from 0 after the sine's 12 periods (found here by a scan of the
+    farther than 1.05 x 1 V from 0 after the sine's two periods per level (found here by a scan of the
     input, independently of the splitter). The sine alone is kept whole."""
     from hammerstein.identification.record_identification import levels_part
     from hammerstein.signals.excitation import REVERSALS, hysteresis_excitation
@@ -183,9 +186,9 @@ def test_the_reversal_curves_after_the_levels_are_cut_off(rng=np.random.default_
     x = _pi(u) + 0.02 * rng.standard_normal(u.size)
     rec = MultiRecord(np.arange(u.size) * T, u[None, :], x[None, :], ["ux"], ["x"], T, "h.csv")
     rec, split = split_record(rec)
-    assert [round(v["percent"]) for v in split.levels] == [100, 80, 60, 40, 20, 10]
-    assert [v["held_out"] for v in split.levels] == [False, True, False, True, False, True]
-    n_sine = 6 * 2 * int(round(0.5 / T))
+    assert [round(v["percent"]) for v in split.levels] == PERCENT
+    assert [v["held_out"] for v in split.levels] == [k % 2 == 1 for k in range(len(LEVELS))]
+    n_sine = len(LEVELS) * 2 * int(round(0.5 / T))
     expected = n_sine + int(np.argmax(np.abs(u[n_sine:]) > 1.05 * 1.0))
     (cut,), (cut_split,), n = levels_part([rec], [split])
     assert n == 1 and cut.u.shape[1] == expected and cut.y.shape[1] == expected

@@ -29,6 +29,9 @@ T_FIT = 2.5e-3    # the fits' records: 400 samples a period draw the same loops,
 # Envelope trials per output: the fits below reach the same loops and circles (to 0.01 %) with
 # 60 as with the default 300 that a 2 x 2 actuator with creep needs, in a fifth of the CPU.
 BUDGET = 60
+#: the excitation's levels before the 30 and 15 % ones: the records of the tests below that
+#: check loops never recorded (30 and 15 %) hold these
+LEVELS_100_TO_10 = (1.0, 0.8, 0.6, 0.4, 0.2, 0.1)
 
 
 def records(hysteresis, noise=0.0, seed=0, amplitude=10.0, sampling_period=T, reversals=(),
@@ -93,7 +96,8 @@ def fitted():
     # with 10 2.8 % (the class notes)
     true = gpi_actuator()
     est = GeneralizedPIIdentifier(max_evaluations=BUDGET)
-    return true, est.fit(records(true, noise=0.01, sampling_period=T_FIT))
+    return true, est.fit(records(true, noise=0.01, sampling_period=T_FIT,
+                                 levels=LEVELS_100_TO_10))
 
 
 def test_recovers_loops_and_minor_loops_of_other_thresholds_and_envelopes(fitted):
@@ -363,7 +367,7 @@ def test_direct_path_with_a_quadratic_reversible_term_is_recovered():
     true = GeneralizedPI([0.0, 0.9, 2.0, 3.4, 5.2], [1.1, 0.55, 0.33, 0.22, 0.13],
                          gamma_l=[13.0, 0.09, -0.08, 0.3], gamma_r=[15.0, 0.075, 0.06, -0.2],
                          reversible=[3.6, -0.025])
-    t, u, _ = decreasing_sine(5e-4, 10.0)
+    t, u, _ = decreasing_sine(5e-4, 10.0, levels=LEVELS_100_TO_10)
     y, _ = true.simulate(u)
     rec = MultiRecord(t, u[np.newaxis], y[np.newaxis], ("u",), ("y",), 5e-4, "sim")
     est = GeneralizedPIIdentifier(max_evaluations=BUDGET).fit(rec)
@@ -439,7 +443,7 @@ def test_level_weighting_trades_the_full_level_for_the_small_ones():
     training RMS relative to its range on both direct paths and raises the 100 % level's,
     and the never-recorded 15 % loops come out closer in amplitude."""
     true = preisach_actuator()
-    R = records(true, noise=0.01, sampling_period=T_FIT)
+    R = records(true, noise=0.01, sampling_period=T_FIT, levels=LEVELS_100_TO_10)
     fits = {lw: GeneralizedPIIdentifier(max_evaluations=BUDGET, level_weighting=lw).fit(R)
             for lw in ("none", "amplitude")}
 
