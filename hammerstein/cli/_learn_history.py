@@ -76,8 +76,8 @@ def history_rows(history_dir):
         except ValueError:
             raise DataFileError(
                 f"{escape(path)}: line {n}: '{escape(line, 60)}' is not 'iteration,output,"
-                f"max_error_um,rms_error_um'; not a history written by hammerstein learn: choose "
-                f"a new --history directory") from None
+                f"max_error,rms_error' (an integer, a name, two numbers); not a history written by "
+                f"hammerstein learn: choose a new --history directory") from None
     return rows
 
 

@@ -143,16 +143,18 @@ def model_from_table(table, source="model"):
     if huge:
         raise PresetError(f"{source}: " + "; ".join(
             f"{key}: {value:.3g} is beyond the magnitude limit {MAX_MAGNITUDE:.0e}" for key, value in huge))
+    units = [f"model.{key}: expected a unit name such as 'V' or 'µm', found {table[key]!r}"
+             for key in ("input_unit", "output_unit")
+             if key in table and not (isinstance(table[key], str) and table[key].strip())]
     if is_mixed_table(table):   # Preisach / generalised-PI / polynomial components: models/preisach.py
+        if units:               # an empty unit would name learn's columns _um (unit_suffix)
+            raise PresetError(f"{source}: " + "; ".join(units))
         try:
             return hysteresis_from_table(table, source)
         except HysteresisError as exc:
             raise PresetError(str(exc)) from None
     problems = _table_problems(table, {k: Field(_any) for k in MODEL_KEYS}, "model")
-    for key in ("input_unit", "output_unit"):
-        if key in table and not (isinstance(table[key], str) and table[key].strip()):
-            problems.append(f"model.{key}: expected a unit name such as 'V' or 'µm', "
-                            f"found {table[key]!r}")
+    problems += units
     inputs, outputs = table.get("inputs"), table.get("outputs")
     for key, val in (("inputs", inputs), ("outputs", outputs)):
         if not (isinstance(val, list) and val and all(isinstance(v, str) for v in val)):

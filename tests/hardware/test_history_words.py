@@ -201,3 +201,37 @@ def test_monotonic_is_said_only_of_a_trial_better_than_the_best(tmp_path):
     best = [k == 0 or judged[k] < min(judged[:k]) for k in range(8)]
     assert not all(best), judged                 # the noise: some trial is not a new best
     assert said == best, (said, judged, state.to_dict())
+
+
+def test_a_malformed_history_line_names_no_unit(tmp_path):
+    """history.csv's columns are named in the model's unit (max_error_nm): the refusal of a
+    malformed line names none, rather than max_error_um."""
+    d = tmp_path / "h"
+    d.mkdir()
+    (d / "history.csv").write_text("iteration,output,max_error_nm,rms_error_nm\n0,x,abc,0.1\n")
+    try:
+        history_rows(d)
+    except Exception as exc:        # DataFileError
+        assert "_um" not in str(exc) and "line 2" in str(exc)
+    else:
+        raise AssertionError("a malformed line was read")
+
+
+def test_an_empty_output_unit_of_a_preisach_model_is_refused():
+    """A Preisach or generalised-PI [model] with output_unit = "" was read (the unit check came
+    after the mixed tables' return) and learn then named its columns _um."""
+    import tomllib
+
+    import pytest
+
+    from hammerstein.exceptions import PresetError
+    from hammerstein.io.model_table import model_from_table
+    from hammerstein.models.preisach import is_mixed_table
+
+    path = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
+    table = tomllib.loads(path.read_text(encoding="utf-8"))["model"]
+    assert is_mixed_table(table)
+    model_from_table(table, path.name)
+    table["output_unit"] = ""
+    with pytest.raises(PresetError, match="model.output_unit: expected a unit name"):
+        model_from_table(table, path.name)
