@@ -414,7 +414,13 @@ def _read_state(history_dir, n_samples):
     if not path.is_file() or not (d / HISTORY_MARK).exists() or not (d / BEST_FILE).is_file():
         return None
     values = {}
-    for line in bounded_read_text(path, "data", "learning state file").splitlines()[1:]:
+    try:
+        text = bounded_read_text(path, "data", "learning state file")
+    except UnicodeDecodeError as exc:
+        raise DataFileError(f"--history: {escape(path)}: not UTF-8 text (byte {exc.start}); not a "
+                            f"learning state file written by hammerstein learn: choose a new "
+                            f"--history directory") from None
+    for line in text.splitlines()[1:]:
         if "," in line:
             key, value = line.split(",", 1)
             values[key.strip()] = value.strip()
@@ -542,11 +548,22 @@ def _restore_gains(history_dir, gains):
     path = Path(history_dir) / GAINS_FILE
     if not path.is_file() or not (Path(history_dir) / HISTORY_MARK).exists():
         return
-    rows = [line.split(",") for line in bounded_read_text(path, "data", "harmonics file").splitlines()[1:]
-            if line.strip()]
+    problem = (f"--history: {escape(path)}: not the per-harmonic gains hammerstein learn writes "
+               f"('harmonic,gain,previous_error,growths,converged'); choose a new --history "
+               f"directory")
+    try:
+        text = bounded_read_text(path, "data", "harmonics file")
+    except UnicodeDecodeError:
+        raise DataFileError(problem) from None
+    rows = [line.split(",") for line in text.splitlines()[1:] if line.strip()]
     if len(rows) != gains.base.size:
         return                          # another reference: start afresh
-    table = np.array([[float(v) for v in r[1:4]] for r in rows])
+    try:
+        table = np.array([[float(v) for v in r[1:4]] for r in rows])
+    except ValueError:
+        raise DataFileError(problem) from None
+    if table.shape != (len(rows), 3):             # a row of fewer cells
+        raise DataFileError(problem)
     gains.gains = table[:, 0].copy()
     gains.previous = table[:, 1].copy()
     gains.growths = table[:, 2].astype(int)

@@ -8,13 +8,18 @@ had 6 significant digits where ``run``'s have 4.
 """
 
 import re
+import tomllib
 from pathlib import Path
 
 import numpy as np
-
 import pandas as pd
+import pytest
 
-from hammerstein.cli._learn_history import history_rows
+from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, STATE_FILE, _read_state,
+                                            history_rows)
+from hammerstein.exceptions import DataFileError, PresetError
+from hammerstein.io.model_table import model_from_table
+from hammerstein.models.preisach import is_mixed_table
 from tests.hardware.test_evaluate_learn import REF, _cli, _hardware
 
 
@@ -209,25 +214,14 @@ def test_a_malformed_history_line_names_no_unit(tmp_path):
     d = tmp_path / "h"
     d.mkdir()
     (d / "history.csv").write_text("iteration,output,max_error_nm,rms_error_nm\n0,x,abc,0.1\n")
-    try:
+    with pytest.raises(DataFileError, match="line 2") as err:
         history_rows(d)
-    except Exception as exc:        # DataFileError
-        assert "_um" not in str(exc) and "line 2" in str(exc)
-    else:
-        raise AssertionError("a malformed line was read")
+    assert "_um" not in str(err.value)
 
 
 def test_an_empty_output_unit_of_a_preisach_model_is_refused():
     """A Preisach or generalised-PI [model] with output_unit = "" was read (the unit check came
     after the mixed tables' return) and learn then named its columns _um."""
-    import tomllib
-
-    import pytest
-
-    from hammerstein.exceptions import PresetError
-    from hammerstein.io.model_table import model_from_table
-    from hammerstein.models.preisach import is_mixed_table
-
     path = Path(__file__).parent / "data" / "outside-gpi-identified.toml"
     table = tomllib.loads(path.read_text(encoding="utf-8"))["model"]
     assert is_mixed_table(table)
@@ -235,3 +229,13 @@ def test_an_empty_output_unit_of_a_preisach_model_is_refused():
     table["output_unit"] = ""
     with pytest.raises(PresetError, match="model.output_unit: expected a unit name"):
         model_from_table(table, path.name)
+
+
+def test_a_learning_state_file_not_utf8_is_refused_naming_it(tmp_path):
+    """A learning.csv of bytes that are not UTF-8 gave the codec's own message; now one line
+    naming the file."""
+    for name, data in ((HISTORY_MARK, b""), (BEST_FILE, b"t,ux\n0,0\n"),
+                       (STATE_FILE, b"key,value\nbest_trial,\xff\n")):
+        (tmp_path / name).write_bytes(data)
+    with pytest.raises(DataFileError, match=f"{STATE_FILE}: not UTF-8 text"):
+        _read_state(tmp_path, 1)

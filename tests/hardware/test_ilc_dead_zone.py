@@ -21,7 +21,7 @@ import pytest
 
 from hammerstein.cli import _learn_history as learn_cli
 from hammerstein.compensation.ilc import HarmonicGains
-from hammerstein.exceptions import CompensatorError
+from hammerstein.exceptions import CompensatorError, DataFileError
 
 NOISE = 0.01                       # µm per harmonic per axis
 FLOOR = 3.0 * NOISE * np.sqrt(2)   # p = 2 axes, default threshold 3
@@ -107,3 +107,15 @@ def test_a_history_written_before_the_dead_zone_restores_as_not_converged(tmp_pa
     back = HarmonicGains([0.5, 0.5])
     learn_cli._restore_gains(tmp_path, back)
     assert not back.converged and list(back.gains) == [0.5, 0.25] and list(back.growths) == [0, 2]
+
+
+@pytest.mark.parametrize("text", [b"harmonic,gain,previous_error_um,growths\n0,abc,0.1,0\n1,0.25,0.2,2\n",
+                                  b"harmonic,gain,previous_error_um,growths\n0,0.5\n1,0.25,0.2,2\n",
+                                  b"harmonic,gain\n0,0.5,0.1,0\n\xff,0.25,0.2,2\n"])
+def test_a_harmonics_file_not_written_by_learn_is_refused_naming_it(tmp_path, text):
+    """A gain that is no number, a short row or bytes that are not UTF-8: one line naming the
+    file, not a bare 'could not convert string to float'."""
+    (tmp_path / learn_cli.HISTORY_MARK).write_text("")
+    (tmp_path / learn_cli.GAINS_FILE).write_bytes(text)
+    with pytest.raises(DataFileError, match=f"{learn_cli.GAINS_FILE}: not the per-harmonic gains"):
+        learn_cli._restore_gains(tmp_path, HarmonicGains([0.5, 0.5]))
