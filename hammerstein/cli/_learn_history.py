@@ -148,6 +148,42 @@ def foreign_history_problem(history, out=None):
     return None
 
 
+def history_unit_problem(history_dir, unit):
+    """Why the errors of a model in ``unit`` may not be added to ``DIR/history.csv`` (one line), or None.
+
+    A history's columns name the unit its errors are in (``max_error_um``); a model whose
+    output unit is another (a preset relabelled from µm to nm) would add its errors to rows
+    in another unit and relabel them.
+
+    Parameters
+    ----------
+    history_dir : str or pathlib.Path
+        ``--history``.
+    unit : str
+        The model's output unit.
+
+    Returns
+    -------
+    str or None
+        ``"--history: DIR/history.csv holds errors in um (max_error_um); ..."``.
+    """
+    path = Path(history_dir) / "history.csv"
+    if not path.is_file():
+        return None
+    try:
+        head = bounded_read_text(path, "data", "history file").split("\n", 1)[0].split(",")
+    except (OSError, ValueError):
+        return None                    # history_rows says what is wrong with the file
+    if len(head) < 3 or not head[2].startswith("max_error_"):
+        return None
+    have = head[2].removeprefix("max_error_")
+    if have == unit_suffix(unit):
+        return None
+    return (f"--history: {escape(path)} holds errors in {have} ({head[2]}), this model's "
+            f"output unit is {unit}: a history belongs to one learning; choose a new --history "
+            f"directory")
+
+
 def _manifest(history_dir):
     """File name -> SHA-256 the history's mark lists, or None (an older mark: no digests)."""
     try:

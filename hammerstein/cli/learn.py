@@ -126,6 +126,7 @@ from hammerstein.cli._hardware import (START_NOTE, add_actuator_arguments, catch
 from hammerstein.cli._hardware import Reference
 from hammerstein.cli._learn_history import (BEST_FILE, HISTORY_MARK, _check_history, _drive_samples,
                                             foreign_history_problem, history_file_problem,
+                                            history_unit_problem,
                                             _fingerprint, _read_best, _read_state, _restore_gains,
                                             _save_gains, _settled_rows, _write_history,
                                             _write_state, history_rows,
@@ -474,6 +475,9 @@ def _learn(args):
         check_reference_first(args.actuator, args.sampling_period, args.reference, args.time,
                               args.outputs, args.period)     # the budget before re-sampling
         plant = load_actuator(args.actuator, args.sampling_period)
+        unit_problem = history_unit_problem(args.history, plant.units[1]) if args.history else None
+        if unit_problem:
+            raise DataFileError(unit_problem)
         model = plant.hysteresis
         ref = load_reference(args.reference, plant, args.time, args.outputs, args.period)
         T = plant.sampling_period

@@ -130,3 +130,16 @@ def test_learn_writes_the_models_units(mv_nm):
                                              "judged_nm"] and settled["trial"].tolist() == [0, 1]
     state = (d / "hist" / "learning.csv").read_text(encoding="utf-8")
     assert "\nbest_score_nm," in state and "_um" not in state
+    # the same actuator's model in µm may not add its errors to this nm history (it would
+    # relabel the rows): one line, exit 1, the history as it was
+    (d / "um.toml").write_text(OUTSIDE_GPI.read_text(encoding="utf-8"), encoding="utf-8")
+    t, u, _ = read_signals(d / "u2.csv", ["ux", "uy"])      # the drive the history asks for next
+    y, _ = load_plant(str(d / "mv.toml")).simulate(u)
+    pd.DataFrame({"t": t, "x": y[0], "y": y[1]}).to_csv(d / "y2.csv", index=False)
+    before = {p.name: p.read_bytes() for p in (d / "hist").iterdir()}
+    um = run_cli("learn", "um.toml", "--reference", REF, "--drive", "u2.csv", "--measured",
+                 "y2.csv", "--out", "u9.csv", "--delay", "0", "--history", "hist", cwd=d)
+    assert um.returncode == 1 and len(um.stderr.strip().splitlines()) == 1, um.stderr
+    assert "holds errors in nm (max_error_nm), this model's output unit is µm" in um.stderr
+    assert {p.name: p.read_bytes() for p in (d / "hist").iterdir()} == before
+    assert not (d / "u9.csv").exists()
