@@ -28,6 +28,8 @@ from hammerstein.io.presets import (load_creep, load_dynamics, load_model, load_
 from hammerstein.identification.identification_pipeline import (DYNAMICS_FIT_WARN_PERCENT,
                                                                  STATIC_GAIN_WARN)
 from hammerstein.exceptions import DataFileError, HammersteinError, PresetError, RangeWarning
+from hammerstein.io.unit_checks import unit_scale
+from hammerstein.scenario.hardware_route import plant_units
 from hammerstein.scenario.validate import _signal
 
 __all__ = ["Reference", "dynamics_problem", "load_actuator", "load_reference", "check_reference_first", "mapping",
@@ -210,8 +212,7 @@ def load_actuator(path, sampling_period=None):
         # drive's header, notes and shaped columns labelled µm and V)
         plant = HammersteinPlant(model, float(sampling_period), dyn, p.stem,
                                  creep=load_creep(p, model.output_names) if "creep" in data else None)
-        plant.units = (str(data["model"].get("input_unit", "V")),
-                       str(data["model"].get("output_unit", "µm")))
+        plant.units = _file_units(data)
         if "amplifier" in data:
             plant.amplifier = amplifier_from_table(data["amplifier"], model.input_names, str(p))
     problem = falling_direct_transfer(plant.hysteresis)
@@ -394,6 +395,11 @@ def _measurement_delay(data, path):
     return value
 
 
+def _file_units(data):
+    """A model file's ``(input unit, output unit)``: its ``[model]`` table's, V and µm by default."""
+    return (str(data["model"].get("input_unit", "V")), str(data["model"].get("output_unit", "µm")))
+
+
 def check_reference_first(path, sampling_period, text, time="t", outputs=None, period=None):
     """Generate the reference at ``sampling_period`` before the actuator is re-sampled.
 
@@ -419,9 +425,13 @@ def check_reference_first(path, sampling_period, text, time="t", outputs=None, p
         return
     p = Path(path)
     data = read_toml(p, "model file") if p.suffix == ".toml" or p.exists() else None
-    model = load_plant(path, dynamics=False).hysteresis if data is None or "preset" in data \
-        else load_model(p)
-    shell = argparse.Namespace(sampling_period=float(sampling_period), hysteresis=model)
+    if data is None or "preset" in data:
+        plant = load_plant(path, dynamics=False)
+        model, units = plant.hysteresis, plant_units(plant)
+    else:
+        model, units = load_model(p), _file_units(data)
+    shell = argparse.Namespace(sampling_period=float(sampling_period), hysteresis=model,
+                               units=units)
     load_reference(text, shell, time, outputs, period)
 
 
@@ -471,8 +481,10 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     text : str
         ``'{ kind = "circle", radius = 30, frequency = 100, periods = 20 }'``
         (the keys of a scenario's ``reference``) or a CSV path (``t`` and one
-        column per output [µm]; resampled onto the plant's period, said in
-        ``Reference.notes`` when the file is at another rate).
+        column per output; resampled onto the plant's period, said in
+        ``Reference.notes`` when the file is at another rate). Either is in the
+        plant's output unit (``plant.units[1]``, µm by default), in which its
+        problems and warnings are worded.
     plant : HammersteinPlant
     time : str
         Time column of a CSV file.
@@ -492,6 +504,7 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
         Bad table or file (one line naming the key or column).
     """
     names = list(plant.hysteresis.output_names)
+    unit = plant_units(plant)[1]
     if text.lstrip().startswith("{"):
         spec = inline_table(text)
         if isinstance(spec, dict) and len(names) == 1 and "output" not in spec \
@@ -503,22 +516,24 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
         got = _signal("reference", "reference", spec, plant, problems, "--reference", Path.cwd(),
                       case_limit=None)
         if got is None:
+            # a reference table's lengths are in the model's output unit, not the scenarios' µm
             msg = "; ".join(p.replace("--reference: reference.", "--reference: ", 1)
-                            for p in problems) or "--reference: cannot generate the reference"
+                            .replace(" [µm]", f" [{unit}]") for p in problems) \
+                or "--reference: cannot generate the reference"
             raise DataFileError(msg)
         t, sig, period, extras = got
-        problem = magnitude_problem(sig, "µm")
+        problem = magnitude_problem(sig, unit)
         if problem:
             raise DataFileError(f"--reference: {problem} (its squares "
-                                f"would overflow the metrics); expected displacements in µm")
-        _warn_implausible(sig, "--reference")
+                                f"would overflow the metrics); expected displacements in {unit}")
+        _warn_implausible(sig, "--reference", unit)
         return Reference(t, sig, period, extras.get("scale"), spec, spec.get("kind"),
                          extras.get("loop_channel"))
     notes = []
     t, sig, _ = read_signals(text, names, time, mapping(outputs, names, "--output-columns"),
                              plant.sampling_period, "--reference", notes=notes, period=period,
                              units=getattr(plant, "units", None))
-    _warn_implausible(sig, text)
+    _warn_implausible(sig, text, unit)
     T = plant.sampling_period
     if period is not None and not 2 * T <= period <= sig.shape[1] * T * (1 + 1e-9):
         raise DataFileError(f"--period: {period:g} s; expected a period of the reference between "
@@ -528,12 +543,26 @@ def load_reference(text, plant, time="t", outputs=None, period=None):
     return Reference(t, sig, period_samples, None, None, "file", notes=notes)
 
 
-def _warn_implausible(signal, what):
-    """A RangeWarning (one ``warning:`` line) when a reference's peak is no actuator's (a unit slip)."""
-    if signal.size:
-        problem = plausibility_problem(float(np.max(np.abs(signal))), "µm", "reference peak")
-        if problem:
-            warnings.warn(f"{what}: {problem}", RangeWarning, stacklevel=2)
+def _warn_implausible(signal, what, unit="µm"):
+    """A RangeWarning (one ``warning:`` line) when a reference's peak is no actuator's (a unit slip).
+
+    The peak is in ``unit``, the model's output unit: judged in µm when the unit converts to
+    it (nm, mm, m: 30 000 nm is a 30 µm circle), not judged in a unit of the lab's own
+    (``counts``), whose scale nothing states.
+    """
+    if not signal.size:
+        return
+    peak = float(np.max(np.abs(signal)))
+    try:
+        scale = unit_scale(unit, "µm", "output")
+    except ValueError:
+        return
+    problem = plausibility_problem(peak * scale, "µm", "reference peak")
+    if problem and unit != "µm":
+        problem = (f"reference peak {peak:g} {unit} ({problem.split(';')[0].split(' ', 2)[2]}); "
+                   f"is it in the model's output unit, {unit}?")
+    if problem:
+        warnings.warn(f"{what}: {problem}", RangeWarning, stacklevel=2)
 
 
 def owned_problem(out, force):
@@ -582,7 +611,8 @@ def add_actuator_arguments(p, time_help=None):
     p.add_argument("--reference", required=True, metavar="SPEC_OR_CSV",
                    help="inline TOML table as a scenario's reference, e.g. '{ kind = \"circle\", "
                         "radius = 30, frequency = 100, periods = 20 }', or a CSV file with t [s] "
-                        "and one column per output [µm]")
+                        "and one column per output, in the model's output unit (µm unless "
+                        "identify --output-unit named another)")
     p.add_argument("--sampling-period", type=positive_float, metavar="S",
                    help="sampling period [s] (default: the preset's, or the model file's)")
     p.add_argument("--period", type=positive_float, metavar="S",

@@ -104,7 +104,8 @@ def add_parser(subparsers):
                         "nothing written), warn or clip (the drive is clipped and slew-limited; "
                         "a chattering drive is written with a warning)")
     p.add_argument("--predicted", action="store_true",
-                   help="add the model-predicted outputs <output>_predicted [µm]")
+                   help="add the model-predicted outputs <output>_predicted, in the model's "
+                        "output unit (µm by default)")
     p.add_argument("--force", action="store_true",
                    help="replace an --out file that hammerstein did not write, or a drive "
                         "changed since it wrote it (a measured column added)")

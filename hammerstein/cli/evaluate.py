@@ -97,10 +97,12 @@ def add_parser(subparsers):
                     "response to a reference; the delay between them is estimated and reported.")
     p.add_argument("--reference", required=True, metavar="SPEC_OR_CSV",
                    help="inline TOML table as a scenario's reference, or a CSV file (t [s], one "
-                        "column per output [µm])")
+                        "column per output), in the outputs' unit (the drive file's, else the "
+                        "model's; µm by default)")
     p.add_argument("--measured", required=True, metavar="MEASURED.csv",
-                   help="t [s] from the drive's start, one column per output [µm], optionally "
-                        "one per input [V]")
+                   help="t [s] from the drive's start, one column per output, optionally "
+                        "one per input, in the drive file's units (else the model's; µm and V "
+                        "by default)")
     p.add_argument("--out", required=True, metavar="DIR", help="report directory")
     p.add_argument("--model", metavar="MODEL_OR_PRESET",
                    help="names the inputs and outputs (without it: the reference's, else those "
@@ -389,7 +391,7 @@ def _handle(args):
         if not args.inputs and args.drive:   # the voltages applied: the drive's own inputs
             drive_ins, u = drive_voltages()
             ins = drive_ins if u is not None else ins
-        shell = SimpleNamespace(sampling_period=T, hysteresis=SimpleNamespace(
+        shell = SimpleNamespace(sampling_period=T, units=units, hysteresis=SimpleNamespace(
             output_names=outs, input_names=ins or ["u"], n_outputs=len(outs)))
         ref = load_reference(args.reference, shell, args.time, None, args.period)
         rate_notes += ref.notes

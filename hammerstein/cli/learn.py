@@ -221,7 +221,8 @@ def add_parser(subparsers):
     p.add_argument("--drive", required=True, metavar="U_K.csv", help="the drive that was applied")
     p.add_argument("--measured", required=True, metavar="Y_K.csv",
                    help="its measured response: t [s] from the drive's start, one column per "
-                        "output [µm] (resampled onto the drive's period)")
+                        "output in the model's output unit (µm by default; resampled onto the "
+                        "drive's period)")
     p.add_argument("--out", required=True, metavar="U_K+1.csv", help="the next drive")
     p.add_argument("--history", metavar="DIR",
                    help="append this trial's error to DIR/history.csv, draw DIR/convergence.png, keep the "

@@ -143,3 +143,34 @@ def test_learn_writes_the_models_units(mv_nm):
     assert "holds errors in nm (max_error_nm), this model's output unit is µm" in um.stderr
     assert {p.name: p.read_bytes() for p in (d / "hist").iterdir()} == before
     assert not (d / "u9.csv").exists()
+
+
+@pytest.mark.parametrize("command", ["compensate", "learn", "evaluate"])
+def test_a_references_problem_is_told_in_the_models_output_unit(mv_nm, command):
+    """A reference table's lengths are in the model's output unit: a negative radius is told
+    "[nm]", not the scenarios' "[µm]"; nothing is written."""
+    d, _ = mv_nm
+    bad = '{ kind = "circle", radius = -2, frequency = 20, periods = 4 }'
+    args = {"compensate": ("compensate", "mv.toml"),
+            "learn": ("learn", "mv.toml", "--drive", "u0.csv", "--measured", "y0.csv"),
+            "evaluate": ("evaluate", "--drive", "u0.csv", "--measured", "y0.csv")}[command]
+    out = "bad.csv" if command != "evaluate" else "bad-report"
+    res = run_cli(*args, "--reference", bad, "--out", out, cwd=d)
+    assert res.returncode in (1, 2) and not (d / out).exists()
+    assert "reference.radius: expected a number > 0 [nm], found -2" in res.stderr, res.stderr
+    assert "µm" not in res.stderr
+
+
+@pytest.mark.parametrize("radius, implausible", [(20_000, False), (2e7, True)])
+def test_a_references_size_is_judged_in_the_models_output_unit(mv_nm, radius, implausible):
+    """A 20 µm circle given as 20 000 nm to a model in nm is no unit slip (it was warned as
+    20 000 µm, beyond 10 mm); 2e7 nm (20 mm) is, and the warning says nm."""
+    d, _ = mv_nm
+    ref = f'{{ kind = "circle", radius = {radius:g}, frequency = 20, periods = 4 }}'
+    res = run_cli("compensate", "mv.toml", "--reference", ref, "--out", "far.csv", cwd=d)
+    lines = [line for line in res.stderr.splitlines() if "implausible" in line]
+    if implausible:
+        assert len(lines) == 1 and f"reference peak {radius:g} nm (" in lines[0], res.stderr
+        assert lines[0].endswith("is it in the model's output unit, nm?")
+    else:
+        assert lines == [], res.stderr
