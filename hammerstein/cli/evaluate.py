@@ -97,12 +97,10 @@ def add_parser(subparsers):
                     "response to a reference; the delay between them is estimated and reported.")
     p.add_argument("--reference", required=True, metavar="SPEC_OR_CSV",
                    help="inline TOML table as a scenario's reference, or a CSV file (t [s], one "
-                        "column per output), in the outputs' unit (the drive file's, else the "
-                        "model's; µm by default)")
+                        "column per output), in the drive's (or --model's) output unit, µm by default")
     p.add_argument("--measured", required=True, metavar="MEASURED.csv",
                    help="t [s] from the drive's start, one column per output, optionally "
-                        "one per input, in the drive file's units (else the model's; µm and V "
-                        "by default)")
+                        "one per input, in the drive's (or --model's) units, µm and V by default")
     p.add_argument("--out", required=True, metavar="DIR", help="report directory")
     p.add_argument("--model", metavar="MODEL_OR_PRESET",
                    help="names the inputs and outputs (without it: the reference's, else those "
