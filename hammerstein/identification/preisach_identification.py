@@ -89,6 +89,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
+from hammerstein.identification.loop_closure import OUTER_CELLS, closure_grid_edges, loop_closure
 from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.demagnetisation import RECORD_STARTS, demagnetising_cycle_of_range
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -203,6 +204,19 @@ def grid_edges(low, high, n_levels, grid="centred"):
     return edges
 
 
+def _closure(records, k):
+    """:func:`~hammerstein.identification.loop_closure.loop_closure` of input k on its direct
+    output, in the record that excites k the most (None, None when outputs and inputs do not
+    pair up)."""
+    if records[0].y.shape[0] != records[0].u.shape[0]:
+        return None, None
+    own = [r for r in records if int(np.argmax(np.ptp(r.u, axis=1))) == k]
+    if not own:
+        return None, None
+    rec = max(own, key=lambda r: float(np.ptp(r.u[k])))
+    return loop_closure(rec.u[k], rec.y[k])
+
+
 class PreisachIdentifier:
     """Fit a multivariable Preisach model to records (see the module notes).
 
@@ -233,8 +247,21 @@ class PreisachIdentifier:
     margin : float
         The grid spans the measured input range widened by this fraction on
         each side.
-    grid : {"centred", "uniform"}
-        ``"centred"`` (default): the edges ``c + h sinh(s x) / sinh(s)``,
+    grid : {"loop", "centred", "uniform"}
+        ``"loop"`` (default): ``"centred"`` over the part of each input's
+        range where the largest recorded loop is open, and
+        :data:`~hammerstein.identification.loop_closure.OUTER_CELLS` equal
+        cells over each end where it is closed
+        (:func:`~hammerstein.identification.loop_closure.loop_closure`: a
+        density that ends inside the records' range; ``"centred"`` where
+        the loop stays open to its tips, as a real stack's does). Measured
+        on the ten Preisach-type actuators of
+        ``benchmarks/route_defaults.py`` (densities that end at +-10.5 V,
+        records to +-20 V; the grid's edge found at 10.3-10.4 V), every
+        default: worst circle 1.94 -> 1.49 % of the radius, worst raster
+        3.55 -> 1.65 % of half its size (``benchmarks/results/route-defaults.md``,
+        stop 89).
+        ``"centred"``: the edges ``c + h sinh(s x) / sinh(s)``,
         ``x`` equally spaced in [-1, 1], ``c`` and ``h`` the centre and half
         span of the grid, ``s`` = :data:`GRID_STRETCH`: cells about 0.42
         times the uniform ones at the centre, where the small loops of a
@@ -259,6 +286,10 @@ class PreisachIdentifier:
     ----------
     model_ : MultivariableHysteresis
         The identified model.
+    closure_ : list of tuple
+        Per input, where its largest recorded loop closes, ``(low, high)``
+        [V] (None on a side where it stays open; both None unless ``grid =
+        "loop"``).
     smoothing_ : float
         The lambda used.
     smoothing_scores_ : dict of float to float
@@ -297,7 +328,7 @@ class PreisachIdentifier:
     """
 
     def __init__(self, n_levels=20, smoothing="auto", components="auto", margin=0.1,
-                 grid="centred", smoothing_start=None, record_start="demagnetised"):
+                 grid="loop", smoothing_start=None, record_start="demagnetised"):
         if isinstance(n_levels, bool) or not isinstance(n_levels, (int, np.integer)) \
                 or not 2 <= n_levels <= 60:
             raise IdentificationError(f"n_levels: expected an integer from 2 to 60, found {n_levels!r}")
@@ -306,8 +337,9 @@ class PreisachIdentifier:
             raise IdentificationError(f"smoothing: expected 'auto' or a number >= 0, found {smoothing!r}")
         if not (isinstance(margin, (int, float)) and 0 <= margin < 1):
             raise IdentificationError(f"margin: expected a fraction in [0, 1), found {margin!r}")
-        if grid not in ("centred", "uniform"):
-            raise IdentificationError(f"grid: expected 'centred' or 'uniform', found {grid!r}")
+        if grid not in ("loop", "centred", "uniform"):
+            raise IdentificationError(f"grid: expected 'loop', 'centred' or 'uniform', found "
+                                      f"{grid!r}")
         self.n_levels, self.smoothing, self.components, self.margin = (
             int(n_levels), smoothing, components, float(margin))
         self.grid = grid
@@ -337,8 +369,14 @@ class PreisachIdentifier:
         lo = np.min([r.u.min(axis=1) for r in records], axis=0)
         hi = np.max([r.u.max(axis=1) for r in records], axis=0)
         span = np.where(hi > lo, hi - lo, 1.0)
-        self._edges = [grid_edges(lo[k] - self.margin * span[k], hi[k] + self.margin * span[k],
-                                  self.n_levels, self.grid) for k in range(m)]
+        shape = "centred" if self.grid == "loop" else self.grid
+        self.closure_ = [_closure(records, k) if self.grid == "loop" else (None, None)
+                         for k in range(m)]
+        self._edges = [closure_grid_edges(lo[k] - self.margin * span[k],
+                                          hi[k] + self.margin * span[k], self.n_levels,
+                                          self.closure_[k],
+                                          lambda a, b, n: grid_edges(a, b, n, shape))
+                       for k in range(m)]
         self._amp = np.maximum(np.abs(lo), np.abs(hi))
         # each record starts after the demagnetising cycle of its input's range (or at rest)
         self._cycles = [demagnetising_cycle_of_range(a, b) if self.record_start == "demagnetised"
@@ -587,6 +625,13 @@ class PreisachIdentifier:
             f"(demagnetise.csv) from {', '.join(demag)}; the model starts there "
             f"(--record-start rest would take the ideal demagnetised state instead)" if demag else
             "preisach: every record starts from the ideal demagnetised state"], {}, None
+        for k, (a, b) in enumerate(self.closure_):
+            if a is not None or b is not None:
+                closed = " and ".join(f"{word} {v:.3g} V" for word, v in
+                                      (("below", a), ("above", b)) if v is not None)
+                notes.append(f"preisach grid of {in_names[k]}: its largest recorded loop is "
+                             f"closed {closed} (no hysteron switches there); the grid's fine "
+                             f"cells cover the rest, {OUTER_CELLS} cells each closed end")
         which = "held_out" if held else "train"
         s_recs, s_splits, s_inputs = self._scored_samples(records, splits, which)
 
