@@ -127,18 +127,19 @@ CROSS_DEGREE = 3
 
 
 def _hysteron_states(u, edges, cycle=(0.0, 0.0)):
-    """State trajectories (n_states, n_samples) of every hysteron of a grid.
+    """State trajectories (n_samples, n_states) of every hysteron of a grid, row per sample.
 
     From the default initial state of a model on the grid whose demagnetising cycle is
     ``cycle = (A, c)`` (:class:`~hammerstein.models.preisach.PreisachModel`), in one pass of
     the compiled kernel (:func:`hammerstein.simulation.preisach_states`: the same states
     as stepping each hysteron alone through :func:`hammerstein.simulation.preisach_steps`).
+    Rows (the kernel's own layout): the regression takes rows of them, a contiguous copy.
     """
     proto = PreisachModel(edges, np.zeros((edges.size - 1, edges.size - 1)),
                           demagnetised=cycle[0], demagnetised_centre=cycle[1])
     row, col, _ = proto.hysteron_arrays
     states, _ = preisach_states(u, edges, row, col, proto.initial_state())
-    return states.T
+    return states
 
 
 def _smoothing_rows(n):
@@ -407,23 +408,30 @@ class PreisachIdentifier:
         return blocks
 
     def _columns(self, blocks, k, kind, direct):
-        """Basis columns (n_rows, n_cols) of input k, its bounds and its penalty block."""
-        st = np.concatenate([b[0] for b in blocks[k]], axis=1).T
+        """Basis columns of input k as column blocks (each (n_rows, width)), its bounds and its
+        penalty block.
+
+        The blocks (the hysteron states, the reversible polynomial) are handed to
+        :func:`~hammerstein.identification.lsq.r_factor` as they are: it copies them row
+        block by row block, so the tall matrix is never stacked into one more copy.
+        """
         u = np.concatenate([b[1] for b in blocks[k]])
-        nq = st.shape[1]
         if kind == "none":
-            return np.zeros((u.size, 0)), np.zeros(0), np.zeros(0), np.zeros((0, 0))
+            return [np.zeros((u.size, 0))], np.zeros(0), np.zeros(0), np.zeros((0, 0))
         if kind == "gain":
-            return u[:, None], np.array([-np.inf]), np.array([np.inf]), np.zeros((0, 1))
+            return [u[:, None]], np.array([-np.inf]), np.array([np.inf]), np.zeros((0, 1))
+        if ("states", k) not in self._cache:     # the same for every output and structure
+            self._cache[("states", k)] = np.concatenate([b[0] for b in blocks[k]], axis=0)
+        st = self._cache[("states", k)]
+        nq = st.shape[1]
         scale = 1.0 / max(self._amp[k], 1e-300)
         poly = np.column_stack([(u * scale) ** d for d in range(1, (2 if direct else CROSS_DEGREE + 1))])
-        A = np.column_stack([st, poly])
         lb = np.r_[np.zeros(nq) if direct else -np.full(nq, np.inf),
                    -np.full(poly.shape[1], np.inf)]
-        ub = np.full(A.shape[1], np.inf)
+        ub = np.full(nq + poly.shape[1], np.inf)
         D = _smoothing_rows(self.n_levels)
         D = np.column_stack([D, np.zeros((D.shape[0], poly.shape[1]))])
-        return A, lb, ub, D
+        return [st, poly], lb, ub, D
 
     @staticmethod
     def _solve(R0, b0, lb, ub, D, lam):
@@ -456,7 +464,7 @@ class PreisachIdentifier:
             lbs.append(lb)
             ubs.append(ub)
             Ds.append(D)
-            sizes.append(A.shape[1])
+            sizes.append(sum(a.shape[1] for a in A))
         # one output offset shared by the records (per-record offsets were tried: they
         # leave the offsets free to absorb the rest outputs, and the cross-couplings'
         # held-out minor loops came out worse, 2.5 % vs 1.3 % RMS on realistic-2dof)
@@ -466,7 +474,7 @@ class PreisachIdentifier:
         # the direct path's linear term: increasing (an exactly invertible model)
         if l < m and kinds[l] == "preisach":
             off = sum(sizes[:l]) + self.n_levels * (self.n_levels + 1) // 2
-            u = parts[l][:, self.n_levels * (self.n_levels + 1) // 2]
+            u = parts[l][1][:, 0]                   # the linear reversible term's column
             secant = np.ptp(ys) / max(np.ptp(u), 1e-300)
             lb[off] = MIN_SLOPE_FRACTION * abs(secant)
         n = sum(sizes) + no
@@ -483,7 +491,7 @@ class PreisachIdentifier:
         cols, c0 = [], 0
         for want in (True, False):
             c0 = 0
-            for a in parts + [offsets]:
+            for a in [a for blocks_k in parts for a in blocks_k] + [offsets]:
                 sel = free[c0:c0 + a.shape[1]] == want
                 if sel.all():
                     cols.append(a)
@@ -613,7 +621,7 @@ class PreisachIdentifier:
         blocks = self._design(records, splits, m)
         train_rows = [s.train[keep] for s, keep in zip(splits, self._rows)]
         sel = np.concatenate(train_rows)
-        blocks = [[(st[:, tr], u[tr]) for (st, u), tr in zip(bk, train_rows)] for bk in blocks]
+        blocks = [[(st[tr], u[tr]) for (st, u), tr in zip(bk, train_rows)] for bk in blocks]
         ys = [np.concatenate([r.y[l][keep][tr] for r, keep, tr in zip(records, self._rows, train_rows)])
               for l in range(p)]
         if not sel.any():

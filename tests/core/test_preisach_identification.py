@@ -339,7 +339,7 @@ def test_regressor_states_equal_each_hysteron_stepped_alone(n_levels, grid):
     t, u, _ = decreasing_sine(1e-3, 10.0)
     u = u[:4000] + 0.05 * np.random.default_rng(3).standard_normal(4000)
     edges = grid_edges(-11.0, 11.0, n_levels, grid)
-    assert np.array_equal(_hysteron_states(u, edges), _hysteron_states_one_by_one(u, edges))
+    assert np.array_equal(_hysteron_states(u, edges).T, _hysteron_states_one_by_one(u, edges))
 
 
 def test_lambda_scores_use_the_whole_records_predictions(fitted):
