@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["loop_closure", "closure_grid_edges", "CLOSURE_BINS", "CLOSED_GAP", "CLOSED_SLOPE",
+__all__ = ["loop_closure", "input_closure", "closure_grid_edges", "CLOSURE_BINS", "CLOSED_GAP", "CLOSED_SLOPE",
            "CLOSED_WIDTH", "SLOPE_BINS", "BIN_SAMPLES", "MIN_BINS", "TIP", "OUTER_CELLS"]
 
 #: Bins of the input range in which the branches of the largest loop are averaged.
@@ -164,6 +164,32 @@ def loop_closure(u, y, bins=CLOSURE_BINS):
         else:
             out.append(None)
     return out[0], out[1]
+
+
+def input_closure(records, k):
+    """:func:`loop_closure` of input k on its direct output, in the record that excites k most.
+
+    Parameters
+    ----------
+    records : sequence of MultiRecord
+        Records whose inputs ``u`` have shape (m, n_samples) [V] and outputs ``y`` shape
+        (p, n_samples) [µm]; each excites the input whose span is the largest.
+    k : int
+        The input (and its direct output, ``y[k]``).
+
+    Returns
+    -------
+    low, high : float or None
+        As :func:`loop_closure`; both None when the outputs do not pair with the inputs
+        (``p != m``) or no record excites input k.
+    """
+    if records[0].y.shape[0] != records[0].u.shape[0]:
+        return None, None
+    own = [r for r in records if int(np.argmax(np.ptp(r.u, axis=1))) == k]
+    if not own:
+        return None, None
+    rec = max(own, key=lambda r: float(np.ptp(r.u[k])))
+    return loop_closure(rec.u[k], rec.y[k])
 
 
 def closure_grid_edges(low, high, n_levels, closure, inner):

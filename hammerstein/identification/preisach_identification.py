@@ -89,7 +89,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
-from hammerstein.identification.loop_closure import OUTER_CELLS, closure_grid_edges, loop_closure
+from hammerstein.identification.loop_closure import OUTER_CELLS, closure_grid_edges, input_closure
 from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.demagnetisation import RECORD_STARTS, demagnetising_cycle_of_range
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -203,19 +203,6 @@ def grid_edges(low, high, n_levels, grid="centred"):
     edges = 0.5 * (low + high) + 0.5 * (high - low) * shape
     edges[0], edges[-1] = low, high
     return edges
-
-
-def _closure(records, k):
-    """:func:`~hammerstein.identification.loop_closure.loop_closure` of input k on its direct
-    output, in the record that excites k the most (None, None when outputs and inputs do not
-    pair up)."""
-    if records[0].y.shape[0] != records[0].u.shape[0]:
-        return None, None
-    own = [r for r in records if int(np.argmax(np.ptp(r.u, axis=1))) == k]
-    if not own:
-        return None, None
-    rec = max(own, key=lambda r: float(np.ptp(r.u[k])))
-    return loop_closure(rec.u[k], rec.y[k])
 
 
 class PreisachIdentifier:
@@ -371,7 +358,7 @@ class PreisachIdentifier:
         hi = np.max([r.u.max(axis=1) for r in records], axis=0)
         span = np.where(hi > lo, hi - lo, 1.0)
         shape = "centred" if self.grid == "loop" else self.grid
-        self.closure_ = [_closure(records, k) if self.grid == "loop" else (None, None)
+        self.closure_ = [input_closure(records, k) if self.grid == "loop" else (None, None)
                          for k in range(m)]
         self._edges = [closure_grid_edges(lo[k] - self.margin * span[k],
                                           hi[k] + self.margin * span[k], self.n_levels,
