@@ -8,18 +8,21 @@ their cells are resolution taken from the open part of the loop, and the density
 inside a cell, which the fit's smoothing penalty blurs over it. :func:`loop_closure` finds
 the closed ends from the records (the gap between the two branches of the largest loop,
 small and flat from the end of the density to the tip), and :func:`closure_grid_edges`
-gives a switching grid whose fine cells cover the open part and whose edge falls where the
-loop closes (Mayergoyz [1]_, ch. 1: the Preisach weight function vanishes outside the
+moves a cell edge of the switching grid to where the loop closes and spreads the cells
+beyond evenly (Mayergoyz [1]_, ch. 1: the Preisach weight function vanishes outside the
 triangle of the switching fields; its support is what the records must resolve).
 
 Measured on the fifteen Preisach-type actuators of ``benchmarks/route_defaults.py`` (two
 seeds; relay densities that end at +-10.5 V, records to +-20 V): the loops are found closed
-beyond 10.3-10.4 V on every input, and the grid built on it took the ten of seed 2026 from a
-worst circle of 1.94 % of the radius and a worst raster of 3.55 % of half its size to 1.49
-and 1.65 %; an edge put 1 V outside the density's end (11.5 V) made two members' circles and
-rasters worse than without any (``benchmarks/results/route-defaults.md``, stop 89). On the
-fifteen generalised-PI-type actuators of the same benchmark and on a real stack's record
-(150 V, 1 Hz) the loop stays open to its tips: the grid is the centred one.
+beyond 10.3-10.4 V on every input, and the grid with an edge there took the worst raster of
+seed 2026's ten from 3.55 to 1.71 % of half its size; an edge put 1 V outside the density's
+end (11.5 V) made two members' circles and rasters worse than without any; a grid refined
+over the open part (24 centred cells within the closure instead of the grid's own edges)
+lost on the 15 µm circles of four members (``benchmarks/results/route-defaults.md``, stop
+89). On fourteen of the fifteen generalised-PI-type actuators of the same benchmark and on a
+real stack's record (150 V, 1 Hz) the loop stays open to its tips: the grid is the centred
+one. The fifteenth (its y loop thins to nothing below -15 V) is found closed there once the
+creep is removed from its records.
 
 References
 ----------
@@ -32,7 +35,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["loop_closure", "input_closure", "closure_grid_edges", "CLOSURE_BINS", "CLOSED_GAP", "CLOSED_SLOPE",
-           "CLOSED_WIDTH", "SLOPE_BINS", "BIN_SAMPLES", "MIN_BINS", "TIP", "OUTER_CELLS"]
+           "CLOSED_WIDTH", "SLOPE_BINS", "BIN_SAMPLES", "MIN_BINS", "TIP"]
 
 #: Bins of the input range in which the branches of the largest loop are averaged.
 CLOSURE_BINS = 400
@@ -55,8 +58,6 @@ CLOSED_WIDTH = 0.1
 SLOPE_BINS = 5
 #: The fraction of the range at each tip left out of the search: every loop closes at its tip.
 TIP = 0.03
-#: Cells of the switching grid over each closed end.
-OUTER_CELLS = 3
 
 
 def _full_branches(u):
@@ -192,8 +193,13 @@ def input_closure(records, k):
     return loop_closure(rec.u[k], rec.y[k])
 
 
-def closure_grid_edges(low, high, n_levels, closure, inner):
-    """A switching grid's edges whose fine cells cover the open part of the loop.
+def closure_grid_edges(low, high, n_levels, closure, grid):
+    """A switching grid's edges with an edge where the largest loop closes.
+
+    The grid's own edges in the open part are kept (the centre's resolution, where a drive's
+    small loops are, does not change), less one closer than half its cell to a closure; the
+    closure becomes an edge, and the cells left over are spread evenly over each closed end
+    (in proportion to its length, at least one each), where no hysteron switches.
 
     Parameters
     ----------
@@ -203,33 +209,42 @@ def closure_grid_edges(low, high, n_levels, closure, inner):
         Cells in all.
     closure : tuple of (float or None)
         :func:`loop_closure`'s ``(low, high)`` [V]; None on an open side.
-    inner : callable
-        ``inner(a, b, n)``: the edges of ``n`` cells over ``[a, b]`` (``grid_edges`` with
-        the grid's shape).
+    grid : callable
+        ``grid(low, high, n_levels)``: the grid's edges without a closure (``grid_edges``
+        with the grid's shape).
 
     Returns
     -------
     numpy.ndarray, shape (n_levels + 1,)
-        Increasing edges [V]: ``n_levels - OUTER_CELLS * (closed sides)`` cells of ``inner``
-        over the open part and :data:`OUTER_CELLS` equal cells over each closed end; the
-        ``inner`` grid over ``[low, high]`` when neither side closes inside it or too few
-        cells would be left for the open part.
+        Increasing edges [V], the first ``low`` and the last ``high``; ``grid(low, high,
+        n_levels)`` when neither side closes inside ``(low, high)`` or no cell is left for a
+        closed end.
 
     Examples
     --------
-    >>> edges = closure_grid_edges(-24.0, 24.0, 12, (-10.5, 10.5),
+    >>> edges = closure_grid_edges(-12.0, 12.0, 12, (-5.5, 5.5),
     ...                            lambda a, b, n: np.linspace(a, b, n + 1))
-    >>> edges[[0, 3, 9, 12]].tolist()
-    [-24.0, -10.5, 10.5, 24.0]
+    >>> np.round(edges, 2).tolist()
+    [-12.0, -9.83, -7.67, -5.5, -4.0, -2.0, 0.0, 2.0, 4.0, 5.5, 7.67, 9.83, 12.0]
     """
     a = closure[0] if closure[0] is not None and low < closure[0] < high else None
     b = closure[1] if closure[1] is not None and low < closure[1] < high else None
     if a is not None and b is not None and not a < b:
         a = b = None
-    n_out = OUTER_CELLS * ((a is not None) + (b is not None))
-    if n_out == 0 or n_levels - n_out < max(4, n_levels // 2):
-        return inner(low, high, n_levels)
-    mid = inner(low if a is None else a, high if b is None else b, n_levels - n_out)
-    parts = ([np.linspace(low, a, OUTER_CELLS + 1)[:-1]] if a is not None else []) + [mid] + \
-        ([np.linspace(b, high, OUTER_CELLS + 1)[1:]] if b is not None else [])
+    full = grid(low, high, n_levels)
+    if a is None and b is None:
+        return full
+    width = np.gradient(full)
+    keep = (full > (-np.inf if a is None else a + 0.5 * width)) & \
+        (full < (np.inf if b is None else b - 0.5 * width))
+    mid = np.concatenate([[] if a is None else [a], full[keep], [] if b is None else [b]])
+    left = n_levels - (mid.size - 1)
+    if left < (a is not None) + (b is not None):
+        return full
+    if a is None or b is None:
+        n_lo = 0 if a is None else left
+    else:
+        n_lo = int(np.clip(round(left * (a - low) / (a - low + high - b)), 1, left - 1))
+    parts = ([np.linspace(low, a, n_lo + 1)[:-1]] if a is not None else []) + [mid] + \
+        ([np.linspace(b, high, left - n_lo + 1)[1:]] if b is not None else [])
     return np.concatenate(parts)

@@ -89,7 +89,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from hammerstein.identification.identification import IdentificationError
-from hammerstein.identification.loop_closure import OUTER_CELLS, closure_grid_edges, input_closure
+from hammerstein.identification.loop_closure import closure_grid_edges, input_closure
 from hammerstein.identification.lsq import penalized_bounded_lstsq, r_factor
 from hammerstein.models.demagnetisation import RECORD_STARTS, demagnetising_cycle_of_range
 from hammerstein.models.preisach import MultivariableHysteresis, Polynomial, PreisachModel
@@ -236,18 +236,17 @@ class PreisachIdentifier:
         The grid spans the measured input range widened by this fraction on
         each side.
     grid : {"loop", "centred", "uniform"}
-        ``"loop"`` (default): ``"centred"`` over the part of each input's
-        range where the largest recorded loop is open, and
-        :data:`~hammerstein.identification.loop_closure.OUTER_CELLS` equal
-        cells over each end where it is closed
-        (:func:`~hammerstein.identification.loop_closure.loop_closure`: a
-        density that ends inside the records' range; ``"centred"`` where
-        the loop stays open to its tips, as a real stack's does). Measured
-        on the ten Preisach-type actuators of
+        ``"loop"`` (default): ``"centred"``, with a cell edge moved to where
+        the largest recorded loop closes and the cells beyond it spread
+        evenly (:func:`~hammerstein.identification.loop_closure.loop_closure`,
+        :func:`~hammerstein.identification.loop_closure.closure_grid_edges`:
+        a density that ends inside the records' range; ``"centred"`` itself
+        where the loop stays open to its tips, as a real stack's does).
+        Measured on the ten Preisach-type actuators of
         ``benchmarks/route_defaults.py`` (densities that end at +-10.5 V,
-        records to +-20 V; the grid's edge found at 10.3-10.4 V), every
-        default: worst circle 1.94 -> 1.49 % of the radius, worst raster
-        3.55 -> 1.65 % of half its size (``benchmarks/results/route-defaults.md``,
+        records to +-20 V; the closure found at 10.3-10.4 V), every default:
+        worst raster 3.55 -> 1.71 % of half its size, circles within 1.5 %
+        of the radius 84 -> 86 of 90 (``benchmarks/results/route-defaults.md``,
         stop 89).
         ``"centred"``: the edges ``c + h sinh(s x) / sinh(s)``,
         ``x`` equally spaced in [-1, 1], ``c`` and ``h`` the centre and half
@@ -625,8 +624,8 @@ class PreisachIdentifier:
                 closed = " and ".join(f"{word} {v:.3g} V" for word, v in
                                       (("below", a), ("above", b)) if v is not None)
                 notes.append(f"preisach grid of {in_names[k]}: its largest recorded loop is "
-                             f"closed {closed} (no hysteron switches there); the grid's fine "
-                             f"cells cover the rest, {OUTER_CELLS} cells each closed end")
+                             f"closed {closed} (no hysteron switches there): a cell edge "
+                             f"there, the grid's cells beyond spread evenly")
         which = "held_out" if held else "train"
         s_recs, s_splits, s_inputs = self._scored_samples(records, splits, which)
 

@@ -10,7 +10,7 @@ up to within twice its largest threshold of each tip.
 import numpy as np
 import pytest
 
-from hammerstein.identification.loop_closure import OUTER_CELLS, closure_grid_edges, loop_closure
+from hammerstein.identification.loop_closure import closure_grid_edges, loop_closure
 from hammerstein.identification.preisach_identification import PreisachIdentifier, grid_edges
 from hammerstein.io.datafiles import MultiRecord
 from hammerstein.models.hysteresis import PrandtlIshlinskii
@@ -74,19 +74,28 @@ def test_a_preisach_model_closes_where_its_grid_ends():
 
 
 def test_the_grid_puts_an_edge_where_the_loop_closes():
-    inner = lambda a, b, n: grid_edges(a, b, n)          # noqa: E731
-    edges = closure_grid_edges(-12.0, 12.0, 20, (-5.0, 4.5), inner)
+    """The grid's own edges more than half a cell inside the open part stay, the closures
+    become edges, and the cells left are equal over each closed end, shared by length."""
+    shape = lambda a, b, n: grid_edges(a, b, n)          # noqa: E731
+    full = shape(-12.0, 12.0, 20)
+    edges = closure_grid_edges(-12.0, 12.0, 20, (-5.0, 4.5), shape)
     assert edges.size == 21 and np.all(np.diff(edges) > 0)
-    assert edges[OUTER_CELLS] == -5.0 and edges[-1 - OUTER_CELLS] == 4.5
-    assert edges[0] == -12.0 and edges[-1] == 12.0
-    np.testing.assert_allclose(edges[OUTER_CELLS:-OUTER_CELLS], inner(-5.0, 4.5, 20 - 2 * OUTER_CELLS))
-    one = closure_grid_edges(-12.0, 12.0, 20, (None, 4.5), inner)
-    assert one[-1 - OUTER_CELLS] == 4.5 and one[0] == -12.0 and one.size == 21
-    # open, out of range, crossed or too few cells left: the grid over the whole range
-    for closure, n in (((None, None), 20), ((-13.0, 13.0), 20), ((3.0, -3.0), 20),
-                       ((-5.0, 5.0), 8)):
-        np.testing.assert_array_equal(closure_grid_edges(-12.0, 12.0, n, closure, inner),
-                                      inner(-12.0, 12.0, n))
+    assert edges[0] == -12.0 and edges[-1] == 12.0 and -5.0 in edges and 4.5 in edges
+    width = np.gradient(full)
+    kept = full[(full > -5.0 + 0.5 * width) & (full < 4.5 - 0.5 * width)]
+    i, j = int(np.flatnonzero(edges == -5.0)[0]), int(np.flatnonzero(edges == 4.5)[0])
+    np.testing.assert_array_equal(edges[i + 1:j], kept)
+    for part in (edges[:i + 1], edges[j:]):
+        np.testing.assert_allclose(np.diff(part), np.diff(part)[0])
+    # 20 cells: the open part's, then the rest shared by the ends' lengths (7 V and 7.5 V)
+    left = 20 - (j - i)
+    assert i == round(left * 7.0 / 14.5) and 20 - j == left - i
+    one = closure_grid_edges(-12.0, 12.0, 20, (None, 4.5), shape)
+    j = int(np.flatnonzero(one == 4.5)[0])
+    np.testing.assert_array_equal(one[:j], full[full < 4.5 - 0.5 * width])
+    # open, out of range or crossed: the grid over the whole range
+    for closure in ((None, None), (-13.0, 13.0), (3.0, -3.0)):
+        np.testing.assert_array_equal(closure_grid_edges(-12.0, 12.0, 20, closure, shape), full)
 
 
 def test_the_identified_model_follows_a_density_that_ends_inside_the_records():
@@ -106,4 +115,4 @@ def test_the_identified_model_follows_a_density_that_ends_inside_the_records():
     assert centred.closure_ == [(None, None)]
     assert any("closed below" in n for n in loop.notes_)
     rms = [np.mean([w["rms_percent"] for w in est.fit_.validation]) for est in (loop, centred)]
-    assert rms[0] < 0.8 * rms[1], rms
+    assert rms[0] < 0.5 * rms[1], rms          # 0.34 times on noise seeds 1-3
