@@ -34,6 +34,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from hammerstein.identification._record_split import reversal_points
+
 __all__ = ["loop_closure", "input_closure", "closure_grid_edges", "CLOSURE_BINS", "CLOSED_GAP", "CLOSED_SLOPE",
            "CLOSED_WIDTH", "SLOPE_BINS", "BIN_SAMPLES", "MIN_BINS", "TIP"]
 
@@ -62,19 +64,21 @@ TIP = 0.03
 
 def _full_branches(u):
     """Samples of the branches (between reversals) that run from one end of ``u``'s range to
-    the other (within 2 % of the span): the largest loop's."""
+    the other (within 2 % of the span): the largest loop's; and whether each sample's branch
+    rises. Reversals as the record splitter finds them
+    (:func:`~hammerstein.identification._record_split.reversal_points`: a measured input's
+    noise wiggles within its dead band are none)."""
     lo, hi = float(u.min()), float(u.max())
     span = hi - lo
-    d = np.diff(u)
-    nz = np.flatnonzero(d)
-    flips = nz[np.flatnonzero(np.diff(np.sign(d[nz])) != 0)] + 1
-    bounds = np.r_[0, flips, u.size - 1]
+    bounds = [0] + reversal_points(u) + [u.size - 1]
     sel = np.zeros(u.size, dtype=bool)
+    rising = np.zeros(u.size, dtype=bool)
     for a, b in zip(bounds[:-1], bounds[1:]):
         seg = u[a:b + 1]
         if seg.min() <= lo + 0.02 * span and seg.max() >= hi - 0.02 * span:
             sel[a:b + 1] = True
-    return sel, np.r_[d > 0, False]
+            rising[a:b + 1] = u[b] > u[a]
+    return sel, rising
 
 
 def loop_closure(u, y, bins=CLOSURE_BINS):
