@@ -24,6 +24,7 @@ metrics rows are in :mod:`hammerstein.cli._identify_report`).
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 from dataclasses import replace
@@ -43,7 +44,7 @@ from hammerstein.core.files import (FileLimitError, all_or_nothing, file_limit_p
                                     guard_inputs, png_provenance, provenance_line,
                                     replace_problem, safe_write)
 from hammerstein.io.presets import PresetError, save_model
-from hammerstein.identification.defaults import PREISACH_LEVELS
+from hammerstein.identification.defaults import PREISACH_LEVELS, smoothing_option
 from hammerstein.identification.loop_orientation import clockwise_loop_warnings
 from hammerstein.identification.identification_pipeline import (PipelineOptions, identify_pipeline,
                                                                  minor_loop_warning,
@@ -68,6 +69,14 @@ del _f
 
 #: Header of a metrics file (the project's long format).
 METRICS_HEADER = "case,channel,metric,value,unit"
+
+
+def _smoothing_type(text):
+    """argparse ``type`` of ``--preisach-smoothing``: ``"auto"`` or a weight >= 0."""
+    try:
+        return smoothing_option(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def add_parser(subparsers):
@@ -157,6 +166,13 @@ def add_parser(subparsers):
                         "(N (N + 1) / 2 hysterons per component; default %(default)s). Fewer: "
                         "a faster fit and exported real-time step, small loops less close "
                         "(docs/records.md)")
+    p.add_argument("--preisach-smoothing", default="auto", metavar="auto|LAMBDA",
+                   type=_smoothing_type,
+                   help="--model preisach/auto: the Preisach density's smoothing weight: "
+                        "searched on the held-out records (auto, default; among scores "
+                        "within 2 %% of each other, the least smoothing), or this one. "
+                        "Weights the records cannot tell apart can give circles 1 %% of the "
+                        "radius apart: compare two on the actuator (hammerstein evaluate)")
     p.add_argument("--hold-out", choices=["auto", "none"], default="auto",
                    help="auto (default): hold out the last complete branches or periods of "
                         "each record; none: train on everything, no validation")
@@ -297,6 +313,9 @@ def _check_usage(args):
     if not 2 <= args.preisach_levels <= 60:
         raise _Usage(f"--preisach-levels: expected an integer from 2 to 60, found "
                      f"{args.preisach_levels}")
+    if args.preisach_smoothing != "auto" and args.model in ("classical", "generalized"):
+        raise _Usage(f"--preisach-smoothing: only used by --model preisach or auto (the "
+                     f"Preisach density's smoothing), found --model {args.model}")
     if args.model in ("preisach", "generalized") and args.thresholds != "15":
         # the classical PI's hysterons: another class has its own grid, and ignored them
         raise _Usage(f"--thresholds: only used by --model classical or auto (the classical PI's "
@@ -693,6 +712,7 @@ def _options(args, n, thresholds):
         bounds=args.bounds, components=args.components, model=args.model,
         threshold_spacing=args.threshold_spacing, level_weighting=args.level_weighting,
         record_start=args.record_start, preisach_levels=args.preisach_levels,
+        preisach_smoothing=args.preisach_smoothing,
         hold_out=args.hold_out, output_map=args.output_map,
         train_fraction=args.train_fraction, skip=args.skip, order=args.order,
         max_order=args.max_order, creep_refits=args.creep_refits, output_unit=args.output_unit,

@@ -97,6 +97,10 @@ class PipelineOptions:
         value; the Preisach model's ideal demagnetised state).
     preisach_levels : int
         Levels of each input's Preisach grid.
+    preisach_smoothing : 'auto' or float
+        The Preisach density's smoothing weight lambda [-]: searched on the
+        held-out records (``"auto"``, the least smoothing among tied
+        scores), or this one.
     hold_out : {'auto', 'none'}
     output_map : {'auto', 'none', 'deadzone'}
     train_fraction, skip : float or None
@@ -123,6 +127,7 @@ class PipelineOptions:
     level_weighting: str = "amplitude"
     record_start: str = "demagnetised"
     preisach_levels: int = PREISACH_LEVELS
+    preisach_smoothing: object = "auto"
     hold_out: str = "auto"
     output_map: str = "auto"
     train_fraction: float | None = None
@@ -369,7 +374,9 @@ def _fit_one_class(name, records, options, names, previous=None, provisional=Fal
             options.train_fraction, options.skip, *names, output_map=options.output_map)
     if name == "preisach":
         return identify_preisach_records(
-            records, options.preisach_levels, SMOOTHING_START if provisional else "auto",
+            records, options.preisach_levels,
+            options.preisach_smoothing if options.preisach_smoothing != "auto" else
+            SMOOTHING_START if provisional else "auto",
             options.components, options.hold_out,
             options.train_fraction, options.skip, *names,
             smoothing_start=getattr(previous, "smoothing", None),

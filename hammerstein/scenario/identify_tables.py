@@ -48,7 +48,7 @@ import re
 
 from hammerstein.core.schema import closest, did_you_mean, nested_table
 from hammerstein.exceptions import NestedInvalid
-from hammerstein.identification.defaults import PREISACH_LEVELS
+from hammerstein.identification.defaults import PREISACH_LEVELS, smoothing_option
 from hammerstein.io.unit_checks import unit_scale
 from hammerstein.signals.excitation import REVERSALS
 from hammerstein.scenario.schema import (MAX_HYSTERONS, MAX_IDENTIFY_PERIODS, Field, Invalid, boolean,
@@ -70,7 +70,37 @@ __all__ = [
     "nyquist_problem",
     "comparison_spec",
     "dynamics_source",
+    "preisach_smoothing",
 ]
+
+
+def preisach_smoothing(v):
+    """A table's ``preisach_smoothing``, checked: as ``identify --preisach-smoothing``.
+
+    Parameters
+    ----------
+    v : str or float
+        ``"auto"`` or the Preisach density's smoothing weight lambda >= 0 [-].
+
+    Returns
+    -------
+    str or float
+        ``"auto"`` or the weight.
+
+    Raises
+    ------
+    Invalid
+        Saying what was expected (the schema names the key).
+
+    Examples
+    --------
+    >>> preisach_smoothing(3e-5), preisach_smoothing("auto")
+    (3e-05, 'auto')
+    """
+    try:
+        return smoothing_option(v)
+    except ValueError as exc:
+        raise Invalid(str(exc)) from None
 
 
 def _bounds(v):
@@ -199,6 +229,7 @@ RECORDS_IDENTIFY_FIELDS = {
     "components": Field(_components, default="auto"),
     "output_map": Field(choice("auto", "none", "deadzone"), default="auto"),
     "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
+    "preisach_smoothing": Field(preisach_smoothing, default="auto"),   # --preisach-smoothing
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
     "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
     "record_start": Field(choice("demagnetised", "rest"), default="demagnetised"),
@@ -248,7 +279,8 @@ def _delay(v):
 
 #: Options of the identification pipeline shared by both records routes.
 _PIPELINE_KEYS = ("model", "method", "n_hysterons", "thresholds", "partition", "bounds",
-                  "components", "output_map", "preisach_levels", "threshold_spacing",
+                  "components", "output_map", "preisach_levels", "preisach_smoothing",
+                  "threshold_spacing",
                   "level_weighting",
                   "record_start", "creep_refits", "order", "max_order", "hold_out",
                   "train_fraction", "skip")

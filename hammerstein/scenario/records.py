@@ -57,6 +57,7 @@ from hammerstein.identification.identification_pipeline import PipelineOptions, 
 from hammerstein.identification.preisach_identification import refit_on_every_level
 from hammerstein.identification.record_identification import KINDS as COMPONENT_KINDS
 from hammerstein.identification.record_identification import identify_records, parse_components
+from hammerstein.scenario.identify_tables import preisach_smoothing
 from hammerstein.scenario.schema import (MAX_HYSTERONS, NAME, Field, Invalid, ScenarioError, check_table,
                                          choice, integer, name_field,
                                          number, string)
@@ -166,6 +167,7 @@ IDENTIFICATION_FIELDS = {
     # the model class, as identify --model (default: the classical PI this kind always fitted)
     "model": Field(choice("classical", "auto", "preisach", "generalized"), default="classical"),
     "preisach_levels": Field(integer(2, 60), default=PREISACH_LEVELS),
+    "preisach_smoothing": Field(preisach_smoothing, default="auto"),
     "threshold_spacing": Field(choice("uniform", "power", "auto"), default="uniform"),
     "level_weighting": Field(choice("amplitude", "none"), default="amplitude"),
     "record_start": Field(choice("demagnetised", "rest"), default="demagnetised"),
@@ -405,7 +407,7 @@ def run_identification_scenario(scenario):
             bounds=spec["bounds"], components=spec["components"], model=spec["model"],
             threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
             record_start=spec["record_start"], preisach_levels=spec["preisach_levels"],
-            hold_out=spec["hold_out"],
+            preisach_smoothing=spec["preisach_smoothing"], hold_out=spec["hold_out"],
             output_map=spec["output_map"], train_fraction=spec.get("train_fraction"),
             skip=spec.get("skip"), output_unit=scenario.data["output_unit"]), (ins, outs))
         # as identify writes it: a Preisach model refitted on every level (its held-out

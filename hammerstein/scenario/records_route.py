@@ -325,7 +325,7 @@ def _pipeline_options(spec, name, scales=(1.0, 1.0), output_unit="µm"):
         bounds=spec["bounds"], components=spec["components"], model=spec["model"],
         threshold_spacing=spec["threshold_spacing"], level_weighting=spec["level_weighting"],
         record_start=spec["record_start"], preisach_levels=spec["preisach_levels"],
-        output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
+        preisach_smoothing=spec["preisach_smoothing"], output_map=spec["output_map"], order=spec.get("order"), max_order=spec.get("max_order"),
         creep_refits=spec.get("creep_refits"), hold_out=spec["hold_out"],
         train_fraction=spec.get("train_fraction"), skip=spec.get("skip"),
         output_unit=output_unit, name=name)

@@ -89,6 +89,47 @@ def test_preisach_levels_out_of_range_is_a_usage_error(files, capsys):
     assert err.count("\n") == 1 and "--preisach-levels" in err
 
 
+@pytest.mark.parametrize("argv, problem", [
+    (["--preisach-smoothing", "0.x"], "expected auto or a smoothing weight >= 0"),
+    (["--preisach-smoothing", "-1e-5"], "found '-1e-5'"),
+    (["--preisach-smoothing", "nan"], "found 'nan'"),
+    (["--preisach-smoothing", "inf"], "found 'inf'"),
+    (["--preisach-smoothing", "1e-5", "--model", "generalized"], "only used by --model preisach"),
+    (["--preisach-smoothing", "1e-5", "--model", "classical"], "only used by --model preisach"),
+])
+def test_a_bad_preisach_smoothing_is_a_usage_error(files, capsys, argv, problem):
+    _, d, recs = files
+    out = d / "bad-smoothing.toml"
+    assert main(["identify", *recs, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t",
+                 *argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--preisach-smoothing: " in err and problem in err
+    assert not out.exists()
+
+
+def test_a_given_preisach_smoothing_is_not_searched(files, capsys):
+    """``--preisach-smoothing 0.003`` is the weight of every Preisach fit: the model equals the
+    identifier's given that weight on the same records (the pipeline refits it on every level:
+    so does the reference here), and no search is printed."""
+    from hammerstein.identification.preisach_identification import (PreisachIdentifier,
+                                                                    refit_on_every_level)
+    from hammerstein.io.datafiles import read_records
+    _, d, recs = files
+    out = d / "given.toml"
+    assert main(["identify", *recs, "--inputs", "ux,uy", "--outputs", "x,y", "--time", "t",
+                 "--model", "preisach", "--preisach-levels", "8", "--preisach-smoothing", "0.003",
+                 "--out", str(out)]) == 0, capsys.readouterr().err
+    printed = capsys.readouterr().out
+    assert "smoothing auto" not in printed and "at lambda 0.003" in printed
+    records = [read_records(r, ["ux", "uy"], ["x", "y"], time="t") for r in recs]
+    est = PreisachIdentifier(8, 0.003).fit(records)
+    est.fit_.smoothing = est.smoothing_
+    ref = refit_on_every_level(est.fit_, 8).model
+    mine = load_model(str(out))
+    u = np.vstack([8 * np.sin(np.linspace(0, 6 * np.pi, 700)), 5 * np.cos(np.linspace(0, 4 * np.pi, 700))])
+    np.testing.assert_allclose(mine.simulate(u)[0], ref.simulate(u)[0], rtol=0, atol=1e-9)
+
+
 @pytest.mark.parametrize("model, grid", [("preisach", "--preisach-levels"),
                                          ("generalized", "--threshold-spacing")])
 @pytest.mark.parametrize("thresholds", ["0,1,2.5", "7"])

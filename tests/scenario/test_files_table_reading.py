@@ -92,6 +92,10 @@ def test_a_scenario_identifies_a_labs_records_as_identify_does(measured, capsys)
     (["--thresholds", "0,1.5,3,6"], {"thresholds": [0, 1.5, 3, 6]}),
     (["--thresholds", "0,2", "--partition", "input"], {"thresholds": [0, 2], "partition": "input"}),
     (["--output-unit", "nm"], {"output_unit": "nm"}),
+    (["--preisach-smoothing", "3e-5"], {"preisach_smoothing": 3e-5}),
+    (["--preisach-smoothing", "0", "--model", "preisach"], {"preisach_smoothing": 0,
+                                                            "model": "preisach"}),
+    (["--preisach-smoothing", "auto"], {"preisach_smoothing": "auto"}),
     (["--input-unit", "mV", "--output-unit", "nm", "--thresholds", "7"],
      {"input_unit": "mV", "output_unit": "nm", "n_hysterons": 7}),
 ])
@@ -414,3 +418,11 @@ def test_the_unit_warning_of_a_files_table_says_that_a_declared_unit_is_converte
                 "(the records are then converted to the plant's units)") in line
     np.testing.assert_allclose(toml_numbers(models["nm", True]), toml_numbers(models["µm", False]),
                                rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("bad", ["lots", -1e-5, float("nan"), True])
+def test_a_bad_preisach_smoothing_is_named(bad):
+    with pytest.raises(NestedInvalid, match="preisach_smoothing: expected auto or a smoothing "
+                                            "weight >= 0"):
+        identify_table({"records": "files", "hysteresis_records": ["r.csv"],
+                        "preisach_smoothing": bad})

@@ -39,10 +39,13 @@ def _load(path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("model, options", [("preisach", ["--preisach-levels", "12"]),
-                                            ("generalized", [])])
+@pytest.mark.parametrize("model, options", [
+    ("preisach", ["--preisach-levels", "12"]),
+    ("preisach", ["--preisach-levels", "12", "--preisach-smoothing", "0.003"]),
+    ("generalized", [])])
 def test_the_scenario_fits_the_class_identify_fits(records, model, options):
-    extra = f'model = "{model}"\n' + ("preisach_levels = 12\n" if options else "")
+    extra = f'model = "{model}"\n' + ("preisach_levels = 12\n" if options else "") + (
+        "preisach_smoothing = 0.003\n" if "--preisach-smoothing" in options else "")
     fit = run_identification_scenario(_load(_scenario(records, extra)))[0].fit
     assert run_cli("identify", "hyst-0.csv", "hyst-1.csv", "--inputs", "ux,uy", "--outputs",
                    "x,y", "--time", "t", "--model", model, *options, "--out", "m.toml",
