@@ -31,8 +31,9 @@ def smoothing_option(value):
     Parameters
     ----------
     value : str or float
-        ``"auto"`` (the search, :class:`PreisachIdentifier`) or a smoothing
-        weight lambda >= 0 [-], as a number or its text.
+        ``"auto"`` (the search of
+        :class:`~hammerstein.identification.preisach_identification.PreisachIdentifier`)
+        or a smoothing weight lambda >= 0 [-], as a number or its text.
 
     Returns
     -------

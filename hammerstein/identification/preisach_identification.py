@@ -103,7 +103,8 @@ from hammerstein.identification.record_identification import (
 from hammerstein.simulation import preisach_states
 
 __all__ = ["PreisachIdentifier", "refit_on_every_level", "SMOOTHING_GRID", "SMOOTHING_BELOW",
-           "SMOOTHING_START", "SMOOTHING_TIE", "smoothing_choice", "GRID_STRETCH", "grid_edges", "identify_preisach_records"]
+           "SMOOTHING_START", "SMOOTHING_TIE", "smoothing_choice", "GRID_STRETCH", "grid_edges",
+           "identify_preisach_records"]
 
 #: Candidate smoothing weights lambda (chosen on the held-out samples, with
 #: :data:`SMOOTHING_BELOW`).
@@ -124,10 +125,10 @@ SMOOTHING_START = 1e-4
 #: range is 0.027 % of the 0.04 % it reaches); the least smoothing among them is kept
 #: (:func:`smoothing_choice`). The share is ``identify``'s class tie
 #: (``identification_pipeline.AUTO_TIE``). Measured on the outside family of
-#: ``benchmarks/route_defaults.py`` (seed 2026), every default: the members where the best
-#: score had taken the larger of two tied weights went from worst circles of 1.91, 1.91 and
-#: 0.78 % of the radius to 1.04, 1.34 and 0.75 % (rasters 1.32, 1.44, 1.27 to 0.83, 1.12,
-#: 1.09 %); the quasi-static loops cannot tell the two apart, a compensated circle can.
+#: ``benchmarks/route_defaults.py`` (seed 2026), every default: the three members where the
+#: best score had taken the larger of two tied weights went from worst circles of 1.91, 1.91
+#: and 0.78 % of the radius to 0.97, 1.21 and 0.76 % (rasters 1.32, 1.44, 1.27 to 0.85, 1.16,
+#: 1.10 %); the quasi-static loops cannot tell the two apart, a compensated circle can.
 SMOOTHING_TIE = 0.02
 #: Rows of the regression kept per record (quasi-static records are decimated to this).
 MAX_ROWS_PER_RECORD = 8000

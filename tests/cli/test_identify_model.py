@@ -126,7 +126,8 @@ def test_a_given_preisach_smoothing_is_not_searched(files, capsys):
     est.fit_.smoothing = est.smoothing_
     ref = refit_on_every_level(est.fit_, 8).model
     mine = load_model(str(out))
-    u = np.vstack([8 * np.sin(np.linspace(0, 6 * np.pi, 700)), 5 * np.cos(np.linspace(0, 4 * np.pi, 700))])
+    u = np.vstack([8 * np.sin(np.linspace(0, 6 * np.pi, 700)),
+                   5 * np.cos(np.linspace(0, 4 * np.pi, 700))])
     np.testing.assert_allclose(mine.simulate(u)[0], ref.simulate(u)[0], rtol=0, atol=1e-9)
 
 
