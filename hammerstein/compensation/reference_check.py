@@ -124,8 +124,9 @@ def check_reference(compensator, reference):
         A compensator with a ``model`` (its hysteresis model: ``n_outputs``,
         ``check_inputs``, ``simulate``, ``input_amplitude``).
     reference : array_like, shape (p, n_samples)
-        The reference the compensator is given [µm] (for a previewed
-        Hammerstein compensator, the reference P samples ahead).
+        The reference the compensator is given [µm, or the ``output_unit`` a
+        model read from a file carries, in which the message gives it] (for
+        a previewed Hammerstein compensator, the reference P samples ahead).
 
     Returns
     -------
@@ -159,8 +160,9 @@ def check_reference(compensator, reference):
     bound = _bound(compensator, model)
     beyond = np.abs(arr) > bound
     if beyond.any():
+        unit = getattr(model, "output_unit", "µm")      # a model read from a file: its own
         raise CompensatorError(
-            f"reference: {_where(model, arr, beyond)[2]} µm, beyond the {bound:.6g} µm a "
+            f"reference: {_where(model, arr, beyond)[2]} {unit}, beyond the {bound:.6g} {unit} a "
             f"compensator takes ({REFERENCE_SPAN:g} x the model's largest |output| over its input range; the "
             f"exported C skips such a sample with status 4): a glitch or a wrong unit, not a "
             f"position the actuator reaches; nothing was run (the state is unchanged)")

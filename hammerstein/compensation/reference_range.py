@@ -93,11 +93,14 @@ def check_reference_range(model: MultivariablePI, reference, warn=True):
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(half > 0, reach / np.where(half > 0, half, 1.0), np.where(reach > 0, np.inf, 0.0))
     if warn and np.any(ratio > 1 + 1e-9):
+        unit = getattr(model, "output_unit", "µm")      # a model read from a file: its own
+
         def beyond(l):
             if abs(mid[l]) <= 1e-12 * max(half[l], 1.0):      # a range symmetric about 0
-                return f"{model.output_names[l]}: {reach[l]:.4g} µm > {half[l]:.4g} µm"
+                return f"{model.output_names[l]}: {reach[l]:.4g} {unit} > {half[l]:.4g} {unit}"
             worst = float(g[l, int(np.argmax(far[l]))])
-            return f"{model.output_names[l]}: {worst:.4g} µm outside {low[l]:.4g}..{high[l]:.4g} µm"
+            return (f"{model.output_names[l]}: {worst:.4g} {unit} outside "
+                    f"{low[l]:.4g}..{high[l]:.4g} {unit}")
 
         bad = [beyond(l) for l in np.flatnonzero(ratio > 1 + 1e-9)]
         origin = getattr(model, "identified_from", None)   # core/presets.load_model

@@ -226,7 +226,9 @@ def load_model(path):
         A model identified from records (an ``[identification]`` table with
         ``sources``, written by ``hammerstein identify``) carries
         ``identified_from``, e.g. ``"records hysteresis-ux.csv,
-        hysteresis-uy.csv (preset id.toml)"``, which the warnings quote.
+        hysteresis-uy.csv (preset id.toml)"``, which the warnings quote;
+        every model carries its ``[model]`` table's ``output_unit`` (µm by
+        default), in which the compensators' reference messages give lengths.
 
     Raises
     ------
@@ -240,11 +242,13 @@ def load_model(path):
         raise PresetError(f"{path}: " + "; ".join(problems))
     model = model_from_table(data["model"], str(path))
     origin = identified_from(data, path)
-    if origin:
-        try:
-            model.identified_from = origin
-        except AttributeError:          # a model class without instance attributes
-            pass
+    for name, value in (("identified_from", origin),
+                        ("output_unit", str(data["model"].get("output_unit", "µm")))):
+        if value:
+            try:
+                setattr(model, name, value)
+            except AttributeError:      # a model class without instance attributes
+                pass
     if isinstance(model, MultivariableHysteresis):   # the inputs it was identified on
         model.input_range = records_input_range(data.get("amplifier"), model.input_names)
     return model

@@ -174,3 +174,45 @@ def test_a_references_size_is_judged_in_the_models_output_unit(mv_nm, radius, im
         assert lines[0].endswith("is it in the model's output unit, nm?")
     else:
         assert lines == [], res.stderr
+
+
+def test_a_glitch_in_a_file_reference_is_told_in_the_models_unit(mv_nm):
+    """A file reference's sample beyond the compensators' bound (10 x the model's largest
+    output, the one the exported C skips a sample at) is refused in nm: it said ``1e+07 µm,
+    beyond the 177220 µm`` of a model in nm. Nothing is written."""
+    from hammerstein.compensation.reference_check import reference_bound
+    d, _ = mv_nm
+    t = np.arange(400) * 2.5e-4
+    x, y = 80.0 * np.cos(2 * np.pi * 20 * t), 80.0 * np.sin(2 * np.pi * 20 * t)
+    bound = reference_bound(load_plant(str(d / "mv.toml")).hysteresis)
+    x[300] = 2.0 * bound
+    pd.DataFrame({"t": t, "x": x, "y": y}).to_csv(d / "glitch.csv", index=False)
+    res = run_cli("compensate", "mv.toml", "--reference", "glitch.csv", "--out", "glitch-u.csv",
+                  cwd=d)
+    assert res.returncode == 1 and not (d / "glitch-u.csv").exists()
+    # (the file is re-sampled at the model's period and faded in: its glitch's sample and
+    # value move, the bound does not)
+    assert re.search(rf"sample \d+ of output 'x' is [\d.e+]+ nm, beyond the {bound:.6g} nm a "
+                     rf"compensator takes", res.stderr), res.stderr
+    assert "µm" not in res.stderr, res.stderr
+
+
+def test_the_range_warning_gives_the_models_unit(tmp_path):
+    """Beyond the range a model in nm was identified on (a classical PI's check), the
+    warning's lengths are nm: it said ``x: 150 µm > ...`` of a model saved in nm."""
+    from hammerstein.compensation.reference_range import check_reference_range
+    from hammerstein.exceptions import RangeWarning
+    from hammerstein.io.presets import load_model, save_model
+    from hammerstein.models.hysteresis import MultivariablePI, PrandtlIshlinskii
+    r = np.linspace(0.0, 9.0, 6)
+    pi = [PrandtlIshlinskii(r, [1.0, 0.3, 0.2, 0.1, 0.05, 0.02]) for _ in range(2)]
+    model = MultivariablePI([[pi[0], None], [None, pi[1]]], ["ux", "uy"], ["x", "y"],
+                            input_amplitude=[10.0, 10.0])
+    save_model(model, tmp_path / "m.toml", input_unit="mV", output_unit="nm")
+    loaded = load_model(tmp_path / "m.toml")
+    t = np.arange(200) / 200
+    far = 150.0 * np.vstack([np.cos(2 * np.pi * t), np.sin(2 * np.pi * t)])
+    with pytest.warns(RangeWarning) as caught:
+        ratio = check_reference_range(loaded, far)
+    text = str(caught[0].message)
+    assert np.all(ratio > 1) and "x: 150 nm > " in text and "µm" not in text, text
